@@ -1,0 +1,43 @@
+# thorax — top-level entry points. `make demo` and `make check` set up what is
+# missing (scripts/deps.sh), configure, build, and run.
+BUILD ?= build
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+THORAX = $(BUILD)/bin/thorax
+
+.PHONY: all deps build demo check sanitize bench clean
+
+all: build
+
+deps:
+	@bash scripts/deps.sh
+
+$(BUILD)/CMakeCache.txt:
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+
+build: deps $(BUILD)/CMakeCache.txt
+	@cmake --build $(BUILD) -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
+	@test -x $(THORAX)
+
+# The main job on the built-in phantom: contours -> surfaces -> check.
+demo: build
+	@mkdir -p out/demo
+	$(THORAX) phantom --resolution medium --seed 1 -o out/demo/contours.txt
+	$(THORAX) surfaces out/demo/contours.txt -o out/demo/model
+	$(THORAX) check out/demo/model
+	$(THORAX) export out/demo/model --format vtp -o out/demo/vtk
+	@echo "demo: model in out/demo/model, VTK files in out/demo/vtk"
+
+check: build
+	@cd $(BUILD) && ctest -j $(JOBS) --output-on-failure
+
+# The whole suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
+sanitize: deps
+	@cmake -S . -B $(BUILD)-asan -DCMAKE_BUILD_TYPE=Debug -DTHORAX_SANITIZE=ON >/dev/null
+	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
+	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) --output-on-failure
+
+bench: build
+	@bash bench/surfaces.sh
+
+clean:
+	rm -rf $(BUILD) $(BUILD)-asan out

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The one list of Debian packages thorax needs. Installs what is missing;
+# idempotent, and silent when everything is already there.
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config   # compiler and build
+  libcjson-dev                       # model.json manifest
+  libgmp-dev                         # exact fallback of the geometric predicates
+  python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
+  time                               # bench: peak memory (/usr/bin/time -v)
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+echo "deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,127 @@
+/* thorax: the command-line front end. Each subcommand is a thin client of libthorax. */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+
+static const struct {
+    const char *name;
+    cli_cmd_fn fn;
+    const char *summary;
+} commands[] = {
+    {"phantom", cmd_phantom, "write the built-in synthetic thorax as digitized contours"},
+    {"surfaces", cmd_surfaces, "contours -> spline layers -> laced, capped, oriented surfaces (a model)"},
+    {"check", cmd_check, "verify a model: closure, orientation, 4 pi solid angle, intersections, quality"},
+    {"export", cmd_export, "write a model's surfaces as VTK, VTP, OBJ, STL or PLY"},
+};
+#define N_COMMANDS (sizeof commands / sizeof commands[0])
+
+static char command_line[4096];
+
+void cli_set_command_line(int argc, char **argv)
+{
+    size_t off = 0;
+    command_line[0] = '\0';
+    for (int i = 0; i < argc && off < sizeof command_line; i++)
+        off += (size_t)snprintf(command_line + off, sizeof command_line - off, "%s%s", i ? " " : "", argv[i]);
+}
+
+const char *cli_command_line(void) { return command_line; }
+
+static void log_stderr(void *user, thx_log_level level, const char *msg)
+{
+    (void)user;
+    fprintf(stderr, "thorax: %s%s\n", level == THX_LOG_WARN ? "warning: " : "", msg);
+}
+
+thx_ctx *cli_ctx(int verbose)
+{
+    thx_ctx *ctx = NULL;
+    if (thx_ctx_create(&ctx) != THX_OK) {
+        fprintf(stderr, "thorax: out of memory\n");
+        exit(1);
+    }
+    thx_ctx_set_log(ctx, log_stderr, NULL,
+                    verbose > 0 ? THX_LOG_DEBUG : verbose < 0 ? THX_LOG_WARN + 1 : THX_LOG_INFO);
+    return ctx;
+}
+
+int cli_fail(thx_ctx *ctx, const char *cmd, thx_status st)
+{
+    const char *msg = thx_ctx_message(ctx);
+    fprintf(stderr, "thorax %s: %s: %s\n", cmd, thx_status_name(st), msg[0] ? msg : "(no detail)");
+    return 1;
+}
+
+int cli_usage_error(const char *cmd, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "thorax %s: ", cmd);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "\n(see 'thorax %s --help')\n", cmd);
+    return 2;
+}
+
+int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out)
+{
+    char *end = NULL;
+    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0' || v != v) return cli_usage_error(cmd, "%s: '%s' is not a number", opt, s);
+    *out = v;
+    return 0;
+}
+
+int cli_parse_int(const char *cmd, const char *opt, const char *s, long *out)
+{
+    char *end = NULL;
+    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
+    long v = strtol(s, &end, 10);
+    if (end == s || *end != '\0') return cli_usage_error(cmd, "%s: '%s' is not an integer", opt, s);
+    *out = v;
+    return 0;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: thorax COMMAND [options]\n\n"
+               "thorax: computational electrocardiology, from digitized contours of the body\n"
+               "to the heart's electric field in it.\n\ncommands:\n");
+    for (size_t i = 0; i < N_COMMANDS; i++) fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(f, "  %-10s %s\n\nRun 'thorax COMMAND --help' for a command's options.\n", "help", "this text, or 'thorax help COMMAND'");
+}
+
+int main(int argc, char **argv)
+{
+    cli_set_command_line(argc, argv);
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *name = argv[1];
+    if (strcmp(name, "help") == 0 || strcmp(name, "--help") == 0 || strcmp(name, "-h") == 0) {
+        if (argc >= 3 && strcmp(name, "help") == 0) {
+            for (size_t i = 0; i < N_COMMANDS; i++)
+                if (strcmp(argv[2], commands[i].name) == 0) {
+                    char *hargv[] = {argv[2], "--help", NULL};
+                    return commands[i].fn(2, hargv);
+                }
+            fprintf(stderr, "thorax: unknown command '%s'\n", argv[2]);
+            return 2;
+        }
+        usage(stdout);
+        return 0;
+    }
+    if (strcmp(name, "--version") == 0) {
+        printf("thorax 0.1.0\n");
+        return 0;
+    }
+    for (size_t i = 0; i < N_COMMANDS; i++)
+        if (strcmp(name, commands[i].name) == 0) return commands[i].fn(argc - 1, argv + 1);
+    fprintf(stderr, "thorax: unknown command '%s' (see 'thorax help')\n", name);
+    return 2;
+}

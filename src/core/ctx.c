@@ -1,0 +1,114 @@
+/* The context: last error message and log sink (see thorax/core.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "thorax/core.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+struct thx_ctx {
+    char message[2048];
+    thx_log_fn log_fn;
+    void *log_user;
+    thx_log_level log_min;
+};
+
+thx_status thx_ctx_create(thx_ctx **out)
+{
+    *out = calloc(1, sizeof **out);
+    return *out ? THX_OK : THX_ENOMEM;
+}
+
+void thx_ctx_destroy(thx_ctx **ctx)
+{
+    if (!ctx || !*ctx) return;
+    free(*ctx);
+    *ctx = NULL;
+}
+
+void thx_ctx_set_log(thx_ctx *ctx, thx_log_fn fn, void *user, thx_log_level min_level)
+{
+    ctx->log_fn = fn;
+    ctx->log_user = user;
+    ctx->log_min = min_level;
+}
+
+thx_status thx_error(thx_ctx *ctx, thx_status code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+const char *thx_ctx_message(const thx_ctx *ctx) { return ctx->message; }
+
+void thx_ctx_clear(thx_ctx *ctx) { ctx->message[0] = '\0'; }
+
+void thx_log(thx_ctx *ctx, thx_log_level level, const char *fmt, ...)
+{
+    if (!ctx->log_fn || level < ctx->log_min) return;
+    char buf[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    ctx->log_fn(ctx->log_user, level, buf);
+}
+
+const char *thx_status_name(thx_status s)
+{
+    switch (s) {
+    case THX_OK: return "ok";
+    case THX_ENOMEM: return "out of memory";
+    case THX_EIO: return "i/o error";
+    case THX_EINPUT: return "input error";
+    case THX_EGEOM: return "geometry error";
+    case THX_ESOLVER: return "solver error";
+    case THX_EINTERNAL: return "internal error";
+    case THX_ECHECK: return "check failed";
+    }
+    return "unknown error";
+}
+
+void *thx_malloc(thx_ctx *ctx, size_t size)
+{
+    void *p = malloc(size ? size : 1);
+    if (!p) thx_error(ctx, THX_ENOMEM, "out of memory (%zu bytes)", size);
+    return p;
+}
+
+void *thx_calloc(thx_ctx *ctx, size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size ? size : 1);
+    if (!p) thx_error(ctx, THX_ENOMEM, "out of memory (%zu x %zu bytes)", n, size);
+    return p;
+}
+
+void *thx_realloc(thx_ctx *ctx, void *p, size_t size)
+{
+    void *q = realloc(p, size ? size : 1);
+    if (!q) thx_error(ctx, THX_ENOMEM, "out of memory (%zu bytes)", size);
+    return q;
+}
+
+thx_status thx_grow(thx_ctx *ctx, void **arr, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return THX_OK;
+    size_t ncap = *cap ? *cap : 16;
+    while (ncap < need) ncap *= 2;
+    void *q = thx_realloc(ctx, *arr, ncap * elem);
+    if (!q) return THX_ENOMEM;
+    *arr = q;
+    *cap = ncap;
+    return THX_OK;
+}
+
+double thx_wtime(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}

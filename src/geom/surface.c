@@ -1,0 +1,42 @@
+/* thx_surface lifecycle and small vector helpers (see thorax/geom.h). */
+#include "thorax/geom.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const role_names[THX_ROLE_COUNT] = {"outer", "fat", "muscle", "lung", "heart", "other"};
+
+const char *thx_role_name(thx_role r)
+{
+    return (r >= 0 && r < THX_ROLE_COUNT) ? role_names[r] : "?";
+}
+
+int thx_role_parse(const char *s, thx_role *out)
+{
+    for (int r = 0; r < THX_ROLE_COUNT; r++)
+        if (strcmp(s, role_names[r]) == 0) { *out = (thx_role)r; return 0; }
+    return -1;
+}
+
+thx_status thx_surface_create(thx_ctx *ctx, const char *name, thx_role role, thx_surface **out)
+{
+    thx_surface *s = thx_calloc(ctx, 1, sizeof *s);
+    if (!s) return THX_ENOMEM;
+    snprintf(s->name, sizeof s->name, "%s", name);
+    s->role = role;
+    *out = s;
+    return THX_OK;
+}
+
+void thx_surface_destroy(thx_surface **s)
+{
+    if (!s || !*s) return;
+    free((*s)->xyz);
+    free((*s)->tri);
+    free(*s);
+    *s = NULL;
+}
+
+double thx_v3_norm(thx_vec3 a) { return sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }

@@ -1,0 +1,561 @@
+/*
+ * Contour files (paper 3.1): reading, validation, writing, in-memory builders.
+ * Format: docs/formats.md, "Contours".
+ */
+#include "thorax/contours.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/fileio.h"
+#include "thorax/predicates.h"
+
+/* ---- builders ---------------------------------------------------------- */
+
+thx_status thx_contours_create(thx_ctx *ctx, thx_contours **out)
+{
+    *out = thx_calloc(ctx, 1, sizeof **out);
+    return *out ? THX_OK : THX_ENOMEM;
+}
+
+void thx_contours_destroy(thx_contours **c)
+{
+    if (!c || !*c) return;
+    thx_contours *k = *c;
+    for (size_t s = 0; s < k->n_surfaces; s++) {
+        thx_contour_surface *cs = &k->surf[s];
+        for (size_t l = 0; l < cs->n_layers; l++) {
+            for (size_t i = 0; i < cs->layers[l].n_loops; i++) {
+                free(cs->layers[l].loops[i].p);
+                free(cs->layers[l].loops[i].lines);
+            }
+            free(cs->layers[l].loops);
+        }
+        free(cs->layers);
+    }
+    free(k->surf);
+    free(k);
+    *c = NULL;
+}
+
+static int find_surface(const thx_contours *c, const char *name)
+{
+    for (size_t s = 0; s < c->n_surfaces; s++)
+        if (strcmp(c->surf[s].name, name) == 0) return (int)s;
+    return -1;
+}
+
+thx_status thx_contours_add_surface(thx_ctx *ctx, thx_contours *c, const char *name, thx_role role,
+                                    thx_cap_method cap, double cap_grid, size_t *idx)
+{
+    if (strlen(name) == 0 || strlen(name) >= sizeof c->surf[0].name)
+        return thx_error(ctx, THX_EINPUT, "surface name '%s' is empty or longer than 63 characters", name);
+    if (find_surface(c, name) >= 0) return thx_error(ctx, THX_EINPUT, "surface \"%s\" declared twice", name);
+    thx_contour_surface *ns = thx_realloc(ctx, c->surf, (c->n_surfaces + 1) * sizeof *ns);
+    if (!ns) return THX_ENOMEM;
+    c->surf = ns;
+    thx_contour_surface *cs = &c->surf[c->n_surfaces];
+    memset(cs, 0, sizeof *cs);
+    snprintf(cs->name, sizeof cs->name, "%s", name);
+    cs->role = role;
+    cs->cap = cap;
+    cs->cap_grid = cap_grid;
+    if (idx) *idx = c->n_surfaces;
+    c->n_surfaces++;
+    return THX_OK;
+}
+
+/* Returns the layer of surface s at height z, appending it if z is new. */
+static thx_status surface_layer(thx_ctx *ctx, thx_contour_surface *cs, double z, int index, int line,
+                                thx_contour_layer **out)
+{
+    if (cs->n_layers && cs->layers[cs->n_layers - 1].z == z) {
+        *out = &cs->layers[cs->n_layers - 1];
+        return THX_OK;
+    }
+    thx_contour_layer *nl = thx_realloc(ctx, cs->layers, (cs->n_layers + 1) * sizeof *nl);
+    if (!nl) return THX_ENOMEM;
+    cs->layers = nl;
+    thx_contour_layer *L = &cs->layers[cs->n_layers++];
+    memset(L, 0, sizeof *L);
+    L->z = z;
+    L->index = index;
+    L->line = line;
+    *out = L;
+    return THX_OK;
+}
+
+static thx_status layer_add_loop(thx_ctx *ctx, thx_contour_layer *L, int line, thx_loop **out)
+{
+    thx_loop *nl = thx_realloc(ctx, L->loops, (L->n_loops + 1) * sizeof *nl);
+    if (!nl) return THX_ENOMEM;
+    L->loops = nl;
+    thx_loop *lp = &L->loops[L->n_loops++];
+    memset(lp, 0, sizeof *lp);
+    lp->line = line;
+    *out = lp;
+    return THX_OK;
+}
+
+thx_status thx_contours_add_loop(thx_ctx *ctx, thx_contours *c, size_t s, double z, const thx_vec2 *pts, size_t n)
+{
+    if (s >= c->n_surfaces) return thx_error(ctx, THX_EINPUT, "no surface %zu", s);
+    thx_contour_surface *cs = &c->surf[s];
+    if (cs->n_layers && z < cs->layers[cs->n_layers - 1].z)
+        return thx_error(ctx, THX_EINPUT, "surface \"%s\": layer z=%g added after z=%g", cs->name, z,
+                         cs->layers[cs->n_layers - 1].z);
+    /* The file-wide layer index: count distinct z over all surfaces lazily at write time. */
+    thx_contour_layer *L;
+    THX_CHECK(surface_layer(ctx, cs, z, -1, 0, &L));
+    thx_loop *lp;
+    THX_CHECK(layer_add_loop(ctx, L, 0, &lp));
+    lp->p = thx_malloc(ctx, (n ? n : 1) * sizeof *lp->p);
+    if (!lp->p) return THX_ENOMEM;
+    memcpy(lp->p, pts, n * sizeof *pts);
+    lp->n = n;
+    return THX_OK;
+}
+
+/* ---- validation -------------------------------------------------------- */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sorted distinct z of all layers of all surfaces. */
+static thx_status all_layer_z(thx_ctx *ctx, const thx_contours *c, double **zs, size_t *nz)
+{
+    size_t total = 0;
+    for (size_t s = 0; s < c->n_surfaces; s++) total += c->surf[s].n_layers;
+    double *z = thx_malloc(ctx, (total ? total : 1) * sizeof *z);
+    if (!z) return THX_ENOMEM;
+    size_t k = 0;
+    for (size_t s = 0; s < c->n_surfaces; s++)
+        for (size_t l = 0; l < c->surf[s].n_layers; l++) z[k++] = c->surf[s].layers[l].z;
+    qsort(z, k, sizeof *z, cmp_double);
+    size_t m = 0;
+    for (size_t i = 0; i < k; i++)
+        if (m == 0 || z[i] != z[m - 1]) z[m++] = z[i];
+    *zs = z;
+    *nz = m;
+    return THX_OK;
+}
+
+static size_t z_index(const double *zs, size_t nz, double z)
+{
+    size_t lo = 0, hi = nz;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (zs[mid] <= z) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+/* Do segments p0p1 and q0q1 intersect (touching counts)? Exact orientation tests. */
+static int segments_intersect(thx_vec2 p0, thx_vec2 p1, thx_vec2 q0, thx_vec2 q1)
+{
+    double d1 = thx_orient2d(&q0.x, &q1.x, &p0.x), d2 = thx_orient2d(&q0.x, &q1.x, &p1.x);
+    double d3 = thx_orient2d(&p0.x, &p1.x, &q0.x), d4 = thx_orient2d(&p0.x, &p1.x, &q1.x);
+    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 1;
+#define ONSEG(a, b, p) (fmin(a.x, b.x) <= p.x && p.x <= fmax(a.x, b.x) && fmin(a.y, b.y) <= p.y && p.y <= fmax(a.y, b.y))
+    if (d1 == 0 && ONSEG(q0, q1, p0)) return 1;
+    if (d2 == 0 && ONSEG(q0, q1, p1)) return 1;
+    if (d3 == 0 && ONSEG(p0, p1, q0)) return 1;
+    if (d4 == 0 && ONSEG(p0, p1, q1)) return 1;
+#undef ONSEG
+    return 0;
+}
+
+typedef struct { double x0; int i; } seg_key;
+static int cmp_seg_key(const void *a, const void *b)
+{
+    double x = ((const seg_key *)a)->x0, y = ((const seg_key *)b)->x0;
+    return (x > y) - (x < y);
+}
+
+/* Finds a pair of non-adjacent intersecting edges of a closed loop: sweep over x. */
+static int loop_self_intersection(thx_ctx *ctx, const thx_loop *lp, int *ei, int *ej)
+{
+    int n = (int)lp->n;
+    seg_key *k = malloc((size_t)n * sizeof *k);
+    if (!k) return -1;
+    for (int i = 0; i < n; i++) {
+        thx_vec2 a = lp->p[i], b = lp->p[(i + 1) % n];
+        k[i].x0 = fmin(a.x, b.x);
+        k[i].i = i;
+    }
+    qsort(k, (size_t)n, sizeof *k, cmp_seg_key);
+    int found = 0;
+    for (int s = 0; s < n && !found; s++) {
+        int i = k[s].i;
+        thx_vec2 a = lp->p[i], b = lp->p[(i + 1) % n];
+        double xmax = fmax(a.x, b.x);
+        for (int t = s + 1; t < n && k[t].x0 <= xmax; t++) {
+            int j = k[t].i;
+            if (j == i || (j + 1) % n == i || (i + 1) % n == j) continue; /* adjacent edges share a point */
+            if (segments_intersect(a, b, lp->p[j], lp->p[(j + 1) % n])) {
+                *ei = i < j ? i : j;
+                *ej = i < j ? j : i;
+                found = 1;
+                break;
+            }
+        }
+    }
+    free(k);
+    (void)ctx;
+    /* Adjacent edges folding back onto each other (a spike) also make a loop invalid. */
+    if (!found)
+        for (int i = 0; i < n; i++) {
+            thx_vec2 a = lp->p[(i + n - 1) % n], b = lp->p[i], c = lp->p[(i + 1) % n];
+            if (thx_orient2d(&a.x, &b.x, &c.x) == 0 && (a.x - b.x) * (c.x - b.x) + (a.y - b.y) * (c.y - b.y) > 0) {
+                *ei = (i + n - 1) % n;
+                *ej = i;
+                return 1;
+            }
+        }
+    return found;
+}
+
+#define LOOP_WHERE(c, cs, L, lp) \
+    (c)->path[0] ? (c)->path : "<contours>", (lp)->line ? (lp)->line : (L)->line, (cs)->name, (L)->index + 1, (L)->z
+
+thx_status thx_contours_validate(thx_ctx *ctx, const thx_contours *c)
+{
+    const char *path = c->path[0] ? c->path : "<contours>";
+    if (c->n_surfaces == 0) return thx_error(ctx, THX_EINPUT, "%s: no surfaces declared", path);
+    double *zs = NULL;
+    size_t nz = 0;
+    THX_CHECK(all_layer_z(ctx, c, &zs, &nz));
+    thx_status st = THX_OK;
+    for (size_t s = 0; s < c->n_surfaces && st == THX_OK; s++) {
+        const thx_contour_surface *cs = &c->surf[s];
+        if (cs->n_layers == 0) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" has no loops", path, cs->line, cs->name);
+            break;
+        }
+        for (size_t l = 0; l < cs->n_layers && st == THX_OK; l++) {
+            const thx_contour_layer *L = &cs->layers[l];
+            if (l > 0) {
+                const thx_contour_layer *P = &cs->layers[l - 1];
+                if (!(L->z > P->z)) {
+                    st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": layer z=%g is out of order after z=%g",
+                                   path, L->line, cs->name, L->z, P->z);
+                    break;
+                }
+                size_t ip = z_index(zs, nz, P->z), il = z_index(zs, nz, L->z);
+                if (il != ip + 1) {
+                    st = thx_error(ctx, THX_EINPUT,
+                                   "%s:%d: surface \"%s\" vanishes at z=%g and reappears at z=%g "
+                                   "(a surface must be digitized on consecutive layers)",
+                                   path, L->line, cs->name, zs[ip + 1], L->z);
+                    break;
+                }
+            }
+            if (!isfinite(L->z)) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: layer z is not finite", path, L->line);
+                break;
+            }
+            for (size_t i = 0; i < L->n_loops && st == THX_OK; i++) {
+                const thx_loop *lp = &L->loops[i];
+                const thx_contour_layer *LL = L;
+                thx_contour_layer tmp = *L;
+                tmp.index = L->index >= 0 ? L->index : (int)z_index(zs, nz, L->z);
+                LL = &tmp;
+                if (lp->n < 3) {
+                    st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" layer %d (z=%g): loop has %zu point%s (at least 3 needed)",
+                                   LOOP_WHERE(c, cs, LL, lp), lp->n, lp->n == 1 ? "" : "s");
+                    break;
+                }
+                for (size_t k = 0; k < lp->n; k++) {
+                    thx_vec2 a = lp->p[k], b = lp->p[(k + 1) % lp->n];
+                    int line = lp->lines ? lp->lines[k] : lp->line;
+                    if (!isfinite(a.x) || !isfinite(a.y)) {
+                        st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" layer %d (z=%g): point %zu is not finite",
+                                       path, line, cs->name, LL->index + 1, L->z, k + 1);
+                        break;
+                    }
+                    if (a.x == b.x && a.y == b.y) {
+                        int bl = lp->lines ? lp->lines[(k + 1) % lp->n] : lp->line;
+                        st = thx_error(ctx, THX_EINPUT,
+                                       "%s:%d: surface \"%s\" layer %d (z=%g): point %zu repeats point %zu (%g, %g)%s",
+                                       path, bl, cs->name, LL->index + 1, L->z, (k + 1) % lp->n + 1, k + 1, a.x, a.y,
+                                       k + 1 == lp->n ? " (do not repeat the first point to close a loop)" : "");
+                        break;
+                    }
+                }
+                if (st != THX_OK) break;
+                int ei = 0, ej = 0;
+                int r = loop_self_intersection(ctx, lp, &ei, &ej);
+                if (r < 0) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); break; }
+                if (r > 0) {
+                    int line = lp->lines ? lp->lines[ei] : lp->line;
+                    st = thx_error(ctx, THX_EINPUT,
+                                   "%s:%d: surface \"%s\" layer %d (z=%g): loop intersects itself "
+                                   "(edge %d-%d crosses edge %d-%d)",
+                                   path, line, cs->name, LL->index + 1, L->z, ei + 1, (int)((ei + 1) % lp->n) + 1,
+                                   ej + 1, (int)((ej + 1) % lp->n) + 1);
+                    break;
+                }
+            }
+        }
+    }
+    free(zs);
+    return st;
+}
+
+/* ---- reading ----------------------------------------------------------- */
+
+typedef struct {
+    thx_ctx *ctx;
+    const char *name;
+    int line;
+} parse_state;
+
+static char *next_token(char **s)
+{
+    char *p = *s;
+    while (*p && isspace((unsigned char)*p)) p++;
+    if (!*p) { *s = p; return NULL; }
+    char *t = p;
+    while (*p && !isspace((unsigned char)*p)) p++;
+    if (*p) *p++ = '\0';
+    *s = p;
+    return t;
+}
+
+static int parse_num(const char *t, double *v)
+{
+    char *end;
+    *v = strtod(t, &end);
+    return end != t && *end == '\0';
+}
+
+thx_status thx_contours_parse(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out)
+{
+    thx_contours *c = NULL;
+    thx_status st = THX_OK;
+    char *buf = thx_malloc(ctx, len + 1);
+    if (!buf) return THX_ENOMEM;
+    memcpy(buf, text, len);
+    buf[len] = '\0';
+    THX_TRY(thx_contours_create(ctx, &c));
+    snprintf(c->path, sizeof c->path, "%s", name);
+
+    int line = 0, seen_header = 0, seen_end = 0, n_layers = 0, direction = 0;
+    double scale = 1.0, layer_z = NAN;
+    int layer_line = 0;
+    thx_loop *cur = NULL;
+    size_t cur_cap = 0;
+    int nonblank = 0;
+    char *p = buf;
+    while (*p) {
+        char *eol = strchr(p, '\n');
+        char *next = eol ? eol + 1 : p + strlen(p);
+        if (eol) *eol = '\0';
+        line++;
+        char *hash = strchr(p, '#');
+        if (hash) *hash = '\0';
+        char *cursor = p;
+        char *kw = next_token(&cursor);
+        p = next;
+        if (!kw) continue;
+        nonblank++;
+        if (seen_end) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: text after 'end'", name, line);
+            goto done;
+        }
+        if (!seen_header) {
+            char *ver = next_token(&cursor);
+            if (strcmp(kw, "thorax-contours") != 0 || !ver || strcmp(ver, "1") != 0) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: not a thorax contour file (expected 'thorax-contours 1' as the first line)", name, line);
+                goto done;
+            }
+            seen_header = 1;
+            continue;
+        }
+        double x, y;
+        if (parse_num(kw, &x)) {
+            char *t2 = next_token(&cursor);
+            char *t3 = next_token(&cursor);
+            if (!cur) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: point outside a loop (a 'loop NAME' line must come first)", name, line);
+                goto done;
+            }
+            if (!t2 || t3 || !parse_num(t2, &y)) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: a point is two numbers 'x y'", name, line);
+                goto done;
+            }
+            if (cur->n + 1 > cur_cap) {
+                size_t ncap = cur_cap ? cur_cap * 2 : 64;
+                thx_vec2 *np = thx_realloc(ctx, cur->p, ncap * sizeof *np);
+                if (!np) { st = THX_ENOMEM; goto done; }
+                cur->p = np;
+                int *nl = thx_realloc(ctx, cur->lines, ncap * sizeof *nl);
+                if (!nl) { st = THX_ENOMEM; goto done; }
+                cur->lines = nl;
+                cur_cap = ncap;
+            }
+            cur->p[cur->n].x = x * scale;
+            cur->p[cur->n].y = y * scale;
+            cur->lines[cur->n] = line;
+            cur->n++;
+            continue;
+        }
+        cur = NULL;
+        cur_cap = 0;
+        if (strcmp(kw, "units") == 0) {
+            char *u = next_token(&cursor);
+            if (n_layers > 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: 'units' must come before the first layer", name, line); goto done; }
+            if (u && strcmp(u, "mm") == 0) scale = 1.0;
+            else if (u && strcmp(u, "cm") == 0) scale = 10.0;
+            else if (u && strcmp(u, "m") == 0) scale = 1000.0;
+            else { st = thx_error(ctx, THX_EINPUT, "%s:%d: unknown units '%s' (mm, cm or m)", name, line, u ? u : ""); goto done; }
+        } else if (strcmp(kw, "surface") == 0) {
+            char *sname = next_token(&cursor), *srole = next_token(&cursor);
+            thx_role role;
+            if (!sname || !srole) { st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'surface NAME ROLE [cap polygon|grid [SPACING]]'", name, line); goto done; }
+            if (thx_role_parse(srole, &role) != 0) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": unknown role '%s' (outer, fat, muscle, lung, heart, other)", name, line, sname, srole);
+                goto done;
+            }
+            thx_cap_method cap = THX_CAP_GRID;
+            double grid = 0;
+            char *t = next_token(&cursor);
+            if (t) {
+                char *m = next_token(&cursor);
+                if (strcmp(t, "cap") != 0 || !m) { st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": expected 'cap polygon' or 'cap grid [SPACING]' after the role", name, line, sname); goto done; }
+                if (strcmp(m, "polygon") == 0) cap = THX_CAP_POLYGON;
+                else if (strcmp(m, "grid") == 0) cap = THX_CAP_GRID;
+                else { st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": unknown cap method '%s' (polygon or grid)", name, line, sname, m); goto done; }
+                char *g = next_token(&cursor);
+                if (g && (cap != THX_CAP_GRID || !parse_num(g, &grid) || !(grid > 0) || !isfinite(grid))) {
+                    st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": bad grid spacing '%s'", name, line, sname, g);
+                    goto done;
+                }
+                grid *= scale;
+                if (next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": unexpected text after the cap", name, line, sname); goto done; }
+            }
+            if (n_layers > 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" declared after the first layer", name, line, sname); goto done; }
+            size_t idx;
+            THX_TRY(thx_contours_add_surface(ctx, c, sname, role, cap, grid, &idx));
+            c->surf[idx].line = line;
+            if (st != THX_OK) goto done;
+        } else if (strcmp(kw, "layer") == 0) {
+            char *zt = next_token(&cursor);
+            double z;
+            if (!zt || !parse_num(zt, &z) || next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'layer Z' with Z in the file's units", name, line); goto done; }
+            if (!isfinite(z)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: layer z is not finite", name, line); goto done; }
+            z *= scale;
+            if (n_layers > 0) {
+                if (z == layer_z) { st = thx_error(ctx, THX_EINPUT, "%s:%d: layer z=%g duplicates the layer at line %d", name, line, z, layer_line); goto done; }
+                int d = z > layer_z ? 1 : -1;
+                if (direction == 0) direction = d;
+                else if (d != direction) {
+                    st = thx_error(ctx, THX_EINPUT, "%s:%d: layer z=%g is out of order (layers must run %s in z; previous z=%g)", name, line, z,
+                                   direction > 0 ? "upward" : "downward", layer_z);
+                    goto done;
+                }
+            }
+            layer_z = z;
+            layer_line = line;
+            n_layers++;
+        } else if (strcmp(kw, "loop") == 0) {
+            char *sname = next_token(&cursor);
+            if (!sname || next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'loop SURFACE'", name, line); goto done; }
+            if (n_layers == 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: loop before the first 'layer' line", name, line); goto done; }
+            int s = find_surface(c, sname);
+            if (s < 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: loop of undeclared surface \"%s\"", name, line, sname); goto done; }
+            thx_contour_layer *L;
+            THX_TRY(surface_layer(ctx, &c->surf[s], layer_z, n_layers - 1, layer_line, &L));
+            THX_TRY(layer_add_loop(ctx, L, line, &cur));
+        } else if (strcmp(kw, "end") == 0) {
+            seen_end = 1;
+        } else {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: unknown keyword '%s'", name, line, kw);
+            goto done;
+        }
+    }
+    if (nonblank == 0) { st = thx_error(ctx, THX_EINPUT, "%s: empty file", name); goto done; }
+    if (!seen_end) { st = thx_error(ctx, THX_EINPUT, "%s:%d: truncated file (no 'end' line)", name, line); goto done; }
+    c->n_layers = (size_t)n_layers;
+    /* Layers were read in file order; store each surface's layers by increasing z. */
+    if (direction < 0)
+        for (size_t s = 0; s < c->n_surfaces; s++) {
+            thx_contour_surface *cs = &c->surf[s];
+            for (size_t i = 0, j = cs->n_layers ? cs->n_layers - 1 : 0; i < j; i++, j--) {
+                thx_contour_layer t = cs->layers[i];
+                cs->layers[i] = cs->layers[j];
+                cs->layers[j] = t;
+            }
+            for (size_t i = 0; i < cs->n_layers; i++) cs->layers[i].index = n_layers - 1 - cs->layers[i].index;
+        }
+    THX_TRY(thx_contours_validate(ctx, c));
+done:
+    free(buf);
+    if (st != THX_OK) thx_contours_destroy(&c);
+    *out = c;
+    return st;
+}
+
+thx_status thx_contours_read(thx_ctx *ctx, const char *path, thx_contours **out)
+{
+    char *text = NULL;
+    size_t len = 0;
+    *out = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    thx_status st = thx_contours_parse(ctx, path, text, len, out);
+    free(text);
+    return st;
+}
+
+/* ---- writing ----------------------------------------------------------- */
+
+thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *path, const char *comment)
+{
+    double *zs = NULL;
+    size_t nz = 0;
+    THX_CHECK(all_layer_z(ctx, c, &zs, &nz));
+    thx_atomic_file af;
+    thx_status st = thx_atomic_open(ctx, path, &af);
+    if (st != THX_OK) { free(zs); return st; }
+    FILE *f = af.f;
+    fprintf(f, "thorax-contours 1\n");
+    if (comment && comment[0]) {
+        const char *p = comment;
+        while (*p) {
+            const char *e = strchr(p, '\n');
+            int n = e ? (int)(e - p) : (int)strlen(p);
+            fprintf(f, "# %.*s\n", n, p);
+            p += n + (e ? 1 : 0);
+        }
+    }
+    fprintf(f, "units mm\n");
+    for (size_t s = 0; s < c->n_surfaces; s++) {
+        const thx_contour_surface *cs = &c->surf[s];
+        fprintf(f, "surface %s %s cap %s", cs->name, thx_role_name(cs->role), cs->cap == THX_CAP_POLYGON ? "polygon" : "grid");
+        if (cs->cap == THX_CAP_GRID && cs->cap_grid > 0) fprintf(f, " %.17g", cs->cap_grid);
+        fprintf(f, "\n");
+    }
+    size_t *pos = calloc(c->n_surfaces ? c->n_surfaces : 1, sizeof *pos);
+    if (!pos) { thx_atomic_abort(&af); free(zs); return thx_error(ctx, THX_ENOMEM, "out of memory"); }
+    for (size_t k = 0; k < nz; k++) {
+        fprintf(f, "layer %.17g\n", zs[k]);
+        for (size_t s = 0; s < c->n_surfaces; s++) {
+            const thx_contour_surface *cs = &c->surf[s];
+            if (pos[s] >= cs->n_layers || cs->layers[pos[s]].z != zs[k]) continue;
+            const thx_contour_layer *L = &cs->layers[pos[s]++];
+            for (size_t i = 0; i < L->n_loops; i++) {
+                fprintf(f, "loop %s\n", cs->name);
+                for (size_t j = 0; j < L->loops[i].n; j++) fprintf(f, "%.6f %.6f\n", L->loops[i].p[j].x, L->loops[i].p[j].y);
+            }
+        }
+    }
+    fprintf(f, "end\n");
+    free(pos);
+    free(zs);
+    return thx_atomic_commit(ctx, &af);
+}
