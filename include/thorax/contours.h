@@ -55,6 +55,7 @@ typedef struct {
 typedef struct {
     char path[512];    /* file the contours came from ("" if built in memory) */
     size_t n_layers;   /* number of layers in the file (all surfaces together) */
+    double spacing;    /* suggested node spacing for resampling, mm (0 = not given) */
     size_t n_surfaces;
     thx_contour_surface *surf;
 } thx_contours;

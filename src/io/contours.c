@@ -414,6 +414,14 @@ thx_status thx_contours_parse(thx_ctx *ctx, const char *name, const char *text, 
             else if (u && strcmp(u, "cm") == 0) scale = 10.0;
             else if (u && strcmp(u, "m") == 0) scale = 1000.0;
             else { st = thx_error(ctx, THX_EINPUT, "%s:%d: unknown units '%s' (mm, cm or m)", name, line, u ? u : ""); goto done; }
+        } else if (strcmp(kw, "spacing") == 0) {
+            char *t = next_token(&cursor);
+            double v;
+            if (!t || !parse_num(t, &v) || !(v > 0) || !isfinite(v) || next_token(&cursor)) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'spacing S' with S > 0 (node spacing, file units)", name, line);
+                goto done;
+            }
+            c->spacing = v * scale;
         } else if (strcmp(kw, "surface") == 0) {
             char *sname = next_token(&cursor), *srole = next_token(&cursor);
             thx_role role;
@@ -534,6 +542,7 @@ thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *p
         }
     }
     fprintf(f, "units mm\n");
+    if (c->spacing > 0) fprintf(f, "spacing %.17g\n", c->spacing);
     for (size_t s = 0; s < c->n_surfaces; s++) {
         const thx_contour_surface *cs = &c->surf[s];
         fprintf(f, "surface %s %s cap %s", cs->name, thx_role_name(cs->role), cs->cap == THX_CAP_POLYGON ? "polygon" : "grid");
