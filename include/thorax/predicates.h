@@ -6,15 +6,30 @@
  * bound cannot decide the sign, an exact evaluation). The magnitude is only an
  * approximation of the determinant.
  *
- *  thx_orient2d(a,b,c) > 0  iff a, b, c are counterclockwise (positive area).
- *  thx_orient3d(a,b,c,d) > 0 iff d lies below the plane of a, b, c, where
- *      "below" means a, b, c appear counterclockwise seen from d's side ... with
- *      the convention det[b-a, c-a, d-a] < 0 ... see predicates.c for the exact
- *      statement; = 0 iff coplanar.
- *  thx_incircle(a,b,c,d) > 0 iff d is inside the circle through a, b, c
- *      (a, b, c counterclockwise).
- *  thx_insphere(a,b,c,d,e) > 0 iff e is inside the sphere through a, b, c, d
- *      (with thx_orient3d(a,b,c,d) > 0).
+ * Points are arrays of 2 (orient2d, incircle) or 3 (orient3d, insphere)
+ * doubles. Signs:
+ *
+ *  thx_orient2d(a,b,c) = det[a-c; b-c] (2x2, rows) = twice the signed area of
+ *      triangle a, b, c: > 0 iff a, b, c are counterclockwise (seen from +z,
+ *      x to the right, y up), < 0 iff clockwise, = 0 iff collinear.
+ *  thx_orient3d(a,b,c,d) = det[a-d; b-d; c-d] (3x3, rows): > 0 iff d lies
+ *      below the plane of a, b, c, "below" meaning on the side from which
+ *      a, b, c appear clockwise; equivalently a, b, c appear counterclockwise
+ *      seen from above (from the side opposite to d), i.e. d is on the side
+ *      opposite to the normal (b-a) x (c-a). = 0 iff coplanar.
+ *      Example: orient3d((0,0,0),(1,0,0),(0,1,0),(0,0,-1)) > 0.
+ *  thx_incircle(a,b,c,d) > 0 iff d lies strictly inside the circle through
+ *      a, b, c when a, b, c are counterclockwise (orient2d(a,b,c) > 0);
+ *      < 0 outside; = 0 iff the four points are cocircular. (If a, b, c are
+ *      clockwise the sign is reversed.)
+ *  thx_insphere(a,b,c,d,e) > 0 iff e lies strictly inside the sphere through
+ *      a, b, c, d when orient3d(a,b,c,d) > 0; < 0 outside; = 0 iff the five
+ *      points are cospherical. (Reversed if orient3d(a,b,c,d) < 0.)
+ *
+ * Assumptions: IEEE binary64, round to nearest, no overflow/underflow in
+ * the products (|coordinates| within about 1e-60 .. 1e60, or 0). The calls
+ * are pure and thread-safe; the exact fallback of insphere uses ~130 kB of
+ * stack.
  */
 #ifndef THORAX_PREDICATES_H
 #define THORAX_PREDICATES_H

@@ -1,5 +1,4 @@
 /* The context: last error message and log sink (see thorax/core.h). */
-#define _POSIX_C_SOURCE 200809L
 #include "thorax/core.h"
 
 #include <stdio.h>

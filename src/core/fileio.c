@@ -1,5 +1,4 @@
 /* Atomic file and directory output (see thorax/fileio.h). */
-#define _GNU_SOURCE
 #include "thorax/fileio.h"
 
 #include <dirent.h>

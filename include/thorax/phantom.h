@@ -1,0 +1,102 @@
+/*
+ * thorax/phantom.h — a synthetic, anatomically plausible human thorax, delivered
+ * the way the paper's model started (section 3.1): as hand-digitized contours.
+ *
+ * Six surfaces, in this order (name, role, cap):
+ *   torso   outer   grid     outer boundary of the torso
+ *   fat     fat     grid     subcutaneous fat / skeletal muscle interface
+ *   muscle  muscle  grid     inner border of the skeletal muscle
+ *   lung_r  lung    polygon  right lung (subject's right, +x)
+ *   lung_l  lung    polygon  left lung (smaller: cardiac notch)
+ *   heart   heart   grid     epicardium
+ * Nesting, on every layer: heart, lung_r and lung_l lie strictly inside muscle,
+ * muscle inside fat inside torso, lungs and heart pairwise disjoint; the smooth
+ * outlines keep at least THX_PHANTOM_MIN_GAP mm between any two surfaces, and
+ * inner surfaces start and end at least one layer inside their container, so
+ * no two caps share a plane. The lower lung layers are crescents whose concave
+ * medial side wraps the heart and the diaphragm domes (the case of paper 3.2,
+ * Figure 2B, that lacing must handle).
+ *
+ * Digitization imitates a person with a mouse (paper 3.1, "inevitably jagged
+ * hand-digitized point set"; 3.2 "Manual editing": layer shifts from breathing):
+ * uneven point spacing (closer where the outline bends), jitter normal to the
+ * outline, a random start point, a random direction per loop, and a random
+ * (x, y) shift of each whole layer. Jitter and shifts are bounded (2.5 sigma)
+ * so that they can never close a gap.
+ *
+ * Resolutions (paper 3.3, the two models of one set of scans):
+ *   THX_PHANTOM_HIGH    every layer, 5 mm apart, "spacing 5";
+ *   THX_PHANTOM_MEDIUM  every second layer (10 mm), "spacing 11".
+ * The layers of the medium phantom are exactly the even layers of the high
+ * phantom of the same seed: each loop is drawn from its own random stream,
+ * keyed by (seed, layer, surface).
+ *
+ * Determinism: the same options give identical contours on every platform with
+ * IEEE doubles (a private splitmix64 generator; never rand()).
+ * Coordinates RAS, millimetres (see geom.h); layer k lies at z = 5 k.
+ */
+#ifndef THORAX_PHANTOM_H
+#define THORAX_PHANTOM_H
+
+#include "thorax/contours.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum { THX_PHANTOM_HIGH = 0, THX_PHANTOM_MEDIUM = 1 };
+
+/* Number of surfaces of the phantom, and the smallest distance (mm) between the
+ * smooth outlines of any two surfaces on any layer (before jitter). */
+#define THX_PHANTOM_N_SURFACES 6
+#define THX_PHANTOM_MIN_GAP 6.5
+
+typedef struct {
+    int resolution;      /* THX_PHANTOM_HIGH or THX_PHANTOM_MEDIUM (default MEDIUM) */
+    unsigned long seed;  /* random seed (default 1) */
+    double jitter_mm;    /* standard deviation of the point jitter normal to the outline
+                            (default 0.6; bounded at 2.5 sigma, at most 1.5 mm) */
+    double shift_mm;     /* standard deviation of each layer's (x, y) shift (default 1.0;
+                            bounded at 2.5 sigma) */
+} thx_phantom_opts;
+
+/* Fills the defaults listed above. */
+void thx_phantom_opts_default(thx_phantom_opts *o);
+
+/* Node spacing (mm) written as the file's "spacing": 5 (high) or 11 (medium). */
+double thx_phantom_spacing(int resolution);
+
+/* Builds the digitized contours. spacing is set to thx_phantom_spacing();
+ * cap grids use the resampling spacing (cap_grid = 0). The result passes
+ * thx_contours_validate. Caller destroys *out. Errors: THX_EINPUT for bad
+ * options, THX_EINTERNAL if the phantom breaks its own invariants (a bug). */
+thx_status thx_phantom_contours(thx_ctx *ctx, const thx_phantom_opts *o, thx_contours **out);
+
+/* Expected size of the surface model built from the phantom, from its smooth
+ * (un-jittered) outlines, following the surface builder's rules:
+ *   each loop is resampled into max(3, round(L / S)) nodes (L its perimeter,
+ *   S the spacing); a grid cap adds about area / S^2 nodes, a polygon cap none;
+ *   a closed surface of V nodes has 2 V - 4 triangles. */
+typedef struct {
+    char name[16];
+    int first_layer, last_layer; /* layer indices k (z = 5 k) of the end loops */
+    size_t layers;               /* layers used at this resolution */
+    size_t loop_nodes, cap_nodes, nodes, triangles;
+} thx_phantom_surface_count;
+
+typedef struct {
+    size_t layers;               /* distinct layers at this resolution */
+    size_t loops;                /* loops digitized */
+    size_t loop_nodes, cap_nodes;
+    size_t nodes, triangles;     /* totals over the surfaces */
+    double min_gap;              /* smallest distance between smooth outlines on a layer, mm */
+    thx_phantom_surface_count surf[THX_PHANTOM_N_SURFACES];
+} thx_phantom_counts;
+
+/* Computes the estimate above for o->resolution (the seed does not matter). */
+thx_status thx_phantom_estimate(thx_ctx *ctx, const thx_phantom_opts *o, thx_phantom_counts *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,117 @@
+/*
+ * thorax/surfaces.h — from digitized contours to closed, oriented triangle
+ * surfaces (paper 3.1 "From MRI to points", 3.2 "Surface Segmentation").
+ *
+ *   contours --(3.1: periodic smoothing spline, arc-length resampling)--> layers
+ *   layers   --(3.2: lacing adjacent layers, slice by slice)--> open surfaces
+ *            --(3.2: end caps, outward orientation by the inside test)--> model
+ *
+ * Invariants of a built surface: closed 2-manifold, every triangle
+ * counterclockwise seen from outside, nodes of a layer lie exactly in its plane.
+ */
+#ifndef THORAX_SURFACES_H
+#define THORAX_SURFACES_H
+
+#include "thorax/contours.h"
+#include "thorax/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- layers (3.1) ------------------------------------------------------- */
+
+/*
+ * Fits a closed parametric cubic smoothing spline x(t), y(t) (t = chord length)
+ * to a digitized loop and resamples it at constant arc-length spacing.
+ *   smoothing: bandwidth of the smoothing, mm (0 = interpolating spline). The
+ *              spline minimizes sum |p_i - s(t_i)|^2 + lambda * int |s''|^2 with
+ *              lambda = smoothing^4 * (points per mm), so the same value smooths
+ *              alike whatever the digitization density.
+ *   spacing:   target node spacing along the curve, mm. The loop gets
+ *              N = max(3, round(L / spacing)) nodes exactly L/N apart in arc length.
+ *   start:     the first node is the curve point nearest this point (the
+ *              anatomical start point, paper 3.2 step 1).
+ * The result runs counterclockwise seen cranio-caudally (positive area),
+ * whatever the input direction. *out is allocated (caller frees).
+ */
+thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n, double spacing, double smoothing,
+                             thx_vec2 start, thx_vec2 **out, size_t *n_out);
+
+/* ---- lacing (3.2) ------------------------------------------------------- */
+
+typedef struct {
+    double spacing;        /* node spacing of the layers, mm (scales the tolerances) */
+    double concave_tol;    /* a triangle is outside the surface if its centroid lies more than
+                              concave_tol * spacing outside the layer curves interpolated to its height */
+    double max_edge;       /* an edge longer than max_edge * max(spacing, layer gap) makes a triangle "too large" */
+    int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
+} thx_lace_opts;
+
+typedef struct {
+    size_t n_tris;
+    size_t removed;        /* triangles of the shortest-diagonal lacing removed as outside (concave) */
+    size_t relaced_gaps;   /* gaps re-triangulated */
+    size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, caps excluded) */
+    size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
+    size_t too_large;      /* triangles with an edge longer than the max_edge bound */
+    int max_fan;           /* largest number of triangles at one node of this slice */
+} thx_lace_stats;
+
+void thx_lace_opts_default(thx_lace_opts *o);
+
+/* One layer's worth of a surface in a slice: a closed chain of nodes. Node ids
+ * may repeat (bridges joining two loops of a branching surface). */
+typedef struct {
+    size_t n;
+    const thx_vec2 *p;     /* n points */
+    const int32_t *id;     /* n node ids written into the triangles */
+    double z;
+} thx_chain;
+
+/*
+ * Laces chain a (lower layer) with chain b (upper layer) into triangles
+ * (node ids from the chains), by the shortest-diagonal rule on the two chains
+ * normalized to a common centroid and size (so layers of very different size or
+ * offset do not fan), then removes triangles outside the surface (concave
+ * regions), re-laces each gap optimally among valid triangles, and where no
+ * valid lacing exists cuts the concave pocket off with triangles in the plane of
+ * its layer. Both chains counterclockwise seen from above. Appends 3 ids per
+ * triangle to *tris (grown with thx_grow; *n_tris, *cap updated).
+ */
+thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o,
+                    int32_t **tris, size_t *n_tris, size_t *cap, thx_lace_stats *stats);
+
+/* ---- whole surfaces ------------------------------------------------------ */
+
+typedef struct {
+    double spacing;        /* node spacing, mm; 0 = the contour file's `spacing`, else 5 */
+    double smoothing;      /* spline smoothing bandwidth, mm */
+    thx_vec2 start;        /* anatomical start point (default: anterior midline, (0, 1000)) */
+    int cap_method;        /* -1: per surface (contour file); else a thx_cap_method for all */
+    double cap_grid;       /* grid spacing for grid caps, mm; 0 = the surface's, else the node spacing */
+    thx_lace_opts lace;
+} thx_surfaces_opts;
+
+typedef struct {
+    size_t n_nodes, n_tris;
+    size_t n_loops, n_slices, n_branch_slices, n_caps;
+    thx_lace_stats lace;             /* summed over slices */
+    size_t orient_by_test;           /* triangles oriented by the inside test */
+    size_t orient_by_neighbours;     /* ambiguous test: oriented from neighbours */
+    size_t orient_flipped;           /* triangles whose stored order the test reversed */
+    double t_layers, t_lace, t_caps, t_orient, t_total; /* seconds */
+} thx_surfaces_stats;
+
+void thx_surfaces_opts_default(thx_surfaces_opts *o);
+
+/* Builds one closed surface per contour surface. `provenance_json`, if not NULL,
+ * is stored in the model. Per-surface statistics go to stats[s] when stats is
+ * not NULL (array of c->n_surfaces), totals to *total when not NULL. */
+thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_surfaces_opts *o, thx_model **out,
+                              thx_surfaces_stats *stats, thx_surfaces_stats *total);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,622 @@
+/*
+ * Surfaces from contours (paper 3.1-3.2): the whole pipeline for every surface
+ *   1. layers: each loop -> smoothing spline -> nodes at constant spacing,
+ *      counterclockwise, starting nearest the anatomical start point;
+ *   2. slices: the loops of adjacent layers are matched by overlap; a group of
+ *      matched loops with more than one loop on a layer (a branching surface)
+ *      is joined into one chain by bridges between nearest nodes; each group is
+ *      laced (lace.c);
+ *   3. caps: every loop with no partner on the layer below (above) is closed by
+ *      a cap in its plane, triangulating the loop itself or a grid inside it;
+ *   4. orientation: every triangle is tested as in the paper: the two candidate
+ *      normal endpoints are classified inside/outside the surface (by the layer
+ *      curves, interpolated between layers); the one outside gives the outward
+ *      side and the triangle is stored counterclockwise seen from it. Triangles
+ *      the test cannot decide take the orientation of decided neighbours.
+ * Node numbering per surface: layer by layer (increasing z), loop by loop, then
+ * the cap grid nodes.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/cdt.h"
+#include "thorax/inside.h"
+#include "thorax/surfaces.h"
+
+void thx_surfaces_opts_default(thx_surfaces_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->spacing = 0;
+    o->smoothing = 2.0;
+    o->start.x = 0;
+    o->start.y = 1000.0;
+    o->cap_method = -1;
+    o->cap_grid = 0;
+    thx_lace_opts_default(&o->lace);
+}
+
+typedef struct {
+    size_t n;
+    thx_vec2 *p;
+    int32_t first; /* node id of p[0]; nodes are consecutive */
+    int down, up;  /* has a partner loop on the layer below / above */
+} rloop;
+
+typedef struct {
+    double z;
+    size_t n_loops;
+    rloop *loops;
+} rlayer;
+
+/* A chain owned by a slice (merged loops). */
+typedef struct {
+    thx_chain c;
+    thx_vec2 *p;
+    int32_t *id;
+} owned_chain;
+
+typedef struct {
+    size_t n_groups;
+    owned_chain *ga, *gb; /* per group: chain on the lower and upper layer */
+    int32_t *tris;
+    size_t n_tris, cap;
+    thx_lace_stats st;
+    int branch;
+} slice;
+
+static double signed_dist_chain(const thx_chain *c, thx_vec2 p)
+{
+    double best = INFINITY;
+    int wn = 0;
+    for (size_t k = 0; k < c->n; k++) {
+        thx_vec2 a = c->p[k], b = c->p[k + 1 == c->n ? 0 : k + 1];
+        double ex = b.x - a.x, ey = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
+        double l2 = ex * ex + ey * ey;
+        double t = l2 > 0 ? (px * ex + py * ey) / l2 : 0;
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        double dx = px - t * ex, dy = py - t * ey, d2 = dx * dx + dy * dy;
+        if (d2 < best) best = d2;
+        double cr = ex * py - ey * px;
+        if (a.y <= p.y) {
+            if (b.y > p.y && cr > 0) wn++;
+        } else if (b.y <= p.y && cr < 0) wn--;
+    }
+    return wn != 0 ? -sqrt(best) : sqrt(best);
+}
+
+/* Do the projections of two loops overlap? */
+static int loops_overlap(const rloop *a, const rloop *b)
+{
+    double ax0 = INFINITY, ax1 = -INFINITY, ay0 = INFINITY, ay1 = -INFINITY;
+    double bx0 = INFINITY, bx1 = -INFINITY, by0 = INFINITY, by1 = -INFINITY;
+    for (size_t k = 0; k < a->n; k++) { ax0 = fmin(ax0, a->p[k].x); ax1 = fmax(ax1, a->p[k].x); ay0 = fmin(ay0, a->p[k].y); ay1 = fmax(ay1, a->p[k].y); }
+    for (size_t k = 0; k < b->n; k++) { bx0 = fmin(bx0, b->p[k].x); bx1 = fmax(bx1, b->p[k].x); by0 = fmin(by0, b->p[k].y); by1 = fmax(by1, b->p[k].y); }
+    if (ax1 < bx0 || bx1 < ax0 || ay1 < by0 || by1 < ay0) return 0;
+    thx_chain ca = {a->n, a->p, NULL, 0}, cb = {b->n, b->p, NULL, 0};
+    size_t step_a = a->n / 16 + 1, step_b = b->n / 16 + 1;
+    for (size_t k = 0; k < a->n; k += step_a) if (signed_dist_chain(&cb, a->p[k]) < 0) return 1;
+    for (size_t k = 0; k < b->n; k += step_b) if (signed_dist_chain(&ca, b->p[k]) < 0) return 1;
+    for (size_t k = 0; k < a->n; k++) if (signed_dist_chain(&cb, a->p[k]) < 0) return 1;
+    for (size_t k = 0; k < b->n; k++) if (signed_dist_chain(&ca, b->p[k]) < 0) return 1;
+    return 0;
+}
+
+/* Joins loops (indices sel[0..m-1] of layer L) into one chain with bridges between nearest nodes. */
+static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int m, owned_chain *out)
+{
+    size_t total = 0;
+    for (int k = 0; k < m; k++) total += L->loops[sel[k]].n + 2;
+    out->p = thx_malloc(ctx, total * sizeof *out->p);
+    out->id = thx_malloc(ctx, total * sizeof *out->id);
+    if (!out->p || !out->id) return THX_ENOMEM;
+    const rloop *l0 = &L->loops[sel[0]];
+    size_t n = l0->n;
+    for (size_t k = 0; k < n; k++) { out->p[k] = l0->p[k]; out->id[k] = l0->first + (int32_t)k; }
+    for (int g = 1; g < m; g++) {
+        const rloop *q = &L->loops[sel[g]];
+        double best = INFINITY;
+        size_t bp = 0, bq = 0;
+        for (size_t i = 0; i < n; i++)
+            for (size_t j = 0; j < q->n; j++) {
+                double d = hypot(out->p[i].x - q->p[j].x, out->p[i].y - q->p[j].y);
+                if (d < best) { best = d; bp = i; bq = j; }
+            }
+        /* chain[0..bp], q[bq..bq-1], q[bq], chain[bp..n-1] */
+        size_t ins = q->n + 2;
+        memmove(out->p + bp + 1 + ins, out->p + bp + 1, (n - bp - 1) * sizeof *out->p);
+        memmove(out->id + bp + 1 + ins, out->id + bp + 1, (n - bp - 1) * sizeof *out->id);
+        for (size_t s = 0; s <= q->n; s++) {
+            size_t j = (bq + s) % q->n;
+            out->p[bp + 1 + s] = q->p[j];
+            out->id[bp + 1 + s] = q->first + (int32_t)j;
+        }
+        out->p[bp + 1 + q->n + 1] = out->p[bp];
+        out->id[bp + 1 + q->n + 1] = out->id[bp];
+        n += ins;
+    }
+    out->c.n = n;
+    out->c.p = out->p;
+    out->c.id = out->id;
+    out->c.z = L->z;
+    return THX_OK;
+}
+
+/* Layered inside test: signed distance at p (negative inside), from the chains
+ * of the slice containing p.z, interpolated in z. Outside the layer range: +inf. */
+static double layered_sdf(const rlayer *layers, size_t nl, const slice *slices, thx_vec3 p)
+{
+    if (nl == 0 || p.z < layers[0].z || p.z > layers[nl - 1].z) return INFINITY;
+    if (nl == 1) return INFINITY;
+    size_t lo = 0, hi = nl - 1;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (layers[mid].z <= p.z) lo = mid; else hi = mid;
+    }
+    const slice *s = &slices[lo];
+    double t = (p.z - layers[lo].z) / (layers[lo + 1].z - layers[lo].z);
+    thx_vec2 q = {p.x, p.y};
+    double best = INFINITY;
+    for (size_t g = 0; g < s->n_groups; g++) {
+        double d = (1 - t) * signed_dist_chain(&s->ga[g].c, q) + t * signed_dist_chain(&s->gb[g].c, q);
+        if (d < best) best = d;
+    }
+    return best;
+}
+
+typedef struct { int32_t a, b; int32_t t; } edge_rec;
+static int cmp_edge(const void *x, const void *y)
+{
+    const edge_rec *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    if (p->b != q->b) return p->b < q->b ? -1 : 1;
+    return p->t - q->t;
+}
+
+/* Orients every triangle by the paper's test; ambiguous ones from neighbours. */
+static thx_status orient_surface(thx_ctx *ctx, thx_surface *s, const rlayer *layers, size_t nl, const slice *slices,
+                                 double spacing, thx_surfaces_stats *stats)
+{
+    size_t nt = s->n_tris;
+    signed char *dec = thx_calloc(ctx, nt ? nt : 1, 1); /* +1 keep, -1 flip, 0 undecided */
+    if (!dec) return THX_ENOMEM;
+    double delta = 0.25 * spacing;
+    long by_test = 0, flipped = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : by_test, flipped)
+    for (long t = 0; t < (long)nt; t++) {
+        const int32_t *v = s->tri + 3 * t;
+        thx_vec3 P[3] = {thx_surface_node(s, (size_t)v[0]), thx_surface_node(s, (size_t)v[1]), thx_surface_node(s, (size_t)v[2])};
+        thx_vec3 nrm = thx_v3_cross(thx_v3_sub(P[1], P[0]), thx_v3_sub(P[2], P[0]));
+        double len = thx_v3_norm(nrm);
+        if (!(len > 0)) continue;
+        nrm = thx_v3_scale(nrm, 1.0 / len);
+        thx_vec3 c = thx_v3_scale(thx_v3_add(thx_v3_add(P[0], P[1]), P[2]), 1.0 / 3.0);
+        /* Candidate base points: the centroid, then the paper's vertices (pulled slightly toward the centroid). */
+        thx_vec3 base[4] = {c, thx_v3_add(P[0], thx_v3_scale(thx_v3_sub(c, P[0]), 0.3)),
+                            thx_v3_add(P[1], thx_v3_scale(thx_v3_sub(c, P[1]), 0.3)),
+                            thx_v3_add(P[2], thx_v3_scale(thx_v3_sub(c, P[2]), 0.3))};
+        int d = 0;
+        for (int scale = 0; scale < 3 && !d; scale++) {
+            double dl = delta / (double)(1 << scale);
+            for (int b = 0; b < 4 && !d; b++) {
+                double dp = layered_sdf(layers, nl, slices, thx_v3_add(base[b], thx_v3_scale(nrm, dl)));
+                double dm = layered_sdf(layers, nl, slices, thx_v3_sub(base[b], thx_v3_scale(nrm, dl)));
+                if (dp > 0 && dm < 0) d = 1;       /* +normal endpoint outside: already outward */
+                else if (dp < 0 && dm > 0) d = -1; /* the other one is outside: flip */
+            }
+        }
+        dec[t] = (signed char)d;
+        if (d) by_test++;
+        if (d < 0) flipped++;
+    }
+    for (size_t t = 0; t < nt; t++)
+        if (dec[t] < 0) { int32_t x = s->tri[3 * t + 1]; s->tri[3 * t + 1] = s->tri[3 * t + 2]; s->tri[3 * t + 2] = x; }
+    /* Undecided triangles: propagate from decided neighbours across shared edges. */
+    size_t undecided = nt - (size_t)by_test;
+    if (undecided) {
+        edge_rec *e = thx_malloc(ctx, 3 * nt * sizeof *e);
+        if (!e) { free(dec); return THX_ENOMEM; }
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 3; k++) {
+                int32_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+                e[3 * t + k].a = a < b ? a : b;
+                e[3 * t + k].b = a < b ? b : a;
+                e[3 * t + k].t = (int32_t)t;
+            }
+        qsort(e, 3 * nt, sizeof *e, cmp_edge);
+        int changed = 1;
+        while (changed && undecided) {
+            changed = 0;
+            for (size_t k = 0; k + 1 < 3 * nt; k++) {
+                if (e[k].a != e[k + 1].a || e[k].b != e[k + 1].b) continue;
+                int32_t t1 = e[k].t, t2 = e[k + 1].t;
+                if ((dec[t1] != 0) == (dec[t2] != 0)) continue;
+                int32_t u = dec[t1] ? t2 : t1, w = dec[t1] ? t1 : t2;
+                /* Orient u so that it traverses the shared edge opposite to w. */
+                int dir_w = 0, dir_u = 0;
+                for (int q = 0; q < 3; q++) {
+                    if (s->tri[3 * w + q] == e[k].a && s->tri[3 * w + (q + 1) % 3] == e[k].b) dir_w = 1;
+                    if (s->tri[3 * w + q] == e[k].b && s->tri[3 * w + (q + 1) % 3] == e[k].a) dir_w = -1;
+                    if (s->tri[3 * u + q] == e[k].a && s->tri[3 * u + (q + 1) % 3] == e[k].b) dir_u = 1;
+                    if (s->tri[3 * u + q] == e[k].b && s->tri[3 * u + (q + 1) % 3] == e[k].a) dir_u = -1;
+                }
+                if (dir_u == dir_w) {
+                    int32_t x = s->tri[3 * u + 1]; s->tri[3 * u + 1] = s->tri[3 * u + 2]; s->tri[3 * u + 2] = x;
+                    flipped++;
+                }
+                dec[u] = 2;
+                undecided--;
+                changed = 1;
+            }
+        }
+        free(e);
+        stats->orient_by_neighbours = nt - (size_t)by_test - undecided;
+    }
+    stats->orient_by_test = (size_t)by_test;
+    stats->orient_flipped = (size_t)flipped;
+    free(dec);
+    if (undecided) return thx_error(ctx, THX_EGEOM, "surface \"%s\": %zu triangles could not be oriented", s->name, undecided);
+    return THX_OK;
+}
+
+/* A point well inside the surface: on the middle layer, the grid point of the
+ * largest loop farthest inside its curve. */
+static thx_vec3 interior_point(const rlayer *layers, size_t nl)
+{
+    const rlayer *L = &layers[nl / 2];
+    if (nl >= 2 && nl % 2 == 0) L = &layers[nl / 2 - 1];
+    thx_vec3 best = {0, 0, L->z};
+    double bestd = INFINITY;
+    for (size_t k = 0; k < L->n_loops; k++) {
+        const rloop *r = &L->loops[k];
+        thx_chain c = {r->n, r->p, NULL, L->z};
+        double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+        for (size_t i = 0; i < r->n; i++) { x0 = fmin(x0, r->p[i].x); x1 = fmax(x1, r->p[i].x); y0 = fmin(y0, r->p[i].y); y1 = fmax(y1, r->p[i].y); }
+        for (int i = 1; i < 40; i++)
+            for (int j = 1; j < 40; j++) {
+                thx_vec2 q = {x0 + (x1 - x0) * i / 40.0, y0 + (y1 - y0) * j / 40.0};
+                double d = signed_dist_chain(&c, q);
+                if (d < bestd) { bestd = d; best = thx_v3(q.x, q.y, L->z); }
+            }
+    }
+    /* Lift it half-way toward the next layer so it is not exactly in a layer plane. */
+    const rlayer *N = (L + 1 < layers + nl) ? L + 1 : NULL;
+    if (N) best.z = L->z + 0.5 * (N->z - L->z);
+    return best;
+}
+
+static void free_layers(rlayer *layers, size_t nl)
+{
+    if (!layers) return;
+    for (size_t l = 0; l < nl; l++) {
+        for (size_t k = 0; k < layers[l].n_loops; k++) free(layers[l].loops[k].p);
+        free(layers[l].loops);
+    }
+    free(layers);
+}
+
+static void free_slices(slice *s, size_t ns)
+{
+    if (!s) return;
+    for (size_t i = 0; i < ns; i++) {
+        for (size_t g = 0; g < s[i].n_groups; g++) {
+            free(s[i].ga[g].p); free(s[i].ga[g].id);
+            free(s[i].gb[g].p); free(s[i].gb[g].id);
+        }
+        free(s[i].ga);
+        free(s[i].gb);
+        free(s[i].tris);
+    }
+    free(s);
+}
+
+/* Groups of overlapping loops between layers A and B (connected components);
+ * fills slice groups with merged chains and marks partners. */
+static thx_status build_slice(thx_ctx *ctx, rlayer *A, rlayer *B, slice *s)
+{
+    size_t na = A->n_loops, nb = B->n_loops, n = na + nb;
+    int *comp = thx_malloc(ctx, n * sizeof *comp);
+    unsigned char *adj = thx_calloc(ctx, (na * nb > 0) ? na * nb : 1, 1);
+    int *sel = thx_malloc(ctx, n * sizeof *sel);
+    thx_status st = THX_OK;
+    if (!comp || !adj || !sel) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < na; i++)
+        for (size_t j = 0; j < nb; j++)
+            adj[i * nb + j] = (unsigned char)((na == 1 && nb == 1) ? 1 : loops_overlap(&A->loops[i], &B->loops[j]));
+    for (size_t i = 0; i < n; i++) comp[i] = -1;
+    int nc = 0;
+    for (size_t r = 0; r < n; r++) {
+        if (comp[r] >= 0) continue;
+        /* flood fill */
+        int *stack = sel, top = 0;
+        stack[top++] = (int)r;
+        comp[r] = nc;
+        while (top) {
+            int u = stack[--top];
+            for (size_t v = 0; v < n; v++) {
+                if (comp[v] >= 0) continue;
+                int linked = 0;
+                if ((size_t)u < na && v >= na) linked = adj[(size_t)u * nb + (v - na)];
+                if ((size_t)u >= na && v < na) linked = adj[v * nb + ((size_t)u - na)];
+                if (linked) { comp[v] = nc; stack[top++] = (int)v; }
+            }
+        }
+        nc++;
+    }
+    s->ga = thx_calloc(ctx, (size_t)nc, sizeof *s->ga);
+    s->gb = thx_calloc(ctx, (size_t)nc, sizeof *s->gb);
+    if (!s->ga || !s->gb) { st = THX_ENOMEM; goto done; }
+    for (int c = 0; c < nc; c++) {
+        int ma = 0, mb = 0;
+        for (size_t i = 0; i < na; i++) if (comp[i] == c) sel[ma++] = (int)i;
+        if (ma == 0) continue;
+        for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) mb++;
+        if (mb == 0) continue; /* loop(s) of A end here: capped */
+        THX_TRY(merge_loops(ctx, A, sel, ma, &s->ga[s->n_groups]));
+        mb = 0;
+        for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) sel[mb++] = (int)j;
+        THX_TRY(merge_loops(ctx, B, sel, mb, &s->gb[s->n_groups]));
+        for (size_t i = 0; i < na; i++) if (comp[i] == c) A->loops[i].up = 1;
+        for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) B->loops[j].down = 1;
+        if (ma > 1 || mb > 1) s->branch = 1;
+        s->n_groups++;
+    }
+done:
+    free(comp);
+    free(adj);
+    free(sel);
+    return st;
+}
+
+static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_contour_surface *cs, const thx_surfaces_opts *o,
+                            double spacing, thx_surface **out, thx_vec3 *interior, thx_surfaces_stats *stats)
+{
+    thx_status st = THX_OK;
+    size_t nl = cs->n_layers;
+    rlayer *layers = thx_calloc(ctx, nl, sizeof *layers);
+    slice *slices = NULL;
+    thx_surface *s = NULL;
+    const char *path = c->path[0] ? c->path : "<contours>";
+    double t0 = thx_wtime();
+    if (!layers) return THX_ENOMEM;
+    memset(stats, 0, sizeof *stats);
+    if (nl < 2) {
+        free(layers);
+        return thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" is digitized on only one layer (at least two are needed)",
+                         path, cs->line, cs->name);
+    }
+    /* 1. layers */
+    size_t n_loops = 0;
+    for (size_t l = 0; l < nl; l++) {
+        layers[l].z = cs->layers[l].z;
+        layers[l].n_loops = cs->layers[l].n_loops;
+        layers[l].loops = thx_calloc(ctx, layers[l].n_loops, sizeof(rloop));
+        if (!layers[l].loops) { st = THX_ENOMEM; goto done; }
+        n_loops += layers[l].n_loops;
+    }
+    {
+        size_t *li = thx_malloc(ctx, n_loops * 2 * sizeof *li);
+        if (!li) { st = THX_ENOMEM; goto done; }
+        size_t q = 0;
+        for (size_t l = 0; l < nl; l++)
+            for (size_t k = 0; k < layers[l].n_loops; k++) { li[2 * q] = l; li[2 * q + 1] = k; q++; }
+        int failed = 0;
+        char msg[1024] = "";
+        thx_status fst = THX_OK;
+#pragma omp parallel for schedule(dynamic, 4)
+        for (long w = 0; w < (long)n_loops; w++) {
+            size_t l = li[2 * w], k = li[2 * w + 1];
+            thx_ctx *lc = NULL;
+            if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
+            const thx_loop *lp = &cs->layers[l].loops[k];
+            thx_status r = thx_loop_resample(lc, lp->p, lp->n, spacing, o->smoothing, o->start, &layers[l].loops[k].p,
+                                             &layers[l].loops[k].n);
+            if (r != THX_OK) {
+#pragma omp critical(thx_build_err)
+                if (!failed) {
+                    failed = 1;
+                    fst = r;
+                    snprintf(msg, sizeof msg, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path, lp->line, cs->name,
+                             cs->layers[l].index + 1, cs->layers[l].z, thx_ctx_message(lc));
+                }
+            }
+            thx_ctx_destroy(&lc);
+        }
+        free(li);
+        if (failed) { st = thx_error(ctx, fst ? fst : THX_ENOMEM, "%s", msg); goto done; }
+    }
+    int32_t next_id = 0;
+    for (size_t l = 0; l < nl; l++)
+        for (size_t k = 0; k < layers[l].n_loops; k++) {
+            layers[l].loops[k].first = next_id;
+            next_id += (int32_t)layers[l].loops[k].n;
+        }
+    stats->n_loops = n_loops;
+    double t1 = thx_wtime();
+    stats->t_layers = t1 - t0;
+    /* 2. slices */
+    size_t ns = nl > 1 ? nl - 1 : 0;
+    slices = thx_calloc(ctx, ns ? ns : 1, sizeof *slices);
+    if (!slices) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < ns; i++) {
+        st = build_slice(ctx, &layers[i], &layers[i + 1], &slices[i]);
+        if (st != THX_OK) goto done;
+    }
+    {
+        thx_lace_opts lo = o->lace;
+        lo.spacing = spacing;
+        int failed = 0;
+        char msg[1024] = "";
+        thx_status fst = THX_OK;
+#pragma omp parallel for schedule(dynamic, 1)
+        for (long i = 0; i < (long)ns; i++) {
+            thx_ctx *lc = NULL;
+            if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
+            for (size_t g = 0; g < slices[i].n_groups; g++) {
+                thx_status r = thx_lace(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, &slices[i].tris, &slices[i].n_tris,
+                                        &slices[i].cap, &slices[i].st);
+                if (r != THX_OK) {
+#pragma omp critical(thx_build_err)
+                    if (!failed) {
+                        failed = 1;
+                        fst = r;
+                        snprintf(msg, sizeof msg, "%s:%d: surface \"%s\" slice between z=%g and z=%g: %s", path,
+                                 cs->layers[i + 1].line, cs->name, layers[i].z, layers[i + 1].z, thx_ctx_message(lc));
+                    }
+                    break;
+                }
+            }
+            thx_ctx_destroy(&lc);
+        }
+        if (failed) { st = thx_error(ctx, fst ? fst : THX_ENOMEM, "%s", msg); goto done; }
+    }
+    size_t ntri = 0;
+    for (size_t i = 0; i < ns; i++) {
+        ntri += slices[i].n_tris;
+        thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
+        a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
+        a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
+        if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
+        stats->n_branch_slices += (size_t)slices[i].branch;
+    }
+    stats->n_slices = ns;
+    double t2 = thx_wtime();
+    stats->t_lace = t2 - t1;
+    /* 3. caps, appended after the laced triangles; grid nodes after the layer nodes. */
+    THX_TRY(thx_surface_create(ctx, cs->name, cs->role, &s));
+    size_t node_cap = (size_t)next_id + 64, tri_cap = ntri + 64;
+    s->xyz = thx_malloc(ctx, node_cap * 3 * sizeof *s->xyz);
+    s->tri = thx_malloc(ctx, tri_cap * 3 * sizeof *s->tri);
+    if (!s->xyz || !s->tri) { st = THX_ENOMEM; goto done; }
+    for (size_t l = 0; l < nl; l++)
+        for (size_t k = 0; k < layers[l].n_loops; k++) {
+            const rloop *r = &layers[l].loops[k];
+            for (size_t i = 0; i < r->n; i++) {
+                size_t id = (size_t)r->first + i;
+                s->xyz[3 * id] = r->p[i].x;
+                s->xyz[3 * id + 1] = r->p[i].y;
+                s->xyz[3 * id + 2] = layers[l].z;
+            }
+        }
+    s->n_nodes = (size_t)next_id;
+    for (size_t i = 0; i < ns; i++) {
+        memcpy(s->tri + 3 * s->n_tris, slices[i].tris, slices[i].n_tris * 3 * sizeof *s->tri);
+        s->n_tris += slices[i].n_tris;
+    }
+    int method = o->cap_method >= 0 ? o->cap_method : (int)cs->cap;
+    double grid = o->cap_grid > 0 ? o->cap_grid : (cs->cap_grid > 0 ? cs->cap_grid : spacing);
+    for (size_t l = 0; l < nl; l++)
+        for (size_t k = 0; k < layers[l].n_loops; k++) {
+            rloop *r = &layers[l].loops[k];
+            for (int side = 0; side < 2; side++) {
+                if (side == 0 ? r->down : r->up) continue;
+                thx_vec2 *cp = NULL;
+                int32_t *ct = NULL;
+                size_t ncp = 0, nct = 0;
+                st = thx_cap_triangulate(ctx, r->p, r->n, method == THX_CAP_GRID ? grid : 0.0,
+                                         method == THX_CAP_GRID ? 0.5 * grid : 0.0, &cp, &ncp, &ct, &nct);
+                if (st != THX_OK) {
+                    char m[1024];
+                    snprintf(m, sizeof m, "%s", thx_ctx_message(ctx));
+                    st = thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): end cap: %s", path,
+                                   cs->layers[l].line, cs->name, cs->layers[l].index + 1, layers[l].z, m);
+                    goto done;
+                }
+                size_t base = s->n_nodes;
+                if (s->n_nodes + ncp > node_cap) {
+                    node_cap = (s->n_nodes + ncp) * 2;
+                    double *nx = thx_realloc(ctx, s->xyz, node_cap * 3 * sizeof *nx);
+                    if (!nx) { free(cp); free(ct); st = THX_ENOMEM; goto done; }
+                    s->xyz = nx;
+                }
+                for (size_t i = r->n; i < ncp; i++) {
+                    s->xyz[3 * s->n_nodes] = cp[i].x;
+                    s->xyz[3 * s->n_nodes + 1] = cp[i].y;
+                    s->xyz[3 * s->n_nodes + 2] = layers[l].z;
+                    s->n_nodes++;
+                }
+                if (s->n_tris + nct > tri_cap) {
+                    tri_cap = (s->n_tris + nct) * 2;
+                    int32_t *nt2 = thx_realloc(ctx, s->tri, tri_cap * 3 * sizeof *nt2);
+                    if (!nt2) { free(cp); free(ct); st = THX_ENOMEM; goto done; }
+                    s->tri = nt2;
+                }
+                for (size_t t = 0; t < nct; t++)
+                    for (int v = 0; v < 3; v++) {
+                        int32_t q = ct[3 * t + v];
+                        s->tri[3 * (s->n_tris + t) + v] = (size_t)q < r->n ? r->first + q : (int32_t)(base + (size_t)q - r->n);
+                    }
+                s->n_tris += nct;
+                stats->n_caps++;
+                free(cp);
+                free(ct);
+            }
+        }
+    double t3 = thx_wtime();
+    stats->t_caps = t3 - t2;
+    /* 4. orientation */
+    THX_TRY(orient_surface(ctx, s, layers, nl, slices, spacing, stats));
+    *interior = interior_point(layers, nl);
+    stats->t_orient = thx_wtime() - t3;
+    stats->n_nodes = s->n_nodes;
+    stats->n_tris = s->n_tris;
+    stats->t_total = thx_wtime() - t0;
+    *out = s;
+    s = NULL;
+done:
+    thx_surface_destroy(&s);
+    free_slices(slices, nl > 1 ? nl - 1 : 0);
+    free_layers(layers, nl);
+    return st;
+}
+
+thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_surfaces_opts *o, thx_model **out,
+                              thx_surfaces_stats *stats, thx_surfaces_stats *total)
+{
+    thx_model *m = NULL;
+    thx_status st = THX_OK;
+    *out = NULL;
+    double spacing = o->spacing > 0 ? o->spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    THX_CHECK(thx_model_create(ctx, &m));
+    if (total) memset(total, 0, sizeof *total);
+    double t0 = thx_wtime();
+    for (size_t k = 0; k < c->n_surfaces; k++) {
+        thx_surface *s = NULL;
+        thx_vec3 interior;
+        thx_surfaces_stats one;
+        THX_TRY(build_one(ctx, c, &c->surf[k], o, spacing, &s, &interior, &one));
+        THX_TRY(thx_model_add_surface(ctx, m, &s));
+        m->has_interior[m->n_surfaces - 1] = 1;
+        m->interior[m->n_surfaces - 1] = interior;
+        thx_log(ctx, THX_LOG_DEBUG,
+                "surface %s: %zu nodes, %zu triangles; lacing removed %zu outside triangles, re-laced %zu gaps, "
+                "%zu in-plane, %zu unresolved, %zu too large, largest fan %d; %zu caps; orientation: %zu by test, "
+                "%zu from neighbours, %zu flipped",
+                c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
+                one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
+                one.orient_by_neighbours, one.orient_flipped);
+        if (one.lace.unresolved)
+            thx_log(ctx, THX_LOG_WARN, "surface %s: %zu triangles still span a concave region after re-lacing",
+                    c->surf[k].name, one.lace.unresolved);
+        if (stats) stats[k] = one;
+        if (total) {
+            total->n_nodes += one.n_nodes; total->n_tris += one.n_tris; total->n_loops += one.n_loops;
+            total->n_slices += one.n_slices; total->n_branch_slices += one.n_branch_slices; total->n_caps += one.n_caps;
+            total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
+            total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
+            total->lace.unresolved += one.lace.unresolved; total->lace.too_large += one.lace.too_large;
+            if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
+            total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
+            total->orient_flipped += one.orient_flipped;
+            total->t_layers += one.t_layers; total->t_lace += one.t_lace; total->t_caps += one.t_caps;
+            total->t_orient += one.t_orient;
+        }
+    }
+    if (total) total->t_total = thx_wtime() - t0;
+    *out = m;
+    m = NULL;
+done:
+    thx_model_destroy(&m);
+    return st;
+}

@@ -1,0 +1,521 @@
+/*
+ * Lacing adjacent layers into triangles (paper 3.2, "Lacing triangles").
+ *
+ * Moves and states. Lacing chain A (lower) with chain B (upper) is a walk from
+ * the first connective segment (A_i0, B_j0) around both chains: each move makes
+ * one triangle and advances one chain by one node,
+ *     A-move at (i, j): triangle (A_i, A_i+1, B_j), new segment (A_i+1, B_j)
+ *     B-move at (i, j): triangle (A_i, B_j+1, B_j), new segment (A_i, B_j+1)
+ * so a complete lacing is na A-moves and nb B-moves in some order (na + nb
+ * triangles). With both chains counterclockwise seen from above and A below B
+ * these triangles are counterclockwise seen from outside; the orientation pass
+ * (build.c) re-decides every triangle by the inside test anyway.
+ *
+ * The steps:
+ *  1. Shortest-diagonal rule (paper steps 3-5) on the chains mapped to a common
+ *     centroid and RMS radius: in those coordinates layers of very different size
+ *     or offset (paper figure 2A) look alike, so one node is not fanned into
+ *     many triangles.
+ *  2. Outside test (figure 2B). A triangle is outside the surface when its
+ *     centroid c, at height fraction t between the layers, has
+ *         (1 - t) dA(c) + t dB(c) > concave_tol * spacing,
+ *     where dA, dB are the signed distances (positive outside) from the
+ *     projection of c to the curves of layers A and B. This is the paper's test
+ *     "projected centroid outside either layer's curve" made consistent for
+ *     layers of different size: the literal rule rejects every triangle of a
+ *     tapering surface (a cone), because there the centroid always lies outside
+ *     the smaller curve; interpolating the signed distance to the triangle's
+ *     height gives the paper's rule where the layers coincide and zero false
+ *     alarms on tapers (docs/decisions.md).
+ *  3. Each run of outside triangles (a gap) is re-laced by dynamic programming
+ *     over the states in a window around it: the valid path of least total
+ *     diagonal length (triangles too large are penalized). The window grows
+ *     until a valid path exists.
+ *  4. If none exists, one layer has a concave pocket the other layer does not
+ *     have (the pocket closes between the layers). The pocket (a bay between two
+ *     consecutive convex-hull vertices of its chain) is cut off with triangles in
+ *     the plane of its layer, the chain is shortened to the pocket's chord, and
+ *     the slice is laced again.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/cdt.h"
+#include "thorax/inside.h"
+#include "thorax/surfaces.h"
+
+#define BIG 1e9       /* cost of a triangle outside the surface */
+#define LARGE 1e4     /* cost of a triangle with an edge that is too long */
+
+void thx_lace_opts_default(thx_lace_opts *o)
+{
+    o->spacing = 5.0;
+    o->concave_tol = 0.25;
+    o->max_edge = 3.0;
+    o->window = 4;
+}
+
+/* Signed distance from p to a closed chain (negative inside). Winding number by
+ * signed crossings (equal to the angle sum / 2 pi of inside.h, without trig). */
+static double chain_sdf(const thx_chain *c, thx_vec2 p)
+{
+    double best = INFINITY;
+    int wn = 0;
+    size_t n = c->n;
+    for (size_t k = 0; k < n; k++) {
+        thx_vec2 a = c->p[k], b = c->p[k + 1 == n ? 0 : k + 1];
+        double ex = b.x - a.x, ey = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
+        double l2 = ex * ex + ey * ey;
+        double t = l2 > 0 ? (px * ex + py * ey) / l2 : 0;
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        double dx = px - t * ex, dy = py - t * ey, d2 = dx * dx + dy * dy;
+        if (d2 < best) best = d2;
+        double cr = ex * py - ey * px;
+        if (a.y <= p.y) {
+            if (b.y > p.y && cr > 0) wn++;
+        } else if (b.y <= p.y && cr < 0) wn--;
+    }
+    double d = sqrt(best);
+    return wn != 0 ? -d : d;
+}
+
+typedef struct {
+    const thx_chain *a, *b;
+    const thx_lace_opts *o;
+    thx_vec2 *na, *nb;  /* normalized coordinates */
+    int i0, j0;         /* first connective segment */
+    double big_edge;    /* "too large" edge length */
+} lacer;
+
+/* The three 3D points of the triangle of a move from state (ca, cb). */
+static void move_tri(const lacer *L, int ca, int cb, int bmove, thx_vec3 t[3], int32_t id[3])
+{
+    const thx_chain *A = L->a, *B = L->b;
+    int na = (int)A->n, nb = (int)B->n;
+    int i = (L->i0 + ca) % na, j = (L->j0 + cb) % nb;
+    int i1 = (i + 1) % na, j1 = (j + 1) % nb;
+    if (!bmove) {
+        t[0] = thx_v3(A->p[i].x, A->p[i].y, A->z);
+        t[1] = thx_v3(A->p[i1].x, A->p[i1].y, A->z);
+        t[2] = thx_v3(B->p[j].x, B->p[j].y, B->z);
+        id[0] = A->id[i]; id[1] = A->id[i1]; id[2] = B->id[j];
+    } else {
+        t[0] = thx_v3(A->p[i].x, A->p[i].y, A->z);
+        t[1] = thx_v3(B->p[j1].x, B->p[j1].y, B->z);
+        t[2] = thx_v3(B->p[j].x, B->p[j].y, B->z);
+        id[0] = A->id[i]; id[1] = B->id[j1]; id[2] = B->id[j];
+    }
+}
+
+/* 1 if the triangle lies outside the surface (step 2 of the file comment). */
+static int tri_outside(const lacer *L, const thx_vec3 t[3])
+{
+    thx_vec2 c = {(t[0].x + t[1].x + t[2].x) / 3.0, (t[0].y + t[1].y + t[2].y) / 3.0};
+    double zc = (t[0].z + t[1].z + t[2].z) / 3.0;
+    double dz = L->b->z - L->a->z;
+    double f = dz != 0 ? (zc - L->a->z) / dz : 0.5;
+    double d = (1 - f) * chain_sdf(L->a, c) + f * chain_sdf(L->b, c);
+    return d > L->o->concave_tol * L->o->spacing;
+}
+
+static double dist3(thx_vec3 a, thx_vec3 b) { return thx_v3_norm(thx_v3_sub(a, b)); }
+
+/* Cost of a move: the length of its new diagonal, plus penalties. */
+static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
+{
+    thx_vec3 t[3];
+    int32_t id[3];
+    move_tri(L, ca, cb, bmove, t, id);
+    double c = bmove ? dist3(t[0], t[1]) : dist3(t[1], t[2]);
+    double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
+    if (e > L->big_edge) c += LARGE;
+    if (check && tri_outside(L, t)) c += BIG;
+    return c;
+}
+
+static void normalize(const thx_chain *c, thx_vec2 *out)
+{
+    double cx = 0, cy = 0, r = 0;
+    for (size_t k = 0; k < c->n; k++) { cx += c->p[k].x; cy += c->p[k].y; }
+    cx /= (double)c->n;
+    cy /= (double)c->n;
+    for (size_t k = 0; k < c->n; k++) r += (c->p[k].x - cx) * (c->p[k].x - cx) + (c->p[k].y - cy) * (c->p[k].y - cy);
+    r = sqrt(r / (double)c->n);
+    if (!(r > 0)) r = 1;
+    for (size_t k = 0; k < c->n; k++) { out[k].x = (c->p[k].x - cx) / r; out[k].y = (c->p[k].y - cy) / r; }
+}
+
+/* DP over states [ca0..ca1] x [cb0..cb1]; writes the best path's moves (0 = A, 1 = B) to mv.
+ * Returns the path's cost. */
+static double dp_path(const lacer *L, int ca0, int cb0, int ca1, int cb1, unsigned char *mv, double *cost_buf,
+                      unsigned char *from_buf)
+{
+    int W = ca1 - ca0 + 1, H = cb1 - cb0 + 1;
+    for (int x = 0; x < W; x++)
+        for (int y = 0; y < H; y++) {
+            double best = x == 0 && y == 0 ? 0 : INFINITY;
+            unsigned char from = 0;
+            if (x > 0) {
+                double c = cost_buf[(x - 1) * H + y] + move_cost(L, ca0 + x - 1, cb0 + y, 0, 1);
+                if (c < best) { best = c; from = 0; }
+            }
+            if (y > 0) {
+                double c = cost_buf[x * H + y - 1] + move_cost(L, ca0 + x, cb0 + y - 1, 1, 1);
+                if (c < best) { best = c; from = 1; }
+            }
+            cost_buf[x * H + y] = best;
+            from_buf[x * H + y] = from;
+        }
+    int x = W - 1, y = H - 1, k = W - 1 + H - 1;
+    while (x > 0 || y > 0) {
+        unsigned char f = from_buf[x * H + y];
+        mv[--k] = f;
+        if (f) y--; else x--;
+    }
+    return cost_buf[W * H - 1];
+}
+
+/* Greedy shortest-diagonal path in normalized coordinates. */
+static void greedy_path(const lacer *L, unsigned char *mv)
+{
+    int na = (int)L->a->n, nb = (int)L->b->n, ca = 0, cb = 0;
+    for (int k = 0; k < na + nb; k++) {
+        int b;
+        if (ca == na) b = 1;
+        else if (cb == nb) b = 0;
+        else {
+            int i = (L->i0 + ca) % na, j = (L->j0 + cb) % nb;
+            thx_vec2 ai = L->na[i], ai1 = L->na[(i + 1) % na], bj = L->nb[j], bj1 = L->nb[(j + 1) % nb];
+            double dA = hypot(ai1.x - bj.x, ai1.y - bj.y), dB = hypot(ai.x - bj1.x, ai.y - bj1.y);
+            b = dB < dA;
+        }
+        mv[k] = (unsigned char)b;
+        if (b) cb++; else ca++;
+    }
+}
+
+/* Pocket of a chain: indices lo..hi (cyclic, hi after lo) between two consecutive
+ * convex-hull vertices with at least one chain node between them. */
+typedef struct { int lo, hi; } pocket;
+
+typedef struct { double x, y; int i; } sort_pt;
+static int cmp_sort_pt(const void *x, const void *y)
+{
+    const sort_pt *p = x, *q = y;
+    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    if (p->y != q->y) return p->y < q->y ? -1 : 1;
+    return p->i - q->i;
+}
+
+static double cross3(thx_vec2 o, thx_vec2 a, thx_vec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+/* Convex hull vertex flags (Andrew's monotone chain; collinear points excluded). */
+static int hull_flags(thx_ctx *ctx, const thx_chain *c, unsigned char *on_hull)
+{
+    int n = (int)c->n;
+    sort_pt *sp = malloc((size_t)n * sizeof *sp);
+    int *idx = malloc((size_t)n * sizeof *idx), *h = malloc((size_t)(2 * n + 2) * sizeof *h);
+    if (!sp || !idx || !h) { free(sp); free(idx); free(h); return -1; }
+    for (int k = 0; k < n; k++) { sp[k].x = c->p[k].x; sp[k].y = c->p[k].y; sp[k].i = k; }
+    qsort(sp, (size_t)n, sizeof *sp, cmp_sort_pt);
+    for (int k = 0; k < n; k++) idx[k] = sp[k].i;
+    free(sp);
+    int m = 0;
+    for (int k = 0; k < n; k++) {
+        while (m >= 2 && cross3(c->p[h[m - 2]], c->p[h[m - 1]], c->p[idx[k]]) <= 0) m--;
+        h[m++] = idx[k];
+    }
+    for (int k = n - 2, lo = m + 1; k >= 0; k--) {
+        while (m >= lo && cross3(c->p[h[m - 2]], c->p[h[m - 1]], c->p[idx[k]]) <= 0) m--;
+        h[m++] = idx[k];
+    }
+    memset(on_hull, 0, (size_t)n);
+    for (int k = 0; k < m; k++) on_hull[h[k]] = 1;
+    free(idx);
+    free(h);
+    (void)ctx;
+    return 0;
+}
+
+/* Finds a pocket of chain `c` that overlaps the chain range [r0, r1] (cyclic) and
+ * whose deepest node lies inside the other chain `o` (the pocket closes there). */
+static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int r0, int r1, double margin, pocket *pk)
+{
+    int n = (int)c->n;
+    unsigned char *on = malloc((size_t)n);
+    if (!on || hull_flags(ctx, c, on) != 0) { free(on); return 0; }
+    int found = 0, first = -1;
+    for (int k = 0; k < n; k++) if (on[k]) { first = k; break; }
+    if (first < 0) { free(on); return 0; }
+    int k = first;
+    do {
+        int nx = (k + 1) % n;
+        while (!on[nx]) nx = (nx + 1) % n;
+        int len = (nx - k + n) % n;
+        if (len > 1) {
+            /* overlap with [r0, r1]? (cyclic ranges) */
+            int overlap = 0;
+            for (int s = 0; s <= len && !overlap; s++) {
+                int q = (k + s) % n;
+                int off = (q - r0 + n) % n, rl = (r1 - r0 + n) % n;
+                if (off <= rl) overlap = 1;
+            }
+            if (overlap) {
+                thx_vec2 a = c->p[k], b = c->p[nx];
+                double best = -1;
+                int deep = -1;
+                for (int s = 1; s < len; s++) {
+                    thx_vec2 q = c->p[(k + s) % n];
+                    double d = fabs(cross3(a, b, q)) / fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
+                    if (d > best) { best = d; deep = (k + s) % n; }
+                }
+                if (deep >= 0 && best > margin) {
+                    /* The pocket closes in the other layer if its deep part is inside that layer's curve. */
+                    thx_vec2 q = c->p[deep];
+                    thx_vec2 mid = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
+                    thx_vec2 probe = {0.5 * (q.x + mid.x), 0.5 * (q.y + mid.y)};
+                    if (chain_sdf(o, probe) < -margin * 0.5 || chain_sdf(o, q) < 0) {
+                        pk->lo = k;
+                        pk->hi = nx;
+                        found = 1;
+                        break;
+                    }
+                }
+            }
+        }
+        k = nx;
+    } while (k != first);
+    free(on);
+    return found;
+}
+
+static thx_status emit(thx_ctx *ctx, int32_t **tris, size_t *n_tris, size_t *cap, const int32_t id[3])
+{
+    THX_CHECK(thx_grow(ctx, (void **)tris, cap, (*n_tris + 1) * 3, sizeof **tris));
+    memcpy(*tris + 3 * *n_tris, id, 3 * sizeof *id);
+    (*n_tris)++;
+    return THX_OK;
+}
+
+static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o, int32_t **tris,
+                           size_t *n_tris, size_t *cap, thx_lace_stats *stats, int depth);
+
+/* Cuts pocket pk of chain c with in-plane triangles (cap triangulation of the
+ * pocket polygon) and returns the shortened chain in *out (arrays malloc'd). */
+static thx_status cut_pocket(thx_ctx *ctx, const thx_chain *c, pocket pk, int32_t **tris, size_t *n_tris, size_t *cap,
+                             thx_lace_stats *stats, thx_chain *out, thx_vec2 **op, int32_t **oid)
+{
+    int n = (int)c->n, len = (pk.hi - pk.lo + n) % n;
+    thx_status st = THX_OK;
+    thx_vec2 *poly = thx_malloc(ctx, (size_t)(len + 1) * sizeof *poly);
+    if (!poly) return THX_ENOMEM;
+    for (int s = 0; s <= len; s++) poly[s] = c->p[(pk.lo + s) % n];
+    thx_vec2 *cp = NULL;
+    int32_t *ct = NULL;
+    size_t ncp = 0, nct = 0;
+    st = thx_cap_triangulate(ctx, poly, (size_t)len + 1, 0.0, 0.0, &cp, &ncp, &ct, &nct);
+    if (st == THX_OK) {
+        for (size_t t = 0; t < nct && st == THX_OK; t++) {
+            int32_t id[3];
+            for (int v = 0; v < 3; v++) id[v] = c->id[(pk.lo + ct[3 * t + v]) % n];
+            st = emit(ctx, tris, n_tris, cap, id);
+            stats->inplane_tris++;
+        }
+    }
+    free(cp);
+    free(ct);
+    free(poly);
+    if (st != THX_OK) return st;
+    int m = n - (len - 1);
+    *op = thx_malloc(ctx, (size_t)m * sizeof **op);
+    *oid = thx_malloc(ctx, (size_t)m * sizeof **oid);
+    if (!*op || !*oid) return THX_ENOMEM;
+    int k = 0;
+    for (int s = 0; s < n; s++) {
+        int off = (s - pk.lo + n) % n;
+        if (off > 0 && off < len) continue;
+        (*op)[k] = c->p[s];
+        (*oid)[k] = c->id[s];
+        k++;
+    }
+    out->n = (size_t)k;
+    out->p = *op;
+    out->id = *oid;
+    out->z = c->z;
+    return THX_OK;
+}
+
+static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o, int32_t **tris,
+                           size_t *n_tris, size_t *cap, thx_lace_stats *stats, int depth)
+{
+    int na = (int)a->n, nb = (int)b->n, N = na + nb;
+    thx_status st = THX_OK;
+    lacer L = {a, b, o, NULL, NULL, 0, 0, 0};
+    L.big_edge = o->max_edge * fmax(o->spacing, fabs(b->z - a->z));
+    L.na = thx_malloc(ctx, (size_t)na * sizeof *L.na);
+    L.nb = thx_malloc(ctx, (size_t)nb * sizeof *L.nb);
+    unsigned char *mv = thx_malloc(ctx, (size_t)N), *bad = thx_calloc(ctx, (size_t)N, 1);
+    int *sa = thx_malloc(ctx, (size_t)(N + 1) * sizeof *sa), *sb = thx_malloc(ctx, (size_t)(N + 1) * sizeof *sb);
+    double *costb = NULL;
+    unsigned char *fromb = NULL;
+    if (!L.na || !L.nb || !mv || !bad || !sa || !sb) { st = THX_ENOMEM; goto done; }
+    normalize(a, L.na);
+    normalize(b, L.nb);
+    /* First connective segment: A's start node and the nearest node of B (normalized). */
+    {
+        double best = INFINITY;
+        for (int j = 0; j < nb; j++) {
+            double d = hypot(L.na[0].x - L.nb[j].x, L.na[0].y - L.nb[j].y);
+            if (d < best) { best = d; L.j0 = j; }
+        }
+    }
+    greedy_path(&L, mv);
+    /* Outside test of every triangle of the shortest-diagonal lacing. */
+    int nbad = 0;
+    sa[0] = sb[0] = 0;
+    for (int k = 0; k < N; k++) {
+        thx_vec3 t[3];
+        int32_t id[3];
+        move_tri(&L, sa[k], sb[k], mv[k], t, id);
+        bad[k] = (unsigned char)tri_outside(&L, t);
+        nbad += bad[k];
+        sa[k + 1] = sa[k] + !mv[k];
+        sb[k + 1] = sb[k] + mv[k];
+    }
+    if (nbad && nbad < N) {
+        /* Rotate so that the walk starts inside the longest run of valid triangles (gaps never wrap). */
+        int best_len = 0, best_start = 0, run = 0;
+        for (int k = 0; k < 2 * N; k++) {
+            if (!bad[k % N]) { run++; if (run > best_len && run <= N) { best_len = run; best_start = k - run + 1; } }
+            else run = 0;
+        }
+        int r = (best_start + best_len / 2) % N;
+        if (r != 0) {
+            L.i0 = (L.i0 + sa[r]) % na;
+            L.j0 = (L.j0 + sb[r]) % nb;
+            unsigned char *tmp = thx_malloc(ctx, (size_t)N);
+            if (!tmp) { st = THX_ENOMEM; goto done; }
+            for (int k = 0; k < N; k++) tmp[k] = mv[(k + r) % N];
+            memcpy(mv, tmp, (size_t)N);
+            for (int k = 0; k < N; k++) tmp[k] = bad[(k + r) % N];
+            memcpy(bad, tmp, (size_t)N);
+            free(tmp);
+            for (int k = 0; k < N; k++) { sa[k + 1] = sa[k] + !mv[k]; sb[k + 1] = sb[k] + mv[k]; }
+        }
+    }
+    stats->removed += (size_t)nbad;
+    int unresolved_pocket = 0;
+    for (int k = 0; k < N && nbad;) {
+        if (!bad[k]) { k++; continue; }
+        int k1 = k, k2 = k;
+        while (k2 + 1 < N && bad[k2 + 1]) k2++;
+        stats->relaced_gaps++;
+        int w = o->window, ok = 0;
+        for (;;) {
+            int s0 = k1 - w < 0 ? 0 : k1 - w, s1 = k2 + 1 + w > N ? N : k2 + 1 + w;
+            int W = sa[s1] - sa[s0] + 1, H = sb[s1] - sb[s0] + 1;
+            costb = realloc(costb, (size_t)W * (size_t)H * sizeof *costb);
+            fromb = realloc(fromb, (size_t)W * (size_t)H);
+            if (!costb || !fromb) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
+            double c = dp_path(&L, sa[s0], sb[s0], sa[s1], sb[s1], mv + s0, costb, fromb);
+            if (c < BIG) {
+                ok = 1;
+                for (int q = s0; q < s1; q++) { sa[q + 1] = sa[q] + !mv[q]; sb[q + 1] = sb[q] + mv[q]; bad[q] = 0; }
+                k = s1;
+                break;
+            }
+            if (s0 == 0 && s1 == N) {
+                for (int q = s0; q < s1; q++) { sa[q + 1] = sa[q] + !mv[q]; sb[q + 1] = sb[q] + mv[q]; }
+                k = s1;
+                break;
+            }
+            w *= 2;
+        }
+        if (!ok) {
+            unresolved_pocket = 1;
+            break;
+        }
+    }
+    if (unresolved_pocket && depth < 8) {
+        /* Step 4: a pocket that closes between the layers is cut off in its own plane. */
+        int gi0 = 0, gj0 = 0, gi1 = 0, gj1 = 0, have = 0;
+        for (int k = 0; k < N; k++) {
+            thx_vec3 t[3];
+            int32_t id[3];
+            move_tri(&L, sa[k], sb[k], mv[k], t, id);
+            if (tri_outside(&L, t)) {
+                if (!have) { gi0 = (L.i0 + sa[k]) % na; gj0 = (L.j0 + sb[k]) % nb; have = 1; }
+                gi1 = (L.i0 + sa[k + 1]) % na;
+                gj1 = (L.j0 + sb[k + 1]) % nb;
+            }
+        }
+        pocket pk;
+        thx_chain nc;
+        thx_vec2 *np = NULL;
+        int32_t *nid = NULL;
+        double margin = 0.5 * o->spacing;
+        if (have && find_pocket(ctx, a, b, gi0, gi1, margin, &pk)) {
+            st = cut_pocket(ctx, a, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            if (st == THX_OK) st = lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+            free(np);
+            free(nid);
+            goto done;
+        }
+        if (have && find_pocket(ctx, b, a, gj0, gj1, margin, &pk)) {
+            st = cut_pocket(ctx, b, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            if (st == THX_OK) st = lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1);
+            free(np);
+            free(nid);
+            goto done;
+        }
+    }
+    /* Emit the path. */
+    for (int k = 0; k < N && st == THX_OK; k++) {
+        thx_vec3 t[3];
+        int32_t id[3];
+        move_tri(&L, sa[k], sb[k], mv[k], t, id);
+        if (tri_outside(&L, t)) stats->unresolved++;
+        double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
+        if (e > L.big_edge) stats->too_large++;
+        st = emit(ctx, tris, n_tris, cap, id);
+    }
+done:
+    free(L.na);
+    free(L.nb);
+    free(mv);
+    free(bad);
+    free(sa);
+    free(sb);
+    free(costb);
+    free(fromb);
+    return st;
+}
+
+thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o, int32_t **tris,
+                    size_t *n_tris, size_t *cap, thx_lace_stats *stats)
+{
+    if (a->n < 3 || b->n < 3) return thx_error(ctx, THX_EINPUT, "lacing needs chains of at least 3 nodes (%zu, %zu)", a->n, b->n);
+    size_t first = *n_tris;
+    thx_lace_stats local = {0};
+    THX_CHECK(lace_rec(ctx, a, b, o, tris, n_tris, cap, &local, 0));
+    local.n_tris = *n_tris - first;
+    /* Largest fan: triangles per node id within this slice. */
+    int32_t maxid = 0;
+    for (size_t k = 3 * first; k < 3 * *n_tris; k++) if ((*tris)[k] > maxid) maxid = (*tris)[k];
+    int *cnt = thx_calloc(ctx, (size_t)maxid + 1, sizeof *cnt);
+    if (!cnt) return THX_ENOMEM;
+    for (size_t k = 3 * first; k < 3 * *n_tris; k++) {
+        int c = ++cnt[(*tris)[k]];
+        if (c > local.max_fan) local.max_fan = c;
+    }
+    free(cnt);
+    stats->n_tris += local.n_tris;
+    stats->removed += local.removed;
+    stats->relaced_gaps += local.relaced_gaps;
+    stats->inplane_tris += local.inplane_tris;
+    stats->unresolved += local.unresolved;
+    stats->too_large += local.too_large;
+    if (local.max_fan > stats->max_fan) stats->max_fan = local.max_fan;
+    return THX_OK;
+}

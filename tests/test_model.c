@@ -1,0 +1,579 @@
+/*
+ * Tests of model directories, .pts/.fac reading and writing, and surface export
+ * (src/io/model.c, src/io/export.c).
+ *
+ * A model.json written by thx_model_write looks like this (the schema the
+ * reader checks):
+ *   {
+ *     "format": "thorax-model", "version": 1, "units": "mm",
+ *     "surfaces": [
+ *       { "name": "tetra", "role": "heart", "pts": "tetra.pts", "fac": "tetra.fac",
+ *         "n_nodes": 4, "n_tris": 4, "interior": [0.25, 0.25, 0.25] }, ...
+ *     ],
+ *     "provenance": { "thorax": "0.1.0", "command": "..." }
+ *   }
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "testlib.h"
+#include "thorax/fileio.h"
+#include "thorax/model.h"
+
+static thx_ctx *ctx;
+static char scratch[1024];
+
+/* ------------------------------------------------------------- helpers */
+
+static const char *sp(const char *name)
+{
+    static char buf[8][2048];
+    static int k;
+    k = (k + 1) % 8;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
+    return buf[k];
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(1);
+    }
+    fputs(text, f);
+    fclose(f);
+}
+
+static char *slurp(const char *path, size_t *len)
+{
+    char *t = NULL;
+    if (thx_read_file(ctx, path, &t, len) != THX_OK) return NULL;
+    return t;
+}
+
+static int exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* Whether a file or directory whose name starts with prefix and contains
+ * ".tmp" or ".old" is left in the scratch directory (a leaked temporary). */
+static int leftover_tmp(const char *prefix)
+{
+    DIR *d = opendir(scratch);
+    int found = 0;
+    struct dirent *e;
+    while (d && (e = readdir(d)))
+        if (strncmp(e->d_name, prefix, strlen(prefix)) == 0 && (strstr(e->d_name, ".tmp") || strstr(e->d_name, ".old")))
+            found = 1;
+    if (d) closedir(d);
+    return found;
+}
+
+static int msg_has(const char *needle)
+{
+    const char *m = thx_ctx_message(ctx);
+    if (strstr(m, needle)) return 1;
+    fprintf(stderr, "  message \"%s\" lacks \"%s\"\n", m, needle);
+    return 0;
+}
+
+static thx_surface *make_surface(const char *name, thx_role role, size_t n, const double *xyz, size_t t,
+                                 const int32_t *tri)
+{
+    thx_surface *s = NULL;
+    if (thx_surface_create(ctx, name, role, &s) != THX_OK) exit(1);
+    s->n_nodes = n;
+    s->xyz = malloc(3 * n * sizeof *s->xyz);
+    memcpy(s->xyz, xyz, 3 * n * sizeof *s->xyz);
+    s->n_tris = t;
+    s->tri = malloc(3 * t * sizeof *s->tri);
+    memcpy(s->tri, tri, 3 * t * sizeof *s->tri);
+    return s;
+}
+
+/* A tetrahedron (outward CCW) with coordinates that need all six decimals. */
+static const double tet_xyz[] = {0.1234567, -0.0000001, 0, 10.000001, 0, 0, 0, 10, 0, 0, 0, -123.4567891};
+static const int32_t tet_tri[] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 2, 0, 3};
+/* An octahedron of radius 5 about (1, 2, 3). */
+static const double oct_xyz[] = {6, 2, 3, -4, 2, 3, 1, 7, 3, 1, -3, 3, 1, 2, 8, 1, 2, -2};
+static const int32_t oct_tri[] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+
+static thx_model *make_model(void)
+{
+    thx_model *m = NULL;
+    CHECK_OK(ctx, thx_model_create(ctx, &m));
+    thx_surface *a = make_surface("tetra", THX_ROLE_HEART, 4, tet_xyz, 4, tet_tri);
+    thx_surface *b = make_surface("octa", THX_ROLE_OUTER, 6, oct_xyz, 8, oct_tri);
+    CHECK_OK(ctx, thx_model_add_surface(ctx, m, &a));
+    CHECK(a == NULL);
+    CHECK_OK(ctx, thx_model_add_surface(ctx, m, &b));
+    m->has_interior[1] = 1;
+    m->interior[1] = thx_v3(1, 2, 3.5);
+    m->provenance_json = strdup("{\"thorax\":\"0.1.0\",\"command\":\"test_model\",\"options\":{\"n\":3}}");
+    return m;
+}
+
+/* ------------------------------------------------------------- tests */
+
+static void test_round_trip(void)
+{
+    thx_model *m = make_model();
+    CHECK(m->n_surfaces == 2);
+
+    /* A second surface of the same name is refused and freed. */
+    thx_surface *dup = make_surface("octa", THX_ROLE_LUNG, 6, oct_xyz, 8, oct_tri);
+    CHECK(thx_model_add_surface(ctx, m, &dup) == THX_EINPUT);
+    CHECK(dup == NULL);
+    CHECK(m->n_surfaces == 2);
+
+    CHECK_OK(ctx, thx_model_write(ctx, m, sp("rt")));
+    CHECK(exists(sp("rt/model.json")) && exists(sp("rt/tetra.pts")) && exists(sp("rt/octa.fac")));
+    CHECK(!leftover_tmp("rt"));
+
+    /* The .fac on disk is 1-based; the .pts uses %.6f with no "-0.000000". */
+    char *fac = slurp(sp("rt/tetra.fac"), NULL);
+    CHECK(fac && strcmp(fac, "1 3 2\n1 2 4\n2 3 4\n3 1 4\n") == 0);
+    free(fac);
+    char *pts = slurp(sp("rt/tetra.pts"), NULL);
+    CHECK(pts && strncmp(pts, "0.123457 0.000000 0.000000\n10.000001 0.000000 0.000000\n", 55) == 0);
+    CHECK(pts && strstr(pts, "-123.456789\n"));
+    free(pts);
+
+    thx_model *r = NULL;
+    CHECK_OK(ctx, thx_model_read(ctx, sp("rt"), &r));
+    if (r) {
+        CHECK(r->n_surfaces == 2);
+        for (size_t i = 0; i < 2 && i < r->n_surfaces; i++) {
+            const thx_surface *a = m->surf[i], *b = r->surf[i];
+            CHECK(strcmp(a->name, b->name) == 0);
+            CHECK(a->role == b->role);
+            CHECK(a->n_nodes == b->n_nodes && a->n_tris == b->n_tris);
+            for (size_t k = 0; k < 3 * a->n_nodes && a->n_nodes == b->n_nodes; k++)
+                CHECK_NEAR(b->xyz[k], a->xyz[k], 5.0000001e-7); /* "%.6f" rounds to half a unit of 1e-6 */
+            CHECK(a->n_tris == b->n_tris && memcmp(a->tri, b->tri, 3 * a->n_tris * sizeof *a->tri) == 0);
+        }
+        CHECK(r->has_interior[0] == 0 && r->has_interior[1] == 1);
+        CHECK_NEAR(r->interior[1].z, 3.5, 0);
+        cJSON *p = r->provenance_json ? cJSON_Parse(r->provenance_json) : NULL;
+        const cJSON *opt = cJSON_GetObjectItemCaseSensitive(p, "options");
+        CHECK(cJSON_IsString(cJSON_GetObjectItemCaseSensitive(p, "command")) &&
+              strcmp(cJSON_GetObjectItemCaseSensitive(p, "command")->valuestring, "test_model") == 0);
+        CHECK(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(opt, "n")));
+        cJSON_Delete(p);
+
+        /* Writing what was read gives byte-identical files (determinism, and
+         * the precision is a fixed point of the round trip). */
+        CHECK_OK(ctx, thx_model_write(ctx, r, sp("rt2")));
+        const char *files[] = {"model.json", "tetra.pts", "tetra.fac", "octa.pts", "octa.fac"};
+        for (size_t k = 0; k < 5; k++) {
+            char n1[64], n2[64];
+            snprintf(n1, sizeof n1, "rt/%s", files[k]);
+            snprintf(n2, sizeof n2, "rt2/%s", files[k]);
+            size_t l1 = 0, l2 = 0;
+            char *t1 = slurp(sp(n1), &l1), *t2 = slurp(sp(n2), &l2);
+            CHECK(t1 && t2 && l1 == l2 && memcmp(t1, t2, l1) == 0);
+            free(t1);
+            free(t2);
+        }
+    }
+
+    /* The manifest has the documented schema. */
+    char *json = slurp(sp("rt/model.json"), NULL);
+    cJSON *root = json ? cJSON_Parse(json) : NULL;
+    CHECK(root != NULL);
+    const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
+    CHECK(cJSON_IsString(fmt) && strcmp(fmt->valuestring, "thorax-model") == 0);
+    CHECK(cJSON_GetObjectItemCaseSensitive(root, "version") &&
+          cJSON_GetObjectItemCaseSensitive(root, "version")->valuedouble == 1);
+    const cJSON *s0 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(root, "surfaces"), 1);
+    CHECK(cJSON_GetObjectItemCaseSensitive(s0, "n_tris") && cJSON_GetObjectItemCaseSensitive(s0, "n_tris")->valuedouble == 8);
+    CHECK(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(s0, "interior")) == 3);
+    cJSON_Delete(root);
+    free(json);
+
+    /* Writing over an existing model replaces it whole. */
+    m->surf[0]->xyz[0] = 42;
+    CHECK_OK(ctx, thx_model_write(ctx, m, sp("rt")));
+    thx_model_destroy(&r);
+    CHECK_OK(ctx, thx_model_read(ctx, sp("rt"), &r));
+    CHECK(r && r->surf[0]->xyz[0] == 42);
+    CHECK(!leftover_tmp("rt"));
+    thx_model_destroy(&r);
+    CHECK(r == NULL);
+    thx_model_destroy(&m);
+    thx_model_destroy(&m); /* NULL accepted */
+}
+
+static void test_failed_write(void)
+{
+    thx_model *m = make_model();
+    /* Parent directory missing: error naming the path, nothing created. */
+    CHECK(thx_model_write(ctx, m, sp("no/such/dir")) == THX_EIO);
+    CHECK(msg_has("no/such/dir"));
+    CHECK(!exists(sp("no")));
+
+    /* An out-of-range triangle index is rejected before anything is written. */
+    m->surf[1]->tri[5] = 6;
+    CHECK(thx_model_write(ctx, m, sp("bad")) == THX_EINPUT);
+    CHECK(msg_has("octa") && msg_has("triangle 2"));
+    CHECK(!exists(sp("bad")));
+    CHECK(!leftover_tmp("bad"));
+
+    /* ... and an existing model of that name is left as it was. */
+    m->surf[1]->tri[5] = 4;
+    CHECK_OK(ctx, thx_model_write(ctx, m, sp("keep")));
+    m->surf[1]->tri[5] = -1;
+    CHECK(thx_model_write(ctx, m, sp("keep")) == THX_EINPUT);
+    thx_model *r = NULL;
+    CHECK_OK(ctx, thx_model_read(ctx, sp("keep"), &r));
+    CHECK(r && r->n_surfaces == 2 && r->surf[1]->tri[5] == 4);
+    thx_model_destroy(&r);
+    CHECK(!leftover_tmp("keep"));
+    m->surf[1]->tri[5] = 4;
+
+    /* Non-finite coordinates and unsafe names are refused. */
+    m->surf[0]->xyz[4] = NAN;
+    CHECK(thx_model_write(ctx, m, sp("nan")) == THX_EINPUT && msg_has("tetra") && msg_has("node 2"));
+    CHECK(!exists(sp("nan")));
+    m->surf[0]->xyz[4] = 0;
+    snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "../evil");
+    CHECK(thx_model_write(ctx, m, sp("evil")) == THX_EINPUT && msg_has("../evil"));
+    CHECK(!exists(sp("evil")));
+    snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "octa"); /* duplicate after mutation */
+    CHECK(thx_model_write(ctx, m, sp("dup")) == THX_EINPUT && msg_has("octa"));
+    snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "tetra");
+    free(m->provenance_json);
+    m->provenance_json = strdup("[1, 2");
+    CHECK(thx_model_write(ctx, m, sp("prov")) == THX_EINPUT && msg_has("provenance"));
+    CHECK(!exists(sp("prov")));
+    thx_model_destroy(&m);
+}
+
+static void test_base_detection(void)
+{
+    const char *pts = "\n  0 0 0\n1.5\t0   0 \r\n\n0 1 0\n0 0 1\n\n";
+    write_text(sp("t.pts"), pts);
+    write_text(sp("t0.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
+    write_text(sp("t1.fac"), "  1 3 2\n\n1 2 4\n2 3 4\r\n3 1 4\n");
+    thx_surface *s0 = NULL, *s1 = NULL;
+    int base = -7;
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t0.fac"), "t", THX_ROLE_OTHER, &s0, &base));
+    CHECK(base == 0);
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t1.fac"), "t", THX_ROLE_OTHER, &s1, &base));
+    CHECK(base == 1);
+    CHECK(s0 && s1 && s0->n_nodes == 4 && s0->n_tris == 4 && s1->n_tris == 4);
+    if (s0 && s1) {
+        CHECK(memcmp(s0->tri, tet_tri, sizeof tet_tri) == 0);
+        CHECK(memcmp(s1->tri, tet_tri, sizeof tet_tri) == 0);
+        CHECK(s0->xyz[3] == 1.5 && s0->xyz[11] == 1);
+        CHECK(strcmp(s0->name, "t") == 0 && s0->role == THX_ROLE_OTHER);
+    }
+    thx_surface_destroy(&s0);
+    thx_surface_destroy(&s1);
+    CHECK(s0 == NULL);
+
+    /* 1-based with node 1 unused is still unambiguous (max == n). */
+    write_text(sp("t1b.fac"), "2 3 4\n");
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t1b.fac"), "t", THX_ROLE_OTHER, &s0, &base));
+    CHECK(base == 1 && s0 && s0->tri[0] == 1);
+    thx_surface_destroy(&s0);
+
+    /* min 1, max < n: could be either; refused, naming file and line. */
+    write_text(sp("amb.fac"), "1 2 3\n3 2 1\n");
+    CHECK(thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("amb.fac"), "t", THX_ROLE_OTHER, &s0, &base) == THX_EINPUT);
+    CHECK(msg_has("amb.fac:1:") && msg_has("0- or 1-based"));
+    CHECK(s0 == NULL);
+
+    /* write_ptsfac then read: 1-based on disk, same triangles. */
+    thx_surface *w = make_surface("w", THX_ROLE_LUNG, 6, oct_xyz, 8, oct_tri);
+    CHECK_OK(ctx, thx_surface_write_ptsfac(ctx, w, sp("w.pts"), sp("w.fac")));
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("w.pts"), sp("w.fac"), "w", THX_ROLE_LUNG, &s0, &base));
+    CHECK(base == 1 && s0 && s0->n_tris == 8 && memcmp(s0->tri, oct_tri, sizeof oct_tri) == 0);
+    thx_surface_destroy(&s0);
+    thx_surface_destroy(&w);
+}
+
+static void test_bad_files(void)
+{
+    thx_surface *s = NULL;
+    write_text(sp("t.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    struct { const char *fac; const char *want; } facs[] = {
+        {"1 2 3\n1 2 5\n", "bad.fac:2:"},          /* 1-based, 5 > 4 nodes */
+        {"0 1 2\n0 1 4\n", "bad.fac:2:"},          /* 0-based, 4 > 3 */
+        {"0 1 2\n-1 1 2\n", "bad.fac:2:"},         /* negative */
+        {"1 2 3\n1 2 x\n", "bad.fac:2:"},          /* non-numeric */
+        {"1 2 3\n1 2 3.5\n", "bad.fac:2:"},        /* not an integer */
+        {"1 2 3\n\n1 2\n", "bad.fac:3:"},          /* two columns */
+        {"1 2 3 4\n", "bad.fac:1:"},               /* four columns */
+        {"1 2 99999999999999999999\n", "bad.fac:1:"},
+    };
+    for (size_t i = 0; i < sizeof facs / sizeof facs[0]; i++) {
+        write_text(sp("bad.fac"), facs[i].fac);
+        thx_status st = thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("bad.fac"), "t", THX_ROLE_OTHER, &s, NULL);
+        CHECK(st == THX_EINPUT);
+        CHECK(msg_has(facs[i].want) && msg_has("surface \"t\""));
+        CHECK(s == NULL);
+    }
+    struct { const char *pts; const char *want; } ptss[] = {
+        {"0 0 0\n1 0\n", "bad.pts:2:"},
+        {"0 0 0\n\n1 0 0 0\n", "bad.pts:3:"},
+        {"0 0 0\n1 y 0\n", "bad.pts:2:"},
+        {"0 0 0\n1 nan 0\n", "bad.pts:2:"},
+        {"0 0 0\n1 2,5 0\n", "bad.pts:2:"},
+        {"\n\n", "bad.pts: surface \"t\": no nodes"},
+    };
+    write_text(sp("ok.fac"), "1 2 3\n");
+    for (size_t i = 0; i < sizeof ptss / sizeof ptss[0]; i++) {
+        write_text(sp("bad.pts"), ptss[i].pts);
+        CHECK(thx_surface_read_ptsfac(ctx, sp("bad.pts"), sp("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EINPUT);
+        CHECK(msg_has(ptss[i].want));
+        CHECK(s == NULL);
+    }
+    /* Missing files are named. */
+    CHECK(thx_surface_read_ptsfac(ctx, sp("missing.pts"), sp("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
+    CHECK(msg_has("missing.pts"));
+    CHECK(thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("missing.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
+    CHECK(msg_has("missing.fac"));
+    CHECK(s == NULL);
+}
+
+/* Writes a model directory with the given manifest around a valid tetra.pts/.fac. */
+static void manifest_case(const char *json)
+{
+    mkdir(sp("man"), 0755);
+    write_text(sp("man/tetra.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    write_text(sp("man/tetra.fac"), "1 3 2\n1 2 4\n2 3 4\n3 1 4\n");
+    write_text(sp("man/model.json"), json);
+}
+
+static void test_bad_manifest(void)
+{
+    thx_model *m = NULL;
+    const char *head = "{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"surfaces\":[";
+    struct { const char *tail; const char *want; } cases[] = {
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         NULL},
+        {"{\"name\":\"tetra\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         "surface 1 (\"tetra\"): \"role\""},
+        {"{\"name\":\"tetra\",\"role\":\"liver\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         "\"liver\""},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":5,\"n_tris\":4}]}",
+         "surface \"tetra\": manifest says 5 nodes"},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":3}]}",
+         "manifest says 3 triangles"},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"gone.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         "gone.pts"},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"../t.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         "\"pts\" and \"fac\""},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":-1}]}",
+         "\"n_tris\""},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4,"
+         "\"interior\":[1,2]}]}",
+         "\"interior\""},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4},"
+         "{\"name\":\"tetra\",\"role\":\"lung\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}",
+         "surface 2 (\"tetra\"): a surface of that name appears twice"},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]",
+         "model.json:1: not valid JSON"},
+        {"{\"name\":\"tetra\",\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]} x",
+         "not valid JSON"},
+        {"7]}", "surface 1: not a JSON object"},
+    };
+    char json[2048];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(json, sizeof json, "%s%s", head, cases[i].tail);
+        manifest_case(json);
+        thx_status st = thx_model_read(ctx, sp("man"), &m);
+        if (!cases[i].want) {
+            CHECK_OK(ctx, st);
+            CHECK(m && m->n_surfaces == 1 && m->surf[0]->role == THX_ROLE_HEART && m->provenance_json == NULL);
+        } else {
+            CHECK(st == THX_EINPUT || st == THX_EIO);
+            CHECK(msg_has(cases[i].want));
+            CHECK(m == NULL);
+        }
+        thx_model_destroy(&m);
+    }
+    /* Errors naming the file: wrong format name, version, units, line of a syntax error. */
+    manifest_case("{\"format\":\"other\",\"version\":1,\"units\":\"mm\",\"surfaces\":[]}");
+    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("man/model.json") && msg_has("\"format\""));
+    manifest_case("{\"format\":\"thorax-model\",\"version\":2,\"units\":\"mm\",\"surfaces\":[]}");
+    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("version 2"));
+    manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"m\",\"surfaces\":[]}");
+    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("\"units\""));
+    manifest_case("{\n\"format\": \"thorax-model\",\n\"version\": 1,\n\"units\": \"mm\"\n\"surfaces\": []}\n");
+    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("man/model.json:5:"));
+    /* A 0-based .fac inside a model directory is an error (model files are 1-based). */
+    manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"surfaces\":[{\"name\":\"tetra\",\"role\":"
+                  "\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}");
+    write_text(sp("man/tetra.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
+    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("tetra.fac:1:") && msg_has("1-based"));
+    /* No model.json at all. */
+    CHECK(thx_model_read(ctx, sp("nowhere"), &m) == THX_EIO && msg_has("nowhere/model.json"));
+    CHECK(m == NULL);
+    /* Unknown keys are ignored (room for regions, conductivities ...). */
+    manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"regions\":[1],\"surfaces\":[]}");
+    CHECK_OK(ctx, thx_model_read(ctx, sp("man"), &m));
+    CHECK(m && m->n_surfaces == 0);
+    thx_model_destroy(&m);
+}
+
+static void test_real_data(void)
+{
+    /* __FILE__ is tests/test_model.c under the source tree; the data sit beside it. */
+    char dir[2048];
+    snprintf(dir, sizeof dir, "%s", __FILE__);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = '\0';
+    else snprintf(dir, sizeof dir, ".");
+    char pts[2300], fac[2300];
+    snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/tank/tank_full_771.pts", dir);
+    snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/tank/tank_full_771.fac", dir);
+    /* The data folder is part of the project's setup: its absence is a failure, not a skip. */
+    CHECK(exists(pts) && exists(fac));
+    if (!exists(pts)) {
+        fprintf(stderr, "test_model: %s missing\n", pts);
+        return;
+    }
+    thx_surface *s = NULL;
+    int base = -1;
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, pts, fac, "tank", THX_ROLE_OUTER, &s, &base));
+    CHECK(base == 1);
+    CHECK(s && s->n_nodes == 771 && s->n_tris == 1538);
+    if (s) {
+        CHECK_NEAR(s->xyz[0], 88.80, 0);
+        CHECK_NEAR(s->xyz[1], 9.30, 0);
+        CHECK(s->tri[0] == 23 && s->tri[1] == 32 && s->tri[2] == 24); /* "24 33 25" */
+        /* A closed surface: 2 n - 4 triangles (Euler, genus 0). */
+        CHECK(s->n_tris == 2 * s->n_nodes - 4);
+
+        /* Through a model directory and back: same counts, coordinates exact
+         * (the file has two decimals, below the written precision). */
+        thx_model *m = NULL;
+        CHECK_OK(ctx, thx_model_create(ctx, &m));
+        double x0 = s->xyz[3 * 770 + 2];
+        CHECK_OK(ctx, thx_model_add_surface(ctx, m, &s));
+        CHECK_OK(ctx, thx_model_write(ctx, m, sp("tank")));
+        thx_model *r = NULL;
+        CHECK_OK(ctx, thx_model_read(ctx, sp("tank"), &r));
+        CHECK(r && r->n_surfaces == 1 && r->surf[0]->n_nodes == 771 && r->surf[0]->n_tris == 1538);
+        CHECK(r && r->surf[0]->xyz[3 * 770 + 2] == x0);
+        CHECK(r && memcmp(r->surf[0]->tri, m->surf[0]->tri, 3 * 1538 * sizeof(int32_t)) == 0);
+        thx_model_destroy(&r);
+        thx_model_destroy(&m);
+    }
+    thx_surface_destroy(&s);
+
+    snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/torso/daltorso.pts", dir);
+    snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/torso/daltorso.fac", dir);
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, pts, fac, "torso", THX_ROLE_OUTER, &s, &base));
+    CHECK(base == 1 && s && s->n_nodes == 352 && s->n_tris == 700);
+    thx_surface_destroy(&s);
+}
+
+static float get_f32(const unsigned char *p)
+{
+    uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static void test_export(void)
+{
+    thx_export_format f;
+    CHECK(thx_export_format_parse("vtk", &f) == 0 && f == THX_EXPORT_VTK);
+    CHECK(thx_export_format_parse("vtp", &f) == 0 && f == THX_EXPORT_VTP);
+    CHECK(thx_export_format_parse("obj", &f) == 0 && f == THX_EXPORT_OBJ);
+    CHECK(thx_export_format_parse("stl", &f) == 0 && f == THX_EXPORT_STL);
+    CHECK(thx_export_format_parse("ply", &f) == 0 && f == THX_EXPORT_PLY);
+    CHECK(thx_export_format_parse("VTK", &f) != 0 && thx_export_format_parse("", &f) != 0);
+
+    thx_surface *s = make_surface("octa", THX_ROLE_OUTER, 6, oct_xyz, 8, oct_tri);
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTK, sp("o.vtk")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTP, sp("o.vtp")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_OBJ, sp("o.obj")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_STL, sp("o.stl")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_PLY, sp("o.ply")));
+
+    char *t = slurp(sp("o.vtk"), NULL);
+    CHECK(t && strstr(t, "POINTS 6 double\n") && strstr(t, "POLYGONS 8 32\n3 0 2 4\n"));
+    free(t);
+    t = slurp(sp("o.obj"), NULL);
+    CHECK(t && strstr(t, "\nv 6.000000 2.000000 3.000000\n") && strstr(t, "\nf 1 3 5\n"));
+    free(t);
+    t = slurp(sp("o.ply"), NULL);
+    CHECK(t && strstr(t, "element vertex 6\n") && strstr(t, "element face 8\n") && strstr(t, "end_header\n"));
+    free(t);
+    t = slurp(sp("o.vtp"), NULL);
+    CHECK(t && strstr(t, "NumberOfPoints=\"6\"") && strstr(t, "NumberOfPolys=\"8\"") && strstr(t, "</VTKFile>\n"));
+    free(t);
+
+    /* Binary STL: 84 + 50 t bytes, unit outward normals (octahedron centre (1,2,3)). */
+    size_t len = 0;
+    unsigned char *b = (unsigned char *)slurp(sp("o.stl"), &len);
+    CHECK(b && len == 84 + 50 * 8);
+    if (b && len == 84 + 50 * 8) {
+        CHECK(strncmp((char *)b, "solid", 5) != 0);
+        CHECK(b[80] == 8 && b[81] == 0 && b[82] == 0 && b[83] == 0);
+        for (int k = 0; k < 8; k++) {
+            const unsigned char *r = b + 84 + 50 * k;
+            double n[3] = {get_f32(r), get_f32(r + 4), get_f32(r + 8)};
+            double c[3] = {0, 0, 0};
+            for (int v = 0; v < 3; v++)
+                for (int d = 0; d < 3; d++) c[d] += get_f32(r + 12 + 12 * v + 4 * d) / 3.0;
+            double out = n[0] * (c[0] - 1) + n[1] * (c[1] - 2) + n[2] * (c[2] - 3);
+            CHECK_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1, 1e-6);
+            CHECK(out > 0);
+            CHECK_NEAR(fabs(n[0]), 1 / sqrt(3.0), 1e-6);
+        }
+    }
+    free(b);
+
+    /* A bad surface is refused and leaves no file. */
+    s->tri[3] = 17;
+    CHECK(thx_surface_export(ctx, s, THX_EXPORT_PLY, sp("bad.ply")) == THX_EINPUT);
+    CHECK(msg_has("bad.ply") && msg_has("octa"));
+    CHECK(!exists(sp("bad.ply")));
+    /* An unwritable destination is an i/o error naming it. */
+    s->tri[3] = 1;
+    CHECK(thx_surface_export(ctx, s, THX_EXPORT_OBJ, sp("no/such.obj")) == THX_EIO && msg_has("no/such.obj"));
+    thx_surface_destroy(&s);
+}
+
+int main(void)
+{
+    if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    snprintf(scratch, sizeof scratch, "test_model.XXXXXX");
+    if (!mkdtemp(scratch)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    test_round_trip();
+    test_failed_write();
+    test_base_detection();
+    test_bad_files();
+    test_bad_manifest();
+    test_real_data();
+    test_export();
+    int rc = tl_finish();
+    if (rc == 0) {
+        char cmd[1200];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
+        if (system(cmd) != 0) fprintf(stderr, "test_model: could not remove %s\n", scratch);
+    } else {
+        fprintf(stderr, "test_model: files kept in %s\n", scratch);
+    }
+    thx_ctx_destroy(&ctx);
+    return rc;
+}

@@ -1,0 +1,290 @@
+/*
+ * Surfaces from contours (paper 3.2): lacing special cases, branching, caps,
+ * orientation, and the round trip from analytic closed surfaces.
+ * Every surface built here must be a closed 2-manifold, consistently oriented
+ * outward (total solid angle 4 pi about its interior point, positive volume)
+ * and free of self-intersections (thx_surface_check).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/check.h"
+#include "thorax/inside.h"
+#include "thorax/surfaces.h"
+
+static double surface_volume(const thx_surface *s)
+{
+    double v = 0;
+    for (size_t t = 0; t < s->n_tris; t++) {
+        thx_vec3 a = thx_surface_node(s, (size_t)s->tri[3 * t]), b = thx_surface_node(s, (size_t)s->tri[3 * t + 1]),
+                 c = thx_surface_node(s, (size_t)s->tri[3 * t + 2]);
+        v += thx_v3_dot(a, thx_v3_cross(b, c)) / 6.0;
+    }
+    return v;
+}
+
+/* Builds the contours with default options and checks the invariants of every surface. */
+static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing, thx_surfaces_stats *st, const char *what)
+{
+    thx_surfaces_opts o;
+    thx_surfaces_opts_default(&o);
+    o.spacing = spacing;
+    thx_model *m = NULL;
+    thx_status s = thx_surfaces_build(ctx, c, &o, &m, st, NULL);
+    CHECK_OK(ctx, s);
+    if (s != THX_OK) { fprintf(stderr, "  (%s)\n", what); return NULL; }
+    for (size_t k = 0; k < m->n_surfaces; k++) {
+        thx_surface_report rep;
+        thx_check_opts co;
+        thx_check_opts_default(&co);
+        CHECK_OK(ctx, thx_surface_check(ctx, m->surf[k], &m->interior[k], &co, &rep));
+        CHECK(rep.ok);
+        double omega = thx_surface_solid_angle(m->surf[k], m->interior[k]);
+        CHECK_NEAR(omega / (4 * M_PI), 1.0, 1e-6);
+        CHECK(surface_volume(m->surf[k]) > 0);
+        if (!rep.ok) {
+            fprintf(stderr, "  %s: surface %s fails its check:", what, m->surf[k]->name);
+            for (int r = 0; r < rep.n_reasons; r++) fprintf(stderr, " [%s]", rep.reasons[r]);
+            fprintf(stderr, "\n");
+        }
+        thx_surface_report_free(&rep);
+    }
+    return m;
+}
+
+typedef thx_vec2 (*shape_fn)(double t, double z, void *user); /* t in [0, 1): counterclockwise */
+
+static void add_shape(thx_ctx *ctx, thx_contours *c, size_t s, double z, int n, int cw, shape_fn f, void *user)
+{
+    thx_vec2 *p = malloc((size_t)n * sizeof *p);
+    for (int i = 0; i < n; i++) p[cw ? n - 1 - i : i] = f((double)i / n, z, user);
+    CHECK_OK(ctx, thx_contours_add_loop(ctx, c, s, z, p, (size_t)n));
+    free(p);
+}
+
+typedef struct { double cx, cy, r, ry; } circ;
+static thx_vec2 circle(double t, double z, void *u)
+{
+    circ *c = u;
+    (void)z;
+    thx_vec2 p = {c->cx + c->r * cos(2 * M_PI * t), c->cy + (c->ry > 0 ? c->ry : c->r) * sin(2 * M_PI * t)};
+    return p;
+}
+
+/* A crescent: the outer circle radius R with a bay of depth `bay` cut on the side at angle phi. */
+typedef struct { double R, bay, phi; } cres;
+static thx_vec2 crescent(double t, double z, void *u)
+{
+    cres *c = u;
+    (void)z;
+    double a = 2 * M_PI * t, d = remainder(a - c->phi, 2 * M_PI);
+    double r = c->R - c->bay * exp(-d * d / 0.18);
+    thx_vec2 p = {r * cos(a), r * sin(a)};
+    return p;
+}
+
+static void test_cylinder_cone_offset(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t cyl, cone, off;
+    thx_contours_add_surface(ctx, c, "cylinder", THX_ROLE_OTHER, THX_CAP_GRID, 0, &cyl);
+    thx_contours_add_surface(ctx, c, "cone", THX_ROLE_OTHER, THX_CAP_POLYGON, 0, &cone);
+    thx_contours_add_surface(ctx, c, "offset", THX_ROLE_OTHER, THX_CAP_GRID, 0, &off);
+    for (int l = 0; l <= 10; l++) {
+        double z = 5.0 * l;
+        circ a = {0, 0, 40, 0};
+        add_shape(ctx, c, cyl, z, 37, l % 2, circle, &a);
+        circ b = {200, 0, 60 - 4.0 * l, 0};
+        add_shape(ctx, c, cone, z, 31 + l, l % 3 == 0, circle, &b);
+        /* figure 2A: every other layer much smaller and shifted sideways */
+        circ d = {400 + (l % 2) * 25.0, 0, l % 2 ? 25 : 60, 0};
+        add_shape(ctx, c, off, z, 40, 0, circle, &d);
+    }
+    thx_surfaces_stats st[3];
+    thx_model *m = build_and_check(ctx, c, 5.0, st, "cylinder/cone/offset");
+    if (m) {
+        double v = surface_volume(m->surf[0]), exact = M_PI * 40 * 40 * 50;
+        CHECK(fabs(v - exact) / exact < 0.01);
+        CHECK(st[0].lace.removed == 0);
+        /* a tapering surface is not concave: the outside test removes nothing */
+        CHECK(st[1].lace.removed == 0);
+        CHECK(st[1].lace.unresolved == 0);
+        /* layers of very different size and offset: no node fanned into many triangles */
+        CHECK(st[2].lace.max_fan <= 8);
+        if (st[2].lace.max_fan > 8) fprintf(stderr, "  offset: largest fan %d\n", st[2].lace.max_fan);
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
+static void test_concave(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t cr, cl;
+    thx_contours_add_surface(ctx, c, "crescent", THX_ROLE_LUNG, THX_CAP_GRID, 0, &cr);
+    thx_contours_add_surface(ctx, c, "closing", THX_ROLE_LUNG, THX_CAP_GRID, 0, &cl);
+    for (int l = 0; l <= 12; l++) {
+        double z = 5.0 * l;
+        /* figure 2B: a deep bay that turns from layer to layer */
+        cres a = {60, 40, 0.12 * l};
+        add_shape(ctx, c, cr, z, 90, l % 2, crescent, &a);
+        /* a bay that closes: deep on the lower layers, gone from layer 7 up */
+        cres b = {60, l < 7 ? 40 : 0, 0};
+        thx_vec2 *p = malloc(90 * sizeof *p);
+        for (int i = 0; i < 90; i++) { p[i] = crescent(i / 90.0, z, &b); p[i].x += 300; }
+        thx_contours_add_loop(ctx, c, cl, z, p, 90);
+        free(p);
+    }
+    thx_surfaces_stats st[2];
+    thx_model *m = build_and_check(ctx, c, 4.0, st, "concave");
+    if (m) {
+        CHECK(st[0].lace.unresolved == 0);
+        CHECK(st[1].lace.unresolved == 0);
+        printf("concave: crescent removed %zu relaced %zu inplane %zu; closing removed %zu relaced %zu inplane %zu\n",
+               st[0].lace.removed, st[0].lace.relaced_gaps, st[0].lace.inplane_tris, st[1].lace.removed,
+               st[1].lace.relaced_gaps, st[1].lace.inplane_tris);
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
+static void test_branching(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t y, lobes;
+    thx_contours_add_surface(ctx, c, "y", THX_ROLE_OTHER, THX_CAP_GRID, 0, &y);
+    thx_contours_add_surface(ctx, c, "lobes", THX_ROLE_OTHER, THX_CAP_POLYGON, 0, &lobes);
+    for (int l = 0; l <= 9; l++) {
+        double z = 5.0 * l;
+        if (l < 4) {
+            circ a = {0, 0, 45, 25};
+            add_shape(ctx, c, y, z, 50, 0, circle, &a);
+        } else {
+            /* one loop below, two above: a vessel dividing */
+            double sep = 22 + 3.0 * (l - 4);
+            circ a = {-sep, 0, 20, 0}, b = {sep, 0, 20, 0};
+            add_shape(ctx, c, y, z, 30, 0, circle, &a);
+            add_shape(ctx, c, y, z, 30, 1, circle, &b);
+        }
+        /* two lobes, the right one ends four layers before the left one */
+        circ d = {300, 0, 25, 0}, e = {370, 0, 25, 0};
+        add_shape(ctx, c, lobes, z, 36, 0, circle, &d);
+        if (l < 6) add_shape(ctx, c, lobes, z, 36, 0, circle, &e);
+    }
+    thx_surfaces_stats st[2];
+    thx_model *m = build_and_check(ctx, c, 5.0, st, "branching");
+    if (m) {
+        CHECK(st[0].n_branch_slices == 1);
+        CHECK(st[1].n_caps == 4);
+        /* a pair of pants: Euler characteristic 2 for a closed genus-0 surface: V - E + F = 2, E = 3F/2 */
+        CHECK((long)m->surf[0]->n_nodes - (long)m->surf[0]->n_tris / 2 == 2);
+        CHECK((long)m->surf[1]->n_nodes - (long)m->surf[1]->n_tris / 2 == 4); /* two closed components */
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
+/* ---- round trip from analytic closed surfaces ---------------------------------- */
+
+/* Ellipsoid semi-axes 80, 55, 60 (z): the cross-section at z is an ellipse. */
+static thx_vec2 ellipsoid_xs(double t, double z, void *u)
+{
+    (void)u;
+    double f = sqrt(fmax(0, 1 - z * z / 3600.0));
+    thx_vec2 p = {80 * f * cos(2 * M_PI * t), 55 * f * sin(2 * M_PI * t)};
+    return p;
+}
+
+/* A kidney: bean-shaped cross-sections (a bay on the +y... -x side), scaled by an elliptic profile in z. */
+static thx_vec2 kidney_xs(double t, double z, void *u)
+{
+    (void)u;
+    double f = sqrt(fmax(0, 1 - z * z / 3600.0));
+    double a = 2 * M_PI * t, d = remainder(a - M_PI, 2 * M_PI);
+    double r = 70 - 28 * exp(-d * d / 0.3);
+    thx_vec2 p = {f * r * cos(a), f * 0.8 * r * sin(a)};
+    return p;
+}
+
+static double dist_to_curve(shape_fn f, double z, thx_vec2 p)
+{
+    double best = INFINITY;
+    thx_vec2 prev = f(0, z, NULL);
+    for (int i = 1; i <= 4000; i++) {
+        thx_vec2 q = f(i / 4000.0, z, NULL);
+        double ex = q.x - prev.x, ey = q.y - prev.y, l2 = ex * ex + ey * ey;
+        double t = l2 > 0 ? ((p.x - prev.x) * ex + (p.y - prev.y) * ey) / l2 : 0;
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        best = fmin(best, hypot(p.x - prev.x - t * ex, p.y - prev.y - t * ey));
+        prev = q;
+    }
+    return best;
+}
+
+static void round_trip(thx_ctx *ctx, const char *name, shape_fn f, double exact_volume)
+{
+    const double spacing = 5.0;
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t s;
+    thx_contours_add_surface(ctx, c, name, THX_ROLE_OTHER, THX_CAP_GRID, 0, &s);
+    /* layers 5 mm apart from z = -57.5 to 57.5; digitized densely and unevenly, alternating direction */
+    for (int l = 0; l < 24; l++) add_shape(ctx, c, s, -57.5 + 5.0 * l, 120 + 7 * (l % 3), l % 2, f, NULL);
+    thx_surfaces_stats st;
+    thx_model *m = build_and_check(ctx, c, spacing, &st, name);
+    if (m) {
+        const thx_surface *su = m->surf[0];
+        double worst = 0;
+        for (size_t i = 0; i < su->n_nodes; i++) {
+            thx_vec3 p = thx_surface_node(su, i);
+            thx_vec2 q = {p.x, p.y};
+            double d = dist_to_curve(f, p.z, q);
+            /* cap nodes lie inside the end cross-section: their distance to the true surface is at most
+               the distance to the pole cap above them (<= 2.5 mm here) */
+            if (i >= (size_t)st.n_nodes - 0 && 0) d = 0;
+            if (fabs(fabs(p.z) - 57.5) < 1e-9) {
+                double zs = 60 * sqrt(fmax(0, 1 - 0)), above = zs - fabs(p.z);
+                d = fmin(d, above);
+            }
+            worst = fmax(worst, d);
+        }
+        double v = surface_volume(su);
+        printf("round trip %s: %zu nodes %zu triangles, worst node distance %.3f mm (half spacing %.1f), "
+               "volume %.1f vs %.1f (%.3f%%)\n",
+               name, su->n_nodes, su->n_tris, worst, 0.5 * spacing, v, exact_volume, 100 * (v - exact_volume) / exact_volume);
+        CHECK(worst <= 0.5 * spacing);
+        CHECK(fabs(v - exact_volume) / exact_volume < 0.01);
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
+int main(void)
+{
+    thx_ctx *ctx = NULL;
+    thx_ctx_create(&ctx);
+    test_cylinder_cone_offset(ctx);
+    test_concave(ctx);
+    test_branching(ctx);
+    round_trip(ctx, "ellipsoid", ellipsoid_xs, 4.0 / 3.0 * M_PI * 80 * 55 * 60);
+    /* kidney volume: integral over z of the cross-section area (area scales with f^2) */
+    {
+        double a0 = 0;
+        int n = 20000;
+        thx_vec2 prev = kidney_xs(0, 0, NULL);
+        for (int i = 1; i <= n; i++) {
+            thx_vec2 q = kidney_xs((double)i / n, 0, NULL);
+            a0 += 0.5 * (prev.x * q.y - q.x * prev.y);
+            prev = q;
+        }
+        round_trip(ctx, "kidney", kidney_xs, a0 * 4.0 / 3.0 * 60);
+    }
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
