@@ -47,7 +47,7 @@ static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing,
         CHECK(surface_volume(m->surf[k]) > 0);
         if (!rep.ok) {
             fprintf(stderr, "  %s: surface %s fails its check:", what, m->surf[k]->name);
-            for (int r = 0; r < rep.n_reasons; r++) fprintf(stderr, " [%s]", rep.reasons[r]);
+            for (size_t r = 0; r < rep.n_reasons; r++) fprintf(stderr, " [%s]", rep.reasons[r]);
             fprintf(stderr, "\n");
         }
         thx_surface_report_free(&rep);

@@ -82,7 +82,7 @@ typedef enum {
 } thx_check_failure;
 
 #define THX_CHECK_MAX_PAIRS 8    /* intersecting pairs listed (the smallest (i, j), i < j) */
-#define THX_CHECK_MAX_REASONS 12 /* one per failure category at most */
+#define THX_CHECK_MAX_REASONS 16 /* at most one per failure category (two for quality) */
 #define THX_CHECK_ASPECT_BINS 8
 /* Histogram bin b counts aspect ratios in [edges[b], edges[b+1]);
  * the last bin is [100, inf] and includes degenerate triangles. */
@@ -157,6 +157,11 @@ typedef struct {
 thx_status thx_surface_check(thx_ctx *ctx, const thx_surface *s, const thx_vec3 *interior,
                              const thx_check_opts *opts, thx_surface_report *rep);
 
+/* Releases what a report owns and zeroes it. A report is plain data today, so
+ * this only clears it; calling it keeps callers right if that ever changes.
+ * Accepts NULL. */
+void thx_surface_report_free(thx_surface_report *r);
+
 /*
  * Finds a point strictly inside a closed surface without trusting its
  * orientation: from the centroids of the largest triangles it steps along
@@ -168,6 +173,12 @@ thx_status thx_surface_check(thx_ctx *ctx, const thx_surface *s, const thx_vec3 
  * qualified (e.g. an open surface), THX_EINPUT for bad indices, THX_ENOMEM.
  */
 thx_status thx_surface_find_interior(thx_ctx *ctx, const thx_surface *s, thx_vec3 *p);
+
+/* Do triangles ta and tb (3 node indices each into xyz, 3 doubles per node)
+ * intersect beyond the nodes they share by index? The rules above (exact).
+ * Both triangles must be non-degenerate (not collinear); returns 0 for
+ * triangles on the same three nodes. Pure and thread-safe. */
+int thx_triangles_intersect(const double *xyz, const int32_t ta[3], const int32_t tb[3]);
 
 /* Per-surface reports of a whole model. */
 typedef struct {
@@ -185,12 +196,31 @@ thx_status thx_model_check(thx_ctx *ctx, const thx_model *m, const thx_check_opt
 /* Frees the report; accepts NULL; nulls *r. */
 void thx_model_report_destroy(thx_model_report **r);
 
-/* JSON form of a report (schema in docs/formats.md "check report"; indices
- * 1-based). Returns a new cJSON tree the caller frees with cJSON_Delete, or
+/* JSON form of a report (indices 1-based; every count and figure of the
+ * struct, non-finite numbers as null), e.g. for one surface:
+ *   {"name": "tank", "role": "outer", "ok": false, "failures": ["boundary", ...],
+ *    "reasons": ["not closed: 3 boundary edges ...", ...],
+ *    "nodes": 771, "triangles": 1537, "edges": 2307,
+ *    "closed": false, "manifold": true, "consistently_oriented": true,
+ *    "topology": {"bad_index_triangles": 0, "boundary_edges": 3, "nonmanifold_edges": 0,
+ *                 "nonmanifold_vertices": 0, "inconsistent_edges": 0, "duplicate_triangles": 0,
+ *                 "degenerate_triangles": 0, "unused_nodes": 0, "euler_characteristic": 1,
+ *                 "components": 1, "first": {"boundary_edge": [717, 718]}},
+ *    "area": 363300.5, "volume": 1.549e7,
+ *    "solid_angle": {"interior_source": "found", "interior": [x, y, z], "omega": 12.547,
+ *                    "omega_over_4pi": 0.99846, "rel_error": 0.00154, "tolerance": 1e-6, "ok": false},
+ *    "intersections": {"checked": true, "pairs": 0, "first_pairs": [[i, j], ...]},
+ *    "quality": {"min_angle_deg": 7.93, "min_angle_triangle": 1177, "max_angle_deg": 138.3,
+ *                "max_angle_triangle": 1369, "min_area": .., "max_area": .., "min_edge": ..,
+ *                "max_edge": .., "aspect_ratio": {"definition": "...", "max": 4.57,
+ *                "max_triangle": 11, "mean": 1.37, "histogram": {"edges": [1, 1.25, 1.5, 2, 3, 5,
+ *                10, 100, null], "counts": [152, 1231, 124, 26, 4, 0, 0, 0]}}}}
+ * Returns a new cJSON tree the caller frees with cJSON_Delete, or
  * NULL on allocation failure (THX_ENOMEM recorded in ctx). role may be NULL. */
 struct cJSON *thx_surface_report_json(thx_ctx *ctx, const thx_surface_report *r, const char *role);
 /* {"ok": .., "index_base": 1, "solid_angle_tol": .., "surfaces": [..]}; roles
- * taken from m if given (may be NULL). */
+ * taken from m if given (may be NULL). A model without surfaces is "ok" here;
+ * `thorax check` treats it as a failure. */
 struct cJSON *thx_model_report_json(thx_ctx *ctx, const thx_model_report *r, const thx_model *m);
 
 /* Name of one failure category ("boundary", "orientation", ...). Static storage. */

@@ -42,8 +42,9 @@ thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n, double
 
 typedef struct {
     double spacing;        /* node spacing of the layers, mm (scales the tolerances) */
-    double concave_tol;    /* a triangle is outside the surface if its centroid lies more than
-                              concave_tol * spacing outside the layer curves interpolated to its height */
+    double concave_tol;    /* a triangle is outside the surface if its centroid c lies more than
+                              concave_tol * (spacing + |dA(c) - dB(c)|) outside the layer curves
+                              interpolated to its height (dA, dB: signed distances to the curves) */
     double max_edge;       /* an edge longer than max_edge * max(spacing, layer gap) makes a triangle "too large" */
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
 } thx_lace_opts;
@@ -97,8 +98,9 @@ typedef struct {
     size_t n_nodes, n_tris;
     size_t n_loops, n_slices, n_branch_slices, n_caps;
     thx_lace_stats lace;             /* summed over slices */
-    size_t orient_by_test;           /* triangles oriented by the inside test */
-    size_t orient_by_neighbours;     /* ambiguous test: oriented from neighbours */
+    size_t orient_by_test;           /* triangles whose own inside test gave the final orientation */
+    size_t orient_by_neighbours;     /* test undecided or overruled: oriented consistently with neighbours */
+    size_t orient_overruled;         /* tests contradicted by the majority of their component */
     size_t orient_flipped;           /* triangles whose stored order the test reversed */
     double t_layers, t_lace, t_caps, t_orient, t_total; /* seconds */
 } thx_surfaces_stats;

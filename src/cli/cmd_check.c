@@ -47,7 +47,7 @@ static void usage(FILE *f)
 static void print_table(const thx_model_report *r, const thx_model *m)
 {
     printf("%-16s %7s %9s %6s %-12s %10s %9s %9s %9s  %s\n", "surface", "nodes", "triangles", "closed", "orientation",
-           "|W/4pi-1|", "intersect", "min angle", "worst AR", "result");
+           "4pi relerr", "intersect", "min angle", "worst AR", "result");
     for (size_t i = 0; i < r->n_surfaces; i++) {
         const thx_surface_report *s = &r->surf[i];
         const char *closed = "-", *orient = "-";
@@ -148,6 +148,7 @@ int cmd_check(int argc, char **argv)
     thx_log(ctx, THX_LOG_DEBUG, "checked %zu surfaces in %.3f s", m->n_surfaces, thx_wtime() - t0);
     if (json) {
         cJSON *j = thx_model_report_json(ctx, rep, m);
+        if (j) cJSON_AddStringToObject(j, "model", model_dir);
         char *text = j ? cJSON_Print(j) : NULL;
         cJSON_Delete(j);
         if (!text) {
@@ -164,9 +165,11 @@ int cmd_check(int argc, char **argv)
         for (size_t k = 0; k < rep->surf[i].n_reasons; k++)
             fprintf(stderr, "thorax check: %s: surface \"%s\": %s\n", model_dir, rep->surf[i].name,
                     rep->surf[i].reasons[k]);
-    if (m->n_surfaces == 0) fprintf(stderr, "thorax check: %s: warning: the model has no surfaces\n", model_dir);
-    if (!json && !quiet) printf("\n%s: %s\n", model_dir, rep->ok ? "all checks passed" : "CHECK FAILED");
-    rc = rep->ok ? 0 : 1;
+    /* a model with nothing to check is not a model that passed */
+    int pass = rep->ok && m->n_surfaces > 0;
+    if (m->n_surfaces == 0) fprintf(stderr, "thorax check: %s: the model has no surfaces\n", model_dir);
+    if (!json && !quiet) printf("\n%s: %s\n", model_dir, pass ? "all checks passed" : "CHECK FAILED");
+    rc = pass ? 0 : 1;
 out:
     thx_model_report_destroy(&rep);
     thx_model_destroy(&m);

@@ -116,8 +116,9 @@ int cmd_surfaces(int argc, char **argv)
                "%zu unresolved, %zu too large, largest fan %d\n",
                tot.n_slices, tot.n_branch_slices, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.inplane_tris,
                tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan);
-        printf("orientation: %zu triangles by the inside test, %zu from neighbours, %zu flipped; %zu caps\n",
-               tot.orient_by_test, tot.orient_by_neighbours, tot.orient_flipped, tot.n_caps);
+        printf("orientation: %zu triangles by their own inside test, %zu from neighbours (%zu tests overruled), "
+               "%zu flipped; %zu caps\n",
+               tot.orient_by_test, tot.orient_by_neighbours, tot.orient_overruled, tot.orient_flipped, tot.n_caps);
     }
 done:
     free(per);

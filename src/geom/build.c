@@ -94,12 +94,18 @@ static int loops_overlap(const rloop *a, const rloop *b)
     for (size_t k = 0; k < a->n; k++) { ax0 = fmin(ax0, a->p[k].x); ax1 = fmax(ax1, a->p[k].x); ay0 = fmin(ay0, a->p[k].y); ay1 = fmax(ay1, a->p[k].y); }
     for (size_t k = 0; k < b->n; k++) { bx0 = fmin(bx0, b->p[k].x); bx1 = fmax(bx1, b->p[k].x); by0 = fmin(by0, b->p[k].y); by1 = fmax(by1, b->p[k].y); }
     if (ax1 < bx0 || bx1 < ax0 || ay1 < by0 || by1 < ay0) return 0;
-    thx_chain ca = {a->n, a->p, NULL, 0}, cb = {b->n, b->p, NULL, 0};
-    size_t step_a = a->n / 16 + 1, step_b = b->n / 16 + 1;
-    for (size_t k = 0; k < a->n; k += step_a) if (signed_dist_chain(&cb, a->p[k]) < 0) return 1;
-    for (size_t k = 0; k < b->n; k += step_b) if (signed_dist_chain(&ca, b->p[k]) < 0) return 1;
-    for (size_t k = 0; k < a->n; k++) if (signed_dist_chain(&cb, a->p[k]) < 0) return 1;
-    for (size_t k = 0; k < b->n; k++) if (signed_dist_chain(&ca, b->p[k]) < 0) return 1;
+    /* Probe points just inside each loop (edge midpoints moved inward by a tenth of the edge),
+       so that identical or nearly identical loops are found to overlap. */
+    const rloop *pair[2][2] = {{a, b}, {b, a}};
+    for (int r = 0; r < 2; r++) {
+        const rloop *p = pair[r][0], *q = pair[r][1];
+        thx_chain cq = {q->n, q->p, NULL, 0};
+        for (size_t k = 0; k < p->n; k++) {
+            thx_vec2 u = p->p[k], v = p->p[(k + 1) % p->n];
+            thx_vec2 m = {0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
+            if (signed_dist_chain(&cq, m) < 0) return 1;
+        }
+    }
     return 0;
 }
 
@@ -174,16 +180,31 @@ static int cmp_edge(const void *x, const void *y)
     return p->t - q->t;
 }
 
-/* Orients every triangle by the paper's test; ambiguous ones from neighbours. */
+/*
+ * Orientation (paper 3.2, "The final step ..."). Every triangle casts a vote
+ * from the paper's test: both candidate normal endpoints (at the centroid, then
+ * near each vertex, at decreasing distances) are classified against the
+ * surface; the one outside gives the outward side. Votes are then reconciled
+ * with the mesh: triangles sharing an edge must traverse it in opposite
+ * directions, which fixes each connected component's orientation up to one
+ * global choice, and that choice is the majority of the component's votes.
+ * This stores every triangle counterclockwise seen from outside even where an
+ * individual test was undecided or fooled (a narrow slot, a fold), and the
+ * number of overruled votes is reported.
+ */
 static thx_status orient_surface(thx_ctx *ctx, thx_surface *s, const rlayer *layers, size_t nl, const slice *slices,
                                  double spacing, thx_surfaces_stats *stats)
 {
     size_t nt = s->n_tris;
-    signed char *dec = thx_calloc(ctx, nt ? nt : 1, 1); /* +1 keep, -1 flip, 0 undecided */
-    if (!dec) return THX_ENOMEM;
+    thx_status st = THX_OK;
+    signed char *vote = thx_calloc(ctx, nt ? nt : 1, 1); /* +1 keep, -1 flip, 0 undecided */
+    signed char *rel = NULL;                              /* per adjacency: +1 same decision, -1 opposite */
+    int32_t *nbr = NULL, *queue = NULL, *flip = NULL;
+    edge_rec *e = NULL;
+    if (!vote) return THX_ENOMEM;
     double delta = 0.25 * spacing;
-    long by_test = 0, flipped = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : by_test, flipped)
+    long by_test = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : by_test)
     for (long t = 0; t < (long)nt; t++) {
         const int32_t *v = s->tri + 3 * t;
         thx_vec3 P[3] = {thx_surface_node(s, (size_t)v[0]), thx_surface_node(s, (size_t)v[1]), thx_surface_node(s, (size_t)v[2])};
@@ -206,58 +227,87 @@ static thx_status orient_surface(thx_ctx *ctx, thx_surface *s, const rlayer *lay
                 else if (dp < 0 && dm > 0) d = -1; /* the other one is outside: flip */
             }
         }
-        dec[t] = (signed char)d;
+        vote[t] = (signed char)d;
         if (d) by_test++;
-        if (d < 0) flipped++;
     }
+    /* Edge adjacency: sort the 3 nt half-edges by their undirected key. */
+    e = thx_malloc(ctx, 3 * (nt ? nt : 1) * sizeof *e);
+    nbr = thx_malloc(ctx, 3 * (nt ? nt : 1) * sizeof *nbr);
+    rel = thx_malloc(ctx, 3 * (nt ? nt : 1));
+    queue = thx_malloc(ctx, (nt ? nt : 1) * sizeof *queue);
+    flip = thx_calloc(ctx, nt ? nt : 1, sizeof *flip); /* 0 = unvisited, +1 keep, -1 flip (relative, then final) */
+    if (!e || !nbr || !rel || !queue || !flip) { st = THX_ENOMEM; goto done; }
     for (size_t t = 0; t < nt; t++)
-        if (dec[t] < 0) { int32_t x = s->tri[3 * t + 1]; s->tri[3 * t + 1] = s->tri[3 * t + 2]; s->tri[3 * t + 2] = x; }
-    /* Undecided triangles: propagate from decided neighbours across shared edges. */
-    size_t undecided = nt - (size_t)by_test;
-    if (undecided) {
-        edge_rec *e = thx_malloc(ctx, 3 * nt * sizeof *e);
-        if (!e) { free(dec); return THX_ENOMEM; }
-        for (size_t t = 0; t < nt; t++)
-            for (int k = 0; k < 3; k++) {
-                int32_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
-                e[3 * t + k].a = a < b ? a : b;
-                e[3 * t + k].b = a < b ? b : a;
-                e[3 * t + k].t = (int32_t)t;
-            }
-        qsort(e, 3 * nt, sizeof *e, cmp_edge);
-        int changed = 1;
-        while (changed && undecided) {
-            changed = 0;
-            for (size_t k = 0; k + 1 < 3 * nt; k++) {
-                if (e[k].a != e[k + 1].a || e[k].b != e[k + 1].b) continue;
-                int32_t t1 = e[k].t, t2 = e[k + 1].t;
-                if ((dec[t1] != 0) == (dec[t2] != 0)) continue;
-                int32_t u = dec[t1] ? t2 : t1, w = dec[t1] ? t1 : t2;
-                /* Orient u so that it traverses the shared edge opposite to w. */
-                int dir_w = 0, dir_u = 0;
-                for (int q = 0; q < 3; q++) {
-                    if (s->tri[3 * w + q] == e[k].a && s->tri[3 * w + (q + 1) % 3] == e[k].b) dir_w = 1;
-                    if (s->tri[3 * w + q] == e[k].b && s->tri[3 * w + (q + 1) % 3] == e[k].a) dir_w = -1;
-                    if (s->tri[3 * u + q] == e[k].a && s->tri[3 * u + (q + 1) % 3] == e[k].b) dir_u = 1;
-                    if (s->tri[3 * u + q] == e[k].b && s->tri[3 * u + (q + 1) % 3] == e[k].a) dir_u = -1;
-                }
-                if (dir_u == dir_w) {
-                    int32_t x = s->tri[3 * u + 1]; s->tri[3 * u + 1] = s->tri[3 * u + 2]; s->tri[3 * u + 2] = x;
-                    flipped++;
-                }
-                dec[u] = 2;
-                undecided--;
-                changed = 1;
+        for (int k = 0; k < 3; k++) {
+            int32_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+            e[3 * t + k].a = a < b ? a : b;
+            e[3 * t + k].b = a < b ? b : a;
+            e[3 * t + k].t = (int32_t)(a < b ? (int32_t)t : -(int32_t)t - 1); /* sign: direction of traversal */
+            nbr[3 * t + k] = -1;
+        }
+    qsort(e, 3 * nt, sizeof *e, cmp_edge);
+    for (size_t k = 0; k < 3 * nt;) {
+        size_t j = k + 1;
+        while (j < 3 * nt && e[j].a == e[k].a && e[j].b == e[k].b) j++;
+        if (j - k == 2) { /* a manifold edge: link the two triangles */
+            int32_t t1 = e[k].t >= 0 ? e[k].t : -e[k].t - 1, t2 = e[k + 1].t >= 0 ? e[k + 1].t : -e[k + 1].t - 1;
+            int same_dir = (e[k].t >= 0) == (e[k + 1].t >= 0);
+            for (int q = 0; q < 3; q++) {
+                int32_t a = s->tri[3 * t1 + q], b = s->tri[3 * t1 + (q + 1) % 3];
+                if ((a < b ? a : b) == e[k].a && (a < b ? b : a) == e[k].b) { nbr[3 * t1 + q] = t2; rel[3 * t1 + q] = same_dir ? -1 : 1; }
+                a = s->tri[3 * t2 + q]; b = s->tri[3 * t2 + (q + 1) % 3];
+                if ((a < b ? a : b) == e[k].a && (a < b ? b : a) == e[k].b) { nbr[3 * t2 + q] = t1; rel[3 * t2 + q] = same_dir ? -1 : 1; }
             }
         }
-        free(e);
-        stats->orient_by_neighbours = nt - (size_t)by_test - undecided;
+        k = j;
     }
-    stats->orient_by_test = (size_t)by_test;
-    stats->orient_flipped = (size_t)flipped;
-    free(dec);
-    if (undecided) return thx_error(ctx, THX_EGEOM, "surface \"%s\": %zu triangles could not be oriented", s->name, undecided);
-    return THX_OK;
+    /* Components: propagate relative decisions, then let the votes choose the global sign. */
+    size_t conflicts = 0, overruled = 0;
+    for (size_t root = 0; root < nt; root++) {
+        if (flip[root]) continue;
+        size_t head = 0, tail = 0, start = 0;
+        flip[root] = 1;
+        queue[tail++] = (int32_t)root;
+        long score = 0;
+        while (head < tail) {
+            int32_t t = queue[head++];
+            score += vote[t] * flip[t];
+            for (int q = 0; q < 3; q++) {
+                int32_t u = nbr[3 * t + q];
+                if (u < 0) continue;
+                int want = flip[t] * rel[3 * t + q];
+                if (!flip[u]) { flip[u] = want; queue[tail++] = u; }
+                else if (flip[u] != want) conflicts++;
+            }
+        }
+        int sign = score < 0 ? -1 : 1;
+        for (size_t k = start; k < tail; k++) {
+            int32_t t = queue[k];
+            flip[t] *= sign;
+            if (vote[t] && vote[t] != flip[t]) overruled++;
+        }
+    }
+    size_t flipped = 0;
+    for (size_t t = 0; t < nt; t++)
+        if (flip[t] < 0) {
+            int32_t x = s->tri[3 * t + 1];
+            s->tri[3 * t + 1] = s->tri[3 * t + 2];
+            s->tri[3 * t + 2] = x;
+            flipped++;
+        }
+    stats->orient_by_test = (size_t)by_test - overruled;
+    stats->orient_by_neighbours = nt - (size_t)by_test + overruled;
+    stats->orient_flipped = flipped;
+    stats->orient_overruled = overruled;
+    if (conflicts) st = thx_error(ctx, THX_EGEOM, "surface \"%s\": the triangles cannot be oriented consistently (%zu conflicting edges: not an orientable manifold)", s->name, conflicts / 2);
+done:
+    free(vote);
+    free(e);
+    free(nbr);
+    free(rel);
+    free(queue);
+    free(flip);
+    return st;
 }
 
 /* A point well inside the surface: on the middle layer, the grid point of the
@@ -592,10 +642,10 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
         thx_log(ctx, THX_LOG_DEBUG,
                 "surface %s: %zu nodes, %zu triangles; lacing removed %zu outside triangles, re-laced %zu gaps, "
                 "%zu in-plane, %zu unresolved, %zu too large, largest fan %d; %zu caps; orientation: %zu by test, "
-                "%zu from neighbours, %zu flipped",
+                "%zu from neighbours (%zu votes overruled), %zu flipped",
                 c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
                 one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
-                one.orient_by_neighbours, one.orient_flipped);
+                one.orient_by_neighbours, one.orient_overruled, one.orient_flipped);
         if (one.lace.unresolved)
             thx_log(ctx, THX_LOG_WARN, "surface %s: %zu triangles still span a concave region after re-lacing",
                     c->surf[k].name, one.lace.unresolved);
@@ -608,7 +658,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->lace.unresolved += one.lace.unresolved; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
-            total->orient_flipped += one.orient_flipped;
+            total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;
             total->t_layers += one.t_layers; total->t_lace += one.t_lace; total->t_caps += one.t_caps;
             total->t_orient += one.t_orient;
         }

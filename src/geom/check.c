@@ -16,6 +16,14 @@
 #define M_PI 3.14159265358979323846
 #endif
 
+/* OpenMP pragmas that vanish (without -Wunknown-pragmas noise) when the
+ * library is built without OpenMP. */
+#ifdef _OPENMP
+#define THX_OMP(x) _Pragma(#x)
+#else
+#define THX_OMP(x)
+#endif
+
 const double thx_check_aspect_edges[THX_CHECK_ASPECT_BINS + 1] = {1.0, 1.25, 1.5, 2.0, 3.0, 5.0, 10.0, 100.0, INFINITY};
 
 void thx_check_opts_default(thx_check_opts *o)
@@ -129,7 +137,7 @@ static int point_in_tri2(const double *p, const double *a, const double *b, cons
 }
 
 /* Closed segment e0-e1 meets closed triangle t (2D). */
-static int seg_tri2(const double *e0, const double *e1, const double t[3][2])
+static int seg_tri2(const double *e0, const double *e1, double t[3][2])
 {
     if (point_in_tri2(e0, t[0], t[1], t[2]) || point_in_tri2(e1, t[0], t[1], t[2])) return 1;
     for (int k = 0; k < 3; k++)
@@ -189,9 +197,8 @@ static int tri_tri3(const double *const p[3], const double *const q[3])
     return 0;
 }
 
-/* Do triangles ta and tb (node indices) intersect beyond what they share by
- * index? See check.h for the rules. Both are non-degenerate. */
-static int tri_pair_intersects(const double *xyz, const int32_t *ta, const int32_t *tb)
+/* The pair test (check.h); both triangles non-degenerate. */
+int thx_triangles_intersect(const double *xyz, const int32_t ta[3], const int32_t tb[3])
 {
     int shared_a[3] = {-1, -1, -1}; /* shared_a[i] = k if ta[i] == tb[k] */
     int n_shared = 0;
@@ -384,7 +391,7 @@ static int find_interior(const thx_surface *s, const thx_bvh *bvh, const unsigne
     double reach = 4.0 * diag;
 
     /* the N largest triangles (ties by index) */
-    size_t top[N_CANDIDATE_TRIS];
+    size_t top[2 * N_CANDIDATE_TRIS];
     double top_area[N_CANDIDATE_TRIS];
     size_t n_top = 0;
     for (size_t t = 0; t < s->n_tris; t++) {
@@ -407,7 +414,16 @@ static int find_interior(const thx_surface *s, const thx_bvh *bvh, const unsigne
         top_area[k] = ar;
     }
 
-    candidate cand[2 * N_CANDIDATE_TRIS];
+    /* then triangles spread over the index range, in case the largest all sit
+     * where the inside is hard to reach (thin slabs, touching parts) */
+    for (size_t k = 0; k < N_CANDIDATE_TRIS && s->n_tris > 0; k++) {
+        size_t t = (2 * k + 1) * s->n_tris / (2 * N_CANDIDATE_TRIS);
+        int dup = degen[t] != 0;
+        for (size_t j = 0; j < n_top && !dup; j++) dup = top[j] == t;
+        if (!dup) top[n_top++] = t;
+    }
+
+    candidate cand[4 * N_CANDIDATE_TRIS];
     size_t n_cand = 0;
     for (size_t k = 0; k < n_top; k++) {
         const int32_t *v = s->tri + 3 * top[k];
@@ -845,7 +861,7 @@ static int isect_visit(void *user, size_t j)
 {
     isect_state *st = user;
     if (j <= st->i || st->dg[j]) return 0;
-    if (tri_pair_intersects(st->s->xyz, st->s->tri + 3 * st->i, st->s->tri + 3 * j)) {
+    if (thx_triangles_intersect(st->s->xyz, st->s->tri + 3 * st->i, st->s->tri + 3 * j)) {
         st->count++;
         pair_list_add(&st->list, st->i, j);
     }
@@ -858,10 +874,10 @@ static thx_status intersections(thx_ctx *ctx, const thx_surface *s, const thx_bv
     size_t total = 0;
     pair_list all = {0};
     long long nt = (long long)s->n_tris;
-#pragma omp parallel
+THX_OMP(omp parallel)
     {
         isect_state st = {s, dg, 0, 0, {0}};
-#pragma omp for schedule(dynamic, 256)
+THX_OMP(omp for schedule(dynamic, 256))
         for (long long i = 0; i < nt; i++) {
             if (dg[i]) continue;
             const int32_t *v = s->tri + 3 * i;
@@ -875,7 +891,7 @@ static thx_status intersections(thx_ctx *ctx, const thx_surface *s, const thx_bv
             st.i = (size_t)i;
             thx_bvh_query_box(bvh, lo, hi, isect_visit, &st);
         }
-#pragma omp critical(thx_check_merge)
+THX_OMP(omp critical(thx_check_merge))
         {
             total += st.count;
             for (size_t k = 0; k < st.list.n; k++) pair_list_add(&all, st.list.pair[k][0], st.list.pair[k][1]);
@@ -1037,6 +1053,11 @@ thx_status thx_model_check(thx_ctx *ctx, const thx_model *m, const thx_check_opt
     *out = r;
     if (!r->ok) return thx_error(ctx, THX_ECHECK, "%s", first);
     return THX_OK;
+}
+
+void thx_surface_report_free(thx_surface_report *r)
+{
+    if (r) memset(r, 0, sizeof *r);
 }
 
 void thx_model_report_destroy(thx_model_report **r)

@@ -18,9 +18,11 @@
  *     many triangles.
  *  2. Outside test (figure 2B). A triangle is outside the surface when its
  *     centroid c, at height fraction t between the layers, has
- *         (1 - t) dA(c) + t dB(c) > concave_tol * spacing,
+ *         (1 - t) dA(c) + t dB(c) > concave_tol * (spacing + |dA(c) - dB(c)|),
  *     where dA, dB are the signed distances (positive outside) from the
- *     projection of c to the curves of layers A and B. This is the paper's test
+ *     projection of c to the curves of layers A and B (the tolerance grows with
+ *     the layers' disagreement, the uncertainty of the interpolation; in a
+ *     concave bay both distances are alike and large). This is the paper's test
  *     "projected centroid outside either layer's curve" made consistent for
  *     layers of different size: the literal rule rejects every triangle of a
  *     tapering surface (a cone), because there the centroid always lies outside
@@ -115,8 +117,11 @@ static int tri_outside(const lacer *L, const thx_vec3 t[3])
     double zc = (t[0].z + t[1].z + t[2].z) / 3.0;
     double dz = L->b->z - L->a->z;
     double f = dz != 0 ? (zc - L->a->z) / dz : 0.5;
-    double d = (1 - f) * chain_sdf(L->a, c) + f * chain_sdf(L->b, c);
-    return d > L->o->concave_tol * L->o->spacing;
+    double da = chain_sdf(L->a, c), db = chain_sdf(L->b, c);
+    double d = (1 - f) * da + f * db;
+    /* Linear interpolation of the signed distance is uncertain by about the layers' disagreement
+       |da - db| (a flat, strongly offset slice); a concave bay has da ~ db > 0. */
+    return d > L->o->concave_tol * (L->o->spacing + fabs(da - db));
 }
 
 static double dist3(thx_vec3 a, thx_vec3 b) { return thx_v3_norm(thx_v3_sub(a, b)); }
@@ -127,7 +132,11 @@ static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
     thx_vec3 t[3];
     int32_t id[3];
     move_tri(L, ca, cb, bmove, t, id);
-    double c = bmove ? dist3(t[0], t[1]) : dist3(t[1], t[2]);
+    /* the new diagonal, measured like the shortest-diagonal rule: in normalized coordinates */
+    int na = (int)L->a->n, nb = (int)L->b->n;
+    int i = (L->i0 + ca) % na, j = (L->j0 + cb) % nb;
+    thx_vec2 p = bmove ? L->na[i] : L->na[(i + 1) % na], q = bmove ? L->nb[(j + 1) % nb] : L->nb[j];
+    double c = hypot(p.x - q.x, p.y - q.y);
     double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
     if (e > L->big_edge) c += LARGE;
     if (check && tri_outside(L, t)) c += BIG;

@@ -24,8 +24,10 @@
  * exact evaluations in near-degenerate cases.
  *   orient2d: k = 4   orient3d: k = 8   incircle: k = 11   insphere: k = 16
  *
- * Exact evaluation uses the raw coordinates (not differences, whose
- * computation would round): each predicate is a determinant with a column of
+ * Exact evaluation: when all coordinate differences are exact in double (the
+ * usual case for nearby points, e.g. grids), the determinant of the
+ * differences is expanded exactly; otherwise the raw coordinates are used
+ * (differences would round): each predicate is a determinant with a column of
  * ones, e.g. orient3d(a,b,c,d) = det[a 1; b 1; c 1; d 1], expanded by
  * cofactors into 2x2 minors x_p y_q - x_q y_p computed exactly.
  *
@@ -302,6 +304,8 @@ static double orient3d_exact(const double *a, const double *b, const double *c, 
     return ex_estimate(n, r);
 }
 
+static int orient3d_diff(const double *a, const double *b, const double *c, const double *d, double *r);
+
 double thx_orient3d(const double *a, const double *b, const double *c, const double *d)
 {
     double adx = a[0] - d[0], ady = a[1] - d[1], adz = a[2] - d[2];
@@ -315,6 +319,8 @@ double thx_orient3d(const double *a, const double *b, const double *c, const dou
                   (fabs(adxbdy) + fabs(bdxady)) * fabs(cdz);
     double bound = orient3d_bound * perm;
     if (det > bound || -det > bound) return det;
+    double r;
+    if (orient3d_diff(a, b, c, d, &r)) return r;
     return orient3d_exact(a, b, c, d);
 }
 
@@ -337,6 +343,94 @@ static int lift_exact(const double *p, int dim, double *out)
     }
     for (int i = 0; i < hn; i++) out[i] = h[i];
     return hn;
+}
+
+/* ---------------------------------------------------------------------------
+ * Shortcut for the common degenerate case of nearby points (grids): when
+ * every coordinate difference to the last point is exact in double, the
+ * determinant of the differences is evaluated exactly directly, with much
+ * shorter expansions than the raw-coordinate form.
+ * ------------------------------------------------------------------------- */
+
+/* d[k] = p[k] - q[k] for k < dim; returns 1 iff all are exact. */
+static int exact_diffs(const double *p, const double *q, int dim, double *d)
+{
+    for (int k = 0; k < dim; k++) {
+        double x, y;
+        two_sum(p[k], -q[k], &x, &y);
+        if (y != 0.0) return 0;
+        d[k] = x;
+    }
+    return 1;
+}
+
+/* Exact det[A; B; C] of single-double 3-vectors (<= 24 components). */
+static int det3_single(const double *A, const double *B, const double *C, double *out)
+{
+    double bc[4], ca[4], ab[4], t1[8], t2[8], t3[8], u[16];
+    int nbc = minor2(B, C, bc), nca = minor2(C, A, ca), nab = minor2(A, B, ab);
+    int n1 = exp_scale(nbc, bc, A[2], t1), n2 = exp_scale(nca, ca, B[2], t2), n3 = exp_scale(nab, ab, C[2], t3);
+    int nu = exp_sum(n1, t1, n2, t2, u);
+    return exp_sum(nu, u, n3, t3, out);
+}
+
+/* Returns 1 and the exact sign estimate in *r if the shortcut applies. */
+static int orient3d_diff(const double *a, const double *b, const double *c, const double *d, double *r)
+{
+    double A[3], B[3], C[3], out[24];
+    if (!exact_diffs(a, d, 3, A) || !exact_diffs(b, d, 3, B) || !exact_diffs(c, d, 3, C)) return 0;
+    int n = det3_single(A, B, C, out);
+    *r = ex_estimate(n, out);
+    return 1;
+}
+
+static int incircle_diff(const double *a, const double *b, const double *c, const double *d, double *r)
+{
+    double A[2], B[2], C[2];
+    if (!exact_diffs(a, d, 2, A) || !exact_diffs(b, d, 2, B) || !exact_diffs(c, d, 2, C)) return 0;
+    /* alift (B x C) + blift (C x A) + clift (A x B) */
+    const double *P[3] = {A, B, C};
+    double acc[96], acc2[96], term[32], tmp[32], scratch[32];
+    int an = 0;
+    for (int i = 0; i < 3; i++) {
+        double mn[4], lift[4];
+        int mnn = minor2(P[(i + 1) % 3], P[(i + 2) % 3], mn);
+        int ln = lift_exact(P[i], 2, lift);
+        int tn = exp_mul(mnn, mn, ln, lift, term, tmp, scratch);
+        int n2 = exp_sum(an, acc, tn, term, acc2);
+        for (int k = 0; k < n2; k++) acc[k] = acc2[k];
+        an = n2;
+    }
+    *r = ex_estimate(an, acc);
+    return 1;
+}
+
+static int insphere_diff(const double *a, const double *b, const double *c, const double *d, const double *e,
+                         double *r)
+{
+    double A[3], B[3], C[3], D[3];
+    if (!exact_diffs(a, e, 3, A) || !exact_diffs(b, e, 3, B) || !exact_diffs(c, e, 3, C) ||
+        !exact_diffs(d, e, 3, D))
+        return 0;
+    /* -alift det[B;C;D] + blift det[A;C;D] - clift det[A;B;D] + dlift det[A;B;C] */
+    const double *P[4] = {A, B, C, D};
+    double acc[1152], acc2[1152], m3[24], term[288], tmp[48], scratch[288];
+    int an = 0;
+    for (int skip = 0; skip < 4; skip++) {
+        const double *q[3];
+        for (int i = 0, k = 0; i < 4; i++)
+            if (i != skip) q[k++] = P[i];
+        int mn = det3_single(q[0], q[1], q[2], m3);
+        double lift[6];
+        int ln = lift_exact(P[skip], 3, lift);
+        if (skip == 0 || skip == 2) negate(ln, lift);
+        int tn = exp_mul(mn, m3, ln, lift, term, tmp, scratch);
+        int n2 = exp_sum(an, acc, tn, term, acc2);
+        for (int k = 0; k < n2; k++) acc[k] = acc2[k];
+        an = n2;
+    }
+    *r = ex_estimate(an, acc);
+    return 1;
 }
 
 static double incircle_exact(const double *a, const double *b, const double *c, const double *d)
@@ -386,6 +480,8 @@ double thx_incircle(const double *a, const double *b, const double *c, const dou
                   (fabs(adxbdy) + fabs(bdxady)) * clift;
     double bound = incircle_bound * perm;
     if (det > bound || -det > bound) return det;
+    double r;
+    if (incircle_diff(a, b, c, d, &r)) return r;
     return incircle_exact(a, b, c, d);
 }
 
@@ -455,5 +551,7 @@ double thx_insphere(const double *a, const double *b, const double *c, const dou
                   (abp * dezp + bdp * aezp + dap * bezp) * clift + (bcp * aezp + acp * bezp + abp * cezp) * dlift;
     double bound = insphere_bound * perm;
     if (det > bound || -det > bound) return det;
+    double r;
+    if (insphere_diff(a, b, c, d, e, &r)) return r;
     return insphere_exact(a, b, c, d, e);
 }

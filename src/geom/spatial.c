@@ -22,33 +22,46 @@ struct thx_bvh {
     double *blo, *bhi; /* the boxes, 3 per box (copied) */
 };
 
+/* A box during the build: its centre and index, moved around by value so
+ * that the scans of the build run through contiguous memory. */
+typedef struct {
+    double c[3];
+    uint32_t i;
+} build_item;
+
 /* Total order used for the median split: centre coordinate along the axis,
  * then box index (so that equal centres still split deterministically). */
-static int key_less(const double *cen, int axis, uint32_t a, uint32_t b)
+static int key_less(const build_item *a, const build_item *b, int axis)
 {
-    double ka = cen[3 * (size_t)a + axis], kb = cen[3 * (size_t)b + axis];
-    return ka < kb || (ka == kb && a < b);
+    return a->c[axis] < b->c[axis] || (a->c[axis] == b->c[axis] && a->i < b->i);
+}
+
+static void swap_items(build_item *a, build_item *b)
+{
+    build_item t = *a;
+    *a = *b;
+    *b = t;
 }
 
 /* Rearranges it[0..n-1] so that it[k] is the element of rank k in key order,
  * with smaller elements before it and larger after (quickselect, median-of-3). */
-static void select_kth(uint32_t *it, size_t n, size_t k, const double *cen, int axis)
+static void select_kth(build_item *it, size_t n, size_t k, int axis)
 {
     ptrdiff_t lo = 0, hi = (ptrdiff_t)n - 1, kk = (ptrdiff_t)k;
     while (hi > lo) {
         ptrdiff_t mid = lo + (hi - lo) / 2;
         /* order it[lo], it[mid], it[hi] so that the median of the three sits at mid */
-        if (key_less(cen, axis, it[mid], it[lo])) { uint32_t t = it[mid]; it[mid] = it[lo]; it[lo] = t; }
-        if (key_less(cen, axis, it[hi], it[lo])) { uint32_t t = it[hi]; it[hi] = it[lo]; it[lo] = t; }
-        if (key_less(cen, axis, it[hi], it[mid])) { uint32_t t = it[hi]; it[hi] = it[mid]; it[mid] = t; }
-        uint32_t pivot = it[mid];
+        if (key_less(&it[mid], &it[lo], axis)) swap_items(&it[mid], &it[lo]);
+        if (key_less(&it[hi], &it[lo], axis)) swap_items(&it[hi], &it[lo]);
+        if (key_less(&it[hi], &it[mid], axis)) swap_items(&it[hi], &it[mid]);
+        build_item pivot = it[mid];
         ptrdiff_t i = lo, j = hi;
         /* Hoare partition; keys are distinct (index tie-break), so it ends */
         while (i <= j) {
-            while (key_less(cen, axis, it[i], pivot)) i++;
-            while (key_less(cen, axis, pivot, it[j])) j--;
+            while (key_less(&it[i], &pivot, axis)) i++;
+            while (key_less(&pivot, &it[j], axis)) j--;
             if (i <= j) {
-                uint32_t t = it[i]; it[i] = it[j]; it[j] = t;
+                swap_items(&it[i], &it[j]);
                 i++;
                 j--;
             }
@@ -60,42 +73,35 @@ static void select_kth(uint32_t *it, size_t n, size_t k, const double *cen, int 
     }
 }
 
-typedef struct {
-    thx_bvh *b;
-    const double *cen;
-} build_state;
-
-static void node_bounds(build_state *bs, bvh_node *nd, size_t first, size_t count)
+/* Builds the subtree over it[first .. first+count-1]; node bounds are the
+ * union of the children's (bottom-up), so each box is read once. */
+static void build(thx_bvh *b, build_item *it, size_t first, size_t count, size_t depth)
 {
-    const thx_bvh *b = bs->b;
-    for (int a = 0; a < 3; a++) { nd->lo[a] = INFINITY; nd->hi[a] = -INFINITY; }
-    for (size_t k = first; k < first + count; k++) {
-        size_t i = b->items[k];
-        for (int a = 0; a < 3; a++) {
-            if (b->blo[3 * i + a] < nd->lo[a]) nd->lo[a] = b->blo[3 * i + a];
-            if (b->bhi[3 * i + a] > nd->hi[a]) nd->hi[a] = b->bhi[3 * i + a];
-        }
-    }
-}
-
-/* Builds the subtree over items[first .. first+count-1] at node index *next. */
-static void build(build_state *bs, size_t first, size_t count, size_t depth)
-{
-    thx_bvh *b = bs->b;
     size_t self = b->n_nodes++;
-    bvh_node *nd = &b->node[self];
-    node_bounds(bs, nd, first, count);
+    bvh_node *nd = &b->node[self]; /* b->node is sized up front: never moves */
     if (count <= LEAF_SIZE || depth + 2 >= STACK_DEPTH) {
         nd->first = (uint32_t)first;
         nd->count = (uint32_t)count;
         nd->right = 0;
+        for (int a = 0; a < 3; a++) {
+            nd->lo[a] = INFINITY;
+            nd->hi[a] = -INFINITY;
+        }
+        for (size_t k = first; k < first + count; k++) {
+            size_t i = it[k].i;
+            b->items[k] = (uint32_t)i;
+            for (int a = 0; a < 3; a++) {
+                if (b->blo[3 * i + a] < nd->lo[a]) nd->lo[a] = b->blo[3 * i + a];
+                if (b->bhi[3 * i + a] > nd->hi[a]) nd->hi[a] = b->bhi[3 * i + a];
+            }
+        }
         return;
     }
-    /* split on the longest extent of the box centres */
+    /* split at the median of the box centres along their longest extent */
     double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t k = first; k < first + count; k++)
         for (int a = 0; a < 3; a++) {
-            double c = bs->cen[3 * (size_t)b->items[k] + a];
+            double c = it[k].c[a];
             if (c < clo[a]) clo[a] = c;
             if (c > chi[a]) chi[a] = c;
         }
@@ -103,12 +109,18 @@ static void build(build_state *bs, size_t first, size_t count, size_t depth)
     for (int a = 1; a < 3; a++)
         if (chi[a] - clo[a] > chi[axis] - clo[axis]) axis = a;
     size_t half = count / 2;
-    select_kth(b->items + first, count, half, bs->cen, axis);
+    select_kth(it + first, count, half, axis);
     nd->count = 0;
     nd->first = 0;
-    build(bs, first, half, depth + 1);
-    b->node[self].right = (uint32_t)b->n_nodes; /* b->node is not reallocated: sized up front */
-    build(bs, first + half, count - half, depth + 1);
+    build(b, it, first, half, depth + 1);
+    size_t right = b->n_nodes;
+    b->node[self].right = (uint32_t)right;
+    build(b, it, first + half, count - half, depth + 1);
+    const bvh_node *l = &b->node[self + 1], *r = &b->node[right];
+    for (int a = 0; a < 3; a++) {
+        b->node[self].lo[a] = fmin(l->lo[a], r->lo[a]);
+        b->node[self].hi[a] = fmax(l->hi[a], r->hi[a]);
+    }
 }
 
 thx_status thx_bvh_create(thx_ctx *ctx, const double *lo, const double *hi, size_t n, thx_bvh **out)
@@ -119,7 +131,7 @@ thx_status thx_bvh_create(thx_ctx *ctx, const double *lo, const double *hi, size
         if (!(lo[i] <= hi[i])) /* also catches NaN */
             return thx_error(ctx, THX_EINPUT, "bvh: box %zu is empty or not a number", i / 3);
     thx_bvh *b = thx_calloc(ctx, 1, sizeof *b);
-    double *cen = NULL;
+    build_item *it = NULL;
     if (!b) return THX_ENOMEM;
     b->n_boxes = n;
     size_t cap = n ? 2 * n : 1;
@@ -127,9 +139,9 @@ thx_status thx_bvh_create(thx_ctx *ctx, const double *lo, const double *hi, size
     b->items = thx_malloc(ctx, (n ? n : 1) * sizeof *b->items);
     b->blo = thx_malloc(ctx, (n ? 3 * n : 1) * sizeof(double));
     b->bhi = thx_malloc(ctx, (n ? 3 * n : 1) * sizeof(double));
-    cen = thx_malloc(ctx, (n ? 3 * n : 1) * sizeof(double));
-    if (!b->node || !b->items || !b->blo || !b->bhi || !cen) {
-        free(cen);
+    it = thx_malloc(ctx, (n ? n : 1) * sizeof *it);
+    if (!b->node || !b->items || !b->blo || !b->bhi || !it) {
+        free(it);
         thx_bvh_destroy(&b);
         return THX_ENOMEM;
     }
@@ -138,14 +150,11 @@ thx_status thx_bvh_create(thx_ctx *ctx, const double *lo, const double *hi, size
         memcpy(b->bhi, hi, 3 * n * sizeof(double));
     }
     for (size_t i = 0; i < n; i++) {
-        b->items[i] = (uint32_t)i;
-        for (int a = 0; a < 3; a++) cen[3 * i + a] = 0.5 * lo[3 * i + a] + 0.5 * hi[3 * i + a];
+        it[i].i = (uint32_t)i;
+        for (int a = 0; a < 3; a++) it[i].c[a] = 0.5 * lo[3 * i + a] + 0.5 * hi[3 * i + a];
     }
-    if (n) {
-        build_state bs = {b, cen};
-        build(&bs, 0, n, 0);
-    }
-    free(cen);
+    if (n) build(b, it, 0, n, 0);
+    free(it);
     *out = b;
     return THX_OK;
 }
