@@ -24,6 +24,7 @@
 #include "thorax/cdt.h"
 #include "thorax/inside.h"
 #include "thorax/surfaces.h"
+#include "geom/chain_sdf.h"
 
 void thx_surfaces_opts_default(thx_surfaces_opts *o)
 {
@@ -55,6 +56,7 @@ typedef struct {
     thx_chain c;
     thx_vec2 *p;
     int32_t *id;
+    chain_index ix;
 } owned_chain;
 
 typedef struct {
@@ -66,25 +68,6 @@ typedef struct {
     int branch;
 } slice;
 
-static double signed_dist_chain(const thx_chain *c, thx_vec2 p)
-{
-    double best = INFINITY;
-    int wn = 0;
-    for (size_t k = 0; k < c->n; k++) {
-        thx_vec2 a = c->p[k], b = c->p[k + 1 == c->n ? 0 : k + 1];
-        double ex = b.x - a.x, ey = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
-        double l2 = ex * ex + ey * ey;
-        double t = l2 > 0 ? (px * ex + py * ey) / l2 : 0;
-        t = t < 0 ? 0 : t > 1 ? 1 : t;
-        double dx = px - t * ex, dy = py - t * ey, d2 = dx * dx + dy * dy;
-        if (d2 < best) best = d2;
-        double cr = ex * py - ey * px;
-        if (a.y <= p.y) {
-            if (b.y > p.y && cr > 0) wn++;
-        } else if (b.y <= p.y && cr < 0) wn--;
-    }
-    return wn != 0 ? -sqrt(best) : sqrt(best);
-}
 
 /* Do the projections of two loops overlap? */
 static int loops_overlap(const rloop *a, const rloop *b)
@@ -99,12 +82,14 @@ static int loops_overlap(const rloop *a, const rloop *b)
     const rloop *pair[2][2] = {{a, b}, {b, a}};
     for (int r = 0; r < 2; r++) {
         const rloop *p = pair[r][0], *q = pair[r][1];
-        thx_chain cq = {q->n, q->p, NULL, 0};
+        chain_index cq;
+        if (chain_index_init(&cq, q->p, q->n) != 0) return 1;
         for (size_t k = 0; k < p->n; k++) {
             thx_vec2 u = p->p[k], v = p->p[(k + 1) % p->n];
             thx_vec2 m = {0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
-            if (signed_dist_chain(&cq, m) < 0) return 1;
+            if (chain_index_sdf(&cq, m) < 0) { chain_index_free(&cq); return 1; }
         }
+        chain_index_free(&cq);
     }
     return 0;
 }
@@ -146,6 +131,7 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
     out->c.p = out->p;
     out->c.id = out->id;
     out->c.z = L->z;
+    if (chain_index_init(&out->ix, out->p, n) != 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
     return THX_OK;
 }
 
@@ -165,7 +151,7 @@ static double layered_sdf(const rlayer *layers, size_t nl, const slice *slices, 
     thx_vec2 q = {p.x, p.y};
     double best = INFINITY;
     for (size_t g = 0; g < s->n_groups; g++) {
-        double d = (1 - t) * signed_dist_chain(&s->ga[g].c, q) + t * signed_dist_chain(&s->gb[g].c, q);
+        double d = (1 - t) * chain_index_sdf(&s->ga[g].ix, q) + t * chain_index_sdf(&s->gb[g].ix, q);
         if (d < best) best = d;
     }
     return best;
@@ -320,15 +306,17 @@ static thx_vec3 interior_point(const rlayer *layers, size_t nl)
     double bestd = INFINITY;
     for (size_t k = 0; k < L->n_loops; k++) {
         const rloop *r = &L->loops[k];
-        thx_chain c = {r->n, r->p, NULL, L->z};
+        chain_index c;
+        if (chain_index_init(&c, r->p, r->n) != 0) continue;
         double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
         for (size_t i = 0; i < r->n; i++) { x0 = fmin(x0, r->p[i].x); x1 = fmax(x1, r->p[i].x); y0 = fmin(y0, r->p[i].y); y1 = fmax(y1, r->p[i].y); }
         for (int i = 1; i < 40; i++)
             for (int j = 1; j < 40; j++) {
                 thx_vec2 q = {x0 + (x1 - x0) * i / 40.0, y0 + (y1 - y0) * j / 40.0};
-                double d = signed_dist_chain(&c, q);
+                double d = chain_index_sdf(&c, q);
                 if (d < bestd) { bestd = d; best = thx_v3(q.x, q.y, L->z); }
             }
+        chain_index_free(&c);
     }
     /* Lift it half-way toward the next layer so it is not exactly in a layer plane. */
     const rlayer *N = (L + 1 < layers + nl) ? L + 1 : NULL;
@@ -351,8 +339,8 @@ static void free_slices(slice *s, size_t ns)
     if (!s) return;
     for (size_t i = 0; i < ns; i++) {
         for (size_t g = 0; g < s[i].n_groups; g++) {
-            free(s[i].ga[g].p); free(s[i].ga[g].id);
-            free(s[i].gb[g].p); free(s[i].gb[g].id);
+            free(s[i].ga[g].p); free(s[i].ga[g].id); chain_index_free(&s[i].ga[g].ix);
+            free(s[i].gb[g].p); free(s[i].gb[g].id); chain_index_free(&s[i].gb[g].ix);
         }
         free(s[i].ga);
         free(s[i].gb);

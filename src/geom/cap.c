@@ -17,6 +17,7 @@
  * slivers) the exact parity decides. See thorax/cdt.h for the contract.
  */
 #include "thorax/cdt.h"
+#include "geom/chain_sdf.h"
 #include "thorax/inside.h"
 
 #include <math.h>
@@ -31,6 +32,12 @@ typedef struct {
     int32_t tri;    /* triangle index */
     int32_t slot;   /* edge slot 0..2 within the triangle */
 } edge_rec;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
 
 static int cmp_edge(const void *a, const void *b)
 {
@@ -100,15 +107,46 @@ thx_status thx_cap_triangulate(thx_ctx *ctx, const thx_vec2 *loop, size_t n, dou
                            MAX_GRID_NODES);
             goto done;
         }
-        for (double j = j0; j <= j1; j += 1.0)
+        /* Row by row: the loop's crossings with the row's line (half-open rule) give inside by
+           parity, O(n + k log k) per row; the distance test then uses the block index. Nodes
+           within a hair of the loop are decided by the exact test of inside.h. */
+        chain_index ci;
+        double *xs = NULL;
+        size_t xcap = 0;
+        if (chain_index_init(&ci, loop, n) != 0) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
+        double hair = 1e-9 * fmax(fmax(fabs(x0), fabs(x1)), fmax(fmax(fabs(y0), fabs(y1)), h));
+        for (double j = j0; j <= j1 && st == THX_OK; j += 1.0) {
+            double gy = (j + 0.5) * h;
+            size_t nx = 0;
+            for (size_t k = 0; k < n; k++) {
+                thx_vec2 a = loop[k], b = loop[(k + 1) % n];
+                if ((a.y <= gy) == (b.y <= gy)) continue;
+                if (nx == xcap) {
+                    st = thx_grow(ctx, (void **)&xs, &xcap, nx + 1, sizeof *xs);
+                    if (st != THX_OK) break;
+                }
+                xs[nx++] = a.x + (gy - a.y) * (b.x - a.x) / (b.y - a.y);
+            }
+            if (st != THX_OK) break;
+            qsort(xs, nx, sizeof *xs, cmp_double);
+            size_t c = 0;
             for (double i = i0; i <= i1; i += 1.0) {
-                thx_vec2 g = {(i + 0.5) * h, (j + 0.5) * h};
-                if (thx_loop_inside(loop, n, g, tol) != THX_INSIDE) continue;
+                thx_vec2 g = {(i + 0.5) * h, gy};
+                while (c < nx && xs[c] < g.x) c++;
+                if (!(c & 1)) continue; /* even number of crossings to the left: outside */
+                double d = fabs(chain_index_sdf(&ci, g));
+                if (d < tol) continue;
+                if (d <= hair && thx_loop_inside(loop, n, g, tol) != THX_INSIDE) continue;
                 if (np == cap) {
-                    THX_TRY(thx_grow(ctx, (void **)&pts, &cap, np + 1, sizeof *pts));
+                    st = thx_grow(ctx, (void **)&pts, &cap, np + 1, sizeof *pts);
+                    if (st != THX_OK) break;
                 }
                 pts[np++] = g;
             }
+        }
+        free(xs);
+        chain_index_free(&ci);
+        if (st != THX_OK) goto done;
     }
     if (np > (size_t)INT32_MAX / 8) {
         st = thx_error(ctx, THX_EINPUT, "cap: too many grid points (%zu)", np);
@@ -181,16 +219,21 @@ thx_status thx_cap_triangulate(thx_ctx *ctx, const thx_vec2 *loop, size_t n, dou
     }
     free(nb);
 
-    /* The paper's check: the centroid of each kept triangle is inside. */
+    /* The paper's check: the centroid of each kept triangle is inside (winding number by crossings,
+       the angle sum of inside.h where the centroid is within a hair of the loop). */
     size_t nkeep = 0, disagree = 0;
+    chain_index cidx;
+    if (chain_index_init(&cidx, loop, n) != 0) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
     for (size_t t = 0; t < nall; t++) {
         const thx_vec2 a = pts[all[3 * t]], b = pts[all[3 * t + 1]], c = pts[all[3 * t + 2]];
         thx_vec2 g = {(a.x + b.x + c.x) / 3.0, (a.y + b.y + c.y) / 3.0};
-        int in = thx_loop_inside(loop, n, g, 0.0) == THX_INSIDE;
+        double sd = chain_index_sdf(&cidx, g);
+        int in = fabs(sd) > 1e-9 ? sd < 0 : thx_loop_inside(loop, n, g, 0.0) == THX_INSIDE;
         if (par[t] < 0) par[t] = (int8_t)in; /* unreachable: the hull triangulation is connected */
         disagree += in != par[t];
         nkeep += par[t] == 1;
     }
+    chain_index_free(&cidx);
     if (disagree)
         thx_log(ctx, THX_LOG_DEBUG, "cap: %zu sliver triangle(s) with a centroid on the wrong side; kept by parity",
                 disagree);

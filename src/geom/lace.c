@@ -46,6 +46,7 @@
 #include "thorax/cdt.h"
 #include "thorax/inside.h"
 #include "thorax/surfaces.h"
+#include "geom/chain_sdf.h"
 
 #define BIG 1e9       /* cost of a triangle outside the surface */
 #define LARGE 1e4     /* cost of a triangle with an edge that is too long */
@@ -58,34 +59,11 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->window = 4;
 }
 
-/* Signed distance from p to a closed chain (negative inside). Winding number by
- * signed crossings (equal to the angle sum / 2 pi of inside.h, without trig). */
-static double chain_sdf(const thx_chain *c, thx_vec2 p)
-{
-    double best = INFINITY;
-    int wn = 0;
-    size_t n = c->n;
-    for (size_t k = 0; k < n; k++) {
-        thx_vec2 a = c->p[k], b = c->p[k + 1 == n ? 0 : k + 1];
-        double ex = b.x - a.x, ey = b.y - a.y, px = p.x - a.x, py = p.y - a.y;
-        double l2 = ex * ex + ey * ey;
-        double t = l2 > 0 ? (px * ex + py * ey) / l2 : 0;
-        t = t < 0 ? 0 : t > 1 ? 1 : t;
-        double dx = px - t * ex, dy = py - t * ey, d2 = dx * dx + dy * dy;
-        if (d2 < best) best = d2;
-        double cr = ex * py - ey * px;
-        if (a.y <= p.y) {
-            if (b.y > p.y && cr > 0) wn++;
-        } else if (b.y <= p.y && cr < 0) wn--;
-    }
-    double d = sqrt(best);
-    return wn != 0 ? -d : d;
-}
-
 typedef struct {
     const thx_chain *a, *b;
     const thx_lace_opts *o;
     thx_vec2 *na, *nb;  /* normalized coordinates */
+    chain_index ia, ib; /* signed distances to the chains */
     int i0, j0;         /* first connective segment */
     double big_edge;    /* "too large" edge length */
 } lacer;
@@ -117,7 +95,7 @@ static int tri_outside(const lacer *L, const thx_vec3 t[3])
     double zc = (t[0].z + t[1].z + t[2].z) / 3.0;
     double dz = L->b->z - L->a->z;
     double f = dz != 0 ? (zc - L->a->z) / dz : 0.5;
-    double da = chain_sdf(L->a, c), db = chain_sdf(L->b, c);
+    double da = chain_index_sdf(&L->ia, c), db = chain_index_sdf(&L->ib, c);
     double d = (1 - f) * da + f * db;
     /* Linear interpolation of the signed distance is uncertain by about the layers' disagreement
        |da - db| (a flat, strongly offset slice); a concave bay has da ~ db > 0. */
@@ -284,7 +262,13 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
                     thx_vec2 q = c->p[deep];
                     thx_vec2 mid = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
                     thx_vec2 probe = {0.5 * (q.x + mid.x), 0.5 * (q.y + mid.y)};
-                    if (chain_sdf(o, probe) < -margin * 0.5 || chain_sdf(o, q) < 0) {
+                    chain_index io;
+                    int inside = 0;
+                    if (chain_index_init(&io, o->p, o->n) == 0) {
+                        inside = chain_index_sdf(&io, probe) < -margin * 0.5 || chain_index_sdf(&io, q) < 0;
+                        chain_index_free(&io);
+                    }
+                    if (inside) {
                         pk->lo = k;
                         pk->hi = nx;
                         found = 1;
@@ -360,7 +344,11 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
 {
     int na = (int)a->n, nb = (int)b->n, N = na + nb;
     thx_status st = THX_OK;
-    lacer L = {a, b, o, NULL, NULL, 0, 0, 0};
+    lacer L;
+    memset(&L, 0, sizeof L);
+    L.a = a;
+    L.b = b;
+    L.o = o;
     L.big_edge = o->max_edge * fmax(o->spacing, fabs(b->z - a->z));
     L.na = thx_malloc(ctx, (size_t)na * sizeof *L.na);
     L.nb = thx_malloc(ctx, (size_t)nb * sizeof *L.nb);
@@ -369,6 +357,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
     double *costb = NULL;
     unsigned char *fromb = NULL;
     if (!L.na || !L.nb || !mv || !bad || !sa || !sb) { st = THX_ENOMEM; goto done; }
+    if (chain_index_init(&L.ia, a->p, a->n) || chain_index_init(&L.ib, b->p, b->n)) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
     normalize(a, L.na);
     normalize(b, L.nb);
     /* First connective segment: A's start node and the nearest node of B (normalized). */
@@ -490,6 +479,8 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         st = emit(ctx, tris, n_tris, cap, id);
     }
 done:
+    chain_index_free(&L.ia);
+    chain_index_free(&L.ib);
     free(L.na);
     free(L.nb);
     free(mv);
