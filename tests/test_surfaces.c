@@ -212,6 +212,15 @@ static thx_vec2 kidney_xs(double t, double z, void *u)
     return p;
 }
 
+/* Height of the true surface above the point (x, y) of the mid-plane (>= 0 inside). */
+static double ellipsoid_z(double x, double y) { return 60 * sqrt(fmax(0, 1 - x * x / 6400 - y * y / 3025)); }
+static double kidney_z(double x, double y)
+{
+    double a = atan2(y / 0.8, x), d = remainder(a - M_PI, 2 * M_PI);
+    double rho = hypot(x, y / 0.8) / (70 - 28 * exp(-d * d / 0.3));
+    return 60 * sqrt(fmax(0, 1 - rho * rho));
+}
+
 static double dist_to_curve(shape_fn f, double z, thx_vec2 p)
 {
     double best = INFINITY;
@@ -227,7 +236,7 @@ static double dist_to_curve(shape_fn f, double z, thx_vec2 p)
     return best;
 }
 
-static void round_trip(thx_ctx *ctx, const char *name, shape_fn f, double exact_volume)
+static void round_trip(thx_ctx *ctx, const char *name, shape_fn f, double (*zsurf)(double, double), double exact_volume)
 {
     const double spacing = 5.0;
     thx_contours *c = NULL;
@@ -240,29 +249,113 @@ static void round_trip(thx_ctx *ctx, const char *name, shape_fn f, double exact_
     thx_model *m = build_and_check(ctx, c, spacing, &st, name);
     if (m) {
         const thx_surface *su = m->surf[0];
-        double worst = 0;
+        double worst = 0, worst_lateral = 0;
         for (size_t i = 0; i < su->n_nodes; i++) {
             thx_vec3 p = thx_surface_node(su, i);
             thx_vec2 q = {p.x, p.y};
             double d = dist_to_curve(f, p.z, q);
-            /* cap nodes lie inside the end cross-section: their distance to the true surface is at most
-               the distance to the pole cap above them (<= 2.5 mm here) */
-            if (i >= (size_t)st.n_nodes - 0 && 0) d = 0;
-            if (fabs(fabs(p.z) - 57.5) < 1e-9) {
-                double zs = 60 * sqrt(fmax(0, 1 - 0)), above = zs - fabs(p.z);
-                d = fmin(d, above);
-            }
+            /* a node of an end cap lies inside the end cross-section: the true surface is above
+               (below) it, at most zsurf(x, y) - |z| away */
+            if (fabs(fabs(p.z) - 57.5) < 1e-9) d = fmin(d, zsurf(p.x, p.y) - fabs(p.z));
+            else worst_lateral = fmax(worst_lateral, d);
             worst = fmax(worst, d);
         }
         double v = surface_volume(su);
-        printf("round trip %s: %zu nodes %zu triangles, worst node distance %.3f mm (half spacing %.1f), "
-               "volume %.1f vs %.1f (%.3f%%)\n",
-               name, su->n_nodes, su->n_tris, worst, 0.5 * spacing, v, exact_volume, 100 * (v - exact_volume) / exact_volume);
+        printf("round trip %s: %zu nodes %zu triangles, worst node distance %.3f mm (half spacing %.1f; "
+               "%.4f mm off the end caps), volume %.1f vs %.1f (%.3f%%)\n",
+               name, su->n_nodes, su->n_tris, worst, 0.5 * spacing, worst_lateral, v, exact_volume, 100 * (v - exact_volume) / exact_volume);
         CHECK(worst <= 0.5 * spacing);
         CHECK(fabs(v - exact_volume) / exact_volume < 0.01);
     }
     thx_model_destroy(&m);
     thx_contours_destroy(&c);
+}
+
+/* ---- lacing invariants on many crescent pairs --------------------------------------- */
+
+static unsigned long long lrng = 0x9E3779B97F4A7C15ULL;
+static double lrand(void)
+{
+    lrng ^= lrng << 13; lrng ^= lrng >> 7; lrng ^= lrng << 17;
+    return (double)(lrng >> 11) / 9007199254740992.0;
+}
+
+static void crescent_pts(thx_vec2 *p, int n, double R, double bay, double phi, double w, double ox)
+{
+    for (int i = 0; i < n; i++) {
+        double a = 2 * M_PI * i / n, d = remainder(a - phi, 2 * M_PI);
+        double r = R - bay * exp(-d * d / w);
+        p[i].x = ox + r * cos(a);
+        p[i].y = r * sin(a);
+    }
+}
+
+typedef struct { int32_t a, b; } uedge;
+static int cmp_uedge(const void *x, const void *y)
+{
+    const uedge *p = x, *q = y;
+    return p->a != q->a ? (p->a < q->a ? -1 : 1) : (p->b != q->b ? (p->b < q->b ? -1 : 1) : 0);
+}
+
+/* Laces random crescent pairs and checks what every slice must satisfy: na + nb triangles
+ * (a pocket cut of k edges removes k - 1 nodes from a chain and adds k - 1 triangles),
+ * every chain edge in exactly one triangle and every other edge in two, triangles whose three
+ * nodes are on one layer lie in a cut pocket, and nothing fails the outside test. */
+static void test_lace_invariants(thx_ctx *ctx, double tol, int cases, size_t *removed, size_t *inplane, size_t *unresolved)
+{
+    for (int it = 0; it < cases; it++) {
+        int na = 40 + (int)(lrand() * 80), nb = 40 + (int)(lrand() * 80);
+        thx_vec2 A[120], B[120];
+        int32_t ia[120], ib[120];
+        crescent_pts(A, na, 60, lrand() * 50, 0, 0.05 + lrand() * 0.3, 0);
+        crescent_pts(B, nb, 60, lrand() * 50, lrand() * 1.2 - 0.6, 0.05 + lrand() * 0.3, lrand() * 20 - 10);
+        for (int i = 0; i < na; i++) ia[i] = i;
+        for (int i = 0; i < nb; i++) ib[i] = na + i;
+        thx_chain a = {(size_t)na, A, ia, 0, NULL, 0}, b = {(size_t)nb, B, ib, 5, NULL, 0};
+        thx_lace_opts o;
+        thx_lace_opts_default(&o);
+        o.spacing = 4;
+        o.concave_tol = tol;
+        int32_t *t = NULL;
+        size_t nt = 0, cap = 0;
+        thx_lace_stats st = {0};
+        thx_status r = thx_lace(ctx, &a, &b, &o, &t, &nt, &cap, &st);
+        CHECK_OK(ctx, r);
+        if (r != THX_OK) continue;
+        CHECK(nt == (size_t)(na + nb));
+        CHECK(st.n_tris == nt);
+        *removed += st.removed;
+        *inplane += st.inplane_tris;
+        *unresolved += st.unresolved;
+        uedge *e = malloc(3 * nt * sizeof *e);
+        size_t flat = 0;
+        for (size_t k = 0; k < nt; k++) {
+            int on_a = 0;
+            for (int v = 0; v < 3; v++) {
+                int32_t x = t[3 * k + v], y = t[3 * k + (v + 1) % 3];
+                e[3 * k + v].a = x < y ? x : y;
+                e[3 * k + v].b = x < y ? y : x;
+                on_a += x < na;
+            }
+            if (on_a == 3 || on_a == 0) flat++;
+        }
+        CHECK(flat == st.inplane_tris);
+        qsort(e, 3 * nt, sizeof *e, cmp_uedge);
+        int bad = 0;
+        for (size_t k = 0; k < 3 * nt;) {
+            size_t j = k + 1;
+            while (j < 3 * nt && e[j].a == e[k].a && e[j].b == e[k].b) j++;
+            int32_t x = e[k].a, y = e[k].b;
+            int chain_edge = (y < na && (y == x + 1 || (x == 0 && y == na - 1))) ||
+                             (x >= na && (y == x + 1 || (x == na && y == na + nb - 1)));
+            if ((int)(j - k) != (chain_edge ? 1 : 2)) bad++;
+            k = j;
+        }
+        CHECK(bad == 0);
+        if (bad) fprintf(stderr, "  lace case %d (tol %g): %d edges used the wrong number of times\n", it, tol, bad);
+        free(e);
+        free(t);
+    }
 }
 
 int main(void)
@@ -272,7 +365,22 @@ int main(void)
     test_cylinder_cone_offset(ctx);
     test_concave(ctx);
     test_branching(ctx);
-    round_trip(ctx, "ellipsoid", ellipsoid_xs, 4.0 / 3.0 * M_PI * 80 * 55 * 60);
+    {
+        /* default tolerance: gaps occur and are always re-laced */
+        size_t removed = 0, inplane = 0, unresolved = 0;
+        test_lace_invariants(ctx, 0.25, 400, &removed, &inplane, &unresolved);
+        printf("lacing 400 crescent pairs (tol 0.25): %zu outside triangles removed, %zu in-plane, %zu unresolved\n",
+               removed, inplane, unresolved);
+        CHECK(removed > 0);
+        CHECK(unresolved == 0);
+        /* a strict tolerance forces pockets to be cut in the plane of their layer */
+        removed = inplane = unresolved = 0;
+        test_lace_invariants(ctx, 0.0, 200, &removed, &inplane, &unresolved);
+        printf("lacing 200 crescent pairs (tol 0): %zu outside triangles removed, %zu in-plane, %zu unresolved\n",
+               removed, inplane, unresolved);
+        CHECK(inplane > 0);
+    }
+    round_trip(ctx, "ellipsoid", ellipsoid_xs, ellipsoid_z, 4.0 / 3.0 * M_PI * 80 * 55 * 60);
     /* kidney volume: integral over z of the cross-section area (area scales with f^2) */
     {
         double a0 = 0;
@@ -283,7 +391,7 @@ int main(void)
             a0 += 0.5 * (prev.x * q.y - q.x * prev.y);
             prev = q;
         }
-        round_trip(ctx, "kidney", kidney_xs, a0 * 4.0 / 3.0 * 60);
+        round_trip(ctx, "kidney", kidney_xs, kidney_z, a0 * 4.0 / 3.0 * 60);
     }
     thx_ctx_destroy(&ctx);
     return tl_finish();

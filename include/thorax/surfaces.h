@@ -63,11 +63,19 @@ void thx_lace_opts_default(thx_lace_opts *o);
 
 /* One layer's worth of a surface in a slice: a closed chain of nodes. Node ids
  * may repeat (bridges joining two loops of a branching surface). */
-typedef struct {
+typedef struct thx_chain {
     size_t n;
     const thx_vec2 *p;     /* n points */
     const int32_t *id;     /* n node ids written into the triangles */
     double z;
+    /* Optional: the same surface's loops on the layer beyond this one (the far
+     * side from the other chain of the slice). A concave pocket of this chain
+     * is cut in the plane of its layer only where the surface closes it in
+     * this slice: if the layer beyond covers the pocket too (a dent of this
+     * layer alone), only the slice above the layer cuts it, so no pocket is
+     * cut twice. NULL / 0 when unknown or at the end of the surface. */
+    const struct thx_chain *beyond;
+    size_t n_beyond;
 } thx_chain;
 
 /*

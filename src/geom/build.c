@@ -49,6 +49,7 @@ typedef struct {
     double z;
     size_t n_loops;
     rloop *loops;
+    thx_chain *ch; /* the loops as chains (for the pocket rule of lacing) */
 } rlayer;
 
 /* A chain owned by a slice (merged loops). */
@@ -330,6 +331,7 @@ static void free_layers(rlayer *layers, size_t nl)
     for (size_t l = 0; l < nl; l++) {
         for (size_t k = 0; k < layers[l].n_loops; k++) free(layers[l].loops[k].p);
         free(layers[l].loops);
+        free(layers[l].ch);
     }
     free(layers);
 }
@@ -351,8 +353,10 @@ static void free_slices(slice *s, size_t ns)
 
 /* Groups of overlapping loops between layers A and B (connected components);
  * fills slice groups with merged chains and marks partners. */
-static thx_status build_slice(thx_ctx *ctx, rlayer *A, rlayer *B, slice *s)
+static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k, slice *s)
 {
+    rlayer *A = &layers[k], *B = &layers[k + 1];
+    const rlayer *below = k > 0 ? &layers[k - 1] : NULL, *above = k + 2 < nl ? &layers[k + 2] : NULL;
     size_t na = A->n_loops, nb = B->n_loops, n = na + nb;
     int *comp = thx_malloc(ctx, n * sizeof *comp);
     unsigned char *adj = thx_calloc(ctx, (na * nb > 0) ? na * nb : 1, 1);
@@ -395,6 +399,8 @@ static thx_status build_slice(thx_ctx *ctx, rlayer *A, rlayer *B, slice *s)
         mb = 0;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) sel[mb++] = (int)j;
         THX_TRY(merge_loops(ctx, B, sel, mb, &s->gb[s->n_groups]));
+        if (below) { s->ga[s->n_groups].c.beyond = below->ch; s->ga[s->n_groups].c.n_beyond = below->n_loops; }
+        if (above) { s->gb[s->n_groups].c.beyond = above->ch; s->gb[s->n_groups].c.n_beyond = above->n_loops; }
         for (size_t i = 0; i < na; i++) if (comp[i] == c) A->loops[i].up = 1;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) B->loops[j].down = 1;
         if (ma > 1 || mb > 1) s->branch = 1;
@@ -465,11 +471,17 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         if (failed) { st = thx_error(ctx, fst ? fst : THX_ENOMEM, "%s", msg); goto done; }
     }
     int32_t next_id = 0;
-    for (size_t l = 0; l < nl; l++)
+    for (size_t l = 0; l < nl; l++) {
+        layers[l].ch = thx_calloc(ctx, layers[l].n_loops, sizeof *layers[l].ch);
+        if (!layers[l].ch) { st = THX_ENOMEM; goto done; }
         for (size_t k = 0; k < layers[l].n_loops; k++) {
             layers[l].loops[k].first = next_id;
             next_id += (int32_t)layers[l].loops[k].n;
+            layers[l].ch[k].n = layers[l].loops[k].n;
+            layers[l].ch[k].p = layers[l].loops[k].p;
+            layers[l].ch[k].z = layers[l].z;
         }
+    }
     stats->n_loops = n_loops;
     double t1 = thx_wtime();
     stats->t_layers = t1 - t0;
@@ -478,7 +490,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     slices = thx_calloc(ctx, ns ? ns : 1, sizeof *slices);
     if (!slices) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i < ns; i++) {
-        st = build_slice(ctx, &layers[i], &layers[i + 1], &slices[i]);
+        st = build_slice(ctx, layers, nl, i, &slices[i]);
         if (st != THX_OK) goto done;
     }
     {

@@ -225,9 +225,27 @@ static int hull_flags(thx_ctx *ctx, const thx_chain *c, unsigned char *on_hull)
     return 0;
 }
 
+/* Is the deep part of a pocket (deepest node q, chord a-b) inside any of the chains? */
+static int pocket_covered(const thx_chain *chains, size_t n_chains, thx_vec2 a, thx_vec2 b, thx_vec2 q, double margin)
+{
+    thx_vec2 mid = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
+    thx_vec2 probe = {0.5 * (q.x + mid.x), 0.5 * (q.y + mid.y)};
+    int inside = 0;
+    for (size_t k = 0; k < n_chains && !inside; k++) {
+        chain_index io;
+        if (chain_index_init(&io, chains[k].p, chains[k].n) != 0) continue;
+        inside = chain_index_sdf(&io, probe) < -margin * 0.5 || chain_index_sdf(&io, q) < 0;
+        chain_index_free(&io);
+    }
+    return inside;
+}
+
 /* Finds a pocket of chain `c` that overlaps the chain range [r0, r1] (cyclic) and
- * whose deepest node lies inside the other chain `o` (the pocket closes there). */
-static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int r0, int r1, double margin, pocket *pk)
+ * that the surface closes in this slice: its deep part lies inside the other
+ * chain `o`, and (unless c is the slice's lower chain) not inside the layer
+ * beyond c, so that a dent of one layer is cut by exactly one slice. */
+static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int c_is_lower, int r0, int r1,
+                       double margin, pocket *pk)
 {
     int n = (int)c->n;
     unsigned char *on = malloc((size_t)n);
@@ -257,23 +275,12 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
                     double d = fabs(cross3(a, b, q)) / fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
                     if (d > best) { best = d; deep = (k + s) % n; }
                 }
-                if (deep >= 0 && best > margin) {
-                    /* The pocket closes in the other layer if its deep part is inside that layer's curve. */
-                    thx_vec2 q = c->p[deep];
-                    thx_vec2 mid = {0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
-                    thx_vec2 probe = {0.5 * (q.x + mid.x), 0.5 * (q.y + mid.y)};
-                    chain_index io;
-                    int inside = 0;
-                    if (chain_index_init(&io, o->p, o->n) == 0) {
-                        inside = chain_index_sdf(&io, probe) < -margin * 0.5 || chain_index_sdf(&io, q) < 0;
-                        chain_index_free(&io);
-                    }
-                    if (inside) {
-                        pk->lo = k;
-                        pk->hi = nx;
-                        found = 1;
-                        break;
-                    }
+                if (deep >= 0 && best > margin && pocket_covered(o, 1, a, b, c->p[deep], margin) &&
+                    (c_is_lower || !pocket_covered(c->beyond, c->n_beyond, a, b, c->p[deep], margin))) {
+                    pk->lo = k;
+                    pk->hi = nx;
+                    found = 1;
+                    break;
                 }
             }
         }
@@ -336,6 +343,8 @@ static thx_status cut_pocket(thx_ctx *ctx, const thx_chain *c, pocket pk, int32_
     out->p = *op;
     out->id = *oid;
     out->z = c->z;
+    out->beyond = c->beyond;
+    out->n_beyond = c->n_beyond;
     return THX_OK;
 }
 
@@ -453,14 +462,14 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         thx_vec2 *np = NULL;
         int32_t *nid = NULL;
         double margin = 0.5 * o->spacing;
-        if (have && find_pocket(ctx, a, b, gi0, gi1, margin, &pk)) {
+        if (have && find_pocket(ctx, a, b, 1, gi0, gi1, margin, &pk)) {
             st = cut_pocket(ctx, a, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
             if (st == THX_OK) st = lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
             free(np);
             free(nid);
             goto done;
         }
-        if (have && find_pocket(ctx, b, a, gj0, gj1, margin, &pk)) {
+        if (have && find_pocket(ctx, b, a, 0, gj0, gj1, margin, &pk)) {
             st = cut_pocket(ctx, b, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
             if (st == THX_OK) st = lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1);
             free(np);
