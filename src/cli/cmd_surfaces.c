@@ -24,7 +24,9 @@ static void help(void)
            "                        from the contour file)\n"
            "  --cap-grid MM         grid spacing of grid caps (default: per surface, else\n"
            "                        the node spacing)\n"
-           "  --concave-tol F       outside-test tolerance, fraction of the spacing (0.25)\n"
+           "  --concave-tol F       outside-test tolerance: a laced triangle is outside when\n"
+           "                        its centroid lies more than F * (spacing + |dA - dB|)\n"
+           "                        outside the layer curves interpolated to its height (0.25)\n"
            "  --max-edge F          'too large' edge bound, times max(spacing, layer gap) (3)\n"
            "  --stats               print per-surface lacing and timing statistics\n"
            "  -v, -q                more / less logging\n");
