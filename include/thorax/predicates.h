@@ -43,6 +43,10 @@ double thx_orient3d(const double *a, const double *b, const double *c, const dou
 double thx_incircle(const double *a, const double *b, const double *c, const double *d);
 double thx_insphere(const double *a, const double *b, const double *c, const double *d, const double *e);
 
+/* Do the closed segments p0-p1 and q0-q1 have a point in common (crossing or
+ * touching, collinear overlaps included)? Exact, built on thx_orient2d. */
+int thx_segments_touch(const double *p0, const double *p1, const double *q0, const double *q1);
+
 #ifdef __cplusplus
 }
 #endif

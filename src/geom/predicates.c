@@ -555,3 +555,19 @@ double thx_insphere(const double *a, const double *b, const double *c, const dou
     if (insphere_diff(a, b, c, d, e, &r)) return r;
     return insphere_exact(a, b, c, d, e);
 }
+
+/* The segments touch if each one's ends are on opposite sides of (or on) the other's line; a
+ * zero orientation puts an end on the other segment's line, where a box test settles it. */
+static int on_box(const double *a, const double *b, const double *p)
+{
+    return fmin(a[0], b[0]) <= p[0] && p[0] <= fmax(a[0], b[0]) && fmin(a[1], b[1]) <= p[1] && p[1] <= fmax(a[1], b[1]);
+}
+
+int thx_segments_touch(const double *p0, const double *p1, const double *q0, const double *q1)
+{
+    double d1 = thx_orient2d(q0, q1, p0), d2 = thx_orient2d(q0, q1, p1);
+    double d3 = thx_orient2d(p0, p1, q0), d4 = thx_orient2d(p0, p1, q1);
+    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 1;
+    return (d1 == 0 && on_box(q0, q1, p0)) || (d2 == 0 && on_box(q0, q1, p1)) || (d3 == 0 && on_box(p0, p1, q0)) ||
+           (d4 == 0 && on_box(p0, p1, q1));
+}

@@ -155,20 +155,6 @@ static size_t z_index(const double *zs, size_t nz, double z)
     return lo;
 }
 
-/* Do segments p0p1 and q0q1 intersect (touching counts)? Exact orientation tests. */
-static int segments_intersect(thx_vec2 p0, thx_vec2 p1, thx_vec2 q0, thx_vec2 q1)
-{
-    double d1 = thx_orient2d(&q0.x, &q1.x, &p0.x), d2 = thx_orient2d(&q0.x, &q1.x, &p1.x);
-    double d3 = thx_orient2d(&p0.x, &p1.x, &q0.x), d4 = thx_orient2d(&p0.x, &p1.x, &q1.x);
-    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 1;
-#define ONSEG(a, b, p) (fmin(a.x, b.x) <= p.x && p.x <= fmax(a.x, b.x) && fmin(a.y, b.y) <= p.y && p.y <= fmax(a.y, b.y))
-    if (d1 == 0 && ONSEG(q0, q1, p0)) return 1;
-    if (d2 == 0 && ONSEG(q0, q1, p1)) return 1;
-    if (d3 == 0 && ONSEG(p0, p1, q0)) return 1;
-    if (d4 == 0 && ONSEG(p0, p1, q1)) return 1;
-#undef ONSEG
-    return 0;
-}
 
 typedef struct { double x0; int i; } seg_key;
 static int cmp_seg_key(const void *a, const void *b)
@@ -197,7 +183,7 @@ static int loop_self_intersection(thx_ctx *ctx, const thx_loop *lp, int *ei, int
         for (int t = s + 1; t < n && k[t].x0 <= xmax; t++) {
             int j = k[t].i;
             if (j == i || (j + 1) % n == i || (i + 1) % n == j) continue; /* adjacent edges share a point */
-            if (segments_intersect(a, b, lp->p[j], lp->p[(j + 1) % n])) {
+            if (thx_segments_touch(&a.x, &b.x, &lp->p[j].x, &lp->p[(j + 1) % n].x)) {
                 *ei = i < j ? i : j;
                 *ej = i < j ? j : i;
                 found = 1;

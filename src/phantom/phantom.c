@@ -771,17 +771,6 @@ done:
 
 /* ---- digitization -------------------------------------------------------- */
 
-/* Do segments p0p1 and q0q1 touch or cross? (exact orientation tests) */
-static int seg_touch(thx_vec2 p0, thx_vec2 p1, thx_vec2 q0, thx_vec2 q1)
-{
-    double d1 = thx_orient2d(&q0.x, &q1.x, &p0.x), d2 = thx_orient2d(&q0.x, &q1.x, &p1.x);
-    double d3 = thx_orient2d(&p0.x, &p1.x, &q0.x), d4 = thx_orient2d(&p0.x, &p1.x, &q1.x);
-    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 1;
-#define ONSEG(a, b, p) (fmin(a.x, b.x) <= p.x && p.x <= fmax(a.x, b.x) && fmin(a.y, b.y) <= p.y && p.y <= fmax(a.y, b.y))
-    return (d1 == 0 && ONSEG(q0, q1, p0)) || (d2 == 0 && ONSEG(q0, q1, p1)) || (d3 == 0 && ONSEG(p0, p1, q0)) ||
-           (d4 == 0 && ONSEG(p0, p1, q1));
-#undef ONSEG
-}
 
 /* Is the closed polygon simple (no two non-adjacent edges touching, no
  * repeated consecutive point, no fold-back)? O(n^2): loops have < 300 points. */
@@ -800,7 +789,7 @@ static int loop_simple(const thx_vec2 *p, size_t n)
             thx_vec2 c = p[j], d = p[(j + 1) % n];
             /* Disjoint bounding boxes cannot touch: skips almost every pair. */
             if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1) continue;
-            if (seg_touch(a, b, c, d)) return 0;
+            if (thx_segments_touch(&a.x, &b.x, &c.x, &d.x)) return 0;
         }
     }
     return 1;
