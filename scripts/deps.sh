@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config   # compiler and build
   libcjson-dev                       # model.json manifest
-  libgmp-dev                         # exact fallback of the geometric predicates
+  libgmp-dev                         # tests: exact rational reference for the predicates
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   time                               # bench: peak memory (/usr/bin/time -v)
 )

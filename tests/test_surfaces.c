@@ -100,8 +100,9 @@ static void test_cylinder_cone_offset(thx_ctx *ctx)
         add_shape(ctx, c, cyl, z, 37, l % 2, circle, &a);
         circ b = {200, 0, 60 - 4.0 * l, 0};
         add_shape(ctx, c, cone, z, 31 + l, l % 3 == 0, circle, &b);
-        /* figure 2A: every other layer much smaller and shifted sideways */
-        circ d = {400 + (l % 2) * 25.0, 0, l % 2 ? 25 : 60, 0};
+        /* figure 2A: every other layer much smaller and shifted sideways (the shortest-diagonal
+           rule on raw coordinates fans one node of such a slice into 13 triangles) */
+        circ d = {400 + (l % 2) * 35.0, 0, l % 2 ? 15 : 60, 0};
         add_shape(ctx, c, off, z, 40, 0, circle, &d);
     }
     thx_surfaces_stats st[3];
@@ -114,8 +115,8 @@ static void test_cylinder_cone_offset(thx_ctx *ctx)
         CHECK(st[1].lace.removed == 0);
         CHECK(st[1].lace.unresolved == 0);
         /* layers of very different size and offset: no node fanned into many triangles */
-        CHECK(st[2].lace.max_fan <= 8);
-        if (st[2].lace.max_fan > 8) fprintf(stderr, "  offset: largest fan %d\n", st[2].lace.max_fan);
+        CHECK(st[2].lace.max_fan <= 7);
+        printf("offset layers (60 mm / 15 mm, 35 mm apart): largest fan %d\n", st[2].lace.max_fan);
     }
     thx_model_destroy(&m);
     thx_contours_destroy(&c);
