@@ -154,6 +154,44 @@ static void test_concave(thx_ctx *ctx)
     thx_contours_destroy(&c);
 }
 
+/* A thick C whose upper horn grows by 22 mm a layer: the part of the horn that the layer
+ * below lacks is a tongue, cut in the plane of its layer rather than fanned from one node. */
+static void test_tongues(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t h;
+    thx_contours_add_surface(ctx, c, "horns", THX_ROLE_LUNG, THX_CAP_GRID, 0, &h);
+    for (int l = 0; l <= 6; l++) {
+        /* one horn grows on layers 0-4, then keeps its length */
+        double a0 = -100.0 * M_PI / 180.0, a1 = (60.0 + 25.0 * (l < 4 ? l : 4)) * M_PI / 180.0;
+        int n = 0;
+        thx_vec2 p[400];
+        for (int i = 0; i <= 120; i++) { double a = a0 + (a1 - a0) * i / 120; p[n].x = 60 * cos(a); p[n].y = 60 * sin(a); n++; }
+        for (int i = 120; i >= 0; i--) { double a = a0 + (a1 - a0) * i / 120; p[n].x = 40 * cos(a); p[n].y = 40 * sin(a); n++; }
+        CHECK_OK(ctx, thx_contours_add_loop(ctx, c, h, 5.0 * l, p, (size_t)n));
+    }
+    thx_surfaces_stats st;
+    thx_model *m = build_and_check(ctx, c, 4.0, &st, "tongues");
+    if (m) {
+        printf("growing horns: %zu tongues cut (%zu in-plane triangles), largest fan %d\n", st.lace.tongues,
+               st.lace.inplane_tris, st.lace.max_fan);
+        CHECK(st.lace.tongues >= 3);
+        CHECK(st.lace.max_fan <= 7);
+    }
+    thx_model_destroy(&m);
+    /* the same without tongue cuts fans one node into many triangles */
+    thx_surfaces_opts o;
+    thx_surfaces_opts_default(&o);
+    o.spacing = 4.0;
+    o.lace.fan_limit = 0;
+    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &o, &m, &st, NULL));
+    if (m) printf("growing horns without tongue cuts: largest fan %d\n", st.lace.max_fan);
+    CHECK(st.lace.max_fan > 7);
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
 static void test_branching(thx_ctx *ctx)
 {
     thx_contours *c = NULL;
@@ -366,6 +404,7 @@ int main(void)
     test_cylinder_cone_offset(ctx);
     test_concave(ctx);
     test_branching(ctx);
+    test_tongues(ctx);
     {
         /* default tolerance: gaps occur and are always re-laced */
         size_t removed = 0, inplane = 0, unresolved = 0;

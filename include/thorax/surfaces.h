@@ -47,13 +47,16 @@ typedef struct {
                               interpolated to its height (dA, dB: signed distances to the curves) */
     double max_edge;       /* an edge longer than max_edge * max(spacing, layer gap) makes a triangle "too large" */
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
+    double phase_weight;   /* weight of the arc-length phase in the lacing metric (0 = position only) */
+    int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
 } thx_lace_opts;
 
 typedef struct {
     size_t n_tris;
     size_t removed;        /* triangles of the shortest-diagonal lacing removed as outside (concave) */
     size_t relaced_gaps;   /* gaps re-triangulated */
-    size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, caps excluded) */
+    size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, tongues; caps excluded) */
+    size_t tongues;        /* tongues of one layer cut in its plane (instead of a long fan) */
     size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
     size_t too_large;      /* triangles with an edge longer than the max_edge bound */
     int max_fan;           /* largest number of triangles at one node of this slice */

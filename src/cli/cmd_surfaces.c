@@ -28,6 +28,10 @@ static void help(void)
            "                        its centroid lies more than F * (spacing + |dA - dB|)\n"
            "                        outside the layer curves interpolated to its height (0.25)\n"
            "  --max-edge F          'too large' edge bound, times max(spacing, layer gap) (3)\n"
+           "  --phase-weight W      weight of the arc-length phase in the shortest-diagonal\n"
+           "                        rule, besides the normalized position (0.25; 0 = off)\n"
+           "  --fan-limit N         a run of N triangles at one node is cut as a tongue\n"
+           "                        where it is one (6; 0 = never)\n"
            "  --stats               print per-surface lacing and timing statistics\n"
            "  -v, -q                more / less logging\n");
 }
@@ -57,6 +61,14 @@ int cmd_surfaces(int argc, char **argv)
         } else if (!strcmp(a, "--cap-grid")) { if (cli_parse_double("surfaces", a, v, &o.cap_grid)) return 2; i++; if (!(o.cap_grid > 0)) return cli_usage_error("surfaces", "--cap-grid must be positive"); }
         else if (!strcmp(a, "--concave-tol")) { if (cli_parse_double("surfaces", a, v, &o.lace.concave_tol)) return 2; i++; }
         else if (!strcmp(a, "--max-edge")) { if (cli_parse_double("surfaces", a, v, &o.lace.max_edge)) return 2; i++; }
+        else if (!strcmp(a, "--phase-weight")) { if (cli_parse_double("surfaces", a, v, &o.lace.phase_weight)) return 2; i++; if (o.lace.phase_weight < 0) return cli_usage_error("surfaces", "--phase-weight must be >= 0"); }
+        else if (!strcmp(a, "--fan-limit")) {
+            long n;
+            if (cli_parse_int("surfaces", a, v, &n)) return 2;
+            if (n < 0 || n > 1000000) return cli_usage_error("surfaces", "--fan-limit must be between 0 and 1000000");
+            o.lace.fan_limit = (int)n;
+            i++;
+        }
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -95,6 +107,8 @@ int cmd_surfaces(int argc, char **argv)
         cJSON_AddNumberToObject(op, "cap_grid_mm", o.cap_grid);
         cJSON_AddNumberToObject(op, "concave_tol", o.lace.concave_tol);
         cJSON_AddNumberToObject(op, "max_edge", o.lace.max_edge);
+        cJSON_AddNumberToObject(op, "phase_weight", o.lace.phase_weight);
+        cJSON_AddNumberToObject(op, "fan_limit", o.lace.fan_limit);
         m->provenance_json = cJSON_PrintUnformatted(p);
         cJSON_Delete(p);
     }
@@ -114,9 +128,9 @@ int cmd_surfaces(int argc, char **argv)
     if (want_stats) {
         printf("stage times (s): read %.4f, layers %.4f, lacing %.4f, caps %.4f, orientation %.4f, build %.4f, write %.4f\n",
                t_read, tot.t_layers, tot.t_lace, tot.t_caps, tot.t_orient, tot.t_total, t_write);
-        printf("lacing: %zu slices (%zu branching), %zu outside triangles removed, %zu gaps re-laced, %zu in-plane, "
-               "%zu unresolved, %zu too large, largest fan %d\n",
-               tot.n_slices, tot.n_branch_slices, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.inplane_tris,
+        printf("lacing: %zu slices (%zu branching), %zu outside triangles removed, %zu gaps re-laced, %zu tongues cut, "
+               "%zu in-plane, %zu unresolved, %zu too large, largest fan %d\n",
+               tot.n_slices, tot.n_branch_slices, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.tongues, tot.lace.inplane_tris,
                tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan);
         printf("orientation: %zu triangles by their own inside test, %zu from neighbours (%zu tests overruled), "
                "%zu flipped; %zu caps\n",

@@ -26,6 +26,9 @@
 #include "thorax/surfaces.h"
 #include "geom/chain_sdf.h"
 
+/* Layer number for messages: the file's layer number, or the surface's own for contours built in memory. */
+#define LAYER_NO(cs, l) ((cs)->layers[l].index >= 0 ? (cs)->layers[l].index + 1 : (int)(l) + 1)
+
 void thx_surfaces_opts_default(thx_surfaces_opts *o)
 {
     memset(o, 0, sizeof *o);
@@ -462,7 +465,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
                     failed = 1;
                     fst = r;
                     snprintf(msg, sizeof msg, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path, lp->line, cs->name,
-                             cs->layers[l].index + 1, cs->layers[l].z, thx_ctx_message(lc));
+                             LAYER_NO(cs, l), cs->layers[l].z, thx_ctx_message(lc));
                 }
             }
             thx_ctx_destroy(&lc);
@@ -527,6 +530,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
         a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
+        a->tongues += b->tongues;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
     }
@@ -570,7 +574,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
                     char m[1024];
                     snprintf(m, sizeof m, "%s", thx_ctx_message(ctx));
                     st = thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): end cap: %s", path,
-                                   cs->layers[l].line, cs->name, cs->layers[l].index + 1, layers[l].z, m);
+                                   cs->layers[l].line, cs->name, LAYER_NO(cs, l), layers[l].z, m);
                     goto done;
                 }
                 size_t base = s->n_nodes;
@@ -628,6 +632,8 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
     thx_status st = THX_OK;
     *out = NULL;
     double spacing = o->spacing > 0 ? o->spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    /* Contours built in memory have not been through the reader's validation. */
+    THX_CHECK(thx_contours_validate(ctx, c));
     THX_CHECK(thx_model_create(ctx, &m));
     if (total) memset(total, 0, sizeof *total);
     double t0 = thx_wtime();
@@ -655,6 +661,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->n_slices += one.n_slices; total->n_branch_slices += one.n_branch_slices; total->n_caps += one.n_caps;
             total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
             total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
+            total->lace.tongues += one.lace.tongues;
             total->lace.unresolved += one.lace.unresolved; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;

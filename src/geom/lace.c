@@ -45,6 +45,7 @@
 
 #include "thorax/cdt.h"
 #include "thorax/inside.h"
+#include "thorax/predicates.h"
 #include "thorax/surfaces.h"
 #include "geom/chain_sdf.h"
 
@@ -57,12 +58,15 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->concave_tol = 0.25;
     o->max_edge = 3.0;
     o->window = 4;
+    o->fan_limit = 6;
+    o->phase_weight = 0.25;
 }
 
 typedef struct {
     const thx_chain *a, *b;
     const thx_lace_opts *o;
     thx_vec2 *na, *nb;  /* normalized coordinates */
+    thx_vec2 *pa, *pb;  /* arc-length phase of each node, as a point on a circle of radius phase_weight */
     chain_index ia, ib; /* signed distances to the chains */
     int i0, j0;         /* first connective segment */
     double big_edge;    /* "too large" edge length */
@@ -104,6 +108,15 @@ static int tri_outside(const lacer *L, const thx_vec3 t[3])
 
 static double dist3(thx_vec3 a, thx_vec3 b) { return thx_v3_norm(thx_v3_sub(a, b)); }
 
+/* Distance between node i of A and node j of B in the lacing metric: normalized
+ * position and arc-length phase (see thx_lace_opts.phase_weight). */
+static double ndist(const lacer *L, int i, int j)
+{
+    double dx = L->na[i].x - L->nb[j].x, dy = L->na[i].y - L->nb[j].y;
+    double px = L->pa[i].x - L->pb[j].x, py = L->pa[i].y - L->pb[j].y;
+    return sqrt(dx * dx + dy * dy + px * px + py * py);
+}
+
 /* Cost of a move: the length of its new diagonal, plus penalties. */
 static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
 {
@@ -113,12 +126,24 @@ static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
     /* the new diagonal, measured like the shortest-diagonal rule: in normalized coordinates */
     int na = (int)L->a->n, nb = (int)L->b->n;
     int i = (L->i0 + ca) % na, j = (L->j0 + cb) % nb;
-    thx_vec2 p = bmove ? L->na[i] : L->na[(i + 1) % na], q = bmove ? L->nb[(j + 1) % nb] : L->nb[j];
-    double c = hypot(p.x - q.x, p.y - q.y);
+    double c = bmove ? ndist(L, i, (j + 1) % nb) : ndist(L, (i + 1) % na, j);
     double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
     if (e > L->big_edge) c += LARGE;
     if (check && tri_outside(L, t)) c += BIG;
     return c;
+}
+
+/* Arc-length phase of each node (fraction of the perimeter from node 0) as a point on a circle. */
+static void phases(const thx_chain *c, double w, thx_vec2 *out)
+{
+    double total = 0, s = 0;
+    for (size_t k = 0; k < c->n; k++) total += hypot(c->p[(k + 1) % c->n].x - c->p[k].x, c->p[(k + 1) % c->n].y - c->p[k].y);
+    for (size_t k = 0; k < c->n; k++) {
+        double a = total > 0 ? 2 * M_PI * s / total : 0;
+        out[k].x = w * cos(a);
+        out[k].y = w * sin(a);
+        s += hypot(c->p[(k + 1) % c->n].x - c->p[k].x, c->p[(k + 1) % c->n].y - c->p[k].y);
+    }
 }
 
 static void normalize(const thx_chain *c, thx_vec2 *out)
@@ -173,8 +198,7 @@ static void greedy_path(const lacer *L, unsigned char *mv)
         else if (cb == nb) b = 0;
         else {
             int i = (L->i0 + ca) % na, j = (L->j0 + cb) % nb;
-            thx_vec2 ai = L->na[i], ai1 = L->na[(i + 1) % na], bj = L->nb[j], bj1 = L->nb[(j + 1) % nb];
-            double dA = hypot(ai1.x - bj.x, ai1.y - bj.y), dB = hypot(ai.x - bj1.x, ai.y - bj1.y);
+            double dA = ndist(L, (i + 1) % na, j), dB = ndist(L, i, (j + 1) % nb);
             b = dB < dA;
         }
         mv[k] = (unsigned char)b;
@@ -290,6 +314,42 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
     return found;
 }
 
+/* Is the arc c[lo .. lo+len] (cyclic) a tongue of c that the other layer lacks, to be cut in
+ * the plane of c's layer? A tongue bulges outward (the arc with its chord runs counterclockwise),
+ * its chord crosses no other edge of c, its deepest node lies outside the other layer's curve
+ * (io) by more than margin, and, so that a tongue of one layer alone is cut by one slice only,
+ * either c is the slice's lower chain or the layer beyond c has the tongue too. A tongue of the
+ * first or last layer is never cut: the end cap covers it. */
+static int is_tongue(const thx_chain *c, const chain_index *io, int c_is_lower, int lo, int len, double margin)
+{
+    int n = (int)c->n, hi = (lo + len) % n;
+    if (len < 2 || len >= n - 1) return 0;
+    double area = 0;
+    for (int s = 0; s < len; s++) {
+        thx_vec2 p = c->p[(lo + s) % n], q = c->p[(lo + s + 1) % n];
+        area += p.x * q.y - q.x * p.y;
+    }
+    area += c->p[hi].x * c->p[lo].y - c->p[lo].x * c->p[hi].y;
+    if (!(area > 0)) return 0;
+    for (int k = 0; k < n; k++) {
+        int k1 = (k + 1) % n;
+        if (k == lo || k1 == lo || k == hi || k1 == hi) continue;
+        if (thx_segments_touch(&c->p[lo].x, &c->p[hi].x, &c->p[k].x, &c->p[k1].x)) return 0;
+    }
+    thx_vec2 a = c->p[lo], b = c->p[hi];
+    double best = -1;
+    int deep = -1;
+    for (int s = 1; s < len; s++) {
+        thx_vec2 q = c->p[(lo + s) % n];
+        double d = fabs(cross3(a, b, q)) / fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
+        if (d > best) { best = d; deep = (lo + s) % n; }
+    }
+    if (deep < 0 || !(chain_index_sdf(io, c->p[deep]) > margin)) return 0;
+    /* At the surface's first or last layer the end cap already covers the tongue: never cut there. */
+    if (c->n_beyond == 0) return 0;
+    return c_is_lower || pocket_covered(c->beyond, c->n_beyond, a, b, c->p[deep], -1e300);
+}
+
 static thx_status emit(thx_ctx *ctx, int32_t **tris, size_t *n_tris, size_t *cap, const int32_t id[3])
 {
     THX_CHECK(thx_grow(ctx, (void **)tris, cap, (*n_tris + 1) * 3, sizeof **tris));
@@ -361,19 +421,23 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
     L.big_edge = o->max_edge * fmax(o->spacing, fabs(b->z - a->z));
     L.na = thx_malloc(ctx, (size_t)na * sizeof *L.na);
     L.nb = thx_malloc(ctx, (size_t)nb * sizeof *L.nb);
+    L.pa = thx_malloc(ctx, (size_t)na * sizeof *L.pa);
+    L.pb = thx_malloc(ctx, (size_t)nb * sizeof *L.pb);
     unsigned char *mv = thx_malloc(ctx, (size_t)N), *bad = thx_calloc(ctx, (size_t)N, 1);
     int *sa = thx_malloc(ctx, (size_t)(N + 1) * sizeof *sa), *sb = thx_malloc(ctx, (size_t)(N + 1) * sizeof *sb);
     double *costb = NULL;
     unsigned char *fromb = NULL;
-    if (!L.na || !L.nb || !mv || !bad || !sa || !sb) { st = THX_ENOMEM; goto done; }
+    if (!L.na || !L.nb || !L.pa || !L.pb || !mv || !bad || !sa || !sb) { st = THX_ENOMEM; goto done; }
     if (chain_index_init(&L.ia, a->p, a->n) || chain_index_init(&L.ib, b->p, b->n)) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
     normalize(a, L.na);
     normalize(b, L.nb);
+    phases(a, o->phase_weight, L.pa);
+    phases(b, o->phase_weight, L.pb);
     /* First connective segment: A's start node and the nearest node of B (normalized). */
     {
         double best = INFINITY;
         for (int j = 0; j < nb; j++) {
-            double d = hypot(L.na[0].x - L.nb[j].x, L.na[0].y - L.nb[j].y);
+            double d = ndist(&L, 0, j);
             if (d < best) { best = d; L.j0 = j; }
         }
     }
@@ -477,6 +541,34 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             goto done;
         }
     }
+    /* Step 5: a long fan (one node joined to a long run of the other chain) where that run is a
+       tongue the node's layer lacks: the tongue is cut off in its own plane and the slice laced
+       again, instead of a spray of long, thin triangles. */
+    if (depth < 8 && o->fan_limit > 1) {
+        for (int k = 0; k < N;) {
+            int r = 1;
+            while (k + r < N && mv[k + r] == mv[k]) r++;
+            if (r >= o->fan_limit) {
+                int bm = mv[k];
+                const thx_chain *c = bm ? b : a;
+                int lo = bm ? (L.j0 + sb[k]) % nb : (L.i0 + sa[k]) % na;
+                if (is_tongue(c, bm ? &L.ia : &L.ib, !bm, lo, r, 0.5 * o->spacing)) {
+                    pocket pk = {lo, (lo + r) % (int)c->n};
+                    thx_chain nc;
+                    thx_vec2 *np = NULL;
+                    int32_t *nid = NULL;
+                    stats->tongues++;
+                    st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+                    if (st == THX_OK) st = bm ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
+                                              : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                    free(np);
+                    free(nid);
+                    goto done;
+                }
+            }
+            k += r;
+        }
+    }
     /* Emit the path. */
     for (int k = 0; k < N && st == THX_OK; k++) {
         thx_vec3 t[3];
@@ -492,6 +584,8 @@ done:
     chain_index_free(&L.ib);
     free(L.na);
     free(L.nb);
+    free(L.pa);
+    free(L.pb);
     free(mv);
     free(bad);
     free(sa);
@@ -523,6 +617,7 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     stats->removed += local.removed;
     stats->relaced_gaps += local.relaced_gaps;
     stats->inplane_tris += local.inplane_tris;
+    stats->tongues += local.tongues;
     stats->unresolved += local.unresolved;
     stats->too_large += local.too_large;
     if (local.max_fan > stats->max_fan) stats->max_fan = local.max_fan;
