@@ -88,6 +88,7 @@ printf '%s\nlayer 0\nloop s\n0 0 0\nend\n' "$HEAD" | bad_input three_numbers "ba
 printf '%s\nlayer 0\nloop lung\n%s\nend\n' "$HEAD" "$SQ" | bad_input undeclared 'bad_undeclared.txt:4: loop of undeclared surface "lung"'
 printf 'thorax-contours 1\nsurface s liver\nend\n' | bad_input role "bad_role.txt:2: surface \"s\": unknown role 'liver'"
 printf '%s\nlayer 0\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input one_layer 'bad_one_layer.txt:2: surface "s" is digitized on only one layer'
+printf '%s\nlayer 0\nloop s\n%s\nlayer 5\nloop s\n%s\nloop s\n100 100\n101 100\n101 101\nlayer 10\nloop s\n%s\nend\n' "$HEAD" "$SQ" "$SQ" "$SQ" | bad_input island 'bad_island.txt:15: surface "s" layer 2 \(z=5\): the loop overlaps no loop of the layers above and below'
 # a missing file and usage errors
 "$THORAX" surfaces "$WORK/does_not_exist.txt" -o "$WORK/x" 2> "$WORK/err" ; rc=$?
 [ $rc -eq 1 ] && grep -q "does_not_exist.txt: cannot open" "$WORK/err" && ok "missing file" || bad "missing file (exit $rc)"

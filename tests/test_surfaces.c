@@ -192,6 +192,46 @@ static void test_tongues(thx_ctx *ctx)
     thx_contours_destroy(&c);
 }
 
+/* Two tiny loops below one large loop around both (the foot of a surface digitized as two
+ * small islands): shortest-diagonal lacing fans the tiny loops' nodes into dozens of triangles;
+ * the ring between the loops is triangulated in projection instead. */
+static void test_projected(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t f;
+    thx_contours_add_surface(ctx, c, "foot", THX_ROLE_OUTER, THX_CAP_GRID, 0, &f);
+    circ t1 = {-40, -80, 3.5, 0}, t2 = {40, -80, 3.5, 0}, big = {0, 0, 76, 113};
+    add_shape(ctx, c, f, 0, 8, 0, circle, &t1);
+    add_shape(ctx, c, f, 0, 8, 1, circle, &t2);
+    for (int l = 1; l <= 4; l++) add_shape(ctx, c, f, 5.0 * l, 150, l % 2, circle, &big);
+    thx_surfaces_stats st;
+    thx_model *m = build_and_check(ctx, c, 5.0, &st, "projected");
+    if (m) {
+        printf("two islands under a large loop: %zu slices laced in projection, largest fan %d\n", st.lace.projected,
+               st.lace.max_fan);
+        CHECK(st.lace.projected == 1);
+    }
+    thx_model_destroy(&m);
+    /* without tongue cuts */
+    thx_surfaces_opts o;
+    thx_surfaces_opts_default(&o);
+    o.spacing = 5.0;
+    o.lace.fan_limit = 0;
+    thx_surfaces_stats st0;
+    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &o, &m, &st0, NULL));
+    thx_surface_report rep;
+    /* the branching chain visits its bridge nodes twice and the shortest-diagonal rule joins one of
+       them to the same node of the large loop twice: an edge in three triangles, detected, and the
+       slice is laced in projection */
+    CHECK(thx_surface_check(ctx, m->surf[0], &m->interior[0], NULL, &rep) == THX_OK);
+    printf("  without tongue cuts: largest fan %d, %zu slices laced in projection\n", st0.lace.max_fan,
+           st0.lace.projected);
+    CHECK(st0.lace.projected == 1);
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
 static void test_branching(thx_ctx *ctx)
 {
     thx_contours *c = NULL;
@@ -350,7 +390,7 @@ static void test_lace_invariants(thx_ctx *ctx, double tol, int cases, size_t *re
         crescent_pts(B, nb, 60, lrand() * 50, lrand() * 1.2 - 0.6, 0.05 + lrand() * 0.3, lrand() * 20 - 10);
         for (int i = 0; i < na; i++) ia[i] = i;
         for (int i = 0; i < nb; i++) ib[i] = na + i;
-        thx_chain a = {(size_t)na, A, ia, 0, NULL, 0}, b = {(size_t)nb, B, ib, 5, NULL, 0};
+        thx_chain a = {(size_t)na, A, ia, 0, NULL, 0, NULL, 0}, b = {(size_t)nb, B, ib, 5, NULL, 0, NULL, 0};
         thx_lace_opts o;
         thx_lace_opts_default(&o);
         o.spacing = 4;
@@ -405,6 +445,7 @@ int main(void)
     test_concave(ctx);
     test_branching(ctx);
     test_tongues(ctx);
+    test_projected(ctx);
     {
         /* default tolerance: gaps occur and are always re-laced */
         size_t removed = 0, inplane = 0, unresolved = 0;

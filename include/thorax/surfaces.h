@@ -49,6 +49,8 @@ typedef struct {
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
     double phase_weight;   /* weight of the arc-length phase in the lacing metric (0 = position only) */
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
+    int optimal;           /* 1: the lacing of least total diagonal length (dynamic programming);
+                              0: the paper's step-by-step shortest-diagonal rule */
 } thx_lace_opts;
 
 typedef struct {
@@ -57,6 +59,8 @@ typedef struct {
     size_t relaced_gaps;   /* gaps re-triangulated */
     size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, tongues; caps excluded) */
     size_t tongues;        /* tongues of one layer cut in its plane (instead of a long fan) */
+    size_t projected;      /* slices of nested loops laced by triangulating the ring between them
+                              in projection (fallback for fans and unresolved triangles) */
     size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
     size_t too_large;      /* triangles with an edge longer than the max_edge bound */
     int max_fan;           /* largest number of triangles at one node of this slice */
@@ -79,6 +83,10 @@ typedef struct thx_chain {
      * cut twice. NULL / 0 when unknown or at the end of the surface. */
     const struct thx_chain *beyond;
     size_t n_beyond;
+    /* Optional: the loops this chain was joined from (a branching surface), each with its
+     * points and node ids; NULL / 0 when the chain is a single loop. */
+    const struct thx_chain *parts;
+    size_t n_parts;
 } thx_chain;
 
 /*
@@ -88,7 +96,13 @@ typedef struct thx_chain {
  * offset do not fan), then removes triangles outside the surface (concave
  * regions), re-laces each gap optimally among valid triangles, and where no
  * valid lacing exists cuts the concave pocket off with triangles in the plane of
- * its layer. Both chains counterclockwise seen from above. Appends 3 ids per
+ * its layer. If the result still leaves triangles outside the surface or puts an
+ * edge into three triangles (possible where a branching chain visits a bridge
+ * node twice), and one chain's loops lie
+ * strictly inside the other's in projection, the slice is laced instead by a
+ * constrained Delaunay triangulation of the ring between them in projection,
+ * lifted to the layers (a graph over the ring: it cannot fold or intersect
+ * itself). Both chains counterclockwise seen from above. Appends 3 ids per
  * triangle to *tris (grown with thx_grow; *n_tris, *cap updated).
  */
 thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o,

@@ -128,9 +128,9 @@ int cmd_surfaces(int argc, char **argv)
     if (want_stats) {
         printf("stage times (s): read %.4f, layers %.4f, lacing %.4f, caps %.4f, orientation %.4f, build %.4f, write %.4f\n",
                t_read, tot.t_layers, tot.t_lace, tot.t_caps, tot.t_orient, tot.t_total, t_write);
-        printf("lacing: %zu slices (%zu branching), %zu outside triangles removed, %zu gaps re-laced, %zu tongues cut, "
-               "%zu in-plane, %zu unresolved, %zu too large, largest fan %d\n",
-               tot.n_slices, tot.n_branch_slices, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.tongues, tot.lace.inplane_tris,
+        printf("lacing: %zu slices (%zu branching, %zu laced in projection), %zu outside triangles removed, "
+               "%zu gaps re-laced, %zu tongues cut, %zu in-plane, %zu unresolved, %zu too large, largest fan %d\n",
+               tot.n_slices, tot.n_branch_slices, tot.lace.projected, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.tongues, tot.lace.inplane_tris,
                tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan);
         printf("orientation: %zu triangles by their own inside test, %zu from neighbours (%zu tests overruled), "
                "%zu flipped; %zu caps\n",

@@ -15,6 +15,7 @@ static const struct {
     {"surfaces", cmd_surfaces, "contours -> spline layers -> laced, capped, oriented surfaces (a model)"},
     {"check", cmd_check, "verify a model: closure, orientation, 4 pi solid angle, intersections, quality"},
     {"export", cmd_export, "write a model's surfaces as VTK, VTP, OBJ, STL or PLY"},
+    {"slice", cmd_slice, "cut a model's surfaces by planes z = const into contours"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

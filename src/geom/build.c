@@ -45,6 +45,7 @@ typedef struct {
     size_t n;
     thx_vec2 *p;
     int32_t first; /* node id of p[0]; nodes are consecutive */
+    int32_t *id;   /* first, first + 1, ... (for chains) */
     int down, up;  /* has a partner loop on the layer below / above */
 } rloop;
 
@@ -61,6 +62,7 @@ typedef struct {
     thx_vec2 *p;
     int32_t *id;
     chain_index ix;
+    thx_chain *parts; /* the loops joined into c (branching), or NULL */
 } owned_chain;
 
 typedef struct {
@@ -135,6 +137,13 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
     out->c.p = out->p;
     out->c.id = out->id;
     out->c.z = L->z;
+    if (m > 1) {
+        out->parts = thx_malloc(ctx, (size_t)m * sizeof *out->parts);
+        if (!out->parts) return THX_ENOMEM;
+        for (int k = 0; k < m; k++) out->parts[k] = L->ch[sel[k]];
+        out->c.parts = out->parts;
+        out->c.n_parts = (size_t)m;
+    }
     if (chain_index_init(&out->ix, out->p, n) != 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
     return THX_OK;
 }
@@ -332,7 +341,10 @@ static void free_layers(rlayer *layers, size_t nl)
 {
     if (!layers) return;
     for (size_t l = 0; l < nl; l++) {
-        for (size_t k = 0; k < layers[l].n_loops; k++) free(layers[l].loops[k].p);
+        for (size_t k = 0; k < layers[l].n_loops; k++) {
+            free(layers[l].loops[k].p);
+            free(layers[l].loops[k].id);
+        }
         free(layers[l].loops);
         free(layers[l].ch);
     }
@@ -344,8 +356,8 @@ static void free_slices(slice *s, size_t ns)
     if (!s) return;
     for (size_t i = 0; i < ns; i++) {
         for (size_t g = 0; g < s[i].n_groups; g++) {
-            free(s[i].ga[g].p); free(s[i].ga[g].id); chain_index_free(&s[i].ga[g].ix);
-            free(s[i].gb[g].p); free(s[i].gb[g].id); chain_index_free(&s[i].gb[g].ix);
+            free(s[i].ga[g].p); free(s[i].ga[g].id); chain_index_free(&s[i].ga[g].ix); free(s[i].ga[g].parts);
+            free(s[i].gb[g].p); free(s[i].gb[g].id); chain_index_free(&s[i].gb[g].ix); free(s[i].gb[g].parts);
         }
         free(s[i].ga);
         free(s[i].gb);
@@ -478,10 +490,15 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         layers[l].ch = thx_calloc(ctx, layers[l].n_loops, sizeof *layers[l].ch);
         if (!layers[l].ch) { st = THX_ENOMEM; goto done; }
         for (size_t k = 0; k < layers[l].n_loops; k++) {
-            layers[l].loops[k].first = next_id;
-            next_id += (int32_t)layers[l].loops[k].n;
-            layers[l].ch[k].n = layers[l].loops[k].n;
-            layers[l].ch[k].p = layers[l].loops[k].p;
+            rloop *r = &layers[l].loops[k];
+            r->first = next_id;
+            r->id = thx_malloc(ctx, r->n * sizeof *r->id);
+            if (!r->id) { st = THX_ENOMEM; goto done; }
+            for (size_t i = 0; i < r->n; i++) r->id[i] = next_id + (int32_t)i;
+            next_id += (int32_t)r->n;
+            layers[l].ch[k].n = r->n;
+            layers[l].ch[k].p = r->p;
+            layers[l].ch[k].id = r->id;
             layers[l].ch[k].z = layers[l].z;
         }
     }
@@ -524,13 +541,25 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         }
         if (failed) { st = thx_error(ctx, fst ? fst : THX_ENOMEM, "%s", msg); goto done; }
     }
+    /* A loop that overlaps no loop on either neighbouring layer would be a flat disc: its two caps
+       would coincide. */
+    for (size_t l = 0; l < nl; l++)
+        for (size_t k = 0; k < layers[l].n_loops; k++)
+            if (!layers[l].loops[k].up && !layers[l].loops[k].down) {
+                const thx_loop *lp = &cs->layers[l].loops[k];
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s:%d: surface \"%s\" layer %d (z=%g): the loop overlaps no loop of the layers above "
+                               "and below, so it would enclose no volume",
+                               path, lp->line ? lp->line : cs->layers[l].line, cs->name, LAYER_NO(cs, l), layers[l].z);
+                goto done;
+            }
     size_t ntri = 0;
     for (size_t i = 0; i < ns; i++) {
         ntri += slices[i].n_tris;
         thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
         a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
-        a->tongues += b->tongues;
+        a->tongues += b->tongues; a->projected += b->projected;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
     }
@@ -661,7 +690,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->n_slices += one.n_slices; total->n_branch_slices += one.n_branch_slices; total->n_caps += one.n_caps;
             total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
             total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
-            total->lace.tongues += one.lace.tongues;
+            total->lace.tongues += one.lace.tongues; total->lace.projected += one.lace.projected;
             total->lace.unresolved += one.lace.unresolved; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;

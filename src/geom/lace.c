@@ -44,6 +44,7 @@
 #include <string.h>
 
 #include "thorax/cdt.h"
+#include "thorax/core.h"
 #include "thorax/inside.h"
 #include "thorax/predicates.h"
 #include "thorax/surfaces.h"
@@ -60,6 +61,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->window = 4;
     o->fan_limit = 6;
     o->phase_weight = 0.25;
+    o->optimal = getenv("THX_OPT") ? atoi(getenv("THX_OPT")) : 0;
 }
 
 typedef struct {
@@ -161,7 +163,7 @@ static void normalize(const thx_chain *c, thx_vec2 *out)
 /* DP over states [ca0..ca1] x [cb0..cb1]; writes the best path's moves (0 = A, 1 = B) to mv.
  * Returns the path's cost. */
 static double dp_path(const lacer *L, int ca0, int cb0, int ca1, int cb1, unsigned char *mv, double *cost_buf,
-                      unsigned char *from_buf)
+                      unsigned char *from_buf, int check)
 {
     int W = ca1 - ca0 + 1, H = cb1 - cb0 + 1;
     for (int x = 0; x < W; x++)
@@ -169,11 +171,11 @@ static double dp_path(const lacer *L, int ca0, int cb0, int ca1, int cb1, unsign
             double best = x == 0 && y == 0 ? 0 : INFINITY;
             unsigned char from = 0;
             if (x > 0) {
-                double c = cost_buf[(x - 1) * H + y] + move_cost(L, ca0 + x - 1, cb0 + y, 0, 1);
+                double c = cost_buf[(x - 1) * H + y] + move_cost(L, ca0 + x - 1, cb0 + y, 0, check);
                 if (c < best) { best = c; from = 0; }
             }
             if (y > 0) {
-                double c = cost_buf[x * H + y - 1] + move_cost(L, ca0 + x, cb0 + y - 1, 1, 1);
+                double c = cost_buf[x * H + y - 1] + move_cost(L, ca0 + x, cb0 + y - 1, 1, check);
                 if (c < best) { best = c; from = 1; }
             }
             cost_buf[x * H + y] = best;
@@ -441,7 +443,16 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             if (d < best) { best = d; L.j0 = j; }
         }
     }
-    greedy_path(&L, mv);
+    if (o->optimal) {
+        /* The whole lacing of least total diagonal length (the shortest-diagonal criterion
+           applied globally rather than step by step). */
+        costb = malloc((size_t)(na + 1) * (size_t)(nb + 1) * sizeof *costb);
+        fromb = malloc((size_t)(na + 1) * (size_t)(nb + 1));
+        if (!costb || !fromb) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
+        dp_path(&L, 0, 0, na, nb, mv, costb, fromb, 0);
+    } else {
+        greedy_path(&L, mv);
+    }
     /* Outside test of every triangle of the shortest-diagonal lacing. */
     int nbad = 0;
     sa[0] = sb[0] = 0;
@@ -489,7 +500,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             costb = realloc(costb, (size_t)W * (size_t)H * sizeof *costb);
             fromb = realloc(fromb, (size_t)W * (size_t)H);
             if (!costb || !fromb) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
-            double c = dp_path(&L, sa[s0], sb[s0], sa[s1], sb[s1], mv + s0, costb, fromb);
+            double c = dp_path(&L, sa[s0], sb[s0], sa[s1], sb[s1], mv + s0, costb, fromb, 1);
             if (c < BIG) {
                 ok = 1;
                 for (int q = s0; q < s1; q++) { sa[q + 1] = sa[q] + !mv[q]; sb[q + 1] = sb[q] + mv[q]; bad[q] = 0; }
@@ -595,6 +606,158 @@ done:
     return st;
 }
 
+/* The loops of a chain: its parts, or the chain itself. */
+static const thx_chain *chain_parts(const thx_chain *c, size_t *n)
+{
+    *n = c->n_parts ? c->n_parts : 1;
+    return c->n_parts ? c->parts : c;
+}
+
+/* Are all loops of `in` strictly inside the union of the loops of `out` and all
+ * loops of `out` strictly outside every loop of `in` (in projection)? */
+static int nested_in(const thx_chain *in, const thx_chain *out)
+{
+    size_t ni, no;
+    const thx_chain *pi = chain_parts(in, &ni), *po = chain_parts(out, &no);
+    int ok = 1;
+    chain_index *io = calloc(no, sizeof *io), *ii = calloc(ni, sizeof *ii);
+    if (!io || !ii) ok = 0;
+    for (size_t k = 0; ok && k < no; k++) if (chain_index_init(&io[k], po[k].p, po[k].n)) ok = 0;
+    for (size_t k = 0; ok && k < ni; k++) if (chain_index_init(&ii[k], pi[k].p, pi[k].n)) ok = 0;
+    /* every inner node inside some outer loop, and no outer node inside an inner loop */
+    for (size_t k = 0; ok && k < ni; k++)
+        for (size_t q = 0; ok && q < pi[k].n; q++) {
+            int inside = 0;
+            for (size_t r = 0; r < no && !inside; r++) inside = chain_index_sdf(&io[r], pi[k].p[q]) < 0;
+            ok = inside;
+        }
+    for (size_t k = 0; ok && k < no; k++)
+        for (size_t q = 0; ok && q < po[k].n; q++)
+            for (size_t r = 0; ok && r < ni; r++) ok = chain_index_sdf(&ii[r], po[k].p[q]) > 0;
+    /* and no edge of one crosses an edge of the other */
+    for (size_t k = 0; ok && k < ni; k++)
+        for (size_t q = 0; ok && q < pi[k].n; q++)
+            for (size_t r = 0; ok && r < no; r++)
+                for (size_t t = 0; ok && t < po[r].n; t++)
+                    ok = !thx_segments_touch(&pi[k].p[q].x, &pi[k].p[(q + 1) % pi[k].n].x, &po[r].p[t].x,
+                                             &po[r].p[(t + 1) % po[r].n].x);
+    for (size_t k = 0; io && k < no; k++) chain_index_free(&io[k]);
+    for (size_t k = 0; ii && k < ni; k++) chain_index_free(&ii[k]);
+    free(io);
+    free(ii);
+    return ok;
+}
+
+/* Laces nested chains by a constrained Delaunay triangulation of the ring between them in
+ * projection: every loop edge is a constraint; the triangles inside the outer loops and outside
+ * the inner ones are kept, with their nodes on their own layers. Returns 0 in *ok when the
+ * chains are not nested or the triangulation is not possible (coincident points). */
+static thx_status lace_projected(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, int32_t **tris, size_t *n_tris,
+                                 size_t *cap, int *ok)
+{
+    *ok = 0;
+    int a_inner = nested_in(a, b);
+    if (!a_inner && !nested_in(b, a)) return THX_OK;
+    const thx_chain *inner = a_inner ? a : b, *outer = a_inner ? b : a;
+    size_t ni, no, np = 0, ns = 0;
+    const thx_chain *pi = chain_parts(inner, &ni), *po = chain_parts(outer, &no);
+    for (size_t k = 0; k < ni; k++) np += pi[k].n;
+    for (size_t k = 0; k < no; k++) np += po[k].n;
+    thx_vec2 *pts = thx_malloc(ctx, np * sizeof *pts);
+    int32_t *ids = thx_malloc(ctx, np * sizeof *ids), *segs = thx_malloc(ctx, 2 * np * sizeof *segs), *t = NULL;
+    chain_index *ix = thx_calloc(ctx, ni + no, sizeof *ix);
+    size_t nt = 0;
+    thx_status st = THX_OK;
+    if (!pts || !ids || !segs || !ix) { st = THX_ENOMEM; goto done; }
+    np = 0;
+    for (int side = 0; side < 2; side++) {
+        const thx_chain *parts = side ? po : pi;
+        size_t n_parts = side ? no : ni;
+        for (size_t k = 0; k < n_parts; k++) {
+            size_t base = np;
+            for (size_t q = 0; q < parts[k].n; q++) {
+                pts[np] = parts[k].p[q];
+                ids[np] = parts[k].id[q];
+                segs[2 * ns] = (int32_t)np;
+                segs[2 * ns + 1] = (int32_t)(q + 1 < parts[k].n ? np + 1 : base);
+                ns++;
+                np++;
+            }
+            if (chain_index_init(&ix[(side ? ni : 0) + k], parts[k].p, parts[k].n)) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
+        }
+    }
+    {
+        thx_ctx *quiet = NULL;
+        if (thx_ctx_create(&quiet) != THX_OK) { st = THX_ENOMEM; goto done; }
+        thx_status r = thx_cdt2d(quiet, pts, np, segs, ns, &t, &nt);
+        thx_ctx_destroy(&quiet);
+        if (r != THX_OK) goto done; /* coincident points or crossing loops: not this way */
+    }
+    for (size_t k = 0; k < nt && st == THX_OK; k++) {
+        thx_vec2 c = {(pts[t[3 * k]].x + pts[t[3 * k + 1]].x + pts[t[3 * k + 2]].x) / 3.0,
+                      (pts[t[3 * k]].y + pts[t[3 * k + 1]].y + pts[t[3 * k + 2]].y) / 3.0};
+        int in_outer = 0, in_inner = 0;
+        for (size_t q = 0; q < no && !in_outer; q++) in_outer = chain_index_sdf(&ix[ni + q], c) < 0;
+        for (size_t q = 0; q < ni && !in_inner; q++) in_inner = chain_index_sdf(&ix[q], c) < 0;
+        if (!in_outer || in_inner) continue;
+        int32_t id[3] = {ids[t[3 * k]], ids[t[3 * k + 1]], ids[t[3 * k + 2]]};
+        st = emit(ctx, tris, n_tris, cap, id);
+    }
+    if (st == THX_OK) *ok = 1;
+done:
+    for (size_t k = 0; ix && k < ni + no; k++) chain_index_free(&ix[k]);
+    free(ix);
+    free(pts);
+    free(ids);
+    free(segs);
+    free(t);
+    return st;
+}
+
+typedef struct { int32_t a, b; } lace_edge;
+static int cmp_lace_edge(const void *x, const void *y)
+{
+    const lace_edge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+/* 1 if some edge lies in more than two triangles of the slice (a chain that visits a bridge node
+ * twice can join it to the same node of the other chain twice), 0 if not, -1 out of memory. */
+static int slice_overused_edge(const int32_t *tris, size_t first, size_t n_tris)
+{
+    size_t ne = 3 * (n_tris - first);
+    lace_edge *e = malloc((ne ? ne : 1) * sizeof *e);
+    if (!e) return -1;
+    for (size_t k = 0; k < ne; k++) {
+        size_t t = first + k / 3;
+        int32_t a = tris[3 * t + k % 3], b = tris[3 * t + (k % 3 + 1) % 3];
+        e[k].a = a < b ? a : b;
+        e[k].b = a < b ? b : a;
+    }
+    qsort(e, ne, sizeof *e, cmp_lace_edge);
+    int bad = 0;
+    for (size_t k = 0; k + 2 < ne && !bad; k++)
+        bad = e[k].a == e[k + 2].a && e[k].b == e[k + 2].b;
+    free(e);
+    return bad;
+}
+
+static int slice_max_fan(thx_ctx *ctx, const int32_t *tris, size_t first, size_t n_tris, int *fan)
+{
+    int32_t maxid = 0;
+    *fan = 0;
+    for (size_t k = 3 * first; k < 3 * n_tris; k++) if (tris[k] > maxid) maxid = tris[k];
+    int *cnt = thx_calloc(ctx, (size_t)maxid + 1, sizeof *cnt);
+    if (!cnt) return -1;
+    for (size_t k = 3 * first; k < 3 * n_tris; k++) {
+        int c = ++cnt[tris[k]];
+        if (c > *fan) *fan = c;
+    }
+    free(cnt);
+    return 0;
+}
+
 thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o, int32_t **tris,
                     size_t *n_tris, size_t *cap, thx_lace_stats *stats)
 {
@@ -602,22 +765,32 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     size_t first = *n_tris;
     thx_lace_stats local = {0};
     THX_CHECK(lace_rec(ctx, a, b, o, tris, n_tris, cap, &local, 0));
-    local.n_tris = *n_tris - first;
     /* Largest fan: triangles per node id within this slice. */
-    int32_t maxid = 0;
-    for (size_t k = 3 * first; k < 3 * *n_tris; k++) if ((*tris)[k] > maxid) maxid = (*tris)[k];
-    int *cnt = thx_calloc(ctx, (size_t)maxid + 1, sizeof *cnt);
-    if (!cnt) return THX_ENOMEM;
-    for (size_t k = 3 * first; k < 3 * *n_tris; k++) {
-        int c = ++cnt[(*tris)[k]];
-        if (c > local.max_fan) local.max_fan = c;
+    if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
+    int overused = slice_overused_edge(*tris, first, *n_tris);
+    if (overused < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
+    if (local.unresolved > 0 || overused) {
+        /* A lacing with triangles outside the surface, or one that is not a manifold (an edge in three
+           triangles): if the loops are nested, triangulate the ring between them in projection instead. */
+        size_t keep = *n_tris;
+        int ok = 0;
+        THX_CHECK(lace_projected(ctx, a, b, tris, n_tris, cap, &ok));
+        if (ok) {
+            memmove(*tris + 3 * first, *tris + 3 * keep, (*n_tris - keep) * 3 * sizeof **tris);
+            *n_tris = first + (*n_tris - keep);
+            thx_lace_stats proj = {0};
+            proj.projected = 1;
+            local = proj;
+            if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
+        }
     }
-    free(cnt);
+    local.n_tris = *n_tris - first;
     stats->n_tris += local.n_tris;
     stats->removed += local.removed;
     stats->relaced_gaps += local.relaced_gaps;
     stats->inplane_tris += local.inplane_tris;
     stats->tongues += local.tongues;
+    stats->projected += local.projected;
     stats->unresolved += local.unresolved;
     stats->too_large += local.too_large;
     if (local.max_fan > stats->max_fan) stats->max_fan = local.max_fan;

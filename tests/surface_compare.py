@@ -1,0 +1,71 @@
+#!/usr/bin/python3
+"""Compares a rebuilt surface with a reference surface (both .pts/.fac, 1-based).
+
+Prints the enclosed volumes and their relative difference, and the distance
+from every rebuilt node to the reference surface (max, mean, 99th percentile).
+Exits 1 if the volume differs by more than --vol (relative) or any node lies
+farther than --dist mm (nodes within --cap-band mm of the lowest or highest
+rebuilt layer, the flat end caps, are reported separately and bounded by
+--cap-dist).
+usage: surface_compare.py REF.pts REF.fac NEW.pts NEW.fac --vol V --dist D --cap-band B --cap-dist C
+"""
+import sys
+import numpy as np
+
+def read(pts, fac):
+    p = np.loadtxt(pts, ndmin=2)
+    f = np.loadtxt(fac, dtype=np.int64, ndmin=2) - 1
+    return p, f
+
+def volume(p, f):
+    a, b, c = p[f[:, 0]], p[f[:, 1]], p[f[:, 2]]
+    return np.einsum('ij,ij->i', a, np.cross(b, c)).sum() / 6.0
+
+def point_triangle_distance(P, a, b, c):
+    """Distance from the points P (n x 3) to triangle abc (Ericson's region tests, vectorized)."""
+    ab, ac, ap = b - a, c - a, P - a
+    d1, d2 = ap @ ab, ap @ ac
+    bp = P - b
+    d3, d4 = bp @ ab, bp @ ac
+    cp = P - c
+    d5, d6 = cp @ ab, cp @ ac
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    with np.errstate(divide='ignore', invalid='ignore'):
+        v = vb / denom
+        w = vc / denom
+    Q = a + np.outer(v, ab) + np.outer(w, ac)  # interior
+    # vertex and edge regions
+    m = (d1 <= 0) & (d2 <= 0); Q[m] = a
+    m = (d3 >= 0) & (d4 <= d3); Q[m] = b
+    m = (d6 >= 0) & (d5 <= d6); Q[m] = c
+    m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    t = np.where(m, d1 / np.where(d1 - d3 == 0, 1, d1 - d3), 0); Q[m] = a + np.outer(t[m], ab)
+    m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    t = np.where(m, d2 / np.where(d2 - d6 == 0, 1, d2 - d6), 0); Q[m] = a + np.outer(t[m], ac)
+    m = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+    t = np.where(m, (d4 - d3) / np.where((d4 - d3) + (d5 - d6) == 0, 1, (d4 - d3) + (d5 - d6)), 0)
+    Q[m] = b + np.outer(t[m], c - b)
+    return np.linalg.norm(P - Q, axis=1)
+
+def main():
+    a = sys.argv[1:]
+    opt = {a[i]: float(a[i + 1]) for i in range(4, len(a), 2)}
+    rp, rf = read(a[0], a[1])
+    npnt, nf = read(a[2], a[3])
+    v0, v1 = volume(rp, rf), volume(npnt, nf)
+    d = np.full(len(npnt), np.inf)
+    for t in rf:
+        d = np.minimum(d, point_triangle_distance(npnt, rp[t[0]], rp[t[1]], rp[t[2]]))
+    z = npnt[:, 2]
+    cap = (z <= z.min() + opt['--cap-band']) | (z >= z.max() - opt['--cap-band'])
+    side = ~cap
+    print("volume: reference %.1f mm^3, rebuilt %.1f mm^3, difference %+.3f%%" % (v0, v1, 100 * (v1 - v0) / v0))
+    print("node distance to the reference surface: sides max %.3f mean %.3f p99 %.3f mm (%d nodes); end layers max %.3f mm (%d nodes)"
+          % (d[side].max(), d[side].mean(), np.percentile(d[side], 99), side.sum(), d[cap].max() if cap.any() else 0, cap.sum()))
+    bad = abs(v1 - v0) / abs(v0) > opt['--vol'] or d[side].max() > opt['--dist'] or (cap.any() and d[cap].max() > opt['--cap-dist'])
+    sys.exit(1 if bad else 0)
+
+main()
