@@ -198,18 +198,6 @@ static void flip(thx_surface *s)
     }
 }
 
-/* Signed volume by the divergence theorem: > 0 iff triangles face outward. */
-static double volume(const thx_surface *s)
-{
-    double v = 0;
-    for (size_t t = 0; t < s->n_tris; t++) {
-        thx_vec3 a = thx_surface_node(s, (size_t)s->tri[3 * t]), b = thx_surface_node(s, (size_t)s->tri[3 * t + 1]),
-                 c = thx_surface_node(s, (size_t)s->tri[3 * t + 2]);
-        v += thx_v3_dot(a, thx_v3_cross(b, c)) / 6.0;
-    }
-    return v;
-}
-
 /* Closed surface from quads given counterclockwise seen from outside. */
 static thx_surface *from_quads(const double *xyz, size_t nn, const int32_t (*q)[4], size_t nq)
 {
@@ -235,7 +223,7 @@ static void test_cube(void)
     const int32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     thx_surface *s = from_quads(xyz, 8, q, 6);
     CHECK(s->n_tris == 12);
-    CHECK_NEAR(volume(s), 1.0, 1e-15);
+    CHECK_NEAR(thx_surface_volume(s), 1.0, 1e-15);
     thx_vec3 in[4] = {{0.5, 0.5, 0.5}, {0.1, 0.2, 0.9}, {0.999, 0.001, 0.5}, {1e-3, 1e-3, 1e-3}};
     for (int i = 0; i < 4; i++) {
         CHECK_NEAR(thx_surface_solid_angle(s, in[i]), 4 * PI, 1e-12);
@@ -343,7 +331,7 @@ static void test_sphere(void)
 {
     thx_surface *s = sphere(3);
     CHECK(s->n_tris == 512);
-    CHECK(volume(s) > 4.0); /* outward (4/3 pi ~ 4.19 for the sphere) */
+    CHECK(thx_surface_volume(s) > 4.0); /* outward (4/3 pi ~ 4.19 for the sphere) */
     thx_vec3 pin[3] = {{0, 0, 0}, {0.5, -0.3, 0.2}, {0.0, 0.0, 0.9}};
     for (int i = 0; i < 3; i++) {
         CHECK_NEAR(thx_surface_solid_angle(s, pin[i]), 4 * PI, 1e-12);
@@ -403,7 +391,7 @@ static void test_l_prism(void)
         tri[k++] = i; tri[k++] = j + 6; tri[k++] = i + 6;
     }
     thx_surface *s = make_surface(xyz, 12, tri, 20);
-    CHECK_NEAR(volume(s), 3.0, 1e-14);
+    CHECK_NEAR(thx_surface_volume(s), 3.0, 1e-14);
     CHECK(thx_surface_inside(s, (thx_vec3){0.5, 0.5, 0.5}, 1e-6) == THX_INSIDE);
     CHECK(thx_surface_inside(s, (thx_vec3){1.5, 0.5, 0.5}, 1e-6) == THX_INSIDE);
     CHECK(thx_surface_inside(s, (thx_vec3){0.5, 1.5, 0.5}, 1e-6) == THX_INSIDE);

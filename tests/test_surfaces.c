@@ -15,17 +15,6 @@
 #include "thorax/inside.h"
 #include "thorax/surfaces.h"
 
-static double surface_volume(const thx_surface *s)
-{
-    double v = 0;
-    for (size_t t = 0; t < s->n_tris; t++) {
-        thx_vec3 a = thx_surface_node(s, (size_t)s->tri[3 * t]), b = thx_surface_node(s, (size_t)s->tri[3 * t + 1]),
-                 c = thx_surface_node(s, (size_t)s->tri[3 * t + 2]);
-        v += thx_v3_dot(a, thx_v3_cross(b, c)) / 6.0;
-    }
-    return v;
-}
-
 /* Builds the contours with default options and checks the invariants of every surface. */
 static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing, thx_surfaces_stats *st, const char *what)
 {
@@ -44,7 +33,7 @@ static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing,
         CHECK(rep.ok);
         double omega = thx_surface_solid_angle(m->surf[k], m->interior[k]);
         CHECK_NEAR(omega / (4 * M_PI), 1.0, 1e-6);
-        CHECK(surface_volume(m->surf[k]) > 0);
+        CHECK(thx_surface_volume(m->surf[k]) > 0);
         if (!rep.ok) {
             fprintf(stderr, "  %s: surface %s fails its check:", what, m->surf[k]->name);
             for (size_t r = 0; r < rep.n_reasons; r++) fprintf(stderr, " [%s]", rep.reasons[r]);
@@ -108,7 +97,7 @@ static void test_cylinder_cone_offset(thx_ctx *ctx)
     thx_surfaces_stats st[3];
     thx_model *m = build_and_check(ctx, c, 5.0, st, "cylinder/cone/offset");
     if (m) {
-        double v = surface_volume(m->surf[0]), exact = M_PI * 40 * 40 * 50;
+        double v = thx_surface_volume(m->surf[0]), exact = M_PI * 40 * 40 * 50;
         CHECK(fabs(v - exact) / exact < 0.01);
         CHECK(st[0].lace.removed == 0);
         /* a tapering surface is not concave: the outside test removes nothing */
@@ -339,7 +328,7 @@ static void round_trip(thx_ctx *ctx, const char *name, shape_fn f, double (*zsur
             else worst_lateral = fmax(worst_lateral, d);
             worst = fmax(worst, d);
         }
-        double v = surface_volume(su);
+        double v = thx_surface_volume(su);
         printf("round trip %s: %zu nodes %zu triangles, worst node distance %.3f mm (half spacing %.1f; "
                "%.4f mm off the end caps), volume %.1f vs %.1f (%.3f%%)\n",
                name, su->n_nodes, su->n_tris, worst, 0.5 * spacing, worst_lateral, v, exact_volume, 100 * (v - exact_volume) / exact_volume);

@@ -57,6 +57,11 @@ thx_status thx_surface_create(thx_ctx *ctx, const char *name, thx_role role, thx
 /* Frees the surface and its arrays; accepts NULL; nulls *s. */
 void thx_surface_destroy(thx_surface **s);
 
+/* Signed enclosed volume (mm^3) by the divergence theorem, summed about the centre of the
+ * bounding box (less cancellation far from the origin): > 0 iff the triangles of a closed
+ * surface face outward. */
+double thx_surface_volume(const thx_surface *s);
+
 /* Vector helpers (inline, no context). */
 static inline thx_vec3 thx_v3(double x, double y, double z) { thx_vec3 v = {x, y, z}; return v; }
 static inline thx_vec3 thx_v3_sub(thx_vec3 a, thx_vec3 b) { return thx_v3(a.x - b.x, a.y - b.y, a.z - b.z); }

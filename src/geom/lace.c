@@ -251,6 +251,22 @@ static int hull_flags(thx_ctx *ctx, const thx_chain *c, unsigned char *on_hull)
     return 0;
 }
 
+/* The node of the arc c[lo+1 .. lo+len-1] farthest from the chord c[lo]-c[lo+len] (cyclic
+ * indices); its distance in *depth. -1 if the arc has no inner node. */
+static int deepest_node(const thx_chain *c, int lo, int len, double *depth)
+{
+    int n = (int)c->n, deep = -1;
+    thx_vec2 a = c->p[lo], b = c->p[(lo + len) % n];
+    double chord = fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
+    *depth = -1;
+    for (int s = 1; s < len; s++) {
+        thx_vec2 q = c->p[(lo + s) % n];
+        double d = fabs(cross3(a, b, q)) / chord;
+        if (d > *depth) { *depth = d; deep = (lo + s) % n; }
+    }
+    return deep;
+}
+
 /* Is the deep part of a pocket (deepest node q, chord a-b) inside any of the chains? */
 static int pocket_covered(const thx_chain *chains, size_t n_chains, thx_vec2 a, thx_vec2 b, thx_vec2 q, double margin)
 {
@@ -294,13 +310,8 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
             }
             if (overlap) {
                 thx_vec2 a = c->p[k], b = c->p[nx];
-                double best = -1;
-                int deep = -1;
-                for (int s = 1; s < len; s++) {
-                    thx_vec2 q = c->p[(k + s) % n];
-                    double d = fabs(cross3(a, b, q)) / fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
-                    if (d > best) { best = d; deep = (k + s) % n; }
-                }
+                double best;
+                int deep = deepest_node(c, k, len, &best);
                 if (deep >= 0 && best > margin && pocket_covered(o, 1, a, b, c->p[deep], margin) &&
                     (c_is_lower || !pocket_covered(c->beyond, c->n_beyond, a, b, c->p[deep], margin))) {
                     pk->lo = k;
@@ -339,13 +350,8 @@ static int is_tongue(const thx_chain *c, const chain_index *io, int c_is_lower, 
         if (thx_segments_touch(&c->p[lo].x, &c->p[hi].x, &c->p[k].x, &c->p[k1].x)) return 0;
     }
     thx_vec2 a = c->p[lo], b = c->p[hi];
-    double best = -1;
-    int deep = -1;
-    for (int s = 1; s < len; s++) {
-        thx_vec2 q = c->p[(lo + s) % n];
-        double d = fabs(cross3(a, b, q)) / fmax(hypot(b.x - a.x, b.y - a.y), 1e-300);
-        if (d > best) { best = d; deep = (lo + s) % n; }
-    }
+    double best;
+    int deep = deepest_node(c, lo, len, &best);
     if (deep < 0 || !(chain_index_sdf(io, c->p[deep]) > margin)) return 0;
     /* At the surface's first or last layer the end cap already covers the tongue: never cut there. */
     if (c->n_beyond == 0) return 0;

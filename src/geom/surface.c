@@ -40,3 +40,22 @@ void thx_surface_destroy(thx_surface **s)
 }
 
 double thx_v3_norm(thx_vec3 a) { return sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
+
+double thx_surface_volume(const thx_surface *s)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < s->n_nodes; i++)
+        for (int d = 0; d < 3; d++) {
+            lo[d] = fmin(lo[d], s->xyz[3 * i + d]);
+            hi[d] = fmax(hi[d], s->xyz[3 * i + d]);
+        }
+    thx_vec3 o = thx_v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2]));
+    double v = 0;
+    for (size_t t = 0; t < s->n_tris; t++) {
+        thx_vec3 a = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t]), o);
+        thx_vec3 b = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t + 1]), o);
+        thx_vec3 c = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t + 2]), o);
+        v += thx_v3_dot(a, thx_v3_cross(b, c));
+    }
+    return v / 6.0;
+}
