@@ -26,21 +26,21 @@ model() {
         "$1" "$2" "$1" "$1" "$(grep -c . "$3")" "$(grep -c . "$4")" > "$d/model.json"
 }
 
-# round_trip NAME SPACING VOL DIST CAP_DIST
+# round_trip NAME SPACING VOL DIST CAP_DIST MAX_ASPECT
 round_trip() {
     local n=$1
     "$THORAX" check "$WORK/$n" -q && ok "$n: the original passes thorax check" || bad "$n: original fails thorax check"
     if "$THORAX" slice "$WORK/$n" --spacing "$2" -o "$WORK/$n.txt" -q &&
        "$THORAX" surfaces "$WORK/$n.txt" -o "$WORK/${n}_rebuilt" -q; then ok "$n: sliced and rebuilt"; else bad "$n: slice/rebuild"; return; fi
-    "$THORAX" check "$WORK/${n}_rebuilt" -q && ok "$n: rebuilt surface passes thorax check" || bad "$n: rebuilt surface fails thorax check"
+    "$THORAX" check "$WORK/${n}_rebuilt" -q --max-aspect "$6" && ok "$n: rebuilt surface passes thorax check (aspect ratio <= $6)" || bad "$n: rebuilt surface fails thorax check"
     if (cd "$WORK" && $PY "$SRC/tests/surface_compare.py" "$n/$n.pts" "$n/$n.fac" "${n}_rebuilt/$n.pts" "${n}_rebuilt/$n.fac" \
             --vol "$3" --dist "$4" --cap-band 0.01 --cap-dist "$5"); then ok "$n: matches the original"; else bad "$n: differs from the original"; fi
 }
 
 model tank outer "$DATA/tank_full_771.pts" "$DATA/tank_full_771.fac"
-round_trip tank 5 0.005 1.0 0.6
+round_trip tank 5 0.005 1.0 0.6 5
 model sock heart "$DATA/25feb97_sock_closed.pts" "$DATA/25feb97_sock_closed.fac"
-round_trip sock 3 0.015 1.0 1.0
+round_trip sock 3 0.015 1.0 1.0 10
 
 # the contours of the tank are what a digitizer would give: every loop closed, counterclockwise
 # when the surface is oriented outward; reversing the surface's triangles is detected by slice

@@ -51,6 +51,8 @@ typedef struct {
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
     int optimal;           /* 1: the lacing of least total diagonal length (dynamic programming);
                               0: the paper's step-by-step shortest-diagonal rule */
+    double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
+                              fan over 3 fan_limit) are laced in projection if that is better */
 } thx_lace_opts;
 
 typedef struct {
@@ -98,7 +100,9 @@ typedef struct thx_chain {
  * valid lacing exists cuts the concave pocket off with triangles in the plane of
  * its layer. If the result still leaves triangles outside the surface or puts an
  * edge into three triangles (possible where a branching chain visits a bridge
- * node twice), and one chain's loops lie
+ * node twice), or is merely poor (a triangle of aspect ratio over
+ * projected_aspect, a fan over 3 fan_limit) and the alternative is better, and
+ * one chain's loops lie
  * strictly inside the other's in projection, the slice is laced instead by a
  * constrained Delaunay triangulation of the ring between them in projection,
  * lifted to the layers (a graph over the ring: it cannot fold or intersect

@@ -60,6 +60,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->max_edge = 3.0;
     o->window = 4;
     o->fan_limit = 6;
+    o->projected_aspect = 10;
     o->phase_weight = 0.25;
     o->optimal = getenv("THX_OPT") ? atoi(getenv("THX_OPT")) : 0;
 }
@@ -749,6 +750,40 @@ static int slice_overused_edge(const int32_t *tris, size_t first, size_t n_tris)
     return bad;
 }
 
+typedef struct { int32_t id; thx_vec3 p; } id_point;
+static int cmp_id_point(const void *x, const void *y)
+{
+    int32_t a = ((const id_point *)x)->id, b = ((const id_point *)y)->id;
+    return (a > b) - (a < b);
+}
+
+/* Worst aspect ratio (longest edge / (2 sqrt(3) inradius); 1 = equilateral) of the slice's
+ * triangles, with node positions looked up from the two chains. -1 when out of memory. */
+static double slice_worst_aspect(const thx_chain *a, const thx_chain *b, const int32_t *tris, size_t first, size_t n_tris)
+{
+    size_t n = a->n + b->n;
+    id_point *m = malloc(n * sizeof *m);
+    if (!m) return -1;
+    for (size_t k = 0; k < a->n; k++) { m[k].id = a->id[k]; m[k].p = thx_v3(a->p[k].x, a->p[k].y, a->z); }
+    for (size_t k = 0; k < b->n; k++) { m[a->n + k].id = b->id[k]; m[a->n + k].p = thx_v3(b->p[k].x, b->p[k].y, b->z); }
+    qsort(m, n, sizeof *m, cmp_id_point);
+    double worst = 1;
+    for (size_t t = first; t < n_tris; t++) {
+        thx_vec3 v[3];
+        for (int q = 0; q < 3; q++) {
+            id_point key = {tris[3 * t + q], {0, 0, 0}};
+            id_point *f = bsearch(&key, m, n, sizeof *m, cmp_id_point);
+            v[q] = f ? f->p : thx_v3(0, 0, 0);
+        }
+        double e0 = dist3(v[0], v[1]), e1 = dist3(v[1], v[2]), e2 = dist3(v[2], v[0]);
+        double area = 0.5 * thx_v3_norm(thx_v3_cross(thx_v3_sub(v[1], v[0]), thx_v3_sub(v[2], v[0])));
+        double ar = area > 0 ? fmax(e0, fmax(e1, e2)) * (e0 + e1 + e2) / (4 * sqrt(3.0) * area) : INFINITY;
+        if (ar > worst) worst = ar;
+    }
+    free(m);
+    return worst;
+}
+
 static int slice_max_fan(thx_ctx *ctx, const int32_t *tris, size_t first, size_t n_tris, int *fan)
 {
     int32_t maxid = 0;
@@ -775,12 +810,21 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
     int overused = slice_overused_edge(*tris, first, *n_tris);
     if (overused < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
-    if (local.unresolved > 0 || overused) {
+    int must = local.unresolved > 0 || overused;
+    double worst = must ? INFINITY : slice_worst_aspect(a, b, *tris, first, *n_tris);
+    if (worst < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
+    if (must || worst > o->projected_aspect || (o->fan_limit > 0 && local.max_fan > 3 * o->fan_limit)) {
         /* A lacing with triangles outside the surface, or one that is not a manifold (an edge in three
-           triangles): if the loops are nested, triangulate the ring between them in projection instead. */
+           triangles): if the loops are nested, triangulate the ring between them in projection instead.
+           A merely poor lacing (long fans, thin triangles) is replaced only if that is better. */
         size_t keep = *n_tris;
         int ok = 0;
         THX_CHECK(lace_projected(ctx, a, b, tris, n_tris, cap, &ok));
+        if (ok && !must) {
+            double w2 = slice_worst_aspect(a, b, *tris, keep, *n_tris);
+            if (w2 < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
+            if (!(w2 < worst)) { *n_tris = keep; ok = 0; }
+        }
         if (ok) {
             memmove(*tris + 3 * first, *tris + 3 * keep, (*n_tris - keep) * 3 * sizeof **tris);
             *n_tris = first + (*n_tris - keep);
