@@ -49,8 +49,6 @@ typedef struct {
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
     double phase_weight;   /* weight of the arc-length phase in the lacing metric (0 = position only) */
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
-    int optimal;           /* 1: the lacing of least total diagonal length (dynamic programming);
-                              0: the paper's step-by-step shortest-diagonal rule */
     double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
                               fan over 3 fan_limit) are laced in projection if that is better */
 } thx_lace_opts;

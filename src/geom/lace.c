@@ -62,7 +62,6 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->fan_limit = 6;
     o->projected_aspect = 10;
     o->phase_weight = 0.25;
-    o->optimal = getenv("THX_OPT") ? atoi(getenv("THX_OPT")) : 0;
 }
 
 typedef struct {
@@ -450,16 +449,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             if (d < best) { best = d; L.j0 = j; }
         }
     }
-    if (o->optimal) {
-        /* The whole lacing of least total diagonal length (the shortest-diagonal criterion
-           applied globally rather than step by step). */
-        costb = malloc((size_t)(na + 1) * (size_t)(nb + 1) * sizeof *costb);
-        fromb = malloc((size_t)(na + 1) * (size_t)(nb + 1));
-        if (!costb || !fromb) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
-        dp_path(&L, 0, 0, na, nb, mv, costb, fromb, 0);
-    } else {
-        greedy_path(&L, mv);
-    }
+    greedy_path(&L, mv);
     /* Outside test of every triangle of the shortest-diagonal lacing. */
     int nbad = 0;
     sa[0] = sb[0] = 0;
