@@ -32,6 +32,8 @@ static void help(void)
            "                        rule, besides the normalized position (0.25; 0 = off)\n"
            "  --fan-limit N         a run of N triangles at one node is cut as a tongue\n"
            "                        where it is one (6; 0 = never)\n"
+           "  --projected-aspect A  nested loops whose lacing has a triangle of aspect ratio\n"
+           "                        over A are laced in projection if that is better (10)\n"
            "  --stats               print per-surface lacing and timing statistics\n"
            "  -v, -q                more / less logging\n");
 }
@@ -69,6 +71,7 @@ int cmd_surfaces(int argc, char **argv)
             o.lace.fan_limit = (int)n;
             i++;
         }
+        else if (!strcmp(a, "--projected-aspect")) { if (cli_parse_double("surfaces", a, v, &o.lace.projected_aspect)) return 2; i++; if (!(o.lace.projected_aspect >= 1)) return cli_usage_error("surfaces", "--projected-aspect must be >= 1"); }
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -109,6 +112,7 @@ int cmd_surfaces(int argc, char **argv)
         cJSON_AddNumberToObject(op, "max_edge", o.lace.max_edge);
         cJSON_AddNumberToObject(op, "phase_weight", o.lace.phase_weight);
         cJSON_AddNumberToObject(op, "fan_limit", o.lace.fan_limit);
+        cJSON_AddNumberToObject(op, "projected_aspect", o.lace.projected_aspect);
         m->provenance_json = cJSON_PrintUnformatted(p);
         cJSON_Delete(p);
     }
