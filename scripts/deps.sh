@@ -8,6 +8,7 @@ packages=(
   libgmp-dev                         # tests: exact rational reference for the predicates
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   time                               # bench: peak memory (/usr/bin/time -v)
+  tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
 )
 missing=()
 for p in "${packages[@]}"; do
