@@ -1,0 +1,782 @@
+/*
+ * Tests of surface import (src/io/import.c): every format written here by
+ * hand (a cube, and variants) and read back; the index base of .fac and .tri;
+ * OBJ quads, v/vt/vn and negative indices; STL vertex merging; PLY ascii and
+ * both binary byte orders; legacy VTK (ASCII, 5.1 offsets, binary, strips);
+ * VTP; errors naming file and line (or byte); the import policy (unused
+ * nodes removed, inward surfaces reversed, open or inconsistent ones refused,
+ * --force, scale).
+ *
+ * The cube: node i at (i&1 ? 8.25 : -1.5, i&2 ? 8.25 : -1.5, i&4 ? 12.5 : 2)
+ * (values exact in float32, so binary STL reproduces them), six quads
+ * counterclockwise seen from outside, each split (a,b,c),(a,c,d).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testlib.h"
+#include "thorax/import.h"
+#include "thorax/model.h"
+
+static thx_ctx *ctx;
+static char scratch[1024];
+
+static const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+
+static double cube_x(int i, int k)
+{
+    if (k == 0) return (i & 1) ? 8.25 : -1.5;
+    if (k == 1) return (i & 2) ? 8.25 : -1.5;
+    return (i & 4) ? 12.5 : 2.0;
+}
+
+/* Triangle t of the cube (0..11) as node numbers. */
+static void cube_tri(int t, int v[3])
+{
+    const int *q = quads[t / 2];
+    v[0] = q[0];
+    v[1] = t % 2 ? q[2] : q[1];
+    v[2] = t % 2 ? q[3] : q[2];
+}
+
+static const char *sp(const char *name)
+{
+    static char buf[8][2048];
+    static int k;
+    k = (k + 1) % 8;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
+    return buf[k];
+}
+
+static void write_bytes(const char *path, const void *data, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(data, 1, n, f) != n) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(1);
+    }
+    fclose(f);
+}
+
+static void write_text(const char *path, const char *text) { write_bytes(path, text, strlen(text)); }
+
+/* A growable text buffer. */
+typedef struct { char *p; size_t n, cap; } sbuf;
+static void sb_printf(sbuf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void sb_printf(sbuf *b, const char *fmt, ...)
+{
+    va_list ap;
+    for (;;) {
+        va_start(ap, fmt);
+        int need = vsnprintf(b->p ? b->p + b->n : NULL, b->p ? b->cap - b->n : 0, fmt, ap);
+        va_end(ap);
+        if (b->p && b->n + (size_t)need < b->cap) {
+            b->n += (size_t)need;
+            return;
+        }
+        b->cap = 2 * (b->cap + (size_t)need + 64);
+        b->p = realloc(b->p, b->cap);
+        if (!b->p) exit(1);
+    }
+}
+static void sb_bytes(sbuf *b, const void *d, size_t n)
+{
+    if (b->n + n + 1 > b->cap) {
+        b->cap = 2 * (b->n + n + 64);
+        b->p = realloc(b->p, b->cap);
+        if (!b->p) exit(1);
+    }
+    memcpy(b->p + b->n, d, n);
+    b->n += n;
+}
+static void put_le(sbuf *b, uint64_t v, int n)
+{
+    unsigned char c[8];
+    for (int i = 0; i < n; i++) c[i] = (unsigned char)(v >> (8 * i));
+    sb_bytes(b, c, (size_t)n);
+}
+static void put_be(sbuf *b, uint64_t v, int n)
+{
+    unsigned char c[8];
+    for (int i = 0; i < n; i++) c[i] = (unsigned char)(v >> (8 * (n - 1 - i)));
+    sb_bytes(b, c, (size_t)n);
+}
+static uint32_t f32_bits(double d)
+{
+    float f = (float)d;
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    return u;
+}
+static uint64_t f64_bits(double d)
+{
+    uint64_t u;
+    memcpy(&u, &d, 8);
+    return u;
+}
+
+/* Does s have the cube's triangles, corner by corner (coordinates exactly,
+ * orientation kept), and nn nodes? */
+static int is_cube(const thx_surface *s, size_t nn)
+{
+    if (!s || s->n_nodes != nn || s->n_tris != 12) return 0;
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < 3; k++)
+                if (s->xyz[3 * (size_t)s->tri[3 * t + c] + (size_t)k] != cube_x(v[c], k)) return 0;
+    }
+    return 1;
+}
+
+static int contains(const char *hay, const char *needle)
+{
+    if (!strstr(hay, needle)) {
+        fprintf(stderr, "  message \"%s\" lacks \"%s\"\n", hay, needle);
+        return 0;
+    }
+    return 1;
+}
+
+/* Reads (no checks) and returns the surface, or NULL with the message printed. */
+static thx_surface *rd(const char *path, thx_import_info *info)
+{
+    thx_surface *s = NULL;
+    thx_status st = thx_surface_read_file(ctx, path, NULL, THX_IMPORT_AUTO, "cube", THX_ROLE_HEART, &s, info);
+    if (st) fprintf(stderr, "  reading %s: %s\n", path, thx_ctx_message(ctx));
+    return s;
+}
+
+/* Imports with the policy; checks it passed. */
+static thx_surface *imp(const char *path, const thx_import_opts *o, thx_import_info *info)
+{
+    thx_surface *s = NULL;
+    thx_status st = thx_surface_import(ctx, path, NULL, "cube", THX_ROLE_HEART, o, &s, info);
+    if (st) fprintf(stderr, "  importing %s: %s\n", path, thx_ctx_message(ctx));
+    return s;
+}
+
+/* ------------------------------------------------------------------ pts/fac */
+
+static void write_ptsfac(const char *stem, int base)
+{
+    sbuf p = {0}, f = {0};
+    for (int i = 0; i < 8; i++) sb_printf(&p, "%.3f %.3f %.3f\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        sb_printf(&f, "%d %d %d\n", v[0] + base, v[1] + base, v[2] + base);
+    }
+    char path[2048];
+    snprintf(path, sizeof path, "%s.pts", sp(stem));
+    write_bytes(path, p.p, p.n);
+    snprintf(path, sizeof path, "%s.fac", sp(stem));
+    write_bytes(path, f.p, f.n);
+    free(p.p);
+    free(f.p);
+}
+
+static void test_ptsfac(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    write_ptsfac("one", 1);
+    write_ptsfac("zero", 0);
+    s = rd(sp("one.pts"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.format == THX_IMPORT_PTSFAC && in.index_base == 1 && in.index_base_detected == 1);
+    CHECK(strstr(in.path2, "one.fac") != NULL);
+    thx_surface_destroy(&s);
+    s = rd(sp("zero.pts"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.index_base == 0 && in.index_base_detected == 1);
+    thx_surface_destroy(&s);
+    /* the .fac named first: the .pts is found beside it */
+    s = rd(sp("zero.fac"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.index_base == 0 && strstr(in.path2, "zero.pts") != NULL);
+    thx_surface_destroy(&s);
+    /* an explicit second file */
+    CHECK_OK(ctx, thx_surface_read_file(ctx, sp("one.pts"), sp("one.fac"), THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, &in));
+    CHECK(is_cube(s, 8));
+    thx_surface_destroy(&s);
+    /* the full import passes the checks */
+    s = imp(sp("one.pts"), NULL, &in);
+    CHECK(is_cube(s, 8) && in.report.ok && !in.reversed && in.n_unused_removed == 0);
+    CHECK(in.report.solid_angle_rel_err < 1e-12);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+}
+
+/* ------------------------------------------------------------------ .tri */
+
+/* ECGSim text: labelled or not; base 1 or 0; stream = everything on few lines;
+ * cw = triangles clockwise seen from outside (ECGSim's own convention). */
+static void write_tri(const char *name, int labelled, int base, int stream, int cw, double unit, const char *trailer)
+{
+    sbuf b = {0};
+    const char *nl = stream ? " " : "\n";
+    sb_printf(&b, "%d%s", 8, "\n");
+    for (int i = 0; i < 8; i++) {
+        if (labelled) sb_printf(&b, "%d ", i + 1);
+        sb_printf(&b, "%.6f %.6f %.6f%s", cube_x(i, 0) * unit, cube_x(i, 1) * unit, cube_x(i, 2) * unit, nl);
+    }
+    sb_printf(&b, "%s12\n", stream ? "\n" : "");
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        if (labelled) sb_printf(&b, "%d\t", t + 1);
+        if (cw) sb_printf(&b, "%d %d %d%s", v[0] + base, v[2] + base, v[1] + base, nl);
+        else sb_printf(&b, "%d %d %d%s", v[0] + base, v[1] + base, v[2] + base, nl);
+    }
+    if (trailer) sb_printf(&b, "\n%s", trailer);
+    write_bytes(sp(name), b.p, b.n);
+    free(b.p);
+}
+
+static void test_tri(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    write_tri("lab.tri", 1, 1, 0, 0, 1, NULL);
+    s = rd(sp("lab.tri"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.format == THX_IMPORT_TRI && in.index_base == 1 && in.index_base_detected && in.trailer_line == 0);
+    CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
+    thx_surface_destroy(&s);
+
+    write_tri("unlab.tri", 0, 1, 0, 0, 1, NULL);
+    s = rd(sp("unlab.tri"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(strstr(in.format_detail, "unlabelled nodes") != NULL);
+    thx_surface_destroy(&s);
+
+    write_tri("zero.tri", 1, 0, 0, 0, 1, NULL);
+    s = rd(sp("zero.tri"), &in);
+    CHECK(is_cube(s, 8) && in.index_base == 0);
+    thx_surface_destroy(&s);
+
+    /* free line breaks (the format allows them): labels found by counting */
+    write_tri("stream.tri", 1, 1, 1, 0, 1, NULL);
+    s = rd(sp("stream.tri"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
+    thx_surface_destroy(&s);
+    write_tri("stream0.tri", 0, 1, 1, 0, 1, NULL);
+    s = rd(sp("stream0.tri"), &in);
+    CHECK(is_cube(s, 8));
+    thx_surface_destroy(&s);
+
+    /* a descriptive trailer (PhysioNet 2007 files) is ignored and reported */
+    write_tri("trailer.tri", 1, 1, 0, 0, 1, "case 3 thorax\nunits mm\n");
+    s = rd(sp("trailer.tri"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.trailer_line == 24); /* 1 + 8 + 1 + 12 lines, a blank one, then the text */
+    thx_surface_destroy(&s);
+
+    /* ECGSim's own convention: clockwise seen from outside, metres. Import
+     * reverses it (reported) and --scale 1000 gives mm. */
+    write_tri("ecgsim.tri", 1, 1, 0, 1, 0.001, NULL);
+    thx_import_opts o;
+    thx_import_opts_default(&o);
+    o.scale = 1000;
+    s = imp(sp("ecgsim.tri"), &o, &in);
+    CHECK(s != NULL && in.reversed == 1 && in.report.ok && in.report.volume > 0);
+    CHECK_NEAR(in.omega_before, -4 * M_PI, 1e-9);
+    CHECK(s && s->n_nodes == 8);
+    if (s) CHECK_NEAR(s->xyz[3 * 7 + 2], 12.5, 1e-9);
+    CHECK_NEAR(in.extent, 12.5 - 2.0, 1e-9);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+    /* without the scale, the extent (a units hint) is tiny */
+    s = imp(sp("ecgsim.tri"), NULL, &in);
+    CHECK(s != NULL && in.extent < 0.1);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+}
+
+/* ------------------------------------------------------------------ OBJ */
+
+static void test_obj(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    sbuf b = {0};
+    sb_printf(&b, "# cube\nmtllib cube.mtl\no cube\n");
+    for (int i = 0; i < 8; i++) sb_printf(&b, "v %g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    sb_printf(&b, "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\ns off\nusemtl skin\n");
+    /* every syntax of a face vertex, and quads */
+    sb_printf(&b, "f %d/1 %d/2 %d/3 %d/1\n", quads[0][0] + 1, quads[0][1] + 1, quads[0][2] + 1, quads[0][3] + 1);
+    sb_printf(&b, "f %d//1 %d//1 %d//1 %d//1\n", quads[1][0] + 1, quads[1][1] + 1, quads[1][2] + 1, quads[1][3] + 1);
+    sb_printf(&b, "f %d/1/1 %d/2/1 %d/3/1 %d/1/1\n", quads[2][0] + 1, quads[2][1] + 1, quads[2][2] + 1, quads[2][3] + 1);
+    /* negative: -1 is the last vertex (node 7), -8 the first */
+    for (int q = 3; q < 6; q++)
+        sb_printf(&b, "f %d %d %d %d\n", quads[q][0] - 8, quads[q][1] - 8, quads[q][2] - 8, quads[q][3] - 8);
+    sb_printf(&b, "l 1 2\n");
+    write_bytes(sp("cube.obj"), b.p, b.n);
+    s = rd(sp("cube.obj"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.format == THX_IMPORT_OBJ && in.index_base == 1 && !in.index_base_detected);
+    CHECK(in.n_polygons_split == 6 && in.n_cells_ignored == 1);
+    thx_surface_destroy(&s);
+
+    /* an unused vertex: removed and reported (numbered as in the file) */
+    b.n = 0;
+    sb_printf(&b, "v 100 100 100\n");
+    for (int i = 0; i < 8; i++) sb_printf(&b, "v %g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        sb_printf(&b, "f %d %d %d\n", v[0] + 2, v[1] + 2, v[2] + 2);
+    }
+    write_bytes(sp("unused.obj"), b.p, b.n);
+    s = imp(sp("unused.obj"), NULL, &in);
+    CHECK(is_cube(s, 8) && in.n_unused_removed == 1 && in.first_unused == 1 && in.report.ok);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+    free(b.p);
+}
+
+/* ------------------------------------------------------------------ STL */
+
+static void test_stl(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    /* binary, with a header starting "solid" (allowed; the size decides) */
+    sbuf b = {0};
+    char header[80] = "solid but binary";
+    sb_bytes(&b, header, 80);
+    put_le(&b, 12, 4);
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        for (int k = 0; k < 3; k++) put_le(&b, f32_bits(0), 4);
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < 3; k++) put_le(&b, f32_bits(cube_x(v[c], k)), 4);
+        put_le(&b, 0, 2);
+    }
+    write_bytes(sp("bin.stl"), b.p, b.n);
+    s = rd(sp("bin.stl"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.index_base == -1 && in.n_corners_merged == 36 - 8);
+    CHECK(strcmp(in.format_detail, "binary STL") == 0);
+    thx_surface_destroy(&s);
+    /* a binary file cut short: neither binary nor ASCII, said at byte 0 */
+    write_bytes(sp("short.stl"), b.p + 5, b.n - 20);
+    CHECK(thx_surface_read_file(ctx, sp("short.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "short.stl: byte 0:"));
+
+    /* ASCII, -0 written for one coordinate (same point as +0) */
+    b.n = 0;
+    sb_printf(&b, "solid cube\n");
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        sb_printf(&b, "  facet normal 0 0 0\n    outer loop\n");
+        for (int c = 0; c < 3; c++) sb_printf(&b, "      vertex %g %g %g\n", cube_x(v[c], 0), cube_x(v[c], 1), cube_x(v[c], 2));
+        sb_printf(&b, "    endloop\n  endfacet\n");
+    }
+    sb_printf(&b, "endsolid cube\n");
+    write_bytes(sp("ascii.stl"), b.p, b.n);
+    s = rd(sp("ascii.stl"), &in);
+    CHECK(is_cube(s, 8) && in.n_corners_merged == 28 && strcmp(in.format_detail, "ASCII STL") == 0);
+    thx_surface_destroy(&s);
+    /* an error names the line */
+    char *bad = strdup(b.p);
+    char *p = strstr(bad, "vertex 8.25");
+    memcpy(p, "vertex xxxx", 11);
+    write_text(sp("bad.stl"), bad);
+    CHECK(thx_surface_read_file(ctx, sp("bad.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    int line = 1;
+    for (char *q = bad; q < p; q++) line += *q == '\n';
+    char want[64];
+    snprintf(want, sizeof want, "bad.stl:%d:", line);
+    CHECK(contains(thx_ctx_message(ctx), want));
+    free(bad);
+    free(b.p);
+}
+
+/* ------------------------------------------------------------------ PLY */
+
+static void test_ply(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    sbuf b = {0};
+    /* ascii, an extra vertex property, quads, an extra element */
+    sb_printf(&b, "ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nelement vertex 8\r\nproperty float x\r\n"
+                  "property float y\r\nproperty float z\r\nproperty uchar red\r\nelement face 6\r\n"
+                  "property list uchar int vertex_indices\r\nelement edge 1\r\nproperty int vertex1\r\n"
+                  "property int vertex2\r\nend_header\r\n");
+    for (int i = 0; i < 8; i++) sb_printf(&b, "%g %g %g 255\r\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    for (int q = 0; q < 6; q++) sb_printf(&b, "4 %d %d %d %d\r\n", quads[q][0], quads[q][1], quads[q][2], quads[q][3]);
+    sb_printf(&b, "0 1\r\n");
+    write_bytes(sp("ascii.ply"), b.p, b.n);
+    s = rd(sp("ascii.ply"), &in);
+    CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.index_base == 0);
+    CHECK(strcmp(in.format_detail, "ascii PLY") == 0);
+    thx_surface_destroy(&s);
+
+    /* binary little-endian: float coordinates, a list property before the indices */
+    b.n = 0;
+    sb_printf(&b, "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                  "property float z\nproperty uchar alpha\nelement face 12\nproperty list uchar float texcoord\n"
+                  "property list uchar int vertex_indices\nend_header\n");
+    for (int i = 0; i < 8; i++) {
+        for (int k = 0; k < 3; k++) put_le(&b, f32_bits(cube_x(i, k)), 4);
+        put_le(&b, 7, 1);
+    }
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        put_le(&b, 2, 1);
+        put_le(&b, f32_bits(0.5), 4);
+        put_le(&b, f32_bits(0.25), 4);
+        put_le(&b, 3, 1);
+        for (int c = 0; c < 3; c++) put_le(&b, (uint32_t)v[c], 4);
+    }
+    write_bytes(sp("le.ply"), b.p, b.n);
+    s = rd(sp("le.ply"), &in);
+    CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary little-endian PLY") == 0);
+    thx_surface_destroy(&s);
+    /* truncated: the byte offset is named */
+    write_bytes(sp("trunc.ply"), b.p, b.n - 3);
+    CHECK(thx_surface_read_file(ctx, sp("trunc.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "trunc.ply: byte "));
+    CHECK(contains(thx_ctx_message(ctx), "face 12"));
+
+    /* binary big-endian: double coordinates, uint8 count, uint32 indices */
+    b.n = 0;
+    sb_printf(&b, "ply\nformat binary_big_endian 1.0\nelement vertex 8\nproperty double x\nproperty double y\n"
+                  "property double z\nelement face 6\nproperty list uint8 uint32 vertex_index\nend_header\n");
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) put_be(&b, f64_bits(cube_x(i, k)), 8);
+    for (int q = 0; q < 6; q++) {
+        put_be(&b, 4, 1);
+        for (int c = 0; c < 4; c++) put_be(&b, (uint32_t)quads[q][c], 4);
+    }
+    write_bytes(sp("be.ply"), b.p, b.n);
+    s = rd(sp("be.ply"), &in);
+    CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary big-endian PLY") == 0);
+    thx_surface_destroy(&s);
+
+    /* an index out of range names the line */
+    b.n = 0;
+    sb_printf(&b, "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
+    write_bytes(sp("range.ply"), b.p, b.n);
+    CHECK(thx_surface_read_file(ctx, sp("range.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "range.ply:13:"));
+    CHECK(contains(thx_ctx_message(ctx), "node number 3 out of range 0..2"));
+    free(b.p);
+}
+
+/* ------------------------------------------------------------------ VTK */
+
+static void test_vtk(void)
+{
+    thx_import_info in;
+    thx_surface *s;
+    sbuf b = {0};
+    /* legacy ASCII: quads, a LINES cell, attributes after the geometry */
+    sb_printf(&b, "# vtk DataFile Version 3.0\ncube\nASCII\nDATASET POLYDATA\nPOINTS 8 float\n");
+    for (int i = 0; i < 8; i++) sb_printf(&b, "%g %g %g%s", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2), i % 2 ? "\n" : " ");
+    sb_printf(&b, "LINES 1 3\n2 0 1\nPOLYGONS 6 30\n");
+    for (int q = 0; q < 6; q++) sb_printf(&b, "4 %d %d %d %d\n", quads[q][0], quads[q][1], quads[q][2], quads[q][3]);
+    sb_printf(&b, "POINT_DATA 8\nSCALARS p float 1\nLOOKUP_TABLE default\n0 0 0 0 0 0 0 0\n");
+    write_bytes(sp("legacy.vtk"), b.p, b.n);
+    s = rd(sp("legacy.vtk"), &in);
+    CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.n_cells_ignored == 1);
+    CHECK(strcmp(in.format_detail, "legacy VTK ASCII POLYDATA") == 0);
+    thx_surface_destroy(&s);
+
+    /* file version 5.1 (VTK 9 writers): OFFSETS / CONNECTIVITY, METADATA */
+    b.n = 0;
+    sb_printf(&b, "# vtk DataFile Version 5.1\ncube\nASCII\nDATASET POLYDATA\nPOINTS 8 double\n");
+    for (int i = 0; i < 8; i++) sb_printf(&b, "%g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    sb_printf(&b, "METADATA\nINFORMATION 0\n\nPOLYGONS 13 36\nOFFSETS vtktypeint64\n");
+    for (int t = 0; t <= 12; t++) sb_printf(&b, "%d ", 3 * t);
+    sb_printf(&b, "\nCONNECTIVITY vtktypeint64\n");
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        sb_printf(&b, "%d %d %d\n", v[0], v[1], v[2]);
+    }
+    write_bytes(sp("v51.vtk"), b.p, b.n);
+    s = rd(sp("v51.vtk"), &in);
+    CHECK(is_cube(s, 8));
+    thx_surface_destroy(&s);
+
+    /* legacy BINARY (big-endian), triangle strips: a quad (a,b,c,d) split
+     * (a,b,c),(a,c,d) is the strip b,c,a,d */
+    b.n = 0;
+    sb_printf(&b, "# vtk DataFile Version 3.0\ncube\nBINARY\nDATASET POLYDATA\nPOINTS 8 float\n");
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) put_be(&b, f32_bits(cube_x(i, k)), 4);
+    sb_printf(&b, "\nTRIANGLE_STRIPS 6 30\n");
+    for (int q = 0; q < 6; q++) {
+        put_be(&b, 4, 4);
+        put_be(&b, (uint32_t)quads[q][1], 4);
+        put_be(&b, (uint32_t)quads[q][2], 4);
+        put_be(&b, (uint32_t)quads[q][0], 4);
+        put_be(&b, (uint32_t)quads[q][3], 4);
+    }
+    sb_printf(&b, "\n");
+    write_bytes(sp("bin.vtk"), b.p, b.n);
+    s = rd(sp("bin.vtk"), &in);
+    /* the strip gives (b,c,a) and (a,c,d): the same triangles, rotated */
+    int ok = s && s->n_nodes == 8 && s->n_tris == 12;
+    for (int t = 0; ok && t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        int r = t % 2 ? 0 : 2; /* (b,c,a) is (a,b,c) rotated by 2 */
+        for (int c = 0; c < 3; c++) ok = ok && s->tri[3 * t + (c + r) % 3] == v[c];
+    }
+    CHECK(ok);
+    CHECK(strcmp(in.format_detail, "legacy VTK binary POLYDATA") == 0);
+    thx_surface_destroy(&s);
+
+    /* not a surface dataset */
+    write_text(sp("grid.vtk"), "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 0 float\n");
+    CHECK(thx_surface_read_file(ctx, sp("grid.vtk"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "grid.vtk:4:"));
+    CHECK(contains(thx_ctx_message(ctx), "only POLYDATA"));
+    free(b.p);
+}
+
+/* ------------------------------------------ our own exports, VTP, round trips */
+
+static void make_cube(thx_surface **out)
+{
+    thx_surface *s = NULL;
+    if (thx_surface_create(ctx, "cube", THX_ROLE_HEART, &s) != THX_OK) exit(1);
+    s->n_nodes = 8;
+    s->n_tris = 12;
+    s->xyz = malloc(24 * sizeof *s->xyz);
+    s->tri = malloc(36 * sizeof *s->tri);
+    if (!s->xyz || !s->tri) exit(1);
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) s->xyz[3 * i + k] = cube_x(i, k);
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        for (int c = 0; c < 3; c++) s->tri[3 * t + c] = v[c];
+    }
+    *out = s;
+}
+
+static void test_exports(void)
+{
+    thx_surface *cube = NULL;
+    make_cube(&cube);
+    const char *ext[] = {"vtk", "vtp", "obj", "stl", "ply"};
+    for (int f = 0; f < 5; f++) {
+        thx_export_format fmt;
+        char name[32];
+        snprintf(name, sizeof name, "export.%s", ext[f]);
+        CHECK(thx_export_format_parse(ext[f], &fmt) == 0);
+        CHECK_OK(ctx, thx_surface_export(ctx, cube, fmt, sp(name)));
+        thx_import_info in;
+        thx_surface *s = imp(sp(name), NULL, &in);
+        CHECK(is_cube(s, 8) && in.report.ok && !in.reversed);
+        if (!is_cube(s, 8)) fprintf(stderr, "  round trip through %s failed\n", ext[f]);
+        thx_import_info_free(&in);
+        thx_surface_destroy(&s);
+    }
+    /* the format may be given when the extension says nothing */
+    CHECK_OK(ctx, thx_surface_export(ctx, cube, THX_EXPORT_PLY, sp("noext")));
+    thx_surface *s = NULL;
+    thx_import_info in;
+    CHECK(thx_surface_read_file(ctx, sp("noext"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "cannot tell the format"));
+    CHECK_OK(ctx, thx_surface_read_file(ctx, sp("noext"), NULL, THX_IMPORT_PLY, "c", THX_ROLE_OUTER, &s, &in));
+    CHECK(is_cube(s, 8));
+    thx_surface_destroy(&s);
+    /* binary VTP is refused with a reason */
+    write_text(sp("bin.vtp"), "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\">\n<PolyData>\n"
+                              "<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n<Points>\n"
+                              "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">AAAA</DataArray>\n"
+                              "</Points>\n</Piece>\n</PolyData>\n</VTKFile>\n");
+    CHECK(thx_surface_read_file(ctx, sp("bin.vtp"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "bin.vtp:6:"));
+    CHECK(contains(thx_ctx_message(ctx), "only format=\"ascii\""));
+    thx_surface_destroy(&cube);
+}
+
+/* ------------------------------------------------------------ errors */
+
+static void expect_error(const char *name, const char *text, const char *where, const char *what)
+{
+    write_text(sp(name), text);
+    thx_surface *s = NULL;
+    thx_status st = thx_surface_read_file(ctx, sp(name), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL);
+    CHECK(st == THX_EINPUT && s == NULL);
+    char want[256];
+    snprintf(want, sizeof want, "%s:%s", name, where);
+    CHECK(contains(thx_ctx_message(ctx), want));
+    CHECK(contains(thx_ctx_message(ctx), "surface \"skin\""));
+    CHECK(contains(thx_ctx_message(ctx), what));
+}
+
+static void test_errors(void)
+{
+    expect_error("e1.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# c\nf 1 2 4\n", "5:", "face refers to vertex 4 but 3 vertices");
+    expect_error("e2.obj", "v 0 0 0\nv 1 0 zz\n", "2:", "vertex 2: coordinate 3 is not a finite number");
+    expect_error("e3.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "3:", "at least 3 vertices, this one has 2");
+    expect_error("e4.obj", "v 0 0 0\nf 1/2/3 0 1\n", "2:", "face vertex \"0\" is not a vertex number");
+    expect_error("e5.obj", "v 0 0 0\nf -2 1 1\n", "2:", "face refers to vertex -2");
+    expect_error("e1.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n1\n1 1 2 4\n", "6:", "node number 4 out of range 1..3");
+    expect_error("e2.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 nan\n1\n1 1 2 3\n", "4:", "node 3: coordinate 3 is not a finite");
+    expect_error("e3.tri", "x\n", "1:", "expected the number of nodes");
+    expect_error("e4.tri", "3\n1 0 0 0\n2 1 0 0\n", "3:", "file ends at node 3 of 3");
+    expect_error("e1.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                           "POLYGONS 1 4\n3 0 1 7\n", "7:", "node number 7 out of range 0..2");
+    expect_error("e2.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0\n0 1\n",
+                 "8:", "file ends before POINTS value 9");
+    expect_error("e3.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 2000000000 float\n0 0 0\n",
+                 "5:", "POINTS: 6000000000 values declared, but the file is too short");
+    expect_error("e1.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "3:",
+                 "lacks scalar properties x, y and z");
+    expect_error("e1.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\n",
+                 "3:", "at least 3 vertices, this one has 2");
+    expect_error("e2.stl", "solid x\nfacet normal 0 0 1\nfoo\n", "3:", "unexpected \"foo\"");
+    /* .pts/.fac errors come from the pair reader, also naming file and line */
+    write_text(sp("e1.pts"), "0 0 0\n1 0 0\n0 1 0\n");
+    write_text(sp("e1.fac"), "1 2 3\n1 2 5\n");
+    thx_surface *s = NULL;
+    CHECK(thx_surface_read_file(ctx, sp("e1.pts"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(contains(thx_ctx_message(ctx), "e1.fac:2:"));
+    /* a missing file */
+    CHECK(thx_surface_read_file(ctx, sp("none.obj"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EIO);
+    CHECK(contains(thx_ctx_message(ctx), "none.obj"));
+}
+
+/* ------------------------------------------------------------ policy */
+
+/* The cube as OBJ with triangle t reversed if mask bit t is set, and
+ * triangles with bit t of drop set left out. */
+static void write_cube_obj(const char *name, unsigned reverse, unsigned drop)
+{
+    sbuf b = {0};
+    for (int i = 0; i < 8; i++) sb_printf(&b, "v %g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    for (int t = 0; t < 12; t++) {
+        if (drop >> t & 1) continue;
+        int v[3];
+        cube_tri(t, v);
+        if (reverse >> t & 1) sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[2] + 1, v[1] + 1);
+        else sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[1] + 1, v[2] + 1);
+    }
+    write_bytes(sp(name), b.p, b.n);
+    free(b.p);
+}
+
+static void test_policy(void)
+{
+    thx_import_info in;
+    thx_surface *s = NULL;
+    thx_import_opts o;
+    thx_import_opts_default(&o);
+
+    /* every triangle clockwise: reversed, reported, then it passes */
+    write_cube_obj("inward.obj", 0xfff, 0);
+    s = imp(sp("inward.obj"), NULL, &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.reversed == 1 && in.report.ok && in.report.volume > 0 && !in.check_failed);
+    CHECK_NEAR(in.omega_before / (4 * M_PI), -1.0, 1e-12);
+    CHECK_NEAR(in.report.solid_angle / (4 * M_PI), 1.0, 1e-12);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+
+    /* open (one triangle missing): refused, nothing returned, reasons given */
+    write_cube_obj("open.obj", 0, 1u << 5);
+    CHECK(thx_surface_import(ctx, sp("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(s == NULL && in.check_failed && !in.report.ok && in.report.n_boundary_edges == 3);
+    CHECK(contains(thx_ctx_message(ctx), "open.obj: surface \"box\": refused: not closed"));
+    CHECK(!in.reversed);
+    thx_import_info_free(&in);
+    /* ... unless forced: returned, flagged */
+    o.force = 1;
+    CHECK(thx_surface_import(ctx, sp("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_OK);
+    CHECK(s != NULL && s->n_tris == 11 && in.check_failed == 1 && !in.report.ok);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+    o.force = 0;
+
+    /* one triangle flipped: inconsistent orientation, never "repaired" */
+    write_cube_obj("flip1.obj", 1u << 3, 0);
+    CHECK(thx_surface_import(ctx, sp("flip1.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(s == NULL && !in.reversed && in.report.n_inconsistent_edges > 0);
+    CHECK(contains(thx_ctx_message(ctx), "refused"));
+    thx_import_info_free(&in);
+
+    /* a duplicate triangle */
+    sbuf b = {0};
+    for (int i = 0; i < 8; i++) sb_printf(&b, "v %g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
+    for (int t = 0; t < 13; t++) {
+        int v[3];
+        cube_tri(t % 12, v);
+        sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[1] + 1, v[2] + 1);
+    }
+    write_bytes(sp("dup.obj"), b.p, b.n);
+    free(b.p);
+    CHECK(thx_surface_import(ctx, sp("dup.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(s == NULL && (in.report.failures & THX_CHECKF_DUPLICATE));
+    thx_import_info_free(&in);
+
+    /* scale must be positive; NULL info is accepted */
+    o.scale = -1;
+    CHECK(thx_surface_import(ctx, sp("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_EINPUT);
+    o.scale = 2;
+    CHECK(thx_surface_import(ctx, sp("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_OK);
+    CHECK(s && s->xyz[3 * 7 + 2] == 25.0);
+    thx_surface_destroy(&s);
+}
+
+static void test_format_names(void)
+{
+    thx_import_format f;
+    CHECK(thx_import_format_from_path("a/b.c/torso.STL") == THX_IMPORT_STL);
+    CHECK(thx_import_format_from_path("x.fac") == THX_IMPORT_PTSFAC);
+    CHECK(thx_import_format_from_path("x.pts") == THX_IMPORT_PTSFAC);
+    CHECK(thx_import_format_from_path("dir.vtk/x") == THX_IMPORT_AUTO);
+    CHECK(thx_import_format_from_path(".obj") == THX_IMPORT_AUTO);
+    CHECK(thx_import_format_parse("Tri", &f) == 0 && f == THX_IMPORT_TRI);
+    CHECK(thx_import_format_parse("gltf", &f) != 0);
+    CHECK(strcmp(thx_import_format_name(THX_IMPORT_VTP), "vtp") == 0);
+}
+
+int main(void)
+{
+    if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    snprintf(scratch, sizeof scratch, "test_import.XXXXXX");
+    if (!mkdtemp(scratch)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    test_format_names();
+    test_ptsfac();
+    test_tri();
+    test_obj();
+    test_stl();
+    test_ply();
+    test_vtk();
+    test_exports();
+    test_errors();
+    test_policy();
+    int rc = tl_finish();
+    if (rc == 0) {
+        char cmd[1200];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
+        if (system(cmd) != 0) fprintf(stderr, "test_import: could not remove %s\n", scratch);
+    } else {
+        fprintf(stderr, "test_import: files kept in %s\n", scratch);
+    }
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
