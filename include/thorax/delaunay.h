@@ -1,0 +1,98 @@
+/*
+ * thorax/delaunay.h — 3D Delaunay tetrahedralization (paper 3.3, "the volume
+ * mesh": the tetrahedra are built from the nodes of the layered surfaces and
+ * the interior grid points).
+ *
+ * Method (details in src/mesh/delaunay3d.c and docs/decisions.md, "3D Delaunay
+ * tetrahedralization"): incremental Bowyer–Watson insertion in BRIO order
+ * (random rounds, Hilbert curve order inside each round), point location by a
+ * remembering stochastic visibility walk, exact adaptive predicates
+ * (thorax/predicates.h), the exterior covered by "ghost" tetrahedra sharing a
+ * vertex at infinity. Cospherical input (grids: the normal case for thorax) is
+ * resolved by a symbolic perturbation of the paraboloid lifting, so the result
+ * is always a true Delaunay tetrahedralization (no point strictly inside the
+ * circumsphere of any tetrahedron) and each input gives one well-defined
+ * answer among the Delaunay tetrahedralizations that exist when points are
+ * cospherical.
+ *
+ * Conventions:
+ *  - Indices are 0-based into the input points.
+ *  - Every output tetrahedron (p0, p1, p2, p3) is positively oriented in the
+ *    sense of thx_orient3d: thx_orient3d(p0, p1, p2, p3) > 0, i.e. p3 lies
+ *    below the plane of p0, p1, p2 seen counterclockwise from above. Since
+ *    thx_orient3d(a,b,c,d) = det[a-d; b-d; c-d] = -((b-a) x (c-a)) . (d-a),
+ *    this means ((p1-p0) x (p2-p0)) . (p3-p0) < 0, and the volume is
+ *    thx_orient3d(p0,p1,p2,p3) / 6.
+ *  - Face i of a tetrahedron is the face opposite vertex i. Its vertices,
+ *    ordered so that they appear counterclockwise seen from OUTSIDE the
+ *    tetrahedron (outward normal (b-a) x (c-a)), are
+ *        face 0: (p1, p3, p2)   face 1: (p0, p2, p3)
+ *        face 2: (p0, p3, p1)   face 3: (p0, p1, p2)
+ *    (thx_delaunay_face below). Hull faces taken this way are
+ *    counterclockwise seen from outside the hull, the thx_surface convention.
+ *  - Output is deterministic: the same points give the same tetrahedra, in the
+ *    same order, with the same vertex order (the code is sequential).
+ */
+#ifndef THORAX_DELAUNAY_H
+#define THORAX_DELAUNAY_H
+
+#include "thorax/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Local vertex indices of face f (opposite vertex f), counterclockwise seen
+ * from outside the tetrahedron. */
+static const int thx_delaunay_face[4][3] = {{1, 3, 2}, {0, 2, 3}, {0, 3, 1}, {0, 1, 2}};
+
+/* Figures of one run (all optional reading; pass NULL to thx_delaunay3d to skip). */
+typedef struct {
+    size_t n_points;      /* input points, all of them vertices of the output */
+    size_t n_tets;        /* output tetrahedra */
+    size_t n_hull_faces;  /* boundary triangles of the convex hull */
+    size_t walk_steps;    /* tetrahedra visited by point location, in total */
+    size_t cavity_tets;   /* tetrahedra deleted by insertions, in total (ghosts included) */
+    size_t n_degenerate;  /* in-sphere tests that were exactly 0 and were decided by the perturbation */
+    double t_sort;        /* seconds: BRIO / Hilbert ordering */
+    double t_insert;      /* seconds: incremental insertion */
+    double t_output;      /* seconds: compaction of the output arrays */
+} thx_delaunay_stats;
+
+/*
+ * Delaunay tetrahedralization of the convex hull of n points.
+ *
+ * xyz: 3n doubles (x, y, z of point i at xyz[3i..3i+2]), mm, finite.
+ * On success:
+ *   *tets    4 * *n_tets vertex indices, every tetrahedron positively oriented
+ *            (thx_orient3d(p0,p1,p2,p3) > 0). Owned by the caller (free()).
+ *   *nbrs    (if nbrs != NULL) 4 * *n_tets entries: nbrs[4t + i] is the
+ *            tetrahedron across face i (the face opposite vertex i) of
+ *            tetrahedron t, or -1 on the convex hull. Symmetric. Owned by the
+ *            caller (free()).
+ *   *stats   (if stats != NULL) figures of the run.
+ * Every input point is a vertex of the output (no point is dropped, points on
+ * the hull between hull corners included). Tetrahedra are positive-volume.
+ * Among cospherical points the tetrahedralization chosen is the one of a
+ * symbolic perturbation that lifts point i by eps^(n - i) (the largest index
+ * perturbed most): deterministic and independent of the insertion order.
+ *
+ * Errors (message in ctx; *tets = NULL, *nbrs = NULL, *n_tets = 0):
+ *   THX_EINPUT  a non-finite coordinate; n > 2^26 points, or more than 2^29
+ *               tetrahedra needed (neighbour codes are 32-bit).
+ *   THX_EGEOM   two points coincide ("points 12 and 4711 coincide (x, y, z)");
+ *               fewer than 4 points, or all points collinear or coplanar
+ *               (no tetrahedron exists).
+ *   THX_ENOMEM
+ *   THX_EINTERNAL  an invariant was broken (a bug: please report).
+ * Cost: O(n log n) expected time. Working memory: 36 bytes per tetrahedron
+ * slot (vertices, neighbours, a stamp; about 7 slots per point) and about 45
+ * bytes per point, besides the output (16 or 32 bytes per tetrahedron).
+ */
+thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **tets, int32_t **nbrs,
+                          size_t *n_tets, thx_delaunay_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
