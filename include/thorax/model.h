@@ -14,6 +14,7 @@
 #define THORAX_MODEL_H
 
 #include "thorax/geom.h"
+#include "thorax/volume.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -25,6 +26,7 @@ typedef struct thx_model {
     int *has_interior;       /* per surface: 1 if interior[s] is a known interior point */
     thx_vec3 *interior;      /* per surface: a point inside it (for the 4 pi check) */
     char *provenance_json;   /* owned JSON text of the "provenance" object, or NULL */
+    struct thx_volume *volume; /* owned tetrahedral mesh with regions (thorax/volume.h), or NULL */
 } thx_model;
 
 thx_status thx_model_create(thx_ctx *ctx, thx_model **out);
