@@ -33,10 +33,10 @@ extern "C" {
 #endif
 
 typedef struct {
-    char name[32];
+    char name[64];
     double sigma[9];     /* conductivity tensor, S/m, row-major, symmetric positive definite */
     int anisotropic;     /* 0: sigma is sigma[0] * identity */
-    char source[160];    /* where the value comes from (literature reference) */
+    char source[256];    /* where the value comes from (literature reference) */
 } thx_region;
 
 typedef struct thx_volume {

@@ -16,6 +16,7 @@ static const struct {
     {"check", cmd_check, "verify a model: closure, orientation, 4 pi solid angle, intersections, quality"},
     {"export", cmd_export, "write a model's surfaces as VTK, VTP, OBJ, STL or PLY"},
     {"slice", cmd_slice, "cut a model's surfaces by planes z = const into contours"},
+    {"mesh", cmd_mesh, "tetrahedral volume mesh with tissue regions and conductivities (paper 3.3)"},
     {"import", cmd_import, "build a model from closed surfaces made elsewhere (pts/fac, tri, obj, stl, ply, vtk)"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])

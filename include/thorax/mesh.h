@@ -1,0 +1,60 @@
+/*
+ * thorax/mesh.h — tetrahedral volume meshes from a surface model (paper 3.3,
+ * "Volume Segmentation").
+ *
+ * The paper's hybrid method: the nodes of the surfaces, plus a planar grid of
+ * points on each layer inside the outer boundary with the points within a
+ * tolerance of any surface dropped, are tetrahedralized (Delaunay,
+ * thorax/delaunay.h); tetrahedra any part of which lies outside the domain
+ * (tested at edge midpoints and centroids, as the paper does) are removed;
+ * every tetrahedron gets a tissue region by a chain of inside/outside tests
+ * against the surfaces; conductivities come from a region table.
+ */
+#ifndef THORAX_MESH_H
+#define THORAX_MESH_H
+
+#include "thorax/model.h"
+#include "thorax/volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    double grid;          /* grid spacing in each layer plane, mm (default 8) */
+    double tol;           /* grid points closer than tol to a surface are dropped, mm (0 = grid / 2) */
+    double layer_spacing; /* planes every layer_spacing mm; 0 = the layers of the outer surface's nodes
+                             when they lie on planes (a model built from contours), else `grid` */
+    int no_heart;         /* 1: the heart's interior is not part of the domain */
+} thx_mesh_opts;
+
+typedef struct {
+    size_t n_surface_nodes, n_grid_nodes, n_planes;
+    size_t n_delaunay_tets;   /* tetrahedra of the convex hull */
+    size_t n_outside;         /* removed: part of them outside the outer surface */
+    size_t n_heart;           /* removed: inside the heart (no_heart) */
+    size_t n_tets, n_nodes;   /* the result */
+    size_t per_region[16];    /* tetrahedra per region (the region table's order) */
+    double t_points, t_delaunay, t_classify, t_total; /* seconds */
+} thx_mesh_stats;
+
+void thx_mesh_opts_default(thx_mesh_opts *o);
+
+/*
+ * Meshes the model's domain: inside its surface of role "outer" (exactly one
+ * is required), minus the heart's interior when o->no_heart. Nodes: every
+ * surface node (volume node numbers follow the model's surface order), then
+ * the grid points. The result is stored in m->volume (replacing any), with
+ * the default region table (thx_region_defaults) and the node tables.
+ */
+thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats);
+
+/* Fills r with the default conductivity of a tissue region by name
+ * ("mean_thorax", "fat", "muscle", "lung", "heart", "blood"), with its
+ * literature source. Returns 0, or -1 for an unknown name. */
+int thx_region_default(const char *tissue, thx_region *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,30 @@
+/*
+ * Point location against a closed surface, accelerated by a bounding-volume
+ * tree (internal to src/mesh). The volume mesher asks millions of these.
+ *
+ *  - inside: parity of the crossings of a ray with the triangles, decided
+ *    with exact orientation tests; a ray that grazes an edge or a vertex
+ *    (some orientation exactly zero) is discarded and another direction
+ *    tried, so the answer is exact for points not on the surface.
+ *  - near: is any triangle closer than r to the point?
+ */
+#ifndef THORAX_MESH_LOCATE_H
+#define THORAX_MESH_LOCATE_H
+
+#include "thorax/geom.h"
+#include "thorax/spatial.h"
+
+typedef struct {
+    const thx_surface *s;
+    thx_bvh *bvh;
+    double reach; /* length of the rays: beyond the surface's bounding box */
+} locator;
+
+thx_status locator_init(thx_ctx *ctx, locator *l, const thx_surface *s);
+void locator_free(locator *l);
+/* 1 inside, 0 outside (points on the surface: either). Thread-safe. */
+int locator_inside(const locator *l, thx_vec3 p);
+/* 1 if some triangle of the surface lies within distance r of p. Thread-safe. */
+int locator_near(const locator *l, thx_vec3 p, double r);
+
+#endif

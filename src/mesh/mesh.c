@@ -1,0 +1,330 @@
+/*
+ * Volume meshing (paper 3.3, "Volume Segmentation"): the hybrid method.
+ *
+ *  1. Nodes: every surface node (volume node numbers follow the model's
+ *     surface order), then a square grid ((i + 1/2) g, (j + 1/2) g) on each
+ *     layer plane, kept where it lies inside the outer surface and no surface
+ *     comes closer than the tolerance ("removed all points that were within
+ *     some tolerance of an existing surface").
+ *  2. Delaunay tetrahedralization of all nodes (thorax/delaunay.h).
+ *  3. Tetrahedra any part of which lies outside the domain are removed: the
+ *     paper tests "the midpoint of each side of the tetrahedron" against the
+ *     enclosing surface; we test the midpoints of the edges whose two ends are
+ *     surface nodes and, when all four corners are, the centroid (an edge with
+ *     an interior grid node has at least that end strictly inside, and the
+ *     grid keeps a tolerance from every surface). With no_heart, tetrahedra
+ *     whose centroid is inside the heart are removed too.
+ *  4. Regions by a chain of inside/outside tests on the centroid (paper 3.3):
+ *     outside the fat/muscle interface -> fat; outside the inner muscle border
+ *     -> muscle; inside a lung -> that lung; inside the heart -> heart;
+ *     inside an "other" surface -> that surface's region; else mean thorax.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh/locate.h"
+#include "thorax/delaunay.h"
+#include "thorax/mesh.h"
+
+void thx_mesh_opts_default(thx_mesh_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->grid = 8.0;
+    o->tol = 0;
+    o->layer_spacing = 0;
+    o->no_heart = 0;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Planes of the grid: the distinct z of the outer surface's nodes when they lie on few planes. */
+static thx_status find_planes(thx_ctx *ctx, const thx_surface *outer, const thx_mesh_opts *o, double **planes, size_t *n)
+{
+    double zlo = INFINITY, zhi = -INFINITY;
+    for (size_t i = 0; i < outer->n_nodes; i++) {
+        zlo = fmin(zlo, outer->xyz[3 * i + 2]);
+        zhi = fmax(zhi, outer->xyz[3 * i + 2]);
+    }
+    double *z = thx_malloc(ctx, (outer->n_nodes + 1) * sizeof *z);
+    if (!z) return THX_ENOMEM;
+    size_t m = 0;
+    if (o->layer_spacing <= 0) {
+        for (size_t i = 0; i < outer->n_nodes; i++) z[i] = outer->xyz[3 * i + 2];
+        qsort(z, outer->n_nodes, sizeof *z, cmp_double);
+        for (size_t i = 0; i < outer->n_nodes; i++)
+            if (m == 0 || z[i] != z[m - 1]) z[m++] = z[i];
+        if (m * 4 > outer->n_nodes) m = 0; /* not a layered model */
+    }
+    if (m == 0) {
+        double step = o->layer_spacing > 0 ? o->layer_spacing : o->grid;
+        size_t k = (size_t)floor((zhi - zlo) / step);
+        free(z);
+        z = thx_malloc(ctx, (k + 2) * sizeof *z);
+        if (!z) return THX_ENOMEM;
+        double z0 = zlo + 0.5 * ((zhi - zlo) - (double)k * step);
+        for (size_t i = 0; i <= k; i++) z[m++] = z0 + (double)i * step;
+    }
+    *planes = z;
+    *n = m;
+    return THX_OK;
+}
+
+/* The domain is closed: a point on the outer surface (the midpoint of one of its
+ * edges, say) is inside, whatever a ray from it would say. */
+static int outside_domain(const locator *outer, thx_vec3 p, double on_eps)
+{
+    return !locator_inside(outer, p) && !locator_near(outer, p, on_eps);
+}
+
+thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats)
+{
+    thx_status st = THX_OK;
+    thx_mesh_stats S;
+    memset(&S, 0, sizeof S);
+    double t0 = thx_wtime();
+    int outer = -1, heart = -1;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        if (m->surf[s]->role == THX_ROLE_OUTER) {
+            if (outer >= 0) return thx_error(ctx, THX_EINPUT, "mesh: more than one surface has the role \"outer\" (%s, %s)", m->surf[outer]->name, m->surf[s]->name);
+            outer = (int)s;
+        }
+        if (m->surf[s]->role == THX_ROLE_HEART) {
+            if (heart >= 0) return thx_error(ctx, THX_EINPUT, "mesh: more than one surface has the role \"heart\"");
+            heart = (int)s;
+        }
+    }
+    if (outer < 0) return thx_error(ctx, THX_EINPUT, "mesh: the model has no surface of role \"outer\" (the domain's boundary)");
+    if (!(o->grid > 0)) return thx_error(ctx, THX_EINPUT, "mesh: grid spacing must be positive (got %g)", o->grid);
+    double tol = o->tol > 0 ? o->tol : 0.5 * o->grid;
+    const double on_eps = 1e-6 * o->grid; /* "on the surface" for midpoints of surface edges */
+    size_t ns = m->n_surfaces;
+    locator *loc = thx_calloc(ctx, ns, sizeof *loc);
+    double *planes = NULL, *xyz = NULL;
+    int32_t *tets = NULL, *nbrs = NULL, *region = NULL;
+    unsigned char *keep = NULL;
+    thx_volume *v = NULL;
+    size_t *offset = thx_calloc(ctx, ns + 1, sizeof *offset);
+    double **gp = NULL;
+    size_t *gn = NULL, np = 0;
+    if (!loc || !offset) { st = THX_ENOMEM; goto done; }
+    for (size_t s = 0; s < ns; s++) THX_TRY(locator_init(ctx, &loc[s], m->surf[s]));
+    for (size_t s = 0; s < ns; s++) offset[s + 1] = offset[s] + m->surf[s]->n_nodes;
+    S.n_surface_nodes = offset[ns];
+
+    /* 1. grid points, plane by plane (in parallel, gathered in plane order: deterministic) */
+    THX_TRY(find_planes(ctx, m->surf[outer], o, &planes, &np));
+    S.n_planes = np;
+    {
+        const thx_surface *os = m->surf[outer];
+        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+        for (size_t i = 0; i < os->n_nodes; i++)
+            for (int d = 0; d < 2; d++) { lo[d] = fmin(lo[d], os->xyz[3 * i + d]); hi[d] = fmax(hi[d], os->xyz[3 * i + d]); }
+        long i0 = (long)ceil(lo[0] / o->grid - 0.5), i1 = (long)floor(hi[0] / o->grid - 0.5);
+        long j0 = (long)ceil(lo[1] / o->grid - 0.5), j1 = (long)floor(hi[1] / o->grid - 0.5);
+        gp = thx_calloc(ctx, np ? np : 1, sizeof *gp);
+        gn = thx_calloc(ctx, np ? np : 1, sizeof *gn);
+        if (!gp || !gn) { st = THX_ENOMEM; goto done; }
+        int failed = 0;
+#pragma omp parallel for schedule(dynamic, 1)
+        for (long k = 0; k < (long)np; k++) {
+            size_t cap = 0, n = 0;
+            double *buf = NULL;
+            for (long j = j0; j <= j1; j++)
+                for (long i = i0; i <= i1; i++) {
+                    thx_vec3 p = thx_v3(((double)i + 0.5) * o->grid, ((double)j + 0.5) * o->grid, planes[k]);
+                    if (!locator_inside(&loc[outer], p)) continue;
+                    if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], p)) continue;
+                    int near = 0;
+                    for (size_t s = 0; s < ns && !near; s++) near = locator_near(&loc[s], p, tol);
+                    if (near) continue;
+                    if (n + 1 > cap) {
+                        cap = cap ? 2 * cap : 256;
+                        double *nb = realloc(buf, 3 * cap * sizeof *nb);
+                        if (!nb) { failed = 1; break; }
+                        buf = nb;
+                    }
+                    buf[3 * n] = p.x; buf[3 * n + 1] = p.y; buf[3 * n + 2] = p.z;
+                    n++;
+                }
+            gp[k] = buf;
+            gn[k] = n;
+        }
+        if (failed) { st = thx_error(ctx, THX_ENOMEM, "mesh: out of memory placing grid points"); goto done; }
+    }
+    size_t n_grid = 0;
+    for (size_t k = 0; k < np; k++) n_grid += gn[k];
+    S.n_grid_nodes = n_grid;
+    size_t nn = offset[ns] + n_grid;
+    xyz = thx_malloc(ctx, 3 * nn * sizeof *xyz);
+    if (!xyz) { st = THX_ENOMEM; goto done; }
+    for (size_t s = 0; s < ns; s++) memcpy(xyz + 3 * offset[s], m->surf[s]->xyz, 3 * m->surf[s]->n_nodes * sizeof *xyz);
+    {
+        size_t at = offset[ns];
+        for (size_t k = 0; k < np; k++) { memcpy(xyz + 3 * at, gp[k], 3 * gn[k] * sizeof *xyz); at += gn[k]; }
+    }
+    double t1 = thx_wtime();
+    S.t_points = t1 - t0;
+
+    /* 2. Delaunay */
+    size_t nt = 0;
+    {
+        thx_ctx *dc = NULL;
+        if (thx_ctx_create(&dc) != THX_OK) { st = THX_ENOMEM; goto done; }
+        st = thx_delaunay3d(dc, xyz, nn, &tets, &nbrs, &nt, NULL);
+        if (st != THX_OK) {
+            char msg[2048];
+            snprintf(msg, sizeof msg, "%s", thx_ctx_message(dc));
+            thx_ctx_destroy(&dc);
+            /* name the surfaces whose nodes coincide: indices below offset[ns] are surface nodes */
+            st = thx_error(ctx, st, "mesh: tetrahedralization failed: %s (volume nodes 1..%zu are the surface nodes in "
+                           "model order, then the grid points)", msg, offset[ns]);
+            goto done;
+        }
+        thx_ctx_destroy(&dc);
+    }
+    S.n_delaunay_tets = nt;
+    double t2 = thx_wtime();
+    S.t_delaunay = t2 - t1;
+
+    /* 3. outside tetrahedra, 4. regions */
+    keep = thx_malloc(ctx, nt ? nt : 1);
+    region = thx_malloc(ctx, (nt ? nt : 1) * sizeof *region);
+    if (!keep || !region) { st = THX_ENOMEM; goto done; }
+    /* the region table: mean thorax first, then per surface role */
+    thx_region table[16];
+    int n_regions = 0, surf_region[64];
+    thx_region_default("mean_thorax", &table[n_regions++]);
+    for (size_t s = 0; s < ns && s < 64; s++) {
+        surf_region[s] = -1;
+        const thx_surface *su = m->surf[s];
+        const char *tissue = NULL;
+        switch (su->role) {
+        case THX_ROLE_FAT: tissue = "fat"; break;
+        case THX_ROLE_MUSCLE: tissue = "muscle"; break;
+        case THX_ROLE_LUNG: tissue = "lung"; break;
+        case THX_ROLE_HEART: tissue = o->no_heart ? NULL : "heart"; break;
+        case THX_ROLE_OTHER: tissue = "mean_thorax"; break;
+        default: break;
+        }
+        if (!tissue || n_regions >= 16) continue;
+        thx_region_default(tissue, &table[n_regions]);
+        /* lungs and other surfaces are named after their surface */
+        if (su->role == THX_ROLE_LUNG || su->role == THX_ROLE_OTHER) snprintf(table[n_regions].name, sizeof table[n_regions].name, "%s", su->name);
+        surf_region[s] = n_regions++;
+    }
+    if (ns > 64) { st = thx_error(ctx, THX_EINPUT, "mesh: more than 64 surfaces"); goto done; }
+    size_t n_out = 0, n_heart = 0;
+#pragma omp parallel for schedule(dynamic, 4096) reduction(+ : n_out, n_heart)
+    for (long t = 0; t < (long)nt; t++) {
+        const int32_t *q = tets + 4 * t;
+        thx_vec3 P[4];
+        int on_surf = 0;
+        for (int k = 0; k < 4; k++) {
+            P[k] = thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]);
+            on_surf += (size_t)q[k] < offset[ns];
+        }
+        int out = 0;
+        for (int a = 0; a < 4 && !out; a++)
+            for (int b = a + 1; b < 4 && !out; b++) {
+                if ((size_t)q[a] >= offset[ns] || (size_t)q[b] >= offset[ns]) continue;
+                out = outside_domain(&loc[outer], thx_v3_scale(thx_v3_add(P[a], P[b]), 0.5), on_eps);
+            }
+        thx_vec3 c = thx_v3_scale(thx_v3_add(thx_v3_add(P[0], P[1]), thx_v3_add(P[2], P[3])), 0.25);
+        if (!out && on_surf == 4) out = outside_domain(&loc[outer], c, on_eps);
+        if (out) { keep[t] = 0; n_out++; continue; }
+        if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], c)) { keep[t] = 0; n_heart++; continue; }
+        keep[t] = 1;
+        /* chain of tests (paper 3.3): the innermost surface containing the centroid decides */
+        int r = 0;
+        for (size_t s = 0; s < ns; s++) {
+            thx_role role = m->surf[s]->role;
+            if (role == THX_ROLE_FAT) { if (!locator_inside(&loc[s], c)) { r = surf_region[s]; break; } }
+            else if (role == THX_ROLE_MUSCLE) { if (!locator_inside(&loc[s], c)) { r = surf_region[s]; break; } }
+        }
+        if (r == 0)
+            for (size_t s = 0; s < ns; s++) {
+                thx_role role = m->surf[s]->role;
+                if ((role == THX_ROLE_LUNG || role == THX_ROLE_HEART || role == THX_ROLE_OTHER) && surf_region[s] >= 0 &&
+                    locator_inside(&loc[s], c)) {
+                    r = surf_region[s];
+                    break;
+                }
+            }
+        region[t] = r;
+    }
+    S.n_outside = n_out;
+    S.n_heart = n_heart;
+    double t3 = thx_wtime();
+    S.t_classify = t3 - t2;
+
+    /* the volume: right-handed tetrahedra (swap two corners of the Delaunay output) */
+    THX_TRY(thx_volume_create(ctx, &v));
+    size_t kept = 0;
+    for (size_t t = 0; t < nt; t++) kept += keep[t];
+    v->tet = thx_malloc(ctx, 4 * (kept ? kept : 1) * sizeof *v->tet);
+    v->region = thx_malloc(ctx, (kept ? kept : 1) * sizeof *v->region);
+    v->regions = thx_malloc(ctx, (size_t)n_regions * sizeof *v->regions);
+    if (!v->tet || !v->region || !v->regions) { st = THX_ENOMEM; goto done; }
+    for (size_t t = 0, k = 0; t < nt; t++) {
+        if (!keep[t]) continue;
+        v->tet[4 * k] = tets[4 * t];
+        v->tet[4 * k + 1] = tets[4 * t + 1];
+        v->tet[4 * k + 2] = tets[4 * t + 3];
+        v->tet[4 * k + 3] = tets[4 * t + 2];
+        v->region[k] = region[t];
+        if (region[t] >= 0 && region[t] < 16) S.per_region[region[t]]++;
+        k++;
+    }
+    v->n_tets = kept;
+    memcpy(v->regions, table, (size_t)n_regions * sizeof *table);
+    v->n_regions = (size_t)n_regions;
+    v->n_nodes = nn;
+    v->xyz = xyz;
+    xyz = NULL;
+    /* node tables */
+    v->n_surfaces = ns;
+    v->surf_n_nodes = thx_malloc(ctx, ns * sizeof *v->surf_n_nodes);
+    v->surf_node = thx_calloc(ctx, ns, sizeof *v->surf_node);
+    v->node_surf = thx_malloc(ctx, nn * sizeof *v->node_surf);
+    v->node_snode = thx_malloc(ctx, nn * sizeof *v->node_snode);
+    if (!v->surf_n_nodes || !v->surf_node || !v->node_surf || !v->node_snode) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < nn; i++) v->node_surf[i] = v->node_snode[i] = -1;
+    for (size_t s = 0; s < ns; s++) {
+        v->surf_n_nodes[s] = m->surf[s]->n_nodes;
+        v->surf_node[s] = thx_malloc(ctx, (m->surf[s]->n_nodes ? m->surf[s]->n_nodes : 1) * sizeof **v->surf_node);
+        if (!v->surf_node[s]) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < m->surf[s]->n_nodes; i++) {
+            v->surf_node[s][i] = (int32_t)(offset[s] + i);
+            v->node_surf[offset[s] + i] = (int32_t)s;
+            v->node_snode[offset[s] + i] = (int32_t)i;
+        }
+    }
+    S.n_tets = v->n_tets;
+    S.n_nodes = v->n_nodes;
+    thx_volume_destroy(&m->volume);
+    m->volume = v;
+    v = NULL;
+    S.t_total = thx_wtime() - t0;
+    if (stats) *stats = S;
+done:
+    if (loc) for (size_t s = 0; s < ns; s++) locator_free(&loc[s]);
+    free(loc);
+    free(offset);
+    free(planes);
+    if (gp) for (size_t k = 0; k < np; k++) free(gp[k]);
+    free(gp);
+    free(gn);
+    free(xyz);
+    free(tets);
+    free(nbrs);
+    free(keep);
+    free(region);
+    thx_volume_destroy(&v);
+    return st;
+}

@@ -1,0 +1,124 @@
+/*
+ * Volume meshing (paper 3.3) of the medium-resolution phantom: every
+ * tetrahedron right-handed, the mesh's volume against the volume the outer
+ * surface encloses, each region's volume against its surfaces', surface nodes
+ * kept as volume nodes, deterministic output, the heart left out on request.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/mesh.h"
+#include "thorax/phantom.h"
+#include "thorax/surfaces.h"
+
+static thx_model *phantom_model(thx_ctx *ctx)
+{
+    thx_phantom_opts po;
+    thx_phantom_opts_default(&po);
+    thx_contours *c = NULL;
+    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
+    thx_surfaces_opts so;
+    thx_surfaces_opts_default(&so);
+    thx_model *m = NULL;
+    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
+    thx_contours_destroy(&c);
+    return m;
+}
+
+static const thx_surface *by_name(const thx_model *m, const char *name)
+{
+    for (size_t s = 0; s < m->n_surfaces; s++) if (!strcmp(m->surf[s]->name, name)) return m->surf[s];
+    return NULL;
+}
+
+static double region_volume(const thx_volume *v, const char *name)
+{
+    double sum = 0;
+    for (size_t t = 0; t < v->n_tets; t++)
+        if (!strcmp(v->regions[v->region[t]].name, name)) sum += thx_volume_tet_volume(v, t);
+    return sum;
+}
+
+int main(void)
+{
+    thx_ctx *ctx = NULL;
+    thx_ctx_create(&ctx);
+    thx_model *m = phantom_model(ctx);
+    thx_mesh_opts o;
+    thx_mesh_opts_default(&o);
+    thx_mesh_stats st;
+    CHECK_OK(ctx, thx_mesh_build(ctx, m, &o, &st));
+    const thx_volume *v = m->volume;
+    CHECK(v != NULL);
+    if (!v) return tl_finish();
+    printf("medium phantom: %zu nodes (%zu surface, %zu grid), %zu tetrahedra (paper: 22,000 and 130,000)\n",
+           v->n_nodes, st.n_surface_nodes, st.n_grid_nodes, v->n_tets);
+    /* every tetrahedron right-handed */
+    size_t bad = 0;
+    double total = 0;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        double vol = thx_volume_tet_volume(v, t);
+        if (!(vol > 0)) bad++;
+        total += vol;
+    }
+    CHECK(bad == 0);
+    /* the mesh fills the outer surface: volume within 1% */
+    double outer = thx_surface_volume(by_name(m, "torso"));
+    printf("volume: tetrahedra %.0f mm^3, torso surface %.0f mm^3 (%+.3f%%)\n", total, outer, 100 * (total - outer) / outer);
+    CHECK(fabs(total - outer) / outer < 0.01);
+    /* regions against the volumes their surfaces enclose */
+    double lr = region_volume(v, "lung_r"), ll = region_volume(v, "lung_l"), h = region_volume(v, "heart");
+    double slr = thx_surface_volume(by_name(m, "lung_r")), sll = thx_surface_volume(by_name(m, "lung_l")),
+           sh = thx_surface_volume(by_name(m, "heart"));
+    double fat = region_volume(v, "fat"), sfat = outer - thx_surface_volume(by_name(m, "fat"));
+    printf("regions: lung_r %+.2f%%, lung_l %+.2f%%, heart %+.2f%%, fat %+.2f%%\n", 100 * (lr - slr) / slr,
+           100 * (ll - sll) / sll, 100 * (h - sh) / sh, 100 * (fat - sfat) / sfat);
+    CHECK(fabs(lr - slr) / slr < 0.05);
+    CHECK(fabs(ll - sll) / sll < 0.05);
+    CHECK(fabs(h - sh) / sh < 0.05);
+    CHECK(fabs(fat - sfat) / sfat < 0.10);
+    /* node tables: surface nodes are volume nodes with the same coordinates */
+    size_t mism = 0;
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        for (size_t i = 0; i < m->surf[s]->n_nodes; i++) {
+            int32_t k = v->surf_node[s][i];
+            for (int d = 0; d < 3; d++) mism += v->xyz[3 * (size_t)k + (size_t)d] != m->surf[s]->xyz[3 * i + (size_t)d];
+            mism += v->node_surf[k] != (int32_t)s || v->node_snode[k] != (int32_t)i;
+        }
+    CHECK(mism == 0);
+    /* conductivity table: anisotropic skeletal muscle along z, every tensor positive */
+    int muscle = -1;
+    for (size_t r = 0; r < v->n_regions; r++) {
+        CHECK(v->regions[r].sigma[0] > 0 && v->regions[r].sigma[4] > 0 && v->regions[r].sigma[8] > 0);
+        CHECK(v->regions[r].source[0] != '\0');
+        if (!strcmp(v->regions[r].name, "muscle")) muscle = (int)r;
+    }
+    CHECK(muscle >= 0 && v->regions[muscle].anisotropic && v->regions[muscle].sigma[8] > v->regions[muscle].sigma[0]);
+    /* deterministic */
+    size_t nt = v->n_tets;
+    int32_t *copy = malloc(4 * nt * sizeof *copy);
+    memcpy(copy, v->tet, 4 * nt * sizeof *copy);
+    CHECK_OK(ctx, thx_mesh_build(ctx, m, &o, &st));
+    CHECK(m->volume->n_tets == nt && memcmp(copy, m->volume->tet, 4 * nt * sizeof *copy) == 0);
+    free(copy);
+    /* without the heart: no heart region, and the heart's volume is missing from the mesh */
+    o.no_heart = 1;
+    CHECK_OK(ctx, thx_mesh_build(ctx, m, &o, &st));
+    v = m->volume;
+    double total2 = 0;
+    for (size_t t = 0; t < v->n_tets; t++) total2 += thx_volume_tet_volume(v, t);
+    CHECK(region_volume(v, "heart") == 0);
+    printf("without the heart: %zu tetrahedra, volume %+.3f%% of torso minus heart\n", v->n_tets,
+           100 * (total2 - (outer - sh)) / (outer - sh));
+    CHECK(fabs(total2 - (outer - sh)) / (outer - sh) < 0.01);
+    /* a model without an outer surface is refused */
+    thx_model *empty = NULL;
+    thx_model_create(ctx, &empty);
+    CHECK(thx_mesh_build(ctx, empty, &o, &st) == THX_EINPUT);
+    thx_model_destroy(&empty);
+    thx_model_destroy(&m);
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
