@@ -21,7 +21,8 @@ extern "C" {
 #endif
 
 typedef struct {
-    double grid;          /* grid spacing in each layer plane, mm (default 8) */
+    double grid;          /* grid spacing in each layer plane, mm; 0 (default) = 6.5 + 0.3 (d - 5) for a
+                             median gap d between the planes (5 mm layers: 6.5 mm; 10 mm layers: 8 mm) */
     double tol;           /* grid points closer than tol to a surface are dropped, mm (0 = grid / 2) */
     double layer_spacing; /* planes every layer_spacing mm; 0 = the layers of the outer surface's nodes
                              when they lie on planes (a model built from contours), else `grid` */
@@ -30,6 +31,7 @@ typedef struct {
 
 typedef struct {
     size_t n_surface_nodes, n_grid_nodes, n_planes;
+    double grid;              /* the grid spacing used, mm */
     size_t n_delaunay_tets;   /* tetrahedra of the convex hull */
     size_t n_outside;         /* removed: part of them outside the outer surface */
     size_t n_heart;           /* removed: inside the heart (no_heart) */

@@ -17,7 +17,8 @@ static void help(void)
            "into the model directory (or the one given by -o).\n\n"
            "options:\n"
            "  -o, --output DIR       write the meshed model here (default: MODEL itself)\n"
-           "  --grid MM              grid spacing in the layer planes (default 8)\n"
+           "  --grid MM              grid spacing in the layer planes (default: 6.5 mm for\n"
+           "                         layers 5 mm apart, 8 mm for 10 mm, 6.5 + 0.3 (gap - 5))\n"
            "  --tol MM               drop grid points closer than this to a surface (default grid/2)\n"
            "  --layer-spacing MM     grid planes this far apart (default: the layers of the\n"
            "                         outer surface when it was built from contours, else --grid)\n"
@@ -59,8 +60,8 @@ int cmd_mesh(int argc, char **argv)
     if (st != THX_OK) rc = cli_fail(ctx, "mesh", st);
     else {
         if (verbose >= 0) {
-            printf("%zu nodes (%zu on surfaces, %zu grid points on %zu planes), %zu tetrahedra\n", S.n_nodes,
-                   S.n_surface_nodes, S.n_grid_nodes, S.n_planes, S.n_tets);
+            printf("%zu nodes (%zu on surfaces, %zu grid points on %zu planes, grid %.2f mm), %zu tetrahedra\n", S.n_nodes,
+                   S.n_surface_nodes, S.n_grid_nodes, S.n_planes, S.grid, S.n_tets);
             for (size_t r = 0; r < m->volume->n_regions && r < 16; r++)
                 printf("  region %-12s %9zu tetrahedra\n", m->volume->regions[r].name, S.per_region[r]);
             printf("wrote %s\n", out);
