@@ -7,6 +7,7 @@ packages=(
   libcjson-dev                       # model.json manifest
   libgmp-dev                         # tests: exact rational reference for the predicates
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
+  gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)
   time                               # bench: peak memory (/usr/bin/time -v)
   tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
 )

@@ -8,6 +8,17 @@
  *   NAME.pts     per surface: one node per line, "x y z" in mm
  *   NAME.fac     per surface: one triangle per line, three 1-based node numbers,
  *                counterclockwise seen from outside
+ * and, when the model has a volume mesh (m->volume; docs/formats.md, "Volume
+ * mesh files"; paper 3.3):
+ *   volume.pts   one volume node per line, "x y z" in mm
+ *   volume.tet   one tetrahedron per line, "a b c d r": four 1-based volume
+ *                node numbers, right-handed (((b-a) x (c-a)) . (d-a) > 0),
+ *                then the 1-based region number
+ *   NAME.vmap    per surface, one line per surface node: its 1-based volume
+ *                node number (the node table; the reverse table is rebuilt)
+ *   model.json   gains "volume" (files, counts, units, orientation), a "vmap"
+ *                per surface, and "regions": the conductivity table (id,
+ *                name, sigma in S/m as a number or a 3x3 tensor, source)
  * Writing is atomic: the directory is built under a temporary name and renamed.
  */
 #ifndef THORAX_MODEL_H
@@ -35,9 +46,20 @@ void thx_model_destroy(thx_model **m);
 /* Appends a surface; the model takes ownership of *s (and nulls *s) even on failure. */
 thx_status thx_model_add_surface(thx_ctx *ctx, thx_model *m, thx_surface **s);
 
-/* Writes the model directory atomically (replacing an existing one). */
+/* Writes the model directory atomically (replacing an existing one). A
+ * volume (m->volume) is checked first and refused with the reason: node
+ * numbers in range and distinct per tetrahedron, region numbers in the
+ * table, region names unique ([A-Za-z0-9_.-], at most 31 characters),
+ * conductivities positive / tensors symmetric positive definite, one node
+ * table per surface with each surface node on a volume node of the same
+ * coordinates ("%.6f") and no volume node on two surface nodes. A surface
+ * may not be called "volume" then. Geometry (orientation, quality) is not
+ * checked here: that is the volume checker's. */
 thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir);
-/* Reads a model directory written by thx_model_write. Caller destroys *out. */
+/* Reads a model directory written by thx_model_write, with its volume if
+ * the manifest has one; every file is validated as the writer validates
+ * memory, and errors name the file and line ("volume.tet:17: region 4 out of
+ * range 1..3"). Caller destroys *out. */
 thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out);
 
 /* Reads a .pts/.fac pair into a surface. The .fac index base (0 or 1) is
@@ -47,11 +69,41 @@ thx_status thx_surface_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fa
 /* Writes a .pts/.fac pair (1-based). Each file written atomically. */
 thx_status thx_surface_write_ptsfac(thx_ctx *ctx, const thx_surface *s, const char *pts, const char *fac);
 
-typedef enum { THX_EXPORT_VTK = 0, THX_EXPORT_VTP, THX_EXPORT_OBJ, THX_EXPORT_STL, THX_EXPORT_PLY } thx_export_format;
-/* Parses "vtk", "vtp", "obj", "stl", "ply"; 0 on success. */
+/* Export formats: surface formats (VTK ... PLY), then volume formats (VTU, MSH). */
+typedef enum {
+    THX_EXPORT_VTK = 0,
+    THX_EXPORT_VTP,
+    THX_EXPORT_OBJ,
+    THX_EXPORT_STL,
+    THX_EXPORT_PLY,
+    THX_EXPORT_VTU, /* volume: VTK XML UnstructuredGrid */
+    THX_EXPORT_MSH  /* volume: Gmsh MSH 4.1 ASCII */
+} thx_export_format;
+/* Parses "vtk", "vtp", "obj", "stl", "ply", "vtu", "msh"; 0 on success. */
 int thx_export_format_parse(const char *s, thx_export_format *out);
-/* Writes one surface in the given format (atomically). */
+/* Whether fmt is a volume format (vtu, msh) rather than a surface format. */
+int thx_export_format_is_volume(thx_export_format fmt);
+/* Writes one surface in a surface format (atomically); a volume format is an
+ * input error. */
 thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_format fmt, const char *path);
+/*
+ * Writes the model's volume mesh (m->volume; THX_EINPUT if there is none) in
+ * a volume format, atomically, after the checks of thx_model_write:
+ *   THX_EXPORT_VTU  VTK XML UnstructuredGrid, ASCII inline: Float64 points
+ *                   (mm, "%.6f"), tetrahedra (cell type 10) with 0-based
+ *                   connectivity in volume.tet's order, cell data "region"
+ *                   (Int32, 1-based region id), point data "surface" (Int32,
+ *                   1-based surface index, 0 for an interior node) and
+ *                   "surface_node" (Int32, 1-based node number on it, 0).
+ *   THX_EXPORT_MSH  Gmsh MSH 4.1 ASCII: one physical group ($PhysicalNames,
+ *                   dimension 3, tag = region id, the region's name) and one
+ *                   volume entity (same tag) per region; node tags = volume
+ *                   node numbers, element tags = volume.tet line numbers,
+ *                   elements of type 4 (4-node tetrahedron).
+ * Both keep the right-handed node order. Output is byte-identical for the
+ * same model.
+ */
+thx_status thx_volume_export(thx_ctx *ctx, const thx_model *m, thx_export_format fmt, const char *path);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,6 @@
-/* thorax check: verify a model's surfaces (closure, orientation, 4 pi, intersections, quality). */
+/* thorax check: verify a model's surfaces (closure, orientation, 4 pi, intersections, quality)
+ * and, when the model has one, its volume mesh (conformity, positive volumes, containment,
+ * volumes against the surfaces, node tables, tetrahedron quality). */
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -7,13 +9,15 @@
 
 #include "cli/cli.h"
 #include "thorax/check.h"
+#include "thorax/check_volume.h"
 #include "thorax/model.h"
 
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: thorax check MODEL [--json] [--tol T] [--min-angle DEG] [--max-aspect A]\n"
-            "                          [--no-intersections] [-q] [-v]\n"
+            "                          [--no-intersections] [--volume-tol R] [--region-tol R]\n"
+            "                          [--min-dihedral DEG] [--max-radius-edge X] [-q] [-v]\n"
             "\n"
             "Verifies every surface of the model directory MODEL (paper 3.2):\n"
             "  closed 2-manifold   every edge in exactly two triangles, every vertex one fan,\n"
@@ -29,19 +33,44 @@ static void usage(FILE *f)
             "\n"
             "Aspect ratio = longest edge / (2 sqrt(3) inradius): 1 for an equilateral triangle.\n"
             "\n"
+            "If the model has a volume mesh (volume.pts/volume.tet), it is checked too (paper 3.3):\n"
+            "  validity            node numbers in range, four distinct nodes, positive volume\n"
+            "                      (exact sign), no unused or coincident nodes, no duplicate\n"
+            "                      tetrahedra, region numbers in the table\n"
+            "  conformity          every face in at most two tetrahedra, on opposite sides;\n"
+            "                      the boundary faces pass the surface checks above; boundary\n"
+            "                      shells and cavities as expected (the heart's cavity when no\n"
+            "                      region is the heart; other cavities are voids)\n"
+            "  containment         no centroid outside the outer surface, none inside an\n"
+            "                      excluded heart\n"
+            "  volume              total tetrahedral volume against the volume the surfaces\n"
+            "                      enclose (outer - excluded heart): |difference| <= R\n"
+            "  regions             each region's volume against its surfaces' (reported)\n"
+            "  node tables         each surface node on a volume node of the same coordinates,\n"
+            "                      and listed back\n"
+            "  quality             dihedral angles, radius-edge ratio (circumradius / shortest\n"
+            "                      edge; regular tetrahedron 0.612), histograms (reported)\n"
+            "\n"
             "options:\n"
             "  --json              print all figures as JSON on stdout (node and triangle\n"
             "                      numbers 1-based, as in the .fac files)\n"
             "  --tol T             tolerance of the 4 pi check, relative (default 1e-6)\n"
             "  --min-angle DEG     also fail if a triangle has a smaller angle\n"
             "  --max-aspect A      also fail if a triangle's aspect ratio exceeds A\n"
-            "  --no-intersections  skip the self-intersection search\n"
+            "  --no-intersections  skip the self-intersection search (surfaces and the volume's\n"
+            "                      boundary)\n"
+            "  --volume-tol R      volume: fail if |total volume difference| > R, relative\n"
+            "                      (default 0.01; 0 reports only)\n"
+            "  --region-tol R      volume: fail if a region's |volume difference| > R\n"
+            "                      (default 0: report only)\n"
+            "  --min-dihedral DEG  volume: fail if a dihedral angle is smaller\n"
+            "  --max-radius-edge X volume: fail if a radius-edge ratio exceeds X\n"
             "  -q                  print only failures (no table)\n"
             "  -v                  more logging\n"
             "  -h, --help          this text\n"
             "\n"
-            "Exit status: 0 every surface passed, 1 a check failed or the model could not\n"
-            "be read, 2 bad usage.\n");
+            "Exit status: 0 every surface (and the volume) passed, 1 a check failed or the\n"
+            "model could not be read, 2 bad usage.\n");
 }
 
 static void print_table(const thx_model_report *r, const thx_model *m)
@@ -83,6 +112,64 @@ static void print_table(const thx_model_report *r, const thx_model *m)
     }
 }
 
+static void print_volume(const thx_volume_report *v)
+{
+    int indexed = !(v->failures & (THX_VCHECKF_EMPTY | THX_VCHECKF_BAD_INDEX));
+    const char *conf = "-", *closed = "-", *pos = "-";
+    char diff[32] = "-", dih[32] = "-", re[32] = "-";
+    if (indexed) {
+        conf = (v->n_nonconforming_faces || v->n_overlapping_faces || v->n_duplicate_tets) ? "no" : "yes";
+        closed = (v->boundary_checked && !v->boundary.n_boundary_edges && !v->boundary.n_nonmanifold_edges) ? "yes"
+                                                                                                            : "no";
+        pos = (v->n_inverted_tets || v->n_flat_tets || v->n_repeated_node_tets) ? "no" : "yes";
+    }
+    /* percentages that round to zero print as +0.000%, not -0.000% */
+    if (v->volume_rel_diff == v->volume_rel_diff)
+        snprintf(diff, sizeof diff, "%+.3f%%", fabs(v->volume_rel_diff) < 5e-6 ? 0.0 : 100.0 * v->volume_rel_diff);
+    if (v->min_dihedral == v->min_dihedral) snprintf(dih, sizeof dih, "%.2f", v->min_dihedral);
+    if (isinf(v->max_radius_edge)) snprintf(re, sizeof re, "inf");
+    else if (v->max_radius_edge == v->max_radius_edge) snprintf(re, sizeof re, "%.3g", v->max_radius_edge);
+    printf("\n%-8s %9s %8s %10s %7s %8s %9s %9s %9s  %s\n", "volume", "tets", "nodes", "conforming", "closed",
+           "positive", "vol diff", "min dihed", "worst RE", "result");
+    printf("%-8s %9zu %8zu %10s %7s %8s %9s %9s %9s  %s\n", "volume", v->n_tets, v->n_nodes, conf, closed, pos, diff,
+           dih, re, v->ok ? "ok" : "FAIL");
+    if (v->n_regions) {
+        printf("\n%-16s %9s %14s %14s %9s  %s\n", "region", "tets", "volume mm^3", "surfaces mm^3", "diff",
+               "from");
+        for (size_t k = 0; k < v->n_regions; k++) {
+            const thx_volume_region_report *g = &v->regions[k];
+            char e[32] = "-", d[32] = "-";
+            if (g->expected == g->expected) snprintf(e, sizeof e, "%.6g", g->expected);
+            if (g->rel_diff == g->rel_diff)
+                snprintf(d, sizeof d, "%+.3f%%", fabs(g->rel_diff) < 5e-6 ? 0.0 : 100.0 * g->rel_diff);
+            printf("%-16s %9zu %14.6g %14s %9s  %s\n", g->name, g->n_tets, g->volume, e, d,
+                   g->definition[0] ? g->definition : "-");
+        }
+    }
+    printf("\ntetrahedra per bin:\n%-16s %10s    %-16s %10s\n", "min dihedral deg", "tets", "radius-edge", "tets");
+    int nb = THX_VCHECK_DIHEDRAL_BINS > THX_VCHECK_RADIUS_EDGE_BINS ? THX_VCHECK_DIHEDRAL_BINS
+                                                                     : THX_VCHECK_RADIUS_EDGE_BINS;
+    for (int b = 0; b < nb; b++) {
+        char l1[32] = "", l2[32] = "", c1[32] = "", c2[32] = "";
+        if (b < THX_VCHECK_DIHEDRAL_BINS) {
+            if (isinf(thx_vcheck_dihedral_edges[b + 1]))
+                snprintf(l1, sizeof l1, ">= %g", thx_vcheck_dihedral_edges[b]);
+            else
+                snprintf(l1, sizeof l1, "[%g, %g)", thx_vcheck_dihedral_edges[b], thx_vcheck_dihedral_edges[b + 1]);
+            snprintf(c1, sizeof c1, "%zu", v->dihedral_hist[b]);
+        }
+        if (b < THX_VCHECK_RADIUS_EDGE_BINS) {
+            if (isinf(thx_vcheck_radius_edge_edges[b + 1]))
+                snprintf(l2, sizeof l2, ">= %.3g", thx_vcheck_radius_edge_edges[b]);
+            else
+                snprintf(l2, sizeof l2, "[%.3g, %.3g)", thx_vcheck_radius_edge_edges[b],
+                         thx_vcheck_radius_edge_edges[b + 1]);
+            snprintf(c2, sizeof c2, "%zu", v->radius_edge_hist[b]);
+        }
+        printf("%-16s %10s    %-16s %10s\n", l1, c1, l2, c2);
+    }
+}
+
 int cmd_check(int argc, char **argv)
 {
     const char *cmd = "check";
@@ -90,6 +177,8 @@ int cmd_check(int argc, char **argv)
     int json = 0, verbose = 0, quiet = 0, rc = 0;
     thx_check_opts opts;
     thx_check_opts_default(&opts);
+    thx_volume_check_opts vopts;
+    thx_volume_check_opts_default(&vopts);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -111,8 +200,25 @@ int cmd_check(int argc, char **argv)
                 if (!(v >= 1.0) || isinf(v)) return cli_usage_error(cmd, "--max-aspect must be a finite number >= 1");
                 opts.max_aspect = v;
             }
+        } else if (!strcmp(a, "--volume-tol") || !strcmp(a, "--region-tol") || !strcmp(a, "--min-dihedral") ||
+                   !strcmp(a, "--max-radius-edge")) {
+            double v;
+            if (cli_parse_double(cmd, a, i + 1 < argc ? argv[i + 1] : NULL, &v)) return 2;
+            i++;
+            if (!strcmp(a, "--volume-tol") || !strcmp(a, "--region-tol")) {
+                if (!(v >= 0.0) || isinf(v)) return cli_usage_error(cmd, "%s must be a finite number >= 0", a);
+                if (a[2] == 'v') vopts.volume_tol = v;
+                else vopts.region_volume_tol = v;
+            } else if (!strcmp(a, "--min-dihedral")) {
+                if (!(v >= 0.0 && v <= 70.6)) return cli_usage_error(cmd, "--min-dihedral must be in [0, 70.6] degrees");
+                vopts.min_dihedral_deg = v;
+            } else {
+                if (!(v >= 0.6) || isinf(v)) return cli_usage_error(cmd, "--max-radius-edge must be a finite number >= 0.6");
+                vopts.max_radius_edge = v;
+            }
         } else if (!strcmp(a, "--no-intersections")) {
             opts.check_intersections = 0;
+            vopts.check_intersections = 0;
         } else if (!strcmp(a, "-q")) {
             quiet = 1;
             verbose--;
@@ -131,6 +237,8 @@ int cmd_check(int argc, char **argv)
     thx_ctx *ctx = cli_ctx(verbose);
     thx_model *m = NULL;
     thx_model_report *rep = NULL;
+    thx_volume_report vrep;
+    memset(&vrep, 0, sizeof vrep);
     thx_status st = thx_model_read(ctx, model_dir, &m);
     if (st != THX_OK) {
         /* the reader's message names the file; say which model too */
@@ -146,9 +254,31 @@ int cmd_check(int argc, char **argv)
         goto out;
     }
     thx_log(ctx, THX_LOG_DEBUG, "checked %zu surfaces in %.3f s", m->n_surfaces, thx_wtime() - t0);
+    if (m->volume) {
+        t0 = thx_wtime();
+        st = thx_volume_check(ctx, m->volume, m, &vopts, &vrep);
+        if (st != THX_OK && st != THX_ECHECK) {
+            rc = cli_fail(ctx, cmd, st);
+            goto out;
+        }
+        thx_log(ctx, THX_LOG_DEBUG, "checked the volume (%zu tetrahedra) in %.3f s", m->volume->n_tets,
+                thx_wtime() - t0);
+    }
+    int vol_ok = !m->volume || vrep.ok;
     if (json) {
         cJSON *j = thx_model_report_json(ctx, rep, m);
         if (j) cJSON_AddStringToObject(j, "model", model_dir);
+        if (j && m->volume) {
+            cJSON *vj = thx_volume_report_json(ctx, &vrep);
+            if (!vj) {
+                cJSON_Delete(j);
+                j = NULL;
+            } else {
+                cJSON_AddItemToObject(j, "volume", vj);
+                /* the top-level verdict covers the volume too */
+                cJSON_ReplaceItemInObject(j, "ok", cJSON_CreateBool(rep->ok && vrep.ok));
+            }
+        }
         char *text = j ? cJSON_Print(j) : NULL;
         cJSON_Delete(j);
         if (!text) {
@@ -159,18 +289,23 @@ int cmd_check(int argc, char **argv)
         free(text);
     } else if (!quiet) {
         print_table(rep, m);
+        if (m->volume) print_volume(&vrep);
     }
     /* failures go to stderr in every mode, so --json output stays pure JSON */
     for (size_t i = 0; i < rep->n_surfaces; i++)
         for (size_t k = 0; k < rep->surf[i].n_reasons; k++)
             fprintf(stderr, "thorax check: %s: surface \"%s\": %s\n", model_dir, rep->surf[i].name,
                     rep->surf[i].reasons[k]);
+    if (m->volume)
+        for (size_t k = 0; k < vrep.n_reasons; k++)
+            fprintf(stderr, "thorax check: %s: volume: %s\n", model_dir, vrep.reasons[k]);
     /* a model with nothing to check is not a model that passed */
-    int pass = rep->ok && m->n_surfaces > 0;
+    int pass = rep->ok && vol_ok && m->n_surfaces > 0;
     if (m->n_surfaces == 0) fprintf(stderr, "thorax check: %s: the model has no surfaces\n", model_dir);
     if (!json && !quiet) printf("\n%s: %s\n", model_dir, pass ? "all checks passed" : "CHECK FAILED");
     rc = pass ? 0 : 1;
 out:
+    thx_volume_report_free(&vrep);
     thx_model_report_destroy(&rep);
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

@@ -1,4 +1,5 @@
-/* thorax export: a model's surfaces as VTK, VTP, OBJ, STL or PLY files for other tools. */
+/* thorax export: a model's surfaces as VTK, VTP, OBJ, STL or PLY files, or its
+ * volume mesh as VTU or Gmsh MSH, for other tools. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,14 +9,16 @@
 #include "cli/cli.h"
 #include "thorax/model.h"
 
-static const char *const ext_of[] = {"vtk", "vtp", "obj", "stl", "ply"}; /* indexed by thx_export_format */
+static const char *const ext_of[] = {"vtk", "vtp", "obj", "stl", "ply", "vtu", "msh"}; /* indexed by thx_export_format */
 
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: thorax export MODEL --format vtk|vtp|obj|stl|ply [-o DIR] [--surface NAME]...\n"
+            "       thorax export MODEL --format vtu|msh [-o DIR]\n"
             "\n"
-            "Writes each surface of the model directory MODEL as DIR/NAME.EXT.\n"
+            "Writes each surface of the model directory MODEL as DIR/NAME.EXT, or, with\n"
+            "a volume format, its volume mesh (made by `thorax mesh`) as DIR/volume.EXT.\n"
             "\n"
             "options:\n"
             "  --format F       vtk  legacy VTK ASCII polydata (ParaView, VTK)\n"
@@ -23,12 +26,18 @@ static void usage(FILE *f)
             "                   obj  Wavefront OBJ\n"
             "                   stl  binary STL (float32, facet normals pointing outward)\n"
             "                   ply  ASCII PLY\n"
+            "                   vtu  volume: VTK XML unstructured grid, tetrahedra, cell data\n"
+            "                        \"region\" (1-based region id), point data \"surface\" and\n"
+            "                        \"surface_node\" (the node tables)\n"
+            "                   msh  volume: Gmsh MSH 4.1 ASCII, one physical volume per region\n"
             "  -o, --output DIR directory for the files (default: MODEL itself; created if missing)\n"
-            "  --surface NAME   export only this surface (repeatable; default: all)\n"
+            "  --surface NAME   export only this surface (repeatable; default: all;\n"
+            "                   surface formats only)\n"
             "  -v, -q           more / less logging\n"
             "  -h, --help       this text\n"
             "\n"
-            "Coordinates are in mm; triangles stay counterclockwise seen from outside.\n"
+            "Coordinates are in mm; triangles stay counterclockwise seen from outside,\n"
+            "tetrahedra right-handed.\n"
             "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n");
 }
 
@@ -77,11 +86,16 @@ int cmd_export(int argc, char **argv)
     }
     thx_export_format fmt;
     if (!format) {
-        rc = cli_usage_error(cmd, "--format is required (vtk, vtp, obj, stl or ply)");
+        rc = cli_usage_error(cmd, "--format is required (vtk, vtp, obj, stl, ply, vtu or msh)");
         goto out;
     }
     if (thx_export_format_parse(format, &fmt) != 0) {
-        rc = cli_usage_error(cmd, "unknown format '%s' (vtk, vtp, obj, stl or ply)", format);
+        rc = cli_usage_error(cmd, "unknown format '%s' (vtk, vtp, obj, stl, ply, vtu or msh)", format);
+        goto out;
+    }
+    int volume = thx_export_format_is_volume(fmt);
+    if (volume && n_only > 0) {
+        rc = cli_usage_error(cmd, "--surface does not apply to the volume format '%s'", format);
         goto out;
     }
     if (!out_dir) out_dir = model_dir;
@@ -91,6 +105,11 @@ int cmd_export(int argc, char **argv)
     thx_status st = thx_model_read(ctx, model_dir, &m);
     if (st) {
         rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    if (volume && !m->volume) {
+        fprintf(stderr, "thorax export: %s: the model has no volume mesh (make one with `thorax mesh`)\n", model_dir);
+        rc = 1;
         goto done;
     }
     /* Every requested name must exist before anything is written. */
@@ -108,6 +127,22 @@ int cmd_export(int argc, char **argv)
     if (mkdir(out_dir, 0755) != 0 && errno != EEXIST) {
         fprintf(stderr, "thorax export: %s: cannot create directory: %s\n", out_dir, strerror(errno));
         rc = 1;
+        goto done;
+    }
+    if (volume) {
+        char path[4096];
+        if ((size_t)snprintf(path, sizeof path, "%s/volume.%s", out_dir, ext_of[fmt]) >= sizeof path) {
+            fprintf(stderr, "thorax export: %s: path too long\n", out_dir);
+            rc = 1;
+            goto done;
+        }
+        st = thx_volume_export(ctx, m, fmt, path);
+        if (st) {
+            rc = cli_fail(ctx, cmd, st);
+            goto done;
+        }
+        thx_log(ctx, THX_LOG_INFO, "wrote %s (%zu nodes, %zu tetrahedra, %zu regions)", path, m->volume->n_nodes,
+                m->volume->n_tets, m->volume->n_regions);
         goto done;
     }
     for (size_t i = 0; i < m->n_surfaces; i++) {

@@ -1,6 +1,7 @@
 /*
  * Surface export for other tools (see thorax/model.h): legacy VTK (.vtk),
- * VTK XML PolyData (.vtp), Wavefront OBJ, binary STL and ASCII PLY.
+ * VTK XML PolyData (.vtp), Wavefront OBJ, binary STL and ASCII PLY. The
+ * volume formats (.vtu, Gmsh .msh) are written by src/io/volume_io.c.
  *
  * Invariants shared by every format:
  *  - Triangles keep thorax's orientation (counterclockwise seen from outside),
@@ -28,7 +29,8 @@ int thx_export_format_parse(const char *s, thx_export_format *out)
 {
     static const struct { const char *name; thx_export_format f; } tab[] = {
         {"vtk", THX_EXPORT_VTK}, {"vtp", THX_EXPORT_VTP}, {"obj", THX_EXPORT_OBJ},
-        {"stl", THX_EXPORT_STL}, {"ply", THX_EXPORT_PLY},
+        {"stl", THX_EXPORT_STL}, {"ply", THX_EXPORT_PLY}, {"vtu", THX_EXPORT_VTU},
+        {"msh", THX_EXPORT_MSH},
     };
     if (!s) return -1;
     for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
@@ -38,6 +40,8 @@ int thx_export_format_parse(const char *s, thx_export_format *out)
         }
     return -1;
 }
+
+int thx_export_format_is_volume(thx_export_format fmt) { return fmt == THX_EXPORT_VTU || fmt == THX_EXPORT_MSH; }
 
 static void put_coord(FILE *f, double v)
 {
@@ -199,6 +203,10 @@ thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_for
     case THX_EXPORT_OBJ: writer = write_obj; break;
     case THX_EXPORT_STL: writer = write_stl; break;
     case THX_EXPORT_PLY: writer = write_ply; break;
+    case THX_EXPORT_VTU:
+    case THX_EXPORT_MSH:
+        return thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": vtu and msh are volume formats (thx_volume_export)", path,
+                         s->name);
     }
     if (!writer) return thx_error(ctx, THX_EINTERNAL, "%s: unknown export format %d", path, (int)fmt);
     thx_atomic_file af;

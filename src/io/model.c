@@ -24,6 +24,10 @@
  *    1-based file whose node 1 is unused is still unambiguous). An empty .fac
  *    file has no base; 1 is reported.
  *
+ *  - The volume mesh (volume.pts, volume.tet, NAME.vmap, the "volume" and
+ *    "regions" parts of model.json) is read and written by
+ *    src/io/volume_io.c, called from thx_model_write / thx_model_read here.
+ *
  *  - Surface names become file names (NAME.pts, NAME.fac): they must be
  *    non-empty, made of [A-Za-z0-9_.-], not start with '.', and be unique in a
  *    model. File names in a manifest must not contain '/' (a model directory
@@ -40,6 +44,7 @@
 #include <string.h>
 
 #include "thorax/fileio.h"
+#include "io/volume_io.h"
 
 #define MODEL_FORMAT "thorax-model"
 #define MODEL_VERSION 1
@@ -116,7 +121,7 @@ static int name_is_safe(const char *s)
 }
 
 /* Writes one coordinate "%.6f", with a value that rounds to zero as +0 (see top). */
-static void put_coord(FILE *f, double v)
+void thx_io_put_coord(FILE *f, double v)
 {
     char buf[64];
     snprintf(buf, sizeof buf, "%.6f", v);
@@ -128,7 +133,7 @@ static void put_coord(FILE *f, double v)
  * max whitespace-separated tokens; each token is NUL-terminated in place.
  * Returns the number of tokens found (max + 1 means "more than max"). *next
  * is set to the start of the following line or NULL at the end. */
-static int split_line(char *p, char **tok, int max, char **next)
+int thx_io_split_line(char *p, char **tok, int max, char **next)
 {
     char *end = strchr(p, '\n');
     if (end) {
@@ -162,7 +167,7 @@ static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, dou
     for (char *p = text, *next = NULL; p; p = next) {
         char *tok[3];
         line++;
-        int nt = split_line(p, tok, 3, &next);
+        int nt = thx_io_split_line(p, tok, 3, &next);
         if (nt == 0) continue; /* blank lines are allowed anywhere */
         if (nt != 3) {
             st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": expected 3 coordinates (x y z), found %s", path,
@@ -212,7 +217,7 @@ static thx_status read_fac(thx_ctx *ctx, const char *path, const char *name, siz
     for (char *p = text, *next = NULL; p; p = next) {
         char *tok[3];
         line++;
-        int nt = split_line(p, tok, 3, &next);
+        int nt = thx_io_split_line(p, tok, 3, &next);
         if (nt == 0) continue;
         if (nt != 3) {
             st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": expected 3 node numbers, found %s", path, line,
@@ -319,11 +324,11 @@ thx_status thx_surface_write_ptsfac(thx_ctx *ctx, const thx_surface *s, const ch
     thx_atomic_file af;
     THX_CHECK(thx_atomic_open(ctx, pts, &af));
     for (size_t i = 0; i < s->n_nodes; i++) {
-        put_coord(af.f, s->xyz[3 * i]);
+        thx_io_put_coord(af.f, s->xyz[3 * i]);
         fputc(' ', af.f);
-        put_coord(af.f, s->xyz[3 * i + 1]);
+        thx_io_put_coord(af.f, s->xyz[3 * i + 1]);
         fputc(' ', af.f);
-        put_coord(af.f, s->xyz[3 * i + 2]);
+        thx_io_put_coord(af.f, s->xyz[3 * i + 2]);
         fputc('\n', af.f);
     }
     THX_CHECK(thx_atomic_commit(ctx, &af));
@@ -379,6 +384,10 @@ static thx_status build_manifest(thx_ctx *ctx, const thx_model *m, cJSON **out)
             cJSON_AddItemToObject(o, "interior", a);
         }
     }
+    if (m->volume) {
+        st = thx_io_volume_manifest(ctx, m, root);
+        if (st) goto fail;
+    }
     if (m->provenance_json) {
         cJSON *prov = cJSON_Parse(m->provenance_json);
         if (!prov || !cJSON_IsObject(prov)) {
@@ -416,7 +425,11 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir)
         if (s->role < 0 || s->role >= THX_ROLE_COUNT)
             return thx_error(ctx, THX_EINPUT, "surface \"%s\": invalid role %d", s->name, (int)s->role);
         THX_CHECK(check_surface(ctx, s));
+        if (m->volume && strcmp(s->name, "volume") == 0)
+            return thx_error(ctx, THX_EINPUT,
+                             "surface \"volume\": name is reserved for the volume mesh files (volume.pts, volume.tet)");
     }
+    if (m->volume) THX_CHECK(thx_io_volume_validate(ctx, m, dir));
     cJSON *root = NULL;
     THX_CHECK(build_manifest(ctx, m, &root));
     char *json = cJSON_Print(root);
@@ -437,6 +450,7 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir)
         THX_TRY(join(ctx, fac, sizeof fac, tmp, f2));
         THX_TRY(thx_surface_write_ptsfac(ctx, s, pts, fac));
     }
+    if (m->volume) THX_TRY(thx_io_volume_write_files(ctx, m, tmp));
     THX_TRY(join(ctx, pts, sizeof pts, tmp, "model.json"));
     thx_atomic_file af;
     THX_TRY(thx_atomic_open(ctx, pts, &af));
@@ -473,7 +487,7 @@ static int get_count(const cJSON *o, const char *key, size_t *out)
     return 0;
 }
 
-static int file_name_ok(const char *s)
+int thx_io_file_name_ok(const char *s)
 {
     return s[0] && !strchr(s, '/') && strcmp(s, ".") != 0 && strcmp(s, "..") != 0;
 }
@@ -552,8 +566,8 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         }
         const cJSON *jp = cJSON_GetObjectItemCaseSensitive(o, "pts");
         const cJSON *jf = cJSON_GetObjectItemCaseSensitive(o, "fac");
-        if (!cJSON_IsString(jp) || !file_name_ok(jp->valuestring) || !cJSON_IsString(jf) ||
-            !file_name_ok(jf->valuestring)) {
+        if (!cJSON_IsString(jp) || !thx_io_file_name_ok(jp->valuestring) || !cJSON_IsString(jf) ||
+            !thx_io_file_name_ok(jf->valuestring)) {
             st = thx_error(ctx, THX_EINPUT,
                            "%s: surface %d (\"%s\"): \"pts\" and \"fac\" must name files in the model directory", mpath,
                            idx, nm);
@@ -606,6 +620,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         m->has_interior[m->n_surfaces - 1] = has_in;
         m->interior[m->n_surfaces - 1] = in;
     }
+    THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m));
     const cJSON *prov = cJSON_GetObjectItemCaseSensitive(root, "provenance");
     if (prov && !cJSON_IsNull(prov)) {
         if (!cJSON_IsObject(prov)) {

@@ -1,0 +1,902 @@
+/*
+ * The volume mesh of a model directory, its region (conductivity) table and
+ * node tables (paper 3.3), and the volume exports .vtu and Gmsh .msh 4.1.
+ * Layouts in docs/formats.md, "Volume mesh files"; the public entry points
+ * are thx_model_write / thx_model_read and thx_volume_export (thorax/model.h).
+ *
+ * Files (all text, one item a line, 1-based node and region numbers):
+ *   volume.pts   "x y z", mm, "%.6f" (as the surface .pts files)
+ *   volume.tet   "a b c d r": four volume node numbers, then the region
+ *                number (the region's "id" in model.json's "regions")
+ *   NAME.vmap    per surface, one line per surface node: its volume node
+ *
+ * Decisions:
+ *  - Reading checks structure, not geometry: numbers in range, four distinct
+ *    nodes per tetrahedron, region numbers in the table, node tables
+ *    consistent, conductivities symmetric positive definite. Orientation,
+ *    coincident nodes and element quality are the volume checker's
+ *    (src/geom/check_volume.c), as surface orientation is `thorax check`'s:
+ *    a faulty mesh can still be saved, read back and inspected.
+ *  - Node tables. A surface node IS a volume node (no duplicate nodes): its
+ *    coordinates in NAME.pts and volume.pts must be equal. In memory both
+ *    come from the same double, so the writer compares their "%.6f" texts
+ *    (what will be on disk) and the reader compares the parsed doubles
+ *    exactly. Each volume node is on at most one surface node (the reverse
+ *    table thx_volume.node_surf/node_snode has one slot per volume node);
+ *    the reverse table is not stored but rebuilt on reading, and a reverse
+ *    table present in memory is checked against the forward one on writing.
+ *  - Conductivity tensors: symmetric within 1e-12 of the largest entry
+ *    (a rotated tensor R D R^T may miss exact symmetry by rounding) and
+ *    positive definite by a Cholesky factorization of the symmetric part;
+ *    an isotropic region in memory must be exactly sigma[0] * identity.
+ *    JSON numbers are printed by cJSON so that they read back bit-exactly.
+ *  - Gmsh: one volume entity and one physical group per region, both tagged
+ *    with the region id; node tags are volume node numbers and element tags
+ *    volume.tet line numbers. Gmsh classifies every node on one entity:
+ *    here the lowest-numbered region whose tetrahedra use it (region 1 for
+ *    a node no tetrahedron uses); elements refer to nodes by tag across
+ *    entities, which Gmsh reads.
+ *  - Output is deterministic; every file is written atomically.
+ */
+#include "io/volume_io.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/fileio.h"
+
+#define VOLUME_PTS "volume.pts"
+#define VOLUME_TET "volume.tet"
+
+static const char orientation_text[] =
+    "right-handed: for each line \"a b c d region\" of volume.tet, ((b - a) x (c - a)) . (d - a) > 0 "
+    "(the VTK and Gmsh convention)";
+static const char node_tables_text[] =
+    "each surface's \"vmap\" file NAME.vmap: line i holds the volume node number of surface node i (1-based)";
+
+/* ------------------------------------------------------------- helpers */
+
+static int name_ok(const char *s, size_t cap)
+{
+    size_t n = strnlen(s, cap);
+    if (n == 0 || n == cap || s[0] == '.') return 0;
+    for (size_t i = 0; i < n; i++) {
+        char c = s[i];
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+              c == '.'))
+            return 0;
+    }
+    return 1;
+}
+
+/* The "%.6f" text of a coordinate as thx_io_put_coord writes it. */
+static void fmt_coord(char *buf, size_t size, double v)
+{
+    snprintf(buf, size, "%.6f", v);
+    if (strcmp(buf, "-0.000000") == 0) snprintf(buf, size, "0.000000");
+}
+
+static int same_printed(const double *a, const double *b)
+{
+    for (int k = 0; k < 3; k++) {
+        char x[64], y[64];
+        fmt_coord(x, sizeof x, a[k]);
+        fmt_coord(y, sizeof y, b[k]);
+        if (strcmp(x, y) != 0) return 0;
+    }
+    return 1;
+}
+
+/* Whether a 3x3 row-major tensor is symmetric positive definite; if not,
+ * why[] says how. */
+static int tensor_spd(const double *a, char *why, size_t size)
+{
+    double amax = 0;
+    for (int k = 0; k < 9; k++) {
+        if (!isfinite(a[k])) {
+            snprintf(why, size, "entry [%d][%d] is not a finite number", k / 3 + 1, k % 3 + 1);
+            return 0;
+        }
+        if (fabs(a[k]) > amax) amax = fabs(a[k]);
+    }
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (fabs(a[3 * i + j] - a[3 * j + i]) > 1e-12 * amax) {
+                snprintf(why, size, "not symmetric: [%d][%d] = %.17g but [%d][%d] = %.17g", i + 1, j + 1, a[3 * i + j],
+                         j + 1, i + 1, a[3 * j + i]);
+                return 0;
+            }
+    /* Cholesky of the symmetric part: all three pivots must be positive. */
+    double s00 = a[0], s11 = a[4], s22 = a[8];
+    double s01 = 0.5 * (a[1] + a[3]), s02 = 0.5 * (a[2] + a[6]), s12 = 0.5 * (a[5] + a[7]);
+    double d = s00;
+    int pivot = 1;
+    if (d > 0) {
+        double l00 = sqrt(d), l10 = s01 / l00, l20 = s02 / l00;
+        d = s11 - l10 * l10;
+        pivot = 2;
+        if (d > 0) {
+            double l11 = sqrt(d), l21 = (s12 - l20 * l10) / l11;
+            d = s22 - l20 * l20 - l21 * l21;
+            pivot = 3;
+        }
+    }
+    if (!(d > 0)) {
+        snprintf(why, size, "not positive definite (Cholesky pivot %d is %.6g)", pivot, d);
+        return 0;
+    }
+    return 1;
+}
+
+/* Checks one region of the table (k 0-based); `where` prefixes messages. */
+static thx_status check_region(thx_ctx *ctx, const char *where, size_t k, const thx_region *r)
+{
+    if (!name_ok(r->name, sizeof r->name))
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: region %zu: name is empty, too long (31 characters at most) or not made of letters, "
+                         "digits, '_', '-', '.'",
+                         where, k + 1);
+    if (!memchr(r->source, '\0', sizeof r->source))
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): source is not terminated", where, k + 1, r->name);
+    char why[160];
+    if (!r->anisotropic) {
+        double s = r->sigma[0];
+        if (!isfinite(s) || !(s > 0))
+            return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): conductivity %g S/m is not positive", where, k + 1,
+                             r->name, s);
+        for (int i = 0; i < 9; i++)
+            if (r->sigma[i] != (i % 4 == 0 ? s : 0.0))
+                return thx_error(ctx, THX_EINPUT,
+                                 "%s: region %zu (\"%s\"): marked isotropic but sigma is not sigma[0] times the identity",
+                                 where, k + 1, r->name);
+    } else if (!tensor_spd(r->sigma, why, sizeof why)) {
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): conductivity tensor %s", where, k + 1, r->name, why);
+    }
+    return THX_OK;
+}
+
+/* ------------------------------------------------------------ validate */
+
+thx_status thx_io_volume_validate(thx_ctx *ctx, const thx_model *m, const char *where)
+{
+    const thx_volume *v = m->volume;
+    if (!v) return thx_error(ctx, THX_EINPUT, "%s: the model has no volume mesh", where);
+    if (v->n_nodes == 0 || !v->xyz) return thx_error(ctx, THX_EINPUT, "%s: volume: no nodes", where);
+    if (v->n_tets == 0 || !v->tet || !v->region) return thx_error(ctx, THX_EINPUT, "%s: volume: no tetrahedra", where);
+    if (v->n_regions == 0 || !v->regions) return thx_error(ctx, THX_EINPUT, "%s: volume: no region table", where);
+    if (v->n_nodes > (size_t)INT32_MAX || v->n_tets > (size_t)INT32_MAX || v->n_regions > (size_t)INT32_MAX)
+        return thx_error(ctx, THX_EINPUT, "%s: volume: too many nodes, tetrahedra or regions", where);
+    for (size_t i = 0; i < 3 * v->n_nodes; i++)
+        if (!isfinite(v->xyz[i]))
+            return thx_error(ctx, THX_EINPUT, "%s: volume node %zu has a non-finite coordinate", where, i / 3 + 1);
+    for (size_t t = 0; t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        for (int a = 0; a < 4; a++) {
+            if (q[a] < 0 || (size_t)q[a] >= v->n_nodes)
+                return thx_error(ctx, THX_EINPUT, "%s: volume tetrahedron %zu: node index %ld out of range 0..%zu (0-based)",
+                                 where, t + 1, (long)q[a], v->n_nodes - 1);
+            for (int b = 0; b < a; b++)
+                if (q[a] == q[b])
+                    return thx_error(ctx, THX_EINPUT, "%s: volume tetrahedron %zu: node %ld appears twice (1-based)", where,
+                                     t + 1, (long)q[a] + 1);
+        }
+        if (v->region[t] < 0 || (size_t)v->region[t] >= v->n_regions)
+            return thx_error(ctx, THX_EINPUT, "%s: volume tetrahedron %zu: region index %ld out of range 0..%zu (0-based)",
+                             where, t + 1, (long)v->region[t], v->n_regions - 1);
+    }
+    for (size_t k = 0; k < v->n_regions; k++) {
+        THX_CHECK(check_region(ctx, where, k, &v->regions[k]));
+        for (size_t j = 0; j < k; j++)
+            if (strcmp(v->regions[j].name, v->regions[k].name) == 0)
+                return thx_error(ctx, THX_EINPUT, "%s: regions %zu and %zu are both named \"%s\"", where, j + 1, k + 1,
+                                 v->regions[k].name);
+    }
+
+    /* Node tables: one per surface of the model, consistent, injective. */
+    if (v->n_surfaces != m->n_surfaces)
+        return thx_error(ctx, THX_EINPUT, "%s: the volume has node tables for %zu surfaces but the model has %zu", where,
+                         v->n_surfaces, m->n_surfaces);
+    if (m->n_surfaces == 0) return THX_OK;
+    if (!v->surf_n_nodes || !v->surf_node)
+        return thx_error(ctx, THX_EINPUT, "%s: the volume has no node tables", where);
+    /* owner[v] = (surface index << 32 | node) + 1 of the surface node on v, 0 if none. */
+    uint64_t *owner = thx_calloc(ctx, v->n_nodes, sizeof *owner);
+    if (!owner) return THX_ENOMEM;
+    thx_status st = THX_OK;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        const thx_surface *sf = m->surf[s];
+        if (v->surf_n_nodes[s] != sf->n_nodes || (sf->n_nodes && !v->surf_node[s])) {
+            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": the volume's node table has %zu nodes, the surface %zu",
+                           where, sf->name, v->surf_n_nodes[s], sf->n_nodes);
+            goto done;
+        }
+        for (size_t i = 0; i < sf->n_nodes; i++) {
+            int32_t w = v->surf_node[s][i];
+            if (w < 0 || (size_t)w >= v->n_nodes) {
+                st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\" node %zu: volume node index %ld out of range 0..%zu",
+                               where, sf->name, i + 1, (long)w, v->n_nodes - 1);
+                goto done;
+            }
+            if (!same_printed(sf->xyz + 3 * i, v->xyz + 3 * (size_t)w)) {
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s: surface \"%s\" node %zu is volume node %ld but the coordinates differ: "
+                               "(%.6f, %.6f, %.6f) vs (%.6f, %.6f, %.6f)",
+                               where, sf->name, i + 1, (long)w + 1, sf->xyz[3 * i], sf->xyz[3 * i + 1], sf->xyz[3 * i + 2],
+                               v->xyz[3 * w], v->xyz[3 * w + 1], v->xyz[3 * w + 2]);
+                goto done;
+            }
+            if (owner[w]) {
+                size_t s2 = (size_t)((owner[w] - 1) >> 32), i2 = (size_t)((owner[w] - 1) & 0xffffffffu);
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s: surface \"%s\" node %zu and surface \"%s\" node %zu are both volume node %ld "
+                               "(a volume node lies on one surface node at most)",
+                               where, m->surf[s2]->name, i2 + 1, sf->name, i + 1, (long)w + 1);
+                goto done;
+            }
+            owner[w] = (((uint64_t)s << 32) | (uint64_t)i) + 1;
+        }
+    }
+    if (v->node_surf && v->node_snode)
+        for (size_t w = 0; w < v->n_nodes; w++) {
+            long ws = owner[w] ? (long)((owner[w] - 1) >> 32) : -1;
+            long wi = owner[w] ? (long)((owner[w] - 1) & 0xffffffffu) : -1;
+            if (v->node_surf[w] != ws || v->node_snode[w] != wi) {
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s: volume node %zu: reverse node table says surface %ld node %ld, the surfaces' tables "
+                               "say surface %ld node %ld (0-based, -1 = none)",
+                               where, w + 1, (long)v->node_surf[w], (long)v->node_snode[w], ws, wi);
+                goto done;
+            }
+        }
+done:
+    free(owner);
+    return st;
+}
+
+/* ------------------------------------------------------------ manifest */
+
+thx_status thx_io_volume_manifest(thx_ctx *ctx, const thx_model *m, cJSON *root)
+{
+    const thx_volume *v = m->volume;
+    cJSON *surfs = cJSON_GetObjectItemCaseSensitive(root, "surfaces");
+    for (size_t i = 0; i < m->n_surfaces; i++) {
+        cJSON *o = cJSON_GetArrayItem(surfs, (int)i);
+        char fname[96];
+        snprintf(fname, sizeof fname, "%s.vmap", m->surf[i]->name);
+        if (!o || !cJSON_AddStringToObject(o, "vmap", fname)) goto nomem;
+    }
+    cJSON *vo = cJSON_AddObjectToObject(root, "volume");
+    if (!vo || !cJSON_AddStringToObject(vo, "pts", VOLUME_PTS) || !cJSON_AddStringToObject(vo, "tet", VOLUME_TET) ||
+        !cJSON_AddNumberToObject(vo, "n_nodes", (double)v->n_nodes) ||
+        !cJSON_AddNumberToObject(vo, "n_tets", (double)v->n_tets) ||
+        !cJSON_AddNumberToObject(vo, "n_regions", (double)v->n_regions) || !cJSON_AddStringToObject(vo, "units", "mm") ||
+        !cJSON_AddNumberToObject(vo, "index_base", 1) || !cJSON_AddStringToObject(vo, "orientation", orientation_text) ||
+        !cJSON_AddStringToObject(vo, "node_tables", node_tables_text))
+        goto nomem;
+    cJSON *regs = cJSON_AddArrayToObject(root, "regions");
+    if (!regs) goto nomem;
+    for (size_t k = 0; k < v->n_regions; k++) {
+        const thx_region *r = &v->regions[k];
+        cJSON *o = cJSON_CreateObject();
+        if (!o) goto nomem;
+        cJSON_AddItemToArray(regs, o);
+        if (!cJSON_AddNumberToObject(o, "id", (double)(k + 1)) || !cJSON_AddStringToObject(o, "name", r->name))
+            goto nomem;
+        if (!r->anisotropic) {
+            if (!cJSON_AddNumberToObject(o, "sigma", r->sigma[0])) goto nomem;
+        } else {
+            cJSON *rows = cJSON_AddArrayToObject(o, "sigma");
+            if (!rows) goto nomem;
+            for (int i = 0; i < 3; i++) {
+                cJSON *row = cJSON_CreateDoubleArray(r->sigma + 3 * i, 3);
+                if (!row) goto nomem;
+                cJSON_AddItemToArray(rows, row);
+            }
+        }
+        if (!cJSON_AddStringToObject(o, "units", "S/m") || !cJSON_AddStringToObject(o, "source", r->source)) goto nomem;
+    }
+    return THX_OK;
+nomem:
+    return thx_error(ctx, THX_ENOMEM, "out of memory building model.json");
+}
+
+/* --------------------------------------------------------------- write */
+
+static thx_status join(thx_ctx *ctx, char *out, size_t size, const char *dir, const char *file)
+{
+    if ((size_t)snprintf(out, size, "%s/%s", dir, file) >= size)
+        return thx_error(ctx, THX_EIO, "%s/%s: path too long", dir, file);
+    return THX_OK;
+}
+
+thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const char *dir)
+{
+    const thx_volume *v = m->volume;
+    char path[4200];
+    thx_atomic_file af;
+    THX_CHECK(join(ctx, path, sizeof path, dir, VOLUME_PTS));
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    for (size_t i = 0; i < v->n_nodes; i++) {
+        thx_io_put_coord(af.f, v->xyz[3 * i]);
+        fputc(' ', af.f);
+        thx_io_put_coord(af.f, v->xyz[3 * i + 1]);
+        fputc(' ', af.f);
+        thx_io_put_coord(af.f, v->xyz[3 * i + 2]);
+        fputc('\n', af.f);
+    }
+    THX_CHECK(thx_atomic_commit(ctx, &af));
+    THX_CHECK(join(ctx, path, sizeof path, dir, VOLUME_TET));
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    for (size_t t = 0; t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        fprintf(af.f, "%ld %ld %ld %ld %ld\n", (long)q[0] + 1, (long)q[1] + 1, (long)q[2] + 1, (long)q[3] + 1,
+                (long)v->region[t] + 1);
+    }
+    THX_CHECK(thx_atomic_commit(ctx, &af));
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        char fname[96];
+        snprintf(fname, sizeof fname, "%s.vmap", m->surf[s]->name);
+        THX_CHECK(join(ctx, path, sizeof path, dir, fname));
+        THX_CHECK(thx_atomic_open(ctx, path, &af));
+        for (size_t i = 0; i < v->surf_n_nodes[s]; i++) fprintf(af.f, "%ld\n", (long)v->surf_node[s][i] + 1);
+        THX_CHECK(thx_atomic_commit(ctx, &af));
+    }
+    return THX_OK;
+}
+
+/* ---------------------------------------------------------------- read */
+
+/* A whole decimal integer token. */
+static int parse_long(const char *tok, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(tok, &end, 10);
+    if (end == tok || *end != '\0' || errno == ERANGE || v < INT32_MIN || v > INT32_MAX) return -1;
+    *out = v;
+    return 0;
+}
+
+/* volume.pts: "x y z" per line; blank lines allowed. */
+static thx_status read_xyz(thx_ctx *ctx, const char *path, double **xyz_out, size_t *n_out)
+{
+    char *text = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    thx_status st = THX_OK;
+    double *xyz = NULL;
+    size_t n = 0, cap = 0;
+    int line = 0;
+    for (char *p = text, *next = NULL; p; p = next) {
+        char *tok[3];
+        line++;
+        int nt = thx_io_split_line(p, tok, 3, &next);
+        if (nt == 0) continue;
+        if (nt != 3) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 3 coordinates (x y z), found %s", path, line,
+                           nt > 3 ? "more" : nt == 1 ? "1" : "2");
+            goto done;
+        }
+        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&xyz, &cap, n + 1, 3 * sizeof *xyz));
+        for (int k = 0; k < 3; k++) {
+            char *end = NULL;
+            double val = strtod(tok[k], &end);
+            if (end == tok[k] || *end != '\0' || !isfinite(val)) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: coordinate %d is not a finite number: \"%s\"", path, line, k + 1,
+                               tok[k]);
+                goto done;
+            }
+            xyz[3 * n + (size_t)k] = val;
+        }
+        n++;
+    }
+    *xyz_out = xyz;
+    *n_out = n;
+    xyz = NULL;
+done:
+    free(xyz);
+    free(text);
+    return st;
+}
+
+/* volume.tet: "a b c d r" per line, 1-based; returned 0-based. */
+static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size_t n_regions, thx_volume *v)
+{
+    char *text = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    thx_status st = THX_OK;
+    int32_t *tet = NULL, *reg = NULL;
+    size_t n = 0, cap = 0, rcap = 0;
+    int line = 0;
+    for (char *p = text, *next = NULL; p; p = next) {
+        char *tok[5];
+        line++;
+        int nt = thx_io_split_line(p, tok, 5, &next);
+        if (nt == 0) continue;
+        if (nt != 5) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 5 numbers (4 node numbers, then a region number), found %s",
+                           path, line, nt > 5 ? "more" : nt == 1 ? "1" : nt == 2 ? "2" : nt == 3 ? "3" : "4");
+            goto done;
+        }
+        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&tet, &cap, n + 1, 4 * sizeof *tet));
+        if (n + 1 > rcap) THX_TRY(thx_grow(ctx, (void **)&reg, &rcap, n + 1, sizeof *reg));
+        long val[5];
+        for (int k = 0; k < 5; k++)
+            if (parse_long(tok[k], &val[k])) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: %s is not an integer: \"%s\"", path, line,
+                               k < 4 ? "a node number" : "the region number", tok[k]);
+                goto done;
+            }
+        for (int k = 0; k < 4; k++) {
+            if (val[k] < 1 || (size_t)val[k] > n_nodes) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: node number %ld out of range 1..%zu (the nodes of %s)", path,
+                               line, val[k], n_nodes, VOLUME_PTS);
+                goto done;
+            }
+            for (int j = 0; j < k; j++)
+                if (val[j] == val[k]) {
+                    st = thx_error(ctx, THX_EINPUT, "%s:%d: node %ld appears twice in the tetrahedron", path, line, val[k]);
+                    goto done;
+                }
+            tet[4 * n + (size_t)k] = (int32_t)(val[k] - 1);
+        }
+        if (val[4] < 1 || (size_t)val[4] > n_regions) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: region %ld out of range 1..%zu (the \"regions\" of model.json)", path,
+                           line, val[4], n_regions);
+            goto done;
+        }
+        reg[n] = (int32_t)(val[4] - 1);
+        n++;
+    }
+    v->tet = tet;
+    v->region = reg;
+    v->n_tets = n;
+    tet = reg = NULL;
+done:
+    free(tet);
+    free(reg);
+    free(text);
+    return st;
+}
+
+/* NAME.vmap of surface s: one volume node number per line. Fills
+ * v->surf_node[s] and the reverse table, checking coordinates and that no
+ * volume node is used twice. vpts is volume.pts's path (for messages). */
+static thx_status read_vmap(thx_ctx *ctx, const char *path, const char *vpts, const thx_model *m, size_t s, thx_volume *v)
+{
+    const thx_surface *sf = m->surf[s];
+    char *text = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    thx_status st = THX_OK;
+    int32_t *map = thx_malloc(ctx, (sf->n_nodes ? sf->n_nodes : 1) * sizeof *map);
+    if (!map) {
+        free(text);
+        return THX_ENOMEM;
+    }
+    size_t n = 0;
+    int line = 0;
+    for (char *p = text, *next = NULL; p; p = next) {
+        char *tok[1];
+        line++;
+        int nt = thx_io_split_line(p, tok, 1, &next);
+        if (nt == 0) continue;
+        long w;
+        if (nt != 1 || parse_long(tok[0], &w)) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": expected one volume node number", path, line, sf->name);
+            goto done;
+        }
+        if (n == sf->n_nodes) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": more lines than the surface's %zu nodes", path, line,
+                           sf->name, sf->n_nodes);
+            goto done;
+        }
+        if (w < 1 || (size_t)w > v->n_nodes) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" node %zu: volume node %ld out of range 1..%zu", path,
+                           line, sf->name, n + 1, w, v->n_nodes);
+            goto done;
+        }
+        size_t vi = (size_t)w - 1;
+        const double *a = sf->xyz + 3 * n, *b = v->xyz + 3 * vi;
+        if (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s:%d: surface \"%s\" node %zu is volume node %ld but the coordinates differ: "
+                           "(%.6f, %.6f, %.6f) in %s.pts vs (%.6f, %.6f, %.6f) at %s:%ld",
+                           path, line, sf->name, n + 1, w, a[0], a[1], a[2], sf->name, b[0], b[1], b[2], vpts, w);
+            goto done;
+        }
+        if (v->node_surf[vi] >= 0) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s:%d: surface \"%s\" node %zu is volume node %ld, which is already node %ld of surface "
+                           "\"%s\" (a volume node lies on one surface node at most)",
+                           path, line, sf->name, n + 1, w, (long)v->node_snode[vi] + 1, m->surf[v->node_surf[vi]]->name);
+            goto done;
+        }
+        v->node_surf[vi] = (int32_t)s;
+        v->node_snode[vi] = (int32_t)n;
+        map[n++] = (int32_t)vi;
+    }
+    if (n != sf->n_nodes) {
+        st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": %zu lines for the surface's %zu nodes", path, sf->name, n,
+                       sf->n_nodes);
+        goto done;
+    }
+    v->surf_node[s] = map;
+    map = NULL;
+done:
+    free(map);
+    free(text);
+    return st;
+}
+
+/* A non-negative integer count from a JSON object. */
+static int get_count(const cJSON *o, const char *key, size_t *out)
+{
+    const cJSON *j = cJSON_GetObjectItemCaseSensitive(o, key);
+    if (!cJSON_IsNumber(j)) return -1;
+    double d = j->valuedouble;
+    if (!(d >= 0) || d != floor(d) || d > (double)INT32_MAX) return -1;
+    *out = (size_t)d;
+    return 0;
+}
+
+/* One entry of the "regions" array (k 0-based) into r. */
+static thx_status read_region(thx_ctx *ctx, const char *mpath, size_t k, const cJSON *o, thx_region *r)
+{
+    memset(r, 0, sizeof *r);
+    if (!cJSON_IsObject(o)) return thx_error(ctx, THX_EINPUT, "%s: region %zu: not a JSON object", mpath, k + 1);
+    const cJSON *id = cJSON_GetObjectItemCaseSensitive(o, "id");
+    if (!cJSON_IsNumber(id) || id->valuedouble != (double)(k + 1))
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu: \"id\" must be %zu (ids run 1, 2, ... in the order listed)",
+                         mpath, k + 1, k + 1);
+    const cJSON *nm = cJSON_GetObjectItemCaseSensitive(o, "name");
+    if (!cJSON_IsString(nm) || !name_ok(nm->valuestring, sizeof r->name))
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: region %zu: \"name\" missing, longer than 31 characters or not made of letters, digits, "
+                         "'_', '-', '.'",
+                         mpath, k + 1);
+    snprintf(r->name, sizeof r->name, "%s", nm->valuestring);
+    const cJSON *un = cJSON_GetObjectItemCaseSensitive(o, "units");
+    if (!cJSON_IsString(un) || strcmp(un->valuestring, "S/m") != 0)
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): \"units\" must be \"S/m\"", mpath, k + 1, r->name);
+    const cJSON *src = cJSON_GetObjectItemCaseSensitive(o, "source");
+    if (!cJSON_IsString(src) || strlen(src->valuestring) >= sizeof r->source)
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): \"source\" must be a string of at most %zu bytes", mpath,
+                         k + 1, r->name, sizeof r->source - 1);
+    snprintf(r->source, sizeof r->source, "%s", src->valuestring);
+    const cJSON *sg = cJSON_GetObjectItemCaseSensitive(o, "sigma");
+    if (cJSON_IsNumber(sg)) {
+        double s = sg->valuedouble;
+        if (!isfinite(s) || !(s > 0))
+            return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): conductivity %g S/m is not positive", mpath, k + 1,
+                             r->name, s);
+        r->sigma[0] = r->sigma[4] = r->sigma[8] = s;
+        r->anisotropic = 0;
+        return THX_OK;
+    }
+    int ok = cJSON_IsArray(sg) && cJSON_GetArraySize(sg) == 3;
+    for (int i = 0; ok && i < 3; i++) {
+        const cJSON *row = cJSON_GetArrayItem(sg, i);
+        ok = cJSON_IsArray(row) && cJSON_GetArraySize(row) == 3;
+        for (int j = 0; ok && j < 3; j++) {
+            const cJSON *e = cJSON_GetArrayItem(row, j);
+            ok = cJSON_IsNumber(e);
+            if (ok) r->sigma[3 * i + j] = e->valuedouble;
+        }
+    }
+    if (!ok)
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: region %zu (\"%s\"): \"sigma\" must be a number (isotropic) or a 3x3 array of numbers "
+                         "(tensor), in S/m",
+                         mpath, k + 1, r->name);
+    r->anisotropic = 1;
+    char why[160];
+    if (!tensor_spd(r->sigma, why, sizeof why))
+        return thx_error(ctx, THX_EINPUT, "%s: region %zu (\"%s\"): conductivity tensor %s", mpath, k + 1, r->name, why);
+    return THX_OK;
+}
+
+thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m)
+{
+    const cJSON *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
+    const cJSON *regs = cJSON_GetObjectItemCaseSensitive(root, "regions");
+    const cJSON *surfs = cJSON_GetObjectItemCaseSensitive(root, "surfaces");
+    if (!vo || cJSON_IsNull(vo)) {
+        /* Readers ignore keys they do not use (docs/formats.md); the region
+         * table and node tables only mean something with a volume. */
+        if (regs && !cJSON_IsNull(regs))
+            thx_log(ctx, THX_LOG_WARN, "%s: \"regions\" ignored: the model has no \"volume\"", mpath);
+        for (size_t i = 0; i < m->n_surfaces; i++)
+            if (cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(surfs, (int)i), "vmap"))
+                thx_log(ctx, THX_LOG_WARN, "%s: surface %zu (\"%s\"): \"vmap\" ignored: the model has no \"volume\"",
+                        mpath, i + 1, m->surf[i]->name);
+        return THX_OK;
+    }
+    if (!cJSON_IsObject(vo)) return thx_error(ctx, THX_EINPUT, "%s: \"volume\" must be an object", mpath);
+    const cJSON *jp = cJSON_GetObjectItemCaseSensitive(vo, "pts");
+    const cJSON *jt = cJSON_GetObjectItemCaseSensitive(vo, "tet");
+    if (!cJSON_IsString(jp) || !thx_io_file_name_ok(jp->valuestring) || !cJSON_IsString(jt) ||
+        !thx_io_file_name_ok(jt->valuestring))
+        return thx_error(ctx, THX_EINPUT, "%s: volume: \"pts\" and \"tet\" must name files in the model directory", mpath);
+    size_t nn, nt, nr;
+    if (get_count(vo, "n_nodes", &nn) || get_count(vo, "n_tets", &nt))
+        return thx_error(ctx, THX_EINPUT, "%s: volume: \"n_nodes\" and \"n_tets\" must be counts", mpath);
+    const cJSON *ju = cJSON_GetObjectItemCaseSensitive(vo, "units");
+    if (ju && !(cJSON_IsString(ju) && strcmp(ju->valuestring, "mm") == 0))
+        return thx_error(ctx, THX_EINPUT, "%s: volume: \"units\" must be \"mm\"", mpath);
+    const cJSON *jb = cJSON_GetObjectItemCaseSensitive(vo, "index_base");
+    if (jb && !(cJSON_IsNumber(jb) && jb->valuedouble == 1))
+        return thx_error(ctx, THX_EINPUT, "%s: volume: \"index_base\" must be 1 (volume files are 1-based)", mpath);
+    if (!cJSON_IsArray(regs) || cJSON_GetArraySize(regs) == 0)
+        return thx_error(ctx, THX_EINPUT, "%s: \"regions\" (the conductivity table) missing, empty or not an array", mpath);
+    nr = (size_t)cJSON_GetArraySize(regs);
+    if (cJSON_GetObjectItemCaseSensitive(vo, "n_regions")) {
+        size_t want;
+        if (get_count(vo, "n_regions", &want) || want != nr)
+            return thx_error(ctx, THX_EINPUT, "%s: volume: \"n_regions\" is not the %zu entries of \"regions\"", mpath, nr);
+    }
+    for (size_t i = 0; i < m->n_surfaces; i++) {
+        const cJSON *jm = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(surfs, (int)i), "vmap");
+        if (!cJSON_IsString(jm) || !thx_io_file_name_ok(jm->valuestring))
+            return thx_error(ctx, THX_EINPUT, "%s: surface %zu (\"%s\"): \"vmap\" (its node table) must name a file in the "
+                             "model directory",
+                             mpath, i + 1, m->surf[i]->name);
+    }
+
+    thx_status st = THX_OK;
+    thx_volume *v = NULL;
+    char path[4200], vpts[4200];
+    THX_TRY(thx_volume_create(ctx, &v));
+    v->regions = thx_calloc(ctx, nr, sizeof *v->regions);
+    if (!v->regions) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    v->n_regions = nr;
+    for (size_t k = 0; k < nr; k++) {
+        THX_TRY(read_region(ctx, mpath, k, cJSON_GetArrayItem(regs, (int)k), &v->regions[k]));
+        for (size_t j = 0; j < k; j++)
+            if (strcmp(v->regions[j].name, v->regions[k].name) == 0) {
+                st = thx_error(ctx, THX_EINPUT, "%s: regions %zu and %zu are both named \"%s\"", mpath, j + 1, k + 1,
+                               v->regions[k].name);
+                goto done;
+            }
+    }
+    THX_TRY(join(ctx, vpts, sizeof vpts, dir, jp->valuestring));
+    THX_TRY(read_xyz(ctx, vpts, &v->xyz, &v->n_nodes));
+    if (v->n_nodes == 0) {
+        st = thx_error(ctx, THX_EINPUT, "%s: volume: no nodes", vpts);
+        goto done;
+    }
+    if (v->n_nodes != nn) {
+        st = thx_error(ctx, THX_EINPUT, "%s: volume: manifest says %zu nodes but %s has %zu", mpath, nn, vpts, v->n_nodes);
+        goto done;
+    }
+    THX_TRY(join(ctx, path, sizeof path, dir, jt->valuestring));
+    THX_TRY(read_tets(ctx, path, v->n_nodes, nr, v));
+    if (v->n_tets == 0) {
+        st = thx_error(ctx, THX_EINPUT, "%s: volume: no tetrahedra", path);
+        goto done;
+    }
+    if (v->n_tets != nt) {
+        st = thx_error(ctx, THX_EINPUT, "%s: volume: manifest says %zu tetrahedra but %s has %zu", mpath, nt, path,
+                       v->n_tets);
+        goto done;
+    }
+    /* Node tables: forward from the files, reverse rebuilt here. */
+    v->node_surf = thx_malloc(ctx, v->n_nodes * sizeof *v->node_surf);
+    v->node_snode = thx_malloc(ctx, v->n_nodes * sizeof *v->node_snode);
+    v->surf_n_nodes = thx_calloc(ctx, m->n_surfaces ? m->n_surfaces : 1, sizeof *v->surf_n_nodes);
+    v->surf_node = thx_calloc(ctx, m->n_surfaces ? m->n_surfaces : 1, sizeof *v->surf_node);
+    if (!v->node_surf || !v->node_snode || !v->surf_n_nodes || !v->surf_node) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    v->n_surfaces = m->n_surfaces;
+    for (size_t w = 0; w < v->n_nodes; w++) v->node_surf[w] = v->node_snode[w] = -1;
+    for (size_t i = 0; i < m->n_surfaces; i++) {
+        if (strcmp(m->surf[i]->name, "volume") == 0) {
+            st = thx_error(ctx, THX_EINPUT, "%s: surface \"volume\": name is reserved for the volume mesh files", mpath);
+            goto done;
+        }
+        const cJSON *jm = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(surfs, (int)i), "vmap");
+        THX_TRY(join(ctx, path, sizeof path, dir, jm->valuestring));
+        v->surf_n_nodes[i] = m->surf[i]->n_nodes;
+        THX_TRY(read_vmap(ctx, path, vpts, m, i, v));
+    }
+    thx_volume_destroy(&m->volume);
+    m->volume = v;
+    v = NULL;
+done:
+    thx_volume_destroy(&v);
+    return st;
+}
+
+/* -------------------------------------------------------------- export */
+
+static void put_xyz(FILE *f, const double *p, const char *eol)
+{
+    thx_io_put_coord(f, p[0]);
+    fputc(' ', f);
+    thx_io_put_coord(f, p[1]);
+    fputc(' ', f);
+    thx_io_put_coord(f, p[2]);
+    fputs(eol, f);
+}
+
+/* VTK XML UnstructuredGrid, ASCII inline. Cell data "region" (1-based id);
+ * point data "surface" (1-based surface index, 0 inside) and "surface_node"
+ * (1-based node number on that surface, 0 inside): the node tables. */
+static void write_vtu(FILE *f, const thx_volume *v)
+{
+    fprintf(f,
+            "<?xml version=\"1.0\"?>\n"
+            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+            "  <UnstructuredGrid>\n"
+            "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
+            "      <PointData Scalars=\"surface\">\n"
+            "        <DataArray type=\"Int32\" Name=\"surface\" format=\"ascii\">\n",
+            v->n_nodes, v->n_tets);
+    for (size_t w = 0; w < v->n_nodes; w++)
+        fprintf(f, "%s%ld%s", w % 20 == 0 ? "          " : " ", (long)v->node_surf[w] + 1,
+                (w % 20 == 19 || w + 1 == v->n_nodes) ? "\n" : "");
+    fputs("        </DataArray>\n        <DataArray type=\"Int32\" Name=\"surface_node\" format=\"ascii\">\n", f);
+    for (size_t w = 0; w < v->n_nodes; w++)
+        fprintf(f, "%s%ld%s", w % 20 == 0 ? "          " : " ", (long)v->node_snode[w] + 1,
+                (w % 20 == 19 || w + 1 == v->n_nodes) ? "\n" : "");
+    fputs("        </DataArray>\n      </PointData>\n      <CellData Scalars=\"region\">\n"
+          "        <DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n", f);
+    for (size_t t = 0; t < v->n_tets; t++)
+        fprintf(f, "%s%ld%s", t % 20 == 0 ? "          " : " ", (long)v->region[t] + 1,
+                (t % 20 == 19 || t + 1 == v->n_tets) ? "\n" : "");
+    fputs("        </DataArray>\n      </CellData>\n      <Points>\n"
+          "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n", f);
+    for (size_t w = 0; w < v->n_nodes; w++) {
+        fputs("          ", f);
+        put_xyz(f, v->xyz + 3 * w, "\n");
+    }
+    fputs("        </DataArray>\n      </Points>\n      <Cells>\n"
+          "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n", f);
+    for (size_t t = 0; t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        fprintf(f, "          %ld %ld %ld %ld\n", (long)q[0], (long)q[1], (long)q[2], (long)q[3]);
+    }
+    fputs("        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n", f);
+    for (size_t t = 0; t < v->n_tets; t++)
+        fprintf(f, "%s%zu%s", t % 10 == 0 ? "          " : " ", 4 * (t + 1),
+                (t % 10 == 9 || t + 1 == v->n_tets) ? "\n" : "");
+    fputs("        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n", f);
+    for (size_t t = 0; t < v->n_tets; t++) /* 10 = VTK_TETRA */
+        fprintf(f, "%s10%s", t % 20 == 0 ? "          " : " ", (t % 20 == 19 || t + 1 == v->n_tets) ? "\n" : "");
+    fputs("        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n", f);
+}
+
+/* Gmsh MSH 4.1 ASCII. node_ent[w] = entity (0-based region) of node w;
+ * nodes_in[r] = nodes classified on region r's entity; n_in[r] =
+ * tetrahedra of region r; box[6r..] = region r's bounding box. */
+static void write_msh(FILE *f, const thx_volume *v, const int32_t *node_ent, const size_t *nodes_in, const size_t *n_in,
+                      const double *box)
+{
+    size_t nr = v->n_regions;
+    fputs("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n", f);
+    fprintf(f, "$PhysicalNames\n%zu\n", nr);
+    for (size_t r = 0; r < nr; r++) fprintf(f, "3 %zu \"%s\"\n", r + 1, v->regions[r].name);
+    fputs("$EndPhysicalNames\n", f);
+    fprintf(f, "$Entities\n0 0 0 %zu\n", nr);
+    for (size_t r = 0; r < nr; r++) {
+        fprintf(f, "%zu ", r + 1);
+        put_xyz(f, box + 6 * r, " ");
+        put_xyz(f, box + 6 * r + 3, "");
+        fprintf(f, " 1 %zu 0\n", r + 1);
+    }
+    fputs("$EndEntities\n", f);
+    /* Nodes: one block per entity that holds nodes, tags ascending in each. */
+    size_t blocks = 0;
+    for (size_t r = 0; r < nr; r++) blocks += nodes_in[r] > 0;
+    fprintf(f, "$Nodes\n%zu %zu 1 %zu\n", blocks, v->n_nodes, v->n_nodes);
+    for (size_t r = 0; r < nr; r++) {
+        if (!nodes_in[r]) continue;
+        fprintf(f, "3 %zu 0 %zu\n", r + 1, nodes_in[r]);
+        for (size_t w = 0; w < v->n_nodes; w++)
+            if ((size_t)node_ent[w] == r) fprintf(f, "%zu\n", w + 1);
+        for (size_t w = 0; w < v->n_nodes; w++)
+            if ((size_t)node_ent[w] == r) put_xyz(f, v->xyz + 3 * w, "\n");
+    }
+    fputs("$EndNodes\n", f);
+    /* Elements: one block of tetrahedra (type 4) per non-empty region; tag =
+     * line number in volume.tet. */
+    blocks = 0;
+    for (size_t r = 0; r < nr; r++) blocks += n_in[r] > 0;
+    fprintf(f, "$Elements\n%zu %zu 1 %zu\n", blocks, v->n_tets, v->n_tets);
+    for (size_t r = 0; r < nr; r++) {
+        if (!n_in[r]) continue;
+        fprintf(f, "3 %zu 4 %zu\n", r + 1, n_in[r]);
+        for (size_t t = 0; t < v->n_tets; t++) {
+            if ((size_t)v->region[t] != r) continue;
+            const int32_t *q = v->tet + 4 * t;
+            fprintf(f, "%zu %ld %ld %ld %ld\n", t + 1, (long)q[0] + 1, (long)q[1] + 1, (long)q[2] + 1, (long)q[3] + 1);
+        }
+    }
+    fputs("$EndElements\n", f);
+}
+
+thx_status thx_volume_export(thx_ctx *ctx, const thx_model *m, thx_export_format fmt, const char *path)
+{
+    if (!m->volume) return thx_error(ctx, THX_EINPUT, "%s: the model has no volume mesh to export", path);
+    if (fmt != THX_EXPORT_VTU && fmt != THX_EXPORT_MSH)
+        return thx_error(ctx, THX_EINPUT, "%s: not a volume export format (vtu or msh)", path);
+    THX_CHECK(thx_io_volume_validate(ctx, m, path));
+    /* A private copy of the volume's reverse node table (rebuilt from the
+     * forward one, which validation just checked) and, for Gmsh, each node's
+     * entity, each region's tetrahedron count and bounding box: everything
+     * that may fail is done before the file is opened. */
+    const thx_volume *v = m->volume;
+    thx_status st = THX_OK;
+    thx_volume view = *v;
+    int32_t *ns = thx_malloc(ctx, v->n_nodes * sizeof *ns), *nn = thx_malloc(ctx, v->n_nodes * sizeof *nn);
+    int32_t *ent = NULL;
+    size_t *n_in = NULL, *nodes_in = NULL;
+    double *box = NULL;
+    if (!ns || !nn) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    for (size_t w = 0; w < v->n_nodes; w++) ns[w] = nn[w] = -1;
+    for (size_t s = 0; s < v->n_surfaces; s++)
+        for (size_t i = 0; i < v->surf_n_nodes[s]; i++) {
+            ns[v->surf_node[s][i]] = (int32_t)s;
+            nn[v->surf_node[s][i]] = (int32_t)i;
+        }
+    view.node_surf = ns;
+    view.node_snode = nn;
+    if (fmt == THX_EXPORT_MSH) {
+        size_t nr = v->n_regions;
+        ent = thx_malloc(ctx, v->n_nodes * sizeof *ent);
+        n_in = thx_calloc(ctx, nr, sizeof *n_in);
+        box = thx_malloc(ctx, 6 * nr * sizeof *box);
+        nodes_in = thx_calloc(ctx, nr, sizeof *nodes_in);
+        if (!ent || !n_in || !box || !nodes_in) {
+            st = THX_ENOMEM;
+            goto done;
+        }
+        for (size_t w = 0; w < v->n_nodes; w++) ent[w] = INT32_MAX;
+        for (size_t r = 0; r < nr; r++)
+            for (int k = 0; k < 3; k++) box[6 * r + k] = INFINITY, box[6 * r + 3 + k] = -INFINITY;
+        for (size_t t = 0; t < v->n_tets; t++) {
+            int32_t r = v->region[t];
+            n_in[r]++;
+            for (int a = 0; a < 4; a++) {
+                int32_t w = v->tet[4 * t + a];
+                if (r < ent[w]) ent[w] = r;
+                for (int k = 0; k < 3; k++) {
+                    double c = v->xyz[3 * (size_t)w + (size_t)k];
+                    if (c < box[6 * r + k]) box[6 * r + k] = c;
+                    if (c > box[6 * r + 3 + k]) box[6 * r + 3 + k] = c;
+                }
+            }
+        }
+        for (size_t w = 0; w < v->n_nodes; w++)
+        {
+            if (ent[w] == INT32_MAX) ent[w] = 0; /* a node no tetrahedron uses */
+            nodes_in[ent[w]]++;
+        }
+        for (size_t r = 0; r < nr; r++)
+            if (!n_in[r])
+                for (int k = 0; k < 6; k++) box[6 * r + k] = 0; /* a region with no tetrahedra */
+    }
+    thx_atomic_file af;
+    THX_TRY(thx_atomic_open(ctx, path, &af));
+    if (fmt == THX_EXPORT_VTU) write_vtu(af.f, &view);
+    else write_msh(af.f, &view, ent, nodes_in, n_in, box);
+    st = thx_atomic_commit(ctx, &af); /* checks ferror: a short write fails here */
+done:
+    free(ns);
+    free(nn);
+    free(ent);
+    free(n_in);
+    free(box);
+    free(nodes_in);
+    return st;
+}

@@ -1,0 +1,46 @@
+/*
+ * Private interface between the model directory code (src/io/model.c) and
+ * the volume mesh files (src/io/volume_io.c). Not installed, not public:
+ * the public entry points are thx_model_write / thx_model_read and
+ * thx_volume_export in thorax/model.h.
+ */
+#ifndef THORAX_IO_VOLUME_IO_H
+#define THORAX_IO_VOLUME_IO_H
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+
+#include "thorax/model.h"
+
+/* Shared text helpers (defined in model.c). */
+/* Writes one coordinate "%.6f", a value that rounds to zero as "0.000000". */
+void thx_io_put_coord(FILE *f, double v);
+/* Splits the line at p into at most max whitespace-separated tokens
+ * (NUL-terminated in place); returns the count (max + 1 = "more than max");
+ * *next = start of the following line or NULL. */
+int thx_io_split_line(char *p, char **tok, int max, char **next);
+/* A manifest file name: non-empty, no '/', not "." or "..". */
+int thx_io_file_name_ok(const char *s);
+
+/* Checks m->volume (must be non-NULL) against the model before anything is
+ * written or exported: arrays present, finite coordinates, node numbers in
+ * range and distinct per tetrahedron, region numbers in range, region table
+ * valid (names, symmetric positive definite tensors), node tables consistent
+ * with the surfaces. `where` prefixes the messages (a path or "volume"). */
+thx_status thx_io_volume_validate(thx_ctx *ctx, const thx_model *m, const char *where);
+
+/* Adds "vmap" to each surface object of root's "surfaces" array (in model
+ * order) and the "volume" and "regions" members to root. m->volume != NULL
+ * and validated. */
+thx_status thx_io_volume_manifest(thx_ctx *ctx, const thx_model *m, cJSON *root);
+
+/* Writes volume.pts, volume.tet and NAME.vmap into dir (validated volume). */
+thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const char *dir);
+
+/* Reads the volume of the model directory dir whose manifest (path mpath)
+ * is root, into m->volume; m already holds the surfaces in manifest order.
+ * Does nothing when the manifest has no "volume" (and then refuses
+ * "regions" or a surface "vmap" as inconsistent). */
+thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m);
+
+#endif
