@@ -8,7 +8,7 @@ fails=0
 ok() { echo "ok: $1"; }
 bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
 out=$("$THORAX" help) && ok "thorax help" || bad "thorax help"
-for cmd in phantom surfaces check export slice import; do
+for cmd in phantom surfaces check export slice import mesh; do
     echo "$out" | grep -q "^  $cmd " && ok "help lists $cmd" || bad "help does not list $cmd"
     "$THORAX" "$cmd" --help | grep -q "^usage: thorax $cmd" && ok "$cmd --help" || bad "$cmd --help"
     "$THORAX" help "$cmd" | grep -q "^usage: thorax $cmd" && ok "help $cmd" || bad "help $cmd"

@@ -35,6 +35,8 @@ typedef struct {
     size_t n_delaunay_tets;   /* tetrahedra of the convex hull */
     size_t n_outside;         /* removed: part of them outside the outer surface */
     size_t n_heart;           /* removed: inside the heart (no_heart) */
+    size_t n_readded;         /* put back by the boundary repair (centroid inside) */
+    size_t n_pinches;         /* pinched boundary edges and unused surface nodes left after the repair */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */
     double t_points, t_delaunay, t_classify, t_total; /* seconds */

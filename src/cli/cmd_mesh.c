@@ -67,9 +67,9 @@ int cmd_mesh(int argc, char **argv)
             printf("wrote %s\n", out);
         }
         if (want_stats)
-            printf("Delaunay %zu tetrahedra, %zu removed outside, %zu inside the heart; times (s): points %.3f, "
-                   "Delaunay %.3f, classification %.3f, total %.3f\n",
-                   S.n_delaunay_tets, S.n_outside, S.n_heart, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
+            printf("Delaunay %zu tetrahedra, %zu removed outside, %zu inside the heart, %zu put back by the boundary "
+                   "repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, classification %.3f, total %.3f\n",
+                   S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_readded, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

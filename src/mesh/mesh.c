@@ -83,6 +83,199 @@ static int outside_domain(const locator *outer, thx_vec3 p, double on_eps)
     return !locator_inside(outer, p) && !locator_near(outer, p, on_eps);
 }
 
+/* The region of a point (paper 3.3): a chain of inside/outside tests, the innermost surface
+ * containing it deciding: outside the fat/muscle interface -> fat; outside the inner muscle
+ * border -> muscle; inside a lung, the heart or an "other" surface -> its region; else the
+ * mean thorax (region 0). */
+static int classify_region(const thx_model *m, const locator *loc, const int *surf_region, thx_vec3 c)
+{
+    size_t ns = m->n_surfaces;
+    for (size_t s = 0; s < ns; s++) {
+        thx_role role = m->surf[s]->role;
+        if ((role == THX_ROLE_FAT || role == THX_ROLE_MUSCLE) && !locator_inside(&loc[s], c)) return surf_region[s];
+    }
+    for (size_t s = 0; s < ns; s++) {
+        thx_role role = m->surf[s]->role;
+        if ((role == THX_ROLE_LUNG || role == THX_ROLE_HEART || role == THX_ROLE_OTHER) && surf_region[s] >= 0 &&
+            locator_inside(&loc[s], c))
+            return surf_region[s];
+    }
+    return 0;
+}
+
+typedef struct { int32_t a, b; } medge;
+static int cmp_medge(const void *x, const void *y)
+{
+    const medge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+typedef struct { int32_t v, w1, w2; } link_rec;
+static int cmp_link_rec(const void *x, const void *y)
+{
+    int32_t a = ((const link_rec *)x)->v, b = ((const link_rec *)y)->v;
+    return (a > b) - (a < b);
+}
+
+static int uf_find(int *parent, int i)
+{
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+/* Connected components of a vertex's link: the graph of the edges (w1, w2) of n records. */
+static int link_components(const link_rec *r, size_t n)
+{
+    int32_t w[128];
+    int parent[128], nw = 0, comps = 0;
+    if (2 * n > 128) return 1; /* an unusually crowded vertex: not judged */
+    for (size_t k = 0; k < n; k++)
+        for (int e = 0; e < 2; e++) {
+            int32_t x = e ? r[k].w2 : r[k].w1;
+            int found = 0;
+            for (int i = 0; i < nw && !found; i++) found = w[i] == x;
+            if (!found) { w[nw] = x; parent[nw] = nw; nw++; }
+        }
+    comps = nw;
+    for (size_t k = 0; k < n; k++) {
+        int i1 = 0, i2 = 0;
+        while (w[i1] != r[k].w1) i1++;
+        while (w[i2] != r[k].w2) i2++;
+        int a = uf_find(parent, i1), b = uf_find(parent, i2);
+        if (a != b) { parent[a] = b; comps--; }
+    }
+    return comps;
+}
+
+static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
+{
+    thx_vec3 c = {0, 0, 0};
+    for (int k = 0; k < 4; k++) c = thx_v3_add(c, thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]));
+    return thx_v3_scale(c, 0.25);
+}
+
+/*
+ * Boundary repair. Removing the tetrahedra that reach outside leaves a boundary
+ * that can pinch: an edge in four boundary faces (two wedges of tetrahedra
+ * touching along it), a vertex where two cones of tetrahedra touch, or a
+ * surface node left in no tetrahedron. For each such
+ * edge or node, the removed tetrahedra around it whose centroid lies inside the
+ * domain are put back (the paper's centroid test instead of the stricter
+ * edge-midpoint test), until nothing changes. Returns the number put back and,
+ * in *bad, the pinched edges and unused surface nodes that remain.
+ */
+static thx_status repair_boundary(thx_ctx *ctx, size_t nt, const int32_t *tets, const int32_t *nbrs, unsigned char *keep,
+                                  const double *xyz, size_t nn, size_t n_surf_nodes, const locator *outer, double on_eps,
+                                  size_t *readded, size_t *bad)
+{
+    thx_status st = THX_OK;
+    *readded = 0;
+    *bad = 0;
+    /* vertex -> tetrahedra (CSR) */
+    size_t *start = thx_calloc(ctx, nn + 1, sizeof *start);
+    int32_t *inc = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *inc);
+    medge *e = NULL;
+    unsigned char *used = thx_malloc(ctx, nn ? nn : 1), *want = thx_malloc(ctx, nn ? nn : 1);
+    size_t cap = 0;
+    if (!start || !inc || !used || !want) { st = THX_ENOMEM; goto done; }
+    for (size_t t = 0; t < 4 * nt; t++) start[tets[t] + 1]++;
+    for (size_t v = 0; v < nn; v++) start[v + 1] += start[v];
+    {
+        size_t *fill = thx_malloc(ctx, (nn ? nn : 1) * sizeof *fill);
+        if (!fill) { st = THX_ENOMEM; goto done; }
+        memcpy(fill, start, nn * sizeof *fill);
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 4; k++) inc[fill[tets[4 * t + k]]++] = (int32_t)t;
+        free(fill);
+    }
+    for (int iter = 0; iter < 20; iter++) {
+        /* boundary edges of the kept set, and nodes in use */
+        size_t ne = 0;
+        memset(used, 0, nn);
+        memset(want, 0, nn);
+        for (size_t t = 0; t < nt; t++) {
+            if (keep[t] != 1) continue;
+            for (int k = 0; k < 4; k++) used[tets[4 * t + k]] = 1;
+            for (int f = 0; f < 4; f++) {
+                int32_t u = nbrs[4 * t + f];
+                if (u >= 0 && keep[u] == 1) continue;
+                st = thx_grow(ctx, (void **)&e, &cap, ne + 3, sizeof *e);
+                if (st != THX_OK) goto done;
+                int32_t v[3];
+                for (int q = 0, k = 0; q < 4; q++) if (q != f) v[k++] = tets[4 * t + q];
+                for (int q = 0; q < 3; q++) {
+                    int32_t a = v[q], b = v[(q + 1) % 3];
+                    e[ne].a = a < b ? a : b;
+                    e[ne].b = a < b ? b : a;
+                    ne++;
+                }
+            }
+        }
+        qsort(e, ne, sizeof *e, cmp_medge);
+        size_t n_bad = 0;
+        for (size_t k = 0; k < ne;) {
+            size_t j = k + 1;
+            while (j < ne && e[j].a == e[k].a && e[j].b == e[k].b) j++;
+            if (j - k > 2) { want[e[k].a] = want[e[k].b] = 1; n_bad++; }
+            k = j;
+        }
+        for (size_t v = 0; v < n_surf_nodes; v++)
+            if (!used[v]) { want[v] = 1; n_bad++; }
+        /* Pinched vertices: at a vertex of a closed 2-manifold the opposite edges of its boundary
+           faces (its link) form one cycle; two cones touching at the vertex give two. */
+        {
+            size_t nr = 0;
+            link_rec *rec = thx_malloc(ctx, (ne ? ne : 1) * sizeof *rec); /* ne = 3 x faces: one per corner */
+            if (!rec) { st = THX_ENOMEM; goto done; }
+            for (size_t t = 0; t < nt; t++) {
+                if (keep[t] != 1) continue;
+                for (int f = 0; f < 4; f++) {
+                    int32_t u = nbrs[4 * t + f];
+                    if (u >= 0 && keep[u] == 1) continue;
+                    int32_t c3[3];
+                    for (int q = 0, k = 0; q < 4; q++) if (q != f) c3[k++] = tets[4 * t + q];
+                    for (int q = 0; q < 3; q++) {
+                        rec[nr].v = c3[q];
+                        rec[nr].w1 = c3[(q + 1) % 3];
+                        rec[nr].w2 = c3[(q + 2) % 3];
+                        nr++;
+                    }
+                }
+            }
+            qsort(rec, nr, sizeof *rec, cmp_link_rec);
+            for (size_t k = 0; k < nr;) {
+                size_t j = k + 1;
+                while (j < nr && rec[j].v == rec[k].v) j++;
+                if (link_components(rec + k, j - k) > 1 && !want[rec[k].v]) { want[rec[k].v] = 1; n_bad++; }
+                k = j;
+            }
+            free(rec);
+        }
+        *bad = n_bad;
+        if (n_bad == 0) break;
+        size_t added = 0;
+        for (size_t v = 0; v < nn; v++) {
+            if (!want[v]) continue;
+            for (size_t k = start[v]; k < start[v + 1]; k++) {
+                int32_t t = inc[k];
+                if (keep[t] != 0) continue;
+                thx_vec3 c = tet_centroid(xyz, tets + 4 * t);
+                if (locator_inside(outer, c) || locator_near(outer, c, on_eps)) { keep[t] = 1; added++; }
+            }
+        }
+        *readded += added;
+        if (added == 0) break;
+    }
+done:
+    free(start);
+    free(inc);
+    free(e);
+    free(used);
+    free(want);
+    return st;
+}
+
 thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats)
 {
     thx_status st = THX_OK;
@@ -252,42 +445,37 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
             }
         thx_vec3 c = thx_v3_scale(thx_v3_add(thx_v3_add(P[0], P[1]), thx_v3_add(P[2], P[3])), 0.25);
         if (!out && on_surf == 4) out = outside_domain(&loc[outer], c, on_eps);
+        region[t] = -1;
         if (out) { keep[t] = 0; n_out++; continue; }
-        if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], c)) { keep[t] = 0; n_heart++; continue; }
+        if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], c)) { keep[t] = 2; n_heart++; continue; }
         keep[t] = 1;
-        /* chain of tests (paper 3.3): the innermost surface containing the centroid decides */
-        int r = 0;
-        for (size_t s = 0; s < ns; s++) {
-            thx_role role = m->surf[s]->role;
-            if (role == THX_ROLE_FAT) { if (!locator_inside(&loc[s], c)) { r = surf_region[s]; break; } }
-            else if (role == THX_ROLE_MUSCLE) { if (!locator_inside(&loc[s], c)) { r = surf_region[s]; break; } }
-        }
-        if (r == 0)
-            for (size_t s = 0; s < ns; s++) {
-                thx_role role = m->surf[s]->role;
-                if ((role == THX_ROLE_LUNG || role == THX_ROLE_HEART || role == THX_ROLE_OTHER) && surf_region[s] >= 0 &&
-                    locator_inside(&loc[s], c)) {
-                    r = surf_region[s];
-                    break;
-                }
-            }
-        region[t] = r;
+        region[t] = classify_region(m, loc, surf_region, c);
     }
     S.n_outside = n_out;
     S.n_heart = n_heart;
+    {
+        size_t readded = 0, bad = 0;
+        THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &readded, &bad));
+        S.n_readded = readded;
+        S.n_pinches = bad;
+        if (readded)
+#pragma omp parallel for schedule(dynamic, 4096)
+            for (long t = 0; t < (long)nt; t++)
+                if (keep[t] == 1 && region[t] < 0) region[t] = classify_region(m, loc, surf_region, tet_centroid(xyz, tets + 4 * t));
+    }
     double t3 = thx_wtime();
     S.t_classify = t3 - t2;
 
     /* the volume: right-handed tetrahedra (swap two corners of the Delaunay output) */
     THX_TRY(thx_volume_create(ctx, &v));
     size_t kept = 0;
-    for (size_t t = 0; t < nt; t++) kept += keep[t];
+    for (size_t t = 0; t < nt; t++) kept += keep[t] == 1;
     v->tet = thx_malloc(ctx, 4 * (kept ? kept : 1) * sizeof *v->tet);
     v->region = thx_malloc(ctx, (kept ? kept : 1) * sizeof *v->region);
     v->regions = thx_malloc(ctx, (size_t)n_regions * sizeof *v->regions);
     if (!v->tet || !v->region || !v->regions) { st = THX_ENOMEM; goto done; }
     for (size_t t = 0, k = 0; t < nt; t++) {
-        if (!keep[t]) continue;
+        if (keep[t] != 1) continue;
         v->tet[4 * k] = tets[4 * t];
         v->tet[4 * k + 1] = tets[4 * t + 1];
         v->tet[4 * k + 2] = tets[4 * t + 3];

@@ -1,0 +1,46 @@
+#!/bin/bash
+# End-to-end volume meshing (paper 3.3) of the medium phantom: phantom -> surfaces ->
+# mesh -> check (surfaces and volume: conforming, closed boundary, positive,
+# volume within 1% of the torso's), with and without the heart; the counts against
+# the paper's medium model (22,000 nodes, 130,000 tetrahedra); vtu and msh exports.
+# Environment: THORAX = the CLI, WORK = a scratch directory.
+set -u
+: "${THORAX:?}" "${WORK:?}"
+PY=/usr/bin/python3
+rm -rf "$WORK"
+mkdir -p "$WORK"
+fails=0
+ok() { echo "ok: $1"; }
+bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
+"$THORAX" phantom --resolution medium --seed 3 -o "$WORK/c.txt" -q && "$THORAX" surfaces "$WORK/c.txt" -o "$WORK/m" -q || { bad "phantom/surfaces"; exit 1; }
+for variant in heart no-heart; do
+    opt=""; [ $variant = no-heart ] && opt="--no-heart"
+    if "$THORAX" mesh "$WORK/m" -o "$WORK/v_$variant" $opt > "$WORK/mesh_$variant.log" 2>&1; then ok "mesh ($variant)"; else bad "mesh ($variant): $(cat "$WORK/mesh_$variant.log")"; continue; fi
+    "$THORAX" check "$WORK/v_$variant" --json > "$WORK/check_$variant.json" 2> "$WORK/check_$variant.err"
+    rc=$?
+    [ $rc -eq 0 ] && ok "check ($variant) exit 0" || bad "check ($variant) exit $rc: $(cat "$WORK/check_$variant.err")"
+    if $PY - "$WORK/check_$variant.json" $variant <<'PYEOF'
+import json, sys
+d = json.load(open(sys.argv[1])); v = d["volume"]; variant = sys.argv[2]
+errs = []
+if not (v["ok"] and v["conforming"] and v["boundary_closed"] and v["positive"]): errs.append("volume checks: %s" % v.get("reasons"))
+diff = v["volume"]["rel_diff"] if isinstance(v["volume"], dict) and "rel_diff" in v["volume"] else None
+nodes, tets = v["nodes"], v["tetrahedra"]
+print("%s: %d nodes, %d tetrahedra, volume difference %s" % (variant, nodes, tets, diff))
+if diff is None or abs(diff) > 0.01: errs.append("volume difference %s" % diff)
+if variant == "heart" and (abs(nodes - 22000) > 0.15 * 22000 or abs(tets - 130000) > 0.15 * 130000): errs.append("counts %d %d" % (nodes, tets))
+if errs: print("\n".join(errs)); sys.exit(1)
+PYEOF
+    then ok "figures ($variant)"; else bad "figures ($variant)"; fi
+done
+grep -q '"regions"' "$WORK/v_heart/model.json" && grep -q '"muscle"' "$WORK/v_heart/model.json" && ok "region table in model.json" || bad "region table"
+"$THORAX" export "$WORK/v_heart" --format vtu -o "$WORK/exp" -q && "$THORAX" export "$WORK/v_heart" --format msh -o "$WORK/exp" -q &&
+    [ -s "$WORK/exp/volume.vtu" ] && [ -s "$WORK/exp/volume.msh" ] && ok "vtu and msh exports" || bad "exports"
+# a model without an outer surface cannot be meshed
+mkdir -p "$WORK/noouter" && cp "$WORK/m/heart.pts" "$WORK/m/heart.fac" "$WORK/noouter/" &&
+printf '{"format": "thorax-model", "version": 1, "units": "mm", "surfaces": [{"name": "heart", "role": "heart", "pts": "heart.pts", "fac": "heart.fac", "n_nodes": %d, "n_tris": %d}]}\n' \
+    "$(grep -c . "$WORK/m/heart.pts")" "$(grep -c . "$WORK/m/heart.fac")" > "$WORK/noouter/model.json"
+"$THORAX" mesh "$WORK/noouter" 2> "$WORK/err"; rc=$?
+[ $rc -eq 1 ] && grep -q 'no surface of role "outer"' "$WORK/err" && ok "no outer surface: refused" || bad "no outer surface (exit $rc)"
+if [ $fails -ne 0 ]; then echo "$fails failed"; exit 1; fi
+echo "all passed"
