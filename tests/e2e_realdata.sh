@@ -50,5 +50,15 @@ model tank_reversed outer "$DATA/tank_full_771.pts" "$WORK/rev.fac"
 "$THORAX" surfaces "$WORK/rev.txt" -o "$WORK/rev_rebuilt" -q && "$THORAX" check "$WORK/rev_rebuilt" -q &&
     ok "a reversed surface slices into clockwise loops, which rebuild outward all the same" || bad "reversed surface"
 
+# the tank with the closed sock inside, imported and meshed (grid planes at the grid spacing):
+# the volume passes thorax check (conforming, closed, positive, within 1% of the tank's volume)
+if "$THORAX" import -o "$WORK/tanksock" "$DATA/tank_full_771.pts" --name tank --role outer \
+        "$DATA/25feb97_sock_closed.pts" --name sock --role heart -q &&
+   "$THORAX" mesh "$WORK/tanksock" --grid 10 -q && "$THORAX" check "$WORK/tanksock" -q; then
+    ok "tank and sock imported, meshed and checked"
+else
+    bad "tank and sock mesh"
+fi
+
 if [ $fails -ne 0 ]; then echo "$fails failed"; exit 1; fi
 echo "all passed"

@@ -10,9 +10,9 @@
  *  3. Tetrahedra any part of which lies outside the domain are removed: the
  *     paper tests "the midpoint of each side of the tetrahedron" against the
  *     enclosing surface; we test the midpoints of the edges whose two ends are
- *     surface nodes and, when all four corners are, the centroid (an edge with
- *     an interior grid node has at least that end strictly inside, and the
- *     grid keeps a tolerance from every surface). With no_heart, tetrahedra
+ *     surface nodes and, when at least two corners are, the centroid (an edge
+ *     with an interior grid node has at least that end strictly inside, and
+ *     the grid keeps a tolerance from every surface). With no_heart, tetrahedra
  *     whose centroid is inside the heart are removed too.
  *  4. Regions by a chain of inside/outside tests on the centroid (paper 3.3):
  *     outside the fat/muscle interface -> fat; outside the inner muscle border
@@ -444,7 +444,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                 out = outside_domain(&loc[outer], thx_v3_scale(thx_v3_add(P[a], P[b]), 0.5), on_eps);
             }
         thx_vec3 c = thx_v3_scale(thx_v3_add(thx_v3_add(P[0], P[1]), thx_v3_add(P[2], P[3])), 0.25);
-        if (!out && on_surf == 4) out = outside_domain(&loc[outer], c, on_eps);
+        if (!out && on_surf >= 2) out = outside_domain(&loc[outer], c, on_eps);
         region[t] = -1;
         if (out) { keep[t] = 0; n_out++; continue; }
         if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], c)) { keep[t] = 2; n_heart++; continue; }
