@@ -374,7 +374,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     for (size_t s = 0; s < ns; s++) memcpy(xyz + 3 * offset[s], m->surf[s]->xyz, 3 * m->surf[s]->n_nodes * sizeof *xyz);
     {
         size_t at = offset[ns];
-        for (size_t k = 0; k < np; k++) { memcpy(xyz + 3 * at, gp[k], 3 * gn[k] * sizeof *xyz); at += gn[k]; }
+        for (size_t k = 0; k < np; k++) {
+            if (gn[k]) memcpy(xyz + 3 * at, gp[k], 3 * gn[k] * sizeof *xyz);
+            at += gn[k];
+        }
     }
     double t1 = thx_wtime();
     S.t_points = t1 - t0;
