@@ -27,6 +27,8 @@ typedef struct {
     double layer_spacing; /* planes every layer_spacing mm; 0 = the layers of the outer surface's nodes
                              when they lie on planes (a model built from contours), else `grid` */
     int no_heart;         /* 1: the heart's interior is not part of the domain */
+    double sliver_deg;    /* tetrahedra on the boundary with a dihedral angle below this (degrees) are
+                             peeled off (default 5; 0 = keep them) */
 } thx_mesh_opts;
 
 typedef struct {
@@ -35,7 +37,9 @@ typedef struct {
     size_t n_delaunay_tets;   /* tetrahedra of the convex hull */
     size_t n_outside;         /* removed: part of them outside the outer surface */
     size_t n_heart;           /* removed: inside the heart (no_heart) */
+    size_t n_slivers_peeled;  /* flat tetrahedra removed from the boundary */
     size_t n_readded;         /* put back by the boundary repair (centroid inside) */
+    size_t n_taken;           /* taken away by the boundary repair (where nothing could be put back) */
     size_t n_pinches;         /* pinched boundary edges and unused surface nodes left after the repair */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */

@@ -8,7 +8,8 @@
 
 static void help(void)
 {
-    printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart] [--stats]\n\n"
+    printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
+           "                        [--sliver DEG] [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
            "hybrid method): the surface nodes plus a square grid on each layer plane,\n"
            "points within a tolerance of any surface dropped; Delaunay; tetrahedra any part\n"
@@ -23,6 +24,7 @@ static void help(void)
            "  --layer-spacing MM     grid planes this far apart (default: the layers of the\n"
            "                         outer surface when it was built from contours, else --grid)\n"
            "  --no-heart             leave the heart's interior out of the domain\n"
+           "  --sliver DEG           peel boundary tetrahedra with a dihedral angle below DEG (5; 0 = off)\n"
            "  --stats                print counts and times\n"
            "  -v, -q                 more / less logging\n");
 }
@@ -41,6 +43,7 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--tol")) { if (cli_parse_double("mesh", a, v, &o.tol)) return 2; i++; if (!(o.tol > 0)) return cli_usage_error("mesh", "--tol must be positive"); }
         else if (!strcmp(a, "--layer-spacing")) { if (cli_parse_double("mesh", a, v, &o.layer_spacing)) return 2; i++; if (!(o.layer_spacing > 0)) return cli_usage_error("mesh", "--layer-spacing must be positive"); }
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
+        else if (!strcmp(a, "--sliver")) { if (cli_parse_double("mesh", a, v, &o.sliver_deg)) return 2; i++; if (o.sliver_deg < 0 || o.sliver_deg >= 70) return cli_usage_error("mesh", "--sliver must be between 0 and 70 degrees"); }
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -67,9 +70,10 @@ int cmd_mesh(int argc, char **argv)
             printf("wrote %s\n", out);
         }
         if (want_stats)
-            printf("Delaunay %zu tetrahedra, %zu removed outside, %zu inside the heart, %zu put back by the boundary "
-                   "repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, classification %.3f, total %.3f\n",
-                   S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_readded, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
+            printf("Delaunay %zu tetrahedra, %zu removed outside, %zu inside the heart, %zu flat ones peeled off the "
+                   "boundary, %zu put back and %zu taken away by the boundary repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, "
+                   "classification %.3f, total %.3f\n",
+                   S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_slivers_peeled, S.n_readded, S.n_taken, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

@@ -35,6 +35,7 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->tol = 0;
     o->layer_spacing = 0;
     o->no_heart = 0;
+    o->sliver_deg = 5.0;
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -148,6 +149,30 @@ static int link_components(const link_rec *r, size_t n)
     return comps;
 }
 
+/* Smallest dihedral angle of a tetrahedron, degrees. */
+static double tet_min_dihedral(const double *xyz, const int32_t *q)
+{
+    static const int fc[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    thx_vec3 p[4], n[4];
+    for (int k = 0; k < 4; k++) p[k] = thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]);
+    for (int f = 0; f < 4; f++) {
+        thx_vec3 v = thx_v3_cross(thx_v3_sub(p[fc[f][1]], p[fc[f][0]]), thx_v3_sub(p[fc[f][2]], p[fc[f][0]]));
+        double l = thx_v3_norm(v);
+        n[f] = l > 0 ? thx_v3_scale(v, 1.0 / l) : v;
+        /* orient each normal away from the opposite corner */
+        if (thx_v3_dot(n[f], thx_v3_sub(p[f], p[fc[f][0]])) > 0) n[f] = thx_v3_scale(n[f], -1.0);
+    }
+    double best = 180.0;
+    for (int f = 0; f < 4; f++)
+        for (int g = f + 1; g < 4; g++) {
+            double c = -thx_v3_dot(n[f], n[g]);
+            c = c > 1 ? 1 : c < -1 ? -1 : c;
+            double a = acos(c) * 180.0 / M_PI;
+            if (a < best) best = a;
+        }
+    return best;
+}
+
 static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
 {
     thx_vec3 c = {0, 0, 0};
@@ -162,15 +187,17 @@ static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
  * surface node left in no tetrahedron. For each such
  * edge or node, the removed tetrahedra around it whose centroid lies inside the
  * domain are put back (the paper's centroid test instead of the stricter
- * edge-midpoint test), until nothing changes. Returns the number put back and,
+ * edge-midpoint test); where none is, the tetrahedra at the pinch that touch
+ * the boundary are taken away instead; until nothing changes. Returns the number put back and,
  * in *bad, the pinched edges and unused surface nodes that remain.
  */
 static thx_status repair_boundary(thx_ctx *ctx, size_t nt, const int32_t *tets, const int32_t *nbrs, unsigned char *keep,
                                   const double *xyz, size_t nn, size_t n_surf_nodes, const locator *outer, double on_eps,
-                                  size_t *readded, size_t *bad)
+                                  size_t *readded, size_t *removed, size_t *bad)
 {
     thx_status st = THX_OK;
     *readded = 0;
+    *removed = 0;
     *bad = 0;
     /* vertex -> tetrahedra (CSR) */
     size_t *start = thx_calloc(ctx, nn + 1, sizeof *start);
@@ -259,13 +286,35 @@ static thx_status repair_boundary(thx_ctx *ctx, size_t nt, const int32_t *tets, 
             if (!want[v]) continue;
             for (size_t k = start[v]; k < start[v + 1]; k++) {
                 int32_t t = inc[k];
+                if (keep[t] == 3) { keep[t] = 1; added++; continue; } /* a peeled sliver: it was inside */
                 if (keep[t] != 0) continue;
                 thx_vec3 c = tet_centroid(xyz, tets + 4 * t);
                 if (locator_inside(outer, c) || locator_near(outer, c, on_eps)) { keep[t] = 1; added++; }
             }
         }
         *readded += added;
-        if (added == 0) break;
+        if (added == 0) {
+            /* Nothing inside to put back: open the pinch instead, taking away the tetrahedra at the
+               pinched edges and vertices that touch the boundary (never to be put back). */
+            size_t taken = 0;
+            for (size_t t = 0; t < nt; t++) {
+                if (keep[t] != 1) continue;
+                int pinched = 0;
+                for (int k = 0; k < 4 && !pinched; k++) pinched = want[tets[4 * t + k]];
+                if (!pinched) continue;
+                int touches = 0;
+                for (int f = 0; f < 4 && !touches; f++) {
+                    int32_t u = nbrs[4 * t + f];
+                    touches = u < 0 || keep[u] != 1;
+                }
+                /* only tetrahedra with at least two corners at pinches: the wedge or cone itself */
+                int corners = 0;
+                for (int k = 0; k < 4; k++) corners += want[tets[4 * t + k]];
+                if (touches && corners >= 2) { keep[t] = 4; taken++; }
+            }
+            *removed += taken;
+            if (taken == 0) break;
+        }
     }
 done:
     free(start);
@@ -345,7 +394,11 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
             double *buf = NULL;
             for (long j = j0; j <= j1; j++)
                 for (long i = i0; i <= i1; i++) {
-                    thx_vec3 p = thx_v3(((double)i + 0.5) * grid, ((double)j + 0.5) * grid, planes[k]);
+                    /* every other plane's grid is shifted by half a step in x and y: the nodes of two
+                       neighbouring planes are then not above one another (a body-centred lattice),
+                       which avoids the flat tetrahedra of vertically aligned squares */
+                    double sh = (k & 1) ? 0.5 : 0.0;
+                    thx_vec3 p = thx_v3(((double)i + 0.5 + sh) * grid, ((double)j + 0.5 + sh) * grid, planes[k]);
                     if (!locator_inside(&loc[outer], p)) continue;
                     if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], p)) continue;
                     int near = 0;
@@ -456,10 +509,40 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     }
     S.n_outside = n_out;
     S.n_heart = n_heart;
+    /* Flat tetrahedra (slivers) with a face on the boundary are peeled off, layer by layer (the
+       paper's quality control); inside the domain they stay, since removing them would leave a void. */
+    if (o->sliver_deg > 0) {
+        size_t peeled = 0;
+        for (int round = 0; round < 8; round++) {
+            size_t this_round = 0;
+            for (size_t t = 0; t < nt; t++) {
+                if (keep[t] != 1) continue;
+                int on_boundary = 0;
+                for (int f = 0; f < 4 && !on_boundary; f++) {
+                    int32_t u = nbrs[4 * t + f];
+                    on_boundary = u < 0 || keep[u] != 1;
+                }
+                if (on_boundary && tet_min_dihedral(xyz, tets + 4 * t) < o->sliver_deg) { keep[t] = 3; this_round++; }
+            }
+            peeled += this_round;
+            if (!this_round) break;
+        }
+        S.n_slivers_peeled = peeled;
+    }
     {
-        size_t readded = 0, bad = 0;
-        THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &readded, &bad));
+        size_t readded = 0, bad = 0, taken = 0;
+        THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &readded, &taken, &bad));
+        if (bad && S.n_slivers_peeled) {
+            /* the peeling opened a pinch the repair cannot close: keep the slivers instead */
+            for (size_t t = 0; t < nt; t++) if (keep[t] == 3) keep[t] = 1;
+            S.n_slivers_peeled = 0;
+            for (size_t t = 0; t < nt; t++) if (keep[t] == 4) keep[t] = 1;
+            size_t more = 0;
+            THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &more, &taken, &bad));
+            readded += more;
+        }
         S.n_readded = readded;
+        S.n_taken = taken;
         S.n_pinches = bad;
         if (readded)
 #pragma omp parallel for schedule(dynamic, 4096)
