@@ -72,7 +72,13 @@ typedef struct {
  *            caller (free()).
  *   *stats   (if stats != NULL) figures of the run.
  * Every input point is a vertex of the output (no point is dropped, points on
- * the hull between hull corners included). Tetrahedra are positive-volume.
+ * the hull between hull corners included). Tetrahedra are positive-volume for
+ * the coordinates GIVEN (exact arithmetic on the doubles). Points meant to be
+ * coplanar but computed inexactly (a 3.9 mm grid: (i + 0.5) * 3.9 in double)
+ * are not coplanar, and the result may hold slivers with orient3d ~ 1e-13
+ * that turn flat or inverted if the coordinates are rounded afterwards (e.g.
+ * written "%.6f"): round the points to their stored precision BEFORE the call;
+ * exact degeneracies are then resolved by the perturbation below.
  * Among cospherical points the tetrahedralization chosen is the one of a
  * symbolic perturbation that lifts point i by eps^(n - i) (the largest index
  * perturbed most): deterministic and independent of the insertion order.

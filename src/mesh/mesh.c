@@ -38,6 +38,14 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->sliver_deg = 5.0;
 }
 
+/* x as it reads back from the model files ("%.6f"). */
+static double stored(double x)
+{
+    char buf[64];
+    snprintf(buf, sizeof buf, "%.6f", x);
+    return strtod(buf, NULL);
+}
+
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -398,7 +406,11 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                        neighbouring planes are then not above one another (a body-centred lattice),
                        which avoids the flat tetrahedra of vertically aligned squares */
                     double sh = (k & 1) ? 0.5 : 0.0;
-                    thx_vec3 p = thx_v3(((double)i + 0.5 + sh) * grid, ((double)j + 0.5 + sh) * grid, planes[k]);
+                    /* rounded to the precision volume.pts stores, so that the file holds exactly the
+                       points that were tetrahedralized (a thin tetrahedron of unrounded grid points
+                       can become exactly flat once written) */
+                    thx_vec3 p = thx_v3(stored(((double)i + 0.5 + sh) * grid), stored(((double)j + 0.5 + sh) * grid),
+                                        stored(planes[k]));
                     if (!locator_inside(&loc[outer], p)) continue;
                     if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], p)) continue;
                     int near = 0;
