@@ -18,6 +18,17 @@ typedef struct {
     const thx_surface *s;
     thx_bvh *bvh;
     double reach; /* length of the rays: beyond the surface's bounding box */
+    /* Voxel cache (built by locator_init, read-only afterwards; vox == NULL:
+     * none, every query casts rays). Voxels no triangle's bounding box touches
+     * hold no surface point; connected sets of them share one side of the
+     * (closed) surface, found by one exact ray each. A point in a touched
+     * voxel casts a short segment to the centre of a nearby labelled voxel
+     * (ref) and flips that label per crossing, or the long rays if the
+     * segment grazes anything. */
+    double lo[3], hi[3], inv_h[3], h[3];
+    int n[3];
+    unsigned char *vox; /* per voxel: 0 touched (no label), 1 inside, 2 outside */
+    int32_t *ref;       /* per voxel: a labelled voxel whose centre is its own, or -1 */
 } locator;
 
 thx_status locator_init(thx_ctx *ctx, locator *l, const thx_surface *s);
