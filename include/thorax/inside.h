@@ -67,6 +67,8 @@ double thx_triangle_solid_angle(thx_vec3 a, thx_vec3 b, thx_vec3 c, thx_vec3 p);
 
 /* Distance from p to the closed triangle a, b, c (mm). */
 double thx_triangle_distance(thx_vec3 a, thx_vec3 b, thx_vec3 c, thx_vec3 p);
+/* The same distance squared (no square root: for comparisons against r * r). */
+double thx_triangle_distance2(thx_vec3 a, thx_vec3 b, thx_vec3 c, thx_vec3 p);
 
 /* Total solid angle subtended at p by all triangles of s (steradians):
  * 4pi inside a closed surface oriented counterclockwise from outside, 0 outside.

@@ -203,6 +203,8 @@ double thx_triangle_distance(thx_vec3 a, thx_vec3 b, thx_vec3 c, thx_vec3 p)
     return sqrt(tri_dist2(a, b, c, p));
 }
 
+double thx_triangle_distance2(thx_vec3 a, thx_vec3 b, thx_vec3 c, thx_vec3 p) { return tri_dist2(a, b, c, p); }
+
 /* Exact test: p lies on the closed triangle a, b, c (coplanar and inside or
  * on its boundary). Projects along the dominant axis of the normal, which is
  * an affine bijection of the plane when p is coplanar. */

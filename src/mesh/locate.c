@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "thorax/inside.h"
 #include "thorax/predicates.h"
 
 typedef struct {
@@ -333,41 +334,13 @@ typedef struct {
     double r2;
 } near_state;
 
-/* Squared distance from p to triangle abc (closest-point by regions). */
-static double tri_dist2(thx_vec3 p, thx_vec3 a, thx_vec3 b, thx_vec3 c)
-{
-    thx_vec3 ab = thx_v3_sub(b, a), ac = thx_v3_sub(c, a), ap = thx_v3_sub(p, a);
-    double d1 = thx_v3_dot(ab, ap), d2 = thx_v3_dot(ac, ap);
-    thx_vec3 q;
-    if (d1 <= 0 && d2 <= 0) q = a;
-    else {
-        thx_vec3 bp = thx_v3_sub(p, b);
-        double d3 = thx_v3_dot(ab, bp), d4 = thx_v3_dot(ac, bp);
-        thx_vec3 cp = thx_v3_sub(p, c);
-        double d5 = thx_v3_dot(ab, cp), d6 = thx_v3_dot(ac, cp);
-        double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-        if (d3 >= 0 && d4 <= d3) q = b;
-        else if (d6 >= 0 && d5 <= d6) q = c;
-        else if (vc <= 0 && d1 >= 0 && d3 <= 0) q = thx_v3_add(a, thx_v3_scale(ab, d1 / (d1 - d3)));
-        else if (vb <= 0 && d2 >= 0 && d6 <= 0) q = thx_v3_add(a, thx_v3_scale(ac, d2 / (d2 - d6)));
-        else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
-            q = thx_v3_add(b, thx_v3_scale(thx_v3_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
-        else {
-            double den = 1.0 / (va + vb + vc);
-            q = thx_v3_add(a, thx_v3_add(thx_v3_scale(ab, vb * den), thx_v3_scale(ac, vc * den)));
-        }
-    }
-    thx_vec3 d = thx_v3_sub(p, q);
-    return thx_v3_dot(d, d);
-}
-
 static int near_visit(void *user, size_t t)
 {
     near_state *n = user;
     const thx_surface *s = n->s;
     thx_vec3 a = thx_surface_node(s, (size_t)s->tri[3 * t]), b = thx_surface_node(s, (size_t)s->tri[3 * t + 1]),
              c = thx_surface_node(s, (size_t)s->tri[3 * t + 2]);
-    return tri_dist2(n->p, a, b, c) < n->r2;
+    return thx_triangle_distance2(a, b, c, n->p) < n->r2;
 }
 
 int locator_near(const locator *l, thx_vec3 p, double r)
