@@ -20,7 +20,8 @@ run() { # LABEL MODEL ARGS...
     /usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" mesh "$model" -o "$W/out" --stats "$@" > "$W/log"
     read -r wall rss < "$W/t"
     echo "thorax mesh $label: $(head -1 "$W/log")"
-    echo "    wall $wall s, peak memory $((rss / 1024)) MB; $(tail -1 "$W/log" | sed 's/.*times (s): /stages (s): /')"
+    echo "    wall $wall s, peak memory $((rss / 1024)) MB; $(grep 'times (s)' "$W/log" | sed 's/.*times (s): /stages (s): /')"
+    grep '^repair' "$W/log" | sed 's/^/    /' || true
     /usr/bin/time -f "%e" -o "$W/tc" "$THORAX" check "$W/out" -q && c=pass || c=FAIL
     echo "    thorax check: $c ($(cat "$W/tc") s)"
 }

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh/improve.h"
 #include "testlib.h"
 #include "thorax/mesh.h"
 #include "thorax/phantom.h"
@@ -96,6 +97,33 @@ int main(void)
         if (!strcmp(v->regions[r].name, "muscle")) muscle = (int)r;
     }
     CHECK(muscle >= 0 && v->regions[muscle].anisotropic && v->regions[muscle].sigma[8] > v->regions[muscle].sigma[0]);
+    /* interior slivers repaired: few flat tetrahedra left, the same domain as without the repair */
+    {
+        size_t below5 = 0;
+        double mn = 180;
+        for (size_t t = 0; t < v->n_tets; t++) {
+            double d = mesh_tet_min_dihedral(v->xyz, v->tet + 4 * t);
+            below5 += d < 5;
+            mn = d < mn ? d : mn;
+        }
+        printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg (%zu below 5 deg left)\n",
+               o.repair_deg, st.repair_below_before, st.repair_below_after, st.repair_min_before, st.repair_min_after, below5);
+        CHECK(st.repair_below_before > 100);
+        CHECK(st.repair_below_after * 10 < st.repair_below_before);
+        CHECK_NEAR(st.repair_min_after, mn, 1e-9);
+        CHECK(mn > 2.0);
+        CHECK(below5 * 20000 < v->n_tets); /* under 0.005% */
+        thx_model *m0 = phantom_model(ctx);
+        thx_mesh_opts o0 = o;
+        o0.repair_deg = 0;
+        thx_mesh_stats st0;
+        CHECK_OK(ctx, thx_mesh_build(ctx, m0, &o0, &st0));
+        double total0 = 0;
+        for (size_t t = 0; t < m0->volume->n_tets; t++) total0 += thx_volume_tet_volume(m0->volume, t);
+        CHECK_NEAR(total0, total, 1e-9 * total);
+        CHECK(m0->volume->n_nodes == v->n_nodes);
+        thx_model_destroy(&m0);
+    }
     /* deterministic */
     size_t nt = v->n_tets;
     int32_t *copy = malloc(4 * nt * sizeof *copy);

@@ -29,6 +29,8 @@ typedef struct {
     int no_heart;         /* 1: the heart's interior is not part of the domain */
     double sliver_deg;    /* tetrahedra on the boundary with a dihedral angle below this (degrees) are
                              peeled off (default 5; 0 = keep them) */
+    double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
+                             flips and by moving grid nodes (default 15; 0 = no repair) */
 } thx_mesh_opts;
 
 typedef struct {
@@ -41,6 +43,10 @@ typedef struct {
     size_t n_readded;         /* put back by the boundary repair (centroid inside) */
     size_t n_taken;           /* taken away by the boundary repair (where nothing could be put back) */
     size_t n_pinches;         /* pinched boundary edges and unused surface nodes left after the repair */
+    size_t repair_below_before, repair_below_after; /* tetrahedra below repair_deg before/after the repair */
+    double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
+    size_t n_edge_removals, n_face_removals, n_moves; /* repair operations applied */
+    double t_repair;          /* seconds */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */
     double t_points, t_delaunay, t_classify, t_total; /* seconds */

@@ -9,11 +9,12 @@
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--sliver DEG] [--stats]\n\n"
+           "                        [--sliver DEG] [--repair DEG] [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
            "hybrid method): the surface nodes plus a square grid on each layer plane,\n"
            "points within a tolerance of any surface dropped; Delaunay; tetrahedra any part\n"
-           "of which lies outside removed; tissue regions by inside/outside tests; the\n"
+           "of which lies outside removed; flat ones peeled off the boundary and repaired\n"
+           "inside (flips, moving grid nodes); tissue regions by inside/outside tests; the\n"
            "default conductivity table. Writes volume.pts, volume.tet and the node tables\n"
            "into the model directory (or the one given by -o).\n\n"
            "options:\n"
@@ -25,6 +26,8 @@ static void help(void)
            "                         outer surface when it was built from contours, else --grid)\n"
            "  --no-heart             leave the heart's interior out of the domain\n"
            "  --sliver DEG           peel boundary tetrahedra with a dihedral angle below DEG (5; 0 = off)\n"
+           "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
+           "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
            "  --stats                print counts and times\n"
            "  -v, -q                 more / less logging\n");
 }
@@ -44,6 +47,7 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--layer-spacing")) { if (cli_parse_double("mesh", a, v, &o.layer_spacing)) return 2; i++; if (!(o.layer_spacing > 0)) return cli_usage_error("mesh", "--layer-spacing must be positive"); }
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
         else if (!strcmp(a, "--sliver")) { if (cli_parse_double("mesh", a, v, &o.sliver_deg)) return 2; i++; if (o.sliver_deg < 0 || o.sliver_deg >= 70) return cli_usage_error("mesh", "--sliver must be between 0 and 70 degrees"); }
+        else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -74,6 +78,11 @@ int cmd_mesh(int argc, char **argv)
                    "boundary, %zu put back and %zu taken away by the boundary repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, "
                    "classification %.3f, total %.3f\n",
                    S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_slivers_peeled, S.n_readded, S.n_taken, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
+        if (want_stats && o.repair_deg > 0)
+            printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
+                   "%zu face removals, %zu grid nodes moved; %.3f s\n",
+                   o.repair_deg, S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
+                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.t_repair);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh/improve.h"
 #include "mesh/locate.h"
 #include "thorax/delaunay.h"
 #include "thorax/mesh.h"
@@ -36,6 +37,7 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->layer_spacing = 0;
     o->no_heart = 0;
     o->sliver_deg = 5.0;
+    o->repair_deg = 15.0;
 }
 
 /* x as it reads back from the model files ("%.6f"). */
@@ -112,6 +114,18 @@ static int classify_region(const thx_model *m, const locator *loc, const int *su
     return 0;
 }
 
+typedef struct {
+    const thx_model *m;
+    const locator *loc;
+    const int *surf_region;
+} region_ctx;
+
+static int classify_cb(void *user, thx_vec3 c)
+{
+    const region_ctx *r = user;
+    return classify_region(r->m, r->loc, r->surf_region, c);
+}
+
 typedef struct { int32_t a, b; } medge;
 static int cmp_medge(const void *x, const void *y)
 {
@@ -155,30 +169,6 @@ static int link_components(const link_rec *r, size_t n)
         if (a != b) { parent[a] = b; comps--; }
     }
     return comps;
-}
-
-/* Smallest dihedral angle of a tetrahedron, degrees. */
-static double tet_min_dihedral(const double *xyz, const int32_t *q)
-{
-    static const int fc[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-    thx_vec3 p[4], n[4];
-    for (int k = 0; k < 4; k++) p[k] = thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]);
-    for (int f = 0; f < 4; f++) {
-        thx_vec3 v = thx_v3_cross(thx_v3_sub(p[fc[f][1]], p[fc[f][0]]), thx_v3_sub(p[fc[f][2]], p[fc[f][0]]));
-        double l = thx_v3_norm(v);
-        n[f] = l > 0 ? thx_v3_scale(v, 1.0 / l) : v;
-        /* orient each normal away from the opposite corner */
-        if (thx_v3_dot(n[f], thx_v3_sub(p[f], p[fc[f][0]])) > 0) n[f] = thx_v3_scale(n[f], -1.0);
-    }
-    double best = 180.0;
-    for (int f = 0; f < 4; f++)
-        for (int g = f + 1; g < 4; g++) {
-            double c = -thx_v3_dot(n[f], n[g]);
-            c = c > 1 ? 1 : c < -1 ? -1 : c;
-            double a = acos(c) * 180.0 / M_PI;
-            if (a < best) best = a;
-        }
-    return best;
 }
 
 static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
@@ -355,7 +345,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     size_t ns = m->n_surfaces;
     locator *loc = thx_calloc(ctx, ns, sizeof *loc);
     double *planes = NULL, *xyz = NULL;
-    int32_t *tets = NULL, *nbrs = NULL, *region = NULL;
+    int32_t *tets = NULL, *nbrs = NULL, *region = NULL, *vnbr = NULL;
     unsigned char *keep = NULL;
     thx_volume *v = NULL;
     size_t *offset = thx_calloc(ctx, ns + 1, sizeof *offset);
@@ -534,7 +524,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                     int32_t u = nbrs[4 * t + f];
                     on_boundary = u < 0 || keep[u] != 1;
                 }
-                if (on_boundary && tet_min_dihedral(xyz, tets + 4 * t) < o->sliver_deg) { keep[t] = 3; this_round++; }
+                if (on_boundary && mesh_tet_min_dihedral(xyz, tets + 4 * t) < o->sliver_deg) { keep[t] = 3; this_round++; }
             }
             peeled += this_round;
             if (!this_round) break;
@@ -572,6 +562,23 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     v->region = thx_malloc(ctx, (kept ? kept : 1) * sizeof *v->region);
     v->regions = thx_malloc(ctx, (size_t)n_regions * sizeof *v->regions);
     if (!v->tet || !v->region || !v->regions) { st = THX_ENOMEM; goto done; }
+    /* the kept tetrahedra's adjacency, for the sliver repair (Delaunay numbering -> kept numbering) */
+    int32_t *newidx = NULL;
+    if (o->repair_deg > 0) {
+        newidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *newidx);
+        vnbr = thx_malloc(ctx, 4 * (kept ? kept : 1) * sizeof *vnbr);
+        if (!newidx || !vnbr) { free(newidx); st = THX_ENOMEM; goto done; }
+        for (size_t t = 0, k = 0; t < nt; t++) newidx[t] = keep[t] == 1 ? (int32_t)k++ : -1;
+        for (size_t t = 0; t < nt; t++) {
+            if (keep[t] != 1) continue;
+            static const int from[4] = {0, 1, 3, 2}; /* corners 2 and 3 swap below */
+            for (int f = 0; f < 4; f++) {
+                int32_t u = nbrs[4 * t + from[f]];
+                vnbr[4 * (size_t)newidx[t] + f] = u >= 0 ? newidx[u] : -1;
+            }
+        }
+        free(newidx);
+    }
     for (size_t t = 0, k = 0; t < nt; t++) {
         if (keep[t] != 1) continue;
         v->tet[4 * k] = tets[4 * t];
@@ -583,6 +590,13 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         k++;
     }
     v->n_tets = kept;
+    /* the Delaunay arrays are done with: free them before the repair's working memory */
+    free(tets);
+    free(nbrs);
+    free(keep);
+    free(region);
+    tets = nbrs = region = NULL;
+    keep = NULL;
     memcpy(v->regions, table, (size_t)n_regions * sizeof *table);
     v->n_regions = (size_t)n_regions;
     v->n_nodes = nn;
@@ -606,6 +620,26 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
             v->node_snode[offset[s] + i] = (int32_t)i;
         }
     }
+    /* slivers inside the domain: repaired (flips, perturbation of grid nodes), never removed */
+    if (o->repair_deg > 0) {
+        region_ctx rc = {m, loc, surf_region};
+        improve_opts io = {o->repair_deg, 6, 0, classify_cb, &rc};
+        improve_stats is;
+        int32_t *adj = vnbr;
+        vnbr = NULL; /* taken over */
+        THX_TRY(mesh_improve(ctx, v, adj, (const thx_surface *const *)m->surf, ns, &io, &is));
+        S.repair_below_before = is.below_before;
+        S.repair_below_after = is.below_after;
+        S.repair_min_before = is.min_before;
+        S.repair_min_after = is.min_after;
+        S.n_edge_removals = is.n_edge_removals;
+        S.n_face_removals = is.n_face_removals;
+        S.n_moves = is.n_moves;
+        S.t_repair = is.seconds;
+        memset(S.per_region, 0, sizeof S.per_region);
+        for (size_t t = 0; t < v->n_tets; t++)
+            if (v->region[t] >= 0 && v->region[t] < 16) S.per_region[v->region[t]]++;
+    }
     S.n_tets = v->n_tets;
     S.n_nodes = v->n_nodes;
     thx_volume_destroy(&m->volume);
@@ -624,6 +658,7 @@ done:
     free(xyz);
     free(tets);
     free(nbrs);
+    free(vnbr);
     free(keep);
     free(region);
     thx_volume_destroy(&v);

@@ -1,0 +1,795 @@
+/*
+ * Sliver repair inside the domain: edge removal, face removal (2-3 flips) and
+ * vertex perturbation (see improve.h). The operations follow Shewchuk's edge
+ * removal by dynamic programming ("Two discrete optimization algorithms for
+ * the topological improvement of tetrahedral meshes", 2002) and Klingner and
+ * Shewchuk's use of it with smoothing ("Aggressive tetrahedral mesh
+ * improvement", IMR 2007), reduced to what the hybrid mesher needs: a few
+ * hundred slivers left where nearly cospherical surface and grid nodes meet.
+ *
+ * Invariant kept by every operation: the new tetrahedra are positively
+ * oriented (exact predicate) and fill exactly the cavity of the old ones, so
+ * the mesh stays conforming, the domain and its boundary do not change, and
+ * the worst tetrahedron of the cavity gets strictly better.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh/improve.h"
+#include "thorax/predicates.h"
+
+#define MAX_RING 12    /* edges with more tetrahedra around them are not removed */
+#define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
+#define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */
+
+/* ---- a set of sorted node triples (surface triangles; edges with c = -1) ---- */
+typedef struct { int32_t a, b, c; } triple;
+typedef struct { triple *slot; size_t mask; } tset;
+
+static triple tri_sorted(int32_t a, int32_t b, int32_t c)
+{
+    int32_t t;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    return (triple){a, b, c};
+}
+
+static triple edge_sorted(int32_t a, int32_t b) { return a < b ? (triple){a, b, -1} : (triple){b, a, -1}; }
+
+static size_t tset_hash(triple k)
+{
+    uint64_t h = (uint64_t)(uint32_t)k.a * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t)(uint32_t)k.b * 0xC2B2AE3D27D4EB4Full + (h >> 29);
+    h ^= (uint64_t)(uint32_t)k.c * 0x165667B19E3779F9ull + (h >> 32);
+    return (size_t)(h ^ (h >> 31));
+}
+
+static int tset_has(const tset *s, triple k)
+{
+    for (size_t i = tset_hash(k) & s->mask;; i = (i + 1) & s->mask) {
+        const triple *e = &s->slot[i];
+        if (e->a < 0) return 0;
+        if (e->a == k.a && e->b == k.b && e->c == k.c) return 1;
+    }
+}
+
+static void tset_add(tset *s, triple k)
+{
+    for (size_t i = tset_hash(k) & s->mask;; i = (i + 1) & s->mask) {
+        triple *e = &s->slot[i];
+        if (e->a < 0) { *e = k; return; }
+        if (e->a == k.a && e->b == k.b && e->c == k.c) return;
+    }
+}
+
+/* ---- quality ---- */
+
+static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}; /* outward for right-handed tets */
+
+/* Smallest sine of the six dihedral angles of (p0, p1, p2, p3); 0 or less when flat or inverted
+ * (floating point: the exact orientation is tested separately). */
+static double quality(const double *p[4])
+{
+    thx_vec3 P[4], n[4];
+    for (int k = 0; k < 4; k++) P[k] = thx_v3(p[k][0], p[k][1], p[k][2]);
+    double vol6 = thx_v3_dot(thx_v3_cross(thx_v3_sub(P[1], P[0]), thx_v3_sub(P[2], P[0])), thx_v3_sub(P[3], P[0]));
+    if (!(vol6 > 0)) return 0;
+    double nl[4];
+    for (int f = 0; f < 4; f++) {
+        const int *v = face_of[f];
+        n[f] = thx_v3_cross(thx_v3_sub(P[v[1]], P[v[0]]), thx_v3_sub(P[v[2]], P[v[0]]));
+        nl[f] = thx_v3_norm(n[f]);
+    }
+    double best = INFINITY;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++) {
+            /* edge (i, j) lies in the faces opposite the other two corners k, l */
+            int k = 0;
+            while (k == i || k == j) k++;
+            int l = 6 - i - j - k;
+            double e = thx_v3_norm(thx_v3_sub(P[j], P[i]));
+            double s = vol6 * e / (nl[k] * nl[l]);
+            if (s < best) best = s;
+        }
+    return best;
+}
+
+double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
+{
+    thx_vec3 P[4], n[4];
+    for (int k = 0; k < 4; k++) P[k] = thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]);
+    for (int f = 0; f < 4; f++) {
+        const int *v = face_of[f];
+        thx_vec3 c = thx_v3_cross(thx_v3_sub(P[v[1]], P[v[0]]), thx_v3_sub(P[v[2]], P[v[0]]));
+        double l = thx_v3_norm(c);
+        n[f] = l > 0 ? thx_v3_scale(c, 1.0 / l) : c;
+        /* outward, whatever the orientation of the tetrahedron */
+        if (thx_v3_dot(n[f], thx_v3_sub(P[f], P[v[0]])) > 0) n[f] = thx_v3_scale(n[f], -1.0);
+    }
+    double best = 180.0;
+    for (int f = 0; f < 4; f++)
+        for (int g = f + 1; g < 4; g++) {
+            double c = -thx_v3_dot(n[f], n[g]);
+            c = c > 1 ? 1 : c < -1 ? -1 : c;
+            double a = acos(c) * (180.0 / M_PI);
+            if (a < best) best = a;
+        }
+    return best;
+}
+
+/* ---- the mesh being improved ---- */
+typedef struct {
+    thx_ctx *ctx;
+    double *xyz;
+    size_t nn;
+    int32_t *tet, *nbr, *reg; /* nbr[4t + f]: across the face opposite corner f, -1 on the boundary */
+    unsigned char *dead;
+    uint32_t *failed;  /* per slot: the clock when every operation failed on it (0: not tried) */
+    size_t nt, cap;
+    int32_t *freel;
+    size_t n_free, free_cap;
+    uint32_t clock, *node_clock; /* a counter of changes; per node, the last change touching it */
+    int32_t *node_tet; /* some live tetrahedron at each node */
+    const int32_t *node_surf;
+    tset prot;
+    const improve_opts *o;
+    size_t n_regions;
+    int32_t star[MAX_STAR]; /* scratch: the star of the vertex being moved */
+} imesh;
+
+static const double *X(const imesh *M, int32_t i) { return M->xyz + 3 * (size_t)i; }
+
+static int right_handed(const double *a, const double *b, const double *c, const double *d)
+{
+    return thx_orient3d(a, b, c, d) < 0; /* predicates.h: < 0 iff ((b-a)x(c-a)).(d-a) > 0 */
+}
+
+/* Quality of (a, b, c, d) by node, -1 if not positively oriented (exact). */
+static double q4(const imesh *M, int32_t a, int32_t b, int32_t c, int32_t d)
+{
+    const double *p[4] = {X(M, a), X(M, b), X(M, c), X(M, d)};
+    if (!right_handed(p[0], p[1], p[2], p[3])) return -1;
+    return quality(p);
+}
+
+static double qtet(const imesh *M, int32_t t)
+{
+    const int32_t *q = M->tet + 4 * (size_t)t;
+    const double *p[4] = {X(M, q[0]), X(M, q[1]), X(M, q[2]), X(M, q[3])};
+    return quality(p);
+}
+
+static double tet_volume6(const imesh *M, const int32_t *q)
+{
+    thx_vec3 P[4];
+    for (int k = 0; k < 4; k++) P[k] = thx_v3(X(M, q[k])[0], X(M, q[k])[1], X(M, q[k])[2]);
+    return thx_v3_dot(thx_v3_cross(thx_v3_sub(P[1], P[0]), thx_v3_sub(P[2], P[0])), thx_v3_sub(P[3], P[0]));
+}
+
+static int local_index(const int32_t *q, int32_t v)
+{
+    for (int k = 0; k < 4; k++)
+        if (q[k] == v) return k;
+    return -1;
+}
+
+/* Face-to-face adjacency through the tetrahedra around each node. */
+static thx_status build_adjacency(imesh *M)
+{
+    size_t nn = M->nn, nt = M->nt;
+    size_t *start = thx_calloc(M->ctx, nn + 1, sizeof *start);
+    int32_t *inc = thx_malloc(M->ctx, 4 * (nt ? nt : 1) * sizeof *inc);
+    if (!start || !inc) { free(start); free(inc); return THX_ENOMEM; }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) start[M->tet[4 * t + k] + 1]++;
+    for (size_t i = 0; i < nn; i++) start[i + 1] += start[i];
+    size_t *fill = thx_malloc(M->ctx, (nn ? nn : 1) * sizeof *fill);
+    if (!fill) { free(start); free(inc); return THX_ENOMEM; }
+    memcpy(fill, start, nn * sizeof *fill);
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) inc[fill[M->tet[4 * t + k]]++] = (int32_t)t;
+    free(fill);
+#pragma omp parallel for schedule(dynamic, 4096)
+    for (long t = 0; t < (long)nt; t++) {
+        const int32_t *q = M->tet + 4 * t;
+        for (int f = 0; f < 4; f++) {
+            int32_t a = q[face_of[f][0]], b = q[face_of[f][1]], c = q[face_of[f][2]];
+            int32_t lo = a < b ? (a < c ? a : c) : (b < c ? b : c);
+            int32_t found = -1, o1 = lo == a ? b : a, o2 = lo == c ? b : c; /* the two corners besides lo */
+            for (size_t k = start[lo]; k < start[lo + 1] && found < 0; k++) {
+                int32_t u = inc[k];
+                if (u == t) continue;
+                const int32_t *r = M->tet + 4 * (size_t)u;
+                int hit = 0;
+                for (int i = 0; i < 4; i++) hit += (r[i] == o1) + (r[i] == o2);
+                if (hit == 2) found = u;
+            }
+            M->nbr[4 * t + f] = found;
+        }
+    }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) M->node_tet[M->tet[4 * t + k]] = (int32_t)t;
+    free(start);
+    free(inc);
+    return THX_OK;
+}
+
+static thx_status grow(imesh *M, size_t need)
+{
+    if (need <= M->cap) return THX_OK;
+    size_t cap = M->cap * 3 / 2 + 64;
+    if (cap < need) cap = need;
+    int32_t *t = realloc(M->tet, 4 * cap * sizeof *t);
+    if (t) M->tet = t;
+    int32_t *n = realloc(M->nbr, 4 * cap * sizeof *n);
+    if (n) M->nbr = n;
+    int32_t *r = realloc(M->reg, cap * sizeof *r);
+    if (r) M->reg = r;
+    unsigned char *d = realloc(M->dead, cap);
+    if (d) M->dead = d;
+    uint32_t *f = realloc(M->failed, cap * sizeof *f);
+    if (f) M->failed = f;
+    if (!t || !n || !r || !d || !f) return thx_error(M->ctx, THX_ENOMEM, "mesh: out of memory repairing slivers");
+    memset(M->dead + M->cap, 1, cap - M->cap);
+    memset(M->failed + M->cap, 0, (cap - M->cap) * sizeof *f);
+    M->cap = cap;
+    return THX_OK;
+}
+
+/*
+ * Replaces the tetrahedra old[0..n_old) by nw[0..n_new) (regions nreg) and
+ * relinks the faces: each face of a new tetrahedron is either a face of the
+ * cavity's boundary (linked to the tetrahedron outside) or shared with another
+ * new one. Returns 0, or -1 if the faces do not match up (nothing changed).
+ */
+typedef struct { triple k; int32_t out; int fo; int used; } oface;
+
+static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], const int32_t *nreg, int n_new)
+{
+    oface of[4 * 2 * MAX_RING];
+    int nof = 0;
+    for (int i = 0; i < n_old; i++) {
+        int32_t o = old[i];
+        for (int f = 0; f < 4; f++) {
+            int32_t u = M->nbr[4 * (size_t)o + f];
+            int inside = 0;
+            for (int j = 0; j < n_old && !inside; j++) inside = old[j] == u;
+            if (inside) continue;
+            const int32_t *q = M->tet + 4 * (size_t)o;
+            of[nof].k = tri_sorted(q[face_of[f][0]], q[face_of[f][1]], q[face_of[f][2]]);
+            of[nof].out = u;
+            of[nof].fo = -1;
+            if (u >= 0)
+                for (int g = 0; g < 4; g++)
+                    if (M->nbr[4 * (size_t)u + g] == o) of[nof].fo = g;
+            of[nof].used = 0;
+            nof++;
+        }
+    }
+    /* match every new face before changing anything */
+    int32_t link[2 * MAX_RING][4]; /* >= 0: outer face index; < 0: -(new tet * 4 + face) - 1 */
+    for (int n = 0; n < n_new; n++)
+        for (int g = 0; g < 4; g++) {
+            triple k = tri_sorted(nw[n][face_of[g][0]], nw[n][face_of[g][1]], nw[n][face_of[g][2]]);
+            int hit = -1;
+            for (int i = 0; i < nof && hit < 0; i++)
+                if (!of[i].used && of[i].k.a == k.a && of[i].k.b == k.b && of[i].k.c == k.c) hit = i;
+            if (hit >= 0) { of[hit].used = 1; link[n][g] = hit; continue; }
+            int other = -1;
+            for (int m = 0; m < n_new && other < 0; m++) {
+                if (m == n) continue;
+                for (int h = 0; h < 4; h++) {
+                    triple l = tri_sorted(nw[m][face_of[h][0]], nw[m][face_of[h][1]], nw[m][face_of[h][2]]);
+                    if (l.a == k.a && l.b == k.b && l.c == k.c) { other = m * 4 + h; break; }
+                }
+            }
+            if (other < 0) return -1;
+            link[n][g] = -other - 1;
+        }
+    for (int i = 0; i < nof; i++)
+        if (!of[i].used) return -1;
+    if (grow(M, M->nt + (size_t)n_new) != THX_OK) return -1;
+    if (M->n_free + (size_t)n_old > M->free_cap) {
+        size_t fc = 2 * M->free_cap + 256;
+        int32_t *fl = realloc(M->freel, fc * sizeof *fl);
+        if (!fl) return -1;
+        M->freel = fl;
+        M->free_cap = fc;
+    }
+    M->clock++;
+    /* slots: the old ones, then free ones, then new */
+    int32_t slot[2 * MAX_RING];
+    for (int n = 0; n < n_new; n++) {
+        if (n < n_old) slot[n] = old[n];
+        else if (M->n_free) slot[n] = M->freel[--M->n_free];
+        else slot[n] = (int32_t)M->nt++;
+    }
+    for (int i = n_new; i < n_old; i++) {
+        M->dead[old[i]] = 1;
+        M->freel[M->n_free++] = old[i];
+    }
+    for (int n = 0; n < n_new; n++) {
+        size_t s = (size_t)slot[n];
+        memcpy(M->tet + 4 * s, nw[n], 4 * sizeof(int32_t));
+        M->reg[s] = nreg[n];
+        M->dead[s] = 0;
+        M->failed[s] = 0;
+    }
+    for (int n = 0; n < n_new; n++) {
+        size_t s = (size_t)slot[n];
+        for (int g = 0; g < 4; g++) {
+            if (link[n][g] >= 0) {
+                const oface *e = &of[link[n][g]];
+                M->nbr[4 * s + g] = e->out;
+                if (e->out >= 0) M->nbr[4 * (size_t)e->out + e->fo] = (int32_t)s;
+            } else {
+                int other = -link[n][g] - 1;
+                M->nbr[4 * s + g] = slot[other / 4];
+            }
+        }
+        for (int k = 0; k < 4; k++) {
+            M->node_tet[nw[n][k]] = (int32_t)s;
+            M->node_clock[nw[n][k]] = M->clock;
+        }
+    }
+    return 0;
+}
+
+/* Regions of new tetrahedra: the old one's when the cavity had one region, else by centroid. */
+static void new_regions(const imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], int n_new, int32_t *nreg)
+{
+    int32_t r0 = M->reg[old[0]];
+    int mixed = 0;
+    for (int i = 1; i < n_old; i++) mixed |= M->reg[old[i]] != r0;
+    if (!mixed) {
+        for (int n = 0; n < n_new; n++) nreg[n] = r0;
+        return;
+    }
+    int32_t big = r0;
+    double bigv = -1;
+    for (int i = 0; i < n_old; i++) {
+        double v6 = tet_volume6(M, M->tet + 4 * (size_t)old[i]);
+        if (v6 > bigv) { bigv = v6; big = M->reg[old[i]]; }
+    }
+    for (int n = 0; n < n_new; n++) {
+        if (!M->o->classify) { nreg[n] = big; continue; }
+        thx_vec3 c = {0, 0, 0};
+        for (int k = 0; k < 4; k++) c = thx_v3_add(c, thx_v3(X(M, nw[n][k])[0], X(M, nw[n][k])[1], X(M, nw[n][k])[2]));
+        int r = M->o->classify(M->o->user, thx_v3_scale(c, 0.25));
+        nreg[n] = r >= 0 && (size_t)r < M->n_regions ? r : big;
+    }
+}
+
+/* ---- edge removal ---- */
+
+/* The ring of vertices around edge (a, b) of tetrahedron t, ordered so that (a, b, r[i], r[i+1]) is
+ * right-handed, and the tetrahedra between consecutive ring vertices. Returns the ring size, or 0
+ * when the edge is on the boundary or has too many tetrahedra around it. */
+static int edge_ring(const imesh *M, int32_t t, int32_t a, int32_t b, int32_t *ring, int32_t *tets)
+{
+    const int32_t *q = M->tet + 4 * (size_t)t;
+    int ia = local_index(q, a), ib = local_index(q, b), ic = 0;
+    while (ic == ia || ic == ib) ic++;
+    int id = 6 - ia - ib - ic;
+    /* orientation of (a, b, c, d): the parity of the permutation (ia, ib, ic, id) of the stored order */
+    int perm[4] = {ia, ib, ic, id}, inv = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++) inv += perm[i] > perm[j];
+    int32_t c = q[ic], d = q[id];
+    int n = 0;
+    int32_t cur = t;
+    for (;;) {
+        if (n >= MAX_RING) return 0;
+        ring[n] = c;
+        tets[n] = cur;
+        n++;
+        /* cross the face (a, b, d), opposite c */
+        const int32_t *r = M->tet + 4 * (size_t)cur;
+        int32_t nx = M->nbr[4 * (size_t)cur + local_index(r, c)];
+        if (nx < 0) return 0;
+        const int32_t *s = M->tet + 4 * (size_t)nx;
+        int32_t e = -1;
+        for (int k = 0; k < 4; k++)
+            if (s[k] != a && s[k] != b && s[k] != d) e = s[k];
+        cur = nx;
+        c = d;
+        d = e;
+        if (cur == t) break;
+    }
+    if (inv & 1) { /* (a, b, r0, r1) is left-handed: reverse the ring and its tetrahedra */
+        for (int i = 0, j = n - 1; i < j; i++, j--) {
+            int32_t x = ring[i]; ring[i] = ring[j]; ring[j] = x;
+        }
+        /* tets[i] lay between old ring[i] and ring[i+1]; after reversal between new ring[i] and ring[i+1] */
+        int32_t tmp[MAX_RING];
+        for (int i = 0; i < n; i++) tmp[i] = tets[(2 * n - 2 - i) % n];
+        memcpy(tets, tmp, (size_t)n * sizeof *tets);
+    }
+    return n;
+}
+
+/* Best triangulation of the ring: returns its worst quality and fills nw (2(n-2) tetrahedra). */
+static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4])
+{
+    double Q[MAX_RING][MAX_RING];
+    int K[MAX_RING][MAX_RING];
+    for (int i = 0; i + 1 < n; i++) Q[i][i + 1] = INFINITY;
+    for (int len = 2; len < n; len++)
+        for (int i = 0; i + len < n; i++) {
+            int j = i + len;
+            double best = -2;
+            int bk = -1;
+            for (int k = i + 1; k < j; k++) {
+                double v = fmin(Q[i][k], Q[k][j]);
+                if (v <= best) continue;
+                /* with the ring counterclockwise seen from b: (ri, rk, rj, b) and (ri, rj, rk, a) */
+                double qb = q4(M, r[i], r[k], r[j], b);
+                if (qb <= best) continue;
+                double qa = q4(M, r[i], r[j], r[k], a);
+                v = fmin(v, fmin(qa, qb));
+                if (v > best) { best = v; bk = k; }
+            }
+            Q[i][j] = best;
+            K[i][j] = bk;
+        }
+    double res = Q[0][n - 1];
+    if (res <= 0) return res;
+    /* the triangles, by an explicit stack */
+    int st[2 * MAX_RING][2], ns = 0, nt = 0;
+    st[ns][0] = 0; st[ns][1] = n - 1; ns++;
+    while (ns) {
+        ns--;
+        int i = st[ns][0], j = st[ns][1];
+        if (j - i < 2) continue;
+        int k = K[i][j];
+        nw[nt][0] = r[i]; nw[nt][1] = r[k]; nw[nt][2] = r[j]; nw[nt][3] = b; nt++;
+        nw[nt][0] = r[i]; nw[nt][1] = r[j]; nw[nt][2] = r[k]; nw[nt][3] = a; nt++;
+        st[ns][0] = i; st[ns][1] = k; ns++;
+        st[ns][0] = k; st[ns][1] = j; ns++;
+    }
+    return res;
+}
+
+static int try_edge_removal(imesh *M, int32_t t, double qt, size_t *count)
+{
+    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    int32_t best_nw[2 * MAX_RING][4], best_old[MAX_RING];
+    int best_n = 0;
+    double best_gain = EPS_GAIN;
+    for (int e = 0; e < 6; e++) {
+        const int32_t *q = M->tet + 4 * (size_t)t;
+        int32_t a = q[edges[e][0]], b = q[edges[e][1]];
+        if (tset_has(&M->prot, edge_sorted(a, b))) continue;
+        int32_t ring[MAX_RING], tets[MAX_RING];
+        int n = edge_ring(M, t, a, b, ring, tets);
+        if (n < 3) continue;
+        double qold = qt;
+        for (int i = 0; i < n; i++) qold = fmin(qold, qtet(M, tets[i]));
+        int32_t nw[2 * MAX_RING][4];
+        double qnew = edge_removal_plan(M, a, b, ring, n, nw);
+        if (qnew - qold > best_gain) {
+            best_gain = qnew - qold;
+            best_n = n;
+            memcpy(best_nw, nw, sizeof(int32_t[4]) * (size_t)(2 * (n - 2)));
+            memcpy(best_old, tets, sizeof(int32_t) * (size_t)n);
+        }
+    }
+    if (!best_n) return 0;
+    int32_t nreg[2 * MAX_RING];
+    new_regions(M, best_old, best_n, (const int32_t(*)[4])best_nw, 2 * (best_n - 2), nreg);
+    if (replace(M, best_old, best_n, (const int32_t(*)[4])best_nw, nreg, 2 * (best_n - 2)) != 0) return 0;
+    (*count)++;
+    return 1;
+}
+
+/* ---- face removal (2-3 flip) ---- */
+static int try_face_removal(imesh *M, int32_t t, double qt, size_t *count)
+{
+    int32_t best_nw[3][4], best_old[2];
+    double best_gain = EPS_GAIN;
+    int found = 0;
+    for (int f = 0; f < 4; f++) {
+        int32_t u = M->nbr[4 * (size_t)t + f];
+        if (u < 0) continue;
+        const int32_t *q = M->tet + 4 * (size_t)t;
+        if (tset_has(&M->prot, tri_sorted(q[face_of[f][0]], q[face_of[f][1]], q[face_of[f][2]]))) continue;
+        const int32_t *s = M->tet + 4 * (size_t)u;
+        int32_t apex = -1;
+        for (int k = 0; k < 4; k++)
+            if (local_index(q, s[k]) < 0) apex = s[k];
+        double qold = fmin(qt, qtet(M, u));
+        /* t with one corner of the shared face replaced by the other apex */
+        int32_t nw[3][4];
+        double qnew = INFINITY;
+        for (int i = 0; i < 3 && qnew > 0; i++) {
+            memcpy(nw[i], q, sizeof nw[i]);
+            nw[i][face_of[f][i]] = apex;
+            qnew = fmin(qnew, q4(M, nw[i][0], nw[i][1], nw[i][2], nw[i][3]));
+        }
+        if (qnew - qold > best_gain) {
+            best_gain = qnew - qold;
+            memcpy(best_nw, nw, sizeof nw);
+            best_old[0] = t;
+            best_old[1] = u;
+            found = 1;
+        }
+    }
+    if (!found) return 0;
+    int32_t nreg[3];
+    new_regions(M, best_old, 2, (const int32_t(*)[4])best_nw, 3, nreg);
+    if (replace(M, best_old, 2, (const int32_t(*)[4])best_nw, nreg, 3) != 0) return 0;
+    (*count)++;
+    return 1;
+}
+
+/* ---- vertex perturbation ---- */
+
+/* The tetrahedra around node v; 0 if v is on the boundary or its star is too large. */
+static int vertex_star(const imesh *M, int32_t v, int32_t *star)
+{
+    int n = 0;
+    star[n++] = M->node_tet[v];
+    for (int i = 0; i < n; i++) {
+        const int32_t *q = M->tet + 4 * (size_t)star[i];
+        int lv = local_index(q, v);
+        for (int f = 0; f < 4; f++) {
+            if (f == lv) continue; /* the faces containing v */
+            int32_t u = M->nbr[4 * (size_t)star[i] + f];
+            if (u < 0) return 0;
+            int seen = 0;
+            for (int j = 0; j < n && !seen; j++) seen = star[j] == u;
+            if (seen) continue;
+            if (n >= MAX_STAR) return 0;
+            star[n++] = u;
+        }
+    }
+    return n;
+}
+
+static double stored(double x)
+{
+    char buf[64];
+    snprintf(buf, sizeof buf, "%.6f", x);
+    return strtod(buf, NULL);
+}
+
+/* Worst quality of the star with v at p (-1 if some tetrahedron inverts). */
+static double star_quality(imesh *M, int32_t v, const int32_t *star, int n, const double *p, int *worst)
+{
+    double *x = M->xyz + 3 * (size_t)v, keep[3] = {x[0], x[1], x[2]};
+    x[0] = p[0]; x[1] = p[1]; x[2] = p[2];
+    double w = INFINITY;
+    for (int i = 0; i < n && w > 0; i++) {
+        const int32_t *q = M->tet + 4 * (size_t)star[i];
+        double s = q4(M, q[0], q[1], q[2], q[3]);
+        if (s < w) { w = s; if (worst) *worst = i; }
+    }
+    x[0] = keep[0]; x[1] = keep[1]; x[2] = keep[2];
+    return w;
+}
+
+static int try_move(imesh *M, int32_t t, size_t *count)
+{
+    int32_t *star = M->star;
+    int moved = 0;
+    for (int k = 0; k < 4; k++) {
+        int32_t v = M->tet[4 * (size_t)t + k];
+        if (M->node_surf[v] >= 0) continue;
+        int n = vertex_star(M, v, star);
+        if (!n) continue;
+        double *x = M->xyz + 3 * (size_t)v;
+        int worst = 0;
+        double q0 = star_quality(M, v, star, n, x, &worst), cur = q0;
+        /* step scale: the shortest edge at v */
+        double h = INFINITY;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < 4; j++) {
+                int32_t w = M->tet[4 * (size_t)star[i] + j];
+                if (w == v) continue;
+                double d = thx_v3_norm(thx_v3_sub(thx_v3(X(M, w)[0], X(M, w)[1], X(M, w)[2]), thx_v3(x[0], x[1], x[2])));
+                if (d < h) h = d;
+            }
+        double step = 0.25 * h;
+        for (int it = 0; it < 40 && step > 1e-4 * h; it++) {
+            /* directions: the axes, and the gradient of the worst tetrahedron's quality */
+            double dir[8][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, 0, 0}, {0, 0, 0}};
+            int nd = 6;
+            {
+                const int32_t *q = M->tet + 4 * (size_t)star[worst];
+                double g[3], d = 1e-3 * h, base = q4(M, q[0], q[1], q[2], q[3]);
+                for (int c = 0; c < 3; c++) {
+                    double keep = x[c];
+                    x[c] = keep + d;
+                    double qp = q4(M, q[0], q[1], q[2], q[3]);
+                    x[c] = keep;
+                    g[c] = (fmax(qp, 0) - base) / d;
+                }
+                double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+                if (gl > 0) { for (int c = 0; c < 3; c++) dir[nd][c] = g[c] / gl; nd++; }
+            }
+            double bestq = cur, bp[3] = {0};
+            int bw = worst;
+            for (int di = 0; di < nd; di++) {
+                double p[3];
+                for (int c = 0; c < 3; c++) p[c] = stored(x[c] + step * dir[di][c]);
+                int w = 0;
+                double qq = star_quality(M, v, star, n, p, &w);
+                if (qq > bestq + EPS_GAIN) { bestq = qq; memcpy(bp, p, sizeof bp); bw = w; }
+            }
+            if (bestq > cur) {
+                memcpy(x, bp, sizeof bp);
+                cur = bestq;
+                worst = bw;
+            } else {
+                step *= 0.5;
+            }
+        }
+        if (cur > q0 + EPS_GAIN) {
+            moved = 1;
+            (*count)++;
+            M->node_clock[v] = ++M->clock;
+        }
+    }
+    return moved;
+}
+
+/* ---- driver ---- */
+typedef struct { double q; int32_t t; } qrec;
+static int cmp_qrec(const void *x, const void *y)
+{
+    double a = ((const qrec *)x)->q, b = ((const qrec *)y)->q;
+    return (a > b) - (a < b);
+}
+
+static double min_dihedral_and_count(const imesh *M, double below, size_t *n_below)
+{
+    double mn = 180;
+    size_t cnt = 0;
+#pragma omp parallel for schedule(static) reduction(min : mn) reduction(+ : cnt)
+    for (long t = 0; t < (long)M->nt; t++) {
+        if (M->dead[t]) continue;
+        double d = mesh_tet_min_dihedral(M->xyz, M->tet + 4 * t);
+        if (d < mn) mn = d;
+        cnt += d < below;
+    }
+    *n_below = cnt;
+    return mn;
+}
+
+thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_surface *const *surf, size_t n_surf,
+                        const improve_opts *o, improve_stats *stats)
+{
+    double t0 = thx_wtime();
+    thx_status st = THX_OK;
+    improve_stats S;
+    memset(&S, 0, sizeof S);
+    imesh M;
+    memset(&M, 0, sizeof M);
+    qrec *bad = NULL;
+    M.ctx = ctx;
+    M.xyz = v->xyz;
+    M.nn = v->n_nodes;
+    M.nt = v->n_tets;
+    M.node_surf = v->node_surf;
+    M.o = o;
+    M.n_regions = v->n_regions;
+    /* the volume's arrays are taken over (no copy) and given back compacted; on failure the volume is
+       left without tetrahedra */
+    M.tet = v->tet;
+    M.reg = v->region;
+    v->tet = NULL;
+    v->region = NULL;
+    v->n_tets = 0;
+    M.nbr = nbr ? nbr : thx_malloc(ctx, 4 * (M.nt ? M.nt : 1) * sizeof *M.nbr);
+    M.dead = thx_calloc(ctx, M.nt ? M.nt : 1, 1);
+    M.failed = thx_calloc(ctx, M.nt ? M.nt : 1, sizeof *M.failed);
+    if (!M.nbr || !M.dead || !M.failed) { st = THX_ENOMEM; goto done; }
+    M.cap = M.nt;
+    THX_TRY(grow(&M, M.nt + 64));
+    M.node_tet = thx_malloc(ctx, (M.nn ? M.nn : 1) * sizeof *M.node_tet);
+    M.node_clock = thx_calloc(ctx, M.nn ? M.nn : 1, sizeof *M.node_clock);
+    if (!M.node_tet || !M.node_clock) { st = THX_ENOMEM; goto done; }
+    /* protected: the model's triangles and edges, in volume node numbers */
+    {
+        size_t n_keys = 0;
+        for (size_t s = 0; s < n_surf; s++) n_keys += surf[s]->n_tris * 3;
+        size_t cap = 16;
+        while (cap < 2 * n_keys + 16) cap <<= 1;
+        M.prot.slot = thx_malloc(ctx, cap * sizeof *M.prot.slot);
+        if (!M.prot.slot) { st = THX_ENOMEM; goto done; }
+        memset(M.prot.slot, 0xff, cap * sizeof *M.prot.slot);
+        M.prot.mask = cap - 1;
+        for (size_t s = 0; s < n_surf && s < v->n_surfaces; s++) {
+            const int32_t *map = v->surf_node[s];
+            for (size_t i = 0; i < surf[s]->n_tris; i++) {
+                const int32_t *f = surf[s]->tri + 3 * i;
+                int32_t a = map[f[0]], b = map[f[1]], c = map[f[2]];
+                tset_add(&M.prot, tri_sorted(a, b, c));
+                tset_add(&M.prot, edge_sorted(a, b));
+                tset_add(&M.prot, edge_sorted(b, c));
+                tset_add(&M.prot, edge_sorted(c, a));
+            }
+        }
+    }
+    if (nbr) {
+        for (size_t t = 0; t < M.nt; t++)
+            for (int k = 0; k < 4; k++) M.node_tet[M.tet[4 * t + k]] = (int32_t)t;
+    } else {
+        THX_TRY(build_adjacency(&M));
+    }
+    S.tets_before = M.nt;
+    S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
+    double sin_target = sin(o->target_deg * M_PI / 180.0);
+    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE;
+    for (int pass = 0; pass < o->max_passes; pass++) {
+        size_t nb = 0;
+        free(bad);
+        bad = thx_malloc(ctx, (M.nt ? M.nt : 1) * sizeof *bad);
+        if (!bad) { st = THX_ENOMEM; goto done; }
+#pragma omp parallel for schedule(static)
+        for (long t = 0; t < (long)M.nt; t++) bad[t].q = M.dead[t] ? INFINITY : qtet(&M, (int32_t)t);
+        for (size_t t = 0; t < M.nt; t++)
+            if (bad[t].q < sin_target) bad[nb++] = (qrec){bad[t].q, (int32_t)t};
+        if (!nb) break;
+        qsort(bad, nb, sizeof *bad, cmp_qrec);
+        size_t changed = 0;
+        for (size_t i = 0; i < nb; i++) {
+            int32_t t = bad[i].t;
+            if (M.dead[t]) continue;
+            double q = qtet(&M, t);
+            if (q >= sin_target) continue;
+            if (M.failed[t]) { /* tried before: again only if something changed at its corners since */
+                uint32_t last = 0;
+                for (int k = 0; k < 4; k++) {
+                    uint32_t c = M.node_clock[M.tet[4 * (size_t)t + k]];
+                    if (c > last) last = c;
+                }
+                if (last <= M.failed[t]) continue;
+            }
+            if (((ops & IMPROVE_EDGE) && try_edge_removal(&M, t, q, &S.n_edge_removals)) ||
+                ((ops & IMPROVE_FACE) && try_face_removal(&M, t, q, &S.n_face_removals)) ||
+                ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)))
+                changed++;
+            else
+                M.failed[t] = M.clock;
+        }
+        if (!changed) break;
+    }
+    S.min_after = min_dihedral_and_count(&M, o->target_deg, &S.below_after);
+    /* back into the volume, compacted */
+    {
+        size_t live = 0;
+        for (size_t t = 0; t < M.nt; t++) {
+            if (M.dead[t]) continue;
+            memmove(M.tet + 4 * live, M.tet + 4 * t, 4 * sizeof *M.tet);
+            M.reg[live] = M.reg[t];
+            live++;
+        }
+        int32_t *tet = realloc(M.tet, 4 * (live ? live : 1) * sizeof *tet);
+        int32_t *reg = realloc(M.reg, (live ? live : 1) * sizeof *reg);
+        if (tet) M.tet = tet; /* a failed shrink keeps the larger block */
+        if (reg) M.reg = reg;
+        v->tet = M.tet;
+        v->region = M.reg;
+        M.tet = M.reg = NULL;
+        v->n_tets = live;
+        S.tets_after = live;
+    }
+    S.seconds = thx_wtime() - t0;
+    if (stats) *stats = S;
+done:
+    free(bad);
+    free(M.tet);
+    free(M.nbr);
+    free(M.reg);
+    free(M.dead);
+    free(M.freel);
+    free(M.failed);
+    free(M.node_clock);
+    free(M.node_tet);
+    free(M.prot.slot);
+    return st;
+}
