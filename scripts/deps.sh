@@ -6,6 +6,8 @@ packages=(
   build-essential cmake pkg-config   # compiler and build
   libcjson-dev                       # model.json manifest
   libgmp-dev                         # tests: exact rational reference for the predicates
+  libmatio-dev                       # MATLAB .mat time series (libmatio)
+  python3-scipy                      # tests: scipy.io.loadmat reads our .mat files
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)
   time                               # bench: peak memory (/usr/bin/time -v)

@@ -12,6 +12,7 @@ int cmd_export(int argc, char **argv);
 int cmd_slice(int argc, char **argv);
 int cmd_import(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
+int cmd_series(int argc, char **argv);
 
 /* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. */
 thx_ctx *cli_ctx(int verbose);

@@ -18,6 +18,7 @@ static const struct {
     {"slice", cmd_slice, "cut a model's surfaces by planes z = const into contours"},
     {"mesh", cmd_mesh, "tetrahedral volume mesh with tissue regions and conductivities (paper 3.3)"},
     {"import", cmd_import, "build a model from closed surfaces made elsewhere (pts/fac, tri, obj, stl, ply, vtk)"},
+    {"series", cmd_series, "time series (rows x frames): summary, conversion between text, raw and .mat"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

@@ -1,0 +1,161 @@
+/* thorax series: time series files (rows x frames matrices with a time axis):
+ * a summary of one, or a conversion between text, raw binary and MATLAB .mat. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "cli/cli.h"
+#include "thorax/series.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: thorax series info FILE\n"
+            "       thorax series convert IN -o OUT [--format text|raw|mat]\n"
+            "\n"
+            "A time series is a rows x frames matrix of values (one row per node or lead,\n"
+            "one column per time instant) with a time axis, units and a label.\n"
+            "\n"
+            "  info FILE          prints rows, frames, the time range, units, label, the\n"
+            "                     smallest and largest finite value and the number of\n"
+            "                     NaN/Inf values (with the first one's row and frame)\n"
+            "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
+            "\n"
+            "Formats (docs/formats.md, \"Time series\"): text (.txt, .dat), raw binary\n"
+            "(.raw), MATLAB (.mat). Input files are recognized by their content, else\n"
+            "their extension. In a .mat file the values are the variable named as\n"
+            "FILE.mat:NAME, else `potvals`, else the first struct with a `potvals` field\n"
+            "(map3d recordings), else the first 2-D numeric matrix.\n"
+            "\n"
+            "options:\n"
+            "  -o, --output OUT   file to write (convert)\n"
+            "  --format F         format of OUT: text, raw or mat (default: from OUT's\n"
+            "                     extension)\n"
+            "  -v, -q             more / less logging\n"
+            "  -h, --help         this text\n"
+            "\n"
+            "Rows and frames are counted from 1 in messages and in `info`.\n"
+            "Exit status: 0 ok, 1 error, 2 bad usage.\n");
+}
+
+/* Output format from --format or OUT's extension; -1 if neither tells. */
+static int output_format(const char *format, const char *out, thx_series_format *fmt)
+{
+    if (format) return thx_series_format_parse(format, fmt) == 0 && *fmt != THX_SERIES_AUTO ? 0 : -1;
+    const char *slash = strrchr(out, '/');
+    const char *base = slash ? slash + 1 : out;
+    const char *dot = strrchr(base, '.');
+    const char *ext = (dot && dot != base) ? dot + 1 : "";
+    if (!strcasecmp(ext, "txt") || !strcasecmp(ext, "dat")) *fmt = THX_SERIES_TEXT;
+    else if (!strcasecmp(ext, "raw")) *fmt = THX_SERIES_RAW;
+    else if (!strcasecmp(ext, "mat")) *fmt = THX_SERIES_MAT;
+    else return -1;
+    return 0;
+}
+
+static void print_info(const char *path, const thx_series *s)
+{
+    size_t N = s->n_rows, M = s->n_frames;
+    printf("file        %s\n", path);
+    printf("rows        %zu\n", N);
+    printf("frames      %zu\n", M);
+    const char *tu = s->time_unit[0] ? s->time_unit : "(no unit)";
+    printf("time        %.10g .. %.10g %s", s->time[0], s->time[M - 1], tu);
+    if (M >= 2) {
+        double dt = s->time[1] - s->time[0];
+        int uniform = 1;
+        for (size_t f = 2; f < M && uniform; f++)
+            uniform = fabs((s->time[f] - s->time[f - 1]) - dt) <= 1e-9 * fabs(dt);
+        if (uniform) printf(" (step %.10g)", dt);
+        else printf(" (non-uniform steps)");
+    }
+    printf("\n");
+    printf("unit        %s\n", s->unit[0] ? s->unit : "(none)");
+    printf("label       %s\n", s->label);
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < N * M; i++)
+        if (isfinite(s->v[i])) {
+            if (s->v[i] < lo) lo = s->v[i];
+            if (s->v[i] > hi) hi = s->v[i];
+        }
+    if (lo <= hi) printf("min         %.10g\nmax         %.10g\n", lo, hi);
+    else printf("min         (no finite value)\nmax         (no finite value)\n");
+    size_t row = 0, frame = 0;
+    size_t bad = thx_series_find_nonfinite(s, &row, &frame);
+    if (bad) printf("non-finite  %zu (first: row %zu, frame %zu)\n", bad, row + 1, frame + 1);
+    else printf("non-finite  0\n");
+}
+
+int cmd_series(int argc, char **argv)
+{
+    const char *cmd = "series";
+    const char *sub = NULL, *in = NULL, *out = NULL, *format = NULL;
+    int verbose = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--format")) {
+            if (i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", a);
+            if (!strcmp(a, "--format")) format = argv[++i];
+            else out = argv[++i];
+        } else if (!strcmp(a, "-v")) {
+            verbose++;
+        } else if (!strcmp(a, "-q")) {
+            verbose--;
+        } else if (a[0] == '-' && a[1]) {
+            return cli_usage_error(cmd, "unknown option '%s'", a);
+        } else if (!sub) {
+            sub = a;
+        } else if (!in) {
+            in = a;
+        } else {
+            return cli_usage_error(cmd, "unexpected argument '%s' (one input file expected)", a);
+        }
+    }
+    if (!sub) return cli_usage_error(cmd, "no subcommand given (info or convert)");
+    int convert = !strcmp(sub, "convert");
+    if (!convert && strcmp(sub, "info") != 0)
+        return cli_usage_error(cmd, "unknown subcommand '%s' (info or convert)", sub);
+    if (!in) return cli_usage_error(cmd, "%s: no input file given", sub);
+    thx_series_format fmt = THX_SERIES_AUTO;
+    if (convert) {
+        if (!out) return cli_usage_error(cmd, "convert: no output file given (-o OUT)");
+        if (output_format(format, out, &fmt) != 0) {
+            if (format) return cli_usage_error(cmd, "unknown format '%s' (text, raw or mat)", format);
+            return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat); "
+                                        "give --format",
+                                   out);
+        }
+    } else if (out || format) {
+        return cli_usage_error(cmd, "info: -o and --format apply only to convert");
+    }
+
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_series *s = NULL;
+    int rc = 0;
+    thx_status st = thx_series_read(ctx, in, THX_SERIES_AUTO, &s);
+    if (st) {
+        rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    if (!convert) {
+        print_info(in, s);
+        goto done;
+    }
+    st = thx_series_write(ctx, s, out, fmt);
+    if (st) {
+        rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    size_t bad = thx_series_find_nonfinite(s, NULL, NULL);
+    thx_log(ctx, THX_LOG_INFO, "wrote %s (%zu rows x %zu frames%s)", out, s->n_rows, s->n_frames,
+            bad ? ", with NaN/Inf values" : "");
+done:
+    thx_series_destroy(&s);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
