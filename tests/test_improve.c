@@ -322,6 +322,98 @@ int main(void)
         thx_volume_destroy(&a);
         thx_volume_destroy(&b);
     }
+    /* 6. recovery: triangles using the other diagonal of lattice squares (inside and on the hull)
+          become faces, the tetrahedralization stays valid, and the domain does not change */
+    {
+        thx_volume *v = lattice(ctx, 3, NULL);
+        CHECK(v != NULL);
+        /* nodes off the hull and off the plane z = 3 jittered by up to 0.15 (generic position there);
+           the hull and the plane exact, so their squares are flat */
+        srand(5);
+        for (size_t k = 0; k < v->n_nodes; k++)
+            for (int c = 0; c < 3; c++) {
+                double x = round(v->xyz[3 * k + c]);
+                int on = v->node_surf[k] >= 0 || round(v->xyz[3 * k + 2]) == 3;
+                v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
+            }
+        int32_t *tets = NULL, *nbrs = NULL;
+        size_t nt = 0;
+        CHECK_OK(ctx, thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, NULL));
+        for (size_t t = 0; t < nt; t++) {
+            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
+            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
+        }
+        free(v->tet);
+        free(v->region);
+        v->tet = tets;
+        v->n_tets = nt;
+        v->region = calloc(nt, sizeof *v->region);
+        face_rec *b0 = NULL, *b1 = NULL;
+        long nb0 = boundary_faces(v, &b0);
+        double vol0 = total_volume(v, -1);
+        /* the squares of the plane z = 3 (inside) and of the face x = 0 (on the hull) */
+#define NODE(i, j, l) ((int32_t)(((i) * N + (j)) * N + (l)))
+        int32_t tri[3 * 2 * 2 * (N - 1) * (N - 1)];
+        size_t ntri = 0, inside = 0;
+        for (int side = 0; side < 2; side++)
+            for (int i = 0; i + 1 < N; i++)
+                for (int j = 0; j + 1 < N; j++) {
+                    int32_t a, b, c, d; /* the square a b c d */
+                    if (side == 0) { a = NODE(i, j, 3); b = NODE(i + 1, j, 3); c = NODE(i + 1, j + 1, 3); d = NODE(i, j + 1, 3); }
+                    else { a = NODE(0, i, j); b = NODE(0, i + 1, j); c = NODE(0, i + 1, j + 1); d = NODE(0, i, j + 1); }
+                    /* the diagonal the tetrahedralization does not have */
+                    int ac = has_face(v, a, b, c) && has_face(v, a, c, d);
+                    int bd = has_face(v, a, b, d) && has_face(v, b, c, d);
+                    CHECK(ac != bd);
+                    if (ac) {
+                        tri[3 * ntri] = a; tri[3 * ntri + 1] = b; tri[3 * ntri + 2] = d; ntri++;
+                        tri[3 * ntri] = b; tri[3 * ntri + 1] = c; tri[3 * ntri + 2] = d; ntri++;
+                    } else {
+                        tri[3 * ntri] = a; tri[3 * ntri + 1] = b; tri[3 * ntri + 2] = c; ntri++;
+                        tri[3 * ntri] = a; tri[3 * ntri + 1] = c; tri[3 * ntri + 2] = d; ntri++;
+                    }
+                    if (side == 0) inside += 2;
+                }
+#undef NODE
+        thx_surface surf;
+        memset(&surf, 0, sizeof surf);
+        surf.n_nodes = v->n_nodes;
+        surf.n_tris = ntri;
+        surf.tri = tri;
+        const thx_surface *sp[1] = {&surf};
+        size_t offset[2] = {0, v->n_nodes};
+        recover_stats R;
+        tets = v->tet;
+        v->tet = NULL;
+        CHECK_OK(ctx, mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, &R));
+        v->tet = tets;
+        v->n_tets = nt;
+        free(v->region);
+        v->region = calloc(nt, sizeof *v->region);
+        free(nbrs);
+        printf("recovery: %zu of %zu triangles missing -> %zu (%zu 2-3 flips, %zu edge removals, %zu on the hull)\n",
+               R.missing_before, R.n_triangles, R.missing_after, R.n_flip23, R.n_edge_removals, R.n_boundary);
+        CHECK(R.missing_before == ntri);
+        CHECK(R.missing_after * 5 < R.missing_before); /* the rest need more than one flip per edge */
+        CHECK(R.n_boundary > 0 && R.n_edge_removals > 0);
+        size_t present = 0, wrong = 0;
+        for (size_t i = 0; i < ntri; i++) present += has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
+        CHECK(present == ntri - R.missing_after);
+        for (size_t t = 0; t < v->n_tets; t++) {
+            const int32_t *q = v->tet + 4 * t;
+            wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
+        }
+        CHECK(wrong == 0);
+        /* conforming; the boundary has as many faces (the hull squares only changed diagonals) and the
+           same volume (the squares are flat: the wedge between the diagonals is empty) */
+        long nb1 = boundary_faces(v, &b1);
+        CHECK(nb1 == nb0);
+        CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
+        (void)inside;
+        free(b0);
+        free(b1);
+        thx_volume_destroy(&v);
+    }
     /* 4. two flat caps on one triangle become three good tetrahedra (2-3 flip) */
     {
         thx_volume *v = NULL;

@@ -31,6 +31,9 @@ typedef struct {
                              peeled off (default 5; 0 = keep them) */
     double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
                              flips and by moving grid nodes (default 15; 0 = no repair) */
+    int recover;          /* 1 (default): make the surfaces' triangles faces of the tetrahedralization by
+                             flips before the outside is removed, so the boundary and the tissue
+                             interfaces follow the surfaces' own triangles */
 } thx_mesh_opts;
 
 typedef struct {
@@ -47,6 +50,10 @@ typedef struct {
     double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
     size_t n_edge_removals, n_face_removals, n_moves; /* repair operations applied */
     double t_repair;          /* seconds */
+    size_t n_surface_tris, n_missing_before, n_missing_after; /* surface triangles not faces of the
+                                                                 tetrahedralization, before/after recovery */
+    size_t n_recover_flips;   /* flips and edge removals that recovered them */
+    double t_recover;         /* seconds */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */
     double t_points, t_delaunay, t_classify, t_total; /* seconds */

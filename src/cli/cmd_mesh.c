@@ -9,11 +9,12 @@
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--sliver DEG] [--repair DEG] [--stats]\n\n"
+           "                        [--sliver DEG] [--repair DEG] [--no-recover] [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
            "hybrid method): the surface nodes plus a square grid on each layer plane,\n"
            "points within a tolerance of any surface dropped; Delaunay; tetrahedra any part\n"
-           "of which lies outside removed; flat ones peeled off the boundary and repaired\n"
+           "of which lies outside removed (after the surfaces' triangles are flipped into\n"
+           "the tetrahedralization); flat ones peeled off the boundary and repaired\n"
            "inside (flips, moving grid nodes); tissue regions by inside/outside tests; the\n"
            "default conductivity table. Writes volume.pts, volume.tet and the node tables\n"
            "into the model directory (or the one given by -o).\n\n"
@@ -28,6 +29,8 @@ static void help(void)
            "  --sliver DEG           peel boundary tetrahedra with a dihedral angle below DEG (5; 0 = off)\n"
            "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
            "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
+           "  --no-recover           do not flip the surfaces' triangles into the mesh (the boundary\n"
+           "                         and interfaces then follow the Delaunay step's own diagonals)\n"
            "  --stats                print counts and times\n"
            "  -v, -q                 more / less logging\n");
 }
@@ -48,6 +51,7 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
         else if (!strcmp(a, "--sliver")) { if (cli_parse_double("mesh", a, v, &o.sliver_deg)) return 2; i++; if (o.sliver_deg < 0 || o.sliver_deg >= 70) return cli_usage_error("mesh", "--sliver must be between 0 and 70 degrees"); }
         else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
+        else if (!strcmp(a, "--no-recover")) o.recover = 0;
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -78,6 +82,10 @@ int cmd_mesh(int argc, char **argv)
                    "boundary, %zu put back and %zu taken away by the boundary repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, "
                    "classification %.3f, total %.3f\n",
                    S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_slivers_peeled, S.n_readded, S.n_taken, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
+        if (want_stats && o.recover)
+            printf("recovery: %zu of %zu surface triangles were not faces of the Delaunay tetrahedralization, %zu "
+                   "after %zu flips; %.3f s\n",
+                   S.n_missing_before, S.n_surface_tris, S.n_missing_after, S.n_recover_flips, S.t_recover);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
                    "%zu face removals, %zu grid nodes moved; %.3f s\n",

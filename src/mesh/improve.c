@@ -73,28 +73,35 @@ static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}; /
  * (floating point: the exact orientation is tested separately). */
 static double quality(const double *p[4])
 {
-    thx_vec3 P[4], n[4];
-    for (int k = 0; k < 4; k++) P[k] = thx_v3(p[k][0], p[k][1], p[k][2]);
-    double vol6 = thx_v3_dot(thx_v3_cross(thx_v3_sub(P[1], P[0]), thx_v3_sub(P[2], P[0])), thx_v3_sub(P[3], P[0]));
+    double e[3][3]; /* p1 - p0, p2 - p0, p3 - p0 */
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 3; c++) e[k][c] = p[k + 1][c] - p[0][c];
+    double vol6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                  e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
     if (!(vol6 > 0)) return 0;
-    double nl[4];
+    /* squared doubled face areas, face f opposite corner f */
+    double nl2[4];
     for (int f = 0; f < 4; f++) {
         const int *v = face_of[f];
-        n[f] = thx_v3_cross(thx_v3_sub(P[v[1]], P[v[0]]), thx_v3_sub(P[v[2]], P[v[0]]));
-        nl[f] = thx_v3_norm(n[f]);
-    }
-    double best = INFINITY;
-    for (int i = 0; i < 4; i++)
-        for (int j = i + 1; j < 4; j++) {
-            /* edge (i, j) lies in the faces opposite the other two corners k, l */
-            int k = 0;
-            while (k == i || k == j) k++;
-            int l = 6 - i - j - k;
-            double e = thx_v3_norm(thx_v3_sub(P[j], P[i]));
-            double s = vol6 * e / (nl[k] * nl[l]);
-            if (s < best) best = s;
+        double u[3], w[3];
+        for (int c = 0; c < 3; c++) {
+            u[c] = p[v[1]][c] - p[v[0]][c];
+            w[c] = p[v[2]][c] - p[v[0]][c];
         }
-    return best;
+        double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2], z = u[0] * w[1] - u[1] * w[0];
+        nl2[f] = x * x + y * y + z * z;
+    }
+    /* sin of the dihedral angle at edge (i, j) = 6V |e_ij| / (|n_k| |n_l|), k, l the other corners;
+       compared squared, one square root at the end */
+    static const int pair[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+    double best = INFINITY;
+    for (int k = 0; k < 6; k++) {
+        const int *q = pair[k];
+        double d0 = p[q[1]][0] - p[q[0]][0], d1 = p[q[1]][1] - p[q[0]][1], d2 = p[q[1]][2] - p[q[0]][2];
+        double s2 = (d0 * d0 + d1 * d1 + d2 * d2) / (nl2[q[2]] * nl2[q[3]]);
+        if (s2 < best) best = s2;
+    }
+    return vol6 * sqrt(best);
 }
 
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
@@ -138,6 +145,9 @@ typedef struct {
     const improve_opts *o;
     size_t n_regions;
     int32_t star[MAX_STAR]; /* scratch: the star of the vertex being moved */
+    int32_t star2[MAX_STAR];
+    uint32_t *nmark, nstamp; /* node marks (recovery: the neighbours of an edge's far end) */
+    uint32_t *tmark, tstamp; /* per slot: visited by the current star search */
 } imesh;
 
 static const double *X(const imesh *M, int32_t i) { return M->xyz + 3 * (size_t)i; }
@@ -232,9 +242,12 @@ static thx_status grow(imesh *M, size_t need)
     if (d) M->dead = d;
     uint32_t *f = realloc(M->failed, cap * sizeof *f);
     if (f) M->failed = f;
-    if (!t || !n || !r || !d || !f) return thx_error(M->ctx, THX_ENOMEM, "mesh: out of memory repairing slivers");
+    uint32_t *mk = realloc(M->tmark, cap * sizeof *mk);
+    if (mk) M->tmark = mk;
+    if (!t || !n || !r || !d || !f || !mk) return thx_error(M->ctx, THX_ENOMEM, "mesh: out of memory repairing slivers");
     memset(M->dead + M->cap, 1, cap - M->cap);
     memset(M->failed + M->cap, 0, (cap - M->cap) * sizeof *f);
+    memset(M->tmark + M->cap, 0, (cap - M->cap) * sizeof *mk);
     M->cap = cap;
     return THX_OK;
 }
@@ -247,7 +260,8 @@ static thx_status grow(imesh *M, size_t need)
  */
 typedef struct { triple k; int32_t out; int fo; int used; } oface;
 
-static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], const int32_t *nreg, int n_new)
+static int replace_any(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], const int32_t *nreg, int n_new,
+                       int open)
 {
     oface of[4 * 2 * MAX_RING];
     int nof = 0;
@@ -286,11 +300,11 @@ static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[
                     if (l.a == k.a && l.b == k.b && l.c == k.c) { other = m * 4 + h; break; }
                 }
             }
-            if (other < 0) return -1;
-            link[n][g] = -other - 1;
+            if (other < 0 && !open) return -1;
+            link[n][g] = other < 0 ? INT32_MIN : -other - 1; /* INT32_MIN: a new boundary face */
         }
     for (int i = 0; i < nof; i++)
-        if (!of[i].used) return -1;
+        if (!of[i].used && !(open && of[i].out < 0)) return -1;
     if (grow(M, M->nt + (size_t)n_new) != THX_OK) return -1;
     if (M->n_free + (size_t)n_old > M->free_cap) {
         size_t fc = 2 * M->free_cap + 256;
@@ -321,7 +335,9 @@ static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[
     for (int n = 0; n < n_new; n++) {
         size_t s = (size_t)slot[n];
         for (int g = 0; g < 4; g++) {
-            if (link[n][g] >= 0) {
+            if (link[n][g] == INT32_MIN) {
+                M->nbr[4 * s + g] = -1;
+            } else if (link[n][g] >= 0) {
                 const oface *e = &of[link[n][g]];
                 M->nbr[4 * s + g] = e->out;
                 if (e->out >= 0) M->nbr[4 * (size_t)e->out + e->fo] = (int32_t)s;
@@ -336,6 +352,12 @@ static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[
         }
     }
     return 0;
+}
+
+/* Replaces a cavity whose boundary stays as it was. */
+static int replace(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], const int32_t *nreg, int n_new)
+{
+    return replace_any(M, old, n_old, nw, nreg, n_new, 0);
 }
 
 /* Regions of new tetrahedra: the old one's when the cavity had one region, else by centroid. */
@@ -411,8 +433,17 @@ static int edge_ring(const imesh *M, int32_t t, int32_t a, int32_t b, int32_t *r
     return n;
 }
 
-/* Best triangulation of the ring: returns its worst quality and fills nw (2(n-2) tetrahedra). */
-static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4])
+/* Does the ring diagonal (x, y) cross the chord (p, q) (ring indices, p < q)? */
+static int crosses(int x, int y, int p, int q)
+{
+    if (x == p || x == q || y == p || y == q) return 0;
+    return (p < x && x < q) != (p < y && y < q);
+}
+
+/* Best triangulation of the ring: returns its worst quality and fills nw (2(n-2) tetrahedra). With
+ * cp < cq (ring indices), only triangulations holding the chord (r[cp], r[cq]) are considered. */
+static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4],
+                                int cp, int cq)
 {
     double Q[MAX_RING][MAX_RING];
     int K[MAX_RING][MAX_RING];
@@ -425,6 +456,7 @@ static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int3
             for (int k = i + 1; k < j; k++) {
                 double v = fmin(Q[i][k], Q[k][j]);
                 if (v <= best) continue;
+                if (cp >= 0 && (crosses(i, k, cp, cq) || crosses(k, j, cp, cq) || crosses(i, j, cp, cq))) continue;
                 /* with the ring counterclockwise seen from b: (ri, rk, rj, b) and (ri, rj, rk, a) */
                 double qb = q4(M, r[i], r[k], r[j], b);
                 if (qb <= best) continue;
@@ -469,7 +501,7 @@ static int try_edge_removal(imesh *M, int32_t t, double qt, size_t *count)
         double qold = qt;
         for (int i = 0; i < n; i++) qold = fmin(qold, qtet(M, tets[i]));
         int32_t nw[2 * MAX_RING][4];
-        double qnew = edge_removal_plan(M, a, b, ring, n, nw);
+        double qnew = edge_removal_plan(M, a, b, ring, n, nw, -1, -1);
         if (qnew - qold > best_gain) {
             best_gain = qnew - qold;
             best_n = n;
@@ -659,6 +691,123 @@ static double min_dihedral_and_count(const imesh *M, double below, size_t *n_bel
     return mn;
 }
 
+/* Takes over tet (4 nt), reg (nt; NULL: all 0) and nbr (NULL: searched for). */
+static thx_status imesh_open(imesh *M, thx_ctx *ctx, double *xyz, size_t nn, int32_t *tet, int32_t *reg, size_t nt,
+                             int32_t *nbr, const int32_t *node_surf, size_t n_regions, const improve_opts *o)
+{
+    memset(M, 0, sizeof *M);
+    M->ctx = ctx;
+    M->xyz = xyz;
+    M->nn = nn;
+    M->nt = nt;
+    M->node_surf = node_surf;
+    M->o = o;
+    M->n_regions = n_regions;
+    M->tet = tet;
+    M->reg = reg ? reg : thx_calloc(ctx, nt ? nt : 1, sizeof *M->reg);
+    M->nbr = nbr ? nbr : thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *M->nbr);
+    M->dead = thx_calloc(ctx, nt ? nt : 1, 1);
+    M->failed = thx_calloc(ctx, nt ? nt : 1, sizeof *M->failed);
+    M->tmark = thx_calloc(ctx, nt ? nt : 1, sizeof *M->tmark);
+    M->node_tet = thx_malloc(ctx, (nn ? nn : 1) * sizeof *M->node_tet);
+    M->node_clock = thx_calloc(ctx, nn ? nn : 1, sizeof *M->node_clock);
+    if (!M->reg || !M->nbr || !M->dead || !M->failed || !M->tmark || !M->node_tet || !M->node_clock) return THX_ENOMEM;
+    M->cap = nt;
+    thx_status st = grow(M, nt + 64);
+    if (st != THX_OK) return st;
+    if (nbr) {
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 4; k++) M->node_tet[M->tet[4 * t + k]] = (int32_t)t;
+        return THX_OK;
+    }
+    return build_adjacency(M);
+}
+
+/* The protected set: every surface's triangles and edges, in volume node numbers (maps[s][i], or
+ * offset[s] + i when maps is NULL). */
+static thx_status build_prot(imesh *M, const thx_surface *const *surf, size_t n_surf, const int32_t *const *maps,
+                             const size_t *offset)
+{
+    size_t n_keys = 0;
+    for (size_t s = 0; s < n_surf; s++) n_keys += surf[s]->n_tris * 4;
+    size_t cap = 16;
+    while (cap < 2 * n_keys + 16) cap <<= 1;
+    M->prot.slot = thx_malloc(M->ctx, cap * sizeof *M->prot.slot);
+    if (!M->prot.slot) return THX_ENOMEM;
+    memset(M->prot.slot, 0xff, cap * sizeof *M->prot.slot);
+    M->prot.mask = cap - 1;
+    for (size_t s = 0; s < n_surf; s++)
+        for (size_t i = 0; i < surf[s]->n_tris; i++) {
+            const int32_t *f = surf[s]->tri + 3 * i;
+            int32_t a, b, c;
+            if (maps) { a = maps[s][f[0]]; b = maps[s][f[1]]; c = maps[s][f[2]]; }
+            else { a = (int32_t)(offset[s] + (size_t)f[0]); b = (int32_t)(offset[s] + (size_t)f[1]); c = (int32_t)(offset[s] + (size_t)f[2]); }
+            tset_add(&M->prot, tri_sorted(a, b, c));
+            tset_add(&M->prot, edge_sorted(a, b));
+            tset_add(&M->prot, edge_sorted(b, c));
+            tset_add(&M->prot, edge_sorted(c, a));
+        }
+    return THX_OK;
+}
+
+/* Compacts the live tetrahedra and hands the arrays back (nbr renumbered when wanted). */
+static thx_status imesh_close(imesh *M, int32_t **tet, int32_t **reg, int32_t **nbr, size_t *nt)
+{
+    int32_t *idx = NULL;
+    if (nbr) {
+        idx = thx_malloc(M->ctx, (M->nt ? M->nt : 1) * sizeof *idx);
+        if (!idx) return THX_ENOMEM;
+    }
+    size_t live = 0;
+    for (size_t t = 0; t < M->nt; t++) {
+        if (idx) idx[t] = M->dead[t] ? -1 : (int32_t)live;
+        if (M->dead[t]) continue;
+        memmove(M->tet + 4 * live, M->tet + 4 * t, 4 * sizeof *M->tet);
+        if (nbr) memmove(M->nbr + 4 * live, M->nbr + 4 * t, 4 * sizeof *M->nbr);
+        M->reg[live] = M->reg[t];
+        live++;
+    }
+    if (idx) {
+        for (size_t k = 0; k < 4 * live; k++)
+            if (M->nbr[k] >= 0) M->nbr[k] = idx[M->nbr[k]];
+        free(idx);
+    }
+    int32_t *t = realloc(M->tet, 4 * (live ? live : 1) * sizeof *t);
+    if (t) M->tet = t; /* a failed shrink keeps the larger block */
+    *tet = M->tet;
+    M->tet = NULL;
+    if (reg) {
+        int32_t *r = realloc(M->reg, (live ? live : 1) * sizeof *r);
+        if (r) M->reg = r;
+        *reg = M->reg;
+        M->reg = NULL;
+    }
+    if (nbr) {
+        int32_t *n = realloc(M->nbr, 4 * (live ? live : 1) * sizeof *n);
+        if (n) M->nbr = n;
+        *nbr = M->nbr;
+        M->nbr = NULL;
+    }
+    *nt = live;
+    return THX_OK;
+}
+
+static void imesh_free(imesh *M)
+{
+    free(M->tet);
+    free(M->nbr);
+    free(M->reg);
+    free(M->dead);
+    free(M->freel);
+    free(M->failed);
+    free(M->node_clock);
+    free(M->node_tet);
+    free(M->prot.slot);
+    free(M->nmark);
+    free(M->tmark);
+    memset(M, 0, sizeof *M);
+}
+
 thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_surface *const *surf, size_t n_surf,
                         const improve_opts *o, improve_stats *stats)
 {
@@ -667,59 +816,18 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_sur
     improve_stats S;
     memset(&S, 0, sizeof S);
     imesh M;
-    memset(&M, 0, sizeof M);
     qrec *bad = NULL;
-    M.ctx = ctx;
-    M.xyz = v->xyz;
-    M.nn = v->n_nodes;
-    M.nt = v->n_tets;
-    M.node_surf = v->node_surf;
-    M.o = o;
-    M.n_regions = v->n_regions;
     /* the volume's arrays are taken over (no copy) and given back compacted; on failure the volume is
        left without tetrahedra */
-    M.tet = v->tet;
-    M.reg = v->region;
+    int32_t *tet = v->tet, *reg = v->region;
+    size_t nt = v->n_tets;
     v->tet = NULL;
     v->region = NULL;
     v->n_tets = 0;
-    M.nbr = nbr ? nbr : thx_malloc(ctx, 4 * (M.nt ? M.nt : 1) * sizeof *M.nbr);
-    M.dead = thx_calloc(ctx, M.nt ? M.nt : 1, 1);
-    M.failed = thx_calloc(ctx, M.nt ? M.nt : 1, sizeof *M.failed);
-    if (!M.nbr || !M.dead || !M.failed) { st = THX_ENOMEM; goto done; }
-    M.cap = M.nt;
-    THX_TRY(grow(&M, M.nt + 64));
-    M.node_tet = thx_malloc(ctx, (M.nn ? M.nn : 1) * sizeof *M.node_tet);
-    M.node_clock = thx_calloc(ctx, M.nn ? M.nn : 1, sizeof *M.node_clock);
-    if (!M.node_tet || !M.node_clock) { st = THX_ENOMEM; goto done; }
-    /* protected: the model's triangles and edges, in volume node numbers */
-    {
-        size_t n_keys = 0;
-        for (size_t s = 0; s < n_surf; s++) n_keys += surf[s]->n_tris * 3;
-        size_t cap = 16;
-        while (cap < 2 * n_keys + 16) cap <<= 1;
-        M.prot.slot = thx_malloc(ctx, cap * sizeof *M.prot.slot);
-        if (!M.prot.slot) { st = THX_ENOMEM; goto done; }
-        memset(M.prot.slot, 0xff, cap * sizeof *M.prot.slot);
-        M.prot.mask = cap - 1;
-        for (size_t s = 0; s < n_surf && s < v->n_surfaces; s++) {
-            const int32_t *map = v->surf_node[s];
-            for (size_t i = 0; i < surf[s]->n_tris; i++) {
-                const int32_t *f = surf[s]->tri + 3 * i;
-                int32_t a = map[f[0]], b = map[f[1]], c = map[f[2]];
-                tset_add(&M.prot, tri_sorted(a, b, c));
-                tset_add(&M.prot, edge_sorted(a, b));
-                tset_add(&M.prot, edge_sorted(b, c));
-                tset_add(&M.prot, edge_sorted(c, a));
-            }
-        }
-    }
-    if (nbr) {
-        for (size_t t = 0; t < M.nt; t++)
-            for (int k = 0; k < 4; k++) M.node_tet[M.tet[4 * t + k]] = (int32_t)t;
-    } else {
-        THX_TRY(build_adjacency(&M));
-    }
+    if (!reg) reg = thx_calloc(ctx, nt ? nt : 1, sizeof *reg);
+    st = imesh_open(&M, ctx, v->xyz, v->n_nodes, tet, reg, nt, nbr, v->node_surf, v->n_regions, o);
+    if (st != THX_OK) goto done;
+    THX_TRY(build_prot(&M, surf, n_surf < v->n_surfaces ? n_surf : v->n_surfaces, (const int32_t *const *)v->surf_node, NULL));
     S.tets_before = M.nt;
     S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
     double sin_target = sin(o->target_deg * M_PI / 180.0);
@@ -759,37 +867,312 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_sur
         if (!changed) break;
     }
     S.min_after = min_dihedral_and_count(&M, o->target_deg, &S.below_after);
-    /* back into the volume, compacted */
-    {
-        size_t live = 0;
-        for (size_t t = 0; t < M.nt; t++) {
-            if (M.dead[t]) continue;
-            memmove(M.tet + 4 * live, M.tet + 4 * t, 4 * sizeof *M.tet);
-            M.reg[live] = M.reg[t];
-            live++;
-        }
-        int32_t *tet = realloc(M.tet, 4 * (live ? live : 1) * sizeof *tet);
-        int32_t *reg = realloc(M.reg, (live ? live : 1) * sizeof *reg);
-        if (tet) M.tet = tet; /* a failed shrink keeps the larger block */
-        if (reg) M.reg = reg;
-        v->tet = M.tet;
-        v->region = M.reg;
-        M.tet = M.reg = NULL;
-        v->n_tets = live;
-        S.tets_after = live;
-    }
+    THX_TRY(imesh_close(&M, &v->tet, &v->region, NULL, &v->n_tets));
+    S.tets_after = v->n_tets;
     S.seconds = thx_wtime() - t0;
     if (stats) *stats = S;
 done:
     free(bad);
-    free(M.tet);
-    free(M.nbr);
-    free(M.reg);
-    free(M.dead);
-    free(M.freel);
-    free(M.failed);
-    free(M.node_clock);
-    free(M.node_tet);
-    free(M.prot.slot);
+    imesh_free(&M);
     return st;
+}
+
+/* ---- recovery of surface triangles as faces ---- */
+
+/* The tetrahedra around node a, boundary allowed (star[] of at most MAX_STAR); 0 if too many. */
+static int open_star(imesh *M, int32_t a, int32_t *star)
+{
+    if (++M->tstamp == 0) { memset(M->tmark, 0, M->cap * sizeof *M->tmark); M->tstamp = 1; }
+    int n = 0;
+    star[n++] = M->node_tet[a];
+    M->tmark[M->node_tet[a]] = M->tstamp;
+    for (int i = 0; i < n; i++) {
+        const int32_t *q = M->tet + 4 * (size_t)star[i];
+        int la = local_index(q, a);
+        for (int f = 0; f < 4; f++) {
+            if (f == la) continue;
+            int32_t u = M->nbr[4 * (size_t)star[i] + f];
+            if (u < 0 || M->tmark[u] == M->tstamp) continue;
+            if (n >= MAX_STAR) return 0;
+            M->tmark[u] = M->tstamp;
+            star[n++] = u;
+        }
+    }
+    return n;
+}
+
+static int star_has(const imesh *M, const int32_t *star, int n, int32_t c)
+{
+    for (int i = 0; i < n; i++)
+        if (local_index(M->tet + 4 * (size_t)star[i], c) >= 0) return 1;
+    return 0;
+}
+
+#define RECOVER_FLOOR 0.0872 /* sine of 5 degrees: a recovery never makes a tetrahedron flatter than this (or than its cavity had) */
+
+/* Makes (a, c) an edge of the mesh by one 2-3 flip or one edge removal with (a, c) as a chord of the
+ * ring. Returns 1 if the edge exists afterwards. */
+static int recover_edge(imesh *M, int32_t a, int32_t c, size_t *n_flip23, size_t *n_edge)
+{
+    int32_t *star = M->star;
+    int n = open_star(M, a, star);
+    if (!n) return 0;
+    if (star_has(M, star, n, c)) return 1;
+    /* the segment leaves a through the face opposite it, and the tetrahedron behind is (face, c) */
+    for (int i = 0; i < n; i++) {
+        int32_t t = star[i];
+        const int32_t *q = M->tet + 4 * (size_t)t;
+        int f = local_index(q, a);
+        int32_t u = M->nbr[4 * (size_t)t + f];
+        if (u < 0 || local_index(M->tet + 4 * (size_t)u, c) < 0) continue;
+        if (tset_has(&M->prot, tri_sorted(q[face_of[f][0]], q[face_of[f][1]], q[face_of[f][2]]))) continue;
+        int32_t nw[3][4];
+        double qnew = INFINITY;
+        for (int k = 0; k < 3 && qnew > 0; k++) {
+            memcpy(nw[k], q, sizeof nw[k]);
+            nw[k][face_of[f][k]] = c;
+            qnew = fmin(qnew, q4(M, nw[k][0], nw[k][1], nw[k][2], nw[k][3]));
+        }
+        double qold = fmin(qtet(M, t), qtet(M, u));
+        if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
+        int32_t old[2] = {t, u}, nreg[3];
+        new_regions(M, old, 2, (const int32_t(*)[4])nw, 3, nreg);
+        if (replace(M, old, 2, (const int32_t(*)[4])nw, nreg, 3) == 0) { (*n_flip23)++; return 1; }
+    }
+    /* an edge (p, q) of the star, opposite a, whose ring holds c as well as a: p and q are neighbours of c */
+    int n2 = open_star(M, c, M->star2);
+    if (!n2) return 0;
+    if (++M->nstamp == 0) { memset(M->nmark, 0, M->nn * sizeof *M->nmark); M->nstamp = 1; }
+    for (int i = 0; i < n2; i++)
+        for (int k = 0; k < 4; k++) M->nmark[M->tet[4 * (size_t)M->star2[i] + k]] = M->nstamp;
+    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    for (int i = 0; i < n; i++) {
+        int32_t t = star[i];
+        for (int e = 0; e < 6; e++) {
+            const int32_t *q = M->tet + 4 * (size_t)t;
+            int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
+            if (p0 == a || p1 == a || M->nmark[p0] != M->nstamp || M->nmark[p1] != M->nstamp) continue;
+            if (tset_has(&M->prot, edge_sorted(p0, p1))) continue;
+            int32_t ring[MAX_RING], tets[MAX_RING];
+            int m = edge_ring(M, t, p0, p1, ring, tets);
+            if (m < 4) continue;
+            int ia = -1, ic = -1;
+            for (int k = 0; k < m; k++) {
+                if (ring[k] == a) ia = k;
+                if (ring[k] == c) ic = k;
+            }
+            if (ia < 0 || ic < 0) continue;
+            int cp = ia < ic ? ia : ic, cq = ia < ic ? ic : ia;
+            if (cq - cp < 2 || (cp == 0 && cq == m - 1)) continue; /* neighbours on the ring: (a, c) would be an edge */
+            double qold = INFINITY;
+            for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
+            int32_t nw[2 * MAX_RING][4];
+            double qnew = edge_removal_plan(M, p0, p1, ring, m, nw, cp, cq);
+            if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
+            int32_t nreg[2 * MAX_RING];
+            new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
+            if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) == 0) { (*n_edge)++; return 1; }
+        }
+    }
+    return 0;
+}
+
+/* The ring around a boundary edge (a, b) of t: ring[0..m) from one boundary face (a, b, ring[0]) to
+ * the other (a, b, ring[m-1]), (a, b, ring[i], ring[i+1]) right-handed, tets[0..m-1) between them.
+ * Returns m, or 0 if the edge is interior or its ring too large. */
+static int edge_ring_open(const imesh *M, int32_t t, int32_t a, int32_t b, int32_t *ring, int32_t *tets)
+{
+    const int32_t *q = M->tet + 4 * (size_t)t;
+    int ia = local_index(q, a), ib = local_index(q, b), ic = 0;
+    while (ic == ia || ic == ib) ic++;
+    int32_t c = q[ic], d = q[6 - ia - ib - ic];
+    /* back to the tetrahedron whose face (a, b, c) is on the boundary */
+    int32_t cur = t;
+    for (int steps = 0;; steps++) {
+        if (steps > MAX_RING) return 0;
+        const int32_t *r = M->tet + 4 * (size_t)cur;
+        int32_t u = M->nbr[4 * (size_t)cur + local_index(r, d)];
+        if (u < 0) break;
+        const int32_t *w = M->tet + 4 * (size_t)u;
+        int32_t e = -1;
+        for (int k = 0; k < 4; k++)
+            if (w[k] != a && w[k] != b && w[k] != c) e = w[k];
+        cur = u;
+        d = c;
+        c = e;
+        if (cur == t) return 0; /* closed: interior edge */
+    }
+    int32_t start = cur;
+    int n = 0;
+    for (;;) {
+        if (n + 1 >= MAX_RING) return 0;
+        ring[n] = c;
+        tets[n] = cur;
+        n++;
+        const int32_t *r = M->tet + 4 * (size_t)cur;
+        int32_t nx = M->nbr[4 * (size_t)cur + local_index(r, c)];
+        if (nx < 0) { ring[n] = d; break; }
+        const int32_t *w = M->tet + 4 * (size_t)nx;
+        int32_t e = -1;
+        for (int k = 0; k < 4; k++)
+            if (w[k] != a && w[k] != b && w[k] != d) e = w[k];
+        cur = nx;
+        c = d;
+        d = e;
+    }
+    int m = n + 1;
+    /* orientation at the start: the parity of (a, b, ring[0], ring[1]) in its stored order */
+    const int32_t *r0 = M->tet + 4 * (size_t)start;
+    int perm[4] = {local_index(r0, a), local_index(r0, b), local_index(r0, ring[0]), local_index(r0, ring[1])}, inv = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++) inv += perm[i] > perm[j];
+    if (inv & 1) {
+        for (int i = 0, j = m - 1; i < j; i++, j--) {
+            int32_t x = ring[i]; ring[i] = ring[j]; ring[j] = x;
+        }
+        for (int i = 0, j = n - 1; i < j; i++, j--) {
+            int32_t x = tets[i]; tets[i] = tets[j]; tets[j] = x;
+        }
+    }
+    return m;
+}
+
+/* Recovers the boundary edge (a, c) where the boundary has the other diagonal (p0, p1) of the
+ * quadrilateral a, p0, c, p1 (the convex hull's choice): the tetrahedra around (p0, p1), an open ring
+ * from a to c, are replaced by a triangulation of the ring polygon closed by (a, c), which becomes a
+ * boundary edge; the thin region between the two diagonals leaves the mesh (it lies outside the
+ * surface whose edge (a, c) is). */
+static int recover_boundary_edge(imesh *M, int32_t a, int32_t c, size_t *n_edge)
+{
+    int32_t *star = M->star;
+    int n = open_star(M, a, star);
+    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    for (int i = 0; i < n; i++) {
+        int32_t t = star[i];
+        for (int e = 0; e < 6; e++) {
+            const int32_t *q = M->tet + 4 * (size_t)t;
+            int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
+            if (p0 == a || p1 == a) continue;
+            if (tset_has(&M->prot, edge_sorted(p0, p1))) continue;
+            int32_t ring[MAX_RING], tets[MAX_RING];
+            int m = edge_ring_open(M, t, p0, p1, ring, tets);
+            if (m < 3) continue;
+            if (!((ring[0] == a && ring[m - 1] == c) || (ring[0] == c && ring[m - 1] == a))) continue;
+            /* the boundary faces (p0, p1, a) and (p0, p1, c) go: they must not be surface triangles */
+            if (tset_has(&M->prot, tri_sorted(p0, p1, a)) || tset_has(&M->prot, tri_sorted(p0, p1, c))) continue;
+            double qold = INFINITY;
+            for (int k = 0; k < m - 1; k++) qold = fmin(qold, qtet(M, tets[k]));
+            int32_t nw[2 * MAX_RING][4];
+            double qnew = edge_removal_plan(M, p0, p1, ring, m, nw, -1, -1);
+            if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
+            int32_t nreg[2 * MAX_RING];
+            new_regions(M, tets, m - 1, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
+            if (replace_any(M, tets, m - 1, (const int32_t(*)[4])nw, nreg, 2 * (m - 2), 1) == 0) {
+                (*n_edge)++;
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Is (a, b, c) a face? */
+static int has_face(imesh *M, int32_t a, int32_t b, int32_t c)
+{
+    int32_t *star = M->star;
+    int n = open_star(M, a, star);
+    for (int i = 0; i < n; i++) {
+        const int32_t *q = M->tet + 4 * (size_t)star[i];
+        if (local_index(q, b) >= 0 && local_index(q, c) >= 0) return 1;
+    }
+    return 0;
+}
+
+thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, int32_t **nbrs, size_t *nt,
+                        const thx_surface *const *surf, const size_t *offset, size_t n_surf, recover_stats *stats)
+{
+    double t0 = thx_wtime();
+    thx_status st = THX_OK;
+    recover_stats S;
+    memset(&S, 0, sizeof S);
+    imesh M;
+    improve_opts o;
+    memset(&o, 0, sizeof o);
+    st = imesh_open(&M, ctx, xyz, nn, *tets, NULL, *nt, *nbrs, NULL, 1, &o);
+    *tets = NULL;
+    *nbrs = NULL;
+    *nt = 0;
+    if (st != THX_OK) goto done;
+    THX_TRY(build_prot(&M, surf, n_surf, NULL, offset));
+    M.nmark = thx_calloc(ctx, nn ? nn : 1, sizeof *M.nmark);
+    if (!M.nmark) { st = THX_ENOMEM; goto done; }
+    for (size_t s = 0; s < n_surf; s++) {
+        S.n_triangles += surf[s]->n_tris;
+        for (size_t i = 0; i < surf[s]->n_tris; i++) {
+            const int32_t *f = surf[s]->tri + 3 * i;
+            S.missing_before += !has_face(&M, (int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
+                                          (int32_t)(offset[s] + (size_t)f[2]));
+        }
+    }
+    for (int pass = 0; pass < 3; pass++) {
+        size_t missing = 0, fixed = 0;
+        for (size_t s = 0; s < n_surf; s++)
+            for (size_t i = 0; i < surf[s]->n_tris; i++) {
+                const int32_t *f = surf[s]->tri + 3 * i;
+                int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
+                                (int32_t)(offset[s] + (size_t)f[2])};
+                if (has_face(&M, v[0], v[1], v[2])) continue;
+                missing++;
+                int ok = 1;
+                for (int e = 0; e < 3 && ok; e++)
+                    ok = recover_edge(&M, v[e], v[(e + 1) % 3], &S.n_flip23, &S.n_edge_removals) ||
+                         recover_boundary_edge(&M, v[e], v[(e + 1) % 3], &S.n_boundary);
+                if (ok && has_face(&M, v[0], v[1], v[2])) fixed++;
+            }
+        S.missing_after = missing - fixed;
+        if (!fixed) break;
+    }
+    THX_TRY(imesh_close(&M, tets, NULL, nbrs, nt));
+    S.seconds = thx_wtime() - t0;
+    if (stats) *stats = S;
+done:
+    imesh_free(&M);
+    return st;
+}
+
+/* ---- the surface triangles as a set ---- */
+struct mesh_triset { tset s; };
+
+thx_status mesh_triset_build(thx_ctx *ctx, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
+                             mesh_triset **out)
+{
+    *out = NULL;
+    size_t n = 0;
+    for (size_t s = 0; s < n_surf; s++) n += surf[s]->n_tris;
+    size_t cap = 16;
+    while (cap < 2 * n + 16) cap <<= 1;
+    mesh_triset *T = thx_malloc(ctx, sizeof *T);
+    if (!T) return THX_ENOMEM;
+    T->s.slot = thx_malloc(ctx, cap * sizeof *T->s.slot);
+    if (!T->s.slot) { free(T); return THX_ENOMEM; }
+    memset(T->s.slot, 0xff, cap * sizeof *T->s.slot);
+    T->s.mask = cap - 1;
+    for (size_t s = 0; s < n_surf; s++)
+        for (size_t i = 0; i < surf[s]->n_tris; i++) {
+            const int32_t *f = surf[s]->tri + 3 * i;
+            tset_add(&T->s, tri_sorted((int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
+                                       (int32_t)(offset[s] + (size_t)f[2])));
+        }
+    *out = T;
+    return THX_OK;
+}
+
+int mesh_triset_has(const mesh_triset *T, int32_t a, int32_t b, int32_t c) { return tset_has(&T->s, tri_sorted(a, b, c)); }
+
+void mesh_triset_free(mesh_triset **T)
+{
+    if (!T || !*T) return;
+    free((*T)->s.slot);
+    free(*T);
+    *T = NULL;
 }

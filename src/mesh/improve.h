@@ -59,4 +59,38 @@ double mesh_tet_min_dihedral(const double *xyz, const int32_t *q);
 thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_surface *const *surf, size_t n_surf,
                         const improve_opts *o, improve_stats *stats);
 
+/* The surfaces' triangles (surface s's node i is node offset[s] + i) as a set of node triples. */
+typedef struct mesh_triset mesh_triset;
+thx_status mesh_triset_build(thx_ctx *ctx, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
+                             mesh_triset **out);
+int mesh_triset_has(const mesh_triset *T, int32_t a, int32_t b, int32_t c);
+void mesh_triset_free(mesh_triset **T);
+
+/*
+ * Recovery of the surfaces' triangles as faces of a tetrahedralization
+ * (before the outside is removed): for every surface triangle that is not a
+ * face, each missing edge is made an edge by one 2-3 flip (the segment crosses
+ * one face) or by one edge removal whose ring triangulation is forced to hold
+ * the edge as a chord (the segment passes by one edge: the other diagonal of a
+ * lacing quadrilateral, the usual case). Surface triangles and edges already
+ * present are never removed; new tetrahedra are positively oriented (exact)
+ * and no worse than the cavity's worst or a floor (sine 0.02). Triangles that
+ * need more than one operation per edge stay missing (counted). On the
+ * convex hull (where the outer surface touches it) a hull edge that is the
+ * other diagonal of a surface quadrilateral is removed with the open ring of
+ * tetrahedra around it, so the hull gives up the thin wedge between the two
+ * diagonals, which lies outside the surface.
+ * tets/nbrs: right-handed tetrahedra and their adjacency (face f opposite
+ * corner f), taken over and replaced; surface s's node i is node offset[s] + i.
+ */
+typedef struct {
+    size_t n_triangles, missing_before, missing_after;
+    size_t n_flip23, n_edge_removals;
+    size_t n_boundary; /* convex-hull edges swapped for surface edges (the hull shrinks to the surface) */
+    double seconds;
+} recover_stats;
+
+thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, int32_t **nbrs, size_t *nt,
+                        const thx_surface *const *surf, const size_t *offset, size_t n_surf, recover_stats *stats);
+
 #endif

@@ -38,6 +38,7 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->no_heart = 0;
     o->sliver_deg = 5.0;
     o->repair_deg = 15.0;
+    o->recover = 1;
 }
 
 /* x as it reads back from the model files ("%.6f"). */
@@ -454,7 +455,26 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         }
         thx_ctx_destroy(&dc);
     }
+    /* right-handed from here on (the volume's convention): swap corners 2 and 3, and their faces */
+    for (size_t t = 0; t < nt; t++) {
+        int32_t x = tets[4 * t + 2];
+        tets[4 * t + 2] = tets[4 * t + 3];
+        tets[4 * t + 3] = x;
+        x = nbrs[4 * t + 2];
+        nbrs[4 * t + 2] = nbrs[4 * t + 3];
+        nbrs[4 * t + 3] = x;
+    }
     S.n_delaunay_tets = nt;
+    /* the surfaces' triangles made faces where one flip per edge does it */
+    if (o->recover) {
+        recover_stats rs;
+        THX_TRY(mesh_recover(ctx, xyz, nn, &tets, &nbrs, &nt, (const thx_surface *const *)m->surf, offset, ns, &rs));
+        S.n_surface_tris = rs.n_triangles;
+        S.n_missing_before = rs.missing_before;
+        S.n_missing_after = rs.missing_after;
+        S.n_recover_flips = rs.n_flip23 + rs.n_edge_removals + rs.n_boundary;
+        S.t_recover = rs.seconds;
+    }
     double t2 = thx_wtime();
     S.t_delaunay = t2 - t1;
 
@@ -512,24 +532,36 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     S.n_outside = n_out;
     S.n_heart = n_heart;
     /* Flat tetrahedra (slivers) with a face on the boundary are peeled off, layer by layer (the
-       paper's quality control); inside the domain they stay, since removing them would leave a void. */
+       paper's quality control); inside the domain they stay, since removing them would leave a void.
+       A boundary face that is a surface triangle is where the boundary belongs: a sliver whose
+       boundary faces are all surface triangles stays, unless it is flatter than half the limit (its
+       interior edge cannot be flipped then: the ring around it is not convex; peeling it moves the
+       boundary by less than sin(2.5 deg) of an edge). */
     if (o->sliver_deg > 0) {
         size_t peeled = 0;
+        mesh_triset *tris = NULL;
+        THX_TRY(mesh_triset_build(ctx, (const thx_surface *const *)m->surf, offset, ns, &tris));
         for (int round = 0; round < 8; round++) {
             size_t this_round = 0;
             for (size_t t = 0; t < nt; t++) {
                 if (keep[t] != 1) continue;
-                int on_boundary = 0;
-                for (int f = 0; f < 4 && !on_boundary; f++) {
+                int on_boundary = 0, off_surface = 0;
+                for (int f = 0; f < 4; f++) {
                     int32_t u = nbrs[4 * t + f];
-                    on_boundary = u < 0 || keep[u] != 1;
+                    const int32_t *q = tets + 4 * t;
+                    if (u >= 0 && keep[u] == 1) continue;
+                    on_boundary = 1;
+                    off_surface |= !mesh_triset_has(tris, q[(f + 1) & 3], q[(f + 2) & 3], q[(f + 3) & 3]);
                 }
-                if (on_boundary && mesh_tet_min_dihedral(xyz, tets + 4 * t) < o->sliver_deg) { keep[t] = 3; this_round++; }
+                if (!on_boundary) continue;
+                double d = mesh_tet_min_dihedral(xyz, tets + 4 * t);
+                if (d < (off_surface ? o->sliver_deg : 0.5 * o->sliver_deg)) { keep[t] = 3; this_round++; }
             }
             peeled += this_round;
             if (!this_round) break;
         }
         S.n_slivers_peeled = peeled;
+        mesh_triset_free(&tris);
     }
     {
         size_t readded = 0, bad = 0, taken = 0;
@@ -571,9 +603,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         for (size_t t = 0, k = 0; t < nt; t++) newidx[t] = keep[t] == 1 ? (int32_t)k++ : -1;
         for (size_t t = 0; t < nt; t++) {
             if (keep[t] != 1) continue;
-            static const int from[4] = {0, 1, 3, 2}; /* corners 2 and 3 swap below */
             for (int f = 0; f < 4; f++) {
-                int32_t u = nbrs[4 * t + from[f]];
+                int32_t u = nbrs[4 * t + f];
                 vnbr[4 * (size_t)newidx[t] + f] = u >= 0 ? newidx[u] : -1;
             }
         }
@@ -583,8 +614,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         if (keep[t] != 1) continue;
         v->tet[4 * k] = tets[4 * t];
         v->tet[4 * k + 1] = tets[4 * t + 1];
-        v->tet[4 * k + 2] = tets[4 * t + 3];
-        v->tet[4 * k + 3] = tets[4 * t + 2];
+        v->tet[4 * k + 2] = tets[4 * t + 2];
+        v->tet[4 * k + 3] = tets[4 * t + 3];
         v->region[k] = region[t];
         if (region[t] >= 0 && region[t] < 16) S.per_region[region[t]]++;
         k++;
