@@ -6,7 +6,9 @@
  *     layer plane, kept where it lies inside the outer surface and no surface
  *     comes closer than the tolerance ("removed all points that were within
  *     some tolerance of an existing surface").
- *  2. Delaunay tetrahedralization of all nodes (thorax/delaunay.h).
+ *  2. Delaunay tetrahedralization of all nodes (thorax/delaunay.h); the
+ *     surfaces' triangles it lacks are flipped in where one operation per
+ *     edge does it (mesh_recover, src/mesh/improve.h).
  *  3. Tetrahedra any part of which lies outside the domain are removed: the
  *     paper tests "the midpoint of each side of the tetrahedron" against the
  *     enclosing surface; we test the midpoints of the edges whose two ends are
@@ -14,6 +16,8 @@
  *     with an interior grid node has at least that end strictly inside, and
  *     the grid keeps a tolerance from every surface). With no_heart, tetrahedra
  *     whose centroid is inside the heart are removed too.
+ *     Flat tetrahedra are then peeled off the boundary; inside, they are
+ *     repaired by flips and grid-node moves (mesh_improve).
  *  4. Regions by a chain of inside/outside tests on the centroid (paper 3.3):
  *     outside the fat/muscle interface -> fat; outside the inner muscle border
  *     -> muscle; inside a lung -> that lung; inside the heart -> heart;
