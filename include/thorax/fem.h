@@ -1,0 +1,157 @@
+/*
+ * thorax/fem.h — finite-element volume-conductor solutions (paper 4.1).
+ *
+ * Linear tetrahedral elements on a thx_volume: the stiffness matrix
+ *   K_ij = sum over tetrahedra T of |T| grad(l_i) . sigma_T grad(l_j)
+ * (l_i the barycentric functions, sigma_T the tensor of T's region). With
+ * lengths in mm and conductivities in S/m, K is in S/m x mm = mS: (K phi)_i
+ * is the current (mA) leaving node i's share of the domain when phi is in
+ * volts, so nodal current loads are given in mA (or uA with phi in mV).
+ *
+ * Assembly is plain C with OpenMP (thx_fem_assemble); the solves go through
+ * PETSc (KSP, default conjugate gradients with algebraic multigrid, every
+ * PETSc runtime option honoured) on PETSC_COMM_WORLD, so the same code runs
+ * under mpirun with the rows split over the ranks. Every rank holds the whole
+ * mesh (500,000 tetrahedra are 10 MB) and assembles only its own rows.
+ */
+#ifndef THORAX_FEM_H
+#define THORAX_FEM_H
+
+#include <stdint.h>
+
+#include "thorax/volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A sparse matrix in compressed rows (0-based, columns sorted in each row). */
+typedef struct {
+    int32_t n_rows, n_cols;
+    int64_t *row;   /* n_rows + 1 */
+    int32_t *col;   /* row[n_rows] */
+    double *val;
+} thx_csr;
+
+void thx_csr_free(thx_csr *a);
+/* y = A x */
+void thx_csr_mul(const thx_csr *a, const double *x, double *y);
+
+/*
+ * The stiffness matrix of the volume's tetrahedra whose region is enabled
+ * (use_region[r] != 0; NULL = all), n_nodes x n_nodes. Errors: a region
+ * whose tensor is not symmetric positive definite (named), a tetrahedron
+ * with non-positive volume (numbered).
+ */
+thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K);
+
+/* Nodes used by the enabled tetrahedra (1) or not (0), n_nodes bytes. */
+thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, unsigned char **active);
+
+/* ---- solving (PETSc) ---- */
+
+/* PetscInitialize with the PETSc options found in argv (arguments from the first one starting with a
+ * single '-' that is not one of ours are left to PETSc); idempotent. rank/size of PETSC_COMM_WORLD. */
+thx_status thx_fem_init(int argc, char **argv, int *rank, int *size);
+void thx_fem_finalize(void);
+
+typedef struct thx_fem_system thx_fem_system;
+
+/*
+ * The system for the free nodes: K_ff phi_f = f_f - K_fd phi_d, where
+ * kind[i] is 0 for an inactive node (not in the system), 1 free, 2 prescribed
+ * (Dirichlet). A free block without any prescribed node (pure Neumann) is
+ * accepted only with pin_one: the first free node is then prescribed 0.
+ * The KSP is created with KSPSetFromOptions (default -ksp_type cg -pc_type
+ * gamg, rtol 1e-10) and keeps its preconditioner across solves.
+ */
+thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                 thx_fem_system **out);
+void thx_fem_system_destroy(thx_fem_system **s);
+
+typedef struct {
+    int iterations;
+    double residual;   /* final relative residual (preconditioned norm as KSP reports it) */
+    double seconds;
+    int converged;     /* KSPConvergedReason > 0 */
+} thx_fem_solve_stats;
+
+/*
+ * One solve. phi (n_nodes, on every rank): on entry the prescribed values at
+ * kind == 2 nodes and, with warm = 1, the initial guess at free nodes; on
+ * return the solution at every active node (inactive: 0). load (n_nodes, or
+ * NULL): nodal currents (mA per V of phi units) at free nodes. A solve that
+ * does not converge is THX_ESOLVER with KSP's reason in the message.
+ */
+thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
+                         thx_fem_solve_stats *st);
+
+/* Free and prescribed node counts, and the setup time (matrix + preconditioner) so far, seconds. */
+void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
+/* The KSP and PC types in use ("cg", "gamg", ...) and the number of MPI ranks. */
+void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks);
+
+/* Current density J = -sigma grad(phi) per tetrahedron (3 per tet; A/m^2 for phi in V and mm,
+ * i.e. the gradient is converted to V/m) and per node (volume-weighted average of the tetrahedra
+ * around it, enabled regions only; 0 at inactive nodes). Either output may be NULL. */
+void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, const double *phi, double *j_tet,
+                      double *j_node);
+
+/* ---- forward problems (paper 4.1) ---- */
+
+#include "thorax/model.h"
+#include "thorax/series.h"
+
+typedef struct {
+    int keep_volume;        /* also return the potentials at every volume node */
+    int warm;               /* start each frame from the previous frame's solution (default 1) */
+    void (*progress)(void *user, size_t done, size_t total); /* after each frame (may be NULL) */
+    void *user;
+} thx_forward_opts;
+
+typedef struct {
+    thx_series *torso;      /* the outer surface's nodes x frames */
+    thx_series *volume;     /* every volume node x frames (keep_volume), else NULL */
+    size_t n_free, n_prescribed;
+    int it_min, it_max;     /* iterations per frame */
+    long it_total;
+    double max_residual;
+    double t_assemble, t_setup, t_solve; /* seconds: stiffness, matrix + preconditioner, all solves */
+    char ksp[32], pc[32];   /* solver in use */
+    int ranks;
+} thx_forward_result;
+
+void thx_forward_opts_default(thx_forward_opts *o);
+void thx_forward_result_free(thx_forward_result *r);
+
+/*
+ * The epicardial forward problem: the potentials of epi (rows: the nodes of
+ * the model's heart surface, in order; any unit) prescribed on the heart
+ * surface, no current through the outer surface, the heart's interior (the
+ * region named "heart", if meshed) left out. Errors: no volume mesh, no or
+ * several heart/outer surfaces, a row count that does not match, NaN/Inf
+ * values (row and frame named), a region tensor not positive definite, a
+ * solve that does not converge.
+ */
+thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const thx_forward_opts *o,
+                                  thx_forward_result *r);
+
+/*
+ * The transfer matrix of the epicardial problem: T (rows x heart nodes) with
+ * phi_rows = T phi_heart, rows the outer surface's nodes (rows == NULL) or
+ * the given outer-surface nodes (an electrode set, n_rows of them). Computed
+ * column by column (one solve per heart node, `forward`) or row by row (one
+ * solve per row with K symmetric: row i = -(K_ff^-1 e_i)^T K_fd, `adjoint`);
+ * method < 0 picks the one with fewer solves. Returned as a series whose
+ * "frames" are the heart nodes (time axis = heart node numbers, 1-based).
+ */
+thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
+                                const thx_forward_opts *o, thx_series **T, thx_forward_result *info);
+
+/* phi = T epi: a series with T's rows and epi's frames. */
+thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

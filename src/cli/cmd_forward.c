@@ -1,0 +1,311 @@
+/* thorax forward: finite-element forward solutions (paper 4.1). */
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli/cli.h"
+#include "cli/cli_fem.h"
+#include "thorax/electrodes.h"
+#include "thorax/fem.h"
+#include "thorax/fileio.h"
+
+static void help(void)
+{
+    printf("usage: thorax forward MODEL --epicardial SERIES -o DIR [options] [PETSc options]\n"
+           "       thorax forward MODEL --transfer-out -o DIR [--rows ELECTRODES] [--method forward|adjoint]\n"
+           "       thorax forward MODEL --electrode SPEC --electrode SPEC ... -o DIR   (defibrillation)\n\n"
+           "Finite-element forward solutions on the model's volume mesh (paper 4.1):\n"
+           "linear tetrahedra, the conductivity of each tissue region, PETSc solvers.\n\n"
+           "Epicardial problem: the potentials of SERIES (rows: the heart surface's nodes)\n"
+           "prescribed on the heart surface, no current through the torso surface, the\n"
+           "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
+           "frames) and DIR/solution.json (what was solved, solver figures, timings).\n\n"
+           "options:\n"
+           "  --epicardial SERIES    heart-surface potentials (text, raw or .mat; see thorax series)\n"
+           "  -o, --output DIR       the solution directory (written whole or not at all)\n"
+           "  --format F             raw (default), text or mat for the series written\n"
+           "  --volume               also write DIR/volume.EXT: the potential at every volume node\n"
+           "  --currents LIST        frames (1-based: 5,10,20-30, or all) for which to write the\n"
+           "                         current density J = -sigma grad phi (A/m^2 for V, mm) per\n"
+           "                         tetrahedron (DIR/currents_tet.EXT, rows 3 x tetrahedra: Jx Jy\n"
+           "                         Jz) and per node (DIR/currents_node.EXT, volume-weighted)\n"
+           "  --transfer FILE        apply this transfer matrix instead of solving\n"
+           "  --transfer-out         compute the transfer matrix (torso nodes <- heart nodes, or\n"
+           "                         --rows) and write DIR/transfer.EXT\n"
+           "  --rows ELECTRODES      rows of the transfer matrix: an electrode file (thorax electrodes)\n"
+           "  --method M             forward (a solve per heart node), adjoint (a solve per row) or\n"
+           "                         auto (default: fewer solves)\n"
+           "  --no-warm              start every frame's solve from zero\n"
+           "  --electrode SPEC       defibrillation electrode (see docs/cli.md):\n"
+           "                         NAME,surface=S,at=X:Y:Z,radius=R,voltage=V | current=I (A)\n"
+           "  --threshold V/CM       field threshold for the heart-volume fraction (default 5)\n"
+           "  -v, -q                 more / less logging\n\n"
+           "PETSc options are passed through: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor,\n"
+           "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg -ksp_rtol 1e-10.\n"
+           "Runs under mpirun -np N (rank 0 writes).\n");
+}
+
+/* "5,10,20-30" or "all" -> flags over n frames */
+static int parse_frames(const char *s, size_t n, unsigned char *sel)
+{
+    memset(sel, 0, n);
+    if (!strcmp(s, "all")) { memset(sel, 1, n); return 0; }
+    const char *p = s;
+    while (*p) {
+        char *e;
+        long a = strtol(p, &e, 10), b = a;
+        if (e == p) return -1;
+        if (*e == '-') { p = e + 1; b = strtol(p, &e, 10); if (e == p) return -1; }
+        if (a < 1 || b < a || (size_t)b > n) return -1;
+        for (long k = a; k <= b; k++) sel[k - 1] = 1;
+        p = e;
+        if (*p == ',') p++;
+        else if (*p) return -1;
+    }
+    return 0;
+}
+
+static thx_series_format fmt_of(const char *name)
+{
+    thx_series_format f = THX_SERIES_RAW;
+    thx_series_format_parse(name, &f);
+    return f;
+}
+
+static const char *ext_of(thx_series_format f)
+{
+    return f == THX_SERIES_TEXT ? "txt" : f == THX_SERIES_MAT ? "mat" : "raw";
+}
+
+int cmd_forward(int argc, char **argv)
+{
+    const char *model_dir = NULL, *epi_path = NULL, *out = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL;
+    const char *format = "raw", *method = "auto";
+    int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1;
+    double threshold = 5.0;
+    const char *electrodes[16];
+    int n_electrodes = 0;
+    cli_petsc_args pa;
+    cli_petsc_args_init(&pa, argv[0]);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
+#define NEED_VALUE() do { if (!v) return cli_usage_error("forward", "%s needs a value", a); i++; } while (0)
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) { NEED_VALUE(); out = v; }
+        else if (!strcmp(a, "--epicardial")) { NEED_VALUE(); epi_path = v; }
+        else if (!strcmp(a, "--format")) { NEED_VALUE(); format = v; thx_series_format f; if (thx_series_format_parse(v, &f) || f == THX_SERIES_AUTO) return cli_usage_error("forward", "--format: raw, text or mat"); }
+        else if (!strcmp(a, "--volume")) want_volume = 1;
+        else if (!strcmp(a, "--currents")) { NEED_VALUE(); currents = v; }
+        else if (!strcmp(a, "--transfer")) { NEED_VALUE(); transfer_in = v; }
+        else if (!strcmp(a, "--transfer-out")) transfer_out = 1;
+        else if (!strcmp(a, "--rows")) { NEED_VALUE(); rows_path = v; }
+        else if (!strcmp(a, "--method")) { NEED_VALUE(); method = v; if (strcmp(v, "auto") && strcmp(v, "forward") && strcmp(v, "adjoint")) return cli_usage_error("forward", "--method: forward, adjoint or auto"); }
+        else if (!strcmp(a, "--no-warm")) warm = 0;
+        else if (!strcmp(a, "--electrode")) { NEED_VALUE(); if (n_electrodes >= 16) return cli_usage_error("forward", "at most 16 electrodes"); electrodes[n_electrodes++] = v; }
+        else if (!strcmp(a, "--threshold")) { NEED_VALUE(); if (cli_parse_double("forward", a, v, &threshold)) return 2; if (!(threshold > 0)) return cli_usage_error("forward", "--threshold must be positive"); }
+        else if (!strcmp(a, "-v")) verbose = 1;
+        else if (!strcmp(a, "-q")) verbose = -1;
+        else if (a[0] == '-' && a[1] == '-') return cli_usage_error("forward", "unknown option '%s'", a);
+        else if (a[0] == '-' && a[1]) i += cli_petsc_args_add(&pa, argv[i], i + 1 < argc ? argv[i + 1] : NULL);
+        else if (!model_dir) model_dir = a;
+        else return cli_usage_error("forward", "more than one model given");
+#undef NEED_VALUE
+    }
+    if (!model_dir) return cli_usage_error("forward", "no model given");
+    if (!out) return cli_usage_error("forward", "no output directory given (-o DIR)");
+    int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0);
+    if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode");
+    if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
+    if (rows_path && !transfer_out) return cli_usage_error("forward", "--rows goes with --transfer-out");
+    if (n_electrodes) return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format, &pa, verbose);
+
+    thx_ctx *ctx = cli_ctx(verbose);
+    int rank = 0, rc = 0;
+    thx_status st = THX_OK;
+    thx_model *m = NULL;
+    thx_series *epi = NULL, *T = NULL, *torso = NULL;
+    thx_electrodes *rowset = NULL;
+    thx_forward_result R;
+    memset(&R, 0, sizeof R);
+    unsigned char *sel = NULL;
+    double *jt = NULL, *jn = NULL;
+    thx_series *cur_t = NULL, *cur_n = NULL;
+    char tmp[PATH_MAX] = "";
+    double t0 = thx_wtime();
+    thx_series_format fmt = fmt_of(format);
+    const char *ext = ext_of(fmt);
+
+    st = thx_model_read(ctx, model_dir, &m);
+    if (st == THX_OK && epi_path) st = thx_series_read(ctx, epi_path, THX_SERIES_AUTO, &epi);
+    if (st == THX_OK && rows_path) {
+        st = thx_electrodes_read(ctx, rows_path, &rowset);
+        if (st == THX_OK) st = thx_electrodes_check(ctx, rowset, m);
+    }
+    if (st == THX_OK && transfer_in) st = thx_series_read(ctx, transfer_in, THX_SERIES_AUTO, &T);
+    if (st == THX_OK && currents) {
+        size_t nf = epi ? epi->n_frames : 0;
+        sel = thx_malloc(ctx, nf ? nf : 1);
+        if (!sel) st = THX_ENOMEM;
+        else if (parse_frames(currents, nf, sel)) { rc = cli_usage_error("forward", "--currents '%s': frames 1..%zu, as 5,10,20-30 or all", currents, nf); goto end; }
+    }
+    if (st != THX_OK) goto fail;
+    /* PETSc only where a solve is needed */
+    int need_solver = !(T && !want_volume && !currents);
+    if (need_solver) {
+        st = cli_petsc_init(ctx, &pa, &rank);
+        if (st != THX_OK) goto fail;
+    }
+    thx_forward_opts fo;
+    thx_forward_opts_default(&fo);
+    fo.warm = warm;
+    fo.keep_volume = want_volume || currents;
+    if (rank == 0 && isatty(2) && verbose >= 0) { fo.progress = cli_progress; fo.user = (void *)"forward"; }
+    if (transfer_out) {
+        size_t nr = rowset ? rowset->n : 0;
+        int meth = !strcmp(method, "forward") ? 0 : !strcmp(method, "adjoint") ? 1 : -1;
+        st = thx_forward_transfer(ctx, m, rowset ? rowset->node : NULL, nr, meth, &fo, &T, &R);
+        if (st != THX_OK) goto fail;
+    } else if (T && !fo.keep_volume) {
+        double t1 = thx_wtime();
+        st = thx_transfer_apply(ctx, T, epi, &torso);
+        if (st != THX_OK) goto fail;
+        R.t_solve = thx_wtime() - t1;
+    } else {
+        st = thx_forward_epicardial(ctx, m, epi, &fo, &R);
+        if (st != THX_OK) goto fail;
+        torso = R.torso;
+        R.torso = NULL;
+    }
+    /* currents for the chosen frames */
+    if (currents && R.volume) {
+        const thx_volume *v = m->volume;
+        size_t nsel = 0;
+        for (size_t f = 0; f < epi->n_frames; f++) nsel += sel[f];
+        st = thx_series_create(ctx, 3 * v->n_tets, nsel, &cur_t);
+        if (st == THX_OK) st = thx_series_create(ctx, 3 * v->n_nodes, nsel, &cur_n);
+        unsigned char *use = malloc(v->n_regions ? v->n_regions : 1);
+        if (st == THX_OK && !use) st = THX_ENOMEM;
+        if (st != THX_OK) { free(use); goto fail; }
+        for (size_t r = 0; r < v->n_regions; r++) use[r] = strcmp(v->regions[r].name, "heart") != 0;
+        for (size_t f = 0, k = 0; f < epi->n_frames; f++) {
+            if (!sel[f]) continue;
+            thx_fem_currents(v, use, R.volume->v + f * v->n_nodes, cur_t->v + k * 3 * v->n_tets, cur_n->v + k * 3 * v->n_nodes);
+            cur_t->time[k] = cur_n->time[k] = epi->time[f];
+            k++;
+        }
+        free(use);
+        for (int q = 0; q < 2; q++) {
+            thx_series *c = q ? cur_n : cur_t;
+            snprintf(c->unit, sizeof c->unit, "A/m^2 per %.20s", epi->unit[0] ? epi->unit : "unit");
+            snprintf(c->time_unit, sizeof c->time_unit, "%s", epi->time_unit);
+            snprintf(c->label, sizeof c->label, "current density J = -sigma grad phi per %s (rows: x, y, z of each)",
+                     q ? "node (volume-weighted)" : "tetrahedron");
+        }
+    }
+    /* write (rank 0): a temporary directory renamed as a whole */
+    if (rank == 0) {
+        char path[PATH_MAX + 64];
+        st = thx_tmpdir_create(ctx, out, tmp, sizeof tmp);
+        if (st != THX_OK) goto fail;
+        cJSON *j = cJSON_CreateObject(), *files = cJSON_CreateObject(), *solver = cJSON_CreateObject();
+        cJSON_AddStringToObject(j, "format", "thorax-solution");
+        cJSON_AddNumberToObject(j, "version", 1);
+        char absmodel[PATH_MAX];
+        cJSON_AddStringToObject(j, "model", realpath(model_dir, absmodel) ? absmodel : model_dir);
+        cJSON_AddStringToObject(j, "problem", transfer_out ? "transfer matrix (epicardial)" : "epicardial");
+        cJSON_AddStringToObject(j, "command", cli_command_line());
+        if (epi_path) {
+            char abs[PATH_MAX];
+            cJSON_AddStringToObject(j, "epicardial", realpath(epi_path, abs) ? abs : epi_path);
+            cJSON_AddNumberToObject(j, "frames", (double)epi->n_frames);
+            cJSON_AddStringToObject(j, "unit", epi->unit);
+        }
+        for (size_t s = 0; s < m->n_surfaces; s++)
+            if (m->surf[s]->role == THX_ROLE_OUTER) cJSON_AddStringToObject(j, "surface", m->surf[s]->name);
+        struct { const char *key; thx_series *s; } w[] = {{"torso", torso}, {"volume", R.volume}, {"currents_tet", cur_t},
+                                                          {"currents_node", cur_n}, {"transfer", transfer_out ? T : NULL}};
+        for (size_t k = 0; k < sizeof w / sizeof w[0] && st == THX_OK; k++) {
+            if (!w[k].s) continue;
+            snprintf(path, sizeof path, "%s/%s.%s", tmp, w[k].key, ext);
+            st = thx_series_write(ctx, w[k].s, path, fmt);
+            char name[64];
+            snprintf(name, sizeof name, "%s.%s", w[k].key, ext);
+            cJSON_AddStringToObject(files, w[k].key, name);
+        }
+        if (rowset && st == THX_OK) {
+            char abs[PATH_MAX];
+            cJSON_AddStringToObject(j, "rows", realpath(rows_path, abs) ? abs : rows_path);
+        }
+        cJSON_AddItemToObject(j, "files", files);
+        if (R.ranks) {
+            cJSON_AddStringToObject(solver, "ksp", R.ksp);
+            cJSON_AddStringToObject(solver, "pc", R.pc);
+            cJSON_AddNumberToObject(solver, "ranks", R.ranks);
+            cJSON_AddNumberToObject(solver, "free_nodes", (double)R.n_free);
+            cJSON_AddNumberToObject(solver, "prescribed_nodes", (double)R.n_prescribed);
+            cJSON_AddNumberToObject(solver, "iterations_min", R.it_min);
+            cJSON_AddNumberToObject(solver, "iterations_max", R.it_max);
+            cJSON_AddNumberToObject(solver, "iterations_total", (double)R.it_total);
+            cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
+            cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
+            cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
+        } else {
+            cJSON_AddStringToObject(solver, "method", "transfer matrix applied");
+            char abs[PATH_MAX];
+            cJSON_AddStringToObject(solver, "transfer", realpath(transfer_in, abs) ? abs : transfer_in);
+        }
+        cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
+        cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
+        cJSON_AddItemToObject(j, "solver", solver);
+        char *text = cJSON_Print(j);
+        cJSON_Delete(j);
+        if (st == THX_OK) {
+            snprintf(path, sizeof path, "%s/solution.json", tmp);
+            thx_atomic_file af;
+            st = thx_atomic_open(ctx, path, &af);
+            if (st == THX_OK) {
+                fputs(text, af.f);
+                fputc('\n', af.f);
+                st = thx_atomic_commit(ctx, &af);
+            }
+        }
+        free(text);
+        if (st == THX_OK) st = thx_tmpdir_commit(ctx, tmp, out);
+        if (st != THX_OK) { thx_tmpdir_abort(tmp); goto fail; }
+        if (verbose >= 0) {
+            if (transfer_out)
+                printf("transfer matrix %zu x %zu (%s solves: %d..%d iterations), %.2f s\n", T->n_rows, T->n_frames,
+                       strstr(T->label, "adjoint") ? "adjoint" : "forward", R.it_min, R.it_max, R.t_solve);
+            else if (R.ranks)
+                printf("%zu frames: %zu free nodes, %zu prescribed; %s + %s on %d rank%s, %d..%d iterations per frame; "
+                       "assembly %.2f s, setup %.2f s, solves %.2f s\n",
+                       epi->n_frames, R.n_free, R.n_prescribed, R.ksp, R.pc, R.ranks, R.ranks > 1 ? "s" : "", R.it_min,
+                       R.it_max, R.t_assemble, R.t_setup, R.t_solve);
+            else
+                printf("%zu frames by the transfer matrix, %.3f s\n", epi->n_frames, R.t_solve);
+            printf("wrote %s\n", out);
+        }
+    }
+    goto end;
+fail:
+    rc = cli_fail(ctx, "forward", st);
+end:
+    free(sel);
+    free(jt);
+    free(jn);
+    thx_series_destroy(&cur_t);
+    thx_series_destroy(&cur_n);
+    thx_series_destroy(&torso);
+    thx_series_destroy(&T);
+    thx_series_destroy(&epi);
+    thx_electrodes_destroy(&rowset);
+    thx_forward_result_free(&R);
+    thx_model_destroy(&m);
+    thx_ctx_destroy(&ctx);
+    cli_petsc_finish(&pa);
+    return rc;
+}

@@ -1,0 +1,274 @@
+/*
+ * Forward problems on a meshed model (thorax/fem.h): the epicardial problem
+ * frame by frame, and its transfer matrix.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/fem.h"
+
+void thx_forward_opts_default(thx_forward_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->warm = 1;
+}
+
+void thx_forward_result_free(thx_forward_result *r)
+{
+    if (!r) return;
+    thx_series_destroy(&r->torso);
+    thx_series_destroy(&r->volume);
+}
+
+/* The one surface of a role, or an error naming how many there are. */
+static thx_status one_surface(thx_ctx *ctx, const thx_model *m, thx_role role, const char *what, size_t *idx)
+{
+    size_t n = 0;
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        if (m->surf[s]->role == role) { *idx = s; n++; }
+    if (n != 1)
+        return thx_error(ctx, THX_EINPUT, "forward: the model has %zu surfaces of role %s; exactly one is needed", n, what);
+    return THX_OK;
+}
+
+/* The epicardial problem's set-up shared by the frame loop and the transfer matrix. */
+typedef struct {
+    size_t heart, outer;
+    unsigned char *use_region, *kind;
+    thx_csr K;
+    thx_fem_system *sys;
+    double t_assemble;
+} epi_problem;
+
+static void epi_free(epi_problem *p)
+{
+    free(p->use_region);
+    free(p->kind);
+    thx_csr_free(&p->K);
+    thx_fem_system_destroy(&p->sys);
+}
+
+static thx_status epi_setup(thx_ctx *ctx, const thx_model *m, epi_problem *p)
+{
+    memset(p, 0, sizeof *p);
+    const thx_volume *v = m->volume;
+    if (!v || !v->n_tets) return thx_error(ctx, THX_EINPUT, "forward: the model has no volume mesh (run thorax mesh)");
+    THX_CHECK(one_surface(ctx, m, THX_ROLE_HEART, "heart", &p->heart));
+    THX_CHECK(one_surface(ctx, m, THX_ROLE_OUTER, "outer", &p->outer));
+    if (v->n_surfaces != m->n_surfaces)
+        return thx_error(ctx, THX_EINPUT, "forward: the volume's node tables list %zu surfaces, the model %zu", v->n_surfaces,
+                         m->n_surfaces);
+    thx_status st = THX_OK;
+    p->use_region = thx_malloc(ctx, v->n_regions ? v->n_regions : 1);
+    if (!p->use_region) return THX_ENOMEM;
+    for (size_t r = 0; r < v->n_regions; r++) p->use_region[r] = strcmp(v->regions[r].name, "heart") != 0;
+    double t0 = thx_wtime();
+    THX_TRY(thx_fem_assemble(ctx, v, p->use_region, &p->K));
+    p->t_assemble = thx_wtime() - t0;
+    THX_TRY(thx_fem_active_nodes(ctx, v, p->use_region, &p->kind));
+    size_t on = 0;
+    for (size_t i = 0; i < m->surf[p->heart]->n_nodes; i++) {
+        int32_t k = v->surf_node[p->heart][i];
+        if (p->kind[k]) { p->kind[k] = 2; on++; }
+    }
+    if (!on) { st = thx_error(ctx, THX_EINPUT, "forward: no node of the heart surface '%s' is in the mesh", m->surf[p->heart]->name); goto done; }
+    THX_TRY(thx_fem_system_create(ctx, &p->K, p->kind, 0, &p->sys));
+    return THX_OK;
+done:
+    epi_free(p);
+    return st;
+}
+
+thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const thx_forward_opts *o,
+                                  thx_forward_result *r)
+{
+    memset(r, 0, sizeof *r);
+    thx_forward_opts def;
+    if (!o) { thx_forward_opts_default(&def); o = &def; }
+    epi_problem P;
+    thx_status st = THX_OK;
+    double *phi = NULL;
+    /* the series before anything expensive */
+    {
+        size_t heart = 0;
+        THX_CHECK(one_surface(ctx, m, THX_ROLE_HEART, "heart", &heart));
+        if (epi->n_rows != m->surf[heart]->n_nodes)
+            return thx_error(ctx, THX_EINPUT, "forward: the epicardial series has %zu rows, the heart surface '%s' %zu nodes",
+                             epi->n_rows, m->surf[heart]->name, m->surf[heart]->n_nodes);
+        size_t row, frame;
+        size_t bad = thx_series_find_nonfinite(epi, &row, &frame);
+        if (bad)
+            return thx_error(ctx, THX_EINPUT, "forward: the epicardial series has %zu values that are not finite "
+                             "(first: row %zu, frame %zu)", bad, row + 1, frame + 1);
+    }
+    THX_CHECK(epi_setup(ctx, m, &P));
+    const thx_volume *v = m->volume;
+    const thx_surface *hs = m->surf[P.heart], *os = m->surf[P.outer];
+    size_t nf = epi->n_frames, nn = v->n_nodes;
+    THX_TRY(thx_series_create(ctx, os->n_nodes, nf, &r->torso));
+    if (o->keep_volume) THX_TRY(thx_series_create(ctx, nn, nf, &r->volume));
+    thx_series *outs[2] = {r->torso, r->volume};
+    for (int k = 0; k < 2; k++) {
+        if (!outs[k]) continue;
+        memcpy(outs[k]->time, epi->time, nf * sizeof *epi->time);
+        snprintf(outs[k]->unit, sizeof outs[k]->unit, "%s", epi->unit);
+        snprintf(outs[k]->time_unit, sizeof outs[k]->time_unit, "%s", epi->time_unit);
+    }
+    snprintf(r->torso->label, sizeof r->torso->label, "potentials on '%s' (epicardial forward problem)", os->name);
+    if (r->volume) snprintf(r->volume->label, sizeof r->volume->label, "potentials at the volume nodes (epicardial forward problem)");
+    phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
+    if (!phi) { st = THX_ENOMEM; goto done; }
+    r->it_min = 1 << 30;
+    for (size_t f = 0; f < nf; f++) {
+        const double *e = epi->v + f * epi->n_rows;
+        for (size_t i = 0; i < hs->n_nodes; i++) phi[v->surf_node[P.heart][i]] = e[i];
+        thx_fem_solve_stats ss;
+        THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, o->warm && f > 0, &ss));
+        r->it_min = ss.iterations < r->it_min ? ss.iterations : r->it_min;
+        r->it_max = ss.iterations > r->it_max ? ss.iterations : r->it_max;
+        r->it_total += ss.iterations;
+        r->max_residual = fmax(r->max_residual, ss.residual);
+        r->t_solve += ss.seconds;
+        double *t = r->torso->v + f * os->n_nodes;
+        for (size_t i = 0; i < os->n_nodes; i++) t[i] = phi[v->surf_node[P.outer][i]];
+        if (r->volume) memcpy(r->volume->v + f * nn, phi, nn * sizeof *phi);
+        if (o->progress) o->progress(o->user, f + 1, nf);
+    }
+    if (!nf) r->it_min = 0;
+    thx_fem_system_info(P.sys, &r->n_free, &r->n_prescribed, &r->t_setup);
+    thx_fem_system_describe(P.sys, r->ksp, r->pc, &r->ranks);
+    r->t_assemble = P.t_assemble;
+done:
+    if (st != THX_OK) thx_forward_result_free(r);
+    free(phi);
+    epi_free(&P);
+    return st;
+}
+
+thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
+                                const thx_forward_opts *o, thx_series **T, thx_forward_result *info)
+{
+    *T = NULL;
+    thx_forward_opts def;
+    if (!o) { thx_forward_opts_default(&def); o = &def; }
+    if (info) memset(info, 0, sizeof *info);
+    epi_problem P;
+    THX_CHECK(epi_setup(ctx, m, &P));
+    thx_status st = THX_OK;
+    const thx_volume *v = m->volume;
+    const thx_surface *hs = m->surf[P.heart], *os = m->surf[P.outer];
+    size_t nh = hs->n_nodes, nn = v->n_nodes;
+    int32_t *rv = NULL; /* volume node of each row */
+    double *phi = NULL, *load = NULL;
+    thx_series *A = NULL;
+    size_t nr = rows ? n_rows : os->n_nodes;
+    rv = thx_malloc(ctx, (nr ? nr : 1) * sizeof *rv);
+    phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
+    load = thx_calloc(ctx, nn ? nn : 1, sizeof *load);
+    if (!rv || !phi || !load) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < nr; i++) {
+        int32_t s = rows ? rows[i] : (int32_t)i;
+        if (s < 0 || (size_t)s >= os->n_nodes) { st = thx_error(ctx, THX_EINPUT, "forward: row %zu: node %d is not on '%s'", i + 1, s + 1, os->name); goto done; }
+        rv[i] = v->surf_node[P.outer][s];
+    }
+    THX_TRY(thx_series_create(ctx, nr, nh, &A));
+    for (size_t j = 0; j < nh; j++) A->time[j] = (double)(j + 1);
+    snprintf(A->time_unit, sizeof A->time_unit, "node");
+    snprintf(A->unit, sizeof A->unit, "1");
+    if (method < 0) method = nr < nh ? 1 : 0;
+    snprintf(A->label, sizeof A->label, "transfer matrix %.40s <- %.40s (%s)", os->name, hs->name, method ? "adjoint" : "forward");
+    int it_min = 1 << 30, it_max = 0;
+    long it_total = 0;
+    double tsolve = 0, maxres = 0;
+    if (method == 0) {
+        /* column j: the heart at e_j */
+        for (size_t j = 0; j < nh; j++) {
+            memset(phi, 0, nn * sizeof *phi);
+            phi[v->surf_node[P.heart][j]] = 1;
+            thx_fem_solve_stats ss;
+            THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, 0, &ss));
+            for (size_t i = 0; i < nr; i++) A->v[j * nr + i] = phi[rv[i]];
+            it_min = ss.iterations < it_min ? ss.iterations : it_min;
+            it_max = ss.iterations > it_max ? ss.iterations : it_max;
+            it_total += ss.iterations;
+            tsolve += ss.seconds;
+            maxres = fmax(maxres, ss.residual);
+            if (o->progress) o->progress(o->user, j + 1, nh);
+        }
+    } else {
+        /* row i: y = K_ff^-1 e_i (heart at 0), then T_ij = -(K_fd^T y)_j = -sum_k K(k, heart_j) y_k */
+        for (size_t i = 0; i < nr; i++) {
+            memset(phi, 0, nn * sizeof *phi);
+            memset(load, 0, nn * sizeof *load);
+            load[rv[i]] = 1;
+            thx_fem_solve_stats ss;
+            THX_TRY(thx_fem_solve(ctx, P.sys, phi, load, 0, &ss));
+            for (size_t j = 0; j < nh; j++) {
+                int32_t d = v->surf_node[P.heart][j];
+                double s = 0;
+                /* K symmetric: row d of K holds K(k, d) */
+                for (int64_t k = P.K.row[d]; k < P.K.row[d + 1]; k++)
+                    if (P.kind[P.K.col[k]] == 1) s += P.K.val[k] * phi[P.K.col[k]];
+                A->v[j * nr + i] = -s;
+            }
+            it_min = ss.iterations < it_min ? ss.iterations : it_min;
+            it_max = ss.iterations > it_max ? ss.iterations : it_max;
+            it_total += ss.iterations;
+            tsolve += ss.seconds;
+            maxres = fmax(maxres, ss.residual);
+            if (o->progress) o->progress(o->user, i + 1, nr);
+        }
+    }
+    if (info) {
+        thx_fem_system_info(P.sys, &info->n_free, &info->n_prescribed, &info->t_setup);
+        thx_fem_system_describe(P.sys, info->ksp, info->pc, &info->ranks);
+        info->t_assemble = P.t_assemble;
+        info->t_solve = tsolve;
+        info->it_min = it_min;
+        info->it_max = it_max;
+        info->it_total = it_total;
+        info->max_residual = maxres;
+    }
+    *T = A;
+    A = NULL;
+done:
+    thx_series_destroy(&A);
+    free(rv);
+    free(phi);
+    free(load);
+    epi_free(&P);
+    return st;
+}
+
+thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out)
+{
+    *out = NULL;
+    if (T->n_frames != epi->n_rows)
+        return thx_error(ctx, THX_EINPUT, "transfer: the matrix has %zu columns (heart nodes), the series %zu rows",
+                         T->n_frames, epi->n_rows);
+    size_t row, frame;
+    if (thx_series_find_nonfinite(epi, &row, &frame))
+        return thx_error(ctx, THX_EINPUT, "transfer: the series has a value that is not finite (row %zu, frame %zu)", row + 1,
+                         frame + 1);
+    thx_series *r = NULL;
+    THX_CHECK(thx_series_create(ctx, T->n_rows, epi->n_frames, &r));
+    memcpy(r->time, epi->time, epi->n_frames * sizeof *r->time);
+    snprintf(r->unit, sizeof r->unit, "%s", epi->unit);
+    snprintf(r->time_unit, sizeof r->time_unit, "%s", epi->time_unit);
+    snprintf(r->label, sizeof r->label, "transfer matrix applied");
+    size_t nr = T->n_rows, nh = T->n_frames;
+#pragma omp parallel for schedule(static)
+    for (long f = 0; f < (long)epi->n_frames; f++) {
+        const double *e = epi->v + (size_t)f * nh;
+        double *o = r->v + (size_t)f * nr;
+        for (size_t j = 0; j < nh; j++) {
+            const double *c = T->v + j * nr;
+            double ej = e[j];
+            for (size_t i = 0; i < nr; i++) o[i] += c[i] * ej;
+        }
+    }
+    *out = r;
+    return THX_OK;
+}

@@ -1,0 +1,293 @@
+/*
+ * The PETSc side of thorax/fem.h: the free-node system K_ff, its KSP, and
+ * solves. Every rank holds the whole assembled matrix (thx_csr) and hands
+ * PETSc its own block of rows; results are gathered to every rank.
+ */
+#include <petscksp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/fem.h"
+
+static int g_inited = 0, g_we_inited = 0;
+
+thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)
+{
+    if (!g_inited) {
+        PetscBool already = PETSC_FALSE;
+        PetscInitialized(&already);
+        if (!already) {
+            /* PETSc reads its options from this argv; it keeps the pointer */
+            static int s_argc;
+            static char **s_argv;
+            s_argc = argc;
+            s_argv = argv;
+            if (PetscInitialize(&s_argc, &s_argv, NULL, NULL) != 0) return THX_ESOLVER;
+            g_we_inited = 1;
+        }
+        PetscPushErrorHandler(PetscReturnErrorHandler, NULL);
+        g_inited = 1;
+    }
+    PetscMPIInt r = 0, s = 1;
+    MPI_Comm_rank(PETSC_COMM_WORLD, &r);
+    MPI_Comm_size(PETSC_COMM_WORLD, &s);
+    if (rank) *rank = r;
+    if (size) *size = s;
+    return THX_OK;
+}
+
+void thx_fem_finalize(void)
+{
+    if (g_inited && g_we_inited) {
+        PetscPopErrorHandler();
+        PetscFinalize();
+    }
+    g_inited = g_we_inited = 0;
+}
+
+struct thx_fem_system {
+    int32_t n;           /* nodes */
+    int32_t nf, nd;      /* free, prescribed */
+    int32_t *fidx;       /* node -> free index or -1 */
+    int32_t *didx;       /* node -> prescribed index or -1 */
+    int32_t *free_node;  /* free index -> node */
+    int32_t *pres_node;  /* prescribed index -> node */
+    int32_t pinned;      /* node pinned to 0 (pure Neumann), or -1 */
+    PetscInt rstart, rend;
+    thx_csr kfd;         /* own free rows x prescribed columns */
+    Mat A;
+    KSP ksp;
+    Vec x, b, xall;
+    VecScatter toall;
+    double t_setup;
+    int pc_ready;
+};
+
+/* A PETSc call inside a thx function: on failure record the message and jump to done. */
+#define PCALL(ctx, call)                                                                      \
+    do {                                                                                      \
+        PetscErrorCode e_ = (call);                                                           \
+        if (e_) {                                                                             \
+            const char *txt_ = NULL;                                                          \
+            PetscErrorMessage(e_, &txt_, NULL);                                               \
+            st = thx_error(ctx, THX_ESOLVER, "PETSc: %s: %s", #call, txt_ ? txt_ : "error"); \
+            goto done;                                                                        \
+        }                                                                                     \
+    } while (0)
+
+thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                 thx_fem_system **out)
+{
+    *out = NULL;
+    if (!g_inited) return thx_error(ctx, THX_EINTERNAL, "fem: thx_fem_init was not called");
+    double t0 = thx_wtime();
+    thx_status st = THX_OK;
+    PetscInt *ii = NULL, *jj = NULL;
+    PetscScalar *aa = NULL;
+    thx_fem_system *s = thx_calloc(ctx, 1, sizeof *s);
+    if (!s) return THX_ENOMEM;
+    int32_t n = K->n_rows;
+    s->n = n;
+    s->pinned = -1;
+    s->fidx = thx_malloc(ctx, (n ? n : 1) * sizeof *s->fidx);
+    s->didx = thx_malloc(ctx, (n ? n : 1) * sizeof *s->didx);
+    s->free_node = thx_malloc(ctx, (n ? n : 1) * sizeof *s->free_node);
+    s->pres_node = thx_malloc(ctx, (n + 1) * sizeof *s->pres_node);
+    if (!s->fidx || !s->didx || !s->free_node || !s->pres_node) { st = THX_ENOMEM; goto done; }
+    int32_t first_free = -1;
+    for (int32_t i = 0; i < n; i++) {
+        s->fidx[i] = s->didx[i] = -1;
+        if (kind[i] == 2) { s->didx[i] = s->nd; s->pres_node[s->nd++] = i; }
+        else if (kind[i] == 1 && first_free < 0) first_free = i;
+    }
+    if (s->nd == 0) {
+        if (!pin_one || first_free < 0)
+            { st = thx_error(ctx, THX_EINPUT, "fem: no prescribed potential anywhere: the problem has no unique solution"); goto done; }
+        s->pinned = first_free;
+        s->didx[first_free] = s->nd;
+        s->pres_node[s->nd++] = first_free;
+    }
+    for (int32_t i = 0; i < n; i++)
+        if (kind[i] == 1 && i != s->pinned) { s->fidx[i] = s->nf; s->free_node[s->nf++] = i; }
+    if (s->nf == 0) { st = thx_error(ctx, THX_EINPUT, "fem: every node is prescribed: nothing to solve"); goto done; }
+    /* own rows */
+    PetscInt m = PETSC_DECIDE, N = s->nf;
+    PCALL(ctx, PetscSplitOwnership(PETSC_COMM_WORLD, &m, &N));
+    PetscInt rend = 0;
+    MPI_Scan(&m, &rend, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD);
+    s->rstart = rend - m;
+    s->rend = rend;
+    /* local CSR of K_ff (global free columns) and K_fd */
+    {
+        int64_t nnz_ff = 0, nnz_fd = 0;
+        for (PetscInt r = s->rstart; r < s->rend; r++) {
+            int32_t i = s->free_node[r];
+            for (int64_t k = K->row[i]; k < K->row[i + 1]; k++) {
+                int32_t j = K->col[k];
+                if (s->fidx[j] >= 0) nnz_ff++;
+                else if (s->didx[j] >= 0) nnz_fd++;
+            }
+        }
+        ii = thx_malloc(ctx, (size_t)(m + 1) * sizeof *ii);
+        jj = thx_malloc(ctx, (size_t)(nnz_ff ? nnz_ff : 1) * sizeof *jj);
+        aa = thx_malloc(ctx, (size_t)(nnz_ff ? nnz_ff : 1) * sizeof *aa);
+        s->kfd.n_rows = (int32_t)m;
+        s->kfd.n_cols = s->nd;
+        s->kfd.row = thx_malloc(ctx, (size_t)(m + 1) * sizeof *s->kfd.row);
+        s->kfd.col = thx_malloc(ctx, (size_t)(nnz_fd ? nnz_fd : 1) * sizeof *s->kfd.col);
+        s->kfd.val = thx_malloc(ctx, (size_t)(nnz_fd ? nnz_fd : 1) * sizeof *s->kfd.val);
+        if (!ii || !jj || !aa || !s->kfd.row || !s->kfd.col || !s->kfd.val) { st = THX_ENOMEM; goto done; }
+        int64_t a = 0, d = 0;
+        ii[0] = 0;
+        s->kfd.row[0] = 0;
+        for (PetscInt r = s->rstart; r < s->rend; r++) {
+            int32_t i = s->free_node[r];
+            for (int64_t k = K->row[i]; k < K->row[i + 1]; k++) {
+                int32_t j = K->col[k];
+                if (s->fidx[j] >= 0) { jj[a] = s->fidx[j]; aa[a] = K->val[k]; a++; }
+                else if (s->didx[j] >= 0) { s->kfd.col[d] = s->didx[j]; s->kfd.val[d] = K->val[k]; d++; }
+            }
+            ii[r - s->rstart + 1] = (PetscInt)a;
+            s->kfd.row[r - s->rstart + 1] = d;
+        }
+        /* columns of K are sorted and the free numbering keeps the node order: rows stay sorted */
+    }
+    PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &s->A));
+    PCALL(ctx, MatSetSizes(s->A, m, m, s->nf, s->nf));
+    PCALL(ctx, MatSetType(s->A, MATAIJ));
+    PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
+    PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
+    PCALL(ctx, MatSetFromOptions(s->A));
+    PCALL(ctx, MatSeqAIJSetPreallocationCSR(s->A, ii, jj, aa));
+    PCALL(ctx, MatMPIAIJSetPreallocationCSR(s->A, ii, jj, aa));
+    PCALL(ctx, MatAssemblyBegin(s->A, MAT_FINAL_ASSEMBLY));
+    PCALL(ctx, MatAssemblyEnd(s->A, MAT_FINAL_ASSEMBLY));
+    PCALL(ctx, MatCreateVecs(s->A, &s->x, &s->b));
+    PCALL(ctx, VecScatterCreateToAll(s->x, &s->toall, &s->xall));
+    PCALL(ctx, KSPCreate(PETSC_COMM_WORLD, &s->ksp));
+    PCALL(ctx, KSPSetOperators(s->ksp, s->A, s->A));
+    PCALL(ctx, KSPSetType(s->ksp, KSPCG));
+    {
+        PC pc;
+        PCALL(ctx, KSPGetPC(s->ksp, &pc));
+        PCALL(ctx, PCSetType(pc, PCGAMG));
+    }
+    PCALL(ctx, KSPSetTolerances(s->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 10000));
+    PCALL(ctx, KSPSetFromOptions(s->ksp));
+    s->t_setup = thx_wtime() - t0;
+    *out = s;
+    s = NULL;
+done:
+    free(ii);
+    free(jj);
+    free(aa);
+    thx_fem_system_destroy(&s);
+    return st;
+}
+
+void thx_fem_system_destroy(thx_fem_system **sp)
+{
+    if (!sp || !*sp) return;
+    thx_fem_system *s = *sp;
+    if (s->ksp) KSPDestroy(&s->ksp);
+    if (s->A) MatDestroy(&s->A);
+    if (s->x) VecDestroy(&s->x);
+    if (s->b) VecDestroy(&s->b);
+    if (s->xall) VecDestroy(&s->xall);
+    if (s->toall) VecScatterDestroy(&s->toall);
+    thx_csr_free(&s->kfd);
+    free(s->fidx);
+    free(s->didx);
+    free(s->free_node);
+    free(s->pres_node);
+    free(s);
+    *sp = NULL;
+}
+
+void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds)
+{
+    if (n_free) *n_free = (size_t)s->nf;
+    if (n_prescribed) *n_prescribed = (size_t)s->nd;
+    if (setup_seconds) *setup_seconds = s->t_setup;
+}
+
+void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
+{
+    KSPType kt = NULL;
+    PCType pt = NULL;
+    PC p = NULL;
+    KSPGetType(s->ksp, &kt);
+    KSPGetPC(s->ksp, &p);
+    if (p) PCGetType(p, &pt);
+    snprintf(ksp, 32, "%s", kt ? kt : "?");
+    snprintf(pc, 32, "%s", pt ? pt : "?");
+    PetscMPIInt n = 1;
+    MPI_Comm_size(PETSC_COMM_WORLD, &n);
+    if (ranks) *ranks = n;
+}
+
+thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
+                         thx_fem_solve_stats *out)
+{
+    thx_status st = THX_OK;
+    double t0 = thx_wtime();
+    if (s->pinned >= 0) phi[s->pinned] = 0;
+    /* b = load_f - K_fd phi_d over the own rows; x = the guess */
+    {
+        PetscScalar *b, *x;
+        PCALL(ctx, VecGetArray(s->b, &b));
+        PCALL(ctx, VecGetArray(s->x, &x));
+        PetscInt m = s->rend - s->rstart;
+        for (PetscInt r = 0; r < m; r++) {
+            int32_t i = s->free_node[s->rstart + r];
+            double v = load ? load[i] : 0;
+            for (int64_t k = s->kfd.row[r]; k < s->kfd.row[r + 1]; k++) v -= s->kfd.val[k] * phi[s->pres_node[s->kfd.col[k]]];
+            b[r] = v;
+            x[r] = warm ? phi[i] : 0;
+        }
+        PCALL(ctx, VecRestoreArray(s->b, &b));
+        PCALL(ctx, VecRestoreArray(s->x, &x));
+    }
+    PCALL(ctx, KSPSetInitialGuessNonzero(s->ksp, warm ? PETSC_TRUE : PETSC_FALSE));
+    if (!s->pc_ready) {
+        double t1 = thx_wtime();
+        PCALL(ctx, KSPSetUp(s->ksp));
+        s->t_setup += thx_wtime() - t1;
+        s->pc_ready = 1;
+        t0 = thx_wtime();
+    }
+    PCALL(ctx, KSPSolve(s->ksp, s->b, s->x));
+    KSPConvergedReason reason;
+    PetscInt its;
+    PetscReal rnorm;
+    PCALL(ctx, KSPGetConvergedReason(s->ksp, &reason));
+    PCALL(ctx, KSPGetIterationNumber(s->ksp, &its));
+    PCALL(ctx, KSPGetResidualNorm(s->ksp, &rnorm));
+    if (out) {
+        out->iterations = (int)its;
+        PetscReal bn = 0;
+        VecNorm(s->b, NORM_2, &bn);
+        out->residual = bn > 0 ? rnorm / bn : rnorm;
+        out->converged = reason > 0;
+    }
+    if (reason <= 0) {
+        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (%s after %d iterations, residual %g)",
+                       KSPConvergedReasons[reason], (int)its, (double)rnorm);
+        goto done;
+    }
+    /* to every rank */
+    PCALL(ctx, VecScatterBegin(s->toall, s->x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+    PCALL(ctx, VecScatterEnd(s->toall, s->x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+    {
+        const PetscScalar *xa;
+        PCALL(ctx, VecGetArrayRead(s->xall, &xa));
+        for (int32_t k = 0; k < s->nf; k++) phi[s->free_node[k]] = xa[k];
+        PCALL(ctx, VecRestoreArrayRead(s->xall, &xa));
+    }
+    for (int32_t i = 0; i < s->n; i++)
+        if (s->fidx[i] < 0 && s->didx[i] < 0) phi[i] = 0;
+    if (out) out->seconds = thx_wtime() - t0;
+done:
+    return st;
+}

@@ -1,0 +1,297 @@
+/*
+ * Finite elements (thorax/fem.h): assembly properties, the linear patch test
+ * (isotropic and anisotropic), Neumann loads, currents, and on the medium
+ * phantom the epicardial forward problem against its transfer matrix (both
+ * methods) and current conservation.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/delaunay.h"
+#include "thorax/fem.h"
+#include "thorax/mesh.h"
+#include "thorax/phantom.h"
+#include "thorax/surfaces.h"
+
+#define N 7
+
+/* A jittered lattice in [0, N-1]^3, tetrahedralized; boundary nodes (on the cube's faces) flagged. */
+static thx_volume *box(thx_ctx *ctx, const double sigma[9], unsigned char **on_boundary)
+{
+    thx_volume *v = NULL;
+    thx_volume_create(ctx, &v);
+    size_t n = N * N * N, k = 0;
+    v->n_nodes = n;
+    v->xyz = malloc(3 * n * sizeof *v->xyz);
+    *on_boundary = calloc(n, 1);
+    srand(3);
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            for (int l = 0; l < N; l++, k++) {
+                int on = i == 0 || j == 0 || l == 0 || i == N - 1 || j == N - 1 || l == N - 1;
+                double jit = on ? 0 : 0.2;
+                v->xyz[3 * k] = i + jit * (rand() / (double)RAND_MAX - 0.5);
+                v->xyz[3 * k + 1] = j + jit * (rand() / (double)RAND_MAX - 0.5);
+                v->xyz[3 * k + 2] = l + jit * (rand() / (double)RAND_MAX - 0.5);
+                (*on_boundary)[k] = (unsigned char)on;
+            }
+    int32_t *tets = NULL;
+    size_t nt = 0;
+    thx_delaunay3d(ctx, v->xyz, n, &tets, NULL, &nt, NULL);
+    for (size_t t = 0; t < nt; t++) {
+        int32_t x = tets[4 * t + 2];
+        tets[4 * t + 2] = tets[4 * t + 3];
+        tets[4 * t + 3] = x;
+    }
+    v->tet = tets;
+    v->n_tets = nt;
+    v->region = calloc(nt, sizeof *v->region);
+    v->n_regions = 1;
+    v->regions = calloc(1, sizeof *v->regions);
+    snprintf(v->regions[0].name, sizeof v->regions[0].name, "test");
+    memcpy(v->regions[0].sigma, sigma, 9 * sizeof(double));
+    return v;
+}
+
+static double linear(const double *p) { return 0.3 * p[0] - 0.7 * p[1] + 1.1 * p[2] + 2.0; }
+
+static thx_model *phantom_model(thx_ctx *ctx)
+{
+    thx_phantom_opts po;
+    thx_phantom_opts_default(&po);
+    thx_contours *c = NULL;
+    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
+    thx_surfaces_opts so;
+    thx_surfaces_opts_default(&so);
+    thx_model *m = NULL;
+    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
+    thx_contours_destroy(&c);
+    thx_mesh_opts mo;
+    thx_mesh_opts_default(&mo);
+    mo.no_heart = 1;
+    CHECK_OK(ctx, thx_mesh_build(ctx, m, &mo, NULL));
+    return m;
+}
+
+int main(int argc, char **argv)
+{
+    thx_ctx *ctx = NULL;
+    thx_ctx_create(&ctx);
+    CHECK_OK(ctx, thx_fem_init(argc, argv, NULL, NULL));
+
+    /* 1. assembly: symmetric, rows sum to zero, positive diagonal; linear patch test (iso and aniso) */
+    const double iso[9] = {0.2, 0, 0, 0, 0.2, 0, 0, 0, 0.2};
+    const double aniso[9] = {0.5, 0.1, 0.05, 0.1, 0.3, -0.04, 0.05, -0.04, 0.1};
+    for (int which = 0; which < 2; which++) {
+        unsigned char *onb = NULL;
+        thx_volume *v = box(ctx, which ? aniso : iso, &onb);
+        thx_csr K;
+        CHECK_OK(ctx, thx_fem_assemble(ctx, v, NULL, &K));
+        double asym = 0, rowsum = 0, mindiag = INFINITY;
+        for (int32_t i = 0; i < K.n_rows; i++) {
+            double s = 0;
+            for (int64_t k = K.row[i]; k < K.row[i + 1]; k++) {
+                int32_t j = K.col[k];
+                s += K.val[k];
+                if (j == i) mindiag = fmin(mindiag, K.val[k]);
+                /* K(j, i) */
+                double kji = 0;
+                for (int64_t q = K.row[j]; q < K.row[j + 1]; q++)
+                    if (K.col[q] == i) kji = K.val[q];
+                asym = fmax(asym, fabs(K.val[k] - kji));
+            }
+            rowsum = fmax(rowsum, fabs(s));
+        }
+        CHECK(asym < 1e-14);
+        CHECK(rowsum < 1e-13);
+        CHECK(mindiag > 0);
+        /* K u = 0 at interior nodes for a linear u (any sigma: the patch test) */
+        double *u = malloc(v->n_nodes * sizeof *u), *Ku = malloc(v->n_nodes * sizeof *Ku);
+        for (size_t i = 0; i < v->n_nodes; i++) u[i] = linear(v->xyz + 3 * i);
+        thx_csr_mul(&K, u, Ku);
+        double worst = 0;
+        for (size_t i = 0; i < v->n_nodes; i++)
+            if (!onb[i]) worst = fmax(worst, fabs(Ku[i]));
+        CHECK(worst < 1e-12);
+        /* the solve reproduces the linear field from its boundary values */
+        unsigned char *kind = malloc(v->n_nodes);
+        for (size_t i = 0; i < v->n_nodes; i++) kind[i] = onb[i] ? 2 : 1;
+        thx_fem_system *S = NULL;
+        CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S));
+        double *phi = calloc(v->n_nodes, sizeof *phi);
+        for (size_t i = 0; i < v->n_nodes; i++)
+            if (onb[i]) phi[i] = u[i];
+        thx_fem_solve_stats ss;
+        CHECK_OK(ctx, thx_fem_solve(ctx, S, phi, NULL, 0, &ss));
+        double err = 0;
+        for (size_t i = 0; i < v->n_nodes; i++) err = fmax(err, fabs(phi[i] - u[i]));
+        printf("patch test (%s): max error %.2e after %d iterations\n", which ? "anisotropic" : "isotropic", err, ss.iterations);
+        CHECK(err < 1e-7);
+        /* currents: J = -sigma grad u * 1000 in every tetrahedron */
+        double *jt = malloc(3 * v->n_tets * sizeof *jt), *jn = malloc(3 * v->n_nodes * sizeof *jn);
+        thx_fem_currents(v, NULL, u, jt, jn);
+        const double *s = v->regions[0].sigma, g[3] = {0.3, -0.7, 1.1};
+        double jerr = 0;
+        for (int c = 0; c < 3; c++) {
+            double J = -1000 * (s[3 * c] * g[0] + s[3 * c + 1] * g[1] + s[3 * c + 2] * g[2]);
+            for (size_t t = 0; t < v->n_tets; t++) jerr = fmax(jerr, fabs(jt[3 * t + c] - J));
+            for (size_t i = 0; i < v->n_nodes; i++) jerr = fmax(jerr, fabs(jn[3 * i + c] - J));
+        }
+        CHECK(jerr < 1e-9);
+        /* Neumann: inject +1 mA at one interior node, take it out at another, pin one node: the
+           residual of K phi equals the loads, and the currents into each node balance */
+        if (which == 0) {
+            unsigned char *k2 = malloc(v->n_nodes);
+            memset(k2, 1, v->n_nodes);
+            thx_fem_system *S2 = NULL;
+            CHECK_OK(ctx, thx_fem_system_create(ctx, &K, k2, 1, &S2));
+            double *load = calloc(v->n_nodes, sizeof *load), *p2 = calloc(v->n_nodes, sizeof *p2);
+            size_t a = (N / 2 * N + N / 2) * N + 1, b = (N / 2 * N + N / 2) * N + N - 2;
+            load[a] = 1;
+            load[b] = -1;
+            CHECK_OK(ctx, thx_fem_solve(ctx, S2, p2, load, 0, &ss));
+            double *r = malloc(v->n_nodes * sizeof *r);
+            thx_csr_mul(&K, p2, r);
+            double bal = 0;
+            for (size_t i = 0; i < v->n_nodes; i++)
+                if (i != 0) bal = fmax(bal, fabs(r[i] - load[i]));
+            CHECK(bal < 1e-8);
+            CHECK(p2[a] > p2[b]); /* current flows from a to b */
+            free(r);
+            free(load);
+            free(p2);
+            free(k2);
+            thx_fem_system_destroy(&S2);
+        }
+        /* a non-positive-definite tensor is refused, naming the region */
+        v->regions[0].sigma[8] = -0.1;
+        thx_csr K2;
+        CHECK(thx_fem_assemble(ctx, v, NULL, &K2) == THX_EINPUT);
+        CHECK(strstr(thx_ctx_message(ctx), "'test'") != NULL);
+        free(jt);
+        free(jn);
+        free(phi);
+        free(kind);
+        free(u);
+        free(Ku);
+        free(onb);
+        thx_fem_system_destroy(&S);
+        thx_csr_free(&K);
+        thx_volume_destroy(&v);
+    }
+
+    /* 2. the medium phantom: frames, transfer matrices (both methods), conservation, bad input */
+    {
+        thx_model *m = phantom_model(ctx);
+        const thx_surface *heart = NULL, *torso = NULL;
+        for (size_t s = 0; s < m->n_surfaces; s++) {
+            if (m->surf[s]->role == THX_ROLE_HEART) heart = m->surf[s];
+            if (m->surf[s]->role == THX_ROLE_OUTER) torso = m->surf[s];
+        }
+        size_t nh = heart->n_nodes, F = 3;
+        thx_series *epi = NULL;
+        CHECK_OK(ctx, thx_series_create(ctx, nh, F, &epi));
+        snprintf(epi->unit, sizeof epi->unit, "mV");
+        double c[3] = {0, 0, 0};
+        for (size_t i = 0; i < nh; i++)
+            for (int d = 0; d < 3; d++) c[d] += heart->xyz[3 * i + d] / (double)nh;
+        for (size_t f = 0; f < F; f++)
+            for (size_t i = 0; i < nh; i++) {
+                const double *p = heart->xyz + 3 * i;
+                double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]}, r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                epi->v[f * nh + i] = 1e4 * (d[f % 3] + 0.3 * d[(f + 1) % 3]) / (r * r * r);
+            }
+        thx_forward_opts fo;
+        thx_forward_opts_default(&fo);
+        fo.keep_volume = 1;
+        thx_forward_result R;
+        CHECK_OK(ctx, thx_forward_epicardial(ctx, m, epi, &fo, &R));
+        printf("phantom: %zu free, %zu prescribed nodes; %d..%d iterations; assembly %.2f s, setup %.2f s, %zu solves %.2f s\n",
+               R.n_free, R.n_prescribed, R.it_min, R.it_max, R.t_assemble, R.t_setup, F, R.t_solve);
+        CHECK(R.torso && R.torso->n_rows == torso->n_nodes && R.torso->n_frames == F);
+        CHECK(R.max_residual < 1e-8);
+        /* conservation: no current leaves through the torso, so the currents the heart injects sum to
+           zero: sum over prescribed nodes of (K phi) = 0 relative to their magnitude */
+        {
+            unsigned char use[16];
+            for (size_t r = 0; r < m->volume->n_regions; r++) use[r] = strcmp(m->volume->regions[r].name, "heart") != 0;
+            thx_csr K;
+            CHECK_OK(ctx, thx_fem_assemble(ctx, m->volume, use, &K));
+            double *Kp = malloc(m->volume->n_nodes * sizeof *Kp);
+            size_t hs = 0;
+            for (size_t s = 0; s < m->n_surfaces; s++)
+                if (m->surf[s] == heart) hs = s;
+            /* the heart nodes carry their prescribed values */
+            double herr = 0;
+            for (size_t i = 0; i < nh; i++) herr = fmax(herr, fabs(R.volume->v[m->volume->surf_node[hs][i]] - epi->v[i]));
+            CHECK(herr == 0);
+            for (size_t f = 0; f < F; f++) {
+                thx_csr_mul(&K, R.volume->v + f * m->volume->n_nodes, Kp);
+                double net = 0, mag = 0;
+                for (size_t i = 0; i < nh; i++) {
+                    double q = Kp[m->volume->surf_node[hs][i]];
+                    net += q;
+                    mag += fabs(q);
+                }
+                printf("frame %zu: current out of the heart %.3e of %.3e (relative %.1e)\n", f + 1, net, mag, fabs(net) / mag);
+                CHECK(fabs(net) < 1e-7 * mag);
+            }
+            free(Kp);
+            thx_csr_free(&K);
+        }
+        /* transfer matrix, forward (a solve per heart node) and adjoint (a solve per row) on 12 rows */
+        int32_t rows[12];
+        for (int i = 0; i < 12; i++) rows[i] = (int32_t)((size_t)i * torso->n_nodes / 12);
+        thx_series *Ta = NULL, *Tfull = NULL, *phi = NULL;
+        CHECK_OK(ctx, thx_forward_transfer(ctx, m, rows, 12, 1, NULL, &Ta, NULL));
+        CHECK_OK(ctx, thx_forward_transfer(ctx, m, NULL, 0, 0, NULL, &Tfull, NULL));
+        CHECK(Tfull->n_rows == torso->n_nodes && Tfull->n_frames == nh);
+        double terr = 0, tmax = 0;
+        for (size_t j = 0; j < nh; j++)
+            for (int i = 0; i < 12; i++) {
+                double a = Ta->v[j * 12 + (size_t)i], b = Tfull->v[j * torso->n_nodes + (size_t)rows[i]];
+                terr = fmax(terr, fabs(a - b));
+                tmax = fmax(tmax, fabs(b));
+            }
+        printf("transfer: adjoint vs forward rows differ by %.2e (largest entry %.3f)\n", terr, tmax);
+        CHECK(terr < 1e-7);
+        /* rows of the transfer matrix sum to one: a constant on the heart gives that constant everywhere */
+        double rs = 0;
+        for (size_t i = 0; i < torso->n_nodes; i++) {
+            double s = 0;
+            for (size_t j = 0; j < nh; j++) s += Tfull->v[j * torso->n_nodes + i];
+            rs = fmax(rs, fabs(s - 1));
+        }
+        CHECK(rs < 1e-7);
+        /* applying it reproduces the frame-by-frame solution */
+        CHECK_OK(ctx, thx_transfer_apply(ctx, Tfull, epi, &phi));
+        double perr = 0, pmax = 0;
+        for (size_t k = 0; k < torso->n_nodes * F; k++) {
+            perr = fmax(perr, fabs(phi->v[k] - R.torso->v[k]));
+            pmax = fmax(pmax, fabs(R.torso->v[k]));
+        }
+        printf("transfer applied vs solved: %.2e (largest %.3f mV)\n", perr, pmax);
+        CHECK(perr < 1e-6 * pmax);
+        /* bad input: a wrong row count, a NaN */
+        thx_series *bad = NULL;
+        CHECK_OK(ctx, thx_series_create(ctx, nh + 1, 2, &bad));
+        thx_forward_result R2;
+        CHECK(thx_forward_epicardial(ctx, m, bad, NULL, &R2) == THX_EINPUT);
+        CHECK(strstr(thx_ctx_message(ctx), "rows") != NULL);
+        thx_series_destroy(&bad);
+        epi->v[5] = NAN;
+        CHECK(thx_forward_epicardial(ctx, m, epi, NULL, &R2) == THX_EINPUT);
+        CHECK(strstr(thx_ctx_message(ctx), "row 6, frame 1") != NULL);
+        thx_series_destroy(&phi);
+        thx_series_destroy(&Ta);
+        thx_series_destroy(&Tfull);
+        thx_forward_result_free(&R);
+        thx_series_destroy(&epi);
+        thx_model_destroy(&m);
+    }
+    thx_fem_finalize();
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
