@@ -13,6 +13,9 @@ int cmd_slice(int argc, char **argv);
 int cmd_import(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_series(int argc, char **argv);
+int cmd_electrodes(int argc, char **argv);
+int cmd_beat(int argc, char **argv);
+int cmd_forward(int argc, char **argv);
 
 /* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. */
 thx_ctx *cli_ctx(int verbose);

@@ -19,6 +19,9 @@ static const struct {
     {"mesh", cmd_mesh, "tetrahedral volume mesh with tissue regions and conductivities (paper 3.3)"},
     {"import", cmd_import, "build a model from closed surfaces made elsewhere (pts/fac, tri, obj, stl, ply, vtk)"},
     {"series", cmd_series, "time series (rows x frames): summary, conversion between text, raw and .mat"},
+    {"electrodes", cmd_electrodes, "the phantom's electrodes: 12-lead positions and a body-surface array"},
+    {"beat", cmd_beat, "the phantom's heartbeat: epicardial potentials of a dipole tracing a VCG loop"},
+    {"forward", cmd_forward, "finite-element forward solutions: heart to body surface, currents, defibrillation"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

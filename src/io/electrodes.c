@@ -1,0 +1,416 @@
+/*
+ * Electrode sets: create, destroy, the text file, and the check against a
+ * model (see thorax/electrodes.h; docs/formats.md, "Electrodes", is the
+ * specification of the file).
+ *
+ * Decisions recorded here:
+ *
+ *  - One validator (check_set) serves the writer, the reader and
+ *    thx_electrodes_check: at least one electrode, a surface name as a model
+ *    would accept it, electrode names 1-31 characters from [A-Za-z0-9_.+-]
+ *    (one word on their line; not a keyword of the file), unique, nodes >= 0,
+ *    finite positions. So whatever is written reads back, and a set read from
+ *    a file can be written again.
+ *
+ *  - Positions are printed "%.6f" like NAME.pts (a node read from a model
+ *    prints back to the same text), and a value that rounds to zero is
+ *    written "0.000000", never "-0.000000" (byte-identical output).
+ *
+ *  - The file is read whole and scanned line by line; `#` starts a comment,
+ *    blank lines and CRLF are allowed. Every message names the file and the
+ *    line, and, where it concerns one, the electrode ("e.txt:7: electrode 4
+ *    (\"V1\"): node '0' is not a node number (1, 2, ...)"). Electrodes are
+ *    counted from 1 in messages, like nodes in the file.
+ *
+ *  - The check against a model accepts a position within 1e-3 mm of its
+ *    node: files written with "%.6f" agree to 5e-7 mm, and anything farther
+ *    means the set belongs to another model (or another version of it).
+ */
+#include "thorax/electrodes.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/fileio.h"
+
+#define POS_TOL_MM 1e-3
+
+/* ------------------------------------------------------------ the object */
+
+thx_status thx_electrodes_create(thx_ctx *ctx, size_t n, thx_electrodes **out)
+{
+    *out = NULL;
+    if (n == 0) return thx_error(ctx, THX_EINPUT, "an electrode set needs at least one electrode");
+    if (n > (size_t)INT32_MAX) return thx_error(ctx, THX_EINPUT, "%zu electrodes are too many", n);
+    thx_electrodes *e = thx_calloc(ctx, 1, sizeof *e);
+    if (!e) return THX_ENOMEM;
+    e->name = thx_calloc(ctx, n, sizeof *e->name);
+    e->node = thx_calloc(ctx, n, sizeof *e->node);
+    e->xyz = thx_calloc(ctx, 3 * n, sizeof *e->xyz);
+    if (!e->name || !e->node || !e->xyz) {
+        thx_electrodes_destroy(&e);
+        return THX_ENOMEM;
+    }
+    e->n = n;
+    *out = e;
+    return THX_OK;
+}
+
+void thx_electrodes_destroy(thx_electrodes **e)
+{
+    if (!e || !*e) return;
+    free((*e)->name);
+    free((*e)->node);
+    free((*e)->xyz);
+    free(*e);
+    *e = NULL;
+}
+
+/* ------------------------------------------------------------ validation */
+
+static int is_keyword(const char *s)
+{
+    return !strcmp(s, "end") || !strcmp(s, "surface") || !strcmp(s, "count") || !strcmp(s, "thorax-electrodes");
+}
+
+/* NULL if `s` is a valid electrode name, else why not. */
+static const char *bad_name(const char *s, size_t cap)
+{
+    size_t n = strnlen(s, cap);
+    if (n == 0) return "is empty";
+    if (n >= cap) return "is longer than 31 characters";
+    for (const char *c = s; *c; c++)
+        if (!((*c >= 'A' && *c <= 'Z') || (*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_' ||
+              *c == '.' || *c == '+' || *c == '-'))
+            return "has a character outside [A-Za-z0-9_.+-]";
+    if (is_keyword(s)) return "is a keyword of the electrode file";
+    return NULL;
+}
+
+/* NULL if `s` is a valid surface name (as thx_model_write accepts it), else why not. */
+static const char *bad_surface_name(const char *s, size_t cap)
+{
+    size_t n = strnlen(s, cap);
+    if (n == 0) return "is empty";
+    if (n >= cap) return "is longer than 63 characters";
+    if (s[0] == '.') return "starts with '.'";
+    for (const char *c = s; *c; c++)
+        if (!((*c >= 'A' && *c <= 'Z') || (*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_' ||
+              *c == '.' || *c == '-'))
+            return "has a character outside [A-Za-z0-9_.-]";
+    return NULL;
+}
+
+/* The checks every set passes before it is written, after it is read, and
+ * when it is checked against a model. `where` prefixes the messages. */
+static thx_status check_set(thx_ctx *ctx, const thx_electrodes *e, const char *where)
+{
+    if (!e || e->n == 0) return thx_error(ctx, THX_EINPUT, "%san electrode set needs at least one electrode", where);
+    const char *why = bad_surface_name(e->surface, sizeof e->surface);
+    if (why) return thx_error(ctx, THX_EINPUT, "%ssurface name \"%.63s\" %s", where, e->surface, why);
+    for (size_t i = 0; i < e->n; i++) {
+        if ((why = bad_name(e->name[i], sizeof e->name[i])))
+            return thx_error(ctx, THX_EINPUT, "%selectrode %zu: name \"%.31s\" %s", where, i + 1, e->name[i], why);
+        if (e->node[i] < 0)
+            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is negative (nodes are 0-based in memory)",
+                             where, i + 1, e->name[i], (int)e->node[i]);
+        if (e->node[i] == INT32_MAX)
+            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is too large", where, i + 1,
+                             e->name[i], (int)e->node[i]);
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(e->xyz[3 * i + k]))
+                return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): position %c is not finite", where, i + 1,
+                                 e->name[i], "xyz"[k]);
+    }
+    /* unique names: n is small (hundreds), a quadratic scan is fine */
+    for (size_t i = 1; i < e->n; i++)
+        for (size_t j = 0; j < i; j++)
+            if (!strcmp(e->name[i], e->name[j]))
+                return thx_error(ctx, THX_EINPUT, "%selectrode %zu: name \"%s\" already used by electrode %zu", where,
+                                 i + 1, e->name[i], j + 1);
+    return THX_OK;
+}
+
+/* ------------------------------------------------------------ writing */
+
+/* "%.6f", with values that round to zero written as 0.000000 (no "-0.000000"). */
+static void put_coord(FILE *f, double v)
+{
+    if (fabs(v) < 5e-7) v = 0.0;
+    fprintf(f, "%.6f", v);
+}
+
+thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const char *path)
+{
+    char where[1100];
+    snprintf(where, sizeof where, "%s: ", path);
+    THX_CHECK(check_set(ctx, e, where));
+    thx_atomic_file af;
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    FILE *f = af.f;
+    fprintf(f, "thorax-electrodes 1\nsurface %s\ncount %zu\n", e->surface, e->n);
+    for (size_t i = 0; i < e->n; i++) {
+        fprintf(f, "%s %d ", e->name[i], (int)e->node[i] + 1);
+        put_coord(f, e->xyz[3 * i]);
+        fputc(' ', f);
+        put_coord(f, e->xyz[3 * i + 1]);
+        fputc(' ', f);
+        put_coord(f, e->xyz[3 * i + 2]);
+        fputc('\n', f);
+    }
+    fprintf(f, "end\n");
+    return thx_atomic_commit(ctx, &af);
+}
+
+/* ------------------------------------------------------------ reading */
+
+static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+/* Splits a line (comment already cut) into at most `max` blank-separated
+ * tokens, NUL-terminated in place; returns the number of tokens found (which
+ * may exceed max: the extra ones are counted, not stored). */
+static int split(char *p, char **tok, int max)
+{
+    int n = 0;
+    for (;;) {
+        while (is_blank(*p)) p++;
+        if (!*p) return n;
+        if (n < max) tok[n] = p;
+        n++;
+        while (*p && !is_blank(*p)) p++;
+        if (*p) *p++ = '\0';
+    }
+}
+
+typedef struct {
+    thx_ctx *ctx;
+    const char *path;
+    size_t line;
+} reader;
+
+static thx_status rfail(const reader *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static thx_status rfail(const reader *r, const char *fmt, ...)
+{
+    char msg[900];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return thx_error(r->ctx, THX_EINPUT, "%s:%zu: %s", r->path, r->line, msg);
+}
+
+/* A positive integer count or node number that fits in 32 bits. */
+static int parse_positive(const char *t, long *out)
+{
+    if (!(*t >= '0' && *t <= '9')) return -1;
+    errno = 0;
+    char *end = NULL;
+    long v = strtol(t, &end, 10);
+    if (errno || *end || v < 1 || v > INT32_MAX - 1) return -1;
+    *out = v;
+    return 0;
+}
+
+static thx_status parse_electrode(const reader *r, char **tok, int ntok, size_t i, thx_electrodes *e)
+{
+    if (ntok != 5)
+        return rfail(r, "electrode %zu: expected 'NAME NODE X Y Z', got %d field%s", i + 1, ntok, ntok == 1 ? "" : "s");
+    const char *why = bad_name(tok[0], sizeof e->name[0]);
+    if (why) return rfail(r, "electrode %zu: name \"%.40s\" %s", i + 1, tok[0], why);
+    for (size_t j = 0; j < i; j++)
+        if (!strcmp(e->name[j], tok[0]))
+            return rfail(r, "electrode %zu: name \"%s\" already used by electrode %zu", i + 1, tok[0], j + 1);
+    long node;
+    if (parse_positive(tok[1], &node) != 0)
+        return rfail(r, "electrode %zu (\"%s\"): node '%.40s' is not a node number (1, 2, ...)", i + 1, tok[0], tok[1]);
+    double x[3];
+    for (int k = 0; k < 3; k++) {
+        char *end = NULL;
+        x[k] = strtod(tok[2 + k], &end);
+        if (end == tok[2 + k] || *end || !isfinite(x[k]))
+            return rfail(r, "electrode %zu (\"%s\"): %c '%.40s' is not a finite number", i + 1, tok[0], "xyz"[k],
+                         tok[2 + k]);
+    }
+    snprintf(e->name[i], sizeof e->name[i], "%s", tok[0]);
+    e->node[i] = (int32_t)(node - 1);
+    memcpy(e->xyz + 3 * i, x, sizeof x);
+    return THX_OK;
+}
+
+thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **out)
+{
+    *out = NULL;
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    reader r = {ctx, path, 0};
+    thx_electrodes *e = NULL;
+    thx_status st = THX_OK;
+    char surface[sizeof e->surface] = "";
+    size_t surface_line = 0, count_line = 0, count = 0, got = 0;
+    int seen_header = 0, seen_end = 0;
+    if (memchr(text, '\0', len)) {
+        /* name the line of the first NUL */
+        const char *z = memchr(text, '\0', len);
+        for (const char *c = text; c < z; c++) r.line += *c == '\n';
+        r.line++;
+        st = rfail(&r, "NUL byte in a text file (is this a binary file?)");
+        goto done;
+    }
+    char *p = text;
+    while (*p) {
+        char *nl = strchr(p, '\n');
+        if (nl) *nl = '\0';
+        char *line = p;
+        p = nl ? nl + 1 : p + strlen(p);
+        r.line++;
+        char *hash = strchr(line, '#');
+        if (hash) *hash = '\0';
+        char *tok[6];
+        int ntok = split(line, tok, 6);
+        if (ntok == 0) continue;
+        if (seen_end) {
+            st = rfail(&r, "text after 'end'");
+            goto done;
+        }
+        if (!seen_header) {
+            if (strcmp(tok[0], "thorax-electrodes") != 0) {
+                st = rfail(&r, "not a thorax electrodes file (expected 'thorax-electrodes 1' as the first line)");
+                goto done;
+            }
+            if (ntok != 2 || strcmp(tok[1], "1") != 0) {
+                st = rfail(&r, "unsupported electrodes file version '%.20s' (this reader knows 'thorax-electrodes 1')",
+                           ntok >= 2 ? tok[1] : "");
+                goto done;
+            }
+            seen_header = 1;
+            continue;
+        }
+        if (!strcmp(tok[0], "surface") || !strcmp(tok[0], "count")) {
+            int is_surface = tok[0][0] == 's';
+            if (e) {
+                st = rfail(&r, "'%s' after the electrode lines began", tok[0]);
+                goto done;
+            }
+            size_t *seen = is_surface ? &surface_line : &count_line;
+            if (*seen) {
+                st = rfail(&r, "'%s' given twice (first on line %zu)", tok[0], *seen);
+                goto done;
+            }
+            if (ntok != 2) {
+                st = rfail(&r, is_surface ? "expected 'surface NAME'" : "expected 'count N' with N a positive integer");
+                goto done;
+            }
+            if (is_surface) {
+                const char *why = bad_surface_name(tok[1], sizeof surface);
+                if (why) {
+                    st = rfail(&r, "surface name \"%.63s\" %s", tok[1], why);
+                    goto done;
+                }
+                snprintf(surface, sizeof surface, "%s", tok[1]);
+            } else {
+                long c;
+                if (parse_positive(tok[1], &c) != 0) {
+                    st = rfail(&r, "expected 'count N' with N a positive integer, got '%.40s'", tok[1]);
+                    goto done;
+                }
+                if ((size_t)c > len / 10) { /* an electrode line takes at least 10 bytes */
+                    st = rfail(&r, "'count %ld' is more electrodes than a file of %zu bytes can hold", c, len);
+                    goto done;
+                }
+                count = (size_t)c;
+            }
+            *seen = r.line;
+            continue;
+        }
+        if (!strcmp(tok[0], "end") && ntok == 1) {
+            if (!e) {
+                st = rfail(&r, "'end' before any electrode line");
+                goto done;
+            }
+            if (got < count) {
+                st = rfail(&r, "'end' after %zu of %zu electrodes ('count %zu', line %zu)", got, count, count,
+                           count_line);
+                goto done;
+            }
+            seen_end = 1;
+            continue;
+        }
+        /* an electrode line */
+        if (!e) {
+            if (!surface_line || !count_line) {
+                st = rfail(&r, "electrode line before %s", !surface_line ? "'surface NAME'" : "'count N'");
+                goto done;
+            }
+            if ((st = thx_electrodes_create(ctx, count, &e)) != THX_OK) goto done;
+            snprintf(e->surface, sizeof e->surface, "%s", surface);
+        }
+        if (got == count) {
+            st = rfail(&r, "more electrode lines than 'count %zu' (line %zu), or a missing 'end'", count, count_line);
+            goto done;
+        }
+        if ((st = parse_electrode(&r, tok, ntok, got, e)) != THX_OK) goto done;
+        got++;
+    }
+    if (!seen_header) {
+        r.line = r.line ? r.line : 1;
+        st = rfail(&r, "empty file (expected 'thorax-electrodes 1' as the first line)");
+        goto done;
+    }
+    if (!seen_end) {
+        if (e && got < count)
+            st = rfail(&r, "truncated file: %zu of %zu electrodes ('count %zu', line %zu) and no 'end' line", got,
+                       count, count, count_line);
+        else
+            st = rfail(&r, "truncated file (no 'end' line)");
+        goto done;
+    }
+    {
+        char where[1100];
+        snprintf(where, sizeof where, "%s: ", path);
+        st = check_set(ctx, e, where); /* cannot fail after the checks above; kept as the invariant */
+    }
+done:
+    free(text);
+    if (st != THX_OK) thx_electrodes_destroy(&e);
+    *out = e;
+    return st;
+}
+
+/* ------------------------------------------------------------ the check */
+
+thx_status thx_electrodes_check(thx_ctx *ctx, const thx_electrodes *e, const thx_model *m)
+{
+    THX_CHECK(check_set(ctx, e, ""));
+    if (!m) return thx_error(ctx, THX_EINPUT, "electrodes: no model to check them against");
+    const thx_surface *s = NULL;
+    for (size_t k = 0; k < m->n_surfaces && !s; k++)
+        if (!strcmp(m->surf[k]->name, e->surface)) s = m->surf[k];
+    if (!s) {
+        char list[600] = "";
+        size_t off = 0;
+        for (size_t k = 0; k < m->n_surfaces && off < sizeof list; k++)
+            off += (size_t)snprintf(list + off, sizeof list - off, "%s%s", k ? ", " : "", m->surf[k]->name);
+        return thx_error(ctx, THX_EINPUT, "the electrodes' surface \"%s\" is not in the model (surfaces: %s)",
+                         e->surface, m->n_surfaces ? list : "none");
+    }
+    for (size_t i = 0; i < e->n; i++) {
+        if ((size_t)e->node[i] >= s->n_nodes)
+            return thx_error(ctx, THX_EINPUT, "electrode %zu (\"%s\"): node %d is not on surface \"%s\" (nodes 1..%zu)",
+                             i + 1, e->name[i], (int)e->node[i] + 1, s->name, s->n_nodes);
+        const double *a = e->xyz + 3 * i, *b = s->xyz + 3 * (size_t)e->node[i];
+        double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+        if (!(d <= POS_TOL_MM))
+            return thx_error(ctx, THX_EINPUT,
+                             "electrode %zu (\"%s\"): position (%.6f, %.6f, %.6f) is %.3g mm from node %d of surface "
+                             "\"%s\" at (%.6f, %.6f, %.6f) (tolerance %g mm)",
+                             i + 1, e->name[i], a[0], a[1], a[2], d, (int)e->node[i] + 1, s->name, b[0], b[1], b[2],
+                             POS_TOL_MM);
+    }
+    return THX_OK;
+}

@@ -1,0 +1,151 @@
+#!/bin/bash
+# End-to-end: the phantom's electrodes and heartbeat through the CLI.
+# phantom -> surfaces -> `thorax electrodes` (12lead.txt and array.txt in
+# MODEL/electrodes or -o DIR; read back independently here: every node's
+# position equals its line of torso.pts; byte-identical reruns) -> `thorax
+# beat` (a series whose rows are the heart's nodes, checked with `thorax
+# series info`; the same values in .txt, .raw and .mat; scipy reads the .mat);
+# usage errors exit 2, bad input exits 1 and writes nothing.
+# Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
+set -eu
+: "${THORAX:?}" "${SRC:?}" "${WORK:?}"
+PY=/usr/bin/python3
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+
+fail() { echo "e2e_electrodes: FAIL: $*" >&2; exit 1; }
+no_tmp() { ! find "$WORK" -name '*.tmp*' | grep -q . || fail "temporary files left: $(find "$WORK" -name '*.tmp*')"; }
+expect_rc() { # CODE ARGS...: run the CLI, check its exit status
+    local want=$1; shift
+    set +e
+    "$THORAX" "$@" >out.log 2>err.log
+    local rc=$?
+    set -e
+    [ "$rc" -eq "$want" ] || fail "thorax $* -> exit $rc, expected $want: $(cat err.log)"
+}
+
+"$THORAX" phantom --resolution medium -o c.txt 2>/dev/null
+"$THORAX" surfaces c.txt -o model >/dev/null 2>&1
+
+# --- help and usage ---------------------------------------------------------------
+"$THORAX" electrodes --help | grep -q "usage: thorax electrodes MODEL" || fail "electrodes --help"
+"$THORAX" help beat | grep -q "usage: thorax beat MODEL -o FILE" || fail "help beat"
+"$THORAX" help | grep -q "^  electrodes " || fail "electrodes not in the command list"
+"$THORAX" help | grep -q "^  beat " || fail "beat not in the command list"
+expect_rc 2 electrodes
+expect_rc 2 electrodes model --array -1
+expect_rc 2 electrodes model --colour red
+expect_rc 2 beat model
+expect_rc 2 beat model -o b.csv
+grep -q "give --format" err.log || fail "no hint at --format: $(cat err.log)"
+expect_rc 2 beat model -o b.txt --frames 0
+expect_rc 2 beat model -o b.txt --dt -1
+expect_rc 2 beat model -o b.txt --format xml
+[ ! -e model/electrodes ] && [ ! -e b.txt ] && [ ! -e b.csv ] || fail "a usage error wrote something"
+
+# --- electrodes ---------------------------------------------------------------------
+"$THORAX" electrodes model > el.log
+[ -f model/electrodes/12lead.txt ] && [ -f model/electrodes/array.txt ] || fail "electrode files missing"
+grep -q "^V4 " el.log || fail "the 12 leads were not printed: $(cat el.log)"
+head -n 3 model/electrodes/12lead.txt | tr '\n' '|' | grep -q "^thorax-electrodes 1|surface torso|count 9|$" ||
+    fail "12lead.txt header: $(head -n 3 model/electrodes/12lead.txt)"
+head -n 3 model/electrodes/array.txt | tr '\n' '|' | grep -q "^thorax-electrodes 1|surface torso|count 192|$" ||
+    fail "array.txt header"
+tail -n 1 model/electrodes/array.txt | grep -qx end || fail "array.txt does not end with 'end'"
+"$THORAX" electrodes model -o el2 --array 64 -q
+cmp -s model/electrodes/12lead.txt el2/12lead.txt || fail "the 12-lead set changed between runs"
+grep -q "^count 64$" el2/array.txt || fail "--array 64"
+"$THORAX" electrodes model -o el3 --array 0 -q
+[ -f el3/12lead.txt ] && [ ! -e el3/array.txt ] || fail "--array 0 wrote an array"
+"$THORAX" electrodes model -o el4 -q
+cmp -s model/electrodes/array.txt el4/array.txt || fail "the array changed between runs"
+no_tmp
+
+# the files read back independently: each node's X Y Z is its line of torso.pts, names and order as documented
+"$PY" - model <<'EOF' || fail "electrode files do not match the model"
+import sys
+model = sys.argv[1]
+pts = [l.split() for l in open(f"{model}/torso.pts")]
+def read(path):
+    lines = [l.split('#')[0].split() for l in open(path)]
+    lines = [l for l in lines if l]
+    assert lines[0] == ['thorax-electrodes', '1'] and lines[1] == ['surface', 'torso'], lines[:2]
+    n = int(lines[2][1])
+    body = lines[3:3 + n]
+    assert lines[3 + n] == ['end'] and len(lines) == 4 + n
+    out = []
+    for name, node, x, y, z in body:
+        assert pts[int(node) - 1] == [x, y, z], (name, node, x, y, z, pts[int(node) - 1])
+        out.append((name, int(node), float(x), float(y), float(z)))
+    return out
+e12 = read(f"{model}/electrodes/12lead.txt")
+assert [e[0] for e in e12] == ['RA', 'LA', 'LL', 'V1', 'V2', 'V3', 'V4', 'V5', 'V6']
+xs = [e[2] for e in e12[3:]]
+assert all(a > b for a, b in zip(xs, xs[1:])), xs          # V1..V6 from the right (+x) to the left
+assert all(e[3] > 0 for e in e12[3:8]), e12                 # V1..V5 anterior (+y)
+arr = read(f"{model}/electrodes/array.txt")
+assert [e[0] for e in arr] == ['A%03d' % (i + 1) for i in range(192)]
+assert len({e[1] for e in arr}) == 192                      # distinct nodes
+print("e2e_electrodes: 12lead.txt and array.txt match torso.pts")
+EOF
+
+# --- beat -----------------------------------------------------------------------------
+nheart=$("$PY" -c "import json; print([s['n_nodes'] for s in json.load(open('model/model.json'))['surfaces'] if s['role'] == 'heart'][0])")
+"$THORAX" beat model -o beat.txt > beat.log
+grep -q "^wrote beat.txt: $nheart nodes of surface heart x 500 frames" beat.log || fail "beat output: $(cat beat.log)"
+"$THORAX" series info beat.txt > info.txt
+for want in "^rows *$nheart$" "^frames *500$" "^unit *mV$" "^time *0 \.\. 499 ms (step 1)$" "^label *phantom beat" \
+            "^non-finite *0$"; do
+    grep -q "$want" info.txt || fail "series info lacks /$want/: $(cat info.txt)"
+done
+"$PY" - <<'EOF' || fail "max |phi| is not 40 mV"
+lo = hi = None
+for l in open('info.txt'):
+    k, _, v = l.partition(' ')
+    if k == 'min': lo = float(v)
+    if k == 'max': hi = float(v)
+assert abs(max(-lo, hi) - 40) < 1e-9, (lo, hi)
+EOF
+"$THORAX" beat model -o beat.mat -q
+"$THORAX" beat model -o beat.dat --format raw -q
+"$THORAX" series convert beat.dat -o beat2.txt -q
+cmp -s beat.txt beat2.txt || fail "raw and text beats differ"
+"$THORAX" series convert beat.mat -o beat3.txt -q
+cmp -s beat.txt beat3.txt || fail ".mat and text beats differ"
+"$THORAX" beat model -o short.txt --frames 300 --dt 2 --peak 5 -q
+"$THORAX" series info short.txt | grep -q "^time *0 \.\. 598 ms (step 2)$" || fail "--frames/--dt"
+"$PY" - "$nheart" <<'EOF' || fail "scipy check of beat.mat"
+import sys
+import numpy as np
+import scipy.io
+n = int(sys.argv[1])
+m = scipy.io.loadmat('beat.mat')
+pv = m['potvals']
+assert pv.shape == (n, 500) and pv.dtype == np.float64, pv.shape
+assert abs(np.abs(pv).max() - 40) < 1e-9
+assert np.array_equal(m['time'][0], np.arange(500.0))
+assert str(m['unit'][0]) == 'mV'
+# QRS (150-240 ms) is the largest wave; baselines are zero; frame-to-frame changes are small
+a = np.abs(pv)
+assert a[:, 150:240].max() == a.max() and a[:, :150].max() < 0.25 * a.max() and a[:, 240:].max() < 0.5 * a.max()
+assert not a[:, :11].any() and not a[:, 470:].any()
+assert np.abs(np.diff(pv, axis=1)).max() < 4
+print("e2e_electrodes: scipy reads beat.mat (%d x 500, max |phi| 40 mV)" % n)
+EOF
+
+# --- failures: exit 1, nothing written ----------------------------------------------
+expect_rc 1 electrodes nomodel -o el5
+grep -q "nomodel" err.log || fail "missing model not named: $(cat err.log)"
+[ ! -e el5 ] || fail "a failed run created el5"
+"$THORAX" import -o torsoonly model/torso.pts --name torso --role outer -q >/dev/null 2>&1 || fail "import"
+expect_rc 1 beat torsoonly -o nb.txt
+grep -q "no heart surface" err.log || fail "beat without a heart: $(cat err.log)"
+expect_rc 1 electrodes torsoonly -o nb
+grep -q "no heart surface" err.log || fail "electrodes without a heart: $(cat err.log)"
+[ ! -e nb.txt ] && [ ! -e nb ] && [ ! -e torsoonly/electrodes ] || fail "a failed run wrote output"
+cp beat.txt keep.txt
+expect_rc 1 beat torsoonly -o keep.txt
+cmp -s beat.txt keep.txt || fail "a failed run changed an existing file"
+no_tmp
+echo "e2e_electrodes: ok"
