@@ -86,6 +86,21 @@ typedef struct {
 thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
                          thx_fem_solve_stats *st);
 
+/* Writes K_ff and the right-hand side for phi's prescribed values (and load, or NULL) in PETSc's
+ * binary format (MatLoad / VecLoad order: matrix, then vector) — for running PETSc alone on the very
+ * same system (bench/forward.sh). */
+thx_status thx_fem_system_dump(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, const char *path);
+
+/*
+ * Tells the system how many right-hand sides will follow. Unless the
+ * command line chose a solver (-ksp_type or -pc_type), n_rhs >= 12 switches
+ * to a sparse Cholesky factorization (-ksp_type preonly -pc_type cholesky,
+ * CHOLMOD on one rank, MUMPS on several): on the high-resolution phantom the
+ * factorization costs about 11 solves of CG + GAMG and each solve after it
+ * a seventh of one (docs/decisions.md). Call before the first solve.
+ */
+void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
+
 /* Free and prescribed node counts, and the setup time (matrix + preconditioner) so far, seconds. */
 void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
 /* The KSP and PC types in use ("cg", "gamg", ...) and the number of MPI ranks. */
@@ -107,6 +122,7 @@ typedef struct {
     int warm;               /* start each frame from the previous frame's solution (default 1) */
     void (*progress)(void *user, size_t done, size_t total); /* after each frame (may be NULL) */
     void *user;
+    const char *dump_system; /* if set: the first frame's system written there (thx_fem_system_dump) */
 } thx_forward_opts;
 
 typedef struct {
@@ -150,6 +166,80 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
 
 /* phi = T epi: a series with T's rows and epi's frames. */
 thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out);
+
+/* ---- verification (thorax verify, docs/validation.md) ---- */
+
+typedef struct {
+    int n;                   /* cells per cube edge of the cubed-sphere mesh */
+    size_t nodes, tets;
+    double h;                /* mean edge length, mm */
+    double rdm, mag;         /* at the outer surface's nodes against the analytic solution */
+    double max_err;          /* largest nodal error on the outer surface / largest |analytic| there */
+    double net_current;      /* current out of the inner sphere / the sum of its magnitudes */
+    int iterations;
+    double seconds;
+} thx_verify_row;
+
+/*
+ * Concentric shells a = 40, b = 70, c = 100 mm (thorax/verify.h): P_l(cos
+ * theta) prescribed on r = a, no current through r = c, conductivity s1 in
+ * the inner shell and s2 in the outer one; the finite-element solution on
+ * the cubed-sphere mesh with n cells per cube edge (n/2 layers per shell)
+ * compared with the analytic one at the outer surface.
+ */
+thx_status thx_verify_shells(thx_ctx *ctx, int l, double s1, double s2, int n, thx_verify_row *row);
+
+/* The anisotropic slab: the largest nodal error against the closed form (linear: exact for P1
+ * elements up to the solver's tolerance), relative to the largest potential. */
+thx_status thx_verify_slab(thx_ctx *ctx, double *rel_err, size_t *nodes);
+
+/* ---- defibrillation (paper 4.1) ---- */
+
+/* An electrode patch: nodes of a surface, each with its share of the patch's area. */
+typedef struct {
+    char name[32];
+    int is_voltage;     /* 1: the patch is held at `value` volts; 0: it injects `value` amperes */
+    double value;
+    size_t n;
+    int32_t *node;      /* volume nodes */
+    double *weight;     /* share of the area (sums to 1) */
+    double area;        /* mm^2 */
+} thx_patch;
+
+/* The nodes of model surface s within radius (mm) of center; weights from the areas of the surface
+ * triangles around each node (a third of each triangle's area per corner inside). Error if no node
+ * is inside. */
+thx_status thx_patch_disc(thx_ctx *ctx, const thx_model *m, size_t s, const double center[3], double radius,
+                          thx_patch *p);
+/* The given nodes of surface s (0-based surface node numbers). */
+thx_status thx_patch_nodes(thx_ctx *ctx, const thx_model *m, size_t s, const int32_t *nodes, size_t n, thx_patch *p);
+void thx_patch_free(thx_patch *p);
+
+typedef struct {
+    double threshold;        /* V/cm */
+    double heart_volume;     /* mm^3 of the heart region */
+    double frac_above;       /* fraction of the heart's volume where |E| > threshold */
+    double e_min, e_mean, e_max;  /* |E| in the heart, V/cm (mean volume-weighted) */
+    double phi_min, phi_max;      /* potential in the heart, V */
+    double current[16];      /* current leaving each patch into the body, A (given for current patches) */
+    double voltage[16];      /* mean potential of each patch, V */
+    int iterations;
+    double residual, t_assemble, t_setup, t_solve;
+    char ksp[32], pc[32];
+    int ranks;
+} thx_defib_report;
+
+/*
+ * The defibrillation problem: the whole domain (heart included), patches
+ * held at voltages (Dirichlet) or injecting currents (Neumann loads,
+ * distributed by area); at least one voltage patch, or currents summing to
+ * zero (the potential is then given relative to its mean over the volume).
+ * phi (n_nodes, malloc'ed, V) and field (|E| per tetrahedron, V/cm,
+ * malloc'ed) on return; either pointer may be NULL. Requires a region named
+ * "heart" for the report (else the figures are over nothing and say so).
+ */
+thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *patches, size_t n_patches, double threshold,
+                           double **phi, double **field, thx_defib_report *rep);
 
 #ifdef __cplusplus
 }

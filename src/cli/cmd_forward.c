@@ -40,6 +40,7 @@ static void help(void)
            "  --method M             forward (a solve per heart node), adjoint (a solve per row) or\n"
            "                         auto (default: fewer solves)\n"
            "  --no-warm              start every frame's solve from zero\n"
+           "  --dump-system FILE     write the first frame's K_ff and right-hand side (PETSc binary)\n"
            "  --electrode SPEC       defibrillation electrode (see docs/cli.md):\n"
            "                         NAME,surface=S,at=X:Y:Z,radius=R,voltage=V | current=I (A)\n"
            "  --threshold V/CM       field threshold for the heart-volume fraction (default 5)\n"
@@ -84,7 +85,7 @@ static const char *ext_of(thx_series_format f)
 int cmd_forward(int argc, char **argv)
 {
     const char *model_dir = NULL, *epi_path = NULL, *out = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL;
-    const char *format = "raw", *method = "auto";
+    const char *format = "raw", *method = "auto", *dump = NULL;
     int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1;
     double threshold = 5.0;
     const char *electrodes[16];
@@ -105,6 +106,7 @@ int cmd_forward(int argc, char **argv)
         else if (!strcmp(a, "--rows")) { NEED_VALUE(); rows_path = v; }
         else if (!strcmp(a, "--method")) { NEED_VALUE(); method = v; if (strcmp(v, "auto") && strcmp(v, "forward") && strcmp(v, "adjoint")) return cli_usage_error("forward", "--method: forward, adjoint or auto"); }
         else if (!strcmp(a, "--no-warm")) warm = 0;
+        else if (!strcmp(a, "--dump-system")) { NEED_VALUE(); dump = v; }
         else if (!strcmp(a, "--electrode")) { NEED_VALUE(); if (n_electrodes >= 16) return cli_usage_error("forward", "at most 16 electrodes"); electrodes[n_electrodes++] = v; }
         else if (!strcmp(a, "--threshold")) { NEED_VALUE(); if (cli_parse_double("forward", a, v, &threshold)) return 2; if (!(threshold > 0)) return cli_usage_error("forward", "--threshold must be positive"); }
         else if (!strcmp(a, "-v")) verbose = 1;
@@ -162,6 +164,7 @@ int cmd_forward(int argc, char **argv)
     thx_forward_opts fo;
     thx_forward_opts_default(&fo);
     fo.warm = warm;
+    fo.dump_system = dump;
     fo.keep_volume = want_volume || currents;
     if (rank == 0 && isatty(2) && verbose >= 0) { fo.progress = cli_progress; fo.user = (void *)"forward"; }
     if (transfer_out) {

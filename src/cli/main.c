@@ -22,6 +22,7 @@ static const struct {
     {"electrodes", cmd_electrodes, "the phantom's electrodes: 12-lead positions and a body-surface array"},
     {"beat", cmd_beat, "the phantom's heartbeat: epicardial potentials of a dipole tracing a VCG loop"},
     {"forward", cmd_forward, "finite-element forward solutions: heart to body surface, currents, defibrillation"},
+    {"verify", cmd_verify, "the finite-element solver against analytic solutions: convergence table"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

@@ -82,12 +82,6 @@ thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigne
     return THX_OK;
 }
 
-static int cmp_i32(const void *x, const void *y)
-{
-    int32_t a = *(const int32_t *)x, b = *(const int32_t *)y;
-    return (a > b) - (a < b);
-}
-
 thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K)
 {
     memset(K, 0, sizeof *K);
@@ -159,60 +153,75 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
                 for (int k = 0; k < 4; k++) ntet[fill[v->tet[4 * t + k]]++] = (int32_t)t;
         free(fill);
     }
-    /* row lengths: distinct neighbours (the node itself included) */
+    /* row lengths: distinct neighbours (the node itself included), deduplicated with a per-thread mark */
     row = thx_calloc(ctx, nn + 1, sizeof *row);
     if (!row) { st = THX_ENOMEM; goto done; }
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (long i = 0; i < (long)nn; i++) {
-        int32_t buf[512];
-        size_t m = 0, deg = nstart[i + 1] - nstart[i];
-        int32_t *nb = 4 * deg <= 512 ? buf : malloc(4 * deg * sizeof *nb);
-        for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
-            for (int c = 0; c < 4; c++) nb[m++] = v->tet[4 * (size_t)ntet[k] + c];
-        qsort(nb, m, sizeof *nb, cmp_i32);
-        size_t u = 0;
-        for (size_t k = 0; k < m; k++)
-            if (u == 0 || nb[k] != nb[u - 1]) nb[u++] = nb[k];
-        row[i + 1] = (int64_t)u;
-        if (nb != buf) free(nb);
+    int fail = 0;
+#pragma omp parallel
+    {
+        int32_t *mark = malloc((nn ? nn : 1) * sizeof *mark);
+        if (!mark) {
+#pragma omp atomic write
+            fail = 1;
+        } else {
+            for (size_t i = 0; i < nn; i++) mark[i] = -1;
+#pragma omp for schedule(dynamic, 1024)
+            for (long i = 0; i < (long)nn; i++) {
+                int64_t u = 0;
+                for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
+                    for (int c = 0; c < 4; c++) {
+                        int32_t j = v->tet[4 * (size_t)ntet[k] + c];
+                        if (mark[j] != (int32_t)i) { mark[j] = (int32_t)i; u++; }
+                    }
+                row[i + 1] = u;
+            }
+            free(mark);
+        }
     }
+    if (fail) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i < nn; i++) row[i + 1] += row[i];
     col = thx_malloc(ctx, (row[nn] ? (size_t)row[nn] : 1) * sizeof *col);
     val = thx_calloc(ctx, row[nn] ? (size_t)row[nn] : 1, sizeof *val);
     if (!col || !val) { st = THX_ENOMEM; goto done; }
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (long i = 0; i < (long)nn; i++) {
-        int32_t buf[512];
-        size_t m = 0, deg = nstart[i + 1] - nstart[i];
-        int32_t *nb = 4 * deg <= 512 ? buf : malloc(4 * deg * sizeof *nb);
-        for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
-            for (int c = 0; c < 4; c++) nb[m++] = v->tet[4 * (size_t)ntet[k] + c];
-        qsort(nb, m, sizeof *nb, cmp_i32);
-        size_t u = 0;
-        for (size_t k = 0; k < m; k++)
-            if (u == 0 || nb[k] != nb[u - 1]) nb[u++] = nb[k];
-        int32_t *c = col + row[i];
-        memcpy(c, nb, u * sizeof *c);
-        double *a = val + row[i];
-        static const int idx[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
-        for (size_t k = nstart[i]; k < nstart[i + 1]; k++) {
-            size_t t = (size_t)ntet[k];
-            const int32_t *q = v->tet + 4 * t;
-            int li = 0;
-            while (q[li] != i) li++;
-            for (int b = 0; b < 4; b++) {
-                /* position of q[b] in this row: binary search */
-                size_t lo = 0, hi = u;
-                while (hi - lo > 1) {
-                    size_t mid = (lo + hi) / 2;
-                    if (c[mid] <= q[b]) lo = mid;
-                    else hi = mid;
+#pragma omp parallel
+    {
+        int32_t *pos = malloc((nn ? nn : 1) * sizeof *pos); /* column -> slot in the current row, or -1 */
+        if (!pos) {
+#pragma omp atomic write
+            fail = 1;
+        } else {
+            for (size_t i = 0; i < nn; i++) pos[i] = -1;
+#pragma omp for schedule(dynamic, 1024)
+            for (long i = 0; i < (long)nn; i++) {
+                int32_t *c = col + row[i];
+                double *a = val + row[i];
+                int32_t u = 0;
+                for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
+                    for (int q = 0; q < 4; q++) {
+                        int32_t j = v->tet[4 * (size_t)ntet[k] + q];
+                        if (pos[j] < 0) { pos[j] = 0; c[u++] = j; }
+                    }
+                /* sorted columns (insertion sort: rows are short) */
+                for (int32_t x = 1; x < u; x++) {
+                    int32_t key = c[x], y = x - 1;
+                    while (y >= 0 && c[y] > key) { c[y + 1] = c[y]; y--; }
+                    c[y + 1] = key;
                 }
-                a[lo] += ke[10 * t + idx[li][b]];
+                for (int32_t x = 0; x < u; x++) pos[c[x]] = x;
+                static const int idx[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
+                for (size_t k = nstart[i]; k < nstart[i + 1]; k++) {
+                    size_t t = (size_t)ntet[k];
+                    const int32_t *q = v->tet + 4 * t;
+                    int li = 0;
+                    while (q[li] != i) li++;
+                    for (int b2 = 0; b2 < 4; b2++) a[pos[q[b2]]] += ke[10 * t + idx[li][b2]];
+                }
+                for (int32_t x = 0; x < u; x++) pos[c[x]] = -1;
             }
+            free(pos);
         }
-        if (nb != buf) free(nb);
     }
+    if (fail) { st = THX_ENOMEM; goto done; }
     K->n_rows = K->n_cols = (int32_t)nn;
     K->row = row;
     K->col = col;

@@ -121,9 +121,11 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
     if (!phi) { st = THX_ENOMEM; goto done; }
     r->it_min = 1 << 30;
+    thx_fem_system_hint_rhs(P.sys, nf);
     for (size_t f = 0; f < nf; f++) {
         const double *e = epi->v + f * epi->n_rows;
         for (size_t i = 0; i < hs->n_nodes; i++) phi[v->surf_node[P.heart][i]] = e[i];
+        if (f == 0 && o->dump_system) THX_TRY(thx_fem_system_dump(ctx, P.sys, phi, NULL, o->dump_system));
         thx_fem_solve_stats ss;
         THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, o->warm && f > 0, &ss));
         r->it_min = ss.iterations < r->it_min ? ss.iterations : r->it_min;
@@ -178,6 +180,7 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
     snprintf(A->time_unit, sizeof A->time_unit, "node");
     snprintf(A->unit, sizeof A->unit, "1");
     if (method < 0) method = nr < nh ? 1 : 0;
+    thx_fem_system_hint_rhs(P.sys, method ? nr : nh);
     snprintf(A->label, sizeof A->label, "transfer matrix %.40s <- %.40s (%s)", os->name, hs->name, method ? "adjoint" : "forward");
     int it_min = 1 << 30, it_max = 0;
     long it_total = 0;

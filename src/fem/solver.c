@@ -227,6 +227,55 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
     if (ranks) *ranks = n;
 }
 
+static thx_status fill_rhs(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, int warm)
+{
+    thx_status st = THX_OK;
+    PetscScalar *b, *x;
+    PCALL(ctx, VecGetArray(s->b, &b));
+    PCALL(ctx, VecGetArray(s->x, &x));
+    PetscInt m = s->rend - s->rstart;
+    for (PetscInt r = 0; r < m; r++) {
+        int32_t i = s->free_node[s->rstart + r];
+        double v = load ? load[i] : 0;
+        for (int64_t k = s->kfd.row[r]; k < s->kfd.row[r + 1]; k++) v -= s->kfd.val[k] * phi[s->pres_node[s->kfd.col[k]]];
+        b[r] = v;
+        x[r] = warm ? phi[i] : 0;
+    }
+    PCALL(ctx, VecRestoreArray(s->b, &b));
+    PCALL(ctx, VecRestoreArray(s->x, &x));
+done:
+    return st;
+}
+
+thx_status thx_fem_system_dump(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, const char *path)
+{
+    thx_status st = fill_rhs(ctx, s, phi, load, 0);
+    PetscViewer vw = NULL;
+    if (st != THX_OK) return st;
+    PCALL(ctx, PetscViewerBinaryOpen(PETSC_COMM_WORLD, path, FILE_MODE_WRITE, &vw));
+    PCALL(ctx, MatView(s->A, vw));
+    PCALL(ctx, VecView(s->b, vw));
+done:
+    if (vw) PetscViewerDestroy(&vw);
+    return st;
+}
+
+void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
+{
+    if (s->pc_ready || n_rhs < 12) return;
+    PetscBool k = PETSC_FALSE, p = PETSC_FALSE;
+    PetscOptionsHasName(NULL, NULL, "-ksp_type", &k);
+    PetscOptionsHasName(NULL, NULL, "-pc_type", &p);
+    if (k || p) return;
+    PetscMPIInt size = 1;
+    MPI_Comm_size(PETSC_COMM_WORLD, &size);
+    PC pc;
+    KSPSetType(s->ksp, KSPPREONLY);
+    KSPGetPC(s->ksp, &pc);
+    PCSetType(pc, PCCHOLESKY);
+    PCFactorSetMatSolverType(pc, size == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS);
+}
+
 thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
                          thx_fem_solve_stats *out)
 {
@@ -234,20 +283,12 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
     double t0 = thx_wtime();
     if (s->pinned >= 0) phi[s->pinned] = 0;
     /* b = load_f - K_fd phi_d over the own rows; x = the guess */
+    st = fill_rhs(ctx, s, phi, load, warm);
+    if (st != THX_OK) goto done;
     {
-        PetscScalar *b, *x;
-        PCALL(ctx, VecGetArray(s->b, &b));
-        PCALL(ctx, VecGetArray(s->x, &x));
-        PetscInt m = s->rend - s->rstart;
-        for (PetscInt r = 0; r < m; r++) {
-            int32_t i = s->free_node[s->rstart + r];
-            double v = load ? load[i] : 0;
-            for (int64_t k = s->kfd.row[r]; k < s->kfd.row[r + 1]; k++) v -= s->kfd.val[k] * phi[s->pres_node[s->kfd.col[k]]];
-            b[r] = v;
-            x[r] = warm ? phi[i] : 0;
-        }
-        PCALL(ctx, VecRestoreArray(s->b, &b));
-        PCALL(ctx, VecRestoreArray(s->x, &x));
+        KSPType kt;
+        PCALL(ctx, KSPGetType(s->ksp, &kt));
+        if (kt && !strcmp(kt, KSPPREONLY)) warm = 0; /* a direct solve takes no initial guess */
     }
     PCALL(ctx, KSPSetInitialGuessNonzero(s->ksp, warm ? PETSC_TRUE : PETSC_FALSE));
     if (!s->pc_ready) {
