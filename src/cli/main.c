@@ -23,6 +23,7 @@ static const struct {
     {"beat", cmd_beat, "the phantom's heartbeat: epicardial potentials of a dipole tracing a VCG loop"},
     {"forward", cmd_forward, "finite-element forward solutions: heart to body surface, currents, defibrillation"},
     {"verify", cmd_verify, "the finite-element solver against analytic solutions: convergence table"},
+    {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

@@ -1,0 +1,115 @@
+/* thorax leads: ECG leads and electrode signals from a forward solution. */
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+#include "thorax/electrodes.h"
+#include "thorax/fileio.h"
+
+static void help(void)
+{
+    printf("usage: thorax leads SOLUTION [-o DIR] [--twelve FILE] [--array FILE] [--format text|raw|mat]\n\n"
+           "Reads a solution of thorax forward (its torso potentials and its model) and\n"
+           "writes the standard 12-lead ECG (I, II, III, aVR, aVL, aVF, V1-V6; the\n"
+           "precordial leads against Wilson's central terminal) as DIR/ecg12.EXT and the\n"
+           "signals of an electrode array as DIR/array.EXT (rows: the electrodes).\n\n"
+           "options:\n"
+           "  -o, --output DIR   where to write (default: SOLUTION itself)\n"
+           "  --twelve FILE      electrodes with RA, LA, LL, V1..V6 (default MODEL/electrodes/12lead.txt)\n"
+           "  --array FILE       an electrode array (default MODEL/electrodes/array.txt, if present)\n"
+           "  --format F         text (default), raw or mat\n");
+}
+
+int cmd_leads(int argc, char **argv)
+{
+    const char *sol = NULL, *out = NULL, *twelve = NULL, *array = NULL, *format = "text";
+    int verbose = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
+#define NEED_VALUE() do { if (!v) return cli_usage_error("leads", "%s needs a value", a); i++; } while (0)
+        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { NEED_VALUE(); out = v; }
+        else if (!strcmp(a, "--twelve")) { NEED_VALUE(); twelve = v; }
+        else if (!strcmp(a, "--array")) { NEED_VALUE(); array = v; }
+        else if (!strcmp(a, "--format")) { NEED_VALUE(); format = v; thx_series_format f; if (thx_series_format_parse(v, &f) || f == THX_SERIES_AUTO) return cli_usage_error("leads", "--format: text, raw or mat"); }
+        else if (!strcmp(a, "-v")) verbose = 1;
+        else if (!strcmp(a, "-q")) verbose = -1;
+        else if (a[0] == '-' && a[1]) return cli_usage_error("leads", "unknown option '%s'", a);
+        else if (!sol) sol = a;
+        else return cli_usage_error("leads", "more than one solution given");
+#undef NEED_VALUE
+    }
+    if (!sol) return cli_usage_error("leads", "no solution given");
+    if (!out) out = sol;
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_series_format fmt = THX_SERIES_TEXT;
+    thx_series_format_parse(format, &fmt);
+    const char *ext = fmt == THX_SERIES_TEXT ? "txt" : fmt == THX_SERIES_MAT ? "mat" : "raw";
+    char path[PATH_MAX + 64], model_dir[PATH_MAX] = "", torso_file[256] = "", p12[PATH_MAX + 64], parr[PATH_MAX + 64];
+    char *text = NULL;
+    size_t len = 0;
+    int rc = 0;
+    thx_model *m = NULL;
+    thx_series *torso = NULL, *ecg = NULL, *arr = NULL;
+    thx_electrodes *e12 = NULL, *ea = NULL;
+    snprintf(path, sizeof path, "%s/solution.json", sol);
+    thx_status st = thx_read_file(ctx, path, &text, &len);
+    if (st == THX_OK) {
+        cJSON *j = cJSON_Parse(text);
+        cJSON *mo = cJSON_GetObjectItem(j, "model"), *files = cJSON_GetObjectItem(j, "files");
+        cJSON *to = files ? cJSON_GetObjectItem(files, "torso") : NULL;
+        if (!j || !cJSON_IsString(mo) || !cJSON_IsString(to))
+            st = thx_error(ctx, THX_EINPUT, "%s: not a thorax solution with torso potentials (model, files.torso)", path);
+        else {
+            snprintf(model_dir, sizeof model_dir, "%s", mo->valuestring);
+            snprintf(torso_file, sizeof torso_file, "%s", to->valuestring);
+        }
+        cJSON_Delete(j);
+    }
+    if (st == THX_OK) st = thx_model_read(ctx, model_dir, &m);
+    if (st == THX_OK) {
+        snprintf(path, sizeof path, "%s/%s", sol, torso_file);
+        st = thx_series_read(ctx, path, THX_SERIES_AUTO, &torso);
+    }
+    snprintf(p12, sizeof p12, "%s", twelve ? twelve : "");
+    if (!twelve) snprintf(p12, sizeof p12, "%s/electrodes/12lead.txt", model_dir);
+    if (st == THX_OK) st = thx_electrodes_read(ctx, p12, &e12);
+    if (st == THX_OK) st = thx_electrodes_check(ctx, e12, m);
+    if (st == THX_OK) st = thx_ecg12(ctx, e12, torso, &ecg);
+    if (st == THX_OK) {
+        if (array) snprintf(parr, sizeof parr, "%s", array);
+        else snprintf(parr, sizeof parr, "%s/electrodes/array.txt", model_dir);
+        FILE *f = fopen(parr, "r");
+        if (f || array) {
+            if (f) fclose(f);
+            st = thx_electrodes_read(ctx, parr, &ea);
+            if (st == THX_OK) st = thx_electrodes_check(ctx, ea, m);
+            if (st == THX_OK) st = thx_electrodes_sample(ctx, ea, torso, &arr);
+        }
+    }
+    if (st == THX_OK) {
+        snprintf(path, sizeof path, "%s/ecg12.%s", out, ext);
+        st = thx_series_write(ctx, ecg, path, fmt);
+    }
+    if (st == THX_OK && arr) {
+        snprintf(path, sizeof path, "%s/array.%s", out, ext);
+        st = thx_series_write(ctx, arr, path, fmt);
+    }
+    if (st != THX_OK) rc = cli_fail(ctx, "leads", st);
+    else if (verbose >= 0) {
+        printf("12-lead ECG: %zu frames -> %s/ecg12.%s\n", ecg->n_frames, out, ext);
+        if (arr) printf("array: %zu electrodes -> %s/array.%s\n", arr->n_rows, out, ext);
+    }
+    free(text);
+    thx_series_destroy(&torso);
+    thx_series_destroy(&ecg);
+    thx_series_destroy(&arr);
+    thx_electrodes_destroy(&e12);
+    thx_electrodes_destroy(&ea);
+    thx_model_destroy(&m);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
