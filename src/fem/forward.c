@@ -100,8 +100,8 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
         size_t row, frame;
         size_t bad = thx_series_find_nonfinite(epi, &row, &frame);
         if (bad)
-            return thx_error(ctx, THX_EINPUT, "forward: the epicardial series has %zu values that are not finite "
-                             "(first: row %zu, frame %zu)", bad, row + 1, frame + 1);
+            return thx_error(ctx, THX_EINPUT, "forward: the epicardial series has %zu value%s that %s not finite "
+                             "(first: row %zu, frame %zu)", bad, bad > 1 ? "s" : "", bad > 1 ? "are" : "is", row + 1, frame + 1);
     }
     THX_CHECK(epi_setup(ctx, m, &P));
     const thx_volume *v = m->volume;

@@ -1,0 +1,141 @@
+#!/usr/bin/env bash
+# thorax forward / leads / verify end to end on the medium phantom: the epicardial
+# problem, the same answer under mpirun -np 2 and with other PETSc options, the
+# transfer matrix (adjoint, applied), currents, 12-lead ECG (Einthoven's law),
+# defibrillation, .mat read by scipy, and every bad input refused with nothing written.
+set -euo pipefail
+: "${THORAX:?}" "${WORK:?}"
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+PY=/usr/bin/python3
+fail() { echo "FAIL: $*"; exit 1; }
+refused() { # WHAT DIR CMD... : must exit 1, say something, leave DIR absent
+    local what=$1 dir=$2; shift 2
+    if "$@" > out.log 2> err.log; then fail "$what: accepted"; fi
+    [ -s err.log ] || fail "$what: no message"
+    [ ! -e "$dir" ] || fail "$what: $dir written"
+    echo "refused ($what): $(head -1 err.log)"
+}
+
+"$THORAX" phantom --resolution medium --seed 1 -o c.txt -q
+"$THORAX" surfaces c.txt -o model -q
+"$THORAX" mesh model --no-heart -q
+"$THORAX" electrodes model -q
+"$THORAX" beat model -o beat.raw --frames 40 -q
+
+# 1. the epicardial problem
+"$THORAX" forward model --epicardial beat.raw -o sol -q
+[ -f sol/solution.json ] && [ -f sol/torso.raw ] || fail "solution files"
+ntorso=$(grep -A5 '"name":	"torso"' model/model.json | grep n_nodes | tr -dc 0-9)
+"$THORAX" series info sol/torso.raw | grep -q "^rows *$ntorso$" || fail "torso rows"
+
+# 2. two ranks and other PETSc options give the same potentials
+mpirun -np 2 "$THORAX" forward model --epicardial beat.raw -o sol2 -q
+"$THORAX" forward model --epicardial beat.raw -o sol3 -q -ksp_type cg -pc_type jacobi -ksp_rtol 1e-12
+grep -q '"ranks":	2' sol2/solution.json || fail "mpirun: not 2 ranks"
+grep -q '"pc":	"jacobi"' sol3/solution.json || fail "PETSc option not passed through"
+# 3. transfer matrix to the array (adjoint), and the full one applied
+"$THORAX" forward model --transfer-out --rows model/electrodes/array.txt -o tr -q
+"$THORAX" forward model --transfer-out -o trf -q
+"$THORAX" forward model --epicardial beat.raw --transfer trf/transfer.raw -o sol4 -q
+# 4. currents for two frames, volume potentials, .mat output
+"$THORAX" forward model --epicardial beat.raw -o solv -q --volume --currents 1,20 --format mat
+# 5. leads
+"$THORAX" leads sol -q
+"$THORAX" leads sol -q --format raw -o sol
+
+$PY - <<'EOF'
+import numpy as np, scipy.io as sio
+def raw(p):
+    b = open(p, 'rb').read()
+    assert b[:8] == b'THXSER01'
+    r, f = np.frombuffer(b[8:24], dtype='<u8')
+    d = np.frombuffer(b[200:], dtype='<f8')
+    return d[f:].reshape(f, r).T  # rows x frames
+a, b2, b3 = raw('sol/torso.raw'), raw('sol2/torso.raw'), raw('sol3/torso.raw')
+scale = abs(a).max()
+assert abs(a - b2).max() < 1e-7 * scale, ('mpirun', abs(a - b2).max())
+assert abs(a - b3).max() < 1e-7 * scale, ('jacobi', abs(a - b3).max())
+# transfer: applied full matrix = solved; adjoint rows = the array's signals
+T = raw('trf/transfer.raw'); epi = raw('beat.raw')
+assert abs(T @ epi - a).max() < 1e-7 * scale
+assert abs(T.sum(axis=1) - 1).max() < 1e-8      # a constant heart gives that constant
+A = raw('tr/transfer.raw'); arr = raw('sol/array.raw')
+assert abs(A @ epi - arr).max() < 1e-7 * scale, abs(A @ epi - arr).max()
+assert abs(raw('sol4/torso.raw') - a).max() < 1e-7 * scale
+# 12 leads: Einthoven II = I + III, aVR + aVL + aVF = 0
+E = raw('sol/ecg12.raw')
+assert E.shape[0] == 12
+assert abs(E[1] - E[0] - E[2]).max() < 1e-9 * abs(E).max()
+assert abs(E[3] + E[4] + E[5]).max() < 1e-9 * abs(E).max()
+# .mat outputs: scipy reads them; volume potentials agree with the torso ones; currents have 3 rows a tet
+m = sio.loadmat('solv/torso.mat'); assert abs(m['potvals'] - a).max() < 1e-12 * scale
+vol = sio.loadmat('solv/volume.mat')['potvals']
+cur = sio.loadmat('solv/currents_tet.mat')['potvals']
+assert cur.shape[1] == 2 and cur.shape[0] % 3 == 0
+print('forward checks: mpirun diff %.1e, jacobi diff %.1e, transfer ok, leads ok, mat ok (scale %.2f mV)' %
+      (abs(a - b2).max(), abs(a - b3).max(), scale))
+EOF
+
+# 6. defibrillation: currents in and out balance
+"$THORAX" forward model -o defib -q --electrode "pad,at=71:92:170,radius=40,voltage=500" --electrode "apex,at=-158:-20:90,radius=40,voltage=0"
+"$THORAX" mesh model -o modelh -q            # the heart included
+"$THORAX" forward modelh -o defibh --electrode "pad,at=71:92:170,radius=40,voltage=500" --electrode "apex,at=-158:-20:90,radius=40,voltage=0" > defib.log
+grep -q "of the volume above 5 V/cm" defib.log || fail "defibrillation report"
+$PY - <<'EOF'
+import json
+d = json.load(open('defibh/solution.json'))
+i = [e['current_A'] for e in d['electrodes']]
+assert abs(i[0] + i[1]) < 1e-6 * abs(i[0]), i
+h = d['heart']
+assert h['volume_mm3'] > 0 and 0 <= h['fraction_above_threshold'] <= 1 and h['field_max_V_per_cm'] > 0
+print('defibrillation: %.3f A in, %.3f A out; heart field %.2f..%.2f V/cm, %.1f%% above 5 V/cm' %
+      (i[0], i[1], h['field_min_V_per_cm'], h['field_max_V_per_cm'], 100 * h['fraction_above_threshold']))
+EOF
+"$THORAX" forward modelh -o defibc -q --electrode "pad,at=71:92:170,radius=40,current=2" --electrode "apex,at=-158:-20:90,radius=40,current=-2"
+
+# 7. verify
+"$THORAX" verify --levels 2 > verify.log || { cat verify.log; fail "thorax verify"; }
+
+# 8. bad input: nothing written
+$PY - <<'EOF'
+import numpy as np
+# a series with one row too few, and one with a NaN
+b = open('beat.raw', 'rb').read()
+r, f = np.frombuffer(b[8:24], dtype='<u8')
+d = np.frombuffer(b[200:], dtype='<f8').copy()
+hdr = bytearray(b[:200])
+t, v = d[:f], d[f:].reshape(f, r)
+short = bytearray(hdr); short[8:16] = np.array([r - 1], dtype='<u8').tobytes()
+open('short.raw', 'wb').write(bytes(short) + t.tobytes() + v[:, :-1].copy().tobytes())
+v2 = v.copy(); v2[3, 7] = np.nan
+open('nan.raw', 'wb').write(bytes(hdr) + t.tobytes() + v2.tobytes())
+import json
+m = json.load(open('model/model.json'))
+m['regions'][1]['sigma'] = [[0.04, 0.09, 0], [0.09, 0.04, 0], [0, 0, 0.04]]   # not positive definite
+import shutil; shutil.copytree('model', 'badmodel')
+json.dump(m, open('badmodel/model.json', 'w'), indent=1)
+EOF
+refused "row count" bad1 "$THORAX" forward model --epicardial short.raw -o bad1
+grep -q "rows" err.log || fail "row count message"
+refused "NaN" bad2 "$THORAX" forward model --epicardial nan.raw -o bad2
+grep -q "row 8, frame 4" err.log || fail "NaN message"
+refused "tensor" bad3 "$THORAX" forward badmodel --epicardial beat.raw -o bad3
+grep -qi "fat" err.log || fail "tensor message does not name the region"
+"$THORAX" surfaces c.txt -o novol -q
+$PY -c "
+import json, shutil
+shutil.copytree('model', 'nocond'); m = json.load(open('nocond/model.json')); del m['regions']
+json.dump(m, open('nocond/model.json', 'w'))"
+refused "no conductivities" bad8 "$THORAX" forward nocond --epicardial beat.raw -o bad8
+grep -q "conductivity" err.log || fail "conductivity message"
+refused "no volume" bad4 "$THORAX" forward novol --epicardial beat.raw -o bad4
+grep -q "no volume mesh" err.log || fail "no-volume message"
+refused "electrode off the body" bad5 "$THORAX" forward modelh -o bad5 --electrode "x,at=0:0:1000,radius=5,voltage=1" --electrode "y,at=71:92:170,radius=40,voltage=0"
+grep -q "no node" err.log || fail "electrode message"
+refused "currents do not balance" bad6 "$THORAX" forward modelh -o bad6 --electrode "pad,at=71:92:170,radius=40,current=2"
+refused "no convergence" bad7 "$THORAX" forward model --epicardial beat.raw -o bad7 -ksp_type cg -pc_type none -ksp_max_it 3
+grep -q "did not converge" err.log || fail "convergence message"
+echo "e2e_forward: all checks passed"
