@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Benchmark of the finite-element forward problem (paper 4.1) on the phantom:
+#   high resolution (about 500,000 tetrahedra): assembly, one solve to 1e-8, 300
+#   frames (default solver choice: Cholesky for many frames), the same with CG + GAMG,
+#   the same solve under mpirun -np 2, peak memory; PETSc alone on the very same
+#   assembled system with the same options (bench/petsc_alone.c), so our overhead is a
+#   ratio; the transfer matrix of the medium model.
+# Prints figures; never fails on time.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+THORAX=${THORAX:-$PWD/build/bin/thorax}
+ALONE=${ALONE:-$PWD/build/bin/petsc_alone}
+[ -x "$THORAX" ] && [ -x "$ALONE" ] || { echo "build first (make)"; exit 1; }
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+for res in medium high; do
+    "$THORAX" phantom --resolution $res --seed 1 -o "$W/c_$res.txt" -q
+    "$THORAX" surfaces "$W/c_$res.txt" -o "$W/m_$res" -q
+    "$THORAX" mesh "$W/m_$res" --no-heart -q
+    "$THORAX" beat "$W/m_$res" -o "$W/beat_$res.raw" --frames 300 -q
+done
+# one frame: the QRS peak of the beat (frame 193), as its own series
+python3 - "$W/beat_high.raw" "$W/one.raw" <<'EOF'
+import sys, struct
+b = open(sys.argv[1], 'rb').read()
+r, f = struct.unpack('<QQ', b[8:24])
+hdr = bytearray(b[:200]); hdr[16:24] = struct.pack('<Q', 1)
+k = 192
+t = b[200 + 8 * k: 200 + 8 * (k + 1)]
+v = b[200 + 8 * f + 8 * r * k: 200 + 8 * f + 8 * r * (k + 1)]
+open(sys.argv[2], 'wb').write(bytes(hdr) + t + v)
+EOF
+run() { # LABEL ARGS... : thorax forward with /usr/bin/time
+    local label=$1; shift
+    rm -rf "$W/sol"
+    /usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" forward "$@" -o "$W/sol" -q
+    read -r wall rss < "$W/t"
+    python3 - "$W/sol/solution.json" "$label" "$wall" "$rss" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[1]))['solver']
+print("%-46s wall %6.2f s, peak %4d MB | %s+%s x%d ranks, its %s, assembly %.2f s, setup %.2f s, solves %.2f s" %
+      (sys.argv[2], float(sys.argv[3]), int(sys.argv[4]) // 1024, s['ksp'], s['pc'], s['ranks'],
+       '%d..%d' % (s['iterations_min'], s['iterations_max']), s['seconds_assembly'], s['seconds_setup'], s['seconds_solve']))
+EOF
+}
+nt=$(python3 -c "import json; print(json.load(open('$W/m_high/model.json'))['volume']['n_tets'])")
+echo "high-resolution phantom: $nt tetrahedra (heart left out)"
+run "one frame, CG + GAMG, rtol 1e-8" "$W/m_high" --epicardial "$W/one.raw" -ksp_rtol 1e-8 --dump-system "$W/sys.bin"
+echo "  PETSc alone, same system and options: $("$ALONE" -system "$W/sys.bin" -ksp_rtol 1e-8)"
+rm -rf "$W/sol"; /usr/bin/time -f "%e %M" -o "$W/t" mpirun -np 2 "$THORAX" forward "$W/m_high" --epicardial "$W/one.raw" -o "$W/sol" -q -ksp_rtol 1e-8
+python3 -c "
+import json; s=json.load(open('$W/sol/solution.json'))['solver']; print('%-46s wall %6.2f s | %s+%s x%d ranks, its %d, setup %.2f s, solve %.2f s' % ('  (the same under mpirun -np 2)', float(open('$W/t').read().split()[0]), s['ksp'], s['pc'], s['ranks'], s['iterations_max'], s['seconds_setup'], s['seconds_solve']))"
+echo "  PETSc alone under mpirun -np 2: $(mpirun -np 2 "$ALONE" -system "$W/sys.bin" -ksp_rtol 1e-8)"
+run "one frame, Cholesky (CHOLMOD)" "$W/m_high" --epicardial "$W/one.raw" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type cholmod --dump-system "$W/sys.bin"
+echo "  PETSc alone, Cholesky (CHOLMOD): $("$ALONE" -system "$W/sys.bin" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type cholmod)"
+run "300 frames, default (Cholesky for many frames)" "$W/m_high" --epicardial "$W/beat_high.raw"
+run "300 frames, Cholesky (MUMPS)" "$W/m_high" --epicardial "$W/beat_high.raw" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type mumps
+run "300 frames, CG + GAMG, warm starts" "$W/m_high" --epicardial "$W/beat_high.raw"  -ksp_type cg -pc_type gamg
+# the transfer matrix of the medium model (torso nodes <- heart nodes)
+rm -rf "$W/sol"
+/usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" forward "$W/m_medium" --transfer-out -o "$W/sol" -q
+read -r wall rss < "$W/t"
+python3 - "$W/sol/solution.json" "$wall" "$rss" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[1]))['solver']
+print("transfer matrix, medium model (a solve per heart node): wall %.2f s, peak %d MB | %s+%s, setup %.2f s, solves %.2f s" %
+      (float(sys.argv[2]), int(sys.argv[3]) // 1024, s['ksp'], s['pc'], s['seconds_setup'], s['seconds_solve']))
+EOF
