@@ -103,6 +103,8 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
 
 /* Free and prescribed node counts, and the setup time (matrix + preconditioner) so far, seconds. */
 void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
+/* Of the setup time: building PETSc's matrix from ours (the rest is the preconditioner's setup). */
+double thx_fem_system_matrix_seconds(const thx_fem_system *s);
 /* The KSP and PC types in use ("cg", "gamg", ...) and the number of MPI ranks. */
 void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks);
 
@@ -133,6 +135,7 @@ typedef struct {
     long it_total;
     double max_residual;
     double t_assemble, t_setup, t_solve; /* seconds: stiffness, matrix + preconditioner, all solves */
+    double t_matrix;        /* of t_setup: handing the matrix to PETSc */
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
 } thx_forward_result;

@@ -256,6 +256,7 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
             cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
             cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
+            cJSON_AddNumberToObject(solver, "seconds_matrix", R.t_matrix);
         } else {
             cJSON_AddStringToObject(solver, "method", "transfer matrix applied");
             char abs[PATH_MAX];

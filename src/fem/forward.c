@@ -140,6 +140,7 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     }
     if (!nf) r->it_min = 0;
     thx_fem_system_info(P.sys, &r->n_free, &r->n_prescribed, &r->t_setup);
+    r->t_matrix = thx_fem_system_matrix_seconds(P.sys);
     thx_fem_system_describe(P.sys, r->ksp, r->pc, &r->ranks);
     r->t_assemble = P.t_assemble;
 done:
@@ -226,6 +227,7 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
     }
     if (info) {
         thx_fem_system_info(P.sys, &info->n_free, &info->n_prescribed, &info->t_setup);
+        info->t_matrix = thx_fem_system_matrix_seconds(P.sys);
         thx_fem_system_describe(P.sys, info->ksp, info->pc, &info->ranks);
         info->t_assemble = P.t_assemble;
         info->t_solve = tsolve;
