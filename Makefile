@@ -45,6 +45,9 @@ sanitize: deps
 
 bench: build
 	@bash bench/surfaces.sh
+	@bash bench/delaunay.sh
+	@bash bench/mesh.sh
+	@bash bench/forward.sh
 
 clean:
 	rm -rf $(BUILD) $(BUILD)-asan out

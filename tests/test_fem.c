@@ -237,6 +237,24 @@ int main(int argc, char **argv)
                 }
                 printf("frame %zu: current out of the heart %.3e of %.3e (relative %.1e)\n", f + 1, net, mag, fabs(net) / mag);
                 CHECK(fabs(net) < 1e-7 * mag);
+                /* and through closed surfaces further out: the node sets within 80, 100, 120 mm of the
+                   heart's centre (each holds the whole heart) exchange no net current with the rest */
+                for (double rad = 80; rad <= 120; rad += 20) {
+                    double sum = 0;
+                    size_t inside_heart = 0;
+                    for (size_t i = 0; i < m->volume->n_nodes; i++) {
+                        const double *x = m->volume->xyz + 3 * i;
+                        double d = sqrt((x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) + (x[2] - c[2]) * (x[2] - c[2]));
+                        if (d < rad) sum += Kp[i];
+                    }
+                    for (size_t i = 0; i < nh; i++) {
+                        const double *x = heart->xyz + 3 * i;
+                        inside_heart += sqrt((x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) + (x[2] - c[2]) * (x[2] - c[2])) < rad;
+                    }
+                    if (inside_heart < nh) continue;
+                    if (f == 0) printf("  through the sphere r = %.0f mm: %.1e of %.3e\n", rad, fabs(sum), mag);
+                    CHECK(fabs(sum) < 1e-7 * mag);
+                }
             }
             free(Kp);
             thx_csr_free(&K);

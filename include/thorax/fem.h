@@ -224,6 +224,7 @@ typedef struct {
     double frac_above;       /* fraction of the heart's volume where |E| > threshold */
     double e_min, e_mean, e_max;  /* |E| in the heart, V/cm (mean volume-weighted) */
     double phi_min, phi_max;      /* potential in the heart, V */
+    double j_min, j_mean, j_max;  /* current density |J| in the heart, A/m^2 (mean volume-weighted) */
     double current[16];      /* current leaving each patch into the body, A (given for current patches) */
     double voltage[16];      /* mean potential of each patch, V */
     int iterations;

@@ -141,6 +141,9 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
         cJSON_AddNumberToObject(heart, "field_min_V_per_cm", R.e_min);
         cJSON_AddNumberToObject(heart, "field_mean_V_per_cm", R.e_mean);
         cJSON_AddNumberToObject(heart, "field_max_V_per_cm", R.e_max);
+        cJSON_AddNumberToObject(heart, "current_density_min_A_per_m2", R.j_min);
+        cJSON_AddNumberToObject(heart, "current_density_mean_A_per_m2", R.j_mean);
+        cJSON_AddNumberToObject(heart, "current_density_max_A_per_m2", R.j_max);
         cJSON_AddNumberToObject(heart, "potential_min_V", R.phi_min);
         cJSON_AddNumberToObject(heart, "potential_max_V", R.phi_max);
         cJSON_AddItemToObject(j, "heart", heart);
@@ -174,9 +177,10 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
                 printf("electrode %-10s %4zu nodes, %7.0f mm^2: %s %g %s; current %+.4f A, mean potential %+.3f V\n", p[k].name,
                        p[k].n, p[k].area, p[k].is_voltage ? "voltage" : "current", p[k].value, p[k].is_voltage ? "V" : "A",
                        R.current[k], R.voltage[k]);
-            printf("heart: %.0f mm^3, field %.2f .. %.2f V/cm (mean %.2f), potential %.2f .. %.2f V; %.1f%% of the "
-                   "volume above %g V/cm\n",
-                   R.heart_volume, R.e_min, R.e_max, R.e_mean, R.phi_min, R.phi_max, 100 * R.frac_above, R.threshold);
+            printf("heart: %.0f mm^3, field %.2f .. %.2f V/cm (mean %.2f), current density %.1f .. %.1f A/m^2 (mean %.1f), "
+                   "potential %.2f .. %.2f V; %.1f%% of the volume above %g V/cm\n",
+                   R.heart_volume, R.e_min, R.e_max, R.e_mean, R.j_min, R.j_max, R.j_mean, R.phi_min, R.phi_max,
+                   100 * R.frac_above, R.threshold);
             printf("solver: %s + %s, %d iterations, assembly %.2f s, setup %.2f s, solve %.2f s\nwrote %s\n", R.ksp, R.pc,
                    R.iterations, R.t_assemble, R.t_setup, R.t_solve, out);
         }

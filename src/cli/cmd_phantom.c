@@ -17,6 +17,7 @@ static void help(FILE *f)
 {
     fprintf(f,
             "usage: thorax phantom [--resolution high|medium] [--seed N] -o FILE\n"
+            "       thorax phantom --beat MODEL -o SERIES [--frames N] [--dt MS] [--peak MV] [--format F]\n"
             "\n"
             "Writes a synthetic human thorax as hand-digitized contours (text format\n"
             "'thorax-contours 1'): outer torso, subcutaneous fat/muscle interface, inner\n"
@@ -36,6 +37,8 @@ static void help(FILE *f)
             "      --shift MM      standard deviation of the layer shifts (default 1.0)\n"
             "  -o, --output FILE   output file ('-' for standard output); written atomically\n"
             "  -v, -q              more / fewer messages on standard error\n"
+            "      --beat MODEL    instead: the phantom's heartbeat on MODEL's heart surface, the\n"
+            "                      same as 'thorax beat MODEL' (see thorax beat --help)\n"
             "  -h, --help          this text\n");
 }
 
@@ -62,6 +65,19 @@ static thx_status write_stdout(thx_ctx *ctx, const thx_contours *c, const char *
 
 int cmd_phantom(int argc, char **argv)
 {
+    /* --beat MODEL: the heartbeat (epicardial sequence) of a phantom model, as thorax beat */
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--beat")) {
+            if (i + 1 >= argc) return cli_usage_error(CMD, "--beat needs a model directory");
+            char *args[64];
+            int n = 0;
+            args[n++] = "beat";
+            args[n++] = argv[i + 1];
+            for (int k = 1; k < argc && n < 63; k++)
+                if (k != i && k != i + 1) args[n++] = argv[k];
+            args[n] = NULL;
+            return cmd_beat(n, args);
+        }
     thx_phantom_opts o;
     thx_phantom_opts_default(&o);
     const char *out = NULL;

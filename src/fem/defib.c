@@ -205,6 +205,8 @@ thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *pa
     if (!j) { st = THX_ENOMEM; goto done; }
     thx_fem_currents(v, NULL, phi, j, NULL);
     rep->e_min = INFINITY;
+    rep->j_min = INFINITY;
+    double jsum = 0;
     rep->phi_min = INFINITY;
     rep->phi_max = -INFINITY;
     double esum = 0, vabove = 0;
@@ -235,6 +237,10 @@ thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *pa
         if (field[t] > threshold) vabove += tv;
         rep->e_min = fmin(rep->e_min, field[t]);
         rep->e_max = fmax(rep->e_max, field[t]);
+        double jm = sqrt(j[3 * t] * j[3 * t] + j[3 * t + 1] * j[3 * t + 1] + j[3 * t + 2] * j[3 * t + 2]);
+        rep->j_min = fmin(rep->j_min, jm);
+        rep->j_max = fmax(rep->j_max, jm);
+        jsum += tv * jm;
         for (int k = 0; k < 4; k++) {
             rep->phi_min = fmin(rep->phi_min, phi[q[k]]);
             rep->phi_max = fmax(rep->phi_max, phi[q[k]]);
@@ -243,9 +249,10 @@ thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *pa
     free(j);
     if (rep->heart_volume > 0) {
         rep->e_mean = esum / rep->heart_volume;
+        rep->j_mean = jsum / rep->heart_volume;
         rep->frac_above = vabove / rep->heart_volume;
     } else {
-        rep->e_min = rep->e_max = rep->phi_min = rep->phi_max = NAN;
+        rep->e_min = rep->e_max = rep->phi_min = rep->phi_max = rep->j_min = rep->j_max = NAN;
         thx_log(ctx, THX_LOG_WARN, "defibrillation: the mesh has no region named 'heart' (mesh without --no-heart)");
     }
     if (phi_out) { *phi_out = phi; phi = NULL; }
