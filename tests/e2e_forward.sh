@@ -35,6 +35,11 @@ ntorso=$(grep -A5 '"name":	"torso"' model/model.json | grep n_nodes | tr -dc 0-9
 mpirun -np 2 "$THORAX" forward model --epicardial beat.raw -o sol2 -q
 "$THORAX" forward model --epicardial beat.raw -o sol3 -q -ksp_type cg -pc_type jacobi -ksp_rtol 1e-12
 grep -q '"ranks":	2' sol2/solution.json || fail "mpirun: not 2 ranks"
+# few frames: the iterative solver (CG + GAMG), serial and on two ranks
+"$THORAX" beat model -o beat8.raw --frames 8 --dt 60 -q
+"$THORAX" forward model --epicardial beat8.raw -o it1 -q
+mpirun -np 2 "$THORAX" forward model --epicardial beat8.raw -o it2 -q
+grep -q '"pc":	"gamg"' it2/solution.json || fail "few frames: not GAMG"
 grep -q '"pc":	"jacobi"' sol3/solution.json || fail "PETSc option not passed through"
 # 3. transfer matrix to the array (adjoint), and the full one applied
 "$THORAX" forward model --transfer-out --rows model/electrodes/array.txt -o tr -q
@@ -58,6 +63,8 @@ a, b2, b3 = raw('sol/torso.raw'), raw('sol2/torso.raw'), raw('sol3/torso.raw')
 scale = abs(a).max()
 assert abs(a - b2).max() < 1e-7 * scale, ('mpirun', abs(a - b2).max())
 assert abs(a - b3).max() < 1e-7 * scale, ('jacobi', abs(a - b3).max())
+i1, i2 = raw('it1/torso.raw'), raw('it2/torso.raw')
+assert abs(i1).max() > 1 and abs(i1 - i2).max() < 1e-7 * abs(i1).max(), ('gamg mpirun', abs(i1 - i2).max())
 # transfer: applied full matrix = solved; adjoint rows = the array's signals
 T = raw('trf/transfer.raw'); epi = raw('beat.raw')
 assert abs(T @ epi - a).max() < 1e-7 * scale
@@ -75,8 +82,8 @@ m = sio.loadmat('solv/torso.mat'); assert abs(m['potvals'] - a).max() < 1e-12 * 
 vol = sio.loadmat('solv/volume.mat')['potvals']
 cur = sio.loadmat('solv/currents_tet.mat')['potvals']
 assert cur.shape[1] == 2 and cur.shape[0] % 3 == 0
-print('forward checks: mpirun diff %.1e, jacobi diff %.1e, transfer ok, leads ok, mat ok (scale %.2f mV)' %
-      (abs(a - b2).max(), abs(a - b3).max(), scale))
+print('forward checks: mpirun diff %.1e (Cholesky), %.1e (CG + GAMG), jacobi diff %.1e, transfer ok, leads ok, mat ok (scale %.2f mV)' %
+      (abs(a - b2).max(), abs(i1 - i2).max(), abs(a - b3).max(), scale))
 EOF
 
 # 6. defibrillation: currents in and out balance
