@@ -18,21 +18,11 @@ build: deps $(BUILD)/CMakeCache.txt
 	@cmake --build $(BUILD) -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
 	@test -x $(THORAX)
 
-# The main job on the built-in phantom: contours -> surfaces -> volume mesh -> check ->
-# electrodes and heartbeat -> forward solution -> 12-lead ECG.
+# The main job on the built-in phantom: contours -> surfaces -> volume mesh -> checks ->
+# electrodes and heartbeat -> forward solution -> 12-lead ECG -> pictures and a movie ->
+# out/demo/index.html (scripts/demo.sh).
 demo: build
-	@mkdir -p out/demo
-	$(THORAX) phantom --resolution medium --seed 1 -o out/demo/contours.txt
-	$(THORAX) surfaces out/demo/contours.txt -o out/demo/model
-	$(THORAX) mesh out/demo/model --no-heart
-	$(THORAX) check out/demo/model
-	$(THORAX) electrodes out/demo/model
-	$(THORAX) beat out/demo/model -o out/demo/beat.raw
-	$(THORAX) forward out/demo/model --epicardial out/demo/beat.raw -o out/demo/solution
-	$(THORAX) leads out/demo/solution
-	$(THORAX) export out/demo/model --format vtp -o out/demo/vtk
-	$(THORAX) export out/demo/model --format vtu -o out/demo/vtk
-	@echo "demo: model in out/demo/model, torso potentials and ECG in out/demo/solution, VTK files in out/demo/vtk"
+	@THORAX=$(THORAX) OUT=out/demo bash scripts/demo.sh
 
 check: build
 	@cd $(BUILD) && ctest -j $(JOBS) --output-on-failure

@@ -9,6 +9,10 @@ packages=(
   libmatio-dev                       # MATLAB .mat time series (libmatio)
   petsc-dev openmpi-bin              # finite-element solves: PETSc 3.18 (hypre, MUMPS, CHOLMOD) on Open MPI; mpirun
   libopenblas0-pthread               # optimized BLAS for the sparse Cholesky factorizations (4-9x over reference BLAS)
+  libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri  # rendering: OpenGL 3.3 core on EGL (Mesa llvmpipe headless)
+  libpng-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core  # PNG images; text in images
+  ffmpeg                             # animations: MP4 (H.264); ffprobe in tests
+  xvfb xauth                         # bench: VTK (no EGL build in Debian) rendering beside ours
   python3-scipy                      # tests: scipy.io.loadmat reads our .mat files
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)

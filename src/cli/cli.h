@@ -18,6 +18,8 @@ int cmd_beat(int argc, char **argv);
 int cmd_forward(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_leads(int argc, char **argv);
+int cmd_render(int argc, char **argv);
+int cmd_animate(int argc, char **argv);
 
 /* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. */
 thx_ctx *cli_ctx(int verbose);

@@ -24,6 +24,8 @@ static const struct {
     {"forward", cmd_forward, "finite-element forward solutions: heart to body surface, currents, defibrillation"},
     {"verify", cmd_verify, "the finite-element solver against analytic solutions: convergence table"},
     {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
+    {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},
+    {"animate", cmd_animate, "one picture per frame and an MP4 movie (ffmpeg), resumable"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

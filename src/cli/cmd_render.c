@@ -1,0 +1,811 @@
+/*
+ * thorax render / thorax animate: batch pictures of models and potentials
+ * (paper 4.2), headless.
+ */
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli/cli.h"
+#include "cli/cli_fem.h"
+#include "thorax/fileio.h"
+#include "thorax/image.h"
+#include "thorax/model.h"
+#include "thorax/render.h"
+#include "thorax/series.h"
+
+enum { SCOPE_FRAME, SCOPE_SERIES, SCOPE_ALL, SCOPE_FIXED };
+
+typedef struct {
+    const char *model_dir, *solution, *data, *data_surface, *out, *font, *trace, *arrows;
+    int w, h, frame, first, last, fps;
+    thx_view view;
+    int have_camera;
+    thx_camera cam;
+    thx_draw_mode mode;
+    thx_data_style style;
+    int levels;
+    thx_colormap cmap;
+    thx_scale_model model;
+    int scope, symmetric;
+    double lo, hi;
+    char clip[64];
+    int colorbar, label, panels;
+    const char *only[16];
+    int n_only;
+    char mode_of[16][64];   /* NAME=mode[:opacity] */
+    int n_mode_of;
+    double arrow_spacing, arrow_scale;
+    int arrow_max, arrow_unit;
+    int verbose;
+} ropts;
+
+/* ---- data bound to surfaces ---- */
+typedef struct {
+    thx_model *m;
+    thx_series *series[64];   /* per surface, or NULL */
+    thx_series *ecg;          /* 12-lead (trace) */
+    thx_series *currents;     /* currents_node, for arrows */
+    thx_series *volume;       /* volume potentials (unused for now) */
+    char ecg_names[12][8];
+} rdata;
+
+static void rdata_free(rdata *d)
+{
+    for (int s = 0; s < 64; s++) thx_series_destroy(&d->series[s]);
+    thx_series_destroy(&d->ecg);
+    thx_series_destroy(&d->currents);
+    thx_series_destroy(&d->volume);
+    thx_model_destroy(&d->m);
+}
+
+static int surface_by_role(const thx_model *m, thx_role role)
+{
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        if (m->surf[s]->role == role) return (int)s;
+    return -1;
+}
+
+static int surface_by_name(const thx_model *m, const char *name)
+{
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        if (!strcmp(m->surf[s]->name, name)) return (int)s;
+    return -1;
+}
+
+static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
+{
+    memset(d, 0, sizeof *d);
+    char model_dir[PATH_MAX] = "";
+    char path[PATH_MAX + 64];
+    cJSON *j = NULL;
+    if (o->solution) {
+        char *text = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "%s/solution.json", o->solution);
+        THX_CHECK(thx_read_file(ctx, path, &text, &len));
+        j = cJSON_Parse(text);
+        free(text);
+        cJSON *mo = cJSON_GetObjectItem(j, "model");
+        if (!j || !cJSON_IsString(mo)) {
+            cJSON_Delete(j);
+            return thx_error(ctx, THX_EINPUT, "%s: not a thorax solution (no \"model\")", path);
+        }
+        snprintf(model_dir, sizeof model_dir, "%s", mo->valuestring);
+    }
+    if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
+    thx_status st = thx_model_read(ctx, model_dir, &d->m);
+    if (st != THX_OK) { cJSON_Delete(j); return st; }
+    if (j) {
+        cJSON *files = cJSON_GetObjectItem(j, "files"), *epi = cJSON_GetObjectItem(j, "epicardial");
+        cJSON *to = files ? cJSON_GetObjectItem(files, "torso") : NULL;
+        cJSON *cn = files ? cJSON_GetObjectItem(files, "currents_node") : NULL;
+        int outer = surface_by_role(d->m, THX_ROLE_OUTER), heart = surface_by_role(d->m, THX_ROLE_HEART);
+        if (cJSON_IsString(to) && outer >= 0) {
+            snprintf(path, sizeof path, "%s/%s", o->solution, to->valuestring);
+            st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->series[outer]);
+        }
+        if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
+            st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
+        if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
+            snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
+            st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
+        }
+        if (st == THX_OK && o->trace) {
+            const char *ext[3] = {"txt", "raw", "mat"};
+            for (int k = 0; k < 3 && !d->ecg; k++) {
+                snprintf(path, sizeof path, "%s/ecg12.%s", o->solution, ext[k]);
+                if (access(path, R_OK) == 0) st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->ecg);
+            }
+            if (st == THX_OK && !d->ecg)
+                st = thx_error(ctx, THX_EINPUT, "--trace: %s has no ecg12 file (run thorax leads first)", o->solution);
+        }
+        cJSON_Delete(j);
+        if (st != THX_OK) return st;
+    }
+    if (o->data) {
+        thx_series *s = NULL;
+        THX_CHECK(thx_series_read(ctx, o->data, THX_SERIES_AUTO, &s));
+        int target = -1;
+        if (o->data_surface) {
+            target = surface_by_name(d->m, o->data_surface);
+            if (target < 0) { thx_series_destroy(&s); return thx_error(ctx, THX_EINPUT, "--data-surface: no surface '%s'", o->data_surface); }
+        } else {
+            int n = 0;
+            for (size_t k = 0; k < d->m->n_surfaces; k++)
+                if (d->m->surf[k]->n_nodes == s->n_rows) { target = (int)k; n++; }
+            if (n != 1) {
+                size_t rows = s->n_rows;
+                thx_series_destroy(&s);
+                return thx_error(ctx, THX_EINPUT, "%s: %zu rows match %s (give --data-surface NAME)", o->data, rows,
+                                 n ? "several surfaces" : "no surface's node count");
+            }
+        }
+        if (d->m->surf[target]->n_nodes != s->n_rows) {
+            size_t rows = s->n_rows;
+            thx_series_destroy(&s);
+            return thx_error(ctx, THX_EINPUT, "%s: %zu rows, surface '%s' has %zu nodes", o->data, rows,
+                             d->m->surf[target]->name, d->m->surf[target]->n_nodes);
+        }
+        thx_series_destroy(&d->series[target]);
+        d->series[target] = s;
+    }
+    for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
+        if (d->series[s] && (size_t)o->frame >= d->series[s]->n_frames && o->last < 0)
+            return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
+                             d->series[s]->n_frames);
+    return THX_OK;
+}
+
+/* ---- one picture ---- */
+static void range_of(const double *v, size_t n, double *lo, double *hi)
+{
+    for (size_t i = 0; i < n; i++)
+        if (isfinite(v[i])) { *lo = fmin(*lo, v[i]); *hi = fmax(*hi, v[i]); }
+}
+
+static void scale_for(const ropts *o, const rdata *d, int s, int frame, thx_scale *sc)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    if (o->scope == SCOPE_FIXED) { lo = o->lo; hi = o->hi; }
+    else {
+        for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++) {
+            const thx_series *x = d->series[k];
+            if (!x || (o->scope != SCOPE_ALL && (int)k != s)) continue;
+            if (o->scope == SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
+            else range_of(x->v, x->n_rows * x->n_frames, &lo, &hi);
+        }
+        if (!(lo <= hi)) { lo = -1; hi = 1; }
+        if (o->symmetric) { double mm = fmax(fabs(lo), fabs(hi)); lo = -mm; hi = mm; }
+        if (hi == lo) { hi += 1; lo -= 1; }
+    }
+    memset(sc, 0, sizeof *sc);
+    sc->model = o->model;
+    sc->lo = lo;
+    sc->hi = hi;
+    sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
+}
+
+static const float palette[6][4] = {{0.85f, 0.75f, 0.65f, 1}, {0.95f, 0.85f, 0.55f, 1}, {0.75f, 0.35f, 0.35f, 1},
+                                    {0.55f, 0.65f, 0.85f, 1}, {0.55f, 0.75f, 0.85f, 1}, {0.85f, 0.25f, 0.25f, 1}};
+
+static thx_draw_mode parse_mode(const char *s, int *ok)
+{
+    static const char *names[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+    for (int k = 0; k < 7; k++)
+        if (!strcmp(s, names[k])) { *ok = 1; return (thx_draw_mode)k; }
+    *ok = 0;
+    return THX_DRAW_GOURAUD;
+}
+
+typedef struct {
+    thx_render_surface rs[64];
+    size_t n;
+    thx_render_arrows arrows;
+    double *apos, *avec;
+    int have_arrows;
+    thx_scale main_scale;
+    int main_surface;
+    size_t nan_count;
+} built_scene;
+
+static void build_arrows(const ropts *o, const rdata *d, int frame, built_scene *b)
+{
+    const thx_volume *v = d->m->volume;
+    if (!o->arrows || !d->currents || !v) return;
+    const thx_series *c = d->currents;
+    if (c->n_rows != 3 * v->n_nodes) return;
+    size_t f = (size_t)frame < c->n_frames ? (size_t)frame : 0;
+    const double *J = c->v + f * c->n_rows;
+    /* average over the cells of a grid of the chosen spacing */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < v->n_nodes; i++)
+        for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], v->xyz[3 * i + k]); hi[k] = fmax(hi[k], v->xyz[3 * i + k]); }
+    double h = o->arrow_spacing;
+    int n[3];
+    for (int k = 0; k < 3; k++) n[k] = (int)((hi[k] - lo[k]) / h) + 1;
+    size_t cells = (size_t)n[0] * n[1] * n[2];
+    double *acc = calloc(cells * 7, sizeof *acc);
+    if (!acc) return;
+    for (size_t i = 0; i < v->n_nodes; i++) {
+        const double *x = v->xyz + 3 * i;
+        int ix = (int)((x[0] - lo[0]) / h), iy = (int)((x[1] - lo[1]) / h), iz = (int)((x[2] - lo[2]) / h);
+        double *a = acc + 7 * (((size_t)iz * n[1] + iy) * n[0] + ix);
+        for (int k = 0; k < 3; k++) { a[k] += x[k]; a[3 + k] += J[3 * i + k]; }
+        a[6] += 1;
+    }
+    size_t m = 0;
+    for (size_t q = 0; q < cells; q++) m += acc[7 * q + 6] > 0 && (acc[7 * q + 3] != 0 || acc[7 * q + 4] != 0 || acc[7 * q + 5] != 0);
+    b->apos = malloc(3 * (m ? m : 1) * sizeof *b->apos);
+    b->avec = malloc(3 * (m ? m : 1) * sizeof *b->avec);
+    if (!b->apos || !b->avec) { free(acc); return; }
+    size_t k2 = 0;
+    double jmax = 0;
+    for (size_t q = 0; q < cells; q++) {
+        double *a = acc + 7 * q;
+        if (!(a[6] > 0) || (a[3] == 0 && a[4] == 0 && a[5] == 0)) continue;
+        for (int k = 0; k < 3; k++) { b->apos[3 * k2 + k] = a[k] / a[6]; b->avec[3 * k2 + k] = a[3 + k] / a[6]; }
+        jmax = fmax(jmax, sqrt(b->avec[3 * k2] * b->avec[3 * k2] + b->avec[3 * k2 + 1] * b->avec[3 * k2 + 1] +
+                                b->avec[3 * k2 + 2] * b->avec[3 * k2 + 2]));
+        k2++;
+    }
+    free(acc);
+    /* clutter control: keep the strongest arrow_max */
+    if ((int)k2 > o->arrow_max) {
+        for (size_t i = 0; i < (size_t)o->arrow_max; i++) {
+            size_t best = i;
+            double bm = -1;
+            for (size_t j = i; j < k2; j++) {
+                double mm = b->avec[3 * j] * b->avec[3 * j] + b->avec[3 * j + 1] * b->avec[3 * j + 1] + b->avec[3 * j + 2] * b->avec[3 * j + 2];
+                if (mm > bm) { bm = mm; best = j; }
+            }
+            for (int k = 0; k < 3; k++) {
+                double t = b->apos[3 * i + k]; b->apos[3 * i + k] = b->apos[3 * best + k]; b->apos[3 * best + k] = t;
+                t = b->avec[3 * i + k]; b->avec[3 * i + k] = b->avec[3 * best + k]; b->avec[3 * best + k] = t;
+            }
+        }
+        k2 = (size_t)o->arrow_max;
+    }
+    memset(&b->arrows, 0, sizeof b->arrows);
+    b->arrows.pos = b->apos;
+    b->arrows.vec = b->avec;
+    b->arrows.n = k2;
+    b->arrows.unit_length = o->arrow_unit;
+    b->arrows.scale = o->arrow_unit ? o->arrow_scale : (jmax > 0 ? o->arrow_scale / jmax : 1);
+    b->arrows.cmap = THX_CMAP_VIRIDIS;
+    b->arrows.mag_scale.model = THX_SCALE_LINEAR;
+    b->arrows.mag_scale.lo = 0;
+    b->arrows.mag_scale.hi = jmax > 0 ? jmax : 1;
+    b->arrows.color[0] = 1.0f;
+    b->arrows.color[1] = 0.9f;
+    b->arrows.color[2] = 0.2f;
+    b->arrows.color[3] = 1;
+    b->arrows.width = 2;
+    b->have_arrows = k2 > 0;
+}
+
+static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scene *b, int only_surface)
+{
+    const thx_model *m = d->m;
+    b->n = 0;
+    b->main_surface = -1;
+    for (size_t s = 0; s < m->n_surfaces && s < 64; s++) {
+        if (only_surface >= 0 && (int)s != only_surface) continue;
+        thx_render_surface *r = &b->rs[b->n];
+        memset(r, 0, sizeof *r);
+        r->surf = m->surf[s];
+        int shown = o->n_only == 0;
+        for (int k = 0; k < o->n_only; k++) shown |= !strcmp(o->only[k], m->surf[s]->name);
+        if (!shown) continue;
+        /* default look: data surfaces opaque; the others translucent */
+        memcpy(r->color, palette[s % 6], sizeof r->color);
+        r->mode = o->mode;
+        int has = d->series[s] != NULL;
+        if (!has && o->mode != THX_DRAW_ORIENTATION && o->mode != THX_DRAW_WIRE && o->mode != THX_DRAW_POINTS) {
+            int any = 0;
+            for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
+            if (any) r->color[3] = m->surf[s]->role == THX_ROLE_OUTER ? 0.25f : 0.35f;
+        }
+        for (int k = 0; k < o->n_mode_of; k++) {
+            char name[64];
+            snprintf(name, sizeof name, "%s", o->mode_of[k]);
+            char *eq = strchr(name, '=');
+            if (!eq) continue;
+            *eq = '\0';
+            if (strcmp(name, m->surf[s]->name)) continue;
+            char *colon = strchr(eq + 1, ':');
+            if (colon) { *colon = '\0'; r->color[3] = (float)atof(colon + 1); }
+            int ok;
+            r->mode = parse_mode(eq + 1, &ok);
+        }
+        r->back_color[0] = 1;
+        r->back_color[1] = 1;
+        r->back_color[2] = 1;
+        r->back_color[3] = 1;
+        r->point_size = 3;
+        r->line_width = 1.5f;
+        if (has && r->mode != THX_DRAW_HIDDEN) {
+            const thx_series *x = d->series[s];
+            size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
+            r->values = x->v + f * x->n_rows;
+            for (size_t i = 0; i < x->n_rows; i++) b->nan_count += !isfinite(r->values[i]);
+            r->style = o->style;
+            r->n_levels = o->levels;
+            r->cmap = o->cmap;
+            scale_for(o, d, (int)s, (int)f, &r->scale);
+            r->contour_color[3] = 1;
+            r->color[3] = 1;
+            if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
+                b->main_surface = (int)s;
+                b->main_scale = r->scale;
+            }
+        }
+        b->n++;
+    }
+}
+
+static int parse_clip(const char *spec, const double lo[3], const double hi[3], thx_clip_plane *p)
+{
+    /* "anterior[:F]" keeps the posterior part up to fraction F of the depth (default 0.45) from the
+       back; "posterior", "left", "right", "superior", "inferior" likewise; or "nx,ny,nz,d" */
+    static const char *names[] = {"anterior", "posterior", "left", "right", "superior", "inferior"};
+    /* the side removed: anterior removes +y, posterior -y, left -x, right +x, superior +z, inferior -z */
+    static const int axis[] = {1, 1, 0, 0, 2, 2}, sign[] = {1, -1, -1, 1, 1, -1};
+    char name[32];
+    double f = 0.5;
+    const char *colon = strchr(spec, ':');
+    snprintf(name, sizeof name, "%.*s", colon ? (int)(colon - spec) : (int)strlen(spec), spec);
+    if (colon) f = atof(colon + 1);
+    for (int k = 0; k < 6; k++)
+        if (!strcmp(name, names[k])) {
+            int a = axis[k];
+            memset(p, 0, sizeof *p);
+            p->n[a] = -sign[k];
+            double cut = sign[k] > 0 ? lo[a] + f * (hi[a] - lo[a]) : hi[a] - f * (hi[a] - lo[a]);
+            p->d = sign[k] * cut;
+            return 0;
+        }
+    if (sscanf(spec, "%lf,%lf,%lf,%lf", &p->n[0], &p->n[1], &p->n[2], &p->d) == 4) return 0;
+    return -1;
+}
+
+static const char *lead_names[12] = {"I", "II", "III", "aVR", "aVL", "aVF", "V1", "V2", "V3", "V4", "V5", "V6"};
+
+static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_renderer *rr, thx_font *font, int frame,
+                             thx_image *img, size_t *nan_total)
+{
+    thx_status st = THX_OK;
+    const thx_model *m = d->m;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        for (size_t i = 0; i < m->surf[s]->n_nodes; i++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], m->surf[s]->xyz[3 * i + k]);
+                hi[k] = fmax(hi[k], m->surf[s]->xyz[3 * i + k]);
+            }
+    unsigned char bg[4] = {24, 24, 28, 255}, fg[4] = {235, 235, 235, 255};
+    thx_image_fill(img, bg);
+    int trace_h = o->trace ? img->h / 5 : 0, bar_w = o->colorbar ? (img->w / 6 > 96 ? img->w / 6 : 96) : 0;
+    int top = o->label ? thx_font_height(font) + 8 : 0;
+    int vw = img->w - bar_w, vh = img->h - trace_h - top;
+    int panels = 1, cols = 1, rows = 1;
+    if (o->panels) {
+        panels = 0;
+        for (size_t s = 0; s < m->n_surfaces; s++) {
+            int shown = o->n_only == 0;
+            for (int k = 0; k < o->n_only; k++) shown |= !strcmp(o->only[k], m->surf[s]->name);
+            panels += shown;
+        }
+        cols = (int)ceil(sqrt((double)panels));
+        rows = (panels + cols - 1) / cols;
+    }
+    built_scene *b = calloc(1, sizeof *b);
+    if (!b) return THX_ENOMEM;
+    int panel = 0;
+    thx_scale bar_scale = {0};
+    int have_bar = 0;
+    for (size_t s = 0; s < (o->panels ? m->n_surfaces : 1); s++) {
+        int only = o->panels ? (int)s : -1;
+        memset(b, 0, sizeof *b);
+        build_surfaces(o, d, frame, b, only);
+        if (b->n == 0) continue;
+        if (!o->panels) build_arrows(o, d, frame, b);
+        thx_scene sc;
+        memset(&sc, 0, sizeof sc);
+        sc.surfaces = b->rs;
+        sc.n_surfaces = b->n;
+        sc.arrows = b->have_arrows ? &b->arrows : NULL;
+        sc.n_arrows = b->have_arrows ? 1 : 0;
+        int pw = vw / cols, ph = vh / rows;
+        sc.viewport[0] = (panel % cols) * pw;
+        sc.viewport[1] = top + (panel / cols) * ph;
+        sc.viewport[2] = pw;
+        sc.viewport[3] = ph;
+        sc.clear = 1;
+        sc.background[0] = bg[0] / 255.0f;
+        sc.background[1] = bg[1] / 255.0f;
+        sc.background[2] = bg[2] / 255.0f;
+        sc.background[3] = 1;
+        sc.nan_color[0] = 0.6f;
+        sc.nan_color[1] = 0.6f;
+        sc.nan_color[2] = 0.2f;
+        sc.nan_color[3] = 1;
+        if (o->have_camera) sc.camera = o->cam;
+        else thx_camera_view(&sc.camera, o->view, lo, hi, (double)pw / ph);
+        if (o->clip[0]) {
+            if (parse_clip(o->clip, lo, hi, &sc.clip[0])) { free(b->apos); free(b->avec); free(b); return thx_error(ctx, THX_EINPUT, "--clip '%s': a side (anterior, posterior, left, right, superior, inferior[:fraction]) or nx,ny,nz,d", o->clip); }
+            sc.n_clip = 1;
+        }
+        size_t nn = 0;
+        st = thx_render(ctx, rr, &sc, img, &nn);
+        if (nan_total) *nan_total += b->nan_count;
+        free(b->apos);
+        free(b->avec);
+        b->apos = b->avec = NULL;
+        if (st != THX_OK) break;
+        if (b->main_surface >= 0 && !have_bar) { bar_scale = b->main_scale; have_bar = 1; }
+        if (o->panels && font) {
+            const char *name = m->surf[s]->name;
+            thx_draw_text(img, font, sc.viewport[0] + 6, sc.viewport[1] + thx_font_height(font) + 2, name, fg);
+        }
+        panel++;
+    }
+    free(b);
+    if (st != THX_OK) return st;
+    /* annotations */
+    const thx_series *any = NULL;
+    for (size_t s = 0; s < m->n_surfaces && s < 64; s++)
+        if (d->series[s] && (!any || m->surf[s]->role == THX_ROLE_OUTER)) any = d->series[s];
+    if (o->colorbar && have_bar && font)
+        thx_draw_colorbar(img, font, vw + bar_w / 4, top + vh / 8, bar_w / 4, vh * 3 / 4, o->cmap, &bar_scale,
+                          o->style == THX_DATA_BANDS || o->style == THX_DATA_BANDS_CONTOURS ? o->levels : 0, 5,
+                          "potential", any ? any->unit : "");
+    if (o->label && font && any) {
+        char text[128];
+        size_t f = (size_t)frame < any->n_frames ? (size_t)frame : 0;
+        snprintf(text, sizeof text, "t = %g %s   (frame %d of %zu)", any->time[f], any->time_unit, frame + 1, any->n_frames);
+        thx_draw_text(img, font, 8, thx_font_height(font) + 2, text, fg);
+    }
+    if (o->trace && d->ecg && font) {
+        int row = -1;
+        for (int k = 0; k < 12; k++)
+            if (!strcmp(o->trace, lead_names[k])) row = k;
+        if (row >= 0 && (size_t)row < d->ecg->n_rows) {
+            size_t n = d->ecg->n_frames;
+            double *v = malloc(n * sizeof *v);
+            if (v) {
+                for (size_t f = 0; f < n; f++) v[f] = d->ecg->v[f * d->ecg->n_rows + (size_t)row];
+                double dt = n > 1 ? d->ecg->time[1] - d->ecg->time[0] : 1;
+                unsigned char tc[4] = {120, 230, 120, 255};
+                thx_draw_trace(img, font, 8, img->h - trace_h + 4, img->w - 16, trace_h - 8, v, n, d->ecg->time[0], dt,
+                               (size_t)frame, o->trace, d->ecg->unit, tc);
+                free(v);
+            }
+        }
+    }
+    return THX_OK;
+}
+
+/* ---- option parsing shared by render and animate ---- */
+static void ropts_default(ropts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->w = 800;
+    o->h = 800;
+    o->view = THX_VIEW_ANTERIOR;
+    o->mode = THX_DRAW_GOURAUD;
+    o->style = THX_DATA_CONTINUOUS;
+    o->levels = 12;
+    o->cmap = THX_CMAP_ECG;
+    o->model = THX_SCALE_LINEAR;
+    o->scope = SCOPE_SERIES;
+    o->symmetric = 1;
+    o->last = -1;
+    o->fps = 25;
+    o->arrow_spacing = 20;
+    o->arrow_scale = 15;
+    o->arrow_max = 400;
+}
+
+/* Returns 0 if a consumed option, 1 if not ours, -1 usage error (printed). *i advanced past values. */
+static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
+{
+    const char *a = argv[*i], *v = *i + 1 < argc ? argv[*i + 1] : NULL;
+#define VAL() do { if (!v) { cli_usage_error(cmd, "%s needs a value", a); return -1; } (*i)++; } while (0)
+    if (!strcmp(a, "--data")) { VAL(); o->data = v; }
+    else if (!strcmp(a, "--data-surface")) { VAL(); o->data_surface = v; }
+    else if (!strcmp(a, "--solution")) { VAL(); o->solution = v; }
+    else if (!strcmp(a, "--size")) {
+        VAL();
+        if (sscanf(v, "%dx%d", &o->w, &o->h) != 2 || o->w < 16 || o->h < 16 || o->w > 8192 || o->h > 8192) { cli_usage_error(cmd, "--size WxH (16..8192)"); return -1; }
+    } else if (!strcmp(a, "--view")) { VAL(); if (thx_view_parse(v, &o->view)) { cli_usage_error(cmd, "--view: anterior, posterior, left, right, superior or inferior"); return -1; } }
+    else if (!strcmp(a, "--camera")) {
+        VAL();
+        thx_camera *c = &o->cam;
+        if (sscanf(v, "%lf,%lf,%lf:%lf,%lf,%lf:%lf,%lf,%lf:%lf", &c->eye[0], &c->eye[1], &c->eye[2], &c->center[0], &c->center[1],
+                   &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg) != 10) { cli_usage_error(cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV"); return -1; }
+        o->have_camera = 1;
+    } else if (!strcmp(a, "--mode")) { VAL(); int ok; o->mode = parse_mode(v, &ok); if (!ok) { cli_usage_error(cmd, "--mode: points, wire, flat, gouraud, phong, orientation"); return -1; } }
+    else if (!strcmp(a, "--surface")) { VAL(); if (o->n_mode_of < 16) snprintf(o->mode_of[o->n_mode_of++], 64, "%s", v); }
+    else if (!strcmp(a, "--only")) { VAL(); if (o->n_only < 16) o->only[o->n_only++] = v; }
+    else if (!strcmp(a, "--style")) {
+        VAL();
+        if (!strcmp(v, "continuous")) o->style = THX_DATA_CONTINUOUS;
+        else if (!strcmp(v, "bands")) o->style = THX_DATA_BANDS;
+        else if (!strcmp(v, "contours")) o->style = THX_DATA_CONTOURS;
+        else if (!strcmp(v, "bands+contours")) o->style = THX_DATA_BANDS_CONTOURS;
+        else if (!strcmp(v, "continuous+contours")) o->style = THX_DATA_CONTINUOUS_CONTOURS;
+        else { cli_usage_error(cmd, "--style: continuous, bands, contours, bands+contours, continuous+contours"); return -1; }
+    } else if (!strcmp(a, "--levels")) { VAL(); o->levels = atoi(v); if (o->levels < 2 || o->levels > 64) { cli_usage_error(cmd, "--levels: 2..64"); return -1; } }
+    else if (!strcmp(a, "--cmap")) { VAL(); if (thx_colormap_parse(v, &o->cmap)) { cli_usage_error(cmd, "--cmap: ecg, ecg-green, coolwarm, viridis, gray, jet"); return -1; } }
+    else if (!strcmp(a, "--scale")) {
+        VAL();
+        if (!strcmp(v, "linear")) o->model = THX_SCALE_LINEAR;
+        else if (!strcmp(v, "log")) o->model = THX_SCALE_LOG;
+        else if (!strcmp(v, "exp")) o->model = THX_SCALE_EXP;
+        else { cli_usage_error(cmd, "--scale: linear, log, exp"); return -1; }
+    } else if (!strcmp(a, "--scope")) {
+        VAL();
+        if (!strcmp(v, "frame")) o->scope = SCOPE_FRAME;
+        else if (!strcmp(v, "series")) o->scope = SCOPE_SERIES;
+        else if (!strcmp(v, "all")) o->scope = SCOPE_ALL;
+        else if (sscanf(v, "fixed:%lf:%lf", &o->lo, &o->hi) == 2 && o->lo < o->hi) o->scope = SCOPE_FIXED;
+        else { cli_usage_error(cmd, "--scope: frame, series, all, or fixed:LO:HI"); return -1; }
+    } else if (!strcmp(a, "--true-range")) o->symmetric = 0;
+    else if (!strcmp(a, "--symmetric")) o->symmetric = 1;
+    else if (!strcmp(a, "--clip")) { VAL(); snprintf(o->clip, sizeof o->clip, "%s", v); }
+    else if (!strcmp(a, "--colorbar")) o->colorbar = 1;
+    else if (!strcmp(a, "--label")) o->label = 1;
+    else if (!strcmp(a, "--panels")) o->panels = 1;
+    else if (!strcmp(a, "--trace")) { VAL(); o->trace = v; }
+    else if (!strcmp(a, "--arrows")) o->arrows = "node";
+    else if (!strcmp(a, "--arrow-spacing")) { VAL(); o->arrow_spacing = atof(v); if (!(o->arrow_spacing > 0)) { cli_usage_error(cmd, "--arrow-spacing must be positive (mm)"); return -1; } }
+    else if (!strcmp(a, "--arrow-max")) { VAL(); o->arrow_max = atoi(v); if (o->arrow_max < 1) { cli_usage_error(cmd, "--arrow-max must be at least 1"); return -1; } }
+    else if (!strcmp(a, "--arrow-length")) { VAL(); o->arrow_scale = atof(v); if (!(o->arrow_scale > 0)) { cli_usage_error(cmd, "--arrow-length must be positive (mm)"); return -1; } }
+    else if (!strcmp(a, "--arrow-unit")) o->arrow_unit = 1;
+    else if (!strcmp(a, "--font")) { VAL(); o->font = v; }
+    else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { VAL(); o->out = v; }
+    else if (!strcmp(a, "-v")) o->verbose = 1;
+    else if (!strcmp(a, "-q")) o->verbose = -1;
+    else return 1;
+    return 0;
+#undef VAL
+}
+
+#define COMMON_HELP                                                                                            \
+    "  --solution DIR      a thorax forward solution: torso potentials (and the epicardial series)\n"        \
+    "  --data SERIES       per-node values of one surface (rows = its nodes; --data-surface NAME)\n"          \
+    "  --size WxH          image size (default 800x800)\n"                                                     \
+    "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
+    "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
+    "  --mode M            points, wire, flat, gouraud (default), phong, orientation (the paper's check)\n"  \
+    "  --surface NAME=M[:OPACITY]  one surface's mode and opacity (repeatable; M may be hidden)\n"          \
+    "  --only NAME         draw only these surfaces (repeatable)\n"                                            \
+    "  --panels            a grid of panels, one per surface\n"                                                \
+    "  --style S           continuous (default), bands, contours, bands+contours, continuous+contours\n"      \
+    "  --levels N          shades / contour levels (default 12)\n"                                             \
+    "  --cmap C            ecg (default: red positive, blue negative, white zero), ecg-green,\n"             \
+    "                      coolwarm (perceptually uniform diverging), viridis, gray, jet\n"                    \
+    "  --scale M           linear (default), log, exp\n"                                                       \
+    "  --scope S           frame, series (default: all frames of the surface), all (all surfaces),\n"        \
+    "                      fixed:LO:HI\n"                                                                      \
+    "  --true-range        map min..max instead of symmetric about zero (default symmetric)\n"                \
+    "  --clip SIDE[:F]     remove a side (anterior, posterior, left, right, superior, inferior) from\n"      \
+    "                      fraction F of the depth (default 0.5), or a plane nx,ny,nz,d (keeps n.x+d >= 0)\n" \
+    "  --colorbar          a colour bar with values and units\n"                                               \
+    "  --label             the time and frame\n"                                                               \
+    "  --trace LEAD        an ECG lead (I..V6, from the solution's ecg12) with a marker at the frame\n"      \
+    "  --arrows            current density arrows (the solution's currents_node), averaged on a grid\n"      \
+    "  --arrow-spacing MM  grid spacing for the averaging (default 20); --arrow-max N (default 400);\n"       \
+    "  --arrow-length MM   the longest arrow's length (default 15); --arrow-unit: unit length, coloured\n"    \
+    "  --font FILE         a TrueType font (default: sans-serif via fontconfig)\n"
+
+static void render_help(void)
+{
+    printf("usage: thorax render MODEL [--solution DIR | --data SERIES] [--frame K] -o IMAGE.png [options]\n"
+           "       thorax render --solution DIR [--frame K] -o IMAGE.png [options]\n\n"
+           "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a GPU), with\n"
+           "potentials coloured per pixel (the value interpolated, then the colour looked up, so bands and\n"
+           "contours are exact), following the field's display conventions (paper 4.2).\n\n"
+           "options:\n"
+           "  --frame K           the frame (1-based, default 1)\n"
+           "  --repeat N          draw N times and print the median time a frame (benchmarks)\n" COMMON_HELP);
+}
+
+static thx_status setup(thx_ctx *ctx, ropts *o, rdata *d, thx_renderer **rr, thx_font **font, thx_image **img)
+{
+    THX_CHECK(load_data(ctx, o, d));
+    THX_CHECK(thx_renderer_create(ctx, o->w, o->h, rr));
+    THX_CHECK(thx_image_create(ctx, o->w, o->h, img));
+    if (o->colorbar || o->label || o->trace || o->panels) THX_CHECK(thx_font_open(ctx, o->font, o->h / 40 > 11 ? o->h / 40 : 11, font));
+    return THX_OK;
+}
+
+static int cmp_dbl(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+int cmd_render(int argc, char **argv)
+{
+    ropts o;
+    ropts_default(&o);
+    int repeat = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { render_help(); return 0; }
+        int r = ropts_parse("render", &o, argc, argv, &i);
+        if (r < 0) return 2;
+        if (r == 0) continue;
+        if (!strcmp(a, "--frame")) {
+            if (i + 1 >= argc) return cli_usage_error("render", "--frame needs a value");
+            o.frame = atoi(argv[++i]) - 1;
+            if (o.frame < 0) return cli_usage_error("render", "--frame: 1, 2, ...");
+        } else if (!strcmp(a, "--repeat")) {
+            if (i + 1 >= argc) return cli_usage_error("render", "--repeat needs a value");
+            repeat = atoi(argv[++i]);
+            if (repeat < 1 || repeat > 10000) return cli_usage_error("render", "--repeat: 1..10000");
+        } else if (a[0] == '-' && a[1]) return cli_usage_error("render", "unknown option '%s'", a);
+        else if (!o.model_dir) o.model_dir = a;
+        else return cli_usage_error("render", "more than one model given");
+    }
+    if (!o.model_dir && !o.solution) return cli_usage_error("render", "no model or --solution given");
+    if (!o.out) return cli_usage_error("render", "no output image given (-o IMAGE.png)");
+    thx_ctx *ctx = cli_ctx(o.verbose);
+    rdata d;
+    thx_renderer *rr = NULL;
+    thx_font *font = NULL;
+    thx_image *img = NULL;
+    size_t nan = 0;
+    double t0 = thx_wtime();
+    thx_status st = setup(ctx, &o, &d, &rr, &font, &img);
+    double *times = malloc((size_t)repeat * sizeof *times);
+    if (!times) st = THX_ENOMEM;
+    for (int k = 0; k < repeat && st == THX_OK; k++) { /* --repeat: the same frame again, timed (benchmarks) */
+        double t1 = thx_wtime();
+        nan = 0;
+        st = draw_frame(ctx, &o, &d, rr, font, o.frame, img, &nan);
+        times[k] = thx_wtime() - t1;
+    }
+    if (st == THX_OK) st = thx_image_write_png(ctx, img, o.out);
+    if (st == THX_OK && repeat > 1 && o.verbose >= 0) {
+        qsort(times, (size_t)repeat, sizeof *times, cmp_dbl);
+        printf("render: %d repetitions, median %.1f ms a frame (min %.1f, max %.1f), %.1f frames per second\n", repeat,
+               1000 * times[repeat / 2], 1000 * times[0], 1000 * times[repeat - 1], 1.0 / times[repeat / 2]);
+    }
+    free(times);
+    int rc = 0;
+    if (st != THX_OK) rc = cli_fail(ctx, "render", st);
+    else {
+        if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
+        if (o.verbose >= 0) printf("wrote %s (%dx%d, %.3f s; %s)\n", o.out, o.w, o.h, thx_wtime() - t0, thx_renderer_info(rr));
+    }
+    thx_image_destroy(&img);
+    thx_font_close(&font);
+    thx_renderer_destroy(&rr);
+    rdata_free(&d);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
+
+static void animate_help(void)
+{
+    printf("usage: thorax animate MODEL|--solution DIR -o DIR [--frames A:B] [--fps N] [--mp4 FILE] [options]\n\n"
+           "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames whose PNG\n"
+           "exists are kept), a progress bar on a terminal, then an MP4 (H.264) through ffmpeg.\n\n"
+           "options:\n"
+           "  --frames A:B        frame range, 1-based inclusive (default: all)\n"
+           "  --fps N             frames per second of the MP4 (default 25)\n"
+           "  --mp4 FILE          the movie (default DIR/animation.mp4; 'none': no movie)\n" COMMON_HELP);
+}
+
+int cmd_animate(int argc, char **argv)
+{
+    ropts o;
+    ropts_default(&o);
+    const char *mp4 = NULL;
+    int a_first = 1, a_last = -1;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { animate_help(); return 0; }
+        int r = ropts_parse("animate", &o, argc, argv, &i);
+        if (r < 0) return 2;
+        if (r == 0) continue;
+        if (!strcmp(a, "--frames")) {
+            if (i + 1 >= argc || sscanf(argv[++i], "%d:%d", &a_first, &a_last) != 2 || a_first < 1 || a_last < a_first)
+                return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
+        } else if (!strcmp(a, "--fps")) {
+            if (i + 1 >= argc) return cli_usage_error("animate", "--fps needs a value");
+            o.fps = atoi(argv[++i]);
+            if (o.fps < 1 || o.fps > 240) return cli_usage_error("animate", "--fps: 1..240");
+        } else if (!strcmp(a, "--mp4")) {
+            if (i + 1 >= argc) return cli_usage_error("animate", "--mp4 needs a value");
+            mp4 = argv[++i];
+        } else if (a[0] == '-' && a[1]) return cli_usage_error("animate", "unknown option '%s'", a);
+        else if (!o.model_dir) o.model_dir = a;
+        else return cli_usage_error("animate", "more than one model given");
+    }
+    if (!o.model_dir && !o.solution) return cli_usage_error("animate", "no model or --solution given");
+    if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
+    o.last = 0; /* frames checked below */
+    thx_ctx *ctx = cli_ctx(o.verbose);
+    rdata d;
+    thx_renderer *rr = NULL;
+    thx_font *font = NULL;
+    thx_image *img = NULL;
+    int rc = 0;
+    size_t nan = 0;
+    double t0 = thx_wtime();
+    char path[PATH_MAX + 64], movie[PATH_MAX + 64];
+    const char *out_dir = o.out;
+    thx_status st = setup(ctx, &o, &d, &rr, &font, &img);
+    size_t nf = 0;
+    if (st == THX_OK) {
+        for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)
+            if (d.series[s] && d.series[s]->n_frames > nf) nf = d.series[s]->n_frames;
+        if (!nf) st = thx_error(ctx, THX_EINPUT, "animate: no time series to animate (give --solution or --data)");
+    }
+    if (st == THX_OK) {
+        if (a_last < 0) a_last = (int)nf;
+        if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
+    }
+    if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
+        st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
+    int done = 0, kept = 0, total = a_last - a_first + 1;
+    for (int f = a_first; st == THX_OK && f <= a_last; f++) {
+        snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
+        thx_image *old = NULL;
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w && old->h == o.h) {
+            kept++; /* resumable: a complete PNG of the right size is kept */
+        } else {
+            st = draw_frame(ctx, &o, &d, rr, font, f - 1, img, &nan);
+            if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
+        }
+        thx_image_destroy(&old);
+        thx_ctx_destroy(&quiet);
+        done++;
+        if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
+    }
+    if (st == THX_OK && !(mp4 && !strcmp(mp4, "none"))) {
+        if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
+        else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
+        char tmpm[PATH_MAX + 80], cmd[3 * PATH_MAX + 512];
+        snprintf(tmpm, sizeof tmpm, "%s.part.mp4", movie);
+        snprintf(cmd, sizeof cmd,
+                 "ffmpeg -nostdin -loglevel error -y -framerate %d -start_number %d -i '%s/frame_%%05d.png' -frames:v %d "
+                 "-c:v libx264 -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '%s'",
+                 o.fps, a_first, out_dir, total, tmpm);
+        int r = system(cmd);
+        if (r != 0) {
+            remove(tmpm);
+            st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
+                           r == 127 * 256 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
+        } else if (rename(tmpm, movie) != 0) {
+            remove(tmpm);
+            st = thx_error(ctx, THX_EIO, "%s: cannot write", movie);
+        }
+    }
+    if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
+    else if (o.verbose >= 0) {
+        if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
+        printf("%d frames (%d drawn, %d kept from an earlier run) in %.1f s -> %s", total, total - kept, kept,
+               thx_wtime() - t0, out_dir);
+        if (!(mp4 && !strcmp(mp4, "none"))) printf(", %s", movie);
+        printf("\n");
+    }
+    thx_image_destroy(&img);
+    thx_font_close(&font);
+    thx_renderer_destroy(&rr);
+    rdata_free(&d);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}

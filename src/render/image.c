@@ -1,0 +1,153 @@
+/*
+ * Images (thorax/image.h): RGBA buffers and PNG files.
+ *
+ * PNG goes through libpng's simplified API (png_image_*), which catches
+ * libpng's internal longjmp itself: no setjmp in thorax. Files are written
+ * through a temporary file renamed into place (thorax/fileio.h), so a failed
+ * write leaves nothing behind. An image whose every alpha is 255 is written as
+ * 8-bit RGB (a quarter smaller, and what most viewers expect of a picture);
+ * otherwise 8-bit RGBA. Reading converts any PNG (grey, palette, 16-bit,
+ * interlaced) to 8-bit RGBA, not premultiplied. 8-bit files come through
+ * unchanged; 16-bit files without colour-space chunks are taken as linear
+ * light, as the simplified API's rule is, and encoded to sRGB (0.5 becomes
+ * 186, not 128): other viewers may show such files darker.
+ */
+#include "thorax/image.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <png.h>
+
+#include "thorax/fileio.h"
+
+/* Largest side accepted: keeps 4 w h far from overflow and refuses absurd PNG headers before
+   allocating (32768^2 RGBA is 4 GiB). */
+#define THX_IMAGE_MAX_SIDE 32768
+
+thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out)
+{
+    *out = NULL;
+    if (w <= 0 || h <= 0 || w > THX_IMAGE_MAX_SIDE || h > THX_IMAGE_MAX_SIDE)
+        return thx_error(ctx, THX_EINPUT, "image size %d x %d: each side must be 1 to %d pixels", w, h,
+                         THX_IMAGE_MAX_SIDE);
+    thx_image *img = thx_calloc(ctx, 1, sizeof *img);
+    if (!img) return THX_ENOMEM;
+    img->rgba = thx_calloc(ctx, (size_t)w * (size_t)h, 4);
+    if (!img->rgba) {
+        free(img);
+        return THX_ENOMEM;
+    }
+    img->w = w;
+    img->h = h;
+    *out = img;
+    return THX_OK;
+}
+
+void thx_image_destroy(thx_image **img)
+{
+    if (!img || !*img) return;
+    free((*img)->rgba);
+    free(*img);
+    *img = NULL;
+}
+
+void thx_image_fill(thx_image *img, const unsigned char rgba[4])
+{
+    size_t n = (size_t)img->w * (size_t)img->h;
+    for (size_t i = 0; i < n; i++) memcpy(img->rgba + 4 * i, rgba, 4);
+}
+
+static int all_opaque(const thx_image *img)
+{
+    size_t n = (size_t)img->w * (size_t)img->h;
+    for (size_t i = 0; i < n; i++)
+        if (img->rgba[4 * i + 3] != 255) return 0;
+    return 1;
+}
+
+thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *path)
+{
+    if (!img || !img->rgba || img->w <= 0 || img->h <= 0)
+        return thx_error(ctx, THX_EINPUT, "%s: no image to write", path);
+    int opaque = all_opaque(img);
+    unsigned char *rgb = NULL;
+    const unsigned char *pixels = img->rgba;
+    if (opaque) {
+        size_t n = (size_t)img->w * (size_t)img->h;
+        rgb = thx_malloc(ctx, 3 * n);
+        if (!rgb) return THX_ENOMEM;
+        for (size_t i = 0; i < n; i++) memcpy(rgb + 3 * i, img->rgba + 4 * i, 3);
+        pixels = rgb;
+    }
+
+    thx_atomic_file af;
+    thx_status st = thx_atomic_open(ctx, path, &af);
+    if (st != THX_OK) {
+        free(rgb);
+        return st;
+    }
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = (png_uint_32)img->w;
+    pi.height = (png_uint_32)img->h;
+    pi.format = opaque ? PNG_FORMAT_RGB : PNG_FORMAT_RGBA;
+    pi.flags = PNG_IMAGE_FLAG_FAST; /* zlib's fast setting and fewer filters: 3x faster, ~20% larger */
+    int ok = png_image_write_to_stdio(&pi, af.f, 0, pixels, 0, NULL);
+    free(rgb);
+    if (!ok) {
+        st = thx_error(ctx, THX_EIO, "%s: PNG write failed: %s", path, pi.message);
+        png_image_free(&pi);
+        thx_atomic_abort(&af);
+        return st;
+    }
+    png_image_free(&pi);
+    return thx_atomic_commit(ctx, &af);
+}
+
+thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
+    unsigned char sig[8];
+    size_t got = fread(sig, 1, sizeof sig, f);
+    if (got != sizeof sig || png_sig_cmp(sig, 0, sizeof sig) != 0) {
+        fclose(f);
+        return thx_error(ctx, THX_EINPUT, "%s: not a PNG file (no PNG signature)", path);
+    }
+    rewind(f);
+
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    thx_image *img = NULL;
+    thx_status st = THX_OK;
+    if (!png_image_begin_read_from_stdio(&pi, f)) {
+        st = thx_error(ctx, THX_EINPUT, "%s: unreadable PNG: %s", path, pi.message);
+        goto done;
+    }
+    if (pi.width == 0 || pi.height == 0 || pi.width > THX_IMAGE_MAX_SIDE || pi.height > THX_IMAGE_MAX_SIDE) {
+        st = thx_error(ctx, THX_EINPUT, "%s: PNG of %u x %u pixels: each side must be 1 to %d", path,
+                       (unsigned)pi.width, (unsigned)pi.height, THX_IMAGE_MAX_SIDE);
+        goto done;
+    }
+    /* 8-bit sRGB RGBA, not premultiplied; a file without colour-space chunks is taken as sRGB,
+       so 8-bit files come through unchanged. */
+    pi.format = PNG_FORMAT_RGBA;
+    st = thx_image_create(ctx, (int)pi.width, (int)pi.height, &img);
+    if (st != THX_OK) goto done;
+    if (!png_image_finish_read(&pi, NULL, img->rgba, 0, NULL)) {
+        st = thx_error(ctx, THX_EINPUT, "%s: unreadable PNG: %s", path, pi.message);
+        thx_image_destroy(&img);
+        goto done;
+    }
+    *out = img;
+done:
+    png_image_free(&pi);
+    fclose(f);
+    return st;
+}

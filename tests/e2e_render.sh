@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# thorax render / animate end to end, headless: pictures of the medium phantom with its
+# forward solution (views, clip plane, colour bar, label, ECG trace, arrows, panels,
+# orientation check), pixel facts read back with VTK's PNG reader, an animation whose
+# MP4 ffprobe reads, resuming, and bad input (rows, NaN, unwritable path, no EGL).
+set -euo pipefail
+: "${THORAX:?}" "${WORK:?}"
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+PY=/usr/bin/python3
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$THORAX" phantom --resolution medium --seed 1 -o c.txt -q
+"$THORAX" surfaces c.txt -o model -q
+"$THORAX" mesh model --no-heart -q
+"$THORAX" electrodes model -q
+"$THORAX" beat model -o beat.raw --frames 300 -q
+"$THORAX" forward model --epicardial beat.raw -o sol --currents 193 -q
+"$THORAX" leads sol -q
+
+R=(--solution sol --frame 193 --size 400x480)
+"$THORAX" render "${R[@]}" --view anterior -o ant.png -q
+"$THORAX" render "${R[@]}" --view posterior --colorbar --label --trace II -o post.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.8 -o clip.png -q
+"$THORAX" render "${R[@]}" --view left --style bands+contours --levels 10 -o bands.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --surface torso=wire:0.2 -o arrows.png -q
+"$THORAX" render model --size 600x400 --panels --mode orientation -o orient.png -q
+"$THORAX" render model --size 300x300 --mode wire --view superior -o wire.png -q
+
+$PY - <<'EOF'
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+def png(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    im = r.GetOutput(); w, h, _ = im.GetDimensions()
+    a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1]   # rows top to bottom
+    return a[:, :, :3].astype(int)
+a = png('ant.png'); h, w, _ = a.shape
+assert (w, h) == (400, 480), (w, h)
+bg = a[0, 0]
+for y, x in ((0, 0), (0, w - 1), (h - 1, 0), (h - 1, w - 1)):
+    assert (a[y, x] == bg).all(), 'corner not background'
+# the QRS peak on the anterior torso: positive (red) at the subject's lower left (image right, low),
+# negative (blue) at the upper right (image left, high)
+red = (a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)
+blue = (a[:, :, 2] > a[:, :, 0] + 60)
+ys, xs = red.nonzero(); yb, xb = blue.nonzero()
+assert red.sum() > 500 and blue.sum() > 500, (red.sum(), blue.sum())
+assert xs.mean() > xb.mean(), 'red should lie right of blue (the subject left) in the anterior view'
+print('anterior: %d red, %d blue pixels; red centre x %.0f, blue %.0f' % (red.sum(), blue.sum(), xs.mean(), xb.mean()))
+# the clip plane opens the front of the torso: the image differs where the heart shows
+c = png('clip.png')
+assert (abs(c - a).sum(axis=2) > 30).sum() > 2000, 'clip changed nothing'
+# bands + contours: a handful of distinct colours on the torso plus dark contour pixels
+b = png('bands.png')
+dark = (b.sum(axis=2) < 120) & ~(b == bg).all(axis=2)
+assert dark.sum() > 200, ('contour pixels', dark.sum())
+# the annotated picture: colour bar and trace change the right and bottom strips
+p = png('post.png')
+assert (abs(p[-60:, :] - bg).sum(axis=2) > 40).sum() > 300, 'no trace'
+o = png('orient.png')
+assert (abs(o - o[0, 0]).sum(axis=2) > 40).sum() > 5000, 'orientation panels empty'
+print('render checks passed')
+EOF
+
+# animation: 6 frames + MP4, then resume (kept), then ffprobe counts the frames
+"$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --fps 10 -o anim -q
+ls anim/frame_00180.png anim/frame_00185.png > /dev/null
+[ "$(ls anim/frame_*.png | wc -l)" -eq 6 ] || fail "frame count"
+rm anim/frame_00183.png
+"$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --fps 10 -o anim > resume.log
+grep -q "1 drawn, 5 kept" resume.log || { cat resume.log; fail "not resumed"; }
+n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 anim/animation.mp4)
+codec=$(ffprobe -v error -select_streams v:0 -show_entries stream=codec_name -of csv=p=0 anim/animation.mp4)
+[ "$n" = 6 ] && [ "$codec" = h264 ] || fail "mp4: $n frames, codec $codec"
+
+# bad input
+refused() { local what=$1 file=$2; shift 2
+    if "$@" > out.log 2> err.log; then fail "$what: accepted"; fi
+    [ -s err.log ] || fail "$what: no message"; [ ! -e "$file" ] || fail "$what: $file written"
+    echo "refused ($what): $(head -1 err.log)"; }
+head -c 200 beat.raw > /dev/null
+refused "rows" bad1.png "$THORAX" render model --data beat.raw --data-surface torso -o bad1.png
+refused "unwritable" /nonexistent/x.png "$THORAX" render model -o /nonexistent/x.png
+refused "frame" bad2.png "$THORAX" render --solution sol --frame 999 -o bad2.png
+refused "no EGL" bad3.png env EGL_PLATFORM=none LIBGL_DRIVERS_PATH=/nonexistent __EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json "$THORAX" render model -o bad3.png
+grep -qi "egl" err.log || fail "EGL message"
+# NaN values: drawn in the NaN colour, counted in a warning, no crash
+$PY - <<'EOF'
+import numpy as np
+b = open('beat.raw', 'rb').read(); r, f = (int(x) for x in np.frombuffer(b[8:24], dtype='<u8'))
+d = np.frombuffer(b[200:], dtype='<f8').copy(); d[f + 10: f + 20] = np.nan
+open('nan.raw', 'wb').write(b[:200] + d.tobytes())
+EOF
+"$THORAX" render model --data nan.raw --data-surface heart --size 200x200 --only heart -o nan.png 2> nan.log
+grep -q "10 values are not numbers" nan.log || { cat nan.log; fail "NaN warning"; }
+echo "e2e_render: all checks passed"

@@ -1,0 +1,783 @@
+/* The 3D renderer (paper 4.2), headless: small renders whose pixels are checked against what the
+ * scene must show — background, the ECG colour convention and the anatomical view, bands and
+ * contour lines, the orientation check, clipping, NaN values, viewports, arrows, translucency,
+ * and the geometry cache.
+ *
+ * THX_RENDER_PNG=dir writes the images to dir; THX_RENDER_BENCH=1 times a 100,000-triangle sphere
+ * with data at 1024 x 1024 (median of 10 frames). */
+#include "testlib.h"
+#include "thorax/render.h"
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+#define N 128
+
+static thx_ctx *ctx;
+static thx_renderer *ren;
+
+/* A UV sphere of radius rad about c: nlat rings of latitude, nlon nodes around, triangles
+ * counterclockwise seen from outside (flip = 1: inward). */
+static thx_surface *sphere(int nlat, int nlon, double rad, const double c[3], int flip)
+{
+    thx_surface *s = NULL;
+    if (thx_surface_create(ctx, "sphere", THX_ROLE_OTHER, &s) != THX_OK) return NULL;
+    s->n_nodes = 2 + (size_t)nlon * (nlat - 1);
+    s->n_tris = 2 * (size_t)nlon * (nlat - 1);
+    s->xyz = malloc(3 * s->n_nodes * sizeof *s->xyz);
+    s->tri = malloc(3 * s->n_tris * sizeof *s->tri);
+    double *p = s->xyz;
+    p[0] = c[0], p[1] = c[1], p[2] = c[2] + rad;             /* north pole: node 0 */
+    p[3] = c[0], p[4] = c[1], p[5] = c[2] - rad;             /* south pole: node 1 */
+    for (int k = 1; k < nlat; k++)
+        for (int j = 0; j < nlon; j++) {
+            double th = PI * k / nlat, ph = 2 * PI * j / nlon;
+            double *q = p + 3 * (2 + (size_t)(k - 1) * nlon + j);
+            q[0] = c[0] + rad * sin(th) * cos(ph);
+            q[1] = c[1] + rad * sin(th) * sin(ph);
+            q[2] = c[2] + rad * cos(th);
+        }
+#define NODE(k, j) ((k) == 0 ? 0 : (k) == nlat ? 1 : 2 + ((k) - 1) * nlon + ((j) % nlon))
+    int32_t *t = s->tri;
+    for (int k = 0; k < nlat; k++)
+        for (int j = 0; j < nlon; j++) {
+            int a = NODE(k, j), b = NODE(k, j + 1), cc = NODE(k + 1, j), d = NODE(k + 1, j + 1);
+            /* (a, c, b) and (b, c, d): theta x phi points outward */
+            if (k > 0) *t++ = a, *t++ = cc, *t++ = b;
+            if (k < nlat - 1) *t++ = b, *t++ = cc, *t++ = d;
+        }
+#undef NODE
+    if (flip)
+        for (size_t i = 0; i < s->n_tris; i++) {
+            int32_t x = s->tri[3 * i + 1];
+            s->tri[3 * i + 1] = s->tri[3 * i + 2];
+            s->tri[3 * i + 2] = x;
+        }
+    return s;
+}
+
+/* The square x, z in [-1, 1] at y = 0, n x n cells, facing -y. */
+static thx_surface *plane(int n)
+{
+    thx_surface *s = NULL;
+    if (thx_surface_create(ctx, "plane", THX_ROLE_OTHER, &s) != THX_OK) return NULL;
+    s->n_nodes = (size_t)(n + 1) * (n + 1);
+    s->n_tris = 2 * (size_t)n * n;
+    s->xyz = malloc(3 * s->n_nodes * sizeof *s->xyz);
+    s->tri = malloc(3 * s->n_tris * sizeof *s->tri);
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++) {
+            double *q = s->xyz + 3 * ((size_t)i * (n + 1) + j);
+            q[0] = -1 + 2.0 * j / n, q[1] = 0, q[2] = -1 + 2.0 * i / n;
+        }
+    int32_t *t = s->tri;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            int a = i * (n + 1) + j, b = a + 1, c = a + n + 1, d = c + 1;
+            *t++ = a, *t++ = b, *t++ = d; /* (x, z) counterclockwise seen from -y */
+            *t++ = a, *t++ = d, *t++ = c;
+        }
+    return s;
+}
+
+static const unsigned char *px(const thx_image *im, int x, int y) { return im->rgba + 4 * ((size_t)y * im->w + x); }
+
+static int near_rgb(const unsigned char *p, double r, double g, double b, int tol)
+{
+    return abs(p[0] - (int)lround(255 * r)) <= tol && abs(p[1] - (int)lround(255 * g)) <= tol &&
+           abs(p[2] - (int)lround(255 * b)) <= tol;
+}
+
+static int diff3(const unsigned char *p, const unsigned char *q)
+{
+    return abs(p[0] - q[0]) + abs(p[1] - q[1]) + abs(p[2] - q[2]);
+}
+
+static void save(const thx_image *im, const char *name)
+{
+    const char *dir = getenv("THX_RENDER_PNG");
+    if (!dir) return;
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s_%d.png", dir, name, ren ? thx_renderer_samples(ren) : 0);
+    CHECK_OK(ctx, thx_image_write_png(ctx, im, path));
+}
+
+static thx_scene base_scene(const thx_render_surface *rs, size_t n)
+{
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = n;
+    double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    thx_camera_view(&sc.camera, THX_VIEW_ANTERIOR, lo, hi, 1.0);
+    const float bg[4] = {0.1f, 0.2f, 0.3f, 1};
+    memcpy(sc.background, bg, sizeof bg);
+    sc.clear = 1;
+    return sc;
+}
+
+/* Looking at the plane from -y, +x to the right, the plane filling the image exactly. */
+static void plane_camera(thx_camera *cam)
+{
+    memset(cam, 0, sizeof *cam);
+    cam->eye[1] = -5;
+    cam->up[2] = 1;
+    cam->height = 2;
+}
+
+static thx_render_surface surf_defaults(const thx_surface *s, thx_draw_mode mode)
+{
+    thx_render_surface rs;
+    memset(&rs, 0, sizeof rs);
+    rs.surf = s;
+    rs.mode = mode;
+    rs.color[0] = 0.8f, rs.color[1] = 0.8f, rs.color[2] = 0.8f, rs.color[3] = 1;
+    rs.cmap = THX_CMAP_ECG;
+    rs.scale.model = THX_SCALE_LINEAR;
+    rs.scale.lo = -1, rs.scale.hi = 1;
+    return rs;
+}
+
+static void test_views(void)
+{
+    thx_view v;
+    CHECK(thx_view_parse("anterior", &v) == 0 && v == THX_VIEW_ANTERIOR);
+    CHECK(thx_view_parse("inferior", &v) == 0 && v == THX_VIEW_INFERIOR);
+    CHECK(thx_view_parse("front", &v) == -1);
+    thx_camera cam;
+    double lo[3] = {-100, -50, 0}, hi[3] = {100, 50, 400};
+    thx_camera_view(&cam, THX_VIEW_ANTERIOR, lo, hi, 1.0);
+    CHECK(cam.fov_deg == 0);
+    CHECK(cam.eye[1] > hi[1] && cam.eye[0] == 0 && cam.eye[2] == 200);
+    CHECK_NEAR(cam.height, 440, 1e-9); /* 400 mm high with 5% margins */
+    thx_camera_view(&cam, THX_VIEW_ANTERIOR, lo, hi, 4.0);
+    CHECK_NEAR(cam.height, 440, 1e-9);
+    thx_camera_view(&cam, THX_VIEW_ANTERIOR, lo, hi, 0.25);
+    CHECK_NEAR(cam.height, 880, 1e-9); /* 200 mm wide in a narrow image */
+    thx_camera_view(&cam, THX_VIEW_SUPERIOR, lo, hi, 1.0);
+    CHECK(cam.eye[2] > hi[2] && cam.up[1] == 1);
+    thx_camera_view(&cam, THX_VIEW_LEFT, lo, hi, 1.0);
+    CHECK(cam.eye[0] < lo[0]); /* the subject's left is -x */
+}
+
+/* Background, the anatomical orientation of the anterior view and the ECG map: data = x, so the
+ * subject's right (+x, positive, red) appears on the image's left. */
+static void test_ecg_map(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(40, 60, 1, c, 0);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = s->xyz[3 * i];
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
+    rs.values = v;
+    thx_scene sc = base_scene(&rs, 1);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    size_t n_nan = 99;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
+    save(im, "ecg_map");
+    CHECK(im->w == N && im->h == N);
+    CHECK(n_nan == 0);
+    int corners[4][2] = {{0, 0}, {N - 1, 0}, {0, N - 1}, {N - 1, N - 1}};
+    for (int i = 0; i < 4; i++) CHECK(near_rgb(px(im, corners[i][0], corners[i][1]), 0.1, 0.2, 0.3, 1));
+    CHECK(px(im, 0, 0)[3] == 255);
+    const unsigned char *l = px(im, 32, 64), *r = px(im, 96, 64);
+    CHECK(l[0] > l[1] + 40 && l[0] > l[2] + 40); /* red: positive, the subject's right */
+    CHECK(r[2] > r[0] + 40);                     /* blue: negative */
+    /* the same in Gouraud and flat shading */
+    for (int m = 0; m < 2; m++) {
+        rs.mode = m ? THX_DRAW_FLAT : THX_DRAW_GOURAUD;
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        l = px(im, 32, 64), r = px(im, 96, 64);
+        CHECK(l[0] > l[1] + 40 && l[0] > l[2] + 40);
+        CHECK(r[2] > r[0] + 40);
+    }
+    /* the posterior view mirrors it */
+    double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    thx_camera_view(&sc.camera, THX_VIEW_POSTERIOR, lo, hi, 1.0);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    l = px(im, 32, 64), r = px(im, 96, 64);
+    CHECK(r[0] > r[1] + 40 && r[0] > r[2] + 40);
+    CHECK(l[2] > l[0] + 40);
+    /* the cache: the same surface redrawn with new values only (negated) */
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = -v[i];
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    l = px(im, 32, 64), r = px(im, 96, 64);
+    CHECK(l[0] > l[1] + 40 && l[0] > l[2] + 40);
+    CHECK(r[2] > r[0] + 40);
+    /* ... and with its coordinates changed in place: half the radius, the silhouette shrinks */
+    for (size_t i = 0; i < 3 * s->n_nodes; i++) s->xyz[i] *= 0.5;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(near_rgb(px(im, 20, 64), 0.1, 0.2, 0.3, 1));
+    CHECK(!near_rgb(px(im, 50, 64), 0.1, 0.2, 0.3, 10));
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
+/* Bands and contour lines on a plane with data = x, seen flat-on so that flat shading shows the
+ * colour map exactly. */
+static void test_bands_contours(void)
+{
+    thx_surface *s = plane(16);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = s->xyz[3 * i];
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_FLAT);
+    rs.values = v;
+    rs.style = THX_DATA_BANDS;
+    rs.n_levels = 4;
+    rs.line_width = 2;
+    thx_scene sc = base_scene(&rs, 1);
+    plane_camera(&sc.camera);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "bands");
+    /* band k covers x in [-1 + k/2, -1/2 + k/2): pixels 32 k .. 32 k + 31 */
+    unsigned char band[4][3];
+    for (int k = 0; k < 4; k++) {
+        thx_colormap_eval(THX_CMAP_ECG, thx_scale_band((k + 0.5) / 4, 4), band[k]);
+        for (int x = 32 * k + 1; x <= 32 * k + 30; x += 7) {
+            const unsigned char *p = px(im, x, 64);
+            CHECK(diff3(p, band[k]) <= 6);
+        }
+    }
+    rs.style = THX_DATA_BANDS_CONTOURS;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "bands_contours");
+    for (int k = 1; k < 4; k++) {
+        /* a dark line at the boundary between pixels 32 k - 1 and 32 k, unlike both bands */
+        int found = 0;
+        for (int x = 32 * k - 2; x <= 32 * k + 1; x++) {
+            const unsigned char *p = px(im, x, 64);
+            if (diff3(p, band[k - 1]) > 200 && diff3(p, band[k]) > 200 && p[0] + p[1] + p[2] < 150) found = 1;
+        }
+        CHECK(found);
+        /* and nothing else in the rows: band centres keep their colour */
+        CHECK(diff3(px(im, 32 * k - 16, 64), band[k - 1]) <= 6);
+        CHECK(diff3(px(im, 32 * k - 16, 10), band[k - 1]) <= 6);
+    }
+    /* contours over the surface colour, lines the same width everywhere */
+    rs.style = THX_DATA_CONTOURS;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "contours");
+    CHECK(near_rgb(px(im, 16, 64), 0.8, 0.8, 0.8, 2));
+    int dark = 0;
+    for (int x = 0; x < N; x++) dark += px(im, x, 40)[0] < 100;
+    CHECK(dark >= 3 * 2 && dark <= 3 * 4); /* three lines, 2 pixels wide (+ antialiasing) */
+    /* continuous: the colour at the centre of the plane is the map's middle (white for ECG) */
+    rs.style = THX_DATA_CONTINUOUS;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    unsigned char mid[3];
+    thx_colormap_eval(THX_CMAP_ECG, 0.5, mid);
+    CHECK(diff3(px(im, 63, 64), mid) <= 12);
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
+/* NaN values: the triangles touching them in nan_color, counted. */
+static void test_nan(void)
+{
+    thx_surface *s = plane(16);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    size_t expect = 0;
+    for (size_t i = 0; i < s->n_nodes; i++) {
+        double x = s->xyz[3 * i];
+        v[i] = x > 0.6 ? NAN : x;
+        expect += x > 0.6;
+    }
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_FLAT);
+    rs.values = v;
+    thx_scene sc = base_scene(&rs, 1);
+    plane_camera(&sc.camera);
+    const float nanc[4] = {0.5f, 0.9f, 0.1f, 1};
+    memcpy(sc.nan_color, nanc, sizeof nanc);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    size_t n_nan = 0;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
+    save(im, "nan");
+    CHECK(expect > 0 && n_nan == expect);
+    /* x > 0.6 is NaN-only; the cells touching x = 0.625 from below too (x > 0.5) */
+    CHECK(near_rgb(px(im, 120, 64), 0.5, 0.9, 0.1, 2));
+    CHECK(near_rgb(px(im, 100, 30), 0.5, 0.9, 0.1, 2));
+    CHECK(!near_rgb(px(im, 90, 64), 0.5, 0.9, 0.1, 30));
+    const unsigned char *p = px(im, 20, 64);
+    CHECK(p[2] > p[0] + 40); /* data still drawn (negative, blue) */
+    /* the default NaN colour when nan_color is zero */
+    memset(sc.nan_color, 0, sizeof sc.nan_color);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
+    p = px(im, 120, 64);
+    CHECK(p[0] > p[1] + 20 && p[2] > p[1] + 20);
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
+static int count_color(const thx_image *im, int r, int g, int b, int tol)
+{
+    int n = 0;
+    for (int y = 0; y < im->h; y++)
+        for (int x = 0; x < im->w; x++) {
+            const unsigned char *p = px(im, x, y);
+            n += abs(p[0] - r) <= tol && abs(p[1] - g) <= tol && abs(p[2] - b) <= tol;
+        }
+    return n;
+}
+
+/* The paper's orientation check: a sphere seen from outside draws its triangles and no points; with
+ * its triangles flipped, the near side's nodes show as points in the back colour over the far
+ * side's inside. */
+static void test_orientation(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *good = sphere(24, 36, 1, c, 0), *bad = sphere(24, 36, 1, c, 1);
+    CHECK(thx_surface_volume(good) > 0 && thx_surface_volume(bad) < 0);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    for (int f = 0; f < 2; f++) {
+        thx_render_surface rs = surf_defaults(f ? bad : good, THX_DRAW_ORIENTATION);
+        rs.color[0] = 0.2f, rs.color[1] = 0.7f, rs.color[2] = 0.2f;
+        rs.back_color[0] = 1, rs.back_color[1] = 0, rs.back_color[2] = 1, rs.back_color[3] = 1;
+        rs.point_size = 4;
+        thx_scene sc = base_scene(&rs, 1);
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        save(im, f ? "orientation_flipped" : "orientation");
+        int back = count_color(im, 255, 0, 255, 60);
+        const unsigned char *p = px(im, 64, 64);
+        if (!f) {
+            CHECK(back == 0);
+            CHECK(p[1] > p[0] + 40 && p[1] > p[2] + 40); /* the front colour, lit */
+        } else {
+            CHECK(back > 300); /* 24 x 36 nodes, about half of them in front, 4 px wide */
+        }
+        CHECK(near_rgb(px(im, 0, 0), 0.1, 0.2, 0.3, 1));
+    }
+    thx_image_destroy(&im);
+    thx_surface_destroy(&good);
+    thx_surface_destroy(&bad);
+}
+
+/* Clip planes: data = y (front red, back blue); cutting off the front cap shows the inside of the
+ * back; cutting off x > 0 shows the background there. */
+static void test_clip(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(40, 60, 1, c, 0);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = s->xyz[3 * i + 1];
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
+    rs.values = v;
+    thx_scene sc = base_scene(&rs, 1);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    const unsigned char *p = px(im, 64, 64);
+    CHECK(p[0] > p[2] + 40); /* the front: red */
+    sc.n_clip = 1;
+    sc.clip[0].n[1] = -1, sc.clip[0].d = 0.3; /* keeps y <= 0.3 */
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "clip_front");
+    p = px(im, 64, 64);
+    CHECK(p[2] > p[0] + 40); /* the inside of the back: blue */
+    p = px(im, 64, 2);      /* beyond the sphere: still background */
+    CHECK(near_rgb(p, 0.1, 0.2, 0.3, 1));
+    memset(&sc.clip[0], 0, sizeof sc.clip[0]);
+    sc.clip[0].n[0] = -1; /* keeps x <= 0: the image's right half in the anterior view */
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "clip_x");
+    CHECK(near_rgb(px(im, 32, 64), 0.1, 0.2, 0.3, 1));
+    CHECK(!near_rgb(px(im, 96, 64), 0.1, 0.2, 0.3, 10));
+    /* two planes: x <= 0 and z <= 0 leave the lower right quadrant */
+    sc.n_clip = 2;
+    sc.clip[1].n[2] = -1;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(near_rgb(px(im, 96, 32), 0.1, 0.2, 0.3, 1));
+    CHECK(!near_rgb(px(im, 96, 96), 0.1, 0.2, 0.3, 10));
+    sc.n_clip = 5;
+    CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
+/* Two scenes side by side in one image, each clearing its own viewport, and a third drawn over the
+ * first without clearing. */
+static void test_viewports(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(20, 30, 1, c, 0);
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    const unsigned char grey[4] = {128, 128, 128, 255};
+    thx_image_fill(im, grey);
+    thx_scene a = base_scene(&rs, 1), b = base_scene(&rs, 1);
+    double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    thx_camera_view(&a.camera, THX_VIEW_ANTERIOR, lo, hi, 64.0 / 128);
+    b.camera = a.camera;
+    int va[4] = {0, 0, 64, 128}, vb[4] = {64, 32, 64, 64};
+    memcpy(a.viewport, va, sizeof va);
+    memcpy(b.viewport, vb, sizeof vb);
+    a.background[0] = 1, a.background[1] = 0, a.background[2] = 0;
+    b.background[0] = 0, b.background[1] = 0, b.background[2] = 1;
+    thx_camera_view(&b.camera, THX_VIEW_ANTERIOR, lo, hi, 1.0);
+    CHECK_OK(ctx, thx_render(ctx, ren, &a, im, NULL));
+    CHECK_OK(ctx, thx_render(ctx, ren, &b, im, NULL));
+    save(im, "viewports");
+    CHECK(near_rgb(px(im, 1, 1), 1, 0, 0, 1));       /* a's background */
+    CHECK(near_rgb(px(im, 65, 33), 0, 0, 1, 1));     /* b's */
+    CHECK(near_rgb(px(im, 100, 10), 0.5, 0.5, 0.5, 1)); /* outside both: untouched */
+    CHECK(near_rgb(px(im, 100, 120), 0.5, 0.5, 0.5, 1));
+    const unsigned char *p = px(im, 32, 64), *q = px(im, 96, 64); /* spheres at both centres */
+    CHECK(abs(p[0] - p[1]) < 30 && p[1] > 100);
+    CHECK(abs(q[0] - q[1]) < 30 && q[1] > 100);
+    /* a small green sphere drawn over viewport a without clearing it: the red and the grey sphere stay */
+    thx_render_surface small = rs;
+    double c2[3] = {0, 0, 0};
+    thx_surface *s2 = sphere(12, 16, 0.3, c2, 0);
+    small.surf = s2;
+    small.color[0] = 0, small.color[1] = 1, small.color[2] = 0;
+    a.surfaces = &small;
+    a.clear = 0;
+    CHECK_OK(ctx, thx_render(ctx, ren, &a, im, NULL));
+    save(im, "viewports_overlay");
+    CHECK(near_rgb(px(im, 1, 1), 1, 0, 0, 1));
+    p = px(im, 32, 64);
+    CHECK(p[1] > p[0] + 60); /* the green sphere over the grey one */
+    p = px(im, 32, 40);      /* the grey sphere still there, drawn before */
+    CHECK(abs(p[0] - p[1]) < 30 && p[1] > 80);
+    int bad[4] = {100, 0, 64, 64};
+    memcpy(a.viewport, bad, sizeof bad);
+    CHECK(thx_render(ctx, ren, &a, im, NULL) == THX_EINPUT);
+    CHECK(strstr(thx_ctx_message(ctx), "viewport") != NULL);
+    thx_image_destroy(&im);
+    thx_surface_destroy(&s);
+    thx_surface_destroy(&s2);
+}
+
+/* Points, wire, translucency, arrows. */
+static void test_modes(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(16, 24, 1, c, 0);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_POINTS);
+    rs.color[0] = 1, rs.color[1] = 1, rs.color[2] = 0;
+    rs.point_size = 5;
+    thx_scene sc = base_scene(&rs, 1);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "points");
+    int n_pts = count_color(im, 255, 255, 0, 10), n_bg = count_color(im, 26, 51, 77, 1);
+    CHECK(n_pts > 200 && n_bg > N * N / 3);
+    CHECK(n_pts + n_bg < N * N); /* antialiased edges in between, and nothing else */
+    rs.mode = THX_DRAW_WIRE;
+    rs.line_width = 1.5f;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "wire");
+    int n_wire = count_color(im, 255, 255, 0, 10);
+    CHECK(n_wire > 500);
+    CHECK(near_rgb(px(im, 0, 0), 0.1, 0.2, 0.3, 1));
+    /* a translucent red sphere around an opaque blue one: purple in the middle, red at the rim */
+    double c0[3] = {0, 0, 0};
+    thx_surface *inner = sphere(16, 24, 0.5, c0, 0);
+    thx_render_surface two[2] = {surf_defaults(s, THX_DRAW_PHONG), surf_defaults(inner, THX_DRAW_PHONG)};
+    two[0].color[0] = 1, two[0].color[1] = 0, two[0].color[2] = 0, two[0].color[3] = 0.4f;
+    two[1].color[0] = 0, two[1].color[1] = 0, two[1].color[2] = 1;
+    sc = base_scene(two, 2);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "translucent");
+    const unsigned char *p = px(im, 64, 64), *q = px(im, 64, 12);
+    CHECK(p[0] > 60 && p[2] > 60 && p[1] < 60);
+    CHECK(q[0] > q[2] + 20);
+    /* translucent over a transparent background: un-premultiplied on the way out */
+    memset(sc.background, 0, sizeof sc.background);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(px(im, 0, 0)[3] == 0);
+    q = px(im, 64, 12);
+    CHECK(q[3] > 60 && q[3] < 200 && q[0] > 150 && q[2] < 40);
+    /* arrows along +x seen from -y (+x to the right): a solid one and a unit-length one coloured by
+     * magnitude */
+    double pos[6] = {-0.8, 0, 0.5, -0.8, 0, -0.5}, vec[6] = {1.6, 0, 0, 4, 0, 0};
+    thx_render_arrows ar[2];
+    memset(ar, 0, sizeof ar);
+    ar[0].pos = pos, ar[0].vec = vec, ar[0].n = 1, ar[0].scale = 1, ar[0].width = 3;
+    ar[0].color[0] = 1, ar[0].color[1] = 1, ar[0].color[3] = 1;
+    ar[1].pos = pos + 3, ar[1].vec = vec + 3, ar[1].n = 1, ar[1].scale = 1.6, ar[1].unit_length = 1, ar[1].width = 3;
+    ar[1].cmap = THX_CMAP_ECG, ar[1].mag_scale.lo = -4, ar[1].mag_scale.hi = 4;
+    sc = base_scene(NULL, 0);
+    plane_camera(&sc.camera);
+    sc.arrows = ar;
+    sc.n_arrows = 2;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "arrows");
+    /* z = 0.5 is row 32 from the top; x = -0.8 .. 0.8 are columns 13 .. 115 */
+    CHECK(near_rgb(px(im, 40, 32), 1, 1, 0, 2));
+    CHECK(near_rgb(px(im, 40, 28), 0.1, 0.2, 0.3, 1));
+    int head = 0;
+    for (int y = 24; y <= 40; y++) head += near_rgb(px(im, 105, y), 1, 1, 0, 2);
+    CHECK(head >= 6); /* the head is wider than the 3-pixel shaft */
+    CHECK(near_rgb(px(im, 5, 32), 0.1, 0.2, 0.3, 1));
+    CHECK(near_rgb(px(im, 122, 32), 0.1, 0.2, 0.3, 1));
+    unsigned char red[3];
+    thx_colormap_eval(THX_CMAP_ECG, 1.0, red);
+    CHECK(diff3(px(im, 40, 96), red) <= 6); /* |v| = 4 at the top of the scale */
+    thx_image_destroy(&im);
+    thx_surface_destroy(&s);
+    thx_surface_destroy(&inner);
+}
+
+static void test_errors(void)
+{
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, 64, 64, &im));
+    thx_scene sc = base_scene(NULL, 0);
+    CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT); /* wrong image size */
+    CHECK(strstr(thx_ctx_message(ctx), "64 x 64") != NULL);
+    thx_image_destroy(&im);
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    sc.camera.center[0] = sc.camera.eye[0], sc.camera.center[1] = sc.camera.eye[1];
+    sc.camera.center[2] = sc.camera.eye[2];
+    CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
+    CHECK(strstr(thx_ctx_message(ctx), "camera") != NULL);
+    thx_surface *s = plane(2);
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_FLAT);
+    s->tri[4] = 99; /* out of range */
+    sc = base_scene(&rs, 1);
+    CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
+    CHECK(strstr(thx_ctx_message(ctx), "triangle") != NULL);
+    s->tri[4] = 1;
+    double v[9] = {0};
+    rs.values = v;
+    rs.style = THX_DATA_BANDS;
+    rs.n_levels = 0;
+    CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
+    rs.n_levels = 3;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    thx_renderer *bad = NULL;
+    CHECK(thx_renderer_create(ctx, -3, 10, &bad) == THX_EINPUT && bad == NULL);
+    /* a renderer for the caller's context cannot read back */
+    CHECK_OK(ctx, thx_renderer_create(ctx, 0, 0, &bad));
+    CHECK(thx_render(ctx, bad, &sc, im, NULL) == THX_EINPUT);
+    thx_renderer_destroy(&bad);
+    CHECK(bad == NULL);
+    thx_renderer_destroy(&bad);
+    thx_image_destroy(&im);
+    thx_surface_destroy(&s);
+}
+
+/* Culling and two-sided lighting: a closed sphere drawn only from outside is the same picture; from
+ * inside (perspective, eye at the centre) its inside shows; so does the back of an open surface and
+ * a closed sphere whose triangles all face inward. */
+static void test_sides(void)
+{
+    double c[3] = {0, 0, 0};
+    thx_surface *good = sphere(24, 36, 1, c, 0), *bad = sphere(24, 36, 1, c, 1), *pl = plane(4);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    for (int f = 0; f < 2; f++) {
+        thx_render_surface rs = surf_defaults(f ? bad : good, THX_DRAW_PHONG);
+        thx_scene sc = base_scene(&rs, 1);
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        const unsigned char *p = px(im, 64, 64);
+        CHECK(p[0] > 150 && abs(p[0] - p[2]) < 10); /* lit grey, facing the light */
+        CHECK(near_rgb(px(im, 2, 2), 0.1, 0.2, 0.3, 1));
+        /* inside, looking along -y (perspective): the sphere's inside fills the view */
+        memset(&sc.camera, 0, sizeof sc.camera);
+        sc.camera.center[1] = -1;
+        sc.camera.up[2] = 1;
+        sc.camera.fov_deg = 60;
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        save(im, f ? "inside_flipped" : "inside");
+        CHECK(!near_rgb(px(im, 64, 64), 0.1, 0.2, 0.3, 20));
+        CHECK(!near_rgb(px(im, 2, 2), 0.1, 0.2, 0.3, 20));
+    }
+    /* the plane faces -y; seen from +y its back is lit the same */
+    thx_render_surface rs = surf_defaults(pl, THX_DRAW_FLAT);
+    thx_scene sc = base_scene(&rs, 1);
+    plane_camera(&sc.camera);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(near_rgb(px(im, 64, 64), 0.8, 0.8, 0.8, 2));
+    sc.camera.eye[1] = 5;
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(near_rgb(px(im, 64, 64), 0.8, 0.8, 0.8, 2));
+    thx_image_destroy(&im);
+    thx_surface_destroy(&good);
+    thx_surface_destroy(&bad);
+    thx_surface_destroy(&pl);
+}
+
+/* A renderer without a context of its own (the viewer's case) drawing with thx_render_scene_gl into
+ * a framebuffer of the caller's: here the first renderer's context, which thx_render leaves current
+ * when no other was. */
+static void test_callers_context(void)
+{
+    if (eglGetCurrentContext() == EGL_NO_CONTEXT) {
+        fprintf(stderr, "test_callers_context: no current context, skipped\n");
+        return;
+    }
+    GLuint fbo, rb[2];
+    glGenFramebuffers(1, &fbo);
+    glGenRenderbuffers(2, rb);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[0]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, 64, 32);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[1]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, 64, 32);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
+    thx_renderer *att = NULL;
+    CHECK_OK(ctx, thx_renderer_create(ctx, 0, 0, &att));
+    CHECK(thx_renderer_samples(att) == 0);
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(16, 24, 1, c, 0);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = s->xyz[3 * i];
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_FLAT);
+    rs.values = v;
+    thx_scene sc = base_scene(&rs, 1);
+    double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    thx_camera_view(&sc.camera, THX_VIEW_ANTERIOR, lo, hi, 2.0);
+    size_t n_nan = 7;
+    CHECK_OK(ctx, thx_render_scene_gl(ctx, att, &sc, 64, 32, &n_nan));
+    CHECK(n_nan == 0);
+    CHECK(strstr(thx_renderer_info(att), "OpenGL") != NULL);
+    unsigned char pix[64 * 32 * 4];
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, 64, 32, GL_RGBA, GL_UNSIGNED_BYTE, pix);
+    const unsigned char *bg = pix, *l = pix + 4 * (16 * 64 + 24), *r = pix + 4 * (16 * 64 + 40);
+    CHECK(abs(bg[0] - 26) <= 1 && abs(bg[1] - 51) <= 1 && abs(bg[2] - 77) <= 1);
+    CHECK(l[0] > l[2] + 30); /* the subject's right, positive, on the left */
+    CHECK(r[2] > r[0] + 30);
+    CHECK(glGetError() == GL_NO_ERROR);
+    thx_renderer_destroy(&att);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteRenderbuffers(2, rb);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
+/* A second renderer of another size alongside the first, then destroyed: the first still works. */
+static void test_second_renderer(void)
+{
+    thx_renderer *r2 = NULL;
+    CHECK_OK(ctx, thx_renderer_create(ctx, 200, 100, &r2));
+    if (!r2) return;
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(16, 24, 1, c, 0);
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_GOURAUD);
+    thx_scene sc = base_scene(&rs, 1);
+    double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+    thx_camera_view(&sc.camera, THX_VIEW_LEFT, lo, hi, 2.0);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, 200, 100, &im));
+    CHECK_OK(ctx, thx_render(ctx, r2, &sc, im, NULL));
+    CHECK(near_rgb(px(im, 10, 50), 0.1, 0.2, 0.3, 1));
+    CHECK(!near_rgb(px(im, 100, 50), 0.1, 0.2, 0.3, 10));
+    thx_renderer_destroy(&r2);
+    thx_image_destroy(&im);
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    sc = base_scene(&rs, 1);
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    CHECK(!near_rgb(px(im, 64, 64), 0.1, 0.2, 0.3, 10));
+    thx_image_destroy(&im);
+    thx_surface_destroy(&s);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* 100,000 triangles with data at 1024 x 1024: the values change every frame (an animation). */
+static void bench(void)
+{
+    thx_renderer *big = NULL;
+    CHECK_OK(ctx, thx_renderer_create(ctx, 1024, 1024, &big));
+    if (!big) return;
+    double c[3] = {0, 0, 0};
+    thx_surface *s = sphere(201, 250, 100, c, 0);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
+    rs.values = v;
+    rs.style = THX_DATA_BANDS_CONTOURS;
+    rs.n_levels = 12;
+    rs.scale.lo = -100, rs.scale.hi = 100;
+    thx_scene sc = base_scene(&rs, 1);
+    double lo[3] = {-100, -100, -100}, hi[3] = {100, 100, 100};
+    thx_camera_view(&sc.camera, THX_VIEW_ANTERIOR, lo, hi, 1.0);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, 1024, 1024, &im));
+    for (int pass = 0; pass < 3; pass++) {
+        /* automatic samples; 4x multisampling; automatic with a clip plane (both sides drawn) */
+        CHECK_OK(ctx, thx_renderer_set_samples(ctx, big, pass == 1 ? 4 : 0));
+        sc.n_clip = pass == 2;
+        sc.clip[0].n[1] = -1, sc.clip[0].d = 150; /* cuts nothing, but disables culling */
+        double t[11];
+        for (int f = 0; f < 11; f++) {
+            for (size_t i = 0; i < s->n_nodes; i++)
+                v[i] = s->xyz[3 * i] * cos(0.3 * f) + s->xyz[3 * i + 2] * sin(0.3 * f);
+            double t0 = thx_wtime();
+            CHECK_OK(ctx, thx_render(ctx, big, &sc, im, NULL));
+            t[f] = thx_wtime() - t0;
+        }
+        save(im, pass == 1 ? "bench_msaa" : "bench");
+        qsort(t + 1, 10, sizeof *t, cmp_double);
+        printf("bench: %zu triangles, %zu nodes, 1024 x 1024, %d sample%s%s: first frame %.1f ms, median of 10 %.1f ms "
+               "(min %.1f, max %.1f)\n", s->n_tris, s->n_nodes, thx_renderer_samples(big),
+               thx_renderer_samples(big) > 1 ? "s" : " + FXAA", pass == 2 ? ", clip plane" : "", 1e3 * t[0],
+               1e3 * 0.5 * (t[5] + t[6]), 1e3 * t[1], 1e3 * t[10]);
+    }
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+    thx_renderer_destroy(&big);
+}
+
+int main(void)
+{
+    if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    test_views();
+    thx_status st = thx_renderer_create(ctx, N, N, &ren);
+    if (st != THX_OK) {
+        fprintf(stderr, "test_render: no renderer: %s\n", thx_ctx_message(ctx));
+        CHECK(st == THX_OK);
+        thx_ctx_destroy(&ctx);
+        return tl_finish();
+    }
+    CHECK(strstr(thx_renderer_info(ren), "OpenGL") != NULL);
+    /* every picture with the automatic antialiasing, then with 4x multisampling */
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass) CHECK_OK(ctx, thx_renderer_set_samples(ctx, ren, 4));
+        int ns = thx_renderer_samples(ren);
+        CHECK(ns == 1 || ns == 4);
+        CHECK(!pass || ns == 4);
+        printf("renderer: %s, %d sample%s\n", thx_renderer_info(ren), ns, ns > 1 ? "s" : " + FXAA");
+        test_ecg_map();
+        test_bands_contours();
+        test_nan();
+        test_orientation();
+        test_clip();
+        test_viewports();
+        test_modes();
+        test_sides();
+        test_errors();
+    }
+    CHECK(thx_renderer_set_samples(ctx, ren, 2) == THX_EINPUT);
+    test_callers_context();
+    test_second_renderer();
+    if (getenv("THX_RENDER_BENCH")) bench();
+    thx_renderer_destroy(&ren);
+    CHECK(ren == NULL);
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
