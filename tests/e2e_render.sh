@@ -25,6 +25,8 @@ R=(--solution sol --frame 193 --size 400x480)
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.8 -o clip.png -q
 "$THORAX" render "${R[@]}" --view left --style bands+contours --levels 10 -o bands.png -q
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --surface torso=wire:0.2 -o arrows.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-region lung_l --surface torso=wire:0.2 -o arrows_lung.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-box -100:-50:80:0:60:140 --surface torso=wire:0.2 -o arrows_box.png -q
 "$THORAX" render model --size 600x400 --panels --mode orientation -o orient.png -q
 "$THORAX" render model --size 300x300 --mode wire --view superior -o wire.png -q
 
@@ -59,6 +61,12 @@ assert dark.sum() > 200, ('contour pixels', dark.sum())
 # the annotated picture: colour bar and trace change the right and bottom strips
 p = png('post.png')
 assert (abs(p[-60:, :] - bg).sum(axis=2) > 40).sum() > 300, 'no trace'
+# arrows (yellow): everywhere, and fewer when limited to the left lung or a box
+def arrows(p):
+    x = png(p); return ((x[:, :, 0] > 200) & (x[:, :, 1] > 170) & (x[:, :, 2] < 90)).sum()
+na, nl, nb = arrows('arrows.png'), arrows('arrows_lung.png'), arrows('arrows_box.png')
+assert na > 200 and nl < na and nb < na, (na, nl, nb)
+print('arrow pixels: all %d, left lung %d, box %d' % (na, nl, nb))
 o = png('orient.png')
 assert (abs(o - o[0, 0]).sum(axis=2) > 40).sum() > 5000, 'orientation panels empty'
 print('render checks passed')

@@ -43,6 +43,9 @@ typedef struct {
     int n_mode_of;
     double arrow_spacing, arrow_scale;
     int arrow_max, arrow_unit;
+    int have_box;
+    double box[6];             /* arrows only inside x0 y0 z0 x1 y1 z1 */
+    const char *arrow_region;  /* arrows only at nodes of this tissue region */
     int verbose;
 } ropts;
 
@@ -227,19 +230,39 @@ static void build_arrows(const ropts *o, const rdata *d, int frame, built_scene 
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < v->n_nodes; i++)
         for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], v->xyz[3 * i + k]); hi[k] = fmax(hi[k], v->xyz[3 * i + k]); }
+    /* limits: a box, a tissue region */
+    unsigned char *in = malloc(v->n_nodes ? v->n_nodes : 1);
+    if (!in) return;
+    memset(in, o->arrow_region ? 0 : 1, v->n_nodes);
+    if (o->arrow_region) {
+        int r = -1;
+        for (size_t k = 0; k < v->n_regions; k++)
+            if (!strcmp(v->regions[k].name, o->arrow_region)) r = (int)k;
+        for (size_t t = 0; t < v->n_tets; t++)
+            if (v->region[t] == r)
+                for (int k = 0; k < 4; k++) in[v->tet[4 * t + k]] = 1;
+    }
+    if (o->have_box)
+        for (size_t i = 0; i < v->n_nodes; i++) {
+            const double *x = v->xyz + 3 * i;
+            for (int k = 0; k < 3; k++)
+                if (x[k] < o->box[k] || x[k] > o->box[3 + k]) in[i] = 0;
+        }
     double h = o->arrow_spacing;
     int n[3];
     for (int k = 0; k < 3; k++) n[k] = (int)((hi[k] - lo[k]) / h) + 1;
     size_t cells = (size_t)n[0] * n[1] * n[2];
     double *acc = calloc(cells * 7, sizeof *acc);
-    if (!acc) return;
+    if (!acc) { free(in); return; }
     for (size_t i = 0; i < v->n_nodes; i++) {
+        if (!in[i]) continue;
         const double *x = v->xyz + 3 * i;
         int ix = (int)((x[0] - lo[0]) / h), iy = (int)((x[1] - lo[1]) / h), iz = (int)((x[2] - lo[2]) / h);
         double *a = acc + 7 * (((size_t)iz * n[1] + iy) * n[0] + ix);
         for (int k = 0; k < 3; k++) { a[k] += x[k]; a[3 + k] += J[3 * i + k]; }
         a[6] += 1;
     }
+    free(in);
     size_t m = 0;
     for (size_t q = 0; q < cells; q++) m += acc[7 * q + 6] > 0 && (acc[7 * q + 3] != 0 || acc[7 * q + 4] != 0 || acc[7 * q + 5] != 0);
     b->apos = malloc(3 * (m ? m : 1) * sizeof *b->apos);
@@ -569,6 +592,16 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     else if (!strcmp(a, "--arrow-max")) { VAL(); o->arrow_max = atoi(v); if (o->arrow_max < 1) { cli_usage_error(cmd, "--arrow-max must be at least 1"); return -1; } }
     else if (!strcmp(a, "--arrow-length")) { VAL(); o->arrow_scale = atof(v); if (!(o->arrow_scale > 0)) { cli_usage_error(cmd, "--arrow-length must be positive (mm)"); return -1; } }
     else if (!strcmp(a, "--arrow-unit")) o->arrow_unit = 1;
+    else if (!strcmp(a, "--arrow-region")) { VAL(); o->arrow_region = v; }
+    else if (!strcmp(a, "--arrow-box")) {
+        VAL();
+        double *b = o->box;
+        if (sscanf(v, "%lf:%lf:%lf:%lf:%lf:%lf", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6 || b[0] >= b[3] || b[1] >= b[4] || b[2] >= b[5]) {
+            cli_usage_error(cmd, "--arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm, low corner then high)");
+            return -1;
+        }
+        o->have_box = 1;
+    }
     else if (!strcmp(a, "--font")) { VAL(); o->font = v; }
     else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { VAL(); o->out = v; }
     else if (!strcmp(a, "-v")) o->verbose = 1;
@@ -604,6 +637,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --arrows            current density arrows (the solution's currents_node), averaged on a grid\n"      \
     "  --arrow-spacing MM  grid spacing for the averaging (default 20); --arrow-max N (default 400);\n"       \
     "  --arrow-length MM   the longest arrow's length (default 15); --arrow-unit: unit length, coloured\n"    \
+    "  --arrow-region NAME only at nodes of this tissue region; --arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm)\n"      \
     "  --font FILE         a TrueType font (default: sans-serif via fontconfig)\n"
 
 static void render_help(void)
