@@ -38,6 +38,7 @@ bench: build
 	@bash bench/delaunay.sh
 	@bash bench/mesh.sh
 	@bash bench/forward.sh
+	@bash bench/render.sh
 
 clean:
 	rm -rf $(BUILD) $(BUILD)-asan out
