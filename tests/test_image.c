@@ -676,6 +676,22 @@ static void test_colorbar(void)
     CHECK(ink_below > 50);
     thx_image_destroy(&img);
 
+    /* at the right edge: the title and the unit do not fit on one line beside the strip, so they
+     * stand on two lines above it, both wholly inside the image (ink rows in two separate groups,
+     * none of them reaching into the top value's label) */
+    img = new_image(120, 300, 255, 255, 255);
+    thx_draw_colorbar(img, f, 84, 80, 16, 200, THX_CMAP_ECG, &s, 0, 5, "potential", "mV");
+    int rows_ink[80] = {0}, groups = 0, in_group = 0, right_col = 0;
+    for (int j = 0; j < 80 - thx_font_height(f) / 2; j++) {
+        for (int i = 0; i < 120; i++) rows_ink[j] += px(img, i, j)[0] < 128;
+        if (rows_ink[j] && !in_group) groups++;
+        in_group = rows_ink[j] > 0;
+        right_col += px(img, 119, j)[0] < 128;
+    }
+    CHECK(groups == 2);
+    CHECK(right_col == 0); /* nothing cut at the edge */
+    thx_image_destroy(&img);
+
     /* no font: strip only; log scale, bands */
     img = new_image(60, 60, 0, 0, 0);
     thx_scale sl = {THX_SCALE_LOG, -1, 1, 10};

@@ -71,7 +71,7 @@ void thx_fem_system_destroy(thx_fem_system **s);
 
 typedef struct {
     int iterations;
-    double residual;   /* final relative residual (preconditioned norm as KSP reports it) */
+    double residual;   /* final relative residual (as KSP reports it; the true one for a direct solve) */
     double seconds;
     int converged;     /* KSPConvergedReason > 0 */
 } thx_fem_solve_stats;

@@ -59,6 +59,7 @@ struct thx_fem_system {
     Mat A;
     KSP ksp;
     Vec x, b, xall;
+    Vec r;               /* work vector for the true residual of a direct solve */
     VecScatter toall;
     double t_setup;      /* the matrix (creation) and the preconditioner (KSPSetUp) */
     double t_matrix;     /* the matrix alone */
@@ -196,6 +197,7 @@ void thx_fem_system_destroy(thx_fem_system **sp)
     if (s->x) VecDestroy(&s->x);
     if (s->b) VecDestroy(&s->b);
     if (s->xall) VecDestroy(&s->xall);
+    if (s->r) VecDestroy(&s->r);
     if (s->toall) VecScatterDestroy(&s->toall);
     thx_csr_free(&s->kfd);
     free(s->fidx);
@@ -308,6 +310,17 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
     PCALL(ctx, KSPGetConvergedReason(s->ksp, &reason));
     PCALL(ctx, KSPGetIterationNumber(s->ksp, &its));
     PCALL(ctx, KSPGetResidualNorm(s->ksp, &rnorm));
+    {
+        /* a direct solve (preonly) reports no residual: compute ||b - A x|| */
+        KSPType kt;
+        PCALL(ctx, KSPGetType(s->ksp, &kt));
+        if (kt && !strcmp(kt, KSPPREONLY)) {
+            if (!s->r) PCALL(ctx, VecDuplicate(s->b, &s->r));
+            PCALL(ctx, MatMult(s->A, s->x, s->r));
+            PCALL(ctx, VecAYPX(s->r, -1.0, s->b));
+            PCALL(ctx, VecNorm(s->r, NORM_2, &rnorm));
+        }
+    }
     if (out) {
         out->iterations = (int)its;
         PetscReal bn = 0;

@@ -464,8 +464,24 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     if (has_title && has_unit) snprintf(head, sizeof head, "%s (%s)", title, unit);
     else snprintf(head, sizeof head, "%s", has_title ? title : has_unit ? unit : "");
     if (!head[0]) return;
-    int tx = vertical ? x : x + (w - thx_text_width(f, head)) / 2;
-    thx_draw_text(img, f, tx, y - 4 - f->descender, head, ink);
+    /* The title is above the strip and kept inside the image: beside a vertical strip it is split
+     * into two lines (the title, then the unit) when one line would run off the right edge; a line
+     * still too long is moved left. */
+    /* (beside a vertical strip the top value's label reaches half a digit above it) */
+    int base = y - 4 - f->descender - (vertical ? f->digit_h / 2 : 0), width = thx_text_width(f, head);
+    if (vertical && has_title && has_unit && x + width > img->w - 2) {
+        char u[64];
+        snprintf(u, sizeof u, "(%s)", unit);
+        int wt = thx_text_width(f, title), wu = thx_text_width(f, u);
+        int tt = x + wt > img->w - 2 ? img->w - 2 - wt : x, tu = x + wu > img->w - 2 ? img->w - 2 - wu : x;
+        thx_draw_text(img, f, tt < 0 ? 0 : tt, base - thx_font_height(f), title, ink);
+        thx_draw_text(img, f, tu < 0 ? 0 : tu, base, u, ink);
+        return;
+    }
+    int tx = vertical ? x : x + (w - width) / 2;
+    if (tx + width > img->w - 2) tx = img->w - 2 - width;
+    if (tx < 0) tx = 0;
+    thx_draw_text(img, f, tx, base, head, ink);
 }
 
 /* ------------------------------------------------------------- signal trace */
