@@ -29,6 +29,8 @@ R=(--solution sol --frame 193 --size 400x480)
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-box -100:-50:80:0:60:140 --surface torso=wire:0.2 -o arrows_box.png -q
 "$THORAX" render model --size 600x400 --panels --mode orientation -o orient.png -q
 "$THORAX" render model --size 300x300 --mode wire --view superior -o wire.png -q
+"$THORAX" render model --size 300x300 --surface lung_l=flat:1:#00ff00 --surface lung_r=flat:1:#ff00ff --only lung_l --only lung_r -o look.png -q
+"$THORAX" render "${R[@]}" --view anterior --trace torso:100 -o node.png -q
 
 $PY - <<'EOF'
 import vtk
@@ -69,6 +71,17 @@ assert na > 200 and nl < na and nb < na, (na, nl, nb)
 print('arrow pixels: all %d, left lung %d, box %d' % (na, nl, nb))
 o = png('orient.png')
 assert (abs(o - o[0, 0]).sum(axis=2) > 40).sum() > 5000, 'orientation panels empty'
+# per-surface colours: the left lung green, the right lung magenta, nothing else drawn
+k = png('look.png')
+green = (k[:, :, 1] > 60) & (k[:, :, 0] < 20) & (k[:, :, 2] < 20)
+magenta = (k[:, :, 0] > 60) & (k[:, :, 2] > 60) & (k[:, :, 1] < 20)
+other = ~(green | magenta) & (abs(k - k[0, 0]).sum(axis=2) > 30)
+assert green.sum() > 2000 and magenta.sum() > 2000, (green.sum(), magenta.sum())
+assert green.nonzero()[1].mean() > magenta.nonzero()[1].mean(), 'left lung should be at the image right (anterior view)'
+assert other.sum() < 0.05 * (green.sum() + magenta.sum()), ('other colours', other.sum())
+# a node's signal as the trace: the bottom strip is drawn
+n = png('node.png')
+assert (abs(n[-90:, :] - bg).sum(axis=2) > 40).sum() > 300, 'no node trace'
 print('render checks passed')
 EOF
 
@@ -91,6 +104,10 @@ refused() { local what=$1 file=$2; shift 2
 head -c 200 beat.raw > /dev/null
 refused "rows" bad1.png "$THORAX" render model --data beat.raw --data-surface torso -o bad1.png
 refused "unwritable" /nonexistent/x.png "$THORAX" render model -o /nonexistent/x.png
+refused "surface name" bad4.png "$THORAX" render model --surface liver=flat -o bad4.png
+refused "surface spec" bad4.png "$THORAX" render model --surface torso=flat:0.5:#12 -o bad4.png
+refused "trace lead" bad4.png "$THORAX" render --solution sol --trace X7 -o bad4.png
+refused "trace node" bad4.png "$THORAX" render --solution sol --trace torso:99999 -o bad4.png
 refused "frame" bad2.png "$THORAX" render --solution sol --frame 999 -o bad2.png
 refused "no EGL" bad3.png env EGL_PLATFORM=none LIBGL_DRIVERS_PATH=/nonexistent __EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json "$THORAX" render model -o bad3.png
 grep -qi "egl" err.log || fail "EGL message"

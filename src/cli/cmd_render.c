@@ -39,8 +39,14 @@ typedef struct {
     int colorbar, label, panels;
     const char *only[16];
     int n_only;
-    char mode_of[16][64];   /* NAME=mode[:opacity] */
-    int n_mode_of;
+    struct surf_look {      /* --surface NAME=MODE[:OPACITY[:#RRGGBB]] */
+        char name[64];
+        thx_draw_mode mode;
+        float opacity;      /* < 0: the default */
+        int have_color;
+        float color[3];
+    } look[16];
+    int n_look;
     double arrow_spacing, arrow_scale;
     int arrow_max, arrow_unit;
     int have_box;
@@ -57,6 +63,9 @@ typedef struct {
     thx_series *currents;     /* currents_node, for arrows */
     thx_series *volume;       /* volume potentials (unused for now) */
     char ecg_names[12][8];
+    const thx_series *trace;  /* the series --trace draws from (not owned), its row and label */
+    size_t trace_row;
+    char trace_label[96];
 } rdata;
 
 static void rdata_free(rdata *d)
@@ -82,6 +91,76 @@ static int surface_by_name(const thx_model *m, const char *name)
     return -1;
 }
 
+static const char *lead_names[12] = {"I", "II", "III", "aVR", "aVL", "aVF", "V1", "V2", "V3", "V4", "V5", "V6"};
+
+static int lead_index(const char *name)
+{
+    for (int k = 0; k < 12; k++)
+        if (!strcmp(name, lead_names[k])) return k;
+    return -1;
+}
+
+/* Every surface named by --only and --surface exists in the model. */
+static thx_status check_names(thx_ctx *ctx, const ropts *o, const thx_model *m)
+{
+    char list[512] = "";
+    size_t len = 0;
+    for (size_t s = 0; s < m->n_surfaces && len < sizeof list - 80; s++)
+        len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", s ? ", " : "", m->surf[s]->name);
+    for (int k = 0; k < o->n_only + o->n_look; k++) {
+        const char *name = k < o->n_only ? o->only[k] : o->look[k - o->n_only].name;
+        if (surface_by_name(m, name) < 0)
+            return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
+                             k < o->n_only ? "--only" : "--surface", name, list);
+    }
+    return THX_OK;
+}
+
+/* --trace: a lead of the solution's 12-lead ECG (I .. V6), or SURFACE:NODE / NODE (1-based) of a
+   surface's data (without a surface name: the body surface's data, else the only data there is). */
+static thx_status resolve_trace(thx_ctx *ctx, const ropts *o, rdata *d)
+{
+    if (!o->trace) return THX_OK;
+    int lead = lead_index(o->trace);
+    if (lead >= 0) {
+        if (!d->ecg)
+            return thx_error(ctx, THX_EINPUT, "--trace %s: a lead needs --solution DIR with an ecg12 file (run thorax leads)", o->trace);
+        if ((size_t)lead >= d->ecg->n_rows)
+            return thx_error(ctx, THX_EINPUT, "--trace %s: the ECG file has %zu rows", o->trace, d->ecg->n_rows);
+        d->trace = d->ecg;
+        d->trace_row = (size_t)lead;
+        snprintf(d->trace_label, sizeof d->trace_label, "%s", o->trace);
+        return THX_OK;
+    }
+    char name[64] = "";
+    const char *num = o->trace, *colon = strrchr(o->trace, ':');
+    if (colon) {
+        snprintf(name, sizeof name, "%.*s", (int)(colon - o->trace < 63 ? colon - o->trace : 63), o->trace);
+        num = colon + 1;
+    }
+    char *end = NULL;
+    long node = strtol(num, &end, 10);
+    if (!*num || *end || node < 1)
+        return thx_error(ctx, THX_EINPUT, "--trace '%s': give a lead (I, II, III, aVR, aVL, aVF, V1..V6) or SURFACE:NODE (1-based)", o->trace);
+    int s = -1;
+    if (name[0]) {
+        s = surface_by_name(d->m, name);
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': the model has no surface '%s'", o->trace, name);
+    } else {
+        for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++)
+            if (d->series[k] && (s < 0 || d->m->surf[k]->role == THX_ROLE_OUTER)) s = (int)k;
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': there are no data to trace (give --solution or --data)", o->trace);
+    }
+    const thx_series *x = d->series[s];
+    if (!x) return thx_error(ctx, THX_EINPUT, "--trace '%s': surface '%s' has no data", o->trace, d->m->surf[s]->name);
+    if ((size_t)node > x->n_rows)
+        return thx_error(ctx, THX_EINPUT, "--trace '%s': surface '%s' has %zu nodes", o->trace, d->m->surf[s]->name, x->n_rows);
+    d->trace = x;
+    d->trace_row = (size_t)node - 1;
+    snprintf(d->trace_label, sizeof d->trace_label, "%s node %ld", d->m->surf[s]->name, node);
+    return THX_OK;
+}
+
 static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
 {
     memset(d, 0, sizeof *d);
@@ -104,6 +183,7 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
     }
     if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
     thx_status st = thx_model_read(ctx, model_dir, &d->m);
+    if (st == THX_OK) st = check_names(ctx, o, d->m);
     if (st != THX_OK) { cJSON_Delete(j); return st; }
     if (j) {
         cJSON *files = cJSON_GetObjectItem(j, "files"), *epi = cJSON_GetObjectItem(j, "epicardial");
@@ -120,7 +200,7 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
         }
-        if (st == THX_OK && o->trace) {
+        if (st == THX_OK && o->trace && lead_index(o->trace) >= 0) {
             const char *ext[3] = {"txt", "raw", "mat"};
             for (int k = 0; k < 3 && !d->ecg; k++) {
                 snprintf(path, sizeof path, "%s/ecg12.%s", o->solution, ext[k]);
@@ -159,6 +239,7 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
         thx_series_destroy(&d->series[target]);
         d->series[target] = s;
     }
+    THX_CHECK(resolve_trace(ctx, o, d));
     for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
         if (d->series[s] && (size_t)o->frame >= d->series[s]->n_frames && o->last < 0)
             return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
@@ -335,17 +416,13 @@ static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scen
             for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
             if (any) r->color[3] = m->surf[s]->role == THX_ROLE_OUTER ? 0.25f : 0.35f;
         }
-        for (int k = 0; k < o->n_mode_of; k++) {
-            char name[64];
-            snprintf(name, sizeof name, "%s", o->mode_of[k]);
-            char *eq = strchr(name, '=');
-            if (!eq) continue;
-            *eq = '\0';
-            if (strcmp(name, m->surf[s]->name)) continue;
-            char *colon = strchr(eq + 1, ':');
-            if (colon) { *colon = '\0'; r->color[3] = (float)atof(colon + 1); }
-            int ok;
-            r->mode = parse_mode(eq + 1, &ok);
+        const struct surf_look *look = NULL;
+        for (int k = 0; k < o->n_look; k++)
+            if (!strcmp(o->look[k].name, m->surf[s]->name)) look = &o->look[k];
+        if (look) {
+            r->mode = look->mode;
+            if (look->opacity >= 0) r->color[3] = look->opacity;
+            if (look->have_color) memcpy(r->color, look->color, sizeof look->color);
         }
         r->back_color[0] = 1;
         r->back_color[1] = 1;
@@ -363,7 +440,7 @@ static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scen
             r->cmap = o->cmap;
             scale_for(o, d, (int)s, (int)f, &r->scale);
             r->contour_color[3] = 1;
-            r->color[3] = 1;
+            r->color[3] = look && look->opacity >= 0 ? look->opacity : 1;
             if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
                 b->main_surface = (int)s;
                 b->main_scale = r->scale;
@@ -398,7 +475,6 @@ static int parse_clip(const char *spec, const double lo[3], const double hi[3], 
     return -1;
 }
 
-static const char *lead_names[12] = {"I", "II", "III", "aVR", "aVL", "aVF", "V1", "V2", "V3", "V4", "V5", "V6"};
 
 static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_renderer *rr, thx_font *font, int frame,
                              thx_image *img, size_t *nan_total)
@@ -495,22 +571,17 @@ static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_rendere
         snprintf(text, sizeof text, "t = %g %s   (frame %d of %zu)", any->time[f], any->time_unit, frame + 1, any->n_frames);
         thx_draw_text(img, font, 8, thx_font_height(font) + 2, text, fg);
     }
-    if (o->trace && d->ecg && font) {
-        int row = -1;
-        for (int k = 0; k < 12; k++)
-            if (!strcmp(o->trace, lead_names[k])) row = k;
-        if (row >= 0 && (size_t)row < d->ecg->n_rows) {
-            size_t n = d->ecg->n_frames;
-            double *v = malloc(n * sizeof *v);
-            if (v) {
-                for (size_t f = 0; f < n; f++) v[f] = d->ecg->v[f * d->ecg->n_rows + (size_t)row];
-                double dt = n > 1 ? d->ecg->time[1] - d->ecg->time[0] : 1;
-                unsigned char tc[4] = {120, 230, 120, 255};
-                thx_draw_trace(img, font, 8, img->h - trace_h + 4, img->w - 16, trace_h - 8, v, n, d->ecg->time[0], dt,
-                               (size_t)frame, o->trace, d->ecg->unit, tc);
-                free(v);
-            }
-        }
+    if (d->trace && font) {
+        const thx_series *x = d->trace;
+        size_t n = x->n_frames;
+        double *v = malloc(n * sizeof *v);
+        if (!v) return thx_error(ctx, THX_ENOMEM, "out of memory (trace of %zu frames)", n);
+        for (size_t f = 0; f < n; f++) v[f] = x->v[f * x->n_rows + d->trace_row];
+        double dt = n > 1 ? x->time[1] - x->time[0] : 1;
+        unsigned char tc[4] = {120, 230, 120, 255};
+        thx_draw_trace(img, font, 8, img->h - trace_h + 4, img->w - 16, trace_h - 8, v, n, x->time[0], dt,
+                       (size_t)frame, d->trace_label, x->unit, tc);
+        free(v);
     }
     return THX_OK;
 }
@@ -536,6 +607,53 @@ static void ropts_default(ropts *o)
     o->arrow_max = 400;
 }
 
+/* --surface NAME=MODE[:OPACITY[:#RRGGBB]]; 0, or -1 after printing the usage error */
+static int parse_look(const char *cmd, const char *spec, ropts *o)
+{
+    if (o->n_look >= 16) { cli_usage_error(cmd, "--surface: at most 16"); return -1; }
+    struct surf_look *l = &o->look[o->n_look];
+    memset(l, 0, sizeof *l);
+    l->opacity = -1;
+    char buf[160];
+    snprintf(buf, sizeof buf, "%s", spec);
+    char *eq = strchr(buf, '=');
+    if (!eq || eq == buf || eq - buf >= (long)sizeof l->name) {
+        cli_usage_error(cmd, "--surface '%s': give NAME=MODE[:OPACITY[:#RRGGBB]]", spec);
+        return -1;
+    }
+    *eq = '\0';
+    memcpy(l->name, buf, (size_t)(eq - buf) + 1);
+    char *mode = eq + 1, *op = strchr(mode, ':'), *col = NULL;
+    if (op) { *op++ = '\0'; col = strchr(op, ':'); if (col) *col++ = '\0'; }
+    int ok;
+    l->mode = parse_mode(mode, &ok);
+    if (!ok) {
+        cli_usage_error(cmd, "--surface '%s': mode '%s' is not hidden, points, wire, flat, gouraud, phong or orientation", spec, mode);
+        return -1;
+    }
+    if (op && *op) {
+        char *end;
+        double a = strtod(op, &end);
+        if (*end || !(a >= 0 && a <= 1)) { cli_usage_error(cmd, "--surface '%s': opacity '%s' is not a number in 0..1", spec, op); return -1; }
+        l->opacity = (float)a;
+    }
+    if (col) {
+        const char *h = col[0] == '#' ? col + 1 : col;
+        unsigned rgb;
+        int used = 0;
+        if (strlen(h) != 6 || sscanf(h, "%6x%n", &rgb, &used) != 1 || used != 6) {
+            cli_usage_error(cmd, "--surface '%s': colour '%s' is not #RRGGBB", spec, col);
+            return -1;
+        }
+        l->color[0] = (float)((rgb >> 16) & 255) / 255.0f;
+        l->color[1] = (float)((rgb >> 8) & 255) / 255.0f;
+        l->color[2] = (float)(rgb & 255) / 255.0f;
+        l->have_color = 1;
+    }
+    o->n_look++;
+    return 0;
+}
+
 /* Returns 0 if a consumed option, 1 if not ours, -1 usage error (printed). *i advanced past values. */
 static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
 {
@@ -555,7 +673,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
                    &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg) != 10) { cli_usage_error(cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV"); return -1; }
         o->have_camera = 1;
     } else if (!strcmp(a, "--mode")) { VAL(); int ok; o->mode = parse_mode(v, &ok); if (!ok) { cli_usage_error(cmd, "--mode: points, wire, flat, gouraud, phong, orientation"); return -1; } }
-    else if (!strcmp(a, "--surface")) { VAL(); if (o->n_mode_of < 16) snprintf(o->mode_of[o->n_mode_of++], 64, "%s", v); }
+    else if (!strcmp(a, "--surface")) { VAL(); if (parse_look(cmd, v, o)) return -1; }
     else if (!strcmp(a, "--only")) { VAL(); if (o->n_only < 16) o->only[o->n_only++] = v; }
     else if (!strcmp(a, "--style")) {
         VAL();
@@ -618,7 +736,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
     "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
     "  --mode M            points, wire, flat, gouraud (default), phong, orientation (the paper's check)\n"  \
-    "  --surface NAME=M[:OPACITY]  one surface's mode and opacity (repeatable; M may be hidden)\n"          \
+    "  --surface NAME=M[:OPACITY[:#RRGGBB]]  one surface's mode, opacity and colour (repeatable; M may be hidden)\n"          \
     "  --only NAME         draw only these surfaces (repeatable)\n"                                            \
     "  --panels            a grid of panels, one per surface\n"                                                \
     "  --style S           continuous (default), bands, contours, bands+contours, continuous+contours\n"      \
@@ -633,7 +751,8 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "                      fraction F of the depth (default 0.5), or a plane nx,ny,nz,d (keeps n.x+d >= 0)\n" \
     "  --colorbar          a colour bar with values and units\n"                                               \
     "  --label             the time and frame\n"                                                               \
-    "  --trace LEAD        an ECG lead (I..V6, from the solution's ecg12) with a marker at the frame\n"      \
+    "  --trace T           a signal under the picture with a marker at the frame: an ECG lead (I..V6,\n"     \
+    "                      from the solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data\n"      \
     "  --arrows            current density arrows (the solution's currents_node), averaged on a grid\n"      \
     "  --arrow-spacing MM  grid spacing for the averaging (default 20); --arrow-max N (default 400);\n"       \
     "  --arrow-length MM   the longest arrow's length (default 15); --arrow-unit: unit length, coloured\n"    \
