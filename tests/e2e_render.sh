@@ -27,6 +27,7 @@ R=(--solution sol --frame 193 --size 400x480)
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --surface torso=wire:0.2 -o arrows.png -q
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-region lung_l --surface torso=wire:0.2 -o arrows_lung.png -q
 "$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-box -100:-50:80:0:60:140 --surface torso=wire:0.2 -o arrows_box.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-spacing 0 --arrow-gap 15 --arrow-max 60 --surface torso=wire:0.2 -o arrows_gap.png -q
 "$THORAX" render model --size 600x400 --panels --mode orientation -o orient.png -q
 "$THORAX" render model --size 300x300 --mode wire --view superior -o wire.png -q
 "$THORAX" render model --size 300x300 --surface lung_l=flat:1:#00ff00 --surface lung_r=flat:1:#ff00ff --only lung_l --only lung_r -o look.png -q
@@ -67,8 +68,9 @@ assert (abs(p[-60:, :] - bg).sum(axis=2) > 40).sum() > 300, 'no trace'
 def arrows(p):
     x = png(p); return ((x[:, :, 0] > 200) & (x[:, :, 1] > 170) & (x[:, :, 2] < 90)).sum()
 na, nl, nb = arrows('arrows.png'), arrows('arrows_lung.png'), arrows('arrows_box.png')
-assert na > 200 and nl < na and nb < na, (na, nl, nb)
-print('arrow pixels: all %d, left lung %d, box %d' % (na, nl, nb))
+ng = arrows('arrows_gap.png')
+assert na > 200 and nl < na and nb < na and 0 < ng < na, (na, nl, nb, ng)
+print('arrow pixels: all %d, left lung %d, box %d, 60 per node 15 mm apart %d' % (na, nl, nb, ng))
 o = png('orient.png')
 assert (abs(o - o[0, 0]).sum(axis=2) > 40).sum() > 5000, 'orientation panels empty'
 # per-surface colours: the left lung green, the right lung magenta, nothing else drawn
@@ -108,6 +110,8 @@ refused "surface name" bad4.png "$THORAX" render model --surface liver=flat -o b
 refused "surface spec" bad4.png "$THORAX" render model --surface torso=flat:0.5:#12 -o bad4.png
 refused "trace lead" bad4.png "$THORAX" render --solution sol --trace X7 -o bad4.png
 refused "trace node" bad4.png "$THORAX" render --solution sol --trace torso:99999 -o bad4.png
+refused "arrows frame" bad4.png "$THORAX" render --solution sol --frame 100 --arrows -o bad4.png
+refused "arrow region" bad4.png "$THORAX" render "${R[@]}" --arrows --arrow-region liver -o bad4.png
 refused "frame" bad2.png "$THORAX" render --solution sol --frame 999 -o bad2.png
 refused "no EGL" bad3.png env EGL_PLATFORM=none LIBGL_DRIVERS_PATH=/nonexistent __EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json "$THORAX" render model -o bad3.png
 grep -qi "egl" err.log || fail "EGL message"

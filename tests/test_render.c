@@ -743,10 +743,128 @@ static void bench(void)
     thx_renderer_destroy(&big);
 }
 
+/* ------------------------------------------------------------- arrow selection (no GL) */
+
+static double urand(unsigned *state)
+{
+    *state = *state * 1664525u + 1013904223u;
+    return (*state >> 8) / 16777216.0;
+}
+
+static void test_arrows_select(void)
+{
+    enum { NP = 3000 };
+    double *xyz = malloc(3 * NP * sizeof *xyz), *v = malloc(3 * NP * sizeof *v);
+    unsigned char *in = malloc(NP);
+    unsigned seed = 7;
+    for (int i = 0; i < NP; i++) {
+        for (int k = 0; k < 3; k++) { xyz[3 * i + k] = 100 * urand(&seed); v[3 * i + k] = urand(&seed) - 0.5; }
+        in[i] = (i % 5) != 0;
+    }
+    v[3 * 4] = NAN;          /* non-finite: dropped */
+    v[3 * 8] = v[3 * 8 + 1] = v[3 * 8 + 2] = 0; /* zero: dropped */
+    double *P = NULL, *V = NULL, vmax = 0;
+    size_t n = 0;
+
+    /* one per point, no limits: every finite nonzero vector inside, strongest first */
+    CHECK_OK(ctx, thx_arrows_select(ctx, xyz, v, NP, in, 0, 0, (size_t)NP, &P, &V, &n, &vmax));
+    size_t expect = 0;
+    double best = 0;
+    for (int i = 0; i < NP; i++)
+        if (in[i] && i != 4 && i != 8) { expect++; best = fmax(best, sqrt(v[3*i]*v[3*i] + v[3*i+1]*v[3*i+1] + v[3*i+2]*v[3*i+2])); }
+    CHECK(n == expect);
+    CHECK(fabs(vmax - best) < 1e-15);
+    int sorted = 1, inside = 1;
+    for (size_t a = 0; a < n; a++) {
+        double m = sqrt(V[3*a]*V[3*a] + V[3*a+1]*V[3*a+1] + V[3*a+2]*V[3*a+2]);
+        if (a && m > sqrt(V[3*a-3]*V[3*a-3] + V[3*a-2]*V[3*a-2] + V[3*a-1]*V[3*a-1]) + 1e-15) sorted = 0;
+        int found = 0; /* the tail is one of the points inside, with its own vector */
+        for (int i = 0; i < NP && !found; i++)
+            found = in[i] && xyz[3*i] == P[3*a] && xyz[3*i+1] == P[3*a+1] && xyz[3*i+2] == P[3*a+2] && v[3*i] == V[3*a];
+        inside &= found;
+    }
+    CHECK(sorted && inside);
+    free(P); free(V);
+
+    /* at most max_n, and those the strongest */
+    CHECK_OK(ctx, thx_arrows_select(ctx, xyz, v, NP, in, 0, 0, 50, &P, &V, &n, &vmax));
+    CHECK(n == 50);
+    double weakest = INFINITY;
+    for (size_t a = 0; a < n; a++) weakest = fmin(weakest, V[3*a]*V[3*a] + V[3*a+1]*V[3*a+1] + V[3*a+2]*V[3*a+2]);
+    int stronger_left_out = 0;
+    for (int i = 0; i < NP; i++) {
+        if (!in[i] || !isfinite(v[3*i])) continue;
+        double m = v[3*i]*v[3*i] + v[3*i+1]*v[3*i+1] + v[3*i+2]*v[3*i+2];
+        int kept = 0;
+        for (size_t a = 0; a < n; a++) kept |= xyz[3*i] == P[3*a] && xyz[3*i+1] == P[3*a+1];
+        if (!kept && m > weakest) stronger_left_out++;
+    }
+    CHECK(stronger_left_out == 0);
+    free(P); free(V);
+
+    /* minimum gap: kept tails at least gap apart, and every point left out lies within gap of a
+       kept arrow at least as strong (the greedy rule, nothing dropped without cause) */
+    const double gap = 12;
+    CHECK_OK(ctx, thx_arrows_select(ctx, xyz, v, NP, in, 0, gap, (size_t)NP, &P, &V, &n, &vmax));
+    CHECK(n > 30 && n < 1000);
+    double dmin = INFINITY;
+    for (size_t a = 0; a < n; a++)
+        for (size_t b = a + 1; b < n; b++) {
+            double d0 = P[3*a] - P[3*b], d1 = P[3*a+1] - P[3*b+1], d2 = P[3*a+2] - P[3*b+2];
+            dmin = fmin(dmin, sqrt(d0*d0 + d1*d1 + d2*d2));
+        }
+    CHECK(dmin >= gap);
+    int unexplained = 0;
+    for (int i = 0; i < NP; i++) {
+        if (!in[i] || i == 4 || i == 8) continue;
+        double m = sqrt(v[3*i]*v[3*i] + v[3*i+1]*v[3*i+1] + v[3*i+2]*v[3*i+2]);
+        int ok = 0;
+        for (size_t a = 0; a < n && !ok; a++) {
+            double d0 = xyz[3*i] - P[3*a], d1 = xyz[3*i+1] - P[3*a+1], d2 = xyz[3*i+2] - P[3*a+2];
+            double ma = sqrt(V[3*a]*V[3*a] + V[3*a+1]*V[3*a+1] + V[3*a+2]*V[3*a+2]);
+            ok = (d0 == 0 && d1 == 0 && d2 == 0) || (d0*d0 + d1*d1 + d2*d2 < gap * gap && ma >= m);
+        }
+        unexplained += !ok;
+    }
+    CHECK(unexplained == 0);
+    printf("arrows: %zu of %d points kept %g mm apart (closest pair %.2f mm)\n", n, NP, gap, dmin);
+    free(P); free(V);
+
+    /* grid averaging: each arrow is the mean position and mean vector of the points of its cell */
+    const double h = 25;
+    CHECK_OK(ctx, thx_arrows_select(ctx, xyz, v, NP, NULL, h, 0, (size_t)NP, &P, &V, &n, &vmax));
+    double lo[3] = {INFINITY, INFINITY, INFINITY};
+    for (int i = 0; i < NP; i++) for (int k = 0; k < 3; k++) lo[k] = fmin(lo[k], xyz[3*i+k]);
+    CHECK(n >= 60 && n <= 125); /* 5^3 cells at most over the 100 mm cube, nearly all filled */
+    double err = 0;
+    for (size_t a = 0; a < n; a++) {
+        int c[3];
+        for (int k = 0; k < 3; k++) c[k] = (int)((P[3*a+k] - lo[k]) / h);
+        double sp[3] = {0, 0, 0}, sv[3] = {0, 0, 0}, cnt = 0;
+        for (int i = 0; i < NP; i++) {
+            if (i == 4) continue;
+            int same = 1;
+            for (int k = 0; k < 3; k++) same &= (int)((xyz[3*i+k] - lo[k]) / h) == c[k];
+            if (!same) continue;
+            for (int k = 0; k < 3; k++) { sp[k] += xyz[3*i+k]; sv[k] += v[3*i+k]; }
+            cnt++;
+        }
+        for (int k = 0; k < 3; k++) err = fmax(err, fmax(fabs(sp[k] / cnt - P[3*a+k]), fabs(sv[k] / cnt - V[3*a+k])));
+    }
+    CHECK(err < 1e-12);
+    free(P); free(V);
+
+    /* bad parameters */
+    CHECK(thx_arrows_select(ctx, xyz, v, NP, NULL, -1, 0, 10, &P, &V, &n, &vmax) == THX_EINPUT);
+    CHECK(P == NULL && V == NULL && n == 0);
+    free(xyz); free(v); free(in);
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
     test_views();
+    test_arrows_select();
     thx_status st = thx_renderer_create(ctx, N, N, &ren);
     if (st != THX_OK) {
         fprintf(stderr, "test_render: no renderer: %s\n", thx_ctx_message(ctx));

@@ -71,6 +71,20 @@ typedef struct {
     float width;         /* shaft width, pixels; 0: 1.5 */
 } thx_render_arrows;
 
+/*
+ * Arrows from a vector field given at points (e.g. current density at the volume mesh's nodes),
+ * with the paper's clutter controls: the points where in[i] is nonzero (in NULL: all) are averaged
+ * over the cells of a grid of `spacing` (mm; each arrow at the mean position of its cell's points,
+ * with their mean vector) or, with spacing 0, taken one by one; zero and non-finite vectors are
+ * dropped; then, strongest first, an arrow is kept when no kept arrow's tail lies within `gap` mm
+ * of its own (0: no limit), until `max_n` are kept.
+ * Output: *pos and *vec (3 n each, malloc'd, strongest first), *n, and *vmax the largest
+ * magnitude among all candidates (the scale of the whole field, kept or not).
+ */
+thx_status thx_arrows_select(thx_ctx *ctx, const double *xyz, const double *vec, size_t n_points,
+                             const unsigned char *in, double spacing, double gap, size_t max_n,
+                             double **pos_out, double **vec_out, size_t *n_out, double *vmax);
+
 typedef struct {
     double eye[3], center[3], up[3];
     double fov_deg;      /* perspective vertical field of view; 0 = orthographic */

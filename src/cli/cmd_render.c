@@ -49,6 +49,7 @@ typedef struct {
     int n_look;
     double arrow_spacing, arrow_scale;
     int arrow_max, arrow_unit;
+    double arrow_gap;          /* minimum distance between arrows (mm), 0: none */
     int have_box;
     double box[6];             /* arrows only inside x0 y0 z0 x1 y1 z1 */
     const char *arrow_region;  /* arrows only at nodes of this tissue region */
@@ -240,6 +241,25 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
         d->series[target] = s;
     }
     THX_CHECK(resolve_trace(ctx, o, d));
+    if (o->arrows) {
+        const thx_volume *v = d->m->volume;
+        if (!o->solution || !d->currents)
+            return thx_error(ctx, THX_EINPUT, "--arrows: needs --solution DIR with currents (thorax forward ... --currents LIST)");
+        if (!v) return thx_error(ctx, THX_EINPUT, "--arrows: the model has no volume mesh (thorax mesh)");
+        if (d->currents->n_rows != 3 * v->n_nodes)
+            return thx_error(ctx, THX_EINPUT, "--arrows: the currents have %zu rows, the volume mesh has %zu nodes (3 rows each)",
+                             d->currents->n_rows, v->n_nodes);
+        if (o->arrow_region) {
+            int r = -1;
+            char list[512] = "";
+            size_t len = 0;
+            for (size_t k = 0; k < v->n_regions; k++) {
+                if (!strcmp(v->regions[k].name, o->arrow_region)) r = (int)k;
+                if (len < sizeof list - 80) len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", v->regions[k].name);
+            }
+            if (r < 0) return thx_error(ctx, THX_EINPUT, "--arrow-region: the volume mesh has no region '%s' (it has %s)", o->arrow_region, list);
+        }
+    }
     for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
         if (d->series[s] && (size_t)o->frame >= d->series[s]->n_frames && o->last < 0)
             return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
@@ -299,21 +319,37 @@ typedef struct {
     size_t nan_count;
 } built_scene;
 
-static void build_arrows(const ropts *o, const rdata *d, int frame, built_scene *b)
+/* The column of the currents series for a frame of the potentials: matched by time, because
+   `thorax forward --currents LIST` writes only the listed frames. -1 if that frame has none. */
+static long currents_column(const rdata *d, int frame)
+{
+    const thx_series *c = d->currents, *ref = NULL;
+    if (!c) return -1;
+    for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
+        if (d->series[s] && (!ref || d->m->surf[s]->role == THX_ROLE_OUTER)) ref = d->series[s];
+    if (!ref) return c->n_frames == 1 ? 0 : -1;
+    if ((size_t)frame >= ref->n_frames) return -1;
+    double t = ref->time[frame], tol = 1e-9 * (ref->n_frames > 1 ? fabs(ref->time[1] - ref->time[0]) : 1);
+    for (size_t k = 0; k < c->n_frames; k++)
+        if (fabs(c->time[k] - t) <= tol) return (long)k;
+    return -1;
+}
+
+/*
+ * Arrows of the current density at a frame: the node values inside the limits (a tissue region, a
+ * box), averaged over the cells of a grid of arrow_spacing mm (or one per node when the spacing is
+ * 0), then, strongest first, kept when no kept arrow lies within arrow_gap mm, up to arrow_max.
+ */
+static thx_status build_arrows(thx_ctx *ctx, const ropts *o, const rdata *d, int frame, built_scene *b)
 {
     const thx_volume *v = d->m->volume;
-    if (!o->arrows || !d->currents || !v) return;
+    if (!o->arrows) return THX_OK;
+    long col = currents_column(d, frame);
+    if (col < 0) return thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d (thorax forward --currents LIST)", frame + 1);
     const thx_series *c = d->currents;
-    if (c->n_rows != 3 * v->n_nodes) return;
-    size_t f = (size_t)frame < c->n_frames ? (size_t)frame : 0;
-    const double *J = c->v + f * c->n_rows;
-    /* average over the cells of a grid of the chosen spacing */
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < v->n_nodes; i++)
-        for (int k = 0; k < 3; k++) { lo[k] = fmin(lo[k], v->xyz[3 * i + k]); hi[k] = fmax(hi[k], v->xyz[3 * i + k]); }
-    /* limits: a box, a tissue region */
+    const double *J = c->v + (size_t)col * c->n_rows;
     unsigned char *in = malloc(v->n_nodes ? v->n_nodes : 1);
-    if (!in) return;
+    if (!in) return thx_error(ctx, THX_ENOMEM, "out of memory (arrows)");
     memset(in, o->arrow_region ? 0 : 1, v->n_nodes);
     if (o->arrow_region) {
         int r = -1;
@@ -329,57 +365,16 @@ static void build_arrows(const ropts *o, const rdata *d, int frame, built_scene 
             for (int k = 0; k < 3; k++)
                 if (x[k] < o->box[k] || x[k] > o->box[3 + k]) in[i] = 0;
         }
-    double h = o->arrow_spacing;
-    int n[3];
-    for (int k = 0; k < 3; k++) n[k] = (int)((hi[k] - lo[k]) / h) + 1;
-    size_t cells = (size_t)n[0] * n[1] * n[2];
-    double *acc = calloc(cells * 7, sizeof *acc);
-    if (!acc) { free(in); return; }
-    for (size_t i = 0; i < v->n_nodes; i++) {
-        if (!in[i]) continue;
-        const double *x = v->xyz + 3 * i;
-        int ix = (int)((x[0] - lo[0]) / h), iy = (int)((x[1] - lo[1]) / h), iz = (int)((x[2] - lo[2]) / h);
-        double *a = acc + 7 * (((size_t)iz * n[1] + iy) * n[0] + ix);
-        for (int k = 0; k < 3; k++) { a[k] += x[k]; a[3 + k] += J[3 * i + k]; }
-        a[6] += 1;
-    }
-    free(in);
-    size_t m = 0;
-    for (size_t q = 0; q < cells; q++) m += acc[7 * q + 6] > 0 && (acc[7 * q + 3] != 0 || acc[7 * q + 4] != 0 || acc[7 * q + 5] != 0);
-    b->apos = malloc(3 * (m ? m : 1) * sizeof *b->apos);
-    b->avec = malloc(3 * (m ? m : 1) * sizeof *b->avec);
-    if (!b->apos || !b->avec) { free(acc); return; }
-    size_t k2 = 0;
+    size_t kept = 0;
     double jmax = 0;
-    for (size_t q = 0; q < cells; q++) {
-        double *a = acc + 7 * q;
-        if (!(a[6] > 0) || (a[3] == 0 && a[4] == 0 && a[5] == 0)) continue;
-        for (int k = 0; k < 3; k++) { b->apos[3 * k2 + k] = a[k] / a[6]; b->avec[3 * k2 + k] = a[3 + k] / a[6]; }
-        jmax = fmax(jmax, sqrt(b->avec[3 * k2] * b->avec[3 * k2] + b->avec[3 * k2 + 1] * b->avec[3 * k2 + 1] +
-                                b->avec[3 * k2 + 2] * b->avec[3 * k2 + 2]));
-        k2++;
-    }
-    free(acc);
-    /* clutter control: keep the strongest arrow_max */
-    if ((int)k2 > o->arrow_max) {
-        for (size_t i = 0; i < (size_t)o->arrow_max; i++) {
-            size_t best = i;
-            double bm = -1;
-            for (size_t j = i; j < k2; j++) {
-                double mm = b->avec[3 * j] * b->avec[3 * j] + b->avec[3 * j + 1] * b->avec[3 * j + 1] + b->avec[3 * j + 2] * b->avec[3 * j + 2];
-                if (mm > bm) { bm = mm; best = j; }
-            }
-            for (int k = 0; k < 3; k++) {
-                double t = b->apos[3 * i + k]; b->apos[3 * i + k] = b->apos[3 * best + k]; b->apos[3 * best + k] = t;
-                t = b->avec[3 * i + k]; b->avec[3 * i + k] = b->avec[3 * best + k]; b->avec[3 * best + k] = t;
-            }
-        }
-        k2 = (size_t)o->arrow_max;
-    }
+    thx_status st = thx_arrows_select(ctx, v->xyz, J, v->n_nodes, in, o->arrow_spacing, o->arrow_gap, (size_t)o->arrow_max,
+                                      &b->apos, &b->avec, &kept, &jmax);
+    free(in);
+    if (st != THX_OK) return st;
     memset(&b->arrows, 0, sizeof b->arrows);
     b->arrows.pos = b->apos;
     b->arrows.vec = b->avec;
-    b->arrows.n = k2;
+    b->arrows.n = kept;
     b->arrows.unit_length = o->arrow_unit;
     b->arrows.scale = o->arrow_unit ? o->arrow_scale : (jmax > 0 ? o->arrow_scale / jmax : 1);
     b->arrows.cmap = THX_CMAP_VIRIDIS;
@@ -391,7 +386,8 @@ static void build_arrows(const ropts *o, const rdata *d, int frame, built_scene 
     b->arrows.color[2] = 0.2f;
     b->arrows.color[3] = 1;
     b->arrows.width = 2;
-    b->have_arrows = k2 > 0;
+    b->have_arrows = kept > 0;
+    return THX_OK;
 }
 
 static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scene *b, int only_surface)
@@ -514,7 +510,10 @@ static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_rendere
         memset(b, 0, sizeof *b);
         build_surfaces(o, d, frame, b, only);
         if (b->n == 0) continue;
-        if (!o->panels) build_arrows(o, d, frame, b);
+        if (!o->panels) {
+            thx_status sa = build_arrows(ctx, o, d, frame, b);
+            if (sa != THX_OK) { free(b->apos); free(b->avec); free(b); return sa; }
+        }
         thx_scene sc;
         memset(&sc, 0, sizeof sc);
         sc.surfaces = b->rs;
@@ -706,7 +705,8 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     else if (!strcmp(a, "--panels")) o->panels = 1;
     else if (!strcmp(a, "--trace")) { VAL(); o->trace = v; }
     else if (!strcmp(a, "--arrows")) o->arrows = "node";
-    else if (!strcmp(a, "--arrow-spacing")) { VAL(); o->arrow_spacing = atof(v); if (!(o->arrow_spacing > 0)) { cli_usage_error(cmd, "--arrow-spacing must be positive (mm)"); return -1; } }
+    else if (!strcmp(a, "--arrow-spacing")) { VAL(); o->arrow_spacing = atof(v); if (!(o->arrow_spacing >= 0)) { cli_usage_error(cmd, "--arrow-spacing must be 0 (one arrow per node) or positive (mm)"); return -1; } }
+    else if (!strcmp(a, "--arrow-gap")) { VAL(); o->arrow_gap = atof(v); if (!(o->arrow_gap >= 0)) { cli_usage_error(cmd, "--arrow-gap must be 0 or positive (mm)"); return -1; } }
     else if (!strcmp(a, "--arrow-max")) { VAL(); o->arrow_max = atoi(v); if (o->arrow_max < 1) { cli_usage_error(cmd, "--arrow-max must be at least 1"); return -1; } }
     else if (!strcmp(a, "--arrow-length")) { VAL(); o->arrow_scale = atof(v); if (!(o->arrow_scale > 0)) { cli_usage_error(cmd, "--arrow-length must be positive (mm)"); return -1; } }
     else if (!strcmp(a, "--arrow-unit")) o->arrow_unit = 1;
@@ -754,7 +754,9 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --trace T           a signal under the picture with a marker at the frame: an ECG lead (I..V6,\n"     \
     "                      from the solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data\n"      \
     "  --arrows            current density arrows (the solution's currents_node), averaged on a grid\n"      \
-    "  --arrow-spacing MM  grid spacing for the averaging (default 20); --arrow-max N (default 400);\n"       \
+    "  --arrow-spacing MM  grid spacing for the averaging (default 20; 0: one arrow per node)\n"            \
+    "  --arrow-max N       at most N arrows, the strongest (default 400); --arrow-gap MM: none closer\n"    \
+    "                      than MM to a stronger one\n"                                                      \
     "  --arrow-length MM   the longest arrow's length (default 15); --arrow-unit: unit length, coloured\n"    \
     "  --arrow-region NAME only at nodes of this tissue region; --arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm)\n"      \
     "  --font FILE         a TrueType font (default: sans-serif via fontconfig)\n"
@@ -908,6 +910,11 @@ int cmd_animate(int argc, char **argv)
     if (st == THX_OK) {
         if (a_last < 0) a_last = (int)nf;
         if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
+        /* arrows on every frame: refused before anything is drawn when some frame has no currents */
+        for (int f = a_first; st == THX_OK && o.arrows && f <= a_last; f++)
+            if (currents_column(&d, f - 1) < 0)
+                st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
+                               "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
     }
     if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
         st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
