@@ -27,12 +27,14 @@ stage "heartbeat (500 frames)" "$T" beat "$O/model" -o "$O/beat.raw" -q
 stage "forward solution (500 frames)" "$T" forward "$O/model" --epicardial "$O/beat.raw" -o "$O/solution" --currents $QRS -q
 stage "12-lead ECG" "$T" leads "$O/solution" -q
 R=(--solution "$O/solution" --size 800x900 --colorbar --label --trace II --only torso --only heart)
-stage "anterior map" "$T" render "${R[@]}" --frame $QRS --view anterior --clip anterior:0.8 -o "$O/anterior.png" -q
+stage "anterior map" "$T" render "${R[@]}" --frame $QRS --view anterior -o "$O/anterior.png" -q
 stage "posterior map" "$T" render "${R[@]}" --frame $QRS --view posterior -o "$O/posterior.png" -q
+OPEN=(--view anterior --clip anterior:0.75 --no-clip heart)   # the chest opened, the heart whole
+stage "heart through the clip plane" "$T" render "${R[@]}" --frame $QRS "${OPEN[@]}" -o "$O/heart.png" -q
 stage "contours and bands" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view left --style bands+contours --levels 16 --colorbar --label -o "$O/bands.png" -q
 stage "current arrows" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view anterior --clip anterior:0.55 --arrows --arrow-spacing 18 --surface torso=wire:0.15 -o "$O/currents.png" -q
 stage "orientation check" "$T" render "$O/model" --size 900x600 --panels --mode orientation -o "$O/orientation.png" -q
-stage "animation (300 frames + MP4)" "$T" animate "${R[@]}" --size 640x720 --view anterior --clip anterior:0.8 --frames 101:400 --fps 30 -o "$O/frames" --mp4 "$O/beat.mp4" -q
+stage "animation (300 frames + MP4)" "$T" animate "${R[@]}" --size 640x720 "${OPEN[@]}" --frames 101:400 --fps 30 -o "$O/frames" --mp4 "$O/beat.mp4" -q
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
 
 python3 - "$O" <<'EOF'
@@ -66,12 +68,14 @@ finite-element forward solution for every frame, the 12-lead ECG, and pictures f
 (red positive, blue negative, white zero).</p>
 <h2>Body-surface maps at the QRS peak (192 ms)</h2>
 <img src="anterior.png" alt="anterior"><img src="posterior.png" alt="posterior">
-<p>Left: anterior view with the front of the torso clipped away to show the epicardium; right: posterior. Lead II below,
-the marker at the frame shown.</p>
-<img src="bands.png" alt="bands"><img src="currents.png" alt="currents">
-<p>Left: left lateral view, 16 bands with contour lines. Right: current density at the QRS peak, averaged on an 18 mm grid.</p>
-<h2>The beat</h2>
-<video src="beat.mp4" controls loop></video>
+<p>Left: anterior view; right: posterior view. Lead II below, the marker at the frame shown.</p>
+<img src="heart.png" alt="heart"><img src="bands.png" alt="bands">
+<p>Left: the chest opened by an anterior clip plane, the heart left whole: the epicardial potentials in front of the
+torso's posterior wall, seen from inside. Right: left lateral view, 16 bands with contour lines.</p>
+<h2>The beat and the currents</h2>
+<video src="beat.mp4" controls loop></video><img src="currents.png" alt="currents">
+<p>Left: frames 101 to 400 of the beat in the opened chest, with lead II. Right: current density at the QRS peak,
+averaged on an 18 mm grid (the torso as a wire mesh).</p>
 <h2>The orientation check (paper 4.2)</h2>
 <img src="orientation.png" alt="orientation" style="max-width:97%">
 <p>Each surface in its own panel: triangles are drawn only where their outward side faces the viewer; the nodes

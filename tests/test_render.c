@@ -399,6 +399,35 @@ static void test_clip(void)
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     CHECK(near_rgb(px(im, 96, 32), 0.1, 0.2, 0.3, 1));
     CHECK(!near_rgb(px(im, 96, 96), 0.1, 0.2, 0.3, 10));
+    /* a surface exempt from the planes (no_clip) is drawn whole beside one that is cut: a small
+       sphere inside a big one, both cut by y <= 0.3 in front; the inner sphere shows its red
+       front at the centre, while the outer one, cut, shows only its inside at the edges */
+    {
+        double c2[3] = {0, 0, 0};
+        thx_surface *in = sphere(30, 40, 0.5, c2, 0);
+        double *v2 = malloc(in->n_nodes * sizeof *v2);
+        for (size_t i = 0; i < in->n_nodes; i++) v2[i] = in->xyz[3 * i + 1];
+        thx_render_surface two[2] = {rs, surf_defaults(in, THX_DRAW_PHONG)};
+        two[1].values = v2;
+        two[1].scale = rs.scale;
+        two[1].cmap = rs.cmap;
+        thx_scene s2 = base_scene(two, 2);
+        s2.n_clip = 1;
+        s2.clip[0].n[1] = -1, s2.clip[0].d = 0.3;
+        CHECK_OK(ctx, thx_render(ctx, ren, &s2, im, NULL));
+        p = px(im, 64, 64);
+        unsigned char cut[3] = {p[0], p[1], p[2]}; /* the inner sphere cut at y = 0.3 too: its inside */
+        CHECK(cut[2] > cut[0] + 40);
+        two[1].no_clip = 1;
+        CHECK_OK(ctx, thx_render(ctx, ren, &s2, im, NULL));
+        save(im, "clip_noclip");
+        p = px(im, 64, 64);
+        CHECK(p[0] > p[2] + 40); /* whole: its red front */
+        p = px(im, 64, 10);      /* the outer sphere still cut: its inside (blue back) where the inner one is not */
+        CHECK(p[2] > p[0] + 20);
+        free(v2);
+        thx_surface_destroy(&in);
+    }
     sc.n_clip = 5;
     CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
     thx_image_destroy(&im);

@@ -56,6 +56,8 @@ typedef struct {
     thx_colormap cmap;
     thx_scale scale;
     float contour_color[4];  /* all zero: black */
+    int no_clip;             /* 1: the scene's clip planes leave this surface whole (the heart
+                                seen entire through a torso opened by a clip plane) */
 } thx_render_surface;
 
 /* Arrows, e.g. current density (paper 4.2, "Displaying vector fields"). */

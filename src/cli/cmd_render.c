@@ -39,6 +39,8 @@ typedef struct {
     int colorbar, label, panels;
     const char *only[16];
     int n_only;
+    const char *whole[16];  /* --no-clip NAME: left whole by the clip plane */
+    int n_whole;
     struct surf_look {      /* --surface NAME=MODE[:OPACITY[:#RRGGBB]] */
         char name[64];
         thx_draw_mode mode;
@@ -108,11 +110,12 @@ static thx_status check_names(thx_ctx *ctx, const ropts *o, const thx_model *m)
     size_t len = 0;
     for (size_t s = 0; s < m->n_surfaces && len < sizeof list - 80; s++)
         len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", s ? ", " : "", m->surf[s]->name);
-    for (int k = 0; k < o->n_only + o->n_look; k++) {
-        const char *name = k < o->n_only ? o->only[k] : o->look[k - o->n_only].name;
+    for (int k = 0; k < o->n_only + o->n_look + o->n_whole; k++) {
+        const char *name = k < o->n_only ? o->only[k] : k < o->n_only + o->n_look ? o->look[k - o->n_only].name
+                                                                                   : o->whole[k - o->n_only - o->n_look];
         if (surface_by_name(m, name) < 0)
             return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
-                             k < o->n_only ? "--only" : "--surface", name, list);
+                             k < o->n_only ? "--only" : k < o->n_only + o->n_look ? "--surface" : "--no-clip", name, list);
     }
     return THX_OK;
 }
@@ -412,6 +415,7 @@ static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scen
             for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
             if (any) r->color[3] = m->surf[s]->role == THX_ROLE_OUTER ? 0.25f : 0.35f;
         }
+        for (int k = 0; k < o->n_whole; k++) r->no_clip |= !strcmp(o->whole[k], m->surf[s]->name);
         const struct surf_look *look = NULL;
         for (int k = 0; k < o->n_look; k++)
             if (!strcmp(o->look[k].name, m->surf[s]->name)) look = &o->look[k];
@@ -674,6 +678,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     } else if (!strcmp(a, "--mode")) { VAL(); int ok; o->mode = parse_mode(v, &ok); if (!ok) { cli_usage_error(cmd, "--mode: points, wire, flat, gouraud, phong, orientation"); return -1; } }
     else if (!strcmp(a, "--surface")) { VAL(); if (parse_look(cmd, v, o)) return -1; }
     else if (!strcmp(a, "--only")) { VAL(); if (o->n_only < 16) o->only[o->n_only++] = v; }
+    else if (!strcmp(a, "--no-clip")) { VAL(); if (o->n_whole < 16) o->whole[o->n_whole++] = v; }
     else if (!strcmp(a, "--style")) {
         VAL();
         if (!strcmp(v, "continuous")) o->style = THX_DATA_CONTINUOUS;
@@ -749,6 +754,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --true-range        map min..max instead of symmetric about zero (default symmetric)\n"                \
     "  --clip SIDE[:F]     remove a side (anterior, posterior, left, right, superior, inferior) from\n"      \
     "                      fraction F of the depth (default 0.5), or a plane nx,ny,nz,d (keeps n.x+d >= 0)\n" \
+    "  --no-clip NAME      this surface is left whole by the clip plane (repeatable; e.g. heart)\n"       \
     "  --colorbar          a colour bar with values and units\n"                                               \
     "  --label             the time and frame\n"                                                               \
     "  --trace T           a signal under the picture with a marker at the frame: an ECG lead (I..V6,\n"     \

@@ -1212,7 +1212,7 @@ static void draw_points(const program *p, float size, int opaque, GLsizei count,
 }
 
 /* One surface in one of the passes. */
-static thx_status draw_surface(thx_ctx *ctx, thx_renderer *r, surf_entry *e, const thx_render_surface *rs,
+static thx_status draw_surface_clipped(thx_ctx *ctx, thx_renderer *r, surf_entry *e, const thx_render_surface *rs,
                                const frame_state *fs, int has_values, int translucent, int outside)
 {
     const thx_surface *s = rs->surf;
@@ -1256,7 +1256,7 @@ static thx_status draw_surface(thx_ctx *ctx, thx_renderer *r, surf_entry *e, con
             glCullFace(GL_BACK);
             glDrawElements(GL_TRIANGLES, n, GL_UNSIGNED_INT, (void *)0);
             glDisable(GL_CULL_FACE);
-        } else if (e->cull && outside && !fs->n_clip) {
+        } else if (e->cull && outside && (!fs->n_clip || rs->no_clip)) {
             /* A closed surface seen from outside, uncut: its inward-facing side is never visible
              * (half the triangles rejected at setup). */
             glEnable(GL_CULL_FACE);
@@ -1296,6 +1296,21 @@ static thx_status draw_surface(thx_ctx *ctx, thx_renderer *r, surf_entry *e, con
     }
     glBindVertexArray(0);
     return THX_OK;
+}
+
+/* A surface exempt from the clip planes is drawn with planes that keep everything (0 x + 1 >= 0):
+ * the same program and the same enabled distances, so no state changes between surfaces (disabling
+ * GL_CLIP_DISTANCEi around one draw was not honoured by Mesa 22.3 llvmpipe: the heart stayed cut). */
+static thx_status draw_surface(thx_ctx *ctx, thx_renderer *r, surf_entry *e, const thx_render_surface *rs,
+                               const frame_state *fs, int has_values, int translucent, int outside)
+{
+    if (!rs->no_clip || fs->n_clip == 0) return draw_surface_clipped(ctx, r, e, rs, fs, has_values, translucent, outside);
+    frame_state whole = *fs;
+    for (int i = 0; i < 4; i++) {
+        whole.clip[4 * i + 0] = whole.clip[4 * i + 1] = whole.clip[4 * i + 2] = 0;
+        whole.clip[4 * i + 3] = 1;
+    }
+    return draw_surface_clipped(ctx, r, e, rs, &whole, has_values, translucent, outside);
 }
 
 /* Arrows: positions, displacements and t packed per arrow; NaN or zero vectors are skipped. */
