@@ -4,7 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli/cli_fem.h"
+#include "thorax/fileio.h"
 #include "thorax/fem.h"
 
 void cli_petsc_args_init(cli_petsc_args *pa, char *argv0)
@@ -65,4 +68,20 @@ void cli_progress(void *user, size_t done, size_t total)
     fprintf(stderr, "\rthorax %s [%s] %zu/%zu", label, bar, done, total);
     if (done >= total) fputc('\n', stderr);
     fflush(stderr);
+}
+
+thx_status cli_write_json(thx_ctx *ctx, const char *path, cJSON *j)
+{
+    char *text = j ? cJSON_Print(j) : NULL;
+    cJSON_Delete(j);
+    if (!text) return thx_error(ctx, THX_ENOMEM, "%s: out of memory writing the JSON", path);
+    thx_atomic_file af;
+    thx_status st = thx_atomic_open(ctx, path, &af);
+    if (st == THX_OK) {
+        fputs(text, af.f);
+        fputc('\n', af.f);
+        st = thx_atomic_commit(ctx, &af);
+    }
+    free(text);
+    return st;
 }

@@ -21,6 +21,11 @@ thx_status cli_petsc_init(thx_ctx *ctx, cli_petsc_args *pa, int *rank);
 /* Warns about PETSc options nobody used, then PetscFinalize (if initialized). */
 void cli_petsc_finish(cli_petsc_args *pa);
 
+/* Writes j (then deleted, even on failure) as indented JSON and a newline to path, atomically:
+ * a temporary file renamed into place. */
+struct cJSON;
+thx_status cli_write_json(thx_ctx *ctx, const char *path, struct cJSON *j);
+
 /* A progress bar on stderr ("thorax LABEL [=====>    ] 120/300"); user is the label. */
 void cli_progress(void *user, size_t done, size_t total);
 

@@ -157,19 +157,12 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
         cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddItemToObject(j, "solver", solver);
-        char *text = cJSON_Print(j);
-        cJSON_Delete(j);
         if (st == THX_OK) {
             snprintf(path, sizeof path, "%s/solution.json", tmp);
-            thx_atomic_file af;
-            st = thx_atomic_open(ctx, path, &af);
-            if (st == THX_OK) {
-                fputs(text, af.f);
-                fputc('\n', af.f);
-                st = thx_atomic_commit(ctx, &af);
-            }
+            st = cli_write_json(ctx, path, j);
+        } else {
+            cJSON_Delete(j);
         }
-        free(text);
         if (st == THX_OK) st = thx_tmpdir_commit(ctx, tmp, out);
         if (st != THX_OK) { thx_tmpdir_abort(tmp); goto fail; }
         if (verbose >= 0) {

@@ -265,19 +265,12 @@ int cmd_forward(int argc, char **argv)
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
         cJSON_AddItemToObject(j, "solver", solver);
-        char *text = cJSON_Print(j);
-        cJSON_Delete(j);
         if (st == THX_OK) {
             snprintf(path, sizeof path, "%s/solution.json", tmp);
-            thx_atomic_file af;
-            st = thx_atomic_open(ctx, path, &af);
-            if (st == THX_OK) {
-                fputs(text, af.f);
-                fputc('\n', af.f);
-                st = thx_atomic_commit(ctx, &af);
-            }
+            st = cli_write_json(ctx, path, j);
+        } else {
+            cJSON_Delete(j);
         }
-        free(text);
         if (st == THX_OK) st = thx_tmpdir_commit(ctx, tmp, out);
         if (st != THX_OK) { thx_tmpdir_abort(tmp); goto fail; }
         if (verbose >= 0) {

@@ -11,6 +11,7 @@
 #include "thorax/inside.h"
 #include "thorax/predicates.h"
 #include "thorax/spatial.h"
+#include "geom/union_find.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -521,24 +522,6 @@ static int cmp_half_edge(const void *x, const void *y)
     const half_edge *a = x, *b = y;
     if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
     return (a->t > b->t) - (a->t < b->t);
-}
-
-static size_t uf_find(size_t *parent, size_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static void uf_union(size_t *parent, size_t a, size_t b)
-{
-    a = uf_find(parent, a);
-    b = uf_find(parent, b);
-    /* the smaller index becomes the root: deterministic */
-    if (a < b) parent[b] = a;
-    else if (b < a) parent[a] = b;
 }
 
 typedef struct {

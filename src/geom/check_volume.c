@@ -11,6 +11,7 @@
 #include "thorax/inside.h"
 #include "thorax/predicates.h"
 #include "thorax/spatial.h"
+#include "geom/union_find.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -427,23 +428,6 @@ static int cmp_node_key(const void *x, const void *y)
     for (int k = 0; k < 3; k++)
         if (a->x[k] != b->x[k]) return a->x[k] < b->x[k] ? -1 : 1;
     return (a->i > b->i) - (a->i < b->i);
-}
-
-static size_t uf_find(size_t *parent, size_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static void uf_union(size_t *parent, size_t a, size_t b)
-{
-    a = uf_find(parent, a);
-    b = uf_find(parent, b);
-    if (a < b) parent[b] = a;
-    else if (b < a) parent[a] = b;
 }
 
 /* Sorts three ints ascending; returns +1 for an even permutation, -1 for odd. */

@@ -476,8 +476,7 @@ static int line_of(const char *text, const char *pos)
     return line;
 }
 
-/* A non-negative integer count from the manifest. */
-static int get_count(const cJSON *o, const char *key, size_t *out)
+int thx_io_json_count(const cJSON *o, const char *key, size_t *out)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
     if (!cJSON_IsNumber(v)) return -1;
@@ -574,7 +573,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
             goto done;
         }
         size_t nn, nt;
-        if (get_count(o, "n_nodes", &nn) || get_count(o, "n_tris", &nt)) {
+        if (thx_io_json_count(o, "n_nodes", &nn) || thx_io_json_count(o, "n_tris", &nt)) {
             st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): \"n_nodes\" and \"n_tris\" must be counts", mpath,
                            idx, nm);
             goto done;

@@ -531,17 +531,6 @@ done:
     return st;
 }
 
-/* A non-negative integer count from a JSON object. */
-static int get_count(const cJSON *o, const char *key, size_t *out)
-{
-    const cJSON *j = cJSON_GetObjectItemCaseSensitive(o, key);
-    if (!cJSON_IsNumber(j)) return -1;
-    double d = j->valuedouble;
-    if (!(d >= 0) || d != floor(d) || d > (double)INT32_MAX) return -1;
-    *out = (size_t)d;
-    return 0;
-}
-
 /* One entry of the "regions" array (k 0-based) into r. */
 static thx_status read_region(thx_ctx *ctx, const char *mpath, size_t k, const cJSON *o, thx_region *r)
 {
@@ -621,7 +610,7 @@ thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, 
         !thx_io_file_name_ok(jt->valuestring))
         return thx_error(ctx, THX_EINPUT, "%s: volume: \"pts\" and \"tet\" must name files in the model directory", mpath);
     size_t nn, nt, nr;
-    if (get_count(vo, "n_nodes", &nn) || get_count(vo, "n_tets", &nt))
+    if (thx_io_json_count(vo, "n_nodes", &nn) || thx_io_json_count(vo, "n_tets", &nt))
         return thx_error(ctx, THX_EINPUT, "%s: volume: \"n_nodes\" and \"n_tets\" must be counts", mpath);
     const cJSON *ju = cJSON_GetObjectItemCaseSensitive(vo, "units");
     if (ju && !(cJSON_IsString(ju) && strcmp(ju->valuestring, "mm") == 0))
@@ -634,7 +623,7 @@ thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, 
     nr = (size_t)cJSON_GetArraySize(regs);
     if (cJSON_GetObjectItemCaseSensitive(vo, "n_regions")) {
         size_t want;
-        if (get_count(vo, "n_regions", &want) || want != nr)
+        if (thx_io_json_count(vo, "n_regions", &want) || want != nr)
             return thx_error(ctx, THX_EINPUT, "%s: volume: \"n_regions\" is not the %zu entries of \"regions\"", mpath, nr);
     }
     for (size_t i = 0; i < m->n_surfaces; i++) {

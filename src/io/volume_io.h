@@ -21,6 +21,9 @@ void thx_io_put_coord(FILE *f, double v);
 int thx_io_split_line(char *p, char **tok, int max, char **next);
 /* A manifest file name: non-empty, no '/', not "." or "..". */
 int thx_io_file_name_ok(const char *s);
+/* A count from a JSON object: o[key] a whole number in 0 .. INT32_MAX; 0, or -1 (missing or not
+ * such a number; *out unchanged). */
+int thx_io_json_count(const cJSON *o, const char *key, size_t *out);
 
 /* Checks m->volume (must be non-NULL) against the model before anything is
  * written or exported: arrays present, finite coordinates, node numbers in
