@@ -414,6 +414,87 @@ int main(void)
         free(b1);
         thx_volume_destroy(&v);
     }
+    /* 7. recovery of edges that cross several tetrahedra (walks of flips): isolated triangles on
+          body diagonals of the jittered lattice's cubes; the walks recover some that single
+          operations could not, every tetrahedron stays positive, the boundary and the volume stay
+          exactly as they were */
+    {
+        thx_volume *v = lattice(ctx, 3, NULL);
+        CHECK(v != NULL);
+        srand(11);
+        for (size_t k = 0; k < v->n_nodes; k++)
+            for (int c = 0; c < 3; c++) {
+                double x = round(v->xyz[3 * k + c]);
+                int on = v->node_surf[k] >= 0;
+                v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
+            }
+        int32_t *tets = NULL, *nbrs = NULL;
+        size_t nt = 0;
+        CHECK_OK(ctx, thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, NULL));
+        for (size_t t = 0; t < nt; t++) {
+            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
+            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
+        }
+        free(v->tet);
+        free(v->region);
+        v->tet = tets;
+        v->n_tets = nt;
+        v->region = calloc(nt, sizeof *v->region);
+        face_rec *b0 = NULL, *b1 = NULL;
+        long nb0 = boundary_faces(v, &b0);
+        double vol0 = total_volume(v, -1);
+#define NODE(i, j, l) ((int32_t)(((i) * N + (j)) * N + (l)))
+        int32_t tri[3 * 64];
+        size_t ntri = 0;
+        for (int i = 1; i + 2 < N - 1; i += 3)
+            for (int j = 1; j + 2 < N - 1; j += 3)
+                for (int l = 1; l + 1 < N - 1; l += 3) {
+                    /* a body diagonal of a lattice cube and two cube edges' worth apart: the
+                       Delaunay step has the diagonal or not, and the jitter decides */
+                    tri[3 * ntri] = NODE(i, j, l);
+                    tri[3 * ntri + 1] = NODE(i + 1, j + 1, l + 1);
+                    tri[3 * ntri + 2] = NODE(i + 1, j, l);
+                    ntri++;
+                }
+#undef NODE
+        size_t missing0 = 0;
+        for (size_t i = 0; i < ntri; i++) missing0 += !has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
+        thx_surface surf;
+        memset(&surf, 0, sizeof surf);
+        surf.n_nodes = v->n_nodes;
+        surf.n_tris = ntri;
+        surf.tri = tri;
+        const thx_surface *sp[1] = {&surf};
+        size_t offset[2] = {0, v->n_nodes};
+        recover_stats R;
+        tets = v->tet;
+        v->tet = NULL;
+        CHECK_OK(ctx, mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, &R));
+        v->tet = tets;
+        v->n_tets = nt;
+        free(v->region);
+        v->region = calloc(nt, sizeof *v->region);
+        free(nbrs);
+        printf("walks: %zu of %zu long triangles missing -> %zu after single operations -> %zu after walks (%zu walk steps)\n",
+               R.missing_before, ntri, R.missing_before_walk, R.missing_after, R.n_walk);
+        CHECK(R.missing_before == missing0 && missing0 * 2 > ntri);
+        CHECK(R.missing_before_walk > 0 && R.n_walk > 0);
+        CHECK(R.missing_after < R.missing_before_walk);
+        size_t present = 0, wrong = 0;
+        for (size_t i = 0; i < ntri; i++) present += has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
+        CHECK(present == ntri - R.missing_after);
+        for (size_t t = 0; t < v->n_tets; t++) {
+            const int32_t *q = v->tet + 4 * t;
+            wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
+        }
+        CHECK(wrong == 0);
+        long nb1 = boundary_faces(v, &b1);
+        CHECK(nb1 == nb0 && !memcmp(b0, b1, (size_t)nb0 * sizeof *b0));
+        CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
+        free(b0);
+        free(b1);
+        thx_volume_destroy(&v);
+    }
     /* 4. two flat caps on one triangle become three good tetrahedra (2-3 flip) */
     {
         thx_volume *v = NULL;

@@ -52,6 +52,7 @@ typedef struct {
     double t_repair;          /* seconds */
     size_t n_surface_tris, n_missing_before, n_missing_after; /* surface triangles not faces of the
                                                                  tetrahedralization, before/after recovery */
+    size_t n_missing_face_only; /* of those left: all three edges are mesh edges, the face is not */
     size_t n_recover_flips;   /* flips and edge removals that recovered them */
     double t_recover;         /* seconds */
     size_t n_tets, n_nodes;   /* the result */

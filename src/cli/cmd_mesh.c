@@ -84,8 +84,8 @@ int cmd_mesh(int argc, char **argv)
                    S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_slivers_peeled, S.n_readded, S.n_taken, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
         if (want_stats && o.recover)
             printf("recovery: %zu of %zu surface triangles were not faces of the Delaunay tetrahedralization, %zu "
-                   "after %zu flips; %.3f s\n",
-                   S.n_missing_before, S.n_surface_tris, S.n_missing_after, S.n_recover_flips, S.t_recover);
+                   "after %zu flips (%zu of them with all three edges); %.3f s\n",
+                   S.n_missing_before, S.n_surface_tris, S.n_missing_after, S.n_recover_flips, S.n_missing_face_only, S.t_recover);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
                    "%zu face removals, %zu grid nodes moved; %.3f s\n",

@@ -977,6 +977,113 @@ static int recover_edge(imesh *M, int32_t a, int32_t c, size_t *n_flip23, size_t
     return 0;
 }
 
+/* Sign of the exact orientation, as an int. */
+static int osgn(const double *a, const double *b, const double *c, const double *d)
+{
+    double o = thx_orient3d(a, b, c, d);
+    return (o > 0) - (o < 0);
+}
+
+
+#define WALK_FLOOR RECOVER_FLOOR /* the least quality a step of the walk may leave: the floor of the single-step recovery */
+#define WALK_STEPS 48
+
+/*
+ * Makes (a, c) an edge when the segment crosses several tetrahedra: from a, the tetrahedron of a's
+ * star whose far side the segment leaves through is found (exact orientations), and what it leaves
+ * through is flipped away: a face by a 2-3 flip with the tetrahedron beyond (which joins a to that
+ * one's apex: one face fewer on the segment), or, when that flip would invert a tetrahedron, the
+ * face's edge that blocks it by an edge removal; an edge the segment passes through by an edge
+ * removal. Each step needs every new tetrahedron better than WALK_FLOOR (the sliver repair that
+ * follows improves them further). Fails on a protected face or edge in the way (a surface crossing),
+ * a node on the segment, the boundary, or after WALK_STEPS steps. Returns 1 if (a, c) is an edge.
+ */
+static int recover_edge_walk(imesh *M, int32_t a, int32_t c, size_t *n_ops)
+{
+    const double *pa = X(M, a), *pc = X(M, c);
+    for (int step = 0; step < WALK_STEPS; step++) {
+        int n = open_star(M, a, M->star);
+        if (!n) return 0;
+        if (star_has(M, M->star, n, c)) return 1;
+        int32_t t = -1, fv[3] = {-1, -1, -1};
+        int fa = -1, zero = -1;
+        for (int i = 0; i < n && t < 0; i++) {
+            const int32_t *q = M->tet + 4 * (size_t)M->star[i];
+            int la = local_index(q, a);
+            int32_t v[3] = {q[face_of[la][0]], q[face_of[la][1]], q[face_of[la][2]]};
+            int s[3], nz = 0, pos = 0, neg = 0, z = -1;
+            for (int k = 0; k < 3; k++) {
+                s[k] = osgn(pa, pc, X(M, v[k]), X(M, v[(k + 1) % 3]));
+                nz += s[k] != 0;
+                pos += s[k] > 0;
+                neg += s[k] < 0;
+                if (!s[k]) z = k;
+            }
+            if (pos && neg) continue;
+            /* the far side: c beyond the face's plane, a before it */
+            int sa = osgn(X(M, v[0]), X(M, v[1]), X(M, v[2]), pa), sc = osgn(X(M, v[0]), X(M, v[1]), X(M, v[2]), pc);
+            if (!(sa * sc < 0)) continue;
+            if (nz < 2) return 0; /* through a node */
+            t = M->star[i];
+            fa = la;
+            memcpy(fv, v, sizeof fv);
+            zero = nz == 2 ? z : -1;
+        }
+        if (t < 0) return 0;
+        int32_t e0, e1; /* the edge to remove, if it comes to that */
+        if (zero < 0) {
+            /* through the face fv: a 2-3 flip with the tetrahedron beyond */
+            if (tset_has(&M->prot, tri_sorted(fv[0], fv[1], fv[2]))) return 0;
+            int32_t u = M->nbr[4 * (size_t)t + fa];
+            if (u < 0) return 0;
+            const int32_t *qu = M->tet + 4 * (size_t)u;
+            int32_t apex = -1;
+            for (int k = 0; k < 4; k++)
+                if (qu[k] != fv[0] && qu[k] != fv[1] && qu[k] != fv[2]) apex = qu[k];
+            const int32_t *q = M->tet + 4 * (size_t)t;
+            int32_t nw[3][4];
+            double qnew = INFINITY;
+            int bad = -1;
+            for (int k = 0; k < 3; k++) {
+                memcpy(nw[k], q, sizeof nw[k]);
+                nw[k][face_of[fa][k]] = apex;
+                double qk = q4(M, nw[k][0], nw[k][1], nw[k][2], nw[k][3]);
+                if (qk <= 0 && bad < 0) bad = k;
+                qnew = fmin(qnew, qk);
+            }
+            if (qnew > WALK_FLOOR) {
+                int32_t old[2] = {t, u}, nreg[3];
+                new_regions(M, old, 2, (const int32_t(*)[4])nw, 3, nreg);
+                if (replace(M, old, 2, (const int32_t(*)[4])nw, nreg, 3) != 0) return 0;
+                (*n_ops)++;
+                continue;
+            }
+            if (bad < 0) return 0; /* valid but too flat */
+            /* the tetrahedron that would invert lacks face vertex `bad`: the edge of the other two blocks */
+            int32_t x = q[face_of[fa][(bad + 1) % 3]], y = q[face_of[fa][(bad + 2) % 3]];
+            e0 = x;
+            e1 = y;
+        } else {
+            e0 = fv[zero];
+            e1 = fv[(zero + 1) % 3];
+        }
+        if (tset_has(&M->prot, edge_sorted(e0, e1))) return 0;
+        int32_t ring[MAX_RING], tets[MAX_RING];
+        int m = edge_ring(M, t, e0, e1, ring, tets);
+        if (m < 3) return 0;
+        double qold = INFINITY;
+        for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
+        int32_t nw[2 * MAX_RING][4];
+        double qnew = edge_removal_plan(M, e0, e1, ring, m, nw, -1, -1);
+        if (!(qnew > WALK_FLOOR) && !(qnew > 0 && qnew >= qold)) return 0;
+        int32_t nreg[2 * MAX_RING];
+        new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
+        if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) != 0) return 0;
+        (*n_ops)++;
+    }
+    return 0;
+}
+
 /* The ring around a boundary edge (a, b) of t: ring[0..m) from one boundary face (a, b, ring[0]) to
  * the other (a, b, ring[m-1]), (a, b, ring[i], ring[i+1]) right-handed, tets[0..m-1) between them.
  * Returns m, or 0 if the edge is interior or its ring too large. */
@@ -1132,6 +1239,42 @@ thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, in
         S.missing_after = missing - fixed;
         if (!fixed) break;
     }
+    /* what one operation per edge could not do: walks along the missing edges, from either end */
+    S.missing_before_walk = S.missing_after;
+    for (int pass = 0; pass < 3 && S.missing_after; pass++) {
+        size_t missing = 0, fixed = 0;
+        for (size_t s = 0; s < n_surf; s++)
+            for (size_t i = 0; i < surf[s]->n_tris; i++) {
+                const int32_t *f = surf[s]->tri + 3 * i;
+                int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
+                                (int32_t)(offset[s] + (size_t)f[2])};
+                if (has_face(&M, v[0], v[1], v[2])) continue;
+                missing++;
+                int ok = 1;
+                for (int e = 0; e < 3 && ok; e++) {
+                    int32_t x = v[e], y = v[(e + 1) % 3];
+                    ok = recover_edge(&M, x, y, &S.n_flip23, &S.n_edge_removals) ||
+                         recover_edge_walk(&M, x, y, &S.n_walk) || recover_edge_walk(&M, y, x, &S.n_walk);
+                }
+                if (ok && has_face(&M, v[0], v[1], v[2])) fixed++;
+            }
+        S.missing_after = missing - fixed;
+        if (!fixed) break;
+    }
+    /* what the missing ones lack: an edge, or only the face (an edge of the mesh pierces it) */
+    for (size_t s = 0; s < n_surf; s++)
+        for (size_t i = 0; i < surf[s]->n_tris; i++) {
+            const int32_t *f = surf[s]->tri + 3 * i;
+            int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
+                            (int32_t)(offset[s] + (size_t)f[2])};
+            if (has_face(&M, v[0], v[1], v[2])) continue;
+            int edges = 0;
+            for (int e = 0; e < 3; e++) {
+                int n = open_star(&M, v[e], M.star);
+                edges += star_has(&M, M.star, n, v[(e + 1) % 3]);
+            }
+            if (edges == 3) S.missing_face_only++;
+        }
     THX_TRY(imesh_close(&M, tets, NULL, nbrs, nt));
     S.seconds = thx_wtime() - t0;
     if (stats) *stats = S;

@@ -74,8 +74,12 @@ void mesh_triset_free(mesh_triset **T);
  * the edge as a chord (the segment passes by one edge: the other diagonal of a
  * lacing quadrilateral, the usual case). Surface triangles and edges already
  * present are never removed; new tetrahedra are positively oriented (exact)
- * and no worse than the cavity's worst or a floor (sine 0.02). Triangles that
- * need more than one operation per edge stay missing (counted). On the
+ * and no worse than the cavity's worst or a floor (sine of 5 degrees). Edges
+ * that need more than one operation are then walked from either end: the
+ * face the segment leaves the end's star through goes by a 2-3 flip, or, when
+ * that flip would invert a tetrahedron, the face's blocking edge by an edge
+ * removal (each step at least the floor). What still fails stays missing
+ * (counted; missing_face_only: all three edges there, the face pierced). On the
  * convex hull (where the outer surface touches it) a hull edge that is the
  * other diagonal of a surface quadrilateral is removed with the open ring of
  * tetrahedra around it, so the hull gives up the thin wedge between the two
@@ -85,7 +89,10 @@ void mesh_triset_free(mesh_triset **T);
  */
 typedef struct {
     size_t n_triangles, missing_before, missing_after;
+    size_t missing_face_only; /* of missing_after: all three edges are mesh edges, the face is not */
     size_t n_flip23, n_edge_removals;
+    size_t n_walk; /* flips and edge removals of the walks along edges that needed several */
+    size_t missing_before_walk; /* missing after the single-operation passes, before the walks */
     size_t n_boundary; /* convex-hull edges swapped for surface edges (the hull shrinks to the surface) */
     double seconds;
 } recover_stats;
