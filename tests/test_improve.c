@@ -495,6 +495,49 @@ int main(void)
         free(b1);
         thx_volume_destroy(&v);
     }
+    /* 8. face recovery: a triangle whose three edges are mesh edges but which an edge pierces (the
+          Delaunay step joins two low apexes across it) becomes a face by the 3-2 flip */
+    {
+        double h = 0.2;
+        double xyz[15] = {1, 0, 0, -0.5, 0.8660254037844386, 0, -0.5, -0.8660254037844386, 0, 0.01, 0.02, h, -0.02, 0.01, -h};
+        int32_t *tets = NULL, *nbrs = NULL;
+        size_t nt = 0;
+        CHECK_OK(ctx, thx_delaunay3d(ctx, xyz, 5, &tets, &nbrs, &nt, NULL));
+        for (size_t t = 0; t < nt; t++) {
+            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
+            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
+        }
+        CHECK(nt == 3); /* around the edge (3, 4) through the triangle */
+        int32_t tri[3] = {0, 1, 2};
+        thx_surface surf;
+        memset(&surf, 0, sizeof surf);
+        surf.n_nodes = 5;
+        surf.n_tris = 1;
+        surf.tri = tri;
+        const thx_surface *sp[1] = {&surf};
+        size_t offset[2] = {0, 5};
+        recover_stats R;
+        CHECK_OK(ctx, mesh_recover(ctx, xyz, 5, &tets, &nbrs, &nt, sp, offset, 1, &R));
+        printf("face recovery: %zu missing -> %zu, %zu tetrahedra, %zu operations on piercing edges\n", R.missing_before,
+               R.missing_after, nt, R.n_face_ops);
+        CHECK(R.missing_before == 1 && R.missing_after == 0 && R.n_face_ops == 1 && nt == 2);
+        double vol = 0;
+        int has = 0;
+        for (size_t t = 0; t < nt; t++) {
+            const int32_t *q = tets + 4 * t;
+            double o = thx_orient3d(xyz + 3 * q[0], xyz + 3 * q[1], xyz + 3 * q[2], xyz + 3 * q[3]);
+            CHECK(o < 0);
+            vol += -o / 6;
+            int k = 0;
+            for (int c = 0; c < 4; c++) k += q[c] <= 2;
+            has += k == 3;
+        }
+        CHECK(has == 2);
+        /* the two tetrahedra on the triangle: area 3 sqrt(3) / 4 times (2 h) / 3 */
+        CHECK_NEAR(vol, 3 * sqrt(3) / 4 * 2 * h / 3, 1e-12);
+        free(tets);
+        free(nbrs);
+    }
     /* 4. two flat caps on one triangle become three good tetrahedra (2-3 flip) */
     {
         thx_volume *v = NULL;

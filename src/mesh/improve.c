@@ -442,8 +442,19 @@ static int crosses(int x, int y, int p, int q)
 
 /* Best triangulation of the ring: returns its worst quality and fills nw (2(n-2) tetrahedra). With
  * cp < cq (ring indices), only triangulations holding the chord (r[cp], r[cq]) are considered. */
+static double edge_removal_plan_chords(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4],
+                                       const int (*ch)[2], int nch);
+
 static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4],
                                 int cp, int cq)
+{
+    const int ch[1][2] = {{cp, cq}};
+    return edge_removal_plan_chords(M, a, b, r, n, nw, ch, cp >= 0 ? 1 : 0);
+}
+
+/* As edge_removal_plan, with every chord ch[k] = (p, q), p < q ring indices, held. */
+static double edge_removal_plan_chords(const imesh *M, int32_t a, int32_t b, const int32_t *r, int n, int32_t (*nw)[4],
+                                       const int (*ch)[2], int nch)
 {
     double Q[MAX_RING][MAX_RING];
     int K[MAX_RING][MAX_RING];
@@ -456,7 +467,10 @@ static double edge_removal_plan(const imesh *M, int32_t a, int32_t b, const int3
             for (int k = i + 1; k < j; k++) {
                 double v = fmin(Q[i][k], Q[k][j]);
                 if (v <= best) continue;
-                if (cp >= 0 && (crosses(i, k, cp, cq) || crosses(k, j, cp, cq) || crosses(i, j, cp, cq))) continue;
+                int cut = 0;
+                for (int c = 0; c < nch && !cut; c++)
+                    cut = crosses(i, k, ch[c][0], ch[c][1]) || crosses(k, j, ch[c][0], ch[c][1]) || crosses(i, j, ch[c][0], ch[c][1]);
+                if (cut) continue;
                 /* with the ring counterclockwise seen from b: (ri, rk, rj, b) and (ri, rj, rk, a) */
                 double qb = q4(M, r[i], r[k], r[j], b);
                 if (qb <= best) continue;
@@ -977,6 +991,8 @@ static int recover_edge(imesh *M, int32_t a, int32_t c, size_t *n_flip23, size_t
     return 0;
 }
 
+static int has_face(imesh *M, int32_t a, int32_t b, int32_t c);
+
 /* Sign of the exact orientation, as an int. */
 static int osgn(const double *a, const double *b, const double *c, const double *d)
 {
@@ -1082,6 +1098,74 @@ static int recover_edge_walk(imesh *M, int32_t a, int32_t c, size_t *n_ops)
         (*n_ops)++;
     }
     return 0;
+}
+
+/* Does the segment (p, q) cross the triangle (a, b, c) through its interior (exact)? */
+static int pierces(const imesh *M, int32_t p, int32_t q, int32_t a, int32_t b, int32_t c)
+{
+    const double *A = X(M, a), *B = X(M, b), *C = X(M, c), *P = X(M, p), *Q = X(M, q);
+    if (osgn(A, B, C, P) * osgn(A, B, C, Q) >= 0) return 0;
+    int s1 = osgn(P, Q, A, B), s2 = osgn(P, Q, B, C), s3 = osgn(P, Q, C, A);
+    return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
+}
+
+/*
+ * Makes (a, b, c), whose three edges are edges of the mesh, a face: the edges that pierce it are
+ * removed one at a time (found in the stars of a, b and c), each by an edge removal whose ring
+ * triangulation holds the chords between whichever of a, b, c lie on its ring, so the triangle
+ * appears when its last piercing edge goes (a single piercing edge with ring a, b, c is the 3-2
+ * flip). Each step keeps the recovery floor. Returns 1 if (a, b, c) is a face afterwards.
+ */
+static int recover_face(imesh *M, int32_t a, int32_t b, int32_t c, size_t *n_ops)
+{
+    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    const int32_t v[3] = {a, b, c};
+    for (int step = 0; step < WALK_STEPS; step++) {
+        if (has_face(M, a, b, c)) return 1;
+        int done = 0;
+        for (int w = 0; w < 3 && !done; w++) {
+            int n = open_star(M, v[w], M->star2);
+            for (int i = 0; i < n && !done; i++) {
+                int32_t t = M->star2[i];
+                for (int e = 0; e < 6 && !done; e++) {
+                    const int32_t *q = M->tet + 4 * (size_t)t;
+                    int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
+                    if (p0 == a || p0 == b || p0 == c || p1 == a || p1 == b || p1 == c) continue;
+                    if (!pierces(M, p0, p1, a, b, c)) continue;
+                    if (tset_has(&M->prot, edge_sorted(p0, p1))) return 0; /* a surface edge through it */
+                    int32_t ring[MAX_RING], tets[MAX_RING];
+                    int m = edge_ring(M, t, p0, p1, ring, tets);
+                    if (m < 3) continue;
+                    int at[3] = {-1, -1, -1}, k3 = 0;
+                    for (int k = 0; k < m; k++)
+                        for (int u = 0; u < 3; u++)
+                            if (ring[k] == v[u]) at[u] = k;
+                    int ch[3][2], nch = 0;
+                    for (int u = 0; u < 3; u++)
+                        for (int x = u + 1; x < 3; x++)
+                            if (at[u] >= 0 && at[x] >= 0) {
+                                ch[nch][0] = at[u] < at[x] ? at[u] : at[x];
+                                ch[nch][1] = at[u] < at[x] ? at[x] : at[u];
+                                nch++;
+                            }
+                    for (int u = 0; u < 3; u++) k3 += at[u] >= 0;
+                    (void)k3;
+                    double qold = INFINITY;
+                    for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
+                    int32_t nw[2 * MAX_RING][4];
+                    double qnew = edge_removal_plan_chords(M, p0, p1, ring, m, nw, (const int(*)[2])ch, nch);
+                    if (!(qnew > WALK_FLOOR) && !(qnew > 0 && qnew >= qold)) continue;
+                    int32_t nreg[2 * MAX_RING];
+                    new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
+                    if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) != 0) continue;
+                    (*n_ops)++;
+                    done = 1;
+                }
+            }
+        }
+        if (!done) return 0;
+    }
+    return has_face(M, a, b, c);
 }
 
 /* The ring around a boundary edge (a, b) of t: ring[0..m) from one boundary face (a, b, ring[0]) to
@@ -1256,7 +1340,7 @@ thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, in
                     ok = recover_edge(&M, x, y, &S.n_flip23, &S.n_edge_removals) ||
                          recover_edge_walk(&M, x, y, &S.n_walk) || recover_edge_walk(&M, y, x, &S.n_walk);
                 }
-                if (ok && has_face(&M, v[0], v[1], v[2])) fixed++;
+                if (ok && recover_face(&M, v[0], v[1], v[2], &S.n_face_ops)) fixed++;
             }
         S.missing_after = missing - fixed;
         if (!fixed) break;

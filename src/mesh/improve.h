@@ -78,8 +78,11 @@ void mesh_triset_free(mesh_triset **T);
  * that need more than one operation are then walked from either end: the
  * face the segment leaves the end's star through goes by a 2-3 flip, or, when
  * that flip would invert a tetrahedron, the face's blocking edge by an edge
- * removal (each step at least the floor). What still fails stays missing
- * (counted; missing_face_only: all three edges there, the face pierced). On the
+ * removal (each step at least the floor). A triangle whose three edges are
+ * there but which edges pierce is made a face by removing those edges, each
+ * ring triangulated holding the chords between the triangle's corners on it
+ * (one piercing edge with ring a, b, c: the 3-2 flip). What still fails stays
+ * missing (counted; missing_face_only: all three edges there, the face not). On the
  * convex hull (where the outer surface touches it) a hull edge that is the
  * other diagonal of a surface quadrilateral is removed with the open ring of
  * tetrahedra around it, so the hull gives up the thin wedge between the two
@@ -92,6 +95,7 @@ typedef struct {
     size_t missing_face_only; /* of missing_after: all three edges are mesh edges, the face is not */
     size_t n_flip23, n_edge_removals;
     size_t n_walk; /* flips and edge removals of the walks along edges that needed several */
+    size_t n_face_ops; /* edge removals that cleared edges piercing a triangle whose edges were there */
     size_t missing_before_walk; /* missing after the single-operation passes, before the walks */
     size_t n_boundary; /* convex-hull edges swapped for surface edges (the hull shrinks to the surface) */
     double seconds;

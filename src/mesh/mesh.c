@@ -477,7 +477,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_missing_before = rs.missing_before;
         S.n_missing_after = rs.missing_after;
         S.n_missing_face_only = rs.missing_face_only;
-        S.n_recover_flips = rs.n_flip23 + rs.n_edge_removals + rs.n_boundary + rs.n_walk;
+        S.n_recover_flips = rs.n_flip23 + rs.n_edge_removals + rs.n_boundary + rs.n_walk + rs.n_face_ops;
         S.t_recover = rs.seconds;
     }
     double t2 = thx_wtime();
