@@ -1002,7 +1002,7 @@ static int osgn(const double *a, const double *b, const double *c, const double 
 
 
 #define WALK_FLOOR RECOVER_FLOOR /* the least quality a step of the walk may leave: the floor of the single-step recovery */
-#define WALK_STEPS 48
+#define WALK_STEPS 8
 
 /*
  * Makes (a, c) an edge when the segment crosses several tetrahedra: from a, the tetrahedron of a's
@@ -1046,7 +1046,8 @@ static int recover_edge_walk(imesh *M, int32_t a, int32_t c, size_t *n_ops)
             zero = nz == 2 ? z : -1;
         }
         if (t < 0) return 0;
-        int32_t e0, e1; /* the edge to remove, if it comes to that */
+        int32_t cand[3][2]; /* the edges one of which to remove, if it comes to that */
+        int n_cand = 0;
         if (zero < 0) {
             /* through the face fv: a 2-3 flip with the tetrahedron beyond */
             if (tset_has(&M->prot, tri_sorted(fv[0], fv[1], fv[2]))) return 0;
@@ -1074,27 +1075,43 @@ static int recover_edge_walk(imesh *M, int32_t a, int32_t c, size_t *n_ops)
                 (*n_ops)++;
                 continue;
             }
-            if (bad < 0) return 0; /* valid but too flat */
-            /* the tetrahedron that would invert lacks face vertex `bad`: the edge of the other two blocks */
-            int32_t x = q[face_of[fa][(bad + 1) % 3]], y = q[face_of[fa][(bad + 2) % 3]];
-            e0 = x;
-            e1 = y;
+            /* the flip would invert a tetrahedron (the one lacking face vertex `bad`: the edge of the
+               other two blocks) or leave one too flat (then any of the face's edges may do) */
+            n_cand = 0;
+            for (int k = 0; k < 3; k++) {
+                if (bad >= 0 && k != bad) continue;
+                cand[n_cand][0] = q[face_of[fa][(k + 1) % 3]];
+                cand[n_cand][1] = q[face_of[fa][(k + 2) % 3]];
+                n_cand++;
+            }
         } else {
-            e0 = fv[zero];
-            e1 = fv[(zero + 1) % 3];
+            cand[0][0] = fv[zero];
+            cand[0][1] = fv[(zero + 1) % 3];
+            n_cand = 1;
         }
-        if (tset_has(&M->prot, edge_sorted(e0, e1))) return 0;
-        int32_t ring[MAX_RING], tets[MAX_RING];
-        int m = edge_ring(M, t, e0, e1, ring, tets);
-        if (m < 3) return 0;
-        double qold = INFINITY;
-        for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
-        int32_t nw[2 * MAX_RING][4];
-        double qnew = edge_removal_plan(M, e0, e1, ring, m, nw, -1, -1);
-        if (!(qnew > WALK_FLOOR) && !(qnew > 0 && qnew >= qold)) return 0;
+        /* the best edge removal among the candidates */
+        double best = -INFINITY;
+        int best_m = 0;
+        int32_t best_tets[MAX_RING], best_nw[2 * MAX_RING][4];
+        for (int k = 0; k < n_cand; k++) {
+            if (tset_has(&M->prot, edge_sorted(cand[k][0], cand[k][1]))) continue;
+            int32_t ring[MAX_RING], tets[MAX_RING];
+            int m = edge_ring(M, t, cand[k][0], cand[k][1], ring, tets);
+            if (m < 3) continue;
+            int32_t nw[2 * MAX_RING][4];
+            double qnew = edge_removal_plan(M, cand[k][0], cand[k][1], ring, m, nw, -1, -1);
+            if (!(qnew > WALK_FLOOR)) continue;
+            if (qnew > best) {
+                best = qnew;
+                best_m = m;
+                memcpy(best_tets, tets, (size_t)m * sizeof *tets);
+                memcpy(best_nw, nw, (size_t)(2 * (m - 2)) * sizeof *nw);
+            }
+        }
+        if (!best_m) return 0;
         int32_t nreg[2 * MAX_RING];
-        new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
-        if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) != 0) return 0;
+        new_regions(M, best_tets, best_m, (const int32_t(*)[4])best_nw, 2 * (best_m - 2), nreg);
+        if (replace(M, best_tets, best_m, (const int32_t(*)[4])best_nw, nreg, 2 * (best_m - 2)) != 0) return 0;
         (*n_ops)++;
     }
     return 0;

@@ -78,7 +78,8 @@ void mesh_triset_free(mesh_triset **T);
  * that need more than one operation are then walked from either end: the
  * face the segment leaves the end's star through goes by a 2-3 flip, or, when
  * that flip would invert a tetrahedron, the face's blocking edge by an edge
- * removal (each step at least the floor). A triangle whose three edges are
+ * removal, or, when it would be too flat, the best of the face's edges (each
+ * step at least the floor, at most 8 steps). A triangle whose three edges are
  * there but which edges pierce is made a face by removing those edges, each
  * ring triangulated holding the chords between the triangle's corners on it
  * (one piercing edge with ring a, b, c: the 3-2 flip). What still fails stays
