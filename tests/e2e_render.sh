@@ -32,6 +32,7 @@ R=(--solution sol --frame 193 --size 400x480)
 "$THORAX" render model --size 300x300 --mode wire --view superior -o wire.png -q
 "$THORAX" render model --size 300x300 --surface lung_l=flat:1:#00ff00 --surface lung_r=flat:1:#ff00ff --only lung_l --only lung_r -o look.png -q
 "$THORAX" render "${R[@]}" --view anterior --trace torso:100 -o node.png -q
+"$THORAX" render "${R[@]}" --view anterior --only torso --only lung_l --surface torso=hidden -o grey.png -q
 
 $PY - <<'EOF'
 import vtk
@@ -84,6 +85,11 @@ assert other.sum() < 0.05 * (green.sum() + magenta.sum()), ('other colours', oth
 # a node's signal as the trace: the bottom strip is drawn
 n = png('node.png')
 assert (abs(n[-90:, :] - bg).sum(axis=2) > 40).sum() > 300, 'no node trace'
+# beside data, surfaces without data are grey: colour means potential
+g = png('grey.png')
+drawn = abs(g - g[0, 0]).sum(axis=2) > 20
+spread = g.max(axis=2) - g.min(axis=2)
+assert drawn.sum() > 2000 and (spread[drawn] <= 8).mean() > 0.99, (drawn.sum(), spread[drawn].max())
 print('render checks passed')
 EOF
 

@@ -410,10 +410,14 @@ static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scen
         memcpy(r->color, palette[s % 6], sizeof r->color);
         r->mode = o->mode;
         int has = d->series[s] != NULL;
-        if (!has && o->mode != THX_DRAW_ORIENTATION && o->mode != THX_DRAW_WIRE && o->mode != THX_DRAW_POINTS) {
-            int any = 0;
-            for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
-            if (any) r->color[3] = m->surf[s]->role == THX_ROLE_OUTER ? 0.25f : 0.35f;
+        int any = 0;
+        for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
+        if (!has && any && o->mode != THX_DRAW_ORIENTATION) {
+            /* beside data, colour means potential: the other surfaces in greys (a shade each) */
+            float g = 0.82f - 0.08f * (float)(s % 4);
+            r->color[0] = r->color[1] = r->color[2] = g;
+            if (o->mode != THX_DRAW_WIRE && o->mode != THX_DRAW_POINTS)
+                r->color[3] = m->surf[s]->role == THX_ROLE_OUTER ? 0.25f : 0.35f;
         }
         for (int k = 0; k < o->n_whole; k++) r->no_clip |= !strcmp(o->whole[k], m->surf[s]->name);
         const struct surf_look *look = NULL;
