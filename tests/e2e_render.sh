@@ -100,6 +100,10 @@ ls anim/frame_00180.png anim/frame_00185.png > /dev/null
 rm anim/frame_00183.png
 "$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --fps 10 -o anim > resume.log
 grep -q "1 drawn, 5 kept" resume.log || { cat resume.log; fail "not resumed"; }
+# other settings: no frame of the earlier run is kept (they would mix two looks in one movie)
+"$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --cmap viridis --fps 10 -o anim --mp4 none > other.log 2>&1
+grep -q "6 drawn, 0 kept" other.log || { cat other.log; fail "stale frames kept"; }
+grep -q "other settings" other.log || { cat other.log; fail "no notice of the redraw"; }
 n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 anim/animation.mp4)
 codec=$(ffprobe -v error -select_streams v:0 -show_entries stream=codec_name -of csv=p=0 anim/animation.mp4)
 [ "$n" = 6 ] && [ "$codec" = h264 ] || fail "mp4: $n frames, codec $codec"

@@ -9,8 +9,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+extern char **environ;
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
@@ -860,11 +864,73 @@ int cmd_render(int argc, char **argv)
     return rc;
 }
 
+/* ---- what the frames of an animation were drawn with ---- */
+
+/* Appends "path:size:mtime" of a file (or "path:-" if it cannot be read). */
+static void sig_file(char *sig, size_t cap, const char *path)
+{
+    struct stat sb;
+    size_t len = strlen(sig);
+    if (stat(path, &sb) == 0)
+        snprintf(sig + len, cap - len, " %s:%lld:%lld.%09ld", path, (long long)sb.st_size, (long long)sb.st_mtim.tv_sec,
+                 sb.st_mtim.tv_nsec);
+    else
+        snprintf(sig + len, cap - len, " %s:-", path);
+}
+
+/* The settings that decide a frame's pixels: every option but the frame range, the rate, the movie
+ * and the verbosity; the data files and the program (size and time of each), so a changed solution
+ * or a rebuilt thorax redraws. */
+static void animation_signature(int argc, char **argv, const ropts *o, char *sig, size_t cap)
+{
+    snprintf(sig, cap, "thorax-animation 1;");
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--frames") || !strcmp(a, "--fps") || !strcmp(a, "--mp4") || !strcmp(a, "-o") || !strcmp(a, "--output")) {
+            i++;
+            continue;
+        }
+        if (!strcmp(a, "-q") || !strcmp(a, "-v")) continue;
+        size_t len = strlen(sig);
+        snprintf(sig + len, cap - len, " %s", a);
+    }
+    char path[PATH_MAX + 64];
+    if (o->solution) {
+        snprintf(path, sizeof path, "%s/solution.json", o->solution);
+        sig_file(sig, cap, path);
+    }
+    if (o->data) sig_file(sig, cap, o->data);
+    if (o->model_dir) {
+        snprintf(path, sizeof path, "%s/model.json", o->model_dir);
+        sig_file(sig, cap, path);
+    }
+    sig_file(sig, cap, "/proc/self/exe");
+}
+
+/* Runs ffmpeg on the frames (argv, no shell: any path works); its exit status, 127 if it cannot run. */
+static int run_ffmpeg(int fps, int first, int count, const char *dir, const char *out)
+{
+    char rate[32], start[32], nframes[32], pattern[PATH_MAX + 32];
+    snprintf(rate, sizeof rate, "%d", fps);
+    snprintf(start, sizeof start, "%d", first);
+    snprintf(nframes, sizeof nframes, "%d", count);
+    snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
+    char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
+                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
+                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", (char *)out, NULL};
+    pid_t pid;
+    if (posix_spawnp(&pid, "ffmpeg", NULL, NULL, args, environ) != 0) return 127;
+    int status = 0;
+    if (waitpid(pid, &status, 0) < 0) return 127;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
 static void animate_help(void)
 {
     printf("usage: thorax animate MODEL|--solution DIR -o DIR [--frames A:B] [--fps N] [--mp4 FILE] [options]\n\n"
            "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames whose PNG\n"
-           "exists are kept), a progress bar on a terminal, then an MP4 (H.264) through ffmpeg.\n\n"
+           "exists are kept if drawn with the same options, data and program: DIR/frames.settings),\n"
+           "a progress bar on a terminal, then an MP4 (H.264) through ffmpeg.\n\n"
            "options:\n"
            "  --frames A:B        frame range, 1-based inclusive (default: all)\n"
            "  --fps N             frames per second of the MP4 (default 25)\n"
@@ -928,13 +994,40 @@ int cmd_animate(int argc, char **argv)
     }
     if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
         st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
+    /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
+    int may_keep = 0;
+    if (st == THX_OK) {
+        char sig[8192], sigpath[PATH_MAX + 64];
+        animation_signature(argc, argv, &o, sig, sizeof sig);
+        snprintf(sigpath, sizeof sigpath, "%s/frames.settings", out_dir);
+        char *old = NULL;
+        size_t olen = 0;
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (thx_read_file(quiet, sigpath, &old, &olen) == THX_OK) {
+            may_keep = olen == strlen(sig) + 1 && !strncmp(old, sig, strlen(sig));
+            if (!may_keep && o.verbose >= 0)
+                fprintf(stderr, "thorax animate: %s was drawn with other settings, data or program: redrawing every frame\n", out_dir);
+        }
+        free(old);
+        thx_ctx_destroy(&quiet);
+        if (!may_keep) {
+            thx_atomic_file af;
+            st = thx_atomic_open(ctx, sigpath, &af);
+            if (st == THX_OK) {
+                fprintf(af.f, "%s\n", sig);
+                st = thx_atomic_commit(ctx, &af);
+            }
+        }
+    }
     int done = 0, kept = 0, total = a_last - a_first + 1;
     for (int f = a_first; st == THX_OK && f <= a_last; f++) {
         snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
         thx_image *old = NULL;
         thx_ctx *quiet = NULL;
         thx_ctx_create(&quiet);
-        if (access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w && old->h == o.h) {
+        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w &&
+            old->h == o.h) {
             kept++; /* resumable: a complete PNG of the right size is kept */
         } else {
             st = draw_frame(ctx, &o, &d, rr, font, f - 1, img, &nan);
@@ -948,17 +1041,13 @@ int cmd_animate(int argc, char **argv)
     if (st == THX_OK && !(mp4 && !strcmp(mp4, "none"))) {
         if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
         else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
-        char tmpm[PATH_MAX + 80], cmd[3 * PATH_MAX + 512];
+        char tmpm[PATH_MAX + 80];
         snprintf(tmpm, sizeof tmpm, "%s.part.mp4", movie);
-        snprintf(cmd, sizeof cmd,
-                 "ffmpeg -nostdin -loglevel error -y -framerate %d -start_number %d -i '%s/frame_%%05d.png' -frames:v %d "
-                 "-c:v libx264 -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '%s'",
-                 o.fps, a_first, out_dir, total, tmpm);
-        int r = system(cmd);
+        int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
         if (r != 0) {
             remove(tmpm);
             st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
-                           r == 127 * 256 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
+                           r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
         } else if (rename(tmpm, movie) != 0) {
             remove(tmpm);
             st = thx_error(ctx, THX_EIO, "%s: cannot write", movie);
