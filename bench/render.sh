@@ -22,7 +22,7 @@ tris=$(python3 -c "
 import json; m=json.load(open('$W/m/model.json'))
 print(sum(s['n_tris'] for s in m['surfaces'] if s['name'] in ('torso','heart')))")
 echo "scene: torso and heart, $tris triangles, potentials of frame $F, Gouraud + 12 contour lines, 1024x1024"
-"$THORAX" render --solution "$W/sol" --frame $F --only torso --only heart --size 1024x1024 --mode gouraud \
+/usr/bin/time -f "%M" -o "$W/mem_ours" "$THORAX" render --solution "$W/sol" --frame $F --only torso --only heart --size 1024x1024 --mode gouraud \
     --style continuous+contours --levels 12 --repeat 30 -o "$W/thorax.png" | tee "$W/ours.txt"
 cat > "$W/vtk_bench.py" <<'EOF'
 import sys, time, json, numpy as np, vtk
@@ -78,7 +78,8 @@ print("VTK %s: 30 repetitions, median %.1f ms a frame (min %.1f, max %.1f), %.1f
       (vtk.vtkVersion.GetVTKVersion(), 1000 * med, 1000 * times[0], 1000 * times[-1], 1 / med,
        win.ReportCapabilities().splitlines()[1].strip() if win.ReportCapabilities() else ''))
 EOF
-xvfb-run -a -s "-screen 0 1280x1280x24" /usr/bin/python3 "$W/vtk_bench.py" "$W/m" "$W/sol" $F "$W/vtk.png" | tee "$W/vtk.txt"
+xvfb-run -a -s "-screen 0 1280x1280x24" /usr/bin/time -f "%M" -o "$W/mem_vtk" /usr/bin/python3 "$W/vtk_bench.py" "$W/m" "$W/sol" $F "$W/vtk.png" | tee "$W/vtk.txt"
+echo "peak memory of the whole process (30 frames): thorax $(( $(tail -1 "$W/mem_ours") / 1024 )) MB, VTK $(( $(tail -1 "$W/mem_vtk") / 1024 )) MB (Python and VTK's libraries included)"
 python3 - "$W/ours.txt" "$W/vtk.txt" <<'EOF'
 import re, sys
 o = float(re.search(r'median ([0-9.]+) ms', open(sys.argv[1]).read()).group(1))
