@@ -4,7 +4,7 @@
 # orientation check), pixel facts read back with VTK's PNG reader, an animation whose
 # MP4 ffprobe reads, resuming, and bad input (rows, NaN, unwritable path, no EGL).
 set -euo pipefail
-: "${THORAX:?}" "${WORK:?}"
+: "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK"
@@ -134,4 +134,24 @@ open('nan.raw', 'wb').write(b[:200] + d.tobytes())
 EOF
 "$THORAX" render model --data nan.raw --data-surface heart --size 200x200 --only heart -o nan.png 2> nan.log
 grep -q "10 values are not numbers" nan.log || { cat nan.log; fail "NaN warning"; }
+# real measured data: the 490-electrode epicardial sock (an open surface, drawn with a warning)
+# and its recording (map3d's ts struct: potvals in mV, samplefrequency 1000 Hz), no model needed
+SOCK="$SRC/../shared/data/map3d/geom/socks/490sock.pts"
+REC="$SRC/../shared/data/map3d/data/socks/10jan01/rsm10jan01-cs-0004.mat"
+"$THORAX" series info "$REC" > rec.txt
+grep -q "0 .. 711 ms" rec.txt || { cat rec.txt; fail "sock recording's time axis"; }
+"$THORAX" render "$SOCK" --data "$REC" --frame 277 --scope frame --style continuous+contours --colorbar --label \
+    --trace 245 --size 400x400 -o sock.png 2> sock.log
+grep -q "drawn as it is, although not closed" sock.log || { cat sock.log; fail "open sock warning"; }
+$PY - <<'EOF2'
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPNGReader(); r.SetFileName('sock.png'); r.Update()
+im = r.GetOutput(); w, h, _ = im.GetDimensions()
+a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
+blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
+assert red > 300 and blue > 300, (red, blue)
+print('measured sock at 276 ms: %d red, %d blue pixels' % (red, blue))
+EOF2
 echo "e2e_render: all checks passed"

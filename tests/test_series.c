@@ -508,6 +508,29 @@ static void test_mat_inputs(void)
     }
     thx_series_destroy(&s);
 
+    /* map3d's ts struct: time is the clock time of the recording (text), samplefrequency in Hz
+       gives the axis (1 / fs apart, in ms) */
+    m = mat_new(sp("ts.mat"));
+    {
+        size_t d1[2] = {1, 1}, dp[2] = {2, 3}, dt[2] = {1, 10};
+        const double pv[6] = {1, 2, 3, 4, 5, 6}, fs = 500;
+        matvar_t *fields[4];
+        fields[0] = Mat_VarCreate("potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dp, (void *)pv, 0);
+        fields[1] = Mat_VarCreate("time", MAT_C_CHAR, MAT_T_UINT8, 2, dt, "2:06:25 PM", 0);
+        fields[2] = Mat_VarCreate("samplefrequency", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d1, (void *)&fs, 0);
+        fields[3] = NULL;
+        matvar_t *st = Mat_VarCreate("ts", MAT_C_STRUCT, MAT_T_STRUCT, 2, d1, fields, 0);
+        CHECK(st && Mat_VarWrite(m, st, MAT_COMPRESSION_NONE) == 0);
+        Mat_VarFree(st);
+    }
+    Mat_Close(m);
+    CHECK_OK(ctx, thx_series_read(ctx, sp("ts.mat"), THX_SERIES_AUTO, &s));
+    if (s) {
+        CHECK(s->n_rows == 2 && s->n_frames == 3 && s->v[5] == 6);
+        CHECK(s->time[0] == 0 && s->time[1] == 2 && s->time[2] == 4 && strcmp(s->time_unit, "ms") == 0);
+    }
+    thx_series_destroy(&s);
+
     /* what cannot be a series */
     m = mat_new(sp("chars.mat"));
     mat_put(m, "name", MAT_C_CHAR, MAT_T_UINT8, 1, 3, "abc");

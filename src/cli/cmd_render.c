@@ -20,6 +20,7 @@ extern char **environ;
 #include "cli/cli_fem.h"
 #include "thorax/fileio.h"
 #include "thorax/image.h"
+#include "thorax/import.h"
 #include "thorax/model.h"
 #include "thorax/render.h"
 #include "thorax/series.h"
@@ -28,6 +29,8 @@ enum { SCOPE_FRAME, SCOPE_SERIES, SCOPE_ALL, SCOPE_FIXED };
 
 typedef struct {
     const char *model_dir, *solution, *data, *data_surface, *out, *font, *trace, *arrows;
+    const char *files[16];  /* surface files drawn without a model (any format thorax import reads) */
+    int n_files;
     int w, h, frame, first, last, fps;
     thx_view view;
     int have_camera;
@@ -169,6 +172,40 @@ static thx_status resolve_trace(thx_ctx *ctx, const ropts *o, rdata *d)
     return THX_OK;
 }
 
+/* A model of the surface files given instead of a model directory, read as `thorax import` reads
+ * them but drawn whatever their checks say (a measured sock is an open surface): a failed check
+ * is a warning. Each surface is named after its file. */
+static thx_status surfaces_from_files(thx_ctx *ctx, const ropts *o, thx_model **out)
+{
+    thx_model *m = NULL;
+    THX_CHECK(thx_model_create(ctx, &m));
+    thx_status st = THX_OK;
+    for (int k = 0; k < o->n_files && st == THX_OK; k++) {
+        char name[64];
+        const char *base = strrchr(o->files[k], '/');
+        base = base ? base + 1 : o->files[k];
+        snprintf(name, sizeof name, "%s", base);
+        char *dot = strrchr(name, '.');
+        if (dot && dot != name) *dot = '\0';
+        thx_import_opts io;
+        thx_import_opts_default(&io);
+        io.force = 1;
+        thx_import_info info;
+        memset(&info, 0, sizeof info);
+        thx_surface *sf = NULL;
+        st = thx_surface_import(ctx, o->files[k], NULL, name, THX_ROLE_OTHER, &io, &sf, &info);
+        if (st == THX_OK && !info.report.ok)
+            thx_log(ctx, THX_LOG_WARN, "%s: drawn as it is, although %s", o->files[k],
+                    info.report.n_reasons ? info.report.reasons[0] : "it fails 'thorax check'");
+        thx_import_info_free(&info);
+        if (st == THX_OK) st = thx_model_add_surface(ctx, m, &sf);
+        thx_surface_destroy(&sf);
+    }
+    if (st != THX_OK) { thx_model_destroy(&m); return st; }
+    *out = m;
+    return THX_OK;
+}
+
 static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
 {
     memset(d, 0, sizeof *d);
@@ -190,7 +227,7 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
         snprintf(model_dir, sizeof model_dir, "%s", mo->valuestring);
     }
     if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
-    thx_status st = thx_model_read(ctx, model_dir, &d->m);
+    thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m) : thx_model_read(ctx, model_dir, &d->m);
     if (st == THX_OK) st = check_names(ctx, o, d->m);
     if (st != THX_OK) { cJSON_Delete(j); return st; }
     if (j) {
@@ -598,6 +635,22 @@ static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_rendere
 }
 
 /* ---- option parsing shared by render and animate ---- */
+
+/* A positional argument: the model directory, or a surface file (a model of its own surfaces).
+ * 0, or -1 for a second directory, a directory beside files, or too many files. */
+static int positional(ropts *o, const char *a)
+{
+    struct stat sb;
+    int dir = stat(a, &sb) == 0 && S_ISDIR(sb.st_mode);
+    if (dir) {
+        if (o->model_dir || o->n_files) return -1;
+        o->model_dir = a;
+        return 0;
+    }
+    if (o->model_dir || o->n_files >= 16) return -1;
+    o->files[o->n_files++] = a;
+    return 0;
+}
 static void ropts_default(ropts *o)
 {
     memset(o, 0, sizeof *o);
@@ -778,7 +831,8 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
 static void render_help(void)
 {
     printf("usage: thorax render MODEL [--solution DIR | --data SERIES] [--frame K] -o IMAGE.png [options]\n"
-           "       thorax render --solution DIR [--frame K] -o IMAGE.png [options]\n\n"
+           "       thorax render --solution DIR [--frame K] -o IMAGE.png [options]\n"
+           "       thorax render SURFACE_FILE... [--data SERIES] [--frame K] -o IMAGE.png [options]\n\n"
            "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a GPU), with\n"
            "potentials coloured per pixel (the value interpolated, then the colour looked up, so bands and\n"
            "contours are exact), following the field's display conventions (paper 4.2).\n\n"
@@ -822,10 +876,9 @@ int cmd_render(int argc, char **argv)
             repeat = atoi(argv[++i]);
             if (repeat < 1 || repeat > 10000) return cli_usage_error("render", "--repeat: 1..10000");
         } else if (a[0] == '-' && a[1]) return cli_usage_error("render", "unknown option '%s'", a);
-        else if (!o.model_dir) o.model_dir = a;
-        else return cli_usage_error("render", "more than one model given");
+        else if (positional(&o, a)) return cli_usage_error("render", "'%s': give one model directory, or surface files (at most 16)", a);
     }
-    if (!o.model_dir && !o.solution) return cli_usage_error("render", "no model or --solution given");
+    if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("render", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("render", "no output image given (-o IMAGE.png)");
     thx_ctx *ctx = cli_ctx(o.verbose);
     rdata d;
@@ -900,6 +953,7 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         sig_file(sig, cap, path);
     }
     if (o->data) sig_file(sig, cap, o->data);
+    for (int k = 0; k < o->n_files; k++) sig_file(sig, cap, o->files[k]);
     if (o->model_dir) {
         snprintf(path, sizeof path, "%s/model.json", o->model_dir);
         sig_file(sig, cap, path);
@@ -960,10 +1014,9 @@ int cmd_animate(int argc, char **argv)
             if (i + 1 >= argc) return cli_usage_error("animate", "--mp4 needs a value");
             mp4 = argv[++i];
         } else if (a[0] == '-' && a[1]) return cli_usage_error("animate", "unknown option '%s'", a);
-        else if (!o.model_dir) o.model_dir = a;
-        else return cli_usage_error("animate", "more than one model given");
+        else if (positional(&o, a)) return cli_usage_error("animate", "'%s': give one model directory, or surface files (at most 16)", a);
     }
-    if (!o.model_dir && !o.solution) return cli_usage_error("animate", "no model or --solution given");
+    if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
     o.last = 0; /* frames checked below */
     thx_ctx *ctx = cli_ctx(o.verbose);

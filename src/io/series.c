@@ -1189,7 +1189,17 @@ static matvar_t *mat_meta_get(mat_meta *m, const char *name)
 static thx_status mat_read_meta(thx_ctx *ctx, const char *path, const char *where, mat_meta *m, thx_series *s)
 {
     matvar_t *t = mat_meta_get(m, "time");
+    int have_time = 0;
+    if (t && t->class_type == MAT_C_CHAR) {
+        /* map3d's ts.time is the clock time of the recording ("2:06:25 PM"), not an axis */
+        char clock[64];
+        int cut = 0;
+        if (mat_string(t, clock, sizeof clock, &cut))
+            thx_log(ctx, THX_LOG_DEBUG, "%s: %stime '%s' is text (a clock time), not a time axis", path, where, clock);
+        t = NULL;
+    }
     if (t) {
+        have_time = 1;
         size_t n = mat_numel(t);
         if (!mat_is_numeric_class(t->class_type) || t->isComplex || n != s->n_frames)
             return thx_error(ctx, THX_EINPUT, "%s: %stime is %s with %zu elements, but the series has %zu frames "
@@ -1197,6 +1207,18 @@ static thx_status mat_read_meta(thx_ctx *ctx, const char *path, const char *wher
                              path, where, mat_class_name(t), n, s->n_frames);
         if (!mat_to_double(t, n, s->time))
             return thx_error(ctx, THX_EINPUT, "%s: %stime: no data", path, where);
+    }
+    if (!have_time) {
+        /* map3d's samplefrequency (Hz): frames 1 / fs apart, in ms */
+        matvar_t *fs = mat_meta_get(m, "samplefrequency");
+        double hz = 0;
+        if (fs && mat_is_numeric_class(fs->class_type) && !fs->isComplex && mat_numel(fs) == 1 && mat_to_double(fs, 1, &hz) &&
+            isfinite(hz) && hz > 0) {
+            for (size_t f = 0; f < s->n_frames; f++) s->time[f] = (double)f * (1000.0 / hz);
+            snprintf(s->time_unit, sizeof s->time_unit, "ms");
+        } else if (fs) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %ssamplefrequency ignored: not one positive number", path, where);
+        }
     }
     static const char *const names[] = {"unit", "time_unit", "label"};
     char *dst[] = {s->unit, s->time_unit, s->label};
