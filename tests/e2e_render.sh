@@ -154,4 +154,19 @@ blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
 assert red > 300 and blue > 300, (red, blue)
 print('measured sock at 276 ms: %d red, %d blue pixels' % (red, blue))
 EOF2
+# map3d's Dalhousie torso with one of its dipole .pot frames (a one-frame series)
+DAL="$SRC/../shared/data/map3d"
+"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --view inferior \
+    --style bands+contours --size 300x300 -o dal.png -q
+$PY - <<'EOF2'
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPNGReader(); r.SetFileName('dal.png'); r.Update()
+im = r.GetOutput(); w, h, _ = im.GetDimensions()
+a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
+blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
+assert red > 200 and blue > 200, (red, blue)
+print('Dalhousie torso, dipole frame 3: %d red, %d blue pixels' % (red, blue))
+EOF2
 echo "e2e_render: all checks passed"

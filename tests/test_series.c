@@ -537,6 +537,20 @@ static void test_mat_inputs(void)
     Mat_Close(m);
     expect_read_fail(sp("chars.mat"), THX_SERIES_AUTO, THX_EINPUT, "chars.mat: no numeric variable", "(variables: name (char 1x3))");
 
+    /* map3d .pot: one value per node, one frame; read only */
+    write_text(sp("a.pot"), "      -2.39000    \n  1.5e1\n\n 3 4\n");
+    CHECK_OK(ctx, thx_series_read(ctx, sp("a.pot"), THX_SERIES_AUTO, &s));
+    if (s) CHECK(s->n_rows == 4 && s->n_frames == 1 && s->v[0] == -2.39 && s->v[1] == 15 && s->v[3] == 4 && s->time[0] == 0);
+    if (s) {
+        thx_status w = thx_series_write(ctx, s, sp("b.pot"), THX_SERIES_AUTO);
+        CHECK(w == THX_EINPUT && strstr(thx_ctx_message(ctx), "read, not written"));
+    }
+    thx_series_destroy(&s);
+    write_text(sp("bad.pot"), "1\n2\nx3\n");
+    expect_read_fail(sp("bad.pot"), THX_SERIES_AUTO, THX_EINPUT, "bad.pot:3: 'x3' is not a number", NULL);
+    write_text(sp("empty.pot"), "\n  \n");
+    expect_read_fail(sp("empty.pot"), THX_SERIES_AUTO, THX_EINPUT, "empty.pot: no values", NULL);
+
     m = mat_new(sp("potchar.mat"));
     mat_put(m, "potvals", MAT_C_CHAR, MAT_T_UINT8, 1, 3, "abc");
     Mat_Close(m);

@@ -43,10 +43,11 @@ typedef struct thx_series {
 } thx_series;
 
 typedef enum {
-    THX_SERIES_AUTO = 0, /* by extension: .txt/.dat text, .raw raw, .mat MATLAB; reading also sniffs content */
+    THX_SERIES_AUTO = 0, /* by extension: .txt/.dat text, .raw raw, .mat MATLAB, .pot map3d; reading also sniffs content */
     THX_SERIES_TEXT,
     THX_SERIES_RAW,
-    THX_SERIES_MAT
+    THX_SERIES_MAT,
+    THX_SERIES_POT       /* map3d .pot, read only: one value per node (whitespace separated), one frame */
 } thx_series_format;
 
 /* A zeroed rows x frames series with time[f] = f (ms), unit "". */

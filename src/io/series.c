@@ -39,6 +39,7 @@
  */
 #include "thorax/series.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -107,7 +108,8 @@ size_t thx_series_find_nonfinite(const thx_series *s, size_t *row, size_t *frame
 int thx_series_format_parse(const char *name, thx_series_format *fmt)
 {
     static const struct { const char *name; thx_series_format f; } tab[] = {
-        {"auto", THX_SERIES_AUTO}, {"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT}};
+        {"auto", THX_SERIES_AUTO}, {"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
+        {"pot", THX_SERIES_POT}};
     if (!name) return -1;
     for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
         if (strcmp(name, tab[i].name) == 0) {
@@ -119,7 +121,7 @@ int thx_series_format_parse(const char *name, thx_series_format *fmt)
 
 static const char *format_name(thx_series_format f)
 {
-    return f == THX_SERIES_TEXT ? "text" : f == THX_SERIES_RAW ? "raw" : f == THX_SERIES_MAT ? "mat" : "auto";
+    return f == THX_SERIES_TEXT ? "text" : f == THX_SERIES_RAW ? "raw" : f == THX_SERIES_MAT ? "mat" : f == THX_SERIES_POT ? "pot" : "auto";
 }
 
 /* The time axis of `dt` files: one expression, shared by writer and reader so
@@ -166,6 +168,7 @@ static thx_series_format format_of_extension(const char *path)
     if (!strcasecmp(e, "txt") || !strcasecmp(e, "dat")) return THX_SERIES_TEXT;
     if (!strcasecmp(e, "raw")) return THX_SERIES_RAW;
     if (!strcasecmp(e, "mat")) return THX_SERIES_MAT;
+    if (!strcasecmp(e, "pot")) return THX_SERIES_POT;
     return THX_SERIES_AUTO;
 }
 
@@ -1371,6 +1374,52 @@ done:
 
 /* ------------------------------------------------------------- dispatch */
 
+/* map3d .pot: the values of one time instant, one per node (any whitespace between them). */
+static thx_status read_pot(thx_ctx *ctx, const char *path, thx_series **out)
+{
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    size_t n = 0, cap = 1024, line = 1;
+    double *v = malloc(cap * sizeof *v);
+    thx_status st = v ? THX_OK : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+    for (char *p = text; st == THX_OK && *p;) {
+        if (*p == '\n') { line++; p++; continue; }
+        if (isspace((unsigned char)*p)) { p++; continue; }
+        char *end;
+        errno = 0;
+        double x = strtod(p, &end);
+        if (end == p || (*end && !isspace((unsigned char)*end))) {
+            char tok[32];
+            size_t k = 0;
+            while (p[k] && !isspace((unsigned char)p[k]) && k < sizeof tok - 1) { tok[k] = p[k]; k++; }
+            tok[k] = '\0';
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: '%s' is not a number (a .pot file holds one value per node)", path, line, tok);
+            break;
+        }
+        if (n == cap) {
+            double *w = realloc(v, 2 * cap * sizeof *v);
+            if (!w) { st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path); break; }
+            v = w;
+            cap *= 2;
+        }
+        v[n++] = x;
+        p = end;
+    }
+    free(text);
+    if (st == THX_OK && n == 0) st = thx_error(ctx, THX_EINPUT, "%s: no values (a .pot file holds one value per node)", path);
+    thx_series *s = NULL;
+    if (st == THX_OK) st = thx_series_create(ctx, n, 1, &s);
+    if (st == THX_OK) {
+        memcpy(s->v, v, n * sizeof *v);
+        snprintf(s->label, sizeof s->label, "map3d .pot");
+    }
+    free(v);
+    if (st != THX_OK) return st;
+    *out = s;
+    return THX_OK;
+}
+
 thx_status thx_series_read(thx_ctx *ctx, const char *path, thx_series_format fmt, thx_series **out)
 {
     *out = NULL;
@@ -1405,6 +1454,7 @@ thx_status thx_series_read(thx_ctx *ctx, const char *path, thx_series_format fmt
     case THX_SERIES_TEXT: return read_text(ctx, file, out);
     case THX_SERIES_RAW: return read_raw(ctx, file, out);
     case THX_SERIES_MAT: return read_mat(ctx, file, varname, out);
+    case THX_SERIES_POT: return read_pot(ctx, file, out);
     default: return thx_error(ctx, THX_EINPUT, "%s: unknown series format %d", file, (int)fmt);
     }
 }
@@ -1419,6 +1469,8 @@ thx_status thx_series_write(thx_ctx *ctx, const thx_series *s, const char *path,
                              ".mat; or give the format)",
                              path, extension(path));
     }
+    if (fmt == THX_SERIES_POT)
+        return thx_error(ctx, THX_EINPUT, "%s: map3d .pot files are read, not written (write .txt, .raw or .mat)", path);
     THX_CHECK(check_series(ctx, s, path));
     switch (fmt) {
     case THX_SERIES_TEXT: return write_text(ctx, s, path);
