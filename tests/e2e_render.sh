@@ -154,6 +154,26 @@ blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
 assert red > 300 and blue > 300, (red, blue)
 print('measured sock at 276 ms: %d red, %d blue pixels' % (red, blue))
 EOF2
+# the Utah tank experiment: 512-channel recording, the epicardial sock's 128 leads on channels
+# 193..320 (map3d's .channels file)
+TANK="$SRC/../shared/data/map3d"
+"$THORAX" render "$TANK/geom/tank/25feb97_sock.pts" --data "$TANK/data/tank/cool1-atdr-run1.mat" \
+    --channels "$TANK/geom/tank/sock128.channels" --frame 185 --scope frame --colorbar --size 300x300 -o tank.png -q 2> /dev/null
+$PY - <<'EOF2'
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPNGReader(); r.SetFileName('tank.png'); r.Update()
+im = r.GetOutput(); w, h, _ = im.GetDimensions()
+a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
+blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
+assert red > 200 and blue > 200, (red, blue)
+print('tank sock by channel, frame 185: %d red, %d blue pixels' % (red, blue))
+EOF2
+printf '2 leads\n1 5\n2 999\n' > bad.channels
+refused "channels" bad5.png "$THORAX" render "$TANK/geom/tank/25feb97_sock.pts" --data "$TANK/data/tank/cool1-atdr-run1.mat" --channels bad.channels -o bad5.png
+grep -q "bad.channels:3: channel 999 is not in 1..512" err.log || { cat err.log; fail "channels message"; }
+
 # map3d's Dalhousie torso with one of its dipole .pot frames (a one-frame series)
 DAL="$SRC/../shared/data/map3d"
 "$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --view inferior \

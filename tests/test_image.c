@@ -692,6 +692,23 @@ static void test_colorbar(void)
     CHECK(right_col == 0); /* nothing cut at the edge */
     thx_image_destroy(&img);
 
+    /* labels too wide for the room beside the strip move the strip left, whole labels in the image;
+       large values without an exponent ("12600") */
+    {
+        thx_scale big = {THX_SCALE_LINEAR, -12600, 12600, 0};
+        img = new_image(120, 300, 255, 255, 255);
+        thx_draw_colorbar(img, f, 100, 60, 12, 200, THX_CMAP_ECG, &big, 0, 5, NULL, NULL);
+        int edge = 0, strip_at = -1;
+        for (int j = 0; j < 300; j++) edge += px(img, 119, j)[0] < 128;
+        for (int i = 0; i < 120 && strip_at < 0; i++) {
+            const unsigned char *q = px(img, i, 60 + 5); /* near the top: dark red */
+            if (q[0] > 150 && q[1] < 80 && q[2] < 80) strip_at = i;
+        }
+        CHECK(edge == 0);
+        CHECK(strip_at >= 0 && strip_at < 100);
+        thx_image_destroy(&img);
+    }
+
     /* no font: strip only; log scale, bands */
     img = new_image(60, 60, 0, 0, 0);
     thx_scale sl = {THX_SCALE_LOG, -1, 1, 10};

@@ -30,6 +30,7 @@ enum { SCOPE_FRAME, SCOPE_SERIES, SCOPE_ALL, SCOPE_FIXED };
 typedef struct {
     const char *model_dir, *solution, *data, *data_surface, *out, *font, *trace, *arrows;
     const char *files[16];  /* surface files drawn without a model (any format thorax import reads) */
+    const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
     int n_files;
     int w, h, frame, first, last, fps;
     thx_view view;
@@ -206,6 +207,61 @@ static thx_status surfaces_from_files(thx_ctx *ctx, const ropts *o, thx_model **
     return THX_OK;
 }
 
+/* map3d .channels: "N leads", then N lines "lead channel" (1-based). The series' rows are the
+ * recording's channels; the result has one row per lead (NaN for a lead the file leaves out). */
+static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp)
+{
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    thx_series *in = *sp, *outs = NULL;
+    thx_status st = THX_OK;
+    char *p = text, *end;
+    size_t line = 1;
+    long n = strtol(p, &end, 10);
+    if (end == p || n < 1 || n > 10000000) {
+        st = thx_error(ctx, THX_EINPUT, "%s:1: expected 'N leads' (the number of leads first)", path);
+        goto done;
+    }
+    p = strchr(end, '\n');
+    p = p ? p + 1 : end + strlen(end);
+    line = 2;
+    st = thx_series_create(ctx, (size_t)n, in->n_frames, &outs);
+    if (st != THX_OK) goto done;
+    for (size_t k = 0; k < (size_t)n * in->n_frames; k++) outs->v[k] = NAN;
+    memcpy(outs->time, in->time, in->n_frames * sizeof *in->time);
+    snprintf(outs->unit, sizeof outs->unit, "%s", in->unit);
+    snprintf(outs->time_unit, sizeof outs->time_unit, "%s", in->time_unit);
+    snprintf(outs->label, sizeof outs->label, "%.100s (by channel)", in->label);
+    for (long k = 0; k < n; k++, line++) {
+        while (*p == '\n' || *p == '\r') { if (*p == '\n') line++; p++; }
+        char *e1, *e2;
+        long lead = strtol(p, &e1, 10), ch = strtol(e1, &e2, 10);
+        if (e1 == p || e2 == e1) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: expected 'lead channel' (%ld of %ld leads read)", path, line, k, n);
+            goto done;
+        }
+        if (lead < 1 || lead > n) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: lead %ld is not in 1..%ld", path, line, lead, n);
+            goto done;
+        }
+        if (ch < 1 || (size_t)ch > in->n_rows) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: channel %ld is not in 1..%zu (the recording's rows)", path, line, ch, in->n_rows);
+            goto done;
+        }
+        for (size_t f = 0; f < in->n_frames; f++)
+            outs->v[f * (size_t)n + (size_t)(lead - 1)] = in->v[f * in->n_rows + (size_t)(ch - 1)];
+        p = strchr(e2, '\n');
+        p = p ? p + 1 : e2 + strlen(e2);
+    }
+done:
+    free(text);
+    if (st != THX_OK) { thx_series_destroy(&outs); return st; }
+    thx_series_destroy(sp);
+    *sp = outs;
+    return THX_OK;
+}
+
 static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
 {
     memset(d, 0, sizeof *d);
@@ -260,6 +316,10 @@ static thx_status load_data(thx_ctx *ctx, const ropts *o, rdata *d)
     if (o->data) {
         thx_series *s = NULL;
         THX_CHECK(thx_series_read(ctx, o->data, THX_SERIES_AUTO, &s));
+        if (o->channels) {
+            thx_status sc = apply_channels(ctx, o->channels, &s);
+            if (sc != THX_OK) { thx_series_destroy(&s); return sc; }
+        }
         int target = -1;
         if (o->data_surface) {
             target = surface_by_name(d->m, o->data_surface);
@@ -725,6 +785,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
 #define VAL() do { if (!v) { cli_usage_error(cmd, "%s needs a value", a); return -1; } (*i)++; } while (0)
     if (!strcmp(a, "--data")) { VAL(); o->data = v; }
     else if (!strcmp(a, "--data-surface")) { VAL(); o->data_surface = v; }
+    else if (!strcmp(a, "--channels")) { VAL(); o->channels = v; }
     else if (!strcmp(a, "--solution")) { VAL(); o->solution = v; }
     else if (!strcmp(a, "--size")) {
         VAL();
@@ -798,6 +859,7 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
 #define COMMON_HELP                                                                                            \
     "  --solution DIR      a thorax forward solution: torso potentials (and the epicardial series)\n"        \
     "  --data SERIES       per-node values of one surface (rows = its nodes; --data-surface NAME)\n"          \
+    "  --channels FILE     map3d .channels: the --data rows are recording channels, node i takes channel c\n" \
     "  --size WxH          image size (default 800x800)\n"                                                     \
     "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
     "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
@@ -953,6 +1015,7 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         sig_file(sig, cap, path);
     }
     if (o->data) sig_file(sig, cap, o->data);
+    if (o->channels) sig_file(sig, cap, o->channels);
     for (int k = 0; k < o->n_files; k++) sig_file(sig, cap, o->files[k]);
     if (o->model_dir) {
         snprintf(path, sizeof path, "%s/model.json", o->model_dir);

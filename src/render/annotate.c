@@ -401,6 +401,12 @@ static void ink_for(const thx_image *img, int x, int y, int w, int h, unsigned c
 static void format_value(char *buf, size_t size, double v, double range)
 {
     if (fabs(v) < 1e-9 * range) v = 0;
+    double a = fabs(v);
+    if (a >= 1e3 && a < 1e6) { /* 12600 rather than 1.26e+04: three significant digits, no exponent */
+        double q = pow(10, floor(log10(a)) - 2);
+        snprintf(buf, size, "%.0f", round(v / q) * q + 0.0);
+        return;
+    }
     snprintf(buf, size, "%.3g", v + 0.0);
 }
 
@@ -420,6 +426,19 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     int vertical = h > w;
     int len = vertical ? h : w;
     int fh = thx_font_height(f);
+    double range = fmax(fabs(s->lo), fabs(s->hi));
+    if (vertical && f) {
+        /* labels that would run off the right edge move the whole bar left */
+        int widest = 0;
+        for (int i = 0; i < n_labels; i++) {
+            char text[64];
+            format_value(text, sizeof text, thx_scale_invert(s, n_labels > 1 ? (double)i / (n_labels - 1) : 0.5), range);
+            int tw = thx_text_width(f, text);
+            widest = tw > widest ? tw : widest;
+        }
+        int over = x + w + 7 + widest - (img->w - 2);
+        if (over > 0) x = x - over > 1 ? x - over : 1;
+    }
 
     /* Choose the ink before drawing anything, from where the labels and title will go. */
     unsigned char ink[4];
@@ -440,7 +459,6 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     thx_draw_rect(img, x - 1, y, 1, h, ink);
     thx_draw_rect(img, x + w, y, 1, h, ink);
 
-    double range = fmax(fabs(s->lo), fabs(s->hi));
     for (int i = 0; i < n_labels; i++) {
         double t = n_labels > 1 ? (double)i / (n_labels - 1) : 0.5;
         char text[64];
