@@ -35,6 +35,19 @@ stage "contours and bands" "$T" render --solution "$O/solution" --size 800x800 -
 stage "current arrows" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view anterior --clip anterior:0.55 --arrows --arrow-spacing 18 --surface torso=wire:0.15 -o "$O/currents.png" -q
 stage "orientation check" "$T" render "$O/model" --size 900x600 --panels --mode orientation -o "$O/orientation.png" -q
 stage "animation (300 frames + MP4)" "$T" animate "${R[@]}" --size 640x720 "${OPEN[@]}" --frames 101:400 --fps 30 -o "$O/frames" --mp4 "$O/beat.mp4" -q
+# Measured data, when the shared data folder is beside the checkout (it is in CI; elsewhere this part
+# is left out): map3d's recordings drawn from their own files, no model needed.
+MD=${MAP3D_DATA:-../shared/data/map3d}
+if [ -f "$MD/data/tank/cool1-atdr-run1.mat" ] && [ -f "$MD/data/socks/10jan01/rsm10jan01-cs-0004.mat" ]; then
+    stage "measured: tank sock" "$T" render "$MD/geom/tank/25feb97_sock.pts" --data "$MD/data/tank/cool1-atdr-run1.mat" \
+        --channels "$MD/geom/tank/sock128.channels" --frame 185 --scope frame --style continuous+contours --colorbar \
+        --label --trace 60 --size 600x600 -o "$O/measured_tank.png" -q 2> /dev/null
+    stage "measured: 490-lead sock" "$T" render "$MD/geom/socks/490sock.pts" --data "$MD/data/socks/10jan01/rsm10jan01-cs-0004.mat" \
+        --frame 277 --scope frame --style continuous+contours --colorbar --label --trace 245 --size 600x600 \
+        -o "$O/measured_sock.png" -q 2> /dev/null
+else
+    rm -f "$O/measured_tank.png" "$O/measured_sock.png"
+fi
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
 
 python3 - "$O" <<'EOF'
@@ -57,6 +70,13 @@ regions = ''.join('<tr><td>%s</td><td>%d</td><td>%.4g</td><td>%+.3f%%</td></tr>'
     html.escape(r['name']), r['tetrahedra'], r['volume'], 100 * r['rel_diff']) for r in v.get('regions', []))
 sv = sol['solver']
 total = sum(float(t[1]) for t in times)
+measured = ''
+if os.path.exists(os.path.join(o, 'measured_tank.png')):
+    measured = '''<h2>Measured recordings (map3d's data)</h2>
+<img src="measured_tank.png" alt="tank sock"><img src="measured_sock.png" alt="490-lead sock">
+<p>Drawn from the files as they are, no model: left, the Utah torso-tank experiment's 512-channel recording
+(&micro;V) on its 128-lead epicardial sock through map3d's channel map, 184 ms; right, a 490-lead sock recording
+(mV) at 276 ms, map3d's time axis from its sample frequency. Both socks are open surfaces.</p>'''
 page = f"""<!doctype html><html><head><meta charset="utf-8"><title>thorax demo</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}} img,video{{max-width:48%;margin:0.5%}}
 table{{border-collapse:collapse;margin:1em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
@@ -76,6 +96,7 @@ torso's posterior wall, seen from inside. Right: left lateral view, 16 bands wit
 <video src="beat.mp4" controls loop></video><img src="currents.png" alt="currents">
 <p>Left: frames 101 to 400 of the beat in the opened chest, with lead II. Right: current density at the QRS peak,
 averaged on an 18 mm grid (the torso as a wire mesh).</p>
+{measured}
 <h2>The orientation check (paper 4.2)</h2>
 <img src="orientation.png" alt="orientation" style="max-width:97%">
 <p>Each surface in its own panel: triangles are drawn only where their outward side faces the viewer; the nodes
