@@ -39,48 +39,8 @@
 #endif
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 /* ------------------------------------------------------------- helpers */
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f || fwrite(text, 1, strlen(text), f) != strlen(text)) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fclose(f);
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-static int leftover_tmp(void)
-{
-    DIR *d = opendir(scratch);
-    int found = 0;
-    struct dirent *e;
-    while (d && (e = readdir(d)))
-        if (strstr(e->d_name, ".tmp")) {
-            fprintf(stderr, "leftover temporary file %s\n", e->d_name);
-            found = 1;
-        }
-    if (d) closedir(d);
-    return found;
-}
 
 static thx_model *phantom_model(void)
 {
@@ -131,10 +91,10 @@ static int same_set(const thx_electrodes *a, const thx_electrodes *b) { return s
 /* A read that must fail with THX_EINPUT, *out NULL, and a message holding both parts. */
 static void expect_read_fail(const char *name, const char *text, const char *part1, const char *part2)
 {
-    write_text(sp(name), text);
+    tl_write_text(tl_path(name), text);
     thx_electrodes *e = (thx_electrodes *)&e;
     thx_ctx_clear(ctx);
-    thx_status st = thx_electrodes_read(ctx, sp(name), &e);
+    thx_status st = thx_electrodes_read(ctx, tl_path(name), &e);
     const char *msg = thx_ctx_message(ctx);
     int ok = st == THX_EINPUT && e == NULL && strstr(msg, part1) && (!part2 || strstr(msg, part2));
     CHECK(ok);
@@ -163,21 +123,21 @@ static void test_round_trip(const thx_model *m, const thx_electrodes *e12, const
     const thx_electrodes *sets[2] = {e12, ea};
     const char *names[2] = {"12lead.txt", "array.txt"};
     for (int k = 0; k < 2; k++) {
-        CHECK_OK(ctx, thx_electrodes_write(ctx, sets[k], sp(names[k])));
+        CHECK_OK(ctx, thx_electrodes_write(ctx, sets[k], tl_path(names[k])));
         thx_electrodes *b = NULL;
-        CHECK_OK(ctx, thx_electrodes_read(ctx, sp(names[k]), &b));
+        CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path(names[k]), &b));
         /* positions are written "%.6f", as NAME.pts: within 5e-7 mm of a model built in memory */
         CHECK(same_set_tol(sets[k], b, 5.000001e-7));
         CHECK_OK(ctx, thx_electrodes_check(ctx, b, m));
         /* the same set gives the same bytes */
-        CHECK_OK(ctx, thx_electrodes_write(ctx, b, sp("again.txt")));
+        CHECK_OK(ctx, thx_electrodes_write(ctx, b, tl_path("again.txt")));
         char *t1 = NULL, *t2 = NULL;
         size_t n1 = 0, n2 = 0;
-        CHECK_OK(ctx, thx_read_file(ctx, sp(names[k]), &t1, &n1));
-        CHECK_OK(ctx, thx_read_file(ctx, sp("again.txt"), &t2, &n2));
+        CHECK_OK(ctx, thx_read_file(ctx, tl_path(names[k]), &t1, &n1));
+        CHECK_OK(ctx, thx_read_file(ctx, tl_path("again.txt"), &t2, &n2));
         CHECK(t1 && t2 && n1 == n2 && memcmp(t1, t2, n1) == 0);
         thx_electrodes *b2 = NULL;
-        CHECK_OK(ctx, thx_electrodes_read(ctx, sp("again.txt"), &b2));
+        CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("again.txt"), &b2));
         CHECK(same_set(b, b2)); /* read -> write -> read: bit for bit */
         thx_electrodes_destroy(&b2);
         if (k == 0 && t1) {
@@ -192,13 +152,13 @@ static void test_round_trip(const thx_model *m, const thx_electrodes *e12, const
     {
         thx_model *md = NULL;
         thx_electrodes *a = NULL, *b = NULL;
-        CHECK_OK(ctx, thx_model_write(ctx, m, sp("model")));
-        CHECK_OK(ctx, thx_model_read(ctx, sp("model"), &md));
+        CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("model")));
+        CHECK_OK(ctx, thx_model_read(ctx, tl_path("model"), &md));
         if (md) CHECK_OK(ctx, thx_phantom_electrodes(ctx, md, &a, 0, NULL));
         CHECK(a && a->n == 9);
         if (a) {
-            CHECK_OK(ctx, thx_electrodes_write(ctx, a, sp("md12.txt")));
-            CHECK_OK(ctx, thx_electrodes_read(ctx, sp("md12.txt"), &b));
+            CHECK_OK(ctx, thx_electrodes_write(ctx, a, tl_path("md12.txt")));
+            CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("md12.txt"), &b));
             CHECK(same_set(a, b));
             CHECK_OK(ctx, thx_electrodes_check(ctx, b, md));
         }
@@ -207,14 +167,14 @@ static void test_round_trip(const thx_model *m, const thx_electrodes *e12, const
         thx_model_destroy(&md);
     }
     /* comments, blank lines, CRLF */
-    write_text(sp("free.txt"), "# made by hand\n\nthorax-electrodes 1   # version\r\ncount 2\nsurface torso\n"
+    tl_write_text(tl_path("free.txt"), "# made by hand\n\nthorax-electrodes 1   # version\r\ncount 2\nsurface torso\n"
                                "  X1 1 0.5 -2 3e1  # first\r\nX2 3 0 0 0\n\nend\n# trailing comment\n");
     thx_electrodes *f = NULL;
-    CHECK_OK(ctx, thx_electrodes_read(ctx, sp("free.txt"), &f));
+    CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("free.txt"), &f));
     CHECK(f && f->n == 2 && !strcmp(f->surface, "torso") && !strcmp(f->name[0], "X1") && f->node[0] == 0 &&
           f->node[1] == 2 && f->xyz[0] == 0.5 && f->xyz[1] == -2 && f->xyz[2] == 30);
     thx_electrodes_destroy(&f);
-    CHECK(!leftover_tmp());
+    CHECK(!tl_leftover_tmp(""));
 }
 
 static void test_bad_files(void)
@@ -268,7 +228,7 @@ static void test_bad_files(void)
     expect_read_fail("late.txt", buf, "late.txt:5: 'count' after the electrode lines began", NULL);
     {
         thx_electrodes *e = (thx_electrodes *)&e;
-        CHECK(thx_electrodes_read(ctx, sp("none.txt"), &e) == THX_EIO && e == NULL);
+        CHECK(thx_electrodes_read(ctx, tl_path("none.txt"), &e) == THX_EIO && e == NULL);
         CHECK(strstr(thx_ctx_message(ctx), "none.txt") != NULL);
     }
 
@@ -279,39 +239,39 @@ static void test_bad_files(void)
     snprintf(e->surface, sizeof e->surface, "torso");
     snprintf(e->name[0], sizeof e->name[0], "A");
     snprintf(e->name[1], sizeof e->name[1], "A");
-    CHECK(thx_electrodes_write(ctx, e, sp("w1.txt")) == THX_EINPUT && !exists(sp("w1.txt")));
+    CHECK(thx_electrodes_write(ctx, e, tl_path("w1.txt")) == THX_EINPUT && !tl_exists(tl_path("w1.txt")));
     CHECK(strstr(thx_ctx_message(ctx), "electrode 2: name \"A\" already used by electrode 1") != NULL);
     snprintf(e->name[1], sizeof e->name[1], "B");
     e->node[1] = -1;
-    CHECK(thx_electrodes_write(ctx, e, sp("w2.txt")) == THX_EINPUT && !exists(sp("w2.txt")));
+    CHECK(thx_electrodes_write(ctx, e, tl_path("w2.txt")) == THX_EINPUT && !tl_exists(tl_path("w2.txt")));
     CHECK(strstr(thx_ctx_message(ctx), "electrode 2 (\"B\"): node -1 is negative") != NULL);
     e->node[1] = 1;
     e->xyz[4] = NAN;
-    CHECK(thx_electrodes_write(ctx, e, sp("w3.txt")) == THX_EINPUT && !exists(sp("w3.txt")));
+    CHECK(thx_electrodes_write(ctx, e, tl_path("w3.txt")) == THX_EINPUT && !tl_exists(tl_path("w3.txt")));
     e->xyz[4] = 0;
     snprintf(e->name[0], sizeof e->name[0], "end");
-    CHECK(thx_electrodes_write(ctx, e, sp("w4.txt")) == THX_EINPUT && !exists(sp("w4.txt")));
+    CHECK(thx_electrodes_write(ctx, e, tl_path("w4.txt")) == THX_EINPUT && !tl_exists(tl_path("w4.txt")));
     snprintf(e->name[0], sizeof e->name[0], "A");
     e->surface[0] = '\0';
-    CHECK(thx_electrodes_write(ctx, e, sp("w5.txt")) == THX_EINPUT && !exists(sp("w5.txt")));
+    CHECK(thx_electrodes_write(ctx, e, tl_path("w5.txt")) == THX_EINPUT && !tl_exists(tl_path("w5.txt")));
     snprintf(e->surface, sizeof e->surface, "torso");
     /* an existing file is kept when a write is refused */
-    CHECK_OK(ctx, thx_electrodes_write(ctx, e, sp("keep.txt")));
+    CHECK_OK(ctx, thx_electrodes_write(ctx, e, tl_path("keep.txt")));
     e->node[0] = -5;
-    CHECK(thx_electrodes_write(ctx, e, sp("keep.txt")) == THX_EINPUT);
+    CHECK(thx_electrodes_write(ctx, e, tl_path("keep.txt")) == THX_EINPUT);
     thx_electrodes *k = NULL;
-    CHECK_OK(ctx, thx_electrodes_read(ctx, sp("keep.txt"), &k));
+    CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("keep.txt"), &k));
     CHECK(k && k->node[0] == 0);
     thx_electrodes_destroy(&k);
     thx_electrodes_destroy(&e);
-    CHECK(!leftover_tmp());
+    CHECK(!tl_leftover_tmp(""));
 }
 
 static void test_check(const thx_model *m, const thx_electrodes *e12)
 {
     thx_electrodes *e = NULL;
-    CHECK_OK(ctx, thx_electrodes_write(ctx, e12, sp("c.txt")));
-    CHECK_OK(ctx, thx_electrodes_read(ctx, sp("c.txt"), &e));
+    CHECK_OK(ctx, thx_electrodes_write(ctx, e12, tl_path("c.txt")));
+    CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("c.txt"), &e));
     if (!e) return;
     CHECK_OK(ctx, thx_electrodes_check(ctx, e, m));
     const thx_surface *outer = by_role(m, THX_ROLE_OUTER);
@@ -341,15 +301,15 @@ static void test_check(const thx_model *m, const thx_electrodes *e12)
     /* an unknown surface (read from a file, then checked) */
     char *text = NULL;
     size_t len = 0;
-    CHECK_OK(ctx, thx_read_file(ctx, sp("c.txt"), &text, &len));
+    CHECK_OK(ctx, thx_read_file(ctx, tl_path("c.txt"), &text, &len));
     if (text) {
         char *s = strstr(text, "surface torso");
         if (s) memcpy(s, "surface tors0", 13);
-        write_text(sp("c2.txt"), text);
+        tl_write_text(tl_path("c2.txt"), text);
         free(text);
     }
     thx_electrodes *u = NULL;
-    CHECK_OK(ctx, thx_electrodes_read(ctx, sp("c2.txt"), &u));
+    CHECK_OK(ctx, thx_electrodes_read(ctx, tl_path("c2.txt"), &u));
     CHECK(u && thx_electrodes_check(ctx, u, m) == THX_EINPUT);
     CHECK(strstr(thx_ctx_message(ctx), "surface \"tors0\" is not in the model (surfaces: torso, fat, muscle") != NULL);
     thx_electrodes_destroy(&u);
@@ -788,11 +748,7 @@ static void test_beat(const thx_model *m)
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
-    snprintf(scratch, sizeof scratch, "test_electrodes.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_electrodes")) return 1;
     test_create();
     thx_model *m = phantom_model();
     thx_electrodes *e12 = NULL, *ea = NULL;
@@ -808,14 +764,7 @@ int main(void)
     thx_electrodes_destroy(&e12);
     thx_electrodes_destroy(&ea);
     thx_model_destroy(&m);
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_electrodes: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_electrodes: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_electrodes");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -23,39 +23,8 @@
 #include "thorax/image.h"
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 /* ------------------------------------------------------------- helpers */
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* Any temporary file ("NAME.tmpXXXXXX") left in the scratch directory. */
-static int leftover_tmp(void)
-{
-    DIR *d = opendir(scratch);
-    int found = 0;
-    struct dirent *e;
-    while (d && (e = readdir(d)))
-        if (strstr(e->d_name, ".tmp")) {
-            fprintf(stderr, "leftover temporary file %s\n", e->d_name);
-            found = 1;
-        }
-    if (d) closedir(d);
-    return found;
-}
 
 static thx_image *new_image(int w, int h, unsigned char r, unsigned char g, unsigned char b)
 {
@@ -157,25 +126,25 @@ static void test_png(void)
             p[0] = (unsigned char)(7 * i + j), p[1] = (unsigned char)(13 * j), p[2] = (unsigned char)(i * j);
             p[3] = (unsigned char)((i + 37 * j) % 256);
         }
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, sp("rgba.png")));
+    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgba.png")));
     unsigned w = 0, h = 0;
     int depth = 0, ctype = -1;
-    CHECK(png_header(sp("rgba.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 6);
-    CHECK_OK(ctx, thx_image_read_png(ctx, sp("rgba.png"), &b));
+    CHECK(png_header(tl_path("rgba.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 6);
+    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("rgba.png"), &b));
     CHECK(b && b->w == 37 && b->h == 23 && memcmp(a->rgba, b->rgba, 4 * 37 * 23) == 0);
     thx_image_destroy(&b);
 
     /* opaque: written as RGB, read back with alpha 255 */
     for (int i = 0; i < a->w * a->h; i++) a->rgba[4 * i + 3] = 255;
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, sp("rgb.png")));
-    CHECK(png_header(sp("rgb.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 2);
-    CHECK_OK(ctx, thx_image_read_png(ctx, sp("rgb.png"), &b));
+    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgb.png")));
+    CHECK(png_header(tl_path("rgb.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 2);
+    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("rgb.png"), &b));
     CHECK(b && b->w == 37 && b->h == 23 && memcmp(a->rgba, b->rgba, 4 * 37 * 23) == 0);
     thx_image_destroy(&b);
 
     /* the same image twice: the same bytes */
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, sp("rgb2.png")));
-    CHECK(same_file(sp("rgb.png"), sp("rgb2.png")));
+    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgb2.png")));
+    CHECK(same_file(tl_path("rgb.png"), tl_path("rgb2.png")));
 
     /* VTK's PNG reader sees the size, three components and the pixels (VTK's rows run bottom up) */
     char cmd[4096];
@@ -185,10 +154,10 @@ static void test_png(void)
              "d = o.GetDimensions(); n = o.GetNumberOfScalarComponents()\n"
              "p = [int(o.GetScalarComponentAsDouble(5, 23 - 1 - 3, 0, k)) for k in range(3)]\n"
              "sys.exit(0 if d[0] == 37 and d[1] == 23 and n == 3 and p == [%d, %d, %d] else 1)\" '%s' 2>/dev/null",
-             px(a, 5, 3)[0], px(a, 5, 3)[1], px(a, 5, 3)[2], sp("rgb.png"));
+             px(a, 5, 3)[0], px(a, 5, 3)[1], px(a, 5, 3)[2], tl_path("rgb.png"));
     int rc = system(cmd);
     CHECK(rc == 0);
-    if (rc != 0) fprintf(stderr, "VTK did not read %s as expected\n", sp("rgb.png"));
+    if (rc != 0) fprintf(stderr, "VTK did not read %s as expected\n", tl_path("rgb.png"));
 
     /* a grey PNG written by VTK reads as grey RGBA (VTK's first row is the image's bottom) */
     snprintf(cmd, sizeof cmd,
@@ -196,10 +165,10 @@ static void test_png(void)
              "im = vtk.vtkImageData(); im.SetDimensions(3, 2, 1); im.AllocateScalars(vtk.VTK_UNSIGNED_CHAR, 1)\n"
              "for i, v in enumerate([0, 1, 127, 128, 200, 255]): im.GetPointData().GetScalars().SetValue(i, v)\n"
              "w = vtk.vtkPNGWriter(); w.SetFileName(sys.argv[1]); w.SetInputData(im); w.Write()\" '%s' 2>/dev/null",
-             sp("grey.png"));
+             tl_path("grey.png"));
     CHECK(system(cmd) == 0);
-    CHECK(png_header(sp("grey.png"), &w, &h, &depth, &ctype) && w == 3 && h == 2 && depth == 8 && ctype == 0);
-    CHECK_OK(ctx, thx_image_read_png(ctx, sp("grey.png"), &b));
+    CHECK(png_header(tl_path("grey.png"), &w, &h, &depth, &ctype) && w == 3 && h == 2 && depth == 8 && ctype == 0);
+    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("grey.png"), &b));
     if (b) {
         const int want[6] = {128, 200, 255, 0, 1, 127};
         int grey = b->w == 3 && b->h == 2;
@@ -212,35 +181,35 @@ static void test_png(void)
 
     /* a write into a directory that does not exist: an error, nothing written */
     thx_ctx_clear(ctx);
-    CHECK(thx_image_write_png(ctx, a, sp("no/such/dir/x.png")) == THX_EIO);
+    CHECK(thx_image_write_png(ctx, a, tl_path("no/such/dir/x.png")) == THX_EIO);
     CHECK(strstr(thx_ctx_message(ctx), "no/such/dir/x.png") != NULL);
-    CHECK(!exists(sp("no/such/dir/x.png")) && !exists(sp("no")));
-    CHECK(!leftover_tmp());
+    CHECK(!tl_exists(tl_path("no/such/dir/x.png")) && !tl_exists(tl_path("no")));
+    CHECK(!tl_leftover_tmp(""));
 
     /* reads that must fail */
     b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, sp("missing.png"), &b) == THX_EIO && b == NULL);
+    CHECK(thx_image_read_png(ctx, tl_path("missing.png"), &b) == THX_EIO && b == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "missing.png") != NULL);
-    FILE *f = fopen(sp("text.png"), "w");
+    FILE *f = fopen(tl_path("text.png"), "w");
     if (f) {
         fputs("this is not a picture\n", f);
         fclose(f);
     }
     b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, sp("text.png"), &b) == THX_EINPUT && b == NULL);
+    CHECK(thx_image_read_png(ctx, tl_path("text.png"), &b) == THX_EINPUT && b == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "not a PNG") != NULL);
     /* truncated after the header */
     char *data = NULL;
     size_t len = 0;
-    CHECK_OK(ctx, thx_read_file(ctx, sp("rgb.png"), &data, &len));
-    f = fopen(sp("cut.png"), "wb");
+    CHECK_OK(ctx, thx_read_file(ctx, tl_path("rgb.png"), &data, &len));
+    f = fopen(tl_path("cut.png"), "wb");
     if (f && data) {
         fwrite(data, 1, len / 2, f);
         fclose(f);
     }
     free(data);
     b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, sp("cut.png"), &b) == THX_EINPUT && b == NULL);
+    CHECK(thx_image_read_png(ctx, tl_path("cut.png"), &b) == THX_EINPUT && b == NULL);
     thx_image_destroy(&a);
 }
 
@@ -520,13 +489,13 @@ static void test_text(void)
     thx_ctx_clear(ctx);
     CHECK(thx_font_open(ctx, "/no/such/font.ttf", 16, &f) == THX_EIO && f == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "/no/such/font.ttf") && strstr(thx_ctx_message(ctx), "No such file"));
-    FILE *tf = fopen(sp("fake.ttf"), "w");
+    FILE *tf = fopen(tl_path("fake.ttf"), "w");
     if (tf) {
         fputs("not a font\n", tf);
         fclose(tf);
     }
     f = (thx_font *)&f;
-    CHECK(thx_font_open(ctx, sp("fake.ttf"), 16, &f) == THX_EINPUT && f == NULL);
+    CHECK(thx_font_open(ctx, tl_path("fake.ttf"), 16, &f) == THX_EINPUT && f == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "not a font") != NULL);
     CHECK(thx_font_open(ctx, NULL, 0, &f) == THX_EINPUT && f == NULL);
     thx_font_close(&f);
@@ -535,7 +504,7 @@ static void test_text(void)
     /* the default sans-serif face, and DejaVu Sans by its path when installed */
     CHECK_OK(ctx, thx_font_open(ctx, NULL, 20, &f));
     if (!f) return;
-    if (exists(DEJAVU)) {
+    if (tl_exists(DEJAVU)) {
         thx_font *g = NULL;
         CHECK_OK(ctx, thx_font_open(ctx, DEJAVU, 20, &g));
         CHECK(g && thx_font_height(g) == thx_font_height(f)); /* Debian's default is DejaVu Sans */
@@ -837,11 +806,7 @@ static void test_trace(void)
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
-    snprintf(scratch, sizeof scratch, "test_image.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_image")) return 1;
     test_image_basic();
     test_png();
     test_colormap_names();
@@ -852,14 +817,7 @@ int main(void)
     test_lines();
     test_colorbar();
     test_trace();
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_image: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_image: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_image");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -23,7 +23,6 @@
 #include "thorax/model.h"
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 static const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
 
@@ -42,27 +41,6 @@ static void cube_tri(int t, int v[3])
     v[1] = t % 2 ? q[2] : q[1];
     v[2] = t % 2 ? q[3] : q[2];
 }
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static void write_bytes(const char *path, const void *data, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f || fwrite(data, 1, n, f) != n) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fclose(f);
-}
-
-static void write_text(const char *path, const char *text) { write_bytes(path, text, strlen(text)); }
 
 /* A growable text buffer. */
 typedef struct { char *p; size_t n, cap; } sbuf;
@@ -173,10 +151,10 @@ static void write_ptsfac(const char *stem, int base)
         sb_printf(&f, "%d %d %d\n", v[0] + base, v[1] + base, v[2] + base);
     }
     char path[2048];
-    snprintf(path, sizeof path, "%s.pts", sp(stem));
-    write_bytes(path, p.p, p.n);
-    snprintf(path, sizeof path, "%s.fac", sp(stem));
-    write_bytes(path, f.p, f.n);
+    snprintf(path, sizeof path, "%s.pts", tl_path(stem));
+    tl_write_bytes(path, p.p, p.n);
+    snprintf(path, sizeof path, "%s.fac", tl_path(stem));
+    tl_write_bytes(path, f.p, f.n);
     free(p.p);
     free(f.p);
 }
@@ -187,26 +165,26 @@ static void test_ptsfac(void)
     thx_surface *s;
     write_ptsfac("one", 1);
     write_ptsfac("zero", 0);
-    s = rd(sp("one.pts"), &in);
+    s = rd(tl_path("one.pts"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.format == THX_IMPORT_PTSFAC && in.index_base == 1 && in.index_base_detected == 1);
     CHECK(strstr(in.path2, "one.fac") != NULL);
     thx_surface_destroy(&s);
-    s = rd(sp("zero.pts"), &in);
+    s = rd(tl_path("zero.pts"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.index_base == 0 && in.index_base_detected == 1);
     thx_surface_destroy(&s);
     /* the .fac named first: the .pts is found beside it */
-    s = rd(sp("zero.fac"), &in);
+    s = rd(tl_path("zero.fac"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.index_base == 0 && strstr(in.path2, "zero.pts") != NULL);
     thx_surface_destroy(&s);
     /* an explicit second file */
-    CHECK_OK(ctx, thx_surface_read_file(ctx, sp("one.pts"), sp("one.fac"), THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, &in));
+    CHECK_OK(ctx, thx_surface_read_file(ctx, tl_path("one.pts"), tl_path("one.fac"), THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, &in));
     CHECK(is_cube(s, 8));
     thx_surface_destroy(&s);
     /* the full import passes the checks */
-    s = imp(sp("one.pts"), NULL, &in);
+    s = imp(tl_path("one.pts"), NULL, &in);
     CHECK(is_cube(s, 8) && in.report.ok && !in.reversed && in.n_unused_removed == 0);
     CHECK(in.report.solid_angle_rel_err < 1e-12);
     thx_import_info_free(&in);
@@ -235,7 +213,7 @@ static void write_tri(const char *name, int labelled, int base, int stream, int 
         else sb_printf(&b, "%d %d %d%s", v[0] + base, v[1] + base, v[2] + base, nl);
     }
     if (trailer) sb_printf(&b, "\n%s", trailer);
-    write_bytes(sp(name), b.p, b.n);
+    tl_write_bytes(tl_path(name), b.p, b.n);
     free(b.p);
 }
 
@@ -244,37 +222,37 @@ static void test_tri(void)
     thx_import_info in;
     thx_surface *s;
     write_tri("lab.tri", 1, 1, 0, 0, 1, NULL);
-    s = rd(sp("lab.tri"), &in);
+    s = rd(tl_path("lab.tri"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.format == THX_IMPORT_TRI && in.index_base == 1 && in.index_base_detected && in.trailer_line == 0);
     CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
     thx_surface_destroy(&s);
 
     write_tri("unlab.tri", 0, 1, 0, 0, 1, NULL);
-    s = rd(sp("unlab.tri"), &in);
+    s = rd(tl_path("unlab.tri"), &in);
     CHECK(is_cube(s, 8));
     CHECK(strstr(in.format_detail, "unlabelled nodes") != NULL);
     thx_surface_destroy(&s);
 
     write_tri("zero.tri", 1, 0, 0, 0, 1, NULL);
-    s = rd(sp("zero.tri"), &in);
+    s = rd(tl_path("zero.tri"), &in);
     CHECK(is_cube(s, 8) && in.index_base == 0);
     thx_surface_destroy(&s);
 
     /* free line breaks (the format allows them): labels found by counting */
     write_tri("stream.tri", 1, 1, 1, 0, 1, NULL);
-    s = rd(sp("stream.tri"), &in);
+    s = rd(tl_path("stream.tri"), &in);
     CHECK(is_cube(s, 8));
     CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
     thx_surface_destroy(&s);
     write_tri("stream0.tri", 0, 1, 1, 0, 1, NULL);
-    s = rd(sp("stream0.tri"), &in);
+    s = rd(tl_path("stream0.tri"), &in);
     CHECK(is_cube(s, 8));
     thx_surface_destroy(&s);
 
     /* a descriptive trailer (PhysioNet 2007 files) is ignored and reported */
     write_tri("trailer.tri", 1, 1, 0, 0, 1, "case 3 thorax\nunits mm\n");
-    s = rd(sp("trailer.tri"), &in);
+    s = rd(tl_path("trailer.tri"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.trailer_line == 24); /* 1 + 8 + 1 + 12 lines, a blank one, then the text */
     thx_surface_destroy(&s);
@@ -285,7 +263,7 @@ static void test_tri(void)
     thx_import_opts o;
     thx_import_opts_default(&o);
     o.scale = 1000;
-    s = imp(sp("ecgsim.tri"), &o, &in);
+    s = imp(tl_path("ecgsim.tri"), &o, &in);
     CHECK(s != NULL && in.reversed == 1 && in.report.ok && in.report.volume > 0);
     CHECK_NEAR(in.omega_before, -4 * M_PI, 1e-9);
     CHECK(s && s->n_nodes == 8);
@@ -294,7 +272,7 @@ static void test_tri(void)
     thx_import_info_free(&in);
     thx_surface_destroy(&s);
     /* without the scale, the extent (a units hint) is tiny */
-    s = imp(sp("ecgsim.tri"), NULL, &in);
+    s = imp(tl_path("ecgsim.tri"), NULL, &in);
     CHECK(s != NULL && in.extent < 0.1);
     thx_import_info_free(&in);
     thx_surface_destroy(&s);
@@ -318,8 +296,8 @@ static void test_obj(void)
     for (int q = 3; q < 6; q++)
         sb_printf(&b, "f %d %d %d %d\n", quads[q][0] - 8, quads[q][1] - 8, quads[q][2] - 8, quads[q][3] - 8);
     sb_printf(&b, "l 1 2\n");
-    write_bytes(sp("cube.obj"), b.p, b.n);
-    s = rd(sp("cube.obj"), &in);
+    tl_write_bytes(tl_path("cube.obj"), b.p, b.n);
+    s = rd(tl_path("cube.obj"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.format == THX_IMPORT_OBJ && in.index_base == 1 && !in.index_base_detected);
     CHECK(in.n_polygons_split == 6 && in.n_cells_ignored == 1);
@@ -334,8 +312,8 @@ static void test_obj(void)
         cube_tri(t, v);
         sb_printf(&b, "f %d %d %d\n", v[0] + 2, v[1] + 2, v[2] + 2);
     }
-    write_bytes(sp("unused.obj"), b.p, b.n);
-    s = imp(sp("unused.obj"), NULL, &in);
+    tl_write_bytes(tl_path("unused.obj"), b.p, b.n);
+    s = imp(tl_path("unused.obj"), NULL, &in);
     CHECK(is_cube(s, 8) && in.n_unused_removed == 1 && in.first_unused == 1 && in.report.ok);
     thx_import_info_free(&in);
     thx_surface_destroy(&s);
@@ -361,15 +339,15 @@ static void test_stl(void)
             for (int k = 0; k < 3; k++) put_le(&b, f32_bits(cube_x(v[c], k)), 4);
         put_le(&b, 0, 2);
     }
-    write_bytes(sp("bin.stl"), b.p, b.n);
-    s = rd(sp("bin.stl"), &in);
+    tl_write_bytes(tl_path("bin.stl"), b.p, b.n);
+    s = rd(tl_path("bin.stl"), &in);
     CHECK(is_cube(s, 8));
     CHECK(in.index_base == -1 && in.n_corners_merged == 36 - 8);
     CHECK(strcmp(in.format_detail, "binary STL") == 0);
     thx_surface_destroy(&s);
     /* a binary file cut short: neither binary nor ASCII, said at byte 0 */
-    write_bytes(sp("short.stl"), b.p + 5, b.n - 20);
-    CHECK(thx_surface_read_file(ctx, sp("short.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    tl_write_bytes(tl_path("short.stl"), b.p + 5, b.n - 20);
+    CHECK(thx_surface_read_file(ctx, tl_path("short.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "short.stl: byte 0:"));
 
     /* ASCII, -0 written for one coordinate (same point as +0) */
@@ -383,16 +361,16 @@ static void test_stl(void)
         sb_printf(&b, "    endloop\n  endfacet\n");
     }
     sb_printf(&b, "endsolid cube\n");
-    write_bytes(sp("ascii.stl"), b.p, b.n);
-    s = rd(sp("ascii.stl"), &in);
+    tl_write_bytes(tl_path("ascii.stl"), b.p, b.n);
+    s = rd(tl_path("ascii.stl"), &in);
     CHECK(is_cube(s, 8) && in.n_corners_merged == 28 && strcmp(in.format_detail, "ASCII STL") == 0);
     thx_surface_destroy(&s);
     /* an error names the line */
     char *bad = strdup(b.p);
     char *p = strstr(bad, "vertex 8.25");
     memcpy(p, "vertex xxxx", 11);
-    write_text(sp("bad.stl"), bad);
-    CHECK(thx_surface_read_file(ctx, sp("bad.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    tl_write_text(tl_path("bad.stl"), bad);
+    CHECK(thx_surface_read_file(ctx, tl_path("bad.stl"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     int line = 1;
     for (char *q = bad; q < p; q++) line += *q == '\n';
     char want[64];
@@ -417,8 +395,8 @@ static void test_ply(void)
     for (int i = 0; i < 8; i++) sb_printf(&b, "%g %g %g 255\r\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2));
     for (int q = 0; q < 6; q++) sb_printf(&b, "4 %d %d %d %d\r\n", quads[q][0], quads[q][1], quads[q][2], quads[q][3]);
     sb_printf(&b, "0 1\r\n");
-    write_bytes(sp("ascii.ply"), b.p, b.n);
-    s = rd(sp("ascii.ply"), &in);
+    tl_write_bytes(tl_path("ascii.ply"), b.p, b.n);
+    s = rd(tl_path("ascii.ply"), &in);
     CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.index_base == 0);
     CHECK(strcmp(in.format_detail, "ascii PLY") == 0);
     thx_surface_destroy(&s);
@@ -441,13 +419,13 @@ static void test_ply(void)
         put_le(&b, 3, 1);
         for (int c = 0; c < 3; c++) put_le(&b, (uint32_t)v[c], 4);
     }
-    write_bytes(sp("le.ply"), b.p, b.n);
-    s = rd(sp("le.ply"), &in);
+    tl_write_bytes(tl_path("le.ply"), b.p, b.n);
+    s = rd(tl_path("le.ply"), &in);
     CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary little-endian PLY") == 0);
     thx_surface_destroy(&s);
     /* truncated: the byte offset is named */
-    write_bytes(sp("trunc.ply"), b.p, b.n - 3);
-    CHECK(thx_surface_read_file(ctx, sp("trunc.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    tl_write_bytes(tl_path("trunc.ply"), b.p, b.n - 3);
+    CHECK(thx_surface_read_file(ctx, tl_path("trunc.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "trunc.ply: byte "));
     CHECK(contains(thx_ctx_message(ctx), "face 12"));
 
@@ -461,8 +439,8 @@ static void test_ply(void)
         put_be(&b, 4, 1);
         for (int c = 0; c < 4; c++) put_be(&b, (uint32_t)quads[q][c], 4);
     }
-    write_bytes(sp("be.ply"), b.p, b.n);
-    s = rd(sp("be.ply"), &in);
+    tl_write_bytes(tl_path("be.ply"), b.p, b.n);
+    s = rd(tl_path("be.ply"), &in);
     CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary big-endian PLY") == 0);
     thx_surface_destroy(&s);
 
@@ -470,8 +448,8 @@ static void test_ply(void)
     b.n = 0;
     sb_printf(&b, "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
-    write_bytes(sp("range.ply"), b.p, b.n);
-    CHECK(thx_surface_read_file(ctx, sp("range.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    tl_write_bytes(tl_path("range.ply"), b.p, b.n);
+    CHECK(thx_surface_read_file(ctx, tl_path("range.ply"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "range.ply:13:"));
     CHECK(contains(thx_ctx_message(ctx), "node number 3 out of range 0..2"));
     free(b.p);
@@ -490,8 +468,8 @@ static void test_vtk(void)
     sb_printf(&b, "LINES 1 3\n2 0 1\nPOLYGONS 6 30\n");
     for (int q = 0; q < 6; q++) sb_printf(&b, "4 %d %d %d %d\n", quads[q][0], quads[q][1], quads[q][2], quads[q][3]);
     sb_printf(&b, "POINT_DATA 8\nSCALARS p float 1\nLOOKUP_TABLE default\n0 0 0 0 0 0 0 0\n");
-    write_bytes(sp("legacy.vtk"), b.p, b.n);
-    s = rd(sp("legacy.vtk"), &in);
+    tl_write_bytes(tl_path("legacy.vtk"), b.p, b.n);
+    s = rd(tl_path("legacy.vtk"), &in);
     CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.n_cells_ignored == 1);
     CHECK(strcmp(in.format_detail, "legacy VTK ASCII POLYDATA") == 0);
     thx_surface_destroy(&s);
@@ -508,8 +486,8 @@ static void test_vtk(void)
         cube_tri(t, v);
         sb_printf(&b, "%d %d %d\n", v[0], v[1], v[2]);
     }
-    write_bytes(sp("v51.vtk"), b.p, b.n);
-    s = rd(sp("v51.vtk"), &in);
+    tl_write_bytes(tl_path("v51.vtk"), b.p, b.n);
+    s = rd(tl_path("v51.vtk"), &in);
     CHECK(is_cube(s, 8));
     thx_surface_destroy(&s);
 
@@ -528,8 +506,8 @@ static void test_vtk(void)
         put_be(&b, (uint32_t)quads[q][3], 4);
     }
     sb_printf(&b, "\n");
-    write_bytes(sp("bin.vtk"), b.p, b.n);
-    s = rd(sp("bin.vtk"), &in);
+    tl_write_bytes(tl_path("bin.vtk"), b.p, b.n);
+    s = rd(tl_path("bin.vtk"), &in);
     /* the strip gives (b,c,a) and (a,c,d): the same triangles, rotated */
     int ok = s && s->n_nodes == 8 && s->n_tris == 12;
     for (int t = 0; ok && t < 12; t++) {
@@ -543,8 +521,8 @@ static void test_vtk(void)
     thx_surface_destroy(&s);
 
     /* not a surface dataset */
-    write_text(sp("grid.vtk"), "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 0 float\n");
-    CHECK(thx_surface_read_file(ctx, sp("grid.vtk"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    tl_write_text(tl_path("grid.vtk"), "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 0 float\n");
+    CHECK(thx_surface_read_file(ctx, tl_path("grid.vtk"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "grid.vtk:4:"));
     CHECK(contains(thx_ctx_message(ctx), "only POLYDATA"));
     free(b.p);
@@ -581,29 +559,29 @@ static void test_exports(void)
         char name[32];
         snprintf(name, sizeof name, "export.%s", ext[f]);
         CHECK(thx_export_format_parse(ext[f], &fmt) == 0);
-        CHECK_OK(ctx, thx_surface_export(ctx, cube, fmt, sp(name)));
+        CHECK_OK(ctx, thx_surface_export(ctx, cube, fmt, tl_path(name)));
         thx_import_info in;
-        thx_surface *s = imp(sp(name), NULL, &in);
+        thx_surface *s = imp(tl_path(name), NULL, &in);
         CHECK(is_cube(s, 8) && in.report.ok && !in.reversed);
         if (!is_cube(s, 8)) fprintf(stderr, "  round trip through %s failed\n", ext[f]);
         thx_import_info_free(&in);
         thx_surface_destroy(&s);
     }
     /* the format may be given when the extension says nothing */
-    CHECK_OK(ctx, thx_surface_export(ctx, cube, THX_EXPORT_PLY, sp("noext")));
+    CHECK_OK(ctx, thx_surface_export(ctx, cube, THX_EXPORT_PLY, tl_path("noext")));
     thx_surface *s = NULL;
     thx_import_info in;
-    CHECK(thx_surface_read_file(ctx, sp("noext"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(thx_surface_read_file(ctx, tl_path("noext"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "cannot tell the format"));
-    CHECK_OK(ctx, thx_surface_read_file(ctx, sp("noext"), NULL, THX_IMPORT_PLY, "c", THX_ROLE_OUTER, &s, &in));
+    CHECK_OK(ctx, thx_surface_read_file(ctx, tl_path("noext"), NULL, THX_IMPORT_PLY, "c", THX_ROLE_OUTER, &s, &in));
     CHECK(is_cube(s, 8));
     thx_surface_destroy(&s);
     /* binary VTP is refused with a reason */
-    write_text(sp("bin.vtp"), "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\">\n<PolyData>\n"
+    tl_write_text(tl_path("bin.vtp"), "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\">\n<PolyData>\n"
                               "<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n<Points>\n"
                               "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">AAAA</DataArray>\n"
                               "</Points>\n</Piece>\n</PolyData>\n</VTKFile>\n");
-    CHECK(thx_surface_read_file(ctx, sp("bin.vtp"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(thx_surface_read_file(ctx, tl_path("bin.vtp"), NULL, THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "bin.vtp:6:"));
     CHECK(contains(thx_ctx_message(ctx), "only format=\"ascii\""));
     thx_surface_destroy(&cube);
@@ -613,9 +591,9 @@ static void test_exports(void)
 
 static void expect_error(const char *name, const char *text, const char *where, const char *what)
 {
-    write_text(sp(name), text);
+    tl_write_text(tl_path(name), text);
     thx_surface *s = NULL;
-    thx_status st = thx_surface_read_file(ctx, sp(name), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL);
+    thx_status st = thx_surface_read_file(ctx, tl_path(name), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL);
     CHECK(st == THX_EINPUT && s == NULL);
     char want[256];
     snprintf(want, sizeof want, "%s:%s", name, where);
@@ -647,13 +625,13 @@ static void test_errors(void)
                  "3:", "at least 3 vertices, this one has 2");
     expect_error("e2.stl", "solid x\nfacet normal 0 0 1\nfoo\n", "3:", "unexpected \"foo\"");
     /* .pts/.fac errors come from the pair reader, also naming file and line */
-    write_text(sp("e1.pts"), "0 0 0\n1 0 0\n0 1 0\n");
-    write_text(sp("e1.fac"), "1 2 3\n1 2 5\n");
+    tl_write_text(tl_path("e1.pts"), "0 0 0\n1 0 0\n0 1 0\n");
+    tl_write_text(tl_path("e1.fac"), "1 2 3\n1 2 5\n");
     thx_surface *s = NULL;
-    CHECK(thx_surface_read_file(ctx, sp("e1.pts"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+    CHECK(thx_surface_read_file(ctx, tl_path("e1.pts"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
     CHECK(contains(thx_ctx_message(ctx), "e1.fac:2:"));
     /* a missing file */
-    CHECK(thx_surface_read_file(ctx, sp("none.obj"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EIO);
+    CHECK(thx_surface_read_file(ctx, tl_path("none.obj"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EIO);
     CHECK(contains(thx_ctx_message(ctx), "none.obj"));
 }
 
@@ -672,7 +650,7 @@ static void write_cube_obj(const char *name, unsigned reverse, unsigned drop)
         if (reverse >> t & 1) sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[2] + 1, v[1] + 1);
         else sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[1] + 1, v[2] + 1);
     }
-    write_bytes(sp(name), b.p, b.n);
+    tl_write_bytes(tl_path(name), b.p, b.n);
     free(b.p);
 }
 
@@ -685,7 +663,7 @@ static void test_policy(void)
 
     /* every triangle clockwise: reversed, reported, then it passes */
     write_cube_obj("inward.obj", 0xfff, 0);
-    s = imp(sp("inward.obj"), NULL, &in);
+    s = imp(tl_path("inward.obj"), NULL, &in);
     CHECK(is_cube(s, 8));
     CHECK(in.reversed == 1 && in.report.ok && in.report.volume > 0 && !in.check_failed);
     CHECK_NEAR(in.omega_before / (4 * M_PI), -1.0, 1e-12);
@@ -695,14 +673,14 @@ static void test_policy(void)
 
     /* open (one triangle missing): refused, nothing returned, reasons given */
     write_cube_obj("open.obj", 0, 1u << 5);
-    CHECK(thx_surface_import(ctx, sp("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(thx_surface_import(ctx, tl_path("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
     CHECK(s == NULL && in.check_failed && !in.report.ok && in.report.n_boundary_edges == 3);
     CHECK(contains(thx_ctx_message(ctx), "open.obj: surface \"box\": refused: not closed"));
     CHECK(!in.reversed);
     thx_import_info_free(&in);
     /* ... unless forced: returned, flagged */
     o.force = 1;
-    CHECK(thx_surface_import(ctx, sp("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_OK);
+    CHECK(thx_surface_import(ctx, tl_path("open.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_OK);
     CHECK(s != NULL && s->n_tris == 11 && in.check_failed == 1 && !in.report.ok);
     thx_import_info_free(&in);
     thx_surface_destroy(&s);
@@ -710,7 +688,7 @@ static void test_policy(void)
 
     /* one triangle flipped: inconsistent orientation, never "repaired" */
     write_cube_obj("flip1.obj", 1u << 3, 0);
-    CHECK(thx_surface_import(ctx, sp("flip1.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(thx_surface_import(ctx, tl_path("flip1.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
     CHECK(s == NULL && !in.reversed && in.report.n_inconsistent_edges > 0);
     CHECK(contains(thx_ctx_message(ctx), "refused"));
     thx_import_info_free(&in);
@@ -723,17 +701,17 @@ static void test_policy(void)
         cube_tri(t % 12, v);
         sb_printf(&b, "f %d %d %d\n", v[0] + 1, v[1] + 1, v[2] + 1);
     }
-    write_bytes(sp("dup.obj"), b.p, b.n);
+    tl_write_bytes(tl_path("dup.obj"), b.p, b.n);
     free(b.p);
-    CHECK(thx_surface_import(ctx, sp("dup.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
+    CHECK(thx_surface_import(ctx, tl_path("dup.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, &in) == THX_ECHECK);
     CHECK(s == NULL && (in.report.failures & THX_CHECKF_DUPLICATE));
     thx_import_info_free(&in);
 
     /* scale must be positive; NULL info is accepted */
     o.scale = -1;
-    CHECK(thx_surface_import(ctx, sp("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_EINPUT);
+    CHECK(thx_surface_import(ctx, tl_path("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_EINPUT);
     o.scale = 2;
-    CHECK(thx_surface_import(ctx, sp("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_OK);
+    CHECK(thx_surface_import(ctx, tl_path("inward.obj"), NULL, "box", THX_ROLE_OUTER, &o, &s, NULL) == THX_OK);
     CHECK(s && s->xyz[3 * 7 + 2] == 25.0);
     thx_surface_destroy(&s);
 }
@@ -754,11 +732,7 @@ static void test_format_names(void)
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
-    snprintf(scratch, sizeof scratch, "test_import.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_import")) return 1;
     test_format_names();
     test_ptsfac();
     test_tri();
@@ -769,14 +743,7 @@ int main(void)
     test_exports();
     test_errors();
     test_policy();
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_import: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_import: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_import");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -28,64 +28,8 @@
 #include "thorax/model.h"
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 /* ------------------------------------------------------------- helpers */
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fputs(text, f);
-    fclose(f);
-}
-
-static char *slurp(const char *path, size_t *len)
-{
-    char *t = NULL;
-    if (thx_read_file(ctx, path, &t, len) != THX_OK) return NULL;
-    return t;
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* Whether a file or directory whose name starts with prefix and contains
- * ".tmp" or ".old" is left in the scratch directory (a leaked temporary). */
-static int leftover_tmp(const char *prefix)
-{
-    DIR *d = opendir(scratch);
-    int found = 0;
-    struct dirent *e;
-    while (d && (e = readdir(d)))
-        if (strncmp(e->d_name, prefix, strlen(prefix)) == 0 && (strstr(e->d_name, ".tmp") || strstr(e->d_name, ".old")))
-            found = 1;
-    if (d) closedir(d);
-    return found;
-}
-
-static int msg_has(const char *needle)
-{
-    const char *m = thx_ctx_message(ctx);
-    if (strstr(m, needle)) return 1;
-    fprintf(stderr, "  message \"%s\" lacks \"%s\"\n", m, needle);
-    return 0;
-}
 
 static thx_surface *make_surface(const char *name, thx_role role, size_t n, const double *xyz, size_t t,
                                  const int32_t *tri)
@@ -136,21 +80,21 @@ static void test_round_trip(void)
     CHECK(dup == NULL);
     CHECK(m->n_surfaces == 2);
 
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("rt")));
-    CHECK(exists(sp("rt/model.json")) && exists(sp("rt/tetra.pts")) && exists(sp("rt/octa.fac")));
-    CHECK(!leftover_tmp("rt"));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("rt")));
+    CHECK(tl_exists(tl_path("rt/model.json")) && tl_exists(tl_path("rt/tetra.pts")) && tl_exists(tl_path("rt/octa.fac")));
+    CHECK(!tl_leftover_tmp("rt"));
 
     /* The .fac on disk is 1-based; the .pts uses %.6f with no "-0.000000". */
-    char *fac = slurp(sp("rt/tetra.fac"), NULL);
+    char *fac = tl_slurp(ctx, tl_path("rt/tetra.fac"), NULL);
     CHECK(fac && strcmp(fac, "1 3 2\n1 2 4\n2 3 4\n3 1 4\n") == 0);
     free(fac);
-    char *pts = slurp(sp("rt/tetra.pts"), NULL);
+    char *pts = tl_slurp(ctx, tl_path("rt/tetra.pts"), NULL);
     CHECK(pts && strncmp(pts, "0.123457 0.000000 0.000000\n10.000001 0.000000 0.000000\n", 55) == 0);
     CHECK(pts && strstr(pts, "-123.456789\n"));
     free(pts);
 
     thx_model *r = NULL;
-    CHECK_OK(ctx, thx_model_read(ctx, sp("rt"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("rt"), &r));
     if (r) {
         CHECK(r->n_surfaces == 2);
         for (size_t i = 0; i < 2 && i < r->n_surfaces; i++) {
@@ -173,14 +117,14 @@ static void test_round_trip(void)
 
         /* Writing what was read gives byte-identical files (determinism, and
          * the precision is a fixed point of the round trip). */
-        CHECK_OK(ctx, thx_model_write(ctx, r, sp("rt2")));
+        CHECK_OK(ctx, thx_model_write(ctx, r, tl_path("rt2")));
         const char *files[] = {"model.json", "tetra.pts", "tetra.fac", "octa.pts", "octa.fac"};
         for (size_t k = 0; k < 5; k++) {
             char n1[64], n2[64];
             snprintf(n1, sizeof n1, "rt/%s", files[k]);
             snprintf(n2, sizeof n2, "rt2/%s", files[k]);
             size_t l1 = 0, l2 = 0;
-            char *t1 = slurp(sp(n1), &l1), *t2 = slurp(sp(n2), &l2);
+            char *t1 = tl_slurp(ctx, tl_path(n1), &l1), *t2 = tl_slurp(ctx, tl_path(n2), &l2);
             CHECK(t1 && t2 && l1 == l2 && memcmp(t1, t2, l1) == 0);
             free(t1);
             free(t2);
@@ -188,7 +132,7 @@ static void test_round_trip(void)
     }
 
     /* The manifest has the documented schema. */
-    char *json = slurp(sp("rt/model.json"), NULL);
+    char *json = tl_slurp(ctx, tl_path("rt/model.json"), NULL);
     cJSON *root = json ? cJSON_Parse(json) : NULL;
     CHECK(root != NULL);
     const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
@@ -203,11 +147,11 @@ static void test_round_trip(void)
 
     /* Writing over an existing model replaces it whole. */
     m->surf[0]->xyz[0] = 42;
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("rt")));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("rt")));
     thx_model_destroy(&r);
-    CHECK_OK(ctx, thx_model_read(ctx, sp("rt"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("rt"), &r));
     CHECK(r && r->surf[0]->xyz[0] == 42);
-    CHECK(!leftover_tmp("rt"));
+    CHECK(!tl_leftover_tmp("rt"));
     thx_model_destroy(&r);
     CHECK(r == NULL);
     thx_model_destroy(&m);
@@ -218,58 +162,58 @@ static void test_failed_write(void)
 {
     thx_model *m = make_model();
     /* Parent directory missing: error naming the path, nothing created. */
-    CHECK(thx_model_write(ctx, m, sp("no/such/dir")) == THX_EIO);
-    CHECK(msg_has("no/such/dir"));
-    CHECK(!exists(sp("no")));
+    CHECK(thx_model_write(ctx, m, tl_path("no/such/dir")) == THX_EIO);
+    CHECK(tl_msg_has(ctx, "no/such/dir"));
+    CHECK(!tl_exists(tl_path("no")));
 
     /* An out-of-range triangle index is rejected before anything is written. */
     m->surf[1]->tri[5] = 6;
-    CHECK(thx_model_write(ctx, m, sp("bad")) == THX_EINPUT);
-    CHECK(msg_has("octa") && msg_has("triangle 2"));
-    CHECK(!exists(sp("bad")));
-    CHECK(!leftover_tmp("bad"));
+    CHECK(thx_model_write(ctx, m, tl_path("bad")) == THX_EINPUT);
+    CHECK(tl_msg_has(ctx, "octa") && tl_msg_has(ctx, "triangle 2"));
+    CHECK(!tl_exists(tl_path("bad")));
+    CHECK(!tl_leftover_tmp("bad"));
 
     /* ... and an existing model of that name is left as it was. */
     m->surf[1]->tri[5] = 4;
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("keep")));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("keep")));
     m->surf[1]->tri[5] = -1;
-    CHECK(thx_model_write(ctx, m, sp("keep")) == THX_EINPUT);
+    CHECK(thx_model_write(ctx, m, tl_path("keep")) == THX_EINPUT);
     thx_model *r = NULL;
-    CHECK_OK(ctx, thx_model_read(ctx, sp("keep"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("keep"), &r));
     CHECK(r && r->n_surfaces == 2 && r->surf[1]->tri[5] == 4);
     thx_model_destroy(&r);
-    CHECK(!leftover_tmp("keep"));
+    CHECK(!tl_leftover_tmp("keep"));
     m->surf[1]->tri[5] = 4;
 
     /* Non-finite coordinates and unsafe names are refused. */
     m->surf[0]->xyz[4] = NAN;
-    CHECK(thx_model_write(ctx, m, sp("nan")) == THX_EINPUT && msg_has("tetra") && msg_has("node 2"));
-    CHECK(!exists(sp("nan")));
+    CHECK(thx_model_write(ctx, m, tl_path("nan")) == THX_EINPUT && tl_msg_has(ctx, "tetra") && tl_msg_has(ctx, "node 2"));
+    CHECK(!tl_exists(tl_path("nan")));
     m->surf[0]->xyz[4] = 0;
     snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "../evil");
-    CHECK(thx_model_write(ctx, m, sp("evil")) == THX_EINPUT && msg_has("../evil"));
-    CHECK(!exists(sp("evil")));
+    CHECK(thx_model_write(ctx, m, tl_path("evil")) == THX_EINPUT && tl_msg_has(ctx, "../evil"));
+    CHECK(!tl_exists(tl_path("evil")));
     snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "octa"); /* duplicate after mutation */
-    CHECK(thx_model_write(ctx, m, sp("dup")) == THX_EINPUT && msg_has("octa"));
+    CHECK(thx_model_write(ctx, m, tl_path("dup")) == THX_EINPUT && tl_msg_has(ctx, "octa"));
     snprintf(m->surf[0]->name, sizeof m->surf[0]->name, "tetra");
     free(m->provenance_json);
     m->provenance_json = strdup("[1, 2");
-    CHECK(thx_model_write(ctx, m, sp("prov")) == THX_EINPUT && msg_has("provenance"));
-    CHECK(!exists(sp("prov")));
+    CHECK(thx_model_write(ctx, m, tl_path("prov")) == THX_EINPUT && tl_msg_has(ctx, "provenance"));
+    CHECK(!tl_exists(tl_path("prov")));
     thx_model_destroy(&m);
 }
 
 static void test_base_detection(void)
 {
     const char *pts = "\n  0 0 0\n1.5\t0   0 \r\n\n0 1 0\n0 0 1\n\n";
-    write_text(sp("t.pts"), pts);
-    write_text(sp("t0.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
-    write_text(sp("t1.fac"), "  1 3 2\n\n1 2 4\n2 3 4\r\n3 1 4\n");
+    tl_write_text(tl_path("t.pts"), pts);
+    tl_write_text(tl_path("t0.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
+    tl_write_text(tl_path("t1.fac"), "  1 3 2\n\n1 2 4\n2 3 4\r\n3 1 4\n");
     thx_surface *s0 = NULL, *s1 = NULL;
     int base = -7;
-    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t0.fac"), "t", THX_ROLE_OTHER, &s0, &base));
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("t0.fac"), "t", THX_ROLE_OTHER, &s0, &base));
     CHECK(base == 0);
-    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t1.fac"), "t", THX_ROLE_OTHER, &s1, &base));
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("t1.fac"), "t", THX_ROLE_OTHER, &s1, &base));
     CHECK(base == 1);
     CHECK(s0 && s1 && s0->n_nodes == 4 && s0->n_tris == 4 && s1->n_tris == 4);
     if (s0 && s1) {
@@ -283,21 +227,21 @@ static void test_base_detection(void)
     CHECK(s0 == NULL);
 
     /* 1-based with node 1 unused is still unambiguous (max == n). */
-    write_text(sp("t1b.fac"), "2 3 4\n");
-    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("t1b.fac"), "t", THX_ROLE_OTHER, &s0, &base));
+    tl_write_text(tl_path("t1b.fac"), "2 3 4\n");
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("t1b.fac"), "t", THX_ROLE_OTHER, &s0, &base));
     CHECK(base == 1 && s0 && s0->tri[0] == 1);
     thx_surface_destroy(&s0);
 
     /* min 1, max < n: could be either; refused, naming file and line. */
-    write_text(sp("amb.fac"), "1 2 3\n3 2 1\n");
-    CHECK(thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("amb.fac"), "t", THX_ROLE_OTHER, &s0, &base) == THX_EINPUT);
-    CHECK(msg_has("amb.fac:1:") && msg_has("0- or 1-based"));
+    tl_write_text(tl_path("amb.fac"), "1 2 3\n3 2 1\n");
+    CHECK(thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("amb.fac"), "t", THX_ROLE_OTHER, &s0, &base) == THX_EINPUT);
+    CHECK(tl_msg_has(ctx, "amb.fac:1:") && tl_msg_has(ctx, "0- or 1-based"));
     CHECK(s0 == NULL);
 
     /* write_ptsfac then read: 1-based on disk, same triangles. */
     thx_surface *w = make_surface("w", THX_ROLE_LUNG, 6, oct_xyz, 8, oct_tri);
-    CHECK_OK(ctx, thx_surface_write_ptsfac(ctx, w, sp("w.pts"), sp("w.fac")));
-    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, sp("w.pts"), sp("w.fac"), "w", THX_ROLE_LUNG, &s0, &base));
+    CHECK_OK(ctx, thx_surface_write_ptsfac(ctx, w, tl_path("w.pts"), tl_path("w.fac")));
+    CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, tl_path("w.pts"), tl_path("w.fac"), "w", THX_ROLE_LUNG, &s0, &base));
     CHECK(base == 1 && s0 && s0->n_tris == 8 && memcmp(s0->tri, oct_tri, sizeof oct_tri) == 0);
     thx_surface_destroy(&s0);
     thx_surface_destroy(&w);
@@ -306,7 +250,7 @@ static void test_base_detection(void)
 static void test_bad_files(void)
 {
     thx_surface *s = NULL;
-    write_text(sp("t.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    tl_write_text(tl_path("t.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
     struct { const char *fac; const char *want; } facs[] = {
         {"1 2 3\n1 2 5\n", "bad.fac:2:"},          /* 1-based, 5 > 4 nodes */
         {"0 1 2\n0 1 4\n", "bad.fac:2:"},          /* 0-based, 4 > 3 */
@@ -318,10 +262,10 @@ static void test_bad_files(void)
         {"1 2 99999999999999999999\n", "bad.fac:1:"},
     };
     for (size_t i = 0; i < sizeof facs / sizeof facs[0]; i++) {
-        write_text(sp("bad.fac"), facs[i].fac);
-        thx_status st = thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("bad.fac"), "t", THX_ROLE_OTHER, &s, NULL);
+        tl_write_text(tl_path("bad.fac"), facs[i].fac);
+        thx_status st = thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("bad.fac"), "t", THX_ROLE_OTHER, &s, NULL);
         CHECK(st == THX_EINPUT);
-        CHECK(msg_has(facs[i].want) && msg_has("surface \"t\""));
+        CHECK(tl_msg_has(ctx, facs[i].want) && tl_msg_has(ctx, "surface \"t\""));
         CHECK(s == NULL);
     }
     struct { const char *pts; const char *want; } ptss[] = {
@@ -332,28 +276,28 @@ static void test_bad_files(void)
         {"0 0 0\n1 2,5 0\n", "bad.pts:2:"},
         {"\n\n", "bad.pts: surface \"t\": no nodes"},
     };
-    write_text(sp("ok.fac"), "1 2 3\n");
+    tl_write_text(tl_path("ok.fac"), "1 2 3\n");
     for (size_t i = 0; i < sizeof ptss / sizeof ptss[0]; i++) {
-        write_text(sp("bad.pts"), ptss[i].pts);
-        CHECK(thx_surface_read_ptsfac(ctx, sp("bad.pts"), sp("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EINPUT);
-        CHECK(msg_has(ptss[i].want));
+        tl_write_text(tl_path("bad.pts"), ptss[i].pts);
+        CHECK(thx_surface_read_ptsfac(ctx, tl_path("bad.pts"), tl_path("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EINPUT);
+        CHECK(tl_msg_has(ctx, ptss[i].want));
         CHECK(s == NULL);
     }
     /* Missing files are named. */
-    CHECK(thx_surface_read_ptsfac(ctx, sp("missing.pts"), sp("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
-    CHECK(msg_has("missing.pts"));
-    CHECK(thx_surface_read_ptsfac(ctx, sp("t.pts"), sp("missing.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
-    CHECK(msg_has("missing.fac"));
+    CHECK(thx_surface_read_ptsfac(ctx, tl_path("missing.pts"), tl_path("ok.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
+    CHECK(tl_msg_has(ctx, "missing.pts"));
+    CHECK(thx_surface_read_ptsfac(ctx, tl_path("t.pts"), tl_path("missing.fac"), "t", THX_ROLE_OTHER, &s, NULL) == THX_EIO);
+    CHECK(tl_msg_has(ctx, "missing.fac"));
     CHECK(s == NULL);
 }
 
 /* Writes a model directory with the given manifest around a valid tetra.pts/.fac. */
 static void manifest_case(const char *json)
 {
-    mkdir(sp("man"), 0755);
-    write_text(sp("man/tetra.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
-    write_text(sp("man/tetra.fac"), "1 3 2\n1 2 4\n2 3 4\n3 1 4\n");
-    write_text(sp("man/model.json"), json);
+    mkdir(tl_path("man"), 0755);
+    tl_write_text(tl_path("man/tetra.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    tl_write_text(tl_path("man/tetra.fac"), "1 3 2\n1 2 4\n2 3 4\n3 1 4\n");
+    tl_write_text(tl_path("man/model.json"), json);
 }
 
 static void test_bad_manifest(void)
@@ -393,37 +337,37 @@ static void test_bad_manifest(void)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         snprintf(json, sizeof json, "%s%s", head, cases[i].tail);
         manifest_case(json);
-        thx_status st = thx_model_read(ctx, sp("man"), &m);
+        thx_status st = thx_model_read(ctx, tl_path("man"), &m);
         if (!cases[i].want) {
             CHECK_OK(ctx, st);
             CHECK(m && m->n_surfaces == 1 && m->surf[0]->role == THX_ROLE_HEART && m->provenance_json == NULL);
         } else {
             CHECK(st == THX_EINPUT || st == THX_EIO);
-            CHECK(msg_has(cases[i].want));
+            CHECK(tl_msg_has(ctx, cases[i].want));
             CHECK(m == NULL);
         }
         thx_model_destroy(&m);
     }
     /* Errors naming the file: wrong format name, version, units, line of a syntax error. */
     manifest_case("{\"format\":\"other\",\"version\":1,\"units\":\"mm\",\"surfaces\":[]}");
-    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("man/model.json") && msg_has("\"format\""));
+    CHECK(thx_model_read(ctx, tl_path("man"), &m) == THX_EINPUT && tl_msg_has(ctx, "man/model.json") && tl_msg_has(ctx, "\"format\""));
     manifest_case("{\"format\":\"thorax-model\",\"version\":2,\"units\":\"mm\",\"surfaces\":[]}");
-    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("version 2"));
+    CHECK(thx_model_read(ctx, tl_path("man"), &m) == THX_EINPUT && tl_msg_has(ctx, "version 2"));
     manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"m\",\"surfaces\":[]}");
-    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("\"units\""));
+    CHECK(thx_model_read(ctx, tl_path("man"), &m) == THX_EINPUT && tl_msg_has(ctx, "\"units\""));
     manifest_case("{\n\"format\": \"thorax-model\",\n\"version\": 1,\n\"units\": \"mm\"\n\"surfaces\": []}\n");
-    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("man/model.json:5:"));
+    CHECK(thx_model_read(ctx, tl_path("man"), &m) == THX_EINPUT && tl_msg_has(ctx, "man/model.json:5:"));
     /* A 0-based .fac inside a model directory is an error (model files are 1-based). */
     manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"surfaces\":[{\"name\":\"tetra\",\"role\":"
                   "\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}");
-    write_text(sp("man/tetra.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
-    CHECK(thx_model_read(ctx, sp("man"), &m) == THX_EINPUT && msg_has("tetra.fac:1:") && msg_has("1-based"));
+    tl_write_text(tl_path("man/tetra.fac"), "0 2 1\n0 1 3\n1 2 3\n2 0 3\n");
+    CHECK(thx_model_read(ctx, tl_path("man"), &m) == THX_EINPUT && tl_msg_has(ctx, "tetra.fac:1:") && tl_msg_has(ctx, "1-based"));
     /* No model.json at all. */
-    CHECK(thx_model_read(ctx, sp("nowhere"), &m) == THX_EIO && msg_has("nowhere/model.json"));
+    CHECK(thx_model_read(ctx, tl_path("nowhere"), &m) == THX_EIO && tl_msg_has(ctx, "nowhere/model.json"));
     CHECK(m == NULL);
     /* Unknown keys are ignored (room for regions, conductivities ...). */
     manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"regions\":[1],\"surfaces\":[]}");
-    CHECK_OK(ctx, thx_model_read(ctx, sp("man"), &m));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("man"), &m));
     CHECK(m && m->n_surfaces == 0);
     thx_model_destroy(&m);
 }
@@ -440,8 +384,8 @@ static void test_real_data(void)
     snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/tank/tank_full_771.pts", dir);
     snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/tank/tank_full_771.fac", dir);
     /* The data folder is part of the project's setup: its absence is a failure, not a skip. */
-    CHECK(exists(pts) && exists(fac));
-    if (!exists(pts)) {
+    CHECK(tl_exists(pts) && tl_exists(fac));
+    if (!tl_exists(pts)) {
         fprintf(stderr, "test_model: %s missing\n", pts);
         return;
     }
@@ -463,9 +407,9 @@ static void test_real_data(void)
         CHECK_OK(ctx, thx_model_create(ctx, &m));
         double x0 = s->xyz[3 * 770 + 2];
         CHECK_OK(ctx, thx_model_add_surface(ctx, m, &s));
-        CHECK_OK(ctx, thx_model_write(ctx, m, sp("tank")));
+        CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("tank")));
         thx_model *r = NULL;
-        CHECK_OK(ctx, thx_model_read(ctx, sp("tank"), &r));
+        CHECK_OK(ctx, thx_model_read(ctx, tl_path("tank"), &r));
         CHECK(r && r->n_surfaces == 1 && r->surf[0]->n_nodes == 771 && r->surf[0]->n_tris == 1538);
         CHECK(r && r->surf[0]->xyz[3 * 770 + 2] == x0);
         CHECK(r && memcmp(r->surf[0]->tri, m->surf[0]->tri, 3 * 1538 * sizeof(int32_t)) == 0);
@@ -500,28 +444,28 @@ static void test_export(void)
     CHECK(thx_export_format_parse("VTK", &f) != 0 && thx_export_format_parse("", &f) != 0);
 
     thx_surface *s = make_surface("octa", THX_ROLE_OUTER, 6, oct_xyz, 8, oct_tri);
-    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTK, sp("o.vtk")));
-    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTP, sp("o.vtp")));
-    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_OBJ, sp("o.obj")));
-    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_STL, sp("o.stl")));
-    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_PLY, sp("o.ply")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTK, tl_path("o.vtk")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_VTP, tl_path("o.vtp")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_OBJ, tl_path("o.obj")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_STL, tl_path("o.stl")));
+    CHECK_OK(ctx, thx_surface_export(ctx, s, THX_EXPORT_PLY, tl_path("o.ply")));
 
-    char *t = slurp(sp("o.vtk"), NULL);
+    char *t = tl_slurp(ctx, tl_path("o.vtk"), NULL);
     CHECK(t && strstr(t, "POINTS 6 double\n") && strstr(t, "POLYGONS 8 32\n3 0 2 4\n"));
     free(t);
-    t = slurp(sp("o.obj"), NULL);
+    t = tl_slurp(ctx, tl_path("o.obj"), NULL);
     CHECK(t && strstr(t, "\nv 6.000000 2.000000 3.000000\n") && strstr(t, "\nf 1 3 5\n"));
     free(t);
-    t = slurp(sp("o.ply"), NULL);
+    t = tl_slurp(ctx, tl_path("o.ply"), NULL);
     CHECK(t && strstr(t, "element vertex 6\n") && strstr(t, "element face 8\n") && strstr(t, "end_header\n"));
     free(t);
-    t = slurp(sp("o.vtp"), NULL);
+    t = tl_slurp(ctx, tl_path("o.vtp"), NULL);
     CHECK(t && strstr(t, "NumberOfPoints=\"6\"") && strstr(t, "NumberOfPolys=\"8\"") && strstr(t, "</VTKFile>\n"));
     free(t);
 
     /* Binary STL: 84 + 50 t bytes, unit outward normals (octahedron centre (1,2,3)). */
     size_t len = 0;
-    unsigned char *b = (unsigned char *)slurp(sp("o.stl"), &len);
+    unsigned char *b = (unsigned char *)tl_slurp(ctx, tl_path("o.stl"), &len);
     CHECK(b && len == 84 + 50 * 8);
     if (b && len == 84 + 50 * 8) {
         CHECK(strncmp((char *)b, "solid", 5) != 0);
@@ -542,23 +486,19 @@ static void test_export(void)
 
     /* A bad surface is refused and leaves no file. */
     s->tri[3] = 17;
-    CHECK(thx_surface_export(ctx, s, THX_EXPORT_PLY, sp("bad.ply")) == THX_EINPUT);
-    CHECK(msg_has("bad.ply") && msg_has("octa"));
-    CHECK(!exists(sp("bad.ply")));
+    CHECK(thx_surface_export(ctx, s, THX_EXPORT_PLY, tl_path("bad.ply")) == THX_EINPUT);
+    CHECK(tl_msg_has(ctx, "bad.ply") && tl_msg_has(ctx, "octa"));
+    CHECK(!tl_exists(tl_path("bad.ply")));
     /* An unwritable destination is an i/o error naming it. */
     s->tri[3] = 1;
-    CHECK(thx_surface_export(ctx, s, THX_EXPORT_OBJ, sp("no/such.obj")) == THX_EIO && msg_has("no/such.obj"));
+    CHECK(thx_surface_export(ctx, s, THX_EXPORT_OBJ, tl_path("no/such.obj")) == THX_EIO && tl_msg_has(ctx, "no/such.obj"));
     thx_surface_destroy(&s);
 }
 
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
-    snprintf(scratch, sizeof scratch, "test_model.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_model")) return 1;
     test_round_trip();
     test_failed_write();
     test_base_detection();
@@ -566,14 +506,7 @@ int main(void)
     test_bad_manifest();
     test_real_data();
     test_export();
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_model: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_model: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_model");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -24,58 +24,8 @@
 #include "thorax/series.h"
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 /* ------------------------------------------------------------- helpers */
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static void write_bytes(const char *path, const void *data, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f || fwrite(data, 1, n, f) != n) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fclose(f);
-}
-
-static void write_text(const char *path, const char *text) { write_bytes(path, text, strlen(text)); }
-
-static char *slurp(const char *path, size_t *len)
-{
-    char *t = NULL;
-    if (thx_read_file(ctx, path, &t, len) != THX_OK) return NULL;
-    return t;
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* Any temporary file ("NAME.tmpXXXXXX") left in the scratch directory. */
-static int leftover_tmp(void)
-{
-    DIR *d = opendir(scratch);
-    int found = 0;
-    struct dirent *e;
-    while (d && (e = readdir(d)))
-        if (strstr(e->d_name, ".tmp")) {
-            fprintf(stderr, "leftover temporary file %s\n", e->d_name);
-            found = 1;
-        }
-    if (d) closedir(d);
-    return found;
-}
 
 /* Bitwise equality of doubles, NaN equal to NaN (payloads aside). */
 static int same_double(double a, double b)
@@ -123,10 +73,10 @@ static void expect_read_fail(const char *path, thx_series_format fmt, thx_status
 /* A text file that must be refused: "NAME:LINE: ..." holding `what`. */
 static void bad_text(const char *name, const char *text, int line, const char *what)
 {
-    write_text(sp(name), text);
+    tl_write_text(tl_path(name), text);
     char where[2300];
-    snprintf(where, sizeof where, "%s:%d: ", sp(name), line);
-    expect_read_fail(sp(name), THX_SERIES_AUTO, THX_EINPUT, where, what);
+    snprintf(where, sizeof where, "%s:%d: ", tl_path(name), line);
+    expect_read_fail(tl_path(name), THX_SERIES_AUTO, THX_EINPUT, where, what);
 }
 
 /* 3 rows x 5 frames with awkward values, NaN and infinities, a non-uniform time axis. */
@@ -190,33 +140,33 @@ static void test_round_trips(void)
     const char *names[3] = {"rt.txt", "rt.raw", "rt.mat"};
     const thx_series_format fmts[3] = {THX_SERIES_TEXT, THX_SERIES_RAW, THX_SERIES_MAT};
     for (int k = 0; k < 3; k++) {
-        CHECK_OK(ctx, thx_series_write(ctx, s, sp(names[k]), THX_SERIES_AUTO));
+        CHECK_OK(ctx, thx_series_write(ctx, s, tl_path(names[k]), THX_SERIES_AUTO));
         thx_series *b = NULL;
-        CHECK_OK(ctx, thx_series_read(ctx, sp(names[k]), THX_SERIES_AUTO, &b));
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path(names[k]), THX_SERIES_AUTO, &b));
         CHECK(same_series(s, b));
         thx_series_destroy(&b);
         /* the format given explicitly, and the content recognized under another name */
-        CHECK_OK(ctx, thx_series_read(ctx, sp(names[k]), fmts[k], &b));
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path(names[k]), fmts[k], &b));
         CHECK(same_series(s, b));
         thx_series_destroy(&b);
         char other[64];
         snprintf(other, sizeof other, "rt%d.bin", k);
-        CHECK_OK(ctx, thx_series_write(ctx, s, sp(other), fmts[k]));
-        CHECK_OK(ctx, thx_series_read(ctx, sp(other), THX_SERIES_AUTO, &b));
+        CHECK_OK(ctx, thx_series_write(ctx, s, tl_path(other), fmts[k]));
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path(other), THX_SERIES_AUTO, &b));
         CHECK(same_series(s, b));
         thx_series_destroy(&b);
         /* determinism: byte-identical files */
         char again[64];
         snprintf(again, sizeof again, "rt_again%d.%s", k, k == 0 ? "txt" : k == 1 ? "raw" : "mat");
-        CHECK_OK(ctx, thx_series_write(ctx, s, sp(again), fmts[k]));
+        CHECK_OK(ctx, thx_series_write(ctx, s, tl_path(again), fmts[k]));
         size_t n1 = 0, n2 = 0;
-        char *t1 = slurp(sp(names[k]), &n1), *t2 = slurp(sp(again), &n2);
+        char *t1 = tl_slurp(ctx, tl_path(names[k]), &n1), *t2 = tl_slurp(ctx, tl_path(again), &n2);
         CHECK(t1 && t2 && n1 == n2 && memcmp(t1, t2, n1) == 0);
         free(t1);
         free(t2);
     }
     /* the text is readable: the shortest exact decimals, the time axis as written */
-    char *t = slurp(sp("rt.txt"), NULL);
+    char *t = tl_slurp(ctx, tl_path("rt.txt"), NULL);
     CHECK(t && strstr(t, "thorax-series 1\nrows 3\nframes 5\nunit mV\ntime_unit ms\n"));
     CHECK(t && strstr(t, "\nlabel ecg run #3: lead II  (x)\n"));
     CHECK(t && strstr(t, "\ntime 0 0.5 1.25 2 10\n"));
@@ -226,9 +176,9 @@ static void test_round_trips(void)
     free(t);
     /* raw: the size is exactly header + 8 x frames x (rows + 1) */
     struct stat st;
-    CHECK(stat(sp("rt.raw"), &st) == 0 && st.st_size == 200 + 8 * 5 * 4);
+    CHECK(stat(tl_path("rt.raw"), &st) == 0 && st.st_size == 200 + 8 * 5 * 4);
     thx_series_destroy(&s);
-    CHECK(!leftover_tmp());
+    CHECK(!tl_leftover_tmp(""));
 }
 
 static void test_text_variants(void)
@@ -239,26 +189,26 @@ static void test_text_variants(void)
     for (size_t f = 0; f < 1000; f++) s->time[f] = -5 + (double)f * 0.1; /* time[1] - time[0] is not 0.1 */
     for (size_t i = 0; i < 2000; i++) s->v[i] = sin((double)i) * 1e3;
     s->time_unit[0] = '\0'; /* none */
-    CHECK_OK(ctx, thx_series_write(ctx, s, sp("uni.txt"), THX_SERIES_AUTO));
-    char *t = slurp(sp("uni.txt"), NULL);
+    CHECK_OK(ctx, thx_series_write(ctx, s, tl_path("uni.txt"), THX_SERIES_AUTO));
+    char *t = tl_slurp(ctx, tl_path("uni.txt"), NULL);
     CHECK(t && strstr(t, "\nt0 -5\ndt 0.1\n") && !strstr(t, "\ntime ") && strstr(t, "\ntime_unit\n") &&
           !strstr(t, "\nunit"));
     free(t);
     thx_series *b = NULL;
-    CHECK_OK(ctx, thx_series_read(ctx, sp("uni.txt"), THX_SERIES_AUTO, &b));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("uni.txt"), THX_SERIES_AUTO, &b));
     CHECK(same_series(s, b));
     thx_series_destroy(&b);
     /* control characters in a label become blanks, outer blanks go */
     snprintf(s->label, sizeof s->label, "  two\nlines\there  ");
-    CHECK_OK(ctx, thx_series_write(ctx, s, sp("lab.txt"), THX_SERIES_TEXT));
-    CHECK_OK(ctx, thx_series_read(ctx, sp("lab.txt"), THX_SERIES_AUTO, &b));
+    CHECK_OK(ctx, thx_series_write(ctx, s, tl_path("lab.txt"), THX_SERIES_TEXT));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("lab.txt"), THX_SERIES_AUTO, &b));
     CHECK(b && strcmp(b->label, "two lines here") == 0);
     thx_series_destroy(&b);
     thx_series_destroy(&s);
 
     /* what a person may write: comments, blank lines, CRLF, several time lines,
      * any keyword order, NaN and infinities in any spelling strtod knows */
-    write_text(sp("hand.dat"),
+    tl_write_text(tl_path("hand.dat"),
                "# recorded by hand\r\n"
                "\r\n"
                "thorax-series 1   # version\r\n"
@@ -273,7 +223,7 @@ static void test_text_variants(void)
                "  4e1\t5 6 \r\n"
                "end\r\n"
                "# trailing comment\r\n");
-    CHECK_OK(ctx, thx_series_read(ctx, sp("hand.dat"), THX_SERIES_AUTO, &b));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("hand.dat"), THX_SERIES_AUTO, &b));
     if (b) {
         CHECK(b->n_rows == 2 && b->n_frames == 3);
         CHECK(b->v[0] == 1 && b->v[1] == 40 && isnan(b->v[2]) && b->v[3] == 5 && isinf(b->v[4]) && b->v[4] < 0 &&
@@ -284,13 +234,13 @@ static void test_text_variants(void)
     }
     thx_series_destroy(&b);
     /* no time axis given: frame numbers */
-    write_text(sp("notime.txt"), "thorax-series 1\nrows 1\nframes 3\n7 8 9\nend\n");
-    CHECK_OK(ctx, thx_series_read(ctx, sp("notime.txt"), THX_SERIES_AUTO, &b));
+    tl_write_text(tl_path("notime.txt"), "thorax-series 1\nrows 1\nframes 3\n7 8 9\nend\n");
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("notime.txt"), THX_SERIES_AUTO, &b));
     CHECK(b && b->time[0] == 0 && b->time[2] == 2 && strcmp(b->time_unit, "ms") == 0 && b->unit[0] == '\0');
     thx_series_destroy(&b);
     /* dt without t0 starts at 0 */
-    write_text(sp("dt.txt"), "thorax-series 1\nrows 1\nframes 3\ndt 2\ntime_unit s\n7 8 9\nend\n");
-    CHECK_OK(ctx, thx_series_read(ctx, sp("dt.txt"), THX_SERIES_AUTO, &b));
+    tl_write_text(tl_path("dt.txt"), "thorax-series 1\nrows 1\nframes 3\ndt 2\ntime_unit s\n7 8 9\nend\n");
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("dt.txt"), THX_SERIES_AUTO, &b));
     CHECK(b && b->time[0] == 0 && b->time[1] == 2 && b->time[2] == 4 && strcmp(b->time_unit, "s") == 0);
     thx_series_destroy(&b);
 }
@@ -348,16 +298,16 @@ static void test_bad_text(void)
     bad_text("version.txt", "thorax-series 2\nrows 1\n", 1, "unsupported series file version '2'");
     bad_text("too_big.txt", "thorax-series 1\nrows 4611686018427387904\nframes 4\n1 2 3 4\nend\n", 4, "too large");
     /* a file with no header at all, and an empty one */
-    write_text(sp("empty.txt"), "# nothing\n\n");
-    expect_read_fail(sp("empty.txt"), THX_SERIES_AUTO, THX_EINPUT, "empty.txt: empty file", NULL);
-    write_bytes(sp("nul.txt"), "thorax-series 1\nrows 1\0\n", 24);
-    expect_read_fail(sp("nul.txt"), THX_SERIES_TEXT, THX_EINPUT, "nul.txt:2: NUL byte", NULL);
+    tl_write_text(tl_path("empty.txt"), "# nothing\n\n");
+    expect_read_fail(tl_path("empty.txt"), THX_SERIES_AUTO, THX_EINPUT, "empty.txt: empty file", NULL);
+    tl_write_bytes(tl_path("nul.txt"), "thorax-series 1\nrows 1\0\n", 24);
+    expect_read_fail(tl_path("nul.txt"), THX_SERIES_TEXT, THX_EINPUT, "nul.txt:2: NUL byte", NULL);
     /* missing files and unknown formats */
-    expect_read_fail(sp("missing.txt"), THX_SERIES_AUTO, THX_EIO, "missing.txt: cannot open", NULL);
-    expect_read_fail(sp("missing"), THX_SERIES_AUTO, THX_EIO, "missing: cannot open", NULL);
-    write_text(sp("what.csv"), "1,2,3\n");
-    expect_read_fail(sp("what.csv"), THX_SERIES_AUTO, THX_EINPUT, "unknown series format", NULL);
-    CHECK(!leftover_tmp());
+    expect_read_fail(tl_path("missing.txt"), THX_SERIES_AUTO, THX_EIO, "missing.txt: cannot open", NULL);
+    expect_read_fail(tl_path("missing"), THX_SERIES_AUTO, THX_EIO, "missing: cannot open", NULL);
+    tl_write_text(tl_path("what.csv"), "1,2,3\n");
+    expect_read_fail(tl_path("what.csv"), THX_SERIES_AUTO, THX_EINPUT, "unknown series format", NULL);
+    CHECK(!tl_leftover_tmp(""));
 }
 
 static void put_u64(unsigned char *p, uint64_t v)
@@ -368,10 +318,10 @@ static void put_u64(unsigned char *p, uint64_t v)
 static void test_bad_raw(void)
 {
     thx_series *s = sample();
-    CHECK_OK(ctx, thx_series_write(ctx, s, sp("good.raw"), THX_SERIES_RAW));
+    CHECK_OK(ctx, thx_series_write(ctx, s, tl_path("good.raw"), THX_SERIES_RAW));
     thx_series_destroy(&s);
     size_t n = 0;
-    unsigned char *good = (unsigned char *)slurp(sp("good.raw"), &n);
+    unsigned char *good = (unsigned char *)tl_slurp(ctx, tl_path("good.raw"), &n);
     CHECK(good && n == 200 + 8 * 5 * 4);
     if (!good) return;
     CHECK(memcmp(good, "THXSER01", 8) == 0 && good[8] == 3 && good[16] == 5);
@@ -382,47 +332,47 @@ static void test_bad_raw(void)
 
     memcpy(b, good, n);
     memcpy(b, "HELLOSER", 8);
-    write_bytes(sp("magic.raw"), b, n);
-    expect_read_fail(sp("magic.raw"), THX_SERIES_AUTO, THX_EINPUT, "magic.raw: not a thorax raw series", NULL);
+    tl_write_bytes(tl_path("magic.raw"), b, n);
+    expect_read_fail(tl_path("magic.raw"), THX_SERIES_AUTO, THX_EINPUT, "magic.raw: not a thorax raw series", NULL);
 
     memcpy(b, good, n);
     memcpy(b, "THXSER02", 8);
-    write_bytes(sp("version.raw"), b, n);
-    expect_read_fail(sp("version.raw"), THX_SERIES_AUTO, THX_EINPUT, "version.raw: raw series version '02'", NULL);
+    tl_write_bytes(tl_path("version.raw"), b, n);
+    expect_read_fail(tl_path("version.raw"), THX_SERIES_AUTO, THX_EINPUT, "version.raw: raw series version '02'", NULL);
 
-    write_bytes(sp("short.raw"), good, 50);
-    expect_read_fail(sp("short.raw"), THX_SERIES_AUTO, THX_EINPUT, "short.raw: truncated: 50 bytes, shorter than the 200-byte", NULL);
-    write_bytes(sp("tiny.raw"), "TH", 2);
-    expect_read_fail(sp("tiny.raw"), THX_SERIES_RAW, THX_EINPUT, "tiny.raw: truncated: 2 bytes", NULL);
+    tl_write_bytes(tl_path("short.raw"), good, 50);
+    expect_read_fail(tl_path("short.raw"), THX_SERIES_AUTO, THX_EINPUT, "short.raw: truncated: 50 bytes, shorter than the 200-byte", NULL);
+    tl_write_bytes(tl_path("tiny.raw"), "TH", 2);
+    expect_read_fail(tl_path("tiny.raw"), THX_SERIES_RAW, THX_EINPUT, "tiny.raw: truncated: 2 bytes", NULL);
 
-    write_bytes(sp("trunc.raw"), good, n - 8);
-    expect_read_fail(sp("trunc.raw"), THX_SERIES_AUTO, THX_EINPUT, "trunc.raw: truncated: 352 bytes, but 3 rows x 5 frames take 360", NULL);
+    tl_write_bytes(tl_path("trunc.raw"), good, n - 8);
+    expect_read_fail(tl_path("trunc.raw"), THX_SERIES_AUTO, THX_EINPUT, "trunc.raw: truncated: 352 bytes, but 3 rows x 5 frames take 360", NULL);
 
     memcpy(b, good, n);
     b[n] = 0;
-    write_bytes(sp("extra.raw"), b, n + 1);
-    expect_read_fail(sp("extra.raw"), THX_SERIES_AUTO, THX_EINPUT, "extra.raw: trailing bytes: 361 bytes", NULL);
+    tl_write_bytes(tl_path("extra.raw"), b, n + 1);
+    expect_read_fail(tl_path("extra.raw"), THX_SERIES_AUTO, THX_EINPUT, "extra.raw: trailing bytes: 361 bytes", NULL);
 
     memcpy(b, good, n);
     put_u64(b + 8, 0);
-    write_bytes(sp("zero.raw"), b, n);
-    expect_read_fail(sp("zero.raw"), THX_SERIES_AUTO, THX_EINPUT, "zero.raw: empty series", NULL);
+    tl_write_bytes(tl_path("zero.raw"), b, n);
+    expect_read_fail(tl_path("zero.raw"), THX_SERIES_AUTO, THX_EINPUT, "zero.raw: empty series", NULL);
 
     memcpy(b, good, n);
     put_u64(b + 8, UINT64_MAX / 2);
-    write_bytes(sp("huge.raw"), b, n);
-    expect_read_fail(sp("huge.raw"), THX_SERIES_AUTO, THX_EINPUT, "huge.raw: impossible sizes", NULL);
+    tl_write_bytes(tl_path("huge.raw"), b, n);
+    expect_read_fail(tl_path("huge.raw"), THX_SERIES_AUTO, THX_EINPUT, "huge.raw: impossible sizes", NULL);
 
     memcpy(b, good, n);
     memset(b + 24, 'u', 32);
-    write_bytes(sp("unit.raw"), b, n);
-    expect_read_fail(sp("unit.raw"), THX_SERIES_AUTO, THX_EINPUT, "unit.raw: the unit field (bytes 24-55) has no terminating NUL", NULL);
+    tl_write_bytes(tl_path("unit.raw"), b, n);
+    expect_read_fail(tl_path("unit.raw"), THX_SERIES_AUTO, THX_EINPUT, "unit.raw: the unit field (bytes 24-55) has no terminating NUL", NULL);
 
     memcpy(b, good, n);
     double t2 = 0.5; /* time of frame 3 = time of frame 2 */
     memcpy(b + 200 + 16, &t2, 8);
-    write_bytes(sp("time.raw"), b, n);
-    expect_read_fail(sp("time.raw"), THX_SERIES_AUTO, THX_EINPUT, "time.raw: time of frame 3 (0.5) is not after that of frame 2", NULL);
+    tl_write_bytes(tl_path("time.raw"), b, n);
+    expect_read_fail(tl_path("time.raw"), THX_SERIES_AUTO, THX_EINPUT, "time.raw: time of frame 3 (0.5) is not after that of frame 2", NULL);
 
     free(b);
     free(good);
@@ -460,14 +410,14 @@ static void test_mat_inputs(void)
     const double t3[3] = {0, 4, 8}, t2[2] = {0, 1};
 
     /* no potvals: the first 2-D numeric matrix, any class; top-level unit and time */
-    mat_t *m = mat_new(sp("int16.mat"));
+    mat_t *m = mat_new(tl_path("int16.mat"));
     mat_put(m, "note", MAT_C_CHAR, MAT_T_UINT8, 1, 5, "hello");
     mat_put(m, "ecg", MAT_C_INT16, MAT_T_INT16, 2, 3, ecg);
     mat_put(m, "other", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, 2, other);
     mat_put(m, "unit", MAT_C_CHAR, MAT_T_UINT8, 1, 2, "mV");
     mat_put(m, "time", MAT_C_DOUBLE, MAT_T_DOUBLE, 3, 1, t3); /* a column is fine */
     Mat_Close(m);
-    CHECK_OK(ctx, thx_series_read(ctx, sp("int16.mat"), THX_SERIES_AUTO, &s));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("int16.mat"), THX_SERIES_AUTO, &s));
     if (s) {
         CHECK(s->n_rows == 2 && s->n_frames == 3);
         CHECK(s->v[0] == 1 && s->v[1] == -2 && s->v[4] == 5 && s->v[5] == -6);
@@ -476,17 +426,17 @@ static void test_mat_inputs(void)
     thx_series_destroy(&s);
     /* a variable named after a colon; a top-level time of another length is an error */
     char named[2100];
-    snprintf(named, sizeof named, "%s:other", sp("int16.mat"));
+    snprintf(named, sizeof named, "%s:other", tl_path("int16.mat"));
     expect_read_fail(named, THX_SERIES_AUTO, THX_EINPUT, "int16.mat: time is double with 3 elements, but the series has 2 frames", NULL);
-    snprintf(named, sizeof named, "%s:nope", sp("int16.mat"));
+    snprintf(named, sizeof named, "%s:nope", tl_path("int16.mat"));
     expect_read_fail(named, THX_SERIES_AUTO, THX_EINPUT, "int16.mat: no variable 'nope' (variables: note (char 1x5), ecg (int16 2x3)", NULL);
-    snprintf(named, sizeof named, "%s:note", sp("int16.mat"));
+    snprintf(named, sizeof named, "%s:note", tl_path("int16.mat"));
     expect_read_fail(named, THX_SERIES_AUTO, THX_EINPUT, "int16.mat: note (char) is not a numeric matrix", NULL);
-    snprintf(named, sizeof named, "%s:ecg", sp("rt.txt"));
+    snprintf(named, sizeof named, "%s:ecg", tl_path("rt.txt"));
     expect_read_fail(named, THX_SERIES_AUTO, THX_EINPUT, "applies only to .mat files", NULL);
 
     /* a struct holding potvals (as map3d writes), its own unit and label */
-    m = mat_new(sp("struct.mat"));
+    m = mat_new(tl_path("struct.mat"));
     {
         size_t d1[2] = {1, 1}, dp[2] = {2, 3}, du[2] = {1, 2}, dl[2] = {1, 4};
         const float pv[6] = {0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f};
@@ -501,7 +451,7 @@ static void test_mat_inputs(void)
         Mat_VarFree(st);
     }
     Mat_Close(m);
-    CHECK_OK(ctx, thx_series_read(ctx, sp("struct.mat"), THX_SERIES_AUTO, &s));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("struct.mat"), THX_SERIES_AUTO, &s));
     if (s) {
         CHECK(s->n_rows == 2 && s->n_frames == 3 && s->v[0] == 0.5 && s->v[5] == 5.5);
         CHECK(strcmp(s->unit, "uV") == 0 && strcmp(s->label, "run7") == 0 && s->time[2] == 2);
@@ -510,7 +460,7 @@ static void test_mat_inputs(void)
 
     /* map3d's ts struct: time is the clock time of the recording (text), samplefrequency in Hz
        gives the axis (1 / fs apart, in ms) */
-    m = mat_new(sp("ts.mat"));
+    m = mat_new(tl_path("ts.mat"));
     {
         size_t d1[2] = {1, 1}, dp[2] = {2, 3}, dt[2] = {1, 10};
         const double pv[6] = {1, 2, 3, 4, 5, 6}, fs = 500;
@@ -524,7 +474,7 @@ static void test_mat_inputs(void)
         Mat_VarFree(st);
     }
     Mat_Close(m);
-    CHECK_OK(ctx, thx_series_read(ctx, sp("ts.mat"), THX_SERIES_AUTO, &s));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("ts.mat"), THX_SERIES_AUTO, &s));
     if (s) {
         CHECK(s->n_rows == 2 && s->n_frames == 3 && s->v[5] == 6);
         CHECK(s->time[0] == 0 && s->time[1] == 2 && s->time[2] == 4 && strcmp(s->time_unit, "ms") == 0);
@@ -532,31 +482,31 @@ static void test_mat_inputs(void)
     thx_series_destroy(&s);
 
     /* what cannot be a series */
-    m = mat_new(sp("chars.mat"));
+    m = mat_new(tl_path("chars.mat"));
     mat_put(m, "name", MAT_C_CHAR, MAT_T_UINT8, 1, 3, "abc");
     Mat_Close(m);
-    expect_read_fail(sp("chars.mat"), THX_SERIES_AUTO, THX_EINPUT, "chars.mat: no numeric variable", "(variables: name (char 1x3))");
+    expect_read_fail(tl_path("chars.mat"), THX_SERIES_AUTO, THX_EINPUT, "chars.mat: no numeric variable", "(variables: name (char 1x3))");
 
     /* map3d .pot: one value per node, one frame; read only */
-    write_text(sp("a.pot"), "      -2.39000    \n  1.5e1\n\n 3 4\n");
-    CHECK_OK(ctx, thx_series_read(ctx, sp("a.pot"), THX_SERIES_AUTO, &s));
+    tl_write_text(tl_path("a.pot"), "      -2.39000    \n  1.5e1\n\n 3 4\n");
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("a.pot"), THX_SERIES_AUTO, &s));
     if (s) CHECK(s->n_rows == 4 && s->n_frames == 1 && s->v[0] == -2.39 && s->v[1] == 15 && s->v[3] == 4 && s->time[0] == 0);
     if (s) {
-        thx_status w = thx_series_write(ctx, s, sp("b.pot"), THX_SERIES_AUTO);
+        thx_status w = thx_series_write(ctx, s, tl_path("b.pot"), THX_SERIES_AUTO);
         CHECK(w == THX_EINPUT && strstr(thx_ctx_message(ctx), "read, not written"));
     }
     thx_series_destroy(&s);
-    write_text(sp("bad.pot"), "1\n2\nx3\n");
-    expect_read_fail(sp("bad.pot"), THX_SERIES_AUTO, THX_EINPUT, "bad.pot:3: 'x3' is not a number", NULL);
-    write_text(sp("empty.pot"), "\n  \n");
-    expect_read_fail(sp("empty.pot"), THX_SERIES_AUTO, THX_EINPUT, "empty.pot: no values", NULL);
+    tl_write_text(tl_path("bad.pot"), "1\n2\nx3\n");
+    expect_read_fail(tl_path("bad.pot"), THX_SERIES_AUTO, THX_EINPUT, "bad.pot:3: 'x3' is not a number", NULL);
+    tl_write_text(tl_path("empty.pot"), "\n  \n");
+    expect_read_fail(tl_path("empty.pot"), THX_SERIES_AUTO, THX_EINPUT, "empty.pot: no values", NULL);
 
-    m = mat_new(sp("potchar.mat"));
+    m = mat_new(tl_path("potchar.mat"));
     mat_put(m, "potvals", MAT_C_CHAR, MAT_T_UINT8, 1, 3, "abc");
     Mat_Close(m);
-    expect_read_fail(sp("potchar.mat"), THX_SERIES_AUTO, THX_EINPUT, "potchar.mat: potvals (char) is not a numeric matrix", NULL);
+    expect_read_fail(tl_path("potchar.mat"), THX_SERIES_AUTO, THX_EINPUT, "potchar.mat: potvals (char) is not a numeric matrix", NULL);
 
-    m = mat_new(sp("complex.mat"));
+    m = mat_new(tl_path("complex.mat"));
     {
         const double re[2] = {1, 2}, im[2] = {3, 4};
         mat_complex_split_t z = {(void *)re, (void *)im};
@@ -566,28 +516,28 @@ static void test_mat_inputs(void)
         Mat_VarFree(v);
     }
     Mat_Close(m);
-    expect_read_fail(sp("complex.mat"), THX_SERIES_AUTO, THX_EINPUT, "complex.mat: potvals (double) is complex", NULL);
+    expect_read_fail(tl_path("complex.mat"), THX_SERIES_AUTO, THX_EINPUT, "complex.mat: potvals (double) is complex", NULL);
 
-    m = mat_new(sp("badtime.mat"));
+    m = mat_new(tl_path("badtime.mat"));
     mat_put(m, "potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, 2, other);
     mat_put(m, "time", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, 2, (const double[2]){3, 1});
     Mat_Close(m);
-    expect_read_fail(sp("badtime.mat"), THX_SERIES_AUTO, THX_EINPUT, "badtime.mat: time of frame 2 (1) is not after that of frame 1 (3)", NULL);
+    expect_read_fail(tl_path("badtime.mat"), THX_SERIES_AUTO, THX_EINPUT, "badtime.mat: time of frame 2 (1) is not after that of frame 1 (3)", NULL);
 
-    write_text(sp("junk.mat"), "this is not a MAT file at all, just some text that goes on for a while.\n");
-    expect_read_fail(sp("junk.mat"), THX_SERIES_AUTO, THX_EINPUT, "junk.mat: not a MATLAB .mat file", NULL);
-    expect_read_fail(sp("nothere.mat"), THX_SERIES_AUTO, THX_EIO, "nothere.mat: cannot open", NULL);
+    tl_write_text(tl_path("junk.mat"), "this is not a MAT file at all, just some text that goes on for a while.\n");
+    expect_read_fail(tl_path("junk.mat"), THX_SERIES_AUTO, THX_EINPUT, "junk.mat: not a MATLAB .mat file", NULL);
+    expect_read_fail(tl_path("nothere.mat"), THX_SERIES_AUTO, THX_EIO, "nothere.mat: cannot open", NULL);
 
     /* non-ASCII strings survive our .mat (UTF-16 inside) */
     thx_series *u = sample();
     snprintf(u->unit, sizeof u->unit, "\xc2\xb5V");                                     /* µV */
     snprintf(u->label, sizeof u->label, "Schr\xc3\xb6" "dinger \xe2\x98\xba \xf0\x9d\x84\x9e"); /* ö ☺ 𝄞 */
-    CHECK_OK(ctx, thx_series_write(ctx, u, sp("utf.mat"), THX_SERIES_AUTO));
-    CHECK_OK(ctx, thx_series_read(ctx, sp("utf.mat"), THX_SERIES_AUTO, &s));
+    CHECK_OK(ctx, thx_series_write(ctx, u, tl_path("utf.mat"), THX_SERIES_AUTO));
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("utf.mat"), THX_SERIES_AUTO, &s));
     CHECK(same_series(u, s));
     thx_series_destroy(&s);
     thx_series_destroy(&u);
-    CHECK(!leftover_tmp());
+    CHECK(!tl_leftover_tmp(""));
 }
 
 static void test_failed_writes(void)
@@ -598,47 +548,47 @@ static void test_failed_writes(void)
     s->time[3] = s->time[2];
     for (int k = 0; k < 3; k++) {
         thx_ctx_clear(ctx);
-        CHECK(thx_series_write(ctx, s, sp(names[k]), THX_SERIES_AUTO) == THX_EINPUT);
+        CHECK(thx_series_write(ctx, s, tl_path(names[k]), THX_SERIES_AUTO) == THX_EINPUT);
         CHECK(strstr(thx_ctx_message(ctx), "time of frame 4 (1.25) is not after that of frame 3") != NULL);
-        CHECK(!exists(sp(names[k])));
+        CHECK(!tl_exists(tl_path(names[k])));
     }
     s->time[3] = NAN;
-    CHECK(thx_series_write(ctx, s, sp("fail.raw"), THX_SERIES_AUTO) == THX_EINPUT && !exists(sp("fail.raw")));
+    CHECK(thx_series_write(ctx, s, tl_path("fail.raw"), THX_SERIES_AUTO) == THX_EINPUT && !tl_exists(tl_path("fail.raw")));
     CHECK(strstr(thx_ctx_message(ctx), "time of frame 4 is nan (times must be finite)") != NULL);
     s->time[3] = 2;
     /* an existing file is left as it was */
-    write_text(sp("keep.txt"), "old content\n");
+    tl_write_text(tl_path("keep.txt"), "old content\n");
     s->time[0] = 100;
-    CHECK(thx_series_write(ctx, s, sp("keep.txt"), THX_SERIES_TEXT) == THX_EINPUT);
-    char *t = slurp(sp("keep.txt"), NULL);
+    CHECK(thx_series_write(ctx, s, tl_path("keep.txt"), THX_SERIES_TEXT) == THX_EINPUT);
+    char *t = tl_slurp(ctx, tl_path("keep.txt"), NULL);
     CHECK(t && strcmp(t, "old content\n") == 0);
     free(t);
     s->time[0] = 0;
     /* a unit text cannot hold */
     snprintf(s->unit, sizeof s->unit, "micro volt");
-    CHECK(thx_series_write(ctx, s, sp("unit.txt"), THX_SERIES_TEXT) == THX_EINPUT && !exists(sp("unit.txt")));
+    CHECK(thx_series_write(ctx, s, tl_path("unit.txt"), THX_SERIES_TEXT) == THX_EINPUT && !tl_exists(tl_path("unit.txt")));
     CHECK(strstr(thx_ctx_message(ctx), "unit \"micro volt\" has a blank") != NULL);
-    CHECK_OK(ctx, thx_series_write(ctx, s, sp("unit.raw"), THX_SERIES_RAW)); /* raw and mat can */
+    CHECK_OK(ctx, thx_series_write(ctx, s, tl_path("unit.raw"), THX_SERIES_RAW)); /* raw and mat can */
     snprintf(s->unit, sizeof s->unit, "mV");
     /* strings must be terminated */
     memset(s->time_unit, 'x', sizeof s->time_unit);
-    CHECK(thx_series_write(ctx, s, sp("term.mat"), THX_SERIES_MAT) == THX_EINPUT && !exists(sp("term.mat")));
+    CHECK(thx_series_write(ctx, s, tl_path("term.mat"), THX_SERIES_MAT) == THX_EINPUT && !tl_exists(tl_path("term.mat")));
     snprintf(s->time_unit, sizeof s->time_unit, "ms");
     /* no format from the name; a directory that does not exist */
-    CHECK(thx_series_write(ctx, s, sp("out.csv"), THX_SERIES_AUTO) == THX_EINPUT && !exists(sp("out.csv")));
+    CHECK(thx_series_write(ctx, s, tl_path("out.csv"), THX_SERIES_AUTO) == THX_EINPUT && !tl_exists(tl_path("out.csv")));
     CHECK(strstr(thx_ctx_message(ctx), "extension 'csv'") != NULL);
     for (int k = 0; k < 3; k++) {
         char p[2100];
-        snprintf(p, sizeof p, "%s/no/such/dir/x.%s", scratch, k == 0 ? "txt" : k == 1 ? "raw" : "mat");
+        snprintf(p, sizeof p, "%s/no/such/dir/x.%s", tl_scratch, k == 0 ? "txt" : k == 1 ? "raw" : "mat");
         CHECK(thx_series_write(ctx, s, p, THX_SERIES_AUTO) == THX_EIO);
     }
     /* an empty series */
     thx_series *e = NULL;
     CHECK_OK(ctx, thx_series_create(ctx, 0, 4, &e));
-    CHECK(thx_series_write(ctx, e, sp("empty.raw"), THX_SERIES_AUTO) == THX_EINPUT && !exists(sp("empty.raw")));
+    CHECK(thx_series_write(ctx, e, tl_path("empty.raw"), THX_SERIES_AUTO) == THX_EINPUT && !tl_exists(tl_path("empty.raw")));
     thx_series_destroy(&e);
     thx_series_destroy(&s);
-    CHECK(!leftover_tmp());
+    CHECK(!tl_leftover_tmp(""));
 }
 
 /* The real recording: map3d's struct `onerun` with potvals (512 x 608) and unit 'uV'. */
@@ -652,8 +602,8 @@ static void test_real_recording(void)
     char path[2300];
     snprintf(path, sizeof path, "%s/../../shared/data/map3d/data/tank/cool1-atdr-run1.mat", dir);
     /* the data folder is part of the project's setup: its absence is a failure */
-    CHECK(exists(path));
-    if (!exists(path)) {
+    CHECK(tl_exists(path));
+    if (!tl_exists(path)) {
         fprintf(stderr, "test_series: %s missing\n", path);
         return;
     }
@@ -685,8 +635,8 @@ static void test_real_recording(void)
     /* and through all three formats unchanged */
     const char *names[3] = {"real.txt", "real.raw", "real.mat"};
     for (int k = 0; k < 3; k++) {
-        CHECK_OK(ctx, thx_series_write(ctx, s, sp(names[k]), THX_SERIES_AUTO));
-        CHECK_OK(ctx, thx_series_read(ctx, sp(names[k]), THX_SERIES_AUTO, &b));
+        CHECK_OK(ctx, thx_series_write(ctx, s, tl_path(names[k]), THX_SERIES_AUTO));
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path(names[k]), THX_SERIES_AUTO, &b));
         CHECK(same_series(s, b));
         thx_series_destroy(&b);
     }
@@ -712,27 +662,23 @@ static void test_large(void)
         s->v[N * 7 + 3] = NAN;
         for (size_t f = 0; f < M; f++) s->time[f] = 0.5 * (double)f;
         double t0 = thx_wtime();
-        CHECK_OK(ctx, thx_series_write(ctx, s, sp(names[k]), THX_SERIES_AUTO));
+        CHECK_OK(ctx, thx_series_write(ctx, s, tl_path(names[k]), THX_SERIES_AUTO));
         double t1 = thx_wtime();
         thx_series *b = NULL;
-        CHECK_OK(ctx, thx_series_read(ctx, sp(names[k]), THX_SERIES_AUTO, &b));
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path(names[k]), THX_SERIES_AUTO, &b));
         double t2 = thx_wtime();
         CHECK(same_series(s, b));
         printf("%-8s %zu x %zu: write %.3f s, read %.3f s\n", names[k], N, M, t1 - t0, t2 - t1);
         thx_series_destroy(&b);
         thx_series_destroy(&s);
-        unlink(sp(names[k]));
+        unlink(tl_path(names[k]));
     }
 }
 
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
-    snprintf(scratch, sizeof scratch, "test_series.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_series")) return 1;
     test_create();
     test_round_trips();
     test_text_variants();
@@ -742,14 +688,7 @@ int main(void)
     test_failed_writes();
     test_real_recording();
     test_large();
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_series: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_series: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_series");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -34,67 +34,13 @@
 #include "thorax/volume.h"
 
 static thx_ctx *ctx;
-static char scratch[1024];
 
 /* ------------------------------------------------------------- helpers */
-
-static const char *sp(const char *name)
-{
-    static char buf[8][2048];
-    static int k;
-    k = (k + 1) % 8;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", scratch, name);
-    return buf[k];
-}
-
-static void write_text(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) {
-        fprintf(stderr, "cannot write %s\n", path);
-        exit(1);
-    }
-    fputs(text, f);
-    fclose(f);
-}
-
-static char *slurp(const char *path, size_t *len)
-{
-    char *t = NULL;
-    if (thx_read_file(ctx, path, &t, len) != THX_OK) return NULL;
-    return t;
-}
-
-static int exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-static int leftover_tmp(const char *prefix)
-{
-    DIR *d = opendir(scratch);
-    int found = 0;
-    struct dirent *e;
-    while (d && (e = readdir(d)))
-        if (strncmp(e->d_name, prefix, strlen(prefix)) == 0 && (strstr(e->d_name, ".tmp") || strstr(e->d_name, ".old")))
-            found = 1;
-    if (d) closedir(d);
-    return found;
-}
-
-static int msg_has(const char *needle)
-{
-    const char *m = thx_ctx_message(ctx);
-    if (strstr(m, needle)) return 1;
-    fprintf(stderr, "  message \"%s\" lacks \"%s\"\n", m, needle);
-    return 0;
-}
 
 static int same_file(const char *a, const char *b)
 {
     size_t l1 = 0, l2 = 0;
-    char *t1 = slurp(a, &l1), *t2 = slurp(b, &l2);
+    char *t1 = tl_slurp(ctx, a, &l1), *t2 = tl_slurp(ctx, b, &l2);
     int same = t1 && t2 && l1 == l2 && memcmp(t1, t2, l1) == 0;
     free(t1);
     free(t2);
@@ -104,7 +50,7 @@ static int same_file(const char *a, const char *b)
 /* Replaces line `line` (1-based) of a text file by `text` (no newline). */
 static void replace_line(const char *path, int line, const char *text)
 {
-    char *t = slurp(path, NULL);
+    char *t = tl_slurp(ctx, path, NULL);
     if (!t) exit(1);
     FILE *f = fopen(path, "w");
     if (!f) exit(1);
@@ -126,7 +72,7 @@ static void replace_line(const char *path, int line, const char *text)
 static void drop_last_line(const char *path)
 {
     size_t n = 0;
-    char *t = slurp(path, &n);
+    char *t = tl_slurp(ctx, path, &n);
     if (!t || n < 2) exit(1);
     n--; /* the final newline */
     while (n > 0 && t[n - 1] != '\n') n--;
@@ -352,18 +298,18 @@ static void compare_models(const thx_model *a, const thx_model *b)
 static void test_round_trip(void)
 {
     thx_model *m = make_model(200);
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("rt")));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("rt")));
     const char *files[] = {"model.json", "box.pts", "box.fac", "box.vmap", "heart.pts",
                            "heart.fac",  "heart.vmap", "volume.pts", "volume.tet"};
     for (size_t k = 0; k < sizeof files / sizeof files[0]; k++) {
         char n1[64];
         snprintf(n1, sizeof n1, "rt/%s", files[k]);
-        CHECK(exists(sp(n1)));
+        CHECK(tl_exists(tl_path(n1)));
     }
-    CHECK(!leftover_tmp("rt"));
+    CHECK(!tl_leftover_tmp("rt"));
 
     /* The files are what docs/formats.md says. */
-    char *tet = slurp(sp("rt/volume.tet"), NULL);
+    char *tet = tl_slurp(ctx, tl_path("rt/volume.tet"), NULL);
     if (tet) {
         const int32_t *q = m->volume->tet;
         char first[128];
@@ -374,19 +320,19 @@ static void test_round_trip(void)
         CHECK(lines == m->volume->n_tets);
     }
     free(tet);
-    char *pts = slurp(sp("rt/volume.pts"), NULL);
+    char *pts = tl_slurp(ctx, tl_path("rt/volume.pts"), NULL);
     const char *pts_head = "0.000000 0.000000 0.000000\n10.000000 0.000000 0.000000\n";
     CHECK(pts && strncmp(pts, pts_head, strlen(pts_head)) == 0);
     free(pts);
-    char *hv = slurp(sp("rt/heart.vmap"), NULL);
+    char *hv = tl_slurp(ctx, tl_path("rt/heart.vmap"), NULL);
     CHECK(hv && strcmp(hv, "15\n16\n17\n18\n19\n20\n") == 0);
     free(hv);
-    char *bv = slurp(sp("rt/box.vmap"), NULL);
+    char *bv = tl_slurp(ctx, tl_path("rt/box.vmap"), NULL);
     CHECK(bv && strncmp(bv, "1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n11\n12\n13\n14\n", 33) == 0 && strlen(bv) == 33);
     free(bv);
 
     /* model.json: "volume", "regions", a "vmap" per surface. */
-    char *json = slurp(sp("rt/model.json"), NULL);
+    char *json = tl_slurp(ctx, tl_path("rt/model.json"), NULL);
     cJSON *root = json ? cJSON_Parse(json) : NULL;
     const cJSON *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
     CHECK(cJSON_IsObject(vo));
@@ -426,27 +372,27 @@ static void test_round_trip(void)
 
     /* Read back: everything equal; write again: byte-identical files. */
     thx_model *r = NULL;
-    CHECK_OK(ctx, thx_model_read(ctx, sp("rt"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("rt"), &r));
     if (r) {
         compare_models(m, r);
-        CHECK_OK(ctx, thx_model_write(ctx, r, sp("rt2")));
+        CHECK_OK(ctx, thx_model_write(ctx, r, tl_path("rt2")));
         for (size_t k = 0; k < sizeof files / sizeof files[0]; k++) {
             char n1[64], n2[64];
             snprintf(n1, sizeof n1, "rt/%s", files[k]);
             snprintf(n2, sizeof n2, "rt2/%s", files[k]);
-            CHECK(same_file(sp(n1), sp(n2)));
+            CHECK(same_file(tl_path(n1), tl_path(n2)));
         }
     }
     thx_model_destroy(&r);
 
     /* A model without a volume has none of the volume files or keys. */
     thx_volume_destroy(&m->volume);
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("novol")));
-    CHECK(!exists(sp("novol/volume.pts")) && !exists(sp("novol/box.vmap")));
-    json = slurp(sp("novol/model.json"), NULL);
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("novol")));
+    CHECK(!tl_exists(tl_path("novol/volume.pts")) && !tl_exists(tl_path("novol/box.vmap")));
+    json = tl_slurp(ctx, tl_path("novol/model.json"), NULL);
     CHECK(json && !strstr(json, "\"volume\"") && !strstr(json, "\"regions\"") && !strstr(json, "vmap"));
     free(json);
-    CHECK_OK(ctx, thx_model_read(ctx, sp("novol"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("novol"), &r));
     CHECK(r && r->volume == NULL);
     thx_model_destroy(&r);
     thx_model_destroy(&m);
@@ -459,8 +405,8 @@ static void test_round_trip(void)
     for (size_t s = 0; s < v->n_surfaces; s++) free(v->surf_node[s]);
     v->n_surfaces = 0;
     for (size_t i = 0; i < v->n_nodes; i++) v->node_surf[i] = v->node_snode[i] = -1;
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("nosurf")));
-    CHECK_OK(ctx, thx_model_read(ctx, sp("nosurf"), &r));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("nosurf")));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("nosurf"), &r));
     if (r) compare_models(m, r);
     thx_model_destroy(&r);
     thx_model_destroy(&m);
@@ -472,8 +418,8 @@ static void test_failed_write(void)
 {
     thx_model *m = make_model(40);
     thx_volume *v = m->volume;
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("keep")));
-    char *before = slurp(sp("keep/volume.tet"), NULL);
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("keep")));
+    char *before = tl_slurp(ctx, tl_path("keep/volume.tet"), NULL);
 
     struct fault { const char *what, *want; } faults[] = {
         {"tet index", "tetrahedron 3: node index"},
@@ -525,12 +471,12 @@ static void test_failed_write(void)
         else if (!strcmp(w, "table count")) v->n_surfaces = 1;
         else if (!strcmp(w, "surface named volume")) snprintf(m->surf[1]->name, sizeof m->surf[1]->name, "volume");
         else if (!strcmp(w, "nan")) v->xyz[18] = NAN;
-        thx_status st = thx_model_write(ctx, m, sp("bad"));
+        thx_status st = thx_model_write(ctx, m, tl_path("bad"));
         CHECK(st == THX_EINPUT);
-        if (st != THX_EINPUT || !msg_has(faults[k].want)) fprintf(stderr, "  (fault \"%s\")\n", w);
-        CHECK(!exists(sp("bad")) && !leftover_tmp("bad"));
+        if (st != THX_EINPUT || !tl_msg_has(ctx, faults[k].want)) fprintf(stderr, "  (fault \"%s\")\n", w);
+        CHECK(!tl_exists(tl_path("bad")) && !tl_leftover_tmp("bad"));
         /* An existing model is left as it was by a failed write. */
-        CHECK(thx_model_write(ctx, m, sp("keep")) == THX_EINPUT);
+        CHECK(thx_model_write(ctx, m, tl_path("keep")) == THX_EINPUT);
         memcpy(v->regions[1].sigma, save, sizeof save);
         v->regions[0] = save_r0, v->regions[2] = save_r2, v->regions[3] = save_r3;
         memcpy(v->tet, save_t, sizeof save_t);
@@ -539,16 +485,16 @@ static void test_failed_write(void)
         snprintf(m->surf[1]->name, sizeof m->surf[1]->name, "heart");
         memcpy(m->surf[1]->xyz + 3, save_h, sizeof save_h);
     }
-    char *after = slurp(sp("keep/volume.tet"), NULL);
+    char *after = tl_slurp(ctx, tl_path("keep/volume.tet"), NULL);
     CHECK(before && after && strcmp(before, after) == 0);
-    CHECK(!leftover_tmp("keep"));
+    CHECK(!tl_leftover_tmp("keep"));
     free(before);
     free(after);
     /* All faults undone: the model writes again. */
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("bad")));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("bad")));
     /* A missing parent directory is an i/o error; nothing is created. */
-    CHECK(thx_model_write(ctx, m, sp("no/such/dir")) == THX_EIO && msg_has("no/such/dir"));
-    CHECK(!exists(sp("no")));
+    CHECK(thx_model_write(ctx, m, tl_path("no/such/dir")) == THX_EIO && tl_msg_has(ctx, "no/such/dir"));
+    CHECK(!tl_exists(tl_path("no")));
     thx_model_destroy(&m);
 }
 
@@ -557,12 +503,12 @@ static void edit_json(const char *dir, void (*fn)(cJSON *root))
 {
     char path[2200];
     snprintf(path, sizeof path, "%s/model.json", dir);
-    char *t = slurp(path, NULL);
+    char *t = tl_slurp(ctx, path, NULL);
     cJSON *root = t ? cJSON_Parse(t) : NULL;
     if (!root) exit(1);
     fn(root);
     char *out = cJSON_Print(root);
-    write_text(path, out);
+    tl_write_text(path, out);
     free(out);
     free(t);
     cJSON_Delete(root);
@@ -676,40 +622,40 @@ static void test_bad_files(void)
         {"model.json", 0, NULL, j_path, "\"pts\" and \"tet\" must name files", "", NULL, 0, NULL},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        CHECK_OK(ctx, thx_model_write(ctx, m, sp("bad")));
+        CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("bad")));
         snprintf(line, sizeof line, "bad/%s", cases[k].file);
-        if (cases[k].line > 0) replace_line(sp(line), cases[k].line, cases[k].text);
-        else if (cases[k].line < 0) drop_last_line(sp(line));
-        else edit_json(sp("bad"), cases[k].fn);
+        if (cases[k].line > 0) replace_line(tl_path(line), cases[k].line, cases[k].text);
+        else if (cases[k].line < 0) drop_last_line(tl_path(line));
+        else edit_json(tl_path("bad"), cases[k].fn);
         if (cases[k].file2) {
             snprintf(line, sizeof line, "bad/%s", cases[k].file2);
-            replace_line(sp(line), cases[k].line2, cases[k].text2);
+            replace_line(tl_path(line), cases[k].line2, cases[k].text2);
         }
         thx_model *r = NULL;
-        thx_status st = thx_model_read(ctx, sp("bad"), &r);
+        thx_status st = thx_model_read(ctx, tl_path("bad"), &r);
         CHECK(st == THX_EINPUT && r == NULL);
-        if (st != THX_EINPUT || !msg_has(cases[k].want1) || !msg_has(cases[k].want2))
+        if (st != THX_EINPUT || !tl_msg_has(ctx, cases[k].want1) || !tl_msg_has(ctx, cases[k].want2))
             fprintf(stderr, "  (case %zu: %s line %d)\n", k, cases[k].file, cases[k].line);
         thx_model_destroy(&r);
     }
     /* Without "volume", "regions" and "vmap" are ignored (readers ignore keys
      * they do not use), each with a warning. */
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("bad")));
-    edit_json(sp("bad"), j_no_volume);
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("bad")));
+    edit_json(tl_path("bad"), j_no_volume);
     warnings = 0;
     thx_ctx_set_log(ctx, count_warning, NULL, THX_LOG_WARN);
     thx_model *r = NULL;
-    CHECK_OK(ctx, thx_model_read(ctx, sp("bad"), &r));
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("bad"), &r));
     thx_ctx_set_log(ctx, NULL, NULL, THX_LOG_WARN);
     CHECK(r && r->volume == NULL && r->n_surfaces == 2);
     CHECK(warnings == 3);
     thx_model_destroy(&r);
     /* Blank lines and CRLF are tolerated, as in the surface files. */
-    CHECK_OK(ctx, thx_model_write(ctx, m, sp("bad")));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("bad")));
     const int32_t *q = v->tet;
     snprintf(line, sizeof line, "\n %d\t%d %d %d  %d\r\n", q[0] + 1, q[1] + 1, q[2] + 1, q[3] + 1, v->region[0] + 1);
-    replace_line(sp("bad/volume.tet"), 1, line);
-    CHECK_OK(ctx, thx_model_read(ctx, sp("bad"), &r));
+    replace_line(tl_path("bad/volume.tet"), 1, line);
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("bad"), &r));
     if (r) compare_models(m, r);
     thx_model_destroy(&r);
     thx_model_destroy(&m);
@@ -731,21 +677,21 @@ static void test_export(void)
     CHECK(thx_export_format_parse("msh", &f) == 0 && f == THX_EXPORT_MSH && thx_export_format_is_volume(f));
     CHECK(thx_export_format_parse("vtp", &f) == 0 && !thx_export_format_is_volume(f));
 
-    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_VTU, sp("v.vtu")));
-    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_MSH, sp("v.msh")));
-    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_VTU, sp("v2.vtu")));
-    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_MSH, sp("v2.msh")));
-    CHECK(same_file(sp("v.vtu"), sp("v2.vtu")) && same_file(sp("v.msh"), sp("v2.msh")));
+    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_VTU, tl_path("v.vtu")));
+    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_MSH, tl_path("v.msh")));
+    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_VTU, tl_path("v2.vtu")));
+    CHECK_OK(ctx, thx_volume_export(ctx, m, THX_EXPORT_MSH, tl_path("v2.msh")));
+    CHECK(same_file(tl_path("v.vtu"), tl_path("v2.vtu")) && same_file(tl_path("v.msh"), tl_path("v2.msh")));
 
     char want[256];
-    char *vtu = slurp(sp("v.vtu"), NULL);
+    char *vtu = tl_slurp(ctx, tl_path("v.vtu"), NULL);
     snprintf(want, sizeof want, "<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">", v->n_nodes, v->n_tets);
     CHECK(vtu && strstr(vtu, "type=\"UnstructuredGrid\"") && strstr(vtu, want));
     CHECK(vtu && strstr(vtu, "<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">"));
     CHECK(vtu && count_str(vtu, " 10") >= v->n_tets);
     free(vtu);
 
-    char *msh = slurp(sp("v.msh"), NULL);
+    char *msh = tl_slurp(ctx, tl_path("v.msh"), NULL);
     const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n4\n3 1 \"mean_thorax\"\n";
     CHECK(msh && strncmp(msh, head, strlen(head)) == 0);
     CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 0 4\n"));
@@ -762,19 +708,19 @@ static void test_export(void)
 
     /* Wrong uses: a surface format for the volume, a volume format for a
      * surface, a model without a volume, a faulty volume (no file left). */
-    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTK, sp("x.vtk")) == THX_EINPUT && msg_has("vtu or msh"));
-    CHECK(thx_surface_export(ctx, m->surf[0], THX_EXPORT_MSH, sp("x.msh")) == THX_EINPUT && msg_has("volume formats"));
-    CHECK(!exists(sp("x.vtk")) && !exists(sp("x.msh")));
+    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTK, tl_path("x.vtk")) == THX_EINPUT && tl_msg_has(ctx, "vtu or msh"));
+    CHECK(thx_surface_export(ctx, m->surf[0], THX_EXPORT_MSH, tl_path("x.msh")) == THX_EINPUT && tl_msg_has(ctx, "volume formats"));
+    CHECK(!tl_exists(tl_path("x.vtk")) && !tl_exists(tl_path("x.msh")));
     m->volume->region[3] = 9;
-    CHECK(thx_volume_export(ctx, m, THX_EXPORT_MSH, sp("bad.msh")) == THX_EINPUT && msg_has("bad.msh") &&
-          msg_has("tetrahedron 4: region index 9"));
-    CHECK(!exists(sp("bad.msh")) && !leftover_tmp("bad.msh"));
-    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, sp("no/such.vtu")) == THX_EINPUT);
+    CHECK(thx_volume_export(ctx, m, THX_EXPORT_MSH, tl_path("bad.msh")) == THX_EINPUT && tl_msg_has(ctx, "bad.msh") &&
+          tl_msg_has(ctx, "tetrahedron 4: region index 9"));
+    CHECK(!tl_exists(tl_path("bad.msh")) && !tl_leftover_tmp("bad.msh"));
+    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, tl_path("no/such.vtu")) == THX_EINPUT);
     m->volume->region[3] = 0;
-    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, sp("no/such.vtu")) == THX_EIO && msg_has("no/such.vtu"));
+    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, tl_path("no/such.vtu")) == THX_EIO && tl_msg_has(ctx, "no/such.vtu"));
     thx_volume_destroy(&m->volume);
-    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, sp("none.vtu")) == THX_EINPUT && msg_has("no volume"));
-    CHECK(!exists(sp("none.vtu")));
+    CHECK(thx_volume_export(ctx, m, THX_EXPORT_VTU, tl_path("none.vtu")) == THX_EINPUT && tl_msg_has(ctx, "no volume"));
+    CHECK(!tl_exists(tl_path("none.vtu")));
     thx_model_destroy(&m);
 }
 
@@ -790,24 +736,13 @@ int main(int argc, char **argv)
         thx_ctx_destroy(&ctx);
         return st ? 1 : 0;
     }
-    snprintf(scratch, sizeof scratch, "test_volume_io.XXXXXX");
-    if (!mkdtemp(scratch)) {
-        perror("mkdtemp");
-        return 1;
-    }
+    if (tl_scratch_make("test_volume_io")) return 1;
     test_model_shape();
     test_round_trip();
     test_failed_write();
     test_bad_files();
     test_export();
-    int rc = tl_finish();
-    if (rc == 0) {
-        char cmd[1200];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch);
-        if (system(cmd) != 0) fprintf(stderr, "test_volume_io: could not remove %s\n", scratch);
-    } else {
-        fprintf(stderr, "test_volume_io: files kept in %s\n", scratch);
-    }
+    int rc = tl_scratch_finish("test_volume_io");
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -35,4 +35,28 @@ int tl_finish(void);
                     thx_ctx_message(ctx));                                     \
         }                                                                      \
     } while (0)
+
+/* ---- a scratch directory for a test program's files ---- */
+#include <stddef.h>
+#include "thorax/core.h"
+
+extern char tl_scratch[1024];
+/* Makes NAME.XXXXXX in the working directory as tl_scratch; 0, or -1 (printed). */
+int tl_scratch_make(const char *name);
+/* tl_finish(); then removes tl_scratch if every check passed, else says where its files are kept.
+ * Returns tl_finish's exit code. */
+int tl_scratch_finish(const char *name);
+/* tl_scratch/file (eight rotating buffers: up to eight such paths may be in use at once). */
+const char *tl_path(const char *file);
+/* Writes the bytes or the text to path; exits the test on failure. */
+void tl_write_bytes(const char *path, const void *data, size_t n);
+void tl_write_text(const char *path, const char *text);
+/* The file's bytes (NUL-terminated, *len without it; len may be NULL), or NULL. */
+char *tl_slurp(thx_ctx *ctx, const char *path, size_t *len);
+int tl_exists(const char *path);
+/* Whether a file or directory whose name starts with prefix ("" for any) and holds ".tmp" or ".old"
+ * is left in tl_scratch (a leaked temporary); each one found is named on stderr. */
+int tl_leftover_tmp(const char *prefix);
+/* Whether ctx's message holds needle; if not, both are printed. */
+int tl_msg_has(thx_ctx *ctx, const char *needle);
 #endif
