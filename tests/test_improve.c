@@ -161,6 +161,38 @@ static thx_volume *lattice(thx_ctx *ctx, unsigned seed, int32_t **adj)
     return v;
 }
 
+/* The lattice with its interior nodes jittered by up to 0.15 (rounded to 1e-6; the nodes of the
+ * plane z = 3 too unless keep_plane), tetrahedralized afresh by the Delaunay step (right-handed, as
+ * the mesher hands them over), regions 0; *nbrs its adjacency. */
+static thx_volume *jittered_delaunay(thx_ctx *ctx, unsigned seed, int keep_plane, int32_t **nbrs)
+{
+    thx_volume *v = lattice(ctx, 3, NULL);
+    if (!v) return NULL;
+    srand(seed);
+    for (size_t k = 0; k < v->n_nodes; k++)
+        for (int c = 0; c < 3; c++) {
+            double x = round(v->xyz[3 * k + c]);
+            int on = v->node_surf[k] >= 0 || (keep_plane && round(v->xyz[3 * k + 2]) == 3);
+            v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
+        }
+    int32_t *tets = NULL;
+    size_t nt = 0;
+    if (thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, nbrs, &nt, NULL) != THX_OK) {
+        thx_volume_destroy(&v);
+        return NULL;
+    }
+    for (size_t t = 0; t < nt; t++) {
+        int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
+        x = (*nbrs)[4 * t + 2]; (*nbrs)[4 * t + 2] = (*nbrs)[4 * t + 3]; (*nbrs)[4 * t + 3] = x;
+    }
+    free(v->tet);
+    free(v->region);
+    v->tet = tets;
+    v->n_tets = nt;
+    v->region = calloc(nt, sizeof *v->region);
+    return v;
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -325,29 +357,13 @@ int main(void)
     /* 6. recovery: triangles using the other diagonal of lattice squares (inside and on the hull)
           become faces, the tetrahedralization stays valid, and the domain does not change */
     {
-        thx_volume *v = lattice(ctx, 3, NULL);
-        CHECK(v != NULL);
-        /* nodes off the hull and off the plane z = 3 jittered by up to 0.15 (generic position there);
-           the hull and the plane exact, so their squares are flat */
-        srand(5);
-        for (size_t k = 0; k < v->n_nodes; k++)
-            for (int c = 0; c < 3; c++) {
-                double x = round(v->xyz[3 * k + c]);
-                int on = v->node_surf[k] >= 0 || round(v->xyz[3 * k + 2]) == 3;
-                v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
-            }
+        /* nodes off the hull and off the plane z = 3 jittered (generic position there); the hull and
+           the plane exact, so their squares are flat */
         int32_t *tets = NULL, *nbrs = NULL;
         size_t nt = 0;
-        CHECK_OK(ctx, thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, NULL));
-        for (size_t t = 0; t < nt; t++) {
-            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
-            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
-        }
-        free(v->tet);
-        free(v->region);
-        v->tet = tets;
-        v->n_tets = nt;
-        v->region = calloc(nt, sizeof *v->region);
+        thx_volume *v = jittered_delaunay(ctx, 5, 1, &nbrs);
+        CHECK(v != NULL);
+        nt = v->n_tets;
         face_rec *b0 = NULL, *b1 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1);
@@ -419,27 +435,11 @@ int main(void)
           operations could not, every tetrahedron stays positive, the boundary and the volume stay
           exactly as they were */
     {
-        thx_volume *v = lattice(ctx, 3, NULL);
-        CHECK(v != NULL);
-        srand(11);
-        for (size_t k = 0; k < v->n_nodes; k++)
-            for (int c = 0; c < 3; c++) {
-                double x = round(v->xyz[3 * k + c]);
-                int on = v->node_surf[k] >= 0;
-                v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
-            }
         int32_t *tets = NULL, *nbrs = NULL;
         size_t nt = 0;
-        CHECK_OK(ctx, thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, NULL));
-        for (size_t t = 0; t < nt; t++) {
-            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
-            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
-        }
-        free(v->tet);
-        free(v->region);
-        v->tet = tets;
-        v->n_tets = nt;
-        v->region = calloc(nt, sizeof *v->region);
+        thx_volume *v = jittered_delaunay(ctx, 11, 0, &nbrs);
+        CHECK(v != NULL);
+        nt = v->n_tets;
         face_rec *b0 = NULL, *b1 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1);

@@ -1296,6 +1296,38 @@ static int has_face(imesh *M, int32_t a, int32_t b, int32_t c)
     return 0;
 }
 
+/* Surface s's triangle i as mesh nodes. */
+static void tri_nodes(const thx_surface *const *surf, const size_t *offset, size_t s, size_t i, int32_t v[3])
+{
+    const int32_t *f = surf[s]->tri + 3 * i;
+    for (int k = 0; k < 3; k++) v[k] = (int32_t)(offset[s] + (size_t)f[k]);
+}
+
+/* One sweep over the surface triangles that are not faces: each missing edge by one operation
+ * (and, on the hull, a hull-edge swap), or with walks = 1 by one operation or a walk from either
+ * end, then the pierced face cleared. Returns how many became faces; *missing counts the sweep's. */
+static size_t recovery_pass(imesh *M, const thx_surface *const *surf, const size_t *offset, size_t n_surf, int walks,
+                            recover_stats *S, size_t *missing)
+{
+    size_t fixed = 0;
+    for (size_t s = 0; s < n_surf; s++)
+        for (size_t i = 0; i < surf[s]->n_tris; i++) {
+            int32_t v[3];
+            tri_nodes(surf, offset, s, i, v);
+            if (has_face(M, v[0], v[1], v[2])) continue;
+            (*missing)++;
+            int ok = 1;
+            for (int e = 0; e < 3 && ok; e++) {
+                int32_t x = v[e], y = v[(e + 1) % 3];
+                ok = recover_edge(M, x, y, &S->n_flip23, &S->n_edge_removals) ||
+                     (walks ? recover_edge_walk(M, x, y, &S->n_walk) || recover_edge_walk(M, y, x, &S->n_walk)
+                            : recover_boundary_edge(M, x, y, &S->n_boundary));
+            }
+            if (ok && (walks ? recover_face(M, v[0], v[1], v[2], &S->n_face_ops) : has_face(M, v[0], v[1], v[2]))) fixed++;
+        }
+    return fixed;
+}
+
 thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, int32_t **nbrs, size_t *nt,
                         const thx_surface *const *surf, const size_t *offset, size_t n_surf, recover_stats *stats)
 {
@@ -1317,57 +1349,28 @@ thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, in
     for (size_t s = 0; s < n_surf; s++) {
         S.n_triangles += surf[s]->n_tris;
         for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            const int32_t *f = surf[s]->tri + 3 * i;
-            S.missing_before += !has_face(&M, (int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
-                                          (int32_t)(offset[s] + (size_t)f[2]));
+            int32_t v[3];
+            tri_nodes(surf, offset, s, i, v);
+            S.missing_before += !has_face(&M, v[0], v[1], v[2]);
         }
     }
     for (int pass = 0; pass < 3; pass++) {
-        size_t missing = 0, fixed = 0;
-        for (size_t s = 0; s < n_surf; s++)
-            for (size_t i = 0; i < surf[s]->n_tris; i++) {
-                const int32_t *f = surf[s]->tri + 3 * i;
-                int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
-                                (int32_t)(offset[s] + (size_t)f[2])};
-                if (has_face(&M, v[0], v[1], v[2])) continue;
-                missing++;
-                int ok = 1;
-                for (int e = 0; e < 3 && ok; e++)
-                    ok = recover_edge(&M, v[e], v[(e + 1) % 3], &S.n_flip23, &S.n_edge_removals) ||
-                         recover_boundary_edge(&M, v[e], v[(e + 1) % 3], &S.n_boundary);
-                if (ok && has_face(&M, v[0], v[1], v[2])) fixed++;
-            }
+        size_t missing = 0, fixed = recovery_pass(&M, surf, offset, n_surf, 0, &S, &missing);
         S.missing_after = missing - fixed;
         if (!fixed) break;
     }
     /* what one operation per edge could not do: walks along the missing edges, from either end */
     S.missing_before_walk = S.missing_after;
     for (int pass = 0; pass < 3 && S.missing_after; pass++) {
-        size_t missing = 0, fixed = 0;
-        for (size_t s = 0; s < n_surf; s++)
-            for (size_t i = 0; i < surf[s]->n_tris; i++) {
-                const int32_t *f = surf[s]->tri + 3 * i;
-                int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
-                                (int32_t)(offset[s] + (size_t)f[2])};
-                if (has_face(&M, v[0], v[1], v[2])) continue;
-                missing++;
-                int ok = 1;
-                for (int e = 0; e < 3 && ok; e++) {
-                    int32_t x = v[e], y = v[(e + 1) % 3];
-                    ok = recover_edge(&M, x, y, &S.n_flip23, &S.n_edge_removals) ||
-                         recover_edge_walk(&M, x, y, &S.n_walk) || recover_edge_walk(&M, y, x, &S.n_walk);
-                }
-                if (ok && recover_face(&M, v[0], v[1], v[2], &S.n_face_ops)) fixed++;
-            }
+        size_t missing = 0, fixed = recovery_pass(&M, surf, offset, n_surf, 1, &S, &missing);
         S.missing_after = missing - fixed;
         if (!fixed) break;
     }
     /* what the missing ones lack: an edge, or only the face (an edge of the mesh pierces it) */
     for (size_t s = 0; s < n_surf; s++)
         for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            const int32_t *f = surf[s]->tri + 3 * i;
-            int32_t v[3] = {(int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
-                            (int32_t)(offset[s] + (size_t)f[2])};
+            int32_t v[3];
+            tri_nodes(surf, offset, s, i, v);
             if (has_face(&M, v[0], v[1], v[2])) continue;
             int edges = 0;
             for (int e = 0; e < 3; e++) {
