@@ -55,6 +55,10 @@ thx_status thx_series_create(thx_ctx *ctx, size_t n_rows, size_t n_frames, thx_s
 /* Frees the series; accepts NULL; nulls *s. */
 void thx_series_destroy(thx_series **s);
 
+/* The format to write: format_name ("text", "raw", "mat") if given, else path's extension (.txt, .dat,
+ * .raw, .mat). 0, or -1 if neither names a format that can be written. */
+int thx_series_output_format(const char *format_name, const char *path, thx_series_format *fmt);
+
 /* Reads a series; errors name the file (and line, for text) and what is wrong. */
 thx_status thx_series_read(thx_ctx *ctx, const char *path, thx_series_format fmt, thx_series **out);
 /* Writes atomically (nothing half-written on failure). */

@@ -40,21 +40,6 @@ static void usage(FILE *f)
             "Exit status: 0 ok, 1 error, 2 bad usage.\n");
 }
 
-/* Output format from --format or OUT's extension; -1 if neither tells. */
-static int output_format(const char *format, const char *out, thx_series_format *fmt)
-{
-    if (format) return thx_series_format_parse(format, fmt) == 0 && *fmt != THX_SERIES_AUTO ? 0 : -1;
-    const char *slash = strrchr(out, '/');
-    const char *base = slash ? slash + 1 : out;
-    const char *dot = strrchr(base, '.');
-    const char *ext = (dot && dot != base) ? dot + 1 : "";
-    if (!strcasecmp(ext, "txt") || !strcasecmp(ext, "dat")) *fmt = THX_SERIES_TEXT;
-    else if (!strcasecmp(ext, "raw")) *fmt = THX_SERIES_RAW;
-    else if (!strcasecmp(ext, "mat")) *fmt = THX_SERIES_MAT;
-    else return -1;
-    return 0;
-}
-
 static void print_info(const char *path, const thx_series *s)
 {
     size_t N = s->n_rows, M = s->n_frames;
@@ -124,7 +109,7 @@ int cmd_series(int argc, char **argv)
     thx_series_format fmt = THX_SERIES_AUTO;
     if (convert) {
         if (!out) return cli_usage_error(cmd, "convert: no output file given (-o OUT)");
-        if (output_format(format, out, &fmt) != 0) {
+        if (thx_series_output_format(format, out, &fmt) != 0) {
             if (format) return cli_usage_error(cmd, "unknown format '%s' (text, raw or mat)", format);
             return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat); "
                                         "give --format",

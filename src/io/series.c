@@ -172,6 +172,19 @@ static thx_series_format format_of_extension(const char *path)
     return THX_SERIES_AUTO;
 }
 
+int thx_series_output_format(const char *format_name, const char *path, thx_series_format *fmt)
+{
+    thx_series_format f = THX_SERIES_AUTO;
+    if (format_name) {
+        if (thx_series_format_parse(format_name, &f) != 0) return -1;
+    } else {
+        f = format_of_extension(path);
+    }
+    if (f == THX_SERIES_AUTO || f == THX_SERIES_POT) return -1;
+    *fmt = f;
+    return 0;
+}
+
 /* The format a file's first bytes announce, or THX_SERIES_AUTO. */
 static thx_series_format format_of_content(const char *path)
 {
