@@ -176,8 +176,15 @@ grep -q "bad.channels:3: channel 999 is not in 1..512" err.log || { cat err.log;
 
 # map3d's Dalhousie torso with one of its dipole .pot frames (a one-frame series)
 DAL="$SRC/../shared/data/map3d"
-"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --view inferior \
+# (its long axis is y, head at -y, anterior -z: --up and --front give the anatomical frame)
+"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --up -y --front -z \
     --style bands+contours --size 300x300 -o dal.png -q
+"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --up +y --front +z \
+    --style bands+contours --size 300x300 -o dal_flip.png -q
+"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --up -y --front -z \
+    --view left --clip anterior:0.5 --size 300x300 -o dal_clip.png -q
+"$THORAX" render "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --up -y --front -z \
+    --view left --size 300x300 -o dal_left.png -q
 $PY - <<'EOF2'
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
@@ -188,5 +195,26 @@ red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
 blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
 assert red > 200 and blue > 200, (red, blue)
 print('Dalhousie torso, dipole frame 3: %d red, %d blue pixels' % (red, blue))
+def load(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    im = r.GetOutput(); w, h, _ = im.GetDimensions()
+    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+def widest_row(x):   # where the silhouette is widest, as a fraction of its height from the top
+    drawn = abs(x - x[0, 0]).sum(axis=2) > 30
+    rows = [r for r in range(x.shape[0]) if drawn[r].any()]
+    top, bottom = rows[0], rows[-1]
+    wmax = max(drawn[r].sum() for r in rows)
+    r = [r for r in rows if drawn[r].sum() >= 0.97 * wmax]
+    return (sum(r) / len(r) - top) / (bottom - top)
+up, flip = widest_row(a), widest_row(load('dal_flip.png'))
+assert up < 0.5 < flip, (up, flip)   # the shoulders in the upper half; upside down, in the lower
+print('Dalhousie torso: widest at %.2f of the height from the top; with the axes reversed at %.2f' % (up, flip))
+# the anterior half clipped away, seen from the left: the depth drawn is about half
+def depth(p):   # columns drawn, and their mean (the left view has the posterior side at the right)
+    x = load(p); cols = (abs(x - x[0, 0]).sum(axis=2) > 30).any(axis=0).nonzero()[0]
+    return len(cols), cols.mean()
+(dc, mc), (df, mf) = depth('dal_clip.png'), depth('dal_left.png')
+assert 0.35 * df < dc < 0.7 * df and mc > mf, (dc, df, mc, mf)   # the posterior half is what is left
+print('Dalhousie torso from the left: depth %d px, %d with the anterior half clipped' % (df, dc))
 EOF2
 echo "e2e_render: all checks passed"

@@ -36,6 +36,11 @@ typedef struct {
     thx_view view;
     int have_camera;
     thx_camera cam;
+    /* the anatomical frame: canonical axis k (0 the subject's right, 1 anterior, 2 cranial) is
+       sg[k] times model axis ax[k] (default x, y, z; --up and --front change it) */
+    int ax[3];
+    double sg[3];
+    const char *up_spec, *front_spec;
     thx_draw_mode mode;
     thx_data_style style;
     int levels;
@@ -555,8 +560,49 @@ static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scen
     }
 }
 
-static int parse_clip(const char *spec, const double lo[3], const double hi[3], thx_clip_plane *p)
+/* "+y", "-z", "x" -> axis index and sign; -1 if not an axis. */
+static int parse_axis(const char *s, int *axis, double *sign)
 {
+    *sign = 1;
+    if (*s == '+' || *s == '-') { *sign = *s == '-' ? -1 : 1; s++; }
+    if ((*s == 'x' || *s == 'y' || *s == 'z') && !s[1]) { *axis = *s - 'x'; return 0; }
+    return -1;
+}
+
+/* The anatomical frame from --up (cranial) and --front (anterior); right = anterior x cranial. */
+static int anat_frame(ropts *o)
+{
+    int a = 1, c = 2;
+    double sa = 1, sc = 1;
+    if (o->front_spec && parse_axis(o->front_spec, &a, &sa)) return -1;
+    if (o->up_spec && parse_axis(o->up_spec, &c, &sc)) return -1;
+    if (a == c) return -1;
+    int r = 3 - a - c;
+    double eps = ((a + 1) % 3 == c) ? 1 : -1; /* e_a x e_c = eps e_r */
+    o->ax[0] = r; o->sg[0] = sa * sc * eps;
+    o->ax[1] = a; o->sg[1] = sa;
+    o->ax[2] = c; o->sg[2] = sc;
+    return 0;
+}
+
+/* Model box -> the box in the anatomical frame; a vector of the frame -> model coordinates. */
+static void box_to_frame(const ropts *o, const double lo[3], const double hi[3], double qlo[3], double qhi[3])
+{
+    for (int k = 0; k < 3; k++) {
+        int a = o->ax[k];
+        qlo[k] = o->sg[k] > 0 ? lo[a] : -hi[a];
+        qhi[k] = o->sg[k] > 0 ? hi[a] : -lo[a];
+    }
+}
+
+static void from_frame(const ropts *o, const double q[3], double p[3])
+{
+    for (int k = 0; k < 3; k++) p[o->ax[k]] = o->sg[k] * q[k];
+}
+
+static int parse_clip(const char *spec, const double lo[3], const double hi[3], thx_clip_plane *p, int *named)
+{
+    *named = 0;
     /* "anterior[:F]" keeps the posterior part up to fraction F of the depth (default 0.45) from the
        back; "posterior", "left", "right", "superior", "inferior" likewise; or "nx,ny,nz,d" */
     static const char *names[] = {"anterior", "posterior", "left", "right", "superior", "inferior"};
@@ -574,6 +620,7 @@ static int parse_clip(const char *spec, const double lo[3], const double hi[3], 
             p->n[a] = -sign[k];
             double cut = sign[k] > 0 ? lo[a] + f * (hi[a] - lo[a]) : hi[a] - f * (hi[a] - lo[a]);
             p->d = sign[k] * cut;
+            *named = 1;
             return 0;
         }
     if (sscanf(spec, "%lf,%lf,%lf,%lf", &p->n[0], &p->n[1], &p->n[2], &p->d) == 4) return 0;
@@ -643,10 +690,27 @@ static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_rendere
         sc.nan_color[1] = 0.6f;
         sc.nan_color[2] = 0.2f;
         sc.nan_color[3] = 1;
+        double qlo[3], qhi[3];
+        box_to_frame(o, lo, hi, qlo, qhi);
         if (o->have_camera) sc.camera = o->cam;
-        else thx_camera_view(&sc.camera, o->view, lo, hi, (double)pw / ph);
+        else {
+            /* the standard view in the anatomical frame, carried back to the model's axes */
+            thx_camera c;
+            thx_camera_view(&c, o->view, qlo, qhi, (double)pw / ph);
+            sc.camera = c;
+            from_frame(o, c.eye, sc.camera.eye);
+            from_frame(o, c.center, sc.camera.center);
+            from_frame(o, c.up, sc.camera.up);
+        }
         if (o->clip[0]) {
-            if (parse_clip(o->clip, lo, hi, &sc.clip[0])) { free(b->apos); free(b->avec); free(b); return thx_error(ctx, THX_EINPUT, "--clip '%s': a side (anterior, posterior, left, right, superior, inferior[:fraction]) or nx,ny,nz,d", o->clip); }
+            int named = 0;
+            if (parse_clip(o->clip, qlo, qhi, &sc.clip[0], &named)) { free(b->apos); free(b->avec); free(b); return thx_error(ctx, THX_EINPUT, "--clip '%s': a side (anterior, posterior, left, right, superior, inferior[:fraction]) or nx,ny,nz,d", o->clip); }
+            if (!named) { /* an explicit plane is in the model's axes */
+                if (parse_clip(o->clip, lo, hi, &sc.clip[0], &named)) { free(b->apos); free(b->avec); free(b); return THX_EINPUT; }
+            } else {
+                double n[3] = {sc.clip[0].n[0], sc.clip[0].n[1], sc.clip[0].n[2]};
+                from_frame(o, n, sc.clip[0].n);
+            }
             sc.n_clip = 1;
         }
         size_t nn = 0;
@@ -717,6 +781,7 @@ static void ropts_default(ropts *o)
     o->w = 800;
     o->h = 800;
     o->view = THX_VIEW_ANTERIOR;
+    for (int k = 0; k < 3; k++) { o->ax[k] = k; o->sg[k] = 1; }
     o->mode = THX_DRAW_GOURAUD;
     o->style = THX_DATA_CONTINUOUS;
     o->levels = 12;
@@ -827,6 +892,13 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     } else if (!strcmp(a, "--true-range")) o->symmetric = 0;
     else if (!strcmp(a, "--symmetric")) o->symmetric = 1;
     else if (!strcmp(a, "--clip")) { VAL(); snprintf(o->clip, sizeof o->clip, "%s", v); }
+    else if (!strcmp(a, "--up") || !strcmp(a, "--front")) {
+        VAL();
+        if (!strcmp(a, "--up")) o->up_spec = v; else o->front_spec = v;
+        int axis;
+        double sign;
+        if (parse_axis(v, &axis, &sign)) { cli_usage_error(cmd, "%s: an axis: +x, -x, +y, -y, +z or -z", a); return -1; }
+    }
     else if (!strcmp(a, "--colorbar")) o->colorbar = 1;
     else if (!strcmp(a, "--label")) o->label = 1;
     else if (!strcmp(a, "--panels")) o->panels = 1;
@@ -862,6 +934,8 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --channels FILE     map3d .channels: the --data rows are recording channels, node i takes channel c\n" \
     "  --size WxH          image size (default 800x800)\n"                                                     \
     "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
+    "  --up AXIS, --front AXIS  the model's cranial and anterior axes for the views and clip sides\n"      \
+    "                      (+x, -x, +y, -y, +z, -z; default +z and +y)\n"                                   \
     "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
     "  --mode M            points, wire, flat, gouraud (default), phong, orientation (the paper's check)\n"  \
     "  --surface NAME=M[:OPACITY[:#RRGGBB]]  one surface's mode, opacity and colour (repeatable; M may be hidden)\n"          \
@@ -905,6 +979,10 @@ static void render_help(void)
 
 static thx_status setup(thx_ctx *ctx, ropts *o, rdata *d, thx_renderer **rr, thx_font **font, thx_image **img)
 {
+    memset(d, 0, sizeof *d);
+    if ((o->up_spec || o->front_spec) && anat_frame(o))
+        return thx_error(ctx, THX_EINPUT, "--up %s and --front %s are the same axis (cranial and anterior must differ)",
+                         o->up_spec ? o->up_spec : "+z", o->front_spec ? o->front_spec : "+y");
     THX_CHECK(load_data(ctx, o, d));
     THX_CHECK(thx_renderer_create(ctx, o->w, o->h, rr));
     THX_CHECK(thx_image_create(ctx, o->w, o->h, img));
