@@ -45,8 +45,11 @@ if [ -f "$MD/data/tank/cool1-atdr-run1.mat" ] && [ -f "$MD/data/socks/10jan01/rs
     stage "measured: 490-lead sock" "$T" render "$MD/geom/socks/490sock.pts" --data "$MD/data/socks/10jan01/rsm10jan01-cs-0004.mat" \
         --frame 277 --scope frame --style continuous+contours --colorbar --label --trace 245 --size 600x600 \
         -o "$O/measured_sock.png" -q 2> /dev/null
+    stage "measured: sock animation (120 frames + MP4)" "$T" animate "$MD/geom/socks/490sock.pts" \
+        --data "$MD/data/socks/10jan01/rsm10jan01-cs-0004.mat" --frames 231:350 --scope fixed:-10:10 --colorbar --style continuous+contours --label \
+        --trace 245 --size 480x480 --fps 20 -o "$O/measured_frames" --mp4 "$O/measured_sock.mp4" -q 2> /dev/null
 else
-    rm -f "$O/measured_tank.png" "$O/measured_sock.png"
+    rm -f "$O/measured_tank.png" "$O/measured_sock.png" "$O/measured_sock.mp4"
 fi
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
 
@@ -76,7 +79,9 @@ if os.path.exists(os.path.join(o, 'measured_tank.png')):
 <img src="measured_tank.png" alt="tank sock"><img src="measured_sock.png" alt="490-lead sock">
 <p>Drawn from the files as they are, no model: left, the Utah torso-tank experiment's 512-channel recording
 (&micro;V) on its 128-lead epicardial sock through map3d's channel map, 184 ms; right, a 490-lead sock recording
-(mV) at 276 ms, map3d's time axis from its sample frequency. Both socks are open surfaces.</p>'''
+(mV) at 276 ms, map3d's time axis from its sample frequency. Both socks are open surfaces.</p>
+<video src="measured_sock.mp4" controls loop></video>
+<p>The 490-lead sock from 230 to 349 ms: activation sweeping the epicardium (one colour scale, -10 to 10 mV, for all frames).</p>'''
 page = f"""<!doctype html><html><head><meta charset="utf-8"><title>thorax demo</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}} img,video{{max-width:48%;margin:0.5%}}
 table{{border-collapse:collapse;margin:1em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}
