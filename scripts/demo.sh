@@ -49,7 +49,7 @@ if [ -f "$MD/data/tank/cool1-atdr-run1.mat" ] && [ -f "$MD/data/socks/10jan01/rs
         --data "$MD/data/socks/10jan01/rsm10jan01-cs-0004.mat" --frames 231:350 --scope fixed:-10:10 --colorbar --style continuous+contours --label \
         --trace 245 --size 480x480 --fps 20 -o "$O/measured_frames" --mp4 "$O/measured_sock.mp4" -q 2> /dev/null
 else
-    rm -f "$O/measured_tank.png" "$O/measured_sock.png" "$O/measured_sock.mp4"
+    rm -rf "$O/measured_tank.png" "$O/measured_sock.png" "$O/measured_sock.mp4" "$O/measured_frames"
 fi
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
 
