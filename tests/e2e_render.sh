@@ -134,6 +134,21 @@ open('nan.raw', 'wb').write(b[:200] + d.tobytes())
 EOF
 "$THORAX" render model --data nan.raw --data-surface heart --size 200x200 --only heart -o nan.png 2> nan.log
 grep -q "10 values are not numbers" nan.log || { cat nan.log; fail "NaN warning"; }
+# red_blue PNG MIN WHAT: at least MIN red (positive) and MIN blue (negative) pixels; prints the counts
+red_blue() {
+    $PY - "$1" "$2" "$3" <<'EOF2'
+import sys, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPNGReader(); r.SetFileName(sys.argv[1]); r.Update()
+im = r.GetOutput(); w, h, _ = im.GetDimensions()
+a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
+blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
+assert red > int(sys.argv[2]) and blue > int(sys.argv[2]), (red, blue)
+print('%s: %d red, %d blue pixels' % (sys.argv[3], red, blue))
+EOF2
+}
+
 # real measured data: the 490-electrode epicardial sock (an open surface, drawn with a warning)
 # and its recording (map3d's ts struct: potvals in mV, samplefrequency 1000 Hz), no model needed
 SOCK="$SRC/../shared/data/map3d/geom/socks/490sock.pts"
@@ -143,33 +158,13 @@ grep -q "0 .. 711 ms" rec.txt || { cat rec.txt; fail "sock recording's time axis
 "$THORAX" render "$SOCK" --data "$REC" --frame 277 --scope frame --style continuous+contours --colorbar --label \
     --trace 245 --size 400x400 -o sock.png 2> sock.log
 grep -q "drawn as it is, although not closed" sock.log || { cat sock.log; fail "open sock warning"; }
-$PY - <<'EOF2'
-import vtk
-from vtk.util.numpy_support import vtk_to_numpy
-r = vtk.vtkPNGReader(); r.SetFileName('sock.png'); r.Update()
-im = r.GetOutput(); w, h, _ = im.GetDimensions()
-a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
-red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
-blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
-assert red > 300 and blue > 300, (red, blue)
-print('measured sock at 276 ms: %d red, %d blue pixels' % (red, blue))
-EOF2
+red_blue sock.png 300 "measured sock at 276 ms"
 # the Utah tank experiment: 512-channel recording, the epicardial sock's 128 leads on channels
 # 193..320 (map3d's .channels file)
 TANK="$SRC/../shared/data/map3d"
 "$THORAX" render "$TANK/geom/tank/25feb97_sock.pts" --data "$TANK/data/tank/cool1-atdr-run1.mat" \
     --channels "$TANK/geom/tank/sock128.channels" --frame 185 --scope frame --colorbar --size 300x300 -o tank.png -q 2> /dev/null
-$PY - <<'EOF2'
-import vtk
-from vtk.util.numpy_support import vtk_to_numpy
-r = vtk.vtkPNGReader(); r.SetFileName('tank.png'); r.Update()
-im = r.GetOutput(); w, h, _ = im.GetDimensions()
-a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
-red = ((a[:, :, 0] > a[:, :, 2] + 60) & (a[:, :, 0] > a[:, :, 1] + 40)).sum()
-blue = (a[:, :, 2] > a[:, :, 0] + 60).sum()
-assert red > 200 and blue > 200, (red, blue)
-print('tank sock by channel, frame 185: %d red, %d blue pixels' % (red, blue))
-EOF2
+red_blue tank.png 200 "tank sock by channel, frame 185"
 printf '2 leads\n1 5\n2 999\n' > bad.channels
 refused "channels" bad5.png "$THORAX" render "$TANK/geom/tank/25feb97_sock.pts" --data "$TANK/data/tank/cool1-atdr-run1.mat" --channels bad.channels -o bad5.png
 grep -q "bad.channels:3: channel 999 is not in 1..512" err.log || { cat err.log; fail "channels message"; }

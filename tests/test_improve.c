@@ -193,6 +193,28 @@ static thx_volume *jittered_delaunay(thx_ctx *ctx, unsigned seed, int keep_plane
     return v;
 }
 
+/* mesh_recover on v's tetrahedra (nbrs their adjacency, taken over) for the triangles tri of v's
+ * nodes; v gets the result, regions 0. */
+static thx_status recover_in(thx_ctx *ctx, thx_volume *v, int32_t *nbrs, int32_t *tri, size_t ntri, recover_stats *R)
+{
+    thx_surface surf;
+    memset(&surf, 0, sizeof surf);
+    surf.n_nodes = v->n_nodes;
+    surf.n_tris = ntri;
+    surf.tri = tri;
+    const thx_surface *sp[1] = {&surf};
+    size_t offset[2] = {0, v->n_nodes}, nt = v->n_tets;
+    int32_t *tets = v->tet;
+    v->tet = NULL;
+    thx_status st = mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, R);
+    v->tet = tets;
+    v->n_tets = nt;
+    free(v->region);
+    v->region = calloc(nt ? nt : 1, sizeof *v->region);
+    free(nbrs);
+    return st;
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -359,11 +381,9 @@ int main(void)
     {
         /* nodes off the hull and off the plane z = 3 jittered (generic position there); the hull and
            the plane exact, so their squares are flat */
-        int32_t *tets = NULL, *nbrs = NULL;
-        size_t nt = 0;
+        int32_t *nbrs = NULL;
         thx_volume *v = jittered_delaunay(ctx, 5, 1, &nbrs);
         CHECK(v != NULL);
-        nt = v->n_tets;
         face_rec *b0 = NULL, *b1 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1);
@@ -391,22 +411,8 @@ int main(void)
                     if (side == 0) inside += 2;
                 }
 #undef NODE
-        thx_surface surf;
-        memset(&surf, 0, sizeof surf);
-        surf.n_nodes = v->n_nodes;
-        surf.n_tris = ntri;
-        surf.tri = tri;
-        const thx_surface *sp[1] = {&surf};
-        size_t offset[2] = {0, v->n_nodes};
         recover_stats R;
-        tets = v->tet;
-        v->tet = NULL;
-        CHECK_OK(ctx, mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, &R));
-        v->tet = tets;
-        v->n_tets = nt;
-        free(v->region);
-        v->region = calloc(nt, sizeof *v->region);
-        free(nbrs);
+        CHECK_OK(ctx, recover_in(ctx, v, nbrs, tri, ntri, &R));
         printf("recovery: %zu of %zu triangles missing -> %zu (%zu 2-3 flips, %zu edge removals, %zu on the hull)\n",
                R.missing_before, R.n_triangles, R.missing_after, R.n_flip23, R.n_edge_removals, R.n_boundary);
         CHECK(R.missing_before == ntri);
@@ -435,11 +441,9 @@ int main(void)
           operations could not, every tetrahedron stays positive, the boundary and the volume stay
           exactly as they were */
     {
-        int32_t *tets = NULL, *nbrs = NULL;
-        size_t nt = 0;
+        int32_t *nbrs = NULL;
         thx_volume *v = jittered_delaunay(ctx, 11, 0, &nbrs);
         CHECK(v != NULL);
-        nt = v->n_tets;
         face_rec *b0 = NULL, *b1 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1);
@@ -459,22 +463,8 @@ int main(void)
 #undef NODE
         size_t missing0 = 0;
         for (size_t i = 0; i < ntri; i++) missing0 += !has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
-        thx_surface surf;
-        memset(&surf, 0, sizeof surf);
-        surf.n_nodes = v->n_nodes;
-        surf.n_tris = ntri;
-        surf.tri = tri;
-        const thx_surface *sp[1] = {&surf};
-        size_t offset[2] = {0, v->n_nodes};
         recover_stats R;
-        tets = v->tet;
-        v->tet = NULL;
-        CHECK_OK(ctx, mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, &R));
-        v->tet = tets;
-        v->n_tets = nt;
-        free(v->region);
-        v->region = calloc(nt, sizeof *v->region);
-        free(nbrs);
+        CHECK_OK(ctx, recover_in(ctx, v, nbrs, tri, ntri, &R));
         printf("walks: %zu of %zu long triangles missing -> %zu after single operations -> %zu after walks (%zu walk steps)\n",
                R.missing_before, ntri, R.missing_before_walk, R.missing_after, R.n_walk);
         CHECK(R.missing_before == missing0 && missing0 * 2 > ntri);
