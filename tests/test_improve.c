@@ -193,6 +193,24 @@ static thx_volume *jittered_delaunay(thx_ctx *ctx, unsigned seed, int keep_plane
     return v;
 }
 
+/* Every tetrahedron positive (exact), the boundary the same face for face as b0 (nb0 faces; freed
+ * here) and the total volume vol0 (to 1e-9). */
+static void same_domain(const thx_volume *v, face_rec *b0, long nb0, double vol0)
+{
+    size_t wrong = 0;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
+    }
+    CHECK(wrong == 0);
+    face_rec *b1 = NULL;
+    long nb1 = boundary_faces(v, &b1);
+    CHECK(nb1 == nb0 && !memcmp(b0, b1, (size_t)nb0 * sizeof *b0));
+    CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
+    free(b0);
+    free(b1);
+}
+
 /* mesh_recover on v's tetrahedra (nbrs their adjacency, taken over) for the triangles tri of v's
  * nodes; v gets the result, regions 0. */
 static thx_status recover_in(thx_ctx *ctx, thx_volume *v, int32_t *nbrs, int32_t *tri, size_t ntri, recover_stats *R)
@@ -332,7 +350,7 @@ int main(void)
     for (unsigned op = IMPROVE_EDGE; op <= IMPROVE_MOVE; op <<= 1) {
         thx_volume *v = lattice(ctx, 13, NULL);
         CHECK(v != NULL);
-        face_rec *b0 = NULL, *b1 = NULL;
+        face_rec *b0 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1), mn0, mn1;
         size_t below0 = count_below(v, 10, &mn0);
@@ -349,17 +367,7 @@ int main(void)
             CHECK(applied > 10);
             CHECK(below1 < below0);
         }
-        size_t wrong = 0;
-        for (size_t t = 0; t < v->n_tets; t++) {
-            const int32_t *q = v->tet + 4 * t;
-            wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
-        }
-        CHECK(wrong == 0);
-        long nb1 = boundary_faces(v, &b1);
-        CHECK(nb1 == nb0 && !memcmp(b0, b1, (size_t)nb0 * sizeof *b0));
-        CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
-        free(b0);
-        free(b1);
+        same_domain(v, b0, nb0, vol0);
         thx_volume_destroy(&v);
     }
     /* 5. the adjacency handed over (as the mesher does) gives the same result as the one searched for */
@@ -444,7 +452,7 @@ int main(void)
         int32_t *nbrs = NULL;
         thx_volume *v = jittered_delaunay(ctx, 11, 0, &nbrs);
         CHECK(v != NULL);
-        face_rec *b0 = NULL, *b1 = NULL;
+        face_rec *b0 = NULL;
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1);
 #define NODE(i, j, l) ((int32_t)(((i) * N + (j)) * N + (l)))
@@ -470,19 +478,10 @@ int main(void)
         CHECK(R.missing_before == missing0 && missing0 * 2 > ntri);
         CHECK(R.missing_before_walk > 0 && R.n_walk > 0);
         CHECK(R.missing_after < R.missing_before_walk);
-        size_t present = 0, wrong = 0;
+        size_t present = 0;
         for (size_t i = 0; i < ntri; i++) present += has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
         CHECK(present == ntri - R.missing_after);
-        for (size_t t = 0; t < v->n_tets; t++) {
-            const int32_t *q = v->tet + 4 * t;
-            wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
-        }
-        CHECK(wrong == 0);
-        long nb1 = boundary_faces(v, &b1);
-        CHECK(nb1 == nb0 && !memcmp(b0, b1, (size_t)nb0 * sizeof *b0));
-        CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
-        free(b0);
-        free(b1);
+        same_domain(v, b0, nb0, vol0);
         thx_volume_destroy(&v);
     }
     /* 8. face recovery: a triangle whose three edges are mesh edges but which an edge pierces (the
