@@ -79,6 +79,8 @@ typedef struct {
     thx_series *currents;     /* currents_node, for arrows */
     thx_series *volume;       /* volume potentials (unused for now) */
     char ecg_names[12][8];
+    double smin[64], smax[64]; /* finite range of each surface's whole series (computed once) */
+    unsigned char sranged[64];
     const thx_series *trace;  /* the series --trace draws from (not owned), its row and label */
     size_t trace_row;
     char trace_label[96];
@@ -383,7 +385,23 @@ static void range_of(const double *v, size_t n, double *lo, double *hi)
         if (isfinite(v[i])) { *lo = fmin(*lo, v[i]); *hi = fmax(*hi, v[i]); }
 }
 
-static void scale_for(const ropts *o, const rdata *d, int s, int frame, thx_scale *sc)
+/* The finite range of surface k's whole series, computed at the first call (an animation asks
+   for it every frame). */
+static void series_range(rdata *d, size_t k, double *lo, double *hi)
+{
+    const thx_series *x = d->series[k];
+    if (!d->sranged[k]) {
+        double a = INFINITY, b = -INFINITY;
+        range_of(x->v, x->n_rows * x->n_frames, &a, &b);
+        d->smin[k] = a;
+        d->smax[k] = b;
+        d->sranged[k] = 1;
+    }
+    *lo = fmin(*lo, d->smin[k]);
+    *hi = fmax(*hi, d->smax[k]);
+}
+
+static void scale_for(const ropts *o, rdata *d, int s, int frame, thx_scale *sc)
 {
     double lo = INFINITY, hi = -INFINITY;
     if (o->scope == SCOPE_FIXED) { lo = o->lo; hi = o->hi; }
@@ -392,7 +410,7 @@ static void scale_for(const ropts *o, const rdata *d, int s, int frame, thx_scal
             const thx_series *x = d->series[k];
             if (!x || (o->scope != SCOPE_ALL && (int)k != s)) continue;
             if (o->scope == SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
-            else range_of(x->v, x->n_rows * x->n_frames, &lo, &hi);
+            else series_range(d, k, &lo, &hi);
         }
         if (!(lo <= hi)) { lo = -1; hi = 1; }
         if (o->symmetric) { double mm = fmax(fabs(lo), fabs(hi)); lo = -mm; hi = mm; }
@@ -499,7 +517,7 @@ static thx_status build_arrows(thx_ctx *ctx, const ropts *o, const rdata *d, int
     return THX_OK;
 }
 
-static void build_surfaces(const ropts *o, const rdata *d, int frame, built_scene *b, int only_surface)
+static void build_surfaces(const ropts *o, rdata *d, int frame, built_scene *b, int only_surface)
 {
     const thx_model *m = d->m;
     b->n = 0;
