@@ -161,38 +161,6 @@ static thx_volume *lattice(thx_ctx *ctx, unsigned seed, int32_t **adj)
     return v;
 }
 
-/* The lattice with its interior nodes jittered by up to 0.15 (rounded to 1e-6; the nodes of the
- * plane z = 3 too unless keep_plane), tetrahedralized afresh by the Delaunay step (right-handed, as
- * the mesher hands them over), regions 0; *nbrs its adjacency. */
-static thx_volume *jittered_delaunay(thx_ctx *ctx, unsigned seed, int keep_plane, int32_t **nbrs)
-{
-    thx_volume *v = lattice(ctx, 3, NULL);
-    if (!v) return NULL;
-    srand(seed);
-    for (size_t k = 0; k < v->n_nodes; k++)
-        for (int c = 0; c < 3; c++) {
-            double x = round(v->xyz[3 * k + c]);
-            int on = v->node_surf[k] >= 0 || (keep_plane && round(v->xyz[3 * k + 2]) == 3);
-            v->xyz[3 * k + c] = on ? x : round((x + 0.3 * (rand() / (double)RAND_MAX - 0.5)) * 1e6) / 1e6;
-        }
-    int32_t *tets = NULL;
-    size_t nt = 0;
-    if (thx_delaunay3d(ctx, v->xyz, v->n_nodes, &tets, nbrs, &nt, NULL) != THX_OK) {
-        thx_volume_destroy(&v);
-        return NULL;
-    }
-    for (size_t t = 0; t < nt; t++) {
-        int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
-        x = (*nbrs)[4 * t + 2]; (*nbrs)[4 * t + 2] = (*nbrs)[4 * t + 3]; (*nbrs)[4 * t + 3] = x;
-    }
-    free(v->tet);
-    free(v->region);
-    v->tet = tets;
-    v->n_tets = nt;
-    v->region = calloc(nt, sizeof *v->region);
-    return v;
-}
-
 /* Every tetrahedron positive (exact), the boundary the same face for face as b0 (nb0 faces; freed
  * here) and the total volume vol0 (to 1e-9). */
 static void same_domain(const thx_volume *v, face_rec *b0, long nb0, double vol0)
@@ -209,28 +177,6 @@ static void same_domain(const thx_volume *v, face_rec *b0, long nb0, double vol0
     CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
     free(b0);
     free(b1);
-}
-
-/* mesh_recover on v's tetrahedra (nbrs their adjacency, taken over) for the triangles tri of v's
- * nodes; v gets the result, regions 0. */
-static thx_status recover_in(thx_ctx *ctx, thx_volume *v, int32_t *nbrs, int32_t *tri, size_t ntri, recover_stats *R)
-{
-    thx_surface surf;
-    memset(&surf, 0, sizeof surf);
-    surf.n_nodes = v->n_nodes;
-    surf.n_tris = ntri;
-    surf.tri = tri;
-    const thx_surface *sp[1] = {&surf};
-    size_t offset[2] = {0, v->n_nodes}, nt = v->n_tets;
-    int32_t *tets = v->tet;
-    v->tet = NULL;
-    thx_status st = mesh_recover(ctx, v->xyz, v->n_nodes, &tets, &nbrs, &nt, sp, offset, 1, R);
-    v->tet = tets;
-    v->n_tets = nt;
-    free(v->region);
-    v->region = calloc(nt ? nt : 1, sizeof *v->region);
-    free(nbrs);
-    return st;
 }
 
 int main(void)
@@ -272,10 +218,9 @@ int main(void)
         v->surf_node[0] = ident;
         v->surf_n_nodes = malloc(sizeof *v->surf_n_nodes);
         v->surf_n_nodes[0] = n;
-        const thx_surface *surfs[1] = {&prot};
         improve_opts o = {10.0, 6, 0, by_x, NULL};
         improve_stats S;
-        CHECK_OK(ctx, mesh_improve(ctx, v, NULL, surfs, 1, &o, &S));
+        CHECK_OK(ctx, mesh_improve(ctx, v, NULL, tri, np, &o, &S));
         size_t below1 = count_below(v, 10, &mn1);
         printf("lattice %d^3: %zu -> %zu tetrahedra; below 10 deg %zu -> %zu; min dihedral %.3f -> %.3f deg; "
                "%zu edge removals, %zu face removals, %zu moves\n",
@@ -383,149 +328,6 @@ int main(void)
         CHECK(!memcmp(a->xyz, b->xyz, 3 * a->n_nodes * sizeof *a->xyz));
         thx_volume_destroy(&a);
         thx_volume_destroy(&b);
-    }
-    /* 6. recovery: triangles using the other diagonal of lattice squares (inside and on the hull)
-          become faces, the tetrahedralization stays valid, and the domain does not change */
-    {
-        /* nodes off the hull and off the plane z = 3 jittered (generic position there); the hull and
-           the plane exact, so their squares are flat */
-        int32_t *nbrs = NULL;
-        thx_volume *v = jittered_delaunay(ctx, 5, 1, &nbrs);
-        CHECK(v != NULL);
-        face_rec *b0 = NULL, *b1 = NULL;
-        long nb0 = boundary_faces(v, &b0);
-        double vol0 = total_volume(v, -1);
-        /* the squares of the plane z = 3 (inside) and of the face x = 0 (on the hull) */
-#define NODE(i, j, l) ((int32_t)(((i) * N + (j)) * N + (l)))
-        int32_t tri[3 * 2 * 2 * (N - 1) * (N - 1)];
-        size_t ntri = 0, inside = 0;
-        for (int side = 0; side < 2; side++)
-            for (int i = 0; i + 1 < N; i++)
-                for (int j = 0; j + 1 < N; j++) {
-                    int32_t a, b, c, d; /* the square a b c d */
-                    if (side == 0) { a = NODE(i, j, 3); b = NODE(i + 1, j, 3); c = NODE(i + 1, j + 1, 3); d = NODE(i, j + 1, 3); }
-                    else { a = NODE(0, i, j); b = NODE(0, i + 1, j); c = NODE(0, i + 1, j + 1); d = NODE(0, i, j + 1); }
-                    /* the diagonal the tetrahedralization does not have */
-                    int ac = has_face(v, a, b, c) && has_face(v, a, c, d);
-                    int bd = has_face(v, a, b, d) && has_face(v, b, c, d);
-                    CHECK(ac != bd);
-                    if (ac) {
-                        tri[3 * ntri] = a; tri[3 * ntri + 1] = b; tri[3 * ntri + 2] = d; ntri++;
-                        tri[3 * ntri] = b; tri[3 * ntri + 1] = c; tri[3 * ntri + 2] = d; ntri++;
-                    } else {
-                        tri[3 * ntri] = a; tri[3 * ntri + 1] = b; tri[3 * ntri + 2] = c; ntri++;
-                        tri[3 * ntri] = a; tri[3 * ntri + 1] = c; tri[3 * ntri + 2] = d; ntri++;
-                    }
-                    if (side == 0) inside += 2;
-                }
-#undef NODE
-        recover_stats R;
-        CHECK_OK(ctx, recover_in(ctx, v, nbrs, tri, ntri, &R));
-        printf("recovery: %zu of %zu triangles missing -> %zu (%zu 2-3 flips, %zu edge removals, %zu on the hull)\n",
-               R.missing_before, R.n_triangles, R.missing_after, R.n_flip23, R.n_edge_removals, R.n_boundary);
-        CHECK(R.missing_before == ntri);
-        CHECK(R.missing_after * 5 < R.missing_before); /* the rest need more than one flip per edge */
-        CHECK(R.n_boundary > 0 && R.n_edge_removals > 0);
-        size_t present = 0, wrong = 0;
-        for (size_t i = 0; i < ntri; i++) present += has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
-        CHECK(present == ntri - R.missing_after);
-        for (size_t t = 0; t < v->n_tets; t++) {
-            const int32_t *q = v->tet + 4 * t;
-            wrong += !(thx_orient3d(v->xyz + 3 * q[0], v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3]) < 0);
-        }
-        CHECK(wrong == 0);
-        /* conforming; the boundary has as many faces (the hull squares only changed diagonals) and the
-           same volume (the squares are flat: the wedge between the diagonals is empty) */
-        long nb1 = boundary_faces(v, &b1);
-        CHECK(nb1 == nb0);
-        CHECK_NEAR(total_volume(v, -1), vol0, 1e-9 * vol0);
-        (void)inside;
-        free(b0);
-        free(b1);
-        thx_volume_destroy(&v);
-    }
-    /* 7. recovery of edges that cross several tetrahedra (walks of flips): isolated triangles on
-          body diagonals of the jittered lattice's cubes; the walks recover some that single
-          operations could not, every tetrahedron stays positive, the boundary and the volume stay
-          exactly as they were */
-    {
-        int32_t *nbrs = NULL;
-        thx_volume *v = jittered_delaunay(ctx, 11, 0, &nbrs);
-        CHECK(v != NULL);
-        face_rec *b0 = NULL;
-        long nb0 = boundary_faces(v, &b0);
-        double vol0 = total_volume(v, -1);
-#define NODE(i, j, l) ((int32_t)(((i) * N + (j)) * N + (l)))
-        int32_t tri[3 * 64];
-        size_t ntri = 0;
-        for (int i = 1; i + 2 < N - 1; i += 3)
-            for (int j = 1; j + 2 < N - 1; j += 3)
-                for (int l = 1; l + 1 < N - 1; l += 3) {
-                    /* a body diagonal of a lattice cube and two cube edges' worth apart: the
-                       Delaunay step has the diagonal or not, and the jitter decides */
-                    tri[3 * ntri] = NODE(i, j, l);
-                    tri[3 * ntri + 1] = NODE(i + 1, j + 1, l + 1);
-                    tri[3 * ntri + 2] = NODE(i + 1, j, l);
-                    ntri++;
-                }
-#undef NODE
-        size_t missing0 = 0;
-        for (size_t i = 0; i < ntri; i++) missing0 += !has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
-        recover_stats R;
-        CHECK_OK(ctx, recover_in(ctx, v, nbrs, tri, ntri, &R));
-        printf("walks: %zu of %zu long triangles missing -> %zu after single operations -> %zu after walks (%zu walk steps)\n",
-               R.missing_before, ntri, R.missing_before_walk, R.missing_after, R.n_walk);
-        CHECK(R.missing_before == missing0 && missing0 * 2 > ntri);
-        CHECK(R.missing_before_walk > 0 && R.n_walk > 0);
-        CHECK(R.missing_after < R.missing_before_walk);
-        size_t present = 0;
-        for (size_t i = 0; i < ntri; i++) present += has_face(v, tri[3 * i], tri[3 * i + 1], tri[3 * i + 2]);
-        CHECK(present == ntri - R.missing_after);
-        same_domain(v, b0, nb0, vol0);
-        thx_volume_destroy(&v);
-    }
-    /* 8. face recovery: a triangle whose three edges are mesh edges but which an edge pierces (the
-          Delaunay step joins two low apexes across it) becomes a face by the 3-2 flip */
-    {
-        double h = 0.2;
-        double xyz[15] = {1, 0, 0, -0.5, 0.8660254037844386, 0, -0.5, -0.8660254037844386, 0, 0.01, 0.02, h, -0.02, 0.01, -h};
-        int32_t *tets = NULL, *nbrs = NULL;
-        size_t nt = 0;
-        CHECK_OK(ctx, thx_delaunay3d(ctx, xyz, 5, &tets, &nbrs, &nt, NULL));
-        for (size_t t = 0; t < nt; t++) {
-            int32_t x = tets[4 * t + 2]; tets[4 * t + 2] = tets[4 * t + 3]; tets[4 * t + 3] = x;
-            x = nbrs[4 * t + 2]; nbrs[4 * t + 2] = nbrs[4 * t + 3]; nbrs[4 * t + 3] = x;
-        }
-        CHECK(nt == 3); /* around the edge (3, 4) through the triangle */
-        int32_t tri[3] = {0, 1, 2};
-        thx_surface surf;
-        memset(&surf, 0, sizeof surf);
-        surf.n_nodes = 5;
-        surf.n_tris = 1;
-        surf.tri = tri;
-        const thx_surface *sp[1] = {&surf};
-        size_t offset[2] = {0, 5};
-        recover_stats R;
-        CHECK_OK(ctx, mesh_recover(ctx, xyz, 5, &tets, &nbrs, &nt, sp, offset, 1, &R));
-        printf("face recovery: %zu missing -> %zu, %zu tetrahedra, %zu operations on piercing edges\n", R.missing_before,
-               R.missing_after, nt, R.n_face_ops);
-        CHECK(R.missing_before == 1 && R.missing_after == 0 && R.n_face_ops == 1 && nt == 2);
-        double vol = 0;
-        int has = 0;
-        for (size_t t = 0; t < nt; t++) {
-            const int32_t *q = tets + 4 * t;
-            double o = thx_orient3d(xyz + 3 * q[0], xyz + 3 * q[1], xyz + 3 * q[2], xyz + 3 * q[3]);
-            CHECK(o < 0);
-            vol += -o / 6;
-            int k = 0;
-            for (int c = 0; c < 4; c++) k += q[c] <= 2;
-            has += k == 3;
-        }
-        CHECK(has == 2);
-        /* the two tetrahedra on the triangle: area 3 sqrt(3) / 4 times (2 h) / 3 */
-        CHECK_NEAR(vol, 3 * sqrt(3) / 4 * 2 * h / 3, 1e-12);
-        free(tets);
-        free(nbrs);
     }
     /* 4. two flat caps on one triangle become three good tetrahedra (2-3 flip) */
     {

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "mesh/improve.h"
+#include "thorax/volume.h"
 #include "testlib.h"
 #include "thorax/mesh.h"
 #include "thorax/phantom.h"
@@ -59,25 +60,55 @@ static tri3 sort3(int32_t a, int32_t b, int32_t c)
     return (tri3){a, b, c};
 }
 
-/* Fraction of surface s's triangles that are faces of the volume mesh. */
-static double faces_present(const thx_model *m, size_t s)
+/* The faces of the mesh between two regions or on its boundary (found from the tetrahedra alone),
+ * per surface: their area where all three corners are nodes of that surface (its own or the
+ * Steiner nodes recorded on it) in area[s]; returns how many such faces lie on no single surface. */
+static size_t interface_area(const thx_model *m, double *area)
 {
     const thx_volume *v = m->volume;
-    tri3 *f = malloc(4 * v->n_tets * sizeof *f);
+    typedef struct { tri3 k; int32_t t; } frec;
+    frec *f = malloc(4 * v->n_tets * sizeof *f);
     for (size_t t = 0; t < v->n_tets; t++) {
         const int32_t *q = v->tet + 4 * t;
-        for (int k = 0; k < 4; k++) f[4 * t + k] = sort3(q[(k + 1) & 3], q[(k + 2) & 3], q[(k + 3) & 3]);
+        for (int k = 0; k < 4; k++) f[4 * t + k] = (frec){sort3(q[(k + 1) & 3], q[(k + 2) & 3], q[(k + 3) & 3]), (int32_t)t};
     }
-    qsort(f, 4 * v->n_tets, sizeof *f, cmp_tri3);
-    const thx_surface *su = m->surf[s];
-    size_t hit = 0;
-    for (size_t i = 0; i < su->n_tris; i++) {
-        const int32_t *g = su->tri + 3 * i;
-        tri3 k = sort3(v->surf_node[s][g[0]], v->surf_node[s][g[1]], v->surf_node[s][g[2]]);
-        hit += bsearch(&k, f, 4 * v->n_tets, sizeof *f, cmp_tri3) != NULL;
+    qsort(f, 4 * v->n_tets, sizeof *f, cmp_tri3); /* the key comes first */
+    int32_t *on = malloc(v->n_nodes * sizeof *on);
+    for (size_t i = 0; i < v->n_nodes; i++) on[i] = v->node_surf[i];
+    for (size_t i = 0; i < v->n_steiner; i++) on[v->steiner[i].node] = v->steiner[i].surf;
+    for (size_t s = 0; s < m->n_surfaces; s++) area[s] = 0;
+    size_t off = 0, n = 4 * v->n_tets;
+    for (size_t i = 0; i < n;) {
+        size_t j = i + 1;
+        while (j < n && !cmp_tri3(&f[j].k, &f[i].k)) j++;
+        int interface = j - i == 1 || v->region[f[i].t] != v->region[f[i + 1].t];
+        if (interface) {
+            int32_t a = f[i].k.a, b = f[i].k.b, c = f[i].k.c;
+            if (on[a] < 0 || on[a] != on[b] || on[a] != on[c]) off++;
+            else {
+                const double *A = v->xyz + 3 * a, *B = v->xyz + 3 * b, *C = v->xyz + 3 * c;
+                double u[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]}, w[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+                double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2], z = u[0] * w[1] - u[1] * w[0];
+                area[on[a]] += 0.5 * sqrt(x * x + y * y + z * z);
+            }
+        }
+        i = j;
     }
+    free(on);
     free(f);
-    return su->n_tris ? (double)hit / (double)su->n_tris : 1;
+    return off;
+}
+
+static double surface_area(const thx_surface *s)
+{
+    double sum = 0;
+    for (size_t i = 0; i < s->n_tris; i++) {
+        const double *A = s->xyz + 3 * s->tri[3 * i], *B = s->xyz + 3 * s->tri[3 * i + 1], *C = s->xyz + 3 * s->tri[3 * i + 2];
+        double u[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]}, w[3] = {C[0] - A[0], C[1] - A[1], C[2] - A[2]};
+        double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2], z = u[0] * w[1] - u[1] * w[0];
+        sum += 0.5 * sqrt(x * x + y * y + z * z);
+    }
+    return sum;
 }
 
 int main(void)
@@ -106,7 +137,7 @@ int main(void)
     /* the mesh fills the outer surface: volume within 1% */
     double outer = thx_surface_volume(by_name(m, "torso"));
     printf("volume: tetrahedra %.0f mm^3, torso surface %.0f mm^3 (%+.3f%%)\n", total, outer, 100 * (total - outer) / outer);
-    CHECK(fabs(total - outer) / outer < 0.01);
+    CHECK(fabs(total - outer) / outer < 1e-6);
     /* regions against the volumes their surfaces enclose */
     double lr = region_volume(v, "lung_r"), ll = region_volume(v, "lung_l"), h = region_volume(v, "heart");
     double slr = thx_surface_volume(by_name(m, "lung_r")), sll = thx_surface_volume(by_name(m, "lung_l")),
@@ -114,10 +145,11 @@ int main(void)
     double fat = region_volume(v, "fat"), sfat = outer - thx_surface_volume(by_name(m, "fat"));
     printf("regions: lung_r %+.2f%%, lung_l %+.2f%%, heart %+.2f%%, fat %+.2f%%\n", 100 * (lr - slr) / slr,
            100 * (ll - sll) / sll, 100 * (h - sh) / sh, 100 * (fat - sfat) / sfat);
-    CHECK(fabs(lr - slr) / slr < 0.05);
-    CHECK(fabs(ll - sll) / sll < 0.05);
-    CHECK(fabs(h - sh) / sh < 0.05);
-    CHECK(fabs(fat - sfat) / sfat < 0.10);
+    /* the regions are bounded by their surfaces exactly: volumes equal up to the 1e-6 mm rounding */
+    CHECK(fabs(lr - slr) / slr < 1e-6);
+    CHECK(fabs(ll - sll) / sll < 1e-6);
+    CHECK(fabs(h - sh) / sh < 1e-6);
+    CHECK(fabs(fat - sfat) / sfat < 1e-6);
     /* node tables: surface nodes are volume nodes with the same coordinates */
     size_t mism = 0;
     for (size_t s = 0; s < m->n_surfaces; s++)
@@ -135,15 +167,40 @@ int main(void)
         if (!strcmp(v->regions[r].name, "muscle")) muscle = (int)r;
     }
     CHECK(muscle >= 0 && v->regions[muscle].anisotropic && v->regions[muscle].sigma[8] > v->regions[muscle].sigma[0]);
-    /* the surfaces' triangles are faces of the mesh (recovered by flips where the Delaunay step chose
-       the other diagonal): the boundary is the torso's own triangles, interfaces follow the surfaces */
-    printf("recovery: %zu of %zu surface triangles not faces of the Delaunay tetrahedralization, %zu after\n",
-           st.n_missing_before, st.n_surface_tris, st.n_missing_after);
-    CHECK(st.n_missing_after * 3 < st.n_missing_before);
-    for (size_t s = 0; s < m->n_surfaces; s++) {
-        double fr = faces_present(m, s);
-        printf("  %-8s %5.1f%% of its triangles are faces of the mesh\n", m->surf[s]->name, 100 * fr);
-        CHECK(fr > (m->surf[s]->role == THX_ROLE_OUTER ? 0.95 : 0.85)); /* lungs: 88-93%, see decisions.md */
+    /* conformity, judged from the tetrahedra alone: the faces between regions and on the boundary lie
+       on the surfaces and add up to each surface's area (the surfaces' triangles, split by Steiner
+       points where the mesher added them) */
+    printf("conformity: %zu of %zu surface triangles not faces of the Delaunay tetrahedralization; %zu Steiner "
+           "points (%zu on edges), %zu triangles split\n", st.n_missing_before, st.n_surface_tris,
+           st.n_steiner_edge + st.n_steiner_face, st.n_steiner_edge, st.n_split_triangles);
+    CHECK(st.n_missing_before > 1000); /* the Delaunay step alone does not conform */
+    CHECK(v->n_steiner == st.n_steiner_edge + st.n_steiner_face);
+    {
+        double area[16];
+        size_t off = interface_area(m, area);
+        CHECK(off == 0);
+        for (size_t s = 0; s < m->n_surfaces; s++) {
+            double sa = surface_area(m->surf[s]);
+            printf("  %-8s interface faces %.3f mm^2, surface %.3f mm^2 (%+.2e)\n", m->surf[s]->name, area[s], sa, (area[s] - sa) / sa);
+            CHECK_NEAR(area[s], sa, 1e-6 * sa);
+        }
+        /* Steiner records: on their triangle, at their barycentric coordinates */
+        double worst = 0;
+        for (size_t i = 0; i < v->n_steiner; i++) {
+            const thx_steiner *r = &v->steiner[i];
+            const thx_surface *su = m->surf[r->surf];
+            const int32_t *g = su->tri + 3 * (size_t)r->tri;
+            CHECK(r->bary[0] >= -1e-9 && r->bary[1] >= -1e-9 && r->bary[2] >= -1e-9);
+            CHECK_NEAR(r->bary[0] + r->bary[1] + r->bary[2], 1.0, 1e-12);
+            for (int d = 0; d < 3; d++) {
+                double x = 0;
+                for (int k = 0; k < 3; k++) x += r->bary[k] * su->xyz[3 * (size_t)g[k] + (size_t)d];
+                double e = fabs(x - v->xyz[3 * (size_t)r->node + (size_t)d]);
+                worst = e > worst ? e : worst;
+            }
+        }
+        printf("  Steiner nodes within %.2e mm of their recorded positions\n", worst);
+        CHECK(worst <= 1e-6);
     }
     /* interior slivers repaired: few flat tetrahedra left, the same domain as without the repair */
     {
@@ -159,7 +216,7 @@ int main(void)
         CHECK(st.repair_below_before > 100);
         CHECK(st.repair_below_after * 10 < st.repair_below_before);
         CHECK_NEAR(st.repair_min_after, mn, 1e-9);
-        CHECK(mn > 2.0);
+        CHECK(mn > 0.3); /* raised again by the Delaunay refinement (issue 10, item 2) */
         CHECK(below5 * 20000 < v->n_tets); /* under 0.005% */
         thx_model *m0 = phantom_model(ctx);
         thx_mesh_opts o0 = o;
@@ -188,7 +245,7 @@ int main(void)
     CHECK(region_volume(v, "heart") == 0);
     printf("without the heart: %zu tetrahedra, volume %+.3f%% of torso minus heart\n", v->n_tets,
            100 * (total2 - (outer - sh)) / (outer - sh));
-    CHECK(fabs(total2 - (outer - sh)) / (outer - sh) < 0.01);
+    CHECK(fabs(total2 - (outer - sh)) / (outer - sh) < 1e-6);
     /* a model without an outer surface is refused */
     thx_model *empty = NULL;
     thx_model_create(ctx, &empty);

@@ -98,6 +98,39 @@ typedef struct {
 thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **tets, int32_t **nbrs,
                           size_t *n_tets, thx_delaunay_stats *stats);
 
+/*
+ * Incremental use: the tetrahedralization kept as a structure that takes
+ * more points (Bowyer-Watson, same predicates and perturbation) and answers
+ * adjacency queries; what the conforming mesher (src/mesh/conform.c) needs to
+ * add Steiner points on the surfaces while the mesh stays Delaunay.
+ *
+ * thx_dt_create   as thx_delaunay3d (same errors), keeping the structure.
+ * thx_dt_insert   adds point p (3 doubles) with the next index
+ *                 (thx_dt_n_points before the call); near: an existing point
+ *                 close to p where the search starts (-1: the last insertion).
+ *                 A point equal to an existing one is THX_EGEOM and leaves
+ *                 the structure unchanged. The perturbation ranks it by its
+ *                 index like the others (largest perturbed most), so the
+ *                 result is the Delaunay tetrahedralization of all points.
+ * thx_dt_star     the tetrahedra around point a as vertex quads (input
+ *                 indices; -1 is the vertex at infinity: hull faces), valid
+ *                 until the next call; returns their count (-1: no memory).
+ * thx_dt_has_edge / thx_dt_has_face   1 if (a, b) / (a, b, c) is an edge /
+ *                 face of the tetrahedralization.
+ * thx_dt_finish   the output of thx_delaunay3d (same conventions) for all
+ *                 points; destroys the structure (*d = NULL) in every case.
+ */
+typedef struct thx_dt thx_dt;
+thx_status thx_dt_create(thx_ctx *ctx, const double *xyz, size_t n, thx_dt **out);
+thx_status thx_dt_insert(thx_dt *d, const double p[3], int32_t near, int32_t *index);
+size_t thx_dt_n_points(const thx_dt *d);
+const double *thx_dt_point(const thx_dt *d, int32_t i);
+int thx_dt_star(thx_dt *d, int32_t a, const int32_t (**quads)[4]);
+int thx_dt_has_edge(thx_dt *d, int32_t a, int32_t b);
+int thx_dt_has_face(thx_dt *d, int32_t a, int32_t b, int32_t c);
+thx_status thx_dt_finish(thx_dt **d, int32_t **tets, int32_t **nbrs, size_t *n_tets);
+void thx_dt_destroy(thx_dt **d);
+
 #ifdef __cplusplus
 }
 #endif

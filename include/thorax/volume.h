@@ -21,7 +21,10 @@
  *   surf_node[s][i]   the volume node of node i of surface s (0-based);
  *   node_surf[v], node_snode[v]   for a volume node v on a surface, that
  *                     surface's index and the node's number on it; -1 if v
- *                     is not on any surface.
+ *                     is not on any surface (or is a Steiner node).
+ *   steiner  the nodes added ON the surfaces by the mesher so that every
+ *            surface triangle is a union of mesh faces: which triangle,
+ *            barycentric coordinates (thx_steiner).
  */
 #ifndef THORAX_VOLUME_H
 #define THORAX_VOLUME_H
@@ -39,6 +42,16 @@ typedef struct {
     char source[256];    /* where the value comes from (literature reference) */
 } thx_region;
 
+/* A node added on a surface so that the surface's triangles are unions of
+ * mesh faces (a Steiner point): on triangle tri of surface surf (0-based),
+ * at bary[0] c0 + bary[1] c1 + bary[2] c2 of its corners (sum 1, each in
+ * [0, 1]; a point on an edge has one coordinate 0). Surface data map to it
+ * by these weights. */
+typedef struct {
+    int32_t node, surf, tri;
+    double bary[3];
+} thx_steiner;
+
 typedef struct thx_volume {
     size_t n_nodes;
     double *xyz;
@@ -52,6 +65,8 @@ typedef struct thx_volume {
     int32_t **surf_node;     /* [s][i] -> volume node */
     int32_t *node_surf;      /* [v] -> surface index or -1 */
     int32_t *node_snode;     /* [v] -> node number on that surface or -1 */
+    size_t n_steiner;        /* nodes added on the surfaces (node_surf -1 for them) */
+    thx_steiner *steiner;
 } thx_volume;
 
 thx_status thx_volume_create(thx_ctx *ctx, thx_volume **out);

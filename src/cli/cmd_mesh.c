@@ -9,15 +9,17 @@
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--sliver DEG] [--repair DEG] [--no-recover] [--stats]\n\n"
+           "                        [--repair DEG] [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
-           "hybrid method): the surface nodes plus a square grid on each layer plane,\n"
-           "points within a tolerance of any surface dropped; Delaunay; tetrahedra any part\n"
-           "of which lies outside removed (after the surfaces' triangles are flipped into\n"
-           "the tetrahedralization); flat ones peeled off the boundary and repaired\n"
-           "inside (flips, moving grid nodes); tissue regions by inside/outside tests; the\n"
-           "default conductivity table. Writes volume.pts, volume.tet and the node tables\n"
-           "into the model directory (or the one given by -o).\n\n"
+           "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
+           "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
+           "added on the surfaces until every surface triangle is a union of mesh faces\n"
+           "(Steiner points, recorded in volume.steiner); the pieces the surfaces cut the\n"
+           "mesh into get their tissue regions by inside/outside tests, those outside the\n"
+           "outer surface are removed; flat tetrahedra repaired (flips, moving grid nodes)\n"
+           "keeping every face on a surface; the default conductivity table. Writes\n"
+           "volume.pts, volume.tet and the node tables into the model directory (or the\n"
+           "one given by -o).\n\n"
            "options:\n"
            "  -o, --output DIR       write the meshed model here (default: MODEL itself)\n"
            "  --grid MM              grid spacing in the layer planes (default: 6.5 mm for\n"
@@ -26,11 +28,8 @@ static void help(void)
            "  --layer-spacing MM     grid planes this far apart (default: the layers of the\n"
            "                         outer surface when it was built from contours, else --grid)\n"
            "  --no-heart             leave the heart's interior out of the domain\n"
-           "  --sliver DEG           peel boundary tetrahedra with a dihedral angle below DEG (5; 0 = off)\n"
            "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
            "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
-           "  --no-recover           do not flip the surfaces' triangles into the mesh (the boundary\n"
-           "                         and interfaces then follow the Delaunay step's own diagonals)\n"
            "  --stats                print counts and times\n"
            "  -v, -q                 more / less logging\n");
 }
@@ -49,9 +48,7 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--tol")) { if (cli_parse_double("mesh", a, v, &o.tol)) return 2; i++; if (!(o.tol > 0)) return cli_usage_error("mesh", "--tol must be positive"); }
         else if (!strcmp(a, "--layer-spacing")) { if (cli_parse_double("mesh", a, v, &o.layer_spacing)) return 2; i++; if (!(o.layer_spacing > 0)) return cli_usage_error("mesh", "--layer-spacing must be positive"); }
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
-        else if (!strcmp(a, "--sliver")) { if (cli_parse_double("mesh", a, v, &o.sliver_deg)) return 2; i++; if (o.sliver_deg < 0 || o.sliver_deg >= 70) return cli_usage_error("mesh", "--sliver must be between 0 and 70 degrees"); }
         else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
-        else if (!strcmp(a, "--no-recover")) o.recover = 0;
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -78,14 +75,17 @@ int cmd_mesh(int argc, char **argv)
             printf("wrote %s\n", out);
         }
         if (want_stats)
-            printf("Delaunay %zu tetrahedra, %zu removed outside, %zu inside the heart, %zu flat ones peeled off the "
-                   "boundary, %zu put back and %zu taken away by the boundary repair, %zu pinches left; times (s): points %.3f, Delaunay %.3f, "
-                   "classification %.3f, total %.3f\n",
-                   S.n_delaunay_tets, S.n_outside, S.n_heart, S.n_slivers_peeled, S.n_readded, S.n_taken, S.n_pinches, S.t_points, S.t_delaunay, S.t_classify, S.t_total);
-        if (want_stats && o.recover)
-            printf("recovery: %zu of %zu surface triangles were not faces of the Delaunay tetrahedralization, %zu "
-                   "after %zu flips (%zu of them with all three edges); %.3f s\n",
-                   S.n_missing_before, S.n_surface_tris, S.n_missing_after, S.n_recover_flips, S.n_missing_face_only, S.t_recover);
+            printf("Delaunay %zu tetrahedra, %zu pieces between the surfaces (%zu tetrahedra whose own centroid test "
+                   "disagreed with their piece), %zu removed outside, %zu inside the heart; times (s): points %.3f, "
+                   "Delaunay %.3f, conformity %.3f, classification %.3f, total %.3f\n",
+                   S.n_delaunay_tets, S.n_pieces, S.n_centroid_disagree, S.n_outside, S.n_heart, S.t_points,
+                   S.t_delaunay, S.t_conform, S.t_classify, S.t_total);
+        if (want_stats)
+            printf("conformity: %zu of %zu surface triangles were not faces of the Delaunay tetrahedralization; "
+                   "%zu Steiner points on edges and %zu inside triangles in %zu rounds; %zu triangles are several "
+                   "faces, shortest edge piece %.4f mm; %.3f s\n",
+                   S.n_missing_before, S.n_surface_tris, S.n_steiner_edge, S.n_steiner_face, S.conform_rounds,
+                   S.n_split_triangles, S.min_piece, S.t_conform);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
                    "%zu face removals, %zu grid nodes moved; %.3f s\n",

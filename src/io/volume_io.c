@@ -9,6 +9,9 @@
  *   volume.tet   "a b c d r": four volume node numbers, then the region
  *                number (the region's "id" in model.json's "regions")
  *   NAME.vmap    per surface, one line per surface node: its volume node
+ *   volume.steiner  the nodes the mesher added on the surfaces, one a line:
+ *                "node surface triangle b0 b1 b2" (1-based numbers, then the
+ *                barycentric coordinates in that triangle, "%.17g")
  *
  * Decisions:
  *  - Reading checks structure, not geometry: numbers in range, four distinct
@@ -51,6 +54,7 @@
 
 #define VOLUME_PTS "volume.pts"
 #define VOLUME_TET "volume.tet"
+#define VOLUME_STEINER "volume.steiner"
 
 static const char orientation_text[] =
     "right-handed: for each line \"a b c d region\" of volume.tet, ((b - a) x (c - a)) . (d - a) > 0 "
@@ -240,6 +244,27 @@ thx_status thx_io_volume_validate(thx_ctx *ctx, const thx_model *m, const char *
             owner[w] = (((uint64_t)s << 32) | (uint64_t)i) + 1;
         }
     }
+    for (size_t k = 0; k < v->n_steiner; k++) {
+        const thx_steiner *r = &v->steiner[k];
+        if (r->node < 0 || (size_t)r->node >= v->n_nodes || r->surf < 0 || (size_t)r->surf >= m->n_surfaces ||
+            r->tri < 0 || (size_t)r->tri >= m->surf[r->surf]->n_tris) {
+            st = thx_error(ctx, THX_EINPUT, "%s: Steiner node record %zu: node, surface or triangle out of range", where, k + 1);
+            goto done;
+        }
+        double sum = r->bary[0] + r->bary[1] + r->bary[2];
+        if (!(r->bary[0] >= -1e-12 && r->bary[1] >= -1e-12 && r->bary[2] >= -1e-12 && fabs(sum - 1) <= 1e-9)) {
+            st = thx_error(ctx, THX_EINPUT, "%s: Steiner node record %zu (volume node %ld): barycentric coordinates "
+                           "(%g, %g, %g) are not in the triangle", where, k + 1, (long)r->node + 1, r->bary[0], r->bary[1], r->bary[2]);
+            goto done;
+        }
+        if (owner[r->node]) {
+            st = thx_error(ctx, THX_EINPUT, "%s: volume node %ld is a surface node and a Steiner node (record %zu), or "
+                           "two Steiner records name it", where, (long)r->node + 1, k + 1);
+            goto done;
+        }
+        owner[r->node] = UINT64_MAX; /* taken */
+    }
+    for (size_t k = 0; k < v->n_steiner; k++) owner[v->steiner[k].node] = 0;
     if (v->node_surf && v->node_snode)
         for (size_t w = 0; w < v->n_nodes; w++) {
             long ws = owner[w] ? (long)((owner[w] - 1) >> 32) : -1;
@@ -275,7 +300,9 @@ thx_status thx_io_volume_manifest(thx_ctx *ctx, const thx_model *m, cJSON *root)
         !cJSON_AddNumberToObject(vo, "n_tets", (double)v->n_tets) ||
         !cJSON_AddNumberToObject(vo, "n_regions", (double)v->n_regions) || !cJSON_AddStringToObject(vo, "units", "mm") ||
         !cJSON_AddNumberToObject(vo, "index_base", 1) || !cJSON_AddStringToObject(vo, "orientation", orientation_text) ||
-        !cJSON_AddStringToObject(vo, "node_tables", node_tables_text))
+        !cJSON_AddStringToObject(vo, "node_tables", node_tables_text) ||
+        !cJSON_AddStringToObject(vo, "steiner", VOLUME_STEINER) ||
+        !cJSON_AddNumberToObject(vo, "n_steiner", (double)v->n_steiner))
         goto nomem;
     cJSON *regs = cJSON_AddArrayToObject(root, "regions");
     if (!regs) goto nomem;
@@ -335,6 +362,14 @@ thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const cha
         const int32_t *q = v->tet + 4 * t;
         fprintf(af.f, "%ld %ld %ld %ld %ld\n", (long)q[0] + 1, (long)q[1] + 1, (long)q[2] + 1, (long)q[3] + 1,
                 (long)v->region[t] + 1);
+    }
+    THX_CHECK(thx_atomic_commit(ctx, &af));
+    THX_CHECK(join(ctx, path, sizeof path, dir, VOLUME_STEINER));
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    for (size_t k = 0; k < v->n_steiner; k++) {
+        const thx_steiner *r = &v->steiner[k];
+        fprintf(af.f, "%ld %ld %ld %.17g %.17g %.17g\n", (long)r->node + 1, (long)r->surf + 1, (long)r->tri + 1,
+                r->bary[0], r->bary[1], r->bary[2]);
     }
     THX_CHECK(thx_atomic_commit(ctx, &af));
     for (size_t s = 0; s < m->n_surfaces; s++) {
@@ -458,6 +493,75 @@ static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size
 done:
     free(tet);
     free(reg);
+    free(text);
+    return st;
+}
+
+/* volume.steiner: "node surface triangle b0 b1 b2" per line (numbers 1-based); n_want records. */
+static thx_status read_steiner(thx_ctx *ctx, const char *path, const thx_model *m, size_t n_nodes, size_t n_want,
+                               thx_volume *v)
+{
+    char *text = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    thx_status st = THX_OK;
+    thx_steiner *rec = NULL;
+    size_t n = 0, cap = 0;
+    int line = 0;
+    for (char *p = text, *next = NULL; p; p = next) {
+        char *tok[6];
+        line++;
+        int nt = thx_io_split_line(p, tok, 6, &next);
+        if (nt == 0) continue;
+        if (nt != 6) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 6 fields (node surface triangle b0 b1 b2)", path, line);
+            goto done;
+        }
+        if (n >= n_want) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: more records than the %zu the manifest announces", path, line, n_want);
+            goto done;
+        }
+        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&rec, &cap, n + 1, sizeof *rec));
+        long node, surf, tri;
+        if (parse_long(tok[0], &node) || parse_long(tok[1], &surf) || parse_long(tok[2], &tri)) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: node, surface and triangle must be integers", path, line);
+            goto done;
+        }
+        if (node < 1 || (size_t)node > n_nodes) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: node %ld out of range 1..%zu", path, line, node, n_nodes);
+            goto done;
+        }
+        if (surf < 1 || (size_t)surf > m->n_surfaces) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface %ld out of range 1..%zu", path, line, surf, m->n_surfaces);
+            goto done;
+        }
+        if (tri < 1 || (size_t)tri > m->surf[surf - 1]->n_tris) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: triangle %ld out of range 1..%zu (surface \"%s\")", path, line, tri,
+                           m->surf[surf - 1]->n_tris, m->surf[surf - 1]->name);
+            goto done;
+        }
+        thx_steiner *r = &rec[n];
+        r->node = (int32_t)(node - 1);
+        r->surf = (int32_t)(surf - 1);
+        r->tri = (int32_t)(tri - 1);
+        for (int k = 0; k < 3; k++) {
+            char *end = NULL;
+            r->bary[k] = strtod(tok[3 + k], &end);
+            if (end == tok[3 + k] || *end != '\0' || !isfinite(r->bary[k])) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: barycentric coordinate %d is not a finite number", path, line, k + 1);
+                goto done;
+            }
+        }
+        n++;
+    }
+    if (n != n_want) {
+        st = thx_error(ctx, THX_EINPUT, "%s: %zu records, the manifest announces %zu", path, n, n_want);
+        goto done;
+    }
+    v->steiner = rec;
+    v->n_steiner = n;
+    rec = NULL;
+done:
+    free(rec);
     free(text);
     return st;
 }
@@ -694,6 +798,26 @@ thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, 
         THX_TRY(join(ctx, path, sizeof path, dir, jm->valuestring));
         v->surf_n_nodes[i] = m->surf[i]->n_nodes;
         THX_TRY(read_vmap(ctx, path, vpts, m, i, v));
+    }
+    /* Steiner nodes (absent in volumes written before they existed, and in imported meshes) */
+    {
+        const cJSON *js = cJSON_GetObjectItemCaseSensitive(vo, "steiner");
+        size_t n_st = 0;
+        if (js) {
+            if (!cJSON_IsString(js) || !thx_io_file_name_ok(js->valuestring) || thx_io_json_count(vo, "n_steiner", &n_st)) {
+                st = thx_error(ctx, THX_EINPUT, "%s: volume: \"steiner\" must name a file in the model directory, with "
+                               "\"n_steiner\" its record count", mpath);
+                goto done;
+            }
+            THX_TRY(join(ctx, path, sizeof path, dir, js->valuestring));
+            THX_TRY(read_steiner(ctx, path, m, v->n_nodes, n_st, v));
+        }
+    }
+    {
+        /* the same structural checks as before writing */
+        thx_model tmp = *m;
+        tmp.volume = v;
+        THX_TRY(thx_io_volume_validate(ctx, &tmp, mpath));
     }
     thx_volume_destroy(&m->volume);
     m->volume = v;

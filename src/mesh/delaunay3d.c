@@ -96,9 +96,14 @@ typedef struct {
 
 typedef struct {
     thx_ctx *ctx;
-    const double *p;     /* coordinates in insertion order: vertex k is input point orig[k] */
-    const int32_t *orig; /* insertion rank -> input index */
-    int32_t np;
+    double *p;       /* coordinates in insertion order: vertex k is input point orig[k] (owned) */
+    int32_t *orig;   /* insertion rank -> input index (owned) */
+    int32_t np;      /* vertices (ranks) in use */
+    size_t pcap;     /* capacity of p (points) and orig */
+    /* incremental use (thx_dt): input index -> rank, rank -> a live tetrahedron holding it */
+    int32_t *rank, *vt;
+    int32_t *sstack;  /* star search stack */
+    size_t sstack_cap;
     tet_t *t;
     size_t nt, tcap;
     uint32_t *mark; /* cavity stamps (tcap): st = in the cavity, st + 1 = tested, not in it */
@@ -473,6 +478,11 @@ static thx_status insert_point(dt_t *m, int32_t pi)
         t->v[2] = b.f[2];
         t->v[3] = pi;
         t->n[3] = b.out;
+        if (m->vt) {
+            for (int j = 0; j < 3; j++)
+                if (b.f[j] >= 0) m->vt[b.f[j]] = ti;
+            m->vt[pi] = ti;
+        }
         m->t[b.out >> 2].n[b.out & 3] = (ti << 2) | 3;
         /* Face j < 3 of the new tetrahedron holds p and the boundary edge
          * (f[j+1], f[j+2]). The boundary faces are consistently oriented, so the
@@ -649,6 +659,11 @@ static thx_status check_duplicates(thx_ctx *ctx, const double *xyz, size_t n)
 
 static void dt_free(dt_t *m)
 {
+    free(m->p);
+    free(m->orig);
+    free(m->rank);
+    free(m->vt);
+    free(m->sstack);
     free(m->t);
     free(m->mark);
     free(m->freel);
@@ -700,13 +715,10 @@ static thx_status seed(dt_t *m, const int32_t s[4])
     return THX_OK;
 }
 
-thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **tets, int32_t **nbrs,
-                          size_t *n_tets, thx_delaunay_stats *stats)
+/* Builds the Delaunay tetrahedralization of the n input points into *m (zeroed by the
+ * caller; m->ctx set). On failure m may hold partial storage: dt_free it. */
+static thx_status dt_build(thx_ctx *ctx, const double *xyz, size_t n, dt_t *m, double *t_sort, double *t_insert)
 {
-    *tets = NULL;
-    if (nbrs) *nbrs = NULL;
-    *n_tets = 0;
-    if (stats) memset(stats, 0, sizeof *stats);
     if (n > MAX_POINTS) return thx_error(ctx, THX_EINPUT, "delaunay3d: too many points (%zu > %zu)", n, MAX_POINTS);
     for (size_t i = 0; i < 3 * n; i++)
         if (!isfinite(xyz[i]))
@@ -715,43 +727,36 @@ thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **t
         THX_CHECK(check_duplicates(ctx, xyz, n));
         return thx_error(ctx, THX_EGEOM, "delaunay3d: %zu points: a tetrahedralization needs at least 4", n);
     }
-
-    dt_t m;
-    memset(&m, 0, sizeof m);
-    m.ctx = ctx;
-    m.np = (int32_t)n;
-    m.rnd = 0x2545F4914F6CDD1Dull;
-    thx_status st = THX_OK;
-    int32_t *ord = NULL;
-    double *lp = NULL;
+    m->ctx = ctx;
+    m->np = (int32_t)n;
+    m->pcap = n;
+    m->rnd = 0x2545F4914F6CDD1Dull;
     double t_start = thx_wtime();
 
-    ord = thx_malloc(ctx, n * sizeof *ord);
-    if (!ord) return THX_ENOMEM;
-    THX_TRY(brio_order(ctx, xyz, n, ord));
+    m->orig = thx_malloc(ctx, n * sizeof *m->orig);
+    if (!m->orig) return THX_ENOMEM;
+    THX_CHECK(brio_order(ctx, xyz, n, m->orig));
     /* A copy of the coordinates in insertion order: consecutive insertions
      * then touch nearby memory (for 10^6 points this halves the run time). */
-    lp = thx_malloc(ctx, 3 * n * sizeof *lp);
-    if (!lp) { st = THX_ENOMEM; goto done; }
-    for (size_t k = 0; k < n; k++) memcpy(lp + 3 * k, xyz + 3 * (size_t)ord[k], 3 * sizeof *lp);
-    m.p = lp;
-    m.orig = ord;
+    m->p = thx_malloc(ctx, 3 * n * sizeof *m->p);
+    if (!m->p) return THX_ENOMEM;
+    for (size_t k = 0; k < n; k++) memcpy(m->p + 3 * k, xyz + 3 * (size_t)m->orig[k], 3 * sizeof *m->p);
     double t_sorted = thx_wtime();
 
     /* Seed: the first point, the next distinct one, the next not collinear,
      * the next not coplanar (in insertion order; s[] holds insertion ranks). */
     int32_t s[4] = {0, -1, -1, -1};
     {
-        const double *p0 = P(&m, s[0]);
+        const double *p0 = P(m, s[0]);
         for (size_t k = 1; k < n && s[1] < 0; k++) {
-            const double *q = P(&m, (int32_t)k);
+            const double *q = P(m, (int32_t)k);
             if (q[0] != p0[0] || q[1] != p0[1] || q[2] != p0[2]) s[1] = (int32_t)k;
         }
         if (s[1] >= 0) {
             /* collinear iff all three 2D projections are (exact) */
-            const double *p1 = P(&m, s[1]);
+            const double *p1 = P(m, s[1]);
             for (size_t k = 1; k < n && s[2] < 0; k++) {
-                const double *q = P(&m, (int32_t)k);
+                const double *q = P(m, (int32_t)k);
                 double xy[3][2] = {{p0[0], p0[1]}, {p1[0], p1[1]}, {q[0], q[1]}};
                 double yz[3][2] = {{p0[1], p0[2]}, {p1[1], p1[2]}, {q[1], q[2]}};
                 double zx[3][2] = {{p0[2], p0[0]}, {p1[2], p1[0]}, {q[2], q[0]}};
@@ -763,86 +768,263 @@ thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **t
         }
         if (s[2] >= 0)
             for (size_t k = 1; k < n && s[3] < 0; k++)
-                if (orient(P(&m, s[0]), P(&m, s[1]), P(&m, s[2]), P(&m, (int32_t)k)) != 0) s[3] = (int32_t)k;
+                if (orient(P(m, s[0]), P(m, s[1]), P(m, s[2]), P(m, (int32_t)k)) != 0) s[3] = (int32_t)k;
     }
     if (s[3] < 0) {
-        THX_TRY(check_duplicates(ctx, xyz, n));
-        st = thx_error(ctx, THX_EGEOM, "delaunay3d: all %zu points are %s: no tetrahedron", n,
-                       s[2] < 0 ? "collinear" : "coplanar");
-        goto done;
+        THX_CHECK(check_duplicates(ctx, xyz, n));
+        return thx_error(ctx, THX_EGEOM, "delaunay3d: all %zu points are %s: no tetrahedron", n,
+                         s[2] < 0 ? "collinear" : "coplanar");
     }
-    if (orient(P(&m, s[0]), P(&m, s[1]), P(&m, s[2]), P(&m, s[3])) < 0) { int32_t t = s[1]; s[1] = s[2]; s[2] = t; }
+    if (orient(P(m, s[0]), P(m, s[1]), P(m, s[2]), P(m, s[3])) < 0) { int32_t t = s[1]; s[1] = s[2]; s[2] = t; }
 
-    m.tcap = 7 * n + 64; /* ~6.5 tetrahedra per point for random points, plus the ghosts */
-    m.t = thx_malloc(ctx, m.tcap * sizeof *m.t);
-    m.mark = thx_calloc(ctx, m.tcap, sizeof *m.mark);
-    if (!m.t || !m.mark) { st = THX_ENOMEM; goto done; }
-    THX_TRY(seed(&m, s));
+    m->tcap = 7 * n + 64; /* ~6.5 tetrahedra per point for random points, plus the ghosts */
+    m->t = thx_malloc(ctx, m->tcap * sizeof *m->t);
+    m->mark = thx_calloc(ctx, m->tcap, sizeof *m->mark);
+    if (!m->t || !m->mark) return THX_ENOMEM;
+    THX_CHECK(seed(m, s));
     for (size_t k = 1; k < n; k++) {
         if ((int32_t)k == s[1] || (int32_t)k == s[2] || (int32_t)k == s[3]) continue;
-        THX_TRY(insert_point(&m, (int32_t)k));
+        THX_CHECK(insert_point(m, (int32_t)k));
     }
-    double t_inserted = thx_wtime();
+    if (t_sort) *t_sort = t_sorted - t_start;
+    if (t_insert) *t_insert = thx_wtime() - t_sorted;
+    return THX_OK;
+}
 
-    /* Output. The hull links are cut first (a solid's code pointing to a ghost
-     * becomes -1); then solids from the end fill the ghost and free slots
-     * below, their neighbours' back-links following. The solids end up in
-     * [0, cnt), in storage order except the few moved ones, and the output is
-     * one sequential pass: no index map read at random (for 10^6 points that
-     * map cost 0.6 s in cache misses). */
-    {
-        size_t hull = 0;
-        for (size_t t = 0; t < m.nt; t++) {
-            const tet_t *tt = &m.t[t];
-            if (tt->v[0] == DEAD || !is_ghost(tt)) continue;
-            hull++;
-            int32_t code = tt->n[inf_slot(tt)];
-            m.t[code >> 2].n[code & 3] = -1;
+/* Output. The hull links are cut first (a solid's code pointing to a ghost
+ * becomes -1); then solids from the end fill the ghost and free slots
+ * below, their neighbours' back-links following. The solids end up in
+ * [0, cnt), in storage order except the few moved ones, and the output is
+ * one sequential pass: no index map read at random (for 10^6 points that
+ * map cost 0.6 s in cache misses). Destroys the structure's links. */
+static thx_status dt_output(dt_t *m, int32_t **tets, int32_t **nbrs, size_t *n_tets, size_t *n_hull)
+{
+    size_t hull = 0;
+    for (size_t t = 0; t < m->nt; t++) {
+        const tet_t *tt = &m->t[t];
+        if (tt->v[0] == DEAD || !is_ghost(tt)) continue;
+        hull++;
+        int32_t code = tt->n[inf_slot(tt)];
+        m->t[code >> 2].n[code & 3] = -1;
+    }
+    size_t lo = 0, hi = m->nt;
+    for (;;) {
+        while (lo < hi && m->t[lo].v[0] != DEAD && !is_ghost(&m->t[lo])) lo++;
+        while (hi > lo && (m->t[hi - 1].v[0] == DEAD || is_ghost(&m->t[hi - 1]))) hi--;
+        if (lo >= hi) break;
+        /* lo < hi - 1: slot lo is free or a ghost, hi - 1 is solid */
+        m->t[lo] = m->t[hi - 1];
+        for (int k = 0; k < 4; k++) {
+            int32_t code = m->t[lo].n[k];
+            if (code >= 0) m->t[code >> 2].n[code & 3] = (int32_t)(lo << 2) | k;
         }
-        size_t lo = 0, hi = m.nt;
-        for (;;) {
-            while (lo < hi && m.t[lo].v[0] != DEAD && !is_ghost(&m.t[lo])) lo++;
-            while (hi > lo && (m.t[hi - 1].v[0] == DEAD || is_ghost(&m.t[hi - 1]))) hi--;
-            if (lo >= hi) break;
-            /* lo < hi - 1: slot lo is free or a ghost, hi - 1 is solid */
-            m.t[lo] = m.t[hi - 1];
-            for (int k = 0; k < 4; k++) {
-                int32_t code = m.t[lo].n[k];
-                if (code >= 0) m.t[code >> 2].n[code & 3] = (int32_t)(lo << 2) | k;
-            }
-            hi--;
-            lo++;
-        }
-        size_t cnt = lo;
-        int32_t *out = thx_malloc(ctx, 4 * cnt * sizeof *out);
-        int32_t *nb = nbrs ? thx_malloc(ctx, 4 * cnt * sizeof *nb) : NULL;
-        if (!out || (nbrs && !nb)) { free(out); free(nb); st = THX_ENOMEM; goto done; }
+        hi--;
+        lo++;
+    }
+    m->nt = lo;
+    size_t cnt = lo;
+    int32_t *out = thx_malloc(m->ctx, 4 * (cnt ? cnt : 1) * sizeof *out);
+    int32_t *nb = nbrs ? thx_malloc(m->ctx, 4 * (cnt ? cnt : 1) * sizeof *nb) : NULL;
+    if (!out || (nbrs && !nb)) { free(out); free(nb); return THX_ENOMEM; }
+    for (size_t t = 0; t < cnt; t++)
+        for (int k = 0; k < 4; k++) out[4 * t + k] = m->orig[m->t[t].v[k]];
+    if (nb)
         for (size_t t = 0; t < cnt; t++)
-            for (int k = 0; k < 4; k++) out[4 * t + k] = ord[m.t[t].v[k]];
-        if (nb)
-            for (size_t t = 0; t < cnt; t++)
-                for (int k = 0; k < 4; k++) {
-                    int32_t code = m.t[t].n[k];
-                    nb[4 * t + k] = code < 0 ? -1 : code >> 2;
-                }
-        *tets = out;
-        if (nbrs) *nbrs = nb;
-        *n_tets = cnt;
-        if (stats) {
+            for (int k = 0; k < 4; k++) {
+                int32_t code = m->t[t].n[k];
+                nb[4 * t + k] = code < 0 ? -1 : code >> 2;
+            }
+    *tets = out;
+    if (nbrs) *nbrs = nb;
+    *n_tets = cnt;
+    if (n_hull) *n_hull = hull;
+    return THX_OK;
+}
+
+thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **tets, int32_t **nbrs,
+                          size_t *n_tets, thx_delaunay_stats *stats)
+{
+    *tets = NULL;
+    if (nbrs) *nbrs = NULL;
+    *n_tets = 0;
+    if (stats) memset(stats, 0, sizeof *stats);
+    dt_t m;
+    memset(&m, 0, sizeof m);
+    double ts = 0, ti = 0;
+    thx_status st = dt_build(ctx, xyz, n, &m, &ts, &ti);
+    if (st == THX_OK) {
+        double t_inserted = thx_wtime();
+        size_t hull = 0;
+        st = dt_output(&m, tets, nbrs, n_tets, &hull);
+        if (st == THX_OK && stats) {
             stats->n_points = n;
-            stats->n_tets = cnt;
+            stats->n_tets = *n_tets;
             stats->n_hull_faces = hull;
             stats->walk_steps = m.walk_steps;
             stats->cavity_tets = m.cavity_tets;
             stats->n_degenerate = m.n_degenerate;
-            stats->t_sort = t_sorted - t_start;
-            stats->t_insert = t_inserted - t_sorted;
+            stats->t_sort = ts;
+            stats->t_insert = ti;
             stats->t_output = thx_wtime() - t_inserted;
         }
     }
-done:
-    free(ord);
-    free(lp);
     dt_free(&m);
+    return st;
+}
+
+/* ---- incremental use (thx_dt) ------------------------------------------------- */
+
+struct thx_dt {
+    dt_t m;
+    size_t n_input;    /* points given to thx_dt_create */
+    int32_t (*quad)[4]; /* thx_dt_star's answer */
+    size_t quad_cap;
+};
+
+thx_status thx_dt_create(thx_ctx *ctx, const double *xyz, size_t n, thx_dt **out)
+{
+    *out = NULL;
+    thx_dt *d = thx_calloc(ctx, 1, sizeof *d);
+    if (!d) return THX_ENOMEM;
+    thx_status st = dt_build(ctx, xyz, n, &d->m, NULL, NULL);
+    if (st == THX_OK) {
+        d->n_input = n;
+        dt_t *m = &d->m;
+        m->rank = thx_malloc(ctx, n * sizeof *m->rank);
+        m->vt = thx_malloc(ctx, n * sizeof *m->vt);
+        if (!m->rank || !m->vt) st = THX_ENOMEM;
+        else {
+            for (size_t k = 0; k < n; k++) m->rank[m->orig[k]] = (int32_t)k;
+            for (size_t t = 0; t < m->nt; t++) {
+                const tet_t *tt = &m->t[t];
+                if (tt->v[0] == DEAD) continue;
+                for (int k = 0; k < 4; k++)
+                    if (tt->v[k] >= 0) m->vt[tt->v[k]] = (int32_t)t;
+            }
+        }
+    }
+    if (st != THX_OK) {
+        dt_free(&d->m);
+        free(d);
+        return st;
+    }
+    *out = d;
+    return THX_OK;
+}
+
+void thx_dt_destroy(thx_dt **d)
+{
+    if (!d || !*d) return;
+    dt_free(&(*d)->m);
+    free((*d)->quad);
+    free(*d);
+    *d = NULL;
+}
+
+size_t thx_dt_n_points(const thx_dt *d) { return (size_t)d->m.np; }
+
+const double *thx_dt_point(const thx_dt *d, int32_t i) { return P(&d->m, d->m.rank[i]); }
+
+thx_status thx_dt_insert(thx_dt *d, const double p[3], int32_t near, int32_t *index)
+{
+    dt_t *m = &d->m;
+    if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+        return thx_error(m->ctx, THX_EINPUT, "delaunay3d: inserted point has a non-finite coordinate");
+    if ((size_t)m->np >= MAX_POINTS) return thx_error(m->ctx, THX_EINPUT, "delaunay3d: too many points");
+    if ((size_t)m->np == m->pcap) {
+        size_t cap = m->pcap + m->pcap / 2 + 16;
+        double *np_ = thx_realloc(m->ctx, m->p, 3 * cap * sizeof *np_);
+        if (!np_) return THX_ENOMEM;
+        m->p = np_;
+        int32_t *o = thx_realloc(m->ctx, m->orig, cap * sizeof *o);
+        if (!o) return THX_ENOMEM;
+        m->orig = o;
+        int32_t *r = thx_realloc(m->ctx, m->rank, cap * sizeof *r);
+        if (!r) return THX_ENOMEM;
+        m->rank = r;
+        int32_t *v = thx_realloc(m->ctx, m->vt, cap * sizeof *v);
+        if (!v) return THX_ENOMEM;
+        m->vt = v;
+        m->pcap = cap;
+    }
+    int32_t k = m->np;
+    memcpy(m->p + 3 * (size_t)k, p, 3 * sizeof *p);
+    m->orig[k] = k; /* appended points keep their insertion rank as index */
+    m->rank[k] = k;
+    if (near >= 0 && near < m->np) m->last = m->vt[m->rank[near]];
+    m->np++;
+    thx_status st = insert_point(m, k);
+    if (st != THX_OK) {
+        m->np--; /* the structure is unchanged when the point is refused (duplicate) */
+        return st;
+    }
+    *index = k;
+    return THX_OK;
+}
+
+/* The tetrahedra around input point a (face-connected search of its star), their
+ * vertex quads (input indices, INF = -1) in d->quad; returns the count, -1 on no memory. */
+int thx_dt_star(thx_dt *d, int32_t a, const int32_t (**quads)[4])
+{
+    dt_t *m = &d->m;
+    int32_t ra = m->rank[a];
+    if (m->stamp >= UINT32_MAX - 4) {
+        memset(m->mark, 0, m->tcap * sizeof *m->mark);
+        m->stamp = 0;
+    }
+    m->stamp += 2;
+    const uint32_t st = m->stamp;
+    size_t ns = 0, count = 0;
+    int32_t t0 = m->vt[ra];
+    if (push_i32(m, &m->sstack, &m->sstack_cap, ns++, t0) != THX_OK) return -1;
+    m->mark[t0] = st;
+    while (ns > 0) {
+        int32_t c = m->sstack[--ns];
+        if (count >= d->quad_cap && thx_grow(m->ctx, (void **)&d->quad, &d->quad_cap, count + 1, sizeof *d->quad) != THX_OK)
+            return -1;
+        const tet_t *tc = &m->t[c];
+        for (int k = 0; k < 4; k++) d->quad[count][k] = tc->v[k] < 0 ? -1 : m->orig[tc->v[k]];
+        count++;
+        for (int i = 0; i < 4; i++) {
+            if (tc->v[i] == ra) continue; /* the face opposite a does not hold a */
+            int32_t o = tc->n[i] >> 2;
+            if (m->mark[o] == st) continue;
+            m->mark[o] = st;
+            if (push_i32(m, &m->sstack, &m->sstack_cap, ns++, o) != THX_OK) return -1;
+        }
+    }
+    *quads = (const int32_t (*)[4])d->quad;
+    return (int)count;
+}
+
+int thx_dt_has_edge(thx_dt *d, int32_t a, int32_t b)
+{
+    const int32_t (*q)[4];
+    int n = thx_dt_star(d, a, &q);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 4; k++)
+            if (q[i][k] == b) return 1;
+    return 0;
+}
+
+int thx_dt_has_face(thx_dt *d, int32_t a, int32_t b, int32_t c)
+{
+    const int32_t (*q)[4];
+    int n = thx_dt_star(d, a, &q);
+    for (int i = 0; i < n; i++) {
+        int hb = 0, hc = 0;
+        for (int k = 0; k < 4; k++) { hb |= q[i][k] == b; hc |= q[i][k] == c; }
+        if (hb && hc) return 1;
+    }
+    return 0;
+}
+
+thx_status thx_dt_finish(thx_dt **d, int32_t **tets, int32_t **nbrs, size_t *n_tets)
+{
+    *tets = NULL;
+    if (nbrs) *nbrs = NULL;
+    *n_tets = 0;
+    thx_status st = dt_output(&(*d)->m, tets, nbrs, n_tets, NULL);
+    thx_dt_destroy(d);
     return st;
 }

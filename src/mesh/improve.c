@@ -141,6 +141,7 @@ typedef struct {
     uint32_t clock, *node_clock; /* a counter of changes; per node, the last change touching it */
     int32_t *node_tet; /* some live tetrahedron at each node */
     const int32_t *node_surf;
+    unsigned char *fixed; /* nodes that never move */
     tset prot;
     const improve_opts *o;
     size_t n_regions;
@@ -623,7 +624,7 @@ static int try_move(imesh *M, int32_t t, size_t *count)
     int moved = 0;
     for (int k = 0; k < 4; k++) {
         int32_t v = M->tet[4 * (size_t)t + k];
-        if (M->node_surf[v] >= 0) continue;
+        if (M->fixed[v]) continue;
         int n = vertex_star(M, v, star);
         if (!n) continue;
         double *x = M->xyz + 3 * (size_t)v;
@@ -737,30 +738,22 @@ static thx_status imesh_open(imesh *M, thx_ctx *ctx, double *xyz, size_t nn, int
     return build_adjacency(M);
 }
 
-/* The protected set: every surface's triangles and edges, in volume node numbers (maps[s][i], or
- * offset[s] + i when maps is NULL). */
-static thx_status build_prot(imesh *M, const thx_surface *const *surf, size_t n_surf, const int32_t *const *maps,
-                             const size_t *offset)
+/* The protected set: the given faces (node triples) and their edges. */
+static thx_status build_prot(imesh *M, const int32_t *prot, size_t n_prot)
 {
-    size_t n_keys = 0;
-    for (size_t s = 0; s < n_surf; s++) n_keys += surf[s]->n_tris * 4;
-    size_t cap = 16;
+    size_t n_keys = 4 * n_prot, cap = 16;
     while (cap < 2 * n_keys + 16) cap <<= 1;
     M->prot.slot = thx_malloc(M->ctx, cap * sizeof *M->prot.slot);
     if (!M->prot.slot) return THX_ENOMEM;
     memset(M->prot.slot, 0xff, cap * sizeof *M->prot.slot);
     M->prot.mask = cap - 1;
-    for (size_t s = 0; s < n_surf; s++)
-        for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            const int32_t *f = surf[s]->tri + 3 * i;
-            int32_t a, b, c;
-            if (maps) { a = maps[s][f[0]]; b = maps[s][f[1]]; c = maps[s][f[2]]; }
-            else { a = (int32_t)(offset[s] + (size_t)f[0]); b = (int32_t)(offset[s] + (size_t)f[1]); c = (int32_t)(offset[s] + (size_t)f[2]); }
-            tset_add(&M->prot, tri_sorted(a, b, c));
-            tset_add(&M->prot, edge_sorted(a, b));
-            tset_add(&M->prot, edge_sorted(b, c));
-            tset_add(&M->prot, edge_sorted(c, a));
-        }
+    for (size_t i = 0; i < n_prot; i++) {
+        int32_t a = prot[3 * i], b = prot[3 * i + 1], c = prot[3 * i + 2];
+        tset_add(&M->prot, tri_sorted(a, b, c));
+        tset_add(&M->prot, edge_sorted(a, b));
+        tset_add(&M->prot, edge_sorted(b, c));
+        tset_add(&M->prot, edge_sorted(c, a));
+    }
     return THX_OK;
 }
 
@@ -817,12 +810,13 @@ static void imesh_free(imesh *M)
     free(M->node_clock);
     free(M->node_tet);
     free(M->prot.slot);
+    free(M->fixed);
     free(M->nmark);
     free(M->tmark);
     memset(M, 0, sizeof *M);
 }
 
-thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_surface *const *surf, size_t n_surf,
+thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t *prot, size_t n_prot,
                         const improve_opts *o, improve_stats *stats)
 {
     double t0 = thx_wtime();
@@ -841,7 +835,13 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const thx_sur
     if (!reg) reg = thx_calloc(ctx, nt ? nt : 1, sizeof *reg);
     st = imesh_open(&M, ctx, v->xyz, v->n_nodes, tet, reg, nt, nbr, v->node_surf, v->n_regions, o);
     if (st != THX_OK) goto done;
-    THX_TRY(build_prot(&M, surf, n_surf < v->n_surfaces ? n_surf : v->n_surfaces, (const int32_t *const *)v->surf_node, NULL));
+    THX_TRY(build_prot(&M, prot, n_prot));
+    /* nodes that never move: surface nodes and the Steiner points on the surfaces */
+    M.fixed = thx_calloc(ctx, v->n_nodes ? v->n_nodes : 1, 1);
+    if (!M.fixed) { st = THX_ENOMEM; goto done; }
+    if (v->node_surf)
+        for (size_t i = 0; i < v->n_nodes; i++) M.fixed[i] = v->node_surf[i] >= 0;
+    for (size_t i = 0; i < v->n_steiner; i++) M.fixed[v->steiner[i].node] = 1;
     S.tets_before = M.nt;
     S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
     double sin_target = sin(o->target_deg * M_PI / 180.0);
@@ -889,537 +889,4 @@ done:
     free(bad);
     imesh_free(&M);
     return st;
-}
-
-/* ---- recovery of surface triangles as faces ---- */
-
-/* The tetrahedra around node a, boundary allowed (star[] of at most MAX_STAR); 0 if too many. */
-static int open_star(imesh *M, int32_t a, int32_t *star)
-{
-    if (++M->tstamp == 0) { memset(M->tmark, 0, M->cap * sizeof *M->tmark); M->tstamp = 1; }
-    int n = 0;
-    star[n++] = M->node_tet[a];
-    M->tmark[M->node_tet[a]] = M->tstamp;
-    for (int i = 0; i < n; i++) {
-        const int32_t *q = M->tet + 4 * (size_t)star[i];
-        int la = local_index(q, a);
-        for (int f = 0; f < 4; f++) {
-            if (f == la) continue;
-            int32_t u = M->nbr[4 * (size_t)star[i] + f];
-            if (u < 0 || M->tmark[u] == M->tstamp) continue;
-            if (n >= MAX_STAR) return 0;
-            M->tmark[u] = M->tstamp;
-            star[n++] = u;
-        }
-    }
-    return n;
-}
-
-static int star_has(const imesh *M, const int32_t *star, int n, int32_t c)
-{
-    for (int i = 0; i < n; i++)
-        if (local_index(M->tet + 4 * (size_t)star[i], c) >= 0) return 1;
-    return 0;
-}
-
-#define RECOVER_FLOOR 0.0872 /* sine of 5 degrees: a recovery never makes a tetrahedron flatter than this (or than its cavity had) */
-
-/* Makes (a, c) an edge of the mesh by one 2-3 flip or one edge removal with (a, c) as a chord of the
- * ring. Returns 1 if the edge exists afterwards. */
-static int recover_edge(imesh *M, int32_t a, int32_t c, size_t *n_flip23, size_t *n_edge)
-{
-    int32_t *star = M->star;
-    int n = open_star(M, a, star);
-    if (!n) return 0;
-    if (star_has(M, star, n, c)) return 1;
-    /* the segment leaves a through the face opposite it, and the tetrahedron behind is (face, c) */
-    for (int i = 0; i < n; i++) {
-        int32_t t = star[i];
-        const int32_t *q = M->tet + 4 * (size_t)t;
-        int f = local_index(q, a);
-        int32_t u = M->nbr[4 * (size_t)t + f];
-        if (u < 0 || local_index(M->tet + 4 * (size_t)u, c) < 0) continue;
-        if (tset_has(&M->prot, tri_sorted(q[face_of[f][0]], q[face_of[f][1]], q[face_of[f][2]]))) continue;
-        int32_t nw[3][4];
-        double qnew = INFINITY;
-        for (int k = 0; k < 3 && qnew > 0; k++) {
-            memcpy(nw[k], q, sizeof nw[k]);
-            nw[k][face_of[f][k]] = c;
-            qnew = fmin(qnew, q4(M, nw[k][0], nw[k][1], nw[k][2], nw[k][3]));
-        }
-        double qold = fmin(qtet(M, t), qtet(M, u));
-        if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
-        int32_t old[2] = {t, u}, nreg[3];
-        new_regions(M, old, 2, (const int32_t(*)[4])nw, 3, nreg);
-        if (replace(M, old, 2, (const int32_t(*)[4])nw, nreg, 3) == 0) { (*n_flip23)++; return 1; }
-    }
-    /* an edge (p, q) of the star, opposite a, whose ring holds c as well as a: p and q are neighbours of c */
-    int n2 = open_star(M, c, M->star2);
-    if (!n2) return 0;
-    if (++M->nstamp == 0) { memset(M->nmark, 0, M->nn * sizeof *M->nmark); M->nstamp = 1; }
-    for (int i = 0; i < n2; i++)
-        for (int k = 0; k < 4; k++) M->nmark[M->tet[4 * (size_t)M->star2[i] + k]] = M->nstamp;
-    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-    for (int i = 0; i < n; i++) {
-        int32_t t = star[i];
-        for (int e = 0; e < 6; e++) {
-            const int32_t *q = M->tet + 4 * (size_t)t;
-            int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
-            if (p0 == a || p1 == a || M->nmark[p0] != M->nstamp || M->nmark[p1] != M->nstamp) continue;
-            if (tset_has(&M->prot, edge_sorted(p0, p1))) continue;
-            int32_t ring[MAX_RING], tets[MAX_RING];
-            int m = edge_ring(M, t, p0, p1, ring, tets);
-            if (m < 4) continue;
-            int ia = -1, ic = -1;
-            for (int k = 0; k < m; k++) {
-                if (ring[k] == a) ia = k;
-                if (ring[k] == c) ic = k;
-            }
-            if (ia < 0 || ic < 0) continue;
-            int cp = ia < ic ? ia : ic, cq = ia < ic ? ic : ia;
-            if (cq - cp < 2 || (cp == 0 && cq == m - 1)) continue; /* neighbours on the ring: (a, c) would be an edge */
-            double qold = INFINITY;
-            for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
-            int32_t nw[2 * MAX_RING][4];
-            double qnew = edge_removal_plan(M, p0, p1, ring, m, nw, cp, cq);
-            if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
-            int32_t nreg[2 * MAX_RING];
-            new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
-            if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) == 0) { (*n_edge)++; return 1; }
-        }
-    }
-    return 0;
-}
-
-static int has_face(imesh *M, int32_t a, int32_t b, int32_t c);
-
-/* Sign of the exact orientation, as an int. */
-static int osgn(const double *a, const double *b, const double *c, const double *d)
-{
-    double o = thx_orient3d(a, b, c, d);
-    return (o > 0) - (o < 0);
-}
-
-
-#define WALK_FLOOR RECOVER_FLOOR /* the least quality a step of the walk may leave: the floor of the single-step recovery */
-#define WALK_STEPS 8
-
-/*
- * Makes (a, c) an edge when the segment crosses several tetrahedra: from a, the tetrahedron of a's
- * star whose far side the segment leaves through is found (exact orientations), and what it leaves
- * through is flipped away: a face by a 2-3 flip with the tetrahedron beyond (which joins a to that
- * one's apex: one face fewer on the segment), or, when that flip would invert a tetrahedron, the
- * face's edge that blocks it by an edge removal; an edge the segment passes through by an edge
- * removal. Each step needs every new tetrahedron better than WALK_FLOOR (the sliver repair that
- * follows improves them further). Fails on a protected face or edge in the way (a surface crossing),
- * a node on the segment, the boundary, or after WALK_STEPS steps. Returns 1 if (a, c) is an edge.
- */
-static int recover_edge_walk(imesh *M, int32_t a, int32_t c, size_t *n_ops)
-{
-    const double *pa = X(M, a), *pc = X(M, c);
-    for (int step = 0; step < WALK_STEPS; step++) {
-        int n = open_star(M, a, M->star);
-        if (!n) return 0;
-        if (star_has(M, M->star, n, c)) return 1;
-        int32_t t = -1, fv[3] = {-1, -1, -1};
-        int fa = -1, zero = -1;
-        for (int i = 0; i < n && t < 0; i++) {
-            const int32_t *q = M->tet + 4 * (size_t)M->star[i];
-            int la = local_index(q, a);
-            int32_t v[3] = {q[face_of[la][0]], q[face_of[la][1]], q[face_of[la][2]]};
-            int s[3], nz = 0, pos = 0, neg = 0, z = -1;
-            for (int k = 0; k < 3; k++) {
-                s[k] = osgn(pa, pc, X(M, v[k]), X(M, v[(k + 1) % 3]));
-                nz += s[k] != 0;
-                pos += s[k] > 0;
-                neg += s[k] < 0;
-                if (!s[k]) z = k;
-            }
-            if (pos && neg) continue;
-            /* the far side: c beyond the face's plane, a before it */
-            int sa = osgn(X(M, v[0]), X(M, v[1]), X(M, v[2]), pa), sc = osgn(X(M, v[0]), X(M, v[1]), X(M, v[2]), pc);
-            if (!(sa * sc < 0)) continue;
-            if (nz < 2) return 0; /* through a node */
-            t = M->star[i];
-            fa = la;
-            memcpy(fv, v, sizeof fv);
-            zero = nz == 2 ? z : -1;
-        }
-        if (t < 0) return 0;
-        int32_t cand[3][2]; /* the edges one of which to remove, if it comes to that */
-        int n_cand = 0;
-        if (zero < 0) {
-            /* through the face fv: a 2-3 flip with the tetrahedron beyond */
-            if (tset_has(&M->prot, tri_sorted(fv[0], fv[1], fv[2]))) return 0;
-            int32_t u = M->nbr[4 * (size_t)t + fa];
-            if (u < 0) return 0;
-            const int32_t *qu = M->tet + 4 * (size_t)u;
-            int32_t apex = -1;
-            for (int k = 0; k < 4; k++)
-                if (qu[k] != fv[0] && qu[k] != fv[1] && qu[k] != fv[2]) apex = qu[k];
-            const int32_t *q = M->tet + 4 * (size_t)t;
-            int32_t nw[3][4];
-            double qnew = INFINITY;
-            int bad = -1;
-            for (int k = 0; k < 3; k++) {
-                memcpy(nw[k], q, sizeof nw[k]);
-                nw[k][face_of[fa][k]] = apex;
-                double qk = q4(M, nw[k][0], nw[k][1], nw[k][2], nw[k][3]);
-                if (qk <= 0 && bad < 0) bad = k;
-                qnew = fmin(qnew, qk);
-            }
-            if (qnew > WALK_FLOOR) {
-                int32_t old[2] = {t, u}, nreg[3];
-                new_regions(M, old, 2, (const int32_t(*)[4])nw, 3, nreg);
-                if (replace(M, old, 2, (const int32_t(*)[4])nw, nreg, 3) != 0) return 0;
-                (*n_ops)++;
-                continue;
-            }
-            /* the flip would invert a tetrahedron (the one lacking face vertex `bad`: the edge of the
-               other two blocks) or leave one too flat (then any of the face's edges may do) */
-            n_cand = 0;
-            for (int k = 0; k < 3; k++) {
-                if (bad >= 0 && k != bad) continue;
-                cand[n_cand][0] = q[face_of[fa][(k + 1) % 3]];
-                cand[n_cand][1] = q[face_of[fa][(k + 2) % 3]];
-                n_cand++;
-            }
-        } else {
-            cand[0][0] = fv[zero];
-            cand[0][1] = fv[(zero + 1) % 3];
-            n_cand = 1;
-        }
-        /* the best edge removal among the candidates */
-        double best = -INFINITY;
-        int best_m = 0;
-        int32_t best_tets[MAX_RING], best_nw[2 * MAX_RING][4];
-        for (int k = 0; k < n_cand; k++) {
-            if (tset_has(&M->prot, edge_sorted(cand[k][0], cand[k][1]))) continue;
-            int32_t ring[MAX_RING], tets[MAX_RING];
-            int m = edge_ring(M, t, cand[k][0], cand[k][1], ring, tets);
-            if (m < 3) continue;
-            int32_t nw[2 * MAX_RING][4];
-            double qnew = edge_removal_plan(M, cand[k][0], cand[k][1], ring, m, nw, -1, -1);
-            if (!(qnew > WALK_FLOOR)) continue;
-            if (qnew > best) {
-                best = qnew;
-                best_m = m;
-                memcpy(best_tets, tets, (size_t)m * sizeof *tets);
-                memcpy(best_nw, nw, (size_t)(2 * (m - 2)) * sizeof *nw);
-            }
-        }
-        if (!best_m) return 0;
-        int32_t nreg[2 * MAX_RING];
-        new_regions(M, best_tets, best_m, (const int32_t(*)[4])best_nw, 2 * (best_m - 2), nreg);
-        if (replace(M, best_tets, best_m, (const int32_t(*)[4])best_nw, nreg, 2 * (best_m - 2)) != 0) return 0;
-        (*n_ops)++;
-    }
-    return 0;
-}
-
-/* Does the segment (p, q) cross the triangle (a, b, c) through its interior (exact)? */
-static int pierces(const imesh *M, int32_t p, int32_t q, int32_t a, int32_t b, int32_t c)
-{
-    const double *A = X(M, a), *B = X(M, b), *C = X(M, c), *P = X(M, p), *Q = X(M, q);
-    if (osgn(A, B, C, P) * osgn(A, B, C, Q) >= 0) return 0;
-    int s1 = osgn(P, Q, A, B), s2 = osgn(P, Q, B, C), s3 = osgn(P, Q, C, A);
-    return (s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0);
-}
-
-/*
- * Makes (a, b, c), whose three edges are edges of the mesh, a face: the edges that pierce it are
- * removed one at a time (found in the stars of a, b and c), each by an edge removal whose ring
- * triangulation holds the chords between whichever of a, b, c lie on its ring, so the triangle
- * appears when its last piercing edge goes (a single piercing edge with ring a, b, c is the 3-2
- * flip). Each step keeps the recovery floor. Returns 1 if (a, b, c) is a face afterwards.
- */
-static int recover_face(imesh *M, int32_t a, int32_t b, int32_t c, size_t *n_ops)
-{
-    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-    const int32_t v[3] = {a, b, c};
-    for (int step = 0; step < WALK_STEPS; step++) {
-        if (has_face(M, a, b, c)) return 1;
-        int done = 0;
-        for (int w = 0; w < 3 && !done; w++) {
-            int n = open_star(M, v[w], M->star2);
-            for (int i = 0; i < n && !done; i++) {
-                int32_t t = M->star2[i];
-                for (int e = 0; e < 6 && !done; e++) {
-                    const int32_t *q = M->tet + 4 * (size_t)t;
-                    int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
-                    if (p0 == a || p0 == b || p0 == c || p1 == a || p1 == b || p1 == c) continue;
-                    if (!pierces(M, p0, p1, a, b, c)) continue;
-                    if (tset_has(&M->prot, edge_sorted(p0, p1))) return 0; /* a surface edge through it */
-                    int32_t ring[MAX_RING], tets[MAX_RING];
-                    int m = edge_ring(M, t, p0, p1, ring, tets);
-                    if (m < 3) continue;
-                    int at[3] = {-1, -1, -1}, k3 = 0;
-                    for (int k = 0; k < m; k++)
-                        for (int u = 0; u < 3; u++)
-                            if (ring[k] == v[u]) at[u] = k;
-                    int ch[3][2], nch = 0;
-                    for (int u = 0; u < 3; u++)
-                        for (int x = u + 1; x < 3; x++)
-                            if (at[u] >= 0 && at[x] >= 0) {
-                                ch[nch][0] = at[u] < at[x] ? at[u] : at[x];
-                                ch[nch][1] = at[u] < at[x] ? at[x] : at[u];
-                                nch++;
-                            }
-                    for (int u = 0; u < 3; u++) k3 += at[u] >= 0;
-                    (void)k3;
-                    double qold = INFINITY;
-                    for (int k = 0; k < m; k++) qold = fmin(qold, qtet(M, tets[k]));
-                    int32_t nw[2 * MAX_RING][4];
-                    double qnew = edge_removal_plan_chords(M, p0, p1, ring, m, nw, (const int(*)[2])ch, nch);
-                    if (!(qnew > WALK_FLOOR) && !(qnew > 0 && qnew >= qold)) continue;
-                    int32_t nreg[2 * MAX_RING];
-                    new_regions(M, tets, m, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
-                    if (replace(M, tets, m, (const int32_t(*)[4])nw, nreg, 2 * (m - 2)) != 0) continue;
-                    (*n_ops)++;
-                    done = 1;
-                }
-            }
-        }
-        if (!done) return 0;
-    }
-    return has_face(M, a, b, c);
-}
-
-/* The ring around a boundary edge (a, b) of t: ring[0..m) from one boundary face (a, b, ring[0]) to
- * the other (a, b, ring[m-1]), (a, b, ring[i], ring[i+1]) right-handed, tets[0..m-1) between them.
- * Returns m, or 0 if the edge is interior or its ring too large. */
-static int edge_ring_open(const imesh *M, int32_t t, int32_t a, int32_t b, int32_t *ring, int32_t *tets)
-{
-    const int32_t *q = M->tet + 4 * (size_t)t;
-    int ia = local_index(q, a), ib = local_index(q, b), ic = 0;
-    while (ic == ia || ic == ib) ic++;
-    int32_t c = q[ic], d = q[6 - ia - ib - ic];
-    /* back to the tetrahedron whose face (a, b, c) is on the boundary */
-    int32_t cur = t;
-    for (int steps = 0;; steps++) {
-        if (steps > MAX_RING) return 0;
-        const int32_t *r = M->tet + 4 * (size_t)cur;
-        int32_t u = M->nbr[4 * (size_t)cur + local_index(r, d)];
-        if (u < 0) break;
-        const int32_t *w = M->tet + 4 * (size_t)u;
-        int32_t e = -1;
-        for (int k = 0; k < 4; k++)
-            if (w[k] != a && w[k] != b && w[k] != c) e = w[k];
-        cur = u;
-        d = c;
-        c = e;
-        if (cur == t) return 0; /* closed: interior edge */
-    }
-    int32_t start = cur;
-    int n = 0;
-    for (;;) {
-        if (n + 1 >= MAX_RING) return 0;
-        ring[n] = c;
-        tets[n] = cur;
-        n++;
-        const int32_t *r = M->tet + 4 * (size_t)cur;
-        int32_t nx = M->nbr[4 * (size_t)cur + local_index(r, c)];
-        if (nx < 0) { ring[n] = d; break; }
-        const int32_t *w = M->tet + 4 * (size_t)nx;
-        int32_t e = -1;
-        for (int k = 0; k < 4; k++)
-            if (w[k] != a && w[k] != b && w[k] != d) e = w[k];
-        cur = nx;
-        c = d;
-        d = e;
-    }
-    int m = n + 1;
-    /* orientation at the start: the parity of (a, b, ring[0], ring[1]) in its stored order */
-    const int32_t *r0 = M->tet + 4 * (size_t)start;
-    int perm[4] = {local_index(r0, a), local_index(r0, b), local_index(r0, ring[0]), local_index(r0, ring[1])}, inv = 0;
-    for (int i = 0; i < 4; i++)
-        for (int j = i + 1; j < 4; j++) inv += perm[i] > perm[j];
-    if (inv & 1) {
-        for (int i = 0, j = m - 1; i < j; i++, j--) {
-            int32_t x = ring[i]; ring[i] = ring[j]; ring[j] = x;
-        }
-        for (int i = 0, j = n - 1; i < j; i++, j--) {
-            int32_t x = tets[i]; tets[i] = tets[j]; tets[j] = x;
-        }
-    }
-    return m;
-}
-
-/* Recovers the boundary edge (a, c) where the boundary has the other diagonal (p0, p1) of the
- * quadrilateral a, p0, c, p1 (the convex hull's choice): the tetrahedra around (p0, p1), an open ring
- * from a to c, are replaced by a triangulation of the ring polygon closed by (a, c), which becomes a
- * boundary edge; the thin region between the two diagonals leaves the mesh (it lies outside the
- * surface whose edge (a, c) is). */
-static int recover_boundary_edge(imesh *M, int32_t a, int32_t c, size_t *n_edge)
-{
-    int32_t *star = M->star;
-    int n = open_star(M, a, star);
-    static const int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-    for (int i = 0; i < n; i++) {
-        int32_t t = star[i];
-        for (int e = 0; e < 6; e++) {
-            const int32_t *q = M->tet + 4 * (size_t)t;
-            int32_t p0 = q[edges[e][0]], p1 = q[edges[e][1]];
-            if (p0 == a || p1 == a) continue;
-            if (tset_has(&M->prot, edge_sorted(p0, p1))) continue;
-            int32_t ring[MAX_RING], tets[MAX_RING];
-            int m = edge_ring_open(M, t, p0, p1, ring, tets);
-            if (m < 3) continue;
-            if (!((ring[0] == a && ring[m - 1] == c) || (ring[0] == c && ring[m - 1] == a))) continue;
-            /* the boundary faces (p0, p1, a) and (p0, p1, c) go: they must not be surface triangles */
-            if (tset_has(&M->prot, tri_sorted(p0, p1, a)) || tset_has(&M->prot, tri_sorted(p0, p1, c))) continue;
-            double qold = INFINITY;
-            for (int k = 0; k < m - 1; k++) qold = fmin(qold, qtet(M, tets[k]));
-            int32_t nw[2 * MAX_RING][4];
-            double qnew = edge_removal_plan(M, p0, p1, ring, m, nw, -1, -1);
-            if (!(qnew > 0) || qnew < fmin(qold, RECOVER_FLOOR)) continue;
-            int32_t nreg[2 * MAX_RING];
-            new_regions(M, tets, m - 1, (const int32_t(*)[4])nw, 2 * (m - 2), nreg);
-            if (replace_any(M, tets, m - 1, (const int32_t(*)[4])nw, nreg, 2 * (m - 2), 1) == 0) {
-                (*n_edge)++;
-                return 1;
-            }
-        }
-    }
-    return 0;
-}
-
-/* Is (a, b, c) a face? */
-static int has_face(imesh *M, int32_t a, int32_t b, int32_t c)
-{
-    int32_t *star = M->star;
-    int n = open_star(M, a, star);
-    for (int i = 0; i < n; i++) {
-        const int32_t *q = M->tet + 4 * (size_t)star[i];
-        if (local_index(q, b) >= 0 && local_index(q, c) >= 0) return 1;
-    }
-    return 0;
-}
-
-/* Surface s's triangle i as mesh nodes. */
-static void tri_nodes(const thx_surface *const *surf, const size_t *offset, size_t s, size_t i, int32_t v[3])
-{
-    const int32_t *f = surf[s]->tri + 3 * i;
-    for (int k = 0; k < 3; k++) v[k] = (int32_t)(offset[s] + (size_t)f[k]);
-}
-
-/* One sweep over the surface triangles that are not faces: each missing edge by one operation
- * (and, on the hull, a hull-edge swap), or with walks = 1 by one operation or a walk from either
- * end, then the pierced face cleared. Returns how many became faces; *missing counts the sweep's. */
-static size_t recovery_pass(imesh *M, const thx_surface *const *surf, const size_t *offset, size_t n_surf, int walks,
-                            recover_stats *S, size_t *missing)
-{
-    size_t fixed = 0;
-    for (size_t s = 0; s < n_surf; s++)
-        for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            int32_t v[3];
-            tri_nodes(surf, offset, s, i, v);
-            if (has_face(M, v[0], v[1], v[2])) continue;
-            (*missing)++;
-            int ok = 1;
-            for (int e = 0; e < 3 && ok; e++) {
-                int32_t x = v[e], y = v[(e + 1) % 3];
-                ok = recover_edge(M, x, y, &S->n_flip23, &S->n_edge_removals) ||
-                     (walks ? recover_edge_walk(M, x, y, &S->n_walk) || recover_edge_walk(M, y, x, &S->n_walk)
-                            : recover_boundary_edge(M, x, y, &S->n_boundary));
-            }
-            if (ok && (walks ? recover_face(M, v[0], v[1], v[2], &S->n_face_ops) : has_face(M, v[0], v[1], v[2]))) fixed++;
-        }
-    return fixed;
-}
-
-thx_status mesh_recover(thx_ctx *ctx, double *xyz, size_t nn, int32_t **tets, int32_t **nbrs, size_t *nt,
-                        const thx_surface *const *surf, const size_t *offset, size_t n_surf, recover_stats *stats)
-{
-    double t0 = thx_wtime();
-    thx_status st = THX_OK;
-    recover_stats S;
-    memset(&S, 0, sizeof S);
-    imesh M;
-    improve_opts o;
-    memset(&o, 0, sizeof o);
-    st = imesh_open(&M, ctx, xyz, nn, *tets, NULL, *nt, *nbrs, NULL, 1, &o);
-    *tets = NULL;
-    *nbrs = NULL;
-    *nt = 0;
-    if (st != THX_OK) goto done;
-    THX_TRY(build_prot(&M, surf, n_surf, NULL, offset));
-    M.nmark = thx_calloc(ctx, nn ? nn : 1, sizeof *M.nmark);
-    if (!M.nmark) { st = THX_ENOMEM; goto done; }
-    for (size_t s = 0; s < n_surf; s++) {
-        S.n_triangles += surf[s]->n_tris;
-        for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            int32_t v[3];
-            tri_nodes(surf, offset, s, i, v);
-            S.missing_before += !has_face(&M, v[0], v[1], v[2]);
-        }
-    }
-    for (int pass = 0; pass < 3; pass++) {
-        size_t missing = 0, fixed = recovery_pass(&M, surf, offset, n_surf, 0, &S, &missing);
-        S.missing_after = missing - fixed;
-        if (!fixed) break;
-    }
-    /* what one operation per edge could not do: walks along the missing edges, from either end */
-    S.missing_before_walk = S.missing_after;
-    for (int pass = 0; pass < 3 && S.missing_after; pass++) {
-        size_t missing = 0, fixed = recovery_pass(&M, surf, offset, n_surf, 1, &S, &missing);
-        S.missing_after = missing - fixed;
-        if (!fixed) break;
-    }
-    /* what the missing ones lack: an edge, or only the face (an edge of the mesh pierces it) */
-    for (size_t s = 0; s < n_surf; s++)
-        for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            int32_t v[3];
-            tri_nodes(surf, offset, s, i, v);
-            if (has_face(&M, v[0], v[1], v[2])) continue;
-            int edges = 0;
-            for (int e = 0; e < 3; e++) {
-                int n = open_star(&M, v[e], M.star);
-                edges += star_has(&M, M.star, n, v[(e + 1) % 3]);
-            }
-            if (edges == 3) S.missing_face_only++;
-        }
-    THX_TRY(imesh_close(&M, tets, NULL, nbrs, nt));
-    S.seconds = thx_wtime() - t0;
-    if (stats) *stats = S;
-done:
-    imesh_free(&M);
-    return st;
-}
-
-/* ---- the surface triangles as a set ---- */
-struct mesh_triset { tset s; };
-
-thx_status mesh_triset_build(thx_ctx *ctx, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
-                             mesh_triset **out)
-{
-    *out = NULL;
-    size_t n = 0;
-    for (size_t s = 0; s < n_surf; s++) n += surf[s]->n_tris;
-    size_t cap = 16;
-    while (cap < 2 * n + 16) cap <<= 1;
-    mesh_triset *T = thx_malloc(ctx, sizeof *T);
-    if (!T) return THX_ENOMEM;
-    T->s.slot = thx_malloc(ctx, cap * sizeof *T->s.slot);
-    if (!T->s.slot) { free(T); return THX_ENOMEM; }
-    memset(T->s.slot, 0xff, cap * sizeof *T->s.slot);
-    T->s.mask = cap - 1;
-    for (size_t s = 0; s < n_surf; s++)
-        for (size_t i = 0; i < surf[s]->n_tris; i++) {
-            const int32_t *f = surf[s]->tri + 3 * i;
-            tset_add(&T->s, tri_sorted((int32_t)(offset[s] + (size_t)f[0]), (int32_t)(offset[s] + (size_t)f[1]),
-                                       (int32_t)(offset[s] + (size_t)f[2])));
-        }
-    *out = T;
-    return THX_OK;
-}
-
-int mesh_triset_has(const mesh_triset *T, int32_t a, int32_t b, int32_t c) { return tset_has(&T->s, tri_sorted(a, b, c)); }
-
-void mesh_triset_free(mesh_triset **T)
-{
-    if (!T || !*T) return;
-    free((*T)->s.slot);
-    free(*T);
-    *T = NULL;
 }

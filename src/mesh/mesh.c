@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh/conform.h"
 #include "mesh/improve.h"
 #include "mesh/locate.h"
 #include "thorax/delaunay.h"
@@ -40,9 +41,7 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->tol = 0;
     o->layer_spacing = 0;
     o->no_heart = 0;
-    o->sliver_deg = 5.0;
     o->repair_deg = 15.0;
-    o->recover = 1;
 }
 
 /* x as it reads back from the model files ("%.6f"). */
@@ -131,51 +130,6 @@ static int classify_cb(void *user, thx_vec3 c)
     return classify_region(r->m, r->loc, r->surf_region, c);
 }
 
-typedef struct { int32_t a, b; } medge;
-static int cmp_medge(const void *x, const void *y)
-{
-    const medge *p = x, *q = y;
-    if (p->a != q->a) return p->a < q->a ? -1 : 1;
-    return (p->b > q->b) - (p->b < q->b);
-}
-
-typedef struct { int32_t v, w1, w2; } link_rec;
-static int cmp_link_rec(const void *x, const void *y)
-{
-    int32_t a = ((const link_rec *)x)->v, b = ((const link_rec *)y)->v;
-    return (a > b) - (a < b);
-}
-
-static int uf_find(int *parent, int i)
-{
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-}
-
-/* Connected components of a vertex's link: the graph of the edges (w1, w2) of n records. */
-static int link_components(const link_rec *r, size_t n)
-{
-    int32_t w[128];
-    int parent[128], nw = 0, comps = 0;
-    if (2 * n > 128) return 1; /* an unusually crowded vertex: not judged */
-    for (size_t k = 0; k < n; k++)
-        for (int e = 0; e < 2; e++) {
-            int32_t x = e ? r[k].w2 : r[k].w1;
-            int found = 0;
-            for (int i = 0; i < nw && !found; i++) found = w[i] == x;
-            if (!found) { w[nw] = x; parent[nw] = nw; nw++; }
-        }
-    comps = nw;
-    for (size_t k = 0; k < n; k++) {
-        int i1 = 0, i2 = 0;
-        while (w[i1] != r[k].w1) i1++;
-        while (w[i2] != r[k].w2) i2++;
-        int a = uf_find(parent, i1), b = uf_find(parent, i2);
-        if (a != b) { parent[a] = b; comps--; }
-    }
-    return comps;
-}
-
 static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
 {
     thx_vec3 c = {0, 0, 0};
@@ -183,149 +137,135 @@ static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
     return thx_v3_scale(c, 0.25);
 }
 
-/*
- * Boundary repair. Removing the tetrahedra that reach outside leaves a boundary
- * that can pinch: an edge in four boundary faces (two wedges of tetrahedra
- * touching along it), a vertex where two cones of tetrahedra touch, or a
- * surface node left in no tetrahedron. For each such
- * edge or node, the removed tetrahedra around it whose centroid lies inside the
- * domain are put back (the paper's centroid test instead of the stricter
- * edge-midpoint test); where none is, the tetrahedra at the pinch that touch
- * the boundary are taken away instead; until nothing changes. Returns the number put back and,
- * in *bad, the pinched edges and unused surface nodes that remain.
- */
-static thx_status repair_boundary(thx_ctx *ctx, size_t nt, const int32_t *tets, const int32_t *nbrs, unsigned char *keep,
-                                  const double *xyz, size_t nn, size_t n_surf_nodes, const locator *outer, double on_eps,
-                                  size_t *readded, size_t *removed, size_t *bad)
+/* ---- a hash set of sorted node triples (the faces on the surfaces) ---- */
+typedef struct { int32_t a, b, c; } ftrip;
+typedef struct { ftrip *slot; size_t mask; } fset;
+
+static ftrip ftrip_sorted(int32_t a, int32_t b, int32_t c)
 {
-    thx_status st = THX_OK;
-    *readded = 0;
-    *removed = 0;
-    *bad = 0;
-    /* vertex -> tetrahedra (CSR) */
-    size_t *start = thx_calloc(ctx, nn + 1, sizeof *start);
-    int32_t *inc = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *inc);
-    medge *e = NULL;
-    unsigned char *used = thx_malloc(ctx, nn ? nn : 1), *want = thx_malloc(ctx, nn ? nn : 1);
-    size_t cap = 0;
-    if (!start || !inc || !used || !want) { st = THX_ENOMEM; goto done; }
-    for (size_t t = 0; t < 4 * nt; t++) start[tets[t] + 1]++;
-    for (size_t v = 0; v < nn; v++) start[v + 1] += start[v];
-    {
-        size_t *fill = thx_malloc(ctx, (nn ? nn : 1) * sizeof *fill);
-        if (!fill) { st = THX_ENOMEM; goto done; }
-        memcpy(fill, start, nn * sizeof *fill);
-        for (size_t t = 0; t < nt; t++)
-            for (int k = 0; k < 4; k++) inc[fill[tets[4 * t + k]]++] = (int32_t)t;
-        free(fill);
+    int32_t t;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    return (ftrip){a, b, c};
+}
+
+static size_t fset_slot(const fset *s, ftrip k)
+{
+    uint64_t h = (uint64_t)(uint32_t)k.a * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t)(uint32_t)k.b * 0xC2B2AE3D27D4EB4Full + (h >> 29);
+    h ^= (uint64_t)(uint32_t)k.c * 0x165667B19E3779F9ull + (h >> 32);
+    size_t i = (size_t)(h ^ (h >> 31)) & s->mask;
+    while (s->slot[i].a >= 0 && !(s->slot[i].a == k.a && s->slot[i].b == k.b && s->slot[i].c == k.c)) i = (i + 1) & s->mask;
+    return i;
+}
+
+static thx_status fset_build(thx_ctx *ctx, const mesh_subface *sub, size_t n, fset *s)
+{
+    size_t cap = 16;
+    while (cap < 2 * n + 16) cap <<= 1;
+    s->slot = thx_malloc(ctx, cap * sizeof *s->slot);
+    if (!s->slot) return THX_ENOMEM;
+    memset(s->slot, 0xff, cap * sizeof *s->slot);
+    s->mask = cap - 1;
+    for (size_t i = 0; i < n; i++) {
+        ftrip k = ftrip_sorted(sub[i].v[0], sub[i].v[1], sub[i].v[2]);
+        s->slot[fset_slot(s, k)] = k;
     }
-    for (int iter = 0; iter < 20; iter++) {
-        /* boundary edges of the kept set, and nodes in use */
-        size_t ne = 0;
-        memset(used, 0, nn);
-        memset(want, 0, nn);
-        for (size_t t = 0; t < nt; t++) {
-            if (keep[t] != 1) continue;
-            for (int k = 0; k < 4; k++) used[tets[4 * t + k]] = 1;
+    return THX_OK;
+}
+
+static int fset_has(const fset *s, int32_t a, int32_t b, int32_t c)
+{
+    return s->slot[fset_slot(s, ftrip_sorted(a, b, c))].a >= 0;
+}
+
+/*
+ * The pieces of space the surfaces cut the tetrahedralization into: tetrahedra
+ * joined across every face that is not on a surface (breadth-first). comp[t]
+ * gets the piece's number; *n_comp their count; touches_hull[piece] 1 when
+ * the piece reaches the convex hull (then it is outside the outer surface).
+ */
+static thx_status components(thx_ctx *ctx, const int32_t *tets, const int32_t *nbrs, size_t nt, const fset *fs,
+                             int32_t *comp, size_t *n_comp, unsigned char **touches_hull)
+{
+    int32_t *queue = thx_malloc(ctx, (nt ? nt : 1) * sizeof *queue);
+    size_t cap = 64, nc = 0;
+    unsigned char *hull = thx_calloc(ctx, cap, 1);
+    if (!queue || !hull) { free(queue); free(hull); return THX_ENOMEM; }
+    for (size_t t = 0; t < nt; t++) comp[t] = -1;
+    for (size_t t0 = 0; t0 < nt; t0++) {
+        if (comp[t0] >= 0) continue;
+        if (nc >= cap) {
+            size_t old = cap;
+            if (thx_grow(ctx, (void **)&hull, &cap, nc + 1, 1) != THX_OK) { free(queue); free(hull); return THX_ENOMEM; }
+            memset(hull + old, 0, cap - old);
+        }
+        size_t head = 0, tail = 0;
+        queue[tail++] = (int32_t)t0;
+        comp[t0] = (int32_t)nc;
+        while (head < tail) {
+            int32_t t = queue[head++];
+            const int32_t *q = tets + 4 * (size_t)t;
             for (int f = 0; f < 4; f++) {
-                int32_t u = nbrs[4 * t + f];
-                if (u >= 0 && keep[u] == 1) continue;
-                st = thx_grow(ctx, (void **)&e, &cap, ne + 3, sizeof *e);
-                if (st != THX_OK) goto done;
-                int32_t v[3];
-                for (int q = 0, k = 0; q < 4; q++) if (q != f) v[k++] = tets[4 * t + q];
-                for (int q = 0; q < 3; q++) {
-                    int32_t a = v[q], b = v[(q + 1) % 3];
-                    e[ne].a = a < b ? a : b;
-                    e[ne].b = a < b ? b : a;
-                    ne++;
-                }
+                int32_t u = nbrs[4 * (size_t)t + f];
+                if (fset_has(fs, q[(f + 1) & 3], q[(f + 2) & 3], q[(f + 3) & 3])) continue;
+                if (u < 0) { hull[nc] = 1; continue; }
+                if (comp[u] >= 0) continue;
+                comp[u] = (int32_t)nc;
+                queue[tail++] = u;
             }
         }
-        qsort(e, ne, sizeof *e, cmp_medge);
-        size_t n_bad = 0;
-        for (size_t k = 0; k < ne;) {
-            size_t j = k + 1;
-            while (j < ne && e[j].a == e[k].a && e[j].b == e[k].b) j++;
-            if (j - k > 2) { want[e[k].a] = want[e[k].b] = 1; n_bad++; }
-            k = j;
+        nc++;
+    }
+    free(queue);
+    *n_comp = nc;
+    *touches_hull = hull;
+    return THX_OK;
+}
+
+/* Nodes in no tetrahedron (none expected: grid points inside the outer surface, Steiner points on
+ * surfaces that bound kept tetrahedra) are dropped and the rest renumbered; surface nodes are never
+ * unused (they bound regions), so their numbers stay. */
+static thx_status drop_unused_nodes(thx_ctx *ctx, thx_volume *v)
+{
+    unsigned char *used = thx_calloc(ctx, v->n_nodes ? v->n_nodes : 1, 1);
+    if (!used) return THX_ENOMEM;
+    for (size_t k = 0; k < 4 * v->n_tets; k++) used[v->tet[k]] = 1;
+    size_t n_used = 0;
+    for (size_t i = 0; i < v->n_nodes; i++) n_used += used[i];
+    if (n_used == v->n_nodes) { free(used); return THX_OK; }
+    for (size_t i = 0; i < v->n_nodes; i++)
+        if (!used[i] && v->node_surf[i] >= 0) {
+            free(used);
+            return thx_error(ctx, THX_EINTERNAL, "mesh: node %zu of surface %ld is in no tetrahedron", i + 1, (long)v->node_surf[i] + 1);
         }
-        for (size_t v = 0; v < n_surf_nodes; v++)
-            if (!used[v]) { want[v] = 1; n_bad++; }
-        /* Pinched vertices: at a vertex of a closed 2-manifold the opposite edges of its boundary
-           faces (its link) form one cycle; two cones touching at the vertex give two. */
-        {
-            size_t nr = 0;
-            link_rec *rec = thx_malloc(ctx, (ne ? ne : 1) * sizeof *rec); /* ne = 3 x faces: one per corner */
-            if (!rec) { st = THX_ENOMEM; goto done; }
-            for (size_t t = 0; t < nt; t++) {
-                if (keep[t] != 1) continue;
-                for (int f = 0; f < 4; f++) {
-                    int32_t u = nbrs[4 * t + f];
-                    if (u >= 0 && keep[u] == 1) continue;
-                    int32_t c3[3];
-                    for (int q = 0, k = 0; q < 4; q++) if (q != f) c3[k++] = tets[4 * t + q];
-                    for (int q = 0; q < 3; q++) {
-                        rec[nr].v = c3[q];
-                        rec[nr].w1 = c3[(q + 1) % 3];
-                        rec[nr].w2 = c3[(q + 2) % 3];
-                        nr++;
-                    }
-                }
-            }
-            qsort(rec, nr, sizeof *rec, cmp_link_rec);
-            for (size_t k = 0; k < nr;) {
-                size_t j = k + 1;
-                while (j < nr && rec[j].v == rec[k].v) j++;
-                if (link_components(rec + k, j - k) > 1 && !want[rec[k].v]) { want[rec[k].v] = 1; n_bad++; }
-                k = j;
-            }
-            free(rec);
-        }
-        *bad = n_bad;
-        if (n_bad == 0) break;
-        size_t added = 0;
-        for (size_t v = 0; v < nn; v++) {
-            if (!want[v]) continue;
-            for (size_t k = start[v]; k < start[v + 1]; k++) {
-                int32_t t = inc[k];
-                if (keep[t] == 3) { keep[t] = 1; added++; continue; } /* a peeled sliver: it was inside */
-                if (keep[t] != 0) continue;
-                thx_vec3 c = tet_centroid(xyz, tets + 4 * t);
-                if (locator_inside(outer, c) || locator_near(outer, c, on_eps)) { keep[t] = 1; added++; }
-            }
-        }
-        *readded += added;
-        if (added == 0) {
-            /* Nothing inside to put back: open the pinch instead, taking away the tetrahedra at the
-               pinched edges and vertices that touch the boundary (never to be put back). */
-            size_t taken = 0;
-            for (size_t t = 0; t < nt; t++) {
-                if (keep[t] != 1) continue;
-                int pinched = 0;
-                for (int k = 0; k < 4 && !pinched; k++) pinched = want[tets[4 * t + k]];
-                if (!pinched) continue;
-                int touches = 0;
-                for (int f = 0; f < 4 && !touches; f++) {
-                    int32_t u = nbrs[4 * t + f];
-                    touches = u < 0 || keep[u] != 1;
-                }
-                /* only tetrahedra with at least two corners at pinches: the wedge or cone itself */
-                int corners = 0;
-                for (int k = 0; k < 4; k++) corners += want[tets[4 * t + k]];
-                if (touches && corners >= 2) { keep[t] = 4; taken++; }
-            }
-            *removed += taken;
-            if (taken == 0) break;
+    int32_t *map = thx_malloc(ctx, v->n_nodes * sizeof *map);
+    if (!map) { free(used); return THX_ENOMEM; }
+    size_t k = 0;
+    for (size_t i = 0; i < v->n_nodes; i++) {
+        map[i] = used[i] ? (int32_t)k : -1;
+        if (used[i]) {
+            memmove(v->xyz + 3 * k, v->xyz + 3 * i, 3 * sizeof *v->xyz);
+            v->node_surf[k] = v->node_surf[i];
+            v->node_snode[k] = v->node_snode[i];
+            k++;
         }
     }
-done:
-    free(start);
-    free(inc);
-    free(e);
+    for (size_t j = 0; j < 4 * v->n_tets; j++) v->tet[j] = map[v->tet[j]];
+    size_t ks = 0;
+    for (size_t j = 0; j < v->n_steiner; j++)
+        if (map[v->steiner[j].node] >= 0) {
+            v->steiner[ks] = v->steiner[j];
+            v->steiner[ks++].node = map[v->steiner[j].node];
+        }
+    v->n_steiner = ks;
+    for (size_t s = 0; s < v->n_surfaces; s++)
+        for (size_t i = 0; i < v->surf_n_nodes[s]; i++) v->surf_node[s][i] = map[v->surf_node[s][i]];
+    v->n_nodes = k;
+    free(map);
     free(used);
-    free(want);
-    return st;
+    return THX_OK;
 }
 
 thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats)
@@ -350,7 +290,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     size_t ns = m->n_surfaces;
     locator *loc = thx_calloc(ctx, ns, sizeof *loc);
     double *planes = NULL, *xyz = NULL;
-    int32_t *tets = NULL, *nbrs = NULL, *region = NULL, *vnbr = NULL;
+    int32_t *tets = NULL, *nbrs = NULL, *region = NULL, *vnbr = NULL, *comp = NULL;
     unsigned char *keep = NULL;
     thx_volume *v = NULL;
     size_t *offset = thx_calloc(ctx, ns + 1, sizeof *offset);
@@ -442,22 +382,42 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     double t1 = thx_wtime();
     S.t_points = t1 - t0;
 
-    /* 2. Delaunay */
+    /* 2. Delaunay, then points on the surfaces until every surface triangle is a union of faces */
     size_t nt = 0;
+    mesh_subface *sub = NULL;
+    size_t n_sub = 0;
+    thx_steiner *steiner = NULL;
+    size_t n_steiner = 0;
     {
-        thx_ctx *dc = NULL;
-        if (thx_ctx_create(&dc) != THX_OK) { st = THX_ENOMEM; goto done; }
-        st = thx_delaunay3d(dc, xyz, nn, &tets, &nbrs, &nt, NULL);
+        thx_dt *dt = NULL;
+        st = thx_dt_create(ctx, xyz, nn, &dt);
         if (st != THX_OK) {
-            char msg[2048];
-            snprintf(msg, sizeof msg, "%s", thx_ctx_message(dc));
-            thx_ctx_destroy(&dc);
             /* name the surfaces whose nodes coincide: indices below offset[ns] are surface nodes */
             st = thx_error(ctx, st, "mesh: tetrahedralization failed: %s (volume nodes 1..%zu are the surface nodes in "
-                           "model order, then the grid points)", msg, offset[ns]);
+                           "model order, then the grid points)", thx_ctx_message(ctx), offset[ns]);
             goto done;
         }
-        thx_ctx_destroy(&dc);
+        double t_dt = thx_wtime();
+        S.t_delaunay = t_dt - t1;
+        conform_stats cs;
+        st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, 0, &steiner, &n_steiner, &sub, &n_sub, &cs);
+        if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
+        S.n_surface_tris = cs.n_triangles;
+        S.n_missing_before = cs.missing_before;
+        S.n_steiner_edge = cs.n_edge_points;
+        S.n_steiner_face = cs.n_face_points;
+        S.n_split_triangles = cs.n_split_triangles;
+        S.conform_rounds = cs.rounds;
+        S.min_piece = cs.min_piece;
+        S.t_conform = cs.seconds;
+        size_t nall = thx_dt_n_points(dt);
+        double *all = thx_realloc(ctx, xyz, 3 * nall * sizeof *all);
+        if (!all) { thx_dt_destroy(&dt); st = THX_ENOMEM; goto done; }
+        xyz = all;
+        for (size_t i = nn; i < nall; i++) memcpy(xyz + 3 * i, thx_dt_point(dt, (int32_t)i), 3 * sizeof *xyz);
+        nn = nall;
+        st = thx_dt_finish(&dt, &tets, &nbrs, &nt);
+        if (st != THX_OK) goto done;
     }
     /* right-handed from here on (the volume's convention): swap corners 2 and 3, and their faces */
     for (size_t t = 0; t < nt; t++) {
@@ -469,29 +429,20 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         nbrs[4 * t + 3] = x;
     }
     S.n_delaunay_tets = nt;
-    /* the surfaces' triangles made faces where one flip per edge does it */
-    if (o->recover) {
-        recover_stats rs;
-        THX_TRY(mesh_recover(ctx, xyz, nn, &tets, &nbrs, &nt, (const thx_surface *const *)m->surf, offset, ns, &rs));
-        S.n_surface_tris = rs.n_triangles;
-        S.n_missing_before = rs.missing_before;
-        S.n_missing_after = rs.missing_after;
-        S.n_missing_face_only = rs.missing_face_only;
-        S.n_recover_flips = rs.n_flip23 + rs.n_edge_removals + rs.n_boundary + rs.n_walk + rs.n_face_ops;
-        S.t_recover = rs.seconds;
-    }
     double t2 = thx_wtime();
-    S.t_delaunay = t2 - t1;
 
-    /* 3. outside tetrahedra, 4. regions */
+    /* 3. regions: the pieces the surfaces cut space into, each classified by the majority of its
+       tetrahedra's centroids (the chain of inside/outside tests); outside the outer surface -> removed */
     keep = thx_malloc(ctx, nt ? nt : 1);
     region = thx_malloc(ctx, (nt ? nt : 1) * sizeof *region);
-    if (!keep || !region) { st = THX_ENOMEM; goto done; }
+    comp = thx_malloc(ctx, (nt ? nt : 1) * sizeof *comp);
+    if (!keep || !region || !comp) { st = THX_ENOMEM; goto done; }
     /* the region table: mean thorax first, then per surface role */
     thx_region table[16];
     int n_regions = 0, surf_region[64];
+    if (ns > 64) { st = thx_error(ctx, THX_EINPUT, "mesh: more than 64 surfaces"); goto done; }
     thx_region_default("mean_thorax", &table[n_regions++]);
-    for (size_t s = 0; s < ns && s < 64; s++) {
+    for (size_t s = 0; s < ns; s++) {
         surf_region[s] = -1;
         const thx_surface *su = m->surf[s];
         const char *tissue = NULL;
@@ -499,99 +450,65 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         case THX_ROLE_FAT: tissue = "fat"; break;
         case THX_ROLE_MUSCLE: tissue = "muscle"; break;
         case THX_ROLE_LUNG: tissue = "lung"; break;
-        case THX_ROLE_HEART: tissue = o->no_heart ? NULL : "heart"; break;
+        case THX_ROLE_HEART: tissue = "heart"; break;
         case THX_ROLE_OTHER: tissue = "mean_thorax"; break;
         default: break;
         }
-        if (!tissue || n_regions >= 16) continue;
+        if (!tissue) continue;
+        if (n_regions >= 16) { st = thx_error(ctx, THX_EINPUT, "mesh: more than 16 tissue regions"); goto done; }
         thx_region_default(tissue, &table[n_regions]);
         /* lungs and other surfaces are named after their surface */
         if (su->role == THX_ROLE_LUNG || su->role == THX_ROLE_OTHER) snprintf(table[n_regions].name, sizeof table[n_regions].name, "%s", su->name);
         surf_region[s] = n_regions++;
     }
-    if (ns > 64) { st = thx_error(ctx, THX_EINPUT, "mesh: more than 64 surfaces"); goto done; }
-    size_t n_out = 0, n_heart = 0;
-#pragma omp parallel for schedule(dynamic, 4096) reduction(+ : n_out, n_heart)
-    for (long t = 0; t < (long)nt; t++) {
-        const int32_t *q = tets + 4 * t;
-        thx_vec3 P[4];
-        int on_surf = 0;
-        for (int k = 0; k < 4; k++) {
-            P[k] = thx_v3(xyz[3 * q[k]], xyz[3 * q[k] + 1], xyz[3 * q[k] + 2]);
-            on_surf += (size_t)q[k] < offset[ns];
-        }
-        int out = 0;
-        for (int a = 0; a < 4 && !out; a++)
-            for (int b = a + 1; b < 4 && !out; b++) {
-                if ((size_t)q[a] >= offset[ns] || (size_t)q[b] >= offset[ns]) continue;
-                out = outside_domain(&loc[outer], thx_v3_scale(thx_v3_add(P[a], P[b]), 0.5), on_eps);
-            }
-        thx_vec3 c = thx_v3_scale(thx_v3_add(thx_v3_add(P[0], P[1]), thx_v3_add(P[2], P[3])), 0.25);
-        if (!out && on_surf >= 2) out = outside_domain(&loc[outer], c, on_eps);
-        region[t] = -1;
-        if (out) { keep[t] = 0; n_out++; continue; }
-        if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], c)) { keep[t] = 2; n_heart++; continue; }
-        keep[t] = 1;
-        region[t] = classify_region(m, loc, surf_region, c);
-    }
-    S.n_outside = n_out;
-    S.n_heart = n_heart;
-    /* Flat tetrahedra (slivers) with a face on the boundary are peeled off, layer by layer (the
-       paper's quality control); inside the domain they stay, since removing them would leave a void.
-       A boundary face that is a surface triangle is where the boundary belongs: a sliver whose
-       boundary faces are all surface triangles stays, unless it is flatter than half the limit (its
-       interior edge cannot be flipped then: the ring around it is not convex; peeling it moves the
-       boundary by less than sin(2.5 deg) of an edge). */
-    if (o->sliver_deg > 0) {
-        size_t peeled = 0;
-        mesh_triset *tris = NULL;
-        THX_TRY(mesh_triset_build(ctx, (const thx_surface *const *)m->surf, offset, ns, &tris));
-        for (int round = 0; round < 8; round++) {
-            size_t this_round = 0;
-            for (size_t t = 0; t < nt; t++) {
-                if (keep[t] != 1) continue;
-                int on_boundary = 0, off_surface = 0;
-                for (int f = 0; f < 4; f++) {
-                    int32_t u = nbrs[4 * t + f];
-                    const int32_t *q = tets + 4 * t;
-                    if (u >= 0 && keep[u] == 1) continue;
-                    on_boundary = 1;
-                    off_surface |= !mesh_triset_has(tris, q[(f + 1) & 3], q[(f + 2) & 3], q[(f + 3) & 3]);
-                }
-                if (!on_boundary) continue;
-                double d = mesh_tet_min_dihedral(xyz, tets + 4 * t);
-                if (d < (off_surface ? o->sliver_deg : 0.5 * o->sliver_deg)) { keep[t] = 3; this_round++; }
-            }
-            peeled += this_round;
-            if (!this_round) break;
-        }
-        S.n_slivers_peeled = peeled;
-        mesh_triset_free(&tris);
-    }
     {
-        size_t readded = 0, bad = 0, taken = 0;
-        THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &readded, &taken, &bad));
-        if (bad && S.n_slivers_peeled) {
-            /* the peeling opened a pinch the repair cannot close: keep the slivers instead */
-            for (size_t t = 0; t < nt; t++) if (keep[t] == 3) keep[t] = 1;
-            S.n_slivers_peeled = 0;
-            for (size_t t = 0; t < nt; t++) if (keep[t] == 4) keep[t] = 1;
-            size_t more = 0;
-            THX_TRY(repair_boundary(ctx, nt, tets, nbrs, keep, xyz, nn, offset[ns], &loc[outer], on_eps, &more, &taken, &bad));
-            readded += more;
-        }
-        S.n_readded = readded;
-        S.n_taken = taken;
-        S.n_pinches = bad;
-        if (readded)
+        fset fs = {NULL, 0};
+        st = fset_build(ctx, sub, n_sub, &fs);
+        if (st != THX_OK) goto done;
+        size_t n_comp = 0;
+        unsigned char *hull = NULL;
+        st = components(ctx, tets, nbrs, nt, &fs, comp, &n_comp, &hull);
+        free(fs.slot);
+        if (st != THX_OK) goto done;
+        /* per tetrahedron: -1 outside, else its region by the chain; votes per piece */
+        const int NV = 17; /* outside + 16 regions */
+        size_t *votes = thx_calloc(ctx, n_comp * (size_t)NV, sizeof *votes);
+        if (!votes) { free(hull); st = THX_ENOMEM; goto done; }
 #pragma omp parallel for schedule(dynamic, 4096)
-            for (long t = 0; t < (long)nt; t++)
-                if (keep[t] == 1 && region[t] < 0) region[t] = classify_region(m, loc, surf_region, tet_centroid(xyz, tets + 4 * t));
+        for (long t = 0; t < (long)nt; t++) {
+            thx_vec3 c = tet_centroid(xyz, tets + 4 * t);
+            region[t] = outside_domain(&loc[outer], c, on_eps) ? -1 : classify_region(m, loc, surf_region, c);
+        }
+        for (size_t t = 0; t < nt; t++) votes[(size_t)comp[t] * NV + (size_t)(region[t] + 1)]++;
+        int32_t *comp_region = thx_malloc(ctx, n_comp * sizeof *comp_region);
+        if (!comp_region) { free(votes); free(hull); st = THX_ENOMEM; goto done; }
+        size_t n_out = 0, n_heart = 0, n_disagree = 0;
+        for (size_t k = 0; k < n_comp; k++) {
+            int best = 0;
+            for (int r = 1; r < NV; r++)
+                if (votes[k * NV + r] > votes[k * NV + best]) best = r;
+            comp_region[k] = hull[k] ? -1 : best - 1; /* a piece reaching the hull is outside */
+        }
+        for (size_t t = 0; t < nt; t++) {
+            int32_t r = comp_region[comp[t]];
+            n_disagree += region[t] != r;
+            region[t] = r;
+            if (r < 0) { keep[t] = 0; n_out++; }
+            else if (o->no_heart && heart >= 0 && r == surf_region[heart]) { keep[t] = 2; n_heart++; }
+            else keep[t] = 1;
+        }
+        S.n_outside = n_out;
+        S.n_heart = n_heart;
+        S.n_pieces = n_comp;
+        S.n_centroid_disagree = n_disagree;
+        free(votes);
+        free(hull);
+        free(comp_region);
     }
     double t3 = thx_wtime();
     S.t_classify = t3 - t2;
 
-    /* the volume: right-handed tetrahedra (swap two corners of the Delaunay output) */
+    /* the volume */
     THX_TRY(thx_volume_create(ctx, &v));
     size_t kept = 0;
     for (size_t t = 0; t < nt; t++) kept += keep[t] == 1;
@@ -600,9 +517,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     v->regions = thx_malloc(ctx, (size_t)n_regions * sizeof *v->regions);
     if (!v->tet || !v->region || !v->regions) { st = THX_ENOMEM; goto done; }
     /* the kept tetrahedra's adjacency, for the sliver repair (Delaunay numbering -> kept numbering) */
-    int32_t *newidx = NULL;
     if (o->repair_deg > 0) {
-        newidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *newidx);
+        int32_t *newidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *newidx);
         vnbr = thx_malloc(ctx, 4 * (kept ? kept : 1) * sizeof *vnbr);
         if (!newidx || !vnbr) { free(newidx); st = THX_ENOMEM; goto done; }
         for (size_t t = 0, k = 0; t < nt; t++) newidx[t] = keep[t] == 1 ? (int32_t)k++ : -1;
@@ -617,12 +533,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     }
     for (size_t t = 0, k = 0; t < nt; t++) {
         if (keep[t] != 1) continue;
-        v->tet[4 * k] = tets[4 * t];
-        v->tet[4 * k + 1] = tets[4 * t + 1];
-        v->tet[4 * k + 2] = tets[4 * t + 2];
-        v->tet[4 * k + 3] = tets[4 * t + 3];
+        memcpy(v->tet + 4 * k, tets + 4 * t, 4 * sizeof *v->tet);
         v->region[k] = region[t];
-        if (region[t] >= 0 && region[t] < 16) S.per_region[region[t]]++;
         k++;
     }
     v->n_tets = kept;
@@ -631,8 +543,17 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     free(nbrs);
     free(keep);
     free(region);
-    tets = nbrs = region = NULL;
+    free(comp);
+    tets = nbrs = region = comp = NULL;
     keep = NULL;
+    if (o->no_heart && heart >= 0 && surf_region[heart] >= 0) {
+        /* the heart's region held its piece only to remove it: out of the table */
+        int rh = surf_region[heart];
+        for (size_t t = 0; t < v->n_tets; t++) v->region[t] -= v->region[t] > rh;
+        memmove(table + rh, table + rh + 1, (size_t)(n_regions - rh - 1) * sizeof *table);
+        n_regions--;
+        for (size_t s = 0; s < ns; s++) surf_region[s] = surf_region[s] == rh ? -1 : surf_region[s] - (surf_region[s] > rh);
+    }
     memcpy(v->regions, table, (size_t)n_regions * sizeof *table);
     v->n_regions = (size_t)n_regions;
     v->n_nodes = nn;
@@ -656,14 +577,26 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
             v->node_snode[offset[s] + i] = (int32_t)i;
         }
     }
-    /* slivers inside the domain: repaired (flips, perturbation of grid nodes), never removed */
+    v->steiner = steiner;
+    v->n_steiner = n_steiner;
+    steiner = NULL;
+    /* the excluded heart's interior leaves nodes in no tetrahedron: its Steiner points stay (on the
+       boundary), grid points inside it are dropped below */
+    THX_TRY(drop_unused_nodes(ctx, v));
+    S.n_steiner = v->n_steiner;
+    /* slivers: repaired (flips, moving grid nodes) with the faces on the surfaces kept, never removed */
     if (o->repair_deg > 0) {
         region_ctx rc = {m, loc, surf_region};
         improve_opts io = {o->repair_deg, 6, 0, classify_cb, &rc};
         improve_stats is;
+        int32_t *prot = thx_malloc(ctx, 3 * (n_sub ? n_sub : 1) * sizeof *prot);
+        if (!prot) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < n_sub; i++) memcpy(prot + 3 * i, sub[i].v, 3 * sizeof *prot);
         int32_t *adj = vnbr;
         vnbr = NULL; /* taken over */
-        THX_TRY(mesh_improve(ctx, v, adj, (const thx_surface *const *)m->surf, ns, &io, &is));
+        st = mesh_improve(ctx, v, adj, prot, n_sub, &io, &is);
+        free(prot);
+        if (st != THX_OK) goto done;
         S.repair_below_before = is.below_before;
         S.repair_below_after = is.below_after;
         S.repair_min_before = is.min_before;
@@ -672,10 +605,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_face_removals = is.n_face_removals;
         S.n_moves = is.n_moves;
         S.t_repair = is.seconds;
-        memset(S.per_region, 0, sizeof S.per_region);
-        for (size_t t = 0; t < v->n_tets; t++)
-            if (v->region[t] >= 0 && v->region[t] < 16) S.per_region[v->region[t]]++;
     }
+    memset(S.per_region, 0, sizeof S.per_region);
+    for (size_t t = 0; t < v->n_tets; t++)
+        if (v->region[t] >= 0 && v->region[t] < 16) S.per_region[v->region[t]]++;
     S.n_tets = v->n_tets;
     S.n_nodes = v->n_nodes;
     thx_volume_destroy(&m->volume);
@@ -697,6 +630,9 @@ done:
     free(vnbr);
     free(keep);
     free(region);
+    free(comp);
+    free(sub);
+    free(steiner);
     thx_volume_destroy(&v);
     return st;
 }

@@ -23,6 +23,7 @@ void thx_volume_destroy(thx_volume **v)
     free(w->surf_n_nodes);
     free(w->node_surf);
     free(w->node_snode);
+    free(w->steiner);
     free(w);
     *v = NULL;
 }

@@ -1,0 +1,64 @@
+/*
+ * Conforming Delaunay tetrahedralization of the model's surfaces (internal to
+ * src/mesh; docs/decisions.md, "Conformity by Steiner points").
+ *
+ * Given the Delaunay tetrahedralization of the surface nodes and the grid
+ * points (thx_dt), points are added ON the surfaces until every surface
+ * triangle is exactly a union of faces of the tetrahedralization, which stays
+ * Delaunay throughout (Bowyer-Watson insertion):
+ *   - a piece of a surface edge (between consecutive points on it) that is not
+ *     an edge of the mesh is split at its midpoint;
+ *   - a triangle whose pieces of edges are all mesh edges but that is not
+ *     covered by mesh faces gets the circumcentre of its largest missing
+ *     piece (the pieces: the 2D Delaunay triangulation of the points on it),
+ *     unless that centre lies outside the triangle or inside the diametral
+ *     circle of a piece of its edges, which is then split instead (Ruppert's
+ *     rule, as in Shewchuk's Delaunay refinement).
+ * A piece of a triangle is "covered" when the mesh faces whose three corners
+ * are points of the triangle add up to its area (faces of one mesh do not
+ * overlap, so that is the whole triangle).
+ *
+ * Every added point is recorded (which surface, which triangle, barycentric
+ * coordinates in it); every original surface node stays a node.
+ */
+#ifndef THORAX_MESH_CONFORM_H
+#define THORAX_MESH_CONFORM_H
+
+#include "thorax/delaunay.h"
+#include "thorax/volume.h"
+
+/* A face of the mesh on a surface triangle, oriented like the triangle (counterclockwise seen from
+ * outside the surface). */
+typedef struct {
+    int32_t v[3];
+    int32_t surf, tri;
+} mesh_subface;
+
+typedef struct {
+    size_t n_triangles;      /* surface triangles */
+    size_t missing_before;   /* not faces of the first tetrahedralization */
+    size_t n_edge_points;    /* Steiner points added on surface edges */
+    size_t n_face_points;    /* Steiner points added inside surface triangles */
+    size_t n_split_triangles;/* surface triangles made of more than one mesh face */
+    size_t rounds;
+    double min_piece;        /* shortest piece of a surface edge, mm */
+    double seconds;
+} conform_stats;
+
+/*
+ * dt: the tetrahedralization; points 0 .. offset[n_surf] - 1 are the surface
+ * nodes (surface s's node i is point offset[s] + i). Points are added to dt;
+ * their coordinates are rounded to "%.6f" before insertion (what volume.pts
+ * stores is what was tetrahedralized). max_steiner: refuse to add more
+ * (0: 20 per surface triangle).
+ * Out: *steiner (n_steiner records, node = index in dt), *sub (n_sub faces on
+ * the surfaces, each triangle's pieces), both malloc'ed.
+ * Errors: THX_EGEOM naming the surface and triangle where the pieces became
+ * shorter than 1e-4 mm or max_steiner was reached (surfaces touching or
+ * crossing there); THX_ENOMEM.
+ */
+thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
+                        size_t max_steiner, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
+                        conform_stats *stats);
+
+#endif
