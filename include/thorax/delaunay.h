@@ -128,6 +128,24 @@ const double *thx_dt_point(const thx_dt *d, int32_t i);
 int thx_dt_star(thx_dt *d, int32_t a, const int32_t (**quads)[4]);
 int thx_dt_has_edge(thx_dt *d, int32_t a, int32_t b);
 int thx_dt_has_face(thx_dt *d, int32_t a, int32_t b, int32_t c);
+/* As thx_dt_insert, but reject(user, a, b, c, interior) is asked about every
+ * face that the insertion would remove (interior = 1: a face between two
+ * tetrahedra of the cavity), then about every face of the cavity's boundary
+ * (interior = 0: kept, joined to the new point); the first face it answers
+ * nonzero for stops the insertion: *index = -1, face[] = that face, the
+ * structure unchanged. */
+thx_status thx_dt_insert_checked(thx_dt *d, const double p[3], int32_t near,
+                                 int (*reject)(void *user, int32_t a, int32_t b, int32_t c, int interior), void *user,
+                                 int32_t *index, int32_t face[3]);
+/* The solid tetrahedra now (4 input indices each, orientation of thx_delaunay3d), malloc'ed. */
+thx_status thx_dt_tets(thx_dt *d, int32_t **quads, size_t *n);
+/* The tetrahedra the last successful insertion made (vertex quads as thx_dt_star,
+ * the new point last; -1 the vertex at infinity), valid until the next call
+ * that takes the structure; their vertices are all the vertices whose star
+ * changed. Returns the count, -1 on no memory. */
+int thx_dt_new_tets(thx_dt *d, const int32_t (**quads)[4]);
+/* 1 if the four points are a tetrahedron of the tetrahedralization. */
+int thx_dt_has_tet(thx_dt *d, const int32_t q[4]);
 thx_status thx_dt_finish(thx_dt **d, int32_t **tets, int32_t **nbrs, size_t *n_tets);
 void thx_dt_destroy(thx_dt **d);
 

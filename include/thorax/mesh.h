@@ -31,6 +31,9 @@ typedef struct {
     double layer_spacing; /* planes every layer_spacing mm; 0 = the layers of the outer surface's nodes
                              when they lie on planes (a model built from contours), else `grid` */
     int no_heart;         /* 1: the heart's interior is not part of the domain */
+    double radius_edge;   /* Delaunay refinement: tetrahedra with a larger radius-edge ratio get their
+                             circumcentre (default 2; 0 = off) */
+    double refine_deg;    /* ... and those with a smaller dihedral angle, degrees (default 10; 0 = off) */
     double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
                              flips and by moving grid nodes (default 15; 0 = no repair) */
 } thx_mesh_opts;
@@ -47,6 +50,11 @@ typedef struct {
     size_t conform_rounds;
     double min_piece;         /* shortest piece of a surface edge, mm */
     double t_conform;         /* seconds */
+    size_t n_refine_points;   /* quality refinement: circumcentres inserted */
+    size_t n_refine_surface;  /* ... points put on the surfaces instead */
+    size_t refine_rounds;
+    int refine_limited;       /* stopped at its point limit */
+    double t_refine;
     size_t n_pieces;          /* pieces of space between the surfaces (flood fill) */
     size_t n_centroid_disagree; /* tetrahedra whose own centroid test disagreed with their piece's majority */
     size_t n_outside;         /* removed: outside the outer surface */

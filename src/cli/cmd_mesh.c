@@ -9,7 +9,7 @@
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--repair DEG] [--stats]\n\n"
+           "                        [--quality R/D] [--repair DEG] [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
            "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
            "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
@@ -28,6 +28,9 @@ static void help(void)
            "  --layer-spacing MM     grid planes this far apart (default: the layers of the\n"
            "                         outer surface when it was built from contours, else --grid)\n"
            "  --no-heart             leave the heart's interior out of the domain\n"
+           "  --quality R/D          Delaunay refinement: circumcentres of tetrahedra whose radius-edge\n"
+           "                         ratio exceeds R or whose smallest dihedral angle is below D degrees\n"
+           "                         (default 2/10; 0 = off)\n"
            "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
            "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
            "  --stats                print counts and times\n"
@@ -49,6 +52,16 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--layer-spacing")) { if (cli_parse_double("mesh", a, v, &o.layer_spacing)) return 2; i++; if (!(o.layer_spacing > 0)) return cli_usage_error("mesh", "--layer-spacing must be positive"); }
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
         else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
+        else if (!strcmp(a, "--quality")) {
+            if (!v) return cli_usage_error("mesh", "--quality needs RATIO/DEG (e.g. 2/10), or 0 for none");
+            char *end = NULL;
+            o.radius_edge = strtod(v, &end);
+            o.refine_deg = 0;
+            if (*end == '/') o.refine_deg = strtod(end + 1, &end);
+            if (end == v || *end || o.radius_edge < 0 || (o.radius_edge > 0 && o.radius_edge < 1) || o.refine_deg < 0 || o.refine_deg > 30)
+                return cli_usage_error("mesh", "--quality takes RATIO/DEG: a radius-edge ratio of at least 1 (0: off) and a dihedral angle of 0 to 30 degrees, got '%s'", v);
+            i++;
+        }
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -86,6 +99,10 @@ int cmd_mesh(int argc, char **argv)
                    "faces, shortest edge piece %.4f mm; %.3f s\n",
                    S.n_missing_before, S.n_surface_tris, S.n_steiner_edge, S.n_steiner_face, S.conform_rounds,
                    S.n_split_triangles, S.min_piece, S.t_conform);
+        if (want_stats && (o.radius_edge > 0 || o.refine_deg > 0))
+            printf("refinement (radius-edge %g, dihedral %g deg): %zu circumcentres, %zu points on the surfaces instead, "
+                   "%zu rounds%s; %.3f s\n", o.radius_edge, o.refine_deg, S.n_refine_points, S.n_refine_surface,
+                   S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
                    "%zu face removals, %zu grid nodes moved; %.3f s\n",

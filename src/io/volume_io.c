@@ -5,7 +5,7 @@
  * are thx_model_write / thx_model_read and thx_volume_export (thorax/model.h).
  *
  * Files (all text, one item a line, 1-based node and region numbers):
- *   volume.pts   "x y z", mm, "%.6f" (as the surface .pts files)
+ *   volume.pts   "x y z", mm, "%.17g": exactly the doubles that were tetrahedralized
  *   volume.tet   "a b c d r": four volume node numbers, then the region
  *                number (the region's "id" in model.json's "regions")
  *   NAME.vmap    per surface, one line per surface node: its volume node
@@ -21,10 +21,8 @@
  *    (src/geom/check_volume.c), as surface orientation is `thorax check`'s:
  *    a faulty mesh can still be saved, read back and inspected.
  *  - Node tables. A surface node IS a volume node (no duplicate nodes): its
- *    coordinates in NAME.pts and volume.pts must be equal. In memory both
- *    come from the same double, so the writer compares their "%.6f" texts
- *    (what will be on disk) and the reader compares the parsed doubles
- *    exactly. Each volume node is on at most one surface node (the reverse
+ *    coordinates in NAME.pts ("%.6f") and volume.pts ("%.17g", the mesher's
+ *    binary grid) agree within 1e-6 mm, on writing and on reading. Each volume node is on at most one surface node (the reverse
  *    table thx_volume.node_surf/node_snode has one slot per volume node);
  *    the reverse table is not stored but rebuilt on reading, and a reverse
  *    table present in memory is checked against the forward one on writing.
@@ -77,21 +75,14 @@ static int name_ok(const char *s, size_t cap)
     return 1;
 }
 
-/* The "%.6f" text of a coordinate as thx_io_put_coord writes it. */
-static void fmt_coord(char *buf, size_t size, double v)
+/* A surface node and its volume node: the mesher snaps volume nodes to a binary grid finer than
+ * the surfaces' 6 decimals (so that points it adds on a surface triangle are exactly in its
+ * plane); they agree to within NODE_TOL mm. */
+#define NODE_TOL 1e-6
+static int same_node(const double *a, const double *b)
 {
-    snprintf(buf, size, "%.6f", v);
-    if (strcmp(buf, "-0.000000") == 0) snprintf(buf, size, "0.000000");
-}
-
-static int same_printed(const double *a, const double *b)
-{
-    for (int k = 0; k < 3; k++) {
-        char x[64], y[64];
-        fmt_coord(x, sizeof x, a[k]);
-        fmt_coord(y, sizeof y, b[k]);
-        if (strcmp(x, y) != 0) return 0;
-    }
+    for (int k = 0; k < 3; k++)
+        if (!(fabs(a[k] - b[k]) <= NODE_TOL)) return 0;
     return 1;
 }
 
@@ -225,7 +216,7 @@ thx_status thx_io_volume_validate(thx_ctx *ctx, const thx_model *m, const char *
                                where, sf->name, i + 1, (long)w, v->n_nodes - 1);
                 goto done;
             }
-            if (!same_printed(sf->xyz + 3 * i, v->xyz + 3 * (size_t)w)) {
+            if (!same_node(sf->xyz + 3 * i, v->xyz + 3 * (size_t)w)) {
                 st = thx_error(ctx, THX_EINPUT,
                                "%s: surface \"%s\" node %zu is volume node %ld but the coordinates differ: "
                                "(%.6f, %.6f, %.6f) vs (%.6f, %.6f, %.6f)",
@@ -347,14 +338,9 @@ thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const cha
     thx_atomic_file af;
     THX_CHECK(join(ctx, path, sizeof path, dir, VOLUME_PTS));
     THX_CHECK(thx_atomic_open(ctx, path, &af));
-    for (size_t i = 0; i < v->n_nodes; i++) {
-        thx_io_put_coord(af.f, v->xyz[3 * i]);
-        fputc(' ', af.f);
-        thx_io_put_coord(af.f, v->xyz[3 * i + 1]);
-        fputc(' ', af.f);
-        thx_io_put_coord(af.f, v->xyz[3 * i + 2]);
-        fputc('\n', af.f);
-    }
+    /* exactly (shortest round-trip form): what was tetrahedralized is what is read back */
+    for (size_t i = 0; i < v->n_nodes; i++)
+        fprintf(af.f, "%.17g %.17g %.17g\n", v->xyz[3 * i] + 0.0, v->xyz[3 * i + 1] + 0.0, v->xyz[3 * i + 2] + 0.0);
     THX_CHECK(thx_atomic_commit(ctx, &af));
     THX_CHECK(join(ctx, path, sizeof path, dir, VOLUME_TET));
     THX_CHECK(thx_atomic_open(ctx, path, &af));
@@ -604,9 +590,9 @@ static thx_status read_vmap(thx_ctx *ctx, const char *path, const char *vpts, co
         }
         size_t vi = (size_t)w - 1;
         const double *a = sf->xyz + 3 * n, *b = v->xyz + 3 * vi;
-        if (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) {
+        if (!same_node(a, b)) {
             st = thx_error(ctx, THX_EINPUT,
-                           "%s:%d: surface \"%s\" node %zu is volume node %ld but the coordinates differ: "
+                           "%s:%d: surface \"%s\" node %zu is volume node %ld but the coordinates differ by more than 1e-6 mm: "
                            "(%.6f, %.6f, %.6f) in %s.pts vs (%.6f, %.6f, %.6f) at %s:%ld",
                            path, line, sf->name, n + 1, w, a[0], a[1], a[2], sf->name, b[0], b[1], b[2], vpts, w);
             goto done;
@@ -829,14 +815,10 @@ done:
 
 /* -------------------------------------------------------------- export */
 
+/* exactly, as volume.pts */
 static void put_xyz(FILE *f, const double *p, const char *eol)
 {
-    thx_io_put_coord(f, p[0]);
-    fputc(' ', f);
-    thx_io_put_coord(f, p[1]);
-    fputc(' ', f);
-    thx_io_put_coord(f, p[2]);
-    fputs(eol, f);
+    fprintf(f, "%.17g %.17g %.17g%s", p[0] + 0.0, p[1] + 0.0, p[2] + 0.0, eol);
 }
 
 /* VTK XML UnstructuredGrid, ASCII inline. Cell data "region" (1-based id);

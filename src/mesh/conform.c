@@ -25,16 +25,18 @@
 
 #include "mesh/conform.h"
 #include "thorax/cdt.h"
+#include "thorax/predicates.h"
 
 #define MIN_PIECE 1e-4 /* mm: shorter pieces mean surfaces touching or crossing */
 #define MAX_ROUNDS 200
+#define MAX_DEPTH 22 /* bits of an edge point's parameter */
 
 typedef struct { double t; int32_t node; } cpt;
 
 typedef struct {
     int32_t a, b;      /* volume nodes, a < b */
     int32_t surf, tri; /* the first triangle holding the edge (for the Steiner record) */
-    int32_t t0;        /* that triangle's index in the conformer */
+    int32_t t0, t1;    /* the triangles holding the edge (t1 = -1 on an open surface) */
     cpt *pt;           /* the chain, sorted by t, ends included */
     size_t n, cap;
 } cedge;
@@ -65,15 +67,27 @@ typedef struct {
     size_t nP, capP;
     int32_t (*F)[3];
     size_t nF, capF;
+    /* which triangles each node lies on (corners: all triangles at it; edge points: the edge's; inner
+       points: their own), as linked lists in a pool; and the edge an edge point lies on */
+    int32_t *own_head, *node_edge;
+    size_t own_cap;
+    struct { int32_t tri, next; } *pool;
+    size_t n_pool, pool_cap;
+    const double *probe; /* the point the refinement tries to insert */
+    /* what an insertion may have changed: triangles and edges to look at again */
+    unsigned char *tdirty, *edirty;
+    int32_t *tlist, *elist;
+    size_t ntl, nel;
+    /* the refinement's work list: tetrahedra to judge (vertex quads) */
+    int refining;
+    int32_t (*rq)[4];
+    size_t nrq, rq_cap;
+    double unit;         /* every coordinate is a multiple of this power of two */
     conform_stats S;
 } conformer;
 
-static double stored(double x)
-{
-    char buf[64];
-    snprintf(buf, sizeof buf, "%.6f", x);
-    return strtod(buf, NULL);
-}
+/* x on the binary grid of spacing C->unit (a power of two: exact). */
+static double snap(const conformer *C, double x) { return nearbyint(x / C->unit) * C->unit; }
 
 static const double *X(const conformer *C, int32_t i) { return thx_dt_point(C->dt, i); }
 
@@ -81,6 +95,130 @@ static double dist3(const double *a, const double *b)
 {
     double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
     return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* ---- which triangles a node lies on ---- */
+
+static thx_status own_reserve(conformer *C, size_t n_nodes)
+{
+    if (n_nodes <= C->own_cap) return THX_OK;
+    size_t cap = n_nodes + n_nodes / 2 + 64;
+    int32_t *h = thx_realloc(C->ctx, C->own_head, cap * sizeof *h);
+    if (!h) return THX_ENOMEM;
+    C->own_head = h;
+    int32_t *e = thx_realloc(C->ctx, C->node_edge, cap * sizeof *e);
+    if (!e) return THX_ENOMEM;
+    C->node_edge = e;
+    for (size_t i = C->own_cap; i < cap; i++) C->own_head[i] = C->node_edge[i] = -1;
+    C->own_cap = cap;
+    return THX_OK;
+}
+
+static thx_status own_add(conformer *C, int32_t node, int32_t tri)
+{
+    THX_CHECK(own_reserve(C, (size_t)node + 1));
+    if (C->n_pool >= C->pool_cap) THX_CHECK(thx_grow(C->ctx, (void **)&C->pool, &C->pool_cap, C->n_pool + 1, sizeof *C->pool));
+    C->pool[C->n_pool].tri = tri;
+    C->pool[C->n_pool].next = C->own_head[node];
+    C->own_head[node] = (int32_t)C->n_pool++;
+    return THX_OK;
+}
+
+static int owns(const conformer *C, int32_t node, int32_t tri)
+{
+    if (node < 0 || (size_t)node >= C->own_cap) return 0;
+    for (int32_t k = C->own_head[node]; k >= 0; k = C->pool[k].next)
+        if (C->pool[k].tri == tri) return 1;
+    return 0;
+}
+
+/* The edges of triangle ti that node lies on (bits 0..2). */
+static unsigned edge_mask(const conformer *C, size_t ti, int32_t node)
+{
+    const ctri *T = &C->T[ti];
+    if (node == T->c[0]) return 5u;
+    if (node == T->c[1]) return 3u;
+    if (node == T->c[2]) return 6u;
+    int32_t e = (size_t)node < C->own_cap ? C->node_edge[node] : -1;
+    for (int k = 0; k < 3; k++)
+        if (e >= 0 && T->e[k] == e) return 1u << k;
+    return 0;
+}
+
+/* The triangle that face (a, b, c) is a piece of, or -1. */
+static int32_t face_triangle(const conformer *C, int32_t a, int32_t b, int32_t c)
+{
+    if (a < 0 || (size_t)a >= C->own_cap) return -1;
+    for (int32_t k = C->own_head[a]; k >= 0; k = C->pool[k].next) {
+        int32_t t = C->pool[k].tri;
+        if (!owns(C, b, t) || !owns(C, c, t)) continue;
+        if (edge_mask(C, (size_t)t, a) & edge_mask(C, (size_t)t, b) & edge_mask(C, (size_t)t, c)) continue;
+        return t;
+    }
+    return -1;
+}
+
+/* The refinement's veto: a piece of a surface would be removed, or the new point (C->probe) lies
+ * in the diametral sphere of a piece it would be joined to (it encroaches upon it). */
+static int veto(void *user, int32_t a, int32_t b, int32_t c, int interior)
+{
+    conformer *C = user;
+    if (face_triangle(C, a, b, c) < 0) return 0;
+    if (interior) return 1;
+    const double *A = X(C, a), *B = X(C, b), *Cc = X(C, c), *p = C->probe;
+    /* centre of the circle through A, B, C in their plane */
+    double u[3], v[3], n[3];
+    for (int k = 0; k < 3; k++) { u[k] = B[k] - A[k]; v[k] = Cc[k] - A[k]; }
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (!(nn > 0)) return 0;
+    double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    double nxu[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
+    double vxn[3] = {v[1] * n[2] - v[2] * n[1], v[2] * n[0] - v[0] * n[2], v[0] * n[1] - v[1] * n[0]};
+    double cc[3];
+    for (int k = 0; k < 3; k++) cc[k] = A[k] + (vv * nxu[k] + uu * vxn[k]) / (2 * nn);
+    double r = dist3(cc, A);
+    return dist3(cc, p) < r;
+}
+
+/* ---- what changed ---- */
+
+static void mark_tri(conformer *C, int32_t t)
+{
+    if (C->tdirty[t]) return;
+    C->tdirty[t] = 1;
+    C->tlist[C->ntl++] = t;
+    for (int k = 0; k < 3; k++) {
+        int32_t e = C->T[t].e[k];
+        if (C->edirty[e]) continue;
+        C->edirty[e] = 1;
+        C->elist[C->nel++] = e;
+    }
+}
+
+/* After an insertion: every vertex whose star changed is a vertex of a new tetrahedron; the
+ * triangles it lies on (and their edges) are looked at again, the new tetrahedra judged. */
+static thx_status after_insert(conformer *C)
+{
+    const int32_t (*q)[4];
+    int n = thx_dt_new_tets(C->dt, &q);
+    if (n < 0) return THX_ENOMEM;
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 4; k++) {
+            int32_t x = q[i][k];
+            if (x < 0 || (size_t)x >= C->own_cap) continue;
+            for (int32_t j = C->own_head[x]; j >= 0; j = C->pool[j].next) mark_tri(C, C->pool[j].tri);
+        }
+    if (C->refining) {
+        if (C->nrq + (size_t)n > C->rq_cap) THX_CHECK(thx_grow(C->ctx, (void **)&C->rq, &C->rq_cap, C->nrq + (size_t)n, sizeof *C->rq));
+        for (int i = 0; i < n; i++) {
+            if (q[i][0] < 0 || q[i][1] < 0 || q[i][2] < 0) continue;
+            memcpy(C->rq[C->nrq++], q[i], sizeof *C->rq);
+        }
+    }
+    return THX_OK;
 }
 
 /* ---- edges ---- */
@@ -128,6 +266,7 @@ static thx_status build(conformer *C, const thx_surface *const *surf, const size
             E->surf = C->T[r[i].t].surf;
             E->tri = C->T[r[i].t].tri;
             E->t0 = r[i].t;
+            E->t1 = -1;
             E->pt = thx_malloc(C->ctx, 4 * sizeof *E->pt);
             if (!E->pt) { free(r); return THX_ENOMEM; }
             E->cap = 4;
@@ -136,25 +275,13 @@ static thx_status build(conformer *C, const thx_surface *const *surf, const size
             E->pt[1] = (cpt){1.0, E->b};
         }
         C->T[r[i].t].e[r[i].k] = (int32_t)(e - 1);
+        if (C->E[e - 1].t0 != r[i].t) C->E[e - 1].t1 = r[i].t;
     }
     C->nE = nE;
     free(r);
+    for (size_t t = 0; t < nT; t++)
+        for (int j = 0; j < 3; j++) THX_CHECK(own_add(C, C->T[t].c[j], (int32_t)t));
     return THX_OK;
-}
-
-/* Barycentric coordinates of point p in triangle T (corners a, b, c), by least squares in its plane. */
-static void barycentric(const double *a, const double *b, const double *c, const double *p, double w[3])
-{
-    double u[3], v[3], q[3];
-    for (int k = 0; k < 3; k++) { u[k] = b[k] - a[k]; v[k] = c[k] - a[k]; q[k] = p[k] - a[k]; }
-    double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    double uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-    double qu = q[0] * u[0] + q[1] * u[1] + q[2] * u[2], qv = q[0] * v[0] + q[1] * v[1] + q[2] * v[2];
-    double det = uu * vv - uv * uv;
-    double s = (qu * vv - qv * uv) / det, t = (qv * uu - qu * uv) / det;
-    w[0] = 1 - s - t;
-    w[1] = s;
-    w[2] = t;
 }
 
 static thx_status add_record(conformer *C, int32_t node, int32_t s, int32_t tri, const double w[3])
@@ -186,7 +313,20 @@ static thx_status split_piece(conformer *C, size_t e, size_t k, const thx_surfac
     const double *A = X(C, E->a), *B = X(C, E->b);
     double t = 0.5 * (E->pt[k].t + E->pt[k + 1].t);
     double p[3];
-    for (int d = 0; d < 3; d++) p[d] = stored(A[d] + t * (B[d] - A[d]));
+    /* exact: A, B on the grid, t dyadic with few bits (checked below) */
+    for (int d = 0; d < 3; d++) p[d] = A[d] + t * (B[d] - A[d]);
+    if (ldexp(t, MAX_DEPTH) != nearbyint(ldexp(t, MAX_DEPTH)))
+        return too_fine(C, E->surf, E->tri, p, "a surface edge would be cut in more than 2^22 pieces", surf);
+    {
+        /* exactly on the edge: coplanar with both triangles holding it */
+        int32_t tt[2] = {E->t0, E->t1};
+        for (int j = 0; j < 2; j++) {
+            if (tt[j] < 0) continue;
+            const ctri *T = &C->T[tt[j]];
+            if (thx_orient3d(X(C, T->c[0]), X(C, T->c[1]), X(C, T->c[2]), p) != 0)
+                return too_fine(C, E->surf, E->tri, p, "a point on a surface edge is not exactly on it (coordinates too large for the grid)", surf);
+        }
+    }
     double len = dist3(X(C, E->pt[k].node), X(C, E->pt[k + 1].node));
     if (len < 2 * MIN_PIECE) return too_fine(C, E->surf, E->tri, p, "a surface edge would be cut into pieces shorter than 1e-4 mm", surf);
     if (C->n_st >= C->max_st) return too_fine(C, E->surf, E->tri, p, "too many points were added to make it a union of faces", surf);
@@ -203,23 +343,27 @@ static thx_status split_piece(conformer *C, size_t e, size_t k, const thx_surfac
     double w[3];
     for (int j = 0; j < 3; j++) w[j] = T->c[j] == E->a ? 1 - t : T->c[j] == E->b ? t : 0;
     THX_CHECK(add_record(C, idx, E->surf, E->tri, w));
+    THX_CHECK(own_add(C, idx, E->t0));
+    if (E->t1 >= 0) THX_CHECK(own_add(C, idx, E->t1));
+    C->node_edge[idx] = (int32_t)e;
     C->S.n_edge_points++;
-    return THX_OK;
+    return after_insert(C);
 }
 
-/* Makes every piece of every surface edge an edge of the tetrahedralization. Returns the
- * number of points added (in *added). */
+/* Makes every piece of every dirty surface edge an edge of the tetrahedralization (splits mark
+ * their neighbourhood dirty again). Returns the number of points added (in *added). */
 static thx_status edge_pass(conformer *C, const thx_surface *const *surf, size_t *added)
 {
     *added = 0;
-    for (size_t e = 0; e < C->nE; e++) {
-        cedge *E = &C->E[e];
-        for (size_t k = 0; k + 1 < E->n;) {
-            if (thx_dt_has_edge(C->dt, E->pt[k].node, E->pt[k + 1].node)) { k++; continue; }
-            THX_CHECK(split_piece(C, e, k, surf));
+    while (C->nel > 0) {
+        int32_t e = C->elist[--C->nel];
+        C->edirty[e] = 0;
+        const cedge *E = &C->E[e];
+        for (size_t k = 0; k + 1 < E->n; k++) {
+            if (thx_dt_has_edge(C->dt, E->pt[k].node, E->pt[k + 1].node)) continue;
+            THX_CHECK(split_piece(C, (size_t)e, k, surf)); /* marks e dirty again */
             (*added)++;
-            E = &C->E[e];
-            /* the new piece k (left half) is tested again */
+            break;
         }
     }
     return THX_OK;
@@ -367,7 +511,14 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     ctri *T = &C->T[ti];
     const double *c0 = X(C, T->c[0]), *c1 = X(C, T->c[1]), *c2 = X(C, T->c[2]);
     double p[3];
-    for (int d = 0; d < 3; d++) p[d] = stored(w[0] * c0[d] + w[1] * c1[d] + w[2] * c2[d]);
+    /* barycentric coordinates on a dyadic grid: then p = c0 + w1 (c1 - c0) + w2 (c2 - c0) is exact and
+       exactly in the triangle's plane */
+    double w1 = ldexp(nearbyint(ldexp(w[1], 20)), -20), w2 = ldexp(nearbyint(ldexp(w[2], 20)), -20);
+    double ww[3] = {1 - w1 - w2, w1, w2};
+    for (int d = 0; d < 3; d++) p[d] = c0[d] + w1 * (c1[d] - c0[d]) + w2 * (c2[d] - c0[d]);
+    if (thx_orient3d(c0, c1, c2, p) != 0)
+        return too_fine(C, T->surf, T->tri, p, "a point inside a surface triangle is not exactly in its plane (coordinates too large for the grid)", surf);
+    if (!(ww[0] > 0 && ww[1] > 0 && ww[2] > 0)) return THX_OK;
     if (C->n_st >= C->max_st) return too_fine(C, T->surf, T->tri, p, "too many points were added to make it a union of faces", surf);
     int32_t idx;
     thx_status st = thx_dt_insert(C->dt, p, T->c[0], &idx);
@@ -375,18 +526,81 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     THX_CHECK(st);
     if (T->n_in >= T->cap_in) THX_CHECK(thx_grow(C->ctx, (void **)&T->in, &T->cap_in, T->n_in + 1, sizeof *T->in));
     T->in[T->n_in++] = idx;
-    double wb[3];
-    barycentric(c0, c1, c2, p, wb);
-    THX_CHECK(add_record(C, idx, T->surf, T->tri, wb));
+    THX_CHECK(add_record(C, idx, T->surf, T->tri, ww));
+    THX_CHECK(own_add(C, idx, (int32_t)ti));
     C->S.n_face_points++;
-    return THX_OK;
+    return after_insert(C);
+}
+
+/* Splits the longest piece of triangle ti's edges (points gathered). */
+static thx_status split_longest(conformer *C, size_t ti, const thx_surface *const *surf)
+{
+    const ctri *T = &C->T[ti];
+    size_t long_e = 0, long_k = 0;
+    double long_len = -1;
+    for (int k = 0; k < 3; k++) {
+        const cedge *G = &C->E[T->e[k]];
+        for (size_t i = 0; i + 1 < G->n; i++) {
+            double len = dist3(X(C, G->pt[i].node), X(C, G->pt[i + 1].node));
+            if (len > long_len) { long_len = len; long_e = (size_t)T->e[k]; long_k = i; }
+        }
+    }
+    return split_piece(C, long_e, long_k, surf);
+}
+
+/* A new point for triangle ti at (cx, cy) of its 2D frame (points gathered): there, unless that
+ * lies outside the triangle or in the diametral circle of a piece of its edges, which is then
+ * split instead (the encroached piece, else the one nearest the point). */
+static thx_status place(conformer *C, size_t ti, double cx, double cy, const thx_surface *const *surf)
+{
+    const ctri *T = &C->T[ti];
+    size_t best_e = 0, best_k = 0, near_e = 0, near_k = 0;
+    double best_len = -1, near_d = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        size_t e = (size_t)T->e[k];
+        const cedge *G = &C->E[e];
+        for (size_t i = 0; i + 1 < G->n; i++) {
+            int a = find_pt(C, G->pt[i].node), b = find_pt(C, G->pt[i + 1].node);
+            double ax = C->P[a].x, ay = C->P[a].y, bx = C->P[b].x, by = C->P[b].y;
+            double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by);
+            double len = hypot(bx - ax, by - ay);
+            if (hypot(cx - mx, cy - my) < 0.5 * len && len > best_len) { best_len = len; best_e = e; best_k = i; }
+            double dx = bx - ax, dy = by - ay, t = ((cx - ax) * dx + (cy - ay) * dy) / (dx * dx + dy * dy);
+            t = t < 0 ? 0 : t > 1 ? 1 : t;
+            double dd = hypot(cx - ax - t * dx, cy - ay - t * dy);
+            if (dd < near_d) { near_d = dd; near_e = e; near_k = i; }
+        }
+    }
+    if (best_len > 0) return split_piece(C, best_e, best_k, surf);
+    /* barycentric coordinates of the point (2D frame: corner 0 at the origin) */
+    const tpt *p0 = &C->P[0], *p1 = &C->P[1], *p2 = &C->P[2];
+    double det = (p1->x - p0->x) * (p2->y - p0->y) - (p2->x - p0->x) * (p1->y - p0->y);
+    double w1 = ((cx - p0->x) * (p2->y - p0->y) - (p2->x - p0->x) * (cy - p0->y)) / det;
+    double w2 = ((p1->x - p0->x) * (cy - p0->y) - (cx - p0->x) * (p1->y - p0->y)) / det;
+    double w[3] = {1 - w1 - w2, w1, w2};
+    const double margin = 1e-9;
+    if (w[0] < margin || w[1] < margin || w[2] < margin) return split_piece(C, near_e, near_k, surf);
+    return add_inside(C, ti, w, surf);
+}
+
+/* 2D circumcentre of three gathered points. */
+static int circumcentre2(const tpt *a, const tpt *b, const tpt *c, double *cx, double *cy, double *r)
+{
+    double bx = b->x - a->x, by = b->y - a->y, qx = c->x - a->x, qy = c->y - a->y;
+    double d = 2 * (bx * qy - by * qx);
+    if (!(fabs(d) > 0)) return 0;
+    double b2 = bx * bx + by * by, q2 = qx * qx + qy * qy;
+    double ux = (qy * b2 - by * q2) / d, uy = (bx * q2 - qx * b2) / d;
+    *cx = a->x + ux;
+    *cy = a->y + uy;
+    *r = sqrt(ux * ux + uy * uy);
+    return 1;
 }
 
 /* Refines triangle ti once (it is not covered): a circumcentre inside, or a split of a piece of its edges. */
 static thx_status refine(conformer *C, size_t ti, const thx_surface *const *surf)
 {
     THX_CHECK(gather(C, ti));
-    ctri *T = &C->T[ti];
     thx_vec2 *pts = thx_malloc(C->ctx, C->nP * sizeof *pts);
     if (!pts) return THX_ENOMEM;
     for (size_t i = 0; i < C->nP; i++) pts[i] = (thx_vec2){C->P[i].x, C->P[i].y};
@@ -405,49 +619,161 @@ static thx_status refine(conformer *C, size_t ti, const thx_surface *const *surf
         const tpt *a = &C->P[tris[3 * j]], *b = &C->P[tris[3 * j + 1]], *c = &C->P[tris[3 * j + 2]];
         if (a->mask & b->mask & c->mask) continue;
         if (thx_dt_has_face(C->dt, a->node, b->node, c->node)) continue;
-        double bx = b->x - a->x, by = b->y - a->y, qx = c->x - a->x, qy = c->y - a->y;
-        double d = 2 * (bx * qy - by * qx);
-        if (!(fabs(d) > 0)) continue;
-        double b2 = bx * bx + by * by, q2 = qx * qx + qy * qy;
-        double ux = (qy * b2 - by * q2) / d, uy = (bx * q2 - qx * b2) / d;
-        double r = sqrt(ux * ux + uy * uy);
-        if (r > best_r) { best_r = r; cx = a->x + ux; cy = a->y + uy; }
+        double ux, uy, r;
+        if (!circumcentre2(a, b, c, &ux, &uy, &r)) continue;
+        if (r > best_r) { best_r = r; cx = ux; cy = uy; }
     }
     free(tris);
-    /* the pieces of the triangle's edges: is the centre in one's diametral circle, or outside? */
-    size_t best_e = 0, best_k = 0;
-    double best_len = -1, near_d = INFINITY;
-    size_t near_e = 0, near_k = 0, long_e = 0, long_k = 0;
-    double long_len = -1;
-    for (int k = 0; k < 3; k++) {
-        size_t e = (size_t)T->e[k];
-        const cedge *G = &C->E[e];
-        for (size_t i = 0; i + 1 < G->n; i++) {
-            int a = find_pt(C, G->pt[i].node), b = find_pt(C, G->pt[i + 1].node);
-            double ax = C->P[a].x, ay = C->P[a].y, bx = C->P[b].x, by = C->P[b].y;
-            double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by);
-            double len = hypot(bx - ax, by - ay);
-            if (len > long_len) { long_len = len; long_e = e; long_k = i; }
-            if (best_r < 0) continue;
-            if (hypot(cx - mx, cy - my) < 0.5 * len && len > best_len) { best_len = len; best_e = e; best_k = i; }
-            /* distance from the centre to the piece */
-            double dx = bx - ax, dy = by - ay, s = ((cx - ax) * dx + (cy - ay) * dy) / (dx * dx + dy * dy);
-            s = s < 0 ? 0 : s > 1 ? 1 : s;
-            double dd = hypot(cx - ax - s * dx, cy - ay - s * dy);
-            if (dd < near_d) { near_d = dd; near_e = e; near_k = i; }
-        }
+    if (best_r < 0) return split_longest(C, ti, surf); /* no missing piece seen */
+    return place(C, ti, cx, cy, surf);
+}
+
+/* ---- Delaunay refinement for quality ---- */
+
+/* Circumcentre of tetrahedron (a, b, c, d); 0 if flat. */
+static int circumcentre3(const double *a, const double *b, const double *c, const double *d, double cc[3])
+{
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; k++) { u[k] = b[k] - a[k]; v[k] = c[k] - a[k]; w[k] = d[k] - a[k]; }
+    double vw[3] = {v[1] * w[2] - v[2] * w[1], v[2] * w[0] - v[0] * w[2], v[0] * w[1] - v[1] * w[0]};
+    double wu[3] = {w[1] * u[2] - w[2] * u[1], w[2] * u[0] - w[0] * u[2], w[0] * u[1] - w[1] * u[0]};
+    double uv[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    double det = 2 * (u[0] * vw[0] + u[1] * vw[1] + u[2] * vw[2]);
+    if (!(fabs(det) > 0)) return 0;
+    double uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2], vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2],
+           ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    for (int k = 0; k < 3; k++) cc[k] = a[k] + (uu * vw[k] + vv * wu[k] + ww * uv[k]) / det;
+    return 1;
+}
+
+/* Smallest dihedral angle (degrees) and radius-edge ratio of a tetrahedron. */
+static void shape(const double *p[4], double *min_dih, double *radius_edge)
+{
+    static const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    double n[4][3];
+    for (int f = 0; f < 4; f++) {
+        const double *a = p[fv[f][0]], *b = p[fv[f][1]], *c = p[fv[f][2]];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
+        double l = sqrt(x * x + y * y + z * z);
+        if (!(l > 0)) { *min_dih = 0; *radius_edge = INFINITY; return; }
+        n[f][0] = x / l; n[f][1] = y / l; n[f][2] = z / l;
+        /* outward: away from the opposite corner */
+        const double *o = p[f];
+        if (n[f][0] * (o[0] - a[0]) + n[f][1] * (o[1] - a[1]) + n[f][2] * (o[2] - a[2]) > 0)
+            for (int k = 0; k < 3; k++) n[f][k] = -n[f][k];
     }
-    if (best_r < 0) return split_piece(C, long_e, long_k, surf); /* no missing piece seen: split the longest */
-    if (best_len > 0) return split_piece(C, best_e, best_k, surf);
-    /* barycentric coordinates of the centre (2D frame: corner 0 at the origin) */
-    const tpt *p0 = &C->P[0], *p1 = &C->P[1], *p2 = &C->P[2];
-    double det = (p1->x - p0->x) * (p2->y - p0->y) - (p2->x - p0->x) * (p1->y - p0->y);
-    double w1 = ((cx - p0->x) * (p2->y - p0->y) - (p2->x - p0->x) * (cy - p0->y)) / det;
-    double w2 = ((p1->x - p0->x) * (cy - p0->y) - (cx - p0->x) * (p1->y - p0->y)) / det;
-    double w[3] = {1 - w1 - w2, w1, w2};
-    const double margin = 1e-9;
-    if (w[0] < margin || w[1] < margin || w[2] < margin) return split_piece(C, near_e, near_k, surf);
-    return add_inside(C, ti, w, surf);
+    double best = 180;
+    for (int f = 0; f < 4; f++)
+        for (int g = f + 1; g < 4; g++) {
+            double dot = n[f][0] * n[g][0] + n[f][1] * n[g][1] + n[f][2] * n[g][2];
+            double ang = 180.0 - acos(dot < -1 ? -1 : dot > 1 ? 1 : dot) * 180.0 / M_PI;
+            if (ang < best) best = ang;
+        }
+    *min_dih = best;
+    double cc[3];
+    if (!circumcentre3(p[0], p[1], p[2], p[3], cc)) { *radius_edge = INFINITY; return; }
+    double r = dist3(cc, p[0]), e = INFINITY;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++) { double l = dist3(p[i], p[j]); if (l < e) e = l; }
+    *radius_edge = r / e;
+}
+
+/* Splits the piece face (a, b, c) of triangle ti: at its circumcentre, or a piece of the edges. */
+static thx_status split_face(conformer *C, size_t ti, const int32_t f[3], const thx_surface *const *surf)
+{
+    THX_CHECK(gather(C, ti));
+    int ia = find_pt(C, f[0]), ib = find_pt(C, f[1]), ic = find_pt(C, f[2]);
+    double cx, cy, r;
+    if (ia < 0 || ib < 0 || ic < 0 || !circumcentre2(&C->P[ia], &C->P[ib], &C->P[ic], &cx, &cy, &r))
+        return split_longest(C, ti, surf);
+    return place(C, ti, cx, cy, surf);
+}
+
+static thx_status conform_loop(conformer *C, const thx_surface *const *surf);
+
+/* Delaunay refinement (Shewchuk; what TetGen's -q does): the circumcentre of every tetrahedron of
+ * the domain whose radius-edge ratio or smallest dihedral angle is bad is inserted, unless the
+ * insertion would remove a piece of a surface or encroach upon one, which is then split instead
+ * and the surfaces made faces again. A work list: every tetrahedron at the start, then those each
+ * insertion makes. */
+static thx_status refine_quality(conformer *C, const conform_quality *Q, const thx_surface *const *surf)
+{
+    double t0 = thx_wtime();
+    size_t start = thx_dt_n_points(C->dt);
+    size_t limit = Q->max_points ? Q->max_points : start;
+    thx_status st = THX_OK;
+    {
+        int32_t *tq = NULL;
+        size_t nt = 0;
+        THX_CHECK(thx_dt_tets(C->dt, &tq, &nt));
+        free(C->rq);
+        C->rq = (int32_t (*)[4])tq;
+        C->nrq = C->rq_cap = nt;
+    }
+    C->refining = 1;
+    size_t head = 0;
+    while (head < C->nrq) {
+        int32_t q[4];
+        memcpy(q, C->rq[head++], sizeof q);
+        if (head > (1u << 20) && head * 2 > C->nrq) { /* drop what was judged */
+            memmove(C->rq, C->rq + head, (C->nrq - head) * sizeof *C->rq);
+            C->nrq -= head;
+            head = 0;
+        }
+        const double *p[4];
+        for (int k = 0; k < 4; k++) p[k] = X(C, q[k]);
+        double dih, re;
+        shape(p, &dih, &re);
+        int bad = (Q->radius_edge > 0 && re > Q->radius_edge) || (Q->min_dihedral > 0 && dih < Q->min_dihedral);
+        if (!bad) continue;
+        double c[3];
+        for (int k = 0; k < 3; k++) c[k] = 0.25 * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
+        if (!Q->inside(Q->user, c)) continue;
+        if (!thx_dt_has_tet(C->dt, q)) continue;
+        if (thx_dt_n_points(C->dt) - start >= limit) { C->S.refine_limited = 1; break; }
+        double cc[3];
+        if (!circumcentre3(p[0], p[1], p[2], p[3], cc)) continue;
+        for (int k = 0; k < 3; k++) cc[k] = snap(C, cc[k]);
+        int32_t idx, f[3];
+        C->probe = cc;
+        st = thx_dt_insert_checked(C->dt, cc, q[0], veto, C, &idx, f);
+        if (st == THX_EGEOM) { thx_ctx_clear(C->ctx); st = THX_OK; continue; } /* on an existing node */
+        if (st != THX_OK) break;
+        if (idx >= 0) {
+            C->S.n_refine_points++;
+            st = after_insert(C);
+            if (st != THX_OK) break;
+            /* the tetrahedron may come back if the centre was vetoed elsewhere: nothing to redo */
+            continue;
+        }
+        int32_t ti = face_triangle(C, f[0], f[1], f[2]);
+        if (ti < 0) continue;
+        {
+            /* a piece already much smaller than its triangle is not split for quality: where the
+               surfaces meet at small angles or come close, refinement would not end */
+            const ctri *T = &C->T[ti];
+            double e0 = fmin(fmin(dist3(X(C, T->c[0]), X(C, T->c[1])), dist3(X(C, T->c[1]), X(C, T->c[2]))),
+                             dist3(X(C, T->c[2]), X(C, T->c[0])));
+            double ef = fmax(fmax(dist3(X(C, f[0]), X(C, f[1])), dist3(X(C, f[1]), X(C, f[2]))), dist3(X(C, f[2]), X(C, f[0])));
+            if (ef < Q->min_piece_ratio * e0) { C->S.n_refine_skipped++; continue; }
+        }
+        size_t before = C->n_st;
+        st = split_face(C, (size_t)ti, f, surf);
+        if (st == THX_OK) st = conform_loop(C, surf);
+        if (st != THX_OK) break;
+        C->S.n_refine_surface += C->n_st - before;
+        /* judge this tetrahedron again later (if it survived) */
+        if (C->nrq >= C->rq_cap && thx_grow(C->ctx, (void **)&C->rq, &C->rq_cap, C->nrq + 1, sizeof *C->rq) != THX_OK) {
+            st = THX_ENOMEM;
+            break;
+        }
+        memcpy(C->rq[C->nrq++], q, sizeof q);
+    }
+    C->refining = 0;
+    C->S.refine_rounds = 1;
+    C->S.t_refine = thx_wtime() - t0;
+    return st;
 }
 
 /* Collects the final faces on every triangle, oriented like it. */
@@ -491,8 +817,51 @@ static thx_status collect(conformer *C, mesh_subface **sub, size_t *n_sub)
     return THX_OK;
 }
 
+/* Adds points on the surfaces until every piece of every surface edge is a mesh edge and every
+ * surface triangle is covered by mesh faces, looking only at what insertions touched. */
+static thx_status conform_loop(conformer *C, const thx_surface *const *surf)
+{
+    size_t budget = 200 * (C->nT + 16), work = 0;
+    for (;;) {
+        size_t added = 0;
+        THX_CHECK(edge_pass(C, surf, &added));
+        if (C->ntl == 0) break;
+        int32_t ti = C->tlist[--C->ntl];
+        C->tdirty[ti] = 0;
+        if (++work > budget)
+            return thx_error(C->ctx, THX_EGEOM, "mesh: the surfaces could not be made faces of the mesh (surface \"%s\", "
+                             "triangle %ld keeps changing)", surf[C->T[ti].surf]->name, (long)C->T[ti].tri + 1);
+        const ctri *T = &C->T[ti];
+        int covered;
+        if (T->n_in == 0 && C->E[T->e[0]].n == 2 && C->E[T->e[1]].n == 2 && C->E[T->e[2]].n == 2)
+            covered = thx_dt_has_face(C->dt, T->c[0], T->c[1], T->c[2]);
+        else {
+            THX_CHECK(gather(C, (size_t)ti));
+            THX_CHECK(cover(C, (size_t)ti, &covered));
+        }
+        if (covered) continue;
+        /* a piece of its edges missing: the edge pass first, then this triangle again */
+        int edges_ok = 1;
+        for (int k = 0; k < 3 && edges_ok; k++) {
+            const cedge *G = &C->E[T->e[k]];
+            for (size_t i = 0; i + 1 < G->n && edges_ok; i++)
+                edges_ok = thx_dt_has_edge(C->dt, G->pt[i].node, G->pt[i + 1].node);
+        }
+        if (!edges_ok) {
+            C->tdirty[ti] = 0;
+            mark_tri(C, ti);
+            for (int k = 0; k < 3; k++)
+                if (!C->edirty[T->e[k]]) { C->edirty[T->e[k]] = 1; C->elist[C->nel++] = T->e[k]; }
+            continue;
+        }
+        THX_CHECK(refine(C, (size_t)ti, surf)); /* marks ti dirty again */
+        C->S.rounds++;
+    }
+    return THX_OK;
+}
+
 thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
-                        size_t max_steiner, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
+                        double unit, size_t max_steiner, const conform_quality *quality, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
                         conform_stats *stats)
 {
     double t0 = thx_wtime();
@@ -504,51 +873,24 @@ thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf
     memset(&C, 0, sizeof C);
     C.ctx = ctx;
     C.dt = dt;
+    C.unit = unit;
     thx_status st = build(&C, surf, offset, n_surf);
     if (st != THX_OK) goto done;
     C.max_st = max_steiner ? max_steiner : 20 * C.nT + 1000;
+    C.tdirty = thx_calloc(ctx, C.nT ? C.nT : 1, 1);
+    C.edirty = thx_calloc(ctx, C.nE ? C.nE : 1, 1);
+    C.tlist = thx_malloc(ctx, (C.nT ? C.nT : 1) * sizeof *C.tlist);
+    C.elist = thx_malloc(ctx, (C.nE ? C.nE : 1) * sizeof *C.elist);
+    if (!C.tdirty || !C.edirty || !C.tlist || !C.elist) { st = THX_ENOMEM; goto done; }
+    for (size_t t = C.nT; t-- > 0;) mark_tri(&C, (int32_t)t);
     C.S.n_triangles = C.nT;
     for (size_t ti = 0; ti < C.nT; ti++)
         C.S.missing_before += !thx_dt_has_face(dt, C.T[ti].c[0], C.T[ti].c[1], C.T[ti].c[2]);
-    for (size_t round = 0;; round++) {
-        if (round >= MAX_ROUNDS) {
-            st = thx_error(ctx, THX_EGEOM, "mesh: the surfaces could not be made faces of the mesh in %d rounds", MAX_ROUNDS);
-            goto done;
-        }
-        size_t added = 0, refined = 0;
-        st = edge_pass(&C, surf, &added);
+    st = conform_loop(&C, surf);
+    if (st != THX_OK) goto done;
+    if (quality && (quality->radius_edge > 0 || quality->min_dihedral > 0)) {
+        st = refine_quality(&C, quality, surf);
         if (st != THX_OK) goto done;
-        for (size_t ti = 0; ti < C.nT; ti++) {
-            ctri *T = &C.T[ti];
-            int covered;
-            if (T->n_in == 0 && C.E[T->e[0]].n == 2 && C.E[T->e[1]].n == 2 && C.E[T->e[2]].n == 2)
-                covered = thx_dt_has_face(dt, T->c[0], T->c[1], T->c[2]);
-            else {
-                st = gather(&C, ti);
-                if (st == THX_OK) st = cover(&C, ti, &covered);
-                if (st != THX_OK) goto done;
-            }
-            if (covered) continue;
-            /* a piece of its edges may have gone since the edge pass: those first */
-            int edges_ok = 1;
-            for (int k = 0; k < 3 && edges_ok; k++) {
-                const cedge *G = &C.E[T->e[k]];
-                for (size_t i = 0; i + 1 < G->n && edges_ok; i++)
-                    edges_ok = thx_dt_has_edge(dt, G->pt[i].node, G->pt[i + 1].node);
-            }
-            if (!edges_ok) continue; /* the next edge pass */
-            st = refine(&C, ti, surf);
-            if (st != THX_OK) goto done;
-            refined++;
-        }
-        C.S.rounds = round + 1;
-        if (added == 0 && refined == 0) {
-            /* nothing added in a whole round: every edge piece and triangle is there */
-            size_t more = 0;
-            st = edge_pass(&C, surf, &more);
-            if (st != THX_OK) goto done;
-            if (more == 0) break;
-        }
     }
     st = collect(&C, sub, n_sub);
     if (st != THX_OK) goto done;
@@ -574,5 +916,13 @@ done:
     free(C.st);
     free(C.P);
     free(C.F);
+    free(C.own_head);
+    free(C.tdirty);
+    free(C.edirty);
+    free(C.tlist);
+    free(C.elist);
+    free(C.rq);
+    free(C.node_edge);
+    free(C.pool);
     return st;
 }

@@ -42,15 +42,40 @@ typedef struct {
     size_t n_split_triangles;/* surface triangles made of more than one mesh face */
     size_t rounds;
     double min_piece;        /* shortest piece of a surface edge, mm */
+    size_t n_refine_points;  /* circumcentres inserted by the quality refinement */
+    size_t n_refine_surface; /* points put on the surfaces instead (pieces split) */
+    size_t refine_rounds;
+    int refine_limited;      /* the refinement stopped at its point limit */
+    size_t n_refine_skipped; /* bad tetrahedra left because their surface piece was already small */
+    double t_refine;
     double seconds;
 } conform_stats;
 
+/* Quality refinement after conformity (Delaunay refinement): tetrahedra of
+ * the domain (inside(user, centroid) != 0) with a radius-edge ratio above
+ * radius_edge or a dihedral angle below min_dihedral (degrees; 0: that test
+ * off) get their circumcentre, unless it would remove a piece of a surface,
+ * which is split instead; at most max_points points (0: as many as the
+ * tetrahedralization had). */
+typedef struct {
+    double radius_edge, min_dihedral;
+    int (*inside)(void *user, const double p[3]);
+    void *user;
+    size_t max_points;
+    double min_piece_ratio; /* pieces of a surface triangle shorter than this times its shortest edge
+                               are not split for quality (0.1) */
+} conform_quality;
+
 /*
  * dt: the tetrahedralization; points 0 .. offset[n_surf] - 1 are the surface
- * nodes (surface s's node i is point offset[s] + i). Points are added to dt;
- * their coordinates are rounded to "%.6f" before insertion (what volume.pts
- * stores is what was tetrahedralized). max_steiner: refuse to add more
- * (0: 20 per surface triangle).
+ * nodes (surface s's node i is point offset[s] + i). Every coordinate in dt
+ * is a multiple of unit (a power of two, at least 2^-30 of the largest
+ * coordinate): points added on a surface edge are dyadic fractions of it
+ * and points added inside a triangle have dyadic barycentric coordinates,
+ * so that they are EXACTLY on the edge / in the triangle's plane (tested
+ * with the exact orientation predicate); coplanar points then never make
+ * flat tetrahedra (thorax/delaunay.h). max_steiner: refuse to add more
+ * (0: 20 per surface triangle). quality: NULL, or the refinement above.
  * Out: *steiner (n_steiner records, node = index in dt), *sub (n_sub faces on
  * the surfaces, each triangle's pieces), both malloc'ed.
  * Errors: THX_EGEOM naming the surface and triangle where the pieces became
@@ -58,7 +83,7 @@ typedef struct {
  * crossing there); THX_ENOMEM.
  */
 thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
-                        size_t max_steiner, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
+                        double unit, size_t max_steiner, const conform_quality *quality, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
                         conform_stats *stats);
 
 #endif

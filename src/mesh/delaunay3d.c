@@ -104,6 +104,13 @@ typedef struct {
     int32_t *rank, *vt;
     int32_t *sstack;  /* star search stack */
     size_t sstack_cap;
+    /* optional veto (thx_dt_insert_checked): a face inside the cavity it refuses stops the insertion */
+    int (*reject)(void *user, int32_t a, int32_t b, int32_t c, int interior);
+    void *reject_user;
+    int rejected;
+    int32_t rejected_face[3];
+    size_t last_nb;   /* boundary faces of the last cavity (m->bnd), joined to point last_p */
+    int32_t last_p;
     tet_t *t;
     size_t nt, tcap;
     uint32_t *mark; /* cavity stamps (tcap): st = in the cavity, st + 1 = tested, not in it */
@@ -445,6 +452,35 @@ static thx_status insert_point(dt_t *m, int32_t pi)
             b->out = code;
         }
     }
+    if (m->reject) {
+        /* faces shared by two cavity tetrahedra would disappear: ask before anything changes */
+        for (size_t k = 0; k < nc; k++) {
+            int32_t c = m->cav[k];
+            const tet_t *tc = &m->t[c];
+            for (int i = 0; i < 4; i++) {
+                int32_t o = tc->n[i] >> 2;
+                if (o <= c || m->mark[o] != st) continue;
+                int32_t a = tc->v[FACE[i][0]], b = tc->v[FACE[i][1]], d = tc->v[FACE[i][2]];
+                if (a < 0 || b < 0 || d < 0) continue;
+                if (m->reject(m->reject_user, m->orig[a], m->orig[b], m->orig[d], 1)) {
+                    m->rejected = 1;
+                    m->rejected_face[0] = m->orig[a];
+                    m->rejected_face[1] = m->orig[b];
+                    m->rejected_face[2] = m->orig[d];
+                    return THX_OK;
+                }
+            }
+        }
+        for (size_t k = 0; k < nb; k++) {
+            const bface *bf = &m->bnd[k];
+            if (bf->f[0] < 0 || bf->f[1] < 0 || bf->f[2] < 0) continue;
+            if (m->reject(m->reject_user, m->orig[bf->f[0]], m->orig[bf->f[1]], m->orig[bf->f[2]], 0)) {
+                m->rejected = 1;
+                for (int j = 0; j < 3; j++) m->rejected_face[j] = m->orig[bf->f[j]];
+                return THX_OK;
+            }
+        }
+    }
     m->cavity_tets += nc;
 
     /* Edge table for linking the new tetrahedra to each other. */
@@ -514,6 +550,8 @@ static thx_status insert_point(dt_t *m, int32_t pi)
         m->nfree++;
     }
     m->last = ti;
+    m->last_nb = nb;
+    m->last_p = pi;
     return THX_OK;
 }
 
@@ -995,6 +1033,76 @@ int thx_dt_star(thx_dt *d, int32_t a, const int32_t (**quads)[4])
     }
     *quads = (const int32_t (*)[4])d->quad;
     return (int)count;
+}
+
+thx_status thx_dt_insert_checked(thx_dt *d, const double p[3], int32_t near,
+                                 int (*reject)(void *user, int32_t a, int32_t b, int32_t c, int interior), void *user,
+                                 int32_t *index,
+                                 int32_t face[3])
+{
+    dt_t *m = &d->m;
+    m->reject = reject;
+    m->reject_user = user;
+    m->rejected = 0;
+    int32_t idx = -1;
+    thx_status st = thx_dt_insert(d, p, near, &idx);
+    m->reject = NULL;
+    if (st != THX_OK) return st;
+    if (m->rejected) {
+        m->np--; /* the point was appended, nothing else changed */
+        *index = -1;
+        memcpy(face, m->rejected_face, sizeof m->rejected_face);
+        return THX_OK;
+    }
+    *index = idx;
+    return THX_OK;
+}
+
+thx_status thx_dt_tets(thx_dt *d, int32_t **quads, size_t *n)
+{
+    dt_t *m = &d->m;
+    *quads = NULL;
+    *n = 0;
+    size_t cnt = 0;
+    for (size_t t = 0; t < m->nt; t++) cnt += m->t[t].v[0] != DEAD && !is_ghost(&m->t[t]);
+    int32_t *q = thx_malloc(m->ctx, 4 * (cnt ? cnt : 1) * sizeof *q);
+    if (!q) return THX_ENOMEM;
+    size_t k = 0;
+    for (size_t t = 0; t < m->nt; t++) {
+        const tet_t *tt = &m->t[t];
+        if (tt->v[0] == DEAD || is_ghost(tt)) continue;
+        for (int j = 0; j < 4; j++) q[4 * k + j] = m->orig[tt->v[j]];
+        k++;
+    }
+    *quads = q;
+    *n = cnt;
+    return THX_OK;
+}
+
+int thx_dt_has_tet(thx_dt *d, const int32_t q[4])
+{
+    const int32_t (*s)[4];
+    int n = thx_dt_star(d, q[0], &s);
+    for (int i = 0; i < n; i++) {
+        int hits = 0;
+        for (int k = 0; k < 4; k++)
+            for (int j = 1; j < 4; j++) hits += s[i][k] == q[j];
+        if (hits == 3) return 1;
+    }
+    return 0;
+}
+
+int thx_dt_new_tets(thx_dt *d, const int32_t (**quads)[4])
+{
+    dt_t *m = &d->m;
+    size_t n = m->last_nb;
+    if (n > d->quad_cap && thx_grow(m->ctx, (void **)&d->quad, &d->quad_cap, n, sizeof *d->quad) != THX_OK) return -1;
+    for (size_t k = 0; k < n; k++) {
+        for (int j = 0; j < 3; j++) d->quad[k][j] = m->bnd[k].f[j] < 0 ? -1 : m->orig[m->bnd[k].f[j]];
+        d->quad[k][3] = m->orig[m->last_p];
+    }
+    *quads = (const int32_t (*)[4])d->quad;
+    return (int)n;
 }
 
 int thx_dt_has_edge(thx_dt *d, int32_t a, int32_t b)

@@ -42,14 +42,24 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->layer_spacing = 0;
     o->no_heart = 0;
     o->repair_deg = 15.0;
+    o->radius_edge = 2.0;
+    o->refine_deg = 10.0;
 }
 
-/* x as it reads back from the model files ("%.6f"). */
-static double stored(double x)
+/* x on the mesher's binary grid (spacing unit, a power of two: exact). */
+static double snap(double x, double unit) { return nearbyint(x / unit) * unit; }
+
+/* The grid spacing: a power of two, 2^-30 of the largest coordinate (rounded up to a power of two),
+ * so that dyadic fractions of surface edges with 22 bits stay exact in double (53 bits). For a
+ * thorax in mm (|x| < 1024) that is 2^-20 mm, about 1e-6 mm. */
+static double grid_unit(const thx_model *m)
 {
-    char buf[64];
-    snprintf(buf, sizeof buf, "%.6f", x);
-    return strtod(buf, NULL);
+    double mx = 1e-300;
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        for (size_t i = 0; i < 3 * m->surf[s]->n_nodes; i++) mx = fmax(mx, fabs(m->surf[s]->xyz[i]));
+    int e;
+    frexp(mx, &e); /* mx < 2^e */
+    return ldexp(1.0, e - 30);
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -138,6 +148,16 @@ static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
 }
 
 /* ---- a hash set of sorted node triples (the faces on the surfaces) ---- */
+/* The domain for the quality refinement: inside the outer surface, not inside an excluded heart. */
+typedef struct { const locator *outer, *heart; double on_eps; } domain_ctx;
+static int in_domain_cb(void *user, const double p[3])
+{
+    const domain_ctx *d = user;
+    thx_vec3 v = thx_v3(p[0], p[1], p[2]);
+    if (outside_domain(d->outer, v, d->on_eps)) return 0;
+    return !(d->heart && locator_inside(d->heart, v));
+}
+
 typedef struct { int32_t a, b, c; } ftrip;
 typedef struct { ftrip *slot; size_t mask; } fset;
 
@@ -300,6 +320,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     for (size_t s = 0; s < ns; s++) THX_TRY(locator_init(ctx, &loc[s], m->surf[s]));
     for (size_t s = 0; s < ns; s++) offset[s + 1] = offset[s] + m->surf[s]->n_nodes;
     S.n_surface_nodes = offset[ns];
+    const double unit = grid_unit(m);
 
     /* 1. grid points, plane by plane (in parallel, gathered in plane order: deterministic) */
     THX_TRY(find_planes(ctx, m->surf[outer], o, o->grid > 0 ? o->grid : 6.5, &planes, &np));
@@ -344,8 +365,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                     /* rounded to the precision volume.pts stores, so that the file holds exactly the
                        points that were tetrahedralized (a thin tetrahedron of unrounded grid points
                        can become exactly flat once written) */
-                    thx_vec3 p = thx_v3(stored(((double)i + 0.5 + sh) * grid), stored(((double)j + 0.5 + sh) * grid),
-                                        stored(planes[k]));
+                    thx_vec3 p = thx_v3(snap(((double)i + 0.5 + sh) * grid, unit), snap(((double)j + 0.5 + sh) * grid, unit),
+                                        snap(planes[k], unit));
                     if (!locator_inside(&loc[outer], p)) continue;
                     if (o->no_heart && heart >= 0 && locator_inside(&loc[heart], p)) continue;
                     int near = 0;
@@ -371,7 +392,9 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     size_t nn = offset[ns] + n_grid;
     xyz = thx_malloc(ctx, 3 * nn * sizeof *xyz);
     if (!xyz) { st = THX_ENOMEM; goto done; }
-    for (size_t s = 0; s < ns; s++) memcpy(xyz + 3 * offset[s], m->surf[s]->xyz, 3 * m->surf[s]->n_nodes * sizeof *xyz);
+    /* the surface nodes on the binary grid (within unit / 2 of the surfaces' own coordinates) */
+    for (size_t s = 0; s < ns; s++)
+        for (size_t i = 0; i < 3 * m->surf[s]->n_nodes; i++) xyz[3 * offset[s] + i] = snap(m->surf[s]->xyz[i], unit);
     {
         size_t at = offset[ns];
         for (size_t k = 0; k < np; k++) {
@@ -400,7 +423,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         double t_dt = thx_wtime();
         S.t_delaunay = t_dt - t1;
         conform_stats cs;
-        st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, 0, &steiner, &n_steiner, &sub, &n_sub, &cs);
+        domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps};
+        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.1};
+        st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
+                          &n_sub, &cs);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
         S.n_surface_tris = cs.n_triangles;
         S.n_missing_before = cs.missing_before;
@@ -409,7 +435,12 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_split_triangles = cs.n_split_triangles;
         S.conform_rounds = cs.rounds;
         S.min_piece = cs.min_piece;
-        S.t_conform = cs.seconds;
+        S.t_conform = cs.seconds - cs.t_refine;
+        S.n_refine_points = cs.n_refine_points;
+        S.n_refine_surface = cs.n_refine_surface;
+        S.refine_rounds = cs.refine_rounds;
+        S.refine_limited = cs.refine_limited;
+        S.t_refine = cs.t_refine;
         size_t nall = thx_dt_n_points(dt);
         double *all = thx_realloc(ctx, xyz, 3 * nall * sizeof *all);
         if (!all) { thx_dt_destroy(&dt); st = THX_ENOMEM; goto done; }
