@@ -36,6 +36,10 @@ typedef struct {
     double refine_deg;    /* ... and those with a smaller dihedral angle, degrees (default 10; 0 = off) */
     double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
                              flips and by moving grid nodes (default 15; 0 = no repair) */
+    /* region table changes: region `name` (mean_thorax, fat, muscle, lung, heart or a surface's name)
+       renamed to `rename` (when not empty) and given the isotropic conductivity sigma (S/m, when > 0) */
+    struct { char name[64], rename[64]; double sigma; } region_set[16];
+    size_t n_region_set;
 } thx_mesh_opts;
 
 typedef struct {

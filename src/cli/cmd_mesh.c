@@ -1,4 +1,5 @@
 /* thorax mesh: the tetrahedral volume mesh of a surface model (paper 3.3). */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,7 +10,7 @@
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--quality R/D] [--repair DEG] [--stats]\n\n"
+           "                        [--quality R/D] [--repair DEG] [--region NAME[=NEW][:SIGMA]]... [--stats]\n\n"
            "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
            "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
            "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
@@ -33,6 +34,8 @@ static void help(void)
            "                         (default 2/10; 0 = off)\n"
            "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
            "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
+           "  --region NAME[=NEW][:SIGMA]  rename a tissue region and/or set its isotropic conductivity\n"
+           "                         (S/m), e.g. --region mean_thorax=scalp:1 --region skull:0.0125\n"
            "  --stats                print counts and times\n"
            "  -v, -q                 more / less logging\n");
 }
@@ -60,6 +63,30 @@ int cmd_mesh(int argc, char **argv)
             if (*end == '/') o.refine_deg = strtod(end + 1, &end);
             if (end == v || *end || o.radius_edge < 0 || (o.radius_edge > 0 && o.radius_edge < 1) || o.refine_deg < 0 || o.refine_deg > 30)
                 return cli_usage_error("mesh", "--quality takes RATIO/DEG: a radius-edge ratio of at least 1 (0: off) and a dihedral angle of 0 to 30 degrees, got '%s'", v);
+            i++;
+        }
+        else if (!strcmp(a, "--region")) {
+            /* NAME[=NEWNAME][:SIGMA] */
+            if (!v) return cli_usage_error("mesh", "--region needs NAME[=NEWNAME][:SIGMA]");
+            if (o.n_region_set >= 16) return cli_usage_error("mesh", "at most 16 --region options");
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", v);
+            char *colon = strchr(buf, ':'), *eq = strchr(buf, '=');
+            double sigma = 0;
+            if (colon) {
+                *colon = 0;
+                char *end = NULL;
+                sigma = strtod(colon + 1, &end);
+                if (end == colon + 1 || *end || !(sigma > 0) || !isfinite(sigma))
+                    return cli_usage_error("mesh", "--region %s: the conductivity must be a positive number (S/m)", v);
+            }
+            if (eq) *eq = 0;
+            if (!buf[0] || strlen(buf) >= 64 || (eq && (!eq[1] || strlen(eq + 1) >= 64)) || (!colon && !eq))
+                return cli_usage_error("mesh", "--region %s: expected NAME=NEWNAME, NAME:SIGMA or NAME=NEWNAME:SIGMA", v);
+            snprintf(o.region_set[o.n_region_set].name, 64, "%s", buf);
+            snprintf(o.region_set[o.n_region_set].rename, 64, "%s", eq ? eq + 1 : "");
+            o.region_set[o.n_region_set].sigma = sigma;
+            o.n_region_set++;
             i++;
         }
         else if (!strcmp(a, "--stats")) want_stats = 1;

@@ -29,6 +29,7 @@ typedef struct {
     int n[3];
     unsigned char *vox; /* per voxel: 0 touched (no label), 1 inside, 2 outside */
     int32_t *ref;       /* per voxel: a labelled voxel whose centre is its own, or -1 */
+    double volume;      /* the volume the surface encloses (set by the mesher) */
 } locator;
 
 thx_status locator_init(thx_ctx *ctx, locator *l, const thx_surface *s);

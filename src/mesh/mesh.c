@@ -119,13 +119,19 @@ static int classify_region(const thx_model *m, const locator *loc, const int *su
         thx_role role = m->surf[s]->role;
         if ((role == THX_ROLE_FAT || role == THX_ROLE_MUSCLE) && !locator_inside(&loc[s], c)) return surf_region[s];
     }
+    /* organs and other surfaces: the innermost one containing the point (smallest enclosed volume:
+       surfaces do not cross, so of two containing it one contains the other) */
+    int best = 0;
+    double best_v = INFINITY;
     for (size_t s = 0; s < ns; s++) {
         thx_role role = m->surf[s]->role;
         if ((role == THX_ROLE_LUNG || role == THX_ROLE_HEART || role == THX_ROLE_OTHER) && surf_region[s] >= 0 &&
-            locator_inside(&loc[s], c))
-            return surf_region[s];
+            loc[s].volume < best_v && locator_inside(&loc[s], c)) {
+            best = surf_region[s];
+            best_v = loc[s].volume;
+        }
     }
-    return 0;
+    return best;
 }
 
 typedef struct {
@@ -317,7 +323,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     double **gp = NULL;
     size_t *gn = NULL, np = 0;
     if (!loc || !offset) { st = THX_ENOMEM; goto done; }
-    for (size_t s = 0; s < ns; s++) THX_TRY(locator_init(ctx, &loc[s], m->surf[s]));
+    for (size_t s = 0; s < ns; s++) {
+        THX_TRY(locator_init(ctx, &loc[s], m->surf[s]));
+        loc[s].volume = thx_surface_volume(m->surf[s]);
+    }
     for (size_t s = 0; s < ns; s++) offset[s + 1] = offset[s] + m->surf[s]->n_nodes;
     S.n_surface_nodes = offset[ns];
     const double unit = grid_unit(m);
@@ -492,6 +501,34 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         if (su->role == THX_ROLE_LUNG || su->role == THX_ROLE_OTHER) snprintf(table[n_regions].name, sizeof table[n_regions].name, "%s", su->name);
         surf_region[s] = n_regions++;
     }
+    for (size_t k = 0; k < o->n_region_set; k++) {
+        int found = -1;
+        for (int r = 0; r < n_regions && found < 0; r++)
+            if (!strcmp(table[r].name, o->region_set[k].name)) found = r;
+        if (found < 0) {
+            char names[16 * 68] = "";
+            for (int r = 0; r < n_regions; r++) {
+                size_t at = strlen(names);
+                snprintf(names + at, sizeof names - at, "%s%.64s", r ? ", " : "", table[r].name);
+            }
+            st = thx_error(ctx, THX_EINPUT, "mesh: no region \"%s\" to set (the regions are %s)", o->region_set[k].name, names);
+            goto done;
+        }
+        thx_region *R = &table[found];
+        if (o->region_set[k].rename[0]) snprintf(R->name, sizeof R->name, "%s", o->region_set[k].rename);
+        if (o->region_set[k].sigma > 0) {
+            memset(R->sigma, 0, sizeof R->sigma);
+            R->sigma[0] = R->sigma[4] = R->sigma[8] = o->region_set[k].sigma;
+            R->anisotropic = 0;
+            snprintf(R->source, sizeof R->source, "set by the user (thorax mesh --region)");
+        }
+    }
+    for (int r = 0; r < n_regions; r++)
+        for (int q = 0; q < r; q++)
+            if (!strcmp(table[r].name, table[q].name)) {
+                st = thx_error(ctx, THX_EINPUT, "mesh: two regions would be named \"%s\"", table[r].name);
+                goto done;
+            }
     {
         fset fs = {NULL, 0};
         st = fset_build(ctx, sub, n_sub, &fs);
