@@ -1,35 +1,53 @@
 #!/usr/bin/env bash
-# Benchmark of volume meshing (paper 3.3) on the phantom: thorax mesh at the paper's
-# sizes (high: ~82,000 nodes / 500,000 tetrahedra; medium: ~22,000 / 130,000) and at
-# 2,000,000 tetrahedra, with wall time, peak memory and the check; beside it TetGen
-# 1.5 meshing the same surfaces (constrained, boundary preserved: tetgen -pY).
-# Prints figures; never fails on time.
+# Benchmark of volume meshing (paper 3.3): thorax mesh beside TetGen 1.5 (tetgen -pq1.414/10: a
+# constrained, quality tetrahedralization of the same surfaces) in the same run, on the phantom
+# (medium, high) and, when the shared data are beside the checkout, the Utah tank + sock, the
+# Dalhousie torso + epicardium and OpenMEEG's Head3. For each: tetrahedra, wall time, peak memory,
+# tetrahedra per second and their ratio, and the quality of both meshes measured by one program
+# (bench/tet_quality.py: smallest dihedral, counts below 5 and 10 degrees, largest and mean
+# radius-edge ratio). thorax's mesh is also judged by thorax check. Prints figures; never fails
+# on time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THORAX=${THORAX:-build/bin/thorax}
+PY=/usr/bin/python3
+DATA=${THORAX_DATA:-../shared/data}
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 [ -x "$THORAX" ] || { echo "build first (make)"; exit 1; }
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+
+models=()
 for res in medium high; do
     "$THORAX" phantom --resolution $res --seed 1 -o "$W/c_$res.txt" -q
     "$THORAX" surfaces "$W/c_$res.txt" -o "$W/m_$res" -q
+    models+=("phantom-$res:$W/m_$res")
 done
-run() { # LABEL MODEL ARGS...
-    local label=$1 model=$2; shift 2
-    /usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" mesh "$model" -o "$W/out" --stats "$@" > "$W/log"
-    read -r wall rss < "$W/t"
-    echo "thorax mesh $label: $(head -1 "$W/log")"
-    echo "    wall $wall s, peak memory $((rss / 1024)) MB; $(grep 'times (s)' "$W/log" | sed 's/.*times (s): /stages (s): /')"
-    grep '^repair' "$W/log" | sed 's/^/    /' || true
-    /usr/bin/time -f "%e" -o "$W/tc" "$THORAX" check "$W/out" -q && c=pass || c=FAIL
-    echo "    thorax check: $c ($(cat "$W/tc") s)"
-}
-run "medium" "$W/m_medium"
-run "high" "$W/m_high"
-run "high, about 2 M tetrahedra (planes 2.5 mm apart, grid 3.9 mm)" "$W/m_high" --layer-spacing 2.5 --grid 3.9
-# TetGen on the same surfaces, as one piecewise-linear complex
-/usr/bin/python3 - "$W/m_high" "$W/ph.poly" <<'PYEOF'
+if [ -d "$DATA/map3d/geom" ]; then
+    G=$DATA/map3d/geom
+    "$THORAX" import -o "$W/m_tank" -q "$G/tank/tank_full_771.pts" --name tank --role outer \
+        "$G/tank/25feb97_sock_closed.pts" --name sock --role heart && models+=("utah-tank+sock:$W/m_tank")
+    "$THORAX" import -o "$W/m_dal" -q "$G/torso/daltorso.pts" --name torso --role outer \
+        "$G/torso/dalepi.pts" --name epicardium --role heart && models+=("dalhousie+epi:$W/m_dal")
+fi
+H=$DATA/openmeeg-spheres/data/Head3
+if [ -d "$H" ]; then
+    # OpenMEEG .tri (vertex + normal lines) as .pts/.fac, radius 1 -> 100 mm
+    for s in scalp skull cortex; do
+        $PY - "$H/$s.3.tri" "$W/$s" <<'PYEOF'
+import sys
+L = open(sys.argv[1]).read().split("\n")
+nv = int(L[0].split()[1]); nt = int(L[1 + nv].split()[1])
+open(sys.argv[2] + ".pts", "w").write("".join(" ".join(l.split()[:3]) + "\n" for l in L[1:1 + nv]))
+open(sys.argv[2] + ".fac", "w").write("".join(l.strip() + "\n" for l in L[2 + nv:2 + nv + nt]))
+PYEOF
+    done
+    "$THORAX" import -o "$W/m_head3" -q --scale 100 "$W/scalp.pts" --name scalp --role outer \
+        "$W/skull.pts" --name skull --role other "$W/cortex.pts" --name brain --role other && models+=("openmeeg-head3:$W/m_head3")
+fi
+
+poly() { # MODEL OUT.poly: the model's surfaces as one piecewise-linear complex
+    $PY - "$1" "$2" <<'PYEOF'
 import json, os, sys
 d, out = sys.argv[1], sys.argv[2]
 m = json.load(open(os.path.join(d, "model.json")))
@@ -45,7 +63,27 @@ with open(out, "w") as f:
     for t in facets: f.write("1\n3 %d %d %d\n" % tuple(t))
     f.write("0\n0\n")
 PYEOF
-(cd "$W" && /usr/bin/time -f "%e %M" -o t tetgen -pYQ ph.poly)
-read -r wall rss < "$W/t"
-echo "peer: TetGen 1.5 -pY on the same high-resolution surfaces: $(head -1 "$W/ph.1.ele" | awk '{print $1}') tetrahedra, $(head -1 "$W/ph.1.node" | awk '{print $1}') nodes, wall $wall s, peak memory $((rss / 1024)) MB"
-echo "    (constrained: its boundary is exactly the surface triangles; no interior grid)"
+}
+
+printf "\n%-18s %-7s %9s %8s %8s %9s %7s %6s %6s %7s %6s %s\n" dataset program tets wall_s peak_MB tets/s min_deg "<5" "<10" maxRE meanRE check
+for entry in "${models[@]}"; do
+    name=${entry%%:*}; model=${entry#*:}
+    /usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" mesh "$model" -o "$W/out" --stats > "$W/log" 2>&1 || { echo "$name: thorax mesh FAILED: $(tail -1 "$W/log")"; continue; }
+    read -r wall rss < "$W/t"
+    "$THORAX" check "$W/out" -q > /dev/null 2>&1 && c=pass || c=FAIL
+    read -r n dm b5 b10 remax remean <<< "$($PY bench/tet_quality.py thorax "$W/out")"
+    rate_t=$($PY -c "print(round($n / max($wall, 1e-3)))")
+    printf "%-18s %-7s %9d %8.2f %8d %9d %7.2f %6d %6d %7.2f %6.3f %s\n" "$name" thorax "$n" "$wall" $((rss / 1024)) "$rate_t" "$dm" "$b5" "$b10" "$remax" "$remean" "$c"
+    grep -E '^(conformity|refinement|repair)' "$W/log" | sed 's/^/        /'
+    poly "$model" "$W/p.poly"
+    if (cd "$W" && /usr/bin/time -f "%e %M" -o tt tetgen -pq1.414/10 -Q p.poly > tlog 2>&1); then
+        read -r wall2 rss2 < "$W/tt"
+        read -r n2 dm2 b52 b102 remax2 remean2 <<< "$($PY bench/tet_quality.py tetgen "$W/p.1")"
+        rate_g=$($PY -c "print(round($n2 / max($wall2, 1e-3)))")
+        printf "%-18s %-7s %9d %8.2f %8d %9d %7.2f %6d %6d %7.2f %6.3f\n" "" tetgen "$n2" "$wall2" $((rss2 / 1024)) "$rate_g" "$dm2" "$b52" "$b102" "$remax2" "$remean2"
+        echo "        ratio thorax/tetgen: tetrahedra per second $($PY -c "print('%.2f' % ($rate_t / $rate_g))"), wall $($PY -c "print('%.2f' % ($wall / max($wall2, 1e-3)))")"
+    else
+        echo "        tetgen -pq1.414/10 failed: $(tail -1 "$W/tlog")"
+    fi
+    rm -rf "$W/out" "$W"/p.*
+done
