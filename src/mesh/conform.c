@@ -74,6 +74,9 @@ typedef struct {
     struct { int32_t tri, next; } *pool;
     size_t n_pool, pool_cap;
     const double *probe; /* the point the refinement tries to insert */
+    int32_t *lidx;       /* node -> local index in P, valid where lstamp == lclock */
+    uint32_t *lstamp, lclock;
+    size_t lcap;
     /* what an insertion may have changed: triangles and edges to look at again */
     unsigned char *tdirty, *edirty;
     int32_t *tlist, *elist;
@@ -198,20 +201,28 @@ static void mark_tri(conformer *C, int32_t t)
     }
 }
 
-/* After an insertion: every vertex whose star changed is a vertex of a new tetrahedron; the
- * triangles it lies on (and their edges) are looked at again, the new tetrahedra judged. */
-static thx_status after_insert(conformer *C)
+/* The insertions' recorder: a piece of a surface triangle among the faces an insertion removes
+ * makes that triangle (and its edges) dirty. Never vetoes. */
+static int face_triangle(const conformer *C, int32_t a, int32_t b, int32_t c);
+static int record_removed(void *user, int32_t a, int32_t b, int32_t c, int interior)
 {
-    const int32_t (*q)[4];
-    int n = thx_dt_new_tets(C->dt, &q);
-    if (n < 0) return THX_ENOMEM;
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 4; k++) {
-            int32_t x = q[i][k];
-            if (x < 0 || (size_t)x >= C->own_cap) continue;
-            for (int32_t j = C->own_head[x]; j >= 0; j = C->pool[j].next) mark_tri(C, C->pool[j].tri);
-        }
+    conformer *C = user;
+    if (!interior) return 0;
+    int32_t t = face_triangle(C, a, b, c);
+    if (t >= 0) mark_tri(C, t);
+    return 0;
+}
+
+/* After an insertion of point idx (its triangles known): they are looked at again; during the
+ * refinement the new tetrahedra are judged. */
+static thx_status after_insert(conformer *C, int32_t idx)
+{
+    if (idx >= 0 && (size_t)idx < C->own_cap)
+        for (int32_t j = C->own_head[idx]; j >= 0; j = C->pool[j].next) mark_tri(C, C->pool[j].tri);
     if (C->refining) {
+        const int32_t (*q)[4];
+        int n = thx_dt_new_tets(C->dt, &q);
+        if (n < 0) return THX_ENOMEM;
         if (C->nrq + (size_t)n > C->rq_cap) THX_CHECK(thx_grow(C->ctx, (void **)&C->rq, &C->rq_cap, C->nrq + (size_t)n, sizeof *C->rq));
         for (int i = 0; i < n; i++) {
             if (q[i][0] < 0 || q[i][1] < 0 || q[i][2] < 0) continue;
@@ -312,6 +323,18 @@ static thx_status split_piece(conformer *C, size_t e, size_t k, const thx_surfac
     cedge *E = &C->E[e];
     const double *A = X(C, E->a), *B = X(C, E->b);
     double t = 0.5 * (E->pt[k].t + E->pt[k + 1].t);
+    /* Concentric shells (Ruppert; Shewchuk 2000): a piece that touches a surface node (and not both
+       ends) is split at a power-of-two distance from that node, so that the points on all edges at a
+       node lie at the same distances from it and edges meeting at small angles do not cut each other
+       into ever shorter pieces. The parameter keeps 22 bits (exactness, below). */
+    if (E->n > 2 && (k == 0 || k + 2 == E->n)) {
+        double L = dist3(A, B), lo = E->pt[k].t, hi = E->pt[k + 1].t;
+        double len = (hi - lo) * L;
+        double sh = exp2(floor(log2(2.0 * len / 3.0))); /* in [len/3, 2 len/3] */
+        double ts = k == 0 ? sh / L : 1.0 - sh / L;
+        ts = ldexp(nearbyint(ldexp(ts, 16)), -16); /* room for 6 more halvings */
+        if (ts > lo && ts < hi) t = ts;
+    }
     double p[3];
     /* exact: A, B on the grid, t dyadic with few bits (checked below) */
     for (int d = 0; d < 3; d++) p[d] = A[d] + t * (B[d] - A[d]);
@@ -331,7 +354,8 @@ static thx_status split_piece(conformer *C, size_t e, size_t k, const thx_surfac
     if (len < 2 * MIN_PIECE) return too_fine(C, E->surf, E->tri, p, "a surface edge would be cut into pieces shorter than 1e-4 mm", surf);
     if (C->n_st >= C->max_st) return too_fine(C, E->surf, E->tri, p, "too many points were added to make it a union of faces", surf);
     int32_t idx;
-    thx_status st = thx_dt_insert(C->dt, p, E->pt[k].node, &idx);
+    int32_t fdummy[3];
+    thx_status st = thx_dt_insert_checked(C->dt, p, E->pt[k].node, record_removed, C, &idx, fdummy);
     if (st == THX_EGEOM) return too_fine(C, E->surf, E->tri, p, "a point added on a surface edge falls on another node", surf);
     THX_CHECK(st);
     if (E->n >= E->cap) THX_CHECK(thx_grow(C->ctx, (void **)&E->pt, &E->cap, E->n + 1, sizeof *E->pt));
@@ -347,7 +371,7 @@ static thx_status split_piece(conformer *C, size_t e, size_t k, const thx_surfac
     if (E->t1 >= 0) THX_CHECK(own_add(C, idx, E->t1));
     C->node_edge[idx] = (int32_t)e;
     C->S.n_edge_points++;
-    return after_insert(C);
+    return after_insert(C, idx);
 }
 
 /* Makes every piece of every dirty surface edge an edge of the tetrahedralization (splits mark
@@ -390,9 +414,24 @@ static thx_status gather(conformer *C, size_t ti)
     size_t need = 3 + T->n_in;
     for (int k = 0; k < 3; k++) need += C->E[T->e[k]].n - 2;
     if (need > C->capP) THX_CHECK(thx_grow(C->ctx, (void **)&C->P, &C->capP, need, sizeof *C->P));
+    size_t np_all = thx_dt_n_points(C->dt);
+    if (np_all > C->lcap) {
+        size_t cap = np_all + np_all / 2 + 64;
+        int32_t *li = thx_realloc(C->ctx, C->lidx, cap * sizeof *li);
+        if (!li) return THX_ENOMEM;
+        C->lidx = li;
+        uint32_t *ls = thx_realloc(C->ctx, C->lstamp, cap * sizeof *ls);
+        if (!ls) return THX_ENOMEM;
+        memset(ls + C->lcap, 0, (cap - C->lcap) * sizeof *ls);
+        C->lstamp = ls;
+        C->lcap = cap;
+    }
+    if (++C->lclock == 0) { memset(C->lstamp, 0, C->lcap * sizeof *C->lstamp); C->lclock = 1; }
 #define ADD(nd, mk)                                                                                   \
     do {                                                                                              \
         const double *q_ = X(C, nd);                                                                  \
+        C->lidx[nd] = (int32_t)C->nP;                                                                 \
+        C->lstamp[nd] = C->lclock;                                                                    \
         double r_[3] = {q_[0] - c0[0], q_[1] - c0[1], q_[2] - c0[2]};                                 \
         C->P[C->nP++] = (tpt){nd, mk, r_[0] * u[0] + r_[1] * u[1] + r_[2] * u[2],                     \
                               r_[0] * w[0] + r_[1] * w[1] + r_[2] * w[2]};                            \
@@ -409,11 +448,11 @@ static thx_status gather(conformer *C, size_t ti)
     return THX_OK;
 }
 
+/* The local index of node among the points gathered last, or -1. */
 static int find_pt(const conformer *C, int32_t node)
 {
-    for (size_t i = 0; i < C->nP; i++)
-        if (C->P[i].node == node) return (int)i;
-    return -1;
+    if (node < 0 || (size_t)node >= C->lcap || C->lstamp[node] != C->lclock) return -1;
+    return C->lidx[node];
 }
 
 typedef struct { int32_t a, b; int n; } fedge;
@@ -521,7 +560,8 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     if (!(ww[0] > 0 && ww[1] > 0 && ww[2] > 0)) return THX_OK;
     if (C->n_st >= C->max_st) return too_fine(C, T->surf, T->tri, p, "too many points were added to make it a union of faces", surf);
     int32_t idx;
-    thx_status st = thx_dt_insert(C->dt, p, T->c[0], &idx);
+    int32_t fdummy[3];
+    thx_status st = thx_dt_insert_checked(C->dt, p, T->c[0], record_removed, C, &idx, fdummy);
     if (st == THX_EGEOM) return too_fine(C, T->surf, T->tri, p, "a point added on a surface triangle falls on another node", surf);
     THX_CHECK(st);
     if (T->n_in >= T->cap_in) THX_CHECK(thx_grow(C->ctx, (void **)&T->in, &T->cap_in, T->n_in + 1, sizeof *T->in));
@@ -529,7 +569,7 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     THX_CHECK(add_record(C, idx, T->surf, T->tri, ww));
     THX_CHECK(own_add(C, idx, (int32_t)ti));
     C->S.n_face_points++;
-    return after_insert(C);
+    return after_insert(C, idx);
 }
 
 /* Splits the longest piece of triangle ti's edges (points gathered). */
@@ -742,7 +782,7 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
         if (st != THX_OK) break;
         if (idx >= 0) {
             C->S.n_refine_points++;
-            st = after_insert(C);
+            st = after_insert(C, -1); /* vetted: no piece of a surface among the faces removed */
             if (st != THX_OK) break;
             /* the tetrahedron may come back if the centre was vetoed elsewhere: nothing to redo */
             continue;
@@ -917,6 +957,8 @@ done:
     free(C.P);
     free(C.F);
     free(C.own_head);
+    free(C.lidx);
+    free(C.lstamp);
     free(C.tdirty);
     free(C.edirty);
     free(C.tlist);
