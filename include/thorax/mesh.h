@@ -40,6 +40,10 @@ typedef struct {
        renamed to `rename` (when not empty) and given the isotropic conductivity sigma (S/m, when > 0) */
     struct { char name[64], rename[64]; double sigma; } region_set[16];
     size_t n_region_set;
+    /* progress (optional): called from the calling thread with the stage's name ("points",
+       "Delaunay", "conformity", "refinement", "regions", "repair") and the share done, 0 to 1 */
+    void (*progress)(void *user, const char *stage, double done);
+    void *progress_user;
 } thx_mesh_opts;
 
 typedef struct {

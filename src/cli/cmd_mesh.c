@@ -1,5 +1,6 @@
 /* thorax mesh: the tetrahedral volume mesh of a surface model (paper 3.3). */
 #include <math.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,8 +41,32 @@ static void help(void)
            "  -v, -q                 more / less logging\n");
 }
 
+/* A progress bar on a terminal (stderr) for a stage once it has run a second; one line per stage. */
+typedef struct { char stage[32]; double t0; int shown; } progress_state;
+static void mesh_progress(void *user, const char *stage, double done)
+{
+    progress_state *p = user;
+    double now = thx_wtime();
+    if (strcmp(p->stage, stage) != 0) {
+        if (p->shown) fputc('\n', stderr);
+        snprintf(p->stage, sizeof p->stage, "%s", stage);
+        p->t0 = now;
+        p->shown = 0;
+    }
+    if (now - p->t0 < 1.0 && !p->shown) return;
+    int width = 30, fill = (int)(done * width);
+    if (fill > width) fill = width;
+    char bar[40];
+    for (int i = 0; i < width; i++) bar[i] = i < fill ? '=' : (i == fill ? '>' : ' ');
+    bar[width] = 0;
+    fprintf(stderr, "\rthorax mesh %-11s [%s] %3.0f%% %5.1f s", stage, bar, 100 * (done > 1 ? 1 : done), now - p->t0);
+    fflush(stderr);
+    p->shown = 1;
+}
+
 int cmd_mesh(int argc, char **argv)
 {
+    progress_state ps = {"", 0, 0};
     const char *in = NULL, *out = NULL;
     int verbose = 0, want_stats = 0;
     thx_mesh_opts o;
@@ -102,9 +127,13 @@ int cmd_mesh(int argc, char **argv)
     thx_model *m = NULL;
     thx_mesh_stats S;
     int rc = 0;
+    if (verbose >= 0 && isatty(2)) { o.progress = mesh_progress; o.progress_user = &ps; }
     thx_status st = thx_model_read(ctx, in, &m);
     if (st == THX_OK) st = thx_mesh_build(ctx, m, &o, &S);
+    if (ps.shown) fputc('\n', stderr);
+    if (st == THX_OK) mesh_progress(&ps, "writing", 0.0);
     if (st == THX_OK) st = thx_model_write(ctx, m, out);
+    if (ps.shown && !strcmp(ps.stage, "writing")) { mesh_progress(&ps, "writing", 1.0); fputc('\n', stderr); }
     if (st != THX_OK) rc = cli_fail(ctx, "mesh", st);
     else {
         if (verbose >= 0) {

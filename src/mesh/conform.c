@@ -74,6 +74,7 @@ typedef struct {
     struct { int32_t tri, next; } *pool;
     size_t n_pool, pool_cap;
     const double *probe; /* the point the refinement tries to insert */
+    const conform_quality *Q; /* the options (progress) */
     int32_t *lidx;       /* node -> local index in P, valid where lstamp == lclock */
     uint32_t *lstamp, lclock;
     size_t lcap;
@@ -754,6 +755,7 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
     C->refining = 1;
     size_t head = 0;
     while (head < C->nrq) {
+        if (Q->progress && (head & 8191) == 0) Q->progress(Q->progress_user, "refinement", (double)head / (double)C->nrq);
         int32_t q[4];
         memcpy(q, C->rq[head++], sizeof q);
         if (head > (1u << 20) && head * 2 > C->nrq) { /* drop what was judged */
@@ -811,6 +813,7 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
         memcpy(C->rq[C->nrq++], q, sizeof q);
     }
     C->refining = 0;
+    if (Q->progress) Q->progress(Q->progress_user, "refinement", 1.0);
     C->S.refine_rounds = 1;
     C->S.t_refine = thx_wtime() - t0;
     return st;
@@ -863,6 +866,8 @@ static thx_status conform_loop(conformer *C, const thx_surface *const *surf)
 {
     size_t budget = 200 * (C->nT + 16), work = 0;
     for (;;) {
+        if (C->Q && C->Q->progress && !C->refining && (work & 1023) == 0)
+            C->Q->progress(C->Q->progress_user, "conformity", 1.0 - (double)C->ntl / (double)(C->nT ? C->nT : 1));
         size_t added = 0;
         THX_CHECK(edge_pass(C, surf, &added));
         if (C->ntl == 0) break;
@@ -914,6 +919,7 @@ thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf
     C.ctx = ctx;
     C.dt = dt;
     C.unit = unit;
+    C.Q = quality;
     thx_status st = build(&C, surf, offset, n_surf);
     if (st != THX_OK) goto done;
     C.max_st = max_steiner ? max_steiner : 20 * C.nT + 1000;
@@ -928,6 +934,7 @@ thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf
         C.S.missing_before += !thx_dt_has_face(dt, C.T[ti].c[0], C.T[ti].c[1], C.T[ti].c[2]);
     st = conform_loop(&C, surf);
     if (st != THX_OK) goto done;
+    if (quality && quality->progress) quality->progress(quality->progress_user, "conformity", 1.0);
     if (quality && (quality->radius_edge > 0 || quality->min_dihedral > 0)) {
         st = refine_quality(&C, quality, surf);
         if (st != THX_OK) goto done;

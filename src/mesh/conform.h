@@ -64,6 +64,8 @@ typedef struct {
     size_t max_points;
     double min_piece_ratio; /* pieces of a surface triangle shorter than this times its shortest edge
                                are not split for quality (0.1) */
+    void (*progress)(void *user, const char *stage, double done); /* optional */
+    void *progress_user;
 } conform_quality;
 
 /*

@@ -332,6 +332,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     const double unit = grid_unit(m);
 
     /* 1. grid points, plane by plane (in parallel, gathered in plane order: deterministic) */
+#define PROGRESS(stage, f) do { if (o->progress) o->progress(o->progress_user, stage, f); } while (0)
+    PROGRESS("points", 0.0);
     THX_TRY(find_planes(ctx, m->surf[outer], o, o->grid > 0 ? o->grid : 6.5, &planes, &np));
     S.n_planes = np;
     /* Automatic grid spacing from the median gap between the planes, chosen so that the
@@ -422,7 +424,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     size_t n_steiner = 0;
     {
         thx_dt *dt = NULL;
+        PROGRESS("points", 1.0);
+        PROGRESS("Delaunay", 0.0);
         st = thx_dt_create(ctx, xyz, nn, &dt);
+        PROGRESS("Delaunay", 1.0);
         if (st != THX_OK) {
             /* name the surfaces whose nodes coincide: indices below offset[ns] are surface nodes */
             st = thx_error(ctx, st, "mesh: tetrahedralization failed: %s (volume nodes 1..%zu are the surface nodes in "
@@ -433,7 +438,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.t_delaunay = t_dt - t1;
         conform_stats cs;
         domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps};
-        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.1};
+        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.1, o->progress, o->progress_user};
         st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
                           &n_sub, &cs);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
@@ -471,6 +476,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     S.n_delaunay_tets = nt;
     double t2 = thx_wtime();
 
+    PROGRESS("regions", 0.0);
     /* 3. regions: the pieces the surfaces cut space into, each classified by the majority of its
        tetrahedra's centroids (the chain of inside/outside tests); outside the outer surface -> removed */
     keep = thx_malloc(ctx, nt ? nt : 1);
@@ -575,6 +581,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     }
     double t3 = thx_wtime();
     S.t_classify = t3 - t2;
+    PROGRESS("regions", 1.0);
 
     /* the volume */
     THX_TRY(thx_volume_create(ctx, &v));
@@ -662,7 +669,9 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         for (size_t i = 0; i < n_sub; i++) memcpy(prot + 3 * i, sub[i].v, 3 * sizeof *prot);
         int32_t *adj = vnbr;
         vnbr = NULL; /* taken over */
+        PROGRESS("repair", 0.0);
         st = mesh_improve(ctx, v, adj, prot, n_sub, &io, &is);
+        PROGRESS("repair", 1.0);
         free(prot);
         if (st != THX_OK) goto done;
         S.repair_below_before = is.below_before;
