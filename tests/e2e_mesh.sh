@@ -34,6 +34,8 @@ if variant == "heart" and not (15000 <= nodes <= 45000 and 100000 <= tets <= 300
 if errs: print("\n".join(errs)); sys.exit(1)
 PYEOF
     then ok "figures ($variant)"; else bad "figures ($variant)"; fi
+    # conformity judged independently of thorax (tests/conformity.py)
+    if $PY "$SRC/tests/conformity.py" "$WORK/v_$variant" > "$WORK/conf_$variant.txt" 2>&1; then ok "conforming ($variant): $(head -1 "$WORK/conf_$variant.txt")"; else bad "conformity ($variant): $(cat "$WORK/conf_$variant.txt")"; fi
 done
 grep -q '"regions"' "$WORK/v_heart/model.json" && grep -q '"muscle"' "$WORK/v_heart/model.json" && ok "region table in model.json" || bad "region table"
 "$THORAX" export "$WORK/v_heart" --format vtu -o "$WORK/exp" -q && "$THORAX" export "$WORK/v_heart" --format msh -o "$WORK/exp" -q &&
