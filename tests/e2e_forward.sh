@@ -2,7 +2,8 @@
 # thorax forward / leads / verify end to end on the medium phantom: the epicardial
 # problem, the same answer under mpirun -np 2 and with other PETSc options, the
 # transfer matrix (adjoint, applied), currents, 12-lead ECG (Einthoven's law),
-# defibrillation, .mat read by scipy, and every bad input refused with nothing written.
+# defibrillation, .mat read by scipy, every bad input refused with nothing written, and
+# a volume that fails thorax check refused unless --force (recorded in solution.json).
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}"
 rm -rf "$WORK"
@@ -145,4 +146,38 @@ grep -q "no node" err.log || fail "electrode message"
 refused "currents do not balance" bad6 "$THORAX" forward modelh -o bad6 --electrode "pad,at=71:92:170,radius=40,current=2"
 refused "no convergence" bad7 "$THORAX" forward model --epicardial beat.raw -o bad7 -ksp_type cg -pc_type none -ksp_max_it 3
 grep -q "did not converge" err.log || fail "convergence message"
+# 9. the volume check before solving: a volume that fails it is refused (nothing written), --force
+#    solves it and records the check's reasons in solution.json; a passing one is recorded as such
+$PY - <<'EOF'
+import json, shutil
+shutil.copytree('model', 'badvol')
+m = json.load(open('badvol/model.json'))
+rid = {r['name']: r['id'] for r in m['regions']}
+tet = [l.split() for l in open('badvol/volume.tet')]
+k = next(i for i, t in enumerate(tet) if int(t[4]) == rid['lung_l'])
+tet[k][4] = str(rid['mean_thorax'])       # a lung tetrahedron on the wrong side of lung_l
+open('badvol/volume.tet', 'w').write(''.join(' '.join(t) + '\n' for t in tet))
+EOF
+refused "volume check" bad9 "$THORAX" forward badvol --epicardial beat.raw -o bad9
+grep -q 'the volume mesh fails thorax check (coverage, region_cells): .*not solved (--force solves anyway)' err.log ||
+    { cat err.log; fail "volume check message"; }
+grep -q 'volume: tetrahedra outside their region: region "mean_thorax"' err.log || fail "volume check reasons on stderr"
+refused "volume check (defibrillation)" bad10 "$THORAX" forward badvol -o bad10 --electrode "pad,at=71:92:170,radius=40,voltage=500" --electrode "apex,at=-158:-20:90,radius=40,voltage=0"
+"$THORAX" forward badvol --epicardial beat8.raw -o forced --force -q 2> forced.err
+grep -q 'warning: .*fails thorax check (coverage, region_cells); solving anyway (--force)' forced.err ||
+    { cat forced.err; fail "--force: no warning on stderr"; }
+$PY - <<'EOF'
+import json
+d = json.load(open('forced/solution.json'))
+w, c = d['warnings'], d['volume_check']
+assert 'fails thorax check (coverage, region_cells); solved anyway (--force)' in w[0], w
+assert any('tetrahedra outside their region' in x for x in w[1:]), w
+assert c['ok'] is False and c['forced'] is True and c['failures'] == ['coverage', 'region_cells'], c
+assert c['reasons'] == w[1:], c
+g = json.load(open('sol/solution.json'))
+assert 'warnings' not in g and g['volume_check'] == {'failures': [], 'reasons': [], 'ok': True, 'forced': False}, g['volume_check']
+assert json.load(open('defibh/solution.json'))['volume_check']['ok'] is True
+print('volume check: refused without --force; forced solution records %d reasons' % len(c['reasons']))
+EOF
+
 echo "e2e_forward: all checks passed"

@@ -212,6 +212,14 @@ static int in_box(thx_vec3 c, double lo, double hi)
     return c.x > lo && c.x < hi && c.y > lo && c.y < hi && c.z > lo && c.z < hi;
 }
 
+static int cmp_key3(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+    for (int i = 0; i < 5; i++)
+        if (a[i] != b[i]) return a[i] < b[i] ? -1 : 1;
+    return 0;
+}
+
 /* A model of the given surfaces (ownership taken). */
 static thx_model *model_of(thx_surface **s, int n)
 {
@@ -220,6 +228,55 @@ static thx_model *model_of(thx_surface **s, int n)
     for (int i = 0; i < n; i++)
         if (thx_model_add_surface(ctx, m, &s[i]) != THX_OK) abort();
     return m;
+}
+
+/* The boundary of v (faces in one tetrahedron, outward) as a surface of its
+ * own nodes: a model surface the mesh conforms to by construction. */
+static thx_surface *boundary_surface(const thx_volume *v, const char *name, thx_role role)
+{
+    static const int vf[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    size_t nf = 4 * v->n_tets;
+    int32_t(*key)[5] = malloc((nf + 1) * sizeof *key); /* sorted nodes, then tet, face */
+    if (!key) abort();
+    for (size_t t = 0; t < v->n_tets; t++)
+        for (int f = 0; f < 4; f++) {
+            int32_t *k = key[4 * t + (size_t)f];
+            for (int j = 0; j < 3; j++) k[j] = v->tet[4 * t + vf[f][j]];
+            for (int i = 1; i < 3; i++)
+                for (int j = i; j > 0 && k[j - 1] > k[j]; j--) {
+                    int32_t x = k[j];
+                    k[j] = k[j - 1];
+                    k[j - 1] = x;
+                }
+            k[3] = (int32_t)t;
+            k[4] = f;
+        }
+    qsort(key, nf, sizeof *key, cmp_key3);
+    thx_surface *s = NULL;
+    if (thx_surface_create(ctx, name, role, &s) != THX_OK) abort();
+    int32_t *map = malloc((v->n_nodes + 1) * sizeof(int32_t));
+    s->tri = malloc((3 * nf + 1) * sizeof(int32_t));
+    s->xyz = malloc((3 * v->n_nodes + 1) * sizeof(double));
+    if (!map || !s->tri || !s->xyz) abort();
+    for (size_t g = 0; g < v->n_nodes; g++) map[g] = -1;
+    for (size_t i = 0; i < nf;) {
+        size_t j = i + 1;
+        while (j < nf && !memcmp(key[j], key[i], 3 * sizeof(int32_t))) j++;
+        if (j == i + 1)
+            for (int c = 0; c < 3; c++) {
+                int32_t g = v->tet[4 * (size_t)key[i][3] + vf[key[i][4]][c]];
+                if (map[g] < 0) {
+                    map[g] = (int32_t)s->n_nodes;
+                    memcpy(s->xyz + 3 * s->n_nodes++, v->xyz + 3 * (size_t)g, 3 * sizeof(double));
+                }
+                s->tri[3 * s->n_tris + (size_t)c] = map[g];
+            }
+        s->n_tris += j == i + 1;
+        i = j;
+    }
+    free(map);
+    free(key);
+    return s;
 }
 
 /* Node tables: every surface node of m on the volume node at the same
@@ -352,14 +409,19 @@ static void test_cube_passes(void)
     CHECK(!r.containment_checked && !r.node_tables_checked);
     CHECK(isnan(r.volume_rel_diff));
 
-    /* with the cube as the outer surface and node tables */
-    thx_surface *s[1] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 1.0)};
+    /* with the cube as the outer surface (triangulated as the mesh's boundary) and node tables */
+    thx_surface *s[1] = {boundary_surface(v, "torso", THX_ROLE_OUTER)};
     thx_model *m = model_of(s, 1);
     CHECK(thx_surface_volume(m->surf[0]) > 0.999);
     link_nodes(v, m);
     f = run(v, m, NULL, &r);
     CHECK(f == 0);
     show_reasons("cube5 + model", &r);
+    CHECK(r.coverage_checked && r.n_surface_reports == 1 && r.surfaces[0].n_covered == 12);
+    CHECK(r.n_interface_faces == 12 && r.n_faces_off_surfaces == 0 && r.n_uncovered_tris == 0);
+    CHECK_NEAR(r.surfaces[0].covered_area, 6.0, 1e-14);
+    CHECK(r.cells_checked && r.n_outside_region_tets == 0 && r.regions[0].cell == 0);
+    CHECK(r.surfaces[0].parent == -1);
     CHECK(r.containment_checked && r.n_outside_tets == 0 && r.n_in_cavity_tets == 0);
     CHECK(r.node_tables_checked && r.n_table_mismatches == 0 && r.table_max_distance == 0.0);
     CHECK_NEAR(r.enclosed_volume, 1.0, 1e-14);
@@ -369,7 +431,10 @@ static void test_cube_passes(void)
     CHECK(fabs(r.regions[0].rel_diff) < 1e-14);
     thx_volume_destroy(&v);
 
-    /* the same cube in 6 tetrahedra (Kuhn) */
+    /* the same cube in 6 tetrahedra (Kuhn; its boundary diagonals are cube_surface's) */
+    thx_model_destroy(&m);
+    s[0] = cube_surface("torso", THX_ROLE_OUTER, 0.0, 1.0);
+    m = model_of(s, 1);
     v = kuhn_grid(1);
     link_nodes(v, m);
     CHECK(run(v, m, NULL, &r) == 0);
@@ -414,10 +479,15 @@ static void test_delaunay_passes(void)
 {
     thx_volume_report r = {0};
     thx_volume *v = delaunay_cube(2000, NULL);
-    thx_surface *s[1] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 1.0)};
+    thx_surface *s[1] = {boundary_surface(v, "torso", THX_ROLE_OUTER)};
     thx_model *m = model_of(s, 1);
     link_nodes(v, m);
-    CHECK(run(v, m, NULL, &r) == 0);
+    /* random points make slivers: the dihedral limit is not what this tests */
+    thx_volume_check_opts no_q;
+    thx_volume_check_opts_default(&no_q);
+    no_q.min_dihedral_deg = 0.0;
+    CHECK(run(v, m, NULL, &r) == THX_VCHECKF_QUALITY && r.min_dihedral < 1.0);
+    CHECK(run(v, m, &no_q, &r) == 0);
     show_reasons("delaunay", &r);
     CHECK(r.n_tets > 10000 && r.n_nodes == 2008);
     CHECK(fabs(r.volume_rel_diff) < 1e-12);
@@ -468,7 +538,7 @@ static void test_delaunay_passes(void)
     int threads = omp_get_max_threads();
     omp_set_num_threads(1);
     thx_volume_report r1 = {0};
-    run(v, m, NULL, &r1);
+    run(v, m, &no_q, &r1);
     cJSON *j1 = thx_volume_report_json(ctx, &r1);
     char *text1 = cJSON_PrintUnformatted(j1);
     CHECK(!strcmp(text, text1));
@@ -630,15 +700,16 @@ static void test_void_and_missing(void)
     free(nbrs);
     CHECK(pick < v->n_tets);
     vol_remove_tet(v, pick);
-    unsigned f = run(v, NULL, NULL, &r);
+    thx_volume_check_opts o;
+    thx_volume_check_opts_default(&o);
+    o.min_dihedral_deg = 0.0; /* random points: slivers */
+    unsigned f = run(v, NULL, &o, &r);
     CHECK(f == THX_VCHECKF_COMPONENTS);
     CHECK(r.n_shells == 1 && r.n_cavities == 1 && r.n_voids == 1 && r.expected_cavities == 0);
     CHECK(r.boundary.ok && r.n_boundary_faces == 12 + 4);
     CHECK(r.n_reasons == 1 && strstr(r.reasons[0], "1 void") != NULL);
     show_reasons("void", &r);
     /* said to be expected: passes */
-    thx_volume_check_opts o;
-    thx_volume_check_opts_default(&o);
     o.expected_cavities = 1;
     CHECK(run(v, NULL, &o, &r) == 0);
     o.expected_cavities = -1;
@@ -652,14 +723,18 @@ static void test_void_and_missing(void)
     link_nodes(v, m);
     vol_remove_tet(v, 2);
     f = run(v, m, NULL, &r);
-    CHECK(f == THX_VCHECKF_VOLUME);
+    /* and the surface triangles where it was are not covered, its inner faces are on no surface */
+    CHECK(f == (THX_VCHECKF_VOLUME | THX_VCHECKF_REGION_VOLUME | THX_VCHECKF_COVERAGE));
+    CHECK(r.n_uncovered_tris == 2 && r.n_faces_off_surfaces == 2);
     CHECK_NEAR(r.volume_rel_diff, -1.0 / 6.0, 1e-12);
     CHECK(r.n_shells == 1 && r.n_cavities == 0 && r.boundary.ok);
     show_reasons("missing boundary tet", &r);
     o.volume_tol = 0.2;
-    CHECK(run(v, m, &o, &r) == 0);
-    o.volume_tol = 0.0; /* report only */
-    CHECK(run(v, m, &o, &r) == 0);
+    o.region_volume_tol = 0.2;
+    o.coverage_tol = 1.0; /* the uncovered triangles are not covered at all: still fail */
+    CHECK(run(v, m, &o, &r) == THX_VCHECKF_COVERAGE);
+    o.volume_tol = o.region_volume_tol = 0.0; /* report only */
+    CHECK(run(v, m, &o, &r) == THX_VCHECKF_COVERAGE);
     CHECK_NEAR(r.volume_rel_diff, -1.0 / 6.0, 1e-12);
     thx_volume_destroy(&v);
     thx_model_destroy(&m);
@@ -701,7 +776,7 @@ static void test_containment_and_tables(void)
     thx_model *m = model_of(s, 1);
 
     /* a tetrahedron outside the outer surface */
-    thx_volume *v = cube5();
+    thx_volume *v = kuhn_grid(1);
     int32_t q[4];
     for (int k = 0; k < 4; k++) q[k] = vol_add_node(v, 3.0 + (k == 1), 0.5 + (k == 2), 0.5 + (k == 3));
     fix_orientation(v->xyz, q);
@@ -709,7 +784,7 @@ static void test_containment_and_tables(void)
     link_nodes(v, m);
     unsigned f = run(v, m, NULL, &r);
     CHECK(f & THX_VCHECKF_CONTAINMENT);
-    CHECK(r.n_outside_tets == 1 && r.ex_outside_tet == 5 && r.n_in_cavity_tets == 0);
+    CHECK(r.n_outside_tets == 1 && r.ex_outside_tet == 6 && r.n_in_cavity_tets == 0);
     CHECK(f & THX_VCHECKF_COMPONENTS); /* two shells */
     CHECK(r.n_shells == 2);
     CHECK(r.n_boundary_nodes_off_surfaces == 4);
@@ -717,7 +792,7 @@ static void test_containment_and_tables(void)
     thx_volume_destroy(&v);
 
     /* a node table pointing to a wrong node */
-    v = cube5();
+    v = kuhn_grid(1);
     link_nodes(v, m);
     v->surf_node[0][3] = v->surf_node[0][4];
     f = run(v, m, NULL, &r);
@@ -744,7 +819,7 @@ static void test_containment_and_tables(void)
     m->surf[0]->xyz[3 * 7] -= 4e-7;
     /* no tables at all while the model has surfaces */
     thx_volume_destroy(&v);
-    v = cube5();
+    v = kuhn_grid(1);
     f = run(v, m, NULL, &r);
     CHECK(f == THX_VCHECKF_NODE_TABLE);
     thx_volume_destroy(&v);
@@ -787,13 +862,21 @@ static void test_regions_and_heart(void)
                 v->region[t] = 0;
                 moved++;
             }
+        /* ... and in the lung's cell, which holds lung_l; the lung surface is no longer all interface */
         unsigned f = run(v, m, &o, &r);
-        CHECK(f == THX_VCHECKF_REGION_VOLUME);
+        CHECK(f == (THX_VCHECKF_REGION_VOLUME | THX_VCHECKF_REGION_CELLS | THX_VCHECKF_COVERAGE));
         CHECK(!r.regions[0].ok && !r.regions[1].ok);
         CHECK_NEAR(r.regions[1].rel_diff, -(4.0 / 6.0) / 8.0, 1e-12);
+        CHECK(r.n_outside_region_tets == 4 && r.regions[0].n_outside == 4 && r.regions[1].n_outside == 0);
+        CHECK(r.regions[0].ex_outside_cell == 1 && r.regions[0].cell == 0 && r.regions[1].cell == 1);
         show_reasons("lung mislabelled", &r);
-        o.region_volume_tol = 0.0; /* report only (default) */
-        CHECK(run(v, m, &o, &r) == 0);
+        int said = 0;
+        for (size_t k = 0; k < r.n_reasons; k++)
+            said |= strstr(r.reasons[k], "region \"mean_thorax\": 4 of 340 tetrahedra lie inside lung_l, which holds "
+                                         "region \"lung_l\"") != NULL;
+        CHECK(said);
+        o.region_volume_tol = 0.0; /* volumes report only: the cells and the coverage still fail */
+        CHECK(run(v, m, &o, &r) == (THX_VCHECKF_REGION_CELLS | THX_VCHECKF_COVERAGE));
         thx_volume_destroy(&v);
         thx_model_destroy(&m);
     }
@@ -838,7 +921,9 @@ static void test_regions_and_heart(void)
         v = kuhn_grid(4);
         link_nodes(v, m);
         unsigned f = run(v, m, &o, &r);
-        CHECK(f == (THX_VCHECKF_CONTAINMENT | THX_VCHECKF_VOLUME | THX_VCHECKF_COMPONENTS | THX_VCHECKF_REGION_VOLUME));
+        CHECK(f == (THX_VCHECKF_CONTAINMENT | THX_VCHECKF_VOLUME | THX_VCHECKF_COMPONENTS | THX_VCHECKF_REGION_VOLUME |
+                    THX_VCHECKF_COVERAGE));
+        CHECK(r.surfaces[1].n_covered == 0 && r.surfaces[0].n_covered == 12); /* the heart is no interface */
         CHECK(r.n_in_cavity_tets == 48 && r.n_outside_tets == 0);
         CHECK_NEAR(r.volume_rel_diff, 8.0 / 56.0, 1e-12);
         show_reasons("heart filled", &r);
@@ -854,6 +939,269 @@ static void test_regions_and_heart(void)
         thx_volume_destroy(&v);
         thx_model_destroy(&m);
     }
+    thx_volume_report_free(&r);
+}
+
+/* Steiner records for the boundary nodes of v that are no node of surface s
+ * of m: the triangle of s each lies on (brute force), its barycentric coordinates. */
+static void add_steiner(thx_volume *v, const thx_model *m, size_t s)
+{
+    const thx_surface *su = m->surf[s];
+    for (size_t g = 0; g < v->n_nodes; g++) {
+        if (v->node_surf[g] >= 0) continue;
+        const double *p = v->xyz + 3 * g;
+        for (size_t t = 0; t < su->n_tris; t++) {
+            const int32_t *c = su->tri + 3 * t;
+            const double *a = su->xyz + 3 * (size_t)c[0], *b = su->xyz + 3 * (size_t)c[1], *d = su->xyz + 3 * (size_t)c[2];
+            double e1[3], e2[3], w[3], n[3];
+            for (int k = 0; k < 3; k++) {
+                e1[k] = b[k] - a[k];
+                e2[k] = d[k] - a[k];
+                w[k] = p[k] - a[k];
+            }
+            n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            if (fabs(n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) > 1e-12 * sqrt(nn)) continue;
+            /* barycentric by areas: (w x e2) . n / |n|^2 and (e1 x w) . n / |n|^2 */
+            double b1 = ((w[1] * e2[2] - w[2] * e2[1]) * n[0] + (w[2] * e2[0] - w[0] * e2[2]) * n[1] +
+                         (w[0] * e2[1] - w[1] * e2[0]) * n[2]) / nn;
+            double b2 = ((e1[1] * w[2] - e1[2] * w[1]) * n[0] + (e1[2] * w[0] - e1[0] * w[2]) * n[1] +
+                         (e1[0] * w[1] - e1[1] * w[0]) * n[2]) / nn;
+            if (b1 < -1e-12 || b2 < -1e-12 || b1 + b2 > 1 + 1e-12) continue;
+            v->steiner = realloc(v->steiner, (v->n_steiner + 1) * sizeof *v->steiner);
+            if (!v->steiner) abort();
+            thx_steiner *r = &v->steiner[v->n_steiner++];
+            r->node = (int32_t)g;
+            r->surf = (int32_t)s;
+            r->tri = (int32_t)t;
+            r->bary[0] = 1.0 - b1 - b2;
+            r->bary[1] = b1;
+            r->bary[2] = b2;
+            break;
+        }
+    }
+}
+
+/* Coverage: surface triangles that are not unions of mesh faces, faces off
+ * the surfaces, the rounding tolerance; Steiner records. */
+static void test_coverage_and_steiner(void)
+{
+    thx_volume_report r = {0};
+    thx_volume_check_opts o;
+    thx_volume_check_opts_default(&o);
+    /* cube5's boundary squares are split along the other diagonals than the
+     * surface's: every face straddles two surface triangles */
+    {
+        thx_volume *v = cube5();
+        thx_surface *s[1] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 1.0)};
+        thx_model *m = model_of(s, 1);
+        link_nodes(v, m);
+        unsigned f = run(v, m, NULL, &r);
+        CHECK(f == THX_VCHECKF_COVERAGE);
+        CHECK(r.n_interface_faces == 12 && r.n_faces_off_surfaces == 6 && r.n_uncovered_tris == 6);
+        CHECK(r.surfaces[0].n_covered == 6 && fabs(r.surfaces[0].share - 0.5) < 1e-15);
+        CHECK(r.surfaces[0].ex_covered_share == 0.0);
+        CHECK(strstr(r.reasons[0], "coverage: surface \"torso\": 6 of 12 triangles not covered") != NULL);
+        CHECK(strstr(r.reasons[1], "6 faces between regions or on the boundary lie on no surface triangle") != NULL);
+        show_reasons("diagonals", &r);
+        thx_volume_destroy(&v);
+        thx_model_destroy(&m);
+    }
+    /* a lung cube inside the grid; the inner nodes moved by up to 5e-7 mm (6-decimal
+     * rounding) still cover; one torso grid node 2e-5 mm off the plane does not */
+    {
+        thx_volume *v = kuhn_grid(4);
+        int32_t lung = add_region(v, "lung_l");
+        for (size_t t = 0; t < v->n_tets; t++)
+            if (in_box(centroid(v, t), 1.0, 3.0)) v->region[t] = lung;
+        thx_surface *s[2] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 4.0),
+                             cube_surface("lung_l", THX_ROLE_LUNG, 1.0, 3.0)};
+        thx_model *m = model_of(s, 2);
+        link_nodes(v, m);
+        CHECK(run(v, m, NULL, &r) == 0);
+        CHECK(r.n_interface_faces == 16 * 6 * 2 + 4 * 6 * 2 && r.n_uncovered_tris == 0);
+        CHECK(r.surfaces[1].parent == 0 && r.surfaces[0].parent == -1);
+        for (size_t g = 0; g < v->n_nodes; g++)
+            if (v->node_surf[g] < 0)
+                for (int a = 0; a < 3; a++) v->xyz[3 * g + a] += (urand() - 0.5) * 1e-6;
+        CHECK(run(v, m, NULL, &r) == 0);
+        show_reasons("rounded", &r);
+        size_t g0 = v->n_nodes; /* a grid node on the plane x = 0, inside the face */
+        for (size_t g = 0; g < v->n_nodes; g++)
+            if (v->node_surf[g] < 0 && fabs(v->xyz[3 * g]) < 1e-5 && v->xyz[3 * g + 1] > 1.5 && v->xyz[3 * g + 1] < 2.5 &&
+                v->xyz[3 * g + 2] > 1.5 && v->xyz[3 * g + 2] < 2.5)
+                g0 = g;
+        CHECK(g0 < v->n_nodes);
+        v->xyz[3 * g0] = -2e-5;
+        unsigned f = run(v, m, NULL, &r);
+        CHECK(f == THX_VCHECKF_COVERAGE);
+        CHECK(r.n_faces_off_surfaces == 6 && r.n_uncovered_tris >= 1); /* the faces around the node */
+        show_reasons("off by 2e-5", &r);
+        /* a looser node_tol (0.1 mm) takes them: within tolerance */
+        o.node_tol = 1e-4;
+        CHECK(run(v, m, &o, &r) == 0);
+        o.node_tol = 1e-5;
+        thx_volume_destroy(&v);
+        thx_model_destroy(&m);
+    }
+    /* Steiner records: the torso's grid nodes are on its triangles */
+    {
+        thx_volume *v = kuhn_grid(4);
+        thx_surface *s[1] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 4.0)};
+        thx_model *m = model_of(s, 1);
+        link_nodes(v, m);
+        CHECK(run(v, m, NULL, &r) == 0 && r.n_boundary_nodes_off_surfaces == 98 - 8);
+        add_steiner(v, m, 0);
+        CHECK(v->n_steiner == 98 - 8);
+        CHECK(run(v, m, NULL, &r) == 0);
+        CHECK(r.n_steiner == 90 && r.surfaces[0].n_steiner == 90 && r.steiner_max_distance < 1e-14);
+        CHECK(r.n_boundary_nodes_off_surfaces == 0); /* Steiner nodes are on the surface */
+        /* a record whose coordinates point elsewhere */
+        v->steiner[17].bary[0] -= 1e-3;
+        v->steiner[17].bary[1] += 1e-3;
+        unsigned f = run(v, m, NULL, &r);
+        CHECK(f == THX_VCHECKF_NODE_TABLE && r.n_steiner_mismatches == 1 && r.ex_steiner == 17);
+        CHECK(r.steiner_max_distance > 1e-3);
+        CHECK(strstr(r.reasons[0], "Steiner nodes: 0 records out of range or on a surface node, 1 nodes farther") != NULL);
+        show_reasons("Steiner", &r);
+        v->steiner[17].bary[0] += 1e-3;
+        v->steiner[17].bary[1] -= 1e-3;
+        /* out of range, and a surface node named as a Steiner node */
+        v->steiner[3].tri = 12;
+        v->steiner[5].node = v->surf_node[0][2];
+        f = run(v, m, NULL, &r);
+        CHECK(f == THX_VCHECKF_NODE_TABLE && r.n_steiner_bad == 2 && r.ex_steiner == 3);
+        thx_volume_destroy(&v);
+        thx_model_destroy(&m);
+    }
+    thx_volume_report_free(&r);
+}
+
+/* Cells: one region per cell between the surfaces; a region may fill several. */
+static void test_region_cells(void)
+{
+    thx_volume_report r = {0};
+    thx_volume *v = kuhn_grid(6);
+    int32_t lungs = add_region(v, "lungs");
+    for (size_t t = 0; t < v->n_tets; t++) {
+        thx_vec3 c = centroid(v, t);
+        if (in_box(c, 1.0, 2.0) || in_box(c, 4.0, 5.0)) v->region[t] = lungs;
+    }
+    thx_surface *s[3] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 6.0), cube_surface("lung_r", THX_ROLE_LUNG, 1.0, 2.0),
+                         cube_surface("lung_l", THX_ROLE_LUNG, 4.0, 5.0)};
+    thx_model *m = model_of(s, 3);
+    link_nodes(v, m);
+    CHECK(run(v, m, NULL, &r) == 0);
+    show_reasons("two lungs", &r);
+    CHECK(r.cells_checked && r.n_outside_region_tets == 0);
+    CHECK(!strcmp(r.regions[1].definition, "lung_r + lung_l") && fabs(r.regions[1].rel_diff) < 1e-12);
+    CHECK(!strcmp(r.regions[0].definition, "torso - lung_r - lung_l") && fabs(r.regions[0].rel_diff) < 1e-12);
+    CHECK(r.regions[0].cell == 0 && r.regions[1].cell == 1);
+    /* one tetrahedron next to lung_r labelled "lungs": outside its region */
+    size_t moved = v->n_tets;
+    for (size_t t = 0; t < v->n_tets && moved == v->n_tets; t++) {
+        thx_vec3 c = centroid(v, t);
+        if (v->region[t] == 0 && c.x > 2.0 && c.x < 3.0 && c.y > 1.0 && c.y < 2.0 && c.z > 1.0 && c.z < 2.0) moved = t;
+    }
+    CHECK(moved < v->n_tets);
+    v->region[moved] = lungs;
+    unsigned f = run(v, m, NULL, &r);
+    CHECK(f == (THX_VCHECKF_REGION_CELLS | THX_VCHECKF_COVERAGE | THX_VCHECKF_REGION_VOLUME));
+    CHECK(r.n_outside_region_tets == 1 && r.ex_outside_region_tet == moved);
+    CHECK(r.regions[1].n_outside == 1 && r.regions[1].ex_outside == moved && r.regions[1].ex_outside_cell == 0);
+    show_reasons("moved", &r);
+    char want[160];
+    snprintf(want, sizeof want,
+             "region \"lungs\": 1 of 13 tetrahedra lie inside torso, which holds region \"mean_thorax\" (first: "
+             "tetrahedron %zu)",
+             moved + 1);
+    int said = 0;
+    for (size_t k = 0; k < r.n_reasons; k++) said |= strstr(r.reasons[k], want) != NULL;
+    CHECK(said);
+    /* the JSON names the cell */
+    cJSON *j = thx_volume_report_json(ctx, &r);
+    cJSON *rc = cJSON_GetObjectItem(j, "region_cells");
+    CHECK(rc && cJSON_GetObjectItem(rc, "outside_region")->valuedouble == 1);
+    cJSON *r1 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "regions"), 1);
+    CHECK(!strcmp(cJSON_GetObjectItem(r1, "cell")->valuestring, "inside lung_r"));
+    CHECK(cJSON_GetObjectItem(r1, "outside_region")->valuedouble == 1);
+    cJSON *cv = cJSON_GetObjectItem(j, "coverage");
+    CHECK(cJSON_GetArraySize(cJSON_GetObjectItem(cv, "surfaces")) == 3);
+    cJSON_Delete(j);
+    thx_volume_destroy(&v);
+    thx_model_destroy(&m);
+    thx_volume_report_free(&r);
+}
+
+/* A lung shell around the heart: the lung's volume is its surface's less the heart's. */
+static void test_nested_volumes(void)
+{
+    thx_volume_report r = {0};
+    thx_volume *v = kuhn_grid(6);
+    int32_t lung = add_region(v, "lung_l"), heart = add_region(v, "heart");
+    for (size_t t = 0; t < v->n_tets; t++) {
+        thx_vec3 c = centroid(v, t);
+        if (in_box(c, 2.0, 4.0)) v->region[t] = heart;
+        else if (in_box(c, 1.0, 5.0)) v->region[t] = lung;
+    }
+    thx_surface *s[3] = {cube_surface("torso", THX_ROLE_OUTER, 0.0, 6.0), cube_surface("lung_l", THX_ROLE_LUNG, 1.0, 5.0),
+                         cube_surface("heart", THX_ROLE_HEART, 2.0, 4.0)};
+    thx_model *m = model_of(s, 3);
+    link_nodes(v, m);
+    CHECK(run(v, m, NULL, &r) == 0);
+    show_reasons("lung around heart", &r);
+    CHECK(r.surfaces[2].parent == 1 && r.surfaces[1].parent == 0 && r.surfaces[0].parent == -1);
+    CHECK(!strcmp(r.regions[1].definition, "lung_l - heart"));
+    CHECK_NEAR(r.regions[1].expected, 56.0, 1e-12);
+    CHECK(fabs(r.regions[1].rel_diff) < 1e-12);
+    CHECK(!strcmp(r.regions[0].definition, "torso - lung_l") && fabs(r.regions[0].rel_diff) < 1e-12);
+    CHECK(!strcmp(r.regions[2].definition, "heart") && r.regions[2].cell == 2);
+    /* the heart left out: a cavity, the lung still "lung_l - heart" */
+    for (size_t t = v->n_tets; t-- > 0;)
+        if (v->region[t] == heart) vol_remove_tet(v, t);
+    vol_drop_unused(v);
+    v->n_regions = 2;
+    link_nodes(v, m);
+    CHECK(run(v, m, NULL, &r) == 0);
+    show_reasons("lung around excluded heart", &r);
+    CHECK(r.n_excluded_hearts == 1 && fabs(r.regions[1].rel_diff) < 1e-12 && fabs(r.volume_rel_diff) < 1e-12);
+    CHECK(r.n_interface_faces == 36 * 6 * 2 + 16 * 6 * 2 + 4 * 6 * 2);
+    thx_volume_destroy(&v);
+    thx_model_destroy(&m);
+    thx_volume_report_free(&r);
+}
+
+/* The smallest dihedral angle fails below 1 degree by default. */
+static void test_min_dihedral(void)
+{
+    /* a flattened regular tetrahedron: h found so that its smallest dihedral is 0.5 degrees */
+    double lo = 1e-4, hi = 1.0, mn = 0.0;
+    for (int it = 0; it < 100; it++) {
+        double h = 0.5 * (lo + hi);
+        double a[3] = {1, 1, h}, b[3] = {1, -1, -h}, c[3] = {-1, 1, -h}, d[3] = {-1, -1, h};
+        thx_tet_quality(a, b, c, d, &mn, NULL, NULL, NULL);
+        if (mn < 0.5) lo = h;
+        else hi = h;
+    }
+    double xyz[12] = {1, 1, hi, 1, -1, -hi, -1, 1, -hi, -1, -1, hi};
+    int32_t q[4] = {0, 1, 2, 3};
+    fix_orientation(xyz, q);
+    thx_volume *v = vol_new(xyz, 4, q, 1);
+    thx_volume_report r = {0};
+    CHECK(run(v, NULL, NULL, &r) == THX_VCHECKF_QUALITY);
+    CHECK_NEAR(r.min_dihedral, 0.5, 1e-9);
+    CHECK(r.n_reasons == 1 && strstr(r.reasons[0], "smallest dihedral angle 0.5 deg < 1 deg (tetrahedron 1)") != NULL);
+    show_reasons("sliver", &r);
+    thx_volume_check_opts o;
+    thx_volume_check_opts_default(&o);
+    CHECK(o.min_dihedral_deg == 1.0 && o.region_volume_tol == 0.005);
+    o.min_dihedral_deg = 0.4;
+    CHECK(run(v, NULL, &o, &r) == 0);
+    o.min_dihedral_deg = 0.0; /* off */
+    CHECK(run(v, NULL, &o, &r) == 0);
+    thx_volume_destroy(&v);
     thx_volume_report_free(&r);
 }
 
@@ -929,8 +1277,11 @@ static void timing(size_t n_in, size_t n_s, int strict)
         if (g < n_s) v->surf_node[0][g] = (int32_t)g;
     }
     thx_volume_report r = {0};
+    thx_volume_check_opts o;
+    thx_volume_check_opts_default(&o);
+    o.min_dihedral_deg = 0.0; /* random points: slivers */
     t0 = thx_wtime();
-    unsigned fl = run(v, m, NULL, &r);
+    unsigned fl = run(v, m, &o, &r);
     double t_check = thx_wtime() - t0;
     show_reasons("timing", &r);
     if (strict) {
@@ -964,6 +1315,10 @@ int main(void)
     test_volume_difference();
     test_containment_and_tables();
     test_regions_and_heart();
+    test_coverage_and_steiner();
+    test_region_cells();
+    test_nested_volumes();
+    test_min_dihedral();
     timing(12000, 3000, 1);
     const char *bench = getenv("THX_CHECK_VOLUME_BENCH");
     if (bench && atol(bench) > 0) {

@@ -223,10 +223,28 @@ int main(int argc, char **argv)
             size_t hs = 0;
             for (size_t s = 0; s < m->n_surfaces; s++)
                 if (m->surf[s] == heart) hs = s;
-            /* the heart nodes carry their prescribed values */
-            double herr = 0;
-            for (size_t i = 0; i < nh; i++) herr = fmax(herr, fabs(R.volume->v[m->volume->surf_node[hs][i]] - epi->v[i]));
+            /* the heart nodes carry their prescribed values, and the Steiner nodes on the heart the
+               barycentric mix of their triangle's corners' (exactly as computed, every frame) */
+            const thx_volume *v = m->volume;
+            double herr = 0, serr = 0;
+            size_t n_st = 0;
+            for (size_t i = 0; i < nh; i++) herr = fmax(herr, fabs(R.volume->v[v->surf_node[hs][i]] - epi->v[i]));
             CHECK(herr == 0);
+            for (size_t k = 0; k < v->n_steiner; k++) {
+                const thx_steiner *st = &v->steiner[k];
+                if (st->surf != (int32_t)hs) continue;
+                n_st++;
+                const int32_t *tc = heart->tri + 3 * (size_t)st->tri;
+                for (size_t f = 0; f < F; f++) {
+                    const double *e = epi->v + f * nh;
+                    double want = st->bary[0] * e[tc[0]] + st->bary[1] * e[tc[1]] + st->bary[2] * e[tc[2]];
+                    serr = fmax(serr, fabs(R.volume->v[f * v->n_nodes + (size_t)st->node] - want));
+                }
+            }
+            printf("phantom: %zu Steiner nodes on the heart, largest deviation from their interpolated value %.1e\n",
+                   n_st, serr);
+            CHECK(n_st > 0 && serr == 0);
+            CHECK(R.n_prescribed == nh + n_st);
             for (size_t f = 0; f < F; f++) {
                 thx_csr_mul(&K, R.volume->v + f * m->volume->n_nodes, Kp);
                 double net = 0, mag = 0;
@@ -235,6 +253,12 @@ int main(int argc, char **argv)
                     net += q;
                     mag += fabs(q);
                 }
+                for (size_t k = 0; k < v->n_steiner; k++)
+                    if (v->steiner[k].surf == (int32_t)hs) {
+                        double q = Kp[v->steiner[k].node];
+                        net += q;
+                        mag += fabs(q);
+                    }
                 printf("frame %zu: current out of the heart %.3e of %.3e (relative %.1e)\n", f + 1, net, mag, fabs(net) / mag);
                 CHECK(fabs(net) < 1e-7 * mag);
                 /* and through closed surfaces further out: the node sets within 80, 100, 120 mm of the
@@ -292,6 +316,74 @@ int main(int argc, char **argv)
         }
         printf("transfer applied vs solved: %.2e (largest %.3f mV)\n", perr, pmax);
         CHECK(perr < 1e-6 * pmax);
+        /* a linear potential on the heart's nodes: every Steiner node on the heart gets the same
+           linear function at its own position (the Dirichlet data are the piecewise-linear
+           interpolant on the heart's triangles, exact for a linear function) */
+        {
+            thx_series *lin = NULL;
+            CHECK_OK(ctx, thx_series_create(ctx, nh, 1, &lin));
+            for (size_t i = 0; i < nh; i++) lin->v[i] = linear(heart->xyz + 3 * i);
+            thx_forward_result RL;
+            CHECK_OK(ctx, thx_forward_epicardial(ctx, m, lin, &fo, &RL));
+            const thx_volume *v = m->volume;
+            size_t hs = 0, n_st = 0;
+            for (size_t s = 0; s < m->n_surfaces; s++)
+                if (m->surf[s] == heart) hs = s;
+            double lerr = 0, lmax = 0;
+            for (size_t k = 0; k < v->n_steiner; k++)
+                if (v->steiner[k].surf == (int32_t)hs) {
+                    int32_t g = v->steiner[k].node;
+                    double want = linear(v->xyz + 3 * (size_t)g);
+                    lerr = fmax(lerr, fabs(RL.volume->v[g] - want));
+                    lmax = fmax(lmax, fabs(want));
+                    n_st++;
+                }
+            printf("linear heart potential: %zu Steiner nodes on the heart within %.1e of it (largest %.1f)\n", n_st, lerr,
+                   lmax);
+            /* node coordinates carry 6 decimals: up to 8.7e-7 mm off, times |grad| = 1.34 */
+            CHECK(n_st > 0 && lerr < 1.2e-6);
+            thx_forward_result_free(&RL);
+            thx_series_destroy(&lin);
+        }
+        /* defibrillation patches hold their Steiner nodes: at the voltage, in the patch's node list */
+        {
+            const thx_volume *v = m->volume;
+            size_t os = 0;
+            for (size_t s = 0; s < m->n_surfaces; s++)
+                if (m->surf[s] == torso) os = s;
+            thx_patch pp[2];
+            memset(pp, 0, sizeof pp);
+            snprintf(pp[0].name, sizeof pp[0].name, "pad");
+            snprintf(pp[1].name, sizeof pp[1].name, "apex");
+            pp[0].is_voltage = pp[1].is_voltage = 1;
+            pp[0].value = 1.0;
+            const double a0[3] = {71, 92, 170}, a1[3] = {-158, -20, 90};
+            CHECK_OK(ctx, thx_patch_disc(ctx, m, os, a0, 60.0, &pp[0]));
+            CHECK_OK(ctx, thx_patch_disc(ctx, m, os, a1, 60.0, &pp[1]));
+            size_t n_surf_nodes = 0, n_st = 0;
+            double wsum = 0;
+            for (size_t i = 0; i < pp[0].n; i++) {
+                int32_t g = pp[0].node[i];
+                if (v->node_surf[g] == (int32_t)os) n_surf_nodes++;
+                wsum += pp[0].weight[i];
+            }
+            for (size_t k = 0; k < v->n_steiner; k++)
+                for (size_t i = 0; i < pp[0].n; i++) n_st += v->steiner[k].node == pp[0].node[i];
+            printf("patch: %zu nodes, %zu of them Steiner nodes, %.0f mm^2\n", pp[0].n, n_st, pp[0].area);
+            CHECK(n_st > 0 && n_surf_nodes + n_st == pp[0].n);
+            CHECK(fabs(wsum - 1) < 1e-12);
+            double *phi_d = NULL;
+            thx_defib_report dr;
+            CHECK_OK(ctx, thx_defib_solve(ctx, m, pp, 2, 5.0, &phi_d, NULL, &dr));
+            double derr = 0;
+            for (int e = 0; e < 2; e++)
+                for (size_t i = 0; i < pp[e].n; i++) derr = fmax(derr, fabs(phi_d[pp[e].node[i]] - pp[e].value));
+            CHECK(derr == 0);
+            CHECK(fabs(dr.current[0] + dr.current[1]) < 1e-6 * fabs(dr.current[0]));
+            free(phi_d);
+            thx_patch_free(&pp[0]);
+            thx_patch_free(&pp[1]);
+        }
         /* bad input: a wrong row count, a NaN */
         thx_series *bad = NULL;
         CHECK_OK(ctx, thx_series_create(ctx, nh + 1, 2, &bad));

@@ -38,14 +38,48 @@
  *     (below; 0 without a model) unless opts->expected_cavities >= 0. Any
  *     further cavity is an interior "void" (missing tetrahedra);
  *
- *  containment (only when a model is given)
+ *  surface coverage (only when a model is given) — decided from the
+ *  geometry alone, not from the mesher's Steiner table (docs/decisions.md,
+ *  "Checks"):
+ *   - "interface faces" are the boundary faces and the interior faces whose
+ *     two tetrahedra have different regions. Each is mapped to the surface
+ *     triangle it lies on: its three corners within opts->node_tol of the
+ *     triangle's plane and inside the triangle within node_tol (a BVH over
+ *     every surface's triangles; of several candidates on one surface the
+ *     one whose inside holds the face's centroid deepest; a face on two
+ *     surfaces that coincide there counts for both);
+ *   - every non-degenerate triangle of every surface must be covered: the
+ *     areas of the faces mapped to it sum to its area within
+ *     opts->coverage_tol (relative, default 1e-6) + 1e-6 mm x its perimeter
+ *     (files carry 6 decimals, so a node on an edge may be 5e-7 mm off in
+ *     each coordinate; a missing sliver of a triangle along an edge is found
+ *     from a few 1e-6 mm of width up);
+ *   - no interface face lies on no surface triangle ("region boundary off
+ *     the surfaces": a region that does not follow its surfaces, or a mesh
+ *     that cuts across a surface);
+ *   reported per surface: triangles, covered, share; failure "coverage";
+ *
+ *  containment and regions (only when a model is given)
+ *   - inside a surface is decided by ray parity with exact orient3d signs
+ *     over a BVH of the surface's triangles and a voxel grid (rays grazing an
+ *     edge are cast again in another direction; after 8 tries the
+ *     solid-angle test of thorax/inside.h decides). The surfaces should
+ *     pass thx_surface_check;
  *   - no tetrahedron's centroid lies outside every surface of role "outer";
  *   - a heart surface (role heart) is "excluded" when no region maps to it
  *     (no region named like the surface, nor "heart"): then no centroid lies
- *     inside it. Inside is decided by ray parity with exact orient3d signs
- *     over a BVH of the surface's triangles (rays grazing an edge are cast
- *     again in another direction; after 8 tries the solid-angle test of
- *     thorax/inside.h decides). The surfaces should pass thx_surface_check;
+ *     inside it;
+ *   - nesting: surface A is inside surface B when most of (up to 256 spread)
+ *     nodes of A are inside B; A's parent is the smallest-volume surface
+ *     containing it (reported per surface as "inside");
+ *   - cells: the cell of a tetrahedron is the innermost (smallest-volume)
+ *     surface containing its centroid, or "outside every surface". Each
+ *     cell should hold one region: the region most of its tetrahedra have
+ *     (ties: the lower region number). A tetrahedron of another region in
+ *     it is "outside its region" (failure "region_cells"), reported per
+ *     region and with the first such tetrahedron. (Per cell rather than per
+ *     region, because one region may fill several cells: "lungs" for both
+ *     lungs.)
  *
  *  volumes (only when a model is given)
  *   - total: V_tets = sum of the tetrahedra's volumes, against
@@ -53,23 +87,23 @@
  *     that of every excluded heart. rel_diff = (V_tets - V_enclosed) / V_enclosed;
  *     fails when |rel_diff| > opts->volume_tol (default 0.01, the "target
  *     under 1%"; <= 0 reports only);
- *   - per region, V_region = sum over its tetrahedra against the volume its
- *     surfaces enclose (V(role) = sum of thx_surface_volume over the
- *     surfaces of that role), by the region's name:
- *        a surface's name (e.g. "lung_l", "heart")    V(that surface)
- *        "heart"                                       V(heart)
- *        "lung", "lungs"                               V(lung)
- *        "fat"                                         V(outer) - V(fat)
- *        "muscle"                                      V(fat, else outer) - V(muscle)
- *        "mean_thorax", "thorax", "torso"              V(muscle, else fat, else outer)
- *                                                      - V(lung) - V(heart) - V(other)
+ *   - per region, V_region = sum over its tetrahedra against the volume
+ *     between its surfaces. The region belongs to the inside of one or
+ *     more surfaces, chosen by its name:
+ *        a surface's name (role lung, heart, other)    that surface
+ *        "heart"                                       the heart surfaces
+ *        "lung", "lungs"                               the lung surfaces
+ *        "fat"                                         outer (if a fat surface exists)
+ *        "muscle"                                      fat, else outer (if a muscle surface exists)
+ *        "mean_thorax", "thorax", "torso"              muscle, else fat, else outer
  *                                                      (unless the name is a surface's)
- *     (roles are layers: outer contains fat contains muscle contains the
- *     organs; role fat is the fat/muscle interface, role muscle the inner
- *     border of the muscle). Other names: the volume is reported, no
- *     expectation. A region fails when |rel_diff| > opts->region_volume_tol
- *     (default 0: report only; centroid classification makes region volumes
- *     only as good as the mesh's conformity to the inner surfaces);
+ *     and the region inside a surface S is V(S) minus the volumes of the
+ *     surfaces directly nested in S (their parent is S, nesting above):
+ *     "fat" is "torso - fat", "mean_thorax" "muscle - lung_r - lung_l -
+ *     heart", and a lung shell around the heart "lung - heart". Other
+ *     names: the volume is reported, no expectation. A region fails when
+ *     |rel_diff| > opts->region_volume_tol (default 0.005; <= 0 reports
+ *     only);
  *
  *  node tables (paper 3.3; when the volume has them or a model is given)
  *   - with a model: v->n_surfaces = m->n_surfaces and every table has the
@@ -81,10 +115,15 @@
  *     node are an error);
  *   - every volume node v with node_surf[v] = s >= 0 is listed back:
  *     surf_node[s][node_snode[v]] = v;
- *   - reported, not failed: boundary nodes of the mesh that are not on an
- *     "outer" surface or an excluded heart (a mesh not conforming to them);
+ *   - every Steiner record (v->steiner, with a model) names a node, surface
+ *     and triangle in range, and its node lies within opts->node_tol of the
+ *     point its barycentric coordinates give on that triangle;
+ *   - reported, not failed: boundary nodes of the mesh that are neither nodes
+ *     nor Steiner nodes of an "outer" surface or an excluded heart (a mesh
+ *     not conforming to them);
  *
- *  quality (reported; fails only when opts asks)
+ *  quality (dihedral angles fail below opts->min_dihedral_deg, default 1
+ *  degree; the rest is reported, failing only when opts asks)
  *   - dihedral angles (degrees, 6 per tetrahedron, between the two faces at
  *     an edge): smallest and largest; regular tetrahedron acos(1/3) = 70.53;
  *   - radius-edge ratio = circumradius / shortest edge: sqrt(6)/4 = 0.612
@@ -116,11 +155,13 @@ extern "C" {
 
 typedef struct {
     double volume_tol;        /* max |total rel_diff|; default 0.01; <= 0: report only */
-    double region_volume_tol; /* max |region rel_diff|; default 0 (report only) */
-    double node_tol;          /* surface node vs its volume node, mm; default 1e-5 */
+    double region_volume_tol; /* max |region rel_diff|; default 0.005; <= 0: report only */
+    double node_tol;          /* surface node vs its volume node, Steiner node vs its triangle point,
+                               * interface face corners vs a surface triangle, mm; default 1e-5 */
+    double coverage_tol;      /* covered area of a surface triangle vs its area, relative; default 1e-6 */
     int expected_cavities;    /* >= 0: cavities expected; default -1: excluded hearts (0 without a model) */
     int check_intersections;  /* of the boundary surface; default 1 */
-    double min_dihedral_deg;  /* > 0: fail if a dihedral angle is smaller; default 0 (report only) */
+    double min_dihedral_deg;  /* > 0: fail if a dihedral angle is smaller; default 1; 0: report only */
     double max_radius_edge;   /* > 0: fail if a radius-edge ratio is larger; default 0 (report only) */
 } thx_volume_check_opts;
 
@@ -144,10 +185,13 @@ typedef enum {
     THX_VCHECKF_CONTAINMENT = 1u << 12,   /* centroids outside the outer surface / inside an excluded heart */
     THX_VCHECKF_VOLUME = 1u << 13,        /* total volume differs from the enclosed one */
     THX_VCHECKF_REGION_VOLUME = 1u << 14, /* a region's volume differs from its surfaces' */
-    THX_VCHECKF_NODE_TABLE = 1u << 15,    /* node tables wrong or missing */
-    THX_VCHECKF_QUALITY = 1u << 16        /* below opts->min_dihedral_deg / above opts->max_radius_edge */
+    THX_VCHECKF_NODE_TABLE = 1u << 15,    /* node tables or Steiner records wrong or missing */
+    THX_VCHECKF_QUALITY = 1u << 16,       /* below opts->min_dihedral_deg / above opts->max_radius_edge */
+    THX_VCHECKF_COVERAGE = 1u << 17,      /* a surface triangle not covered by interface faces, or an
+                                           * interface face on no surface */
+    THX_VCHECKF_REGION_CELLS = 1u << 18   /* tetrahedra outside their region (in another region's cell) */
 } thx_volume_check_failure;
-#define THX_VCHECK_N_FAILURES 17
+#define THX_VCHECK_N_FAILURES 19
 
 #define THX_VCHECK_MAX_REASONS 20
 #define THX_VCHECK_MAX_WORST 8
@@ -170,14 +214,34 @@ typedef struct {
     double rel_diff;        /* (volume - expected) / expected; NaN if no expectation */
     char definition[160];   /* e.g. "torso - fat", "" if none */
     int ok;                 /* 0 iff |rel_diff| > region_volume_tol > 0 */
+    int cell;               /* the cell most of its tetrahedra are in: a surface index (inside it,
+                             * innermost), -1 outside every surface; -2 if not decided */
+    size_t n_outside;       /* its tetrahedra in a cell that holds another region */
+    size_t ex_outside;      /* the first of them (0-based; valid when n_outside > 0) */
+    int ex_outside_cell;    /* that tetrahedron's cell (as cell) */
 } thx_volume_region_report;
+
+/* Coverage and nesting of one surface of the model. */
+typedef struct {
+    char name[64];
+    size_t n_tris;          /* all triangles (degenerate ones count as covered) */
+    size_t n_covered;
+    double share;           /* n_covered / n_tris (1 for no triangles) */
+    double area, covered_area; /* mm^2: the surface's, and that of the interface faces on it */
+    size_t ex_uncovered;    /* first triangle not covered (0-based; valid when n_covered < n_tris) */
+    double ex_centroid[3];  /* its centroid, mm */
+    double ex_covered_share;/* covered area / area of that triangle */
+    size_t n_steiner;       /* Steiner records on this surface */
+    int parent;             /* the smallest-volume surface containing it (index), -1 none */
+    double volume;          /* thx_surface_volume, mm^3 */
+} thx_volume_surface_report;
 
 typedef struct {
     size_t tet;
     double value;
 } thx_volume_worst;
 
-/* Everything thx_volume_check measured. Owns regions (thx_volume_report_free). */
+/* Everything thx_volume_check measured. Owns regions and surfaces (thx_volume_report_free). */
 typedef struct {
     int ok;                 /* 1 iff failures == 0 */
     unsigned failures;      /* bits of thx_volume_check_failure */
@@ -211,7 +275,19 @@ typedef struct {
     size_t n_boundary_components, n_shells, n_cavities;
     size_t expected_shells, expected_cavities;
     size_t n_voids;                 /* cavities beyond the expected ones */
-    size_t n_boundary_nodes_off_surfaces; /* with a model: boundary nodes on no outer/excluded heart surface */
+    size_t n_boundary_nodes_off_surfaces; /* with a model: boundary nodes that are neither nodes nor Steiner
+                                           * nodes of an outer surface or an excluded heart */
+
+    /* surface coverage (with a model) */
+    int coverage_checked;
+    size_t n_interface_faces;       /* boundary faces + faces between two regions */
+    size_t n_uncovered_tris;        /* over all surfaces */
+    size_t n_faces_off_surfaces;    /* interface faces on no surface triangle */
+    int32_t ex_off_face[3];         /* the first (volume nodes, sorted) */
+    double ex_off_centroid[3];
+    double coverage_tol;
+    size_t n_surface_reports;
+    thx_volume_surface_report *surfaces; /* one per model surface, owned */
 
     /* containment */
     int containment_checked;
@@ -220,6 +296,9 @@ typedef struct {
     size_t n_outside_tets, ex_outside_tet;
     size_t n_in_cavity_tets, ex_in_cavity_tet;
     size_t n_undecided_tets;        /* classified by the solid-angle fallback (counted, not failed) */
+    int cells_checked;              /* cells decided against every surface of the model */
+    size_t n_outside_region_tets;   /* tetrahedra in a cell that holds another region */
+    size_t ex_outside_region_tet;   /* the first of them */
 
     /* volumes (mm^3) */
     double tet_volume;              /* sum of all tetrahedra's signed volumes */
@@ -243,6 +322,11 @@ typedef struct {
     double node_tol;
     size_t ex_table_surface, ex_table_node; /* first bad surf_node entry (surface, node) */
     int32_t ex_backlink_node;
+    size_t n_steiner;               /* v->n_steiner */
+    size_t n_steiner_bad;           /* records out of range */
+    size_t n_steiner_mismatches;    /* node farther than node_tol from its barycentric point */
+    double steiner_max_distance;    /* mm; NaN if none checked */
+    size_t ex_steiner;              /* first bad record (0-based) */
 
     /* quality (dihedral angles in degrees) */
     double min_dihedral, max_dihedral;
@@ -266,9 +350,11 @@ typedef struct {
  * *r is overwritten without being freed: free a report before reusing it.
  * opts: NULL for the defaults. Returns THX_OK if the volume passed,
  * THX_ECHECK if it failed (r tells why; the context holds the first reason),
- * THX_ENOMEM. Cost: O(T log T) for T tetrahedra plus one ray per
- * tetrahedron and outer/heart surface (BVH); 500,000 tetrahedra take about
- * a second.
+ * THX_ENOMEM. Cost: O(T log T) for T tetrahedra, plus per tetrahedron a
+ * voxel lookup or a ray (BVH) for each surface up to the innermost one
+ * holding its centroid and the outer/excluded ones, plus a BVH query per
+ * interface face; the high-resolution phantom (1.15 M tetrahedra, 6
+ * surfaces) takes about 2 s on 2 cores.
  */
 thx_status thx_volume_check(thx_ctx *ctx, const thx_volume *v, const thx_model *m, const thx_volume_check_opts *opts,
                             thx_volume_report *r);
@@ -296,13 +382,21 @@ void thx_tet_quality(const double *a, const double *b, const double *c, const do
  *                   "boundary": <thx_surface_report_json of the boundary> | null},
  *    "containment": {"checked", "outer_surfaces": [..], "excluded_surfaces": [..],
  *                    "outside": n, "in_excluded": n, "undecided": n, "first": {..}},
+ *    "coverage": {"checked", "interface_faces", "uncovered_triangles", "faces_off_surfaces",
+ *                 "tolerance", "surfaces": [{"name", "triangles", "covered", "share", "area",
+ *                 "covered_area", "steiner_nodes", "inside": name|null,
+ *                 "first_uncovered": {"triangle", "centroid", "covered_share"}}, ..],
+ *                 "first_off_surface": {"nodes", "centroid"}},
+ *    "region_cells": {"checked", "outside_region", "first_tetrahedron"},
  *    "volume": {"tetrahedra": V, "enclosed": V|null, "definition": "..",
  *               "rel_diff": d|null, "tolerance": t, "min_tet": .., "max_tet": .., "ok"},
  *    "regions": [{"name", "tetrahedra", "volume", "expected", "definition",
- *                 "rel_diff", "ok"}, ..], "region_tolerance": t,
+ *                 "rel_diff", "ok", "cell": "inside NAME"|"outside every surface"|null,
+ *                 "outside_region", "first_outside_tetrahedron"}, ..], "region_tolerance": t,
  *    "node_tables": {"checked", "surfaces", "size_errors", "bad_entries",
  *                    "coordinate_mismatches", "backlink_errors", "max_distance",
- *                    "tolerance", "first": {..}},
+ *                    "tolerance", "steiner_nodes", "steiner_bad", "steiner_mismatches",
+ *                    "steiner_max_distance", "first": {..}},
  *    "quality": {"min_dihedral_deg", "min_dihedral_tetrahedron", "max_dihedral_deg",
  *                "max_dihedral_tetrahedron", "min_edge", "max_edge",
  *                "dihedral": {"definition", "histogram": {"edges", "counts"},

@@ -147,7 +147,11 @@ void thx_forward_result_free(thx_forward_result *r);
  * The epicardial forward problem: the potentials of epi (rows: the nodes of
  * the model's heart surface, in order; any unit) prescribed on the heart
  * surface, no current through the outer surface, the heart's interior (the
- * region named "heart", if meshed) left out. Errors: no volume mesh, no or
+ * region named "heart", if meshed) left out. The Steiner nodes on the heart
+ * surface (v->steiner) are prescribed too, each the barycentric mix of its
+ * triangle's corner values (so the prescribed potential is the piecewise
+ * linear one on the heart's triangles). The volume is not checked here
+ * (thorax forward runs thx_volume_check first). Errors: no volume mesh, no or
  * several heart/outer surfaces, a row count that does not match, NaN/Inf
  * values (row and frame named), a region tensor not positive definite, a
  * solve that does not converge.
@@ -158,7 +162,9 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
 /*
  * The transfer matrix of the epicardial problem: T (rows x heart nodes) with
  * phi_rows = T phi_heart, rows the outer surface's nodes (rows == NULL) or
- * the given outer-surface nodes (an electrode set, n_rows of them). Computed
+ * the given outer-surface nodes (an electrode set, n_rows of them). Heart
+ * node j's column prescribes 1 at the node and, at each Steiner node of the
+ * heart, its weight of corner j (as thx_forward_epicardial interpolates). Computed
  * column by column (one solve per heart node, `forward`) or row by row (one
  * solve per row with K symmetric: row i = -(K_ff^-1 e_i)^T K_fd, `adjoint`);
  * method < 0 picks the one with fewer solves. Returned as a series whose
@@ -198,7 +204,9 @@ thx_status thx_verify_slab(thx_ctx *ctx, double *rel_err, size_t *nodes);
 
 /* ---- defibrillation (paper 4.1) ---- */
 
-/* An electrode patch: nodes of a surface, each with its share of the patch's area. */
+/* An electrode patch: volume nodes on a surface, each with its share of the patch's area: the
+ * surface's nodes chosen, then the Steiner nodes (thorax/volume.h) on the part of the surface they
+ * span (a Steiner node whose non-zero barycentric weights all fall on chosen nodes). */
 typedef struct {
     char name[32];
     int is_voltage;     /* 1: the patch is held at `value` volts; 0: it injects `value` amperes */
@@ -209,9 +217,10 @@ typedef struct {
     double area;        /* mm^2 */
 } thx_patch;
 
-/* The nodes of model surface s within radius (mm) of center; weights from the areas of the surface
- * triangles around each node (a third of each triangle's area per corner inside). Error if no node
- * is inside. */
+/* The nodes of model surface s within radius (mm) of center, and the Steiner nodes among them (above);
+ * weights from the areas of the mesh faces on the surface around each node (a third of each face's
+ * area per patch node on it; without Steiner nodes these are the surface's triangles). Error if no
+ * node is inside. */
 thx_status thx_patch_disc(thx_ctx *ctx, const thx_model *m, size_t s, const double center[3], double radius,
                           thx_patch *p);
 /* The given nodes of surface s (0-based surface node numbers). */

@@ -7,8 +7,10 @@
 #include <cjson/cJSON.h>
 
 #include "cli/cli_fem.h"
+#include "thorax/check_volume.h"
 #include "thorax/fileio.h"
 #include "thorax/fem.h"
+#include "thorax/model.h"
 
 void cli_petsc_args_init(cli_petsc_args *pa, char *argv0)
 {
@@ -83,5 +85,72 @@ thx_status cli_write_json(thx_ctx *ctx, const char *path, cJSON *j)
         st = thx_atomic_commit(ctx, &af);
     }
     free(text);
+    return st;
+}
+
+thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir, const thx_model *m, int force,
+                           int rank, cJSON **note, cJSON **warning)
+{
+    if (note) *note = NULL;
+    if (warning) *warning = NULL;
+    /* no volume: the solver says so in its own words */
+    if (!m->volume || !m->volume->n_tets) return THX_OK;
+    thx_volume_report r;
+    double t0 = thx_wtime();
+    thx_status st = thx_volume_check(ctx, m->volume, m, NULL, &r);
+    if (st != THX_OK && st != THX_ECHECK) {
+        thx_volume_report_free(&r);
+        return st;
+    }
+    thx_ctx_clear(ctx);
+    thx_log(ctx, THX_LOG_DEBUG, "volume check (%zu tetrahedra): %s in %.2f s", m->volume->n_tets,
+            r.ok ? "passed" : "failed", thx_wtime() - t0);
+    char names[256] = "";
+    for (unsigned b = 0; b < THX_VCHECK_N_FAILURES; b++)
+        if (r.failures & (1u << b)) {
+            size_t n = strlen(names);
+            snprintf(names + n, sizeof names - n, "%s%s", n ? ", " : "",
+                     thx_volume_check_failure_name((thx_volume_check_failure)(1u << b)));
+        }
+    cJSON *j = NULL, *w = NULL;
+    if (note) {
+        j = cJSON_CreateObject();
+        cJSON *fl = cJSON_AddArrayToObject(j, "failures"), *rs = cJSON_AddArrayToObject(j, "reasons");
+        cJSON_AddBoolToObject(j, "ok", r.ok);
+        cJSON_AddBoolToObject(j, "forced", !r.ok && force);
+        for (unsigned b = 0; b < THX_VCHECK_N_FAILURES && fl; b++)
+            if (r.failures & (1u << b))
+                cJSON_AddItemToArray(fl, cJSON_CreateString(thx_volume_check_failure_name((thx_volume_check_failure)(1u << b))));
+        for (size_t k = 0; k < r.n_reasons && rs; k++) cJSON_AddItemToArray(rs, cJSON_CreateString(r.reasons[k]));
+        if (!j || !fl || !rs) {
+            cJSON_Delete(j);
+            thx_volume_report_free(&r);
+            return thx_error(ctx, THX_ENOMEM, "out of memory recording the volume check");
+        }
+    }
+    if (!r.ok && force && warning) {
+        w = cJSON_CreateArray();
+        char head[512];
+        snprintf(head, sizeof head, "the volume mesh fails thorax check (%s); solved anyway (--force)", names);
+        cJSON_AddItemToArray(w, cJSON_CreateString(head));
+        for (size_t k = 0; k < r.n_reasons; k++) cJSON_AddItemToArray(w, cJSON_CreateString(r.reasons[k]));
+    }
+    if (!r.ok && rank == 0) {
+        for (size_t k = 0; k < r.n_reasons; k++)
+            fprintf(stderr, "thorax %s: %s: volume: %s\n", cmd, model_dir, r.reasons[k]);
+        /* printed even with -q, as the reasons are: the solution is on a volume known to be wrong */
+        if (force)
+            fprintf(stderr, "thorax %s: warning: %s: the volume mesh fails thorax check (%s); solving anyway (--force)\n",
+                    cmd, model_dir, names);
+    }
+    if (!r.ok && !force)
+        st = thx_error(ctx, THX_ECHECK,
+                       "%s: the volume mesh fails thorax check (%s): %s; not solved (--force solves anyway)", model_dir,
+                       names, r.reasons[0]);
+    else
+        st = THX_OK;
+    thx_volume_report_free(&r);
+    if (note) *note = j;
+    if (warning) *warning = w;
     return st;
 }

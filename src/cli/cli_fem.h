@@ -29,7 +29,26 @@ thx_status cli_write_json(thx_ctx *ctx, const char *path, struct cJSON *j);
 /* A progress bar on stderr ("thorax LABEL [=====>    ] 120/300"); user is the label. */
 void cli_progress(void *user, size_t done, size_t total);
 
-/* thorax forward --electrode ...: the defibrillation problem (cmd_defib.c). */
+/*
+ * The volume check before a solve (thorax forward): thx_volume_check of m's
+ * volume against m's surfaces, default options (thorax/check_volume.h).
+ *  - passed: THX_OK;
+ *  - failed, force = 0: every reason on stderr (rank 0 only), then THX_ECHECK
+ *    with a message naming the failures and the first reason ("... not
+ *    solved; --force solves anyway");
+ *  - failed, force = 1: a warning on stderr (rank 0), THX_OK.
+ * *note (if not NULL; on THX_OK and THX_ECHECK) is a new object for
+ * solution.json's "volume_check": {"ok", "forced", "failures": [names],
+ * "reasons": [..]}; with force and a failure, *warning (if not NULL) gets a
+ * new array of strings for its "warnings". Caller deletes both.
+ * Other statuses: THX_ENOMEM (nothing returned).
+ */
+struct thx_model;
+thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir, const struct thx_model *m, int force,
+                           int rank, struct cJSON **note, struct cJSON **warning);
+
+/* thorax forward --electrode ...: the defibrillation problem (cmd_defib.c); force: solve a volume
+ * that fails the check (cli_volume_gate). */
 int cli_forward_defib(const char *model_dir, const char *out, const char **specs, int n_specs, double threshold,
-                      const char *format, cli_petsc_args *pa, int verbose);
+                      const char *format, cli_petsc_args *pa, int verbose, int force);
 #endif

@@ -1,6 +1,7 @@
 /* thorax check: verify a model's surfaces (closure, orientation, 4 pi, intersections, quality)
- * and, when the model has one, its volume mesh (conformity, positive volumes, containment,
- * volumes against the surfaces, node tables, tetrahedron quality). */
+ * and, when the model has one, its volume mesh (conformity, positive volumes, surface coverage,
+ * containment and region cells, volumes against the surfaces, node tables and Steiner records,
+ * tetrahedron quality). */
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdio.h>
@@ -41,15 +42,23 @@ static void usage(FILE *f)
             "                      the boundary faces pass the surface checks above; boundary\n"
             "                      shells and cavities as expected (the heart's cavity when no\n"
             "                      region is the heart; other cavities are voids)\n"
+            "  coverage            every surface triangle covered by mesh faces on the boundary\n"
+            "                      or between two regions (areas sum to its area), and no such\n"
+            "                      face off the surfaces (decided from the geometry alone)\n"
             "  containment         no centroid outside the outer surface, none inside an\n"
             "                      excluded heart\n"
+            "  region cells        the cell of a tetrahedron = the innermost surface holding\n"
+            "                      its centroid; each cell holds one region (no tetrahedron\n"
+            "                      outside its region)\n"
             "  volume              total tetrahedral volume against the volume the surfaces\n"
             "                      enclose (outer - excluded heart): |difference| <= R\n"
-            "  regions             each region's volume against its surfaces' (reported)\n"
+            "  regions             each region's volume against its surfaces' (the surface less\n"
+            "                      the surfaces nested directly in it): |difference| <= R\n"
             "  node tables         each surface node on a volume node of the same coordinates,\n"
-            "                      and listed back\n"
-            "  quality             dihedral angles, radius-edge ratio (circumradius / shortest\n"
-            "                      edge; regular tetrahedron 0.612), histograms (reported)\n"
+            "                      and listed back; each Steiner node on its triangle's point\n"
+            "  quality             smallest dihedral angle >= DEG (default 1); radius-edge\n"
+            "                      ratio (circumradius / shortest edge; regular tetrahedron\n"
+            "                      0.612), histograms (reported)\n"
             "\n"
             "options:\n"
             "  --json              print all figures as JSON on stdout (node and triangle\n"
@@ -62,8 +71,9 @@ static void usage(FILE *f)
             "  --volume-tol R      volume: fail if |total volume difference| > R, relative\n"
             "                      (default 0.01; 0 reports only)\n"
             "  --region-tol R      volume: fail if a region's |volume difference| > R\n"
-            "                      (default 0: report only)\n"
-            "  --min-dihedral DEG  volume: fail if a dihedral angle is smaller\n"
+            "                      (default 0.005; 0 reports only)\n"
+            "  --min-dihedral DEG  volume: fail if a dihedral angle is smaller (default 1;\n"
+            "                      0 turns it off)\n"
             "  --max-radius-edge X volume: fail if a radius-edge ratio exceeds X\n"
             "  -q                  print only failures (no table)\n"
             "  -v                  more logging\n"
@@ -133,17 +143,33 @@ static void print_volume(const thx_volume_report *v)
            "positive", "vol diff", "min dihed", "worst RE", "result");
     printf("%-8s %9zu %8zu %10s %7s %8s %9s %9s %9s  %s\n", "volume", v->n_tets, v->n_nodes, conf, closed, pos, diff,
            dih, re, v->ok ? "ok" : "FAIL");
+    if (v->coverage_checked) {
+        printf("\n%-16s %9s %9s %8s %8s  %s\n", "surface", "triangles", "covered", "share", "steiner", "inside");
+        for (size_t s = 0; s < v->n_surface_reports; s++) {
+            const thx_volume_surface_report *sr = &v->surfaces[s];
+            const char *in = sr->parent >= 0 ? v->surfaces[sr->parent].name : "-";
+            /* a share just short of 1 prints as 99.99%, never as a rounded 100% */
+            double pct = sr->n_covered == sr->n_tris ? 100.0 : fmin(99.99, 100.0 * sr->share);
+            printf("%-16s %9zu %9zu %7.2f%% %8zu  %s\n", sr->name, sr->n_tris, sr->n_covered, pct, sr->n_steiner, in);
+        }
+        printf("interface faces %zu, on no surface %zu\n", v->n_interface_faces, v->n_faces_off_surfaces);
+    }
     if (v->n_regions) {
-        printf("\n%-16s %9s %14s %14s %9s  %s\n", "region", "tets", "volume mm^3", "surfaces mm^3", "diff",
-               "from");
+        printf("\n%-16s %9s %14s %14s %9s %-18s %8s  %s\n", "region", "tets", "volume mm^3", "surfaces mm^3", "diff",
+               "cell", "outside", "from");
         for (size_t k = 0; k < v->n_regions; k++) {
             const thx_volume_region_report *g = &v->regions[k];
             char e[32] = "-", d[32] = "-";
             if (g->expected == g->expected) snprintf(e, sizeof e, "%.6g", g->expected);
             if (g->rel_diff == g->rel_diff)
                 snprintf(d, sizeof d, "%+.3f%%", fabs(g->rel_diff) < 5e-6 ? 0.0 : 100.0 * g->rel_diff);
-            printf("%-16s %9zu %14.6g %14s %9s  %s\n", g->name, g->n_tets, g->volume, e, d,
-                   g->definition[0] ? g->definition : "-");
+            char cell[80] = "-";
+            if (g->cell >= 0 && (size_t)g->cell < v->n_surface_reports)
+                snprintf(cell, sizeof cell, "in %s", v->surfaces[g->cell].name);
+            else if (g->cell == -1)
+                snprintf(cell, sizeof cell, "outside all");
+            printf("%-16s %9zu %14.6g %14s %9s %-18s %8zu  %s\n", g->name, g->n_tets, g->volume, e, d, cell,
+                   g->n_outside, g->definition[0] ? g->definition : "-");
         }
     }
     printf("\ntetrahedra per bin:\n%-16s %10s    %-16s %10s\n", "min dihedral deg", "tets", "radius-edge", "tets");

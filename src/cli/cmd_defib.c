@@ -69,7 +69,7 @@ static thx_status parse_spec(thx_ctx *ctx, const thx_model *m, const char *spec,
 }
 
 int cli_forward_defib(const char *model_dir, const char *out, const char **specs, int n_specs, double threshold,
-                      const char *format, cli_petsc_args *pa, int verbose)
+                      const char *format, cli_petsc_args *pa, int verbose, int force)
 {
     thx_ctx *ctx = cli_ctx(verbose);
     thx_model *m = NULL;
@@ -78,6 +78,7 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
     double *phi = NULL, *field = NULL;
     thx_series *vol = NULL, *torso = NULL, *fld = NULL;
     thx_defib_report R;
+    cJSON *vcheck = NULL, *warnings = NULL;
     char tmp[PATH_MAX] = "";
     int rank = 0, rc = 0;
     thx_series_format fmt = THX_SERIES_RAW;
@@ -86,6 +87,7 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
     thx_status st = thx_model_read(ctx, model_dir, &m);
     for (int k = 0; k < n_specs && st == THX_OK; k++) st = parse_spec(ctx, m, specs[k], &p[k]);
     if (st == THX_OK) st = cli_petsc_init(ctx, pa, &rank);
+    if (st == THX_OK) st = cli_volume_gate(ctx, "forward", model_dir, m, force, rank, &vcheck, &warnings);
     if (st == THX_OK) st = thx_defib_solve(ctx, m, p, (size_t)n_specs, threshold, &phi, &field, &R);
     if (st != THX_OK) goto fail;
     const thx_volume *v = m->volume;
@@ -157,6 +159,14 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
         cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddItemToObject(j, "solver", solver);
+        if (vcheck) {
+            cJSON_AddItemToObject(j, "volume_check", vcheck);
+            vcheck = NULL;
+        }
+        if (warnings) {
+            cJSON_AddItemToObject(j, "warnings", warnings);
+            warnings = NULL;
+        }
         if (st == THX_OK) {
             snprintf(path, sizeof path, "%s/solution.json", tmp);
             st = cli_write_json(ctx, path, j);
@@ -182,6 +192,8 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
 fail:
     rc = cli_fail(ctx, "forward", st);
 end:
+    cJSON_Delete(vcheck);
+    cJSON_Delete(warnings);
     for (int k = 0; k < 16; k++) thx_patch_free(&p[k]);
     free(phi);
     free(field);

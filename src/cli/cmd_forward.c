@@ -24,6 +24,10 @@ static void help(void)
            "prescribed on the heart surface, no current through the torso surface, the\n"
            "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
            "frames) and DIR/solution.json (what was solved, solver figures, timings).\n\n"
+           "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
+           "coverage of every surface, regions, volumes, node tables, smallest dihedral\n"
+           "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
+           "unless --force, which solves anyway and records the reasons in solution.json.\n\n"
            "options:\n"
            "  --epicardial SERIES    heart-surface potentials (text, raw or .mat; see thorax series)\n"
            "  -o, --output DIR       the solution directory (written whole or not at all)\n"
@@ -44,6 +48,8 @@ static void help(void)
            "  --electrode SPEC       defibrillation electrode (see docs/cli.md):\n"
            "                         NAME,surface=S,at=X:Y:Z,radius=R,voltage=V | current=I (A)\n"
            "  --threshold V/CM       field threshold for the heart-volume fraction (default 5)\n"
+           "  --force                solve even if the volume mesh fails the check (a warning\n"
+           "                         in solution.json: \"warnings\", \"volume_check\")\n"
            "  -v, -q                 more / less logging\n\n"
            "PETSc options are passed through: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor,\n"
            "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg -ksp_rtol 1e-10.\n"
@@ -86,7 +92,7 @@ int cmd_forward(int argc, char **argv)
 {
     const char *model_dir = NULL, *epi_path = NULL, *out = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL;
     const char *format = "raw", *method = "auto", *dump = NULL;
-    int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1;
+    int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0;
     double threshold = 5.0;
     const char *electrodes[16];
     int n_electrodes = 0;
@@ -106,6 +112,7 @@ int cmd_forward(int argc, char **argv)
         else if (!strcmp(a, "--rows")) { NEED_VALUE(); rows_path = v; }
         else if (!strcmp(a, "--method")) { NEED_VALUE(); method = v; if (strcmp(v, "auto") && strcmp(v, "forward") && strcmp(v, "adjoint")) return cli_usage_error("forward", "--method: forward, adjoint or auto"); }
         else if (!strcmp(a, "--no-warm")) warm = 0;
+        else if (!strcmp(a, "--force")) force = 1;
         else if (!strcmp(a, "--dump-system")) { NEED_VALUE(); dump = v; }
         else if (!strcmp(a, "--electrode")) { NEED_VALUE(); if (n_electrodes >= 16) return cli_usage_error("forward", "at most 16 electrodes"); electrodes[n_electrodes++] = v; }
         else if (!strcmp(a, "--threshold")) { NEED_VALUE(); if (cli_parse_double("forward", a, v, &threshold)) return 2; if (!(threshold > 0)) return cli_usage_error("forward", "--threshold must be positive"); }
@@ -123,7 +130,8 @@ int cmd_forward(int argc, char **argv)
     if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode");
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
     if (rows_path && !transfer_out) return cli_usage_error("forward", "--rows goes with --transfer-out");
-    if (n_electrodes) return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format, &pa, verbose);
+    if (n_electrodes)
+        return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format, &pa, verbose, force);
 
     thx_ctx *ctx = cli_ctx(verbose);
     int rank = 0, rc = 0;
@@ -136,6 +144,7 @@ int cmd_forward(int argc, char **argv)
     unsigned char *sel = NULL;
     double *jt = NULL, *jn = NULL;
     thx_series *cur_t = NULL, *cur_n = NULL;
+    cJSON *vcheck = NULL, *warnings = NULL;
     char tmp[PATH_MAX] = "";
     double t0 = thx_wtime();
     thx_series_format fmt = fmt_of(format);
@@ -159,6 +168,9 @@ int cmd_forward(int argc, char **argv)
     int need_solver = !(T && !want_volume && !currents);
     if (need_solver) {
         st = cli_petsc_init(ctx, &pa, &rank);
+        if (st != THX_OK) goto fail;
+        /* the volume the solve runs on must pass the volume check (or --force) */
+        st = cli_volume_gate(ctx, "forward", model_dir, m, force, rank, &vcheck, &warnings);
         if (st != THX_OK) goto fail;
     }
     thx_forward_opts fo;
@@ -244,6 +256,14 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddStringToObject(j, "rows", realpath(rows_path, abs) ? abs : rows_path);
         }
         cJSON_AddItemToObject(j, "files", files);
+        if (vcheck) {
+            cJSON_AddItemToObject(j, "volume_check", vcheck);
+            vcheck = NULL;
+        }
+        if (warnings) {
+            cJSON_AddItemToObject(j, "warnings", warnings);
+            warnings = NULL;
+        }
         if (R.ranks) {
             cJSON_AddStringToObject(solver, "ksp", R.ksp);
             cJSON_AddStringToObject(solver, "pc", R.pc);
@@ -291,6 +311,8 @@ int cmd_forward(int argc, char **argv)
 fail:
     rc = cli_fail(ctx, "forward", st);
 end:
+    cJSON_Delete(vcheck);
+    cJSON_Delete(warnings);
     free(sel);
     free(jt);
     free(jn);

@@ -22,44 +22,150 @@ void thx_patch_free(thx_patch *p)
     p->n = 0;
 }
 
-static double tri_area(const thx_surface *s, const int32_t *t)
+static int cmp_i32x3(const void *x, const void *y)
 {
-    const double *a = s->xyz + 3 * (size_t)t[0], *b = s->xyz + 3 * (size_t)t[1], *c = s->xyz + 3 * (size_t)t[2];
-    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2], z = u[0] * w[1] - u[1] * w[0];
-    return 0.5 * sqrt(x * x + y * y + z * z);
+    const int32_t *a = x, *b = y;
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
 }
 
-/* Patch from a membership flag per surface node. */
+/*
+ * Patch from a membership flag per node of surface s. The patch's volume
+ * nodes are its surface nodes and the Steiner nodes on s (thorax/volume.h)
+ * whose non-zero barycentric weights all fall on patch nodes (a Steiner node
+ * inside a triangle, or on an edge, spanned by patch nodes): a voltage holds
+ * the whole part of the surface they span, as before the mesher subdivided
+ * it. Weights: a third of the area of each mesh face on s around a patch
+ * node (the faces the finite elements see; s's own triangles when nothing
+ * was subdivided), normalized; a face is on s when its three nodes lie on
+ * one triangle of s (each node a corner of it, or a Steiner node whose
+ * weights fall on its corners).
+ */
 static thx_status patch_from_flags(thx_ctx *ctx, const thx_model *m, size_t s, const unsigned char *in, thx_patch *p)
 {
     const thx_surface *su = m->surf[s];
     const thx_volume *v = m->volume;
-    double *w = thx_calloc(ctx, su->n_nodes ? su->n_nodes : 1, sizeof *w);
-    if (!w) return THX_ENOMEM;
-    for (size_t t = 0; t < su->n_tris; t++) {
-        const int32_t *q = su->tri + 3 * t;
-        double a = tri_area(su, q) / 3.0;
-        for (int k = 0; k < 3; k++)
-            if (in[q[k]]) w[q[k]] += a;
+    size_t nv = v->n_nodes, ns = su->n_nodes;
+    thx_status st = THX_OK;
+    int32_t *sup = thx_malloc(ctx, 3 * (nv ? nv : 1) * sizeof *sup); /* per volume node on s: surface nodes it lies between */
+    unsigned char *member = thx_calloc(ctx, nv ? nv : 1, 1);
+    double *w = thx_calloc(ctx, nv ? nv : 1, sizeof *w);
+    size_t *tstart = thx_calloc(ctx, ns + 1, sizeof *tstart);
+    int32_t *ttri = thx_malloc(ctx, (3 * su->n_tris + 1) * sizeof *ttri);
+    int32_t(*face)[3] = NULL;
+    size_t nface = 0, capf = 0;
+    if (!sup || !member || !w || !tstart || !ttri) { st = THX_ENOMEM; goto done; }
+    for (size_t g = 0; g < 3 * nv; g++) sup[g] = -1;
+    for (size_t i = 0; i < ns; i++) {
+        int32_t g = v->surf_node[s][i];
+        sup[3 * (size_t)g] = (int32_t)i;
+        if (in[i]) member[g] = 1;
+    }
+    for (size_t k = 0; k < v->n_steiner; k++) {
+        const thx_steiner *r = &v->steiner[k];
+        if (r->surf != (int32_t)s || r->node < 0 || (size_t)r->node >= nv || r->tri < 0 || (size_t)r->tri >= su->n_tris)
+            continue;
+        int all_in = 1, n = 0;
+        for (int c = 0; c < 3; c++)
+            if (r->bary[c] > 1e-12) {
+                int32_t i = su->tri[3 * (size_t)r->tri + (size_t)c];
+                sup[3 * (size_t)r->node + (size_t)n++] = i;
+                all_in &= in[i] != 0;
+            }
+        if (all_in && n) member[r->node] = 1;
+    }
+    /* triangles around each surface node */
+    for (size_t t = 0; t < su->n_tris; t++)
+        for (int c = 0; c < 3; c++) tstart[su->tri[3 * t + (size_t)c] + 1]++;
+    for (size_t i = 0; i < ns; i++) tstart[i + 1] += tstart[i];
+    {
+        size_t *fill = thx_malloc(ctx, (ns + 1) * sizeof *fill);
+        if (!fill) { st = THX_ENOMEM; goto done; }
+        memcpy(fill, tstart, (ns + 1) * sizeof *fill);
+        for (size_t t = 0; t < su->n_tris; t++)
+            for (int c = 0; c < 3; c++) ttri[fill[su->tri[3 * t + (size_t)c]]++] = (int32_t)t;
+        free(fill);
+    }
+    /* mesh faces on s with a patch node: their nodes' supports are one triangle's corners */
+    static const int vf[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    for (size_t t = 0; t < v->n_tets; t++)
+        for (int f = 0; f < 4; f++) {
+            int32_t q[3];
+            int any = 0, on = 1;
+            for (int k = 0; k < 3; k++) {
+                q[k] = v->tet[4 * t + (size_t)vf[f][k]];
+                any |= member[q[k]];
+                on &= sup[3 * (size_t)q[k]] >= 0;
+            }
+            if (!any || !on) continue;
+            int32_t u[9];
+            int nu = 0;
+            for (int k = 0; k < 3; k++)
+                for (int c = 0; c < 3; c++) {
+                    int32_t i = sup[3 * (size_t)q[k] + (size_t)c];
+                    if (i < 0) break;
+                    int seen = 0;
+                    for (int j = 0; j < nu; j++) seen |= u[j] == i;
+                    if (!seen) u[nu++] = i;
+                }
+            if (nu != 3) continue;
+            int tri = 0;
+            for (size_t e = tstart[u[0]]; e < tstart[u[0] + 1] && !tri; e++) {
+                const int32_t *c = su->tri + 3 * (size_t)ttri[e];
+                int h1 = c[0] == u[1] || c[1] == u[1] || c[2] == u[1], h2 = c[0] == u[2] || c[1] == u[2] || c[2] == u[2];
+                tri = h1 && h2;
+            }
+            if (!tri) continue;
+            if (nface + 1 > capf && (st = thx_grow(ctx, (void **)&face, &capf, nface + 1, sizeof *face)) != THX_OK) goto done;
+            if (q[0] > q[1]) { int32_t x = q[0]; q[0] = q[1]; q[1] = x; }
+            if (q[1] > q[2]) { int32_t x = q[1]; q[1] = q[2]; q[2] = x; }
+            if (q[0] > q[1]) { int32_t x = q[0]; q[0] = q[1]; q[1] = x; }
+            memcpy(face[nface++], q, sizeof q);
+        }
+    if (nface > 1) qsort(face, nface, sizeof *face, cmp_i32x3);
+    for (size_t k = 0; k < nface; k++) {
+        if (k && !memcmp(face[k], face[k - 1], sizeof face[k])) continue; /* a face on an inner surface, seen from both sides */
+        const double *a = v->xyz + 3 * (size_t)face[k][0], *b = v->xyz + 3 * (size_t)face[k][1];
+        const double *c = v->xyz + 3 * (size_t)face[k][2];
+        double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2], wx = c[0] - a[0], wy = c[1] - a[1], wz = c[2] - a[2];
+        double x = uy * wz - uz * wy, y = uz * wx - ux * wz, z = ux * wy - uy * wx;
+        double third = 0.5 * sqrt(x * x + y * y + z * z) / 3.0;
+        for (int j = 0; j < 3; j++)
+            if (member[face[k][j]]) w[face[k][j]] += third;
     }
     size_t n = 0;
     double total = 0;
-    for (size_t i = 0; i < su->n_nodes; i++)
-        if (in[i]) { n++; total += w[i]; }
+    for (size_t g = 0; g < nv; g++)
+        if (member[g]) { n++; total += w[g]; }
     p->node = thx_malloc(ctx, (n ? n : 1) * sizeof *p->node);
     p->weight = thx_malloc(ctx, (n ? n : 1) * sizeof *p->weight);
-    if (!p->node || !p->weight) { free(w); thx_patch_free(p); return THX_ENOMEM; }
+    if (!p->node || !p->weight) { thx_patch_free(p); st = THX_ENOMEM; goto done; }
     p->n = 0;
-    for (size_t i = 0; i < su->n_nodes; i++)
+    /* the surface's nodes first, in their order, then the Steiner nodes in volume order */
+    for (size_t i = 0; i < ns; i++)
         if (in[i]) {
-            p->node[p->n] = v->surf_node[s][i];
-            p->weight[p->n] = total > 0 ? w[i] / total : 1.0 / (double)n;
+            int32_t g = v->surf_node[s][i];
+            p->node[p->n] = g;
+            p->weight[p->n] = total > 0 ? w[g] / total : 1.0 / (double)n;
+            p->n++;
+            member[g] = 0;
+        }
+    for (size_t g = 0; g < nv; g++)
+        if (member[g]) {
+            p->node[p->n] = (int32_t)g;
+            p->weight[p->n] = total > 0 ? w[g] / total : 1.0 / (double)n;
             p->n++;
         }
     p->area = total;
+done:
+    free(sup);
+    free(member);
     free(w);
-    return THX_OK;
+    free(tstart);
+    free(ttri);
+    free(face);
+    return st;
 }
 
 thx_status thx_patch_disc(thx_ctx *ctx, const thx_model *m, size_t s, const double center[3], double radius,

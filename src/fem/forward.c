@@ -33,19 +33,31 @@ static thx_status one_surface(thx_ctx *ctx, const thx_model *m, thx_role role, c
     return THX_OK;
 }
 
-/* The epicardial problem's set-up shared by the frame loop and the transfer matrix. */
+/* The epicardial problem's set-up shared by the frame loop and the transfer matrix.
+ * Prescribed (Dirichlet) nodes: the heart surface's nodes, and the Steiner
+ * nodes the mesher put on its triangles (thorax/volume.h), whose values are
+ * interpolated from the triangle's corners with the barycentric weights —
+ * left free, they would be unknowns inside the boundary and the potential
+ * would sag between the corners. */
 typedef struct {
     size_t heart, outer;
     unsigned char *use_region, *kind;
     thx_csr K;
     thx_fem_system *sys;
     double t_assemble;
+    size_t n_st;            /* Steiner nodes on the heart surface (active ones) */
+    int32_t *st_node;       /* their volume nodes */
+    int32_t *st_corner;     /* 3 per node: heart-surface node numbers of the triangle's corners */
+    double *st_w;           /* 3 per node: barycentric weights */
 } epi_problem;
 
 static void epi_free(epi_problem *p)
 {
     free(p->use_region);
     free(p->kind);
+    free(p->st_node);
+    free(p->st_corner);
+    free(p->st_w);
     thx_csr_free(&p->K);
     thx_fem_system_destroy(&p->sys);
 }
@@ -74,11 +86,45 @@ static thx_status epi_setup(thx_ctx *ctx, const thx_model *m, epi_problem *p)
         if (p->kind[k]) { p->kind[k] = 2; on++; }
     }
     if (!on) { st = thx_error(ctx, THX_EINPUT, "forward: no node of the heart surface '%s' is in the mesh", m->surf[p->heart]->name); goto done; }
+    {
+        const thx_surface *hs = m->surf[p->heart];
+        size_t n = 0;
+        for (size_t k = 0; k < v->n_steiner; k++) n += v->steiner[k].surf == (int32_t)p->heart;
+        p->st_node = thx_malloc(ctx, (n ? n : 1) * sizeof *p->st_node);
+        p->st_corner = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *p->st_corner);
+        p->st_w = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *p->st_w);
+        if (!p->st_node || !p->st_corner || !p->st_w) { st = THX_ENOMEM; goto done; }
+        for (size_t k = 0; k < v->n_steiner; k++) {
+            const thx_steiner *r = &v->steiner[k];
+            if (r->surf != (int32_t)p->heart) continue;
+            if (r->node < 0 || (size_t)r->node >= v->n_nodes || r->tri < 0 || (size_t)r->tri >= hs->n_tris) {
+                st = thx_error(ctx, THX_EINPUT, "forward: Steiner record %zu: node or triangle of '%s' out of range", k + 1,
+                               hs->name);
+                goto done;
+            }
+            if (!p->kind[r->node]) continue;
+            p->kind[r->node] = 2;
+            for (int c = 0; c < 3; c++) {
+                p->st_corner[3 * p->n_st + (size_t)c] = hs->tri[3 * (size_t)r->tri + (size_t)c];
+                p->st_w[3 * p->n_st + (size_t)c] = r->bary[c];
+            }
+            p->st_node[p->n_st++] = r->node;
+        }
+    }
     THX_TRY(thx_fem_system_create(ctx, &p->K, p->kind, 0, &p->sys));
     return THX_OK;
 done:
     epi_free(p);
     return st;
+}
+
+/* (K_fd^T y)_d = sum over free k of K(k, d) y_k (K symmetric: row d of K holds K(k, d)). */
+static double kfd_dot(const epi_problem *P, int32_t d, const double *y)
+{
+    double s = 0;
+    for (int64_t k = P->K.row[d]; k < P->K.row[d + 1]; k++)
+        if (P->kind[P->K.col[k]] == 1) s += P->K.val[k] * y[P->K.col[k]];
+    return s;
 }
 
 thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const thx_forward_opts *o,
@@ -125,6 +171,11 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     for (size_t f = 0; f < nf; f++) {
         const double *e = epi->v + f * epi->n_rows;
         for (size_t i = 0; i < hs->n_nodes; i++) phi[v->surf_node[P.heart][i]] = e[i];
+        for (size_t k = 0; k < P.n_st; k++) {
+            const int32_t *c = P.st_corner + 3 * k;
+            const double *w = P.st_w + 3 * k;
+            phi[P.st_node[k]] = w[0] * e[c[0]] + w[1] * e[c[1]] + w[2] * e[c[2]];
+        }
         if (f == 0 && o->dump_system) THX_TRY(thx_fem_system_dump(ctx, P.sys, phi, NULL, o->dump_system));
         thx_fem_solve_stats ss;
         THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, o->warm && f > 0, &ss));
@@ -191,6 +242,10 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
         for (size_t j = 0; j < nh; j++) {
             memset(phi, 0, nn * sizeof *phi);
             phi[v->surf_node[P.heart][j]] = 1;
+            /* a Steiner node carries its weight of corner j */
+            for (size_t k = 0; k < P.n_st; k++)
+                for (int c = 0; c < 3; c++)
+                    if (P.st_corner[3 * k + (size_t)c] == (int32_t)j) phi[P.st_node[k]] += P.st_w[3 * k + (size_t)c];
             thx_fem_solve_stats ss;
             THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, 0, &ss));
             for (size_t i = 0; i < nr; i++) A->v[j * nr + i] = phi[rv[i]];
@@ -209,13 +264,11 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
             load[rv[i]] = 1;
             thx_fem_solve_stats ss;
             THX_TRY(thx_fem_solve(ctx, P.sys, phi, load, 0, &ss));
-            for (size_t j = 0; j < nh; j++) {
-                int32_t d = v->surf_node[P.heart][j];
-                double s = 0;
-                /* K symmetric: row d of K holds K(k, d) */
-                for (int64_t k = P.K.row[d]; k < P.K.row[d + 1]; k++)
-                    if (P.kind[P.K.col[k]] == 1) s += P.K.val[k] * phi[P.K.col[k]];
-                A->v[j * nr + i] = -s;
+            for (size_t j = 0; j < nh; j++) A->v[j * nr + i] = -kfd_dot(&P, v->surf_node[P.heart][j], phi);
+            /* a Steiner node's column of K_fd counts for its corners by their weights */
+            for (size_t k = 0; k < P.n_st; k++) {
+                double g = kfd_dot(&P, P.st_node[k], phi);
+                for (int c = 0; c < 3; c++) A->v[(size_t)P.st_corner[3 * k + (size_t)c] * nr + i] -= P.st_w[3 * k + (size_t)c] * g;
             }
             it_min = ss.iterations < it_min ? ss.iterations : it_min;
             it_max = ss.iterations > it_max ? ss.iterations : it_max;
