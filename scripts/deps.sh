@@ -7,6 +7,7 @@ packages=(
   libcjson-dev                       # model.json manifest
   libgmp-dev                         # tests: exact rational reference for the predicates
   libmatio-dev                       # MATLAB .mat time series (libmatio)
+  zlib1g-dev                         # import: zlib-compressed VTK XML (.vtu) data
   petsc-dev openmpi-bin              # finite-element solves: PETSc 3.18 (hypre, MUMPS, CHOLMOD) on Open MPI; mpirun
   libopenblas0-pthread               # optimized BLAS for the sparse Cholesky factorizations (4-9x over reference BLAS)
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri  # rendering: OpenGL 3.3 core on EGL (Mesa llvmpipe headless)

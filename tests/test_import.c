@@ -1,6 +1,7 @@
 /*
  * Tests of surface import (src/io/import.c): every format written here by
  * hand (a cube, and variants) and read back; the index base of .fac and .tri;
+ * OpenMEEG's .tri (normals, strict counts);
  * OBJ quads, v/vt/vn and negative indices; STL vertex merging; PLY ascii and
  * both binary byte orders; legacy VTK (ASCII, 5.1 offsets, binary, strips);
  * VTP; errors naming file and line (or byte); the import policy (unused
@@ -275,6 +276,53 @@ static void test_tri(void)
     s = imp(tl_path("ecgsim.tri"), NULL, &in);
     CHECK(s != NULL && in.extent < 0.1);
     thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+}
+
+/* ------------------------------------------------------- OpenMEEG .tri */
+
+/* The cube in OpenMEEG's .tri: "- 8", vertex lines with (unused) normals,
+ * "- 12 12 12", 0-based triangles; cw = clockwise seen from outside (as the
+ * OpenMEEG sphere files have them). */
+static void write_openmeeg(const char *name, int cw)
+{
+    sbuf b = {0};
+    sb_printf(&b, "- 8\n");
+    for (int i = 0; i < 8; i++)
+        sb_printf(&b, "%g %g %g %g %g %g\n", cube_x(i, 0), cube_x(i, 1), cube_x(i, 2), (i & 1) ? 0.57735 : -0.57735,
+                  (i & 2) ? 0.57735 : -0.57735, (i & 4) ? 0.57735 : -0.57735);
+    sb_printf(&b, "- 12 12 12\n");
+    for (int t = 0; t < 12; t++) {
+        int v[3];
+        cube_tri(t, v);
+        if (cw) sb_printf(&b, "%d %d %d\n", v[0], v[2], v[1]);
+        else sb_printf(&b, "%d %d %d\n", v[0], v[1], v[2]);
+    }
+    tl_write_bytes(tl_path(name), b.p, b.n);
+    free(b.p);
+}
+
+static void test_openmeeg(void)
+{
+    thx_import_info in;
+    write_openmeeg("om.tri", 0);
+    thx_surface *s = rd(tl_path("om.tri"), &in);
+    CHECK(is_cube(s, 8));
+    CHECK(in.format == THX_IMPORT_TRI && strstr(in.format_detail, "OpenMEEG") != NULL);
+    CHECK(in.index_base == 0 && in.index_base_detected == 0 && in.trailer_line == 0);
+    thx_surface_destroy(&s);
+    /* clockwise, as OpenMEEG's sphere files: reversed by the policy, then the cube exactly */
+    write_openmeeg("om_cw.tri", 1);
+    s = imp(tl_path("om_cw.tri"), NULL, &in);
+    CHECK(is_cube(s, 8) && in.reversed && in.report.ok);
+    thx_import_info_free(&in);
+    thx_surface_destroy(&s);
+    /* blank lines and CRLF are allowed; the normals are not used (any numbers) */
+    s = NULL;
+    tl_write_text(tl_path("om_crlf.tri"), "- 4\r\n0 0 0 9 9 9\r\n1 0 0 0 0 0\r\n\r\n0 1 0 1 1 1\r\n0 0 1 -1 -1 -1\r\n"
+                                          "- 4 4 4\r\n0 2 1\r\n0 1 3\r\n0 3 2\r\n1 2 3\r\n\r\n");
+    s = rd(tl_path("om_crlf.tri"), &in);
+    CHECK(s && s->n_nodes == 4 && s->n_tris == 4 && s->tri[3 * 3 + 2] == 3 && s->xyz[3 * 3 + 2] == 1.0);
     thx_surface_destroy(&s);
 }
 
@@ -613,6 +661,24 @@ static void test_errors(void)
     expect_error("e2.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 nan\n1\n1 1 2 3\n", "4:", "node 3: coordinate 3 is not a finite");
     expect_error("e3.tri", "x\n", "1:", "expected the number of nodes");
     expect_error("e4.tri", "3\n1 0 0 0\n2 1 0 0\n", "3:", "file ends at node 3 of 3");
+    /* OpenMEEG .tri: counts beyond the file, indices out of range, missing normals, trailing text */
+    expect_error("om1.tri", "- 100\n0 0 0 0 0 1\n1 0 0 0 0 1\n", "3:", "file ends at vertex 3 of 100");
+    expect_error("om2.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 3\n", "6:",
+                 "node number 3 out of range 0..2");
+    expect_error("om3.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\n", "3:",
+                 "vertex 2: normal z is missing");
+    expect_error("om4.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 x 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\n", "3:",
+                 "vertex 2: normal y is not a finite number");
+    expect_error("om5.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 5 5 5\n0 1 2\n2 1 0\n", "7:",
+                 "file ends at triangle 3 of 5");
+    expect_error("om6.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 2 1\n0 1 2\n", "5:",
+                 "one triangle count, repeated");
+    expect_error("om7.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\nextra\n", "7:",
+                 "unexpected \"extra\" after the last of the 1 triangles");
+    expect_error("om8.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 1 1\n0 1\n", "6:",
+                 "triangle 1: vertex number 3 is missing");
+    expect_error("om9.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1 7\n", "3:", "vertex 2: more than six numbers");
+    expect_error("om10.tri", "- 2\n0 0 0 0 0 1\n1 0 0 0 0 1\n", "3:", "file ends after the vertices");
     expect_error("e1.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
                            "POLYGONS 1 4\n3 0 1 7\n", "7:", "node number 7 out of range 0..2");
     expect_error("e2.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0\n0 1\n",
@@ -736,6 +802,7 @@ int main(void)
     test_format_names();
     test_ptsfac();
     test_tri();
+    test_openmeeg();
     test_obj();
     test_stl();
     test_ply();

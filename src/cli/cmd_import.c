@@ -1,6 +1,10 @@
 /* thorax import: a model directory from closed surfaces made elsewhere
- * (.pts/.fac, ECGSim .tri, OBJ, STL, PLY, VTK, VTP), each checked as `thorax check` does. */
+ * (.pts/.fac, ECGSim and OpenMEEG .tri, OBJ, STL, PLY, VTK, VTP), each checked
+ * as `thorax check` does, or from one tetrahedral volume mesh (.pts +
+ * .tet/.elem, CARP, VTK unstructured grid, VTU, Gmsh .msh), its regions mapped
+ * to tissues and conductivities, its surfaces extracted and the whole checked. */
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,6 +13,7 @@
 #include "cli/cli.h"
 #include "thorax/check.h"
 #include "thorax/import.h"
+#include "thorax/mesh.h"
 #include "thorax/model.h"
 
 static void usage(FILE *f)
@@ -16,25 +21,46 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: thorax import -o MODEL FILE --name NAME --role ROLE [--fac FAC] [--format F] [--scale S]\n"
             "                     [FILE --name NAME --role ROLE ...] [--force] [-q] [-v]\n"
+            "       thorax import -o MODEL MESH [--elem ELEM] [--format F] [--scale S]\n"
+            "                     [--region N=NAME[:SIGMA]]... [--region-array A] [--force] [-q] [-v]\n"
             "\n"
             "Builds the model directory MODEL from closed triangle surfaces made by other\n"
-            "programs. Each FILE starts a surface; the options after it, up to the next\n"
-            "FILE, describe that surface:\n"
+            "programs, or from one tetrahedral volume mesh. Each surface FILE starts a\n"
+            "surface; the options after it, up to the next FILE, describe that surface:\n"
             "  --name NAME      surface name (file names NAME.pts/NAME.fac in the model)\n"
             "  --role ROLE      outer, fat, muscle, lung, heart or other\n"
             "  --fac FAC        the .fac of a .pts FILE (default: FILE with .fac for .pts)\n"
-            "  --format F       pts, tri, obj, stl, ply, vtk or vtp (default: FILE's extension)\n"
-            "  --scale S        multiply this surface's coordinates by S\n"
+            "  --format F       pts, tri, obj, stl, ply, vtk or vtp (default: FILE's extension);\n"
+            "                   tet, elem, vtu, msh (or vtk) for a volume MESH\n"
+            "  --scale S        multiply this file's coordinates by S\n"
             "\n"
-            "formats (by extension):\n"
+            "surface formats (by extension):\n"
             "  .pts + .fac  map3d/SCIRun; .fac numbering 0- or 1-based, detected and reported\n"
-            "  .tri         ECGSim: node count, 'label x y z' lines, triangle count,\n"
-            "               'label a b c' lines (labels optional; 1-based, 0-based detected)\n"
+            "  .tri         OpenMEEG ('- NV', NV lines 'x y z nx ny nz', '- NT NT NT', NT\n"
+            "               lines 'i j k', 0-based; normals ignored), or ECGSim: node count,\n"
+            "               'label x y z' lines, triangle count, 'label a b c' lines\n"
+            "               (labels optional; 1-based, 0-based detected)\n"
             "  .obj         Wavefront OBJ: v, f (v/vt/vn, negative indices; polygons fanned)\n"
             "  .stl         binary or ASCII; corners with identical coordinates merged\n"
             "  .ply         ascii or binary PLY: vertex x y z, face vertex_indices\n"
             "  .vtk         legacy VTK POLYDATA, ASCII or BINARY (POLYGONS, TRIANGLE_STRIPS)\n"
             "  .vtp         VTK XML PolyData with ascii arrays\n"
+            "\n"
+            "volume mesh formats (a MESH is the only FILE; no --name/--role):\n"
+            "  .pts + .tet  'x y z' node lines; 'a b c d [region]' element lines, node\n"
+            "   or .elem    numbers 0- or 1-based (detected, reported); CARP/openCARP: a\n"
+            "               count line first, 'Tt a b c d [region]' lines, 0-based\n"
+            "               (--elem names the element file; default: MESH with .tet, .elem)\n"
+            "  .vtk         legacy VTK UNSTRUCTURED_GRID, ASCII or BINARY: tetrahedra (cell\n"
+            "               type 10); cells of dimension 0-2 skipped; others refused\n"
+            "  .vtu         VTK XML UnstructuredGrid: ascii, binary or appended (raw or\n"
+            "               base64) arrays, uncompressed or zlib\n"
+            "  .msh         Gmsh MSH 4.1 ASCII: tetrahedra (type 4); regions = physical\n"
+            "               volumes (names from $PhysicalNames), else volume entities;\n"
+            "               named physical surfaces (triangles) name the surfaces\n"
+            "  regions of a VTK file: the cell array --region-array A, else one named\n"
+            "  region, gmsh:physical, CellEntityIds, material, tissue, ..., else the only\n"
+            "  integer cell array, else one region\n"
             "\n"
             "Every surface is checked as 'thorax check' does (closed 2-manifold, consistent\n"
             "and outward orientation, 4 pi solid angle, no self-intersections, no\n"
@@ -44,30 +70,51 @@ static void usage(FILE *f)
             "    (clockwise seen from outside, Omega = -4 pi) is reversed (reported);\n"
             "  - any other failure refuses the import: nothing is written, exit 1.\n"
             "\n"
+            "A volume MESH becomes a model with that volume: one region per region number\n"
+            "of the file (ids 1, 2, ... in increasing order), named and given a\n"
+            "conductivity by --region; nodes in no tetrahedron removed; left-handed\n"
+            "tetrahedra made right-handed (counted), flat ones refused; the mesh's\n"
+            "boundary becomes a surface of role outer (named after the region inside it;\n"
+            "a hole in the mesh becomes 'cavity', role heart), and each closed interface\n"
+            "between regions that touches no other surface becomes a surface of role\n"
+            "other, named after the region inside it. Then the surfaces and the volume are\n"
+            "checked as 'thorax check' does: a failure refuses the import.\n"
+            "  --region N=NAME[:SIGMA]  region number N of the file: its name, and its\n"
+            "                   isotropic conductivity in S/m (N=:SIGMA keeps the name);\n"
+            "                   default name: the file's (Gmsh physical name), else\n"
+            "                   region_N; default conductivity: mean thorax (0.239 S/m,\n"
+            "                   with a warning)\n"
+            "  --region-array A the cell array of region numbers of a .vtk/.vtu MESH\n"
+            "  --elem ELEM      the element file (.tet or .elem) of a .pts MESH\n"
+            "\n"
             "options:\n"
             "  -o, --output DIR  model directory to write (replaced atomically)\n"
-            "  --scale S         before the first FILE: default scale of every surface\n"
+            "  --scale S         before the first FILE: default scale of every file\n"
             "                    (coordinates are taken as mm; 1000 for a file in metres)\n"
-            "  --force           write surfaces that fail their checks anyway (warns)\n"
+            "  --force           write surfaces or a mesh that fail their checks (warns)\n"
             "  -q                print nothing but warnings and errors\n"
             "  -v                more logging\n"
             "  -h, --help        this text\n"
             "\n"
-            "example:\n"
+            "examples:\n"
             "  thorax import -o tank tank_full_771.pts --name tank --role outer \\\n"
             "                25feb97_sock_closed.pts --name sock --role heart\n"
+            "  thorax import -o head --scale 100 scalp.3.tri --name scalp --role outer \\\n"
+            "                skull.3.tri --name skull --role other cortex.3.tri --name brain --role other\n"
+            "  thorax import -o head head.msh --region 1=brain:0.33 --region 2=skull:0.0042\n"
             "\n"
-            "Exit status: 0 written, 1 a file could not be read or a surface was refused\n"
-            "(nothing written), 2 bad usage.\n");
+            "Exit status: 0 written, 1 a file could not be read or a surface or mesh was\n"
+            "refused (nothing written), 2 bad usage.\n");
 }
 
 typedef struct {
-    const char *file, *fac, *name;
+    const char *file, *fac, *name, *elem, *fmt_text;
     thx_role role;
     int has_role;
     thx_import_format fmt;
     double scale;
     int has_scale;
+    thx_volume_format vfmt; /* THX_VOLFMT_NONE: a surface */
 } spec;
 
 /* One line describing the check's figures. */
@@ -161,15 +208,60 @@ static cJSON *input_json(const spec *sp, const thx_import_info *in)
     return o;
 }
 
+/* Parses "N=NAME[:SIGMA]" or "N=:SIGMA" into *mp; 0, or -1 with a usage message. */
+static int parse_region(const char *cmd, const char *v, thx_region_map *mp)
+{
+    memset(mp, 0, sizeof *mp);
+    const char *eq = strchr(v, '=');
+    char *end = NULL;
+    errno = 0;
+    long long tag = eq ? strtoll(v, &end, 10) : 0;
+    if (!eq || end != eq || end == v || errno) {
+        cli_usage_error(cmd, "--region '%s': expected N=NAME[:SIGMA] (N the file's region number)", v);
+        return -1;
+    }
+    mp->tag = tag;
+    const char *name = eq + 1, *colon = strchr(name, ':');
+    size_t nl = colon ? (size_t)(colon - name) : strlen(name);
+    if (nl >= sizeof mp->name) {
+        cli_usage_error(cmd, "--region '%s': name too long", v);
+        return -1;
+    }
+    memcpy(mp->name, name, nl);
+    mp->name[nl] = '\0';
+    if (colon) {
+        errno = 0;
+        double sg = strtod(colon + 1, &end);
+        if (end == colon + 1 || *end || errno || !(sg > 0) || isinf(sg)) {
+            cli_usage_error(cmd, "--region '%s': the conductivity must be a number > 0 (S/m)", v);
+            return -1;
+        }
+        mp->sigma = sg;
+        mp->has_sigma = 1;
+    }
+    if (!nl && !colon) {
+        cli_usage_error(cmd, "--region '%s': give a name, a conductivity (N=:SIGMA), or both", v);
+        return -1;
+    }
+    return 0;
+}
+
+static int import_volume(const spec *sp, const char *outdir, double default_scale, int force, int quiet, int verbose,
+                         const thx_region_map *maps, size_t n_maps, const char *region_array);
+
 int cmd_import(int argc, char **argv)
 {
     const char *cmd = "import";
-    const char *outdir = NULL;
+    const char *outdir = NULL, *region_array = NULL;
     double default_scale = 1.0;
     int force = 0, verbose = 0, quiet = 0, rc = 0;
     spec *sp = calloc((size_t)argc + 1, sizeof *sp);
-    if (!sp) {
+    thx_region_map *maps = calloc((size_t)argc + 1, sizeof *maps);
+    size_t n_maps = 0;
+    if (!sp || !maps) {
         fprintf(stderr, "thorax import: out of memory\n");
+        free(sp);
+        free(maps);
         return 1;
     }
     int n = 0;
@@ -180,12 +272,14 @@ int cmd_import(int argc, char **argv)
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             free(sp);
+            free(maps);
             return 0;
         } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
             if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
             outdir = v;
             i++;
-        } else if (!strcmp(a, "--name") || !strcmp(a, "--role") || !strcmp(a, "--fac") || !strcmp(a, "--format")) {
+        } else if (!strcmp(a, "--name") || !strcmp(a, "--role") || !strcmp(a, "--fac") || !strcmp(a, "--format") ||
+                   !strcmp(a, "--elem")) {
             if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
             if (!cur) { rc = cli_usage_error(cmd, "%s must follow the FILE it describes", a); goto out; }
             i++;
@@ -201,10 +295,30 @@ int cmd_import(int argc, char **argv)
                 cur->has_role = 1;
             } else if (!strcmp(a, "--fac")) {
                 cur->fac = v;
-            } else if (thx_import_format_parse(v, &cur->fmt) != 0) {
-                rc = cli_usage_error(cmd, "unknown format '%s' (pts, tri, obj, stl, ply, vtk or vtp)", v);
-                goto out;
+            } else if (!strcmp(a, "--elem")) {
+                cur->elem = v;
+            } else {
+                thx_volume_format vf;
+                if (thx_import_format_parse(v, &cur->fmt) != 0 && thx_volume_format_parse(v, &vf) != 0) {
+                    rc = cli_usage_error(cmd, "unknown format '%s' (pts, tri, obj, stl, ply, vtk, vtp; tet, elem, vtu, msh)", v);
+                    goto out;
+                }
+                cur->fmt_text = v;
             }
+        } else if (!strcmp(a, "--region")) {
+            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
+            if (parse_region(cmd, v, &maps[n_maps]) != 0) { rc = 2; goto out; }
+            for (size_t k = 0; k < n_maps; k++)
+                if (maps[k].tag == maps[n_maps].tag) {
+                    rc = cli_usage_error(cmd, "--region %lld given twice", maps[k].tag);
+                    goto out;
+                }
+            n_maps++;
+            i++;
+        } else if (!strcmp(a, "--region-array")) {
+            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
+            region_array = v;
+            i++;
         } else if (!strcmp(a, "--scale")) {
             double s;
             if (cli_parse_double(cmd, a, v, &s)) { rc = 2; goto out; }
@@ -228,8 +342,42 @@ int cmd_import(int argc, char **argv)
         }
     }
     if (!outdir) { rc = cli_usage_error(cmd, "no output directory given (-o MODEL)"); goto out; }
-    if (n == 0) { rc = cli_usage_error(cmd, "no surface FILE given"); goto out; }
+    if (n == 0) { rc = cli_usage_error(cmd, "no surface FILE or volume MESH given"); goto out; }
+    /* a volume mesh: by --format (vtk decided by the content), else by the file */
+    int n_volumes = 0;
     for (int k = 0; k < n; k++) {
+        thx_volume_format vf = THX_VOLFMT_NONE;
+        if (sp[k].fmt_text && thx_volume_format_parse(sp[k].fmt_text, &vf) == 0 && vf == THX_VOLFMT_VTK) {
+            thx_volume_format by_content = thx_volume_format_from_path(sp[k].file);
+            vf = by_content == THX_VOLFMT_VTK ? THX_VOLFMT_VTK : THX_VOLFMT_NONE;
+        } else if (!sp[k].fmt_text) {
+            vf = sp[k].elem ? THX_VOLFMT_PTS : thx_volume_format_from_path(sp[k].file);
+        }
+        sp[k].vfmt = vf;
+        n_volumes += vf != THX_VOLFMT_NONE;
+    }
+    if (n_volumes) {
+        const spec *vs = NULL;
+        for (int k = 0; k < n; k++)
+            if (sp[k].vfmt != THX_VOLFMT_NONE) vs = &sp[k];
+        if (n > 1) {
+            rc = cli_usage_error(cmd, "%s is a volume mesh: it must be the only FILE", vs->file);
+            goto out;
+        }
+        if (vs->name || vs->has_role || vs->fac) {
+            rc = cli_usage_error(cmd, "%s is a volume mesh: --name, --role and --fac do not apply (its surfaces are "
+                                 "named after its regions)", vs->file);
+            goto out;
+        }
+        rc = import_volume(vs, outdir, default_scale, force, quiet, verbose, maps, n_maps, region_array);
+        goto out;
+    }
+    if (n_maps || region_array) {
+        rc = cli_usage_error(cmd, "--region and --region-array apply to a volume mesh only");
+        goto out;
+    }
+    for (int k = 0; k < n; k++) {
+        if (sp[k].elem) { rc = cli_usage_error(cmd, "%s: --elem applies to a .pts volume mesh only", sp[k].file); goto out; }
         if (!sp[k].name) { rc = cli_usage_error(cmd, "%s: --name NAME missing after it", sp[k].file); goto out; }
         if (!sp[k].has_role) { rc = cli_usage_error(cmd, "%s: --role ROLE missing after it", sp[k].file); goto out; }
         if (!sp[k].has_scale) sp[k].scale = default_scale;
@@ -241,8 +389,9 @@ int cmd_import(int argc, char **argv)
     }
 
     thx_ctx *ctx = cli_ctx(verbose);
-    thx_import_info *info = calloc((size_t)n, sizeof *info);
-    thx_surface **surf = calloc((size_t)n, sizeof *surf);
+    size_t n_files = (size_t)(n > 0 ? n : 1);
+    thx_import_info *info = calloc(n_files, sizeof *info);
+    thx_surface **surf = calloc(n_files, sizeof *surf);
     thx_model *m = NULL;
     cJSON *prov = NULL;
     int n_failed = 0;
@@ -335,5 +484,228 @@ done:
     thx_ctx_destroy(&ctx);
 out:
     free(sp);
+    free(maps);
+    return rc;
+}
+
+/* ------------------------------------------------------------ volume meshes */
+
+static const char *surface_kind_name(thx_volume_surface_kind k)
+{
+    return k == THX_VSURF_BOUNDARY ? "boundary" : k == THX_VSURF_CAVITY ? "cavity" : "interface";
+}
+
+static const char *name_from_text(thx_region_name_source s)
+{
+    return s == THX_RNAME_OPTION ? "--region" : s == THX_RNAME_FILE ? "the file's name" : "default name";
+}
+
+static void print_volume_report(const spec *sp, const thx_model *m, const thx_volume_import_info *in)
+{
+    const thx_volume *v = m->volume;
+    printf("volume mesh from %s%s%s\n", sp->file, in->path2[0] ? " + " : "", in->path2);
+    printf("  read: %s, %zu nodes, %zu tetrahedra", in->format_detail, in->n_nodes_read, in->n_tets_read);
+    printf("; node numbers %d-based (%s)\n", in->index_base, in->index_base_detected ? "detected" : "by the format");
+    printf("  regions from %s\n", in->region_source);
+    if (in->n_cells_ignored) printf("  skipped %zu cells of dimension 0-2 (points, lines, triangles, ...)\n", in->n_cells_ignored);
+    if (in->scale != 1.0) printf("  scaled coordinates by %g\n", in->scale);
+    if (in->n_unused_removed)
+        printf("  removed %zu unused nodes (in no tetrahedron; the first is node %lld as numbered in the file); the rest "
+               "renumbered\n", in->n_unused_removed, in->first_unused);
+    if (in->n_flipped) printf("  made %zu left-handed tetrahedra right-handed (two nodes swapped)\n", in->n_flipped);
+    for (size_t k = 0; k < in->n_regions; k++) {
+        const thx_volume_import_region *g = &in->regions[k];
+        const thx_region *rg = &v->regions[k];
+        printf("  region %zu \"%s\" (file region %lld, %s): %zu tetrahedra, %.6g mm^3, sigma %g S/m%s%s\n", k + 1, rg->name,
+               g->tag, name_from_text(g->name_from), g->n_tets, g->volume, rg->sigma[0],
+               rg->anisotropic ? " (anisotropic)" : "", g->sigma_defaulted ? " (default)" : "");
+    }
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        const thx_volume_import_surface *u = &in->surfaces[s];
+        printf("surface \"%s\" (%s): %s", m->surf[s]->name, thx_role_name(m->surf[s]->role), surface_kind_name(u->kind));
+        if (u->inside >= 0) printf(", inside: %s", v->regions[u->inside].name);
+        if (u->outside >= 0) printf(", outside: %s", v->regions[u->outside].name);
+        if (u->named_by_file) printf(", named by the file");
+        printf("\n");
+        print_check(&in->surface_reports[s]);
+    }
+    for (size_t k = 0; k < in->n_dropped && k < THX_VIMPORT_MAX_DROPPED; k++) printf("  not a surface: %s\n", in->dropped[k]);
+    if (in->n_dropped > THX_VIMPORT_MAX_DROPPED)
+        printf("  not a surface: ... and %zu more\n", in->n_dropped - THX_VIMPORT_MAX_DROPPED);
+    if (in->volume_checked) {
+        const thx_volume_report *r = &in->volume_report;
+        printf("  volume check: %zu nodes, %zu tetrahedra, %zu boundary faces, %zu shell%s, %zu cavit%s, volume %.6g mm^3",
+               r->n_nodes, r->n_tets, r->n_boundary_faces, r->n_shells, r->n_shells == 1 ? "" : "s", r->n_cavities,
+               r->n_cavities == 1 ? "y" : "ies", r->tet_volume);
+        if (r->volume_rel_diff == r->volume_rel_diff) printf(" (%+.2e vs the surfaces)", r->volume_rel_diff);
+        if (r->min_dihedral == r->min_dihedral) printf(", dihedral %.2f..%.2f deg", r->min_dihedral, r->max_dihedral);
+        printf(": %s\n", r->ok ? "ok" : "FAILED");
+    }
+}
+
+static cJSON *volume_input_json(const spec *sp, const thx_model *m, const thx_volume_import_info *in)
+{
+    cJSON *o = cJSON_CreateObject();
+    if (!o) return NULL;
+    const thx_volume *v = m->volume;
+    cJSON_AddStringToObject(o, "volume_mesh", sp->file);
+    if (in->path2[0]) cJSON_AddStringToObject(o, "other_file", in->path2);
+    cJSON_AddStringToObject(o, "format", thx_volume_format_name(in->format));
+    cJSON_AddStringToObject(o, "format_detail", in->format_detail);
+    cJSON_AddNumberToObject(o, "index_base", in->index_base);
+    cJSON_AddBoolToObject(o, "index_base_detected", in->index_base_detected);
+    add_num(o, "scale", in->scale);
+    cJSON_AddNumberToObject(o, "nodes_read", (double)in->n_nodes_read);
+    cJSON_AddNumberToObject(o, "tetrahedra_read", (double)in->n_tets_read);
+    cJSON_AddNumberToObject(o, "cells_skipped", (double)in->n_cells_ignored);
+    cJSON_AddNumberToObject(o, "unused_nodes_removed", (double)in->n_unused_removed);
+    cJSON_AddNumberToObject(o, "tetrahedra_flipped", (double)in->n_flipped);
+    cJSON_AddStringToObject(o, "region_source", in->region_source);
+    cJSON *rs = cJSON_AddArrayToObject(o, "regions");
+    for (size_t k = 0; rs && k < in->n_regions; k++) {
+        cJSON *g = cJSON_CreateObject();
+        if (!g) break;
+        cJSON_AddNumberToObject(g, "id", (double)(k + 1));
+        cJSON_AddNumberToObject(g, "file_region", (double)in->regions[k].tag);
+        cJSON_AddStringToObject(g, "name", v->regions[k].name);
+        if (in->regions[k].file_name[0]) cJSON_AddStringToObject(g, "file_name", in->regions[k].file_name);
+        cJSON_AddStringToObject(g, "name_from", name_from_text(in->regions[k].name_from));
+        cJSON_AddBoolToObject(g, "sigma_defaulted", in->regions[k].sigma_defaulted);
+        cJSON_AddNumberToObject(g, "tetrahedra", (double)in->regions[k].n_tets);
+        add_num(g, "volume", in->regions[k].volume);
+        cJSON_AddItemToArray(rs, g);
+    }
+    cJSON *ss = cJSON_AddArrayToObject(o, "surfaces");
+    for (size_t s = 0; ss && s < m->n_surfaces; s++) {
+        const thx_volume_import_surface *u = &in->surfaces[s];
+        cJSON *g = cJSON_CreateObject();
+        if (!g) break;
+        cJSON_AddStringToObject(g, "surface", m->surf[s]->name);
+        cJSON_AddStringToObject(g, "role", thx_role_name(m->surf[s]->role));
+        cJSON_AddStringToObject(g, "kind", surface_kind_name(u->kind));
+        if (u->inside >= 0) cJSON_AddStringToObject(g, "inside", v->regions[u->inside].name);
+        if (u->outside >= 0) cJSON_AddStringToObject(g, "outside", v->regions[u->outside].name);
+        cJSON_AddBoolToObject(g, "check_ok", in->surface_reports[s].ok);
+        cJSON_AddItemToArray(ss, g);
+    }
+    cJSON *ds = cJSON_AddArrayToObject(o, "not_surfaces");
+    for (size_t k = 0; ds && k < in->n_dropped && k < THX_VIMPORT_MAX_DROPPED; k++)
+        cJSON_AddItemToArray(ds, cJSON_CreateString(in->dropped[k]));
+    cJSON *c = cJSON_AddObjectToObject(o, "check");
+    if (c) {
+        const thx_volume_report *r = &in->volume_report;
+        cJSON_AddBoolToObject(c, "ok", !in->check_failed);
+        cJSON_AddBoolToObject(c, "forced", in->check_failed);
+        cJSON_AddBoolToObject(c, "volume_ok", r->ok);
+        add_num(c, "volume_rel_diff", r->volume_rel_diff);
+        add_num(c, "min_dihedral_deg", r->min_dihedral);
+        cJSON *rr = cJSON_AddArrayToObject(c, "reasons");
+        for (size_t s = 0; rr && s < m->n_surfaces; s++)
+            for (size_t k = 0; k < in->surface_reports[s].n_reasons; k++) {
+                char buf[320];
+                snprintf(buf, sizeof buf, "surface \"%s\": %s", m->surf[s]->name, in->surface_reports[s].reasons[k]);
+                cJSON_AddItemToArray(rr, cJSON_CreateString(buf));
+            }
+        for (size_t k = 0; rr && k < r->n_reasons; k++) cJSON_AddItemToArray(rr, cJSON_CreateString(r->reasons[k]));
+    }
+    return o;
+}
+
+/* The reasons a volume import failed its checks, to stderr (refused) or as warnings (forced). */
+static void volume_reasons(thx_ctx *ctx, const spec *sp, const thx_volume_import_info *in, const thx_model *m, int warn)
+{
+    for (size_t s = 0; s < in->n_surfaces; s++)
+        for (size_t k = 0; k < in->surface_reports[s].n_reasons; k++) {
+            const char *nm = m ? m->surf[s]->name : in->surface_reports[s].name;
+            if (warn) thx_log(ctx, THX_LOG_WARN, "%s: surface \"%s\": %s", sp->file, nm, in->surface_reports[s].reasons[k]);
+            else fprintf(stderr, "thorax import: %s: surface \"%s\": %s\n", sp->file, nm, in->surface_reports[s].reasons[k]);
+        }
+    for (size_t k = 0; in->volume_checked && k < in->volume_report.n_reasons; k++) {
+        if (warn) thx_log(ctx, THX_LOG_WARN, "%s: volume: %s", sp->file, in->volume_report.reasons[k]);
+        else fprintf(stderr, "thorax import: %s: volume: %s\n", sp->file, in->volume_report.reasons[k]);
+    }
+}
+
+static int import_volume(const spec *sp, const char *outdir, double default_scale, int force, int quiet, int verbose,
+                         const thx_region_map *maps, size_t n_maps, const char *region_array)
+{
+    const char *cmd = "import";
+    int rc = 0;
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_model *m = NULL;
+    cJSON *prov = NULL;
+    thx_volume_import_info info;
+    memset(&info, 0, sizeof info);
+    thx_volume_import_opts o;
+    thx_volume_import_opts_default(&o);
+    o.format = sp->vfmt;
+    o.elem_path = sp->elem;
+    o.region_array = region_array;
+    o.scale = sp->has_scale ? sp->scale : default_scale;
+    o.force = force;
+    o.region_maps = maps;
+    o.n_region_maps = n_maps;
+    thx_region_default("mean_thorax", &o.default_region);
+    thx_status st = thx_volume_import(ctx, sp->file, &o, &m, &info);
+    if (st == THX_ECHECK) {
+        volume_reasons(ctx, sp, &info, NULL, 0);
+        for (size_t k = 0; k < info.n_dropped && k < THX_VIMPORT_MAX_DROPPED; k++)
+            fprintf(stderr, "thorax import: %s: not a surface: %s\n", sp->file, info.dropped[k]);
+        fprintf(stderr, "thorax import: %s: refused: the mesh failed its checks (--force writes it anyway); nothing written\n",
+                sp->file);
+        rc = 1;
+        goto done;
+    }
+    if (st != THX_OK) {
+        rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    if (!quiet) print_volume_report(sp, m, &info);
+    for (size_t k = 0; k < info.n_regions; k++)
+        if (info.regions[k].sigma_defaulted)
+            thx_log(ctx, THX_LOG_WARN, "%s: region %lld (\"%s\"): no conductivity given, using %s (%g S/m); set it with "
+                    "--region %lld=%s:SIGMA", sp->file, info.regions[k].tag, m->volume->regions[k].name, "mean_thorax",
+                    m->volume->regions[k].sigma[0], info.regions[k].tag, m->volume->regions[k].name);
+    if (o.scale == 1.0 && info.extent > 0 && info.extent < 5.0)
+        thx_log(ctx, THX_LOG_WARN, "%s: the mesh spans only %g mm: if the file is in metres, use --scale 1000", sp->file,
+                info.extent);
+    if (info.check_failed) {
+        volume_reasons(ctx, sp, &info, m, 1);
+        thx_log(ctx, THX_LOG_WARN, "%s: the mesh failed its checks; written anyway (--force)", sp->file);
+    }
+    prov = cJSON_CreateObject();
+    cJSON *inputs = prov ? cJSON_AddArrayToObject(prov, "inputs") : NULL;
+    if (!inputs) {
+        rc = cli_fail(ctx, cmd, thx_error(ctx, THX_ENOMEM, "out of memory"));
+        goto done;
+    }
+    cJSON_AddStringToObject(prov, "program", "thorax 0.1.0");
+    cJSON_AddStringToObject(prov, "command", cli_command_line());
+    cJSON_AddItemToArray(inputs, volume_input_json(sp, m, &info));
+    cJSON *op = cJSON_AddObjectToObject(prov, "options");
+    if (op) {
+        cJSON_AddNumberToObject(op, "default_scale", default_scale);
+        cJSON_AddBoolToObject(op, "force", force);
+        if (region_array) cJSON_AddStringToObject(op, "region_array", region_array);
+    }
+    m->provenance_json = cJSON_PrintUnformatted(prov);
+    if (!m->provenance_json) {
+        rc = cli_fail(ctx, cmd, thx_error(ctx, THX_ENOMEM, "out of memory"));
+        goto done;
+    }
+    st = thx_model_write(ctx, m, outdir);
+    if (st != THX_OK) {
+        rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    if (!quiet)
+        printf("wrote %s (%zu nodes, %zu tetrahedra, %zu region%s, %zu surface%s)\n", outdir, m->volume->n_nodes,
+               m->volume->n_tets, m->volume->n_regions, m->volume->n_regions == 1 ? "" : "s", m->n_surfaces,
+               m->n_surfaces == 1 ? "" : "s");
+done:
+    cJSON_Delete(prov);
+    thx_model_destroy(&m);
+    thx_volume_import_info_free(&info);
+    thx_ctx_destroy(&ctx);
     return rc;
 }

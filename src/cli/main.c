@@ -17,7 +17,7 @@ static const struct {
     {"export", cmd_export, "write a model's surfaces as VTK, VTP, OBJ, STL or PLY"},
     {"slice", cmd_slice, "cut a model's surfaces by planes z = const into contours"},
     {"mesh", cmd_mesh, "tetrahedral volume mesh with tissue regions and conductivities (paper 3.3)"},
-    {"import", cmd_import, "build a model from closed surfaces made elsewhere (pts/fac, tri, obj, stl, ply, vtk)"},
+    {"import", cmd_import, "a model from surfaces or a volume mesh made elsewhere (tri, obj, stl, vtk, vtu, msh, ...)"},
     {"series", cmd_series, "time series (rows x frames): summary, conversion between text, raw and .mat"},
     {"electrodes", cmd_electrodes, "the phantom's electrodes: 12-lead positions and a body-surface array"},
     {"beat", cmd_beat, "the phantom's heartbeat: epicardial potentials of a dipole tracing a VCG loop"},

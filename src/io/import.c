@@ -48,6 +48,7 @@
 
 #include "thorax/fileio.h"
 #include "thorax/model.h"
+#include "io/import_text.h"
 
 /* ------------------------------------------------------------ formats */
 
@@ -188,100 +189,6 @@ static thx_status finish(build *b, thx_role role, thx_surface **out)
     return THX_OK;
 }
 
-/* ---------------------------------------------------------- text cursor */
-
-typedef struct {
-    const char *buf;
-    size_t len, pos;
-    int line; /* line of pos, 1-based */
-} cursor;
-
-static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-/* The next whitespace-separated token, crossing line ends. Returns its length
- * (0 at the end) and sets *t and *line. */
-static size_t next_token(cursor *c, const char **t, int *line)
-{
-    while (c->pos < c->len && (is_blank(c->buf[c->pos]) || c->buf[c->pos] == '\n')) {
-        if (c->buf[c->pos] == '\n') c->line++;
-        c->pos++;
-    }
-    if (c->pos >= c->len) return 0;
-    *t = c->buf + c->pos;
-    *line = c->line;
-    size_t s = c->pos;
-    while (c->pos < c->len && !is_blank(c->buf[c->pos]) && c->buf[c->pos] != '\n') c->pos++;
-    return c->pos - s;
-}
-
-/* The next token on the current line only (0 at the line's end). */
-static size_t line_token(cursor *c, const char **t)
-{
-    while (c->pos < c->len && is_blank(c->buf[c->pos])) c->pos++;
-    if (c->pos >= c->len || c->buf[c->pos] == '\n') return 0;
-    *t = c->buf + c->pos;
-    size_t s = c->pos;
-    while (c->pos < c->len && !is_blank(c->buf[c->pos]) && c->buf[c->pos] != '\n') c->pos++;
-    return c->pos - s;
-}
-
-/* Moves to the start of the next line; returns 0 at the end of the text. */
-static int next_line(cursor *c)
-{
-    while (c->pos < c->len && c->buf[c->pos] != '\n') c->pos++;
-    if (c->pos >= c->len) return 0;
-    c->pos++;
-    c->line++;
-    return 1;
-}
-
-static int tok_is(const char *t, size_t n, const char *word) { return strlen(word) == n && strncmp(t, word, n) == 0; }
-static int tok_is_ci(const char *t, size_t n, const char *word) { return strlen(word) == n && strncasecmp(t, word, n) == 0; }
-
-/* Token as a printable, bounded C string for messages. */
-static const char *tok_show(const char *t, size_t n)
-{
-    static _Thread_local char buf[48];
-    size_t k = 0;
-    for (size_t i = 0; i < n && k + 4 < sizeof buf; i++) buf[k++] = (t[i] >= 0x20 && t[i] < 0x7f) ? t[i] : '?';
-    if (k < n) buf[k++] = '.', buf[k++] = '.', buf[k++] = '.';
-    buf[k] = '\0';
-    return buf;
-}
-
-/* A finite number; returns 0 on success. */
-static int parse_num(const char *t, size_t n, double *out)
-{
-    char tmp[128];
-    if (n == 0 || n >= sizeof tmp) return -1;
-    memcpy(tmp, t, n);
-    tmp[n] = '\0';
-    char *end = NULL;
-    double v = strtod(tmp, &end);
-    if (end != tmp + n || !isfinite(v)) return -1;
-    *out = v;
-    return 0;
-}
-
-/* An integer ("3", or an integral "3.0"); returns 0 on success. */
-static int parse_int(const char *t, size_t n, long long *out)
-{
-    char tmp[128];
-    if (n == 0 || n >= sizeof tmp) return -1;
-    memcpy(tmp, t, n);
-    tmp[n] = '\0';
-    char *end = NULL;
-    errno = 0;
-    long long v = strtoll(tmp, &end, 10);
-    if (end == tmp + n && errno == 0) {
-        *out = v;
-        return 0;
-    }
-    double d;
-    if (parse_num(t, n, &d) != 0 || d != floor(d) || fabs(d) > 9007199254740992.0) return -1;
-    *out = (long long)d;
-    return 0;
-}
 
 /* ----------------------------------------------------------- .pts/.fac */
 
@@ -346,9 +253,110 @@ static int tri_labelled(const token *tk, size_t nt, size_t i, size_t count, int 
     return 1;
 }
 
+/* The next line that is not blank; 0 at the end of the text. Its first
+ * token is in *t (length returned through *n). */
+static int next_filled_line(cursor *c, const char **t, size_t *n)
+{
+    for (;;) {
+        *n = line_token(c, t);
+        if (*n) return 1;
+        if (!next_line(c)) return 0;
+    }
+}
+
+/* OpenMEEG's .tri (recognised by its first token "-"):
+ *     - NV
+ *     x y z nx ny nz        NV lines: a vertex and its normal
+ *     - NT NT NT
+ *     i j k                 NT lines: 0-based vertex numbers
+ * Read line by line and strictly: every vertex line has six finite numbers
+ * (the normals are not used: orientation comes from the triangles, and the
+ * check decides it), every triangle line three vertex numbers in range, the
+ * triangle header repeats one count (once to three times), and nothing but
+ * blank lines follows the last triangle. */
+static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_import_info *info)
+{
+    cursor c = {text, len, 0, 1};
+    const char *t;
+    size_t n;
+    long long nv, ntri;
+    if (!next_filled_line(&c, &t, &n) || !tok_is(t, n, "-"))
+        return fail(b, at_line(c.line), "not an OpenMEEG .tri file (the first line is not \"- NV\")");
+    int line = c.line;
+    n = line_token(&c, &t);
+    if (!n || parse_int(t, n, &nv) != 0 || nv <= 0 || nv > INT32_MAX)
+        return fail(b, at_line(line), "expected \"- NV\" (the number of vertices) on the first line");
+    if ((n = line_token(&c, &t)) != 0)
+        return fail(b, at_line(line), "unexpected \"%s\" after the vertex count", tok_show(t, n));
+    for (long long e = 0; e < nv; e++) {
+        if (!next_line(&c) || !next_filled_line(&c, &t, &n))
+            return fail(b, at_line(line), "file ends at vertex %lld of %lld", e + 1, nv);
+        line = c.line;
+        double v[6];
+        static const char *const what[6] = {"x", "y", "z", "normal x", "normal y", "normal z"};
+        for (int k = 0; k < 6; k++) {
+            if (k > 0) n = line_token(&c, &t);
+            if (!n)
+                return fail(b, at_line(line), "vertex %lld: %s is missing (expected \"x y z nx ny nz\")", e + 1, what[k]);
+            if (parse_num(t, n, &v[k]) != 0)
+                return fail(b, at_line(line), "vertex %lld: %s is not a finite number: \"%s\"", e + 1, what[k], tok_show(t, n));
+        }
+        if ((n = line_token(&c, &t)) != 0)
+            return fail(b, at_line(line), "vertex %lld: more than six numbers (\"%s\")", e + 1, tok_show(t, n));
+        THX_CHECK(add_node(b, at_line(line), v[0], v[1], v[2]));
+    }
+    if (!next_line(&c) || !next_filled_line(&c, &t, &n))
+        return fail(b, at_line(line), "file ends after the vertices (expected \"- NT NT NT\")");
+    line = c.line;
+    if (!tok_is(t, n, "-"))
+        return fail(b, at_line(line), "expected \"- NT NT NT\" after the %lld vertices, found \"%s\"", nv, tok_show(t, n));
+    int copies = 0;
+    ntri = -1;
+    while ((n = line_token(&c, &t)) != 0) {
+        long long x;
+        if (parse_int(t, n, &x) != 0 || x < 0 || x > INT32_MAX || (ntri >= 0 && x != ntri) || ++copies > 3)
+            return fail(b, at_line(line), "expected \"- NT NT NT\" (one triangle count, repeated), found \"%s\"", tok_show(t, n));
+        ntri = x;
+    }
+    if (ntri < 0) return fail(b, at_line(line), "expected \"- NT NT NT\": the triangle count is missing");
+    for (long long e = 0; e < ntri; e++) {
+        if (!next_line(&c) || !next_filled_line(&c, &t, &n))
+            return fail(b, at_line(line), "file ends at triangle %lld of %lld", e + 1, ntri);
+        line = c.line;
+        int32_t v[3];
+        for (int k = 0; k < 3; k++) {
+            if (k > 0) n = line_token(&c, &t);
+            long long x;
+            if (!n) return fail(b, at_line(line), "triangle %lld: vertex number %d is missing", e + 1, k + 1);
+            if (parse_int(t, n, &x) != 0)
+                return fail(b, at_line(line), "triangle %lld: vertex number %d is not an integer: \"%s\"", e + 1, k + 1, tok_show(t, n));
+            THX_CHECK(check_index(b, at_line(line), x, 0, b->n_nodes, &v[k]));
+        }
+        if ((n = line_token(&c, &t)) != 0)
+            return fail(b, at_line(line), "triangle %lld: more than three vertex numbers (\"%s\")", e + 1, tok_show(t, n));
+        THX_CHECK(add_tri(b, v[0], v[1], v[2]));
+    }
+    if (next_line(&c) && next_filled_line(&c, &t, &n))
+        return fail(b, at_line(c.line), "unexpected \"%s\" after the last of the %lld triangles", tok_show(t, n), ntri);
+    if (info) {
+        snprintf(info->format_detail, sizeof info->format_detail, "OpenMEEG .tri (vertex normals ignored)");
+        info->index_base = 0;
+        info->index_base_detected = 0;
+    }
+    return THX_OK;
+}
+
 static thx_status read_tri(build *b, const char *text, size_t len, thx_import_info *info)
 {
     thx_status st = THX_OK;
+    /* OpenMEEG's variant begins with "- NV"; ECGSim's with the node count */
+    {
+        cursor c0 = {text, len, 0, 1};
+        const char *t0;
+        int l0;
+        size_t n0 = next_token(&c0, &t0, &l0);
+        if (tok_is(t0, n0, "-")) return read_tri_openmeeg(b, text, len, info);
+    }
     if (len >= 8 && (strncmp(text, ";;mbftri", 8) == 0 || strncmp(text, ";;mbfpnt", 8) == 0))
         return fail(b, at_byte(0), "binary MBFYS triangulation (\";;mbftri\") is not supported; write it as text");
     /* Tokenize the whole file: the format allows free line breaks, and label
@@ -696,8 +704,6 @@ done:
 
 /* -------------------------------------------------- scalar types (PLY, VTK) */
 
-typedef enum { T_NONE = 0, T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64 } scalar_type;
-static const size_t type_size[] = {0, 1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
 
 static scalar_type ply_type(const char *t, size_t n)
 {
@@ -711,42 +717,6 @@ static scalar_type ply_type(const char *t, size_t n)
     return T_NONE;
 }
 
-static scalar_type vtk_type(const char *t, size_t n)
-{
-    static const struct { const char *name; scalar_type ty; } tab[] = {
-        {"char", T_I8}, {"unsigned_char", T_U8}, {"short", T_I16}, {"unsigned_short", T_U16}, {"int", T_I32},
-        {"unsigned_int", T_U32}, {"vtktypeint64", T_I64}, {"vtktypeuint64", T_U64}, {"vtkIdType", T_I64},
-        {"float", T_F32}, {"double", T_F64}, {"vtktypeint32", T_I32}, {"vtktypeuint32", T_U32},
-        /* "long" is 4 or 8 bytes depending on the writer's platform: only its ASCII form is unambiguous */
-        {"long", T_I64}, {"unsigned_long", T_U64},
-    };
-    for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
-        if (tok_is(t, n, tab[i].name)) return tab[i].ty;
-    return T_NONE;
-}
-
-/* A binary scalar of type ty at p, in big- or little-endian order. */
-static double get_scalar(const unsigned char *p, scalar_type ty, int big)
-{
-    unsigned char q[8];
-    size_t sz = type_size[ty];
-    for (size_t i = 0; i < sz; i++) q[i] = big ? p[sz - 1 - i] : p[i]; /* q: little-endian */
-    uint64_t u = 0;
-    for (size_t i = 0; i < sz; i++) u |= (uint64_t)q[i] << (8 * i);
-    switch (ty) {
-    case T_I8: return (double)(int8_t)u;
-    case T_U8: return (double)(uint8_t)u;
-    case T_I16: return (double)(int16_t)u;
-    case T_U16: return (double)(uint16_t)u;
-    case T_I32: return (double)(int32_t)(uint32_t)u;
-    case T_U32: return (double)(uint32_t)u;
-    case T_I64: return (double)(int64_t)u;
-    case T_U64: return (double)u;
-    case T_F32: { uint32_t w = (uint32_t)u; float f; memcpy(&f, &w, 4); return f; }
-    case T_F64: { double d; memcpy(&d, &u, 8); return d; }
-    default: return NAN;
-    }
-}
 
 /* Reads one scalar of type ty, as text (a token) or binary (big/little endian).
  * Sets *w to where it was. */
@@ -802,12 +772,6 @@ typedef struct {
     ply_prop prop[PLY_MAX_PROPS];
 } ply_elem;
 
-static void copy_tok(char *dst, size_t size, const char *t, size_t n)
-{
-    if (n >= size) n = size - 1;
-    memcpy(dst, t, n);
-    dst[n] = '\0';
-}
 
 static thx_status read_ply(build *b, const char *text, size_t len, thx_import_info *info)
 {
@@ -1229,42 +1193,6 @@ done:
 
 /* --------------------------------------------------------- VTK XML (.vtp) */
 
-static int line_of(const char *buf, const char *p)
-{
-    int line = 1;
-    for (const char *q = buf; q < p; q++)
-        if (*q == '\n') line++;
-    return line;
-}
-
-/* The value of attribute key in the tag [tag, end) into out; 0 if found. */
-static int xml_attr(const char *tag, const char *end, const char *key, char *out, size_t size)
-{
-    size_t kl = strlen(key);
-    for (const char *p = tag; p + kl + 2 < end; p++) {
-        if ((p == tag || isspace((unsigned char)p[-1])) && strncmp(p, key, kl) == 0 && p[kl] == '=' &&
-            (p[kl + 1] == '"' || p[kl + 1] == '\'')) {
-            char q = p[kl + 1];
-            const char *v = p + kl + 2, *e = v;
-            while (e < end && *e != q) e++;
-            if (e >= end) return -1;
-            copy_tok(out, size, v, (size_t)(e - v));
-            return 0;
-        }
-    }
-    return -1;
-}
-
-/* Finds "<name" (followed by a space, '>' or '/') in [p, end). */
-static const char *xml_find(const char *p, const char *end, const char *name)
-{
-    size_t nl = strlen(name);
-    for (; p + nl + 1 < end; p++)
-        if (p[0] == '<' && strncmp(p + 1, name, nl) == 0 &&
-            (isspace((unsigned char)p[nl + 1]) || p[nl + 1] == '>' || p[nl + 1] == '/'))
-            return p;
-    return NULL;
-}
 
 /* Reads an ascii DataArray starting at tag into *out (count values). */
 static thx_status vtp_array(build *b, const char *buf, const char *tag, const char *end, const char *what, size_t count,
@@ -1362,8 +1290,8 @@ static thx_status read_vtp(build *b, const char *text, size_t len, thx_import_in
         goto done;
     }
     THX_TRY(vtp_array(b, text, da, end, "Points", 3 * (size_t)np, 0, &pts));
-    for (long long i = 0; i < np; i++)
-        THX_TRY(add_node(b, at_line(line_of(text, da)), pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
+    int pts_line = line_of(text, da); /* once: line_of scans from the start of the file */
+    for (long long i = 0; i < np; i++) THX_TRY(add_node(b, at_line(pts_line), pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
     if (npoly > 0) {
         const char *polys = xml_find(piece_end, end, "Polys");
         const char *pend = polys ? strstr(polys, "</Polys>") : NULL;
