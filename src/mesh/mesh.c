@@ -438,7 +438,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.t_delaunay = t_dt - t1;
         conform_stats cs;
         domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps};
-        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.1, o->progress, o->progress_user};
+        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.03, o->progress, o->progress_user};
         st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
                           &n_sub, &cs);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
