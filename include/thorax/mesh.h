@@ -64,7 +64,8 @@ typedef struct {
     int refine_limited;       /* stopped at its point limit */
     double t_refine;
     size_t n_pieces;          /* pieces of space between the surfaces (flood fill) */
-    size_t n_centroid_disagree; /* tetrahedra whose own centroid test disagreed with their piece's majority */
+    size_t n_centroid_tested;   /* tetrahedra whose centroid was classified (about 512 per piece) */
+    size_t n_centroid_disagree; /* of those, disagreeing with their piece's majority */
     size_t n_outside;         /* removed: outside the outer surface */
     size_t n_heart;           /* removed: inside the heart (no_heart) */
     size_t repair_below_before, repair_below_after; /* tetrahedra below repair_deg before/after the repair */

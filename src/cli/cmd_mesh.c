@@ -144,10 +144,10 @@ int cmd_mesh(int argc, char **argv)
             printf("wrote %s\n", out);
         }
         if (want_stats)
-            printf("Delaunay %zu tetrahedra, %zu pieces between the surfaces (%zu tetrahedra whose own centroid test "
+            printf("Delaunay %zu tetrahedra, %zu pieces between the surfaces (of %zu tetrahedra classified, %zu "
                    "disagreed with their piece), %zu removed outside, %zu inside the heart; times (s): points %.3f, "
                    "Delaunay %.3f, conformity %.3f, classification %.3f, total %.3f\n",
-                   S.n_delaunay_tets, S.n_pieces, S.n_centroid_disagree, S.n_outside, S.n_heart, S.t_points,
+                   S.n_delaunay_tets, S.n_pieces, S.n_centroid_tested, S.n_centroid_disagree, S.n_outside, S.n_heart, S.t_points,
                    S.t_delaunay, S.t_conform, S.t_classify, S.t_total);
         if (want_stats)
             printf("conformity: %zu of %zu surface triangles were not faces of the Delaunay tetrahedralization; "

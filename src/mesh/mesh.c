@@ -548,12 +548,28 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         const int NV = 17; /* outside + 16 regions */
         size_t *votes = thx_calloc(ctx, n_comp * (size_t)NV, sizeof *votes);
         if (!votes) { free(hull); st = THX_ENOMEM; goto done; }
+        /* a piece is one region by construction: its vote is taken on at most about 512 of its
+           tetrahedra, evenly spread over it (all of them in small pieces) */
+        size_t *size = thx_calloc(ctx, n_comp, sizeof *size), *seen = thx_calloc(ctx, n_comp, sizeof *seen);
+        if (!size || !seen) { free(size); free(seen); free(votes); free(hull); st = THX_ENOMEM; goto done; }
+        for (size_t t = 0; t < nt; t++) size[comp[t]]++;
+        unsigned char *sampled = keep; /* as scratch until the keep flags are set below */
+        for (size_t t = 0; t < nt; t++) {
+            size_t k = (size_t)comp[t], stride = size[k] / 512 + 1;
+            sampled[t] = seen[k]++ % stride == 0;
+        }
+        free(size);
+        free(seen);
 #pragma omp parallel for schedule(dynamic, 4096)
         for (long t = 0; t < (long)nt; t++) {
+            region[t] = -2;
+            if (!sampled[t]) continue;
             thx_vec3 c = tet_centroid(xyz, tets + 4 * t);
             region[t] = outside_domain(&loc[outer], c, on_eps) ? -1 : classify_region(m, loc, surf_region, c);
         }
-        for (size_t t = 0; t < nt; t++) votes[(size_t)comp[t] * NV + (size_t)(region[t] + 1)]++;
+        size_t n_sampled = 0;
+        for (size_t t = 0; t < nt; t++)
+            if (region[t] > -2) { votes[(size_t)comp[t] * NV + (size_t)(region[t] + 1)]++; n_sampled++; }
         int32_t *comp_region = thx_malloc(ctx, n_comp * sizeof *comp_region);
         if (!comp_region) { free(votes); free(hull); st = THX_ENOMEM; goto done; }
         size_t n_out = 0, n_heart = 0, n_disagree = 0;
@@ -565,7 +581,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         }
         for (size_t t = 0; t < nt; t++) {
             int32_t r = comp_region[comp[t]];
-            n_disagree += region[t] != r;
+            n_disagree += region[t] > -2 && region[t] != r;
             region[t] = r;
             if (r < 0) { keep[t] = 0; n_out++; }
             else if (o->no_heart && heart >= 0 && r == surf_region[heart]) { keep[t] = 2; n_heart++; }
@@ -575,6 +591,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_heart = n_heart;
         S.n_pieces = n_comp;
         S.n_centroid_disagree = n_disagree;
+        S.n_centroid_tested = n_sampled;
         free(votes);
         free(hull);
         free(comp_region);
