@@ -83,7 +83,14 @@ typedef struct {
 typedef struct {
     int32_t f[3];
     int32_t out;
+    uint8_t l[4]; /* local numbers of f[] for linking (see LT), l[3] unused */
 } bface;
+
+/* Linking table side: a cavity boundary with at most LT - 2 distinct finite
+ * vertices (nearly all of them) links its new tetrahedra through an
+ * LT x LT table indexed by local vertex numbers (0: none, 1: INF); larger
+ * ones through the edge hash table. */
+#define LT 64
 
 /* Open-addressing table entry: directed edge (a, b) of a new tetrahedron's
  * face through p, and the code (tetrahedron << 2 | face). Entries whose stamp
@@ -126,6 +133,11 @@ typedef struct {
     hent *h;
     size_t hcap;
     uint32_t hstamp;
+    uint8_t *vloc;   /* rank -> local number in the current cavity boundary, 0 outside it (pcap) */
+    int32_t lv[LT];  /* local number -> rank (2..) */
+    int32_t *newt;   /* the new tetrahedra of an insertion, one per boundary face */
+    size_t newt_cap;
+    int32_t *ltab;   /* LT x LT: directed edge (local a, local b) -> code of the new face holding it */
     /* figures */
     size_t walk_steps, cavity_tets, n_degenerate;
 } dt_t;
@@ -181,18 +193,43 @@ static int near_all(const double *const *q, int k)
 }
 
 /* The filter failed: the second stage, then the exact predicate (not inlined:
- * rare except on grids, and kept out of the hot loop's code). */
+ * rare except on grids, and kept out of the hot loop's code). The permanent
+ * (sum of the absolute values of the terms) is computed here, only when needed. */
 static __attribute__((noinline)) double orient_slow(const double *a, const double *b, const double *c,
                                                     const double *d, double det)
 {
+    double adx = a[0] - d[0], ady = a[1] - d[1], adz = a[2] - d[2];
+    double bdx = b[0] - d[0], bdy = b[1] - d[1], bdz = b[2] - d[2];
+    double cdx = c[0] - d[0], cdy = c[1] - d[1], cdz = c[2] - d[2];
+    double perm = (fabs(bdx * cdy) + fabs(cdx * bdy)) * fabs(adz) + (fabs(cdx * ady) + fabs(adx * cdy)) * fabs(bdz) +
+                  (fabs(adx * bdy) + fabs(bdx * ady)) * fabs(cdz);
+    if (perm == 0) return 0.0; /* every product has an exactly zero factor: exact */
+    double bound = (9.0 / 9007199254740992.0) * perm;
+    if (det > bound || -det > bound) return det; /* Shewchuk's filter decides where the semi-static one did not */
     const double *q[4] = {a, b, c, d};
     if (on_grid(a) && on_grid(b) && on_grid(c) && on_grid(d) && near_all(q, 4)) return det;
     return thx_orient3d(a, b, c, d);
 }
 
 static __attribute__((noinline)) double insphere_slow(const double *a, const double *b, const double *c,
-                                                      const double *d, const double *e, double det, double perm)
+                                                      const double *d, const double *e, double det)
 {
+    double aex = a[0] - e[0], aey = a[1] - e[1], aez = a[2] - e[2];
+    double bex = b[0] - e[0], bey = b[1] - e[1], bez = b[2] - e[2];
+    double cex = c[0] - e[0], cey = c[1] - e[1], cez = c[2] - e[2];
+    double dex = d[0] - e[0], dey = d[1] - e[1], dez = d[2] - e[2];
+    double aezp = fabs(aez), bezp = fabs(bez), cezp = fabs(cez), dezp = fabs(dez);
+    double abp = fabs(aex * bey) + fabs(bex * aey), bcp = fabs(bex * cey) + fabs(cex * bey);
+    double cdp = fabs(cex * dey) + fabs(dex * cey), dap = fabs(dex * aey) + fabs(aex * dey);
+    double acp = fabs(aex * cey) + fabs(cex * aey), bdp = fabs(bex * dey) + fabs(dex * bey);
+    double alift = aex * aex + aey * aey + aez * aez;
+    double blift = bex * bex + bey * bey + bez * bez;
+    double clift = cex * cex + cey * cey + cez * cez;
+    double dlift = dex * dex + dey * dey + dez * dez;
+    double perm = (cdp * bezp + bdp * cezp + bcp * dezp) * alift + (dap * cezp + acp * dezp + cdp * aezp) * blift +
+                  (abp * dezp + bdp * aezp + dap * bezp) * clift + (bcp * aezp + acp * bezp + abp * cezp) * dlift;
+    double bound = (17.0 / 9007199254740992.0) * perm;
+    if (det > bound || -det > bound) return det; /* Shewchuk's filter decides where the semi-static one did not */
     const double *q[5] = {a, b, c, d, e};
     /* permanent scaled by 16^5 below 2^52 */
     if (perm * 1048576.0 < 4503599627370496.0 && on_grid(a) && on_grid(b) && on_grid(c) && on_grid(d) &&
@@ -201,20 +238,46 @@ static __attribute__((noinline)) double insphere_slow(const double *a, const dou
     return thx_insphere(a, b, c, d, e);
 }
 
+static inline double dmax(double x, double y) { return x > y ? x : y; }
+
+/* First stage: semi-static filters. Shewchuk's bound (9u times the permanent
+ * for orient3d, 17u for insphere, u = 2^-53, the permanent evaluated in
+ * floating point) is bounded above by the same expression with every
+ * |difference| replaced by the largest one of its coordinate, X, Y, Z
+ * (rounding is monotonic): orient3d's permanent has 6 terms |x y z| <= XYZ,
+ * insphere's 24 terms |x y z| lift <= XYZ (X^2 + Y^2 + Z^2). So
+ *   |det| > 6.1e-15 XYZ               (> 54u XYZ, with rounding slack)
+ *   |det| > 4.6e-14 XYZ (X^2+Y^2+Z^2)  (> 408u ..., with rounding slack)
+ * decide the sign wherever Shewchuk's filter would have, give or take the
+ * slack; elsewhere the slow path applies his filter itself, then the exact
+ * stages. Fewer operations than the permanent (no products of absolute values). */
 static inline __attribute__((always_inline)) double orient(const double *a, const double *b, const double *c, const double *d)
 {
     double adx = a[0] - d[0], ady = a[1] - d[1], adz = a[2] - d[2];
     double bdx = b[0] - d[0], bdy = b[1] - d[1], bdz = b[2] - d[2];
     double cdx = c[0] - d[0], cdy = c[1] - d[1], cdz = c[2] - d[2];
-    double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
-    double cdxady = cdx * ady, adxcdy = adx * cdy;
-    double adxbdy = adx * bdy, bdxady = bdx * ady;
-    double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
-    double perm = (fabs(bdxcdy) + fabs(cdxbdy)) * fabs(adz) + (fabs(cdxady) + fabs(adxcdy)) * fabs(bdz) +
-                  (fabs(adxbdy) + fabs(bdxady)) * fabs(cdz);
-    double bound = (9.0 / 9007199254740992.0) * perm;
+    double det = adz * (bdx * cdy - cdx * bdy) + bdz * (cdx * ady - adx * cdy) + cdz * (adx * bdy - bdx * ady);
+    double mx = dmax(dmax(fabs(adx), fabs(bdx)), fabs(cdx));
+    double my = dmax(dmax(fabs(ady), fabs(bdy)), fabs(cdy));
+    double mz = dmax(dmax(fabs(adz), fabs(bdz)), fabs(cdz));
+    double bound = 6.1e-15 * (mx * my * mz);
     if (det > bound || -det > bound) return det;
-    if (perm == 0) return 0.0; /* every product has an exactly zero factor: exact */
+    return orient_slow(a, b, c, d, det);
+}
+
+/* orient(a, b, c, d) given the differences A = a - d, B = b - d, C = c - d
+ * (the same expression: the same value). */
+static inline __attribute__((always_inline)) double orient_diff(const double *A, const double *B, const double *C,
+                                                                const double *a, const double *b, const double *c,
+                                                                const double *d)
+{
+    double det = A[2] * (B[0] * C[1] - C[0] * B[1]) + B[2] * (C[0] * A[1] - A[0] * C[1]) +
+                 C[2] * (A[0] * B[1] - B[0] * A[1]);
+    double mx = dmax(dmax(fabs(A[0]), fabs(B[0])), fabs(C[0]));
+    double my = dmax(dmax(fabs(A[1]), fabs(B[1])), fabs(C[1]));
+    double mz = dmax(dmax(fabs(A[2]), fabs(B[2])), fabs(C[2]));
+    double bound = 6.1e-15 * (mx * my * mz);
+    if (det > bound || -det > bound) return det;
     return orient_slow(a, b, c, d, det);
 }
 
@@ -224,14 +287,8 @@ static inline __attribute__((always_inline)) double insphere(const double *a, co
     double bex = b[0] - e[0], bey = b[1] - e[1], bez = b[2] - e[2];
     double cex = c[0] - e[0], cey = c[1] - e[1], cez = c[2] - e[2];
     double dex = d[0] - e[0], dey = d[1] - e[1], dez = d[2] - e[2];
-    double aexbey = aex * bey, bexaey = bex * aey;
-    double bexcey = bex * cey, cexbey = cex * bey;
-    double cexdey = cex * dey, dexcey = dex * cey;
-    double dexaey = dex * aey, aexdey = aex * dey;
-    double aexcey = aex * cey, cexaey = cex * aey;
-    double bexdey = bex * dey, dexbey = dex * bey;
-    double ab = aexbey - bexaey, bc = bexcey - cexbey, cd = cexdey - dexcey;
-    double da = dexaey - aexdey, ac = aexcey - cexaey, bd = bexdey - dexbey;
+    double ab = aex * bey - bex * aey, bc = bex * cey - cex * bey, cd = cex * dey - dex * cey;
+    double da = dex * aey - aex * dey, ac = aex * cey - cex * aey, bd = bex * dey - dex * bey;
     double abc = aez * bc - bez * ac + cez * ab;
     double bcd = bez * cd - cez * bd + dez * bc;
     double cda = cez * da + dez * ac + aez * cd;
@@ -241,15 +298,12 @@ static inline __attribute__((always_inline)) double insphere(const double *a, co
     double clift = cex * cex + cey * cey + cez * cez;
     double dlift = dex * dex + dey * dey + dez * dez;
     double det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
-    double aezp = fabs(aez), bezp = fabs(bez), cezp = fabs(cez), dezp = fabs(dez);
-    double abp = fabs(aexbey) + fabs(bexaey), bcp = fabs(bexcey) + fabs(cexbey);
-    double cdp = fabs(cexdey) + fabs(dexcey), dap = fabs(dexaey) + fabs(aexdey);
-    double acp = fabs(aexcey) + fabs(cexaey), bdp = fabs(bexdey) + fabs(dexbey);
-    double perm = (cdp * bezp + bdp * cezp + bcp * dezp) * alift + (dap * cezp + acp * dezp + cdp * aezp) * blift +
-                  (abp * dezp + bdp * aezp + dap * bezp) * clift + (bcp * aezp + acp * bezp + abp * cezp) * dlift;
-    double bound = (17.0 / 9007199254740992.0) * perm;
+    double mx = dmax(dmax(fabs(aex), fabs(bex)), dmax(fabs(cex), fabs(dex)));
+    double my = dmax(dmax(fabs(aey), fabs(bey)), dmax(fabs(cey), fabs(dey)));
+    double mz = dmax(dmax(fabs(aez), fabs(bez)), dmax(fabs(cez), fabs(dez)));
+    double bound = 4.6e-14 * (mx * my * mz) * (mx * mx + my * my + mz * mz);
     if (det > bound || -det > bound) return det;
-    return insphere_slow(a, b, c, d, e, det, perm);
+    return insphere_slow(a, b, c, d, e, det);
 }
 
 /* orient3d of tetrahedron t with vertex slot i replaced by point pi
@@ -307,6 +361,21 @@ static int in_conflict(dt_t *m, int32_t ti, int32_t pi)
 
 /* ---- storage ---------------------------------------------------------------- */
 
+/* Tetrahedron storage aligned to a cache line, so that no 32-byte
+ * tetrahedron straddles two lines (malloc's 16-byte alignment would split
+ * every other one). Grown by copying: realloc would not keep the alignment. */
+static tet_t *tets_alloc(thx_ctx *ctx, size_t cap, const tet_t *old, size_t n_old)
+{
+    size_t bytes = (cap * sizeof(tet_t) + 63) & ~(size_t)63;
+    tet_t *t = aligned_alloc(64, bytes);
+    if (!t) {
+        thx_error(ctx, THX_ENOMEM, "out of memory (%zu bytes)", bytes);
+        return NULL;
+    }
+    if (n_old) memcpy(t, old, n_old * sizeof *t);
+    return t;
+}
+
 static thx_status tet_new(dt_t *m, int32_t *out)
 {
     if (m->nfree > 0) {
@@ -317,8 +386,9 @@ static thx_status tet_new(dt_t *m, int32_t *out)
         return thx_error(m->ctx, THX_EINPUT, "delaunay3d: more than %zu tetrahedra needed", MAX_TETS);
     if (m->nt == m->tcap) {
         size_t cap = m->tcap + m->tcap / 2 + 64;
-        tet_t *t = thx_realloc(m->ctx, m->t, cap * sizeof *t);
+        tet_t *t = tets_alloc(m->ctx, cap, m->t, m->nt);
         if (!t) return THX_ENOMEM;
+        free(m->t);
         m->t = t;
         uint32_t *mk = thx_realloc(m->ctx, m->mark, cap * sizeof *mk);
         if (!mk) return THX_ENOMEM;
@@ -363,6 +433,7 @@ static int32_t locate(dt_t *m, int32_t pi)
 {
     int32_t ti = m->last;
     if (is_ghost(&m->t[ti])) ti = m->t[ti].n[inf_slot(&m->t[ti])] >> 2;
+    const double *p = P(m, pi);
     int from = -1;
     size_t steps = 0, limit = 4 * m->nt + 1000;
     for (;;) {
@@ -370,10 +441,17 @@ static int32_t locate(dt_t *m, int32_t pi)
         if (is_ghost(t)) break;
         m->rnd = m->rnd * 6364136223846793005ull + 1442695040888963407ull;
         int r = (int)(m->rnd >> 62), moved = 0;
+        /* the four vertices relative to p, shared by the faces tried */
+        double d[4][3];
+        for (int k = 0; k < 4; k++) {
+            const double *q = P(m, t->v[k]);
+            for (int c = 0; c < 3; c++) d[k][c] = q[c] - p[c];
+        }
         for (int s = 0; s < 4; s++) {
             int i = (r + s) & 3;
             if (i == from) continue;
-            if (orient_replaced(m, t, i, pi) < 0) {
+            const int *f = FACE[i]; /* orient(f0, f1, f2, p): the sign of orient_replaced(t, i, p) */
+            if (orient_diff(d[f[0]], d[f[1]], d[f[2]], P(m, t->v[f[0]]), P(m, t->v[f[1]]), P(m, t->v[f[2]]), p) < 0) {
                 int32_t c = t->n[i];
                 ti = c >> 2;
                 from = c & 3;
@@ -398,6 +476,10 @@ static inline uint32_t hash_edge(uint64_t key)
     key *= 0x9E3779B97F4A7C15ull;
     return (uint32_t)(key >> 32);
 }
+
+static thx_status link_small(dt_t *m, int32_t pi, size_t nc, size_t nb);
+static thx_status link_hashed(dt_t *m, int32_t pi, size_t nc, size_t nb);
+static thx_status finish_insert(dt_t *m, int32_t pi, size_t nc, size_t nb, int32_t ti);
 
 /* Bowyer–Watson insertion of point pi. */
 static thx_status insert_point(dt_t *m, int32_t pi)
@@ -483,6 +565,87 @@ static thx_status insert_point(dt_t *m, int32_t pi)
     }
     m->cavity_tets += nc;
 
+    /* Local numbers of the boundary vertices (see LT): 1 for INF, 2.. for the others in order of appearance; more than LT - 2 of them
+     * (large cavities: degenerate input, refinement) take the hash table. */
+    int small = 1;
+    uint32_t nl = 2;
+    for (size_t k = 0; k < nb && small; k++) {
+        bface *bf = &m->bnd[k];
+        for (int j = 0; j < 3; j++) {
+            int32_t v = bf->f[j];
+            uint32_t l = 1;
+            if (v >= 0) {
+                l = m->vloc[v];
+                if (!l) {
+                    if (nl == LT) { small = 0; break; }
+                    l = nl;
+                    m->vloc[v] = (uint8_t)nl;
+                    m->lv[nl++] = v;
+                }
+            }
+            bf->l[j] = (uint8_t)l;
+        }
+    }
+    for (uint32_t l = 2; l < nl; l++) m->vloc[m->lv[l]] = 0;
+    if (small) return link_small(m, pi, nc, nb);
+    return link_hashed(m, pi, nc, nb);
+}
+
+/* The new tetrahedron (f0, f1, f2, p) on boundary face k, in a cavity slot
+ * (k < nc) or a new one; joined to the tetrahedron beyond the face. Positive
+ * because p is on the cavity side of the face. */
+static inline thx_status new_tet(dt_t *m, int32_t pi, size_t nc, size_t k, int32_t *out)
+{
+    int32_t ti;
+    if (k < nc) ti = m->cav[k];
+    else THX_CHECK(tet_new(m, &ti));
+    const bface *b = &m->bnd[k];
+    tet_t *t = &m->t[ti];
+    t->v[0] = b->f[0];
+    t->v[1] = b->f[1];
+    t->v[2] = b->f[2];
+    t->v[3] = pi;
+    t->n[3] = b->out;
+    if (m->vt) {
+        for (int j = 0; j < 3; j++)
+            if (b->f[j] >= 0) m->vt[b->f[j]] = ti;
+        m->vt[pi] = ti;
+    }
+    m->t[b->out >> 2].n[b->out & 3] = (ti << 2) | 3;
+    *out = ti;
+    return THX_OK;
+}
+
+/* Face j < 3 of the new tetrahedron on boundary face f holds p and the
+ * boundary edge (f[j+1], f[j+2]) (indices mod 3). The boundary faces are
+ * consistently oriented (a closed surface), so the neighbour through that
+ * face holds the same edge reversed: with the table, the first pass records
+ * every directed edge, the second reads every reversed one (all present). */
+static thx_status link_small(dt_t *m, int32_t pi, size_t nc, size_t nb)
+{
+    if (nb > m->newt_cap) THX_CHECK(thx_grow(m->ctx, (void **)&m->newt, &m->newt_cap, nb, sizeof *m->newt));
+    int32_t *tab = m->ltab, *nt = m->newt;
+    int32_t ti = -1;
+    for (size_t k = 0; k < nb; k++) {
+        THX_CHECK(new_tet(m, pi, nc, k, &ti));
+        nt[k] = ti;
+        const uint8_t *l = m->bnd[k].l;
+        tab[l[1] * LT + l[2]] = (ti << 2) | 0;
+        tab[l[2] * LT + l[0]] = (ti << 2) | 1;
+        tab[l[0] * LT + l[1]] = (ti << 2) | 2;
+    }
+    for (size_t k = 0; k < nb; k++) {
+        tet_t *t = &m->t[nt[k]];
+        const uint8_t *l = m->bnd[k].l;
+        t->n[0] = tab[l[2] * LT + l[1]];
+        t->n[1] = tab[l[0] * LT + l[2]];
+        t->n[2] = tab[l[1] * LT + l[0]];
+    }
+    return finish_insert(m, pi, nc, nb, ti);
+}
+
+static thx_status link_hashed(dt_t *m, int32_t pi, size_t nc, size_t nb)
+{
     /* Edge table for linking the new tetrahedra to each other. */
     if (m->hcap < 4 * nb) {
         size_t cap = 64;
@@ -500,29 +663,11 @@ static thx_status insert_point(dt_t *m, int32_t pi)
     }
     const uint32_t hs = m->hstamp;
     const size_t hmask = m->hcap - 1;
-
-    /* One new tetrahedron (f0, f1, f2, p) per boundary face: positive because p
-     * is on the cavity side of the face. Cavity slots are reused first. */
     int32_t ti = -1;
     for (size_t k = 0; k < nb; k++) {
-        if (k < nc) ti = m->cav[k];
-        else THX_CHECK(tet_new(m, &ti));
+        THX_CHECK(new_tet(m, pi, nc, k, &ti));
         const bface b = m->bnd[k];
         tet_t *t = &m->t[ti];
-        t->v[0] = b.f[0];
-        t->v[1] = b.f[1];
-        t->v[2] = b.f[2];
-        t->v[3] = pi;
-        t->n[3] = b.out;
-        if (m->vt) {
-            for (int j = 0; j < 3; j++)
-                if (b.f[j] >= 0) m->vt[b.f[j]] = ti;
-            m->vt[pi] = ti;
-        }
-        m->t[b.out >> 2].n[b.out & 3] = (ti << 2) | 3;
-        /* Face j < 3 of the new tetrahedron holds p and the boundary edge
-         * (f[j+1], f[j+2]). The boundary faces are consistently oriented, so the
-         * neighbour through that face holds the same edge reversed. */
         for (int j = 0; j < 3; j++) {
             uint32_t a = (uint32_t)b.f[j == 2 ? 0 : j + 1], c = (uint32_t)b.f[j == 0 ? 2 : j - 1];
             uint64_t rev = ((uint64_t)c << 32) | a;
@@ -542,7 +687,13 @@ static thx_status insert_point(dt_t *m, int32_t pi)
             }
         }
     }
-    /* Leftover cavity slots (a cavity can hold more tetrahedra than its boundary has faces). */
+    return finish_insert(m, pi, nc, nb, ti);
+}
+
+/* Leftover cavity slots to the free list; the walk restarts from ti. */
+static thx_status finish_insert(dt_t *m, int32_t pi, size_t nc, size_t nb, int32_t ti)
+{
+    /* (a cavity can hold more tetrahedra than its boundary has faces) */
     for (size_t k = nb; k < nc; k++) {
         int32_t d = m->cav[k];
         m->t[d].v[0] = DEAD;
@@ -629,30 +780,42 @@ static thx_status brio_order(thx_ctx *ctx, const double *xyz, size_t n, int32_t 
         }
     double span = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     /* rounds [b_k, e_k): [n/4, n), [n/16, n/4), ..., [0, small) */
-    size_t e = n;
-    int round = 0;
-    while (e > 0) {
+    size_t rb[32], re[32];
+    int rbits[32], nr = 0;
+    for (size_t e = n; e > 0; nr++) {
         size_t b = e / 4 < 64 ? 0 : e / 4;
-        size_t m = e - b;
         int bits = 2;
-        while (bits < 10 && ((size_t)1 << (3 * (bits - 2))) < m) bits++;
+        while (bits < 10 && ((size_t)1 << (3 * (bits - 2))) < e - b) bits++;
+        rb[nr] = b;
+        re[nr] = e;
+        rbits[nr] = bits;
+        e = b;
+    }
+    /* Keys in input order (the coordinates read sequentially, not in the
+     * shuffled order: for 10^6 points that gather was a cache miss per
+     * point), each written at its point's shuffled position. */
+    int32_t *pos = (int32_t *)(a + n); /* inverse of the shuffle; that half of a is the sort's scratch later */
+    for (size_t k = 0; k < n; k++) pos[ord[k]] = (int32_t)k;
+    for (size_t i = 0; i < n; i++) {
+        size_t k = (size_t)pos[i];
+        int r = 0;
+        while (k < rb[r]) r++;
+        int bits = rbits[r];
         double sc = span > 0 ? (double)((1u << bits) - 1) / span : 0.0;
-        for (size_t k = 0; k < m; k++) {
-            int32_t i = ord[b + k];
-            uint32_t q[3];
-            for (int c = 0; c < 3; c++) {
-                double v = (xyz[3 * (size_t)i + c] - lo[c]) * sc;
-                q[c] = v <= 0 ? 0u : (v >= (double)((1u << bits) - 1) ? (1u << bits) - 1 : (uint32_t)v);
-            }
-            a[k] = ((uint64_t)hilbert3(q[0], q[1], q[2], bits) << 32) | (uint32_t)i;
+        uint32_t q[3];
+        for (int c = 0; c < 3; c++) {
+            double v = (xyz[3 * i + c] - lo[c]) * sc;
+            q[c] = v <= 0 ? 0u : (v >= (double)((1u << bits) - 1) ? (1u << bits) - 1 : (uint32_t)v);
         }
-        radix_sort_hi(a, a + n, m, 3 * bits);
+        a[k] = ((uint64_t)hilbert3(q[0], q[1], q[2], bits) << 32) | (uint32_t)i;
+    }
+    for (int r = 0; r < nr; r++) {
+        size_t b = rb[r], m = re[r] - b;
+        radix_sort_hi(a + b, a + n, m, 3 * rbits[r]);
         /* The rounds are inserted coarsest first, i.e. in the reverse of the
          * order built here; reversing every other round makes each one start
          * near where the previous one ended (the last round runs forward). */
-        for (size_t k = 0; k < m; k++) ord[b + k] = (int32_t)(a[(round & 1) ? m - 1 - k : k] & 0xffffffffu);
-        e = b;
-        round++;
+        for (size_t k = 0; k < m; k++) ord[b + k] = (int32_t)(a[b + ((r & 1) ? m - 1 - k : k)] & 0xffffffffu);
     }
     free(a);
     return THX_OK;
@@ -709,6 +872,9 @@ static void dt_free(dt_t *m)
     free(m->cav);
     free(m->bnd);
     free(m->h);
+    free(m->vloc);
+    free(m->newt);
+    free(m->ltab);
 }
 
 /* Builds the first solid tetrahedron s (positive) and its four ghosts. */
@@ -816,9 +982,11 @@ static thx_status dt_build(thx_ctx *ctx, const double *xyz, size_t n, dt_t *m, d
     if (orient(P(m, s[0]), P(m, s[1]), P(m, s[2]), P(m, s[3])) < 0) { int32_t t = s[1]; s[1] = s[2]; s[2] = t; }
 
     m->tcap = 7 * n + 64; /* ~6.5 tetrahedra per point for random points, plus the ghosts */
-    m->t = thx_malloc(ctx, m->tcap * sizeof *m->t);
+    m->t = tets_alloc(ctx, m->tcap, NULL, 0);
     m->mark = thx_calloc(ctx, m->tcap, sizeof *m->mark);
-    if (!m->t || !m->mark) return THX_ENOMEM;
+    m->vloc = thx_calloc(ctx, n, sizeof *m->vloc);
+    m->ltab = thx_malloc(ctx, LT * LT * sizeof *m->ltab);
+    if (!m->t || !m->mark || !m->vloc || !m->ltab) return THX_ENOMEM;
     THX_CHECK(seed(m, s));
     for (size_t k = 1; k < n; k++) {
         if ((int32_t)k == s[1] || (int32_t)k == s[2] || (int32_t)k == s[3]) continue;
@@ -834,7 +1002,7 @@ static thx_status dt_build(thx_ctx *ctx, const double *xyz, size_t n, dt_t *m, d
  * below, their neighbours' back-links following. The solids end up in
  * [0, cnt), in storage order except the few moved ones, and the output is
  * one sequential pass: no index map read at random (for 10^6 points that
- * map cost 0.6 s in cache misses). Destroys the structure's links. */
+ * map cost 0.6 s in cache misses). Consumes the structure's tetrahedra. */
 static thx_status dt_output(dt_t *m, int32_t **tets, int32_t **nbrs, size_t *n_tets, size_t *n_hull)
 {
     size_t hull = 0;
@@ -861,17 +1029,28 @@ static thx_status dt_output(dt_t *m, int32_t **tets, int32_t **nbrs, size_t *n_t
     }
     m->nt = lo;
     size_t cnt = lo;
-    int32_t *out = thx_malloc(m->ctx, 4 * (cnt ? cnt : 1) * sizeof *out);
     int32_t *nb = nbrs ? thx_malloc(m->ctx, 4 * (cnt ? cnt : 1) * sizeof *nb) : NULL;
-    if (!out || (nbrs && !nb)) { free(out); free(nb); return THX_ENOMEM; }
-    for (size_t t = 0; t < cnt; t++)
-        for (int k = 0; k < 4; k++) out[4 * t + k] = m->orig[m->t[t].v[k]];
+    if (nbrs && !nb) return THX_ENOMEM;
     if (nb)
         for (size_t t = 0; t < cnt; t++)
             for (int k = 0; k < 4; k++) {
                 int32_t code = m->t[t].n[k];
                 nb[4 * t + k] = code < 0 ? -1 : code >> 2;
             }
+    /* The vertices are written over the tetrahedron array itself (entry t
+     * goes to bytes [16t, 16t + 16), at or before where it was read), which
+     * is then shrunk: the output takes no fresh memory (for 10^6 points,
+     * 108 MB less to fault in and zero). */
+    int32_t *out = (int32_t *)m->t;
+    for (size_t t = 0; t < cnt; t++) {
+        int32_t v[4];
+        memcpy(v, m->t[t].v, sizeof v);
+        for (int k = 0; k < 4; k++) out[4 * t + k] = m->orig[v[k]];
+    }
+    int32_t *shrunk = realloc(out, 4 * (cnt ? cnt : 1) * sizeof *out);
+    if (shrunk) out = shrunk; /* a failed shrink keeps the larger block */
+    m->t = NULL;
+    m->nt = m->tcap = 0;
     *tets = out;
     if (nbrs) *nbrs = nb;
     *n_tets = cnt;
@@ -983,6 +1162,10 @@ thx_status thx_dt_insert(thx_dt *d, const double p[3], int32_t near, int32_t *in
         int32_t *v = thx_realloc(m->ctx, m->vt, cap * sizeof *v);
         if (!v) return THX_ENOMEM;
         m->vt = v;
+        uint8_t *vl = thx_realloc(m->ctx, m->vloc, cap * sizeof *vl);
+        if (!vl) return THX_ENOMEM;
+        memset(vl + m->pcap, 0, (cap - m->pcap) * sizeof *vl);
+        m->vloc = vl;
         m->pcap = cap;
     }
     int32_t k = m->np;
