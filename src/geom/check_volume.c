@@ -247,6 +247,41 @@ static size_t vox_index(const inside_surface *is, const double *p)
     return i[0] + (size_t)is->n[0] * (i[1] + (size_t)is->n[1] * i[2]);
 }
 
+/* A point p of a surface voxel (voxel coordinates v): the side of a free
+ * voxel nearby (up to 3 voxels away), flipped by the parity of the exact
+ * crossings of the short segment from p to a point inside it. Every point of
+ * a free voxel is on that voxel's side, so this is the ray-parity test with a
+ * ray of a few voxels instead of one across the surface's box. 0 if no free
+ * voxel is near or every segment tried grazes an edge (the caller casts a
+ * full ray). */
+static int classify_near(const inside_surface *is, const double *p, const size_t v[3], int *inside)
+{
+    static const double frac[4][3] = {{0.5, 0.5, 0.5}, {0.31, 0.62, 0.43}, {0.67, 0.36, 0.58}, {0.42, 0.71, 0.29}};
+    for (int rad = 1; rad <= 3; rad++)
+        for (int dz = -rad; dz <= rad; dz++)
+            for (int dy = -rad; dy <= rad; dy++)
+                for (int dx = -rad; dx <= rad; dx++) {
+                    if (abs(dx) != rad && abs(dy) != rad && abs(dz) != rad) continue; /* the shell only */
+                    long w[3] = {(long)v[0] + dx, (long)v[1] + dy, (long)v[2] + dz};
+                    int in_grid = 1;
+                    for (int a = 0; a < 3; a++) in_grid &= w[a] >= 0 && w[a] < is->n[a];
+                    if (!in_grid) continue;
+                    unsigned char c =
+                        is->vox[(size_t)w[0] + (size_t)is->n[0] * ((size_t)w[1] + (size_t)is->n[1] * (size_t)w[2])];
+                    if (c != VOX_INSIDE && c != VOX_OUTSIDE) continue;
+                    for (int t = 0; t < 4; t++) {
+                        double q[3];
+                        for (int a = 0; a < 3; a++) q[a] = is->lo[a] + ((double)w[a] + frac[t][a]) * is->h[a];
+                        parity_state ps = {is, p, q, 0, 0};
+                        thx_bvh_query_segment(is->bvh, p, q, parity_visit, &ps);
+                        if (ps.ambiguous) continue;
+                        *inside = (c == VOX_INSIDE) ^ (ps.crossings & 1);
+                        return 1;
+                    }
+                }
+    return 0;
+}
+
 /* As classify_ray, through the voxel grid where it can. */
 static int classify_point(const inside_surface *is, thx_vec3 pt, int *inside)
 {
@@ -257,11 +292,15 @@ static int classify_point(const inside_surface *is, thx_vec3 pt, int *inside)
             return 0;
         }
     if (is->vox) {
-        unsigned char c = is->vox[vox_index(is, p)];
+        size_t k = vox_index(is, p);
+        unsigned char c = is->vox[k];
         if (c == VOX_INSIDE || c == VOX_OUTSIDE) {
             *inside = c == VOX_INSIDE;
             return *inside;
         }
+        size_t vv[3] = {k % (size_t)is->n[0], (k / (size_t)is->n[0]) % (size_t)is->n[1],
+                        k / ((size_t)is->n[0] * (size_t)is->n[1])};
+        if (classify_near(is, p, vv, inside)) return *inside;
     }
     return classify_ray(is, pt, inside);
 }
