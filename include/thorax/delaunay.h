@@ -91,9 +91,10 @@ typedef struct {
  *               (no tetrahedron exists).
  *   THX_ENOMEM
  *   THX_EINTERNAL  an invariant was broken (a bug: please report).
- * Cost: O(n log n) expected time. Working memory: 36 bytes per tetrahedron
- * slot (vertices, neighbours, a stamp; about 7 slots per point) and about 45
- * bytes per point, besides the output (16 or 32 bytes per tetrahedron).
+ * Cost: O(n log n) expected time. Working memory: 32 bytes per tetrahedron
+ * slot (vertices, neighbours; about 7 slots per point) and about 46 bytes
+ * per point; the vertex output is written over the slots, the neighbour
+ * output (if asked for) takes 16 bytes per tetrahedron more.
  */
 thx_status thx_delaunay3d(thx_ctx *ctx, const double *xyz, size_t n, int32_t **tets, int32_t **nbrs,
                           size_t *n_tets, thx_delaunay_stats *stats);
@@ -133,7 +134,8 @@ int thx_dt_has_face(thx_dt *d, int32_t a, int32_t b, int32_t c);
  * tetrahedra of the cavity), then about every face of the cavity's boundary
  * (interior = 0: kept, joined to the new point); the first face it answers
  * nonzero for stops the insertion: *index = -1, face[] = that face, the
- * structure unchanged. */
+ * structure unchanged. reject must not call thx_dt_* functions on d (the
+ * structure is in the middle of an insertion while it is asked). */
 thx_status thx_dt_insert_checked(thx_dt *d, const double p[3], int32_t near,
                                  int (*reject)(void *user, int32_t a, int32_t b, int32_t c, int interior), void *user,
                                  int32_t *index, int32_t face[3]);

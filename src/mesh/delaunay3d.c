@@ -72,6 +72,11 @@
 #define DEAD (-2)
 #define MAX_POINTS ((size_t)1 << 26)
 #define MAX_TETS ((size_t)1 << 29)
+/* Neighbour codes are below 2^31; during an insertion the sign bit of n[0]
+ * marks a tetrahedron of the cavity, that of n[1] one tested and not in it. */
+#define CODE INT32_MAX
+#define CAVITY INT32_MIN
+#define TESTED INT32_MIN
 
 typedef struct {
     int32_t v[4];
@@ -120,7 +125,7 @@ typedef struct {
     int32_t last_p;
     tet_t *t;
     size_t nt, tcap;
-    uint32_t *mark; /* cavity stamps (tcap): st = in the cavity, st + 1 = tested, not in it */
+    uint32_t *mark; /* thx_dt_star's visit stamps (tcap; allocated by its first call) */
     uint32_t stamp;
     int32_t *freel;
     size_t nfree, free_cap;
@@ -390,13 +395,15 @@ static thx_status tet_new(dt_t *m, int32_t *out)
         if (!t) return THX_ENOMEM;
         free(m->t);
         m->t = t;
-        uint32_t *mk = thx_realloc(m->ctx, m->mark, cap * sizeof *mk);
-        if (!mk) return THX_ENOMEM;
-        memset(mk + m->tcap, 0, (cap - m->tcap) * sizeof *mk);
-        m->mark = mk;
+        if (m->mark) {
+            uint32_t *mk = thx_realloc(m->ctx, m->mark, cap * sizeof *mk);
+            if (!mk) return THX_ENOMEM;
+            memset(mk + m->tcap, 0, (cap - m->tcap) * sizeof *mk);
+            m->mark = mk;
+        }
         m->tcap = cap;
     }
-    m->mark[m->nt] = 0;
+    if (m->mark) m->mark[m->nt] = 0;
     *out = (int32_t)m->nt++;
     return THX_OK;
 }
@@ -498,40 +505,47 @@ static thx_status insert_point(dt_t *m, int32_t pi)
             }
         }
     }
-    if (m->stamp >= UINT32_MAX - 4) { /* stamps wrap: forget all marks */
-        memset(m->mark, 0, m->tcap * sizeof *m->mark);
-        m->stamp = 0;
-    }
-    m->stamp += 2;
-    const uint32_t st = m->stamp;
+    /* Cavity search. Marks live in the tetrahedra themselves (no separate
+     * array to miss in the cache): the sign bit of n[0] = in the cavity,
+     * of n[1] = tested, not in it (see CAVITY, TESTED). Every marked
+     * tetrahedron is on the cavity list or beyond a boundary face, so the
+     * marks are cleared (or overwritten) before the insertion returns. */
     size_t ns = 0, nc = 0, nb = 0;
-    THX_CHECK(push_i32(m, &m->stack, &m->stack_cap, ns++, t0));
-    THX_CHECK(push_i32(m, &m->cav, &m->cav_cap, nc++, t0));
-    m->mark[t0] = st;
+    thx_status st = THX_OK;
+    if ((st = push_i32(m, &m->stack, &m->stack_cap, ns++, t0)) != THX_OK) return st;
+    if ((st = push_i32(m, &m->cav, &m->cav_cap, nc++, t0)) != THX_OK) return st;
+    m->t[t0].n[0] |= CAVITY;
     /* Invariant: every tetrahedron on the stack is in the cavity; a tetrahedron
      * is tested at most once per insertion (its mark remembers the answer). */
     while (ns > 0) {
         int32_t c = m->stack[--ns];
         for (int i = 0; i < 4; i++) {
-            int32_t code = m->t[c].n[i], o = code >> 2;
-            uint32_t mk = m->mark[o];
-            if (mk == st) continue;
-            if (mk != st + 1) {
+            int32_t code = m->t[c].n[i] & CODE, o = code >> 2;
+            tet_t *to = &m->t[o];
+            if (to->n[0] & CAVITY) continue;
+            if (!(to->n[1] & TESTED)) {
                 if (in_conflict(m, o, pi)) {
-                    m->mark[o] = st;
-                    THX_CHECK(push_i32(m, &m->stack, &m->stack_cap, ns++, o));
-                    THX_CHECK(push_i32(m, &m->cav, &m->cav_cap, nc++, o));
+                    if ((st = push_i32(m, &m->stack, &m->stack_cap, ns, o)) != THX_OK ||
+                        (st = push_i32(m, &m->cav, &m->cav_cap, nc, o)) != THX_OK)
+                        goto fail;
+                    ns++;
+                    nc++;
+                    to->n[0] |= CAVITY;
+                    /* its neighbours are tested soon (depth first): start fetching them */
+                    for (int j = 0; j < 4; j++) __builtin_prefetch(&m->t[(to->n[j] & CODE) >> 2]);
                     continue;
                 }
-                m->mark[o] = st + 1;
             }
-            if (nb >= m->bnd_cap) THX_CHECK(thx_grow(m->ctx, (void **)&m->bnd, &m->bnd_cap, nb + 1, sizeof *m->bnd));
+            if (nb >= m->bnd_cap &&
+                (st = thx_grow(m->ctx, (void **)&m->bnd, &m->bnd_cap, nb + 1, sizeof *m->bnd)) != THX_OK)
+                goto fail;
             const tet_t *tc = &m->t[c];
             bface *b = &m->bnd[nb++];
             b->f[0] = tc->v[FACE[i][0]];
             b->f[1] = tc->v[FACE[i][1]];
             b->f[2] = tc->v[FACE[i][2]];
             b->out = code;
+            to->n[1] |= TESTED;
         }
     }
     if (m->reject) {
@@ -540,8 +554,8 @@ static thx_status insert_point(dt_t *m, int32_t pi)
             int32_t c = m->cav[k];
             const tet_t *tc = &m->t[c];
             for (int i = 0; i < 4; i++) {
-                int32_t o = tc->n[i] >> 2;
-                if (o <= c || m->mark[o] != st) continue;
+                int32_t o = (tc->n[i] & CODE) >> 2;
+                if (o <= c || !(m->t[o].n[0] & CAVITY)) continue;
                 int32_t a = tc->v[FACE[i][0]], b = tc->v[FACE[i][1]], d = tc->v[FACE[i][2]];
                 if (a < 0 || b < 0 || d < 0) continue;
                 if (m->reject(m->reject_user, m->orig[a], m->orig[b], m->orig[d], 1)) {
@@ -549,7 +563,7 @@ static thx_status insert_point(dt_t *m, int32_t pi)
                     m->rejected_face[0] = m->orig[a];
                     m->rejected_face[1] = m->orig[b];
                     m->rejected_face[2] = m->orig[d];
-                    return THX_OK;
+                    goto fail;
                 }
             }
         }
@@ -559,7 +573,7 @@ static thx_status insert_point(dt_t *m, int32_t pi)
             if (m->reject(m->reject_user, m->orig[bf->f[0]], m->orig[bf->f[1]], m->orig[bf->f[2]], 0)) {
                 m->rejected = 1;
                 for (int j = 0; j < 3; j++) m->rejected_face[j] = m->orig[bf->f[j]];
-                return THX_OK;
+                goto fail;
             }
         }
     }
@@ -589,6 +603,10 @@ static thx_status insert_point(dt_t *m, int32_t pi)
     for (uint32_t l = 2; l < nl; l++) m->vloc[m->lv[l]] = 0;
     if (small) return link_small(m, pi, nc, nb);
     return link_hashed(m, pi, nc, nb);
+fail: /* nothing changed but the marks */
+    for (size_t k = 0; k < nc; k++) m->t[m->cav[k]].n[0] &= CODE;
+    for (size_t k = 0; k < nb; k++) m->t[m->bnd[k].out >> 2].n[1] &= CODE;
+    return st;
 }
 
 /* The new tetrahedron (f0, f1, f2, p) on boundary face k, in a cavity slot
@@ -611,7 +629,9 @@ static inline thx_status new_tet(dt_t *m, int32_t pi, size_t nc, size_t k, int32
             if (b->f[j] >= 0) m->vt[b->f[j]] = ti;
         m->vt[pi] = ti;
     }
-    m->t[b->out >> 2].n[b->out & 3] = (ti << 2) | 3;
+    tet_t *o = &m->t[b->out >> 2];
+    o->n[b->out & 3] = (ti << 2) | 3;
+    o->n[1] &= CODE; /* its TESTED mark */
     *out = ti;
     return THX_OK;
 }
@@ -697,6 +717,7 @@ static thx_status finish_insert(dt_t *m, int32_t pi, size_t nc, size_t nb, int32
     for (size_t k = nb; k < nc; k++) {
         int32_t d = m->cav[k];
         m->t[d].v[0] = DEAD;
+        m->t[d].n[0] &= CODE; /* its CAVITY mark */
         THX_CHECK(push_i32(m, &m->freel, &m->free_cap, m->nfree, d));
         m->nfree++;
     }
@@ -983,10 +1004,9 @@ static thx_status dt_build(thx_ctx *ctx, const double *xyz, size_t n, dt_t *m, d
 
     m->tcap = 7 * n + 64; /* ~6.5 tetrahedra per point for random points, plus the ghosts */
     m->t = tets_alloc(ctx, m->tcap, NULL, 0);
-    m->mark = thx_calloc(ctx, m->tcap, sizeof *m->mark);
     m->vloc = thx_calloc(ctx, n, sizeof *m->vloc);
     m->ltab = thx_malloc(ctx, LT * LT * sizeof *m->ltab);
-    if (!m->t || !m->mark || !m->vloc || !m->ltab) return THX_ENOMEM;
+    if (!m->t || !m->vloc || !m->ltab) return THX_ENOMEM;
     THX_CHECK(seed(m, s));
     for (size_t k = 1; k < n; k++) {
         if ((int32_t)k == s[1] || (int32_t)k == s[2] || (int32_t)k == s[3]) continue;
@@ -1189,6 +1209,7 @@ int thx_dt_star(thx_dt *d, int32_t a, const int32_t (**quads)[4])
 {
     dt_t *m = &d->m;
     int32_t ra = m->rank[a];
+    if (!m->mark && !(m->mark = thx_calloc(m->ctx, m->tcap, sizeof *m->mark))) return -1;
     if (m->stamp >= UINT32_MAX - 4) {
         memset(m->mark, 0, m->tcap * sizeof *m->mark);
         m->stamp = 0;
