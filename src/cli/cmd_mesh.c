@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "thorax/check_volume.h"
 #include "thorax/mesh.h"
 
 static void help(void)
@@ -62,6 +63,38 @@ static void mesh_progress(void *user, const char *stage, double done)
     fprintf(stderr, "\rthorax mesh %-11s [%s] %3.0f%% %5.1f s", stage, bar, 100 * (done > 1 ? 1 : done), now - p->t0);
     fflush(stderr);
     p->shown = 1;
+}
+
+/* The surface triangle nearest point c and its smallest corner angle (degrees): where a mesh fault
+ * sits on the model. */
+static double nearest_triangle(const thx_model *m, const double c[3], size_t *ws, size_t *wt)
+{
+    double best = INFINITY, angle = 180;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        const thx_surface *su = m->surf[s];
+        for (size_t t = 0; t < su->n_tris; t++) {
+            const double *p[3];
+            double d = 0;
+            for (int k = 0; k < 3; k++) p[k] = su->xyz + 3 * (size_t)su->tri[3 * t + (size_t)k];
+            for (int a = 0; a < 3; a++) {
+                double g = (p[0][a] + p[1][a] + p[2][a]) / 3 - c[a];
+                d += g * g;
+            }
+            if (d >= best) continue;
+            best = d;
+            *ws = s;
+            *wt = t;
+            angle = 180;
+            for (int k = 0; k < 3; k++) {
+                const double *o = p[k], *u = p[(k + 1) % 3], *w = p[(k + 2) % 3];
+                double x[3], y[3], xx = 0, yy = 0, xy = 0;
+                for (int a = 0; a < 3; a++) { x[a] = u[a] - o[a]; y[a] = w[a] - o[a]; xx += x[a] * x[a]; yy += y[a] * y[a]; xy += x[a] * y[a]; }
+                double ang = acos(fmax(-1, fmin(1, xy / sqrt(xx * yy)))) * 180 / M_PI;
+                if (ang < angle) angle = ang;
+            }
+        }
+    }
+    return angle;
 }
 
 int cmd_mesh(int argc, char **argv)
@@ -131,6 +164,28 @@ int cmd_mesh(int argc, char **argv)
     thx_status st = thx_model_read(ctx, in, &m);
     if (st == THX_OK) st = thx_mesh_build(ctx, m, &o, &S);
     if (ps.shown) fputc('\n', stderr);
+    /* never write a mesh its own check fails: refuse it, naming the fault and where it sits */
+    if (st == THX_OK) {
+        thx_volume_report r;
+        memset(&r, 0, sizeof r);
+        thx_status cs = thx_volume_check(ctx, m->volume, m, NULL, &r);
+        if (cs == THX_ECHECK) {
+            for (size_t k = 0; k < r.n_reasons; k++) fprintf(stderr, "thorax mesh: %s: %s\n", in, r.reasons[k]);
+            if (r.failures & THX_VCHECKF_QUALITY) {
+                const int32_t *q = m->volume->tet + 4 * r.min_dihedral_tet;
+                double c[3] = {0, 0, 0};
+                for (int k = 0; k < 4; k++)
+                    for (int a = 0; a < 3; a++) c[a] += 0.25 * m->volume->xyz[3 * (size_t)q[k] + (size_t)a];
+                size_t ws = 0, wt = 0;
+                double ang = nearest_triangle(m, c, &ws, &wt);
+                fprintf(stderr, "thorax mesh: the worst tetrahedron is at (%.3f, %.3f, %.3f), by surface \"%s\" triangle %zu, "
+                        "whose smallest angle is %.2f deg%s\n", c[0], c[1], c[2], m->surf[ws]->name, wt + 1, ang,
+                        ang < 5 ? ": a needle in the surface forces flat tetrahedra there (repair the surface)" : "");
+            }
+            st = thx_error(ctx, THX_ECHECK, "mesh: the volume fails its check (above); nothing written");
+        } else if (cs != THX_OK) st = cs;
+        thx_volume_report_free(&r);
+    }
     if (st == THX_OK) mesh_progress(&ps, "writing", 0.0);
     if (st == THX_OK) st = thx_model_write(ctx, m, out);
     if (ps.shown && !strcmp(ps.stage, "writing")) { mesh_progress(&ps, "writing", 1.0); fputc('\n', stderr); }
@@ -161,9 +216,9 @@ int cmd_mesh(int argc, char **argv)
                    S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
-                   "%zu face removals, %zu grid nodes moved; %.3f s\n",
+                   "%zu face removals, %zu grid nodes moved, %zu collapsed; %.3f s\n",
                    o.repair_deg, S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
-                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.t_repair);
+                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_collapses, S.t_repair);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

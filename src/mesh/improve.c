@@ -683,6 +683,80 @@ static int try_move(imesh *M, int32_t t, size_t *count)
     return moved;
 }
 
+/* ---- edge collapse ---- */
+
+/* Removes a movable node v of tetrahedron t by collapsing it onto a neighbour w: the tetrahedra
+ * around edge (v, w) vanish, the others of v's star get w for v. Applied when every new
+ * tetrahedron is positive (exact), the new ones fill the star exactly (faces matched, same
+ * volume) and the worst one is better than the star's worst. v is left in no tetrahedron (the
+ * mesher drops such nodes). Nodes on the surfaces never go (they are fixed). */
+static int try_collapse(imesh *M, int32_t t, size_t *count)
+{
+    int32_t *star = M->star;
+    for (int k = 0; k < 4; k++) {
+        int32_t v = M->tet[4 * (size_t)t + k];
+        if (M->fixed[v]) continue;
+        int n = vertex_star(M, v, star);
+        if (!n || n > 2 * MAX_RING) continue;
+        double q_old = INFINITY, vol_old = 0;
+        for (int i = 0; i < n; i++) {
+            double q = qtet(M, star[i]);
+            if (q < q_old) q_old = q;
+            vol_old += tet_volume6(M, M->tet + 4 * (size_t)star[i]);
+        }
+        /* candidates: the star's other nodes, nearest first */
+        int32_t cand[3 * 2 * MAX_RING + 4];
+        int nc = 0;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < 4; j++) {
+                int32_t w = M->tet[4 * (size_t)star[i] + j];
+                int seen = w == v;
+                for (int c = 0; c < nc && !seen; c++) seen = cand[c] == w;
+                if (!seen && nc < (int)(sizeof cand / sizeof *cand)) cand[nc++] = w;
+            }
+        double best_q = q_old + EPS_GAIN;
+        int32_t best_w = -1;
+        int32_t nw[2 * MAX_RING][4], nreg[2 * MAX_RING];
+        for (int c = 0; c < nc; c++) {
+            int32_t w = cand[c];
+            int m = 0, okc = 1;
+            double q_new = INFINITY, vol_new = 0;
+            for (int i = 0; i < n && okc; i++) {
+                const int32_t *q = M->tet + 4 * (size_t)star[i];
+                int has_w = q[0] == w || q[1] == w || q[2] == w || q[3] == w;
+                if (has_w) continue;
+                int32_t r[4];
+                for (int j = 0; j < 4; j++) r[j] = q[j] == v ? w : q[j];
+                double qq = q4(M, r[0], r[1], r[2], r[3]);
+                if (qq <= 0) { okc = 0; break; }
+                if (qq < q_new) q_new = qq;
+                vol_new += tet_volume6(M, r);
+                m++;
+            }
+            if (!okc || m == 0 || !(q_new > best_q)) continue;
+            if (fabs(vol_new - vol_old) > 1e-9 * fabs(vol_old)) continue; /* the new ones overlap: not the star */
+            best_q = q_new;
+            best_w = w;
+        }
+        if (best_w < 0) continue;
+        int m = 0;
+        for (int i = 0; i < n; i++) {
+            const int32_t *q = M->tet + 4 * (size_t)star[i];
+            if (q[0] == best_w || q[1] == best_w || q[2] == best_w || q[3] == best_w) continue;
+            for (int j = 0; j < 4; j++) nw[m][j] = q[j] == v ? best_w : q[j];
+            nreg[m] = M->reg[star[i]];
+            m++;
+        }
+        int32_t old[2 * MAX_RING];
+        memcpy(old, star, (size_t)n * sizeof *old);
+        if (replace(M, old, n, (const int32_t (*)[4])nw, nreg, m) != 0) continue;
+        M->node_tet[v] = -1;
+        (*count)++;
+        return 1;
+    }
+    return 0;
+}
+
 /* ---- driver ---- */
 typedef struct { double q; int32_t t; } qrec;
 static int cmp_qrec(const void *x, const void *y)
@@ -845,7 +919,7 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
     S.tets_before = M.nt;
     S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
     double sin_target = sin(o->target_deg * M_PI / 180.0);
-    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE;
+    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_COLLAPSE;
     for (int pass = 0; pass < o->max_passes; pass++) {
         size_t nb = 0;
         free(bad);
@@ -873,7 +947,8 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
             }
             if (((ops & IMPROVE_EDGE) && try_edge_removal(&M, t, q, &S.n_edge_removals)) ||
                 ((ops & IMPROVE_FACE) && try_face_removal(&M, t, q, &S.n_face_removals)) ||
-                ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)))
+                ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)) ||
+                ((ops & IMPROVE_COLLAPSE) && try_collapse(&M, t, &S.n_collapses)))
                 changed++;
             else
                 M.failed[t] = M.clock;

@@ -12,6 +12,10 @@
  *     tetrahedron;
  *   - face removal: two tetrahedra sharing a face become three around the
  *     edge joining their apexes (2-3 flip);
+ *   - edge collapse: an interior grid or refinement node of a sliver is
+ *     removed by collapsing it onto a neighbour (the tetrahedra around the edge
+ *     vanish, the rest of its star takes the neighbour), when that fills the
+ *     star exactly and betters its worst tetrahedron; the node is then unused;
  *   - vertex perturbation: an interior grid node (never a surface node) of a
  *     sliver is moved, within its star, to where the worst tetrahedron of the
  *     star is best (pattern search, positions rounded to the stored
@@ -26,12 +30,12 @@
 
 #include "thorax/volume.h"
 
-enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4 };
+enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8 };
 
 typedef struct {
     double target_deg; /* repair tetrahedra whose smallest dihedral angle is below this */
     int max_passes;    /* sweeps over the tetrahedra below target (each stops early when nothing improves) */
-    unsigned ops;      /* IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE; 0 = all of them */
+    unsigned ops;      /* IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_COLLAPSE; 0 = all */
     /* region of a new tetrahedron whose cavity mixed regions, from its centroid; NULL: the region
        of the old tetrahedron containing most of the cavity's volume */
     int (*classify)(void *user, thx_vec3 centroid);
@@ -41,7 +45,7 @@ typedef struct {
 typedef struct {
     size_t below_before, below_after; /* tetrahedra below target_deg */
     double min_before, min_after;     /* smallest dihedral angle in the mesh, degrees */
-    size_t n_edge_removals, n_face_removals, n_moves;
+    size_t n_edge_removals, n_face_removals, n_moves, n_collapses;
     size_t tets_before, tets_after;
     double seconds;
 } improve_stats;

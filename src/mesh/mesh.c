@@ -698,6 +698,9 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_edge_removals = is.n_edge_removals;
         S.n_face_removals = is.n_face_removals;
         S.n_moves = is.n_moves;
+        S.n_collapses = is.n_collapses;
+        /* collapsed nodes are in no tetrahedron now */
+        THX_TRY(drop_unused_nodes(ctx, v));
         S.t_repair = is.seconds;
     }
     memset(S.per_region, 0, sizeof S.per_region);
