@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
-# Benchmark of thx_delaunay3d (paper 3.3, volume mesh) against TetGen and qhull
-# on the same points, side by side in one run:
+# Benchmark of thx_delaunay3d (paper 3.3, volume mesh) against CGAL, TetGen and
+# qhull on the same points, side by side in one run:
 #   - 100,000 and 1,000,000 random points in a 100 mm cube (fixed seed);
 #   - a thorax-like layered set: 60 planes 5 mm apart, a 5 mm grid inside a
 #     330 x 220 mm ellipse, plus the outer loop and three inner loops per plane
 #     (~177,000 points, most of them cospherical/coplanar with others).
 # For each program: the tetrahedra count, the triangulation time (thorax: the
-# thx_delaunay3d call, best of $REPEAT; TetGen: its own "Delaunay seconds" from
-# -V; qdelaunay: whole run only), tetrahedra per second from that time, the
+# thx_delaunay3d call, best of $REPEAT; CGAL: the Delaunay_triangulation_3
+# construction from the point range, best of $REPEAT, in bench/delaunay_cgal.cpp
+# (a C++ peer built here with g++ when libcgal-dev is installed, never by the
+# project's CMake); TetGen: its own "Delaunay seconds" from -V; qdelaunay:
+# whole run only), tetrahedra per second from that time, the
 # whole-process wall time (reading text input included) and peak memory
 # (/usr/bin/time %M). Prints figures; never passes or fails on time.
 # Environment: REPEAT (default 3), QHULL_MAX (largest point count given to
@@ -24,9 +27,14 @@ W=$(mktemp -d)
 
 cc -O2 -std=c11 -D_GNU_SOURCE -Iinclude bench/delaunay_gen.c "$LIB" \
    $(pkg-config --libs libcjson 2> /dev/null || echo -lcjson) -lm -fopenmp -o "$W/dgen"
+CGAL=""
+if [ -f /usr/include/CGAL/Delaunay_triangulation_3.h ] && command -v g++ > /dev/null &&
+   g++ -O3 -DNDEBUG -std=c++17 bench/delaunay_cgal.cpp -o "$W/dcgal" -lgmp -lmpfr 2> "$W/cgal.err"; then
+    CGAL="$W/dcgal"
+fi
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-echo "peers: TetGen (Debian tetgen $(dpkg-query -W -f='${Version}' tetgen 2> /dev/null || echo '?')), $(qdelaunay -V 2>&1 | head -1)"
+echo "peers: CGAL $(dpkg-query -W -f='${Version}' libcgal-dev 2> /dev/null || echo 'not installed (libcgal-dev)'), TetGen (Debian tetgen $(dpkg-query -W -f='${Version}' tetgen 2> /dev/null || echo '?')), $(qdelaunay -V 2>&1 | head -1)"
 echo
 printf '%-22s %-10s %10s %11s %9s %8s %9s\n' "points" "program" "tets" "triang. s" "M tets/s" "wall s" "peak MB"
 
@@ -52,6 +60,20 @@ run_set() { # name kind n
         printf '%-22s %-10s %10s %11s %9s %8s %9s\n' "$label" thorax "$tt" "$ts" "$(rate "$tt" "$ts")" "$wall" "$(mb "$rss")"
     else
         printf '%-22s %-10s failed: %s\n' "$label" thorax "$(tail -1 "$W/thx.out")"
+    fi
+
+    # CGAL: best construction time of REPEAT, then one run under /usr/bin/time
+    if [ -n "$CGAL" ]; then
+        if "$CGAL" "$f.node" "$rep" > "$W/cg.out" 2>&1; then
+            local ct cs
+            ct=$(awk '/^tets/ {print $2}' "$W/cg.out")
+            cs=$(awk '/^tets/ {print $4}' "$W/cg.out")
+            /usr/bin/time -f "%e %M" -o "$W/cg.time" "$CGAL" "$f.node" 1 > /dev/null 2>&1 || true
+            read -r wall rss < "$W/cg.time"
+            printf '%-22s %-10s %10s %11s %9s %8s %9s\n' "" CGAL "$ct" "$cs" "$(rate "$ct" "$cs")" "$wall" "$(mb "$rss")"
+        else
+            printf '%-22s %-10s failed: %s\n' "" CGAL "$(tail -1 "$W/cg.out")"
+        fi
     fi
 
     # TetGen: -V reports its own Delaunay time; -NEF writes no mesh files
@@ -87,6 +109,7 @@ run_set "random cube" cube 1000000
 run_set "thorax layers" layers 0
 echo
 echo "triang. s: thorax = the thx_delaunay3d call (best of $REPEAT; 1 run at 10^6 points),"
+echo "CGAL = its Delaunay_triangulation_3 construction (same repeats; spatial sort included),"
 echo "TetGen = its own 'Delaunay seconds' (-V); qdelaunay has no inner timer, so its rate uses"
 echo "the whole run. wall s and peak MB: whole process, reading the text input included."
-echo "Random points are in general position: all three counts must agree (unique Delaunay)."
+echo "Random points are in general position: all counts must agree (unique Delaunay)."

@@ -19,6 +19,7 @@ packages=(
   gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)
   time                               # bench: peak memory (/usr/bin/time -v)
   tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
+  libcgal-dev                        # bench: CGAL's Delaunay_triangulation_3 beside ours (bench/delaunay_cgal.cpp, g++)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -54,7 +54,8 @@
  * infinity, v[0] = DEAD for a free slot) and n[4], the neighbour across the
  * face opposite v[i], coded (tetrahedron << 2) | (index of the shared face in
  * the neighbour), so that back-links are set in O(1). 32 bytes per
- * tetrahedron, plus a 4-byte stamp for the cavity search.
+ * tetrahedron, 64-byte aligned; the cavity search marks tetrahedra with the
+ * sign bits of n[0] and n[1] (cleared before the insertion returns).
  * Invariants: every live tetrahedron (solid or ghost) is positively oriented
  * (thx_orient3d(v0,v1,v2,v3) > 0; for a ghost, with INF replaced by any point
  * strictly beyond its hull face); n is symmetric: if t.n[i] = (o << 2) | j
