@@ -18,52 +18,12 @@
 #include <string.h>
 
 #include "mesh/improve.h"
+#include "mesh/triset.h"
 #include "thorax/predicates.h"
 
 #define MAX_RING 12    /* edges with more tetrahedra around them are not removed */
 #define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
 #define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */
-
-/* ---- a set of sorted node triples (surface triangles; edges with c = -1) ---- */
-typedef struct { int32_t a, b, c; } triple;
-typedef struct { triple *slot; size_t mask; } tset;
-
-static triple tri_sorted(int32_t a, int32_t b, int32_t c)
-{
-    int32_t t;
-    if (a > b) { t = a; a = b; b = t; }
-    if (b > c) { t = b; b = c; c = t; }
-    if (a > b) { t = a; a = b; b = t; }
-    return (triple){a, b, c};
-}
-
-static triple edge_sorted(int32_t a, int32_t b) { return a < b ? (triple){a, b, -1} : (triple){b, a, -1}; }
-
-static size_t tset_hash(triple k)
-{
-    uint64_t h = (uint64_t)(uint32_t)k.a * 0x9E3779B97F4A7C15ull;
-    h ^= (uint64_t)(uint32_t)k.b * 0xC2B2AE3D27D4EB4Full + (h >> 29);
-    h ^= (uint64_t)(uint32_t)k.c * 0x165667B19E3779F9ull + (h >> 32);
-    return (size_t)(h ^ (h >> 31));
-}
-
-static int tset_has(const tset *s, triple k)
-{
-    for (size_t i = tset_hash(k) & s->mask;; i = (i + 1) & s->mask) {
-        const triple *e = &s->slot[i];
-        if (e->a < 0) return 0;
-        if (e->a == k.a && e->b == k.b && e->c == k.c) return 1;
-    }
-}
-
-static void tset_add(tset *s, triple k)
-{
-    for (size_t i = tset_hash(k) & s->mask;; i = (i + 1) & s->mask) {
-        triple *e = &s->slot[i];
-        if (e->a < 0) { *e = k; return; }
-        if (e->a == k.a && e->b == k.b && e->c == k.c) return;
-    }
-}
 
 /* ---- quality ---- */
 
@@ -815,12 +775,7 @@ static thx_status imesh_open(imesh *M, thx_ctx *ctx, double *xyz, size_t nn, int
 /* The protected set: the given faces (node triples) and their edges. */
 static thx_status build_prot(imesh *M, const int32_t *prot, size_t n_prot)
 {
-    size_t n_keys = 4 * n_prot, cap = 16;
-    while (cap < 2 * n_keys + 16) cap <<= 1;
-    M->prot.slot = thx_malloc(M->ctx, cap * sizeof *M->prot.slot);
-    if (!M->prot.slot) return THX_ENOMEM;
-    memset(M->prot.slot, 0xff, cap * sizeof *M->prot.slot);
-    M->prot.mask = cap - 1;
+    THX_CHECK(tset_init(M->ctx, &M->prot, 4 * n_prot));
     for (size_t i = 0; i < n_prot; i++) {
         int32_t a = prot[3 * i], b = prot[3 * i + 1], c = prot[3 * i + 2];
         tset_add(&M->prot, tri_sorted(a, b, c));

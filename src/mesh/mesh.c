@@ -31,6 +31,7 @@
 #include "mesh/conform.h"
 #include "mesh/improve.h"
 #include "mesh/locate.h"
+#include "mesh/triset.h"
 #include "thorax/delaunay.h"
 #include "thorax/mesh.h"
 
@@ -153,7 +154,6 @@ static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
     return thx_v3_scale(c, 0.25);
 }
 
-/* ---- a hash set of sorted node triples (the faces on the surfaces) ---- */
 /* The domain for the quality refinement: inside the outer surface, not inside an excluded heart. */
 typedef struct { const locator *outer, *heart; double on_eps; } domain_ctx;
 static int in_domain_cb(void *user, const double p[3])
@@ -164,55 +164,13 @@ static int in_domain_cb(void *user, const double p[3])
     return !(d->heart && locator_inside(d->heart, v));
 }
 
-typedef struct { int32_t a, b, c; } ftrip;
-typedef struct { ftrip *slot; size_t mask; } fset;
-
-static ftrip ftrip_sorted(int32_t a, int32_t b, int32_t c)
-{
-    int32_t t;
-    if (a > b) { t = a; a = b; b = t; }
-    if (b > c) { t = b; b = c; c = t; }
-    if (a > b) { t = a; a = b; b = t; }
-    return (ftrip){a, b, c};
-}
-
-static size_t fset_slot(const fset *s, ftrip k)
-{
-    uint64_t h = (uint64_t)(uint32_t)k.a * 0x9E3779B97F4A7C15ull;
-    h ^= (uint64_t)(uint32_t)k.b * 0xC2B2AE3D27D4EB4Full + (h >> 29);
-    h ^= (uint64_t)(uint32_t)k.c * 0x165667B19E3779F9ull + (h >> 32);
-    size_t i = (size_t)(h ^ (h >> 31)) & s->mask;
-    while (s->slot[i].a >= 0 && !(s->slot[i].a == k.a && s->slot[i].b == k.b && s->slot[i].c == k.c)) i = (i + 1) & s->mask;
-    return i;
-}
-
-static thx_status fset_build(thx_ctx *ctx, const mesh_subface *sub, size_t n, fset *s)
-{
-    size_t cap = 16;
-    while (cap < 2 * n + 16) cap <<= 1;
-    s->slot = thx_malloc(ctx, cap * sizeof *s->slot);
-    if (!s->slot) return THX_ENOMEM;
-    memset(s->slot, 0xff, cap * sizeof *s->slot);
-    s->mask = cap - 1;
-    for (size_t i = 0; i < n; i++) {
-        ftrip k = ftrip_sorted(sub[i].v[0], sub[i].v[1], sub[i].v[2]);
-        s->slot[fset_slot(s, k)] = k;
-    }
-    return THX_OK;
-}
-
-static int fset_has(const fset *s, int32_t a, int32_t b, int32_t c)
-{
-    return s->slot[fset_slot(s, ftrip_sorted(a, b, c))].a >= 0;
-}
-
 /*
  * The pieces of space the surfaces cut the tetrahedralization into: tetrahedra
  * joined across every face that is not on a surface (breadth-first). comp[t]
  * gets the piece's number; *n_comp their count; touches_hull[piece] 1 when
  * the piece reaches the convex hull (then it is outside the outer surface).
  */
-static thx_status components(thx_ctx *ctx, const int32_t *tets, const int32_t *nbrs, size_t nt, const fset *fs,
+static thx_status components(thx_ctx *ctx, const int32_t *tets, const int32_t *nbrs, size_t nt, const tset *fs,
                              int32_t *comp, size_t *n_comp, unsigned char **touches_hull)
 {
     int32_t *queue = thx_malloc(ctx, (nt ? nt : 1) * sizeof *queue);
@@ -235,7 +193,7 @@ static thx_status components(thx_ctx *ctx, const int32_t *tets, const int32_t *n
             const int32_t *q = tets + 4 * (size_t)t;
             for (int f = 0; f < 4; f++) {
                 int32_t u = nbrs[4 * (size_t)t + f];
-                if (fset_has(fs, q[(f + 1) & 3], q[(f + 2) & 3], q[(f + 3) & 3])) continue;
+                if (tset_has(fs, tri_sorted(q[(f + 1) & 3], q[(f + 2) & 3], q[(f + 3) & 3]))) continue;
                 if (u < 0) { hull[nc] = 1; continue; }
                 if (comp[u] >= 0) continue;
                 comp[u] = (int32_t)nc;
@@ -536,8 +494,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                 goto done;
             }
     {
-        fset fs = {NULL, 0};
-        st = fset_build(ctx, sub, n_sub, &fs);
+        tset fs = {NULL, 0};
+        st = tset_init(ctx, &fs, n_sub);
+        if (st == THX_OK)
+            for (size_t i = 0; i < n_sub; i++) tset_add(&fs, tri_sorted(sub[i].v[0], sub[i].v[1], sub[i].v[2]));
         if (st != THX_OK) goto done;
         size_t n_comp = 0;
         unsigned char *hull = NULL;
@@ -672,10 +632,6 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     v->steiner = steiner;
     v->n_steiner = n_steiner;
     steiner = NULL;
-    /* the excluded heart's interior leaves nodes in no tetrahedron: its Steiner points stay (on the
-       boundary), grid points inside it are dropped below */
-    THX_TRY(drop_unused_nodes(ctx, v));
-    S.n_steiner = v->n_steiner;
     /* slivers: repaired (flips, moving grid nodes) with the faces on the surfaces kept, never removed */
     if (o->repair_deg > 0) {
         region_ctx rc = {m, loc, surf_region};
@@ -699,10 +655,11 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_face_removals = is.n_face_removals;
         S.n_moves = is.n_moves;
         S.n_collapses = is.n_collapses;
-        /* collapsed nodes are in no tetrahedron now */
-        THX_TRY(drop_unused_nodes(ctx, v));
         S.t_repair = is.seconds;
     }
+    /* nodes in no tetrahedron (collapsed by the repair, or any the removed pieces held) go */
+    THX_TRY(drop_unused_nodes(ctx, v));
+    S.n_steiner = v->n_steiner;
     memset(S.per_region, 0, sizeof S.per_region);
     for (size_t t = 0; t < v->n_tets; t++)
         if (v->region[t] >= 0 && v->region[t] < 16) S.per_region[v->region[t]]++;
