@@ -75,19 +75,11 @@ int thx_import_format_parse(const char *s, thx_import_format *out)
     return -1;
 }
 
-/* The extension of the last path component (after its last '.'), or "". */
-static const char *extension(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    const char *dot = strrchr(base, '.');
-    return (dot && dot != base) ? dot + 1 : "";
-}
 
 thx_import_format thx_import_format_from_path(const char *path)
 {
     thx_import_format f;
-    if (!path || thx_import_format_parse(extension(path), &f) != 0) return THX_IMPORT_AUTO;
+    if (!path || thx_import_format_parse(path_extension(path), &f) != 0) return THX_IMPORT_AUTO;
     return f;
 }
 
@@ -197,7 +189,7 @@ static thx_status read_ptsfac(thx_ctx *ctx, const char *path, const char *path2,
 {
     char other[1024];
     const char *pts = path, *fac = path2;
-    const char *ext = extension(path);
+    const char *ext = path_extension(path);
     int given_fac = strcasecmp(ext, "fac") == 0;
     if (given_fac) { /* the user named the .fac: the .pts is the other one */
         fac = path;
@@ -1357,7 +1349,7 @@ thx_status thx_surface_read_file(thx_ctx *ctx, const char *path, const char *pat
     if (fmt == THX_IMPORT_AUTO)
         return thx_error(ctx, THX_EINPUT,
                          "%s: surface \"%s\": cannot tell the format from the extension \"%s\" (known: .pts/.fac, .tri, "
-                         ".obj, .stl, .ply, .vtk, .vtp)", path, name, extension(path));
+                         ".obj, .stl, .ply, .vtk, .vtp)", path, name, path_extension(path));
     if (info) info->format = fmt;
     thx_status st = THX_OK;
     if (fmt == THX_IMPORT_PTSFAC) {

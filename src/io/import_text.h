@@ -19,6 +19,15 @@
 #include <string.h>
 #include <strings.h>
 
+/* The extension of the last path component (after its last '.'), or "". */
+static inline const char *path_extension(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    return (dot && dot != base) ? dot + 1 : "";
+}
+
 /* ---------------------------------------------------------- text cursor */
 
 typedef struct {

@@ -72,14 +72,6 @@ int thx_volume_format_parse(const char *s, thx_volume_format *out)
     return -1;
 }
 
-/* The extension of the last path component (after its last '.'), or "". */
-static const char *extension(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    const char *dot = strrchr(base, '.');
-    return (dot && dot != base) ? dot + 1 : "";
-}
 
 static int readable(const char *path)
 {
@@ -93,7 +85,7 @@ static int readable(const char *path)
  * starts upper case); 0, or -1 if it does not fit or there is none. */
 static int with_extension(char *out, size_t size, const char *path, const char *ext)
 {
-    const char *old = extension(path);
+    const char *old = path_extension(path);
     if (!old[0]) return -1;
     size_t stem = (size_t)(old - path), el = strlen(ext);
     if (stem + el + 1 > size) return -1;
@@ -129,7 +121,7 @@ static int vtk_is_ugrid(const char *path)
 thx_volume_format thx_volume_format_from_path(const char *path)
 {
     if (!path) return THX_VOLFMT_NONE;
-    const char *ext = extension(path);
+    const char *ext = path_extension(path);
     if (!strcasecmp(ext, "msh")) return THX_VOLFMT_MSH;
     if (!strcasecmp(ext, "vtu")) return THX_VOLFMT_VTU;
     if (!strcasecmp(ext, "tet") || !strcasecmp(ext, "elem")) return THX_VOLFMT_PTS;
@@ -483,7 +475,7 @@ static thx_status read_ptselem(raw *r, const char *path, const char *elem_path)
     thx_status st = THX_OK;
     char other[1024];
     const char *pts = path, *elem = elem_path;
-    const char *ext = extension(path);
+    const char *ext = path_extension(path);
     int given_elem = !strcasecmp(ext, "tet") || !strcasecmp(ext, "elem");
     if (given_elem) {
         if (elem_path) return fail(r, at_file(), "an element file given twice: name the .pts, and the element file with --elem");
