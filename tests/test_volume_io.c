@@ -385,6 +385,30 @@ static void test_round_trip(void)
     }
     thx_model_destroy(&r);
 
+    /* Damaged volume files are refused, never read in part: a NUL byte in volume.pts (the line
+       parser would stop there), a Steiner record the manifest does not announce, a cut record. */
+    {
+        size_t len = 0;
+        char *vp = tl_slurp(ctx, tl_path("rt/volume.pts"), &len);
+        CHECK(vp != NULL && len > 10);
+        if (vp) {
+            vp[len / 2] = '\0';
+            tl_write_bytes(tl_path("rt2/volume.pts"), vp, len);
+            CHECK(thx_model_read(ctx, tl_path("rt2"), &r) == THX_EINPUT && tl_msg_has(ctx, "NUL byte"));
+            CHECK(r == NULL);
+            tl_write_bytes(tl_path("rt2/volume.pts"), vp, len / 2); /* back to a whole file for what follows */
+            free(vp);
+        }
+        vp = tl_slurp(ctx, tl_path("rt/volume.pts"), &len);
+        if (vp) { tl_write_bytes(tl_path("rt2/volume.pts"), vp, len); free(vp); }
+        tl_write_text(tl_path("rt2/volume.steiner"), "1 1 1 0.5 0.5 0\n");
+        CHECK(thx_model_read(ctx, tl_path("rt2"), &r) == THX_EINPUT && tl_msg_has(ctx, "more records than the 0"));
+        CHECK(r == NULL);
+        tl_write_text(tl_path("rt2/volume.steiner"), "1 1 1 0.5\n");
+        CHECK(thx_model_read(ctx, tl_path("rt2"), &r) == THX_EINPUT && tl_msg_has(ctx, "volume.steiner:1: expected 6 fields"));
+        CHECK(r == NULL);
+    }
+
     /* A model without a volume has none of the volume files or keys. */
     thx_volume_destroy(&m->volume);
     CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("novol")));

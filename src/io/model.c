@@ -133,6 +133,19 @@ void thx_io_put_coord(FILE *f, double v)
  * max whitespace-separated tokens; each token is NUL-terminated in place.
  * Returns the number of tokens found (max + 1 means "more than max"). *next
  * is set to the start of the following line or NULL at the end. */
+thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text)
+{
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, text, &len));
+    const char *nul = memchr(*text, '\0', len);
+    if (!nul) return THX_OK;
+    int line = 1;
+    for (const char *p = *text; p < nul; p++) line += *p == '\n';
+    free(*text);
+    *text = NULL;
+    return thx_error(ctx, THX_EINPUT, "%s:%d: a NUL byte in a text file (the file is binary or damaged)", path, line);
+}
+
 int thx_io_split_line(char *p, char **tok, int max, char **next)
 {
     char *end = strchr(p, '\n');
@@ -159,7 +172,7 @@ int thx_io_split_line(char *p, char **tok, int max, char **next)
 static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, double **xyz_out, size_t *n_out)
 {
     char *text = NULL;
-    thx_status st = thx_read_file(ctx, path, &text, NULL);
+    thx_status st = thx_io_read_text(ctx, path, &text);
     if (st) return st;
     double *xyz = NULL;
     size_t n = 0, cap = 0;
@@ -208,7 +221,7 @@ static thx_status read_fac(thx_ctx *ctx, const char *path, const char *name, siz
                            int32_t **tri_out, size_t *n_out, int *base_out)
 {
     char *text = NULL;
-    thx_status st = thx_read_file(ctx, path, &text, NULL);
+    thx_status st = thx_io_read_text(ctx, path, &text);
     if (st) return st;
     int32_t *tri = NULL;
     size_t n = 0, cap = 0;

@@ -386,7 +386,7 @@ static int parse_long(const char *tok, long *out)
 static thx_status read_xyz(thx_ctx *ctx, const char *path, double **xyz_out, size_t *n_out)
 {
     char *text = NULL;
-    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    THX_CHECK(thx_io_read_text(ctx, path, &text));
     thx_status st = THX_OK;
     double *xyz = NULL;
     size_t n = 0, cap = 0;
@@ -427,7 +427,7 @@ done:
 static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size_t n_regions, thx_volume *v)
 {
     char *text = NULL;
-    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    THX_CHECK(thx_io_read_text(ctx, path, &text));
     thx_status st = THX_OK;
     int32_t *tet = NULL, *reg = NULL;
     size_t n = 0, cap = 0, rcap = 0;
@@ -488,7 +488,7 @@ static thx_status read_steiner(thx_ctx *ctx, const char *path, const thx_model *
                                thx_volume *v)
 {
     char *text = NULL;
-    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    THX_CHECK(thx_io_read_text(ctx, path, &text));
     thx_status st = THX_OK;
     thx_steiner *rec = NULL;
     size_t n = 0, cap = 0;
@@ -559,7 +559,7 @@ static thx_status read_vmap(thx_ctx *ctx, const char *path, const char *vpts, co
 {
     const thx_surface *sf = m->surf[s];
     char *text = NULL;
-    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    THX_CHECK(thx_io_read_text(ctx, path, &text));
     thx_status st = THX_OK;
     int32_t *map = thx_malloc(ctx, (sf->n_nodes ? sf->n_nodes : 1) * sizeof *map);
     if (!map) {

@@ -15,6 +15,9 @@
 /* Shared text helpers (defined in model.c). */
 /* Writes one coordinate "%.6f", a value that rounds to zero as "0.000000". */
 void thx_io_put_coord(FILE *f, double v);
+/* Reads a whole text file (thx_read_file), refusing one with a NUL byte (naming its line):
+ * the line parsers stop at a NUL, which would cut the file short without a word. */
+thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
 /* Splits the line at p into at most max whitespace-separated tokens
  * (NUL-terminated in place); returns the count (max + 1 = "more than max");
  * *next = start of the following line or NULL. */
