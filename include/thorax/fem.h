@@ -179,14 +179,19 @@ thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_serie
 /* ---- verification (thorax verify, docs/validation.md) ---- */
 
 typedef struct {
-    int n;                   /* cells per cube edge of the cubed-sphere mesh */
+    int n;                   /* cells per cube edge of the cubed-sphere mesh; the spheres: nodes per icosphere */
     size_t nodes, tets;
-    double h;                /* mean edge length, mm */
+    double h;                /* mean edge length, mm (the spheres: of the tetrahedra between r = a and r = c) */
     double rdm, mag;         /* at the outer surface's nodes against the analytic solution */
     double max_err;          /* largest nodal error on the outer surface / largest |analytic| there */
     double net_current;      /* current out of the inner sphere / the sum of its magnitudes */
     int iterations;
-    double seconds;
+    double seconds;          /* the solve */
+    /* the spheres only (thx_verify_spheres) */
+    size_t steiner;          /* Steiner nodes thorax mesh put on the three surfaces */
+    double lin_err;          /* largest |phi - z/a| at the brain's interior nodes (exactly linear there: 0 to
+                                the solver's tolerance) */
+    double t_mesh;           /* seconds in thx_mesh_build */
 } thx_verify_row;
 
 /*
@@ -197,6 +202,25 @@ typedef struct {
  * compared with the analytic one at the outer surface.
  */
 thx_status thx_verify_shells(thx_ctx *ctx, int l, double s1, double s2, int n, thx_verify_row *row);
+
+/*
+ * OpenMEEG's three spheres (its test model data/HeadN: radii 0.87, 0.92, 1
+ * and HeadN.cond, here in mm): brain r < 87 mm (1 S/m), skull 87 < r < 92 (0.0125), scalp 92 < r < 100
+ * (1), each surface an icosphere of 10 4^level + 2 nodes (thx_icosphere),
+ * the whole meshed by the library's mesher (thx_mesh_build, default options
+ * but the grid, 60 / 2^level mm, so that surfaces and volume refine
+ * together: level 5 is 10,242 nodes per sphere and a 1.875 mm grid) with
+ * brain, skull and scalp as regions, and the mesh checked as thorax mesh
+ * checks it (thx_volume_check; a failure is THX_ECHECK with the reasons).
+ * Then the epicardial forward problem of thorax forward
+ * (thx_forward_epicardial, the brain's surface in the heart's role): P_1 =
+ * cos(theta) at the brain surface's nodes, its Steiner nodes interpolated,
+ * no current through the scalp. Compared with the analytic solution of the
+ * concentric spheres (thx_shells_potential with a = 87, b = 92, c = 100)
+ * at the scalp's nodes; the brain's interior must be the linear z / a.
+ * level 2 to 6 (level 6: about 12 M tetrahedra and several GB).
+ */
+thx_status thx_verify_spheres(thx_ctx *ctx, int level, thx_verify_row *row);
 
 /* The anisotropic slab: the largest nodal error against the closed form (linear: exact for P1
  * elements up to the solver's tolerance), relative to the largest potential. */

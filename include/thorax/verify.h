@@ -51,6 +51,16 @@ thx_status thx_slab_mesh(thx_ctx *ctx, double L, double W, double H, int nx, int
 /* The slab's closed-form potential at p. */
 double thx_slab_potential(const double sigma[9], const double p[3]);
 
+/*
+ * An icosphere: the regular icosahedron with `level` rounds of midpoint
+ * subdivision (each triangle into four, new nodes projected onto the
+ * sphere), scaled to radius r about the origin: 10 4^level + 2 nodes
+ * (level 2: 162, 3: 642, 4: 2562, 5: 10242), 20 4^level triangles
+ * counterclockwise seen from outside, every node on the sphere (to
+ * rounding). level 0 to 8. Caller destroys *out.
+ */
+thx_status thx_icosphere(thx_ctx *ctx, int level, double r, const char *name, thx_role role, thx_surface **out);
+
 /* Error measures between a computed and a reference vector over n values:
  * RDM = || u/|u| - v/|v| || (0..2), MAG = |u| / |v| (1 = right magnitude). */
 double thx_rdm(const double *u, const double *v, size_t n);

@@ -111,6 +111,7 @@
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
+#define GOLD 1.6180339887498948482 /* (1 + sqrt 5) / 2 */
 
 /* ------------------------------------------------------------------ */
 /* Legendre polynomials and the shells solution. */
@@ -479,6 +480,96 @@ done:
     *out = v;
     *n_ends = 2 * sy * sz;
     return THX_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Icospheres. */
+
+/* The regular icosahedron's 12 vertices (on a sphere of radius sqrt(1 + phi^2)) and its 20 faces. */
+static const double ico_v[12][3] = {{-1, GOLD, 0}, {1, GOLD, 0}, {-1, -GOLD, 0}, {1, -GOLD, 0}, {0, -1, GOLD}, {0, 1, GOLD},
+                                    {0, -1, -GOLD}, {0, 1, -GOLD}, {GOLD, 0, -1}, {GOLD, 0, 1}, {-GOLD, 0, -1}, {-GOLD, 0, 1}};
+static const int32_t ico_f[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                     {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                     {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+
+/* The midpoint node of edge (a, b) in the open-addressing table (key lo * n + hi, -1 = empty), added
+ * (projected onto the unit sphere) on first use. */
+static int32_t ico_mid(int64_t *key, int32_t *val, size_t cap, size_t n_all, double *x, size_t *nn, int32_t a, int32_t b)
+{
+    int64_t lo = a < b ? a : b, hi = a < b ? b : a, k = lo * (int64_t)n_all + hi;
+    size_t h = (size_t)(((uint64_t)k * 0x9E3779B97F4A7C15ull) >> 20) % cap;
+    while (key[h] != -1 && key[h] != k) h = (h + 1) % cap;
+    if (key[h] == -1) {
+        double m[3], r = 0;
+        for (int d = 0; d < 3; d++) {
+            m[d] = 0.5 * (x[3 * (size_t)a + (size_t)d] + x[3 * (size_t)b + (size_t)d]);
+            r += m[d] * m[d];
+        }
+        r = sqrt(r);
+        for (int d = 0; d < 3; d++) x[3 * *nn + (size_t)d] = m[d] / r;
+        key[h] = k;
+        val[h] = (int32_t)(*nn)++;
+    }
+    return val[h];
+}
+
+thx_status thx_icosphere(thx_ctx *ctx, int level, double r, const char *name, thx_role role, thx_surface **out)
+{
+    *out = NULL;
+    if (level < 0 || level > 8 || !(r > 0.0) || !isfinite(r))
+        return thx_error(ctx, THX_EINPUT, "icosphere: level %d (0 to 8) or radius %g (> 0) out of range", level, r);
+    size_t n_all = 12, nt = 20;
+    for (int l = 0; l < level; l++) {
+        n_all += 3 * nt / 2; /* one new node per edge; E = 3F/2 */
+        nt *= 4;
+    }
+    thx_surface *s = NULL;
+    int64_t *key = NULL;
+    int32_t *val = NULL, *t2 = NULL;
+    thx_status st = THX_OK;
+    THX_TRY(thx_surface_create(ctx, name, role, &s));
+    s->xyz = thx_malloc(ctx, 3 * n_all * sizeof *s->xyz);
+    s->tri = thx_malloc(ctx, 3 * nt * sizeof *s->tri);
+    t2 = thx_malloc(ctx, 3 * nt * sizeof *t2);
+    size_t cap = 2 * (3 * nt / 8 + 1) + 1; /* twice the edges of the last level's coarse mesh */
+    key = thx_malloc(ctx, cap * sizeof *key);
+    val = thx_malloc(ctx, cap * sizeof *val);
+    if (!s->xyz || !s->tri || !t2 || !key || !val) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < 12; i++) {
+        double n = sqrt(ico_v[i][0] * ico_v[i][0] + ico_v[i][1] * ico_v[i][1] + ico_v[i][2] * ico_v[i][2]);
+        for (int d = 0; d < 3; d++) s->xyz[3 * i + (size_t)d] = ico_v[i][d] / n;
+    }
+    memcpy(s->tri, ico_f, sizeof ico_f);
+    size_t nn = 12, n_tri = 20;
+    for (int l = 0; l < level; l++) {
+        for (size_t i = 0; i < cap; i++) key[i] = -1;
+        for (size_t k = 0; k < n_tri; k++) {
+            int32_t v[3] = {s->tri[3 * k], s->tri[3 * k + 1], s->tri[3 * k + 2]}, m[3];
+            for (int e = 0; e < 3; e++) m[e] = ico_mid(key, val, cap, n_all, s->xyz, &nn, v[e], v[(e + 1) % 3]);
+            /* m[e] is the midpoint of v[e] v[e+1]: three corner triangles and the middle one, same turn */
+            const int32_t q[12] = {v[0], m[0], m[2], v[1], m[1], m[0], v[2], m[2], m[1], m[0], m[1], m[2]};
+            memcpy(t2 + 12 * k, q, sizeof q);
+        }
+        n_tri *= 4;
+        memcpy(s->tri, t2, 3 * n_tri * sizeof *t2);
+    }
+    s->n_nodes = nn;
+    s->n_tris = n_tri;
+    for (size_t i = 0; i < 3 * nn; i++) s->xyz[i] *= r;
+    if (thx_surface_volume(s) < 0.0) /* counterclockwise seen from outside */
+        for (size_t k = 0; k < n_tri; k++) {
+            int32_t x = s->tri[3 * k + 1];
+            s->tri[3 * k + 1] = s->tri[3 * k + 2];
+            s->tri[3 * k + 2] = x;
+        }
+    *out = s;
+    s = NULL;
+done:
+    thx_surface_destroy(&s);
+    free(key);
+    free(val);
+    free(t2);
+    return st;
 }
 
 /* ------------------------------------------------------------------ */
