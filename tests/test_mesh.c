@@ -15,6 +15,43 @@
 #include "thorax/phantom.h"
 #include "thorax/surfaces.h"
 
+/* Largest radius-edge ratio (circumradius / shortest edge) of v's tetrahedra, computed here
+ * independently of the mesher. */
+static double worst_radius_edge(const thx_volume *v)
+{
+    double worst = 0;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        const double *p[4];
+        for (int k = 0; k < 4; k++) p[k] = v->xyz + 3 * (size_t)v->tet[4 * t + k];
+        double a[3][3], l2[3];
+        for (int k = 0; k < 3; k++) {
+            for (int d = 0; d < 3; d++) a[k][d] = p[k + 1][d] - p[0][d];
+            l2[k] = a[k][0] * a[k][0] + a[k][1] * a[k][1] + a[k][2] * a[k][2];
+        }
+        /* circumcentre c - p0 solves 2 a_k . x = |a_k|^2 (Cramer's rule) */
+        double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        double x[3];
+        for (int c = 0; c < 3; c++) {
+            double m[3][3];
+            memcpy(m, a, sizeof m);
+            for (int k = 0; k < 3; k++) m[k][c] = 0.5 * l2[k];
+            x[c] = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                    m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])) / det;
+        }
+        double e = INFINITY;
+        for (int i = 0; i < 4; i++)
+            for (int j = i + 1; j < 4; j++) {
+                double d2 = 0;
+                for (int d = 0; d < 3; d++) d2 += (p[i][d] - p[j][d]) * (p[i][d] - p[j][d]);
+                e = fmin(e, d2);
+            }
+        double re = sqrt((x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) / e);
+        worst = re > worst ? re : worst;
+    }
+    return worst;
+}
+
 static thx_model *phantom_model(thx_ctx *ctx)
 {
     thx_phantom_opts po;
@@ -221,6 +258,9 @@ int main(void)
         CHECK(st.repair_below_after * 10 < st.repair_below_before);
         CHECK_NEAR(st.repair_min_after, mn, 1e-9);
         CHECK(mn >= 5.0);                    /* issue 10: no tetrahedron below 5 degrees */
+        double re = worst_radius_edge(v);
+        printf("quality: largest radius-edge ratio %.2f\n", re);
+        CHECK(re < 9.58); /* what tetgen -pq1.414/10 leaves on the medium phantom (bench/mesh.sh) */
         CHECK(below10 * 2000 < v->n_tets);   /* fewer than 0.05% below 10 degrees */
         thx_model *m0 = phantom_model(ctx);
         thx_mesh_opts o0 = o;

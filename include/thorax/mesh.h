@@ -60,6 +60,8 @@ typedef struct {
     double t_conform;         /* seconds */
     size_t n_refine_points;   /* quality refinement: circumcentres inserted */
     size_t n_refine_surface;  /* ... points put on the surfaces instead */
+    size_t n_refine_near;     /* ... of the circumcentres, those put close to a small surface piece */
+    size_t n_refine_left;     /* bad tetrahedra left at small surface pieces */
     size_t refine_rounds;
     int refine_limited;       /* stopped at its point limit */
     double t_refine;

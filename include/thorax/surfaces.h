@@ -129,6 +129,7 @@ typedef struct {
     size_t orient_by_neighbours;     /* test undecided or overruled: oriented consistently with neighbours */
     size_t orient_overruled;         /* tests contradicted by the majority of their component */
     size_t orient_flipped;           /* triangles whose stored order the test reversed */
+    size_t n_flat_flipped;           /* nearly flat triangles swapped with their neighbour (step 5) */
     double t_layers, t_lace, t_caps, t_orient, t_total; /* seconds */
 } thx_surfaces_stats;
 

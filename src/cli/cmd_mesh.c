@@ -211,8 +211,9 @@ int cmd_mesh(int argc, char **argv)
                    S.n_missing_before, S.n_surface_tris, S.n_steiner_edge, S.n_steiner_face, S.conform_rounds,
                    S.n_split_triangles, S.min_piece, S.t_conform);
         if (want_stats && (o.radius_edge > 0 || o.refine_deg > 0))
-            printf("refinement (radius-edge %g, dihedral %g deg): %zu circumcentres, %zu points on the surfaces instead, "
-                   "%zu rounds%s; %.3f s\n", o.radius_edge, o.refine_deg, S.n_refine_points, S.n_refine_surface,
+            printf("refinement (radius-edge %g, dihedral %g deg): %zu circumcentres (%zu close to small surface pieces), "
+                   "%zu points on the surfaces instead, %zu tetrahedra left at small pieces, %zu rounds%s; %.3f s\n",
+                   o.radius_edge, o.refine_deg, S.n_refine_points, S.n_refine_near, S.n_refine_surface, S.n_refine_left,
                    S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "

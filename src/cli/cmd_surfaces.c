@@ -137,8 +137,9 @@ int cmd_surfaces(int argc, char **argv)
                tot.n_slices, tot.n_branch_slices, tot.lace.projected, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.tongues, tot.lace.inplane_tris,
                tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan);
         printf("orientation: %zu triangles by their own inside test, %zu from neighbours (%zu tests overruled), "
-               "%zu flipped; %zu caps\n",
-               tot.orient_by_test, tot.orient_by_neighbours, tot.orient_overruled, tot.orient_flipped, tot.n_caps);
+               "%zu flipped; %zu caps; %zu nearly flat triangles swapped with a neighbour\n",
+               tot.orient_by_test, tot.orient_by_neighbours, tot.orient_overruled, tot.orient_flipped, tot.n_caps,
+               tot.n_flat_flipped);
     }
 done:
     free(per);

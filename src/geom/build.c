@@ -13,6 +13,8 @@
  *      curves, interpolated between layers); the one outside gives the outward
  *      side and the triangle is stored counterclockwise seen from it. Triangles
  *      the test cannot decide take the orientation of decided neighbours.
+ *   5. nearly flat triangles (a corner above 170 degrees) are swapped with
+ *      their neighbour across the long edge where that betters both.
  * Node numbering per surface: layer by layer (increasing z), loop by loop, then
  * the cap grid nodes.
  */
@@ -311,6 +313,109 @@ done:
 
 /* A point well inside the surface: on the middle layer, the grid point of the
  * largest loop farthest inside its curve. */
+/* ---- 5. flat triangles ---- */
+
+#define FLAT_DEG 170.0 /* a corner above this makes a triangle nearly flat */
+
+static double corner_deg(const double *o, const double *a, const double *b)
+{
+    double u[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]}, v[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+    double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    return atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) *
+           (180.0 / M_PI);
+}
+
+static double min_corner(const double *p, const double *q, const double *r)
+{
+    return fmin(corner_deg(p, q, r), fmin(corner_deg(q, r, p), corner_deg(r, p, q)));
+}
+
+static void tri_normal(const double *p, const double *q, const double *r, double n[3])
+{
+    double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+static int find_edge(const edge_rec *E, size_t ne, int32_t a, int32_t b, int32_t not_t)
+{
+    edge_rec key = {a < b ? a : b, a < b ? b : a, -1};
+    size_t lo = 0, hi = ne;
+    while (lo < hi) { /* first record of (a, b) */
+        size_t mid = (lo + hi) / 2;
+        if (E[mid].a < key.a || (E[mid].a == key.a && E[mid].b < key.b)) lo = mid + 1;
+        else hi = mid;
+    }
+    int found = -1, count = 0;
+    for (size_t i = lo; i < ne && E[i].a == key.a && E[i].b == key.b; i++, count++)
+        if (E[i].t != not_t) found = E[i].t;
+    return count == 2 ? found : (not_t < 0 && count ? 0 : -1);
+}
+
+/*
+ * A triangle with a corner above FLAT_DEG (a node almost on the edge
+ * opposite it: a pocket's chord grazing a contour node) is nearly flat; it is
+ * swapped with its neighbour across that edge for the two triangles that join
+ * the node to the neighbour's far corner, when both are better (smallest
+ * corner), face the same way as the neighbour, and their edge is not in the
+ * surface yet. The surface moves by the node's distance from the edge. The
+ * orientation is kept (after step 4).
+ */
+static thx_status flip_flat(thx_ctx *ctx, thx_surface *s, size_t *n_flipped)
+{
+    size_t nt = s->n_tris;
+    edge_rec *E = thx_malloc(ctx, 3 * (nt ? nt : 1) * sizeof *E);
+    unsigned char *touched = thx_calloc(ctx, nt ? nt : 1, 1);
+    if (!E || !touched) { free(E); free(touched); return THX_ENOMEM; }
+    for (int pass = 0; pass < 8; pass++) {
+        size_t ne = 0, flips = 0;
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 3; k++) {
+                int32_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+                E[ne++] = (edge_rec){a < b ? a : b, a < b ? b : a, (int32_t)t};
+            }
+        qsort(E, ne, sizeof *E, cmp_edge);
+        memset(touched, 0, nt);
+        for (size_t t = 0; t < nt; t++) {
+            if (touched[t]) continue;
+            int32_t *T = s->tri + 3 * t;
+            const double *P[3] = {s->xyz + 3 * (size_t)T[0], s->xyz + 3 * (size_t)T[1], s->xyz + 3 * (size_t)T[2]};
+            int k = -1;
+            for (int i = 0; i < 3; i++)
+                if (corner_deg(P[i], P[(i + 1) % 3], P[(i + 2) % 3]) > FLAT_DEG) k = i;
+            if (k < 0) continue;
+            int32_t v = T[k], a = T[(k + 1) % 3], b = T[(k + 2) % 3]; /* t = (v, a, b) */
+            int u = find_edge(E, ne, a, b, (int32_t)t);
+            if (u < 0 || touched[u]) continue;
+            int32_t *U = s->tri + 3 * (size_t)u, x = -1;
+            for (int i = 0; i < 3; i++)
+                if (U[i] == b && U[(i + 1) % 3] == a) x = U[(i + 2) % 3]; /* u = (b, a, x) */
+            if (x < 0 || x == v || find_edge(E, ne, v, x, -1) >= 0) continue;
+            const double *V = s->xyz + 3 * (size_t)v, *A = s->xyz + 3 * (size_t)a, *B = s->xyz + 3 * (size_t)b,
+                         *Xp = s->xyz + 3 * (size_t)x;
+            double before = fmin(min_corner(V, A, B), min_corner(B, A, Xp));
+            double after = fmin(min_corner(V, A, Xp), min_corner(V, Xp, B));
+            if (!(after > before)) continue;
+            double nu[3], n1[3], n2[3];
+            tri_normal(B, A, Xp, nu);
+            tri_normal(V, A, Xp, n1);
+            tri_normal(V, Xp, B, n2);
+            if (nu[0] * n1[0] + nu[1] * n1[1] + nu[2] * n1[2] <= 0 || nu[0] * n2[0] + nu[1] * n2[1] + nu[2] * n2[2] <= 0)
+                continue;
+            T[0] = v; T[1] = a; T[2] = x;
+            U[0] = v; U[1] = x; U[2] = b;
+            touched[t] = touched[u] = 1;
+            flips++;
+        }
+        *n_flipped += flips;
+        if (!flips) break;
+    }
+    free(E);
+    free(touched);
+    return THX_OK;
+}
+
 static thx_vec3 interior_point(const rlayer *layers, size_t nl)
 {
     const rlayer *L = &layers[nl / 2];
@@ -640,6 +745,8 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     stats->t_caps = t3 - t2;
     /* 4. orientation */
     THX_TRY(orient_surface(ctx, s, layers, nl, slices, spacing, stats));
+    /* 5. nearly flat triangles swapped away */
+    THX_TRY(flip_flat(ctx, s, &stats->n_flat_flipped));
     *interior = interior_point(layers, nl);
     stats->t_orient = thx_wtime() - t3;
     stats->n_nodes = s->n_nodes;
@@ -695,6 +802,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
             total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;
+            total->n_flat_flipped += one.n_flat_flipped;
             total->t_layers += one.t_layers; total->t_lace += one.t_lace; total->t_caps += one.t_caps;
             total->t_orient += one.t_orient;
         }

@@ -187,6 +187,12 @@ static int veto(void *user, int32_t a, int32_t b, int32_t c, int interior)
     return dist3(cc, p) < r;
 }
 
+/* The veto near small pieces: only a piece of a surface that would be removed. */
+static int veto_removal(void *user, int32_t a, int32_t b, int32_t c, int interior)
+{
+    return interior && face_triangle(user, a, b, c) >= 0;
+}
+
 /* ---- what changed ---- */
 
 static void mark_tri(conformer *C, int32_t t)
@@ -742,7 +748,7 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
 {
     double t0 = thx_wtime();
     size_t start = thx_dt_n_points(C->dt);
-    size_t limit = Q->max_points ? Q->max_points : start;
+    size_t limit = Q->max_points ? Q->max_points : 2 * start;
     thx_status st = THX_OK;
     {
         int32_t *tq = NULL;
@@ -798,7 +804,21 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
             double e0 = fmin(fmin(dist3(X(C, T->c[0]), X(C, T->c[1])), dist3(X(C, T->c[1]), X(C, T->c[2]))),
                              dist3(X(C, T->c[2]), X(C, T->c[0])));
             double ef = fmax(fmax(dist3(X(C, f[0]), X(C, f[1])), dist3(X(C, f[1]), X(C, f[2]))), dist3(X(C, f[2]), X(C, f[0])));
-            if (ef < Q->min_piece_ratio * e0) { C->S.n_refine_skipped++; continue; }
+            if (ef < Q->min_piece_ratio * e0) {
+                /* the centre is inserted anyway where that removes no piece of a surface (it lies on
+                   the tetrahedron's side of every surface): close to a surface, but conforming */
+                st = thx_dt_insert_checked(C->dt, cc, q[0], veto_removal, C, &idx, f);
+                if (st == THX_EGEOM) { thx_ctx_clear(C->ctx); st = THX_OK; }
+                if (st != THX_OK) break;
+                if (idx >= 0) {
+                    C->S.n_refine_points++;
+                    C->S.n_refine_near++;
+                    st = after_insert(C, -1);
+                    if (st != THX_OK) break;
+                } else
+                    C->S.n_refine_skipped++;
+                continue;
+            }
         }
         size_t before = C->n_st;
         st = split_face(C, (size_t)ti, f, surf);

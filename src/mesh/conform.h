@@ -47,6 +47,7 @@ typedef struct {
     size_t refine_rounds;
     int refine_limited;      /* the refinement stopped at its point limit */
     size_t n_refine_skipped; /* bad tetrahedra left because their surface piece was already small */
+    size_t n_refine_near;    /* centres inserted close to such a piece (no piece removed) */
     double t_refine;
     double seconds;
 } conform_stats;
@@ -54,9 +55,11 @@ typedef struct {
 /* Quality refinement after conformity (Delaunay refinement): tetrahedra of
  * the domain (inside(user, centroid) != 0) with a radius-edge ratio above
  * radius_edge or a dihedral angle below min_dihedral (degrees; 0: that test
- * off) get their circumcentre, unless it would remove a piece of a surface,
- * which is split instead; at most max_points points (0: as many as the
- * tetrahedralization had). */
+ * off) get their circumcentre, unless it would remove a piece of a surface
+ * or encroach upon one, which is split instead; where that piece is already
+ * below min_piece_ratio of its triangle, the centre is inserted if it removes
+ * no piece, else the tetrahedron stays; at most max_points points (0: twice
+ * as many as the tetrahedralization had). */
 typedef struct {
     double radius_edge, min_dihedral;
     int (*inside)(void *user, const double p[3]);

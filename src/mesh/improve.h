@@ -23,7 +23,9 @@
  * An operation is applied only if the worst tetrahedron it touches becomes
  * better. The faces on the surfaces and their edges are never removed, so
  * the tissue interfaces stay exactly where they are. Quality is the smallest sine of the six dihedral
- * angles (flat tetrahedra have angles near 0 and near 180 degrees).
+ * angles (flat tetrahedra have angles near 0 and near 180 degrees), or
+ * 1.2 / (radius-edge ratio) where that is smaller (needles: a ratio of 4.6
+ * counts as a dihedral angle of 15 degrees).
  */
 #ifndef THORAX_MESH_IMPROVE_H
 #define THORAX_MESH_IMPROVE_H

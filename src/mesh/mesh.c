@@ -410,6 +410,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.t_conform = cs.seconds - cs.t_refine;
         S.n_refine_points = cs.n_refine_points;
         S.n_refine_surface = cs.n_refine_surface;
+        S.n_refine_near = cs.n_refine_near;
+        S.n_refine_left = cs.n_refine_skipped;
         S.refine_rounds = cs.refine_rounds;
         S.refine_limited = cs.refine_limited;
         S.t_refine = cs.t_refine;
