@@ -104,8 +104,26 @@ print('defibrillation: %.3f A in, %.3f A out; heart field %.2f..%.2f V/cm, %.1f%
 EOF
 "$THORAX" forward modelh -o defibc -q --electrode "pad,at=71:92:170,radius=40,current=2" --electrode "apex,at=-158:-20:90,radius=40,current=-2"
 
-# 7. verify
-"$THORAX" verify --levels 2 > verify.log || { cat verify.log; fail "thorax verify"; }
+# 7. verify ((c) at its default levels is tests/test_verify_spheres.c)
+"$THORAX" verify --levels 2 --spheres off > verify.log || { cat verify.log; fail "thorax verify"; }
+! grep -q "^(c)" verify.log || fail "verify --spheres off ran (c)"
+# (c) on the two coarsest meshes: its table is printed and the exit status follows the printed order
+rc=0; "$THORAX" verify --levels 2 --spheres 2:3 > verify_c.log || rc=$?
+$PY - "$rc" <<'EOF'
+import sys
+rc = int(sys.argv[1]); L = open('verify_c.log').read().split('(c) ')[1].split('\n')
+rows = [l.split() for l in L if l.strip()[:1].isdigit()]
+assert [r[0] for r in rows] == ['162', '642'], rows
+worst = float([l for l in L if 'observed order' in l][0].split(':')[1].split()[0])
+lin = float([l for l in L if 'brain interior' in l][0].split()[-1])
+assert lin < 1e-7 and all(float(r[-3]) < 1e-8 for r in rows), (lin, rows)
+assert rc == (1 if worst < 1.7 else 0), (rc, worst)
+print('verify (c) on 162/642-node spheres: worst order %.2f, exit %d' % (worst, rc))
+EOF
+for bad in 3:3 1:4 4:7 5:4 4 4:5x x; do
+    if "$THORAX" verify --spheres "$bad" > out.log 2> err.log; then fail "verify --spheres $bad accepted"; fi
+    grep -q -- "--spheres" err.log || fail "verify --spheres $bad: $(cat err.log)"
+done
 
 # 8. bad input: nothing written
 $PY - <<'EOF'

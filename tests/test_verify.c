@@ -6,13 +6,15 @@
  * the shells (boundary on r = a and r = c, interface on r = b, volume
  * converging at second order), the slab mesh and its closed form are
  * consistent (the linear potential is the discrete solution of the P1
- * problem with zero flux through the sides), and RDM/MAG on hand cases.
+ * problem with zero flux through the sides), RDM/MAG on hand cases, and the
+ * icospheres (closed, outward, on the sphere, volume deficit of second order).
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "testlib.h"
+#include "thorax/check.h"
 #include "thorax/check_volume.h"
 #include "thorax/predicates.h"
 #include "thorax/verify.h"
@@ -822,6 +824,78 @@ static void test_rdm_mag(void)
     CHECK(isnan(thx_rdm(e1, e1, 0)) && isnan(thx_mag(e1, e1, 0)));
 }
 
+/* ------------------------------------------------------------------ */
+/* Icospheres (thx_icosphere) */
+
+static void test_icosphere(thx_ctx *ctx)
+{
+    double prev_edge = 0, prev_deficit = 0;
+    for (int level = 0; level <= 5; level++) {
+        const double r = 87.0;
+        thx_surface *s = NULL;
+        CHECK_OK(ctx, thx_icosphere(ctx, level, r, "ico", THX_ROLE_OTHER, &s));
+        if (!s) continue;
+        size_t f = (size_t)1 << (2 * level); /* 4^level */
+        CHECK(s->n_nodes == 10 * f + 2 && s->n_tris == 20 * f);
+        CHECK(!strcmp(s->name, "ico") && s->role == THX_ROLE_OTHER);
+        /* every node on the sphere, none twice (nearest other node: at least half the shortest edge) */
+        double off = 0;
+        for (size_t i = 0; i < s->n_nodes; i++) {
+            const double *p = s->xyz + 3 * i;
+            off = fmax(off, fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - r));
+        }
+        CHECK(off < 1e-12 * r);
+        /* closed, consistently oriented, outward (the project's surface checker, and each normal by hand) */
+        tri *t = malloc(s->n_tris * sizeof *t);
+        size_t outward = 0;
+        double emin = INFINITY, emax = 0, esum = 0;
+        for (size_t k = 0; k < s->n_tris; k++) {
+            const int32_t *q = s->tri + 3 * k;
+            for (int c = 0; c < 3; c++) t[k].n[c] = q[c];
+            const double *a = s->xyz + 3 * (size_t)q[0], *b = s->xyz + 3 * (size_t)q[1], *c = s->xyz + 3 * (size_t)q[2];
+            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            double nrm[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+            outward += nrm[0] * (a[0] + b[0] + c[0]) + nrm[1] * (a[1] + b[1] + c[1]) + nrm[2] * (a[2] + b[2] + c[2]) > 0;
+            for (int e = 0; e < 3; e++) {
+                const double *p = s->xyz + 3 * (size_t)q[e], *pn = s->xyz + 3 * (size_t)q[(e + 1) % 3];
+                double l = sqrt((p[0] - pn[0]) * (p[0] - pn[0]) + (p[1] - pn[1]) * (p[1] - pn[1]) + (p[2] - pn[2]) * (p[2] - pn[2]));
+                emin = fmin(emin, l);
+                emax = fmax(emax, l);
+                esum += l;
+            }
+        }
+        CHECK(outward == s->n_tris);
+        CHECK(closed_sphere(t, s->n_tris, s->n_nodes));
+        free(t);
+        /* the midpoint rule keeps the triangles near-equilateral: edges within a factor 1.25 (level 5: 1.21) */
+        CHECK(emax < 1.25 * emin);
+        if (level <= 4) {
+            thx_surface_report rep;
+            CHECK_OK(ctx, thx_surface_check(ctx, s, NULL, NULL, &rep));
+            CHECK(rep.ok && rep.euler == 2 && rep.n_components == 1 && rep.n_intersecting_pairs == 0 && rep.volume > 0);
+            thx_surface_report_free(&rep);
+        }
+        /* the inscribed polyhedron's volume deficit shrinks with the edge squared (about (h/r)^2 3/8) */
+        double edge = esum / (3.0 * (double)s->n_tris), deficit = 1.0 - thx_surface_volume(s) / (4.0 / 3.0 * M_PI * r * r * r);
+        CHECK(deficit > 0);
+        if (level >= 3) { /* (level 1 -> 2 halves the edge only roughly: 1.94) */
+            double order = log(prev_deficit / deficit) / log(prev_edge / edge);
+            CHECK(order > 1.95 && order < 2.05);
+            CHECK(prev_edge / edge > 1.95 && prev_edge / edge < 2.05);
+        }
+        printf("icosphere level %d: %zu nodes, %zu triangles, mean edge %.3f mm (r = %.0f), edges %.3f..%.3f, volume deficit %.2e\n",
+               level, s->n_nodes, s->n_tris, edge, r, emin, emax, deficit);
+        prev_edge = edge;
+        prev_deficit = deficit;
+        thx_surface_destroy(&s);
+    }
+    thx_surface *s = NULL;
+    CHECK(thx_icosphere(ctx, -1, 1.0, "x", THX_ROLE_OTHER, &s) == THX_EINPUT && !s);
+    CHECK(thx_icosphere(ctx, 9, 1.0, "x", THX_ROLE_OTHER, &s) == THX_EINPUT && !s);
+    CHECK(thx_icosphere(ctx, 2, 0.0, "x", THX_ROLE_OTHER, &s) == THX_EINPUT && !s);
+    CHECK(thx_icosphere(ctx, 2, NAN, "x", THX_ROLE_OTHER, &s) == THX_EINPUT && !s);
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -831,6 +905,7 @@ int main(void)
     test_shells_mesh(ctx);
     test_slab(ctx);
     test_rdm_mag();
+    test_icosphere(ctx);
     thx_ctx_destroy(&ctx);
     return tl_finish();
 }
