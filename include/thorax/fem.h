@@ -218,7 +218,7 @@ thx_status thx_verify_shells(thx_ctx *ctx, int l, double s1, double s2, int n, t
  * no current through the scalp. Compared with the analytic solution of the
  * concentric spheres (thx_shells_potential with a = 87, b = 92, c = 100)
  * at the scalp's nodes; the brain's interior must be the linear z / a.
- * level 2 to 6 (level 6: about 12 M tetrahedra and several GB).
+ * level 2 to 6 (level 5: 3.9 M tetrahedra, 0.9 GB; level 6: 31 M, 7 GB).
  */
 thx_status thx_verify_spheres(thx_ctx *ctx, int level, thx_verify_row *row);
 
