@@ -2,7 +2,8 @@
 # Benchmark of volume meshing (paper 3.3): thorax mesh beside TetGen 1.5 (tetgen -pq1.414/10: a
 # constrained, quality tetrahedralization of the same surfaces) in the same run, on the phantom
 # (medium, high) and, when the shared data are beside the checkout, the Utah tank + sock, the
-# Dalhousie torso + epicardium and OpenMEEG's Head3. For each: tetrahedra, wall time, peak memory,
+# Dalhousie torso + epicardium, OpenMEEG's Head1-3, nested icospheres, and the tank, the Dalhousie
+# torso and Head3 rebuilt from contours that thorax slice cuts 10 mm apart (issue 10, item 4). For each: tetrahedra, wall time, peak memory,
 # tetrahedra per second and their ratio, and the quality of both meshes measured by one program
 # (bench/tet_quality.py: smallest dihedral, counts below 5 and 10 degrees, largest and mean
 # radius-edge ratio). thorax's mesh is also judged by thorax check. Prints figures; never fails
@@ -30,21 +31,43 @@ if [ -d "$DATA/map3d/geom" ]; then
     "$THORAX" import -o "$W/m_dal" -q "$G/torso/daltorso.pts" --name torso --role outer \
         "$G/torso/dalepi.pts" --name epicardium --role heart && models+=("dalhousie+epi:$W/m_dal")
 fi
-H=$DATA/openmeeg-spheres/data/Head3
-if [ -d "$H" ]; then
-    # OpenMEEG .tri (vertex + normal lines) as .pts/.fac, radius 1 -> 100 mm
-    for s in scalp skull cortex; do
-        $PY - "$H/$s.3.tri" "$W/$s" <<'PYEOF'
-import sys
-L = open(sys.argv[1]).read().split("\n")
-nv = int(L[0].split()[1]); nt = int(L[1 + nv].split()[1])
-open(sys.argv[2] + ".pts", "w").write("".join(" ".join(l.split()[:3]) + "\n" for l in L[1:1 + nv]))
-open(sys.argv[2] + ".fac", "w").write("".join(l.strip() + "\n" for l in L[2 + nv:2 + nv + nt]))
+HD=$DATA/openmeeg-spheres/data
+for n in 1 2 3; do
+    [ -d "$HD/Head$n" ] || continue
+    # OpenMEEG .tri, radius 1 -> 100 mm
+    "$THORAX" import -o "$W/m_head$n" -q --scale 100 "$HD/Head$n/scalp.$n.tri" --name scalp --role outer \
+        "$HD/Head$n/skull.$n.tri" --name skull --role other "$HD/Head$n/cortex.$n.tri" --name brain --role other &&
+        models+=("openmeeg-head$n:$W/m_head$n")
+done
+# nested icospheres (radii 100, 80, 50 mm; 642 vertices each)
+(cd "$W" && $PY - <<'PYEOF'
+import numpy as np
+t = (1 + 5 ** 0.5) / 2
+V = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]]
+F = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+     [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+V = [np.array(v, float) / np.linalg.norm(v) for v in V]
+for _ in range(3):
+    mid = {}
+    def m(a, b):
+        k = (min(a, b), max(a, b))
+        if k not in mid:
+            p = V[a] + V[b]; V.append(p / np.linalg.norm(p)); mid[k] = len(V) - 1
+        return mid[k]
+    F = [f for a, b, c in F for f in ([a, m(a, b), m(c, a)], [b, m(b, c), m(a, b)], [c, m(c, a), m(b, c)], [m(a, b), m(b, c), m(c, a)])]
+for name, r in (("ico_out", 100), ("ico_mid", 80), ("ico_in", 50)):
+    np.savetxt(name + ".pts", np.array(V) * r, fmt="%.6f")
+    np.savetxt(name + ".fac", np.array(F), fmt="%d")
 PYEOF
-    done
-    "$THORAX" import -o "$W/m_head3" -q --scale 100 "$W/scalp.pts" --name scalp --role outer \
-        "$W/skull.pts" --name skull --role other "$W/cortex.pts" --name brain --role other && models+=("openmeeg-head3:$W/m_head3")
-fi
+)
+"$THORAX" import -o "$W/m_ico" -q "$W/ico_out.pts" --name out --role outer "$W/ico_mid.pts" --name mid --role other \
+    "$W/ico_in.pts" --name in --role other && models+=("icospheres:$W/m_ico")
+# models rebuilt from contours that thorax slice cuts from these surfaces (10 mm apart)
+for src in tank dal head3; do
+    [ -d "$W/m_$src" ] || continue
+    "$THORAX" slice "$W/m_$src" --spacing 10 -o "$W/c_$src.txt" -q && "$THORAX" surfaces "$W/c_$src.txt" -o "$W/m_${src}_sliced" -q &&
+        models+=("$src-sliced:$W/m_${src}_sliced")
+done
 
 poly() { # MODEL OUT.poly: the model's surfaces as one piecewise-linear complex
     $PY - "$1" "$2" <<'PYEOF'

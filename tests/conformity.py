@@ -16,6 +16,7 @@ import json
 import os
 import sys
 
+import itertools
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -103,28 +104,27 @@ def main(d):
     tree = cKDTree(tcen)
     nrm = np.cross(B - A, C - A)
     nrm /= np.linalg.norm(nrm, axis=1)[:, None]
-    covered = np.zeros(len(A))
-    off = 0
+    # every (face, triangle) pair within reach, tested in chunks (vectorized); each face goes to the
+    # first triangle of its list that holds it (in its plane, its centroid inside)
     cand = tree.query_ball_point(fcen, r=trad.max() + TOL)
-    for i, cs in enumerate(cand):
-        found = -1
-        for j in cs:
-            pts = np.stack([fa[i], fb[i], fc[i]])
-            if np.abs((pts - A[j]) @ nrm[j]).max() > TOL:
-                continue
-            # barycentric coordinates of the face centroid in triangle j
-            v0, v1, v2 = B[j] - A[j], C[j] - A[j], fcen[i] - A[j]
-            d00, d01, d11 = v0 @ v0, v0 @ v1, v1 @ v1
-            d20, d21 = v2 @ v0, v2 @ v1
-            den = d00 * d11 - d01 * d01
-            s, t = (d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den
-            if s >= -1e-9 and t >= -1e-9 and s + t <= 1 + 1e-9:
-                found = j
-                break
-        if found < 0:
-            off += 1
-        else:
-            covered[found] += farea[i]
+    lens = np.fromiter(map(len, cand), dtype=np.int64, count=len(cand))
+    I = np.repeat(np.arange(len(cand)), lens)
+    J = np.fromiter(itertools.chain.from_iterable(cand), dtype=np.int64, count=int(lens.sum()))
+    ok = np.zeros(len(I), dtype=bool)
+    for lo in range(0, len(I), 1 << 20):
+        i, j = I[lo:lo + (1 << 20)], J[lo:lo + (1 << 20)]
+        near = np.linalg.norm(fcen[i] - tcen[j], axis=1) <= trad[j] + TOL
+        dev = np.maximum.reduce([np.abs(np.einsum("ij,ij->i", q[i] - A[j], nrm[j])) for q in (fa, fb, fc)])
+        v0, v1, v2 = B[j] - A[j], C[j] - A[j], fcen[i] - A[j]
+        d00, d01, d11 = (np.einsum("ij,ij->i", x, y) for x, y in ((v0, v0), (v0, v1), (v1, v1)))
+        d20, d21 = np.einsum("ij,ij->i", v2, v0), np.einsum("ij,ij->i", v2, v1)
+        den = d00 * d11 - d01 * d01
+        su, tv = (d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den
+        ok[lo:lo + len(i)] = near & (dev <= TOL) & (su >= -1e-9) & (tv >= -1e-9) & (su + tv <= 1 + 1e-9)
+    fi, first = np.unique(I[ok], return_index=True)
+    covered = np.zeros(len(A))
+    np.add.at(covered, J[ok][first], farea[fi])
+    off = len(fcen) - len(fi)
     tarea = tri_area(A, B, C)
     rel = np.abs(covered - tarea) / tarea
     bad = np.where(rel > 1e-6)[0]

@@ -30,7 +30,10 @@ print("%s: %d nodes, %d tetrahedra, volume difference %s" % (variant, nodes, tet
 if diff is None or abs(diff) > 0.01: errs.append("volume difference %s" % diff)
 # the paper's medium mesh had about 22,000 nodes and 130,000 tetrahedra; the quality refinement adds
 # points near the surfaces (docs/decisions.md, "Quality by Delaunay refinement")
-if variant == "heart" and not (15000 <= nodes <= 45000 and 100000 <= tets <= 300000): errs.append("counts %d %d" % (nodes, tets))
+# plausibility against the paper's medium model, which did not conform and had no quality bounds:
+# conformity and the quality refinement (radius-edge 1.6, 10 deg) take more (TetGen -pq1.414/10
+# makes 402,753 of the same surfaces; bench/mesh.sh)
+if variant == "heart" and not (15000 <= nodes <= 70000 and 100000 <= tets <= 400000): errs.append("counts %d %d" % (nodes, tets))
 if errs: print("\n".join(errs)); sys.exit(1)
 PYEOF
     then ok "figures ($variant)"; else bad "figures ($variant)"; fi

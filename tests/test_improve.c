@@ -218,7 +218,7 @@ int main(void)
         v->surf_node[0] = ident;
         v->surf_n_nodes = malloc(sizeof *v->surf_n_nodes);
         v->surf_n_nodes[0] = n;
-        improve_opts o = {10.0, 6, 0, by_x, NULL};
+        improve_opts o = {10.0, 0, 6, 0, by_x, NULL, NULL};
         improve_stats S;
         CHECK_OK(ctx, mesh_improve(ctx, v, NULL, tri, np, &o, &S));
         size_t below1 = count_below(v, 10, &mn1);
@@ -276,7 +276,7 @@ int main(void)
         long nb0 = boundary_faces(v, &b0);
         double mn0, mn1;
         size_t below0 = count_below(v, 10, &mn0);
-        improve_opts o = {10.0, 6, 0, NULL, NULL};
+        improve_opts o = {10.0, 0, 6, 0, NULL, NULL, NULL};
         improve_stats S;
         CHECK_OK(ctx, mesh_improve(ctx, v, NULL, NULL, 0, &o, &S));
         size_t below1 = count_below(v, 10, &mn1);
@@ -299,7 +299,7 @@ int main(void)
         long nb0 = boundary_faces(v, &b0);
         double vol0 = total_volume(v, -1), mn0, mn1;
         size_t below0 = count_below(v, 10, &mn0);
-        improve_opts o = {10.0, 6, op, NULL, NULL};
+        improve_opts o = {10.0, 0, 6, op, NULL, NULL, NULL};
         improve_stats S;
         CHECK_OK(ctx, mesh_improve(ctx, v, NULL, NULL, 0, &o, &S));
         size_t below1 = count_below(v, 10, &mn1);
@@ -320,7 +320,7 @@ int main(void)
         int32_t *adj = NULL;
         thx_volume *a = lattice(ctx, 7, &adj), *b = lattice(ctx, 7, NULL);
         CHECK(a && b && adj);
-        improve_opts o = {10.0, 6, 0, by_x, NULL};
+        improve_opts o = {10.0, 0, 6, 0, by_x, NULL, NULL};
         improve_stats Sa, Sb;
         CHECK_OK(ctx, mesh_improve(ctx, a, adj, NULL, 0, &o, &Sa));
         CHECK_OK(ctx, mesh_improve(ctx, b, NULL, NULL, 0, &o, &Sb));
@@ -351,7 +351,7 @@ int main(void)
         CHECK(thx_volume_tet_volume(v, 0) > 0 && thx_volume_tet_volume(v, 1) > 0);
         double vol0 = total_volume(v, -1), mn0, mn1;
         count_below(v, 40, &mn0);
-        improve_opts o = {40.0, 6, IMPROVE_FACE, NULL, NULL};
+        improve_opts o = {40.0, 0, 6, IMPROVE_FACE, NULL, NULL, NULL};
         improve_stats S;
         CHECK_OK(ctx, mesh_improve(ctx, v, NULL, NULL, 0, &o, &S));
         count_below(v, 40, &mn1);

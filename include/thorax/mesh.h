@@ -72,7 +72,7 @@ typedef struct {
     size_t n_heart;           /* removed: inside the heart (no_heart) */
     size_t repair_below_before, repair_below_after; /* tetrahedra below repair_deg before/after the repair */
     double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
-    size_t n_edge_removals, n_face_removals, n_moves, n_collapses; /* repair operations applied */
+    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses; /* repair operations applied */
     double t_repair;          /* seconds */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */

@@ -33,7 +33,7 @@ static void help(void)
            "  --no-heart             leave the heart's interior out of the domain\n"
            "  --quality R/D          Delaunay refinement: circumcentres of tetrahedra whose radius-edge\n"
            "                         ratio exceeds R or whose smallest dihedral angle is below D degrees\n"
-           "                         (default 2/10; 0 = off)\n"
+           "                         (default 1.6/10; 0 = off)\n"
            "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
            "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
            "  --region NAME[=NEW][:SIGMA]  rename a tissue region and/or set its isotropic conductivity\n"
@@ -114,7 +114,7 @@ int cmd_mesh(int argc, char **argv)
         else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
         else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
         else if (!strcmp(a, "--quality")) {
-            if (!v) return cli_usage_error("mesh", "--quality needs RATIO/DEG (e.g. 2/10), or 0 for none");
+            if (!v) return cli_usage_error("mesh", "--quality needs RATIO/DEG (e.g. 1.6/10), or 0 for none");
             char *end = NULL;
             o.radius_edge = strtod(v, &end);
             o.refine_deg = 0;
@@ -217,9 +217,9 @@ int cmd_mesh(int argc, char **argv)
                    S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
         if (want_stats && o.repair_deg > 0)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
-                   "%zu face removals, %zu grid nodes moved, %zu collapsed; %.3f s\n",
+                   "%zu face removals, %zu grid nodes moved, %zu Steiner nodes slid, %zu collapsed; %.3f s\n",
                    o.repair_deg, S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
-                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_collapses, S.t_repair);
+                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_slides, S.n_collapses, S.t_repair);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

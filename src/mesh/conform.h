@@ -66,7 +66,7 @@ typedef struct {
     void *user;
     size_t max_points;
     double min_piece_ratio; /* pieces of a surface triangle shorter than this times its shortest edge
-                               are not split for quality (the mesher: 0.03) */
+                               are not split for quality (the mesher: 0.12) */
     void (*progress)(void *user, const char *stage, double done); /* optional */
     void *progress_user;
 } conform_quality;

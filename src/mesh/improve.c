@@ -24,12 +24,13 @@
 #define MAX_RING 12    /* edges with more tetrahedra around them are not removed */
 #define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
 #define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */
-/* Quality is the smaller of the smallest dihedral sine and RE_WEIGHT / (radius-edge ratio): a
-   needle of ratio 4.6 counts as a sliver of 15 degrees, so the repair also takes on needles, and no
-   operation trades a sliver for a needle that is worse by this measure (with the dihedral sine
-   alone, the repair made needles of ratio 59 on the high phantom, where the refinement had left
-   16). */
-#define RE_WEIGHT 1.2
+#define SELECT_RE 1.25  /* needles above this times the radius-edge bound are repaired */
+/* Quality is the smallest dihedral sine, or, for a tetrahedron whose radius-edge ratio RE exceeds
+   the bound B (the refinement's), sin(target) * B / RE where that is smaller: such a needle counts
+   as a sliver of the target angle or worse, so the repair takes it on, and no operation trades a
+   sliver for a needle that is worse by this measure. (With the dihedral sine alone, the repair
+   made needles of ratio 59 on the high phantom, where the refinement had left 16, and of 2.1 on
+   OpenMEEG's Head1, where it had left none above 2.) */
 
 /* ---- quality ---- */
 
@@ -37,7 +38,7 @@ static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}; /
 
 /* Smallest sine of the six dihedral angles of (p0, p1, p2, p3); 0 or less when flat or inverted
  * (floating point: the exact orientation is tested separately). */
-static double quality(const double *p[4])
+static double quality(const double *p[4], double re_bound, double re_scale)
 {
     double e[3][3]; /* p1 - p0, p2 - p0, p3 - p0 */
     for (int k = 0; k < 3; k++)
@@ -86,7 +87,8 @@ static double quality(const double *p[4])
     double lmin2 = l2[0];
     for (int k = 1; k < 6; k++) lmin2 = fmin(lmin2, l2[k]);
     double r2 = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (4 * vol6 * vol6);
-    double needle = RE_WEIGHT * sqrt(lmin2 / r2);
+    if (!(re_bound > 0) || r2 <= re_bound * re_bound * lmin2) return sine;
+    double needle = re_scale * sqrt(lmin2 / r2);
     return needle < sine ? needle : sine;
 }
 
@@ -127,9 +129,13 @@ typedef struct {
     uint32_t clock, *node_clock; /* a counter of changes; per node, the last change touching it */
     int32_t *node_tet; /* some live tetrahedron at each node */
     const int32_t *node_surf;
-    unsigned char *fixed; /* nodes that never move */
+    unsigned char *fixed; /* nodes that never move freely */
+    int32_t *slide;       /* per node: its Steiner record if it may slide in its surface triangle, else -1 */
+    thx_steiner *rec;     /* the volume's Steiner records (updated when a node slides) */
+    const int32_t *corner; /* 3 volume nodes per record: its triangle's corners */
     tset prot;
     const improve_opts *o;
+    double re_bound, re_scale; /* quality(): radius-edge bound and sin(target) * bound */
     size_t n_regions;
     int32_t star[MAX_STAR]; /* scratch: the star of the vertex being moved */
     int32_t star2[MAX_STAR];
@@ -149,14 +155,24 @@ static double q4(const imesh *M, int32_t a, int32_t b, int32_t c, int32_t d)
 {
     const double *p[4] = {X(M, a), X(M, b), X(M, c), X(M, d)};
     if (!right_handed(p[0], p[1], p[2], p[3])) return -1;
-    return quality(p);
+    return quality(p, M->re_bound, M->re_scale);
 }
 
 static double qtet(const imesh *M, int32_t t)
 {
     const int32_t *q = M->tet + 4 * (size_t)t;
     const double *p[4] = {X(M, q[0]), X(M, q[1]), X(M, q[2]), X(M, q[3])};
-    return quality(p);
+    return quality(p, M->re_bound, M->re_scale);
+}
+
+/* The measure that picks the tetrahedra to repair: dihedral angles below the target, or needles
+ * above SELECT_RE times the bound (the ones just above it are many, and most are where the
+ * refinement could not reach). */
+static double qsel(const imesh *M, int32_t t)
+{
+    const int32_t *q = M->tet + 4 * (size_t)t;
+    const double *p[4] = {X(M, q[0]), X(M, q[1]), X(M, q[2]), X(M, q[3])};
+    return quality(p, SELECT_RE * M->re_bound, SELECT_RE * M->re_scale);
 }
 
 static double tet_volume6(const imesh *M, const int32_t *q)
@@ -669,6 +685,135 @@ static int try_move(imesh *M, int32_t t, size_t *count)
     return moved;
 }
 
+/* ---- Steiner nodes sliding on their surface triangle ---- */
+
+/* The tetrahedra around node v, on the boundary too; 0 if the star is too large. */
+static int vertex_star_open(const imesh *M, int32_t v, int32_t *star)
+{
+    int n = 0;
+    star[n++] = M->node_tet[v];
+    for (int i = 0; i < n; i++) {
+        const int32_t *q = M->tet + 4 * (size_t)star[i];
+        int lv = local_index(q, v);
+        for (int f = 0; f < 4; f++) {
+            if (f == lv) continue;
+            int32_t u = M->nbr[4 * (size_t)star[i] + f];
+            if (u < 0) continue;
+            int seen = 0;
+            for (int j = 0; j < n && !seen; j++) seen = star[j] == u;
+            if (seen) continue;
+            if (n >= MAX_STAR) return 0;
+            star[n++] = u;
+        }
+    }
+    return n;
+}
+
+/* The point of record r's triangle at barycentric coordinates w (w[k] = 0 for a corner the node's
+ * edge leaves out). Exact, as the mesher's Steiner points are: the corners lie on the mesher's
+ * binary grid and the coordinates are dyadic with few bits (2^-22 on an edge, 2^-20 inside). */
+static void slide_point(const imesh *M, int32_t r, const double w[3], double p[3])
+{
+    const double *c[3] = {X(M, M->corner[3 * r]), X(M, M->corner[3 * r + 1]), X(M, M->corner[3 * r + 2])};
+    int z = w[0] == 0 ? 0 : w[1] == 0 ? 1 : w[2] == 0 ? 2 : -1;
+    if (z >= 0) { /* on the edge (a, b): a + w_b (b - a) */
+        const double *a = c[(z + 1) % 3], *b = c[(z + 2) % 3];
+        double t = w[(z + 2) % 3];
+        for (int d = 0; d < 3; d++) p[d] = a[d] + t * (b[d] - a[d]);
+    } else {
+        for (int d = 0; d < 3; d++) p[d] = c[0][d] + w[1] * (c[1][d] - c[0][d]) + w[2] * (c[2][d] - c[0][d]);
+    }
+}
+
+/*
+ * A Steiner node of tetrahedron t slides within its surface triangle (a node on a triangle's
+ * edge, along the edge): pattern search over its barycentric coordinates, rounded to the dyadic
+ * grid the mesher uses, each position exactly in the triangle's plane (tested) and every
+ * tetrahedron of its star positive (exact). The faces on the surfaces keep their nodes and stay
+ * in the plane of their triangle, so the surfaces are still exactly unions of faces; the record
+ * gets the new coordinates.
+ */
+static int try_slide(imesh *M, int32_t t, size_t *count)
+{
+    int32_t *star = M->star;
+    for (int k = 0; k < 4; k++) {
+        int32_t v = M->tet[4 * (size_t)t + k];
+        int32_t r = M->slide ? M->slide[v] : -1;
+        if (r < 0) continue;
+        int n = vertex_star_open(M, v, star);
+        if (!n) continue;
+        double *x = M->xyz + 3 * (size_t)v;
+        double w[3] = {M->rec[r].bary[0], M->rec[r].bary[1], M->rec[r].bary[2]};
+        int z = w[0] == 0 ? 0 : w[1] == 0 ? 1 : w[2] == 0 ? 2 : -1;
+        double bits = z >= 0 ? 22 : 20;
+        const double *c[3] = {X(M, M->corner[3 * r]), X(M, M->corner[3 * r + 1]), X(M, M->corner[3 * r + 2])};
+        double L = fmax(thx_v3_norm(thx_v3_sub(thx_v3(c[1][0], c[1][1], c[1][2]), thx_v3(c[0][0], c[0][1], c[0][2]))),
+                        thx_v3_norm(thx_v3_sub(thx_v3(c[2][0], c[2][1], c[2][2]), thx_v3(c[0][0], c[0][1], c[0][2]))));
+        double h = INFINITY;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < 4; j++) {
+                int32_t u = M->tet[4 * (size_t)star[i] + j];
+                if (u == v) continue;
+                double d = thx_v3_norm(thx_v3_sub(thx_v3(X(M, u)[0], X(M, u)[1], X(M, u)[2]), thx_v3(x[0], x[1], x[2])));
+                if (d < h) h = d;
+            }
+        double q0 = star_quality(M, v, star, n, x, NULL), cur = q0;
+        double step = 0.25 * h / L, keep[3] = {x[0], x[1], x[2]};
+        for (int it = 0; it < 30 && step * L > 1e-4 * h; it++) {
+            /* directions in the coordinates: along the edge, or the three edge directions inside */
+            double dir[6][3];
+            int nd = 0;
+            if (z >= 0) {
+                int a = (z + 1) % 3, b = (z + 2) % 3;
+                for (int sgn = -1; sgn <= 1; sgn += 2) { dir[nd][z] = 0; dir[nd][a] = -sgn; dir[nd][b] = sgn; nd++; }
+            } else {
+                for (int a = 0; a < 3; a++)
+                    for (int sgn = -1; sgn <= 1; sgn += 2) {
+                        int b = (a + 1) % 3, cc = (a + 2) % 3;
+                        dir[nd][a] = sgn; dir[nd][b] = -0.5 * sgn; dir[nd][cc] = -0.5 * sgn; nd++;
+                    }
+            }
+            double bestq = cur, bw[3] = {0};
+            for (int di = 0; di < nd; di++) {
+                double ww[3];
+                for (int j = 0; j < 3; j++) ww[j] = w[j] + step * dir[di][j];
+                /* on the dyadic grid; the corner weight left out stays exactly zero */
+                int ok = 1;
+                double sum = 0;
+                int last = z >= 0 ? (z + 2) % 3 : 2;
+                for (int j = 0; j < 3; j++) {
+                    if (j == z || j == (z >= 0 ? (z + 1) % 3 : 0)) continue;
+                    ww[j] = ldexp(nearbyint(ldexp(ww[j], (int)bits)), -(int)bits);
+                }
+                (void)last;
+                if (z >= 0) { ww[z] = 0; ww[(z + 1) % 3] = 1 - ww[(z + 2) % 3]; }
+                else ww[0] = 1 - ww[1] - ww[2];
+                for (int j = 0; j < 3; j++) { if (j != z && !(ww[j] > 0 && ww[j] < 1)) ok = 0; sum += ww[j]; }
+                if (!ok) continue;
+                double p[3];
+                slide_point(M, r, ww, p);
+                if (thx_orient3d(c[0], c[1], c[2], p) != 0) continue; /* not exactly in the plane */
+                double qq = star_quality(M, v, star, n, p, NULL);
+                if (qq > bestq + EPS_GAIN) { bestq = qq; memcpy(bw, ww, sizeof bw); }
+            }
+            if (bestq > cur) {
+                memcpy(w, bw, sizeof w);
+                slide_point(M, r, w, x);
+                cur = bestq;
+            } else
+                step *= 0.5;
+        }
+        if (cur > q0 + EPS_GAIN) {
+            memcpy(M->rec[r].bary, w, sizeof w);
+            (*count)++;
+            M->node_clock[v] = ++M->clock;
+            return 1;
+        }
+        x[0] = keep[0]; x[1] = keep[1]; x[2] = keep[2];
+    }
+    return 0;
+}
+
 /* ---- edge collapse ---- */
 
 /* Removes a movable node v of tetrahedron t by collapsing it onto a neighbour w: the tetrahedra
@@ -866,6 +1011,7 @@ static void imesh_free(imesh *M)
     free(M->node_tet);
     free(M->prot.slot);
     free(M->fixed);
+    free(M->slide);
     free(M->nmark);
     free(M->tmark);
     memset(M, 0, sizeof *M);
@@ -897,17 +1043,33 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
     if (v->node_surf)
         for (size_t i = 0; i < v->n_nodes; i++) M.fixed[i] = v->node_surf[i] >= 0;
     for (size_t i = 0; i < v->n_steiner; i++) M.fixed[v->steiner[i].node] = 1;
+    if (o->steiner_corners && v->n_steiner) {
+        /* Steiner nodes that may slide: those whose record gives back their position exactly */
+        M.slide = thx_malloc(ctx, v->n_nodes * sizeof *M.slide);
+        if (!M.slide) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < v->n_nodes; i++) M.slide[i] = -1;
+        M.rec = v->steiner;
+        M.corner = o->steiner_corners;
+        for (size_t i = 0; i < v->n_steiner; i++) {
+            double p[3];
+            slide_point(&M, (int32_t)i, v->steiner[i].bary, p);
+            const double *x = X(&M, v->steiner[i].node);
+            if (p[0] == x[0] && p[1] == x[1] && p[2] == x[2]) M.slide[v->steiner[i].node] = (int32_t)i;
+        }
+    }
     S.tets_before = M.nt;
     S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
     double sin_target = sin(o->target_deg * M_PI / 180.0);
-    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_COLLAPSE;
+    M.re_bound = o->radius_edge;
+    M.re_scale = sin_target * o->radius_edge;
+    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_SLIDE | IMPROVE_COLLAPSE;
     for (int pass = 0; pass < o->max_passes; pass++) {
         size_t nb = 0;
         free(bad);
         bad = thx_malloc(ctx, (M.nt ? M.nt : 1) * sizeof *bad);
         if (!bad) { st = THX_ENOMEM; goto done; }
 #pragma omp parallel for schedule(static)
-        for (long t = 0; t < (long)M.nt; t++) bad[t].q = M.dead[t] ? INFINITY : qtet(&M, (int32_t)t);
+        for (long t = 0; t < (long)M.nt; t++) bad[t].q = M.dead[t] ? INFINITY : qsel(&M, (int32_t)t);
         for (size_t t = 0; t < M.nt; t++)
             if (bad[t].q < sin_target) bad[nb++] = (qrec){bad[t].q, (int32_t)t};
         if (!nb) break;
@@ -916,8 +1078,8 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
         for (size_t i = 0; i < nb; i++) {
             int32_t t = bad[i].t;
             if (M.dead[t]) continue;
+            if (qsel(&M, t) >= sin_target) continue;
             double q = qtet(&M, t);
-            if (q >= sin_target) continue;
             if (M.failed[t]) { /* tried before: again only if something changed at its corners since */
                 uint32_t last = 0;
                 for (int k = 0; k < 4; k++) {
@@ -929,6 +1091,7 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
             if (((ops & IMPROVE_EDGE) && try_edge_removal(&M, t, q, &S.n_edge_removals)) ||
                 ((ops & IMPROVE_FACE) && try_face_removal(&M, t, q, &S.n_face_removals)) ||
                 ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)) ||
+                ((ops & IMPROVE_SLIDE) && try_slide(&M, t, &S.n_slides)) ||
                 ((ops & IMPROVE_COLLAPSE) && try_collapse(&M, t, &S.n_collapses)))
                 changed++;
             else

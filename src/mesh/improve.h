@@ -19,35 +19,44 @@
  *   - vertex perturbation: an interior grid node (never a surface node) of a
  *     sliver is moved, within its star, to where the worst tetrahedron of the
  *     star is best (pattern search, positions rounded to the stored
- *     precision, orientations tested exactly).
+ *     precision, orientations tested exactly);
+ *   - Steiner node sliding: a Steiner node of a sliver moves within its
+ *     surface triangle (along its edge for a node on an edge), on the
+ *     mesher's dyadic grid of barycentric coordinates, so that it stays
+ *     exactly in the triangle's plane; its record follows.
  * An operation is applied only if the worst tetrahedron it touches becomes
  * better. The faces on the surfaces and their edges are never removed, so
  * the tissue interfaces stay exactly where they are. Quality is the smallest sine of the six dihedral
- * angles (flat tetrahedra have angles near 0 and near 180 degrees), or
- * 1.2 / (radius-edge ratio) where that is smaller (needles: a ratio of 4.6
- * counts as a dihedral angle of 15 degrees).
+ * angles (flat tetrahedra have angles near 0 and near 180 degrees), or, for
+ * a needle whose radius-edge ratio RE exceeds the bound B (radius_edge),
+ * sin(target) * B / RE where that is smaller: a needle just above the bound
+ * counts as a sliver of the target angle.
  */
 #ifndef THORAX_MESH_IMPROVE_H
 #define THORAX_MESH_IMPROVE_H
 
 #include "thorax/volume.h"
 
-enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8 };
+enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16 };
 
 typedef struct {
     double target_deg; /* repair tetrahedra whose smallest dihedral angle is below this */
+    double radius_edge; /* ... or whose radius-edge ratio is above this (0: dihedral angles only) */
     int max_passes;    /* sweeps over the tetrahedra below target (each stops early when nothing improves) */
-    unsigned ops;      /* IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_COLLAPSE; 0 = all */
+    unsigned ops;      /* IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_SLIDE | IMPROVE_COLLAPSE; 0 = all */
     /* region of a new tetrahedron whose cavity mixed regions, from its centroid; NULL: the region
        of the old tetrahedron containing most of the cavity's volume */
     int (*classify)(void *user, thx_vec3 centroid);
     void *user;
+    /* NULL, or 3 volume nodes per Steiner record of v (its surface triangle's corners, in the
+       order of its barycentric coordinates): those Steiner nodes may slide in their triangle */
+    const int32_t *steiner_corners;
 } improve_opts;
 
 typedef struct {
     size_t below_before, below_after; /* tetrahedra below target_deg */
     double min_before, min_after;     /* smallest dihedral angle in the mesh, degrees */
-    size_t n_edge_removals, n_face_removals, n_moves, n_collapses;
+    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses;
     size_t tets_before, tets_after;
     double seconds;
 } improve_stats;
@@ -55,8 +64,9 @@ typedef struct {
 /* Smallest dihedral angle of the tetrahedron q (node indices into xyz), degrees; either orientation. */
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q);
 
-/* Repairs v in place (tetrahedra, regions; grid node coordinates). Nodes with
- * v->node_surf[i] >= 0 and the Steiner nodes (v->steiner) never move; the
+/* Repairs v in place (tetrahedra, regions; grid node coordinates; Steiner
+ * nodes and their records, within their triangles, when o->steiner_corners
+ * is given). Nodes with v->node_surf[i] >= 0 never move; the
  * faces prot (n_prot node triples: the surfaces' pieces) and their edges stay.
  * nbr: NULL, or the face adjacency of v's tetrahedra (nbr[4t + f] across the
  * face opposite corner f, -1 on the boundary; malloc'ed), which the call takes

@@ -43,7 +43,7 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->layer_spacing = 0;
     o->no_heart = 0;
     o->repair_deg = 15.0;
-    o->radius_edge = 2.0;
+    o->radius_edge = 1.6;
     o->refine_deg = 10.0;
 }
 
@@ -396,7 +396,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.t_delaunay = t_dt - t1;
         conform_stats cs;
         domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps};
-        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.03, o->progress, o->progress_user};
+        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.12, o->progress, o->progress_user};
         st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
                           &n_sub, &cs);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
@@ -637,10 +637,15 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     /* slivers: repaired (flips, moving grid nodes) with the faces on the surfaces kept, never removed */
     if (o->repair_deg > 0) {
         region_ctx rc = {m, loc, surf_region};
-        improve_opts io = {o->repair_deg, 6, 0, classify_cb, &rc};
+        int32_t *corners = thx_malloc(ctx, 3 * (v->n_steiner ? v->n_steiner : 1) * sizeof *corners);
+        if (!corners) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < v->n_steiner; i++)
+            for (int k = 0; k < 3; k++)
+                corners[3 * i + k] = v->surf_node[v->steiner[i].surf][m->surf[v->steiner[i].surf]->tri[3 * (size_t)v->steiner[i].tri + k]];
+        improve_opts io = {o->repair_deg, o->radius_edge > 0 ? o->radius_edge : 2.0, 6, 0, classify_cb, &rc, corners};
         improve_stats is;
         int32_t *prot = thx_malloc(ctx, 3 * (n_sub ? n_sub : 1) * sizeof *prot);
-        if (!prot) { st = THX_ENOMEM; goto done; }
+        if (!prot) { free(corners); st = THX_ENOMEM; goto done; }
         for (size_t i = 0; i < n_sub; i++) memcpy(prot + 3 * i, sub[i].v, 3 * sizeof *prot);
         int32_t *adj = vnbr;
         vnbr = NULL; /* taken over */
@@ -648,6 +653,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         st = mesh_improve(ctx, v, adj, prot, n_sub, &io, &is);
         PROGRESS("repair", 1.0);
         free(prot);
+        free(corners);
         if (st != THX_OK) goto done;
         S.repair_below_before = is.below_before;
         S.repair_below_after = is.below_after;
@@ -656,6 +662,7 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_edge_removals = is.n_edge_removals;
         S.n_face_removals = is.n_face_removals;
         S.n_moves = is.n_moves;
+        S.n_slides = is.n_slides;
         S.n_collapses = is.n_collapses;
         S.t_repair = is.seconds;
     }
