@@ -3,8 +3,8 @@
  *
  * Every file thorax writes goes first to a temporary name in the same
  * directory and is renamed over the target only when complete, so a failed
- * run leaves no partial output. Model directories are built in a temporary
- * sibling directory and renamed as a whole.
+ * run leaves no partial output. Model and solution directories are built in
+ * a temporary sibling directory and renamed as a whole (thx_outdir).
  */
 #ifndef THORAX_FILEIO_H
 #define THORAX_FILEIO_H
@@ -26,12 +26,40 @@ thx_status thx_atomic_commit(thx_ctx *ctx, thx_atomic_file *af);
 /* Closes and removes the temporary file (safe after a failed commit or none). */
 void thx_atomic_abort(thx_atomic_file *af);
 
-/* Creates a fresh temporary directory beside `final_dir` ("final_dir.tmpXXXXXX"). */
-thx_status thx_tmpdir_create(thx_ctx *ctx, const char *final_dir, char *tmp, size_t tmp_size);
-/* Replaces final_dir by tmp (an existing final_dir is removed first, recursively). */
-thx_status thx_tmpdir_commit(thx_ctx *ctx, const char *tmp, const char *final_dir);
-/* Removes a temporary directory and its files (one level). */
-void thx_tmpdir_abort(const char *tmp);
+/*
+ * Directory outputs (a model, a solution). A directory is replaced only when it
+ * is thorax's own output of the same kind: it holds `manifest` (model.json,
+ * solution.json) with "format": `format`, and nothing that manifest does not
+ * name (no other file, no folder, no link). It is never followed through a
+ * symbolic link and never replaced when it holds an input of the command.
+ * Otherwise the command stops with a message saying what is there, before
+ * anything is written.
+ *
+ * Two commands writing the same directory at once: the claim records what
+ * was there when the command started; the commit replaces it only if it is
+ * still that (the same directory, or still absent), so the first to commit
+ * wins whole and the other fails with nothing left behind.
+ */
+typedef struct {
+    char dir[4096];
+    char tmp[4200];          /* the temporary sibling the output is built in ("" until begun) */
+    const char *manifest, *format;
+    int existed;             /* dir existed when claimed */
+    unsigned long long dev, ino; /* ... as this directory */
+} thx_outdir;
+
+/* Checks that dir may be written (above) by a command reading the files or
+ * directories inputs[0..n_inputs-1] (NULL entries skipped) and records what
+ * is there now. Nothing is created. */
+thx_status thx_outdir_claim(thx_ctx *ctx, thx_outdir *od, const char *dir, const char *manifest, const char *format,
+                            const char *const *inputs, size_t n_inputs);
+/* Creates the temporary sibling directory od->tmp to write the output into. */
+thx_status thx_outdir_begin(thx_ctx *ctx, thx_outdir *od);
+/* Replaces (or creates) od->dir by od->tmp, if dir is still what the claim
+ * saw and still thorax's own; else removes od->tmp and fails. */
+thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od);
+/* Removes od->tmp and everything in it, if begun. */
+void thx_outdir_abort(thx_outdir *od);
 
 /* Reads a whole file into a NUL-terminated buffer (caller frees). */
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len);

@@ -24,6 +24,7 @@
 #ifndef THORAX_MODEL_H
 #define THORAX_MODEL_H
 
+#include "thorax/fileio.h"
 #include "thorax/geom.h"
 #include "thorax/volume.h"
 
@@ -56,6 +57,13 @@ thx_status thx_model_add_surface(thx_ctx *ctx, thx_model *m, thx_surface **s);
  * may not be called "volume" then. Geometry (orientation, quality) is not
  * checked here: that is the volume checker's. */
 thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir);
+/* The same into a directory claimed earlier (thx_outdir_claim with manifest
+ * model.json, format THX_MODEL_FORMAT): a command claims its output before it
+ * reads and computes, so that a directory another command writes meanwhile is
+ * never replaced (thorax/fileio.h). thx_model_write claims dir itself. */
+#define THX_MODEL_MANIFEST "model.json"
+#define THX_MODEL_FORMAT "thorax-model"
+thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir *od);
 /* Reads a model directory written by thx_model_write, with its volume if
  * the manifest has one; every file is validated as the writer validates
  * memory, and errors name the file and line ("volume.tet:17: region 4 out of

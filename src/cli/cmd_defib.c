@@ -79,12 +79,16 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
     thx_series *vol = NULL, *torso = NULL, *fld = NULL;
     thx_defib_report R;
     cJSON *vcheck = NULL, *warnings = NULL;
-    char tmp[PATH_MAX] = "";
+    thx_outdir od;
+    memset(&od, 0, sizeof od);
     int rank = 0, rc = 0;
     thx_series_format fmt = THX_SERIES_RAW;
     thx_series_format_parse(format, &fmt);
     const char *ext = fmt == THX_SERIES_TEXT ? "txt" : fmt == THX_SERIES_MAT ? "mat" : "raw";
-    thx_status st = thx_model_read(ctx, model_dir, &m);
+    /* the output directory first: refused before any work if it is not thorax's own solution */
+    const char *inputs[] = {model_dir};
+    thx_status st = thx_outdir_claim(ctx, &od, out, "solution.json", "thorax-solution", inputs, 1);
+    if (st == THX_OK) st = thx_model_read(ctx, model_dir, &m);
     for (int k = 0; k < n_specs && st == THX_OK; k++) st = parse_spec(ctx, m, specs[k], &p[k]);
     if (st == THX_OK) st = cli_petsc_init(ctx, pa, &rank);
     if (st == THX_OK) st = cli_volume_gate(ctx, "forward", model_dir, m, force, rank, &vcheck, &warnings);
@@ -106,13 +110,13 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
     snprintf(torso->label, sizeof torso->label, "defibrillation: potential on the outer surface");
     snprintf(fld->label, sizeof fld->label, "defibrillation: field magnitude |E| per tetrahedron");
     if (rank == 0) {
-        char path[PATH_MAX + 64];
-        st = thx_tmpdir_create(ctx, out, tmp, sizeof tmp);
+        char path[4400];
+        st = thx_outdir_begin(ctx, &od);
         if (st != THX_OK) goto fail;
         struct { const char *key; thx_series *s; } w[] = {{"volume", vol}, {"torso", torso}, {"field_tet", fld}};
         cJSON *j = cJSON_CreateObject(), *files = cJSON_CreateObject(), *el = cJSON_CreateArray(), *heart = cJSON_CreateObject();
         for (size_t k = 0; k < 3 && st == THX_OK; k++) {
-            snprintf(path, sizeof path, "%s/%s.%s", tmp, w[k].key, ext);
+            snprintf(path, sizeof path, "%s/%s.%s", od.tmp, w[k].key, ext);
             st = thx_series_write(ctx, w[k].s, path, fmt);
             char name[64];
             snprintf(name, sizeof name, "%s.%s", w[k].key, ext);
@@ -168,13 +172,13 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
             warnings = NULL;
         }
         if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/solution.json", tmp);
+            snprintf(path, sizeof path, "%s/solution.json", od.tmp);
             st = cli_write_json(ctx, path, j);
         } else {
             cJSON_Delete(j);
         }
-        if (st == THX_OK) st = thx_tmpdir_commit(ctx, tmp, out);
-        if (st != THX_OK) { thx_tmpdir_abort(tmp); goto fail; }
+        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
+        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
         if (verbose >= 0) {
             for (int k = 0; k < n_specs; k++)
                 printf("electrode %-10s %4zu nodes, %7.0f mm^2: %s %g %s; current %+.4f A, mean potential %+.3f V\n", p[k].name,

@@ -145,12 +145,16 @@ int cmd_forward(int argc, char **argv)
     double *jt = NULL, *jn = NULL;
     thx_series *cur_t = NULL, *cur_n = NULL;
     cJSON *vcheck = NULL, *warnings = NULL;
-    char tmp[PATH_MAX] = "";
+    thx_outdir od;
+    memset(&od, 0, sizeof od);
     double t0 = thx_wtime();
     thx_series_format fmt = fmt_of(format);
     const char *ext = ext_of(fmt);
 
-    st = thx_model_read(ctx, model_dir, &m);
+    /* the output directory first: refused before any work if it is not thorax's own solution */
+    const char *inputs[] = {model_dir, epi_path, rows_path, transfer_in};
+    st = thx_outdir_claim(ctx, &od, out, "solution.json", "thorax-solution", inputs, 4);
+    if (st == THX_OK) st = thx_model_read(ctx, model_dir, &m);
     if (st == THX_OK && epi_path) st = thx_series_read(ctx, epi_path, THX_SERIES_AUTO, &epi);
     if (st == THX_OK && rows_path) {
         st = thx_electrodes_read(ctx, rows_path, &rowset);
@@ -223,8 +227,8 @@ int cmd_forward(int argc, char **argv)
     }
     /* write (rank 0): a temporary directory renamed as a whole */
     if (rank == 0) {
-        char path[PATH_MAX + 64];
-        st = thx_tmpdir_create(ctx, out, tmp, sizeof tmp);
+        char path[4400];
+        st = thx_outdir_begin(ctx, &od);
         if (st != THX_OK) goto fail;
         cJSON *j = cJSON_CreateObject(), *files = cJSON_CreateObject(), *solver = cJSON_CreateObject();
         cJSON_AddStringToObject(j, "format", "thorax-solution");
@@ -245,7 +249,7 @@ int cmd_forward(int argc, char **argv)
                                                           {"currents_node", cur_n}, {"transfer", transfer_out ? T : NULL}};
         for (size_t k = 0; k < sizeof w / sizeof w[0] && st == THX_OK; k++) {
             if (!w[k].s) continue;
-            snprintf(path, sizeof path, "%s/%s.%s", tmp, w[k].key, ext);
+            snprintf(path, sizeof path, "%s/%s.%s", od.tmp, w[k].key, ext);
             st = thx_series_write(ctx, w[k].s, path, fmt);
             char name[64];
             snprintf(name, sizeof name, "%s.%s", w[k].key, ext);
@@ -286,13 +290,13 @@ int cmd_forward(int argc, char **argv)
         cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
         cJSON_AddItemToObject(j, "solver", solver);
         if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/solution.json", tmp);
+            snprintf(path, sizeof path, "%s/solution.json", od.tmp);
             st = cli_write_json(ctx, path, j);
         } else {
             cJSON_Delete(j);
         }
-        if (st == THX_OK) st = thx_tmpdir_commit(ctx, tmp, out);
-        if (st != THX_OK) { thx_tmpdir_abort(tmp); goto fail; }
+        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
+        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
         if (verbose >= 0) {
             if (transfer_out)
                 printf("transfer matrix %zu x %zu (%s solves: %d..%d iterations), %.2f s\n", T->n_rows, T->n_frames,

@@ -399,6 +399,18 @@ int cmd_import(int argc, char **argv)
         rc = cli_fail(ctx, cmd, thx_error(ctx, THX_ENOMEM, "out of memory"));
         goto done;
     }
+    /* the output first: refused before any work unless it is absent or thorax's own model */
+    thx_outdir od;
+    {
+        const char *inputs[2 * 64];
+        size_t ni = 0;
+        for (int k = 0; k < n && ni + 2 <= sizeof inputs / sizeof *inputs; k++) {
+            inputs[ni++] = sp[k].file;
+            inputs[ni++] = sp[k].fac;
+        }
+        thx_status cst = thx_outdir_claim(ctx, &od, outdir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, inputs, ni);
+        if (cst != THX_OK) { rc = cli_fail(ctx, cmd, cst); goto done; }
+    }
     /* Every surface is read and checked, so that one run reports every problem. */
     for (int k = 0; k < n; k++) {
         thx_import_opts o;
@@ -468,7 +480,7 @@ int cmd_import(int argc, char **argv)
         rc = cli_fail(ctx, cmd, thx_error(ctx, THX_ENOMEM, "out of memory"));
         goto done;
     }
-    st = thx_model_write(ctx, m, outdir);
+    st = thx_model_write_claimed(ctx, m, &od);
     if (st != THX_OK) {
         rc = cli_fail(ctx, cmd, st);
         goto done;
@@ -646,7 +658,10 @@ static int import_volume(const spec *sp, const char *outdir, double default_scal
     o.region_maps = maps;
     o.n_region_maps = n_maps;
     thx_region_default("mean_thorax", &o.default_region);
-    thx_status st = thx_volume_import(ctx, sp->file, &o, &m, &info);
+    thx_outdir od;
+    const char *in_files[] = {sp->file, sp->elem};
+    thx_status st = thx_outdir_claim(ctx, &od, outdir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, in_files, 2);
+    if (st == THX_OK) st = thx_volume_import(ctx, sp->file, &o, &m, &info);
     if (st == THX_ECHECK) {
         volume_reasons(ctx, sp, &info, NULL, 0);
         for (size_t k = 0; k < info.n_dropped && k < THX_VIMPORT_MAX_DROPPED; k++)
@@ -693,7 +708,7 @@ static int import_volume(const spec *sp, const char *outdir, double default_scal
         rc = cli_fail(ctx, cmd, thx_error(ctx, THX_ENOMEM, "out of memory"));
         goto done;
     }
-    st = thx_model_write(ctx, m, outdir);
+    st = thx_model_write_claimed(ctx, m, &od);
     if (st != THX_OK) {
         rc = cli_fail(ctx, cmd, st);
         goto done;

@@ -1,4 +1,5 @@
 /* thorax mesh: the tetrahedral volume mesh of a surface model (paper 3.3). */
+#include <limits.h>
 #include <math.h>
 #include <unistd.h>
 #include <stdio.h>
@@ -161,7 +162,14 @@ int cmd_mesh(int argc, char **argv)
     thx_mesh_stats S;
     int rc = 0;
     if (verbose >= 0 && isatty(2)) { o.progress = mesh_progress; o.progress_user = &ps; }
-    thx_status st = thx_model_read(ctx, in, &m);
+    /* the output first: the model itself (meshed in place), or absent, or another thorax model; an
+       output elsewhere must not hold the input model */
+    thx_outdir od;
+    char rin[PATH_MAX], rout[PATH_MAX];
+    int in_place = realpath(in, rin) && realpath(out, rout) && !strcmp(rin, rout);
+    const char *inputs[] = {in};
+    thx_status st = thx_outdir_claim(ctx, &od, out, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, inputs, in_place ? 0 : 1);
+    if (st == THX_OK) st = thx_model_read(ctx, in, &m);
     if (st == THX_OK) st = thx_mesh_build(ctx, m, &o, &S);
     if (ps.shown) fputc('\n', stderr);
     /* never write a mesh its own check fails: refuse it, naming the fault and where it sits */
@@ -187,7 +195,7 @@ int cmd_mesh(int argc, char **argv)
         thx_volume_report_free(&r);
     }
     if (st == THX_OK) mesh_progress(&ps, "writing", 0.0);
-    if (st == THX_OK) st = thx_model_write(ctx, m, out);
+    if (st == THX_OK) st = thx_model_write_claimed(ctx, m, &od);
     if (ps.shown && !strcmp(ps.stage, "writing")) { mesh_progress(&ps, "writing", 1.0); fputc('\n', stderr); }
     if (st != THX_OK) rc = cli_fail(ctx, "mesh", st);
     else {

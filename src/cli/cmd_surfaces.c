@@ -87,7 +87,11 @@ int cmd_surfaces(int argc, char **argv)
     thx_surfaces_stats *per = NULL, tot;
     int rc = 0;
     double t0 = thx_wtime();
-    thx_status st = thx_contours_read(ctx, in, &c);
+    /* the output first: refused before any work unless it is absent or thorax's own model */
+    thx_outdir od;
+    const char *inputs[] = {in};
+    thx_status st = thx_outdir_claim(ctx, &od, outdir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, inputs, 1);
+    if (st == THX_OK) st = thx_contours_read(ctx, in, &c);
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
     double t_read = thx_wtime() - t0;
     per = calloc(c->n_surfaces, sizeof *per);
@@ -117,7 +121,7 @@ int cmd_surfaces(int argc, char **argv)
         cJSON_Delete(p);
     }
     double t1 = thx_wtime();
-    st = thx_model_write(ctx, m, outdir);
+    st = thx_model_write_claimed(ctx, m, &od);
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
     double t_write = thx_wtime() - t1;
     if (verbose >= 0) {

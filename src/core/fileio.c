@@ -1,8 +1,12 @@
 /* Atomic file and directory output (see thorax/fileio.h). */
 #include "thorax/fileio.h"
 
+#include <cjson/cJSON.h>
+
 #include <dirent.h>
 #include <errno.h>
+#include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -56,23 +60,12 @@ void thx_atomic_abort(thx_atomic_file *af)
     af->tmp[0] = '\0';
 }
 
-thx_status thx_tmpdir_create(thx_ctx *ctx, const char *final_dir, char *tmp, size_t tmp_size)
-{
-    size_t n = strlen(final_dir);
-    while (n > 1 && final_dir[n - 1] == '/') n--;
-    if ((size_t)snprintf(tmp, tmp_size, "%.*s.tmpXXXXXX", (int)n, final_dir) >= tmp_size)
-        return thx_error(ctx, THX_EIO, "%s: path too long", final_dir);
-    if (!mkdtemp(tmp)) return thx_error(ctx, THX_EIO, "%s: cannot create a temporary directory: %s", final_dir, strerror(errno));
-    chmod(tmp, 0755);
-    return THX_OK;
-}
-
 static void remove_tree(const char *dir)
 {
     DIR *d = opendir(dir);
     if (!d) return;
     struct dirent *e;
-    char p[4096];
+    char p[4400];
     while ((e = readdir(d))) {
         if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
         snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
@@ -84,39 +77,228 @@ static void remove_tree(const char *dir)
     rmdir(dir);
 }
 
-thx_status thx_tmpdir_commit(thx_ctx *ctx, const char *tmp, const char *final_dir)
+/* The file names a manifest gives: the values of "pts", "fac", "vmap", "tet" and "steiner" at any
+ * depth (a model) and every string in a "files" object (a solution). */
+static size_t manifest_files(const cJSON *j, int in_files, const char **out, size_t n, size_t cap)
 {
+    static const char *keys[] = {"pts", "fac", "vmap", "tet", "steiner"};
+    for (const cJSON *c = j ? j->child : NULL; c; c = c->next) {
+        if (cJSON_IsString(c) && c->valuestring) {
+            int take = in_files;
+            for (size_t k = 0; k < sizeof keys / sizeof *keys && !take && c->string; k++) take = !strcmp(c->string, keys[k]);
+            if (take && n < cap) out[n++] = c->valuestring;
+        } else if (cJSON_IsObject(c) || cJSON_IsArray(c)) {
+            n = manifest_files(c, in_files || (c->string && !strcmp(c->string, "files")), out, n, cap);
+        }
+    }
+    return n;
+}
+
+/* Is dir thorax's own output of this kind? (dir exists; lstat'ed by the caller as a directory) */
+static int empty_dir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return 0;
+    struct dirent *e;
+    int n = 0;
+    while (!n && (e = readdir(d))) n = strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return !n;
+}
+
+static thx_status owned(thx_ctx *ctx, const char *dir, const char *manifest, const char *format)
+{
+    if (empty_dir(dir)) return THX_OK; /* nothing to lose */
+    char path[4400];
+    snprintf(path, sizeof path, "%s/%s", dir, manifest);
     struct stat st;
-    if (stat(final_dir, &st) == 0) {
-        if (!S_ISDIR(st.st_mode)) {
-            remove_tree(tmp);
-            return thx_error(ctx, THX_EIO, "%s: exists and is not a directory", final_dir);
-        }
-        /* Move the old directory aside first so the swap leaves no mixture. */
-        char old[4200];
-        snprintf(old, sizeof old, "%s.oldXXXXXX", tmp);
-        if (!mkdtemp(old) || rmdir(old) != 0 || rename(final_dir, old) != 0) {
-            remove_tree(tmp);
-            return thx_error(ctx, THX_EIO, "%s: cannot replace: %s", final_dir, strerror(errno));
-        }
-        if (rename(tmp, final_dir) != 0) {
-            int e = errno;
-            rename(old, final_dir);
-            remove_tree(tmp);
-            return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", final_dir, strerror(e));
-        }
-        remove_tree(old);
-        return THX_OK;
+    if (lstat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return thx_error(ctx, THX_EIO,
+                         "%s exists and is not a thorax output of this kind (it has no %s); thorax replaces only its "
+                         "own outputs: nothing was written (give another -o, or empty it yourself)",
+                         dir, manifest);
+    if (st.st_size > (64 << 20))
+        return thx_error(ctx, THX_EIO, "%s: %s is larger than any manifest thorax writes; nothing was written", dir, manifest);
+    char *text = NULL;
+    THX_CHECK(thx_read_file(ctx, path, &text, NULL));
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    const cJSON *fmt = root ? cJSON_GetObjectItemCaseSensitive(root, "format") : NULL;
+    if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, format) != 0) {
+        thx_status st2 = thx_error(ctx, THX_EIO,
+                                   "%s holds a %s that is not a thorax output of this kind (%s%s%s; this command writes "
+                                   "\"format\": \"%s\"): nothing was written",
+                                   dir, manifest, !root ? "not JSON" : cJSON_IsString(fmt) ? "\"format\": \"" : "no \"format\"",
+                                   cJSON_IsString(fmt) ? fmt->valuestring : "", cJSON_IsString(fmt) ? "\"" : "", format);
+        cJSON_Delete(root);
+        return st2;
     }
-    if (rename(tmp, final_dir) != 0) {
-        int e = errno;
-        remove_tree(tmp);
-        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", final_dir, strerror(e));
+    size_t cap = 4096;
+    const char **names = malloc(cap * sizeof *names);
+    if (!names) { cJSON_Delete(root); return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path); }
+    size_t nn = manifest_files(root, 0, names, 0, cap);
+    DIR *d = opendir(dir);
+    if (!d) {
+        free(names);
+        cJSON_Delete(root);
+        return thx_error(ctx, THX_EIO, "%s: cannot read: %s", dir, strerror(errno));
     }
+    thx_status rs = THX_OK;
+    struct dirent *e;
+    while (rs == THX_OK && (e = readdir(d))) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..") || !strcmp(e->d_name, manifest)) continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        const char *what = NULL;
+        if (lstat(path, &st) != 0) what = "an entry it cannot examine";
+        else if (S_ISLNK(st.st_mode)) what = "a symbolic link";
+        else if (S_ISDIR(st.st_mode)) what = "a folder";
+        else if (!S_ISREG(st.st_mode)) what = "a special file";
+        else {
+            int listed = 0;
+            for (size_t i = 0; i < nn && !listed; i++) listed = strcmp(names[i], e->d_name) == 0;
+            if (!listed) what = "a file its manifest does not name";
+        }
+        if (what)
+            rs = thx_error(ctx, THX_EIO,
+                           "%s is a thorax output but also holds \"%s\", %s; thorax does not replace what it did not "
+                           "write: nothing was written",
+                           dir, e->d_name, what);
+    }
+    closedir(d);
+    free(names);
+    cJSON_Delete(root);
+    return rs;
+}
+
+/* Is `path` (a file or directory that exists) dir itself or inside it? Both resolved. */
+static int inside_dir(const char *path, const char *dir_real)
+{
+    char r[PATH_MAX];
+    if (!realpath(path, r)) return 0;
+    size_t n = strlen(dir_real);
+    return strncmp(r, dir_real, n) == 0 && (r[n] == '\0' || r[n] == '/');
+}
+
+thx_status thx_outdir_claim(thx_ctx *ctx, thx_outdir *od, const char *dir, const char *manifest, const char *format,
+                            const char *const *inputs, size_t n_inputs)
+{
+    memset(od, 0, sizeof *od);
+    size_t n = strlen(dir);
+    while (n > 1 && dir[n - 1] == '/') n--;
+    if (n == 0 || n >= sizeof od->dir - 16) return thx_error(ctx, THX_EIO, "%s: path empty or too long", dir);
+    memcpy(od->dir, dir, n);
+    od->dir[n] = '\0';
+    od->manifest = manifest;
+    od->format = format;
+    struct stat st;
+    if (lstat(od->dir, &st) != 0) {
+        if (errno != ENOENT) return thx_error(ctx, THX_EIO, "%s: %s", od->dir, strerror(errno));
+        return THX_OK; /* absent: created at commit */
+    }
+    if (S_ISLNK(st.st_mode))
+        return thx_error(ctx, THX_EIO,
+                         "%s is a symbolic link; thorax does not write through links (give the directory itself): nothing "
+                         "was written",
+                         od->dir);
+    if (!S_ISDIR(st.st_mode)) return thx_error(ctx, THX_EIO, "%s exists and is not a directory: nothing was written", od->dir);
+    char real[PATH_MAX];
+    if (!realpath(od->dir, real)) return thx_error(ctx, THX_EIO, "%s: %s", od->dir, strerror(errno));
+    for (size_t i = 0; i < n_inputs; i++)
+        if (inputs[i] && inside_dir(inputs[i], real))
+            return thx_error(ctx, THX_EIO,
+                             "%s holds %s, an input of this command; thorax does not replace its own input: nothing was "
+                             "written (give another -o)",
+                             od->dir, inputs[i]);
+    THX_CHECK(owned(ctx, od->dir, manifest, format));
+    od->existed = 1;
+    od->dev = (unsigned long long)st.st_dev;
+    od->ino = (unsigned long long)st.st_ino;
     return THX_OK;
 }
 
-void thx_tmpdir_abort(const char *tmp) { remove_tree(tmp); }
+thx_status thx_outdir_begin(thx_ctx *ctx, thx_outdir *od)
+{
+    if ((size_t)snprintf(od->tmp, sizeof od->tmp, "%s.tmpXXXXXX", od->dir) >= sizeof od->tmp) {
+        od->tmp[0] = '\0';
+        return thx_error(ctx, THX_EIO, "%s: path too long", od->dir);
+    }
+    if (!mkdtemp(od->tmp)) {
+        od->tmp[0] = '\0';
+        return thx_error(ctx, THX_EIO, "%s: cannot create a temporary directory: %s", od->dir, strerror(errno));
+    }
+    chmod(od->tmp, 0755);
+    return THX_OK;
+}
+
+void thx_outdir_abort(thx_outdir *od)
+{
+    if (od->tmp[0]) remove_tree(od->tmp);
+    od->tmp[0] = '\0';
+}
+
+static thx_status raced(thx_ctx *ctx, thx_outdir *od)
+{
+    thx_outdir_abort(od);
+    return thx_error(ctx, THX_EIO,
+                     "%s was changed by another command while this one ran; this command's output was discarded and "
+                     "the other's left whole",
+                     od->dir);
+}
+
+thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od)
+{
+    struct stat st;
+    if (!od->existed) {
+        /* created, unless another command made it meanwhile (a non-empty directory is never renamed over) */
+        if (lstat(od->dir, &st) == 0) return raced(ctx, od);
+        if (rename(od->tmp, od->dir) != 0) {
+            if (errno == EEXIST || errno == ENOTEMPTY || errno == EISDIR || errno == ENOTDIR) return raced(ctx, od);
+            int e = errno;
+            thx_outdir_abort(od);
+            return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", od->dir, strerror(e));
+        }
+        od->tmp[0] = '\0';
+        return THX_OK;
+    }
+    if (lstat(od->dir, &st) != 0 || !S_ISDIR(st.st_mode) || (unsigned long long)st.st_dev != od->dev ||
+        (unsigned long long)st.st_ino != od->ino)
+        return raced(ctx, od);
+    /* still thorax's own (nothing added while the command ran) */
+    thx_status ow = owned(ctx, od->dir, od->manifest, od->format);
+    if (ow != THX_OK) { thx_outdir_abort(od); return ow; }
+    /* the old directory aside, then the new one in its place: no mixture is ever visible */
+    char old[4300];
+    snprintf(old, sizeof old, "%s.oldXXXXXX", od->tmp);
+    if (!mkdtemp(old) || rmdir(old) != 0 || rename(od->dir, old) != 0) {
+        int e = errno;
+        if (e == ENOENT) return raced(ctx, od);
+        thx_outdir_abort(od);
+        return thx_error(ctx, THX_EIO, "%s: cannot replace: %s", od->dir, strerror(e));
+    }
+    /* what was moved must be what was claimed (another command may have swapped it in between) */
+    if (lstat(old, &st) != 0 || (unsigned long long)st.st_ino != od->ino || (unsigned long long)st.st_dev != od->dev) {
+        if (rename(old, od->dir) != 0) {
+            thx_outdir_abort(od);
+            return thx_error(ctx, THX_EIO, "%s was changed by another command meanwhile; its output is now at %s", od->dir,
+                             old);
+        }
+        return raced(ctx, od);
+    }
+    if (rename(od->tmp, od->dir) != 0) {
+        int e = errno;
+        if (rename(old, od->dir) != 0) {
+            thx_outdir_abort(od);
+            return thx_error(ctx, THX_EIO, "%s: cannot rename into place (%s); the previous output is at %s", od->dir,
+                             strerror(e), old);
+        }
+        if (e == EEXIST || e == ENOTEMPTY) return raced(ctx, od);
+        thx_outdir_abort(od);
+        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", od->dir, strerror(e));
+    }
+    od->tmp[0] = '\0';
+    remove_tree(old);
+    return THX_OK;
+}
 
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len)
 {

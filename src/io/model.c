@@ -421,6 +421,14 @@ fail:
 
 thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir)
 {
+    thx_outdir od;
+    THX_CHECK(thx_outdir_claim(ctx, &od, dir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, NULL, 0));
+    return thx_model_write_claimed(ctx, m, &od);
+}
+
+thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir *od)
+{
+    const char *dir = od->dir;
     /* Validate everything before creating anything on disk. */
     for (size_t i = 0; i < m->n_surfaces; i++) {
         const thx_surface *s = m->surf[i];
@@ -450,9 +458,10 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir)
     if (!json) return thx_error(ctx, THX_ENOMEM, "out of memory printing model.json");
 
     thx_status st = THX_OK;
-    char tmp[4096], pts[4200], fac[4200];
+    char pts[4400], fac[4400];
+    const char *tmp = od->tmp;
     int have_tmp = 0;
-    THX_TRY(thx_tmpdir_create(ctx, dir, tmp, sizeof tmp));
+    THX_TRY(thx_outdir_begin(ctx, od));
     have_tmp = 1;
     for (size_t i = 0; i < m->n_surfaces; i++) {
         const thx_surface *s = m->surf[i];
@@ -470,10 +479,10 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir)
     fputs(json, af.f);
     fputc('\n', af.f);
     THX_TRY(thx_atomic_commit(ctx, &af));
-    have_tmp = 0; /* thx_tmpdir_commit removes tmp itself on failure */
-    THX_TRY(thx_tmpdir_commit(ctx, tmp, dir));
+    have_tmp = 0; /* thx_outdir_commit removes tmp itself on failure */
+    THX_TRY(thx_outdir_commit(ctx, od));
 done:
-    if (have_tmp) thx_tmpdir_abort(tmp);
+    if (have_tmp) thx_outdir_abort(od);
     free(json);
     return st;
 }
