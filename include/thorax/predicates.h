@@ -34,6 +34,8 @@
 #ifndef THORAX_PREDICATES_H
 #define THORAX_PREDICATES_H
 
+#include <stddef.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -46,6 +48,13 @@ double thx_insphere(const double *a, const double *b, const double *c, const dou
 /* Do the closed segments p0-p1 and q0-q1 have a point in common (crossing or
  * touching, collinear overlaps included)? Exact, built on thx_orient2d. */
 int thx_segments_touch(const double *p0, const double *p1, const double *q0, const double *q1);
+
+/* Does the closed loop of n points xy[2i], xy[2i+1] touch itself: two edges that are not
+ * neighbours along the loop cross, touch or overlap (exact)? 1 and the pair (ei < ej; edge i
+ * joins point i to point i + 1 mod n), 0 if not, -1 out of memory. O(n log n): a sweep
+ * (Shamos and Hoey; src/geom/loop_touch.c). Edges folding back onto their neighbour are not
+ * looked for here. */
+int thx_loop_touch(const double *xy, size_t n, size_t *ei, size_t *ej);
 
 #ifdef __cplusplus
 }

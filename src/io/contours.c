@@ -156,42 +156,14 @@ static size_t z_index(const double *zs, size_t nz, double z)
 }
 
 
-typedef struct { double x0; int i; } seg_key;
-static int cmp_seg_key(const void *a, const void *b)
-{
-    double x = ((const seg_key *)a)->x0, y = ((const seg_key *)b)->x0;
-    return (x > y) - (x < y);
-}
-
-/* Finds a pair of non-adjacent intersecting edges of a closed loop: sweep over x. */
+/* Finds a pair of non-adjacent edges of a closed loop that touch (an O(n log n) sweep), or a spike. */
 static int loop_self_intersection(thx_ctx *ctx, const thx_loop *lp, int *ei, int *ej)
 {
     int n = (int)lp->n;
-    seg_key *k = malloc((size_t)n * sizeof *k);
-    if (!k) return -1;
-    for (int i = 0; i < n; i++) {
-        thx_vec2 a = lp->p[i], b = lp->p[(i + 1) % n];
-        k[i].x0 = fmin(a.x, b.x);
-        k[i].i = i;
-    }
-    qsort(k, (size_t)n, sizeof *k, cmp_seg_key);
-    int found = 0;
-    for (int s = 0; s < n && !found; s++) {
-        int i = k[s].i;
-        thx_vec2 a = lp->p[i], b = lp->p[(i + 1) % n];
-        double xmax = fmax(a.x, b.x);
-        for (int t = s + 1; t < n && k[t].x0 <= xmax; t++) {
-            int j = k[t].i;
-            if (j == i || (j + 1) % n == i || (i + 1) % n == j) continue; /* adjacent edges share a point */
-            if (thx_segments_touch(&a.x, &b.x, &lp->p[j].x, &lp->p[(j + 1) % n].x)) {
-                *ei = i < j ? i : j;
-                *ej = i < j ? j : i;
-                found = 1;
-                break;
-            }
-        }
-    }
-    free(k);
+    size_t e1 = 0, e2 = 0;
+    int found = thx_loop_touch(&lp->p[0].x, lp->n, &e1, &e2);
+    if (found < 0) return -1;
+    if (found) { *ei = (int)e1; *ej = (int)e2; }
     (void)ctx;
     /* Adjacent edges folding back onto each other (a spike) also make a loop invalid. */
     if (!found)
