@@ -51,6 +51,9 @@ grep -q '"pc":	"jacobi"' sol3/solution.json || fail "PETSc option not passed thr
 # 5. leads
 "$THORAX" leads sol -q
 "$THORAX" leads sol -q --format raw -o sol
+grep -q '"ecg12":' sol/solution.json && grep -q '"array":' sol/solution.json || fail "leads: not named in solution.json"
+# a solution holding its leads is still thorax's own: it is written again (tests/e2e_outputs.sh)
+cp -r sol sol_again && "$THORAX" forward model --epicardial beat8.raw -o sol_again -q || fail "forward over a solution with its leads"
 
 $PY - <<'EOF'
 import numpy as np, scipy.io as sio

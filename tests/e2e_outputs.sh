@@ -48,6 +48,14 @@ mkdir -p empty && "$THORAX" surfaces c.txt -o empty -q && [ -s empty/model.json 
 "$THORAX" mesh m -q && [ -s m/volume.tet ] && ok "mesh in place" || bad "mesh in place"
 [ -z "$(leftovers .)" ] && ok "no temporary directories left" || bad "left: $(leftovers .)"
 
+# electrodes written into the model (thorax electrodes' default) are thorax's own, by their manifest
+"$THORAX" electrodes m -q && [ -s m/electrodes/electrodes.json ] && "$THORAX" surfaces c.txt -o m -q && [ ! -e m/electrodes ] &&
+    ok "a model holding its electrodes is rewritten" || bad "a model holding its electrodes"
+"$THORAX" mesh m -q && "$THORAX" electrodes m -q && cp -r m m_el && rm m_el/electrodes/electrodes.json
+refused "electrodes without their manifest" '"electrodes", a folder' "$THORAX" mesh m_el -q
+[ -s m_el/electrodes/12lead.txt ] && ok "they are kept" || bad "they went"
+"$THORAX" mesh m -q || bad "mesh in place again"
+
 # 4. thorax's own model with something added by the user
 cp -r m m_extra && echo "keep me" > m_extra/README.txt
 before=$(snap m_extra)

@@ -2,13 +2,17 @@
  * surface (the 12-lead positions and a body-surface-mapping array), and the
  * phantom's heartbeat as epicardial potentials (paper 4.1). */
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli/cli.h"
+#include "cli/cli_fem.h"
 #include "thorax/electrodes.h"
 
 /* ------------------------------------------------------------ electrodes */
@@ -96,6 +100,21 @@ int cmd_electrodes(int argc, char **argv)
     }
     st = thx_electrodes_write(ctx, e12, p12);
     if (st == THX_OK && ea) st = thx_electrodes_write(ctx, ea, parr);
+    if (st == THX_OK) {
+        /* the folder's manifest: it marks the folder as thorax's, so that a model holding it (the
+           default place) can still be rewritten (thorax/fileio.h) */
+        cJSON *j = cJSON_CreateObject(), *files = j ? cJSON_AddObjectToObject(j, "files") : NULL;
+        char mpath[PATH_MAX + 32];
+        snprintf(mpath, sizeof mpath, "%s/electrodes.json", dir);
+        if (!files) { cJSON_Delete(j); st = thx_error(ctx, THX_ENOMEM, "out of memory"); }
+        else {
+            cJSON_AddStringToObject(j, "format", "thorax-electrodes");
+            cJSON_AddNumberToObject(j, "version", 1);
+            cJSON_AddStringToObject(files, "12lead", "12lead.txt");
+            if (ea) cJSON_AddStringToObject(files, "array", "array.txt");
+            st = cli_write_json(ctx, mpath, j);
+        }
+    }
     if (st != THX_OK) {
         rc = cli_fail(ctx, cmd, st);
         goto done;

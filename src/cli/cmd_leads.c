@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "cli/cli_fem.h"
 #include "thorax/electrodes.h"
 #include "thorax/fileio.h"
 
@@ -97,6 +98,33 @@ int cmd_leads(int argc, char **argv)
     if (st == THX_OK && arr) {
         snprintf(path, sizeof path, "%s/array.%s", out, ext);
         st = thx_series_write(ctx, arr, path, fmt);
+    }
+    if (st == THX_OK) {
+        /* written into the solution itself: its manifest names the new files, so that the solution
+           stays thorax's own and can be written again (thorax/fileio.h) */
+        char rs[PATH_MAX], ro[PATH_MAX];
+        if (realpath(sol, rs) && realpath(out, ro) && !strcmp(rs, ro)) {
+            cJSON *j = cJSON_Parse(text), *files = j ? cJSON_GetObjectItem(j, "files") : NULL;
+            if (!cJSON_IsObject(files)) st = thx_error(ctx, THX_EINPUT, "%s/solution.json: no \"files\"", sol);
+            else {
+                /* one entry per format written (ecg12 for text, ecg12_raw, ecg12_mat) */
+                char key[32], name[64];
+                snprintf(key, sizeof key, fmt == THX_SERIES_TEXT ? "ecg12" : "ecg12_%s", ext);
+                snprintf(name, sizeof name, "ecg12.%s", ext);
+                cJSON_DeleteItemFromObject(files, key);
+                cJSON_AddStringToObject(files, key, name);
+                if (arr) {
+                    snprintf(key, sizeof key, fmt == THX_SERIES_TEXT ? "array" : "array_%s", ext);
+                    snprintf(name, sizeof name, "array.%s", ext);
+                    cJSON_DeleteItemFromObject(files, key);
+                    cJSON_AddStringToObject(files, key, name);
+                }
+                snprintf(path, sizeof path, "%s/solution.json", sol);
+                st = cli_write_json(ctx, path, j);
+                j = NULL; /* taken */
+            }
+            cJSON_Delete(j);
+        }
     }
     if (st != THX_OK) rc = cli_fail(ctx, "leads", st);
     else if (verbose >= 0) {

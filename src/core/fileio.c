@@ -106,6 +106,22 @@ static int empty_dir(const char *dir)
     return !n;
 }
 
+static thx_status owned(thx_ctx *ctx, const char *dir, const char *manifest, const char *format);
+
+/* Outputs that thorax writes inside another one, by their manifests. */
+static const struct { const char *manifest, *format; } sub_outputs[] = {{"electrodes.json", "thorax-electrodes"}};
+
+static thx_status owned_sub(thx_ctx *ctx, const char *dir)
+{
+    for (size_t k = 0; k < sizeof sub_outputs / sizeof *sub_outputs; k++) {
+        char path[4500];
+        struct stat st;
+        if ((size_t)snprintf(path, sizeof path, "%s/%s", dir, sub_outputs[k].manifest) >= sizeof path) return THX_EIO;
+        if (lstat(path, &st) == 0 && S_ISREG(st.st_mode)) return owned(ctx, dir, sub_outputs[k].manifest, sub_outputs[k].format);
+    }
+    return THX_EIO;
+}
+
 static thx_status owned(thx_ctx *ctx, const char *dir, const char *manifest, const char *format)
 {
     if (empty_dir(dir)) return THX_OK; /* nothing to lose */
@@ -151,7 +167,13 @@ static thx_status owned(thx_ctx *ctx, const char *dir, const char *manifest, con
         const char *what = NULL;
         if (lstat(path, &st) != 0) what = "an entry it cannot examine";
         else if (S_ISLNK(st.st_mode)) what = "a symbolic link";
-        else if (S_ISDIR(st.st_mode)) what = "a folder";
+        else if (S_ISDIR(st.st_mode)) {
+            /* a folder thorax wrote into the output, with its own manifest (the electrodes thorax
+               electrodes puts into a model by default): thorax's own too */
+            thx_status sub = owned_sub(ctx, path);
+            if (sub != THX_OK) thx_ctx_clear(ctx);
+            what = sub == THX_OK ? NULL : "a folder";
+        }
         else if (!S_ISREG(st.st_mode)) what = "a special file";
         else {
             int listed = 0;
