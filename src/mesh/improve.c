@@ -576,8 +576,8 @@ static int try_face_removal(imesh *M, int32_t t, double qt, size_t *count)
 
 /* ---- vertex perturbation ---- */
 
-/* The tetrahedra around node v; 0 if v is on the boundary or its star is too large. */
-static int vertex_star(const imesh *M, int32_t v, int32_t *star)
+/* The tetrahedra around node v; 0 if its star is too large, or if v is on the boundary and open is 0. */
+static int vertex_star(const imesh *M, int32_t v, int32_t *star, int open)
 {
     int n = 0;
     star[n++] = M->node_tet[v];
@@ -587,7 +587,10 @@ static int vertex_star(const imesh *M, int32_t v, int32_t *star)
         for (int f = 0; f < 4; f++) {
             if (f == lv) continue; /* the faces containing v */
             int32_t u = M->nbr[4 * (size_t)star[i] + f];
-            if (u < 0) return 0;
+            if (u < 0) {
+                if (!open) return 0;
+                continue;
+            }
             int seen = 0;
             for (int j = 0; j < n && !seen; j++) seen = star[j] == u;
             if (seen) continue;
@@ -627,7 +630,7 @@ static int try_move(imesh *M, int32_t t, size_t *count)
     for (int k = 0; k < 4; k++) {
         int32_t v = M->tet[4 * (size_t)t + k];
         if (M->fixed[v]) continue;
-        int n = vertex_star(M, v, star);
+        int n = vertex_star(M, v, star, 0);
         if (!n) continue;
         double *x = M->xyz + 3 * (size_t)v;
         int worst = 0;
@@ -687,28 +690,6 @@ static int try_move(imesh *M, int32_t t, size_t *count)
 
 /* ---- Steiner nodes sliding on their surface triangle ---- */
 
-/* The tetrahedra around node v, on the boundary too; 0 if the star is too large. */
-static int vertex_star_open(const imesh *M, int32_t v, int32_t *star)
-{
-    int n = 0;
-    star[n++] = M->node_tet[v];
-    for (int i = 0; i < n; i++) {
-        const int32_t *q = M->tet + 4 * (size_t)star[i];
-        int lv = local_index(q, v);
-        for (int f = 0; f < 4; f++) {
-            if (f == lv) continue;
-            int32_t u = M->nbr[4 * (size_t)star[i] + f];
-            if (u < 0) continue;
-            int seen = 0;
-            for (int j = 0; j < n && !seen; j++) seen = star[j] == u;
-            if (seen) continue;
-            if (n >= MAX_STAR) return 0;
-            star[n++] = u;
-        }
-    }
-    return n;
-}
-
 /* The point of record r's triangle at barycentric coordinates w (w[k] = 0 for a corner the node's
  * edge leaves out). Exact, as the mesher's Steiner points are: the corners lie on the mesher's
  * binary grid and the coordinates are dyadic with few bits (2^-22 on an edge, 2^-20 inside). */
@@ -740,7 +721,7 @@ static int try_slide(imesh *M, int32_t t, size_t *count)
         int32_t v = M->tet[4 * (size_t)t + k];
         int32_t r = M->slide ? M->slide[v] : -1;
         if (r < 0) continue;
-        int n = vertex_star_open(M, v, star);
+        int n = vertex_star(M, v, star, 1);
         if (!n) continue;
         double *x = M->xyz + 3 * (size_t)v;
         double w[3] = {M->rec[r].bary[0], M->rec[r].bary[1], M->rec[r].bary[2]};
@@ -827,7 +808,7 @@ static int try_collapse(imesh *M, int32_t t, size_t *count)
     for (int k = 0; k < 4; k++) {
         int32_t v = M->tet[4 * (size_t)t + k];
         if (M->fixed[v]) continue;
-        int n = vertex_star(M, v, star);
+        int n = vertex_star(M, v, star, 0);
         if (!n || n > 2 * MAX_RING) continue;
         double q_old = INFINITY, vol_old = 0;
         for (int i = 0; i < n; i++) {
