@@ -12,7 +12,7 @@
 
 #include "thorax/model.h"
 
-/* Shared text helpers (defined in model.c). */
+/* Shared text helpers (defined in ptsfac.c). */
 /* Writes one coordinate "%.6f", a value that rounds to zero as "0.000000". */
 void thx_io_put_coord(FILE *f, double v);
 /* Reads a whole text file (thx_read_file), refusing one with a NUL byte (naming its line):
@@ -22,6 +22,11 @@ thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
  * (NUL-terminated in place); returns the count (max + 1 = "more than max");
  * *next = start of the following line or NULL. */
 int thx_io_split_line(char *p, char **tok, int max, char **next);
+/* Reads a .pts/.fac pair; want_base 0 or 1 requires that .fac base, -1 detects it (ptsfac.c). */
+thx_status thx_io_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fac, const char *name, thx_role role,
+                              int want_base, thx_surface **out, int *base);
+/* The checks every surface writer makes: arrays present, finite coordinates, indices in range. */
+thx_status thx_io_check_surface(thx_ctx *ctx, const thx_surface *s);
 /* A manifest file name: non-empty, no '/', not "." or "..". */
 int thx_io_file_name_ok(const char *s);
 /* A count from a JSON object: o[key] a whole number in 0 .. INT32_MAX; 0, or -1 (missing or not
