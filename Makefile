@@ -4,7 +4,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 THORAX = $(BUILD)/bin/thorax
 
-.PHONY: all deps build demo check sanitize bench clean
+.PHONY: all deps build demo check sanitize fuzz bench clean
 
 all: build
 
@@ -33,6 +33,11 @@ sanitize: deps
 	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
 	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) --output-on-failure
 
+# Every libFuzzer harness (tests/fuzz/) for FUZZ_TIME seconds each (default 60); fails on a finding.
+FUZZ_TIME ?= 60
+fuzz: deps
+	@FUZZ_TIME=$(FUZZ_TIME) JOBS=$(JOBS) bash scripts/fuzz.sh
+
 bench: build
 	@bash bench/surfaces.sh
 	@bash bench/delaunay.sh
@@ -41,4 +46,4 @@ bench: build
 	@bash bench/render.sh
 
 clean:
-	rm -rf $(BUILD) $(BUILD)-asan out
+	rm -rf $(BUILD) $(BUILD)-asan build-fuzz out

@@ -4,6 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config   # compiler and build
+  clang libclang-rt-14-dev           # make fuzz: libFuzzer with ASan/UBSan (scripts/fuzz.sh)
   libcjson-dev                       # model.json manifest
   libgmp-dev                         # tests: exact rational reference for the predicates
   libmatio-dev                       # MATLAB .mat time series (libmatio)
