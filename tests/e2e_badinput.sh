@@ -4,4 +4,4 @@
 set -euo pipefail
 : "${THORAX:?}" "${SRC:?}" "${WORK:?}"
 rm -rf "$WORK" && mkdir -p "$WORK"
-python3 "$SRC/tests/badinput/run.py" "$THORAX" --table "$WORK/table.md"
+python3 -B "$SRC/tests/badinput/run.py" "$THORAX" --table "$WORK/table.md"

@@ -29,6 +29,8 @@ import subprocess
 import sys
 import tempfile
 
+sys.dont_write_bytecode = True  # nothing written into the source tree (tests/tree_clean.sh)
+
 
 @dataclasses.dataclass
 class Case:
