@@ -16,6 +16,7 @@
 #ifndef THORAX_CONTOURS_H
 #define THORAX_CONTOURS_H
 
+#include "thorax/frame.h"
 #include "thorax/geom.h"
 
 #ifdef __cplusplus
@@ -56,6 +57,7 @@ typedef struct {
     char path[512];    /* file the contours came from ("" if built in memory) */
     size_t n_layers;   /* number of layers in the file (all surfaces together) */
     double spacing;    /* suggested node spacing for resampling, mm (0 = not given) */
+    thx_frame frame;   /* the anatomical frame ("frame UP FRONT" line; .set = 0 when absent) */
     size_t n_surfaces;
     thx_contour_surface *surf;
 } thx_contours;

@@ -1,0 +1,57 @@
+/* The anatomical frame of a model (see thorax/frame.h). */
+#include "thorax/frame.h"
+
+#include <string.h>
+
+int thx_axis_parse(const char *s, thx_axis *a)
+{
+    int sign = 1;
+    if (*s == '+' || *s == '-') sign = *s++ == '-' ? -1 : 1;
+    if ((*s == 'x' || *s == 'y' || *s == 'z') && !s[1]) {
+        a->axis = *s - 'x';
+        a->sign = sign;
+        return 0;
+    }
+    return -1;
+}
+
+const char *thx_axis_name(thx_axis a, char buf[3])
+{
+    buf[0] = a.sign < 0 ? '-' : '+';
+    buf[1] = (char)('x' + a.axis);
+    buf[2] = '\0';
+    return buf;
+}
+
+thx_status thx_frame_from_names(thx_ctx *ctx, const char *up, const char *front, const char *what, thx_frame *f)
+{
+    thx_frame r = {0};
+    if (!up || thx_axis_parse(up, &r.up))
+        return thx_error(ctx, THX_EINPUT, "%s: superior axis \"%s\" is not one of +x -x +y -y +z -z", what, up ? up : "");
+    if (!front || thx_axis_parse(front, &r.front))
+        return thx_error(ctx, THX_EINPUT, "%s: anterior axis \"%s\" is not one of +x -x +y -y +z -z", what,
+                         front ? front : "");
+    if (r.up.axis == r.front.axis)
+        return thx_error(ctx, THX_EINPUT, "%s: the superior (%s) and anterior (%s) axes must be different axes", what, up,
+                         front);
+    r.set = 1;
+    *f = r;
+    return THX_OK;
+}
+
+void thx_frame_vectors(const thx_frame *f, double up[3], double front[3], double left[3])
+{
+    memset(up, 0, 3 * sizeof *up);
+    memset(front, 0, 3 * sizeof *front);
+    up[f->up.axis] = f->up.sign;
+    front[f->front.axis] = f->front.sign;
+    left[0] = up[1] * front[2] - up[2] * front[1];
+    left[1] = up[2] * front[0] - up[0] * front[2];
+    left[2] = up[0] * front[1] - up[1] * front[0];
+}
+
+thx_frame thx_frame_ras(void)
+{
+    thx_frame f = {1, {2, 1}, {1, 1}};
+    return f;
+}
