@@ -1,0 +1,69 @@
+/*
+ * Surfaces made elsewhere: Wavefront OBJ (thorax/import.h).
+ */
+#include "io/import_surface.h"
+
+/* ------------------------------------------------------------- OBJ */
+
+thx_status import_read_obj(build *b, const char *text, size_t len, thx_import_info *info)
+{
+    thx_status st = THX_OK;
+    cursor c = {text, len, 0, 1};
+    int32_t *poly = NULL;
+    size_t cap = 0;
+    do {
+        const char *t;
+        int line = c.line;
+        size_t n = line_token(&c, &t);
+        if (!n || t[0] == '#') continue;
+        if (tok_is(t, n, "v")) {
+            double v[3];
+            for (int k = 0; k < 3; k++) {
+                const char *u;
+                size_t m = line_token(&c, &u);
+                if (!m || parse_num(u, m, &v[k]) != 0) {
+                    st = fail(b, at_line(line), "vertex %zu: coordinate %d %s", b->n_nodes + 1, k + 1,
+                              m ? "is not a finite number" : "is missing");
+                    goto done;
+                }
+            }
+            /* an optional w (or vertex colour) may follow: not geometry here */
+            THX_TRY(add_node(b, at_line(line), v[0], v[1], v[2]));
+        } else if (tok_is(t, n, "f")) {
+            size_t nv = 0;
+            const char *u;
+            size_t m;
+            while ((m = line_token(&c, &u)) != 0) {
+                /* v, v/vt, v//vn, v/vt/vn: the vertex is the part before the first '/' */
+                size_t vlen = 0;
+                while (vlen < m && u[vlen] != '/') vlen++;
+                long long x;
+                if (parse_int(u, vlen, &x) != 0 || x == 0) {
+                    st = fail(b, at_line(line), "face vertex \"%s\" is not a vertex number (1-based, or negative "
+                              "counting back from the last vertex)", tok_show(u, m));
+                    goto done;
+                }
+                /* negative numbers count back from the last vertex defined so far */
+                long long idx = x > 0 ? x - 1 : (long long)b->n_nodes + x;
+                if (idx < 0 || (size_t)idx >= b->n_nodes) {
+                    st = fail(b, at_line(line), "face refers to vertex %lld but %zu vertices are defined before it", x, b->n_nodes);
+                    goto done;
+                }
+                if (nv + 1 > cap) THX_TRY(thx_grow(b->ctx, (void **)&poly, &cap, nv + 1, sizeof *poly));
+                poly[nv++] = (int32_t)idx;
+            }
+            THX_TRY(add_polygon(b, at_line(line), poly, nv));
+        } else if (tok_is(t, n, "l") || tok_is(t, n, "p")) {
+            b->n_ignored++;
+        }
+        /* vt, vn, vp, g, o, s, usemtl, mtllib and other statements carry no surface geometry */
+    } while (next_line(&c));
+    if (info) {
+        snprintf(info->format_detail, sizeof info->format_detail, "Wavefront OBJ");
+        info->index_base = 1;
+    }
+done:
+    free(poly);
+    return st;
+}
+
