@@ -1,0 +1,497 @@
+/*
+ * Time series, MATLAB .mat through libmatio (series.c has the dispatch).
+ *
+ * Decisions recorded here:
+ *
+ *  - .mat files go through libmatio as MATLAB 5 files without compression
+ *    (scipy.io.loadmat and every MATLAB since 5 read them; compression would
+ *    cost more time than the file size is worth here), with a fixed header
+ *    text and no date, so the same series gives byte-identical files. Strings
+ *    are written as UTF-16 code units (miUINT16), MATLAB's own char
+ *    encoding: libmatio writes UTF-8 char arrays with one byte per
+ *    character, which would cut multi-byte characters. On reading, UTF-8,
+ *    UTF-16 and 8-bit (Latin-1) char data are accepted and stored as UTF-8.
+ *    libmatio prints nothing unless someone calls Mat_LogInit, which the
+ *    library never does; its failures are reported in our own words.
+ */
+#include "thorax/series.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <matio.h>
+
+#include "thorax/fileio.h"
+#include "io/series_impl.h"
+
+/* ------------------------------------------------------------- MATLAB */
+
+#define MAT_HEADER_TEXT "MATLAB 5.0 MAT-file, Platform: any, Created by: thorax (libmatio)"
+
+/* The code point of the UTF-8 sequence at p and its length in *len, or -1
+ * (with *len = 1) for a byte that does not start a valid sequence. */
+static long utf8_decode(const unsigned char *p, int *len)
+{
+    *len = 1;
+    int n;
+    uint32_t c;
+    if (p[0] < 0x80) return p[0];
+    if (p[0] >= 0xC2 && p[0] < 0xE0) n = 2, c = p[0] & 0x1Fu;
+    else if (p[0] >= 0xE0 && p[0] < 0xF0) n = 3, c = p[0] & 0x0Fu;
+    else if (p[0] >= 0xF0 && p[0] < 0xF5) n = 4, c = p[0] & 0x07u;
+    else return -1;
+    for (int i = 1; i < n; i++) {
+        if ((p[i] & 0xC0) != 0x80) return -1; /* also stops at the NUL */
+        c = (c << 6) | (p[i] & 0x3Fu);
+    }
+    static const uint32_t least[5] = {0, 0, 0x80, 0x800, 0x10000}; /* no overlong forms */
+    if (c < least[n] || c > 0x10FFFF || (c >= 0xD800 && c < 0xE000)) return -1;
+    *len = n;
+    return (long)c;
+}
+
+/* UTF-8 to UTF-16 code units; a byte that is not valid UTF-8 is taken as
+ * Latin-1. Returns the count (at most strlen(s)). */
+static size_t utf8_to_utf16(const char *s, uint16_t *w)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t n = 0;
+    while (*p) {
+        int len;
+        long c = utf8_decode(p, &len);
+        if (c < 0) c = *p;
+        p += len;
+        if (c >= 0x10000) {
+            c -= 0x10000;
+            w[n++] = (uint16_t)(0xD800 + (c >> 10));
+            w[n++] = (uint16_t)(0xDC00 + (c & 0x3FF));
+        } else {
+            w[n++] = (uint16_t)c;
+        }
+    }
+    return n;
+}
+
+/* Appends code point c as UTF-8 if it fits in cap bytes (NUL excluded); 0 if not. */
+static int put_utf8(char *dst, size_t *n, size_t cap, uint32_t c)
+{
+    unsigned char b[4];
+    size_t k = c < 0x80 ? 1 : c < 0x800 ? 2 : c < 0x10000 ? 3 : 4;
+    if (*n + k > cap) return 0;
+    if (k == 1) {
+        b[0] = (unsigned char)c;
+    } else {
+        static const unsigned char lead[5] = {0, 0, 0xC0, 0xE0, 0xF0};
+        for (size_t i = k - 1; i > 0; i--, c >>= 6) b[i] = (unsigned char)(0x80 | (c & 0x3F));
+        b[0] = (unsigned char)(lead[k] | c);
+    }
+    memcpy(dst + *n, b, k);
+    *n += k;
+    return 1;
+}
+
+static thx_status mat_write_string(mat_t *mat, const char *name, const char *str, uint16_t *w)
+{
+    size_t n = utf8_to_utf16(str, w);
+    size_t dims[2] = {n ? 1 : 0, n};
+    matvar_t *v = Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT16, 2, dims, n ? w : NULL, MAT_F_DONT_COPY_DATA);
+    if (!v) return THX_EIO;
+    int bad = Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE);
+    Mat_VarFree(v);
+    return bad ? THX_EIO : THX_OK;
+}
+
+thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
+{
+    thx_atomic_file af;
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    /* libmatio opens files by name: keep the temporary name, write through it */
+    fclose(af.f);
+    af.f = NULL;
+    errno = 0;
+    mat_t *mat = Mat_CreateVer(af.tmp, MAT_HEADER_TEXT, MAT_FT_MAT5);
+    if (!mat) {
+        thx_atomic_abort(&af);
+        return thx_error(ctx, THX_EIO, "%s: libmatio cannot create the file", path);
+    }
+    const char *what = "potvals";
+    uint16_t w[2 * sizeof s->label];
+    size_t dims[2] = {s->n_rows, s->n_frames};
+    matvar_t *v = Mat_VarCreate("potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, s->v, MAT_F_DONT_COPY_DATA);
+    int bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
+    Mat_VarFree(v);
+    if (!bad) {
+        what = "time";
+        size_t tdims[2] = {1, s->n_frames};
+        v = Mat_VarCreate("time", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, tdims, s->time, MAT_F_DONT_COPY_DATA);
+        bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
+        Mat_VarFree(v);
+    }
+    if (!bad) bad = mat_write_string(mat, what = "unit", s->unit, w) != THX_OK;
+    if (!bad) bad = mat_write_string(mat, what = "time_unit", s->time_unit, w) != THX_OK;
+    if (!bad) bad = mat_write_string(mat, what = "label", s->label, w) != THX_OK;
+    int e = errno;
+    if (Mat_Close(mat) != 0 && !bad) {
+        bad = 1;
+        what = "the end of the file";
+    }
+    /* libmatio does not always report a failed fwrite: a file shorter than
+     * its data is (a full disk) is caught here */
+    struct stat sb;
+    if (!bad && (stat(af.tmp, &sb) != 0 || (uint64_t)sb.st_size < 128 + 8 * (uint64_t)s->n_frames * (s->n_rows + 1))) {
+        bad = 1;
+        what = "the data (the file is too short: disk full?)";
+    }
+    if (bad) {
+        thx_atomic_abort(&af);
+        return thx_error(ctx, THX_EIO, "%s: writing %s failed: %s", path, what, e ? strerror(e) : "libmatio error");
+    }
+    if (rename(af.tmp, af.path) != 0) {
+        e = errno;
+        thx_atomic_abort(&af);
+        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", path, strerror(e));
+    }
+    af.tmp[0] = '\0';
+    return THX_OK;
+}
+
+static const char *mat_class_name(const matvar_t *v)
+{
+    static const char *const names[] = {"empty", "cell", "struct", "object", "char", "sparse", "double", "single",
+                                        "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
+                                        "function", "opaque"};
+    if (v->isLogical) return "logical";
+    return (unsigned)v->class_type < sizeof names / sizeof names[0] ? names[v->class_type] : "unknown";
+}
+
+static int mat_is_numeric_class(enum matio_classes c)
+{
+    return c == MAT_C_DOUBLE || c == MAT_C_SINGLE || c == MAT_C_INT8 || c == MAT_C_UINT8 || c == MAT_C_INT16 ||
+           c == MAT_C_UINT16 || c == MAT_C_INT32 || c == MAT_C_UINT32 || c == MAT_C_INT64 || c == MAT_C_UINT64;
+}
+
+static size_t mat_numel(const matvar_t *v)
+{
+    size_t n = 1;
+    for (int i = 0; i < v->rank; i++) n *= v->dims[i];
+    return v->rank > 0 ? n : 0;
+}
+
+/* A candidate for the values: real, numeric, 2-D, not empty. */
+static int mat_is_matrix(const matvar_t *v)
+{
+    return v && mat_is_numeric_class(v->class_type) && !v->isComplex && !v->isLogical && v->rank == 2 &&
+           mat_numel(v) > 0;
+}
+
+/* Why v cannot be the values (for messages), or NULL. */
+static const char *mat_not_matrix(const matvar_t *v)
+{
+    if (!mat_is_numeric_class(v->class_type)) return "not a numeric matrix";
+    if (v->isComplex) return "complex (only real values are supported)";
+    if (v->rank != 2) return "not 2-D (a series is a rows x frames matrix)";
+    if (mat_numel(v) == 0) return "empty";
+    return NULL;
+}
+
+/* Converts n numeric elements of v (any real class) to double. */
+static int mat_to_double(const matvar_t *v, size_t n, double *out)
+{
+    if (!v->data) return 0;
+    switch (v->class_type) {
+#define CONV(T)                                                 \
+    do {                                                        \
+        const T *d = (const T *)v->data;                        \
+        for (size_t i = 0; i < n; i++) out[i] = (double)d[i];   \
+    } while (0)
+    case MAT_C_DOUBLE: memcpy(out, v->data, n * sizeof *out); return 1;
+    case MAT_C_SINGLE: CONV(float); return 1;
+    case MAT_C_INT8: CONV(int8_t); return 1;
+    case MAT_C_UINT8: CONV(uint8_t); return 1;
+    case MAT_C_INT16: CONV(int16_t); return 1;
+    case MAT_C_UINT16: CONV(uint16_t); return 1;
+    case MAT_C_INT32: CONV(int32_t); return 1;
+    case MAT_C_UINT32: CONV(uint32_t); return 1;
+    case MAT_C_INT64: CONV(int64_t); return 1;
+    case MAT_C_UINT64: CONV(uint64_t); return 1;
+    default: return 0;
+#undef CONV
+    }
+}
+
+/* A char variable as UTF-8 into dst (cap bytes with the NUL). Returns 0 if it
+ * is not a one-line char array; sets *cut when it had to be shortened. */
+static int mat_string(const matvar_t *v, char *dst, size_t cap, int *cut)
+{
+    *cut = 0;
+    dst[0] = '\0';
+    if (v->class_type != MAT_C_CHAR || v->rank != 2 || v->dims[0] > 1) return 0;
+    size_t n = 0, limit = cap - 1;
+    if (!v->data || v->nbytes == 0 || mat_numel(v) == 0) return 1;
+    switch (v->data_type) {
+    case MAT_T_UTF8: {
+        /* whole characters only */
+        const unsigned char *b = v->data;
+        size_t len = v->nbytes, i = 0;
+        while (i < len && b[i]) {
+            size_t k = 1;
+            if (b[i] >= 0xC0) while (i + k < len && (b[i + k] & 0xC0) == 0x80) k++;
+            if (n + k > limit) {
+                *cut = 1;
+                break;
+            }
+            memcpy(dst + n, b + i, k);
+            n += k;
+            i += k;
+        }
+        break;
+    }
+    case MAT_T_UINT16:
+    case MAT_T_INT16:
+    case MAT_T_UTF16: {
+        const uint16_t *w = v->data;
+        size_t len = v->nbytes / 2;
+        for (size_t i = 0; i < len && w[i]; i++) {
+            uint32_t c = w[i];
+            if (c >= 0xD800 && c < 0xDC00 && i + 1 < len && w[i + 1] >= 0xDC00 && w[i + 1] < 0xE000) {
+                c = 0x10000 + ((c - 0xD800) << 10) + (w[i + 1] - 0xDC00u);
+                i++;
+            } else if (c >= 0xD800 && c < 0xE000) {
+                c = 0xFFFD;
+            }
+            if (!put_utf8(dst, &n, limit, c)) {
+                *cut = 1;
+                break;
+            }
+        }
+        break;
+    }
+    case MAT_T_UINT8:
+    case MAT_T_INT8: {
+        const unsigned char *b = v->data;
+        for (size_t i = 0; i < v->nbytes && b[i]; i++)
+            if (!put_utf8(dst, &n, limit, b[i])) {
+                *cut = 1;
+                break;
+            }
+        break;
+    }
+    default: return 0;
+    }
+    dst[n] = '\0';
+    return 1;
+}
+
+/* Where the metadata (time, unit, time_unit, label) come from: top-level
+ * variables, or the fields of the struct that held the values. */
+typedef struct {
+    mat_t *mat;
+    matvar_t *holder; /* the struct, or NULL for top level */
+    matvar_t *owned;  /* the top-level variable last read (freed by the next mat_meta_get or the caller) */
+} mat_meta;
+
+static matvar_t *mat_meta_get(mat_meta *m, const char *name)
+{
+    if (m->holder) return Mat_VarGetStructFieldByName(m->holder, name, 0);
+    Mat_VarFree(m->owned);
+    m->owned = NULL;
+    matvar_t *info = Mat_VarReadInfo(m->mat, name);
+    if (!info) return NULL;
+    Mat_VarFree(info);
+    m->owned = Mat_VarRead(m->mat, name);
+    return m->owned;
+}
+
+static thx_status mat_read_meta(thx_ctx *ctx, const char *path, const char *where, mat_meta *m, thx_series *s)
+{
+    matvar_t *t = mat_meta_get(m, "time");
+    int have_time = 0;
+    if (t && t->class_type == MAT_C_CHAR) {
+        /* map3d's ts.time is the clock time of the recording ("2:06:25 PM"), not an axis */
+        char clock[64];
+        int cut = 0;
+        if (mat_string(t, clock, sizeof clock, &cut))
+            thx_log(ctx, THX_LOG_DEBUG, "%s: %stime '%s' is text (a clock time), not a time axis", path, where, clock);
+        t = NULL;
+    }
+    if (t) {
+        have_time = 1;
+        size_t n = mat_numel(t);
+        if (!mat_is_numeric_class(t->class_type) || t->isComplex || n != s->n_frames)
+            return thx_error(ctx, THX_EINPUT, "%s: %stime is %s with %zu elements, but the series has %zu frames "
+                                              "(a numeric vector of one time per frame is needed)",
+                             path, where, mat_class_name(t), n, s->n_frames);
+        if (!mat_to_double(t, n, s->time))
+            return thx_error(ctx, THX_EINPUT, "%s: %stime: no data", path, where);
+    }
+    if (!have_time) {
+        /* map3d's samplefrequency (Hz): frames 1 / fs apart, in ms */
+        matvar_t *fs = mat_meta_get(m, "samplefrequency");
+        double hz = 0;
+        if (fs && mat_is_numeric_class(fs->class_type) && !fs->isComplex && mat_numel(fs) == 1 && mat_to_double(fs, 1, &hz) &&
+            isfinite(hz) && hz > 0) {
+            for (size_t f = 0; f < s->n_frames; f++) s->time[f] = (double)f * (1000.0 / hz);
+            snprintf(s->time_unit, sizeof s->time_unit, "ms");
+        } else if (fs) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %ssamplefrequency ignored: not one positive number", path, where);
+        }
+    }
+    static const char *const names[] = {"unit", "time_unit", "label"};
+    char *dst[] = {s->unit, s->time_unit, s->label};
+    size_t cap[] = {sizeof s->unit, sizeof s->time_unit, sizeof s->label};
+    for (int k = 0; k < 3; k++) {
+        matvar_t *v = mat_meta_get(m, names[k]);
+        if (!v) continue;
+        char tmp[128];
+        int cut = 0;
+        if (!mat_string(v, tmp, cap[k], &cut)) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %s%s ignored: %s, not a one-line char array", path, where, names[k],
+                    mat_class_name(v));
+            continue;
+        }
+        if (cut) thx_log(ctx, THX_LOG_WARN, "%s: %s%s cut to %zu bytes", path, where, names[k], cap[k] - 1);
+        memcpy(dst[k], tmp, cap[k]);
+    }
+    Mat_VarFree(m->owned);
+    m->owned = NULL;
+    return THX_OK;
+}
+
+/* "a (double 3x4), b (char 1x2)" for messages. */
+static void mat_list_vars(mat_t *mat, char *buf, size_t cap)
+{
+    size_t n = 0;
+    buf[0] = '\0';
+    Mat_Rewind(mat);
+    matvar_t *v;
+    int count = 0;
+    while ((v = Mat_VarReadNextInfo(mat)) && n < cap) {
+        int w = snprintf(buf + n, cap - n, "%s%s (%s", count++ ? ", " : "", v->name ? v->name : "?",
+                         mat_class_name(v));
+        n += w > 0 ? (size_t)w : 0;
+        for (int i = 0; i < v->rank && n < cap; i++) {
+            w = snprintf(buf + n, cap - n, "%s%zu", i ? "x" : " ", v->dims[i]);
+            n += w > 0 ? (size_t)w : 0;
+        }
+        if (n < cap) {
+            w = snprintf(buf + n, cap - n, ")");
+            n += w > 0 ? (size_t)w : 0;
+        }
+        Mat_VarFree(v);
+    }
+    Mat_VarFree(v);
+    if (!count) snprintf(buf, cap, "none");
+}
+
+thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, thx_series **out)
+{
+    *out = NULL;
+    FILE *probe = fopen(path, "rb");
+    if (!probe) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
+    fclose(probe);
+    mat_t *mat = Mat_Open(path, MAT_ACC_RDONLY);
+    if (!mat) return thx_error(ctx, THX_EINPUT, "%s: not a MATLAB .mat file that libmatio can read", path);
+    thx_status st = THX_OK;
+    thx_series *s = NULL;
+    matvar_t *top = NULL;     /* the variable read */
+    const matvar_t *vals = NULL;
+    char where[200] = "", vars[1024];
+    const char *name = varname;
+    if (!name) {
+        /* potvals, else the first struct with a potvals field, else the first matrix */
+        matvar_t *info = Mat_VarReadInfo(mat, "potvals");
+        if (info) {
+            name = "potvals";
+            Mat_VarFree(info);
+        } else {
+            char fs[256] = "", fm[256] = "";
+            Mat_Rewind(mat);
+            while ((info = Mat_VarReadNextInfo(mat))) {
+                if (!fs[0] && info->class_type == MAT_C_STRUCT && mat_numel(info) >= 1 && info->name &&
+                    Mat_VarGetStructFieldByName(info, "potvals", 0))
+                    snprintf(fs, sizeof fs, "%s", info->name);
+                if (!fm[0] && mat_is_matrix(info) && info->name) snprintf(fm, sizeof fm, "%s", info->name);
+                Mat_VarFree(info);
+            }
+            if (!fs[0] && !fm[0]) {
+                mat_list_vars(mat, vars, sizeof vars);
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s: no numeric variable: no 'potvals', no struct with a 'potvals' field, no 2-D "
+                               "numeric matrix (variables: %s)",
+                               path, vars);
+                goto done;
+            }
+            top = Mat_VarRead(mat, fs[0] ? fs : fm);
+            if (!top) {
+                st = thx_error(ctx, THX_EINPUT, "%s: variable '%s' cannot be read (damaged file?)", path,
+                               fs[0] ? fs : fm);
+                goto done;
+            }
+            name = top->name;
+        }
+    }
+    if (!top) {
+        matvar_t *info = Mat_VarReadInfo(mat, name);
+        if (!info) {
+            mat_list_vars(mat, vars, sizeof vars);
+            st = thx_error(ctx, THX_EINPUT, "%s: no variable '%s' (variables: %s)", path, name, vars);
+            goto done;
+        }
+        Mat_VarFree(info);
+        top = Mat_VarRead(mat, name);
+        if (!top) {
+            st = thx_error(ctx, THX_EINPUT, "%s: variable '%s' cannot be read (damaged file?)", path, name);
+            goto done;
+        }
+    }
+    mat_meta meta = {mat, NULL, NULL};
+    if (top->class_type == MAT_C_STRUCT) {
+        const matvar_t *pv = mat_numel(top) >= 1 ? Mat_VarGetStructFieldByName(top, "potvals", 0) : NULL;
+        if (!pv) {
+            st = thx_error(ctx, THX_EINPUT, "%s: variable '%s' is a struct without a 'potvals' field", path,
+                           top->name);
+            goto done;
+        }
+        if (mat_numel(top) > 1)
+            thx_log(ctx, THX_LOG_WARN, "%s: '%s' is a struct array of %zu elements; the first is read", path,
+                    top->name, mat_numel(top));
+        vals = pv;
+        meta.holder = top;
+        snprintf(where, sizeof where, "%s.", top->name);
+    } else {
+        vals = top;
+    }
+    const char *why = mat_not_matrix(vals);
+    if (why) {
+        st = thx_error(ctx, THX_EINPUT, "%s: %s%s (%s) is %s", path, where, meta.holder ? "potvals" : top->name,
+                       mat_class_name(vals), why);
+        goto done;
+    }
+    if ((st = thx_series_create(ctx, vals->dims[0], vals->dims[1], &s)) != THX_OK) goto done;
+    if (!mat_to_double(vals, s->n_rows * s->n_frames, s->v)) {
+        st = thx_error(ctx, THX_EINPUT, "%s: %s%s: no data", path, where, meta.holder ? "potvals" : top->name);
+        goto done;
+    }
+    if ((st = mat_read_meta(ctx, path, where, &meta, s)) != THX_OK) {
+        Mat_VarFree(meta.owned);
+        goto done;
+    }
+    st = series_check(ctx, s, path);
+done:
+    Mat_VarFree(top);
+    Mat_Close(mat);
+    if (st != THX_OK) thx_series_destroy(&s);
+    *out = s;
+    return st;
+}
+
