@@ -39,5 +39,19 @@ thx_status thx_frame_from_names(thx_ctx *ctx, const char *up, const char *front,
 void thx_frame_vectors(const thx_frame *f, double up[3], double front[3], double left[3]);
 /* The RAS frame of thorax's own models (+z up, +y front). */
 thx_frame thx_frame_ras(void);
+/* The axis toward the subject's left (superior x anterior). f->set required. */
+thx_axis thx_frame_left(const thx_frame *f);
+/* Whether f is a valid frame (set, axes 0..2, signs +-1, up and front on different axes). */
+int thx_frame_valid(const thx_frame *f);
+/* A point or vector between model coordinates p and the RAS coordinates q of the frame
+ * (q[0] toward the subject's right, q[1] anterior, q[2] superior). The map is a rotation
+ * (det +1): orientations, distances and handedness are kept. f->set required. */
+void thx_frame_to_ras(const thx_frame *f, const double p[3], double q[3]);
+void thx_frame_from_ras(const thx_frame *f, const double q[3], double p[3]);
+/* THX_EINPUT when f is not set, with the message every command that needs anatomy gives:
+ * "MODEL has no anatomical frame (which axes point superior and anterior; NEEDS depend on
+ * it): give --up and --front to thorax import ..., or a 'frame UP FRONT' line in the
+ * contours"; `needs` says what needed it ("the 12-lead landmarks"). THX_OK when set. */
+thx_status thx_frame_require(thx_ctx *ctx, const thx_frame *f, const char *model, const char *needs);
 
 #endif

@@ -3,8 +3,10 @@
  *
  * Model directory layout (docs/formats.md, "Model directory"):
  *   model.json   manifest: format version, units ("mm"), surfaces (name, role,
- *                files, node and triangle counts, an interior point), provenance
- *                (thorax version, command line, options, input file)
+ *                files, node and triangle counts, an interior point), the
+ *                anatomical frame ("frame": {"superior": "+z", "anterior": "+y",
+ *                "left": "-x"}; absent when unknown), provenance (thorax
+ *                version, command line, options, input file)
  *   NAME.pts     per surface: one node per line, "x y z" in mm
  *   NAME.fac     per surface: one triangle per line, three 1-based node numbers,
  *                counterclockwise seen from outside
@@ -25,6 +27,7 @@
 #define THORAX_MODEL_H
 
 #include "thorax/fileio.h"
+#include "thorax/frame.h"
 #include "thorax/geom.h"
 #include "thorax/volume.h"
 
@@ -39,6 +42,8 @@ typedef struct thx_model {
     thx_vec3 *interior;      /* per surface: a point inside it (for the 4 pi check) */
     char *provenance_json;   /* owned JSON text of the "provenance" object, or NULL */
     struct thx_volume *volume; /* owned tetrahedral mesh with regions (thorax/volume.h), or NULL */
+    thx_frame frame;         /* which model axes point superior and anterior (thorax/frame.h);
+                                .set = 0: unknown (a command that needs anatomy refuses the model) */
 } thx_model;
 
 thx_status thx_model_create(thx_ctx *ctx, thx_model **out);
@@ -67,7 +72,11 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
 /* Reads a model directory written by thx_model_write, with its volume if
  * the manifest has one; every file is validated as the writer validates
  * memory, and errors name the file and line ("volume.tet:17: region 4 out of
- * range 1..3"). Caller destroys *out. */
+ * range 1..3"). The manifest is read strictly: a NUL byte, an unknown or
+ * repeated key, a value of the wrong type, a count that disagrees with its
+ * file or a bad frame is refused, naming model.json and the key (and the
+ * surface); nothing is returned half-read. A manifest without "frame" gives
+ * frame.set = 0. Caller destroys *out. */
 thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out);
 
 /* Reads a .pts/.fac pair into a surface. The .fac index base (0 or 1) is

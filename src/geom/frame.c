@@ -55,3 +55,54 @@ thx_frame thx_frame_ras(void)
     thx_frame f = {1, {2, 1}, {1, 1}};
     return f;
 }
+
+thx_axis thx_frame_left(const thx_frame *f)
+{
+    double u[3], a[3], l[3];
+    thx_frame_vectors(f, u, a, l);
+    thx_axis r = {0, 1};
+    for (int k = 0; k < 3; k++)
+        if (l[k] != 0) {
+            r.axis = k;
+            r.sign = l[k] > 0 ? 1 : -1;
+        }
+    return r;
+}
+
+int thx_frame_valid(const thx_frame *f)
+{
+    return f && f->set && f->up.axis >= 0 && f->up.axis <= 2 && f->front.axis >= 0 && f->front.axis <= 2 &&
+           (f->up.sign == 1 || f->up.sign == -1) && (f->front.sign == 1 || f->front.sign == -1) &&
+           f->up.axis != f->front.axis;
+}
+
+void thx_frame_to_ras(const thx_frame *f, const double p[3], double q[3])
+{
+    double u[3], a[3], l[3];
+    thx_frame_vectors(f, u, a, l);
+    double r0 = -(l[0] * p[0] + l[1] * p[1] + l[2] * p[2]);
+    double r1 = a[0] * p[0] + a[1] * p[1] + a[2] * p[2];
+    double r2 = u[0] * p[0] + u[1] * p[1] + u[2] * p[2];
+    q[0] = r0;
+    q[1] = r1;
+    q[2] = r2;
+}
+
+void thx_frame_from_ras(const thx_frame *f, const double q[3], double p[3])
+{
+    double u[3], a[3], l[3];
+    thx_frame_vectors(f, u, a, l);
+    double r[3];
+    for (int k = 0; k < 3; k++) r[k] = -l[k] * q[0] + a[k] * q[1] + u[k] * q[2];
+    memcpy(p, r, sizeof r);
+}
+
+thx_status thx_frame_require(thx_ctx *ctx, const thx_frame *f, const char *model, const char *needs)
+{
+    if (f && f->set) return THX_OK;
+    return thx_error(ctx, THX_EINPUT,
+                     "%s has no anatomical frame (which axes point superior and anterior; %s depend on it): give "
+                     "--up and --front to thorax import (e.g. --up +z --front +y), or a 'frame UP FRONT' line in the "
+                     "contours given to thorax surfaces",
+                     model, needs);
+}

@@ -154,6 +154,14 @@ static thx_status build_manifest(thx_ctx *ctx, const thx_model *m, cJSON **out)
             cJSON_AddItemToObject(o, "interior", a);
         }
     }
+    if (m->frame.set) {
+        char a[3];
+        cJSON *fo = cJSON_AddObjectToObject(root, "frame");
+        if (!fo || !cJSON_AddStringToObject(fo, "superior", thx_axis_name(m->frame.up, a)) ||
+            !cJSON_AddStringToObject(fo, "anterior", thx_axis_name(m->frame.front, a)) ||
+            !cJSON_AddStringToObject(fo, "left", thx_axis_name(thx_frame_left(&m->frame), a)))
+            goto nomem;
+    }
     if (m->volume) {
         st = thx_io_volume_manifest(ctx, m, root);
         if (st) goto fail;
@@ -207,6 +215,8 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
             return thx_error(ctx, THX_EINPUT,
                              "surface \"volume\": name is reserved for the volume mesh files (volume.pts, volume.tet)");
     }
+    if (m->frame.set && !thx_frame_valid(&m->frame))
+        return thx_error(ctx, THX_EINPUT, "model frame: the superior and anterior axes must be two different axes of +x -x +y -y +z -z");
     if (m->volume) THX_CHECK(thx_io_volume_validate(ctx, m, dir));
     cJSON *root = NULL;
     THX_CHECK(build_manifest(ctx, m, &root));
@@ -270,6 +280,110 @@ int thx_io_file_name_ok(const char *s)
     return s[0] && !strchr(s, '/') && strcmp(s, ".") != 0 && strcmp(s, "..") != 0;
 }
 
+/* The keys each object of the manifest may hold (docs/formats.md). A key
+ * outside its list is refused rather than ignored: a misspelt key ("interiour",
+ * "fram") would otherwise drop what it carries without a word; a later format
+ * that adds keys raises "version". */
+static const char *const ROOT_KEYS[] = {"format", "version", "units", "surfaces", "frame", "volume", "regions", "provenance", NULL};
+static const char *const SURFACE_KEYS[] = {"name", "role", "pts", "fac", "n_nodes", "n_tris", "interior", "vmap", NULL};
+static const char *const FRAME_KEYS[] = {"superior", "anterior", "left", NULL};
+static const char *const VOLUME_KEYS[] = {"pts",   "tet",         "n_nodes",     "n_tets",  "n_regions", "units",
+                                          "index_base", "orientation", "node_tables", "steiner", "n_steiner", NULL};
+static const char *const REGION_KEYS[] = {"id", "name", "sigma", "units", "source", NULL};
+
+/* Refuses a key of o outside `keys` or a key given twice (cJSON keeps both and
+ * would read the first); `where` is "" or " surface 2 (\"torso\")" etc. */
+static thx_status check_keys(thx_ctx *ctx, const char *mpath, const char *where, const cJSON *o,
+                             const char *const *keys)
+{
+    for (const cJSON *c = o->child; c; c = c->next) {
+        const char *k = c->string ? c->string : "";
+        int known = 0;
+        for (const char *const *p = keys; *p && !known; p++) known = strcmp(*p, k) == 0;
+        if (!known) {
+            char list[256];
+            size_t n = 0;
+            list[0] = '\0';
+            for (const char *const *p = keys; *p && n < sizeof list; p++)
+                n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", p == keys ? "" : ", ", *p);
+            return thx_error(ctx, THX_EINPUT, "%s:%s unknown key \"%.40s\" (known here: %s)", mpath, where, k, list);
+        }
+        for (const cJSON *d = o->child; d != c; d = d->next)
+            if (d->string && strcmp(d->string, k) == 0)
+                return thx_error(ctx, THX_EINPUT, "%s:%s key \"%s\" appears twice", mpath, where, k);
+    }
+    return THX_OK;
+}
+
+/* "frame": {"superior": AXIS, "anterior": AXIS[, "left": AXIS]} -> *f. */
+static thx_status read_frame(thx_ctx *ctx, const char *mpath, const cJSON *jf, thx_frame *f)
+{
+    memset(f, 0, sizeof *f);
+    if (!jf || cJSON_IsNull(jf)) return THX_OK;
+    if (!cJSON_IsObject(jf))
+        return thx_error(ctx, THX_EINPUT, "%s: \"frame\" must be an object {\"superior\": \"+z\", \"anterior\": \"+y\"}", mpath);
+    THX_CHECK(check_keys(ctx, mpath, " \"frame\":", jf, FRAME_KEYS));
+    static const char *const names[3] = {"superior", "anterior", "left"};
+    thx_axis ax[3];
+    for (int k = 0; k < 3; k++) {
+        const cJSON *v = cJSON_GetObjectItemCaseSensitive(jf, names[k]);
+        if (!v && k == 2) break;
+        if (!cJSON_IsString(v) || thx_axis_parse(v->valuestring, &ax[k]))
+            return thx_error(ctx, THX_EINPUT, "%s: \"frame\".\"%s\" %s (one of \"+x\" \"-x\" \"+y\" \"-y\" \"+z\" \"-z\")",
+                             mpath, names[k], !v ? "missing" : cJSON_IsString(v) ? "is not an axis" : "must be a string");
+    }
+    if (ax[0].axis == ax[1].axis)
+        return thx_error(ctx, THX_EINPUT, "%s: \"frame\": \"superior\" and \"anterior\" must be two different axes", mpath);
+    thx_frame r = {1, ax[0], ax[1]};
+    if (cJSON_GetObjectItemCaseSensitive(jf, "left")) {
+        thx_axis l = thx_frame_left(&r);
+        char a[3], b[3];
+        if (l.axis != ax[2].axis || l.sign != ax[2].sign)
+            return thx_error(ctx, THX_EINPUT,
+                             "%s: \"frame\".\"left\" is %s but superior x anterior is %s (the frame must be right-handed)",
+                             mpath, thx_axis_name(ax[2], a), thx_axis_name(l, b));
+    }
+    *f = r;
+    return THX_OK;
+}
+
+/* Keys, duplicates and value types of "volume" and the "regions" entries
+ * (their meaning is checked by thx_io_volume_read). */
+static thx_status check_volume_keys(thx_ctx *ctx, const char *mpath, const cJSON *root)
+{
+    const cJSON *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
+    if (cJSON_IsObject(vo)) {
+        THX_CHECK(check_keys(ctx, mpath, " \"volume\":", vo, VOLUME_KEYS));
+        static const char *const strs[] = {"pts", "tet", "units", "orientation", "node_tables", "steiner"};
+        for (size_t k = 0; k < sizeof strs / sizeof *strs; k++) {
+            const cJSON *v = cJSON_GetObjectItemCaseSensitive(vo, strs[k]);
+            if (v && !cJSON_IsString(v))
+                return thx_error(ctx, THX_EINPUT, "%s: \"volume\".\"%s\" must be a string", mpath, strs[k]);
+        }
+        static const char *const nums[] = {"n_nodes", "n_tets", "n_regions", "index_base", "n_steiner"};
+        for (size_t k = 0; k < sizeof nums / sizeof *nums; k++) {
+            const cJSON *v = cJSON_GetObjectItemCaseSensitive(vo, nums[k]);
+            size_t n;
+            if (v && thx_io_json_count(vo, nums[k], &n))
+                return thx_error(ctx, THX_EINPUT, "%s: \"volume\".\"%s\" must be a count (a whole number >= 0)", mpath,
+                                 nums[k]);
+        }
+    }
+    const cJSON *regs = cJSON_GetObjectItemCaseSensitive(root, "regions");
+    if (cJSON_IsArray(regs)) {
+        int k = 0;
+        const cJSON *r;
+        cJSON_ArrayForEach(r, regs)
+        {
+            k++;
+            char where[48];
+            snprintf(where, sizeof where, " region %d:", k);
+            if (cJSON_IsObject(r)) THX_CHECK(check_keys(ctx, mpath, where, r, REGION_KEYS));
+        }
+    }
+    return THX_OK;
+}
+
 thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
 {
     *out = NULL;
@@ -282,9 +396,19 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
     thx_status st = THX_OK;
     thx_model *m = NULL;
     thx_surface *s = NULL;
+    cJSON *root = NULL;
     const char *end = NULL;
+    {
+        /* cJSON stops at a NUL and would accept "{...}\0anything" */
+        const char *nul = memchr(text, '\0', len);
+        if (nul) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: NUL byte at byte offset %zu (not a text file)", mpath,
+                           line_of(text, nul), (size_t)(nul - text));
+            goto done;
+        }
+    }
     /* len + 1: cJSON's trailing-garbage check needs the terminating NUL in range. */
-    cJSON *root = cJSON_ParseWithLengthOpts(text, len + 1, &end, 1);
+    root = cJSON_ParseWithLengthOpts(text, len + 1, &end, 1);
     if (!root) {
         st = thx_error(ctx, THX_EINPUT, "%s:%d: not valid JSON", mpath, line_of(text, end ? end : text));
         goto done;
@@ -293,6 +417,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         st = thx_error(ctx, THX_EINPUT, "%s: not a JSON object", mpath);
         goto done;
     }
+    THX_TRY(check_keys(ctx, mpath, "", root, ROOT_KEYS));
     const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
     if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, MODEL_FORMAT) != 0) {
         st = thx_error(ctx, THX_EINPUT, "%s: \"format\" must be \"%s\"", mpath, MODEL_FORMAT);
@@ -304,7 +429,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         goto done;
     }
     if (ver->valuedouble != MODEL_VERSION) {
-        st = thx_error(ctx, THX_EINPUT, "%s: model format version %g; this thorax reads version %d", mpath,
+        st = thx_error(ctx, THX_EINPUT, "%s: \"version\": model format version %g; this thorax reads version %d", mpath,
                        ver->valuedouble, MODEL_VERSION);
         goto done;
     }
@@ -318,7 +443,14 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         st = thx_error(ctx, THX_EINPUT, "%s: \"surfaces\" missing or not an array", mpath);
         goto done;
     }
+    const cJSON *prov = cJSON_GetObjectItemCaseSensitive(root, "provenance");
+    if (prov && !cJSON_IsNull(prov) && !cJSON_IsObject(prov)) {
+        st = thx_error(ctx, THX_EINPUT, "%s: \"provenance\" must be an object", mpath);
+        goto done;
+    }
+    THX_TRY(check_volume_keys(ctx, mpath, root));
     THX_TRY(thx_model_create(ctx, &m));
+    THX_TRY(read_frame(ctx, mpath, cJSON_GetObjectItemCaseSensitive(root, "frame"), &m->frame));
     int idx = 0;
     const cJSON *o;
     cJSON_ArrayForEach(o, surfs)
@@ -334,10 +466,15 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
             goto done;
         }
         const char *nm = name->valuestring;
+        {
+            char where[96];
+            snprintf(where, sizeof where, " surface %d (\"%s\"):", idx, nm);
+            THX_TRY(check_keys(ctx, mpath, where, o, SURFACE_KEYS));
+        }
         const cJSON *role = cJSON_GetObjectItemCaseSensitive(o, "role");
         thx_role r;
         if (!cJSON_IsString(role) || thx_role_parse(role->valuestring, &r) != 0) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): \"role\" missing or unknown%s%s%s", mpath, idx, nm,
+            st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): \"role\" missing or unknown%s%.40s%s", mpath, idx, nm,
                            cJSON_IsString(role) ? " (\"" : "", cJSON_IsString(role) ? role->valuestring : "",
                            cJSON_IsString(role) ? "\")" : "");
             goto done;
@@ -355,6 +492,11 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         if (thx_io_json_count(o, "n_nodes", &nn) || thx_io_json_count(o, "n_tris", &nt)) {
             st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): \"n_nodes\" and \"n_tris\" must be counts", mpath,
                            idx, nm);
+            goto done;
+        }
+        const cJSON *jm = cJSON_GetObjectItemCaseSensitive(o, "vmap");
+        if (jm && !cJSON_IsString(jm)) {
+            st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): \"vmap\" must be a file name", mpath, idx, nm);
             goto done;
         }
         const cJSON *ji = cJSON_GetObjectItemCaseSensitive(o, "interior");
@@ -375,36 +517,32 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
             has_in = 1;
             in = thx_v3(v[0], v[1], v[2]);
         }
+        for (size_t j = 0; j < m->n_surfaces; j++)
+            if (strcmp(m->surf[j]->name, nm) == 0) {
+                st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): a surface of that name appears twice", mpath, idx, nm);
+                goto done;
+            }
         THX_TRY(join(ctx, pts, sizeof pts, dir, jp->valuestring));
         THX_TRY(join(ctx, fac, sizeof fac, dir, jf->valuestring));
         /* Model directories are 1-based by definition: read strictly. */
         THX_TRY(thx_io_read_ptsfac(ctx, pts, fac, nm, r, 1, &s, NULL));
         if (s->n_nodes != nn) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": manifest says %zu nodes but %s has %zu", mpath, nm, nn, pts,
-                           s->n_nodes);
+            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": manifest says %zu nodes (\"n_nodes\") but %s has %zu",
+                           mpath, nm, nn, pts, s->n_nodes);
             goto done;
         }
         if (s->n_tris != nt) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": manifest says %zu triangles but %s has %zu", mpath, nm, nt,
-                           fac, s->n_tris);
+            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": manifest says %zu triangles (\"n_tris\") but %s has %zu",
+                           mpath, nm, nt, fac, s->n_tris);
             goto done;
         }
         st = thx_model_add_surface(ctx, m, &s);
-        if (st == THX_EINPUT) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface %d (\"%s\"): a surface of that name appears twice", mpath, idx, nm);
-            goto done;
-        }
         if (st) goto done;
         m->has_interior[m->n_surfaces - 1] = has_in;
         m->interior[m->n_surfaces - 1] = in;
     }
     THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m));
-    const cJSON *prov = cJSON_GetObjectItemCaseSensitive(root, "provenance");
     if (prov && !cJSON_IsNull(prov)) {
-        if (!cJSON_IsObject(prov)) {
-            st = thx_error(ctx, THX_EINPUT, "%s: \"provenance\" must be an object", mpath);
-            goto done;
-        }
         m->provenance_json = cJSON_PrintUnformatted(prov);
         if (!m->provenance_json) {
             st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", mpath);

@@ -890,6 +890,7 @@ thx_status thx_phantom_contours(thx_ctx *ctx, const thx_phantom_opts *o, thx_con
     THX_CHECK(make_plan(ctx, &pl));
     THX_TRY(thx_contours_create(ctx, &c));
     c->spacing = thx_phantom_spacing(o->resolution);
+    c->frame = thx_frame_ras(); /* the phantom is drawn in RAS: +z superior, +y anterior */
     for (int s = 0; s < THX_PHANTOM_N_SURFACES; s++)
         THX_TRY(thx_contours_add_surface(ctx, c, SURF[s].name, SURF[s].role, SURF[s].cap, 0.0, NULL));
     double min_gap = 1e9;
