@@ -98,6 +98,7 @@ int cmd_surfaces(int argc, char **argv)
     if (!per) { rc = 1; goto done; }
     st = thx_surfaces_build(ctx, c, &o, &m, per, &tot);
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
+    m->frame = c->frame; /* the contours' anatomical frame ("frame UP FRONT") belongs to the model */
     double spacing = o.spacing > 0 ? o.spacing : (c->spacing > 0 ? c->spacing : 5.0);
     {
         cJSON *p = cJSON_CreateObject();
