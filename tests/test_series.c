@@ -296,7 +296,12 @@ static void test_bad_text(void)
     bad_text("no_frames.txt", "thorax-series 1\nrows 1\n1 2 3\nend\n", 3, "value row before 'frames M'");
     bad_text("header.txt", "# c\nthorax-contours 1\nrows 1\n", 2, "not a thorax series file");
     bad_text("version.txt", "thorax-series 2\nrows 1\n", 1, "unsupported series file version '2'");
-    bad_text("too_big.txt", "thorax-series 1\nrows 4611686018427387904\nframes 4\n1 2 3 4\nend\n", 4, "too large");
+    bad_text("too_big.txt", "thorax-series 1\nrows 4611686018427387904\nframes 4\n1 2 3 4\nend\n", 2,
+             "a file of 62 bytes cannot hold 4611686018427387904 value rows");
+    bad_text("rows_overflow.txt", "thorax-series 1\nrows 99999999999999999999999\nframes 4\n1 2 3 4\nend\n", 2,
+             "expected 'rows N' with N a positive integer");
+    bad_text("value_range.txt", "thorax-series 1\nrows 1\nframes 2\n1 1e999\nend\n", 4,
+             "row 1, frame 2: '1e999' is too large for a double");
     /* a file with no header at all, and an empty one */
     tl_write_text(tl_path("empty.txt"), "# nothing\n\n");
     expect_read_fail(tl_path("empty.txt"), THX_SERIES_AUTO, THX_EINPUT, "empty.txt: empty file", NULL);
@@ -675,6 +680,40 @@ static void test_large(void)
     }
 }
 
+/* Issue 11's findings on the text and .pot readers (each failed on the code before the fix). */
+static void test_bounded_findings(void)
+{
+    /* a 48-byte text series claiming 5e8 frames took 3.9 GB and 15 s before it was refused: now
+     * refused at its 'frames' line, at once */
+    const char *t48 = "thorax-series 1\nrows 1\nframes 500000000\n0 0\nend\n";
+    CHECK(strlen(t48) == 48);
+    double t0 = thx_wtime();
+    bad_text("frames_5e8.txt", t48, 3, "'frames 500000000': a file of 48 bytes cannot hold 500000000 values per row");
+    CHECK(thx_wtime() - t0 < 1.0);
+    /* rows x frames beyond the file, each count alone within it */
+    bad_text("product.txt", "thorax-series 1\nrows 20\nframes 20\n0 0\nend\n", 4,
+             "'rows 20' (line 2) x 'frames 20' (line 3) values cannot be in a file of 42 bytes");
+    /* a .pot with a NUL byte gave 11 of its 352 values (exit 0): now refused, naming the byte and line */
+    char pot[352 * 8 + 1];
+    size_t n = 0;
+    for (int i = 0; i < 352; i++) n += (size_t)snprintf(pot + n, sizeof pot - n, "%6.2f\n", i * 0.25 - 40);
+    size_t at = 11 * 7 + 3; /* inside value 12, line 12 */
+    pot[at] = '\0';
+    tl_write_bytes(tl_path("nul.pot"), pot, n);
+    char want[64];
+    snprintf(want, sizeof want, "nul.pot:12: NUL byte at byte offset %zu", at);
+    expect_read_fail(tl_path("nul.pot"), THX_SERIES_AUTO, THX_EINPUT, want, "in value 12");
+    pot[at] = '1';
+    tl_write_bytes(tl_path("good.pot"), pot, n);
+    thx_series *s = NULL;
+    CHECK_OK(ctx, thx_series_read(ctx, tl_path("good.pot"), THX_SERIES_AUTO, &s));
+    if (s) CHECK(s->n_rows == 352 && s->n_frames == 1);
+    thx_series_destroy(&s);
+    /* a NUL in a text series names its byte offset */
+    tl_write_bytes(tl_path("nul.txt"), "thorax-series 1\nrows 1\nframes 1\n\0\nend\n", 38);
+    expect_read_fail(tl_path("nul.txt"), THX_SERIES_AUTO, THX_EINPUT, "nul.txt:4: NUL byte at byte offset 32", NULL);
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
@@ -684,6 +723,7 @@ int main(void)
     test_text_variants();
     test_bad_text();
     test_bad_raw();
+    test_bounded_findings();
     test_mat_inputs();
     test_failed_writes();
     test_real_recording();

@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "thorax/fileio.h"
+#include "io/parse_uint.h"
 
 #define POS_TOL_MM 1e-3
 
@@ -204,15 +205,12 @@ static thx_status rfail(const reader *r, const char *fmt, ...)
     return thx_error(r->ctx, THX_EINPUT, "%s:%zu: %s", r->path, r->line, msg);
 }
 
-/* A positive integer count or node number that fits in 32 bits. */
+/* A positive integer count or node number that fits in 32 bits (digits only, overflow-checked). */
 static int parse_positive(const char *t, long *out)
 {
-    if (!(*t >= '0' && *t <= '9')) return -1;
-    errno = 0;
-    char *end = NULL;
-    long v = strtol(t, &end, 10);
-    if (errno || *end || v < 1 || v > INT32_MAX - 1) return -1;
-    *out = v;
+    uint64_t v;
+    if (thx_parse_uint(t, 0, INT32_MAX - 1, &v) != 0 || v < 1) return -1;
+    *out = (long)v;
     return 0;
 }
 
@@ -259,7 +257,8 @@ thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **
         const char *z = memchr(text, '\0', len);
         for (const char *c = text; c < z; c++) r.line += *c == '\n';
         r.line++;
-        st = rfail(&r, "NUL byte in a text file (is this a binary file?)");
+        st = rfail(&r, "NUL byte at byte offset %zu (a text file holds none: a binary file, or a damaged one?)",
+                   (size_t)(z - text));
         goto done;
     }
     char *p = text;

@@ -27,6 +27,20 @@ thx_status series_read_pot(thx_ctx *ctx, const char *path, thx_series **out)
     char *text = NULL;
     size_t len = 0;
     THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    const char *nul = memchr(text, '\0', len);
+    if (nul) {
+        size_t at = (size_t)(nul - text), nl = 1, vals = 0;
+        for (const char *c = text; c < nul; c++) nl += *c == '\n';
+        /* the value it falls in (or would start), for the message */
+        for (const char *c = text; c < nul; c++)
+            vals += !isspace((unsigned char)*c) && (c == text || isspace((unsigned char)c[-1]));
+        if (at == 0 || isspace((unsigned char)nul[-1])) vals++;
+        free(text);
+        return thx_error(ctx, THX_EINPUT,
+                         "%s:%zu: NUL byte at byte offset %zu, in value %zu (a .pot file is text: one value per "
+                         "node; damaged or binary file?)",
+                         path, nl, at, vals);
+    }
     size_t n = 0, cap = 1024, line = 1;
     double *v = malloc(cap * sizeof *v);
     thx_status st = v ? THX_OK : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
@@ -36,12 +50,14 @@ thx_status series_read_pot(thx_ctx *ctx, const char *path, thx_series **out)
         char *end;
         errno = 0;
         double x = strtod(p, &end);
-        if (end == p || (*end && !isspace((unsigned char)*end))) {
+        int range = errno == ERANGE && isinf(x);
+        if (end == p || range || (*end && !isspace((unsigned char)*end))) {
             char tok[32];
             size_t k = 0;
             while (p[k] && !isspace((unsigned char)p[k]) && k < sizeof tok - 1) { tok[k] = p[k]; k++; }
             tok[k] = '\0';
-            st = thx_error(ctx, THX_EINPUT, "%s:%zu: '%s' is not a number (a .pot file holds one value per node)", path, line, tok);
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: '%s' is %s (value %zu; a .pot file holds one value per node)",
+                           path, line, tok, range ? "too large for a double" : "not a number", n + 1);
             break;
         }
         if (n == cap) {

@@ -32,6 +32,7 @@
 #include <matio.h>
 
 #include "thorax/fileio.h"
+#include "io/parse_uint.h"
 #include "io/series_impl.h"
 
 /* ------------------------------------------------------------ text out */
@@ -269,22 +270,28 @@ static char *next_token(char **cur)
     return t;
 }
 
+/* strtod, refusing a finite decimal too large for a double ("1e999"), which
+ * strtod would silently make an infinity; "inf" and "nan" are accepted. */
+static double parse_double(const char *t, char **end)
+{
+    errno = 0;
+    double x = strtod(t, end);
+    if (errno == ERANGE && isinf(x)) *end = (char *)t;
+    return x;
+}
+
 static int parse_number(const char *t, double *x)
 {
     char *end;
-    *x = strtod(t, &end);
+    *x = parse_double(t, &end);
     return end != t && *end == '\0';
 }
 
-/* A positive decimal integer (digits only). */
+/* A positive decimal integer (digits only, overflow-checked). */
 static int parse_count(const char *t, size_t *n)
 {
-    if (!t || !*t) return 0;
-    for (const char *c = t; *c; c++)
-        if (*c < '0' || *c > '9') return 0;
-    errno = 0;
-    unsigned long long v = strtoull(t, NULL, 10);
-    if (errno || v == 0 || v > SIZE_MAX) return 0;
+    uint64_t v;
+    if (thx_parse_uint(t, 0, SIZE_MAX, &v) != 0 || v == 0) return 0;
     *n = (size_t)v;
     return 1;
 }
@@ -293,6 +300,8 @@ typedef struct {
     thx_ctx *ctx;
     const char *path;
     size_t line;
+    unsigned long long size;   /* the file's size in bytes */
+    unsigned long long offset; /* byte offset of the current line */
     /* header */
     size_t rows, frames, rows_line, frames_line;
     size_t unit_line, time_unit_line, label_line, t0_line, dt_line, time_line;
@@ -339,6 +348,11 @@ static thx_status text_header_line(text_reader *tr, const char *kw, char *cur)
         size_t n;
         if (!parse_count(t, &n) || next_token(&cur))
             return text_fail(tr, "expected '%s N' with N a positive integer", kw);
+        /* a value takes at least 2 bytes (a digit and a blank or newline): refuse a
+         * count the file cannot hold now, before anything is allocated */
+        if (n > tr->size / 2)
+            return text_fail(tr, "'%s %zu': a file of %llu bytes cannot hold %zu %s (a value takes at least 2 bytes)",
+                             kw, n, tr->size, n, is_rows ? "value rows" : "values per row");
         *seen = tr->line;
         *(is_rows ? &tr->rows : &tr->frames) = n;
         return THX_OK;
@@ -395,6 +409,13 @@ static thx_status text_begin_values(text_reader *tr)
     if (tr->time_line && tr->n_times != tr->frames)
         return thx_error(tr->ctx, THX_EINPUT, "%s:%zu: 'time' gives %zu values for %zu frames (line %zu)", tr->path,
                          tr->time_line, tr->n_times, tr->frames, tr->frames_line);
+    /* the rows x frames values, at least 2 bytes each, must fit in the file (the
+     * header is not subtracted: a file cut short gets the more telling message
+     * of the row where it ends) */
+    if (tr->rows > tr->size / 2 / tr->frames)
+        return text_fail(tr, "'rows %zu' (line %zu) x 'frames %zu' (line %zu) values cannot be in a file of %llu "
+                             "bytes (a value takes at least 2 bytes): wrong sizes, or a truncated file",
+                         tr->rows, tr->rows_line, tr->frames, tr->frames_line, tr->size);
     thx_status st = thx_series_create(tr->ctx, tr->rows, tr->frames, &tr->s);
     if (st != THX_OK) return st == THX_EINPUT ? text_fail(tr, "%s", thx_ctx_message(tr->ctx)) : st;
     thx_series *s = tr->s;
@@ -431,11 +452,15 @@ static thx_status text_value_row(text_reader *tr, char *p)
             return text_fail(tr, "row %zu has %zu value%s, expected %zu (frames %zu, line %zu)", r + 1, f,
                              f == 1 ? "" : "s", M, M, tr->frames_line);
         char *end;
-        double x = strtod(p, &end);
+        double x = parse_double(p, &end);
         if (end == p || !(is_blank(*end) || !*end || *end == '#')) {
             size_t n = 0;
             while (p[n] && !is_blank(p[n]) && p[n] != '#') n++;
-            return text_fail(tr, "row %zu, frame %zu: '%.*s' is not a number", r + 1, f + 1, (int)(n > 40 ? 40 : n), p);
+            errno = 0;
+            char *e2;
+            (void)strtod(p, &e2);
+            return text_fail(tr, "row %zu, frame %zu: '%.*s' is %s", r + 1, f + 1, (int)(n > 40 ? 40 : n), p,
+                             errno == ERANGE && e2 != p ? "too large for a double" : "not a number");
         }
         v[f * N] = x;
         p = end;
@@ -461,15 +486,27 @@ thx_status series_read_text(thx_ctx *ctx, const char *path, thx_series **out)
     memset(&tr, 0, sizeof tr);
     tr.ctx = ctx;
     tr.path = path;
+    struct stat sb;
+    if (fstat(fileno(f), &sb) != 0) {
+        fclose(f);
+        return thx_error(ctx, THX_EIO, "%s: cannot stat: %s", path, strerror(errno));
+    }
+    tr.size = (unsigned long long)sb.st_size;
     thx_status st = THX_OK;
     char *buf = NULL;
     size_t cap = 0;
     int seen_header = 0, seen_end = 0;
     ssize_t len;
+    unsigned long long next = 0;
     while ((len = getline(&buf, &cap, f)) >= 0) {
         tr.line++;
-        if (memchr(buf, '\0', (size_t)len)) {
-            st = text_fail(&tr, "NUL byte in a text file (is this a binary file?)");
+        tr.offset = next;
+        next += (unsigned long long)len;
+        const char *nul = memchr(buf, '\0', (size_t)len);
+        if (nul) {
+            st = text_fail(&tr, "NUL byte at byte offset %llu (a text file holds none: a binary file, or a "
+                                "damaged one?)",
+                           tr.offset + (unsigned long long)(nul - buf));
             goto done;
         }
         if (len && buf[len - 1] == '\n') buf[--len] = '\0';

@@ -1,0 +1,14 @@
+/*
+ * Fuzz harness: a time series read as text (thx_series_read, THX_SERIES_TEXT).
+ * Properties of an accepted series: series_fuzz.h (at most size / 2 + 1 values
+ * for a file of `size` bytes, a finite increasing time axis, round trips).
+ */
+#include "series_fuzz.h"
+
+static size_t max_values(size_t size) { return size / 2 + 1; }
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    series_fuzz_one(data, size, "s.txt", THX_SERIES_TEXT, max_values);
+    return 0;
+}
