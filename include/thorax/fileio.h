@@ -17,6 +17,9 @@ typedef struct {
     FILE *f;            /* write here */
     char path[1024];    /* final name */
     char tmp[1040];     /* temporary name */
+    int claimed;        /* opened by thx_atomic_open_output: the commit checks the claim */
+    int existed;        /* ... and path existed then, as this file: */
+    unsigned long long dev, ino;
 } thx_atomic_file;
 
 /* Opens a temporary file next to `path` for writing. */
@@ -25,6 +28,31 @@ thx_status thx_atomic_open(thx_ctx *ctx, const char *path, thx_atomic_file *af);
 thx_status thx_atomic_commit(thx_ctx *ctx, thx_atomic_file *af);
 /* Closes and removes the temporary file (safe after a failed commit or none). */
 void thx_atomic_abort(thx_atomic_file *af);
+
+/*
+ * Single-file outputs a user names (-o FILE: contours, series, images,
+ * exports, movies). An existing path is replaced only when it is a regular
+ * file (never through a symbolic link, never a directory), not one of the
+ * command's inputs, and thorax's own output of the same kind: its first
+ * 4096 bytes hold `marker` (marker_len bytes; every such writer puts its
+ * marker there: "thorax-contours", "thorax-series", the .mat header text,
+ * a PNG tEXt chunk, ...). Otherwise the command stops, before anything is
+ * written, with a message saying what is there.
+ *
+ * Two commands writing the same file at once: if it was absent, the commit
+ * links the finished file into place and fails if another got there first;
+ * if it existed, the commit replaces it only if it is still the file the
+ * claim saw. The loser exits with an error and leaves nothing behind.
+ */
+thx_status thx_atomic_open_output(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
+                                  const char *const *inputs, size_t n_inputs, thx_atomic_file *af);
+/* The claim alone (no temporary file): for writers that go through another library
+ * (libpng, libmatio, ffmpeg) and commit by thx_output_place. */
+thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
+                            const char *const *inputs, size_t n_inputs, thx_atomic_file *af);
+/* Moves the finished temporary file tmp into af->path under the claim (rules above); tmp is
+ * removed whatever happens. */
+thx_status thx_output_place(thx_ctx *ctx, thx_atomic_file *af, const char *tmp);
 
 /*
  * Directory outputs (a model, a solution). A directory is replaced only when it

@@ -124,6 +124,19 @@ int cmd_export(int argc, char **argv)
             goto done;
         }
     }
+    /* Every file this run writes is claimed before any is written: one refused, none written. */
+    for (size_t i = 0; i < m->n_surfaces && !volume; i++) {
+        int wanted = n_only == 0;
+        for (int k = 0; k < n_only && !wanted; k++) wanted = strcmp(m->surf[i]->name, only[k]) == 0;
+        char path[4096];
+        if (!wanted || (size_t)snprintf(path, sizeof path, "%s/%s.%s", out_dir, m->surf[i]->name, ext_of[fmt]) >= sizeof path)
+            continue; /* a path too long is reported below */
+        st = thx_export_claim(ctx, fmt, path);
+        if (st) {
+            rc = cli_fail(ctx, cmd, st);
+            goto done;
+        }
+    }
     if (mkdir(out_dir, 0755) != 0 && errno != EEXIST) {
         fprintf(stderr, "thorax export: %s: cannot create directory: %s\n", out_dir, strerror(errno));
         rc = 1;

@@ -34,21 +34,135 @@ thx_status thx_atomic_open(thx_ctx *ctx, const char *path, thx_atomic_file *af)
     return THX_OK;
 }
 
+/* Puts the finished file tmp at af->path: a plain rename, or under a claim (see fileio.h). */
+static thx_status place(thx_ctx *ctx, thx_atomic_file *af, const char *tmp)
+{
+    if (!af->claimed) {
+        if (rename(tmp, af->path) != 0) {
+            int e = errno;
+            unlink(tmp);
+            return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", af->path, strerror(e));
+        }
+        return THX_OK;
+    }
+    if (!af->existed) {
+        if (link(tmp, af->path) != 0) {
+            int e = errno;
+            unlink(tmp);
+            if (e == EEXIST)
+                return thx_error(ctx, THX_EIO,
+                                 "%s: another command wrote this file while this one ran; it was not replaced (nothing "
+                                 "was written)",
+                                 af->path);
+            return thx_error(ctx, THX_EIO, "%s: cannot put the file in place: %s", af->path, strerror(e));
+        }
+        unlink(tmp);
+        return THX_OK;
+    }
+    struct stat st;
+    if (lstat(af->path, &st) != 0 || (unsigned long long)st.st_dev != af->dev ||
+        (unsigned long long)st.st_ino != af->ino) {
+        unlink(tmp);
+        return thx_error(ctx, THX_EIO,
+                         "%s: another command replaced or removed this file while this one ran; it was not replaced "
+                         "(nothing was written)",
+                         af->path);
+    }
+    if (rename(tmp, af->path) != 0) {
+        int e = errno;
+        unlink(tmp);
+        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", af->path, strerror(e));
+    }
+    return THX_OK;
+}
+
 thx_status thx_atomic_commit(thx_ctx *ctx, thx_atomic_file *af)
 {
     int bad = ferror(af->f);
     if (fclose(af->f) != 0) bad = 1;
     af->f = NULL;
     if (bad) {
-        thx_atomic_abort(af);
-        return thx_error(ctx, THX_EIO, "%s: write failed: %s", af->path, strerror(errno));
-    }
-    if (rename(af->tmp, af->path) != 0) {
         int e = errno;
         thx_atomic_abort(af);
-        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", af->path, strerror(e));
+        return thx_error(ctx, THX_EIO, "%s: write failed: %s", af->path, strerror(e));
     }
+    thx_status st = place(ctx, af, af->tmp);
     af->tmp[0] = '\0';
+    return st;
+}
+
+/* 1 if path names the same file as one of inputs (by device and inode). */
+static int is_input(const struct stat *st, const char *const *inputs, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        struct stat si;
+        if (inputs[i] && stat(inputs[i], &si) == 0 && si.st_dev == st->st_dev && si.st_ino == st->st_ino) return 1;
+    }
+    return 0;
+}
+
+thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
+                            const char *const *inputs, size_t n_inputs, thx_atomic_file *af)
+{
+    memset(af, 0, sizeof *af);
+    if (!path[0] || strlen(path) >= sizeof af->path) return thx_error(ctx, THX_EIO, "%s: path empty or too long", path);
+    snprintf(af->path, sizeof af->path, "%s", path);
+    af->claimed = 1;
+    struct stat st;
+    if (lstat(path, &st) != 0) {
+        if (errno != ENOENT) return thx_error(ctx, THX_EIO, "%s: %s", path, strerror(errno));
+        return THX_OK;
+    }
+    if (S_ISLNK(st.st_mode))
+        return thx_error(ctx, THX_EIO,
+                         "%s is a symbolic link; thorax does not write through links (give the file itself): nothing was "
+                         "written",
+                         path);
+    if (S_ISDIR(st.st_mode)) return thx_error(ctx, THX_EIO, "%s is a directory, not a file: nothing was written", path);
+    if (!S_ISREG(st.st_mode)) return thx_error(ctx, THX_EIO, "%s exists and is not a regular file: nothing was written", path);
+    if (is_input(&st, inputs, n_inputs))
+        return thx_error(ctx, THX_EIO,
+                         "%s is an input of this command; thorax does not replace its own input: nothing was written "
+                         "(give another -o)",
+                         path);
+    unsigned char head[4096];
+    size_t got = 0;
+    FILE *f = fopen(path, "rb");
+    if (f) {
+        got = fread(head, 1, sizeof head, f);
+        fclose(f);
+    }
+    if (!f || !memmem(head, got, marker, marker_len)) {
+        char shown[64];
+        size_t k = 0;
+        for (size_t i = 0; i < marker_len && k + 1 < sizeof shown; i++) {
+            unsigned char c = ((const unsigned char *)marker)[i];
+            shown[k++] = (c >= 32 && c < 127) ? (char)c : '.';
+        }
+        shown[k] = '\0';
+        return thx_error(ctx, THX_EIO,
+                         "%s exists and is not thorax's own output of this kind (no \"%s\" in its first 4096 bytes); "
+                         "thorax replaces only what it wrote: nothing was written (remove it or give another -o)",
+                         path, shown);
+    }
+    af->existed = 1;
+    af->dev = (unsigned long long)st.st_dev;
+    af->ino = (unsigned long long)st.st_ino;
+    return THX_OK;
+}
+
+thx_status thx_output_place(thx_ctx *ctx, thx_atomic_file *af, const char *tmp) { return place(ctx, af, tmp); }
+
+thx_status thx_atomic_open_output(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
+                                  const char *const *inputs, size_t n_inputs, thx_atomic_file *af)
+{
+    THX_CHECK(thx_output_claim(ctx, path, marker, marker_len, inputs, n_inputs, af));
+    thx_atomic_file claim = *af;
+    THX_CHECK(thx_atomic_open(ctx, path, af));
+    af->claimed = claim.claimed;
+    af->existed = claim.existed;
+    af->dev = claim.dev;
+    af->ino = claim.ino;
     return THX_OK;
 }
 

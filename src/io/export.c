@@ -103,6 +103,7 @@ static void write_vtp(FILE *f, const thx_surface *s)
     /* The name is not written into the XML: it would need escaping and VTK
      * does not use it; the file name carries it. */
     fprintf(f, "<?xml version=\"1.0\"?>\n"
+               "<!-- thorax surface, mm -->\n"
                "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
                "  <PolyData>\n"
                "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" "
@@ -193,6 +194,19 @@ static void write_ply(FILE *f, const thx_surface *s)
         fprintf(f, "3 %ld %ld %ld\n", (long)s->tri[3 * t], (long)s->tri[3 * t + 1], (long)s->tri[3 * t + 2]);
 }
 
+/* An existing file is replaced only when it is one of thorax's exports of this format: the
+ * signature each writer above puts in its first line or header (thorax/fileio.h). */
+static const char *const marker[] = {[THX_EXPORT_VTK] = "\nthorax surface ", [THX_EXPORT_VTP] = "<!-- thorax surface",
+                                     [THX_EXPORT_OBJ] = "# thorax surface ", [THX_EXPORT_STL] = "thorax binary STL",
+                                     [THX_EXPORT_PLY] = "comment thorax surface "};
+
+thx_status thx_export_claim(thx_ctx *ctx, thx_export_format fmt, const char *path)
+{
+    if (fmt > THX_EXPORT_PLY) return THX_OK; /* volume formats: thx_volume_export's own rule */
+    thx_atomic_file af;
+    return thx_output_claim(ctx, path, marker[fmt], strlen(marker[fmt]), NULL, 0, &af);
+}
+
 thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_format fmt, const char *path)
 {
     THX_CHECK(validate(ctx, s, path));
@@ -210,7 +224,7 @@ thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_for
     }
     if (!writer) return thx_error(ctx, THX_EINTERNAL, "%s: unknown export format %d", path, (int)fmt);
     thx_atomic_file af;
-    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    THX_CHECK(thx_atomic_open_output(ctx, path, marker[fmt], strlen(marker[fmt]), NULL, 0, &af));
     writer(af.f, s);
     return thx_atomic_commit(ctx, &af); /* checks ferror: a short write fails here */
 }

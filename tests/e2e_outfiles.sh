@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Single-file outputs never destroy what thorax did not write (issue 11, item 1): a file a command
+# writes (exports; contours, series, images, movies as they are wired to thx_atomic_open_output)
+# replaces an existing file only when that file is thorax's own output of the same kind (its
+# signature in the first 4096 bytes), a regular file, not a link and not an input. Refusals exit 1,
+# say what is there, and leave every file as it was; a command writing several files claims all
+# before writing any. Two commands writing the same new file at once: one wins, the other exits 1.
+# Environment: THORAX = the CLI, WORK = a scratch directory.
+set -u
+: "${THORAX:?}" "${WORK:?}"
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK" || exit 1
+fails=0
+ok() { echo "ok: $1"; }
+bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
+refused() {
+    local name=$1 pat=$2; shift 2
+    "$@" > out.log 2> err.log; local rc=$?
+    if [ $rc -eq 1 ] && grep -q -- "$pat" err.log && grep -q "nothing was written" err.log; then ok "$name: refused ($(head -1 err.log))"
+    else bad "$name: exit $rc, $(cat err.log)"; fi
+}
+snap() { (cd "$1" && find . -print0 | sort -z | xargs -0 -I{} sh -c 'if [ -f "{}" ]; then echo "{} $(md5sum < "{}")"; else echo "{}"; fi'); }
+leftovers() { ls -a "$1" | grep -E '\.tmp' || true; }
+
+"$THORAX" phantom -o c.txt -q && "$THORAX" surfaces c.txt -o m -q || { bad "phantom model"; exit 1; }
+
+# export: thorax's own files are replaced; a user's file of the same name stops the whole run
+for f in obj stl ply vtk vtp; do
+    "$THORAX" export m --format $f -o ex_$f -q && "$THORAX" export m --format $f -o ex_$f -q &&
+        ok "$f: thorax's own export replaced" || bad "$f: re-export failed"
+    echo "my own torso, keep me" > ex_$f/torso.$f
+    before=$(snap ex_$f)
+    refused "$f: a user's torso.$f" "is not thorax's own output of this kind" "$THORAX" export m --format $f -o ex_$f -q
+    [ "$before" = "$(snap ex_$f)" ] && ok "$f: no file changed (the other surfaces neither)" || bad "$f: files changed"
+done
+# a link is never followed, a directory is never replaced
+mkdir -p elsewhere ex_link && echo "precious" > elsewhere/target.obj && ln -s ../elsewhere/target.obj ex_link/torso.obj
+refused "symbolic link" "symbolic link" "$THORAX" export m --format obj --surface torso -o ex_link -q
+grep -q precious elsewhere/target.obj && ok "the link's target is unchanged" || bad "the link's target changed"
+mkdir -p ex_dir/torso.obj
+refused "a directory in the way" "is a directory" "$THORAX" export m --format obj --surface torso -o ex_dir -q
+# nothing is left half-written, and a refused run into a new folder creates no folder
+refused "the user file still stops a re-export" "is not thorax's own" "$THORAX" export m --format obj -o ex_obj -q
+[ -z "$(leftovers ex_obj)" ] && ok "no temporary file left" || bad "left $(leftovers ex_obj)"
+# two exports of the same new file at once: one wins, the other exits 1 naming the race
+for i in 1 2 3; do
+    rm -rf race && mkdir race
+    "$THORAX" export m --format obj --surface torso -o race -q > r1.log 2>&1 & p1=$!
+    "$THORAX" export m --format obj --surface torso -o race -q > r2.log 2>&1 & p2=$!
+    wait $p1; r1=$?; wait $p2; r2=$?
+    if [ $r1 -eq 0 ] && [ $r2 -eq 0 ]; then echo "race $i: both finished without overlapping (no race this time)"
+    elif [ $((r1 + r2)) -eq 1 ]; then
+        loser=r1.log; [ $r2 -ne 0 ] && loser=r2.log
+        grep -q "another command wrote this file" "$loser" && ok "race $i: one won, the other exited 1" || bad "race $i: loser said $(cat $loser)"
+    else bad "race $i: exits $r1 $r2"; fi
+    head -1 race/torso.obj | grep -q "# thorax surface torso" && ok "race $i: the file is whole" || bad "race $i: file broken"
+    [ -z "$(leftovers race)" ] && ok "race $i: nothing left behind" || bad "race $i: left $(leftovers race)"
+done
+
+[ $fails -eq 0 ] && echo "e2e_outfiles: all passed" || echo "e2e_outfiles: $fails failed" >&2
+exit $((fails > 0))
