@@ -2,6 +2,7 @@
 #include "thorax/core.h"
 
 #include <stdio.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -96,6 +97,9 @@ void *thx_realloc(thx_ctx *ctx, void *p, size_t size)
 thx_status thx_grow(thx_ctx *ctx, void **arr, size_t *cap, size_t need, size_t elem)
 {
     if (need <= *cap) return THX_OK;
+    /* The doubling and the byte count must not wrap (a count read from a file can be anything). */
+    if (elem == 0 || need > SIZE_MAX / 2 / elem)
+        return thx_error(ctx, THX_ENOMEM, "out of memory: %zu items of %zu bytes", need, elem);
     size_t ncap = *cap ? *cap : 16;
     while (ncap < need) ncap *= 2;
     void *q = thx_realloc(ctx, *arr, ncap * elem);
