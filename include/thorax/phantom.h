@@ -53,6 +53,7 @@
 #define THORAX_PHANTOM_H
 
 #include "thorax/contours.h"
+#include "thorax/electrodes.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -109,6 +110,26 @@ typedef struct {
 
 /* Computes the estimate above for o->resolution (the seed does not matter). */
 thx_status thx_phantom_estimate(thx_ctx *ctx, const thx_phantom_opts *o, thx_phantom_counts *out);
+
+/*
+ * Electrodes and the beat on any torso, in its anatomical frame (thorax/frame.h).
+ *
+ * thx_torso_electrodes: the 12-lead positions and the body-surface array of
+ * thx_phantom_electrodes (thorax/electrodes.h) on the outer surface of any
+ * model, the landmarks taken along frame's superior, anterior and left axes
+ * (frame NULL: m->frame). THX_EINPUT naming the missing frame when neither
+ * is set. thx_phantom_electrodes itself uses m->frame, or RAS when the model
+ * has none (the phantom's own convention; the CLI refuses such a model).
+ * Positions are the nodes' model coordinates.
+ *
+ * thx_torso_epicardial: thx_phantom_epicardial with the dipole's anatomical
+ * directions (RAS in thx_beat_dipole) carried into the model's axes by
+ * frame (required, set): left-inferior in the body whatever the axes.
+ */
+thx_status thx_torso_electrodes(thx_ctx *ctx, const thx_model *m, const thx_frame *frame, thx_electrodes **leads12,
+                                size_t n_array, thx_electrodes **array);
+thx_status thx_torso_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_frame *frame, const thx_beat_opts *o,
+                                thx_series **out);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
-/* thorax electrodes / thorax beat: the phantom's electrodes on its outer
+/* thorax electrodes / thorax beat: the phantom's electrodes on a model's outer
  * surface (the 12-lead positions and a body-surface-mapping array), and the
- * phantom's heartbeat as epicardial potentials (paper 4.1). */
+ * phantom's heartbeat as epicardial potentials (paper 4.1); both in the
+ * model's anatomical frame (model.json "frame"; a model without one is refused). */
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -14,6 +15,7 @@
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "thorax/electrodes.h"
+#include "thorax/phantom.h"
 
 /* ------------------------------------------------------------ electrodes */
 
@@ -22,7 +24,10 @@ static void help_electrodes(void)
     printf("usage: thorax electrodes MODEL [--array N] [-o DIR]\n\n"
            "Places the phantom's electrodes on the model's outer surface (role outer),\n"
            "each on the surface node nearest its landmark, and writes them as electrode\n"
-           "files (docs/formats.md, \"Electrodes\"):\n"
+           "files (docs/formats.md, \"Electrodes\"). Heights are along the model's\n"
+           "superior axis, \"front\" and \"left\" its anterior and left axes: the model's\n"
+           "anatomical frame (model.json \"frame\", from `thorax import --up --front` or the\n"
+           "contours' 'frame' line); a model without one is refused.\n"
            "  DIR/12lead.txt  RA, LA, LL (Mason-Likar: front of the shoulders, left lower\n"
            "                  torso), V1-V6 (4th intercostal space beside the sternum, V4\n"
            "                  5th space mid-clavicular over the apex, V5 anterior axillary,\n"
@@ -86,7 +91,8 @@ int cmd_electrodes(int argc, char **argv)
     thx_electrodes *e12 = NULL, *ea = NULL;
     int rc = 0;
     thx_status st = thx_model_read(ctx, in, &m);
-    if (st == THX_OK) st = thx_phantom_electrodes(ctx, m, &e12, (size_t)n_array, &ea);
+    if (st == THX_OK) st = thx_frame_require(ctx, &m->frame, in, "the electrode landmarks");
+    if (st == THX_OK) st = thx_torso_electrodes(ctx, m, &m->frame, &e12, (size_t)n_array, &ea);
     if (st == THX_OK) st = thx_electrodes_check(ctx, e12, m);
     if (st == THX_OK && ea) st = thx_electrodes_check(ctx, ea, m);
     if (st != THX_OK) {
@@ -143,7 +149,9 @@ static void help_beat(void)
            "The phantom's heartbeat as epicardial potentials: a current dipole at the\n"
            "centre of the model's heart surface (role heart) traces a vectorcardiogram -\n"
            "P loop, PR segment, QRS loop (90 ms, left-inferior-posterior), ST segment,\n"
-           "T loop, baseline (heart rate about 90/min; docs/decisions.md) - in an\n"
+           "T loop, baseline (heart rate about 90/min; docs/decisions.md; directions in\n"
+           "the model's anatomical frame, model.json \"frame\": a model without one is\n"
+           "refused, give --up/--front to thorax import) - in an\n"
            "unbounded homogeneous medium; the potentials at the heart's nodes are scaled\n"
            "so that the largest |potential| over the beat is the peak. Writes a time\n"
            "series (docs/formats.md, \"Time series\"): rows = the heart surface's nodes in\n"
@@ -224,7 +232,8 @@ int cmd_beat(int argc, char **argv)
             if (m->surf[k]->role == THX_ROLE_HEART) heart = m->surf[k];
         if (!heart) st = thx_error(ctx, THX_EINPUT, "%s: the model has no heart surface (role \"heart\")", in);
     }
-    if (st == THX_OK) st = thx_phantom_epicardial(ctx, heart, &o, &s);
+    if (st == THX_OK) st = thx_frame_require(ctx, &m->frame, in, "the dipole's directions");
+    if (st == THX_OK) st = thx_torso_epicardial(ctx, heart, &m->frame, &o, &s);
     if (st == THX_OK) st = thx_series_write(ctx, s, out, fmt);
     if (st != THX_OK) rc = cli_fail(ctx, cmd, st);
     else if (verbose >= 0)

@@ -20,9 +20,10 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: thorax import -o MODEL FILE --name NAME --role ROLE [--fac FAC] [--format F] [--scale S]\n"
-            "                     [FILE --name NAME --role ROLE ...] [--force] [-q] [-v]\n"
+            "                     [FILE --name NAME --role ROLE ...] [--up AXIS --front AXIS] [--force] [-q] [-v]\n"
             "       thorax import -o MODEL MESH [--elem ELEM] [--format F] [--scale S]\n"
-            "                     [--region N=NAME[:SIGMA]]... [--region-array A] [--force] [-q] [-v]\n"
+            "                     [--region N=NAME[:SIGMA]]... [--region-array A] [--up AXIS --front AXIS]\n"
+            "                     [--force] [-q] [-v]\n"
             "\n"
             "Builds the model directory MODEL from closed triangle surfaces made by other\n"
             "programs, or from one tetrahedral volume mesh. Each surface FILE starts a\n"
@@ -89,6 +90,13 @@ static void usage(FILE *f)
             "\n"
             "options:\n"
             "  -o, --output DIR  model directory to write (replaced atomically)\n"
+            "  --up AXIS         the model axis toward the head (superior): +x -x +y -y +z -z\n"
+            "  --front AXIS      the model axis toward the front (anterior); with --up, the\n"
+            "                    model's anatomical frame, recorded in model.json (\"frame\")\n"
+            "                    and read by electrodes, beat and render's named views; left\n"
+            "                    = up x front. Without them the frame is unknown and those\n"
+            "                    commands refuse the model (e.g. the Dalhousie torso:\n"
+            "                    --up -y --front -z; thorax's own models: --up +z --front +y)\n"
             "  --scale S         before the first FILE: default scale of every file\n"
             "                    (coordinates are taken as mm; 1000 for a file in metres)\n"
             "  --force           write surfaces or a mesh that fail their checks (warns)\n"
@@ -101,6 +109,8 @@ static void usage(FILE *f)
             "                25feb97_sock_closed.pts --name sock --role heart\n"
             "  thorax import -o head --scale 100 scalp.3.tri --name scalp --role outer \\\n"
             "                skull.3.tri --name skull --role other cortex.3.tri --name brain --role other\n"
+            "  thorax import -o dal --up -y --front -z daltorso.pts --name torso --role outer \\\n"
+            "                dalepi.pts --name epicardium --role heart\n"
             "  thorax import -o head head.msh --region 1=brain:0.33 --region 2=skull:0.0042\n"
             "\n"
             "Exit status: 0 written, 1 a file could not be read or a surface or mesh was\n"
@@ -247,12 +257,33 @@ static int parse_region(const char *cmd, const char *v, thx_region_map *mp)
 }
 
 static int import_volume(const spec *sp, const char *outdir, double default_scale, int force, int quiet, int verbose,
-                         const thx_region_map *maps, size_t n_maps, const char *region_array);
+                         const thx_region_map *maps, size_t n_maps, const char *region_array, const thx_frame *frame);
+
+/* The summary's frame line and the provenance's record of it. */
+static void print_frame(const thx_frame *f)
+{
+    char a[3], b[3], c[3];
+    if (f->set)
+        printf("frame: superior %s, anterior %s, left %s\n", thx_axis_name(f->up, a), thx_axis_name(f->front, b),
+               thx_axis_name(thx_frame_left(f), c));
+    else
+        printf("frame: unknown (no --up/--front): thorax electrodes, beat and render's named views will refuse this "
+               "model until it is imported with them\n");
+}
+
+static void frame_json(cJSON *op, const thx_frame *f)
+{
+    char a[3];
+    if (!f->set) return;
+    cJSON_AddStringToObject(op, "up", thx_axis_name(f->up, a));
+    cJSON_AddStringToObject(op, "front", thx_axis_name(f->front, a));
+}
 
 int cmd_import(int argc, char **argv)
 {
     const char *cmd = "import";
-    const char *outdir = NULL, *region_array = NULL;
+    const char *outdir = NULL, *region_array = NULL, *up = NULL, *front = NULL;
+    thx_frame frame = {0};
     double default_scale = 1.0;
     int force = 0, verbose = 0, quiet = 0, rc = 0;
     spec *sp = calloc((size_t)argc + 1, sizeof *sp);
@@ -315,6 +346,12 @@ int cmd_import(int argc, char **argv)
                 }
             n_maps++;
             i++;
+        } else if (!strcmp(a, "--up") || !strcmp(a, "--front")) {
+            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
+            const char **dst = !strcmp(a, "--up") ? &up : &front;
+            if (*dst) { rc = cli_usage_error(cmd, "%s given twice", a); goto out; }
+            *dst = v;
+            i++;
         } else if (!strcmp(a, "--region-array")) {
             if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
             region_array = v;
@@ -343,6 +380,20 @@ int cmd_import(int argc, char **argv)
     }
     if (!outdir) { rc = cli_usage_error(cmd, "no output directory given (-o MODEL)"); goto out; }
     if (n == 0) { rc = cli_usage_error(cmd, "no surface FILE or volume MESH given"); goto out; }
+    if (up || front) {
+        if (!up || !front) {
+            rc = cli_usage_error(cmd, "%s needs %s too (the anatomical frame takes both axes)", up ? "--up" : "--front",
+                                 up ? "--front" : "--up");
+            goto out;
+        }
+        thx_ctx *fctx = cli_ctx(-1);
+        if (thx_frame_from_names(fctx, up, front, "--up/--front", &frame) != THX_OK) {
+            rc = cli_usage_error(cmd, "%s", thx_ctx_message(fctx));
+            thx_ctx_destroy(&fctx);
+            goto out;
+        }
+        thx_ctx_destroy(&fctx);
+    }
     /* a volume mesh: by --format (vtk decided by the content), else by the file */
     int n_volumes = 0;
     for (int k = 0; k < n; k++) {
@@ -369,7 +420,7 @@ int cmd_import(int argc, char **argv)
                                  "named after its regions)", vs->file);
             goto out;
         }
-        rc = import_volume(vs, outdir, default_scale, force, quiet, verbose, maps, n_maps, region_array);
+        rc = import_volume(vs, outdir, default_scale, force, quiet, verbose, maps, n_maps, region_array, &frame);
         goto out;
     }
     if (n_maps || region_array) {
@@ -448,6 +499,7 @@ int cmd_import(int argc, char **argv)
     }
 
     thx_status st = thx_model_create(ctx, &m);
+    if (st == THX_OK) m->frame = frame;
     for (int k = 0; st == THX_OK && k < n; k++) {
         st = thx_model_add_surface(ctx, m, &surf[k]);
         /* the point is stored only where it gave 4 pi: a forced open surface has no inside */
@@ -474,6 +526,7 @@ int cmd_import(int argc, char **argv)
     if (op) {
         cJSON_AddNumberToObject(op, "default_scale", default_scale);
         cJSON_AddBoolToObject(op, "force", force);
+        frame_json(op, &frame);
     }
     m->provenance_json = cJSON_PrintUnformatted(prov);
     if (!m->provenance_json) {
@@ -485,7 +538,10 @@ int cmd_import(int argc, char **argv)
         rc = cli_fail(ctx, cmd, st);
         goto done;
     }
-    if (!quiet) printf("wrote %s (%d surface%s)\n", outdir, n, n == 1 ? "" : "s");
+    if (!quiet) {
+        print_frame(&m->frame);
+        printf("wrote %s (%d surface%s)\n", outdir, n, n == 1 ? "" : "s");
+    }
 done:
     cJSON_Delete(prov);
     thx_model_destroy(&m);
@@ -639,7 +695,7 @@ static void volume_reasons(thx_ctx *ctx, const spec *sp, const thx_volume_import
 }
 
 static int import_volume(const spec *sp, const char *outdir, double default_scale, int force, int quiet, int verbose,
-                         const thx_region_map *maps, size_t n_maps, const char *region_array)
+                         const thx_region_map *maps, size_t n_maps, const char *region_array, const thx_frame *frame)
 {
     const char *cmd = "import";
     int rc = 0;
@@ -675,6 +731,7 @@ static int import_volume(const spec *sp, const char *outdir, double default_scal
         rc = cli_fail(ctx, cmd, st);
         goto done;
     }
+    m->frame = *frame;
     if (!quiet) print_volume_report(sp, m, &info);
     for (size_t k = 0; k < info.n_regions; k++)
         if (info.regions[k].sigma_defaulted)
@@ -702,6 +759,7 @@ static int import_volume(const spec *sp, const char *outdir, double default_scal
         cJSON_AddNumberToObject(op, "default_scale", default_scale);
         cJSON_AddBoolToObject(op, "force", force);
         if (region_array) cJSON_AddStringToObject(op, "region_array", region_array);
+        frame_json(op, frame);
     }
     m->provenance_json = cJSON_PrintUnformatted(prov);
     if (!m->provenance_json) {
@@ -713,6 +771,7 @@ static int import_volume(const spec *sp, const char *outdir, double default_scal
         rc = cli_fail(ctx, cmd, st);
         goto done;
     }
+    if (!quiet) print_frame(&m->frame);
     if (!quiet)
         printf("wrote %s (%zu nodes, %zu tetrahedra, %zu region%s, %zu surface%s)\n", outdir, m->volume->n_nodes,
                m->volume->n_tets, m->volume->n_regions, m->volume->n_regions == 1 ? "" : "s", m->n_surfaces,

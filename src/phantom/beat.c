@@ -47,6 +47,7 @@
  * surface has no triangles or encloses no positive volume.
  */
 #include "thorax/electrodes.h"
+#include "thorax/phantom.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -165,7 +166,27 @@ static void heart_centre(const thx_surface *s, double r0[3])
     }
 }
 
+static thx_status epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_frame *frame, const thx_beat_opts *o,
+                             thx_series **out);
+
 thx_status thx_phantom_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_beat_opts *o, thx_series **out)
+{
+    thx_frame ras = thx_frame_ras();
+    return epicardial(ctx, heart, &ras, o, out);
+}
+
+thx_status thx_torso_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_frame *frame, const thx_beat_opts *o,
+                                thx_series **out)
+{
+    *out = NULL;
+    THX_CHECK(thx_frame_require(ctx, frame, "the model", "the dipole's directions"));
+    if (!thx_frame_valid(frame)) return thx_error(ctx, THX_EINPUT, "beat: the model's frame is not valid");
+    return epicardial(ctx, heart, frame, o, out);
+}
+
+/* The dipole's RAS directions (thx_beat_dipole) are carried into the model's axes by the frame (a rotation). */
+static thx_status epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_frame *frame, const thx_beat_opts *o,
+                             thx_series **out)
 {
     *out = NULL;
     thx_beat_opts def;
@@ -224,8 +245,9 @@ thx_status thx_phantom_epicardial(thx_ctx *ctx, const thx_surface *heart, const 
     }
     double vmax = 0;
     for (size_t f = 0; f < M; f++) {
-        double p[3];
-        thx_beat_dipole(o, f, p);
+        double q[3], p[3];
+        thx_beat_dipole(o, f, q);
+        thx_frame_from_ras(frame, q, p);
         double *v = s->v + f * N;
         for (size_t r = 0; r < N; r++) {
             v[r] = 1000.0 * (p[0] * g[3 * r] + p[1] * g[3 * r + 1] + p[2] * g[3 * r + 2]);

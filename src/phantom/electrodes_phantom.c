@@ -3,11 +3,16 @@
  * positions and a body-surface-mapping array on the model's outer surface.
  *
  * Landmarks are computed from the model itself, so they follow the phantom's
- * shape (and any other torso of the same build): the torso's cross-sections
- * (thx_surface_slice: the largest loop of the outer surface on a plane
- * z = const), its z extent, and the heart's z extent. Each electrode is the
- * outer-surface node nearest its landmark. In RAS, the subject's left is -x
- * and anterior +y.
+ * shape and any other torso (an imported one such as the Dalhousie torso):
+ * the torso's cross-sections across its superior axis (thx_surface_slice: the
+ * largest loop of the outer surface on a plane of constant height), its
+ * extent along that axis, and the heart's. The model's anatomical frame
+ * (thorax/frame.h) says which axes are superior and anterior: the outer and
+ * heart surfaces are first carried into RAS (+x the subject's right, +y
+ * anterior, +z superior; a rotation, so orientation and distances are kept),
+ * the landmarks are found there, and each electrode is the outer-surface node
+ * nearest its landmark, reported with the node's own model coordinates. Below,
+ * x, y, z are those RAS coordinates: the subject's left is -x, anterior +y.
  *
  *  - Heights. V1 and V2 (4th intercostal space) at the middle of the heart's
  *    z extent; V4, V5, V6 (5th space) a quarter of the heart's height lower,
@@ -22,9 +27,10 @@
  *    anterior axillary line is not evident); V3: the anterior surface at the
  *    mean x of V2 and V4, halfway between their heights.
  *  - Limb leads, Mason-Likar: RA and LA on the front of the shoulders
- *    (8% of the torso's height below its top, at +-0.7 half-width), LL on
- *    the front at the left lower end (8% above the bottom, 0.6 half-width
- *    left).
+ *    (8% of the torso's height below its top, at +-0.7 half-width; on a
+ *    torso that goes on into the neck, lower: at the first height where the
+ *    section is at least 75% as wide as the widest), LL on the front at the
+ *    left lower end (8% above the bottom, 0.6 half-width left).
  *  - The array: rings at heights zmin + (k + 1/2) H / rings (k = 0 bottom to
  *    top, H the torso's height, so no ring is on a cap), each ring's
  *    electrodes evenly spaced in arc length along the section, starting at
@@ -43,6 +49,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "thorax/phantom.h"
 #include "thorax/slice.h"
 
 /* A cross-section: one closed loop, counterclockwise seen from above, with
@@ -208,6 +215,8 @@ static void set_electrode(thx_electrodes *e, size_t i, const char *name, const t
     memcpy(e->xyz + 3 * i, s->xyz + 3 * node, 3 * sizeof(double));
 }
 
+#define SHOULDER_WIDTH 0.75
+
 static thx_status twelve_lead(thx_ctx *ctx, const thx_surface *outer, const thx_surface *heart, double zmin,
                               double zmax, thx_electrodes **out)
 {
@@ -227,7 +236,27 @@ static thx_status twelve_lead(thx_ctx *ctx, const thx_surface *outer, const thx_
     THX_TRY(section_at(ctx, outer, z12, &c12));
     THX_TRY(section_at(ctx, outer, z3, &c3));
     THX_TRY(section_at(ctx, outer, z46, &c46));
-    THX_TRY(section_at(ctx, outer, zarm, &carm));
+    {
+        /* The shoulders. A torso cut at the shoulders (the phantom) has them at its top;
+         * one that goes on into the neck (the Dalhousie torso) is much narrower there:
+         * then the arm electrodes go down to the first height where the torso is at
+         * least SHOULDER_WIDTH of its widest section (sampled at 48 heights), never
+         * below the V1/V2 level. */
+        double wmax = 0;
+        for (int k = 0; k < 48; k++) {
+            section t;
+            double z = zmin + (0.04 + 0.92 * k / 47.0) * H;
+            if (section_at(ctx, outer, z, &t) != THX_OK) continue;
+            wmax = fmax(wmax, t.x1 - t.x0);
+            section_free(&t);
+        }
+        THX_TRY(section_at(ctx, outer, zarm, &carm));
+        while (carm.x1 - carm.x0 < SHOULDER_WIDTH * wmax && zarm - 0.01 * H > z12) {
+            section_free(&carm);
+            zarm -= 0.01 * H;
+            THX_TRY(section_at(ctx, outer, zarm, &carm));
+        }
+    }
     THX_TRY(section_at(ctx, outer, zleg, &cleg));
     THX_TRY(anterior_at(ctx, &carm, sec_mid_x(&carm) + 0.7 * sec_hw_right(&carm), "RA", lm[0]));
     THX_TRY(anterior_at(ctx, &carm, sec_mid_x(&carm) - 0.7 * sec_hw_left(&carm), "LA", lm[1]));
@@ -335,13 +364,74 @@ static thx_status body_array(thx_ctx *ctx, const thx_surface *outer, double zmin
     return THX_OK;
 }
 
+/* A copy of s in the RAS coordinates of frame f (same node and triangle numbers). */
+static thx_status ras_copy(thx_ctx *ctx, const thx_surface *s, const thx_frame *f, thx_surface **out)
+{
+    *out = NULL;
+    thx_surface *c = NULL;
+    THX_CHECK(thx_surface_create(ctx, s->name, s->role, &c));
+    c->xyz = thx_malloc(ctx, (s->n_nodes ? s->n_nodes : 1) * 3 * sizeof *c->xyz);
+    c->tri = thx_malloc(ctx, (s->n_tris ? s->n_tris : 1) * 3 * sizeof *c->tri);
+    if (!c->xyz || !c->tri) {
+        thx_surface_destroy(&c);
+        return THX_ENOMEM;
+    }
+    c->n_nodes = s->n_nodes;
+    c->n_tris = s->n_tris;
+    for (size_t i = 0; i < s->n_nodes; i++) thx_frame_to_ras(f, s->xyz + 3 * i, c->xyz + 3 * i);
+    if (s->n_tris) memcpy(c->tri, s->tri, 3 * s->n_tris * sizeof *c->tri);
+    *out = c;
+    return THX_OK;
+}
+
+/* Each electrode's position back in the model's coordinates: its node's. */
+static void to_model(thx_electrodes *e, const thx_surface *outer)
+{
+    for (size_t i = 0; e && i < e->n; i++) memcpy(e->xyz + 3 * i, outer->xyz + 3 * (size_t)e->node[i], 3 * sizeof(double));
+}
+
 thx_status thx_phantom_electrodes(thx_ctx *ctx, const thx_model *m, thx_electrodes **leads12, size_t n_array,
                                   thx_electrodes **array)
+{
+    thx_frame ras = thx_frame_ras();
+    return thx_torso_electrodes(ctx, m, m && m->frame.set ? &m->frame : &ras, leads12, n_array, array);
+}
+
+static thx_status place(thx_ctx *ctx, const thx_surface *outer, const thx_surface *heart, thx_electrodes **leads12,
+                        size_t n_array, thx_electrodes **array);
+
+thx_status thx_torso_electrodes(thx_ctx *ctx, const thx_model *m, const thx_frame *frame, thx_electrodes **leads12,
+                                size_t n_array, thx_electrodes **array)
 {
     if (leads12) *leads12 = NULL;
     if (array) *array = NULL;
     if (!m) return thx_error(ctx, THX_EINPUT, "electrodes: no model");
-    const thx_surface *outer = find_role(m, THX_ROLE_OUTER), *heart = find_role(m, THX_ROLE_HEART);
+    if (!frame) frame = &m->frame;
+    THX_CHECK(thx_frame_require(ctx, frame, "the model", "the electrode landmarks"));
+    if (!thx_frame_valid(frame)) return thx_error(ctx, THX_EINPUT, "electrodes: the model's frame is not valid");
+    const thx_surface *mo = find_role(m, THX_ROLE_OUTER), *mh = find_role(m, THX_ROLE_HEART);
+    if (!mo || mo->n_nodes == 0 || mo->n_tris == 0)
+        return thx_error(ctx, THX_EINPUT, "electrodes: the model has no outer surface (role \"outer\") to place them on");
+    if (!mh || mh->n_nodes == 0)
+        return thx_error(ctx, THX_EINPUT,
+                         "electrodes: the model has no heart surface (role \"heart\"): the precordial landmarks "
+                         "follow the heart's height");
+    thx_surface *o = NULL, *h = NULL;
+    thx_status st = ras_copy(ctx, mo, frame, &o);
+    if (st == THX_OK) st = ras_copy(ctx, mh, frame, &h);
+    if (st == THX_OK) st = place(ctx, o, h, leads12, n_array, array);
+    if (st == THX_OK) {
+        if (leads12) to_model(*leads12, mo);
+        if (array) to_model(*array, mo);
+    }
+    thx_surface_destroy(&o);
+    thx_surface_destroy(&h);
+    return st;
+}
+
+static thx_status place(thx_ctx *ctx, const thx_surface *outer, const thx_surface *heart, thx_electrodes **leads12,
+                        size_t n_array, thx_electrodes **array)
+{
     if (!outer || outer->n_nodes == 0 || outer->n_tris == 0)
         return thx_error(ctx, THX_EINPUT, "electrodes: the model has no outer surface (role \"outer\") to place them on");
     if (!heart || heart->n_nodes == 0)
@@ -354,7 +444,7 @@ thx_status thx_phantom_electrodes(thx_ctx *ctx, const thx_model *m, thx_electrod
         zmax = fmax(zmax, outer->xyz[3 * i + 2]);
     }
     if (!(zmax > zmin))
-        return thx_error(ctx, THX_EGEOM, "electrodes: the outer surface \"%s\" is flat in z", outer->name);
+        return thx_error(ctx, THX_EGEOM, "electrodes: the outer surface \"%s\" is flat along its superior axis", outer->name);
     thx_electrodes *e12 = NULL, *ea = NULL;
     if (leads12) THX_CHECK(twelve_lead(ctx, outer, heart, zmin, zmax, &e12));
     if (array && n_array > 0) {
