@@ -15,6 +15,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <stdarg.h>
 #include <stdint.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -660,17 +661,21 @@ static void test_errors(void)
     expect_error("e1.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n1\n1 1 2 4\n", "6:", "node number 4 out of range 1..3");
     expect_error("e2.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 nan\n1\n1 1 2 3\n", "4:", "node 3: coordinate 3 is not a finite");
     expect_error("e3.tri", "x\n", "1:", "expected the number of nodes");
-    expect_error("e4.tri", "3\n1 0 0 0\n2 1 0 0\n", "3:", "file ends at node 3 of 3");
+    expect_error("e4.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1\n", "4:", "file ends at node 3 of 3");
+    expect_error("e4b.tri", "3\n1 0 0 0\n2 1 0 0\n", "1:", "3 nodes declared, but the file holds only 8 numbers");
     /* OpenMEEG .tri: counts beyond the file, indices out of range, missing normals, trailing text */
-    expect_error("om1.tri", "- 100\n0 0 0 0 0 1\n1 0 0 0 0 1\n", "3:", "file ends at vertex 3 of 100");
+    expect_error("om1.tri", "- 100\n0 0 0 0 0 1\n1 0 0 0 0 1\n", "1:", "100 vertices declared, but the 25 bytes that follow can hold at most 3");
+    expect_error("om1b.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n", "3:", "file ends at vertex 3 of 3");
     expect_error("om2.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 3\n", "6:",
                  "node number 3 out of range 0..2");
     expect_error("om3.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\n", "3:",
                  "vertex 2: normal z is missing");
     expect_error("om4.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 x 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\n", "3:",
                  "vertex 2: normal y is not a finite number");
-    expect_error("om5.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 5 5 5\n0 1 2\n2 1 0\n", "7:",
-                 "file ends at triangle 3 of 5");
+    expect_error("om5.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 3 3 3\n0 1 2\n2 1 0\n", "7:",
+                 "file ends at triangle 3 of 3");
+    expect_error("om5b.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 5 5 5\n0 1 2\n2 1 0\n", "5:",
+                 "5 triangles declared, but the 13 bytes that follow can hold at most 3");
     expect_error("om6.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 2 1\n0 1 2\n", "5:",
                  "one triangle count, repeated");
     expect_error("om7.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1 1 1\n0 1 2\nextra\n", "7:",
@@ -718,6 +723,113 @@ static void write_cube_obj(const char *name, unsigned reverse, unsigned drop)
     }
     tl_write_bytes(tl_path(name), b.p, b.n);
     free(b.p);
+}
+
+/* Issue 11's findings: counts checked against the file before any loop, and
+ * indices too large for any integer type refused as written, with no
+ * undefined behaviour (the sanitizer build runs this too). */
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void test_bounded(void)
+{
+    static const char *ply_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                  "property float z\n";
+    char buf[1024];
+    /* a PLY element without properties and a count of 2^31 - 1 takes no bytes: skipped at once (it was
+     * iterated one by one, 9 s) */
+    snprintf(buf, sizeof buf, "%selement nothing 2147483647\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", ply_head);
+    tl_write_text(tl_path("empty-elem.ply"), buf);
+    thx_surface *s = NULL;
+    double t0 = seconds_now();
+    CHECK_OK(ctx, thx_surface_read_file(ctx, tl_path("empty-elem.ply"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL));
+    CHECK(seconds_now() - t0 < 0.5);
+    CHECK(s && s->n_nodes == 3 && s->n_tris == 1);
+    thx_surface_destroy(&s);
+    /* a PLY element count the data cannot hold: refused from the size */
+    snprintf(buf, sizeof buf, "%selement face 2147483647\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", ply_head);
+    t0 = seconds_now();
+    expect_error("big-face.ply", buf, "7:", "element \"face\": 2147483647 items declared, but the 9 bytes of data left");
+    CHECK(seconds_now() - t0 < 0.5);
+    /* a .tri claiming 2^31 - 1 triangles: refused from the size at once (it took 8 s) */
+    t0 = seconds_now();
+    expect_error("big.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n2147483647\n1 1 2 3\n", "5:",
+                 "2147483647 triangles declared, but the file holds only 4 numbers");
+    expect_error("big-om.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 2147483647\n0 1 2\n", "5:",
+                 "2147483647 triangles declared");
+    expect_error("big-nodes.tri", "2147483647\n1 0 0 0\n", "1:", "2147483647 nodes declared");
+    CHECK(seconds_now() - t0 < 0.5);
+    /* huge indices: no signed overflow (x - base), reported as written */
+    expect_error("huge1.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n1\n1 1 2 -9223372036854775808\n", "6:",
+                 "node number -9223372036854775808 out of range 1..3");
+    expect_error("huge2.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n1\n1 1 2 9223372036854775807\n", "6:",
+                 "node number 9223372036854775807 out of range");
+    expect_error("huge3.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 1\n0 1 99999999999999999999\n", "6:",
+                 "vertex number 99999999999999999999 out of range");
+    /* float-to-integer conversions: PLY and VTK keep values as doubles; one past 2^53 (or 2^63) was rounded
+     * (and converted with undefined behaviour), then reported as another number */
+    snprintf(buf, sizeof buf, "%selement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 9223372036854775807\n", ply_head);
+    expect_error("huge.ply", buf, "13:", "\"9223372036854775807\" is out of range -2147483648..2147483647");
+    snprintf(buf, sizeof buf, "%selement face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 4294967296\n", ply_head);
+    expect_error("huge2.ply", buf, "13:", "\"4294967296\" is out of range 0..4294967295");
+    expect_error("huge.vtk", "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                 "POLYGONS 1 4\n3 0 1 9007199254740993\n", "8:", "\"9007199254740993\" is out of range");
+    expect_error("huge51.vtk", "# vtk DataFile Version 5.1\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                 "POLYGONS 2 3\nOFFSETS vtktypeint64\n0 3\nCONNECTIVITY vtktypeint64\n0 1 9223372036854775807\n", "11:",
+                 "\"9223372036854775807\" is out of range");
+    /* binary: a 64-bit index beyond 2^53, named as written */
+    {
+        static const char head[] = "# vtk DataFile Version 5.1\nt\nBINARY\nDATASET POLYDATA\nPOINTS 3 float\n";
+        unsigned char bin[512];
+        size_t n = 0;
+        memcpy(bin, head, sizeof head - 1), n = sizeof head - 1;
+        const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        for (int i = 0; i < 9; i++) {
+            uint32_t u;
+            memcpy(&u, &p[i], 4);
+            for (int k = 3; k >= 0; k--) bin[n++] = (unsigned char)(u >> (8 * k));
+        }
+        const char *h2 = "\nPOLYGONS 2 3\nOFFSETS vtktypeint64\n";
+        memcpy(bin + n, h2, strlen(h2)), n += strlen(h2);
+        const uint64_t off[2] = {0, 3}, conn[3] = {0, 1, 0x7fffffffffffffffull};
+        for (int i = 0; i < 2; i++)
+            for (int k = 7; k >= 0; k--) bin[n++] = (unsigned char)(off[i] >> (8 * k));
+        const char *h3 = "\nCONNECTIVITY vtktypeint64\n";
+        memcpy(bin + n, h3, strlen(h3)), n += strlen(h3);
+        for (int i = 0; i < 3; i++)
+            for (int k = 7; k >= 0; k--) bin[n++] = (unsigned char)(conn[i] >> (8 * k));
+        bin[n++] = '\n';
+        FILE *f = fopen(tl_path("huge-bin.vtk"), "wb");
+        CHECK(f && fwrite(bin, 1, n, f) == n && fclose(f) == 0);
+        CHECK(thx_surface_read_file(ctx, tl_path("huge-bin.vtk"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) ==
+              THX_EINPUT);
+        CHECK(contains(thx_ctx_message(ctx), "integer 9223372036854775807 is beyond +-2^53"));
+        CHECK(contains(thx_ctx_message(ctx), "huge-bin.vtk: byte "));
+    }
+    /* nothing half-read: NUL bytes, trailing data */
+    {
+        static const char obj[] = "v 0 0 0\nv 1 0 0\n\0v 0 1 0\nf 1 2 3\n";
+        FILE *f = fopen(tl_path("nul.obj"), "wb");
+        CHECK(f && fwrite(obj, 1, sizeof obj - 1, f) == sizeof obj - 1 && fclose(f) == 0);
+        CHECK(thx_surface_read_file(ctx, tl_path("nul.obj"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL) == THX_EINPUT);
+        CHECK(contains(thx_ctx_message(ctx), "nul.obj:3: surface \"skin\": NUL byte at byte 16"));
+    }
+    snprintf(buf, sizeof buf, "%selement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", ply_head);
+    expect_error("trail.ply", buf, "14:", "unexpected \"3\" after the last element's data");
+    expect_error("trail.obj", "v 0 0 0 junk\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "1:", "vertex 1: unexpected \"junk\"");
+    expect_error("vt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2 3\n", "4:", "face vertex \"1/x\" is not a vertex number");
+    expect_error("trail.stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0 9\n", "4:",
+                 "unexpected \"9\" after the vertex's three coordinates");
+    expect_error("normal.stl", "solid s\nfacet normal 0 x 1\n", "2:", "expected \"facet normal nx ny nz\"");
 }
 
 static void test_policy(void)
@@ -809,6 +921,7 @@ int main(void)
     test_vtk();
     test_exports();
     test_errors();
+    test_bounded();
     test_policy();
     int rc = tl_scratch_finish("test_import");
     thx_ctx_destroy(&ctx);

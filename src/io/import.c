@@ -139,7 +139,13 @@ thx_status thx_surface_read_file(thx_ctx *ctx, const char *path, const char *pat
         build b;
         memset(&b, 0, sizeof b);
         b.ctx = ctx, b.path = path, b.name = name;
-        switch (fmt) {
+        /* Text formats hold no NUL byte: one means a binary or damaged file (the
+         * binary formats, STL, PLY and VTK, check their text parts themselves). */
+        int zl = (fmt == THX_IMPORT_TRI || fmt == THX_IMPORT_OBJ || fmt == THX_IMPORT_VTP) ? nul_line(text, len) : 0;
+        if (zl) {
+            st = fail(&b, at_line(zl), "NUL byte at byte %zu: not a text file, or a damaged one",
+                      (size_t)((const char *)memchr(text, 0, len) - text));
+        } else switch (fmt) {
         case THX_IMPORT_TRI: st = import_read_tri(&b, text, len, info); break;
         case THX_IMPORT_OBJ: st = import_read_obj(&b, text, len, info); break;
         case THX_IMPORT_STL: st = import_read_stl(&b, text, len, info); break;

@@ -27,18 +27,43 @@ thx_status import_read_obj(build *b, const char *text, size_t len, thx_import_in
                     goto done;
                 }
             }
-            /* an optional w (or vertex colour) may follow: not geometry here */
+            /* an optional w, vertex colour (r g b) or both may follow: numbers, not geometry here */
+            const char *u;
+            size_t m, extra = 0;
+            while ((m = line_token(&c, &u)) != 0 && u[0] != '#') { /* '#': a comment to the line's end */
+                double x;
+                if (parse_num(u, m, &x) != 0 || ++extra > 4) {
+                    st = fail(b, at_line(line), "vertex %zu: unexpected \"%s\" after the coordinates (at most w and "
+                              "a colour r g b may follow, as numbers)", b->n_nodes + 1, tok_show(u, m));
+                    goto done;
+                }
+            }
             THX_TRY(add_node(b, at_line(line), v[0], v[1], v[2]));
         } else if (tok_is(t, n, "f")) {
             size_t nv = 0;
             const char *u;
             size_t m;
-            while ((m = line_token(&c, &u)) != 0) {
+            while ((m = line_token(&c, &u)) != 0 && u[0] != '#') { /* '#': a comment to the line's end */
                 /* v, v/vt, v//vn, v/vt/vn: the vertex is the part before the first '/' */
                 size_t vlen = 0;
                 while (vlen < m && u[vlen] != '/') vlen++;
+                /* the texture and normal numbers after it (may be empty): integers, at most two */
+                int parts = 0, bad_part = 0;
+                for (size_t q = vlen; q < m;) {
+                    size_t e = q + 1;
+                    while (e < m && u[e] != '/') e++;
+                    long long y;
+                    if (++parts > 2 || (e > q + 1 && (parse_int(u + q + 1, e - q - 1, &y) != 0 || y == 0))) bad_part = 1;
+                    q = e;
+                }
                 long long x;
-                if (parse_int(u, vlen, &x) != 0 || x == 0) {
+                int pr = parse_i64(u, vlen, -INT_LIMIT, INT_LIMIT, &x);
+                if (pr == -2) {
+                    st = fail(b, at_line(line), "face refers to vertex %s but %zu vertices are defined before it",
+                              tok_show(u, vlen), b->n_nodes);
+                    goto done;
+                }
+                if (pr != 0 || x == 0 || bad_part) {
                     st = fail(b, at_line(line), "face vertex \"%s\" is not a vertex number (1-based, or negative "
                               "counting back from the last vertex)", tok_show(u, m));
                     goto done;

@@ -89,7 +89,13 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
             const char *u;
             size_t m = line_token(c, &t), k = line_token(c, &u);
             long long cnt;
-            if (!m || !k || parse_int(u, k, &cnt) != 0 || cnt < 0 || cnt > INT32_MAX) {
+            int pc = (m && k) ? parse_count(u, k, INT32_MAX, &cnt) : -1;
+            if (pc == -2) {
+                st = fail(b, at_line(line), "element \"%s\": count %s out of range 0..%d", tok_show(t, m), tok_show(u, k),
+                          INT32_MAX);
+                goto done;
+            }
+            if (pc != 0) {
                 st = fail(b, at_line(line), "expected \"element NAME COUNT\"");
                 goto done;
             }
@@ -143,6 +149,14 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
         goto done;
     }
     next_line(c); /* the body starts after the end_header line (binary data right after its '\n') */
+    {
+        /* no NUL in the header; none in an ascii body */
+        int zl = nul_line(text, s.binary ? c->pos : len);
+        if (zl) {
+            st = fail(b, at_line(zl), "NUL byte in %s", s.binary ? "the PLY header" : "an ascii PLY file");
+            goto done;
+        }
+    }
 
     int seen_vertex = 0;
     for (size_t ei = 0; ei < n_el; ei++) {
@@ -176,6 +190,20 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
             goto done;
         }
         seen_vertex |= is_vertex;
+        /* The least each item takes (binary: its scalars and list counts; ascii: a
+         * character and a separator per value): a count the rest of the file
+         * cannot hold is refused before the loop; an element without properties
+         * takes no bytes and is skipped at once, whatever its count. */
+        size_t min_item = 0;
+        for (size_t k = 0; k < e->n_prop; k++)
+            min_item += s.binary ? type_size[e->prop[k].count_ty ? e->prop[k].count_ty : e->prop[k].ty] : 2;
+        size_t left = len - c->pos;
+        if (min_item == 0) continue;
+        if (e->count > (s.binary ? left / min_item : left / min_item + 1)) {
+            st = fail(b, at_line(e->line), "element \"%s\": %zu items declared, but the %zu bytes of data left can hold "
+                      "at most %zu", e->name, e->count, left, s.binary ? left / min_item : left / min_item + 1);
+            goto done;
+        }
         char what[96];
         for (size_t r = 0; r < e->count; r++) {
             double xyz[3] = {0, 0, 0};
@@ -197,8 +225,10 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
                 }
                 THX_TRY(read_scalar(b, &s, p->count_ty, what, &v, &w));
                 if (first) w0 = w, first = 0;
-                if (v < 0 || v > 1e6) {
-                    st = fail(b, w, "%s: list length %g out of range", what, v);
+                size_t left2 = len - c->pos, most = s.binary ? left2 / type_size[p->ty] : left2 / 2 + 1;
+                if (v < 0 || v > 1e6 || v > (double)most) {
+                    st = fail(b, w, "%s: list length %.0f out of range (0..%zu: what the file has left, at most 1000000)",
+                              what, v, most < 1000000 ? most : 1000000);
                     goto done;
                 }
                 size_t cnt = (size_t)v;
@@ -218,6 +248,21 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
     if (!seen_vertex) {
         st = fail(b, at_line(1), "no \"vertex\" element");
         goto done;
+    }
+    /* nothing may follow the last item of the last element */
+    if (s.binary && c->pos < len) {
+        st = fail(b, at_byte(c->pos), "%zu bytes after the last element's data (the header declares fewer items "
+                  "than the file holds)", len - c->pos);
+        goto done;
+    }
+    if (!s.binary) {
+        int l;
+        size_t m = next_token(c, &t, &l);
+        if (m) {
+            st = fail(b, at_line(l), "unexpected \"%s\" after the last element's data (the header declares fewer "
+                      "items than the file holds)", tok_show(t, m));
+            goto done;
+        }
     }
     if (info) {
         snprintf(info->format_detail, sizeof info->format_detail, "%s PLY",

@@ -122,6 +122,11 @@ thx_status import_read_stl(build *b, const char *text, size_t len, thx_import_in
                 st = fail(b, at_line(1), "not an STL file: too short for binary, and no \"solid\" at the start");
             goto done;
         }
+        int zl = nul_line(text, len);
+        if (zl) {
+            st = fail(b, at_line(zl), "NUL byte in an ASCII STL file (a binary STL has exactly 84 + 50 n bytes)");
+            goto done;
+        }
         next_line(&c);
         size_t nv = 0;
         int in_loop = 0, loop_line = 0;
@@ -143,11 +148,24 @@ thx_status import_read_stl(build *b, const char *text, size_t len, thx_import_in
                         goto done;
                     }
                 }
+                const char *x;
+                size_t m3 = line_token(&c, &x);
+                if (m3) {
+                    st = fail(b, at_line(line), "unexpected \"%s\" after the vertex's three coordinates", tok_show(x, m3));
+                    goto done;
+                }
                 if (nv + 1 > pcap) THX_TRY(thx_grow(b->ctx, (void **)&poly, &pcap, nv + 1, sizeof *poly));
                 THX_TRY(merge_node(b, &m, at_line(line), v[0], v[1], v[2], &poly[nv]));
                 nv++;
                 corners++;
             } else if (tok_is_ci(t, n, "outer")) {
+                const char *x;
+                size_t m3 = line_token(&c, &x);
+                if (!tok_is_ci(x, m3, "loop") || in_loop) {
+                    st = fail(b, at_line(line), in_loop ? "\"outer loop\" inside another (no \"endloop\" before it)"
+                                                        : "expected \"outer loop\"");
+                    goto done;
+                }
                 in_loop = 1;
                 loop_line = line;
                 nv = 0;
@@ -158,8 +176,29 @@ thx_status import_read_stl(build *b, const char *text, size_t len, thx_import_in
                 }
                 THX_TRY(add_polygon(b, at_line(loop_line), poly, nv));
                 in_loop = 0;
-            } else if (tok_is_ci(t, n, "facet") || tok_is_ci(t, n, "endfacet") || tok_is_ci(t, n, "endsolid") ||
-                       tok_is_ci(t, n, "solid")) {
+            } else if (tok_is_ci(t, n, "facet")) {
+                /* "facet normal nx ny nz": numbers (NaN allowed: some writers give degenerate facets one);
+                 * the normal is recomputed from the corners */
+                const char *x;
+                size_t m3 = line_token(&c, &x);
+                int ok = tok_is_ci(x, m3, "normal");
+                for (int k = 0; ok && k < 3; k++) {
+                    m3 = line_token(&c, &x);
+                    char tmp[64], *end = NULL;
+                    if (!m3 || m3 >= sizeof tmp) ok = 0;
+                    else {
+                        memcpy(tmp, x, m3);
+                        tmp[m3] = '\0';
+                        (void)strtod(tmp, &end);
+                        ok = end == tmp + m3;
+                    }
+                }
+                if (ok && line_token(&c, &x)) ok = 0;
+                if (!ok) {
+                    st = fail(b, at_line(line), "expected \"facet normal nx ny nz\" (three numbers)");
+                    goto done;
+                }
+            } else if (tok_is_ci(t, n, "endfacet") || tok_is_ci(t, n, "endsolid") || tok_is_ci(t, n, "solid")) {
                 /* facet normals are recomputed from the corners; several solids are read as one surface */
             } else {
                 st = fail(b, at_line(line), "unexpected \"%s\" in an ASCII STL file", tok_show(t, n));

@@ -118,6 +118,9 @@ static inline thx_status read_scalar(build *b, source *s, scalar_type ty, const 
     if (s->binary) {
         *w = at_byte(s->c.pos);
         if (s->c.len - s->c.pos < type_size[ty]) return fail(b, *w, "file ends inside %s", what);
+        char big[32];
+        if (int64_beyond((const unsigned char *)s->c.buf + s->c.pos, ty, s->big, big, sizeof big))
+            return fail(b, *w, "%s: integer %s is beyond +-2^53 (too large for any index or count)", what, big);
         *out = get_scalar((const unsigned char *)s->c.buf + s->c.pos, ty, s->big);
         s->c.pos += type_size[ty];
         if (ty >= T_F32 && !isfinite(*out)) return fail(b, *w, "%s is not a finite number", what);
@@ -132,8 +135,11 @@ static inline thx_status read_scalar(build *b, source *s, scalar_type ty, const 
     if (ty >= T_F32) {
         bad = parse_num(t, n, out) != 0;
     } else {
-        long long v = 0;
-        bad = parse_int(t, n, &v) != 0;
+        long long v = 0, lo, hi;
+        type_range(ty, &lo, &hi);
+        int pr = parse_i64(t, n, lo, hi, &v);
+        if (pr == -2) return fail(b, *w, "%s: \"%s\" is out of range %lld..%lld", what, tok_show(t, n), lo, hi);
+        bad = pr != 0;
         *out = (double)v;
     }
     if (bad)

@@ -13,8 +13,10 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -105,24 +107,74 @@ static inline int parse_num(const char *t, size_t n, double *out)
     return 0;
 }
 
-/* An integer ("3", or an integral "3.0"); returns 0 on success. */
-static inline int parse_int(const char *t, size_t n, long long *out)
+/* The largest integer every reader accepts: 2^53, the last one a double
+ * holds exactly, so that an index kept as a double (VTK, PLY arrays) is
+ * still the number the file wrote, and index arithmetic cannot overflow. */
+#define INT_LIMIT 9007199254740992LL
+
+/* The one integer parser of the import readers (overflow-safe): a decimal
+ * integer token, "3", "-3", "+3", or an integral number written as "3.0" or
+ * "3e2" (some PLY/VTK writers do), within [lo, hi] (|lo|, |hi| <= 2^53).
+ * Hexadecimal, "inf", "nan" and fractions are not integers. Returns 0 and
+ * *out; -1 if the token is not an integer; -2 if it is one outside
+ * [lo, hi] (*out untouched: the caller quotes the token as written). */
+static inline int parse_i64(const char *t, size_t n, long long lo, long long hi, long long *out)
 {
-    char tmp[128];
-    if (n == 0 || n >= sizeof tmp) return -1;
-    memcpy(tmp, t, n);
-    tmp[n] = '\0';
-    char *end = NULL;
-    errno = 0;
-    long long v = strtoll(tmp, &end, 10);
-    if (end == tmp + n && errno == 0) {
-        *out = v;
+    size_t i = 0;
+    int neg = 0;
+    if (n == 0) return -1;
+    if (t[0] == '+' || t[0] == '-') neg = t[0] == '-', i = 1;
+    if (i == n || !isdigit((unsigned char)t[i])) {
+        if (!(i < n && t[i] == '.')) return -1; /* ".5" and the like: not integers anyway, but parsed below */
+    }
+    unsigned long long v = 0;
+    int big = 0;
+    for (; i < n && isdigit((unsigned char)t[i]); i++) {
+        unsigned d = (unsigned)(t[i] - '0');
+        if (v > (ULLONG_MAX - d) / 10) big = 1;
+        else v = 10 * v + d;
+    }
+    if (i < n) {
+        /* a fraction or exponent: only an integral value of plain decimal notation */
+        for (size_t k = i; k < n; k++)
+            if (!(isdigit((unsigned char)t[k]) || t[k] == '.' || t[k] == 'e' || t[k] == 'E' || t[k] == '+' || t[k] == '-'))
+                return -1;
+        char tmp[128];
+        if (n >= sizeof tmp) return -1;
+        memcpy(tmp, t, n);
+        tmp[n] = '\0';
+        char *end = NULL;
+        double d = strtod(tmp, &end);
+        if (end != tmp + n || !isfinite(d) || d != floor(d)) return -1;
+        if (d < (double)lo || d > (double)hi) return -2;
+        *out = (long long)d;
         return 0;
     }
-    double d;
-    if (parse_num(t, n, &d) != 0 || d != floor(d) || fabs(d) > 9007199254740992.0) return -1;
-    *out = (long long)d;
+    if (big || v > (unsigned long long)INT_LIMIT) return -2;
+    long long s = neg ? -(long long)v : (long long)v;
+    if (s < lo || s > hi) return -2;
+    *out = s;
     return 0;
+}
+
+/* An integer of magnitude at most 2^53 (parse_i64); returns 0 on success. */
+static inline int parse_int(const char *t, size_t n, long long *out)
+{
+    return parse_i64(t, n, -INT_LIMIT, INT_LIMIT, out) == 0 ? 0 : -1;
+}
+
+/* A count: an integer in 0 .. hi; 0 on success, -1 not an integer, -2 out of range. */
+static inline int parse_count(const char *t, size_t n, long long hi, long long *out) { return parse_i64(t, n, 0, hi, out); }
+
+/* The first NUL byte of text[0, len) as a line number (1-based), or 0 if none. */
+static inline int nul_line(const char *text, size_t len)
+{
+    const char *z = memchr(text, 0, len);
+    if (!z) return 0;
+    int line = 1;
+    for (const char *q = text; q < z; q++)
+        if (*q == '\n') line++;
+    return line;
 }
 
 typedef enum { T_NONE = 0, T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64 } scalar_type;
@@ -163,6 +215,39 @@ static inline double get_scalar(const unsigned char *p, scalar_type ty, int big)
     case T_F64: { double d; memcpy(&d, &u, 8); return d; }
     default: return NAN;
     }
+}
+
+/* The range of an integer type, clamped to +-2^53 (INT_LIMIT) for 64 bits. */
+static inline void type_range(scalar_type ty, long long *lo, long long *hi)
+{
+    switch (ty) {
+    case T_I8: *lo = INT8_MIN, *hi = INT8_MAX; break;
+    case T_U8: *lo = 0, *hi = UINT8_MAX; break;
+    case T_I16: *lo = INT16_MIN, *hi = INT16_MAX; break;
+    case T_U16: *lo = 0, *hi = UINT16_MAX; break;
+    case T_I32: *lo = INT32_MIN, *hi = INT32_MAX; break;
+    case T_U32: *lo = 0, *hi = UINT32_MAX; break;
+    case T_U64: *lo = 0, *hi = INT_LIMIT; break;
+    default: *lo = -INT_LIMIT, *hi = INT_LIMIT; break;
+    }
+}
+
+/* A binary 64-bit integer at p beyond +-2^53 (a double would not hold it
+ * exactly): returns 1 and its decimal text in buf; 0 otherwise. */
+static inline int int64_beyond(const unsigned char *p, scalar_type ty, int big, char *buf, size_t size)
+{
+    if (ty != T_I64 && ty != T_U64) return 0;
+    uint64_t u = 0;
+    for (size_t i = 0; i < 8; i++) u |= (uint64_t)p[big ? 7 - i : i] << (8 * i);
+    if (ty == T_U64 || !(u >> 63)) {
+        if (u <= (uint64_t)INT_LIMIT) return 0;
+        snprintf(buf, size, "%llu", (unsigned long long)u);
+        return 1;
+    }
+    uint64_t mag = ~u + 1; /* |v| of a negative value, without signed overflow */
+    if (mag <= (uint64_t)INT_LIMIT) return 0;
+    snprintf(buf, size, "-%llu", (unsigned long long)mag);
+    return 1;
 }
 
 static inline void copy_tok(char *dst, size_t size, const char *t, size_t n)

@@ -67,8 +67,15 @@ static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_
         return fail(b, at_line(c.line), "not an OpenMEEG .tri file (the first line is not \"- NV\")");
     int line = c.line;
     n = line_token(&c, &t);
-    if (!n || parse_int(t, n, &nv) != 0 || nv <= 0 || nv > INT32_MAX)
+    int pc = n ? parse_count(t, n, INT32_MAX, &nv) : -1;
+    if (pc == -2) return fail(b, at_line(line), "vertex count \"%s\" out of range 1..%d", tok_show(t, n), INT32_MAX);
+    if (pc != 0 || nv <= 0)
         return fail(b, at_line(line), "expected \"- NV\" (the number of vertices) on the first line");
+    /* A vertex line takes at least 12 bytes ("0 0 0 0 0 0\n"): a count the rest
+     * of the file cannot hold is refused at once, before any loop or allocation. */
+    if ((unsigned long long)nv > (len - c.pos) / 12 + 1)
+        return fail(b, at_line(line), "%lld vertices declared, but the %zu bytes that follow can hold at most %zu",
+                    nv, len - c.pos, (len - c.pos) / 12 + 1);
     if ((n = line_token(&c, &t)) != 0)
         return fail(b, at_line(line), "unexpected \"%s\" after the vertex count", tok_show(t, n));
     for (long long e = 0; e < nv; e++) {
@@ -97,11 +104,14 @@ static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_
     ntri = -1;
     while ((n = line_token(&c, &t)) != 0) {
         long long x;
-        if (parse_int(t, n, &x) != 0 || x < 0 || x > INT32_MAX || (ntri >= 0 && x != ntri) || ++copies > 3)
+        if (parse_count(t, n, INT32_MAX, &x) != 0 || (ntri >= 0 && x != ntri) || ++copies > 3)
             return fail(b, at_line(line), "expected \"- NT NT NT\" (one triangle count, repeated), found \"%s\"", tok_show(t, n));
         ntri = x;
     }
     if (ntri < 0) return fail(b, at_line(line), "expected \"- NT NT NT\": the triangle count is missing");
+    if ((unsigned long long)ntri > (len - c.pos) / 6 + 1) /* "0 1 2\n": 6 bytes a triangle */
+        return fail(b, at_line(line), "%lld triangles declared, but the %zu bytes that follow can hold at most %zu",
+                    ntri, len - c.pos, (len - c.pos) / 6 + 1);
     for (long long e = 0; e < ntri; e++) {
         if (!next_line(&c) || !next_filled_line(&c, &t, &n))
             return fail(b, at_line(line), "file ends at triangle %lld of %lld", e + 1, ntri);
@@ -111,7 +121,11 @@ static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_
             if (k > 0) n = line_token(&c, &t);
             long long x;
             if (!n) return fail(b, at_line(line), "triangle %lld: vertex number %d is missing", e + 1, k + 1);
-            if (parse_int(t, n, &x) != 0)
+            int pr = parse_i64(t, n, -INT_LIMIT, INT_LIMIT, &x);
+            if (pr == -2)
+                return fail(b, at_line(line), "triangle %lld: vertex number %s out of range 0..%zu (0-based, %zu vertices)",
+                            e + 1, tok_show(t, n), b->n_nodes - 1, b->n_nodes);
+            if (pr != 0)
                 return fail(b, at_line(line), "triangle %lld: vertex number %d is not an integer: \"%s\"", e + 1, k + 1, tok_show(t, n));
             THX_CHECK(check_index(b, at_line(line), x, 0, b->n_nodes, &v[k]));
         }
@@ -160,11 +174,19 @@ thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_in
         st = fail(b, at_line(1), "empty file (expected the number of nodes)");
         goto done;
     }
-    if (parse_int(tk[0].t, tk[0].n, &npnt) != 0 || npnt <= 0 || npnt > INT32_MAX) {
-        st = fail(b, at_line(tk[0].line), "expected the number of nodes, found \"%s\"", tok_show(tk[0].t, tk[0].n));
+    if (parse_count(tk[0].t, tk[0].n, INT32_MAX, &npnt) != 0 || npnt <= 0) {
+        st = fail(b, at_line(tk[0].line), "expected the number of nodes (1..%d), found \"%s\"", INT32_MAX,
+                  tok_show(tk[0].t, tk[0].n));
         goto done;
     }
     i = 1;
+    /* Counts are checked against the tokens the file holds (three per entry at
+     * least) before any loop: a damaged count is refused at once. */
+    if ((unsigned long long)npnt > (nt - i) / 3) {
+        st = fail(b, at_line(tk[0].line), "%lld nodes declared, but the file holds only %zu numbers after the count "
+                  "(3 a node at least)", npnt, nt - i);
+        goto done;
+    }
     int lab_nodes = tri_labelled(tk, nt, i, (size_t)npnt, 3);
     for (long long e = 0; e < npnt; e++) {
         int w = 3 + lab_nodes;
@@ -193,11 +215,17 @@ thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_in
         st = fail(b, at_line(tk[nt - 1].line + 1), "file ends after the nodes (expected the number of triangles)");
         goto done;
     }
-    if (parse_int(tk[i].t, tk[i].n, &ntri) != 0 || ntri < 0 || ntri > INT32_MAX) {
-        st = fail(b, at_line(tk[i].line), "expected the number of triangles, found \"%s\"", tok_show(tk[i].t, tk[i].n));
+    if (parse_count(tk[i].t, tk[i].n, INT32_MAX, &ntri) != 0) {
+        st = fail(b, at_line(tk[i].line), "expected the number of triangles (0..%d), found \"%s\"", INT32_MAX,
+                  tok_show(tk[i].t, tk[i].n));
         goto done;
     }
     i++;
+    if ((unsigned long long)ntri > (nt - i) / 3) {
+        st = fail(b, at_line(tk[i - 1].line), "%lld triangles declared, but the file holds only %zu numbers after the "
+                  "count (3 a triangle at least)", ntri, nt - i);
+        goto done;
+    }
     int lab_tris = tri_labelled(tk, nt, i, (size_t)ntri, 3);
     size_t first_tri = i;
     /* base: 0 if any index is 0, else 1 (the format's own numbering) */
@@ -226,7 +254,13 @@ thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_in
         int32_t v[3];
         for (int k = 0; k < 3; k++, i++) {
             long long x;
-            if (parse_int(tk[i].t, tk[i].n, &x) != 0) {
+            int pr = parse_i64(tk[i].t, tk[i].n, -INT_LIMIT, INT_LIMIT, &x);
+            if (pr == -2) {
+                st = fail(b, at_line(tk[i].line), "triangle %lld: node number %s out of range %d..%lld (%d-based, %zu nodes)",
+                          e + 1, tok_show(tk[i].t, tk[i].n), base, (long long)b->n_nodes - 1 + base, base, b->n_nodes);
+                goto done;
+            }
+            if (pr != 0) {
                 st = fail(b, at_line(tk[i].line), "triangle %lld: node number %d is not an integer: \"%s\"", e + 1, k + 1,
                           tok_show(tk[i].t, tk[i].n));
                 goto done;

@@ -1,0 +1,8 @@
+/* Fuzz harness: STL, binary (by its size) and ASCII (thx_surface_read_file, then thx_surface_import; properties in fuzz_import.h). */
+#include "fuzz_import.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    fuzz_surface(data, size, "s.stl", THX_IMPORT_STL);
+    return 0;
+}
