@@ -138,7 +138,7 @@ EOF
 expect_rc 1 electrodes nomodel -o el5
 grep -q "nomodel" err.log || fail "missing model not named: $(cat err.log)"
 [ ! -e el5 ] || fail "a failed run created el5"
-"$THORAX" import -o torsoonly model/torso.pts --name torso --role outer -q >/dev/null 2>&1 || fail "import"
+"$THORAX" import -o torsoonly --up +z --front +y model/torso.pts --name torso --role outer -q >/dev/null 2>&1 || fail "import"
 expect_rc 1 beat torsoonly -o nb.txt
 grep -q "no heart surface" err.log || fail "beat without a heart: $(cat err.log)"
 expect_rc 1 electrodes torsoonly -o nb
@@ -147,5 +147,56 @@ grep -q "no heart surface" err.log || fail "electrodes without a heart: $(cat er
 cp beat.txt keep.txt
 expect_rc 1 beat torsoonly -o keep.txt
 cmp -s beat.txt keep.txt || fail "a failed run changed an existing file"
+# a model without an anatomical frame: both commands stop, naming the options that give one
+"$THORAX" import -o noframe model/torso.pts --name torso --role outer model/heart.pts --name heart --role heart >imp.log 2>&1 ||
+    fail "import without a frame"
+grep -q "frame: unknown" imp.log || fail "import's summary does not say the frame is unknown: $(cat imp.log)"
+grep -q '"frame"' noframe/model.json && fail "a model imported without --up/--front has a frame"
+expect_rc 1 electrodes noframe -o nf
+grep -q "noframe has no anatomical frame.*--up and --front to thorax import" err.log || fail "electrodes without a frame: $(cat err.log)"
+expect_rc 1 beat noframe -o keep.txt
+grep -q "noframe has no anatomical frame.*--up and --front" err.log || fail "beat without a frame: $(cat err.log)"
+cmp -s beat.txt keep.txt && [ ! -e nf ] && [ ! -e noframe/electrodes ] || fail "a run refused for its frame wrote output"
+# the phantom's model carries RAS from its contours, and the same model imported with that frame
+# gives the same electrodes
+grep -q '"superior":[[:space:]]*"+z"' model/model.json || fail "the phantom's model has no RAS frame"
+"$THORAX" import -o ras --up +z --front +y model/torso.pts --name torso --role outer model/heart.pts --name heart --role heart -q ||
+    fail "import with a frame"
+"$THORAX" electrodes ras -o el_ras -q || fail "electrodes on the imported RAS model"
+cmp -s el_ras/12lead.txt el4/12lead.txt || fail "the imported RAS model gives other 12-lead electrodes"
+# the same torso turned (superior -> +x, anterior -> -z): the same nodes, the same beat values
+"$PY" - <<'EOF2' || fail "rotated model"
+import json, os
+os.makedirs('rot', exist_ok=True)
+man = json.load(open('ras/model.json'))
+for s in man['surfaces']:
+    pts = [list(map(float, l.split())) for l in open('ras/' + s['pts'])]
+    # RAS (x right, y anterior, z superior) -> model axes: superior = +x, anterior = -z, so left =
+    # superior x anterior = +y (a rotation: the triangles keep their orientation)
+    with open('rot/' + s['pts'], 'w') as f:
+        for x, y, z in pts: f.write('%.6f %.6f %.6f\n' % (z, -x, -y))
+    open('rot/' + s['fac'], 'w').write(open('ras/' + s['fac']).read())
+    s.pop('interior', None)
+man['frame'] = {'superior': '+x', 'anterior': '-z', 'left': '+y'}
+json.dump(man, open('rot/model.json', 'w'))
+EOF2
+"$THORAX" electrodes rot -o el_rot -q || fail "electrodes on the rotated model"
+"$PY" - <<'EOF2' || fail "rotated electrodes differ"
+a = [l.split()[:2] for l in open('el_ras/12lead.txt')][3:-1]
+b = [l.split()[:2] for l in open('el_rot/12lead.txt')][3:-1]
+assert a == b, (a, b)
+EOF2
+"$THORAX" beat ras -o b_ras.txt -q && "$THORAX" beat rot -o b_rot.txt -q || fail "beat on the RAS/rotated models"
+"$PY" - <<'EOF2' || fail "rotated beat differs"
+def rows(p):
+    out = []
+    for l in open(p):
+        try: out.append([float(x) for x in l.split()])
+        except ValueError: pass
+    return [r for r in out if len(r) > 2]
+a, b = rows('b_ras.txt'), rows('b_rot.txt')
+assert len(a) == len(b) and all(abs(x - y) <= 1e-6 * 40 for r, q in zip(a, b) for x, y in zip(r, q)), 'values'
+print('e2e_electrodes: rotated model: same 12-lead nodes, beat within 4e-5 mV')
+EOF2
 no_tmp
 echo "e2e_electrodes: ok"

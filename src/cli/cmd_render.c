@@ -587,11 +587,12 @@ static int parse_axis(const char *s, int *axis, double *sign)
     return -1;
 }
 
-/* The anatomical frame from --up (cranial) and --front (anterior); right = anterior x cranial. */
-static int anat_frame(ropts *o)
+/* The anatomical frame: --up (cranial) and --front (anterior) over the model's frame (the model's
+   own when it has one, else +z and +y); right = anterior x cranial. */
+static int anat_frame(ropts *o, const thx_frame *mf)
 {
-    int a = 1, c = 2;
-    double sa = 1, sc = 1;
+    int a = mf && mf->set ? mf->front.axis : 1, c = mf && mf->set ? mf->up.axis : 2;
+    double sa = mf && mf->set ? mf->front.sign : 1, sc = mf && mf->set ? mf->up.sign : 1;
     if (o->front_spec && parse_axis(o->front_spec, &a, &sa)) return -1;
     if (o->up_spec && parse_axis(o->up_spec, &c, &sc)) return -1;
     if (a == c) return -1;
@@ -953,7 +954,9 @@ static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
     "  --size WxH          image size (default 800x800)\n"                                                     \
     "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
     "  --up AXIS, --front AXIS  the model's cranial and anterior axes for the views and clip sides\n"      \
-    "                      (+x, -x, +y, -y, +z, -z; default +z and +y)\n"                                   \
+    "                      (+x, -x, +y, -y, +z, -z; default: the model's frame, model.json \"frame\"; a\n"   \
+    "                      model without one needs them for a named view or clip side; surface files\n"   \
+    "                      without them are drawn as +z and +y, with a warning)\n"                          \
     "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
     "  --mode M            points, wire, flat, gouraud (default), phong, orientation (the paper's check)\n"  \
     "  --surface NAME=M[:OPACITY[:#RRGGBB]]  one surface's mode, opacity and colour (repeatable; M may be hidden)\n"          \
@@ -995,13 +998,37 @@ static void render_help(void)
            "  --repeat N          draw N times and print the median time a frame (benchmarks)\n" COMMON_HELP);
 }
 
+/* The views' frame: --up/--front over the model's frame. A model without a frame is refused for a
+   named view (no --camera) or a named clip side unless both are given; loose surface files have no
+   model and are drawn in +z/+y with a warning. */
+static thx_status view_frame(thx_ctx *ctx, ropts *o, const rdata *d)
+{
+    const thx_frame *mf = &d->m->frame;
+    int named_clip = o->clip[0] && ((o->clip[0] >= 'a' && o->clip[0] <= 'z') || (o->clip[0] >= 'A' && o->clip[0] <= 'Z'));
+    int needs = !o->have_camera || named_clip;
+    if (!mf->set && needs && !(o->up_spec && o->front_spec)) {
+        if (!o->n_files) {
+            char what[PATH_MAX + 16];
+            snprintf(what, sizeof what, "model %s", o->model_dir ? o->model_dir : o->solution ? o->solution : "?");
+            char msg[1024];
+            thx_frame_require(ctx, mf, what, o->have_camera ? "named clip sides" : "the named views (--view)");
+            snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
+            return thx_error(ctx, THX_EINPUT, "%s; or give --up and --front to thorax render (or --camera)", msg);
+        }
+        thx_log(ctx, THX_LOG_WARN, "surface files have no anatomical frame: the %s taken as +z superior, +y anterior "
+                "(give --up and --front)", named_clip && o->have_camera ? "clip side is" : "view is");
+    }
+    if (anat_frame(o, mf))
+        return thx_error(ctx, THX_EINPUT, "--up %s and --front %s are the same axis (cranial and anterior must differ)",
+                         o->up_spec ? o->up_spec : "(the model's)", o->front_spec ? o->front_spec : "(the model's)");
+    return THX_OK;
+}
+
 static thx_status setup(thx_ctx *ctx, ropts *o, rdata *d, thx_renderer **rr, thx_font **font, thx_image **img)
 {
     memset(d, 0, sizeof *d);
-    if ((o->up_spec || o->front_spec) && anat_frame(o))
-        return thx_error(ctx, THX_EINPUT, "--up %s and --front %s are the same axis (cranial and anterior must differ)",
-                         o->up_spec ? o->up_spec : "+z", o->front_spec ? o->front_spec : "+y");
     THX_CHECK(load_data(ctx, o, d));
+    THX_CHECK(view_frame(ctx, o, d));
     THX_CHECK(thx_renderer_create(ctx, o->w, o->h, rr));
     THX_CHECK(thx_image_create(ctx, o->w, o->h, img));
     if (o->colorbar || o->label || o->trace || o->panels) THX_CHECK(thx_font_open(ctx, o->font, o->h / 40 > 11 ? o->h / 40 : 11, font));
