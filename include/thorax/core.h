@@ -50,6 +50,12 @@ thx_status thx_error(thx_ctx *ctx, thx_status code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* The last error message ("" if none). Owned by ctx, valid until the next call. */
 const char *thx_ctx_message(const thx_ctx *ctx);
+/* Records a file the running command reads: no single-file output (thx_output_claim in
+ * thorax/fileio.h) may replace it. The CLI registers each command's input files; directory
+ * outputs name their inputs explicitly (a mesh may be written into its own model). */
+thx_status thx_ctx_add_input(thx_ctx *ctx, const char *path);
+/* The inputs recorded so far (n of them; owned by ctx). */
+const char *const *thx_ctx_inputs(const thx_ctx *ctx, size_t *n);
 /* Clears the last error message. */
 void thx_ctx_clear(thx_ctx *ctx);
 /* Logs a message (printf format) through the context's sink. */

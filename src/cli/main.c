@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "cli/cli.h"
 
@@ -31,8 +32,13 @@ static const struct {
 
 static char command_line[4096];
 
+static int g_argc;
+static char **g_argv;
+
 void cli_set_command_line(int argc, char **argv)
 {
+    g_argc = argc;
+    g_argv = argv;
     size_t off = 0;
     command_line[0] = '\0';
     for (int i = 0; i < argc && off < sizeof command_line; i++)
@@ -56,6 +62,16 @@ thx_ctx *cli_ctx(int verbose)
     }
     thx_ctx_set_log(ctx, log_stderr, NULL,
                     verbose > 0 ? THX_LOG_DEBUG : verbose < 0 ? THX_LOG_WARN + 1 : THX_LOG_INFO);
+    /* Every existing regular file named on the command line, except the value of -o/--output, is
+     * one of the command's inputs: no single-file output may replace it (thorax/fileio.h). */
+    for (int i = 2; i < g_argc; i++) {
+        struct stat st;
+        if (!strcmp(g_argv[i - 1], "-o") || !strcmp(g_argv[i - 1], "--output")) continue;
+        if (stat(g_argv[i], &st) == 0 && S_ISREG(st.st_mode) && thx_ctx_add_input(ctx, g_argv[i]) != THX_OK) {
+            fprintf(stderr, "thorax: out of memory\n");
+            exit(1);
+        }
+    }
     return ctx;
 }
 

@@ -12,6 +12,8 @@ struct thx_ctx {
     thx_log_fn log_fn;
     void *log_user;
     thx_log_level log_min;
+    char **inputs;        /* the running command's input files and directories (thx_ctx_add_input) */
+    size_t n_inputs;
 };
 
 thx_status thx_ctx_create(thx_ctx **out)
@@ -23,8 +25,28 @@ thx_status thx_ctx_create(thx_ctx **out)
 void thx_ctx_destroy(thx_ctx **ctx)
 {
     if (!ctx || !*ctx) return;
+    for (size_t i = 0; i < (*ctx)->n_inputs; i++) free((*ctx)->inputs[i]);
+    free((*ctx)->inputs);
     free(*ctx);
     *ctx = NULL;
+}
+
+thx_status thx_ctx_add_input(thx_ctx *ctx, const char *path)
+{
+    if (!path) return THX_OK;
+    char **q = realloc(ctx->inputs, (ctx->n_inputs + 1) * sizeof *q);
+    if (!q) return thx_error(ctx, THX_ENOMEM, "out of memory");
+    ctx->inputs = q;
+    size_t n = strlen(path) + 1;
+    if (!(q[ctx->n_inputs] = malloc(n))) return thx_error(ctx, THX_ENOMEM, "out of memory");
+    memcpy(q[ctx->n_inputs++], path, n);
+    return THX_OK;
+}
+
+const char *const *thx_ctx_inputs(const thx_ctx *ctx, size_t *n)
+{
+    *n = ctx->n_inputs;
+    return (const char *const *)ctx->inputs;
 }
 
 void thx_ctx_set_log(thx_ctx *ctx, thx_log_fn fn, void *user, thx_log_level min_level)

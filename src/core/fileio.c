@@ -120,7 +120,9 @@ thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, 
                          path);
     if (S_ISDIR(st.st_mode)) return thx_error(ctx, THX_EIO, "%s is a directory, not a file: nothing was written", path);
     if (!S_ISREG(st.st_mode)) return thx_error(ctx, THX_EIO, "%s exists and is not a regular file: nothing was written", path);
-    if (is_input(&st, inputs, n_inputs))
+    size_t n_ctx = 0;
+    const char *const *ctx_inputs = thx_ctx_inputs(ctx, &n_ctx);
+    if (is_input(&st, inputs, n_inputs) || is_input(&st, ctx_inputs, n_ctx))
         return thx_error(ctx, THX_EIO,
                          "%s is an input of this command; thorax does not replace its own input: nothing was written "
                          "(give another -o)",
