@@ -461,8 +461,12 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
             goto done;
         }
         const cJSON *name = cJSON_GetObjectItemCaseSensitive(o, "name");
-        if (!cJSON_IsString(name) || !name_is_safe(name->valuestring) || strlen(name->valuestring) > 56) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface %d: \"name\" missing or not a valid surface name", mpath, idx);
+        if (!cJSON_IsString(name) || !name_is_safe(name->valuestring) || strlen(name->valuestring) > 56 ||
+            strcmp(name->valuestring, "model.json") == 0) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: surface %d: \"name\" missing or not a valid surface name (letters, digits, '_', '-', "
+                           "'.', not starting with '.', at most 56 characters, not \"model.json\")",
+                           mpath, idx);
             goto done;
         }
         const char *nm = name->valuestring;
