@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <matio.h>
+#include <zlib.h>
 
 #include "testlib.h"
 #include "thorax/fileio.h"
@@ -407,6 +408,154 @@ static mat_t *mat_new(const char *path)
     return m;
 }
 
+/* ------------------------------------- .mat files built byte by byte */
+
+/* Appends a MATLAB 5 element (tag, data, padding to 8) to b at *n. */
+static void m5_el(unsigned char *b, size_t *n, uint32_t type, const void *d, uint32_t bytes)
+{
+    memcpy(b + *n, &type, 4);
+    memcpy(b + *n + 4, &bytes, 4);
+    if (bytes) memcpy(b + *n + 8, d, bytes);
+    *n += 8 + bytes;
+    while (*n % 8) b[(*n)++] = 0;
+}
+
+/* A miMATRIX element of class cls, rows x cols, named name, whose data part is `data` (type dtype,
+ * dbytes bytes; dtype 0: no data part, for cells and structs the caller appends the rest). Returns
+ * the offset of its size word so that callers can fix it up. */
+static size_t m5_matrix(unsigned char *b, size_t *n, uint32_t cls, uint32_t rows, uint32_t cols, const char *name,
+                        uint32_t dtype, const void *data, uint32_t dbytes)
+{
+    size_t start = *n;
+    uint32_t t = 14, z = 0;
+    memcpy(b + *n, &t, 4);
+    memcpy(b + *n + 4, &z, 4);
+    *n += 8;
+    uint32_t flags[2] = {cls, 0}, dims[2] = {rows, cols};
+    m5_el(b, n, 6, flags, 8);
+    m5_el(b, n, 5, dims, 8);
+    m5_el(b, n, 1, name, (uint32_t)strlen(name));
+    if (dtype) m5_el(b, n, dtype, data, dbytes);
+    uint32_t size = (uint32_t)(*n - start - 8);
+    memcpy(b + start + 4, &size, 4);
+    return start + 4;
+}
+
+static size_t m5_header(unsigned char *b)
+{
+    memset(b, ' ', 116);
+    memcpy(b, "MATLAB 5.0 MAT-file, made by test_series", 40);
+    memset(b + 116, 0, 8);
+    b[124] = 0;
+    b[125] = 1;
+    b[126] = 'I';
+    b[127] = 'M';
+    return 128;
+}
+
+/* Issue 11's .mat findings: files of a few hundred bytes drove libmatio to 16.8 GB (exit 0); a file
+ * cut in half lost its time step, unit and label (exit 0). Each is refused now, before libmatio
+ * allocates anything, naming the variable and the byte offset. */
+static void test_mat_bounded(void)
+{
+    unsigned char b[4096];
+    size_t n = m5_header(b);
+    double one = 1;
+    /* dims 100000 x 100000 over 8 bytes of data: libmatio would allocate 80 GB */
+    m5_matrix(b, &n, 6, 100000, 100000, "potvals", 9, &one, 8);
+    tl_write_bytes(tl_path("dims.mat"), b, n);
+    double t0 = thx_wtime();
+    expect_read_fail(tl_path("dims.mat"), THX_SERIES_AUTO, THX_EINPUT, "dims.mat: variable 1 ('potvals', at byte offset 128",
+                     "its 10000000000 elements of 8 bytes need 80000000000 bytes, the file holds 8");
+    CHECK(thx_wtime() - t0 < 1.0);
+    /* a cell claiming 10^9 cells and a struct claiming 2^40 fields, both with no data */
+    n = m5_header(b);
+    m5_matrix(b, &n, 1, 1, 1000000000, "c", 0, NULL, 0);
+    tl_write_bytes(tl_path("cell.mat"), b, n);
+    expect_read_fail(tl_path("cell.mat"), THX_SERIES_AUTO, THX_EINPUT, "cell.mat: variable 1 ('c'",
+                     "1000000000 cells claimed, but 0 bytes can hold at most 0");
+    n = m5_header(b);
+    size_t sz = m5_matrix(b, &n, 2, 1 << 20, 1 << 20, "s", 0, NULL, 0);
+    int32_t flen = 8;
+    m5_el(b, &n, 5, &flen, 4);
+    m5_el(b, &n, 1, "potvals\0", 8);
+    uint32_t size = (uint32_t)(n - sz - 4);
+    memcpy(b + sz, &size, 4);
+    tl_write_bytes(tl_path("struct.mat"), b, n);
+    expect_read_fail(tl_path("struct.mat"), THX_SERIES_AUTO, THX_EINPUT, "struct.mat: variable 1 ('s'",
+                     "1099511627776 struct fields claimed");
+    /* a good series written by thorax, then cut in half, then with bytes after its end */
+    thx_series *s = sample(), *r = NULL;
+    CHECK_OK(ctx, thx_series_write(ctx, s, tl_path("good.mat"), THX_SERIES_MAT));
+    size_t len = 0;
+    char *good = tl_slurp(ctx, tl_path("good.mat"), &len);
+    CHECK(good && len > 400);
+    if (good) {
+        tl_write_bytes(tl_path("half.mat"), good, len / 2);
+        expect_read_fail(tl_path("half.mat"), THX_SERIES_AUTO, THX_EINPUT, "half.mat: variable ", "truncated");
+        for (size_t cut = 129; cut < len; cut += 37) {
+            tl_write_bytes(tl_path("cut.mat"), good, cut);
+            expect_read_fail(tl_path("cut.mat"), THX_SERIES_AUTO, THX_EINPUT, "cut.mat: ", NULL);
+        }
+        char *longer = malloc(len + 16);
+        memcpy(longer, good, len);
+        memset(longer + len, 0x55, 16);
+        tl_write_bytes(tl_path("tail5.mat"), longer, len + 5);
+        expect_read_fail(tl_path("tail5.mat"), THX_SERIES_AUTO, THX_EINPUT, "tail5.mat: byte offset", "5 stray bytes after the last variable");
+        tl_write_bytes(tl_path("tail16.mat"), longer, len + 16);
+        expect_read_fail(tl_path("tail16.mat"), THX_SERIES_AUTO, THX_EINPUT, "tail16.mat: variable 6 ('?', at byte offset", "a small element of 21845 bytes");
+        free(longer);
+        CHECK_OK(ctx, thx_series_read(ctx, tl_path("good.mat"), THX_SERIES_AUTO, &r));
+        if (r) CHECK(same_series(s, r));
+        thx_series_destroy(&r);
+    }
+    free(good);
+    thx_series_destroy(&s);
+    /* zlib: 16e6 zero doubles stored as uint8 compress to about 16 KB and would make 128 MB of doubles:
+     * refused (more than 1032 x the compressed size + 1 MiB); the same variable 3 x 4 reads */
+    for (int big = 1; big >= 0; big--) {
+        uint32_t cols = big ? 16000000u : 4u, rows = big ? 1 : 3;
+        size_t cap = (size_t)rows * cols + 256, in = 0;
+        unsigned char *inner = calloc(1, cap), *zbuf = malloc(compressBound(cap) + 8);
+        unsigned char *zeros = calloc(1, (size_t)rows * cols);
+        m5_matrix(inner, &in, 6, rows, cols, "potvals", 2, zeros, rows * cols);
+        uLongf zl = compressBound(cap);
+        CHECK(compress2(zbuf + 8, &zl, inner, in, 9) == Z_OK);
+        uint32_t t = 15, zs = (uint32_t)zl;
+        memcpy(zbuf, &t, 4);
+        memcpy(zbuf + 4, &zs, 4);
+        n = m5_header(b);
+        unsigned char *file = malloc(n + 8 + zl);
+        memcpy(file, b, n);
+        memcpy(file + n, zbuf, 8 + zl);
+        tl_write_bytes(tl_path("zlib.mat"), file, n + 8 + zl);
+        if (big) {
+            expect_read_fail(tl_path("zlib.mat"), THX_SERIES_AUTO, THX_EINPUT, "zlib.mat: variable 1 ('potvals'",
+                             "would expand to 128000000 bytes of values");
+        } else {
+            CHECK_OK(ctx, thx_series_read(ctx, tl_path("zlib.mat"), THX_SERIES_AUTO, &r));
+            if (r) CHECK(r->n_rows == 3 && r->n_frames == 4 && r->v[11] == 0);
+            thx_series_destroy(&r);
+            /* the zlib stream cut short, and compressed bytes after its end */
+            file[n + 4] = (unsigned char)(zl - 3);
+            tl_write_bytes(tl_path("zcut.mat"), file, n + 8 + zl - 3);
+            expect_read_fail(tl_path("zcut.mat"), THX_SERIES_AUTO, THX_EINPUT, "zcut.mat: variable 1 ('potvals'", NULL);
+        }
+        free(inner);
+        free(zbuf);
+        free(zeros);
+        free(file);
+    }
+    /* MATLAB v7.3 (HDF5): refused with the reason */
+    mat_t *m = Mat_CreateVer(tl_path("v73.mat"), NULL, MAT_FT_MAT73);
+    if (m) {
+        double d[2] = {1, 2};
+        mat_put(m, "potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, 2, d);
+        Mat_Close(m);
+        expect_read_fail(tl_path("v73.mat"), THX_SERIES_AUTO, THX_EINPUT, "v73.mat: a MATLAB v7.3 (HDF5) file", "-v7");
+    }
+}
+
 static void test_mat_inputs(void)
 {
     thx_series *s = NULL;
@@ -725,6 +874,7 @@ int main(void)
     test_bad_raw();
     test_bounded_findings();
     test_mat_inputs();
+    test_mat_bounded();
     test_failed_writes();
     test_real_recording();
     test_large();

@@ -23,6 +23,9 @@ thx_status series_read_raw(thx_ctx *ctx, const char *path, thx_series **out);
 thx_status series_write_raw(thx_ctx *ctx, const thx_series *s, const char *path);
 /* varname: the variable to read, or NULL (potvals, a struct with potvals, the first matrix). */
 thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, thx_series **out);
+/* Walks a MATLAB 5 file's every element before libmatio sees it (series_matcheck.c): sizes against
+ * the file, truncation, stray bytes, compressed variables within zlib's ratio; v7.3 and v4 refused. */
+thx_status series_mat_preflight(thx_ctx *ctx, const char *path);
 thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path);
 thx_status series_read_pot(thx_ctx *ctx, const char *path, thx_series **out);
 

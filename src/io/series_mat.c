@@ -399,6 +399,8 @@ thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, 
     FILE *probe = fopen(path, "rb");
     if (!probe) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
     fclose(probe);
+    /* nothing reaches libmatio unless every variable's size has been checked against the file */
+    THX_CHECK(series_mat_preflight(ctx, path));
     mat_t *mat = Mat_Open(path, MAT_ACC_RDONLY);
     if (!mat) return thx_error(ctx, THX_EINPUT, "%s: not a MATLAB .mat file that libmatio can read", path);
     thx_status st = THX_OK;
