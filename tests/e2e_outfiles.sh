@@ -58,5 +58,14 @@ for i in 1 2 3; do
     [ -z "$(leftovers race)" ] && ok "race $i: nothing left behind" || bad "race $i: left $(leftovers race)"
 done
 
+# render: a PNG carries thorax's tEXt signature; a user's picture of the same name stops the run
+if "$THORAX" render m -o pic.png --size 64x64 -q 2> r.err && "$THORAX" render m -o pic.png --size 64x64 -q 2>> r.err; then
+    ok "render: thorax's own picture replaced"
+else bad "render: $(cat r.err)"; fi
+printf '\x89PNG\r\n\x1a\n a user picture' > user.png
+before=$(md5sum < user.png)
+refused "render over a user's PNG" "is not thorax's own output of this kind" "$THORAX" render m -o user.png --size 64x64 -q
+[ "$before" = "$(md5sum < user.png)" ] && ok "the user's PNG is unchanged" || bad "the user's PNG changed"
+
 [ $fails -eq 0 ] && echo "e2e_outfiles: all passed" || echo "e2e_outfiles: $fails failed" >&2
 exit $((fails > 0))

@@ -25,7 +25,11 @@ typedef struct {
 thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out);
 void thx_image_destroy(thx_image **img);
 void thx_image_fill(thx_image *img, const unsigned char rgba[4]);
-/* PNG through libpng, 8-bit RGBA (or RGB when every alpha is 255); atomic. */
+/* The tEXt chunk thorax writes in every PNG ("Software" = "thorax"): an existing file is replaced
+ * only when it has it (thorax/fileio.h, thx_atomic_open_output). */
+#define THX_PNG_MARKER "Software\0thorax"
+/* PNG through libpng, 8-bit RGBA (or RGB when every alpha is 255); atomic; an existing file is
+ * replaced only when thorax's own (above), never through a link. */
 thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *path);
 thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out);
 

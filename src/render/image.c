@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include <png.h>
+#include <zlib.h>
 
 #include "thorax/fileio.h"
 
@@ -83,12 +84,8 @@ thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *p
         pixels = rgb;
     }
 
-    thx_atomic_file af;
-    thx_status st = thx_atomic_open(ctx, path, &af);
-    if (st != THX_OK) {
-        free(rgb);
-        return st;
-    }
+    /* Encoded in memory, then written with a tEXt chunk "Software: thorax" after the header: the
+     * signature by which a later run knows the file as its own (thorax/fileio.h). */
     png_image pi;
     memset(&pi, 0, sizeof pi);
     pi.version = PNG_IMAGE_VERSION;
@@ -96,15 +93,39 @@ thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *p
     pi.height = (png_uint_32)img->h;
     pi.format = opaque ? PNG_FORMAT_RGB : PNG_FORMAT_RGBA;
     pi.flags = PNG_IMAGE_FLAG_FAST; /* zlib's fast setting and fewer filters: 3x faster, ~20% larger */
-    int ok = png_image_write_to_stdio(&pi, af.f, 0, pixels, 0, NULL);
+    png_alloc_size_t size = 0;
+    unsigned char *png = NULL;
+    int ok = png_image_write_to_memory(&pi, NULL, &size, 0, pixels, 0, NULL);
+    if (ok && size > 33) {
+        png = thx_malloc(ctx, size);
+        ok = png && png_image_write_to_memory(&pi, png, &size, 0, pixels, 0, NULL);
+    }
     free(rgb);
-    if (!ok) {
-        st = thx_error(ctx, THX_EIO, "%s: PNG write failed: %s", path, pi.message);
+    if (!ok || size <= 33) {
+        thx_status st = png ? thx_error(ctx, THX_EIO, "%s: PNG encoding failed: %s", path, pi.message) : THX_ENOMEM;
         png_image_free(&pi);
-        thx_atomic_abort(&af);
+        free(png);
         return st;
     }
     png_image_free(&pi);
+    thx_atomic_file af;
+    thx_status st = thx_atomic_open_output(ctx, path, THX_PNG_MARKER, sizeof THX_PNG_MARKER - 1, NULL, 0, &af);
+    if (st != THX_OK) {
+        free(png);
+        return st;
+    }
+    /* signature (8) and IHDR (4 length + 4 type + 13 data + 4 CRC) come first in every PNG */
+    static const unsigned char text[] = "tEXt" THX_PNG_MARKER;
+    const size_t n_text = sizeof text - 1; /* type + data */
+    unsigned char len[4] = {0, 0, 0, (unsigned char)(n_text - 4)}, crc[4];
+    uLong c = crc32(crc32(0L, Z_NULL, 0), text, (uInt)n_text);
+    for (int k = 0; k < 4; k++) crc[k] = (unsigned char)(c >> (24 - 8 * k));
+    fwrite(png, 1, 33, af.f);
+    fwrite(len, 1, 4, af.f);
+    fwrite(text, 1, n_text, af.f);
+    fwrite(crc, 1, 4, af.f);
+    fwrite(png + 33, 1, size - 33, af.f);
+    free(png);
     return thx_atomic_commit(ctx, &af);
 }
 
