@@ -12,6 +12,15 @@
  *    points (including last/first), and does not intersect itself;
  *  - a surface's layers have strictly increasing z and are consecutive in the
  *    file's list of layers (a surface does not vanish and reappear).
+ * The _raw readers and thx_contours_validate_structure check everything but
+ * the loops' geometry (repeated points, self-intersection): what
+ * thx_contours_repair (thorax/repair.h) mends, as `thorax surfaces` does.
+ *
+ * The reader is bounded and reads nothing in part: a NUL byte, a number with
+ * trailing characters, hex/inf/nan or a value out of range, a layer without
+ * loops, a loop cut short and a file without its 'end' line are refused, with
+ * file:line and the surface, layer and loop concerned. Memory is a small
+ * multiple of the file's size (no count is read from the file).
  */
 #ifndef THORAX_CONTOURS_H
 #define THORAX_CONTOURS_H
@@ -67,9 +76,15 @@ typedef struct {
 thx_status thx_contours_read(thx_ctx *ctx, const char *path, thx_contours **out);
 /* Parses contour text held in memory; `name` is used in messages. */
 thx_status thx_contours_parse(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out);
+/* As read / parse, checking the structure only (not repeated points nor self-intersections). */
+thx_status thx_contours_read_raw(thx_ctx *ctx, const char *path, thx_contours **out);
+thx_status thx_contours_parse_raw(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out);
 /* Checks the invariants listed above (used by read; call it on contours built in memory). */
 thx_status thx_contours_validate(thx_ctx *ctx, const thx_contours *c);
-/* Writes contours in the text format, atomically (temporary file + rename). */
+/* Checks all but the loops' geometry (what the _raw readers check). */
+thx_status thx_contours_validate_structure(thx_ctx *ctx, const thx_contours *c);
+/* Writes contours in the text format, atomically (temporary file + rename); the frame line
+ * ("frame UP FRONT") when c->frame.set. */
 thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *path, const char *comment);
 
 /* Builders for contours made in memory (the phantom, tests). */

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "thorax/repair.h"
 #include "thorax/surfaces.h"
 
 static void help(void)
@@ -13,6 +14,10 @@ static void help(void)
            "Builds one closed, outward-oriented triangle surface per contour surface\n"
            "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
            "NAME.fac). Nothing is written unless every surface builds.\n\n"
+           "Digitization noise is repaired, each repair reported as a warning (file:line,\n"
+           "surface, layer, loop, what was done) and listed in model.json's provenance\n"
+           "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
+           "merged, spikes removed, small self-crossings untangled. --strict refuses instead.\n\n"
            "options:\n"
            "  -o, --output DIR      model directory to write (replaced atomically)\n"
            "  --spacing MM          node spacing along the layers (default: the file's\n"
@@ -34,6 +39,14 @@ static void help(void)
            "                        where it is one (6; 0 = never)\n"
            "  --projected-aspect A  nested loops whose lacing has a triangle of aspect ratio\n"
            "                        over A are laced in projection if that is better (10)\n"
+           "  --merge-tol MM        consecutive points of a loop closer than this are merged\n"
+           "                        into one (default: a tenth of the node spacing)\n"
+           "  --untangle-tol MM     a loop crossing itself is untangled when the small loop\n"
+           "                        at the crossing lies within this of the crossing point:\n"
+           "                        that loop is cut off (default: half the node spacing)\n"
+           "  --strict              refuse any loop that needs a repair (a repeated closing\n"
+           "                        point, near-coincident points, a spike, a self-crossing)\n"
+           "                        instead of repairing it; exit 1 with the same message\n"
            "  --stats               print per-surface lacing and timing statistics\n"
            "  -v, -q                more / less logging\n");
 }
@@ -41,7 +54,8 @@ static void help(void)
 int cmd_surfaces(int argc, char **argv)
 {
     const char *in = NULL, *outdir = NULL;
-    int verbose = 0, want_stats = 0;
+    int verbose = 0, want_stats = 0, strict = 0;
+    double merge_tol = -1, untangle_tol = -1;
     thx_surfaces_opts o;
     thx_surfaces_opts_default(&o);
     for (int i = 1; i < argc; i++) {
@@ -72,6 +86,9 @@ int cmd_surfaces(int argc, char **argv)
             i++;
         }
         else if (!strcmp(a, "--projected-aspect")) { if (cli_parse_double("surfaces", a, v, &o.lace.projected_aspect)) return 2; i++; if (!(o.lace.projected_aspect >= 1)) return cli_usage_error("surfaces", "--projected-aspect must be >= 1"); }
+        else if (!strcmp(a, "--merge-tol")) { if (cli_parse_double("surfaces", a, v, &merge_tol)) return 2; i++; if (!(merge_tol >= 0)) return cli_usage_error("surfaces", "--merge-tol must be >= 0"); }
+        else if (!strcmp(a, "--untangle-tol")) { if (cli_parse_double("surfaces", a, v, &untangle_tol)) return 2; i++; if (!(untangle_tol >= 0)) return cli_usage_error("surfaces", "--untangle-tol must be >= 0"); }
+        else if (!strcmp(a, "--strict")) strict = 1;
         else if (!strcmp(a, "--stats")) want_stats = 1;
         else if (!strcmp(a, "-v")) verbose = 1;
         else if (!strcmp(a, "-q")) verbose = -1;
@@ -85,13 +102,23 @@ int cmd_surfaces(int argc, char **argv)
     thx_contours *c = NULL;
     thx_model *m = NULL;
     thx_surfaces_stats *per = NULL, tot;
+    thx_repair_log rlog = {0};
+    thx_repair_opts ro;
     int rc = 0;
     double t0 = thx_wtime();
     /* the output first: refused before any work unless it is absent or thorax's own model */
     thx_outdir od;
     const char *inputs[] = {in};
     thx_status st = thx_outdir_claim(ctx, &od, outdir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, inputs, 1);
-    if (st == THX_OK) st = thx_contours_read(ctx, in, &c);
+    if (st == THX_OK) st = thx_contours_read_raw(ctx, in, &c);
+    if (st == THX_OK) {
+        /* digitization noise (paper 3.1): repaired and reported, or refused under --strict */
+        thx_repair_opts_default(&ro, o.spacing > 0 ? o.spacing : (c->spacing > 0 ? c->spacing : 5.0));
+        if (merge_tol >= 0) ro.merge_tol = merge_tol;
+        if (untangle_tol >= 0) ro.untangle_tol = untangle_tol;
+        ro.strict = strict;
+        st = thx_contours_repair(ctx, c, &ro, &rlog);
+    }
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
     double t_read = thx_wtime() - t0;
     per = calloc(c->n_surfaces, sizeof *per);
@@ -118,6 +145,11 @@ int cmd_surfaces(int argc, char **argv)
         cJSON_AddNumberToObject(op, "phase_weight", o.lace.phase_weight);
         cJSON_AddNumberToObject(op, "fan_limit", o.lace.fan_limit);
         cJSON_AddNumberToObject(op, "projected_aspect", o.lace.projected_aspect);
+        cJSON_AddNumberToObject(op, "merge_tol_mm", ro.merge_tol);
+        cJSON_AddNumberToObject(op, "untangle_tol_mm", ro.untangle_tol);
+        cJSON_AddBoolToObject(op, "strict", strict);
+        cJSON *rp = cJSON_AddArrayToObject(p, "repairs");
+        for (size_t k = 0; k < rlog.n; k++) cJSON_AddItemToArray(rp, cJSON_CreateString(rlog.msg[k]));
         m->provenance_json = cJSON_PrintUnformatted(p);
         cJSON_Delete(p);
     }
@@ -132,6 +164,10 @@ int cmd_surfaces(int argc, char **argv)
                    c->surf[k].n_layers, per[k].lace.removed, per[k].lace.relaced_gaps, per[k].lace.inplane_tris,
                    per[k].lace.max_fan);
         printf("%-12s %8zu %9zu\n", "total", tot.n_nodes, tot.n_tris);
+        if (rlog.n)
+            printf("repairs: %zu (%zu closing points dropped, %zu near-coincident points merged, %zu spikes removed, "
+                   "%zu self-crossings untangled; listed in model.json)\n",
+                   rlog.n, rlog.closing, rlog.merged, rlog.spikes, rlog.untangled);
         printf("wrote %s (spacing %g mm) in %.3f s\n", outdir, spacing, thx_wtime() - t0);
     }
     if (want_stats) {
@@ -147,6 +183,7 @@ int cmd_surfaces(int argc, char **argv)
                tot.n_flat_flipped);
     }
 done:
+    thx_repair_log_free(&rlog);
     free(per);
     thx_model_destroy(&m);
     thx_contours_destroy(&c);

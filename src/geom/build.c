@@ -65,6 +65,8 @@ typedef struct {
     int32_t *id;
     chain_index ix;
     thx_chain *parts; /* the loops joined into c (branching), or NULL */
+    int *sel;         /* indices of those loops in their layer */
+    int n_sel;
 } owned_chain;
 
 typedef struct {
@@ -139,6 +141,10 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
     out->c.p = out->p;
     out->c.id = out->id;
     out->c.z = L->z;
+    out->sel = thx_malloc(ctx, (size_t)m * sizeof *out->sel);
+    if (!out->sel) return THX_ENOMEM;
+    memcpy(out->sel, sel, (size_t)m * sizeof *sel);
+    out->n_sel = m;
     if (m > 1) {
         out->parts = thx_malloc(ctx, (size_t)m * sizeof *out->parts);
         if (!out->parts) return THX_ENOMEM;
@@ -461,8 +467,8 @@ static void free_slices(slice *s, size_t ns)
     if (!s) return;
     for (size_t i = 0; i < ns; i++) {
         for (size_t g = 0; g < s[i].n_groups; g++) {
-            free(s[i].ga[g].p); free(s[i].ga[g].id); chain_index_free(&s[i].ga[g].ix); free(s[i].ga[g].parts);
-            free(s[i].gb[g].p); free(s[i].gb[g].id); chain_index_free(&s[i].gb[g].ix); free(s[i].gb[g].parts);
+            free(s[i].ga[g].p); free(s[i].ga[g].id); chain_index_free(&s[i].ga[g].ix); free(s[i].ga[g].parts); free(s[i].ga[g].sel);
+            free(s[i].gb[g].p); free(s[i].gb[g].id); chain_index_free(&s[i].gb[g].ix); free(s[i].gb[g].parts); free(s[i].gb[g].sel);
         }
         free(s[i].ga);
         free(s[i].gb);
@@ -618,6 +624,17 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         st = build_slice(ctx, layers, nl, i, &slices[i]);
         if (st != THX_OK) goto done;
     }
+    /* A chain with a loop that ends at its layer (capped on the far side: no partner on the layer
+       beyond) has nothing beyond it there: the end cap covers that loop, so the lacing must not cut
+       a tongue of it in the layer's plane too (the two would overlap). */
+    for (size_t i = 0; i < ns; i++)
+        for (size_t g = 0; g < slices[i].n_groups; g++) {
+            owned_chain *ca = &slices[i].ga[g], *cb = &slices[i].gb[g];
+            for (int q = 0; q < ca->n_sel; q++)
+                if (!layers[i].loops[ca->sel[q]].down) { ca->c.beyond = NULL; ca->c.n_beyond = 0; }
+            for (int q = 0; q < cb->n_sel; q++)
+                if (!layers[i + 1].loops[cb->sel[q]].up) { cb->c.beyond = NULL; cb->c.n_beyond = 0; }
+        }
     {
         thx_lace_opts lo = o->lace;
         lo.spacing = spacing;

@@ -177,6 +177,29 @@ static double seg_invert(const spline *S, int i, double target, double seglen)
     return a;
 }
 
+/* Curvature 1/R of the circle through a, b, c (0 if collinear). */
+static double circle_curvature(thx_vec2 a, thx_vec2 b, thx_vec2 c)
+{
+    double ab = hypot(b.x - a.x, b.y - a.y), bc = hypot(c.x - b.x, c.y - b.y), ca = hypot(a.x - c.x, a.y - c.y);
+    double twice_area = fabs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+    double den = ab * bc * ca;
+    return den > 0 ? 2 * twice_area / den : 0;
+}
+
+/* How far the spline may stray from digitized edge e (points e, e + 1 of n) before the edge is
+ * resampled linearly: what a smooth curve through the neighbouring points would (1.5 times the
+ * sagitta of the flatter of the circles through e-1, e, e+1 and e, e+1, e+2), within a tenth
+ * and 0.4 of the node spacing. A smooth curve sampled sparsely (a circle's chords) keeps its
+ * spline; a polygon's corner after a straight run (curvature 0 on one side) does not. */
+static double allowed_deviation(const thx_vec2 *p, int n, int e, double spacing)
+{
+    thx_vec2 a = p[(e + n - 1) % n], b = p[e], c = p[(e + 1) % n], d = p[(e + 2) % n];
+    double k = fmin(circle_curvature(a, b, c), circle_curvature(b, c, d));
+    double h = hypot(c.x - b.x, c.y - b.y);
+    double sag = 1.5 * h * h * k / 8.0;
+    return fmax(0.1 * spacing, fmin(0.4 * spacing, sag));
+}
+
 thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n_in, double spacing, double smoothing,
                              thx_vec2 start, thx_vec2 **out, size_t *n_out)
 {
@@ -187,56 +210,100 @@ thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n_in, dou
     int n = (int)n_in;
     int ccw = thx_loop_area(pts, n_in) > 0;
     thx_status st = THX_OK;
-    /* A loop of 3 or 4 points is too short for the cyclic band structure: sample it densely first. */
-    size_t nbuf = (size_t)(n < 5 ? 5 * n : n);
+    /* Knots: the digitized points, each edge e split linearly into parts[e] pieces. A loop of 3
+     * or 4 points, too short for the cyclic band structure, has every edge split five ways. */
+    int n0 = n;
+    int *parts = thx_malloc(ctx, (size_t)n0 * sizeof *parts);
+    if (!parts) return THX_ENOMEM;
+    size_t nbuf = 5;
+    for (int e = 0; e < n0; e++) {
+        const thx_vec2 *a = &pts[e], *b = &pts[(e + 1) % n0];
+        double len = hypot(b->x - a->x, b->y - a->y), pd = ceil(len / spacing);
+        if (!(pd <= 1e7)) { free(parts); return thx_error(ctx, THX_EINPUT, "loop edge %d is %g mm long: too long for spacing %g mm", e + 1, len, spacing); }
+        parts[e] = n0 < 5 ? 5 : 1;
+        nbuf += (size_t)(pd > 1 ? pd : 1) * (size_t)(n0 < 5 ? 5 : 1); /* the most knots the loop below can make */
+    }
+    if (nbuf > (size_t)1 << 26) { free(parts); return thx_error(ctx, THX_EINPUT, "loop needs %zu knots at spacing %g mm: too many", nbuf, spacing); }
     double *mem = thx_calloc(ctx, nbuf * 7 + 8, sizeof *mem);
-    if (!mem) return THX_ENOMEM;
+    cyc_chol C = {0, thx_calloc(ctx, nbuf * (BW + 1), sizeof(double)), thx_calloc(ctx, nbuf * BW, sizeof(double))};
+    int *edge_of = thx_malloc(ctx, nbuf * sizeof *edge_of); /* knot interval -> digitized edge (in ccw order) */
+    if (!mem || !C.band || !C.dense || !edge_of) { st = THX_ENOMEM; goto done; }
     double *x = mem, *y = x + nbuf, *h = y + nbuf, *gx = h + nbuf, *gy = gx + nbuf, *sx = gy + nbuf, *sy = sx + nbuf;
-    if (n < 5) {
+    /*
+     * A spline limited by the polygon (issue 11 item 6). Points sparse relative to the node
+     * spacing (an edge longer than the spacing: a polygon digitized at a coarse step) leave the
+     * spline free to swing out between far-apart knots: 5-12 mm beyond the polygon at 40 mm
+     * between points. So the spline is fitted, and every digitized edge longer than the spacing
+     * along which it strays from the edge farther than a smooth curve through the neighbouring
+     * points would (allowed_deviation: at most 0.4 of the spacing) is resampled
+     * linearly (split into pieces no longer than the spacing), and the spline fitted again,
+     * until no edge strays (at most a few rounds: a split edge is never split again). Edges the
+     * spline follows (a smooth curve sampled sparsely: a circle's chords) keep the spline, so
+     * smooth shapes keep their accuracy; corners the polygon has are rounded only over the
+     * smoothing bandwidth. Nodes stay within half the spacing of the digitized polygon.
+     */
+    for (int round = 0;; round++) {
         int m = 0;
-        for (int i = 0; i < n; i++) {
-            int k = ccw ? i : n - 1 - i, kn = ccw ? (i + 1) % n : (n - 2 - i + n) % n;
-            for (int s = 0; s < 5; s++) {
-                x[m] = pts[k].x + (pts[kn].x - pts[k].x) * s / 5.0;
-                y[m] = pts[k].y + (pts[kn].y - pts[k].y) * s / 5.0;
+        for (int i = 0; i < n0; i++) {
+            int e = ccw ? i : n0 - 1 - i; /* edge e joins point e and e + 1; walked backwards when cw */
+            int k = ccw ? i : (n0 - i) % n0, kn = ccw ? (i + 1) % n0 : n0 - 1 - i;
+            int ee = ccw ? e : kn; /* the digitized edge between k and kn */
+            for (int q = 0; q < parts[ee]; q++) {
+                x[m] = pts[k].x + (pts[kn].x - pts[k].x) * q / (double)parts[ee];
+                y[m] = pts[k].y + (pts[kn].y - pts[k].y) * q / (double)parts[ee];
+                edge_of[m] = ee;
                 m++;
             }
         }
         n = m;
-    } else {
+        double T = 0;
         for (int i = 0; i < n; i++) {
-            int k = ccw ? i : n - 1 - i;
-            x[i] = pts[k].x;
-            y[i] = pts[k].y;
+            int j = (i + 1) % n;
+            h[i] = hypot(x[j] - x[i], y[j] - y[i]);
+            if (!(h[i] > 0)) { st = thx_error(ctx, THX_EINPUT, "loop has two equal consecutive points (point %d)", edge_of[i] + 1); goto done; }
+            T += h[i];
         }
-    }
-    double T = 0;
-    for (int i = 0; i < n; i++) {
-        int j = (i + 1) % n;
-        h[i] = hypot(x[j] - x[i], y[j] - y[i]);
-        if (!(h[i] > 0)) { free(mem); return thx_error(ctx, THX_EINPUT, "loop has two equal consecutive points (point %d)", i + 1); }
-        T += h[i];
-    }
-    double lambda = smoothing > 0 ? pow(smoothing, 4) * n / T : 0.0;
-    spline_sys sys = {n, h, lambda};
-    cyc_chol C = {n, NULL, NULL};
-    C.band = thx_calloc(ctx, (size_t)n * (BW + 1), sizeof(double));
-    C.dense = thx_calloc(ctx, (size_t)n * BW, sizeof(double));
-    if (!C.band || !C.dense) { st = THX_ENOMEM; goto done; }
-    if (cyc_factor(&C, sys_entry, &sys) != 0) { st = thx_error(ctx, THX_EGEOM, "spline system is not positive definite (degenerate loop)"); goto done; }
-    for (int i = 0; i < n; i++) { /* right-hand side D y */
-        int ip = (i + 1) % n, im = (i + n - 1) % n;
-        gx[i] = (x[ip] - x[i]) / h[i] - (x[i] - x[im]) / h[im];
-        gy[i] = (y[ip] - y[i]) / h[i] - (y[i] - y[im]) / h[im];
-    }
-    cyc_solve(&C, gx);
-    cyc_solve(&C, gy);
-    for (int i = 0; i < n; i++) { /* s = y - lambda D g */
-        int ip = (i + 1) % n, im = (i + n - 1) % n;
-        double dgx = (gx[ip] - gx[i]) / h[i] - (gx[i] - gx[im]) / h[im];
-        double dgy = (gy[ip] - gy[i]) / h[i] - (gy[i] - gy[im]) / h[im];
-        sx[i] = x[i] - lambda * dgx;
-        sy[i] = y[i] - lambda * dgy;
+        double lambda = smoothing > 0 ? pow(smoothing, 4) * n / T : 0.0;
+        spline_sys sys = {n, h, lambda};
+        C.n = n;
+        memset(C.band, 0, (size_t)n * (BW + 1) * sizeof(double));
+        memset(C.dense, 0, (size_t)n * BW * sizeof(double));
+        if (cyc_factor(&C, sys_entry, &sys) != 0) { st = thx_error(ctx, THX_EGEOM, "spline system is not positive definite (degenerate loop)"); goto done; }
+        for (int i = 0; i < n; i++) { /* right-hand side D y */
+            int ip = (i + 1) % n, im = (i + n - 1) % n;
+            gx[i] = (x[ip] - x[i]) / h[i] - (x[i] - x[im]) / h[im];
+            gy[i] = (y[ip] - y[i]) / h[i] - (y[i] - y[im]) / h[im];
+        }
+        cyc_solve(&C, gx);
+        cyc_solve(&C, gy);
+        for (int i = 0; i < n; i++) { /* s = y - lambda D g */
+            int ip = (i + 1) % n, im = (i + n - 1) % n;
+            double dgx = (gx[ip] - gx[i]) / h[i] - (gx[i] - gx[im]) / h[im];
+            double dgy = (gy[ip] - gy[i]) / h[i] - (gy[i] - gy[im]) / h[im];
+            sx[i] = x[i] - lambda * dgx;
+            sy[i] = y[i] - lambda * dgy;
+        }
+        /* Edges longer than the spacing, still one knot interval, along which the spline strays. */
+        int split = 0;
+        for (int i = 0; i < n && round < 8; i++) {
+            int ee = edge_of[i];
+            if (parts[ee] != (n0 < 5 ? 5 : 1) || !(h[i] * (n0 < 5 ? 5 : 1) > spacing)) continue;
+            int j = (i + 1) % n;
+            double ux = x[j] - x[i], uy = y[j] - y[i], far = 0;
+            for (int q = 1; q < 16; q++) {
+                thx_vec2 pq;
+                seg_eval(sx, sy, gx, gy, h, n, i, q / 16.0, &pq, NULL);
+                double t = ((pq.x - x[i]) * ux + (pq.y - y[i]) * uy) / (h[i] * h[i]);
+                t = t < 0 ? 0 : t > 1 ? 1 : t;
+                far = fmax(far, hypot(pq.x - x[i] - t * ux, pq.y - y[i] - t * uy));
+            }
+            if (far > allowed_deviation(pts, n0, ee, spacing)) {
+                double pd = ceil(hypot(pts[(ee + 1) % n0].x - pts[ee].x, pts[(ee + 1) % n0].y - pts[ee].y) / spacing);
+                parts[ee] = (int)pd * (n0 < 5 ? 5 : 1);
+                split = 1;
+            }
+        }
+        if (!split) break;
     }
     spline S = {sx, sy, gx, gy, h, n};
     /* Arc length per segment and the start point: the curve point nearest `start`. */
@@ -304,5 +371,7 @@ done:
     free(C.band);
     free(C.dense);
     free(mem);
+    free(parts);
+    free(edge_of);
     return st;
 }

@@ -1,0 +1,316 @@
+/*
+ * Repair of digitization noise in contours (see thorax/repair.h; paper 3.1,
+ * issue 11 item 6). Works loop by loop on the points and their source lines.
+ */
+#include "thorax/repair.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/predicates.h"
+
+void thx_repair_opts_default(thx_repair_opts *o, double spacing)
+{
+    o->merge_tol = spacing / 10.0;
+    o->untangle_tol = spacing / 2.0;
+    o->strict = 0;
+}
+
+void thx_repair_log_free(thx_repair_log *log)
+{
+    if (!log) return;
+    for (size_t i = 0; i < log->n; i++) free(log->msg[i]);
+    free(log->msg);
+    memset(log, 0, sizeof *log);
+}
+
+/* The loop being repaired and where it came from (for messages). */
+typedef struct {
+    thx_ctx *ctx;
+    const thx_repair_opts *o;
+    thx_repair_log *log;
+    const char *path, *surf;
+    int layer_no, loop_line;
+    size_t loop_no;
+    double z;
+    thx_loop *lp;
+} job;
+
+static int line_of(const job *j, size_t k) { return j->lp->lines ? j->lp->lines[k] : j->loop_line; }
+
+/* One repair: refused under strict, else logged and kept. */
+static thx_status report(job *j, int line, const char *fmt, ...)
+{
+    char what[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    char msg[1200];
+    snprintf(msg, sizeof msg, "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: %s", j->path, line, j->surf, j->layer_no,
+             j->z, j->loop_no, what);
+    if (j->o->strict)
+        return thx_error(j->ctx, THX_EINPUT, "%s (refused: --strict; without it this is repaired)", msg);
+    thx_log(j->ctx, THX_LOG_WARN, "%s", msg);
+    if (j->log) {
+        if (j->log->n == j->log->cap) {
+            size_t nc = j->log->cap ? 2 * j->log->cap : 16;
+            char **nm = thx_realloc(j->ctx, j->log->msg, nc * sizeof *nm);
+            if (!nm) return THX_ENOMEM;
+            j->log->msg = nm;
+            j->log->cap = nc;
+        }
+        char *m = thx_malloc(j->ctx, strlen(msg) + 1);
+        if (!m) return THX_ENOMEM;
+        memcpy(m, msg, strlen(msg) + 1);
+        j->log->msg[j->log->n++] = m;
+    }
+    return THX_OK;
+}
+
+/* Removes points [k, k + m) of the loop (indices mod n, m < n) and, if x is not NULL, puts x
+ * (with source line `line`) in their place; the loop then starts after the removed run. */
+static thx_status splice(thx_ctx *ctx, thx_loop *lp, size_t k, size_t m, const thx_vec2 *x, int line)
+{
+    size_t n = lp->n, w = 0;
+    thx_vec2 *tp = thx_malloc(ctx, n * sizeof *tp);
+    int *tl = lp->lines ? thx_malloc(ctx, n * sizeof *tl) : NULL;
+    if (!tp || (lp->lines && !tl)) { free(tp); free(tl); return THX_ENOMEM; }
+    for (size_t s = 0; s < n - m; s++) {
+        size_t i = (k + m + s) % n;
+        tp[w] = lp->p[i];
+        if (tl) tl[w] = lp->lines[i];
+        w++;
+    }
+    if (x) {
+        tp[w] = *x;
+        if (tl) tl[w] = line;
+        w++;
+    }
+    memcpy(lp->p, tp, w * sizeof *tp);
+    if (tl) memcpy(lp->lines, tl, w * sizeof *tl);
+    lp->n = w;
+    free(tp);
+    free(tl);
+    return THX_OK;
+}
+
+static double dist(thx_vec2 a, thx_vec2 b) { return hypot(a.x - b.x, a.y - b.y); }
+
+/* 1. The last point equal to the first. */
+static thx_status drop_closing(job *j)
+{
+    thx_loop *lp = j->lp;
+    while (lp->n > 1 && lp->p[lp->n - 1].x == lp->p[0].x && lp->p[lp->n - 1].y == lp->p[0].y) {
+        THX_CHECK(report(j, line_of(j, lp->n - 1),
+                         "the last point (%zu) repeats the first point (%g, %g): dropped (a loop closes "
+                         "without repeating its first point)",
+                         lp->n, lp->p[0].x, lp->p[0].y));
+        lp->n--;
+        j->log->closing++;
+    }
+    return THX_OK;
+}
+
+/* 2. Runs of consecutive points within merge_tol of the run's first point (exact repeats always). */
+static thx_status merge_near(job *j, int *changed)
+{
+    thx_loop *lp = j->lp;
+    double tol = j->o->merge_tol;
+    if (lp->n < 2) return THX_OK;
+    /* Start at a point that does not continue a run from its predecessor, so no run wraps. */
+    size_t s0 = 0;
+    for (size_t t = 0; t < lp->n; t++) {
+        size_t prev = (t + lp->n - 1) % lp->n;
+        double d = dist(lp->p[prev], lp->p[t]);
+        if (d > tol || (tol == 0 && d > 0)) { s0 = t; break; }
+        if (t + 1 == lp->n) s0 = 0; /* every point within tol of its predecessor: one run */
+    }
+    if (s0) THX_CHECK(splice(j->ctx, lp, s0, 0, NULL, 0)); /* rotate: s0 first */
+    size_t n = lp->n, w = 0;
+    for (size_t i = 0; i < n;) {
+        size_t e = i + 1;
+        double far = 0;
+        while (e < n) {
+            double d = dist(lp->p[i], lp->p[e]);
+            if (!(d <= tol || d == 0)) break;
+            if (d > far) far = d;
+            e++;
+        }
+        if (e - i > 1) {
+            thx_vec2 c = {0, 0};
+            for (size_t k = i; k < e; k++) { c.x += lp->p[k].x; c.y += lp->p[k].y; }
+            c.x /= (double)(e - i);
+            c.y /= (double)(e - i);
+            int l0 = line_of(j, i), l1 = line_of(j, e - 1);
+            if (far == 0)
+                THX_CHECK(report(j, line_of(j, i + 1), "%zu point%s (lines %d-%d) repeat%s the point before (%g, %g): merged into one",
+                                 e - i - 1, e - i > 2 ? "s" : "", line_of(j, i + 1), l1, e - i > 2 ? "" : "s",
+                                 lp->p[i].x, lp->p[i].y));
+            else
+                THX_CHECK(report(j, l0,
+                                 "%zu near-coincident points (lines %d-%d, %.3g mm apart, within the merge tolerance "
+                                 "%g mm) merged into their centroid (%g, %g)",
+                                 e - i, l0, l1, far, tol, c.x, c.y));
+            j->log->merged += e - i - 1;
+            lp->p[w] = c;
+            if (lp->lines) lp->lines[w] = l0;
+            *changed = 1;
+        } else {
+            lp->p[w] = lp->p[i];
+            if (lp->lines) lp->lines[w] = lp->lines[i];
+        }
+        w++;
+        i = e;
+    }
+    lp->n = w;
+    /* The last run may end within tol of the first point (after the rotation: only by merging). */
+    while (lp->n > 1 && (dist(lp->p[lp->n - 1], lp->p[0]) == 0 || dist(lp->p[lp->n - 1], lp->p[0]) <= tol)) {
+        THX_CHECK(report(j, line_of(j, lp->n - 1),
+                         "the last point (%zu) lies %.3g mm from the first point (within the merge tolerance "
+                         "%g mm): merged into it",
+                         lp->n, dist(lp->p[lp->n - 1], lp->p[0]), tol));
+        lp->n--;
+        j->log->merged++;
+        *changed = 1;
+    }
+    return THX_OK;
+}
+
+/* 3. A point where the loop folds straight back (its edges collinear and overlapping). */
+static thx_status remove_spikes(job *j, int *changed)
+{
+    thx_loop *lp = j->lp;
+    while (lp->n >= 3) {
+        size_t n = lp->n, hit = n;
+        for (size_t i = 0; i < n; i++) {
+            thx_vec2 a = lp->p[(i + n - 1) % n], b = lp->p[i], c = lp->p[(i + 1) % n];
+            if (thx_orient2d(&a.x, &b.x, &c.x) == 0 && (a.x - b.x) * (c.x - b.x) + (a.y - b.y) * (c.y - b.y) > 0) {
+                hit = i;
+                break;
+            }
+        }
+        if (hit == n) break;
+        THX_CHECK(report(j, line_of(j, hit), "point %zu (%g, %g) is a spike (the loop folds straight back on itself "
+                                             "there): removed",
+                         hit + 1, lp->p[hit].x, lp->p[hit].y));
+        THX_CHECK(splice(j->ctx, lp, hit, 1, NULL, 0));
+        j->log->spikes++;
+        *changed = 1;
+    }
+    return THX_OK;
+}
+
+/* A common point of segments a-b and c-d, which touch. */
+static thx_vec2 touch_point(thx_vec2 a, thx_vec2 b, thx_vec2 c, thx_vec2 d)
+{
+    double rx = b.x - a.x, ry = b.y - a.y, sx = d.x - c.x, sy = d.y - c.y;
+    double den = rx * sy - ry * sx;
+    if (den != 0) {
+        double t = ((c.x - a.x) * sy - (c.y - a.y) * sx) / den;
+        if (t < 0) t = 0;
+        if (t > 1) t = 1;
+        thx_vec2 x = {a.x + t * rx, a.y + t * ry};
+        return x;
+    }
+    /* parallel (collinear overlap): an endpoint of one lying on the other */
+    const thx_vec2 *cand[4] = {&c, &d, &a, &b};
+    for (int k = 0; k < 4; k++) {
+        thx_vec2 p = *cand[k];
+        const thx_vec2 *u = k < 2 ? &a : &c, *v = k < 2 ? &b : &d;
+        if (thx_segments_touch(&p.x, &p.x, &u->x, &v->x)) return p;
+    }
+    return c;
+}
+
+/* 4. One self-crossing: cut off its small side, or refuse. *found = 0 when there is none. */
+static thx_status untangle_one(job *j, int *found)
+{
+    thx_loop *lp = j->lp;
+    size_t n = lp->n, e1 = 0, e2 = 0;
+    *found = 0;
+    int r = thx_loop_touch(&lp->p[0].x, n, &e1, &e2);
+    if (r < 0) return thx_error(j->ctx, THX_ENOMEM, "out of memory");
+    if (r == 0) return THX_OK;
+    *found = 1;
+    thx_vec2 a = lp->p[e1], b = lp->p[(e1 + 1) % n], c = lp->p[e2], d = lp->p[(e2 + 1) % n];
+    thx_vec2 x = touch_point(a, b, c, d);
+    /* side A: points e1+1 .. e2; side B: points e2+1 .. e1 (mod n) */
+    size_t ma = e2 - e1, mb = n - ma;
+    double ra = 0, rb = 0;
+    for (size_t k = 0; k < ma; k++) ra = fmax(ra, dist(lp->p[(e1 + 1 + k) % n], x));
+    for (size_t k = 0; k < mb; k++) rb = fmax(rb, dist(lp->p[(e2 + 1 + k) % n], x));
+    int cut_a = ra <= rb;
+    double rr = cut_a ? ra : rb;
+    size_t m = cut_a ? ma : mb, k0 = cut_a ? e1 + 1 : e2 + 1;
+    int line = line_of(j, e1);
+    if (!(rr <= j->o->untangle_tol) || n - m + 1 < 3)
+        return thx_error(j->ctx, THX_EINPUT,
+                         "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: loop intersects itself (edge %zu-%zu crosses "
+                         "edge %zu-%zu at (%g, %g)); the smaller side reaches %.3g mm from the crossing, beyond the "
+                         "untangle tolerance %g mm, so it is not repaired",
+                         j->path, line, j->surf, j->layer_no, j->z, j->loop_no, e1 + 1, (e1 + 1) % n + 1, e2 + 1,
+                         (e2 + 1) % n + 1, x.x, x.y, rr, j->o->untangle_tol);
+    /* Area of the cut-off loop (x and its points), for the report. */
+    double area = 0;
+    thx_vec2 prev = x;
+    for (size_t k = 0; k <= m; k++) {
+        thx_vec2 q = k < m ? lp->p[(k0 + k) % n] : x;
+        area += prev.x * q.y - q.x * prev.y;
+        prev = q;
+    }
+    area = fabs(area) / 2;
+    THX_CHECK(report(j, line,
+                     "loop crosses itself (edge %zu-%zu crosses edge %zu-%zu at (%g, %g)): the small loop of %zu "
+                     "point%s (within %.3g mm of the crossing, %.3g mm^2) cut off",
+                     e1 + 1, (e1 + 1) % n + 1, e2 + 1, (e2 + 1) % n + 1, x.x, x.y, m, m == 1 ? "" : "s", rr, area));
+    THX_CHECK(splice(j->ctx, lp, k0 % n, m, &x, line_of(j, k0 % n)));
+    j->log->untangled++;
+    return THX_OK;
+}
+
+static thx_status repair_loop(job *j)
+{
+    THX_CHECK(drop_closing(j));
+    for (;;) { /* each round removes at least one point or ends */
+        int changed = 0, found = 0;
+        THX_CHECK(merge_near(j, &changed));
+        if (j->lp->n < 3) break;
+        THX_CHECK(remove_spikes(j, &changed));
+        if (j->lp->n < 3) break;
+        THX_CHECK(untangle_one(j, &found));
+        if (!found || j->lp->n < 3) break;
+    }
+    if (j->lp->n < 3)
+        return thx_error(j->ctx, THX_EINPUT,
+                         "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: fewer than 3 distinct points are left "
+                         "after merging points within %g mm (the loop is smaller than the merge tolerance)",
+                         j->path, j->loop_line, j->surf, j->layer_no, j->z, j->loop_no, j->o->merge_tol);
+    return THX_OK;
+}
+
+thx_status thx_contours_repair(thx_ctx *ctx, thx_contours *c, const thx_repair_opts *o, thx_repair_log *log)
+{
+    thx_repair_log dummy = {0};
+    if (!log) log = &dummy;
+    THX_CHECK(thx_contours_validate_structure(ctx, c));
+    thx_status st = THX_OK;
+    for (size_t s = 0; s < c->n_surfaces && st == THX_OK; s++) {
+        thx_contour_surface *cs = &c->surf[s];
+        for (size_t l = 0; l < cs->n_layers && st == THX_OK; l++) {
+            thx_contour_layer *L = &cs->layers[l];
+            for (size_t i = 0; i < L->n_loops && st == THX_OK; i++) {
+                job j = {ctx, o, log, c->path[0] ? c->path : "<contours>", cs->name,
+                         L->index >= 0 ? L->index + 1 : (int)l + 1, L->loops[i].line ? L->loops[i].line : L->line,
+                         i + 1, L->z, &L->loops[i]};
+                st = repair_loop(&j);
+            }
+        }
+    }
+    if (log == &dummy) thx_repair_log_free(&dummy);
+    if (st == THX_OK) st = thx_contours_validate(ctx, c);
+    return st;
+}

@@ -1,0 +1,88 @@
+#!/usr/bin/python3
+"""How far the rebuilt layer nodes of a surface lie from the digitized polygons they came from.
+
+usage: digitized_compare.py CONTOURS.txt SURFACE MODEL/SURFACE.pts MODEL/SURFACE.fac [--max MM]
+                            [--ref REF.pts REF.fac --ref-max MM]
+For every node on a layer loop (a node of a triangle that joins two layers: the nodes away from
+the caps; cap nodes, at the surface's ends and where a loop starts or ends mid-surface, are left
+out), the 2D distance to the nearest edge of that surface's digitized loops on the node's layer,
+and with --ref the 3D distance to the reference (true) triangulated surface. Prints max / mean /
+p99; exits 1 when a max exceeds --max / --ref-max.
+"""
+import os
+import sys
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from surface_compare_lib import point_triangle_distance  # noqa: E402
+
+
+def loops(path, surf):
+    out, z, cur, scale = {}, None, None, 1.0
+    for line in open(path):
+        f = line.split("#")[0].split()
+        if not f:
+            continue
+        if f[0] == "units":
+            scale = {"mm": 1.0, "cm": 10.0, "m": 1000.0}[f[1]]
+        elif f[0] == "layer":
+            z, cur = float(f[1]) * scale, None
+        elif f[0] == "loop":
+            cur = [] if f[1] == surf else None
+            if cur is not None:
+                out.setdefault(z, []).append(cur)
+        elif cur is not None and len(f) == 2 and f[0][0] in "+-.0123456789":
+            cur.append((float(f[0]) * scale, float(f[1]) * scale))
+    return out
+
+
+def seg_dist(P, a, b):
+    ab = b - a
+    t = np.clip(((P - a) @ ab) / max(ab @ ab, 1e-300), 0, 1)
+    return np.linalg.norm(P - (a + np.outer(t, ab)), axis=1)
+
+
+def main():
+    a = sys.argv[1:]
+    L = loops(a[0], a[1])
+    p = np.loadtxt(a[2], ndmin=2)
+    f = np.loadtxt(a[3], dtype=np.int64, ndmin=2) - 1
+    zt = p[f, 2]
+    joins = (zt.max(axis=1) - zt.min(axis=1)) > 0
+    on = np.zeros(len(p), bool)
+    on[f[joins].ravel()] = True
+    zs = np.array(sorted(L))
+    d = np.full(len(p), np.nan)
+    for z in zs:
+        m = on & (np.abs(p[:, 2] - z) < 1e-6 * max(1.0, abs(z)))
+        if not m.any():
+            continue
+        P = p[m, :2]
+        best = np.full(len(P), np.inf)
+        for lp in L[z]:
+            q = np.array(lp)
+            for i in range(len(q)):
+                best = np.minimum(best, seg_dist(P, q[i], q[(i + 1) % len(q)]))
+        d[m] = best
+    d = d[~np.isnan(d)]
+    bad = False
+    print("layer nodes to the digitized polygon: max %.3f mean %.3f p99 %.3f mm (%d nodes)"
+          % (d.max(), d.mean(), np.percentile(d, 99), len(d)))
+    if "--max" in a and d.max() > float(a[a.index("--max") + 1]):
+        bad = True
+    if "--ref" in a:
+        i = a.index("--ref")
+        rp = np.loadtxt(a[i + 1], ndmin=2)
+        rf = np.loadtxt(a[i + 2], dtype=np.int64, ndmin=2) - 1
+        P = p[on]
+        e = np.full(len(P), np.inf)
+        for t in rf:
+            e = np.minimum(e, point_triangle_distance(P, rp[t[0]], rp[t[1]], rp[t[2]]))
+        print("layer nodes to the true surface: max %.3f mean %.3f p99 %.3f mm (%d nodes)"
+              % (e.max(), e.mean(), np.percentile(e, 99), len(e)))
+        if "--ref-max" in a and e.max() > float(a[a.index("--ref-max") + 1]):
+            bad = True
+    sys.exit(1 if bad else 0)
+
+
+main()
