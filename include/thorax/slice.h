@@ -44,7 +44,7 @@ void thx_slice_opts_default(thx_slice_opts *o);
 
 /* Slices every surface of the model with common planes spread evenly from zmin + margin to
  * zmax - margin (over all surfaces), at most `spacing` apart, and returns the cross-sections
- * as contours, surface names and roles kept, grid
+ * as contours, surface names, roles and the model's frame kept, grid
  * caps. A surface whose cross-section is empty on a plane between two non-empty ones is an
  * error (it would vanish and reappear). Caller destroys *out. */
 thx_status thx_model_slice(thx_ctx *ctx, const thx_model *m, const thx_slice_opts *o, thx_contours **out);

@@ -191,6 +191,7 @@ thx_status thx_model_slice(thx_ctx *ctx, const thx_model *m, const thx_slice_opt
     thx_status st = thx_contours_create(ctx, &c);
     if (st != THX_OK) return st;
     c->spacing = o->node_spacing > 0 ? o->node_spacing : o->spacing;
+    c->frame = m->frame; /* the model's anatomical frame, written as the contour file's 'frame' line */
     for (size_t k = 0; k < m->n_surfaces && st == THX_OK; k++) {
         const thx_surface *s = m->surf[k];
         size_t idx;
