@@ -165,7 +165,7 @@ grep -q "word.txt:300: row 293, frame 2: 'x4' is not a number" err.txt || fail "
 head -c 100000 a.raw > trunc.raw
 "$THORAX" series convert trunc.raw -o out.mat 2>err.txt; rc=$?
 [ $rc -eq 1 ] || fail "truncated raw gave exit $rc, expected 1"
-grep -q "trunc.raw: truncated: 100000 bytes, but 512 rows x 608 frames take 2495432" err.txt ||
+grep -q "trunc.raw: byte offset 100000: truncated (the file ends here): 512 rows x 608 frames take 2495432 bytes" err.txt ||
     fail "raw truncation message: $(cat err.txt)"
 "$PY" -c "import scipy.io; scipy.io.savemat('chars.mat', {'name': 'abc'})"
 "$THORAX" series convert chars.mat -o out.txt 2>err.txt; rc=$?

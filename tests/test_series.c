@@ -339,46 +339,46 @@ static void test_bad_raw(void)
     memcpy(b, good, n);
     memcpy(b, "HELLOSER", 8);
     tl_write_bytes(tl_path("magic.raw"), b, n);
-    expect_read_fail(tl_path("magic.raw"), THX_SERIES_AUTO, THX_EINPUT, "magic.raw: not a thorax raw series", NULL);
+    expect_read_fail(tl_path("magic.raw"), THX_SERIES_AUTO, THX_EINPUT, "magic.raw: byte offset 0: not a thorax raw series", NULL);
 
     memcpy(b, good, n);
     memcpy(b, "THXSER02", 8);
     tl_write_bytes(tl_path("version.raw"), b, n);
-    expect_read_fail(tl_path("version.raw"), THX_SERIES_AUTO, THX_EINPUT, "version.raw: raw series version '02'", NULL);
+    expect_read_fail(tl_path("version.raw"), THX_SERIES_AUTO, THX_EINPUT, "version.raw: byte offset 6: raw series version '02'", NULL);
 
     tl_write_bytes(tl_path("short.raw"), good, 50);
-    expect_read_fail(tl_path("short.raw"), THX_SERIES_AUTO, THX_EINPUT, "short.raw: truncated: 50 bytes, shorter than the 200-byte", NULL);
+    expect_read_fail(tl_path("short.raw"), THX_SERIES_AUTO, THX_EINPUT, "short.raw: byte offset 50: truncated: the file ends inside the 200-byte", NULL);
     tl_write_bytes(tl_path("tiny.raw"), "TH", 2);
-    expect_read_fail(tl_path("tiny.raw"), THX_SERIES_RAW, THX_EINPUT, "tiny.raw: truncated: 2 bytes", NULL);
+    expect_read_fail(tl_path("tiny.raw"), THX_SERIES_RAW, THX_EINPUT, "tiny.raw: byte offset 2: truncated", NULL);
 
     tl_write_bytes(tl_path("trunc.raw"), good, n - 8);
-    expect_read_fail(tl_path("trunc.raw"), THX_SERIES_AUTO, THX_EINPUT, "trunc.raw: truncated: 352 bytes, but 3 rows x 5 frames take 360", NULL);
+    expect_read_fail(tl_path("trunc.raw"), THX_SERIES_AUTO, THX_EINPUT, "trunc.raw: byte offset 352: truncated (the file ends here): 3 rows x 5 frames take 360 bytes", NULL);
 
     memcpy(b, good, n);
     b[n] = 0;
     tl_write_bytes(tl_path("extra.raw"), b, n + 1);
-    expect_read_fail(tl_path("extra.raw"), THX_SERIES_AUTO, THX_EINPUT, "extra.raw: trailing bytes: 361 bytes", NULL);
+    expect_read_fail(tl_path("extra.raw"), THX_SERIES_AUTO, THX_EINPUT, "extra.raw: byte offset 360: trailing bytes after the data", NULL);
 
     memcpy(b, good, n);
     put_u64(b + 8, 0);
     tl_write_bytes(tl_path("zero.raw"), b, n);
-    expect_read_fail(tl_path("zero.raw"), THX_SERIES_AUTO, THX_EINPUT, "zero.raw: empty series", NULL);
+    expect_read_fail(tl_path("zero.raw"), THX_SERIES_AUTO, THX_EINPUT, "zero.raw: bytes 8-23: empty series", NULL);
 
     memcpy(b, good, n);
     put_u64(b + 8, UINT64_MAX / 2);
     tl_write_bytes(tl_path("huge.raw"), b, n);
-    expect_read_fail(tl_path("huge.raw"), THX_SERIES_AUTO, THX_EINPUT, "huge.raw: impossible sizes", NULL);
+    expect_read_fail(tl_path("huge.raw"), THX_SERIES_AUTO, THX_EINPUT, "huge.raw: bytes 8-23: impossible sizes", NULL);
 
     memcpy(b, good, n);
     memset(b + 24, 'u', 32);
     tl_write_bytes(tl_path("unit.raw"), b, n);
-    expect_read_fail(tl_path("unit.raw"), THX_SERIES_AUTO, THX_EINPUT, "unit.raw: the unit field (bytes 24-55) has no terminating NUL", NULL);
+    expect_read_fail(tl_path("unit.raw"), THX_SERIES_AUTO, THX_EINPUT, "unit.raw: bytes 24-55: the unit field has no terminating NUL", NULL);
 
     memcpy(b, good, n);
     double t2 = 0.5; /* time of frame 3 = time of frame 2 */
     memcpy(b + 200 + 16, &t2, 8);
     tl_write_bytes(tl_path("time.raw"), b, n);
-    expect_read_fail(tl_path("time.raw"), THX_SERIES_AUTO, THX_EINPUT, "time.raw: time of frame 3 (0.5) is not after that of frame 2", NULL);
+    expect_read_fail(tl_path("time.raw"), THX_SERIES_AUTO, THX_EINPUT, "time.raw: byte offset 216: time of frame 3 is 0.5: not after the previous one", NULL);
 
     free(b);
     free(good);

@@ -110,8 +110,8 @@ static thx_status raw_string(thx_ctx *ctx, const char *path, const unsigned char
                              const char *name, char *dst)
 {
     if (!memchr(h + off, '\0', size))
-        return thx_error(ctx, THX_EINPUT, "%s: the %s field (bytes %zu-%zu) has no terminating NUL byte", path, name,
-                         off, off + size - 1);
+        return thx_error(ctx, THX_EINPUT, "%s: bytes %zu-%zu: the %s field has no terminating NUL byte", path, off,
+                         off + size - 1, name);
     memcpy(dst, h + off, size);
     return THX_OK;
 }
@@ -132,41 +132,41 @@ thx_status series_read_raw(thx_ctx *ctx, const char *path, thx_series **out)
     unsigned char h[RAW_HEADER];
     size_t got = fread(h, 1, sizeof h, f);
     if (memcmp(h, "THXSER", got < 6 ? got : 6) != 0) {
-        st = thx_error(ctx, THX_EINPUT, "%s: not a thorax raw series (the file does not start with \"%s\")", path,
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset 0: not a thorax raw series (the file does not start with \"%s\")", path,
                        RAW_MAGIC);
         goto done;
     }
     if (got >= 8 && memcmp(h, RAW_MAGIC, 8) != 0) {
-        st = thx_error(ctx, THX_EINPUT, "%s: raw series version '%c%c' is not supported (this reader knows \"%s\")",
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset 6: raw series version '%c%c' is not supported (this reader knows \"%s\")",
                        path, h[6] >= ' ' && h[6] < 127 ? h[6] : '?', h[7] >= ' ' && h[7] < 127 ? h[7] : '?',
                        RAW_MAGIC);
         goto done;
     }
     if (got < sizeof h) {
-        st = thx_error(ctx, THX_EINPUT, "%s: truncated: %llu bytes, shorter than the %d-byte raw series header", path,
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset %llu: truncated: the file ends inside the %d-byte raw series header", path,
                        size, RAW_HEADER);
         goto done;
     }
     uint64_t rows = get_u64le(h + 8), frames = get_u64le(h + 16);
     if (rows == 0 || frames == 0) {
-        st = thx_error(ctx, THX_EINPUT, "%s: empty series in the header (%llu rows x %llu frames)", path,
+        st = thx_error(ctx, THX_EINPUT, "%s: bytes 8-23: empty series in the header (%llu rows x %llu frames)", path,
                        (unsigned long long)rows, (unsigned long long)frames);
         goto done;
     }
     /* expected size = 200 + 8 frames (rows + 1), without overflow */
     uint64_t lim = (UINT64_MAX - RAW_HEADER) / 8;
     if (rows >= lim || frames > lim / (rows + 1) || rows > SIZE_MAX || frames > SIZE_MAX) {
-        st = thx_error(ctx, THX_EINPUT, "%s: impossible sizes in the header (%llu rows x %llu frames)", path,
+        st = thx_error(ctx, THX_EINPUT, "%s: bytes 8-23: impossible sizes in the header (%llu rows x %llu frames)", path,
                        (unsigned long long)rows, (unsigned long long)frames);
         goto done;
     }
     uint64_t want = RAW_HEADER + 8 * frames * (rows + 1);
     if (size != want) {
         st = thx_error(ctx, THX_EINPUT,
-                       "%s: %s: %llu bytes, but %llu rows x %llu frames take %llu (header %d + 8 x frames x "
-                       "(rows + 1))",
-                       path, size < want ? "truncated" : "trailing bytes", size, (unsigned long long)rows,
-                       (unsigned long long)frames, (unsigned long long)want, RAW_HEADER);
+                       "%s: byte offset %llu: %s: %llu rows x %llu frames take %llu bytes (header %d + 8 x frames x "
+                       "(rows + 1)), the file has %llu",
+                       path, size < want ? size : want, size < want ? "truncated (the file ends here)" : "trailing bytes after the data",
+                       (unsigned long long)rows, (unsigned long long)frames, (unsigned long long)want, RAW_HEADER, size);
         goto done;
     }
     char unit[32] = "", time_unit[16] = "", label[128] = "";
@@ -181,6 +181,14 @@ thx_status series_read_raw(thx_ctx *ctx, const char *path, thx_series **out)
         st = thx_error(ctx, THX_EIO, "%s: read error (file changed while reading?)", path);
         goto done;
     }
+    /* the time axis, with the byte offset of a bad time (series_check would give the frame only) */
+    for (size_t k = 0; k < s->n_frames; k++)
+        if (!isfinite(s->time[k]) || (k && !(s->time[k] > s->time[k - 1]))) {
+            st = thx_error(ctx, THX_EINPUT, "%s: byte offset %zu: time of frame %zu is %.17g: %s", path,
+                           (size_t)RAW_HEADER + 8 * k, k + 1, s->time[k],
+                           isfinite(s->time[k]) ? "not after the previous one (times must increase)" : "not finite");
+            goto done;
+        }
     st = series_check(ctx, s, path);
 done:
     fclose(f);
