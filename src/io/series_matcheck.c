@@ -422,12 +422,12 @@ thx_status series_mat_preflight(thx_ctx *ctx, const char *path)
     unsigned char h[128];
     size_t got = fread(h, 1, sizeof h, f);
     if (got < 6 || memcmp(h, "MATLAB", 6) != 0) {
-        st = thx_error(ctx, THX_EINPUT, "%s: not a MATLAB .mat file (no 'MATLAB' header text of a MATLAB 5/7 file; MATLAB 4 files "
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset 0: not a MATLAB .mat file (no 'MATLAB' header text of a MATLAB 5/7 file; MATLAB 4 files "
                                         "are not read: save with -v7)", path);
         goto done;
     }
     if (got < sizeof h) {
-        st = thx_error(ctx, THX_EINPUT, "%s: truncated: %" PRIu64 " bytes, shorter than the 128-byte MAT-file header", path, size);
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset %" PRIu64 ": truncated: the file ends inside the 128-byte MAT-file header", path, size);
         goto done;
     }
     if (!(h[126] == 'I' && h[127] == 'M') && !(h[126] == 'M' && h[127] == 'I')) {
@@ -440,7 +440,7 @@ thx_status series_mat_preflight(thx_ctx *ctx, const char *path)
     src->pos = 128;
     unsigned version = src->swap ? (unsigned)h[124] << 8 | h[125] : (unsigned)h[125] << 8 | h[124];
     if (version == 0x0200) {
-        st = thx_error(ctx, THX_EINPUT, "%s: a MATLAB v7.3 (HDF5) file: not read (its variables' sizes cannot be checked "
+        st = thx_error(ctx, THX_EINPUT, "%s: byte offset 124: a MATLAB v7.3 (HDF5) file: not read (its variables' sizes cannot be checked "
                                         "against the file before they are allocated); save it with -v7", path);
         goto done;
     }
@@ -527,7 +527,7 @@ thx_status series_mat_preflight(thx_ctx *ctx, const char *path)
             goto done;
         }
     }
-    if (m.var == 0) st = thx_error(ctx, THX_EINPUT, "%s: no variables (a 128-byte header only)", path);
+    if (m.var == 0) st = thx_error(ctx, THX_EINPUT, "%s: byte offset 128: no variables (a 128-byte header only)", path);
 done:
     if (z_live) inflateEnd(&z);
     free(src);
