@@ -209,7 +209,7 @@ static thx_status read_tag(mcheck *m, uint64_t *left, mtag *t, const char *what)
 static thx_status read_data(mcheck *m, uint64_t *left, const mtag *t, void *dst, size_t cap, const char *what)
 {
     if (t->small) {
-        memcpy(dst, t->data, t->bytes < cap ? t->bytes : cap);
+        if (dst && cap) memcpy(dst, t->data, t->bytes < cap ? t->bytes : cap);
         return THX_OK;
     }
     uint64_t n = t->span - 8, keep = t->bytes < cap ? t->bytes : cap;

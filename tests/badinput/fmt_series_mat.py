@@ -13,9 +13,9 @@ def el(t, data, small_ok=False):
     return struct.pack("<II", t, len(data)) + data + b"\0" * pad
 
 
-def matrix(name, cls, dims, body, flags=0, dtype_dims=5, raw_size=None):
+def matrix(name, cls, dims, body, flags=0, dtype_dims=5, raw_size=None, nzmax=0):
     """A miMATRIX element of class cls with the given dims and the sub-elements in body."""
-    inner = el(6, struct.pack("<II", cls | flags, 0)) + el(dtype_dims, struct.pack("<%di" % len(dims), *dims))
+    inner = el(6, struct.pack("<II", cls | flags, nzmax)) + el(dtype_dims, struct.pack("<%di" % len(dims), *dims))
     inner += el(1, name.encode())
     inner += body
     return struct.pack("<II", 14, raw_size if raw_size is not None else len(inner)) + inner
@@ -90,7 +90,7 @@ CASES = [
     bad("cells nested 40 deep", GOOD_MAT + nest(40)),
     bad("unit of 2 characters holding 3", header() + POTVALS + TIME + matrix("unit", 4, [1, 2], el(4, "mV!".encode("utf-16-le")))),
     bad("a sparse matrix with a short column index", GOOD_MAT + matrix("sp", 5, [2, 2], el(5, struct.pack("<i", 0)) +
-        el(5, struct.pack("<ii", 0, 1)) + el(9, struct.pack("<d", 1.0)))),
+        el(5, struct.pack("<ii", 0, 1)) + el(9, struct.pack("<d", 1.0)), nzmax=1)),
     bad("zlib bomb: 16 KB inflating to 16e6 uint8 zeros (128 MB of doubles)", header() + compressed(ZEROS)),
     bad("a compressed variable cut short", header() + compressed(POTVALS)[:-6] + compressed(TIME)),
     bad("a compressed size past the end of the file", header() + struct.pack("<II", 15, 5000) + zlib.compress(POTVALS)),
