@@ -140,6 +140,26 @@ open('nan.raw', 'wb').write(b[:200] + d.tobytes())
 EOF
 "$THORAX" render model --data nan.raw --data-surface heart --size 200x200 --only heart -o nan.png 2> nan.log
 grep -q "10 values are not numbers" nan.log || { cat nan.log; fail "NaN warning"; }
+# The symmetric colour range is the largest magnitude, whichever side it is on (issue 11, item 9):
+# values -5..2 (the negative side dominates) draw exactly as the fixed range -5..5, not as -2..2
+# (the range a rule taking the largest value would give). `thorax render` takes its range from the
+# library's one rule (thx_scale_from_range).
+nheart=$($PY -c "import json; print([s['n_nodes'] for s in json.load(open('model/model.json'))['surfaces'] if s['role'] == 'heart'][0])")
+$PY - "$nheart" <<'EOF2'
+import sys
+n = int(sys.argv[1])
+rows = ['2'] * n
+for k in range(0, n, 3): rows[k] = '-5'
+open('neg.txt', 'w').write('thorax-series 1\nrows %d\nframes 1\nunit mV\ntime_unit ms\nlabel negative side dominates\nt0 0\ndt 1\n%s\nend\n' % (n, '\n'.join(rows)))
+EOF2
+for r in sym:--symmetric f55:--scope=fixed:-5:5 f22:--scope=fixed:-2:2; do
+    name=${r%%:*}; opt=${r#*:}
+    "$THORAX" render model --data neg.txt --data-surface heart --only heart --size 160x160 ${opt/=/ } -o neg_$name.png -q ||
+        fail "render of the -5..2 data ($opt)"
+done
+cmp -s neg_sym.png neg_f55.png || fail "symmetric range of -5..2 data is not -5..5"
+cmp -s neg_sym.png neg_f22.png && fail "symmetric range of -5..2 data drawn as -2..2"
+echo "e2e_render: symmetric range of -5..2 data = -5..5 (image identical to --scope fixed:-5:5)"
 # red_blue PNG MIN WHAT: at least MIN red (positive) and MIN blue (negative) pixels; prints the counts
 red_blue() {
     $PY - "$1" "$2" "$3" <<'EOF2'

@@ -11,6 +11,7 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -889,9 +890,36 @@ static void test_arrows_select(void)
     free(xyz); free(v); free(in);
 }
 
+/* The symmetric colour range is the largest magnitude, on whichever side: data -5..2 gives -5..5
+ * (the range `thorax render` uses: thx_scale_from_range over the values its --scope covers; a
+ * range from the largest value would give -2..2). */
+static void test_symmetric_range(void)
+{
+    thx_scale s;
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, -5, 2, 1);
+    CHECK(s.lo == -5 && s.hi == 5);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, -2, 5, 1);
+    CHECK(s.lo == -5 && s.hi == 5);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, -5, 2, 0);
+    CHECK(s.lo == -5 && s.hi == 2);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, -7, -3, 1); /* all negative */
+    CHECK(s.lo == -7 && s.hi == 7);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, 0, 0, 1);
+    CHECK(s.lo == -1 && s.hi == 1);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, 3, 3, 0);
+    CHECK(s.lo == 2 && s.hi == 4);
+    thx_scale_from_range(&s, THX_SCALE_LINEAR, INFINITY, -INFINITY, 1); /* no finite value */
+    CHECK(s.lo == -1 && s.hi == 1);
+    const double v[] = {2, -5, 1, NAN, 0.5};
+    thx_scale_from_data(&s, THX_SCALE_LINEAR, v, 5, 1); /* the same rule over an array */
+    CHECK(s.lo == -5 && s.hi == 5);
+    CHECK(fabs(thx_scale_apply(&s, 2) - 0.7) < 1e-12 && thx_scale_apply(&s, -5) == 0);
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    test_symmetric_range();
     test_views();
     test_arrows_select();
     thx_status st = thx_renderer_create(ctx, N, N, &ren);

@@ -19,6 +19,19 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+/* The one range rule of the colour scales (thx_scale_from_data, thorax/image.h, is this over the
+ * finite values of an array; `thorax render` uses it over the values its --scope covers): lo..hi
+ * the data's least and greatest finite values; symmetric: -M..M with M the largest magnitude
+ * max(|lo|, |hi|) (data -5..2 gives -5..5); no finite value (lo > hi or not finite): -1..1; all
+ * zeros when symmetric, or constant data: a unit range around the value. k: the model's default. */
+void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric);
+#ifdef __cplusplus
+}
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 typedef enum {
     THX_DRAW_HIDDEN = 0,

@@ -404,23 +404,22 @@ static void series_range(rdata *d, size_t k, double *lo, double *hi)
 static void scale_for(const ropts *o, rdata *d, int s, int frame, thx_scale *sc)
 {
     double lo = INFINITY, hi = -INFINITY;
-    if (o->scope == SCOPE_FIXED) { lo = o->lo; hi = o->hi; }
-    else {
-        for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++) {
-            const thx_series *x = d->series[k];
-            if (!x || (o->scope != SCOPE_ALL && (int)k != s)) continue;
-            if (o->scope == SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
-            else series_range(d, k, &lo, &hi);
-        }
-        if (!(lo <= hi)) { lo = -1; hi = 1; }
-        if (o->symmetric) { double mm = fmax(fabs(lo), fabs(hi)); lo = -mm; hi = mm; }
-        if (hi == lo) { hi += 1; lo -= 1; }
-    }
     memset(sc, 0, sizeof *sc);
-    sc->model = o->model;
-    sc->lo = lo;
-    sc->hi = hi;
-    sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
+    if (o->scope == SCOPE_FIXED) {
+        sc->model = o->model;
+        sc->lo = o->lo;
+        sc->hi = o->hi;
+        sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
+        return;
+    }
+    for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++) {
+        const thx_series *x = d->series[k];
+        if (!x || (o->scope != SCOPE_ALL && (int)k != s)) continue;
+        if (o->scope == SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
+        else series_range(d, k, &lo, &hi);
+    }
+    /* the library's one range rule (thorax/render.h): symmetric = the largest magnitude */
+    thx_scale_from_range(sc, o->model, lo, hi, o->symmetric);
 }
 
 static const float palette[6][4] = {{0.85f, 0.75f, 0.65f, 1}, {0.95f, 0.85f, 0.55f, 1}, {0.75f, 0.35f, 0.35f, 1},

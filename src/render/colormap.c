@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "thorax/image.h"
+#include "thorax/render.h"
 
 /* ------------------------------------------------------------- colour science */
 
@@ -323,21 +324,15 @@ static double strength(const thx_scale *s)
     return s->k > 0 && isfinite(s->k) ? s->k : default_k(s->model);
 }
 
-void thx_scale_from_data(thx_scale *s, thx_scale_model model, const double *v, size_t n, int symmetric)
+void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric)
 {
-    double lo = INFINITY, hi = -INFINITY, mag = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(v[i])) continue;
-        lo = fmin(lo, v[i]);
-        hi = fmax(hi, v[i]);
-        mag = fmax(mag, fabs(v[i]));
-    }
     s->model = model;
     s->k = default_k(model);
-    if (lo > hi) { /* no finite value */
+    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi)) { /* no finite value */
         s->lo = -1, s->hi = 1;
     } else if (symmetric) {
-        /* All zeros: -1/1, so zero still sits in the middle. */
+        /* the largest magnitude, whichever side it is on; all zeros: -1/1, so zero still sits in the middle */
+        double mag = fmax(fabs(lo), fabs(hi));
         s->hi = mag > 0 ? mag : 1;
         s->lo = -s->hi;
     } else if (lo == hi) {
@@ -346,6 +341,17 @@ void thx_scale_from_data(thx_scale *s, thx_scale_model model, const double *v, s
     } else {
         s->lo = lo, s->hi = hi;
     }
+}
+
+void thx_scale_from_data(thx_scale *s, thx_scale_model model, const double *v, size_t n, int symmetric)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        if (!isfinite(v[i])) continue;
+        lo = fmin(lo, v[i]);
+        hi = fmax(hi, v[i]);
+    }
+    thx_scale_from_range(s, model, lo, hi, symmetric);
 }
 
 double thx_scale_apply(const thx_scale *s, double v)
