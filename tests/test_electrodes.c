@@ -181,6 +181,26 @@ static void test_bad_files(void)
 {
     const char *head = "thorax-electrodes 1\nsurface torso\ncount 3\n";
     char buf[1024];
+    {
+        /* a NUL byte: refused with its line and byte offset, not read up to it */
+        static const char nul[] = "thorax-electrodes 1\nsurface torso\ncount 2\nRA 1 0 0 0\nL\0A 2 0 0 0\nend\n";
+        tl_write_bytes(tl_path("nul.txt"), nul, sizeof nul - 1);
+        thx_electrodes *e = NULL;
+        thx_ctx_clear(ctx);
+        CHECK(thx_electrodes_read(ctx, tl_path("nul.txt"), &e) == THX_EINPUT && e == NULL);
+        CHECK(strstr(thx_ctx_message(ctx), "nul.txt:5: NUL byte at byte offset 54") != NULL);
+    }
+    /* counts and node numbers: digits only, overflow-checked (src/io/parse_uint.h) */
+    expect_read_fail("count64.txt", "thorax-electrodes 1\nsurface torso\ncount 18446744073709551617\nRA 1 0 0 0\nend\n",
+                     "count64.txt:3: expected 'count N' with N a positive integer", NULL);
+    expect_read_fail("countbig.txt", "thorax-electrodes 1\nsurface torso\ncount 2147483646\nRA 1 0 0 0\nend\n",
+                     "countbig.txt:3: 'count 2147483646' is more electrodes than a file of", NULL);
+    expect_read_fail("countplus.txt", "thorax-electrodes 1\nsurface torso\ncount +1\nRA 1 0 0 0\nend\n",
+                     "countplus.txt:3: expected 'count N'", NULL);
+    expect_read_fail("node64.txt", "thorax-electrodes 1\nsurface torso\ncount 1\nRA 18446744073709551617 0 0 0\nend\n",
+                     "node64.txt:4: electrode 1 (\"RA\"): node '18446744073709551617' is not a node number", NULL);
+    expect_read_fail("node32.txt", "thorax-electrodes 1\nsurface torso\ncount 1\nRA 2147483647 0 0 0\nend\n",
+                     "node32.txt:4: electrode 1 (\"RA\"): node '2147483647'", NULL);
     /* truncated: a line cut off, or the end missing */
     snprintf(buf, sizeof buf, "%sRA 1 0 0 0\nLA 2 0 0 0\n", head);
     expect_read_fail("trunc1.txt", buf, "trunc1.txt:5: truncated file: 2 of 3 electrodes", NULL);
