@@ -495,6 +495,87 @@ static void test_export(void)
     thx_surface_destroy(&s);
 }
 
+/* The anatomical frame in model.json: written and read back; absent (an old model) = unknown;
+ * refused when it is not a frame; and the strict reading of the manifest (keys, NUL). */
+static void test_frame(void)
+{
+    thx_model *m = NULL, *r = NULL;
+    thx_surface *s = NULL;
+    CHECK_OK(ctx, thx_model_create(ctx, &m));
+    CHECK_OK(ctx, thx_surface_create(ctx, "tetra", THX_ROLE_HEART, &s));
+    static const double xyz[12] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10};
+    static const int32_t tri[12] = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
+    s->xyz = malloc(sizeof xyz);
+    s->tri = malloc(sizeof tri);
+    memcpy(s->xyz, xyz, sizeof xyz);
+    memcpy(s->tri, tri, sizeof tri);
+    s->n_nodes = s->n_tris = 4;
+    CHECK_OK(ctx, thx_model_add_surface(ctx, m, &s));
+    CHECK(m->frame.set == 0);
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("fr")));
+    char *t = tl_slurp(ctx, tl_path("fr/model.json"), NULL);
+    CHECK(t && !strstr(t, "\"frame\""));
+    free(t);
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("fr"), &r));
+    CHECK(r && r->frame.set == 0);
+    thx_model_destroy(&r);
+    CHECK_OK(ctx, thx_frame_from_names(ctx, "-y", "-z", "t", &m->frame));
+    CHECK_OK(ctx, thx_model_write(ctx, m, tl_path("fr")));
+    t = tl_slurp(ctx, tl_path("fr/model.json"), NULL);
+    CHECK(t && strstr(t, "\"superior\":\t\"-y\"") && strstr(t, "\"anterior\":\t\"-z\"") && strstr(t, "\"left\":\t\"+x\""));
+    free(t);
+    CHECK_OK(ctx, thx_model_read(ctx, tl_path("fr"), &r));
+    CHECK(r && r->frame.set && r->frame.up.axis == 1 && r->frame.up.sign == -1 && r->frame.front.axis == 2 &&
+          r->frame.front.sign == -1);
+    thx_model_destroy(&r);
+    m->frame.front = m->frame.up; /* not a frame */
+    CHECK(thx_model_write(ctx, m, tl_path("fr2")) == THX_EINPUT && !tl_exists(tl_path("fr2")));
+    thx_model_destroy(&m);
+
+    const char *head = "{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"surfaces\":[{\"name\":\"tetra\","
+                       "\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]";
+    struct { const char *tail, *want; } cases[] = {
+        {",\"frame\":{\"superior\":\"+z\",\"anterior\":\"+y\"}}", NULL},
+        {",\"frame\":null}", NULL},
+        {",\"frame\":{\"superior\":\"+z\",\"anterior\":\"+w\"}}", "\"frame\".\"anterior\" is not an axis"},
+        {",\"frame\":{\"superior\":\"+z\"}}", "\"frame\".\"anterior\" missing"},
+        {",\"frame\":{\"superior\":\"+z\",\"anterior\":\"-z\"}}", "two different axes"},
+        {",\"frame\":{\"superior\":\"+z\",\"anterior\":\"+y\",\"left\":\"+x\"}}", "\"frame\".\"left\" is +x"},
+        {",\"frame\":{\"superior\":\"+z\",\"anterior\":\"+y\",\"up\":\"+z\"}}", "\"frame\": unknown key \"up\""},
+        {",\"frame\":\"+z +y\"}", "\"frame\" must be an object"},
+        {",\"frame\":{\"superior\":\"+z\",\"superior\":\"-z\",\"anterior\":\"+y\"}}", "key \"superior\" appears twice"},
+        {",\"colour\":\"red\"}", "unknown key \"colour\""},
+        {",\"units\":\"mm\"}", "key \"units\" appears twice"},
+        {",\"volume\":{\"pts\":\"v.pts\",\"tets\":\"v.tet\"}}", "\"volume\": unknown key \"tets\""},
+        {",\"regions\":[{\"id\":1,\"nme\":\"x\"}]}", "region 1: unknown key \"nme\""},
+    };
+    char json[2048];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(json, sizeof json, "%s%s", head, cases[i].tail);
+        manifest_case(json);
+        thx_status st = thx_model_read(ctx, tl_path("man"), &r);
+        if (!cases[i].want) {
+            CHECK_OK(ctx, st);
+            CHECK(r && r->frame.set == (strstr(cases[i].tail, "null") == NULL));
+        } else {
+            CHECK(st == THX_EINPUT && r == NULL);
+            CHECK(tl_msg_has(ctx, cases[i].want) && tl_msg_has(ctx, "man/model.json"));
+        }
+        thx_model_destroy(&r);
+    }
+    /* a NUL byte: cJSON would stop there and accept what comes before */
+    snprintf(json, sizeof json, "%s}", head);
+    size_t n = strlen(json);
+    json[n] = '\0';
+    memcpy(json + n + 1, "garbage", 8);
+    tl_write_bytes(tl_path("man/model.json"), json, n + 8);
+    CHECK(thx_model_read(ctx, tl_path("man"), &r) == THX_EINPUT && r == NULL && tl_msg_has(ctx, "NUL byte at byte offset"));
+    /* a surface named model.json (the writer refuses it too) */
+    manifest_case("{\"format\":\"thorax-model\",\"version\":1,\"units\":\"mm\",\"surfaces\":[{\"name\":\"model.json\","
+                  "\"role\":\"heart\",\"pts\":\"tetra.pts\",\"fac\":\"tetra.fac\",\"n_nodes\":4,\"n_tris\":4}]}");
+    CHECK(thx_model_read(ctx, tl_path("man"), &r) == THX_EINPUT && tl_msg_has(ctx, "surface 1: \"name\""));
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
@@ -504,6 +585,7 @@ int main(void)
     test_base_detection();
     test_bad_files();
     test_bad_manifest();
+    test_frame();
     test_real_data();
     test_export();
     int rc = tl_scratch_finish("test_model");

@@ -489,6 +489,9 @@ static void test_roundtrip(void)
     if (fd < 0) return;
     close(fd);
     thx_contours *c = make(THX_PHANTOM_MEDIUM, 5, -1, -1), *r = NULL;
+    /* the phantom is drawn in RAS, and its contours say so (the model built from them carries it) */
+    CHECK(c && c->frame.set && c->frame.up.axis == 2 && c->frame.up.sign == 1 && c->frame.front.axis == 1 &&
+          c->frame.front.sign == 1);
     if (c) {
         CHECK_OK(ctx, thx_contours_write(ctx, c, path, "test_phantom\nsecond line"));
         CHECK_OK(ctx, thx_contours_read(ctx, path, &r));
