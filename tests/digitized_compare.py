@@ -36,12 +36,6 @@ def loops(path, surf):
     return out
 
 
-def seg_dist(P, a, b):
-    ab = b - a
-    t = np.clip(((P - a) @ ab) / max(ab @ ab, 1e-300), 0, 1)
-    return np.linalg.norm(P - (a + np.outer(t, ab)), axis=1)
-
-
 def main():
     a = sys.argv[1:]
     L = loops(a[0], a[1])
@@ -58,11 +52,14 @@ def main():
         if not m.any():
             continue
         P = p[m, :2]
+        segs = np.concatenate([np.stack([np.array(lp), np.roll(np.array(lp), -1, axis=0)], axis=1) for lp in L[z]])
         best = np.full(len(P), np.inf)
-        for lp in L[z]:
-            q = np.array(lp)
-            for i in range(len(q)):
-                best = np.minimum(best, seg_dist(P, q[i], q[(i + 1) % len(q)]))
+        for k in range(0, len(segs), 256):  # nodes x segments, in blocks
+            s0, s1 = segs[k:k + 256, 0], segs[k:k + 256, 1]
+            ab = s1 - s0
+            t = np.clip(np.einsum('nsk,sk->ns', P[:, None, :] - s0[None], ab) / np.maximum((ab * ab).sum(1), 1e-300), 0, 1)
+            q = s0[None] + t[..., None] * ab[None]
+            best = np.minimum(best, np.linalg.norm(P[:, None, :] - q, axis=2).min(axis=1))
         d[m] = best
     d = d[~np.isnan(d)]
     bad = False

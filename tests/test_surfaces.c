@@ -426,6 +426,54 @@ static void test_lace_invariants(thx_ctx *ctx, double tol, int cases, size_t *re
     }
 }
 
+
+/*
+ * Orientation by the majority of votes, not by the first triangle's (issue 11 item 9). A thin
+ * U-shaped prism: arms 0.8 mm wide around a slot 0.6 mm wide, node spacing 4 mm, so the inside
+ * test's first probes (0.25 spacing = 1 mm along the normal) of a triangle on a slot face land
+ * in the other arm (inside) on the outward side and through its own arm (outside) on the inward
+ * side: those triangles vote the wrong way. The start point is on the slot face, so the first
+ * triangle of the lacing is one of them. The outer faces, the base and the caps vote right and
+ * are the majority: the surface must come out outward (positive volume, 4 pi about its interior)
+ * with the slot faces' votes overruled. Decided by the first vote, it would come out inside-out.
+ */
+static void test_orientation_majority(thx_ctx *ctx)
+{
+    const double w = 0.8, g = 0.6, H = 30, B = 6; /* arm width, slot width, arm height, base height */
+    /* counterclockwise outline, dense (1 mm) along the long sides */
+    thx_vec2 corner[] = {{-g / 2 - w, 0},     {g / 2 + w, 0},  {g / 2 + w, B + H}, {g / 2, B + H},
+                         {g / 2, B},          {-g / 2, B},     {-g / 2, B + H},    {-g / 2 - w, B + H}};
+    thx_vec2 p[400];
+    size_t n = 0;
+    for (int k = 0; k < 8; k++) {
+        thx_vec2 a = corner[k], b = corner[(k + 1) % 8];
+        int parts = (int)ceil(hypot(b.x - a.x, b.y - a.y) / 1.0);
+        for (int q = 0; q < parts; q++) p[n++] = (thx_vec2){a.x + (b.x - a.x) * q / parts, a.y + (b.y - a.y) * q / parts};
+    }
+    thx_contours *c = NULL;
+    size_t s;
+    CHECK_OK(ctx, thx_contours_create(ctx, &c));
+    CHECK_OK(ctx, thx_contours_add_surface(ctx, c, "u", THX_ROLE_OTHER, THX_CAP_POLYGON, 0, &s));
+    for (int l = 0; l < 3; l++) CHECK_OK(ctx, thx_contours_add_loop(ctx, c, s, 4.0 * l, p, n));
+    thx_surfaces_opts o;
+    thx_surfaces_opts_default(&o);
+    o.spacing = 4;
+    o.smoothing = 0;
+    o.start = (thx_vec2){g / 2, B + 0.6 * H}; /* on the right arm's slot face */
+    thx_model *m = NULL;
+    thx_surfaces_stats st;
+    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &o, &m, &st, NULL));
+    if (m) {
+        printf("thin U: %zu triangles, %zu votes overruled, volume %.2f mm^3 (expected about %.2f)\n",
+               m->surf[0]->n_tris, st.orient_overruled, thx_surface_volume(m->surf[0]), (2 * w + g) * B * 8 + 2 * w * H * 8);
+        CHECK(st.orient_overruled > 0);                  /* some votes were wrong ... */
+        CHECK(thx_surface_volume(m->surf[0]) > 0);       /* ... and the majority won */
+        CHECK_NEAR(thx_surface_solid_angle(m->surf[0], m->interior[0]) / (4 * M_PI), 1.0, 1e-6);
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -435,6 +483,7 @@ int main(void)
     test_branching(ctx);
     test_tongues(ctx);
     test_projected(ctx);
+    test_orientation_majority(ctx);
     {
         /* default tolerance: gaps occur and are always re-laced */
         size_t removed = 0, inplane = 0, unresolved = 0;

@@ -63,6 +63,10 @@ typedef struct {
                               in projection (fallback for fans and unresolved triangles) */
     size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
     size_t too_large;      /* triangles with an edge longer than the max_edge bound */
+    size_t relaced_crossing; /* groups whose lacing had crossing triangles, laced again with other
+                              settings until it had none (thx_surfaces_build) */
+    size_t crossing;       /* groups whose lacing still has crossing triangles after the retries
+                              (thx_surfaces_build; reported, the check then fails) */
     int max_fan;           /* largest number of triangles at one node of this slice */
 } thx_lace_stats;
 

@@ -17,7 +17,8 @@ static void help(void)
            "Digitization noise is repaired, each repair reported as a warning (file:line,\n"
            "surface, layer, loop, what was done) and listed in model.json's provenance\n"
            "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
-           "merged, spikes removed, small self-crossings untangled. --strict refuses instead.\n\n"
+           "merged, spikes removed, small self-crossings untangled, holes narrower than the\n"
+           "node spacing dropped. --strict refuses instead.\n\n"
            "options:\n"
            "  -o, --output DIR      model directory to write (replaced atomically)\n"
            "  --spacing MM          node spacing along the layers (default: the file's\n"
@@ -43,10 +44,11 @@ static void help(void)
            "                        into one (default: a tenth of the node spacing)\n"
            "  --untangle-tol MM     a loop crossing itself is untangled when the small loop\n"
            "                        at the crossing lies within this of the crossing point:\n"
-           "                        that loop is cut off (default: half the node spacing)\n"
+           "                        that loop is cut off (default: the node spacing)\n"
            "  --strict              refuse any loop that needs a repair (a repeated closing\n"
-           "                        point, near-coincident points, a spike, a self-crossing)\n"
-           "                        instead of repairing it; exit 1 with the same message\n"
+           "                        point, near-coincident points, a spike, a self-crossing,\n"
+           "                        a narrow hole) instead of repairing it: exit 1 with the\n"
+           "                        message the repair would have given as a warning\n"
            "  --stats               print per-surface lacing and timing statistics\n"
            "  -v, -q                more / less logging\n");
 }
@@ -166,17 +168,18 @@ int cmd_surfaces(int argc, char **argv)
         printf("%-12s %8zu %9zu\n", "total", tot.n_nodes, tot.n_tris);
         if (rlog.n)
             printf("repairs: %zu (%zu closing points dropped, %zu near-coincident points merged, %zu spikes removed, "
-                   "%zu self-crossings untangled; listed in model.json)\n",
-                   rlog.n, rlog.closing, rlog.merged, rlog.spikes, rlog.untangled);
+                   "%zu self-crossings untangled, %zu narrow holes dropped; listed in model.json)\n",
+                   rlog.n, rlog.closing, rlog.merged, rlog.spikes, rlog.untangled, rlog.holes);
         printf("wrote %s (spacing %g mm) in %.3f s\n", outdir, spacing, thx_wtime() - t0);
     }
     if (want_stats) {
         printf("stage times (s): read %.4f, layers %.4f, lacing %.4f, caps %.4f, orientation %.4f, build %.4f, write %.4f\n",
                t_read, tot.t_layers, tot.t_lace, tot.t_caps, tot.t_orient, tot.t_total, t_write);
         printf("lacing: %zu slices (%zu branching, %zu laced in projection), %zu outside triangles removed, "
-               "%zu gaps re-laced, %zu tongues cut, %zu in-plane, %zu unresolved, %zu too large, largest fan %d\n",
+               "%zu gaps re-laced, %zu tongues cut, %zu in-plane, %zu unresolved, %zu too large, largest fan %d; "
+               "%zu crossing lacings laced again, %zu left crossing\n",
                tot.n_slices, tot.n_branch_slices, tot.lace.projected, tot.lace.removed, tot.lace.relaced_gaps, tot.lace.tongues, tot.lace.inplane_tris,
-               tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan);
+               tot.lace.unresolved, tot.lace.too_large, tot.lace.max_fan, tot.lace.relaced_crossing, tot.lace.crossing);
         printf("orientation: %zu triangles by their own inside test, %zu from neighbours (%zu tests overruled), "
                "%zu flipped; %zu caps; %zu nearly flat triangles swapped with a neighbour\n",
                tot.orient_by_test, tot.orient_by_neighbours, tot.orient_overruled, tot.orient_flipped, tot.n_caps,

@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "thorax/cdt.h"
+#include "thorax/check.h"
 #include "thorax/inside.h"
 #include "thorax/surfaces.h"
 #include "geom/chain_sdf.h"
@@ -154,6 +155,46 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
     }
     if (chain_index_init(&out->ix, out->p, n) != 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
     return THX_OK;
+}
+
+/* Do two of the nt triangles tri (node ids into xyz) intersect beyond the nodes they share?
+ * A sweep over the triangles' x extents, exact test per candidate pair (thx_triangles_intersect);
+ * degenerate (collinear) triangles are skipped. -1 out of memory. */
+typedef struct { double x0, x1; size_t t; } tri_span;
+static int cmp_span(const void *a, const void *b)
+{
+    const tri_span *p = a, *q = b;
+    return (p->x0 > q->x0) - (p->x0 < q->x0);
+}
+
+static int tris_cross(const double *xyz, const int32_t *tri, size_t nt)
+{
+    tri_span *sp = malloc((nt ? nt : 1) * sizeof *sp);
+    double *box = malloc((nt ? nt : 1) * 4 * sizeof *box); /* y0 y1 z0 z1 */
+    if (!sp || !box) { free(sp); free(box); return -1; }
+    size_t m = 0;
+    for (size_t t = 0; t < nt; t++) {
+        const double *a = xyz + 3 * (size_t)tri[3 * t], *b = xyz + 3 * (size_t)tri[3 * t + 1], *c = xyz + 3 * (size_t)tri[3 * t + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double cr = fabs(u[1] * v[2] - u[2] * v[1]) + fabs(u[2] * v[0] - u[0] * v[2]) + fabs(u[0] * v[1] - u[1] * v[0]);
+        if (!(cr > 0)) continue;
+        sp[m] = (tri_span){fmin(a[0], fmin(b[0], c[0])), fmax(a[0], fmax(b[0], c[0])), t};
+        double *bx = box + 4 * t;
+        bx[0] = fmin(a[1], fmin(b[1], c[1])); bx[1] = fmax(a[1], fmax(b[1], c[1]));
+        bx[2] = fmin(a[2], fmin(b[2], c[2])); bx[3] = fmax(a[2], fmax(b[2], c[2]));
+        m++;
+    }
+    qsort(sp, m, sizeof *sp, cmp_span);
+    int hit = 0;
+    for (size_t i = 0; i < m && !hit; i++)
+        for (size_t j = i + 1; j < m && sp[j].x0 <= sp[i].x1 && !hit; j++) {
+            const double *p = box + 4 * sp[i].t, *q = box + 4 * sp[j].t;
+            if (p[1] < q[0] || q[1] < p[0] || p[3] < q[2] || q[3] < p[2]) continue;
+            hit = thx_triangles_intersect(xyz, tri + 3 * sp[i].t, tri + 3 * sp[j].t);
+        }
+    free(sp);
+    free(box);
+    return hit;
 }
 
 /* Layered inside test: signed distance at p (negative inside), from the chains
@@ -546,6 +587,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     size_t nl = cs->n_layers;
     rlayer *layers = thx_calloc(ctx, nl, sizeof *layers);
     slice *slices = NULL;
+    double *lxyz = NULL;
     thx_surface *s = NULL;
     const char *path = c->path[0] ? c->path : "<contours>";
     double t0 = thx_wtime();
@@ -635,6 +677,16 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             for (int q = 0; q < cb->n_sel; q++)
                 if (!layers[i + 1].loops[cb->sel[q]].up) { cb->c.beyond = NULL; cb->c.n_beyond = 0; }
         }
+    lxyz = thx_malloc(ctx, ((size_t)next_id + 1) * 3 * sizeof *lxyz); /* the layer nodes, for the crossing test */
+    if (!lxyz) { st = THX_ENOMEM; goto done; }
+    for (size_t l = 0; l < nl; l++)
+        for (size_t k = 0; k < layers[l].n_loops; k++)
+            for (size_t q = 0; q < layers[l].loops[k].n; q++) {
+                size_t id = (size_t)layers[l].loops[k].first + q;
+                lxyz[3 * id] = layers[l].loops[k].p[q].x;
+                lxyz[3 * id + 1] = layers[l].loops[k].p[q].y;
+                lxyz[3 * id + 2] = layers[l].z;
+            }
     {
         thx_lace_opts lo = o->lace;
         lo.spacing = spacing;
@@ -646,8 +698,35 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             thx_ctx *lc = NULL;
             if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
             for (size_t g = 0; g < slices[i].n_groups; g++) {
-                thx_status r = thx_lace(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, &slices[i].tris, &slices[i].n_tris,
-                                        &slices[i].cap, &slices[i].st);
+                /* A lacing whose triangles cross each other (a fold the lacing's own tests do not see,
+                   e.g. a narrow protrusion of one layer fanned across to the other side of the
+                   other layer) is laced again with other settings: a tighter and a looser outside
+                   test, tongues cut from shorter fans, the position-only metric. The first that
+                   does not cross is kept (else the last: the surface check reports it). */
+                enum { N_TRY = 6 };
+                size_t first = slices[i].n_tris;
+                thx_lace_stats keep = slices[i].st;
+                thx_status r = THX_OK;
+                for (int attempt = 0; attempt < N_TRY; attempt++) {
+                    thx_lace_opts la = lo;
+                    if (attempt == 1) la.concave_tol *= 0.5;
+                    if (attempt == 2) la.concave_tol *= 2;
+                    if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
+                    if (attempt == 4) la.phase_weight = 0;
+                    if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
+                    slices[i].n_tris = first;
+                    slices[i].st = keep;
+                    r = thx_lace(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &la, &slices[i].tris, &slices[i].n_tris,
+                                 &slices[i].cap, &slices[i].st);
+                    if (r != THX_OK) break;
+                    int x = tris_cross(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first);
+                    if (x < 0) { r = thx_error(lc, THX_ENOMEM, "out of memory"); break; }
+                    if (!x) {
+                        if (attempt) slices[i].st.relaced_crossing++;
+                        break;
+                    }
+                    if (attempt == N_TRY - 1) slices[i].st.crossing++;
+                }
                 if (r != THX_OK) {
 #pragma omp critical(thx_build_err)
                     if (!failed) {
@@ -681,7 +760,8 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
         a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
-        a->tongues += b->tongues; a->projected += b->projected;
+        a->tongues += b->tongues; a->projected += b->projected; a->crossing += b->crossing;
+        a->relaced_crossing += b->relaced_crossing;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
     }
@@ -763,7 +843,22 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     /* 4. orientation */
     THX_TRY(orient_surface(ctx, s, layers, nl, slices, spacing, stats));
     /* 5. nearly flat triangles swapped away */
-    THX_TRY(flip_flat(ctx, s, &stats->n_flat_flipped));
+    {
+        /* The swaps are local; one that makes triangles cross elsewhere (coplanar in-plane triangles
+           at a pocket) is not worth it: the surface is kept as it was when the swaps add a crossing. */
+        int32_t *before = thx_malloc(ctx, s->n_tris * 3 * sizeof *before);
+        if (!before) { st = THX_ENOMEM; goto done; }
+        memcpy(before, s->tri, s->n_tris * 3 * sizeof *before);
+        size_t nf = 0;
+        st = flip_flat(ctx, s, &nf);
+        int x1 = st == THX_OK && nf ? tris_cross(s->xyz, s->tri, s->n_tris) : 0;
+        int x0 = x1 > 0 ? tris_cross(s->xyz, before, s->n_tris) : 0;
+        if (x1 < 0 || x0 < 0) st = THX_ENOMEM;
+        if (x1 > 0 && !x0) { memcpy(s->tri, before, s->n_tris * 3 * sizeof *before); nf = 0; }
+        free(before);
+        if (st != THX_OK) goto done;
+        stats->n_flat_flipped += nf;
+    }
     *interior = interior_point(layers, nl);
     stats->t_orient = thx_wtime() - t3;
     stats->n_nodes = s->n_nodes;
@@ -772,6 +867,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     *out = s;
     s = NULL;
 done:
+    free(lxyz);
     thx_surface_destroy(&s);
     free_slices(slices, nl > 1 ? nl - 1 : 0);
     free_layers(layers, nl);
@@ -805,6 +901,9 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
                 c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
                 one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
                 one.orient_by_neighbours, one.orient_overruled, one.orient_flipped);
+        if (one.lace.crossing)
+            thx_log(ctx, THX_LOG_WARN, "surface %s: %zu slice groups keep crossing triangles after re-lacing",
+                    c->surf[k].name, one.lace.crossing);
         if (one.lace.unresolved)
             thx_log(ctx, THX_LOG_WARN, "surface %s: %zu triangles still span a concave region after re-lacing",
                     c->surf[k].name, one.lace.unresolved);
@@ -815,7 +914,8 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
             total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
             total->lace.tongues += one.lace.tongues; total->lace.projected += one.lace.projected;
-            total->lace.unresolved += one.lace.unresolved; total->lace.too_large += one.lace.too_large;
+            total->lace.unresolved += one.lace.unresolved; total->lace.crossing += one.lace.crossing;
+            total->lace.relaced_crossing += one.lace.relaced_crossing; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
             total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;

@@ -10,12 +10,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "thorax/inside.h"
 #include "thorax/predicates.h"
 
 void thx_repair_opts_default(thx_repair_opts *o, double spacing)
 {
+    o->spacing = spacing;
     o->merge_tol = spacing / 10.0;
-    o->untangle_tol = spacing / 2.0;
+    o->untangle_tol = spacing;
     o->strict = 0;
 }
 
@@ -292,6 +294,80 @@ static thx_status repair_loop(job *j)
     return THX_OK;
 }
 
+/* Is point q inside the closed loop p (crossing number; points on the boundary count either way)? */
+static int point_in_loop(thx_vec2 q, const thx_loop *lp)
+{
+    int in = 0;
+    for (size_t i = 0, j = lp->n - 1; i < lp->n; j = i++) {
+        thx_vec2 a = lp->p[i], b = lp->p[j];
+        if ((a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x) in = !in;
+    }
+    return in;
+}
+
+static void loop_box(const thx_loop *lp, double box[4])
+{
+    box[0] = box[2] = INFINITY;
+    box[1] = box[3] = -INFINITY;
+    for (size_t k = 0; k < lp->n; k++) {
+        box[0] = fmin(box[0], lp->p[k].x); box[1] = fmax(box[1], lp->p[k].x);
+        box[2] = fmin(box[2], lp->p[k].y); box[3] = fmax(box[3], lp->p[k].y);
+    }
+}
+
+/* 5. Holes: a loop inside another loop of its surface on the same layer. The surfaces are built
+ * from solid loops only (a hole would be laced as a second solid inside the first), so a hole
+ * narrower than the node spacing (width 2 area / perimeter: a groove the layer cuts across,
+ * which the nodes could not resolve) is dropped and reported; a wider one is refused. */
+static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_surface *cs, size_t l,
+                             const thx_repair_opts *o, double spacing, thx_repair_log *log)
+{
+    thx_contour_layer *L = &cs->layers[l];
+    if (L->n_loops < 2) return THX_OK;
+    double *box = thx_malloc(ctx, L->n_loops * 4 * sizeof *box);
+    if (!box) return THX_ENOMEM;
+    for (size_t i = 0; i < L->n_loops; i++) loop_box(&L->loops[i], box + 4 * i);
+    thx_status st = THX_OK;
+    for (size_t i = 0; i < L->n_loops && st == THX_OK; i++) {
+        const thx_loop *b = &L->loops[i];
+        const double *bb = box + 4 * i;
+        size_t outer = L->n_loops;
+        for (size_t k = 0; k < L->n_loops && outer == L->n_loops; k++) {
+            const double *ab = box + 4 * k;
+            if (k == i || bb[0] < ab[0] || bb[1] > ab[1] || bb[2] < ab[2] || bb[3] > ab[3]) continue;
+            if (point_in_loop(b->p[0], &L->loops[k])) outer = k;
+        }
+        if (outer == L->n_loops) continue;
+        double area = fabs(thx_loop_area(b->p, b->n)), per = 0;
+        for (size_t k = 0; k < b->n; k++) per += dist(b->p[k], b->p[(k + 1) % b->n]);
+        double width = per > 0 ? 2 * area / per : 0;
+        job j = {ctx, o, log, c->path[0] ? c->path : "<contours>", cs->name, L->index >= 0 ? L->index + 1 : (int)l + 1,
+                 b->line ? b->line : L->line, i + 1, L->z, &L->loops[i]};
+        if (!(width < spacing)) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: the loop lies inside loop %zu of the same "
+                           "surface (a hole, %.3g mm wide): surfaces with holes are not supported (make the inner "
+                           "boundary a surface of its own)",
+                           j.path, j.loop_line, cs->name, j.layer_no, L->z, i + 1, outer + 1, width);
+            break;
+        }
+        st = report(&j, j.loop_line,
+                    "the loop lies inside loop %zu of the same surface (a hole of %.3g mm^2, %.3g mm wide: "
+                    "narrower than the node spacing %g mm, which cannot resolve it): dropped",
+                    outer + 1, area, width, spacing);
+        if (st != THX_OK) break;
+        free(L->loops[i].p);
+        free(L->loops[i].lines);
+        memmove(&L->loops[i], &L->loops[i + 1], (L->n_loops - i - 1) * sizeof *L->loops);
+        memmove(box + 4 * i, box + 4 * (i + 1), (L->n_loops - i - 1) * 4 * sizeof *box);
+        L->n_loops--;
+        log->holes++;
+        i--;
+    }
+    free(box);
+    return st;
+}
+
 thx_status thx_contours_repair(thx_ctx *ctx, thx_contours *c, const thx_repair_opts *o, thx_repair_log *log)
 {
     thx_repair_log dummy = {0};
@@ -308,6 +384,7 @@ thx_status thx_contours_repair(thx_ctx *ctx, thx_contours *c, const thx_repair_o
                          i + 1, L->z, &L->loops[i]};
                 st = repair_loop(&j);
             }
+            if (st == THX_OK) st = drop_holes(ctx, c, cs, l, o, o->spacing, log);
         }
     }
     if (log == &dummy) thx_repair_log_free(&dummy);
