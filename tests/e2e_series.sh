@@ -167,6 +167,19 @@ head -c 100000 a.raw > trunc.raw
 [ $rc -eq 1 ] || fail "truncated raw gave exit $rc, expected 1"
 grep -q "trunc.raw: byte offset 100000: truncated (the file ends here): 512 rows x 608 frames take 2495432 bytes" err.txt ||
     fail "raw truncation message: $(cat err.txt)"
+# issue 11: the recording cut in half lost its time step, unit and label (exit 0); a 48-byte text
+# series claiming 5e8 frames took 3.9 GB and 15 s before it was refused
+head -c $(( $(stat -c %s "$REC") / 2 )) "$REC" > half.mat
+"$THORAX" series convert half.mat -o out.txt 2>err.txt; rc=$?
+[ $rc -eq 1 ] || fail "the recording cut in half gave exit $rc, expected 1"
+grep -q "half.mat: variable 1 ('onerun', at byte offset 128; .*truncated" err.txt || fail "half .mat message: $(cat err.txt)"
+printf 'thorax-series 1\nrows 1\nframes 500000000\n0 0\nend\n' > claim.txt
+t0=$(date +%s%N)
+"$THORAX" series info claim.txt 2>err.txt >/dev/null; rc=$?
+t1=$(date +%s%N)
+[ $rc -eq 1 ] || fail "5e8 claimed frames gave exit $rc, expected 1"
+grep -q "claim.txt:3: 'frames 500000000': a file of 48 bytes cannot hold" err.txt || fail "claim message: $(cat err.txt)"
+[ $(( (t1 - t0) / 1000000 )) -lt 2000 ] || fail "5e8 claimed frames took $(( (t1 - t0) / 1000000 )) ms"
 "$PY" -c "import scipy.io; scipy.io.savemat('chars.mat', {'name': 'abc'})"
 "$THORAX" series convert chars.mat -o out.txt 2>err.txt; rc=$?
 [ $rc -eq 1 ] || fail ".mat without numbers gave exit $rc, expected 1"

@@ -225,6 +225,37 @@ static thx_status skip_data(mcheck *m, uint64_t *left, const mtag *t, const char
     return read_data(m, left, t, NULL, 0, what);
 }
 
+/* The name of an uncompressed top-level variable whose element is cut short, read from what is
+ * left of its header (best effort, for the message); "" if that is cut too. */
+static void peek_name(msrc *s, uint64_t avail, char *name, size_t cap)
+{
+    unsigned char b[512];
+    size_t n = avail < sizeof b ? (size_t)avail : sizeof b;
+    name[0] = '\0';
+    long at = ftell(s->f);
+    if (at < 0 || fread(b, 1, n, s->f) != n) n = 0;
+    fseek(s->f, at, SEEK_SET);
+    /* flags: 8 + 8 bytes; then the dimensions' tag and data */
+    if (n < 24) return;
+    uint32_t dbytes = get_u32(s, b + 20);
+    uint64_t p = 24 + ((uint64_t)dbytes + 7) / 8 * 8;
+    if (p + 8 > n) return;
+    uint32_t w = get_u32(s, b + p), len;
+    const unsigned char *d;
+    if (w >> 16) {
+        len = w >> 16;
+        d = b + p + 4;
+        if (len > 4) return;
+    } else {
+        len = get_u32(s, b + p + 4);
+        d = b + p + 8;
+        if (p + 8 + len > n) return;
+    }
+    size_t k = len < cap - 1 ? len : cap - 1;
+    for (size_t i = 0; i < k; i++) name[i] = (d[i] >= ' ' && d[i] < 127) ? (char)d[i] : '?';
+    name[k] = '\0';
+}
+
 static thx_status check_matrix(mcheck *m, uint64_t size, int depth);
 
 /* `count` sub-variables (cells, struct fields), each a miMATRIX element, within *left bytes. */
@@ -462,6 +493,13 @@ thx_status series_mat_preflight(thx_ctx *ctx, const char *path)
             goto done;
         }
         mtag t;
+        if (left >= 8) {
+            /* a variable cut short: name it from what is left of its header */
+            unsigned char tb[8];
+            if (fread(tb, 1, 8, f) == 8 && get_u32(src, tb) == miMATRIX && get_u32(src, tb + 4) > left - 8)
+                peek_name(src, left - 8, m.name, sizeof m.name);
+            fseeko(f, (off_t)src->pos, SEEK_SET);
+        }
         if ((st = read_tag(&m, &left, &t, "variable tag")) != THX_OK) goto done;
         if (t.small || (t.type != miMATRIX && t.type != miCOMPRESSED)) {
             st = thx_error(ctx, THX_EINPUT, "%s: byte offset %" PRIu64 ": element of type %" PRIu32 " where a variable "
