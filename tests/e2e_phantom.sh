@@ -36,7 +36,9 @@ well_formed() { # FILE SPACING LAYERS
     grep -qx "surface heart heart cap grid" "$f" &&
     [ "$(grep -c '^layer ' "$f")" -eq "$3" ] &&
     # every data line is a loop header or two numbers
-    ! grep -v -E '^(#|thorax-contours 1$|units mm$|spacing [0-9.]+$|surface |layer -?[0-9.]+$|loop [a-z_]+$|end$|-?[0-9]+\.[0-9]+ -?[0-9]+\.[0-9]+$)' "$f" | grep -q .
+    # the anatomical frame: the phantom is drawn in RAS (+z superior, +y anterior)
+    grep -qx "frame +z +y" "$f" &&
+    ! grep -v -E '^(#|thorax-contours 1$|units mm$|spacing [0-9.]+$|frame [-+][xyz] [-+][xyz]$|surface |layer -?[0-9.]+$|loop [a-z_]+$|end$|-?[0-9]+\.[0-9]+ -?[0-9]+\.[0-9]+$)' "$f" | grep -q .
 }
 
 expect_rc 0 phantom --resolution medium --seed 3 -o "$WORK/m3a.txt"

@@ -43,15 +43,16 @@ static void help(FILE *f)
 }
 
 /* Writes contours to standard output through a temporary file: the writer is
- * atomic by path, and the text must be complete before any of it is shown. */
+ * atomic by path, and the text must be complete before any of it is shown. The
+ * file goes into a private temporary directory (the writer replaces only a file
+ * that is thorax's own, so it must not exist beforehand). */
 static thx_status write_stdout(thx_ctx *ctx, const thx_contours *c, const char *comment)
 {
-    const char *dir = getenv("TMPDIR");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/thorax-phantom-XXXXXX", dir && dir[0] ? dir : "/tmp");
-    int fd = mkstemp(path);
-    if (fd < 0) return thx_error(ctx, THX_EIO, "%s: cannot create a temporary file", path);
-    close(fd);
+    const char *tmp = getenv("TMPDIR");
+    char dir[1024], path[1100];
+    snprintf(dir, sizeof dir, "%s/thorax-phantom-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
+    if (!mkdtemp(dir)) return thx_error(ctx, THX_EIO, "%s: cannot create a temporary directory", dir);
+    snprintf(path, sizeof path, "%s/contours.txt", dir);
     thx_status st = thx_contours_write(ctx, c, path, comment);
     char *text = NULL;
     size_t len = 0;
@@ -60,6 +61,7 @@ static thx_status write_stdout(thx_ctx *ctx, const thx_contours *c, const char *
         st = thx_error(ctx, THX_EIO, "standard output: write failed");
     free(text);
     remove(path);
+    rmdir(dir);
     return st;
 }
 
