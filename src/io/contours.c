@@ -350,7 +350,7 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
     snprintf(c->path, sizeof c->path, "%s", name);
 
     int line = 0, seen_header = 0, seen_end = 0, n_layers = 0, direction = 0, layer_loops = 0, frame_line = 0;
-    int units_line = 0, spacing_line = 0;
+    int units_line = 0, spacing_line = 0, unterminated = 0;
     double scale = 1.0, layer_z = NAN;
     int layer_line = 0;
     thx_loop *cur = NULL;
@@ -362,6 +362,7 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
         char *eol = strchr(p, '\n');
         char *next = eol ? eol + 1 : p + strlen(p);
         if (eol) *eol = '\0';
+        else unterminated = 1;
         if (line == INT_MAX) { st = thx_error(ctx, THX_EINPUT, "%s: more than %d lines", name, INT_MAX); goto done; }
         line++;
         char *hash = strchr(p, '#');
@@ -420,6 +421,7 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             cur->n++;
             continue;
         }
+        int was_in_loop = cur != NULL;
         cur = NULL;
         cur_cap = 0;
         if (strcmp(kw, "units") == 0) {
@@ -533,8 +535,14 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             if (next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: unexpected text after 'end'", name, line); goto done; }
             if (n_layers > 0 && layer_loops == 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: layer %d (z=%g) has no loops", name, layer_line, n_layers, layer_z); goto done; }
             seen_end = 1;
+        } else if (was_in_loop && strlen(kw) < 40) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: '%s' is neither a keyword nor a finite "
+                           "decimal number (a point is two numbers 'x y')",
+                           name, line, cur_surf, n_layers, layer_z, cur_loop_no, kw);
+            goto done;
         } else {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: unknown keyword '%s'", name, line, kw);
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: unknown keyword '%.40s'", name, line, kw);
             goto done;
         }
     }
@@ -545,6 +553,7 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
                            name, line, cur_surf, n_layers, cur_loop_no);
         else
             st = thx_error(ctx, THX_EINPUT, "%s:%d: truncated file (no 'end' line)", name, line);
+        unterminated = 0; /* said already */
         goto done;
     }
     c->n_layers = (size_t)n_layers;
@@ -562,6 +571,11 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
     THX_TRY(validate(ctx, c, geometry));
 done:
     free(buf);
+    if (st == THX_EINPUT && unterminated && len > 0) { /* the error is on the last line, which has no newline */
+        char m[1200];
+        snprintf(m, sizeof m, "%s", thx_ctx_message(ctx));
+        st = thx_error(ctx, st, "%s (the file ends in this line, without a newline: is it cut short?)", m);
+    }
     if (st != THX_OK) thx_contours_destroy(&c);
     *out = c;
     return st;
@@ -600,7 +614,8 @@ thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *p
     size_t nz = 0;
     THX_CHECK(all_layer_z(ctx, c, &zs, &nz));
     thx_atomic_file af;
-    thx_status st = thx_atomic_open(ctx, path, &af);
+    /* an existing file is replaced only when it is thorax's own contours (thorax/fileio.h) */
+    thx_status st = thx_atomic_open_output(ctx, path, "thorax-contours", 15, NULL, 0, &af);
     if (st != THX_OK) { free(zs); return st; }
     FILE *f = af.f;
     fprintf(f, "thorax-contours 1\n");
