@@ -58,6 +58,29 @@ for i in 1 2 3; do
     [ -z "$(leftovers race)" ] && ok "race $i: nothing left behind" || bad "race $i: left $(leftovers race)"
 done
 
+# contours (phantom, slice): a user's text file of the same name stops the run; thorax's own is replaced
+echo "my digitized notes" > notes.txt
+before=$(md5sum < notes.txt)
+refused "phantom over a user's file" "is not thorax's own output of this kind" "$THORAX" phantom -o notes.txt -q
+[ "$before" = "$(md5sum < notes.txt)" ] && ok "the user's file is unchanged" || bad "the user's file changed"
+"$THORAX" phantom -o c.txt -q && "$THORAX" slice m --spacing 20 -o s.txt -q && "$THORAX" slice m --spacing 20 -o s.txt -q &&
+    ok "contours: thorax's own replaced" || bad "contours: rewrite failed"
+refused "slice over its input's neighbour: a user's file" "is not thorax's own" "$THORAX" slice m --spacing 20 -o notes.txt -q
+# series: text, raw and .mat; the input itself is never the output
+printf 'thorax-series 1\nrows 2\nframes 3\ntime 0 1 2\n1 2 3\n4 5 6\nend\n' > s1.txt
+if "$THORAX" series convert s1.txt -o s1.mat -q 2> se.err; then
+    for f in txt raw mat; do
+        "$THORAX" series convert s1.mat -o out.$f -q && "$THORAX" series convert s1.mat -o out.$f -q &&
+            ok "series $f: thorax's own replaced" || bad "series $f: rewrite failed"
+        echo "someone else's data" > user.$f
+        refused "series $f over a user's file" "is not thorax's own output of this kind" "$THORAX" series convert s1.mat -o user.$f -q
+        grep -q "someone else" user.$f && ok "series $f: the user's file is unchanged" || bad "series $f: changed"
+    done
+    cp s1.txt same.txt
+    refused "series convert onto its own input" "an input of this command" "$THORAX" series convert same.txt -o same.txt -q
+    cmp -s s1.txt same.txt && ok "the input is unchanged" || bad "the input changed"
+else bad "series: $(cat se.err)"; fi
+
 # render: a PNG carries thorax's tEXt signature; a user's picture of the same name stops the run
 if "$THORAX" render m -o pic.png --size 64x64 -q 2> r.err && "$THORAX" render m -o pic.png --size 64x64 -q 2>> r.err; then
     ok "render: thorax's own picture replaced"

@@ -33,7 +33,7 @@ void thx_atomic_abort(thx_atomic_file *af);
  * Single-file outputs a user names (-o FILE: contours, series, images,
  * exports, movies). An existing path is replaced only when it is a regular
  * file (never through a symbolic link, never a directory), not one of the
- * command's inputs, and thorax's own output of the same kind: its first
+ * command's inputs, and empty or thorax's own output of the same kind: its first
  * 4096 bytes hold `marker` (marker_len bytes; every such writer puts its
  * marker there: "thorax-contours", "thorax-series", the .mat header text,
  * a PNG tEXt chunk, ...). Otherwise the command stops, before anything is

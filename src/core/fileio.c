@@ -134,7 +134,8 @@ thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, 
         got = fread(head, 1, sizeof head, f);
         fclose(f);
     }
-    if (!f || !memmem(head, got, marker, marker_len)) {
+    /* an empty file holds nothing to lose (and is what mkstemp makes for a command to write into) */
+    if (!f || (st.st_size > 0 && !memmem(head, got, marker, marker_len))) {
         char shown[64];
         size_t k = 0;
         for (size_t i = 0; i < marker_len && k + 1 < sizeof shown; i++) {

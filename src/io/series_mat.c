@@ -113,8 +113,9 @@ static thx_status mat_write_string(mat_t *mat, const char *name, const char *str
 
 thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
 {
+    /* An existing file is replaced only when libmatio wrote it for thorax (its header text). */
     thx_atomic_file af;
-    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    THX_CHECK(thx_atomic_open_output(ctx, path, "Created by: thorax", 18, NULL, 0, &af));
     /* libmatio opens files by name: keep the temporary name, write through it */
     fclose(af.f);
     af.f = NULL;
@@ -156,13 +157,9 @@ thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
         thx_atomic_abort(&af);
         return thx_error(ctx, THX_EIO, "%s: writing %s failed: %s", path, what, e ? strerror(e) : "libmatio error");
     }
-    if (rename(af.tmp, af.path) != 0) {
-        e = errno;
-        thx_atomic_abort(&af);
-        return thx_error(ctx, THX_EIO, "%s: cannot rename into place: %s", path, strerror(e));
-    }
+    thx_status st = thx_output_place(ctx, &af, af.tmp); /* under the claim: see thorax/fileio.h */
     af.tmp[0] = '\0';
-    return THX_OK;
+    return st;
 }
 
 static const char *mat_class_name(const matvar_t *v)
