@@ -93,6 +93,25 @@ int main(void)
     CHECK(thx_surface_slice(ctx, open, 0.5, &loops, &n) == THX_EGEOM);
     CHECK(loops == NULL && n == 0);
     thx_surface_destroy(&open);
+    /* the model's anatomical frame goes into the contours (written as their 'frame' line) */
+    for (int framed = 0; framed < 2; framed++) {
+        thx_model *m = NULL;
+        CHECK_OK(ctx, thx_model_create(ctx, &m));
+        thx_surface *cs = make(ctx, cube, 8, ctri, 12, 0);
+        CHECK_OK(ctx, thx_model_add_surface(ctx, m, &cs));
+        if (framed) CHECK_OK(ctx, thx_frame_from_names(ctx, "-y", "+z", "test", &m->frame));
+        thx_slice_opts so;
+        thx_slice_opts_default(&so);
+        so.spacing = 0.25;
+        thx_contours *k = NULL;
+        CHECK_OK(ctx, thx_model_slice(ctx, m, &so, &k));
+        if (k) {
+            CHECK(k->frame.set == framed);
+            if (framed) CHECK(k->frame.up.axis == 1 && k->frame.up.sign == -1 && k->frame.front.axis == 2 && k->frame.front.sign == 1);
+        }
+        thx_contours_destroy(&k);
+        thx_model_destroy(&m);
+    }
     thx_ctx_destroy(&ctx);
     return tl_finish();
 }
