@@ -48,14 +48,16 @@ thx_status import_read_obj(build *b, const char *text, size_t len, thx_import_in
                 size_t vlen = 0;
                 while (vlen < m && u[vlen] != '/') vlen++;
                 /* the texture and normal numbers after it (may be empty): integers, at most two */
-                int parts = 0, bad_part = 0;
+                int parts = 0, bad_part = 0, last_empty = 0;
                 for (size_t q = vlen; q < m;) {
                     size_t e = q + 1;
                     while (e < m && u[e] != '/') e++;
                     long long y;
                     if (++parts > 2 || (e > q + 1 && (parse_int(u + q + 1, e - q - 1, &y) != 0 || y == 0))) bad_part = 1;
+                    last_empty = e == q + 1;
                     q = e;
                 }
+                if (parts && last_empty) bad_part = 1; /* "v/" and "v//": the number after the last '/' is missing */
                 long long x;
                 int pr = parse_i64(u, vlen, -INT_LIMIT, INT_LIMIT, &x);
                 if (pr == -2) {

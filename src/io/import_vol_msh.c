@@ -145,6 +145,12 @@ thx_status vol_read_msh(raw *r, const char *text, size_t len)
     int have_entities = 0, have_nodes = 0, have_elements = 0, phys3 = 0;
     node_key *keys = NULL;
     int32_t *tri_nodes = NULL;
+    if (nul_line(text, len)) { /* an ASCII file: a NUL byte means a binary or damaged one */
+        st = fail(r, at_line(nul_line(text, len)), "NUL byte at byte %zu (binary MSH files are not supported)",
+                  (size_t)((const char *)memchr(text, 0, len) - text));
+        goto done;
+    }
+    int have_names = 0;
     k = read_line(&c, tk, 2, &line);
     if (k != 1 || !tok_is(tk[0].t, tk[0].n, "$MeshFormat")) {
         st = fail(r, at_line(line), "not a Gmsh .msh file (no $MeshFormat on the first line)");
@@ -173,7 +179,14 @@ thx_status vol_read_msh(raw *r, const char *text, size_t len)
         char name[64];
         copy_tok(name, sizeof name, tk[0].t + 1, tk[0].n - 1);
         int open_line = line;
+        if ((!strcmp(name, "PhysicalNames") && have_names) || (!strcmp(name, "Entities") && have_entities) ||
+            (!strcmp(name, "Nodes") && have_nodes) || (!strcmp(name, "Elements") && have_elements) ||
+            !strcmp(name, "MeshFormat")) {
+            st = fail(r, at_line(line), "a second $%s section", name);
+            goto done;
+        }
         if (!strcmp(name, "PhysicalNames")) {
+            have_names = 1;
             long long n;
             THX_TRY(msh_counts(r, &c, "$PhysicalNames", 1, &n));
             if ((size_t)n > len / 8) {

@@ -142,6 +142,13 @@ static thx_status read_elem(raw *r, const char *text, size_t len, int pts_counte
         } else base = lo >= 1 ? 1 : 0; /* out of range: reported below */
     }
     r->index_base = base;
+    if (lo < 0) /* named as written, before the base detection's guess makes another number the first out of range */
+        for (size_t e = 0; e < n; e++)
+            for (int j = 0; j < 4; j++)
+                if (idx[5 * e + (size_t)j] < 0) {
+                    st = fail(r, at_line(lines[e]), "element %zu: node number %lld is negative", e + 1, idx[5 * e + (size_t)j]);
+                    goto done;
+                }
     for (size_t e = 0; e < n; e++) {
         int32_t v[4];
         for (int j = 0; j < 4; j++) {
@@ -190,12 +197,24 @@ thx_status vol_read_ptselem(raw *r, const char *path, const char *elem_path)
     int counted = 0;
     r->path = pts;
     THX_CHECK(thx_read_file(r->ctx, pts, &text, &len));
+    if (nul_line(text, len)) {
+        st = fail(r, at_line(nul_line(text, len)), "NUL byte at byte %zu: not a text file, or a damaged one",
+                  (size_t)((const char *)memchr(text, 0, len) - text));
+        free(text);
+        return st;
+    }
     st = read_pts(r, text, len, &counted);
     free(text);
     text = NULL;
     if (st) return st;
     r->path = elem;
     THX_CHECK(thx_read_file(r->ctx, elem, &text, &len));
+    if (nul_line(text, len)) {
+        st = fail(r, at_line(nul_line(text, len)), "NUL byte at byte %zu: not a text file, or a damaged one",
+                  (size_t)((const char *)memchr(text, 0, len) - text));
+        free(text);
+        return st;
+    }
     st = read_elem(r, text, len, counted);
     free(text);
     r->path = path;

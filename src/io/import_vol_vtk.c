@@ -137,6 +137,13 @@ static thx_status vtk_read_values(raw *r, vsrc *s, scalar_type ty, size_t count,
     }
     if (s->binary) {
         const unsigned char *p = (const unsigned char *)s->c.buf + s->c.pos;
+        char big[32];
+        for (size_t i = 0; ty <= T_U64 && ty >= T_I64 && i < count; i++)
+            if (int64_beyond(p + i * type_size[ty], ty, 1, big, sizeof big)) {
+                free(v);
+                return fail(r, at_byte(s->c.pos + i * type_size[ty]), "%s value %zu: integer %s is beyond +-2^53 (too large "
+                            "for any index, count or region)", what, i + 1, big);
+            }
         for (size_t i = 0; v && i < count; i++) {
             v[i] = get_scalar(p + i * type_size[ty], ty, 1);
             if (ty >= T_F32 && !isfinite(v[i])) {
@@ -154,15 +161,24 @@ static thx_status vtk_read_values(raw *r, vsrc *s, scalar_type ty, size_t count,
                 free(v);
                 return fail(r, at_line(line), "file ends at %s value %zu of %zu", what, i + 1, count);
             }
-            if (!v) continue;
+            /* every value is parsed, kept or not: a damaged array is never skipped unseen */
             int bad;
+            double d = 0;
             if (ty >= T_F32) {
-                bad = parse_num(t, n, &v[i]) != 0;
+                bad = parse_num(t, n, &d) != 0;
             } else {
-                long long x = 0;
-                bad = parse_int(t, n, &x) != 0;
-                v[i] = (double)x;
+                long long x = 0, lo, hi;
+                type_range(ty, &lo, &hi);
+                int pr = parse_i64(t, n, lo, hi, &x);
+                if (pr == -2) {
+                    free(v);
+                    return fail(r, at_line(line), "%s value %zu: \"%s\" is out of range %lld..%lld", what, i + 1,
+                                tok_show(t, n), lo, hi);
+                }
+                bad = pr != 0;
+                d = (double)x;
             }
+            if (v) v[i] = d;
             if (bad) {
                 free(v);
                 return fail(r, at_line(line), "%s value %zu: \"%s\" is not %s", what, i + 1, tok_show(t, n),
@@ -190,8 +206,9 @@ static thx_status vtk_line_count(raw *r, cursor *c, int line, const char *what, 
 {
     const char *t;
     size_t n = line_token(c, &t);
-    if (!n || parse_int(t, n, out) != 0 || *out < 0 || *out > INT32_MAX)
-        return fail(r, at_line(line), "%s: expected a count", what);
+    int pc = n ? parse_count(t, n, INT32_MAX, out) : -1;
+    if (pc == -2) return fail(r, at_line(line), "%s: count %s out of range 0..%d", what, tok_show(t, n), INT32_MAX);
+    if (pc != 0) return fail(r, at_line(line), "%s: expected a count", what);
     return THX_OK;
 }
 
@@ -367,6 +384,11 @@ thx_status vol_read_vtk_ugrid(raw *r, const char *text, size_t len, const char *
         st = fail(r, at_line(line), "expected ASCII or BINARY");
         goto done;
     }
+    if (!s.binary && nul_line(text, len)) {
+        st = fail(r, at_line(nul_line(text, len)), "NUL byte in an ASCII VTK file (at byte %zu)",
+                  (size_t)((const char *)memchr(text, 0, len) - text));
+        goto done;
+    }
     n = next_token(c, &t, &line);
     if (!tok_is(t, n, "DATASET")) {
         st = fail(r, at_line(line), "expected \"DATASET UNSTRUCTURED_GRID\"");
@@ -379,6 +401,11 @@ thx_status vol_read_vtk_ugrid(raw *r, const char *text, size_t len, const char *
         goto done;
     }
     while ((n = next_token(c, &t, &line)) != 0) {
+        if ((tok_is(t, n, "POINTS") && np >= 0) || (tok_is(t, n, "CELLS") && have_cells) ||
+            (tok_is(t, n, "CELL_TYPES") && types)) {
+            st = fail(r, at_line(line), "a second %s section", tok_show(t, n));
+            goto done;
+        }
         if (tok_is(t, n, "POINTS")) {
             scalar_type ty;
             THX_TRY(vtk_line_count(r, c, line, "POINTS", &np));
@@ -401,6 +428,10 @@ thx_status vol_read_vtk_ugrid(raw *r, const char *text, size_t len, const char *
             if (!tok_is(t, n, "OFFSETS")) { /* classic: n1 cells, n2 entries "k p1 .. pk" */
                 *c = save;
                 vtk_data_start(&s);
+                if (n1 > n2) { /* every cell takes one entry for its point count at least */
+                    st = fail(r, at_line(line), "CELLS: %lld cells cannot fit in %lld entries", n1, n2);
+                    goto done;
+                }
                 double *list = NULL;
                 THX_TRY(vtk_read_values(r, &s, T_I32, (size_t)n2, "CELLS", &list));
                 n_cells = (size_t)n1;

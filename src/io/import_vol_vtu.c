@@ -84,7 +84,14 @@ typedef struct {
     int zlib;              /* compressor="vtkZLibDataCompressor" */
     const char *app;       /* the first byte after the appended data's '_' (NULL: none) */
     int app_b64;           /* appended encoding="base64" */
+    size_t inflate_left;   /* bytes zlib may still give (INFLATE_BUDGET) */
 } vtu_file;
+
+/* What compressed arrays may expand to, in all: 64 times the file's size and
+ * 16 MB. zlib itself allows 1032 bytes out per byte in, so that a small file
+ * of compressed zeros could otherwise claim gigabytes; real meshes expand
+ * less than 10 times (their connectivity compresses about 4:1). */
+#define INFLATE_BUDGET(len) ((len) < SIZE_MAX / 128 ? 64 * (len) + ((size_t)16 << 20) : SIZE_MAX)
 
 static scalar_type vtu_type(const char *s)
 {
@@ -105,13 +112,15 @@ static int read_uint(bstream *b, const vtu_file *f, uint64_t *out)
     unsigned char q[8];
     size_t k = f->header64 ? 8 : 4;
     if (bs_read(b, q, k) != 0) return -1;
-    *out = (uint64_t)get_scalar(q, f->header64 ? T_U64 : T_U32, f->big);
+    uint64_t u = 0; /* exactly, not through a double (2^64 - 1 would not convert back) */
+    for (size_t i = 0; i < k; i++) u |= (uint64_t)q[f->big ? k - 1 - i : i] << (8 * i);
+    *out = u;
     return 0;
 }
 
 /* The bytes of one binary DataArray (header + data, compressed or not),
  * nbytes expected, into a new buffer. */
-static thx_status vtu_block(raw *r, const vtu_file *f, bstream *b, where w, const char *what, size_t nbytes,
+static thx_status vtu_block(raw *r, vtu_file *f, bstream *b, where w, const char *what, size_t nbytes,
                             unsigned char **out)
 {
     thx_status st = THX_OK;
@@ -138,6 +147,13 @@ static thx_status vtu_block(raw *r, const vtu_file *f, bstream *b, where w, cons
         return fail(r, w, "%s: the compressed data end before their header", what);
     if (nblk > bs_left(b) / (f->header64 ? 8 : 4))
         return fail(r, w, "%s: %llu compressed blocks declared, but the data are too short", what, (unsigned long long)nblk);
+    /* every block but the last holds bsz bytes, the last one `last` (0: bsz; VTK writes one
+     * block of a smaller array with bsz its default 32768); the sizes must add up to the
+     * array's bytes without overflow */
+    if (nblk > 0 && (bsz == 0 || last > bsz || (nblk > 1 && (bsz > (uint64_t)nbytes || (nblk - 1) > (uint64_t)nbytes / bsz))))
+        return fail(r, w, "%s: compressed header (%llu blocks of %llu bytes, the last %llu) inconsistent with the %zu "
+                    "bytes expected", what, (unsigned long long)nblk, (unsigned long long)bsz, (unsigned long long)last,
+                    nbytes);
     uint64_t total = nblk == 0 ? 0 : (nblk - 1) * bsz + (last ? last : bsz);
     if (total != (uint64_t)nbytes)
         return fail(r, w, "%s: the compressed data hold %llu bytes, %zu expected", what, (unsigned long long)total, nbytes);
@@ -149,6 +165,11 @@ static thx_status vtu_block(raw *r, const vtu_file *f, bstream *b, where w, cons
             st = fail(r, w, "%s: the compressed data end in their header", what);
             goto done;
         }
+        if (csize[i] > bs_left(b)) {
+            st = fail(r, w, "%s: compressed block %llu of %llu bytes, but the data are shorter", what,
+                      (unsigned long long)i + 1, (unsigned long long)csize[i]);
+            goto done;
+        }
         csum += csize[i];
         if (csize[i] > cmax) cmax = csize[i];
     }
@@ -156,6 +177,12 @@ static thx_status vtu_block(raw *r, const vtu_file *f, bstream *b, where w, cons
         st = fail(r, w, "%s: compressed sizes (%llu bytes) inconsistent with the data", what, (unsigned long long)csum);
         goto done;
     }
+    if (nbytes > f->inflate_left) {
+        st = fail(r, w, "%s: the compressed arrays expand to more than 64 times the file's size (%zu bytes here): "
+                  "refused as a damaged or hostile file", what, nbytes);
+        goto done;
+    }
+    f->inflate_left -= nbytes;
     data = thx_malloc(r->ctx, nbytes ? nbytes : 1);
     cbuf = thx_malloc(r->ctx, cmax ? cmax : 1);
     if (!data || !cbuf) {
@@ -170,6 +197,10 @@ static thx_status vtu_block(raw *r, const vtu_file *f, bstream *b, where w, cons
         }
         uLongf dl = (uLongf)((i + 1 == nblk && last) ? last : bsz);
         uLongf want = dl;
+        if (dl > nbytes - at) { /* cannot happen after the header checks; never write past data */
+            st = fail(r, w, "%s: compressed block %llu larger than the array", what, (unsigned long long)i + 1);
+            goto done;
+        }
         int zr = uncompress(data + at, &dl, cbuf, (uLong)csize[i]);
         if (zr != Z_OK || dl != want) {
             st = fail(r, w, "%s: compressed block %llu is not valid zlib data of %lu bytes", what, (unsigned long long)i + 1,
@@ -189,7 +220,7 @@ done:
 
 /* Reads the DataArray whose tag starts at tag: count values (components
  * included) into a new array. what names it in messages. */
-static thx_status vtu_array(raw *r, const vtu_file *f, const char *tag, const char *what, size_t count, double **out)
+static thx_status vtu_array(raw *r, vtu_file *f, const char *tag, const char *what, size_t count, double **out)
 {
     const char *end = f->xml_end;
     where w = at_line(line_of(f->text, tag));
@@ -218,8 +249,15 @@ static thx_status vtu_array(raw *r, const vtu_file *f, const char *tag, const ch
             int bad = !n;
             if (n && ty >= T_F32) bad = parse_num(t, n, &v[i]) != 0;
             else if (n) {
-                long long x = 0;
-                bad = parse_int(t, n, &x) != 0;
+                long long x = 0, lo, hi;
+                type_range(ty, &lo, &hi);
+                int pr = parse_i64(t, n, lo, hi, &x);
+                if (pr == -2) {
+                    free(v);
+                    return fail(r, at_line(line), "%s: value %zu \"%s\" is out of range %lld..%lld", what, i + 1,
+                                tok_show(t, n), lo, hi);
+                }
+                bad = pr != 0;
                 v[i] = (double)x;
             }
             if (bad) {
@@ -266,6 +304,13 @@ static thx_status vtu_array(raw *r, const vtu_file *f, const char *tag, const ch
         return THX_ENOMEM;
     }
     for (size_t i = 0; i < count; i++) {
+        char big[32];
+        if (int64_beyond(bytes + i * type_size[ty], ty, f->big, big, sizeof big)) {
+            free(bytes);
+            free(v);
+            return fail(r, w, "%s: value %zu: integer %s is beyond +-2^53 (too large for any index, count or region)",
+                        what, i + 1, big);
+        }
         v[i] = get_scalar(bytes + i * type_size[ty], ty, f->big);
         if (ty >= T_F32 && !isfinite(v[i])) {
             free(bytes);
@@ -314,6 +359,7 @@ thx_status vol_read_vtu(raw *r, const char *text, size_t len, const char *region
     vtu_file f;
     memset(&f, 0, sizeof f);
     f.text = text, f.len = len;
+    f.inflate_left = INFLATE_BUDGET(len);
     const char *end = text + len;
     double *pts = NULL, *conn = NULL, *off = NULL, *types = NULL;
     cell_array *arr = NULL;
@@ -322,6 +368,11 @@ thx_status vol_read_vtu(raw *r, const char *text, size_t len, const char *region
     /* the appended data may hold any bytes: XML is parsed only before it */
     const char *ad = xml_find(text, end, "AppendedData");
     f.xml_end = ad ? ad : end;
+    if (nul_line(text, (size_t)(f.xml_end - text))) {
+        st = fail(r, at_line(nul_line(text, (size_t)(f.xml_end - text))), "NUL byte in the XML (at byte %zu)",
+                  (size_t)((const char *)memchr(text, 0, (size_t)(f.xml_end - text)) - text));
+        goto done;
+    }
     const char *vf = xml_find(text, f.xml_end, "VTKFile");
     const char *vf_end = vf ? memchr(vf, '>', (size_t)(f.xml_end - vf)) : NULL;
     if (!vf_end) {

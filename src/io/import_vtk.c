@@ -40,8 +40,9 @@ static thx_status vtk_count(build *b, cursor *c, int line, const char *kw, long 
 {
     const char *t;
     size_t n = line_token(c, &t);
-    if (!n || parse_int(t, n, out) != 0 || *out < 0 || *out > INT32_MAX)
-        return fail(b, at_line(line), "%s: expected a count", kw);
+    int pc = n ? parse_count(t, n, INT32_MAX, out) : -1;
+    if (pc == -2) return fail(b, at_line(line), "%s: count %s out of range 0..%d", kw, tok_show(t, n), INT32_MAX);
+    if (pc != 0) return fail(b, at_line(line), "%s: expected a count", kw);
     return THX_OK;
 }
 
@@ -110,6 +111,11 @@ thx_status import_read_vtk(build *b, const char *text, size_t len, thx_import_in
     if (tok_is_ci(t, n, "BINARY")) s.binary = 1;
     else if (!tok_is_ci(t, n, "ASCII")) {
         st = fail(b, at_line(line), "expected ASCII or BINARY");
+        goto done;
+    }
+    if (!s.binary && nul_line(text, len)) {
+        st = fail(b, at_line(nul_line(text, len)), "NUL byte in an ASCII VTK file (at byte %zu)",
+                  (size_t)((const char *)memchr(text, 0, len) - text));
         goto done;
     }
     n = next_token(c, &t, &line);
