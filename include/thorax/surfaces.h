@@ -30,6 +30,12 @@ extern "C" {
  *              alike whatever the digitization density.
  *   spacing:   target node spacing along the curve, mm. The loop gets
  *              N = max(3, round(L / spacing)) nodes exactly L/N apart in arc length.
+ *              A digitized edge longer than the spacing along which the spline strays
+ *              farther than a smooth curve through the neighbouring points would (at most
+ *              0.4 spacing) is resampled linearly first and the spline fitted again: sparse
+ *              polygons (40 mm between points) are rebuilt within half the spacing of the
+ *              polygon, without the free spline's overshoot, and smooth curves sampled
+ *              sparsely keep the spline's accuracy.
  *   start:     the first node is the curve point nearest this point (the
  *              anatomical start point, paper 3.2 step 1).
  * The result runs counterclockwise seen cranio-caudally (positive area),
