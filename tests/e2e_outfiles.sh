@@ -34,6 +34,16 @@ for f in obj stl ply vtk vtp; do
     refused "$f: a user's torso.$f" "is not thorax's own output of this kind" "$THORAX" export m --format $f -o ex_$f -q
     [ "$before" = "$(snap ex_$f)" ] && ok "$f: no file changed (the other surfaces neither)" || bad "$f: files changed"
 done
+# the volume exports likewise (a mesh of the phantom's torso and lungs)
+if "$THORAX" mesh m -o mv -q 2> mv.err; then
+    for f in vtu msh; do
+        "$THORAX" export mv --format $f -o exv_$f -q && "$THORAX" export mv --format $f -o exv_$f -q &&
+            ok "$f: thorax's own volume export replaced" || bad "$f: re-export failed"
+        echo "my mesh" > exv_$f/volume.$f
+        refused "$f: a user's volume.$f" "is not thorax's own output of this kind" "$THORAX" export mv --format $f -o exv_$f -q
+        grep -q "my mesh" exv_$f/volume.$f && ok "$f: the user's file is unchanged" || bad "$f: changed"
+    done
+else bad "mesh: $(cat mv.err)"; fi
 # a link is never followed, a directory is never replaced
 mkdir -p elsewhere ex_link && echo "precious" > elsewhere/target.obj && ln -s ../elsewhere/target.obj ex_link/torso.obj
 refused "symbolic link" "symbolic link" "$THORAX" export m --format obj --surface torso -o ex_link -q

@@ -103,9 +103,9 @@ int thx_export_format_is_volume(thx_export_format fmt);
 /* Writes one surface in a surface format (atomically); a volume format is an
  * input error. */
 thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_format fmt, const char *path);
-/* Checks, writing nothing, that thx_surface_export may write path: absent, or thorax's own export of
- * this format (its signature in the first 4096 bytes), a regular file, not a link (thorax/fileio.h).
- * A command writing several files claims them all first. */
+/* Checks, writing nothing, that thx_surface_export or thx_volume_export may write path: absent,
+ * empty or thorax's own export of this format (its signature in the first 4096 bytes), a regular
+ * file, not a link, not an input (thorax/fileio.h). A command writing several files claims all first. */
 thx_status thx_export_claim(thx_ctx *ctx, thx_export_format fmt, const char *path);
 /*
  * Writes the model's volume mesh (m->volume; THX_EINPUT if there is none) in

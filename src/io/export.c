@@ -198,11 +198,12 @@ static void write_ply(FILE *f, const thx_surface *s)
  * signature each writer above puts in its first line or header (thorax/fileio.h). */
 static const char *const marker[] = {[THX_EXPORT_VTK] = "\nthorax surface ", [THX_EXPORT_VTP] = "<!-- thorax surface",
                                      [THX_EXPORT_OBJ] = "# thorax surface ", [THX_EXPORT_STL] = "thorax binary STL",
-                                     [THX_EXPORT_PLY] = "comment thorax surface "};
+                                     [THX_EXPORT_PLY] = "comment thorax surface ",
+                                     [THX_EXPORT_VTU] = "<!-- thorax volume mesh",
+                                     [THX_EXPORT_MSH] = "$Comments\nthorax volume mesh"};
 
 thx_status thx_export_claim(thx_ctx *ctx, thx_export_format fmt, const char *path)
 {
-    if (fmt > THX_EXPORT_PLY) return THX_OK; /* volume formats: thx_volume_export's own rule */
     thx_atomic_file af;
     return thx_output_claim(ctx, path, marker[fmt], strlen(marker[fmt]), NULL, 0, &af);
 }

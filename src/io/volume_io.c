@@ -828,6 +828,7 @@ static void write_vtu(FILE *f, const thx_volume *v)
 {
     fprintf(f,
             "<?xml version=\"1.0\"?>\n"
+            "<!-- thorax volume mesh, mm -->\n"
             "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
             "  <UnstructuredGrid>\n"
             "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
@@ -875,7 +876,8 @@ static void write_msh(FILE *f, const thx_volume *v, const int32_t *node_ent, con
                       const double *box)
 {
     size_t nr = v->n_regions;
-    fputs("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n", f);
+    /* a section Gmsh does not know is skipped by its reader: it carries thorax's signature */
+    fputs("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm\n$EndComments\n", f);
     fprintf(f, "$PhysicalNames\n%zu\n", nr);
     for (size_t r = 0; r < nr; r++) fprintf(f, "3 %zu \"%s\"\n", r + 1, v->regions[r].name);
     fputs("$EndPhysicalNames\n", f);
@@ -981,7 +983,8 @@ thx_status thx_volume_export(thx_ctx *ctx, const thx_model *m, thx_export_format
             if (!n_in[r])
                 for (int k = 0; k < 6; k++) box[6 * r + k] = 0; /* a region with no tetrahedra */
     }
-    thx_atomic_file af;
+    thx_atomic_file af; /* an existing file is replaced only when thorax's own export (thx_export_claim) */
+    THX_TRY(thx_export_claim(ctx, fmt, path));
     THX_TRY(thx_atomic_open(ctx, path, &af));
     if (fmt == THX_EXPORT_VTU) write_vtu(af.f, &view);
     else write_msh(af.f, &view, ent, nodes_in, n_in, box);
