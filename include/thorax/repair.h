@@ -12,7 +12,8 @@
  *      on one spot);
  *   3. spikes: a point where the loop folds straight back on itself (its two
  *      edges collinear and overlapping) is removed;
- *   4. small self-crossings: where two edges cross or touch, the loop is two
+ *   4. small self-crossings (at most 64 per loop: more is not noise, and
+ *      refused): where two edges cross or touch, the loop is two
  *      loops joined at the crossing point X; the one whose points all lie
  *      within untangle_tol of X (the smaller if both do) is cut off and
  *      replaced by X: the bow-tie of a jittered point is removed, the loop

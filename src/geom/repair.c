@@ -186,9 +186,10 @@ static thx_status merge_near(job *j, int *changed)
 static thx_status remove_spikes(job *j, int *changed)
 {
     thx_loop *lp = j->lp;
+    size_t from = 0; /* a removal can only make a spike of its neighbours: scan on from there */
     while (lp->n >= 3) {
         size_t n = lp->n, hit = n;
-        for (size_t i = 0; i < n; i++) {
+        for (size_t i = from < n ? from : 0; i < n; i++) {
             thx_vec2 a = lp->p[(i + n - 1) % n], b = lp->p[i], c = lp->p[(i + 1) % n];
             if (thx_orient2d(&a.x, &b.x, &c.x) == 0 && (a.x - b.x) * (c.x - b.x) + (a.y - b.y) * (c.y - b.y) > 0) {
                 hit = i;
@@ -199,7 +200,12 @@ static thx_status remove_spikes(job *j, int *changed)
         THX_CHECK(report(j, line_of(j, hit), "point %zu (%g, %g) is a spike (the loop folds straight back on itself "
                                              "there): removed",
                          hit + 1, lp->p[hit].x, lp->p[hit].y));
-        THX_CHECK(splice(j->ctx, lp, hit, 1, NULL, 0));
+        /* remove point `hit` in place (the order is kept, so the scan can go on before it) */
+        memmove(lp->p + hit, lp->p + hit + 1, (lp->n - hit - 1) * sizeof *lp->p);
+        if (lp->lines) memmove(lp->lines + hit, lp->lines + hit + 1, (lp->n - hit - 1) * sizeof *lp->lines);
+        lp->n--;
+        from = hit > 0 ? hit - 1 : 0;
+        if (hit == 0 || hit >= lp->n) from = 0; /* the wrap: its neighbours are at both ends */
         j->log->spikes++;
         *changed = 1;
     }
@@ -274,17 +280,36 @@ static thx_status untangle_one(job *j, int *found)
     return THX_OK;
 }
 
+/* A loop that crosses itself more often than this is not digitization noise (and each untangling
+ * costs a sweep of the loop: the bound keeps the repair O(n log n)). */
+#define MAX_UNTANGLE 64
+
 static thx_status repair_loop(job *j)
 {
     THX_CHECK(drop_closing(j));
+    size_t untangled = 0;
     for (;;) { /* each round removes at least one point or ends */
         int changed = 0, found = 0;
         THX_CHECK(merge_near(j, &changed));
         if (j->lp->n < 3) break;
         THX_CHECK(remove_spikes(j, &changed));
         if (j->lp->n < 3) break;
+        if (untangled == MAX_UNTANGLE) {
+            size_t e1 = 0, e2 = 0;
+            int r = thx_loop_touch(&j->lp->p[0].x, j->lp->n, &e1, &e2);
+            if (r < 0) return thx_error(j->ctx, THX_ENOMEM, "out of memory");
+            if (r)
+                return thx_error(j->ctx, THX_EINPUT,
+                                 "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: the loop crosses itself more than %d "
+                                 "times (edge %zu-%zu crosses edge %zu-%zu): that is not digitization noise, so it is "
+                                 "not repaired",
+                                 j->path, line_of(j, e1), j->surf, j->layer_no, j->z, j->loop_no, MAX_UNTANGLE, e1 + 1,
+                                 (e1 + 1) % j->lp->n + 1, e2 + 1, (e2 + 1) % j->lp->n + 1);
+            break;
+        }
         THX_CHECK(untangle_one(j, &found));
         if (!found || j->lp->n < 3) break;
+        untangled++;
     }
     if (j->lp->n < 3)
         return thx_error(j->ctx, THX_EINPUT,
