@@ -237,7 +237,9 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
                     THX_TRY(read_scalar(b, &s, p->ty, what, &v, &wi));
                     if ((int)k != iv) continue;
                     if (nv + 1 > pcap) THX_TRY(thx_grow(b->ctx, (void **)&poly, &pcap, nv + 1, sizeof *poly));
-                    THX_TRY(check_index(b, wi, (long long)v, 0, b->n_nodes, &poly[nv]));
+                    char obj[128];
+                    snprintf(obj, sizeof obj, "%s %zu: ", e->name, r + 1);
+                    THX_TRY(check_index(b, wi, obj, (long long)v, 0, b->n_nodes, &poly[nv]));
                     nv++;
                 }
             }

@@ -84,10 +84,11 @@ static inline thx_status add_polygon(build *b, where w, const int32_t *v, size_t
 }
 
 /* Checks a 0-based index against the node count, naming it as the file numbers it. */
-static inline thx_status check_index(build *b, where w, long long v, int base, size_t n_nodes, int32_t *out)
+static inline thx_status check_index(build *b, where w, const char *obj, long long v, int base, size_t n_nodes, int32_t *out)
 {
+    /* obj names the face or cell ("triangle 3: "), or is "" */
     if (v < 0 || (unsigned long long)v >= n_nodes)
-        return fail(b, w, "node number %lld out of range %d..%lld (%d-based, %zu nodes)", v + base, base,
+        return fail(b, w, "%snode number %lld out of range %d..%lld (%d-based, %zu nodes)", obj, v + base, base,
                     (long long)n_nodes - 1 + base, base, n_nodes);
     *out = (int32_t)v;
     return THX_OK;

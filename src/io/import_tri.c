@@ -127,7 +127,9 @@ static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_
                             e + 1, tok_show(t, n), b->n_nodes - 1, b->n_nodes);
             if (pr != 0)
                 return fail(b, at_line(line), "triangle %lld: vertex number %d is not an integer: \"%s\"", e + 1, k + 1, tok_show(t, n));
-            THX_CHECK(check_index(b, at_line(line), x, 0, b->n_nodes, &v[k]));
+            char obj[48];
+            snprintf(obj, sizeof obj, "triangle %lld: ", e + 1);
+            THX_CHECK(check_index(b, at_line(line), obj, x, 0, b->n_nodes, &v[k]));
         }
         if ((n = line_token(&c, &t)) != 0)
             return fail(b, at_line(line), "triangle %lld: more than three vertex numbers (\"%s\")", e + 1, tok_show(t, n));
@@ -265,7 +267,9 @@ thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_in
                           tok_show(tk[i].t, tk[i].n));
                 goto done;
             }
-            THX_TRY(check_index(b, at_line(tk[i].line), x - base, base, b->n_nodes, &v[k]));
+            char obj[48];
+            snprintf(obj, sizeof obj, "triangle %lld: ", e + 1);
+            THX_TRY(check_index(b, at_line(tk[i].line), obj, x - base, base, b->n_nodes, &v[k]));
         }
         THX_TRY(add_tri(b, v[0], v[1], v[2]));
     }

@@ -72,7 +72,9 @@ static thx_status vtk_cells(build *b, int kind, const double *off, size_t n_cell
             continue;
         }
         if (k > *pcap) THX_CHECK(thx_grow(b->ctx, (void **)poly, pcap, k, sizeof **poly));
-        for (size_t j = 0; j < k; j++) THX_CHECK(check_index(b, w, (long long)conn[start + j], 0, b->n_nodes, &(*poly)[j]));
+        char obj[48];
+        snprintf(obj, sizeof obj, "cell %zu: ", cidx + 1);
+        for (size_t j = 0; j < k; j++) THX_CHECK(check_index(b, w, obj, (long long)conn[start + j], 0, b->n_nodes, &(*poly)[j]));
         if (kind == 0) {
             THX_CHECK(add_polygon(b, w, *poly, k));
         } else {
