@@ -18,6 +18,16 @@
  *                 the first struct holding a `potvals` field (map3d's
  *                 recordings, unit from its `unit` field), else the first
  *                 2-D numeric matrix; any numeric class is converted to double.
+ *                 MATLAB 5/7 files only (v7.3 HDF5 and v4 are refused); the
+ *                 whole file is checked before libmatio reads it (every
+ *                 variable's data against its dimensions, nothing cut short
+ *                 or left over, a compressed variable within 1032 times its
+ *                 compressed size: src/io/series_matcheck.c).
+ * Readers accept a file whole or not at all: every count is checked against
+ * the file's size before anything is allocated (memory stays a small multiple
+ * of the file's size), and a NUL byte, a truncation, trailing bytes or a
+ * partial row, frame or variable is an error naming the file, the line or
+ * byte offset, and the object.
  * Values may be NaN (a missing lead); thx_series_find_nonfinite reports them,
  * callers that cannot use them (solvers) reject them.
  */

@@ -276,13 +276,11 @@ static thx_status check_children(mcheck *m, uint64_t *left, uint64_t count, int 
         THX_CHECK(read_tag(m, left, &t, kind));
         if (t.small || t.type != miMATRIX)
             return mfail(m, "%s: element of type %" PRIu32 " where a variable (miMATRIX) must be", kind, t.type);
-        uint64_t before = *left;
         THX_CHECK(check_matrix(m, t.bytes, depth + 1));
         *left -= t.bytes;
         uint64_t pad = t.span - 8 - t.bytes;
         if (pad && src_read(m->src, NULL, pad)) return mfail(m, "%s: the data ends inside its padding", kind);
         *left -= pad;
-        (void)before;
     }
     m->where[keep] = '\0';
     return THX_OK;
