@@ -197,9 +197,9 @@ static thx_status remove_spikes(job *j, int *changed)
             }
         }
         if (hit == n) break;
-        THX_CHECK(report(j, line_of(j, hit), "point %zu (%g, %g) is a spike (the loop folds straight back on itself "
+        THX_CHECK(report(j, line_of(j, hit), "the point (%g, %g) is a spike (the loop folds straight back on itself "
                                              "there): removed",
-                         hit + 1, lp->p[hit].x, lp->p[hit].y));
+                         lp->p[hit].x, lp->p[hit].y));
         /* remove point `hit` in place (the order is kept, so the scan can go on before it) */
         memmove(lp->p + hit, lp->p + hit + 1, (lp->n - hit - 1) * sizeof *lp->p);
         if (lp->lines) memmove(lp->lines + hit, lp->lines + hit + 1, (lp->n - hit - 1) * sizeof *lp->lines);
@@ -257,11 +257,11 @@ static thx_status untangle_one(job *j, int *found)
     int line = line_of(j, e1);
     if (!(rr <= j->o->untangle_tol) || n - m + 1 < 3)
         return thx_error(j->ctx, THX_EINPUT,
-                         "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: loop intersects itself (edge %zu-%zu crosses "
-                         "edge %zu-%zu at (%g, %g)); the smaller side reaches %.3g mm from the crossing, beyond the "
-                         "untangle tolerance %g mm, so it is not repaired",
-                         j->path, line, j->surf, j->layer_no, j->z, j->loop_no, e1 + 1, (e1 + 1) % n + 1, e2 + 1,
-                         (e2 + 1) % n + 1, x.x, x.y, rr, j->o->untangle_tol);
+                         "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: loop intersects itself (the edge from line %d "
+                         "crosses the edge from line %d at (%g, %g)); the smaller side reaches %.3g mm from the crossing, "
+                         "beyond the untangle tolerance %g mm, so it is not repaired",
+                         j->path, line, j->surf, j->layer_no, j->z, j->loop_no, line, line_of(j, e2), x.x, x.y, rr,
+                         j->o->untangle_tol);
     /* Area of the cut-off loop (x and its points), for the report. */
     double area = 0;
     thx_vec2 prev = x;
@@ -272,9 +272,9 @@ static thx_status untangle_one(job *j, int *found)
     }
     area = fabs(area) / 2;
     THX_CHECK(report(j, line,
-                     "loop crosses itself (edge %zu-%zu crosses edge %zu-%zu at (%g, %g)): the small loop of %zu "
-                     "point%s (within %.3g mm of the crossing, %.3g mm^2) cut off",
-                     e1 + 1, (e1 + 1) % n + 1, e2 + 1, (e2 + 1) % n + 1, x.x, x.y, m, m == 1 ? "" : "s", rr, area));
+                     "loop crosses itself (the edge from line %d crosses the edge from line %d at (%g, %g)): the "
+                     "small loop of %zu point%s (within %.3g mm of the crossing, %.3g mm^2) cut off",
+                     line, line_of(j, e2), x.x, x.y, m, m == 1 ? "" : "s", rr, area));
     THX_CHECK(splice(j->ctx, lp, k0 % n, m, &x, line_of(j, k0 % n)));
     j->log->untangled++;
     return THX_OK;
@@ -301,10 +301,10 @@ static thx_status repair_loop(job *j)
             if (r)
                 return thx_error(j->ctx, THX_EINPUT,
                                  "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: the loop crosses itself more than %d "
-                                 "times (edge %zu-%zu crosses edge %zu-%zu): that is not digitization noise, so it is "
-                                 "not repaired",
-                                 j->path, line_of(j, e1), j->surf, j->layer_no, j->z, j->loop_no, MAX_UNTANGLE, e1 + 1,
-                                 (e1 + 1) % j->lp->n + 1, e2 + 1, (e2 + 1) % j->lp->n + 1);
+                                 "times (here the edge from line %d crosses the edge from line %d): that is not "
+                                 "digitization noise, so it is not repaired",
+                                 j->path, line_of(j, e1), j->surf, j->layer_no, j->z, j->loop_no, MAX_UNTANGLE,
+                                 line_of(j, e1), line_of(j, e2));
             break;
         }
         THX_CHECK(untangle_one(j, &found));
