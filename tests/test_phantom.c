@@ -483,11 +483,11 @@ static void test_estimate(void)
 /* Written and read back through the contour format (the reader validates). */
 static void test_roundtrip(void)
 {
-    char path[] = "/tmp/thorax-test-phantom-XXXXXX";
-    int fd = mkstemp(path);
-    CHECK(fd >= 0);
-    if (fd < 0) return;
-    close(fd);
+    /* a file in a private directory: the writer replaces only a file that is thorax's own, so
+       mkstemp's empty file would be refused */
+    char dir[] = "/tmp/thorax-test-phantom-XXXXXX", path[64];
+    CHECK(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/c.txt", dir);
     thx_contours *c = make(THX_PHANTOM_MEDIUM, 5, -1, -1), *r = NULL;
     /* the phantom is drawn in RAS, and its contours say so (the model built from them carries it) */
     CHECK(c && c->frame.set && c->frame.up.axis == 2 && c->frame.up.sign == 1 && c->frame.front.axis == 1 &&
@@ -497,6 +497,8 @@ static void test_roundtrip(void)
         CHECK_OK(ctx, thx_contours_read(ctx, path, &r));
         if (r) {
             CHECK(r->n_surfaces == 6 && r->spacing == 11.0 && r->n_layers == 28);
+            CHECK(r->frame.set && r->frame.up.axis == 2 && r->frame.up.sign == 1 && r->frame.front.axis == 1 &&
+                  r->frame.front.sign == 1); /* written as 'frame +z +y' */
             for (size_t s = 0; s < 6 && s < r->n_surfaces; s++) {
                 CHECK(r->surf[s].n_layers == c->surf[s].n_layers);
                 CHECK(r->surf[s].cap == c->surf[s].cap && r->surf[s].role == c->surf[s].role);
@@ -509,6 +511,7 @@ static void test_roundtrip(void)
     thx_contours_destroy(&c);
     thx_contours_destroy(&r);
     remove(path);
+    rmdir(dir);
 }
 
 int main(void)
