@@ -79,7 +79,7 @@ thx_status thx_surface_slice(thx_ctx *ctx, const thx_surface *s, double z0, thx_
     if (nx == 0) { free(x); return THX_OK; }
     /* Pair every 'out' crossing of one triangle with the 'in' crossing of its neighbour on the same edge. */
     qsort(x, nx, sizeof *x, cmp_xedge);
-    for (size_t k = 0; k < nx; k++) {
+    for (size_t k = 0; k < nx; k += 2) { /* records come in pairs */
         int ok = (k + 1 < nx && x[k + 1].a == x[k].a && x[k + 1].b == x[k].b && x[k].out == 0 && x[k + 1].out == 1) &&
                  (k + 2 >= nx || x[k + 2].a != x[k].a || x[k + 2].b != x[k].b) &&
                  (k == 0 || x[k - 1].a != x[k].a || x[k - 1].b != x[k].b);
@@ -90,7 +90,6 @@ thx_status thx_surface_slice(thx_ctx *ctx, const thx_surface *s, double z0, thx_
                            s->name, z0, x[k].a + 1, x[k].b + 1);
             goto done;
         }
-        k++;
     }
     /* For each crossing triangle: its 'in' record and its 'out' record; walk out -> neighbour's in -> its out. */
     next_of = thx_malloc(ctx, s->n_tris * sizeof *next_of);
