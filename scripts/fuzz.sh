@@ -45,6 +45,7 @@ failed=0
 for t in "${targets[@]}"; do
   bin="$FUZZ_BUILD/bin/fuzz_$t"
   if [ ! -x "$bin" ]; then echo "fuzz: no harness $bin" >&2; failed=1; continue; fi
+  bin=$(realpath "$bin")
   corpus="$scratch/$t"
   mkdir -p "$corpus" "$out/$t"
   [ -d "tests/fuzz/corpus/$t" ] && cp -r "tests/fuzz/corpus/$t/." "$corpus/"
@@ -52,7 +53,7 @@ for t in "${targets[@]}"; do
   set +e
   # -fork would add parallel jobs; one process keeps the figures comparable run to run.
   (cd "$out/$t" && ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 \
-     "$OLDPWD/$bin" "$corpus" -max_total_time="$FUZZ_TIME" -rss_limit_mb="$FUZZ_RSS_MB" \
+     "$bin" "$corpus" -max_total_time="$FUZZ_TIME" -rss_limit_mb="$FUZZ_RSS_MB" \
      -malloc_limit_mb="$FUZZ_MALLOC_MB" -timeout="$FUZZ_TIMEOUT" -max_len="$FUZZ_MAX_LEN" \
      -print_final_stats=1 -artifact_prefix="$out/$t/" >"$log" 2>&1)
   rc=$?
