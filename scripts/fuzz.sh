@@ -26,7 +26,7 @@ if ! command -v clang >/dev/null; then
   exit 1
 fi
 cmake -S . -B "$FUZZ_BUILD" -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTHORAX_FUZZ=ON >/dev/null
-cmake --build "$FUZZ_BUILD" -j "$JOBS" 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
+cmake --build "$FUZZ_BUILD" -j "$JOBS" 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|^g?make\[' || true
 
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
