@@ -19,6 +19,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -645,6 +646,106 @@ static void test_errors(void)
  * check fails (duplicate nodes), so the import is refused; with force it is
  * returned, marked. A region touching the boundary gives no surface of its
  * own (recorded). */
+/* Issue 11: counts, sizes and integers of a file never trusted beyond what it holds; nothing
+ * half-read. Each case failed on the code before (leaks, undefined behaviour, a heap overflow
+ * or a wrong number in the message). */
+static void write_bytes(const char *name, const void *data, size_t n)
+{
+    FILE *f = fopen(tl_path(name), "wb");
+    CHECK(f && fwrite(data, 1, n, f) == n && fclose(f) == 0);
+}
+
+static void put_be(unsigned char **p, uint64_t v, int bytes)
+{
+    for (int k = bytes - 1; k >= 0; k--) *(*p)++ = (unsigned char)(v >> (8 * k));
+}
+
+static void test_bounded(void)
+{
+    char buf[2048];
+    /* a second section (the first one leaked) */
+    snprintf(buf, sizeof buf, "%sPOINTS 1 float\n0 0 0\n", vtk_head);
+    expect_error("b1.vtk", buf, ":7:", "a second POINTS section");
+    snprintf(buf, sizeof buf, "%sCELLS 1 5\n4 0 1 2 3\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n", vtk_head);
+    expect_error("b2.vtk", buf, ":9:", "a second CELLS section");
+    /* classic CELLS: the cell count cannot exceed its entries (allocated before) */
+    snprintf(buf, sizeof buf, "%sCELLS 2147483647 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n", vtk_head);
+    expect_error("b3.vtk", buf, ":7:", "CELLS: 2147483647 cells cannot fit in 5 entries");
+    /* huge indices: quoted as written, no float-to-integer conversion */
+    snprintf(buf, sizeof buf, "%sCELLS 1 5\n4 0 1 2 9223372036854775807\nCELL_TYPES 1\n10\n", vtk_head);
+    expect_error("b4.vtk", buf, ":8:", "CELLS value 5: \"9223372036854775807\" is out of range -2147483648..2147483647");
+    snprintf(buf, sizeof buf, "%sCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n1099511627776\n", vtk_head);
+    expect_error("b5.vtk", buf, ":10:", "CELL_TYPES value 1: \"1099511627776\" is out of range");
+    /* a value of a skipped array is read too */
+    snprintf(buf, sizeof buf, "%sCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS p float 1\n"
+             "LOOKUP_TABLE default\n0 0 x 0\n", vtk_head);
+    expect_error("b6.vtk", buf, ":14:", "SCALARS \"p\" value 3: \"x\" is not a finite number");
+    /* NUL bytes */
+    {
+        static const char t[] = "0 0 0\n1 0 0\n0 1 0\n\0" "0 0 1\n";
+        write_bytes("b7.pts", t, sizeof t - 1);
+        tl_write_text(tl_path("b7.tet"), "1 2 3 4\n");
+        expect_error("b7.pts", NULL, ":4:", "NUL byte at byte 18");
+    }
+    /* a negative node number, named as written */
+    tl_write_text(tl_path("b8.pts"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    expect_error("b8.tet", "1 2 3 4\n1 2 -3 4\n", ":2:", "element 2: node number -3 is negative");
+    /* .msh: a second $Nodes (the first leaked) */
+    expect_error("b9.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1 1 1\n0 1 0 1\n1\n0 0 0\n$EndNodes\n"
+                 "$Nodes\n", ":10:", "a second $Nodes section");
+    /* binary VTK: a 64-bit index beyond 2^53 with its exact value */
+    for (int pass = 0; pass < 2; pass++) {
+        unsigned char bin[1024], *p = bin;
+        const char *h = "# vtk DataFile Version 5.1\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n";
+        memcpy(p, h, strlen(h)), p += strlen(h);
+        const double xyz[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+        for (int i = 0; i < 12; i++) {
+            uint64_t u;
+            memcpy(&u, &xyz[i], 8);
+            put_be(&p, u, 8);
+        }
+        const char *h2 = "\nCELLS 2 4\nOFFSETS vtktypeint64\n";
+        memcpy(p, h2, strlen(h2)), p += strlen(h2);
+        put_be(&p, 0, 8), put_be(&p, 4, 8);
+        const char *h3 = "\nCONNECTIVITY vtktypeint64\n";
+        memcpy(p, h3, strlen(h3)), p += strlen(h3);
+        put_be(&p, 0, 8), put_be(&p, 1, 8), put_be(&p, 2, 8);
+        put_be(&p, pass ? 0x7fffffffffffffffull : 0xfffffffffffffffdull, 8); /* 2^63 - 1, or -3 */
+        const char *h4 = "\nCELL_TYPES 1\n";
+        memcpy(p, h4, strlen(h4)), p += strlen(h4);
+        put_be(&p, 10, 4);
+        *p++ = '\n';
+        write_bytes(pass ? "b11.vtk" : "b10.vtk", bin, (size_t)(p - bin));
+        if (pass) expect_error("b11.vtk", NULL, ": byte ", "CONNECTIVITY value 4: integer 9223372036854775807 is beyond +-2^53");
+        else expect_error("b10.vtk", NULL, ":", "cell 0 (0-based): point number -3 out of range");
+    }
+    /* VTU zlib: a UInt64 header whose block sizes wrap around 2^64 to the array's size (the old
+     * reader then decompressed a block into a buffer far too small) */
+    {
+        static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        unsigned char hdr[48], *p = hdr;
+        for (int i = 0; i < 6; i++) {
+            const uint64_t v[6] = {3, 1ull << 63, 48, 8, 8, 8};
+            for (int k = 0; k < 8; k++) *p++ = (unsigned char)(v[i] >> (8 * k)); /* little-endian */
+        }
+        char enc[80];
+        size_t e = 0;
+        for (size_t i = 0; i < sizeof hdr; i += 3) {
+            uint32_t w = (uint32_t)hdr[i] << 16 | (uint32_t)hdr[i + 1] << 8 | hdr[i + 2];
+            for (int k = 3; k >= 0; k--) enc[e++] = b64[(w >> (6 * k)) & 63];
+        }
+        enc[e] = '\0';
+        snprintf(buf, sizeof buf,
+                 "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                 "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">\n<UnstructuredGrid>\n"
+                 "<Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n<Points>\n"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">\n%sAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA\n"
+                 "</DataArray>\n</Points>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n", enc);
+        expect_error("b12.vtu", buf, ":6:", "Points: compressed header (3 blocks of 9223372036854775808 bytes, the last 48) "
+                     "inconsistent with the 48 bytes expected");
+    }
+}
+
 static void test_policy(void)
 {
     thx_volume_import_info in;
@@ -700,6 +801,7 @@ int main(void)
     test_msh();
     test_round_trip();
     test_errors();
+    test_bounded();
     test_policy();
     int rc = tl_scratch_finish("test_import_volume");
     thx_ctx_destroy(&ctx);

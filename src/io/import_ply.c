@@ -253,8 +253,8 @@ thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_in
     }
     /* nothing may follow the last item of the last element */
     if (s.binary && c->pos < len) {
-        st = fail(b, at_byte(c->pos), "%zu bytes after the last element's data (the header declares fewer items "
-                  "than the file holds)", len - c->pos);
+        st = fail(b, at_byte(c->pos), "%zu byte%s after the last element's data (the header declares fewer items "
+                  "than the file holds)", len - c->pos, len - c->pos == 1 ? "" : "s");
         goto done;
     }
     if (!s.binary) {
