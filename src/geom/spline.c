@@ -223,7 +223,9 @@ thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n_in, dou
         parts[e] = n0 < 5 ? 5 : 1;
         nbuf += (size_t)(pd > 1 ? pd : 1) * (size_t)(n0 < 5 ? 5 : 1); /* the most knots the loop below can make */
     }
-    if (nbuf > (size_t)1 << 26) { free(parts); return thx_error(ctx, THX_EINPUT, "loop needs %zu knots at spacing %g mm: too many", nbuf, spacing); }
+    /* A loop a million node spacings long is not a body outline (a coordinate typed wrong): refused
+     * before its knots are allocated (at most 2^20 knots, 60 MB). */
+    if (nbuf > (size_t)1 << 20) { free(parts); return thx_error(ctx, THX_EINPUT, "loop needs %zu knots at spacing %g mm: too long for that spacing", nbuf, spacing); }
     double *mem = thx_calloc(ctx, nbuf * 7 + 8, sizeof *mem);
     cyc_chol C = {0, thx_calloc(ctx, nbuf * (BW + 1), sizeof(double)), thx_calloc(ctx, nbuf * BW, sizeof(double))};
     int *edge_of = thx_malloc(ctx, nbuf * sizeof *edge_of); /* knot interval -> digitized edge (in ccw order) */
@@ -346,6 +348,7 @@ thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n_in, dou
     }
     double L = cum[n];
     double s0 = cum[best_i] + seg_len(&S, best_i, best_a);
+    if (!(L / spacing < (double)(1 << 20))) { free(cum); st = thx_error(ctx, THX_EINPUT, "loop is %g mm long: too long for spacing %g mm", L, spacing); goto done; }
     long N = lround(L / spacing);
     if (N < 3) N = 3;
     thx_vec2 *res = thx_malloc(ctx, (size_t)N * sizeof *res);
