@@ -5,6 +5,7 @@
 # file and line, a non-zero exit, and no output directory.
 # Environment: THORAX = the CLI, WORK = a scratch directory (created here).
 set -u
+shopt -s lastpipe # `printf ... | bad_input ...` runs bad_input in this shell, so its failures count
 : "${THORAX:?set THORAX to the thorax executable}"
 : "${WORK:?set WORK to a scratch directory}"
 PY=/usr/bin/python3
@@ -55,11 +56,12 @@ OMP_NUM_THREADS=1 "$THORAX" surfaces "$WORK/c_medium.txt" -o "$WORK/m_one" -q &&
 "$THORAX" surfaces "$WORK/c_medium.txt" -o "$WORK/m_grid" --cap grid --cap-grid 6 -q && "$THORAX" check "$WORK/m_grid" -q && ok "--cap grid 6" || bad "--cap grid"
 
 # ---- bad input --------------------------------------------------------------
-# bad_input NAME EXPECTED_MESSAGE_REGEX: the contour text comes on stdin
+# bad_input NAME EXPECTED_MESSAGE_REGEX [OPTIONS...]: the contour text comes on stdin
 bad_input() {
     local name=$1 want=$2 f="$WORK/bad_$1.txt" out="$WORK/bad_$1_model"
+    shift 2
     cat > "$f"
-    "$THORAX" surfaces "$f" -o "$out" > "$WORK/bad.out" 2> "$WORK/bad.err"
+    "$THORAX" surfaces "$f" -o "$out" "$@" > "$WORK/bad.out" 2> "$WORK/bad.err"
     local rc=$?
     if [ $rc -eq 0 ]; then bad "$name: accepted"; return; fi
     if [ -e "$out" ] || ls "$WORK" | grep -q "bad_${name}_model.tmp"; then bad "$name: left output behind"; fi
@@ -71,24 +73,32 @@ SQ='0 0
 10 0
 10 10
 0 10'
-printf '%s\nlayer 0\nloop s\n0 0\n10 0\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input few_points 'bad_few_points.txt:4: surface "s" layer 1 \(z=0\): loop has 2 points'
-printf '%s\nlayer 0\nloop s\n0 0\n10 0\n10 0\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input duplicate 'bad_duplicate.txt:7: surface "s" layer 1 \(z=0\): point 3 repeats point 2'
-printf '%s\nlayer 0\nloop s\n0 0\n10 10\n10 0\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input self_intersecting 'bad_self_intersecting.txt:[0-9]+: surface "s" layer 1 \(z=0\): loop intersects itself'
-printf '%s\nlayer 0\nloop s\n0 0\nnan 0\n10 10\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input nan 'bad_nan.txt:6: surface "s" layer 1 \(z=0\): point 2 is not finite'
-printf '%s\nlayer 0\nloop s\n0 0\ninf 0\n10 10\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input inf 'bad_inf.txt:6: .*not finite'
+printf '%s\nlayer 0\nloop s\n0 0\n10 0\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input few_points 'bad_few_points.txt:4: surface "s" layer 1 \(z=0\) loop 1: loop has 2 points'
+printf '%s\nlayer 0\nloop s\n0 0\n10 0\n10 0\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input duplicate 'bad_duplicate.txt:7: surface "s" layer 1 \(z=0\) loop 1: the point repeats the point before .*refused: --strict' --strict
+printf '%s\nlayer 0\nloop s\n0 0\n10 10\n10 0\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input self_intersecting 'bad_self_intersecting.txt:[0-9]+: surface "s" layer 1 \(z=0\) loop 1: loop intersects itself'
+printf '%s\nlayer 0\nloop s\n0 0\nnan 0\n10 10\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input nan "bad_nan.txt:6: surface \"s\" layer 1 \\(z=0\\) loop 1: 'nan' is neither a keyword nor a finite decimal number"
+printf '%s\nlayer 0\nloop s\n0 0\ninf 0\n10 10\n0 10\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input inf "bad_inf.txt:6: .*'inf' is neither a keyword nor a finite decimal number"
 printf '%s\nlayer 5\nloop s\n%s\nlayer 0\nloop s\n%s\nlayer 10\nloop s\n%s\nend\n' "$HEAD" "$SQ" "$SQ" "$SQ" | bad_input out_of_order 'bad_out_of_order.txt:15: layer z=10 is out of order'
 printf '%s\nlayer 0\nloop s\n%s\nlayer 0\nloop s\n%s\nend\n' "$HEAD" "$SQ" "$SQ" | bad_input duplicated_layer 'bad_duplicated_layer.txt:9: layer z=0 duplicates the layer at line 3'
 printf 'thorax-contours 1\nsurface s other\nsurface t other\nlayer 0\nloop s\n%s\nloop t\n%s\nlayer 5\nloop t\n%s\nlayer 10\nloop s\n%s\nloop t\n%s\nend\n' "$SQ" "$SQ" "$SQ" "$SQ" "$SQ" | bad_input vanishes 'bad_vanishes.txt:[0-9]+: surface "s" vanishes at z=5 and reappears at z=10'
 printf '%s\nlayer 0\nloop s\n%s\nlayre 5\nend\n' "$HEAD" "$SQ" | bad_input unknown_keyword "bad_unknown_keyword.txt:9: unknown keyword 'layre'"
-printf '%s\nlayer 0\nloop s\n%s\nlayer 5\nloop s\n0 0\n10 0\n10 1' "$HEAD" "$SQ" | bad_input truncated "bad_truncated.txt:[0-9]+: truncated file \(no 'end' line\)"
+printf '%s\nlayer 0\nloop s\n%s\nlayer 5\nloop s\n0 0\n10 0\n10 1' "$HEAD" "$SQ" | bad_input truncated "bad_truncated.txt:[0-9]+: truncated file: surface \"s\" layer 2 loop 1 is cut short \\(no 'end' line\\)"
 printf '' | bad_input empty 'bad_empty.txt: empty file'
 printf '# only a comment\n\n' | bad_input comments_only 'bad_comments_only.txt: empty file'
 printf 'thorax-contours 2\nend\n' | bad_input version 'bad_version.txt:1: not a thorax contour file'
-printf '%s\nlayer 0\nloop s\n0 0 0\nend\n' "$HEAD" | bad_input three_numbers "bad_three_numbers.txt:5: a point is two numbers 'x y'"
+printf '%s\nlayer 0\nloop s\n0 0 0\nend\n' "$HEAD" | bad_input three_numbers "bad_three_numbers.txt:5: surface \"s\" layer 1 \\(z=0\\) loop 1 point 1: a point is two finite decimal numbers 'x y'"
 printf '%s\nlayer 0\nloop lung\n%s\nend\n' "$HEAD" "$SQ" | bad_input undeclared 'bad_undeclared.txt:4: loop of undeclared surface "lung"'
 printf 'thorax-contours 1\nsurface s liver\nend\n' | bad_input role "bad_role.txt:2: surface \"s\": unknown role 'liver'"
 printf '%s\nlayer 0\nloop s\n%s\nend\n' "$HEAD" "$SQ" | bad_input one_layer 'bad_one_layer.txt:2: surface "s" is digitized on only one layer'
 printf '%s\nlayer 0\nloop s\n%s\nlayer 5\nloop s\n%s\nloop s\n100 100\n101 100\n101 101\nlayer 10\nloop s\n%s\nend\n' "$HEAD" "$SQ" "$SQ" "$SQ" | bad_input island 'bad_island.txt:15: surface "s" layer 2 \(z=5\): the loop overlaps no loop of the layers above and below'
+# repaired, not refused (issue 11 item 6): a repeated point and a closing point are dropped and reported
+printf '%s\nlayer 0\nloop s\n0 0\n10 0\n10 0\n0 10\n0 0\nlayer 5\nloop s\n%s\nend\n' "$HEAD" "$SQ" > "$WORK/repair.txt"
+if "$THORAX" surfaces "$WORK/repair.txt" -o "$WORK/m_repair" > /dev/null 2> "$WORK/repair.err" && "$THORAX" check "$WORK/m_repair" -q &&
+    grep -q 'repair.txt:7: surface "s" layer 1 (z=0) loop 1: the point repeats the point before (10, 0): merged into one' "$WORK/repair.err" &&
+    grep -q 'repair.txt:9: surface "s" layer 1 (z=0) loop 1: the last point (5) repeats the first point (0, 0): dropped' "$WORK/repair.err" &&
+    ! grep -q 'intersects' "$WORK/repair.err"; then ok "repeated and closing points repaired and reported"
+else bad "repair: $(cat "$WORK/repair.err")"; fi
+"$THORAX" surfaces "$WORK/c_medium.txt" -o "$WORK/x" --merge-tol -1 2> /dev/null; [ $? -eq 2 ] && ok "bad --merge-tol: usage error" || bad "bad --merge-tol"
 # a missing file and usage errors
 "$THORAX" surfaces "$WORK/does_not_exist.txt" -o "$WORK/x" 2> "$WORK/err" ; rc=$?
 [ $rc -eq 1 ] && grep -q "does_not_exist.txt: cannot open" "$WORK/err" && ok "missing file" || bad "missing file (exit $rc)"

@@ -149,9 +149,14 @@ static thx_status merge_near(job *j, int *changed)
             c.y /= (double)(e - i);
             int l0 = line_of(j, i), l1 = line_of(j, e - 1);
             if (far == 0)
-                THX_CHECK(report(j, line_of(j, i + 1), "%zu point%s (lines %d-%d) repeat%s the point before (%g, %g): merged into one",
-                                 e - i - 1, e - i > 2 ? "s" : "", line_of(j, i + 1), l1, e - i > 2 ? "" : "s",
-                                 lp->p[i].x, lp->p[i].y));
+            {
+                if (e - i == 2)
+                    THX_CHECK(report(j, line_of(j, i + 1), "the point repeats the point before (%g, %g): merged into one",
+                                     lp->p[i].x, lp->p[i].y));
+                else
+                    THX_CHECK(report(j, line_of(j, i + 1), "%zu points (lines %d-%d) repeat the point before (%g, %g): merged into one",
+                                     e - i - 1, line_of(j, i + 1), l1, lp->p[i].x, lp->p[i].y));
+            }
             else
                 THX_CHECK(report(j, l0,
                                  "%zu near-coincident points (lines %d-%d, %.3g mm apart, within the merge tolerance "

@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "thorax/fileio.h"
 #include "thorax/predicates.h"
@@ -535,7 +536,8 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             if (next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: unexpected text after 'end'", name, line); goto done; }
             if (n_layers > 0 && layer_loops == 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: layer %d (z=%g) has no loops", name, layer_line, n_layers, layer_z); goto done; }
             seen_end = 1;
-        } else if (was_in_loop && strlen(kw) < 40) {
+        } else if (was_in_loop && (strncasecmp(kw, "nan", 3) == 0 || strncasecmp(kw, "inf", 3) == 0 ||
+                                   strncasecmp(kw, "-nan", 4) == 0) && strlen(kw) < 40) {
             st = thx_error(ctx, THX_EINPUT,
                            "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: '%s' is neither a keyword nor a finite "
                            "decimal number (a point is two numbers 'x y')",
