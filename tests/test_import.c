@@ -748,7 +748,7 @@ static void test_bounded(void)
     thx_surface *s = NULL;
     double t0 = seconds_now();
     CHECK_OK(ctx, thx_surface_read_file(ctx, tl_path("empty-elem.ply"), NULL, THX_IMPORT_AUTO, "skin", THX_ROLE_OUTER, &s, NULL));
-    CHECK(seconds_now() - t0 < 0.5);
+    CHECK(seconds_now() - t0 < 2.0);
     CHECK(s && s->n_nodes == 3 && s->n_tris == 1);
     thx_surface_destroy(&s);
     /* a PLY element count the data cannot hold: refused from the size */
@@ -756,7 +756,7 @@ static void test_bounded(void)
              "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", ply_head);
     t0 = seconds_now();
     expect_error("big-face.ply", buf, "7:", "element \"face\": 2147483647 items declared, but the 9 bytes of data left");
-    CHECK(seconds_now() - t0 < 0.5);
+    CHECK(seconds_now() - t0 < 2.0);
     /* a .tri claiming 2^31 - 1 triangles: refused from the size at once (it took 8 s) */
     t0 = seconds_now();
     expect_error("big.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n2147483647\n1 1 2 3\n", "5:",
@@ -764,7 +764,7 @@ static void test_bounded(void)
     expect_error("big-om.tri", "- 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n- 2147483647\n0 1 2\n", "5:",
                  "2147483647 triangles declared");
     expect_error("big-nodes.tri", "2147483647\n1 0 0 0\n", "1:", "2147483647 nodes declared");
-    CHECK(seconds_now() - t0 < 0.5);
+    CHECK(seconds_now() - t0 < 2.0);
     /* huge indices: no signed overflow (x - base), reported as written */
     expect_error("huge1.tri", "3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n1\n1 1 2 -9223372036854775808\n", "6:",
                  "node number -9223372036854775808 out of range 1..3");
