@@ -25,6 +25,7 @@ typedef struct {
     char (*name)[32];   /* electrode names: "RA", "LA", "LL", "V1".."V6", "A001".. */
     int32_t *node;      /* node on that surface, 0-based */
     double *xyz;        /* 3 n: the node's position, mm */
+    char path[512];     /* the file it was read from (thx_electrodes_read; "" otherwise): checks name it */
 } thx_electrodes;
 
 thx_status thx_electrodes_create(thx_ctx *ctx, size_t n, thx_electrodes **out);

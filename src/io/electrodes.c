@@ -377,6 +377,7 @@ thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **
 done:
     free(text);
     if (st != THX_OK) thx_electrodes_destroy(&e);
+    if (e) snprintf(e->path, sizeof e->path, "%s", path);
     *out = e;
     return st;
 }
@@ -385,6 +386,9 @@ done:
 
 thx_status thx_electrodes_check(thx_ctx *ctx, const thx_electrodes *e, const thx_model *m)
 {
+    /* messages name the file the set came from, when it came from one */
+    char fp[sizeof e->path + 2] = "";
+    if (e->path[0]) snprintf(fp, sizeof fp, "%s: ", e->path);
     THX_CHECK(check_set(ctx, e, ""));
     if (!m) return thx_error(ctx, THX_EINPUT, "electrodes: no model to check them against");
     const thx_surface *s = NULL;
@@ -395,20 +399,20 @@ thx_status thx_electrodes_check(thx_ctx *ctx, const thx_electrodes *e, const thx
         size_t off = 0;
         for (size_t k = 0; k < m->n_surfaces && off < sizeof list; k++)
             off += (size_t)snprintf(list + off, sizeof list - off, "%s%s", k ? ", " : "", m->surf[k]->name);
-        return thx_error(ctx, THX_EINPUT, "the electrodes' surface \"%s\" is not in the model (surfaces: %s)",
-                         e->surface, m->n_surfaces ? list : "none");
+        return thx_error(ctx, THX_EINPUT, "%sthe electrodes' surface \"%s\" is not in the model (surfaces: %s)",
+                         fp, e->surface, m->n_surfaces ? list : "none");
     }
     for (size_t i = 0; i < e->n; i++) {
         if ((size_t)e->node[i] >= s->n_nodes)
-            return thx_error(ctx, THX_EINPUT, "electrode %zu (\"%s\"): node %d is not on surface \"%s\" (nodes 1..%zu)",
-                             i + 1, e->name[i], (int)e->node[i] + 1, s->name, s->n_nodes);
+            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is not on surface \"%s\" (nodes 1..%zu)",
+                             fp, i + 1, e->name[i], (int)e->node[i] + 1, s->name, s->n_nodes);
         const double *a = e->xyz + 3 * i, *b = s->xyz + 3 * (size_t)e->node[i];
         double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
         if (!(d <= POS_TOL_MM))
             return thx_error(ctx, THX_EINPUT,
-                             "electrode %zu (\"%s\"): position (%.6f, %.6f, %.6f) is %.3g mm from node %d of surface "
+                             "%selectrode %zu (\"%s\"): position (%.6f, %.6f, %.6f) is %.3g mm from node %d of surface "
                              "\"%s\" at (%.6f, %.6f, %.6f) (tolerance %g mm)",
-                             i + 1, e->name[i], a[0], a[1], a[2], d, (int)e->node[i] + 1, s->name, b[0], b[1], b[2],
+                             fp, i + 1, e->name[i], a[0], a[1], a[2], d, (int)e->node[i] + 1, s->name, b[0], b[1], b[2],
                              POS_TOL_MM);
     }
     return THX_OK;

@@ -22,7 +22,7 @@ ROWS = [b"%s %d %s" % (n, i % 6 + 1, POS[i % 6 + 1]) for i, n in enumerate(NAMES
 HEAD = [b"thorax-electrodes 1", b"surface torso", b"count 9"]
 GOOD_E = b"\n".join(HEAD + ROWS + [b"end", b""])
 # Checks against the model (a node past the surface, a position away from its node, an unknown
-# surface) are thx_electrodes_check's, whose messages name the electrode but not the file: not here.
+# surface) name the file and the electrode: "e.txt: electrode N".
 ARGV = ["leads", "sol", "--twelve", "e.txt", "-o", "out", "-q"]
 
 
@@ -74,4 +74,8 @@ CASES = [
     bad("count before surface twice", lines(head=HEAD + [b"count 9"])),
     bad("wrong version", lines(head=[b"thorax-electrodes 2"] + HEAD[1:])),
     bad("empty file", b"", where=r"e\.txt:\d+: "),
+    bad("a node past the model's surface (6 nodes)", row(0, b"RA 7 " + POS[1]), where=r"e\.txt: electrode 1 "),
+    bad("a position 0.5 mm from its node", row(1, b"LA 2 -1.500000 0.000000 0.000000"), where=r"e\.txt: electrode 2 "),
+    bad("a surface the model does not have", lines(head=[HEAD[0], b"surface heart", HEAD[2]]),
+        where=r"e\.txt: the electrodes' surface \"heart\""),
 ]
