@@ -163,14 +163,14 @@ static void test_frame(thx_ctx *ctx)
     CHECK_OK(ctx, thx_contours_parse(ctx, "c.txt", t, strlen(t), &c));
     if (!c) return;
     CHECK(c->frame.set && c->frame.up.axis == 1 && c->frame.up.sign == -1 && c->frame.front.axis == 2 && c->frame.front.sign == 1);
-    char path[] = "/tmp/thorax-test-repair.XXXXXX";
-    int fd = mkstemp(path);
-    CHECK(fd >= 0);
-    close(fd);
+    char dir[] = "/tmp/thorax-test-repair.XXXXXX", path[64];
+    CHECK(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/c.txt", dir); /* a new file: the writer replaces only its own */
     CHECK_OK(ctx, thx_contours_write(ctx, c, path, "test"));
     CHECK_OK(ctx, thx_contours_read(ctx, path, &r));
     if (r) CHECK(r->frame.set && r->frame.up.axis == 1 && r->frame.up.sign == -1 && r->frame.front.axis == 2);
     remove(path);
+    rmdir(dir);
     thx_contours_destroy(&r);
     thx_contours_destroy(&c);
     const char *none = "thorax-contours 1\nsurface s outer\nlayer 0\nloop s\n0 0\n1 0\n0 1\nend\n";
