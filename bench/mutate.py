@@ -112,7 +112,7 @@ def main():
             return 1
         # The unmutated tree must pass every test a mutant uses, or a kill means nothing.
         regex = "|".join(sorted({m["tests"] for m in muts}))
-        r = run(["ctest", "-R", regex, "-j", jobs, "--timeout", "600"], build)
+        r = run(["ctest", "-R", regex, "-j", jobs, "--timeout", "1800"], build)
         if r.returncode:
             print("the unmutated tree fails its tests:\n" + r.stdout[-3000:])
             return 1
@@ -129,7 +129,7 @@ def main():
                 broke += 1
                 res, who = "build", "does not compile"
             else:
-                r = run(["ctest", "-R", m["tests"], "-j", jobs, "--timeout", "600"], build)
+                r = run(["ctest", "-R", m["tests"], "-j", jobs, "--timeout", "1800"], build)
                 failed = re.findall(r"\d+ - (\S+) \(", r.stdout)
                 if r.returncode and failed:
                     killed += 1
