@@ -137,4 +137,15 @@ cmp -s ant.png ant_zy.png && fail "the framed model's anterior view is the +z/+y
 cmp -s left.png left_explicit.png || fail "left view / anterior clip differ from the explicit frame"
 "$THORAX" render dal --up +z --front +y --size 200x200 -o override.png -q
 cmp -s override.png ant_zy.png || fail "--up/--front on render do not override the model's frame"
+# the lacing start point follows the contours' frame: anterior in the contour plane, else superior
+start_of() { $PY -c "import json,sys; print(json.load(open(sys.argv[1] + '/model.json'))['provenance']['options']['start_point_mm'])" "$1"; }
+"$THORAX" phantom -o ph.txt -q
+sed 's/^frame +z +y$/frame +z -x/' ph.txt > ph_x.txt
+grep -qx "frame +z -x" ph_x.txt || fail "could not set the phantom's frame line"
+"$THORAX" surfaces ph.txt -o ph_m -q && [ "$(start_of ph_m)" = "[0, 1000]" ] || fail "RAS contours: start $(start_of ph_m), not [0, 1000]"
+"$THORAX" surfaces ph_x.txt -o ph_xm -q && [ "$(start_of ph_xm)" = "[-1000, 0]" ] || fail "anterior -x: start $(start_of ph_xm), not [-1000, 0]"
+"$THORAX" slice dal --spacing 20 -o dal_c.txt -q && grep -qx "frame -y -z" dal_c.txt || fail "the Dalhousie slices do not carry its frame"
+"$THORAX" surfaces dal_c.txt -o dal_cm -q && [ "$(start_of dal_cm)" = "[0, -1000]" ] ||
+    fail "Dalhousie slices (anterior across the planes): start $(start_of dal_cm), not superior [0, -1000]"
+"$THORAX" surfaces ph_x.txt --start 5,6 -o ph_sm -q && [ "$(start_of ph_sm)" = "[5, 6]" ] || fail "--start does not override the frame"
 echo "e2e_frame: ok"

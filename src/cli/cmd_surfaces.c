@@ -24,8 +24,9 @@ static void help(void)
            "  --spacing MM          node spacing along the layers (default: the file's\n"
            "                        'spacing' line, else 5)\n"
            "  --smoothing MM        spline smoothing bandwidth (default 2; 0 = interpolate)\n"
-           "  --start X,Y           anatomical start point of every loop (default 0,1000:\n"
-           "                        the anterior midline)\n"
+           "  --start X,Y           anatomical start point of every loop (default: 1000 mm\n"
+           "                        anterior in the plane by the contours' frame, 0,1000\n"
+           "                        without one: the anterior midline)\n"
            "  --cap polygon|grid    end-cap method for all surfaces (default: per surface,\n"
            "                        from the contour file)\n"
            "  --cap-grid MM         grid spacing of grid caps (default: per surface, else\n"
@@ -58,6 +59,7 @@ int cmd_surfaces(int argc, char **argv)
     const char *in = NULL, *outdir = NULL;
     int verbose = 0, want_stats = 0, strict = 0;
     double merge_tol = -1, untangle_tol = -1;
+    int start_given = 0;
     thx_surfaces_opts o;
     thx_surfaces_opts_default(&o);
     for (int i = 1; i < argc; i++) {
@@ -69,6 +71,7 @@ int cmd_surfaces(int argc, char **argv)
         else if (!strcmp(a, "--smoothing")) { if (cli_parse_double("surfaces", a, v, &o.smoothing)) return 2; i++; if (o.smoothing < 0) return cli_usage_error("surfaces", "--smoothing must be >= 0"); }
         else if (!strcmp(a, "--start")) {
             if (!v || sscanf(v, "%lf,%lf", &o.start.x, &o.start.y) != 2) return cli_usage_error("surfaces", "--start needs X,Y");
+            start_given = 1;
             i++;
         } else if (!strcmp(a, "--cap")) {
             if (!v) return cli_usage_error("surfaces", "--cap needs polygon or grid");
@@ -122,6 +125,14 @@ int cmd_surfaces(int argc, char **argv)
         st = thx_contours_repair(ctx, c, &ro, &rlog);
     }
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
+    /* The lacing start point (paper 3.2, step 1: the anterior midline) follows the contours'
+     * frame: 1000 mm anterior in the contour plane, or superior when the contours are stacked
+     * along the anterior axis (no anterior direction in their plane); --start overrides. */
+    if (!start_given && c->frame.set) {
+        thx_axis ax = c->frame.front.axis != 2 ? c->frame.front : c->frame.up;
+        o.start.x = ax.axis == 0 ? 1000.0 * ax.sign : 0;
+        o.start.y = ax.axis == 1 ? 1000.0 * ax.sign : 0;
+    }
     double t_read = thx_wtime() - t0;
     per = calloc(c->n_surfaces, sizeof *per);
     if (!per) { rc = 1; goto done; }
