@@ -13,6 +13,7 @@ import os
 import sys
 import numpy as np
 
+sys.dont_write_bytecode = True  # nothing written into the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from surface_compare_lib import point_triangle_distance  # noqa: E402
 
