@@ -28,6 +28,8 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 sys.dont_write_bytecode = True  # nothing written into the source tree (tests/tree_clean.sh)
 
@@ -69,6 +71,33 @@ def run(thorax, d, argv):
     return p.returncode, p.stderr.decode("utf-8", "replace").strip()
 
 
+_good_cache = {}
+_good_lock = threading.Lock()
+
+
+def good_output(thorax, c, g):
+    """Fills the empty directory g with the valid base files and the output the command makes
+    from them (made once per base and command line, then copied); returns an error or None."""
+    h = hashlib.sha256("\0".join(c.argv).encode())
+    for n in sorted(c.good):
+        h.update(n.encode() + b"\0" + hashlib.sha256(c.good[n]).digest())
+    key = h.hexdigest()
+    with _good_lock:
+        if key not in _good_cache:
+            t = tempfile.mkdtemp(prefix="thorax-goodbase.")
+            for n, b in c.good.items():
+                os.makedirs(os.path.dirname(os.path.join(t, n)) or t, exist_ok=True)
+                with open(os.path.join(t, n), "wb") as fh:
+                    fh.write(b)
+            rc0, msg0 = run(thorax, t, c.argv)
+            _good_cache[key] = (t, None if rc0 == 0 else (msg0.splitlines()[0] if msg0 else f"exit {rc0}"))
+        t, err = _good_cache[key]
+    if err:
+        return err
+    shutil.copytree(t, g, symlinks=True, dirs_exist_ok=True)
+    return None
+
+
 def check_case(thorax, c):
     """Returns (ok, message, problems)."""
     problems = []
@@ -90,13 +119,9 @@ def check_case(thorax, c):
         # An existing output, made from the valid files, stays as it was.
         if c.out and c.good is not None and not problems:
             with tempfile.TemporaryDirectory(prefix="thorax-good.") as g:
-                for n, b in c.good.items():
-                    os.makedirs(os.path.dirname(os.path.join(g, n)) or g, exist_ok=True)
-                    with open(os.path.join(g, n), "wb") as fh:
-                        fh.write(b)
-                rc0, msg0 = run(thorax, g, c.argv)
-                if rc0 != 0:
-                    problems.append(f"the valid base fails: {msg0.splitlines()[0] if msg0 else rc0}")
+                err = good_output(thorax, c, g)
+                if err:
+                    problems.append(f"the valid base fails: {err}")
                 else:
                     before = tree_digest(os.path.join(g, c.out))
                     for n, b in c.files.items():
@@ -141,8 +166,12 @@ def main():
     failed = 0
     rows = []
     per_fmt = {}
-    for c in cases:
-        ok, first, problems = check_case(thorax, c)
+    # two cases at a time: each is a few short thorax runs; the valid bases are made once
+    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as ex:
+        results = list(ex.map(lambda c: check_case(thorax, c), cases))
+    for t, _ in _good_cache.values():
+        shutil.rmtree(t, ignore_errors=True)
+    for c, (ok, first, problems) in zip(cases, results):
         per_fmt[c.fmt] = per_fmt.get(c.fmt, 0) + 1
         if not ok:
             failed += 1
