@@ -113,6 +113,16 @@ grep -q "other settings" other.log || { cat other.log; fail "no notice of the re
 n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 anim/animation.mp4)
 codec=$(ffprobe -v error -select_streams v:0 -show_entries stream=codec_name -of csv=p=0 anim/animation.mp4)
 [ "$n" = 6 ] && [ "$codec" = h264 ] || fail "mp4: $n frames, codec $codec"
+# the movie is thorax's own (its metadata comment, in the header by +faststart); a user's movie of
+# that name stops the run before any frame is drawn, and is left as it was
+head -c 4194304 anim/animation.mp4 | grep -q "thorax-movie" || fail "the movie carries no signature in its header"
+printf 'my holiday video' > anim/mine.mp4
+if "$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --fps 10 -o anim --mp4 anim/mine.mp4 -q 2> mine.err; then
+    fail "animate replaced a user's movie"
+fi
+grep -q "is not thorax's own output of this kind" mine.err || { cat mine.err; fail "the refusal does not say why"; }
+[ "$(cat anim/mine.mp4)" = "my holiday video" ] || fail "the user's movie changed"
+ls anim | grep -q "\.tmp" && fail "a temporary file was left in anim/"
 
 # bad input
 refused() { local what=$1 file=$2; shift 2

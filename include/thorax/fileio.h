@@ -50,6 +50,9 @@ thx_status thx_atomic_open_output(thx_ctx *ctx, const char *path, const void *ma
  * (libpng, libmatio, ffmpeg) and commit by thx_output_place. */
 thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
                             const char *const *inputs, size_t n_inputs, thx_atomic_file *af);
+/* The same with the signature looked for in the first `window` bytes (a movie's metadata). */
+thx_status thx_output_claim_in(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len, size_t window,
+                               const char *const *inputs, size_t n_inputs, thx_atomic_file *af);
 /* Moves the finished temporary file tmp into af->path under the claim (rules above); tmp is
  * removed whatever happens. */
 thx_status thx_output_place(thx_ctx *ctx, thx_atomic_file *af, const char *tmp);

@@ -1146,6 +1146,11 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
     sig_file(sig, cap, "/proc/self/exe");
 }
 
+/* The movie's signature: its metadata comment, which +faststart puts in the header before the
+ * frames' data, within the first MOVIE_WINDOW bytes (thorax/fileio.h). */
+#define MOVIE_MARKER "thorax-movie"
+#define MOVIE_WINDOW (4u << 20)
+
 /* Runs ffmpeg on the frames (argv, no shell: any path works); its exit status, 127 if it cannot run. */
 static int run_ffmpeg(int fps, int first, int count, const char *dir, const char *out)
 {
@@ -1156,7 +1161,8 @@ static int run_ffmpeg(int fps, int first, int count, const char *dir, const char
     snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
     char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
                     "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
-                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", (char *)out, NULL};
+                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-metadata", "comment=" MOVIE_MARKER, "-movflags", "+faststart",
+                    "-f", "mp4", (char *)out, NULL};
     pid_t pid;
     if (posix_spawnp(&pid, "ffmpeg", NULL, NULL, args, environ) != 0) return 127;
     int status = 0;
@@ -1230,6 +1236,15 @@ int cmd_animate(int argc, char **argv)
                 st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
                                "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
     }
+    /* the movie is claimed before any frame is drawn: a user's file of that name stops the run */
+    int want_movie = !(mp4 && !strcmp(mp4, "none"));
+    thx_atomic_file maf;
+    if (want_movie) {
+        if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
+        else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
+    }
+    if (st == THX_OK && want_movie)
+        st = thx_output_claim_in(ctx, movie, MOVIE_MARKER, strlen(MOVIE_MARKER), MOVIE_WINDOW, NULL, 0, &maf);
     if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
         st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
     /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
@@ -1276,19 +1291,23 @@ int cmd_animate(int argc, char **argv)
         done++;
         if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
     }
-    if (st == THX_OK && !(mp4 && !strcmp(mp4, "none"))) {
-        if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
-        else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
+    if (st == THX_OK && want_movie) {
+        /* a fresh temporary name beside the movie (never a file that is there), moved in under the claim */
         char tmpm[PATH_MAX + 80];
-        snprintf(tmpm, sizeof tmpm, "%s.part.mp4", movie);
-        int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
-        if (r != 0) {
-            remove(tmpm);
-            st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
-                           r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
-        } else if (rename(tmpm, movie) != 0) {
-            remove(tmpm);
-            st = thx_error(ctx, THX_EIO, "%s: cannot write", movie);
+        snprintf(tmpm, sizeof tmpm, "%s.tmpXXXXXX", movie);
+        int fd = mkstemp(tmpm);
+        if (fd < 0) {
+            st = thx_error(ctx, THX_EIO, "%s: cannot create a temporary file beside it: %s", movie, strerror(errno));
+        } else {
+            close(fd);
+            int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
+            if (r != 0) {
+                remove(tmpm);
+                st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
+                               r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
+            } else {
+                st = thx_output_place(ctx, &maf, tmpm);
+            }
         }
     }
     if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
@@ -1296,7 +1315,7 @@ int cmd_animate(int argc, char **argv)
         if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
         printf("%d frames (%d drawn, %d kept from an earlier run) in %.1f s -> %s", total, total - kept, kept,
                thx_wtime() - t0, out_dir);
-        if (!(mp4 && !strcmp(mp4, "none"))) printf(", %s", movie);
+        if (want_movie) printf(", %s", movie);
         printf("\n");
     }
     thx_image_destroy(&img);

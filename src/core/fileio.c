@@ -104,6 +104,12 @@ static int is_input(const struct stat *st, const char *const *inputs, size_t n)
 thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len,
                             const char *const *inputs, size_t n_inputs, thx_atomic_file *af)
 {
+    return thx_output_claim_in(ctx, path, marker, marker_len, 4096, inputs, n_inputs, af);
+}
+
+thx_status thx_output_claim_in(thx_ctx *ctx, const char *path, const void *marker, size_t marker_len, size_t window,
+                               const char *const *inputs, size_t n_inputs, thx_atomic_file *af)
+{
     memset(af, 0, sizeof *af);
     if (!path[0] || strlen(path) >= sizeof af->path) return thx_error(ctx, THX_EIO, "%s: path empty or too long", path);
     snprintf(af->path, sizeof af->path, "%s", path);
@@ -127,15 +133,18 @@ thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, 
                          "%s is an input of this command; thorax does not replace its own input: nothing was written "
                          "(give another -o)",
                          path);
-    unsigned char head[4096];
     size_t got = 0;
+    unsigned char *head = malloc(window ? window : 1);
+    if (!head) return thx_error(ctx, THX_ENOMEM, "out of memory");
     FILE *f = fopen(path, "rb");
     if (f) {
-        got = fread(head, 1, sizeof head, f);
+        got = fread(head, 1, window, f);
         fclose(f);
     }
+    int found = f && memmem(head, got, marker, marker_len) != NULL;
+    free(head);
     /* an empty file holds nothing to lose (and is what mkstemp makes for a command to write into) */
-    if (!f || (st.st_size > 0 && !memmem(head, got, marker, marker_len))) {
+    if (!f || (st.st_size > 0 && !found)) {
         char shown[64];
         size_t k = 0;
         for (size_t i = 0; i < marker_len && k + 1 < sizeof shown; i++) {
@@ -144,9 +153,9 @@ thx_status thx_output_claim(thx_ctx *ctx, const char *path, const void *marker, 
         }
         shown[k] = '\0';
         return thx_error(ctx, THX_EIO,
-                         "%s exists and is not thorax's own output of this kind (no \"%s\" in its first 4096 bytes); "
+                         "%s exists and is not thorax's own output of this kind (no \"%s\" in its first %zu bytes); "
                          "thorax replaces only what it wrote: nothing was written (remove it or give another -o)",
-                         path, shown);
+                         path, shown, window);
     }
     af->existed = 1;
     af->dev = (unsigned long long)st.st_dev;
