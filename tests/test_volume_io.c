@@ -731,7 +731,8 @@ static void test_export(void)
     free(vtu);
 
     char *msh = tl_slurp(ctx, tl_path("v.msh"), NULL);
-    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n4\n3 1 \"mean_thorax\"\n";
+    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm\n$EndComments\n"
+                       "$PhysicalNames\n4\n3 1 \"mean_thorax\"\n"; /* the comment: thorax's signature */
     CHECK(msh && strncmp(msh, head, strlen(head)) == 0);
     CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 0 4\n"));
     /* Region 4 holds no node (region 3, the heart, may hold none either). */
