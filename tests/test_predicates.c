@@ -217,6 +217,22 @@ static void test_collinear_exact(void)
     CHECK(mismatches == 0);
     CHECK(naive_wrong > 0); /* the test really exercises the exact path */
 
+    /* The same at a small scale (coordinates below 1 mm: both products of the determinant below
+     * 1), where a filter that trusted small terms would give the float's wrong sign. */
+    mismatches = 0;
+    naive_wrong = 0;
+    double bs[2] = {0.012, 0.012}, cs[2] = {0.024, 0.024};
+    for (int i = 0; i < 64; i++)
+        for (int j = 0; j < 64; j++) {
+            double a[2] = {0.0005 + i * ldexp(1.0, -63), 0.0005 + j * ldexp(1.0, -63)};
+            int r = ref_orient2d(a, bs, cs);
+            AGREE(thx_orient2d(a, bs, cs), r);
+            double naive = (a[0] - cs[0]) * (bs[1] - cs[1]) - (a[1] - cs[1]) * (bs[0] - cs[0]);
+            naive_wrong += sgn(naive) != r;
+        }
+    CHECK(mismatches == 0);
+    CHECK(naive_wrong > 0);
+
     /* Coplanar points in 3D: z = z0 + (3x + 5y) exactly on dyadic offsets. */
     mismatches = 0;
     nz = 0;
