@@ -117,7 +117,7 @@ def main():
         if "--baseline-passed" in args:
             print("baseline: taken as passed (--baseline-passed)")
         else:
-            r = run(["ctest", "-R", regex, "-j", jobs, "--timeout", "1800"], build)
+            r = run(["ctest", "-R", regex, "-j", jobs, "--timeout", "600"], build)
         if r is not None and r.returncode:
             print("the unmutated tree fails its tests:\n" + r.stdout[-3000:])
             return 1
@@ -134,7 +134,7 @@ def main():
                 broke += 1
                 res, who = "build", "does not compile"
             else:
-                r = run(["ctest", "-R", m["tests"], "-j", jobs, "--timeout", "1800"], build)
+                r = run(["ctest", "-R", m["tests"], "-j", jobs, "--timeout", "600"], build)
                 failed = re.findall(r"\d+ - (\S+) \(", r.stdout)
                 if r.returncode and failed:
                     killed += 1
