@@ -77,7 +77,9 @@ int thx_io_split_line(char *p, char **tok, int max, char **next)
 
 /* ------------------------------------------------------------ .pts / .fac */
 
-static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, double **xyz_out, size_t *n_out)
+/* "x y z" per line, blank lines allowed (a surface's .pts and the volume's volume.pts): what
+ * prefixes the messages after FILE:LINE: (e.g. "surface \"torso\": ", or ""). */
+thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out)
 {
     char *text = NULL;
     thx_status st = thx_io_read_text(ctx, path, &text);
@@ -91,27 +93,22 @@ static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, dou
         int nt = thx_io_split_line(p, tok, 3, &next);
         if (nt == 0) continue; /* blank lines are allowed anywhere */
         if (nt != 3) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": expected 3 coordinates (x y z), found %s", path,
-                           line, name, nt > 3 ? "more" : nt == 1 ? "1" : "2");
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: %sexpected 3 coordinates (x y z), found %s", path, line, what,
+                           nt > 3 ? "more" : nt == 1 ? "1" : "2");
             goto done;
         }
         if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&xyz, &cap, n + 1, 3 * sizeof *xyz));
         for (int k = 0; k < 3; k++) {
             char *end = NULL;
-            errno = 0;
             double v = strtod(tok[k], &end);
             if (end == tok[k] || *end != '\0' || !isfinite(v)) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": coordinate %d is not a finite number: \"%s\"",
-                               path, line, name, k + 1, tok[k]);
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: %scoordinate %d is not a finite number: \"%s\"", path, line, what,
+                               k + 1, tok[k]);
                 goto done;
             }
             xyz[3 * n + (size_t)k] = v;
         }
         n++;
-    }
-    if (n == 0) {
-        st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": no nodes", path, name);
-        goto done;
     }
     *xyz_out = xyz;
     *n_out = n;
@@ -120,6 +117,19 @@ done:
     free(xyz);
     free(text);
     return st;
+}
+
+static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, double **xyz_out, size_t *n_out)
+{
+    char what[96];
+    snprintf(what, sizeof what, "surface \"%s\": ", name);
+    THX_CHECK(thx_io_read_xyz(ctx, path, what, xyz_out, n_out));
+    if (*n_out == 0) {
+        free(*xyz_out);
+        *xyz_out = NULL;
+        return thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": no nodes", path, name);
+    }
+    return THX_OK;
 }
 
 /* Reads a .fac file of n_nodes nodes. want_base is 0 or 1 to require that

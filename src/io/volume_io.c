@@ -382,47 +382,6 @@ static int parse_long(const char *tok, long *out)
     return 0;
 }
 
-/* volume.pts: "x y z" per line; blank lines allowed. */
-static thx_status read_xyz(thx_ctx *ctx, const char *path, double **xyz_out, size_t *n_out)
-{
-    char *text = NULL;
-    THX_CHECK(thx_io_read_text(ctx, path, &text));
-    thx_status st = THX_OK;
-    double *xyz = NULL;
-    size_t n = 0, cap = 0;
-    int line = 0;
-    for (char *p = text, *next = NULL; p; p = next) {
-        char *tok[3];
-        line++;
-        int nt = thx_io_split_line(p, tok, 3, &next);
-        if (nt == 0) continue;
-        if (nt != 3) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 3 coordinates (x y z), found %s", path, line,
-                           nt > 3 ? "more" : nt == 1 ? "1" : "2");
-            goto done;
-        }
-        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&xyz, &cap, n + 1, 3 * sizeof *xyz));
-        for (int k = 0; k < 3; k++) {
-            char *end = NULL;
-            double val = strtod(tok[k], &end);
-            if (end == tok[k] || *end != '\0' || !isfinite(val)) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: coordinate %d is not a finite number: \"%s\"", path, line, k + 1,
-                               tok[k]);
-                goto done;
-            }
-            xyz[3 * n + (size_t)k] = val;
-        }
-        n++;
-    }
-    *xyz_out = xyz;
-    *n_out = n;
-    xyz = NULL;
-done:
-    free(xyz);
-    free(text);
-    return st;
-}
-
 /* volume.tet: "a b c d r" per line, 1-based; returned 0-based. */
 static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size_t n_regions, thx_volume *v)
 {
@@ -744,7 +703,7 @@ thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, 
             }
     }
     THX_TRY(join(ctx, vpts, sizeof vpts, dir, jp->valuestring));
-    THX_TRY(read_xyz(ctx, vpts, &v->xyz, &v->n_nodes));
+    THX_TRY(thx_io_read_xyz(ctx, vpts, "", &v->xyz, &v->n_nodes)); /* volume.pts */
     if (v->n_nodes == 0) {
         st = thx_error(ctx, THX_EINPUT, "%s: volume: no nodes", vpts);
         goto done;

@@ -22,6 +22,8 @@ thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
  * (NUL-terminated in place); returns the count (max + 1 = "more than max");
  * *next = start of the following line or NULL. */
 int thx_io_split_line(char *p, char **tok, int max, char **next);
+/* Reads "x y z" lines (blank lines allowed); `what` prefixes the messages after FILE:LINE:. */
+thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out);
 /* Reads a .pts/.fac pair; want_base 0 or 1 requires that .fac base, -1 detects it (ptsfac.c). */
 thx_status thx_io_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fac, const char *name, thx_role role,
                               int want_base, thx_surface **out, int *base);
