@@ -7,20 +7,11 @@
 # before writing any. Two commands writing the same new file at once: one wins, the other exits 1.
 # Environment: THORAX = the CLI, WORK = a scratch directory.
 set -u
-: "${THORAX:?}" "${WORK:?}"
+: "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK" || exit 1
-fails=0
-ok() { echo "ok: $1"; }
-bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
-refused() {
-    local name=$1 pat=$2; shift 2
-    "$@" > out.log 2> err.log; local rc=$?
-    if [ $rc -eq 1 ] && grep -q -- "$pat" err.log && grep -q "nothing was written" err.log; then ok "$name: refused ($(head -1 err.log))"
-    else bad "$name: exit $rc, $(cat err.log)"; fi
-}
-snap() { (cd "$1" && find . -print0 | sort -z | xargs -0 -I{} sh -c 'if [ -f "{}" ]; then echo "{} $(md5sum < "{}")"; else echo "{}"; fi'); }
+. "$SRC/tests/outputs_lib.sh"  # ok, bad, refused, snap
 leftovers() { ls -a "$1" | grep -E '\.tmp' || true; }
 
 "$THORAX" phantom -o c.txt -q && "$THORAX" surfaces c.txt -o m -q || { bad "phantom model"; exit 1; }

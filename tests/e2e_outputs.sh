@@ -6,22 +6,11 @@
 # whole, the other exits 1, and nothing is left behind.
 # Environment: THORAX = the CLI, WORK = a scratch directory.
 set -u
-: "${THORAX:?}" "${WORK:?}"
+: "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK" || exit 1
-fails=0
-ok() { echo "ok: $1"; }
-bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
-# refused CASE PATTERN CMD...: exit 1, the message matches PATTERN
-refused() {
-    local name=$1 pat=$2; shift 2
-    "$@" > out.log 2> err.log; local rc=$?
-    if [ $rc -eq 1 ] && grep -q -- "$pat" err.log && grep -q "nothing was written" err.log; then ok "$name: refused ($(head -1 err.log))"
-    else bad "$name: exit $rc, $(cat err.log)"; fi
-}
-# a tree's listing with checksums, to see that nothing changed
-snap() { (cd "$1" && find . -print0 | sort -z | xargs -0 -I{} sh -c 'if [ -f "{}" ]; then echo "{} $(md5sum < "{}")"; else echo "{}"; fi'); }
+. "$SRC/tests/outputs_lib.sh"  # ok, bad, refused, snap
 leftovers() { ls -a "$1" | grep -E '\.(tmp|old)' || true; }
 
 "$THORAX" phantom --resolution medium --seed 2 -o c.txt -q || { bad "phantom"; exit 1; }
