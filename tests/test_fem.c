@@ -299,6 +299,18 @@ int main(int argc, char **argv)
             }
         printf("transfer: adjoint vs forward rows differ by %.2e (largest entry %.3f)\n", terr, tmax);
         CHECK(terr < 1e-7);
+        /* the automatic choice takes the method with fewer solves: a solve per row for 12 rows, a
+           solve per heart node for every torso node (the torso has more nodes than the heart) */
+        {
+            thx_series *Tauto = NULL;
+            CHECK(torso->n_nodes > nh && nh > 12);
+            CHECK_OK(ctx, thx_forward_transfer(ctx, m, rows, 12, -1, NULL, &Tauto, NULL));
+            CHECK(Tauto && strstr(Tauto->label, "(adjoint)") != NULL);
+            thx_series_destroy(&Tauto);
+            CHECK_OK(ctx, thx_forward_transfer(ctx, m, NULL, 0, -1, NULL, &Tauto, NULL));
+            CHECK(Tauto && strstr(Tauto->label, "(forward)") != NULL);
+            thx_series_destroy(&Tauto);
+        }
         /* rows of the transfer matrix sum to one: a constant on the heart gives that constant everywhere */
         double rs = 0;
         for (size_t i = 0; i < torso->n_nodes; i++) {

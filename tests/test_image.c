@@ -460,6 +460,23 @@ static void test_scales(void)
         CHECK(thx_scale_band(1, n) == (n - 0.5) / n && thx_scale_band(0, n) == 0.5 / n);
     }
     CHECK(thx_scale_band(0.3, 0) == 0.3 && isnan(thx_scale_band(NAN, 4)));
+    /* positions outside [0, 1] are the ends: the last band, the range's limits, the map's end colours */
+    CHECK(thx_scale_band(1.5, 4) == 3.5 / 4 && thx_scale_band(-0.5, 4) == 0.5 / 4);
+    thx_scale lin = {THX_SCALE_LINEAR, -2, 6, 0};
+    CHECK(thx_scale_invert(&lin, 1.5) == 6 && thx_scale_invert(&lin, -0.5) == -2);
+    for (int c = 0; c < 6; c++) {
+        unsigned char e0[3], e1[3], o0[3], o1[3];
+        thx_colormap_eval((thx_colormap)c, 0, e0);
+        thx_colormap_eval((thx_colormap)c, 1, e1);
+        thx_colormap_eval((thx_colormap)c, -0.7, o0);
+        thx_colormap_eval((thx_colormap)c, 1.7, o1);
+        CHECK(!memcmp(e0, o0, 3) && !memcmp(e1, o1, 3));
+    }
+    unsigned char g[3];
+    thx_colormap_eval(THX_CMAP_GRAY, 1.7, g);
+    CHECK(g[0] == 255 && g[1] == 255 && g[2] == 255);
+    thx_colormap_eval(THX_CMAP_JET, 0.75, g); /* jet's red channel saturates at t = 0.75 */
+    CHECK(g[0] == 255);
 }
 
 /* ------------------------------------------------------------- text */
@@ -577,6 +594,16 @@ static void test_lines(void)
         }
     CHECK(partial > 20 && near);
     CHECK(px(img, 31, 15)[0] > 200 || px(img, 31, 16)[0] > 200); /* on the line's middle */
+    /* a wide line: its spine and round caps fully covered (coverage saturates at 1), nothing
+       beyond its half-width; a cap pixel is judged from the end point, not from the segment */
+    thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 255});
+    thx_draw_line(img, 10.5, 16.5, 40.5, 16.5, 5, white);
+    int spine = 1;
+    for (int i = 10; i <= 40; i++) spine &= px(img, i, 16)[0] == 255 && px(img, i, 15)[0] == 255 && px(img, i, 17)[0] == 255;
+    CHECK(spine);
+    CHECK(px(img, 42, 16)[0] == 255 && px(img, 8, 16)[0] == 255);   /* 2 px past the ends, radius 2.5 */
+    CHECK(px(img, 44, 16)[0] == 0 && px(img, 6, 16)[0] == 0);       /* 4 px past */
+    CHECK(px(img, 25, 13)[0] == 0 && px(img, 25, 19)[0] == 0);      /* 3 px beside */
     /* half-transparent rectangle over black: half grey; over a transparent image: the colour itself */
     thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 255});
     thx_draw_rect(img, -5, -5, 10, 10, half); /* clipped */

@@ -643,6 +643,39 @@ static void test_sides(void)
     thx_surface_destroy(&pl);
 }
 
+/* Perspective: a square of half-width 1 at distance d under a vertical field of view fov has its
+ * edge at 1 / (d tan(fov / 2)) of the half-image. With d = 2 / tan(fov / 2) the square fills the
+ * middle half of the image (pixels 32..96 of 128), at 60 and at 30 degrees; a field of view taken
+ * as the half angle would show it at a third (60) or under half (30) of that size. */
+static void test_perspective(void)
+{
+    thx_surface *pl = plane(4);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    const double fovs[2] = {60, 30};
+    for (int k = 0; k < 2; k++) {
+        thx_render_surface rs = surf_defaults(pl, THX_DRAW_FLAT);
+        thx_scene sc = base_scene(&rs, 1);
+        memset(&sc.camera, 0, sizeof sc.camera);
+        double d = 2 / tan(0.5 * fovs[k] * PI / 180); /* the edge at half the half-image */
+        sc.camera.eye[1] = -d;
+        sc.camera.up[2] = 1;
+        sc.camera.fov_deg = fovs[k];
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        save(im, k ? "perspective30" : "perspective60");
+        int row = 0, col = 0;
+        for (int i = 0; i < N; i++) {
+            row += !near_rgb(px(im, i, N / 2), 0.1, 0.2, 0.3, 40); /* lit by a headlight: not one grey */
+            col += !near_rgb(px(im, N / 2, i), 0.1, 0.2, 0.3, 40);
+        }
+        printf("perspective %g deg: the square spans %d x %d pixels of %d (expected %d)\n", fovs[k], row, col, N, N / 2);
+        CHECK(abs(row - N / 2) <= 2 && abs(col - N / 2) <= 2);
+        CHECK(!near_rgb(px(im, N / 4 + 2, N / 2), 0.1, 0.2, 0.3, 40) && near_rgb(px(im, N / 4 - 2, N / 2), 0.1, 0.2, 0.3, 3));
+    }
+    thx_image_destroy(&im);
+    thx_surface_destroy(&pl);
+}
+
 /* A renderer without a context of its own (the viewer's case) drawing with thx_render_scene_gl into
  * a framebuffer of the caller's: here the first renderer's context, which thx_render leaves current
  * when no other was. */
@@ -945,6 +978,7 @@ int main(void)
         test_viewports();
         test_modes();
         test_sides();
+        test_perspective();
         test_errors();
     }
     CHECK(thx_renderer_set_samples(ctx, ren, 2) == THX_EINPUT);
