@@ -11,8 +11,7 @@
  *       Reads the .node file, runs thx_delaunay3d REPEAT times (default 1) and
  *       prints "tets T seconds S" (best run) and the stage figures.
  * Built by bench/delaunay.sh against build/libthorax.a. */
-#include "thorax/delaunay.h"
-
+#include "thorax/mesh/delaunay.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

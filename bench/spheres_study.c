@@ -21,12 +21,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/check_volume.h"
-#include "thorax/fem.h"
-#include "thorax/mesh.h"
-#include "thorax/model.h"
-#include "thorax/verify.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/fem/fem.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/geom/verify.h"
 static const double A = 87, B = 92, C = 100, S_SCALP = 1;
 static double s_skull = 0.0125;
 

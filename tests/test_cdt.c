@@ -3,10 +3,9 @@
  * interior edge, the counts by Euler's formula, the caps by edge use and
  * area. */
 #include "testlib.h"
-#include "thorax/cdt.h"
-#include "thorax/inside.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/cdt.h"
+#include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

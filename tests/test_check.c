@@ -13,11 +13,12 @@
 #endif
 
 #include "testlib.h"
-#include "thorax/check.h"
-#include "thorax/inside.h"
-#include "thorax/model.h"
-#include "thorax/spatial.h"
-
+#include "thorax/geom/tri_intersect.h"
+#include "thorax/check/check.h"
+#include "thorax/geom/inside.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/geom/spatial.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

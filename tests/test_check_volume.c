@@ -16,12 +16,12 @@
 #endif
 
 #include "testlib.h"
-#include "thorax/check_volume.h"
-#include "thorax/delaunay.h"
-#include "thorax/model.h"
-#include "thorax/predicates.h"
-#include "thorax/volume.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/mesh/delaunay.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/geom/predicates.h"
+#include "thorax/model/volume.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

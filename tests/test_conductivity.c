@@ -6,8 +6,7 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/mesh.h"
-
+#include "thorax/mesh/mesh.h"
 int main(void)
 {
     /* tissue, across, along (S/m), a word of its source */

@@ -8,9 +8,8 @@
  * enclosed volume equals the sum of the tetrahedron volumes; every point a
  * vertex; the Euler characteristic of a ball (V - E + F - T = 1). */
 #include "testlib.h"
-#include "thorax/delaunay.h"
-#include "thorax/predicates.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/geom/predicates.h"
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

@@ -29,11 +29,14 @@
 #include <unistd.h>
 
 #include "testlib.h"
-#include "thorax/electrodes.h"
-#include "thorax/fileio.h"
-#include "thorax/phantom.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/io/model_dir.h"
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/core/fileio.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/geom/surfaces.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

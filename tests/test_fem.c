@@ -9,12 +9,11 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/delaunay.h"
-#include "thorax/fem.h"
-#include "thorax/mesh.h"
-#include "thorax/phantom.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/fem/fem.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/geom/surfaces.h"
 #define N 7
 
 /* A jittered lattice in [0, N-1]^3, tetrahedralized; boundary nodes (on the cube's faces) flagged. */

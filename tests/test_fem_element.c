@@ -15,9 +15,8 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/delaunay.h"
-#include "thorax/fem.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/fem/fem.h"
 static thx_volume *one_tet(thx_ctx *ctx, const double p[4][3], const double sigma[9])
 {
     thx_volume *v = NULL;

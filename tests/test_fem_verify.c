@@ -8,8 +8,7 @@
 #include <stdio.h>
 
 #include "testlib.h"
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 int main(int argc, char **argv)
 {
     thx_ctx *ctx = NULL;

@@ -2,8 +2,7 @@
  * left axis, the map to RAS and back (a rotation: det +1, inverse of each other), the message of
  * a missing frame. */
 #include "testlib.h"
-#include "thorax/frame.h"
-
+#include "thorax/model/frame.h"
 #include <math.h>
 #include <string.h>
 

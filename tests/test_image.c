@@ -19,9 +19,8 @@
 #include <unistd.h>
 
 #include "testlib.h"
-#include "thorax/fileio.h"
-#include "thorax/image.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/render/image.h"
 static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- helpers */

@@ -25,11 +25,11 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/check_volume.h"
-#include "thorax/import.h"
-#include "thorax/mesh.h"
-#include "thorax/model.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/import/import.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- the cube */

@@ -14,10 +14,9 @@
 
 #include "mesh/improve.h"
 #include "testlib.h"
-#include "thorax/check_volume.h"
-#include "thorax/delaunay.h"
-#include "thorax/predicates.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/mesh/delaunay.h"
+#include "thorax/geom/predicates.h"
 #define N 9 /* lattice points per side */
 
 typedef struct { int32_t a, b, c, t; } face_rec;

@@ -1,8 +1,7 @@
 /* Inside/outside by angle sums (paper 3.2): 2D loops and 3D closed surfaces,
  * convex and concave, both orientations, on/near the boundary. */
 #include "testlib.h"
-#include "thorax/inside.h"
-
+#include "thorax/geom/inside.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -3,9 +3,8 @@
 #include <stdlib.h>
 
 #include "testlib.h"
-#include "thorax/inside.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/surfaces.h"
 static unsigned long long rng = 88172645463325252ULL;
 static double urand(void)
 {

@@ -17,8 +17,7 @@
 #include <time.h>
 
 #include "testlib.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/predicates.h"
 static int brute(const double *p, size_t n)
 {
     for (size_t i = 0; i < n; i++)

@@ -9,12 +9,11 @@
 #include <string.h>
 
 #include "mesh/improve.h"
-#include "thorax/volume.h"
+#include "thorax/model/volume.h"
 #include "testlib.h"
-#include "thorax/mesh.h"
-#include "thorax/phantom.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/mesh/mesh.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/geom/surfaces.h"
 /* Largest radius-edge ratio (circumradius / shortest edge) of v's tetrahedra, computed here
  * independently of the mesher. */
 static double worst_radius_edge(const thx_volume *v)

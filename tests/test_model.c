@@ -24,9 +24,9 @@
 #include <cjson/cJSON.h>
 
 #include "testlib.h"
-#include "thorax/fileio.h"
-#include "thorax/model.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- helpers */

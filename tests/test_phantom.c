@@ -12,8 +12,10 @@
 #include <unistd.h>
 
 #include "testlib.h"
-#include "thorax/phantom.h"
-
+#include "thorax/io/contours_file.h"
+#include "thorax/geom/contours_valid.h"
+#include "thorax/check/contours.h"
+#include "thorax/phantom/phantom.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

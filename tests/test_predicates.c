@@ -2,8 +2,7 @@
  * GMP rationals (mpq), on random, exactly degenerate and one-ulp perturbed
  * inputs. */
 #include "testlib.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/predicates.h"
 #include <gmp.h>
 #include <math.h>
 #include <stdint.h>

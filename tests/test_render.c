@@ -6,8 +6,7 @@
  * THX_RENDER_PNG=dir writes the images to dir; THX_RENDER_BENCH=1 times a 100,000-triangle sphere
  * with data at 1024 x 1024 (median of 10 frames). */
 #include "testlib.h"
-#include "thorax/render.h"
-
+#include "thorax/render/render.h"
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 

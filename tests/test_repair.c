@@ -12,9 +12,10 @@
 #include <unistd.h>
 
 #include "testlib.h"
-#include "thorax/repair.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/check/contours.h"
+#include "thorax/io/contours_file.h"
+#include "thorax/geom/repair.h"
+#include "thorax/geom/surfaces.h"
 static const char *HEAD = "thorax-contours 1\nsurface s outer\n";
 
 /* A file of one surface on two layers: `loop0` (point lines) on z=0, a 40 mm square on z=10. */

@@ -21,9 +21,9 @@
 #include <zlib.h>
 
 #include "testlib.h"
-#include "thorax/fileio.h"
-#include "thorax/series.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- helpers */

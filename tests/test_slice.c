@@ -3,9 +3,8 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/inside.h"
-#include "thorax/slice.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/slice.h"
 static thx_surface *make(thx_ctx *ctx, const double *xyz, size_t nn, const int32_t *tri, size_t nt, int reverse)
 {
     thx_surface *s = NULL;

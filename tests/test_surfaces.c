@@ -11,10 +11,9 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/check.h"
-#include "thorax/inside.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/check/check.h"
+#include "thorax/geom/inside.h"
+#include "thorax/geom/surfaces.h"
 /* Builds the contours with default options and checks the invariants of every surface. */
 static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing, thx_surfaces_stats *st, const char *what)
 {

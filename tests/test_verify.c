@@ -14,11 +14,10 @@
 #include <string.h>
 
 #include "testlib.h"
-#include "thorax/check.h"
-#include "thorax/check_volume.h"
-#include "thorax/predicates.h"
-#include "thorax/verify.h"
-
+#include "thorax/check/check.h"
+#include "thorax/check/check_volume.h"
+#include "thorax/geom/predicates.h"
+#include "thorax/geom/verify.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

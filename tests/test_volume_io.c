@@ -29,11 +29,11 @@
 #include <cjson/cJSON.h>
 
 #include "testlib.h"
-#include "thorax/delaunay.h"
-#include "thorax/fileio.h"
-#include "thorax/model.h"
-#include "thorax/volume.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/core/fileio.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/volume.h"
 static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- helpers */

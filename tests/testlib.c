@@ -6,8 +6,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "thorax/fileio.h"
-
+#include "thorax/core/fileio.h"
 int tl_pass, tl_fail;
 
 void tl_report_fail(const char *file, int line, const char *what)

@@ -38,8 +38,7 @@ int tl_finish(void);
 
 /* ---- a scratch directory for a test program's files ---- */
 #include <stddef.h>
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 extern char tl_scratch[1024];
 /* Makes NAME.XXXXXX in the working directory as tl_scratch; 0, or -1 (printed). */
 int tl_scratch_make(const char *name);

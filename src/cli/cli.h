@@ -1,8 +1,7 @@
 /* Shared helpers of the thorax command-line subcommands. */
 #ifndef THORAX_CLI_H
 #define THORAX_CLI_H
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 typedef int (*cli_cmd_fn)(int argc, char **argv);
 
 int cmd_phantom(int argc, char **argv);

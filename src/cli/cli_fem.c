@@ -7,11 +7,11 @@
 #include <cjson/cJSON.h>
 
 #include "cli/cli_fem.h"
-#include "thorax/check_volume.h"
-#include "thorax/fileio.h"
-#include "thorax/fem.h"
-#include "thorax/model.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/core/fileio.h"
+#include "thorax/fem/fem.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 void cli_petsc_args_init(cli_petsc_args *pa, char *argv0)
 {
     memset(pa, 0, sizeof *pa);

@@ -3,8 +3,7 @@
 #define THORAX_CLI_FEM_H
 #include <stddef.h>
 
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 /* The PETSc options of a command line: every argument with a single leading '-' that the command
  * does not know, with its value when the next argument does not start with '-' (or is a number). */
 typedef struct {

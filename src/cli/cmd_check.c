@@ -9,10 +9,10 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "thorax/check.h"
-#include "thorax/check_volume.h"
-#include "thorax/model.h"
-
+#include "thorax/check/check.h"
+#include "thorax/check/check_volume.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static void usage(FILE *f)
 {
     fprintf(f,

@@ -8,10 +8,12 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/electrodes.h"
-#include "thorax/fem.h"
-#include "thorax/fileio.h"
-
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/fem/fem.h"
+#include "thorax/core/fileio.h"
 /* NAME,surface=S,at=X:Y:Z,radius=R,voltage=V | current=I | nodes=FILE (an electrode file) */
 static thx_status parse_spec(thx_ctx *ctx, const thx_model *m, const char *spec, thx_patch *p)
 {

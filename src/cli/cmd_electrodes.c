@@ -14,9 +14,12 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/electrodes.h"
-#include "thorax/phantom.h"
-
+#include "thorax/io/series_file.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
 /* ------------------------------------------------------------ electrodes */
 
 static void help_electrodes(void)

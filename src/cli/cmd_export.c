@@ -7,8 +7,8 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
-#include "thorax/model.h"
-
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static const char *const ext_of[] = {"vtk", "vtp", "obj", "stl", "ply", "vtu", "msh"}; /* indexed by thx_export_format */
 
 static void usage(FILE *f)

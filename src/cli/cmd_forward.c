@@ -9,10 +9,12 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/electrodes.h"
-#include "thorax/fem.h"
-#include "thorax/fileio.h"
-
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/fem/fem.h"
+#include "thorax/core/fileio.h"
 static void help(void)
 {
     printf("usage: thorax forward MODEL --epicardial SERIES -o DIR [options] [PETSc options]\n"

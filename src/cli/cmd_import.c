@@ -11,11 +11,11 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "thorax/check.h"
-#include "thorax/import.h"
-#include "thorax/mesh.h"
-#include "thorax/model.h"
-
+#include "thorax/check/check.h"
+#include "thorax/import/import.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static void usage(FILE *f)
 {
     fprintf(f,

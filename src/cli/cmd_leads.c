@@ -7,9 +7,13 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/electrodes.h"
-#include "thorax/fileio.h"
-
+#include "thorax/io/series_file.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
+#include "thorax/core/fileio.h"
 static void help(void)
 {
     printf("usage: thorax leads SOLUTION [-o DIR] [--twelve FILE] [--array FILE] [--format text|raw|mat]\n\n"

@@ -7,9 +7,8 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "thorax/check_volume.h"
-#include "thorax/mesh.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/mesh/mesh.h"
 static void help(void)
 {
     printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"

@@ -8,9 +8,9 @@
 #include <unistd.h>
 
 #include "cli/cli.h"
-#include "thorax/fileio.h"
-#include "thorax/phantom.h"
-
+#include "thorax/io/contours_file.h"
+#include "thorax/core/fileio.h"
+#include "thorax/phantom/phantom.h"
 static const char *CMD = "phantom";
 
 static void help(FILE *f)

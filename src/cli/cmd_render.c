@@ -18,13 +18,14 @@ extern char **environ;
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/fileio.h"
-#include "thorax/image.h"
-#include "thorax/import.h"
-#include "thorax/model.h"
-#include "thorax/render.h"
-#include "thorax/series.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/render/image.h"
+#include "thorax/import/import.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/render/render.h"
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 enum { SCOPE_FRAME, SCOPE_SERIES, SCOPE_ALL, SCOPE_FIXED };
 
 typedef struct {

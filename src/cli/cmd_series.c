@@ -7,8 +7,8 @@
 #include <strings.h>
 
 #include "cli/cli.h"
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 static void usage(FILE *f)
 {
     fprintf(f,

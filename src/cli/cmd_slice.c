@@ -4,8 +4,9 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "thorax/slice.h"
-
+#include "thorax/io/model_dir.h"
+#include "thorax/io/contours_file.h"
+#include "thorax/geom/slice.h"
 static void help(void)
 {
     printf("usage: thorax slice MODEL -o CONTOURS [--spacing MM] [--margin MM] [--densify MM]\n"

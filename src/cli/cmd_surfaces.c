@@ -5,9 +5,11 @@
 #include <string.h>
 
 #include "cli/cli.h"
-#include "thorax/repair.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/io/contours_file.h"
+#include "thorax/geom/repair.h"
+#include "thorax/geom/surfaces.h"
 static void help(void)
 {
     printf("usage: thorax surfaces CONTOURS -o MODEL [options]\n\n"

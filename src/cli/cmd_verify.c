@@ -6,8 +6,7 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 static void help(void)
 {
     printf("usage: thorax verify [--levels N] [--degree L] [--spheres FIRST:LAST|off] [PETSc options]\n\n"

@@ -1,6 +1,5 @@
 /* The context: last error message and log sink (see thorax/core.h). */
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 #include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>

@@ -1,6 +1,5 @@
 /* Atomic file and directory output (see thorax/fileio.h). */
-#include "thorax/fileio.h"
-
+#include "thorax/core/fileio.h"
 #include <cjson/cJSON.h>
 
 #include <dirent.h>

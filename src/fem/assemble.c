@@ -10,8 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 void thx_csr_free(thx_csr *a)
 {
     if (!a) return;

@@ -10,8 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 void thx_patch_free(thx_patch *p)
 {
     if (!p) return;

@@ -7,8 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 void thx_forward_opts_default(thx_forward_opts *o)
 {
     memset(o, 0, sizeof *o);

@@ -8,8 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fem.h"
-
+#include "thorax/fem/fem.h"
 static int g_inited = 0, g_we_inited = 0;
 
 thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)

@@ -9,12 +9,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/check_volume.h"
-#include "thorax/fem.h"
-#include "thorax/mesh.h"
-#include "thorax/model.h"
-#include "thorax/verify.h"
-
+#include "thorax/check/check_volume.h"
+#include "thorax/fem/fem.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/geom/verify.h"
 static double mean_edge(const thx_volume *v)
 {
     static const int e[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};

@@ -23,10 +23,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/cdt.h"
-#include "thorax/check.h"
-#include "thorax/inside.h"
-#include "thorax/surfaces.h"
+#include "thorax/geom/cdt.h"
+#include "thorax/geom/tri_intersect.h"
+#include "thorax/geom/inside.h"
+#include "thorax/geom/surfaces.h"
 #include "geom/chain_sdf.h"
 
 /* Layer number for messages: the file's layer number, or the surface's own for contours built in memory. */

@@ -16,10 +16,9 @@
  * the two are compared, and where they disagree (only possible for such
  * slivers) the exact parity decides. See thorax/cdt.h for the contract.
  */
-#include "thorax/cdt.h"
+#include "thorax/geom/cdt.h"
 #include "geom/chain_sdf.h"
-#include "thorax/inside.h"
-
+#include "thorax/geom/inside.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

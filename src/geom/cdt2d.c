@@ -25,9 +25,8 @@
  * constraint segment on that edge or -1. Invariant: n is symmetric, and every
  * triangle (solid or ghost) has three neighbours.
  */
-#include "thorax/cdt.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/cdt.h"
+#include "thorax/geom/predicates.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

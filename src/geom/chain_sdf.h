@@ -13,8 +13,7 @@
 #ifndef THORAX_CHAIN_SDF_H
 #define THORAX_CHAIN_SDF_H
 
-#include "thorax/geom.h"
-
+#include "thorax/model/surface.h"
 #define CHAIN_BLOCK 8
 
 typedef struct {

@@ -3,9 +3,8 @@
  * planar angles about a point for a closed loop, solid angles for a closed
  * triangle surface. See thorax/inside.h for conventions and tolerances.
  */
-#include "thorax/inside.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
 #include <math.h>
 
 #define TWO_PI 6.283185307179586476925286766559

@@ -43,11 +43,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/cdt.h"
-#include "thorax/core.h"
-#include "thorax/inside.h"
-#include "thorax/predicates.h"
-#include "thorax/surfaces.h"
+#include "thorax/geom/cdt.h"
+#include "thorax/core/core.h"
+#include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
+#include "thorax/geom/surfaces.h"
 #include "geom/chain_sdf.h"
 
 #define BIG 1e9       /* cost of a triangle outside the surface */

@@ -17,8 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/predicates.h"
-
+#include "thorax/geom/predicates.h"
 typedef struct {
     const double *p;     /* n points, x y */
     size_t n;

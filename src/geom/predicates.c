@@ -40,8 +40,7 @@
  * otherwise; GCC in ISO C mode (-std=c11, as this project builds) also sets
  * -ffp-contract=off.
  */
-#include "thorax/predicates.h"
-
+#include "thorax/geom/predicates.h"
 #include <math.h>
 #include <stddef.h>
 

@@ -2,17 +2,15 @@
  * Repair of digitization noise in contours (see thorax/repair.h; paper 3.1,
  * issue 11 item 6). Works loop by loop on the points and their source lines.
  */
-#include "thorax/repair.h"
-
+#include "thorax/geom/repair.h"
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/inside.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
 void thx_repair_opts_default(thx_repair_opts *o, double spacing)
 {
     o->spacing = spacing;

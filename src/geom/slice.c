@@ -11,8 +11,7 @@
  * goes upward keeps the material on the left, so the loop is counterclockwise
  * seen from above.
  */
-#include "thorax/slice.h"
-
+#include "thorax/geom/slice.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

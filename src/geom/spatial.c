@@ -1,6 +1,5 @@
 /* Bounding-volume hierarchy over axis-aligned boxes (see thorax/spatial.h). */
-#include "thorax/spatial.h"
-
+#include "thorax/geom/spatial.h"
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>

@@ -16,9 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/inside.h"
-#include "thorax/surfaces.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/surfaces.h"
 #define BW 2 /* half bandwidth of R + lambda D^2 */
 
 /* Cholesky factor of a cyclic SPD matrix with half bandwidth BW.

@@ -105,9 +105,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/predicates.h"
-#include "thorax/verify.h"
-
+#include "thorax/geom/predicates.h"
+#include "thorax/geom/verify.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

@@ -1,8 +1,8 @@
 /*
- * Contour files (paper 3.1): reading, validation, writing, in-memory builders.
- * Format: docs/formats.md, "Contours".
+ * The contour file (paper 3.1; docs/formats.md, "Contours"): reading (the structure checked,
+ * nothing accepted in part) and writing.
  */
-#include "thorax/contours.h"
+#include "thorax/io/contours_file.h"
 
 #include <ctype.h>
 #include <limits.h>
@@ -11,284 +11,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "thorax/fileio.h"
-#include "thorax/predicates.h"
-
-/* Grows an array of n elements by one: arrays grown only here have capacity n rounded up to a
- * power of two, so a file of many small loops costs O(total) copying, not O(n^2). */
-static void *grow_one(thx_ctx *ctx, void *a, size_t n, size_t size)
-{
-    if (n && (n & (n - 1))) return a; /* not a power of two: room left */
-    size_t cap = n ? 2 * n : 1;
-    return thx_realloc(ctx, a, cap * size);
-}
-
-/* ---- builders ---------------------------------------------------------- */
-
-thx_status thx_contours_create(thx_ctx *ctx, thx_contours **out)
-{
-    *out = thx_calloc(ctx, 1, sizeof **out);
-    return *out ? THX_OK : THX_ENOMEM;
-}
-
-void thx_contours_destroy(thx_contours **c)
-{
-    if (!c || !*c) return;
-    thx_contours *k = *c;
-    for (size_t s = 0; s < k->n_surfaces; s++) {
-        thx_contour_surface *cs = &k->surf[s];
-        for (size_t l = 0; l < cs->n_layers; l++) {
-            for (size_t i = 0; i < cs->layers[l].n_loops; i++) {
-                free(cs->layers[l].loops[i].p);
-                free(cs->layers[l].loops[i].lines);
-            }
-            free(cs->layers[l].loops);
-        }
-        free(cs->layers);
-    }
-    free(k->surf);
-    free(k);
-    *c = NULL;
-}
-
-static int find_surface(const thx_contours *c, const char *name)
-{
-    for (size_t s = 0; s < c->n_surfaces; s++)
-        if (strcmp(c->surf[s].name, name) == 0) return (int)s;
-    return -1;
-}
-
-thx_status thx_contours_add_surface(thx_ctx *ctx, thx_contours *c, const char *name, thx_role role,
-                                    thx_cap_method cap, double cap_grid, size_t *idx)
-{
-    if (strlen(name) == 0 || strlen(name) >= sizeof c->surf[0].name)
-        return thx_error(ctx, THX_EINPUT, "surface name '%s' is empty or longer than 63 characters", name);
-    if (find_surface(c, name) >= 0) return thx_error(ctx, THX_EINPUT, "surface \"%s\" declared twice", name);
-    thx_contour_surface *ns = grow_one(ctx, c->surf, c->n_surfaces, sizeof *ns);
-    if (!ns) return THX_ENOMEM;
-    c->surf = ns;
-    thx_contour_surface *cs = &c->surf[c->n_surfaces];
-    memset(cs, 0, sizeof *cs);
-    snprintf(cs->name, sizeof cs->name, "%s", name);
-    cs->role = role;
-    cs->cap = cap;
-    cs->cap_grid = cap_grid;
-    if (idx) *idx = c->n_surfaces;
-    c->n_surfaces++;
-    return THX_OK;
-}
-
-/* Returns the layer of surface s at height z, appending it if z is new. */
-static thx_status surface_layer(thx_ctx *ctx, thx_contour_surface *cs, double z, int index, int line,
-                                thx_contour_layer **out)
-{
-    if (cs->n_layers && cs->layers[cs->n_layers - 1].z == z) {
-        *out = &cs->layers[cs->n_layers - 1];
-        return THX_OK;
-    }
-    thx_contour_layer *nl = grow_one(ctx, cs->layers, cs->n_layers, sizeof *nl);
-    if (!nl) return THX_ENOMEM;
-    cs->layers = nl;
-    thx_contour_layer *L = &cs->layers[cs->n_layers++];
-    memset(L, 0, sizeof *L);
-    L->z = z;
-    L->index = index;
-    L->line = line;
-    *out = L;
-    return THX_OK;
-}
-
-static thx_status layer_add_loop(thx_ctx *ctx, thx_contour_layer *L, int line, thx_loop **out)
-{
-    thx_loop *nl = grow_one(ctx, L->loops, L->n_loops, sizeof *nl);
-    if (!nl) return THX_ENOMEM;
-    L->loops = nl;
-    thx_loop *lp = &L->loops[L->n_loops++];
-    memset(lp, 0, sizeof *lp);
-    lp->line = line;
-    *out = lp;
-    return THX_OK;
-}
-
-thx_status thx_contours_add_loop(thx_ctx *ctx, thx_contours *c, size_t s, double z, const thx_vec2 *pts, size_t n)
-{
-    if (s >= c->n_surfaces) return thx_error(ctx, THX_EINPUT, "no surface %zu", s);
-    thx_contour_surface *cs = &c->surf[s];
-    if (cs->n_layers && z < cs->layers[cs->n_layers - 1].z)
-        return thx_error(ctx, THX_EINPUT, "surface \"%s\": layer z=%g added after z=%g", cs->name, z,
-                         cs->layers[cs->n_layers - 1].z);
-    /* The file-wide layer index: count distinct z over all surfaces lazily at write time. */
-    thx_contour_layer *L;
-    THX_CHECK(surface_layer(ctx, cs, z, -1, 0, &L));
-    thx_loop *lp;
-    THX_CHECK(layer_add_loop(ctx, L, 0, &lp));
-    lp->p = thx_malloc(ctx, (n ? n : 1) * sizeof *lp->p);
-    if (!lp->p) return THX_ENOMEM;
-    memcpy(lp->p, pts, n * sizeof *pts);
-    lp->n = n;
-    return THX_OK;
-}
-
-/* ---- validation -------------------------------------------------------- */
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* Sorted distinct z of all layers of all surfaces. */
-static thx_status all_layer_z(thx_ctx *ctx, const thx_contours *c, double **zs, size_t *nz)
-{
-    size_t total = 0;
-    for (size_t s = 0; s < c->n_surfaces; s++) total += c->surf[s].n_layers;
-    double *z = thx_malloc(ctx, (total ? total : 1) * sizeof *z);
-    if (!z) return THX_ENOMEM;
-    size_t k = 0;
-    for (size_t s = 0; s < c->n_surfaces; s++)
-        for (size_t l = 0; l < c->surf[s].n_layers; l++) z[k++] = c->surf[s].layers[l].z;
-    qsort(z, k, sizeof *z, cmp_double);
-    size_t m = 0;
-    for (size_t i = 0; i < k; i++)
-        if (m == 0 || z[i] != z[m - 1]) z[m++] = z[i];
-    *zs = z;
-    *nz = m;
-    return THX_OK;
-}
-
-static size_t z_index(const double *zs, size_t nz, double z)
-{
-    size_t lo = 0, hi = nz;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (zs[mid] <= z) lo = mid; else hi = mid;
-    }
-    return lo;
-}
-
-
-/* Finds a pair of non-adjacent edges of a closed loop that touch (an O(n log n) sweep), or a spike. */
-static int loop_self_intersection(thx_ctx *ctx, const thx_loop *lp, int *ei, int *ej)
-{
-    int n = (int)lp->n;
-    size_t e1 = 0, e2 = 0;
-    int found = thx_loop_touch(&lp->p[0].x, lp->n, &e1, &e2);
-    if (found < 0) return -1;
-    if (found) { *ei = (int)e1; *ej = (int)e2; }
-    (void)ctx;
-    /* Adjacent edges folding back onto each other (a spike) also make a loop invalid. */
-    if (!found)
-        for (int i = 0; i < n; i++) {
-            thx_vec2 a = lp->p[(i + n - 1) % n], b = lp->p[i], c = lp->p[(i + 1) % n];
-            if (thx_orient2d(&a.x, &b.x, &c.x) == 0 && (a.x - b.x) * (c.x - b.x) + (a.y - b.y) * (c.y - b.y) > 0) {
-                *ei = (i + n - 1) % n;
-                *ej = i;
-                return 1;
-            }
-        }
-    return found;
-}
-
-/* Layer number for messages: the file's, or the surface's own for contours built in memory. */
-static int layer_no(const double *zs, size_t nz, const thx_contour_layer *L)
-{
-    return L->index >= 0 ? L->index + 1 : (int)z_index(zs, nz, L->z) + 1;
-}
-
-/* The structure (surfaces, layers, loop sizes, finite values) and, when `geometry`, the loops'
- * geometry (no repeated consecutive points, no self-intersection). */
-static thx_status validate(thx_ctx *ctx, const thx_contours *c, int geometry)
-{
-    const char *path = c->path[0] ? c->path : "<contours>";
-    if (c->n_surfaces == 0) return thx_error(ctx, THX_EINPUT, "%s: no surfaces declared", path);
-    double *zs = NULL;
-    size_t nz = 0;
-    THX_CHECK(all_layer_z(ctx, c, &zs, &nz));
-    thx_status st = THX_OK;
-    for (size_t s = 0; s < c->n_surfaces && st == THX_OK; s++) {
-        const thx_contour_surface *cs = &c->surf[s];
-        if (cs->n_layers == 0) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" has no loops", path, cs->line, cs->name);
-            break;
-        }
-        for (size_t l = 0; l < cs->n_layers && st == THX_OK; l++) {
-            const thx_contour_layer *L = &cs->layers[l];
-            int lno = layer_no(zs, nz, L);
-            if (!isfinite(L->z)) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" layer %d: z is not finite", path, L->line,
-                               cs->name, lno);
-                break;
-            }
-            if (l > 0) {
-                const thx_contour_layer *P = &cs->layers[l - 1];
-                if (!(L->z > P->z)) {
-                    st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": layer z=%g is out of order after z=%g",
-                                   path, L->line, cs->name, L->z, P->z);
-                    break;
-                }
-                size_t ip = z_index(zs, nz, P->z), il = z_index(zs, nz, L->z);
-                if (il != ip + 1) {
-                    st = thx_error(ctx, THX_EINPUT,
-                                   "%s:%d: surface \"%s\" vanishes at z=%g and reappears at z=%g "
-                                   "(a surface must be digitized on consecutive layers)",
-                                   path, L->line, cs->name, zs[ip + 1], L->z);
-                    break;
-                }
-            }
-            for (size_t i = 0; i < L->n_loops && st == THX_OK; i++) {
-                const thx_loop *lp = &L->loops[i];
-                int where = lp->line ? lp->line : L->line;
-                if (lp->n < 3) {
-                    st = thx_error(ctx, THX_EINPUT,
-                                   "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: loop has %zu point%s (at least 3 needed)",
-                                   path, where, cs->name, lno, L->z, i + 1, lp->n, lp->n == 1 ? "" : "s");
-                    break;
-                }
-                for (size_t k = 0; k < lp->n; k++) {
-                    thx_vec2 a = lp->p[k], b = lp->p[(k + 1) % lp->n];
-                    int line = lp->lines ? lp->lines[k] : where;
-                    if (!isfinite(a.x) || !isfinite(a.y)) {
-                        st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: point %zu is not finite",
-                                       path, line, cs->name, lno, L->z, i + 1, k + 1);
-                        break;
-                    }
-                    if (geometry && a.x == b.x && a.y == b.y) {
-                        int bl = lp->lines ? lp->lines[(k + 1) % lp->n] : where;
-                        if (k + 1 == lp->n)
-                            st = thx_error(ctx, THX_EINPUT,
-                                           "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: the last point repeats the "
-                                           "first point (%g, %g): a loop is closed without repeating its first point",
-                                           path, line, cs->name, lno, L->z, i + 1, a.x, a.y);
-                        else
-                            st = thx_error(ctx, THX_EINPUT,
-                                           "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: point %zu repeats point %zu (%g, %g)",
-                                           path, bl, cs->name, lno, L->z, i + 1, k + 2, k + 1, a.x, a.y);
-                        break;
-                    }
-                }
-                if (st != THX_OK || !geometry) continue;
-                int ei = 0, ej = 0;
-                int r = loop_self_intersection(ctx, lp, &ei, &ej);
-                if (r < 0) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); break; }
-                if (r > 0) {
-                    int line = lp->lines ? lp->lines[ei] : where;
-                    st = thx_error(ctx, THX_EINPUT,
-                                   "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: loop intersects itself "
-                                   "(edge %d-%d crosses edge %d-%d)",
-                                   path, line, cs->name, lno, L->z, i + 1, ei + 1, (int)((ei + 1) % lp->n) + 1,
-                                   ej + 1, (int)((ej + 1) % lp->n) + 1);
-                    break;
-                }
-            }
-        }
-    }
-    free(zs);
-    return st;
-}
-
-thx_status thx_contours_validate(thx_ctx *ctx, const thx_contours *c) { return validate(ctx, c, 1); }
-
-thx_status thx_contours_validate_structure(thx_ctx *ctx, const thx_contours *c) { return validate(ctx, c, 0); }
+#include "thorax/core/fileio.h"
 
 /* ---- reading ----------------------------------------------------------- */
 
@@ -330,7 +53,7 @@ static int parse_num(const char *t, double *v)
     return end == q && isfinite(*v);
 }
 
-static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t len, int geometry, thx_contours **out)
+static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out)
 {
     thx_contours *c = NULL;
     thx_status st = THX_OK;
@@ -347,11 +70,11 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
     if (!buf) return THX_ENOMEM;
     memcpy(buf, text, len);
     buf[len] = '\0';
+    int line = 0, seen_header = 0, seen_end = 0, n_layers = 0, direction = 0, layer_loops = 0, frame_line = 0;
+    int units_line = 0, spacing_line = 0, unterminated = 0;
     THX_TRY(thx_contours_create(ctx, &c));
     snprintf(c->path, sizeof c->path, "%s", name);
 
-    int line = 0, seen_header = 0, seen_end = 0, n_layers = 0, direction = 0, layer_loops = 0, frame_line = 0;
-    int units_line = 0, spacing_line = 0, unterminated = 0;
     double scale = 1.0, layer_z = NAN;
     int layer_line = 0;
     thx_loop *cur = NULL;
@@ -484,9 +207,9 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
                 grid *= scale;
                 if (next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\": unexpected text after the cap", name, line, sname); goto done; }
             }
-            if (find_surface(c, sname) >= 0) {
+            if (thx_contours_find_surface(c, sname) >= 0) {
                 st = thx_error(ctx, THX_EINPUT, "%s:%d: surface \"%s\" declared twice (first at line %d)", name, line, sname,
-                               c->surf[find_surface(c, sname)].line);
+                               c->surf[thx_contours_find_surface(c, sname)].line);
                 goto done;
             }
             size_t idx;
@@ -524,11 +247,11 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             char *sname = next_token(&cursor);
             if (!sname || next_token(&cursor)) { st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'loop SURFACE'", name, line); goto done; }
             if (n_layers == 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: loop before the first 'layer' line", name, line); goto done; }
-            int s = find_surface(c, sname);
+            int s = thx_contours_find_surface(c, sname);
             if (s < 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: loop of undeclared surface \"%s\"", name, line, sname); goto done; }
             thx_contour_layer *L;
-            THX_TRY(surface_layer(ctx, &c->surf[s], layer_z, n_layers - 1, layer_line, &L));
-            THX_TRY(layer_add_loop(ctx, L, line, &cur));
+            THX_TRY(thx_contours_layer(ctx, &c->surf[s], layer_z, n_layers - 1, layer_line, &L));
+            THX_TRY(thx_contours_layer_add_loop(ctx, L, line, &cur));
             cur_surf = c->surf[s].name;
             cur_loop_no = L->n_loops;
             layer_loops++;
@@ -570,7 +293,7 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             }
             for (size_t i = 0; i < cs->n_layers; i++) cs->layers[i].index = n_layers - 1 - cs->layers[i].index;
         }
-    THX_TRY(validate(ctx, c, geometry));
+    THX_TRY(thx_contours_validate_structure(ctx, c));
 done:
     free(buf);
     if (st == THX_EINPUT && unterminated && len > 0) { /* the error is on the last line, which has no newline */
@@ -583,30 +306,21 @@ done:
     return st;
 }
 
-thx_status thx_contours_parse(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out)
-{
-    return parse(ctx, name, text, len, 1, out);
-}
-
 thx_status thx_contours_parse_raw(thx_ctx *ctx, const char *name, const char *text, size_t len, thx_contours **out)
 {
-    return parse(ctx, name, text, len, 0, out);
+    return parse(ctx, name, text, len, out);
 }
 
-static thx_status read_file(thx_ctx *ctx, const char *path, int geometry, thx_contours **out)
+thx_status thx_contours_read_raw(thx_ctx *ctx, const char *path, thx_contours **out)
 {
     char *text = NULL;
     size_t len = 0;
     *out = NULL;
     THX_CHECK(thx_read_file(ctx, path, &text, &len));
-    thx_status st = parse(ctx, path, text, len, geometry, out);
+    thx_status st = parse(ctx, path, text, len, out);
     free(text);
     return st;
 }
-
-thx_status thx_contours_read(thx_ctx *ctx, const char *path, thx_contours **out) { return read_file(ctx, path, 1, out); }
-
-thx_status thx_contours_read_raw(thx_ctx *ctx, const char *path, thx_contours **out) { return read_file(ctx, path, 0, out); }
 
 /* ---- writing ----------------------------------------------------------- */
 
@@ -614,7 +328,7 @@ thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *p
 {
     double *zs = NULL;
     size_t nz = 0;
-    THX_CHECK(all_layer_z(ctx, c, &zs, &nz));
+    THX_CHECK(thx_contours_layer_z(ctx, c, &zs, &nz));
     thx_atomic_file af;
     /* an existing file is replaced only when it is thorax's own contours (thorax/fileio.h) */
     thx_status st = thx_atomic_open_output(ctx, path, "thorax-contours", 15, NULL, 0, &af);

@@ -1,12 +1,11 @@
 /*
- * Electrode sets: create, destroy, the text file, and the check against a
- * model (see thorax/electrodes.h; docs/formats.md, "Electrodes", is the
- * specification of the file).
+ * The electrode file (see thorax/io/electrodes_file.h; docs/formats.md,
+ * "Electrodes", is the specification of the file).
  *
  * Decisions recorded here:
  *
- *  - One validator (check_set) serves the writer, the reader and
- *    thx_electrodes_check: at least one electrode, a surface name as a model
+ *  - One validator (thx_electrodes_validate, src/model/electrodes.c) serves the
+ *    writer, the reader and thx_electrodes_check: at least one electrode, a surface name as a model
  *    would accept it, electrode names 1-31 characters from [A-Za-z0-9_.+-]
  *    (one word on their line; not a keyword of the file), unique, nodes >= 0,
  *    finite positions. So whatever is written reads back, and a set read from
@@ -21,12 +20,8 @@
  *    line, and, where it concerns one, the electrode ("e.txt:7: electrode 4
  *    (\"V1\"): node '0' is not a node number (1, 2, ...)"). Electrodes are
  *    counted from 1 in messages, like nodes in the file.
- *
- *  - The check against a model accepts a position within 1e-3 mm of its
- *    node: files written with "%.6f" agree to 5e-7 mm, and anything farther
- *    means the set belongs to another model (or another version of it).
  */
-#include "thorax/electrodes.h"
+#include "thorax/io/electrodes_file.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -36,106 +31,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fileio.h"
+#include "thorax/core/fileio.h"
 #include "io/parse_uint.h"
-
-#define POS_TOL_MM 1e-3
-
-/* ------------------------------------------------------------ the object */
-
-thx_status thx_electrodes_create(thx_ctx *ctx, size_t n, thx_electrodes **out)
-{
-    *out = NULL;
-    if (n == 0) return thx_error(ctx, THX_EINPUT, "an electrode set needs at least one electrode");
-    if (n > (size_t)INT32_MAX) return thx_error(ctx, THX_EINPUT, "%zu electrodes are too many", n);
-    thx_electrodes *e = thx_calloc(ctx, 1, sizeof *e);
-    if (!e) return THX_ENOMEM;
-    e->name = thx_calloc(ctx, n, sizeof *e->name);
-    e->node = thx_calloc(ctx, n, sizeof *e->node);
-    e->xyz = thx_calloc(ctx, 3 * n, sizeof *e->xyz);
-    if (!e->name || !e->node || !e->xyz) {
-        thx_electrodes_destroy(&e);
-        return THX_ENOMEM;
-    }
-    e->n = n;
-    *out = e;
-    return THX_OK;
-}
-
-void thx_electrodes_destroy(thx_electrodes **e)
-{
-    if (!e || !*e) return;
-    free((*e)->name);
-    free((*e)->node);
-    free((*e)->xyz);
-    free(*e);
-    *e = NULL;
-}
-
-/* ------------------------------------------------------------ validation */
-
-static int is_keyword(const char *s)
-{
-    return !strcmp(s, "end") || !strcmp(s, "surface") || !strcmp(s, "count") || !strcmp(s, "thorax-electrodes");
-}
-
-/* NULL if `s` is a valid electrode name, else why not. */
-static const char *bad_name(const char *s, size_t cap)
-{
-    size_t n = strnlen(s, cap);
-    if (n == 0) return "is empty";
-    if (n >= cap) return "is longer than 31 characters";
-    for (const char *c = s; *c; c++)
-        if (!((*c >= 'A' && *c <= 'Z') || (*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_' ||
-              *c == '.' || *c == '+' || *c == '-'))
-            return "has a character outside [A-Za-z0-9_.+-]";
-    if (is_keyword(s)) return "is a keyword of the electrode file";
-    return NULL;
-}
-
-/* NULL if `s` is a valid surface name (as thx_model_write accepts it), else why not. */
-static const char *bad_surface_name(const char *s, size_t cap)
-{
-    size_t n = strnlen(s, cap);
-    if (n == 0) return "is empty";
-    if (n >= cap) return "is longer than 63 characters";
-    if (s[0] == '.') return "starts with '.'";
-    for (const char *c = s; *c; c++)
-        if (!((*c >= 'A' && *c <= 'Z') || (*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_' ||
-              *c == '.' || *c == '-'))
-            return "has a character outside [A-Za-z0-9_.-]";
-    return NULL;
-}
-
-/* The checks every set passes before it is written, after it is read, and
- * when it is checked against a model. `where` prefixes the messages. */
-static thx_status check_set(thx_ctx *ctx, const thx_electrodes *e, const char *where)
-{
-    if (!e || e->n == 0) return thx_error(ctx, THX_EINPUT, "%san electrode set needs at least one electrode", where);
-    const char *why = bad_surface_name(e->surface, sizeof e->surface);
-    if (why) return thx_error(ctx, THX_EINPUT, "%ssurface name \"%.63s\" %s", where, e->surface, why);
-    for (size_t i = 0; i < e->n; i++) {
-        if ((why = bad_name(e->name[i], sizeof e->name[i])))
-            return thx_error(ctx, THX_EINPUT, "%selectrode %zu: name \"%.31s\" %s", where, i + 1, e->name[i], why);
-        if (e->node[i] < 0)
-            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is negative (nodes are 0-based in memory)",
-                             where, i + 1, e->name[i], (int)e->node[i]);
-        if (e->node[i] == INT32_MAX)
-            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is too large", where, i + 1,
-                             e->name[i], (int)e->node[i]);
-        for (int k = 0; k < 3; k++)
-            if (!isfinite(e->xyz[3 * i + k]))
-                return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): position %c is not finite", where, i + 1,
-                                 e->name[i], "xyz"[k]);
-    }
-    /* unique names: n is small (hundreds), a quadratic scan is fine */
-    for (size_t i = 1; i < e->n; i++)
-        for (size_t j = 0; j < i; j++)
-            if (!strcmp(e->name[i], e->name[j]))
-                return thx_error(ctx, THX_EINPUT, "%selectrode %zu: name \"%s\" already used by electrode %zu", where,
-                                 i + 1, e->name[i], j + 1);
-    return THX_OK;
-}
 
 /* ------------------------------------------------------------ writing */
 
@@ -150,7 +47,7 @@ thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const cha
 {
     char where[1100];
     snprintf(where, sizeof where, "%s: ", path);
-    THX_CHECK(check_set(ctx, e, where));
+    THX_CHECK(thx_electrodes_validate(ctx, e, where));
     thx_atomic_file af;
     THX_CHECK(thx_atomic_open(ctx, path, &af));
     FILE *f = af.f;
@@ -218,7 +115,7 @@ static thx_status parse_electrode(const reader *r, char **tok, int ntok, size_t 
 {
     if (ntok != 5)
         return rfail(r, "electrode %zu: expected 'NAME NODE X Y Z', got %d field%s", i + 1, ntok, ntok == 1 ? "" : "s");
-    const char *why = bad_name(tok[0], sizeof e->name[0]);
+    const char *why = thx_electrodes_name_why(tok[0], sizeof e->name[0]);
     if (why) return rfail(r, "electrode %zu: name \"%.40s\" %s", i + 1, tok[0], why);
     for (size_t j = 0; j < i; j++)
         if (!strcmp(e->name[j], tok[0]))
@@ -306,7 +203,7 @@ thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **
                 goto done;
             }
             if (is_surface) {
-                const char *why = bad_surface_name(tok[1], sizeof surface);
+                const char *why = thx_electrodes_surface_name_why(tok[1], sizeof surface);
                 if (why) {
                     st = rfail(&r, "surface name \"%.63s\" %s", tok[1], why);
                     goto done;
@@ -372,7 +269,7 @@ thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **
     {
         char where[1100];
         snprintf(where, sizeof where, "%s: ", path);
-        st = check_set(ctx, e, where); /* cannot fail after the checks above; kept as the invariant */
+        st = thx_electrodes_validate(ctx, e, where); /* cannot fail after the checks above; kept as the invariant */
     }
 done:
     free(text);
@@ -380,40 +277,4 @@ done:
     if (e) snprintf(e->path, sizeof e->path, "%s", path);
     *out = e;
     return st;
-}
-
-/* ------------------------------------------------------------ the check */
-
-thx_status thx_electrodes_check(thx_ctx *ctx, const thx_electrodes *e, const thx_model *m)
-{
-    /* messages name the file the set came from, when it came from one */
-    char fp[sizeof e->path + 2] = "";
-    if (e->path[0]) snprintf(fp, sizeof fp, "%s: ", e->path);
-    THX_CHECK(check_set(ctx, e, ""));
-    if (!m) return thx_error(ctx, THX_EINPUT, "electrodes: no model to check them against");
-    const thx_surface *s = NULL;
-    for (size_t k = 0; k < m->n_surfaces && !s; k++)
-        if (!strcmp(m->surf[k]->name, e->surface)) s = m->surf[k];
-    if (!s) {
-        char list[600] = "";
-        size_t off = 0;
-        for (size_t k = 0; k < m->n_surfaces && off < sizeof list; k++)
-            off += (size_t)snprintf(list + off, sizeof list - off, "%s%s", k ? ", " : "", m->surf[k]->name);
-        return thx_error(ctx, THX_EINPUT, "%sthe electrodes' surface \"%s\" is not in the model (surfaces: %s)",
-                         fp, e->surface, m->n_surfaces ? list : "none");
-    }
-    for (size_t i = 0; i < e->n; i++) {
-        if ((size_t)e->node[i] >= s->n_nodes)
-            return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is not on surface \"%s\" (nodes 1..%zu)",
-                             fp, i + 1, e->name[i], (int)e->node[i] + 1, s->name, s->n_nodes);
-        const double *a = e->xyz + 3 * i, *b = s->xyz + 3 * (size_t)e->node[i];
-        double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-        if (!(d <= POS_TOL_MM))
-            return thx_error(ctx, THX_EINPUT,
-                             "%selectrode %zu (\"%s\"): position (%.6f, %.6f, %.6f) is %.3g mm from node %d of surface "
-                             "\"%s\" at (%.6f, %.6f, %.6f) (tolerance %g mm)",
-                             fp, i + 1, e->name[i], a[0], a[1], a[2], d, (int)e->node[i] + 1, s->name, b[0], b[1], b[2],
-                             POS_TOL_MM);
-    }
-    return THX_OK;
 }

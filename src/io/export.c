@@ -22,9 +22,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "thorax/fileio.h"
-#include "thorax/model.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 int thx_export_format_parse(const char *s, thx_export_format *out)
 {
     static const struct { const char *name; thx_export_format f; } tab[] = {

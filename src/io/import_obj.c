@@ -1,11 +1,11 @@
 /*
- * Surfaces made elsewhere: Wavefront OBJ (thorax/import.h).
+ * Surfaces made elsewhere: Wavefront OBJ (thorax/io/surface_read.h).
  */
 #include "io/import_surface.h"
 
 /* ------------------------------------------------------------- OBJ */
 
-thx_status import_read_obj(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_obj(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     cursor c = {text, len, 0, 1};

@@ -1,5 +1,5 @@
 /*
- * Surfaces made elsewhere: PLY, ascii and binary (thorax/import.h).
+ * Surfaces made elsewhere: PLY, ascii and binary (thorax/io/surface_read.h).
  */
 #include "io/import_surface.h"
 
@@ -40,7 +40,7 @@ typedef struct {
 } ply_elem;
 
 
-thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_ply(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     ply_elem *el = NULL;

@@ -1,5 +1,5 @@
 /*
- * Surfaces made elsewhere: STL, binary and ASCII (thorax/import.h).
+ * Surfaces made elsewhere: STL, binary and ASCII (thorax/io/surface_read.h).
  *
  * STL has no shared vertices: corners are merged when their float
  * coordinates are bit-identical (with -0 = +0), in order of first
@@ -84,7 +84,7 @@ static thx_status merge_node(build *b, merge_map *m, where w, double x, double y
 
 /* ------------------------------------------------------------- STL */
 
-thx_status import_read_stl(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_stl(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     merge_map m = {NULL, 0};

@@ -2,8 +2,8 @@
  * Private pieces shared by the surface readers (src/io/import*.c): the
  * growable node/triangle store every reader builds into (0-based indices,
  * range-checked as they arrive), error positions, and one scalar reader for
- * text or binary data (PLY, VTK). Not installed, not public; the entry points
- * are thx_surface_read_file and thx_surface_import (thorax/import.h).
+ * text or binary data (PLY, VTK). Not installed, not public; the entry point
+ * is thx_surface_read_file (thorax/io/surface_read.h).
  */
 #ifndef THORAX_IO_IMPORT_SURFACE_H
 #define THORAX_IO_IMPORT_SURFACE_H
@@ -19,8 +19,8 @@
 #include <string.h>
 #include <strings.h>
 
-#include "thorax/import.h"
-#include "thorax/fileio.h"
+#include "thorax/io/surface_read.h"
+#include "thorax/core/fileio.h"
 #include "io/import_text.h"
 
 /* ------------------------------------------------------- the surface store */
@@ -150,11 +150,11 @@ static inline thx_status read_scalar(build *b, source *s, scalar_type ty, const 
 
 /* The readers, one per format (src/io/import_FORMAT.c): each fills b from the
  * whole file text[0, len) and the reading fields of info (may be NULL). */
-thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_info *info);
-thx_status import_read_obj(build *b, const char *text, size_t len, thx_import_info *info);
-thx_status import_read_stl(build *b, const char *text, size_t len, thx_import_info *info);
-thx_status import_read_ply(build *b, const char *text, size_t len, thx_import_info *info);
-thx_status import_read_vtk(build *b, const char *text, size_t len, thx_import_info *info);
-thx_status import_read_vtp(build *b, const char *text, size_t len, thx_import_info *info);
+thx_status import_read_tri(build *b, const char *text, size_t len, thx_surface_read_info *info);
+thx_status import_read_obj(build *b, const char *text, size_t len, thx_surface_read_info *info);
+thx_status import_read_stl(build *b, const char *text, size_t len, thx_surface_read_info *info);
+thx_status import_read_ply(build *b, const char *text, size_t len, thx_surface_read_info *info);
+thx_status import_read_vtk(build *b, const char *text, size_t len, thx_surface_read_info *info);
+thx_status import_read_vtp(build *b, const char *text, size_t len, thx_surface_read_info *info);
 
 #endif

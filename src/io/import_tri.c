@@ -1,5 +1,5 @@
 /*
- * Surfaces made elsewhere: OpenMEEG and ECGSim / MBFYS .tri (thorax/import.h).
+ * Surfaces made elsewhere: OpenMEEG and ECGSim / MBFYS .tri (thorax/io/surface_read.h).
  *
  * .tri labels: a node (or triangle) block is "labelled" when the line of
  * its first entry has four tokens (three: unlabelled). When the entries
@@ -57,7 +57,7 @@ static int next_filled_line(cursor *c, const char **t, size_t *n)
  * check decides it), every triangle line three vertex numbers in range, the
  * triangle header repeats one count (once to three times), and nothing but
  * blank lines follows the last triangle. */
-static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_import_info *info)
+static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     cursor c = {text, len, 0, 1};
     const char *t;
@@ -145,7 +145,7 @@ static thx_status read_tri_openmeeg(build *b, const char *text, size_t len, thx_
     return THX_OK;
 }
 
-thx_status import_read_tri(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_tri(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     /* OpenMEEG's variant begins with "- NV"; ECGSim's with the node count */

@@ -1,5 +1,5 @@
 /*
- * Volume meshes made elsewhere: Gmsh MSH 4.1 ASCII (thorax/import.h).
+ * Volume meshes made elsewhere: Gmsh MSH 4.1 ASCII (thorax/io/volume_read.h).
  */
 #include "io/import_volume_impl.h"
 

@@ -1,5 +1,5 @@
 /*
- * Volume meshes made elsewhere: .pts + .tet / .elem, plain and CARP (thorax/import.h).
+ * Volume meshes made elsewhere: .pts + .tet / .elem, plain and CARP (thorax/io/volume_read.h).
  */
 #include "io/import_volume_impl.h"
 

@@ -1,6 +1,6 @@
 /*
  * Volume meshes made elsewhere: legacy VTK UNSTRUCTURED_GRID, and the VTK
- * cell handling the XML reader shares (thorax/import.h).
+ * cell handling the XML reader shares (thorax/io/volume_read.h).
  */
 #include "io/import_volume_impl.h"
 

@@ -1,6 +1,6 @@
 /*
  * Volume meshes made elsewhere: VTK XML UnstructuredGrid (.vtu), ascii,
- * base64 and appended data, raw or zlib-compressed (thorax/import.h).
+ * base64 and appended data, raw or zlib-compressed (thorax/io/volume_read.h).
  */
 #include <zlib.h>
 

@@ -1,9 +1,9 @@
 /*
- * Private pieces shared by the volume-mesh readers (src/io/import_vol_*.c)
- * and the import policy (src/io/import_volume.c): the mesh store every
- * reader fills (struct raw), error positions, line tokens, and the VTK cell
- * handling shared by the legacy and XML VTK readers. Not installed, not
- * public; the entry point is thx_volume_import (thorax/import.h).
+ * Private pieces shared by the volume-mesh readers (src/io/import_vol_*.c,
+ * dispatched by src/io/import_volume.c): the mesh store every reader fills
+ * (thx_volume_file, called raw here), error positions, line tokens, and the
+ * VTK cell handling shared by the legacy and XML VTK readers. Not installed,
+ * not public; the entry point is thx_volume_file_read (thorax/io/volume_read.h).
  */
 #ifndef THORAX_IO_IMPORT_VOLUME_IMPL_H
 #define THORAX_IO_IMPORT_VOLUME_IMPL_H
@@ -20,9 +20,8 @@
 #include <strings.h>
 
 #include "io/import_text.h"
-#include "thorax/fileio.h"
-#include "thorax/import.h"
-
+#include "thorax/core/fileio.h"
+#include "thorax/io/volume_read.h"
 /* Can path be opened for reading? */
 static inline int readable(const char *path)
 {
@@ -49,48 +48,9 @@ static inline int with_extension(char *out, size_t size, const char *path, const
 
 /* ------------------------------------------------------- the mesh store */
 
-typedef struct {
-    int dim;
-    long long tag;
-    char name[128];
-} tag_name;
-
-typedef struct {
-    thx_ctx *ctx;
-    const char *path;     /* the file being read (for messages) */
-    double *xyz;
-    size_t n_nodes, cap_nodes;
-    long long *node_tag;  /* Gmsh: the file's node tags (else NULL: nodes are numbered by position) */
-    size_t cap_node_tag;
-    int32_t *tet;         /* 4 per tetrahedron, 0-based */
-    long long *tag;       /* per tetrahedron: the file's region number (0 when has_tags is 0) */
-    long long *ref;       /* per tetrahedron: where the file has it (ref_kind) */
-    size_t n_tets, cap_tets, cap_tag, cap_ref;
-    const char *ref_kind; /* "line", "cell", "element" */
-    int has_tags;
-    int32_t *tri;         /* Gmsh triangles of named physical surfaces (0-based nodes) */
-    long long *tri_tag;
-    size_t n_tris, cap_tri, cap_tri_tag;
-    tag_name *names;      /* Gmsh physical names, dimensions 2 and 3 */
-    size_t n_names, cap_names;
-    size_t n_ignored;     /* cells of dimension 0-2 */
-    char detail[96];
-    char region_source[160];
-    int index_base, index_base_detected;
-    char path2[1024];
-} raw;
-
-static inline void raw_free(raw *r)
-{
-    free(r->xyz);
-    free(r->node_tag);
-    free(r->tet);
-    free(r->tag);
-    free(r->ref);
-    free(r->tri);
-    free(r->tri_tag);
-    free(r->names);
-}
+/* The mesh store every reader fills (thorax/io/volume_read.h). */
+typedef thx_volume_file raw;
+typedef thx_volume_file_name tag_name;
 
 /* Where an error is: a line of text (line > 0), a byte offset (line == 0,
  * byte != NOWHERE) or the file as a whole. */
@@ -149,12 +109,7 @@ static inline thx_status add_name(raw *r, int dim, long long tag, const char *na
     return THX_OK;
 }
 
-static inline const char *name_of(const raw *r, int dim, long long tag)
-{
-    for (size_t i = 0; i < r->n_names; i++)
-        if (r->names[i].dim == dim && r->names[i].tag == tag) return r->names[i].name;
-    return NULL;
-}
+static inline const char *name_of(const raw *r, int dim, long long tag) { return thx_volume_file_name_of(r, dim, tag); }
 
 /* The tokens of the current line, from the cursor to the line's end (at
  * most max kept); returns how many there are (possibly more than max). */

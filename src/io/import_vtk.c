@@ -1,5 +1,5 @@
 /*
- * Surfaces made elsewhere: legacy VTK POLYDATA and VTK XML PolyData (.vtp) (thorax/import.h).
+ * Surfaces made elsewhere: legacy VTK POLYDATA and VTK XML PolyData (.vtp) (thorax/io/surface_read.h).
  */
 #include "io/import_surface.h"
 
@@ -91,7 +91,7 @@ static thx_status vtk_cells(build *b, int kind, const double *off, size_t n_cell
     return THX_OK;
 }
 
-thx_status import_read_vtk(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_vtk(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     source s = {{text, len, 0, 1}, 0, 1};
@@ -283,7 +283,7 @@ static thx_status vtp_array(build *b, const char *buf, const char *tag, const ch
     return THX_OK;
 }
 
-thx_status import_read_vtp(build *b, const char *text, size_t len, thx_import_info *info)
+thx_status import_read_vtp(build *b, const char *text, size_t len, thx_surface_read_info *info)
 {
     thx_status st = THX_OK;
     const char *end = text + len;

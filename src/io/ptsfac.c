@@ -24,8 +24,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fileio.h"
-#include "thorax/model.h"
+#include "thorax/core/fileio.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 #include "io/volume_io.h"
 
 /* Writes one coordinate "%.6f", with a value that rounds to zero as +0 (the rule is in model.c). */

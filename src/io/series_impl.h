@@ -8,8 +8,8 @@
 
 #include <stddef.h>
 
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 /* The time axis of `dt` files: one expression, shared by writer and reader so
  * that the writer's "is this axis uniform?" test predicts the reader's bits. */
 static inline double uniform_time(double t0, double dt, size_t f) { return t0 + (double)f * dt; }

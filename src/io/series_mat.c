@@ -14,8 +14,8 @@
  *    libmatio prints nothing unless someone calls Mat_LogInit, which the
  *    library never does; its failures are reported in our own words.
  */
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
@@ -31,7 +31,7 @@
 
 #include <matio.h>
 
-#include "thorax/fileio.h"
+#include "thorax/core/fileio.h"
 #include "io/series_impl.h"
 
 /* ------------------------------------------------------------- MATLAB */

@@ -1,8 +1,8 @@
 /*
  * map3d .pot files (read only): the values of one time instant, one per node.
  */
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
@@ -18,7 +18,7 @@
 
 #include <matio.h>
 
-#include "thorax/fileio.h"
+#include "thorax/core/fileio.h"
 #include "io/series_impl.h"
 
 /* map3d .pot: the values of one time instant, one per node (any whitespace between them). */

@@ -8,8 +8,8 @@
  *    file size must equal the header's sizes exactly, so truncation and
  *    trailing bytes are both caught before anything is allocated.
  */
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
@@ -25,7 +25,7 @@
 
 #include <matio.h>
 
-#include "thorax/fileio.h"
+#include "thorax/core/fileio.h"
 #include "io/series_impl.h"
 
 #define RAW_MAGIC "THXSER01"

@@ -14,8 +14,8 @@
  *    count. Text is read line by line (getline) and parsed with strtod; a
  *    token ends at a blank or '#'.
  */
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
@@ -31,7 +31,7 @@
 
 #include <matio.h>
 
-#include "thorax/fileio.h"
+#include "thorax/core/fileio.h"
 #include "io/parse_uint.h"
 #include "io/series_impl.h"
 

@@ -48,8 +48,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/fileio.h"
-
+#include "thorax/core/fileio.h"
 #define VOLUME_PTS "volume.pts"
 #define VOLUME_TET "volume.tet"
 #define VOLUME_STEINER "volume.steiner"

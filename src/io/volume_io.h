@@ -10,8 +10,8 @@
 #include <cjson/cJSON.h>
 #include <stdio.h>
 
-#include "thorax/model.h"
-
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 /* Shared text helpers (defined in ptsfac.c). */
 /* Writes one coordinate "%.6f", a value that rounds to zero as "0.000000". */
 void thx_io_put_coord(FILE *f, double v);

@@ -6,8 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "thorax/mesh.h"
-
+#include "thorax/mesh/mesh.h"
 typedef struct {
     const char *tissue;
     double along, across; /* along the body axis (z) and across it; equal when isotropic */

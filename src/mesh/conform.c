@@ -24,9 +24,8 @@
 #include <string.h>
 
 #include "mesh/conform.h"
-#include "thorax/cdt.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/cdt.h"
+#include "thorax/geom/predicates.h"
 #define MIN_PIECE 1e-4 /* mm: shorter pieces mean surfaces touching or crossing */
 #define MAX_ROUNDS 200
 #define MAX_DEPTH 22 /* bits of an edge point's parameter */

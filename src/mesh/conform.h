@@ -24,9 +24,8 @@
 #ifndef THORAX_MESH_CONFORM_H
 #define THORAX_MESH_CONFORM_H
 
-#include "thorax/delaunay.h"
-#include "thorax/volume.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/model/volume.h"
 /* A face of the mesh on a surface triangle, oriented like the triangle (counterclockwise seen from
  * outside the surface). */
 typedef struct {

@@ -62,9 +62,8 @@
  * then o.n[j] = (t << 2) | i and the two faces have the same vertices;
  * every live tetrahedron has four neighbours (the ghosts close the space).
  */
-#include "thorax/delaunay.h"
-#include "thorax/predicates.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/geom/predicates.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -19,8 +19,7 @@
 
 #include "mesh/improve.h"
 #include "mesh/triset.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/predicates.h"
 #define MAX_RING 12    /* edges with more tetrahedra around them are not removed */
 #define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
 #define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */

@@ -35,8 +35,7 @@
 #ifndef THORAX_MESH_IMPROVE_H
 #define THORAX_MESH_IMPROVE_H
 
-#include "thorax/volume.h"
-
+#include "thorax/model/volume.h"
 enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16 };
 
 typedef struct {

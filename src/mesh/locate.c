@@ -6,9 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/inside.h"
-#include "thorax/predicates.h"
-
+#include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
 typedef struct {
     const thx_surface *s;
     const double *p, *q;

@@ -11,9 +11,8 @@
 #ifndef THORAX_MESH_LOCATE_H
 #define THORAX_MESH_LOCATE_H
 
-#include "thorax/geom.h"
-#include "thorax/spatial.h"
-
+#include "thorax/model/surface.h"
+#include "thorax/geom/spatial.h"
 typedef struct {
     const thx_surface *s;
     thx_bvh *bvh;

@@ -32,9 +32,8 @@
 #include "mesh/improve.h"
 #include "mesh/locate.h"
 #include "mesh/triset.h"
-#include "thorax/delaunay.h"
-#include "thorax/mesh.h"
-
+#include "thorax/mesh/delaunay.h"
+#include "thorax/mesh/mesh.h"
 void thx_mesh_opts_default(thx_mesh_opts *o)
 {
     memset(o, 0, sizeof *o);

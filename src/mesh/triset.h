@@ -12,8 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 typedef struct { int32_t a, b, c; } triple;
 typedef struct { triple *slot; size_t mask; } tset;
 

@@ -46,9 +46,10 @@
  * (divergence theorem over the triangles), or the mean of its nodes when the
  * surface has no triangles or encloses no positive volume.
  */
-#include "thorax/electrodes.h"
-#include "thorax/phantom.h"
-
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

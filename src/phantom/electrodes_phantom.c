@@ -42,16 +42,16 @@
  *    each takes the nearest node not taken by an earlier one.
  * Everything is deterministic (no randomness, fixed order).
  */
-#include "thorax/electrodes.h"
-
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/phantom.h"
-#include "thorax/slice.h"
-
+#include "thorax/geom/slice.h"
 /* A cross-section: one closed loop, counterclockwise seen from above, with
  * cumulative arc lengths and its bounding box. */
 typedef struct {

@@ -23,16 +23,15 @@
  *     then the layer's (x, y) shift. A loop that came out self-intersecting is
  *     redrawn (deterministically, from the same stream).
  */
-#include "thorax/phantom.h"
-
+#include "thorax/phantom/phantom.h"
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/predicates.h"
-
+#include "thorax/geom/contours_valid.h"
+#include "thorax/geom/predicates.h"
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

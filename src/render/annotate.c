@@ -30,8 +30,7 @@
 #include <ft2build.h>
 #include FT_FREETYPE_H
 
-#include "thorax/image.h"
-
+#include "thorax/render/image.h"
 struct thx_font {
     FT_Library lib;
     FT_Face face;

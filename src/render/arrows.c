@@ -6,8 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/render.h"
-
+#include "thorax/render/render.h"
 typedef struct {
     double mag2;
     size_t i;

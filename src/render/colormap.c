@@ -24,9 +24,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "thorax/image.h"
-#include "thorax/render.h"
-
+#include "thorax/render/image.h"
+#include "thorax/render/render.h"
 /* ------------------------------------------------------------- colour science */
 
 /* D65 reference white of CIELAB, XYZ with Y = 1. */

@@ -12,8 +12,7 @@
  * light, as the simplified API's rule is, and encoded to sRGB (0.5 becomes
  * 186, not 128): other viewers may show such files darker.
  */
-#include "thorax/image.h"
-
+#include "thorax/render/image.h"
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,8 +21,7 @@
 #include <png.h>
 #include <zlib.h>
 
-#include "thorax/fileio.h"
-
+#include "thorax/core/fileio.h"
 /* Largest side accepted: keeps 4 w h far from overflow and refuses absurd PNG headers before
    allocating (32768^2 RGBA is 4 GiB). */
 #define THX_IMAGE_MAX_SIDE 32768

@@ -11,8 +11,7 @@
 #ifndef THORAX_RENDER_INTERNAL_H
 #define THORAX_RENDER_INTERNAL_H
 
-#include "thorax/render.h"
-
+#include "thorax/render/render.h"
 /* The camera's orthonormal frame: right, up and back (from the centre toward the eye). Returns -1
  * when the camera is degenerate (eye at the centre, up along the line of sight, non-finite). */
 int cam_frame(const thx_camera *cam, double right[3], double up[3], double back[3]);

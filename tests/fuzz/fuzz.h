@@ -27,8 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/core.h"
-
+#include "thorax/core/core.h"
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* The process's scratch directory (created on first use, removed at exit). */

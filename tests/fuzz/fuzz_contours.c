@@ -11,9 +11,11 @@
 #include <math.h>
 
 #include "fuzz.h"
-#include "thorax/contours.h"
-#include "thorax/repair.h"
-
+#include "thorax/model/contours.h"
+#include "thorax/io/contours_file.h"
+#include "thorax/geom/contours_valid.h"
+#include "thorax/check/contours.h"
+#include "thorax/geom/repair.h"
 static size_t count_points(const thx_contours *c, size_t *loops)
 {
     size_t n = 0;

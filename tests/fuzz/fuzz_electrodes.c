@@ -9,8 +9,10 @@
 #include <math.h>
 
 #include "fuzz.h"
-#include "thorax/electrodes.h"
-
+#include "thorax/model/electrodes.h"
+#include "thorax/io/electrodes_file.h"
+#include "thorax/leads/leads.h"
+#include "thorax/phantom/phantom.h"
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const char *path = fuzz_file("e.txt", data, size);

@@ -23,16 +23,16 @@
 #include <math.h>
 
 #include "fuzz.h"
-#include "thorax/import.h"
-#include "thorax/mesh.h"
-#include "thorax/model.h"
-
+#include "thorax/import/import.h"
+#include "thorax/mesh/mesh.h"
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 static inline void fuzz_surface(const uint8_t *data, size_t size, const char *file, thx_import_format fmt)
 {
     const char *path = fuzz_file(file, data, size);
     thx_ctx *ctx = fuzz_ctx();
     thx_surface *s = NULL;
-    thx_import_info info;
+    thx_surface_read_info info;
     if (thx_surface_read_file(ctx, path, NULL, fmt, "s", THX_ROLE_OUTER, &s, &info) == THX_OK) {
         FUZZ_ASSERT(s && s->n_nodes >= 1 && s->n_nodes <= size && s->n_tris <= size);
         FUZZ_ASSERT(info.n_nodes_read == s->n_nodes && info.n_tris_read == s->n_tris);

@@ -9,9 +9,9 @@
  * written back and read again has the same surfaces, counts, frame and volume.
  */
 #include "fuzz.h"
-#include "thorax/model.h"
-#include "thorax/volume.h"
-
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/volume.h"
 #include "model_fixture.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

@@ -8,9 +8,9 @@
  */
 #include "fuzz.h"
 #include "model_fixture.h"
-#include "thorax/model.h"
-#include "thorax/volume.h"
-
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/volume.h"
 static const char *const PARTS[] = {"volume.pts", "volume.tet", "volume.steiner", "box.vmap"};
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

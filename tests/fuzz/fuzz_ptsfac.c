@@ -9,8 +9,8 @@
 #include <math.h>
 
 #include "fuzz.h"
-#include "thorax/model.h"
-
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const uint8_t *nul = memchr(data, 0, size);

@@ -14,8 +14,8 @@
 #include <math.h>
 
 #include "fuzz.h"
-#include "thorax/series.h"
-
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
 static int same_value(double a, double b) { return (isnan(a) && isnan(b)) || a == b; }
 
 static void series_fuzz_round_trip(thx_ctx *ctx, const thx_series *s, const char *name, thx_series_format fmt)

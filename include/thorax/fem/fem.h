@@ -1,0 +1,284 @@
+/*
+ * thorax/fem.h — finite-element volume-conductor solutions (paper 4.1).
+ *
+ * Linear tetrahedral elements on a thx_volume: the stiffness matrix
+ *   K_ij = sum over tetrahedra T of |T| grad(l_i) . sigma_T grad(l_j)
+ * (l_i the barycentric functions, sigma_T the tensor of T's region). With
+ * lengths in mm and conductivities in S/m, K is in S/m x mm = mS: (K phi)_i
+ * is the current (mA) leaving node i's share of the domain when phi is in
+ * volts, so nodal current loads are given in mA (or uA with phi in mV).
+ *
+ * Assembly is plain C with OpenMP (thx_fem_assemble); the solves go through
+ * PETSc (KSP, default conjugate gradients with algebraic multigrid, every
+ * PETSc runtime option honoured) on PETSC_COMM_WORLD, so the same code runs
+ * under mpirun with the rows split over the ranks. Every rank holds the whole
+ * mesh (500,000 tetrahedra are 10 MB) and assembles only its own rows.
+ */
+#ifndef THORAX_FEM_H
+#define THORAX_FEM_H
+
+#include <stdint.h>
+
+#include "thorax/model/volume.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A sparse matrix in compressed rows (0-based, columns sorted in each row). */
+typedef struct {
+    int32_t n_rows, n_cols;
+    int64_t *row;   /* n_rows + 1 */
+    int32_t *col;   /* row[n_rows] */
+    double *val;
+} thx_csr;
+
+void thx_csr_free(thx_csr *a);
+/* y = A x */
+void thx_csr_mul(const thx_csr *a, const double *x, double *y);
+
+/*
+ * The stiffness matrix of the volume's tetrahedra whose region is enabled
+ * (use_region[r] != 0; NULL = all), n_nodes x n_nodes. Errors: a region
+ * whose tensor is not symmetric positive definite (named), a tetrahedron
+ * with non-positive volume (numbered).
+ */
+thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K);
+
+/* Nodes used by the enabled tetrahedra (1) or not (0), n_nodes bytes. */
+thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, unsigned char **active);
+
+/* ---- solving (PETSc) ---- */
+
+/* PetscInitialize with the PETSc options found in argv (arguments from the first one starting with a
+ * single '-' that is not one of ours are left to PETSc); idempotent. rank/size of PETSC_COMM_WORLD. */
+thx_status thx_fem_init(int argc, char **argv, int *rank, int *size);
+void thx_fem_finalize(void);
+
+typedef struct thx_fem_system thx_fem_system;
+
+/*
+ * The system for the free nodes: K_ff phi_f = f_f - K_fd phi_d, where
+ * kind[i] is 0 for an inactive node (not in the system), 1 free, 2 prescribed
+ * (Dirichlet). A free block without any prescribed node (pure Neumann) is
+ * accepted only with pin_one: the first free node is then prescribed 0.
+ * The KSP is created with KSPSetFromOptions (default -ksp_type cg -pc_type
+ * gamg, rtol 1e-10) and keeps its preconditioner across solves.
+ */
+thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                 thx_fem_system **out);
+void thx_fem_system_destroy(thx_fem_system **s);
+
+typedef struct {
+    int iterations;
+    double residual;   /* final relative residual (as KSP reports it; the true one for a direct solve) */
+    double seconds;
+    int converged;     /* KSPConvergedReason > 0 */
+} thx_fem_solve_stats;
+
+/*
+ * One solve. phi (n_nodes, on every rank): on entry the prescribed values at
+ * kind == 2 nodes and, with warm = 1, the initial guess at free nodes; on
+ * return the solution at every active node (inactive: 0). load (n_nodes, or
+ * NULL): nodal currents (mA per V of phi units) at free nodes. A solve that
+ * does not converge is THX_ESOLVER with KSP's reason in the message.
+ */
+thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
+                         thx_fem_solve_stats *st);
+
+/* Writes K_ff and the right-hand side for phi's prescribed values (and load, or NULL) in PETSc's
+ * binary format (MatLoad / VecLoad order: matrix, then vector) — for running PETSc alone on the very
+ * same system (bench/forward.sh). */
+thx_status thx_fem_system_dump(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, const char *path);
+
+/*
+ * Tells the system how many right-hand sides will follow. Unless the
+ * command line chose a solver (-ksp_type or -pc_type), n_rhs >= 12 switches
+ * to a sparse Cholesky factorization (-ksp_type preonly -pc_type cholesky,
+ * CHOLMOD on one rank, MUMPS on several): on the high-resolution phantom the
+ * factorization costs about 11 solves of CG + GAMG and each solve after it
+ * a seventh of one (docs/decisions.md). Call before the first solve.
+ */
+void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
+
+/* Free and prescribed node counts, and the setup time (matrix + preconditioner) so far, seconds. */
+void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
+/* Of the setup time: building PETSc's matrix from ours (the rest is the preconditioner's setup). */
+double thx_fem_system_matrix_seconds(const thx_fem_system *s);
+/* The KSP and PC types in use ("cg", "gamg", ...) and the number of MPI ranks. */
+void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks);
+
+/* Current density J = -sigma grad(phi) per tetrahedron (3 per tet; A/m^2 for phi in V and mm,
+ * i.e. the gradient is converted to V/m) and per node (volume-weighted average of the tetrahedra
+ * around it, enabled regions only; 0 at inactive nodes). Either output may be NULL. */
+void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, const double *phi, double *j_tet,
+                      double *j_node);
+
+/* ---- forward problems (paper 4.1) ---- */
+
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/series.h"
+#include "thorax/io/series_file.h"
+typedef struct {
+    int keep_volume;        /* also return the potentials at every volume node */
+    int warm;               /* start each frame from the previous frame's solution (default 1) */
+    void (*progress)(void *user, size_t done, size_t total); /* after each frame (may be NULL) */
+    void *user;
+    const char *dump_system; /* if set: the first frame's system written there (thx_fem_system_dump) */
+} thx_forward_opts;
+
+typedef struct {
+    thx_series *torso;      /* the outer surface's nodes x frames */
+    thx_series *volume;     /* every volume node x frames (keep_volume), else NULL */
+    size_t n_free, n_prescribed;
+    int it_min, it_max;     /* iterations per frame */
+    long it_total;
+    double max_residual;
+    double t_assemble, t_setup, t_solve; /* seconds: stiffness, matrix + preconditioner, all solves */
+    double t_matrix;        /* of t_setup: handing the matrix to PETSc */
+    char ksp[32], pc[32];   /* solver in use */
+    int ranks;
+} thx_forward_result;
+
+void thx_forward_opts_default(thx_forward_opts *o);
+void thx_forward_result_free(thx_forward_result *r);
+
+/*
+ * The epicardial forward problem: the potentials of epi (rows: the nodes of
+ * the model's heart surface, in order; any unit) prescribed on the heart
+ * surface, no current through the outer surface, the heart's interior (the
+ * region named "heart", if meshed) left out. The Steiner nodes on the heart
+ * surface (v->steiner) are prescribed too, each the barycentric mix of its
+ * triangle's corner values (so the prescribed potential is the piecewise
+ * linear one on the heart's triangles). The volume is not checked here
+ * (thorax forward runs thx_volume_check first). Errors: no volume mesh, no or
+ * several heart/outer surfaces, a row count that does not match, NaN/Inf
+ * values (row and frame named), a region tensor not positive definite, a
+ * solve that does not converge.
+ */
+thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const thx_forward_opts *o,
+                                  thx_forward_result *r);
+
+/*
+ * The transfer matrix of the epicardial problem: T (rows x heart nodes) with
+ * phi_rows = T phi_heart, rows the outer surface's nodes (rows == NULL) or
+ * the given outer-surface nodes (an electrode set, n_rows of them). Heart
+ * node j's column prescribes 1 at the node and, at each Steiner node of the
+ * heart, its weight of corner j (as thx_forward_epicardial interpolates). Computed
+ * column by column (one solve per heart node, `forward`) or row by row (one
+ * solve per row with K symmetric: row i = -(K_ff^-1 e_i)^T K_fd, `adjoint`);
+ * method < 0 picks the one with fewer solves. Returned as a series whose
+ * "frames" are the heart nodes (time axis = heart node numbers, 1-based).
+ */
+thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
+                                const thx_forward_opts *o, thx_series **T, thx_forward_result *info);
+
+/* phi = T epi: a series with T's rows and epi's frames. */
+thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out);
+
+/* ---- verification (thorax verify, docs/validation.md) ---- */
+
+typedef struct {
+    int n;                   /* cells per cube edge of the cubed-sphere mesh; the spheres: nodes per icosphere */
+    size_t nodes, tets;
+    double h;                /* mean edge length, mm (the spheres: of the tetrahedra between r = a and r = c) */
+    double rdm, mag;         /* at the outer surface's nodes against the analytic solution */
+    double max_err;          /* largest nodal error on the outer surface / largest |analytic| there */
+    double net_current;      /* current out of the inner sphere / the sum of its magnitudes */
+    int iterations;
+    double seconds;          /* the solve */
+    /* the spheres only (thx_verify_spheres) */
+    size_t steiner;          /* Steiner nodes thorax mesh put on the three surfaces */
+    double lin_err;          /* largest |phi - z/a| at the brain's interior nodes (exactly linear there: 0 to
+                                the solver's tolerance) */
+    double t_mesh;           /* seconds in thx_mesh_build */
+} thx_verify_row;
+
+/*
+ * Concentric shells a = 40, b = 70, c = 100 mm (thorax/verify.h): P_l(cos
+ * theta) prescribed on r = a, no current through r = c, conductivity s1 in
+ * the inner shell and s2 in the outer one; the finite-element solution on
+ * the cubed-sphere mesh with n cells per cube edge (n/2 layers per shell)
+ * compared with the analytic one at the outer surface.
+ */
+thx_status thx_verify_shells(thx_ctx *ctx, int l, double s1, double s2, int n, thx_verify_row *row);
+
+/*
+ * OpenMEEG's three spheres (its test model data/HeadN: radii 0.87, 0.92, 1
+ * and HeadN.cond, here in mm): brain r < 87 mm (1 S/m), skull 87 < r < 92 (0.0125), scalp 92 < r < 100
+ * (1), each surface an icosphere of 10 4^level + 2 nodes (thx_icosphere),
+ * the whole meshed by the library's mesher (thx_mesh_build, default options
+ * but the grid, 60 / 2^level mm, so that surfaces and volume refine
+ * together: level 5 is 10,242 nodes per sphere and a 1.875 mm grid) with
+ * brain, skull and scalp as regions, and the mesh checked as thorax mesh
+ * checks it (thx_volume_check; a failure is THX_ECHECK with the reasons).
+ * Then the epicardial forward problem of thorax forward
+ * (thx_forward_epicardial, the brain's surface in the heart's role): P_1 =
+ * cos(theta) at the brain surface's nodes, its Steiner nodes interpolated,
+ * no current through the scalp. Compared with the analytic solution of the
+ * concentric spheres (thx_shells_potential with a = 87, b = 92, c = 100)
+ * at the scalp's nodes; the brain's interior must be the linear z / a.
+ * level 2 to 6 (level 5: 3.9 M tetrahedra, 0.9 GB; level 6: 31 M, 7 GB).
+ */
+thx_status thx_verify_spheres(thx_ctx *ctx, int level, thx_verify_row *row);
+
+/* The anisotropic slab: the largest nodal error against the closed form (linear: exact for P1
+ * elements up to the solver's tolerance), relative to the largest potential. */
+thx_status thx_verify_slab(thx_ctx *ctx, double *rel_err, size_t *nodes);
+
+/* ---- defibrillation (paper 4.1) ---- */
+
+/* An electrode patch: volume nodes on a surface, each with its share of the patch's area: the
+ * surface's nodes chosen, then the Steiner nodes (thorax/volume.h) on the part of the surface they
+ * span (a Steiner node whose non-zero barycentric weights all fall on chosen nodes). */
+typedef struct {
+    char name[32];
+    int is_voltage;     /* 1: the patch is held at `value` volts; 0: it injects `value` amperes */
+    double value;
+    size_t n;
+    int32_t *node;      /* volume nodes */
+    double *weight;     /* share of the area (sums to 1) */
+    double area;        /* mm^2 */
+} thx_patch;
+
+/* The nodes of model surface s within radius (mm) of center, and the Steiner nodes among them (above);
+ * weights from the areas of the mesh faces on the surface around each node (a third of each face's
+ * area per patch node on it; without Steiner nodes these are the surface's triangles). Error if no
+ * node is inside. */
+thx_status thx_patch_disc(thx_ctx *ctx, const thx_model *m, size_t s, const double center[3], double radius,
+                          thx_patch *p);
+/* The given nodes of surface s (0-based surface node numbers). */
+thx_status thx_patch_nodes(thx_ctx *ctx, const thx_model *m, size_t s, const int32_t *nodes, size_t n, thx_patch *p);
+void thx_patch_free(thx_patch *p);
+
+typedef struct {
+    double threshold;        /* V/cm */
+    double heart_volume;     /* mm^3 of the heart region */
+    double frac_above;       /* fraction of the heart's volume where |E| > threshold */
+    double e_min, e_mean, e_max;  /* |E| in the heart, V/cm (mean volume-weighted) */
+    double phi_min, phi_max;      /* potential in the heart, V */
+    double j_min, j_mean, j_max;  /* current density |J| in the heart, A/m^2 (mean volume-weighted) */
+    double current[16];      /* current leaving each patch into the body, A (given for current patches) */
+    double voltage[16];      /* mean potential of each patch, V */
+    int iterations;
+    double residual, t_assemble, t_setup, t_solve;
+    char ksp[32], pc[32];
+    int ranks;
+} thx_defib_report;
+
+/*
+ * The defibrillation problem: the whole domain (heart included), patches
+ * held at voltages (Dirichlet) or injecting currents (Neumann loads,
+ * distributed by area); at least one voltage patch, or currents summing to
+ * zero (the potential is then given relative to its mean over the volume).
+ * phi (n_nodes, malloc'ed, V) and field (|E| per tetrahedron, V/cm,
+ * malloc'ed) on return; either pointer may be NULL. Requires a region named
+ * "heart" for the report (else the figures are over nothing and say so).
+ */
+thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *patches, size_t n_patches, double threshold,
+                           double **phi, double **field, thx_defib_report *rep);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,101 @@
+/*
+ * thorax/mesh.h — tetrahedral volume meshes from a surface model (paper 3.3,
+ * "Volume Segmentation").
+ *
+ * The paper's hybrid method, made conforming: the nodes of the surfaces, plus
+ * a planar grid of points on each layer inside the outer boundary with the
+ * points within a tolerance of any surface dropped, are tetrahedralized
+ * (Delaunay, thorax/delaunay.h); points are then added ON the surfaces
+ * (Steiner points, recorded in the volume) until every surface triangle is a
+ * union of mesh faces; the surfaces cut the mesh into pieces, each piece
+ * gets a tissue region by a chain of inside/outside tests (the paper's) and
+ * the pieces outside the outer surface are removed, so the boundary is the
+ * outer surface and every region's boundary is its surfaces, exactly;
+ * slivers inside are repaired by flips and grid-node moves that keep every
+ * face on a surface; conductivities come from a region table.
+ */
+#ifndef THORAX_MESH_H
+#define THORAX_MESH_H
+
+#include "thorax/model/model.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/model/volume.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    double grid;          /* grid spacing in each layer plane, mm; 0 (default) = 6.5 + 0.3 (d - 5) for a
+                             median gap d between the planes (5 mm layers: 6.5 mm; 10 mm layers: 8 mm) */
+    double tol;           /* grid points closer than tol to a surface are dropped, mm (0 = grid / 2) */
+    double layer_spacing; /* planes every layer_spacing mm; 0 = the layers of the outer surface's nodes
+                             when they lie on planes (a model built from contours), else `grid` */
+    int no_heart;         /* 1: the heart's interior is not part of the domain */
+    double radius_edge;   /* Delaunay refinement: tetrahedra with a larger radius-edge ratio get their
+                             circumcentre (default 2; 0 = off) */
+    double refine_deg;    /* ... and those with a smaller dihedral angle, degrees (default 10; 0 = off) */
+    double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
+                             flips and by moving grid nodes (default 15; 0 = no repair) */
+    /* region table changes: region `name` (mean_thorax, fat, muscle, lung, heart or a surface's name)
+       renamed to `rename` (when not empty) and given the isotropic conductivity sigma (S/m, when > 0) */
+    struct { char name[64], rename[64]; double sigma; } region_set[16];
+    size_t n_region_set;
+    /* progress (optional): called from the calling thread with the stage's name ("points",
+       "Delaunay", "conformity", "refinement", "regions", "repair") and the share done, 0 to 1 */
+    void (*progress)(void *user, const char *stage, double done);
+    void *progress_user;
+} thx_mesh_opts;
+
+typedef struct {
+    size_t n_surface_nodes, n_grid_nodes, n_planes;
+    double grid;              /* the grid spacing used, mm */
+    size_t n_delaunay_tets;   /* tetrahedra of the convex hull (after the Steiner points) */
+    size_t n_surface_tris;    /* surface triangles */
+    size_t n_missing_before;  /* of those, not faces of the first Delaunay tetrahedralization */
+    size_t n_steiner_edge, n_steiner_face; /* Steiner points added on surface edges / inside triangles */
+    size_t n_steiner;         /* Steiner nodes in the result */
+    size_t n_split_triangles; /* surface triangles that are more than one mesh face */
+    size_t conform_rounds;
+    double min_piece;         /* shortest piece of a surface edge, mm */
+    double t_conform;         /* seconds */
+    size_t n_refine_points;   /* quality refinement: circumcentres inserted */
+    size_t n_refine_surface;  /* ... points put on the surfaces instead */
+    size_t n_refine_near;     /* ... of the circumcentres, those put close to a small surface piece */
+    size_t n_refine_left;     /* bad tetrahedra left at small surface pieces */
+    size_t refine_rounds;
+    int refine_limited;       /* stopped at its point limit */
+    double t_refine;
+    size_t n_pieces;          /* pieces of space between the surfaces (flood fill) */
+    size_t n_centroid_tested;   /* tetrahedra whose centroid was classified (about 512 per piece) */
+    size_t n_centroid_disagree; /* of those, disagreeing with their piece's majority */
+    size_t n_outside;         /* removed: outside the outer surface */
+    size_t n_heart;           /* removed: inside the heart (no_heart) */
+    size_t repair_below_before, repair_below_after; /* tetrahedra below repair_deg before/after the repair */
+    double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
+    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses; /* repair operations applied */
+    double t_repair;          /* seconds */
+    size_t n_tets, n_nodes;   /* the result */
+    size_t per_region[16];    /* tetrahedra per region (the region table's order) */
+    double t_points, t_delaunay, t_classify, t_total; /* seconds */
+} thx_mesh_stats;
+
+void thx_mesh_opts_default(thx_mesh_opts *o);
+
+/*
+ * Meshes the model's domain: inside its surface of role "outer" (exactly one
+ * is required), minus the heart's interior when o->no_heart. Nodes: every
+ * surface node (volume node numbers follow the model's surface order), then
+ * the grid points. The result is stored in m->volume (replacing any), with
+ * the default region table (thx_region_defaults) and the node tables.
+ */
+thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats);
+
+/* Fills r with the default conductivity of a tissue region by name
+ * ("mean_thorax", "fat", "muscle", "lung", "heart", "blood"), with its
+ * literature source. Returns 0, or -1 for an unknown name. */
+int thx_region_default(const char *tissue, thx_region *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

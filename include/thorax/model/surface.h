@@ -1,0 +1,71 @@
+/*
+ * thorax/model/surface.h — triangle surfaces and the tissue roles of the model (model layer).
+ *
+ * Coordinate convention (RAS): +x toward the subject's right, +y anterior,
+ * +z cranial (superior). Millimetres throughout.
+ * "Counterclockwise seen cranio-caudally" (looking from the head toward the
+ * feet, i.e. along -z) is a positive signed area in the (x, y) plane.
+ * Triangles of a thx_surface are stored counterclockwise seen from outside:
+ * (b - a) x (c - a) points out of the enclosed volume.
+ */
+#ifndef THORAX_MODEL_SURFACE_H
+#define THORAX_MODEL_SURFACE_H
+
+#include "thorax/core/core.h"
+#include "thorax/core/vec.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Tissue role of a surface (paper 3.1: the boundaries between tissues of
+ * different conductivity). The text names are used in files and on the CLI. */
+typedef enum {
+    THX_ROLE_OUTER = 0,  /* "outer": outer boundary of the torso */
+    THX_ROLE_FAT,        /* "fat": subcutaneous fat / skeletal muscle interface */
+    THX_ROLE_MUSCLE,     /* "muscle": inner border of the skeletal muscle */
+    THX_ROLE_LUNG,       /* "lung" */
+    THX_ROLE_HEART,      /* "heart": epicardium */
+    THX_ROLE_OTHER,      /* "other" */
+    THX_ROLE_COUNT
+} thx_role;
+
+/* "outer", "fat", ... (static storage). */
+const char *thx_role_name(thx_role r);
+/* Parses a role name; returns 0 on success, -1 if unknown. */
+int thx_role_parse(const char *s, thx_role *out);
+
+/*
+ * A closed triangle surface. Plain data: fields may be read and written
+ * directly; thx_surface_destroy frees the arrays.
+ *   xyz: 3 * n_nodes doubles.  tri: 3 * n_tris node indices, 0-based,
+ *   counterclockwise seen from outside once the surface is built.
+ */
+typedef struct thx_surface {
+    char name[64];
+    thx_role role;
+    size_t n_nodes;
+    double *xyz;
+    size_t n_tris;
+    int32_t *tri;
+} thx_surface;
+
+/* New empty surface (arrays NULL). Caller destroys. */
+thx_status thx_surface_create(thx_ctx *ctx, const char *name, thx_role role, thx_surface **out);
+/* Frees the surface and its arrays; accepts NULL; nulls *s. */
+void thx_surface_destroy(thx_surface **s);
+
+/* Signed enclosed volume (mm^3) by the divergence theorem, summed about the centre of the
+ * bounding box (less cancellation far from the origin): > 0 iff the triangles of a closed
+ * surface face outward. */
+double thx_surface_volume(const thx_surface *s);
+
+static inline thx_vec3 thx_surface_node(const thx_surface *s, size_t i)
+{
+    return thx_v3(s->xyz[3 * i], s->xyz[3 * i + 1], s->xyz[3 * i + 2]);
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

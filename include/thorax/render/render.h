@@ -1,0 +1,166 @@
+/*
+ * thorax/render.h — the 3D renderer (paper 4.2): surfaces as points, wire
+ * meshes, flat, Gouraud or Phong shading, the orientation check, clipping
+ * planes, potentials coloured per pixel (value interpolated, then looked up:
+ * exact bands and contour lines), and arrows for current density.
+ *
+ * OpenGL 3.3 core profile through libepoxy. thx_renderer_create makes an
+ * offscreen context with EGL (the GPU's driver where there is one, Mesa's
+ * llvmpipe where there is none) and renders into a framebuffer object; the
+ * drawing code (thx_render_scene_gl) only needs a current 3.3 context, so
+ * the interactive viewer can call it in its own window.
+ */
+#ifndef THORAX_RENDER_H
+#define THORAX_RENDER_H
+
+#include "thorax/model/surface.h"
+#include "thorax/render/image.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+/* The one range rule of the colour scales (thx_scale_from_data, thorax/image.h, is this over the
+ * finite values of an array; `thorax render` uses it over the values its --scope covers): lo..hi
+ * the data's least and greatest finite values; symmetric: -M..M with M the largest magnitude
+ * max(|lo|, |hi|) (data -5..2 gives -5..5); no finite value (lo > hi or not finite): -1..1; all
+ * zeros when symmetric, or constant data: a unit range around the value. k: the model's default. */
+void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric);
+#ifdef __cplusplus
+}
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    THX_DRAW_HIDDEN = 0,
+    THX_DRAW_POINTS,      /* nodes as round points */
+    THX_DRAW_WIRE,        /* triangle edges */
+    THX_DRAW_FLAT,        /* one normal per triangle */
+    THX_DRAW_GOURAUD,     /* lighting per vertex, interpolated */
+    THX_DRAW_PHONG,       /* normals interpolated, lighting per pixel */
+    THX_DRAW_ORIENTATION  /* the paper's check: triangles drawn only where their outward side faces the
+                             viewer (front colour), nodes behind drawn as points (back colour) */
+} thx_draw_mode;
+
+typedef enum {
+    THX_DATA_CONTINUOUS = 0, /* the colour map, continuously */
+    THX_DATA_BANDS,          /* n_levels discrete shades */
+    THX_DATA_CONTOURS,       /* n_levels - 1 contour lines at the band boundaries over the surface colour */
+    THX_DATA_BANDS_CONTOURS, /* shades with the lines between them */
+    THX_DATA_CONTINUOUS_CONTOURS
+} thx_data_style;
+
+typedef struct {
+    const thx_surface *surf;
+    thx_draw_mode mode;
+    float color[4];          /* surface colour; alpha < 1: translucent (drawn after the opaque ones);
+                                all zero: light grey */
+    float back_color[4];     /* orientation mode: colour of the points behind; all zero: white */
+    float point_size;        /* pixels (points and orientation modes); 0: 4 */
+    float line_width;        /* pixels (wire mode, contour lines); 0: 1 (wire), 1.5 (contours) */
+    /* data: one value per node (NULL = none). Values are mapped by `scale` to t in [0, 1], t is
+       interpolated across each triangle per pixel and looked up in `cmap` (thorax/image.h). NaN
+       values are drawn in the scene's nan_color. */
+    const double *values;
+    thx_data_style style;
+    int n_levels;
+    thx_colormap cmap;
+    thx_scale scale;
+    float contour_color[4];  /* all zero: black */
+    int no_clip;             /* 1: the scene's clip planes leave this surface whole (the heart
+                                seen entire through a torso opened by a clip plane) */
+} thx_render_surface;
+
+/* Arrows, e.g. current density (paper 4.2, "Displaying vector fields"). */
+typedef struct {
+    const double *pos;   /* 3 n: tails */
+    const double *vec;   /* 3 n */
+    size_t n;
+    int unit_length;     /* 0: length = |v| * scale (mm); 1: every arrow `scale` mm long, coloured by |v| */
+    double scale;
+    thx_colormap cmap;   /* colour by |v| under mag_scale (unit_length), else `color` */
+    thx_scale mag_scale;
+    float color[4];      /* all zero: black */
+    float width;         /* shaft width, pixels; 0: 1.5 */
+} thx_render_arrows;
+
+/*
+ * Arrows from a vector field given at points (e.g. current density at the volume mesh's nodes),
+ * with the paper's clutter controls: the points where in[i] is nonzero (in NULL: all) are averaged
+ * over the cells of a grid of `spacing` (mm; each arrow at the mean position of its cell's points,
+ * with their mean vector) or, with spacing 0, taken one by one; zero and non-finite vectors are
+ * dropped; then, strongest first, an arrow is kept when no kept arrow's tail lies within `gap` mm
+ * of its own (0: no limit), until `max_n` are kept.
+ * Output: *pos and *vec (3 n each, malloc'd, strongest first), *n, and *vmax the largest
+ * magnitude among all candidates (the scale of the whole field, kept or not).
+ */
+thx_status thx_arrows_select(thx_ctx *ctx, const double *xyz, const double *vec, size_t n_points,
+                             const unsigned char *in, double spacing, double gap, size_t max_n,
+                             double **pos_out, double **vec_out, size_t *n_out, double *vmax);
+
+typedef struct {
+    double eye[3], center[3], up[3];
+    double fov_deg;      /* perspective vertical field of view; 0 = orthographic */
+    double height;       /* orthographic: the visible height, mm */
+} thx_camera;
+
+typedef enum { THX_VIEW_ANTERIOR = 0, THX_VIEW_POSTERIOR, THX_VIEW_LEFT, THX_VIEW_RIGHT, THX_VIEW_SUPERIOR, THX_VIEW_INFERIOR } thx_view;
+
+/* "anterior", "posterior", "left", "right", "superior", "inferior"; -1 if unknown. */
+int thx_view_parse(const char *name, thx_view *out);
+/* A standard anatomical view of the box lo..hi (the model's axes: +x the subject's right, +y
+ * anterior, +z cranial): looking at the subject from that side, head up (superior/inferior:
+ * anterior up), orthographic, the box filling the view with a margin for the given aspect w/h. */
+void thx_camera_view(thx_camera *cam, thx_view view, const double lo[3], const double hi[3], double aspect);
+
+/* Keeps the half space n . x + d >= 0. */
+typedef struct {
+    double n[3], d;
+} thx_clip_plane;
+
+typedef struct {
+    const thx_render_surface *surfaces;
+    size_t n_surfaces;
+    const thx_render_arrows *arrows;
+    size_t n_arrows;
+    thx_camera camera;
+    thx_clip_plane clip[4];
+    int n_clip;
+    float background[4];
+    float nan_color[4];  /* default magenta-grey if all zero */
+    int viewport[4];     /* x, y (from the top left), w, h within the image; w = 0: the whole image */
+    int clear;           /* clear the viewport to the background first (else draw over its pixels) */
+} thx_scene;
+
+typedef struct thx_renderer thx_renderer;
+
+/* An offscreen EGL context with OpenGL 3.3 core and a w x h framebuffer (4x multisampled). Errors
+ * name what is missing ("no EGL display", "OpenGL 3.3 core not available: got 2.1 Mesa ...").
+ * w = h = 0: no context of its own, for thx_render_scene_gl in the caller's current 3.3 context
+ * (the viewer); its GL objects are made there at the first draw, and it must be destroyed with
+ * that context current. */
+thx_status thx_renderer_create(thx_ctx *ctx, int w, int h, thx_renderer **out);
+void thx_renderer_destroy(thx_renderer **r);
+/* "OpenGL 4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)" */
+const char *thx_renderer_info(const thx_renderer *r);
+/* Antialiasing of the offscreen framebuffer: 4 = 4x multisampling; 1 = one sample per pixel,
+ * smoothed by FXAA; 0 = automatic, the default: 4 on a GPU, 1 on a software rasterizer (llvmpipe),
+ * where multisampling triples the time of a large mesh (docs/decisions.md, "Renderer"). */
+thx_status thx_renderer_set_samples(thx_ctx *ctx, thx_renderer *r, int samples);
+/* The samples per pixel in use (4 or 1; 0 for a renderer without its own framebuffer). */
+int thx_renderer_samples(const thx_renderer *r);
+
+/* Draws the scene into the renderer's framebuffer and reads it back into img (w x h of the
+ * renderer), leaving the pixels outside the viewport as they were in img. n_nan (may be NULL):
+ * the number of NaN values met in the data of the surfaces drawn with it. */
+thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx_image *img, size_t *n_nan);
+
+/* The drawing alone, into whatever framebuffer (with a depth buffer) is bound in the current 3.3
+ * context (for the interactive viewer; the renderer made with w = h = 0). */
+thx_status thx_render_scene_gl(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, int fb_w, int fb_h, size_t *n_nan);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,59 @@
+/* Surfaces (thorax/model/surface.h): roles, lifecycle, enclosed volume. */
+#include "thorax/model/surface.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const role_names[THX_ROLE_COUNT] = {"outer", "fat", "muscle", "lung", "heart", "other"};
+
+const char *thx_role_name(thx_role r)
+{
+    return (r >= 0 && r < THX_ROLE_COUNT) ? role_names[r] : "?";
+}
+
+int thx_role_parse(const char *s, thx_role *out)
+{
+    for (int r = 0; r < THX_ROLE_COUNT; r++)
+        if (strcmp(s, role_names[r]) == 0) { *out = (thx_role)r; return 0; }
+    return -1;
+}
+
+thx_status thx_surface_create(thx_ctx *ctx, const char *name, thx_role role, thx_surface **out)
+{
+    thx_surface *s = thx_calloc(ctx, 1, sizeof *s);
+    if (!s) return THX_ENOMEM;
+    snprintf(s->name, sizeof s->name, "%s", name);
+    s->role = role;
+    *out = s;
+    return THX_OK;
+}
+
+void thx_surface_destroy(thx_surface **s)
+{
+    if (!s || !*s) return;
+    free((*s)->xyz);
+    free((*s)->tri);
+    free(*s);
+    *s = NULL;
+}
+
+double thx_surface_volume(const thx_surface *s)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < s->n_nodes; i++)
+        for (int d = 0; d < 3; d++) {
+            lo[d] = fmin(lo[d], s->xyz[3 * i + d]);
+            hi[d] = fmax(hi[d], s->xyz[3 * i + d]);
+        }
+    thx_vec3 o = thx_v3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2]));
+    double v = 0;
+    for (size_t t = 0; t < s->n_tris; t++) {
+        thx_vec3 a = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t]), o);
+        thx_vec3 b = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t + 1]), o);
+        thx_vec3 c = thx_v3_sub(thx_surface_node(s, (size_t)s->tri[3 * t + 2]), o);
+        v += thx_v3_dot(a, thx_v3_cross(b, c));
+    }
+    return v / 6.0;
+}

@@ -1,0 +1,249 @@
+#!/usr/bin/env python3
+"""The library's layers (docs/decisions.md, "One direction"): a module uses only modules below it.
+
+    level 0  core
+    level 1  model
+    level 2  geom, io, leads
+    level 3  mesh, check
+    level 4  fem, render, phantom, import
+    level 5  cli
+
+A module may use itself and any module of a lower level, never a sibling or a module above.
+Checked three ways, each failing with the file and what it uses:
+  includes  every #include "thorax/M/..." in src/X/ and include/thorax/X/ (and a private header
+            "M/..." of src/M/ is used only inside src/M/);
+  headers   every public header is include/thorax/M/NAME.h of a known module M, and each function
+            it declares is defined in src/M/ (header names match their modules);
+  calls     with --build BUILD: every thx_ symbol an object file of src/X/ needs (nm -u) is
+            defined in src/X/ or a module below it.
+Usage: layers.py SRC [--build BUILD]     exit 0 when all hold, 1 with the violations listed;
+       layers.py --self-test             the checker on made-up trees with planted violations.
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "leads": 2, "mesh": 3, "check": 3,
+         "fem": 4, "render": 4, "phantom": 4, "import": 4, "cli": 5}
+
+
+def allowed(user, used):
+    return user == used or LEVEL[used] < LEVEL[user]
+
+
+def strip_comments(text):
+    text = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    return re.sub(r"//[^\n]*", "", text)
+
+
+def sources(root):
+    """(module, path) of every .c/.h under src/ and include/thorax/."""
+    out = []
+    for base in ("src", os.path.join("include", "thorax")):
+        top = os.path.join(root, base)
+        if not os.path.isdir(top):
+            continue
+        for mod in sorted(os.listdir(top)):
+            d = os.path.join(top, mod)
+            if not os.path.isdir(d):
+                out.append((None, os.path.join(base, mod)))
+                continue
+            for dirpath, _, files in os.walk(d):
+                for f in sorted(files):
+                    if f.endswith((".c", ".h")):
+                        out.append((mod, os.path.relpath(os.path.join(dirpath, f), root)))
+    return out
+
+
+def check_includes(root, files):
+    bad = []
+    inc = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
+    for mod, rel in files:
+        if mod is None:
+            bad.append(f"{rel}: a header outside include/thorax/MODULE/ (which module is it?)")
+            continue
+        if mod not in LEVEL:
+            bad.append(f"{rel}: '{mod}' is not a module of the layer table (tests/layers.py)")
+            continue
+        text = strip_comments(open(os.path.join(root, rel), errors="replace").read())
+        for m in inc.finditer(text):
+            name = m.group(1)
+            line = text.count("\n", 0, m.start()) + 1
+            parts = name.split("/")
+            if parts[0] == "thorax":
+                used = parts[1] if len(parts) == 3 else None
+                if used not in LEVEL:
+                    bad.append(f"{rel}:{line}: includes {name}, not a header of a module (thorax/MODULE/NAME.h)")
+                elif not allowed(mod, used):
+                    bad.append(f"{rel}:{line}: {mod} (level {LEVEL[mod]}) includes {name} of {used} "
+                               f"(level {LEVEL[used]}): against the direction")
+            elif len(parts) == 2 and parts[0] in LEVEL and parts[0] != mod:
+                bad.append(f"{rel}:{line}: {mod} includes {name}, a private header of {parts[0]}")
+    return bad
+
+
+def declared(header_text):
+    """Function names a header declares (prototypes ending in ';', outside inline bodies)."""
+    text = strip_comments(header_text)
+    text = re.sub(r"^\s*#.*$", "", text, flags=re.M)
+    # drop bodies of inline functions and struct/enum braces
+    depth, flat = 0, []
+    for ch in text:
+        if ch == "{":
+            depth += 1
+            continue
+        if ch == "}":
+            depth -= 1
+            flat.append(";")
+            continue
+        if depth == 0:
+            flat.append(ch)
+    names = set()
+    for stmt in "".join(flat).split(";"):
+        if "typedef" in stmt or "(" not in stmt:
+            continue
+        m = re.search(r"\b(thx_\w+)\s*\(", stmt)
+        if m and "static" not in stmt.split(m.group(1))[0]:
+            names.add(m.group(1))
+    return names
+
+
+def defined_symbols(root, build):
+    """symbol -> module, from the library's object files."""
+    objdir = os.path.join(build, "CMakeFiles", "thorax.dir", "src")
+    out = {}
+    for mod, obj in objects(objdir, root):
+        r = subprocess.run(["nm", "-g", "--defined-only", obj], capture_output=True, text=True)
+        for ln in r.stdout.splitlines():
+            p = ln.split()
+            if len(p) == 3 and p[2].startswith("thx_"):
+                out[p[2]] = mod
+    return out
+
+
+def objects(objdir, root):
+    """(module, object) of the objects whose source is in the tree (a moved file leaves a stale one)."""
+    res = []
+    if not os.path.isdir(objdir):
+        return res
+    for mod in sorted(os.listdir(objdir)):
+        for dirpath, _, files in os.walk(os.path.join(objdir, mod)):
+            for f in sorted(files):
+                src = os.path.join(root, "src", os.path.relpath(os.path.join(dirpath, f[:-2]), objdir))
+                if f.endswith(".o") and os.path.exists(src):
+                    res.append((mod, os.path.join(dirpath, f)))
+    return res
+
+
+def check_headers(root, files, defs):
+    bad = []
+    for mod, rel in files:
+        if mod is None or not rel.startswith("include") or mod not in LEVEL:
+            continue
+        for name in sorted(declared(open(os.path.join(root, rel)).read())):
+            where = defs.get(name)
+            if where is None:
+                continue  # declared, not (yet) defined: the linker's business
+            if where != mod:
+                bad.append(f"{rel}: declares {name}, which src/{where}/ defines (a header belongs to its module)")
+    return bad
+
+
+def check_calls(root, build, defs):
+    bad = []
+    objdirs = [(os.path.join(build, "CMakeFiles", "thorax.dir", "src"), None),
+               (os.path.join(build, "CMakeFiles", "thorax_cli.dir", "src"), "cli")]
+    for objdir, force in objdirs:
+        for mod, obj in objects(objdir, root):
+            mod = force or mod
+            if mod not in LEVEL:
+                bad.append(f"{obj}: object of an unknown module '{mod}'")
+                continue
+            r = subprocess.run(["nm", "-u", obj], capture_output=True, text=True)
+            for ln in r.stdout.splitlines():
+                sym = ln.split()[-1]
+                used = defs.get(sym)
+                if used and not allowed(mod, used):
+                    src = os.path.relpath(obj, objdir).replace(".o", "")
+                    bad.append(f"src/{src}: {mod} (level {LEVEL[mod]}) calls {sym} of {used} "
+                               f"(level {LEVEL[used]}): against the direction")
+    return bad
+
+
+def run(root, build):
+    files = sources(root)
+    bad = check_includes(root, files)
+    ncalls = 0
+    if build:
+        defs = defined_symbols(root, build)
+        if not defs:
+            bad.append(f"{build}: no object files of the library (build it first)")
+        bad += check_headers(root, files, defs)
+        calls = check_calls(root, build, defs)
+        ncalls = len(defs)
+        bad += calls
+    return files, bad, ncalls
+
+
+def self_test():
+    """Planted violations must each be found; a clean tree must pass."""
+    tmp = tempfile.mkdtemp(prefix="thorax-layers.")
+    try:
+        def put(rel, text):
+            p = os.path.join(tmp, rel)
+            os.makedirs(os.path.dirname(p), exist_ok=True)
+            open(p, "w").write(text)
+        put("include/thorax/model/a.h", "#include \"thorax/core/core.h\"\nint thx_a(void);\n")
+        put("include/thorax/geom/g.h", "#include \"thorax/model/a.h\"\nint thx_g(void);\n")
+        put("src/model/a.c", "#include \"thorax/model/a.h\"\nint thx_a(void) { return 1; }\n")
+        put("src/geom/g.c", "#include \"thorax/geom/g.h\"\n/* #include \"thorax/mesh/m.h\" in a comment */\n")
+        _, bad, _ = run(tmp, None)
+        ok = not bad
+        cases = [
+            ("src/model/b.c", "#include \"thorax/geom/g.h\"\n", "model (level 1) includes thorax/geom/g.h"),
+            ("src/geom/h.c", "#include \"thorax/io/x.h\"\n", "geom (level 2) includes thorax/io/x.h"),
+            ("src/mesh/m.c", "#include \"check/private.h\"\n", "a private header of check"),
+            ("include/thorax/stray.h", "int thx_s(void);\n", "outside include/thorax/MODULE/"),
+            ("src/viewer/v.c", "int v;\n", "'viewer' is not a module"),
+        ]
+        for rel, text, want in cases:
+            put(rel, text)
+            _, bad, _ = run(tmp, None)
+            found = any(want in b for b in bad)
+            print(f"self-test: {rel}: {'found' if found else 'MISSED'} ({want})")
+            ok &= found
+            os.remove(os.path.join(tmp, rel))
+        decl = declared("/* thx_c(void); */\ntypedef int (*thx_fn)(int);\nstatic inline int thx_i(void) { return thx_j(); }\n"
+                        "thx_status thx_d(thx_ctx *ctx,\n    int x);\nvoid thx_e(void);\n")
+        print(f"self-test: declared names {sorted(decl)}")
+        ok &= decl == {"thx_d", "thx_e"}
+        return ok
+    finally:
+        shutil.rmtree(tmp)
+
+
+def main():
+    args = sys.argv[1:]
+    if args == ["--self-test"]:
+        ok = self_test()
+        print("self-test: " + ("passed" if ok else "FAILED"))
+        return 0 if ok else 1
+    if not args:
+        print(__doc__)
+        return 2
+    root = args[0]
+    build = args[args.index("--build") + 1] if "--build" in args else None
+    files, bad, nsym = run(root, build)
+    for b in bad:
+        print("layers: " + b)
+    mods = sorted({m for m, _ in files if m}, key=lambda m: (LEVEL.get(m, 99), m))
+    print(f"layers: {len(files)} files in {len(mods)} modules ({', '.join(mods)})"
+          + (f", {nsym} library symbols" if build else "") + f": {len(bad)} violation(s)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
