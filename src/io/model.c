@@ -154,14 +154,14 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
         if (s->n_nodes == 0) return thx_error(ctx, THX_EINPUT, "surface \"%s\": has no nodes", s->name);
         if (s->role < 0 || s->role >= THX_ROLE_COUNT)
             return thx_error(ctx, THX_EINPUT, "surface \"%s\": invalid role %d", s->name, (int)s->role);
-        THX_CHECK(thx_io_check_surface(ctx, s));
+        THX_CHECK(thx_surface_validate(ctx, s));
         if (m->volume && strcmp(s->name, "volume") == 0)
             return thx_error(ctx, THX_EINPUT,
                              "surface \"volume\": name is reserved for the volume mesh files (volume.pts, volume.tet)");
     }
     if (m->frame.set && !thx_frame_valid(&m->frame))
         return thx_error(ctx, THX_EINPUT, "model frame: the superior and anterior axes must be two different axes of +x -x +y -y +z -z");
-    if (m->volume) THX_CHECK(thx_io_volume_validate(ctx, m, dir));
+    if (m->volume) THX_CHECK(thx_model_volume_validate(ctx, m, dir));
     cJSON *root = NULL;
     THX_CHECK(build_manifest(ctx, m, &root));
     char *json = cJSON_Print(root);

@@ -234,25 +234,9 @@ thx_status thx_surface_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fa
 
 /* The checks every writer makes before touching a file: arrays present,
  * coordinates finite, triangle indices within 0..n_nodes-1. */
-thx_status thx_io_check_surface(thx_ctx *ctx, const thx_surface *s)
-{
-    if ((s->n_nodes && !s->xyz) || (s->n_tris && !s->tri))
-        return thx_error(ctx, THX_EINTERNAL, "surface \"%s\": counts set but arrays missing", s->name);
-    for (size_t i = 0; i < 3 * s->n_nodes; i++)
-        if (!isfinite(s->xyz[i]))
-            return thx_error(ctx, THX_EINPUT, "surface \"%s\": node %zu has a non-finite coordinate", s->name, i / 3 + 1);
-    if (s->n_nodes > (size_t)INT32_MAX)
-        return thx_error(ctx, THX_EINPUT, "surface \"%s\": too many nodes (%zu)", s->name, s->n_nodes);
-    for (size_t i = 0; i < 3 * s->n_tris; i++)
-        if (s->tri[i] < 0 || (size_t)s->tri[i] >= s->n_nodes)
-            return thx_error(ctx, THX_EINPUT, "surface \"%s\": triangle %zu has node index %ld out of range 0..%zu (0-based)",
-                             s->name, i / 3 + 1, (long)s->tri[i], s->n_nodes - 1);
-    return THX_OK;
-}
-
 thx_status thx_surface_write_ptsfac(thx_ctx *ctx, const thx_surface *s, const char *pts, const char *fac)
 {
-    THX_CHECK(thx_io_check_surface(ctx, s));
+    THX_CHECK(thx_surface_validate(ctx, s));
     thx_atomic_file af;
     THX_CHECK(thx_atomic_open(ctx, pts, &af));
     for (size_t i = 0; i < s->n_nodes; i++) {

@@ -7,7 +7,7 @@
  * Decisions recorded here:
  *
  *  - Every reader ends with the same checks as the writers start with
- *    (series_check): at least one row and one frame, a finite, strictly
+ *    (thx_series_validate, src/model/series.c): at least one row and one frame, a finite, strictly
  *    increasing time axis, NUL-terminated strings. So whatever is written
  *    reads back, and whatever is read can be written in any format.
  *
@@ -56,28 +56,6 @@ static const char *format_name(thx_series_format f)
  * that the writer's "is this axis uniform?" test predicts the reader's bits. */
 
 /* What every series must satisfy to be written, and satisfies once read. */
-thx_status series_check(thx_ctx *ctx, const thx_series *s, const char *path)
-{
-    if (!s || !s->v || !s->time) return thx_error(ctx, THX_EINPUT, "%s: no series (NULL values or time)", path);
-    if (s->n_rows == 0 || s->n_frames == 0)
-        return thx_error(ctx, THX_EINPUT, "%s: empty series (%zu rows x %zu frames; at least 1 x 1 needed)", path,
-                         s->n_rows, s->n_frames);
-    if (!memchr(s->unit, '\0', sizeof s->unit) || !memchr(s->time_unit, '\0', sizeof s->time_unit) ||
-        !memchr(s->label, '\0', sizeof s->label))
-        return thx_error(ctx, THX_EINPUT, "%s: unit, time_unit or label is not NUL-terminated", path);
-    for (size_t f = 0; f < s->n_frames; f++) {
-        if (!isfinite(s->time[f]))
-            return thx_error(ctx, THX_EINPUT, "%s: time of frame %zu is %g (times must be finite)", path, f + 1,
-                             s->time[f]);
-        if (f > 0 && !(s->time[f] > s->time[f - 1]))
-            return thx_error(ctx, THX_EINPUT,
-                             "%s: time of frame %zu (%.17g) is not after that of frame %zu (%.17g): "
-                             "times must increase",
-                             path, f + 1, s->time[f], f, s->time[f - 1]);
-    }
-    return THX_OK;
-}
-
 /* ------------------------------------------------------ formats by name */
 
 /* The extension of the last path component (after its last '.'), or "". */
@@ -188,7 +166,7 @@ thx_status thx_series_write(thx_ctx *ctx, const thx_series *s, const char *path,
     }
     if (fmt == THX_SERIES_POT)
         return thx_error(ctx, THX_EINPUT, "%s: map3d .pot files are read, not written (write .txt, .raw or .mat)", path);
-    THX_CHECK(series_check(ctx, s, path));
+    THX_CHECK(thx_series_validate(ctx, s, path));
     switch (fmt) {
     case THX_SERIES_TEXT: return series_write_text(ctx, s, path);
     case THX_SERIES_RAW: return series_write_raw(ctx, s, path);

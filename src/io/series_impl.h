@@ -14,8 +14,6 @@
  * that the writer's "is this axis uniform?" test predicts the reader's bits. */
 static inline double uniform_time(double t0, double dt, size_t f) { return t0 + (double)f * dt; }
 
-/* What every series must satisfy to be written, and satisfies once read. */
-thx_status series_check(thx_ctx *ctx, const thx_series *s, const char *path);
 
 thx_status series_read_text(thx_ctx *ctx, const char *path, thx_series **out);
 thx_status series_write_text(thx_ctx *ctx, const thx_series *s, const char *path);

@@ -485,7 +485,7 @@ thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, 
         Mat_VarFree(meta.owned);
         goto done;
     }
-    st = series_check(ctx, s, path);
+    st = thx_series_validate(ctx, s, path);
 done:
     Mat_VarFree(top);
     Mat_Close(mat);

@@ -181,7 +181,7 @@ thx_status series_read_raw(thx_ctx *ctx, const char *path, thx_series **out)
         st = thx_error(ctx, THX_EIO, "%s: read error (file changed while reading?)", path);
         goto done;
     }
-    /* the time axis, with the byte offset of a bad time (series_check would give the frame only) */
+    /* the time axis, with the byte offset of a bad time (thx_series_validate would give the frame only) */
     for (size_t k = 0; k < s->n_frames; k++)
         if (!isfinite(s->time[k]) || (k && !(s->time[k] > s->time[k - 1]))) {
             st = thx_error(ctx, THX_EINPUT, "%s: byte offset %zu: time of frame %zu is %.17g: %s", path,
@@ -189,7 +189,7 @@ thx_status series_read_raw(thx_ctx *ctx, const char *path, thx_series **out)
                            isfinite(s->time[k]) ? "not after the previous one (times must increase)" : "not finite");
             goto done;
         }
-    st = series_check(ctx, s, path);
+    st = thx_series_validate(ctx, s, path);
 done:
     fclose(f);
     if (st != THX_OK) thx_series_destroy(&s);

@@ -617,7 +617,7 @@ thx_status series_read_text(thx_ctx *ctx, const char *path, thx_series **out)
             st = text_fail(&tr, "truncated file (no 'end' line)");
         goto done;
     }
-    st = series_check(ctx, tr.s, path);
+    st = thx_series_validate(ctx, tr.s, path);
 done:
     free(buf);
     free(tr.times);

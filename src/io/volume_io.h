@@ -2,7 +2,7 @@
  * Private interface between the model directory code (src/io/model.c) and
  * the volume mesh files (src/io/volume_io.c). Not installed, not public:
  * the public entry points are thx_model_write / thx_model_read and
- * thx_volume_export in thorax/model.h.
+ * thx_volume_export in thorax/io/model_dir.h.
  */
 #ifndef THORAX_IO_VOLUME_IO_H
 #define THORAX_IO_VOLUME_IO_H
@@ -27,20 +27,11 @@ thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, dou
 /* Reads a .pts/.fac pair; want_base 0 or 1 requires that .fac base, -1 detects it (ptsfac.c). */
 thx_status thx_io_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fac, const char *name, thx_role role,
                               int want_base, thx_surface **out, int *base);
-/* The checks every surface writer makes: arrays present, finite coordinates, indices in range. */
-thx_status thx_io_check_surface(thx_ctx *ctx, const thx_surface *s);
 /* A manifest file name: non-empty, no '/', not "." or "..". */
 int thx_io_file_name_ok(const char *s);
 /* A count from a JSON object: o[key] a whole number in 0 .. INT32_MAX; 0, or -1 (missing or not
  * such a number; *out unchanged). */
 int thx_io_json_count(const cJSON *o, const char *key, size_t *out);
-
-/* Checks m->volume (must be non-NULL) against the model before anything is
- * written or exported: arrays present, finite coordinates, node numbers in
- * range and distinct per tetrahedron, region numbers in range, region table
- * valid (names, symmetric positive definite tensors), node tables consistent
- * with the surfaces. `where` prefixes the messages (a path or "volume"). */
-thx_status thx_io_volume_validate(thx_ctx *ctx, const thx_model *m, const char *where);
 
 /* Adds "vmap" to each surface object of root's "surfaces" array (in model
  * order) and the "volume" and "regions" members to root. m->volume != NULL

@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 thx_status thx_series_create(thx_ctx *ctx, size_t n_rows, size_t n_frames, thx_series **out)
 {
@@ -50,3 +51,24 @@ size_t thx_series_find_nonfinite(const thx_series *s, size_t *row, size_t *frame
     return count;
 }
 
+thx_status thx_series_validate(thx_ctx *ctx, const thx_series *s, const char *path)
+{
+    if (!s || !s->v || !s->time) return thx_error(ctx, THX_EINPUT, "%s: no series (NULL values or time)", path);
+    if (s->n_rows == 0 || s->n_frames == 0)
+        return thx_error(ctx, THX_EINPUT, "%s: empty series (%zu rows x %zu frames; at least 1 x 1 needed)", path,
+                         s->n_rows, s->n_frames);
+    if (!memchr(s->unit, '\0', sizeof s->unit) || !memchr(s->time_unit, '\0', sizeof s->time_unit) ||
+        !memchr(s->label, '\0', sizeof s->label))
+        return thx_error(ctx, THX_EINPUT, "%s: unit, time_unit or label is not NUL-terminated", path);
+    for (size_t f = 0; f < s->n_frames; f++) {
+        if (!isfinite(s->time[f]))
+            return thx_error(ctx, THX_EINPUT, "%s: time of frame %zu is %g (times must be finite)", path, f + 1,
+                             s->time[f]);
+        if (f > 0 && !(s->time[f] > s->time[f - 1]))
+            return thx_error(ctx, THX_EINPUT,
+                             "%s: time of frame %zu (%.17g) is not after that of frame %zu (%.17g): "
+                             "times must increase",
+                             path, f + 1, s->time[f], f, s->time[f - 1]);
+    }
+    return THX_OK;
+}

@@ -2,6 +2,7 @@
 #include "thorax/model/surface.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -56,4 +57,20 @@ double thx_surface_volume(const thx_surface *s)
         v += thx_v3_dot(a, thx_v3_cross(b, c));
     }
     return v / 6.0;
+}
+
+thx_status thx_surface_validate(thx_ctx *ctx, const thx_surface *s)
+{
+    if ((s->n_nodes && !s->xyz) || (s->n_tris && !s->tri))
+        return thx_error(ctx, THX_EINTERNAL, "surface \"%s\": counts set but arrays missing", s->name);
+    for (size_t i = 0; i < 3 * s->n_nodes; i++)
+        if (!isfinite(s->xyz[i]))
+            return thx_error(ctx, THX_EINPUT, "surface \"%s\": node %zu has a non-finite coordinate", s->name, i / 3 + 1);
+    if (s->n_nodes > (size_t)INT32_MAX)
+        return thx_error(ctx, THX_EINPUT, "surface \"%s\": too many nodes (%zu)", s->name, s->n_nodes);
+    for (size_t i = 0; i < 3 * s->n_tris; i++)
+        if (s->tri[i] < 0 || (size_t)s->tri[i] >= s->n_nodes)
+            return thx_error(ctx, THX_EINPUT, "surface \"%s\": triangle %zu has node index %ld out of range 0..%zu (0-based)",
+                             s->name, i / 3 + 1, (long)s->tri[i], s->n_nodes - 1);
+    return THX_OK;
 }

@@ -31,6 +31,14 @@ void thx_model_destroy(thx_model **m);
 /* Appends a surface; the model takes ownership of *s (and nulls *s) even on failure. */
 thx_status thx_model_add_surface(thx_ctx *ctx, thx_model *m, thx_surface **s);
 
+/* Checks m->volume (must be non-NULL) against the model before anything is written or exported:
+ * arrays present, finite coordinates, node numbers in range and distinct per tetrahedron, region
+ * numbers in range, region table valid (names, symmetric positive definite tensors), node tables
+ * consistent with the surfaces, Steiner records in range. Geometry (orientation, quality) is the
+ * volume checker's (thorax/check/check_volume.h). `where` prefixes the messages (a path or
+ * "volume"). */
+thx_status thx_model_volume_validate(thx_ctx *ctx, const thx_model *m, const char *where);
+
 #ifdef __cplusplus
 }
 #endif

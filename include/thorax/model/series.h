@@ -36,6 +36,11 @@ thx_status thx_series_create(thx_ctx *ctx, size_t n_rows, size_t n_frames, thx_s
 /* Frees the series; accepts NULL; nulls *s. */
 void thx_series_destroy(thx_series **s);
 
+/* The invariants of a series every reader ends with and every writer starts with: values and times
+ * present, at least 1 row x 1 frame, unit, time_unit and label NUL-terminated, a finite and strictly
+ * increasing time axis. `path` names the file in messages. */
+thx_status thx_series_validate(thx_ctx *ctx, const thx_series *s, const char *path);
+
 /* Number of NaN/Inf values; the first one's row and frame (0-based) when any. */
 size_t thx_series_find_nonfinite(const thx_series *s, size_t *row, size_t *frame);
 

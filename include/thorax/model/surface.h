@@ -55,6 +55,11 @@ thx_status thx_surface_create(thx_ctx *ctx, const char *name, thx_role role, thx
 /* Frees the surface and its arrays; accepts NULL; nulls *s. */
 void thx_surface_destroy(thx_surface **s);
 
+/* The invariants every surface holds before it is written or used: arrays present for the counts,
+ * finite coordinates, at most INT32_MAX nodes, node indices in range. Errors name the surface, the
+ * node or the triangle (1-based). */
+thx_status thx_surface_validate(thx_ctx *ctx, const thx_surface *s);
+
 /* Signed enclosed volume (mm^3) by the divergence theorem, summed about the centre of the
  * bounding box (less cancellation far from the origin): > 0 iff the triangles of a closed
  * surface face outward. */
