@@ -30,7 +30,7 @@
 static const double A = 87, B = 92, C = 100, S_SCALP = 1;
 static double s_skull = 0.0125;
 
-/* The radial factor of the analytic solution (thorax/verify.h, l = 1), for any r > 0 (harmonic on
+/* The radial factor of the analytic solution (thorax/geom/verify.h, l = 1), for any r > 0 (harmonic on
  * either side of b; thx_shells_potential refuses r outside [a, c]). */
 static double radial(double r)
 {

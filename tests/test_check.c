@@ -1,4 +1,4 @@
-/* Tests of thorax/check.h and thorax/spatial.h on hand-made surfaces: every
+/* Tests of thorax/check/check.h and thorax/geom/spatial.h on hand-made surfaces: every
  * defect the checker claims to find is planted once and must be found, and
  * clean surfaces of the same kind must pass (a checker that cannot fail, or
  * that fails everything, is a defect). */

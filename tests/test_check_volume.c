@@ -1,4 +1,4 @@
-/* Tests of thorax/check_volume.h on hand-made volume meshes: clean meshes of
+/* Tests of thorax/check/check_volume.h on hand-made volume meshes: clean meshes of
  * several kinds must pass, and every defect the checker claims to find is
  * planted once and must be found (alone, where the defect allows it).
  *

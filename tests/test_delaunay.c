@@ -1,4 +1,4 @@
-/* Tests of thx_delaunay3d (thorax/delaunay.h).
+/* Tests of thx_delaunay3d (thorax/mesh/delaunay.h).
  *
  * Every tetrahedralization is checked against properties that do not trust
  * the code under test: exact positive orientation of every tetrahedron;

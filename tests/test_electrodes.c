@@ -1,5 +1,5 @@
 /*
- * Tests of electrodes, leads and the phantom's beat (thorax/electrodes.h:
+ * Tests of electrodes, leads and the phantom's beat (thorax/model/electrodes.h:
  * src/io/electrodes.c, src/io/leads.c, src/phantom/electrodes_phantom.c,
  * src/phantom/beat.c):
  *  - electrode files: round trip, byte-identical output, malformed files

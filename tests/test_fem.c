@@ -1,5 +1,5 @@
 /*
- * Finite elements (thorax/fem.h): assembly properties, the linear patch test
+ * Finite elements (thorax/fem/fem.h): assembly properties, the linear patch test
  * (isotropic and anisotropic), Neumann loads, currents, and on the medium
  * phantom the epicardial forward problem against its transfer matrix (both
  * methods) and current conservation.

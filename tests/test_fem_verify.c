@@ -1,5 +1,5 @@
 /*
- * The finite-element solver against closed forms (thorax/fem.h, verify):
+ * The finite-element solver against closed forms (thorax/fem/fem.h, verify):
  * concentric spheres with one and two shells converge at second order in
  * RDM, MAG and the largest nodal error at the outer surface; current is
  * conserved; the anisotropic slab is reproduced exactly.

@@ -1,4 +1,4 @@
-/* The anatomical frame (thorax/frame.h): axis names, the frame from two names, its vectors and
+/* The anatomical frame (thorax/model/frame.h): axis names, the frame from two names, its vectors and
  * left axis, the map to RAS and back (a rotation: det +1, inverse of each other), the message of
  * a missing frame. */
 #include "testlib.h"

@@ -1,6 +1,6 @@
 /*
  * Tests of images, colour maps, scaling models and 2D annotation
- * (src/render/image.c, colormap.c, annotate.c; thorax/image.h): PNG round
+ * (src/render/image.c, colormap.c, annotate.c; thorax/render/image.h): PNG round
  * trips (RGBA and opaque RGB, byte-identical rewrites, VTK's own PNG reader),
  * failed writes leave nothing, bad files are refused; the maps' end points and
  * middles, CIELAB lightness monotone from the ends to the middle of the

@@ -1,5 +1,5 @@
 /*
- * Digitization noise repaired, not refused (thorax/repair.h; issue 11 items 6 and 9): the
+ * Digitization noise repaired, not refused (thorax/geom/repair.h; issue 11 items 6 and 9): the
  * repeated closing point, near-coincident points (1e-9 mm apart, as `thorax slice` gives them
  * beside a mesh node), spikes, small self-crossings (the bow-tie of a jittered point), holes;
  * what is refused (a wide crossing, a wide hole, anything under strict), the messages (file:line,

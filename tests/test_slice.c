@@ -1,4 +1,4 @@
-/* Cross-sections of closed surfaces by planes (thorax/slice.h): areas, orientation, nodes on the plane, open surfaces. */
+/* Cross-sections of closed surfaces by planes (thorax/geom/slice.h): areas, orientation, nodes on the plane, open surfaces. */
 #include <stdlib.h>
 #include <string.h>
 

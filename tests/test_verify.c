@@ -1,5 +1,5 @@
 /*
- * Verification geometry (src/geom/verify.c, thorax/verify.h): the analytic
+ * Verification geometry (src/geom/verify.c, thorax/geom/verify.h): the analytic
  * shells solution satisfies its boundary value problem (checked by finite
  * differences and against an independent 4x4 solve), the cubed-sphere shell
  * mesh is a conforming, positively oriented tetrahedralization of exactly

@@ -259,7 +259,7 @@ static void test_model_shape(void)
 }
 
 /* The scratch model "bad" is edited by hand between cases; thorax rightly refuses to replace a model
- * whose files its manifest no longer names (thorax/fileio.h), so each case starts from a new one. */
+ * whose files its manifest no longer names (thorax/core/fileio.h), so each case starts from a new one. */
 static int rm_entry(const char *p, const struct stat *sb, int flag, struct FTW *ftw)
 {
     (void)sb; (void)flag; (void)ftw;

@@ -30,7 +30,7 @@ void cli_progress(void *user, size_t done, size_t total);
 
 /*
  * The volume check before a solve (thorax forward): thx_volume_check of m's
- * volume against m's surfaces, default options (thorax/check_volume.h).
+ * volume against m's surfaces, default options (thorax/check/check_volume.h).
  *  - passed: THX_OK;
  *  - failed, force = 0: every reason on stderr (rank 0 only), then THX_ECHECK
  *    with a message naming the failures and the first reason ("... not

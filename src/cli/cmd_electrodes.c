@@ -111,7 +111,7 @@ int cmd_electrodes(int argc, char **argv)
     if (st == THX_OK && ea) st = thx_electrodes_write(ctx, ea, parr);
     if (st == THX_OK) {
         /* the folder's manifest: it marks the folder as thorax's, so that a model holding it (the
-           default place) can still be rewritten (thorax/fileio.h) */
+           default place) can still be rewritten (thorax/core/fileio.h) */
         cJSON *j = cJSON_CreateObject(), *files = j ? cJSON_AddObjectToObject(j, "files") : NULL;
         char mpath[PATH_MAX + 32];
         snprintf(mpath, sizeof mpath, "%s/electrodes.json", dir);

@@ -105,7 +105,7 @@ int cmd_leads(int argc, char **argv)
     }
     if (st == THX_OK) {
         /* written into the solution itself: its manifest names the new files, so that the solution
-           stays thorax's own and can be written again (thorax/fileio.h) */
+           stays thorax's own and can be written again (thorax/core/fileio.h) */
         char rs[PATH_MAX], ro[PATH_MAX];
         if (realpath(sol, rs) && realpath(out, ro) && !strcmp(rs, ro)) {
             cJSON *j = cJSON_Parse(text), *files = j ? cJSON_GetObjectItem(j, "files") : NULL;

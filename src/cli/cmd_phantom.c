@@ -1,5 +1,5 @@
 /*
- * thorax phantom: writes the built-in synthetic thorax (include/thorax/phantom.h)
+ * thorax phantom: writes the built-in synthetic thorax (include/thorax/phantom/phantom.h)
  * as hand-digitized contours, the input of `thorax surfaces`.
  */
 #include <stdio.h>

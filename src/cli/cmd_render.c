@@ -419,7 +419,7 @@ static void scale_for(const ropts *o, rdata *d, int s, int frame, thx_scale *sc)
         if (o->scope == SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
         else series_range(d, k, &lo, &hi);
     }
-    /* the library's one range rule (thorax/render.h): symmetric = the largest magnitude */
+    /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude */
     thx_scale_from_range(sc, o->model, lo, hi, o->symmetric);
 }
 
@@ -1148,7 +1148,7 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
 }
 
 /* The movie's signature: its metadata comment, which +faststart puts in the header before the
- * frames' data, within the first MOVIE_WINDOW bytes (thorax/fileio.h). */
+ * frames' data, within the first MOVIE_WINDOW bytes (thorax/core/fileio.h). */
 #define MOVIE_MARKER "thorax-movie"
 #define MOVIE_WINDOW (4u << 20)
 

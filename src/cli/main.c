@@ -63,7 +63,7 @@ thx_ctx *cli_ctx(int verbose)
     thx_ctx_set_log(ctx, log_stderr, NULL,
                     verbose > 0 ? THX_LOG_DEBUG : verbose < 0 ? THX_LOG_WARN + 1 : THX_LOG_INFO);
     /* Every existing regular file named on the command line, except the value of -o/--output/--mp4, is
-     * one of the command's inputs: no single-file output may replace it (thorax/fileio.h). */
+     * one of the command's inputs: no single-file output may replace it (thorax/core/fileio.h). */
     for (int i = 2; i < g_argc; i++) {
         struct stat st;
         if (!strcmp(g_argv[i - 1], "-o") || !strcmp(g_argv[i - 1], "--output") || !strcmp(g_argv[i - 1], "--mp4"))

@@ -1,4 +1,4 @@
-/* The context: last error message and log sink (see thorax/core.h). */
+/* The context: last error message and log sink (see thorax/core/core.h). */
 #include "thorax/core/core.h"
 #include <stdio.h>
 #include <stdint.h>

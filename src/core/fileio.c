@@ -1,4 +1,4 @@
-/* Atomic file and directory output (see thorax/fileio.h). */
+/* Atomic file and directory output (see thorax/core/fileio.h). */
 #include "thorax/core/fileio.h"
 #include <cjson/cJSON.h>
 

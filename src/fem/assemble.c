@@ -1,5 +1,5 @@
 /*
- * Stiffness assembly for linear tetrahedra (thorax/fem.h), plain C + OpenMP.
+ * Stiffness assembly for linear tetrahedra (thorax/fem/fem.h), plain C + OpenMP.
  *
  * Two passes, both parallel without atomics: the element matrices (10 unique
  * entries of the symmetric 4 x 4 |T| G sigma G^T per tetrahedron) are computed

@@ -31,7 +31,7 @@ static int cmp_i32x3(const void *x, const void *y)
 
 /*
  * Patch from a membership flag per node of surface s. The patch's volume
- * nodes are its surface nodes and the Steiner nodes on s (thorax/volume.h)
+ * nodes are its surface nodes and the Steiner nodes on s (thorax/model/volume.h)
  * whose non-zero barycentric weights all fall on patch nodes (a Steiner node
  * inside a triangle, or on an edge, spanned by patch nodes): a voltage holds
  * the whole part of the surface they span, as before the mesher subdivided

@@ -1,5 +1,5 @@
 /*
- * Forward problems on a meshed model (thorax/fem.h): the epicardial problem
+ * Forward problems on a meshed model (thorax/fem/fem.h): the epicardial problem
  * frame by frame, and its transfer matrix.
  */
 #include <math.h>
@@ -34,7 +34,7 @@ static thx_status one_surface(thx_ctx *ctx, const thx_model *m, thx_role role, c
 
 /* The epicardial problem's set-up shared by the frame loop and the transfer matrix.
  * Prescribed (Dirichlet) nodes: the heart surface's nodes, and the Steiner
- * nodes the mesher put on its triangles (thorax/volume.h), whose values are
+ * nodes the mesher put on its triangles (thorax/model/volume.h), whose values are
  * interpolated from the triangle's corners with the barycentric weights —
  * left free, they would be unknowns inside the boundary and the potential
  * would sag between the corners. */

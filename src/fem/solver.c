@@ -1,5 +1,5 @@
 /*
- * The PETSc side of thorax/fem.h: the free-node system K_ff, its KSP, and
+ * The PETSc side of thorax/fem/fem.h: the free-node system K_ff, its KSP, and
  * solves. Every rank holds the whole assembled matrix (thx_csr) and hands
  * PETSc its own block of rows; results are gathered to every rank.
  */

@@ -1,7 +1,7 @@
 /*
  * Verification runs of the finite-element solver against closed forms
  * (thorax verify; tests/test_fem_verify.c; docs/validation.md): on the
- * structured meshes of thorax/verify.h, and on meshes the library's own
+ * structured meshes of thorax/geom/verify.h, and on meshes the library's own
  * mesher makes of OpenMEEG's three spheres (thx_verify_spheres).
  */
 #include <math.h>

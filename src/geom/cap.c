@@ -14,7 +14,7 @@
  * each time a loop edge is crossed. That parity is exact, while a centroid
  * computed in floating point can fall outside an extremely thin triangle;
  * the two are compared, and where they disagree (only possible for such
- * slivers) the exact parity decides. See thorax/cdt.h for the contract.
+ * slivers) the exact parity decides. See thorax/geom/cdt.h for the contract.
  */
 #include "thorax/geom/cdt.h"
 #include "geom/chain_sdf.h"

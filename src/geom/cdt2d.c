@@ -1,5 +1,5 @@
 /*
- * 2D constrained Delaunay triangulation (see thorax/cdt.h).
+ * 2D constrained Delaunay triangulation (see thorax/geom/cdt.h).
  *
  * Method.
  *  1. Delaunay triangulation by incremental Bowyer–Watson insertion. Points

@@ -8,7 +8,7 @@
  * number (the horizontal ray from p toward +x cannot cross it), so the result
  * is exactly that of the plain loop over all edges, at a fraction of the cost.
  * The winding number is counted by signed crossings, which equals the
- * paper's angle sum divided by 2 pi (see thorax/inside.h).
+ * paper's angle sum divided by 2 pi (see thorax/geom/inside.h).
  */
 #ifndef THORAX_CHAIN_SDF_H
 #define THORAX_CHAIN_SDF_H

@@ -1,7 +1,7 @@
 /*
  * Inside/outside tests by angle sums (paper 3.2, "Inside/Outside algorithm"):
  * planar angles about a point for a closed loop, solid angles for a closed
- * triangle surface. See thorax/inside.h for conventions and tolerances.
+ * triangle surface. See thorax/geom/inside.h for conventions and tolerances.
  */
 #include "thorax/geom/inside.h"
 #include "thorax/geom/predicates.h"

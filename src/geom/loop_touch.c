@@ -1,5 +1,5 @@
 /*
- * Does a closed loop touch itself? (thorax/predicates.h, thx_loop_touch)
+ * Does a closed loop touch itself? (thorax/geom/predicates.h, thx_loop_touch)
  *
  * Shamos and Hoey's sweep: the edges are ordered by the height at which
  * they cross a line sweeping over the points in (x, y) order; two edges that

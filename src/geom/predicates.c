@@ -1,5 +1,5 @@
 /*
- * Exact geometric predicates (see thorax/predicates.h for the conventions).
+ * Exact geometric predicates (see thorax/geom/predicates.h for the conventions).
  *
  * Each predicate first evaluates its determinant in plain floating point on
  * coordinate differences, together with a rigorous bound on the rounding

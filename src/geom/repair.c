@@ -1,5 +1,5 @@
 /*
- * Repair of digitization noise in contours (see thorax/repair.h; paper 3.1,
+ * Repair of digitization noise in contours (see thorax/geom/repair.h; paper 3.1,
  * issue 11 item 6). Works loop by loop on the points and their source lines.
  */
 #include "thorax/geom/repair.h"

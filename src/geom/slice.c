@@ -1,5 +1,5 @@
 /*
- * Cross-sections of a closed triangle surface with a plane z = z0 (see thorax/slice.h).
+ * Cross-sections of a closed triangle surface with a plane z = z0 (see thorax/geom/slice.h).
  *
  * Every node gets a side: above (z >= z0) or below. A triangle with nodes on
  * both sides crosses the plane along a segment joining the crossing points of

@@ -1,4 +1,4 @@
-/* Bounding-volume hierarchy over axis-aligned boxes (see thorax/spatial.h). */
+/* Bounding-volume hierarchy over axis-aligned boxes (see thorax/geom/spatial.h). */
 #include "thorax/geom/spatial.h"
 #include <math.h>
 #include <stddef.h>

@@ -1,6 +1,6 @@
 /*
  * Verification geometry and closed-form solutions for the volume-conductor
- * solvers (thorax/verify.h, docs/validation.md "Verification geometry").
+ * solvers (thorax/geom/verify.h, docs/validation.md "Verification geometry").
  *
  * 1. Concentric spherical shells.
  *

@@ -98,7 +98,7 @@ static void unique_name(char *name, char (*used)[64], size_t n)
 /* ------------------------------------------------------------- faces */
 
 /* The outward faces of a right-handed tetrahedron p0..p3, counterclockwise
- * seen from outside (thorax/check_volume.h). */
+ * seen from outside (thorax/check/check_volume.h). */
 static const int tet_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 typedef struct { int32_t a, b, c, tf; } face_rec; /* sorted nodes; tf = 4 * tet + local face */

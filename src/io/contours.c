@@ -330,7 +330,7 @@ thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *p
     size_t nz = 0;
     THX_CHECK(thx_contours_layer_z(ctx, c, &zs, &nz));
     thx_atomic_file af;
-    /* an existing file is replaced only when it is thorax's own contours (thorax/fileio.h) */
+    /* an existing file is replaced only when it is thorax's own contours (thorax/core/fileio.h) */
     thx_status st = thx_atomic_open_output(ctx, path, "thorax-contours", 15, NULL, 0, &af);
     if (st != THX_OK) { free(zs); return st; }
     FILE *f = af.f;

@@ -1,5 +1,5 @@
 /*
- * Surface export for other tools (see thorax/model.h): legacy VTK (.vtk),
+ * Surface export for other tools (see thorax/io/model_dir.h): legacy VTK (.vtk),
  * VTK XML PolyData (.vtp), Wavefront OBJ, binary STL and ASCII PLY. The
  * volume formats (.vtu, Gmsh .msh) are written by src/io/volume_io.c.
  *
@@ -195,7 +195,7 @@ static void write_ply(FILE *f, const thx_surface *s)
 }
 
 /* An existing file is replaced only when it is one of thorax's exports of this format: the
- * signature each writer above puts in its first line or header (thorax/fileio.h). */
+ * signature each writer above puts in its first line or header (thorax/core/fileio.h). */
 static const char *const marker[] = {[THX_EXPORT_VTK] = "\nthorax surface ", [THX_EXPORT_VTP] = "<!-- thorax surface",
                                      [THX_EXPORT_OBJ] = "# thorax surface ", [THX_EXPORT_STL] = "thorax binary STL",
                                      [THX_EXPORT_PLY] = "comment thorax surface ",

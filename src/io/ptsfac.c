@@ -1,6 +1,6 @@
 /*
  * map3d/SCIRun .pts/.fac surfaces and the text helpers every line-based reader
- * shares (see thorax/model.h for the public entry points).
+ * shares (see thorax/io/model_dir.h for the public entry points).
  *
  * Decisions recorded here (docs/formats.md repeats them for users):
  *

@@ -157,7 +157,7 @@ thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
         thx_atomic_abort(&af);
         return thx_error(ctx, THX_EIO, "%s: writing %s failed: %s", path, what, e ? strerror(e) : "libmatio error");
     }
-    thx_status st = thx_output_place(ctx, &af, af.tmp); /* under the claim: see thorax/fileio.h */
+    thx_status st = thx_output_place(ctx, &af, af.tmp); /* under the claim: see thorax/core/fileio.h */
     af.tmp[0] = '\0';
     return st;
 }

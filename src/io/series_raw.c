@@ -94,7 +94,7 @@ thx_status series_write_raw(thx_ctx *ctx, const thx_series *s, const char *path)
     memcpy(h + 24, s->unit, strlen(s->unit));           /* < 32: checked NUL-terminated */
     memcpy(h + 56, s->time_unit, strlen(s->time_unit)); /* < 16 */
     memcpy(h + 72, s->label, strlen(s->label));         /* < 128 */
-    thx_atomic_file af; /* an existing file is replaced only when it is thorax's raw series (thorax/fileio.h) */
+    thx_atomic_file af; /* an existing file is replaced only when it is thorax's raw series (thorax/core/fileio.h) */
     THX_CHECK(thx_atomic_open_output(ctx, path, RAW_MAGIC, 8, NULL, 0, &af));
     if (fwrite(h, 1, sizeof h, af.f) != sizeof h || !fwrite_f64le(s->time, s->n_frames, af.f) ||
         !fwrite_f64le(s->v, s->n_rows * s->n_frames, af.f)) {

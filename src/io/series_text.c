@@ -177,7 +177,7 @@ thx_status series_write_text(thx_ctx *ctx, const thx_series *s, const char *path
         free(row_len);
         return THX_ENOMEM;
     }
-    thx_atomic_file af; /* an existing file is replaced only when it is thorax's series (thorax/fileio.h) */
+    thx_atomic_file af; /* an existing file is replaced only when it is thorax's series (thorax/core/fileio.h) */
     thx_status st = thx_atomic_open_output(ctx, path, "thorax-series", 13, NULL, 0, &af);
     if (st != THX_OK) {
         free(line);

@@ -2,7 +2,7 @@
  * The volume mesh of a model directory, its region (conductivity) table and
  * node tables (paper 3.3), and the volume exports .vtu and Gmsh .msh 4.1.
  * Layouts in docs/formats.md, "Volume mesh files"; the public entry points
- * are thx_model_write / thx_model_read and thx_volume_export (thorax/model.h).
+ * are thx_model_write / thx_model_read and thx_volume_export (thorax/io/model_dir.h).
  *
  * Files (all text, one item a line, 1-based node and region numbers):
  *   volume.pts   "x y z", mm, "%.17g": exactly the doubles that were tetrahedralized

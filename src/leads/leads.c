@@ -1,5 +1,5 @@
 /*
- * Signals at electrodes and the standard 12-lead ECG (thorax/electrodes.h).
+ * Signals at electrodes and the standard 12-lead ECG (thorax/model/electrodes.h).
  *
  * thx_electrodes_sample copies the rows of a surface series that are the
  * electrodes' nodes: row i of the result is electrode i.

@@ -78,7 +78,7 @@ typedef struct {
  * and points added inside a triangle have dyadic barycentric coordinates,
  * so that they are EXACTLY on the edge / in the triangle's plane (tested
  * with the exact orientation predicate); coplanar points then never make
- * flat tetrahedra (thorax/delaunay.h). max_steiner: refuse to add more
+ * flat tetrahedra (thorax/mesh/delaunay.h). max_steiner: refuse to add more
  * (0: 20 per surface triangle). quality: NULL, or the refinement above.
  * Out: *steiner (n_steiner records, node = index in dt), *sub (n_sub faces on
  * the surfaces, each triangle's pieces), both malloc'ed.

@@ -1,5 +1,5 @@
 /*
- * 3D Delaunay tetrahedralization (see thorax/delaunay.h; paper 3.3).
+ * 3D Delaunay tetrahedralization (see thorax/mesh/delaunay.h; paper 3.3).
  *
  * Method.
  *  1. Order: BRIO (Amenta, Choi, Rote 2003). The points are shuffled with a

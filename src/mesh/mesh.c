@@ -6,7 +6,7 @@
  *     layer plane, kept where it lies inside the outer surface and no surface
  *     comes closer than the tolerance ("removed all points that were within
  *     some tolerance of an existing surface").
- *  2. Delaunay tetrahedralization of all nodes (thorax/delaunay.h); the
+ *  2. Delaunay tetrahedralization of all nodes (thorax/mesh/delaunay.h); the
  *     surfaces' triangles it lacks are flipped in where one operation per
  *     edge does it (mesh_recover, src/mesh/improve.h).
  *  3. Tetrahedra any part of which lies outside the domain are removed: the

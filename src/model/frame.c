@@ -1,4 +1,4 @@
-/* The anatomical frame of a model (see thorax/frame.h). */
+/* The anatomical frame of a model (see thorax/model/frame.h). */
 #include "thorax/model/frame.h"
 #include <string.h>
 

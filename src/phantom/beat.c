@@ -1,5 +1,5 @@
 /*
- * The phantom's heartbeat (thorax/electrodes.h): one current dipole at the
+ * The phantom's heartbeat (thorax/phantom/phantom.h): one current dipole at the
  * centre of the heart tracing a vectorcardiogram, and the potentials it makes
  * on the epicardium in an unbounded homogeneous medium.
  *

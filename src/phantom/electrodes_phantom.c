@@ -1,5 +1,5 @@
 /*
- * The phantom's electrodes (thorax/electrodes.h): the standard 12-lead
+ * The phantom's electrodes (thorax/phantom/phantom.h): the standard 12-lead
  * positions and a body-surface-mapping array on the model's outer surface.
  *
  * Landmarks are computed from the model itself, so they follow the phantom's
@@ -7,7 +7,7 @@
  * the torso's cross-sections across its superior axis (thx_surface_slice: the
  * largest loop of the outer surface on a plane of constant height), its
  * extent along that axis, and the heart's. The model's anatomical frame
- * (thorax/frame.h) says which axes are superior and anterior: the outer and
+ * (thorax/model/frame.h) says which axes are superior and anterior: the outer and
  * heart surfaces are first carried into RAS (+x the subject's right, +y
  * anterior, +z superior; a rotation, so orientation and distances are kept),
  * the landmarks are found there, and each electrode is the outer-surface node

@@ -1,5 +1,5 @@
 /*
- * The synthetic thorax (include/thorax/phantom.h): smooth anatomy, then a
+ * The synthetic thorax (include/thorax/phantom/phantom.h): smooth anatomy, then a
  * simulated hand digitization of it (paper 3.1).
  *
  * Construction, per layer k (z = 5 k):

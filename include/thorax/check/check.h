@@ -1,5 +1,5 @@
 /*
- * thorax/check.h — invariant checks of triangle surfaces and models
+ * thorax/check/check.h — invariant checks of triangle surfaces and models
  * (paper 3.2, "Completing the model": "we select a point inside each surface,
  * and compute the total solid angle about that point. If the surface
  * description is complete (no holes), and all the outward normals are

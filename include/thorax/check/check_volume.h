@@ -1,12 +1,12 @@
 /*
- * thorax/check_volume.h — invariant checks of a tetrahedral volume mesh
+ * thorax/check/check_volume.h — invariant checks of a tetrahedral volume mesh
  * (paper 3.3, "Volume Segmentation": "quality control of the
  * tetrahedralization ... removing tetrahedra which were flat ... or which
  * spanned concave regions of the outer boundaries of the domain", "we kept
  * tables which described the location of each point, in terms of both the
  * volume and surface point numbers").
  *
- * A thx_volume (thorax/volume.h) passes when ALL of these hold:
+ * A thx_volume (thorax/model/volume.h) passes when ALL of these hold:
  *
  *  validity
  *   - it has at least one tetrahedron; every node index is in range (if not,
@@ -66,7 +66,7 @@
  *     set of such voxels), a point in a voxel it passes through the side of
  *     a free voxel nearby flipped by the parity of the segment between them,
  *     else a full ray (rays grazing an edge are cast again in another
- *     direction; after 8 tries the solid-angle test of thorax/inside.h
+ *     direction; after 8 tries the solid-angle test of thorax/geom/inside.h
  *     decides). The surfaces should pass thx_surface_check;
  *   - no tetrahedron's centroid lies outside every surface of role "outer";
  *   - a heart surface (role heart) is "excluded" when no region maps to it

@@ -1,5 +1,5 @@
 /*
- * thorax/core.h — the context, status codes and small utilities every module uses.
+ * thorax/core/core.h — the context, status codes and small utilities every module uses.
  *
  * Invariants:
  *  - Every fallible library call takes a thx_ctx * first and returns a thx_status.
@@ -51,7 +51,7 @@ thx_status thx_error(thx_ctx *ctx, thx_status code, const char *fmt, ...)
 /* The last error message ("" if none). Owned by ctx, valid until the next call. */
 const char *thx_ctx_message(const thx_ctx *ctx);
 /* Records a file the running command reads: no single-file output (thx_output_claim in
- * thorax/fileio.h) may replace it. The CLI registers each command's input files; directory
+ * thorax/core/fileio.h) may replace it. The CLI registers each command's input files; directory
  * outputs name their inputs explicitly (a mesh may be written into its own model). */
 thx_status thx_ctx_add_input(thx_ctx *ctx, const char *path);
 /* The inputs recorded so far (n of them; owned by ctx). */

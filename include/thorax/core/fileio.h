@@ -1,5 +1,5 @@
 /*
- * thorax/fileio.h — atomic file and directory output.
+ * thorax/core/fileio.h — atomic file and directory output.
  *
  * Every file thorax writes goes first to a temporary name in the same
  * directory and is renamed over the target only when complete, so a failed

@@ -1,5 +1,5 @@
 /*
- * thorax/fem.h — finite-element volume-conductor solutions (paper 4.1).
+ * thorax/fem/fem.h — finite-element volume-conductor solutions (paper 4.1).
  *
  * Linear tetrahedral elements on a thx_volume: the stiffness matrix
  *   K_ij = sum over tetrahedra T of |T| grad(l_i) . sigma_T grad(l_j)
@@ -195,7 +195,7 @@ typedef struct {
 } thx_verify_row;
 
 /*
- * Concentric shells a = 40, b = 70, c = 100 mm (thorax/verify.h): P_l(cos
+ * Concentric shells a = 40, b = 70, c = 100 mm (thorax/geom/verify.h): P_l(cos
  * theta) prescribed on r = a, no current through r = c, conductivity s1 in
  * the inner shell and s2 in the outer one; the finite-element solution on
  * the cubed-sphere mesh with n cells per cube edge (n/2 layers per shell)
@@ -229,7 +229,7 @@ thx_status thx_verify_slab(thx_ctx *ctx, double *rel_err, size_t *nodes);
 /* ---- defibrillation (paper 4.1) ---- */
 
 /* An electrode patch: volume nodes on a surface, each with its share of the patch's area: the
- * surface's nodes chosen, then the Steiner nodes (thorax/volume.h) on the part of the surface they
+ * surface's nodes chosen, then the Steiner nodes (thorax/model/volume.h) on the part of the surface they
  * span (a Steiner node whose non-zero barycentric weights all fall on chosen nodes). */
 typedef struct {
     char name[32];

@@ -1,8 +1,8 @@
 /*
- * thorax/cdt.h — 2D constrained Delaunay triangulation and end caps
+ * thorax/geom/cdt.h — 2D constrained Delaunay triangulation and end caps
  * (paper 3.2, "Completing the model").
  *
- * All orientation decisions use the exact predicates of thorax/predicates.h,
+ * All orientation decisions use the exact predicates of thorax/geom/predicates.h,
  * so the results are exact for the given double coordinates (no epsilon).
  * Indices are 0-based. Triangles are returned counterclockwise in the (x, y)
  * plane (positive signed area). Output is deterministic: the same input gives

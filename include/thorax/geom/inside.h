@@ -1,5 +1,5 @@
 /*
- * thorax/inside.h — inside/outside tests (paper 3.2, "Inside/Outside algorithm").
+ * thorax/geom/inside.h — inside/outside tests (paper 3.2, "Inside/Outside algorithm").
  *
  * 2D: the algebraic sum of the angles subtended at P by consecutive points of a
  *     closed loop is 2*pi (times the winding number) if P is inside, 0 outside.

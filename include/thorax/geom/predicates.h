@@ -1,5 +1,5 @@
 /*
- * thorax/predicates.h — exact geometric predicates.
+ * thorax/geom/predicates.h — exact geometric predicates.
  *
  * Each predicate returns a value whose SIGN is exact for the given double
  * inputs (a fast floating-point evaluation with a rigorous error bound; when the

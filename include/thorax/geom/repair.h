@@ -1,5 +1,5 @@
 /*
- * thorax/repair.h — digitization noise in contours repaired, not refused
+ * thorax/geom/repair.h — digitization noise in contours repaired, not refused
  * (paper 3.1: hand-digitized points are "inevitably jagged"; issue 11 item 6).
  *
  * What a loop may carry and what is done about it, in this order, repeated

@@ -1,5 +1,5 @@
 /*
- * thorax/slice.h — cross-sections of closed surfaces by planes z = const.
+ * thorax/geom/slice.h — cross-sections of closed surfaces by planes z = const.
  *
  * The inverse of model construction's first step: where digitized contours
  * are the cross-sections of the body with the image planes, slicing a closed

@@ -1,5 +1,5 @@
 /*
- * thorax/spatial.h — a bounding-volume hierarchy over axis-aligned boxes
+ * thorax/geom/spatial.h — a bounding-volume hierarchy over axis-aligned boxes
  * (typically the bounding boxes of a surface's triangles), for "which
  * triangles may touch this one / this segment" queries in O(log n + k).
  *

@@ -1,5 +1,5 @@
 /*
- * thorax/surfaces.h — from digitized contours to closed, oriented triangle
+ * thorax/geom/surfaces.h — from digitized contours to closed, oriented triangle
  * surfaces (paper 3.1 "From MRI to points", 3.2 "Surface Segmentation").
  *
  *   contours --(3.1: periodic smoothing spline, arc-length resampling)--> layers

@@ -1,5 +1,5 @@
 /*
- * thorax/verify.h — geometry and analytic solutions for verifying the
+ * thorax/geom/verify.h — geometry and analytic solutions for verifying the
  * volume-conductor solvers (docs/validation.md).
  *
  * Concentric spherical shells: radii a < b < c, conductivity s1 in a < r < b

@@ -47,7 +47,7 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir);
 /* The same into a directory claimed earlier (thx_outdir_claim with manifest
  * model.json, format THX_MODEL_FORMAT): a command claims its output before it
  * reads and computes, so that a directory another command writes meanwhile is
- * never replaced (thorax/fileio.h). thx_model_write claims dir itself. */
+ * never replaced (thorax/core/fileio.h). thx_model_write claims dir itself. */
 #define THX_MODEL_MANIFEST "model.json"
 #define THX_MODEL_FORMAT "thorax-model"
 thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir *od);
@@ -87,7 +87,7 @@ int thx_export_format_is_volume(thx_export_format fmt);
 thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_format fmt, const char *path);
 /* Checks, writing nothing, that thx_surface_export or thx_volume_export may write path: absent,
  * empty or thorax's own export of this format (its signature in the first 4096 bytes), a regular
- * file, not a link, not an input (thorax/fileio.h). A command writing several files claims all first. */
+ * file, not a link, not an input (thorax/core/fileio.h). A command writing several files claims all first. */
 thx_status thx_export_claim(thx_ctx *ctx, thx_export_format fmt, const char *path);
 /*
  * Writes the model's volume mesh (m->volume; THX_EINPUT if there is none) in

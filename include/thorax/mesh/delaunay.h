@@ -1,5 +1,5 @@
 /*
- * thorax/delaunay.h — 3D Delaunay tetrahedralization (paper 3.3, "the volume
+ * thorax/mesh/delaunay.h — 3D Delaunay tetrahedralization (paper 3.3, "the volume
  * mesh": the tetrahedra are built from the nodes of the layered surfaces and
  * the interior grid points).
  *
@@ -7,7 +7,7 @@
  * tetrahedralization"): incremental Bowyer–Watson insertion in BRIO order
  * (random rounds, Hilbert curve order inside each round), point location by a
  * remembering stochastic visibility walk, exact adaptive predicates
- * (thorax/predicates.h), the exterior covered by "ghost" tetrahedra sharing a
+ * (thorax/geom/predicates.h), the exterior covered by "ghost" tetrahedra sharing a
  * vertex at infinity. Cospherical input (grids: the normal case for thorax) is
  * resolved by a symbolic perturbation of the paraboloid lifting, so the result
  * is always a true Delaunay tetrahedralization (no point strictly inside the

@@ -1,11 +1,11 @@
 /*
- * thorax/mesh.h — tetrahedral volume meshes from a surface model (paper 3.3,
+ * thorax/mesh/mesh.h — tetrahedral volume meshes from a surface model (paper 3.3,
  * "Volume Segmentation").
  *
  * The paper's hybrid method, made conforming: the nodes of the surfaces, plus
  * a planar grid of points on each layer inside the outer boundary with the
  * points within a tolerance of any surface dropped, are tetrahedralized
- * (Delaunay, thorax/delaunay.h); points are then added ON the surfaces
+ * (Delaunay, thorax/mesh/delaunay.h); points are then added ON the surfaces
  * (Steiner points, recorded in the volume) until every surface triangle is a
  * union of mesh faces; the surfaces cut the mesh into pieces, each piece
  * gets a tissue region by a chain of inside/outside tests (the paper's) and

@@ -20,8 +20,8 @@ typedef struct thx_model {
     int *has_interior;       /* per surface: 1 if interior[s] is a known interior point */
     thx_vec3 *interior;      /* per surface: a point inside it (for the 4 pi check) */
     char *provenance_json;   /* owned JSON text of the "provenance" object, or NULL */
-    struct thx_volume *volume; /* owned tetrahedral mesh with regions (thorax/volume.h), or NULL */
-    thx_frame frame;         /* which model axes point superior and anterior (thorax/frame.h);
+    struct thx_volume *volume; /* owned tetrahedral mesh with regions (thorax/model/volume.h), or NULL */
+    thx_frame frame;         /* which model axes point superior and anterior (thorax/model/frame.h);
                                 .set = 0: unknown (a command that needs anatomy refuses the model) */
 } thx_model;
 

@@ -1,5 +1,5 @@
 /*
- * thorax/volume.h — tetrahedral volume meshes with tissue regions (paper 3.3).
+ * thorax/model/volume.h — tetrahedral volume meshes with tissue regions (paper 3.3).
  *
  * A thx_volume is plain data:
  *   xyz      3 * n_nodes doubles (mm). Every surface node of the model is a
@@ -8,7 +8,7 @@
  *            usual right-handed sense used by VTK and Gmsh:
  *                ((p1 - p0) x (p2 - p0)) . (p3 - p0) > 0
  *            (that is thx_orient3d(p0, p1, p2, p3) < 0 in the convention of
- *            thorax/predicates.h, the opposite of thorax/delaunay.h's output).
+ *            thorax/geom/predicates.h, the opposite of thorax/mesh/delaunay.h's output).
  *   region   per tetrahedron the index (0-based) of its tissue region in the
  *            region table.
  *   regions  the tissue regions: a name ("mean_thorax", "fat", "muscle",

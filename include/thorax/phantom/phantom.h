@@ -150,10 +150,10 @@ void thx_beat_dipole(const thx_beat_opts *o, size_t f, double p[3]);
 thx_status thx_phantom_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_beat_opts *o, thx_series **out);
 
 /*
- * Electrodes and the beat on any torso, in its anatomical frame (thorax/frame.h).
+ * Electrodes and the beat on any torso, in its anatomical frame (thorax/model/frame.h).
  *
  * thx_torso_electrodes: the 12-lead positions and the body-surface array of
- * thx_phantom_electrodes (thorax/electrodes.h) on the outer surface of any
+ * thx_phantom_electrodes (thorax/model/electrodes.h) on the outer surface of any
  * model, the landmarks taken along frame's superior, anterior and left axes
  * (frame NULL: m->frame). THX_EINPUT naming the missing frame when neither
  * is set. thx_phantom_electrodes itself uses m->frame, or RAS when the model

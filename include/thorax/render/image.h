@@ -1,8 +1,8 @@
 /*
- * thorax/image.h — images, colour maps, scaling models, and 2D annotation
+ * thorax/render/image.h — images, colour maps, scaling models, and 2D annotation
  * (text, colour bars, signal traces) for the renderer (paper 4.2,
  * "Standards"). Everything here is CPU-side and needs no OpenGL: the 3D
- * renderer (thorax/render.h) draws into a thx_image, the annotations are
+ * renderer (thorax/render/render.h) draws into a thx_image, the annotations are
  * composited on top.
  */
 #ifndef THORAX_IMAGE_H
@@ -25,7 +25,7 @@ thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out);
 void thx_image_destroy(thx_image **img);
 void thx_image_fill(thx_image *img, const unsigned char rgba[4]);
 /* The tEXt chunk thorax writes in every PNG ("Software" = "thorax"): an existing file is replaced
- * only when it has it (thorax/fileio.h, thx_atomic_open_output). */
+ * only when it has it (thorax/core/fileio.h, thx_atomic_open_output). */
 #define THX_PNG_MARKER "Software\0thorax"
 /* PNG through libpng, 8-bit RGBA (or RGB when every alpha is 255); atomic; an existing file is
  * replaced only when thorax's own (above), never through a link. */

@@ -1,5 +1,5 @@
 /*
- * thorax/render.h — the 3D renderer (paper 4.2): surfaces as points, wire
+ * thorax/render/render.h — the 3D renderer (paper 4.2): surfaces as points, wire
  * meshes, flat, Gouraud or Phong shading, the orientation check, clipping
  * planes, potentials coloured per pixel (value interpolated, then looked up:
  * exact bands and contour lines), and arrows for current density.
@@ -18,7 +18,7 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-/* The one range rule of the colour scales (thx_scale_from_data, thorax/image.h, is this over the
+/* The one range rule of the colour scales (thx_scale_from_data, thorax/render/image.h, is this over the
  * finite values of an array; `thorax render` uses it over the values its --scope covers): lo..hi
  * the data's least and greatest finite values; symmetric: -M..M with M the largest magnitude
  * max(|lo|, |hi|) (data -5..2 gives -5..5); no finite value (lo > hi or not finite): -1..1; all
@@ -60,7 +60,7 @@ typedef struct {
     float point_size;        /* pixels (points and orientation modes); 0: 4 */
     float line_width;        /* pixels (wire mode, contour lines); 0: 1 (wire), 1.5 (contours) */
     /* data: one value per node (NULL = none). Values are mapped by `scale` to t in [0, 1], t is
-       interpolated across each triangle per pixel and looked up in `cmap` (thorax/image.h). NaN
+       interpolated across each triangle per pixel and looked up in `cmap` (thorax/render/image.h). NaN
        values are drawn in the scene's nan_color. */
     const double *values;
     thx_data_style style;
