@@ -148,6 +148,11 @@ static inline thx_status read_scalar(build *b, source *s, scalar_type ty, const 
     return THX_OK;
 }
 
+/* The legacy VTK cell reader (import_vtk.c), which the .vtp reader shares: adds the cells of one
+ * section: kind 0 polygons, 1 triangle strips, 2 ignored. */
+thx_status import_vtk_cells(build *b, int kind, const double *off, size_t n_cells, const double *conn, size_t n_conn,
+                            int legacy, where w, int32_t **poly, size_t *pcap);
+
 /* The readers, one per format (src/io/import_FORMAT.c): each fills b from the
  * whole file text[0, len) and the reading fields of info (may be NULL). */
 thx_status import_read_tri(build *b, const char *text, size_t len, thx_surface_read_info *info);
