@@ -18,7 +18,7 @@
  *    nodes per tetrahedron, region numbers in the table, node tables
  *    consistent, conductivities symmetric positive definite. Orientation,
  *    coincident nodes and element quality are the volume checker's
- *    (src/geom/check_volume.c), as surface orientation is `thorax check`'s:
+ *    (src/check/check_volume*.c), as surface orientation is `thorax check`'s:
  *    a faulty mesh can still be saved, read back and inspected.
  *  - Node tables. A surface node IS a volume node (no duplicate nodes): its
  *    coordinates in NAME.pts ("%.6f") and volume.pts ("%.17g", the mesher's
