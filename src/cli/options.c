@@ -670,7 +670,7 @@ int cli_check(const cli_command *c, FILE *f)
             if (e > p) {
                 char w[512];
                 problems += usage_word(c, p, (size_t)(e - p), w, sizeof w, f, seen);
-                if (e - p >= 8 && !strncmp(e - 8, "options]", 8)) catch_all = 1;
+                if (e - p == 9 && !strncmp(p, "[options]", 9)) catch_all = 1;
             }
             p = e;
         }
@@ -678,6 +678,6 @@ int cli_check(const cli_command *c, FILE *f)
     }
     for (size_t k = 0; !catch_all && (o = nth(c, k)); k++)
         if (!seen[k] && !(o->flags & (CLI_NOUSAGE | CLI_HIDDEN)))
-            fprintf(f, "%s: %s is in no usage line (and no line says [... options])\n", c->name, o->name), problems++;
+            fprintf(f, "%s: %s is in no usage line (and no line says [options])\n", c->name, o->name), problems++;
     return problems;
 }

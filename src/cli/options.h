@@ -14,8 +14,8 @@
  *
  * Invariants the tables keep (cli_check, `thorax help --check`): names start with '-' and are
  * unique within a command; every option has help text; every dash word of the usage lines is an
- * option of the command, and every option is in some usage line unless a line says
- * "[... options]" or the option is CLI_NOUSAGE.
+ * option of the command, and every option is in some usage line unless a line says "[options]"
+ * or the option is CLI_NOUSAGE.
  */
 #ifndef THORAX_CLI_OPTIONS_H
 #define THORAX_CLI_OPTIONS_H
