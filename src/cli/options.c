@@ -504,29 +504,36 @@ static int usage_word(const cli_command *c, const char *tok, size_t tl, char *ou
     return problems;
 }
 
-/* One form of the usage (line of c->usage, [line, end)) expanded after prefix; a word (a bracketed
- * option with its value) is never split, the words are wrapped before width under the first. */
+/* One form of the usage (line of c->usage, [line, end)) expanded after prefix, wrapped before width
+ * under its first word; a bracketed group ("[--grid MM]", "[FILE --name NAME ...]") is never split. */
 static void usage_form(const cli_command *c, FILE *f, const char *prefix, const char *line, const char *end, int width)
 {
     int col = fprintf(f, "%s", prefix), indent = col, first = 1;
     for (const char *p = line; p < end;) {
-        while (p < end && *p == ' ') p++;
-        if (p >= end) break;
-        const char *e = p;
-        while (e < end && *e != ' ') e++;
-        char w[512];
-        usage_word(c, p, (size_t)(e - p), w, sizeof w, NULL, NULL);
-        int len = (int)strlen(w);
-        if (!first && col + 1 + len > width) {
+        char unit[1024];
+        size_t len = 0;
+        int depth = 0;
+        do { /* the words up to the end of the group the first one opens */
+            while (p < end && *p == ' ') p++;
+            if (p >= end) break;
+            const char *e = p;
+            while (e < end && *e != ' ') e++;
+            for (const char *q = p; q < e; q++) depth += (*q == '[') - (*q == ']');
+            char w[512];
+            usage_word(c, p, (size_t)(e - p), w, sizeof w, NULL, NULL);
+            len += (size_t)snprintf(unit + len, len < sizeof unit ? sizeof unit - len : 0, "%s%s", len ? " " : "", w);
+            p = e;
+        } while (depth > 0 && p < end);
+        if (!len) break;
+        if (!first && col + 1 + (int)strlen(unit) > width) {
             fprintf(f, "\n%*s", indent, "");
             col = indent;
         } else if (!first) {
             fputc(' ', f);
             col++;
         }
-        col += fprintf(f, "%s", w);
+        col += fprintf(f, "%s", unit);
         first = 0;
-        p = e;
     }
     fputc('\n', f);
 }

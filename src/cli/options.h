@@ -63,7 +63,7 @@ struct cli_opt {
     const char *alias; /* the short form of a long option ("-o"), or NULL */
     cli_type type;
     const char *meta; /* the value's metavariable ("MM"); a choice shows its words instead */
-    const char *def;  /* the default as text; NULL: the destination's value before parsing */
+    const char *def;  /* the default as text; NULL: the destination's value before parsing; "": none */
     const char *unit; /* "mm", "S/m", "deg", "ms", "mV", ...; NULL: none */
     const char *help; /* one sentence, wrapped by the help; no trailing period */
     const char *note; /* after the default: what special values mean ("0 turns it off") */
