@@ -28,9 +28,6 @@ int cmd_animate(int argc, char **argv);
 thx_ctx *cli_ctx(int verbose);
 /* Prints "thorax CMD: <message>" for a failed status and returns the exit code (1, or 2 for usage). */
 int cli_fail(thx_ctx *ctx, const char *cmd, thx_status st);
-/* Parses a double/int option value; on error prints a usage error and returns non-zero. */
-int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out);
-int cli_parse_int(const char *cmd, const char *opt, const char *s, long *out);
 /* The whole command line joined by spaces (for provenance). Static buffer. */
 const char *cli_command_line(void);
 void cli_set_command_line(int argc, char **argv);

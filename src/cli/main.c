@@ -82,26 +82,6 @@ int cli_fail(thx_ctx *ctx, const char *cmd, thx_status st)
     return 1;
 }
 
-int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out)
-{
-    char *end = NULL;
-    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
-    double v = strtod(s, &end);
-    if (end == s || *end != '\0' || v != v) return cli_usage_error(cmd, "%s: '%s' is not a number", opt, s);
-    *out = v;
-    return 0;
-}
-
-int cli_parse_int(const char *cmd, const char *opt, const char *s, long *out)
-{
-    char *end = NULL;
-    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
-    long v = strtol(s, &end, 10);
-    if (end == s || *end != '\0') return cli_usage_error(cmd, "%s: '%s' is not an integer", opt, s);
-    *out = v;
-    return 0;
-}
-
 static void usage(FILE *f)
 {
     fprintf(f, "usage: thorax COMMAND [options]\n\n"
