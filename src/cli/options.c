@@ -602,11 +602,13 @@ void cli_usage_markdown(const cli_command *c, FILE *f) { put_usage(c, f, "    ",
 
 void cli_options_markdown(const cli_command *c, FILE *f)
 {
-    int tables = 0;
+    int tables = 0, groups = 0;
+    for (int g = 0; g < CLI_MAX_GROUPS; g++) groups += c->group[g].n > 0;
     for (int g = 0; g < CLI_MAX_GROUPS; g++) {
         if (!c->group[g].n) continue;
         if (tables++) fputc('\n', f);
-        if (c->group[g].title) fprintf(f, "%s:\n\n", c->group[g].title);
+        /* several tables: each under its title, as in the help */
+        if (groups > 1) fprintf(f, "%s:\n\n", c->group[g].title ? c->group[g].title : "options");
         fprintf(f, "| option | default | unit | meaning |\n|---|---|---|---|\n");
         for (size_t k = 0; k < c->group[g].n; k++) {
             const cli_opt *o = &c->group[g].opt[k];
