@@ -156,7 +156,7 @@ static void test_errors(void)
         {{"--grid", "nan", NULL}, "'nan' is not a number"},
         {{"--grid", "2x", NULL}, "'2x' is not a number"},
         {{"--grid", "0", NULL}, "demo: --grid must be positive"},
-        {{"--tol", "1.5", NULL}, "demo: --tol: '1.5' is out of range (from 0 to 1 mm)"},
+        {{"--tol", "1.5", NULL}, "demo: --tol: '1.5' is out of range (in [0, 1] mm)"},
         {{"--tol", "inf", NULL}, "is out of range"},
         {{"-s", "-1", NULL}, "demo: -s: '-1' is out of range (>= 0)"},
         {{"--seed", "1.5", NULL}, "demo: --seed: '1.5' is not an integer"},

@@ -107,9 +107,10 @@ int cmd_animate(int argc, char **argv)
     cli_command cmd = {
         .name = "animate",
         .usage = "MODEL|--solution -o [--frames] [--fps] [--mp4] [options]",
-        .about = "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames whose PNG\n"
-                 "exists are kept if drawn with the same options, data and program: DIR/frames.settings),\n"
-                 "a progress bar on a terminal, then an MP4 (H.264) through ffmpeg.\n",
+        .about = "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames\n"
+                 "whose PNG exists are kept if drawn with the same options, data and program:\n"
+                 "DIR/frames.settings), a progress bar on a terminal, then an MP4 (H.264) through\n"
+                 "ffmpeg.\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)}},
         .positional = render_positional,
         .user = &o,

@@ -105,8 +105,8 @@ int cmd_forward(int argc, char **argv)
                  "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
                  "unless --force, which solves anyway and records the reasons in solution.json.\n",
         .epilog = "PETSc options are passed through: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor,\n"
-                  "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg -ksp_rtol 1e-10.\n"
-                  "Runs under mpirun -np N (rank 0 writes).\n",
+                  "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg\n"
+                  "-ksp_rtol 1e-10. Runs under mpirun -np N (rank 0 writes).\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
         .pass = cli_petsc_pass,
         .user = &pa,

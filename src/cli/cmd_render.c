@@ -905,7 +905,7 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--view", .type = CLI_CHOICE, .meta = "V", .choices = views, .i = &o->view,
                        .help = "anterior, posterior, left, right, superior or inferior, in the model's frame"};
     t[n++] = (cli_opt){.name = "--up", .type = CLI_STRING, .meta = "AXIS", .fn = parse_axis_option,
-                       .def = "the model's frame (model.json \"frame\")",
+                       .def = "the model's frame, model.json \"frame\"",
                        .help = "the model's cranial axis for the views and clip sides: +x, -x, +y, -y, +z or -z (a "
                                "model without a frame needs --up and --front for a named view or clip side; surface "
                                "files without them are drawn as +z and +y, with a warning)"};
@@ -1044,9 +1044,10 @@ int cmd_render(int argc, char **argv)
         .usage = "MODEL [--data [--data-surface]] [--frame] -o [options]\n"
                  "--solution [--frame] -o [options]\n"
                  "SURFACE_FILE... [--data [--channels]] [--frame] -o [options]",
-        .about = "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a GPU), with\n"
-                 "potentials coloured per pixel (the value interpolated, then the colour looked up, so bands and\n"
-                 "contours are exact), following the field's display conventions (paper 4.2).\n",
+        .about = "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a\n"
+                 "GPU), with potentials coloured per pixel (the value interpolated, then the colour\n"
+                 "looked up, so bands and contours are exact), following the field's display\n"
+                 "conventions (paper 4.2).\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)}},
         .positional = render_positional,
         .user = &o,

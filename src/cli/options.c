@@ -13,7 +13,7 @@
 
 #define HELP_WIDTH 79 /* the help's lines are at most this long */
 #define HELP_COLUMN 22 /* where an option's text starts ("  " + 18 for its name, then 2 spaces) */
-#define MD_WIDTH 100   /* the manual's usage lines */
+#define MD_WIDTH 100   /* the manual's usage lines (a code block, indented 4) */
 #define MAX_OPTS 96    /* options of one command (defaults remembered for its help) */
 #define MAX_OUTPUTS 64
 
@@ -24,7 +24,8 @@ static int check_problems;
 static const char *outputs[MAX_OUTPUTS];
 static int n_outputs;
 
-/* the defaults of the command being parsed, as its options held them before the parse */
+/* the defaults of the command last parsed, as its options held them before the parse (the help
+   printed for -h shows these, not the values of the options before it) */
 static const cli_command *snap_of;
 static char snap[MAX_OPTS][48];
 
@@ -48,6 +49,18 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
     va_end(ap);
     fprintf(stderr, "\n(see 'thorax %s --help')\n", cmd);
     return 2;
+}
+
+/* Appends to buf (cap bytes, *len of them used), truncating at its end. */
+static void appendf(char *buf, size_t cap, size_t *len, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+static void appendf(char *buf, size_t cap, size_t *len, const char *fmt, ...)
+{
+    if (*len + 1 >= cap) return;
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(buf + *len, cap - *len, fmt, ap);
+    va_end(ap);
+    if (n > 0) *len = *len + (size_t)n < cap ? *len + (size_t)n : cap - 1;
 }
 
 /* ---------------------------------------------------------------- the table */
@@ -88,13 +101,13 @@ static void format_number(double v, char *buf, size_t cap)
     char t[40];
     snprintf(t, sizeof t, "%g", v);
     char *e = strchr(t, 'e');
-    if (e) {
-        char sign = e[1];
-        const char *d = e + 2;
-        while (*d == '0' && d[1]) d++;
-        snprintf(e + 1, sizeof t - (size_t)(e + 1 - t), "%s%s", sign == '-' ? "-" : "", d);
+    if (!e) {
+        snprintf(buf, cap, "%s", t);
+        return;
     }
-    snprintf(buf, cap, "%s", t);
+    const char *d = e + 2; /* past the exponent's sign */
+    while (*d == '0' && d[1]) d++;
+    snprintf(buf, cap, "%.*se%s%s", (int)(e - t), t, e[1] == '-' ? "-" : "", d);
 }
 
 /* The default of o as text (from the table, else from its destination now), "" for none. */
@@ -142,8 +155,8 @@ static void choice_words(const cli_opt *o, const char *sep, const char *last, ch
     size_t len = 0, n = 0;
     buf[0] = '\0';
     while (o->choices && o->choices[n].word) n++;
-    for (size_t k = 0; k < n && len < cap; k++)
-        len += (size_t)snprintf(buf + len, cap - len, "%s%s", k == 0 ? "" : k + 1 == n ? last : sep, o->choices[k].word);
+    for (size_t k = 0; k < n; k++)
+        appendf(buf, cap, &len, "%s%s", k == 0 ? "" : k + 1 == n ? last : sep, o->choices[k].word);
 }
 
 /* What the value of o is shown as: its metavariable, or a choice's words a|b|c. */
@@ -181,15 +194,15 @@ static void help_tail(const cli_command *c, const cli_opt *o, char *buf, size_t 
     int show_unit = o->unit && !unit_in_meta(o);
     size_t len = 0;
     buf[0] = '\0';
-    if (o->flags & CLI_REPEAT) len += (size_t)snprintf(buf, cap, "repeatable");
-    if (def[0] && len < cap) {
-        int attach = show_unit && numeric_text(def);
-        len += (size_t)snprintf(buf + len, cap - len, "%sdefault%s%s%s%s", len ? "; " : "", strchr(def, ' ') ? ": " : " ", def,
-                                attach ? " " : "", attach ? o->unit : "");
+    if (o->flags & CLI_REPEAT) appendf(buf, cap, &len, "repeatable");
+    if (def[0]) {
+        int attach = show_unit && numeric_text(def); /* "5 mm", but "the node spacing" alone */
+        appendf(buf, cap, &len, "%sdefault%s%s", len ? "; " : "", strchr(def, ' ') ? ": " : " ", def);
+        if (attach) appendf(buf, cap, &len, " %s", o->unit);
         if (attach) show_unit = 0;
     }
-    if (show_unit && len < cap) len += (size_t)snprintf(buf + len, cap - len, "%sin %s", len ? "; " : "", o->unit);
-    if (o->note && len < cap) snprintf(buf + len, cap - len, "%s%s", len ? "; " : "", o->note);
+    if (show_unit) appendf(buf, cap, &len, "%sin %s", len ? "; " : "", o->unit);
+    if (o->note) appendf(buf, cap, &len, "%s%s", len ? "; " : "", o->note);
 }
 
 /* --------------------------------------------------------------- the parser */
@@ -206,7 +219,7 @@ static int check_rule(const cli_command *c, const cli_opt *o, const char *typed,
     format_number(o->lo, lo, sizeof lo);
     format_number(o->hi, hi, sizeof hi);
     if ((r & (CLI_GE | CLI_GT)) && (r & (CLI_LE | CLI_LT)))
-        snprintf(what, sizeof what, "%s %s to %s%s", r & CLI_GT ? "above" : "from", lo, hi, r & CLI_LT ? " (excluded)" : "");
+        snprintf(what, sizeof what, "in %c%s, %s%c", r & CLI_GT ? '(' : '[', lo, hi, r & CLI_LT ? ')' : ']');
     else if (r & (CLI_GE | CLI_GT))
         snprintf(what, sizeof what, "%s %s", r & CLI_GT ? ">" : ">=", lo);
     else if (r & (CLI_LE | CLI_LT))
@@ -376,7 +389,8 @@ int cli_suggest(const cli_command *c, const char *word, char *buf, size_t cap)
     names[n++] = "--help";
     const char *w = undash(word);
     size_t wl = strlen(w);
-    /* the nearest names by edit distance (without the dashes), within a quarter of their length */
+    /* the nearest names by edit distance (without the dashes), within a quarter of their length
+       (at least 1, at most 3); no guesses at names shorter than 3 (-o, -v) */
     const char *best[3];
     size_t nb = 0, bd = 64;
     for (size_t k = 0; k < n; k++) {
@@ -388,23 +402,17 @@ int cli_suggest(const cli_command *c, const char *word, char *buf, size_t cap)
         if (d < bd) nb = 0, bd = d;
         if (nb < 3) best[nb++] = names[k];
     }
-    /* else the names it begins (--no-inter) or that begin it (--grid=5) */
-    for (size_t k = 0; k < n && nb == 0; k++) {
-        const char *cn = undash(names[k]);
-        size_t len = strlen(cn);
-        if (wl >= 2 && (!strncmp(cn, w, wl) || (len >= 2 && !strncmp(w, cn, len) && w[len] == '='))) {
-            for (size_t j = k; j < n && nb < 3; j++) {
-                const char *cj = undash(names[j]);
-                size_t lj = strlen(cj);
-                if (!strncmp(cj, w, wl) || (lj >= 2 && !strncmp(w, cj, lj) && w[lj] == '=')) best[nb++] = names[j];
-            }
+    /* else the names it begins (--no-inter), or that begin it up to an '=' (--grid=5) */
+    if (!nb && wl >= 2)
+        for (size_t k = 0; k < n && nb < 3; k++) {
+            const char *cn = undash(names[k]);
+            size_t len = strlen(cn);
+            if (!strncmp(cn, w, wl) || (!strncmp(w, cn, len) && w[len] == '=')) best[nb++] = names[k];
         }
-    }
     if (!nb) return 0;
     size_t len = 0;
     buf[0] = '\0';
-    for (size_t k = 0; k < nb && len < cap; k++)
-        len += (size_t)snprintf(buf + len, cap - len, "%s%s", k == 0 ? "" : k + 1 == nb ? " or " : ", ", best[k]);
+    for (size_t k = 0; k < nb; k++) appendf(buf, cap, &len, "%s%s", k == 0 ? "" : k + 1 == nb ? " or " : ", ", best[k]);
     return 1;
 }
 
@@ -445,10 +453,12 @@ static int usage_word(const cli_command *c, const char *tok, size_t tl, char *ou
     size_t a = 0, b = tl;
     while (a < b && (tok[a] == '[' || tok[a] == '(')) a++;
     while (b > a && (tok[b - 1] == ']' || tok[b - 1] == ')' || tok[b - 1] == '.')) b--;
-    size_t len = (size_t)snprintf(out, cap, "%.*s", (int)a, tok);
+    size_t len = 0;
+    out[0] = '\0';
+    appendf(out, cap, &len, "%.*s", (int)a, tok);
     int problems = 0, repeat = 0;
     /* alternatives separated by '|', unless an option's '=' gives its own words */
-    for (size_t p = a; p < b && len < cap;) {
+    for (size_t p = a; p < b;) {
         size_t q = p;
         const char *eq = NULL;
         if (tok[p] == '-') {
@@ -466,7 +476,7 @@ static int usage_word(const cli_command *c, const char *tok, size_t tl, char *ou
         }
         if (o && seen) seen[index_of(c, o)] = 1;
         if (o && (o->flags & CLI_REPEAT)) repeat = 1;
-        len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s", name);
+        appendf(out, cap, &len, "%s", name);
         if (eq) {
             const char *v = eq + 1;
             size_t vl = (size_t)(tok + b - v);
@@ -483,24 +493,23 @@ static int usage_word(const cli_command *c, const char *tok, size_t tl, char *ou
                     }
                     w = e + (e < v + vl);
                 }
-            len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, " %.*s", (int)vl, v);
+            appendf(out, cap, &len, " %.*s", (int)vl, v);
             p = b;
             break;
         }
         if (o && takes_value(o)) {
             char v[160];
             value_name(o, v, sizeof v);
-            len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, " %s", v);
+            appendf(out, cap, &len, " %s", v);
         }
         p = q;
         if (p < b && tok[p] == '|') {
-            len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "|");
+            appendf(out, cap, &len, "|");
             p++;
         }
     }
-    len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%.*s", (int)(tl - b), tok + b);
-    if (repeat && (tl < 3 || strncmp(tok + tl - 3, "...", 3)))
-        snprintf(out + len, len < cap ? cap - len : 0, "...");
+    appendf(out, cap, &len, "%.*s", (int)(tl - b), tok + b);
+    if (repeat && (tl < 3 || strncmp(tok + tl - 3, "...", 3))) appendf(out, cap, &len, "...");
     return problems;
 }
 
@@ -521,7 +530,7 @@ static void usage_form(const cli_command *c, FILE *f, const char *prefix, const 
             for (const char *q = p; q < e; q++) depth += (*q == '[') - (*q == ']');
             char w[512];
             usage_word(c, p, (size_t)(e - p), w, sizeof w, NULL, NULL);
-            len += (size_t)snprintf(unit + len, len < sizeof unit ? sizeof unit - len : 0, "%s%s", len ? " " : "", w);
+            appendf(unit, sizeof unit, &len, "%s%s", len ? " " : "", w);
             p = e;
         } while (depth > 0 && p < end);
         if (!len) break;
@@ -559,8 +568,10 @@ static void option_text(const cli_command *c, const cli_opt *o, char *buf, size_
     if (!markdown) help_tail(c, o, tail, sizeof tail);
     else snprintf(tail, sizeof tail, "%s%s%s", o->flags & CLI_REPEAT ? "repeatable" : "",
                   (o->flags & CLI_REPEAT) && o->note ? "; " : "", o->note ? o->note : "");
-    size_t len = (size_t)snprintf(buf, cap, "%s", o->help ? o->help : "");
-    if (tail[0]) snprintf(buf + len, len < cap ? cap - len : 0, " (%s)", tail);
+    size_t len = 0;
+    buf[0] = '\0';
+    appendf(buf, cap, &len, "%s", o->help ? o->help : "");
+    if (tail[0]) appendf(buf, cap, &len, " (%s)", tail);
 }
 
 void cli_help(const cli_command *c, FILE *f)
