@@ -81,8 +81,8 @@ static void demo(cli_command *c, cli_opt *t, size_t *n, vals *v)
         {.name = "--input", .type = CLI_INPUT, .meta = "FILE", .s = &v->in, .help = "what to read"},
         {.name = "--grid", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &v->grid, .rule = CLI_GT,
          .bad = "--grid must be positive", .help = "grid spacing"},
-        {.name = "--tol", .type = CLI_REAL, .meta = "T", .unit = "mm", .d = &v->tol, .rule = CLI_GE | CLI_LE | CLI_FINITE,
-         .lo = 0, .hi = 1, .note = "0 = exact", .help = "a tolerance"},
+        {.name = "--tol", .type = CLI_REAL, .meta = "T", .unit = "mm", .d = &v->tol,
+         .rule = CLI_GE | CLI_LE | CLI_FINITE, .lo = 0, .hi = 1, .note = "0 = exact", .help = "a tolerance"},
         {.name = "--seed", .alias = "-s", .type = CLI_INT, .meta = "N", .l = &v->seed, .rule = CLI_GE, .help = "seed"},
         {.name = "--small", .type = CLI_INT, .meta = "K", .i = &v->small, .help = "an int"},
         {.name = "--size", .type = CLI_CHOICE, .choices = sizes, .i = &v->choice, .help = "how big"},
@@ -127,9 +127,9 @@ static void test_values(void)
     size_t n;
     vals v;
     demo(&c, t, &n, &v);
-    const char *w[] = {"in1", "-o", "out", "--grid", "2.5", "--tol", "0", "-s", "42", "--small", "-3", "--size", "small",
-                       "--name", "-dash-", "--only", "a", "--only", "b", "--flag", "--off", "-v", "-v", "-q", "-", "in2",
-                       NULL};
+    const char *w[] = {"in1",    "-o",     "out",    "--grid", "2.5",   "--tol",   "0",      "-s",  "42",
+                       "--small", "-3",    "--size", "small",  "--name", "-dash-", "--only", "a",    "--only",
+                       "b",      "--flag", "--off",  "-v",     "-v",    "-q",      "-",      "in2", NULL};
     CHECK(parse(&c, w) == 0);
     CHECK(c.n_pos == 3 && !strcmp(c.pos[0], "in1") && !strcmp(c.pos[1], "-") && !strcmp(c.pos[2], "in2"));
     CHECK(v.out && !strcmp(v.out, "out"));
@@ -333,8 +333,10 @@ static void test_check(void)
     for (size_t k = 0; k < sizeof faults / sizeof faults[0]; k++) {
         demo(&c, t, &n, &v);
         switch (k) {
-        case 0: c.usage = "IN -o [--input] [--grid] [--tol] [--seed] [--small] [--size] [--name] [--only] [--flag] [--off] [--frobnicate]"; break;
-        case 1: c.usage = "IN -o [--input] [--grid] [--tol] [--seed] [--small] [--size=medium] [--name] [--only] [--flag] [--off]"; break;
+        case 0: c.usage = "IN -o [--input] [--grid] [--tol] [--seed] [--small] [--size] [--name] [--only] [--flag] "
+                          "[--off] [--frobnicate]"; break;
+        case 1: c.usage = "IN -o [--input] [--grid] [--tol] [--seed] [--small] [--size=medium] [--name] [--only] "
+                          "[--flag] [--off]"; break;
         case 2: c.usage = "IN -o [--input] [--tol] [--seed] [--small] [--size] [--name] [--only] [--flag] [--off]"; break;
         case 3: t[3].help = NULL; break;
         case 4: t[5].name = "--seed"; break;

@@ -140,8 +140,8 @@ int cmd_beat(int argc, char **argv)
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "FILE", .s = &out,
          .help = "series to write (atomically)"},
-        {.name = "--frames", .type = CLI_INT, .meta = "N", .l = &frames, .rule = CLI_GE | CLI_LE, .lo = 1, .hi = 10000000,
-         .bad = "--frames must be between 1 and 10000000", .help = "number of frames (the beat ends at 470 ms)"},
+        {.name = "--frames", .type = CLI_INT, .meta = "N", .l = &frames, .rule = CLI_GE | CLI_LE, .lo = 1,
+         .hi = 10000000, .bad = "--frames must be between 1 and 10000000", .help = "number of frames (the beat ends at 470 ms)"},
         {.name = "--dt", .type = CLI_REAL, .meta = "MS", .unit = "ms", .d = &o.dt_ms, .rule = CLI_GT | CLI_LE, .lo = 0,
          .hi = 1e6, .bad = "--dt must be a positive number of ms", .help = "time step"},
         {.name = "--peak", .type = CLI_REAL, .meta = "MV", .unit = "mV", .d = &o.peak_mv, .rule = CLI_GT | CLI_LE,

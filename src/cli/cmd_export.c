@@ -27,8 +27,8 @@ int cmd_export(int argc, char **argv)
     cli_opt opts[] = {
         {.name = "--format", .type = CLI_CHOICE, .meta = "F", .choices = formats, .i = &format,
          .help = "the format (required): vtk: legacy VTK ASCII polydata (ParaView, VTK); vtp: VTK XML polydata; "
-                 "obj: Wavefront OBJ; stl: binary STL (float32, facet normals pointing outward); ply: ASCII PLY; vtu: the volume as a VTK XML "
-                 "unstructured grid of tetrahedra, cell data \"region\" (1-based region id), point data \"surface\" "
+                 "obj: Wavefront OBJ; stl: binary STL (float32, facet normals pointing outward); ply: ASCII PLY; "
+                 "vtu: the volume as a VTK XML unstructured grid of tetrahedra, cell data \"region\" (1-based region id), point data \"surface\" "
                  "and \"surface_node\" (the node tables); msh: the volume as Gmsh MSH 4.1 ASCII, one physical volume "
                  "per region"},
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out_dir, .def = "MODEL itself",

@@ -106,8 +106,9 @@ static int command_help(size_t k, cli_help_mode mode)
 static int manual(int argc, char **argv)
 {
     const char *what = argv[2];
-    cli_help_mode mode = !strcmp(what, "--usage") ? CLI_HELP_USAGE_MD : !strcmp(what, "--markdown") ? CLI_HELP_OPTIONS_MD
-                                                                                                     : CLI_HELP_CHECK;
+    cli_help_mode mode = !strcmp(what, "--usage")      ? CLI_HELP_USAGE_MD
+                         : !strcmp(what, "--markdown") ? CLI_HELP_OPTIONS_MD
+                                                       : CLI_HELP_CHECK;
     if (mode != CLI_HELP_CHECK && argc != 4) {
         fprintf(stderr, "thorax: usage: thorax help %s COMMAND\n", what);
         return 2;
@@ -126,7 +127,8 @@ static int manual(int argc, char **argv)
         }
     }
     if (mode == CLI_HELP_CHECK && cli_check_problems()) {
-        fprintf(stderr, "thorax help --check: %d problem%s\n", cli_check_problems(), cli_check_problems() > 1 ? "s" : "");
+        int n = cli_check_problems();
+        fprintf(stderr, "thorax help --check: %d problem%s\n", n, n > 1 ? "s" : "");
         return 1;
     }
     return 0;

@@ -328,7 +328,8 @@ int cli_parse(cli_command *c, int argc, char **argv)
         }
         if (!o) {
             char near[200];
-            if (cli_suggest(c, a, near, sizeof near)) return cli_usage_error(c->name, "unknown option '%s' (did you mean %s?)", a, near);
+            if (cli_suggest(c, a, near, sizeof near))
+                return cli_usage_error(c->name, "unknown option '%s' (did you mean %s?)", a, near);
             return cli_usage_error(c->name, "unknown option '%s'", a);
         }
         const char *v = NULL;
@@ -448,7 +449,8 @@ static int put_wrapped(FILE *f, const char *text, int col, int indent, int width
  * "[--grid MM]", "--format=vtu|msh" -> "--format vtu|msh", "MODEL|--solution" -> "MODEL|--solution
  * DIR"), a repeatable one "..." after it. Problems (an unknown option, a word not among a choice's)
  * go to err when it is not NULL; seen[k] is set for every option k named. */
-static int usage_word(const cli_command *c, const char *tok, size_t tl, char *out, size_t cap, FILE *err, unsigned char *seen)
+static int usage_word(const cli_command *c, const char *tok, size_t tl, char *out, size_t cap, FILE *err,
+                      unsigned char *seen)
 {
     size_t a = 0, b = tl;
     while (a < b && (tok[a] == '[' || tok[a] == '(')) a++;
@@ -488,7 +490,9 @@ static int usage_word(const cli_command *c, const char *tok, size_t tl, char *ou
                     for (const cli_choice *ch = o->choices; ch && ch->word; ch++)
                         found |= strlen(ch->word) == (size_t)(e - w) && !strncmp(ch->word, w, (size_t)(e - w));
                     if (!found) {
-                        if (err) fprintf(err, "%s: the usage gives %s '%.*s', not one of its words\n", c->name, name, (int)(e - w), w);
+                        if (err)
+                            fprintf(err, "%s: the usage gives %s '%.*s', not one of its words\n", c->name, name,
+                                    (int)(e - w), w);
                         problems++;
                     }
                     w = e + (e < v + vl);
@@ -659,8 +663,10 @@ int cli_check(const cli_command *c, FILE *f)
         for (int q = 0; q < 2; q++) {
             const char *nm = names[q];
             if (!nm) continue;
-            if (nm[0] != '-' || !nm[1] || (q == 1 && nm[1] == '-')) fprintf(f, "%s: option name '%s'\n", c->name, nm), problems++;
-            if (!strcmp(nm, "-h") || !strcmp(nm, "--help")) fprintf(f, "%s: %s is every command's help\n", c->name, nm), problems++;
+            if (nm[0] != '-' || !nm[1] || (q == 1 && nm[1] == '-'))
+                fprintf(f, "%s: option name '%s'\n", c->name, nm), problems++;
+            if (!strcmp(nm, "-h") || !strcmp(nm, "--help"))
+                fprintf(f, "%s: %s is every command's help\n", c->name, nm), problems++;
             cli_opt *first = find(c, nm);
             if (first != o) fprintf(f, "%s: %s is declared twice\n", c->name, nm), problems++;
         }
