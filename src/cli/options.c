@@ -383,7 +383,6 @@ int cli_suggest(const cli_command *c, const char *word, char *buf, size_t cap)
     size_t n = 0;
     cli_opt *o;
     for (size_t k = 0; (o = nth(c, k)) && n + 2 < sizeof names / sizeof names[0]; k++) {
-        if (o->flags & CLI_HIDDEN) continue;
         names[n++] = o->name;
         if (o->alias) names[n++] = o->alias;
     }
@@ -587,7 +586,6 @@ void cli_help(const cli_command *c, FILE *f)
         fprintf(f, "\n%s:\n", c->group[g].title ? c->group[g].title : "options");
         for (size_t k = 0; k < c->group[g].n; k++) {
             const cli_opt *o = &c->group[g].opt[k];
-            if (o->flags & CLI_HIDDEN) continue;
             char spec[256], text[2048];
             spec_of(o, spec, sizeof spec);
             option_text(c, o, text, sizeof text, 0);
@@ -627,7 +625,6 @@ void cli_options_markdown(const cli_command *c, FILE *f)
         fprintf(f, "| option | default | unit | meaning |\n|---|---|---|---|\n");
         for (size_t k = 0; k < c->group[g].n; k++) {
             const cli_opt *o = &c->group[g].opt[k];
-            if (o->flags & CLI_HIDDEN) continue;
             char spec[256], def[256], text[2048];
             spec_of(o, spec, sizeof spec);
             default_text(c, o, def, sizeof def);
@@ -703,7 +700,7 @@ int cli_check(const cli_command *c, FILE *f)
         line = *end ? end + 1 : end;
     }
     for (size_t k = 0; !catch_all && (o = nth(c, k)); k++)
-        if (!seen[k] && !(o->flags & (CLI_NOUSAGE | CLI_HIDDEN)))
+        if (!seen[k] && !(o->flags & CLI_NOUSAGE))
             fprintf(f, "%s: %s is in no usage line (and no line says [options])\n", c->name, o->name), problems++;
     return problems;
 }

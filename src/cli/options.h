@@ -27,7 +27,7 @@ typedef enum {
     CLI_SET,    /* no value: *i = ival (-q: -1, --no-warm: 0) */
     CLI_COUNT,  /* no value: *i += ival (-v: +1, -q: -1) */
     CLI_STRING, /* a word, or a spec the command (or fn) reads further: *s */
-    CLI_PATH,   /* a file or directory: *s */
+    CLI_PATH,   /* a file or directory, neither read nor written as such: *s */
     CLI_INPUT,  /* a file or directory the command reads: *s */
     CLI_OUTPUT, /* a file or directory the command writes: *s; never one of its inputs (cli_ctx) */
     CLI_INT,    /* an integer, base 10: *l, else *i (within int's range) */
@@ -44,8 +44,7 @@ typedef struct {
 /* cli_opt.flags */
 enum {
     CLI_REPEAT = 1u << 0,  /* may be given more than once; with sv: every value kept, in order */
-    CLI_NOUSAGE = 1u << 1, /* need not appear in the usage lines (-v, -q) */
-    CLI_HIDDEN = 1u << 2   /* parsed, but shown neither in the help nor in the manual */
+    CLI_NOUSAGE = 1u << 1  /* need not appear in the usage lines (-v, -q) */
 };
 
 /* cli_opt.rule: the range of a number, against lo and hi */
@@ -62,12 +61,13 @@ struct cli_opt {
     const char *name;  /* "--grid"; or a short option alone ("-v") */
     const char *alias; /* the short form of a long option ("-o"), or NULL */
     cli_type type;
-    const char *meta; /* the value's metavariable ("MM"); a choice shows its words instead */
+    const char *meta; /* the value's metavariable ("MM"); NULL for a choice: its words, a|b|c (a choice
+                         with a metavariable names its words in its help) */
     const char *def;  /* the default as text; NULL: the destination's value before parsing; "": none */
     const char *unit; /* "mm", "S/m", "deg", "ms", "mV", ...; NULL: none */
     const char *help; /* one sentence, wrapped by the help; no trailing period */
     const char *note; /* after the default: what special values mean ("0 turns it off") */
-    unsigned flags;   /* CLI_REPEAT, CLI_NOUSAGE, CLI_HIDDEN */
+    unsigned flags;   /* CLI_REPEAT, CLI_NOUSAGE */
     /* where the value goes: the member the type names (none, or fn alone, is fine) */
     int *i;
     long *l;
