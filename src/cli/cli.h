@@ -1,6 +1,7 @@
 /* Shared helpers of the thorax command-line subcommands. */
 #ifndef THORAX_CLI_H
 #define THORAX_CLI_H
+#include "cli/options.h"
 #include "thorax/core/core.h"
 typedef int (*cli_cmd_fn)(int argc, char **argv);
 
@@ -20,15 +21,12 @@ int cmd_leads(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_animate(int argc, char **argv);
 
-/* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. */
+/* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. Every existing
+ * regular file on the command line but the values of the last cli_parse's CLI_OUTPUT options is
+ * registered as an input (thx_ctx_add_input): no single-file output may replace it. */
 thx_ctx *cli_ctx(int verbose);
 /* Prints "thorax CMD: <message>" for a failed status and returns the exit code (1, or 2 for usage). */
 int cli_fail(thx_ctx *ctx, const char *cmd, thx_status st);
-/* Usage error: prints the message and a pointer to --help; returns 2. */
-int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-/* Parses a double/int option value; on error prints a usage error and returns non-zero. */
-int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out);
-int cli_parse_int(const char *cmd, const char *opt, const char *s, long *out);
 /* The whole command line joined by spaces (for provenance). Static buffer. */
 const char *cli_command_line(void);
 void cli_set_command_line(int argc, char **argv);

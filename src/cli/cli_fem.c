@@ -36,6 +36,11 @@ int cli_petsc_args_add(cli_petsc_args *pa, char *a, char *v)
     return 0;
 }
 
+int cli_petsc_pass(void *user, char **argv, int argc, int i)
+{
+    return cli_petsc_args_add(user, argv[i], i + 1 < argc ? argv[i + 1] : NULL);
+}
+
 thx_status cli_petsc_init(thx_ctx *ctx, cli_petsc_args *pa, int *rank)
 {
     pa->argv[pa->argc] = NULL;

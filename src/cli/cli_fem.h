@@ -15,6 +15,9 @@ typedef struct {
 void cli_petsc_args_init(cli_petsc_args *pa, char *argv0);
 /* Adds option a (and value v when it takes one); returns 1 if v was taken, else 0. */
 int cli_petsc_args_add(cli_petsc_args *pa, char *a, char *v);
+/* cli_command.pass for a command that passes PETSc options through (user: its cli_petsc_args):
+ * adds argv[i] (and its value); returns how many words after argv[i] it took. */
+int cli_petsc_pass(void *user, char **argv, int argc, int i);
 /* PetscInitialize with those options; rank of this process. */
 thx_status cli_petsc_init(thx_ctx *ctx, cli_petsc_args *pa, int *rank);
 /* Warns about PETSc options nobody used, then PetscFinalize (if initialized). */

@@ -13,76 +13,6 @@
 #include "thorax/check/check_volume.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: thorax check MODEL [--json] [--tol T] [--min-angle DEG] [--max-aspect A]\n"
-            "                          [--no-intersections] [--volume-tol R] [--region-tol R]\n"
-            "                          [--min-dihedral DEG] [--max-radius-edge X] [-q] [-v]\n"
-            "\n"
-            "Verifies every surface of the model directory MODEL (paper 3.2):\n"
-            "  closed 2-manifold   every edge in exactly two triangles, every vertex one fan,\n"
-            "                      no unused nodes, no duplicate or zero-area triangles\n"
-            "  orientation         neighbouring triangles traverse their edge in opposite\n"
-            "                      directions; the enclosed signed volume is positive\n"
-            "  4 pi                the total solid angle about an interior point (the model's,\n"
-            "                      else one found by ray parity) is 4 pi: |Omega/4pi - 1| <= T\n"
-            "  intersections       no two triangles meet except where they share nodes\n"
-            "                      (exact predicates)\n"
-            "  quality             smallest/largest angle, aspect ratio histogram (reported;\n"
-            "                      a failure only with --min-angle / --max-aspect)\n"
-            "\n"
-            "Aspect ratio = longest edge / (2 sqrt(3) inradius): 1 for an equilateral triangle.\n"
-            "\n"
-            "If the model has a volume mesh (volume.pts/volume.tet), it is checked too (paper 3.3):\n"
-            "  validity            node numbers in range, four distinct nodes, positive volume\n"
-            "                      (exact sign), no unused or coincident nodes, no duplicate\n"
-            "                      tetrahedra, region numbers in the table\n"
-            "  conformity          every face in at most two tetrahedra, on opposite sides;\n"
-            "                      the boundary faces pass the surface checks above; boundary\n"
-            "                      shells and cavities as expected (the heart's cavity when no\n"
-            "                      region is the heart; other cavities are voids)\n"
-            "  coverage            every surface triangle covered by mesh faces on the boundary\n"
-            "                      or between two regions (areas sum to its area), and no such\n"
-            "                      face off the surfaces (decided from the geometry alone)\n"
-            "  containment         no centroid outside the outer surface, none inside an\n"
-            "                      excluded heart\n"
-            "  region cells        the cell of a tetrahedron = the innermost surface holding\n"
-            "                      its centroid; each cell holds one region (no tetrahedron\n"
-            "                      outside its region)\n"
-            "  volume              total tetrahedral volume against the volume the surfaces\n"
-            "                      enclose (outer - excluded heart): |difference| <= R\n"
-            "  regions             each region's volume against its surfaces' (the surface less\n"
-            "                      the surfaces nested directly in it): |difference| <= R\n"
-            "  node tables         each surface node on a volume node of the same coordinates,\n"
-            "                      and listed back; each Steiner node on its triangle's point\n"
-            "  quality             smallest dihedral angle >= DEG (default 1); radius-edge\n"
-            "                      ratio (circumradius / shortest edge; regular tetrahedron\n"
-            "                      0.612), histograms (reported)\n"
-            "\n"
-            "options:\n"
-            "  --json              print all figures as JSON on stdout (node and triangle\n"
-            "                      numbers 1-based, as in the .fac files)\n"
-            "  --tol T             tolerance of the 4 pi check, relative (default 1e-6)\n"
-            "  --min-angle DEG     also fail if a triangle has a smaller angle\n"
-            "  --max-aspect A      also fail if a triangle's aspect ratio exceeds A\n"
-            "  --no-intersections  skip the self-intersection search (surfaces and the volume's\n"
-            "                      boundary)\n"
-            "  --volume-tol R      volume: fail if |total volume difference| > R, relative\n"
-            "                      (default 0.01; 0 reports only)\n"
-            "  --region-tol R      volume: fail if a region's |volume difference| > R\n"
-            "                      (default 0.005; 0 reports only)\n"
-            "  --min-dihedral DEG  volume: fail if a dihedral angle is smaller (default 1;\n"
-            "                      0 turns it off)\n"
-            "  --max-radius-edge X volume: fail if a radius-edge ratio exceeds X\n"
-            "  -q                  print only failures (no table)\n"
-            "  -v                  more logging\n"
-            "  -h, --help          this text\n"
-            "\n"
-            "Exit status: 0 every surface (and the volume) passed, 1 a check failed or the\n"
-            "model could not be read, 2 bad usage.\n");
-}
-
 static void print_table(const thx_model_report *r, const thx_model *m)
 {
     printf("%-16s %7s %9s %6s %-12s %10s %9s %9s %9s  %s\n", "surface", "nodes", "triangles", "closed", "orientation",
@@ -199,64 +129,97 @@ static void print_volume(const thx_volume_report *v)
 int cmd_check(int argc, char **argv)
 {
     const char *cmd = "check";
-    const char *model_dir = NULL;
-    int json = 0, verbose = 0, quiet = 0, rc = 0;
+    int json = 0, verbose = 0, quiet = 0, rc = 0, no_intersections = 0;
     thx_check_opts opts;
     thx_check_opts_default(&opts);
     thx_volume_check_opts vopts;
     thx_volume_check_opts_default(&vopts);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "--json")) {
-            json = 1;
-        } else if (!strcmp(a, "--tol") || !strcmp(a, "--min-angle") || !strcmp(a, "--max-aspect")) {
-            double v;
-            if (cli_parse_double(cmd, a, i + 1 < argc ? argv[i + 1] : NULL, &v)) return 2;
-            i++;
-            if (!strcmp(a, "--tol")) {
-                if (!(v >= 0.0) || isinf(v)) return cli_usage_error(cmd, "--tol must be a finite number >= 0");
-                opts.solid_angle_tol = v;
-            } else if (!strcmp(a, "--min-angle")) {
-                if (!(v >= 0.0 && v <= 60.0)) return cli_usage_error(cmd, "--min-angle must be in [0, 60] degrees");
-                opts.min_angle_deg = v;
-            } else {
-                if (!(v >= 1.0) || isinf(v)) return cli_usage_error(cmd, "--max-aspect must be a finite number >= 1");
-                opts.max_aspect = v;
-            }
-        } else if (!strcmp(a, "--volume-tol") || !strcmp(a, "--region-tol") || !strcmp(a, "--min-dihedral") ||
-                   !strcmp(a, "--max-radius-edge")) {
-            double v;
-            if (cli_parse_double(cmd, a, i + 1 < argc ? argv[i + 1] : NULL, &v)) return 2;
-            i++;
-            if (!strcmp(a, "--volume-tol") || !strcmp(a, "--region-tol")) {
-                if (!(v >= 0.0) || isinf(v)) return cli_usage_error(cmd, "%s must be a finite number >= 0", a);
-                if (a[2] == 'v') vopts.volume_tol = v;
-                else vopts.region_volume_tol = v;
-            } else if (!strcmp(a, "--min-dihedral")) {
-                if (!(v >= 0.0 && v <= 70.6)) return cli_usage_error(cmd, "--min-dihedral must be in [0, 70.6] degrees");
-                vopts.min_dihedral_deg = v;
-            } else {
-                if (!(v >= 0.6) || isinf(v)) return cli_usage_error(cmd, "--max-radius-edge must be a finite number >= 0.6");
-                vopts.max_radius_edge = v;
-            }
-        } else if (!strcmp(a, "--no-intersections")) {
-            opts.check_intersections = 0;
-            vopts.check_intersections = 0;
-        } else if (!strcmp(a, "-q")) {
-            quiet = 1;
-            verbose--;
-        } else if (!strcmp(a, "-v")) {
-            verbose++;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (!model_dir) {
-            model_dir = a;
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s' (one MODEL directory expected)", a);
-        }
+    cli_opt table[] = {
+        {.name = "--json", .type = CLI_FLAG, .i = &json,
+         .help = "print all figures as JSON on stdout (node and triangle numbers 1-based, as in the .fac files)"},
+        {.name = "--tol", .type = CLI_REAL, .meta = "T", .d = &opts.solid_angle_tol, .rule = CLI_GE | CLI_FINITE,
+         .bad = "--tol must be a finite number >= 0", .help = "tolerance of the 4 pi check, relative"},
+        {.name = "--min-angle", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &opts.min_angle_deg,
+         .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 60, .bad = "--min-angle must be in [0, 60] degrees", .def = "none",
+         .help = "also fail if a triangle has a smaller angle"},
+        {.name = "--max-aspect", .type = CLI_REAL, .meta = "A", .d = &opts.max_aspect, .rule = CLI_GE | CLI_FINITE,
+         .lo = 1, .bad = "--max-aspect must be a finite number >= 1", .def = "none",
+         .help = "also fail if a triangle's aspect ratio exceeds A"},
+        {.name = "--no-intersections", .type = CLI_FLAG, .i = &no_intersections,
+         .help = "skip the self-intersection search (surfaces and the volume's boundary)"},
+        {.name = "--volume-tol", .type = CLI_REAL, .meta = "R", .d = &vopts.volume_tol, .rule = CLI_GE | CLI_FINITE,
+         .bad = "--volume-tol must be a finite number >= 0", .note = "0 reports only",
+         .help = "volume: fail if |total volume difference| > R, relative"},
+        {.name = "--region-tol", .type = CLI_REAL, .meta = "R", .d = &vopts.region_volume_tol,
+         .rule = CLI_GE | CLI_FINITE, .bad = "--region-tol must be a finite number >= 0", .note = "0 reports only",
+         .help = "volume: fail if a region's |volume difference| > R"},
+        {.name = "--min-dihedral", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &vopts.min_dihedral_deg,
+         .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 70.6, .bad = "--min-dihedral must be in [0, 70.6] degrees",
+         .note = "0 turns it off", .help = "volume: fail if a dihedral angle is smaller"},
+        {.name = "--max-radius-edge", .type = CLI_REAL, .meta = "X", .d = &vopts.max_radius_edge,
+         .rule = CLI_GE | CLI_FINITE, .lo = 0.6, .bad = "--max-radius-edge must be a finite number >= 0.6",
+         .def = "none", .help = "volume: fail if a radius-edge ratio exceeds X"},
+        {.name = "-q", .type = CLI_COUNT, .i = &quiet, .ival = 1, .help = "print only failures (no table)"},
+        {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .help = "more logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "MODEL [--json] [--tol] [--min-angle] [--max-aspect] [--no-intersections] [--volume-tol] "
+                 "[--region-tol] [--min-dihedral] [--max-radius-edge] [-q] [-v]",
+        .about =
+            "Verifies every surface of the model directory MODEL (paper 3.2):\n"
+            "  closed 2-manifold   every edge in exactly two triangles, every vertex one fan,\n"
+            "                      no unused nodes, no duplicate or zero-area triangles\n"
+            "  orientation         neighbouring triangles traverse their edge in opposite\n"
+            "                      directions; the enclosed signed volume is positive\n"
+            "  4 pi                the total solid angle about an interior point (the model's,\n"
+            "                      else one found by ray parity) is 4 pi: |Omega/4pi - 1| <= T\n"
+            "  intersections       no two triangles meet except where they share nodes\n"
+            "                      (exact predicates)\n"
+            "  quality             smallest/largest angle, aspect ratio histogram (reported;\n"
+            "                      a failure only with --min-angle / --max-aspect)\n"
+            "\n"
+            "Aspect ratio = longest edge / (2 sqrt(3) inradius): 1 for an equilateral triangle.\n"
+            "\n"
+            "If the model has a volume mesh (volume.pts/volume.tet), it is checked too (paper 3.3):\n"
+            "  validity            node numbers in range, four distinct nodes, positive volume\n"
+            "                      (exact sign), no unused or coincident nodes, no duplicate\n"
+            "                      tetrahedra, region numbers in the table\n"
+            "  conformity          every face in at most two tetrahedra, on opposite sides;\n"
+            "                      the boundary faces pass the surface checks above; boundary\n"
+            "                      shells and cavities as expected (the heart's cavity when no\n"
+            "                      region is the heart; other cavities are voids)\n"
+            "  coverage            every surface triangle covered by mesh faces on the boundary\n"
+            "                      or between two regions (areas sum to its area), and no such\n"
+            "                      face off the surfaces (decided from the geometry alone)\n"
+            "  containment         no centroid outside the outer surface, none inside an\n"
+            "                      excluded heart\n"
+            "  region cells        the cell of a tetrahedron = the innermost surface holding\n"
+            "                      its centroid; each cell holds one region (no tetrahedron\n"
+            "                      outside its region)\n"
+            "  volume              total tetrahedral volume against the volume the surfaces\n"
+            "                      enclose (outer - excluded heart): |difference| <= R\n"
+            "  regions             each region's volume against its surfaces' (the surface less\n"
+            "                      the surfaces nested directly in it): |difference| <= R\n"
+            "  node tables         each surface node on a volume node of the same coordinates,\n"
+            "                      and listed back; each Steiner node on its triangle's point\n"
+            "  quality             smallest dihedral angle >= DEG (default 1); radius-edge\n"
+            "                      ratio (circumradius / shortest edge; regular tetrahedron\n"
+            "                      0.612), histograms (reported)\n",
+        .epilog =
+            "Exit status: 0 every surface (and the volume) passed, 1 a check failed or the\n"
+            "model could not be read, 2 bad usage.\n",
+        .group = {{NULL, table, sizeof table / sizeof table[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (c.n_pos > 1) return cli_usage_error(cmd, "unexpected argument '%s' (one MODEL directory expected)", c.pos[1]);
+    const char *model_dir = c.n_pos ? c.pos[0] : NULL;
+    verbose -= quiet; /* -q: less logging, and only the failures */
+    quiet = quiet > 0;
+    if (no_intersections) {
+        opts.check_intersections = 0;
+        vopts.check_intersections = 0;
     }
     if (!model_dir) return cli_usage_error(cmd, "no MODEL directory given");
 

@@ -22,66 +22,49 @@
 #include "thorax/phantom/phantom.h"
 /* ------------------------------------------------------------ electrodes */
 
-static void help_electrodes(void)
-{
-    printf("usage: thorax electrodes MODEL [--array N] [-o DIR]\n\n"
-           "Places the phantom's electrodes on the model's outer surface (role outer),\n"
-           "each on the surface node nearest its landmark, and writes them as electrode\n"
-           "files (docs/formats.md, \"Electrodes\"). Heights are along the model's\n"
-           "superior axis, \"front\" and \"left\" its anterior and left axes: the model's\n"
-           "anatomical frame (model.json \"frame\", from `thorax import --up --front` or the\n"
-           "contours' 'frame' line); a model without one is refused.\n"
-           "  DIR/12lead.txt  RA, LA, LL (Mason-Likar: front of the shoulders, left lower\n"
-           "                  torso), V1-V6 (4th intercostal space beside the sternum, V4\n"
-           "                  5th space mid-clavicular over the apex, V5 anterior axillary,\n"
-           "                  V6 mid-axillary, at V4's height), from the torso's own\n"
-           "                  cross-sections and the heart's height\n"
-           "  DIR/array.txt   N electrodes A001... on distinct nodes in rings around the\n"
-           "                  torso (192: 16 around at each of 12 heights), each ring from\n"
-           "                  the anterior midline toward the subject's left\n"
-           "The model needs an outer and a heart surface (as `thorax surfaces` builds\n"
-           "them from `thorax phantom` contours). The 12 leads are printed (nodes 1-based).\n\n"
-           "options:\n"
-           "  -o, --output DIR   directory to write into (created if missing; default\n"
-           "                     MODEL/electrodes; note that commands that rewrite the\n"
-           "                     model, such as `thorax mesh`, replace MODEL whole)\n"
-           "  --array N          electrodes in the array (default 192; 0 = no array.txt)\n"
-           "  -v, -q             more / less logging\n"
-           "  -h, --help         this text\n\n"
-           "Exit status: 0 ok, 1 error (nothing written), 2 bad usage.\n");
-}
-
 int cmd_electrodes(int argc, char **argv)
 {
     const char *cmd = "electrodes";
-    const char *in = NULL, *out = NULL;
+    const char *out = NULL;
     long n_array = 192;
     int verbose = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            help_electrodes();
-            return 0;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!v) return cli_usage_error(cmd, "%s needs a value", a);
-            out = v;
-            i++;
-        } else if (!strcmp(a, "--array")) {
-            if (cli_parse_int(cmd, a, v, &n_array)) return 2;
-            i++;
-            if (n_array < 0 || n_array > 100000) return cli_usage_error(cmd, "--array must be between 0 and 100000");
-        } else if (!strcmp(a, "-v")) {
-            verbose = 1;
-        } else if (!strcmp(a, "-q")) {
-            verbose = -1;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error(cmd, "more than one model given");
-        }
-    }
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out, .def = "MODEL/electrodes",
+         .help = "directory to write into, created if missing (commands that rewrite the model, such as `thorax "
+                 "mesh`, replace MODEL whole)"},
+        {.name = "--array", .type = CLI_INT, .meta = "N", .l = &n_array, .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 100000,
+         .bad = "--array must be between 0 and 100000", .note = "0 = no array.txt",
+         .help = "electrodes in the array, in round(sqrt(3N/4)) rings"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
+         .help = "less logging (no table)"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "MODEL [--array] [-o]",
+        .about = "Places the phantom's electrodes on the model's outer surface (role outer),\n"
+                 "each on the surface node nearest its landmark, and writes them as electrode\n"
+                 "files (docs/formats.md, \"Electrodes\"). Heights are along the model's\n"
+                 "superior axis, \"front\" and \"left\" its anterior and left axes: the model's\n"
+                 "anatomical frame (model.json \"frame\", from `thorax import --up --front` or the\n"
+                 "contours' 'frame' line); a model without one is refused.\n"
+                 "  DIR/12lead.txt  RA, LA, LL (Mason-Likar: front of the shoulders, left lower\n"
+                 "                  torso), V1-V6 (4th intercostal space beside the sternum, V4\n"
+                 "                  5th space mid-clavicular over the apex, V5 anterior axillary,\n"
+                 "                  V6 mid-axillary, at V4's height), from the torso's own\n"
+                 "                  cross-sections and the heart's height\n"
+                 "  DIR/array.txt   N electrodes A001... on distinct nodes in rings around the\n"
+                 "                  torso (192: 16 around at each of 12 heights), each ring from\n"
+                 "                  the anterior midline toward the subject's left\n"
+                 "The model needs an outer and a heart surface (as `thorax surfaces` builds\n"
+                 "them from `thorax phantom` contours). The 12 leads are printed (nodes 1-based).\n",
+        .epilog = "Exit status: 0 ok, 1 error (nothing written), 2 bad usage.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (c.n_pos > 1) return cli_usage_error(cmd, "more than one model given");
+    const char *in = c.n_pos ? c.pos[0] : NULL;
     if (!in) return cli_usage_error(cmd, "no model given");
     char dir[2048], p12[2100], parr[2100];
     if (out) snprintf(dir, sizeof dir, "%s", out);
@@ -146,83 +129,61 @@ done:
 
 /* ------------------------------------------------------------ beat */
 
-static void help_beat(void)
-{
-    printf("usage: thorax beat MODEL -o FILE [--frames N] [--dt MS] [--peak MV] [--format text|raw|mat]\n\n"
-           "The phantom's heartbeat as epicardial potentials: a current dipole at the\n"
-           "centre of the model's heart surface (role heart) traces a vectorcardiogram -\n"
-           "P loop, PR segment, QRS loop (90 ms, left-inferior-posterior), ST segment,\n"
-           "T loop, baseline (heart rate about 90/min; docs/decisions.md; directions in\n"
-           "the model's anatomical frame, model.json \"frame\": a model without one is\n"
-           "refused, give --up/--front to thorax import) - in an\n"
-           "unbounded homogeneous medium; the potentials at the heart's nodes are scaled\n"
-           "so that the largest |potential| over the beat is the peak. Writes a time\n"
-           "series (docs/formats.md, \"Time series\"): rows = the heart surface's nodes in\n"
-           "order, frames at t = f * dt ms, unit mV.\n\n"
-           "options:\n"
-           "  -o, --output FILE  series to write (atomically)\n"
-           "  --frames N         number of frames (default 500)\n"
-           "  --dt MS            time step in ms (default 1)\n"
-           "  --peak MV          largest |potential| on the heart over the beat (default 40)\n"
-           "  --format F         text, raw or mat (default: from FILE's extension .txt,\n"
-           "                     .dat, .raw, .mat)\n"
-           "  -v, -q             more / less logging\n"
-           "  -h, --help         this text\n\n"
-           "Exit status: 0 ok, 1 error (nothing written), 2 bad usage.\n");
-}
-
 int cmd_beat(int argc, char **argv)
 {
     const char *cmd = "beat";
-    const char *in = NULL, *out = NULL, *format = NULL;
-    int verbose = 0;
+    const char *out = NULL;
+    int verbose = 0, format = THX_SERIES_AUTO;
+    long frames;
     thx_beat_opts o;
     thx_beat_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            help_beat();
-            return 0;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--format")) {
-            if (!v) return cli_usage_error(cmd, "%s needs a value", a);
-            if (!strcmp(a, "--format")) format = v;
-            else out = v;
-            i++;
-        } else if (!strcmp(a, "--frames")) {
-            long n;
-            if (cli_parse_int(cmd, a, v, &n)) return 2;
-            i++;
-            if (n < 1 || n > 10000000) return cli_usage_error(cmd, "--frames must be between 1 and 10000000");
-            o.n_frames = (size_t)n;
-        } else if (!strcmp(a, "--dt")) {
-            if (cli_parse_double(cmd, a, v, &o.dt_ms)) return 2;
-            i++;
-            if (!(o.dt_ms > 0) || o.dt_ms > 1e6) return cli_usage_error(cmd, "--dt must be a positive number of ms");
-        } else if (!strcmp(a, "--peak")) {
-            if (cli_parse_double(cmd, a, v, &o.peak_mv)) return 2;
-            i++;
-            if (!(o.peak_mv > 0) || o.peak_mv > 1e12) return cli_usage_error(cmd, "--peak must be a positive number of mV");
-        } else if (!strcmp(a, "-v")) {
-            verbose = 1;
-        } else if (!strcmp(a, "-q")) {
-            verbose = -1;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error(cmd, "more than one model given");
-        }
-    }
+    frames = (long)o.n_frames;
+    static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
+                                         {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "FILE", .s = &out,
+         .help = "series to write (atomically)"},
+        {.name = "--frames", .type = CLI_INT, .meta = "N", .l = &frames, .rule = CLI_GE | CLI_LE, .lo = 1,
+         .hi = 10000000, .bad = "--frames must be between 1 and 10000000", .help = "number of frames (the beat ends at 470 ms)"},
+        {.name = "--dt", .type = CLI_REAL, .meta = "MS", .unit = "ms", .d = &o.dt_ms, .rule = CLI_GT | CLI_LE, .lo = 0,
+         .hi = 1e6, .bad = "--dt must be a positive number of ms", .help = "time step"},
+        {.name = "--peak", .type = CLI_REAL, .meta = "MV", .unit = "mV", .d = &o.peak_mv, .rule = CLI_GT | CLI_LE,
+         .lo = 0, .hi = 1e12, .bad = "--peak must be a positive number of mV",
+         .help = "largest |potential| on the heart over the beat"},
+        {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format,
+         .def = "from FILE's extension: .txt or .dat, .raw, .mat", .help = "the series' format"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "MODEL -o [--frames] [--dt] [--peak] [--format]",
+        .about = "The phantom's heartbeat as epicardial potentials: a current dipole at the\n"
+                 "centre of the model's heart surface (role heart) traces a vectorcardiogram -\n"
+                 "P loop, PR segment, QRS loop (90 ms, left-inferior-posterior), ST segment,\n"
+                 "T loop, baseline (heart rate about 90/min; docs/decisions.md; directions in\n"
+                 "the model's anatomical frame, model.json \"frame\": a model without one is\n"
+                 "refused, give --up/--front to thorax import) - in an\n"
+                 "unbounded homogeneous medium; the potentials at the heart's nodes are scaled\n"
+                 "so that the largest |potential| over the beat is the peak. Writes a time\n"
+                 "series (docs/formats.md, \"Time series\"): rows = the heart surface's nodes in\n"
+                 "order, frames at t = f * dt ms, unit mV. `thorax phantom --beat MODEL ...` is\n"
+                 "the same.\n",
+        .epilog = "Exit status: 0 ok, 1 error (nothing written), 2 bad usage.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (c.n_pos > 1) return cli_usage_error(cmd, "more than one model given");
+    const char *in = c.n_pos ? c.pos[0] : NULL;
+    o.n_frames = (size_t)frames;
     if (!in) return cli_usage_error(cmd, "no model given");
     if (!out) return cli_usage_error(cmd, "no output file given (-o FILE)");
-    thx_series_format fmt = THX_SERIES_AUTO;
-    if (thx_series_output_format(format, out, &fmt) != 0) {
-        if (format) return cli_usage_error(cmd, "unknown format '%s' (text, raw or mat)", format);
+    thx_series_format fmt = (thx_series_format)format;
+    if (fmt == THX_SERIES_AUTO && thx_series_output_format(NULL, out, &fmt) != 0)
         return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat); "
                                     "give --format",
                                out);
-    }
 
     thx_ctx *ctx = cli_ctx(verbose);
     thx_model *m = NULL;

@@ -11,91 +11,65 @@
 #include "thorax/io/model_dir.h"
 static const char *const ext_of[] = {"vtk", "vtp", "obj", "stl", "ply", "vtu", "msh"}; /* indexed by thx_export_format */
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: thorax export MODEL --format vtk|vtp|obj|stl|ply [-o DIR] [--surface NAME]...\n"
-            "       thorax export MODEL --format vtu|msh [-o DIR]\n"
-            "\n"
-            "Writes each surface of the model directory MODEL as DIR/NAME.EXT, or, with\n"
-            "a volume format, its volume mesh (made by `thorax mesh`) as DIR/volume.EXT.\n"
-            "\n"
-            "options:\n"
-            "  --format F       vtk  legacy VTK ASCII polydata (ParaView, VTK)\n"
-            "                   vtp  VTK XML polydata\n"
-            "                   obj  Wavefront OBJ\n"
-            "                   stl  binary STL (float32, facet normals pointing outward)\n"
-            "                   ply  ASCII PLY\n"
-            "                   vtu  volume: VTK XML unstructured grid, tetrahedra, cell data\n"
-            "                        \"region\" (1-based region id), point data \"surface\" and\n"
-            "                        \"surface_node\" (the node tables)\n"
-            "                   msh  volume: Gmsh MSH 4.1 ASCII, one physical volume per region\n"
-            "  -o, --output DIR directory for the files (default: MODEL itself; created if missing)\n"
-            "  --surface NAME   export only this surface (repeatable; default: all;\n"
-            "                   surface formats only)\n"
-            "  -v, -q           more / less logging\n"
-            "  -h, --help       this text\n"
-            "\n"
-            "Coordinates are in mm; triangles stay counterclockwise seen from outside,\n"
-            "tetrahedra right-handed.\n"
-            "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n");
-}
-
 int cmd_export(int argc, char **argv)
 {
     const char *cmd = "export";
-    const char *model_dir = NULL, *out_dir = NULL, *format = NULL;
+    const char *out_dir = NULL;
     const char **only = calloc((size_t)argc + 1, sizeof *only);
-    int n_only = 0, verbose = 0, rc = 0;
+    int n_only = 0, verbose = 0, rc = 0, format = -1;
     if (!only) {
         fprintf(stderr, "thorax export: out of memory\n");
         return 1;
     }
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            free(only);
-            return 0;
-        } else if (!strcmp(a, "--format") || !strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--surface")) {
-            if (i + 1 >= argc) {
-                rc = cli_usage_error(cmd, "%s needs a value", a);
-                goto out;
-            }
-            const char *v = argv[++i];
-            if (!strcmp(a, "--format")) format = v;
-            else if (!strcmp(a, "--surface")) only[n_only++] = v;
-            else out_dir = v;
-        } else if (!strcmp(a, "-v")) {
-            verbose++;
-        } else if (!strcmp(a, "-q")) {
-            verbose--;
-        } else if (a[0] == '-' && a[1]) {
-            rc = cli_usage_error(cmd, "unknown option '%s'", a);
-            goto out;
-        } else if (!model_dir) {
-            model_dir = a;
-        } else {
-            rc = cli_usage_error(cmd, "unexpected argument '%s' (one MODEL directory expected)", a);
-            goto out;
-        }
+    static const cli_choice formats[] = {{"vtk", THX_EXPORT_VTK}, {"vtp", THX_EXPORT_VTP}, {"obj", THX_EXPORT_OBJ},
+                                         {"stl", THX_EXPORT_STL}, {"ply", THX_EXPORT_PLY}, {"vtu", THX_EXPORT_VTU},
+                                         {"msh", THX_EXPORT_MSH}, {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--format", .type = CLI_CHOICE, .meta = "F", .choices = formats, .i = &format,
+         .help = "the format (required): vtk: legacy VTK ASCII polydata (ParaView, VTK); vtp: VTK XML polydata; "
+                 "obj: Wavefront OBJ; stl: binary STL (float32, facet normals pointing outward); ply: ASCII PLY; "
+                 "vtu: the volume as a VTK XML unstructured grid of tetrahedra, cell data \"region\" (1-based region id), point data \"surface\" "
+                 "and \"surface_node\" (the node tables); msh: the volume as Gmsh MSH 4.1 ASCII, one physical volume "
+                 "per region"},
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out_dir, .def = "MODEL itself",
+         .help = "directory for the files (created if missing)"},
+        {.name = "--surface", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = only, .count = &n_only,
+         .max = argc, .def = "all", .help = "export only this surface (surface formats only)"},
+        {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "MODEL --format=vtk|vtp|obj|stl|ply [-o] [--surface]\nMODEL --format=vtu|msh [-o]",
+        .about = "Writes each surface of the model directory MODEL as DIR/NAME.EXT, or, with\n"
+                 "a volume format, its volume mesh (made by `thorax mesh`) as DIR/volume.EXT.\n",
+        .epilog = "Coordinates are in mm; triangles stay counterclockwise seen from outside,\n"
+                  "tetrahedra right-handed.\n"
+                  "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) {
+        free(only);
+        return CLI_EXIT(pr);
+    }
+    const char *model_dir = c.n_pos ? c.pos[0] : NULL;
+    if (c.n_pos > 1) {
+        rc = cli_usage_error(cmd, "unexpected argument '%s' (one MODEL directory expected)", c.pos[1]);
+        goto out;
     }
     if (!model_dir) {
         rc = cli_usage_error(cmd, "no MODEL directory given");
         goto out;
     }
-    thx_export_format fmt;
-    if (!format) {
+    if (format < 0) {
         rc = cli_usage_error(cmd, "--format is required (vtk, vtp, obj, stl, ply, vtu or msh)");
         goto out;
     }
-    if (thx_export_format_parse(format, &fmt) != 0) {
-        rc = cli_usage_error(cmd, "unknown format '%s' (vtk, vtp, obj, stl, ply, vtu or msh)", format);
-        goto out;
-    }
+    thx_export_format fmt = (thx_export_format)format;
     int volume = thx_export_format_is_volume(fmt);
     if (volume && n_only > 0) {
-        rc = cli_usage_error(cmd, "--surface does not apply to the volume format '%s'", format);
+        rc = cli_usage_error(cmd, "--surface does not apply to the volume format '%s'", ext_of[fmt]);
         goto out;
     }
     if (!out_dir) out_dir = model_dir;

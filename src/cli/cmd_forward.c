@@ -15,49 +15,6 @@
 #include "thorax/phantom/phantom.h"
 #include "thorax/fem/fem.h"
 #include "thorax/core/fileio.h"
-static void help(void)
-{
-    printf("usage: thorax forward MODEL --epicardial SERIES -o DIR [options] [PETSc options]\n"
-           "       thorax forward MODEL --transfer-out -o DIR [--rows ELECTRODES] [--method forward|adjoint]\n"
-           "       thorax forward MODEL --electrode SPEC --electrode SPEC ... -o DIR   (defibrillation)\n\n"
-           "Finite-element forward solutions on the model's volume mesh (paper 4.1):\n"
-           "linear tetrahedra, the conductivity of each tissue region, PETSc solvers.\n\n"
-           "Epicardial problem: the potentials of SERIES (rows: the heart surface's nodes)\n"
-           "prescribed on the heart surface, no current through the torso surface, the\n"
-           "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
-           "frames) and DIR/solution.json (what was solved, solver figures, timings).\n\n"
-           "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
-           "coverage of every surface, regions, volumes, node tables, smallest dihedral\n"
-           "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
-           "unless --force, which solves anyway and records the reasons in solution.json.\n\n"
-           "options:\n"
-           "  --epicardial SERIES    heart-surface potentials (text, raw or .mat; see thorax series)\n"
-           "  -o, --output DIR       the solution directory (written whole or not at all)\n"
-           "  --format F             raw (default), text or mat for the series written\n"
-           "  --volume               also write DIR/volume.EXT: the potential at every volume node\n"
-           "  --currents LIST        frames (1-based: 5,10,20-30, or all) for which to write the\n"
-           "                         current density J = -sigma grad phi (A/m^2 for V, mm) per\n"
-           "                         tetrahedron (DIR/currents_tet.EXT, rows 3 x tetrahedra: Jx Jy\n"
-           "                         Jz) and per node (DIR/currents_node.EXT, volume-weighted)\n"
-           "  --transfer FILE        apply this transfer matrix instead of solving\n"
-           "  --transfer-out         compute the transfer matrix (torso nodes <- heart nodes, or\n"
-           "                         --rows) and write DIR/transfer.EXT\n"
-           "  --rows ELECTRODES      rows of the transfer matrix: an electrode file (thorax electrodes)\n"
-           "  --method M             forward (a solve per heart node), adjoint (a solve per row) or\n"
-           "                         auto (default: fewer solves)\n"
-           "  --no-warm              start every frame's solve from zero\n"
-           "  --dump-system FILE     write the first frame's K_ff and right-hand side (PETSc binary)\n"
-           "  --electrode SPEC       defibrillation electrode (see docs/cli.md):\n"
-           "                         NAME,surface=S,at=X:Y:Z,radius=R,voltage=V | current=I (A)\n"
-           "  --threshold V/CM       field threshold for the heart-volume fraction (default 5)\n"
-           "  --force                solve even if the volume mesh fails the check (a warning\n"
-           "                         in solution.json: \"warnings\", \"volume_check\")\n"
-           "  -v, -q                 more / less logging\n\n"
-           "PETSc options are passed through: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor,\n"
-           "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg -ksp_rtol 1e-10.\n"
-           "Runs under mpirun -np N (rank 0 writes).\n");
-}
-
 /* "5,10,20-30" or "all" -> flags over n frames */
 static int parse_frames(const char *s, size_t n, unsigned char *sel)
 {
@@ -78,13 +35,6 @@ static int parse_frames(const char *s, size_t n, unsigned char *sel)
     return 0;
 }
 
-static thx_series_format fmt_of(const char *name)
-{
-    thx_series_format f = THX_SERIES_RAW;
-    thx_series_format_parse(name, &f);
-    return f;
-}
-
 static const char *ext_of(thx_series_format f)
 {
     return f == THX_SERIES_TEXT ? "txt" : f == THX_SERIES_MAT ? "mat" : "raw";
@@ -92,40 +42,82 @@ static const char *ext_of(thx_series_format f)
 
 int cmd_forward(int argc, char **argv)
 {
-    const char *model_dir = NULL, *epi_path = NULL, *out = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL;
-    const char *format = "raw", *method = "auto", *dump = NULL;
-    int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0;
+    const char *out = NULL, *epi_path = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL, *dump = NULL;
+    int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0, format = THX_SERIES_RAW, meth = -1;
     double threshold = 5.0;
     const char *electrodes[16];
     int n_electrodes = 0;
     cli_petsc_args pa;
     cli_petsc_args_init(&pa, argv[0]);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-#define NEED_VALUE() do { if (!v) return cli_usage_error("forward", "%s needs a value", a); i++; } while (0)
-        if (!strcmp(a, "-o") || !strcmp(a, "--output")) { NEED_VALUE(); out = v; }
-        else if (!strcmp(a, "--epicardial")) { NEED_VALUE(); epi_path = v; }
-        else if (!strcmp(a, "--format")) { NEED_VALUE(); format = v; thx_series_format f; if (thx_series_format_parse(v, &f) || f == THX_SERIES_AUTO) return cli_usage_error("forward", "--format: raw, text or mat"); }
-        else if (!strcmp(a, "--volume")) want_volume = 1;
-        else if (!strcmp(a, "--currents")) { NEED_VALUE(); currents = v; }
-        else if (!strcmp(a, "--transfer")) { NEED_VALUE(); transfer_in = v; }
-        else if (!strcmp(a, "--transfer-out")) transfer_out = 1;
-        else if (!strcmp(a, "--rows")) { NEED_VALUE(); rows_path = v; }
-        else if (!strcmp(a, "--method")) { NEED_VALUE(); method = v; if (strcmp(v, "auto") && strcmp(v, "forward") && strcmp(v, "adjoint")) return cli_usage_error("forward", "--method: forward, adjoint or auto"); }
-        else if (!strcmp(a, "--no-warm")) warm = 0;
-        else if (!strcmp(a, "--force")) force = 1;
-        else if (!strcmp(a, "--dump-system")) { NEED_VALUE(); dump = v; }
-        else if (!strcmp(a, "--electrode")) { NEED_VALUE(); if (n_electrodes >= 16) return cli_usage_error("forward", "at most 16 electrodes"); electrodes[n_electrodes++] = v; }
-        else if (!strcmp(a, "--threshold")) { NEED_VALUE(); if (cli_parse_double("forward", a, v, &threshold)) return 2; if (!(threshold > 0)) return cli_usage_error("forward", "--threshold must be positive"); }
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1] == '-') return cli_usage_error("forward", "unknown option '%s'", a);
-        else if (a[0] == '-' && a[1]) i += cli_petsc_args_add(&pa, argv[i], i + 1 < argc ? argv[i + 1] : NULL);
-        else if (!model_dir) model_dir = a;
-        else return cli_usage_error("forward", "more than one model given");
-#undef NEED_VALUE
-    }
+    static const cli_choice formats[] = {{"raw", THX_SERIES_RAW}, {"text", THX_SERIES_TEXT}, {"mat", THX_SERIES_MAT},
+                                         {NULL, 0}};
+    static const cli_choice methods[] = {{"forward", 0}, {"adjoint", 1}, {"auto", -1}, {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--epicardial", .type = CLI_INPUT, .meta = "SERIES", .s = &epi_path,
+         .help = "heart-surface potentials, rows the heart surface's nodes (text, raw or .mat; see thorax series)"},
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
+         .help = "the solution directory (written whole or not at all)"},
+        {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
+        {.name = "--volume", .type = CLI_FLAG, .i = &want_volume,
+         .help = "also write DIR/volume.EXT: the potential at every volume node"},
+        {.name = "--currents", .type = CLI_STRING, .meta = "LIST", .s = &currents,
+         .help = "frames (1-based: 5,10,20-30, or all) for which to write the current density J = -sigma grad phi "
+                 "(A/m^2 for V, mm) per tetrahedron (DIR/currents_tet.EXT, rows 3 x tetrahedra: Jx Jy Jz) and per node "
+                 "(DIR/currents_node.EXT, volume-weighted)"},
+        {.name = "--transfer", .type = CLI_INPUT, .meta = "FILE", .s = &transfer_in,
+         .help = "apply this transfer matrix to the epicardial series instead of solving"},
+        {.name = "--no-warm", .type = CLI_SET, .i = &warm, .ival = 0,
+         .help = "start every frame's solve from zero, not from the previous frame's solution"},
+        {.name = "--dump-system", .type = CLI_OUTPUT, .meta = "FILE", .s = &dump,
+         .help = "write the first frame's K_ff and right-hand side there (PETSc binary)"},
+        {.name = "--transfer-out", .type = CLI_FLAG, .i = &transfer_out,
+         .help = "compute the transfer matrix (torso nodes, or --rows, from heart nodes) and write DIR/transfer.EXT"},
+        {.name = "--rows", .type = CLI_INPUT, .meta = "ELECTRODES", .s = &rows_path, .def = "the outer surface's nodes",
+         .help = "rows of the transfer matrix: an electrode file (thorax electrodes)"},
+        {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &meth,
+         .help = "forward: a solve per heart node; adjoint: a solve per row; auto: the fewer solves"},
+        {.name = "--electrode", .type = CLI_STRING, .meta = "SPEC", .flags = CLI_REPEAT, .sv = electrodes,
+         .count = &n_electrodes, .max = 16,
+         .help = "a defibrillation electrode (up to 16): NAME,at=X:Y:Z,radius=R,voltage=V (mm, V), current=I (A) "
+                 "instead of voltage, surface=NAME, or nodes=FILE instead of at and radius (docs/cli.md)"},
+        {.name = "--threshold", .type = CLI_REAL, .meta = "V/CM", .unit = "V/cm", .d = &threshold, .rule = CLI_GT,
+         .bad = "--threshold must be positive", .help = "field threshold for the fraction of the heart's volume above it"},
+        {.name = "--force", .type = CLI_FLAG, .i = &force,
+         .help = "solve even if the volume mesh fails the check (a warning in solution.json: \"warnings\", "
+                 "\"volume_check\")"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command cmd = {
+        .name = "forward",
+        .usage = "MODEL --epicardial -o [--format] [--volume] [--currents] [--transfer] [--no-warm] [--dump-system] "
+                 "[--force] [PETSc options]\n"
+                 "MODEL --transfer-out -o [--rows] [--method] [--format] [--force] [PETSc options]\n"
+                 "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
+        .about = "Finite-element forward solutions on the model's volume mesh (paper 4.1):\n"
+                 "linear tetrahedra, the conductivity of each tissue region, PETSc solvers.\n\n"
+                 "Epicardial problem: the potentials of SERIES (rows: the heart surface's nodes)\n"
+                 "prescribed on the heart surface, no current through the torso surface, the\n"
+                 "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
+                 "frames) and DIR/solution.json (what was solved, solver figures, timings).\n"
+                 "Transfer matrix: DIR/transfer.EXT. Defibrillation: the whole domain, the\n"
+                 "electrodes' currents and potentials, the field in the heart.\n\n"
+                 "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
+                 "coverage of every surface, regions, volumes, node tables, smallest dihedral\n"
+                 "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
+                 "unless --force, which solves anyway and records the reasons in solution.json.\n",
+        .epilog = "PETSc options are passed through: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor,\n"
+                  "-pc_factor_mat_solver_type mumps, ... Default: -ksp_type cg -pc_type gamg\n"
+                  "-ksp_rtol 1e-10. Runs under mpirun -np N (rank 0 writes).\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+        .pass = cli_petsc_pass,
+        .user = &pa,
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos > 1) return cli_usage_error("forward", "more than one model given");
+    const char *model_dir = cmd.n_pos ? cmd.pos[0] : NULL;
+    const char *format_name = format == THX_SERIES_TEXT ? "text" : format == THX_SERIES_MAT ? "mat" : "raw";
     if (!model_dir) return cli_usage_error("forward", "no model given");
     if (!out) return cli_usage_error("forward", "no output directory given (-o DIR)");
     int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0);
@@ -133,7 +125,7 @@ int cmd_forward(int argc, char **argv)
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
     if (rows_path && !transfer_out) return cli_usage_error("forward", "--rows goes with --transfer-out");
     if (n_electrodes)
-        return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format, &pa, verbose, force);
+        return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format_name, &pa, verbose, force);
 
     thx_ctx *ctx = cli_ctx(verbose);
     int rank = 0, rc = 0;
@@ -150,7 +142,7 @@ int cmd_forward(int argc, char **argv)
     thx_outdir od;
     memset(&od, 0, sizeof od);
     double t0 = thx_wtime();
-    thx_series_format fmt = fmt_of(format);
+    thx_series_format fmt = (thx_series_format)format;
     const char *ext = ext_of(fmt);
 
     /* the output directory first: refused before any work if it is not thorax's own solution */
@@ -187,7 +179,6 @@ int cmd_forward(int argc, char **argv)
     if (rank == 0 && isatty(2) && verbose >= 0) { fo.progress = cli_progress; fo.user = (void *)"forward"; }
     if (transfer_out) {
         size_t nr = rowset ? rowset->n : 0;
-        int meth = !strcmp(method, "forward") ? 0 : !strcmp(method, "adjoint") ? 1 : -1;
         st = thx_forward_transfer(ctx, m, rowset ? rowset->node : NULL, nr, meth, &fo, &T, &R);
         if (st != THX_OK) goto fail;
     } else if (T && !fo.keep_volume) {

@@ -16,107 +16,6 @@
 #include "thorax/mesh/mesh.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: thorax import -o MODEL FILE --name NAME --role ROLE [--fac FAC] [--format F] [--scale S]\n"
-            "                     [FILE --name NAME --role ROLE ...] [--up AXIS --front AXIS] [--force] [-q] [-v]\n"
-            "       thorax import -o MODEL MESH [--elem ELEM] [--format F] [--scale S]\n"
-            "                     [--region N=NAME[:SIGMA]]... [--region-array A] [--up AXIS --front AXIS]\n"
-            "                     [--force] [-q] [-v]\n"
-            "\n"
-            "Builds the model directory MODEL from closed triangle surfaces made by other\n"
-            "programs, or from one tetrahedral volume mesh. Each surface FILE starts a\n"
-            "surface; the options after it, up to the next FILE, describe that surface:\n"
-            "  --name NAME      surface name (file names NAME.pts/NAME.fac in the model)\n"
-            "  --role ROLE      outer, fat, muscle, lung, heart or other\n"
-            "  --fac FAC        the .fac of a .pts FILE (default: FILE with .fac for .pts)\n"
-            "  --format F       pts, tri, obj, stl, ply, vtk or vtp (default: FILE's extension);\n"
-            "                   tet, elem, vtu, msh (or vtk) for a volume MESH\n"
-            "  --scale S        multiply this file's coordinates by S\n"
-            "\n"
-            "surface formats (by extension):\n"
-            "  .pts + .fac  map3d/SCIRun; .fac numbering 0- or 1-based, detected and reported\n"
-            "  .tri         OpenMEEG ('- NV', NV lines 'x y z nx ny nz', '- NT NT NT', NT\n"
-            "               lines 'i j k', 0-based; normals ignored), or ECGSim: node count,\n"
-            "               'label x y z' lines, triangle count, 'label a b c' lines\n"
-            "               (labels optional; 1-based, 0-based detected)\n"
-            "  .obj         Wavefront OBJ: v, f (v/vt/vn, negative indices; polygons fanned)\n"
-            "  .stl         binary or ASCII; corners with identical coordinates merged\n"
-            "  .ply         ascii or binary PLY: vertex x y z, face vertex_indices\n"
-            "  .vtk         legacy VTK POLYDATA, ASCII or BINARY (POLYGONS, TRIANGLE_STRIPS)\n"
-            "  .vtp         VTK XML PolyData with ascii arrays\n"
-            "\n"
-            "volume mesh formats (a MESH is the only FILE; no --name/--role):\n"
-            "  .pts + .tet  'x y z' node lines; 'a b c d [region]' element lines, node\n"
-            "   or .elem    numbers 0- or 1-based (detected, reported); CARP/openCARP: a\n"
-            "               count line first, 'Tt a b c d [region]' lines, 0-based\n"
-            "               (--elem names the element file; default: MESH with .tet, .elem)\n"
-            "  .vtk         legacy VTK UNSTRUCTURED_GRID, ASCII or BINARY: tetrahedra (cell\n"
-            "               type 10); cells of dimension 0-2 skipped; others refused\n"
-            "  .vtu         VTK XML UnstructuredGrid: ascii, binary or appended (raw or\n"
-            "               base64) arrays, uncompressed or zlib\n"
-            "  .msh         Gmsh MSH 4.1 ASCII: tetrahedra (type 4); regions = physical\n"
-            "               volumes (names from $PhysicalNames), else volume entities;\n"
-            "               named physical surfaces (triangles) name the surfaces\n"
-            "  regions of a VTK file: the cell array --region-array A, else one named\n"
-            "  region, gmsh:physical, CellEntityIds, material, tissue, ..., else the only\n"
-            "  integer cell array, else one region\n"
-            "\n"
-            "Every surface is checked as 'thorax check' does (closed 2-manifold, consistent\n"
-            "and outward orientation, 4 pi solid angle, no self-intersections, no\n"
-            "degenerate or duplicate triangles). Then:\n"
-            "  - nodes used by no triangle are removed (reported);\n"
-            "  - a closed, consistently oriented surface whose triangles face inward\n"
-            "    (clockwise seen from outside, Omega = -4 pi) is reversed (reported);\n"
-            "  - any other failure refuses the import: nothing is written, exit 1.\n"
-            "\n"
-            "A volume MESH becomes a model with that volume: one region per region number\n"
-            "of the file (ids 1, 2, ... in increasing order), named and given a\n"
-            "conductivity by --region; nodes in no tetrahedron removed; left-handed\n"
-            "tetrahedra made right-handed (counted), flat ones refused; the mesh's\n"
-            "boundary becomes a surface of role outer (named after the region inside it;\n"
-            "a hole in the mesh becomes 'cavity', role heart), and each closed interface\n"
-            "between regions that touches no other surface becomes a surface of role\n"
-            "other, named after the region inside it. Then the surfaces and the volume are\n"
-            "checked as 'thorax check' does: a failure refuses the import.\n"
-            "  --region N=NAME[:SIGMA]  region number N of the file: its name, and its\n"
-            "                   isotropic conductivity in S/m (N=:SIGMA keeps the name);\n"
-            "                   default name: the file's (Gmsh physical name), else\n"
-            "                   region_N; default conductivity: mean thorax (0.239 S/m,\n"
-            "                   with a warning)\n"
-            "  --region-array A the cell array of region numbers of a .vtk/.vtu MESH\n"
-            "  --elem ELEM      the element file (.tet or .elem) of a .pts MESH\n"
-            "\n"
-            "options:\n"
-            "  -o, --output DIR  model directory to write (replaced atomically)\n"
-            "  --up AXIS         the model axis toward the head (superior): +x -x +y -y +z -z\n"
-            "  --front AXIS      the model axis toward the front (anterior); with --up, the\n"
-            "                    model's anatomical frame, recorded in model.json (\"frame\")\n"
-            "                    and read by electrodes, beat and render's named views; left\n"
-            "                    = up x front. Without them the frame is unknown and those\n"
-            "                    commands refuse the model (e.g. the Dalhousie torso:\n"
-            "                    --up -y --front -z; thorax's own models: --up +z --front +y)\n"
-            "  --scale S         before the first FILE: default scale of every file\n"
-            "                    (coordinates are taken as mm; 1000 for a file in metres)\n"
-            "  --force           write surfaces or a mesh that fail their checks (warns)\n"
-            "  -q                print nothing but warnings and errors\n"
-            "  -v                more logging\n"
-            "  -h, --help        this text\n"
-            "\n"
-            "examples:\n"
-            "  thorax import -o tank tank_full_771.pts --name tank --role outer \\\n"
-            "                25feb97_sock_closed.pts --name sock --role heart\n"
-            "  thorax import -o head --scale 100 scalp.3.tri --name scalp --role outer \\\n"
-            "                skull.3.tri --name skull --role other cortex.3.tri --name brain --role other\n"
-            "  thorax import -o dal --up -y --front -z daltorso.pts --name torso --role outer \\\n"
-            "                dalepi.pts --name epicardium --role heart\n"
-            "  thorax import -o head head.msh --region 1=brain:0.33 --region 2=skull:0.0042\n"
-            "\n"
-            "Exit status: 0 written, 1 a file could not be read or a surface or mesh was\n"
-            "refused (nothing written), 2 bad usage.\n");
-}
-
 typedef struct {
     const char *file, *fac, *name, *elem, *fmt_text;
     thx_role role;
@@ -279,105 +178,221 @@ static void frame_json(cJSON *op, const thx_frame *f)
     cJSON_AddStringToObject(op, "front", thx_axis_name(f->front, a));
 }
 
+/* The parser's state (cli_command.user): the FILEs so far, each with the options after it. */
+typedef struct {
+    spec *sp;
+    int n;
+    thx_region_map *maps;
+    size_t n_maps;
+    const char *up, *front;
+    double scale, default_scale; /* the last --scale; the one before the first FILE */
+    int role;                    /* the last --role */
+} import_args;
+
+static int add_file(void *user, const char *arg)
+{
+    import_args *A = user;
+    A->sp[A->n].file = arg;
+    A->sp[A->n].fmt = THX_IMPORT_AUTO;
+    A->n++;
+    return 0;
+}
+
+/* --name, --role, --fac, --elem, --format, --scale: of the FILE before them (--scale before the first
+   FILE: every file's default) */
+static int file_option(void *user, const cli_opt *opt, const char *v)
+{
+    const char *cmd = "import", *a = opt->name;
+    import_args *A = user;
+    spec *cur = A->n ? &A->sp[A->n - 1] : NULL;
+    if (!strcmp(a, "--scale")) {
+        if (cur) cur->scale = A->scale, cur->has_scale = 1;
+        else A->default_scale = A->scale;
+        return 0;
+    }
+    if (!cur) return cli_usage_error(cmd, "%s must follow the FILE it describes", a);
+    if (!strcmp(a, "--name")) {
+        if (cur->name) return cli_usage_error(cmd, "%s: --name given twice", cur->file);
+        cur->name = v;
+    } else if (!strcmp(a, "--role")) {
+        if (cur->has_role) return cli_usage_error(cmd, "%s: --role given twice", cur->file);
+        cur->role = (thx_role)A->role;
+        cur->has_role = 1;
+    } else if (!strcmp(a, "--fac")) {
+        cur->fac = v;
+    } else if (!strcmp(a, "--elem")) {
+        cur->elem = v;
+    } else {
+        thx_volume_format vf;
+        if (thx_import_format_parse(v, &cur->fmt) != 0 && thx_volume_format_parse(v, &vf) != 0)
+            return cli_usage_error(cmd, "unknown format '%s' (pts, tri, obj, stl, ply, vtk, vtp; tet, elem, vtu, msh)", v);
+        cur->fmt_text = v;
+    }
+    return 0;
+}
+
+static int region_option(void *user, const cli_opt *opt, const char *v)
+{
+    import_args *A = user;
+    if (parse_region("import", v, &A->maps[A->n_maps]) != 0) return 2;
+    for (size_t k = 0; k < A->n_maps; k++)
+        if (A->maps[k].tag == A->maps[A->n_maps].tag) return cli_usage_error("import", "--region %lld given twice", A->maps[k].tag);
+    A->n_maps++;
+    return 0;
+}
+
+static int axis_option(void *user, const cli_opt *opt, const char *v)
+{
+    import_args *A = user;
+    const char **dst = !strcmp(opt->name, "--up") ? &A->up : &A->front;
+    if (*dst) return cli_usage_error("import", "%s given twice", opt->name);
+    *dst = v;
+    return 0;
+}
+
 int cmd_import(int argc, char **argv)
 {
     const char *cmd = "import";
-    const char *outdir = NULL, *region_array = NULL, *up = NULL, *front = NULL;
+    const char *outdir = NULL, *region_array = NULL;
     thx_frame frame = {0};
-    double default_scale = 1.0;
     int force = 0, verbose = 0, quiet = 0, rc = 0;
-    spec *sp = calloc((size_t)argc + 1, sizeof *sp);
-    thx_region_map *maps = calloc((size_t)argc + 1, sizeof *maps);
-    size_t n_maps = 0;
-    if (!sp || !maps) {
+    import_args A = {.sp = calloc((size_t)argc + 1, sizeof *A.sp), .maps = calloc((size_t)argc + 1, sizeof *A.maps),
+                     .default_scale = 1.0};
+    if (!A.sp || !A.maps) {
         fprintf(stderr, "thorax import: out of memory\n");
-        free(sp);
-        free(maps);
+        free(A.sp);
+        free(A.maps);
         return 1;
     }
-    int n = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        spec *cur = n ? &sp[n - 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            free(sp);
-            free(maps);
-            return 0;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
-            outdir = v;
-            i++;
-        } else if (!strcmp(a, "--name") || !strcmp(a, "--role") || !strcmp(a, "--fac") || !strcmp(a, "--format") ||
-                   !strcmp(a, "--elem")) {
-            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
-            if (!cur) { rc = cli_usage_error(cmd, "%s must follow the FILE it describes", a); goto out; }
-            i++;
-            if (!strcmp(a, "--name")) {
-                if (cur->name) { rc = cli_usage_error(cmd, "%s: --name given twice", cur->file); goto out; }
-                cur->name = v;
-            } else if (!strcmp(a, "--role")) {
-                if (cur->has_role) { rc = cli_usage_error(cmd, "%s: --role given twice", cur->file); goto out; }
-                if (thx_role_parse(v, &cur->role) != 0) {
-                    rc = cli_usage_error(cmd, "unknown role '%s' (outer, fat, muscle, lung, heart or other)", v);
-                    goto out;
-                }
-                cur->has_role = 1;
-            } else if (!strcmp(a, "--fac")) {
-                cur->fac = v;
-            } else if (!strcmp(a, "--elem")) {
-                cur->elem = v;
-            } else {
-                thx_volume_format vf;
-                if (thx_import_format_parse(v, &cur->fmt) != 0 && thx_volume_format_parse(v, &vf) != 0) {
-                    rc = cli_usage_error(cmd, "unknown format '%s' (pts, tri, obj, stl, ply, vtk, vtp; tet, elem, vtu, msh)", v);
-                    goto out;
-                }
-                cur->fmt_text = v;
-            }
-        } else if (!strcmp(a, "--region")) {
-            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
-            if (parse_region(cmd, v, &maps[n_maps]) != 0) { rc = 2; goto out; }
-            for (size_t k = 0; k < n_maps; k++)
-                if (maps[k].tag == maps[n_maps].tag) {
-                    rc = cli_usage_error(cmd, "--region %lld given twice", maps[k].tag);
-                    goto out;
-                }
-            n_maps++;
-            i++;
-        } else if (!strcmp(a, "--up") || !strcmp(a, "--front")) {
-            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
-            const char **dst = !strcmp(a, "--up") ? &up : &front;
-            if (*dst) { rc = cli_usage_error(cmd, "%s given twice", a); goto out; }
-            *dst = v;
-            i++;
-        } else if (!strcmp(a, "--region-array")) {
-            if (!v) { rc = cli_usage_error(cmd, "%s needs a value", a); goto out; }
-            region_array = v;
-            i++;
-        } else if (!strcmp(a, "--scale")) {
-            double s;
-            if (cli_parse_double(cmd, a, v, &s)) { rc = 2; goto out; }
-            i++;
-            if (!(s > 0) || isinf(s)) { rc = cli_usage_error(cmd, "--scale must be a finite number > 0"); goto out; }
-            if (cur) cur->scale = s, cur->has_scale = 1;
-            else default_scale = s;
-        } else if (!strcmp(a, "--force")) {
-            force = 1;
-        } else if (!strcmp(a, "-q")) {
-            quiet = 1; /* warnings stay: they say what was written despite doubts */
-        } else if (!strcmp(a, "-v")) {
-            verbose++;
-        } else if (a[0] == '-' && a[1]) {
-            rc = cli_usage_error(cmd, "unknown option '%s'", a);
-            goto out;
-        } else {
-            sp[n].file = a;
-            sp[n].fmt = THX_IMPORT_AUTO;
-            n++;
-        }
+    static const cli_choice roles[] = {{"outer", THX_ROLE_OUTER}, {"fat", THX_ROLE_FAT}, {"muscle", THX_ROLE_MUSCLE},
+                                       {"lung", THX_ROLE_LUNG},   {"heart", THX_ROLE_HEART}, {"other", THX_ROLE_OTHER},
+                                       {NULL, 0}};
+    cli_opt per_file[] = {
+        {.name = "--name", .type = CLI_STRING, .meta = "NAME", .fn = file_option,
+         .help = "surface name (file names NAME.pts/NAME.fac in the model); required for a surface"},
+        {.name = "--role", .type = CLI_CHOICE, .meta = "ROLE", .choices = roles, .i = &A.role, .def = "",
+         .fn = file_option,
+         .help = "the surface's role: outer, fat, muscle, lung, heart or other; required for a surface"},
+        {.name = "--fac", .type = CLI_INPUT, .meta = "FAC", .fn = file_option, .def = "FILE with .fac",
+         .help = "the .fac of a .pts FILE (a .fac given as FILE finds its .pts the same way)"},
+        {.name = "--elem", .type = CLI_INPUT, .meta = "ELEM", .fn = file_option, .def = "MESH with .tet, else .elem",
+         .help = "the element file (.tet or .elem) of a .pts volume MESH"},
+        {.name = "--format", .type = CLI_STRING, .meta = "F", .fn = file_option, .def = "by the extension",
+         .help = "pts, tri, obj, stl, ply, vtk or vtp for a surface; tet, elem (or carp), vtk, vtu or msh for a "
+                 "volume MESH"},
+        {.name = "--scale", .type = CLI_REAL, .meta = "S", .d = &A.scale, .fn = file_option, .rule = CLI_GT | CLI_FINITE,
+         .bad = "--scale must be a finite number > 0", .def = "1, or the --scale before the first FILE",
+         .help = "multiply this file's coordinates by S (they are taken as mm: 1000 for a file in metres); before "
+                 "the first FILE: the default of every file"},
+    };
+    cli_opt volume[] = {
+        {.name = "--region", .type = CLI_STRING, .meta = "N=NAME[:SIGMA]", .unit = "S/m", .flags = CLI_REPEAT,
+         .fn = region_option,
+         .help = "region number N of the file: its name (1-31 characters of A-Z a-z 0-9 _ . -) and its isotropic "
+                 "conductivity SIGMA; N=:SIGMA keeps the name; once per N. Default name: the file's (a Gmsh "
+                 "physical name), else region_N; default conductivity: mean thorax (0.239 S/m, with a warning)"},
+        {.name = "--region-array", .type = CLI_STRING, .meta = "A", .s = &region_array,
+         .def = "one named region, gmsh:physical, CellEntityIds, material, MaterialIds, tissue, elemTag ..., else "
+                "the only integer one, else one region",
+         .help = "the cell array of region numbers of a .vtk/.vtu MESH"},
+    };
+    cli_opt general[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "MODEL", .s = &outdir,
+         .help = "model directory to write (replaced atomically)"},
+        {.name = "--up", .type = CLI_STRING, .meta = "AXIS", .fn = axis_option,
+         .help = "the model axis toward the head (superior): +x -x +y -y +z -z"},
+        {.name = "--front", .type = CLI_STRING, .meta = "AXIS", .fn = axis_option,
+         .help = "the model axis toward the front (anterior); with --up, the model's anatomical frame, recorded in "
+                 "model.json (\"frame\") and read by electrodes, beat and render's named views; left = up x front. "
+                 "Without them the frame is unknown and those commands refuse the model (e.g. the Dalhousie torso: "
+                 "--up -y --front -z; thorax's own models: --up +z --front +y)"},
+        {.name = "--force", .type = CLI_FLAG, .i = &force,
+         .help = "write surfaces or a mesh that fail their checks (with a warning)"},
+        {.name = "-q", .type = CLI_FLAG, .i = &quiet, .help = "print nothing but warnings and errors"},
+        {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .help = "more logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "-o FILE --name --role [--fac] [--format] [--scale] [FILE --name --role ...] [--up --front] "
+                 "[--force] [-q] [-v]\n"
+                 "-o MESH [--elem] [--format] [--scale] [--region]... [--region-array] [--up --front] [--force] [-q] "
+                 "[-v]",
+        .about =
+            "Builds the model directory MODEL from closed triangle surfaces made by other\n"
+            "programs, or from one tetrahedral volume mesh. Each surface FILE starts a\n"
+            "surface; the options after it, up to the next FILE, describe that surface.\n"
+            "\n"
+            "surface formats (by extension):\n"
+            "  .pts + .fac  map3d/SCIRun; .fac numbering 0- or 1-based, detected and reported\n"
+            "  .tri         OpenMEEG ('- NV', NV lines 'x y z nx ny nz', '- NT NT NT', NT\n"
+            "               lines 'i j k', 0-based; normals ignored), or ECGSim: node count,\n"
+            "               'label x y z' lines, triangle count, 'label a b c' lines\n"
+            "               (labels optional; 1-based, 0-based detected)\n"
+            "  .obj         Wavefront OBJ: v, f (v/vt/vn, negative indices; polygons fanned)\n"
+            "  .stl         binary or ASCII; corners with identical coordinates merged\n"
+            "  .ply         ascii or binary PLY: vertex x y z, face vertex_indices\n"
+            "  .vtk         legacy VTK POLYDATA, ASCII or BINARY (POLYGONS, TRIANGLE_STRIPS)\n"
+            "  .vtp         VTK XML PolyData with ascii arrays\n"
+            "\n"
+            "volume mesh formats (a MESH is the only FILE; no --name/--role):\n"
+            "  .pts + .tet  'x y z' node lines; 'a b c d [region]' element lines, node\n"
+            "   or .elem    numbers 0- or 1-based (detected, reported); CARP/openCARP: a\n"
+            "               count line first, 'Tt a b c d [region]' lines, 0-based\n"
+            "               (--elem names the element file; default: MESH with .tet, .elem)\n"
+            "  .vtk         legacy VTK UNSTRUCTURED_GRID, ASCII or BINARY: tetrahedra (cell\n"
+            "               type 10); cells of dimension 0-2 skipped; others refused\n"
+            "  .vtu         VTK XML UnstructuredGrid: ascii, binary or appended (raw or\n"
+            "               base64) arrays, uncompressed or zlib\n"
+            "  .msh         Gmsh MSH 4.1 ASCII: tetrahedra (type 4); regions = physical\n"
+            "               volumes (names from $PhysicalNames), else volume entities;\n"
+            "               named physical surfaces (triangles) name the surfaces\n"
+            "\n"
+            "Every surface is checked as 'thorax check' does (closed 2-manifold, consistent\n"
+            "and outward orientation, 4 pi solid angle, no self-intersections, no\n"
+            "degenerate or duplicate triangles). Then:\n"
+            "  - nodes used by no triangle are removed (reported);\n"
+            "  - a closed, consistently oriented surface whose triangles face inward\n"
+            "    (clockwise seen from outside, Omega = -4 pi) is reversed (reported);\n"
+            "  - any other failure refuses the import: nothing is written, exit 1.\n"
+            "\n"
+            "A volume MESH becomes a model with that volume: one region per region number\n"
+            "of the file (ids 1, 2, ... in increasing order), named and given a\n"
+            "conductivity by --region; nodes in no tetrahedron removed; left-handed\n"
+            "tetrahedra made right-handed (counted), flat ones refused; the mesh's\n"
+            "boundary becomes a surface of role outer (named after the region inside it;\n"
+            "a hole in the mesh becomes 'cavity', role heart), and each closed interface\n"
+            "between regions that touches no other surface becomes a surface of role\n"
+            "other, named after the region inside it. Then the surfaces and the volume are\n"
+            "checked as 'thorax check' does: a failure refuses the import.\n",
+        .epilog =
+            "examples:\n"
+            "  thorax import -o tank tank_full_771.pts --name tank --role outer \\\n"
+            "                25feb97_sock_closed.pts --name sock --role heart\n"
+            "  thorax import -o head --scale 100 scalp.3.tri --name scalp --role outer \\\n"
+            "                skull.3.tri --name skull --role other cortex.3.tri --name brain --role other\n"
+            "  thorax import -o dal --up -y --front -z daltorso.pts --name torso --role outer \\\n"
+            "                dalepi.pts --name epicardium --role heart\n"
+            "  thorax import -o head head.msh --region 1=brain:0.33 --region 2=skull:0.0042\n"
+            "\n"
+            "Exit status: 0 written, 1 a file could not be read or a surface or mesh was\n"
+            "refused (nothing written), 2 bad usage.\n",
+        .group = {{"options after a FILE (they describe it)", per_file, sizeof per_file / sizeof per_file[0]},
+                  {"options of a volume MESH", volume, sizeof volume / sizeof volume[0]},
+                  {NULL, general, sizeof general / sizeof general[0]}},
+        .positional = add_file,
+        .user = &A,
+    };
+    spec *sp = A.sp;
+    thx_region_map *maps = A.maps;
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) {
+        rc = CLI_EXIT(pr);
+        goto out;
     }
+    int n = A.n;
+    size_t n_maps = A.n_maps;
+    const char *up = A.up, *front = A.front;
+    double default_scale = A.default_scale;
     if (!outdir) { rc = cli_usage_error(cmd, "no output directory given (-o MODEL)"); goto out; }
     if (n == 0) { rc = cli_usage_error(cmd, "no surface FILE or volume MESH given"); goto out; }
     if (up || front) {

@@ -14,44 +14,40 @@
 #include "thorax/leads/leads.h"
 #include "thorax/phantom/phantom.h"
 #include "thorax/core/fileio.h"
-static void help(void)
-{
-    printf("usage: thorax leads SOLUTION [-o DIR] [--twelve FILE] [--array FILE] [--format text|raw|mat]\n\n"
-           "Reads a solution of thorax forward (its torso potentials and its model) and\n"
-           "writes the standard 12-lead ECG (I, II, III, aVR, aVL, aVF, V1-V6; the\n"
-           "precordial leads against Wilson's central terminal) as DIR/ecg12.EXT and the\n"
-           "signals of an electrode array as DIR/array.EXT (rows: the electrodes).\n\n"
-           "options:\n"
-           "  -o, --output DIR   where to write (default: SOLUTION itself)\n"
-           "  --twelve FILE      electrodes with RA, LA, LL, V1..V6 (default MODEL/electrodes/12lead.txt)\n"
-           "  --array FILE       an electrode array (default MODEL/electrodes/array.txt, if present)\n"
-           "  --format F         text (default), raw or mat\n");
-}
-
 int cmd_leads(int argc, char **argv)
 {
-    const char *sol = NULL, *out = NULL, *twelve = NULL, *array = NULL, *format = "text";
-    int verbose = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-#define NEED_VALUE() do { if (!v) return cli_usage_error("leads", "%s needs a value", a); i++; } while (0)
-        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { NEED_VALUE(); out = v; }
-        else if (!strcmp(a, "--twelve")) { NEED_VALUE(); twelve = v; }
-        else if (!strcmp(a, "--array")) { NEED_VALUE(); array = v; }
-        else if (!strcmp(a, "--format")) { NEED_VALUE(); format = v; thx_series_format f; if (thx_series_format_parse(v, &f) || f == THX_SERIES_AUTO) return cli_usage_error("leads", "--format: text, raw or mat"); }
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1]) return cli_usage_error("leads", "unknown option '%s'", a);
-        else if (!sol) sol = a;
-        else return cli_usage_error("leads", "more than one solution given");
-#undef NEED_VALUE
-    }
+    const char *out = NULL, *twelve = NULL, *array = NULL;
+    int verbose = 0, format = THX_SERIES_TEXT;
+    static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
+                                         {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out, .def = "SOLUTION itself",
+         .help = "where to write"},
+        {.name = "--twelve", .type = CLI_INPUT, .meta = "FILE", .s = &twelve, .def = "MODEL/electrodes/12lead.txt",
+         .help = "electrodes with RA, LA, LL, V1..V6 (made by thorax electrodes)"},
+        {.name = "--array", .type = CLI_INPUT, .meta = "FILE", .s = &array,
+         .def = "MODEL/electrodes/array.txt, if present", .help = "an electrode array"},
+        {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "the series' format"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command c = {
+        .name = "leads",
+        .usage = "SOLUTION [-o] [--twelve] [--array] [--format]",
+        .about = "Reads a solution of thorax forward (its torso potentials and its model) and\n"
+                 "writes the standard 12-lead ECG (I, II, III, aVR, aVL, aVF, V1-V6; the\n"
+                 "precordial leads against Wilson's central terminal) as DIR/ecg12.EXT and the\n"
+                 "signals of an electrode array as DIR/array.EXT (rows: the electrodes).\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (c.n_pos > 1) return cli_usage_error("leads", "more than one solution given");
+    const char *sol = c.n_pos ? c.pos[0] : NULL;
     if (!sol) return cli_usage_error("leads", "no solution given");
     if (!out) out = sol;
     thx_ctx *ctx = cli_ctx(verbose);
-    thx_series_format fmt = THX_SERIES_TEXT;
-    thx_series_format_parse(format, &fmt);
+    thx_series_format fmt = (thx_series_format)format;
     const char *ext = fmt == THX_SERIES_TEXT ? "txt" : fmt == THX_SERIES_MAT ? "mat" : "raw";
     char path[PATH_MAX + 64], model_dir[PATH_MAX] = "", torso_file[256] = "", p12[PATH_MAX + 64], parr[PATH_MAX + 64];
     char *text = NULL;

@@ -9,39 +9,6 @@
 #include "cli/cli.h"
 #include "thorax/check/check_volume.h"
 #include "thorax/mesh/mesh.h"
-static void help(void)
-{
-    printf("usage: thorax mesh MODEL [-o MODEL] [--grid MM] [--tol MM] [--layer-spacing MM] [--no-heart]\n"
-           "                        [--quality R/D] [--repair DEG] [--region NAME[=NEW][:SIGMA]]... [--stats]\n\n"
-           "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
-           "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
-           "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
-           "added on the surfaces until every surface triangle is a union of mesh faces\n"
-           "(Steiner points, recorded in volume.steiner); the pieces the surfaces cut the\n"
-           "mesh into get their tissue regions by inside/outside tests, those outside the\n"
-           "outer surface are removed; flat tetrahedra repaired (flips, moving grid nodes)\n"
-           "keeping every face on a surface; the default conductivity table. Writes\n"
-           "volume.pts, volume.tet and the node tables into the model directory (or the\n"
-           "one given by -o).\n\n"
-           "options:\n"
-           "  -o, --output DIR       write the meshed model here (default: MODEL itself)\n"
-           "  --grid MM              grid spacing in the layer planes (default: 6.5 mm for\n"
-           "                         layers 5 mm apart, 8 mm for 10 mm, 6.5 + 0.3 (gap - 5))\n"
-           "  --tol MM               drop grid points closer than this to a surface (default grid/2)\n"
-           "  --layer-spacing MM     grid planes this far apart (default: the layers of the\n"
-           "                         outer surface when it was built from contours, else --grid)\n"
-           "  --no-heart             leave the heart's interior out of the domain\n"
-           "  --quality R/D          Delaunay refinement: circumcentres of tetrahedra whose radius-edge\n"
-           "                         ratio exceeds R or whose smallest dihedral angle is below D degrees\n"
-           "                         (default 1.6/10; 0 = off)\n"
-           "  --repair DEG           repair tetrahedra inside with a dihedral angle below DEG by\n"
-           "                         edge/face flips and moving grid nodes (15; 0 = off)\n"
-           "  --region NAME[=NEW][:SIGMA]  rename a tissue region and/or set its isotropic conductivity\n"
-           "                         (S/m), e.g. --region mean_thorax=scalp:1 --region skull:0.0125\n"
-           "  --stats                print counts and times\n"
-           "  -v, -q                 more / less logging\n");
-}
-
 /* A progress bar on a terminal (stderr) for a stage once it has run a second; one line per stage. */
 typedef struct { char stage[32]; double t0; int shown; } progress_state;
 static void mesh_progress(void *user, const char *stage, double done)
@@ -97,63 +64,101 @@ static double nearest_triangle(const thx_model *m, const double c[3], size_t *ws
     return angle;
 }
 
+/* --quality R/D (or 0): the Delaunay refinement's radius-edge ratio and dihedral angle */
+static int parse_quality(void *user, const cli_opt *opt, const char *v)
+{
+    thx_mesh_opts *o = user;
+    char *end = NULL;
+    o->radius_edge = strtod(v, &end);
+    o->refine_deg = 0;
+    if (*end == '/') o->refine_deg = strtod(end + 1, &end);
+    if (end == v || *end || o->radius_edge < 0 || (o->radius_edge > 0 && o->radius_edge < 1) || o->refine_deg < 0 || o->refine_deg > 30)
+        return cli_usage_error("mesh", "--quality takes RATIO/DEG: a radius-edge ratio of at least 1 (0: off) and a dihedral angle of 0 to 30 degrees, got '%s'", v);
+    return 0;
+}
+
+/* --region NAME[=NEWNAME][:SIGMA] */
+static int parse_region(void *user, const cli_opt *opt, const char *v)
+{
+    thx_mesh_opts *o = user;
+    if (o->n_region_set >= 16) return cli_usage_error("mesh", "at most 16 --region options");
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", v);
+    char *colon = strchr(buf, ':'), *eq = strchr(buf, '=');
+    double sigma = 0;
+    if (colon) {
+        *colon = 0;
+        char *end = NULL;
+        sigma = strtod(colon + 1, &end);
+        if (end == colon + 1 || *end || !(sigma > 0) || !isfinite(sigma))
+            return cli_usage_error("mesh", "--region %s: the conductivity must be a positive number (S/m)", v);
+    }
+    if (eq) *eq = 0;
+    if (!buf[0] || strlen(buf) >= 64 || (eq && (!eq[1] || strlen(eq + 1) >= 64)) || (!colon && !eq))
+        return cli_usage_error("mesh", "--region %s: expected NAME=NEWNAME, NAME:SIGMA or NAME=NEWNAME:SIGMA", v);
+    snprintf(o->region_set[o->n_region_set].name, 64, "%s", buf);
+    snprintf(o->region_set[o->n_region_set].rename, 64, "%s", eq ? eq + 1 : "");
+    o->region_set[o->n_region_set].sigma = sigma;
+    o->n_region_set++;
+    return 0;
+}
+
 int cmd_mesh(int argc, char **argv)
 {
     progress_state ps = {"", 0, 0};
-    const char *in = NULL, *out = NULL;
+    const char *out = NULL;
     int verbose = 0, want_stats = 0;
     thx_mesh_opts o;
     thx_mesh_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { if (!v) return cli_usage_error("mesh", "%s needs a value", a); out = v; i++; }
-        else if (!strcmp(a, "--grid")) { if (cli_parse_double("mesh", a, v, &o.grid)) return 2; i++; if (!(o.grid > 0)) return cli_usage_error("mesh", "--grid must be positive"); }
-        else if (!strcmp(a, "--tol")) { if (cli_parse_double("mesh", a, v, &o.tol)) return 2; i++; if (!(o.tol > 0)) return cli_usage_error("mesh", "--tol must be positive"); }
-        else if (!strcmp(a, "--layer-spacing")) { if (cli_parse_double("mesh", a, v, &o.layer_spacing)) return 2; i++; if (!(o.layer_spacing > 0)) return cli_usage_error("mesh", "--layer-spacing must be positive"); }
-        else if (!strcmp(a, "--no-heart")) o.no_heart = 1;
-        else if (!strcmp(a, "--repair")) { if (cli_parse_double("mesh", a, v, &o.repair_deg)) return 2; i++; if (o.repair_deg < 0 || o.repair_deg >= 70) return cli_usage_error("mesh", "--repair must be between 0 and 70 degrees"); }
-        else if (!strcmp(a, "--quality")) {
-            if (!v) return cli_usage_error("mesh", "--quality needs RATIO/DEG (e.g. 1.6/10), or 0 for none");
-            char *end = NULL;
-            o.radius_edge = strtod(v, &end);
-            o.refine_deg = 0;
-            if (*end == '/') o.refine_deg = strtod(end + 1, &end);
-            if (end == v || *end || o.radius_edge < 0 || (o.radius_edge > 0 && o.radius_edge < 1) || o.refine_deg < 0 || o.refine_deg > 30)
-                return cli_usage_error("mesh", "--quality takes RATIO/DEG: a radius-edge ratio of at least 1 (0: off) and a dihedral angle of 0 to 30 degrees, got '%s'", v);
-            i++;
-        }
-        else if (!strcmp(a, "--region")) {
-            /* NAME[=NEWNAME][:SIGMA] */
-            if (!v) return cli_usage_error("mesh", "--region needs NAME[=NEWNAME][:SIGMA]");
-            if (o.n_region_set >= 16) return cli_usage_error("mesh", "at most 16 --region options");
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", v);
-            char *colon = strchr(buf, ':'), *eq = strchr(buf, '=');
-            double sigma = 0;
-            if (colon) {
-                *colon = 0;
-                char *end = NULL;
-                sigma = strtod(colon + 1, &end);
-                if (end == colon + 1 || *end || !(sigma > 0) || !isfinite(sigma))
-                    return cli_usage_error("mesh", "--region %s: the conductivity must be a positive number (S/m)", v);
-            }
-            if (eq) *eq = 0;
-            if (!buf[0] || strlen(buf) >= 64 || (eq && (!eq[1] || strlen(eq + 1) >= 64)) || (!colon && !eq))
-                return cli_usage_error("mesh", "--region %s: expected NAME=NEWNAME, NAME:SIGMA or NAME=NEWNAME:SIGMA", v);
-            snprintf(o.region_set[o.n_region_set].name, 64, "%s", buf);
-            snprintf(o.region_set[o.n_region_set].rename, 64, "%s", eq ? eq + 1 : "");
-            o.region_set[o.n_region_set].sigma = sigma;
-            o.n_region_set++;
-            i++;
-        }
-        else if (!strcmp(a, "--stats")) want_stats = 1;
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1]) return cli_usage_error("mesh", "unknown option '%s'", a);
-        else if (!in) in = a;
-        else return cli_usage_error("mesh", "more than one model given");
-    }
+    char quality[40];
+    snprintf(quality, sizeof quality, "%g/%g", o.radius_edge, o.refine_deg);
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "MODEL", .s = &out, .def = "MODEL itself",
+         .help = "write the meshed model here"},
+        {.name = "--grid", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.grid, .rule = CLI_GT,
+         .bad = "--grid must be positive", .def = "6.5 + 0.3 (d - 5) for layers d mm apart: 6.5 mm for 5, 8 mm for 10",
+         .help = "grid spacing in the layer planes"},
+        {.name = "--tol", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.tol, .rule = CLI_GT,
+         .bad = "--tol must be positive", .def = "grid/2", .help = "drop grid points closer than this to a surface"},
+        {.name = "--layer-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.layer_spacing, .rule = CLI_GT,
+         .bad = "--layer-spacing must be positive",
+         .def = "the layers of the outer surface when it was built from contours, else --grid",
+         .help = "grid planes this far apart"},
+        {.name = "--no-heart", .type = CLI_FLAG, .i = &o.no_heart, .help = "leave the heart's interior out of the domain"},
+        {.name = "--quality", .type = CLI_STRING, .meta = "R/D", .def = quality, .note = "0 = off", .fn = parse_quality,
+         .help = "Delaunay refinement: circumcentres of tetrahedra whose radius-edge ratio exceeds R or whose smallest "
+                 "dihedral angle is below D degrees"},
+        {.name = "--repair", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &o.repair_deg, .rule = CLI_GE | CLI_LT,
+         .lo = 0, .hi = 70, .bad = "--repair must be between 0 and 70 degrees", .note = "0 = off",
+         .help = "repair tetrahedra inside with a dihedral angle below DEG by edge/face flips and moving grid nodes"},
+        {.name = "--region", .type = CLI_STRING, .meta = "NAME[=NEW][:SIGMA]", .unit = "S/m", .flags = CLI_REPEAT,
+         .fn = parse_region,
+         .help = "rename a tissue region and/or set its isotropic conductivity SIGMA, e.g. --region "
+                 "mean_thorax=scalp:1 --region skull:0.0125"},
+        {.name = "--stats", .type = CLI_FLAG, .i = &want_stats, .help = "print counts and times"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command cmd = {
+        .name = "mesh",
+        .usage = "MODEL [-o] [--grid] [--tol] [--layer-spacing] [--no-heart] [--quality] [--repair] [--region] [--stats]",
+        .about = "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
+                 "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
+                 "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
+                 "added on the surfaces until every surface triangle is a union of mesh faces\n"
+                 "(Steiner points, recorded in volume.steiner); the pieces the surfaces cut the\n"
+                 "mesh into get their tissue regions by inside/outside tests, those outside the\n"
+                 "outer surface are removed; flat tetrahedra repaired (flips, moving grid nodes)\n"
+                 "keeping every face on a surface; the default conductivity table. Writes\n"
+                 "volume.pts, volume.tet and the node tables into the model directory (or the\n"
+                 "one given by -o).\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+        .user = &o,
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos > 1) return cli_usage_error("mesh", "more than one model given");
+    const char *in = cmd.n_pos ? cmd.pos[0] : NULL;
     if (!in) return cli_usage_error("mesh", "no model given");
     if (!out) out = in;
     thx_ctx *ctx = cli_ctx(verbose);

@@ -13,35 +13,6 @@
 #include "thorax/phantom/phantom.h"
 static const char *CMD = "phantom";
 
-static void help(FILE *f)
-{
-    fprintf(f,
-            "usage: thorax phantom [--resolution high|medium] [--seed N] -o FILE\n"
-            "       thorax phantom --beat MODEL -o SERIES [--frames N] [--dt MS] [--peak MV] [--format F]\n"
-            "\n"
-            "Writes a synthetic human thorax as hand-digitized contours (text format\n"
-            "'thorax-contours 1'): outer torso, subcutaneous fat/muscle interface, inner\n"
-            "border of the skeletal muscle, right and left lungs (crescent-shaped lower\n"
-            "layers around the heart and diaphragm), and the epicardium. The points imitate\n"
-            "hand digitization: uneven spacing, jitter, a shift of each whole layer\n"
-            "(breathing), random start points and directions. Deterministic for a seed.\n"
-            "\n"
-            "options:\n"
-            "  -r, --resolution R  high: every layer, 5 mm apart, node spacing 5 mm\n"
-            "                      (about 42,000 surface nodes, 85,000 triangles);\n"
-            "                      medium: every second layer, node spacing 11 mm\n"
-            "                      (about 9,600 nodes, 19,000 triangles). Default medium.\n"
-            "  -s, --seed N        random seed (integer >= 0, default 1)\n"
-            "      --jitter MM     standard deviation of the point jitter (default 0.6;\n"
-            "                      each point moves at most min(2.5 sd, 1.5 mm))\n"
-            "      --shift MM      standard deviation of the layer shifts (default 1.0)\n"
-            "  -o, --output FILE   output file ('-' for standard output); written atomically\n"
-            "  -v, -q              more / fewer messages on standard error\n"
-            "      --beat MODEL    instead: the phantom's heartbeat on MODEL's heart surface, the\n"
-            "                      same as 'thorax beat MODEL' (see thorax beat --help)\n"
-            "  -h, --help          this text\n");
-}
-
 /* Writes contours to standard output through a temporary file: the writer is
  * atomic by path, and the text must be complete before any of it is shown. The
  * file goes into a private temporary directory (the writer replaces only a file
@@ -67,7 +38,48 @@ static thx_status write_stdout(thx_ctx *ctx, const thx_contours *c, const char *
 
 int cmd_phantom(int argc, char **argv)
 {
-    /* --beat MODEL: the heartbeat (epicardial sequence) of a phantom model, as thorax beat */
+    thx_phantom_opts o;
+    thx_phantom_opts_default(&o);
+    const char *out = NULL, *beat = NULL;
+    int verbose = 0;
+    long seed = (long)o.seed;
+    static const cli_choice resolutions[] = {{"high", THX_PHANTOM_HIGH}, {"medium", THX_PHANTOM_MEDIUM}, {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--resolution", .alias = "-r", .type = CLI_CHOICE, .choices = resolutions, .i = &o.resolution,
+         .help = "high: every layer, 5 mm apart, node spacing 5 mm (thorax surfaces builds about 42,400 nodes and "
+                 "84,800 triangles from it); medium: every second layer, node spacing 11 mm (about 9,400 nodes and "
+                 "18,800 triangles)"},
+        {.name = "--seed", .alias = "-s", .type = CLI_INT, .meta = "N", .l = &seed, .rule = CLI_GE,
+         .bad = "--seed: the seed must be >= 0", .help = "random seed; the same seed gives byte-identical files"},
+        {.name = "--jitter", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.jitter_mm, .rule = CLI_GE,
+         .bad = "--jitter: must be >= 0 mm",
+         .help = "standard deviation of the point jitter normal to the outline; each point moves at most "
+                 "min(2.5 sd, 1.5 mm)"},
+        {.name = "--shift", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.shift_mm, .rule = CLI_GE,
+         .bad = "--shift: must be >= 0 mm", .help = "standard deviation of the whole-layer shifts (breathing)"},
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "FILE", .s = &out,
+         .help = "output file, '-' for standard output; written atomically"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE,
+         .help = "more messages on standard error"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
+         .help = "fewer messages on standard error"},
+        {.name = "--beat", .type = CLI_INPUT, .meta = "MODEL", .s = &beat,
+         .help = "instead: the phantom's heartbeat on MODEL's heart surface, the same as 'thorax beat MODEL' with the "
+                 "other options (see thorax beat --help)"},
+    };
+    cli_command cmd = {
+        .name = CMD,
+        .usage = "[--resolution] [--seed] [--jitter] [--shift] -o\n--beat -o=SERIES [beat options]",
+        .about = "Writes a synthetic human thorax as hand-digitized contours (text format\n"
+                 "'thorax-contours 1'): outer torso, subcutaneous fat/muscle interface, inner\n"
+                 "border of the skeletal muscle, right and left lungs (crescent-shaped lower\n"
+                 "layers around the heart and diaphragm), and the epicardium. The points imitate\n"
+                 "hand digitization: uneven spacing, jitter, a shift of each whole layer\n"
+                 "(breathing), random start points and directions. Deterministic for a seed.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    /* --beat MODEL: the heartbeat (epicardial sequence) of a phantom model, as thorax beat, which
+       reads the other options */
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--beat")) {
             if (i + 1 >= argc) return cli_usage_error(CMD, "--beat needs a model directory");
@@ -80,46 +92,10 @@ int cmd_phantom(int argc, char **argv)
             args[n] = NULL;
             return cmd_beat(n, args);
         }
-    thx_phantom_opts o;
-    thx_phantom_opts_default(&o);
-    const char *out = NULL;
-    int verbose = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            help(stdout);
-            return 0;
-        } else if (!strcmp(a, "-r") || !strcmp(a, "--resolution")) {
-            if (!val) return cli_usage_error(CMD, "%s needs a value (high or medium)", a);
-            if (!strcmp(val, "high")) o.resolution = THX_PHANTOM_HIGH;
-            else if (!strcmp(val, "medium")) o.resolution = THX_PHANTOM_MEDIUM;
-            else return cli_usage_error(CMD, "%s: '%s' is not a resolution (high or medium)", a, val);
-            i++;
-        } else if (!strcmp(a, "-s") || !strcmp(a, "--seed")) {
-            long v;
-            if (cli_parse_int(CMD, a, val, &v)) return 2;
-            if (v < 0) return cli_usage_error(CMD, "%s: the seed must be >= 0", a);
-            o.seed = (unsigned long)v;
-            i++;
-        } else if (!strcmp(a, "--jitter") || !strcmp(a, "--shift")) {
-            double v;
-            if (cli_parse_double(CMD, a, val, &v)) return 2;
-            if (!(v >= 0)) return cli_usage_error(CMD, "%s: must be >= 0 mm", a);
-            if (a[2] == 'j') o.jitter_mm = v; else o.shift_mm = v;
-            i++;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!val) return cli_usage_error(CMD, "%s needs a file name", a);
-            out = val;
-            i++;
-        } else if (!strcmp(a, "-v")) {
-            verbose = 1;
-        } else if (!strcmp(a, "-q")) {
-            verbose = -1;
-        } else {
-            return cli_usage_error(CMD, "unknown %s '%s'", a[0] == '-' ? "option" : "argument", a);
-        }
-    }
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos) return cli_usage_error(CMD, "unknown argument '%s'", cmd.pos[0]);
+    o.seed = (unsigned long)seed;
     if (!out) return cli_usage_error(CMD, "no output given (-o FILE, or -o - for standard output)");
 
     thx_ctx *ctx = cli_ctx(verbose);

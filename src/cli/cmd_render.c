@@ -1,7 +1,8 @@
 /*
- * thorax render / thorax animate: batch pictures of models and potentials
- * (paper 4.2), headless.
+ * thorax render: batch pictures of models and potentials (paper 4.2), headless; the options,
+ * data and drawing it shares with thorax animate (cmd_animate.c, cli/render_cli.h).
  */
+#include <assert.h>
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <limits.h>
@@ -9,15 +10,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
-
-extern char **environ;
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
+#include "cli/render_cli.h"
 #include "thorax/core/fileio.h"
 #include "thorax/render/image.h"
 #include "thorax/import/import.h"
@@ -26,68 +24,7 @@ extern char **environ;
 #include "thorax/render/render.h"
 #include "thorax/model/series.h"
 #include "thorax/io/series_file.h"
-enum { SCOPE_FRAME, SCOPE_SERIES, SCOPE_ALL, SCOPE_FIXED };
-
-typedef struct {
-    const char *model_dir, *solution, *data, *data_surface, *out, *font, *trace, *arrows;
-    const char *files[16];  /* surface files drawn without a model (any format thorax import reads) */
-    const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
-    int n_files;
-    int w, h, frame, first, last, fps;
-    thx_view view;
-    int have_camera;
-    thx_camera cam;
-    /* the anatomical frame: canonical axis k (0 the subject's right, 1 anterior, 2 cranial) is
-       sg[k] times model axis ax[k] (default x, y, z; --up and --front change it) */
-    int ax[3];
-    double sg[3];
-    const char *up_spec, *front_spec;
-    thx_draw_mode mode;
-    thx_data_style style;
-    int levels;
-    thx_colormap cmap;
-    thx_scale_model model;
-    int scope, symmetric;
-    double lo, hi;
-    char clip[64];
-    int colorbar, label, panels;
-    const char *only[16];
-    int n_only;
-    const char *whole[16];  /* --no-clip NAME: left whole by the clip plane */
-    int n_whole;
-    struct surf_look {      /* --surface NAME=MODE[:OPACITY[:#RRGGBB]] */
-        char name[64];
-        thx_draw_mode mode;
-        float opacity;      /* < 0: the default */
-        int have_color;
-        float color[3];
-    } look[16];
-    int n_look;
-    double arrow_spacing, arrow_scale;
-    int arrow_max, arrow_unit;
-    double arrow_gap;          /* minimum distance between arrows (mm), 0: none */
-    int have_box;
-    double box[6];             /* arrows only inside x0 y0 z0 x1 y1 z1 */
-    const char *arrow_region;  /* arrows only at nodes of this tissue region */
-    int verbose;
-} ropts;
-
-/* ---- data bound to surfaces ---- */
-typedef struct {
-    thx_model *m;
-    thx_series *series[64];   /* per surface, or NULL */
-    thx_series *ecg;          /* 12-lead (trace) */
-    thx_series *currents;     /* currents_node, for arrows */
-    thx_series *volume;       /* volume potentials (unused for now) */
-    char ecg_names[12][8];
-    double smin[64], smax[64]; /* finite range of each surface's whole series (computed once) */
-    unsigned char sranged[64];
-    const thx_series *trace;  /* the series --trace draws from (not owned), its row and label */
-    size_t trace_row;
-    char trace_label[96];
-} rdata;
-
-static void rdata_free(rdata *d)
+void render_data_free(rdata *d)
 {
     for (int s = 0; s < 64; s++) thx_series_destroy(&d->series[s]);
     thx_series_destroy(&d->ecg);
@@ -448,7 +385,7 @@ typedef struct {
 
 /* The column of the currents series for a frame of the potentials: matched by time, because
    `thorax forward --currents LIST` writes only the listed frames. -1 if that frame has none. */
-static long currents_column(const rdata *d, int frame)
+long render_currents_column(const rdata *d, int frame)
 {
     const thx_series *c = d->currents, *ref = NULL;
     if (!c) return -1;
@@ -471,7 +408,7 @@ static thx_status build_arrows(thx_ctx *ctx, const ropts *o, const rdata *d, int
 {
     const thx_volume *v = d->m->volume;
     if (!o->arrows) return THX_OK;
-    long col = currents_column(d, frame);
+    long col = render_currents_column(d, frame);
     if (col < 0) return thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d (thorax forward --currents LIST)", frame + 1);
     const thx_series *c = d->currents;
     const double *J = c->v + (size_t)col * c->n_rows;
@@ -647,8 +584,8 @@ static int parse_clip(const char *spec, const double lo[3], const double hi[3], 
 }
 
 
-static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_renderer *rr, thx_font *font, int frame,
-                             thx_image *img, size_t *nan_total)
+thx_status render_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_renderer *rr, thx_font *font, int frame,
+                        thx_image *img, size_t *nan_total)
 {
     thx_status st = THX_OK;
     const thx_model *m = d->m;
@@ -777,7 +714,7 @@ static thx_status draw_frame(thx_ctx *ctx, const ropts *o, rdata *d, thx_rendere
     return THX_OK;
 }
 
-/* ---- option parsing shared by render and animate ---- */
+/* ---- the options of render and animate ---- */
 
 /* A positional argument: the model directory, or a surface file (a model of its own surfaces).
  * 0, or -1 for a second directory, a directory beside files, or too many files. */
@@ -794,7 +731,7 @@ static int positional(ropts *o, const char *a)
     o->files[o->n_files++] = a;
     return 0;
 }
-static void ropts_default(ropts *o)
+void render_opts_default(ropts *o)
 {
     memset(o, 0, sizeof *o);
     o->w = 800;
@@ -815,10 +752,12 @@ static void ropts_default(ropts *o)
     o->arrow_max = 400;
 }
 
-/* --surface NAME=MODE[:OPACITY[:#RRGGBB]]; 0, or -1 after printing the usage error */
-static int parse_look(const char *cmd, const char *spec, ropts *o)
+/* --surface NAME=MODE[:OPACITY[:#RRGGBB]]; 0, or 2 after printing the usage error */
+static int parse_look(void *user, const cli_opt *opt, const char *spec)
 {
-    if (o->n_look >= 16) { cli_usage_error(cmd, "--surface: at most 16"); return -1; }
+    ropts *o = user;
+    const char *cmd = o->cmd;
+    if (o->n_look >= 16) { cli_usage_error(cmd, "--surface: at most 16"); return 2; }
     struct surf_look *l = &o->look[o->n_look];
     memset(l, 0, sizeof *l);
     l->opacity = -1;
@@ -827,7 +766,7 @@ static int parse_look(const char *cmd, const char *spec, ropts *o)
     char *eq = strchr(buf, '=');
     if (!eq || eq == buf || eq - buf >= (long)sizeof l->name) {
         cli_usage_error(cmd, "--surface '%s': give NAME=MODE[:OPACITY[:#RRGGBB]]", spec);
-        return -1;
+        return 2;
     }
     *eq = '\0';
     memcpy(l->name, buf, (size_t)(eq - buf) + 1);
@@ -837,12 +776,12 @@ static int parse_look(const char *cmd, const char *spec, ropts *o)
     l->mode = parse_mode(mode, &ok);
     if (!ok) {
         cli_usage_error(cmd, "--surface '%s': mode '%s' is not hidden, points, wire, flat, gouraud, phong or orientation", spec, mode);
-        return -1;
+        return 2;
     }
     if (op && *op) {
         char *end;
         double a = strtod(op, &end);
-        if (*end || !(a >= 0 && a <= 1)) { cli_usage_error(cmd, "--surface '%s': opacity '%s' is not a number in 0..1", spec, op); return -1; }
+        if (*end || !(a >= 0 && a <= 1)) { cli_usage_error(cmd, "--surface '%s': opacity '%s' is not a number in 0..1", spec, op); return 2; }
         l->opacity = (float)a;
     }
     if (col) {
@@ -851,7 +790,7 @@ static int parse_look(const char *cmd, const char *spec, ropts *o)
         int used = 0;
         if (strlen(h) != 6 || sscanf(h, "%6x%n", &rgb, &used) != 1 || used != 6) {
             cli_usage_error(cmd, "--surface '%s': colour '%s' is not #RRGGBB", spec, col);
-            return -1;
+            return 2;
         }
         l->color[0] = (float)((rgb >> 16) & 255) / 255.0f;
         l->color[1] = (float)((rgb >> 8) & 255) / 255.0f;
@@ -862,140 +801,185 @@ static int parse_look(const char *cmd, const char *spec, ropts *o)
     return 0;
 }
 
-/* Returns 0 if a consumed option, 1 if not ours, -1 usage error (printed). *i advanced past values. */
-static int ropts_parse(const char *cmd, ropts *o, int argc, char **argv, int *i)
+int render_positional(void *user, const char *a)
 {
-    const char *a = argv[*i], *v = *i + 1 < argc ? argv[*i + 1] : NULL;
-#define VAL() do { if (!v) { cli_usage_error(cmd, "%s needs a value", a); return -1; } (*i)++; } while (0)
-    if (!strcmp(a, "--data")) { VAL(); o->data = v; }
-    else if (!strcmp(a, "--data-surface")) { VAL(); o->data_surface = v; }
-    else if (!strcmp(a, "--channels")) { VAL(); o->channels = v; }
-    else if (!strcmp(a, "--solution")) { VAL(); o->solution = v; }
-    else if (!strcmp(a, "--size")) {
-        VAL();
-        if (sscanf(v, "%dx%d", &o->w, &o->h) != 2 || o->w < 16 || o->h < 16 || o->w > 8192 || o->h > 8192) { cli_usage_error(cmd, "--size WxH (16..8192)"); return -1; }
-    } else if (!strcmp(a, "--view")) { VAL(); if (thx_view_parse(v, &o->view)) { cli_usage_error(cmd, "--view: anterior, posterior, left, right, superior or inferior"); return -1; } }
-    else if (!strcmp(a, "--camera")) {
-        VAL();
-        thx_camera *c = &o->cam;
-        if (sscanf(v, "%lf,%lf,%lf:%lf,%lf,%lf:%lf,%lf,%lf:%lf", &c->eye[0], &c->eye[1], &c->eye[2], &c->center[0], &c->center[1],
-                   &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg) != 10) { cli_usage_error(cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV"); return -1; }
-        o->have_camera = 1;
-    } else if (!strcmp(a, "--mode")) { VAL(); int ok; o->mode = parse_mode(v, &ok); if (!ok) { cli_usage_error(cmd, "--mode: points, wire, flat, gouraud, phong, orientation"); return -1; } }
-    else if (!strcmp(a, "--surface")) { VAL(); if (parse_look(cmd, v, o)) return -1; }
-    else if (!strcmp(a, "--only")) { VAL(); if (o->n_only < 16) o->only[o->n_only++] = v; }
-    else if (!strcmp(a, "--no-clip")) { VAL(); if (o->n_whole < 16) o->whole[o->n_whole++] = v; }
-    else if (!strcmp(a, "--style")) {
-        VAL();
-        if (!strcmp(v, "continuous")) o->style = THX_DATA_CONTINUOUS;
-        else if (!strcmp(v, "bands")) o->style = THX_DATA_BANDS;
-        else if (!strcmp(v, "contours")) o->style = THX_DATA_CONTOURS;
-        else if (!strcmp(v, "bands+contours")) o->style = THX_DATA_BANDS_CONTOURS;
-        else if (!strcmp(v, "continuous+contours")) o->style = THX_DATA_CONTINUOUS_CONTOURS;
-        else { cli_usage_error(cmd, "--style: continuous, bands, contours, bands+contours, continuous+contours"); return -1; }
-    } else if (!strcmp(a, "--levels")) { VAL(); o->levels = atoi(v); if (o->levels < 2 || o->levels > 64) { cli_usage_error(cmd, "--levels: 2..64"); return -1; } }
-    else if (!strcmp(a, "--cmap")) { VAL(); if (thx_colormap_parse(v, &o->cmap)) { cli_usage_error(cmd, "--cmap: ecg, ecg-green, coolwarm, viridis, gray, jet"); return -1; } }
-    else if (!strcmp(a, "--scale")) {
-        VAL();
-        if (!strcmp(v, "linear")) o->model = THX_SCALE_LINEAR;
-        else if (!strcmp(v, "log")) o->model = THX_SCALE_LOG;
-        else if (!strcmp(v, "exp")) o->model = THX_SCALE_EXP;
-        else { cli_usage_error(cmd, "--scale: linear, log, exp"); return -1; }
-    } else if (!strcmp(a, "--scope")) {
-        VAL();
-        if (!strcmp(v, "frame")) o->scope = SCOPE_FRAME;
-        else if (!strcmp(v, "series")) o->scope = SCOPE_SERIES;
-        else if (!strcmp(v, "all")) o->scope = SCOPE_ALL;
-        else if (sscanf(v, "fixed:%lf:%lf", &o->lo, &o->hi) == 2 && o->lo < o->hi) o->scope = SCOPE_FIXED;
-        else { cli_usage_error(cmd, "--scope: frame, series, all, or fixed:LO:HI"); return -1; }
-    } else if (!strcmp(a, "--true-range")) o->symmetric = 0;
-    else if (!strcmp(a, "--symmetric")) o->symmetric = 1;
-    else if (!strcmp(a, "--clip")) { VAL(); snprintf(o->clip, sizeof o->clip, "%s", v); }
-    else if (!strcmp(a, "--up") || !strcmp(a, "--front")) {
-        VAL();
-        if (!strcmp(a, "--up")) o->up_spec = v; else o->front_spec = v;
-        int axis;
-        double sign;
-        if (parse_axis(v, &axis, &sign)) { cli_usage_error(cmd, "%s: an axis: +x, -x, +y, -y, +z or -z", a); return -1; }
-    }
-    else if (!strcmp(a, "--colorbar")) o->colorbar = 1;
-    else if (!strcmp(a, "--label")) o->label = 1;
-    else if (!strcmp(a, "--panels")) o->panels = 1;
-    else if (!strcmp(a, "--trace")) { VAL(); o->trace = v; }
-    else if (!strcmp(a, "--arrows")) o->arrows = "node";
-    else if (!strcmp(a, "--arrow-spacing")) { VAL(); o->arrow_spacing = atof(v); if (!(o->arrow_spacing >= 0)) { cli_usage_error(cmd, "--arrow-spacing must be 0 (one arrow per node) or positive (mm)"); return -1; } }
-    else if (!strcmp(a, "--arrow-gap")) { VAL(); o->arrow_gap = atof(v); if (!(o->arrow_gap >= 0)) { cli_usage_error(cmd, "--arrow-gap must be 0 or positive (mm)"); return -1; } }
-    else if (!strcmp(a, "--arrow-max")) { VAL(); o->arrow_max = atoi(v); if (o->arrow_max < 1) { cli_usage_error(cmd, "--arrow-max must be at least 1"); return -1; } }
-    else if (!strcmp(a, "--arrow-length")) { VAL(); o->arrow_scale = atof(v); if (!(o->arrow_scale > 0)) { cli_usage_error(cmd, "--arrow-length must be positive (mm)"); return -1; } }
-    else if (!strcmp(a, "--arrow-unit")) o->arrow_unit = 1;
-    else if (!strcmp(a, "--arrow-region")) { VAL(); o->arrow_region = v; }
-    else if (!strcmp(a, "--arrow-box")) {
-        VAL();
-        double *b = o->box;
-        if (sscanf(v, "%lf:%lf:%lf:%lf:%lf:%lf", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6 || b[0] >= b[3] || b[1] >= b[4] || b[2] >= b[5]) {
-            cli_usage_error(cmd, "--arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm, low corner then high)");
-            return -1;
-        }
-        o->have_box = 1;
-    }
-    else if (!strcmp(a, "--font")) { VAL(); o->font = v; }
-    else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { VAL(); o->out = v; }
-    else if (!strcmp(a, "-v")) o->verbose = 1;
-    else if (!strcmp(a, "-q")) o->verbose = -1;
-    else return 1;
+    ropts *o = user;
+    if (positional(o, a)) return cli_usage_error(o->cmd, "'%s': give one model directory, or surface files (at most 16)", a);
     return 0;
-#undef VAL
 }
 
-#define COMMON_HELP                                                                                            \
-    "  --solution DIR      a thorax forward solution: torso potentials (and the epicardial series)\n"        \
-    "  --data SERIES       per-node values of one surface (rows = its nodes; --data-surface NAME)\n"          \
-    "  --channels FILE     map3d .channels: the --data rows are recording channels, node i takes channel c\n" \
-    "  --size WxH          image size (default 800x800)\n"                                                     \
-    "  --view V            anterior (default), posterior, left, right, superior, inferior\n"                  \
-    "  --up AXIS, --front AXIS  the model's cranial and anterior axes for the views and clip sides\n"      \
-    "                      (+x, -x, +y, -y, +z, -z; default: the model's frame, model.json \"frame\"; a\n"   \
-    "                      model without one needs them for a named view or clip side; surface files\n"   \
-    "                      without them are drawn as +z and +y, with a warning)\n"                          \
-    "  --camera E:C:U:FOV  explicit camera: eye, centre, up (x,y,z each), field of view (0: orthographic)\n"  \
-    "  --mode M            points, wire, flat, gouraud (default), phong, orientation (the paper's check)\n"  \
-    "  --surface NAME=M[:OPACITY[:#RRGGBB]]  one surface's mode, opacity and colour (repeatable; M may be hidden)\n"          \
-    "  --only NAME         draw only these surfaces (repeatable)\n"                                            \
-    "  --panels            a grid of panels, one per surface\n"                                                \
-    "  --style S           continuous (default), bands, contours, bands+contours, continuous+contours\n"      \
-    "  --levels N          shades / contour levels (default 12)\n"                                             \
-    "  --cmap C            ecg (default: red positive, blue negative, white zero), ecg-green,\n"             \
-    "                      coolwarm (perceptually uniform diverging), viridis, gray, jet\n"                    \
-    "  --scale M           linear (default), log, exp\n"                                                       \
-    "  --scope S           frame, series (default: all frames of the surface), all (all surfaces),\n"        \
-    "                      fixed:LO:HI\n"                                                                      \
-    "  --true-range        map min..max instead of symmetric about zero (default symmetric)\n"                \
-    "  --clip SIDE[:F]     remove a side (anterior, posterior, left, right, superior, inferior) from\n"      \
-    "                      fraction F of the depth (default 0.5), or a plane nx,ny,nz,d (keeps n.x+d >= 0)\n" \
-    "  --no-clip NAME      this surface is left whole by the clip plane (repeatable; e.g. heart)\n"       \
-    "  --colorbar          a colour bar with values and units\n"                                               \
-    "  --label             the time and frame\n"                                                               \
-    "  --trace T           a signal under the picture with a marker at the frame: an ECG lead (I..V6,\n"     \
-    "                      from the solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data\n"      \
-    "  --arrows            current density arrows (the solution's currents_node), averaged on a grid\n"      \
-    "  --arrow-spacing MM  grid spacing for the averaging (default 20; 0: one arrow per node)\n"            \
-    "  --arrow-max N       at most N arrows, the strongest (default 400); --arrow-gap MM: none closer\n"    \
-    "                      than MM to a stronger one\n"                                                      \
-    "  --arrow-length MM   the longest arrow's length (default 15); --arrow-unit: unit length, coloured\n"    \
-    "  --arrow-region NAME only at nodes of this tissue region; --arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm)\n"      \
-    "  --font FILE         a TrueType font (default: sans-serif via fontconfig)\n"
-
-static void render_help(void)
+static int parse_size(void *user, const cli_opt *opt, const char *v)
 {
-    printf("usage: thorax render MODEL [--solution DIR | --data SERIES] [--frame K] -o IMAGE.png [options]\n"
-           "       thorax render --solution DIR [--frame K] -o IMAGE.png [options]\n"
-           "       thorax render SURFACE_FILE... [--data SERIES] [--frame K] -o IMAGE.png [options]\n\n"
-           "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a GPU), with\n"
-           "potentials coloured per pixel (the value interpolated, then the colour looked up, so bands and\n"
-           "contours are exact), following the field's display conventions (paper 4.2).\n\n"
-           "options:\n"
-           "  --frame K           the frame (1-based, default 1)\n"
-           "  --repeat N          draw N times and print the median time a frame (benchmarks)\n" COMMON_HELP);
+    ropts *o = user;
+    if (sscanf(v, "%dx%d", &o->w, &o->h) != 2 || o->w < 16 || o->h < 16 || o->w > 8192 || o->h > 8192)
+        return cli_usage_error(o->cmd, "--size WxH (16..8192)");
+    return 0;
+}
+
+static int parse_camera(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    thx_camera *c = &o->cam;
+    if (sscanf(v, "%lf,%lf,%lf:%lf,%lf,%lf:%lf,%lf,%lf:%lf", &c->eye[0], &c->eye[1], &c->eye[2], &c->center[0],
+               &c->center[1], &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg) != 10)
+        return cli_usage_error(o->cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV");
+    o->have_camera = 1;
+    return 0;
+}
+
+static int parse_scope(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    if (!strcmp(v, "frame")) o->scope = SCOPE_FRAME;
+    else if (!strcmp(v, "series")) o->scope = SCOPE_SERIES;
+    else if (!strcmp(v, "all")) o->scope = SCOPE_ALL;
+    else if (sscanf(v, "fixed:%lf:%lf", &o->lo, &o->hi) == 2 && o->lo < o->hi) o->scope = SCOPE_FIXED;
+    else return cli_usage_error(o->cmd, "--scope: frame, series, all, or fixed:LO:HI");
+    return 0;
+}
+
+static int parse_clip_option(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    snprintf(o->clip, sizeof o->clip, "%s", v);
+    return 0;
+}
+
+static int parse_axis_option(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    int axis;
+    double sign;
+    if (!strcmp(opt->name, "--up")) o->up_spec = v;
+    else o->front_spec = v;
+    if (parse_axis(v, &axis, &sign)) return cli_usage_error(o->cmd, "%s: an axis: +x, -x, +y, -y, +z or -z", opt->name);
+    return 0;
+}
+
+static int set_arrows(void *user, const cli_opt *opt, const char *v)
+{
+    ((ropts *)user)->arrows = "node";
+    return 0;
+}
+
+static int parse_box(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    double *b = o->box;
+    if (sscanf(v, "%lf:%lf:%lf:%lf:%lf:%lf", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6 || b[0] >= b[3] ||
+        b[1] >= b[4] || b[2] >= b[5])
+        return cli_usage_error(o->cmd, "--arrow-box X0:Y0:Z0:X1:Y1:Z1 (mm, low corner then high)");
+    o->have_box = 1;
+    return 0;
+}
+
+static const cli_choice views[] = {{"anterior", THX_VIEW_ANTERIOR}, {"posterior", THX_VIEW_POSTERIOR},
+                                   {"left", THX_VIEW_LEFT},         {"right", THX_VIEW_RIGHT},
+                                   {"superior", THX_VIEW_SUPERIOR}, {"inferior", THX_VIEW_INFERIOR},
+                                   {NULL, 0}};
+static const cli_choice modes[] = {{"hidden", THX_DRAW_HIDDEN}, {"points", THX_DRAW_POINTS},   {"wire", THX_DRAW_WIRE},
+                                   {"flat", THX_DRAW_FLAT},     {"gouraud", THX_DRAW_GOURAUD}, {"phong", THX_DRAW_PHONG},
+                                   {"orientation", THX_DRAW_ORIENTATION}, {NULL, 0}};
+static const cli_choice styles[] = {{"continuous", THX_DATA_CONTINUOUS}, {"bands", THX_DATA_BANDS},
+                                    {"contours", THX_DATA_CONTOURS},     {"bands+contours", THX_DATA_BANDS_CONTOURS},
+                                    {"continuous+contours", THX_DATA_CONTINUOUS_CONTOURS}, {NULL, 0}};
+static const cli_choice cmaps[] = {{"ecg", THX_CMAP_ECG},         {"ecg-green", THX_CMAP_ECG_GREEN},
+                                   {"coolwarm", THX_CMAP_COOLWARM}, {"viridis", THX_CMAP_VIRIDIS},
+                                   {"gray", THX_CMAP_GRAY},       {"jet", THX_CMAP_JET}, {NULL, 0}};
+static const cli_choice scales[] = {{"linear", THX_SCALE_LINEAR}, {"log", THX_SCALE_LOG}, {"exp", THX_SCALE_EXP},
+                                    {NULL, 0}};
+
+size_t render_options(cli_opt *t, ropts *o)
+{
+    size_t n = 0;
+    t[n++] = (cli_opt){.name = "--solution", .type = CLI_INPUT, .meta = "DIR", .s = &o->solution,
+                       .help = "a thorax forward solution: its model, the torso potentials (and the heart's, when the "
+                               "epicardial series is still where the solution says)"};
+    t[n++] = (cli_opt){.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .s = &o->data,
+                       .help = "per-node values of one surface (rows = its nodes), any series format"};
+    t[n++] = (cli_opt){.name = "--data-surface", .type = CLI_STRING, .meta = "NAME", .s = &o->data_surface,
+                       .help = "the surface --data belongs to, when several have that many nodes"};
+    t[n++] = (cli_opt){.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &o->channels,
+                       .help = "map3d .channels: the --data rows are recording channels, node i takes channel c"};
+    t[n++] = (cli_opt){.name = "--size", .type = CLI_STRING, .meta = "WxH", .fn = parse_size, .def = "800x800",
+                       .unit = "pixels", .help = "image size, 16 to 8192 each"};
+    t[n++] = (cli_opt){.name = "--view", .type = CLI_CHOICE, .meta = "V", .choices = views, .i = &o->view,
+                       .help = "anterior, posterior, left, right, superior or inferior, in the model's frame"};
+    t[n++] = (cli_opt){.name = "--up", .type = CLI_STRING, .meta = "AXIS", .fn = parse_axis_option,
+                       .def = "the model's frame, model.json \"frame\"",
+                       .help = "the model's cranial axis for the views and clip sides: +x, -x, +y, -y, +z or -z (a "
+                               "model without a frame needs --up and --front for a named view or clip side; surface "
+                               "files without them are drawn as +z and +y, with a warning)"};
+    t[n++] = (cli_opt){.name = "--front", .type = CLI_STRING, .meta = "AXIS", .fn = parse_axis_option,
+                       .def = "the model's frame", .help = "the model's anterior axis, as --up"};
+    t[n++] = (cli_opt){.name = "--camera", .type = CLI_STRING, .meta = "E:C:U:FOV", .fn = parse_camera,
+                       .help = "explicit camera: eye, centre, up (x,y,z each), field of view in degrees (0: "
+                               "orthographic)"};
+    t[n++] = (cli_opt){.name = "--mode", .type = CLI_CHOICE, .meta = "M", .choices = modes, .i = &o->mode,
+                       .help = "hidden, points, wire, flat, gouraud, phong, or orientation (the paper's check: "
+                               "triangles only where their outward side faces the viewer, the nodes behind as points)"};
+    t[n++] = (cli_opt){.name = "--surface", .type = CLI_STRING, .meta = "NAME=M[:OPACITY[:#RRGGBB]]",
+                       .flags = CLI_REPEAT, .fn = parse_look,
+                       .help = "one surface's mode (as --mode), opacity and colour (a surface with data keeps the colour "
+                               "map); at most 16"};
+    t[n++] = (cli_opt){.name = "--only", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = o->only,
+                       .count = &o->n_only, .max = 16, .help = "draw only these surfaces"};
+    t[n++] = (cli_opt){.name = "--panels", .type = CLI_FLAG, .i = &o->panels, .help = "a grid of panels, one per surface"};
+    t[n++] = (cli_opt){.name = "--style", .type = CLI_CHOICE, .meta = "S", .choices = styles, .i = &o->style,
+                       .help = "continuous, bands, contours, bands+contours or continuous+contours"};
+    t[n++] = (cli_opt){.name = "--levels", .type = CLI_INT, .meta = "N", .i = &o->levels, .rule = CLI_GE | CLI_LE,
+                       .lo = 2, .hi = 64, .bad = "--levels: 2..64", .help = "shades / contour levels, 2 to 64"};
+    t[n++] = (cli_opt){.name = "--cmap", .type = CLI_CHOICE, .meta = "C", .choices = cmaps, .i = &o->cmap,
+                       .help = "ecg (red positive, blue negative, white zero), ecg-green, coolwarm (perceptually "
+                               "uniform, diverging), viridis, gray or jet"};
+    t[n++] = (cli_opt){.name = "--scale", .type = CLI_CHOICE, .choices = scales, .i = &o->model,
+                       .help = "the scaling model from values to colours"};
+    t[n++] = (cli_opt){.name = "--scope", .type = CLI_STRING, .meta = "S", .fn = parse_scope, .def = "series",
+                       .help = "the range the colours span: frame (this frame), series (all frames of the surface), "
+                               "all (all surfaces), or fixed:LO:HI"};
+    t[n++] = (cli_opt){.name = "--true-range", .type = CLI_SET, .i = &o->symmetric, .ival = 0,
+                       .help = "map min..max instead of a range symmetric about zero"};
+    t[n++] = (cli_opt){.name = "--symmetric", .type = CLI_SET, .i = &o->symmetric, .ival = 1,
+                       .help = "a range symmetric about zero (the default; undoes --true-range)"};
+    t[n++] = (cli_opt){.name = "--clip", .type = CLI_STRING, .meta = "SIDE[:F]|PLANE", .fn = parse_clip_option,
+                       .help = "remove a side (anterior, posterior, left, right, superior, inferior) from fraction F of "
+                               "the depth (default 0.5), or cut by a plane nx,ny,nz,d (keeps n.x + d >= 0)"};
+    t[n++] = (cli_opt){.name = "--no-clip", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = o->whole,
+                       .count = &o->n_whole, .max = 16,
+                       .help = "this surface is left whole by the clip plane (e.g. the heart inside an opened chest)"};
+    t[n++] = (cli_opt){.name = "--colorbar", .type = CLI_FLAG, .i = &o->colorbar,
+                       .help = "a colour bar with values, title and unit"};
+    t[n++] = (cli_opt){.name = "--label", .type = CLI_FLAG, .i = &o->label, .help = "the time and frame"};
+    t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->trace,
+                       .help = "a signal under the picture with a marker at the frame: an ECG lead (I..V6, from the "
+                               "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
+    t[n++] = (cli_opt){.name = "--arrows", .type = CLI_FLAG, .fn = set_arrows,
+                       .help = "current density arrows (the solution's currents_node, for the frame shown)"};
+    t[n++] = (cli_opt){.name = "--arrow-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->arrow_spacing,
+                       .rule = CLI_GE, .bad = "--arrow-spacing must be 0 (one arrow per node) or positive (mm)",
+                       .note = "0: one arrow per node", .help = "arrows averaged on a grid of this spacing"};
+    t[n++] = (cli_opt){.name = "--arrow-gap", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->arrow_gap,
+                       .rule = CLI_GE, .bad = "--arrow-gap must be 0 or positive (mm)", .note = "0: none",
+                       .help = "no arrow closer than this to a stronger one"};
+    t[n++] = (cli_opt){.name = "--arrow-max", .type = CLI_INT, .meta = "N", .i = &o->arrow_max, .rule = CLI_GE, .lo = 1,
+                       .bad = "--arrow-max must be at least 1", .help = "at most N arrows, the strongest"};
+    t[n++] = (cli_opt){.name = "--arrow-length", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->arrow_scale,
+                       .rule = CLI_GT, .bad = "--arrow-length must be positive (mm)",
+                       .help = "the longest arrow's length (lengths proportional to magnitude)"};
+    t[n++] = (cli_opt){.name = "--arrow-unit", .type = CLI_FLAG, .i = &o->arrow_unit,
+                       .help = "every arrow the same length, coloured by magnitude"};
+    t[n++] = (cli_opt){.name = "--arrow-region", .type = CLI_STRING, .meta = "NAME", .s = &o->arrow_region,
+                       .help = "arrows only at nodes of this tissue region"};
+    t[n++] = (cli_opt){.name = "--arrow-box", .type = CLI_STRING, .meta = "X0:Y0:Z0:X1:Y1:Z1", .unit = "mm",
+                       .fn = parse_box, .help = "arrows only inside this box, low corner then high"};
+    t[n++] = (cli_opt){.name = "--font", .type = CLI_INPUT, .meta = "FILE", .s = &o->font,
+                       .def = "sans-serif, through fontconfig", .help = "a TrueType font for the annotations"};
+    t[n++] = (cli_opt){.name = "-v", .type = CLI_SET, .i = &o->verbose, .ival = 1, .flags = CLI_NOUSAGE,
+                       .help = "more logging"};
+    t[n++] = (cli_opt){.name = "-q", .type = CLI_SET, .i = &o->verbose, .ival = -1, .flags = CLI_NOUSAGE,
+                       .help = "less logging"};
+    assert(n <= N_RENDER_OPTS);
+    return n;
 }
 
 /* The views' frame: --up/--front over the model's frame. A model without a frame is refused for a
@@ -1024,7 +1008,7 @@ static thx_status view_frame(thx_ctx *ctx, ropts *o, const rdata *d)
     return THX_OK;
 }
 
-static thx_status setup(thx_ctx *ctx, ropts *o, rdata *d, thx_renderer **rr, thx_font **font, thx_image **img)
+thx_status render_setup(thx_ctx *ctx, ropts *o, rdata *d, thx_renderer **rr, thx_font **font, thx_image **img)
 {
     memset(d, 0, sizeof *d);
     THX_CHECK(load_data(ctx, o, d));
@@ -1044,25 +1028,34 @@ static int cmp_dbl(const void *x, const void *y)
 int cmd_render(int argc, char **argv)
 {
     ropts o;
-    ropts_default(&o);
-    int repeat = 1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { render_help(); return 0; }
-        int r = ropts_parse("render", &o, argc, argv, &i);
-        if (r < 0) return 2;
-        if (r == 0) continue;
-        if (!strcmp(a, "--frame")) {
-            if (i + 1 >= argc) return cli_usage_error("render", "--frame needs a value");
-            o.frame = atoi(argv[++i]) - 1;
-            if (o.frame < 0) return cli_usage_error("render", "--frame: 1, 2, ...");
-        } else if (!strcmp(a, "--repeat")) {
-            if (i + 1 >= argc) return cli_usage_error("render", "--repeat needs a value");
-            repeat = atoi(argv[++i]);
-            if (repeat < 1 || repeat > 10000) return cli_usage_error("render", "--repeat: 1..10000");
-        } else if (a[0] == '-' && a[1]) return cli_usage_error("render", "unknown option '%s'", a);
-        else if (positional(&o, a)) return cli_usage_error("render", "'%s': give one model directory, or surface files (at most 16)", a);
-    }
+    render_opts_default(&o);
+    o.cmd = "render";
+    int repeat = 1, frame = 1;
+    cli_opt own[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "IMAGE.png", .s = &o.out,
+         .help = "the picture (PNG)"},
+        {.name = "--frame", .type = CLI_INT, .meta = "K", .i = &frame, .rule = CLI_GE, .lo = 1, .bad = "--frame: 1, 2, ...",
+         .help = "the frame, 1-based"},
+        {.name = "--repeat", .type = CLI_INT, .meta = "N", .i = &repeat, .rule = CLI_GE | CLI_LE, .lo = 1, .hi = 10000,
+         .bad = "--repeat: 1..10000", .help = "draw N times and print the median time a frame (benchmarks)"},
+    };
+    cli_opt common[N_RENDER_OPTS];
+    cli_command cmd = {
+        .name = "render",
+        .usage = "MODEL [--data [--data-surface]] [--frame] -o [options]\n"
+                 "--solution [--frame] -o [options]\n"
+                 "SURFACE_FILE... [--data [--channels]] [--frame] -o [options]",
+        .about = "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a\n"
+                 "GPU), with potentials coloured per pixel (the value interpolated, then the colour\n"
+                 "looked up, so bands and contours are exact), following the field's display\n"
+                 "conventions (paper 4.2).\n",
+        .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)}},
+        .positional = render_positional,
+        .user = &o,
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    o.frame = frame - 1;
     if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("render", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("render", "no output image given (-o IMAGE.png)");
     thx_ctx *ctx = cli_ctx(o.verbose);
@@ -1072,13 +1065,13 @@ int cmd_render(int argc, char **argv)
     thx_image *img = NULL;
     size_t nan = 0;
     double t0 = thx_wtime();
-    thx_status st = setup(ctx, &o, &d, &rr, &font, &img);
+    thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
     double *times = malloc((size_t)repeat * sizeof *times);
     if (!times) st = THX_ENOMEM;
     for (int k = 0; k < repeat && st == THX_OK; k++) { /* --repeat: the same frame again, timed (benchmarks) */
         double t1 = thx_wtime();
         nan = 0;
-        st = draw_frame(ctx, &o, &d, rr, font, o.frame, img, &nan);
+        st = render_frame(ctx, &o, &d, rr, font, o.frame, img, &nan);
         times[k] = thx_wtime() - t1;
     }
     if (st == THX_OK) st = thx_image_write_png(ctx, img, o.out);
@@ -1097,232 +1090,7 @@ int cmd_render(int argc, char **argv)
     thx_image_destroy(&img);
     thx_font_close(&font);
     thx_renderer_destroy(&rr);
-    rdata_free(&d);
-    thx_ctx_destroy(&ctx);
-    return rc;
-}
-
-/* ---- what the frames of an animation were drawn with ---- */
-
-/* Appends "path:size:mtime" of a file (or "path:-" if it cannot be read). */
-static void sig_file(char *sig, size_t cap, const char *path)
-{
-    struct stat sb;
-    size_t len = strlen(sig);
-    if (stat(path, &sb) == 0)
-        snprintf(sig + len, cap - len, " %s:%lld:%lld.%09ld", path, (long long)sb.st_size, (long long)sb.st_mtim.tv_sec,
-                 sb.st_mtim.tv_nsec);
-    else
-        snprintf(sig + len, cap - len, " %s:-", path);
-}
-
-/* The settings that decide a frame's pixels: every option but the frame range, the rate, the movie
- * and the verbosity; the data files and the program (size and time of each), so a changed solution
- * or a rebuilt thorax redraws. */
-static void animation_signature(int argc, char **argv, const ropts *o, char *sig, size_t cap)
-{
-    snprintf(sig, cap, "thorax-animation 1;");
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--frames") || !strcmp(a, "--fps") || !strcmp(a, "--mp4") || !strcmp(a, "-o") || !strcmp(a, "--output")) {
-            i++;
-            continue;
-        }
-        if (!strcmp(a, "-q") || !strcmp(a, "-v")) continue;
-        size_t len = strlen(sig);
-        snprintf(sig + len, cap - len, " %s", a);
-    }
-    char path[PATH_MAX + 64];
-    if (o->solution) {
-        snprintf(path, sizeof path, "%s/solution.json", o->solution);
-        sig_file(sig, cap, path);
-    }
-    if (o->data) sig_file(sig, cap, o->data);
-    if (o->channels) sig_file(sig, cap, o->channels);
-    for (int k = 0; k < o->n_files; k++) sig_file(sig, cap, o->files[k]);
-    if (o->model_dir) {
-        snprintf(path, sizeof path, "%s/model.json", o->model_dir);
-        sig_file(sig, cap, path);
-    }
-    sig_file(sig, cap, "/proc/self/exe");
-}
-
-/* The movie's signature: its metadata comment, which +faststart puts in the header before the
- * frames' data, within the first MOVIE_WINDOW bytes (thorax/core/fileio.h). */
-#define MOVIE_MARKER "thorax-movie"
-#define MOVIE_WINDOW (4u << 20)
-
-/* Runs ffmpeg on the frames (argv, no shell: any path works); its exit status, 127 if it cannot run. */
-static int run_ffmpeg(int fps, int first, int count, const char *dir, const char *out)
-{
-    char rate[32], start[32], nframes[32], pattern[PATH_MAX + 32];
-    snprintf(rate, sizeof rate, "%d", fps);
-    snprintf(start, sizeof start, "%d", first);
-    snprintf(nframes, sizeof nframes, "%d", count);
-    snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
-    char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
-                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
-                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-metadata", "comment=" MOVIE_MARKER, "-movflags", "+faststart",
-                    "-f", "mp4", (char *)out, NULL};
-    pid_t pid;
-    if (posix_spawnp(&pid, "ffmpeg", NULL, NULL, args, environ) != 0) return 127;
-    int status = 0;
-    if (waitpid(pid, &status, 0) < 0) return 127;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-}
-
-static void animate_help(void)
-{
-    printf("usage: thorax animate MODEL|--solution DIR -o DIR [--frames A:B] [--fps N] [--mp4 FILE] [options]\n\n"
-           "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames whose PNG\n"
-           "exists are kept if drawn with the same options, data and program: DIR/frames.settings),\n"
-           "a progress bar on a terminal, then an MP4 (H.264) through ffmpeg.\n\n"
-           "options:\n"
-           "  --frames A:B        frame range, 1-based inclusive (default: all)\n"
-           "  --fps N             frames per second of the MP4 (default 25)\n"
-           "  --mp4 FILE          the movie (default DIR/animation.mp4; 'none': no movie)\n" COMMON_HELP);
-}
-
-int cmd_animate(int argc, char **argv)
-{
-    ropts o;
-    ropts_default(&o);
-    const char *mp4 = NULL;
-    int a_first = 1, a_last = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { animate_help(); return 0; }
-        int r = ropts_parse("animate", &o, argc, argv, &i);
-        if (r < 0) return 2;
-        if (r == 0) continue;
-        if (!strcmp(a, "--frames")) {
-            if (i + 1 >= argc || sscanf(argv[++i], "%d:%d", &a_first, &a_last) != 2 || a_first < 1 || a_last < a_first)
-                return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
-        } else if (!strcmp(a, "--fps")) {
-            if (i + 1 >= argc) return cli_usage_error("animate", "--fps needs a value");
-            o.fps = atoi(argv[++i]);
-            if (o.fps < 1 || o.fps > 240) return cli_usage_error("animate", "--fps: 1..240");
-        } else if (!strcmp(a, "--mp4")) {
-            if (i + 1 >= argc) return cli_usage_error("animate", "--mp4 needs a value");
-            mp4 = argv[++i];
-        } else if (a[0] == '-' && a[1]) return cli_usage_error("animate", "unknown option '%s'", a);
-        else if (positional(&o, a)) return cli_usage_error("animate", "'%s': give one model directory, or surface files (at most 16)", a);
-    }
-    if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
-    if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
-    o.last = 0; /* frames checked below */
-    thx_ctx *ctx = cli_ctx(o.verbose);
-    rdata d;
-    thx_renderer *rr = NULL;
-    thx_font *font = NULL;
-    thx_image *img = NULL;
-    int rc = 0;
-    size_t nan = 0;
-    double t0 = thx_wtime();
-    char path[PATH_MAX + 64], movie[PATH_MAX + 64];
-    const char *out_dir = o.out;
-    thx_status st = setup(ctx, &o, &d, &rr, &font, &img);
-    size_t nf = 0;
-    if (st == THX_OK) {
-        for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)
-            if (d.series[s] && d.series[s]->n_frames > nf) nf = d.series[s]->n_frames;
-        if (!nf) st = thx_error(ctx, THX_EINPUT, "animate: no time series to animate (give --solution or --data)");
-    }
-    if (st == THX_OK) {
-        if (a_last < 0) a_last = (int)nf;
-        if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
-        /* arrows on every frame: refused before anything is drawn when some frame has no currents */
-        for (int f = a_first; st == THX_OK && o.arrows && f <= a_last; f++)
-            if (currents_column(&d, f - 1) < 0)
-                st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
-                               "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
-    }
-    /* the movie is claimed before any frame is drawn: a user's file of that name stops the run */
-    int want_movie = !(mp4 && !strcmp(mp4, "none"));
-    thx_atomic_file maf;
-    if (want_movie) {
-        if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
-        else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
-    }
-    if (st == THX_OK && want_movie)
-        st = thx_output_claim_in(ctx, movie, MOVIE_MARKER, strlen(MOVIE_MARKER), MOVIE_WINDOW, NULL, 0, &maf);
-    if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
-        st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
-    /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
-    int may_keep = 0;
-    if (st == THX_OK) {
-        char sig[8192], sigpath[PATH_MAX + 64];
-        animation_signature(argc, argv, &o, sig, sizeof sig);
-        snprintf(sigpath, sizeof sigpath, "%s/frames.settings", out_dir);
-        char *old = NULL;
-        size_t olen = 0;
-        thx_ctx *quiet = NULL;
-        thx_ctx_create(&quiet);
-        if (thx_read_file(quiet, sigpath, &old, &olen) == THX_OK) {
-            may_keep = olen == strlen(sig) + 1 && !strncmp(old, sig, strlen(sig));
-            if (!may_keep && o.verbose >= 0)
-                fprintf(stderr, "thorax animate: %s was drawn with other settings, data or program: redrawing every frame\n", out_dir);
-        }
-        free(old);
-        thx_ctx_destroy(&quiet);
-        if (!may_keep) {
-            thx_atomic_file af;
-            st = thx_atomic_open(ctx, sigpath, &af);
-            if (st == THX_OK) {
-                fprintf(af.f, "%s\n", sig);
-                st = thx_atomic_commit(ctx, &af);
-            }
-        }
-    }
-    int done = 0, kept = 0, total = a_last - a_first + 1;
-    for (int f = a_first; st == THX_OK && f <= a_last; f++) {
-        snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
-        thx_image *old = NULL;
-        thx_ctx *quiet = NULL;
-        thx_ctx_create(&quiet);
-        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w &&
-            old->h == o.h) {
-            kept++; /* resumable: a complete PNG of the right size is kept */
-        } else {
-            st = draw_frame(ctx, &o, &d, rr, font, f - 1, img, &nan);
-            if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
-        }
-        thx_image_destroy(&old);
-        thx_ctx_destroy(&quiet);
-        done++;
-        if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
-    }
-    if (st == THX_OK && want_movie) {
-        /* a fresh temporary name beside the movie (never a file that is there), moved in under the claim */
-        char tmpm[PATH_MAX + 80];
-        snprintf(tmpm, sizeof tmpm, "%s.tmpXXXXXX", movie);
-        int fd = mkstemp(tmpm);
-        if (fd < 0) {
-            st = thx_error(ctx, THX_EIO, "%s: cannot create a temporary file beside it: %s", movie, strerror(errno));
-        } else {
-            close(fd);
-            int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
-            if (r != 0) {
-                remove(tmpm);
-                st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
-                               r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
-            } else {
-                st = thx_output_place(ctx, &maf, tmpm);
-            }
-        }
-    }
-    if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
-    else if (o.verbose >= 0) {
-        if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
-        printf("%d frames (%d drawn, %d kept from an earlier run) in %.1f s -> %s", total, total - kept, kept,
-               thx_wtime() - t0, out_dir);
-        if (want_movie) printf(", %s", movie);
-        printf("\n");
-    }
-    thx_image_destroy(&img);
-    thx_font_close(&font);
-    thx_renderer_destroy(&rr);
-    rdata_free(&d);
+    render_data_free(&d);
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -9,40 +9,6 @@
 #include "cli/cli.h"
 #include "thorax/model/series.h"
 #include "thorax/io/series_file.h"
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: thorax series info FILE\n"
-            "       thorax series convert IN -o OUT [--format text|raw|mat]\n"
-            "\n"
-            "A time series is a rows x frames matrix of values (one row per node or lead,\n"
-            "one column per time instant) with a time axis, units and a label.\n"
-            "\n"
-            "  info FILE          prints rows, frames, the time range, units, label, the\n"
-            "                     smallest and largest finite value and the number of\n"
-            "                     NaN/Inf values (with the first one's row and frame)\n"
-            "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
-            "\n"
-            "Formats (docs/formats.md, \"Time series\"): text (.txt, .dat), raw binary\n"
-            "(.raw), MATLAB (.mat). Input files are recognized by their content, else\n"
-            "their extension. In a .mat file the values are the variable named as\n"
-            "FILE.mat:NAME, else `potvals`, else the first struct with a `potvals` field\n"
-            "(map3d recordings), else the first 2-D numeric matrix. MATLAB 5/7 files are\n"
-            "read (compressed or not); v7.3 (HDF5) files are refused: save with -v7.\n"
-            "A file is read whole or refused: truncation, stray bytes, NUL bytes or sizes\n"
-            "the file cannot hold are errors naming the file and the line or byte offset.\n"
-            "\n"
-            "options:\n"
-            "  -o, --output OUT   file to write (convert)\n"
-            "  --format F         format of OUT: text, raw or mat (default: from OUT's\n"
-            "                     extension)\n"
-            "  -v, -q             more / less logging\n"
-            "  -h, --help         this text\n"
-            "\n"
-            "Rows and frames are counted from 1 in messages and in `info`.\n"
-            "Exit status: 0 ok, 1 error, 2 bad usage.\n");
-}
-
 static void print_info(const char *path, const thx_series *s)
 {
     size_t N = s->n_rows, M = s->n_frames;
@@ -79,46 +45,58 @@ static void print_info(const char *path, const thx_series *s)
 int cmd_series(int argc, char **argv)
 {
     const char *cmd = "series";
-    const char *sub = NULL, *in = NULL, *out = NULL, *format = NULL;
-    int verbose = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--format")) {
-            if (i + 1 >= argc) return cli_usage_error(cmd, "%s needs a value", a);
-            if (!strcmp(a, "--format")) format = argv[++i];
-            else out = argv[++i];
-        } else if (!strcmp(a, "-v")) {
-            verbose++;
-        } else if (!strcmp(a, "-q")) {
-            verbose--;
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error(cmd, "unknown option '%s'", a);
-        } else if (!sub) {
-            sub = a;
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error(cmd, "unexpected argument '%s' (one input file expected)", a);
-        }
-    }
+    const char *out = NULL;
+    int verbose = 0, format = THX_SERIES_AUTO;
+    static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
+                                         {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "OUT", .s = &out,
+         .help = "file to write (convert)"},
+        {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .def = "from OUT's extension",
+         .help = "format of OUT (convert)"},
+        {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "info FILE\nconvert IN -o [--format]",
+        .about = "A time series is a rows x frames matrix of values (one row per node or lead,\n"
+                 "one column per time instant) with a time axis, units and a label.\n"
+                 "\n"
+                 "  info FILE          prints rows, frames, the time range, units, label, the\n"
+                 "                     smallest and largest finite value and the number of\n"
+                 "                     NaN/Inf values (with the first one's row and frame)\n"
+                 "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
+                 "\n"
+                 "Formats (docs/formats.md, \"Time series\"): text (.txt, .dat), raw binary\n"
+                 "(.raw), MATLAB (.mat). Input files are recognized by their content, else\n"
+                 "their extension. In a .mat file the values are the variable named as\n"
+                 "FILE.mat:NAME, else `potvals`, else the first struct with a `potvals` field\n"
+                 "(map3d recordings), else the first 2-D numeric matrix. MATLAB 5/7 files are\n"
+                 "read (compressed or not); v7.3 (HDF5) files are refused: save with -v7.\n"
+                 "A file is read whole or refused: truncation, stray bytes, NUL bytes or sizes\n"
+                 "the file cannot hold are errors naming the file and the line or byte offset.\n",
+        .epilog = "Rows and frames are counted from 1 in messages and in `info`.\n"
+                  "Exit status: 0 ok, 1 error, 2 bad usage.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (c.n_pos > 2) return cli_usage_error(cmd, "unexpected argument '%s' (one input file expected)", c.pos[2]);
+    const char *sub = c.n_pos > 0 ? c.pos[0] : NULL, *in = c.n_pos > 1 ? c.pos[1] : NULL;
     if (!sub) return cli_usage_error(cmd, "no subcommand given (info or convert)");
     int convert = !strcmp(sub, "convert");
     if (!convert && strcmp(sub, "info") != 0)
         return cli_usage_error(cmd, "unknown subcommand '%s' (info or convert)", sub);
     if (!in) return cli_usage_error(cmd, "%s: no input file given", sub);
-    thx_series_format fmt = THX_SERIES_AUTO;
+    thx_series_format fmt = (thx_series_format)format;
     if (convert) {
         if (!out) return cli_usage_error(cmd, "convert: no output file given (-o OUT)");
-        if (thx_series_output_format(format, out, &fmt) != 0) {
-            if (format) return cli_usage_error(cmd, "unknown format '%s' (text, raw or mat)", format);
+        if (fmt == THX_SERIES_AUTO && thx_series_output_format(NULL, out, &fmt) != 0)
             return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat); "
                                         "give --format",
                                    out);
-        }
-    } else if (out || format) {
+    } else if (out || format != THX_SERIES_AUTO) {
         return cli_usage_error(cmd, "info: -o and --format apply only to convert");
     }
 

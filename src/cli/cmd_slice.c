@@ -7,45 +7,44 @@
 #include "thorax/io/model_dir.h"
 #include "thorax/io/contours_file.h"
 #include "thorax/geom/slice.h"
-static void help(void)
-{
-    printf("usage: thorax slice MODEL -o CONTOURS [--spacing MM] [--margin MM] [--densify MM]\n"
-           "                          [--node-spacing MM]\n\n"
-           "Cuts every surface of the model directory MODEL with planes z = const spread\n"
-           "evenly from the lowest node + margin to the highest - margin, at most spacing\n"
-           "apart, and writes the cross-sections as a contour file\n"
-           "(docs/formats.md), names and roles kept: the contours the surfaces would have\n"
-           "been digitized as. `thorax surfaces` rebuilds surfaces from them.\n\n"
-           "options:\n"
-           "  -o, --output FILE   contour file to write (atomically)\n"
-           "  --spacing MM        largest distance between the planes (default 5)\n"
-           "  --margin MM         distance of the first and last plane from the lowest and\n"
-           "                      highest node (default spacing/10)\n"
-           "  --densify MM        insert points so no loop segment is longer (default spacing/2;\n"
-           "                      0 = only the crossing points)\n"
-           "  --node-spacing MM   the contour file's suggested node spacing (default: --spacing)\n");
-}
-
 int cmd_slice(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL;
+    const char *out = NULL;
     thx_slice_opts o;
     thx_slice_opts_default(&o);
     int verbose = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { if (!v) return cli_usage_error("slice", "%s needs a value", a); out = v; i++; }
-        else if (!strcmp(a, "--spacing")) { if (cli_parse_double("slice", a, v, &o.spacing)) return 2; i++; if (!(o.spacing > 0)) return cli_usage_error("slice", "--spacing must be positive"); }
-        else if (!strcmp(a, "--margin")) { if (cli_parse_double("slice", a, v, &o.margin)) return 2; i++; if (o.margin < 0) return cli_usage_error("slice", "--margin must be >= 0"); }
-        else if (!strcmp(a, "--densify")) { if (cli_parse_double("slice", a, v, &o.densify)) return 2; i++; if (o.densify < 0) return cli_usage_error("slice", "--densify must be >= 0"); }
-        else if (!strcmp(a, "--node-spacing")) { if (cli_parse_double("slice", a, v, &o.node_spacing)) return 2; i++; if (!(o.node_spacing > 0)) return cli_usage_error("slice", "--node-spacing must be positive"); }
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1]) return cli_usage_error("slice", "unknown option '%s'", a);
-        else if (!in) in = a;
-        else return cli_usage_error("slice", "more than one model given");
-    }
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "CONTOURS", .s = &out,
+         .help = "contour file to write (atomically)"},
+        {.name = "--spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.spacing, .rule = CLI_GT,
+         .bad = "--spacing must be positive", .help = "largest distance between the planes"},
+        {.name = "--margin", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.margin, .rule = CLI_GE,
+         .bad = "--margin must be >= 0", .def = "spacing/10",
+         .help = "distance of the first and last plane from the lowest and highest node"},
+        {.name = "--densify", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.densify, .rule = CLI_GE,
+         .bad = "--densify must be >= 0", .def = "spacing/2", .note = "0 = only the crossing points",
+         .help = "insert points so that no loop segment is longer"},
+        {.name = "--node-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.node_spacing, .rule = CLI_GT,
+         .bad = "--node-spacing must be positive", .def = "--spacing",
+         .help = "the contour file's suggested node spacing"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
+         .help = "less logging (no summary line)"},
+    };
+    cli_command cmd = {
+        .name = "slice",
+        .usage = "MODEL -o [--spacing] [--margin] [--densify] [--node-spacing]",
+        .about = "Cuts every surface of the model directory MODEL with planes z = const spread\n"
+                 "evenly from the lowest node + margin to the highest - margin, at most spacing\n"
+                 "apart, and writes the cross-sections as a contour file\n"
+                 "(docs/formats.md), names and roles kept: the contours the surfaces would have\n"
+                 "been digitized as. `thorax surfaces` rebuilds surfaces from them.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos > 1) return cli_usage_error("slice", "more than one model given");
+    const char *in = cmd.n_pos ? cmd.pos[0] : NULL;
     if (!in) return cli_usage_error("slice", "no model given");
     if (!out) return cli_usage_error("slice", "no output file given (-o CONTOURS)");
     thx_ctx *ctx = cli_ctx(verbose);

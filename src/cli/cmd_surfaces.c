@@ -10,99 +10,82 @@
 #include "thorax/io/contours_file.h"
 #include "thorax/geom/repair.h"
 #include "thorax/geom/surfaces.h"
-static void help(void)
-{
-    printf("usage: thorax surfaces CONTOURS -o MODEL [options]\n\n"
-           "Builds one closed, outward-oriented triangle surface per contour surface\n"
-           "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
-           "NAME.fac). Nothing is written unless every surface builds.\n\n"
-           "Digitization noise is repaired, each repair reported as a warning (file:line,\n"
-           "surface, layer, loop, what was done) and listed in model.json's provenance\n"
-           "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
-           "merged, spikes removed, small self-crossings untangled, holes narrower than the\n"
-           "node spacing dropped. --strict refuses instead.\n\n"
-           "options:\n"
-           "  -o, --output DIR      model directory to write (replaced atomically)\n"
-           "  --spacing MM          node spacing along the layers (default: the file's\n"
-           "                        'spacing' line, else 5)\n"
-           "  --smoothing MM        spline smoothing bandwidth (default 2; 0 = interpolate)\n"
-           "  --start X,Y           anatomical start point of every loop (default: 1000 mm\n"
-           "                        anterior in the plane by the contours' frame, 0,1000\n"
-           "                        without one: the anterior midline)\n"
-           "  --cap polygon|grid    end-cap method for all surfaces (default: per surface,\n"
-           "                        from the contour file)\n"
-           "  --cap-grid MM         grid spacing of grid caps (default: per surface, else\n"
-           "                        the node spacing)\n"
-           "  --concave-tol F       outside-test tolerance: a laced triangle is outside when\n"
-           "                        its centroid lies more than F * (spacing + |dA - dB|)\n"
-           "                        outside the layer curves interpolated to its height (0.25)\n"
-           "  --max-edge F          'too large' edge bound, times max(spacing, layer gap) (3)\n"
-           "  --phase-weight W      weight of the arc-length phase in the shortest-diagonal\n"
-           "                        rule, besides the normalized position (0.25; 0 = off)\n"
-           "  --fan-limit N         a run of N triangles at one node is cut as a tongue\n"
-           "                        where it is one (6; 0 = never)\n"
-           "  --projected-aspect A  nested loops whose lacing has a triangle of aspect ratio\n"
-           "                        over A are laced in projection if that is better (10)\n"
-           "  --merge-tol MM        consecutive points of a loop closer than this are merged\n"
-           "                        into one (default: a tenth of the node spacing)\n"
-           "  --untangle-tol MM     a loop crossing itself is untangled when the small loop\n"
-           "                        at the crossing lies within this of the crossing point:\n"
-           "                        that loop is cut off (default: the node spacing)\n"
-           "  --strict              refuse any loop that needs a repair (a repeated closing\n"
-           "                        point, near-coincident points, a spike, a self-crossing,\n"
-           "                        a narrow hole) instead of repairing it: exit 1 with the\n"
-           "                        message the repair would have given as a warning\n"
-           "  --stats               print per-surface lacing and timing statistics\n"
-           "  -v, -q                more / less logging\n");
-}
-
 int cmd_surfaces(int argc, char **argv)
 {
-    const char *in = NULL, *outdir = NULL;
+    const char *outdir = NULL, *start = NULL;
     int verbose = 0, want_stats = 0, strict = 0;
     double merge_tol = -1, untangle_tol = -1;
-    int start_given = 0;
     thx_surfaces_opts o;
     thx_surfaces_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-        else if (!strcmp(a, "-o") || !strcmp(a, "--output")) { if (!v) return cli_usage_error("surfaces", "%s needs a value", a); outdir = v; i++; }
-        else if (!strcmp(a, "--spacing")) { if (cli_parse_double("surfaces", a, v, &o.spacing)) return 2; i++; if (!(o.spacing > 0)) return cli_usage_error("surfaces", "--spacing must be positive"); }
-        else if (!strcmp(a, "--smoothing")) { if (cli_parse_double("surfaces", a, v, &o.smoothing)) return 2; i++; if (o.smoothing < 0) return cli_usage_error("surfaces", "--smoothing must be >= 0"); }
-        else if (!strcmp(a, "--start")) {
-            if (!v || sscanf(v, "%lf,%lf", &o.start.x, &o.start.y) != 2) return cli_usage_error("surfaces", "--start needs X,Y");
-            start_given = 1;
-            i++;
-        } else if (!strcmp(a, "--cap")) {
-            if (!v) return cli_usage_error("surfaces", "--cap needs polygon or grid");
-            if (!strcmp(v, "polygon")) o.cap_method = THX_CAP_POLYGON;
-            else if (!strcmp(v, "grid")) o.cap_method = THX_CAP_GRID;
-            else return cli_usage_error("surfaces", "--cap: unknown method '%s' (polygon or grid)", v);
-            i++;
-        } else if (!strcmp(a, "--cap-grid")) { if (cli_parse_double("surfaces", a, v, &o.cap_grid)) return 2; i++; if (!(o.cap_grid > 0)) return cli_usage_error("surfaces", "--cap-grid must be positive"); }
-        else if (!strcmp(a, "--concave-tol")) { if (cli_parse_double("surfaces", a, v, &o.lace.concave_tol)) return 2; i++; }
-        else if (!strcmp(a, "--max-edge")) { if (cli_parse_double("surfaces", a, v, &o.lace.max_edge)) return 2; i++; }
-        else if (!strcmp(a, "--phase-weight")) { if (cli_parse_double("surfaces", a, v, &o.lace.phase_weight)) return 2; i++; if (o.lace.phase_weight < 0) return cli_usage_error("surfaces", "--phase-weight must be >= 0"); }
-        else if (!strcmp(a, "--fan-limit")) {
-            long n;
-            if (cli_parse_int("surfaces", a, v, &n)) return 2;
-            if (n < 0 || n > 1000000) return cli_usage_error("surfaces", "--fan-limit must be between 0 and 1000000");
-            o.lace.fan_limit = (int)n;
-            i++;
-        }
-        else if (!strcmp(a, "--projected-aspect")) { if (cli_parse_double("surfaces", a, v, &o.lace.projected_aspect)) return 2; i++; if (!(o.lace.projected_aspect >= 1)) return cli_usage_error("surfaces", "--projected-aspect must be >= 1"); }
-        else if (!strcmp(a, "--merge-tol")) { if (cli_parse_double("surfaces", a, v, &merge_tol)) return 2; i++; if (!(merge_tol >= 0)) return cli_usage_error("surfaces", "--merge-tol must be >= 0"); }
-        else if (!strcmp(a, "--untangle-tol")) { if (cli_parse_double("surfaces", a, v, &untangle_tol)) return 2; i++; if (!(untangle_tol >= 0)) return cli_usage_error("surfaces", "--untangle-tol must be >= 0"); }
-        else if (!strcmp(a, "--strict")) strict = 1;
-        else if (!strcmp(a, "--stats")) want_stats = 1;
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1]) return cli_usage_error("surfaces", "unknown option '%s'", a);
-        else if (!in) in = a;
-        else return cli_usage_error("surfaces", "more than one input file");
-    }
+    static const cli_choice caps[] = {{"polygon", THX_CAP_POLYGON}, {"grid", THX_CAP_GRID}, {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "MODEL", .s = &outdir,
+         .help = "model directory to write (replaced atomically)"},
+        {.name = "--spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.spacing, .rule = CLI_GT,
+         .bad = "--spacing must be positive", .def = "the contour file's 'spacing' line, else 5",
+         .help = "node spacing along the layers"},
+        {.name = "--smoothing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.smoothing, .rule = CLI_GE,
+         .bad = "--smoothing must be >= 0", .note = "0 interpolates the digitized points",
+         .help = "spline smoothing bandwidth"},
+        {.name = "--start", .type = CLI_STRING, .meta = "X,Y", .unit = "mm", .s = &start,
+         .def = "1000 mm anterior in the plane by the contours' frame (superior when the planes are stacked along "
+                "the anterior axis); 0,1000, the anterior midline, without a frame",
+         .help = "anatomical start point of every loop"},
+        {.name = "--merge-tol", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &merge_tol, .rule = CLI_GE,
+         .bad = "--merge-tol must be >= 0", .def = "a tenth of the node spacing",
+         .help = "consecutive points of a loop closer than this are merged into one"},
+        {.name = "--untangle-tol", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &untangle_tol, .rule = CLI_GE,
+         .bad = "--untangle-tol must be >= 0", .def = "the node spacing",
+         .help = "the largest small loop cut off where a loop crosses itself"},
+        {.name = "--strict", .type = CLI_FLAG, .i = &strict,
+         .help = "refuse the first loop that needs a repair (a repeated closing point, near-coincident points, a "
+                 "spike, a self-crossing, a narrow hole) instead of repairing it: exit 1 with the message the "
+                 "repair would have given as a warning"},
+        {.name = "--cap", .type = CLI_CHOICE, .choices = caps, .i = &o.cap_method,
+         .def = "each surface's own, from the contour file", .help = "end-cap method for every surface"},
+        {.name = "--cap-grid", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.cap_grid, .rule = CLI_GT,
+         .bad = "--cap-grid must be positive", .def = "the surface's, else the node spacing",
+         .help = "grid spacing of grid caps"},
+        {.name = "--concave-tol", .type = CLI_REAL, .meta = "F", .d = &o.lace.concave_tol,
+         .help = "outside-test tolerance: a laced triangle is outside when its centroid lies more than F * "
+                 "(spacing + |dA - dB|) outside the layer curves interpolated to its height"},
+        {.name = "--max-edge", .type = CLI_REAL, .meta = "F", .d = &o.lace.max_edge,
+         .help = "a triangle edge longer than F * max(spacing, layer gap) counts as too large"},
+        {.name = "--phase-weight", .type = CLI_REAL, .meta = "W", .d = &o.lace.phase_weight, .rule = CLI_GE,
+         .bad = "--phase-weight must be >= 0", .note = "0 = position only",
+         .help = "weight of the arc-length phase in the shortest-diagonal rule, besides the normalized position"},
+        {.name = "--fan-limit", .type = CLI_INT, .meta = "N", .i = &o.lace.fan_limit, .rule = CLI_GE | CLI_LE,
+         .lo = 0, .hi = 1000000, .bad = "--fan-limit must be between 0 and 1000000", .note = "0 = never",
+         .help = "a run of N triangles at one node is cut as a tongue where it is one"},
+        {.name = "--projected-aspect", .type = CLI_REAL, .meta = "A", .d = &o.lace.projected_aspect, .rule = CLI_GE,
+         .lo = 1, .bad = "--projected-aspect must be >= 1",
+         .help = "nested loops whose lacing has a triangle of aspect ratio over A (or a fan over 3 times the fan "
+                 "limit) are laced in projection if that is better"},
+        {.name = "--stats", .type = CLI_FLAG, .i = &want_stats,
+         .help = "print per-stage times and lacing/orientation statistics"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
+         .help = "less logging: no table, warnings and errors only"},
+    };
+    cli_command cmd = {
+        .name = "surfaces",
+        .usage = "CONTOURS -o [options]",
+        .about = "Builds one closed, outward-oriented triangle surface per contour surface\n"
+                 "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
+                 "NAME.fac). Nothing is written unless every surface builds.\n\n"
+                 "Digitization noise is repaired, each repair reported as a warning (file:line,\n"
+                 "surface, layer, loop, what was done) and listed in model.json's provenance\n"
+                 "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
+                 "merged, spikes removed, small self-crossings untangled, holes narrower than the\n"
+                 "node spacing dropped. --strict refuses instead.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos > 1) return cli_usage_error("surfaces", "more than one input file");
+    const char *in = cmd.n_pos ? cmd.pos[0] : NULL;
+    int start_given = start != NULL;
+    if (start && sscanf(start, "%lf,%lf", &o.start.x, &o.start.y) != 2) return cli_usage_error("surfaces", "--start needs X,Y");
     if (!in) return cli_usage_error("surfaces", "no contour file given");
     if (!outdir) return cli_usage_error("surfaces", "no output directory given (-o MODEL)");
     thx_ctx *ctx = cli_ctx(verbose);

@@ -7,62 +7,63 @@
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "thorax/fem/fem.h"
-static void help(void)
-{
-    printf("usage: thorax verify [--levels N] [--degree L] [--spheres FIRST:LAST|off] [PETSc options]\n\n"
-           "Runs the finite-element solver on problems with known solutions and prints\n"
-           "the errors and the observed order of convergence:\n"
-           "  (a) concentric spheres r = 40, 70, 100 mm: P_l(cos theta) prescribed on the\n"
-           "      inner sphere, no current through the outer one; one shell, and two\n"
-           "      shells with conductivity ratios 1:5 and 5:1; cubed-sphere meshes with\n"
-           "      n = 4, 8, 16, ... cells per cube edge. RDM and MAG at the outer surface,\n"
-           "      the largest nodal error there, and the net current out of the inner\n"
-           "      sphere (zero: the outer surface is insulated);\n"
-           "  (b) a uniform anisotropic slab against its linear closed form;\n"
-           "  (c) OpenMEEG's three spheres r = 87, 92, 100 mm (brain 1, skull 0.0125, scalp\n"
-           "      1 S/m), each an icosphere of 10 4^k + 2 nodes, meshed by thorax mesh's\n"
-           "      mesher with a grid of 60 / 2^k mm (surfaces and volume refine together)\n"
-           "      and checked as thorax mesh checks; P_1 = cos(theta) on the brain's surface\n"
-           "      (its Steiner nodes interpolated), no current through the scalp, solved as\n"
-           "      thorax forward solves; RDM, MAG and the largest error at the scalp's nodes,\n"
-           "      the net current, and the brain's interior against the linear z / 87.\n"
-           "Exit status 1 if the observed order of the errors falls below 1.7 (second\n"
-           "order expected) or a check fails.\n\n"
-           "options:\n"
-           "  --levels N      refinements of (a) (default 3: n = 4, 8, 16; 4 adds n = 32)\n"
-           "  --degree L      the Legendre degree l of the prescribed potential in (a) (default 1)\n"
-           "  --spheres FIRST:LAST  icosphere levels k of (c), 2 to 6 (default 4:5: 2,562 and\n"
-           "                  10,242 nodes per sphere, about 30 s; 6 adds 40,962 nodes, about\n"
-           "                  31 M tetrahedra, 7 GB and 6 minutes); off: skip (c)\n");
-}
-
 int cmd_verify(int argc, char **argv)
 {
     int levels = 3, degree = 1, verbose = 0, sph_first = 4, sph_last = 5;
+    const char *spheres = NULL;
     cli_petsc_args pa;
     cli_petsc_args_init(&pa, argv[0]);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        long x;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) { help(); return 0; }
-        else if (!strcmp(a, "--levels")) { if (cli_parse_int("verify", a, v, &x)) return 2; i++; if (x < 2 || x > 5) return cli_usage_error("verify", "--levels: 2 to 5"); levels = (int)x; }
-        else if (!strcmp(a, "--degree")) { if (cli_parse_int("verify", a, v, &x)) return 2; i++; if (x < 1 || x > 8) return cli_usage_error("verify", "--degree: 1 to 8"); degree = (int)x; }
-        else if (!strcmp(a, "--spheres")) {
-            if (!v) return cli_usage_error("verify", "--spheres needs FIRST:LAST (icosphere levels 2 to 6) or off");
-            i++;
-            int f = 0, l = 0, end = 0;
-            if (!strcmp(v, "off")) sph_first = sph_last = 0;
-            else if (sscanf(v, "%d:%d%n", &f, &l, &end) == 2 && v[end] == '\0' && f >= 2 && l <= 6 && f < l) {
-                sph_first = f;
-                sph_last = l;
-            } else
-                return cli_usage_error("verify", "--spheres %s: expected FIRST:LAST with 2 <= FIRST < LAST <= 6 (e.g. 4:5), or off", v);
-        }
-        else if (!strcmp(a, "-v")) verbose = 1;
-        else if (!strcmp(a, "-q")) verbose = -1;
-        else if (a[0] == '-' && a[1] == '-') return cli_usage_error("verify", "unknown option '%s'", a);
-        else if (a[0] == '-' && a[1]) i += cli_petsc_args_add(&pa, argv[i], i + 1 < argc ? argv[i + 1] : NULL);
-        else return cli_usage_error("verify", "unexpected argument '%s'", a);
+    cli_opt opts[] = {
+        {.name = "--levels", .type = CLI_INT, .meta = "N", .i = &levels, .rule = CLI_GE | CLI_LE, .lo = 2, .hi = 5,
+         .bad = "--levels: 2 to 5", .help = "refinements of (a), 2 to 5: 3 gives n = 4, 8, 16; 4 adds n = 32"},
+        {.name = "--degree", .type = CLI_INT, .meta = "L", .i = &degree, .rule = CLI_GE | CLI_LE, .lo = 1, .hi = 8,
+         .bad = "--degree: 1 to 8", .help = "the Legendre degree l of the potential prescribed in (a), 1 to 8"},
+        {.name = "--spheres", .type = CLI_STRING, .meta = "FIRST:LAST|off", .s = &spheres, .def = "4:5",
+         .help = "the icosphere levels k of (c), 2 <= FIRST < LAST <= 6: 4:5 gives 2,562 and 10,242 nodes per sphere, "
+                 "about 3.9 M tetrahedra and 30 s; level 6 has 40,962 nodes, about 31 M tetrahedra, 6.9 GB and 5-6 "
+                 "minutes; levels 2 and 3 are too coarse for the 5 mm skull and do not converge at second order; off "
+                 "skips (c)"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command cmd = {
+        .name = "verify",
+        .usage = "[--levels] [--degree] [--spheres] [PETSc options]",
+        .about = "Runs the finite-element solver on problems with known solutions and prints\n"
+                 "the errors and the observed order of convergence:\n"
+                 "  (a) concentric spheres r = 40, 70, 100 mm: P_l(cos theta) prescribed on the\n"
+                 "      inner sphere, no current through the outer one; one shell, and two\n"
+                 "      shells with conductivity ratios 1:5 and 5:1; cubed-sphere meshes with\n"
+                 "      n = 4, 8, 16, ... cells per cube edge. RDM and MAG at the outer surface,\n"
+                 "      the largest nodal error there, and the net current out of the inner\n"
+                 "      sphere (zero: the outer surface is insulated);\n"
+                 "  (b) a uniform anisotropic slab against its linear closed form;\n"
+                 "  (c) OpenMEEG's three spheres r = 87, 92, 100 mm (brain 1, skull 0.0125, scalp\n"
+                 "      1 S/m), each an icosphere of 10 4^k + 2 nodes, meshed by thorax mesh's\n"
+                 "      mesher with a grid of 60 / 2^k mm (surfaces and volume refine together)\n"
+                 "      and checked as thorax mesh checks; P_1 = cos(theta) on the brain's surface\n"
+                 "      (its Steiner nodes interpolated), no current through the scalp, solved as\n"
+                 "      thorax forward solves; RDM, MAG and the largest error at the scalp's nodes,\n"
+                 "      the net current, and the brain's interior against the linear z / 87.\n"
+                 "Exit status 1 if the observed order of the errors falls below 1.7 (second\n"
+                 "order expected) or a check fails.\n",
+        .epilog = "PETSc options (single dash: -ksp_type, -pc_type, -ksp_rtol, -ksp_monitor, ...)\n"
+                  "are passed through.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+        .pass = cli_petsc_pass,
+        .user = &pa,
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos) return cli_usage_error("verify", "unexpected argument '%s'", cmd.pos[0]);
+    if (spheres) {
+        int f = 0, l = 0, end = 0;
+        if (!strcmp(spheres, "off")) sph_first = sph_last = 0;
+        else if (sscanf(spheres, "%d:%d%n", &f, &l, &end) == 2 && spheres[end] == '\0' && f >= 2 && l <= 6 && f < l) {
+            sph_first = f;
+            sph_last = l;
+        } else
+            return cli_usage_error("verify", "--spheres %s: expected FIRST:LAST with 2 <= FIRST < LAST <= 6 (e.g. 4:5), or off", spheres);
     }
     thx_ctx *ctx = cli_ctx(verbose);
     int rank = 0, rc = 0;

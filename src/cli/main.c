@@ -1,5 +1,4 @@
 /* thorax: the command-line front end. Each subcommand is a thin client of libthorax. */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,12 +61,12 @@ thx_ctx *cli_ctx(int verbose)
     }
     thx_ctx_set_log(ctx, log_stderr, NULL,
                     verbose > 0 ? THX_LOG_DEBUG : verbose < 0 ? THX_LOG_WARN + 1 : THX_LOG_INFO);
-    /* Every existing regular file named on the command line, except the value of -o/--output/--mp4, is
-     * one of the command's inputs: no single-file output may replace it (thorax/core/fileio.h). */
+    /* Every existing regular file named on the command line, except the values of the options the
+     * command's table declares outputs (CLI_OUTPUT: -o/--output, --mp4, ...), is one of the command's
+     * inputs: no single-file output may replace it (thorax/core/fileio.h). */
     for (int i = 2; i < g_argc; i++) {
         struct stat st;
-        if (!strcmp(g_argv[i - 1], "-o") || !strcmp(g_argv[i - 1], "--output") || !strcmp(g_argv[i - 1], "--mp4"))
-            continue;
+        if (cli_is_output_arg(g_argv[i])) continue;
         if (stat(g_argv[i], &st) == 0 && S_ISREG(st.st_mode) && thx_ctx_add_input(ctx, g_argv[i]) != THX_OK) {
             fprintf(stderr, "thorax: out of memory\n");
             exit(1);
@@ -83,37 +82,6 @@ int cli_fail(thx_ctx *ctx, const char *cmd, thx_status st)
     return 1;
 }
 
-int cli_usage_error(const char *cmd, const char *fmt, ...)
-{
-    va_list ap;
-    fprintf(stderr, "thorax %s: ", cmd);
-    va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fprintf(stderr, "\n(see 'thorax %s --help')\n", cmd);
-    return 2;
-}
-
-int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out)
-{
-    char *end = NULL;
-    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
-    double v = strtod(s, &end);
-    if (end == s || *end != '\0' || v != v) return cli_usage_error(cmd, "%s: '%s' is not a number", opt, s);
-    *out = v;
-    return 0;
-}
-
-int cli_parse_int(const char *cmd, const char *opt, const char *s, long *out)
-{
-    char *end = NULL;
-    if (!s) return cli_usage_error(cmd, "%s needs a value", opt);
-    long v = strtol(s, &end, 10);
-    if (end == s || *end != '\0') return cli_usage_error(cmd, "%s: '%s' is not an integer", opt, s);
-    *out = v;
-    return 0;
-}
-
 static void usage(FILE *f)
 {
     fprintf(f, "usage: thorax COMMAND [options]\n\n"
@@ -121,6 +89,49 @@ static void usage(FILE *f)
                "to the heart's electric field in it.\n\ncommands:\n");
     for (size_t i = 0; i < N_COMMANDS; i++) fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(f, "  %-10s %s\n\nRun 'thorax COMMAND --help' for a command's options.\n", "help", "this text, or 'thorax help COMMAND'");
+}
+
+/* The command's help through its option table: the help itself, or one of the manual's sections, or
+ * the table's check (options.h). */
+static int command_help(size_t k, cli_help_mode mode)
+{
+    char *hargv[] = {(char *)commands[k].name, "--help", NULL};
+    cli_set_help_mode(mode);
+    return commands[k].fn(2, hargv);
+}
+
+/* thorax help --usage|--markdown COMMAND: docs/cli.md's generated sections (scripts/cli_docs.sh);
+ * thorax help --check [COMMAND...]: every command's (or these) option table against its usage lines
+ * (exit 1 on a problem, each on stderr). Not in the command list: they are the manual's tools. */
+static int manual(int argc, char **argv)
+{
+    const char *what = argv[2];
+    cli_help_mode mode = !strcmp(what, "--usage")      ? CLI_HELP_USAGE_MD
+                         : !strcmp(what, "--markdown") ? CLI_HELP_OPTIONS_MD
+                                                       : CLI_HELP_CHECK;
+    if (mode != CLI_HELP_CHECK && argc != 4) {
+        fprintf(stderr, "thorax: usage: thorax help %s COMMAND\n", what);
+        return 2;
+    }
+    for (size_t k = 0; k < N_COMMANDS; k++) {
+        int named = argc == 3;
+        for (int i = 3; i < argc; i++) named |= !strcmp(argv[i], commands[k].name);
+        if (named) command_help(k, mode);
+    }
+    for (int i = 3; i < argc; i++) {
+        size_t k = 0;
+        while (k < N_COMMANDS && strcmp(argv[i], commands[k].name)) k++;
+        if (k == N_COMMANDS) {
+            fprintf(stderr, "thorax: unknown command '%s'\n", argv[i]);
+            return 2;
+        }
+    }
+    if (mode == CLI_HELP_CHECK && cli_check_problems()) {
+        int n = cli_check_problems();
+        fprintf(stderr, "thorax help --check: %d problem%s\n", n, n > 1 ? "s" : "");
+        return 1;
+    }
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -133,11 +144,10 @@ int main(int argc, char **argv)
     const char *name = argv[1];
     if (strcmp(name, "help") == 0 || strcmp(name, "--help") == 0 || strcmp(name, "-h") == 0) {
         if (argc >= 3 && strcmp(name, "help") == 0) {
+            if (!strcmp(argv[2], "--usage") || !strcmp(argv[2], "--markdown") || !strcmp(argv[2], "--check"))
+                return manual(argc, argv);
             for (size_t i = 0; i < N_COMMANDS; i++)
-                if (strcmp(argv[2], commands[i].name) == 0) {
-                    char *hargv[] = {argv[2], "--help", NULL};
-                    return commands[i].fn(2, hargv);
-                }
+                if (strcmp(argv[2], commands[i].name) == 0) return command_help(i, CLI_HELP_TEXT);
             fprintf(stderr, "thorax: unknown command '%s'\n", argv[2]);
             return 2;
         }

@@ -1,0 +1,238 @@
+/* thorax animate: one picture per frame (as thorax render draws them, cli/render_cli.h) and an MP4
+ * movie through ffmpeg; resumable. */
+#include <errno.h>
+#include <limits.h>
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+#include "cli/cli.h"
+#include "cli/cli_fem.h"
+#include "cli/render_cli.h"
+#include "thorax/core/fileio.h"
+/* ---- what the frames of an animation were drawn with ---- */
+
+/* Appends "path:size:mtime" of a file (or "path:-" if it cannot be read). */
+static void sig_file(char *sig, size_t cap, const char *path)
+{
+    struct stat sb;
+    size_t len = strlen(sig);
+    if (stat(path, &sb) == 0)
+        snprintf(sig + len, cap - len, " %s:%lld:%lld.%09ld", path, (long long)sb.st_size, (long long)sb.st_mtim.tv_sec,
+                 sb.st_mtim.tv_nsec);
+    else
+        snprintf(sig + len, cap - len, " %s:-", path);
+}
+
+/* The settings that decide a frame's pixels: every option but the frame range, the rate, the movie
+ * and the verbosity; the data files and the program (size and time of each), so a changed solution
+ * or a rebuilt thorax redraws. */
+static void animation_signature(int argc, char **argv, const ropts *o, char *sig, size_t cap)
+{
+    snprintf(sig, cap, "thorax-animation 1;");
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--frames") || !strcmp(a, "--fps") || !strcmp(a, "--mp4") || !strcmp(a, "-o") || !strcmp(a, "--output")) {
+            i++;
+            continue;
+        }
+        if (!strcmp(a, "-q") || !strcmp(a, "-v")) continue;
+        size_t len = strlen(sig);
+        snprintf(sig + len, cap - len, " %s", a);
+    }
+    char path[PATH_MAX + 64];
+    if (o->solution) {
+        snprintf(path, sizeof path, "%s/solution.json", o->solution);
+        sig_file(sig, cap, path);
+    }
+    if (o->data) sig_file(sig, cap, o->data);
+    if (o->channels) sig_file(sig, cap, o->channels);
+    for (int k = 0; k < o->n_files; k++) sig_file(sig, cap, o->files[k]);
+    if (o->model_dir) {
+        snprintf(path, sizeof path, "%s/model.json", o->model_dir);
+        sig_file(sig, cap, path);
+    }
+    sig_file(sig, cap, "/proc/self/exe");
+}
+
+/* The movie's signature: its metadata comment, which +faststart puts in the header before the
+ * frames' data, within the first MOVIE_WINDOW bytes (thorax/core/fileio.h). */
+#define MOVIE_MARKER "thorax-movie"
+#define MOVIE_WINDOW (4u << 20)
+
+/* Runs ffmpeg on the frames (argv, no shell: any path works); its exit status, 127 if it cannot run. */
+static int run_ffmpeg(int fps, int first, int count, const char *dir, const char *out)
+{
+    char rate[32], start[32], nframes[32], pattern[PATH_MAX + 32];
+    snprintf(rate, sizeof rate, "%d", fps);
+    snprintf(start, sizeof start, "%d", first);
+    snprintf(nframes, sizeof nframes, "%d", count);
+    snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
+    char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
+                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
+                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-metadata", "comment=" MOVIE_MARKER, "-movflags", "+faststart",
+                    "-f", "mp4", (char *)out, NULL};
+    pid_t pid;
+    if (posix_spawnp(&pid, "ffmpeg", NULL, NULL, args, environ) != 0) return 127;
+    int status = 0;
+    if (waitpid(pid, &status, 0) < 0) return 127;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+int cmd_animate(int argc, char **argv)
+{
+    ropts o;
+    render_opts_default(&o);
+    o.cmd = "animate";
+    const char *mp4 = NULL, *frames = NULL;
+    int a_first = 1, a_last = -1;
+    cli_opt own[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &o.out,
+         .help = "the frames' directory, DIR/frame_00001.png ..."},
+        {.name = "--frames", .type = CLI_STRING, .meta = "A:B", .s = &frames, .def = "all",
+         .help = "frame range, 1-based, inclusive"},
+        {.name = "--fps", .type = CLI_INT, .meta = "N", .i = &o.fps, .rule = CLI_GE | CLI_LE, .lo = 1, .hi = 240,
+         .bad = "--fps: 1..240", .help = "frames per second of the movie, 1 to 240"},
+        {.name = "--mp4", .type = CLI_OUTPUT, .meta = "FILE|none", .s = &mp4, .def = "DIR/animation.mp4",
+         .note = "none: no movie", .help = "the movie"},
+    };
+    cli_opt common[N_RENDER_OPTS];
+    cli_command cmd = {
+        .name = "animate",
+        .usage = "MODEL|--solution -o [--frames] [--fps] [--mp4] [options]",
+        .about = "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames\n"
+                 "whose PNG exists are kept if drawn with the same options, data and program:\n"
+                 "DIR/frames.settings), a progress bar on a terminal, then an MP4 (H.264) through\n"
+                 "ffmpeg.\n",
+        .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)}},
+        .positional = render_positional,
+        .user = &o,
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (frames && (sscanf(frames, "%d:%d", &a_first, &a_last) != 2 || a_first < 1 || a_last < a_first))
+        return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
+    if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
+    if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
+    o.last = 0; /* frames checked below */
+    thx_ctx *ctx = cli_ctx(o.verbose);
+    rdata d;
+    thx_renderer *rr = NULL;
+    thx_font *font = NULL;
+    thx_image *img = NULL;
+    int rc = 0;
+    size_t nan = 0;
+    double t0 = thx_wtime();
+    char path[PATH_MAX + 64], movie[PATH_MAX + 64];
+    const char *out_dir = o.out;
+    thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
+    size_t nf = 0;
+    if (st == THX_OK) {
+        for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)
+            if (d.series[s] && d.series[s]->n_frames > nf) nf = d.series[s]->n_frames;
+        if (!nf) st = thx_error(ctx, THX_EINPUT, "animate: no time series to animate (give --solution or --data)");
+    }
+    if (st == THX_OK) {
+        if (a_last < 0) a_last = (int)nf;
+        if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
+        /* arrows on every frame: refused before anything is drawn when some frame has no currents */
+        for (int f = a_first; st == THX_OK && o.arrows && f <= a_last; f++)
+            if (render_currents_column(&d, f - 1) < 0)
+                st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
+                               "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
+    }
+    /* the movie is claimed before any frame is drawn: a user's file of that name stops the run */
+    int want_movie = !(mp4 && !strcmp(mp4, "none"));
+    thx_atomic_file maf;
+    if (want_movie) {
+        if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
+        else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
+    }
+    if (st == THX_OK && want_movie)
+        st = thx_output_claim_in(ctx, movie, MOVIE_MARKER, strlen(MOVIE_MARKER), MOVIE_WINDOW, NULL, 0, &maf);
+    if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
+        st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
+    /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
+    int may_keep = 0;
+    if (st == THX_OK) {
+        char sig[8192], sigpath[PATH_MAX + 64];
+        animation_signature(argc, argv, &o, sig, sizeof sig);
+        snprintf(sigpath, sizeof sigpath, "%s/frames.settings", out_dir);
+        char *old = NULL;
+        size_t olen = 0;
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (thx_read_file(quiet, sigpath, &old, &olen) == THX_OK) {
+            may_keep = olen == strlen(sig) + 1 && !strncmp(old, sig, strlen(sig));
+            if (!may_keep && o.verbose >= 0)
+                fprintf(stderr, "thorax animate: %s was drawn with other settings, data or program: redrawing every frame\n", out_dir);
+        }
+        free(old);
+        thx_ctx_destroy(&quiet);
+        if (!may_keep) {
+            thx_atomic_file af;
+            st = thx_atomic_open(ctx, sigpath, &af);
+            if (st == THX_OK) {
+                fprintf(af.f, "%s\n", sig);
+                st = thx_atomic_commit(ctx, &af);
+            }
+        }
+    }
+    int done = 0, kept = 0, total = a_last - a_first + 1;
+    for (int f = a_first; st == THX_OK && f <= a_last; f++) {
+        snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
+        thx_image *old = NULL;
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w &&
+            old->h == o.h) {
+            kept++; /* resumable: a complete PNG of the right size is kept */
+        } else {
+            st = render_frame(ctx, &o, &d, rr, font, f - 1, img, &nan);
+            if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
+        }
+        thx_image_destroy(&old);
+        thx_ctx_destroy(&quiet);
+        done++;
+        if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
+    }
+    if (st == THX_OK && want_movie) {
+        /* a fresh temporary name beside the movie (never a file that is there), moved in under the claim */
+        char tmpm[PATH_MAX + 80];
+        snprintf(tmpm, sizeof tmpm, "%s.tmpXXXXXX", movie);
+        int fd = mkstemp(tmpm);
+        if (fd < 0) {
+            st = thx_error(ctx, THX_EIO, "%s: cannot create a temporary file beside it: %s", movie, strerror(errno));
+        } else {
+            close(fd);
+            int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
+            if (r != 0) {
+                remove(tmpm);
+                st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
+                               r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
+            } else {
+                st = thx_output_place(ctx, &maf, tmpm);
+            }
+        }
+    }
+    if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
+    else if (o.verbose >= 0) {
+        if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
+        printf("%d frames (%d drawn, %d kept from an earlier run) in %.1f s -> %s", total, total - kept, kept,
+               thx_wtime() - t0, out_dir);
+        if (want_movie) printf(", %s", movie);
+        printf("\n");
+    }
+    thx_image_destroy(&img);
+    thx_font_close(&font);
+    thx_renderer_destroy(&rr);
+    render_data_free(&d);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
