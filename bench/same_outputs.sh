@@ -10,25 +10,13 @@
 # Usage: bash bench/same_outputs.sh [REV] [WORKDIR]   (about 2 x the demo's time, ~10 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROOT=$PWD
-REV=${1:-HEAD~1}
-W=${2:-$(mktemp -d /tmp/thorax-same.XXXXXX)}
-mkdir -p "$W"
-NEW=${THORAX:-$ROOT/build/bin/thorax}
-[ -x "$NEW" ] || { echo "same_outputs: $NEW is not built (make build)" >&2; exit 1; }
-sha=$(git rev-parse --short "$REV")
-if [ ! -x "$W/old-build/bin/thorax" ]; then
-    rm -rf "$W/old"
-    git worktree add --detach "$W/old" "$REV" > /dev/null
-    trap 'git -C "$ROOT" worktree remove --force "$W/old" > /dev/null 2>&1 || true' EXIT
-    cmake -S "$W/old" -B "$W/old-build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
-    cmake --build "$W/old-build" -j "${JOBS:-2}" --target thorax_cli > /dev/null
-fi
-echo "same_outputs: $REV ($sha) against this tree ($(git rev-parse --short HEAD)$(git diff --quiet || echo ', with changes'))"
+NAME=same_outputs
+. bench/old_thorax.sh "$@"
+echo "same_outputs: $REV ($(git rev-parse --short "$REV")) against this tree ($(git rev-parse --short HEAD)$(git diff --quiet || echo ', with changes'))"
 # the demo reads the shared data beside the checkout: run both from this checkout's directory
 for side in old new; do
     bin=$NEW
-    [ $side = old ] && bin=$W/old-build/bin/thorax
+    [ $side = old ] && bin=$OLD
     if [ $side = new ] || [ ! -f "$W/out-old/index.html" ]; then
         # one output path for both (provenance records the command line),
         rm -rf "$W/out-$side" "$W/out"

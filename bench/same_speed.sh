@@ -9,21 +9,9 @@
 #        bench/same_outputs.sh; about 15 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ROOT=$PWD
-REV=${1:-HEAD~1}
-W=${2:-$(mktemp -d /tmp/thorax-speed.XXXXXX)}
-mkdir -p "$W"
-NEW=${THORAX:-$ROOT/build/bin/thorax}
-[ -x "$NEW" ] || { echo "same_speed: $NEW is not built (make build)" >&2; exit 1; }
+NAME=same_speed
+. bench/old_thorax.sh "$@"
 command -v valgrind > /dev/null || { echo "same_speed: needs valgrind" >&2; exit 1; }
-if [ ! -x "$W/old-build/bin/thorax" ]; then
-    rm -rf "$W/old"
-    git worktree add --detach "$W/old" "$REV" > /dev/null
-    trap 'git -C "$ROOT" worktree remove --force "$W/old" > /dev/null 2>&1 || true' EXIT
-    cmake -S "$W/old" -B "$W/old-build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
-    cmake --build "$W/old-build" -j "${JOBS:-2}" --target thorax_cli > /dev/null
-fi
-OLD=$W/old-build/bin/thorax
 D=$W/speed
 rm -rf "$D"
 mkdir -p "$D"

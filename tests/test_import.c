@@ -127,22 +127,9 @@ static int contains(const char *hay, const char *needle)
 static thx_surface *rd(const char *path, thx_import_info *info)
 {
     thx_surface *s = NULL;
-    thx_surface_read_info ri;
-    thx_status st = thx_surface_read_file(ctx, path, NULL, THX_IMPORT_AUTO, "cube", THX_ROLE_HEART, &s, &ri);
-    if (st) fprintf(stderr, "  reading %s: %s\n", path, thx_ctx_message(ctx));
-    /* the reading's fields, where the tests look for them */
     memset(info, 0, sizeof *info);
-    info->format = ri.format;
-    memcpy(info->format_detail, ri.format_detail, sizeof info->format_detail);
-    memcpy(info->path2, ri.path2, sizeof info->path2);
-    info->index_base = ri.index_base;
-    info->index_base_detected = ri.index_base_detected;
-    info->n_nodes_read = ri.n_nodes_read;
-    info->n_tris_read = ri.n_tris_read;
-    info->n_polygons_split = ri.n_polygons_split;
-    info->n_corners_merged = ri.n_corners_merged;
-    info->n_cells_ignored = ri.n_cells_ignored;
-    info->trailer_line = ri.trailer_line;
+    thx_status st = thx_surface_read_file(ctx, path, NULL, THX_IMPORT_AUTO, "cube", THX_ROLE_HEART, &s, &info->read);
+    if (st) fprintf(stderr, "  reading %s: %s\n", path, thx_ctx_message(ctx));
     return s;
 }
 
@@ -183,17 +170,17 @@ static void test_ptsfac(void)
     write_ptsfac("zero", 0);
     s = rd(tl_path("one.pts"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.format == THX_IMPORT_PTSFAC && in.index_base == 1 && in.index_base_detected == 1);
-    CHECK(strstr(in.path2, "one.fac") != NULL);
+    CHECK(in.read.format == THX_IMPORT_PTSFAC && in.read.index_base == 1 && in.read.index_base_detected == 1);
+    CHECK(strstr(in.read.path2, "one.fac") != NULL);
     thx_surface_destroy(&s);
     s = rd(tl_path("zero.pts"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.index_base == 0 && in.index_base_detected == 1);
+    CHECK(in.read.index_base == 0 && in.read.index_base_detected == 1);
     thx_surface_destroy(&s);
     /* the .fac named first: the .pts is found beside it */
     s = rd(tl_path("zero.fac"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.index_base == 0 && strstr(in.path2, "zero.pts") != NULL);
+    CHECK(in.read.index_base == 0 && strstr(in.read.path2, "zero.pts") != NULL);
     thx_surface_destroy(&s);
     /* an explicit second file */
     CHECK_OK(ctx, thx_surface_read_file(ctx, tl_path("one.pts"), tl_path("one.fac"), THX_IMPORT_AUTO, "c", THX_ROLE_OUTER, &s, NULL));
@@ -240,26 +227,26 @@ static void test_tri(void)
     write_tri("lab.tri", 1, 1, 0, 0, 1, NULL);
     s = rd(tl_path("lab.tri"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.format == THX_IMPORT_TRI && in.index_base == 1 && in.index_base_detected && in.trailer_line == 0);
-    CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
+    CHECK(in.read.format == THX_IMPORT_TRI && in.read.index_base == 1 && in.read.index_base_detected && in.read.trailer_line == 0);
+    CHECK(strstr(in.read.format_detail, "labelled nodes") != NULL);
     thx_surface_destroy(&s);
 
     write_tri("unlab.tri", 0, 1, 0, 0, 1, NULL);
     s = rd(tl_path("unlab.tri"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(strstr(in.format_detail, "unlabelled nodes") != NULL);
+    CHECK(strstr(in.read.format_detail, "unlabelled nodes") != NULL);
     thx_surface_destroy(&s);
 
     write_tri("zero.tri", 1, 0, 0, 0, 1, NULL);
     s = rd(tl_path("zero.tri"), &in);
-    CHECK(is_cube(s, 8) && in.index_base == 0);
+    CHECK(is_cube(s, 8) && in.read.index_base == 0);
     thx_surface_destroy(&s);
 
     /* free line breaks (the format allows them): labels found by counting */
     write_tri("stream.tri", 1, 1, 1, 0, 1, NULL);
     s = rd(tl_path("stream.tri"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(strstr(in.format_detail, "labelled nodes") != NULL);
+    CHECK(strstr(in.read.format_detail, "labelled nodes") != NULL);
     thx_surface_destroy(&s);
     write_tri("stream0.tri", 0, 1, 1, 0, 1, NULL);
     s = rd(tl_path("stream0.tri"), &in);
@@ -270,7 +257,7 @@ static void test_tri(void)
     write_tri("trailer.tri", 1, 1, 0, 0, 1, "case 3 thorax\nunits mm\n");
     s = rd(tl_path("trailer.tri"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.trailer_line == 24); /* 1 + 8 + 1 + 12 lines, a blank one, then the text */
+    CHECK(in.read.trailer_line == 24); /* 1 + 8 + 1 + 12 lines, a blank one, then the text */
     thx_surface_destroy(&s);
 
     /* ECGSim's own convention: clockwise seen from outside, metres. Import
@@ -323,8 +310,8 @@ static void test_openmeeg(void)
     write_openmeeg("om.tri", 0);
     thx_surface *s = rd(tl_path("om.tri"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.format == THX_IMPORT_TRI && strstr(in.format_detail, "OpenMEEG") != NULL);
-    CHECK(in.index_base == 0 && in.index_base_detected == 0 && in.trailer_line == 0);
+    CHECK(in.read.format == THX_IMPORT_TRI && strstr(in.read.format_detail, "OpenMEEG") != NULL);
+    CHECK(in.read.index_base == 0 && in.read.index_base_detected == 0 && in.read.trailer_line == 0);
     thx_surface_destroy(&s);
     /* clockwise, as OpenMEEG's sphere files: reversed by the policy, then the cube exactly */
     write_openmeeg("om_cw.tri", 1);
@@ -362,8 +349,8 @@ static void test_obj(void)
     tl_write_bytes(tl_path("cube.obj"), b.p, b.n);
     s = rd(tl_path("cube.obj"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.format == THX_IMPORT_OBJ && in.index_base == 1 && !in.index_base_detected);
-    CHECK(in.n_polygons_split == 6 && in.n_cells_ignored == 1);
+    CHECK(in.read.format == THX_IMPORT_OBJ && in.read.index_base == 1 && !in.read.index_base_detected);
+    CHECK(in.read.n_polygons_split == 6 && in.read.n_cells_ignored == 1);
     thx_surface_destroy(&s);
 
     /* an unused vertex: removed and reported (numbered as in the file) */
@@ -405,8 +392,8 @@ static void test_stl(void)
     tl_write_bytes(tl_path("bin.stl"), b.p, b.n);
     s = rd(tl_path("bin.stl"), &in);
     CHECK(is_cube(s, 8));
-    CHECK(in.index_base == -1 && in.n_corners_merged == 36 - 8);
-    CHECK(strcmp(in.format_detail, "binary STL") == 0);
+    CHECK(in.read.index_base == -1 && in.read.n_corners_merged == 36 - 8);
+    CHECK(strcmp(in.read.format_detail, "binary STL") == 0);
     thx_surface_destroy(&s);
     /* a binary file cut short: neither binary nor ASCII, said at byte 0 */
     tl_write_bytes(tl_path("short.stl"), b.p + 5, b.n - 20);
@@ -426,7 +413,7 @@ static void test_stl(void)
     sb_printf(&b, "endsolid cube\n");
     tl_write_bytes(tl_path("ascii.stl"), b.p, b.n);
     s = rd(tl_path("ascii.stl"), &in);
-    CHECK(is_cube(s, 8) && in.n_corners_merged == 28 && strcmp(in.format_detail, "ASCII STL") == 0);
+    CHECK(is_cube(s, 8) && in.read.n_corners_merged == 28 && strcmp(in.read.format_detail, "ASCII STL") == 0);
     thx_surface_destroy(&s);
     /* an error names the line */
     char *bad = strdup(b.p);
@@ -460,8 +447,8 @@ static void test_ply(void)
     sb_printf(&b, "0 1\r\n");
     tl_write_bytes(tl_path("ascii.ply"), b.p, b.n);
     s = rd(tl_path("ascii.ply"), &in);
-    CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.index_base == 0);
-    CHECK(strcmp(in.format_detail, "ascii PLY") == 0);
+    CHECK(is_cube(s, 8) && in.read.n_polygons_split == 6 && in.read.index_base == 0);
+    CHECK(strcmp(in.read.format_detail, "ascii PLY") == 0);
     thx_surface_destroy(&s);
 
     /* binary little-endian: float coordinates, a list property before the indices */
@@ -484,7 +471,7 @@ static void test_ply(void)
     }
     tl_write_bytes(tl_path("le.ply"), b.p, b.n);
     s = rd(tl_path("le.ply"), &in);
-    CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary little-endian PLY") == 0);
+    CHECK(is_cube(s, 8) && strcmp(in.read.format_detail, "binary little-endian PLY") == 0);
     thx_surface_destroy(&s);
     /* truncated: the byte offset is named */
     tl_write_bytes(tl_path("trunc.ply"), b.p, b.n - 3);
@@ -504,7 +491,7 @@ static void test_ply(void)
     }
     tl_write_bytes(tl_path("be.ply"), b.p, b.n);
     s = rd(tl_path("be.ply"), &in);
-    CHECK(is_cube(s, 8) && strcmp(in.format_detail, "binary big-endian PLY") == 0);
+    CHECK(is_cube(s, 8) && strcmp(in.read.format_detail, "binary big-endian PLY") == 0);
     thx_surface_destroy(&s);
 
     /* an index out of range names the line */
@@ -533,8 +520,8 @@ static void test_vtk(void)
     sb_printf(&b, "POINT_DATA 8\nSCALARS p float 1\nLOOKUP_TABLE default\n0 0 0 0 0 0 0 0\n");
     tl_write_bytes(tl_path("legacy.vtk"), b.p, b.n);
     s = rd(tl_path("legacy.vtk"), &in);
-    CHECK(is_cube(s, 8) && in.n_polygons_split == 6 && in.n_cells_ignored == 1);
-    CHECK(strcmp(in.format_detail, "legacy VTK ASCII POLYDATA") == 0);
+    CHECK(is_cube(s, 8) && in.read.n_polygons_split == 6 && in.read.n_cells_ignored == 1);
+    CHECK(strcmp(in.read.format_detail, "legacy VTK ASCII POLYDATA") == 0);
     thx_surface_destroy(&s);
 
     /* file version 5.1 (VTK 9 writers): OFFSETS / CONNECTIVITY, METADATA */
@@ -580,7 +567,7 @@ static void test_vtk(void)
         for (int c = 0; c < 3; c++) ok = ok && s->tri[3 * t + (c + r) % 3] == v[c];
     }
     CHECK(ok);
-    CHECK(strcmp(in.format_detail, "legacy VTK binary POLYDATA") == 0);
+    CHECK(strcmp(in.read.format_detail, "legacy VTK binary POLYDATA") == 0);
     thx_surface_destroy(&s);
 
     /* not a surface dataset */

@@ -50,16 +50,16 @@ static void print_check(const thx_surface_report *r)
 
 static void print_report(const spec *sp, const thx_import_info *in)
 {
-    printf("surface \"%s\" (%s) from %s%s%s\n", sp->name, thx_role_name(sp->role), sp->file, in->path2[0] ? " + " : "",
-           in->path2);
-    printf("  read: %s, %zu nodes, %zu triangles", in->format_detail, in->n_nodes_read, in->n_tris_read);
-    if (in->index_base >= 0)
-        printf("; node numbers %d-based (%s)", in->index_base, in->index_base_detected ? "detected" : "by the format");
+    printf("surface \"%s\" (%s) from %s%s%s\n", sp->name, thx_role_name(sp->role), sp->file, in->read.path2[0] ? " + " : "",
+           in->read.path2);
+    printf("  read: %s, %zu nodes, %zu triangles", in->read.format_detail, in->read.n_nodes_read, in->read.n_tris_read);
+    if (in->read.index_base >= 0)
+        printf("; node numbers %d-based (%s)", in->read.index_base, in->read.index_base_detected ? "detected" : "by the format");
     printf("\n");
-    if (in->n_polygons_split) printf("  split %zu polygons with more than 3 vertices into triangle fans\n", in->n_polygons_split);
-    if (in->n_corners_merged) printf("  merged %zu STL facet corners into %zu shared nodes\n", in->n_corners_merged, in->n_nodes_read);
-    if (in->n_cells_ignored) printf("  ignored %zu vertex/line cells (not triangles)\n", in->n_cells_ignored);
-    if (in->trailer_line) printf("  ignored the text after the last triangle (from line %d)\n", in->trailer_line);
+    if (in->read.n_polygons_split) printf("  split %zu polygons with more than 3 vertices into triangle fans\n", in->read.n_polygons_split);
+    if (in->read.n_corners_merged) printf("  merged %zu STL facet corners into %zu shared nodes\n", in->read.n_corners_merged, in->read.n_nodes_read);
+    if (in->read.n_cells_ignored) printf("  ignored %zu vertex/line cells (not triangles)\n", in->read.n_cells_ignored);
+    if (in->read.trailer_line) printf("  ignored the text after the last triangle (from line %d)\n", in->read.trailer_line);
     if (in->scale != 1.0) printf("  scaled coordinates by %g\n", in->scale);
     if (in->n_unused_removed)
         printf("  removed %zu unused nodes (in no triangle; the first is node %ld as numbered in the file); the rest "
@@ -82,23 +82,23 @@ static cJSON *input_json(const spec *sp, const thx_import_info *in)
     cJSON_AddStringToObject(o, "surface", sp->name);
     cJSON_AddStringToObject(o, "role", thx_role_name(sp->role));
     cJSON_AddStringToObject(o, "file", sp->file);
-    if (in->path2[0]) {
+    if (in->read.path2[0]) {
         /* a pair named by its .fac: path2 is then the .pts */
         size_t n = strlen(sp->file);
         int file_is_fac = n >= 4 && (!strcmp(sp->file + n - 4, ".fac") || !strcmp(sp->file + n - 4, ".FAC"));
-        cJSON_AddStringToObject(o, file_is_fac ? "pts" : "fac", in->path2);
+        cJSON_AddStringToObject(o, file_is_fac ? "pts" : "fac", in->read.path2);
     }
-    cJSON_AddStringToObject(o, "format", thx_import_format_name(in->format));
-    cJSON_AddStringToObject(o, "format_detail", in->format_detail);
-    if (in->index_base >= 0) cJSON_AddNumberToObject(o, "index_base", in->index_base);
+    cJSON_AddStringToObject(o, "format", thx_import_format_name(in->read.format));
+    cJSON_AddStringToObject(o, "format_detail", in->read.format_detail);
+    if (in->read.index_base >= 0) cJSON_AddNumberToObject(o, "index_base", in->read.index_base);
     else cJSON_AddNullToObject(o, "index_base");
-    cJSON_AddBoolToObject(o, "index_base_detected", in->index_base_detected);
+    cJSON_AddBoolToObject(o, "index_base_detected", in->read.index_base_detected);
     add_num(o, "scale", in->scale);
-    cJSON_AddNumberToObject(o, "nodes_read", (double)in->n_nodes_read);
-    cJSON_AddNumberToObject(o, "triangles_read", (double)in->n_tris_read);
-    cJSON_AddNumberToObject(o, "polygons_split", (double)in->n_polygons_split);
-    cJSON_AddNumberToObject(o, "stl_corners_merged", (double)in->n_corners_merged);
-    cJSON_AddNumberToObject(o, "cells_ignored", (double)in->n_cells_ignored);
+    cJSON_AddNumberToObject(o, "nodes_read", (double)in->read.n_nodes_read);
+    cJSON_AddNumberToObject(o, "triangles_read", (double)in->read.n_tris_read);
+    cJSON_AddNumberToObject(o, "polygons_split", (double)in->read.n_polygons_split);
+    cJSON_AddNumberToObject(o, "stl_corners_merged", (double)in->read.n_corners_merged);
+    cJSON_AddNumberToObject(o, "cells_ignored", (double)in->read.n_cells_ignored);
     cJSON_AddNumberToObject(o, "unused_nodes_removed", (double)in->n_unused_removed);
     cJSON_AddBoolToObject(o, "reversed", in->reversed);
     cJSON *c = cJSON_AddObjectToObject(o, "check");

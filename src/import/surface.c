@@ -26,24 +26,6 @@ void thx_import_info_free(thx_import_info *info)
 }
 
 
-/* The reading's fields of info (the rest zeroed: overwritten, not freed). */
-static void copy_read_info(thx_import_info *info, const thx_surface_read_info *ri)
-{
-    memset(info, 0, sizeof *info);
-    info->format = ri->format;
-    memcpy(info->format_detail, ri->format_detail, sizeof info->format_detail);
-    memcpy(info->path2, ri->path2, sizeof info->path2);
-    info->index_base = ri->index_base;
-    info->index_base_detected = ri->index_base_detected;
-    info->n_nodes_read = ri->n_nodes_read;
-    info->n_tris_read = ri->n_tris_read;
-    info->n_polygons_split = ri->n_polygons_split;
-    info->n_corners_merged = ri->n_corners_merged;
-    info->n_cells_ignored = ri->n_cells_ignored;
-    info->trailer_line = ri->trailer_line;
-    info->scale = 1.0;
-}
-
 /* Removes nodes used by no triangle, keeping the order of the rest. */
 static thx_status remove_unused(thx_ctx *ctx, thx_surface *s, size_t *removed, long *first)
 {
@@ -98,10 +80,9 @@ thx_status thx_surface_import(thx_ctx *ctx, const char *path, const char *path2,
                          opts->scale);
     thx_surface *s = NULL;
     thx_status st;
-    thx_surface_read_info ri;
-    st = thx_surface_read_file(ctx, path, path2, opts->format, name, role, &s, &ri);
-    copy_read_info(info, &ri);
-    if (st != THX_OK) goto done;
+    memset(info, 0, sizeof *info); /* overwritten, not freed */
+    info->scale = 1.0;
+    THX_TRY(thx_surface_read_file(ctx, path, path2, opts->format, name, role, &s, &info->read));
     info->scale = opts->scale;
     if (opts->scale != 1.0)
         for (size_t i = 0; i < 3 * s->n_nodes; i++) {
@@ -120,7 +101,7 @@ thx_status thx_surface_import(thx_ctx *ctx, const char *path, const char *path2,
         }
     info->extent = s->n_nodes ? fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2])) : 0;
     THX_TRY(remove_unused(ctx, s, &info->n_unused_removed, &info->first_unused));
-    if (info->first_unused >= 0 && info->index_base > 0) info->first_unused += info->index_base;
+    if (info->first_unused >= 0 && info->read.index_base > 0) info->first_unused += info->read.index_base;
 
     st = thx_surface_check(ctx, s, NULL, &opts->check, &info->report);
     if (st != THX_OK && st != THX_ECHECK) goto done;

@@ -37,21 +37,6 @@
 #define MODEL_FORMAT "thorax-model"
 #define MODEL_VERSION 1
 
-/* ------------------------------------------------------ small text helpers */
-
-/* Names that are safe as file names on every system we care about. */
-static int name_is_safe(const char *s)
-{
-    if (!s[0] || s[0] == '.') return 0;
-    for (const char *p = s; *p; p++) {
-        char c = *p;
-        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
-                 c == '.';
-        if (!ok) return 0;
-    }
-    return 1;
-}
-
 /* ------------------------------------------------------------ model write */
 
 static thx_status join(thx_ctx *ctx, char *out, size_t size, const char *dir, const char *file)
@@ -141,7 +126,7 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
     /* Validate everything before creating anything on disk. */
     for (size_t i = 0; i < m->n_surfaces; i++) {
         const thx_surface *s = m->surf[i];
-        if (!name_is_safe(s->name))
+        if (!thx_name_ok(s->name, sizeof s->name))
             return thx_error(ctx, THX_EINPUT,
                              "surface \"%s\": name is not usable as a file name (use letters, digits, '_', '-', '.'; "
                              "not starting with '.')",
@@ -405,7 +390,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
             goto done;
         }
         const cJSON *name = cJSON_GetObjectItemCaseSensitive(o, "name");
-        if (!cJSON_IsString(name) || !name_is_safe(name->valuestring) || strlen(name->valuestring) > 56 ||
+        if (!cJSON_IsString(name) || !thx_name_ok(name->valuestring, sizeof m->surf[0]->name) || strlen(name->valuestring) > 56 ||
             strcmp(name->valuestring, "model.json") == 0) {
             st = thx_error(ctx, THX_EINPUT,
                            "%s: surface %d: \"name\" missing or not a valid surface name (letters, digits, '_', '-', "

@@ -376,7 +376,7 @@ static thx_status read_region(thx_ctx *ctx, const char *mpath, size_t k, const c
         return thx_error(ctx, THX_EINPUT, "%s: region %zu: \"id\" must be %zu (ids run 1, 2, ... in the order listed)",
                          mpath, k + 1, k + 1);
     const cJSON *nm = cJSON_GetObjectItemCaseSensitive(o, "name");
-    if (!cJSON_IsString(nm) || !thx_region_name_ok(nm->valuestring, sizeof r->name))
+    if (!cJSON_IsString(nm) || !thx_name_ok(nm->valuestring, sizeof r->name))
         return thx_error(ctx, THX_EINPUT,
                          "%s: region %zu: \"name\" missing, longer than 31 characters or not made of letters, digits, "
                          "'_', '-', '.'",

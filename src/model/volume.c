@@ -45,7 +45,7 @@ double thx_volume_tet_volume(const thx_volume *v, size_t t)
     return thx_v3_dot(thx_v3_cross(a, b), c) / 6.0;
 }
 
-int thx_region_name_ok(const char *s, size_t cap)
+int thx_name_ok(const char *s, size_t cap)
 {
     size_t n = strnlen(s, cap);
     if (n == 0 || n == cap || s[0] == '.') return 0;
@@ -113,7 +113,7 @@ int thx_tensor_spd(const double *a, char *why, size_t size)
 /* Checks one region of the table (k 0-based); `where` prefixes messages. */
 static thx_status check_region(thx_ctx *ctx, const char *where, size_t k, const thx_region *r)
 {
-    if (!thx_region_name_ok(r->name, sizeof r->name))
+    if (!thx_name_ok(r->name, sizeof r->name))
         return thx_error(ctx, THX_EINPUT,
                          "%s: region %zu: name is empty, too long (31 characters at most) or not made of letters, "
                          "digits, '_', '-', '.'",

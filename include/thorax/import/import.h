@@ -51,17 +51,7 @@ void thx_import_opts_default(thx_import_opts *o);
 
 /* What reading and post-processing found. Plain data. */
 typedef struct {
-    thx_import_format format;  /* the format read */
-    char format_detail[64];    /* e.g. "binary STL", "ascii PLY", "ECGSim .tri (labelled lines)" */
-    char path2[1024];          /* the second file read (the .fac or .pts of a pair), else "" */
-    int index_base;            /* base of the file's node numbers: 0 or 1; -1 for STL (none) */
-    int index_base_detected;   /* 1 if detected from the data (.fac, .tri), 0 if fixed by the format */
-    size_t n_nodes_read;       /* as read (STL: after merging corners) */
-    size_t n_tris_read;        /* as read, after splitting polygons into fans */
-    size_t n_polygons_split;   /* faces with more than three vertices split into fans */
-    size_t n_corners_merged;   /* STL: facet corners merged into existing nodes */
-    size_t n_cells_ignored;    /* OBJ l/p lines, VTK VERTICES and LINES cells */
-    int trailer_line;          /* .tri: first line of ignored text after the triangles, 0 if none */
+    thx_surface_read_info read; /* what thx_surface_read_file found (format, index base, counts as read) */
     size_t n_unused_removed;   /* nodes in no triangle, removed */
     long first_unused;         /* the first of them, numbered as in the file (its index base) */
     double scale;              /* the scale applied */

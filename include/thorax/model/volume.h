@@ -75,9 +75,10 @@ void thx_volume_destroy(thx_volume **v);
 /* Signed volume of tetrahedron t, mm^3 (> 0 for every tetrahedron of a valid volume). */
 double thx_volume_tet_volume(const thx_volume *v, size_t t);
 
-/* A region name: 1-31 characters of [A-Za-z0-9_.-], not starting with '.' (it names files and
- * table rows); s holds at most cap bytes. */
-int thx_region_name_ok(const char *s, size_t cap);
+/* A name that can name a file and a table row (a region's, a surface's): at least one character of
+ * [A-Za-z0-9_.-], not starting with '.', shorter than cap (the bytes s may hold: 32 for a region,
+ * 64 for a surface). */
+int thx_name_ok(const char *s, size_t cap);
 /* Whether a 3x3 row-major tensor is symmetric positive definite; if not, why[] says how. */
 int thx_tensor_spd(const double *a, char *why, size_t size);
 /* Whether a surface node and its volume node are the same point: the mesher snaps volume nodes to
