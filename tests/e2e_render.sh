@@ -115,7 +115,9 @@ codec=$(ffprobe -v error -select_streams v:0 -show_entries stream=codec_name -of
 [ "$n" = 6 ] && [ "$codec" = h264 ] || fail "mp4: $n frames, codec $codec"
 # the movie is thorax's own (its metadata comment, in the header by +faststart); a user's movie of
 # that name stops the run before any frame is drawn, and is left as it was
-head -c 4194304 anim/animation.mp4 | grep -q "thorax-movie" || fail "the movie carries no signature in its header"
+# (read into a file first: grep -q leaving early would kill head with SIGPIPE, a failure under pipefail)
+head -c 4194304 anim/animation.mp4 > movie_head.bin
+grep -qa "thorax-movie" movie_head.bin || fail "the movie carries no signature in its header"
 printf 'my holiday video' > anim/mine.mp4
 if "$THORAX" animate --solution sol --frames 180:185 --size 320x360 --colorbar --label --fps 10 -o anim --mp4 anim/mine.mp4 -q 2> mine.err; then
     fail "animate replaced a user's movie"
