@@ -14,7 +14,8 @@ packages=(
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri  # rendering: OpenGL 3.3 core on EGL (Mesa llvmpipe headless)
   libpng-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core  # PNG images; text in images
   ffmpeg                             # animations: MP4 (H.264); ffprobe in tests
-  xvfb xauth                         # bench: VTK (no EGL build in Debian) rendering beside ours
+  libgtk-4-dev                       # thorax view: the interactive viewer (GTK 4, GtkGLArea)
+  xvfb xauth xdotool x11-apps        # viewer tests under Xvfb (real key and mouse events, xwd); VTK beside ours
   python3-scipy                      # tests: scipy.io.loadmat reads our .mat files
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)

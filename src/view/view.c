@@ -1,0 +1,2 @@
+/* The viewer's application (see view.h). */
+#include "view/view.h"
