@@ -47,15 +47,15 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         snprintf(sig + len, cap - len, " %s", a);
     }
     char path[PATH_MAX + 64];
-    if (o->solution) {
-        snprintf(path, sizeof path, "%s/solution.json", o->solution);
+    if (o->p.solution) {
+        snprintf(path, sizeof path, "%s/solution.json", o->p.solution);
         sig_file(sig, cap, path);
     }
-    if (o->data) sig_file(sig, cap, o->data);
-    if (o->channels) sig_file(sig, cap, o->channels);
-    for (int k = 0; k < o->n_files; k++) sig_file(sig, cap, o->files[k]);
-    if (o->model_dir) {
-        snprintf(path, sizeof path, "%s/model.json", o->model_dir);
+    if (o->p.data) sig_file(sig, cap, o->p.data);
+    if (o->p.channels) sig_file(sig, cap, o->p.channels);
+    for (int k = 0; k < o->p.n_files; k++) sig_file(sig, cap, o->p.files[k]);
+    if (o->p.model_dir) {
+        snprintf(path, sizeof path, "%s/model.json", o->p.model_dir);
         sig_file(sig, cap, path);
     }
     sig_file(sig, cap, "/proc/self/exe");
@@ -118,11 +118,11 @@ int cmd_animate(int argc, char **argv)
     if (pr) return CLI_EXIT(pr);
     if (frames && (sscanf(frames, "%d:%d", &a_first, &a_last) != 2 || a_first < 1 || a_last < a_first))
         return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
-    if (!o.model_dir && !o.n_files && !o.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
+    if (!o.p.model_dir && !o.p.n_files && !o.p.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
     o.last = 0; /* frames checked below */
     thx_ctx *ctx = cli_ctx(o.verbose);
-    rdata d;
+    thx_picture_data d;
     thx_renderer *rr = NULL;
     thx_font *font = NULL;
     thx_image *img = NULL;
@@ -142,8 +142,8 @@ int cmd_animate(int argc, char **argv)
         if (a_last < 0) a_last = (int)nf;
         if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
         /* arrows on every frame: refused before anything is drawn when some frame has no currents */
-        for (int f = a_first; st == THX_OK && o.arrows && f <= a_last; f++)
-            if (render_currents_column(&d, f - 1) < 0)
+        for (int f = a_first; st == THX_OK && o.p.arrows && f <= a_last; f++)
+            if (thx_picture_currents_column(&d, f - 1) < 0)
                 st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
                                "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
     }
@@ -190,11 +190,11 @@ int cmd_animate(int argc, char **argv)
         thx_image *old = NULL;
         thx_ctx *quiet = NULL;
         thx_ctx_create(&quiet);
-        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.w &&
-            old->h == o.h) {
+        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.p.w &&
+            old->h == o.p.h) {
             kept++; /* resumable: a complete PNG of the right size is kept */
         } else {
-            st = render_frame(ctx, &o, &d, rr, font, f - 1, img, &nan);
+            st = thx_picture_draw(ctx, &o.p, &d, rr, font, f - 1, img, &nan);
             if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
         }
         thx_image_destroy(&old);
@@ -232,7 +232,7 @@ int cmd_animate(int argc, char **argv)
     thx_image_destroy(&img);
     thx_font_close(&font);
     thx_renderer_destroy(&rr);
-    render_data_free(&d);
+    thx_picture_data_free(&d);
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -1,0 +1,151 @@
+/*
+ * thorax/picture/picture.h — a picture of a model and its data (paper 4.2): which surfaces, how
+ * each is drawn, the data bound to them and the scale of each, the camera and clip plane in the
+ * model's anatomical frame, and the annotations (colour bar, time label, a signal trace).
+ *
+ * One code for every picture thorax makes: `thorax render` and `thorax animate` draw it offscreen
+ * (thx_picture_draw), `thorax view` draws the same scene into its window (thx_picture_draw_gl, then
+ * thx_picture_annotate over the pixels), so a window shows what `thorax render` writes from the
+ * same settings.
+ */
+#ifndef THORAX_PICTURE_H
+#define THORAX_PICTURE_H
+#include <stddef.h>
+
+#include "thorax/model/model.h"
+#include "thorax/model/series.h"
+#include "thorax/render/image.h"
+#include "thorax/render/render.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The range a surface's colours span (paper 4.2: "based on the current data frame or in some
+ * larger context, or even set directly by the user"). */
+typedef enum {
+    THX_SCOPE_FRAME = 0, /* this frame of this surface */
+    THX_SCOPE_SERIES,    /* all frames of this surface */
+    THX_SCOPE_ALL,       /* all frames of all surfaces with data */
+    THX_SCOPE_FIXED      /* lo..hi as given */
+} thx_scope;
+
+/* One surface's look (--surface NAME=MODE[:OPACITY[:#RRGGBB]]). */
+typedef struct {
+    char name[64];
+    thx_draw_mode mode;
+    float opacity;      /* < 0: the default */
+    int have_color;
+    float color[3];
+} thx_picture_look;
+
+#define THX_PICTURE_MAX 16 /* files, --only, --surface, --no-clip entries */
+
+/* The settings of a picture: what `thorax render` takes on its command line (docs/cli.md), which
+ * the viewer changes as it runs. Plain data; thx_picture_opts_default fills the defaults. Strings
+ * are not owned. */
+typedef struct {
+    const char *model_dir, *solution, *data, *data_surface, *font, *trace, *arrows;
+    const char *files[THX_PICTURE_MAX]; /* surface files drawn without a model (any format thorax import reads) */
+    const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
+    int n_files;
+    int w, h;               /* picture size, pixels */
+    int view;               /* a thx_view */
+    int have_camera;
+    thx_camera cam;
+    /* the anatomical frame: canonical axis k (0 the subject's right, 1 anterior, 2 cranial) is
+       sg[k] times model axis ax[k] (default x, y, z; up_spec and front_spec change it) */
+    int ax[3];
+    double sg[3];
+    const char *up_spec, *front_spec;
+    int mode;               /* a thx_draw_mode */
+    int style;              /* a thx_data_style */
+    int levels;
+    int cmap;               /* a thx_colormap */
+    int model;              /* a thx_scale_model */
+    int scope;              /* a thx_scope */
+    int symmetric;
+    double lo, hi;          /* THX_SCOPE_FIXED */
+    char clip[64];          /* SIDE[:F] or nx,ny,nz,d; "" none */
+    int colorbar, label, panels;
+    const char *only[THX_PICTURE_MAX];
+    int n_only;
+    const char *whole[THX_PICTURE_MAX]; /* left whole by the clip plane */
+    int n_whole;
+    thx_picture_look look[THX_PICTURE_MAX];
+    int n_look;
+    double arrow_spacing, arrow_scale;
+    int arrow_max, arrow_unit;
+    double arrow_gap;       /* minimum distance between arrows (mm), 0: none */
+    int have_box;
+    double box[6];          /* arrows only inside x0 y0 z0 x1 y1 z1 */
+    const char *arrow_region; /* arrows only at nodes of this tissue region */
+    int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
+    int frame;              /* 0-based, for that check */
+} thx_picture_opts;
+
+#define THX_PICTURE_SURFACES 64
+
+/* The data a picture draws, read once (thx_picture_load) and owned here. */
+typedef struct {
+    thx_model *m;
+    thx_series *series[THX_PICTURE_SURFACES]; /* per surface, or NULL */
+    thx_series *ecg;          /* 12-lead (trace) */
+    thx_series *currents;     /* currents_node, for arrows */
+    thx_series *volume;       /* volume potentials (unused for now) */
+    double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
+    unsigned char sranged[THX_PICTURE_SURFACES];
+    const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
+    size_t trace_row;
+    char trace_label[96];
+} thx_picture_data;
+
+/* The defaults (800x800, anterior, gouraud, ecg, linear, series scope, symmetric, ...). */
+void thx_picture_opts_default(thx_picture_opts *o);
+/* "hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"; -1 if unknown. */
+int thx_picture_mode_parse(const char *s, thx_draw_mode *out);
+/* "+y", "-z", "x" -> axis index and sign; -1 if not an axis. */
+int thx_picture_axis_parse(const char *s, int *axis, double *sign);
+
+/* Reads the model (or the surface files), the solution's or the given data, the trace and the
+ * currents, checks every name the options give, and settles the anatomical frame of the views
+ * (o->ax, o->sg). d is zeroed first; free it with thx_picture_data_free even on failure. */
+thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d);
+void thx_picture_data_free(thx_picture_data *d);
+
+/* The picture of frame (0-based) into img (o->w x o->h), offscreen with r (made with that size).
+ * *nan_total (may be NULL) counts the values that are not numbers. font may be NULL (no text). */
+thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
+                            thx_font *font, int frame, thx_image *img, size_t *nan_total);
+
+/* The same picture's 3D part, into the framebuffer bound in the caller's current OpenGL 3.3
+ * context (fb_w x fb_h pixels; r made with w = h = 0), the whole framebuffer cleared to the
+ * picture's background first. The scale of the colour bar is left in *bar (when *have_bar) for
+ * thx_picture_annotate. The camera used is o->cam when o->have_camera, else the standard view. */
+thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
+                               thx_font *font, int frame, int fb_w, int fb_h, thx_scale *bar, int *have_bar,
+                               size_t *nan_total);
+/* The annotations (surface names of panels, colour bar, time label, trace) over img, which holds
+ * the 3D part drawn by thx_picture_draw_gl at img's size. */
+thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_font *font,
+                                int frame, const thx_scale *bar, int have_bar, thx_image *img);
+
+/* The 3D part's viewport (x, y from the top left, w, h) of a picture of w x h pixels: the picture
+ * less the label strip above, the colour bar beside and the trace below, as o asks for them. */
+void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4]);
+/* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes. */
+void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);
+/* The model's bounding box (all surfaces). */
+void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3]);
+/* The clip plane o->clip asks for, in the model's axes; 0 none, 1 one (in *p), -1 a bad spec (message in ctx). */
+int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_clip_plane *p);
+
+/* The column of the solution's currents_node at the time of frame, or -1. */
+long thx_picture_currents_column(const thx_picture_data *d, int frame);
+/* The number of frames of the data shown (the body surface's, else the first surface's with data;
+ * 0 without data). */
+size_t thx_picture_n_frames(const thx_picture_data *d);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
