@@ -20,6 +20,7 @@ int cmd_verify(int argc, char **argv);
 int cmd_leads(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_animate(int argc, char **argv);
+int cmd_view(int argc, char **argv);
 
 /* A context whose log goes to stderr ("thorax: warning: ..."), verbosity from -v/-q. Every existing
  * regular file on the command line but the values of the last cli_parse's CLI_OUTPUT options is

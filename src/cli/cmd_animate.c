@@ -16,6 +16,7 @@ extern char **environ;
 #include "cli/cli_fem.h"
 #include "cli/render_cli.h"
 #include "thorax/core/fileio.h"
+#include "thorax/picture/movie.h"
 /* ---- what the frames of an animation were drawn with ---- */
 
 /* Appends "path:size:mtime" of a file (or "path:-" if it cannot be read). */
@@ -59,30 +60,6 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         sig_file(sig, cap, path);
     }
     sig_file(sig, cap, "/proc/self/exe");
-}
-
-/* The movie's signature: its metadata comment, which +faststart puts in the header before the
- * frames' data, within the first MOVIE_WINDOW bytes (thorax/core/fileio.h). */
-#define MOVIE_MARKER "thorax-movie"
-#define MOVIE_WINDOW (4u << 20)
-
-/* Runs ffmpeg on the frames (argv, no shell: any path works); its exit status, 127 if it cannot run. */
-static int run_ffmpeg(int fps, int first, int count, const char *dir, const char *out)
-{
-    char rate[32], start[32], nframes[32], pattern[PATH_MAX + 32];
-    snprintf(rate, sizeof rate, "%d", fps);
-    snprintf(start, sizeof start, "%d", first);
-    snprintf(nframes, sizeof nframes, "%d", count);
-    snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
-    char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
-                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
-                    "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-metadata", "comment=" MOVIE_MARKER, "-movflags", "+faststart",
-                    "-f", "mp4", (char *)out, NULL};
-    pid_t pid;
-    if (posix_spawnp(&pid, "ffmpeg", NULL, NULL, args, environ) != 0) return 127;
-    int status = 0;
-    if (waitpid(pid, &status, 0) < 0) return 127;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
 int cmd_animate(int argc, char **argv)
@@ -155,7 +132,7 @@ int cmd_animate(int argc, char **argv)
         else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
     }
     if (st == THX_OK && want_movie)
-        st = thx_output_claim_in(ctx, movie, MOVIE_MARKER, strlen(MOVIE_MARKER), MOVIE_WINDOW, NULL, 0, &maf);
+        st = thx_movie_claim(ctx, movie, &maf);
     if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
         st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
     /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
@@ -203,23 +180,7 @@ int cmd_animate(int argc, char **argv)
         if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
     }
     if (st == THX_OK && want_movie) {
-        /* a fresh temporary name beside the movie (never a file that is there), moved in under the claim */
-        char tmpm[PATH_MAX + 80];
-        snprintf(tmpm, sizeof tmpm, "%s.tmpXXXXXX", movie);
-        int fd = mkstemp(tmpm);
-        if (fd < 0) {
-            st = thx_error(ctx, THX_EIO, "%s: cannot create a temporary file beside it: %s", movie, strerror(errno));
-        } else {
-            close(fd);
-            int r = run_ffmpeg(o.fps, a_first, total, out_dir, tmpm);
-            if (r != 0) {
-                remove(tmpm);
-                st = thx_error(ctx, THX_EIO, "ffmpeg failed (exit %d) making %s%s", r, movie,
-                               r == 127 ? ": ffmpeg is not installed (Debian package ffmpeg)" : "");
-            } else {
-                st = thx_output_place(ctx, &maf, tmpm);
-            }
-        }
+        st = thx_movie_make(ctx, &maf, out_dir, a_first, total, o.fps);
     }
     if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
     else if (o.verbose >= 0) {

@@ -118,9 +118,12 @@ static int parse_camera(void *user, const cli_opt *opt, const char *v)
 {
     ropts *o = user;
     thx_camera *c = &o->p.cam;
-    if (sscanf(v, "%lf,%lf,%lf:%lf,%lf,%lf:%lf,%lf,%lf:%lf", &c->eye[0], &c->eye[1], &c->eye[2], &c->center[0],
-               &c->center[1], &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg) != 10)
-        return cli_usage_error(o->cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV");
+    c->height = 0;
+    int got = sscanf(v, "%lf,%lf,%lf:%lf,%lf,%lf:%lf,%lf,%lf:%lf:%lf", &c->eye[0], &c->eye[1], &c->eye[2], &c->center[0],
+                     &c->center[1], &c->center[2], &c->up[0], &c->up[1], &c->up[2], &c->fov_deg, &c->height);
+    if (got < 10 || !(c->fov_deg >= 0 && c->fov_deg < 180) || (c->fov_deg == 0 && !(c->height > 0)))
+        return cli_usage_error(o->cmd, "--camera EX,EY,EZ:CX,CY,CZ:UX,UY,UZ:FOV[:HEIGHT] (FOV in degrees, 0 for orthographic "
+                                       "with the visible HEIGHT in mm)");
     o->p.have_camera = 1;
     return 0;
 }
@@ -131,8 +134,9 @@ static int parse_scope(void *user, const cli_opt *opt, const char *v)
     if (!strcmp(v, "frame")) o->p.scope = THX_SCOPE_FRAME;
     else if (!strcmp(v, "series")) o->p.scope = THX_SCOPE_SERIES;
     else if (!strcmp(v, "all")) o->p.scope = THX_SCOPE_ALL;
+    else if (!strcmp(v, "surfaces")) o->p.scope = THX_SCOPE_SURFACES;
     else if (sscanf(v, "fixed:%lf:%lf", &o->p.lo, &o->p.hi) == 2 && o->p.lo < o->p.hi) o->p.scope = THX_SCOPE_FIXED;
-    else return cli_usage_error(o->cmd, "--scope: frame, series, all, or fixed:LO:HI");
+    else return cli_usage_error(o->cmd, "--scope: frame, series, surfaces, all, or fixed:LO:HI");
     return 0;
 }
 
@@ -210,9 +214,9 @@ size_t render_options(cli_opt *t, ropts *o)
                                "files without them are drawn as +z and +y, with a warning)"};
     t[n++] = (cli_opt){.name = "--front", .type = CLI_STRING, .meta = "AXIS", .fn = parse_axis_option,
                        .def = "the model's frame", .help = "the model's anterior axis, as --up"};
-    t[n++] = (cli_opt){.name = "--camera", .type = CLI_STRING, .meta = "E:C:U:FOV", .fn = parse_camera,
-                       .help = "explicit camera: eye, centre, up (x,y,z each), field of view in degrees (0: "
-                               "orthographic)"};
+    t[n++] = (cli_opt){.name = "--camera", .type = CLI_STRING, .meta = "E:C:U:FOV[:H]", .fn = parse_camera,
+                       .help = "explicit camera: eye, centre, up (x,y,z each), field of view in degrees, or 0 and the "
+                               "visible height H in mm for an orthographic view"};
     t[n++] = (cli_opt){.name = "--mode", .type = CLI_CHOICE, .meta = "M", .choices = modes, .i = &o->p.mode,
                        .help = "hidden, points, wire, flat, gouraud, phong, or orientation (the paper's check: "
                                "triangles only where their outward side faces the viewer, the nodes behind as points)"};
@@ -234,7 +238,15 @@ size_t render_options(cli_opt *t, ropts *o)
                        .help = "the scaling model from values to colours"};
     t[n++] = (cli_opt){.name = "--scope", .type = CLI_STRING, .meta = "S", .fn = parse_scope, .def = "series",
                        .help = "the range the colours span: frame (this frame), series (all frames of the surface), "
-                               "all (all surfaces), or fixed:LO:HI"};
+                               "surfaces (this frame of all surfaces), all (all frames of all surfaces), or fixed:LO:HI"};
+    t[n++] = (cli_opt){.name = "--scale-group", .type = CLI_STRING, .meta = "A,B,...", .flags = CLI_REPEAT,
+                       .sv = o->p.groups, .count = &o->p.n_groups, .max = THX_PICTURE_MAX,
+                       .help = "these surfaces share one scale (the frame and series scopes span them together)"};
+    t[n++] = (cli_opt){.name = "--slave", .type = CLI_STRING, .meta = "NAME=MASTER", .flags = CLI_REPEAT,
+                       .sv = o->p.slaves, .count = &o->p.n_slaves, .max = THX_PICTURE_MAX,
+                       .help = "surface NAME is drawn with surface MASTER's scale"};
+    t[n++] = (cli_opt){.name = "--invert", .type = CLI_FLAG, .i = &o->p.invert,
+                       .help = "the colour map reversed (high values in the low colours)"};
     t[n++] = (cli_opt){.name = "--true-range", .type = CLI_SET, .i = &o->p.symmetric, .ival = 0,
                        .help = "map min..max instead of a range symmetric about zero"};
     t[n++] = (cli_opt){.name = "--symmetric", .type = CLI_SET, .i = &o->p.symmetric, .ival = 1,

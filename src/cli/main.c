@@ -26,6 +26,7 @@ static const struct {
     {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
     {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},
     {"animate", cmd_animate, "one picture per frame and an MP4 movie (ffmpeg), resumable"},
+    {"view", cmd_view, "the interactive viewer (GTK 4): linked surfaces, frames, picking, scripts"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

@@ -19,7 +19,7 @@
 
 void thx_picture_data_free(thx_picture_data *d)
 {
-    for (int s = 0; s < 64; s++) thx_series_destroy(&d->series[s]);
+    for (int s = 0; s < THX_PICTURE_SURFACES; s++) thx_series_destroy(&d->series[s]);
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
@@ -63,6 +63,21 @@ static thx_status check_names(thx_ctx *ctx, const thx_picture_opts *o, const thx
             return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
                              k < o->n_only ? "--only" : k < o->n_only + o->n_look ? "--surface" : "--no-clip", name, list);
     }
+    /* the surfaces of --scale-group A,B and --slave A=B */
+    for (int k = 0; k < o->n_groups + o->n_slaves; k++) {
+        const char *spec = k < o->n_groups ? o->groups[k] : o->slaves[k - o->n_groups];
+        const char *what = k < o->n_groups ? "--scale-group" : "--slave";
+        if (k >= o->n_groups && (!strchr(spec, '=') || strchr(spec, '=') == spec))
+            return thx_error(ctx, THX_EINPUT, "--slave '%s': give NAME=MASTER", spec);
+        for (const char *p = spec; *p;) {
+            const char *c = p + strcspn(p, ",=");
+            char name[64];
+            snprintf(name, sizeof name, "%.*s", (int)(c - p < 63 ? c - p : 63), p);
+            if (surface_by_name(m, name) < 0)
+                return thx_error(ctx, THX_EINPUT, "%s '%s': the model has no surface '%s' (it has %s)", what, spec, name, list);
+            p = *c ? c + 1 : c;
+        }
+    }
     return THX_OK;
 }
 
@@ -97,7 +112,7 @@ static thx_status resolve_trace(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
         s = surface_by_name(d->m, name);
         if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': the model has no surface '%s'", o->trace, name);
     } else {
-        for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++)
+        for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++)
             if (d->series[k] && (s < 0 || d->m->surf[k]->role == THX_ROLE_OUTER)) s = (int)k;
         if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': there are no data to trace (give --solution or --data)", o->trace);
     }
@@ -302,7 +317,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
             if (r < 0) return thx_error(ctx, THX_EINPUT, "--arrow-region: the volume mesh has no region '%s' (it has %s)", o->arrow_region, list);
         }
     }
-    for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
+    for (size_t s = 0; s < d->m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
         if (o->check_frame && d->series[s] && (size_t)o->frame >= d->series[s]->n_frames)
             return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
                              d->series[s]->n_frames);
@@ -332,6 +347,43 @@ static void series_range(thx_picture_data *d, size_t k, double *lo, double *hi)
     *hi = fmax(*hi, d->smax[k]);
 }
 
+/* Whether surface name is in the comma-separated list. */
+static int in_list(const char *list, const char *name)
+{
+    size_t n = strlen(name);
+    for (const char *p = list; *p;) {
+        const char *c = strchr(p, ',');
+        size_t len = c ? (size_t)(c - p) : strlen(p);
+        if (len == n && !strncmp(p, name, n)) return 1;
+        p = c ? c + 1 : p + len;
+    }
+    return 0;
+}
+
+/* The surface whose scale s takes (--slave NAME=MASTER), or s. */
+static int master_of(const thx_picture_opts *o, const thx_model *m, int s)
+{
+    for (int k = 0; k < o->n_slaves; k++) {
+        const char *eq = strchr(o->slaves[k], '=');
+        if (!eq || strncmp(o->slaves[k], m->surf[s]->name, (size_t)(eq - o->slaves[k])) ||
+            m->surf[s]->name[eq - o->slaves[k]])
+            continue;
+        for (size_t j = 0; j < m->n_surfaces; j++)
+            if (!strcmp(m->surf[j]->name, eq + 1)) return (int)j;
+    }
+    return s;
+}
+
+/* Whether surface k's data count toward surface s's scale: all surfaces (scopes all and
+ * surfaces), the surfaces of s's group (--scale-group), or s alone. */
+static int shares_scale(const thx_picture_opts *o, const thx_model *m, int s, int k)
+{
+    if (o->scope == THX_SCOPE_ALL || o->scope == THX_SCOPE_SURFACES || k == s) return 1;
+    for (int g = 0; g < o->n_groups; g++)
+        if (in_list(o->groups[g], m->surf[s]->name) && in_list(o->groups[g], m->surf[k]->name)) return 1;
+    return 0;
+}
+
 static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int frame, thx_scale *sc)
 {
     double lo = INFINITY, hi = -INFINITY;
@@ -341,16 +393,23 @@ static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int
         sc->lo = o->lo;
         sc->hi = o->hi;
         sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
-        return;
+    } else {
+        s = master_of(o, d->m, s);
+        for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++) {
+            const thx_series *x = d->series[k];
+            if (!x || !shares_scale(o, d->m, s, (int)k)) continue;
+            size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
+            if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
+            else series_range(d, k, &lo, &hi);
+        }
+        /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude */
+        thx_scale_from_range(sc, o->model, lo, hi, o->symmetric);
     }
-    for (size_t k = 0; k < d->m->n_surfaces && k < 64; k++) {
-        const thx_series *x = d->series[k];
-        if (!x || (o->scope != THX_SCOPE_ALL && (int)k != s)) continue;
-        if (o->scope == THX_SCOPE_FRAME) range_of(x->v + (size_t)frame * x->n_rows, x->n_rows, &lo, &hi);
-        else series_range(d, k, &lo, &hi);
+    if (o->invert) { /* the colour map reversed: the scale's ends swapped */
+        double t = sc->lo;
+        sc->lo = sc->hi;
+        sc->hi = t;
     }
-    /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude */
-    thx_scale_from_range(sc, o->model, lo, hi, o->symmetric);
 }
 
 static const float palette[6][4] = {{0.85f, 0.75f, 0.65f, 1}, {0.95f, 0.85f, 0.55f, 1}, {0.75f, 0.35f, 0.35f, 1},
@@ -381,7 +440,7 @@ long thx_picture_currents_column(const thx_picture_data *d, int frame)
 {
     const thx_series *c = d->currents, *ref = NULL;
     if (!c) return -1;
-    for (size_t s = 0; s < d->m->n_surfaces && s < 64; s++)
+    for (size_t s = 0; s < d->m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
         if (d->series[s] && (!ref || d->m->surf[s]->role == THX_ROLE_OUTER)) ref = d->series[s];
     if (!ref) return c->n_frames == 1 ? 0 : -1;
     if ((size_t)frame >= ref->n_frames) return -1;
@@ -451,7 +510,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
     const thx_model *m = d->m;
     b->n = 0;
     b->main_surface = -1;
-    for (size_t s = 0; s < m->n_surfaces && s < 64; s++) {
+    for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
         if (only_surface >= 0 && (int)s != only_surface) continue;
         thx_render_surface *r = &b->rs[b->n];
         memset(r, 0, sizeof *r);
@@ -464,7 +523,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
         r->mode = o->mode;
         int has = d->series[s] != NULL;
         int any = 0;
-        for (size_t k = 0; k < m->n_surfaces && k < 64; k++) any |= d->series[k] != NULL;
+        for (size_t k = 0; k < m->n_surfaces && k < THX_PICTURE_SURFACES; k++) any |= d->series[k] != NULL;
         if (!has && any && o->mode != THX_DRAW_ORIENTATION) {
             /* beside data, colour means potential: the other surfaces in greys (a shade each) */
             float g = 0.82f - 0.08f * (float)(s % 4);

@@ -26,7 +26,8 @@ typedef enum {
     THX_SCOPE_FRAME = 0, /* this frame of this surface */
     THX_SCOPE_SERIES,    /* all frames of this surface */
     THX_SCOPE_ALL,       /* all frames of all surfaces with data */
-    THX_SCOPE_FIXED      /* lo..hi as given */
+    THX_SCOPE_FIXED,     /* lo..hi as given */
+    THX_SCOPE_SURFACES   /* this frame of all surfaces with data */
 } thx_scope;
 
 /* One surface's look (--surface NAME=MODE[:OPACITY[:#RRGGBB]]). */
@@ -65,6 +66,13 @@ typedef struct {
     int scope;              /* a thx_scope */
     int symmetric;
     double lo, hi;          /* THX_SCOPE_FIXED */
+    int invert;             /* the colour map reversed (high values in the low colour) */
+    /* scale groups: each a comma-separated list of surfaces whose scope spans them together
+       (frame and series scopes); slaves: "NAME=MASTER", NAME drawn with MASTER's scale */
+    const char *groups[THX_PICTURE_MAX];
+    int n_groups;
+    const char *slaves[THX_PICTURE_MAX];
+    int n_slaves;
     char clip[64];          /* SIDE[:F] or nx,ny,nz,d; "" none */
     int colorbar, label, panels;
     const char *only[THX_PICTURE_MAX];

@@ -1,0 +1,226 @@
+/*
+ * thorax view: the interactive viewer (thorax/view/view.h) with the options of thorax render (so
+ * a window shows what render draws from the same options), the viewer's own, and script files of
+ * those same options (paper 4.2, "Program control").
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+#include "cli/render_cli.h"
+#include "thorax/core/fileio.h"
+#include "thorax/view/view.h"
+
+typedef struct {
+    ropts r;
+    thx_view_opts v;
+    int size_given;
+    int no_loop;
+} vopts;
+
+/* The words of a script's leading option lines, and its other lines (kept for the viewer). */
+typedef struct {
+    char *text;        /* the file, cut into lines and words in place */
+    char **words;
+    int n_words, cap;
+} script_text;
+
+static int push_word(script_text *t, char *w)
+{
+    if (t->n_words == t->cap) {
+        int cap = t->cap ? 2 * t->cap : 64;
+        char **n = realloc(t->words, (size_t)cap * sizeof *n);
+        if (!n) return -1;
+        t->words = n;
+        t->cap = cap;
+    }
+    t->words[t->n_words++] = w;
+    return 0;
+}
+
+static int is_command_line(const char *s)
+{
+    return !strncmp(s, "action ", 7) || !strcmp(s, "action") || !strncmp(s, "wait ", 5) || !strcmp(s, "quit");
+}
+
+/*
+ * Reads a script: its lines up to the first action, wait or quit line are options (--name VALUE:
+ * the name and the rest of the line as its one value, so a path may hold spaces) and positional
+ * arguments (a model directory, surface files); the lines from there on go to the viewer as they
+ * are. 0, or 1 after printing an error naming the file and line.
+ */
+static int read_script(const char *path, script_text *t, thx_view_opts *vo)
+{
+    thx_ctx *ctx = cli_ctx(0);
+    size_t len = 0;
+    thx_status st = thx_read_file(ctx, path, &t->text, &len);
+    if (st != THX_OK) { int rc = cli_fail(ctx, "view", st); thx_ctx_destroy(&ctx); return rc; }
+    thx_ctx_destroy(&ctx);
+    if (memchr(t->text, '\0', len)) { fprintf(stderr, "thorax view: %s: a NUL byte: not a text script\n", path); return 1; }
+    int in_head = 1, line = 0;
+    for (char *p = t->text; p && *p;) {
+        char *nl = strchr(p, '\n');
+        if (nl) *nl = '\0';
+        line++;
+        char *s = p;
+        p = nl ? nl + 1 : NULL;
+        while (*s == ' ' || *s == '\t') s++;
+        size_t n = strlen(s);
+        while (n && (s[n - 1] == '\r' || s[n - 1] == ' ' || s[n - 1] == '\t')) s[--n] = '\0';
+        if (in_head && is_command_line(s)) {
+            in_head = 0;
+            vo->script_line0 = line;
+        }
+        if (!in_head) {
+            if (vo->n_lines >= (int)(sizeof vo->lines / sizeof vo->lines[0])) {
+                fprintf(stderr, "thorax view: %s:%d: more than %zu lines after the options\n", path, line,
+                        sizeof vo->lines / sizeof vo->lines[0]);
+                return 1;
+            }
+            vo->lines[vo->n_lines++] = s;
+            continue;
+        }
+        if (!*s || *s == '#') continue;
+        char *sp = s + strcspn(s, " \t");
+        if (*sp && *s == '-') {
+            *sp++ = '\0';
+            while (*sp == ' ' || *sp == '\t') sp++;
+            if (push_word(t, s) || (*sp && push_word(t, sp))) return 1;
+        } else if (push_word(t, s)) {
+            return 1;
+        }
+    }
+    vo->script = path;
+    return 0;
+}
+
+static int set_loop(void *user, const cli_opt *opt, const char *v)
+{
+    vopts *o = user;
+    o->v.loop = strcmp(opt->name, "--no-loop") != 0;
+    return 0;
+}
+
+/* The options of a running viewer's script line: render's table on a copy of the picture. The
+ * data the viewer holds cannot change under it. */
+static int live_option(void *user, thx_picture_opts *p, const char *line)
+{
+    (void)user;
+    vopts o;
+    memset(&o, 0, sizeof o);
+    o.r.p = *p;
+    o.r.cmd = "view";
+    cli_opt common[N_RENDER_OPTS];
+    cli_command cmd = {.name = "view", .usage = "[options]", .about = "", .group = {{NULL, common, render_options(common, &o.r)}}, .user = &o.r};
+    /* the words must outlive the viewer's use of them: kept until the process ends */
+    char *copy = strdup(line);
+    if (!copy) return 1;
+    char *sp = copy + strcspn(copy, " \t"), *argv[4] = {"view", copy, NULL, NULL};
+    int argc = 2;
+    if (*sp) {
+        *sp++ = '\0';
+        while (*sp == ' ' || *sp == '\t') sp++;
+        if (*sp) argv[argc++] = sp;
+    }
+    int rc = cli_parse(&cmd, argc, argv);
+    if (rc) { free(copy); return 1; }
+    if (o.r.p.solution != p->solution || o.r.p.data != p->data || o.r.p.channels != p->channels ||
+        o.r.p.data_surface != p->data_surface || o.r.p.trace != p->trace || o.r.p.arrows != p->arrows ||
+        o.r.p.model_dir != p->model_dir || o.r.p.n_files != p->n_files) {
+        fprintf(stderr, "thorax view: %s: the data of a running viewer cannot change (give it on the command line or at the "
+                        "head of the script)\n", line);
+        free(copy);
+        return 1;
+    }
+    *p = o.r.p;
+    return 0;
+}
+
+int cmd_view(int argc, char **argv)
+{
+    vopts o;
+    memset(&o, 0, sizeof o);
+    render_opts_default(&o.r);
+    thx_view_opts_default(&o.v);
+    o.r.cmd = "view";
+    int frame = 1;
+    const char *script = NULL;
+    /* a script's options take the place of --script FILE on the command line */
+    script_text st = {0};
+    char **args = calloc((size_t)argc + 1, sizeof *args);
+    int n_args = 0;
+    if (!args) return 1;
+    for (int k = 0; k < argc; k++) {
+        if (!strcmp(argv[k], "--script") && k + 1 < argc && !script) {
+            script = argv[++k];
+            if (read_script(script, &st, &o.v)) { free(args); free(st.words); free(st.text); return 1; }
+            char **grown = realloc(args, ((size_t)argc + (size_t)st.n_words + 1) * sizeof *args);
+            if (!grown) return 1;
+            args = grown;
+            for (int j = 0; j < st.n_words; j++) args[n_args++] = st.words[j];
+            continue;
+        }
+        args[n_args++] = argv[k];
+    }
+    args[n_args] = NULL;
+    cli_opt own[] = {
+        {.name = "--frame", .type = CLI_INT, .meta = "K", .i = &frame, .rule = CLI_GE, .lo = 1, .bad = "--frame: 1, 2, ...",
+         .help = "the first frame shown, 1-based"},
+        {.name = "--script", .type = CLI_INPUT, .meta = "FILE", .s = &script,
+         .help = "options, one a line (the head of the file), then lines run once the windows are up: action NAME "
+                 "[VALUE], --option VALUE, wait MS, quit"},
+        {.name = "--window", .type = CLI_STRING, .meta = "A,B,...", .flags = CLI_REPEAT, .sv = o.v.windows,
+         .count = &o.v.n_windows, .max = THX_VIEW_MAX_WINDOWS,
+         .help = "a window with these surfaces (repeat for more windows; default one window with every surface)"},
+        {.name = "--separate", .type = CLI_FLAG, .i = &o.v.separate, .help = "one window per surface"},
+        {.name = "--rate", .type = CLI_REAL, .meta = "FPS", .d = &o.v.rate, .rule = CLI_GT | CLI_LE, .lo = 0, .hi = 1000,
+         .unit = "frames/s", .bad = "--rate: 0 < frames per second <= 1000", .help = "frames per second when playing"},
+        {.name = "--step", .type = CLI_INT, .meta = "N", .i = &o.v.step, .rule = CLI_GE, .lo = 1, .bad = "--step: at least 1",
+         .help = "frames per step of the arrow keys and of playing"},
+        {.name = "--loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing and stepping wrap around (the default)"},
+        {.name = "--no-loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing stops at the last frame"},
+        {.name = "--play", .type = CLI_FLAG, .i = &o.v.play, .help = "start playing"},
+    };
+    cli_opt common[N_RENDER_OPTS];
+    cli_command cmd = {
+        .name = "view",
+        .usage = "MODEL [--data [--data-surface]] [--frame] [--script] [options]\n"
+                 "--solution [--frame] [--window]... [--separate] [options]\n"
+                 "SURFACE_FILE... [--data [--channels]] [options]\n"
+                 "--script FILE",
+        .about = "The interactive viewer (GTK 4; paper 4.2): the surfaces and their data in one window or\n"
+                 "several, frames stepped with the left and right arrow keys (in step on every surface),\n"
+                 "the surface a command acts on chosen with up and down, turned with the mouse (arcball),\n"
+                 "panned, zoomed and clipped, the field's display standards in the menus and keys, a click\n"
+                 "showing the node's time signal. The window shows what thorax render draws from the same\n"
+                 "options (--size is the drawing area). `?` lists the keys; every key and menu item is an\n"
+                 "action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n",
+        .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how (as thorax render)", common, render_options(common, &o.r)}},
+        .positional = render_positional,
+        .user = &o,
+    };
+    /* the positional and common options' callbacks take the render options, the own ones vopts:
+       r is vopts' first member, so both see what they expect */
+    cmd.user = &o.r;
+    int pr = cli_parse(&cmd, n_args, args);
+    if (pr) { free(args); free(st.words); free(st.text); return CLI_EXIT(pr); }
+    if (!o.r.p.model_dir && !o.r.p.n_files && !o.r.p.solution) {
+        free(args); free(st.words); free(st.text);
+        return cli_usage_error("view", "no model, surface file or --solution given");
+    }
+    o.v.pic = o.r.p;
+    o.v.frame = frame - 1;
+    o.v.win_w = o.r.p.w;
+    o.v.win_h = o.r.p.h;
+    o.v.verbose = o.r.verbose;
+    o.v.option_fn = live_option;
+    o.v.command_line = cli_command_line();
+    thx_ctx *ctx = cli_ctx(o.r.verbose);
+    int rc = thx_view_run(ctx, &o.v);
+    thx_ctx_destroy(&ctx);
+    free(args);
+    free(st.words);
+    free(st.text);
+    return rc;
+}

@@ -1,2 +1,0 @@
-/* The viewer's application (see view.h). */
-#include "view/view.h"

@@ -1,0 +1,752 @@
+/*
+ * Every thing the viewer does is a GAction of the application ("app.NAME"): the menus' items, the
+ * keys (accelerators of the same actions) and a script's `action NAME [VALUE]` lines call the same
+ * code. One table below names each action, its parameter, its keys and its line in the keyboard
+ * overlay (`?`), so the three cannot drift apart. Actions that concern one window act on the
+ * active one (the one with the focus; window 1 in scripts).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "view/view_internal.h"
+
+/* ---- what the actions change ---- */
+
+static void set_frame(view_app *a, view_win *w, int f)
+{
+    if (a->n_frames <= 0) return;
+    if (f < 0) f = a->loop ? a->n_frames - 1 : 0;
+    if (f >= a->n_frames) f = a->loop ? 0 : a->n_frames - 1;
+    if (a->lock_frame) {
+        a->frame = f;
+        for (int k = 0; k < a->n_win; k++) a->win[k]->frame = f;
+        view_redraw_all(a);
+    } else if (w) {
+        w->frame = f;
+        w->pending = 1;
+        gtk_gl_area_queue_render(GTK_GL_AREA(w->gl));
+        view_update_titles(a);
+    }
+    view_plot_update(a);
+}
+
+static void step_frames(view_app *a, int by)
+{
+    view_win *w = view_active(a);
+    int f = a->lock_frame || !w ? a->frame : w->frame;
+    if (!a->loop && (f + by < 0 || f + by >= a->n_frames)) by = 0;
+    set_frame(a, w, f + by);
+}
+
+/* The look entry of surface s in a window's picture (made from the window's defaults if none). */
+static thx_picture_look *look_of(view_win *w, const char *name)
+{
+    for (int k = 0; k < w->o.n_look; k++)
+        if (!strcmp(w->o.look[k].name, name)) return &w->o.look[k];
+    if (w->o.n_look >= THX_PICTURE_MAX) return NULL;
+    thx_picture_look *l = &w->o.look[w->o.n_look++];
+    memset(l, 0, sizeof *l);
+    snprintf(l->name, sizeof l->name, "%s", name);
+    l->mode = (thx_draw_mode)w->o.mode;
+    l->opacity = -1;
+    return l;
+}
+
+static const char *current_name(view_app *a)
+{
+    const thx_model *m = a->d.m;
+    return a->current >= 0 && (size_t)a->current < m->n_surfaces ? m->surf[a->current]->name : NULL;
+}
+
+static const char *mode_names[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+static const char *style_names[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
+static const char *cmap_names[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
+static const char *scale_names[] = {"linear", "log", "exp"};
+static const char *scope_names[] = {"frame", "series", "all", "fixed", "surfaces"};
+static const char *view_names[] = {"anterior", "posterior", "left", "right", "superior", "inferior"};
+
+static int name_index(const char *const *names, int n, const char *s)
+{
+    for (int k = 0; k < n; k++)
+        if (!strcmp(names[k], s)) return k;
+    return -1;
+}
+
+#define N_OF(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+/* ---- the handlers ---- */
+
+typedef void (*handler)(view_app *a, GSimpleAction *act, GVariant *v);
+
+static void do_quit(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    g_application_quit(G_APPLICATION(a->gapp));
+}
+static void do_next(view_app *a, GSimpleAction *act, GVariant *v) { step_frames(a, a->step); }
+static void do_prev(view_app *a, GSimpleAction *act, GVariant *v) { step_frames(a, -a->step); }
+static void do_first(view_app *a, GSimpleAction *act, GVariant *v) { set_frame(a, view_active(a), 0); }
+static void do_last(view_app *a, GSimpleAction *act, GVariant *v) { set_frame(a, view_active(a), a->n_frames - 1); }
+static void do_frame(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    int f = g_variant_get_int32(v);
+    if (f < 1 || f > a->n_frames) { view_set_info(a, "frame %d: the data have frames 1 to %d", f, a->n_frames); a->status = 1; return; }
+    set_frame(a, view_active(a), f - 1);
+}
+
+static gboolean play_tick(gpointer user)
+{
+    view_app *a = user;
+    if (!a->loop && (a->lock_frame ? a->frame : view_active(a)->frame) + a->step >= a->n_frames) {
+        a->playing = 0;
+        a->play_id = 0;
+        GAction *p = g_action_map_lookup_action(G_ACTION_MAP(a->gapp), "play");
+        g_simple_action_set_state(G_SIMPLE_ACTION(p), g_variant_new_boolean(FALSE));
+        view_update_titles(a);
+        return G_SOURCE_REMOVE;
+    }
+    step_frames(a, a->step);
+    return G_SOURCE_CONTINUE;
+}
+
+static void restart_play(view_app *a)
+{
+    if (a->play_id) { g_source_remove(a->play_id); a->play_id = 0; }
+    if (a->playing && a->n_frames > 1) a->play_id = g_timeout_add((guint)fmax(1, 1000.0 / a->rate), play_tick, a);
+}
+
+static void do_play(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    a->playing = g_variant_get_boolean(v);
+    g_simple_action_set_state(act, v);
+    restart_play(a);
+    view_update_titles(a);
+}
+static void do_rate(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    double r = g_variant_get_double(v);
+    if (!(r > 0 && r <= 1000)) { view_set_info(a, "rate %g: give 0 < frames per second <= 1000", r); a->status = 1; return; }
+    a->rate = r;
+    restart_play(a);
+}
+static void do_step(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    int s = g_variant_get_int32(v);
+    if (s < 1) { view_set_info(a, "step %d: at least 1", s); a->status = 1; return; }
+    a->step = s;
+}
+static void do_toggle(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    int on = g_variant_get_boolean(v);
+    g_simple_action_set_state(act, v);
+    if (!strcmp(name, "loop")) a->loop = on;
+    else if (!strcmp(name, "lock-frame")) {
+        a->lock_frame = on;
+        if (on) set_frame(a, NULL, view_active(a) ? view_active(a)->frame : a->frame);
+    } else if (!strcmp(name, "lock-transform")) {
+        a->lock_transform = on;
+        if (on) view_copy_transform(a, view_active(a));
+    } else if (!strcmp(name, "lock-scale")) {
+        /* one scale over all surfaces and windows: the frame scope widens to every surface's frame,
+           the series scope to every surface's series */
+        a->lock_scale = on;
+        for (int k = 0; k < a->n_win; k++) {
+            thx_picture_opts *o = &a->win[k]->o;
+            if (on && o->scope == THX_SCOPE_FRAME) o->scope = THX_SCOPE_SURFACES;
+            else if (on && o->scope == THX_SCOPE_SERIES) o->scope = THX_SCOPE_ALL;
+            else if (!on && o->scope == THX_SCOPE_SURFACES) o->scope = THX_SCOPE_FRAME;
+            else if (!on && o->scope == THX_SCOPE_ALL) o->scope = THX_SCOPE_SERIES;
+        }
+    } else if (!strcmp(name, "colorbar") || !strcmp(name, "label") || !strcmp(name, "invert")) {
+        for (int k = 0; k < a->n_win; k++) {
+            thx_picture_opts *o = &a->win[k]->o;
+            int *f = !strcmp(name, "colorbar") ? &o->colorbar : !strcmp(name, "label") ? &o->label : &o->invert;
+            *f = on;
+        }
+    }
+    view_redraw_all(a);
+}
+
+static void do_surface_step(view_app *a, int by)
+{
+    int n = (int)a->d.m->n_surfaces;
+    if (n <= 0) return;
+    a->current = ((a->current + by) % n + n) % n;
+    view_set_info(a, "surface %s", current_name(a));
+}
+static void do_surface_next(view_app *a, GSimpleAction *act, GVariant *v) { do_surface_step(a, 1); }
+static void do_surface_prev(view_app *a, GSimpleAction *act, GVariant *v) { do_surface_step(a, -1); }
+static void do_surface(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    for (size_t k = 0; k < a->d.m->n_surfaces; k++)
+        if (!strcmp(a->d.m->surf[k]->name, s)) { a->current = (int)k; view_set_info(a, "surface %s", s); return; }
+    view_set_info(a, "surface '%s': not in the model", s);
+    a->status = 1;
+}
+
+/* A string choice on every window's picture (style, colour map, scale, scope) or on the current
+ * surface's look (mode); "next" cycles. */
+static void do_choice(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    const char *s = g_variant_get_string(v, NULL);
+    const char *const *names;
+    int n;
+    if (!strcmp(name, "mode")) { names = mode_names; n = N_OF(mode_names); }
+    else if (!strcmp(name, "style")) { names = style_names; n = N_OF(style_names); }
+    else if (!strcmp(name, "colormap")) { names = cmap_names; n = N_OF(cmap_names); }
+    else if (!strcmp(name, "scale")) { names = scale_names; n = N_OF(scale_names); }
+    else { names = scope_names; n = N_OF(scope_names); }
+    int k = name_index(names, n, s);
+    if (!strcmp(s, "next")) {
+        GVariant *cur = g_action_get_state(G_ACTION(act));
+        k = (name_index(names, n, g_variant_get_string(cur, NULL)) + 1) % n;
+        if (!strcmp(name, "scope") && k == THX_SCOPE_FIXED) k++; /* fixed needs limits: only by --scope fixed:LO:HI */
+        g_variant_unref(cur);
+    }
+    if (k < 0) {
+        GString *list = g_string_new("");
+        for (int j = 0; j < n; j++) g_string_append_printf(list, "%s%s", j ? ", " : "", names[j]);
+        view_set_info(a, "%s '%s': one of %s, or next", name, s, list->str);
+        g_string_free(list, TRUE);
+        a->status = 1;
+        return;
+    }
+    if (!strcmp(name, "scope") && k == THX_SCOPE_FIXED) {
+        view_set_info(a, "scope fixed: give it with its limits on the command line (--scope fixed:LO:HI)");
+        a->status = 1;
+        return;
+    }
+    g_simple_action_set_state(act, g_variant_new_string(names[k]));
+    for (int j = 0; j < a->n_win; j++) {
+        view_win *w = a->win[j];
+        if (!strcmp(name, "mode")) {
+            const char *cur = current_name(a);
+            thx_picture_look *l = cur ? look_of(w, cur) : NULL;
+            if (l) l->mode = (thx_draw_mode)k;
+        } else if (!strcmp(name, "style")) w->o.style = k;
+        else if (!strcmp(name, "colormap")) w->o.cmap = k;
+        else if (!strcmp(name, "scale")) w->o.model = k;
+        else w->o.scope = k;
+    }
+    if (!strcmp(name, "mode")) view_set_info(a, "%s: %s", current_name(a), names[k]);
+    else view_set_info(a, "%s: %s", name, names[k]);
+    view_redraw_all(a);
+}
+
+static void do_visible(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *cur = current_name(a);
+    for (int j = 0; j < a->n_win && cur; j++) {
+        thx_picture_look *l = look_of(a->win[j], cur);
+        if (l) l->mode = l->mode == THX_DRAW_HIDDEN ? (thx_draw_mode)a->win[j]->o.mode : THX_DRAW_HIDDEN;
+    }
+    view_redraw_all(a);
+}
+
+static void do_opacity(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    double x = g_variant_get_double(v);
+    const char *cur = current_name(a);
+    if (!(x >= 0 && x <= 1)) { view_set_info(a, "opacity %g: give 0 to 1", x); a->status = 1; return; }
+    for (int j = 0; j < a->n_win && cur; j++) {
+        thx_picture_look *l = look_of(a->win[j], cur);
+        if (l) l->opacity = (float)x;
+    }
+    view_redraw_all(a);
+}
+
+static void do_color(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL), *h = s[0] == '#' ? s + 1 : s;
+    unsigned rgb;
+    int used = 0;
+    if (strlen(h) != 6 || sscanf(h, "%6x%n", &rgb, &used) != 1 || used != 6) {
+        view_set_info(a, "color '%s': give #RRGGBB", s);
+        a->status = 1;
+        return;
+    }
+    const char *cur = current_name(a);
+    for (int j = 0; j < a->n_win && cur; j++) {
+        thx_picture_look *l = look_of(a->win[j], cur);
+        if (!l) continue;
+        l->color[0] = (float)((rgb >> 16) & 255) / 255.0f;
+        l->color[1] = (float)((rgb >> 8) & 255) / 255.0f;
+        l->color[2] = (float)(rgb & 255) / 255.0f;
+        l->have_color = 1;
+    }
+    view_redraw_all(a);
+}
+
+static void do_levels(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    for (int j = 0; j < a->n_win; j++) {
+        thx_picture_opts *o = &a->win[j]->o;
+        int n = !strcmp(name, "levels") ? g_variant_get_int32(v) : o->levels + (!strcmp(name, "levels-more") ? 1 : -1);
+        if (n < 2 || n > 64) { view_set_info(a, "levels %d: 2 to 64", n); if (!strcmp(name, "levels")) a->status = 1; return; }
+        o->levels = n;
+    }
+    view_set_info(a, "%d levels", a->win[0]->o.levels);
+    view_redraw_all(a);
+}
+
+/* The window's camera back to the standard view v (or its own when v < 0). */
+static void reset_view(view_app *a, view_win *w, int v)
+{
+    if (v >= 0) {
+        w->o.view = v;
+        w->o.have_camera = 0;
+    }
+    view_quat_identity(w->q);
+    w->zoom = 1;
+    w->pan[0] = w->pan[1] = 0;
+    w->clip_offset = 0;
+    view_copy_transform(a, w);
+    if (a->lock_transform)
+        for (int k = 0; k < a->n_win; k++)
+            if (v >= 0) { a->win[k]->o.view = v; a->win[k]->o.have_camera = 0; }
+    view_redraw_all(a);
+}
+
+static void do_view(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    int k = name_index(view_names, N_OF(view_names), s);
+    if (k < 0) { view_set_info(a, "view '%s': anterior, posterior, left, right, superior or inferior", s); a->status = 1; return; }
+    view_win *w = view_active(a);
+    if (w) reset_view(a, w, k);
+    view_set_info(a, "%s view", s);
+}
+static void do_reset(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    view_win *w = view_active(a);
+    if (w) reset_view(a, w, -1);
+}
+
+/* "right:15", "up:-15", "spin:10": the object turned by that many degrees about the screen's
+ * vertical axis (right), horizontal axis (up) or the line of sight (spin). */
+static void do_rotate(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    char dir[16];
+    double deg;
+    view_win *w = view_active(a);
+    if (!w || sscanf(s, "%15[a-z]:%lf", dir, &deg) != 2 || (strcmp(dir, "right") && strcmp(dir, "up") && strcmp(dir, "spin"))) {
+        view_set_info(a, "rotate '%s': right:DEG, up:DEG or spin:DEG", s);
+        a->status = 1;
+        return;
+    }
+    if (!strcmp(dir, "right")) view_rotate_screen(w, 0, 1, deg);
+    else if (!strcmp(dir, "up")) view_rotate_screen(w, -1, 0, deg);
+    else {
+        /* about the line of sight: the camera's up turned */
+        thx_camera cam;
+        view_camera(w, 1, &cam);
+        double axis[3] = {cam.eye[0] - cam.center[0], cam.eye[1] - cam.center[1], cam.eye[2] - cam.center[2]};
+        double q[4], out[4];
+        view_quat_axis_angle(axis, -deg, q);
+        view_quat_mul(q, w->q, out);
+        memcpy(w->q, out, sizeof out);
+    }
+    view_copy_transform(a, w);
+    view_redraw_all(a);
+}
+
+static void do_zoom(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    double f = g_variant_get_double(v);
+    view_win *w = view_active(a);
+    if (!(f > 0) || !w) { view_set_info(a, "zoom %g: a factor > 0", f); a->status = 1; return; }
+    w->zoom = fmin(fmax((w->zoom > 0 ? w->zoom : 1) * f, 0.05), 200);
+    view_copy_transform(a, w);
+    view_redraw_all(a);
+}
+
+static void do_clip(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        char old[64];
+        memcpy(old, w->o.clip, sizeof old);
+        snprintf(w->o.clip, sizeof w->o.clip, "%s", strcmp(s, "none") ? s : "");
+        thx_clip_plane p;
+        if (w->o.clip[0] && thx_picture_clip(a->ctx, &w->o, &a->d, &p) < 0) {
+            memcpy(w->o.clip, old, sizeof old);
+            view_report(a, "clip");
+            a->status = 1;
+            return;
+        }
+        w->clip_offset = 0;
+    }
+    view_set_info(a, "clip: %s", s);
+    view_redraw_all(a);
+}
+
+static void do_clip_move(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    double mm = g_variant_get_double(v);
+    view_win *w = view_active(a);
+    if (!w || !w->o.clip[0]) { view_set_info(a, "clip-move: no clip plane (action clip SIDE[:F])"); a->status = 1; return; }
+    w->clip_offset += mm;
+    view_copy_transform(a, w);
+    view_redraw_all(a);
+}
+
+static void do_screenshot(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    view_win *w = view_active(a);
+    if (!w) return;
+    char auto_name[64];
+    if (!s[0]) {
+        /* from the menu: the next free thorax-view-NNNN.png here */
+        do snprintf(auto_name, sizeof auto_name, "thorax-view-%04d.png", ++a->shots);
+        while (g_file_test(auto_name, G_FILE_TEST_EXISTS) && a->shots < 9999);
+        s = auto_name;
+    }
+    g_free(w->shot_path);
+    w->shot_path = g_strdup(s);
+    w->pending = 1;
+    gtk_gl_area_queue_render(GTK_GL_AREA(w->gl));
+}
+
+static void do_record(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    if (!s[0]) s = "thorax-view-frames";
+    if (g_mkdir_with_parents(s, 0777) != 0) { view_set_info(a, "record: cannot create %s", s); a->status = 1; return; }
+    snprintf(a->rec_dir, sizeof a->rec_dir, "%s", s);
+    a->recording = 1;
+    a->rec_count = 0;
+    view_set_info(a, "recording every frame drawn into %s/", s);
+    view_redraw_all(a);
+}
+
+/* Stops recording; with a path, assembles the frames recorded into an MP4 (as thorax animate). */
+static void do_record_stop(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    if (!a->recording) { view_set_info(a, "record-stop: not recording"); a->status = 1; return; }
+    a->recording = 0;
+    if (s[0] && view_movie(a, s) != THX_OK) { view_report(a, "movie"); a->status = 1; return; }
+    view_set_info(a, "recorded %d frames into %s/%s%s", a->rec_count, a->rec_dir, s[0] ? ", movie " : "", s);
+}
+
+static void do_record_all(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    if (a->n_frames <= 0) { view_set_info(a, "record-all: no data with frames"); a->status = 1; return; }
+    view_record_all(a, s[0] ? s : "thorax-view-frames");
+}
+
+static void do_save_session(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    if (!s[0]) s = "thorax-view-session.txt";
+    if (view_save_session(a, s) != THX_OK) { view_report(a, "save session"); a->status = 1; return; }
+    view_set_info(a, "session saved to %s", s);
+}
+
+static void do_pick(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    double x, y;
+    view_win *w = view_active(a);
+    if (!w || sscanf(s, "%lf,%lf", &x, &y) != 2) { view_set_info(a, "pick '%s': give X,Y (window pixels)", s); a->status = 1; return; }
+    view_pick_at(w, x, y);
+}
+
+static void do_traces_clear(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    a->n_traces = 0;
+    view_plot_update(a);
+}
+
+static void do_traces_export(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *s = g_variant_get_string(v, NULL);
+    if (!s[0]) s = "thorax-view-traces.txt";
+    if (view_plot_export(a, s) != THX_OK) { view_report(a, "export traces"); a->status = 1; return; }
+    view_set_info(a, "traces written to %s", s);
+}
+
+static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v);
+
+/* ---- the table ---- */
+
+typedef struct {
+    const char *name;
+    const char *param;  /* NULL none, "i", "d", "s" */
+    const char *state;  /* NULL stateless; "b" boolean; "s" string (radio) */
+    handler fn;
+    const char *keys[3]; /* accelerators (GTK syntax) */
+    const char *target;  /* the key's parameter, as a GVariant text ("'next'", "'right:15'") */
+    const char *help;    /* the overlay's line */
+} action_def;
+
+static const action_def ACTIONS[] = {
+    {"frame-next", NULL, NULL, do_next, {"Right"}, NULL, "next frame (the frame step)"},
+    {"frame-prev", NULL, NULL, do_prev, {"Left"}, NULL, "previous frame"},
+    {"frame-first", NULL, NULL, do_first, {"Home"}, NULL, "first frame"},
+    {"frame-last", NULL, NULL, do_last, {"End"}, NULL, "last frame"},
+    {"frame", "i", NULL, do_frame, {NULL}, NULL, "go to frame K (1-based)"},
+    {"play", NULL, "b", do_play, {"space"}, NULL, "play / pause"},
+    {"rate", "d", NULL, do_rate, {NULL}, NULL, "frames per second when playing"},
+    {"step", "i", NULL, do_step, {NULL}, NULL, "frames per step"},
+    {"loop", NULL, "b", do_toggle, {"<Shift>l"}, NULL, "playing and stepping wrap around"},
+    {"lock-frame", NULL, "b", do_toggle, {"<Shift>f"}, NULL, "frame lock: every window steps together"},
+    {"lock-transform", NULL, "b", do_toggle, {"<Shift>t"}, NULL, "transform lock: every window turns together"},
+    {"lock-scale", NULL, "b", do_toggle, {"<Shift>k"}, NULL, "scale lock: one colour scale over every surface"},
+    {"surface-next", NULL, NULL, do_surface_next, {"Down"}, NULL, "the next surface (the one commands act on)"},
+    {"surface-prev", NULL, NULL, do_surface_prev, {"Up"}, NULL, "the previous surface"},
+    {"surface", "s", NULL, do_surface, {NULL}, NULL, "the surface commands act on, by name"},
+    {"mode", "s", "s", do_choice, {"m"}, "'next'", "the surface's mode: points, wire, flat, gouraud, phong, orientation, hidden"},
+    {"visible", NULL, NULL, do_visible, {"v"}, NULL, "show / hide the surface"},
+    {"opacity", "d", NULL, do_opacity, {NULL}, NULL, "the surface's opacity, 0 to 1"},
+    {"color", "s", NULL, do_color, {NULL}, NULL, "the surface's colour, #RRGGBB"},
+    {"style", "s", "s", do_choice, {"b"}, "'next'", "data style: continuous, bands, contours, ..."},
+    {"colormap", "s", "s", do_choice, {"c"}, "'next'", "colour map: ecg, ecg-green, coolwarm, viridis, gray, jet"},
+    {"invert", NULL, "b", do_toggle, {"i"}, NULL, "colour map reversed"},
+    {"scale", "s", "s", do_choice, {"s"}, "'next'", "scaling model: linear, log, exp"},
+    {"scope", "s", "s", do_choice, {"o"}, "'next'", "scale scope: frame, series, surfaces, all"},
+    {"levels", "i", NULL, do_levels, {NULL}, NULL, "number of shades / contours"},
+    {"levels-more", NULL, NULL, do_levels, {"plus", "equal", "KP_Add"}, NULL, "more shades / contours"},
+    {"levels-fewer", NULL, NULL, do_levels, {"minus", "KP_Subtract"}, NULL, "fewer shades / contours"},
+    {"colorbar", NULL, "b", do_toggle, {"<Shift>b"}, NULL, "colour bar"},
+    {"label", NULL, "b", do_toggle, {"<Shift>n"}, NULL, "time label"},
+    {"view", "s", NULL, do_view, {"1"}, "'anterior'", "anterior view"},
+    {"view-posterior", NULL, NULL, NULL, {"2"}, NULL, "posterior view"},
+    {"view-left", NULL, NULL, NULL, {"3"}, NULL, "left view"},
+    {"view-right", NULL, NULL, NULL, {"4"}, NULL, "right view"},
+    {"view-superior", NULL, NULL, NULL, {"5"}, NULL, "superior view"},
+    {"view-inferior", NULL, NULL, NULL, {"6"}, NULL, "inferior view"},
+    {"reset", NULL, NULL, do_reset, {"r"}, NULL, "back to the view (rotation, zoom, pan, clip offset)"},
+    {"rotate", "s", NULL, do_rotate, {"<Control>Right"}, "'right:15'", "turn 15 degrees right (Ctrl+arrows)"},
+    {"rotate-left", NULL, NULL, NULL, {"<Control>Left"}, NULL, "turn 15 degrees left"},
+    {"rotate-up", NULL, NULL, NULL, {"<Control>Up"}, NULL, "turn 15 degrees up"},
+    {"rotate-down", NULL, NULL, NULL, {"<Control>Down"}, NULL, "turn 15 degrees down"},
+    {"zoom", "d", NULL, do_zoom, {"Page_Up"}, "1.25", "zoom in (the wheel; Page Down out)"},
+    {"zoom-out", NULL, NULL, NULL, {"Page_Down"}, NULL, "zoom out"},
+    {"clip", "s", NULL, do_clip, {NULL}, NULL, "clip plane: SIDE[:F], nx,ny,nz,d, or none"},
+    {"clip-move", "d", NULL, do_clip_move, {"<Shift>Page_Up"}, "5.0", "move the clip plane (mm; Ctrl+drag)"},
+    {"screenshot", "s", NULL, do_screenshot, {"<Control>s"}, "''", "save the window as PNG (path; empty: next free name)"},
+    {"record", "s", NULL, do_record, {"<Control>r"}, "''", "record every frame drawn into a directory"},
+    {"record-stop", "s", NULL, do_record_stop, {"<Control><Shift>r"}, "''", "stop recording (and make an MP4 at the path given)"},
+    {"record-all", "s", NULL, do_record_all, {"<Control><Alt>r"}, "''", "record every frame, unattended, and make DIR/animation.mp4"},
+    {"save-session", "s", NULL, do_save_session, {"<Control><Shift>s"}, "''", "save the session as a script of options"},
+    {"pick", "s", NULL, do_pick, {NULL}, NULL, "pick at X,Y (window pixels; a click does the same)"},
+    {"traces-clear", NULL, NULL, do_traces_clear, {"Escape"}, NULL, "clear the traces"},
+    {"traces-export", "s", NULL, do_traces_export, {"<Control>e"}, "''", "write the traces as text"},
+    {"shortcuts", NULL, NULL, do_shortcuts, {"question", "F1"}, NULL, "this list"},
+    {"quit", NULL, NULL, do_quit, {"<Control>q"}, NULL, "quit"},
+};
+
+/* Keys that are a parameterized action with a fixed value (view-left is app.view('left'), ...):
+   their rows above have no handler of their own. */
+static const struct {
+    const char *alias, *action, *target;
+} ALIASES[] = {
+    {"view-posterior", "view", "'posterior'"}, {"view-left", "view", "'left'"},       {"view-right", "view", "'right'"},
+    {"view-superior", "view", "'superior'"},   {"view-inferior", "view", "'inferior'"}, {"rotate-left", "rotate", "'right:-15'"},
+    {"rotate-up", "rotate", "'up:15'"},        {"rotate-down", "rotate", "'up:-15'"},   {"zoom-out", "zoom", "0.8"},
+};
+
+static void on_activate_action(GSimpleAction *act, GVariant *v, gpointer user)
+{
+    view_app *a = user;
+    const char *name = g_action_get_name(G_ACTION(act));
+    for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++)
+        if (!strcmp(ACTIONS[k].name, name) && ACTIONS[k].fn) {
+            if (ACTIONS[k].state && !ACTIONS[k].param && !strcmp(ACTIONS[k].state, "b")) {
+                /* a toggle: activation flips the state */
+                GVariant *st = g_action_get_state(G_ACTION(act));
+                gboolean on = !g_variant_get_boolean(st);
+                g_variant_unref(st);
+                ACTIONS[k].fn(a, act, g_variant_new_boolean(on));
+            } else {
+                ACTIONS[k].fn(a, act, v);
+            }
+            return;
+        }
+}
+
+static void on_change_state(GSimpleAction *act, GVariant *v, gpointer user)
+{
+    view_app *a = user;
+    const char *name = g_action_get_name(G_ACTION(act));
+    for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++)
+        if (!strcmp(ACTIONS[k].name, name) && ACTIONS[k].fn) { ACTIONS[k].fn(a, act, v); return; }
+}
+
+static GVariant *initial_state(view_app *a, const action_def *d)
+{
+    const thx_picture_opts *o = &a->vo->pic;
+    if (!strcmp(d->state, "b")) {
+        int on = !strcmp(d->name, "loop") ? a->loop : !strcmp(d->name, "lock-frame") ? a->lock_frame
+               : !strcmp(d->name, "lock-transform") ? a->lock_transform : !strcmp(d->name, "lock-scale") ? a->lock_scale
+               : !strcmp(d->name, "colorbar") ? o->colorbar : !strcmp(d->name, "label") ? o->label
+               : !strcmp(d->name, "invert") ? o->invert : 0;
+        return g_variant_new_boolean(on);
+    }
+    const char *s = !strcmp(d->name, "mode") ? mode_names[o->mode] : !strcmp(d->name, "style") ? style_names[o->style]
+                  : !strcmp(d->name, "colormap") ? cmap_names[o->cmap] : !strcmp(d->name, "scale") ? scale_names[o->model]
+                  : scope_names[o->scope];
+    return g_variant_new_string(s);
+}
+
+static void on_alias(GSimpleAction *act, GVariant *v, gpointer user)
+{
+    view_app *a = user;
+    const char *name = g_action_get_name(G_ACTION(act));
+    for (size_t k = 0; k < sizeof ALIASES / sizeof ALIASES[0]; k++)
+        if (!strcmp(ALIASES[k].alias, name)) {
+            GVariant *t = g_variant_parse(NULL, ALIASES[k].target, NULL, NULL, NULL);
+            g_action_group_activate_action(G_ACTION_GROUP(a->gapp), ALIASES[k].action, t);
+        }
+}
+
+void view_actions_install(view_app *a)
+{
+    for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++) {
+        const action_def *d = &ACTIONS[k];
+        GSimpleAction *act;
+        const GVariantType *pt = d->param ? G_VARIANT_TYPE(d->param) : NULL;
+        if (d->state) act = g_simple_action_new_stateful(d->name, pt, initial_state(a, d));
+        else act = g_simple_action_new(d->name, pt);
+        g_signal_connect(act, "activate", G_CALLBACK(d->fn ? on_activate_action : on_alias), a);
+        if (d->state) g_signal_connect(act, "change-state", G_CALLBACK(on_change_state), a);
+        g_action_map_add_action(G_ACTION_MAP(a->gapp), G_ACTION(act));
+        g_object_unref(act);
+        if (d->keys[0]) {
+            char detailed[128];
+            if (d->target) snprintf(detailed, sizeof detailed, "app.%s(%s)", d->name, d->target);
+            else snprintf(detailed, sizeof detailed, "app.%s", d->name);
+            gtk_application_set_accels_for_action(a->gapp, detailed, d->keys);
+        }
+    }
+}
+
+/* ---- the keyboard overlay (`?`): the table above, as it is ---- */
+
+static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    GString *text = g_string_new("");
+    g_string_append(text, "<b>Keys</b> (every one an action: menus and script lines `action NAME [VALUE]` do the same)\n\n");
+    for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++) {
+        const action_def *d = &ACTIONS[k];
+        GString *keys = g_string_new("");
+        for (int j = 0; j < 3 && d->keys[j]; j++) {
+            guint key;
+            GdkModifierType mods;
+            if (gtk_accelerator_parse(d->keys[j], &key, &mods)) {
+                char *label = gtk_accelerator_get_label(key, mods);
+                g_string_append_printf(keys, "%s%s", j ? ", " : "", label);
+                g_free(label);
+            }
+        }
+        char *help = g_markup_escape_text(d->help, -1), *k2 = g_markup_escape_text(keys->str, -1);
+        g_string_append_printf(text, "<tt>%-16s</tt> %-14s  %s\n", k2, d->fn ? d->name : "", help);
+        g_free(help);
+        g_free(k2);
+        g_string_free(keys, TRUE);
+    }
+    g_string_append(text, "\n<b>Mouse</b>: drag turns (arcball), Shift+drag or the middle button pans, the wheel zooms,\n"
+                          "Ctrl+drag moves the clip plane, a click picks the node under the pointer.");
+    GtkWidget *win = gtk_window_new();
+    gtk_window_set_title(GTK_WINDOW(win), "thorax — keys");
+    view_win *w = view_active(a);
+    if (w) gtk_window_set_transient_for(GTK_WINDOW(win), GTK_WINDOW(w->window));
+    GtkWidget *label = gtk_label_new(NULL);
+    gtk_label_set_markup(GTK_LABEL(label), text->str);
+    gtk_label_set_selectable(GTK_LABEL(label), TRUE);
+    GtkWidget *scroll = gtk_scrolled_window_new();
+    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(scroll), label);
+    gtk_window_set_child(GTK_WINDOW(win), scroll);
+    gtk_window_set_default_size(GTK_WINDOW(win), 720, 640);
+    gtk_window_present(GTK_WINDOW(win));
+    g_string_free(text, TRUE);
+}
+
+/* ---- the menus ---- */
+
+static void add(GMenu *m, const char *label, const char *action)
+{
+    g_menu_append(m, label, action);
+}
+
+static GMenu *choice_menu(const char *action, const char *const *names, int n)
+{
+    GMenu *m = g_menu_new();
+    for (int k = 0; k < n; k++) {
+        char detailed[96];
+        snprintf(detailed, sizeof detailed, "app.%s::%s", action, names[k]);
+        add(m, names[k], detailed);
+    }
+    return m;
+}
+
+GMenuModel *view_menu(void)
+{
+    GMenu *bar = g_menu_new();
+    GMenu *file = g_menu_new();
+    add(file, "Save picture (PNG)", "app.screenshot::");
+    add(file, "Record frames", "app.record::");
+    add(file, "Stop recording", "app.record-stop::");
+    add(file, "Record every frame", "app.record-all::");
+    add(file, "Export traces", "app.traces-export::");
+    add(file, "Save session", "app.save-session::");
+    add(file, "Quit", "app.quit");
+    g_menu_append_submenu(bar, "File", G_MENU_MODEL(file));
+    GMenu *view = g_menu_new();
+    GMenu *views = choice_menu("view", view_names, N_OF(view_names));
+    g_menu_append_section(view, NULL, G_MENU_MODEL(views));
+    add(view, "Reset", "app.reset");
+    add(view, "Zoom in", "app.zoom(1.25)");
+    add(view, "Zoom out", "app.zoom(0.8)");
+    GMenu *clip = g_menu_new();
+    static const char *clips[] = {"anterior", "posterior", "left", "right", "superior", "inferior", "none"};
+    for (int k = 0; k < N_OF(clips); k++) {
+        char detailed[64];
+        snprintf(detailed, sizeof detailed, "app.clip::%s", clips[k]);
+        add(clip, clips[k], detailed);
+    }
+    g_menu_append_submenu(view, "Clip", G_MENU_MODEL(clip));
+    add(view, "Colour bar", "app.colorbar");
+    add(view, "Time label", "app.label");
+    add(view, "Keys", "app.shortcuts");
+    g_menu_append_submenu(bar, "View", G_MENU_MODEL(view));
+    GMenu *surf = g_menu_new();
+    add(surf, "Next surface", "app.surface-next");
+    add(surf, "Previous surface", "app.surface-prev");
+    add(surf, "Show / hide", "app.visible");
+    g_menu_append_submenu(surf, "Mode", G_MENU_MODEL(choice_menu("mode", mode_names, N_OF(mode_names))));
+    g_menu_append_submenu(bar, "Surface", G_MENU_MODEL(surf));
+    GMenu *data = g_menu_new();
+    g_menu_append_submenu(data, "Style", G_MENU_MODEL(choice_menu("style", style_names, N_OF(style_names))));
+    g_menu_append_submenu(data, "Colour map", G_MENU_MODEL(choice_menu("colormap", cmap_names, N_OF(cmap_names))));
+    add(data, "Reversed colours", "app.invert");
+    g_menu_append_submenu(data, "Scaling model", G_MENU_MODEL(choice_menu("scale", scale_names, N_OF(scale_names))));
+    static const char *scopes_menu[] = {"frame", "series", "surfaces", "all"};
+    g_menu_append_submenu(data, "Scope", G_MENU_MODEL(choice_menu("scope", scopes_menu, N_OF(scopes_menu))));
+    add(data, "More levels", "app.levels-more");
+    add(data, "Fewer levels", "app.levels-fewer");
+    add(data, "Clear traces", "app.traces-clear");
+    g_menu_append_submenu(bar, "Data", G_MENU_MODEL(data));
+    GMenu *frames = g_menu_new();
+    add(frames, "Next", "app.frame-next");
+    add(frames, "Previous", "app.frame-prev");
+    add(frames, "First", "app.frame-first");
+    add(frames, "Last", "app.frame-last");
+    add(frames, "Play", "app.play");
+    add(frames, "Loop", "app.loop");
+    add(frames, "Frame lock", "app.lock-frame");
+    add(frames, "Transform lock", "app.lock-transform");
+    add(frames, "Scale lock", "app.lock-scale");
+    g_menu_append_submenu(bar, "Frames", G_MENU_MODEL(frames));
+    return G_MENU_MODEL(bar);
+}

@@ -1,0 +1,265 @@
+/*
+ * The viewer's drawing: each window's GtkGLArea draws its picture with the picture module
+ * (thx_picture_draw_gl: the same scene `thorax render` draws), then, when the picture has
+ * annotations, reads the pixels back, lets thx_picture_annotate draw them over, and shows the
+ * result as one texture — so the window holds the very pixels `thorax render` writes. Screenshots
+ * and recorded frames are those pixels.
+ */
+#include <epoxy/gl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "view/view_internal.h"
+
+static const char *VS = "#version 330 core\n"
+                        "layout(location = 0) in vec2 p;\n"
+                        "out vec2 uv;\n"
+                        "void main() { uv = vec2((p.x + 1.0) * 0.5, (1.0 - p.y) * 0.5); gl_Position = vec4(p, 0.0, 1.0); }\n";
+static const char *FS = "#version 330 core\n"
+                        "in vec2 uv;\n"
+                        "uniform sampler2D tex;\n"
+                        "out vec4 color;\n"
+                        "void main() { color = texture(tex, uv); }\n";
+
+static unsigned compile(GLenum type, const char *src)
+{
+    unsigned s = glCreateShader(type);
+    glShaderSource(s, 1, &src, NULL);
+    glCompileShader(s);
+    int ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) { glDeleteShader(s); return 0; }
+    return s;
+}
+
+static int overlay_init(view_win *w)
+{
+    unsigned vs = compile(GL_VERTEX_SHADER, VS), fs = compile(GL_FRAGMENT_SHADER, FS);
+    if (!vs || !fs) return -1;
+    w->prog = glCreateProgram();
+    glAttachShader(w->prog, vs);
+    glAttachShader(w->prog, fs);
+    glLinkProgram(w->prog);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    int ok = 0;
+    glGetProgramiv(w->prog, GL_LINK_STATUS, &ok);
+    if (!ok) return -1;
+    static const float quad[8] = {-1, -1, 1, -1, -1, 1, 1, 1};
+    glGenVertexArrays(1, &w->vao);
+    glBindVertexArray(w->vao);
+    glGenBuffers(1, &w->vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, w->vbo);
+    glBufferData(GL_ARRAY_BUFFER, sizeof quad, quad, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindVertexArray(0);
+    glGenTextures(1, &w->tex);
+    return 0;
+}
+
+static void on_realize(GtkGLArea *area, gpointer user)
+{
+    view_win *w = user;
+    gtk_gl_area_make_current(area);
+    if (gtk_gl_area_get_error(area)) {
+        w->gl_failed = 1;
+        view_set_info(w->app, "OpenGL: %s", gtk_gl_area_get_error(area)->message);
+        return;
+    }
+    if (thx_renderer_create(w->app->ctx, 0, 0, &w->r) != THX_OK || overlay_init(w)) {
+        w->gl_failed = 1;
+        view_report(w->app, "OpenGL");
+    }
+}
+
+static void on_unrealize(GtkGLArea *area, gpointer user)
+{
+    view_win *w = user;
+    gtk_gl_area_make_current(area);
+    if (gtk_gl_area_get_error(area)) return;
+    thx_renderer_destroy(&w->r);
+    if (w->tex) glDeleteTextures(1, &w->tex);
+    if (w->vbo) glDeleteBuffers(1, &w->vbo);
+    if (w->vao) glDeleteVertexArrays(1, &w->vao);
+    if (w->prog) glDeleteProgram(w->prog);
+    w->tex = w->vbo = w->vao = w->prog = 0;
+}
+
+void view_camera(const view_win *w, double aspect, thx_camera *cam)
+{
+    thx_camera base;
+    thx_picture_camera(&w->o, &w->app->d, aspect, &base);
+    double c[3], e0[3], e[3], u[3];
+    for (int k = 0; k < 3; k++) { c[k] = base.center[k]; e0[k] = base.eye[k] - c[k]; }
+    view_quat_rotate(w->q, e0, e);
+    view_quat_rotate(w->q, base.up, u);
+    double f[3] = {-e[0], -e[1], -e[2]};
+    double r[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
+    double rn = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]), un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    double zoom = w->zoom > 0 ? w->zoom : 1;
+    *cam = base;
+    for (int k = 0; k < 3; k++) {
+        double t = (rn > 0 ? r[k] / rn : 0) * w->pan[0] + (un > 0 ? u[k] / un : 0) * w->pan[1];
+        cam->center[k] = c[k] + t;
+        cam->eye[k] = c[k] + t + (base.fov_deg > 0 ? e[k] / zoom : e[k]);
+        cam->up[k] = u[k];
+    }
+    cam->height = base.height / zoom;
+}
+
+void view_scene_viewport(const view_win *w, int fb_w, int fb_h, int vp[4])
+{
+    thx_picture_viewport(&w->o, w->font, fb_w, fb_h, vp);
+}
+
+/* The window's picture with its camera and clip offset made explicit (what `thorax render` would
+ * be given to draw the same). */
+static int window_picture(view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
+{
+    *o = w->o;
+    int vp[4];
+    thx_picture_viewport(&w->o, w->font, fb_w, fb_h, vp);
+    view_camera(w, vp[3] > 0 ? (double)vp[2] / vp[3] : 1, &o->cam);
+    o->have_camera = 1;
+    if (o->clip[0] && w->clip_offset != 0) {
+        thx_clip_plane p;
+        if (thx_picture_clip(w->app->ctx, &w->o, &w->app->d, &p) == 1) {
+            double n = sqrt(p.n[0] * p.n[0] + p.n[1] * p.n[1] + p.n[2] * p.n[2]);
+            snprintf(o->clip, sizeof o->clip, "%.9g,%.9g,%.9g,%.9g", p.n[0], p.n[1], p.n[2], p.d - w->clip_offset * n);
+        }
+    }
+    return 0;
+}
+
+static int font_for(view_win *w, int fb_h)
+{
+    int px = fb_h / 40 > 11 ? fb_h / 40 : 11;
+    int want = w->o.colorbar || w->o.label || w->o.trace || w->o.panels;
+    if (!want) { thx_font_close(&w->font); w->font_px = 0; return 0; }
+    if (w->font && w->font_px == px) return 0;
+    thx_font_close(&w->font);
+    if (thx_font_open(w->app->ctx, w->o.font, px, &w->font) != THX_OK) return -1;
+    w->font_px = px;
+    return 0;
+}
+
+static void read_back(thx_image *img)
+{
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, img->w, img->h, GL_RGBA, GL_UNSIGNED_BYTE, img->rgba);
+    size_t row = 4 * (size_t)img->w;
+    unsigned char *tmp = malloc(row);
+    if (!tmp) return;
+    for (int y = 0; y < img->h / 2; y++) {
+        unsigned char *a = img->rgba + (size_t)y * row, *b = img->rgba + (size_t)(img->h - 1 - y) * row;
+        memcpy(tmp, a, row);
+        memcpy(a, b, row);
+        memcpy(b, tmp, row);
+    }
+    free(tmp);
+    for (size_t i = 3; i < row * (size_t)img->h; i += 4) img->rgba[i] = 255;
+}
+
+static void show_image(view_win *w, const thx_image *img)
+{
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glViewport(0, 0, img->w, img->h);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, w->tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    if (w->tex_w != img->w || w->tex_h != img->h) {
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img->w, img->h, 0, GL_RGBA, GL_UNSIGNED_BYTE, img->rgba);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        w->tex_w = img->w;
+        w->tex_h = img->h;
+    } else {
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img->w, img->h, GL_RGBA, GL_UNSIGNED_BYTE, img->rgba);
+    }
+    glUseProgram(w->prog);
+    glUniform1i(glGetUniformLocation(w->prog, "tex"), 0);
+    glBindVertexArray(w->vao);
+    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    glBindVertexArray(0);
+    glUseProgram(0);
+}
+
+static void record_frame(view_win *w, const thx_image *img)
+{
+    view_app *a = w->app;
+    /* numbered in the order drawn, from 1, so the movie's frames are consecutive */
+    char path[1100];
+    snprintf(path, sizeof path, "%s/frame_%05d.png", a->rec_dir, a->rec_count + 1);
+    if (thx_image_write_png(a->ctx, img, path) != THX_OK) {
+        view_report(a, "recording");
+        a->recording = 0;
+        return;
+    }
+    a->rec_first = 1;
+    a->rec_count++;
+}
+
+static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
+{
+    view_win *w = user;
+    view_app *a = w->app;
+    w->pending = 0;
+    if (w->gl_failed || !w->r) return TRUE;
+    int scale = gtk_widget_get_scale_factor(GTK_WIDGET(area));
+    int fb_w = gtk_widget_get_width(GTK_WIDGET(area)) * scale, fb_h = gtk_widget_get_height(GTK_WIDGET(area)) * scale;
+    if (fb_w < 1 || fb_h < 1) return TRUE;
+    gint64 t0 = g_get_monotonic_time();
+    if (font_for(w, fb_h)) { view_report(a, "font"); return TRUE; }
+    thx_picture_opts o;
+    window_picture(w, fb_w, fb_h, &o);
+    thx_scale bar;
+    int have_bar = 0;
+    int frame = view_frame_of(w);
+    thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bar, &have_bar, NULL);
+    if (st != THX_OK) { view_report(a, "drawing"); return TRUE; }
+    int annotated = w->font != NULL;
+    int need_pixels = annotated || w->shot_path || (a->recording && w->id == 1);
+    if (need_pixels) {
+        if (!w->img || w->img->w != fb_w || w->img->h != fb_h) {
+            thx_image_destroy(&w->img);
+            if (thx_image_create(a->ctx, fb_w, fb_h, &w->img) != THX_OK) { view_report(a, "image"); return TRUE; }
+        }
+        read_back(w->img);
+        if (annotated) {
+            st = thx_picture_annotate(a->ctx, &o, &a->d, w->font, frame, &bar, have_bar, w->img);
+            if (st != THX_OK) { view_report(a, "annotations"); return TRUE; }
+            show_image(w, w->img);
+        }
+        if (w->shot_path) {
+            if (thx_image_write_png(a->ctx, w->img, w->shot_path) == THX_OK) view_set_info(a, "saved %s (%dx%d)", w->shot_path, fb_w, fb_h);
+            else { view_report(a, "screenshot"); a->status = 1; }
+            g_free(w->shot_path);
+            w->shot_path = NULL;
+        }
+        if (a->recording && w->id == 1) record_frame(w, w->img);
+    }
+    glFlush();
+    w->draw_ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
+    w->ms_sum += w->draw_ms;
+    w->ms_n++;
+    w->drawn++;
+    return TRUE;
+}
+
+void view_gl_attach(view_win *w)
+{
+    GtkGLArea *area = GTK_GL_AREA(w->gl);
+    gtk_gl_area_set_required_version(area, 3, 3);
+    gtk_gl_area_set_has_depth_buffer(area, TRUE);
+    gtk_gl_area_set_auto_render(area, FALSE);
+    g_signal_connect(area, "realize", G_CALLBACK(on_realize), w);
+    g_signal_connect(area, "unrealize", G_CALLBACK(on_unrealize), w);
+    g_signal_connect(area, "render", G_CALLBACK(on_render), w);
+}

@@ -1,0 +1,128 @@
+/* What the viewer's files share (thorax/view/view.h): the application, its windows, and the
+ * functions each file gives the others. GTK 4; OpenGL through libepoxy. */
+#ifndef THORAX_VIEW_INTERNAL_H
+#define THORAX_VIEW_INTERNAL_H
+#include <gtk/gtk.h>
+
+#include "thorax/picture/picture.h"
+#include "thorax/view/view.h"
+
+typedef struct view_app view_app;
+
+/* A trace held in the plot pane: a node of a surface with data. */
+typedef struct {
+    int surface;
+    size_t node;
+} view_trace;
+
+#define VIEW_MAX_TRACES 6
+
+typedef struct view_win {
+    view_app *app;
+    int id;                    /* 1-based, in titles */
+    GtkWidget *window, *gl, *status, *plot, *paned;
+    thx_picture_opts o;        /* this window's picture; o.only[] = its surfaces (none: all) */
+    char only_buf[THX_PICTURE_MAX][64];
+    thx_renderer *r;           /* in the GL area's context */
+    thx_font *font;
+    int font_px;
+    thx_font *plot_font;       /* the plot pane's */
+    int frame;                 /* this window's frame when the frame lock is off */
+    /* camera: the standard view at open, turned by q about its centre, zoomed and panned */
+    int have_base;
+    thx_camera base;
+    double q[4];               /* unit quaternion (w, x, y, z) applied to the camera about the centre */
+    double zoom;               /* > 1: closer */
+    double pan[2];             /* mm, along the camera's right and up */
+    double drag_q[4], drag_pan[2];
+    double drag_x0, drag_y0;
+    int drag_mode;             /* 0 none, 1 rotate, 2 pan, 3 clip */
+    double drag_clip;
+    /* clip plane: off, or the picture's o.clip; `offset` moves it along its normal (mm); locked:
+       turns with the object (kept in model coordinates) instead of staying facing the viewer */
+    double clip_offset;
+    /* the overlay of annotations */
+    unsigned tex, prog, vao, vbo;
+    int tex_w, tex_h;
+    thx_image *img;
+    /* a screenshot wanted at the next draw (path owned), and its outcome */
+    char *shot_path;
+    int drawn;                 /* draws since open */
+    int pending;               /* a draw is queued */
+    double draw_ms;            /* the last draw's time */
+    double ms_sum;
+    int ms_n;
+    int gl_failed;
+} view_win;
+
+struct view_app {
+    thx_ctx *ctx;
+    thx_view_opts *vo;
+    thx_picture_data d;
+    GtkApplication *gapp;
+    view_win *win[THX_VIEW_MAX_WINDOWS];
+    int n_win;
+    int n_frames;
+    int frame;                 /* the shared frame (frame lock on) */
+    int playing;
+    guint play_id;
+    double rate;
+    int loop, step;
+    int lock_frame, lock_transform, lock_scale;
+    int current;               /* the surface commands act on (up/down arrows) */
+    int status;                /* exit status */
+    /* the script */
+    int line;
+    guint script_id;
+    gint64 wait_until;         /* a `wait` line's end (monotonic microseconds) */
+    /* recording: every new frame drawn in window 1 into rec_dir/frame_%05d.png */
+    char rec_dir[1024];
+    int recording, rec_count, rec_first;
+    int sweep_next;            /* record-all: the next frame to draw (while sweep_id) */
+    guint sweep_id;
+    /* picking */
+    struct thx_pick_index *pick; /* built at the first pick; rebuilt after an edit */
+    view_trace traces[VIEW_MAX_TRACES];
+    int n_traces;
+    char info[512];            /* the status line's pick/edit information */
+    int shots;                 /* screenshots saved by the menu (numbering) */
+};
+
+/* view_app.c */
+view_win *view_active(view_app *a);
+void view_redraw_all(view_app *a);
+void view_update_titles(view_app *a);
+int view_frame_of(const view_win *w);
+void view_set_info(view_app *a, const char *fmt, ...) G_GNUC_PRINTF(2, 3);
+void view_report(view_app *a, const char *what); /* the ctx's message into the status line and stderr */
+
+/* view_gl.c */
+void view_gl_attach(view_win *w);
+void view_camera(const view_win *w, double aspect, thx_camera *cam);
+void view_scene_viewport(const view_win *w, int fb_w, int fb_h, int vp[4]);
+
+/* view_input.c */
+void view_input_attach(view_win *w);
+void view_quat_identity(double q[4]);
+void view_quat_mul(const double a[4], const double b[4], double out[4]);
+void view_quat_axis_angle(const double axis[3], double deg, double q[4]);
+void view_quat_rotate(const double q[4], const double v[3], double out[3]);
+void view_rotate_screen(view_win *w, double ax, double ay, double deg); /* about an axis in screen space */
+void view_copy_transform(view_app *a, const view_win *from);
+
+/* view_actions.c */
+void view_actions_install(view_app *a);
+GMenuModel *view_menu(void);
+
+/* view_script.c */
+void view_script_start(view_app *a);
+thx_status view_save_session(view_app *a, const char *path);
+thx_status view_movie(view_app *a, const char *path);
+void view_record_all(view_app *a, const char *dir);
+
+/* view_plot.c */
+void view_plot_attach(view_win *w);
+void view_plot_update(view_app *a);
+thx_status view_plot_export(view_app *a, const char *path);
+void view_pick_at(view_win *w, double x, double y);
+#endif

@@ -1,0 +1,220 @@
+/*
+ * Picking and the plot pane (paper 4.2; map3d's pick window): a click casts the ray under the
+ * pointer through the camera (thorax/geom/pick.h: watertight, clip planes honoured, hidden
+ * surfaces skipped); the node nearest the hit is reported (index, coordinates, value, the
+ * triangle) and its time signal joins the traces under the picture (at most VIEW_MAX_TRACES, the
+ * oldest dropped), each drawn by the same trace code as `thorax render --trace`, with a marker
+ * at the current frame. The traces export as text (time, then one column per trace).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/core/fileio.h"
+#include "thorax/geom/pick.h"
+#include "view/view_internal.h"
+
+#define TRACE_H 110 /* pixels per trace */
+
+void view_plot_attach(view_win *w)
+{
+    gtk_widget_set_size_request(w->plot, -1, 0);
+    gtk_picture_set_can_shrink(GTK_PICTURE(w->plot), FALSE);
+}
+
+/* The traces as one image, one row each (thx_draw_trace), then shown in every window's pane. */
+void view_plot_update(view_app *a)
+{
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        if (a->n_traces == 0) {
+            gtk_widget_set_visible(w->plot, FALSE);
+            continue;
+        }
+        int width = gtk_widget_get_width(w->gl);
+        if (width < 64) width = a->vo->win_w;
+        int height = TRACE_H * a->n_traces;
+        thx_image *img = NULL;
+        if (thx_image_create(a->ctx, width, height, &img) != THX_OK) return;
+        static const unsigned char bg[4] = {24, 24, 28, 255};
+        static const unsigned char colors[VIEW_MAX_TRACES][4] = {{120, 230, 120, 255}, {250, 200, 80, 255}, {110, 180, 250, 255},
+                                                                 {240, 120, 200, 255}, {200, 200, 200, 255}, {250, 120, 90, 255}};
+        thx_image_fill(img, bg);
+        if (!w->plot_font) thx_font_open(a->ctx, w->o.font, 13, &w->plot_font);
+        int frame = view_frame_of(w);
+        for (int t = 0; t < a->n_traces; t++) {
+            const thx_series *x = a->d.series[a->traces[t].surface];
+            if (!x) continue;
+            size_t n = x->n_frames, row = a->traces[t].node;
+            double *v = malloc(n * sizeof *v);
+            if (!v) break;
+            for (size_t f = 0; f < n; f++) v[f] = x->v[f * x->n_rows + row];
+            char label[128];
+            snprintf(label, sizeof label, "%s node %zu", a->d.m->surf[a->traces[t].surface]->name, row + 1);
+            double dt = n > 1 ? x->time[1] - x->time[0] : 1;
+            thx_draw_trace(img, w->plot_font, 8, t * TRACE_H + 4, width - 16, TRACE_H - 8, v, n, x->time[0], dt, (size_t)frame,
+                           label, x->unit, colors[t % VIEW_MAX_TRACES]);
+            free(v);
+        }
+        GBytes *bytes = g_bytes_new(img->rgba, (size_t)width * (size_t)height * 4);
+        GdkTexture *tex = gdk_memory_texture_new(width, height, GDK_MEMORY_R8G8B8A8, bytes, (size_t)width * 4);
+        gtk_picture_set_paintable(GTK_PICTURE(w->plot), GDK_PAINTABLE(tex));
+        gtk_widget_set_size_request(w->plot, -1, height);
+        gtk_widget_set_visible(w->plot, TRUE);
+        g_object_unref(tex);
+        g_bytes_unref(bytes);
+        thx_image_destroy(&img);
+    }
+}
+
+thx_status view_plot_export(view_app *a, const char *path)
+{
+    if (a->n_traces == 0) return thx_error(a->ctx, THX_EINPUT, "no traces to export (pick a node first)");
+    const thx_series *x0 = a->d.series[a->traces[0].surface];
+    thx_atomic_file af;
+    static const char marker[] = "# thorax view traces";
+    THX_CHECK(thx_atomic_open_output(a->ctx, path, marker, sizeof marker - 1, NULL, 0, &af));
+    fprintf(af.f, "%s\n# time (%s)", marker, x0->time_unit);
+    for (int t = 0; t < a->n_traces; t++)
+        fprintf(af.f, "\t%s:%zu (%s)", a->d.m->surf[a->traces[t].surface]->name, a->traces[t].node + 1,
+                a->d.series[a->traces[t].surface]->unit);
+    fprintf(af.f, "\n");
+    for (size_t f = 0; f < x0->n_frames; f++) {
+        fprintf(af.f, "%.9g", x0->time[f]);
+        for (int t = 0; t < a->n_traces; t++) {
+            const thx_series *x = a->d.series[a->traces[t].surface];
+            if (f < x->n_frames) fprintf(af.f, "\t%.9g", x->v[f * x->n_rows + a->traces[t].node]);
+            else fprintf(af.f, "\tnan");
+        }
+        fprintf(af.f, "\n");
+    }
+    return thx_atomic_commit(a->ctx, &af);
+}
+
+/* The ray under window point (x, y) (logical pixels) through the window's camera. 0, or -1 when
+ * the point is outside the 3D viewport. */
+static int ray_at(view_win *w, double x, double y, double origin[3], double dir[3])
+{
+    int scale = gtk_widget_get_scale_factor(w->gl);
+    int fb_w = gtk_widget_get_width(w->gl) * scale, fb_h = gtk_widget_get_height(w->gl) * scale;
+    int vp[4];
+    view_scene_viewport(w, fb_w, fb_h, vp);
+    if (vp[2] <= 0 || vp[3] <= 0) return -1;
+    double px = x * scale, py = y * scale;
+    if (px < vp[0] || py < vp[1] || px > vp[0] + vp[2] || py > vp[1] + vp[3]) return -1;
+    double aspect = (double)vp[2] / vp[3];
+    thx_camera cam;
+    view_camera(w, aspect, &cam);
+    double nx = 2 * (px - vp[0]) / vp[2] - 1, ny = 1 - 2 * (py - vp[1]) / vp[3];
+    double b[3], bn = 0;
+    for (int k = 0; k < 3; k++) { b[k] = cam.eye[k] - cam.center[k]; bn += b[k] * b[k]; }
+    bn = sqrt(bn);
+    if (!(bn > 0)) return -1;
+    for (int k = 0; k < 3; k++) b[k] /= bn;
+    double d = cam.up[0] * b[0] + cam.up[1] * b[1] + cam.up[2] * b[2], u[3], un = 0;
+    for (int k = 0; k < 3; k++) { u[k] = cam.up[k] - d * b[k]; un += u[k] * u[k]; }
+    un = sqrt(un);
+    for (int k = 0; k < 3; k++) u[k] /= un;
+    double r[3] = {u[1] * b[2] - u[2] * b[1], u[2] * b[0] - u[0] * b[2], u[0] * b[1] - u[1] * b[0]};
+    if (cam.fov_deg > 0) {
+        double ty = tan(0.5 * cam.fov_deg * M_PI / 180), tx = ty * aspect;
+        for (int k = 0; k < 3; k++) {
+            origin[k] = cam.eye[k];
+            dir[k] = -b[k] + nx * tx * r[k] + ny * ty * u[k];
+        }
+    } else {
+        double hh = 0.5 * cam.height, hw = hh * aspect;
+        for (int k = 0; k < 3; k++) {
+            /* from well in front of everything: the orthographic view has no eye point */
+            origin[k] = cam.eye[k] + nx * hw * r[k] + ny * hh * u[k] + 1e4 * b[k];
+            dir[k] = -b[k];
+        }
+    }
+    return 0;
+}
+
+void view_pick_at(view_win *w, double x, double y)
+{
+    view_app *a = w->app;
+    const thx_model *m = a->d.m;
+    double origin[3], dir[3];
+    if (ray_at(w, x, y, origin, dir)) { view_set_info(a, "pick: outside the picture"); return; }
+    gint64 t0 = g_get_monotonic_time();
+    const thx_surface *surf[THX_PICTURE_SURFACES];
+    unsigned char skip[THX_PICTURE_SURFACES];
+    size_t n = m->n_surfaces < THX_PICTURE_SURFACES ? m->n_surfaces : THX_PICTURE_SURFACES;
+    for (size_t s = 0; s < n; s++) {
+        surf[s] = m->surf[s];
+        int shown = w->o.n_only == 0;
+        for (int k = 0; k < w->o.n_only; k++) shown |= !strcmp(w->o.only[k], m->surf[s]->name);
+        for (int k = 0; k < w->o.n_look; k++)
+            if (!strcmp(w->o.look[k].name, m->surf[s]->name) && w->o.look[k].mode == THX_DRAW_HIDDEN) shown = 0;
+        if (w->o.mode == THX_DRAW_HIDDEN) shown = 0;
+        skip[s] = !shown;
+    }
+    thx_pick_index *idx = NULL;
+    thx_pick_hit hit;
+    thx_pick_opts po;
+    thx_pick_opts_default(&po);
+    po.skip = skip;
+    thx_pick_plane clip;
+    thx_clip_plane cp;
+    thx_picture_opts o = w->o;
+    if (o.clip[0] && thx_picture_clip(a->ctx, &o, &a->d, &cp) == 1) {
+        double nn = sqrt(cp.n[0] * cp.n[0] + cp.n[1] * cp.n[1] + cp.n[2] * cp.n[2]);
+        memcpy(clip.n, cp.n, sizeof clip.n);
+        clip.d = cp.d - w->clip_offset * nn;
+        po.clip = &clip;
+        po.n_clip = 1;
+    }
+    /* a surface the clip plane leaves whole (--no-clip) is not clipped for picking either: picked
+       in a second pass without the plane, the nearer hit kept */
+    thx_status st = THX_OK;
+    if (!a->pick) st = thx_pick_index_create(a->ctx, surf, n, &a->pick);
+    idx = a->pick;
+    if (st == THX_OK) st = thx_pick_ray(a->ctx, idx, origin, dir, &po, &hit);
+    if (st == THX_OK && po.n_clip && w->o.n_whole) {
+        unsigned char skip2[THX_PICTURE_SURFACES];
+        for (size_t s = 0; s < n; s++) {
+            int whole = 0;
+            for (int k = 0; k < w->o.n_whole; k++) whole |= !strcmp(w->o.whole[k], m->surf[s]->name);
+            skip2[s] = skip[s] || !whole;
+        }
+        thx_pick_opts p2 = po;
+        p2.skip = skip2;
+        p2.clip = NULL;
+        p2.n_clip = 0;
+        thx_pick_hit h2;
+        st = thx_pick_ray(a->ctx, idx, origin, dir, &p2, &h2);
+        if (st == THX_OK && h2.surface >= 0 && (hit.surface < 0 || h2.t < hit.t)) hit = h2;
+    }
+    double ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
+    if (st != THX_OK) { view_report(a, "pick"); return; }
+    if (hit.surface < 0) { view_set_info(a, "pick: nothing under the pointer (%.1f ms)", ms); return; }
+    const thx_surface *s = m->surf[hit.surface];
+    const double *p = s->xyz + 3 * hit.node;
+    const thx_series *ser = a->d.series[hit.surface];
+    char value[64] = "no data";
+    int f = view_frame_of(w);
+    if (ser) {
+        size_t fi = (size_t)f < ser->n_frames ? (size_t)f : ser->n_frames - 1;
+        snprintf(value, sizeof value, "%.4g %s", ser->v[fi * ser->n_rows + hit.node], ser->unit);
+    }
+    a->current = hit.surface;
+    view_set_info(a, "picked %s node %zu (%.1f, %.1f, %.1f) mm, %s, triangle %zu (%.1f ms)", s->name, hit.node + 1, p[0],
+                  p[1], p[2], value, hit.tri + 1, ms);
+    if (a->vo->verbose >= 0) printf("pick: surface %s node %zu triangle %zu value %s time %.2f ms\n", s->name, hit.node + 1,
+                                    hit.tri + 1, value, ms);
+    fflush(stdout);
+    if (ser) {
+        if (a->n_traces == VIEW_MAX_TRACES) {
+            memmove(a->traces, a->traces + 1, (VIEW_MAX_TRACES - 1) * sizeof a->traces[0]);
+            a->n_traces--;
+        }
+        a->traces[a->n_traces].surface = hit.surface;
+        a->traces[a->n_traces].node = hit.node;
+        a->n_traces++;
+        view_plot_update(a);
+    }
+}

@@ -1,0 +1,290 @@
+/*
+ * Program control (paper 4.2): a script file holds the viewer's command-line options, one per
+ * line, the way the paper's users kept theirs; the options at its head are read with the command
+ * line (the CLI does that), and the lines after them run once the windows are up, each after the
+ * previous one's drawing is done:
+ *     action NAME [VALUE]   a GAction, as a key or menu would run it (`?` lists them)
+ *     --option [VALUE]      an option of the command line, applied to every window now
+ *     wait MS               let MS milliseconds pass (while playing, say)
+ *     quit                  the same as `action quit`
+ * A line that fails stops the script and the viewer with exit status 1, naming FILE:LINE.
+ * "Save session" writes such a script: the data options, then every setting that makes the
+ * picture (the camera made explicit), so the script reopens the session and `thorax render`
+ * given the same options draws the same picture.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "thorax/core/fileio.h"
+#include "thorax/picture/movie.h"
+#include "view/view_internal.h"
+
+/* Drawing queued or under way in some window (or a window not drawn yet). */
+static int busy(view_app *a)
+{
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        if (w->gl_failed) continue;
+        if (!gtk_widget_get_realized(w->gl) || w->drawn == 0 || w->pending || w->shot_path) return 1;
+    }
+    return 0;
+}
+
+static void script_fail(view_app *a, int line, const char *fmt, const char *what)
+{
+    fprintf(stderr, "thorax view: %s:%d: ", a->vo->script ? a->vo->script : "script", line);
+    fprintf(stderr, fmt, what);
+    fprintf(stderr, "\n");
+    a->status = 1;
+    g_application_quit(G_APPLICATION(a->gapp));
+}
+
+/* Runs one line; 0 on success, -1 after reporting a failure. *wait_ms: a pause asked for. */
+static int run_line(view_app *a, const char *text, int line, int *wait_ms)
+{
+    while (*text == ' ' || *text == '\t') text++;
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", text);
+    size_t len = strlen(buf);
+    while (len && (buf[len - 1] == '\n' || buf[len - 1] == '\r' || buf[len - 1] == ' ' || buf[len - 1] == '\t')) buf[--len] = '\0';
+    if (!buf[0] || buf[0] == '#') return 0;
+    if (!strcmp(buf, "quit")) snprintf(buf, sizeof buf, "action quit");
+    if (!strncmp(buf, "wait ", 5)) {
+        char *end;
+        long ms = strtol(buf + 5, &end, 10);
+        if (*end || ms < 0 || ms > 600000) { script_fail(a, line, "wait '%s': milliseconds, 0 to 600000", buf + 5); return -1; }
+        *wait_ms = (int)ms;
+        return 0;
+    }
+    if (buf[0] == '-') {
+        if (!a->vo->option_fn) { script_fail(a, line, "'%s': options are not taken here", buf); return -1; }
+        for (int k = 0; k < a->n_win; k++) {
+            thx_picture_opts o = a->win[k]->o;
+            if (a->vo->option_fn(a->vo->option_user, &o, buf)) { script_fail(a, line, "'%s': see the message above", buf); return -1; }
+            thx_clip_plane p;
+            if (o.clip[0] && thx_picture_clip(a->ctx, &o, &a->d, &p) < 0) {
+                script_fail(a, line, "%s", thx_ctx_message(a->ctx));
+                return -1;
+            }
+            a->win[k]->o = o;
+        }
+        view_redraw_all(a);
+        return 0;
+    }
+    if (strncmp(buf, "action ", 7)) {
+        script_fail(a, line, "'%s': a line is an option (--name value), action NAME [VALUE], wait MS, quit or a # comment", buf);
+        return -1;
+    }
+    char *name = buf + 7;
+    while (*name == ' ') name++;
+    char *value = name + strcspn(name, " \t");
+    if (*value) { *value++ = '\0'; while (*value == ' ' || *value == '\t') value++; }
+    if (!strncmp(name, "app.", 4)) name += 4;
+    GActionGroup *g = G_ACTION_GROUP(a->gapp);
+    if (!g_action_group_has_action(g, name)) { script_fail(a, line, "no action '%s' (the `?` key lists them)", name); return -1; }
+    const GVariantType *pt = g_action_group_get_action_parameter_type(g, name);
+    GVariant *param = NULL;
+    if (!pt) {
+        if (*value) { script_fail(a, line, "action %s takes no value", name); return -1; }
+    } else if (g_variant_type_equal(pt, G_VARIANT_TYPE_STRING)) {
+        param = g_variant_new_string(value);
+    } else if (g_variant_type_equal(pt, G_VARIANT_TYPE_INT32)) {
+        char *end;
+        long v = strtol(value, &end, 10);
+        if (!*value || *end || v < INT32_MIN || v > INT32_MAX) { script_fail(a, line, "action %s: give an integer", name); return -1; }
+        param = g_variant_new_int32((gint32)v);
+    } else {
+        char *end;
+        double v = strtod(value, &end);
+        if (!*value || *end || !isfinite(v)) { script_fail(a, line, "action %s: give a number", name); return -1; }
+        param = g_variant_new_double(v);
+    }
+    int before = a->status;
+    a->status = 0;
+    g_action_group_activate_action(g, name, param);
+    if (a->status) { script_fail(a, line, "%s", a->info); return -1; }
+    a->status = before;
+    return 0;
+}
+
+/* Every 5 ms: the next lines, as long as they queue no drawing; then wait for it. */
+static gboolean script_tick(gpointer user)
+{
+    view_app *a = user;
+    if (busy(a) || a->sweep_id || g_get_monotonic_time() < a->wait_until) return G_SOURCE_CONTINUE;
+    while (a->line < a->vo->n_lines) {
+        int wait_ms = 0, k = a->line++;
+        if (run_line(a, a->vo->lines[k], a->vo->script_line0 + k, &wait_ms)) {
+            a->script_id = 0;
+            return G_SOURCE_REMOVE;
+        }
+        if (wait_ms > 0) {
+            a->wait_until = g_get_monotonic_time() + 1000 * (gint64)wait_ms;
+            return G_SOURCE_CONTINUE;
+        }
+        if (busy(a) || a->sweep_id) return G_SOURCE_CONTINUE;
+    }
+    a->script_id = 0;
+    return G_SOURCE_REMOVE;
+}
+
+void view_script_start(view_app *a)
+{
+    if (a->vo->n_lines == 0) return;
+    a->line = 0;
+    a->script_id = g_timeout_add(5, script_tick, a);
+}
+
+/* ---- save session ---- */
+
+static void write_look(FILE *f, const thx_picture_look *l)
+{
+    static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+    fprintf(f, "--surface %s=%s", l->name, modes[l->mode]);
+    if (l->opacity >= 0 || l->have_color) fprintf(f, ":%.3g", l->opacity >= 0 ? l->opacity : 1.0);
+    if (l->have_color)
+        fprintf(f, ":#%02x%02x%02x", (int)lround(l->color[0] * 255), (int)lround(l->color[1] * 255), (int)lround(l->color[2] * 255));
+    fprintf(f, "\n");
+}
+
+/* The options of a window's picture as it is drawn now (what `thorax render` takes). */
+static void write_picture(FILE *f, view_win *w)
+{
+    static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+    static const char *styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
+    static const char *cmaps[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
+    static const char *scales[] = {"linear", "log", "exp"};
+    static const char *scopes[] = {"frame", "series", "all", "fixed", "surfaces"};
+    const thx_picture_opts *o = &w->o;
+    int scale = gtk_widget_get_scale_factor(w->gl);
+    int fb_w = gtk_widget_get_width(w->gl) * scale, fb_h = gtk_widget_get_height(w->gl) * scale;
+    int vp[4];
+    view_scene_viewport(w, fb_w, fb_h, vp);
+    thx_camera cam;
+    view_camera(w, vp[3] > 0 ? (double)vp[2] / vp[3] : 1, &cam);
+    fprintf(f, "--size %dx%d\n", fb_w, fb_h);
+    fprintf(f, "--camera %.17g,%.17g,%.17g:%.17g,%.17g,%.17g:%.17g,%.17g,%.17g:%.17g:%.17g\n", cam.eye[0], cam.eye[1],
+            cam.eye[2], cam.center[0], cam.center[1], cam.center[2], cam.up[0], cam.up[1], cam.up[2], cam.fov_deg, cam.height);
+    if (o->up_spec) fprintf(f, "--up %s\n", o->up_spec);
+    if (o->front_spec) fprintf(f, "--front %s\n", o->front_spec);
+    fprintf(f, "--mode %s\n", modes[o->mode]);
+    for (int k = 0; k < o->n_look; k++) write_look(f, &o->look[k]);
+    for (int k = 0; k < o->n_only; k++) fprintf(f, "--only %s\n", o->only[k]);
+    for (int k = 0; k < o->n_whole; k++) fprintf(f, "--no-clip %s\n", o->whole[k]);
+    fprintf(f, "--style %s\n--levels %d\n--cmap %s\n--scale %s\n", styles[o->style], o->levels, cmaps[o->cmap], scales[o->model]);
+    if (o->scope == THX_SCOPE_FIXED) fprintf(f, "--scope fixed:%.17g:%.17g\n", o->lo, o->hi);
+    else fprintf(f, "--scope %s\n", scopes[o->scope]);
+    fprintf(f, "%s\n", o->symmetric ? "--symmetric" : "--true-range");
+    for (int k = 0; k < o->n_groups; k++) fprintf(f, "--scale-group %s\n", o->groups[k]);
+    for (int k = 0; k < o->n_slaves; k++) fprintf(f, "--slave %s\n", o->slaves[k]);
+    if (o->invert) fprintf(f, "--invert\n");
+    if (o->colorbar) fprintf(f, "--colorbar\n");
+    if (o->label) fprintf(f, "--label\n");
+    if (o->panels) fprintf(f, "--panels\n");
+    if (o->trace) fprintf(f, "--trace %s\n", o->trace);
+    if (o->font) fprintf(f, "--font %s\n", o->font);
+    if (o->clip[0]) {
+        if (w->clip_offset != 0) {
+            thx_clip_plane p;
+            if (thx_picture_clip(w->app->ctx, o, &w->app->d, &p) == 1) {
+                double n = sqrt(p.n[0] * p.n[0] + p.n[1] * p.n[1] + p.n[2] * p.n[2]);
+                fprintf(f, "--clip %.9g,%.9g,%.9g,%.9g\n", p.n[0], p.n[1], p.n[2], p.d - w->clip_offset * n);
+            }
+        } else {
+            fprintf(f, "--clip %s\n", o->clip);
+        }
+    }
+    if (o->arrows) {
+        fprintf(f, "--arrows\n--arrow-spacing %.17g\n--arrow-length %.17g\n--arrow-max %d\n", o->arrow_spacing,
+                o->arrow_scale, o->arrow_max);
+        if (o->arrow_gap > 0) fprintf(f, "--arrow-gap %.17g\n", o->arrow_gap);
+        if (o->arrow_unit) fprintf(f, "--arrow-unit\n");
+        if (o->arrow_region) fprintf(f, "--arrow-region %s\n", o->arrow_region);
+    }
+}
+
+thx_status view_save_session(view_app *a, const char *path)
+{
+    static const char marker[] = "# thorax view session";
+    thx_atomic_file af;
+    THX_CHECK(thx_atomic_open_output(a->ctx, path, marker, sizeof marker - 1, NULL, 0, &af));
+    FILE *f = af.f;
+    const thx_picture_opts *o = &a->vo->pic;
+    time_t now = time(NULL);
+    char when[64];
+    strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S", localtime(&now));
+    fprintf(f, "%s, saved %s\n", marker, when);
+    fprintf(f, "# reopen: thorax view --script %s\n", path);
+    fprintf(f, "# draw the same offscreen: thorax render with these options (less the viewer's own, after the mark below)\n");
+    if (a->vo->command_line) fprintf(f, "# from: %s\n", a->vo->command_line);
+    if (o->model_dir) fprintf(f, "%s\n", o->model_dir);
+    for (int k = 0; k < o->n_files; k++) fprintf(f, "%s\n", o->files[k]);
+    if (o->solution) fprintf(f, "--solution %s\n", o->solution);
+    if (o->data) fprintf(f, "--data %s\n", o->data);
+    if (o->data_surface) fprintf(f, "--data-surface %s\n", o->data_surface);
+    if (o->channels) fprintf(f, "--channels %s\n", o->channels);
+    view_win *w = a->win[0];
+    write_picture(f, w);
+    fprintf(f, "--frame %d\n", view_frame_of(w) + 1);
+    fprintf(f, "# the viewer's own\n");
+    fprintf(f, "--rate %.17g\n--step %d\n%s\n", a->rate, a->step, a->loop ? "--loop" : "--no-loop");
+    if (a->n_win > 1)
+        for (int k = 0; k < a->n_win; k++) {
+            GString *names = g_string_new("");
+            for (int j = 0; j < a->win[k]->o.n_only; j++) g_string_append_printf(names, "%s%s", j ? "," : "", a->win[k]->o.only[j]);
+            fprintf(f, "--window %s\n", names->str);
+            g_string_free(names, TRUE);
+        }
+    return thx_atomic_commit(a->ctx, &af);
+}
+
+thx_status view_movie(view_app *a, const char *path)
+{
+    thx_atomic_file af;
+    THX_CHECK(thx_movie_claim(a->ctx, path, &af));
+    int fps = (int)lround(a->rate);
+    return thx_movie_make(a->ctx, &af, a->rec_dir, a->rec_first, a->rec_count, fps < 1 ? 1 : fps > 240 ? 240 : fps);
+}
+
+/* ---- record every frame, unattended ---- */
+
+static gboolean sweep_tick(gpointer user)
+{
+    view_app *a = user;
+    if (busy(a)) return G_SOURCE_CONTINUE;
+    if (a->sweep_next < a->n_frames && a->recording) {
+        g_action_group_activate_action(G_ACTION_GROUP(a->gapp), "frame", g_variant_new_int32(a->sweep_next + 1));
+        a->sweep_next++;
+        return G_SOURCE_CONTINUE;
+    }
+    a->sweep_id = 0;
+    if (!a->recording) return G_SOURCE_REMOVE;
+    a->recording = 0;
+    char movie[1100];
+    snprintf(movie, sizeof movie, "%s/animation.mp4", a->rec_dir);
+    if (view_movie(a, movie) != THX_OK) {
+        view_report(a, "movie");
+        a->status = 1;
+    } else {
+        view_set_info(a, "recorded %d frames and %s", a->rec_count, movie);
+    }
+    return G_SOURCE_REMOVE;
+}
+
+void view_record_all(view_app *a, const char *dir)
+{
+    if (g_mkdir_with_parents(dir, 0777) != 0) {
+        view_set_info(a, "record-all: cannot create %s: %s", dir, g_strerror(errno));
+        a->status = 1;
+        return;
+    }
+    snprintf(a->rec_dir, sizeof a->rec_dir, "%s", dir);
+    a->recording = 1;
+    a->rec_count = 0;
+    a->sweep_next = 0;
+    a->sweep_id = g_timeout_add(5, sweep_tick, a);
+}
