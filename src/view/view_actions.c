@@ -668,6 +668,12 @@ static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
     gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(scroll), label);
     gtk_window_set_child(GTK_WINDOW(win), scroll);
     gtk_window_set_default_size(GTK_WINDOW(win), 720, 640);
+    /* Escape closes it */
+    GtkEventController *sc = gtk_shortcut_controller_new();
+    gtk_shortcut_controller_add_shortcut(GTK_SHORTCUT_CONTROLLER(sc),
+                                         gtk_shortcut_new(gtk_keyval_trigger_new(GDK_KEY_Escape, 0),
+                                                          gtk_named_action_new("window.close")));
+    gtk_widget_add_controller(win, sc);
     gtk_window_present(GTK_WINDOW(win));
     g_string_free(text, TRUE);
 }

@@ -1,0 +1,251 @@
+#!/usr/bin/env bash
+# thorax view end to end under Xvfb, as a user would meet it: the viewer opens the medium phantom
+# with its forward solution; real key presses (xdotool) step the frame, shown in the title; a real
+# click picks a node; a scripted session's screenshot matches thorax render given the session's
+# saved options, pixel by pixel within a tolerance, at GDK_SCALE 1 and 2; a scripted pick opens the
+# trace of the node the ray meets (found here independently in numpy) and exports its signal;
+# playing advances frames; record-all writes every frame and an MP4; the keys overlay opens; bad
+# scripts, names and a missing display are refused with the file and line, exit 1.
+set -euo pipefail
+: "${THORAX:?}" "${WORK:?}" "${SRC:?}"
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+PY=/usr/bin/python3
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$THORAX" phantom --resolution medium --seed 1 -o c.txt -q
+"$THORAX" surfaces c.txt -o model -q
+"$THORAX" mesh model --no-heart -q
+"$THORAX" electrodes model -q
+"$THORAX" beat model -o beat.raw --frames 300 -q
+"$THORAX" forward model --epicardial beat.raw -o sol -q
+"$THORAX" series convert sol/torso.raw -o torso.txt -q
+
+# ---- everything that needs a display runs inside one Xvfb ----
+cat > inside.sh <<'INNER'
+set -euo pipefail
+fail() { echo "FAIL: $*"; exit 1; }
+V=("$THORAX" view --solution sol)
+
+# 1. real keys: the title shows the frame; Right steps it; ? opens the keys' window; a click picks
+"${V[@]}" --size 400x440 --frame 193 > keys.out 2> keys.err &
+VP=$!
+W=""
+for i in $(seq 100); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
+[ -n "$W" ] || { cat keys.err; fail "no viewer window appeared"; }
+sleep 0.5
+title() { xdotool getwindowname "$W"; }
+title | grep -q "frame 193 of 300" || fail "title: $(title)"
+xdotool windowactivate --sync "$W" 2>/dev/null || xdotool windowfocus --sync "$W" || true
+xdotool key --window "$W" Right
+for i in $(seq 50); do title | grep -q "frame 194 of 300" && break; sleep 0.1; done
+title | grep -q "frame 194 of 300" || fail "Right did not step the frame: $(title)"
+xdotool key --window "$W" Right Right Left
+for i in $(seq 50); do title | grep -q "frame 195 of 300" && break; sleep 0.1; done
+title | grep -q "frame 195 of 300" || fail "Right Right Left: $(title)"
+echo "keys: $(title)"
+xdotool key --window "$W" question
+for i in $(seq 50); do xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 && break; sleep 0.1; done
+xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 || fail "? did not open the keys window"
+KW=$(xdotool search --onlyvisible --name "thorax — keys" | head -1)
+xdotool key --window "$KW" Escape
+for i in $(seq 50); do xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 || break; sleep 0.1; done
+xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 && fail "Escape did not close the keys window"
+xdotool windowfocus --sync "$W" 2>/dev/null || true
+# the middle of the window's drawing area (below the menu bar): the torso's front
+xdotool mousemove --window "$W" 200 250 click 1
+for i in $(seq 50); do grep -q "^pick: surface" keys.out && break; sleep 0.1; done
+grep -q "^pick: surface torso node" keys.out || { cat keys.out keys.err; fail "a click did not pick the torso"; }
+echo "click: $(grep '^pick' keys.out)"
+xdotool windowfocus --sync "$W" 2>/dev/null || true
+xdotool key --window "$W" ctrl+q
+for i in $(seq 50); do kill -0 $VP 2>/dev/null || break; sleep 0.1; done
+kill -0 $VP 2>/dev/null && { kill $VP; fail "ctrl+q did not quit"; }
+wait $VP || fail "the viewer exited $?"
+
+# 2. a scripted session: frame, look, camera turned; screenshot, session saved, and the
+#    viewport-centre pick with its trace exported
+cat > s1.txt <<EOF
+--solution sol
+--size 400x440
+--frame 193
+--style continuous+contours
+--only torso
+--only heart
+action frame-next
+action rotate right:30
+action rotate up:10
+action zoom 1.2
+action pick 100,110
+action traces-export $PWD/traces.txt
+action traces-clear
+action screenshot $PWD/view1.png
+action save-session $PWD/session.txt
+quit
+EOF
+"$THORAX" view --script s1.txt > s1.out 2> s1.err || { cat s1.err; fail "scripted session exit $?"; }
+[ -s view1.png ] && [ -s session.txt ] && [ -s traces.txt ] || fail "the session's files"
+grep -q "^--frame 194$" session.txt || fail "session: frame"
+grep -q "^--camera " session.txt || fail "session: camera"
+args=()
+while IFS= read -r l; do
+    case "$l" in "# the viewer's own"*) break ;; "#"*|"") continue ;; esac
+    args+=(${l%% *}); [ "${l#* }" != "$l" ] && args+=("${l#* }")
+done < session.txt
+"$THORAX" render "${args[@]}" -o render1.png -q
+mv view1.png v1.png
+mv session.txt session1.txt
+# 3. the same at GDK_SCALE=2: twice the pixels, and render at twice the size agrees
+GDK_SCALE=2 "$THORAX" view --script s1.txt --size 300x240 > s2.out 2> s2.err || { cat s2.err; fail "GDK_SCALE=2 session"; }
+mv view1.png v2.png
+mv session.txt session2.txt
+grep -q "^--size 600x480$" session2.txt || fail "GDK_SCALE=2: the drawing area is not 600x480 pixels: $(grep -- --size session2.txt)"
+args=()
+while IFS= read -r l; do
+    case "$l" in "# the viewer's own"*) break ;; "#"*|"") continue ;; esac
+    args+=(${l%% *}); [ "${l#* }" != "$l" ] && args+=("${l#* }")
+done < session2.txt
+"$THORAX" render "${args[@]}" -o render2.png -q
+
+# 4. playing advances the frames; the session says where it stopped
+cat > s3.txt <<EOF
+--solution sol
+--size 200x200
+--frame 10
+action rate 200
+action play
+wait 600
+action play
+action save-session $PWD/played.txt
+quit
+EOF
+"$THORAX" view --script s3.txt > /dev/null 2> s3.err || { cat s3.err; fail "playing session"; }
+f=$(sed -n 's/^--frame //p' played.txt)
+[ "$f" -gt 20 ] || fail "playing for 0.6 s at 200 frames/s got from frame 10 to $f only"
+echo "played: frame 10 -> $f in 0.6 s"
+
+# 5. record-all: every frame drawn and an MP4
+cat > s4.txt <<EOF
+--solution sol
+--size 160x160
+action record-all $PWD/rec
+quit
+EOF
+"$THORAX" view --script s4.txt > /dev/null 2> s4.err || { cat s4.err; fail "record-all"; }
+[ "$(ls rec/frame_*.png | wc -l)" -eq 300 ] || fail "record-all: $(ls rec | wc -l) files"
+n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 rec/animation.mp4)
+[ "$n" = 300 ] || fail "record-all: the movie has $n frames"
+
+# 6. bad input: exit 1, the file and line named
+printf -- '--solution sol\n--size 120x120\naction frame-next\naction no-such-thing\nquit\n' > bad1.txt
+if "$THORAX" view --script bad1.txt > /dev/null 2> bad1.err; then fail "an unknown action was accepted"; fi
+grep -q "bad1.txt:4: no action 'no-such-thing'" bad1.err || { cat bad1.err; fail "unknown action: message"; }
+printf -- '--solution sol\n--size 120x120\naction frame 999\n' > bad2.txt
+if "$THORAX" view --script bad2.txt > /dev/null 2> bad2.err; then fail "frame 999 was accepted"; fi
+grep -q "bad2.txt:3: frame 999: the data have frames 1 to 300" bad2.err || { cat bad2.err; fail "frame 999: message"; }
+printf -- '--solution sol\n--size 120x120\naction frame-next\n--solution other\n' > bad3.txt
+if "$THORAX" view --script bad3.txt > /dev/null 2> bad3.err; then fail "changing the data of a running viewer was accepted"; fi
+grep -q "cannot change" bad3.err || { cat bad3.err; fail "data change: message"; }
+if "$THORAX" view --solution sol --window torso,nope > /dev/null 2> bad4.err; then fail "--window with an unknown surface"; fi
+grep -q "no surface 'nope'" bad4.err || { cat bad4.err; fail "--window: message"; }
+echo "inside: all passed"
+INNER
+THORAX="$THORAX" xvfb-run -a -s "-screen 0 1600x1200x24" bash inside.sh 2>&1 | grep -v "dbus\|session bus\|^$" || true
+grep -q . keys.out 2>/dev/null || fail "the display part did not run"
+[ -s render2.png ] && [ -s rec/animation.mp4 ] && [ -s bad4.err ] || fail "the display part stopped early (see above)"
+
+# no display at all: a clear message, exit 1
+if env -u DISPLAY -u WAYLAND_DISPLAY "$THORAX" view --solution sol > /dev/null 2> nodisp.err; then fail "no display: accepted"; fi
+grep -q "no display" nodisp.err || { cat nodisp.err; fail "no display: message"; }
+
+# ---- pixels and numbers, checked outside ----
+$PY - <<'EOF'
+import numpy as np, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+def png(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    d = r.GetOutput(); w, h, _ = d.GetDimensions()
+    a = vtk_to_numpy(d.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+    return a
+# The window draws without the offscreen renderer's antialiasing pass (FXAA on llvmpipe): the two
+# may differ at edges (a pixel whose neighbour differs from it by more than 24 in the render), and
+# must agree everywhere else.
+for v, r in (('v1.png', 'render1.png'), ('v2.png', 'render2.png')):
+    a, b = png(v), png(r)
+    assert a.shape == b.shape, (v, a.shape, b.shape)
+    d = np.abs(a - b).max(axis=2)
+    edge = np.zeros(d.shape, bool)
+    for dy, dx in ((0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (-1, -1), (1, -1), (-1, 1)):
+        edge |= np.abs(np.roll(np.roll(b, dy, 0), dx, 1) - b).max(axis=2) > 24
+    drawn = (np.abs(b - b[0, 0]).max(axis=2) > 20).mean()
+    off = d > 16
+    print('%s vs %s: %dx%d, %.0f%% drawn; away from edges (%.0f%% of pixels) mean difference %.4f, %d pixels off by '
+          'more than 16; at edges %d' % (v, r, a.shape[1], a.shape[0], 100 * drawn, 100 * (~edge).mean(), d[~edge].mean(),
+                                          (off & ~edge).sum(), (off & edge).sum()))
+    assert drawn > 0.2, 'the picture is mostly empty'
+    assert d[~edge].mean() < 0.1 and (off & ~edge).mean() < 0.001, 'the window differs from thorax render'
+assert png("v2.png").shape[:2] == (480, 600)
+
+# the pick at the viewport's centre: the ray (the view's axis through the middle of the model's
+# box, turned as the script turned it) is not known here, but its node must be a torso node whose
+# trace is the exported one
+t = [l.split() for l in open('traces.txt') if not l.startswith('#')]
+t = np.array(t, float)
+assert t.shape == (300, 2), t.shape
+hdr = open('traces.txt').read().split('\n')[1]
+node = int(hdr.split('torso:')[1].split()[0])
+rows = []
+for l in open('torso.txt'):
+    s = l.split()
+    try:
+        rows.append([float(x) for x in s])
+    except ValueError:
+        pass
+torso = np.array([r for r in rows if len(r) == max(len(q) for q in rows)])
+print('picked torso node %d; the export is its row of the series: %s' % (node, np.allclose(t[:, 1], torso[node - 1], rtol=1e-6, atol=1e-9)))
+assert np.allclose(t[:, 1], torso[node - 1], rtol=1e-6, atol=1e-9)
+EOF
+
+# ---- the pick against an independent ray cast: anterior view, no turn, the viewport's centre ----
+cat > s5.txt <<EOF
+--solution sol
+--size 300x300
+--frame 193
+action pick 150,150
+quit
+EOF
+xvfb-run -a -s "-screen 0 800x600x24" "$THORAX" view --script s5.txt > s5.out 2> s5.err || { cat s5.err; fail "pick session"; }
+node=$(sed -n 's/^pick: surface torso node \([0-9]*\) .*/\1/p' s5.out)
+[ -n "$node" ] || { cat s5.out; fail "the centre pick did not hit the torso"; }
+$PY - "$node" <<'EOF'
+import sys, numpy as np
+pick = int(sys.argv[1])
+def read(p, cols, typ):
+    return np.array([[typ(x) for x in l.split()[:cols]] for l in open(p) if l.strip() and not l.startswith('#')])
+names = {}
+import json
+m = json.load(open('model/model.json'))
+allp = []
+for s in m['surfaces']:
+    allp.append(read('model/%s.pts' % s['name'], 3, float))
+lo = np.min([p.min(0) for p in allp], 0); hi = np.max([p.max(0) for p in allp], 0); c = (lo + hi) / 2
+P = read('model/torso.pts', 3, float); F = read('model/torso.fac', 3, int) - 1
+# the anterior view looks along -y through the box centre: the first torso triangle met from +y
+o = np.array([c[0], hi[1] + 100, c[2]]); d = np.array([0, -1.0, 0])
+a, b, cc = P[F[:, 0]], P[F[:, 1]], P[F[:, 2]]
+e1, e2 = b - a, cc - a
+h = np.cross(d, e2); det = (e1 * h).sum(1)
+ok = np.abs(det) > 1e-12
+f = np.where(ok, 1 / np.where(ok, det, 1), 0)
+s = o - a; u = f * (s * h).sum(1)
+q = np.cross(s, e1); v = f * (q * d).sum(1); tt = f * (e2 * q).sum(1)
+hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (tt > 0)
+k = np.where(hit)[0][np.argmin(tt[hit])]
+x = o + tt[k] * d
+tri = F[k]
+near = tri[np.argmin(((P[tri] - x) ** 2).sum(1))] + 1
+print('centre pick: viewer node %d, numpy ray cast node %d (triangle %d)' % (pick, near, k + 1))
+assert pick == near
+EOF
+echo "view checks passed"
