@@ -675,6 +675,69 @@ static void test_perspective(void)
     thx_surface_destroy(&pl);
 }
 
+/* thx_camera_project lands a point where the renderer draws it, and thx_camera_ray is its inverse:
+ * a small square of the plane drawn around a point off the axis, under an orthographic and a
+ * perspective camera turned off the axes, has its pixels' centre where the projection says; and
+ * every pixel's ray projects back to that pixel. */
+static void test_project(void)
+{
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    for (int persp = 0; persp < 2; persp++) {
+        thx_camera cam;
+        memset(&cam, 0, sizeof cam);
+        cam.eye[0] = 3; cam.eye[1] = -9; cam.eye[2] = 2;
+        cam.center[0] = 0.2; cam.center[1] = 0; cam.center[2] = 0.1;
+        cam.up[2] = 1; cam.up[0] = 0.2;
+        if (persp) cam.fov_deg = 40;
+        else cam.height = 5;
+        /* round trips: pixel -> ray -> a point along it -> pixel */
+        double worst = 0;
+        for (int i = 0; i < 50; i++) {
+            double x = (i * 37 % 101) * N / 100.0, y = (i * 53 % 97) * N / 96.0, o[3], d[3], p[3], px2, py2, dep;
+            CHECK(thx_camera_ray(&cam, N, N, x, y, o, d) == 0);
+            for (int k = 0; k < 3; k++) p[k] = o[k] + (3 + i % 7) * d[k];
+            CHECK(thx_camera_project(&cam, N, N, p, &px2, &py2, &dep) == 0);
+            worst = fmax(worst, fmax(fabs(px2 - x), fabs(py2 - y)));
+        }
+        CHECK(worst < 1e-9);
+        /* a square of side 0.2 around (0.7, 0, 0.5) in the plane y = 0 */
+        thx_surface *sq = NULL;
+        CHECK_OK(ctx, thx_surface_create(ctx, "sq", THX_ROLE_OTHER, &sq));
+        double c[3] = {0.7, 0, 0.5}, h = 0.1;
+        double xyz[12] = {c[0] - h, 0, c[2] - h, c[0] + h, 0, c[2] - h, c[0] + h, 0, c[2] + h, c[0] - h, 0, c[2] + h};
+        int32_t tri[6] = {0, 1, 2, 0, 2, 3};
+        sq->xyz = malloc(sizeof xyz);
+        sq->tri = malloc(sizeof tri);
+        memcpy(sq->xyz, xyz, sizeof xyz);
+        memcpy(sq->tri, tri, sizeof tri);
+        sq->n_nodes = 4;
+        sq->n_tris = 2;
+        thx_render_surface rs = surf_defaults(sq, THX_DRAW_FLAT);
+        thx_scene sc = base_scene(&rs, 1);
+        sc.camera = cam;
+        CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+        double sx = 0, sy = 0, n = 0;
+        for (int y = 0; y < N; y++)
+            for (int x = 0; x < N; x++)
+                if (!near_rgb(px(im, x, y), 0.1, 0.2, 0.3, 40)) { sx += x + 0.5; sy += y + 0.5; n++; }
+        double ex, ey, dep;
+        CHECK(thx_camera_project(&cam, N, N, c, &ex, &ey, &dep) == 0);
+        printf("project (%s): square drawn at (%.2f, %.2f) over %.0f pixels, projected (%.2f, %.2f), depth %.3f\n",
+               persp ? "perspective" : "orthographic", sx / n, sy / n, n, ex, ey, dep);
+        CHECK(n > 4);
+        CHECK(fabs(sx / n - ex) < 1.0 && fabs(sy / n - ey) < 1.0);
+        double bv[3], bl = 0, de = 0;
+        for (int k = 0; k < 3; k++) { bv[k] = cam.eye[k] - cam.center[k]; bl += bv[k] * bv[k]; }
+        for (int k = 0; k < 3; k++) de -= (c[k] - cam.eye[k]) * bv[k] / sqrt(bl);
+        CHECK_NEAR(dep, de, 1e-12); /* the distance in front of the eye along the line of sight */
+        double q[3] = {cam.eye[0], cam.eye[1], cam.eye[2]}, a, b2, d2;
+        if (persp) CHECK(thx_camera_project(&cam, N, N, q, &a, &b2, &d2) == -1); /* the eye itself is not in front */
+        thx_surface_destroy(&sq);
+    }
+    thx_image_destroy(&im);
+}
+
 /* A renderer without a context of its own (the viewer's case) drawing with thx_render_scene_gl into
  * a framebuffer of the caller's: here the first renderer's context, which thx_render leaves current
  * when no other was. */
@@ -978,6 +1041,7 @@ int main(void)
         test_modes();
         test_sides();
         test_perspective();
+        test_project();
         test_errors();
     }
     CHECK(thx_renderer_set_samples(ctx, ren, 2) == THX_EINPUT);

@@ -154,3 +154,53 @@ void cam_depth_range(const thx_camera *cam, const double lo[3], const double hi[
     *znear = zn;
     *zfar = zf;
 }
+
+int thx_camera_project(const thx_camera *cam, int w, int h, const double p[3], double *x, double *y, double *depth)
+{
+    double r[3], u[3], b[3];
+    if (w <= 0 || h <= 0 || cam_frame(cam, r, u, b) != 0) return -1;
+    double q[3] = {p[0] - cam->eye[0], p[1] - cam->eye[1], p[2] - cam->eye[2]};
+    double xe = q[0] * r[0] + q[1] * r[1] + q[2] * r[2], ye = q[0] * u[0] + q[1] * u[1] + q[2] * u[2];
+    double d = -(q[0] * b[0] + q[1] * b[1] + q[2] * b[2]);
+    double aspect = (double)w / h, nx, ny;
+    if (cam->fov_deg > 0) {
+        if (!(d > 0)) return -1;
+        double f = 1 / tan(0.5 * cam->fov_deg * M_PI / 180);
+        nx = f / aspect * xe / d;
+        ny = f * ye / d;
+    } else {
+        double hh = 0.5 * cam->height, hw = hh * aspect;
+        if (!(hh > 0)) return -1;
+        nx = xe / hw;
+        ny = ye / hh;
+    }
+    *x = 0.5 * (nx + 1) * w;
+    *y = 0.5 * (1 - ny) * h;
+    *depth = d;
+    return 0;
+}
+
+int thx_camera_ray(const thx_camera *cam, int w, int h, double x, double y, double origin[3], double dir[3])
+{
+    double r[3], u[3], b[3];
+    if (w <= 0 || h <= 0 || cam_frame(cam, r, u, b) != 0) return -1;
+    double aspect = (double)w / h, nx = 2 * x / w - 1, ny = 1 - 2 * y / h;
+    if (cam->fov_deg > 0) {
+        double ty = tan(0.5 * cam->fov_deg * M_PI / 180), tx = ty * aspect, n = 0;
+        for (int k = 0; k < 3; k++) {
+            origin[k] = cam->eye[k];
+            dir[k] = -b[k] + nx * tx * r[k] + ny * ty * u[k];
+            n += dir[k] * dir[k];
+        }
+        n = sqrt(n);
+        for (int k = 0; k < 3; k++) dir[k] /= n;
+    } else {
+        double hh = 0.5 * cam->height, hw = hh * aspect;
+        if (!(hh > 0)) return -1;
+        for (int k = 0; k < 3; k++) {
+            origin[k] = cam->eye[k] + nx * hw * r[k] + ny * hh * u[k];
+            dir[k] = -b[k];
+        }
+    }
+    return 0;
+}

@@ -103,35 +103,9 @@ static int ray_at(view_win *w, double x, double y, double origin[3], double dir[
     if (vp[2] <= 0 || vp[3] <= 0) return -1;
     double px = x * scale, py = y * scale;
     if (px < vp[0] || py < vp[1] || px > vp[0] + vp[2] || py > vp[1] + vp[3]) return -1;
-    double aspect = (double)vp[2] / vp[3];
     thx_camera cam;
-    view_camera(w, aspect, &cam);
-    double nx = 2 * (px - vp[0]) / vp[2] - 1, ny = 1 - 2 * (py - vp[1]) / vp[3];
-    double b[3], bn = 0;
-    for (int k = 0; k < 3; k++) { b[k] = cam.eye[k] - cam.center[k]; bn += b[k] * b[k]; }
-    bn = sqrt(bn);
-    if (!(bn > 0)) return -1;
-    for (int k = 0; k < 3; k++) b[k] /= bn;
-    double d = cam.up[0] * b[0] + cam.up[1] * b[1] + cam.up[2] * b[2], u[3], un = 0;
-    for (int k = 0; k < 3; k++) { u[k] = cam.up[k] - d * b[k]; un += u[k] * u[k]; }
-    un = sqrt(un);
-    for (int k = 0; k < 3; k++) u[k] /= un;
-    double r[3] = {u[1] * b[2] - u[2] * b[1], u[2] * b[0] - u[0] * b[2], u[0] * b[1] - u[1] * b[0]};
-    if (cam.fov_deg > 0) {
-        double ty = tan(0.5 * cam.fov_deg * M_PI / 180), tx = ty * aspect;
-        for (int k = 0; k < 3; k++) {
-            origin[k] = cam.eye[k];
-            dir[k] = -b[k] + nx * tx * r[k] + ny * ty * u[k];
-        }
-    } else {
-        double hh = 0.5 * cam.height, hw = hh * aspect;
-        for (int k = 0; k < 3; k++) {
-            /* from well in front of everything: the orthographic view has no eye point */
-            origin[k] = cam.eye[k] + nx * hw * r[k] + ny * hh * u[k] + 1e4 * b[k];
-            dir[k] = -b[k];
-        }
-    }
-    return 0;
+    view_camera(w, (double)vp[2] / vp[3], &cam);
+    return thx_camera_ray(&cam, vp[2], vp[3], px - vp[0], py - vp[1], origin, dir);
 }
 
 void view_pick_at(view_win *w, double x, double y)

@@ -113,6 +113,15 @@ int thx_view_parse(const char *name, thx_view *out);
  * anterior, +z cranial): looking at the subject from that side, head up (superior/inferior:
  * anterior up), orthographic, the box filling the view with a margin for the given aspect w/h. */
 void thx_camera_view(thx_camera *cam, thx_view view, const double lo[3], const double hi[3], double aspect);
+/* Where point p lands in a viewport of w x h pixels under cam (the renderer's projection): *x, *y
+ * in pixels from the viewport's top left (fractional; outside 0..w, 0..h when off the picture),
+ * *depth the distance in front of the eye along the line of sight (mm). 0, or -1 when p is not in
+ * front of the eye (perspective) or the camera is degenerate. */
+int thx_camera_project(const thx_camera *cam, int w, int h, const double p[3], double *x, double *y, double *depth);
+/* The ray under viewport pixel (x, y) (from the top left, fractional): origin and unit direction.
+ * Orthographic: the origin on the plane through the eye facing the view. 0, or -1 for a
+ * degenerate camera. The inverse of thx_camera_project: a point on the ray projects to (x, y). */
+int thx_camera_ray(const thx_camera *cam, int w, int h, double x, double y, double origin[3], double dir[3]);
 
 /* Keeps the half space n . x + d >= 0. */
 typedef struct {
