@@ -52,7 +52,7 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         snprintf(path, sizeof path, "%s/solution.json", o->p.solution);
         sig_file(sig, cap, path);
     }
-    if (o->p.data) sig_file(sig, cap, o->p.data);
+    for (int k = 0; k < o->p.n_data; k++) sig_file(sig, cap, o->p.data[k]);
     if (o->p.channels) sig_file(sig, cap, o->p.channels);
     for (int k = 0; k < o->p.n_files; k++) sig_file(sig, cap, o->p.files[k]);
     if (o->p.model_dir) {

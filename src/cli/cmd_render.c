@@ -197,10 +197,14 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--solution", .type = CLI_INPUT, .meta = "DIR", .s = &o->p.solution,
                        .help = "a thorax forward solution: its model, the torso potentials (and the heart's, when the "
                                "epicardial series is still where the solution says)"};
-    t[n++] = (cli_opt){.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .s = &o->p.data,
-                       .help = "per-node values of one surface (rows = its nodes), any series format"};
-    t[n++] = (cli_opt){.name = "--data-surface", .type = CLI_STRING, .meta = "NAME", .s = &o->p.data_surface,
-                       .help = "the surface --data belongs to, when several have that many nodes"};
+    t[n++] = (cli_opt){.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .flags = CLI_REPEAT, .sv = o->p.data,
+                       .count = &o->p.n_data, .max = THX_PICTURE_MAX,
+                       .help = "per-node values of one surface (rows = its nodes), any series format; repeat for more data "
+                               "sets (a surface shows the last given; the viewer steps through them)"};
+    t[n++] = (cli_opt){.name = "--data-surface", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT,
+                       .sv = o->p.data_surface, .count = &o->p.n_data_surface, .max = THX_PICTURE_MAX,
+                       .help = "the surface the k-th --data belongs to (the k-th --data-surface), when several have that many "
+                               "nodes"};
     t[n++] = (cli_opt){.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &o->p.channels,
                        .help = "map3d .channels: the --data rows are recording channels, node i takes channel c"};
     t[n++] = (cli_opt){.name = "--size", .type = CLI_STRING, .meta = "WxH", .fn = parse_size, .def = "800x800",
@@ -260,6 +264,12 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--colorbar", .type = CLI_FLAG, .i = &o->p.colorbar,
                        .help = "a colour bar with values, title and unit"};
     t[n++] = (cli_opt){.name = "--label", .type = CLI_FLAG, .i = &o->p.label, .help = "the time and frame"};
+    t[n++] = (cli_opt){.name = "--node-labels", .type = CLI_STRING, .meta = "SURFACE=index|channel|value",
+                       .flags = CLI_REPEAT, .sv = o->p.labels, .count = &o->p.n_labels, .max = THX_PICTURE_MAX,
+                       .help = "the surface's nodes seen from the camera labelled with their number (1-based), recording "
+                               "channel (--channels) or value, where the labels do not overlap"};
+    t[n++] = (cli_opt){.name = "--extrema", .type = CLI_FLAG, .i = &o->p.extrema,
+                       .help = "marks at the largest and smallest value of each surface's data (grey when behind)"};
     t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->p.trace,
                        .help = "a signal under the picture with a marker at the frame: an ECG lead (I..V6, from the "
                                "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
@@ -301,7 +311,7 @@ thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_rendere
     THX_CHECK(thx_picture_load(ctx, &o->p, d));
     THX_CHECK(thx_renderer_create(ctx, o->p.w, o->p.h, rr));
     THX_CHECK(thx_image_create(ctx, o->p.w, o->p.h, img));
-    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels) THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
+    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema) THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
     return THX_OK;
 }
 

@@ -15,11 +15,24 @@
 #include "thorax/import/import.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
-#include "thorax/picture/picture.h"
+#include "thorax/geom/pick.h"
+#include "picture/picture_internal.h"
 
 void thx_picture_data_free(thx_picture_data *d)
 {
-    for (int s = 0; s < THX_PICTURE_SURFACES; s++) thx_series_destroy(&d->series[s]);
+    for (int s = 0; s < THX_PICTURE_SURFACES; s++) {
+        int owned = 0;
+        for (int k = 0; k < d->n_sets[s]; k++) {
+            owned |= d->sets[s][k] == d->series[s];
+            thx_series_destroy(&d->sets[s][k]);
+        }
+        if (!owned) thx_series_destroy(&d->series[s]);
+        d->series[s] = NULL;
+        d->n_sets[s] = 0;
+        free(d->channel[s]);
+        d->channel[s] = NULL;
+    }
+    thx_pick_index_destroy(&d->pick);
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
@@ -162,12 +175,13 @@ static thx_status surfaces_from_files(thx_ctx *ctx, const thx_picture_opts *o, t
 
 /* map3d .channels: "N leads", then N lines "lead channel" (1-based). The series' rows are the
  * recording's channels; the result has one row per lead (NaN for a lead the file leaves out). */
-static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp)
+static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp, int **chan_out)
 {
     char *text = NULL;
     size_t len = 0;
     THX_CHECK(thx_read_file(ctx, path, &text, &len));
     thx_series *in = *sp, *outs = NULL;
+    int *chan = NULL;
     thx_status st = THX_OK;
     char *p = text, *end;
     size_t line = 1;
@@ -181,6 +195,8 @@ static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp
     line = 2;
     st = thx_series_create(ctx, (size_t)n, in->n_frames, &outs);
     if (st != THX_OK) goto done;
+    chan = calloc((size_t)n, sizeof *chan);
+    if (!chan) { st = thx_error(ctx, THX_ENOMEM, "out of memory (%ld channels)", n); goto done; }
     for (size_t k = 0; k < (size_t)n * in->n_frames; k++) outs->v[k] = NAN;
     memcpy(outs->time, in->time, in->n_frames * sizeof *in->time);
     snprintf(outs->unit, sizeof outs->unit, "%s", in->unit);
@@ -204,14 +220,16 @@ static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp
         }
         for (size_t f = 0; f < in->n_frames; f++)
             outs->v[f * (size_t)n + (size_t)(lead - 1)] = in->v[f * in->n_rows + (size_t)(ch - 1)];
+        chan[lead - 1] = (int)ch;
         p = strchr(e2, '\n');
         p = p ? p + 1 : e2 + strlen(e2);
     }
 done:
     free(text);
-    if (st != THX_OK) { thx_series_destroy(&outs); return st; }
+    if (st != THX_OK) { thx_series_destroy(&outs); free(chan); return st; }
     thx_series_destroy(sp);
     *sp = outs;
+    *chan_out = chan;
     return THX_OK;
 }
 
@@ -266,36 +284,45 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         cJSON_Delete(j);
         if (st != THX_OK) return st;
     }
-    if (o->data) {
+    /* the solution's series are each surface's first data set */
+    for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++)
+        if (d->series[k]) { d->sets[k][0] = d->series[k]; d->n_sets[k] = 1; }
+    for (int k = 0; k < o->n_data; k++) {
+        const char *dpath = o->data[k], *on = k < o->n_data_surface ? o->data_surface[k] : NULL;
         thx_series *s = NULL;
-        THX_CHECK(thx_series_read(ctx, o->data, THX_SERIES_AUTO, &s));
+        int *chan = NULL;
+        THX_CHECK(thx_series_read(ctx, dpath, THX_SERIES_AUTO, &s));
         if (o->channels) {
-            thx_status sc = apply_channels(ctx, o->channels, &s);
+            thx_status sc = apply_channels(ctx, o->channels, &s, &chan);
             if (sc != THX_OK) { thx_series_destroy(&s); return sc; }
         }
         int target = -1;
-        if (o->data_surface) {
-            target = surface_by_name(d->m, o->data_surface);
-            if (target < 0) { thx_series_destroy(&s); return thx_error(ctx, THX_EINPUT, "--data-surface: no surface '%s'", o->data_surface); }
+        thx_status bad = THX_OK;
+        if (on) {
+            target = surface_by_name(d->m, on);
+            if (target < 0) bad = thx_error(ctx, THX_EINPUT, "--data-surface: no surface '%s'", on);
         } else {
             int n = 0;
-            for (size_t k = 0; k < d->m->n_surfaces; k++)
-                if (d->m->surf[k]->n_nodes == s->n_rows) { target = (int)k; n++; }
-            if (n != 1) {
-                size_t rows = s->n_rows;
-                thx_series_destroy(&s);
-                return thx_error(ctx, THX_EINPUT, "%s: %zu rows match %s (give --data-surface NAME)", o->data, rows,
-                                 n ? "several surfaces" : "no surface's node count");
-            }
+            for (size_t q = 0; q < d->m->n_surfaces; q++)
+                if (d->m->surf[q]->n_nodes == s->n_rows) { target = (int)q; n++; }
+            if (n != 1)
+                bad = thx_error(ctx, THX_EINPUT, "%s: %zu rows match %s (give --data-surface NAME)", dpath, s->n_rows,
+                                n ? "several surfaces" : "no surface's node count");
         }
-        if (d->m->surf[target]->n_nodes != s->n_rows) {
-            size_t rows = s->n_rows;
-            thx_series_destroy(&s);
-            return thx_error(ctx, THX_EINPUT, "%s: %zu rows, surface '%s' has %zu nodes", o->data, rows,
-                             d->m->surf[target]->name, d->m->surf[target]->n_nodes);
-        }
-        thx_series_destroy(&d->series[target]);
+        if (bad == THX_OK && d->m->surf[target]->n_nodes != s->n_rows)
+            bad = thx_error(ctx, THX_EINPUT, "%s: %zu rows, surface '%s' has %zu nodes", dpath, s->n_rows,
+                            d->m->surf[target]->name, d->m->surf[target]->n_nodes);
+        if (bad == THX_OK && target >= THX_PICTURE_SURFACES)
+            bad = thx_error(ctx, THX_EINPUT, "%s: data on surface %d: at most %d surfaces carry data", dpath, target + 1, THX_PICTURE_SURFACES);
+        if (bad == THX_OK && d->n_sets[target] >= THX_PICTURE_SETS)
+            bad = thx_error(ctx, THX_EINPUT, "%s: surface '%s' has %d data sets already (at most %d)", dpath,
+                            d->m->surf[target]->name, d->n_sets[target], THX_PICTURE_SETS);
+        if (bad != THX_OK) { thx_series_destroy(&s); free(chan); return bad; }
+        d->sets[target][d->n_sets[target]++] = s;
+        d->active[target] = d->n_sets[target] - 1;
         d->series[target] = s;
+        d->sranged[target] = 0;
+        if (chan) { free(d->channel[target]); d->channel[target] = chan; }
     }
     THX_CHECK(resolve_trace(ctx, o, d));
     if (o->arrows) {
@@ -429,7 +456,6 @@ typedef struct {
     thx_render_arrows arrows;
     double *apos, *avec;
     int have_arrows;
-    thx_scale main_scale;
     int main_surface;
     size_t nan_count;
 } built_scene;
@@ -559,7 +585,6 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             r->color[3] = look && look->opacity >= 0 ? look->opacity : 1;
             if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
                 b->main_surface = (int)s;
-                b->main_scale = r->scale;
             }
         }
         b->n++;
@@ -680,6 +705,20 @@ void thx_picture_opts_default(thx_picture_opts *o)
     o->arrow_max = 400;
 }
 
+int thx_picture_set_active(thx_picture_data *d, int s, int k)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s]) return -1;
+    d->active[s] = k;
+    d->series[s] = d->sets[s][k];
+    d->sranged[s] = 0;
+    return 0;
+}
+
+void thx_picture_geometry_changed(thx_picture_data *d)
+{
+    thx_pick_index_destroy(&d->pick);
+}
+
 thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
 {
     THX_CHECK(load_data(ctx, o, d));
@@ -771,11 +810,31 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
     return 1;
 }
 
+/* The scales of the surfaces with data in b, the main one first, each distinct one once. */
+static void collect_bars(const thx_model *m, const built_scene *b, thx_picture_bars *bars)
+{
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t i = 0; i < b->n; i++) {
+            const thx_render_surface *r = &b->rs[i];
+            int main = b->main_surface >= 0 && r->surf == m->surf[b->main_surface];
+            if (!r->values || (pass == 0) != main) continue;
+            int k = 0;
+            while (k < bars->n && memcmp(&bars->scale[k], &r->scale, sizeof r->scale)) k++;
+            if (k == bars->n) {
+                if (bars->n == THX_PICTURE_BARS) continue;
+                bars->scale[bars->n++] = r->scale;
+            }
+            size_t len = strlen(bars->names[k]);
+            if (len + strlen(r->surf->name) + 3 < sizeof bars->names[k])
+                snprintf(bars->names[k] + len, sizeof bars->names[k] - len, "%s%s", len ? ", " : "", r->surf->name);
+        }
+}
+
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
  * into the current framebuffer (img NULL, fb_w x fb_h). */
 static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *rr,
-                              thx_font *font, int frame, int fb_w, int fb_h, thx_image *img, thx_scale *bar,
-                              int *have_bar, size_t *nan_total)
+                              thx_font *font, int frame, int fb_w, int fb_h, thx_image *img, thx_picture_bars *bars,
+                              size_t *nan_total)
 {
     thx_status st = THX_OK;
     const thx_model *m = d->m;
@@ -785,7 +844,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     built_scene *b = calloc(1, sizeof *b);
     if (!b) return thx_error(ctx, THX_ENOMEM, "out of memory (scene)");
     int panel = 0;
-    *have_bar = 0;
+    memset(bars, 0, sizeof *bars);
     thx_clip_plane clip;
     int n_clip = thx_picture_clip(ctx, o, d, &clip);
     if (n_clip < 0) { free(b); return THX_EINPUT; }
@@ -827,15 +886,15 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         free(b->avec);
         b->apos = b->avec = NULL;
         if (st != THX_OK) break;
-        if (b->main_surface >= 0 && !*have_bar) { *bar = b->main_scale; *have_bar = 1; }
+        collect_bars(m, b, bars);
         panel++;
     }
     free(b);
     return st;
 }
 
-thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_font *font,
-                                int frame, const thx_scale *bar, int have_bar, thx_image *img)
+thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font,
+                                int frame, const thx_picture_bars *bars, thx_image *img)
 {
     const thx_model *m = d->m;
     if (!font) return THX_OK;
@@ -855,13 +914,27 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, const t
             panel++;
         }
     }
+    THX_CHECK(picture_marks(ctx, o, d, font, frame, img));
     const thx_series *any = NULL;
     for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
         if (d->series[s] && (!any || m->surf[s]->role == THX_ROLE_OUTER)) any = d->series[s];
-    if (o->colorbar && have_bar)
-        thx_draw_colorbar(img, font, vw + bar_w / 4, top + vh / 8, bar_w / 4, vh * 3 / 4, o->cmap, bar,
-                          o->style == THX_DATA_BANDS || o->style == THX_DATA_BANDS_CONTOURS ? o->levels : 0, 5,
-                          "potential", any ? any->unit : "");
+    int shades = o->style == THX_DATA_BANDS || o->style == THX_DATA_BANDS_CONTOURS ? o->levels : 0;
+    if (o->colorbar && bars->n == 1)
+        thx_draw_colorbar(img, font, vw + bar_w / 4, top + vh / 8, bar_w / 4, vh * 3 / 4, o->cmap, &bars->scale[0], shades,
+                          5, "potential", any ? any->unit : "");
+    else if (o->colorbar && bars->n > 1) {
+        /* one bar per distinct scale, stacked, each titled with its surfaces */
+        int slot = vh * 7 / 8 / bars->n, fh = thx_font_height(font);
+        for (int k = 0; k < bars->n; k++) {
+            const char *unit = "";
+            for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
+                if (d->series[s] && strstr(bars->names[k], m->surf[s]->name)) unit = d->series[s]->unit;
+            int y0 = top + vh / 16 + k * slot + 2 * fh + 4, hh = slot - 3 * fh - 8;
+            if (hh < 16) break;
+            thx_draw_colorbar(img, font, vw + bar_w / 4, y0, bar_w / 4, hh, o->cmap, &bars->scale[k], shades, hh > 8 * fh ? 5 : 3,
+                              bars->names[k], unit);
+        }
+    }
     if (o->label && any) {
         char text[128];
         size_t f = (size_t)frame < any->n_frames ? (size_t)frame : 0;
@@ -887,16 +960,13 @@ thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
                             thx_font *font, int frame, thx_image *img, size_t *nan_total)
 {
     thx_image_fill(img, BG);
-    thx_scale bar;
-    int have_bar = 0;
-    memset(&bar, 0, sizeof bar);
-    THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bar, &have_bar, nan_total));
-    return thx_picture_annotate(ctx, o, d, font, frame, &bar, have_bar, img);
+    thx_picture_bars bars;
+    THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bars, nan_total));
+    return thx_picture_annotate(ctx, o, d, font, frame, &bars, img);
 }
 
 thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
-                               thx_font *font, int frame, int fb_w, int fb_h, thx_scale *bar, int *have_bar,
-                               size_t *nan_total)
+                               thx_font *font, int frame, int fb_w, int fb_h, thx_picture_bars *bars, size_t *nan_total)
 {
     /* the whole framebuffer in the background colour: the scene's viewport clears only itself */
     thx_scene bgs;
@@ -910,6 +980,5 @@ thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
     bgs.camera.eye[1] = 1;
     bgs.camera.height = 1;
     THX_CHECK(thx_render_scene_gl(ctx, r, &bgs, fb_w, fb_h, NULL));
-    memset(bar, 0, sizeof *bar);
-    return draw_panels(ctx, o, d, r, font, frame, fb_w, fb_h, NULL, bar, have_bar, nan_total);
+    return draw_panels(ctx, o, d, r, font, frame, fb_w, fb_h, NULL, bars, nan_total);
 }

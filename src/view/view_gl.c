@@ -137,7 +137,7 @@ static int window_picture(view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
 static int font_for(view_win *w, int fb_h)
 {
     int px = fb_h / 40 > 11 ? fb_h / 40 : 11;
-    int want = w->o.colorbar || w->o.label || w->o.trace || w->o.panels;
+    int want = w->o.colorbar || w->o.label || w->o.trace || w->o.panels || w->o.n_labels || w->o.extrema;
     if (!want) { thx_font_close(&w->font); w->font_px = 0; return 0; }
     if (w->font && w->font_px == px) return 0;
     thx_font_close(&w->font);
@@ -219,10 +219,9 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     if (font_for(w, fb_h)) { view_report(a, "font"); return TRUE; }
     thx_picture_opts o;
     window_picture(w, fb_w, fb_h, &o);
-    thx_scale bar;
-    int have_bar = 0;
+    thx_picture_bars bars;
     int frame = view_frame_of(w);
-    thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bar, &have_bar, NULL);
+    thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bars, NULL);
     if (st != THX_OK) { view_report(a, "drawing"); return TRUE; }
     int annotated = w->font != NULL;
     int need_pixels = annotated || w->shot_path || (a->recording && w->id == 1);
@@ -233,7 +232,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
         }
         read_back(w->img);
         if (annotated) {
-            st = thx_picture_annotate(a->ctx, &o, &a->d, w->font, frame, &bar, have_bar, w->img);
+            st = thx_picture_annotate(a->ctx, &o, &a->d, w->font, frame, &bars, w->img);
             if (st != THX_OK) { view_report(a, "annotations"); return TRUE; }
             show_image(w, w->img);
         }

@@ -224,8 +224,8 @@ thx_status view_save_session(view_app *a, const char *path)
     if (o->model_dir) fprintf(f, "%s\n", o->model_dir);
     for (int k = 0; k < o->n_files; k++) fprintf(f, "%s\n", o->files[k]);
     if (o->solution) fprintf(f, "--solution %s\n", o->solution);
-    if (o->data) fprintf(f, "--data %s\n", o->data);
-    if (o->data_surface) fprintf(f, "--data-surface %s\n", o->data_surface);
+    for (int k = 0; k < o->n_data; k++) fprintf(f, "--data %s\n", o->data[k]);
+    for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
     if (o->channels) fprintf(f, "--channels %s\n", o->channels);
     view_win *w = a->win[0];
     write_picture(f, w);

@@ -45,7 +45,13 @@ typedef struct {
  * the viewer changes as it runs. Plain data; thx_picture_opts_default fills the defaults. Strings
  * are not owned. */
 typedef struct {
-    const char *model_dir, *solution, *data, *data_surface, *font, *trace, *arrows;
+    const char *model_dir, *solution, *font, *trace, *arrows;
+    /* data sets: each series given (rows = a surface's nodes) goes to data_surface[k] when given,
+       else to the one surface with that many nodes; a surface may hold several, the last shown */
+    const char *data[THX_PICTURE_MAX];
+    int n_data;
+    const char *data_surface[THX_PICTURE_MAX];
+    int n_data_surface;
     const char *files[THX_PICTURE_MAX]; /* surface files drawn without a model (any format thorax import reads) */
     const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
     int n_files;
@@ -87,16 +93,28 @@ typedef struct {
     int have_box;
     double box[6];          /* arrows only inside x0 y0 z0 x1 y1 z1 */
     const char *arrow_region; /* arrows only at nodes of this tissue region */
+    /* marks (single-panel pictures): node labels "SURFACE=index|channel|value" (the nodes seen
+       from the camera, decluttered), and the extrema of each surface's data at the frame */
+    const char *labels[THX_PICTURE_MAX];
+    int n_labels;
+    int extrema;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
 
 #define THX_PICTURE_SURFACES 64
 
+#define THX_PICTURE_SETS 8
+
 /* The data a picture draws, read once (thx_picture_load) and owned here. */
 typedef struct {
     thx_model *m;
-    thx_series *series[THX_PICTURE_SURFACES]; /* per surface, or NULL */
+    thx_series *sets[THX_PICTURE_SURFACES][THX_PICTURE_SETS]; /* each surface's data sets (owned) */
+    int n_sets[THX_PICTURE_SURFACES];
+    int active[THX_PICTURE_SURFACES];
+    thx_series *series[THX_PICTURE_SURFACES]; /* the set shown per surface (sets[s][active[s]]), or NULL */
+    int *channel[THX_PICTURE_SURFACES]; /* the recording channel of each node (1-based; 0 none), from --channels */
+    struct thx_pick_index *pick; /* for the marks' visibility, built at the first use (thorax/geom/pick.h) */
     thx_series *ecg;          /* 12-lead (trace) */
     thx_series *currents;     /* currents_node, for arrows */
     thx_series *volume;       /* volume potentials (unused for now) */
@@ -106,6 +124,17 @@ typedef struct {
     size_t trace_row;
     char trace_label[96];
 } thx_picture_data;
+
+/* The colour scales of a picture: one colour bar each (paper 4.2: "a colour bar per distinct
+ * scale"). The first is the body surface's (else the first surface's with data); the others are
+ * the other surfaces' scales that differ from every one before. */
+#define THX_PICTURE_BARS 4
+typedef struct {
+    int n;
+    thx_scale scale[THX_PICTURE_BARS];
+    char names[THX_PICTURE_BARS][96]; /* the surfaces drawn with each */
+    char unit[THX_PICTURE_BARS][16];
+} thx_picture_bars;
 
 /* The defaults (800x800, anterior, gouraud, ecg, linear, series scope, symmetric, ...). */
 void thx_picture_opts_default(thx_picture_opts *o);
@@ -127,15 +156,14 @@ thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
 
 /* The same picture's 3D part, into the framebuffer bound in the caller's current OpenGL 3.3
  * context (fb_w x fb_h pixels; r made with w = h = 0), the whole framebuffer cleared to the
- * picture's background first. The scale of the colour bar is left in *bar (when *have_bar) for
- * thx_picture_annotate. The camera used is o->cam when o->have_camera, else the standard view. */
+ * picture's background first. The colour scales drawn are left in *bars for thx_picture_annotate.
+ * The camera used is o->cam when o->have_camera, else the standard view. */
 thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
-                               thx_font *font, int frame, int fb_w, int fb_h, thx_scale *bar, int *have_bar,
-                               size_t *nan_total);
+                               thx_font *font, int frame, int fb_w, int fb_h, thx_picture_bars *bars, size_t *nan_total);
 /* The annotations (surface names of panels, colour bar, time label, trace) over img, which holds
  * the 3D part drawn by thx_picture_draw_gl at img's size. */
-thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_font *font,
-                                int frame, const thx_scale *bar, int have_bar, thx_image *img);
+thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font,
+                                int frame, const thx_picture_bars *bars, thx_image *img);
 
 /* The 3D part's viewport (x, y from the top left, w, h) of a picture of w x h pixels: the picture
  * less the label strip above, the colour bar beside and the trace below, as o asks for them. */
@@ -146,6 +174,11 @@ void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, do
 void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3]);
 /* The clip plane o->clip asks for, in the model's axes; 0 none, 1 one (in *p), -1 a bad spec (message in ctx). */
 int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_clip_plane *p);
+
+/* Shows data set k (0-based) of surface s; -1 when there is no such set. */
+int thx_picture_set_active(thx_picture_data *d, int s, int k);
+/* After the model's surfaces changed (an edit): forget what was computed from their geometry. */
+void thx_picture_geometry_changed(thx_picture_data *d);
 
 /* The column of the solution's currents_node at the time of frame, or -1. */
 long thx_picture_currents_column(const thx_picture_data *d, int frame);
