@@ -458,6 +458,7 @@ static void test_bad_inputs(void)
                                                                            "'a_label_of_forty_characters_123456789012' is longer than 39"},
         {"  2.69\n", ",2.69\n", ":3: segment 1 point 1: a comma in '297.844,2.69'"},
         {" 11 segment", " 11 segmnet", ":1: unexpected text after the segment count: 'segmnet'"},
+        {" 11 segment", " 11 segments 4", ":1: unexpected text after the segment count: '4'"},
         {" 11 segment", " 011", ":1: segment count '011' has a leading zero (map3d would read it as octal)"},
         {" 11 segment", " -11", ":1: expected the number of segments on the first line, found '-11'"},
         {" 11 segment", " 2000000000", ":1: the file declares 2000000000 segments, but the 2"},
@@ -735,7 +736,7 @@ static void test_other_shapes(void)
         thx_landmark_mesh_opts_default(&o);
         o.min_radius = 0;
         s = mesh_of(THX_LANDMARK_ROD, pts, 2, &o);
-        CHECK(!s && tl_msg_has(ctx, "minimum radius 0 mm"));
+        CHECK(!s && tl_msg_has(ctx, "minimum radius 0 mm is not in [0.001, 1e+07]"));
         thx_landmark_mesh_opts_default(&o);
         pts[1].xyz[0] = NAN;
         s = mesh_of(THX_LANDMARK_ROD, pts, 2, &o);

@@ -116,6 +116,15 @@ static int same(thx_vec3 a, thx_vec3 b)
     return thx_landmark_points_coincide(x, y);
 }
 
+/* A radius as drawn at centre c: radii within the tolerance at which two points coincide
+ * (thx_landmark_points_coincide, 1e-9 of the coordinates) are 0 (they would give rings of
+ * coincident nodes); then `zero` stands for it (min_radius, or 0 for an end that closes). */
+static double drawn_radius(double r, thx_vec3 c, double zero)
+{
+    double m = fmax(fabs(c.x), fmax(fabs(c.y), fabs(c.z)));
+    return r > 1e-9 * (1.0 + m) ? r : zero;
+}
+
 /* A unit vector perpendicular to unit t. */
 static thx_vec3 any_perpendicular(thx_vec3 t)
 {
@@ -184,7 +193,8 @@ static thx_status tube(mesh *me, const thx_vec3 *c, const double *r, size_t m, i
         thx_vec3 v = thx_v3_cross(t, u);
         int is_end = i == 0 || i + 1 == m;
         if (r[i] <= 0) { /* an end closed to a point */
-            if (!is_end) return thx_error(me->ctx, THX_EINTERNAL, "landmark tube: radius 0 inside");
+            if (!is_end || (i > 0 && prev_first < 0))
+                return thx_error(me->ctx, THX_EINTERNAL, "landmark tube: radius 0 inside, or at both ends of one piece");
             int32_t pt;
             THX_CHECK(add_vertex(me, c[i], &pt));
             if (i > 0) /* the cone from the previous ring to this point */
@@ -275,9 +285,9 @@ static void squeeze(stations *s)
 static thx_status tube_stations(thx_ctx *ctx, const thx_landmark_segment *g, double rmin, stations *s)
 {
     int all_zero = 1;
-    for (size_t i = 0; i < g->n; i++) all_zero &= g->pt[i].radius == 0;
+    for (size_t i = 0; i < g->n; i++) all_zero &= drawn_radius(g->pt[i].radius, p3(g->pt[i].xyz), 0) == 0;
     for (size_t i = 0; i < g->n; i++) {
-        double r = g->pt[i].radius;
+        double r = drawn_radius(g->pt[i].radius, p3(g->pt[i].xyz), 0);
         int end = i == 0 || i + 1 == g->n;
         if (r == 0 && (all_zero || !end)) r = rmin;
         THX_CHECK(st_push(ctx, s, p3(g->pt[i].xyz), r));
@@ -300,7 +310,7 @@ static thx_status tube_stations(thx_ctx *ctx, const thx_landmark_segment *g, dou
 static thx_status spheres(mesh *me, const thx_landmark_segment *g, const thx_landmark_mesh_opts *o)
 {
     for (size_t i = 0; i < g->n; i++) {
-        double r = g->pt[i].radius > 0 ? g->pt[i].radius : o->min_radius;
+        double r = drawn_radius(g->pt[i].radius, p3(g->pt[i].xyz), o->min_radius);
         thx_surface *s = NULL;
         THX_CHECK(thx_icosphere(me->ctx, o->sphere_level, r, "site", THX_ROLE_OTHER, &s));
         int32_t base = (int32_t)me->nv, dummy;
@@ -320,9 +330,13 @@ static thx_status disc(mesh *me, const thx_landmark_segment *g, const thx_landma
     thx_vec3 a = p3(g->pt[0].xyz), b = p3(g->pt[1].xyz), c = p3(g->pt[2].xyz);
     thx_vec3 ctr = thx_v3_scale(thx_v3_add(thx_v3_add(a, b), c), 1.0 / 3);
     thx_vec3 nrm = unit(thx_v3_cross(thx_v3_sub(b, a), thx_v3_sub(c, a)));
-    double R = g->pt[0].radius > 0 ? g->pt[0].radius : o->min_radius;
-    double T = g->pt[1].radius > 0 ? g->pt[1].radius : o->min_radius;
+    double R = drawn_radius(g->pt[0].radius, ctr, o->min_radius);
+    double T = drawn_radius(g->pt[1].radius, ctr, o->min_radius);
     if (T > 2 * R) T = 2 * R;
+    /* far from the origin a thin disc's faces would coincide (thx_landmark_points_coincide): at
+       least 4e-9 of the coordinates apart, which they do not (|d| >= T / sqrt 3 > the tolerance) */
+    double m = fmax(fabs(ctr.x), fmax(fabs(ctr.y), fabs(ctr.z)));
+    T = fmax(T, 4e-9 * (1.0 + m));
     thx_vec3 cs[2] = {thx_v3_sub(ctr, thx_v3_scale(nrm, T / 2)), thx_v3_add(ctr, thx_v3_scale(nrm, T / 2))};
     double rs[2] = {R, R};
     if (same(cs[0], cs[1]))
@@ -341,7 +355,7 @@ static thx_status segment_mesh(mesh *me, const thx_landmark_segment *g, const th
     if (shape == THX_LANDMARK_TUBE) {
         THX_TRY(tube_stations(me->ctx, g, o->min_radius, &s));
     } else {
-        double r = g->pt[0].radius > 0 ? g->pt[0].radius : o->min_radius;
+        double r = drawn_radius(g->pt[0].radius, p3(g->pt[0].xyz), o->min_radius);
         for (size_t i = 0; i < g->n; i++) THX_TRY(st_push(me->ctx, &s, p3(g->pt[i].xyz), r));
         squeeze(&s); /* equal radii: one station per place */
         if (shape == THX_LANDMARK_ARROW && s.m >= 2) {
@@ -375,8 +389,8 @@ static thx_status check_opts(thx_ctx *ctx, const thx_landmark_mesh_opts *o)
         return thx_error(ctx, THX_EINPUT, "landmark meshes: disc sides %d out of range 3..1024", o->disc_sides);
     if (o->sphere_level < 0 || o->sphere_level > 5)
         return thx_error(ctx, THX_EINPUT, "landmark meshes: sphere level %d out of range 0..5", o->sphere_level);
-    if (!(o->min_radius > 0) || !(o->min_radius <= THX_LANDMARK_MAX_COORD))
-        return thx_error(ctx, THX_EINPUT, "landmark meshes: minimum radius %g mm is not in (0, %g]", o->min_radius,
+    if (!(o->min_radius >= 1e-3) || !(o->min_radius <= THX_LANDMARK_MAX_COORD))
+        return thx_error(ctx, THX_EINPUT, "landmark meshes: minimum radius %g mm is not in [0.001, %g]", o->min_radius,
                          THX_LANDMARK_MAX_COORD);
     return THX_OK;
 }

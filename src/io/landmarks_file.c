@@ -299,10 +299,13 @@ thx_status thx_landmarks_parse(thx_ctx *ctx, const char *name, const char *text,
                 st = rfail(&r, "segment count '%s' has a leading zero (map3d would read it as octal)", show(tok[0], b));
                 goto done;
             }
-            if (ntok > 2 || (ntok == 2 && strcasecmp(tok[1], "segment") && strcasecmp(tok[1], "segments"))) {
-                st = rfail(&r, "unexpected text after the segment count: '%s' (only 'segment' or 'segments' may follow)",
-                           show(tok[1], b));
-                goto done;
+            if (ntok >= 2) {
+                int word = !strcasecmp(tok[1], "segment") || !strcasecmp(tok[1], "segments");
+                if (!word || ntok > 2) {
+                    st = rfail(&r, "unexpected text after the segment count: '%s' (only 'segment' or 'segments' may "
+                               "follow)", show(tok[word ? 2 : 1], b));
+                    goto done;
+                }
             }
             if (u > (bytes_left + 1) / SEGMENT_MIN_BYTES) {
                 st = rfail(&r, "the file declares %llu segment%s, but the %zu bytes that follow hold at most %zu (a "

@@ -3,6 +3,9 @@
  * for drawing with the surfaces: tubes for arteries, catheters, cannulas and rods, spheres for
  * sites, discs for planes, arrows for fibres (geom layer).
  *
+ * A radius within 1e-9 of the point's coordinates (the tolerance at which points coincide) counts
+ * as 0 below.
+ *
  * Every mesh is a closed, edge-manifold triangle surface, triangles counterclockwise seen from
  * outside (thx_surface_volume > 0), with no triangle of zero area; several disjoint closed
  * pieces for a segment of several sites. Millimetres, the landmarks' frame.
@@ -42,7 +45,7 @@ typedef struct {
     int sides;          /* facets around a tube, rod or arrow, 3..256 (default 12) */
     int disc_sides;     /* facets around a plane's disc, 3..1024 (default 48) */
     int sphere_level;   /* icosphere subdivisions, 0..5 (default 2: 162 nodes, 320 triangles) */
-    double min_radius;  /* mm, > 0: drawn where a radius is 0 (default 0.5) */
+    double min_radius;  /* mm, 0.001..1e7: drawn where a radius is 0 (default 0.5) */
 } thx_landmark_mesh_opts;
 
 void thx_landmark_mesh_opts_default(thx_landmark_mesh_opts *o);
