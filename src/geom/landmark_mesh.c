@@ -348,17 +348,17 @@ static thx_status disc(mesh *me, const thx_landmark_segment *g, const thx_landma
 static thx_status segment_mesh(mesh *me, const thx_landmark_segment *g, const thx_landmark_mesh_opts *o)
 {
     thx_landmark_shape shape = thx_landmark_type_shape(g->type);
-    if (shape == THX_LANDMARK_SPHERES) return spheres(me, g, o);
-    if (shape == THX_LANDMARK_DISC) return disc(me, g, o);
+    if (shape == THX_LANDMARK_SHAPE_SPHERES) return spheres(me, g, o);
+    if (shape == THX_LANDMARK_SHAPE_DISC) return disc(me, g, o);
     stations s = {0};
     thx_status st = THX_OK;
-    if (shape == THX_LANDMARK_TUBE) {
+    if (shape == THX_LANDMARK_SHAPE_TUBE) {
         THX_TRY(tube_stations(me->ctx, g, o->min_radius, &s));
     } else {
         double r = drawn_radius(g->pt[0].radius, p3(g->pt[0].xyz), o->min_radius);
         for (size_t i = 0; i < g->n; i++) THX_TRY(st_push(me->ctx, &s, p3(g->pt[i].xyz), r));
         squeeze(&s); /* equal radii: one station per place */
-        if (shape == THX_LANDMARK_ARROW && s.m >= 2) {
+        if (shape == THX_LANDMARK_SHAPE_ARROW && s.m >= 2) {
             /* the head: on the last piece, a step out to 2.5 r, then the tip */
             thx_vec3 tip = s.c[s.m - 1], from = s.c[s.m - 2];
             double len = thx_v3_norm(thx_v3_sub(tip, from));

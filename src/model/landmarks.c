@@ -58,19 +58,19 @@ thx_landmark_shape thx_landmark_type_shape(thx_landmark_type t)
     switch (t) {
     case THX_LANDMARK_ARTERY:
     case THX_LANDMARK_CATH:
-    case THX_LANDMARK_CANNULA: return THX_LANDMARK_TUBE;
-    case THX_LANDMARK_PLANE: return THX_LANDMARK_DISC;
-    case THX_LANDMARK_ROD: return THX_LANDMARK_ROD_SHAPE;
-    case THX_LANDMARK_FIBER: return THX_LANDMARK_ARROW;
-    default: return THX_LANDMARK_SPHERES;
+    case THX_LANDMARK_CANNULA: return THX_LANDMARK_SHAPE_TUBE;
+    case THX_LANDMARK_PLANE: return THX_LANDMARK_SHAPE_DISC;
+    case THX_LANDMARK_ROD: return THX_LANDMARK_SHAPE_ROD;
+    case THX_LANDMARK_FIBER: return THX_LANDMARK_SHAPE_ARROW;
+    default: return THX_LANDMARK_SHAPE_SPHERES;
     }
 }
 
 size_t thx_landmark_type_min_points(thx_landmark_type t)
 {
     switch (thx_landmark_type_shape(t)) {
-    case THX_LANDMARK_SPHERES: return 1;
-    case THX_LANDMARK_DISC: return 3;
+    case THX_LANDMARK_SHAPE_SPHERES: return 1;
+    case THX_LANDMARK_SHAPE_DISC: return 3;
     default: return 2;
     }
 }
@@ -160,8 +160,8 @@ static thx_status segment_check(thx_ctx *ctx, const thx_landmark_segment *s, siz
     if (s->n < need || !s->pt)
         return thx_error(ctx, THX_EINPUT, "%ssegment %zu (%s): %zu point%s; a%s %s needs %s%zu", pre, k + 1, tn, s->n,
                          s->n == 1 ? "" : "s", tn[0] == 'a' || tn[0] == 'o' ? "n" : "", tn,
-                         shape == THX_LANDMARK_DISC ? "exactly " : "at least ", need);
-    if (shape == THX_LANDMARK_DISC && s->n != 3)
+                         shape == THX_LANDMARK_SHAPE_DISC ? "exactly " : "at least ", need);
+    if (shape == THX_LANDMARK_SHAPE_DISC && s->n != 3)
         return thx_error(ctx, THX_EINPUT, "%ssegment %zu (plane): %zu points; a plane needs exactly 3", pre, k + 1,
                          s->n);
     if (s->has_index && s->index < 0)
@@ -182,7 +182,7 @@ static thx_status segment_check(thx_ctx *ctx, const thx_landmark_segment *s, siz
             return thx_error(ctx, THX_EINPUT, "%ssegment %zu point %zu: label \"%s\" %s", pre, k + 1, i + 1,
                              p->label, why);
     }
-    if (shape == THX_LANDMARK_TUBE || shape == THX_LANDMARK_ROD_SHAPE || shape == THX_LANDMARK_ARROW) {
+    if (shape == THX_LANDMARK_SHAPE_TUBE || shape == THX_LANDMARK_SHAPE_ROD || shape == THX_LANDMARK_SHAPE_ARROW) {
         size_t i = 1;
         while (i < s->n && thx_landmark_points_coincide(s->pt[0].xyz, s->pt[i].xyz)) i++;
         if (i == s->n)
@@ -190,7 +190,7 @@ static thx_status segment_check(thx_ctx *ctx, const thx_landmark_segment *s, siz
                              "needs a length", pre, k + 1, tn, s->n, s->pt[0].xyz[0], s->pt[0].xyz[1], s->pt[0].xyz[2],
                              tn[0] == 'a' ? "n" : "", tn);
     }
-    if (shape == THX_LANDMARK_DISC) {
+    if (shape == THX_LANDMARK_SHAPE_DISC) {
         const double *a = s->pt[0].xyz, *b = s->pt[1].xyz, *c = s->pt[2].xyz;
         double u[3], v[3];
         for (int d = 0; d < 3; d++) u[d] = b[d] - a[d], v[d] = c[d] - a[d];

@@ -56,7 +56,13 @@ typedef enum {
 } thx_landmark_type;
 
 /* How a type is drawn (the header comment above). */
-typedef enum { THX_LANDMARK_TUBE, THX_LANDMARK_SPHERES, THX_LANDMARK_DISC, THX_LANDMARK_ROD_SHAPE, THX_LANDMARK_ARROW } thx_landmark_shape;
+typedef enum {
+    THX_LANDMARK_SHAPE_TUBE,    /* artery, cath, cannula */
+    THX_LANDMARK_SHAPE_SPHERES, /* occlusion, closure, stimulus, lead, paceneedle, recneedle */
+    THX_LANDMARK_SHAPE_DISC,    /* plane */
+    THX_LANDMARK_SHAPE_ROD,     /* rod */
+    THX_LANDMARK_SHAPE_ARROW    /* fiber */
+} thx_landmark_shape;
 
 /* Coordinates and radii beyond this many millimetres (1e7 mm = 10 km) are refused: nothing
  * anatomical is that large, and the meshes' products of coordinates stay far from overflow. */
