@@ -21,6 +21,9 @@ fail() { echo "FAIL: $*"; exit 1; }
 "$THORAX" beat model -o beat.raw --frames 300 -q
 "$THORAX" forward model --epicardial beat.raw -o sol -q
 "$THORAX" series convert sol/torso.raw -o torso.txt -q
+# a colour bar per distinct scale: the torso's and the heart's (each its own series scope)
+"$THORAX" render --solution sol --frame 193 --size 400x440 --colorbar --only torso --only heart -o bars2.png -q
+"$THORAX" render --solution sol --frame 193 --size 400x440 --colorbar --only torso --only heart --scope all -o bars1.png -q
 
 # ---- everything that needs a display runs inside one Xvfb ----
 cat > inside.sh <<'INNER'
@@ -32,7 +35,7 @@ V=("$THORAX" view --solution sol)
 "${V[@]}" --size 400x440 --frame 193 > keys.out 2> keys.err &
 VP=$!
 W=""
-for i in $(seq 100); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
+for i in $(seq 300); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
 [ -n "$W" ] || { cat keys.err; fail "no viewer window appeared"; }
 sleep 0.5
 title() { xdotool getwindowname "$W"; }
@@ -186,6 +189,18 @@ for v, r in (('v1.png', 'render1.png'), ('v2.png', 'render2.png')):
     assert drawn > 0.2, 'the picture is mostly empty'
     assert d[~edge].mean() < 0.1 and (off & ~edge).mean() < 0.001, 'the window differs from thorax render'
 assert png("v2.png").shape[:2] == (480, 600)
+
+# colour bars: count the runs of strip down the bar's column (a bar is a strip from blue through white to red)
+def strips(p):
+    a = png(p)
+    w = a.shape[1]; bw = max(w // 6, 96)  # the bar's box: a quarter of the bar area, from its first quarter
+    col = a[:, w - bw + bw // 4 + bw // 8]
+    sat = np.abs(col - np.array([24, 24, 28])).max(axis=1) > 60  # not the background
+    edges = np.diff(np.concatenate([[0], sat.astype(int), [0]]))
+    runs = np.nonzero(edges == -1)[0] - np.nonzero(edges == 1)[0]
+    return int((runs > 40).sum())  # strips, not the letters of a title
+print('colour bars: %d strips with scales of their own, %d with one scope over all' % (strips('bars2.png'), strips('bars1.png')))
+assert strips('bars2.png') == 2 and strips('bars1.png') == 1
 
 # the pick at the viewport's centre: the ray (the view's axis through the middle of the model's
 # box, turned as the script turned it) is not known here, but its node must be a torso node whose

@@ -268,6 +268,10 @@ size_t render_options(cli_opt *t, ropts *o)
                        .flags = CLI_REPEAT, .sv = o->p.labels, .count = &o->p.n_labels, .max = THX_PICTURE_MAX,
                        .help = "the surface's nodes seen from the camera labelled with their number (1-based), recording "
                                "channel (--channels) or value, where the labels do not overlap"};
+    t[n++] = (cli_opt){.name = "--landmarks", .type = CLI_INPUT, .meta = "FILE.lmarks", .flags = CLI_REPEAT,
+                       .sv = o->p.landmarks, .count = &o->p.n_landmarks, .max = THX_PICTURE_MAX,
+                       .help = "map3d landmarks drawn with the surfaces: coronary arteries as tubes, sites and leads as "
+                               "spheres, in their colours, never clipped"};
     t[n++] = (cli_opt){.name = "--extrema", .type = CLI_FLAG, .i = &o->p.extrema,
                        .help = "marks at the largest and smallest value of each surface's data (grey when behind)"};
     t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->p.trace,

@@ -15,7 +15,9 @@
 #include "thorax/import/import.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
+#include "thorax/geom/landmark_mesh.h"
 #include "thorax/geom/pick.h"
+#include "thorax/io/landmarks_file.h"
 #include "picture/picture_internal.h"
 
 void thx_picture_data_free(thx_picture_data *d)
@@ -33,6 +35,8 @@ void thx_picture_data_free(thx_picture_data *d)
         d->channel[s] = NULL;
     }
     thx_pick_index_destroy(&d->pick);
+    for (int k = 0; k < d->n_marks; k++) thx_landmark_meshes_destroy(&d->marks[k]);
+    d->n_marks = 0;
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
@@ -324,6 +328,14 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         d->sranged[target] = 0;
         if (chan) { free(d->channel[target]); d->channel[target] = chan; }
     }
+    for (int k = 0; k < o->n_landmarks; k++) {
+        thx_landmarks *lm = NULL;
+        THX_CHECK(thx_landmarks_read(ctx, o->landmarks[k], &lm));
+        thx_status sl = thx_landmarks_mesh(ctx, lm, NULL, &d->marks[d->n_marks]);
+        thx_landmarks_destroy(&lm);
+        if (sl != THX_OK) return sl;
+        d->n_marks++;
+    }
     THX_CHECK(resolve_trace(ctx, o, d));
     if (o->arrows) {
         const thx_volume *v = d->m->volume;
@@ -451,7 +463,7 @@ int thx_picture_mode_parse(const char *s, thx_draw_mode *out)
 }
 
 typedef struct {
-    thx_render_surface rs[64];
+    thx_render_surface rs[THX_PICTURE_SURFACES + 64]; /* the surfaces, then landmark meshes */
     size_t n;
     thx_render_arrows arrows;
     double *apos, *avec;
@@ -589,6 +601,15 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
         }
         b->n++;
     }
+    for (int k = 0; k < d->n_marks; k++)
+        for (size_t j = 0; j < d->marks[k]->n && b->n < sizeof b->rs / sizeof b->rs[0]; j++) {
+            thx_render_surface *r = &b->rs[b->n++];
+            memset(r, 0, sizeof *r);
+            r->surf = d->marks[k]->surf[j];
+            r->mode = THX_DRAW_GOURAUD;
+            memcpy(r->color, d->marks[k]->rgba[j], sizeof r->color);
+            r->no_clip = 1;
+        }
 }
 
 int thx_picture_axis_parse(const char *s, int *axis, double *sign)

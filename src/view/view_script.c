@@ -186,6 +186,8 @@ static void write_picture(FILE *f, view_win *w)
     if (o->label) fprintf(f, "--label\n");
     if (o->panels) fprintf(f, "--panels\n");
     if (o->trace) fprintf(f, "--trace %s\n", o->trace);
+    for (int k = 0; k < o->n_labels; k++) fprintf(f, "--node-labels %s\n", o->labels[k]);
+    if (o->extrema) fprintf(f, "--extrema\n");
     if (o->font) fprintf(f, "--font %s\n", o->font);
     if (o->clip[0]) {
         if (w->clip_offset != 0) {
@@ -227,6 +229,7 @@ thx_status view_save_session(view_app *a, const char *path)
     for (int k = 0; k < o->n_data; k++) fprintf(f, "--data %s\n", o->data[k]);
     for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
     if (o->channels) fprintf(f, "--channels %s\n", o->channels);
+    for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
     view_win *w = a->win[0];
     write_picture(f, w);
     fprintf(f, "--frame %d\n", view_frame_of(w) + 1);

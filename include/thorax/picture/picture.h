@@ -13,6 +13,7 @@
 #include <stddef.h>
 
 #include "thorax/model/model.h"
+#include "thorax/geom/landmark_mesh.h"
 #include "thorax/model/series.h"
 #include "thorax/render/image.h"
 #include "thorax/render/render.h"
@@ -97,6 +98,10 @@ typedef struct {
        from the camera, decluttered), and the extrema of each surface's data at the frame */
     const char *labels[THX_PICTURE_MAX];
     int n_labels;
+    /* map3d landmark files (.lmarks): arteries as tubes, sites as spheres, drawn with the surfaces
+       in their own colours, never clipped (markers of where things are) */
+    const char *landmarks[THX_PICTURE_MAX];
+    int n_landmarks;
     int extrema;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
@@ -115,6 +120,8 @@ typedef struct {
     thx_series *series[THX_PICTURE_SURFACES]; /* the set shown per surface (sets[s][active[s]]), or NULL */
     int *channel[THX_PICTURE_SURFACES]; /* the recording channel of each node (1-based; 0 none), from --channels */
     struct thx_pick_index *pick; /* for the marks' visibility, built at the first use (thorax/geom/pick.h) */
+    thx_landmark_meshes *marks[THX_PICTURE_MAX]; /* the meshes of o->landmarks[k] */
+    int n_marks;
     thx_series *ecg;          /* 12-lead (trace) */
     thx_series *currents;     /* currents_node, for arrows */
     thx_series *volume;       /* volume potentials (unused for now) */
