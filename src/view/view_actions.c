@@ -159,10 +159,11 @@ static void do_toggle(view_app *a, GSimpleAction *act, GVariant *v)
             else if (!on && o->scope == THX_SCOPE_SURFACES) o->scope = THX_SCOPE_FRAME;
             else if (!on && o->scope == THX_SCOPE_ALL) o->scope = THX_SCOPE_SERIES;
         }
-    } else if (!strcmp(name, "colorbar") || !strcmp(name, "label") || !strcmp(name, "invert")) {
+    } else if (!strcmp(name, "colorbar") || !strcmp(name, "label") || !strcmp(name, "invert") || !strcmp(name, "extrema")) {
         for (int k = 0; k < a->n_win; k++) {
             thx_picture_opts *o = &a->win[k]->o;
-            int *f = !strcmp(name, "colorbar") ? &o->colorbar : !strcmp(name, "label") ? &o->label : &o->invert;
+            int *f = !strcmp(name, "colorbar") ? &o->colorbar : !strcmp(name, "label") ? &o->label
+                   : !strcmp(name, "extrema") ? &o->extrema : &o->invert;
             *f = on;
         }
     }
@@ -382,8 +383,84 @@ static void do_clip(view_app *a, GSimpleAction *act, GVariant *v)
             return;
         }
         w->clip_offset = 0;
+        w->clip_view = 0;
     }
     view_set_info(a, "clip: %s", s);
+    view_redraw_all(a);
+}
+
+/* A plane facing the viewer through the model's centre, cutting away the near part (front) or the
+ * far part (back); it turns with the camera until clip-lock fixes it to the object. */
+static void do_clip_view(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    for (int k = 0; k < a->n_win; k++) {
+        a->win[k]->clip_view = !strcmp(name, "clip-front") ? 1 : 2;
+        a->win[k]->clip_offset = 0;
+    }
+    view_set_info(a, "%s clip plane, facing the viewer (clip-lock fixes it to the object)", !strcmp(name, "clip-front") ? "front" : "back");
+    view_redraw_all(a);
+}
+
+static void do_clip_lock(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    int locked = 0;
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        if (!w->clip_view && !(w->o.clip[0] && w->clip_offset != 0)) continue;
+        thx_picture_opts o;
+        int scale = gtk_widget_get_scale_factor(w->gl);
+        view_picture(w, gtk_widget_get_width(w->gl) * scale, gtk_widget_get_height(w->gl) * scale, &o);
+        memcpy(w->o.clip, o.clip, sizeof w->o.clip);
+        w->clip_view = 0;
+        w->clip_offset = 0;
+        locked++;
+    }
+    view_set_info(a, locked ? "clip plane fixed to the object: %s" : "clip-lock: no plane facing the viewer%s", locked ? a->win[0]->o.clip : "");
+    view_redraw_all(a);
+}
+
+static void do_data_next(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    int s = a->current;
+    if (s < 0 || s >= THX_PICTURE_SURFACES || a->d.n_sets[s] < 1) { view_set_info(a, "data-next: the surface has no data"); a->status = 1; return; }
+    int k = (a->d.active[s] + 1) % a->d.n_sets[s];
+    thx_picture_set_active(&a->d, s, k);
+    view_set_info(a, "%s: data set %d of %d (%s)", a->d.m->surf[s]->name, k + 1, a->d.n_sets[s], a->d.series[s]->label);
+    view_redraw_all(a);
+    view_plot_update(a);
+}
+
+/* Node labels on the current surface: index, channel, value, or none. */
+static void do_node_labels(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *kind = g_variant_get_string(v, NULL), *cur = current_name(a);
+    if (!cur || (strcmp(kind, "index") && strcmp(kind, "channel") && strcmp(kind, "value") && strcmp(kind, "none"))) {
+        view_set_info(a, "node-labels '%s': index, channel, value or none", kind);
+        a->status = 1;
+        return;
+    }
+    if (!strcmp(kind, "channel") && !a->d.channel[a->current]) { view_set_info(a, "node-labels channel: %s has no channels (--channels)", cur); a->status = 1; return; }
+    if (!strcmp(kind, "value") && !a->d.series[a->current]) { view_set_info(a, "node-labels value: %s has no data", cur); a->status = 1; return; }
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        int j = 0;
+        for (int i = 0; i < w->o.n_labels; i++) /* drop this surface's entry */
+            if (strncmp(w->o.labels[i], cur, strlen(cur)) || w->o.labels[i][strlen(cur)] != '=') w->o.labels[j++] = w->o.labels[i];
+        w->o.n_labels = j;
+        if (strcmp(kind, "none") && w->o.n_labels < THX_PICTURE_MAX) {
+            snprintf(w->label_buf[w->o.n_labels], sizeof w->label_buf[0], "%s=%s", cur, kind);
+            /* the entries kept may point into label_buf: rebuild them all from copies */
+            char tmp[THX_PICTURE_MAX][80];
+            for (int i = 0; i <= w->o.n_labels; i++) snprintf(tmp[i], sizeof tmp[i], "%s", i < w->o.n_labels ? w->o.labels[i] : w->label_buf[w->o.n_labels]);
+            w->o.n_labels++;
+            for (int i = 0; i < w->o.n_labels; i++) {
+                memcpy(w->label_buf[i], tmp[i], sizeof tmp[i]);
+                w->o.labels[i] = w->label_buf[i];
+            }
+        }
+    }
+    view_set_info(a, "%s: node labels %s", cur, kind);
     view_redraw_all(a);
 }
 
@@ -391,7 +468,7 @@ static void do_clip_move(view_app *a, GSimpleAction *act, GVariant *v)
 {
     double mm = g_variant_get_double(v);
     view_win *w = view_active(a);
-    if (!w || !w->o.clip[0]) { view_set_info(a, "clip-move: no clip plane (action clip SIDE[:F])"); a->status = 1; return; }
+    if (!w || (!w->o.clip[0] && !w->clip_view)) { view_set_info(a, "clip-move: no clip plane (action clip SIDE[:F], clip-front or clip-back)"); a->status = 1; return; }
     w->clip_offset += mm;
     view_copy_transform(a, w);
     view_redraw_all(a);
@@ -517,6 +594,9 @@ static const action_def ACTIONS[] = {
     {"levels", "i", NULL, do_levels, {NULL}, NULL, "number of shades / contours"},
     {"levels-more", NULL, NULL, do_levels, {"plus", "equal", "KP_Add"}, NULL, "more shades / contours"},
     {"levels-fewer", NULL, NULL, do_levels, {"minus", "KP_Subtract"}, NULL, "fewer shades / contours"},
+    {"data-next", NULL, NULL, do_data_next, {"d"}, NULL, "the surface's next data set"},
+    {"extrema", NULL, "b", do_toggle, {"x"}, NULL, "marks at the largest and smallest values"},
+    {"node-labels", "s", NULL, do_node_labels, {"n"}, "'index'", "label the surface's nodes: index, channel, value or none"},
     {"colorbar", NULL, "b", do_toggle, {"<Shift>b"}, NULL, "colour bar"},
     {"label", NULL, "b", do_toggle, {"<Shift>n"}, NULL, "time label"},
     {"view", "s", NULL, do_view, {"1"}, "'anterior'", "anterior view"},
@@ -533,6 +613,9 @@ static const action_def ACTIONS[] = {
     {"zoom", "d", NULL, do_zoom, {"Page_Up"}, "1.25", "zoom in (the wheel; Page Down out)"},
     {"zoom-out", NULL, NULL, NULL, {"Page_Down"}, NULL, "zoom out"},
     {"clip", "s", NULL, do_clip, {NULL}, NULL, "clip plane: SIDE[:F], nx,ny,nz,d, or none"},
+    {"clip-front", NULL, NULL, do_clip_view, {"<Shift>c"}, NULL, "a clip plane facing the viewer, cutting away the near half"},
+    {"clip-back", NULL, NULL, do_clip_view, {"<Control><Shift>c"}, NULL, "a clip plane facing the viewer, cutting away the far half"},
+    {"clip-lock", NULL, NULL, do_clip_lock, {"<Control>l"}, NULL, "fix the clip plane to the object (it then turns with it)"},
     {"clip-move", "d", NULL, do_clip_move, {"<Shift>Page_Up"}, "5.0", "move the clip plane (mm; Ctrl+drag)"},
     {"screenshot", "s", NULL, do_screenshot, {"<Control>s"}, "''", "save the window as PNG (path; empty: next free name)"},
     {"record", "s", NULL, do_record, {"<Control>r"}, "''", "record every frame drawn into a directory"},
@@ -590,7 +673,7 @@ static GVariant *initial_state(view_app *a, const action_def *d)
         int on = !strcmp(d->name, "loop") ? a->loop : !strcmp(d->name, "lock-frame") ? a->lock_frame
                : !strcmp(d->name, "lock-transform") ? a->lock_transform : !strcmp(d->name, "lock-scale") ? a->lock_scale
                : !strcmp(d->name, "colorbar") ? o->colorbar : !strcmp(d->name, "label") ? o->label
-               : !strcmp(d->name, "invert") ? o->invert : 0;
+               : !strcmp(d->name, "invert") ? o->invert : !strcmp(d->name, "extrema") ? o->extrema : 0;
         return g_variant_new_boolean(on);
     }
     const char *s = !strcmp(d->name, "mode") ? mode_names[o->mode] : !strcmp(d->name, "style") ? style_names[o->style]
@@ -722,6 +805,9 @@ GMenuModel *view_menu(void)
         add(clip, clips[k], detailed);
     }
     g_menu_append_submenu(view, "Clip", G_MENU_MODEL(clip));
+    add(view, "Clip front (facing the viewer)", "app.clip-front");
+    add(view, "Clip back (facing the viewer)", "app.clip-back");
+    add(view, "Fix the clip plane to the object", "app.clip-lock");
     add(view, "Colour bar", "app.colorbar");
     add(view, "Time label", "app.label");
     add(view, "Keys", "app.shortcuts");
@@ -741,6 +827,12 @@ GMenuModel *view_menu(void)
     g_menu_append_submenu(data, "Scope", G_MENU_MODEL(choice_menu("scope", scopes_menu, N_OF(scopes_menu))));
     add(data, "More levels", "app.levels-more");
     add(data, "Fewer levels", "app.levels-fewer");
+    add(data, "Next data set", "app.data-next");
+    add(data, "Extrema", "app.extrema");
+    add(data, "Node numbers", "app.node-labels::index");
+    add(data, "Node channels", "app.node-labels::channel");
+    add(data, "Node values", "app.node-labels::value");
+    add(data, "No node labels", "app.node-labels::none");
     add(data, "Clear traces", "app.traces-clear");
     g_menu_append_submenu(bar, "Data", G_MENU_MODEL(data));
     GMenu *frames = g_menu_new();

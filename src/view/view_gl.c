@@ -115,23 +115,40 @@ void view_scene_viewport(const view_win *w, int fb_w, int fb_h, int vp[4])
     thx_picture_viewport(&w->o, w->font, fb_w, fb_h, vp);
 }
 
-/* The window's picture with its camera and clip offset made explicit (what `thorax render` would
- * be given to draw the same). */
-static int window_picture(view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
+/* The window's picture with its camera and clip plane made explicit: what `thorax render` would be
+ * given to draw the same (the session's options), and what picking and the marks see. A clip plane
+ * facing the viewer (clip_view) follows the camera: through the model's centre, moved by the
+ * offset, removing the near (front) or far (back) part. */
+void view_picture(const view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
 {
     *o = w->o;
     int vp[4];
     thx_picture_viewport(&w->o, w->font, fb_w, fb_h, vp);
     view_camera(w, vp[3] > 0 ? (double)vp[2] / vp[3] : 1, &o->cam);
     o->have_camera = 1;
-    if (o->clip[0] && w->clip_offset != 0) {
+    if (w->clip_view) {
+        double lo[3], hi[3], c[3], b[3], bn = 0;
+        thx_picture_bounds(&w->app->d, lo, hi);
+        for (int k = 0; k < 3; k++) {
+            c[k] = 0.5 * (lo[k] + hi[k]);
+            b[k] = o->cam.eye[k] - o->cam.center[k];
+            bn += b[k] * b[k];
+        }
+        bn = sqrt(bn);
+        if (bn > 0) {
+            /* front: keep (x - c) . b <= offset, i.e. -b . x + (b . c + offset) >= 0; back: the other side */
+            double sgn = w->clip_view == 1 ? -1 : 1, bc = 0;
+            for (int k = 0; k < 3; k++) { b[k] /= bn; bc += b[k] * c[k]; }
+            snprintf(o->clip, sizeof o->clip, "%.9g,%.9g,%.9g,%.9g", sgn * b[0], sgn * b[1], sgn * b[2],
+                     -sgn * bc + w->clip_offset);
+        }
+    } else if (o->clip[0] && w->clip_offset != 0) {
         thx_clip_plane p;
         if (thx_picture_clip(w->app->ctx, &w->o, &w->app->d, &p) == 1) {
             double n = sqrt(p.n[0] * p.n[0] + p.n[1] * p.n[1] + p.n[2] * p.n[2]);
             snprintf(o->clip, sizeof o->clip, "%.9g,%.9g,%.9g,%.9g", p.n[0], p.n[1], p.n[2], p.d - w->clip_offset * n);
         }
     }
-    return 0;
 }
 
 static int font_for(view_win *w, int fb_h)
@@ -218,7 +235,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     gint64 t0 = g_get_monotonic_time();
     if (font_for(w, fb_h)) { view_report(a, "font"); return TRUE; }
     thx_picture_opts o;
-    window_picture(w, fb_w, fb_h, &o);
+    view_picture(w, fb_w, fb_h, &o);
     thx_picture_bars bars;
     int frame = view_frame_of(w);
     thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bars, NULL);

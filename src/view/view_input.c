@@ -171,7 +171,7 @@ static void drag_update(GtkGestureDrag *g, double dx, double dy, gpointer user)
         w->pan[0] = w->drag_pan[0] - dx * s;
         w->pan[1] = w->drag_pan[1] + dy * s;
     } else if (w->drag_mode == 3) {
-        if (!w->o.clip[0]) return;
+        if (!w->o.clip[0] && !w->clip_view) return;
         w->clip_offset = w->drag_clip - dy * mm_per_pixel(w);
     }
     gtk_gl_area_queue_render(GTK_GL_AREA(w->gl));

@@ -23,6 +23,7 @@ typedef struct view_win {
     GtkWidget *window, *gl, *status, *plot, *paned;
     thx_picture_opts o;        /* this window's picture; o.only[] = its surfaces (none: all) */
     char only_buf[THX_PICTURE_MAX][64];
+    char label_buf[THX_PICTURE_MAX][80]; /* node-labels entries set by the action */
     thx_renderer *r;           /* in the GL area's context */
     thx_font *font;
     int font_px;
@@ -41,6 +42,8 @@ typedef struct view_win {
     /* clip plane: off, or the picture's o.clip; `offset` moves it along its normal (mm); locked:
        turns with the object (kept in model coordinates) instead of staying facing the viewer */
     double clip_offset;
+    int clip_view;             /* 0: the picture's clip plane; 1, 2: a plane facing the viewer, cutting the near
+                                  (front) or far (back) part, that follows the camera until locked */
     /* the overlay of annotations */
     unsigned tex, prog, vao, vbo;
     int tex_w, tex_h;
@@ -100,6 +103,7 @@ void view_report(view_app *a, const char *what); /* the ctx's message into the s
 void view_gl_attach(view_win *w);
 void view_camera(const view_win *w, double aspect, thx_camera *cam);
 void view_scene_viewport(const view_win *w, int fb_w, int fb_h, int vp[4]);
+void view_picture(const view_win *w, int fb_w, int fb_h, thx_picture_opts *o);
 
 /* view_input.c */
 void view_input_attach(view_win *w);

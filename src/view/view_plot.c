@@ -134,11 +134,12 @@ void view_pick_at(view_win *w, double x, double y)
     po.skip = skip;
     thx_pick_plane clip;
     thx_clip_plane cp;
-    thx_picture_opts o = w->o;
+    thx_picture_opts o;
+    int scale = gtk_widget_get_scale_factor(w->gl);
+    view_picture(w, gtk_widget_get_width(w->gl) * scale, gtk_widget_get_height(w->gl) * scale, &o);
     if (o.clip[0] && thx_picture_clip(a->ctx, &o, &a->d, &cp) == 1) {
-        double nn = sqrt(cp.n[0] * cp.n[0] + cp.n[1] * cp.n[1] + cp.n[2] * cp.n[2]);
         memcpy(clip.n, cp.n, sizeof clip.n);
-        clip.d = cp.d - w->clip_offset * nn;
+        clip.d = cp.d;
         po.clip = &clip;
         po.n_clip = 1;
     }

@@ -159,13 +159,12 @@ static void write_picture(FILE *f, view_win *w)
     static const char *cmaps[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
     static const char *scales[] = {"linear", "log", "exp"};
     static const char *scopes[] = {"frame", "series", "all", "fixed", "surfaces"};
-    const thx_picture_opts *o = &w->o;
     int scale = gtk_widget_get_scale_factor(w->gl);
     int fb_w = gtk_widget_get_width(w->gl) * scale, fb_h = gtk_widget_get_height(w->gl) * scale;
-    int vp[4];
-    view_scene_viewport(w, fb_w, fb_h, vp);
-    thx_camera cam;
-    view_camera(w, vp[3] > 0 ? (double)vp[2] / vp[3] : 1, &cam);
+    thx_picture_opts pic;
+    view_picture(w, fb_w, fb_h, &pic);
+    const thx_picture_opts *o = &pic;
+    const thx_camera cam = pic.cam;
     fprintf(f, "--size %dx%d\n", fb_w, fb_h);
     fprintf(f, "--camera %.17g,%.17g,%.17g:%.17g,%.17g,%.17g:%.17g,%.17g,%.17g:%.17g:%.17g\n", cam.eye[0], cam.eye[1],
             cam.eye[2], cam.center[0], cam.center[1], cam.center[2], cam.up[0], cam.up[1], cam.up[2], cam.fov_deg, cam.height);
@@ -189,17 +188,7 @@ static void write_picture(FILE *f, view_win *w)
     for (int k = 0; k < o->n_labels; k++) fprintf(f, "--node-labels %s\n", o->labels[k]);
     if (o->extrema) fprintf(f, "--extrema\n");
     if (o->font) fprintf(f, "--font %s\n", o->font);
-    if (o->clip[0]) {
-        if (w->clip_offset != 0) {
-            thx_clip_plane p;
-            if (thx_picture_clip(w->app->ctx, o, &w->app->d, &p) == 1) {
-                double n = sqrt(p.n[0] * p.n[0] + p.n[1] * p.n[1] + p.n[2] * p.n[2]);
-                fprintf(f, "--clip %.9g,%.9g,%.9g,%.9g\n", p.n[0], p.n[1], p.n[2], p.d - w->clip_offset * n);
-            }
-        } else {
-            fprintf(f, "--clip %s\n", o->clip);
-        }
-    }
+    if (o->clip[0]) fprintf(f, "--clip %s\n", o->clip);
     if (o->arrows) {
         fprintf(f, "--arrows\n--arrow-spacing %.17g\n--arrow-length %.17g\n--arrow-max %d\n", o->arrow_spacing,
                 o->arrow_scale, o->arrow_max);
