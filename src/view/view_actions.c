@@ -554,6 +554,15 @@ static void do_traces_export(view_app *a, GSimpleAction *act, GVariant *v)
 
 static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v);
 
+/* bench-rotate N, bench-frames N, bench-pick N (bench/view.sh) */
+static void do_bench(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    int n = g_variant_get_int32(v);
+    if (n < 1 || n > 100000) { view_set_info(a, "%s %d: 1 to 100000 steps", name, n); a->status = 1; return; }
+    view_bench(a, !strcmp(name, "bench-rotate") ? 1 : !strcmp(name, "bench-frames") ? 2 : 3, n);
+}
+
 /* ---- the table ---- */
 
 typedef struct {
@@ -625,6 +634,9 @@ static const action_def ACTIONS[] = {
     {"pick", "s", NULL, do_pick, {NULL}, NULL, "pick at X,Y (window pixels; a click does the same)"},
     {"traces-clear", NULL, NULL, do_traces_clear, {"Escape"}, NULL, "clear the traces"},
     {"traces-export", "s", NULL, do_traces_export, {"<Control>e"}, "''", "write the traces as text"},
+    {"bench-rotate", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N drawings each turned 1 degree"},
+    {"bench-frames", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N frame steps"},
+    {"bench-pick", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N picks over a grid of the window"},
     {"shortcuts", NULL, NULL, do_shortcuts, {"question", "F1"}, NULL, "this list"},
     {"quit", NULL, NULL, do_quit, {"<Control>q"}, NULL, "quit"},
 };

@@ -56,6 +56,7 @@ typedef struct view_win {
     double ms_sum;
     int ms_n;
     int gl_failed;
+    int bench;                 /* benchmarking: each draw finished (glFinish) before it is timed */
 } view_win;
 
 struct view_app {
@@ -82,9 +83,13 @@ struct view_app {
     char rec_dir[1024];
     int recording, rec_count, rec_first;
     int sweep_next;            /* record-all: the next frame to draw (while sweep_id) */
+    /* benchmarks (bench/view.sh): N steps of a kind, each drawn before the next, timed */
+    int bench_kind, bench_n, bench_i;  /* 1 rotate 1 degree, 2 frame step, 3 pick */
+    gint64 bench_t0, bench_last;
+    double *bench_ms;          /* wall time between consecutive finished draws */
+    guint bench_id;
     guint sweep_id;
     /* picking */
-    struct thx_pick_index *pick; /* built at the first pick; rebuilt after an edit */
     view_trace traces[VIEW_MAX_TRACES];
     int n_traces;
     char info[512];            /* the status line's pick/edit information */
@@ -123,10 +128,12 @@ void view_script_start(view_app *a);
 thx_status view_save_session(view_app *a, const char *path);
 thx_status view_movie(view_app *a, const char *path);
 void view_record_all(view_app *a, const char *dir);
+void view_bench(view_app *a, int kind, int n);
 
 /* view_plot.c */
 void view_plot_attach(view_win *w);
 void view_plot_update(view_app *a);
 thx_status view_plot_export(view_app *a, const char *path);
 void view_pick_at(view_win *w, double x, double y);
+void view_pick_quiet(view_win *w, double x, double y);
 #endif

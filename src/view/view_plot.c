@@ -108,7 +108,20 @@ static int ray_at(view_win *w, double x, double y, double origin[3], double dir[
     return thx_camera_ray(&cam, vp[2], vp[3], px - vp[0], py - vp[1], origin, dir);
 }
 
+static void pick(view_win *w, double x, double y, int quiet);
+
 void view_pick_at(view_win *w, double x, double y)
+{
+    pick(w, x, y, 0);
+}
+
+/* The same search, reporting nothing (benchmarks). */
+void view_pick_quiet(view_win *w, double x, double y)
+{
+    pick(w, x, y, 1);
+}
+
+static void pick(view_win *w, double x, double y, int quiet)
 {
     view_app *a = w->app;
     const thx_model *m = a->d.m;
@@ -146,8 +159,8 @@ void view_pick_at(view_win *w, double x, double y)
     /* a surface the clip plane leaves whole (--no-clip) is not clipped for picking either: picked
        in a second pass without the plane, the nearer hit kept */
     thx_status st = THX_OK;
-    if (!a->pick) st = thx_pick_index_create(a->ctx, surf, n, &a->pick);
-    idx = a->pick;
+    if (!a->d.pick) st = thx_pick_index_create(a->ctx, surf, n, &a->d.pick);
+    idx = a->d.pick;
     if (st == THX_OK) st = thx_pick_ray(a->ctx, idx, origin, dir, &po, &hit);
     if (st == THX_OK && po.n_clip && w->o.n_whole) {
         unsigned char skip2[THX_PICTURE_SURFACES];
@@ -166,6 +179,7 @@ void view_pick_at(view_win *w, double x, double y)
     }
     double ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
     if (st != THX_OK) { view_report(a, "pick"); return; }
+    if (quiet) return;
     if (hit.surface < 0) { view_set_info(a, "pick: nothing under the pointer (%.1f ms)", ms); return; }
     const thx_surface *s = m->surf[hit.surface];
     const double *p = s->xyz + 3 * hit.node;

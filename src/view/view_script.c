@@ -115,7 +115,7 @@ static int run_line(view_app *a, const char *text, int line, int *wait_ms)
 static gboolean script_tick(gpointer user)
 {
     view_app *a = user;
-    if (busy(a) || a->sweep_id || g_get_monotonic_time() < a->wait_until) return G_SOURCE_CONTINUE;
+    if (busy(a) || a->sweep_id || a->bench_id || g_get_monotonic_time() < a->wait_until) return G_SOURCE_CONTINUE;
     while (a->line < a->vo->n_lines) {
         int wait_ms = 0, k = a->line++;
         if (run_line(a, a->vo->lines[k], a->vo->script_line0 + k, &wait_ms)) {
@@ -126,7 +126,7 @@ static gboolean script_tick(gpointer user)
             a->wait_until = g_get_monotonic_time() + 1000 * (gint64)wait_ms;
             return G_SOURCE_CONTINUE;
         }
-        if (busy(a) || a->sweep_id) return G_SOURCE_CONTINUE;
+        if (busy(a) || a->sweep_id || a->bench_id) return G_SOURCE_CONTINUE;
     }
     a->script_id = 0;
     return G_SOURCE_REMOVE;
@@ -279,4 +279,87 @@ void view_record_all(view_app *a, const char *dir)
     a->rec_count = 0;
     a->sweep_next = 0;
     a->sweep_id = g_timeout_add(5, sweep_tick, a);
+}
+
+/* ---- benchmarks ---- */
+
+static int cmp_ms(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* Peak resident memory of the process, MB (VmHWM). */
+static double peak_mb(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    double kb = 0;
+    while (f && fgets(line, sizeof line, f))
+        if (!strncmp(line, "VmHWM:", 6)) kb = atof(line + 6);
+    if (f) fclose(f);
+    return kb / 1024;
+}
+
+static gboolean bench_tick(gpointer user)
+{
+    view_app *a = user;
+    if (busy(a)) return G_SOURCE_CONTINUE;
+    gint64 now = g_get_monotonic_time();
+    if (a->bench_i > 0 && a->bench_kind != 3) a->bench_ms[a->bench_i - 1] = (double)(now - a->bench_last) / 1000.0;
+    a->bench_last = now;
+    view_win *w = a->win[0];
+    if (a->bench_i < a->bench_n) {
+        if (a->bench_kind == 1) {
+            view_rotate_screen(w, 0, 1, 1.0);
+            view_copy_transform(a, w);
+            view_redraw_all(a);
+        } else if (a->bench_kind == 2) {
+            a->frame = (a->frame + 1) % (a->n_frames > 0 ? a->n_frames : 1);
+            for (int k = 0; k < a->n_win; k++) a->win[k]->frame = a->frame;
+            view_redraw_all(a);
+        } else {
+            /* picks over a grid of the window, each timed alone */
+            int gw = gtk_widget_get_width(w->gl), gh = gtk_widget_get_height(w->gl), side = (int)ceil(sqrt(a->bench_n));
+            double x = (a->bench_i % side + 0.5) * gw / side, y = (a->bench_i / side + 0.5) * gh / side;
+            gint64 t0 = g_get_monotonic_time();
+            view_pick_quiet(w, x, y);
+            a->bench_ms[a->bench_i] = (double)(g_get_monotonic_time() - t0) / 1000.0;
+        }
+        a->bench_i++;
+        return G_SOURCE_CONTINUE;
+    }
+    int n = a->bench_n;
+    double total = (double)(now - a->bench_t0) / 1e6;
+    qsort(a->bench_ms, (size_t)n, sizeof *a->bench_ms, cmp_ms);
+    double draw = 0;
+    int nd = 0;
+    for (int k = 0; k < a->n_win; k++) { draw += a->win[k]->ms_sum; nd += a->win[k]->ms_n; }
+    static const char *kinds[] = {"", "rotate", "frame-step", "pick"};
+    int scale = gtk_widget_get_scale_factor(w->gl);
+    if (a->bench_kind == 3)
+        printf("view bench: pick %d picks, median %.2f ms, max %.2f ms, window %dx%d, peak %.0f MB\n", n, a->bench_ms[n / 2],
+               a->bench_ms[n - 1], gtk_widget_get_width(w->gl) * scale, gtk_widget_get_height(w->gl) * scale, peak_mb());
+    else
+        printf("view bench: %s %d steps in %.2f s: %.1f per second; median %.1f ms a step (slowest %.1f); drawing %.1f ms "
+               "on average; window %dx%d; peak %.0f MB\n", kinds[a->bench_kind], n, total, n / total, a->bench_ms[n / 2],
+               a->bench_ms[n - 1], nd ? draw / nd : 0, gtk_widget_get_width(w->gl) * scale, gtk_widget_get_height(w->gl) * scale,
+               peak_mb());
+    fflush(stdout);
+    free(a->bench_ms);
+    a->bench_ms = NULL;
+    a->bench_id = 0;
+    return G_SOURCE_REMOVE;
+}
+
+void view_bench(view_app *a, int kind, int n)
+{
+    a->bench_ms = calloc((size_t)n, sizeof *a->bench_ms);
+    if (!a->bench_ms) { view_set_info(a, "bench: out of memory"); a->status = 1; return; }
+    for (int k = 0; k < a->n_win; k++) { a->win[k]->ms_sum = 0; a->win[k]->ms_n = 0; a->win[k]->bench = 1; }
+    a->bench_kind = kind;
+    a->bench_n = n;
+    a->bench_i = 0;
+    a->bench_t0 = a->bench_last = g_get_monotonic_time();
+    a->bench_id = g_idle_add(bench_tick, a);
 }
