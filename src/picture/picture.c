@@ -18,6 +18,7 @@
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/geom/pick.h"
 #include "thorax/io/landmarks_file.h"
+#include "thorax/leads/activation.h"
 #include "picture/picture_internal.h"
 
 void thx_picture_data_free(thx_picture_data *d)
@@ -328,6 +329,18 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         d->sranged[target] = 0;
         if (chan) { free(d->channel[target]); d->channel[target] = chan; }
     }
+    for (int k = 0; k < o->n_activation; k++) {
+        char name[64];
+        double t0 = NAN, t1 = NAN;
+        const char *colon = strchr(o->activation[k], ':');
+        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - o->activation[k] : (long)strlen(o->activation[k])), o->activation[k]);
+        if (colon && (sscanf(colon + 1, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1)))
+            return thx_error(ctx, THX_EINPUT, "--activation '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", o->activation[k]);
+        int s = surface_by_name(d->m, name);
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--activation '%s': the model has no surface '%s'", o->activation[k], name);
+        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "--activation '%s': surface '%s' has no data", o->activation[k], name);
+        THX_CHECK(thx_picture_add_activation(ctx, d, s, t0, t1));
+    }
     for (int k = 0; k < o->n_landmarks; k++) {
         thx_landmarks *lm = NULL;
         THX_CHECK(thx_landmarks_read(ctx, o->landmarks[k], &lm));
@@ -437,12 +450,15 @@ static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int
         for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++) {
             const thx_series *x = d->series[k];
             if (!x || !shares_scale(o, d->m, s, (int)k)) continue;
+            if (d->map[k][d->active[k]] != d->map[s][d->active[s]]) continue; /* times and potentials apart */
             size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
             if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
             else series_range(d, k, &lo, &hi);
         }
-        /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude */
-        thx_scale_from_range(sc, o->model, lo, hi, o->symmetric);
+        /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude;
+           a map of times over its true range */
+        int map = s < THX_PICTURE_SURFACES && d->series[s] && d->map[s][d->active[s]];
+        thx_scale_from_range(sc, o->model, lo, hi, map ? 0 : o->symmetric);
     }
     if (o->invert) { /* the colour map reversed: the scale's ends swapped */
         double t = sc->lo;
@@ -726,6 +742,26 @@ void thx_picture_opts_default(thx_picture_opts *o)
     o->arrow_max = 400;
 }
 
+thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || (size_t)s >= d->m->n_surfaces || !d->series[s])
+        return thx_error(ctx, THX_EINPUT, "activation: surface %d has no data", s + 1);
+    if (d->n_sets[s] >= THX_PICTURE_SETS)
+        return thx_error(ctx, THX_EINPUT, "activation: surface '%s' has %d data sets already (at most %d)", d->m->surf[s]->name,
+                         d->n_sets[s], THX_PICTURE_SETS);
+    thx_activation_opts ao;
+    thx_activation_opts_default(&ao);
+    ao.t0 = t0;
+    ao.t1 = t1;
+    thx_series *map = NULL;
+    THX_CHECK(thx_activation_times(ctx, d->series[s], &ao, &map));
+    int k = d->n_sets[s]++;
+    d->sets[s][k] = map;
+    d->map[s][k] = 1;
+    thx_picture_set_active(d, s, k);
+    return THX_OK;
+}
+
 int thx_picture_set_active(thx_picture_data *d, int s, int k)
 {
     if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s]) return -1;
@@ -940,9 +976,12 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
     for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
         if (d->series[s] && (!any || m->surf[s]->role == THX_ROLE_OUTER)) any = d->series[s];
     int shades = o->style == THX_DATA_BANDS || o->style == THX_DATA_BANDS_CONTOURS ? o->levels : 0;
+    int any_map = 0; /* the bar of a map of times says so */
+    for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
+        if (d->series[s] == any && any) any_map = d->map[s][d->active[s]];
     if (o->colorbar && bars->n == 1)
         thx_draw_colorbar(img, font, vw + bar_w / 4, top + vh / 8, bar_w / 4, vh * 3 / 4, o->cmap, &bars->scale[0], shades,
-                          5, "potential", any ? any->unit : "");
+                          5, any_map ? "activation" : "potential", any ? any->unit : "");
     else if (o->colorbar && bars->n > 1) {
         /* one bar per distinct scale, stacked, each titled with its surfaces */
         int slot = vh * 7 / 8 / bars->n, fh = thx_font_height(font);

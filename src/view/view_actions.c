@@ -431,6 +431,27 @@ static void do_data_next(view_app *a, GSimpleAction *act, GVariant *v)
     view_plot_update(a);
 }
 
+/* The current surface's activation-time map ("T0:T1" or "" for the whole series), as a new data set. */
+static void do_activation(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *spec = g_variant_get_string(v, NULL);
+    double t0 = NAN, t1 = NAN;
+    if (spec[0] && (sscanf(spec, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1))) {
+        view_set_info(a, "activation '%s': give T0:T1 (the data's time unit), or nothing for the whole series", spec);
+        a->status = 1;
+        return;
+    }
+    if (thx_picture_add_activation(a->ctx, &a->d, a->current, t0, t1) != THX_OK) { view_report(a, "activation"); a->status = 1; return; }
+    int s = a->current;
+    const thx_series *m = a->d.series[s];
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < m->n_rows; i++)
+        if (isfinite(m->v[i])) { lo = fmin(lo, m->v[i]); hi = fmax(hi, m->v[i]); }
+    view_set_info(a, "%s: activation times %.4g to %.4g %s (data set %d; d steps back)", a->d.m->surf[s]->name, lo, hi, m->unit,
+                  a->d.n_sets[s]);
+    view_redraw_all(a);
+}
+
 /* Node labels on the current surface: index, channel, value, or none. */
 static void do_node_labels(view_app *a, GSimpleAction *act, GVariant *v)
 {
@@ -604,6 +625,7 @@ static const action_def ACTIONS[] = {
     {"levels-more", NULL, NULL, do_levels, {"plus", "equal", "KP_Add"}, NULL, "more shades / contours"},
     {"levels-fewer", NULL, NULL, do_levels, {"minus", "KP_Subtract"}, NULL, "fewer shades / contours"},
     {"data-next", NULL, NULL, do_data_next, {"d"}, NULL, "the surface's next data set"},
+    {"activation", "s", NULL, do_activation, {"a"}, "''", "the surface's activation-time map (T0:T1, or the whole series)"},
     {"extrema", NULL, "b", do_toggle, {"x"}, NULL, "marks at the largest and smallest values"},
     {"node-labels", "s", NULL, do_node_labels, {"n"}, "'index'", "label the surface's nodes: index, channel, value or none"},
     {"colorbar", NULL, "b", do_toggle, {"<Shift>b"}, NULL, "colour bar"},
@@ -840,6 +862,7 @@ GMenuModel *view_menu(void)
     add(data, "More levels", "app.levels-more");
     add(data, "Fewer levels", "app.levels-fewer");
     add(data, "Next data set", "app.data-next");
+    add(data, "Activation times", "app.activation::");
     add(data, "Extrema", "app.extrema");
     add(data, "Node numbers", "app.node-labels::index");
     add(data, "Node channels", "app.node-labels::channel");

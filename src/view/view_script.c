@@ -219,6 +219,7 @@ thx_status view_save_session(view_app *a, const char *path)
     for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
     if (o->channels) fprintf(f, "--channels %s\n", o->channels);
     for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
+    for (int k = 0; k < o->n_activation; k++) fprintf(f, "--activation %s\n", o->activation[k]);
     view_win *w = a->win[0];
     write_picture(f, w);
     fprintf(f, "--frame %d\n", view_frame_of(w) + 1);

@@ -102,6 +102,11 @@ typedef struct {
        in their own colours, never clipped (markers of where things are) */
     const char *landmarks[THX_PICTURE_MAX];
     int n_landmarks;
+    /* activation-time maps: "SURFACE[:T0:T1]": the surface's data replaced by the time of each
+       node's steepest downstroke (between T0 and T1, the series' time unit), drawn over its true
+       range, isochrones with a contour style (thorax/leads/activation.h) */
+    const char *activation[THX_PICTURE_MAX];
+    int n_activation;
     int extrema;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
@@ -119,6 +124,8 @@ typedef struct {
     int active[THX_PICTURE_SURFACES];
     thx_series *series[THX_PICTURE_SURFACES]; /* the set shown per surface (sets[s][active[s]]), or NULL */
     int *channel[THX_PICTURE_SURFACES]; /* the recording channel of each node (1-based; 0 none), from --channels */
+    unsigned char map[THX_PICTURE_SURFACES][THX_PICTURE_SETS]; /* a map of times, not potentials: drawn over
+                                                                  its true range whatever the mapping */
     struct thx_pick_index *pick; /* for the marks' visibility, built at the first use (thorax/geom/pick.h) */
     thx_landmark_meshes *marks[THX_PICTURE_MAX]; /* the meshes of o->landmarks[k] */
     int n_marks;
@@ -184,6 +191,9 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
 
 /* Shows data set k (0-based) of surface s; -1 when there is no such set. */
 int thx_picture_set_active(thx_picture_data *d, int s, int k);
+/* Adds the activation-time map of surface s's shown data (steepest downstroke between t0 and t1;
+ * NaN: the whole series) as its next data set, and shows it. */
+thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1);
 /* After the model's surfaces changed (an edit): forget what was computed from their geometry. */
 void thx_picture_geometry_changed(thx_picture_data *d);
 
