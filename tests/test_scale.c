@@ -5,8 +5,8 @@
  * analytic values of every model under every mapping (SEPARATE's -1 -> 0, 0 -> 0.5, 10 -> 1);
  * over every model x mapping x range: monotone, clamped, NaN kept, round trips both ways,
  * thx_scale_apply_n equal to thx_scale_apply, bands between consecutive levels; TRUE equal bit for
- * bit to the scale as it was before mappings; the range rule; the colour bar of a lab scale and of
- * a SEPARATE mapping.
+ * bit to the scale as it was before mappings (reversed ends too); lo > hi turning any scale
+ * around; the range rule; the colour bar of a lab scale and of a SEPARATE mapping.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -285,6 +285,43 @@ static void test_properties(void)
     CHECK(at_levels);
 }
 
+/* lo > hi: the same scale turned around, under every model and mapping */
+static void test_reversed(void)
+{
+    const double ranges[][2] = {{-37, 52}, {-1, 10}, {2, 10}, {-10, -2}, {0, 52}, {20, 52}};
+    int turned = 1, inverse = 1, same_levels = 1;
+    for (int m = 0; m < 5; m++)
+        for (int p = 0; p < 4; p++)
+            for (int r = 0; r < 6; r++) {
+                thx_scale s = make((thx_scale_model)m, (thx_scale_mapping)p, ranges[r][0], ranges[r][1]);
+                thx_scale b = make((thx_scale_model)m, (thx_scale_mapping)p, ranges[r][1], ranges[r][0]);
+                double v0 = thx_scale_invert(&s, 0), v1 = thx_scale_invert(&s, 1);
+                for (int i = -50; i <= 1050; i++) {
+                    double v = v0 + (v1 - v0) * i / 1000.0, t = i / 1000.0;
+                    if (fabs(thx_scale_apply(&b, v) - (1 - thx_scale_apply(&s, v))) > 1e-15) turned = 0;
+                    if (i >= 0 && i <= 1000 &&
+                        fabs(thx_scale_invert(&b, t) - thx_scale_invert(&s, 1 - t)) > 1e-12 * fmax(1, fabs(v)))
+                        inverse = 0;
+                }
+                double la[64], lb[64];
+                int na = thx_scale_levels(&s, 6, la, 64), nb = thx_scale_levels(&b, 6, lb, 64);
+                if (na != nb || thx_scale_bands(&s, 6) != thx_scale_bands(&b, 6)) same_levels = 0;
+                for (int j = 0; j < na && j < nb; j++)
+                    if (fabs(la[j] - lb[j]) > 1e-12 * fmax(1, fabs(la[j]))) same_levels = 0;
+                if (!turned || !inverse || !same_levels) {
+                    fprintf(stderr, "reversed %s/%s [%g, %g]\n", thx_scale_model_name(s.model),
+                            thx_scale_mapping_name(s.mapping), s.lo, s.hi);
+                    turned = inverse = same_levels = 1;
+                    CHECK(0);
+                }
+            }
+    CHECK(turned && inverse && same_levels);
+    /* a reversed lab scale: its levels at 1 - j / n */
+    thx_scale s = make(THX_SCALE_LAB7, THX_MAPPING_SEPARATE, 52, -37);
+    CHECK(thx_scale_apply(&s, 47) == 1.0 / 16 && thx_scale_apply(&s, -33) == 15.0 / 16 &&
+          thx_scale_apply(&s, 0) == 0.5);
+}
+
 /* The scale before mappings existed (thorax 98c5f55, src/render/colormap.c), kept here to show
    that TRUE gives exactly the same t. */
 static double old_apply(const thx_scale *s, double v)
@@ -320,11 +357,15 @@ static void test_unchanged(void)
     for (int m = 0; m < 3; m++)
         for (int r = 0; r < 6; r++)
             for (int q = 0; q < 4; q++)
-                for (int sym = 0; sym < 2; sym++) {
+                for (int sym = 0; sym < 4; sym++) {
                     thx_scale s;
-                    if (sym) thx_scale_from_range(&s, (thx_scale_model)m, ranges[r][0], ranges[r][1], 1);
+                    if (sym & 1) thx_scale_from_range(&s, (thx_scale_model)m, ranges[r][0], ranges[r][1], 1);
                     else s = make((thx_scale_model)m, THX_MAPPING_TRUE, ranges[r][0], ranges[r][1]);
                     s.k = ks[q];
+                    if (sym & 2) { /* the picture module's reversed colours: the ends swapped */
+                        double x = s.lo;
+                        s.lo = s.hi, s.hi = x;
+                    }
                     thx_scale old = s; /* the old code saw lo = -M, hi = M for a symmetric range */
                     for (int i = -100; i <= 1100; i++) {
                         double v = s.lo + (s.hi - s.lo) * i / 1000.0 + (i == 500 ? 0 : 1e-3 * i), t = i / 1000.0;
@@ -407,6 +448,18 @@ static void test_colorbar(void)
             for (int i = bx + bw + 7; i < 120; i++) ink += px(img, i, j)[0] < 128;
         CHECK(pass ? ink > 200 : ink == 0);
     }
+    /* reversed: ticks at the same places (the strip is the map in t; the labels run the other way) */
+    thx_scale rev = make(THX_SCALE_LAB7, THX_MAPPING_SYMMETRIC, 52, -37);
+    thx_image_fill(img, white);
+    thx_draw_colorbar(img, NULL, bx, by, bw, bh, THX_CMAP_ECG, &rev, 12, 5, NULL, NULL);
+    int rticks = 0, ron = 1;
+    for (int row = by; row < by + bh; row++)
+        if (px(img, bx + bw + 3, row)[0] < 128) {
+            rticks++;
+            double j = (by + bh - row) / (double)bh * 16;
+            if (fabs(j - round(j)) > 0.5 / bh * 16 + 1e-9) ron = 0;
+        }
+    CHECK(rticks == 15 && ron);
     /* lab13 in a short bar: 28 bands, labels on every k-th level only, never touching */
     thx_scale s13 = make(THX_SCALE_LAB13, THX_MAPPING_SYMMETRIC, -37, 52);
     thx_image_fill(img, white);
@@ -447,6 +500,7 @@ int main(void)
     test_lab();
     test_values();
     test_properties();
+    test_reversed();
     test_unchanged();
     test_ranges();
     test_colorbar();

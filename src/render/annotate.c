@@ -529,7 +529,7 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
         for (int j = 0; j < mk.n_lev; j++) {
             int shown = (j - mk.n_lev / 2) % stride == 0;
             format_value(text, sizeof text, mk.lev[j], range);
-            bar_label(img, f, vertical, x, y, w, h, (double)(j + 1) / n, shown ? text : NULL, ink);
+            bar_label(img, f, vertical, x, y, w, h, thx_scale_apply(s, mk.lev[j]), shown ? text : NULL, ink);
         }
     } else {
         for (int i = 0; i < n_labels; i++) {

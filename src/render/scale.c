@@ -11,7 +11,9 @@
  * Invariants:
  *  - TRUE and MIDPOINT under linear, log and exp are computed with exactly the operations of the
  *    scale before mappings existed (c = (lo + hi) / 2, h = (hi - lo) / 2, u = (v - c) / h ...), and
- *    SYMMETRIC with lo = -M, hi = M too, so pictures made before do not change by a bit.
+ *    SYMMETRIC with lo = -M, hi = M too, so pictures made before do not change by a bit; that
+ *    includes lo > hi, the reversed colours of the picture module (h < 0).
+ *  - lo > hi under SEPARATE or a lab model: the scale of hi..lo with t turned to 1 - t.
  *  - Lab knots y[0] < y[1] < ... < y[n] with t(y[j]) = j / n; y[1 .. n - 1] are the levels. A level
  *    value is an integer mantissa (10, 15, 22, ...) times or divided by an exact power of ten: the
  *    double nearest to the decimal value (4.7, 0.068) over the range of exact powers (1e-22..1e22).
@@ -107,6 +109,7 @@ static int lab_levels(thx_scale_model model, double h, double *out)
 
 typedef struct {
     int lab;          /* knots below, else the analytic form */
+    int flip;         /* lo > hi under SEPARATE or a lab model: t -> 1 - t of the range put in order */
     int step;         /* a degenerate range: 0 below c, 1 above, 0.5 at c */
     int separate;     /* analytic: h- below c, h+ above */
     thx_scale_model model;
@@ -122,10 +125,10 @@ static double default_k(thx_scale_model m) { return m == THX_SCALE_LOG ? 10 : m 
 static double strength(const thx_scale *s) { return s->k > 0 && isfinite(s->k) ? s->k : default_k(s->model); }
 
 /* SEPARATE's two half widths: |lo| below zero, hi above; a side without a range takes the other's. */
-static void separate_sides(const thx_scale *s, double *hn, double *hp)
+static void separate_sides(double lo, double hi, double *hn, double *hp)
 {
-    *hn = s->lo < 0 ? -s->lo : 0;
-    *hp = s->hi > 0 ? s->hi : 0;
+    *hn = lo < 0 ? -lo : 0;
+    *hp = hi > 0 ? hi : 0;
     if (*hn == 0) *hn = *hp;
     if (*hp == 0) *hp = *hn;
 }
@@ -170,21 +173,29 @@ static void resolve(const thx_scale *s, resolved *r)
 {
     r->model = s->model;
     r->lab = is_lab(s->model);
-    r->step = r->separate = 0;
+    r->step = r->separate = r->flip = 0;
     r->n = 0;
     double lo = s->lo, hi = s->hi;
+    int reversed = lo > hi;
     if (s->mapping == THX_MAPPING_SYMMETRIC) {
         double mag = fmax(fabs(lo), fabs(hi));
-        lo = -mag, hi = mag;
+        lo = reversed ? mag : -mag, hi = reversed ? -mag : mag;
     }
-    /* TRUE, MIDPOINT and SYMMETRIC: the centre and half width as the scale always had them */
+    if (reversed && (r->lab || s->mapping == THX_MAPPING_SEPARATE)) {
+        /* these are built on an ascending range: build that, and turn t around */
+        double x = lo;
+        lo = hi, hi = x;
+        r->flip = 1;
+    }
+    /* TRUE, MIDPOINT and SYMMETRIC: the centre and half width as the scale always had them (a
+       reversed range, h < 0, turns the analytic models around by itself) */
     r->c = 0.5 * (lo + hi);
     r->h = 0.5 * (hi - lo);
     r->hn = r->hp = r->h;
     if (s->mapping == THX_MAPPING_SEPARATE) {
         r->separate = 1;
         r->c = 0;
-        separate_sides(s, &r->hn, &r->hp);
+        separate_sides(lo, hi, &r->hn, &r->hp);
     }
     if (!r->lab) {
         r->k = strength(s);
@@ -203,7 +214,8 @@ static void resolve(const thx_scale *s, resolved *r)
     if (bad) r->step = 1;
 }
 
-static double eval(const resolved *r, double v)
+/* t of v, the range taken in ascending order. */
+static double eval_ordered(const resolved *r, double v)
 {
     if (isnan(v)) return v;
     if (r->step) return v < r->c ? 0 : v > r->c ? 1 : 0.5;
@@ -230,10 +242,18 @@ static double eval(const resolved *r, double v)
     return 0.5 * (copysign(w, u) + 1);
 }
 
+/* t of v (a reversed range turned around). */
+static double eval(const resolved *r, double v)
+{
+    double t = eval_ordered(r, v);
+    return r->flip ? 1 - t : t;
+}
+
 static double uneval(const resolved *r, double t)
 {
     if (isnan(t)) return t;
     t = clamp01(t);
+    if (r->flip) t = 1 - t;
     if (r->lab && !r->step) {
         double x = t * r->n;
         int j = (int)floor(x);
@@ -296,7 +316,9 @@ int thx_scale_levels(const thx_scale *s, int n_requested, double *out, int max)
     resolve(s, &r);
     int n = r.lab ? (r.step ? 1 : r.n) : n_requested;
     if (n < 1) return 0;
-    for (int j = 1; j < n && j - 1 < max; j++) out[j - 1] = r.lab ? r.y[j] : uneval(&r, (double)j / n);
+    int down = !r.lab && uneval(&r, 0) > uneval(&r, 1); /* a reversed range: read t from the top */
+    for (int j = 1; j < n && j - 1 < max; j++)
+        out[j - 1] = r.lab ? r.y[j] : uneval(&r, (double)(down ? n - j : j) / n);
     return n - 1;
 }
 

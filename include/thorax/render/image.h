@@ -85,6 +85,8 @@ void thx_colormap_table(thx_colormap c, int n, unsigned char *rgb);
  *   The number of bands is the scale's own (thx_scale_bands): a lab scale ignores the number asked
  *   for, as map3d's does.
  *
+ * lo > hi reverses the scale (t -> 1 - t of the scale with lo and hi swapped: the colour map read
+ * backwards), under every model and mapping.
  * The default, {model, lo, hi, k} with mapping 0 = TRUE, is the scale as it was before mappings:
  * the same t for the same value. */
 typedef enum { THX_SCALE_LINEAR = 0, THX_SCALE_LOG, THX_SCALE_EXP, THX_SCALE_LAB7, THX_SCALE_LAB13 } thx_scale_model;
@@ -120,7 +122,8 @@ void thx_scale_from_data_mapped(thx_scale *s, thx_scale_model model, thx_scale_m
 void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric);
 void thx_scale_from_data(thx_scale *s, thx_scale_model model, const double *v, size_t n, int symmetric);
 
-/* t in [0, 1] for a value: monotone non-decreasing in v, clamped outside the range; NaN stays NaN. */
+/* t in [0, 1] for a value: monotone in v (non-decreasing; non-increasing when lo > hi), clamped
+ * outside the range; NaN stays NaN. */
 double thx_scale_apply(const thx_scale *s, double v);
 /* The same for n values into float t[0..n) (for vertex buffers): a lab scale's levels are found
  * once, not per value; t[i] = (float)thx_scale_apply(s, v[i]) exactly. */
