@@ -375,7 +375,7 @@ static void test_coolwarm_vtk(void)
 
 static void test_scales(void)
 {
-    thx_scale s = {THX_SCALE_LINEAR, -2, 6, 0};
+    thx_scale s = {THX_SCALE_LINEAR, -2, 6, 0, THX_MAPPING_TRUE};
     CHECK(thx_scale_apply(&s, -2) == 0 && thx_scale_apply(&s, 6) == 1 && thx_scale_apply(&s, 2) == 0.5);
     CHECK_NEAR(thx_scale_apply(&s, 0), 0.25, 1e-15);
     CHECK(thx_scale_apply(&s, -100) == 0 && thx_scale_apply(&s, 100) == 1); /* clamped */
@@ -410,7 +410,7 @@ static void test_scales(void)
     for (int m = 0; m < 2; m++)
         for (int r = 0; r < 3; r++)
             for (int q = 0; q < 3; q++) {
-                thx_scale sc = {models[m], ranges[r][0], ranges[r][1], ks[q]};
+                thx_scale sc = {models[m], ranges[r][0], ranges[r][1], ks[q], THX_MAPPING_TRUE};
                 double c = 0.5 * (sc.lo + sc.hi), h = 0.5 * (sc.hi - sc.lo);
                 ends &= thx_scale_apply(&sc, sc.lo) == 0 && thx_scale_apply(&sc, sc.hi) == 1 &&
                         thx_scale_apply(&sc, c) == 0.5;
@@ -439,9 +439,9 @@ static void test_scales(void)
     CHECK(side);
     CHECK(inv);
     /* the header's formula, literally */
-    thx_scale sl = {THX_SCALE_LOG, -4, 4, 10};
+    thx_scale sl = {THX_SCALE_LOG, -4, 4, 10, THX_MAPPING_TRUE};
     CHECK_NEAR(thx_scale_apply(&sl, 1), 0.5 * (log(1 + 10 * 0.25) / log(11) + 1), 1e-15);
-    thx_scale se = {THX_SCALE_EXP, -4, 4, 3};
+    thx_scale se = {THX_SCALE_EXP, -4, 4, 3, THX_MAPPING_TRUE};
     CHECK_NEAR(thx_scale_apply(&se, -2), 0.5 * (-(exp(3 * 0.5) - 1) / (exp(3) - 1) + 1), 1e-15);
 
     /* bands: n values (b + 0.5) / n, the last band closed */
@@ -461,7 +461,7 @@ static void test_scales(void)
     CHECK(thx_scale_band(0.3, 0) == 0.3 && isnan(thx_scale_band(NAN, 4)));
     /* positions outside [0, 1] are the ends: the last band, the range's limits, the map's end colours */
     CHECK(thx_scale_band(1.5, 4) == 3.5 / 4 && thx_scale_band(-0.5, 4) == 0.5 / 4);
-    thx_scale lin = {THX_SCALE_LINEAR, -2, 6, 0};
+    thx_scale lin = {THX_SCALE_LINEAR, -2, 6, 0, THX_MAPPING_TRUE};
     CHECK(thx_scale_invert(&lin, 1.5) == 6 && thx_scale_invert(&lin, -0.5) == -2);
     for (int c = 0; c < 6; c++) {
         unsigned char e0[3], e1[3], o0[3], o1[3];
@@ -621,7 +621,7 @@ static void test_colorbar(void)
 {
     thx_font *f = NULL;
     CHECK_OK(ctx, thx_font_open(ctx, NULL, 14, &f));
-    thx_scale s = {THX_SCALE_LINEAR, -2, 2, 0};
+    thx_scale s = {THX_SCALE_LINEAR, -2, 2, 0, THX_MAPPING_TRUE};
     const int bx = 20, by = 30, bw = 16, bh = 200;
 
     /* vertical, continuous: the strip's column shows the map from the bottom up */
@@ -690,7 +690,7 @@ static void test_colorbar(void)
     /* labels too wide for the room beside the strip move the strip left, whole labels in the image;
        large values without an exponent ("12600") */
     {
-        thx_scale big = {THX_SCALE_LINEAR, -12600, 12600, 0};
+        thx_scale big = {THX_SCALE_LINEAR, -12600, 12600, 0, THX_MAPPING_TRUE};
         img = new_image(120, 300, 255, 255, 255);
         thx_draw_colorbar(img, f, 100, 60, 12, 200, THX_CMAP_ECG, &big, 0, 5, NULL, NULL);
         int edge = 0, strip_at = -1;
@@ -706,7 +706,7 @@ static void test_colorbar(void)
 
     /* no font: strip only; log scale, bands */
     img = new_image(60, 60, 0, 0, 0);
-    thx_scale sl = {THX_SCALE_LOG, -1, 1, 10};
+    thx_scale sl = {THX_SCALE_LOG, -1, 1, 10, THX_MAPPING_TRUE};
     thx_draw_colorbar(img, NULL, 10, 5, 10, 50, THX_CMAP_COOLWARM, &sl, 0, 3, "x", "y");
     CHECK(px(img, 40, 30)[0] == 0 && px(img, 15, 30)[0] > 150);
     thx_image_destroy(&img);

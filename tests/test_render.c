@@ -281,6 +281,50 @@ static void test_bands_contours(void)
 }
 
 /* NaN values: the triangles touching them in nan_color, counted. */
+/* A lab scale on the plane, data = 52 x (node per pixel column): 16 bands whatever n_levels says,
+ * each column whose neighbourhood lies inside one band (between two lab levels) in that band's
+ * colour, and (nearly) every band seen. */
+static void test_lab_bands(void)
+{
+    thx_surface *s = plane(N);
+    double *v = malloc(s->n_nodes * sizeof *v);
+    for (size_t i = 0; i < s->n_nodes; i++) v[i] = 52 * s->xyz[3 * i];
+    thx_render_surface rs = surf_defaults(s, THX_DRAW_FLAT);
+    rs.values = v;
+    rs.style = THX_DATA_BANDS;
+    rs.n_levels = 4; /* ignored: the lab scale has 16 bands */
+    thx_scale_from_range_mapped(&rs.scale, THX_SCALE_LAB7, THX_MAPPING_SYMMETRIC, -37, 52);
+    CHECK(thx_scale_bands(&rs.scale, rs.n_levels) == 16);
+    thx_scene sc = base_scene(&rs, 1);
+    plane_camera(&sc.camera);
+    thx_image *im = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
+    save(im, "lab_bands");
+    int seen[16] = {0}, exact = 1, distinct = 0;
+    for (int x = 1; x + 2 <= N; x++) {
+        /* nodes x - 1 .. x + 2 (columns x - 1 .. x + 1) in one band */
+        int b = -1, one = 1;
+        for (int k = x - 1; k <= x + 2; k++) {
+            int bk = (int)floor(thx_scale_apply(&rs.scale, 52 * (-1 + 2.0 * k / N)) * 16);
+            if (bk > 15) bk = 15;
+            if (b >= 0 && bk != b) one = 0;
+            b = bk;
+        }
+        if (!one) continue;
+        unsigned char want[3];
+        thx_colormap_eval(THX_CMAP_ECG, (b + 0.5) / 16, want);
+        if (diff3(px(im, x, 64), want) > 6) exact = 0;
+        seen[b] = 1;
+    }
+    for (int b = 0; b < 16; b++) distinct += seen[b];
+    CHECK(exact);
+    CHECK(distinct >= 13);
+    thx_image_destroy(&im);
+    free(v);
+    thx_surface_destroy(&s);
+}
+
 static void test_nan(void)
 {
     thx_surface *s = plane(16);
@@ -1034,6 +1078,7 @@ int main(void)
         printf("renderer: %s, %d sample%s\n", thx_renderer_info(ren), ns, ns > 1 ? "s" : " + FXAA");
         test_ecg_map();
         test_bands_contours();
+        test_lab_bands();
         test_nan();
         test_orientation();
         test_clip();

@@ -409,14 +409,51 @@ static void format_value(char *buf, size_t size, double v, double range)
     snprintf(buf, size, "%.3g", v + 0.0);
 }
 
+/* The tick of the value at t beside the strip, and its label (text NULL: the tick alone). */
+static void bar_label(thx_image *img, thx_font *f, int vertical, int x, int y, int w, int h, double t,
+                      const char *text, const unsigned char ink[4])
+{
+    if (vertical) {
+        int row = y + h - (int)lround(t * h);
+        if (row > y + h - 1) row = y + h - 1;
+        thx_draw_rect(img, x + w + 1, row, 4, 1, ink);
+        if (f && text) thx_draw_text(img, f, x + w + 7, row + f->digit_h / 2, text, ink);
+    } else {
+        int col = x + (int)lround(t * w);
+        if (col > x + w - 1) col = x + w - 1;
+        thx_draw_rect(img, col, y + h + 1, 1, 4, ink);
+        if (f && text) thx_draw_text(img, f, col - thx_text_width(f, text) / 2, y + h + 7 + f->digit_h, text, ink);
+    }
+}
+
+/* What a colour bar labels: n values at t = i / (n - 1), or a lab scale's levels at t = (j + 1) /
+   (n_lev + 1); and whether a SEPARATE mapping's zero needs a label of its own. */
+typedef struct {
+    int lab, n_lev;
+    double lev[2 * 13 + 1];
+    int zero_extra;
+} bar_marks;
+
+static void bar_marks_of(const thx_scale *s, int n_labels, bar_marks *m)
+{
+    m->lab = s->model == THX_SCALE_LAB7 || s->model == THX_SCALE_LAB13;
+    m->n_lev = m->lab ? thx_scale_levels(s, 0, m->lev, 2 * 13 + 1) : 0;
+    if (m->n_lev > 2 * 13 + 1) m->n_lev = 2 * 13 + 1;
+    int has_middle = m->lab || (n_labels == 1 || (n_labels > 1 && (n_labels - 1) % 2 == 0));
+    m->zero_extra = s->mapping == THX_MAPPING_SEPARATE && !has_middle;
+}
+
 /*
  * Layout: (x, y, w, h) is the strip of colour itself. Along its length t runs linearly from 0 (the
  * bottom of a vertical bar, the left of a horizontal one) to 1; the label at t reads the value
  * thx_scale_invert(s, t), so under a log or exp model the labels are unevenly spaced values. Labels
  * are at t = i / (n_labels - 1) with a 4-pixel tick, to the right of a vertical bar or below a
- * horizontal one; the title, followed by the unit in parentheses, is above the strip. Text and
- * the frame are black or white, whichever contrasts with the image where the labels go. With no
- * font only the strip, its frame and the ticks are drawn.
+ * horizontal one; a lab scale ticks each of its levels (at t = j / n, the band boundaries) and
+ * labels every k-th of them counted from the middle one, k the least that keeps the labels apart.
+ * A SEPARATE mapping's zero (t = 0.5, where the two sides' scales meet) gets a line of ink across
+ * the strip and a label "0". The title, followed by the unit in parentheses, is above the strip.
+ * Text and the frame are black or white, whichever contrasts with the image where the labels go.
+ * With no font only the strip, its frame and the ticks are drawn.
  */
 void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, thx_colormap c, const thx_scale *s,
                        int n_shades, int n_labels, const char *title, const char *unit)
@@ -426,15 +463,29 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     int len = vertical ? h : w;
     int fh = thx_font_height(f);
     double range = fmax(fabs(s->lo), fabs(s->hi));
+    bar_marks mk;
+    bar_marks_of(s, n_labels, &mk);
+    int widest = 0;
+    if (f) {
+        char text[64];
+        if (mk.lab) {
+            for (int j = 0; j < mk.n_lev; j++) {
+                format_value(text, sizeof text, mk.lev[j], range);
+                int tw = thx_text_width(f, text);
+                widest = tw > widest ? tw : widest;
+            }
+        } else if (vertical) {
+            for (int i = 0; i < n_labels; i++) {
+                format_value(text, sizeof text, thx_scale_invert(s, n_labels > 1 ? (double)i / (n_labels - 1) : 0.5),
+                             range);
+                int tw = thx_text_width(f, text);
+                widest = tw > widest ? tw : widest;
+            }
+        }
+        if (mk.zero_extra && thx_text_width(f, "0") > widest) widest = thx_text_width(f, "0");
+    }
     if (vertical && f) {
         /* labels that would run off the right edge move the whole bar left */
-        int widest = 0;
-        for (int i = 0; i < n_labels; i++) {
-            char text[64];
-            format_value(text, sizeof text, thx_scale_invert(s, n_labels > 1 ? (double)i / (n_labels - 1) : 0.5), range);
-            int tw = thx_text_width(f, text);
-            widest = tw > widest ? tw : widest;
-        }
         int over = x + w + 7 + widest - (img->w - 2);
         if (over > 0) x = x - over > 1 ? x - over : 1;
     }
@@ -444,9 +495,10 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     if (vertical) ink_for(img, x + w, y - fh, 6 * fh + 8, h + 2 * fh, ink);
     else ink_for(img, x, y - fh - 4, w, h + 2 * fh + 12, ink);
 
+    int n_bands = n_shades > 0 ? thx_scale_bands(s, n_shades) : 0;
     for (int p = 0; p < len; p++) {
         double t = (p + 0.5) / len;
-        if (n_shades > 0) t = thx_scale_band(t, n_shades);
+        if (n_bands > 0) t = thx_scale_band(t, n_bands);
         unsigned char col[4] = {0, 0, 0, 255};
         thx_colormap_eval(c, t, col);
         if (vertical) thx_draw_rect(img, x, y + h - 1 - p, w, 1, col);
@@ -457,23 +509,36 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
     thx_draw_rect(img, x - 1, y + h, w + 2, 1, ink);
     thx_draw_rect(img, x - 1, y, 1, h, ink);
     thx_draw_rect(img, x + w, y, 1, h, ink);
-
-    for (int i = 0; i < n_labels; i++) {
-        double t = n_labels > 1 ? (double)i / (n_labels - 1) : 0.5;
-        char text[64];
-        format_value(text, sizeof text, thx_scale_invert(s, t), range);
+    if (s->mapping == THX_MAPPING_SEPARATE) { /* the zero, where the two sides' scales meet */
         if (vertical) {
-            int row = y + h - (int)lround(t * h);
-            if (row > y + h - 1) row = y + h - 1;
-            thx_draw_rect(img, x + w + 1, row, 4, 1, ink);
-            if (f) thx_draw_text(img, f, x + w + 7, row + f->digit_h / 2, text, ink);
+            int row = y + h - (int)lround(0.5 * h);
+            thx_draw_rect(img, x, row > y + h - 1 ? y + h - 1 : row, w, 1, ink);
         } else {
-            int col = x + (int)lround(t * w);
-            if (col > x + w - 1) col = x + w - 1;
-            thx_draw_rect(img, col, y + h + 1, 1, 4, ink);
-            if (f) thx_draw_text(img, f, col - thx_text_width(f, text) / 2, y + h + 7 + f->digit_h, text, ink);
+            int col = x + (int)lround(0.5 * w);
+            thx_draw_rect(img, col > x + w - 1 ? x + w - 1 : col, y, 1, h, ink);
         }
     }
+
+    char text[64];
+    if (mk.lab) {
+        int n = mk.n_lev + 1, stride = 1;
+        if (f) {
+            double room = (double)len / n, need = vertical ? f->digit_h + 4 : widest + 8;
+            while (stride < n && stride * room < need) stride++;
+        }
+        for (int j = 0; j < mk.n_lev; j++) {
+            int shown = (j - mk.n_lev / 2) % stride == 0;
+            format_value(text, sizeof text, mk.lev[j], range);
+            bar_label(img, f, vertical, x, y, w, h, thx_scale_apply(s, mk.lev[j]), shown ? text : NULL, ink);
+        }
+    } else {
+        for (int i = 0; i < n_labels; i++) {
+            double t = n_labels > 1 ? (double)i / (n_labels - 1) : 0.5;
+            format_value(text, sizeof text, thx_scale_invert(s, t), range);
+            bar_label(img, f, vertical, x, y, w, h, t, text, ink);
+        }
+    }
+    if (mk.zero_extra) bar_label(img, f, vertical, x, y, w, h, 0.5, "0", ink);
 
     if (!f) return;
     char head[512];

@@ -1,5 +1,6 @@
 /*
- * Colour maps and scaling models (thorax/image.h; paper 4.2, "Standards").
+ * Colour maps (thorax/render/image.h; paper 4.2, "Standards"); the scales that map values to
+ * positions in them are in scale.c.
  *
  * Colours are computed in double precision and rounded to 8-bit sRGB once, at
  * the end. The colour science is the standard one: sRGB (IEC 61966-2-1)
@@ -25,7 +26,6 @@
 #include <string.h>
 
 #include "thorax/render/image.h"
-#include "thorax/render/render.h"
 /* ------------------------------------------------------------- colour science */
 
 /* D65 reference white of CIELAB, XYZ with Y = 1. */
@@ -311,76 +311,4 @@ void thx_colormap_eval(thx_colormap c, double t, unsigned char rgb[3])
 void thx_colormap_table(thx_colormap c, int n, unsigned char *rgb)
 {
     for (int i = 0; i < n; i++) thx_colormap_eval(c, n > 1 ? (double)i / (n - 1) : 0.5, rgb + 3 * i);
-}
-
-/* ------------------------------------------------------------- scaling models */
-
-static double default_k(thx_scale_model m) { return m == THX_SCALE_LOG ? 10 : m == THX_SCALE_EXP ? 3 : 0; }
-
-/* The strength in use: the struct's k, or the model's default when k is not positive. */
-static double strength(const thx_scale *s)
-{
-    return s->k > 0 && isfinite(s->k) ? s->k : default_k(s->model);
-}
-
-void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric)
-{
-    s->model = model;
-    s->k = default_k(model);
-    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi)) { /* no finite value */
-        s->lo = -1, s->hi = 1;
-    } else if (symmetric) {
-        /* the largest magnitude, whichever side it is on; all zeros: -1/1, so zero still sits in the middle */
-        double mag = fmax(fabs(lo), fabs(hi));
-        s->hi = mag > 0 ? mag : 1;
-        s->lo = -s->hi;
-    } else if (lo == hi) {
-        /* Constant data: a unit range around the value, which maps to the middle. */
-        s->lo = lo - 1, s->hi = hi + 1;
-    } else {
-        s->lo = lo, s->hi = hi;
-    }
-}
-
-void thx_scale_from_data(thx_scale *s, thx_scale_model model, const double *v, size_t n, int symmetric)
-{
-    double lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(v[i])) continue;
-        lo = fmin(lo, v[i]);
-        hi = fmax(hi, v[i]);
-    }
-    thx_scale_from_range(s, model, lo, hi, symmetric);
-}
-
-double thx_scale_apply(const thx_scale *s, double v)
-{
-    if (isnan(v)) return v;
-    double c = 0.5 * (s->lo + s->hi), h = 0.5 * (s->hi - s->lo);
-    if (h == 0 || !isfinite(h)) return v < c ? 0 : v > c ? 1 : 0.5; /* a degenerate range: a step */
-    double u = (v - c) / h;
-    u = u < -1 ? -1 : u > 1 ? 1 : u;
-    double a = fabs(u), k = strength(s), w = a;
-    if (s->model == THX_SCALE_LOG) w = log1p(k * a) / log1p(k);
-    else if (s->model == THX_SCALE_EXP) w = expm1(k * a) / expm1(k);
-    return 0.5 * (copysign(w, u) + 1);
-}
-
-double thx_scale_invert(const thx_scale *s, double t)
-{
-    if (isnan(t)) return t;
-    double c = 0.5 * (s->lo + s->hi), h = 0.5 * (s->hi - s->lo);
-    double w = 2 * clamp01(t) - 1, a = fabs(w), k = strength(s), u = a;
-    if (s->model == THX_SCALE_LOG) u = expm1(a * log1p(k)) / k;
-    else if (s->model == THX_SCALE_EXP) u = log1p(a * expm1(k)) / k;
-    return c + h * copysign(u, w);
-}
-
-double thx_scale_band(double t, int n)
-{
-    if (isnan(t) || n <= 0) return t;
-    t = clamp01(t);
-    double b = floor(t * n);
-    if (b > n - 1) b = n - 1; /* t = 1 belongs to the last band */
-    return (b + 0.5) / n;
 }

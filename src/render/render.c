@@ -21,7 +21,9 @@
  *    it: those pixels take the NaN colour.
  *  - Band and contour arithmetic happens per pixel: the band is floor(t n)
  *    (thx_scale_band), the contour lines sit where t n crosses 1 .. n - 1,
- *    with a constant width in pixels from fwidth(t n).
+ *    with a constant width in pixels from fwidth(t n); n is
+ *    thx_scale_bands(scale, n_levels), the lab scales' own count, whose
+ *    levels sit exactly at t = j / n.
  *  - Geometry is uploaded once per surface and kept in a cache keyed by the
  *    surface's address, its counts and array addresses, and a hash of its
  *    coordinates and triangles, so a redrawn mesh with new values only

@@ -55,16 +55,12 @@ static thx_status upload_values(thx_ctx *ctx, thx_renderer *r, const surf_entry 
     size_t nn = e->n_nodes;
     THX_CHECK(rn_grow(ctx, (void **)&r->tbuf, &r->tbuf_cap, nn + 1, sizeof *r->tbuf));
     size_t nan = 0;
-    for (size_t i = 0; i < nn; i++) {
-        double v = rs->values[i];
-        if (isnan(v)) {
+    thx_scale_apply_n(&rs->scale, rs->values, nn, r->tbuf); /* t in [0, 1]; a lab scale's levels found once */
+    for (size_t i = 0; i < nn; i++)
+        if (isnan(rs->values[i])) {
             r->tbuf[i] = NAN_T;
             nan++;
-            continue;
         }
-        double t = thx_scale_apply(&rs->scale, v);
-        r->tbuf[i] = t >= 0 && t <= 1 ? (float)t : t > 1 ? 1.0f : 0.0f;
-    }
     *n_nan += nan;
     glBindBuffer(GL_ARRAY_BUFFER, e->vbo_t);
     glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)(nn * sizeof(float)), r->tbuf);
@@ -134,7 +130,7 @@ static thx_status use_program(thx_ctx *ctx, thx_renderer *r, variant v, const fr
         THX_CHECK(rn_cmap_texture(ctx, r, rs->cmap, &tex));
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_1D, tex);
-        glUniform1i(p->nlev, rs->n_levels);
+        glUniform1i(p->nlev, thx_scale_bands(&rs->scale, rs->n_levels)); /* a lab scale's own count */
         glUniform4fv(p->contour_color, 1, or_default(rs->contour_color, DEFAULT_CONTOUR));
     }
     *out = p;
@@ -394,7 +390,8 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
     for (size_t i = 0; i < sc->n_surfaces; i++) {
         const thx_render_surface *rs = &sc->surfaces[i];
         if (rs->mode == THX_DRAW_HIDDEN || !rs->surf) continue;
-        if (rs->values && has_data_mode(rs->mode) && rs->style != THX_DATA_CONTINUOUS && rs->n_levels < 1)
+        if (rs->values && has_data_mode(rs->mode) && rs->style != THX_DATA_CONTINUOUS &&
+            thx_scale_bands(&rs->scale, rs->n_levels) < 1)
             return thx_error(ctx, THX_EINPUT, "renderer: surface \"%s\": bands and contours need n_levels >= 1, got %d",
                              rs->surf->name, rs->n_levels);
         if ((int)rs->style < 0 || (int)rs->style > THX_DATA_CONTINUOUS_CONTOURS)

@@ -15,18 +15,7 @@
 
 #include "thorax/model/surface.h"
 #include "thorax/render/image.h"
-#ifdef __cplusplus
-extern "C" {
-#endif
-/* The one range rule of the colour scales (thx_scale_from_data, thorax/render/image.h, is this over the
- * finite values of an array; `thorax render` uses it over the values its --scope covers): lo..hi
- * the data's least and greatest finite values; symmetric: -M..M with M the largest magnitude
- * max(|lo|, |hi|) (data -5..2 gives -5..5); no finite value (lo > hi or not finite): -1..1; all
- * zeros when symmetric, or constant data: a unit range around the value. k: the model's default. */
-void thx_scale_from_range(thx_scale *s, thx_scale_model model, double lo, double hi, int symmetric);
-#ifdef __cplusplus
-}
-#endif
+/* The colour scales (thx_scale, thx_scale_from_range and the rest) are in thorax/render/image.h. */
 
 #ifdef __cplusplus
 extern "C" {
@@ -64,7 +53,7 @@ typedef struct {
        values are drawn in the scene's nan_color. */
     const double *values;
     thx_data_style style;
-    int n_levels;
+    int n_levels;            /* bands asked for; a lab scale draws its own number (thx_scale_bands) */
     thx_colormap cmap;
     thx_scale scale;
     float contour_color[4];  /* all zero: black */
