@@ -189,7 +189,9 @@ static const cli_choice cmaps[] = {{"ecg", THX_CMAP_ECG},         {"ecg-green", 
                                    {"coolwarm", THX_CMAP_COOLWARM}, {"viridis", THX_CMAP_VIRIDIS},
                                    {"gray", THX_CMAP_GRAY},       {"jet", THX_CMAP_JET}, {NULL, 0}};
 static const cli_choice scales[] = {{"linear", THX_SCALE_LINEAR}, {"log", THX_SCALE_LOG}, {"exp", THX_SCALE_EXP},
-                                    {NULL, 0}};
+                                    {"lab7", THX_SCALE_LAB7}, {"lab13", THX_SCALE_LAB13}, {NULL, 0}};
+static const cli_choice mappings[] = {{"true", THX_MAPPING_TRUE}, {"symmetric", THX_MAPPING_SYMMETRIC},
+                                      {"midpoint", THX_MAPPING_MIDPOINT}, {"separate", THX_MAPPING_SEPARATE}, {NULL, 0}};
 
 size_t render_options(cli_opt *t, ropts *o)
 {
@@ -239,7 +241,9 @@ size_t render_options(cli_opt *t, ropts *o)
                        .help = "ecg (red positive, blue negative, white zero), ecg-green, coolwarm (perceptually "
                                "uniform, diverging), viridis, gray or jet"};
     t[n++] = (cli_opt){.name = "--scale", .type = CLI_CHOICE, .choices = scales, .i = &o->p.model,
-                       .help = "the scaling model from values to colours"};
+                       .help = "the scaling model from values to colours: linear, log, exp, or map3d's lab7 and lab13 "
+                               "standards (levels 1, 1.5, 2.2, 3.3, 4.7, 6.8 or the 13-step series, times powers of ten; "
+                               "they fix the number of bands)"};
     t[n++] = (cli_opt){.name = "--scope", .type = CLI_STRING, .meta = "S", .fn = parse_scope, .def = "series",
                        .help = "the range the colours span: frame (this frame), series (all frames of the surface), "
                                "surfaces (this frame of all surfaces), all (all frames of all surfaces), or fixed:LO:HI"};
@@ -251,10 +255,14 @@ size_t render_options(cli_opt *t, ropts *o)
                        .help = "surface NAME is drawn with surface MASTER's scale"};
     t[n++] = (cli_opt){.name = "--invert", .type = CLI_FLAG, .i = &o->p.invert,
                        .help = "the colour map reversed (high values in the low colours)"};
-    t[n++] = (cli_opt){.name = "--true-range", .type = CLI_SET, .i = &o->p.symmetric, .ival = 0,
-                       .help = "map min..max instead of a range symmetric about zero"};
-    t[n++] = (cli_opt){.name = "--symmetric", .type = CLI_SET, .i = &o->p.symmetric, .ival = 1,
-                       .help = "a range symmetric about zero (the default; undoes --true-range)"};
+    t[n++] = (cli_opt){.name = "--mapping", .type = CLI_CHOICE, .choices = mappings, .i = &o->p.mapping,
+                       .help = "how the range meets the colours: true (min..max), symmetric about zero, midpoint "
+                               "(symmetric about the middle of min..max), separate (negative and positive values each "
+                               "over their own half of the colours, zero always the middle colour)"};
+    t[n++] = (cli_opt){.name = "--true-range", .type = CLI_SET, .i = &o->p.mapping, .ival = THX_MAPPING_TRUE,
+                       .help = "the same as --mapping true"};
+    t[n++] = (cli_opt){.name = "--symmetric", .type = CLI_SET, .i = &o->p.mapping, .ival = THX_MAPPING_SYMMETRIC,
+                       .help = "the same as --mapping symmetric (the default)"};
     t[n++] = (cli_opt){.name = "--clip", .type = CLI_STRING, .meta = "SIDE[:F]|PLANE", .fn = parse_clip_option,
                        .help = "remove a side (anterior, posterior, left, right, superior, inferior) from fraction F of "
                                "the depth (default 0.5), or cut by a plane nx,ny,nz,d (keeps n.x + d >= 0)"};

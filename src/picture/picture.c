@@ -445,6 +445,7 @@ static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int
         sc->lo = o->lo;
         sc->hi = o->hi;
         sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
+        sc->mapping = (thx_scale_mapping)o->mapping;
     } else {
         s = master_of(o, d->m, s);
         for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++) {
@@ -455,10 +456,10 @@ static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int
             if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
             else series_range(d, k, &lo, &hi);
         }
-        /* the library's one range rule (thorax/render/render.h): symmetric = the largest magnitude;
+        /* the library's one range rule (thorax/render/image.h): symmetric = the largest magnitude;
            a map of times over its true range */
         int map = s < THX_PICTURE_SURFACES && d->series[s] && d->map[s][d->active[s]];
-        thx_scale_from_range(sc, o->model, lo, hi, map ? 0 : o->symmetric);
+        thx_scale_from_range_mapped(sc, (thx_scale_model)o->model, map ? THX_MAPPING_TRUE : (thx_scale_mapping)o->mapping, lo, hi);
     }
     if (o->invert) { /* the colour map reversed: the scale's ends swapped */
         double t = sc->lo;
@@ -736,7 +737,7 @@ void thx_picture_opts_default(thx_picture_opts *o)
     o->cmap = THX_CMAP_ECG;
     o->model = THX_SCALE_LINEAR;
     o->scope = THX_SCOPE_SERIES;
-    o->symmetric = 1;
+    o->mapping = THX_MAPPING_SYMMETRIC;
     o->arrow_spacing = 20;
     o->arrow_scale = 15;
     o->arrow_max = 400;

@@ -63,7 +63,8 @@ static const char *current_name(view_app *a)
 static const char *mode_names[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
 static const char *style_names[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
 static const char *cmap_names[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
-static const char *scale_names[] = {"linear", "log", "exp"};
+static const char *scale_names[] = {"linear", "log", "exp", "lab7", "lab13"};
+static const char *mapping_names[] = {"true", "symmetric", "midpoint", "separate"};
 static const char *scope_names[] = {"frame", "series", "all", "fixed", "surfaces"};
 static const char *view_names[] = {"anterior", "posterior", "left", "right", "superior", "inferior"};
 
@@ -200,6 +201,7 @@ static void do_choice(view_app *a, GSimpleAction *act, GVariant *v)
     else if (!strcmp(name, "style")) { names = style_names; n = N_OF(style_names); }
     else if (!strcmp(name, "colormap")) { names = cmap_names; n = N_OF(cmap_names); }
     else if (!strcmp(name, "scale")) { names = scale_names; n = N_OF(scale_names); }
+    else if (!strcmp(name, "mapping")) { names = mapping_names; n = N_OF(mapping_names); }
     else { names = scope_names; n = N_OF(scope_names); }
     int k = name_index(names, n, s);
     if (!strcmp(s, "next")) {
@@ -231,6 +233,7 @@ static void do_choice(view_app *a, GSimpleAction *act, GVariant *v)
         } else if (!strcmp(name, "style")) w->o.style = k;
         else if (!strcmp(name, "colormap")) w->o.cmap = k;
         else if (!strcmp(name, "scale")) w->o.model = k;
+        else if (!strcmp(name, "mapping")) w->o.mapping = k;
         else w->o.scope = k;
     }
     if (!strcmp(name, "mode")) view_set_info(a, "%s: %s", current_name(a), names[k]);
@@ -619,8 +622,9 @@ static const action_def ACTIONS[] = {
     {"style", "s", "s", do_choice, {"b"}, "'next'", "data style: continuous, bands, contours, ..."},
     {"colormap", "s", "s", do_choice, {"c"}, "'next'", "colour map: ecg, ecg-green, coolwarm, viridis, gray, jet"},
     {"invert", NULL, "b", do_toggle, {"i"}, NULL, "colour map reversed"},
-    {"scale", "s", "s", do_choice, {"s"}, "'next'", "scaling model: linear, log, exp"},
+    {"scale", "s", "s", do_choice, {"s"}, "'next'", "scaling model: linear, log, exp, lab7, lab13"},
     {"scope", "s", "s", do_choice, {"o"}, "'next'", "scale scope: frame, series, surfaces, all"},
+    {"mapping", "s", "s", do_choice, {"p"}, "'next'", "scale mapping: true, symmetric, midpoint, separate"},
     {"levels", "i", NULL, do_levels, {NULL}, NULL, "number of shades / contours"},
     {"levels-more", NULL, NULL, do_levels, {"plus", "equal", "KP_Add"}, NULL, "more shades / contours"},
     {"levels-fewer", NULL, NULL, do_levels, {"minus", "KP_Subtract"}, NULL, "fewer shades / contours"},
@@ -712,7 +716,7 @@ static GVariant *initial_state(view_app *a, const action_def *d)
     }
     const char *s = !strcmp(d->name, "mode") ? mode_names[o->mode] : !strcmp(d->name, "style") ? style_names[o->style]
                   : !strcmp(d->name, "colormap") ? cmap_names[o->cmap] : !strcmp(d->name, "scale") ? scale_names[o->model]
-                  : scope_names[o->scope];
+                  : !strcmp(d->name, "mapping") ? mapping_names[o->mapping] : scope_names[o->scope];
     return g_variant_new_string(s);
 }
 
@@ -859,6 +863,7 @@ GMenuModel *view_menu(void)
     g_menu_append_submenu(data, "Scaling model", G_MENU_MODEL(choice_menu("scale", scale_names, N_OF(scale_names))));
     static const char *scopes_menu[] = {"frame", "series", "surfaces", "all"};
     g_menu_append_submenu(data, "Scope", G_MENU_MODEL(choice_menu("scope", scopes_menu, N_OF(scopes_menu))));
+    g_menu_append_submenu(data, "Mapping", G_MENU_MODEL(choice_menu("mapping", mapping_names, N_OF(mapping_names))));
     add(data, "More levels", "app.levels-more");
     add(data, "Fewer levels", "app.levels-fewer");
     add(data, "Next data set", "app.data-next");

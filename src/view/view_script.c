@@ -157,7 +157,7 @@ static void write_picture(FILE *f, view_win *w)
     static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
     static const char *styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
     static const char *cmaps[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
-    static const char *scales[] = {"linear", "log", "exp"};
+    static const char *scales[] = {"linear", "log", "exp", "lab7", "lab13"};
     static const char *scopes[] = {"frame", "series", "all", "fixed", "surfaces"};
     int scale = gtk_widget_get_scale_factor(w->gl);
     int fb_w = gtk_widget_get_width(w->gl) * scale, fb_h = gtk_widget_get_height(w->gl) * scale;
@@ -177,7 +177,8 @@ static void write_picture(FILE *f, view_win *w)
     fprintf(f, "--style %s\n--levels %d\n--cmap %s\n--scale %s\n", styles[o->style], o->levels, cmaps[o->cmap], scales[o->model]);
     if (o->scope == THX_SCOPE_FIXED) fprintf(f, "--scope fixed:%.17g:%.17g\n", o->lo, o->hi);
     else fprintf(f, "--scope %s\n", scopes[o->scope]);
-    fprintf(f, "%s\n", o->symmetric ? "--symmetric" : "--true-range");
+    static const char *mappings[] = {"true", "symmetric", "midpoint", "separate"};
+    fprintf(f, "--mapping %s\n", mappings[o->mapping]);
     for (int k = 0; k < o->n_groups; k++) fprintf(f, "--scale-group %s\n", o->groups[k]);
     for (int k = 0; k < o->n_slaves; k++) fprintf(f, "--slave %s\n", o->slaves[k]);
     if (o->invert) fprintf(f, "--invert\n");

@@ -71,7 +71,7 @@ typedef struct {
     int cmap;               /* a thx_colormap */
     int model;              /* a thx_scale_model */
     int scope;              /* a thx_scope */
-    int symmetric;
+    int mapping;            /* a thx_scale_mapping: true, symmetric (the default), midpoint, separate */
     double lo, hi;          /* THX_SCOPE_FIXED */
     int invert;             /* the colour map reversed (high values in the low colour) */
     /* scale groups: each a comma-separated list of surfaces whose scope spans them together
