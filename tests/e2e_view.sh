@@ -111,6 +111,50 @@ while IFS= read -r l; do
 done < session2.txt
 "$THORAX" render "${args[@]}" -o render2.png -q
 
+# 3b. the display standards and marks: lab7 scale, separate mapping, bands, node labels, extrema, a
+#     front clip plane fixed to the object after a turn; then an activation map of the heart;
+#     each session drawn again by thorax render
+cat > s7.txt <<EOF
+--solution sol
+--size 400x440
+--frame 193
+--colorbar
+--only torso
+--only heart
+action scale lab7
+action mapping separate
+action style bands+contours
+action surface torso
+action node-labels index
+action extrema
+action clip-front
+action rotate right:20
+action clip-lock
+action plot-zoom 4
+action screenshot $PWD/v7.png
+action save-session $PWD/session7.txt
+action surface heart
+action activation 150:260
+action colormap viridis
+action mapping true
+action screenshot $PWD/v8.png
+action save-session $PWD/session8.txt
+quit
+EOF
+"$THORAX" view --script s7.txt > s7.out 2> s7.err || { cat s7.err; fail "standards session"; }
+grep -q "^--scale lab7$" session7.txt && grep -q "^--mapping separate$" session7.txt && grep -q "^--node-labels torso=index$" session7.txt &&
+    grep -q "^--extrema$" session7.txt && grep -q "^--clip -\?[0-9.e-]*,-\?[0-9.e-]*,-\?[0-9.e-]*,-\?[0-9.e-]*$" session7.txt ||
+    { cat session7.txt; fail "session7: the settings"; }
+grep -q "^--activation heart:150:260$" session8.txt || { cat session8.txt; fail "session8: the activation map"; }
+for k in 7 8; do
+    args=()
+    while IFS= read -r l; do
+        case "$l" in "# the viewer's own"*) break ;; "#"*|"") continue ;; esac
+        args+=(${l%% *}); [ "${l#* }" != "$l" ] && args+=("${l#* }")
+    done < session$k.txt
+    "$THORAX" render "${args[@]}" -o render$k.png -q
+done
+
 # 4. playing advances the frames; the session says where it stopped
 cat > s3.txt <<EOF
 --solution sol
@@ -174,7 +218,7 @@ def png(p):
 # The window draws without the offscreen renderer's antialiasing pass (FXAA on llvmpipe): the two
 # may differ at edges (a pixel whose neighbour differs from it by more than 24 in the render), and
 # must agree everywhere else.
-for v, r in (('v1.png', 'render1.png'), ('v2.png', 'render2.png')):
+for v, r in (('v1.png', 'render1.png'), ('v2.png', 'render2.png'), ('v7.png', 'render7.png'), ('v8.png', 'render8.png')):
     a, b = png(v), png(r)
     assert a.shape == b.shape, (v, a.shape, b.shape)
     d = np.abs(a - b).max(axis=2)

@@ -370,7 +370,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         }
     }
     for (size_t s = 0; s < d->m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
-        if (o->check_frame && d->series[s] && (size_t)o->frame >= d->series[s]->n_frames)
+        if (o->check_frame && d->series[s] && !d->map[s][d->active[s]] && (size_t)o->frame >= d->series[s]->n_frames)
             return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
                              d->series[s]->n_frames);
     return THX_OK;

@@ -446,6 +446,7 @@ static void do_activation(view_app *a, GSimpleAction *act, GVariant *v)
     }
     if (thx_picture_add_activation(a->ctx, &a->d, a->current, t0, t1) != THX_OK) { view_report(a, "activation"); a->status = 1; return; }
     int s = a->current;
+    snprintf(a->act_spec[s], sizeof a->act_spec[s], "%s", spec);
     const thx_series *m = a->d.series[s];
     double lo = INFINITY, hi = -INFINITY;
     for (size_t i = 0; i < m->n_rows; i++)
@@ -562,6 +563,14 @@ static void do_pick(view_app *a, GSimpleAction *act, GVariant *v)
     view_pick_at(w, x, y);
 }
 
+static void do_plot_zoom(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    double f = g_variant_get_double(v);
+    if (!(f > 0)) { view_set_info(a, "plot-zoom %g: a factor > 0 (1 shows every frame again)", f); a->status = 1; return; }
+    a->plot_zoom = f == 1 ? 1 : fmin(fmax((a->plot_zoom > 1 ? a->plot_zoom : 1) * f, 1), 1000);
+    view_plot_update(a);
+}
+
 static void do_traces_clear(view_app *a, GSimpleAction *act, GVariant *v)
 {
     a->n_traces = 0;
@@ -658,6 +667,7 @@ static const action_def ACTIONS[] = {
     {"record-all", "s", NULL, do_record_all, {"<Control><Alt>r"}, "''", "record every frame, unattended, and make DIR/animation.mp4"},
     {"save-session", "s", NULL, do_save_session, {"<Control><Shift>s"}, "''", "save the session as a script of options"},
     {"pick", "s", NULL, do_pick, {NULL}, NULL, "pick at X,Y (window pixels; a click does the same)"},
+    {"plot-zoom", "d", NULL, do_plot_zoom, {"<Alt>Page_Up"}, "2.0", "the traces' time axis zoomed by a factor about the frame (the wheel over them; 1: all)"},
     {"traces-clear", NULL, NULL, do_traces_clear, {"Escape"}, NULL, "clear the traces"},
     {"traces-export", "s", NULL, do_traces_export, {"<Control>e"}, "''", "write the traces as text"},
     {"bench-rotate", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N drawings each turned 1 degree"},

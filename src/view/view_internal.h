@@ -91,6 +91,8 @@ struct view_app {
     guint sweep_id;
     /* picking */
     view_trace traces[VIEW_MAX_TRACES];
+    char act_spec[THX_PICTURE_SURFACES][40]; /* the window of each surface's activation map ("" whole series) */
+    double plot_zoom;          /* the plot pane shows 1/plot_zoom of the frames, centred on the frame shown */
     int n_traces;
     char info[512];            /* the status line's pick/edit information */
     int shots;                 /* screenshots saved by the menu (numbering) */

@@ -17,10 +17,32 @@
 
 #define TRACE_H 110 /* pixels per trace */
 
+static gboolean on_plot_scroll(GtkEventControllerScroll *c, double dx, double dy, gpointer user)
+{
+    view_win *w = user;
+    g_action_group_activate_action(G_ACTION_GROUP(w->app->gapp), "plot-zoom", g_variant_new_double(pow(1.25, -dy)));
+    return TRUE;
+}
+
 void view_plot_attach(view_win *w)
 {
     gtk_widget_set_size_request(w->plot, -1, 0);
     gtk_picture_set_can_shrink(GTK_PICTURE(w->plot), FALSE);
+    GtkEventController *scroll = gtk_event_controller_scroll_new(GTK_EVENT_CONTROLLER_SCROLL_VERTICAL);
+    g_signal_connect(scroll, "scroll", G_CALLBACK(on_plot_scroll), w);
+    gtk_widget_add_controller(w->plot, scroll);
+}
+
+/* The frames the plot shows: all, or 1/zoom of them centred on the frame (kept inside). */
+static void plot_window(const view_app *a, size_t n, size_t frame, size_t *f0, size_t *f1)
+{
+    double z = a->plot_zoom > 1 ? a->plot_zoom : 1;
+    size_t span = (size_t)ceil((double)n / z);
+    if (span < 8) span = n < 8 ? n : 8;
+    size_t lo = frame > span / 2 ? frame - span / 2 : 0;
+    if (lo + span > n) lo = n - span;
+    *f0 = lo;
+    *f1 = lo + span;
 }
 
 /* The traces as one image, one row each (thx_draw_trace), then shown in every window's pane. */
@@ -46,14 +68,16 @@ void view_plot_update(view_app *a)
         for (int t = 0; t < a->n_traces; t++) {
             const thx_series *x = a->d.series[a->traces[t].surface];
             if (!x) continue;
-            size_t n = x->n_frames, row = a->traces[t].node;
+            size_t row = a->traces[t].node, fr = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1, f0, f1;
+            plot_window(a, x->n_frames, fr, &f0, &f1);
+            size_t n = f1 - f0;
             double *v = malloc(n * sizeof *v);
             if (!v) break;
-            for (size_t f = 0; f < n; f++) v[f] = x->v[f * x->n_rows + row];
+            for (size_t f = 0; f < n; f++) v[f] = x->v[(f0 + f) * x->n_rows + row];
             char label[128];
             snprintf(label, sizeof label, "%s node %zu", a->d.m->surf[a->traces[t].surface]->name, row + 1);
             double dt = n > 1 ? x->time[1] - x->time[0] : 1;
-            thx_draw_trace(img, w->plot_font, 8, t * TRACE_H + 4, width - 16, TRACE_H - 8, v, n, x->time[0], dt, (size_t)frame,
+            thx_draw_trace(img, w->plot_font, 8, t * TRACE_H + 4, width - 16, TRACE_H - 8, v, n, x->time[f0], dt, fr - f0,
                            label, x->unit, colors[t % VIEW_MAX_TRACES]);
             free(v);
         }
@@ -191,8 +215,8 @@ static void pick(view_win *w, double x, double y, int quiet)
         snprintf(value, sizeof value, "%.4g %s", ser->v[fi * ser->n_rows + hit.node], ser->unit);
     }
     a->current = hit.surface;
-    view_set_info(a, "picked %s node %zu (%.1f, %.1f, %.1f) mm, %s, triangle %zu (%.1f ms)", s->name, hit.node + 1, p[0],
-                  p[1], p[2], value, hit.tri + 1, ms);
+    view_set_info(a, "picked %s (%s) node %zu (%.1f, %.1f, %.1f) mm, %s, triangle %zu (%.1f ms)", s->name, thx_role_name(s->role),
+                  hit.node + 1, p[0], p[1], p[2], value, hit.tri + 1, ms);
     if (a->vo->verbose >= 0) printf("pick: surface %s node %zu triangle %zu value %s time %.2f ms\n", s->name, hit.node + 1,
                                     hit.tri + 1, value, ms);
     fflush(stdout);

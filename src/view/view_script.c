@@ -220,7 +220,16 @@ thx_status view_save_session(view_app *a, const char *path)
     for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
     if (o->channels) fprintf(f, "--channels %s\n", o->channels);
     for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
-    for (int k = 0; k < o->n_activation; k++) fprintf(f, "--activation %s\n", o->activation[k]);
+    /* the maps shown: those asked for at the start, and those made since */
+    for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
+        if (!a->d.series[s] || !a->d.map[s][a->d.active[s]]) continue;
+        const char *spec = a->act_spec[s];
+        for (int k = 0; k < o->n_activation; k++) /* the start's own spec for this surface */
+            if (!strncmp(o->activation[k], a->d.m->surf[s]->name, strlen(a->d.m->surf[s]->name)) &&
+                (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':' || !o->activation[k][strlen(a->d.m->surf[s]->name)]) && !spec[0])
+                spec = o->activation[k] + strlen(a->d.m->surf[s]->name) + (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':');
+        fprintf(f, "--activation %s%s%s\n", a->d.m->surf[s]->name, spec[0] ? ":" : "", spec);
+    }
     view_win *w = a->win[0];
     write_picture(f, w);
     fprintf(f, "--frame %d\n", view_frame_of(w) + 1);
