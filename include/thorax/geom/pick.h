@@ -98,7 +98,8 @@ thx_status thx_pick_ray(thx_ctx *ctx, const thx_pick_index *idx, const double or
                         const thx_pick_opts *o, thx_pick_hit *hit);
 
 /* The same answer as thx_pick_ray (bit for bit) by testing every triangle: no index. The
- * reference for tests and benchmarks. */
+ * reference for tests and benchmarks; the surfaces must be valid (thx_surface_validate: it is not
+ * run here). */
 thx_status thx_pick_ray_brute(thx_ctx *ctx, const thx_surface *const *surf, size_t n, const double origin[3],
                               const double dir[3], const thx_pick_opts *o, thx_pick_hit *hit);
 
