@@ -463,9 +463,9 @@ static thx_status tri_add(thx_ctx *ctx, thx_surface *s, const thx_edit *e, thx_e
 static thx_status layer_edit(thx_ctx *ctx, thx_model *m, thx_contours *c, const thx_edit_recipe *r, const thx_edit *e,
                              edit_undo *u, thx_edit_result *res)
 {
-    if (!r) return thx_error(ctx, THX_EINPUT, "no recipe: the options the surfaces were built with are unknown");
     size_t cs, layer;
     THX_CHECK(edit_layer_locate(ctx, c, e, &cs, &layer));
+    if (!r) return thx_error(ctx, THX_EINPUT, "no recipe: the options the surfaces were built with are unknown");
     thx_loop *old = NULL;
     size_t n_old = 0;
     THX_CHECK(edit_layer_transform(ctx, c, cs, layer, e, &old, &n_old));

@@ -200,6 +200,12 @@ thx_status thx_edit_replay(thx_ctx *ctx, thx_edit_session *s, const thx_edit_log
                              "numbers would not mean the same; build with the log's options",
                              log->path, log->recipe_line, what);
     }
+    if (!log->has_contours)
+        thx_log(ctx, THX_LOG_WARN, "%s: no 'contours' line: not checked that the log was made on these contours",
+                log->path);
+    if (!log->has_recipe)
+        thx_log(ctx, THX_LOG_WARN, "%s: no 'build' line: not checked that the log was made with these options",
+                log->path);
     thx_edit_result *r = thx_malloc(ctx, sizeof *r);
     if (!r) return THX_ENOMEM;
     memset(r, 0, sizeof *r);
