@@ -470,6 +470,14 @@ static void test_phantom(thx_ctx *ctx)
     CHECK(thx_edit_undo_count(s) == 7 && thx_edit_redo_count(s) == 1);
     CHECK_OK(ctx, thx_edit_session_save(ctx, s, tl_path("pa")));
     CHECK_OK(ctx, thx_edit_session_write_log(ctx, s, tl_path("pa.edits")));
+    CHECK_OK(ctx, thx_edit_session_write_log(ctx, s, tl_path("pa.edits"))); /* its own: replaced */
+    tl_write_text(tl_path("notes.txt"), "my notes\n");
+    CHECK(thx_edit_session_write_log(ctx, s, tl_path("notes.txt")) == THX_EIO && tl_msg_has(ctx, "notes.txt"));
+    {
+        char *n = tl_slurp(ctx, tl_path("notes.txt"), NULL);
+        CHECK(n && strcmp(n, "my notes\n") == 0);
+        free(n);
+    }
     thx_edit_session_destroy(&s);
     t0 = thx_wtime();
     CHECK_OK(ctx, replay_into(ctx, cpath, tl_path("pa/edits.txt"), tl_path("pb")));

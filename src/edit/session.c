@@ -336,8 +336,13 @@ thx_status thx_edit_session_log_text(thx_ctx *ctx, const thx_edit_session *s, ch
         edits[i].line = 0;
     }
     thx_status st;
+    /* the path is informative in the log: characters its line cannot hold become '?' */
+    char name[sizeof s->contours_name];
+    memcpy(name, s->contours_name, sizeof name);
+    for (char *p = name; *p; p++)
+        if (*p == '#' || *p == '\n' || *p == '\r') *p = '?';
     if (!s->base_text) {
-        st = thx_edit_log_text(ctx, s->contours_name[0] ? s->contours_name : NULL,
+        st = thx_edit_log_text(ctx, name[0] ? name : NULL,
                                s->contours_sha256[0] ? s->contours_sha256 : NULL, s->has_recipe ? &s->recipe : NULL,
                                edits, s->n_undo, "edits of the model's surfaces (thorax/edit/edit.h); replay: thorax "
                                                  "surfaces CONTOURS --edits THIS -o MODEL",
