@@ -292,7 +292,8 @@ typedef void (*thx_edit_replay_fn)(void *user, const thx_edit_log *log, const th
  * contours' hash, and its `build` recipe the session's (else "LOG:LINE: ..." saying what differs).
  * An edit that does not apply stops the replay with "LOG:LINE: " and the reason; the session's
  * model is then partly edited and must be discarded (the CLI writes nothing). On success the log
- * becomes the session's base: its text is the model's edit log as given (comments kept).
+ * becomes the session's base (its edits are not undoable): the model's edit log is the log's text
+ * as given up to its `end` line (comments kept), then `end`.
  */
 thx_status thx_edit_replay(thx_ctx *ctx, thx_edit_session *s, const thx_edit_log *log, thx_edit_replay_fn fn,
                            void *user);
