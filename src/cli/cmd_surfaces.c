@@ -10,9 +10,22 @@
 #include "thorax/io/contours_file.h"
 #include "thorax/geom/repair.h"
 #include "thorax/geom/surfaces.h"
+#include "thorax/edit/edit.h"
+
+/* One line per replayed edit: where it is in the log, what it is, what the check found. */
+static void replay_line(void *user, const thx_edit_log *log, const thx_edit *e, const thx_edit_result *r)
+{
+    const int *verbose = user;
+    if (*verbose < 0 && r->check_ok && !r->discarded) return;
+    char line[512];
+    thx_edit_format(e, line, sizeof line);
+    printf("%s:%d: %s: %s\n", log->path, e->line, line, r->summary);
+    if (r->discarded || (*verbose > 0 && r->note[0])) printf("%s:%d:   %s\n", log->path, e->line, r->note);
+}
+
 int cmd_surfaces(int argc, char **argv)
 {
-    const char *outdir = NULL, *start = NULL;
+    const char *outdir = NULL, *start = NULL, *edits = NULL;
     int verbose = 0, want_stats = 0, strict = 0;
     double merge_tol = -1, untangle_tol = -1;
     thx_surfaces_opts o;
@@ -61,6 +74,10 @@ int cmd_surfaces(int argc, char **argv)
          .lo = 1, .bad = "--projected-aspect must be >= 1",
          .help = "nested loops whose lacing has a triangle of aspect ratio over A (or a fan over 3 times the fan "
                  "limit) are laced in projection if that is better"},
+        {.name = "--edits", .type = CLI_INPUT, .meta = "LOG", .s = &edits,
+         .help = "then apply the edit log LOG (thorax-edits 1: node, triangle and layer edits, as the viewer saves "
+                 "them in MODEL/edits.txt) in order, and write the edited model with the log; an edit that no longer "
+                 "applies stops the run (LOG:LINE) and nothing is written"},
         {.name = "--stats", .type = CLI_FLAG, .i = &want_stats,
          .help = "print per-stage times and lacing/orientation statistics"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
@@ -69,7 +86,7 @@ int cmd_surfaces(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "surfaces",
-        .usage = "CONTOURS -o [options]",
+        .usage = "CONTOURS -o [--edits] [options]",
         .about = "Builds one closed, outward-oriented triangle surface per contour surface\n"
                  "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
                  "NAME.fac). Nothing is written unless every surface builds.\n\n"
@@ -77,7 +94,13 @@ int cmd_surfaces(int argc, char **argv)
                  "surface, layer, loop, what was done) and listed in model.json's provenance\n"
                  "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
                  "merged, spikes removed, small self-crossings untangled, holes narrower than the\n"
-                 "node spacing dropped. --strict refuses instead.\n",
+                 "node spacing dropped. --strict refuses instead.\n\n"
+                 "With --edits LOG the surfaces are edited as the log says (paper 3.2, \"Manual\n"
+                 "editing\"): its header must name these contours (their SHA-256) and these options\n"
+                 "(its 'build' line), each edit's check is printed, and the model is written with\n"
+                 "the log as MODEL/edits.txt: the same model the editing session saved.\n"
+                 "model.json records the contours' SHA-256 and their path from MODEL, so that an\n"
+                 "editing session finds them.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
     };
     int pr = cli_parse(&cmd, argc, argv);
@@ -119,37 +142,53 @@ int cmd_surfaces(int argc, char **argv)
         o.start.y = ax.axis == 1 ? 1000.0 * ax.sign : 0;
     }
     double t_read = thx_wtime() - t0;
+    double spacing = o.spacing > 0 ? o.spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    /* the recipe: these options with the spacing as used (recorded, and compared with a log's) */
+    thx_edit_recipe recipe;
+    recipe.surfaces = o;
+    recipe.surfaces.spacing = spacing;
+    recipe.repair = ro;
     per = calloc(c->n_surfaces, sizeof *per);
     if (!per) { rc = 1; goto done; }
     st = thx_surfaces_build(ctx, c, &o, &m, per, &tot);
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
     m->frame = c->frame; /* the contours' anatomical frame ("frame UP FRONT") belongs to the model */
-    double spacing = o.spacing > 0 ? o.spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    char sha[65] = "";
     {
         cJSON *p = cJSON_CreateObject();
         cJSON_AddStringToObject(p, "program", "thorax 0.1.0");
         cJSON_AddStringToObject(p, "command", cli_command_line());
         cJSON_AddStringToObject(p, "input", in);
+        /* where the contours are, for an editing session on the model (thorax/edit/edit.h) */
+        st = thx_edit_record_contours(ctx, p, in, outdir, sha);
         cJSON *op = cJSON_AddObjectToObject(p, "options");
-        cJSON_AddNumberToObject(op, "spacing_mm", spacing);
-        cJSON_AddNumberToObject(op, "smoothing_mm", o.smoothing);
-        cJSON *sp = cJSON_AddArrayToObject(op, "start_point_mm");
-        cJSON_AddItemToArray(sp, cJSON_CreateNumber(o.start.x));
-        cJSON_AddItemToArray(sp, cJSON_CreateNumber(o.start.y));
-        cJSON_AddStringToObject(op, "cap", o.cap_method < 0 ? "per-surface" : o.cap_method == THX_CAP_GRID ? "grid" : "polygon");
-        cJSON_AddNumberToObject(op, "cap_grid_mm", o.cap_grid);
-        cJSON_AddNumberToObject(op, "concave_tol", o.lace.concave_tol);
-        cJSON_AddNumberToObject(op, "max_edge", o.lace.max_edge);
-        cJSON_AddNumberToObject(op, "phase_weight", o.lace.phase_weight);
-        cJSON_AddNumberToObject(op, "fan_limit", o.lace.fan_limit);
-        cJSON_AddNumberToObject(op, "projected_aspect", o.lace.projected_aspect);
-        cJSON_AddNumberToObject(op, "merge_tol_mm", ro.merge_tol);
-        cJSON_AddNumberToObject(op, "untangle_tol_mm", ro.untangle_tol);
-        cJSON_AddBoolToObject(op, "strict", strict);
+        if (st == THX_OK) st = thx_edit_recipe_json(ctx, &recipe, op);
         cJSON *rp = cJSON_AddArrayToObject(p, "repairs");
         for (size_t k = 0; k < rlog.n; k++) cJSON_AddItemToArray(rp, cJSON_CreateString(rlog.msg[k]));
         m->provenance_json = cJSON_PrintUnformatted(p);
         cJSON_Delete(p);
+        if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
+    }
+    if (edits) {
+        /* paper 3.2, "Manual editing": the log's edits, in order, on the surfaces just built */
+        thx_edit_log *log = NULL;
+        thx_edit_session *es = NULL;
+        st = thx_edit_log_read(ctx, edits, &log);
+        if (st == THX_OK) st = thx_edit_session_create(ctx, &m, &c, &recipe, in, sha, NULL, &es);
+        if (st == THX_OK) st = thx_edit_replay(ctx, es, log, replay_line, &verbose);
+        if (st == THX_OK) st = thx_edit_session_finish(ctx, &es, &m, &c);
+        thx_edit_session_destroy(&es);
+        thx_edit_log_destroy(&log);
+        if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
+        if (verbose >= 0) {
+            tot.n_nodes = tot.n_tris = 0;
+            for (size_t k = 0; k < m->n_surfaces; k++) {
+                per[k].n_nodes = m->surf[k]->n_nodes;
+                per[k].n_tris = m->surf[k]->n_tris;
+                tot.n_nodes += per[k].n_nodes;
+                tot.n_tris += per[k].n_tris;
+            }
+        }
     }
     double t1 = thx_wtime();
     st = thx_model_write_claimed(ctx, m, &od);

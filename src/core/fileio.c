@@ -202,11 +202,12 @@ static void remove_tree(const char *dir)
     rmdir(dir);
 }
 
-/* The file names a manifest gives: the values of "pts", "fac", "vmap", "tet" and "steiner" at any
- * depth (a model) and every string in a "files" object (a solution). */
+/* The file names a manifest gives: the values of "pts", "fac", "vmap", "tet", "steiner" and
+ * "edit_log" (a model's edits.txt, named in its provenance) at any depth (a model) and every string
+ * in a "files" object (a solution). */
 static size_t manifest_files(const cJSON *j, int in_files, const char **out, size_t n, size_t cap)
 {
-    static const char *keys[] = {"pts", "fac", "vmap", "tet", "steiner"};
+    static const char *keys[] = {"pts", "fac", "vmap", "tet", "steiner", "edit_log"};
     for (const cJSON *c = j ? j->child : NULL; c; c = c->next) {
         if (cJSON_IsString(c) && c->valuestring) {
             int take = in_files;

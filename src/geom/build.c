@@ -931,3 +931,19 @@ done:
     thx_model_destroy(&m);
     return st;
 }
+
+thx_status thx_surface_build(thx_ctx *ctx, const thx_contours *c, size_t k, const thx_surfaces_opts *o,
+                             thx_surface **out, thx_vec3 *interior, thx_surfaces_stats *stats)
+{
+    *out = NULL;
+    if (k >= c->n_surfaces)
+        return thx_error(ctx, THX_EINPUT, "surface %zu: the contours have %zu surfaces", k + 1, c->n_surfaces);
+    double spacing = o->spacing > 0 ? o->spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    /* the contours seen as holding this surface alone: its loops are checked, not the others' */
+    thx_contours one = *c;
+    one.n_surfaces = 1;
+    one.surf = &c->surf[k];
+    THX_CHECK(thx_contours_validate(ctx, &one));
+    thx_surfaces_stats local;
+    return build_one(ctx, c, &c->surf[k], o, spacing, out, interior, stats ? stats : &local);
+}

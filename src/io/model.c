@@ -30,8 +30,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "thorax/core/fileio.h"
+#include "thorax/core/sha256.h"
 #include "io/volume_io.h"
 
 #define MODEL_FORMAT "thorax-model"
@@ -95,14 +97,26 @@ static thx_status build_manifest(thx_ctx *ctx, const thx_model *m, cJSON **out)
         st = thx_io_volume_manifest(ctx, m, root);
         if (st) goto fail;
     }
-    if (m->provenance_json) {
-        cJSON *prov = cJSON_Parse(m->provenance_json);
+    if (m->provenance_json || m->edit_log) {
+        cJSON *prov = m->provenance_json ? cJSON_Parse(m->provenance_json) : cJSON_CreateObject();
         if (!prov || !cJSON_IsObject(prov)) {
             cJSON_Delete(prov);
             st = thx_error(ctx, THX_EINPUT, "model provenance is not a JSON object");
             goto fail;
         }
         cJSON_AddItemToObject(root, "provenance", prov);
+        /* The edit log's record is the writer's: it names the file written beside the surfaces and
+         * its hash, or nothing when the model has no log (a record copied from a model read earlier
+         * must not name a file this directory does not hold). */
+        cJSON_DeleteItemFromObjectCaseSensitive(prov, "edit_log");
+        cJSON_DeleteItemFromObjectCaseSensitive(prov, "edit_log_sha256");
+        if (m->edit_log) {
+            char hex[65];
+            thx_sha256_hex(m->edit_log, strlen(m->edit_log), hex);
+            if (!cJSON_AddStringToObject(prov, "edit_log", THX_MODEL_EDIT_LOG) ||
+                !cJSON_AddStringToObject(prov, "edit_log_sha256", hex))
+                goto nomem;
+        }
     }
     *out = root;
     return THX_OK;
@@ -169,6 +183,13 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
         THX_TRY(thx_surface_write_ptsfac(ctx, s, pts, fac));
     }
     if (m->volume) THX_TRY(thx_io_volume_write_files(ctx, m, tmp));
+    if (m->edit_log) {
+        thx_atomic_file lf;
+        THX_TRY(join(ctx, pts, sizeof pts, tmp, THX_MODEL_EDIT_LOG));
+        THX_TRY(thx_atomic_open(ctx, pts, &lf));
+        fputs(m->edit_log, lf.f);
+        THX_TRY(thx_atomic_commit(ctx, &lf));
+    }
     THX_TRY(join(ctx, pts, sizeof pts, tmp, "model.json"));
     thx_atomic_file af;
     THX_TRY(thx_atomic_open(ctx, pts, &af));
@@ -310,6 +331,52 @@ static thx_status check_volume_keys(thx_ctx *ctx, const char *mpath, const cJSON
             if (cJSON_IsObject(r)) THX_CHECK(check_keys(ctx, mpath, where, r, REGION_KEYS));
         }
     }
+    return THX_OK;
+}
+
+/* The edit log a model's provenance names ("edit_log": a file in the directory, "edit_log_sha256":
+ * its hash) into m->edit_log: text without NUL bytes, at most 64 MiB, whose hash is the recorded one
+ * (a log changed by hand no longer describes the surfaces beside it). */
+static thx_status read_edit_log(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *prov, thx_model *m)
+{
+    const cJSON *jl = cJSON_GetObjectItemCaseSensitive(prov, "edit_log");
+    const cJSON *jh = cJSON_GetObjectItemCaseSensitive(prov, "edit_log_sha256");
+    if (!jl && !jh) return THX_OK;
+    if (!cJSON_IsString(jl) || !thx_io_file_name_ok(jl->valuestring))
+        return thx_error(ctx, THX_EINPUT, "%s: \"provenance\".\"edit_log\" must name a file in the model directory",
+                         mpath);
+    size_t nh = cJSON_IsString(jh) ? strlen(jh->valuestring) : 0;
+    if (nh != 64 || strspn(jh->valuestring, "0123456789abcdef") != 64)
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: \"provenance\".\"edit_log_sha256\" must be the log's SHA-256, 64 lowercase hex digits",
+                         mpath);
+    char path[4200];
+    THX_CHECK(join(ctx, path, sizeof path, dir, jl->valuestring));
+    struct stat sb;
+    if (lstat(path, &sb) != 0 || !S_ISREG(sb.st_mode))
+        return thx_error(ctx, THX_EINPUT, "%s: the edit log model.json names is missing or not a regular file", path);
+    if (sb.st_size > (64 << 20))
+        return thx_error(ctx, THX_EINPUT, "%s: %lld bytes: larger than any edit log (64 MiB)", path, (long long)sb.st_size);
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    const char *nul = memchr(text, '\0', len);
+    if (nul) {
+        thx_status st = thx_error(ctx, THX_EINPUT, "%s:%d: NUL byte at byte offset %zu (not a text file)", path,
+                                  line_of(text, nul), (size_t)(nul - text));
+        free(text);
+        return st;
+    }
+    char hex[65];
+    thx_sha256_hex(text, len, hex);
+    if (strcmp(hex, jh->valuestring) != 0) {
+        free(text);
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: its SHA-256 is %s but model.json records %s: the log was changed after the model was "
+                         "written, so it no longer describes these surfaces",
+                         path, hex, jh->valuestring);
+    }
+    m->edit_log = text;
     return THX_OK;
 }
 
@@ -475,6 +542,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         m->interior[m->n_surfaces - 1] = in;
     }
     THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m));
+    if (prov && !cJSON_IsNull(prov)) THX_TRY(read_edit_log(ctx, dir, mpath, prov, m));
     if (prov && !cJSON_IsNull(prov)) {
         m->provenance_json = cJSON_PrintUnformatted(prov);
         if (!m->provenance_json) {

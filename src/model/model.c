@@ -22,6 +22,7 @@ void thx_model_destroy(thx_model **m)
     free(p->has_interior);
     free(p->interior);
     free(p->provenance_json);
+    free(p->edit_log);
     thx_volume_destroy(&p->volume);
     free(p);
     *m = NULL;

@@ -151,6 +151,14 @@ void thx_surfaces_opts_default(thx_surfaces_opts *o);
 thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_surfaces_opts *o, thx_model **out,
                               thx_surfaces_stats *stats, thx_surfaces_stats *total);
 
+/* Builds the one surface c->surf[k] as thx_surfaces_build does (the same code: a surface never
+ * depends on the others, so the result is byte for byte the surface thx_surfaces_build makes from
+ * the same contours), after checking that surface's loops (thx_contours_validate on it alone).
+ * *out is a new surface (caller destroys), *interior a point inside it, stats (may be NULL) its
+ * statistics. Used to lace one surface again after its contours changed (thorax/edit/edit.h). */
+thx_status thx_surface_build(thx_ctx *ctx, const thx_contours *c, size_t k, const thx_surfaces_opts *o,
+                             thx_surface **out, thx_vec3 *interior, thx_surfaces_stats *stats);
+
 #ifdef __cplusplus
 }
 #endif

@@ -22,6 +22,11 @@
  *   model.json   gains "volume" (files, counts, units, orientation), a "vmap"
  *                per surface, and "regions": the conductivity table (id,
  *                name, sigma in S/m as a number or a 3x3 tensor, source)
+ * and, when the surfaces went through edits (m->edit_log; thorax/edit/edit.h, docs/formats.md
+ * "Edit logs"; paper 3.2 "Manual editing"):
+ *   edits.txt    the edit log, as m->edit_log holds it
+ *   model.json   "provenance" gains "edit_log": "edits.txt" and "edit_log_sha256": its SHA-256
+ *                (the writer sets both, or removes them when the model has no log)
  * Writing is atomic: the directory is built under a temporary name and renamed.
  */
 #ifndef THORAX_IO_MODEL_DIR_H
@@ -49,6 +54,7 @@ thx_status thx_model_write(thx_ctx *ctx, const thx_model *m, const char *dir);
  * reads and computes, so that a directory another command writes meanwhile is
  * never replaced (thorax/core/fileio.h). thx_model_write claims dir itself. */
 #define THX_MODEL_MANIFEST "model.json"
+#define THX_MODEL_EDIT_LOG "edits.txt"
 #define THX_MODEL_FORMAT "thorax-model"
 thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir *od);
 /* Reads a model directory written by thx_model_write, with its volume if
@@ -58,7 +64,8 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
  * repeated key, a value of the wrong type, a count that disagrees with its
  * file or a bad frame is refused, naming model.json and the key (and the
  * surface); nothing is returned half-read. A manifest without "frame" gives
- * frame.set = 0. Caller destroys *out. */
+ * frame.set = 0. An edit log the provenance names is read into m->edit_log, refused when missing,
+ * holding a NUL byte, over 64 MiB or not of the recorded SHA-256. Caller destroys *out. */
 thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out);
 
 /* Reads a .pts/.fac pair into a surface. The .fac index base (0 or 1) is

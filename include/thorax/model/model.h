@@ -23,6 +23,9 @@ typedef struct thx_model {
     struct thx_volume *volume; /* owned tetrahedral mesh with regions (thorax/model/volume.h), or NULL */
     thx_frame frame;         /* which model axes point superior and anterior (thorax/model/frame.h);
                                 .set = 0: unknown (a command that needs anatomy refuses the model) */
+    char *edit_log;          /* owned text of the edit log the surfaces went through (thorax/edit/edit.h;
+                                the model directory's edits.txt, named in the provenance), or NULL: the
+                                surfaces are as built or imported. Opaque text to the model and io layers. */
 } thx_model;
 
 thx_status thx_model_create(thx_ctx *ctx, thx_model **out);
