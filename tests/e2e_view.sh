@@ -21,6 +21,8 @@ fail() { echo "FAIL: $*"; exit 1; }
 "$THORAX" beat model -o beat.raw --frames 300 -q
 "$THORAX" forward model --epicardial beat.raw -o sol -q
 "$THORAX" series convert sol/torso.raw -o torso.txt -q
+"$THORAX" surfaces c.txt -o emodel -q 2> /dev/null   # a model to edit (no volume mesh)
+cp -r emodel emodel.orig
 # a colour bar per distinct scale: the torso's and the heart's (each its own series scope)
 "$THORAX" render --solution sol --frame 193 --size 400x440 --colorbar --only torso --only heart -o bars2.png -q
 "$THORAX" render --solution sol --frame 193 --size 400x440 --colorbar --only torso --only heart --scope all -o bars1.png -q
@@ -100,10 +102,10 @@ done < session.txt
 mv view1.png v1.png
 mv session.txt session1.txt
 # 3. the same at GDK_SCALE=2: twice the pixels, and render at twice the size agrees
-GDK_SCALE=2 "$THORAX" view --script s1.txt --size 300x240 > s2.out 2> s2.err || { cat s2.err; fail "GDK_SCALE=2 session"; }
+GDK_SCALE=2 "$THORAX" view --script s1.txt --size 360x240 > s2.out 2> s2.err || { cat s2.err; fail "GDK_SCALE=2 session"; }
 mv view1.png v2.png
 mv session.txt session2.txt
-grep -q "^--size 600x480$" session2.txt || fail "GDK_SCALE=2: the drawing area is not 600x480 pixels: $(grep -- --size session2.txt)"
+grep -q "^--size 720x480$" session2.txt || fail "GDK_SCALE=2: the drawing area is not 720x480 pixels: $(grep -- --size session2.txt)"
 args=()
 while IFS= read -r l; do
     case "$l" in "# the viewer's own"*) break ;; "#"*|"") continue ;; esac
@@ -184,6 +186,71 @@ EOF
 n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 rec/animation.mp4)
 [ "$n" = 300 ] || fail "record-all: the movie has $n frames"
 
+# 5b. manual editing: scripted edits with the check's verdict after each, undo, save; the saved
+#     model replays from its contours and log byte for byte; edit then undo saves the model as it
+#     was, byte for byte; a real Alt+drag moves one node
+cat > e1.txt <<EOF
+$PWD/emodel
+--size 300x300
+action edit node_move torso 5 10 20 30
+action edit tri_flip torso 7
+action edit tri_delete torso 9
+action undo
+action undo
+action redo
+action undo
+action edit layer_move heart layer=3 2 1
+action save-model $PWD/edited
+quit
+EOF
+"$THORAX" view --script e1.txt > e1.out 2> e1.err || { cat e1.err; fail "editing session"; }
+grep -q "^edit: tri_flip torso 7 -> torso: FAILS: closed, orientation: 3 edges" e1.out || { cat e1.out; fail "the check after a flip"; }
+grep -q "^edit: tri_delete torso 9 -> torso: FAILS: 3 open edges" e1.out || { cat e1.out; fail "the check after a delete"; }
+[ "$(grep -c '^edit: undo -> torso: passes' e1.out)" -ge 1 ] || { cat e1.out; fail "undo did not restore a passing torso"; }
+grep -q "^edit: layer_move heart layer=3 2 1 -> heart: passes" e1.out || { cat e1.out; fail "the layer edit"; }
+[ "$(sed -n 5p edited/torso.pts)" = "10.000000 20.000000 30.000000" ] || fail "node 5 not moved: $(sed -n 5p edited/torso.pts)"
+[ "$(grep -cE '^(node_move|tri_|layer_)' edited/edits.txt)" = 2 ] || { cat edited/edits.txt; fail "the log holds more than the two kept edits"; }
+"$THORAX" surfaces c.txt --edits edited/edits.txt -o replayed -q 2> /dev/null
+for f in edited/*.pts edited/*.fac edited/edits.txt; do cmp -s "$f" "replayed/${f#edited/}" || fail "replay differs: $f"; done
+cat > e2.txt <<EOF
+$PWD/emodel
+--size 300x300
+action edit node_move lung_l 17 1 2 3
+action edit tri_delete heart 4
+action undo
+action undo
+action save-model $PWD/undone
+quit
+EOF
+"$THORAX" view --script e2.txt > e2.out 2> e2.err || { cat e2.err; fail "edit and undo session"; }
+for f in emodel/*.pts emodel/*.fac; do cmp -s "$f" "undone/${f#emodel/}" || fail "undo is not byte for byte: $f"; done
+# Alt+drag: the node under the pointer follows it; saved, one line of one surface changed
+"$THORAX" view emodel --size 400x440 > drag.out 2> drag.err &
+VP=$!
+W=""
+for i in $(seq 300); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
+[ -n "$W" ] || fail "no window for the drag"
+sleep 0.5
+xdotool windowfocus --sync "$W" 2>/dev/null || true
+xdotool mousemove --window "$W" 200 250 keydown alt mousedown 1
+for k in 1 2 3 4 5 6; do xdotool mousemove_relative -- 4 -3; sleep 0.05; done
+xdotool mouseup 1 keyup alt
+for i in $(seq 50); do grep -q "^edit: node_move" drag.out && break; sleep 0.1; done
+grep -q "^edit: node_move" drag.out || { cat drag.out drag.err; fail "Alt+drag made no edit"; }
+xdotool key --window "$W" ctrl+shift+m
+for i in $(seq 50); do grep -q "^edit: saved" drag.out && break; sleep 0.1; done
+xdotool key --window "$W" ctrl+q
+wait $VP || fail "the drag session exited $?"
+echo "drag: $(grep '^edit: node_move' drag.out | head -1)"
+grep -q "^node_move " emodel/edits.txt || fail "the dragged model's log"
+n=0
+for f in emodel.orig/*.pts emodel.orig/*.fac; do
+    d=$(diff "$f" "emodel/${f#emodel.orig/}" | grep -c '^>' || true)
+    case "$f" in *.fac) [ "$d" = 0 ] || fail "Alt+drag changed triangles: $f" ;; esac
+    n=$((n + d))
+done
+[ "$n" = 1 ] || fail "Alt+drag changed $n node lines (one expected)"
+
 # 6. bad input: exit 1, the file and line named
 printf -- '--solution sol\n--size 120x120\naction frame-next\naction no-such-thing\nquit\n' > bad1.txt
 if "$THORAX" view --script bad1.txt > /dev/null 2> bad1.err; then fail "an unknown action was accepted"; fi
@@ -232,7 +299,7 @@ for v, r in (('v1.png', 'render1.png'), ('v2.png', 'render2.png'), ('v7.png', 'r
                                           (off & ~edge).sum(), (off & edge).sum()))
     assert drawn > 0.2, 'the picture is mostly empty'
     assert d[~edge].mean() < 0.1 and (off & ~edge).mean() < 0.001, 'the window differs from thorax render'
-assert png("v2.png").shape[:2] == (480, 600)
+assert png("v2.png").shape[:2] == (480, 720)
 
 # colour bars: count the runs of strip down the bar's column (a bar is a strip from blue through white to red)
 def strips(p):
@@ -269,9 +336,9 @@ EOF
 # ---- the pick against an independent ray cast: anterior view, no turn, the viewport's centre ----
 cat > s5.txt <<EOF
 --solution sol
---size 300x300
+--size 400x400
 --frame 193
-action pick 150,150
+action pick 200,200
 quit
 EOF
 xvfb-run -a -s "-screen 0 800x600x24" "$THORAX" view --script s5.txt > s5.out 2> s5.err || { cat s5.err; fail "pick session"; }
@@ -299,12 +366,17 @@ ok = np.abs(det) > 1e-12
 f = np.where(ok, 1 / np.where(ok, det, 1), 0)
 s = o - a; u = f * (s * h).sum(1)
 q = np.cross(s, e1); v = f * (q * d).sum(1); tt = f * (e2 * q).sum(1)
-hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (tt > 0)
-k = np.where(hit)[0][np.argmin(tt[hit])]
-x = o + tt[k] * d
-tri = F[k]
-near = tri[np.argmin(((P[tri] - x) ** 2).sum(1))] + 1
-print('centre pick: viewer node %d, numpy ray cast node %d (triangle %d)' % (pick, near, k + 1))
-assert pick == near
+# the view's axis through the box centre may run along an edge: every triangle it meets within
+# rounding at the nearest distance is a right answer, with its own nearest node
+e = 1e-9
+hit = ok & (u >= -e) & (v >= -e) & (u + v <= 1 + e) & (tt > 0)
+tmin = tt[hit].min()
+cands = set()
+for k in np.where(hit & (tt <= tmin + 1e-6))[0]:
+    x = o + tt[k] * d
+    tri = F[k]
+    cands.add(int(tri[np.argmin(((P[tri] - x) ** 2).sum(1))] + 1))
+print('centre pick: viewer node %d, numpy ray cast nodes %s' % (pick, sorted(cands)))
+assert pick in cands
 EOF
 echo "view checks passed"

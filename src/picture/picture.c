@@ -260,6 +260,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
     }
     if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
     thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m) : thx_model_read(ctx, model_dir, &d->m);
+    if (!o->n_files) snprintf(d->model_dir, sizeof d->model_dir, "%s", model_dir);
     if (st == THX_OK) st = check_names(ctx, o, d->m);
     if (st != THX_OK) { cJSON_Delete(j); return st; }
     if (j) {

@@ -587,6 +587,19 @@ static void do_traces_export(view_app *a, GSimpleAction *act, GVariant *v)
 
 static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v);
 
+/* ---- editing (view_edit.c) ---- */
+static void do_edit(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_line(a, g_variant_get_string(v, NULL)); }
+static void do_undo(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_undo(a, 0); }
+static void do_redo(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_undo(a, 1); }
+static void do_save_model(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_save(a, g_variant_get_string(v, NULL)); }
+static void do_edit_picked(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    double x = v ? g_variant_get_double(v) : 0;
+    view_edit_picked(a, !strcmp(name, "delete-triangle") ? "delete" : !strcmp(name, "flip-triangle") ? "flip"
+                      : !strcmp(name, "build-triangle") ? "triangle" : name, x);
+}
+
 /* bench-rotate N, bench-frames N, bench-pick N (bench/view.sh) */
 static void do_bench(view_app *a, GSimpleAction *act, GVariant *v)
 {
@@ -670,6 +683,20 @@ static const action_def ACTIONS[] = {
     {"plot-zoom", "d", NULL, do_plot_zoom, {"<Alt>Page_Up"}, "2.0", "the traces' time axis zoomed by a factor about the frame (the wheel over them; 1: all)"},
     {"traces-clear", NULL, NULL, do_traces_clear, {"Escape"}, NULL, "clear the traces"},
     {"traces-export", "s", NULL, do_traces_export, {"<Control>e"}, "''", "write the traces as text"},
+    {"edit", "s", NULL, do_edit, {NULL}, NULL, "an edit as an edit-log line, 1-based: node_move S N X Y Z, tri_delete S T, ..."},
+    {"delete-triangle", NULL, NULL, do_edit_picked, {"Delete"}, NULL, "delete the picked triangle"},
+    {"flip-triangle", NULL, NULL, do_edit_picked, {"f"}, NULL, "flip the picked triangle's orientation"},
+    {"build-triangle", NULL, NULL, do_edit_picked, {"t"}, NULL, "a triangle on the last three picked nodes"},
+    {"layer-x", "d", NULL, do_edit_picked, {"<Alt>Right"}, "1.0", "move the picked node's layer along x (mm; Alt+Left: -1)"},
+    {"layer-y", "d", NULL, do_edit_picked, {"<Alt>Up"}, "1.0", "move the picked node's layer along y (mm; Alt+Down: -1)"},
+    {"layer-rotate", "d", NULL, do_edit_picked, {"<Alt>period"}, "1.0", "turn the picked node's layer in its plane (degrees; Alt+comma: -1)"},
+    {"layer-smooth", "d", NULL, do_edit_picked, {"<Alt>s"}, "2.0", "smooth the picked node's layer (bandwidth, mm)"},
+    {"layer-x-back", NULL, NULL, NULL, {"<Alt>Left"}, NULL, "move the layer by -1 mm along x"},
+    {"layer-y-back", NULL, NULL, NULL, {"<Alt>Down"}, NULL, "move the layer by -1 mm along y"},
+    {"layer-rotate-back", NULL, NULL, NULL, {"<Alt>comma"}, NULL, "turn the layer by -1 degree"},
+    {"undo", NULL, NULL, do_undo, {"<Control>z"}, NULL, "undo the last edit"},
+    {"redo", NULL, NULL, do_redo, {"<Control><Shift>z", "<Control>y"}, NULL, "redo"},
+    {"save-model", "s", NULL, do_save_model, {"<Control><Shift>m"}, "''", "save the edited model with its edit log (a directory; empty: the model itself)"},
     {"bench-rotate", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N drawings each turned 1 degree"},
     {"bench-frames", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N frame steps"},
     {"bench-pick", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N picks over a grid of the window"},
@@ -685,6 +712,7 @@ static const struct {
     {"view-posterior", "view", "'posterior'"}, {"view-left", "view", "'left'"},       {"view-right", "view", "'right'"},
     {"view-superior", "view", "'superior'"},   {"view-inferior", "view", "'inferior'"}, {"rotate-left", "rotate", "'right:-15'"},
     {"rotate-up", "rotate", "'up:15'"},        {"rotate-down", "rotate", "'up:-15'"},   {"zoom-out", "zoom", "0.8"},
+    {"layer-x-back", "layer-x", "-1.0"},       {"layer-y-back", "layer-y", "-1.0"},     {"layer-rotate-back", "layer-rotate", "-1.0"},
 };
 
 static void on_activate_action(GSimpleAction *act, GVariant *v, gpointer user)
@@ -787,7 +815,7 @@ static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
         g_string_free(keys, TRUE);
     }
     g_string_append(text, "\n<b>Mouse</b>: drag turns (arcball), Shift+drag or the middle button pans, the wheel zooms,\n"
-                          "Ctrl+drag moves the clip plane, a click picks the node under the pointer.");
+                          "Ctrl+drag moves the clip plane, a click picks the node under the pointer, Alt+drag moves it (an edit).");
     GtkWidget *win = gtk_window_new();
     gtk_window_set_title(GTK_WINDOW(win), "thorax — keys");
     view_win *w = view_active(a);
@@ -896,5 +924,14 @@ GMenuModel *view_menu(void)
     add(frames, "Transform lock", "app.lock-transform");
     add(frames, "Scale lock", "app.lock-scale");
     g_menu_append_submenu(bar, "Frames", G_MENU_MODEL(frames));
+    GMenu *edit = g_menu_new();
+    add(edit, "Undo", "app.undo");
+    add(edit, "Redo", "app.redo");
+    add(edit, "Delete the picked triangle", "app.delete-triangle");
+    add(edit, "Flip the picked triangle", "app.flip-triangle");
+    add(edit, "Triangle on the last three picked nodes", "app.build-triangle");
+    add(edit, "Smooth the picked node's layer", "app.layer-smooth(2.0)");
+    add(edit, "Save the model with its edit log", "app.save-model::");
+    g_menu_append_submenu(bar, "Edit", G_MENU_MODEL(edit));
     return G_MENU_MODEL(bar);
 }

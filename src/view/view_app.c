@@ -240,6 +240,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
             fprintf(stderr, "thorax view: window %d: %d draws, %.1f ms a draw on average\n", w->id, w->ms_n, w->ms_sum / w->ms_n);
         free(w);
     }
+    thx_edit_session_destroy(&a.edit);
     thx_picture_data_free(&a.d);
     if (rc != 0 && a.status == 0) a.status = 1;
     return a.status;

@@ -47,7 +47,7 @@ void view_quat_rotate(const double q[4], const double v[3], double out[3])
 }
 
 /* The camera's right, up and backward (toward the eye) directions in the model's axes. */
-static void camera_basis(const view_win *w, double right[3], double up[3], double back[3])
+void view_camera_basis(const view_win *w, double right[3], double up[3], double back[3])
 {
     thx_camera cam;
     view_camera(w, 1, &cam);
@@ -70,7 +70,7 @@ static void camera_basis(const view_win *w, double right[3], double up[3], doubl
 void view_rotate_screen(view_win *w, double ax, double ay, double deg)
 {
     double r[3], u[3], b[3], axis[3], q[4], out[4];
-    camera_basis(w, r, u, b);
+    view_camera_basis(w, r, u, b);
     for (int k = 0; k < 3; k++) axis[k] = ax * r[k] + ay * u[k];
     view_quat_axis_angle(axis, -deg, q);
     view_quat_mul(q, w->q, out);
@@ -114,7 +114,7 @@ static void arcball_point(const view_win *w, double x, double y, double p[3])
 }
 
 /* mm per screen pixel in the viewport (orthographic height, or the height at the centre). */
-static double mm_per_pixel(const view_win *w)
+double view_mm_per_pixel(const view_win *w)
 {
     thx_camera cam;
     int vp[4];
@@ -142,7 +142,10 @@ static void drag_begin(GtkGestureDrag *g, double x, double y, gpointer user)
     w->drag_clip = w->clip_offset;
     if (button == 2 || (m & GDK_SHIFT_MASK)) w->drag_mode = 2;
     else if (m & GDK_CONTROL_MASK) w->drag_mode = 3;
-    else w->drag_mode = 1;
+    else if (m & GDK_ALT_MASK) {
+        /* moving a node: the one under the pointer */
+        w->drag_mode = view_pick_at(w, x, y) ? 4 : 0;
+    } else w->drag_mode = 1;
     gtk_widget_grab_focus(w->gl);
 }
 
@@ -160,19 +163,22 @@ static void drag_update(GtkGestureDrag *g, double dx, double dy, gpointer user)
         if (deg > 0) {
             /* the screen axis (ax[0] right, ax[1] up, ax[2] toward the viewer) in the model's axes */
             double r[3], u[3], b[3], axis[3], q[4], out[4];
-            camera_basis(w, r, u, b);
+            view_camera_basis(w, r, u, b);
             for (int k = 0; k < 3; k++) axis[k] = ax[0] * r[k] + ax[1] * u[k] + ax[2] * b[k];
             view_quat_axis_angle(axis, -deg, q);
             view_quat_mul(q, w->drag_q, out);
             memcpy(w->q, out, sizeof out);
         }
     } else if (w->drag_mode == 2) {
-        double s = mm_per_pixel(w);
+        double s = view_mm_per_pixel(w);
         w->pan[0] = w->drag_pan[0] - dx * s;
         w->pan[1] = w->drag_pan[1] + dy * s;
+    } else if (w->drag_mode == 4) {
+        view_edit_drag(w, dx, dy, 0);
+        return;
     } else if (w->drag_mode == 3) {
         if (!w->o.clip[0] && !w->clip_view) return;
-        w->clip_offset = w->drag_clip - dy * mm_per_pixel(w);
+        w->clip_offset = w->drag_clip - dy * view_mm_per_pixel(w);
     }
     gtk_gl_area_queue_render(GTK_GL_AREA(w->gl));
     view_copy_transform(w->app, w);
@@ -183,6 +189,7 @@ static void drag_end(GtkGestureDrag *g, double dx, double dy, gpointer user)
     view_win *w = user;
     int mode = w->drag_mode;
     w->drag_mode = 0;
+    if (mode == 4) { view_edit_drag(w, dx, dy, 1); return; }
     if (mode == 1 && fabs(dx) < 3 && fabs(dy) < 3) {
         memcpy(w->q, w->drag_q, sizeof w->q);
         view_pick_at(w, w->drag_x0, w->drag_y0);

@@ -4,10 +4,18 @@
 #define THORAX_VIEW_INTERNAL_H
 #include <gtk/gtk.h>
 
+#include "thorax/edit/edit.h"
 #include "thorax/picture/picture.h"
 #include "thorax/view/view.h"
 
 typedef struct view_app view_app;
+
+/* A pick kept for the edits: the surface, the triangle hit and its nearest node, where the node was. */
+typedef struct {
+    int surface;
+    size_t tri, node;
+    double start[3];
+} view_pick;
 
 /* A trace held in the plot pane: a node of a surface with data. */
 typedef struct {
@@ -92,7 +100,10 @@ struct view_app {
     /* picking */
     view_trace traces[VIEW_MAX_TRACES];
     char act_spec[THX_PICTURE_SURFACES][40]; /* the window of each surface's activation map ("" whole series) */
-    double plot_zoom;          /* the plot pane shows 1/plot_zoom of the frames, centred on the frame shown */
+    double plot_zoom;
+    thx_edit_session *edit;    /* opened at the first edit (view_edit.c) */
+    view_pick picked[3];       /* the last three picks, oldest first */
+    int n_picked;          /* the plot pane shows 1/plot_zoom of the frames, centred on the frame shown */
     int n_traces;
     char info[512];            /* the status line's pick/edit information */
     int shots;                 /* screenshots saved by the menu (numbering) */
@@ -120,6 +131,8 @@ void view_quat_axis_angle(const double axis[3], double deg, double q[4]);
 void view_quat_rotate(const double q[4], const double v[3], double out[3]);
 void view_rotate_screen(view_win *w, double ax, double ay, double deg); /* about an axis in screen space */
 void view_copy_transform(view_app *a, const view_win *from);
+void view_camera_basis(const view_win *w, double right[3], double up[3], double back[3]);
+double view_mm_per_pixel(const view_win *w);
 
 /* view_actions.c */
 void view_actions_install(view_app *a);
@@ -132,10 +145,18 @@ thx_status view_movie(view_app *a, const char *path);
 void view_record_all(view_app *a, const char *dir);
 void view_bench(view_app *a, int kind, int n);
 
+/* view_edit.c */
+int view_edit_apply(view_app *a, const thx_edit *e);
+int view_edit_line(view_app *a, const char *text);
+int view_edit_undo(view_app *a, int redo);
+int view_edit_save(view_app *a, const char *dir);
+int view_edit_picked(view_app *a, const char *what, double x);
+void view_edit_drag(view_win *w, double dx, double dy, int done);
+
 /* view_plot.c */
 void view_plot_attach(view_win *w);
 void view_plot_update(view_app *a);
 thx_status view_plot_export(view_app *a, const char *path);
-void view_pick_at(view_win *w, double x, double y);
+int view_pick_at(view_win *w, double x, double y);
 void view_pick_quiet(view_win *w, double x, double y);
 #endif

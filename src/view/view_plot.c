@@ -132,11 +132,11 @@ static int ray_at(view_win *w, double x, double y, double origin[3], double dir[
     return thx_camera_ray(&cam, vp[2], vp[3], px - vp[0], py - vp[1], origin, dir);
 }
 
-static void pick(view_win *w, double x, double y, int quiet);
+static int pick(view_win *w, double x, double y, int quiet);
 
-void view_pick_at(view_win *w, double x, double y)
+int view_pick_at(view_win *w, double x, double y)
 {
-    pick(w, x, y, 0);
+    return pick(w, x, y, 0);
 }
 
 /* The same search, reporting nothing (benchmarks). */
@@ -145,12 +145,13 @@ void view_pick_quiet(view_win *w, double x, double y)
     pick(w, x, y, 1);
 }
 
-static void pick(view_win *w, double x, double y, int quiet)
+/* 1 when something was hit (and, unless quiet, kept among the picks and reported), else 0. */
+static int pick(view_win *w, double x, double y, int quiet)
 {
     view_app *a = w->app;
     const thx_model *m = a->d.m;
     double origin[3], dir[3];
-    if (ray_at(w, x, y, origin, dir)) { view_set_info(a, "pick: outside the picture"); return; }
+    if (ray_at(w, x, y, origin, dir)) { view_set_info(a, "pick: outside the picture"); return 0; }
     gint64 t0 = g_get_monotonic_time();
     const thx_surface *surf[THX_PICTURE_SURFACES];
     unsigned char skip[THX_PICTURE_SURFACES];
@@ -202,9 +203,9 @@ static void pick(view_win *w, double x, double y, int quiet)
         if (st == THX_OK && h2.surface >= 0 && (hit.surface < 0 || h2.t < hit.t)) hit = h2;
     }
     double ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
-    if (st != THX_OK) { view_report(a, "pick"); return; }
-    if (quiet) return;
-    if (hit.surface < 0) { view_set_info(a, "pick: nothing under the pointer (%.1f ms)", ms); return; }
+    if (st != THX_OK) { view_report(a, "pick"); return 0; }
+    if (quiet) return hit.surface >= 0;
+    if (hit.surface < 0) { view_set_info(a, "pick: nothing under the pointer (%.1f ms)", ms); return 0; }
     const thx_surface *s = m->surf[hit.surface];
     const double *p = s->xyz + 3 * hit.node;
     const thx_series *ser = a->d.series[hit.surface];
@@ -215,6 +216,15 @@ static void pick(view_win *w, double x, double y, int quiet)
         snprintf(value, sizeof value, "%.4g %s", ser->v[fi * ser->n_rows + hit.node], ser->unit);
     }
     a->current = hit.surface;
+    if (a->n_picked == 3) {
+        memmove(a->picked, a->picked + 1, 2 * sizeof a->picked[0]);
+        a->n_picked = 2;
+    }
+    view_pick *kept = &a->picked[a->n_picked++];
+    kept->surface = hit.surface;
+    kept->tri = hit.tri;
+    kept->node = hit.node;
+    memcpy(kept->start, p, sizeof kept->start);
     view_set_info(a, "picked %s (%s) node %zu (%.1f, %.1f, %.1f) mm, %s, triangle %zu (%.1f ms)", s->name, thx_role_name(s->role),
                   hit.node + 1, p[0], p[1], p[2], value, hit.tri + 1, ms);
     if (a->vo->verbose >= 0) printf("pick: surface %s node %zu triangle %zu value %s time %.2f ms\n", s->name, hit.node + 1,
@@ -230,4 +240,5 @@ static void pick(view_win *w, double x, double y, int quiet)
         a->n_traces++;
         view_plot_update(a);
     }
+    return 1;
 }
