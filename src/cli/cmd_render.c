@@ -72,8 +72,13 @@ static int parse_look(void *user, const cli_opt *opt, const char *spec)
     memcpy(l->name, buf, (size_t)(eq - buf) + 1);
     char *mode = eq + 1, *op = strchr(mode, ':'), *col = NULL;
     if (op) { *op++ = '\0'; col = strchr(op, ':'); if (col) *col++ = '\0'; }
-    if (thx_picture_mode_parse(mode, &l->mode)) {
-        cli_usage_error(cmd, "--surface '%s': mode '%s' is not hidden, points, wire, flat, gouraud, phong or orientation", spec, mode);
+    l->style = -1;
+    static const char *styles_words[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
+    for (int k = 0; k < 5; k++)
+        if (!strcmp(mode, styles_words[k])) { l->style = k; l->mode = THX_DRAW_GOURAUD; }
+    if (l->style < 0 && thx_picture_mode_parse(mode, &l->mode)) {
+        cli_usage_error(cmd, "--surface '%s': mode '%s' is not hidden, points, wire, flat, gouraud, phong, orientation, or a data style "
+                                  "(continuous, bands, contours, bands+contours, continuous+contours)", spec, mode);
         return 2;
     }
     if (op && *op) {
@@ -228,7 +233,8 @@ size_t render_options(cli_opt *t, ropts *o)
                                "triangles only where their outward side faces the viewer, the nodes behind as points)"};
     t[n++] = (cli_opt){.name = "--surface", .type = CLI_STRING, .meta = "NAME=M[:OPACITY[:#RRGGBB]]",
                        .flags = CLI_REPEAT, .fn = parse_look,
-                       .help = "one surface's mode (as --mode), opacity and colour (a surface with data keeps the colour "
+                       .help = "one surface's mode (as --mode, or a data style as --style: the surface's data drawn so), "
+                               "opacity and colour (a surface with data keeps the colour "
                                "map); at most 16"};
     t[n++] = (cli_opt){.name = "--only", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = o->p.only,
                        .count = &o->p.n_only, .max = 16, .help = "draw only these surfaces"};

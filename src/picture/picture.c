@@ -607,7 +607,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
             r->values = x->v + f * x->n_rows;
             for (size_t i = 0; i < x->n_rows; i++) b->nan_count += !isfinite(r->values[i]);
-            r->style = o->style;
+            r->style = look && look->style >= 0 ? look->style : o->style;
             r->n_levels = o->levels;
             r->cmap = o->cmap;
             scale_for(o, d, (int)s, (int)f, &r->scale);

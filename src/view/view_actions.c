@@ -50,6 +50,7 @@ static thx_picture_look *look_of(view_win *w, const char *name)
     memset(l, 0, sizeof *l);
     snprintf(l->name, sizeof l->name, "%s", name);
     l->mode = (thx_draw_mode)w->o.mode;
+    l->style = -1;
     l->opacity = -1;
     return l;
 }
@@ -60,7 +61,9 @@ static const char *current_name(view_app *a)
     return a->current >= 0 && (size_t)a->current < m->n_surfaces ? m->surf[a->current]->name : NULL;
 }
 
-static const char *mode_names[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+/* the surface modes, then the data styles a surface may take alone (shaded, its data so) */
+static const char *mode_names[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation", "bands", "contours",
+                                   "bands+contours", "continuous+contours"};
 static const char *style_names[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
 static const char *cmap_names[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
 static const char *scale_names[] = {"linear", "log", "exp", "lab7", "lab13"};
@@ -229,7 +232,8 @@ static void do_choice(view_app *a, GSimpleAction *act, GVariant *v)
         if (!strcmp(name, "mode")) {
             const char *cur = current_name(a);
             thx_picture_look *l = cur ? look_of(w, cur) : NULL;
-            if (l) l->mode = (thx_draw_mode)k;
+            if (l && k <= THX_DRAW_ORIENTATION) { l->mode = (thx_draw_mode)k; l->style = -1; }
+            else if (l) { l->mode = THX_DRAW_GOURAUD; l->style = k - THX_DRAW_ORIENTATION; }
         } else if (!strcmp(name, "style")) w->o.style = k;
         else if (!strcmp(name, "colormap")) w->o.cmap = k;
         else if (!strcmp(name, "scale")) w->o.model = k;

@@ -158,5 +158,6 @@ void view_plot_attach(view_win *w);
 void view_plot_update(view_app *a);
 thx_status view_plot_export(view_app *a, const char *path);
 int view_pick_at(view_win *w, double x, double y);
+void view_pick_prepare(view_app *a);
 void view_pick_quiet(view_win *w, double x, double y);
 #endif

@@ -134,6 +134,24 @@ static int ray_at(view_win *w, double x, double y, double origin[3], double dir[
 
 static int pick(view_win *w, double x, double y, int quiet);
 
+/* The pick index, built once the first picture is up (so the first click answers as fast as the
+ * others) and again after an edit. */
+static gboolean build_index(gpointer user)
+{
+    view_app *a = user;
+    const thx_model *m = a->d.m;
+    const thx_surface *surf[THX_PICTURE_SURFACES];
+    size_t n = m->n_surfaces < THX_PICTURE_SURFACES ? m->n_surfaces : THX_PICTURE_SURFACES;
+    for (size_t s = 0; s < n; s++) surf[s] = m->surf[s];
+    if (!a->d.pick && thx_pick_index_create(a->ctx, surf, n, &a->d.pick) != THX_OK) view_report(a, "pick index");
+    return G_SOURCE_REMOVE;
+}
+
+void view_pick_prepare(view_app *a)
+{
+    if (!a->d.pick) g_idle_add(build_index, a);
+}
+
 int view_pick_at(view_win *w, double x, double y)
 {
     return pick(w, x, y, 0);

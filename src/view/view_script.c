@@ -144,7 +144,8 @@ void view_script_start(view_app *a)
 static void write_look(FILE *f, const thx_picture_look *l)
 {
     static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
-    fprintf(f, "--surface %s=%s", l->name, modes[l->mode]);
+    static const char *styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
+    fprintf(f, "--surface %s=%s", l->name, l->style >= 0 ? styles[l->style] : modes[l->mode]);
     if (l->opacity >= 0 || l->have_color) fprintf(f, ":%.3g", l->opacity >= 0 ? l->opacity : 1.0);
     if (l->have_color)
         fprintf(f, ":#%02x%02x%02x", (int)lround(l->color[0] * 255), (int)lround(l->color[1] * 255), (int)lround(l->color[2] * 255));

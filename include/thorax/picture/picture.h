@@ -31,10 +31,12 @@ typedef enum {
     THX_SCOPE_SURFACES   /* this frame of all surfaces with data */
 } thx_scope;
 
-/* One surface's look (--surface NAME=MODE[:OPACITY[:#RRGGBB]]). */
+/* One surface's look (--surface NAME=MODE[:OPACITY[:#RRGGBB]]; MODE also a data style: bands,
+ * contours, ... draw the surface's data so, shaded). */
 typedef struct {
     char name[64];
     thx_draw_mode mode;
+    int style;          /* a thx_data_style for this surface's data, or -1: the picture's */
     float opacity;      /* < 0: the default */
     int have_color;
     float color[3];
