@@ -54,6 +54,7 @@ static thx_status sync_model(view_app *a)
         m->surf[k] = c;
     }
     thx_picture_geometry_changed(&a->d);
+    view_pick_prepare(a);
     int drop = 0;
     for (int k = 0; k < a->n_traces; k++)
         if (!a->d.series[a->traces[k].surface] || a->traces[k].node >= m->surf[a->traces[k].surface]->n_nodes) drop = 1;

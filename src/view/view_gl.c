@@ -267,7 +267,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     w->ms_sum += w->draw_ms;
     w->ms_n++;
     w->drawn++;
-    if (w->drawn == 1 || !a->d.pick) view_pick_prepare(a);
+    if (w->drawn == 1) view_pick_prepare(a);
     return TRUE;
 }
 
