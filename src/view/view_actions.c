@@ -438,6 +438,62 @@ static void do_data_next(view_app *a, GSimpleAction *act, GVariant *v)
     view_plot_update(a);
 }
 
+/* Scale groups and slaves (the picture's --scale-group and --slave): "A,B,..." / "NAME=MASTER",
+ * "all" (every surface with data in one group; scale-group only), or "none" (clears them). */
+static void do_scale_rel(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act)), *spec = g_variant_get_string(v, NULL);
+    int group = !strcmp(name, "scale-group");
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", spec);
+    if (group && !strcmp(spec, "all")) {
+        size_t len = 0;
+        buf[0] = '\0';
+        for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES && len < sizeof buf - 70; s++)
+            if (a->d.series[s]) len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%s", len ? "," : "", a->d.m->surf[s]->name);
+    }
+    for (int k = 0; k < a->n_win; k++) {
+        view_win *w = a->win[k];
+        thx_picture_opts o = w->o;
+        if (!strcmp(spec, "none")) {
+            if (group) o.n_groups = 0;
+            else o.n_slaves = 0;
+        } else if ((group ? o.n_groups : o.n_slaves) >= THX_PICTURE_MAX) {
+            view_set_info(a, "%s: at most %d", name, THX_PICTURE_MAX);
+            a->status = 1;
+            return;
+        } else if (group) {
+            snprintf(w->group_buf[o.n_groups], sizeof w->group_buf[0], "%s", buf);
+            o.groups[o.n_groups] = w->group_buf[o.n_groups];
+            o.n_groups++;
+        } else {
+            snprintf(w->slave_buf[o.n_slaves], sizeof w->slave_buf[0], "%s", buf);
+            o.slaves[o.n_slaves] = w->slave_buf[o.n_slaves];
+            o.n_slaves++;
+        }
+        /* the names checked as the command line's are */
+        for (int j = 0; j < o.n_groups + o.n_slaves; j++) {
+            const char *sp = j < o.n_groups ? o.groups[j] : o.slaves[j - o.n_groups];
+            if (j >= o.n_groups && (!strchr(sp, '=') || strchr(sp, '=') == sp)) {
+                view_set_info(a, "slave '%s': give NAME=MASTER", sp);
+                a->status = 1;
+                return;
+            }
+            for (const char *p = sp; *p;) {
+                size_t n = strcspn(p, ",=");
+                int found = 0;
+                for (size_t s = 0; s < a->d.m->n_surfaces; s++)
+                    found |= strlen(a->d.m->surf[s]->name) == n && !strncmp(a->d.m->surf[s]->name, p, n);
+                if (!found) { view_set_info(a, "%s '%s': no surface '%.*s'", name, sp, (int)n, p); a->status = 1; return; }
+                p += n + (p[n] != '\0');
+            }
+        }
+        w->o = o;
+    }
+    view_set_info(a, "%s %s", name, spec);
+    view_redraw_all(a);
+}
+
 /* The current surface's activation-time map ("T0:T1" or "" for the whole series), as a new data set. */
 static void do_activation(view_app *a, GSimpleAction *act, GVariant *v)
 {
@@ -655,6 +711,8 @@ static const action_def ACTIONS[] = {
     {"levels-more", NULL, NULL, do_levels, {"plus", "equal", "KP_Add"}, NULL, "more shades / contours"},
     {"levels-fewer", NULL, NULL, do_levels, {"minus", "KP_Subtract"}, NULL, "fewer shades / contours"},
     {"data-next", NULL, NULL, do_data_next, {"d"}, NULL, "the surface's next data set"},
+    {"scale-group", "s", NULL, do_scale_rel, {"g"}, "'all'", "surfaces sharing one scale: A,B,..., all (key g), or none"},
+    {"slave", "s", NULL, do_scale_rel, {NULL}, NULL, "a surface drawn with another's scale: NAME=MASTER, or none"},
     {"activation", "s", NULL, do_activation, {"a"}, "''", "the surface's activation-time map (T0:T1, or the whole series)"},
     {"extrema", NULL, "b", do_toggle, {"x"}, NULL, "marks at the largest and smallest values"},
     {"node-labels", "s", NULL, do_node_labels, {"n"}, "'index'", "label the surface's nodes: index, channel, value or none"},
@@ -908,6 +966,8 @@ GMenuModel *view_menu(void)
     g_menu_append_submenu(data, "Mapping", G_MENU_MODEL(choice_menu("mapping", mapping_names, N_OF(mapping_names))));
     add(data, "More levels", "app.levels-more");
     add(data, "Fewer levels", "app.levels-fewer");
+    add(data, "One scale for every surface with data", "app.scale-group::all");
+    add(data, "Scales apart again", "app.scale-group::none");
     add(data, "Next data set", "app.data-next");
     add(data, "Activation times", "app.activation::");
     add(data, "Extrema", "app.extrema");

@@ -32,6 +32,8 @@ typedef struct view_win {
     thx_picture_opts o;        /* this window's picture; o.only[] = its surfaces (none: all) */
     char only_buf[THX_PICTURE_MAX][64];
     char label_buf[THX_PICTURE_MAX][80]; /* node-labels entries set by the action */
+    char group_buf[THX_PICTURE_MAX][256]; /* scale-group and slave entries set by the actions */
+    char slave_buf[THX_PICTURE_MAX][140];
     thx_renderer *r;           /* in the GL area's context */
     thx_font *font;
     int font_px;
