@@ -157,6 +157,7 @@ def check_headers(root, files, defs):
 def check_calls(root, build, defs):
     bad = []
     objdirs = [(os.path.join(build, "CMakeFiles", "thorax.dir", "src"), None),
+               (os.path.join(build, "CMakeFiles", "thorax_view.dir", "src"), "view"),
                (os.path.join(build, "CMakeFiles", "thorax_cli.dir", "src"), "cli")]
     for objdir, force in objdirs:
         for mod, obj in objects(objdir, root):

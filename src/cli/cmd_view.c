@@ -12,6 +12,33 @@
 #include "thorax/core/fileio.h"
 #include "thorax/view/view.h"
 
+#ifndef THORAX_VIEW_PROGRAM
+#include <errno.h>
+#include <limits.h>
+#include <unistd.h>
+
+/* Runs thorax-view (the program beside this one, linked with GTK) with this command line. Returns
+ * only on failure: 1, after saying why. */
+static int cli_exec_viewer(int argc, char **argv)
+{
+    char self[PATH_MAX], path[PATH_MAX + 32];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0) { fprintf(stderr, "thorax view: cannot find this program's directory: %s\n", strerror(errno)); return 1; }
+    self[n] = '\0';
+    char *slash = strrchr(self, '/');
+    if (slash) *slash = '\0';
+    snprintf(path, sizeof path, "%s/thorax-view", self);
+    char **args = calloc((size_t)argc + 2, sizeof *args);
+    if (!args) return 1;
+    args[0] = path;
+    for (int k = 0; k < argc; k++) args[k + 1] = argv[k]; /* argv[0] is "view" */
+    execv(path, args);
+    fprintf(stderr, "thorax view: cannot run the viewer %s: %s (it is built beside thorax: make)\n", path, strerror(errno));
+    free(args);
+    return 1;
+}
+#endif
+
 typedef struct {
     ropts r;
     thx_view_opts v;
@@ -216,9 +243,14 @@ int cmd_view(int argc, char **argv)
     o.v.verbose = o.r.verbose;
     o.v.option_fn = live_option;
     o.v.command_line = cli_command_line();
+#ifdef THORAX_VIEW_PROGRAM
     thx_ctx *ctx = cli_ctx(o.r.verbose);
     int rc = thx_view_run(ctx, &o.v);
     thx_ctx_destroy(&ctx);
+#else
+    /* the options are good: the viewer program (beside this one) takes the same command line */
+    int rc = cli_exec_viewer(argc, argv);
+#endif
     free(args);
     free(st.words);
     free(st.text);

@@ -137,6 +137,15 @@ static int manual(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+#ifdef THORAX_VIEW_PROGRAM
+    /* thorax-view: the viewer alone, started by `thorax view ...` as `thorax-view view ...` */
+    cli_set_command_line(argc, argv);
+    if (argc < 2 || strcmp(argv[1], "view")) {
+        fprintf(stderr, "thorax-view: run it as thorax view ... (see thorax help view)\n");
+        return 2;
+    }
+    return cmd_view(argc - 1, argv + 1);
+#endif
     cli_set_command_line(argc, argv);
     if (argc < 2) {
         usage(stderr);

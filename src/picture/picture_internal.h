@@ -6,4 +6,7 @@
 /* Node labels and extrema marks over img (marks.c), for a single-panel picture drawn at img's size. */
 thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font, int frame,
                          thx_image *img);
+/* The views' frame (o->ax, o->sg) from --up/--front over the model's frame; refuses a model with
+ * no frame where a named view or clip side needs one (picture_frame.c). */
+thx_status picture_view_frame(thx_ctx *ctx, thx_picture_opts *o, const thx_picture_data *d);
 #endif

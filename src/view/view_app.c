@@ -12,17 +12,6 @@
 #include "thorax/geom/pick.h"
 #include "view/view_internal.h"
 
-void thx_view_opts_default(thx_view_opts *o)
-{
-    memset(o, 0, sizeof *o);
-    thx_picture_opts_default(&o->pic);
-    o->win_w = 800;
-    o->win_h = 800;
-    o->rate = 25;
-    o->loop = 1;
-    o->step = 1;
-}
-
 view_win *view_active(view_app *a)
 {
     GtkWindow *gw = gtk_application_get_active_window(a->gapp);

@@ -33,7 +33,7 @@ typedef struct view_win {
     char only_buf[THX_PICTURE_MAX][64];
     char label_buf[THX_PICTURE_MAX][80]; /* node-labels entries set by the action */
     char group_buf[THX_PICTURE_MAX][256]; /* scale-group and slave entries set by the actions */
-    char slave_buf[THX_PICTURE_MAX][140];
+    char slave_buf[THX_PICTURE_MAX][256];
     thx_renderer *r;           /* in the GL area's context */
     thx_font *font;
     int font_px;

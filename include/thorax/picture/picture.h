@@ -130,7 +130,7 @@ typedef struct {
                                                                   its true range whatever the mapping */
     struct thx_pick_index *pick; /* for the marks' visibility, built at the first use (thorax/geom/pick.h) */
     thx_landmark_meshes *marks[THX_PICTURE_MAX]; /* the meshes of o->landmarks[k] */
-    char model_dir[1024];     /* the model directory read ("" for surface files) */
+    char model_dir[4096];     /* the model directory read ("" for surface files) */
     int n_marks;
     thx_series *ecg;          /* 12-lead (trace) */
     thx_series *currents;     /* currents_node, for arrows */

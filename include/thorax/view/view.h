@@ -9,6 +9,8 @@
  */
 #ifndef THORAX_VIEW_H
 #define THORAX_VIEW_H
+#include <string.h>
+
 #include "thorax/picture/picture.h"
 #ifdef __cplusplus
 extern "C" {
@@ -43,7 +45,17 @@ typedef struct {
     int verbose;
 } thx_view_opts;
 
-void thx_view_opts_default(thx_view_opts *o);
+/* The defaults: the picture's, 800x800, 25 frames a second, looping, one frame a step. */
+static inline void thx_view_opts_default(thx_view_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    thx_picture_opts_default(&o->pic);
+    o->win_w = 800;
+    o->win_h = 800;
+    o->rate = 25;
+    o->loop = 1;
+    o->step = 1;
+}
 
 /* Loads the data (thx_picture_load), opens the windows and runs until the last window closes or a
  * `quit` action. Returns the process exit status: 0, or 1 after an error (reported through ctx's

@@ -1,0 +1,439 @@
+/*
+ * A picture's data (thorax/picture/picture.h): the model or the surface files, a solution's
+ * series, the data sets given, recording channels, the trace, the currents, landmarks and
+ * activation maps — read once, checked against the model, owned by thx_picture_data.
+ */
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "thorax/core/fileio.h"
+#include "thorax/import/import.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/io/series_file.h"
+#include "thorax/geom/landmark_mesh.h"
+#include "thorax/geom/pick.h"
+#include "thorax/io/landmarks_file.h"
+#include "thorax/leads/activation.h"
+#include "picture/picture_internal.h"
+
+void thx_picture_data_free(thx_picture_data *d)
+{
+    for (int s = 0; s < THX_PICTURE_SURFACES; s++) {
+        int owned = 0;
+        for (int k = 0; k < d->n_sets[s]; k++) {
+            owned |= d->sets[s][k] == d->series[s];
+            thx_series_destroy(&d->sets[s][k]);
+        }
+        if (!owned) thx_series_destroy(&d->series[s]);
+        d->series[s] = NULL;
+        d->n_sets[s] = 0;
+        free(d->channel[s]);
+        d->channel[s] = NULL;
+    }
+    thx_pick_index_destroy(&d->pick);
+    for (int k = 0; k < d->n_marks; k++) thx_landmark_meshes_destroy(&d->marks[k]);
+    d->n_marks = 0;
+    thx_series_destroy(&d->ecg);
+    thx_series_destroy(&d->currents);
+    thx_series_destroy(&d->volume);
+    thx_model_destroy(&d->m);
+}
+
+static int surface_by_role(const thx_model *m, thx_role role)
+{
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        if (m->surf[s]->role == role) return (int)s;
+    return -1;
+}
+
+static int surface_by_name(const thx_model *m, const char *name)
+{
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        if (!strcmp(m->surf[s]->name, name)) return (int)s;
+    return -1;
+}
+
+static const char *lead_names[12] = {"I", "II", "III", "aVR", "aVL", "aVF", "V1", "V2", "V3", "V4", "V5", "V6"};
+
+static int lead_index(const char *name)
+{
+    for (int k = 0; k < 12; k++)
+        if (!strcmp(name, lead_names[k])) return k;
+    return -1;
+}
+
+/* Every surface named by --only and --surface exists in the model. */
+static thx_status check_names(thx_ctx *ctx, const thx_picture_opts *o, const thx_model *m)
+{
+    char list[512] = "";
+    size_t len = 0;
+    for (size_t s = 0; s < m->n_surfaces && len < sizeof list - 80; s++)
+        len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", s ? ", " : "", m->surf[s]->name);
+    for (int k = 0; k < o->n_only + o->n_look + o->n_whole; k++) {
+        const char *name = k < o->n_only ? o->only[k] : k < o->n_only + o->n_look ? o->look[k - o->n_only].name
+                                                                                   : o->whole[k - o->n_only - o->n_look];
+        if (surface_by_name(m, name) < 0)
+            return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
+                             k < o->n_only ? "--only" : k < o->n_only + o->n_look ? "--surface" : "--no-clip", name, list);
+    }
+    /* the surfaces of --scale-group A,B and --slave A=B */
+    for (int k = 0; k < o->n_groups + o->n_slaves; k++) {
+        const char *spec = k < o->n_groups ? o->groups[k] : o->slaves[k - o->n_groups];
+        const char *what = k < o->n_groups ? "--scale-group" : "--slave";
+        if (k >= o->n_groups && (!strchr(spec, '=') || strchr(spec, '=') == spec))
+            return thx_error(ctx, THX_EINPUT, "--slave '%s': give NAME=MASTER", spec);
+        for (const char *p = spec; *p;) {
+            const char *c = p + strcspn(p, ",=");
+            char name[64];
+            snprintf(name, sizeof name, "%.*s", (int)(c - p < 63 ? c - p : 63), p);
+            if (surface_by_name(m, name) < 0)
+                return thx_error(ctx, THX_EINPUT, "%s '%s': the model has no surface '%s' (it has %s)", what, spec, name, list);
+            p = *c ? c + 1 : c;
+        }
+    }
+    return THX_OK;
+}
+
+/* --trace: a lead of the solution's 12-lead ECG (I .. V6), or SURFACE:NODE / NODE (1-based) of a
+   surface's data (without a surface name: the body surface's data, else the only data there is). */
+static thx_status resolve_trace(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
+{
+    if (!o->trace) return THX_OK;
+    int lead = lead_index(o->trace);
+    if (lead >= 0) {
+        if (!d->ecg)
+            return thx_error(ctx, THX_EINPUT, "--trace %s: a lead needs --solution DIR with an ecg12 file (run thorax leads)", o->trace);
+        if ((size_t)lead >= d->ecg->n_rows)
+            return thx_error(ctx, THX_EINPUT, "--trace %s: the ECG file has %zu rows", o->trace, d->ecg->n_rows);
+        d->trace = d->ecg;
+        d->trace_row = (size_t)lead;
+        snprintf(d->trace_label, sizeof d->trace_label, "%s", o->trace);
+        return THX_OK;
+    }
+    char name[64] = "";
+    const char *num = o->trace, *colon = strrchr(o->trace, ':');
+    if (colon) {
+        snprintf(name, sizeof name, "%.*s", (int)(colon - o->trace < 63 ? colon - o->trace : 63), o->trace);
+        num = colon + 1;
+    }
+    char *end = NULL;
+    long node = strtol(num, &end, 10);
+    if (!*num || *end || node < 1)
+        return thx_error(ctx, THX_EINPUT, "--trace '%s': give a lead (I, II, III, aVR, aVL, aVF, V1..V6) or SURFACE:NODE (1-based)", o->trace);
+    int s = -1;
+    if (name[0]) {
+        s = surface_by_name(d->m, name);
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': the model has no surface '%s'", o->trace, name);
+    } else {
+        for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++)
+            if (d->series[k] && (s < 0 || d->m->surf[k]->role == THX_ROLE_OUTER)) s = (int)k;
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--trace '%s': there are no data to trace (give --solution or --data)", o->trace);
+    }
+    const thx_series *x = d->series[s];
+    if (!x) return thx_error(ctx, THX_EINPUT, "--trace '%s': surface '%s' has no data", o->trace, d->m->surf[s]->name);
+    if ((size_t)node > x->n_rows)
+        return thx_error(ctx, THX_EINPUT, "--trace '%s': surface '%s' has %zu nodes", o->trace, d->m->surf[s]->name, x->n_rows);
+    d->trace = x;
+    d->trace_row = (size_t)node - 1;
+    snprintf(d->trace_label, sizeof d->trace_label, "%s node %ld", d->m->surf[s]->name, node);
+    return THX_OK;
+}
+
+/* A model of the surface files given instead of a model directory, read as `thorax import` reads
+ * them but drawn whatever their checks say (a measured sock is an open surface): a failed check
+ * is a warning. Each surface is named after its file. */
+static thx_status surfaces_from_files(thx_ctx *ctx, const thx_picture_opts *o, thx_model **out)
+{
+    thx_model *m = NULL;
+    THX_CHECK(thx_model_create(ctx, &m));
+    thx_status st = THX_OK;
+    for (int k = 0; k < o->n_files && st == THX_OK; k++) {
+        char name[64];
+        const char *base = strrchr(o->files[k], '/');
+        base = base ? base + 1 : o->files[k];
+        snprintf(name, sizeof name, "%s", base);
+        char *dot = strrchr(name, '.');
+        if (dot && dot != name) *dot = '\0';
+        thx_import_opts io;
+        thx_import_opts_default(&io);
+        io.force = 1;
+        thx_import_info info;
+        memset(&info, 0, sizeof info);
+        thx_surface *sf = NULL;
+        st = thx_surface_import(ctx, o->files[k], NULL, name, THX_ROLE_OTHER, &io, &sf, &info);
+        if (st == THX_OK && !info.report.ok)
+            thx_log(ctx, THX_LOG_WARN, "%s: drawn as it is, although %s", o->files[k],
+                    info.report.n_reasons ? info.report.reasons[0] : "it fails 'thorax check'");
+        thx_import_info_free(&info);
+        if (st == THX_OK) st = thx_model_add_surface(ctx, m, &sf);
+        thx_surface_destroy(&sf);
+    }
+    if (st != THX_OK) { thx_model_destroy(&m); return st; }
+    *out = m;
+    return THX_OK;
+}
+
+/* map3d .channels: "N leads", then N lines "lead channel" (1-based). The series' rows are the
+ * recording's channels; the result has one row per lead (NaN for a lead the file leaves out). */
+static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp, int **chan_out)
+{
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    thx_series *in = *sp, *outs = NULL;
+    int *chan = NULL;
+    thx_status st = THX_OK;
+    char *p = text, *end;
+    size_t line = 1;
+    long n = strtol(p, &end, 10);
+    if (end == p || n < 1 || n > 10000000) {
+        st = thx_error(ctx, THX_EINPUT, "%s:1: expected 'N leads' (the number of leads first)", path);
+        goto done;
+    }
+    p = strchr(end, '\n');
+    p = p ? p + 1 : end + strlen(end);
+    line = 2;
+    st = thx_series_create(ctx, (size_t)n, in->n_frames, &outs);
+    if (st != THX_OK) goto done;
+    chan = calloc((size_t)n, sizeof *chan);
+    if (!chan) { st = thx_error(ctx, THX_ENOMEM, "out of memory (%ld channels)", n); goto done; }
+    for (size_t k = 0; k < (size_t)n * in->n_frames; k++) outs->v[k] = NAN;
+    memcpy(outs->time, in->time, in->n_frames * sizeof *in->time);
+    snprintf(outs->unit, sizeof outs->unit, "%s", in->unit);
+    snprintf(outs->time_unit, sizeof outs->time_unit, "%s", in->time_unit);
+    snprintf(outs->label, sizeof outs->label, "%.100s (by channel)", in->label);
+    for (long k = 0; k < n; k++, line++) {
+        while (*p == '\n' || *p == '\r') { if (*p == '\n') line++; p++; }
+        char *e1, *e2;
+        long lead = strtol(p, &e1, 10), ch = strtol(e1, &e2, 10);
+        if (e1 == p || e2 == e1) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: expected 'lead channel' (%ld of %ld leads read)", path, line, k, n);
+            goto done;
+        }
+        if (lead < 1 || lead > n) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: lead %ld is not in 1..%ld", path, line, lead, n);
+            goto done;
+        }
+        if (ch < 1 || (size_t)ch > in->n_rows) {
+            st = thx_error(ctx, THX_EINPUT, "%s:%zu: channel %ld is not in 1..%zu (the recording's rows)", path, line, ch, in->n_rows);
+            goto done;
+        }
+        for (size_t f = 0; f < in->n_frames; f++)
+            outs->v[f * (size_t)n + (size_t)(lead - 1)] = in->v[f * in->n_rows + (size_t)(ch - 1)];
+        chan[lead - 1] = (int)ch;
+        p = strchr(e2, '\n');
+        p = p ? p + 1 : e2 + strlen(e2);
+    }
+done:
+    free(text);
+    if (st != THX_OK) { thx_series_destroy(&outs); free(chan); return st; }
+    thx_series_destroy(sp);
+    *sp = outs;
+    *chan_out = chan;
+    return THX_OK;
+}
+
+static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
+{
+    memset(d, 0, sizeof *d);
+    char model_dir[PATH_MAX] = "";
+    char path[PATH_MAX + 64];
+    cJSON *j = NULL;
+    if (o->solution) {
+        char *text = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "%s/solution.json", o->solution);
+        THX_CHECK(thx_read_file(ctx, path, &text, &len));
+        j = cJSON_Parse(text);
+        free(text);
+        cJSON *mo = cJSON_GetObjectItem(j, "model");
+        if (!j || !cJSON_IsString(mo)) {
+            cJSON_Delete(j);
+            return thx_error(ctx, THX_EINPUT, "%s: not a thorax solution (no \"model\")", path);
+        }
+        snprintf(model_dir, sizeof model_dir, "%s", mo->valuestring);
+    }
+    if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
+    thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m) : thx_model_read(ctx, model_dir, &d->m);
+    if (!o->n_files) snprintf(d->model_dir, sizeof d->model_dir, "%s", model_dir);
+    if (st == THX_OK) st = check_names(ctx, o, d->m);
+    if (st != THX_OK) { cJSON_Delete(j); return st; }
+    if (j) {
+        cJSON *files = cJSON_GetObjectItem(j, "files"), *epi = cJSON_GetObjectItem(j, "epicardial");
+        cJSON *to = files ? cJSON_GetObjectItem(files, "torso") : NULL;
+        cJSON *cn = files ? cJSON_GetObjectItem(files, "currents_node") : NULL;
+        int outer = surface_by_role(d->m, THX_ROLE_OUTER), heart = surface_by_role(d->m, THX_ROLE_HEART);
+        if (cJSON_IsString(to) && outer >= 0) {
+            snprintf(path, sizeof path, "%s/%s", o->solution, to->valuestring);
+            st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->series[outer]);
+        }
+        if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
+            st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
+        if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
+            snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
+            st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
+        }
+        if (st == THX_OK && o->trace && lead_index(o->trace) >= 0) {
+            const char *ext[3] = {"txt", "raw", "mat"};
+            for (int k = 0; k < 3 && !d->ecg; k++) {
+                snprintf(path, sizeof path, "%s/ecg12.%s", o->solution, ext[k]);
+                if (access(path, R_OK) == 0) st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->ecg);
+            }
+            if (st == THX_OK && !d->ecg)
+                st = thx_error(ctx, THX_EINPUT, "--trace: %s has no ecg12 file (run thorax leads first)", o->solution);
+        }
+        cJSON_Delete(j);
+        if (st != THX_OK) return st;
+    }
+    /* the solution's series are each surface's first data set */
+    for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++)
+        if (d->series[k]) { d->sets[k][0] = d->series[k]; d->n_sets[k] = 1; }
+    for (int k = 0; k < o->n_data; k++) {
+        const char *dpath = o->data[k], *on = k < o->n_data_surface ? o->data_surface[k] : NULL;
+        thx_series *s = NULL;
+        int *chan = NULL;
+        THX_CHECK(thx_series_read(ctx, dpath, THX_SERIES_AUTO, &s));
+        if (o->channels) {
+            thx_status sc = apply_channels(ctx, o->channels, &s, &chan);
+            if (sc != THX_OK) { thx_series_destroy(&s); return sc; }
+        }
+        int target = -1;
+        thx_status bad = THX_OK;
+        if (on) {
+            target = surface_by_name(d->m, on);
+            if (target < 0) bad = thx_error(ctx, THX_EINPUT, "--data-surface: no surface '%s'", on);
+        } else {
+            int n = 0;
+            for (size_t q = 0; q < d->m->n_surfaces; q++)
+                if (d->m->surf[q]->n_nodes == s->n_rows) { target = (int)q; n++; }
+            if (n != 1)
+                bad = thx_error(ctx, THX_EINPUT, "%s: %zu rows match %s (give --data-surface NAME)", dpath, s->n_rows,
+                                n ? "several surfaces" : "no surface's node count");
+        }
+        if (bad == THX_OK && d->m->surf[target]->n_nodes != s->n_rows)
+            bad = thx_error(ctx, THX_EINPUT, "%s: %zu rows, surface '%s' has %zu nodes", dpath, s->n_rows,
+                            d->m->surf[target]->name, d->m->surf[target]->n_nodes);
+        if (bad == THX_OK && target >= THX_PICTURE_SURFACES)
+            bad = thx_error(ctx, THX_EINPUT, "%s: data on surface %d: at most %d surfaces carry data", dpath, target + 1, THX_PICTURE_SURFACES);
+        if (bad == THX_OK && d->n_sets[target] >= THX_PICTURE_SETS)
+            bad = thx_error(ctx, THX_EINPUT, "%s: surface '%s' has %d data sets already (at most %d)", dpath,
+                            d->m->surf[target]->name, d->n_sets[target], THX_PICTURE_SETS);
+        if (bad != THX_OK) { thx_series_destroy(&s); free(chan); return bad; }
+        d->sets[target][d->n_sets[target]++] = s;
+        d->active[target] = d->n_sets[target] - 1;
+        d->series[target] = s;
+        d->sranged[target] = 0;
+        if (chan) { free(d->channel[target]); d->channel[target] = chan; }
+    }
+    for (int k = 0; k < o->n_activation; k++) {
+        char name[64];
+        double t0 = NAN, t1 = NAN;
+        const char *colon = strchr(o->activation[k], ':');
+        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - o->activation[k] : (long)strlen(o->activation[k])), o->activation[k]);
+        if (colon && (sscanf(colon + 1, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1)))
+            return thx_error(ctx, THX_EINPUT, "--activation '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", o->activation[k]);
+        int s = surface_by_name(d->m, name);
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "--activation '%s': the model has no surface '%s'", o->activation[k], name);
+        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "--activation '%s': surface '%s' has no data", o->activation[k], name);
+        THX_CHECK(thx_picture_add_activation(ctx, d, s, t0, t1));
+    }
+    for (int k = 0; k < o->n_landmarks; k++) {
+        thx_landmarks *lm = NULL;
+        THX_CHECK(thx_landmarks_read(ctx, o->landmarks[k], &lm));
+        thx_status sl = thx_landmarks_mesh(ctx, lm, NULL, &d->marks[d->n_marks]);
+        thx_landmarks_destroy(&lm);
+        if (sl != THX_OK) return sl;
+        d->n_marks++;
+    }
+    THX_CHECK(resolve_trace(ctx, o, d));
+    if (o->arrows) {
+        const thx_volume *v = d->m->volume;
+        if (!o->solution || !d->currents)
+            return thx_error(ctx, THX_EINPUT, "--arrows: needs --solution DIR with currents (thorax forward ... --currents LIST)");
+        if (!v) return thx_error(ctx, THX_EINPUT, "--arrows: the model has no volume mesh (thorax mesh)");
+        if (d->currents->n_rows != 3 * v->n_nodes)
+            return thx_error(ctx, THX_EINPUT, "--arrows: the currents have %zu rows, the volume mesh has %zu nodes (3 rows each)",
+                             d->currents->n_rows, v->n_nodes);
+        if (o->arrow_region) {
+            int r = -1;
+            char list[512] = "";
+            size_t len = 0;
+            for (size_t k = 0; k < v->n_regions; k++) {
+                if (!strcmp(v->regions[k].name, o->arrow_region)) r = (int)k;
+                if (len < sizeof list - 80) len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", k ? ", " : "", v->regions[k].name);
+            }
+            if (r < 0) return thx_error(ctx, THX_EINPUT, "--arrow-region: the volume mesh has no region '%s' (it has %s)", o->arrow_region, list);
+        }
+    }
+    for (size_t s = 0; s < d->m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
+        if (o->check_frame && d->series[s] && !d->map[s][d->active[s]] && (size_t)o->frame >= d->series[s]->n_frames)
+            return thx_error(ctx, THX_EINPUT, "--frame %d: the data on '%s' has %zu frames", o->frame + 1, d->m->surf[s]->name,
+                             d->series[s]->n_frames);
+    return THX_OK;
+}
+
+thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || (size_t)s >= d->m->n_surfaces || !d->series[s])
+        return thx_error(ctx, THX_EINPUT, "activation: surface %d has no data", s + 1);
+    if (d->n_sets[s] >= THX_PICTURE_SETS)
+        return thx_error(ctx, THX_EINPUT, "activation: surface '%s' has %d data sets already (at most %d)", d->m->surf[s]->name,
+                         d->n_sets[s], THX_PICTURE_SETS);
+    thx_activation_opts ao;
+    thx_activation_opts_default(&ao);
+    ao.t0 = t0;
+    ao.t1 = t1;
+    thx_series *map = NULL;
+    THX_CHECK(thx_activation_times(ctx, d->series[s], &ao, &map));
+    int k = d->n_sets[s]++;
+    d->sets[s][k] = map;
+    d->map[s][k] = 1;
+    thx_picture_set_active(d, s, k);
+    return THX_OK;
+}
+
+int thx_picture_set_active(thx_picture_data *d, int s, int k)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s]) return -1;
+    d->active[s] = k;
+    d->series[s] = d->sets[s][k];
+    d->sranged[s] = 0;
+    return 0;
+}
+
+void thx_picture_geometry_changed(thx_picture_data *d)
+{
+    thx_pick_index_destroy(&d->pick);
+}
+
+thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
+{
+    THX_CHECK(load_data(ctx, o, d));
+    return picture_view_frame(ctx, o, d);
+}
+
+size_t thx_picture_n_frames(const thx_picture_data *d)
+{
+    const thx_series *any = NULL;
+    for (size_t s = 0; d->m && s < d->m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
+        if (d->series[s] && (!any || d->m->surf[s]->role == THX_ROLE_OUTER)) any = d->series[s];
+    return any ? any->n_frames : 0;
+}
+
+void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3])
+{
+    const thx_model *m = d->m;
+    for (int k = 0; k < 3; k++) { lo[k] = INFINITY; hi[k] = -INFINITY; }
+    for (size_t s = 0; s < m->n_surfaces; s++)
+        for (size_t i = 0; i < m->surf[s]->n_nodes; i++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], m->surf[s]->xyz[3 * i + k]);
+                hi[k] = fmax(hi[k], m->surf[s]->xyz[3 * i + k]);
+            }
+}
+
