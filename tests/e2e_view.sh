@@ -174,7 +174,8 @@ f=$(sed -n 's/^--frame //p' played.txt)
 [ "$f" -gt 20 ] || fail "playing for 0.6 s at 200 frames/s got from frame 10 to $f only"
 echo "played: frame 10 -> $f in 0.6 s"
 
-# 5. record-all: every frame drawn and an MP4
+# 5. record-all: every frame drawn and an MP4 (the sanitized run, THORAX_QUICK, skips it: 300 PNGs)
+if [ -z "${THORAX_QUICK:-}" ]; then
 cat > s4.txt <<EOF
 --solution sol
 --size 160x160
@@ -185,6 +186,7 @@ EOF
 [ "$(ls rec/frame_*.png | wc -l)" -eq 300 ] || fail "record-all: $(ls rec | wc -l) files"
 n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 rec/animation.mp4)
 [ "$n" = 300 ] || fail "record-all: the movie has $n frames"
+fi
 
 # 5b. manual editing: scripted edits with the check's verdict after each, undo, save; the saved
 #     model replays from its contours and log byte for byte; edit then undo saves the model as it
@@ -267,7 +269,7 @@ echo "inside: all passed"
 INNER
 THORAX="$THORAX" xvfb-run -a -s "-screen 0 1600x1200x24" bash inside.sh 2>&1 | grep -v "dbus\|session bus\|^$" || true
 grep -q . keys.out 2>/dev/null || fail "the display part did not run"
-[ -s render2.png ] && [ -s rec/animation.mp4 ] && [ -s bad4.err ] || fail "the display part stopped early (see above)"
+[ -s render2.png ] && { [ -n "${THORAX_QUICK:-}" ] || [ -s rec/animation.mp4 ]; } && [ -s bad4.err ] || fail "the display part stopped early (see above)"
 
 # no display at all: a clear message, exit 1
 if env -u DISPLAY -u WAYLAND_DISPLAY "$THORAX" view --solution sol > /dev/null 2> nodisp.err; then fail "no display: accepted"; fi
