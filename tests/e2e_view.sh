@@ -69,6 +69,35 @@ for i in $(seq 50); do kill -0 $VP 2>/dev/null || break; sleep 0.1; done
 kill -0 $VP 2>/dev/null && { kill $VP; fail "ctrl+q did not quit"; }
 wait $VP || fail "the viewer exited $?"
 
+# 1b. two windows (the torso and the heart, mixed with the lungs): the frame lock steps both; with
+#     the lock off (Shift+F) Right steps only the window it is typed in
+"${V[@]}" --size 340x300 --frame 100 --window torso,lung_l --window heart > win.out 2> win.err &
+VP=$!
+for i in $(seq 300); do [ "$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.1; done
+WS=($(xdotool search --onlyvisible --name "^thorax " 2>/dev/null))
+[ "${#WS[@]}" -ge 2 ] || { cat win.err; fail "two windows did not appear"; }
+W1=""; W2=""
+for w in "${WS[@]}"; do
+    case "$(xdotool getwindowname "$w")" in *"torso, lung_l"*) W1=$w ;; *"— heart —"*) W2=$w ;; esac
+done
+[ -n "$W1" ] && [ -n "$W2" ] || fail "the windows' titles: $(for w in "${WS[@]}"; do xdotool getwindowname "$w"; done)"
+sleep 0.5
+xdotool windowfocus --sync "$W1" 2>/dev/null || true
+xdotool key --window "$W1" Right
+for i in $(seq 50); do xdotool getwindowname "$W2" | grep -q "frame 101 of" && break; sleep 0.1; done
+xdotool getwindowname "$W2" | grep -q "frame 101 of" || fail "frame lock: the heart's window did not step: $(xdotool getwindowname "$W2")"
+xdotool key --window "$W1" shift+f
+sleep 0.3
+xdotool key --window "$W1" Right
+for i in $(seq 50); do xdotool getwindowname "$W1" | grep -q "frame 102 of" && break; sleep 0.1; done
+xdotool getwindowname "$W1" | grep -q "frame 102 of" || fail "unlocked: the torso's window did not step: $(xdotool getwindowname "$W1")"
+xdotool getwindowname "$W2" | grep -q "frame 101 of" || fail "unlocked: the heart's window stepped too: $(xdotool getwindowname "$W2")"
+echo "windows: $(xdotool getwindowname "$W1") | $(xdotool getwindowname "$W2")"
+xdotool key --window "$W1" ctrl+q
+for i in $(seq 50); do kill -0 $VP 2>/dev/null || break; sleep 0.1; done
+kill -0 $VP 2>/dev/null && { kill $VP; fail "ctrl+q did not quit the two windows"; }
+wait $VP || fail "the two-window viewer exited $?"
+
 # 2. a scripted session: frame, look, camera turned; screenshot, session saved, and the
 #    viewport-centre pick with its trace exported
 cat > s1.txt <<EOF
