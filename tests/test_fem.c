@@ -58,15 +58,7 @@ static double linear(const double *p) { return 0.3 * p[0] - 0.7 * p[1] + 1.1 * p
 
 static thx_model *phantom_model(thx_ctx *ctx)
 {
-    thx_phantom_opts po;
-    thx_phantom_opts_default(&po);
-    thx_contours *c = NULL;
-    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
-    thx_surfaces_opts so;
-    thx_surfaces_opts_default(&so);
-    thx_model *m = NULL;
-    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
-    thx_contours_destroy(&c);
+    thx_model *m = tl_phantom_surfaces(ctx);
     thx_mesh_opts mo;
     thx_mesh_opts_default(&mo);
     mo.no_heart = 1;

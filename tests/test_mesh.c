@@ -53,15 +53,7 @@ static double worst_radius_edge(const thx_volume *v)
 
 static thx_model *phantom_model(thx_ctx *ctx)
 {
-    thx_phantom_opts po;
-    thx_phantom_opts_default(&po);
-    thx_contours *c = NULL;
-    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
-    thx_surfaces_opts so;
-    thx_surfaces_opts_default(&so);
-    thx_model *m = NULL;
-    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
-    thx_contours_destroy(&c);
+    thx_model *m = tl_phantom_surfaces(ctx);
     return m;
 }
 

@@ -656,15 +656,7 @@ static void test_bad(void)
 
 static void test_phantom(void)
 {
-    thx_phantom_opts po;
-    thx_phantom_opts_default(&po);
-    thx_contours *c = NULL;
-    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
-    thx_surfaces_opts so;
-    thx_surfaces_opts_default(&so);
-    thx_model *m = NULL;
-    CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
-    thx_contours_destroy(&c);
+    thx_model *m = tl_phantom_surfaces(ctx);
     if (!m) return;
     const thx_surface *const *surf = (const thx_surface *const *)m->surf;
     size_t ns = m->n_surfaces, ntri = 0;

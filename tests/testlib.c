@@ -1,5 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "testlib.h"
+#include "thorax/geom/surfaces.h"
+#include "thorax/phantom/phantom.h"
 
 #include <dirent.h>
 #include <stdlib.h>
@@ -99,4 +101,18 @@ int tl_msg_has(thx_ctx *ctx, const char *needle)
     if (strstr(m, needle)) return 1;
     fprintf(stderr, "  message \"%s\" lacks \"%s\"\n", m, needle);
     return 0;
+}
+
+struct thx_model *tl_phantom_surfaces(thx_ctx *ctx)
+{
+    thx_phantom_opts po;
+    thx_phantom_opts_default(&po);
+    thx_contours *c = NULL;
+    CHECK_OK(ctx, thx_phantom_contours(ctx, &po, &c));
+    thx_surfaces_opts so;
+    thx_surfaces_opts_default(&so);
+    thx_model *m = NULL;
+    if (c) CHECK_OK(ctx, thx_surfaces_build(ctx, c, &so, &m, NULL, NULL));
+    thx_contours_destroy(&c);
+    return m;
 }

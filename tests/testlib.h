@@ -58,4 +58,8 @@ int tl_exists(const char *path);
 int tl_leftover_tmp(const char *prefix);
 /* Whether ctx's message holds needle; if not, both are printed. */
 int tl_msg_has(thx_ctx *ctx, const char *needle);
+/* The built-in phantom's surfaces at the default settings (thx_phantom_contours, then
+ * thx_surfaces_build), as several tests start from them; NULL after a failed check. */
+struct thx_model;
+struct thx_model *tl_phantom_surfaces(thx_ctx *ctx);
 #endif
