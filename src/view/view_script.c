@@ -141,10 +141,12 @@ void view_script_start(view_app *a)
 
 /* ---- save session ---- */
 
+/* The words of render's --mode and --style (thx_draw_mode, thx_data_style order). */
+static const char *const modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
+static const char *const styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
+
 static void write_look(FILE *f, const thx_picture_look *l)
 {
-    static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
-    static const char *styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
     fprintf(f, "--surface %s=%s", l->name, l->style >= 0 ? styles[l->style] : modes[l->mode]);
     if (l->opacity >= 0 || l->have_color) fprintf(f, ":%.3g", l->opacity >= 0 ? l->opacity : 1.0);
     if (l->have_color)
@@ -155,10 +157,6 @@ static void write_look(FILE *f, const thx_picture_look *l)
 /* The options of a window's picture as it is drawn now (what `thorax render` takes). */
 static void write_picture(FILE *f, view_win *w)
 {
-    static const char *modes[] = {"hidden", "points", "wire", "flat", "gouraud", "phong", "orientation"};
-    static const char *styles[] = {"continuous", "bands", "contours", "bands+contours", "continuous+contours"};
-    static const char *cmaps[] = {"ecg", "ecg-green", "coolwarm", "viridis", "gray", "jet"};
-    static const char *scales[] = {"linear", "log", "exp", "lab7", "lab13"};
     static const char *scopes[] = {"frame", "series", "all", "fixed", "surfaces"};
     int scale = gtk_widget_get_scale_factor(w->gl);
     int fb_w = gtk_widget_get_width(w->gl) * scale, fb_h = gtk_widget_get_height(w->gl) * scale;
@@ -175,11 +173,11 @@ static void write_picture(FILE *f, view_win *w)
     for (int k = 0; k < o->n_look; k++) write_look(f, &o->look[k]);
     for (int k = 0; k < o->n_only; k++) fprintf(f, "--only %s\n", o->only[k]);
     for (int k = 0; k < o->n_whole; k++) fprintf(f, "--no-clip %s\n", o->whole[k]);
-    fprintf(f, "--style %s\n--levels %d\n--cmap %s\n--scale %s\n", styles[o->style], o->levels, cmaps[o->cmap], scales[o->model]);
+    fprintf(f, "--style %s\n--levels %d\n--cmap %s\n--scale %s\n", styles[o->style], o->levels,
+            thx_colormap_name((thx_colormap)o->cmap), thx_scale_model_name((thx_scale_model)o->model));
     if (o->scope == THX_SCOPE_FIXED) fprintf(f, "--scope fixed:%.17g:%.17g\n", o->lo, o->hi);
     else fprintf(f, "--scope %s\n", scopes[o->scope]);
-    static const char *mappings[] = {"true", "symmetric", "midpoint", "separate"};
-    fprintf(f, "--mapping %s\n", mappings[o->mapping]);
+    fprintf(f, "--mapping %s\n", thx_scale_mapping_name((thx_scale_mapping)o->mapping));
     for (int k = 0; k < o->n_groups; k++) fprintf(f, "--scale-group %s\n", o->groups[k]);
     for (int k = 0; k < o->n_slaves; k++) fprintf(f, "--slave %s\n", o->slaves[k]);
     if (o->invert) fprintf(f, "--invert\n");
