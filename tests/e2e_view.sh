@@ -292,6 +292,12 @@ grep -q "bad2.txt:3: frame 999: the data have frames 1 to 300" bad2.err || { cat
 printf -- '--solution sol\n--size 120x120\naction frame-next\n--solution other\n' > bad3.txt
 if "$THORAX" view --script bad3.txt > /dev/null 2> bad3.err; then fail "changing the data of a running viewer was accepted"; fi
 grep -q "cannot change" bad3.err || { cat bad3.err; fail "data change: message"; }
+{ printf -- '--solution sol\naction screenshot '; head -c 1200 /dev/zero | tr '\0' a; printf '.png\n'; } > bad5.txt
+if "$THORAX" view --script bad5.txt > /dev/null 2> bad5.err; then fail "a 1,200-character script line was accepted"; fi
+grep -q "bad5.txt:2: a line of 1222 characters" bad5.err || { cat bad5.err; fail "long line: message"; }
+printf -- '--solution sol\n--size 120x120\nac\0tion quit\n' > bad6.txt
+if "$THORAX" view --script bad6.txt > /dev/null 2> bad6.err; then fail "a script with a NUL byte was accepted"; fi
+grep -q "NUL byte" bad6.err || { cat bad6.err; fail "NUL: message"; }
 if "$THORAX" view --solution sol --window torso,nope > /dev/null 2> bad4.err; then fail "--window with an unknown surface"; fi
 grep -q "no surface 'nope'" bad4.err || { cat bad4.err; fail "--window: message"; }
 echo "inside: all passed"

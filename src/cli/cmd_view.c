@@ -95,6 +95,10 @@ static int read_script(const char *path, script_text *t, thx_view_opts *vo)
         while (*s == ' ' || *s == '\t') s++;
         size_t n = strlen(s);
         while (n && (s[n - 1] == '\r' || s[n - 1] == ' ' || s[n - 1] == '\t')) s[--n] = '\0';
+        if (n > 1000) { /* the viewer reads a line into 1024 bytes: refused, never cut */
+            fprintf(stderr, "thorax view: %s:%d: a line of %zu characters (at most 1000)\n", path, line, n);
+            return 1;
+        }
         if (in_head && is_command_line(s)) {
             in_head = 0;
             vo->script_line0 = line;
