@@ -726,22 +726,31 @@ static void test_export(void)
     char *vtu = tl_slurp(ctx, tl_path("v.vtu"), NULL);
     snprintf(want, sizeof want, "<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">", v->n_nodes, v->n_tets);
     CHECK(vtu && strstr(vtu, "type=\"UnstructuredGrid\"") && strstr(vtu, want));
-    CHECK(vtu && strstr(vtu, "<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">"));
-    CHECK(vtu && count_str(vtu, " 10") >= v->n_tets);
+    /* binary appended arrays (VTK itself reads them back: tests/volume_read.py, export_data_read.py) */
+    CHECK(vtu && strstr(vtu, "<DataArray type=\"Int32\" Name=\"region\" format=\"appended\" offset=\""));
+    CHECK(vtu && strstr(vtu, "<DataArray type=\"Float64\" Name=\"conductivity\" format=\"appended\""));
+    CHECK(vtu && strstr(vtu, "Name=\"conductivity_tensor\" NumberOfComponents=\"9\"")); /* muscle is anisotropic */
+    CHECK(vtu && strstr(vtu, "<Array type=\"String\" Name=\"region_name\" NumberOfTuples=\"4\" format=\"ascii\">"));
+    CHECK(vtu && count_str(vtu, "<AppendedData encoding=\"raw\">") == 1);
     free(vtu);
 
     char *msh = tl_slurp(ctx, tl_path("v.msh"), NULL);
-    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm\n$EndComments\n"
-                       "$PhysicalNames\n4\n3 1 \"mean_thorax\"\n"; /* the comment: thorax's signature */
-    CHECK(msh && strncmp(msh, head, strlen(head)) == 0);
-    CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 0 4\n"));
+    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm, tagged surfaces\n"
+                       "$EndComments\n$PhysicalNames\n6\n2 1 \"box\"\n2 2 \"heart\"\n3 1 \"mean_thorax\"\n";
+    CHECK(msh && strncmp(msh, head, strlen(head)) == 0); /* the comment: thorax's signature */
+    CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 2 4\n"));
     /* Region 4 holds no node (region 3, the heart, may hold none either). */
     const char *nodes = msh ? strstr(msh, "$Nodes\n") : NULL;
     size_t nb = 0, nn = 0, lo = 0, hi = 0;
     CHECK(nodes && sscanf(nodes, "$Nodes\n%zu %zu %zu %zu", &nb, &nn, &lo, &hi) == 4);
     CHECK((nb == 2 || nb == 3) && nn == v->n_nodes && lo == 1 && hi == v->n_nodes);
-    snprintf(want, sizeof want, "$Elements\n3 %zu 1 %zu\n", v->n_tets, v->n_tets); /* region 4 has no element */
+    /* region 4 has no element; the box's triangles are faces of the tetrahedra (its hull), the
+     * heart's octahedron is not meshed conformingly: its own 8 triangles are written */
+    size_t n_box = m->surf[0]->n_tris;
+    snprintf(want, sizeof want, "$Elements\n5 %zu 1 %zu\n", v->n_tets + n_box + 8, v->n_tets + n_box + 8);
     CHECK(msh && strstr(msh, want));
+    snprintf(want, sizeof want, "\n2 1 2 %zu\n", n_box);
+    CHECK(msh && strstr(msh, want) && strstr(msh, "\n2 2 2 8\n"));
     CHECK(msh && strstr(msh, "\n4 0 0 0 0 0 0 1 4 0\n"));
     CHECK(msh && strstr(msh, "$EndElements\n") && msh[strlen(msh) - 1] == '\n');
     free(msh);

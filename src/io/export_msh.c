@@ -157,6 +157,40 @@ static thx_status boundary_faces(thx_ctx *ctx, const locator *L, face **out, siz
     return THX_OK;
 }
 
+/* A surface some of whose triangles no face of the mesh lies on (a mesh that does not conform to
+ * it: made elsewhere, or regions assigned without the surfaces) is written as its own triangles
+ * on their volume nodes (the node table), with a warning: the group then names the surface, not
+ * faces of the tetrahedra. F stays sorted. */
+static thx_status fall_back(thx_ctx *ctx, const thx_model *m, face **F, size_t *nF, const char *path)
+{
+    const thx_volume *v = m->volume;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        const thx_surface *S = m->surf[s];
+        size_t lo = 0, hi, covered = 0;
+        while (lo < *nF && (size_t)(*F)[lo].s < s) lo++;
+        for (hi = lo; hi < *nF && (size_t)(*F)[hi].s == s; hi++)
+            covered += hi == lo || (*F)[hi].tri != (*F)[hi - 1].tri;
+        if (covered == S->n_tris) continue;
+        thx_log(ctx, THX_LOG_WARN, "%s: surface \"%s\": the tetrahedra's faces cover %zu of its %zu triangles (the mesh "
+                "does not conform to it): its own triangles are written", path, S->name, covered, S->n_tris);
+        size_t n_new = *nF - (hi - lo) + S->n_tris;
+        face *G = thx_malloc(ctx, (n_new ? n_new : 1) * sizeof *G);
+        if (!G) return THX_ENOMEM;
+        memcpy(G, *F, lo * sizeof *G);
+        for (size_t t = 0; t < S->n_tris; t++) {
+            face *g = &G[lo + t];
+            g->s = (int32_t)s;
+            g->tri = (int32_t)t;
+            for (int k = 0; k < 3; k++) g->key[k] = g->n[k] = v->surf_node[s][S->tri[3 * t + (size_t)k]];
+        }
+        memcpy(G + lo + S->n_tris, *F + hi, (*nF - hi) * sizeof *G);
+        free(*F);
+        *F = G;
+        *nF = n_new;
+    }
+    return THX_OK;
+}
+
 static void put_xyz(FILE *f, const double *p, const char *eol)
 {
     fprintf(f, "%.17g %.17g %.17g%s", p[0] + 0.0, p[1] + 0.0, p[2] + 0.0, eol);
@@ -236,13 +270,8 @@ thx_status thx_volume_export_msh(thx_ctx *ctx, const thx_model *m, const thx_msh
     }
     locator L = {m, v, ns, nn, stn, inc_start, inc};
     THX_TRY(boundary_faces(ctx, &L, &F, &nF));
+    THX_TRY(fall_back(ctx, m, &F, &nF, path));
     for (size_t i = 0; i < nF; i++) f_in[F[i].s]++;
-    for (size_t s = 0; s < nsu; s++)
-        if (!f_in[s]) {
-            st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": no face of the volume mesh lies on it (node tables "
-                           "that do not match the mesh)", path, m->surf[s]->name);
-            goto done;
-        }
     /* entities: node classification and bounding boxes */
     for (size_t w = 0; w < v->n_nodes; w++) ent[w] = INT32_MAX;
     for (size_t b = 0; b < nr + nsu; b++)

@@ -107,7 +107,8 @@ typedef struct {
  * nodes on them (found from the node tables and v->steiner, exactly). Then each view as
  * $NodeData / $ElementData sections, one per frame (string tag: name; real tag: time; integer
  * tags: step, components, count). Node tags = volume node numbers. Byte-identical for the same
- * input. A surface no face lies on is an error (the node tables do not match the mesh).
+ * input. A surface whose triangles are not all covered by faces of the tetrahedra (a mesh that
+ * does not conform to it) is written as its own triangles on their volume nodes, with a warning.
  */
 thx_status thx_volume_export_msh(thx_ctx *ctx, const thx_model *m, const thx_msh_view *views, size_t n_views,
                                  const char *path);
