@@ -270,19 +270,26 @@ def main():
                           ty == 4 and np.array_equal(nd.reshape(-1, 4).astype(np.int64) - 1, v["tet"][sel])
                           and np.all(v["region"][sel] == rid))
             check(p + " region %s: count" % name, n == int((v["region"] == rid).sum()), "%d" % n)
-        views = gmsh.view.getTags()
+        views = {}
+        for vt in gmsh.view.getTags():
+            views[gmsh.option.getString("View[%d].Name" % gmsh.view.getIndex(vt))] = vt
         want = [("volume", vol)] if vol is not None else [(k, d) for k, d in surfdata.items()]
-        check(p + " views", len(views) == len(want), "%d views" % len(views))
-        for vt, (who, data) in zip(views, want):
+        for who, data in want:
+            stem = "potential" if who == "volume" else "potential on " + who
+            vname = [n for n in views if n == stem or n.startswith(stem + " (")]
+            check(p + " view of %s" % who, len(vname) == 1, "views: %s" % sorted(views))
+            if len(vname) != 1:
+                continue
+            vt = views[vname[0]]
             idx = np.arange(len(data)) if who == "volume" else m["surf"][names.index(who)]["vmap"]
             nsteps = int(gmsh.option.getNumber("View[%d].NbTimeStep" % gmsh.view.getIndex(vt)))
-            check(p + " view %d (%s): %d steps" % (vt, who, nsteps), nsteps == len(frames))
+            check(p + " view \"%s\": %d steps" % (vname[0], nsteps), nsteps == len(frames))
             for k, f in enumerate(frames):
                 typ, ntags, d, time, nc = gmsh.view.getModelData(vt, k)
                 vals = np.full(len(X), np.nan)
                 vals[np.asarray(ntags, dtype=np.int64)] = np.array([x[0] for x in d])
                 ok = typ == "NodeData" and time == T[f] and rel(vals[idx + 1], data[:, f]) < 1e-6
-                check(p + " view %d step %d: frame %d, time %g" % (vt, k, f + 1, time), ok,
+                check(p + " view \"%s\" step %d: frame %d, time %g" % (vname[0], k, f + 1, time), ok,
                       "%s, %d values, rel %.2e" % (typ, len(d), rel(vals[idx + 1], data[:, f])))
         gmsh.finalize()
     else:
