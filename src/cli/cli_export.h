@@ -18,4 +18,7 @@ typedef struct {
 /* Runs the export; the exit status (0, 1, or 2 for a bad --frames). */
 int cli_export_data(const cli_export_request *rq);
 
+/* Creates dir and its missing parents (mode 0755); 0, or -1 with errno set. */
+int cli_make_dirs(const char *dir);
+
 #endif

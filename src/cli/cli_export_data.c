@@ -224,8 +224,7 @@ done:
     return st;
 }
 
-/* Creates dir and its missing parents. */
-static int make_dirs(const char *dir)
+int cli_make_dirs(const char *dir)
 {
     char p[4096];
     if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) return -1;
@@ -352,7 +351,7 @@ int cli_export_data(const cli_export_request *rq)
         st = l > 4 && !strcmp(names[i] + l - 4, ".pvd") ? thx_export_pvd_claim(ctx, path) : thx_export_claim(ctx, fmt, path);
         if (st) goto fail;
     }
-    if (make_dirs(rq->out_dir) != 0) {
+    if (cli_make_dirs(rq->out_dir) != 0) {
         st = thx_error(ctx, THX_EIO, "%s: cannot create directory: %s", rq->out_dir, strerror(errno));
         goto fail;
     }

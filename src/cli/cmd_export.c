@@ -4,7 +4,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "cli/cli.h"
 #include "cli/cli_export.h"
@@ -161,7 +160,7 @@ int cmd_export(int argc, char **argv)
             goto done;
         }
     }
-    if (mkdir(out_dir, 0755) != 0 && errno != EEXIST) {
+    if (cli_make_dirs(out_dir) != 0) {
         fprintf(stderr, "thorax export: %s: cannot create directory: %s\n", out_dir, strerror(errno));
         rc = 1;
         goto done;
