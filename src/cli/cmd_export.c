@@ -1,5 +1,6 @@
 /* thorax export: a model's surfaces as VTK, VTP, OBJ, STL or PLY files, or its
- * volume mesh as VTU or Gmsh MSH, for other tools. */
+ * volume mesh as VTU or Gmsh MSH, for other tools; with --solution or --data, the potentials per
+ * frame (cli_export_data.c). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
