@@ -122,4 +122,10 @@ EOF
 read_back dal dsol/volume.raw volume dout/vtu vtu all noheart
 "$THORAX" export dal --solution dsol --format msh -o dout/msh3 -q
 read_back dal dsol/volume.raw volume dout/msh3 msh
+# a solution of another model, and a series whose rows are not the named surface's
+refused 1 "another model's solution" "sol/volume.raw: 49640 rows, but the model's volume mesh has" \
+    "$THORAX" export dal --solution sol --format vtu -o dout/no
+refused 1 "rows of another surface" "among the --surface names" \
+    "$THORAX" export model --data beat.raw --surface torso --format vtp -o dout/no
+[ ! -e dout/no ] || fail "a refused export wrote dout/no"
 echo "e2e_export_data: ok"
