@@ -494,6 +494,15 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                 st = thx_error(ctx, THX_EINPUT, "mesh: two regions would be named \"%s\"", table[r].name);
                 goto done;
             }
+    for (size_t k = 0; k < o->n_sigma_set; k++) {
+        st = thx_regions_assign(ctx, table, (size_t)n_regions, o->sigma_set[k], "set by the user (thorax mesh --sigma)");
+        if (st != THX_OK) {
+            char why[512];
+            snprintf(why, sizeof why, "%s", thx_ctx_message(ctx));
+            st = thx_error(ctx, st, "mesh: --sigma %s", why);
+            goto done;
+        }
+    }
     {
         tset fs = {NULL, 0};
         st = tset_init(ctx, &fs, n_sub);
