@@ -19,7 +19,7 @@ typedef struct {
 static const tissue_default defaults[] = {
     {"mean_thorax", 0.239, 0.239,
      "Klepfer, Johnson, MacLeod, IEEE TBME 44:706 (1997): mean of the thoracic tissues (Foster & Schwan 1989)"},
-    {"fat", 0.04, 0.04, "Rush, Abildskov, McFee, Circ Res 12:40 (1963): subcutaneous fat, 2500 ohm cm"},
+    {"fat", 0.04, 0.04, "Rush, Abildskov, McFee, Circ Res 12:40 (1963): subcutaneous fat"},
     {"muscle", 0.4, 0.04,
      "Rush, Abildskov, McFee (1963); anisotropy about 10:1 along/across the fibres, Epstein & Foster, Med Biol Eng "
      "Comput 21:51 (1983); fibres taken along the body axis"},

@@ -90,13 +90,18 @@ void thx_mesh_opts_default(thx_mesh_opts *o);
  * is required), minus the heart's interior when o->no_heart. Nodes: every
  * surface node (volume node numbers follow the model's surface order), then
  * the grid points. The result is stored in m->volume (replacing any), with
- * the default region table (thx_region_defaults) and the node tables.
+ * the default region table (thx_region_default; anisotropic defaults along the
+ * model's superior axis, z without a frame), then o->region_set and
+ * o->sigma_set applied, and the node tables.
  */
 thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats);
 
 /* Fills r with the default conductivity of a tissue region by name
  * ("mean_thorax", "fat", "muscle", "lung", "heart", "blood"), with its
- * literature source. Returns 0, or -1 for an unknown name. */
+ * literature source (docs/decisions.md, "Default conductivities"). An
+ * anisotropic one (muscle) is diagonal with its "along" value on z
+ * (sigma[8]); thx_mesh_build puts it on the model's superior axis. Returns 0,
+ * or -1 for an unknown name. */
 int thx_region_default(const char *tissue, thx_region *r);
 
 /*
