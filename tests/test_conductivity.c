@@ -75,6 +75,23 @@ int main(void)
     CHECK(thx_regions_assign(ctx, table, 3, "muscle=0.1", NULL) == THX_OK);
     CHECK(!table[2].anisotropic && table[2].sigma[8] == 0.1 && !strcmp(table[2].source, "set by the user"));
     CHECK(memcmp(&before[0], &table[0], sizeof table[0]) == 0);
+    /* the defaults' "along" on the model's superior axis: the muscle of a model whose up is -y */
+    thx_region t2[2];
+    CHECK(thx_region_default("muscle", &t2[0]) == 0 && thx_region_default("fat", &t2[1]) == 0);
+    thx_frame f;
+    CHECK(thx_frame_from_names(ctx, "-y", "-z", "test", &f) == THX_OK);
+    thx_regions_orient(t2, 2, &f);
+    CHECK(t2[0].sigma[0] == 0.04 && t2[0].sigma[4] == 0.4 && t2[0].sigma[8] == 0.04 && t2[0].anisotropic);
+    CHECK(t2[1].sigma[0] == 0.04 && t2[1].sigma[4] == 0.04 && t2[1].sigma[8] == 0.04);
+    CHECK(thx_region_default("muscle", &t2[0]) == 0);
+    thx_frame ras = thx_frame_ras(), none;
+    memset(&none, 0, sizeof none);
+    thx_regions_orient(t2, 1, &ras);
+    thx_regions_orient(t2, 1, &none);
+    CHECK(t2[0].sigma[8] == 0.4 && t2[0].sigma[0] == 0.04); /* RAS or no frame: along z */
+    CHECK(thx_frame_from_names(ctx, "+x", "+y", "test", &f) == THX_OK);
+    thx_regions_orient(t2, 1, &f);
+    CHECK(t2[0].sigma[0] == 0.4 && t2[0].sigma[4] == 0.04 && t2[0].sigma[8] == 0.04);
     thx_ctx_destroy(&ctx);
     return tl_finish();
 }

@@ -43,6 +43,19 @@ int thx_region_default(const char *tissue, thx_region *r)
     return -1;
 }
 
+void thx_regions_orient(thx_region *table, size_t n, const thx_frame *frame)
+{
+    if (!frame || !frame->set || frame->up.axis < 0 || frame->up.axis > 2 || frame->up.axis == 2) return;
+    for (size_t r = 0; r < n; r++) {
+        double *s = table[r].sigma;
+        int diagonal = s[1] == 0 && s[2] == 0 && s[3] == 0 && s[5] == 0 && s[6] == 0 && s[7] == 0;
+        if (!table[r].anisotropic || !diagonal || s[0] != s[4]) continue; /* not a default's shape */
+        double along = s[8], across = s[0];
+        s[0] = s[4] = s[8] = across;
+        s[4 * frame->up.axis] = along;
+    }
+}
+
 thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int *anisotropic)
 {
     double c[7];

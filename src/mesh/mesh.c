@@ -466,15 +466,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         if (su->role == THX_ROLE_LUNG || su->role == THX_ROLE_OTHER) snprintf(table[n_regions].name, sizeof table[n_regions].name, "%s", su->name);
         surf_region[s] = n_regions++;
     }
-    /* the defaults' "along" is the body axis (thorax/mesh/mesh.h): the model's superior axis when it
-       has a frame (a model whose long axis is y gets its muscle's 0.4 along y), else z */
-    if (m->frame.set && m->frame.up.axis >= 0 && m->frame.up.axis < 3 && m->frame.up.axis != 2)
-        for (int r = 0; r < n_regions; r++)
-            if (table[r].anisotropic) {
-                double along = table[r].sigma[8], across = table[r].sigma[0];
-                table[r].sigma[0] = table[r].sigma[4] = table[r].sigma[8] = across;
-                table[r].sigma[4 * m->frame.up.axis] = along;
-            }
+    /* the defaults' "along" on the body axis: the model's superior axis (z without a frame) */
+    thx_regions_orient(table, (size_t)n_regions, &m->frame);
     for (size_t k = 0; k < o->n_region_set; k++) {
         int found = -1;
         for (int r = 0; r < n_regions && found < 0; r++)

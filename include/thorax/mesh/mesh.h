@@ -103,6 +103,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
  * (sigma[8]); thx_mesh_build puts it on the model's superior axis. Returns 0,
  * or -1 for an unknown name. */
 int thx_region_default(const char *tissue, thx_region *r);
+/* Turns the defaults' body axis to the model's: every region of table[0..n-1] whose tensor is
+ * diagonal with sxx = syy != szz (a default's "along z") gets szz on frame's superior axis and sxx
+ * on the other two. Nothing changes without a frame or when the superior axis is z. */
+void thx_regions_orient(thx_region *table, size_t n, const thx_frame *frame);
 
 /*
  * Parses a conductivity in S/m, in the model's axes (x, y, z of its coordinates, whatever its
