@@ -94,6 +94,37 @@ static double read_bar(const thx_image *img, const int box[4], double lo, double
     return lo + t * (hi - lo);
 }
 
+/* Whether text is drawn in img with its left end at x and its baseline within y0..y1: the pixels of
+ * the glyphs' box (and one around it) exactly as the font draws text on the background. */
+static int text_at(const thx_image *img, thx_font *font, int x, int y0, int y1, const char *text)
+{
+    thx_image *ref = NULL;
+    if (thx_image_create(ctx, img->w, img->h, &ref) != THX_OK) return 0;
+    static const unsigned char bg[4] = {24, 24, 28, 255}, ink[4] = {255, 255, 255, 255};
+    int found = 0;
+    for (int y = y0; y <= y1 && !found; y++) {
+        thx_image_fill(ref, bg);
+        thx_draw_text(ref, font, x, y, text, ink);
+        int bx0 = img->w, by0 = img->h, bx1 = -1, by1 = -1;
+        for (int j = 0; j < img->h; j++)
+            for (int i = 0; i < img->w; i++)
+                if (dist(px(ref, i, j), bg)) {
+                    if (i < bx0) bx0 = i;
+                    if (i > bx1) bx1 = i;
+                    if (j < by0) by0 = j;
+                    if (j > by1) by1 = j;
+                }
+        if (bx1 < 0) break;
+        int same = 1;
+        for (int j = by0 - 1; j <= by1 + 1 && same; j++)
+            for (int i = bx0 - 1; i <= bx1 + 1 && same; i++)
+                if (i >= 0 && j >= 0 && i < img->w && j < img->h) same = dist(px(ref, i, j), px(img, i, j)) == 0;
+        found = same;
+    }
+    thx_image_destroy(&ref);
+    return found;
+}
+
 /* The pixel of the picture where model point p lands (single panel). */
 static void where(const thx_picture_opts *o, const thx_picture_data *d, thx_font *font, const double p[3], int *x, int *y)
 {
@@ -149,6 +180,20 @@ static void test_bars(thx_renderer *r, thx_font *font)
         thx_colormap_eval((thx_colormap)o.cmap, 0.5 / box[k][3], bottom);
         CHECK(dist(px(img, box[k][0] + box[k][2] / 2, box[k][1]), top) <= 3);
         CHECK(dist(px(img, box[k][0] + box[k][2] / 2, box[k][1] + box[k][3] - 1), bottom) <= 3);
+    }
+    /* the end labels read each bar's own scale: "10" and "-10" beside the first, "40" and "-40"
+       beside the second (the label's left end 7 pixels right of the strip, its baseline about half
+       a digit below the end row), and not the other bar's */
+    int fh = thx_font_height(font);
+    for (int k = 0; k < 2; k++) {
+        char hi[16], lo[16], ohi[16];
+        snprintf(hi, sizeof hi, "%g", range[k]);
+        snprintf(lo, sizeof lo, "%g", -range[k]);
+        snprintf(ohi, sizeof ohi, "%g", range[1 - k]);
+        int lx = box[k][0] + box[k][2] + 7, top_row = box[k][1], bottom_row = box[k][1] + box[k][3] - 1;
+        CHECK(text_at(img, font, lx, top_row, top_row + fh, hi));
+        CHECK(text_at(img, font, lx, bottom_row, bottom_row + fh, lo));
+        CHECK(!text_at(img, font, lx, top_row, top_row + fh, ohi));
     }
     /* one scale for both (--scope all): one bar, +-40, and the plates' pixels read their values on it */
     o.scope = THX_SCOPE_ALL;
