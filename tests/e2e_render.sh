@@ -254,6 +254,7 @@ EOF2
 # and a picture too small for both refused with nothing written
 "$THORAX" render "${R[@]}" --view anterior --colorbar -o bars2.png -q
 "$THORAX" render "${R[@]}" --view anterior --colorbar --scope all -o bars1.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-unit --colorbar -o bars3.png -q
 if "$THORAX" render --solution sol --frame 193 --size 400x110 --colorbar -o bars_small.png 2> small.err; then fail "two bars in 110 rows accepted"; fi
 [ ! -e bars_small.png ] || fail "refused picture written"
 grep -q "2 different scales" small.err || { cat small.err; fail "refusal message"; }
@@ -278,8 +279,8 @@ def runs(p):   # the bars' strips: runs of 16 rows or more drawn over the backgr
     edges = np.flatnonzero(np.diff(np.concatenate([[0], drawn, [0]])))
     lengths = edges[1::2] - edges[0::2]
     return (lengths >= 16).sum(), lengths.max()
-(n2, l2), (n1, l1) = runs('bars2.png'), runs('bars1.png')
-assert n2 == 2 and n1 == 1, (n2, n1)
+(n2, l2), (n1, l1), (n3, l3) = runs('bars2.png'), runs('bars1.png'), runs('bars3.png')
+assert n2 == 2 and n1 == 1 and n3 == 3, (n2, n1, n3)   # arrows coloured by |J|: a third bar
 print('colour bars: %d strips (%d rows) for the torso and heart scales, %d (%d rows) sharing one' % (n2, l2, n1, l1))
 plain, ant, post = load('dal_plain.png'), load('dal_ant.png'), load('dal_post.png')
 h, w, _ = plain.shape

@@ -341,11 +341,14 @@ static void add_bar(thx_picture_bars *bars, const thx_scale *sc, int cmap, const
         bars->names[k][0] = '\0';
         bars->n++;
     }
-    size_t len = strlen(bars->names[k]);
-    if (strstr(bars->names[k], name) && (len == strlen(name) || strstr(bars->names[k], name)[strlen(name)] == ',' ||
-                                        !strstr(bars->names[k], name)[strlen(name)]))
-        return; /* already named (a surface in several panels' passes) */
-    if (len + strlen(name) + 3 < sizeof bars->names[k])
+    size_t len = strlen(bars->names[k]), n = strlen(name);
+    for (const char *p = bars->names[k]; *p;) { /* already named (a surface drawn in several passes) */
+        const char *c = strstr(p, ", ");
+        size_t l = c ? (size_t)(c - p) : strlen(p);
+        if (l == n && !strncmp(p, name, n)) return;
+        p = c ? c + 2 : p + l;
+    }
+    if (len + n + 3 < sizeof bars->names[k])
         snprintf(bars->names[k] + len, sizeof bars->names[k] - len, "%s%s", len ? ", " : "", name);
 }
 
