@@ -9,7 +9,7 @@
 #  2. real files: the Dalhousie torso and epicardium (map3d geom/torso) imported with thorax
 #     import and meshed; the six dipole2_00N.pot torso maps assembled into one series (times
 #     0..5), exported as vtp, vtk and msh; one .pot read directly; a forward solution on the real
-#     geometry (an epicardial series made here) as vtu with currents.
+#     geometry (an epicardial series made here) as vtu with currents, and a defibrillation one.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
 : "${THORAX:?}" "${SRC:?}" "${WORK:?}"
@@ -122,6 +122,11 @@ EOF
 read_back dal dsol/volume.raw volume dout/vtu vtu all noheart
 "$THORAX" export dal --solution dsol --format msh -o dout/msh3 -q
 read_back dal dsol/volume.raw volume dout/msh3 msh
+# a defibrillation solution (volts, every region conducts): two pads on the real torso
+"$THORAX" forward dal -o dfb -q --electrode "a,at=-200:300:0,radius=60,voltage=1" \
+    --electrode "b,at=200:300:0,radius=60,voltage=0"
+"$THORAX" export dal --solution dfb --format vtu -o dout/dfb -q
+read_back dal dfb/volume.raw volume dout/dfb vtu all all
 # a solution of another model, and a series whose rows are not the named surface's
 refused 1 "another model's solution" "sol/volume.raw: 49640 rows, but the model's volume mesh has" \
     "$THORAX" export dal --solution sol --format vtu -o dout/no
