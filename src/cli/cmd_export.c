@@ -64,9 +64,9 @@ int cmd_export(int argc, char **argv)
                  "With --solution or --data: the potentials of every frame (or --frames), as\n"
                  "DIR/volume_FFFF.vtu (point data potential, cell data current_density) or\n"
                  "DIR/NAME_FFFF.vtp|vtk per surface (point data potential), FFFF the 1-based\n"
-                 "frame number, with DIR/volume.pvd or DIR/NAME.pvd: the collection ParaView\n"
-                 "opens with the series' time axis; or DIR/volume.msh with one $NodeData per\n"
-                 "frame (Gmsh views with their times).\n",
+                 "frame number, with DIR/volume.pvd or DIR/NAME.pvd (not for vtk): the\n"
+                 "collection ParaView opens with the series' time axis; or DIR/volume.msh with\n"
+                 "one $NodeData per frame (Gmsh views with their times).\n",
         .epilog = "Coordinates are in mm; triangles stay counterclockwise seen from outside,\n"
                   "tetrahedra right-handed.\n"
                   "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n",
