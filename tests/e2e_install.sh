@@ -1,0 +1,137 @@
+#!/usr/bin/env bash
+# The installable library (issue 14, item 8): `make install PREFIX=/opt/thorax DESTDIR=STAGE` into a
+# temporary stage, then, using only what was installed (the stage moved nowhere else: thorax.pc and
+# the programs' RPATH are relative, so the staged tree works where it lies):
+#  - the layout: libthorax.so.0.1.0 with SONAME libthorax.so.0.1 and its links, libthorax.a, the
+#    public headers (not the viewer's), thorax.pc, the CMake package, thorax and thorax-view, the man
+#    pages, the licence, the Python package;
+#  - the installed thorax runs on the installed libthorax.so (ldd), not the build tree's;
+#  - a C program built with `cc prog.c $(pkg-config --cflags --libs thorax)` alone reads the
+#    Dalhousie torso (map3d daltorso.pts/.fac) and prints its node and triangle counts, the enclosed
+#    volume and the Euler characteristic: compared with the same computed by NumPy from the files;
+#  - the same program linked statically against libthorax.a with `pkg-config --static --libs`
+#    (no libthorax.so in its NEEDED), and built through CMake's find_package(thorax) (thorax::thorax);
+#  - `man -l` renders thorax(1) and thorax-forward(1) with their options;
+#  - the installed Python package finds the installed library by itself.
+# Skipped (with a message) when ../shared/data is not beside the checkout.
+set -euo pipefail
+: "${THORAX:?}" "${SRC:?}" "${WORK:?}"
+PY=/usr/bin/python3
+DATA=${THORAX_DATA:-$SRC/../shared/data}
+G=$DATA/map3d/geom/torso
+BUILD=$(cd "$(dirname "$THORAX")/.." && pwd)
+rm -rf "$WORK" && mkdir -p "$WORK" && cd "$WORK"
+fail() { echo "e2e_install: FAIL: $*" >&2; exit 1; }
+if [ ! -f "$G/daltorso.pts" ]; then echo "skip: $G not found (the Dalhousie torso)"; exit 0; fi
+
+# installed twice, staged: cmake --install, and the Makefile's target as a packager runs it (the build
+# is up to date, so make's build step does nothing)
+DESTDIR="$WORK/stage" cmake --install "$BUILD" --prefix /opt/thorax >install.log 2>&1 || fail "cmake --install: $(cat install.log)"
+make -s -C "$SRC" install BUILD="$BUILD" PREFIX=/opt/thorax DESTDIR="$WORK/stage2" >make.log 2>&1 || fail "make install: $(cat make.log)"
+P=$WORK/stage/opt/thorax
+[ -d "$WORK/stage2/opt/thorax/lib" ] || fail "make install DESTDIR=stage2 PREFIX=/opt/thorax put nothing in stage2/opt/thorax"
+L=$P/lib
+for f in lib/libthorax.so.0.1.0 lib/libthorax.a include/thorax/core/core.h include/thorax/capi/capi.h \
+    include/thorax/fem/fem.h lib/pkgconfig/thorax.pc lib/cmake/thorax/thoraxConfig.cmake \
+    lib/cmake/thorax/thoraxConfigVersion.cmake lib/cmake/thorax/thoraxTargets.cmake bin/thorax bin/thorax-view \
+    share/man/man1/thorax.1 share/man/man1/thorax-forward.1 share/man/man1/thorax-view.1 share/doc/thorax/LICENSE \
+    lib/python3/dist-packages/thorax/__init__.py lib/python3/dist-packages/thorax/_installed.py; do
+    [ -e "$P/$f" ] || fail "not installed: $f"
+done
+[ ! -e "$P/include/thorax/view" ] || fail "the viewer's header was installed (libthorax_view is not)"
+[ "$(readlink "$L/libthorax.so")" = libthorax.so.0.1 ] || fail "libthorax.so -> $(readlink "$L/libthorax.so"), not libthorax.so.0.1"
+[ "$(readlink "$L/libthorax.so.0.1")" = libthorax.so.0.1.0 ] || fail "libthorax.so.0.1 -> $(readlink "$L/libthorax.so.0.1")"
+soname=$(readelf -d "$L/libthorax.so.0.1.0" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
+[ "$soname" = libthorax.so.0.1 ] || fail "SONAME '$soname', not libthorax.so.0.1"
+n_pages=$(ls "$P/share/man/man1" | wc -l)
+n_cmds=$("$THORAX" help | awk '/^commands:/ { on = 1; next } on && /^  [a-z]/ && $1 != "help" { n++ } END { print n }')
+[ "$n_pages" -eq $((n_cmds + 1)) ] || fail "$n_pages man pages for $n_cmds commands (+ thorax.1)"
+
+# the installed program runs on the installed library
+ldd "$P/bin/thorax" | grep -q "libthorax.so.0.1 => $L/libthorax.so.0.1" || fail "bin/thorax does not load $L/libthorax.so.0.1: $(ldd "$P/bin/thorax" | grep thorax)"
+ldd "$P/bin/thorax-view" | grep -q "libthorax.so.0.1 => $L/libthorax.so.0.1" || fail "bin/thorax-view does not load the installed library"
+[ "$("$P/bin/thorax" --version)" = "thorax 0.1.0" ] || fail "installed thorax --version: $("$P/bin/thorax" --version)"
+
+# the reference: the same facts computed by NumPy from the files (0- or 1-based .fac detected alike)
+"$PY" - "$G/daltorso.pts" "$G/daltorso.fac" >expected.txt <<'EOF'
+import sys
+import numpy as np
+x = np.loadtxt(sys.argv[1])
+f = np.loadtxt(sys.argv[2], dtype=np.int64)
+base = 0 if f.min() == 0 else 1
+f = f - base
+a, b, c = x[f[:, 0]], x[f[:, 1]], x[f[:, 2]]
+vol = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+edges = {tuple(sorted(e)) for t in f for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+print(f"nodes {len(x)}\ntriangles {len(f)}\nbase {base}\nvolume {vol:.3f}\neuler {len(x) - len(edges) + len(f)}")
+EOF
+
+compare() {  # compare WHAT OUTPUT: counts, base and Euler exact, volume to 1e-6 relative
+    "$PY" - "$2" expected.txt "$1" <<'EOF' || exit 1
+import sys
+got = dict(l.split(None, 1) for l in open(sys.argv[1]) if l.strip())
+want = dict(l.split(None, 1) for l in open(sys.argv[2]) if l.strip())
+for k in ("nodes", "triangles", "base", "euler"):
+    if got.get(k, "").strip() != want[k].strip():
+        sys.exit(f"e2e_install: FAIL: {sys.argv[3]}: {k} {got.get(k, '(missing)').strip()}, NumPy says {want[k].strip()}")
+g, w = float(got["volume"]), float(want["volume"])
+if abs(g - w) > 1e-6 * abs(w):
+    sys.exit(f"e2e_install: FAIL: {sys.argv[3]}: volume {g}, NumPy says {w}")
+print(f"{sys.argv[3]}: nodes {got['nodes'].strip()}, triangles {got['triangles'].strip()}, "
+      f"volume {g:.0f} mm^3 (NumPy {w:.0f}), Euler {got['euler'].strip()}: agree")
+EOF
+}
+grep -q '^euler 2$' expected.txt || fail "the Dalhousie torso is not a closed sphere-like surface? $(cat expected.txt)"
+
+# 1. pkg-config alone
+export PKG_CONFIG_PATH=$L/pkgconfig
+[ "$(pkg-config --modversion thorax)" = 0.1.0 ] || fail "pkg-config --modversion thorax: $(pkg-config --modversion thorax 2>&1)"
+cc -o facts_pc "$SRC/tests/install/surface_facts.c" $(pkg-config --cflags --libs thorax) -Wl,-rpath,"$L" 2>cc.log \
+    || fail "cc with pkg-config --cflags --libs thorax: $(cat cc.log)"
+readelf -d facts_pc | grep -q 'NEEDED.*libthorax.so.0.1' || fail "facts_pc does not need libthorax.so.0.1"
+./facts_pc "$G/daltorso.pts" "$G/daltorso.fac" >facts_pc.txt || fail "facts_pc: $(cat facts_pc.txt)"
+ldd ./facts_pc | grep -q "$L/libthorax.so.0.1" || fail "facts_pc does not run on the installed library"
+compare "pkg-config (shared)" facts_pc.txt
+
+# 2. pkg-config --static: libthorax.a and every library it needs
+libs=$(pkg-config --static --libs thorax)
+cc -o facts_static "$SRC/tests/install/surface_facts.c" $(pkg-config --cflags thorax) ${libs/-lthorax/-l:libthorax.a} 2>cc.log \
+    || fail "cc with pkg-config --static --libs thorax and libthorax.a: $(cat cc.log)"
+! readelf -d facts_static | grep -q 'NEEDED.*libthorax' || fail "facts_static still needs libthorax.so"
+./facts_static "$G/daltorso.pts" "$G/daltorso.fac" >facts_static.txt || fail "facts_static: $(cat facts_static.txt)"
+compare "pkg-config --static" facts_static.txt
+
+# 3. CMake's find_package(thorax): thorax::thorax
+cmake -S "$SRC/tests/install" -B consumer -DCMAKE_PREFIX_PATH="$P" -DCMAKE_BUILD_TYPE=Release >cmake.log 2>&1 \
+    || fail "find_package(thorax): $(cat cmake.log)"
+cmake --build consumer >>cmake.log 2>&1 || fail "building against thorax::thorax: $(cat cmake.log)"
+grep -q "thorax_DIR:PATH=$P/lib/cmake/thorax" consumer/CMakeCache.txt || fail "find_package found another thorax: $(grep thorax_DIR consumer/CMakeCache.txt)"
+consumer/surface_facts "$G/daltorso.pts" "$G/daltorso.fac" >facts_cmake.txt || fail "CMake-built program: $(cat facts_cmake.txt)"
+compare "find_package(thorax)" facts_cmake.txt
+
+# 4. the man pages render, with the options from the help
+for page in thorax thorax-forward thorax-mesh thorax-view; do
+    MANWIDTH=100 man -l "$P/share/man/man1/$page.1" >"$page.man" 2>man.err || fail "man -l $page.1: $(cat man.err)"
+    [ ! -s man.err ] || fail "man -l $page.1 warns: $(cat man.err)"
+done
+grep -q 'thorax-forward - finite-element forward solutions' thorax-forward.man || fail "thorax-forward(1) NAME: $(head -5 thorax-forward.man)"
+for opt in --epicardial --transfer-out --currents; do
+    grep -q -- "$opt" thorax-forward.man || fail "thorax-forward(1) lacks $opt"
+done
+for cmd in phantom surfaces mesh forward leads render view; do
+    grep -q "thorax $cmd" thorax.man || fail "thorax(1) does not list '$cmd'"
+done
+grep -q -- '--grid MM' thorax-mesh.man || fail "thorax-mesh(1) lacks --grid MM"
+groff -man -ww -z "$P/share/man/man1/"*.1 2>groff.err; [ ! -s groff.err ] || fail "groff warns: $(head -5 groff.err)"
+
+# 5. the installed Python package finds the installed library by itself
+env -u THORAX_LIBRARY PYTHONPATH="$P/lib/python3/dist-packages" "$PY" -B - "$G" "$L" <<'EOF' >py.txt || fail "installed Python package: $(cat py.txt)"
+import os, sys
+import thorax
+g, lib = sys.argv[1], sys.argv[2]
+assert os.path.realpath(thorax.library_path()) == os.path.realpath(os.path.join(lib, "libthorax.so.0.1")), thorax.library_path()
+assert thorax.version() == "0.1.0", thorax.version()
+print("python: library", thorax.library_path())
+EOF
+cat py.txt
+echo "e2e_install: passed"
