@@ -17,6 +17,7 @@ PYTHONPATH (python/) and THORAX_DATA (../shared/data) set:
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import unittest
 
@@ -272,6 +273,19 @@ class Dalhousie(Work):
         self.assertEqual(torso.values.shape, (len(m.surface(role="outer").nodes), 3))
         np.testing.assert_allclose(torso.values[:, 2], 0.3 * torso.values[:, 0] - 0.5 * torso.values[:, 1],
                                    rtol=0, atol=1e-6 * scale)
+
+        # the example script on the meshed model: its dipole turns half a turn between frames 0 and 2
+        # of 4, so its torso maps there are opposite; its .mat read by scipy
+        example = os.path.join(os.path.dirname(__file__), "..", "examples", "dipole_forward.py")
+        r = subprocess.run([sys.executable, "-B", example, self.path("dal_meshed"), self.path("ex.mat"), "--frames", "4"],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("wrote", r.stdout)
+        import scipy.io
+        v = scipy.io.loadmat(self.path("ex.mat"))["potvals"]
+        self.assertEqual(v.shape, (len(m.surface(role="outer").nodes), 4))
+        self.assertGreater(np.abs(v[:, 0]).max(), 0.01)  # mV: a 0.1 mA m dipole reaches the torso
+        np.testing.assert_allclose(v[:, 2], -v[:, 0], rtol=0, atol=1e-6 * np.abs(v).max())
 
 
 if __name__ == "__main__":
