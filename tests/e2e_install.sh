@@ -20,6 +20,10 @@ PY=/usr/bin/python3
 DATA=${THORAX_DATA:-$SRC/../shared/data}
 G=$DATA/map3d/geom/torso
 BUILD=$(cd "$(dirname "$THORAX")/.." && pwd)
+# the version the build was configured with (CMake's project version): VER 0.1.0, SO 0.1 (the SONAME's)
+VER=$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$BUILD/CMakeCache.txt")
+SO=${VER%.*}
+[ -n "$VER" ] || { echo "e2e_install: no project version in $BUILD/CMakeCache.txt" >&2; exit 1; }
 rm -rf "$WORK" && mkdir -p "$WORK" && cd "$WORK"
 fail() { echo "e2e_install: FAIL: $*" >&2; exit 1; }
 if [ ! -f "$G/daltorso.pts" ]; then echo "skip: $G not found (the Dalhousie torso)"; exit 0; fi
@@ -31,7 +35,7 @@ env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$SRC" install BUILD="$BUILD"
 P=$WORK/stage/opt/thorax
 [ -d "$WORK/stage2/opt/thorax/lib" ] || fail "make install DESTDIR=stage2 PREFIX=/opt/thorax put nothing in stage2/opt/thorax"
 L=$P/lib
-for f in lib/libthorax.so.0.1.0 lib/libthorax.a include/thorax/core/core.h include/thorax/capi/capi.h \
+for f in lib/libthorax.so.$VER lib/libthorax.a include/thorax/core/core.h include/thorax/capi/capi.h \
     include/thorax/fem/fem.h lib/pkgconfig/thorax.pc lib/cmake/thorax/thoraxConfig.cmake \
     lib/cmake/thorax/thoraxConfigVersion.cmake lib/cmake/thorax/thoraxTargets.cmake bin/thorax bin/thorax-view \
     share/man/man1/thorax.1 share/man/man1/thorax-forward.1 share/man/man1/thorax-view.1 share/doc/thorax/LICENSE \
@@ -39,20 +43,20 @@ for f in lib/libthorax.so.0.1.0 lib/libthorax.a include/thorax/core/core.h inclu
     [ -e "$P/$f" ] || fail "not installed: $f"
 done
 [ ! -e "$P/include/thorax/view" ] || fail "the viewer's header was installed (libthorax_view is not)"
-[ "$(readlink "$L/libthorax.so")" = libthorax.so.0.1 ] || fail "libthorax.so -> $(readlink "$L/libthorax.so"), not libthorax.so.0.1"
-[ "$(readlink "$L/libthorax.so.0.1")" = libthorax.so.0.1.0 ] || fail "libthorax.so.0.1 -> $(readlink "$L/libthorax.so.0.1")"
-soname=$(readelf -d "$L/libthorax.so.0.1.0" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
-[ "$soname" = libthorax.so.0.1 ] || fail "SONAME '$soname', not libthorax.so.0.1"
+[ "$(readlink "$L/libthorax.so")" = libthorax.so.$SO ] || fail "libthorax.so -> $(readlink "$L/libthorax.so"), not libthorax.so.$SO"
+[ "$(readlink "$L/libthorax.so.$SO")" = libthorax.so.$VER ] || fail "libthorax.so.$SO -> $(readlink "$L/libthorax.so.$SO")"
+soname=$(readelf -d "$L/libthorax.so.$VER" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
+[ "$soname" = libthorax.so.$SO ] || fail "SONAME '$soname', not libthorax.so.$SO"
 n_pages=$(ls "$P/share/man/man1" | wc -l)
 n_cmds=$("$THORAX" help | awk '/^commands:/ { on = 1; next } on && /^  [a-z]/ && $1 != "help" { n++ } END { print n }')
 [ "$n_pages" -eq $((n_cmds + 1)) ] || fail "$n_pages man pages for $n_cmds commands (+ thorax.1)"
 
 # the installed program runs on the installed library
-loaded() { realpath "$(ldd "$1" | awk '$1 == "libthorax.so.0.1" { print $3 }')"; }
+loaded() { realpath "$(ldd "$1" | awk -v n="libthorax.so.$SO" '$1 == n { print $3 }')"; }
 for prog in thorax thorax-view; do
-    [ "$(loaded "$P/bin/$prog")" = "$L/libthorax.so.0.1.0" ] || fail "bin/$prog loads $(loaded "$P/bin/$prog"), not $L/libthorax.so.0.1.0"
+    [ "$(loaded "$P/bin/$prog")" = "$L/libthorax.so.$VER" ] || fail "bin/$prog loads $(loaded "$P/bin/$prog"), not $L/libthorax.so.$VER"
 done
-[ "$("$P/bin/thorax" --version)" = "thorax 0.1.0" ] || fail "installed thorax --version: $("$P/bin/thorax" --version)"
+[ "$("$P/bin/thorax" --version)" = "thorax $VER" ] || fail "installed thorax --version: $("$P/bin/thorax" --version)"
 
 # the reference: the same facts computed by NumPy from the files (0- or 1-based .fac detected alike)
 "$PY" - "$G/daltorso.pts" "$G/daltorso.fac" >expected.txt <<'EOF'
@@ -88,16 +92,16 @@ grep -q '^euler 2$' expected.txt || fail "the Dalhousie torso is not a closed sp
 # A sanitized build (THORAX_SANITIZE) installs a sanitized library: the programs built against it are
 # sanitized alike (the runtime must come first), and Python cannot load it (step 5 is skipped).
 SAN=""
-if readelf -d "$L/libthorax.so.0.1.0" | grep -q 'NEEDED.*lib[at]san'; then SAN="-fsanitize=address,undefined"; fi
+if readelf -d "$L/libthorax.so.$VER" | grep -q 'NEEDED.*lib[at]san'; then SAN="-fsanitize=address,undefined"; fi
 
 # 1. pkg-config alone
 export PKG_CONFIG_PATH=$L/pkgconfig
-[ "$(pkg-config --modversion thorax)" = 0.1.0 ] || fail "pkg-config --modversion thorax: $(pkg-config --modversion thorax 2>&1)"
+[ "$(pkg-config --modversion thorax)" = "$VER" ] || fail "pkg-config --modversion thorax: $(pkg-config --modversion thorax 2>&1)"
 cc $SAN -o facts_pc "$SRC/tests/install/surface_facts.c" $(pkg-config --cflags --libs thorax) -Wl,-rpath,"$L" 2>cc.log \
     || fail "cc with pkg-config --cflags --libs thorax: $(cat cc.log)"
-readelf -d facts_pc | grep -q 'NEEDED.*libthorax.so.0.1' || fail "facts_pc does not need libthorax.so.0.1"
+readelf -d facts_pc | grep -q "NEEDED.*libthorax.so.$SO" || fail "facts_pc does not need libthorax.so.$SO"
 ./facts_pc "$G/daltorso.pts" "$G/daltorso.fac" >facts_pc.txt || fail "facts_pc: $(cat facts_pc.txt)"
-[ "$(loaded ./facts_pc)" = "$L/libthorax.so.0.1.0" ] || fail "facts_pc runs on $(loaded ./facts_pc), not the installed library"
+[ "$(loaded ./facts_pc)" = "$L/libthorax.so.$VER" ] || fail "facts_pc runs on $(loaded ./facts_pc), not the installed library"
 compare "pkg-config (shared)" facts_pc.txt
 
 # 2. pkg-config --static: libthorax.a and every library it needs
@@ -134,12 +138,12 @@ groff -man -ww -z "$P/share/man/man1/"*.1 2>groff.err; [ ! -s groff.err ] || fai
 
 # 5. the installed Python package finds the installed library by itself
 if [ -n "$SAN" ]; then echo "e2e_install: passed (a sanitized library: the Python step skipped)"; exit 0; fi
-env -u THORAX_LIBRARY PYTHONPATH="$P/lib/python3/dist-packages" "$PY" -B - "$G" "$L" <<'EOF' >py.txt || fail "installed Python package: $(cat py.txt)"
+env -u THORAX_LIBRARY PYTHONPATH="$P/lib/python3/dist-packages" "$PY" -B - "$G" "$L" "$SO" "$VER" <<'EOF' >py.txt || fail "installed Python package: $(cat py.txt)"
 import os, sys
 import thorax
 g, lib = sys.argv[1], sys.argv[2]
-assert os.path.realpath(thorax.library_path()) == os.path.realpath(os.path.join(lib, "libthorax.so.0.1")), thorax.library_path()
-assert thorax.version() == "0.1.0", thorax.version()
+assert os.path.realpath(thorax.library_path()) == os.path.realpath(os.path.join(lib, "libthorax.so." + sys.argv[3])), thorax.library_path()
+assert thorax.version() == sys.argv[4], thorax.version()
 print("python: library", thorax.library_path())
 EOF
 cat py.txt
