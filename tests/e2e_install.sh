@@ -39,6 +39,7 @@ for f in lib/libthorax.so.$VER lib/libthorax.a include/thorax/core/core.h includ
     include/thorax/fem/fem.h lib/pkgconfig/thorax.pc lib/cmake/thorax/thoraxConfig.cmake \
     lib/cmake/thorax/thoraxConfigVersion.cmake lib/cmake/thorax/thoraxTargets.cmake bin/thorax bin/thorax-view \
     share/man/man1/thorax.1 share/man/man1/thorax-forward.1 share/man/man1/thorax-view.1 share/doc/thorax/LICENSE \
+    share/doc/thorax/examples/surface_facts.c share/doc/thorax/examples/dipole_forward.py \
     lib/python3/dist-packages/thorax/__init__.py lib/python3/dist-packages/thorax/_installed.py; do
     [ -e "$P/$f" ] || fail "not installed: $f"
 done
