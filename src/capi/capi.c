@@ -207,10 +207,11 @@ thx_status thx_capi_forward(thx_ctx *ctx, const thx_model *m, const thx_series *
     if (!m || !epi) return thx_error(ctx, THX_EINPUT, "forward: no model or no epicardial series (NULL)");
     if (!m->volume || !m->volume->n_tets)
         return thx_error(ctx, THX_EINPUT, "forward: the model has no volume mesh (thorax mesh makes one)");
-    /* PETSc keeps the argv it was started with: static storage */
-    static char name[] = "libthorax";
-    static char *argv[] = {name, NULL};
-    if (thx_fem_init(1, argv, NULL, NULL) != THX_OK)
+    /* PETSc keeps the argv it was started with: static storage. No signal handlers: the host
+       program (Python) keeps its own SIGINT/SIGSEGV handling. */
+    static char name[] = "libthorax", nosig[] = "-no_signal_handler";
+    static char *argv[] = {name, nosig, NULL};
+    if (thx_fem_init(2, argv, NULL, NULL) != THX_OK)
         return thx_error(ctx, THX_ESOLVER, "forward: PETSc could not be initialized (PetscInitialize failed)");
     THX_CHECK(volume_gate(ctx, m, "forward"));
     thx_forward_opts fo;

@@ -80,8 +80,8 @@ thx_status thx_capi_mesh(thx_ctx *ctx, thx_model *m, double grid_mm, size_t *n_n
  * potentials of epi (rows: the heart surface's nodes) prescribed on the heart, the potentials of the
  * outer surface's nodes returned in *torso (rows x epi's frames; caller destroys). The volume is
  * checked first, as the CLI does (THX_ECHECK with the reasons when it fails). Starts PETSc on first
- * use (options from the PETSC_OPTIONS environment variable); PETSc stays up until the process ends
- * or thx_capi_finalize. */
+ * use, without its signal handlers (options from the PETSC_OPTIONS environment variable); PETSc
+ * stays up until the process ends or thx_capi_finalize. */
 thx_status thx_capi_forward(thx_ctx *ctx, const thx_model *m, const thx_series *epi, thx_series **torso);
 /* Ends what thx_capi_forward started (PETSc); harmless when nothing was started. */
 void thx_capi_finalize(void);
