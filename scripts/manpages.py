@@ -67,6 +67,7 @@ def body(lines):
     out = [".SH DESCRIPTION"]
     prev_blank, i = True, 0
     prose = False
+    section = "DESCRIPTION"
     while i < len(lines):
         line = lines[i].rstrip()
         if not line:
@@ -74,7 +75,13 @@ def body(lines):
             i += 1
             continue
         if is_header(line, prev_blank):
-            out.append(".SH " + esc(line[:-1].upper()))
+            # "volume mesh formats (a MESH is the only FILE; no --name/--role):" -> the heading in
+            # capitals, the parenthesis as its first line, in its own case
+            title, paren, rest = line[:-1].partition(" (")
+            section = title.upper()
+            out.append(".SH " + esc(section))
+            if paren:
+                out += [".PP", esc("(" + rest)]
             prev_blank, prose = False, False
             i += 1
             continue
@@ -99,6 +106,10 @@ def body(lines):
             prev_blank, prose = False, False
             continue
         if not prose:
+            if "OPTIONS" in section and prev_blank:
+                # prose after an option list (exit status, notes): a section of its own
+                section = "NOTES"
+                out.append(".SH NOTES")
             out.append(".PP")
             prose = True
         out.append(esc(line))
