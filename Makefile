@@ -4,7 +4,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 THORAX = $(BUILD)/bin/thorax
 
-.PHONY: all deps build demo check sanitize fuzz bench clean
+.PHONY: all deps build demo check sanitize fuzz bench clean install
 
 all: build
 
@@ -37,6 +37,14 @@ sanitize: deps
 FUZZ_TIME ?= 60
 fuzz: deps
 	@FUZZ_TIME=$(FUZZ_TIME) JOBS=$(JOBS) bash scripts/fuzz.sh
+
+# Installs the shared and static library, headers, thorax.pc, the CMake package, the programs, the
+# man pages and the Python binding under PREFIX, staged under DESTDIR when given (packaging):
+#   make install PREFIX=$$HOME/.local      make install PREFIX=/usr DESTDIR=/tmp/stage
+PREFIX ?= /usr/local
+install: build
+	@DESTDIR="$(DESTDIR)" cmake --install $(BUILD) --prefix "$(PREFIX)" >$(BUILD)/install.log || { cat $(BUILD)/install.log; exit 1; }
+	@echo "installed under $(DESTDIR)$(PREFIX) ($$(grep -c '^-- ' $(BUILD)/install.log) files; list in $(BUILD)/install_manifest.txt)"
 
 bench: build
 	@bash bench/surfaces.sh

@@ -20,6 +20,7 @@ packages=(
   python3 python3-vtk9 python3-numpy # tests: VTK itself reads our exports
   gmsh python3-gmsh                  # tests: Gmsh itself reads our .msh volume exports (API, or the CLI)
   time                               # bench: peak memory (/usr/bin/time -v)
+  man-db groff-base                  # tests: man -l renders the man pages made from the help (e2e_install)
   tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
   libcgal-dev                        # bench: CGAL's Delaunay_triangulation_3 beside ours (bench/delaunay_cgal.cpp, g++)
 )
