@@ -73,4 +73,4 @@ fi
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
 
 # the page: the figures at a glance, the ECG, the pictures, the tables (scripts/demo_report.py)
-python3 "$(dirname "$0")/demo_report.py" "$O"
+python3 "$(dirname "$0")/demo_report.py" "$O" $QRS

@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """The demo's results page: OUT/index.html from the files scripts/demo.sh leaves in OUT.
 
-    python3 scripts/demo_report.py OUT
+    python3 scripts/demo_report.py OUT [FRAME]
 
 Reads OUT/check.json (thorax check --json), OUT/solution/solution.json and ecg12.txt (thorax forward,
 thorax leads), OUT/model/model.json (the conductivity table), OUT/beat.txt's label or OUT/beat.label
 (the dipole), OUT/mesh.txt (thorax mesh --stats) and OUT/timings.txt (one "stage<TAB>seconds" a
-line), and writes OUT/index.html naming the pictures beside it. Prints the figures at a glance.
+line), and writes OUT/index.html naming the pictures beside it. FRAME (1-based) is the frame the maps
+show (default: lead II's peak). Prints where the page is and lead II's peak.
 Pictures that are missing are left out of the page, with a note saying so.
 """
 import html
@@ -44,7 +45,7 @@ def esc(s):
     return html.escape(str(s))
 
 
-def main(o):
+def main(o, frame=None):
     chk = json.load(open(os.path.join(o, 'check.json')))
     sol = json.load(open(os.path.join(o, 'solution', 'solution.json')))
     model = json.load(open(os.path.join(o, 'model', 'model.json')))
@@ -136,15 +137,15 @@ def main(o):
             img('measured_tank.png', 'tank sock'), img('measured_sock.png', '490-lead sock'),
             '<video src="measured_sock.mp4" controls loop></video>' if have('measured_sock.mp4') else '')
 
-    qrs_ms = t0 + k_ii * dt
+    qrs_ms = t0 + ((frame - 1) if frame else k_ii) * dt
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>thorax demo: results</title>
 <style>
 body{{font-family:sans-serif;max-width:1200px;margin:1.5em auto;color:#222;line-height:1.35}}
 h1{{font-size:1.6em;margin-bottom:0.2em}} h2{{border-bottom:1px solid #ddd;padding-bottom:0.15em;margin-top:1.6em}}
 .row{{display:flex;gap:1%;align-items:flex-start}} .row img,.row video{{flex:1;min-width:0;max-width:49.5%}}
-img.wide{{width:100%}} video{{max-width:49.5%}}
+img.wide{{display:block;width:100%;max-width:820px;margin:0 auto}} video{{max-width:49.5%}}
 table{{border-collapse:collapse;margin:0.6em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right;vertical-align:top}}
-td:first-child,th:first-child{{text-align:left}} td.src{{text-align:left;font-size:0.85em;color:#555;max-width:520px}}
+td:first-child,th:first-child{{text-align:left}} td.src,th.src{{text-align:left;font-size:0.85em;color:#555;max-width:520px}}
 table.glance td{{text-align:left}} table.glance td:first-child{{font-weight:bold;white-space:nowrap;background:#f6f6f6}}
 .sw{{display:inline-block;width:0.9em;height:0.9em;border:1px solid #888;vertical-align:middle;margin-right:4px}}
 .missing{{color:#a00}} pre{{background:#f8f8f8;padding:0.6em;overflow-x:auto;font-size:0.85em}}
@@ -184,7 +185,7 @@ plane, seen from the front), coloured by tissue region as in the table below; th
 potentials are prescribed. <code>thorax render MODEL --tetrahedra --clip anterior:0.5</code>. Right: the orientation
 check (paper 4.2): each surface in its own panel, triangles drawn only where their outward side faces the viewer,
 the nodes behind drawn as points.</p>
-<table><tr><th>region</th><th>&sigma; (S/m)</th><th>tetrahedra</th><th>volume (cm&sup3;)</th><th>source</th></tr>{''.join(crows)}</table>
+<table><tr><th>region</th><th>&sigma; (S/m)</th><th>tetrahedra</th><th>volume (cm&sup3;)</th><th class="src">source</th></tr>{''.join(crows)}</table>
 <table><tr><th>surface</th><th>role</th><th>nodes</th><th>triangles</th><th>closed</th><th>|&Omega;/4&pi; &minus; 1|</th><th>intersecting pairs</th><th>check</th></tr>{''.join(srows)}</table>
 <p>Volume: {v.get('nodes')} nodes, {v.get('tetrahedra')} tetrahedra; volume against the torso surface
 {100 * v.get('volume', {}).get('rel_diff', float('nan')):+.3f}%; smallest dihedral angle
@@ -205,7 +206,7 @@ ECG), <code>vtk/</code> (for ParaView), <code>frames/</code>; <code>demo.log</co
 
 
 if __name__ == '__main__':
-    if len(sys.argv) != 2:
-        sys.exit('usage: demo_report.py OUT')
-    peak, total = main(sys.argv[1])
+    if len(sys.argv) not in (2, 3):
+        sys.exit('usage: demo_report.py OUT [FRAME]')
+    peak, total = main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) == 3 else None)
     print('demo: wrote %s/index.html (lead II peak %.2f mV; total %.1f s)' % (sys.argv[1], peak, total))

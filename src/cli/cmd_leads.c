@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
@@ -49,6 +50,11 @@ int cmd_leads(int argc, char **argv)
     const char *sol = c.n_pos ? c.pos[0] : NULL;
     if (!sol) return cli_usage_error("leads", "no solution given");
     if (!out) out = sol;
+    if (plot) { /* checked before anything is written */
+        size_t pl = strlen(plot);
+        if (pl < 5 || (strcasecmp(plot + pl - 4, ".svg") && strcasecmp(plot + pl - 4, ".png")))
+            return cli_usage_error("leads", "--plot %s: give a file ending in .svg or .png", plot);
+    }
     thx_ctx *ctx = cli_ctx(verbose);
     thx_series_format fmt = (thx_series_format)format;
     const char *ext = fmt == THX_SERIES_TEXT ? "txt" : fmt == THX_SERIES_MAT ? "mat" : "raw";
@@ -102,7 +108,9 @@ int cmd_leads(int argc, char **argv)
         thx_ecg_plot_opts po;
         thx_ecg_plot_opts_default(&po);
         char title[PATH_MAX + 32];
-        snprintf(title, sizeof title, "12-lead ECG of %s", sol);
+        const char *base = strrchr(sol, '/');
+        base = base && base[1] ? base + 1 : sol;
+        snprintf(title, sizeof title, "12-lead ECG of %s", base);
         po.title = title;
         snprintf(path, sizeof path, "%s/%s", sol, torso_file);
         const char *in[1] = {path};
