@@ -63,7 +63,7 @@ xs = sorted({round(float(l.get('x1')), 3) for l in root.iter('{http://www.w3.org
              if l.get('x1') == l.get('x2') and float(l.get('y2')) - float(l.get('y1')) == H})
 assert xs == [float(i) for i in range(0, int(W) + 1)], xs[:10]
 heavy = {float(l.get('x1')) for l in root.iter('{http://www.w3.org/2000/svg}line')
-         if l.get('x1') == l.get('x2') and l.get('stroke-width') == '0.2' and float(l.get('y2')) - float(l.get('y1')) == H}
+         if l.get('x1') == l.get('x2') and float(l.get('stroke-width')) == 0.2 and float(l.get('y2')) - float(l.get('y1')) == H}
 assert heavy == {float(i) for i in range(0, int(W) + 1, 5)}
 names = ['I', 'II', 'III', 'aVR', 'aVL', 'aVF', 'V1', 'V2', 'V3', 'V4', 'V5', 'V6']
 t = [float(head['t0']) + k * float(head['dt']) for k in range(int(head['frames']))]
