@@ -8,8 +8,8 @@
 #  - thorax render --electrodes: the electrodes drawn (green) where they project; a missing file
 #    refused; --tetrahedra: the clipped mesh in its region colours, refused without a volume mesh;
 #  - scripts/demo_report.py on these files: the page parses, its figures at a glance are the
-#    files' (nodes, tetrahedra, lead II peak), the conductivity table is the model's, every
-#    picture it names exists.
+#    files' (nodes, tetrahedra, lead II peak, the leads' singular values against numpy's: rank 3
+#    for one dipole), the conductivity table is the model's, every picture it names exists.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
@@ -182,6 +182,14 @@ E = [[float(x) for x in l.split()] for l in open('solution/ecg12.txt') if l[:1] 
 assert ('peak %.2f mV' % max(E[1])) in glance['lead II'], glance['lead II']
 assert 'dipole 0.016 mA m' in glance['source'], glance['source']
 assert glance['checks'].startswith('all passed')
+# one dipole: the 8 independent leads have rank 3; the page's singular values are numpy's
+import numpy as np
+sv = np.linalg.svd(np.array([E[0], E[1]] + E[6:12]), compute_uv=False)
+m = re.search(r'singular values (\S+), (\S+), (\S+), then (\S+) \(relative (\S+)\)', glance['one dipole'])
+assert m, glance['one dipole']
+page_sv = [float(x) for x in m.groups()[:4]]
+assert all(abs(a - b) < 2e-3 * sv[0] for a, b in zip(page_sv[:3], sv[:3])), (page_sv, sv)
+assert page_sv[3] < 1e-9 * sv[0] and sv[3] < 1e-9 * sv[0], (page_sv, sv)
 # the conductivity table: one row a region, sigma as in model.json
 cond = {r[0]: r[1] for r in p.rows if r and len(r) == 5 and r[0] != 'region'}
 assert set(cond) == {r['name'] for r in model['regions']}, cond
