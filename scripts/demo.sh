@@ -41,18 +41,18 @@ stage "electrodes" "$T" electrodes "$O/model" -q
 stage "heartbeat (500 frames)" sh -c "'$T' beat '$O/model' -o '$O/beat.raw' > '$O/beat.out' && sed -n 2p '$O/beat.out' > '$O/beat.label'"
 stage "forward solution (500 frames)" "$T" forward "$O/model" --epicardial "$O/beat.raw" -o "$O/solution" --currents $QRS -q
 stage "12-lead ECG and its plot" "$T" leads "$O/solution" --plot "$O/ecg12.svg" -q
-R=(--solution "$O/solution" --size 800x900 --colorbar --label --trace II --only torso --only heart)
+R=(--solution "$O/solution" --size 800x900 --colorbar --orientation --label --trace II --only torso --only heart)
 stage "anterior map" "$T" render "${R[@]}" --frame $QRS --view anterior -o "$O/anterior.png" -q
 stage "posterior map" "$T" render "${R[@]}" --frame $QRS --view posterior -o "$O/posterior.png" -q
 OPEN=(--view anterior --clip anterior:0.75 --no-clip heart)   # the chest opened, the heart whole
 stage "heart through the clip plane" "$T" render "${R[@]}" --frame $QRS "${OPEN[@]}" -o "$O/heart.png" -q
-stage "contours and bands" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view left --style bands+contours --levels 16 --colorbar --label -o "$O/bands.png" -q
-stage "current arrows" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view anterior --clip anterior:0.55 --arrows --arrow-spacing 18 --surface torso=wire:0.15 -o "$O/currents.png" -q
-stage "orientation check" "$T" render "$O/model" --size 900x600 --panels --mode orientation -o "$O/orientation.png" -q
+stage "contours and bands" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view left --style bands+contours --levels 16 --colorbar --orientation --label -o "$O/bands.png" -q
+stage "current arrows" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view anterior --clip anterior:0.55 --arrows --arrow-spacing 18 --surface torso=wire:0.15 --orientation -o "$O/currents.png" -q
+stage "orientation check" "$T" render "$O/model" --size 900x600 --panels --mode orientation --orientation -o "$O/orientation.png" -q
 E12=(--electrodes "$O/model/electrodes/12lead.txt")
-stage "electrodes (anterior)" "$T" render --solution "$O/solution" --frame $QRS --size 700x800 --only torso "${E12[@]}" --view anterior -o "$O/electrodes_anterior.png" -q
-stage "electrodes (left)" "$T" render --solution "$O/solution" --frame $QRS --size 700x800 --only torso "${E12[@]}" --view left -o "$O/electrodes_left.png" -q
-stage "volume mesh picture" "$T" render "$O/model" --size 800x900 --mode hidden --tetrahedra --clip anterior:0.5 --view anterior -o "$O/tetrahedra.png" -q
+stage "electrodes (anterior)" "$T" render --solution "$O/solution" --frame $QRS --size 700x800 --only torso "${E12[@]}" --orientation --view anterior -o "$O/electrodes_anterior.png" -q
+stage "electrodes (left)" "$T" render --solution "$O/solution" --frame $QRS --size 700x800 --only torso "${E12[@]}" --orientation --view left -o "$O/electrodes_left.png" -q
+stage "volume mesh picture" "$T" render "$O/model" --size 800x900 --mode hidden --tetrahedra --clip anterior:0.5 --orientation --view anterior -o "$O/tetrahedra.png" -q
 stage "animation (300 frames + MP4)" "$T" animate "${R[@]}" --size 640x720 "${OPEN[@]}" --frames 101:400 --fps 30 -o "$O/frames" --mp4 "$O/beat.mp4" -q
 # Measured data, when the shared data folder is beside the checkout (it is in CI; elsewhere this part
 # is left out): map3d's recordings drawn from their own files, no model needed.

@@ -47,6 +47,7 @@ export      --formt       --format        --format        xyz
 slice       --spacng      --spacing       --margin        -1
 import      --forse       --force         --scale         0
 mesh        --gird        --grid          --grid          five
+sigma       --scal        --scale         --scale         -2
 series      --fromat      --format        --format        csv
 electrodes  --aray        --array         --array         -3
 beat        --frmes       --frames        --dt            0

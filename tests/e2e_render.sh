@@ -250,4 +250,53 @@ def depth(p):   # columns drawn, and their mean (the left view has the posterior
 assert 0.35 * df < dc < 0.7 * df and mc > mf, (dc, df, mc, mf)   # the posterior half is what is left
 print('Dalhousie torso from the left: depth %d px, %d with the anterior half clipped' % (df, dc))
 EOF2
+# colour bars: one per distinct scale (the torso's and the heart's), one when they share a scale,
+# and a picture too small for both refused with nothing written
+"$THORAX" render "${R[@]}" --view anterior --colorbar -o bars2.png -q
+"$THORAX" render "${R[@]}" --view anterior --colorbar --scope all -o bars1.png -q
+"$THORAX" render "${R[@]}" --view anterior --clip anterior:0.55 --arrows --arrow-unit --colorbar -o bars3.png -q
+if "$THORAX" render --solution sol --frame 193 --size 400x110 --colorbar -o bars_small.png 2> small.err; then fail "two bars in 110 rows accepted"; fi
+[ ! -e bars_small.png ] || fail "refused picture written"
+grep -q "2 different scales" small.err || { cat small.err; fail "refusal message"; }
+"$THORAX" render --solution sol --frame 193 --size 400x110 --colorbar --scope all -o bars_small.png -q
+# orientation letters on the Dalhousie torso (its own axes: up -y, front -z): anterior and posterior
+DALO=("$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2_003.pot" --up -y --front -z --size 300x300)
+"$THORAX" render "${DALO[@]}" -o dal_plain.png -q
+"$THORAX" render "${DALO[@]}" --orientation -o dal_ant.png -q
+"$THORAX" render "${DALO[@]}" --orientation --view posterior -o dal_post.png -q
+$PY - <<'EOF3'
+import vtk, numpy as np
+from vtk.util.numpy_support import vtk_to_numpy
+def load(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    im = r.GetOutput(); w, h, _ = im.GetDimensions()
+    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3].astype(int)
+def runs(p):   # the bars' strips: runs of 16 rows or more drawn over the background in the column
+    a = load(p); w = a.shape[1]    # of the right sixth with the most saturated pixels
+    sat = (a.max(axis=2) - a.min(axis=2)) > 60
+    col = max(range(w - w // 6, w), key=lambda x: sat[:, x].sum())
+    drawn = (abs(a[:, col] - a[0, 0]).sum(axis=1) > 30).astype(int)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], drawn, [0]])))
+    lengths = edges[1::2] - edges[0::2]
+    return (lengths >= 16).sum(), lengths.max()
+(n2, l2), (n1, l1), (n3, l3) = runs('bars2.png'), runs('bars1.png'), runs('bars3.png')
+assert n2 == 2 and n1 == 1 and n3 == 3, (n2, n1, n3)   # arrows coloured by |J|: a third bar
+print('colour bars: %d strips (%d rows) for the torso and heart scales, %d (%d rows) sharing one' % (n2, l2, n1, l1))
+plain, ant, post = load('dal_plain.png'), load('dal_ant.png'), load('dal_post.png')
+h, w, _ = plain.shape
+def patch(img, x0, x1, y0, y1):   # the letter's pixels: the tight box of what differs from the plain picture
+    d = (abs(img - plain).sum(axis=2) > 60)[y0:y1, x0:x1]
+    ys, xs = d.nonzero()
+    assert len(ys) > 5, ('no letter', x0, y0)
+    return d[ys.min():ys.max() + 1, xs.min():xs.max() + 1]
+aL, aR = patch(ant, 0, 30, h // 2 - 20, h // 2 + 20), patch(ant, w - 30, w, h // 2 - 20, h // 2 + 20)
+pL, pR = patch(post, 0, 30, h // 2 - 20, h // 2 + 20), patch(post, w - 30, w, h // 2 - 20, h // 2 + 20)
+# the anterior view's left letter (R) is the posterior view's right one, and not the anterior's right (L)
+assert aL.shape == pR.shape and (aL == pR).all(), 'anterior left != posterior right'
+assert aR.shape == pL.shape and (aR == pL).all(), 'anterior right != posterior left'
+assert aL.shape != aR.shape or (aL != aR).any(), 'R and L drawn alike'
+top, bottom = patch(ant, w // 2 - 20, w // 2 + 20, 0, 30), patch(ant, w // 2 - 20, w // 2 + 20, h - 30, h)
+assert top.shape != bottom.shape or (top != bottom).any(), 'S and I drawn alike'
+print('orientation letters on the Dalhousie torso: left %s, right %s, top %s, bottom %s pixels' % (aL.shape, aR.shape, top.shape, bottom.shape))
+EOF3
 echo "e2e_render: all checks passed"

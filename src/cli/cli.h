@@ -12,6 +12,7 @@ int cmd_export(int argc, char **argv);
 int cmd_slice(int argc, char **argv);
 int cmd_import(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
+int cmd_sigma(int argc, char **argv);
 int cmd_series(int argc, char **argv);
 int cmd_electrodes(int argc, char **argv);
 int cmd_beat(int argc, char **argv);

@@ -103,6 +103,27 @@ static int parse_region(void *user, const cli_opt *opt, const char *v)
     return 0;
 }
 
+/* --sigma NAME=SIGMA: checked here (the number or tensor), the name when the regions exist */
+static int parse_sigma(void *user, const cli_opt *opt, const char *v)
+{
+    thx_mesh_opts *o = user;
+    (void)opt;
+    if (o->n_sigma_set >= sizeof o->sigma_set / sizeof o->sigma_set[0])
+        return cli_usage_error("mesh", "at most %zu --sigma options", sizeof o->sigma_set / sizeof o->sigma_set[0]);
+    const char *eq = strchr(v, '=');
+    thx_ctx *ctx = NULL;
+    if (thx_ctx_create(&ctx) != THX_OK) return cli_usage_error("mesh", "out of memory");
+    double s[9];
+    int aniso = 0;
+    int bad = !eq || eq == v ? 1 : thx_sigma_parse(ctx, eq + 1, s, &aniso) != THX_OK ? 2 : 0;
+    int rc = 0;
+    if (bad == 1) rc = cli_usage_error("mesh", "--sigma %s: expected NAME=SIGMA", v);
+    else if (bad == 2) rc = cli_usage_error("mesh", "--sigma %s", thx_ctx_message(ctx));
+    thx_ctx_destroy(&ctx);
+    if (!rc) o->sigma_set[o->n_sigma_set++] = v;
+    return rc;
+}
+
 int cmd_mesh(int argc, char **argv)
 {
     progress_state ps = {"", 0, 0};
@@ -135,13 +156,19 @@ int cmd_mesh(int argc, char **argv)
          .fn = parse_region,
          .help = "rename a tissue region and/or set its isotropic conductivity SIGMA, e.g. --region "
                  "mean_thorax=scalp:1 --region skull:0.0125"},
+        {.name = "--sigma", .type = CLI_STRING, .meta = "NAME=S|SXX,SYY,SZZ[,SXY,SXZ,SYZ]", .unit = "S/m",
+         .flags = CLI_REPEAT, .fn = parse_sigma,
+         .help = "the conductivity of region NAME (its name after --region): a number (isotropic), or a tensor in "
+                 "the model's axes, its diagonal or all six entries; e.g. --sigma lung_l=0.08 --sigma "
+                 "muscle=0.04,0.04,0.4 (docs/decisions.md lists the defaults and their sources; thorax sigma "
+                 "changes them later)"},
         {.name = "--stats", .type = CLI_FLAG, .i = &want_stats, .help = "print counts and times"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command cmd = {
         .name = "mesh",
-        .usage = "MODEL [-o] [--grid] [--tol] [--layer-spacing] [--no-heart] [--quality] [--repair] [--region] [--stats]",
+        .usage = "MODEL [-o] [--grid] [--tol] [--layer-spacing] [--no-heart] [--quality] [--repair] [--region]... [--sigma]... [--stats]",
         .about = "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
                  "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
                  "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"

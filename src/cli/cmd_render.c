@@ -276,7 +276,20 @@ size_t render_options(cli_opt *t, ropts *o)
                        .count = &o->p.n_whole, .max = 16,
                        .help = "this surface is left whole by the clip plane (e.g. the heart inside an opened chest)"};
     t[n++] = (cli_opt){.name = "--colorbar", .type = CLI_FLAG, .i = &o->p.colorbar,
-                       .help = "a colour bar with values, title and unit"};
+                       .help = "a colour bar per distinct colour scale shown (at most 4; a picture with more is refused), "
+                               "with its values, title and unit, and the surfaces it serves when there are several"};
+    t[n++] = (cli_opt){.name = "--bar-title", .type = CLI_STRING, .meta = "TEXT", .flags = CLI_REPEAT,
+                       .sv = o->p.bar_title, .count = &o->p.n_bar_title, .max = THX_PICTURE_BARS,
+                       .def = "what is shown: potential, activation, |J|",
+                       .help = "the colour bar's title; given once, every bar's; repeated, the k-th bar's (the body "
+                               "surface's first)"};
+    t[n++] = (cli_opt){.name = "--bar-unit", .type = CLI_STRING, .meta = "UNIT", .flags = CLI_REPEAT,
+                       .sv = o->p.bar_unit, .count = &o->p.n_bar_unit, .max = THX_PICTURE_BARS, .def = "the data's",
+                       .help = "the colour bar's unit, as --bar-title"};
+    t[n++] = (cli_opt){.name = "--orientation", .type = CLI_FLAG, .i = &o->p.orientation,
+                       .help = "orientation letters at the middle of each edge of every panel: the anatomical "
+                               "directions (R/L the subject's right/left, A/P, S/I) toward that edge for the camera "
+                               "and the model's frame (two or three letters for an oblique camera)"};
     t[n++] = (cli_opt){.name = "--label", .type = CLI_FLAG, .i = &o->p.label, .help = "the time and frame"};
     t[n++] = (cli_opt){.name = "--node-labels", .type = CLI_STRING, .meta = "SURFACE=index|channel|value",
                        .flags = CLI_REPEAT, .sv = o->p.labels, .count = &o->p.n_labels, .max = THX_PICTURE_MAX,
@@ -341,7 +354,9 @@ thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_rendere
     THX_CHECK(thx_picture_load(ctx, &o->p, d));
     THX_CHECK(thx_renderer_create(ctx, o->p.w, o->p.h, rr));
     THX_CHECK(thx_image_create(ctx, o->p.w, o->p.h, img));
-    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema || o->p.n_electrodes) THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
+    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema || o->p.orientation ||
+        o->p.n_electrodes)
+        THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
     return THX_OK;
 }
 

@@ -17,6 +17,7 @@ static const struct {
     {"export", cmd_export, "write a model's surfaces as VTK, VTP, OBJ, STL or PLY"},
     {"slice", cmd_slice, "cut a model's surfaces by planes z = const into contours"},
     {"mesh", cmd_mesh, "tetrahedral volume mesh with tissue regions and conductivities (paper 3.3)"},
+    {"sigma", cmd_sigma, "a meshed model's conductivity table: list it, or change regions' values in place"},
     {"import", cmd_import, "a model from surfaces or a volume mesh made elsewhere (tri, obj, stl, vtk, vtu, msh, ...)"},
     {"series", cmd_series, "time series (rows x frames): summary, conversion between text, raw and .mat"},
     {"electrodes", cmd_electrodes, "the phantom's electrodes: 12-lead positions and a body-surface array"},

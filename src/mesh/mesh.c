@@ -466,6 +466,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         if (su->role == THX_ROLE_LUNG || su->role == THX_ROLE_OTHER) snprintf(table[n_regions].name, sizeof table[n_regions].name, "%s", su->name);
         surf_region[s] = n_regions++;
     }
+    /* the defaults' "along" on the body axis: the model's superior axis (z without a frame) */
+    thx_regions_orient(table, (size_t)n_regions, &m->frame);
     for (size_t k = 0; k < o->n_region_set; k++) {
         int found = -1;
         for (int r = 0; r < n_regions && found < 0; r++)
@@ -494,6 +496,15 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
                 st = thx_error(ctx, THX_EINPUT, "mesh: two regions would be named \"%s\"", table[r].name);
                 goto done;
             }
+    for (size_t k = 0; k < o->n_sigma_set; k++) {
+        st = thx_regions_assign(ctx, table, (size_t)n_regions, o->sigma_set[k], "set by the user (thorax mesh --sigma)");
+        if (st != THX_OK) {
+            char why[512];
+            snprintf(why, sizeof why, "%s", thx_ctx_message(ctx));
+            st = thx_error(ctx, st, "mesh: --sigma %s", why);
+            goto done;
+        }
+    }
     {
         tset fs = {NULL, 0};
         st = tset_init(ctx, &fs, n_sub);

@@ -339,23 +339,119 @@ static int n_panels(const thx_picture_opts *o, const thx_model *m, int *cols, in
     return panels;
 }
 
-static void collect_bars(const thx_model *m, const built_scene *b, thx_picture_bars *bars)
+/* Scale sc (colour map cmap, quantity title, unit) into the bars, once per distinct one; the
+   surface (or "currents") named on it. */
+static void add_bar(thx_picture_bars *bars, const thx_scale *sc, int cmap, const char *title, const char *unit,
+                    const char *name)
 {
+    int k = 0;
+    while (k < bars->n && (memcmp(&bars->scale[k], sc, sizeof *sc) || bars->cmap[k] != cmap ||
+                           strcmp(bars->title[k], title) || strncmp(bars->unit[k], unit, sizeof bars->unit[k] - 1)))
+        k++;
+    if (k == bars->n) {
+        if (bars->n == THX_PICTURE_SCALES) { bars->more = 1; return; }
+        bars->scale[k] = *sc;
+        bars->cmap[k] = cmap;
+        snprintf(bars->title[k], sizeof bars->title[k], "%s", title);
+        snprintf(bars->unit[k], sizeof bars->unit[k], "%s", unit);
+        bars->names[k][0] = '\0';
+        bars->n++;
+    }
+    size_t len = strlen(bars->names[k]), n = strlen(name);
+    for (const char *p = bars->names[k]; *p;) { /* already named (a surface drawn in several passes) */
+        const char *c = strstr(p, ", ");
+        size_t l = c ? (size_t)(c - p) : strlen(p);
+        if (l == n && !strncmp(p, name, n)) return;
+        p = c ? c + 2 : p + l;
+    }
+    if (len + n + 3 < sizeof bars->names[k])
+        snprintf(bars->names[k] + len, sizeof bars->names[k] - len, "%s%s", len ? ", " : "", name);
+}
+
+static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_picture_bars *bars)
+{
+    const thx_model *m = d->m;
     for (int pass = 0; pass < 2; pass++)
         for (size_t i = 0; i < b->n; i++) {
             const thx_render_surface *r = &b->rs[i];
             int main = b->main_surface >= 0 && r->surf == m->surf[b->main_surface];
             if (!r->values || (pass == 0) != main) continue;
-            int k = 0;
-            while (k < bars->n && memcmp(&bars->scale[k], &r->scale, sizeof r->scale)) k++;
-            if (k == bars->n) {
-                if (bars->n == THX_PICTURE_BARS) continue;
-                bars->scale[bars->n++] = r->scale;
-            }
-            size_t len = strlen(bars->names[k]);
-            if (len + strlen(r->surf->name) + 3 < sizeof bars->names[k])
-                snprintf(bars->names[k] + len, sizeof bars->names[k] - len, "%s%s", len ? ", " : "", r->surf->name);
+            int s = -1;
+            for (size_t k = 0; k < m->n_surfaces && k < THX_PICTURE_SURFACES && s < 0; k++)
+                if (m->surf[k] == r->surf) s = (int)k;
+            int map = s >= 0 && d->series[s] && d->map[s][d->active[s]];
+            add_bar(bars, &r->scale, (int)r->cmap, map ? "activation" : "potential",
+                    s >= 0 && d->series[s] ? d->series[s]->unit : "", r->surf->name);
         }
+    if (b->have_arrows && b->arrows.unit_length)
+        add_bar(bars, &b->arrows.mag_scale, (int)b->arrows.cmap, "|J|", d->currents ? d->currents->unit : "", "currents");
+}
+
+int thx_picture_bar_layout(const thx_picture_opts *o, thx_font *font, int w, int h, int n, int box[][4])
+{
+    int vp[4];
+    thx_picture_viewport(o, font, w, h, vp);
+    int vw = vp[2], vh = vp[3], top = vp[1], bar_w = w - vw;
+    if (n <= 0 || !o->colorbar) return 0;
+    if (n == 1) {
+        box[0][0] = vw + bar_w / 4;
+        box[0][1] = top + vh / 8;
+        box[0][2] = bar_w / 4;
+        box[0][3] = vh * 3 / 4;
+        return box[0][3] >= 16 ? 1 : 0;
+    }
+    /* stacked, each below its three title lines (its surfaces, what is shown, the unit) */
+    int slot = vh * 7 / 8 / n, fh = thx_font_height(font), fit = 0;
+    for (int k = 0; k < n && k < THX_PICTURE_BARS; k++) {
+        int y0 = top + vh / 16 + k * slot + 3 * fh + 8, hh = slot - 4 * fh - 12;
+        if (hh < 16) break;
+        box[k][0] = vw + bar_w / 4;
+        box[k][1] = y0;
+        box[k][2] = bar_w / 4;
+        box[k][3] = hh;
+        fit++;
+    }
+    return fit;
+}
+
+void thx_picture_bar_title(const thx_picture_opts *o, const thx_picture_bars *bars, int k, char *head, size_t head_size,
+                           char *unit, size_t unit_size)
+{
+    const char *title = o->n_bar_title == 1 ? o->bar_title[0] : k < o->n_bar_title ? o->bar_title[k] : bars->title[k];
+    const char *u = o->n_bar_unit == 1 ? o->bar_unit[0] : k < o->n_bar_unit ? o->bar_unit[k] : bars->unit[k];
+    snprintf(head, head_size, "%s", title);
+    snprintf(unit, unit_size, "%s", u);
+}
+
+thx_status thx_picture_bars_check(thx_ctx *ctx, const thx_picture_opts *o, thx_font *font, int w, int h,
+                                  const thx_picture_bars *bars)
+{
+    if (!o->colorbar) return THX_OK;
+    if (o->n_bar_title > 1 && o->n_bar_title > bars->n)
+        return thx_error(ctx, THX_EINPUT, "--bar-title is given %d times, but the picture has %d colour bar%s",
+                         o->n_bar_title, bars->n, bars->n == 1 ? "" : "s");
+    if (o->n_bar_unit > 1 && o->n_bar_unit > bars->n)
+        return thx_error(ctx, THX_EINPUT, "--bar-unit is given %d times, but the picture has %d colour bar%s",
+                         o->n_bar_unit, bars->n, bars->n == 1 ? "" : "s");
+    int box[THX_PICTURE_BARS][4];
+    int fit = thx_picture_bar_layout(o, font, w, h, bars->n, box);
+    if (fit >= bars->n && !bars->more) return THX_OK;
+    char list[1024] = "";
+    for (int k = 0; k < bars->n; k++) {
+        size_t at = strlen(list);
+        char lo[32], hi[32];
+        snprintf(lo, sizeof lo, "%.3g", bars->scale[k].lo);
+        snprintf(hi, sizeof hi, "%.3g", bars->scale[k].hi);
+        if (at + 200 < sizeof list)
+            snprintf(list + at, sizeof list - at, "%s%s %s %s..%s %s", k ? "; " : "", bars->names[k], bars->title[k], lo, hi,
+                     bars->unit[k]);
+    }
+    return thx_error(ctx, THX_EINPUT,
+                     "--colorbar: the surfaces are coloured on %s%d different scales (%s), but %d colour bar%s fit "
+                     "beside a %dx%d picture, and one bar for all would not be the scale of every surface: give "
+                     "them one scale (--scope all or surfaces, --scale-group A,B, --slave NAME=MASTER), draw fewer "
+                     "surfaces (--only), or a taller picture (--size)",
+                     bars->more ? "more than " : "", bars->n, list, fit, fit == 1 ? "" : "s", w, h);
 }
 
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
@@ -414,7 +510,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         free(b->avec);
         b->apos = b->avec = NULL;
         if (st != THX_OK) break;
-        collect_bars(m, b, bars);
+        collect_bars(d, b, bars);
         panel++;
     }
     free(b);
@@ -429,7 +525,7 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
     int vp[4], cols, rows;
     thx_picture_viewport(o, font, img->w, img->h, vp);
     int vw = vp[2], vh = vp[3], top = vp[1];
-    int trace_h = o->trace ? img->h / 5 : 0, bar_w = img->w - vw;
+    int trace_h = o->trace ? img->h / 5 : 0;
     if (o->panels) {
         n_panels(o, m, &cols, &rows);
         int pw = vw / cols, ph = vh / rows, panel = 0;
@@ -447,24 +543,28 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
     for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
         if (d->series[s] && (!any || m->surf[s]->role == THX_ROLE_OUTER)) any = d->series[s];
     int shades = o->style == THX_DATA_BANDS || o->style == THX_DATA_BANDS_CONTOURS ? o->levels : 0;
-    int any_map = 0; /* the bar of a map of times says so */
-    for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
-        if (d->series[s] == any && any) any_map = d->map[s][d->active[s]];
-    if (o->colorbar && bars->n == 1)
-        thx_draw_colorbar(img, font, vw + bar_w / 4, top + vh / 8, bar_w / 4, vh * 3 / 4, o->cmap, &bars->scale[0], shades,
-                          5, any_map ? "activation" : "potential", any ? any->unit : "");
-    else if (o->colorbar && bars->n > 1) {
-        /* one bar per distinct scale, stacked, each titled with its surfaces */
-        int slot = vh * 7 / 8 / bars->n, fh = thx_font_height(font);
-        for (int k = 0; k < bars->n; k++) {
-            const char *unit = "";
-            for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
-                if (d->series[s] && strstr(bars->names[k], m->surf[s]->name)) unit = d->series[s]->unit;
-            int y0 = top + vh / 16 + k * slot + 2 * fh + 4, hh = slot - 3 * fh - 8;
-            if (hh < 16) break;
-            thx_draw_colorbar(img, font, vw + bar_w / 4, y0, bar_w / 4, hh, o->cmap, &bars->scale[k], shades, hh > 8 * fh ? 5 : 3,
-                              bars->names[k], unit);
+    if (o->colorbar) {
+        /* one bar per distinct scale, each with its own colour map and titles; those that do not
+           fit are left out here (thx_picture_draw refuses such a picture before) */
+        int box[THX_PICTURE_BARS][4];
+        int fit = thx_picture_bar_layout(o, font, img->w, img->h, bars->n, box), fh = thx_font_height(font);
+        for (int k = 0; k < fit; k++) {
+            char head[160], unit[64];
+            thx_picture_bar_title(o, bars, k, head, sizeof head, unit, sizeof unit);
+            if (bars->n > 1) { /* the surfaces the bar serves, above its title and unit */
+                int tw = thx_text_width(font, bars->names[k]), tx = box[k][0];
+                if (tx + tw > img->w - 2) tx = img->w - 2 - tw;
+                thx_draw_text(img, font, tx < 0 ? 0 : tx, box[k][1] - 3 * fh - 2, bars->names[k], FG);
+            }
+            thx_draw_colorbar(img, font, box[k][0], box[k][1], box[k][2], box[k][3], (thx_colormap)bars->cmap[k],
+                              &bars->scale[k], bars->cmap[k] == (int)o->cmap ? shades : 0,
+                              bars->n == 1 || box[k][3] > 8 * fh ? 5 : 3, head, unit);
         }
+    }
+    if (o->orientation) {
+        thx_picture_letter L[4 * 64];
+        int nl = thx_picture_orientation(o, d, font, img->w, img->h, L, 4 * 64);
+        for (int k = 0; k < nl; k++) thx_draw_text(img, font, L[k].x, L[k].y, L[k].text, FG);
     }
     if (o->label && any) {
         char text[128];
@@ -493,6 +593,7 @@ thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
     thx_image_fill(img, BG);
     thx_picture_bars bars;
     THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bars, nan_total));
+    if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, &bars));
     return thx_picture_annotate(ctx, o, d, font, frame, &bars, img);
 }
 

@@ -40,6 +40,10 @@ typedef struct {
        renamed to `rename` (when not empty) and given the isotropic conductivity sigma (S/m, when > 0) */
     struct { char name[64], rename[64]; double sigma; } region_set[16];
     size_t n_region_set;
+    /* conductivity assignments "NAME=SIGMA" (thx_regions_assign), applied after the renames of
+       region_set, so NAME is the region's final name; strings not owned */
+    const char *sigma_set[16];
+    size_t n_sigma_set;
     /* progress (optional): called from the calling thread with the stage's name ("points",
        "Delaunay", "conformity", "refinement", "regions", "repair") and the share done, 0 to 1 */
     void (*progress)(void *user, const char *stage, double done);
@@ -86,14 +90,40 @@ void thx_mesh_opts_default(thx_mesh_opts *o);
  * is required), minus the heart's interior when o->no_heart. Nodes: every
  * surface node (volume node numbers follow the model's surface order), then
  * the grid points. The result is stored in m->volume (replacing any), with
- * the default region table (thx_region_defaults) and the node tables.
+ * the default region table (thx_region_default; anisotropic defaults along the
+ * model's superior axis, z without a frame), then o->region_set and
+ * o->sigma_set applied, and the node tables.
  */
 thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, thx_mesh_stats *stats);
 
 /* Fills r with the default conductivity of a tissue region by name
  * ("mean_thorax", "fat", "muscle", "lung", "heart", "blood"), with its
- * literature source. Returns 0, or -1 for an unknown name. */
+ * literature source (docs/decisions.md, "Default conductivities"). An
+ * anisotropic one (muscle) is diagonal with its "along" value on z
+ * (sigma[8]); thx_mesh_build puts it on the model's superior axis. Returns 0,
+ * or -1 for an unknown name. */
 int thx_region_default(const char *tissue, thx_region *r);
+/* Turns the defaults' body axis to the model's: every region of table[0..n-1] whose tensor is
+ * diagonal with sxx = syy != szz (a default's "along z") gets szz on frame's superior axis and sxx
+ * on the other two. Nothing changes without a frame or when the superior axis is z. */
+void thx_regions_orient(thx_region *table, size_t n, const thx_frame *frame);
+
+/*
+ * Parses a conductivity in S/m, in the model's axes (x, y, z of its coordinates, whatever its
+ * anatomical frame): "S" (isotropic), "SXX,SYY,SZZ" (a diagonal tensor) or
+ * "SXX,SYY,SZZ,SXY,SXZ,SYZ" (a symmetric tensor). Refused (THX_EINPUT, the message quoting the
+ * text): another count, a value that is not a finite number, a diagonal entry that is not
+ * positive, a tensor that is not positive definite. sigma gets the 3x3 row-major tensor;
+ * *anisotropic is 0 when it is a multiple of the identity.
+ */
+thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int *anisotropic);
+/*
+ * Applies one assignment "NAME=SIGMA" (SIGMA as thx_sigma_parse reads it) to the region table
+ * table[0..n-1]: region NAME gets the conductivity and `source` as its source (NULL: "set by the
+ * user"). An unknown name is refused with the table's names and the nearest one ("did you
+ * mean"); the table is unchanged on any error.
+ */
+thx_status thx_regions_assign(thx_ctx *ctx, thx_region *table, size_t n, const char *assignment, const char *source);
 
 #ifdef __cplusplus
 }

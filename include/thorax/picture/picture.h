@@ -44,6 +44,7 @@ typedef struct {
 } thx_picture_look;
 
 #define THX_PICTURE_MAX 16 /* files, --only, --surface, --no-clip entries */
+#define THX_PICTURE_BARS 4 /* colour bars beside a picture, at most */
 
 /* The settings of a picture: what `thorax render` takes on its command line (docs/cli.md), which
  * the viewer changes as it runs. Plain data; thx_picture_opts_default fills the defaults. Strings
@@ -118,6 +119,15 @@ typedef struct {
     const char *activation[THX_PICTURE_MAX];
     int n_activation;
     int extrema;
+    /* colour bars: the k-th bar's title and unit (given once: every bar's), in place of what is
+       shown ("potential", "activation", "|J|") and the data's unit */
+    const char *bar_title[THX_PICTURE_BARS];
+    int n_bar_title;
+    const char *bar_unit[THX_PICTURE_BARS];
+    int n_bar_unit;
+    /* orientation letters (A/P, L/R, S/I of the anatomical frame) at the middle of each edge of
+       every panel, for the camera of that panel (thx_picture_orientation) */
+    int orientation;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
@@ -157,13 +167,20 @@ typedef struct {
 
 /* The colour scales of a picture: one colour bar each (paper 4.2: "a colour bar per distinct
  * scale"). The first is the body surface's (else the first surface's with data); the others are
- * the other surfaces' scales that differ from every one before. */
-#define THX_PICTURE_BARS 4
+ * the other surfaces' scales that differ from every one before (in range, model, mapping, colour
+ * map, quantity or unit), then the arrows' |J| when they are coloured by magnitude. At most
+ * THX_PICTURE_BARS fit beside a picture; up to THX_PICTURE_SCALES distinct ones are counted, so
+ * that a picture with more can be refused (thx_picture_draw) instead of showing a bar that does
+ * not belong to a surface's colours. */
+#define THX_PICTURE_SCALES 16
 typedef struct {
-    int n;
-    thx_scale scale[THX_PICTURE_BARS];
-    char names[THX_PICTURE_BARS][96]; /* the surfaces drawn with each */
-    char unit[THX_PICTURE_BARS][16];
+    int n;                                /* distinct scales shown (up to THX_PICTURE_SCALES) */
+    int more;                             /* 1: more than THX_PICTURE_SCALES */
+    thx_scale scale[THX_PICTURE_SCALES];
+    int cmap[THX_PICTURE_SCALES];         /* a thx_colormap */
+    char names[THX_PICTURE_SCALES][96];   /* the surfaces drawn with each ("currents" for arrows) */
+    char unit[THX_PICTURE_SCALES][16];    /* the data's unit ("mV", "ms", ...) */
+    char title[THX_PICTURE_SCALES][16];   /* what is shown: "potential", "activation", "|J|" */
 } thx_picture_bars;
 
 /* The defaults (800x800, anterior, gouraud, ecg, linear, series scope, symmetric, ...). */
@@ -194,6 +211,43 @@ thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
  * the 3D part drawn by thx_picture_draw_gl at img's size. */
 thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font,
                                 int frame, const thx_picture_bars *bars, thx_image *img);
+
+/* Where the colour bars of a picture of w x h pixels go: the strip of bar k (x, y from the top
+ * left, w, h) in box[k], for n bars stacked beside the 3D part (o->colorbar). Returns how many of
+ * the n fit (at least 16 pixels of strip each, room for three title lines above), at most
+ * THX_PICTURE_BARS. */
+int thx_picture_bar_layout(const thx_picture_opts *o, thx_font *font, int w, int h, int n, int box[][4]);
+/* The titles of bar k: what is shown ("potential", "activation", "|J|", or o->bar_title's) and
+ * the unit (o->bar_unit's, or the data's). With more than one bar, a line above them names the
+ * surfaces the bar serves (bars->names[k]). */
+void thx_picture_bar_title(const thx_picture_opts *o, const thx_picture_bars *bars, int k, char *head, size_t head_size,
+                           char *unit, size_t unit_size);
+/* Whether the colour bars a picture asks for can be drawn truthfully: THX_EINPUT, naming the
+ * scales and how to share them, when there are more distinct scales than fit beside a picture of
+ * w x h pixels, or more --bar-title/--bar-unit than bars. Called by thx_picture_draw; the viewer
+ * draws the bars that fit. */
+thx_status thx_picture_bars_check(thx_ctx *ctx, const thx_picture_opts *o, thx_font *font, int w, int h,
+                                  const thx_picture_bars *bars);
+
+/* An orientation letter of a picture: text (1 to 3 of A P L R S I, the strongest direction
+ * first) drawn with its baseline's left end at (x, y) (pixels from the top left). */
+typedef struct {
+    char text[4];
+    int x, y;
+} thx_picture_letter;
+/*
+ * The anatomical directions along the screen under camera cam, in the frame o->ax/o->sg (the
+ * model's frame or --up/--front): for the screen's left, right, top and bottom (out[0..3]), the
+ * letters of the anatomical axes making an angle of at most about 70 degrees with that screen
+ * direction (|cos| >= 0.35), the nearest first: 'R'/'L' (the subject's right/left), 'A'/'P',
+ * 'S'/'I'. A standard anterior view of a RAS model gives R, L, S, I; an oblique camera gives
+ * e.g. "LA". out[k].x, y are 0.
+ */
+void thx_picture_orientation_text(const thx_picture_opts *o, const thx_camera *cam, thx_picture_letter out[4]);
+/* The orientation letters of every panel of a picture of w x h pixels, placed 6 pixels inside the
+ * middle of each edge of the panel's viewport; up to max (4 per panel). Returns the count. */
+int thx_picture_orientation(const thx_picture_opts *o, const thx_picture_data *d, thx_font *font, int w, int h,
+                            thx_picture_letter *out, int max);
 
 /* The 3D part's viewport (x, y from the top left, w, h) of a picture of w x h pixels: the picture
  * less the label strip above, the colour bar beside and the trace below, as o asks for them. */
