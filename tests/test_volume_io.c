@@ -33,6 +33,7 @@
 #include "thorax/core/fileio.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
+#include "thorax/io/export_data.h"
 #include "thorax/model/volume.h"
 static thx_ctx *ctx;
 
@@ -726,22 +727,31 @@ static void test_export(void)
     char *vtu = tl_slurp(ctx, tl_path("v.vtu"), NULL);
     snprintf(want, sizeof want, "<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">", v->n_nodes, v->n_tets);
     CHECK(vtu && strstr(vtu, "type=\"UnstructuredGrid\"") && strstr(vtu, want));
-    CHECK(vtu && strstr(vtu, "<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">"));
-    CHECK(vtu && count_str(vtu, " 10") >= v->n_tets);
+    /* binary appended arrays (VTK itself reads them back: tests/volume_read.py, export_data_read.py) */
+    CHECK(vtu && strstr(vtu, "<DataArray type=\"Int32\" Name=\"region\" format=\"appended\" offset=\""));
+    CHECK(vtu && strstr(vtu, "<DataArray type=\"Float64\" Name=\"conductivity\" format=\"appended\""));
+    CHECK(vtu && strstr(vtu, "Name=\"conductivity_tensor\" NumberOfComponents=\"9\"")); /* muscle is anisotropic */
+    CHECK(vtu && strstr(vtu, "<Array type=\"String\" Name=\"region_name\" NumberOfTuples=\"4\" format=\"ascii\">"));
+    CHECK(vtu && count_str(vtu, "<AppendedData encoding=\"raw\">") == 1);
     free(vtu);
 
     char *msh = tl_slurp(ctx, tl_path("v.msh"), NULL);
-    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm\n$EndComments\n"
-                       "$PhysicalNames\n4\n3 1 \"mean_thorax\"\n"; /* the comment: thorax's signature */
-    CHECK(msh && strncmp(msh, head, strlen(head)) == 0);
-    CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 0 4\n"));
+    const char *head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm, tagged surfaces\n"
+                       "$EndComments\n$PhysicalNames\n6\n2 1 \"box\"\n2 2 \"heart\"\n3 1 \"mean_thorax\"\n";
+    CHECK(msh && strncmp(msh, head, strlen(head)) == 0); /* the comment: thorax's signature */
+    CHECK(msh && strstr(msh, "3 4 \"blood\"\n$EndPhysicalNames\n$Entities\n0 0 2 4\n"));
     /* Region 4 holds no node (region 3, the heart, may hold none either). */
     const char *nodes = msh ? strstr(msh, "$Nodes\n") : NULL;
     size_t nb = 0, nn = 0, lo = 0, hi = 0;
     CHECK(nodes && sscanf(nodes, "$Nodes\n%zu %zu %zu %zu", &nb, &nn, &lo, &hi) == 4);
     CHECK((nb == 2 || nb == 3) && nn == v->n_nodes && lo == 1 && hi == v->n_nodes);
-    snprintf(want, sizeof want, "$Elements\n3 %zu 1 %zu\n", v->n_tets, v->n_tets); /* region 4 has no element */
+    /* region 4 has no element; the box's triangles are faces of the tetrahedra (its hull), the
+     * heart's octahedron is not meshed conformingly: its own 8 triangles are written */
+    size_t n_box = m->surf[0]->n_tris;
+    snprintf(want, sizeof want, "$Elements\n5 %zu 1 %zu\n", v->n_tets + n_box + 8, v->n_tets + n_box + 8);
     CHECK(msh && strstr(msh, want));
+    snprintf(want, sizeof want, "\n2 1 2 %zu\n", n_box);
+    CHECK(msh && strstr(msh, want) && strstr(msh, "\n2 2 2 8\n"));
     CHECK(msh && strstr(msh, "\n4 0 0 0 0 0 0 1 4 0\n"));
     CHECK(msh && strstr(msh, "$EndElements\n") && msh[strlen(msh) - 1] == '\n');
     free(msh);
@@ -764,6 +774,80 @@ static void test_export(void)
     thx_model_destroy(&m);
 }
 
+/* The values of a Gmsh view in test_export_data: frame k gives node i the value k + i / 3. */
+static void third_values(void *user, size_t k, double *out)
+{
+    size_t n = *(const size_t *)user;
+    for (size_t i = 0; i < n; i++) out[i] = (double)k + (double)i / 3.0;
+}
+
+/* The writers with data (thorax/io/export_data.h); VTK and Gmsh read them in tests/e2e_export_data.sh. */
+static void test_export_data(void)
+{
+    thx_model *m = make_model(40);
+    const thx_volume *v = m->volume;
+    double *phi = malloc(v->n_nodes * sizeof *phi), *j = calloc(3 * v->n_tets, sizeof *j);
+    for (size_t i = 0; i < v->n_nodes; i++) phi[i] = 0.1 * (double)i;
+    thx_export_array pt = {"potential", 1, phi}, ce = {"current_density", 3, j};
+    thx_export_frame fr = {.has_time = 1, .time = 2.5, .point = &pt, .n_point = 1, .cell = &ce, .n_cell = 1};
+    CHECK_OK(ctx, thx_volume_export_vtu(ctx, m, &fr, tl_path("d.vtu")));
+    char *t = tl_slurp(ctx, tl_path("d.vtu"), NULL);
+    CHECK(t && strstr(t, "<!-- thorax volume mesh") && strstr(t, "Name=\"potential\" format=\"appended\""));
+    CHECK(t && strstr(t, "Name=\"current_density\" NumberOfComponents=\"3\" format=\"appended\""));
+    CHECK(t && strstr(t, "Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n        2.5\n"));
+    CHECK(t && !strstr(t, "conductivity_tensor")); /* per frame: region_sigma holds the tensors */
+    free(t);
+    /* a name XML or legacy VTK cannot hold is refused before anything is written */
+    pt.name = "phi<1>";
+    CHECK(thx_volume_export_vtu(ctx, m, &fr, tl_path("n.vtu")) == THX_EINPUT && tl_msg_has(ctx, "phi<1>"));
+    pt.name = "phi 1";
+    CHECK(thx_surface_export_data(ctx, m, 0, THX_EXPORT_VTK, &fr, tl_path("n.vtk")) == THX_EINPUT);
+    CHECK(!tl_exists(tl_path("n.vtu")) && !tl_exists(tl_path("n.vtk")) && !tl_leftover_tmp("n."));
+    pt.name = "potential";
+    fr.n_cell = 0;
+    pt.v = phi; /* surface 0 has fewer nodes than the volume: the first ones serve */
+    CHECK_OK(ctx, thx_surface_export_data(ctx, m, 0, THX_EXPORT_VTK, &fr, tl_path("s.vtk")));
+    t = tl_slurp(ctx, tl_path("s.vtk"), NULL);
+    CHECK(t && strstr(t, "\nthorax surface box (mm, with data)\n") && strstr(t, "\nTimeValue 1 1 double\n2.5\n") &&
+          strstr(t, "\nsurface_name 1 2 string\nbox\nheart\n") && strstr(t, "\nSCALARS potential double 1\n"));
+    free(t);
+    /* the collection: times must increase; a file it did not write is never replaced */
+    const char *files[] = {"a_0001.vtu", "a_0002.vtu"};
+    double times[] = {0.5, 0.25};
+    CHECK(thx_export_pvd(ctx, tl_path("a.pvd"), files, times, 2) == THX_EINPUT && tl_msg_has(ctx, "increasing"));
+    CHECK(!tl_exists(tl_path("a.pvd")));
+    times[1] = 1e-3 + 0.5;
+    CHECK_OK(ctx, thx_export_pvd(ctx, tl_path("a.pvd"), files, times, 2));
+    t = tl_slurp(ctx, tl_path("a.pvd"), NULL);
+    CHECK(t && strstr(t, "<DataSet timestep=\"0.501\" group=\"\" part=\"0\" file=\"a_0002.vtu\"/>"));
+    free(t);
+    CHECK_OK(ctx, thx_export_pvd(ctx, tl_path("a.pvd"), files, times, 2)); /* its own: replaced */
+    tl_write_text(tl_path("b.pvd"), "<VTKFile type=\"Collection\"/>\n");
+    CHECK(thx_export_pvd(ctx, tl_path("b.pvd"), files, times, 2) != THX_OK && tl_msg_has(ctx, "b.pvd"));
+    t = tl_slurp(ctx, tl_path("b.pvd"), NULL);
+    CHECK(t && strcmp(t, "<VTKFile type=\"Collection\"/>\n") == 0);
+    free(t);
+    /* Gmsh views: one $NodeData per frame, values exact ("%.17g") */
+    size_t n = v->n_nodes;
+    double vt[3] = {0, 2, 4};
+    thx_msh_view view = {.name = "potential (mV)", .n_comp = 1, .n = n, .n_frames = 3, .time = vt,
+                         .values = third_values, .user = &n};
+    CHECK_OK(ctx, thx_volume_export_msh(ctx, m, &view, 1, tl_path("d.msh")));
+    t = tl_slurp(ctx, tl_path("d.msh"), NULL);
+    CHECK(t && count_str(t, "$NodeData\n1\n\"potential (mV)\"\n1\n") == 3 && count_str(t, "$EndNodeData\n") == 3);
+    char want[128];
+    snprintf(want, sizeof want, "$NodeData\n1\n\"potential (mV)\"\n1\n4\n3\n2\n1\n%zu\n1 2\n2 2.3333333333333335\n", n);
+    CHECK(t && strstr(t, want));
+    free(t);
+    int32_t bad_id = (int32_t)n;
+    view.ids = &bad_id;
+    view.n = 1;
+    CHECK(thx_volume_export_msh(ctx, m, &view, 1, tl_path("e.msh")) == THX_EINTERNAL && !tl_exists(tl_path("e.msh")));
+    free(phi);
+    free(j);
+    thx_model_destroy(&m);
+}
+
 int main(int argc, char **argv)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
@@ -782,6 +866,7 @@ int main(int argc, char **argv)
     test_failed_write();
     test_bad_files();
     test_export();
+    test_export_data();
     int rc = tl_scratch_finish("test_volume_io");
     thx_ctx_destroy(&ctx);
     return rc;

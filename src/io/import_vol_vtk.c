@@ -269,6 +269,46 @@ static thx_status vtk_attribute(raw *r, vsrc *s, const char *kw, size_t kwn, int
             scalar_type ty;
             THX_CHECK(vtk_line_count(r, &s->c, l2, an, &nc));
             THX_CHECK(vtk_line_count(r, &s->c, l2, an, &nt));
+            /* a string array (names: VTK writes thorax export's region_name, surface_name back so) holds no
+             * region: in ASCII one string a line, skipped */
+            cursor peek = s->c;
+            const char *u;
+            size_t un = line_token(&peek, &u);
+            if (s->binary && (tok_is(u, un, "string") || tok_is(u, un, "utf8_string"))) {
+                /* BINARY: after the header line each string is a big-endian length whose top two bits
+                 * give its size (11: 1 byte, 10: 2, 01: 4, 00: 8; VTK's vtkDataWriter), then its bytes */
+                s->c = peek;
+                next_line(&s->c);
+                cursor *c = &s->c;
+                for (long long k = 0; k < nc * nt; k++) {
+                    if (c->pos >= c->len)
+                        return fail(r, at_line(l2), "%s array \"%s\": file ends at string %lld of %lld", what, an,
+                                    k + 1, nc * nt);
+                    unsigned char b0 = (unsigned char)c->buf[c->pos];
+                    size_t hb = (b0 >> 6) == 3 ? 1 : (b0 >> 6) == 2 ? 2 : (b0 >> 6) == 1 ? 4 : 8;
+                    if (c->len - c->pos < hb)
+                        return fail(r, at_line(l2), "%s array \"%s\": string %lld cut short", what, an, k + 1);
+                    unsigned long long sl = b0 & 0x3fu;
+                    for (size_t q = 1; q < hb; q++) sl = (sl << 8) | (unsigned char)c->buf[c->pos + q];
+                    c->pos += hb;
+                    if (sl > c->len - c->pos)
+                        return fail(r, at_line(l2), "%s array \"%s\": string %lld of %llu bytes runs past the end", what,
+                                    an, k + 1, sl);
+                    c->pos += (size_t)sl;
+                }
+                next_line(&s->c); /* the newline after the data */
+                vtk_maybe_metadata(s);
+                continue;
+            }
+            if (!s->binary && (tok_is(u, un, "string") || tok_is(u, un, "utf8_string"))) {
+                s->c = peek;
+                for (long long k = 0; k <= nc * nt; k++) /* the header line's end, then a line per string */
+                    if (!next_line(&s->c) && k < nc * nt)
+                        return fail(r, at_line(l2), "%s array \"%s\": file ends at string %lld of %lld", what, an, k + 1,
+                                    nc * nt);
+                vtk_maybe_metadata(s);
+                continue;
+            }
             THX_CHECK(vtk_line_type(r, s, l2, an, &ty));
             vtk_data_start(s);
             char aw[320];

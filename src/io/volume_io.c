@@ -1,6 +1,6 @@
 /*
  * The volume mesh of a model directory, its region (conductivity) table and
- * node tables (paper 3.3), and the volume exports .vtu and Gmsh .msh 4.1.
+ * node tables (paper 3.3), and the entry point of the volume exports (written by export_vtk.c, export_msh.c).
  * Layouts in docs/formats.md, "Volume mesh files"; the public entry points
  * are thx_model_write / thx_model_read and thx_volume_export (thorax/io/model_dir.h).
  *
@@ -49,6 +49,7 @@
 #include <string.h>
 
 #include "thorax/core/fileio.h"
+#include "thorax/io/export_data.h"
 #define VOLUME_PTS "volume.pts"
 #define VOLUME_TET "volume.tet"
 #define VOLUME_STEINER "volume.steiner"
@@ -560,186 +561,12 @@ done:
 
 /* -------------------------------------------------------------- export */
 
-/* exactly, as volume.pts */
-static void put_xyz(FILE *f, const double *p, const char *eol)
-{
-    fprintf(f, "%.17g %.17g %.17g%s", p[0] + 0.0, p[1] + 0.0, p[2] + 0.0, eol);
-}
-
-/* VTK XML UnstructuredGrid, ASCII inline. Cell data "region" (1-based id);
- * point data "surface" (1-based surface index, 0 inside) and "surface_node"
- * (1-based node number on that surface, 0 inside): the node tables. */
-static void write_vtu(FILE *f, const thx_volume *v)
-{
-    fprintf(f,
-            "<?xml version=\"1.0\"?>\n"
-            "<!-- thorax volume mesh, mm -->\n"
-            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-            "  <UnstructuredGrid>\n"
-            "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
-            "      <PointData Scalars=\"surface\">\n"
-            "        <DataArray type=\"Int32\" Name=\"surface\" format=\"ascii\">\n",
-            v->n_nodes, v->n_tets);
-    for (size_t w = 0; w < v->n_nodes; w++)
-        fprintf(f, "%s%ld%s", w % 20 == 0 ? "          " : " ", (long)v->node_surf[w] + 1,
-                (w % 20 == 19 || w + 1 == v->n_nodes) ? "\n" : "");
-    fputs("        </DataArray>\n        <DataArray type=\"Int32\" Name=\"surface_node\" format=\"ascii\">\n", f);
-    for (size_t w = 0; w < v->n_nodes; w++)
-        fprintf(f, "%s%ld%s", w % 20 == 0 ? "          " : " ", (long)v->node_snode[w] + 1,
-                (w % 20 == 19 || w + 1 == v->n_nodes) ? "\n" : "");
-    fputs("        </DataArray>\n      </PointData>\n      <CellData Scalars=\"region\">\n"
-          "        <DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n", f);
-    for (size_t t = 0; t < v->n_tets; t++)
-        fprintf(f, "%s%ld%s", t % 20 == 0 ? "          " : " ", (long)v->region[t] + 1,
-                (t % 20 == 19 || t + 1 == v->n_tets) ? "\n" : "");
-    fputs("        </DataArray>\n      </CellData>\n      <Points>\n"
-          "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n", f);
-    for (size_t w = 0; w < v->n_nodes; w++) {
-        fputs("          ", f);
-        put_xyz(f, v->xyz + 3 * w, "\n");
-    }
-    fputs("        </DataArray>\n      </Points>\n      <Cells>\n"
-          "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n", f);
-    for (size_t t = 0; t < v->n_tets; t++) {
-        const int32_t *q = v->tet + 4 * t;
-        fprintf(f, "          %ld %ld %ld %ld\n", (long)q[0], (long)q[1], (long)q[2], (long)q[3]);
-    }
-    fputs("        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n", f);
-    for (size_t t = 0; t < v->n_tets; t++)
-        fprintf(f, "%s%zu%s", t % 10 == 0 ? "          " : " ", 4 * (t + 1),
-                (t % 10 == 9 || t + 1 == v->n_tets) ? "\n" : "");
-    fputs("        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n", f);
-    for (size_t t = 0; t < v->n_tets; t++) /* 10 = VTK_TETRA */
-        fprintf(f, "%s10%s", t % 20 == 0 ? "          " : " ", (t % 20 == 19 || t + 1 == v->n_tets) ? "\n" : "");
-    fputs("        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n", f);
-}
-
-/* Gmsh MSH 4.1 ASCII. node_ent[w] = entity (0-based region) of node w;
- * nodes_in[r] = nodes classified on region r's entity; n_in[r] =
- * tetrahedra of region r; box[6r..] = region r's bounding box. */
-static void write_msh(FILE *f, const thx_volume *v, const int32_t *node_ent, const size_t *nodes_in, const size_t *n_in,
-                      const double *box)
-{
-    size_t nr = v->n_regions;
-    /* a section Gmsh does not know is skipped by its reader: it carries thorax's signature */
-    fputs("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Comments\nthorax volume mesh, mm\n$EndComments\n", f);
-    fprintf(f, "$PhysicalNames\n%zu\n", nr);
-    for (size_t r = 0; r < nr; r++) fprintf(f, "3 %zu \"%s\"\n", r + 1, v->regions[r].name);
-    fputs("$EndPhysicalNames\n", f);
-    fprintf(f, "$Entities\n0 0 0 %zu\n", nr);
-    for (size_t r = 0; r < nr; r++) {
-        fprintf(f, "%zu ", r + 1);
-        put_xyz(f, box + 6 * r, " ");
-        put_xyz(f, box + 6 * r + 3, "");
-        fprintf(f, " 1 %zu 0\n", r + 1);
-    }
-    fputs("$EndEntities\n", f);
-    /* Nodes: one block per entity that holds nodes, tags ascending in each. */
-    size_t blocks = 0;
-    for (size_t r = 0; r < nr; r++) blocks += nodes_in[r] > 0;
-    fprintf(f, "$Nodes\n%zu %zu 1 %zu\n", blocks, v->n_nodes, v->n_nodes);
-    for (size_t r = 0; r < nr; r++) {
-        if (!nodes_in[r]) continue;
-        fprintf(f, "3 %zu 0 %zu\n", r + 1, nodes_in[r]);
-        for (size_t w = 0; w < v->n_nodes; w++)
-            if ((size_t)node_ent[w] == r) fprintf(f, "%zu\n", w + 1);
-        for (size_t w = 0; w < v->n_nodes; w++)
-            if ((size_t)node_ent[w] == r) put_xyz(f, v->xyz + 3 * w, "\n");
-    }
-    fputs("$EndNodes\n", f);
-    /* Elements: one block of tetrahedra (type 4) per non-empty region; tag =
-     * line number in volume.tet. */
-    blocks = 0;
-    for (size_t r = 0; r < nr; r++) blocks += n_in[r] > 0;
-    fprintf(f, "$Elements\n%zu %zu 1 %zu\n", blocks, v->n_tets, v->n_tets);
-    for (size_t r = 0; r < nr; r++) {
-        if (!n_in[r]) continue;
-        fprintf(f, "3 %zu 4 %zu\n", r + 1, n_in[r]);
-        for (size_t t = 0; t < v->n_tets; t++) {
-            if ((size_t)v->region[t] != r) continue;
-            const int32_t *q = v->tet + 4 * t;
-            fprintf(f, "%zu %ld %ld %ld %ld\n", t + 1, (long)q[0] + 1, (long)q[1] + 1, (long)q[2] + 1, (long)q[3] + 1);
-        }
-    }
-    fputs("$EndElements\n", f);
-}
-
+/* The writers are src/io/export_vtk.c and src/io/export_msh.c (thorax/io/export_data.h): the
+ * geometry-only export is the data export with no data. */
 thx_status thx_volume_export(thx_ctx *ctx, const thx_model *m, thx_export_format fmt, const char *path)
 {
     if (!m->volume) return thx_error(ctx, THX_EINPUT, "%s: the model has no volume mesh to export", path);
-    if (fmt != THX_EXPORT_VTU && fmt != THX_EXPORT_MSH)
-        return thx_error(ctx, THX_EINPUT, "%s: not a volume export format (vtu or msh)", path);
-    THX_CHECK(thx_model_volume_validate(ctx, m, path));
-    /* A private copy of the volume's reverse node table (rebuilt from the
-     * forward one, which validation just checked) and, for Gmsh, each node's
-     * entity, each region's tetrahedron count and bounding box: everything
-     * that may fail is done before the file is opened. */
-    const thx_volume *v = m->volume;
-    thx_status st = THX_OK;
-    thx_volume view = *v;
-    int32_t *ns = thx_malloc(ctx, v->n_nodes * sizeof *ns), *nn = thx_malloc(ctx, v->n_nodes * sizeof *nn);
-    int32_t *ent = NULL;
-    size_t *n_in = NULL, *nodes_in = NULL;
-    double *box = NULL;
-    if (!ns || !nn) {
-        st = THX_ENOMEM;
-        goto done;
-    }
-    for (size_t w = 0; w < v->n_nodes; w++) ns[w] = nn[w] = -1;
-    for (size_t s = 0; s < v->n_surfaces; s++)
-        for (size_t i = 0; i < v->surf_n_nodes[s]; i++) {
-            ns[v->surf_node[s][i]] = (int32_t)s;
-            nn[v->surf_node[s][i]] = (int32_t)i;
-        }
-    view.node_surf = ns;
-    view.node_snode = nn;
-    if (fmt == THX_EXPORT_MSH) {
-        size_t nr = v->n_regions;
-        ent = thx_malloc(ctx, v->n_nodes * sizeof *ent);
-        n_in = thx_calloc(ctx, nr, sizeof *n_in);
-        box = thx_malloc(ctx, 6 * nr * sizeof *box);
-        nodes_in = thx_calloc(ctx, nr, sizeof *nodes_in);
-        if (!ent || !n_in || !box || !nodes_in) {
-            st = THX_ENOMEM;
-            goto done;
-        }
-        for (size_t w = 0; w < v->n_nodes; w++) ent[w] = INT32_MAX;
-        for (size_t r = 0; r < nr; r++)
-            for (int k = 0; k < 3; k++) box[6 * r + k] = INFINITY, box[6 * r + 3 + k] = -INFINITY;
-        for (size_t t = 0; t < v->n_tets; t++) {
-            int32_t r = v->region[t];
-            n_in[r]++;
-            for (int a = 0; a < 4; a++) {
-                int32_t w = v->tet[4 * t + a];
-                if (r < ent[w]) ent[w] = r;
-                for (int k = 0; k < 3; k++) {
-                    double c = v->xyz[3 * (size_t)w + (size_t)k];
-                    if (c < box[6 * r + k]) box[6 * r + k] = c;
-                    if (c > box[6 * r + 3 + k]) box[6 * r + 3 + k] = c;
-                }
-            }
-        }
-        for (size_t w = 0; w < v->n_nodes; w++)
-        {
-            if (ent[w] == INT32_MAX) ent[w] = 0; /* a node no tetrahedron uses */
-            nodes_in[ent[w]]++;
-        }
-        for (size_t r = 0; r < nr; r++)
-            if (!n_in[r])
-                for (int k = 0; k < 6; k++) box[6 * r + k] = 0; /* a region with no tetrahedra */
-    }
-    thx_atomic_file af; /* an existing file is replaced only when thorax's own export (thx_export_claim) */
-    THX_TRY(thx_export_claim(ctx, fmt, path));
-    THX_TRY(thx_atomic_open(ctx, path, &af));
-    if (fmt == THX_EXPORT_VTU) write_vtu(af.f, &view);
-    else write_msh(af.f, &view, ent, nodes_in, n_in, box);
-    st = thx_atomic_commit(ctx, &af); /* checks ferror: a short write fails here */
-done:
-    free(ns);
-    free(nn);
-    free(ent);
-    free(n_in);
-    free(box);
-    free(nodes_in);
-    return st;
+    if (fmt == THX_EXPORT_VTU) return thx_volume_export_vtu(ctx, m, NULL, path);
+    if (fmt == THX_EXPORT_MSH) return thx_volume_export_msh(ctx, m, NULL, 0, path);
+    return thx_error(ctx, THX_EINPUT, "%s: not a volume export format (vtu or msh)", path);
 }
