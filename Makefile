@@ -3,6 +3,7 @@
 BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 THORAX = $(BUILD)/bin/thorax
+OUT ?= out/demo
 
 .PHONY: all deps build demo check sanitize fuzz bench clean install
 
@@ -14,15 +15,25 @@ deps:
 $(BUILD)/CMakeCache.txt:
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 
+# Quiet: one line with the time; the compiler's whole output goes to $(BUILD)/build.log, its
+# warnings are shown, and a failed build shows its errors (the log without make's progress lines)
+# and stops here.
 build: deps $(BUILD)/CMakeCache.txt
-	@cmake --build $(BUILD) -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
+	@t0=$$(date +%s); \
+	if cmake --build $(BUILD) -j $(JOBS) > $(BUILD)/build.log 2>&1; then \
+	    grep -E 'warning:' $(BUILD)/build.log >&2 || true; \
+	    printf '  %-46s %5d s\n' "build ($(BUILD))" $$(( $$(date +%s) - t0 )); \
+	else \
+	    grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|Entering directory|Leaving directory|^make.*: \*\*\*' $(BUILD)/build.log | tail -n 80 >&2; \
+	    echo "build failed: the whole log is $(BUILD)/build.log" >&2; exit 1; \
+	fi
 	@test -x $(THORAX)
 
 # The main job on the built-in phantom: contours -> surfaces -> volume mesh -> checks ->
 # electrodes and heartbeat -> forward solution -> 12-lead ECG -> pictures and a movie ->
 # out/demo/index.html (scripts/demo.sh).
 demo: build
-	@THORAX=$(THORAX) OUT=out/demo bash scripts/demo.sh
+	@THORAX=$(THORAX) OUT=$(OUT) bash scripts/demo.sh
 
 check: build
 	@cd $(BUILD) && ctest -j $(JOBS) --output-on-failure

@@ -68,7 +68,7 @@ scale = abs(a).max()
 assert abs(a - b2).max() < 1e-7 * scale, ('mpirun', abs(a - b2).max())
 assert abs(a - b3).max() < 1e-7 * scale, ('jacobi', abs(a - b3).max())
 i1, i2 = raw('it1/torso.raw'), raw('it2/torso.raw')
-assert abs(i1).max() > 1 and abs(i1 - i2).max() < 1e-7 * abs(i1).max(), ('gamg mpirun', abs(i1 - i2).max())
+assert abs(i1).max() > 0.5 and abs(i1 - i2).max() < 1e-7 * abs(i1).max(), ('gamg mpirun', abs(i1 - i2).max())  # 180 ms, near the QRS peak: about 0.9 mV at the default 16 uA m
 # transfer: applied full matrix = solved; adjoint rows = the array's signals
 T = raw('trf/transfer.raw'); epi = raw('beat.raw')
 assert abs(T @ epi - a).max() < 1e-7 * scale

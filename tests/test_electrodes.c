@@ -572,7 +572,7 @@ static void test_dipole_loop(void)
 {
     thx_beat_opts o;
     thx_beat_opts_default(&o);
-    CHECK(o.n_frames == 500 && o.dt_ms == 1 && o.sigma == 0.2 && o.peak_mv == 40);
+    CHECK(o.n_frames == 500 && o.dt_ms == 1 && o.sigma == 0.2 && o.peak_mv == 0 && o.dipole_mam == 0.016);
     /* at 10 us steps: the largest |p| is 1 (the QRS peak), in the QRS; P about 0.1, T about 0.3 */
     thx_beat_opts fine = o;
     fine.dt_ms = 0.01;
@@ -639,9 +639,10 @@ static void test_beat(const thx_model *m)
             wmax[f < 150 ? 0 : f < 240 ? 1 : 2] = fmax(wmax[f < 150 ? 0 : f < 240 ? 1 : 2], fabs(v));
             if (f <= 10 || (f >= 100 && f <= 150) || (f >= 240 && f <= 310) || f >= 470) base &= v == 0;
         }
-    CHECK_NEAR(vmax, o.peak_mv, 1e-12 * o.peak_mv);
+    /* the default scale is the dipole moment (16 uA m at the QRS peak): about 2 mV on the phantom's heart */
+    CHECK(vmax > 1 && vmax < 4);
     CHECK(base);
-    CHECK(step < 0.1 * o.peak_mv); /* per 1 ms frame */
+    CHECK(step < 0.1 * vmax); /* per 1 ms frame */
     CHECK(wmax[1] == vmax && wmax[0] < 0.25 * vmax && wmax[2] < 0.5 * vmax && wmax[2] > 0.15 * vmax);
 
     /* the analytic field: phi = k p . d / |d|^3 with one k for every node and frame */
@@ -673,8 +674,8 @@ static void test_beat(const thx_model *m)
             if (k) worst = fmax(worst, fabs(s->v[f * N + r] - k * phi));
         }
     }
-    CHECK(k > 0);
-    CHECK(worst < 1e-9 * o.peak_mv);
+    CHECK_NEAR(k, o.dipole_mam * 1e-3, 1e-12 * o.dipole_mam * 1e-3); /* A m at |p| = 1 */
+    CHECK(worst < 1e-9 * vmax);
     /* the label reports the dipole: k A m at |p| = 1, in mA m */
     char want[32];
     snprintf(want, sizeof want, "dipole %.4g mA m", k * 1e3);
@@ -729,6 +730,10 @@ static void test_beat(const thx_model *m)
     bad = o;
     bad.peak_mv = -1;
     CHECK(thx_phantom_epicardial(ctx, heart, &bad, &s) == THX_EINPUT && s == NULL);
+    bad = o;
+    bad.dipole_mam = 0; /* no --peak either: nothing sets the scale */
+    CHECK(thx_phantom_epicardial(ctx, heart, &bad, &s) == THX_EINPUT && s == NULL);
+    CHECK(strstr(thx_ctx_message(ctx), "dipole moment 0 mA m is not positive") != NULL);
     thx_surface *empty = NULL;
     CHECK_OK(ctx, thx_surface_create(ctx, "heart", THX_ROLE_HEART, &empty));
     CHECK(thx_phantom_epicardial(ctx, empty, &o, &s) == THX_EINPUT && s == NULL);

@@ -3,6 +3,7 @@
  * phantom's heartbeat as epicardial potentials (paper 4.1); both in the
  * model's anatomical frame (model.json "frame"; a model without one is refused). */
 #include <errno.h>
+#include <math.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -148,8 +149,11 @@ int cmd_beat(int argc, char **argv)
         {.name = "--dt", .type = CLI_REAL, .meta = "MS", .unit = "ms", .d = &o.dt_ms, .rule = CLI_GT | CLI_LE, .lo = 0,
          .hi = 1e6, .bad = "--dt must be a positive number of ms", .help = "time step"},
         {.name = "--peak", .type = CLI_REAL, .meta = "MV", .unit = "mV", .d = &o.peak_mv, .rule = CLI_GT | CLI_LE,
-         .lo = 0, .hi = 1e12, .bad = "--peak must be a positive number of mV",
-         .help = "largest |potential| on the heart over the beat"},
+         .lo = 0, .hi = 1e12, .bad = "--peak must be a positive number of mV", .def = "none: --dipole sets the scale",
+         .help = "largest |potential| on the heart over the beat (instead of --dipole)"},
+        {.name = "--dipole", .type = CLI_REAL, .meta = "MAM", .unit = "mA m", .d = &o.dipole_mam,
+         .rule = CLI_GT | CLI_LE, .lo = 0, .hi = 1e6, .bad = "--dipole must be a positive dipole moment in mA m",
+         .help = "the dipole moment at the QRS peak (16 uA m: lead II about 1.5 mV on the phantom)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format,
          .def = "from FILE's extension: .txt or .dat, .raw, .mat", .help = "the series' format"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
@@ -157,15 +161,15 @@ int cmd_beat(int argc, char **argv)
     };
     cli_command c = {
         .name = cmd,
-        .usage = "MODEL -o [--frames] [--dt] [--peak] [--format]",
+        .usage = "MODEL -o [--frames] [--dt] [--dipole|--peak] [--format]",
         .about = "The phantom's heartbeat as epicardial potentials: a current dipole at the\n"
                  "centre of the model's heart surface (role heart) traces a vectorcardiogram -\n"
                  "P loop, PR segment, QRS loop (90 ms, left-inferior-posterior), ST segment,\n"
                  "T loop, baseline (heart rate about 90/min; docs/decisions.md; directions in\n"
                  "the model's anatomical frame, model.json \"frame\": a model without one is\n"
                  "refused, give --up/--front to thorax import) - in an\n"
-                 "unbounded homogeneous medium; the potentials at the heart's nodes are scaled\n"
-                 "so that the largest |potential| over the beat is the peak. Writes a time\n"
+                 "unbounded homogeneous medium, of the given moment at the QRS peak (or scaled\n"
+                 "so that the largest |potential| on the heart is --peak). Writes a time\n"
                  "series (docs/formats.md, \"Time series\"): rows = the heart surface's nodes in\n"
                  "order, frames at t = f * dt ms, unit mV. `thorax phantom --beat MODEL ...` is\n"
                  "the same.\n",
@@ -201,8 +205,12 @@ int cmd_beat(int argc, char **argv)
     if (st == THX_OK) st = thx_series_write(ctx, s, out, fmt);
     if (st != THX_OK) rc = cli_fail(ctx, cmd, st);
     else if (verbose >= 0)
+    {
+        double vmax = 0;
+        for (size_t i = 0; i < s->n_rows * s->n_frames; i++) vmax = vmax > fabs(s->v[i]) ? vmax : fabs(s->v[i]);
         printf("wrote %s: %zu nodes of surface %s x %zu frames (0 .. %g ms), peak %g mV\n%s\n", out, s->n_rows,
-               heart->name, s->n_frames, s->time[s->n_frames - 1], o.peak_mv, s->label);
+               heart->name, s->n_frames, s->time[s->n_frames - 1], vmax, s->label);
+    }
     thx_series_destroy(&s);
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

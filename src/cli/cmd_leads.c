@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
@@ -14,9 +15,10 @@
 #include "thorax/leads/leads.h"
 #include "thorax/phantom/phantom.h"
 #include "thorax/core/fileio.h"
+#include "thorax/picture/ecg_plot.h"
 int cmd_leads(int argc, char **argv)
 {
-    const char *out = NULL, *twelve = NULL, *array = NULL;
+    const char *out = NULL, *twelve = NULL, *array = NULL, *plot = NULL;
     int verbose = 0, format = THX_SERIES_TEXT;
     static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
                                          {NULL, 0}};
@@ -28,12 +30,14 @@ int cmd_leads(int argc, char **argv)
         {.name = "--array", .type = CLI_INPUT, .meta = "FILE", .s = &array,
          .def = "MODEL/electrodes/array.txt, if present", .help = "an electrode array"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "the series' format"},
+        {.name = "--plot", .type = CLI_OUTPUT, .meta = "FILE.svg|.png", .s = &plot,
+         .help = "the 12-lead ECG on ECG paper (3 x 4 layout, 25 mm/s, 10 mm/mV, 1 mm grid), SVG or PNG"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = "leads",
-        .usage = "SOLUTION [-o] [--twelve] [--array] [--format]",
+        .usage = "SOLUTION [-o] [--twelve] [--array] [--format] [--plot]",
         .about = "Reads a solution of thorax forward (its torso potentials and its model) and\n"
                  "writes the standard 12-lead ECG (I, II, III, aVR, aVL, aVF, V1-V6; the\n"
                  "precordial leads against Wilson's central terminal) as DIR/ecg12.EXT and the\n"
@@ -46,6 +50,11 @@ int cmd_leads(int argc, char **argv)
     const char *sol = c.n_pos ? c.pos[0] : NULL;
     if (!sol) return cli_usage_error("leads", "no solution given");
     if (!out) out = sol;
+    if (plot) { /* checked before anything is written */
+        size_t pl = strlen(plot);
+        if (pl < 5 || (strcasecmp(plot + pl - 4, ".svg") && strcasecmp(plot + pl - 4, ".png")))
+            return cli_usage_error("leads", "--plot %s: give a file ending in .svg or .png", plot);
+    }
     thx_ctx *ctx = cli_ctx(verbose);
     thx_series_format fmt = (thx_series_format)format;
     const char *ext = fmt == THX_SERIES_TEXT ? "txt" : fmt == THX_SERIES_MAT ? "mat" : "raw";
@@ -95,6 +104,18 @@ int cmd_leads(int argc, char **argv)
         snprintf(path, sizeof path, "%s/ecg12.%s", out, ext);
         st = thx_series_write(ctx, ecg, path, fmt);
     }
+    if (st == THX_OK && plot) {
+        thx_ecg_plot_opts po;
+        thx_ecg_plot_opts_default(&po);
+        char title[PATH_MAX + 32];
+        const char *base = strrchr(sol, '/');
+        base = base && base[1] ? base + 1 : sol;
+        snprintf(title, sizeof title, "12-lead ECG of %s", base);
+        po.title = title;
+        snprintf(path, sizeof path, "%s/%s", sol, torso_file);
+        const char *in[1] = {path};
+        st = thx_ecg_plot_write(ctx, ecg, &po, plot, in, 1);
+    }
     if (st == THX_OK && arr) {
         snprintf(path, sizeof path, "%s/array.%s", out, ext);
         st = thx_series_write(ctx, arr, path, fmt);
@@ -130,6 +151,7 @@ int cmd_leads(int argc, char **argv)
     else if (verbose >= 0) {
         printf("12-lead ECG: %zu frames -> %s/ecg12.%s\n", ecg->n_frames, out, ext);
         if (arr) printf("array: %zu electrodes -> %s/array.%s\n", arr->n_rows, out, ext);
+        if (plot) printf("plot: %s\n", plot);
     }
     free(text);
     thx_series_destroy(&torso);

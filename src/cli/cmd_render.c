@@ -299,6 +299,14 @@ size_t render_options(cli_opt *t, ropts *o)
                        .sv = o->p.landmarks, .count = &o->p.n_landmarks, .max = THX_PICTURE_MAX,
                        .help = "map3d landmarks drawn with the surfaces: coronary arteries as tubes, sites and leads as "
                                "spheres, in their colours, never clipped"};
+    t[n++] = (cli_opt){.name = "--electrodes", .type = CLI_INPUT, .meta = "FILE", .flags = CLI_REPEAT,
+                       .sv = o->p.electrodes, .count = &o->p.n_electrodes, .max = THX_PICTURE_MAX,
+                       .help = "an electrode file (thorax electrodes: MODEL/electrodes/12lead.txt, array.txt): each "
+                               "electrode a green sphere with its name, never clipped"};
+    t[n++] = (cli_opt){.name = "--tetrahedra", .type = CLI_FLAG, .i = &o->p.tetrahedra,
+                       .help = "the volume mesh: the tetrahedra wholly on the kept side of --clip (all without it), "
+                               "faces coloured by tissue region (1 tan, 2 blue, 3 red, 4 green, 5 violet, 6 yellow, "
+                               "7 cyan, 8 grey, then again), edges dark"};
     t[n++] = (cli_opt){.name = "--activation", .type = CLI_STRING, .meta = "SURFACE[:T0:T1]", .flags = CLI_REPEAT,
                        .sv = o->p.activation, .count = &o->p.n_activation, .max = THX_PICTURE_MAX,
                        .help = "the surface's activation-time map (each node's steepest downstroke, between T0 and T1 "
@@ -346,7 +354,9 @@ thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_rendere
     THX_CHECK(thx_picture_load(ctx, &o->p, d));
     THX_CHECK(thx_renderer_create(ctx, o->p.w, o->p.h, rr));
     THX_CHECK(thx_image_create(ctx, o->p.w, o->p.h, img));
-    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema || o->p.orientation) THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
+    if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema || o->p.orientation ||
+        o->p.n_electrodes)
+        THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
     return THX_OK;
 }
 

@@ -39,12 +39,16 @@
  *
  * The potentials. phi(r) = p . (r - r0) / (4 pi sigma |r - r0|^3) with r, r0
  * in metres, p in A m and sigma in S/m gives volts; times 1000 gives mV. The
- * loop (|p| = 1 A m at the QRS peak) is then multiplied by the one factor k
- * that makes the largest |phi| over all nodes and frames equal peak_mv, so
- * the dipole actually used is k p(t) A m (reported in the series' label, in
- * mA m). r0 is the centroid of the volume the heart surface encloses
- * (divergence theorem over the triangles), or the mean of its nodes when the
- * surface has no triangles or encloses no positive volume.
+ * loop (|p| = 1 at the QRS peak) is multiplied by the dipole moment at the QRS
+ * peak, dipole_mam (default 0.016 mA m = 16 uA m: the human heart's equivalent
+ * dipole, chosen so that the body-surface ECG has clinical amplitudes, lead II
+ * peaking at about 1.5 mV on the phantom; docs/decisions.md, "The phantom's
+ * ECG amplitudes"), or, when peak_mv > 0, by the one factor k that makes the
+ * largest |phi| over all nodes and frames equal peak_mv. The dipole actually
+ * used is reported in the series' label, in mA m. r0 is the centroid of the
+ * volume the heart surface encloses (divergence theorem over the triangles),
+ * or the mean of its nodes when the surface has no triangles or encloses no
+ * positive volume.
  */
 #include "thorax/model/electrodes.h"
 #include "thorax/io/electrodes_file.h"
@@ -114,7 +118,8 @@ void thx_beat_opts_default(thx_beat_opts *o)
     o->n_frames = 500;
     o->dt_ms = 1.0;
     o->sigma = 0.2;
-    o->peak_mv = 40.0;
+    o->peak_mv = 0.0;      /* not given: the dipole moment sets the scale */
+    o->dipole_mam = 0.016; /* mA m at the QRS peak (docs/decisions.md) */
 }
 
 void thx_beat_dipole(const thx_beat_opts *o, size_t f, double p[3])
@@ -202,8 +207,10 @@ static thx_status epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_f
         return thx_error(ctx, THX_EINPUT, "beat: dt %g ms is not a positive time step", o->dt_ms);
     if (!(o->sigma > 0) || !isfinite(o->sigma))
         return thx_error(ctx, THX_EINPUT, "beat: conductivity %g S/m is not positive", o->sigma);
-    if (!(o->peak_mv > 0) || !isfinite(o->peak_mv))
+    if (o->peak_mv != 0 && (!(o->peak_mv > 0) || !isfinite(o->peak_mv)))
         return thx_error(ctx, THX_EINPUT, "beat: peak %g mV is not positive", o->peak_mv);
+    if (o->peak_mv == 0 && (!(o->dipole_mam > 0) || !isfinite(o->dipole_mam)))
+        return thx_error(ctx, THX_EINPUT, "beat: dipole moment %g mA m is not positive", o->dipole_mam);
     for (size_t i = 0; i < 3 * heart->n_tris; i++)
         if (heart->tri[i] < 0 || (size_t)heart->tri[i] >= heart->n_nodes)
             return thx_error(ctx, THX_EINPUT, "heart surface \"%s\": triangle %zu has node %d, out of range 1..%zu",
@@ -264,7 +271,8 @@ static thx_status epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_f
                          "beat ends at 470 ms)",
                          M, (double)(M - 1) * o->dt_ms);
     }
-    double k = o->peak_mv / vmax;
+    /* k: the dipole moment in A m at |p| = 1 */
+    double k = o->peak_mv > 0 ? o->peak_mv / vmax : o->dipole_mam * 1e-3;
     for (size_t i = 0; i < N * M; i++) s->v[i] *= k;
     /* the time axis must increase strictly: f * dt can stall only for absurd sizes */
     for (size_t f = 1; f < M; f++)

@@ -1,5 +1,5 @@
 /*
- * Marks over a picture (map3d's node labels and extrema marks; paper 4.2): a surface's nodes
+ * Marks over a picture (map3d's node labels and extrema marks; paper 4.2; electrodes' names): a surface's nodes
  * labelled with their number, recording channel or value, and the largest and smallest value of
  * each surface's data marked. A node is labelled only where the camera sees it — the ray from the
  * eye through it meets it first (thorax/geom/pick.h, clip plane and hidden surfaces honoured) —
@@ -75,7 +75,7 @@ thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_da
                          thx_image *img)
 {
     const thx_model *m = d->m;
-    if (!font || o->panels || (!o->n_labels && !o->extrema)) return THX_OK;
+    if (!font || o->panels || (!o->n_labels && !o->extrema && !d->n_elec)) return THX_OK;
     size_t n = m->n_surfaces < THX_PICTURE_SURFACES ? m->n_surfaces : THX_PICTURE_SURFACES;
     if (!d->pick) {
         const thx_surface *surf[THX_PICTURE_SURFACES];
@@ -165,6 +165,24 @@ thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_da
         }
         free(c);
         free(used);
+    }
+    /* electrodes (--electrodes): each one's name beside its sphere, wherever it is (the spheres are
+       never clipped, like landmarks); dimmed when the electrode is behind the surfaces */
+    for (int k = 0; k < d->n_elec; k++) {
+        const thx_electrodes *e = d->elec[k];
+        int es = -1;
+        for (size_t j = 0; j < n; j++)
+            if (!strcmp(m->surf[j]->name, e->surface)) es = (int)j;
+        for (size_t i = 0; i < e->n; i++) {
+            double px, py, dep;
+            if (thx_camera_project(&v.cam, v.vp[2], v.vp[3], e->xyz + 3 * i, &px, &py, &dep)) continue;
+            if (px < 0 || py < 0 || px >= v.vp[2] || py >= v.vp[3]) continue;
+            int seen = es >= 0 && e->node[i] >= 0 && (size_t)e->node[i] < m->surf[es]->n_nodes
+                           ? visible(ctx, d, &v, es, (size_t)e->node[i], px, py) != 0
+                           : 1;
+            int cx = v.vp[0] + (int)lround(px), cy = v.vp[1] + (int)lround(py);
+            text_shadowed(img, font, cx + 8, cy + fh / 3, e->name[i], seen ? white : grey);
+        }
     }
     /* extrema of each surface's data at the frame */
     if (o->extrema)

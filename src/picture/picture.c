@@ -272,6 +272,22 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             memcpy(r->color, d->marks[k]->rgba[j], sizeof r->color);
             r->no_clip = 1;
         }
+    /* the volume mesh (--tetrahedra): each region's faces flat in its colour (the region's index in
+       this palette, docs/cli.md), then their edges; already clipped element by element */
+    static const float REGION_RGB[8][3] = {{0.93f, 0.80f, 0.62f}, {0.55f, 0.72f, 0.93f}, {0.98f, 0.62f, 0.62f},
+                                           {0.62f, 0.87f, 0.62f}, {0.85f, 0.70f, 0.93f}, {0.95f, 0.90f, 0.45f},
+                                           {0.55f, 0.88f, 0.88f}, {0.80f, 0.80f, 0.80f}};
+    for (int k = 0; k < d->n_tets; k++)
+        for (int pass = 0; pass < 2 && b->n < sizeof b->rs / sizeof b->rs[0]; pass++) {
+            thx_render_surface *r = &b->rs[b->n++];
+            memset(r, 0, sizeof *r);
+            r->surf = d->tets[k];
+            r->mode = pass ? THX_DRAW_WIRE : THX_DRAW_FLAT;
+            const float *c = REGION_RGB[d->tets_region[k] % 8];
+            for (int i = 0; i < 3; i++) r->color[i] = pass ? 0.25f * c[i] : c[i];
+            r->color[3] = 1;
+            r->no_clip = 1;
+        }
 }
 
 void thx_picture_opts_default(thx_picture_opts *o)

@@ -18,8 +18,11 @@
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/geom/pick.h"
 #include "thorax/io/landmarks_file.h"
+#include "thorax/io/electrodes_file.h"
 #include "thorax/leads/activation.h"
 #include "picture/picture_internal.h"
+
+static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_data *d);
 
 void thx_picture_data_free(thx_picture_data *d)
 {
@@ -38,6 +41,10 @@ void thx_picture_data_free(thx_picture_data *d)
     thx_pick_index_destroy(&d->pick);
     for (int k = 0; k < d->n_marks; k++) thx_landmark_meshes_destroy(&d->marks[k]);
     d->n_marks = 0;
+    for (int k = 0; k < d->n_elec; k++) thx_electrodes_destroy(&d->elec[k]);
+    d->n_elec = 0;
+    for (int k = 0; k < d->n_tets; k++) thx_surface_destroy(&d->tets[k]);
+    d->n_tets = 0;
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
@@ -350,6 +357,10 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         if (sl != THX_OK) return sl;
         d->n_marks++;
     }
+    if (o->n_landmarks + o->n_electrodes > THX_PICTURE_MAX)
+        return thx_error(ctx, THX_EINPUT, "--landmarks and --electrodes: %d files, at most %d together",
+                         o->n_landmarks + o->n_electrodes, THX_PICTURE_MAX);
+    for (int k = 0; k < o->n_electrodes; k++) THX_CHECK(electrode_marks(ctx, o->electrodes[k], d));
     THX_CHECK(resolve_trace(ctx, o, d));
     if (o->arrows) {
         const thx_volume *v = d->m->volume;
@@ -411,10 +422,66 @@ void thx_picture_geometry_changed(thx_picture_data *d)
     thx_pick_index_destroy(&d->pick);
 }
 
+/* An electrode file as marks: one sphere per electrode (1.2% of the model's diagonal across, at
+ * least 2 mm), in one colour that is neither a potential's nor a tissue's grey; its names are drawn
+ * beside them by picture_marks. */
+static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_data *d)
+{
+    thx_electrodes *e = NULL;
+    THX_CHECK(thx_electrodes_read(ctx, path, &e));
+    if (d->m && d->m->n_surfaces) {
+        thx_status sc = thx_electrodes_check(ctx, e, d->m);
+        if (sc != THX_OK) {
+            thx_electrodes_destroy(&e);
+            return sc;
+        }
+    }
+    double lo[3], hi[3], diag = 0;
+    thx_picture_bounds(d, lo, hi);
+    for (int k = 0; k < 3; k++) diag += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    double r = fmax(2.0, 0.006 * sqrt(diag));
+    thx_landmarks *lm = NULL;
+    thx_landmark_point *pt = calloc(e->n, sizeof *pt);
+    thx_status st = pt ? thx_landmarks_create(ctx, &lm) : thx_error(ctx, THX_ENOMEM, "out of memory (electrodes)");
+    if (st == THX_OK) {
+        for (size_t i = 0; i < e->n; i++) {
+            memcpy(pt[i].xyz, e->xyz + 3 * i, sizeof pt[i].xyz);
+            pt[i].radius = r;
+            snprintf(pt[i].label, sizeof pt[i].label, "%s", e->name[i]);
+        }
+        thx_landmark_segment *seg = NULL;
+        st = thx_landmarks_add_segment(ctx, lm, THX_LANDMARK_LEAD, pt, e->n, &seg);
+        if (st == THX_OK) {
+            seg->has_color = 1;
+            seg->rgb[0] = 0x10;
+            seg->rgb[1] = 0xa0;
+            seg->rgb[2] = 0x40;
+            st = thx_landmarks_mesh(ctx, lm, NULL, &d->marks[d->n_marks]);
+        }
+        if (st == THX_OK) d->n_marks++;
+    }
+    free(pt);
+    thx_landmarks_destroy(&lm);
+    if (st == THX_OK) d->elec[d->n_elec++] = e;
+    else thx_electrodes_destroy(&e);
+    return st;
+}
+
 thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
 {
     THX_CHECK(load_data(ctx, o, d));
-    return picture_view_frame(ctx, o, d);
+    THX_CHECK(picture_view_frame(ctx, o, d));
+    if (o->tetrahedra) {
+        if (!d->m || !d->m->volume)
+            return thx_error(ctx, THX_EINPUT, "--tetrahedra: %s has no volume mesh (thorax mesh makes one)",
+                             d->model_dir[0] ? d->model_dir : "the picture");
+        thx_clip_plane cp;
+        int nc = thx_picture_clip(ctx, o, d, &cp);
+        if (nc < 0) return THX_EINPUT;
+        THX_CHECK(picture_tet_surfaces(ctx, d->m->volume, nc ? &cp : NULL, d->tets, d->tets_region, THX_PICTURE_MAX,
+                                       &d->n_tets));
+    }
+    return THX_OK;
 }
 
 size_t thx_picture_n_frames(const thx_picture_data *d)

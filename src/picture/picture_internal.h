@@ -9,4 +9,9 @@ thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_da
 /* The views' frame (o->ax, o->sg) from --up/--front over the model's frame; refuses a model with
  * no frame where a named view or clip side needs one (picture_frame.c). */
 thx_status picture_view_frame(thx_ctx *ctx, thx_picture_opts *o, const thx_picture_data *d);
+/* The volume mesh's tetrahedra whose four nodes keep n.x + d >= 0 (cp NULL: all), their faces not
+ * shared by two such tetrahedra, outward, as one new surface per tissue region that has any (named
+ * after it; at most max): out[k] holds region region[k]; *n_out of them (tets.c). */
+thx_status picture_tet_surfaces(thx_ctx *ctx, const thx_volume *v, const thx_clip_plane *cp, thx_surface **out,
+                                int *region, int max, int *n_out);
 #endif

@@ -219,6 +219,8 @@ thx_status view_save_session(view_app *a, const char *path)
     for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
     if (o->channels) fprintf(f, "--channels %s\n", o->channels);
     for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
+    for (int k = 0; k < o->n_electrodes; k++) fprintf(f, "--electrodes %s\n", o->electrodes[k]);
+    if (o->tetrahedra) fprintf(f, "--tetrahedra\n");
     /* the maps shown: those asked for at the start, and those made since */
     for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
         if (!a->d.series[s] || !a->d.map[s][a->d.active[s]]) continue;

@@ -137,15 +137,17 @@ typedef struct {
     size_t n_frames;  /* default 500 (500 ms at 1 ms) */
     double dt_ms;     /* default 1 */
     double sigma;     /* S/m, default 0.2 */
-    double peak_mv;   /* largest |potential| on the heart surface over the beat, mV (default 40): sets the
-                         dipole's scale */
+    double peak_mv;   /* largest |potential| on the heart surface over the beat, mV: when > 0 it sets the
+                         dipole's scale; 0 (the default): dipole_mam does */
+    double dipole_mam; /* the dipole moment at the QRS peak, mA m (default 0.016: lead II peaks at about
+                          1.5 mV on the phantom; docs/decisions.md, "The phantom's ECG amplitudes") */
 } thx_beat_opts;
 
 void thx_beat_opts_default(thx_beat_opts *o);
 /* The dipole moment at frame f (time f * o->dt_ms; 3 values, RAS) for the default loop shape, in units
  * where |p| = 1 at the QRS peak (o may be NULL: dt 1 ms). thx_phantom_epicardial places it at the centroid
- * of the heart's enclosed volume and multiplies it by the factor (A m) that gives peak_mv; the series'
- * label reports both. */
+ * of the heart's enclosed volume and multiplies it by dipole_mam (or by the factor that gives peak_mv);
+ * the series' label reports the moment and the place. */
 void thx_beat_dipole(const thx_beat_opts *o, size_t f, double p[3]);
 thx_status thx_phantom_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_beat_opts *o, thx_series **out);
 

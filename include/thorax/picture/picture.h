@@ -13,6 +13,7 @@
 #include <stddef.h>
 
 #include "thorax/model/model.h"
+#include "thorax/model/electrodes.h"
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/model/series.h"
 #include "thorax/render/image.h"
@@ -105,6 +106,13 @@ typedef struct {
        in their own colours, never clipped (markers of where things are) */
     const char *landmarks[THX_PICTURE_MAX];
     int n_landmarks;
+    /* electrode files (thorax/model/electrodes.h): each electrode a sphere at its position, with its
+       name beside it, never clipped (where the ECG is measured) */
+    const char *electrodes[THX_PICTURE_MAX];
+    int n_electrodes;
+    /* the volume mesh drawn: the tetrahedra wholly on the kept side of the clip plane (all of them
+       without one), their visible faces coloured by tissue region with their edges; made at load */
+    int tetrahedra;
     /* activation-time maps: "SURFACE[:T0:T1]": the surface's data replaced by the time of each
        node's steepest downstroke (between T0 and T1, the series' time unit), drawn over its true
        range, isochrones with a contour style (thorax/leads/activation.h) */
@@ -142,6 +150,11 @@ typedef struct {
     thx_landmark_meshes *marks[THX_PICTURE_MAX]; /* the meshes of o->landmarks[k] */
     char model_dir[4096];     /* the model directory read ("" for surface files) */
     int n_marks;
+    thx_electrodes *elec[THX_PICTURE_MAX];        /* o->electrodes[k], read (thx_electrodes; owned) */
+    int n_elec;
+    thx_surface *tets[THX_PICTURE_MAX];  /* o->tetrahedra: the visible faces of each region's kept tetrahedra (owned) */
+    int tets_region[THX_PICTURE_MAX];    /* ... and the region each one is */
+    int n_tets;
     thx_series *ecg;          /* 12-lead (trace) */
     thx_series *currents;     /* currents_node, for arrows */
     thx_series *volume;       /* volume potentials (unused for now) */
