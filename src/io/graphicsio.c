@@ -177,6 +177,28 @@ static void surface_name(gio *g, size_t i, void *user, char *dst, size_t cap)
     if (w->info[i - 1]) text_field(g, w->info[i - 1] + 4, 80, dst, cap);
 }
 
+/* The blocks of surface k (1-based) whose header is at `at`, checked against the file: its nodes
+ * (nn x 3 reals at *nodes) and triangles (ne x 3 longs at *elems). */
+static thx_status surface_blocks(gio *g, size_t at, size_t k, long *nn, size_t *nodes, long *ne, size_t *elems)
+{
+    size_t nh = 0, eh = 0;
+    THX_CHECK(link_to(g, at + 8, 12, "the node header", &nh));
+    *nn = i32(g, nh + 4);
+    if (*nn < 1 || (size_t)*nn > g->len / 12)
+        return gerr(g, nh + 4, "surface %zu: node count %ld is impossible in a file of %zu bytes", k, *nn, g->len);
+    THX_CHECK(link_to(g, nh + 8, (size_t)*nn * 12, "the nodes", nodes));
+    if (i32(g, at + 12) == 0) return gerr(g, at + 12, "surface %zu has no elements (nodes only: not a surface)", k);
+    THX_CHECK(link_to(g, at + 12, 16, "the element header", &eh));
+    *ne = i32(g, eh + 4);
+    long es = i32(g, eh + 8);
+    if (es != 3)
+        return gerr(g, eh + 8, "surface %zu: elements of %ld nodes%s; only triangles (3) make a surface", k, es,
+                    es == 2 ? " (line segments)" : es == 4 ? " (tetrahedra: a volume)" : "");
+    if (*ne < 1 || (size_t)*ne > g->len / 12)
+        return gerr(g, eh + 4, "surface %zu: triangle count %ld is impossible in a file of %zu bytes", k, *ne, g->len);
+    return link_to(g, eh + 12, (size_t)*ne * 12, "the triangles", elems);
+}
+
 thx_status thx_geom_parse(thx_ctx *ctx, const char *path, const unsigned char *buf, size_t len, const char *select,
                           const char *name, thx_role role, thx_surface **out, thx_geom_info *info)
 {
@@ -199,6 +221,10 @@ thx_status thx_geom_parse(thx_ctx *ctx, const char *path, const unsigned char *b
             break;
         }
         if (i32(&g, at + 16) != 0) st = link_to(&g, at + 16, 88, "the surface info block", &w.info[k]);
+        /* every surface's blocks inside the file, not only the one picked: a file is read whole or not at all */
+        long nn, ne;
+        size_t nodes, elems;
+        if (st == THX_OK) st = surface_blocks(&g, at, k + 1, &nn, &nodes, &ne, &elems);
         if (st == THX_OK && k + 1 < h.n_surfaces) st = link_to(&g, at + 4, 20, "the next surface header", &at);
     }
     size_t which = 0;
@@ -212,26 +238,9 @@ thx_status thx_geom_parse(thx_ctx *ctx, const char *path, const unsigned char *b
             surface_name(&g, which, &w, info->file_name, sizeof info->file_name);
             if (h.fib) text_field(&g, h.fib + 172, 256, info->text, sizeof info->text);
         }
-        size_t nh = 0, eh = 0, nodes = 0, elems = 0;
-        st = link_to(&g, at + 8, 12, "the node header", &nh);
-        long nn = 0, ne = 0, es = 0;
-        if (st == THX_OK) {
-            nn = i32(&g, nh + 4);
-            if (nn < 1 || (size_t)nn > len / 12) st = gerr(&g, nh + 4, "surface %zu: node count %ld is impossible in a file of %zu bytes", which, nn, len);
-        }
-        if (st == THX_OK) st = link_to(&g, nh + 8, (size_t)nn * 12, "the nodes", &nodes);
-        if (st == THX_OK && i32(&g, at + 12) == 0) st = gerr(&g, at + 12, "surface %zu has no elements (nodes only: not a surface)", which);
-        if (st == THX_OK) st = link_to(&g, at + 12, 16, "the element header", &eh);
-        if (st == THX_OK) {
-            ne = i32(&g, eh + 4);
-            es = i32(&g, eh + 8);
-            if (es != 3)
-                st = gerr(&g, eh + 8, "surface %zu: elements of %ld nodes%s; only triangles (3) make a surface", which, es,
-                          es == 2 ? " (line segments)" : es == 4 ? " (tetrahedra: a volume)" : "");
-            else if (ne < 1 || (size_t)ne > len / 12)
-                st = gerr(&g, eh + 4, "surface %zu: triangle count %ld is impossible in a file of %zu bytes", which, ne, len);
-        }
-        if (st == THX_OK) st = link_to(&g, eh + 12, (size_t)ne * 12, "the triangles", &elems);
+        size_t nodes = 0, elems = 0;
+        long nn = 0, ne = 0;
+        st = surface_blocks(&g, at, which, &nn, &nodes, &ne, &elems);
         char nm[80];
         if (!name || !*name) {
             surface_name(&g, which, &w, nm, sizeof nm);
@@ -298,8 +307,21 @@ thx_status thx_tsdf_parse(thx_ctx *ctx, const char *path, const unsigned char *b
             st = gerr(&g, p, "time series %zu: header size %ld (308 to 336 expected: not a .tsdf header)", k + 1, hs);
         else if (!inside(&g, p, (size_t)hs))
             st = gerr(&g, p, "time series %zu: its %ld-byte header runs past the end of the file (%zu bytes)", k + 1, hs, len);
-        else if (k + 1 < h.n_series)
-            st = link_to(&g, p + 4, 4, "the next time series header", &p);
+        else {
+            /* every series' data inside the file, not only the one picked */
+            long nch = i32(&g, p + 92), nfr = i32(&g, p + 96);
+            size_t es = (hs >= 328 && i32(&g, p + 324) == 0) ? 2 : 4, data = 0;
+            char ext[81];
+            text_field(&g, p + 132, 80, ext, sizeof ext);
+            if (nch < 1 || nfr < 1)
+                st = gerr(&g, p + 92, "time series %zu: %ld channels x %ld frames (at least 1 x 1 needed)", k + 1, nch, nfr);
+            else if ((size_t)nfr > len / es / (size_t)nch)
+                st = gerr(&g, p + 92, "time series %zu: %ld channels x %ld frames of %zu bytes cannot fit in a file of %zu "
+                                      "bytes", k + 1, nch, nfr, es, len);
+            else if (!ext[0])
+                st = link_to(&g, p + 100, (size_t)nch * (size_t)nfr * es, "the data", &data);
+        }
+        if (st == THX_OK && k + 1 < h.n_series) st = link_to(&g, p + 4, 4, "the next time series header", &p);
     }
     size_t which = 0;
     if (st == THX_OK) st = pick(&g, select, h.n_series, "time series", "LABEL", series_label, at, &which);
