@@ -496,13 +496,23 @@ static thx_status mat_read_fids(thx_ctx *ctx, const char *path, const char *wher
         matvar_t *set = Mat_VarGetStructFieldByName(fv, "fidset", k);
         double t = 0, g = 0;
         size_t nv = val ? mat_numel(val) : 0;
-        if (!val || !typ || !mat_is_numeric_class(val->class_type) || val->isComplex || !mat_is_numeric_class(typ->class_type) ||
-            mat_numel(typ) != 1 || !mat_to_double(typ, 1, &t) || (nv != 1 && nv != s->n_rows)) {
+        /* the data buffers must hold what the dimensions say before they are converted */
+        int ok = val && typ && mat_is_numeric_class(val->class_type) && !val->isComplex &&
+                 mat_is_numeric_class(typ->class_type) && mat_numel(typ) == 1 && (nv == 1 || nv == s->n_rows) &&
+                 val->data && typ->data && val->nbytes >= nv * Mat_SizeOfClass(val->class_type) &&
+                 typ->nbytes >= Mat_SizeOfClass(typ->class_type);
+        if (!ok || !mat_to_double(typ, 1, &t)) {
             thx_log(ctx, THX_LOG_WARN, "%s: %sfids(%zu) not kept: a numeric type and one value or one per row (%zu) "
                                        "are needed", path, where, k + 1, s->n_rows);
             continue;
         }
-        if (set && mat_is_numeric_class(set->class_type) && mat_numel(set) == 1) mat_to_double(set, 1, &g);
+        if (set && mat_is_numeric_class(set->class_type) && mat_numel(set) == 1 && set->data &&
+            set->nbytes >= Mat_SizeOfClass(set->class_type))
+            mat_to_double(set, 1, &g);
+        if (!isfinite(t) || t < -1e6 || t > 1e6 || !isfinite(g) || g < -1e6 || g > 1e6) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %sfids(%zu) not kept: type %g, fidset %g", path, where, k + 1, t, g);
+            continue;
+        }
         double *x = malloc(nv * sizeof *x);
         if (!x) return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
         if (!mat_to_double(val, nv, x)) {
