@@ -263,6 +263,44 @@ static void test_tsdf_hand(void)
     CHECK(!s);
 }
 
+/* Two series in one file, and two named surfaces: picked by number and by label or name. */
+static void test_pick(void)
+{
+    double v[6] = {1, 2, 3, 4, 5, 6};
+    buf b;
+    make_tsdf(&b, 2, 3, v);
+    /* a second series header after the data (at 388), 1 x 2, label "second" */
+    size_t t2 = b.n, d2 = t2 + 308;
+    put32(&b, 28, 2), put32(&b, 40 + 4, (long)t2);
+    put32(&b, t2, 308), put32(&b, t2 + 92, 1), put32(&b, t2 + 96, 2), put32(&b, t2 + 100, (long)d2);
+    memcpy(b.b + t2 + 212, "second", 6);
+    putvax(&b, d2, 7), putvax(&b, d2 + 4, -8);
+    thx_series *s = NULL;
+    CHECK(thx_tsdf_parse(ctx, "t.tsdf", b.b, b.n, NULL, &s) == THX_EINPUT);
+    CHECK(msg_has("t.tsdf: holds 2 time series: pick one as t.tsdf@1 .. t.tsdf@2 (or @LABEL)", NULL));
+    CHECK_OK(ctx, thx_tsdf_parse(ctx, "t.tsdf", b.b, b.n, "2", &s));
+    if (s) CHECK(s->n_rows == 1 && s->n_frames == 2 && s->v[1] == -8 && !strcmp(s->label, "second") && !s->unit[0]);
+    thx_series_destroy(&s);
+    CHECK_OK(ctx, thx_tsdf_parse(ctx, "t.tsdf", b.b, b.n, "hand made", &s));
+    if (s) CHECK(s->n_rows == 2 && s->v[5] == 6);
+    thx_series_destroy(&s);
+    CHECK(thx_tsdf_parse(ctx, "t.tsdf", b.b, b.n, "third", &s) == THX_EINPUT && msg_has("t.tsdf@third: no time series", NULL));
+    /* the second series' data cut off: the file is refused even when the first is picked */
+    CHECK(thx_tsdf_parse(ctx, "t.tsdf", b.b, b.n - 2, "1", &s) == THX_EINPUT && msg_has("byte 488: the data at byte 696", NULL));
+    CHECK(!s);
+    /* a .geom with a named surface (info block at 184: size 88, name "heart") */
+    make_tet_geom(&b);
+    put32(&b, 56, 184), put32(&b, 184, 88);
+    memcpy(b.b + 188, "heart", 5);
+    b.n = 184 + 88;
+    thx_surface *g = NULL;
+    CHECK_OK(ctx, thx_geom_parse(ctx, "t.geom", b.b, b.n, "heart", NULL, THX_ROLE_HEART, &g, NULL));
+    if (g) CHECK(!strcmp(g->name, "heart") && g->n_tris == 4);
+    thx_surface_destroy(&g);
+    CHECK(thx_geom_parse(ctx, "t.geom", b.b, b.n, "lung", NULL, THX_ROLE_HEART, &g, NULL) == THX_EINPUT &&
+          msg_has("t.geom@lung: no surface of that NAME", NULL));
+}
+
 /* ----------------------------------------------------------------- .tsdf */
 
 static void test_tsdf_real(void)
@@ -464,6 +502,7 @@ int main(void)
     test_geom_real();
     test_geom_bad();
     test_tsdf_hand();
+    test_pick();
     test_tsdf_real();
     test_pot_sets();
     test_ts_struct();

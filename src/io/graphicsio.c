@@ -133,13 +133,14 @@ static thx_status read_header(gio *g, gio_header *h)
 static thx_status pick(gio *g, const char *select, size_t n, const char *kind, const char *by,
                        void (*name_of)(gio *, size_t, void *, char *, size_t), void *user, size_t *which)
 {
+    const char *plural = kind[strlen(kind) - 1] == 's' ? "" : "s"; /* "surfaces", "time series" */
     if (!select || !*select) {
         if (n == 1) {
             *which = 1;
             return THX_OK;
         }
-        return thx_error(g->ctx, THX_EINPUT, "%s: holds %zu %ss: pick one as %s@1 .. %s@%zu (or @%s)", g->path, n,
-                         kind, g->path, g->path, n, by);
+        return thx_error(g->ctx, THX_EINPUT, "%s: holds %zu %s%s: pick one as %s@1 .. %s@%zu (or @%s)", g->path, n,
+                         kind, plural, g->path, g->path, n, by);
     }
     size_t k = strspn(select, "0123456789");
     if (!select[k]) {
@@ -147,7 +148,7 @@ static thx_status pick(gio *g, const char *select, size_t n, const char *kind, c
         unsigned long long v = strtoull(select, NULL, 10);
         if (errno || v < 1 || v > n)
             return thx_error(g->ctx, THX_EINPUT, "%s@%s: the file holds %zu %s%s (1..%zu)", g->path, select, n, kind,
-                             n == 1 ? "" : "s", n);
+                             n == 1 ? "" : plural, n);
         *which = (size_t)v;
         return THX_OK;
     }
