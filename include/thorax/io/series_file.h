@@ -18,6 +18,12 @@
  *                 variable's data against its dimensions, nothing cut short
  *                 or left over, a compressed variable within 1032 times its
  *                 compressed size: src/io/series_matcheck.c).
+ *   map3d (read): .pot (one frame), numbered .pot sets (a pattern "NAME_%03d.pot" or a directory),
+ *                 .tsdf (thorax/io/graphicsio.h), .fids fiducials (thx_series_read_fids);
+ *   matrices (read): plain numbers in text, one line per row, one column per frame;
+ *   CSV   (.csv)  written with a header of times, read back as a matrix.
+ * A .mat struct (map3d's ts) is kept whole: its fields (thx_series_field) and fids
+ * (thx_fiducial) are written back as the same struct.
  * Readers accept a file whole or not at all: every count is checked against
  * the file's size before anything is allocated (memory stays a small multiple
  * of the file's size), and a NUL byte, a truncation, trailing bytes or a
