@@ -32,7 +32,7 @@ set +e
 [ $rc -eq 2 ] || fail "info without a file gave exit $rc, expected 2"
 "$THORAX" series convert "$REC" 2>/dev/null; rc=$?
 [ $rc -eq 2 ] || fail "convert without -o gave exit $rc, expected 2"
-"$THORAX" series convert "$REC" -o x.csv 2>err.txt; rc=$?
+"$THORAX" series convert "$REC" -o x.xyz 2>err.txt; rc=$?
 [ $rc -eq 2 ] || fail "unknown output extension gave exit $rc, expected 2"
 grep -q "give --format" err.txt || fail "no hint at --format: $(cat err.txt)"
 "$THORAX" series convert "$REC" -o x.txt --format xml 2>/dev/null; rc=$?
@@ -41,7 +41,7 @@ grep -q "give --format" err.txt || fail "no hint at --format: $(cat err.txt)"
 [ $rc -eq 1 ] || fail "missing file gave exit $rc, expected 1"
 grep -q "none.mat: cannot open" err.txt || fail "error does not name the file: $(cat err.txt)"
 set -e
-[ ! -e x.csv ] && [ ! -e x.txt ] || fail "a refused command wrote a file"
+[ ! -e x.xyz ] && [ ! -e x.txt ] || fail "a refused command wrote a file"
 
 # --- info on the recording ----------------------------------------------------
 "$THORAX" series info "$REC" > info.txt

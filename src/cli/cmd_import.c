@@ -1,5 +1,5 @@
 /* thorax import: a model directory from closed surfaces made elsewhere
- * (.pts/.fac, ECGSim and OpenMEEG .tri, OBJ, STL, PLY, VTK, VTP), each checked
+ * (.pts/.fac, ECGSim and OpenMEEG .tri, OBJ, STL, PLY, VTK, VTP, map3d .geom), each checked
  * as `thorax check` does, or from one tetrahedral volume mesh (.pts +
  * .tet/.elem, CARP, VTK unstructured grid, VTU, Gmsh .msh), its regions mapped
  * to tissues and conductivities, its surfaces extracted and the whole checked. */
@@ -278,7 +278,7 @@ int cmd_import(int argc, char **argv)
         {.name = "--elem", .type = CLI_INPUT, .meta = "ELEM", .fn = file_option, .def = "MESH with .tet, else .elem",
          .help = "the element file (.tet or .elem) of a .pts volume MESH"},
         {.name = "--format", .type = CLI_STRING, .meta = "F", .fn = file_option, .def = "by the extension",
-         .help = "pts, tri, obj, stl, ply, vtk or vtp for a surface; tet, elem (or carp), vtk, vtu or msh for a "
+         .help = "pts, tri, obj, stl, ply, vtk, vtp or geom for a surface; tet, elem (or carp), vtk, vtu or msh for a "
                  "volume MESH"},
         {.name = "--scale", .type = CLI_REAL, .meta = "S", .d = &A.scale, .fn = file_option, .rule = CLI_GT | CLI_FINITE,
          .bad = "--scale must be a finite number > 0", .def = "1, or the --scale before the first FILE",
@@ -333,6 +333,8 @@ int cmd_import(int argc, char **argv)
             "  .ply         ascii or binary PLY: vertex x y z, face vertex_indices\n"
             "  .vtk         legacy VTK POLYDATA, ASCII or BINARY (POLYGONS, TRIANGLE_STRIPS)\n"
             "  .vtp         VTK XML PolyData with ascii arrays\n"
+            "  .geom        map3d/CVRTI binary graphicsio: FILE.geom@N (or @NAME) picks one\n"
+            "               surface; a file of several needs the pick (1-based triangles)\n"
             "\n"
             "volume mesh formats (a MESH is the only FILE; no --name/--role):\n"
             "  .pts + .tet  'x y z' node lines; 'a b c d [region]' element lines, node\n"
@@ -373,6 +375,8 @@ int cmd_import(int argc, char **argv)
             "  thorax import -o dal --up -y --front -z daltorso.pts --name torso --role outer \\\n"
             "                dalepi.pts --name epicardium --role heart\n"
             "  thorax import -o head head.msh --region 1=brain:0.33 --region 2=skull:0.0042\n"
+            "  thorax import -o dal --up -y --front -z daltorsoepi.geom@1 --name torso --role outer \\\n"
+            "                daltorsoepi.geom@2 --name epicardium --role heart\n"
             "\n"
             "Exit status: 0 written, 1 a file could not be read or a surface or mesh was\n"
             "refused (nothing written), 2 bad usage.\n",

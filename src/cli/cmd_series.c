@@ -9,6 +9,34 @@
 #include "cli/cli.h"
 #include "thorax/model/series.h"
 #include "thorax/io/series_file.h"
+/* map3d fiducials: one line each, values as frames counted from 0 (map3d's convention). */
+static void print_fiducials(const thx_series *s)
+{
+    if (s->group[0]) printf("struct      %s (%zu fields kept)\n", s->group, s->n_fields);
+    printf("fiducials   %zu%s\n", s->n_fids, s->n_fids ? " (frames counted from 0)" : "");
+    for (size_t k = 0; k < s->n_fids; k++) {
+        const thx_fiducial *f = &s->fids[k];
+        const char *name = thx_fiducial_type_name(f->type);
+        printf("  %-10s type %-3d", name ? name : "?", f->type);
+        if (f->fidset) printf(" fidset %d", f->fidset);
+        if (f->n == 1) {
+            printf(" %.10g (one value)\n", f->v[0]);
+            continue;
+        }
+        double lo = INFINITY, hi = -INFINITY;
+        size_t nan = 0;
+        for (size_t i = 0; i < f->n; i++) {
+            if (!isfinite(f->v[i])) { nan++; continue; }
+            if (f->v[i] < lo) lo = f->v[i];
+            if (f->v[i] > hi) hi = f->v[i];
+        }
+        printf(" %zu values (one per row)", f->n);
+        if (lo <= hi) printf(", %.10g .. %.10g", lo, hi);
+        if (nan) printf(", %zu without a value", nan);
+        printf("\n");
+    }
+}
+
 static void print_info(const char *path, const thx_series *s)
 {
     size_t N = s->n_rows, M = s->n_frames;
@@ -40,26 +68,31 @@ static void print_info(const char *path, const thx_series *s)
     size_t bad = thx_series_find_nonfinite(s, &row, &frame);
     if (bad) printf("non-finite  %zu (first: row %zu, frame %zu)\n", bad, row + 1, frame + 1);
     else printf("non-finite  0\n");
+    print_fiducials(s);
 }
 
 int cmd_series(int argc, char **argv)
 {
     const char *cmd = "series";
-    const char *out = NULL;
-    int verbose = 0, format = THX_SERIES_AUTO;
+    const char *out = NULL, *fids = NULL;
+    int verbose = 0, format = THX_SERIES_AUTO, transpose = 0;
     static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
-                                         {NULL, 0}};
+                                         {"csv", THX_SERIES_CSV}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "OUT", .s = &out,
          .help = "file to write (convert)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .def = "from OUT's extension",
          .help = "format of OUT (convert)"},
+        {.name = "--fids", .type = CLI_INPUT, .meta = "FIDS", .s = &fids,
+         .help = "add the fiducials of a map3d .fids file (one line per lead; its lead count must be the rows)"},
+        {.name = "--transpose", .type = CLI_FLAG, .i = &transpose,
+         .help = "swap rows and frames after reading (a matrix laid out frames x channels)"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "info FILE\nconvert IN -o [--format]",
+        .usage = "info FILE [--fids] [--transpose]\nconvert IN -o [--format] [--fids] [--transpose]",
         .about = "A time series is a rows x frames matrix of values (one row per node or lead,\n"
                  "one column per time instant) with a time axis, units and a label.\n"
                  "\n"
@@ -69,8 +102,15 @@ int cmd_series(int argc, char **argv)
                  "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
                  "\n"
                  "Formats (docs/formats.md, \"Time series\"): text (.txt, .dat), raw binary\n"
-                 "(.raw), MATLAB (.mat). Input files are recognized by their content, else\n"
-                 "their extension. In a .mat file the values are the variable named as\n"
+                 "(.raw), MATLAB (.mat), CSV (.csv, written with a header of times). Read\n"
+                 "also: map3d .pot (one frame), numbered .pot files as one series (a pattern,\n"
+                 "'dipole2_%03d.pot', or their directory: frames in number order, gaps\n"
+                 "refused), map3d/CVRTI .tsdf (FILE.tsdf@N picks one of several), plain\n"
+                 "numeric matrices in text (one line per row, one column per frame, blanks\n"
+                 "or commas; --transpose for frames x channels). map3d fiducials (a .mat's\n"
+                 "fids, a .tsdf's q/s/t times, a .fids file) are kept, printed by info and\n"
+                 "written to .mat; a .mat struct (map3d's ts) is written back whole.\n"
+                 "Input files are recognized by their content, else their extension. In a .mat file the values are the variable named as\n"
                  "FILE.mat:NAME, else `potvals`, else the first struct with a `potvals` field\n"
                  "(map3d recordings), else the first 2-D numeric matrix. MATLAB 5/7 files are\n"
                  "read (compressed or not); v7.3 (HDF5) files are refused: save with -v7.\n"
@@ -93,7 +133,7 @@ int cmd_series(int argc, char **argv)
     if (convert) {
         if (!out) return cli_usage_error(cmd, "convert: no output file given (-o OUT)");
         if (fmt == THX_SERIES_AUTO && thx_series_output_format(NULL, out, &fmt) != 0)
-            return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat); "
+            return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat, .csv); "
                                         "give --format",
                                    out);
     } else if (out || format != THX_SERIES_AUTO) {
@@ -104,6 +144,8 @@ int cmd_series(int argc, char **argv)
     thx_series *s = NULL;
     int rc = 0;
     thx_status st = thx_series_read(ctx, in, THX_SERIES_AUTO, &s);
+    if (st == THX_OK && transpose) st = thx_series_transpose(ctx, &s);
+    if (st == THX_OK && fids) st = thx_series_read_fids(ctx, fids, s);
     if (st) {
         rc = cli_fail(ctx, cmd, st);
         goto done;

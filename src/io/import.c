@@ -24,13 +24,14 @@
  */
 #include "io/import_surface.h"
 #include "thorax/io/model_dir.h"
+#include "thorax/io/graphicsio.h"
 /* ------------------------------------------------------------ formats */
 
-static const char *const format_names[] = {"auto", "pts/fac", "tri", "obj", "stl", "ply", "vtk", "vtp"};
+static const char *const format_names[] = {"auto", "pts/fac", "tri", "obj", "stl", "ply", "vtk", "vtp", "geom"};
 
 const char *thx_import_format_name(thx_import_format f)
 {
-    return (f >= THX_IMPORT_AUTO && f <= THX_IMPORT_VTP) ? format_names[f] : "unknown";
+    return (f >= THX_IMPORT_AUTO && f <= THX_IMPORT_GEOM) ? format_names[f] : "unknown";
 }
 
 int thx_import_format_parse(const char *s, thx_import_format *out)
@@ -38,7 +39,7 @@ int thx_import_format_parse(const char *s, thx_import_format *out)
     static const struct { const char *name; thx_import_format f; } tab[] = {
         {"pts", THX_IMPORT_PTSFAC}, {"fac", THX_IMPORT_PTSFAC}, {"pts/fac", THX_IMPORT_PTSFAC},
         {"tri", THX_IMPORT_TRI}, {"obj", THX_IMPORT_OBJ}, {"stl", THX_IMPORT_STL},
-        {"ply", THX_IMPORT_PLY}, {"vtk", THX_IMPORT_VTK}, {"vtp", THX_IMPORT_VTP},
+        {"ply", THX_IMPORT_PLY}, {"vtk", THX_IMPORT_VTK}, {"vtp", THX_IMPORT_VTP}, {"geom", THX_IMPORT_GEOM},
     };
     if (!s) return -1;
     for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
@@ -53,6 +54,9 @@ int thx_import_format_parse(const char *s, thx_import_format *out)
 thx_import_format thx_import_format_from_path(const char *path)
 {
     thx_import_format f;
+    char file[4096];
+    const char *sel = NULL;
+    if (path && thx_gio_split_select(path, "geom", file, sizeof file, &sel) == 0 && sel) return THX_IMPORT_GEOM;
     if (!path || thx_import_format_parse(path_extension(path), &f) != 0) return THX_IMPORT_AUTO;
     return f;
 }
@@ -105,10 +109,27 @@ thx_status thx_surface_read_file(thx_ctx *ctx, const char *path, const char *pat
     if (fmt == THX_IMPORT_AUTO)
         return thx_error(ctx, THX_EINPUT,
                          "%s: surface \"%s\": cannot tell the format from the extension \"%s\" (known: .pts/.fac, .tri, "
-                         ".obj, .stl, .ply, .vtk, .vtp)", path, name, path_extension(path));
+                         ".obj, .stl, .ply, .vtk, .vtp, .geom)", path, name, path_extension(path));
     if (info) info->format = fmt;
     thx_status st = THX_OK;
-    if (fmt == THX_IMPORT_PTSFAC) {
+    if (fmt == THX_IMPORT_GEOM) {
+        char file[4096];
+        const char *sel = NULL;
+        if (thx_gio_split_select(path, "geom", file, sizeof file, &sel) != 0)
+            return thx_error(ctx, THX_EIO, "%s: path too long", path);
+        char *buf = NULL;
+        size_t len = 0;
+        THX_CHECK(thx_read_file(ctx, file, &buf, &len));
+        thx_geom_info gi;
+        st = thx_geom_parse(ctx, file, (const unsigned char *)buf, len, sel, name, role, out, &gi);
+        free(buf);
+        if (st == THX_OK && info) {
+            snprintf(info->format_detail, sizeof info->format_detail, "map3d graphicsio .geom, surface %zu of %zu",
+                     gi.index, gi.n_surfaces);
+            info->index_base = 1;
+            info->index_base_detected = 0;
+        }
+    } else if (fmt == THX_IMPORT_PTSFAC) {
         st = read_ptsfac(ctx, path, path2, name, role, out, info);
     } else {
         char *text = NULL;

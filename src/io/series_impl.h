@@ -26,5 +26,12 @@ thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, 
 thx_status series_mat_preflight(thx_ctx *ctx, const char *path);
 thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path);
 thx_status series_read_pot(thx_ctx *ctx, const char *path, thx_series **out);
+/* numbered .pot files: a pattern with one %d, or a directory (series_potset.c) */
+thx_status series_read_pot_set(thx_ctx *ctx, const char *path, thx_series **out);
+/* plain numeric matrices in, CSV out (series_matrix.c) */
+thx_status series_read_matrix(thx_ctx *ctx, const char *path, thx_series **out);
+thx_status series_write_csv(thx_ctx *ctx, const thx_series *s, const char *path);
+/* the shortest text that reads back to x (series_text.c); writes at most 25 characters */
+char *series_put_double(char *p, double x);
 
 #endif

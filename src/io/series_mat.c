@@ -111,6 +111,102 @@ static thx_status mat_write_string(mat_t *mat, const char *name, const char *str
     return bad ? THX_EIO : THX_OK;
 }
 
+static const enum matio_classes field_class[] = {
+    MAT_C_EMPTY, MAT_C_DOUBLE, MAT_C_SINGLE, MAT_C_INT8, MAT_C_UINT8, MAT_C_INT16, MAT_C_UINT16,
+    MAT_C_INT32, MAT_C_UINT32, MAT_C_INT64, MAT_C_UINT64, MAT_C_CHAR, MAT_C_CELL};
+static const enum matio_types field_type[] = {
+    MAT_T_UNKNOWN, MAT_T_DOUBLE, MAT_T_SINGLE, MAT_T_INT8, MAT_T_UINT8, MAT_T_INT16, MAT_T_UINT16,
+    MAT_T_INT32, MAT_T_UINT32, MAT_T_INT64, MAT_T_UINT64, MAT_T_UINT16, MAT_T_CELL};
+
+/* A char matvar of UTF-8 text (UTF-16 code units, MATLAB's encoding); w holds 2 * strlen + 2 units.
+ * dims0: the first dimension the file had for an empty string (0 or 1). */
+static matvar_t *mat_char_var(const char *name, const char *str, uint16_t *w, size_t dims0)
+{
+    size_t n = utf8_to_utf16(str, w);
+    size_t dims[2] = {n ? 1 : dims0, n};
+    return Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UINT16, 2, dims, n ? w : NULL, 0);
+}
+
+/* map3d's fids: a 1 x n struct array of value (double: 1 or one per row), type and fidset. */
+static matvar_t *mat_fids_var(const char *name, const thx_series *s)
+{
+    const char *names[3] = {"value", "type", "fidset"};
+    size_t dims[2] = {1, s->n_fids};
+    matvar_t *st = Mat_VarCreateStruct(name, 2, dims, names, 3);
+    for (size_t k = 0; st && k < s->n_fids; k++) {
+        const thx_fiducial *f = &s->fids[k];
+        size_t vd[2] = {f->n, 1}, sd[2] = {1, 1};
+        double type = f->type, fidset = f->fidset;
+        matvar_t *v = Mat_VarCreate(NULL, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, vd, f->v, 0);
+        matvar_t *t = Mat_VarCreate(NULL, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, sd, &type, 0);
+        matvar_t *g = Mat_VarCreate(NULL, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, sd, &fidset, 0);
+        if (!v || !t || !g) {
+            Mat_VarFree(v), Mat_VarFree(t), Mat_VarFree(g), Mat_VarFree(st);
+            return NULL;
+        }
+        Mat_VarSetStructFieldByName(st, "value", k, v);
+        Mat_VarSetStructFieldByName(st, "type", k, t);
+        Mat_VarSetStructFieldByName(st, "fidset", k, g);
+    }
+    return st;
+}
+
+/* The struct the series came from (s->group), its fields in the file's order. */
+static matvar_t *mat_group_var(const thx_series *s, uint16_t *w, size_t wcap)
+{
+    size_t nf = s->n_fields;
+    const char **names = malloc((nf + 4) * sizeof *names);
+    if (!names) return NULL;
+    for (size_t k = 0; k < nf; k++) names[k] = s->fields[k].name;
+    /* what the series holds but the struct did not name */
+    static const char *const own[4] = {"potvals", "unit", "label", "fids"};
+    for (int j = 0; j < 4; j++)
+        if (!thx_series_field_get(s, own[j]) && (j == 0 || (j == 1 && s->unit[0]) || (j == 2 && s->label[0]) ||
+                                                 (j == 3 && s->n_fids)))
+            names[nf++] = own[j];
+    size_t dims[2] = {1, 1};
+    matvar_t *st = Mat_VarCreateStruct(s->group, 2, dims, names, (unsigned)nf);
+    for (size_t k = 0; st && k < nf; k++) {
+        const thx_series_field *f = k < s->n_fields ? &s->fields[k] : NULL;
+        matvar_t *v = NULL;
+        if (!f || f->cls == THX_FIELD_SERIES) {
+            if (!strcmp(names[k], "potvals")) {
+                size_t d[2] = {s->n_rows, s->n_frames};
+                v = Mat_VarCreate(NULL, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, d, s->v, 0);
+            } else if (!strcmp(names[k], "unit")) {
+                v = mat_char_var(NULL, s->unit, w, 1);
+            } else if (!strcmp(names[k], "label")) {
+                v = mat_char_var(NULL, s->label, w, 1);
+            } else if (!strcmp(names[k], "fids")) {
+                v = mat_fids_var(NULL, s);
+            }
+        } else if (f->cls == THX_FIELD_CHAR) {
+            const char *txt = f->data ? (const char *)f->data : "";
+            if (2 * strlen(txt) + 2 > wcap) {
+                uint16_t *big = malloc((2 * strlen(txt) + 2) * sizeof *big);
+                if (big) v = mat_char_var(NULL, txt, big, f->dims[0]);
+                free(big);
+            } else {
+                v = mat_char_var(NULL, txt, w, f->dims[0]);
+            }
+        } else if (f->cls == THX_FIELD_EMPTY_CELL) {
+            size_t d[2] = {f->dims[0], f->dims[1]};
+            v = Mat_VarCreate(NULL, MAT_C_CELL, MAT_T_CELL, 2, d, NULL, 0);
+        } else {
+            size_t d[2] = {f->dims[0], f->dims[1]};
+            v = Mat_VarCreate(NULL, field_class[f->cls], field_type[f->cls], 2, d, f->data, 0);
+        }
+        if (!v) {
+            Mat_VarFree(st);
+            st = NULL;
+            break;
+        }
+        Mat_VarSetStructFieldByName(st, names[k], 0, v);
+    }
+    free(names);
+    return st;
+}
+
 thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
 {
     /* An existing file is replaced only when libmatio wrote it for thorax (its header text). */
@@ -127,9 +223,19 @@ thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
     }
     const char *what = "potvals";
     uint16_t w[2 * sizeof s->label];
+    int bad = 0;
+    matvar_t *v = NULL;
+    if (s->group[0]) {
+        /* the struct it came from (map3d's ts), every field kept */
+        what = s->group;
+        v = mat_group_var(s, w, sizeof w / sizeof w[0]);
+        bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
+        Mat_VarFree(v);
+        goto close;
+    }
     size_t dims[2] = {s->n_rows, s->n_frames};
-    matvar_t *v = Mat_VarCreate("potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, s->v, MAT_F_DONT_COPY_DATA);
-    int bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
+    v = Mat_VarCreate("potvals", MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, s->v, MAT_F_DONT_COPY_DATA);
+    bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
     Mat_VarFree(v);
     if (!bad) {
         what = "time";
@@ -141,6 +247,13 @@ thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
     if (!bad) bad = mat_write_string(mat, what = "unit", s->unit, w) != THX_OK;
     if (!bad) bad = mat_write_string(mat, what = "time_unit", s->time_unit, w) != THX_OK;
     if (!bad) bad = mat_write_string(mat, what = "label", s->label, w) != THX_OK;
+    if (!bad && s->n_fids) {
+        what = "fids";
+        v = mat_fids_var("fids", s);
+        bad = !v || Mat_VarWrite(mat, v, MAT_COMPRESSION_NONE) != 0;
+        Mat_VarFree(v);
+    }
+close:;
     int e = errno;
     if (Mat_Close(mat) != 0 && !bad) {
         bad = 1;
@@ -149,7 +262,7 @@ thx_status series_write_mat(thx_ctx *ctx, const thx_series *s, const char *path)
     /* libmatio does not always report a failed fwrite: a file shorter than
      * its data is (a full disk) is caught here */
     struct stat sb;
-    if (!bad && (stat(af.tmp, &sb) != 0 || (uint64_t)sb.st_size < 128 + 8 * (uint64_t)s->n_frames * (s->n_rows + 1))) {
+    if (!bad && (stat(af.tmp, &sb) != 0 || (uint64_t)sb.st_size < 128 + 8 * (uint64_t)s->n_frames * (s->n_rows + (s->group[0] ? 0 : 1)))) {
         bad = 1;
         what = "the data (the file is too short: disk full?)";
     }
@@ -364,6 +477,107 @@ static thx_status mat_read_meta(thx_ctx *ctx, const char *path, const char *wher
     return THX_OK;
 }
 
+static const thx_field_class class_field[] = {
+    [MAT_C_DOUBLE] = THX_FIELD_DOUBLE, [MAT_C_SINGLE] = THX_FIELD_SINGLE, [MAT_C_INT8] = THX_FIELD_INT8,
+    [MAT_C_UINT8] = THX_FIELD_UINT8, [MAT_C_INT16] = THX_FIELD_INT16, [MAT_C_UINT16] = THX_FIELD_UINT16,
+    [MAT_C_INT32] = THX_FIELD_INT32, [MAT_C_UINT32] = THX_FIELD_UINT32, [MAT_C_INT64] = THX_FIELD_INT64,
+    [MAT_C_UINT64] = THX_FIELD_UINT64};
+
+/* map3d's fids (a struct array of value, type, fidset) into the series' fiducials. */
+static thx_status mat_read_fids(thx_ctx *ctx, const char *path, const char *where, matvar_t *fv, thx_series *s)
+{
+    if (fv->class_type != MAT_C_STRUCT) {
+        thx_log(ctx, THX_LOG_WARN, "%s: %sfids is %s, not a struct array: not kept", path, where, mat_class_name(fv));
+        return THX_OK;
+    }
+    size_t n = mat_numel(fv);
+    for (size_t k = 0; k < n; k++) {
+        matvar_t *val = Mat_VarGetStructFieldByName(fv, "value", k), *typ = Mat_VarGetStructFieldByName(fv, "type", k);
+        matvar_t *set = Mat_VarGetStructFieldByName(fv, "fidset", k);
+        double t = 0, g = 0;
+        size_t nv = val ? mat_numel(val) : 0;
+        /* the data buffers must hold what the dimensions say before they are converted */
+        int ok = val && typ && mat_is_numeric_class(val->class_type) && !val->isComplex &&
+                 mat_is_numeric_class(typ->class_type) && mat_numel(typ) == 1 && (nv == 1 || nv == s->n_rows) &&
+                 val->data && typ->data && val->nbytes >= nv * Mat_SizeOfClass(val->class_type) &&
+                 typ->nbytes >= Mat_SizeOfClass(typ->class_type);
+        if (!ok || !mat_to_double(typ, 1, &t)) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %sfids(%zu) not kept: a numeric type and one value or one per row (%zu) "
+                                       "are needed", path, where, k + 1, s->n_rows);
+            continue;
+        }
+        if (set && mat_is_numeric_class(set->class_type) && mat_numel(set) == 1 && set->data &&
+            set->nbytes >= Mat_SizeOfClass(set->class_type))
+            mat_to_double(set, 1, &g);
+        if (!isfinite(t) || t < -1e6 || t > 1e6 || !isfinite(g) || g < -1e6 || g > 1e6) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %sfids(%zu) not kept: type %g, fidset %g", path, where, k + 1, t, g);
+            continue;
+        }
+        double *x = malloc(nv * sizeof *x);
+        if (!x) return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        if (!mat_to_double(val, nv, x)) {
+            free(x);
+            continue;
+        }
+        thx_status st = thx_series_add_fiducial(ctx, s, (int)t, (int)g, nv, x);
+        free(x);
+        THX_CHECK(st);
+    }
+    return THX_OK;
+}
+
+/* Every field of the struct the values came from, kept in order (potvals, unit, label and fids as
+ * the series' own). */
+static thx_status mat_keep_fields(thx_ctx *ctx, const char *path, matvar_t *top, thx_series *s)
+{
+    unsigned nf = Mat_VarGetNumberOfFields(top);
+    char *const *names = Mat_VarGetStructFieldnames(top);
+    snprintf(s->group, sizeof s->group, "%s", top->name ? top->name : "ts");
+    char where[80];
+    snprintf(where, sizeof where, "%.60s.", s->group);
+    for (unsigned k = 0; k < nf && names; k++) {
+        const char *nm = names[k];
+        matvar_t *f = Mat_VarGetStructFieldByIndex(top, k, 0);
+        size_t d0[2] = {0, 0};
+        if (!strcmp(nm, "potvals") || !strcmp(nm, "unit") || !strcmp(nm, "label") || !strcmp(nm, "fids")) {
+            if (!strcmp(nm, "fids") && f) THX_CHECK(mat_read_fids(ctx, path, where, f, s));
+            THX_CHECK(thx_series_add_field(ctx, s, nm, THX_FIELD_SERIES, d0, NULL, 0));
+            continue;
+        }
+        if (!f) continue;
+        size_t dims[2] = {f->rank >= 1 ? f->dims[0] : 0, f->rank >= 2 ? f->dims[1] : 1};
+        if (f->class_type == MAT_C_EMPTY) {
+            /* libmatio's empty array (MATLAB's [] of any class; its size is not kept): an empty double */
+            THX_CHECK(thx_series_add_field(ctx, s, nm, THX_FIELD_DOUBLE, d0, NULL, 0));
+        } else if (f->rank != 2) {
+            thx_log(ctx, THX_LOG_WARN, "%s: %s%s not kept: %d-D", path, where, nm, f->rank);
+        } else if (mat_is_numeric_class(f->class_type) && !f->isComplex) {
+            thx_field_class c = class_field[f->class_type];
+            size_t nb = mat_numel(f) * thx_field_class_size(c);
+            if (nb && (!f->data || f->nbytes < nb))
+                thx_log(ctx, THX_LOG_WARN, "%s: %s%s not kept: no data", path, where, nm);
+            else
+                THX_CHECK(thx_series_add_field(ctx, s, nm, c, dims, f->data, nb));
+        } else if (f->class_type == MAT_C_CHAR) {
+            size_t cap = 3 * f->nbytes + 2;
+            char *txt = malloc(cap);
+            int cut = 0;
+            if (!txt) return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+            if (mat_string(f, txt, cap, &cut))
+                THX_CHECK(thx_series_add_field(ctx, s, nm, THX_FIELD_CHAR, dims, txt, strlen(txt) + 1));
+            else
+                thx_log(ctx, THX_LOG_WARN, "%s: %s%s not kept: a char array of several lines", path, where, nm);
+            free(txt);
+        } else if (f->class_type == MAT_C_CELL && mat_numel(f) == 0) {
+            THX_CHECK(thx_series_add_field(ctx, s, nm, THX_FIELD_EMPTY_CELL, dims, NULL, 0));
+        } else {
+            thx_log(ctx, THX_LOG_WARN, "%s: %s%s (%s) not kept: only numeric arrays, text and empty cells are", path,
+                    where, nm, mat_class_name(f));
+        }
+    }
+    return THX_OK;
+}
+
 /* "a (double 3x4), b (char 1x2)" for messages. */
 static void mat_list_vars(mat_t *mat, char *buf, size_t cap)
 {
@@ -484,6 +698,19 @@ thx_status series_read_mat(thx_ctx *ctx, const char *path, const char *varname, 
     if ((st = mat_read_meta(ctx, path, where, &meta, s)) != THX_OK) {
         Mat_VarFree(meta.owned);
         goto done;
+    }
+    if (meta.holder) {
+        if ((st = mat_keep_fields(ctx, path, top, s)) != THX_OK) goto done;
+    } else {
+        /* top-level potvals: a top-level fids */
+        matvar_t *info = Mat_VarReadInfo(mat, "fids");
+        if (info) {
+            Mat_VarFree(info);
+            matvar_t *fv = Mat_VarRead(mat, "fids");
+            if (fv) st = mat_read_fids(ctx, path, "", fv, s);
+            Mat_VarFree(fv);
+            if (st != THX_OK) goto done;
+        }
     }
     st = thx_series_validate(ctx, s, path);
 done:

@@ -92,7 +92,7 @@ static char *put_digits(char *p, int neg, const char *d, int n, int e, int n_max
  *  - else the 17 significant digits of %.16e (correctly rounded by the C
  *    library, so they always read back), shortened to 15 or 16 digits when
  *    strtod confirms that those read back too. */
-static char *put_double(char *p, double x)
+char *series_put_double(char *p, double x)
 {
     if (isnan(x) || isinf(x)) {
         const char *t = isnan(x) ? "nan" : x > 0 ? "inf" : "-inf";
@@ -213,15 +213,15 @@ thx_status series_write_text(thx_ctx *ctx, const thx_series *s, const char *path
     }
     if (uniform) {
         char *p = line;
-        p = put_double(p + sprintf(p, "t0 "), s->time[0]);
-        p = put_double(p + sprintf(p, "\ndt "), dt);
+        p = series_put_double(p + sprintf(p, "t0 "), s->time[0]);
+        p = series_put_double(p + sprintf(p, "\ndt "), dt);
         *p++ = '\n';
         fwrite(line, 1, (size_t)(p - line), f);
     } else {
         char *p = line + sprintf(line, "time");
         for (size_t k = 0; k < M; k++) {
             *p++ = ' ';
-            p = put_double(p, s->time[k]);
+            p = series_put_double(p, s->time[k]);
         }
         *p++ = '\n';
         fwrite(line, 1, (size_t)(p - line), f);
@@ -234,7 +234,7 @@ thx_status series_write_text(thx_ctx *ctx, const thx_series *s, const char *path
             const double *v = s->v + r0 + (size_t)i;
             for (size_t k = 0; k < M; k++) {
                 if (k) *p++ = ' ';
-                p = put_double(p, v[k * N]);
+                p = series_put_double(p, v[k * N]);
             }
             *p++ = '\n';
             row_len[i] = (size_t)(p - (rows + (size_t)i * row_cap));

@@ -165,7 +165,11 @@ static thx_status surfaces_from_files(thx_ctx *ctx, const thx_picture_opts *o, t
         base = base ? base + 1 : o->files[k];
         snprintf(name, sizeof name, "%s", base);
         char *dot = strrchr(name, '.');
+        const char *at = dot ? strchr(dot, '@') : NULL; /* FILE.geom@2: one surface of several, "FILE_2" */
+        char sel[32] = "";
+        if (at) snprintf(sel, sizeof sel, "_%s", at + 1);
         if (dot && dot != name) *dot = '\0';
+        if (sel[0] && strlen(name) + strlen(sel) < sizeof name) strcat(name, sel);
         thx_import_opts io;
         thx_import_opts_default(&io);
         io.force = 1;

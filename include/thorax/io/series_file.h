@@ -18,6 +18,12 @@
  *                 variable's data against its dimensions, nothing cut short
  *                 or left over, a compressed variable within 1032 times its
  *                 compressed size: src/io/series_matcheck.c).
+ *   map3d (read): .pot (one frame), numbered .pot sets (a pattern "NAME_%03d.pot" or a directory),
+ *                 .tsdf (thorax/io/graphicsio.h), .fids fiducials (thx_series_read_fids);
+ *   matrices (read): plain numbers in text, one line per row, one column per frame;
+ *   CSV   (.csv)  written with a header of times, read back as a matrix.
+ * A .mat struct (map3d's ts) is kept whole: its fields (thx_series_field) and fids
+ * (thx_fiducial) are written back as the same struct.
  * Readers accept a file whole or not at all: every count is checked against
  * the file's size before anything is allocated (memory stays a small multiple
  * of the file's size), and a NUL byte, a truncation, trailing bytes or a
@@ -38,19 +44,31 @@ typedef enum {
     THX_SERIES_TEXT,
     THX_SERIES_RAW,
     THX_SERIES_MAT,
-    THX_SERIES_POT       /* map3d .pot, read only: one value per node (whitespace separated), one frame */
+    THX_SERIES_POT,      /* map3d .pot, read only: one value per node (whitespace separated), one frame */
+    THX_SERIES_TSDF,     /* map3d/CVRTI graphicsio .tsdf, read only (thorax/io/graphicsio.h); FILE.tsdf@N picks one */
+    THX_SERIES_CSV,      /* written: CSV with a header of times; read as a matrix (below) */
+    THX_SERIES_MATRIX    /* read only: a plain numeric matrix in text, rows x frames (blanks or commas) */
 } thx_series_format;
 
-/* The format to write: format_name ("text", "raw", "mat") if given, else path's extension (.txt, .dat,
- * .raw, .mat). 0, or -1 if neither names a format that can be written. */
+/* The format to write: format_name ("text", "raw", "mat", "csv") if given, else path's extension (.txt,
+ * .dat, .raw, .mat, .csv). 0, or -1 if neither names a format that can be written. */
 int thx_series_output_format(const char *format_name, const char *path, thx_series_format *fmt);
 
-/* Reads a series; errors name the file (and line, for text) and what is wrong. */
+/* Reads a series; path may also be a set of numbered map3d .pot files (a pattern such as
+ * "dipole2_%03d.pot", or a directory of NAME + number + .pot files: one frame per file, in number
+ * order, gaps refused) or "FILE.tsdf@N". .tsdfc (map3d's GDBM container of fiducial sets) is refused.
+ * Errors name the file (and line, for text) and what is wrong. */
 thx_status thx_series_read(thx_ctx *ctx, const char *path, thx_series_format fmt, thx_series **out);
+/* Adds the fiducials of a map3d .fids file to s (its lead count must be s's rows; values minus 1,
+ * as map3d reads them). */
+thx_status thx_series_read_fids(thx_ctx *ctx, const char *path, thx_series *s);
+/* Swaps rows and frames (a matrix laid out frames x channels); the time axis becomes the frame
+ * number from 0 (time_unit "frame"); per-row fiducials and kept fields are dropped. */
+thx_status thx_series_transpose(thx_ctx *ctx, thx_series **s);
 /* Writes atomically (nothing half-written on failure). */
 thx_status thx_series_write(thx_ctx *ctx, const thx_series *s, const char *path, thx_series_format fmt);
 
-/* Parses "text", "raw", "mat" or "auto"; returns -1 for anything else. */
+/* Parses "text", "raw", "mat", "csv", "pot", "tsdf", "matrix" or "auto"; returns -1 for anything else. */
 int thx_series_format_parse(const char *name, thx_series_format *fmt);
 
 #ifdef __cplusplus

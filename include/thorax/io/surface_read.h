@@ -33,6 +33,10 @@
  *                (POINT_DATA, CELL_DATA) ignored
  *   .vtp         VTK XML PolyData with format="ascii" arrays (as `thorax
  *                export` writes); binary and appended data are refused
+ *   .geom        map3d's legacy binary graphicsio file (thorax/io/graphicsio.h):
+ *                one or more surfaces; "FILE.geom@N" (1-based) or "@NAME" picks
+ *                one, and a file of several surfaces needs the pick; node
+ *                numbers 1-based by the format
  *
  * Coordinates are returned as the file has them (thorax/import/import.h scales them).
  *
@@ -54,13 +58,14 @@ typedef enum {
     THX_IMPORT_STL,
     THX_IMPORT_PLY,
     THX_IMPORT_VTK,
-    THX_IMPORT_VTP
+    THX_IMPORT_VTP,
+    THX_IMPORT_GEOM      /* map3d/CVRTI graphicsio .geom (thorax/io/graphicsio.h); FILE.geom@N or @NAME picks a surface */
 } thx_import_format;
 
 /* The format a file name's extension implies (THX_IMPORT_AUTO if none matches).
  * ".fac" counts as THX_IMPORT_PTSFAC (the .pts is then found beside it). */
 thx_import_format thx_import_format_from_path(const char *path);
-/* Parses "pts", "tri", "obj", "stl", "ply", "vtk", "vtp" ("fac" = "pts"); 0 on success. */
+/* Parses "pts", "tri", "obj", "stl", "ply", "vtk", "vtp", "geom" ("fac" = "pts"); 0 on success. */
 int thx_import_format_parse(const char *s, thx_import_format *out);
 /* Short name: "pts/fac", "tri", "obj", ... (static storage). */
 const char *thx_import_format_name(thx_import_format f);
