@@ -52,9 +52,9 @@ thx_status thx_channels_apply(thx_ctx *ctx, const thx_channels *c, const thx_ser
     for (size_t i = 0; i < c->n; i++)
         if (c->channel[i] >= 0 && (size_t)c->channel[i] >= in->n_rows) {
             if (c->line[i])
-                return thx_error(ctx, THX_EINPUT, "%s:%d: node %zu takes channel %d, but the recording has %zu rows (channels)",
+                return thx_error(ctx, THX_EINPUT, "%s:%d: node %zu: channel %d is not in 1..%zu (the recording's rows)",
                                  path, (int)c->line[i], i + 1, (int)c->channel[i] + 1, in->n_rows);
-            return thx_error(ctx, THX_EINPUT, "%s: node %zu takes channel %d, but the recording has %zu rows (channels)", path,
+            return thx_error(ctx, THX_EINPUT, "%s: node %zu: channel %d is not in 1..%zu (the recording's rows)", path,
                              i + 1, (int)c->channel[i] + 1, in->n_rows);
         }
     thx_series *s = NULL;
