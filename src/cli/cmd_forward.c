@@ -102,18 +102,24 @@ int cmd_forward(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "forward",
-        .usage = "MODEL --epicardial -o [--format] [--volume] [--currents] [--transfer] [--no-warm] [--dump-system] "
-                 "[--force] [PETSc options]\n"
-                 "MODEL --transfer-out -o [--rows] [--method] [--format] [--force] [PETSc options]\n"
+        .usage = "MODEL --epicardial [--channels] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
+                 "[--no-warm] [--dump-system] [--force] [PETSc options]\n"
+                 "MODEL --transfer-out -o [--rows] [--max-offset] [--method] [--format] [--force] [PETSc options]\n"
                  "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
         .about = "Finite-element forward solutions on the model's volume mesh (paper 4.1):\n"
                  "linear tetrahedra, the conductivity of each tissue region, PETSc solvers.\n\n"
                  "Epicardial problem: the potentials of SERIES (rows: the heart surface's nodes)\n"
                  "prescribed on the heart surface, no current through the torso surface, the\n"
                  "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
-                 "frames) and DIR/solution.json (what was solved, solver figures, timings).\n"
-                 "Transfer matrix: DIR/transfer.EXT. Defibrillation: the whole domain, the\n"
-                 "electrodes' currents and potentials, the field in the heart.\n\n"
+                 "frames) and DIR/solution.json (what was solved, solver figures, timings);\n"
+                 "with --rows ELECTRODES also DIR/electrodes.EXT (rows: the electrodes). A\n"
+                 "recording whose rows are channels is mapped to the heart's nodes by\n"
+                 "--channels (map3d .channels).\n"
+                 "Transfer matrix: DIR/transfer.EXT (rows: the outer surface's nodes) or, with\n"
+                 "--rows, DIR/transfer_electrodes.EXT; applied with --transfer, a matrix whose\n"
+                 "rows are electrodes writes DIR/electrodes.EXT, never torso.EXT.\n"
+                 "Defibrillation: the whole domain, the electrodes' currents and potentials,\n"
+                 "the field in the heart.\n\n"
                  "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
                  "coverage of every surface, regions, volumes, node tables, smallest dihedral\n"
                  "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
@@ -247,7 +253,7 @@ int cmd_forward(int argc, char **argv)
         if (T && !fo.keep_volume) {
             at_electrodes = torso;
             torso = NULL;
-        } else if (rowset) {
+        } else if (rowset && rank == 0) { /* rank 0 holds the torso's potentials and writes */
             st = thx_electrodes_sample(ctx, rowset, torso, &at_electrodes);
             if (st != THX_OK) goto fail;
         }
