@@ -4,8 +4,8 @@
  *
  *   .channels   `N leads`, then N lines `NODE CHANNEL` (1-based): node NODE of the surface takes
  *               its signal from the recording's row CHANNEL; CHANNEL 0 or negative = none
- *               (map3d's "unused"). Nodes in any order, each at most once; a node not listed
- *               has no channel.
+ *               (map3d's "unused"). Nodes 1..N in any order, each exactly once (N lines,
+ *               none twice).
  *   .leadlinks  `N leads`, then N lines `LABEL NODE`: lead LABEL (a name, often its number)
  *               sits on node NODE of the surface, 1-based (a file holding a node 0 is read as
  *               0-based, as map3d does; the log says so).
