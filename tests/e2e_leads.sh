@@ -4,8 +4,9 @@
 #    (117 leads): `thorax leads MODEL --data dipole2_001.pot --array daltorso.leadlinks -o DIR` with
 #    no 12-lead set; each row is the .pot value at its lead's node (read here from the files);
 #    electrodes between nodes (triangle centroids, and points 3 mm off the surface) take the
-#    triangle's interpolated value; a node list; -o creates DIR, refuses a user's file, replaces
-#    its own; errors exit 1 with file:line and write nothing;
+#    triangle's interpolated value; a node list; `thorax electrodes --from` writes any set as a
+#    thorax electrode file; -o creates DIR, refuses a user's file, replaces its own; errors exit 1
+#    with file:line and write nothing;
 #  - the Utah tank (tank_full_771 + the closed sock, meshed): the 512-channel recording with
 #    sock128.channels through `series convert --channels` (rows 193..320 exactly, scipy reads the
 #    .mat) and `forward --channels --rows tank_leads_192.pts` (the 192 tank leads are nodes of the
@@ -89,6 +90,22 @@ print("e2e_leads: daltorso: 117 leadlinks leads = the .pot at their nodes; %d ce
       "interpolated on their triangles (error %.1e of max |phi|)" % (len(c), len(o), err))
 EOF
 
+# thorax electrodes --from: the leadlinks as a thorax electrode file in MODEL/electrodes (its manifest
+# names it), giving the same signals; a user's file of that name is left alone
+"$THORAX" electrodes dal --from "$LL" -q
+grep -q '"daltorso":	"daltorso.txt"' dal/electrodes/electrodes.json || fail "electrodes.json: $(cat dal/electrodes/electrodes.json)"
+"$THORAX" electrodes dal --from centroids.pts -q
+grep -q '"centroids":	"centroids.txt"' dal/electrodes/electrodes.json && grep -q "^P1 - " dal/electrodes/centroids.txt ||
+    fail "centroids.txt"
+"$THORAX" leads dal --data "$POT" --array dal/electrodes/daltorso.txt -o out5 --format mat -q
+$PY -c "
+import scipy.io as sio, numpy as np
+assert np.array_equal(sio.loadmat('out5/array.mat')['potvals'], sio.loadmat('out1/array.mat')['potvals'])" ||
+    fail "daltorso.txt and daltorso.leadlinks give different signals"
+mkdir theirs && echo "their notes" > theirs/daltorso.txt
+expect_rc 1 electrodes dal --from "$LL" -o theirs
+[ "$(cat theirs/daltorso.txt)" = "their notes" ] && [ "$(ls theirs)" = "daltorso.txt" ] || fail "electrodes -o over a user's file"
+
 # -o: created; a user's file of the same name is never replaced; an error writes nothing
 mkdir mine && echo "my notes" > mine/array.txt
 expect_rc 1 leads dal --data "$POT" --array "$LL" -o mine
@@ -125,6 +142,14 @@ grep -q '"channels":' tsol/solution.json && grep -q '"electrodes":	"electrodes.r
 [ -f ttr/transfer_electrodes.raw ] && [ ! -e ttr/transfer.raw ] || fail "ttr: $(ls ttr)"
 "$THORAX" forward tank --epicardial "$REC" --channels "$CH" --transfer ttr/transfer_electrodes.raw -o tsol2 -q
 [ -f tsol2/electrodes.raw ] && [ ! -e tsol2/torso.raw ] || fail "an electrode-row matrix wrote $(ls tsol2)"
+# leads on a solution with no 12-lead set: the array alone, sampled as forward --rows sampled it
+"$THORAX" leads tsol --array "$TL" --format raw -q
+[ ! -e tsol/ecg12.raw ] && grep -q '"array_raw":	"array.raw"' tsol/solution.json || fail "leads tsol --array"
+cmp -s tsol/array.raw tsol/electrodes.raw || $PY -c "
+import numpy as np
+def raw(p):
+    b = open(p, 'rb').read(); r, f = np.frombuffer(b[8:24], dtype='<u8'); return np.frombuffer(b[200:], dtype='<f8')[f:]
+assert np.array_equal(raw('tsol/array.raw'), raw('tsol/electrodes.raw'))" || fail "leads --array differs from forward --rows"
 expect_rc 1 leads tsol2
 grep -q "holds the potentials at its electrodes" err.log || fail "$(cat err.log)"
 # the tank leads' channels (1..192) as a map of the full tank's nodes, made from the positions

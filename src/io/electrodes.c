@@ -49,7 +49,8 @@ thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const cha
     snprintf(where, sizeof where, "%s: ", path);
     THX_CHECK(thx_electrodes_validate(ctx, e, where));
     thx_atomic_file af;
-    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    /* a file of that name is replaced only if thorax wrote it (thorax/core/fileio.h) */
+    THX_CHECK(thx_atomic_open_output(ctx, path, "thorax-electrodes", 17, NULL, 0, &af));
     FILE *f = af.f;
     fprintf(f, "thorax-electrodes 1\nsurface %s\ncount %zu\n", e->surface, e->n);
     for (size_t i = 0; i < e->n; i++) {

@@ -12,7 +12,9 @@ extern "C" {
 #endif
 
 thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **out);
-/* Atomic; nothing half-written on failure. An electrode between nodes is written with node `-`. */
+/* Atomic; nothing half-written on failure. An existing file at path is replaced only if thorax
+ * wrote it (its first line, thx_atomic_open_output). An electrode between nodes is written with
+ * node `-`. */
 thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const char *path);
 
 /* What an electrode source was read as (thx_electrodes_load). */
