@@ -219,7 +219,7 @@ static void test_channels(void)
     thx_series *small = NULL;
     CHECK_OK(ctx, thx_series_create(ctx, 9, 1, &small));
     CHECK(thx_channels_apply(ctx, c, small, &out) == THX_EINPUT && out == NULL);
-    CHECK(strstr(thx_ctx_message(ctx), "a.channels:3: node 3: channel 10 is not in 1..9 (the recording's rows)") != NULL);
+    CHECK(strstr(thx_ctx_message(ctx), "a.channels:3: channel 10 is not in 1..9 (the recording's rows; node 3)") != NULL);
     thx_series_destroy(&small);
     thx_series_destroy(&rec);
     thx_channels_destroy(&c);

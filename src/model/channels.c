@@ -52,10 +52,10 @@ thx_status thx_channels_apply(thx_ctx *ctx, const thx_channels *c, const thx_ser
     for (size_t i = 0; i < c->n; i++)
         if (c->channel[i] >= 0 && (size_t)c->channel[i] >= in->n_rows) {
             if (c->line[i])
-                return thx_error(ctx, THX_EINPUT, "%s:%d: node %zu: channel %d is not in 1..%zu (the recording's rows)",
-                                 path, (int)c->line[i], i + 1, (int)c->channel[i] + 1, in->n_rows);
-            return thx_error(ctx, THX_EINPUT, "%s: node %zu: channel %d is not in 1..%zu (the recording's rows)", path,
-                             i + 1, (int)c->channel[i] + 1, in->n_rows);
+                return thx_error(ctx, THX_EINPUT, "%s:%d: channel %d is not in 1..%zu (the recording's rows; node %zu)",
+                                 path, (int)c->line[i], (int)c->channel[i] + 1, in->n_rows, i + 1);
+            return thx_error(ctx, THX_EINPUT, "%s: channel %d is not in 1..%zu (the recording's rows; node %zu)", path,
+                             (int)c->channel[i] + 1, in->n_rows, i + 1);
         }
     thx_series *s = NULL;
     THX_CHECK(thx_series_create(ctx, c->n, in->n_frames, &s));
