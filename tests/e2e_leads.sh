@@ -142,6 +142,10 @@ grep -q '"channels":' tsol/solution.json && grep -q '"electrodes":	"electrodes.r
 [ -f ttr/transfer_electrodes.raw ] && [ ! -e ttr/transfer.raw ] || fail "ttr: $(ls ttr)"
 "$THORAX" forward tank --epicardial "$REC" --channels "$CH" --transfer ttr/transfer_electrodes.raw -o tsol2 -q
 [ -f tsol2/electrodes.raw ] && [ ! -e tsol2/torso.raw ] || fail "an electrode-row matrix wrote $(ls tsol2)"
+# the node-row matrix applied with --rows: torso.raw (nodes) and electrodes.raw sampled from it
+"$THORAX" forward tank --transfer-out -o tfull -q
+"$THORAX" forward tank --epicardial "$REC" --channels "$CH" --transfer tfull/transfer.raw --rows "$TL" -o tsol3 -q
+[ -f tsol3/electrodes.raw ] && [ -f tsol3/torso.raw ] || fail "node-row matrix with --rows: $(ls tsol3)"
 # leads on a solution with no 12-lead set: the array alone, sampled as forward --rows sampled it
 "$THORAX" leads tsol --array "$TL" --format raw -q
 [ ! -e tsol/ecg12.raw ] && grep -q '"array_raw":	"array.raw"' tsol/solution.json || fail "leads tsol --array"
@@ -172,9 +176,10 @@ def raw(p):
     return d[f:].reshape(f, r).T
 s = sio.loadmat('sock.mat')['potvals']
 assert s.shape == (128, 608) and np.array_equal(s, pv[192:320])
-E, E2 = raw('tsol/electrodes.raw'), raw('tsol2/electrodes.raw')
+E, E2, E3 = raw('tsol/electrodes.raw'), raw('tsol2/electrodes.raw'), raw('tsol3/electrodes.raw')
 assert E.shape == (192, 608)
 assert np.abs(E - E2).max() < 1e-7 * np.abs(E).max(), np.abs(E - E2).max()
+assert np.abs(E - E3).max() < 1e-7 * np.abs(E).max(), np.abs(E - E3).max()
 def text(p):
     L = open(p).read().split('\n'); assert L[0] == 'thorax-series 1', L[0]
     n = int(next(l for l in L if l.startswith('rows ')).split()[1])

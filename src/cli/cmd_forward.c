@@ -152,7 +152,7 @@ int cmd_forward(int argc, char **argv)
     thx_model *m = NULL;
     thx_series *epi = NULL, *T = NULL, *torso = NULL, *at_electrodes = NULL;
     thx_electrodes *rowset = NULL;
-    int rows_electrodes = 0;
+    int t_electrodes = 0; /* --transfer's rows are electrodes, not the outer surface's nodes */
     thx_forward_result R;
     memset(&R, 0, sizeof R);
     unsigned char *sel = NULL;
@@ -201,13 +201,12 @@ int cmd_forward(int argc, char **argv)
     }
     if (st == THX_OK && transfer_in) st = thx_series_read(ctx, transfer_in, THX_SERIES_AUTO, &T);
     /* a matrix whose rows are electrodes writes electrodes.EXT, not torso.EXT */
-    rows_electrodes = rowset != NULL;
     if (st == THX_OK && T && !transfer_out) {
         const thx_surface *os = NULL;
         for (size_t k = 0; k < m->n_surfaces; k++)
             if (m->surf[k]->role == THX_ROLE_OUTER) os = m->surf[k];
-        rows_electrodes = rowset || !strncmp(T->label, "transfer matrix electrodes", 26) || (os && T->n_rows != os->n_nodes);
-        if (rowset && T->n_rows != rowset->n)
+        t_electrodes = !strncmp(T->label, "transfer matrix electrodes", 26) || (os && T->n_rows != os->n_nodes);
+        if (t_electrodes && rowset && T->n_rows != rowset->n)
             st = thx_error(ctx, THX_EINPUT, "%s: %zu rows, but --rows %s holds %zu electrodes", transfer_in, T->n_rows,
                            rows_path, rowset->n);
     }
@@ -249,8 +248,8 @@ int cmd_forward(int argc, char **argv)
         R.torso = NULL;
     }
     /* the electrodes' signals: from the torso's nodes (the matrix applied gave them directly) */
-    if (!transfer_out && rows_electrodes) {
-        if (T && !fo.keep_volume) {
+    if (!transfer_out) {
+        if (T && !fo.keep_volume && t_electrodes) {
             at_electrodes = torso;
             torso = NULL;
         } else if (rowset && rank == 0) { /* rank 0 holds the torso's potentials and writes */
