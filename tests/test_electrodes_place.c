@@ -311,7 +311,7 @@ static void test_load(const thx_model *m)
           strstr(thx_ctx_message(ctx), "no surface \"nosuch\""));
     tl_write_text(tl_path("bad.txt"), "1 2\n");
     CHECK(thx_electrodes_load(ctx, tl_path("bad.txt"), m, NULL, 10, &e, &k, NULL) == THX_EINPUT && !e &&
-          strstr(thx_ctx_message(ctx), "not an electrode file"));
+          strstr(thx_ctx_message(ctx), "bad.txt:1: not an electrode file"));
     tl_write_text(tl_path("mixed.txt"), "3\n4 5 6\n");
     CHECK(thx_electrodes_load(ctx, tl_path("mixed.txt"), m, NULL, 10, &e, &k, NULL) == THX_EINPUT &&
           strstr(thx_ctx_message(ctx), "mixed.txt:2: a node list holds one node number"));

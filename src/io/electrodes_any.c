@@ -162,6 +162,7 @@ thx_status thx_electrodes_load(thx_ctx *ctx, const char *path, const thx_model *
     /* the first line that says something */
     thx_electrodes_kind k = THX_ELECTRODES_POINTS;
     int known = 0;
+    size_t line_no = 0;
     if (memchr(text, '\0', len)) k = THX_ELECTRODES_FILE, known = 1; /* the thorax reader names the NUL's line */
     for (const char *p = text; *p && !known;) {
         const char *nl = strchr(p, '\n');
@@ -169,6 +170,7 @@ thx_status thx_electrodes_load(thx_ctx *ctx, const char *path, const thx_model *
         char line[256];
         snprintf(line, sizeof line, "%.*s", (int)(ll < sizeof line ? ll : sizeof line - 1), p);
         p = nl ? nl + 1 : p + ll;
+        line_no++;
         char *hash = strchr(line, '#');
         if (hash) *hash = '\0';
         char *tok[4];
@@ -186,15 +188,20 @@ thx_status thx_electrodes_load(thx_ctx *ctx, const char *path, const thx_model *
     const thx_surface *s = NULL;
     if (known != 1) {
         st = thx_error(ctx, THX_EINPUT,
-                       "%s: not an electrode file (a thorax electrode file, a map3d .leadlinks 'N leads' + 'LABEL NODE' "
-                       "lines, a node list (one node number a line) or positions ('X Y Z' a line))",
-                       path);
+                       "%s:%zu: %s (a thorax electrode file, a map3d .leadlinks 'N leads' + 'LABEL NODE' lines, a node "
+                       "list (one node number a line) or positions ('X Y Z' a line))",
+                       path, line_no ? line_no : 1, known ? "not an electrode file" : "empty file: no electrodes");
         goto done;
     }
     if (k == THX_ELECTRODES_FILE) {
         st = thx_electrodes_read(ctx, path, &e);
-        if (st == THX_OK && surface && strcmp(surface, e->surface) != 0)
-            st = thx_error(ctx, THX_EINPUT, "%s: the electrodes lie on surface \"%s\", not \"%s\"", path, e->surface, surface);
+        if (st == THX_OK && surface && strcmp(surface, e->surface) != 0) {
+            /* a surface the model lacks is said as the check says it */
+            if (thx_electrodes_surface(ctx, e, m)) /* else: its message stands */
+                thx_error(ctx, THX_EINPUT, "%s: the electrodes lie on surface \"%s\", not \"%s\" (the potentials' surface)",
+                          path, e->surface, surface);
+            st = THX_EINPUT;
+        }
     } else {
         s = pick_surface(ctx, path, m, surface);
         if (!s) { st = THX_EINPUT; goto done; }
