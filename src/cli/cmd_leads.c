@@ -78,7 +78,7 @@ int cmd_leads(int argc, char **argv)
     };
     cli_command c = {
         .name = "leads",
-        .usage = "SOLUTION [-o] [--twelve] [--array] [--format]\n"
+        .usage = "SOLUTION [-o] [--twelve] [--array] [--max-offset] [--format]\n"
                  "MODEL --data [--channels] -o [--twelve] [--array] [--surface] [--max-offset] [--format]",
         .about = "Reads potentials on the torso - a solution of thorax forward (its torso\n"
                  "potentials and its model), or a MODEL and --data SERIES (a recording, its\n"
