@@ -35,13 +35,13 @@ typedef struct {
     char (*name)[32];   /* electrode names: "RA", "LA", "LL", "V1".."V6", "A001".. */
     int32_t *node;      /* node on that surface, 0-based; THX_ELECTRODE_OFF_NODE: a point between nodes */
     double *xyz;        /* 3 n: the electrode's position, mm (its node's, for one on a node) */
+    char path[512];     /* the file it was read from (thx_electrodes_read; "" otherwise): checks name it */
     /* Filled by thx_electrodes_place (placed = 1): electrode i's value is
      * sum_k weight[3i+k] * u[corner[3i+k]], k = 0..2, the weights >= 0 summing
      * to 1. An electrode on a node has corners (node, node, node), weights (1, 0, 0). */
     int32_t *corner;    /* 3 n, 0-based nodes of the surface; -1 before placing */
     double *weight;     /* 3 n */
     int placed;
-    char path[512];     /* the file it was read from (thx_electrodes_read; "" otherwise): checks name it */
 } thx_electrodes;
 
 thx_status thx_electrodes_create(thx_ctx *ctx, size_t n, thx_electrodes **out);
