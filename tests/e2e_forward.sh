@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # thorax forward / leads / verify end to end on the medium phantom: the epicardial
 # problem, the same answer under mpirun -np 2 and with other PETSc options, the
-# transfer matrix (adjoint, applied), currents, 12-lead ECG (Einthoven's law),
+# transfer matrix (adjoint, applied; electrode rows named electrodes), currents, 12-lead ECG (Einthoven's law),
 # defibrillation, .mat read by scipy, every bad input refused with nothing written, and
 # a volume that fails thorax check refused unless --force (recorded in solution.json).
 set -euo pipefail
@@ -46,6 +46,9 @@ grep -q '"pc":	"jacobi"' sol3/solution.json || fail "PETSc option not passed thr
 "$THORAX" forward model --transfer-out --rows model/electrodes/array.txt -o tr -q
 "$THORAX" forward model --transfer-out -o trf -q
 "$THORAX" forward model --epicardial beat.raw --transfer trf/transfer.raw -o sol4 -q
+# the electrode-row matrix applied: its rows are the array's electrodes (DIR/electrodes.EXT, not torso.EXT)
+"$THORAX" forward model --epicardial beat.raw --transfer tr/transfer_electrodes.raw -o sol5 -q
+[ -f sol5/electrodes.raw ] && [ ! -e sol5/torso.raw ] || fail "electrode-row transfer applied: $(ls sol5)"
 # 4. currents for two frames, volume potentials, .mat output
 "$THORAX" forward model --epicardial beat.raw -o solv -q --volume --currents 1,20 --format mat
 # 5. leads
@@ -73,8 +76,9 @@ assert abs(i1).max() > 0.5 and abs(i1 - i2).max() < 1e-7 * abs(i1).max(), ('gamg
 T = raw('trf/transfer.raw'); epi = raw('beat.raw')
 assert abs(T @ epi - a).max() < 1e-7 * scale
 assert abs(T.sum(axis=1) - 1).max() < 1e-8      # a constant heart gives that constant
-A = raw('tr/transfer.raw'); arr = raw('sol/array.raw')
+A = raw("tr/transfer_electrodes.raw"); arr = raw("sol/array.raw")
 assert abs(A @ epi - arr).max() < 1e-7 * scale, abs(A @ epi - arr).max()
+assert abs(raw('sol5/electrodes.raw') - arr).max() < 1e-7 * scale
 assert abs(raw('sol4/torso.raw') - a).max() < 1e-7 * scale
 # 12 leads: Einthoven II = I + III, aVR + aVL + aVF = 0
 E = raw('sol/ecg12.raw')

@@ -257,9 +257,9 @@ static void test_bad_files(void)
     CHECK(thx_electrodes_write(ctx, e, tl_path("w1.txt")) == THX_EINPUT && !tl_exists(tl_path("w1.txt")));
     CHECK(strstr(thx_ctx_message(ctx), "electrode 2: name \"A\" already used by electrode 1") != NULL);
     snprintf(e->name[1], sizeof e->name[1], "B");
-    e->node[1] = -1;
+    e->node[1] = -2; /* -1 is THX_ELECTRODE_OFF_NODE, a point between nodes */
     CHECK(thx_electrodes_write(ctx, e, tl_path("w2.txt")) == THX_EINPUT && !tl_exists(tl_path("w2.txt")));
-    CHECK(strstr(thx_ctx_message(ctx), "electrode 2 (\"B\"): node -1 is negative") != NULL);
+    CHECK(strstr(thx_ctx_message(ctx), "electrode 2 (\"B\"): node -2 is negative") != NULL);
     e->node[1] = 1;
     e->xyz[4] = NAN;
     CHECK(thx_electrodes_write(ctx, e, tl_path("w3.txt")) == THX_EINPUT && !tl_exists(tl_path("w3.txt")));

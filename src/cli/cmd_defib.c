@@ -62,6 +62,10 @@ static thx_status parse_spec(thx_ctx *ctx, const thx_model *m, const char *spec,
     if (s == m->n_surfaces) st = thx_error(ctx, THX_EINPUT, "electrode '%s': the model has no surface '%s'", p->name, surface ? surface : "(outer)");
     else if (nodes) {
         st = thx_electrodes_check(ctx, e, m);
+        for (size_t i = 0; st == THX_OK && i < e->n; i++)
+            if (e->node[i] < 0) /* a patch is a set of nodes */
+                st = thx_error(ctx, THX_EINPUT, "electrode '%s': %s: electrode %zu (\"%s\") is not on a node ('-')", p->name,
+                               nodes, i + 1, e->name[i]);
         if (st == THX_OK) st = thx_patch_nodes(ctx, m, s, e->node, e->n, p);
     } else if (!have_at || !(radius > 0))
         st = thx_error(ctx, THX_EINPUT, "electrode '%s': give at=X:Y:Z and radius=R, or nodes=FILE", p->name);

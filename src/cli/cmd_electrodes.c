@@ -10,6 +10,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
@@ -21,13 +22,108 @@
 #include "thorax/io/electrodes_file.h"
 #include "thorax/leads/leads.h"
 #include "thorax/phantom/phantom.h"
+#include "thorax/core/fileio.h"
 /* ------------------------------------------------------------ electrodes */
+
+/* The folder's manifest electrodes.json, naming files[key] = name in it besides those already
+ * there (an existing manifest is thorax's own: it was claimed). */
+static thx_status write_manifest(thx_ctx *ctx, const char *dir, const char *const *keys, const char *const *names, int n)
+{
+    char mpath[PATH_MAX + 32];
+    snprintf(mpath, sizeof mpath, "%s/electrodes.json", dir);
+    cJSON *j = NULL;
+    char *text = NULL;
+    size_t len = 0;
+    if (access(mpath, F_OK) == 0 && thx_read_file(ctx, mpath, &text, &len) == THX_OK) j = cJSON_Parse(text);
+    free(text);
+    cJSON *fmt = j ? cJSON_GetObjectItem(j, "format") : NULL;
+    if (!j || !cJSON_IsString(fmt) || strcmp(fmt->valuestring, "thorax-electrodes") != 0 ||
+        !cJSON_IsObject(cJSON_GetObjectItem(j, "files"))) {
+        cJSON_Delete(j);
+        j = cJSON_CreateObject();
+        if (!j) return thx_error(ctx, THX_ENOMEM, "out of memory");
+        cJSON_AddStringToObject(j, "format", "thorax-electrodes");
+        cJSON_AddNumberToObject(j, "version", 1);
+        cJSON_AddObjectToObject(j, "files");
+    }
+    cJSON *files = cJSON_GetObjectItem(j, "files");
+    for (int k = 0; k < n; k++) {
+        cJSON_DeleteItemFromObject(files, keys[k]);
+        cJSON_AddStringToObject(files, keys[k], names[k]);
+    }
+    return cli_write_json(ctx, mpath, j);
+}
+
+/* thorax electrodes MODEL --from FILE: any electrode set placed on the model, as a thorax file. */
+static int electrodes_from(const char *in, const char *dir, const char *from, const char *surface, double max_offset,
+                           int verbose)
+{
+    const char *cmd = "electrodes";
+    /* the file's name without folder and extension, in the characters a file name of thorax keeps */
+    char stem[64] = "";
+    const char *b = strrchr(from, '/');
+    b = b ? b + 1 : from;
+    size_t k = 0;
+    for (; *b && *b != '.' && k + 1 < sizeof stem; b++)
+        stem[k++] = ((*b >= 'A' && *b <= 'Z') || (*b >= 'a' && *b <= 'z') || (*b >= '0' && *b <= '9') || *b == '_' ||
+                     *b == '-') ? *b : '_';
+    stem[k] = '\0';
+    if (!stem[0]) snprintf(stem, sizeof stem, "electrodes");
+    char path[PATH_MAX + 80], mpath[PATH_MAX + 32], name[80];
+    snprintf(name, sizeof name, "%s.txt", stem);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    snprintf(mpath, sizeof mpath, "%s/electrodes.json", dir);
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_model *m = NULL;
+    thx_electrodes *e = NULL;
+    thx_electrodes_kind kind = THX_ELECTRODES_FILE;
+    double moved = 0;
+    int rc = 0, made = 0;
+    thx_status st = thx_model_read(ctx, in, &m);
+    if (st == THX_OK) st = thx_electrodes_load(ctx, from, m, surface, max_offset, &e, &kind, &moved);
+    struct stat sb;
+    if (st == THX_OK && stat(dir, &sb) != 0) {
+        if (mkdir(dir, 0755) != 0) st = thx_error(ctx, THX_EIO, "cannot create directory %s: %s", dir, strerror(errno));
+        else made = 1;
+    }
+    thx_atomic_file af;
+    if (st == THX_OK) st = thx_output_claim(ctx, path, "thorax-electrodes", 17, NULL, 0, &af);
+    if (st == THX_OK) st = thx_output_claim(ctx, mpath, "\"thorax-electrodes\"", 19, NULL, 0, &af);
+    if (st == THX_OK) st = thx_electrodes_write(ctx, e, path);
+    if (st == THX_OK) {
+        const char *keys[1] = {stem}, *names[1] = {name};
+        st = write_manifest(ctx, dir, keys, names, 1);
+        if (st != THX_OK) unlink(path);
+    }
+    if (st != THX_OK) {
+        if (made) rmdir(dir);
+        rc = cli_fail(ctx, cmd, st);
+    } else if (verbose >= 0) {
+        size_t off = 0;
+        for (size_t i = 0; i < e->n; i++) off += e->node[i] < 0;
+        printf("%s: %zu electrodes (%s) on surface %s: %zu on nodes, %zu between nodes (moved onto the surface by up to "
+               "%.3g mm)\n",
+               from, e->n, thx_electrodes_kind_name(kind), e->surface, e->n - off, off, moved);
+        if (verbose > 0 || e->n <= 24)
+            for (size_t i = 0; i < e->n; i++) {
+                char nd[16] = "-";
+                if (e->node[i] >= 0) snprintf(nd, sizeof nd, "%d", (int)e->node[i] + 1);
+                printf("%-9s %5s %10.2f %10.2f %10.2f\n", e->name[i], nd, e->xyz[3 * i], e->xyz[3 * i + 1], e->xyz[3 * i + 2]);
+            }
+        printf("wrote %s\n", path);
+    }
+    thx_electrodes_destroy(&e);
+    thx_model_destroy(&m);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
 
 int cmd_electrodes(int argc, char **argv)
 {
     const char *cmd = "electrodes";
-    const char *out = NULL;
+    const char *out = NULL, *from = NULL, *surface = NULL;
     long n_array = 192;
+    double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0;
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out, .def = "MODEL/electrodes",
@@ -36,13 +132,21 @@ int cmd_electrodes(int argc, char **argv)
         {.name = "--array", .type = CLI_INT, .meta = "N", .l = &n_array, .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 100000,
          .bad = "--array must be between 0 and 100000", .note = "0 = no array.txt",
          .help = "electrodes in the array, in round(sqrt(3N/4)) rings"},
+        {.name = "--from", .type = CLI_INPUT, .meta = "FILE", .s = &from,
+         .help = "instead of the phantom's sets: any electrode set (a thorax electrode file, a map3d .leadlinks, a node "
+                 "list, or X Y Z positions, projected onto the surface) written as DIR/STEM.txt, STEM FILE's name"},
+        {.name = "--surface", .type = CLI_STRING, .meta = "NAME", .s = &surface, .def = "the outer surface",
+         .help = "the surface the --from electrodes are on"},
+        {.name = "--max-offset", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &max_offset, .rule = CLI_GE, .lo = 0,
+         .bad = "--max-offset must be a number of mm >= 0",
+         .help = "farthest a --from position may lie from the surface"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
          .help = "less logging (no table)"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "MODEL [--array] [-o]",
+        .usage = "MODEL [--array] [-o]\nMODEL --from FILE [--surface] [--max-offset] [-o]",
         .about = "Places the phantom's electrodes on the model's outer surface (role outer),\n"
                  "each on the surface node nearest its landmark, and writes them as electrode\n"
                  "files (docs/formats.md, \"Electrodes\"). Heights are along the model's\n"
@@ -58,7 +162,11 @@ int cmd_electrodes(int argc, char **argv)
                  "                  torso (192: 16 around at each of 12 heights), each ring from\n"
                  "                  the anterior midline toward the subject's left\n"
                  "The model needs an outer and a heart surface (as `thorax surfaces` builds\n"
-                 "them from `thorax phantom` contours). The 12 leads are printed (nodes 1-based).\n",
+                 "them from `thorax phantom` contours). The 12 leads are printed (nodes 1-based).\n"
+                 "With --from FILE, any electrode set is placed on the model instead and written\n"
+                 "as DIR/STEM.txt (electrodes between nodes with node '-', at their projected\n"
+                 "positions); no anatomical frame is needed.\n"
+                 "Files already in DIR are replaced only if thorax wrote them.\n",
         .epilog = "Exit status: 0 ok, 1 error (nothing written), 2 bad usage.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
     };
@@ -70,6 +178,9 @@ int cmd_electrodes(int argc, char **argv)
     char dir[2048], p12[2100], parr[2100];
     if (out) snprintf(dir, sizeof dir, "%s", out);
     else snprintf(dir, sizeof dir, "%s/electrodes", in);
+    if (from) return electrodes_from(in, dir, from, surface, max_offset, verbose);
+    if (surface || max_offset != THX_ELECTRODE_MAX_OFFSET_MM)
+        return cli_usage_error(cmd, "--surface and --max-offset go with --from");
     snprintf(p12, sizeof p12, "%s/12lead.txt", dir);
     snprintf(parr, sizeof parr, "%s/array.txt", dir);
 
@@ -86,27 +197,34 @@ int cmd_electrodes(int argc, char **argv)
         rc = cli_fail(ctx, cmd, st);
         goto done;
     }
-    if (mkdir(dir, 0755) != 0 && errno != EEXIST) {
+    int made = 0;
+    if (mkdir(dir, 0755) == 0) made = 1;
+    else if (errno != EEXIST) {
         fprintf(stderr, "thorax %s: cannot create directory %s: %s\n", cmd, dir, strerror(errno));
         rc = 1;
         goto done;
+    }
+    /* every output claimed before any is written: a user's file there stops the run, untouched */
+    {
+        thx_atomic_file af;
+        char mp[2100];
+        snprintf(mp, sizeof mp, "%s/electrodes.json", dir);
+        st = thx_output_claim(ctx, p12, "thorax-electrodes", 17, NULL, 0, &af);
+        if (st == THX_OK && ea) st = thx_output_claim(ctx, parr, "thorax-electrodes", 17, NULL, 0, &af);
+        if (st == THX_OK) st = thx_output_claim(ctx, mp, "\"thorax-electrodes\"", 19, NULL, 0, &af);
+        if (st != THX_OK) {
+            if (made) rmdir(dir);
+            rc = cli_fail(ctx, cmd, st);
+            goto done;
+        }
     }
     st = thx_electrodes_write(ctx, e12, p12);
     if (st == THX_OK && ea) st = thx_electrodes_write(ctx, ea, parr);
     if (st == THX_OK) {
         /* the folder's manifest: it marks the folder as thorax's, so that a model holding it (the
            default place) can still be rewritten (thorax/core/fileio.h) */
-        cJSON *j = cJSON_CreateObject(), *files = j ? cJSON_AddObjectToObject(j, "files") : NULL;
-        char mpath[PATH_MAX + 32];
-        snprintf(mpath, sizeof mpath, "%s/electrodes.json", dir);
-        if (!files) { cJSON_Delete(j); st = thx_error(ctx, THX_ENOMEM, "out of memory"); }
-        else {
-            cJSON_AddStringToObject(j, "format", "thorax-electrodes");
-            cJSON_AddNumberToObject(j, "version", 1);
-            cJSON_AddStringToObject(files, "12lead", "12lead.txt");
-            if (ea) cJSON_AddStringToObject(files, "array", "array.txt");
-            st = cli_write_json(ctx, mpath, j);
-        }
+        const char *keys[2] = {"12lead", "array"}, *names[2] = {"12lead.txt", "array.txt"};
+        st = write_manifest(ctx, dir, keys, names, ea ? 2 : 1);
     }
     if (st != THX_OK) {
         rc = cli_fail(ctx, cmd, st);

@@ -11,6 +11,8 @@
 #include "cli/cli_fem.h"
 #include "thorax/model/electrodes.h"
 #include "thorax/io/electrodes_file.h"
+#include "thorax/io/channels_file.h"
+#include "thorax/io/series_file.h"
 #include "thorax/leads/leads.h"
 #include "thorax/phantom/phantom.h"
 #include "thorax/fem/fem.h"
@@ -43,6 +45,8 @@ static const char *ext_of(thx_series_format f)
 int cmd_forward(int argc, char **argv)
 {
     const char *out = NULL, *epi_path = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL, *dump = NULL;
+    const char *channels = NULL;
+    double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0, format = THX_SERIES_RAW, meth = -1;
     double threshold = 5.0;
     const char *electrodes[16];
@@ -55,6 +59,9 @@ int cmd_forward(int argc, char **argv)
     cli_opt opts[] = {
         {.name = "--epicardial", .type = CLI_INPUT, .meta = "SERIES", .s = &epi_path,
          .help = "heart-surface potentials, rows the heart surface's nodes (text, raw or .mat; see thorax series)"},
+        {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
+         .help = "map3d .channels: the --epicardial rows are recording channels, heart node i takes channel c "
+                 "(a node with no channel is refused)"},
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
          .help = "the solution directory (written whole or not at all)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
@@ -73,7 +80,12 @@ int cmd_forward(int argc, char **argv)
         {.name = "--transfer-out", .type = CLI_FLAG, .i = &transfer_out,
          .help = "compute the transfer matrix (torso nodes, or --rows, from heart nodes) and write DIR/transfer.EXT"},
         {.name = "--rows", .type = CLI_INPUT, .meta = "ELECTRODES", .s = &rows_path, .def = "the outer surface's nodes",
-         .help = "rows of the transfer matrix: an electrode file (thorax electrodes)"},
+         .help = "electrodes on the outer surface: the rows of --transfer-out's matrix (DIR/transfer_electrodes.EXT), or "
+                 "with --epicardial the signals written as DIR/electrodes.EXT; a thorax electrode file, a map3d "
+                 ".leadlinks, a node list or positions (X Y Z a line; between nodes: interpolated on the triangle)"},
+        {.name = "--max-offset", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &max_offset, .rule = CLI_GE,
+         .lo = 0, .bad = "--max-offset must be a number of mm >= 0",
+         .help = "farthest a --rows position may lie from the outer surface (it is projected onto it)"},
         {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &meth,
          .help = "forward: a solve per heart node; adjoint: a solve per row; auto: the fewer solves"},
         {.name = "--electrode", .type = CLI_STRING, .meta = "SPEC", .flags = CLI_REPEAT, .sv = electrodes,
@@ -90,18 +102,24 @@ int cmd_forward(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "forward",
-        .usage = "MODEL --epicardial -o [--format] [--volume] [--currents] [--transfer] [--no-warm] [--dump-system] "
-                 "[--force] [PETSc options]\n"
-                 "MODEL --transfer-out -o [--rows] [--method] [--format] [--force] [PETSc options]\n"
+        .usage = "MODEL --epicardial [--channels] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
+                 "[--no-warm] [--dump-system] [--force] [PETSc options]\n"
+                 "MODEL --transfer-out -o [--rows] [--max-offset] [--method] [--format] [--force] [PETSc options]\n"
                  "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
         .about = "Finite-element forward solutions on the model's volume mesh (paper 4.1):\n"
                  "linear tetrahedra, the conductivity of each tissue region, PETSc solvers.\n\n"
                  "Epicardial problem: the potentials of SERIES (rows: the heart surface's nodes)\n"
                  "prescribed on the heart surface, no current through the torso surface, the\n"
                  "heart's interior left out. Writes DIR/torso.EXT (the outer surface's nodes x\n"
-                 "frames) and DIR/solution.json (what was solved, solver figures, timings).\n"
-                 "Transfer matrix: DIR/transfer.EXT. Defibrillation: the whole domain, the\n"
-                 "electrodes' currents and potentials, the field in the heart.\n\n"
+                 "frames) and DIR/solution.json (what was solved, solver figures, timings);\n"
+                 "with --rows ELECTRODES also DIR/electrodes.EXT (rows: the electrodes). A\n"
+                 "recording whose rows are channels is mapped to the heart's nodes by\n"
+                 "--channels (map3d .channels).\n"
+                 "Transfer matrix: DIR/transfer.EXT (rows: the outer surface's nodes) or, with\n"
+                 "--rows, DIR/transfer_electrodes.EXT; applied with --transfer, a matrix whose\n"
+                 "rows are electrodes writes DIR/electrodes.EXT, never torso.EXT.\n"
+                 "Defibrillation: the whole domain, the electrodes' currents and potentials,\n"
+                 "the field in the heart.\n\n"
                  "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
                  "coverage of every surface, regions, volumes, node tables, smallest dihedral\n"
                  "angle 1 degree); a volume that fails is refused (exit 1, the reasons on stderr)\n"
@@ -123,7 +141,8 @@ int cmd_forward(int argc, char **argv)
     int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0);
     if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode");
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
-    if (rows_path && !transfer_out) return cli_usage_error("forward", "--rows goes with --transfer-out");
+    if (rows_path && !transfer_out && !epi_path) return cli_usage_error("forward", "--rows goes with --transfer-out or --epicardial");
+    if (channels && !epi_path) return cli_usage_error("forward", "--channels needs --epicardial (its rows are the channels)");
     if (n_electrodes)
         return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format_name, &pa, verbose, force);
 
@@ -131,8 +150,9 @@ int cmd_forward(int argc, char **argv)
     int rank = 0, rc = 0;
     thx_status st = THX_OK;
     thx_model *m = NULL;
-    thx_series *epi = NULL, *T = NULL, *torso = NULL;
+    thx_series *epi = NULL, *T = NULL, *torso = NULL, *at_electrodes = NULL;
     thx_electrodes *rowset = NULL;
+    int t_electrodes = 0; /* --transfer's rows are electrodes, not the outer surface's nodes */
     thx_forward_result R;
     memset(&R, 0, sizeof R);
     unsigned char *sel = NULL;
@@ -146,15 +166,50 @@ int cmd_forward(int argc, char **argv)
     const char *ext = ext_of(fmt);
 
     /* the output directory first: refused before any work if it is not thorax's own solution */
-    const char *inputs[] = {model_dir, epi_path, rows_path, transfer_in};
-    st = thx_outdir_claim(ctx, &od, out, "solution.json", "thorax-solution", inputs, 4);
+    const char *inputs[] = {model_dir, epi_path, rows_path, transfer_in, channels};
+    st = thx_outdir_claim(ctx, &od, out, "solution.json", "thorax-solution", inputs, 5);
     if (st == THX_OK) st = thx_model_read(ctx, model_dir, &m);
     if (st == THX_OK && epi_path) st = thx_series_read(ctx, epi_path, THX_SERIES_AUTO, &epi);
+    if (st == THX_OK && channels) { /* the recording's channels as the heart's nodes */
+        thx_channels *ch = NULL;
+        thx_series *mapped = NULL;
+        st = thx_channels_read(ctx, channels, &ch);
+        if (st == THX_OK) st = thx_channels_apply(ctx, ch, epi, &mapped);
+        if (st == THX_OK && thx_channels_unmapped(ch)) {
+            size_t i = 0;
+            while (ch->channel[i] >= 0) i++;
+            st = thx_error(ctx, THX_EINPUT, "%s: %zu of %zu nodes have no channel (first: node %zu); the heart's potentials "
+                           "must be known at every node", channels, thx_channels_unmapped(ch), ch->n, i + 1);
+        }
+        if (st == THX_OK) {
+            thx_series_destroy(&epi);
+            epi = mapped;
+            mapped = NULL;
+        }
+        thx_series_destroy(&mapped);
+        thx_channels_destroy(&ch);
+    }
     if (st == THX_OK && rows_path) {
-        st = thx_electrodes_read(ctx, rows_path, &rowset);
-        if (st == THX_OK) st = thx_electrodes_check(ctx, rowset, m);
+        /* any electrode set on the outer surface: the transfer rows, or the signals sampled */
+        const char *outer = NULL;
+        for (size_t k = 0; k < m->n_surfaces; k++)
+            if (m->surf[k]->role == THX_ROLE_OUTER) outer = m->surf[k]->name;
+        double moved = 0;
+        st = thx_electrodes_load(ctx, rows_path, m, outer, max_offset, &rowset, NULL, &moved);
+        if (st == THX_OK && moved > 0)
+            thx_log(ctx, THX_LOG_INFO, "%s: electrodes moved onto the surface by up to %.3g mm", rows_path, moved);
     }
     if (st == THX_OK && transfer_in) st = thx_series_read(ctx, transfer_in, THX_SERIES_AUTO, &T);
+    /* a matrix whose rows are electrodes writes electrodes.EXT, not torso.EXT */
+    if (st == THX_OK && T && !transfer_out) {
+        const thx_surface *os = NULL;
+        for (size_t k = 0; k < m->n_surfaces; k++)
+            if (m->surf[k]->role == THX_ROLE_OUTER) os = m->surf[k];
+        t_electrodes = !strncmp(T->label, "transfer matrix electrodes", 26) || (os && T->n_rows != os->n_nodes);
+        if (t_electrodes && rowset && T->n_rows != rowset->n)
+            st = thx_error(ctx, THX_EINPUT, "%s: %zu rows, but --rows %s holds %zu electrodes", transfer_in, T->n_rows,
+                           rows_path, rowset->n);
+    }
     if (st == THX_OK && currents) {
         size_t nf = epi ? epi->n_frames : 0;
         sel = thx_malloc(ctx, nf ? nf : 1);
@@ -178,8 +233,8 @@ int cmd_forward(int argc, char **argv)
     fo.keep_volume = want_volume || currents;
     if (rank == 0 && isatty(2) && verbose >= 0) { fo.progress = cli_progress; fo.user = (void *)"forward"; }
     if (transfer_out) {
-        size_t nr = rowset ? rowset->n : 0;
-        st = thx_forward_transfer(ctx, m, rowset ? rowset->node : NULL, nr, meth, &fo, &T, &R);
+        if (rowset) st = thx_forward_transfer_weighted(ctx, m, rowset->corner, rowset->weight, rowset->n, meth, &fo, &T, &R);
+        else st = thx_forward_transfer(ctx, m, NULL, 0, meth, &fo, &T, &R);
         if (st != THX_OK) goto fail;
     } else if (T && !fo.keep_volume) {
         double t1 = thx_wtime();
@@ -191,6 +246,16 @@ int cmd_forward(int argc, char **argv)
         if (st != THX_OK) goto fail;
         torso = R.torso;
         R.torso = NULL;
+    }
+    /* the electrodes' signals: from the torso's nodes (the matrix applied gave them directly) */
+    if (!transfer_out) {
+        if (T && !fo.keep_volume && t_electrodes) {
+            at_electrodes = torso;
+            torso = NULL;
+        } else if (rowset && rank == 0) { /* rank 0 holds the torso's potentials and writes */
+            st = thx_electrodes_sample(ctx, rowset, torso, &at_electrodes);
+            if (st != THX_OK) goto fail;
+        }
     }
     /* currents for the chosen frames */
     if (currents && R.volume) {
@@ -238,8 +303,9 @@ int cmd_forward(int argc, char **argv)
         }
         for (size_t s = 0; s < m->n_surfaces; s++)
             if (m->surf[s]->role == THX_ROLE_OUTER) cJSON_AddStringToObject(j, "surface", m->surf[s]->name);
-        struct { const char *key; thx_series *s; } w[] = {{"torso", torso}, {"volume", R.volume}, {"currents_tet", cur_t},
-                                                          {"currents_node", cur_n}, {"transfer", transfer_out ? T : NULL}};
+        struct { const char *key; thx_series *s; } w[] = {
+            {"torso", torso}, {"electrodes", at_electrodes}, {"volume", R.volume}, {"currents_tet", cur_t},
+            {"currents_node", cur_n}, {rowset ? "transfer_electrodes" : "transfer", transfer_out ? T : NULL}};
         for (size_t k = 0; k < sizeof w / sizeof w[0] && st == THX_OK; k++) {
             if (!w[k].s) continue;
             snprintf(path, sizeof path, "%s/%s.%s", od.tmp, w[k].key, ext);
@@ -251,6 +317,10 @@ int cmd_forward(int argc, char **argv)
         if (rowset && st == THX_OK) {
             char abs[PATH_MAX];
             cJSON_AddStringToObject(j, "rows", realpath(rows_path, abs) ? abs : rows_path);
+        }
+        if (channels && st == THX_OK) {
+            char abs[PATH_MAX];
+            cJSON_AddStringToObject(j, "channels", realpath(channels, abs) ? abs : channels);
         }
         cJSON_AddItemToObject(j, "files", files);
         if (vcheck) {
@@ -316,6 +386,7 @@ end:
     thx_series_destroy(&cur_t);
     thx_series_destroy(&cur_n);
     thx_series_destroy(&torso);
+    thx_series_destroy(&at_electrodes);
     thx_series_destroy(&T);
     thx_series_destroy(&epi);
     thx_electrodes_destroy(&rowset);

@@ -9,6 +9,7 @@
 #include "cli/cli.h"
 #include "thorax/model/series.h"
 #include "thorax/io/series_file.h"
+#include "thorax/io/channels_file.h"
 /* map3d fiducials: one line each, values as frames counted from 0 (map3d's convention). */
 static void print_fiducials(const thx_series *s)
 {
@@ -74,7 +75,7 @@ static void print_info(const char *path, const thx_series *s)
 int cmd_series(int argc, char **argv)
 {
     const char *cmd = "series";
-    const char *out = NULL, *fids = NULL;
+    const char *out = NULL, *fids = NULL, *channels = NULL;
     int verbose = 0, format = THX_SERIES_AUTO, transpose = 0;
     static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
                                          {"csv", THX_SERIES_CSV}, {NULL, 0}};
@@ -87,12 +88,15 @@ int cmd_series(int argc, char **argv)
          .help = "add the fiducials of a map3d .fids file (one line per lead; its lead count must be the rows)"},
         {.name = "--transpose", .type = CLI_FLAG, .i = &transpose,
          .help = "swap rows and frames after reading (a matrix laid out frames x channels)"},
+        {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
+         .help = "map3d .channels: IN's rows are recording channels; the series taken is one row per node of the "
+                 "file (NaN for a node with no channel)"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "info FILE [--fids] [--transpose]\nconvert IN -o [--format] [--fids] [--transpose]",
+        .usage = "info FILE [--fids] [--transpose] [--channels]\nconvert IN -o [--format] [--fids] [--transpose] [--channels]",
         .about = "A time series is a rows x frames matrix of values (one row per node or lead,\n"
                  "one column per time instant) with a time axis, units and a label.\n"
                  "\n"
@@ -100,6 +104,8 @@ int cmd_series(int argc, char **argv)
                  "                     smallest and largest finite value and the number of\n"
                  "                     NaN/Inf values (with the first one's row and frame)\n"
                  "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
+                 "  --channels FILE    first takes IN's rows as recording channels and maps them\n"
+                 "                     to nodes by a map3d .channels file (docs/formats.md)\n"
                  "\n"
                  "Formats (docs/formats.md, \"Time series\"): text (.txt, .dat), raw binary\n"
                  "(.raw), MATLAB (.mat), CSV (.csv, written with a header of times). Read\n"
@@ -146,6 +152,19 @@ int cmd_series(int argc, char **argv)
     thx_status st = thx_series_read(ctx, in, THX_SERIES_AUTO, &s);
     if (st == THX_OK && transpose) st = thx_series_transpose(ctx, &s);
     if (st == THX_OK && fids) st = thx_series_read_fids(ctx, fids, s);
+    if (st == THX_OK && channels) { /* the recording's channels as the nodes of the .channels file */
+        thx_channels *ch = NULL;
+        thx_series *mapped = NULL;
+        st = thx_channels_read(ctx, channels, &ch);
+        if (st == THX_OK) st = thx_channels_apply(ctx, ch, s, &mapped);
+        if (st == THX_OK) {
+            thx_log(ctx, THX_LOG_INFO, "%s: %zu of %zu channels -> %zu nodes (%zu with no channel)", channels,
+                    ch->n - thx_channels_unmapped(ch), s->n_rows, ch->n, thx_channels_unmapped(ch));
+            thx_series_destroy(&s);
+            s = mapped;
+        }
+        thx_channels_destroy(&ch);
+    }
     if (st) {
         rc = cli_fail(ctx, cmd, st);
         goto done;

@@ -200,8 +200,10 @@ done:
     return st;
 }
 
-thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
-                                const thx_forward_opts *o, thx_series **T, thx_forward_result *info)
+/* rows == NULL: every outer node; corner == NULL: rows[i] alone; else row i weighs corner[3i..3i+2]. */
+static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, const int32_t *corner,
+                           const double *weight, size_t n_rows, int method, const thx_forward_opts *o, thx_series **T,
+                           thx_forward_result *info)
 {
     *T = NULL;
     thx_forward_opts def;
@@ -213,26 +215,36 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
     const thx_volume *v = m->volume;
     const thx_surface *hs = m->surf[P.heart], *os = m->surf[P.outer];
     size_t nh = hs->n_nodes, nn = v->n_nodes;
-    int32_t *rv = NULL; /* volume node of each row */
+    int32_t *rv = NULL; /* volume nodes of each row: 3 a row */
+    double *rw = NULL;  /* ... and their weights */
     double *phi = NULL, *load = NULL;
     thx_series *A = NULL;
-    size_t nr = rows ? n_rows : os->n_nodes;
-    rv = thx_malloc(ctx, (nr ? nr : 1) * sizeof *rv);
+    size_t nr = rows || corner ? n_rows : os->n_nodes;
+    rv = thx_malloc(ctx, 3 * (nr ? nr : 1) * sizeof *rv);
+    rw = thx_malloc(ctx, 3 * (nr ? nr : 1) * sizeof *rw);
     phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
     load = thx_calloc(ctx, nn ? nn : 1, sizeof *load);
-    if (!rv || !phi || !load) { st = THX_ENOMEM; goto done; }
-    for (size_t i = 0; i < nr; i++) {
-        int32_t s = rows ? rows[i] : (int32_t)i;
-        if (s < 0 || (size_t)s >= os->n_nodes) { st = thx_error(ctx, THX_EINPUT, "forward: row %zu: node %d is not on '%s'", i + 1, s + 1, os->name); goto done; }
-        rv[i] = v->surf_node[P.outer][s];
-    }
+    if (!rv || !rw || !phi || !load) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < nr; i++)
+        for (int k = 0; k < 3; k++) {
+            int32_t s = corner ? corner[3 * i + (size_t)k] : rows ? rows[i] : (int32_t)i;
+            double w = corner ? weight[3 * i + (size_t)k] : k == 0;
+            if (s < 0 || (size_t)s >= os->n_nodes) { st = thx_error(ctx, THX_EINPUT, "forward: row %zu: node %d is not on '%s'", i + 1, s + 1, os->name); goto done; }
+            if (!isfinite(w)) { st = thx_error(ctx, THX_EINPUT, "forward: row %zu: weight %d is not finite", i + 1, k + 1); goto done; }
+            rv[3 * i + (size_t)k] = v->surf_node[P.outer][s];
+            rw[3 * i + (size_t)k] = w;
+        }
     THX_TRY(thx_series_create(ctx, nr, nh, &A));
     for (size_t j = 0; j < nh; j++) A->time[j] = (double)(j + 1);
     snprintf(A->time_unit, sizeof A->time_unit, "node");
     snprintf(A->unit, sizeof A->unit, "1");
     if (method < 0) method = nr < nh ? 1 : 0;
     thx_fem_system_hint_rhs(P.sys, method ? nr : nh);
-    snprintf(A->label, sizeof A->label, "transfer matrix %.40s <- %.40s (%s)", os->name, hs->name, method ? "adjoint" : "forward");
+    if (corner)
+        snprintf(A->label, sizeof A->label, "transfer matrix electrodes on %.40s <- %.40s (%s)", os->name, hs->name,
+                 method ? "adjoint" : "forward");
+    else
+        snprintf(A->label, sizeof A->label, "transfer matrix %.40s <- %.40s (%s)", os->name, hs->name, method ? "adjoint" : "forward");
     int it_min = 1 << 30, it_max = 0;
     long it_total = 0;
     double tsolve = 0, maxres = 0;
@@ -247,7 +259,8 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
                     if (P.st_corner[3 * k + (size_t)c] == (int32_t)j) phi[P.st_node[k]] += P.st_w[3 * k + (size_t)c];
             thx_fem_solve_stats ss;
             THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, 0, &ss));
-            for (size_t i = 0; i < nr; i++) A->v[j * nr + i] = phi[rv[i]];
+            for (size_t i = 0; i < nr; i++)
+                A->v[j * nr + i] = rw[3 * i] * phi[rv[3 * i]] + rw[3 * i + 1] * phi[rv[3 * i + 1]] + rw[3 * i + 2] * phi[rv[3 * i + 2]];
             it_min = ss.iterations < it_min ? ss.iterations : it_min;
             it_max = ss.iterations > it_max ? ss.iterations : it_max;
             it_total += ss.iterations;
@@ -260,7 +273,7 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
         for (size_t i = 0; i < nr; i++) {
             memset(phi, 0, nn * sizeof *phi);
             memset(load, 0, nn * sizeof *load);
-            load[rv[i]] = 1;
+            for (int k = 0; k < 3; k++) load[rv[3 * i + (size_t)k]] += rw[3 * i + (size_t)k];
             thx_fem_solve_stats ss;
             THX_TRY(thx_fem_solve(ctx, P.sys, phi, load, 0, &ss));
             for (size_t j = 0; j < nh; j++) A->v[j * nr + i] = -kfd_dot(&P, v->surf_node[P.heart][j], phi);
@@ -293,10 +306,26 @@ thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t 
 done:
     thx_series_destroy(&A);
     free(rv);
+    free(rw);
     free(phi);
     free(load);
     epi_free(&P);
     return st;
+}
+
+thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
+                                const thx_forward_opts *o, thx_series **T, thx_forward_result *info)
+{
+    return transfer(ctx, m, rows, NULL, NULL, n_rows, method, o, T, info);
+}
+
+thx_status thx_forward_transfer_weighted(thx_ctx *ctx, const thx_model *m, const int32_t *corner, const double *weight,
+                                         size_t n_rows, int method, const thx_forward_opts *o, thx_series **T,
+                                         thx_forward_result *info)
+{
+    *T = NULL;
+    if (!corner || !weight) return thx_error(ctx, THX_EINPUT, "forward: weighted rows without corners or weights");
+    return transfer(ctx, m, NULL, corner, weight, n_rows, method, o, T, info);
 }
 
 thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out)

@@ -49,11 +49,13 @@ thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const cha
     snprintf(where, sizeof where, "%s: ", path);
     THX_CHECK(thx_electrodes_validate(ctx, e, where));
     thx_atomic_file af;
-    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    /* a file of that name is replaced only if thorax wrote it (thorax/core/fileio.h) */
+    THX_CHECK(thx_atomic_open_output(ctx, path, "thorax-electrodes", 17, NULL, 0, &af));
     FILE *f = af.f;
     fprintf(f, "thorax-electrodes 1\nsurface %s\ncount %zu\n", e->surface, e->n);
     for (size_t i = 0; i < e->n; i++) {
-        fprintf(f, "%s %d ", e->name[i], (int)e->node[i] + 1);
+        if (e->node[i] == THX_ELECTRODE_OFF_NODE) fprintf(f, "%s - ", e->name[i]);
+        else fprintf(f, "%s %d ", e->name[i], (int)e->node[i] + 1);
         put_coord(f, e->xyz[3 * i]);
         fputc(' ', f);
         put_coord(f, e->xyz[3 * i + 1]);
@@ -121,8 +123,10 @@ static thx_status parse_electrode(const reader *r, char **tok, int ntok, size_t 
         if (!strcmp(e->name[j], tok[0]))
             return rfail(r, "electrode %zu: name \"%s\" already used by electrode %zu", i + 1, tok[0], j + 1);
     long node;
-    if (parse_positive(tok[1], &node) != 0)
-        return rfail(r, "electrode %zu (\"%s\"): node '%.40s' is not a node number (1, 2, ...)", i + 1, tok[0], tok[1]);
+    if (!strcmp(tok[1], "-")) node = 0; /* between nodes: placed on the surface by its position */
+    else if (parse_positive(tok[1], &node) != 0)
+        return rfail(r, "electrode %zu (\"%s\"): node '%.40s' is not a node number (1, 2, ...) or '-' (a point "
+                        "between nodes)", i + 1, tok[0], tok[1]);
     double x[3];
     for (int k = 0; k < 3; k++) {
         char *end = NULL;
@@ -132,7 +136,7 @@ static thx_status parse_electrode(const reader *r, char **tok, int ntok, size_t 
                          tok[2 + k]);
     }
     snprintf(e->name[i], sizeof e->name[i], "%s", tok[0]);
-    e->node[i] = (int32_t)(node - 1);
+    e->node[i] = node ? (int32_t)(node - 1) : THX_ELECTRODE_OFF_NODE;
     memcpy(e->xyz + 3 * i, x, sizeof x);
     return THX_OK;
 }

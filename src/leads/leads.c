@@ -1,8 +1,10 @@
 /*
  * Signals at electrodes and the standard 12-lead ECG (thorax/model/electrodes.h).
  *
- * thx_electrodes_sample copies the rows of a surface series that are the
- * electrodes' nodes: row i of the result is electrode i.
+ * thx_electrodes_sample takes each electrode's value from a surface series:
+ * its node's row, or for an electrode between nodes (placed by
+ * thx_electrodes_place) the weighted sum of its triangle's three node rows.
+ * Row i of the result is electrode i.
  *
  * thx_ecg12 forms the twelve standard leads from the electrodes named RA,
  * LA, LL and V1..V6 (names matched exactly, case included), as rows in this
@@ -28,15 +30,30 @@
 #include <stdio.h>
 #include <string.h>
 
-/* Every electrode's node must be a row of the series. */
+/* Every node an electrode reads must be a row of the series. */
 static thx_status check_rows(thx_ctx *ctx, const thx_electrodes *e, const thx_series *surface, const char *what)
 {
-    for (size_t i = 0; i < e->n; i++)
-        if (e->node[i] < 0 || (size_t)e->node[i] >= surface->n_rows)
+    for (size_t i = 0; i < e->n; i++) {
+        if (e->node[i] < 0) {
+            if (!e->placed || e->node[i] != THX_ELECTRODE_OFF_NODE)
+                return thx_error(ctx, THX_EINPUT,
+                                 "%s: electrode %zu (\"%s\") is not on a node and was not placed on surface \"%s\" "
+                                 "(thx_electrodes_place)",
+                                 what, i + 1, e->name[i], e->surface);
+            for (int k = 0; k < 3; k++) {
+                int32_t c = e->corner[3 * i + (size_t)k];
+                if (c < 0 || (size_t)c >= surface->n_rows)
+                    return thx_error(ctx, THX_EINPUT,
+                                     "%s: electrode %zu (\"%s\") lies on a triangle of node %d of surface \"%s\", but the "
+                                     "series has %zu rows (is it a series on that surface?)",
+                                     what, i + 1, e->name[i], (int)c + 1, e->surface, surface->n_rows);
+            }
+        } else if ((size_t)e->node[i] >= surface->n_rows)
             return thx_error(ctx, THX_EINPUT,
                              "%s: electrode %zu (\"%s\") is node %d of surface \"%s\", but the series has %zu rows "
                              "(is it a series on that surface?)",
                              what, i + 1, e->name[i], (int)e->node[i] + 1, e->surface, surface->n_rows);
+    }
     return THX_OK;
 }
 
@@ -59,7 +76,7 @@ thx_status thx_electrodes_sample(thx_ctx *ctx, const thx_electrodes *e, const th
     copy_axis(surface, s);
     size_t N = surface->n_rows, n = e->n;
     for (size_t f = 0; f < surface->n_frames; f++)
-        for (size_t i = 0; i < n; i++) s->v[f * n + i] = surface->v[f * N + (size_t)e->node[i]];
+        for (size_t i = 0; i < n; i++) s->v[f * n + i] = thx_electrode_value(e, i, surface->v + f * N);
     snprintf(s->label, sizeof s->label, "%zu electrodes on surface %.40s", n, e->surface);
     *out = s;
     return THX_OK;
@@ -97,7 +114,7 @@ thx_status thx_ecg12(thx_ctx *ctx, const thx_electrodes *e, const thx_series *su
     for (size_t f = 0; f < surface->n_frames; f++) {
         const double *u = surface->v + f * N;
         double x[9];
-        for (int k = 0; k < 9; k++) x[k] = u[e->node[at[k]]];
+        for (int k = 0; k < 9; k++) x[k] = thx_electrode_value(e, at[k], u);
         double ra = x[0], la = x[1], ll = x[2], wct = (ra + la + ll) / 3.0;
         double *v = s->v + f * 12;
         v[0] = la - ra;

@@ -27,10 +27,13 @@ thx_status thx_electrodes_create(thx_ctx *ctx, size_t n, thx_electrodes **out)
     e->name = thx_calloc(ctx, n, sizeof *e->name);
     e->node = thx_calloc(ctx, n, sizeof *e->node);
     e->xyz = thx_calloc(ctx, 3 * n, sizeof *e->xyz);
-    if (!e->name || !e->node || !e->xyz) {
+    e->corner = thx_malloc(ctx, 3 * n * sizeof *e->corner);
+    e->weight = thx_calloc(ctx, 3 * n, sizeof *e->weight);
+    if (!e->name || !e->node || !e->xyz || !e->corner || !e->weight) {
         thx_electrodes_destroy(&e);
         return THX_ENOMEM;
     }
+    for (size_t k = 0; k < 3 * n; k++) e->corner[k] = -1;
     e->n = n;
     *out = e;
     return THX_OK;
@@ -42,6 +45,8 @@ void thx_electrodes_destroy(thx_electrodes **e)
     free((*e)->name);
     free((*e)->node);
     free((*e)->xyz);
+    free((*e)->corner);
+    free((*e)->weight);
     free(*e);
     *e = NULL;
 }
@@ -89,7 +94,7 @@ thx_status thx_electrodes_validate(thx_ctx *ctx, const thx_electrodes *e, const 
     for (size_t i = 0; i < e->n; i++) {
         if ((why = thx_electrodes_name_why(e->name[i], sizeof e->name[i])))
             return thx_error(ctx, THX_EINPUT, "%selectrode %zu: name \"%.31s\" %s", where, i + 1, e->name[i], why);
-        if (e->node[i] < 0)
+        if (e->node[i] < 0 && e->node[i] != THX_ELECTRODE_OFF_NODE)
             return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is negative (nodes are 0-based in memory)",
                              where, i + 1, e->name[i], (int)e->node[i]);
         if (e->node[i] == INT32_MAX)
@@ -111,29 +116,48 @@ thx_status thx_electrodes_validate(thx_ctx *ctx, const thx_electrodes *e, const 
 
 /* ------------------------------------------------------------ the check */
 
+const thx_surface *thx_electrodes_surface(thx_ctx *ctx, const thx_electrodes *e, const thx_model *m)
+{
+    char fp[sizeof e->path + 2] = "";
+    if (e->path[0]) snprintf(fp, sizeof fp, "%s: ", e->path);
+    if (!m) {
+        thx_error(ctx, THX_EINPUT, "%selectrodes: no model to check them against", fp);
+        return NULL;
+    }
+    for (size_t k = 0; k < m->n_surfaces; k++)
+        if (!strcmp(m->surf[k]->name, e->surface)) return m->surf[k];
+    char list[600] = "";
+    size_t off = 0;
+    for (size_t k = 0; k < m->n_surfaces && off < sizeof list; k++)
+        off += (size_t)snprintf(list + off, sizeof list - off, "%s%s", k ? ", " : "", m->surf[k]->name);
+    thx_error(ctx, THX_EINPUT, "%sthe electrodes' surface \"%s\" is not in the model (surfaces: %s)", fp, e->surface,
+              m->n_surfaces ? list : "none");
+    return NULL;
+}
+
 thx_status thx_electrodes_check(thx_ctx *ctx, const thx_electrodes *e, const thx_model *m)
 {
     /* messages name the file the set came from, when it came from one */
     char fp[sizeof e->path + 2] = "";
     if (e->path[0]) snprintf(fp, sizeof fp, "%s: ", e->path);
-    THX_CHECK(thx_electrodes_validate(ctx, e, ""));
-    if (!m) return thx_error(ctx, THX_EINPUT, "electrodes: no model to check them against");
-    const thx_surface *s = NULL;
-    for (size_t k = 0; k < m->n_surfaces && !s; k++)
-        if (!strcmp(m->surf[k]->name, e->surface)) s = m->surf[k];
-    if (!s) {
-        char list[600] = "";
-        size_t off = 0;
-        for (size_t k = 0; k < m->n_surfaces && off < sizeof list; k++)
-            off += (size_t)snprintf(list + off, sizeof list - off, "%s%s", k ? ", " : "", m->surf[k]->name);
-        return thx_error(ctx, THX_EINPUT, "%sthe electrodes' surface \"%s\" is not in the model (surfaces: %s)",
-                         fp, e->surface, m->n_surfaces ? list : "none");
-    }
+    THX_CHECK(thx_electrodes_validate(ctx, e, fp));
+    const thx_surface *s = thx_electrodes_surface(ctx, e, m);
+    if (!s) return THX_EINPUT;
     for (size_t i = 0; i < e->n; i++) {
+        const double *a = e->xyz + 3 * i;
+        if (e->node[i] == THX_ELECTRODE_OFF_NODE) {
+            double q[3], d = thx_surface_nearest(s, a, NULL, NULL, q);
+            if (!(d >= 0 && d <= THX_ELECTRODE_MAX_OFFSET_MM))
+                return thx_error(ctx, THX_EINPUT,
+                                 "%selectrode %zu (\"%s\"): position (%.6f, %.6f, %.6f) is %.3g mm from surface \"%s\" "
+                                 "(at most %g mm)",
+                                 fp, i + 1, e->name[i], a[0], a[1], a[2], d, s->name, THX_ELECTRODE_MAX_OFFSET_MM);
+            continue;
+        }
         if ((size_t)e->node[i] >= s->n_nodes)
             return thx_error(ctx, THX_EINPUT, "%selectrode %zu (\"%s\"): node %d is not on surface \"%s\" (nodes 1..%zu)",
                              fp, i + 1, e->name[i], (int)e->node[i] + 1, s->name, s->n_nodes);
-        const double *a = e->xyz + 3 * i, *b = s->xyz + 3 * (size_t)e->node[i];
+        const double *b = s->xyz + 3 * (size_t)e->node[i];
         double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
         if (!(d <= POS_TOL_MM))
             return thx_error(ctx, THX_EINPUT,

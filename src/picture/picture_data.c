@@ -15,6 +15,7 @@
 #include "thorax/import/import.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
+#include "thorax/io/channels_file.h"
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/geom/pick.h"
 #include "thorax/io/landmarks_file.h"
@@ -189,60 +190,24 @@ static thx_status surfaces_from_files(thx_ctx *ctx, const thx_picture_opts *o, t
     return THX_OK;
 }
 
-/* map3d .channels: "N leads", then N lines "lead channel" (1-based). The series' rows are the
- * recording's channels; the result has one row per lead (NaN for a lead the file leaves out). */
+/* map3d .channels (thorax/io/channels_file.h, the one reader every --channels uses): the series'
+ * rows are the recording's channels; the result has one row per node (NaN for a node with no
+ * channel), and chan_out the channel of each node (1-based; 0 none) for the node labels. */
 static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp, int **chan_out)
 {
-    char *text = NULL;
-    size_t len = 0;
-    THX_CHECK(thx_read_file(ctx, path, &text, &len));
-    thx_series *in = *sp, *outs = NULL;
+    thx_channels *c = NULL;
+    thx_series *outs = NULL;
+    THX_CHECK(thx_channels_read(ctx, path, &c));
+    thx_status st = thx_channels_apply(ctx, c, *sp, &outs);
     int *chan = NULL;
-    thx_status st = THX_OK;
-    char *p = text, *end;
-    size_t line = 1;
-    long n = strtol(p, &end, 10);
-    if (end == p || n < 1 || n > 10000000) {
-        st = thx_error(ctx, THX_EINPUT, "%s:1: expected 'N leads' (the number of leads first)", path);
-        goto done;
+    if (st == THX_OK) {
+        chan = calloc(c->n, sizeof *chan);
+        if (!chan) st = thx_error(ctx, THX_ENOMEM, "out of memory (%zu channels)", c->n);
+        else
+            for (size_t i = 0; i < c->n; i++) chan[i] = c->channel[i] + 1;
     }
-    p = strchr(end, '\n');
-    p = p ? p + 1 : end + strlen(end);
-    line = 2;
-    st = thx_series_create(ctx, (size_t)n, in->n_frames, &outs);
-    if (st != THX_OK) goto done;
-    chan = calloc((size_t)n, sizeof *chan);
-    if (!chan) { st = thx_error(ctx, THX_ENOMEM, "out of memory (%ld channels)", n); goto done; }
-    for (size_t k = 0; k < (size_t)n * in->n_frames; k++) outs->v[k] = NAN;
-    memcpy(outs->time, in->time, in->n_frames * sizeof *in->time);
-    snprintf(outs->unit, sizeof outs->unit, "%s", in->unit);
-    snprintf(outs->time_unit, sizeof outs->time_unit, "%s", in->time_unit);
-    snprintf(outs->label, sizeof outs->label, "%.100s (by channel)", in->label);
-    for (long k = 0; k < n; k++, line++) {
-        while (*p == '\n' || *p == '\r') { if (*p == '\n') line++; p++; }
-        char *e1, *e2;
-        long lead = strtol(p, &e1, 10), ch = strtol(e1, &e2, 10);
-        if (e1 == p || e2 == e1) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%zu: expected 'lead channel' (%ld of %ld leads read)", path, line, k, n);
-            goto done;
-        }
-        if (lead < 1 || lead > n) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%zu: lead %ld is not in 1..%ld", path, line, lead, n);
-            goto done;
-        }
-        if (ch < 1 || (size_t)ch > in->n_rows) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%zu: channel %ld is not in 1..%zu (the recording's rows)", path, line, ch, in->n_rows);
-            goto done;
-        }
-        for (size_t f = 0; f < in->n_frames; f++)
-            outs->v[f * (size_t)n + (size_t)(lead - 1)] = in->v[f * in->n_rows + (size_t)(ch - 1)];
-        chan[lead - 1] = (int)ch;
-        p = strchr(e2, '\n');
-        p = p ? p + 1 : e2 + strlen(e2);
-    }
-done:
-    free(text);
-    if (st != THX_OK) { thx_series_destroy(&outs); free(chan); return st; }
+    thx_channels_destroy(&c);
+    if (st != THX_OK) { thx_series_destroy(&outs); return st; }
     thx_series_destroy(sp);
     *sp = outs;
     *chan_out = chan;

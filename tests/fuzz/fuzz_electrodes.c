@@ -2,7 +2,7 @@
  * Fuzz harness: an electrodes file (thx_electrodes_read).
  * Properties of an accepted set: at least one electrode and no more than the
  * file's bytes can hold (an electrode line "A 1 0 0 0" takes at least 10
- * bytes), names NUL-terminated and unique, 0-based nodes >= 0, finite
+ * bytes), names NUL-terminated and unique, 0-based nodes >= 0 or THX_ELECTRODE_OFF_NODE (a "-"), finite
  * positions, and a write/read round trip that keeps names, nodes and the
  * positions to the written precision.
  */
@@ -23,7 +23,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FUZZ_ASSERT(memchr(e->surface, 0, sizeof e->surface));
         for (size_t i = 0; i < e->n; i++) {
             FUZZ_ASSERT(memchr(e->name[i], 0, sizeof e->name[i]) && e->name[i][0]);
-            FUZZ_ASSERT(e->node[i] >= 0 && e->node[i] < INT32_MAX);
+            FUZZ_ASSERT((e->node[i] >= 0 || e->node[i] == THX_ELECTRODE_OFF_NODE) && e->node[i] < INT32_MAX);
             for (int k = 0; k < 3; k++) FUZZ_ASSERT(isfinite(e->xyz[3 * i + k]));
             for (size_t j = 0; j < i; j++) FUZZ_ASSERT(strcmp(e->name[i], e->name[j]) != 0);
         }

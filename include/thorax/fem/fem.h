@@ -173,6 +173,17 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
 thx_status thx_forward_transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows, size_t n_rows, int method,
                                 const thx_forward_opts *o, thx_series **T, thx_forward_result *info);
 
+/*
+ * The same with rows that are weighted sums of outer-surface nodes: row i is
+ * sum_k weight[3i+k] phi(corner[3i+k]), k = 0..2 (an electrode between nodes,
+ * thx_electrodes_place; one on a node has weights 1, 0, 0). Row i of T is
+ * exactly that combination of the node rows thx_forward_transfer gives (the
+ * solve is linear in the row's load). The label says "electrodes".
+ */
+thx_status thx_forward_transfer_weighted(thx_ctx *ctx, const thx_model *m, const int32_t *corner, const double *weight,
+                                         size_t n_rows, int method, const thx_forward_opts *o, thx_series **T,
+                                         thx_forward_result *info);
+
 /* phi = T epi: a series with T's rows and epi's frames. */
 thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out);
 

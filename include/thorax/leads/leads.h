@@ -12,7 +12,9 @@
 extern "C" {
 #endif
 
-/* Signals at the electrodes: rows = electrodes, from a series on their surface (rows = its nodes). */
+/* Signals at the electrodes: rows = electrodes, from a series on their surface (rows = its nodes).
+ * An electrode between nodes (placed, thx_electrodes_place) takes the weighted sum of its
+ * triangle's node rows; NaN in a row it reads gives NaN. */
 thx_status thx_electrodes_sample(thx_ctx *ctx, const thx_electrodes *e, const thx_series *surface, thx_series **out);
 
 /*

@@ -65,6 +65,13 @@ thx_status thx_surface_validate(thx_ctx *ctx, const thx_surface *s);
  * surface face outward. */
 double thx_surface_volume(const thx_surface *s);
 
+/* The point of s's triangles nearest to p (src/model/surface_nearest.c): returns its distance,
+ * sets *tri (0-based triangle; ties: the lowest number), w (barycentric weights of the triangle's
+ * corners, >= 0, sum 1) and q (the point, mm). A brute-force scan of every triangle: O(n_tris) per
+ * point, meant for electrode sets (hundreds of points), not for large queries. -1 if s has no
+ * triangle. */
+double thx_surface_nearest(const thx_surface *s, const double p[3], size_t *tri, double w[3], double q[3]);
+
 static inline thx_vec3 thx_surface_node(const thx_surface *s, size_t i)
 {
     return thx_v3(s->xyz[3 * i], s->xyz[3 * i + 1], s->xyz[3 * i + 2]);
