@@ -48,7 +48,7 @@ slice       --spacng      --spacing       --margin        -1
 import      --forse       --force         --scale         0
 mesh        --gird        --grid          --grid          five
 sigma       --scal        --scale         --scale         -2
-series      --fromat      --format        --format        csv
+series      --fromat      --format        --format        xls
 electrodes  --aray        --array         --array         -3
 beat        --frmes       --frames        --dt            0
 forward     --epicardal   --epicardial    --threshold     nan

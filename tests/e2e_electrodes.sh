@@ -37,12 +37,12 @@ expect_rc 2 electrodes
 expect_rc 2 electrodes model --array -1
 expect_rc 2 electrodes model --colour red
 expect_rc 2 beat model
-expect_rc 2 beat model -o b.csv
+expect_rc 2 beat model -o b.xls
 grep -q "give --format" err.log || fail "no hint at --format: $(cat err.log)"
 expect_rc 2 beat model -o b.txt --frames 0
 expect_rc 2 beat model -o b.txt --dt -1
 expect_rc 2 beat model -o b.txt --format xml
-[ ! -e model/electrodes ] && [ ! -e b.txt ] && [ ! -e b.csv ] || fail "a usage error wrote something"
+[ ! -e model/electrodes ] && [ ! -e b.txt ] && [ ! -e b.xls ] || fail "a usage error wrote something"
 
 # --- electrodes ---------------------------------------------------------------------
 "$THORAX" electrodes model > el.log

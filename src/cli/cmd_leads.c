@@ -230,8 +230,7 @@ int cmd_leads(int argc, char **argv)
         if (st == THX_OK && ecg) st = thx_output_claim(ctx, ecg_path, mk, ml, NULL, 0, &af);
         if (st == THX_OK && arr) st = thx_output_claim(ctx, arr_path, mk, ml, NULL, 0, &af);
     }
-    if (st == THX_OK && ecg && (st = thx_series_write(ctx, ecg, ecg_path, fmt)) == THX_OK) wrote_ecg = 1;
-    if (st == THX_OK && arr && (st = thx_series_write(ctx, arr, arr_path, fmt)) == THX_OK) wrote_arr = 1;
+    /* the plot first: its refusal (a user's file there) comes before any series is written */
     if (st == THX_OK && plot) {
         thx_ecg_plot_opts po;
         thx_ecg_plot_opts_default(&po);
@@ -244,6 +243,8 @@ int cmd_leads(int argc, char **argv)
         const char *in[1] = {data ? data : path};
         st = thx_ecg_plot_write(ctx, ecg, &po, plot, in, 1);
     }
+    if (st == THX_OK && ecg && (st = thx_series_write(ctx, ecg, ecg_path, fmt)) == THX_OK) wrote_ecg = 1;
+    if (st == THX_OK && arr && (st = thx_series_write(ctx, arr, arr_path, fmt)) == THX_OK) wrote_arr = 1;
     if (st == THX_OK && into_solution) {
         /* written into the solution itself: its manifest names the new files, so that the solution
            stays thorax's own and can be written again (thorax/core/fileio.h) */
