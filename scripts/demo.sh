@@ -71,6 +71,8 @@ else
     rm -rf "$O/measured_tank.png" "$O/measured_sock.png" "$O/measured_sock.mp4" "$O/measured_frames"
 fi
 stage "VTK export" sh -c "'$T' export '$O/model' --format vtp -o '$O/vtk' -q && '$T' export '$O/model' --format vtu -o '$O/vtk' -q"
+stage "ParaView time series (every 5th frame)" "$T" export "$O/model" --solution "$O/solution" --format vtp \
+    --surface torso --surface heart --frames 1:500:5 -o "$O/paraview" -q
 
 # the page: the figures at a glance, the ECG, the pictures, the tables (scripts/demo_report.py)
 python3 "$(dirname "$0")/demo_report.py" "$O" $QRS

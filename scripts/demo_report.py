@@ -233,7 +233,7 @@ the nodes behind drawn as points.</p>
 <table><tr><th>stage</th><th>seconds</th></tr>{''.join('<tr><td>%s</td><td>%s</td></tr>' % (esc(a), b) for a, b in times)}
 <tr><th>total</th><th>{total:.1f}</th></tr></table>
 <p>Files: <code>model/</code> (surfaces, volume mesh, electrodes), <code>solution/</code> (torso potentials, currents,
-ECG), <code>vtk/</code> (for ParaView), <code>frames/</code>; <code>demo.log</code> holds every command and its output.</p>
+ECG), <code>vtk/</code> (the model for ParaView), <code>paraview/</code> (the beat's potentials on torso and heart, every 5th frame: open <code>torso.pvd</code> and <code>heart.pvd</code> in ParaView for the time axis), <code>frames/</code>; <code>demo.log</code> holds every command and its output.</p>
 </body></html>
 """
     tmp = os.path.join(o, '.index.html.tmp')
