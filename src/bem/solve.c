@@ -1,0 +1,268 @@
+/* The boundary-element systems: dipoles (with the isolated problem approach and deflation) and
+ * the heart-surface-potential transfer matrix; dense LU by LAPACK (thorax/bem/bem.h). */
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bem/bem_impl.h"
+
+void thx_bem_opts_default(thx_bem_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->ipa = 1;
+}
+
+/* Each row of B over its own surface sums to 2 pi (the smooth-surface value): the diagonal takes
+ * what the flat triangles at the node leave out (4 pi - its inner solid angle - 2 pi). */
+static void fix_diagonal(const thx_bem *b, double *B, size_t ld)
+{
+    for (size_t k = 0; k < b->n; k++) {
+        size_t o = b->off[k], e = b->off[k + 1];
+#pragma omp parallel for schedule(static)
+        for (size_t i = o; i < e; i++) {
+            double sum = 0;
+            for (size_t j = o; j < e; j++)
+                if (j != i) sum += B[j * ld + i];
+            B[i * ld + i] = 2 * M_PI - sum;
+        }
+    }
+}
+
+static size_t surface_of(const thx_bem *b, size_t i)
+{
+    size_t k = 0;
+    while (b->off[k + 1] <= i) k++;
+    return k;
+}
+
+static thx_status lu_solve(thx_ctx *ctx, double *A, size_t n, double *rhs, size_t nrhs, const char *what)
+{
+    if (n > INT_MAX || nrhs > INT_MAX) return thx_error(ctx, THX_EINPUT, "bem: %s: %zu unknowns, more than LAPACK's int", what, n);
+    int N = (int)n, R = (int)nrhs, info = 0;
+    int *piv = thx_malloc(ctx, (n ? n : 1) * sizeof *piv);
+    if (!piv) return THX_ENOMEM;
+    dgetrf_(&N, &N, A, &N, piv, &info);
+    if (info == 0 && R > 0) dgetrs_("N", &N, &R, A, &N, piv, rhs, &N, &info);
+    free(piv);
+    if (info != 0)
+        return thx_error(ctx, THX_ESOLVER, "bem: %s: the %zu x %zu system is singular (LAPACK dgetrf info %d): are "
+                         "two surfaces touching?", what, n, n, info);
+    return THX_OK;
+}
+
+thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
+                           const thx_bem_opts *o, double *phi, thx_bem_info *info)
+{
+    thx_bem_opts def;
+    if (!o) { thx_bem_opts_default(&def); o = &def; }
+    thx_bem_info inf;
+    memset(&inf, 0, sizeof inf);
+    inf.ipa_surface = -1;
+    size_t N = b->off[b->n], S = b->n;
+    thx_status st = THX_OK;
+    double *B = NULL, *A1 = NULL, *rhs1 = NULL;
+    int *comp = NULL;
+    for (size_t k = 0; k < S; k++)
+        if (!(b->sig_in[k] > 0))
+            return thx_error(ctx, THX_EINPUT, "bem: surface '%s': conductivity inside %g S/m; dipoles need every "
+                             "compartment conducting", b->surf[k]->name, b->sig_in[k]);
+    comp = thx_malloc(ctx, (nd ? nd : 1) * sizeof *comp);
+    if (!comp) return THX_ENOMEM;
+    /* each dipole's compartment: the innermost surface holding it */
+    for (size_t d = 0; d < nd; d++) {
+        const double *p = pos + 3 * d;
+        const double *q = mom + 3 * d;
+        if (!isfinite(p[0] + p[1] + p[2] + q[0] + q[1] + q[2])) { st = thx_error(ctx, THX_EINPUT, "dipole %zu: a value is not finite", d + 1); goto done; }
+        int c = -1;
+        for (size_t k = 0; k < S; k++) {
+            size_t t;
+            double w[3], qq[3];
+            double dist = thx_surface_nearest(b->surf[k], p, &t, w, qq);
+            if (dist <= 1e-9 * b->scale) {
+                st = thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) lies on surface '%s'", d + 1, p[0], p[1], p[2], b->surf[k]->name);
+                goto done;
+            }
+            if (thx_bem_surface_angle(b, k, p) > 2 * M_PI) {
+                /* innermost: a surface inside the current one */
+                if (c < 0) c = (int)k;
+                else {
+                    int a = (int)k;
+                    while (a >= 0 && a != c) a = b->parent[a];
+                    if (a == c) c = (int)k;
+                }
+            }
+        }
+        if (c < 0) {
+            st = thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) is outside the outer surface '%s'", d + 1, p[0], p[1],
+                           p[2], b->surf[b->outer]->name);
+            goto done;
+        }
+        comp[d] = c;
+    }
+    double t0 = thx_wtime();
+    B = thx_calloc(ctx, N * N, sizeof *B);
+    double *rhs = phi;
+    if (!B) { st = THX_ENOMEM; goto done; }
+    inf.matrix_bytes = (double)N * (double)N * sizeof(double);
+    unsigned char use[256];
+    if (S > sizeof use) { st = thx_error(ctx, THX_EINPUT, "bem: %zu surfaces, at most %zu", S, sizeof use); goto done; }
+    memset(use, 1, S);
+    thx_bem_assemble_rows(b, use, -1, B, NULL, N);
+    fix_diagonal(b, B, N);
+    inf.t_assemble = thx_wtime() - t0;
+    t0 = thx_wtime();
+    /* right-hand sides: V_inf at every node */
+    for (size_t d = 0; d < nd; d++)
+        for (size_t i = 0; i < N; i++) {
+            size_t k = surface_of(b, i);
+            const double *x = b->surf[k]->xyz + 3 * (i - b->off[k]), *p = pos + 3 * d, *q = mom + 3 * d;
+            double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+            double r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            rhs[d * N + i] = (q[0] * r[0] + q[1] * r[1] + q[2] * r[2]) / (4 * M_PI * r2 * sqrt(r2));
+        }
+    /* the isolated problem for the dipoles in a leaf compartment that conducts more than outside
+     * (Hämäläinen & Sarvas 1989): phi0 on that surface alone in an insulator; the full problem
+     * is then solved for the rest with right-hand side -(s- s+/(s- - s+)) phi0 on that surface */
+    for (size_t k = 0; k < S && o->ipa; k++) {
+        int leaf = 1;
+        for (size_t l = 0; l < S; l++) leaf &= b->parent[l] != (int)k;
+        double sm = b->sig_in[k], sp = b->sig_out[k];
+        if (!leaf || !(sp < sm) || k == b->outer) continue;
+        size_t nk = 0;
+        for (size_t d = 0; d < nd; d++) nk += comp[d] == (int)k;
+        if (!nk) continue;
+        size_t n1 = b->off[k + 1] - b->off[k], o1 = b->off[k];
+        A1 = thx_malloc(ctx, n1 * n1 * sizeof *A1);
+        rhs1 = thx_malloc(ctx, n1 * nk * sizeof *rhs1);
+        if (!A1 || !rhs1) { st = THX_ENOMEM; goto done; }
+        double atot = 0;
+        for (size_t j = 0; j < n1; j++) atot += b->area[o1 + j];
+        for (size_t j = 0; j < n1; j++)
+            for (size_t i = 0; i < n1; i++)
+                A1[j * n1 + i] = (i == j ? sm / 2 : 0) - sm / (4 * M_PI) * B[(o1 + j) * N + o1 + i] + sm * b->area[o1 + j] / atot;
+        for (size_t d = 0, c = 0; d < nd; d++)
+            if (comp[d] == (int)k) { memcpy(rhs1 + c * n1, rhs + d * N + o1, n1 * sizeof *rhs1); c++; }
+        inf.matrix_bytes += (double)n1 * (double)n1 * sizeof(double);
+        THX_TRY(lu_solve(ctx, A1, n1, rhs1, nk, "isolated problem"));
+        double alpha = sm / (sm - sp), beta = -sm * sp / (sm - sp);
+        for (size_t d = 0, c = 0; d < nd; d++) {
+            if (comp[d] != (int)k) continue;
+            for (size_t i = 0; i < N; i++) rhs[d * N + i] = 0;
+            for (size_t i = 0; i < n1; i++) rhs[d * N + o1 + i] = beta * rhs1[c * n1 + i];
+            /* keep phi0 (times alpha) where the correction is added after the solve */
+            for (size_t i = 0; i < n1; i++) rhs1[c * n1 + i] *= alpha;
+            c++;
+        }
+        inf.ipa_surface = (int)k;
+        free(A1);
+        A1 = NULL;
+        /* the full solve below; the isolated parts are added after it */
+        break;
+    }
+    /* the full system: A = diag(mean sigma) - (ds_l / 4 pi) B + deflation by the outer surface's
+     * area-weighted constant (the constant null vector of the pure Neumann problem) */
+    {
+        double *w = thx_calloc(ctx, N, sizeof *w);
+        if (!w) { st = THX_ENOMEM; goto done; }
+        size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+        double atot = 0;
+        for (size_t j = 0; j < on; j++) atot += b->area[oo + j];
+        for (size_t j = 0; j < on; j++) w[oo + j] = b->area[oo + j] / atot;
+        double cdef = b->sig_in[b->outer];
+        for (size_t j = 0; j < N; j++) {
+            size_t l = surface_of(b, j);
+            double f = -(b->sig_in[l] - b->sig_out[l]) / (4 * M_PI);
+            double *col = B + j * N;
+            for (size_t i = 0; i < N; i++) col[i] = f * col[i] + cdef * w[j];
+            col[j] += (b->sig_in[l] + b->sig_out[l]) / 2;
+        }
+        st = lu_solve(ctx, B, N, rhs, nd, "dipoles");
+        if (st == THX_OK && inf.ipa_surface >= 0) {
+            size_t k = (size_t)inf.ipa_surface, n1 = b->off[k + 1] - b->off[k], o1 = b->off[k];
+            for (size_t d = 0, c = 0; d < nd; d++)
+                if (comp[d] == (int)k) {
+                    for (size_t i = 0; i < n1; i++) rhs[d * N + o1 + i] += rhs1[c * n1 + i];
+                    c++;
+                }
+        }
+        /* reference: zero area-weighted mean over the outer surface */
+        for (size_t d = 0; d < nd && st == THX_OK; d++) {
+            double mean = 0;
+            for (size_t j = 0; j < N; j++) mean += w[j] * rhs[d * N + j];
+            for (size_t j = 0; j < N; j++) rhs[d * N + j] -= mean;
+        }
+        free(w);
+    }
+    inf.t_solve = thx_wtime() - t0;
+    inf.n_unknowns = N;
+done:
+    free(B);
+    free(A1);
+    free(rhs1);
+    free(comp);
+    if (info) *info = inf;
+    return st;
+}
+
+thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t h, const thx_bem_opts *o, double *T,
+                            thx_bem_info *info)
+{
+    (void)o;
+    thx_bem_info inf;
+    memset(&inf, 0, sizeof inf);
+    inf.ipa_surface = -1;
+    size_t N = b->off[b->n], S = b->n;
+    if (h >= S) return thx_error(ctx, THX_EINPUT, "bem: heart surface %zu of %zu", h + 1, S);
+    if (h == b->outer) return thx_error(ctx, THX_EINPUT, "bem: the heart '%s' is the outermost surface", b->surf[h]->name);
+    for (size_t k = 0; k < S; k++) {
+        if (b->parent[k] == (int)h)
+            return thx_error(ctx, THX_EINPUT, "bem: surface '%s' is inside the heart '%s'; the heart is a hole in the "
+                             "heart-surface formulation", b->surf[k]->name, b->surf[h]->name);
+        if (k != h && !(b->sig_in[k] > 0))
+            return thx_error(ctx, THX_EINPUT, "bem: surface '%s': conductivity inside %g S/m", b->surf[k]->name, b->sig_in[k]);
+    }
+    double sp = b->sig_out[h];
+    size_t nh = b->off[h + 1] - b->off[h], oh = b->off[h];
+    size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+    thx_status st = THX_OK;
+    double t0 = thx_wtime();
+    double *B = thx_calloc(ctx, N * N, sizeof *B), *SL = thx_calloc(ctx, N * nh, sizeof *SL);
+    double *R = thx_malloc(ctx, N * nh * sizeof *R);
+    if (!B || !SL || !R) { st = THX_ENOMEM; goto done; }
+    inf.matrix_bytes = ((double)N * (double)N + 2.0 * (double)N * (double)nh) * sizeof(double);
+    unsigned char use[256];
+    if (S > sizeof use) { st = thx_error(ctx, THX_EINPUT, "bem: %zu surfaces, at most %zu", S, sizeof use); goto done; }
+    memset(use, 1, S);
+    thx_bem_assemble_rows(b, use, (int)h, B, SL, N);
+    fix_diagonal(b, B, N);
+    inf.t_assemble = thx_wtime() - t0;
+    t0 = thx_wtime();
+    /* the right-hand sides: the heart's potential columns moved over (inside the heart: sigma 0) */
+    for (size_t j = 0; j < nh; j++)
+        for (size_t i = 0; i < N; i++)
+            R[j * N + i] = -(i == oh + j ? sp / 2 : 0) - sp / (4 * M_PI) * B[(oh + j) * N + i];
+    /* the system: potential columns off the heart, the single layer of the heart's normal
+     * derivative in the heart's columns */
+    for (size_t j = 0; j < N; j++) {
+        double *col = B + j * N;
+        if (j >= oh && j < oh + nh) {
+            for (size_t i = 0; i < N; i++) col[i] = sp / (4 * M_PI) * SL[(j - oh) * N + i];
+            continue;
+        }
+        size_t l = surface_of(b, j);
+        double f = -(b->sig_in[l] - b->sig_out[l]) / (4 * M_PI);
+        for (size_t i = 0; i < N; i++) col[i] *= f;
+        col[j] += (b->sig_in[l] + b->sig_out[l]) / 2;
+    }
+    THX_TRY(lu_solve(ctx, B, N, R, nh, "transfer matrix"));
+    for (size_t j = 0; j < nh; j++) memcpy(T + j * on, R + j * N + oo, on * sizeof *T);
+    inf.t_solve = thx_wtime() - t0;
+    inf.n_unknowns = N;
+done:
+    free(B);
+    free(SL);
+    free(R);
+    if (info) *info = inf;
+    return st;
+}
