@@ -29,6 +29,74 @@ static void fix_diagonal(const thx_bem *b, double *B, size_t ld)
     }
 }
 
+
+/* V_inf of dipole (p, q) times the double-layer kernel seen from x, integrated over the triangle
+ * (a, b, c) with normal n: the 3-point midpoint rule (exact for quadratics) on a recursive
+ * subdivision fine enough near the dipole and near x. */
+static double quad_tri(const double *x, const double *p, const double *q, const double *n, const double *a,
+                       const double *b, const double *c, int depth)
+{
+    double g[3] = {(a[0] + b[0] + c[0]) / 3, (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3};
+    double h = 0;
+    const double *v[3] = {a, b, c};
+    for (int i = 0; i < 3; i++) {
+        const double *u = v[i], *w = v[(i + 1) % 3];
+        double l = sqrt((u[0] - w[0]) * (u[0] - w[0]) + (u[1] - w[1]) * (u[1] - w[1]) + (u[2] - w[2]) * (u[2] - w[2]));
+        if (l > h) h = l;
+    }
+    double dp = sqrt((g[0] - p[0]) * (g[0] - p[0]) + (g[1] - p[1]) * (g[1] - p[1]) + (g[2] - p[2]) * (g[2] - p[2]));
+    double dx = sqrt((g[0] - x[0]) * (g[0] - x[0]) + (g[1] - x[1]) * (g[1] - x[1]) + (g[2] - x[2]) * (g[2] - x[2]));
+    if (depth < 9 && (h > 0.4 * dp || h > 0.4 * dx)) {
+        double ab[3], bc[3], ca[3];
+        for (int k = 0; k < 3; k++) { ab[k] = (a[k] + b[k]) / 2; bc[k] = (b[k] + c[k]) / 2; ca[k] = (c[k] + a[k]) / 2; }
+        return quad_tri(x, p, q, n, a, ab, ca, depth + 1) + quad_tri(x, p, q, n, ab, b, bc, depth + 1) +
+               quad_tri(x, p, q, n, ca, bc, c, depth + 1) + quad_tri(x, p, q, n, ab, bc, ca, depth + 1);
+    }
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double area = 0.5 * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+    double sum = 0;
+    for (int i = 0; i < 3; i++) {
+        const double *u = v[i], *w = v[(i + 1) % 3];
+        double m[3] = {(u[0] + w[0]) / 2, (u[1] + w[1]) / 2, (u[2] + w[2]) / 2};
+        double rp[3] = {m[0] - p[0], m[1] - p[1], m[2] - p[2]}, rx[3] = {m[0] - x[0], m[1] - x[1], m[2] - x[2]};
+        double lp = sqrt(rp[0] * rp[0] + rp[1] * rp[1] + rp[2] * rp[2]), lx = sqrt(rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]);
+        double vinf = (q[0] * rp[0] + q[1] * rp[1] + q[2] * rp[2]) / (4 * M_PI * lp * lp * lp);
+        sum += vinf * (n[0] * rx[0] + n[1] * rx[1] + n[2] * rx[2]) / (lx * lx * lx);
+    }
+    return sum * area / 3;
+}
+
+/* The isolated problem's right-hand side for chi = phi0 - (2/sigma) V_inf (smooth where V_inf is
+ * peaked: a dipole near the surface): (1/2 pi) (K V_inf)(r_i), K the double layer as the discrete
+ * system has it (the flat triangles at r_i give 0; the diagonal term B_ii V_inf(r_i)). */
+static void isolated_rhs(const thx_bem *b, size_t k, const double *B, size_t ld, const double *p, const double *q,
+                         double *out)
+{
+    const thx_surface *s = b->surf[k];
+    size_t o = b->off[k];
+#pragma omp parallel for schedule(dynamic, 4)
+    for (size_t i = 0; i < s->n_nodes; i++) {
+        const double *x = s->xyz + 3 * i;
+        double sum = 0;
+        for (size_t t = 0; t < s->n_tris; t++) {
+            const int32_t *v = s->tri + 3 * t;
+            if (v[0] == (int32_t)i || v[1] == (int32_t)i || v[2] == (int32_t)i) continue;
+            const double *a = s->xyz + 3 * v[0], *bb = s->xyz + 3 * v[1], *c = s->xyz + 3 * v[2];
+            double e1[3] = {bb[0] - a[0], bb[1] - a[1], bb[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (!(nl > 0)) continue;
+            for (int j = 0; j < 3; j++) n[j] /= nl;
+            sum += quad_tri(x, p, q, n, a, bb, c, 0);
+        }
+        double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        double r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        double vi = (q[0] * r[0] + q[1] * r[1] + q[2] * r[2]) / (4 * M_PI * r2 * sqrt(r2));
+        out[i] = (sum + B[(o + i) * ld + o + i] * vi) / (2 * M_PI);
+    }
+}
+
 static size_t surface_of(const thx_bem *b, size_t i)
 {
     size_t k = 0;
@@ -141,10 +209,16 @@ thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, co
         for (size_t j = 0; j < n1; j++)
             for (size_t i = 0; i < n1; i++)
                 A1[j * n1 + i] = (i == j ? sm / 2 : 0) - sm / (4 * M_PI) * B[(o1 + j) * N + o1 + i] + sm * b->area[o1 + j] / atot;
+        /* phi0 = (2/sigma) V_inf + chi: chi carries no peak of V_inf and suits linear elements */
         for (size_t d = 0, c = 0; d < nd; d++)
-            if (comp[d] == (int)k) { memcpy(rhs1 + c * n1, rhs + d * N + o1, n1 * sizeof *rhs1); c++; }
+            if (comp[d] == (int)k) { isolated_rhs(b, k, B, N, pos + 3 * d, mom + 3 * d, rhs1 + c * n1); c++; }
         inf.matrix_bytes += (double)n1 * (double)n1 * sizeof(double);
         THX_TRY(lu_solve(ctx, A1, n1, rhs1, nk, "isolated problem"));
+        for (size_t d = 0, c = 0; d < nd; d++)
+            if (comp[d] == (int)k) {
+                for (size_t i = 0; i < n1; i++) rhs1[c * n1 + i] += 2 / sm * rhs[d * N + o1 + i];
+                c++;
+            }
         double alpha = sm / (sm - sp), beta = -sm * sp / (sm - sp);
         for (size_t d = 0, c = 0; d < nd; d++) {
             if (comp[d] != (int)k) continue;
