@@ -6,6 +6,9 @@
 
 #include "bem/bem_impl.h"
 
+/* Nodes of a surface tested against each other surface for the nesting (all of a smaller one). */
+#define NEST_SAMPLES 400
+
 static int cmp_edge(const void *pa, const void *pb)
 {
     const int64_t *a = pa, *b = pb;
@@ -139,12 +142,15 @@ thx_status thx_bem_create(thx_ctx *ctx, const thx_surface *const *surf, size_t n
         for (size_t l = 0; l < n && st == THX_OK; l++) {
             if (k == l) continue;
             const thx_surface *s = b->surf[k];
-            size_t n_in = 0, first_in = 0, first_out = 0;
+            size_t n_in = 0, first_in = 0, first_out = 0, n_test = 0;
             int have_in = 0, have_out = 0;
+            /* at most NEST_SAMPLES nodes, evenly spread over the surface's numbering */
+            size_t stride = s->n_nodes > NEST_SAMPLES ? s->n_nodes / NEST_SAMPLES : 1;
+            for (size_t i = 0; i < s->n_nodes; i += stride) n_test++;
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_in)
-            for (size_t i = 0; i < s->n_nodes; i++) n_in += thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
-            if (n_in > 0 && n_in < s->n_nodes) {
-                for (size_t i = 0; i < s->n_nodes && !(have_in && have_out); i++) {
+            for (size_t i = 0; i < s->n_nodes; i += stride) n_in += thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
+            if (n_in > 0 && n_in < n_test) {
+                for (size_t i = 0; i < s->n_nodes && !(have_in && have_out); i += stride) {
                     int in = thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
                     if (in && !have_in) { have_in = 1; first_in = i; }
                     if (!in && !have_out) { have_out = 1; first_out = i; }
@@ -153,7 +159,7 @@ thx_status thx_bem_create(thx_ctx *ctx, const thx_surface *const *surf, size_t n
                                "outside (the surfaces must be nested or apart)", s->name, b->surf[l]->name, first_in + 1,
                                s->name, b->surf[l]->name, first_out + 1);
             }
-            inside[k * n + l] = n_in == s->n_nodes;
+            inside[k * n + l] = n_in == n_test;
         }
     if (st != THX_OK) goto done;
     size_t n_outer = 0;

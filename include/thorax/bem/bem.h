@@ -48,7 +48,8 @@ double thx_bem_triangle(const double x[3], const double a[3], const double b[3],
  * the conductivity (S/m) of the compartment just inside surface k (between k and the surfaces
  * directly inside it). The nesting is found here; the conductivity just outside a surface is
  * that of its parent, 0 outside the outermost. Refused with the surface named: an open or
- * non-manifold surface (the edge), a surface crossing another (a node on each side), two
+ * non-manifold surface (the edge), a surface crossing another (a node on each side; up to 400
+ * nodes of each surface are tested, evenly spread), two
  * outermost surfaces, a conductivity not finite or not positive (sigma_in of a surface used as
  * a hole, e.g. the heart in thx_bem_transfer, is not read and may be 0). Surfaces given inward
  * (negative enclosed volume) are reversed and logged. Caller destroys *out.
