@@ -131,8 +131,8 @@ int cmd_bem(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "bem",
-        .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--format]\n"
-                 "MODEL --dipoles FILE -o DIR [--electrodes] [--no-ipa] [--format]",
+        .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--format]\n"
+                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--no-ipa] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
                  "problem approach, dense LU by LAPACK (OpenBLAS). MODEL is a model directory\n"
