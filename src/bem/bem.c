@@ -208,12 +208,12 @@ size_t thx_bem_outer(const thx_bem *b) { return b->outer; }
 double thx_bem_sigma_in(const thx_bem *b, size_t k) { return b->sig_in[k]; }
 double thx_bem_sigma_out(const thx_bem *b, size_t k) { return b->sig_out[k]; }
 
-void thx_bem_assemble_rows(const thx_bem *b, const unsigned char *use, int sl_surf, double *B, double *S, size_t ld)
+void thx_bem_assemble_rows(const thx_bem *b, size_t i0, size_t i1, const unsigned char *use, int sl_surf, double *B,
+                           double *S, size_t ld)
 {
-    size_t N = b->off[b->n];
     /* every collocation node against every triangle: a row at a time (no write conflicts) */
 #pragma omp parallel for schedule(dynamic, 8)
-    for (size_t i = 0; i < N; i++) {
+    for (size_t i = i0; i < i1; i++) {
         size_t ks = 0;
         while (b->off[ks + 1] <= i) ks++;
         const double *x = b->surf[ks]->xyz + 3 * (i - b->off[ks]);
@@ -228,8 +228,8 @@ void thx_bem_assemble_rows(const thx_bem *b, const unsigned char *use, int sl_su
                 double dl[3], sl[3];
                 thx_bem_triangle(x, s->xyz + 3 * v[0], s->xyz + 3 * v[1], s->xyz + 3 * v[2], dl, want_sl ? sl : NULL);
                 for (int q = 0; q < 3; q++) {
-                    if (col) col[(o + (size_t)v[q]) * ld + i] += dl[q];
-                    if (want_sl) S[(size_t)v[q] * ld + i] += sl[q];
+                    if (col) col[(o + (size_t)v[q]) * ld + i - i0] += dl[q];
+                    if (want_sl) S[(size_t)v[q] * ld + i - i0] += sl[q];
                 }
             }
         }
@@ -243,7 +243,7 @@ thx_status thx_bem_double_layer(thx_ctx *ctx, const thx_bem *b, double *B)
     if (!use) return THX_ENOMEM;
     memset(use, 1, b->n);
     memset(B, 0, N * N * sizeof *B);
-    thx_bem_assemble_rows(b, use, -1, B, NULL, N);
+    thx_bem_assemble_rows(b, 0, N, use, -1, B, NULL, N);
     free(use);
     return THX_OK;
 }

@@ -15,16 +15,17 @@ void thx_bem_opts_default(thx_bem_opts *o)
 
 /* Each row of B over its own surface sums to 2 pi (the smooth-surface value): the diagonal takes
  * what the flat triangles at the node leave out (4 pi - its inner solid angle - 2 pi). */
-static void fix_diagonal(const thx_bem *b, double *B, size_t ld)
+static void fix_diagonal(const thx_bem *b, double *B, size_t ld, size_t i0, size_t i1)
 {
     for (size_t k = 0; k < b->n; k++) {
         size_t o = b->off[k], e = b->off[k + 1];
+        size_t a = o > i0 ? o : i0, z = e < i1 ? e : i1;
 #pragma omp parallel for schedule(static)
-        for (size_t i = o; i < e; i++) {
+        for (size_t i = a; i < z; i++) {
             double sum = 0;
             for (size_t j = o; j < e; j++)
-                if (j != i) sum += B[j * ld + i];
-            B[i * ld + i] = 2 * M_PI - sum;
+                if (j != i) sum += B[j * ld + i - i0];
+            B[i * ld + i - i0] = 2 * M_PI - sum;
         }
     }
 }
@@ -176,8 +177,8 @@ thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, co
     unsigned char use[256];
     if (S > sizeof use) { st = thx_error(ctx, THX_EINPUT, "bem: %zu surfaces, at most %zu", S, sizeof use); goto done; }
     memset(use, 1, S);
-    thx_bem_assemble_rows(b, use, -1, B, NULL, N);
-    fix_diagonal(b, B, N);
+    thx_bem_assemble_rows(b, 0, N, use, -1, B, NULL, N);
+    fix_diagonal(b, B, N, 0, N);
     inf.t_assemble = thx_wtime() - t0;
     t0 = thx_wtime();
     /* right-hand sides: V_inf at every node */
@@ -279,14 +280,44 @@ done:
     return st;
 }
 
-thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t h, const thx_bem_opts *o, double *T,
-                            thx_bem_info *info)
+thx_status thx_bem_transfer_rows(thx_ctx *ctx, const thx_bem *b, size_t h, size_t i0, size_t i1, double *M, double *R,
+                                 size_t ld)
 {
-    (void)o;
-    thx_bem_info inf;
-    memset(&inf, 0, sizeof inf);
-    inf.ipa_surface = -1;
     size_t N = b->off[b->n], S = b->n;
+    double sp = b->sig_out[h];
+    size_t nh = b->off[h + 1] - b->off[h], oh = b->off[h];
+    double *SL = thx_calloc(ctx, ld * (nh ? nh : 1), sizeof *SL);
+    if (!SL) return THX_ENOMEM;
+    memset(M, 0, ld * N * sizeof *M);
+    unsigned char use[256];
+    if (S > sizeof use) { free(SL); return thx_error(ctx, THX_EINPUT, "bem: %zu surfaces, at most %zu", S, sizeof use); }
+    memset(use, 1, S);
+    thx_bem_assemble_rows(b, i0, i1, use, (int)h, M, SL, ld);
+    fix_diagonal(b, M, ld, i0, i1);
+    /* the right-hand sides: the heart's potential columns moved over (inside the heart: sigma 0) */
+    for (size_t j = 0; j < nh; j++)
+        for (size_t i = i0; i < i1; i++)
+            R[j * ld + i - i0] = -(i == oh + j ? sp / 2 : 0) - sp / (4 * M_PI) * M[(oh + j) * ld + i - i0];
+    /* the system: potential columns off the heart, the single layer of the heart's normal
+     * derivative in the heart's columns */
+    for (size_t j = 0; j < N; j++) {
+        double *col = M + j * ld;
+        if (j >= oh && j < oh + nh) {
+            for (size_t i = i0; i < i1; i++) col[i - i0] = sp / (4 * M_PI) * SL[(j - oh) * ld + i - i0];
+            continue;
+        }
+        size_t l = surface_of(b, j);
+        double f = -(b->sig_in[l] - b->sig_out[l]) / (4 * M_PI);
+        for (size_t i = i0; i < i1; i++) col[i - i0] *= f;
+        if (j >= i0 && j < i1) col[j - i0] += (b->sig_in[l] + b->sig_out[l]) / 2;
+    }
+    free(SL);
+    return THX_OK;
+}
+
+thx_status thx_bem_transfer_check(thx_ctx *ctx, const thx_bem *b, size_t h)
+{
+    size_t S = b->n;
     if (h >= S) return thx_error(ctx, THX_EINPUT, "bem: heart surface %zu of %zu", h + 1, S);
     if (h == b->outer) return thx_error(ctx, THX_EINPUT, "bem: the heart '%s' is the outermost surface", b->surf[h]->name);
     for (size_t k = 0; k < S; k++) {
@@ -296,46 +327,34 @@ thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t h, const thx_
         if (k != h && !(b->sig_in[k] > 0))
             return thx_error(ctx, THX_EINPUT, "bem: surface '%s': conductivity inside %g S/m", b->surf[k]->name, b->sig_in[k]);
     }
-    double sp = b->sig_out[h];
-    size_t nh = b->off[h + 1] - b->off[h], oh = b->off[h];
+    return THX_OK;
+}
+
+thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t h, const thx_bem_opts *o, double *T,
+                            thx_bem_info *info)
+{
+    (void)o;
+    thx_bem_info inf;
+    memset(&inf, 0, sizeof inf);
+    inf.ipa_surface = -1;
+    THX_CHECK(thx_bem_transfer_check(ctx, b, h));
+    size_t N = b->off[b->n];
+    size_t nh = b->off[h + 1] - b->off[h];
     size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
     thx_status st = THX_OK;
     double t0 = thx_wtime();
-    double *B = thx_calloc(ctx, N * N, sizeof *B), *SL = thx_calloc(ctx, N * nh, sizeof *SL);
-    double *R = thx_malloc(ctx, N * nh * sizeof *R);
-    if (!B || !SL || !R) { st = THX_ENOMEM; goto done; }
+    double *B = thx_malloc(ctx, N * N * sizeof *B), *R = thx_malloc(ctx, N * nh * sizeof *R);
+    if (!B || !R) { st = THX_ENOMEM; goto done; }
     inf.matrix_bytes = ((double)N * (double)N + 2.0 * (double)N * (double)nh) * sizeof(double);
-    unsigned char use[256];
-    if (S > sizeof use) { st = thx_error(ctx, THX_EINPUT, "bem: %zu surfaces, at most %zu", S, sizeof use); goto done; }
-    memset(use, 1, S);
-    thx_bem_assemble_rows(b, use, (int)h, B, SL, N);
-    fix_diagonal(b, B, N);
+    THX_TRY(thx_bem_transfer_rows(ctx, b, h, 0, N, B, R, N));
     inf.t_assemble = thx_wtime() - t0;
     t0 = thx_wtime();
-    /* the right-hand sides: the heart's potential columns moved over (inside the heart: sigma 0) */
-    for (size_t j = 0; j < nh; j++)
-        for (size_t i = 0; i < N; i++)
-            R[j * N + i] = -(i == oh + j ? sp / 2 : 0) - sp / (4 * M_PI) * B[(oh + j) * N + i];
-    /* the system: potential columns off the heart, the single layer of the heart's normal
-     * derivative in the heart's columns */
-    for (size_t j = 0; j < N; j++) {
-        double *col = B + j * N;
-        if (j >= oh && j < oh + nh) {
-            for (size_t i = 0; i < N; i++) col[i] = sp / (4 * M_PI) * SL[(j - oh) * N + i];
-            continue;
-        }
-        size_t l = surface_of(b, j);
-        double f = -(b->sig_in[l] - b->sig_out[l]) / (4 * M_PI);
-        for (size_t i = 0; i < N; i++) col[i] *= f;
-        col[j] += (b->sig_in[l] + b->sig_out[l]) / 2;
-    }
     THX_TRY(lu_solve(ctx, B, N, R, nh, "transfer matrix"));
     for (size_t j = 0; j < nh; j++) memcpy(T + j * on, R + j * N + oo, on * sizeof *T);
     inf.t_solve = thx_wtime() - t0;
     inf.n_unknowns = N;
 done:
     free(B);
-    free(SL);
     free(R);
     if (info) *info = inf;
     return st;
