@@ -69,6 +69,28 @@ T = np.loadtxt([l for l in L[i + 1:] if l.strip() and l != "end"])
 assert T.shape == (42, 42), T.shape
 assert abs(T.sum(axis=1) - 1).max() < 1e-8, abs(T.sum(axis=1) - 1).max()
 EOF
+# the distributed path: PETSc's MATSCALAPACK on 1 rank and under mpirun -np 2, the same matrix
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+expect_rc 0 bem "$H/Head1.geom" --transfer --heart cortex -o tr1 --format text --scalapack -q
+set +e
+mpirun -np 2 "$THORAX" bem "$H/Head1.geom" --transfer --heart cortex -o tr2 --format text -q > out.log 2> err.log
+rc=$?
+set -e
+[ "$rc" -eq 0 ] || fail "mpirun -np 2 thorax bem: exit $rc: $(cat err.log)"
+"$PY" - <<'EOF2' || fail "ScaLAPACK transfer matrices"
+import json
+import numpy as np
+def read(p):
+    L = open(p).read().split("\n")
+    i = [k for k, l in enumerate(L) if l.startswith("dt")][0]
+    return np.loadtxt([l for l in L[i + 1:] if l.strip() and l != "end"])
+a, b, c = read("tr/transfer.txt"), read("tr1/transfer.txt"), read("tr2/transfer.txt")
+s = abs(a).max()
+print("LAPACK vs ScaLAPACK 1 rank: %.2g; 1 vs 2 ranks: %.2g" % (abs(a - b).max() / s, abs(b - c).max() / s))
+assert abs(a - b).max() < 1e-12 * s and abs(b - c).max() < 1e-12 * s
+j = json.load(open("tr2/bem.json"))
+assert j["ranks"] == 2 and j["dense_solver"].startswith("ScaLAPACK"), j
+EOF2
 # bad input
 expect_rc 2 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --transfer -o bad
 expect_rc 2 bem "$H/Head1.geom" -o bad

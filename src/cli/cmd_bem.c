@@ -1,6 +1,7 @@
 /* thorax bem: boundary-element forward solutions (paper 4.1): the heart-surface transfer matrix
  * and dipole sources (thorax/bem/bem.h). */
 #include <cjson/cJSON.h>
+#include <mpi.h>
 #include <ctype.h>
 #include <limits.h>
 #include <math.h>
@@ -100,7 +101,9 @@ static const char *ext_of(thx_series_format f)
 int cmd_bem(int argc, char **argv)
 {
     const char *out = NULL, *dip_path = NULL, *elec_path = NULL, *cond_path = NULL, *heart_name = NULL;
-    int verbose = 0, transfer = 0, no_ipa = 0, format = THX_SERIES_RAW;
+    int verbose = 0, transfer = 0, no_ipa = 0, format = THX_SERIES_RAW, scalapack = 0;
+    cli_petsc_args pa;
+    cli_petsc_args_init(&pa, argv[0]);
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     static const cli_choice formats[] = {{"raw", THX_SERIES_RAW}, {"text", THX_SERIES_TEXT}, {"mat", THX_SERIES_MAT},
                                          {NULL, 0}};
@@ -123,6 +126,9 @@ int cmd_bem(int argc, char **argv)
          .help = "OpenMEEG conductivities for a MODEL given as an OpenMEEG .geom file"},
         {.name = "--heart", .type = CLI_STRING, .meta = "NAME", .s = &heart_name, .def = "the surface of role heart",
          .help = "the surface whose potentials are given (--transfer)"},
+        {.name = "--scalapack", .type = CLI_FLAG, .i = &scalapack,
+         .help = "--transfer: the dense system as PETSc's MATSCALAPACK over the MPI ranks (the default under mpirun "
+                 "with more than one rank)"},
         {.name = "--no-ipa", .type = CLI_FLAG, .i = &no_ipa,
          .help = "dipoles: no isolated problem approach (Hamalainen & Sarvas 1989)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
@@ -139,7 +145,11 @@ int cmd_bem(int argc, char **argv)
                  "(conductivities from its volume mesh's regions) or an OpenMEEG .geom file\n"
                  "with its .cond. Writes DIR/bem.json (surfaces, conductivities, timings) and\n"
                  "the series (docs/formats.md, \"Boundary-element results\").\n",
+        .epilog = "Under mpirun -np N, --transfer assembles N blocks of rows and solves with ScaLAPACK\n"
+                  "(PETSc MATSCALAPACK); rank 0 writes. PETSc options are passed through.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+        .pass = cli_petsc_pass,
+        .user = &pa,
     };
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
@@ -149,6 +159,12 @@ int cmd_bem(int argc, char **argv)
     if (transfer + (dip_path != NULL) != 1) return cli_usage_error("bem", "give exactly one of --transfer, --dipoles");
     int is_geom = ends_with(model, ".geom");
     if (cond_path && !is_geom) return cli_usage_error("bem", "--cond goes with an OpenMEEG .geom MODEL");
+    if (scalapack && !transfer) return cli_usage_error("bem", "--scalapack goes with --transfer");
+    /* under mpirun (more than one rank), or asked: the distributed path */
+    const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
+    if (!ws) ws = getenv("PMI_SIZE");
+    int mpi = transfer && (scalapack || (ws && atoi(ws) > 1));
+    int rank = 0;
 
     thx_ctx *ctx = cli_ctx(verbose);
     thx_status st = THX_OK;
@@ -171,7 +187,11 @@ int cmd_bem(int argc, char **argv)
         cond_path = cond_buf;
     }
     const char *inputs[] = {model, dip_path, elec_path, cond_path};
-    st = thx_outdir_claim(ctx, &od, out, "bem.json", "thorax-bem", inputs, 4);
+    if (mpi) {
+        st = cli_petsc_init(ctx, &pa, &rank);
+        if (st != THX_OK) goto fail;
+    }
+    if (rank == 0) st = thx_outdir_claim(ctx, &od, out, "bem.json", "thorax-bem", inputs, 4);
     if (st != THX_OK) goto fail;
     if (is_geom) {
         st = thx_bem_read_openmeeg(ctx, model, cond_path, &m, &sig);
@@ -218,7 +238,7 @@ int cmd_bem(int argc, char **argv)
         size_t nh = m->surf[heart]->n_nodes;
         T = malloc(no * nh * sizeof *T);
         if (!T) { st = THX_ENOMEM; goto fail; }
-        st = thx_bem_transfer(ctx, b, heart, &o, T, &info);
+        st = mpi ? thx_bem_transfer_parallel(ctx, b, heart, T, &info) : thx_bem_transfer(ctx, b, heart, &o, T, &info);
         if (st != THX_OK) goto fail;
         size_t nr = el ? el->n : no;
         st = thx_series_create(ctx, nr, nh, &S1);
@@ -260,6 +280,7 @@ int cmd_bem(int argc, char **argv)
         }
         if (S3) snprintf(S3->label, sizeof S3->label, "bem dipole potentials at electrodes on %.40s", oname);
     }
+    if (rank != 0) goto end; /* rank 0 writes */
     /* write */
     st = thx_outdir_begin(ctx, &od);
     if (st != THX_OK) goto fail;
@@ -289,6 +310,14 @@ int cmd_bem(int argc, char **argv)
         if (elec_path) cJSON_AddStringToObject(j, "electrodes", realpath(elec_path, abs) ? abs : elec_path);
         if (info.ipa_surface >= 0) cJSON_AddStringToObject(j, "isolated_problem", m->surf[info.ipa_surface]->name);
         cJSON_AddNumberToObject(j, "unknowns", (double)info.n_unknowns);
+        if (mpi) {
+            int size = 1;
+            MPI_Comm_size(MPI_COMM_WORLD, &size);
+            cJSON_AddStringToObject(j, "dense_solver", "ScaLAPACK (PETSc MATSCALAPACK)");
+            cJSON_AddNumberToObject(j, "ranks", size);
+        } else {
+            cJSON_AddStringToObject(j, "dense_solver", "LAPACK dgetrf/dgetrs");
+        }
         cJSON_AddNumberToObject(j, "seconds_assembly", info.t_assemble);
         cJSON_AddNumberToObject(j, "seconds_solve", info.t_solve);
         cJSON_AddNumberToObject(j, "matrix_bytes", info.matrix_bytes);
@@ -321,7 +350,7 @@ int cmd_bem(int argc, char **argv)
     }
     goto end;
 fail:
-    thx_outdir_abort(&od);
+    if (rank == 0) thx_outdir_abort(&od);
     rc = cli_fail(ctx, "bem", st);
 end:
     thx_series_destroy(&S1);
@@ -336,5 +365,6 @@ end:
     free(phi);
     free(T);
     thx_ctx_destroy(&ctx);
+    if (mpi) cli_petsc_finish(&pa);
     return rc;
 }

@@ -125,6 +125,15 @@ thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t heart, const 
                             thx_bem_info *info);
 
 /*
+ * thx_bem_transfer under MPI (collective over PETSC_COMM_WORLD; PETSc initialized by the caller):
+ * each rank assembles N/size rows, the system is a PETSc MATSCALAPACK matrix (block-cyclic over
+ * the ranks, so no rank holds it whole) factored by ScaLAPACK's LU, every heart column solved at
+ * once; T (as thx_bem_transfer's) is filled on rank 0 only. The same matrix as the serial path
+ * to rounding (tests/e2e_bem.sh: 2 ranks against 1). info->matrix_bytes: per rank.
+ */
+thx_status thx_bem_transfer_parallel(thx_ctx *ctx, const thx_bem *b, size_t heart, double *T, thx_bem_info *info);
+
+/*
  * The conductivity just inside each surface of a meshed model (m->volume), sigma_in[k]: the
  * region of most of the tetrahedra at the surface's nodes on its inner side (by the node's normal).
  * A surface with no tetrahedron inside (a hole, e.g. a heart meshed with --no-heart) gets 0.
