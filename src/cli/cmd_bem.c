@@ -137,7 +137,7 @@ int cmd_bem(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "bem",
-        .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--format]\n"
+        .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
                  "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--no-ipa] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
