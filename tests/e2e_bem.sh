@@ -69,6 +69,17 @@ T = np.loadtxt([l for l in L[i + 1:] if l.strip() and l != "end"])
 assert T.shape == (42, 42), T.shape
 assert abs(T.sum(axis=1) - 1).max() < 1e-8, abs(T.sum(axis=1) - 1).max()
 EOF
+# electrode rows: the patches projected on the scalp; each row the interpolation of node rows
+expect_rc 0 bem "$H/Head1.geom" --transfer --heart cortex --electrodes "$H/Head1.patches" -o tre --format text -q
+"$PY" - "$H/Head1.patches" <<'EOF2' || fail "electrode-row transfer matrix"
+import numpy as np
+L = open("tre/transfer_electrodes.txt").read().split("\n")
+i = [k for k, l in enumerate(L) if l.startswith("dt")][0]
+assert any(l.startswith("label transfer matrix electrodes on scalp <- cortex (bem)") for l in L[:i]), L[:i]
+E = np.loadtxt([l for l in L[i + 1:] if l.strip() and l != "end"])
+assert E.shape == (32, 42), E.shape
+assert abs(E.sum(axis=1) - 1).max() < 1e-8
+EOF2
 # the distributed path: PETSc's MATSCALAPACK on 1 rank and under mpirun -np 2, the same matrix
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 expect_rc 0 bem "$H/Head1.geom" --transfer --heart cortex -o tr1 --format text --scalapack -q
