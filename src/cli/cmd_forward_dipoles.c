@@ -15,7 +15,7 @@
 #include "thorax/fem/fem.h"
 #include "thorax/core/fileio.h"
 
-int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_path, const char *rows_path,
+int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_path, int method, const char *rows_path,
                         double max_offset, const char *format, int want_volume, int warm, cli_petsc_args *pa, int verbose,
                         int force)
 {
@@ -51,6 +51,7 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
     thx_forward_opts_default(&fo);
     fo.warm = warm;
     fo.keep_volume = want_volume;
+    fo.dipole_method = method;
     if (rank == 0 && isatty(2) && verbose >= 0) { fo.progress = cli_progress; fo.user = (void *)"forward"; }
     if (st == THX_OK) st = thx_forward_dipoles(ctx, m, d, &fo, &R);
     if (st == THX_OK && rowset && rank == 0) st = thx_electrodes_sample(ctx, rowset, R.torso, &at_electrodes);
@@ -74,7 +75,9 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddNumberToObject(j, "dipole_count", (double)d->n);
         cJSON_AddNumberToObject(j, "frames", (double)d->n_frames);
         cJSON_AddStringToObject(j, "layout", d->separate ? "one frame per dipole (OpenMEEG .dip)" : "moments over time");
-        cJSON_AddStringToObject(j, "method", "partial integration");
+        cJSON_AddStringToObject(j, "method", method == THX_DIPOLE_PARTIAL ? "partial integration" : "Saint-Venant");
+        if (method != THX_DIPOLE_PARTIAL)
+            cJSON_AddNumberToObject(j, "partial_integration_fallbacks", (double)R.n_fallback);
         cJSON_AddStringToObject(j, "reference", "zero integral over the outer surface");
         cJSON_AddStringToObject(j, "unit", "mV");
         for (size_t s = 0; s < m->n_surfaces; s++)

@@ -1,8 +1,9 @@
 /*
  * Current dipole sources in the finite-element forward problem (thorax/fem/fem.h,
- * thx_forward_dipoles; docs/decisions.md, "Dipole sources: partial integration").
+ * thx_forward_dipoles; docs/decisions.md, "Dipole sources").
  *
- * The source term of div(sigma grad phi) = div J_p for a dipole q at x0, J_p = q delta(x - x0),
+ * Two ways to put a dipole on the mesh: Saint-Venant (default; venant_stencil below) and partial
+ * integration. Partial integration: the source term of div(sigma grad phi) = div J_p for a dipole q at x0, J_p = q delta(x - x0),
  * tested against the hat function l_i: integrating by parts, f_i = -int l_i div J_p = q . grad
  * l_i(x0) — the load is q . grad l_i on the four corners of the tetrahedron that holds x0 and
  * zero elsewhere (the partial-integration or "direct" method). The four loads sum to zero
@@ -91,7 +92,8 @@ void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[
     if (l) memcpy(l, bl, sizeof bl);
 }
 
-void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *load)
+/* The partial-integration stencil: the corners of tet, w = the gradients of their hat functions (1/mm). */
+static int pi_stencil(const thx_volume *v, long tet, int32_t *node, double (*w)[3])
 {
     const int32_t *c = v->tet + 4 * tet;
     const double *p0 = v->xyz + 3 * (size_t)c[0];
@@ -115,7 +117,136 @@ void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *l
     for (int k = 0; k < 3; k++)
         for (int j = 0; j < 3; j++) g[k + 1][j] = inv[j][k];
     for (int j = 0; j < 3; j++) g[0][j] = -(g[1][j] + g[2][j] + g[3][j]);
-    for (int k = 0; k < 4; k++) load[c[k]] += LOAD_SCALE * (q[0] * g[k][0] + q[1] * g[k][1] + q[2] * g[k][2]);
+    for (int k = 0; k < 4; k++) {
+        node[k] = c[k];
+        memcpy(w[k], g[k], sizeof g[k]);
+    }
+    return 4;
+}
+
+void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *load)
+{
+    int32_t node[4];
+    double w[4][3];
+    pi_stencil(v, tet, node, w);
+    for (int k = 0; k < 4; k++) load[node[k]] += LOAD_SCALE * (q[0] * w[k][0] + q[1] * w[k][1] + q[2] * w[k][2]);
+}
+
+/* ---- Saint-Venant: monopoles on the nodes around the dipole whose moments match it ---- */
+
+#define VENANT_MAX 96      /* nodes in a stencil: the node nearest the dipole and its neighbours */
+#define VENANT_LAMBDA 1e-6 /* Buchner et al. (1997)'s regularization of the higher moments */
+
+/* Solves the n x n system A x = b (row-major, overwritten) by Gaussian elimination with partial
+ * pivoting; 0, or -1 if singular. */
+static int dense_solve(int n, double *A, double *b)
+{
+    for (int k = 0; k < n; k++) {
+        int piv = k;
+        for (int i = k + 1; i < n; i++)
+            if (fabs(A[i * n + k]) > fabs(A[piv * n + k])) piv = i;
+        if (!(fabs(A[piv * n + k]) > 0)) return -1;
+        if (piv != k) {
+            for (int j = 0; j < n; j++) { double t = A[k * n + j]; A[k * n + j] = A[piv * n + j]; A[piv * n + j] = t; }
+            double t = b[k]; b[k] = b[piv]; b[piv] = t;
+        }
+        for (int i = k + 1; i < n; i++) {
+            double f = A[i * n + k] / A[k * n + k];
+            if (f == 0) continue;
+            for (int j = k; j < n; j++) A[i * n + j] -= f * A[k * n + j];
+            b[i] -= f * b[k];
+        }
+    }
+    for (int k = n - 1; k >= 0; k--) {
+        double s = b[k];
+        for (int j = k + 1; j < n; j++) s -= A[k * n + j] * b[j];
+        b[k] = s / A[k * n + k];
+    }
+    return 0;
+}
+
+/*
+ * The Saint-Venant stencil of a dipole at p in tetrahedron tet: the corner of tet nearest p (n0)
+ * and every node sharing a tetrahedron of tet's region with it carry monopole currents c_j with
+ * sum c_j = 0 (no net charge), sum c_j (x_j - p) = q (the dipole moment) and the second moments
+ * sum c_j (x_j - p)(x_j - p)^T as small as the regularization lets them be:
+ *   c = argmin |t - X c|^2 + lambda |W c|^2,
+ * X's rows the moments of order 0, 1, 2 of the scaled offsets (x_j - p) / a (a: their mean
+ * length), t = (0, q / a, 0), W = diag(|x_j - p| / a) (Buchner et al. 1997; Wolters et al. 2007).
+ * c is linear in q: w[j][axis] is c_j for the unit moment along axis (per mm: the loads are
+ * 10^6 q . w in µA, as for partial integration). M: room for VENANT_MAX^2 doubles. Returns the
+ * stencil's size; -2 if n0 lies on an interface between regions (iface[n0]: the monopoles
+ * would then spread on both sides of it; measured on OpenMEEG's dipole 5, 2.85 mm under the skull,
+ * that is worse than partial integration, and leaving the interface nodes out is worse still —
+ * docs/decisions.md) or fewer than 10 nodes are found: the caller uses partial integration for
+ * that dipole; -1 if the system cannot be solved.
+ */
+static int venant_stencil(const thx_volume *v, const unsigned char *iface, long tet, const double p[3], int32_t *node,
+                          double (*w)[3], double *M)
+{
+    const int32_t *c4 = v->tet + 4 * tet;
+    int32_t n0 = -1;
+    double best = INFINITY;
+    for (int k = 0; k < 4; k++) {
+        const double *x = v->xyz + 3 * (size_t)c4[k];
+        double d = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) + (x[2] - p[2]) * (x[2] - p[2]);
+        if (d < best) { best = d; n0 = c4[k]; }
+    }
+    if (n0 < 0 || iface[n0]) return -2;
+    int32_t region = v->region[tet];
+    int n = 0;
+    node[n++] = n0;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        if (v->region[t] != region) continue;
+        const int32_t *q = v->tet + 4 * t;
+        if (q[0] != n0 && q[1] != n0 && q[2] != n0 && q[3] != n0) continue;
+        for (int k = 0; k < 4; k++) {
+            int seen = 0;
+            for (int j = 0; j < n && !seen; j++) seen = node[j] == q[k];
+            if (!seen) {
+                if (n == VENANT_MAX) return -1;
+                node[n++] = q[k];
+            }
+        }
+    }
+    if (n < 10) return -2; /* fewer nodes than moment conditions */
+    /* offsets and their scale */
+    double D[VENANT_MAX][3], a = 0;
+    for (int j = 0; j < n; j++) {
+        for (int k = 0; k < 3; k++) D[j][k] = v->xyz[3 * (size_t)node[j] + k] - p[k];
+        a += sqrt(D[j][0] * D[j][0] + D[j][1] * D[j][1] + D[j][2] * D[j][2]);
+    }
+    a /= n;
+    if (!(a > 0)) return -1;
+    /* X: 10 rows (1; dx dy dz; dxdx dydy dzdz dxdy dxdz dydz) x n, scaled */
+    double X[10][VENANT_MAX], W2[VENANT_MAX];
+    for (int j = 0; j < n; j++) {
+        double x = D[j][0] / a, y = D[j][1] / a, z = D[j][2] / a;
+        double r[10] = {1, x, y, z, x * x, y * y, z * z, x * y, x * z, y * z};
+        for (int i = 0; i < 10; i++) X[i][j] = r[i];
+        W2[j] = x * x + y * y + z * z;
+    }
+    for (int axis = 0; axis < 3; axis++) {
+        double b[VENANT_MAX];
+        for (int i = 0; i < n; i++) {
+            for (int j = 0; j < n; j++) {
+                double s = 0;
+                for (int r = 0; r < 10; r++) s += X[r][i] * X[r][j];
+                M[i * n + j] = s + (i == j ? VENANT_LAMBDA * W2[i] : 0);
+            }
+            b[i] = X[1 + axis][i] / a; /* X^T t with t = e_(1+axis) / a */
+        }
+        if (dense_solve(n, M, b)) return -1;
+        double sum = 0;
+        for (int j = 0; j < n; j++) sum += b[j];
+        for (int j = 0; j < n; j++) w[j][axis] = b[j] - sum / n; /* no net current, exactly */
+    }
+    return n;
+}
+
+static void add_load(const int32_t *node, const double (*w)[3], int n, const double q[3], double *load)
+{
+    for (int k = 0; k < n; k++) load[node[k]] += LOAD_SCALE * (q[0] * w[k][0] + q[1] * w[k][1] + q[2] * w[k][2]);
 }
 
 /* The regions that conduct: a conductivity tensor that is not all zero (a region of conductivity
@@ -153,7 +284,11 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_status st = THX_OK;
     unsigned char *use = NULL, *kind = NULL;
     long *tet = NULL;
-    double *phi = NULL, *load = NULL, *basis = NULL, *wt = NULL;
+    double *phi = NULL, *load = NULL, *basis = NULL, *wt = NULL, *work = NULL;
+    int *sn = NULL;
+    unsigned char *iface = NULL;
+    int32_t *snode = NULL;
+    double (*sw)[3] = NULL;
     thx_csr K;
     memset(&K, 0, sizeof K);
     thx_fem_system *S = NULL;
@@ -175,6 +310,43 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
         if (!use[rg]) {
             st = thx_error(ctx, THX_EINPUT, "%s lies in region '%s', whose conductivity is 0 (an insulator: no current source there)",
                            at, v->regions[rg].name);
+            goto done;
+        }
+    }
+    /* each dipole's stencil: nodes and, per node, the load of a unit moment along each axis */
+    sn = thx_malloc(ctx, n * sizeof *sn);
+    snode = thx_malloc(ctx, n * VENANT_MAX * sizeof *snode);
+    sw = thx_malloc(ctx, n * VENANT_MAX * sizeof *sw);
+    work = thx_malloc(ctx, VENANT_MAX * VENANT_MAX * sizeof *work);
+    iface = thx_calloc(ctx, nn ? nn : 1, 1);
+    if (!sn || !snode || !sw || !work || !iface) { st = THX_ENOMEM; goto done; }
+    {
+        /* nodes of tetrahedra of two regions or more: interfaces */
+        int32_t *first = thx_malloc(ctx, (nn ? nn : 1) * sizeof *first);
+        if (!first) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < nn; i++) first[i] = -1;
+        for (size_t t = 0; t < v->n_tets; t++)
+            for (int k = 0; k < 4; k++) {
+                int32_t a = v->tet[4 * t + k];
+                if (first[a] < 0) first[a] = v->region[t];
+                else if (first[a] != v->region[t]) iface[a] = 1;
+            }
+        free(first);
+    }
+    for (size_t i = 0; i < n; i++) {
+        int32_t *nd = snode + i * VENANT_MAX;
+        double (*w)[3] = sw + i * VENANT_MAX;
+        sn[i] = o->dipole_method == THX_DIPOLE_PARTIAL ? pi_stencil(v, tet[i], nd, w)
+                                                       : venant_stencil(v, iface, tet[i], d->pos + 3 * i, nd, w, work);
+        if (sn[i] == -2) { /* at an interface: partial integration (counted in the result) */
+            sn[i] = pi_stencil(v, tet[i], nd, w);
+            r->n_fallback++;
+        }
+        if (sn[i] < 0) {
+            const double *p = d->pos + 3 * i;
+            st = thx_error(ctx, THX_EGEOM, "%s:%zu: dipole %zu at (%g, %g, %g) mm: no Saint-Venant stencil around its nearest node "
+                           "(more than %d neighbours, or a degenerate one): use partial integration", src, d->line[i], i + 1, p[0],
+                           p[1], p[2], VENANT_MAX);
             goto done;
         }
     }
@@ -226,13 +398,13 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
         if (by_axis) {
             double q[3] = {0, 0, 0};
             q[k % 3] = 1;
-            thx_dipole_load(v, tet[k / 3], q, load);
+            add_load(snode + (k / 3) * VENANT_MAX, sw + (k / 3) * VENANT_MAX, sn[k / 3], q, load);
             any = 1;
         } else {
             const double *q = d->moment + 3 * n * k;
             for (size_t i = 0; i < n; i++)
                 if (q[3 * i] != 0 || q[3 * i + 1] != 0 || q[3 * i + 2] != 0) {
-                    thx_dipole_load(v, tet[i], q + 3 * i, load);
+                    add_load(snode + i * VENANT_MAX, sw + i * VENANT_MAX, sn[i], q + 3 * i, load);
                     any = 1;
                 }
         }
@@ -303,5 +475,10 @@ done:
     free(load);
     free(basis);
     free(wt);
+    free(sn);
+    free(snode);
+    free(sw);
+    free(work);
+    free(iface);
     return st;
 }

@@ -125,7 +125,11 @@ typedef struct {
     void (*progress)(void *user, size_t done, size_t total); /* after each frame (may be NULL) */
     void *user;
     const char *dump_system; /* if set: the first frame's system written there (thx_fem_system_dump) */
+    int dipole_method;      /* thx_forward_dipoles: THX_DIPOLE_VENANT (default) or THX_DIPOLE_PARTIAL */
 } thx_forward_opts;
+
+/* How thx_forward_dipoles puts a dipole on the mesh (docs/decisions.md, "Dipole sources"). */
+enum { THX_DIPOLE_VENANT = 0, THX_DIPOLE_PARTIAL = 1 };
 
 typedef struct {
     thx_series *torso;      /* the outer surface's nodes x frames */
@@ -138,6 +142,8 @@ typedef struct {
     double t_matrix;        /* of t_setup: handing the matrix to PETSc */
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
+    size_t n_fallback;      /* thx_forward_dipoles, Saint-Venant: dipoles put on by partial integration instead
+                               (every corner of their tetrahedron on an interface between regions) */
 } thx_forward_result;
 
 void thx_forward_opts_default(thx_forward_opts *o);
@@ -205,8 +211,11 @@ void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *l
  * The potentials of current dipoles (positions mm, moments mA·m; thorax/io/dipoles_file.h) in the
  * whole volume: every region whose conductivity is not zero is in the domain (none is left out
  * as the epicardial problem leaves out the heart; a region of conductivity 0 is an insulator),
- * no current through the outer boundary, the sources by partial integration
- * (thx_dipole_load). The reference: the integral of the potential over the outer surface is zero
+ * no current through the outer boundary. Each dipole goes on the mesh by o->dipole_method:
+ * Saint-Venant (default: monopoles on its nearest node and that node's neighbours in its region,
+ * their moments of order 0 and 1 those of the dipole, order 2 minimized; partial integration
+ * for a dipole whose nearest node lies on an interface between regions, counted in
+ * r->n_fallback), or partial integration (thx_dipole_load). The reference: the integral of the potential over the outer surface is zero
  * (the reference of the analytic solutions of concentric spheres). r->torso: the outer surface's
  * nodes x the dipole set's frames, mV (a .dip-layout set: one frame per dipole); r->volume with
  * keep_volume. A frame is one solve, or when there are more frames than 3 n, 3 n solves (a unit
