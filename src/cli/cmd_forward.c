@@ -154,7 +154,8 @@ int cmd_forward(int argc, char **argv)
     int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0) + (dipoles != NULL);
     if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode, --dipoles");
     if (dipoles && (transfer_in || channels || currents || dump))
-        return cli_usage_error("forward", "--dipoles goes with --rows, --volume, --format, --no-warm and --force only");
+        return cli_usage_error("forward", "--dipoles goes with --dipole-method, --rows, --max-offset, --volume, --format, "
+                                          "--no-warm and --force only");
     if (dipoles)
         return cli_forward_dipoles(model_dir, out, dipoles, dip_method, rows_path, max_offset, format_name, want_volume, warm,
                                    &pa, verbose, force);
