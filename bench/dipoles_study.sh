@@ -42,8 +42,9 @@ x = P[Tt[:, :4] - 1]
 e = [np.linalg.norm(x[:, a] - x[:, b], axis=1) for a, b in ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))]
 h = np.mean(e)
 C = np.loadtxt(cmp)
+fmt = lambda x: "%.3f" % x if x >= 0.01 else "%.2g" % x  # two significant digits below 0.01
 print("| %s | %d | %d | %.2f | %s | %s | %.1f / %.1f |" % (name, len(P), len(Tt), h,
-      " ".join("%.3f" % r for r in C[:, 1]), " ".join("%.3f" % m for m in C[:, 2]), float(tm), float(ts)))
+      " ".join(fmt(r) for r in C[:, 1]), " ".join(fmt(m) for m in C[:, 2]), float(tm), float(ts)))
 sys.stdout.flush()
 PYEOF
 }
