@@ -225,23 +225,31 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
     double t1 = wtime();
     if (!(s[0] > 0)) THX_TRY(thx_error(ctx, THX_EINPUT, "the transfer matrix is zero"));
     thx_inv_gemm('T', 'N', kk, F, m, U, m, Bb, m, 0.0, beta, kk);
+    /* the part of b outside range(U), as a vector (||b||² - ||β||² would cancel digits away) */
+    double *Rb = thx_malloc(ctx, m * F * sizeof *Rb);
+    if (!Rb) THX_TRY(THX_ENOMEM);
+    memcpy(Rb, Bb, m * F * sizeof *Rb);
+    {
+        int M_ = (int)m, N_ = (int)F, K_ = (int)kk;
+        double one = 1, mone = -1;
+        dgemm_("N", "N", &M_, &N_, &K_, &mone, U, &M_, beta, &K_, &one, Rb, &M_);
+    }
     double perp_sum = 0, target2 = 0;
     for (size_t f = 0; f < F; f++) {
-        double b2 = 0, p2 = 0;
-        for (size_t i = 0; i < m; i++) b2 += Bb[f * m + i] * Bb[f * m + i];
-        for (size_t i = 0; i < kk; i++) {
-            double v = beta[f * kk + i] * beta[f * kk + i];
-            p2 += v;
-            sum2[i] += v;
-        }
-        perp[f] = b2 - p2 > 0 ? b2 - p2 : 0;
+        double p2 = 0;
+        for (size_t i = 0; i < m; i++) p2 += Rb[f * m + i] * Rb[f * m + i];
+        for (size_t i = 0; i < kk; i++) sum2[i] += beta[f * kk + i] * beta[f * kk + i];
+        perp[f] = m > kk ? p2 : 0;
         perp_sum += perp[f];
         if (co->target) target2 += co->target[f] * co->target[f];
     }
+    free(Rb);
     double series_lam = NAN;
     int series_k = 0;
     if (co->per_series)
-        series_lam = thx_inverse_pick(s, sum2, kk, perp_sum, (double)m * (double)F, co->rule, co->fixed, sqrt(target2),
+        /* the stacked problem: ρ² and η² summed over the frames; its GCV denominator is F (m - Σ f),
+         * so the minimizer is that of ρ²_sum / (m - Σ f)² */
+        series_lam = thx_inverse_pick(s, sum2, kk, perp_sum, (double)m, co->rule, co->fixed, sqrt(target2),
                                       co->tsvd, co->n_grid, &series_k);
     int fail = 0;
 #pragma omp parallel for schedule(dynamic, 8) reduction(| : fail)
