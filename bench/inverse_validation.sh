@@ -36,7 +36,7 @@ outer=$($PY -c "import json,sys; m=json.load(open(sys.argv[1])); print([s['name'
 awk '{print $1, $2, $3}' "$W/m_medium/$outer.pts" > "$W/medium_torso_positions.txt"
 [ -d "$W/F_high" ] || "$THORAX" forward "$W/m_high" --epicardial "$W/beat_high.raw" --rows "$W/medium_torso_positions.txt" \
     --max-offset 30 -o "$W/F_high" -q
-"$THORAX" series "$W/F_high/electrodes.raw" -o "$W/clean.mat" -q
+"$THORAX" series convert "$W/F_high/electrodes.raw" -o "$W/clean.mat" -q
 $PY - "$W/clean.mat" "$W/noisy.mat" <<'PYEOF'
 import sys, numpy as np, scipy.io as sio
 b = sio.loadmat(sys.argv[1])['potvals']
@@ -85,8 +85,8 @@ if [ ! -d "$W/tank" ]; then
 fi
 [ -d "$W/T_tank" ] || "$THORAX" forward "$W/tank" --transfer-out --rows "$TANK/tank_leads_192.pts" -o "$W/T_tank" -q
 { echo "192 leads"; for i in $(seq 1 192); do echo " $i $i"; done; } > "$W/tank192.channels"
-"$THORAX" series "$REC" --channels "$W/tank192.channels" -o "$W/tank_leads.raw" -q
-"$THORAX" series "$REC" --channels "$TANK/sock128.channels" -o "$W/sock.raw" -q
+"$THORAX" series convert "$REC" --channels "$W/tank192.channels" -o "$W/tank_leads.raw" -q
+"$THORAX" series convert "$REC" --channels "$TANK/sock128.channels" -o "$W/sock.raw" -q
 echo "| method | λ rule | λ per | CC median | CC 10th pct | RE median | RE 90th pct | λ used (median) | SVD s | frames s |"
 echo "|---|---|---|---|---|---|---|---|---|---|"
 for method in tikhonov0 tikhonov1 tikhonov2 tsvd greensite tv; do

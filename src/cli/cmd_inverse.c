@@ -209,7 +209,7 @@ int cmd_inverse(int argc, char **argv)
     if (st == THX_OK) st = thx_series_read(ctx, transfer, THX_SERIES_AUTO, &A);
     if (st == THX_OK) st = thx_series_read(ctx, data, THX_SERIES_AUTO, &B);
     int needs_heart = method == THX_INVERSE_TIKHONOV1 || method == THX_INVERSE_TIKHONOV2 || method == THX_INVERSE_TV;
-    if (st == THX_OK && (needs_heart || heart_dir)) {
+    if (st == THX_OK && (needs_heart || heart_dir || truth_model)) {
         char dir[PATH_MAX];
         if (heart_dir) snprintf(dir, sizeof dir, "%s", heart_dir);
         else dir_of(transfer, dir, sizeof dir);
@@ -218,7 +218,7 @@ int cmd_inverse(int argc, char **argv)
             char msg[1024];
             snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
             st = thx_error(ctx, st, "%s needs the heart surface the matrix's columns are the nodes of: %s (give --heart MODEL)",
-                           thx_inverse_method_name(o.method), msg);
+                           needs_heart ? thx_inverse_method_name(o.method) : "--truth-model", msg);
         }
     }
     if (st == THX_OK && truth_path) st = thx_series_read(ctx, truth_path, THX_SERIES_AUTO, &truth);
@@ -227,7 +227,6 @@ int cmd_inverse(int argc, char **argv)
         if (st == THX_OK && theart->n_nodes != truth->n_rows)
             st = thx_error(ctx, THX_EINPUT, "%s has %zu rows but the heart of %s has %zu nodes", truth_path,
                            truth->n_rows, truth_model, theart->n_nodes);
-        if (st == THX_OK && !heart) st = load_heart(ctx, heart_dir ? heart_dir : ".", &hm, &heart);
     }
     if (st != THX_OK) goto fail;
     if (truth) {
