@@ -230,6 +230,9 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
     if (rule == THX_LAMBDA_DISCREPANCY) {
         /* ρ(λ) increases with λ: bisection in log λ */
         double r2, e2, lo = log(grid[0]), hi = log(grid[n - 1]);
+        /* a target below the residual outside the matrix's range (the noise underestimated): the
+         * in-range part of the residual is set to its expected share instead, k/m of target² */
+        if (perp2 >= target * target && m > 0) target = sqrt(perp2 + target * target * (double)k / m);
         thx_inv_norms(s, beta2, k, perp2, grid[0], &r2, &e2);
         if (sqrt(r2) >= target) lam = grid[0];
         else {

@@ -469,12 +469,15 @@ static thx_status check_inputs(thx_ctx *ctx, const thx_series *A, const thx_seri
     return THX_OK;
 }
 
-static double frame_sigma(const thx_inverse_opts *o, const double *b, size_t m)
+/* σ: given, or from the signal-to-noise ratio against the whole series' RMS (noise of one level
+ * on every frame, as a recording's is) */
+static double series_sigma(const thx_inverse_opts *o, const thx_series *B)
 {
     if (o->noise > 0) return o->noise;
     double s2 = 0;
-    for (size_t i = 0; i < m; i++) s2 += b[i] * b[i];
-    return sqrt(s2 / (double)m) * pow(10.0, -o->snr_db / 20.0);
+    size_t n = B->n_rows * B->n_frames;
+    for (size_t i = 0; i < n; i++) s2 += B->v[i] * B->v[i];
+    return sqrt(s2 / (double)n) * pow(10.0, -o->snr_db / 20.0);
 }
 
 thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series *B, const thx_surface *heart,
@@ -591,8 +594,8 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
     target = thx_malloc(ctx, F * sizeof *target);
     if (!Bb || !Y || !Abar || !target) THX_TRY(THX_ENOMEM);
     memcpy(Bb, B->v, m * F * sizeof *Bb);
-    for (size_t f = 0; f < F; f++)
-        target[f] = o->rule == THX_LAMBDA_DISCREPANCY ? sqrt((double)m) * frame_sigma(o, B->v + f * m, m) : 0;
+    double sig = o->rule == THX_LAMBDA_DISCREPANCY ? series_sigma(o, B) : 0;
+    for (size_t f = 0; f < F; f++) target[f] = sqrt((double)m) * sig;
     if (o->rule == THX_LAMBDA_DISCREPANCY) r->noise_sigma = target[0] / sqrt((double)m);
     size_t null_dim = 0;
     if (order > 0) {

@@ -65,8 +65,8 @@ typedef struct {
     double lambda;        /* THX_LAMBDA_FIXED: λ (TSVD: components with s_i > λ are kept) */
     int per_series;       /* 1: one λ for the whole series; 0: λ per frame */
     double noise;         /* discrepancy: noise standard deviation per row, data units (0: use snr_db) */
-    double snr_db;        /* discrepancy when noise == 0: signal-to-noise ratio of each frame, dB
-                             (σ = rms(b) 10^(-snr/20)); Greensite: of the whole series */
+    double snr_db;        /* when noise == 0: signal-to-noise ratio in dB against the whole series' RMS
+                             (σ = rms(B) 10^(-snr/20), the same σ for every frame) */
     int greensite_rank;   /* temporal components kept (0: by the noise level if given, else 99.99% energy) */
     int tv_iterations;    /* IRLS iterations (default 10) */
     int n_grid;           /* λ grid points for the rules (default 200) */
