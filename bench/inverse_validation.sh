@@ -13,6 +13,7 @@
 #            cool1-atdr-run1.mat inverted, compared with the measured sock (channels 193-320).
 # CC and RE per frame: median and 10th percentile of CC, median and 90th percentile of RE.
 # Usage: bench/inverse_validation.sh [FRAMES]   (default 150 beat frames; the tank: all 608)
+#        PARTS="phantom tank" (default both); WORK=DIR keeps and reuses the models and matrices
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THORAX=${THORAX:-$PWD/build/bin/thorax}
@@ -23,6 +24,8 @@ W=${WORK:-$(mktemp -d)}
 mkdir -p "$W"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 PY=/usr/bin/python3
+PARTS=${PARTS:-phantom tank}
+if [[ " $PARTS " == *" phantom "* ]]; then
 for res in medium high; do
     [ -d "$W/m_$res" ] && continue
     "$THORAX" phantom --resolution $res --seed 1 -o "$W/c_$res.txt" -q
@@ -73,6 +76,8 @@ for method in tikhonov0 tikhonov1 tikhonov2 tsvd greensite tv; do
     done
 done
 
+fi
+[[ " $PARTS " == *" tank "* ]] || exit 0
 echo
 echo "### Utah tank: measured tank leads inverted, compared with the measured sock"
 echo
@@ -87,17 +92,31 @@ fi
 { echo "192 leads"; for i in $(seq 1 192); do echo " $i $i"; done; } > "$W/tank192.channels"
 "$THORAX" series convert "$REC" --channels "$W/tank192.channels" -o "$W/tank_leads.raw" -q
 "$THORAX" series convert "$REC" --channels "$TANK/sock128.channels" -o "$W/sock.raw" -q
-echo "| method | λ rule | λ per | CC median | CC 10th pct | RE median | RE 90th pct | λ used (median) | SVD s | frames s |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+"$THORAX" series convert "$W/sock.raw" -o "$W/sock.mat" -q
+# CC and RE over all 608 frames (baseline included), and over the 150 frames of largest sock RMS
+active() { # DIR -> "| CC median | RE median |" over the active frames
+    $PY - "$1/lambda.txt" "$W/sock.mat" <<'PYEOF'
+import sys, numpy as np, scipy.io as sio
+rows = np.array([[float(v) for v in l.split()] for l in open(sys.argv[1]) if not l.startswith('#')])
+s = sio.loadmat(sys.argv[2])['potvals']
+idx = np.argsort(np.sqrt((s ** 2).mean(0)))[-150:]
+print('| %.3f | %.3f |' % (np.median(rows[idx, 6]), np.median(rows[idx, 7])), end='')
+PYEOF
+}
+echo "| method | λ rule | λ per | CC median | CC 10th pct | RE median | RE 90th pct | λ used (median) | SVD s | frames s | CC median, 150 active frames | RE median, active |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 for method in tikhonov0 tikhonov1 tikhonov2 tsvd greensite tv; do
     for rule in lcurve creso gcv; do
         [ "$method" = tsvd ] && [ "$rule" = creso ] && continue
-        rm -rf "$W/inv"
-        if "$THORAX" inverse --transfer "$W/T_tank/transfer_electrodes.raw" --data "$W/tank_leads.raw" --method $method \
-            --lambda $rule --truth "$W/sock.raw" -o "$W/inv" -q 2> "$W/err"; then
-            echo "| $method | $rule | frame $(summary "$W/inv")"
-        else
-            echo "| $method | $rule | frame | failed: $(head -c 150 "$W/err") |"
-        fi
+        for per in frame series; do
+            [ "$method" = tv ] && [ "$per" = series ] && continue
+            rm -rf "$W/inv"
+            if "$THORAX" inverse --transfer "$W/T_tank/transfer_electrodes.raw" --data "$W/tank_leads.raw" --method $method \
+                --lambda $rule --lambda-per $per --truth "$W/sock.raw" -o "$W/inv" -q 2> "$W/err"; then
+                echo "| $method | $rule | $per $(summary "$W/inv") $(active "$W/inv")"
+            else
+                echo "| $method | $rule | $per | failed: $(head -c 150 "$W/err") |"
+            fi
+        done
     done
 done
