@@ -24,6 +24,9 @@ W=${WORK:-$(mktemp -d)}
 mkdir -p "$W"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 PY=/usr/bin/python3
+summary() { # DIR -> "cc_med cc_p10 re_med re_p90 lambda t_svd t_frames"
+    $PY -c "import json,sys; j=json.load(open(sys.argv[1])); t=j['truth']; print('| %.3f | %.3f | %.3f | %.3f | %.3g | %.3f | %.3f |' % (t['cc_median'], t['cc_p10'], t['re_median'], t['re_p90'], j['lambda_used'], j['seconds_svd'], j['seconds_frames']))" "$1/inverse.json"
+}
 PARTS=${PARTS:-phantom tank}
 if [[ " $PARTS " == *" phantom "* ]]; then
 for res in medium high; do
@@ -49,9 +52,6 @@ sio.savemat(sys.argv[2], {'potvals': b + rng.normal(0, sigma, b.shape), 'unit': 
 print("noise: sigma %.4g (30 dB of RMS %.4g); %d leads x %d frames" % (sigma, np.sqrt(np.mean(b ** 2)), *b.shape), file=sys.stderr)
 PYEOF
 T="$W/T_med/transfer.raw"
-summary() { # DIR -> "cc_med cc_p10 re_med re_p90 lambda t_svd t_frames"
-    $PY -c "import json,sys; j=json.load(open(sys.argv[1])); t=j['truth']; print('| %.3f | %.3f | %.3f | %.3f | %.3g | %.3f | %.3f |' % (t['cc_median'], t['cc_p10'], t['re_median'], t['re_p90'], j['lambda_used'], j['seconds_svd'], j['seconds_frames']))" "$1/inverse.json"
-}
 echo
 echo "### Phantom: high-resolution forward, 30 dB noise, medium-resolution inverse ($FRAMES frames)"
 echo
