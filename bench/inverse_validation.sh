@@ -100,7 +100,7 @@ import sys, numpy as np, scipy.io as sio
 rows = np.array([[float(v) for v in l.split()] for l in open(sys.argv[1]) if not l.startswith('#')])
 s = sio.loadmat(sys.argv[2])['potvals']
 idx = np.argsort(np.sqrt((s ** 2).mean(0)))[-150:]
-print('| %.3f | %.3f |' % (np.median(rows[idx, 6]), np.median(rows[idx, 7])), end='')
+print(' %.3f | %.3f |' % (np.median(rows[idx, 6]), np.median(rows[idx, 7])), end='')
 PYEOF
 }
 echo "| method | λ rule | λ per | CC median | CC 10th pct | RE median | RE 90th pct | λ used (median) | SVD s | frames s | CC median, 150 active frames | RE median, active |"

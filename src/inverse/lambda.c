@@ -49,24 +49,32 @@ void thx_inv_norms(const double *s, const double *beta2, size_t k, double perp2,
     *eta2 = e;
 }
 
+/* One right-hand side's spectral data, with s² and ξ² = β²/s² computed once (the rules evaluate
+ * their functions at a few hundred λ). */
+typedef struct {
+    const double *s2, *b2, *xi2;
+    size_t k;
+    double perp2, m;
+} spec;
+
 /* The signed curvature of the L-curve (x, y) = (log ρ, log η) at λ, positive at the corner:
  * κ = (x' y'' - x'' y') / (x'² + y'²)^(3/2) with the derivatives in λ from the filter factors
  * f = s²/(s²+λ²): f' = -2 f (1-f)/λ, f'' = -f' (3-4f)/λ (docs/decisions.md). */
-static double lcurve_kappa(const double *s, const double *beta2, size_t k, double perp2, double lambda)
+static double f_kappa(const spec *q, double lambda)
 {
-    double l2 = lambda * lambda, rho2 = perp2, eta2 = 0, a = 0, b = 0, c = 0, d = 0;
-    for (size_t i = 0; i < k; i++) {
-        double s2 = s[i] * s[i], f = s2 / (s2 + l2), f1 = -2 * f * (1 - f) / lambda, f2 = -f1 * (3 - 4 * f) / lambda;
-        double xi2 = beta2[i] / s2;
-        rho2 += (1 - f) * (1 - f) * beta2[i];
+    double l2 = lambda * lambda, il = 1.0 / lambda, rho2 = q->perp2, eta2 = 0, a = 0, b = 0, c = 0, d = 0;
+    for (size_t i = 0; i < q->k; i++) {
+        double f = q->s2[i] / (q->s2[i] + l2), g = 1 - f, f1 = -2 * f * g * il, f2 = -f1 * (3 - 4 * f) * il;
+        double xi2 = q->xi2[i], b2 = q->b2[i];
+        rho2 += g * g * b2;
         eta2 += f * f * xi2;
-        a += f * f1 * xi2;                    /* η η' */
-        b += (f1 * f1 + f * f2) * xi2;        /* (η η')' */
-        c += -(1 - f) * f1 * beta2[i];        /* ρ ρ' */
-        d += (f1 * f1 - (1 - f) * f2) * beta2[i]; /* (ρ ρ')' */
+        a += f * f1 * xi2;                /* η η' */
+        b += (f1 * f1 + f * f2) * xi2;    /* (η η')' */
+        c += -g * f1 * b2;                /* ρ ρ' */
+        d += (f1 * f1 - g * f2) * b2;     /* (ρ ρ')' */
     }
     if (!(rho2 > 0) || !(eta2 > 0)) return -INFINITY;
-    /* x' = ρ'/ρ = c/ρ², x'' = (ρρ')'/ρ² - 2 x'² ; likewise y */
+    /* x' = ρ'/ρ = c/ρ², x'' = (ρρ')'/ρ² - 2 x'²; likewise y */
     double x1 = c / rho2, y1 = a / eta2;
     double x2 = d / rho2 - 2 * x1 * x1, y2 = b / eta2 - 2 * y1 * y1;
     double den = pow(x1 * x1 + y1 * y1, 1.5);
@@ -75,61 +83,50 @@ static double lcurve_kappa(const double *s, const double *beta2, size_t k, doubl
 }
 
 /* CRESO's C(λ) = η² + 2 λ² dη²/d(λ²) = Σ s² β² (s² - 3λ²) / (s² + λ²)³ */
-static double creso_c(const double *s, const double *beta2, size_t k, double lambda)
+static double f_creso(const spec *q, double lambda)
 {
     double l2 = lambda * lambda, c = 0;
-    for (size_t i = 0; i < k; i++) {
-        double s2 = s[i] * s[i], d = s2 + l2;
-        c += s2 * beta2[i] * (s2 - 3 * l2) / (d * d * d);
+    for (size_t i = 0; i < q->k; i++) {
+        double s2 = q->s2[i], d = 1.0 / (s2 + l2);
+        c += s2 * q->b2[i] * (s2 - 3 * l2) * d * d * d;
     }
     return c;
 }
 
-static double gcv_g(const double *s, const double *beta2, size_t k, double perp2, double m, double lambda)
+/* minus GCV's G(λ) = ρ² / (m - Σ f)² */
+static double f_mgcv(const spec *q, double lambda)
 {
-    double rho2, eta2, tr = 0, l2 = lambda * lambda;
-    thx_inv_norms(s, beta2, k, perp2, lambda, &rho2, &eta2);
-    for (size_t i = 0; i < k; i++) tr += s[i] * s[i] / (s[i] * s[i] + l2);
-    double d = m - tr;
-    return d > 0 ? rho2 / (d * d) : INFINITY;
+    double l2 = lambda * lambda, rho2 = q->perp2, tr = 0;
+    for (size_t i = 0; i < q->k; i++) {
+        double f = q->s2[i] / (q->s2[i] + l2), g = 1 - f;
+        rho2 += g * g * q->b2[i];
+        tr += f;
+    }
+    double d = q->m - tr;
+    return d > 0 ? -rho2 / (d * d) : -INFINITY;
 }
 
-typedef double (*fn1)(const double *s, const double *beta2, size_t k, double perp2, double m, double lambda);
-static double f_kappa(const double *s, const double *b, size_t k, double p, double m, double l)
-{
-    (void)m;
-    return lcurve_kappa(s, b, k, p, l);
-}
-static double f_creso(const double *s, const double *b, size_t k, double p, double m, double l)
-{
-    (void)m;
-    (void)p;
-    return creso_c(s, b, k, l);
-}
-static double f_mgcv(const double *s, const double *b, size_t k, double p, double m, double l)
-{
-    return -gcv_g(s, b, k, p, m, l);
-}
+typedef double (*fn1)(const spec *q, double lambda);
 
 /* The maximum of g in log λ between a and c (a < c), golden section. */
-static double golden_max(fn1 g, const double *s, const double *b, size_t k, double p, double m, double a, double c)
+static double golden_max(fn1 g, const spec *q, double a, double c)
 {
     double la = log(a), lc = log(c), r = (sqrt(5.0) - 1) / 2;
     double x1 = lc - r * (lc - la), x2 = la + r * (lc - la);
-    double g1 = g(s, b, k, p, m, exp(x1)), g2 = g(s, b, k, p, m, exp(x2));
-    for (int it = 0; it < 80 && lc - la > 1e-10; it++) {
+    double g1 = g(q, exp(x1)), g2 = g(q, exp(x2));
+    for (int it = 0; it < 60 && lc - la > 1e-8; it++) {
         if (g1 >= g2) {
             lc = x2;
             x2 = x1;
             g2 = g1;
             x1 = lc - r * (lc - la);
-            g1 = g(s, b, k, p, m, exp(x1));
+            g1 = g(q, exp(x1));
         } else {
             la = x1;
             x1 = x2;
             g1 = g2;
             x2 = la + r * (lc - la);
-            g2 = g(s, b, k, p, m, exp(x2));
+            g2 = g(q, exp(x2));
         }
     }
     return exp(0.5 * (la + lc));
@@ -252,12 +249,18 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
         return lam;
     }
     fn1 g = rule == THX_LAMBDA_LCURVE ? f_kappa : rule == THX_LAMBDA_CRESO ? f_creso : f_mgcv;
-    double *v = malloc(n * sizeof *v);
+    double *v = malloc((n + 2 * k) * sizeof *v);
     if (!v) {
         free(grid);
         return NAN;
     }
-    for (size_t i = 0; i < n; i++) v[i] = g(s, beta2, k, perp2, m, grid[i]);
+    double *s2 = v + n, *xi2 = v + n + k;
+    for (size_t i = 0; i < k; i++) {
+        s2[i] = s[i] * s[i];
+        xi2[i] = beta2[i] / s2[i];
+    }
+    spec q = {s2, beta2, xi2, k, perp2, m};
+    for (size_t i = 0; i < n; i++) v[i] = g(&q, grid[i]);
     size_t at = 0;
     if (rule == THX_LAMBDA_CRESO) {
         /* the first local maximum met coming down from λ = s_1 (the largest-λ one): with a discrete
@@ -278,7 +281,7 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
         for (size_t i = 1; i < n; i++)
             if (v[i] > v[at]) at = i;
     }
-    if (at > 0 && at + 1 < n) lam = golden_max(g, s, beta2, k, perp2, m, grid[at - 1], grid[at + 1]);
+    if (at > 0 && at + 1 < n) lam = golden_max(g, &q, grid[at - 1], grid[at + 1]);
     else lam = grid[at];
     free(v);
     free(grid);

@@ -26,7 +26,7 @@ void thx_inverse_opts_default(thx_inverse_opts *o)
     o->method = THX_INVERSE_TIKHONOV0;
     o->rule = THX_LAMBDA_LCURVE;
     o->tv_iterations = 10;
-    o->n_grid = 200;
+    o->n_grid = 100;
     o->matrix_name = "transfer matrix";
     o->data_name = "data";
 }

@@ -69,7 +69,7 @@ typedef struct {
                              (σ = rms(B) 10^(-snr/20), the same σ for every frame) */
     int greensite_rank;   /* temporal components kept (0: by the noise level if given, else 99.99% energy) */
     int tv_iterations;    /* IRLS iterations (default 10) */
-    int n_grid;           /* λ grid points for the rules (default 200) */
+    int n_grid;           /* λ grid points for the rules (default 100, log-spaced; then golden section) */
     const char *matrix_name, *data_name; /* names for messages (file names) */
 } thx_inverse_opts;
 
