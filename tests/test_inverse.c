@@ -3,7 +3,8 @@
  * K(s,t) = exp(-(s-t)²/(2w²)) / (w sqrt(2π)), discretized by the midpoint rule (m = 60 collocation
  * points s, n = 50 quadrature points t), x(t) = two smooth bumps. Every λ rule's λ and the solution
  * error are checked against numpy computing them its own way (explicit normal-equation solves,
- * the influence matrix's trace, finite-difference curvature, root finding; python below), the
+ * the influence matrix's trace, finite-difference curvature, root finding, TSVD's truncation from
+ * explicit residuals; python below), the
  * error must fall with the noise, the filter factors are checked, and bad input is refused. */
 #include <math.h>
 #include <stdio.h>
@@ -107,10 +108,15 @@ static const char *reference_py =
     "    x = x_of(out[k]); print(k, repr(out[k]), repr(np.linalg.norm(x - x_true) / np.linalg.norm(x_true)))\n"
     "x = x_of(1e-3); print('fixed', repr(1e-3), repr(np.linalg.norm(x - x_true) / np.linalg.norm(x_true)))\n"
     "U, s, Vt = np.linalg.svd(A, full_matrices=False); k = int(np.sum(s > 1e-3))\n"
-    "xt = Vt[:k].T @ ((U[:, :k].T @ b) / s[:k]); print('tsvd', k, repr(np.linalg.norm(xt - x_true) / np.linalg.norm(x_true)))\n";
+    "xt = Vt[:k].T @ ((U[:, :k].T @ b) / s[:k]); print('tsvd', k, repr(np.linalg.norm(xt - x_true) / np.linalg.norm(x_true)))\n"
+    "kmax = int(np.sum(s > s[0] * 16 * np.finfo(float).eps))\n"
+    "rk = [np.linalg.norm(A @ (Vt[:q].T @ ((U[:, :q].T @ b) / s[:q])) - b) for q in range(1, kmax + 1)]\n"
+    "g = [rk[q - 1] ** 2 / (m - q) ** 2 for q in range(1, kmax + 1)]\n"
+    "ok = [q for q in range(1, kmax + 1) if rk[q - 1] <= np.sqrt(m) * sigma]\n"
+    "print('tsvd_rules', int(np.argmin(g)) + 1, ok[0] if ok else kmax)\n";
 
 static int reference(const char *a, const char *b, const char *x, double sigma, double lam[5], double err[5],
-                     int *tk, double *terr)
+                     int *tk, double *terr, int tr[2])
 {
     char cmd[4096];
     snprintf(cmd, sizeof cmd, "/usr/bin/python3 %s %s %s %s %.17g", tl_path("ref.py"), a, b, x, sigma);
@@ -122,7 +128,8 @@ static int reference(const char *a, const char *b, const char *x, double sigma, 
     for (int k = 0; k < 5; k++)
         if (fscanf(p, "%31s %lf %lf", name, &lam[k], &err[k]) == 3 && !strcmp(name, names[k])) got++;
     if (fscanf(p, "%31s %d %lf", name, tk, terr) == 3 && !strcmp(name, "tsvd")) got++;
-    return pclose(p) == 0 && got == 6 ? 0 : -1;
+    if (fscanf(p, "%31s %d %d", name, &tr[0], &tr[1]) == 3 && !strcmp(name, "tsvd_rules")) got++;
+    return pclose(p) == 0 && got == 7 ? 0 : -1;
 }
 
 static double rel_err(const double *x, const double *t, size_t n)
@@ -152,8 +159,8 @@ static void test_rules_against_numpy(thx_ctx *ctx)
         write_matrix(tl_path("b.txt"), B->v, M, 1);
         write_matrix(tl_path("x.txt"), xt, N, 1);
         double lam[5], err[5], terr;
-        int tk;
-        int ok = reference(tl_path("A.txt"), tl_path("b.txt"), tl_path("x.txt"), sigma, lam, err, &tk, &terr);
+        int tk, tr[2];
+        int ok = reference(tl_path("A.txt"), tl_path("b.txt"), tl_path("x.txt"), sigma, lam, err, &tk, &terr, tr);
         CHECK(ok == 0);
         if (ok) return;
         thx_lambda_rule rules[5] = {THX_LAMBDA_LCURVE, THX_LAMBDA_CRESO, THX_LAMBDA_GCV, THX_LAMBDA_DISCREPANCY,
@@ -202,6 +209,18 @@ static void test_rules_against_numpy(thx_ctx *ctx)
         }
         thx_series_destroy(&X);
         thx_inverse_report_free(&r);
+        /* TSVD's GCV and discrepancy pick the truncation numpy picks from explicit residuals */
+        for (int q = 0; q < 2; q++) {
+            o.rule = q ? THX_LAMBDA_DISCREPANCY : THX_LAMBDA_GCV;
+            o.noise = sigma;
+            CHECK_OK(ctx, thx_inverse_solve(ctx, A, B, NULL, &o, &X, &r));
+            if (X && r.k[0] != tr[q])
+                fprintf(stderr, "noise %g, tsvd %s: thorax keeps %d, numpy %d\n", levels[lv], q ? "discrepancy" : "gcv",
+                        r.k[0], tr[q]);
+            CHECK(X && r.k[0] == tr[q]);
+            thx_series_destroy(&X);
+            thx_inverse_report_free(&r);
+        }
         thx_series_destroy(&A);
         thx_series_destroy(&B);
     }

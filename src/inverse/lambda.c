@@ -142,18 +142,6 @@ size_t thx_inv_grid(const double *s, size_t k, int n_grid, double *grid)
     return (size_t)n_grid;
 }
 
-/* TSVD's figures at k components: ρ², η² */
-static void tsvd_norms(const double *s, const double *beta2, size_t k, double perp2, size_t kk, double *rho2,
-                       double *eta2)
-{
-    double r = perp2, e = 0;
-    for (size_t i = 0; i < k; i++) {
-        if (i < kk) e += beta2[i] / (s[i] * s[i]);
-        else r += beta2[i];
-    }
-    *rho2 = r;
-    *eta2 = e;
-}
 
 static double pick_tsvd(const double *s, const double *beta2, size_t k, double perp2, double m, thx_lambda_rule rule,
                         double fixed, double target, int *kept)
@@ -161,14 +149,20 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
     size_t kmax = 0;
     while (kmax < k && s[kmax] > s[0] * 16 * DBL_EPSILON) kmax++;
     size_t best = kmax;
+    /* ρ_k² and η_k² for every k at once: suffix and prefix sums (O(k), no cancellation) */
+    double *R2 = malloc(2 * (k + 1) * sizeof *R2), *E2 = R2 ? R2 + k + 1 : NULL;
+    if (!R2) return NAN;
+    E2[0] = 0;
+    for (size_t q = 1; q <= k; q++) E2[q] = E2[q - 1] + beta2[q - 1] / (s[q - 1] * s[q - 1]);
+    R2[k] = perp2;
+    for (size_t q = k; q-- > 0;) R2[q] = R2[q + 1] + beta2[q];
     if (rule == THX_LAMBDA_FIXED) {
         best = 0;
         while (best < k && s[best] > fixed) best++;
     } else if (rule == THX_LAMBDA_GCV) {
         double bg = INFINITY;
         for (size_t kk = 1; kk <= kmax; kk++) {
-            double r2, e2;
-            tsvd_norms(s, beta2, k, perp2, kk, &r2, &e2);
+            double r2 = R2[kk];
             double d = m - (double)kk, g = d > 0 ? r2 / (d * d) : INFINITY;
             if (g < bg) {
                 bg = g;
@@ -178,9 +172,7 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
     } else if (rule == THX_LAMBDA_DISCREPANCY) {
         best = kmax;
         for (size_t kk = 1; kk <= kmax; kk++) {
-            double r2, e2;
-            tsvd_norms(s, beta2, k, perp2, kk, &r2, &e2);
-            if (sqrt(r2) <= target) {
+            if (sqrt(R2[kk]) <= target) {
                 best = kk;
                 break;
             }
@@ -191,8 +183,7 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
         for (size_t kk = 2; kk + 1 <= kmax; kk++) {
             double p[3][2];
             for (int j = 0; j < 3; j++) {
-                double r2, e2;
-                tsvd_norms(s, beta2, k, perp2, kk - 1 + (size_t)j, &r2, &e2);
+                double r2 = R2[kk - 1 + (size_t)j], e2 = E2[kk - 1 + (size_t)j];
                 p[j][0] = 0.5 * log(r2 > 0 ? r2 : DBL_MIN);
                 p[j][1] = 0.5 * log(e2 > 0 ? e2 : DBL_MIN);
             }
@@ -208,6 +199,7 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
             }
         }
     }
+    free(R2);
     if (kept) *kept = (int)best;
     if (best == 0) return s[0];
     return s[best - 1];
