@@ -342,17 +342,27 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
 {
     thx_status st = THX_OK;
     size_t nt = h->n_tris, r3 = 3 * nt;
-    double *G = NULL, *AtA = thx_malloc(ctx, n * n * sizeof *AtA), *AtB = thx_malloc(ctx, n * F * sizeof *AtB);
+    double *G = NULL, *sqa = NULL, *AtA = thx_malloc(ctx, n * n * sizeof *AtA), *AtB = thx_malloc(ctx, n * F * sizeof *AtB);
     if (!AtA || !AtB) THX_TRY(THX_ENOMEM);
     THX_TRY(thx_inv_gradient(ctx, h, &G));
     thx_inv_gemm('T', 'N', n, n, m, A, m, A, m, 0.0, AtA, n);
     thx_inv_gemm('T', 'N', n, F, m, A, m, B, m, 0.0, AtB, n);
+    /* sqrt(area) per triangle: G's rows are sqrt(area) ∇x, so Σ area |∇x| = Σ sqrt(area) |G_t x| */
+    sqa = thx_malloc(ctx, (nt ? nt : 1) * sizeof *sqa);
+    if (!sqa) THX_TRY(THX_ENOMEM);
+    for (size_t t = 0; t < nt; t++) {
+        const double *p0 = h->xyz + 3 * (size_t)h->tri[3 * t], *p1 = h->xyz + 3 * (size_t)h->tri[3 * t + 1],
+                     *p2 = h->xyz + 3 * (size_t)h->tri[3 * t + 2];
+        double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        double nx = u[1] * v[2] - u[2] * v[1], ny = u[2] * v[0] - u[0] * v[2], nz = u[0] * v[1] - u[1] * v[0];
+        sqa[t] = sqrt(0.5 * sqrt(nx * nx + ny * ny + nz * nz));
+    }
     int fail = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(| : fail)
     for (size_t f = 0; f < F; f++) {
         double *S = malloc(n * n * sizeof *S), *g = malloc(r3 * sizeof *g), *w = malloc(nt * sizeof *w),
-               *x = malloc(n * sizeof *x), *area = malloc(nt * sizeof *area);
-        if (!S || !g || !w || !x || !area) {
+               *x = malloc(n * sizeof *x);
+        if (!S || !g || !w || !x) {
             fail = 1;
             goto next;
         }
@@ -367,17 +377,15 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
                 double q2 = 0, q1 = 0, gmax = 0;
                 for (size_t t = 0; t < nt; t++) {
                     double a2 = g[3 * t] * g[3 * t] + g[3 * t + 1] * g[3 * t + 1] + g[3 * t + 2] * g[3 * t + 2];
-                    double ar = 0; /* area from the gradient rows' scale: |G row|² sums to area Σ|∇φ|² */
-                    (void)ar;
                     q2 += a2;
-                    q1 += sqrt(a2);
+                    q1 += sqa[t] * sqrt(a2);
                     if (sqrt(a2) > gmax) gmax = sqrt(a2);
                 }
                 c = q1 > 0 ? q2 / q1 : 1;
                 eps = 1e-3 * (gmax > 0 ? gmax : 1);
             }
             for (size_t t = 0; t < nt; t++)
-                w[t] = c / sqrt(g[3 * t] * g[3 * t] + g[3 * t + 1] * g[3 * t + 1] + g[3 * t + 2] * g[3 * t + 2] + eps * eps);
+                w[t] = c * sqa[t] / sqrt(g[3 * t] * g[3 * t] + g[3 * t + 1] * g[3 * t + 1] + g[3 * t + 2] * g[3 * t + 2] + eps * eps);
             /* S = AtA + λ² G^T W G (only the upper triangle is used by dposv) */
             memcpy(S, AtA, n * n * sizeof *S);
             for (size_t t = 0; t < nt; t++)
@@ -413,12 +421,7 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
             for (size_t t = 0; t < nt; t++) {
                 /* Σ area |∇x| = Σ sqrt(area) |g_t| with |g_t| = sqrt(area) |∇x| */
                 double gg = sqrt(g[3 * t] * g[3 * t] + g[3 * t + 1] * g[3 * t + 1] + g[3 * t + 2] * g[3 * t + 2]);
-                const double *p0 = h->xyz + 3 * (size_t)h->tri[3 * t], *p1 = h->xyz + 3 * (size_t)h->tri[3 * t + 1],
-                             *p2 = h->xyz + 3 * (size_t)h->tri[3 * t + 2];
-                double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-                double nx = u[1] * v[2] - u[2] * v[1], ny = u[2] * v[0] - u[0] * v[2], nz = u[0] * v[1] - u[1] * v[0];
-                area[t] = 0.5 * sqrt(nx * nx + ny * ny + nz * nz);
-                tv += sqrt(area[t]) * gg;
+                tv += sqa[t] * gg;
             }
             tvnorm[f] = tv;
         }
@@ -427,13 +430,13 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
         free(g);
         free(w);
         free(x);
-        free(area);
     }
     if (fail == 1) THX_TRY(THX_ENOMEM);
     if (fail) THX_TRY(thx_error(ctx, THX_ESOLVER, "total variation: the reweighted system is not positive definite "
                                                   "(LAPACK dposv); the transfer matrix may vanish on constants"));
 done:
     free(G);
+    free(sqa);
     free(AtA);
     free(AtB);
     return st;
