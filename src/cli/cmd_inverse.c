@@ -117,7 +117,7 @@ int cmd_inverse(int argc, char **argv)
         {.name = "--lambda", .type = CLI_STRING, .meta = "RULE", .s = &lambda_s,
          .help = "how λ is chosen: lcurve (maximum curvature), creso, gcv, discrepancy (needs --noise), or a number"},
         {.name = "--lambda-per", .type = CLI_CHOICE, .choices = pers, .i = &per,
-         .help = "a λ for every frame, or one for the whole series"},
+         .help = "a λ for every frame (greensite: every temporal component), or one for the whole series"},
         {.name = "--noise", .type = CLI_STRING, .meta = "SIGMA", .s = &noise_s,
          .help = "the data's noise for the discrepancy principle (and Greensite's rank): a standard deviation per "
                  "lead in the data's unit, or a signal-to-noise ratio such as 30dB"},
