@@ -1,0 +1,145 @@
+/*
+ * thorax/inverse/inverse.h — regularized inverse solutions: heart-surface potentials from
+ * body-surface potentials through a transfer matrix (paper 4.1: the inverse problem, "ill-posed").
+ *
+ * The problem: find x (heart nodes) with A x ≈ b (A: the transfer matrix, rows the body-surface
+ * nodes or electrodes, columns the heart nodes; b: one frame of the data), for every frame.
+ *
+ * Methods (docs/decisions.md, "The inverse problem"):
+ *   Tikhonov order 0, 1, 2   min ||A x - b||² + λ² ||L x||², L = I, the surface gradient or the
+ *                            surface Laplacian on the heart mesh (thx_inverse_operator). Orders 1
+ *                            and 2 are brought to standard form (Eldén's A-weighted pseudo-inverse of
+ *                            L, L's null space: the constants), so one SVD of the transformed matrix
+ *                            gives every λ at once: the GSVD's filter factors without dggsvd3.
+ *   TSVD                     the first k singular components; the rules pick k.
+ *   Greensite                the data's temporal SVD: the leading temporal components solved with
+ *                            Tikhonov order 0 as if they were frames, recombined with their time
+ *                            courses.
+ *   total variation          min ||A x - b||² + λ² Σ_t area_t |∇x|_t, iteratively reweighted least
+ *                            squares on the gradient-Tikhonov system, λ from the order-1 rule.
+ * λ rules: the L-curve's corner (maximum curvature of (log ||Ax-b||, log ||Lx||)), CRESO (the first
+ * local maximum of C(λ) = ||Lx||² + 2λ² d||Lx||²/dλ² met coming down from λ = s_1), GCV (minimum of
+ * ||Ax-b||² / (m - Σ f_i)²), the discrepancy principle (||Ax-b|| = sqrt(m) σ, σ the noise's
+ * standard deviation per row), or a fixed value; per frame or one λ for the whole series (the
+ * curves summed over frames: the series as one long vector).
+ *
+ * Invariants: matrices column-major; the solution's rows are A's columns in order; nothing here
+ * prints or writes but thx_inverse_write_svg.
+ */
+#ifndef THORAX_INVERSE_INVERSE_H
+#define THORAX_INVERSE_INVERSE_H
+
+#include <stddef.h>
+
+#include "thorax/core/core.h"
+#include "thorax/model/series.h"
+#include "thorax/model/surface.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum {
+    THX_INVERSE_TIKHONOV0 = 0,
+    THX_INVERSE_TIKHONOV1,
+    THX_INVERSE_TIKHONOV2,
+    THX_INVERSE_TSVD,
+    THX_INVERSE_GREENSITE,
+    THX_INVERSE_TV
+} thx_inverse_method;
+
+typedef enum {
+    THX_LAMBDA_LCURVE = 0,
+    THX_LAMBDA_CRESO,
+    THX_LAMBDA_GCV,
+    THX_LAMBDA_DISCREPANCY,
+    THX_LAMBDA_FIXED
+} thx_lambda_rule;
+
+const char *thx_inverse_method_name(thx_inverse_method m);
+const char *thx_lambda_rule_name(thx_lambda_rule r);
+
+typedef struct {
+    thx_inverse_method method;
+    thx_lambda_rule rule;
+    double lambda;        /* THX_LAMBDA_FIXED: λ (TSVD: components with s_i > λ are kept) */
+    int per_series;       /* 1: one λ for the whole series; 0: λ per frame */
+    double noise;         /* discrepancy: noise standard deviation per row, data units (0: use snr_db) */
+    double snr_db;        /* when noise == 0: signal-to-noise ratio in dB against the whole series' RMS
+                             (σ = rms(B) 10^(-snr/20), the same σ for every frame) */
+    int greensite_rank;   /* temporal components kept (0: by the noise level if given, else 99.99% energy) */
+    int tv_iterations;    /* IRLS iterations (default 10) */
+    int n_grid;           /* λ grid points for the rules (default 100, log-spaced; then golden section) */
+    const char *matrix_name, *data_name; /* names for messages (file names) */
+} thx_inverse_opts;
+
+void thx_inverse_opts_default(thx_inverse_opts *o);
+
+/* Per-frame figures and the series' L-curve, filled by thx_inverse_solve (all arrays owned;
+ * thx_inverse_report_free releases them). */
+typedef struct {
+    size_t n_frames;
+    double *lambda;        /* λ used per frame (TSVD: the truncation threshold s_k; Greensite: NaN) */
+    int *k;                /* TSVD: components kept per frame (else 0) */
+    double *residual;      /* ||A x - b|| per frame */
+    double *seminorm;      /* ||L x|| per frame (order 0, TSVD, Greensite: ||x||; TV: Σ area |∇x|) */
+    size_t n_components;   /* Greensite: temporal components kept, with their λ */
+    double *component_lambda;
+    size_t n_curve;        /* the series' L-curve (summed over frames, as a series λ rule sees it) */
+    double *curve_lambda, *curve_residual, *curve_seminorm;
+    double corner_lambda;  /* the curve's maximum-curvature λ */
+    double chosen_lambda;  /* the series' λ, or the median of the frames' λ */
+    size_t rank;           /* singular values of the (transformed) matrix, largest first */
+    double *sv;
+    double noise_sigma;    /* σ used by the discrepancy rule (first frame's, per frame) */
+    double t_svd, t_frames; /* seconds: standard form + SVD; everything per frame */
+    char note[256];        /* a remark for the report (e.g. discrepancy target out of reach) */
+} thx_inverse_report;
+
+void thx_inverse_report_free(thx_inverse_report *r);
+
+/*
+ * The Tikhonov matrix M = L^T L (n x n, column-major, new array the caller frees) of the heart
+ * surface (n = heart->n_nodes): order 1: the gradient of the piecewise-linear potential,
+ * ∫ |∇x|² = x^T M x (the cotangent stiffness matrix); order 2: the Laplacian D^-1 K (D the lumped
+ * mass, area/3 per corner), weighted by the mass: M = K D^-1 K. Both vanish on constants.
+ * Errors: a degenerate triangle (zero area), named.
+ */
+thx_status thx_inverse_operator(thx_ctx *ctx, const thx_surface *heart, int order, double **M);
+
+/*
+ * Solves A X ≈ B for every frame. A: the transfer matrix (rows x heart nodes), B: the data
+ * (rows x frames); heart: the surface whose nodes are A's columns (needed for orders 1, 2 and TV;
+ * NULL otherwise). *X: a new series (A's columns x B's frames, B's time axis and unit).
+ * Errors, each naming the file (o->matrix_name, o->data_name): sizes that disagree, NaN or Inf in
+ * A (row, column) or B (row, frame), a heart surface whose node count is not A's columns, a rule
+ * a method cannot use (CRESO with TSVD), LAPACK failing.
+ */
+thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series *B, const thx_surface *heart,
+                             const thx_inverse_opts *o, thx_series **X, thx_inverse_report *r);
+
+/*
+ * Building blocks (the tests check them against independent computations).
+ * Filter factors of singular values s[0..k-1] at λ: Tikhonov s²/(s²+λ²), TSVD 1 if s > λ else 0.
+ */
+void thx_inverse_filter(const double *s, size_t k, double lambda, int tsvd, double *f);
+
+/* The λ a rule picks from the spectral data of one right-hand side (or a series summed):
+ * s[k] singular values (decreasing), beta2[k] = (u_i^T b)² summed over the frames concerned,
+ * perp2 = the part of ||b||² outside range(U), m = rows (times frames for a series), target = the
+ * discrepancy's residual norm. Tikhonov (tsvd = 0) or TSVD (tsvd = 1, λ = s_k, *kept = k).
+ * Returns the λ (and *kept for TSVD). */
+double thx_inverse_pick(const double *s, const double *beta2, size_t k, double perp2, double m, thx_lambda_rule rule,
+                        double fixed, double target, int tsvd, int n_grid, int *kept);
+
+/* Correlation coefficient and relative error ||x - t|| / ||t|| of two vectors of n values. */
+void thx_inverse_compare(const double *x, const double *t, size_t n, double *cc, double *re);
+
+/* Writes the report's L-curve as an SVG picture (log-log axes, the corner and the chosen λ
+ * marked), atomically. */
+thx_status thx_inverse_write_svg(thx_ctx *ctx, const thx_inverse_report *r, const char *title, const char *path);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,411 @@
+/* thorax inverse: heart-surface potentials from body-surface potentials (paper 4.1, the inverse
+ * problem), through a transfer matrix (thorax forward --transfer-out, or a .mat from elsewhere). */
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+#include "cli/cli_fem.h"
+#include "thorax/core/fileio.h"
+#include "thorax/inverse/inverse.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/io/series_file.h"
+
+static const char *ext_of(thx_series_format f)
+{
+    return f == THX_SERIES_TEXT ? "txt" : f == THX_SERIES_MAT ? "mat" : "raw";
+}
+
+/* The heart surface of a model directory (or of the model a thorax solution directory names). */
+static thx_status load_heart(thx_ctx *ctx, const char *dir, thx_model **m, const thx_surface **heart)
+{
+    char path[PATH_MAX + 32];
+    *heart = NULL;
+    snprintf(path, sizeof path, "%s/model.json", dir);
+    FILE *f = fopen(path, "r");
+    if (f) fclose(f);
+    else {
+        /* a solution directory: its solution.json names the model */
+        char *text = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "%s/solution.json", dir);
+        THX_CHECK(thx_read_file(ctx, path, &text, &len));
+        cJSON *j = cJSON_Parse(text);
+        free(text);
+        const cJSON *mm = j ? cJSON_GetObjectItemCaseSensitive(j, "model") : NULL;
+        if (!cJSON_IsString(mm)) {
+            cJSON_Delete(j);
+            return thx_error(ctx, THX_EINPUT, "%s: no \"model\" (the model the transfer matrix belongs to)", path);
+        }
+        snprintf(path, sizeof path, "%s", mm->valuestring);
+        cJSON_Delete(j);
+        dir = path;
+    }
+    THX_CHECK(thx_model_read(ctx, dir, m));
+    for (size_t k = 0; k < (*m)->n_surfaces; k++)
+        if ((*m)->surf[k]->role == THX_ROLE_HEART) {
+            if (*heart) return thx_error(ctx, THX_EINPUT, "%s: more than one heart surface", dir);
+            *heart = (*m)->surf[k];
+        }
+    if (!*heart) return thx_error(ctx, THX_EINPUT, "%s: no heart surface (role \"heart\")", dir);
+    return THX_OK;
+}
+
+/* The directory of a file path ("." for a bare name); the part before ':' of FILE.mat:NAME dropped. */
+static void dir_of(const char *file, char *dir, size_t n)
+{
+    snprintf(dir, n, "%s", file);
+    char *colon = strstr(dir, ".mat:");
+    if (colon) colon[4] = '\0';
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = '\0';
+    else snprintf(dir, n, ".");
+}
+
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* the q-quantile (0..1) of n values, NaN skipped; linear interpolation between order statistics */
+static double quantile(const double *v, size_t n, double q)
+{
+    double *c = malloc((n ? n : 1) * sizeof *c);
+    size_t k = 0;
+    if (!c) return NAN;
+    for (size_t i = 0; i < n; i++)
+        if (!isnan(v[i])) c[k++] = v[i];
+    if (!k) {
+        free(c);
+        return NAN;
+    }
+    qsort(c, k, sizeof *c, cmp_d);
+    double p = q * (double)(k - 1), r;
+    size_t i = (size_t)p;
+    r = i + 1 < k ? c[i] + (p - (double)i) * (c[i + 1] - c[i]) : c[k - 1];
+    free(c);
+    return r;
+}
+
+int cmd_inverse(int argc, char **argv)
+{
+    const char *transfer = NULL, *data = NULL, *out = NULL, *lambda_s = "lcurve", *noise_s = NULL, *heart_dir = NULL;
+    const char *truth_path = NULL, *truth_model = NULL;
+    int verbose = 0, method = THX_INVERSE_TIKHONOV0, per = 0, format = THX_SERIES_RAW, gs_rank = 0, tv_it = 10;
+    static const cli_choice methods[] = {{"tikhonov0", THX_INVERSE_TIKHONOV0}, {"tikhonov1", THX_INVERSE_TIKHONOV1},
+                                         {"tikhonov2", THX_INVERSE_TIKHONOV2}, {"tsvd", THX_INVERSE_TSVD},
+                                         {"greensite", THX_INVERSE_GREENSITE}, {"tv", THX_INVERSE_TV}, {NULL, 0}};
+    static const cli_choice pers[] = {{"frame", 0}, {"series", 1}, {NULL, 0}};
+    static const cli_choice formats[] = {{"raw", THX_SERIES_RAW}, {"text", THX_SERIES_TEXT}, {"mat", THX_SERIES_MAT},
+                                         {NULL, 0}};
+    cli_opt opts[] = {
+        {.name = "--transfer", .type = CLI_INPUT, .meta = "FILE", .s = &transfer,
+         .help = "the transfer matrix, rows the body-surface leads, columns the heart's nodes: thorax forward "
+                 "--transfer-out's transfer.EXT or transfer_electrodes.EXT, or any series file (FILE.mat:NAME picks "
+                 "a variable)"},
+        {.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .s = &data,
+         .help = "the body-surface potentials, rows the transfer matrix's rows, one column per frame"},
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
+         .help = "the result directory (written whole or not at all): heart.EXT, lambda.txt, lcurve.svg, inverse.json"},
+        {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &method,
+         .help = "Tikhonov of order 0, 1 (surface gradient) or 2 (surface Laplacian), truncated SVD, Greensite's "
+                 "temporal-SVD method, or total variation (IRLS)"},
+        {.name = "--lambda", .type = CLI_STRING, .meta = "RULE", .s = &lambda_s,
+         .help = "how λ is chosen: lcurve (maximum curvature), creso, gcv, discrepancy (needs --noise), or a number"},
+        {.name = "--lambda-per", .type = CLI_CHOICE, .choices = pers, .i = &per,
+         .help = "a λ for every frame (greensite: every temporal component), or one for the whole series"},
+        {.name = "--noise", .type = CLI_STRING, .meta = "SIGMA", .s = &noise_s,
+         .help = "the data's noise for the discrepancy principle (and Greensite's rank): a standard deviation per "
+                 "lead in the data's unit, or a signal-to-noise ratio such as 30dB"},
+        {.name = "--heart", .type = CLI_INPUT, .meta = "MODEL", .s = &heart_dir,
+         .def = "the model of the solution.json beside --transfer",
+         .help = "the model (or solution directory) whose heart surface's nodes are the matrix's columns: the mesh of "
+                 "the gradient and Laplacian (tikhonov1, tikhonov2, tv)"},
+        {.name = "--truth", .type = CLI_INPUT, .meta = "SERIES", .s = &truth_path,
+         .help = "the true heart potentials: CC and RE per frame printed, with their median and 10th percentile"},
+        {.name = "--truth-model", .type = CLI_INPUT, .meta = "MODEL", .s = &truth_model,
+         .help = "the --truth rows are this model's heart nodes: each of our heart nodes is compared with the nearest "
+                 "of them"},
+        {.name = "--rank", .type = CLI_INT, .meta = "K", .i = &gs_rank, .rule = CLI_GE, .lo = 0,
+         .note = "0: the components above the noise (--noise), else 99.99% of the energy",
+         .help = "greensite: the temporal components kept"},
+        {.name = "--iterations", .type = CLI_INT, .meta = "N", .i = &tv_it, .rule = CLI_GE, .lo = 1,
+         .help = "tv: reweighted least-squares iterations at most"},
+        {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
+        {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command cmd = {
+        .name = "inverse",
+        .usage = "--transfer --data -o [--method] [--lambda] [--lambda-per] [--noise] [--heart] [--truth] "
+                 "[--truth-model] [--rank] [--iterations] [--format]",
+        .about = "The inverse problem (paper 4.1): heart-surface potentials from body-surface\n"
+                 "potentials through a transfer matrix, regularized. Tikhonov of order 0, 1, 2\n"
+                 "(orders 1 and 2 brought to standard form, so one SVD serves every λ), TSVD,\n"
+                 "Greensite's temporal-SVD method, total variation. λ by the L-curve's corner,\n"
+                 "CRESO, GCV, the discrepancy principle, or given; per frame or per series.\n"
+                 "Writes DIR/heart.EXT (rows: the matrix's columns, the heart's nodes),\n"
+                 "DIR/lambda.txt (λ, residual and solution norm per frame), DIR/lcurve.svg\n"
+                 "(the series' L-curve, its corner and the λ used marked) and DIR/inverse.json.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+    };
+    int pr = cli_parse(&cmd, argc, argv);
+    if (pr) return CLI_EXIT(pr);
+    if (cmd.n_pos) return cli_usage_error("inverse", "unexpected argument '%s'", cmd.pos[0]);
+    if (!transfer) return cli_usage_error("inverse", "no transfer matrix given (--transfer FILE)");
+    if (!data) return cli_usage_error("inverse", "no data given (--data SERIES)");
+    if (!out) return cli_usage_error("inverse", "no output directory given (-o DIR)");
+    if (truth_model && !truth_path) return cli_usage_error("inverse", "--truth-model goes with --truth");
+    thx_inverse_opts o;
+    thx_inverse_opts_default(&o);
+    o.method = (thx_inverse_method)method;
+    o.per_series = per;
+    o.greensite_rank = gs_rank;
+    o.tv_iterations = tv_it;
+    o.matrix_name = transfer;
+    o.data_name = data;
+    static const cli_choice rules[] = {{"lcurve", THX_LAMBDA_LCURVE}, {"creso", THX_LAMBDA_CRESO},
+                                       {"gcv", THX_LAMBDA_GCV}, {"discrepancy", THX_LAMBDA_DISCREPANCY}, {NULL, 0}};
+    int known = 0;
+    for (const cli_choice *c = rules; c->word; c++)
+        if (!strcmp(lambda_s, c->word)) o.rule = (thx_lambda_rule)c->value, known = 1;
+    if (!known) {
+        char *e;
+        o.lambda = strtod(lambda_s, &e);
+        if (e == lambda_s || *e || !(o.lambda >= 0) || !isfinite(o.lambda))
+            return cli_usage_error("inverse", "--lambda '%s': lcurve, creso, gcv, discrepancy or a number >= 0", lambda_s);
+        o.rule = THX_LAMBDA_FIXED;
+    }
+    if (noise_s) {
+        char *e;
+        double v = strtod(noise_s, &e);
+        if (e != noise_s && (!strcmp(e, "dB") || !strcmp(e, "db")) && v > 0 && isfinite(v)) o.snr_db = v;
+        else if (e != noise_s && !*e && v > 0 && isfinite(v)) o.noise = v;
+        else return cli_usage_error("inverse", "--noise '%s': a standard deviation > 0, or a ratio such as 30dB", noise_s);
+    }
+    if (o.rule == THX_LAMBDA_DISCREPANCY && !noise_s)
+        return cli_usage_error("inverse", "--lambda discrepancy needs --noise (SIGMA, or a ratio such as 30dB)");
+
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_status st = THX_OK;
+    int rc = 0;
+    thx_series *A = NULL, *B = NULL, *X = NULL, *truth = NULL;
+    thx_model *hm = NULL, *tm = NULL;
+    const thx_surface *heart = NULL, *theart = NULL;
+    thx_inverse_report R;
+    memset(&R, 0, sizeof R);
+    double *cc = NULL, *re = NULL, *tv = NULL;
+    size_t *near = NULL;
+    thx_outdir od;
+    memset(&od, 0, sizeof od);
+    thx_series_format fmt = (thx_series_format)format;
+    double t0 = thx_wtime();
+    const char *inputs[] = {transfer, data, heart_dir, truth_path, truth_model};
+    st = thx_outdir_claim(ctx, &od, out, "inverse.json", "thorax-inverse", inputs, 5);
+    if (st == THX_OK) st = thx_series_read(ctx, transfer, THX_SERIES_AUTO, &A);
+    if (st == THX_OK) st = thx_series_read(ctx, data, THX_SERIES_AUTO, &B);
+    int needs_heart = method == THX_INVERSE_TIKHONOV1 || method == THX_INVERSE_TIKHONOV2 || method == THX_INVERSE_TV;
+    if (st == THX_OK && (needs_heart || heart_dir || truth_model)) {
+        char dir[PATH_MAX];
+        if (heart_dir) snprintf(dir, sizeof dir, "%s", heart_dir);
+        else dir_of(transfer, dir, sizeof dir);
+        st = load_heart(ctx, dir, &hm, &heart);
+        if (st != THX_OK && !heart_dir) {
+            char msg[1024];
+            snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
+            st = thx_error(ctx, st, "%s needs the heart surface the matrix's columns are the nodes of: %s (give --heart MODEL)",
+                           needs_heart ? thx_inverse_method_name(o.method) : "--truth-model", msg);
+        }
+    }
+    if (st == THX_OK && truth_path) st = thx_series_read(ctx, truth_path, THX_SERIES_AUTO, &truth);
+    if (st == THX_OK && truth_model) {
+        st = load_heart(ctx, truth_model, &tm, &theart);
+        if (st == THX_OK && theart->n_nodes != truth->n_rows)
+            st = thx_error(ctx, THX_EINPUT, "%s has %zu rows but the heart of %s has %zu nodes", truth_path,
+                           truth->n_rows, truth_model, theart->n_nodes);
+    }
+    if (st != THX_OK) goto fail;
+    if (truth) {
+        if (truth->n_frames != B->n_frames) {
+            st = thx_error(ctx, THX_EINPUT, "%s has %zu frames but %s has %zu", truth_path, truth->n_frames, data,
+                           B->n_frames);
+            goto fail;
+        }
+        if (!theart && truth->n_rows != A->n_frames) {
+            st = thx_error(ctx, THX_EINPUT, "%s has %zu rows but the transfer matrix has %zu columns (heart nodes); "
+                           "--truth-model maps another model's heart", truth_path, truth->n_rows, A->n_frames);
+            goto fail;
+        }
+    }
+    st = thx_inverse_solve(ctx, A, B, heart, &o, &X, &R);
+    if (st != THX_OK) goto fail;
+    if (truth) {
+        size_t n = X->n_rows, F = X->n_frames;
+        cc = malloc(F * sizeof *cc);
+        re = malloc(F * sizeof *re);
+        tv = malloc(n * sizeof *tv);
+        near = malloc(n * sizeof *near);
+        if (!cc || !re || !tv || !near) {
+            st = thx_error(ctx, THX_ENOMEM, "out of memory comparing with %s", truth_path);
+            goto fail;
+        }
+        for (size_t i = 0; i < n; i++) {
+            near[i] = i;
+            if (theart) { /* the nearest node of the truth's heart */
+                if (heart->n_nodes != n) {
+                    st = thx_error(ctx, THX_EINPUT, "the heart surface has %zu nodes, the solution %zu rows", heart->n_nodes, n);
+                    goto fail;
+                }
+                double best = INFINITY;
+                const double *p = heart->xyz + 3 * i;
+                for (size_t j = 0; j < theart->n_nodes; j++) {
+                    const double *q = theart->xyz + 3 * j;
+                    double d = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+                    if (d < best) best = d, near[i] = j;
+                }
+            }
+        }
+        for (size_t f = 0; f < F; f++) {
+            for (size_t i = 0; i < n; i++) tv[i] = truth->v[f * truth->n_rows + near[i]];
+            thx_inverse_compare(X->v + f * n, tv, n, &cc[f], &re[f]);
+        }
+    }
+    /* write: a temporary directory renamed as a whole */
+    {
+        char path[4400];
+        const char *ext = ext_of(fmt);
+        FILE *f = NULL;
+        st = thx_outdir_begin(ctx, &od);
+        if (st != THX_OK) goto fail;
+        snprintf(path, sizeof path, "%s/heart.%s", od.tmp, ext);
+        st = thx_series_write(ctx, X, path, fmt);
+        char title[256];
+        snprintf(title, sizeof title, "L-curve: %s, lambda by %s (%s), %zu frames", thx_inverse_method_name(o.method),
+                 thx_lambda_rule_name(o.rule), per ? "one for the series" : "per frame", X->n_frames);
+        if (st == THX_OK && R.n_curve) {
+            snprintf(path, sizeof path, "%s/lcurve.svg", od.tmp);
+            st = thx_inverse_write_svg(ctx, &R, title, path);
+        }
+        /* lambda.txt: one line per frame */
+        if (st == THX_OK) {
+            thx_atomic_file af;
+            snprintf(path, sizeof path, "%s/lambda.txt", od.tmp);
+            st = thx_atomic_open(ctx, path, &af);
+            if (st == THX_OK) {
+                f = af.f;
+                fprintf(f, "# thorax inverse: method %s, lambda %s (%s)\n", thx_inverse_method_name(o.method),
+                        o.rule == THX_LAMBDA_FIXED ? lambda_s : thx_lambda_rule_name(o.rule), per ? "series" : "frame");
+                fprintf(f, "# frame (1-based), time (%s), lambda, kept (tsvd), residual ||Ax-b||, solution norm ||Lx||%s\n",
+                        X->time_unit, truth ? ", CC, RE" : "");
+                for (size_t k = 0; k < X->n_frames; k++) {
+                    fprintf(f, "%zu %.9g %.9g %d %.9g %.9g", k + 1, X->time[k], R.lambda[k], R.k[k], R.residual[k],
+                            R.seminorm[k]);
+                    if (truth) fprintf(f, " %.6f %.6f", cc[k], re[k]);
+                    fputc('\n', f);
+                }
+                st = thx_atomic_commit(ctx, &af);
+            }
+        }
+        cJSON *j = cJSON_CreateObject(), *files = cJSON_CreateObject(), *fr = cJSON_CreateArray();
+        char abs[PATH_MAX];
+        cJSON_AddStringToObject(j, "format", "thorax-inverse");
+        cJSON_AddNumberToObject(j, "version", 1);
+        cJSON_AddStringToObject(j, "command", cli_command_line());
+        cJSON_AddStringToObject(j, "transfer", realpath(transfer, abs) ? abs : transfer);
+        cJSON_AddStringToObject(j, "data", realpath(data, abs) ? abs : data);
+        cJSON_AddStringToObject(j, "method", thx_inverse_method_name(o.method));
+        cJSON_AddStringToObject(j, "lambda_rule", thx_lambda_rule_name(o.rule));
+        cJSON_AddStringToObject(j, "lambda_per", per ? "series" : "frame");
+        if (o.rule == THX_LAMBDA_DISCREPANCY) cJSON_AddNumberToObject(j, "noise_sigma", R.noise_sigma);
+        cJSON_AddNumberToObject(j, "rows", (double)A->n_rows);
+        cJSON_AddNumberToObject(j, "heart_nodes", (double)A->n_frames);
+        cJSON_AddNumberToObject(j, "frames", (double)X->n_frames);
+        cJSON_AddNumberToObject(j, "lambda_used", R.chosen_lambda);
+        cJSON_AddNumberToObject(j, "lambda_corner", R.corner_lambda);
+        cJSON_AddNumberToObject(j, "seconds_svd", R.t_svd);
+        cJSON_AddNumberToObject(j, "seconds_frames", R.t_frames);
+        cJSON_AddNumberToObject(j, "seconds_total", thx_wtime() - t0);
+        if (R.n_components) {
+            cJSON *cl = cJSON_AddArrayToObject(j, "component_lambda");
+            for (size_t k = 0; k < R.n_components; k++) cJSON_AddItemToArray(cl, cJSON_CreateNumber(R.component_lambda[k]));
+        }
+        cJSON *sv = cJSON_AddArrayToObject(j, "singular_values");
+        for (size_t k = 0; k < R.rank && sv; k++) cJSON_AddItemToArray(sv, cJSON_CreateNumber(R.sv[k]));
+        for (size_t k = 0; k < X->n_frames; k++) {
+            cJSON *e = cJSON_CreateObject();
+            cJSON_AddNumberToObject(e, "frame", (double)(k + 1));
+            if (isfinite(R.lambda[k])) cJSON_AddNumberToObject(e, "lambda", R.lambda[k]);
+            else cJSON_AddNullToObject(e, "lambda");
+            if (o.method == THX_INVERSE_TSVD) cJSON_AddNumberToObject(e, "kept", R.k[k]);
+            cJSON_AddNumberToObject(e, "residual", R.residual[k]);
+            cJSON_AddNumberToObject(e, "solution_norm", R.seminorm[k]);
+            if (truth) {
+                if (isfinite(cc[k])) cJSON_AddNumberToObject(e, "cc", cc[k]);
+                else cJSON_AddNullToObject(e, "cc");
+                cJSON_AddNumberToObject(e, "re", re[k]);
+            }
+            cJSON_AddItemToArray(fr, e);
+        }
+        cJSON_AddItemToObject(j, "per_frame", fr);
+        if (truth) {
+            cJSON *c = cJSON_AddObjectToObject(j, "truth");
+            cJSON_AddStringToObject(c, "series", realpath(truth_path, abs) ? abs : truth_path);
+            if (truth_model) cJSON_AddStringToObject(c, "model", realpath(truth_model, abs) ? abs : truth_model);
+            cJSON_AddNumberToObject(c, "cc_median", quantile(cc, X->n_frames, 0.5));
+            cJSON_AddNumberToObject(c, "cc_p10", quantile(cc, X->n_frames, 0.1));
+            cJSON_AddNumberToObject(c, "re_median", quantile(re, X->n_frames, 0.5));
+            cJSON_AddNumberToObject(c, "re_p90", quantile(re, X->n_frames, 0.9));
+        }
+        char name[64];
+        snprintf(name, sizeof name, "heart.%s", ext);
+        cJSON_AddStringToObject(files, "heart", name);
+        cJSON_AddStringToObject(files, "lambda", "lambda.txt");
+        if (R.n_curve) cJSON_AddStringToObject(files, "lcurve", "lcurve.svg");
+        cJSON_AddItemToObject(j, "files", files);
+        if (st == THX_OK) {
+            snprintf(path, sizeof path, "%s/inverse.json", od.tmp);
+            st = cli_write_json(ctx, path, j);
+        } else {
+            cJSON_Delete(j);
+        }
+        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
+        if (st != THX_OK) {
+            thx_outdir_abort(&od);
+            goto fail;
+        }
+    }
+    if (verbose >= 0) {
+        if (truth) {
+            printf("frame CC RE\n");
+            for (size_t k = 0; k < X->n_frames; k++) printf("%zu %.4f %.4f\n", k + 1, cc[k], re[k]);
+            printf("median CC %.4f, 10th percentile CC %.4f; median RE %.4f, 90th percentile RE %.4f\n",
+                   quantile(cc, X->n_frames, 0.5), quantile(cc, X->n_frames, 0.1), quantile(re, X->n_frames, 0.5),
+                   quantile(re, X->n_frames, 0.9));
+        }
+        printf("%zu frames, %zu x %zu matrix, %s, lambda %s (%s): SVD %.3f s, frames %.3f s\n", X->n_frames, A->n_rows,
+               A->n_frames, thx_inverse_method_name(o.method), o.rule == THX_LAMBDA_FIXED ? lambda_s : thx_lambda_rule_name(o.rule),
+               per ? "series" : "frame", R.t_svd, R.t_frames);
+        printf("wrote %s\n", out);
+    }
+    goto end;
+fail:
+    rc = cli_fail(ctx, "inverse", st);
+end:
+    free(cc);
+    free(re);
+    free(tv);
+    free(near);
+    thx_inverse_report_free(&R);
+    thx_series_destroy(&A);
+    thx_series_destroy(&B);
+    thx_series_destroy(&X);
+    thx_series_destroy(&truth);
+    thx_model_destroy(&hm);
+    thx_model_destroy(&tm);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
