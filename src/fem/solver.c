@@ -234,6 +234,28 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
     if (ranks) *ranks = n;
 }
 
+/* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
+#define THX_FEM_BLOCK_BYTES ((size_t)256 << 20)
+#define THX_FEM_BLOCK_MAX 64
+/* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
+ * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system
+ * (currents into a piece of the mesh with no prescribed potential) whose tiny pivot the package took. */
+#define THX_FEM_DIRECT_RTOL 1e-6
+
+/* A factorization in use: -ksp_type preonly with -pc_type cholesky or lu (thx_fem_system_hint_rhs's choice for
+ * many right-hand sides, or the command line's). Only then does a dense block of right-hand sides go to the
+ * factor at once. */
+static int is_direct(const thx_fem_system *s)
+{
+    KSPType kt = NULL;
+    PCType pt = NULL;
+    PC pc = NULL;
+    KSPGetType(s->ksp, &kt);
+    KSPGetPC(s->ksp, &pc);
+    if (pc) PCGetType(pc, &pt);
+    return kt && pt && !strcmp(kt, KSPPREONLY) && (!strcmp(pt, PCCHOLESKY) || !strcmp(pt, PCLU));
+}
+
 /* The own rows of one right-hand side, b = load_f - K_fd phi_d, and of the guess (x may be NULL). */
 static void rhs_rows(const thx_fem_system *s, const double *phi, const double *load, int warm, PetscScalar *b,
                      PetscScalar *x)
@@ -330,17 +352,24 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
             PCALL(ctx, VecNorm(s->r, NORM_2, &rnorm));
         }
     }
+    PetscReal bn = 0;
+    PCALL(ctx, VecNorm(s->b, NORM_2, &bn));
+    double rel = bn > 0 ? rnorm / bn : rnorm;
     if (out) {
         out->iterations = out->iterations_min = (int)its;
         out->iterations_total = (long)its;
-        PetscReal bn = 0;
-        VecNorm(s->b, NORM_2, &bn);
-        out->residual = bn > 0 ? rnorm / bn : rnorm;
+        out->residual = rel;
         out->converged = reason > 0;
     }
     if (reason <= 0) {
         st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (%s after %d iterations, residual %g)",
                        KSPConvergedReasons[reason], (int)its, (double)rnorm);
+        goto done;
+    }
+    if (is_direct(s) && !(rel <= THX_FEM_DIRECT_RTOL)) {
+        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
+                       "relative residual of %g: the system is singular, e.g. currents into a part of the mesh with no "
+                       "prescribed potential)", rel);
         goto done;
     }
     /* to every rank */
@@ -357,24 +386,6 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
     if (out) out->seconds = thx_wtime() - t0;
 done:
     return st;
-}
-
-/* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
-#define THX_FEM_BLOCK_BYTES ((size_t)256 << 20)
-#define THX_FEM_BLOCK_MAX 64
-
-/* A factorization in use: -ksp_type preonly with -pc_type cholesky or lu (thx_fem_system_hint_rhs's choice for
- * many right-hand sides, or the command line's). Only then does a dense block of right-hand sides go to the
- * factor at once. */
-static int is_direct(const thx_fem_system *s)
-{
-    KSPType kt = NULL;
-    PCType pt = NULL;
-    PC pc = NULL;
-    KSPGetType(s->ksp, &kt);
-    KSPGetPC(s->ksp, &pc);
-    if (pc) PCGetType(pc, &pt);
-    return kt && pt && !strcmp(kt, KSPPREONLY) && (!strcmp(pt, PCCHOLESKY) || !strcmp(pt, PCLU));
 }
 
 void thx_fem_system_set_block(thx_fem_system *s, size_t k) { s->block = k; }
@@ -438,9 +449,10 @@ static thx_status solve_dense_block(thx_ctx *ctx, thx_fem_system *s, double *phi
     PCALL(ctx, MatGetColumnNorms(B, NORM_2, bn));
     for (size_t j = 0; j < k; j++) {
         double rel = bn[j] > 0 ? rn[j] / bn[j] : rn[j];
-        if (!isfinite(rel)) {
-            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (right-hand side %zu of a block of %zu: "
-                           "residual %g)", j + 1, k, (double)rn[j]);
+        if (!(rel <= THX_FEM_DIRECT_RTOL)) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
+                           "relative residual of %g at right-hand side %zu of a block of %zu: the system is singular, e.g. "
+                           "currents into a part of the mesh with no prescribed potential)", rel, j + 1, k);
             goto done;
         }
         if (out) out->residual = fmax(out->residual, rel);
