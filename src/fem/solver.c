@@ -235,7 +235,7 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
 }
 
 /* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
-#define THX_FEM_BLOCK_BYTES ((size_t)256 << 20)
+#define THX_FEM_BLOCK_BYTES ((size_t)512 << 20)
 #define THX_FEM_BLOCK_MAX 64
 /* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
  * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system

@@ -128,7 +128,7 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
  * else the thx_fem_system_set_block value, or the PETSc option
  * -thorax_block_size N, or as many as keep five n_nodes-long columns per
  * right-hand side (the caller's block, PETSc's B and X, CHOLMOD's workspace,
- * the residuals) within 256 MB, at most 64 (docs/decisions.md: the measured
+ * the residuals) within 512 MB, at most 64 (docs/decisions.md: the measured
  * gain flattens there). Call after thx_fem_system_hint_rhs. A block size of 1
  * is the frame-by-frame solve exactly (KSPSolve per column).
  */
