@@ -11,6 +11,7 @@ packages=(
   zlib1g-dev                         # import: zlib-compressed VTK XML (.vtu) data
   petsc-dev openmpi-bin              # finite-element solves: PETSc 3.18 (hypre, MUMPS, CHOLMOD) on Open MPI; mpirun
   libopenblas0-pthread               # optimized BLAS for the sparse Cholesky factorizations (4-9x over reference BLAS)
+  liblapack-dev                      # boundary elements: -llapack (dgetrf/dgetrs), at run time OpenBLAS's liblapack.so.3
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri  # rendering: OpenGL 3.3 core on EGL (Mesa llvmpipe headless)
   libpng-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core  # PNG images; text in images
   ffmpeg                             # animations: MP4 (H.264); ffprobe in tests

@@ -5,7 +5,7 @@
     level 1  model
     level 2  geom, io, leads
     level 3  mesh, check
-    level 4  fem, render, phantom, import, edit
+    level 4  fem, bem, render, phantom, import, edit
     level 5  picture (a picture's settings and data -> scenes and annotations; render and view share it),
              capi (flat accessors for bindings: python/thorax over libthorax.so)
     level 6  view (the interactive viewer, GTK 4)
@@ -30,7 +30,7 @@ import sys
 import tempfile
 
 LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "leads": 2, "mesh": 3, "check": 3,
-         "fem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
+         "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
 
 
 def allowed(user, used):

@@ -17,6 +17,7 @@ int cmd_series(int argc, char **argv);
 int cmd_electrodes(int argc, char **argv);
 int cmd_beat(int argc, char **argv);
 int cmd_forward(int argc, char **argv);
+int cmd_bem(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_leads(int argc, char **argv);
 int cmd_render(int argc, char **argv);

@@ -53,4 +53,10 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
  * that fails the check (cli_volume_gate). */
 int cli_forward_defib(const char *model_dir, const char *out, const char **specs, int n_specs, double threshold,
                       const char *format, cli_petsc_args *pa, int verbose, int force);
+
+/* thorax forward --dipoles FILE: current dipole sources (cmd_forward_dipoles.c); method THX_DIPOLE_*; rows_path (may be
+ * NULL): electrodes whose signals are written too. */
+int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_path, int method, const char *rows_path,
+                        double max_offset, const char *format, int want_volume, int warm, cli_petsc_args *pa, int verbose,
+                        int force);
 #endif

@@ -45,7 +45,8 @@ static const char *ext_of(thx_series_format f)
 int cmd_forward(int argc, char **argv)
 {
     const char *out = NULL, *epi_path = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL, *dump = NULL;
-    const char *channels = NULL;
+    const char *channels = NULL, *dipoles = NULL;
+    int dip_method = THX_DIPOLE_VENANT;
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0, format = THX_SERIES_RAW, meth = -1;
     double threshold = 5.0;
@@ -55,10 +56,18 @@ int cmd_forward(int argc, char **argv)
     cli_petsc_args_init(&pa, argv[0]);
     static const cli_choice formats[] = {{"raw", THX_SERIES_RAW}, {"text", THX_SERIES_TEXT}, {"mat", THX_SERIES_MAT},
                                          {NULL, 0}};
+    static const cli_choice dip_methods[] = {{"venant", THX_DIPOLE_VENANT}, {"partial", THX_DIPOLE_PARTIAL}, {NULL, 0}};
     static const cli_choice methods[] = {{"forward", 0}, {"adjoint", 1}, {"auto", -1}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--epicardial", .type = CLI_INPUT, .meta = "SERIES", .s = &epi_path,
          .help = "heart-surface potentials, rows the heart surface's nodes (text, raw or .mat; see thorax series)"},
+        {.name = "--dipoles", .type = CLI_INPUT, .meta = "FILE", .s = &dipoles,
+         .help = "current dipole sources in the whole volume (positions mm, moments mA*m; OpenMEEG's .dip, a line "
+                 "'px py pz qx qy qz' per dipole and frame, or thorax-dipoles moments over time; docs/formats.md): "
+                 "DIR/torso.EXT in mV, with --rows DIR/electrodes.EXT"},
+        {.name = "--dipole-method", .type = CLI_CHOICE, .choices = dip_methods, .i = &dip_method,
+         .help = "venant: monopoles on the nodes around the dipole matching its moment (partial integration where "
+                 "its nearest node is on an interface); partial: partial integration (docs/decisions.md)"},
         {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
          .help = "map3d .channels: the --epicardial rows are recording channels, heart node i takes channel c "
                  "(a node with no channel is refused)"},
@@ -102,7 +111,8 @@ int cmd_forward(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "forward",
-        .usage = "MODEL --epicardial [--channels] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
+        .usage = "MODEL --dipoles -o [--dipole-method] [--rows] [--max-offset] [--format] [--volume] [--no-warm] [--force] [PETSc options]\n"
+                 "MODEL --epicardial [--channels] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
                  "[--no-warm] [--dump-system] [--force] [PETSc options]\n"
                  "MODEL --transfer-out -o [--rows] [--max-offset] [--method] [--format] [--force] [PETSc options]\n"
                  "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
@@ -118,6 +128,9 @@ int cmd_forward(int argc, char **argv)
                  "Transfer matrix: DIR/transfer.EXT (rows: the outer surface's nodes) or, with\n"
                  "--rows, DIR/transfer_electrodes.EXT; applied with --transfer, a matrix whose\n"
                  "rows are electrodes writes DIR/electrodes.EXT, never torso.EXT.\n"
+                 "Dipoles: current dipoles (Saint-Venant or partial integration) in the whole\n"
+                 "volume, no current through the outer surface, the potential's integral over it\n"
+                 "zero; DIR/torso.EXT (mV) and with --rows DIR/electrodes.EXT.\n"
                  "Defibrillation: the whole domain, the electrodes' currents and potentials,\n"
                  "the field in the heart.\n\n"
                  "Before solving, the volume mesh is checked as thorax check does (conformity,\n"
@@ -138,10 +151,16 @@ int cmd_forward(int argc, char **argv)
     const char *format_name = format == THX_SERIES_TEXT ? "text" : format == THX_SERIES_MAT ? "mat" : "raw";
     if (!model_dir) return cli_usage_error("forward", "no model given");
     if (!out) return cli_usage_error("forward", "no output directory given (-o DIR)");
-    int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0);
-    if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode");
+    int modes = (epi_path != NULL) + transfer_out + (n_electrodes > 0) + (dipoles != NULL);
+    if (modes != 1) return cli_usage_error("forward", "give exactly one of --epicardial, --transfer-out, --electrode, --dipoles");
+    if (dipoles && (transfer_in || channels || currents || dump))
+        return cli_usage_error("forward", "--dipoles goes with --dipole-method, --rows, --max-offset, --volume, --format, "
+                                          "--no-warm and --force only");
+    if (dipoles)
+        return cli_forward_dipoles(model_dir, out, dipoles, dip_method, rows_path, max_offset, format_name, want_volume, warm,
+                                   &pa, verbose, force);
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
-    if (rows_path && !transfer_out && !epi_path) return cli_usage_error("forward", "--rows goes with --transfer-out or --epicardial");
+    if (rows_path && !transfer_out && !epi_path) return cli_usage_error("forward", "--rows goes with --transfer-out, --epicardial or --dipoles");
     if (channels && !epi_path) return cli_usage_error("forward", "--channels needs --epicardial (its rows are the channels)");
     if (n_electrodes)
         return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format_name, &pa, verbose, force);

@@ -23,6 +23,7 @@ static const struct {
     {"electrodes", cmd_electrodes, "the phantom's electrodes: 12-lead positions and a body-surface array"},
     {"beat", cmd_beat, "the phantom's heartbeat: epicardial potentials of a dipole tracing a VCG loop"},
     {"forward", cmd_forward, "finite-element forward solutions: heart to body surface, currents, defibrillation"},
+    {"bem", cmd_bem, "boundary-element forward solutions: heart-surface transfer matrix, dipoles (OpenMEEG spheres)"},
     {"verify", cmd_verify, "the finite-element solver against analytic solutions: convergence table"},
     {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
     {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},

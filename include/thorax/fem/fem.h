@@ -162,7 +162,11 @@ typedef struct {
     const char *dump_system; /* if set: the first frame's system written there (thx_fem_system_dump) */
     size_t block;           /* right-hand sides per blocked solve (thx_fem_solve_block); 0 = automatic
                                (thx_fem_system_block), 1 = frame by frame */
+    int dipole_method;      /* thx_forward_dipoles: THX_DIPOLE_VENANT (default) or THX_DIPOLE_PARTIAL */
 } thx_forward_opts;
+
+/* How thx_forward_dipoles puts a dipole on the mesh (docs/decisions.md, "Dipole sources"). */
+enum { THX_DIPOLE_VENANT = 0, THX_DIPOLE_PARTIAL = 1 };
 
 typedef struct {
     thx_series *torso;      /* the outer surface's nodes x frames */
@@ -176,6 +180,8 @@ typedef struct {
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
     size_t block;           /* right-hand sides per blocked solve used (1: frame by frame) */
+    size_t n_fallback;      /* thx_forward_dipoles, Saint-Venant: dipoles put on by partial integration instead
+                               (every corner of their tetrahedron on an interface between regions) */
 } thx_forward_result;
 
 void thx_forward_opts_default(thx_forward_opts *o);
@@ -224,6 +230,38 @@ thx_status thx_forward_transfer_weighted(thx_ctx *ctx, const thx_model *m, const
 
 /* phi = T epi: a series with T's rows and epi's frames. */
 thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_series *epi, thx_series **out);
+
+/* ---- current dipole sources (src/fem/dipole.c; docs/decisions.md, "Dipole sources") ---- */
+
+#include "thorax/io/dipoles_file.h"
+
+/* The tetrahedron holding point p (mm): the one p lies deepest in (largest smallest barycentric
+ * coordinate, at least -1e-9; ties: the lowest number), or -1 if p is outside every tetrahedron;
+ * l (may be NULL) its barycentric coordinates there. */
+void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[4]);
+
+/* Adds the partial-integration load of a dipole of moment q (mA·m) in tetrahedron tet to load
+ * (n_nodes; µA, so that the potential comes out in mV): q . grad l_k, times 10^6 for the units, on
+ * the tetrahedron's four corners (they sum to zero). */
+void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *load);
+
+/*
+ * The potentials of current dipoles (positions mm, moments mA·m; thorax/io/dipoles_file.h) in the
+ * whole volume: every region whose conductivity is not zero is in the domain (none is left out
+ * as the epicardial problem leaves out the heart; a region of conductivity 0 is an insulator),
+ * no current through the outer boundary. Each dipole goes on the mesh by o->dipole_method:
+ * Saint-Venant (default: monopoles on its nearest node and that node's neighbours in its region,
+ * their moments of order 0 and 1 those of the dipole, order 2 minimized; partial integration
+ * for a dipole whose nearest node lies on an interface between regions, counted in
+ * r->n_fallback), or partial integration (thx_dipole_load). The reference: the integral of the potential over the outer surface is zero
+ * (the reference of the analytic solutions of concentric spheres). r->torso: the outer surface's
+ * nodes x the dipole set's frames, mV (a .dip-layout set: one frame per dipole); r->volume with
+ * keep_volume. A frame is one solve, or when there are more frames than 3 n, 3 n solves (a unit
+ * moment per dipole and axis) are combined. Errors name the dipole file and line: a dipole
+ * outside the volume, in a region of conductivity 0, a position or moment that is not finite.
+ */
+thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipoles *d, const thx_forward_opts *o,
+                               thx_forward_result *r);
 
 /* ---- verification (thorax verify, docs/validation.md) ---- */
 

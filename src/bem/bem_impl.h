@@ -1,0 +1,37 @@
+/* Private to src/bem: the geometry of a boundary-element problem. */
+#ifndef THORAX_BEM_IMPL_H
+#define THORAX_BEM_IMPL_H
+#include "thorax/bem/bem.h"
+
+struct thx_bem {
+    size_t n;            /* surfaces */
+    thx_surface **surf;  /* owned copies, outward */
+    size_t *off;         /* n + 1: first unknown of each surface, off[n] = total nodes */
+    int *parent;         /* surface directly outside, -1 for the outermost */
+    double *sig_in, *sig_out;
+    size_t outer;
+    double *area;        /* per node (all surfaces): a third of its triangles' areas */
+    double scale;        /* the model's size (bounding-box diagonal) */
+};
+
+/* Adds the double-layer rows i0..i1-1 (of all nodes) into B, the columns of surfaces in use
+ * (use[l] != 0; others left untouched), and the single layer of surface `sl_surf` (-1: none)
+ * into S (its columns those of sl_surf's nodes). B and S column-major, leading dimension ld >=
+ * i1 - i0: row i is B[col * ld + i - i0]. */
+void thx_bem_assemble_rows(const thx_bem *b, size_t i0, size_t i1, const unsigned char *use, int sl_surf, double *B,
+                           double *S, size_t ld);
+/* The transfer system's rows i0..i1-1 (thx_bem_transfer): M (ld x N) and the right-hand sides R
+ * (ld x n_heart), column-major, zeroed here. Identical whatever the row blocks. */
+thx_status thx_bem_transfer_rows(thx_ctx *ctx, const thx_bem *b, size_t h, size_t i0, size_t i1, double *M, double *R,
+                                 size_t ld);
+/* Signed solid angle of surface k seen from p (4 pi inside, 0 outside). */
+double thx_bem_surface_angle(const thx_bem *b, size_t k, const double p[3]);
+
+/* The checks of thx_bem_transfer (heart not outermost, nothing inside it, conductivities). */
+thx_status thx_bem_transfer_check(thx_ctx *ctx, const thx_bem *b, size_t h);
+
+/* LAPACK / BLAS (Fortran interfaces of OpenBLAS) */
+void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
+void dgetrs_(const char *trans, const int *n, const int *nrhs, const double *a, const int *lda, const int *ipiv,
+             double *b, const int *ldb, int *info);
+#endif
