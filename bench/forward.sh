@@ -4,13 +4,19 @@
 #   frames (default solver choice: Cholesky for many frames), the same with CG + GAMG,
 #   the same solve under mpirun -np 2, peak memory; PETSc alone on the very same
 #   assembled system with the same options (bench/petsc_alone.c), so our overhead is a
-#   ratio; the transfer matrix of the medium model.
+#   ratio; the transfer matrix of the medium model. Many frames at once (issue 15, item 6): the
+#   300 frames solved frame by frame (-thorax_block_size 1, the old path) beside the blocked
+#   multi-right-hand-side solve (the default) in the same run, with the largest relative
+#   difference between the two answers; the factorization packages' blocked solves side by side
+#   (bench/block_solve.c: CHOLMOD and MUMPS, blocks of 1 to 128 right-hand sides).
 # Prints figures; never fails on time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THORAX=${THORAX:-$PWD/build/bin/thorax}
 ALONE=${ALONE:-$PWD/build/bin/petsc_alone}
-[ -x "$THORAX" ] && [ -x "$ALONE" ] || { echo "build first (make)"; exit 1; }
+BLOCK=${BLOCK:-$PWD/build/bin/block_solve}
+PY=${PY:-/usr/bin/python3}
+[ -x "$THORAX" ] && [ -x "$ALONE" ] && [ -x "$BLOCK" ] || { echo "build first (make)"; exit 1; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
@@ -40,8 +46,8 @@ run() { # LABEL ARGS... : thorax forward with /usr/bin/time
     python3 - "$W/sol/solution.json" "$label" "$wall" "$rss" <<'EOF'
 import json, sys
 s = json.load(open(sys.argv[1]))['solver']
-print("%-46s wall %6.2f s, peak %4d MB | %s+%s x%d ranks, its %s, assembly %.2f s, matrix %.2f s, preconditioner %.2f s, solves %.2f s (pc + solves %.3f s)" %
-      (sys.argv[2], float(sys.argv[3]), int(sys.argv[4]) // 1024, s['ksp'], s['pc'], s['ranks'],
+print("%-46s wall %6.2f s, peak %4d MB | %s+%s x%d ranks, block %s, its %s, assembly %.2f s, matrix %.2f s, preconditioner %.2f s, solves %.2f s (pc + solves %.3f s)" %
+      (sys.argv[2], float(sys.argv[3]), int(sys.argv[4]) // 1024, s['ksp'], s['pc'], s['ranks'], s.get('block', '?'),
        '%d..%d' % (s['iterations_min'], s['iterations_max']), s['seconds_assembly'], s['seconds_matrix'],
        s['seconds_setup'] - s['seconds_matrix'], s['seconds_solve'], s['seconds_setup'] - s['seconds_matrix'] + s['seconds_solve']))
 EOF
@@ -66,16 +72,43 @@ import json; s=json.load(open('$W/sol/solution.json'))['solver']; print('%-46s w
 echo "  PETSc alone under mpirun -np 2: $(mpirun -np 2 "$ALONE" -system "$W/sys.bin" -ksp_rtol 1e-8)"
 run "one frame, Cholesky (CHOLMOD)" "$W/m_high" --epicardial "$W/one.raw" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type cholmod --dump-system "$W/sys.bin"
 echo "  PETSc alone, Cholesky (CHOLMOD): $("$ALONE" -system "$W/sys.bin" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type cholmod)"
-run "300 frames, default (Cholesky for many frames)" "$W/m_high" --epicardial "$W/beat_high.raw"
-run "300 frames, Cholesky (MUMPS)" "$W/m_high" --epicardial "$W/beat_high.raw" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type mumps
+# many frames at once: the old path (a triangular solve per frame) beside the blocked solve
+same() { # A B: the largest difference between two series, relative to the largest value of each frame
+    "$PY" - "$1" "$2" <<'EOF'
+import sys, struct, numpy as np
+def rd(p):
+    b = open(p, 'rb').read(); r, f = struct.unpack('<QQ', b[8:24])
+    return np.frombuffer(b[200 + 8 * f:], dtype='<f8').reshape(f, r)
+a, b = rd(sys.argv[1]), rd(sys.argv[2])
+m = np.abs(b).max(axis=1); m[m == 0] = 1
+print("%.1e" % (np.abs(a - b).max(axis=1) / m).max())
+EOF
+}
+run "300 frames, Cholesky (CHOLMOD) frame by frame" "$W/m_high" --epicardial "$W/beat_high.raw" -thorax_block_size 1
+mv "$W/sol" "$W/sol_frames"
+run "300 frames, default (blocked Cholesky, CHOLMOD)" "$W/m_high" --epicardial "$W/beat_high.raw"
+echo "  blocked against frame by frame: largest difference $(same "$W/sol/torso.raw" "$W/sol_frames/torso.raw") (relative to each frame's largest value)"
+run "300 frames, Cholesky (MUMPS), blocked" "$W/m_high" --epicardial "$W/beat_high.raw" -ksp_type preonly -pc_type cholesky -pc_factor_mat_solver_type mumps
+echo "  MUMPS blocked against CHOLMOD frame by frame: $(same "$W/sol/torso.raw" "$W/sol_frames/torso.raw")"
+rm -rf "$W/sol_frames"
+# the packages' blocked solves on the very same factor (PETSc alone: MatSolve per column, MatMatSolve per block)
+for pkg in cholmod mumps; do
+    /usr/bin/time -f "%e %M" -o "$W/t" "$BLOCK" -system "$W/sys.bin" -nrhs 128 -blocks 1,16,32,64,128 -pc_factor_mat_solver_type $pkg | sed 's/^/  /'
+    echo "  ($pkg: wall $(cut -d' ' -f1 "$W/t") s, peak $(( $(cut -d' ' -f2 "$W/t") / 1024 )) MB)"
+done
 run "300 frames, CG + GAMG, warm starts" "$W/m_high" --epicardial "$W/beat_high.raw"  -ksp_type cg -pc_type gamg
-# the transfer matrix of the medium model (torso nodes <- heart nodes)
-rm -rf "$W/sol"
-/usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" forward "$W/m_medium" --transfer-out -o "$W/sol" -q
-read -r wall rss < "$W/t"
-python3 - "$W/sol/solution.json" "$wall" "$rss" <<'EOF'
+# the transfer matrix of the medium model (torso nodes <- heart nodes), a solve per heart node one by one and blocked
+for b in 1 0; do
+    rm -rf "$W/sol"
+    /usr/bin/time -f "%e %M" -o "$W/t" "$THORAX" forward "$W/m_medium" --transfer-out -o "$W/sol" -q -thorax_block_size $b
+    read -r wall rss < "$W/t"
+    python3 - "$W/sol/solution.json" "$wall" "$rss" <<'EOF'
 import json, sys
 s = json.load(open(sys.argv[1]))['solver']
-print("transfer matrix, medium model (a solve per heart node): wall %.2f s, peak %d MB | %s+%s, setup %.2f s, solves %.2f s" %
-      (float(sys.argv[2]), int(sys.argv[3]) // 1024, s['ksp'], s['pc'], s['seconds_setup'], s['seconds_solve']))
+print("transfer matrix, medium model (a solve per heart node), block %3d: wall %.2f s, peak %d MB | %s+%s, setup %.2f s, solves %.2f s" %
+      (s['block'], float(sys.argv[2]), int(sys.argv[3]) // 1024, s['ksp'], s['pc'], s['seconds_setup'], s['seconds_solve']))
 EOF
+    if [ $b = 1 ]; then mv "$W/sol" "$W/sol_frames"; fi
+done
+echo "  blocked against one by one: largest difference $(same "$W/sol/transfer.raw" "$W/sol_frames/transfer.raw")"
+

@@ -360,6 +360,7 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddNumberToObject(solver, "iterations_max", R.it_max);
             cJSON_AddNumberToObject(solver, "iterations_total", (double)R.it_total);
             cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
+            cJSON_AddNumberToObject(solver, "block", (double)R.block); /* right-hand sides per solve (1: one by one) */
             cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
             cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
             cJSON_AddNumberToObject(solver, "seconds_matrix", R.t_matrix);

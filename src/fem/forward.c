@@ -1,6 +1,8 @@
 /*
  * Forward problems on a meshed model (thorax/fem/fem.h): the epicardial problem
- * frame by frame, and its transfer matrix.
+ * for a series of frames, and its transfer matrix; both solve their right-hand
+ * sides in blocks (thx_fem_solve_block: one dense multi-right-hand-side solve
+ * per block with a factorization, one KSPSolve per column otherwise).
  */
 #include <math.h>
 #include <stdio.h>
@@ -163,30 +165,44 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     }
     snprintf(r->torso->label, sizeof r->torso->label, "potentials on '%s' (epicardial forward problem)", os->name);
     if (r->volume) snprintf(r->volume->label, sizeof r->volume->label, "potentials at the volume nodes (epicardial forward problem)");
-    phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
-    if (!phi) { st = THX_ENOMEM; goto done; }
     r->it_min = 1 << 30;
     thx_fem_system_hint_rhs(P.sys, nf);
-    for (size_t f = 0; f < nf; f++) {
-        const double *e = epi->v + f * epi->n_rows;
-        for (size_t i = 0; i < hs->n_nodes; i++) phi[v->surf_node[P.heart][i]] = e[i];
-        for (size_t k = 0; k < P.n_st; k++) {
-            const int32_t *c = P.st_corner + 3 * k;
-            const double *w = P.st_w + 3 * k;
-            phi[P.st_node[k]] = w[0] * e[c[0]] + w[1] * e[c[1]] + w[2] * e[c[2]];
+    if (o->block) thx_fem_system_set_block(P.sys, o->block);
+    /* frames in blocks: one dense multi-right-hand-side solve per block with a factorization, else
+       (block 1) frame by frame, each frame starting from the previous one's solution */
+    size_t nb = thx_fem_system_block(P.sys);
+    nb = nb < nf ? nb : nf ? nf : 1;
+    r->block = nb;
+    phi = thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *phi);
+    if (!phi) { st = THX_ENOMEM; goto done; }
+    for (size_t f0 = 0; f0 < nf; f0 += nb) {
+        size_t k = nf - f0 < nb ? nf - f0 : nb;
+        if (f0 > 0 && nb > 1) memcpy(phi, phi + (nb - 1) * nn, nn * sizeof *phi); /* the warm start */
+        for (size_t j = 0; j < k; j++) {
+            const double *e = epi->v + (f0 + j) * epi->n_rows;
+            double *pj = phi + j * nn;
+            for (size_t i = 0; i < hs->n_nodes; i++) pj[v->surf_node[P.heart][i]] = e[i];
+            for (size_t q = 0; q < P.n_st; q++) {
+                const int32_t *c = P.st_corner + 3 * q;
+                const double *w = P.st_w + 3 * q;
+                pj[P.st_node[q]] = w[0] * e[c[0]] + w[1] * e[c[1]] + w[2] * e[c[2]];
+            }
         }
-        if (f == 0 && o->dump_system) THX_TRY(thx_fem_system_dump(ctx, P.sys, phi, NULL, o->dump_system));
+        if (f0 == 0 && o->dump_system) THX_TRY(thx_fem_system_dump(ctx, P.sys, phi, NULL, o->dump_system));
         thx_fem_solve_stats ss;
-        THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, o->warm && f > 0, &ss));
-        r->it_min = ss.iterations < r->it_min ? ss.iterations : r->it_min;
+        THX_TRY(thx_fem_solve_block(ctx, P.sys, phi, NULL, k, o->warm, &ss)); /* frame 1 starts from 0 */
+        r->it_min = ss.iterations_min < r->it_min ? ss.iterations_min : r->it_min;
         r->it_max = ss.iterations > r->it_max ? ss.iterations : r->it_max;
-        r->it_total += ss.iterations;
+        r->it_total += ss.iterations_total;
         r->max_residual = fmax(r->max_residual, ss.residual);
         r->t_solve += ss.seconds;
-        double *t = r->torso->v + f * os->n_nodes;
-        for (size_t i = 0; i < os->n_nodes; i++) t[i] = phi[v->surf_node[P.outer][i]];
-        if (r->volume) memcpy(r->volume->v + f * nn, phi, nn * sizeof *phi);
-        if (o->progress) o->progress(o->user, f + 1, nf);
+        for (size_t j = 0; j < k; j++) {
+            const double *pj = phi + j * nn;
+            double *t = r->torso->v + (f0 + j) * os->n_nodes;
+            for (size_t i = 0; i < os->n_nodes; i++) t[i] = pj[v->surf_node[P.outer][i]];
+            if (r->volume) memcpy(r->volume->v + (f0 + j) * nn, pj, nn * sizeof *pj);
+        }
+        if (o->progress) o->progress(o->user, f0 + k, nf);
     }
     if (!nf) r->it_min = 0;
     thx_fem_system_info(P.sys, &r->n_free, &r->n_prescribed, &r->t_setup);
@@ -222,9 +238,7 @@ static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows
     size_t nr = rows || corner ? n_rows : os->n_nodes;
     rv = thx_malloc(ctx, 3 * (nr ? nr : 1) * sizeof *rv);
     rw = thx_malloc(ctx, 3 * (nr ? nr : 1) * sizeof *rw);
-    phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
-    load = thx_calloc(ctx, nn ? nn : 1, sizeof *load);
-    if (!rv || !rw || !phi || !load) { st = THX_ENOMEM; goto done; }
+    if (!rv || !rw) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i < nr; i++)
         for (int k = 0; k < 3; k++) {
             int32_t s = corner ? corner[3 * i + (size_t)k] : rows ? rows[i] : (int32_t)i;
@@ -248,48 +262,60 @@ static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows
     int it_min = 1 << 30, it_max = 0;
     long it_total = 0;
     double tsolve = 0, maxres = 0;
-    if (method == 0) {
-        /* column j: the heart at e_j */
-        for (size_t j = 0; j < nh; j++) {
-            memset(phi, 0, nn * sizeof *phi);
-            phi[v->surf_node[P.heart][j]] = 1;
-            /* a Steiner node carries its weight of corner j */
-            for (size_t k = 0; k < P.n_st; k++)
-                for (int c = 0; c < 3; c++)
-                    if (P.st_corner[3 * k + (size_t)c] == (int32_t)j) phi[P.st_node[k]] += P.st_w[3 * k + (size_t)c];
-            thx_fem_solve_stats ss;
-            THX_TRY(thx_fem_solve(ctx, P.sys, phi, NULL, 0, &ss));
-            for (size_t i = 0; i < nr; i++)
-                A->v[j * nr + i] = rw[3 * i] * phi[rv[3 * i]] + rw[3 * i + 1] * phi[rv[3 * i + 1]] + rw[3 * i + 2] * phi[rv[3 * i + 2]];
-            it_min = ss.iterations < it_min ? ss.iterations : it_min;
-            it_max = ss.iterations > it_max ? ss.iterations : it_max;
-            it_total += ss.iterations;
-            tsolve += ss.seconds;
-            maxres = fmax(maxres, ss.residual);
-            if (o->progress) o->progress(o->user, j + 1, nh);
+    /* the solves in blocks of nb right-hand sides (one dense multi-right-hand-side solve each with a
+       factorization), nb columns of phi (and of load) at a time */
+    size_t n_solves = method ? nr : nh;
+    if (o->block) thx_fem_system_set_block(P.sys, o->block);
+    size_t nb = thx_fem_system_block(P.sys);
+    nb = nb < n_solves ? nb : n_solves ? n_solves : 1;
+    if (info) info->block = nb;
+    phi = thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *phi);
+    load = method ? thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *load) : NULL;
+    if (!phi || (method && !load)) { st = THX_ENOMEM; goto done; }
+    for (size_t c0 = 0; c0 < n_solves; c0 += nb) {
+        size_t k = n_solves - c0 < nb ? n_solves - c0 : nb;
+        memset(phi, 0, nn * k * sizeof *phi);
+        if (method == 0) {
+            /* column j: the heart at e_j; a Steiner node carries its weight of corner j */
+            for (size_t q = 0; q < k; q++) phi[q * nn + (size_t)v->surf_node[P.heart][c0 + q]] = 1;
+            for (size_t t = 0; t < P.n_st; t++)
+                for (int c = 0; c < 3; c++) {
+                    size_t j = (size_t)P.st_corner[3 * t + (size_t)c];
+                    if (j >= c0 && j < c0 + k) phi[(j - c0) * nn + (size_t)P.st_node[t]] += P.st_w[3 * t + (size_t)c];
+                }
+        } else {
+            /* row i: y = K_ff^-1 e_i (the heart at 0), loaded at the row's nodes by its weights */
+            memset(load, 0, nn * k * sizeof *load);
+            for (size_t q = 0; q < k; q++)
+                for (int c = 0; c < 3; c++) load[q * nn + (size_t)rv[3 * (c0 + q) + (size_t)c]] += rw[3 * (c0 + q) + (size_t)c];
         }
-    } else {
-        /* row i: y = K_ff^-1 e_i (heart at 0), then T_ij = -(K_fd^T y)_j = -sum_k K(k, heart_j) y_k */
-        for (size_t i = 0; i < nr; i++) {
-            memset(phi, 0, nn * sizeof *phi);
-            memset(load, 0, nn * sizeof *load);
-            for (int k = 0; k < 3; k++) load[rv[3 * i + (size_t)k]] += rw[3 * i + (size_t)k];
-            thx_fem_solve_stats ss;
-            THX_TRY(thx_fem_solve(ctx, P.sys, phi, load, 0, &ss));
-            for (size_t j = 0; j < nh; j++) A->v[j * nr + i] = -kfd_dot(&P, v->surf_node[P.heart][j], phi);
-            /* a Steiner node's column of K_fd counts for its corners by their weights */
-            for (size_t k = 0; k < P.n_st; k++) {
-                double g = kfd_dot(&P, P.st_node[k], phi);
-                for (int c = 0; c < 3; c++) A->v[(size_t)P.st_corner[3 * k + (size_t)c] * nr + i] -= P.st_w[3 * k + (size_t)c] * g;
+        thx_fem_solve_stats ss;
+        THX_TRY(thx_fem_solve_block(ctx, P.sys, phi, load, k, 0, &ss));
+        for (size_t q = 0; q < k; q++) {
+            const double *y = phi + q * nn;
+            if (method == 0) {
+                size_t j = c0 + q;
+                for (size_t i = 0; i < nr; i++)
+                    A->v[j * nr + i] = rw[3 * i] * y[rv[3 * i]] + rw[3 * i + 1] * y[rv[3 * i + 1]] + rw[3 * i + 2] * y[rv[3 * i + 2]];
+            } else {
+                /* T_ij = -(K_fd^T y)_j = -sum_k K(k, heart_j) y_k; a Steiner node's column of K_fd counts for its
+                   corners by their weights */
+                size_t i = c0 + q;
+                for (size_t j = 0; j < nh; j++) A->v[j * nr + i] = -kfd_dot(&P, v->surf_node[P.heart][j], y);
+                for (size_t t = 0; t < P.n_st; t++) {
+                    double g = kfd_dot(&P, P.st_node[t], y);
+                    for (int c = 0; c < 3; c++) A->v[(size_t)P.st_corner[3 * t + (size_t)c] * nr + i] -= P.st_w[3 * t + (size_t)c] * g;
+                }
             }
-            it_min = ss.iterations < it_min ? ss.iterations : it_min;
-            it_max = ss.iterations > it_max ? ss.iterations : it_max;
-            it_total += ss.iterations;
-            tsolve += ss.seconds;
-            maxres = fmax(maxres, ss.residual);
-            if (o->progress) o->progress(o->user, i + 1, nr);
         }
+        it_min = ss.iterations_min < it_min ? ss.iterations_min : it_min;
+        it_max = ss.iterations > it_max ? ss.iterations : it_max;
+        it_total += ss.iterations_total;
+        tsolve += ss.seconds;
+        maxres = fmax(maxres, ss.residual);
+        if (o->progress) o->progress(o->user, c0 + k, n_solves);
     }
+    if (!n_solves) it_min = 0;
     if (info) {
         thx_fem_system_info(P.sys, &info->n_free, &info->n_prescribed, &info->t_setup);
         info->t_matrix = thx_fem_system_matrix_seconds(P.sys);

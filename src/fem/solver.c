@@ -3,7 +3,9 @@
  * solves. Every rank holds the whole assembled matrix (thx_csr) and hands
  * PETSc its own block of rows; results are gathered to every rank.
  */
+#include <math.h>
 #include <petscksp.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,6 +65,7 @@ struct thx_fem_system {
     double t_setup;      /* the matrix (creation) and the preconditioner (KSPSetUp) */
     double t_matrix;     /* the matrix alone */
     int pc_ready;
+    size_t block;        /* columns per dense block (thx_fem_system_set_block), 0 = automatic */
 };
 
 /* A PETSc call inside a thx function: on failure record the message and jump to done. */
@@ -231,20 +234,49 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
     if (ranks) *ranks = n;
 }
 
-static thx_status fill_rhs(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, int warm)
+/* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
+#define THX_FEM_BLOCK_BYTES ((size_t)512 << 20)
+#define THX_FEM_BLOCK_MAX 64
+/* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
+ * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system
+ * (currents into a piece of the mesh with no prescribed potential) whose tiny pivot the package took. */
+#define THX_FEM_DIRECT_RTOL 1e-6
+
+/* A factorization in use: -ksp_type preonly with -pc_type cholesky or lu (thx_fem_system_hint_rhs's choice for
+ * many right-hand sides, or the command line's). Only then does a dense block of right-hand sides go to the
+ * factor at once. */
+static int is_direct(const thx_fem_system *s)
 {
-    thx_status st = THX_OK;
-    PetscScalar *b, *x;
-    PCALL(ctx, VecGetArray(s->b, &b));
-    PCALL(ctx, VecGetArray(s->x, &x));
+    KSPType kt = NULL;
+    PCType pt = NULL;
+    PC pc = NULL;
+    KSPGetType(s->ksp, &kt);
+    KSPGetPC(s->ksp, &pc);
+    if (pc) PCGetType(pc, &pt);
+    return kt && pt && !strcmp(kt, KSPPREONLY) && (!strcmp(pt, PCCHOLESKY) || !strcmp(pt, PCLU));
+}
+
+/* The own rows of one right-hand side, b = load_f - K_fd phi_d, and of the guess (x may be NULL). */
+static void rhs_rows(const thx_fem_system *s, const double *phi, const double *load, int warm, PetscScalar *b,
+                     PetscScalar *x)
+{
     PetscInt m = s->rend - s->rstart;
     for (PetscInt r = 0; r < m; r++) {
         int32_t i = s->free_node[s->rstart + r];
         double v = load ? load[i] : 0;
         for (int64_t k = s->kfd.row[r]; k < s->kfd.row[r + 1]; k++) v -= s->kfd.val[k] * phi[s->pres_node[s->kfd.col[k]]];
         b[r] = v;
-        x[r] = warm ? phi[i] : 0;
+        if (x) x[r] = warm ? phi[i] : 0;
     }
+}
+
+static thx_status fill_rhs(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, int warm)
+{
+    thx_status st = THX_OK;
+    PetscScalar *b, *x;
+    PCALL(ctx, VecGetArray(s->b, &b));
+    PCALL(ctx, VecGetArray(s->x, &x));
+    rhs_rows(s, phi, load, warm, b, x);
     PCALL(ctx, VecRestoreArray(s->b, &b));
     PCALL(ctx, VecRestoreArray(s->x, &x));
 done:
@@ -320,16 +352,24 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
             PCALL(ctx, VecNorm(s->r, NORM_2, &rnorm));
         }
     }
+    PetscReal bn = 0;
+    PCALL(ctx, VecNorm(s->b, NORM_2, &bn));
+    double rel = bn > 0 ? rnorm / bn : rnorm;
     if (out) {
-        out->iterations = (int)its;
-        PetscReal bn = 0;
-        VecNorm(s->b, NORM_2, &bn);
-        out->residual = bn > 0 ? rnorm / bn : rnorm;
+        out->iterations = out->iterations_min = (int)its;
+        out->iterations_total = (long)its;
+        out->residual = rel;
         out->converged = reason > 0;
     }
     if (reason <= 0) {
         st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (%s after %d iterations, residual %g)",
                        KSPConvergedReasons[reason], (int)its, (double)rnorm);
+        goto done;
+    }
+    if (is_direct(s) && !(rel <= THX_FEM_DIRECT_RTOL)) {
+        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
+                       "relative residual of %g: the system is singular, e.g. currents into a part of the mesh with no "
+                       "prescribed potential)", rel);
         goto done;
     }
     /* to every rank */
@@ -345,5 +385,163 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
         if (s->fidx[i] < 0 && s->didx[i] < 0) phi[i] = 0;
     if (out) out->seconds = thx_wtime() - t0;
 done:
+    return st;
+}
+
+void thx_fem_system_set_block(thx_fem_system *s, size_t k) { s->block = k; }
+
+size_t thx_fem_system_block(const thx_fem_system *s)
+{
+    if (!is_direct(s)) return 1;
+    if (s->block) return s->block;
+    PetscInt want = 0;
+    PetscBool set = PETSC_FALSE;
+    PetscOptionsGetInt(NULL, NULL, "-thorax_block_size", &want, &set);
+    if (set && want >= 1) return (size_t)want;
+    /* five columns of every node's value per right-hand side live at once: the caller's block, PETSc's
+       dense B and X, CHOLMOD's workspace and the residual's block (docs/decisions.md) */
+    size_t k = THX_FEM_BLOCK_BYTES / (5 * sizeof(double) * (size_t)(s->n > 0 ? s->n : 1));
+    return k < 1 ? 1 : k > THX_FEM_BLOCK_MAX ? THX_FEM_BLOCK_MAX : k;
+}
+
+/* Columns j0 .. j0 + k - 1 in one MatMatSolve with the factor; phi, load point at column j0. */
+static thx_status solve_dense_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k,
+                                    thx_fem_solve_stats *out)
+{
+    thx_status st = THX_OK;
+    Mat B = NULL, X = NULL, R = NULL, F = NULL;
+    PetscReal *rn = NULL, *bn = NULL;
+    PetscScalar *pb = NULL, *px = NULL;
+    size_t n = (size_t)s->n;
+    PetscInt m = s->rend - s->rstart, kk = (PetscInt)k, ldb = 0, ldx = 0;
+    PetscMPIInt size = 1;
+    MPI_Comm_size(PETSC_COMM_WORLD, &size);
+    PC pc;
+    PCALL(ctx, KSPGetPC(s->ksp, &pc));
+    PCALL(ctx, PCFactorGetMatrix(pc, &F));
+    PCALL(ctx, MatCreateDense(PETSC_COMM_WORLD, m, PETSC_DECIDE, s->nf, kk, NULL, &B));
+    PCALL(ctx, MatCreateDense(PETSC_COMM_WORLD, m, PETSC_DECIDE, s->nf, kk, NULL, &X));
+    PCALL(ctx, MatDenseGetLDA(B, &ldb));
+    PCALL(ctx, MatDenseGetArrayWrite(B, &pb));
+    for (size_t j = 0; j < k; j++)
+        rhs_rows(s, phi + j * n, load ? load + j * n : NULL, 0, pb + j * (size_t)ldb, NULL);
+    PCALL(ctx, MatDenseRestoreArrayWrite(B, &pb));
+    PCALL(ctx, MatMatSolve(F, B, X));
+    {
+        MatFactorError fe = MAT_FACTOR_NOERROR;
+        PCALL(ctx, MatFactorGetError(F, &fe));
+        if (fe != MAT_FACTOR_NOERROR) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: %s)",
+                           fe == MAT_FACTOR_STRUCT_ZEROPIVOT    ? "structurally zero pivot"
+                           : fe == MAT_FACTOR_NUMERIC_ZEROPIVOT ? "zero pivot: the matrix is singular"
+                           : fe == MAT_FACTOR_OUTMEMORY         ? "out of memory"
+                                                                : "the package's error");
+            goto done;
+        }
+    }
+    /* the true residuals, as a direct thx_fem_solve reports them: ||B - A X|| column by column */
+    rn = thx_malloc(ctx, 2 * k * sizeof *rn);
+    if (!rn) { st = THX_ENOMEM; goto done; }
+    bn = rn + k;
+    PCALL(ctx, MatMatMult(s->A, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &R));
+    PCALL(ctx, MatAXPY(R, -1.0, B, SAME_NONZERO_PATTERN));
+    PCALL(ctx, MatGetColumnNorms(R, NORM_2, rn));
+    PCALL(ctx, MatGetColumnNorms(B, NORM_2, bn));
+    for (size_t j = 0; j < k; j++) {
+        double rel = bn[j] > 0 ? rn[j] / bn[j] : rn[j];
+        if (!(rel <= THX_FEM_DIRECT_RTOL)) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
+                           "relative residual of %g at right-hand side %zu of a block of %zu: the system is singular, e.g. "
+                           "currents into a part of the mesh with no prescribed potential)", rel, j + 1, k);
+            goto done;
+        }
+        if (out) out->residual = fmax(out->residual, rel);
+    }
+    /* the free values to every rank: on one rank straight from X, else a column at a time through the scatter */
+    PCALL(ctx, MatDenseGetLDA(X, &ldx));
+    PCALL(ctx, MatDenseGetArray(X, &px));
+    for (size_t j = 0; j < k; j++) {
+        double *pj = phi + j * n;
+        const PetscScalar *xa = px + j * (size_t)ldx;
+        if (size > 1) {
+            PCALL(ctx, VecPlaceArray(s->x, xa));
+            PCALL(ctx, VecScatterBegin(s->toall, s->x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+            PCALL(ctx, VecScatterEnd(s->toall, s->x, s->xall, INSERT_VALUES, SCATTER_FORWARD));
+            PCALL(ctx, VecResetArray(s->x));
+            PCALL(ctx, VecGetArrayRead(s->xall, &xa));
+        }
+        for (int32_t q = 0; q < s->nf; q++) pj[s->free_node[q]] = xa[q];
+        if (size > 1) PCALL(ctx, VecRestoreArrayRead(s->xall, &xa));
+        for (int32_t i = 0; i < s->n; i++)
+            if (s->fidx[i] < 0 && s->didx[i] < 0) pj[i] = 0;
+    }
+    PCALL(ctx, MatDenseRestoreArray(X, &px));
+    px = NULL;
+done:
+    if (px) MatDenseRestoreArray(X, &px);
+    free(rn);
+    if (R) MatDestroy(&R);
+    if (B) MatDestroy(&B);
+    if (X) MatDestroy(&X);
+    return st;
+}
+
+thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, int warm,
+                               thx_fem_solve_stats *out)
+{
+    thx_status st = THX_OK;
+    size_t n = (size_t)s->n;
+    thx_fem_solve_stats sum;
+    memset(&sum, 0, sizeof sum);
+    sum.iterations_min = 1 << 30;
+    sum.converged = 1;
+    if (!k) { sum.iterations_min = 0; goto done; }
+    if (k == 1 || !is_direct(s)) {
+        /* column by column: exactly thx_fem_solve, column j > 0 warm-started from column j - 1's solution */
+        for (size_t j = 0; j < k; j++) {
+            double *pj = phi + j * n;
+            if (warm && j > 0)
+                for (int32_t q = 0; q < s->nf; q++) pj[s->free_node[q]] = pj[(ptrdiff_t)s->free_node[q] - (ptrdiff_t)n];
+            thx_fem_solve_stats ss;
+            THX_TRY(thx_fem_solve(ctx, s, pj, load ? load + j * n : NULL, warm, &ss));
+            sum.iterations = ss.iterations > sum.iterations ? ss.iterations : sum.iterations;
+            sum.iterations_min = ss.iterations < sum.iterations_min ? ss.iterations : sum.iterations_min;
+            sum.iterations_total += ss.iterations;
+            sum.residual = fmax(sum.residual, ss.residual);
+            sum.seconds += ss.seconds;
+        }
+        goto done;
+    }
+    /* the factorization once (timed as the setup, as in thx_fem_solve), then dense blocks */
+    if (!s->pc_ready) {
+        double t1 = thx_wtime();
+        PCALL(ctx, KSPSetUp(s->ksp));
+        s->t_setup += thx_wtime() - t1;
+        s->pc_ready = 1;
+        PC pc;
+        PCFailedReason why = PC_NOERROR;
+        PCALL(ctx, KSPGetPC(s->ksp, &pc));
+        PCALL(ctx, PCGetFailedReason(pc, &why));
+        if (why != PC_NOERROR) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: %s)",
+                           PCFailedReasons[why]);
+            goto done;
+        }
+    }
+    {
+        double t0 = thx_wtime();
+        size_t nb = thx_fem_system_block(s);
+        if (s->pinned >= 0)
+            for (size_t j = 0; j < k; j++) phi[j * n + (size_t)s->pinned] = 0;
+        for (size_t j0 = 0; j0 < k; j0 += nb) {
+            size_t kk = k - j0 < nb ? k - j0 : nb;
+            THX_TRY(solve_dense_block(ctx, s, phi + j0 * n, load ? load + j0 * n : NULL, kk, &sum));
+        }
+        sum.iterations = sum.iterations_min = 1;
+        sum.iterations_total = (long)k;
+        sum.seconds = thx_wtime() - t0;
+    }
+done:
+    if (out) *out = sum;
     return st;
 }

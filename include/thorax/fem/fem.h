@@ -69,8 +69,11 @@ thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned 
 void thx_fem_system_destroy(thx_fem_system **s);
 
 typedef struct {
-    int iterations;
-    double residual;   /* final relative residual (as KSP reports it; the true one for a direct solve) */
+    int iterations;    /* of a block (thx_fem_solve_block): the most over its columns */
+    int iterations_min;   /* the fewest over a block's columns (one solve: = iterations) */
+    long iterations_total; /* summed over a block's columns */
+    double residual;   /* final relative residual (as KSP reports it; the true one for a direct solve);
+                          of a block the largest */
     double seconds;
     int converged;     /* KSPConvergedReason > 0 */
 } thx_fem_solve_stats;
@@ -100,6 +103,38 @@ thx_status thx_fem_system_dump(thx_ctx *ctx, thx_fem_system *s, const double *ph
  */
 void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
 
+/*
+ * Many right-hand sides at once (issue 15, item 6). phi and load (or NULL)
+ * hold k columns of n_nodes values each, column j at phi + j * n_nodes, each
+ * as in thx_fem_solve. With a factorization (-ksp_type preonly, -pc_type
+ * cholesky or lu: thx_fem_system_hint_rhs's choice for many right-hand sides)
+ * the columns go to the factorization's package as dense blocks of
+ * thx_fem_system_block(s) columns (MatMatSolve: CHOLMOD and MUMPS traverse the
+ * factor once per block, not once per column, with level-3 BLAS); the answers
+ * agree with column-by-column solves to rounding (1e-14 relative measured),
+ * the residuals are the true ones (||b - A x|| / ||b|| per column), and a
+ * failed factorization or a non-finite answer is THX_ESOLVER as in
+ * thx_fem_solve. Otherwise (an iterative KSP: PETSc 3.18 as Debian builds it
+ * has no block Krylov method, KSPHPDDM) and for k = 1 it is thx_fem_solve
+ * column by column, column j > 0 warm-started from column j - 1's solution
+ * when warm. st: iterations (most, fewest, total) and the largest residual
+ * over the columns, seconds of solving (the factorization is setup time).
+ */
+thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, int warm,
+                               thx_fem_solve_stats *st);
+
+/*
+ * Columns per blocked solve: 1 without a factorization (nothing to gain);
+ * else the thx_fem_system_set_block value, or the PETSc option
+ * -thorax_block_size N, or as many as keep five n_nodes-long columns per
+ * right-hand side (the caller's block, PETSc's B and X, CHOLMOD's workspace,
+ * the residuals) within 512 MB, at most 64 (docs/decisions.md: the measured
+ * gain flattens there). Call after thx_fem_system_hint_rhs. A block size of 1
+ * is the frame-by-frame solve exactly (KSPSolve per column).
+ */
+size_t thx_fem_system_block(const thx_fem_system *s);
+void thx_fem_system_set_block(thx_fem_system *s, size_t k); /* 0: automatic */
+
 /* Free and prescribed node counts, and the setup time (matrix + preconditioner) so far, seconds. */
 void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
 /* Of the setup time: building PETSc's matrix from ours (the rest is the preconditioner's setup). */
@@ -125,6 +160,8 @@ typedef struct {
     void (*progress)(void *user, size_t done, size_t total); /* after each frame (may be NULL) */
     void *user;
     const char *dump_system; /* if set: the first frame's system written there (thx_fem_system_dump) */
+    size_t block;           /* right-hand sides per blocked solve (thx_fem_solve_block); 0 = automatic
+                               (thx_fem_system_block), 1 = frame by frame */
     int dipole_method;      /* thx_forward_dipoles: THX_DIPOLE_VENANT (default) or THX_DIPOLE_PARTIAL */
 } thx_forward_opts;
 
@@ -142,6 +179,7 @@ typedef struct {
     double t_matrix;        /* of t_setup: handing the matrix to PETSc */
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
+    size_t block;           /* right-hand sides per blocked solve used (1: frame by frame) */
     size_t n_fallback;      /* thx_forward_dipoles, Saint-Venant: dipoles put on by partial integration instead
                                (every corner of their tetrahedron on an interface between regions) */
 } thx_forward_result;

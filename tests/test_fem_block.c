@@ -1,0 +1,369 @@
+/*
+ * Blocked multi-right-hand-side solves (thx_fem_solve_block, issue 15 item 6):
+ * on a jittered box, linear fields reproduced exactly by a blocked Cholesky
+ * solve with CHOLMOD and with MUMPS, block sizes that do and do not divide the
+ * number of right-hand sides, loads, one right-hand side; a singular system
+ * (a current into a floating piece) refused by both the frame-by-frame and
+ * the blocked solve, by CG and by the factorization, a system without any
+ * prescribed node refused before; and on the
+ * phantom at test resolution the epicardial series and both transfer
+ * methods, blocked, against the frame-by-frame solve to 1e-12.
+ */
+#include <math.h>
+#include <petscsys.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/fem/fem.h"
+#include "thorax/geom/surfaces.h"
+#include "thorax/mesh/delaunay.h"
+#include "thorax/mesh/mesh.h"
+#define N 6
+
+/* A jittered lattice in [0, N-1]^3 shifted by x0 along x, tetrahedralized (positive orientation);
+ * boundary nodes flagged. */
+static thx_volume *box(thx_ctx *ctx, double x0, unsigned char **on_boundary)
+{
+    thx_volume *v = NULL;
+    thx_volume_create(ctx, &v);
+    size_t n = N * N * N, k = 0;
+    v->n_nodes = n;
+    v->xyz = malloc(3 * n * sizeof *v->xyz);
+    *on_boundary = calloc(n, 1);
+    srand(5);
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            for (int l = 0; l < N; l++, k++) {
+                int on = i == 0 || j == 0 || l == 0 || i == N - 1 || j == N - 1 || l == N - 1;
+                double jit = on ? 0 : 0.2;
+                v->xyz[3 * k] = x0 + i + jit * (rand() / (double)RAND_MAX - 0.5);
+                v->xyz[3 * k + 1] = j + jit * (rand() / (double)RAND_MAX - 0.5);
+                v->xyz[3 * k + 2] = l + jit * (rand() / (double)RAND_MAX - 0.5);
+                (*on_boundary)[k] = (unsigned char)on;
+            }
+    int32_t *tets = NULL;
+    size_t nt = 0;
+    thx_delaunay3d(ctx, v->xyz, n, &tets, NULL, &nt, NULL);
+    for (size_t t = 0; t < nt; t++) {
+        int32_t x = tets[4 * t + 2];
+        tets[4 * t + 2] = tets[4 * t + 3];
+        tets[4 * t + 3] = x;
+    }
+    v->tet = tets;
+    v->n_tets = nt;
+    v->region = calloc(nt, sizeof *v->region);
+    v->n_regions = 1;
+    v->regions = calloc(1, sizeof *v->regions);
+    snprintf(v->regions[0].name, sizeof v->regions[0].name, "test");
+    const double sigma[9] = {0.5, 0.1, 0.05, 0.1, 0.3, -0.04, 0.05, -0.04, 0.1};
+    memcpy(v->regions[0].sigma, sigma, sizeof sigma);
+    return v;
+}
+
+/* The j-th linear field (a different one per column). */
+static double lin(size_t j, const double *p)
+{
+    return (0.3 + 0.1 * (double)j) * p[0] - 0.7 * p[1] + (1.1 - 0.05 * (double)j) * p[2] + 2.0 + (double)j;
+}
+
+/* Largest |a - b| over n values, relative to the largest |b|. */
+static double rel_diff(const double *a, const double *b, size_t n)
+{
+    double d = 0, m = 0;
+    for (size_t i = 0; i < n; i++) {
+        d = fmax(d, fabs(a[i] - b[i]));
+        m = fmax(m, fabs(b[i]));
+    }
+    return m > 0 ? d / m : d;
+}
+
+/* Box tests with the factorization package `pkg` (NULL: thorax's own choice for many right-hand sides). */
+static void box_tests(thx_ctx *ctx, const char *pkg)
+{
+    unsigned char *onb = NULL;
+    thx_volume *v = box(ctx, 0, &onb);
+    thx_csr K;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v, NULL, &K));
+    size_t n = v->n_nodes, R = 11;
+    unsigned char *kind = malloc(n);
+    for (size_t i = 0; i < n; i++) kind[i] = onb[i] ? 2 : 1;
+    if (pkg) {
+        PetscOptionsSetValue(NULL, "-ksp_type", "preonly");
+        PetscOptionsSetValue(NULL, "-pc_type", "cholesky");
+        PetscOptionsSetValue(NULL, "-pc_factor_mat_solver_type", pkg);
+    }
+    thx_fem_system *S = NULL;
+    CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S));
+    if (S) {
+        thx_fem_system_hint_rhs(S, R);
+        thx_fem_system_hint_rhs(S, 100); /* 11 < 12 does not switch; this does (without options) */
+    }
+    if (pkg) {
+        PetscOptionsClearValue(NULL, "-ksp_type");
+        PetscOptionsClearValue(NULL, "-pc_type");
+        PetscOptionsClearValue(NULL, "-pc_factor_mat_solver_type");
+    }
+    if (!S) goto out;
+    char ksp[32], pc[32];
+    thx_fem_system_describe(S, ksp, pc, NULL);
+    CHECK(!strcmp(ksp, "preonly") && !strcmp(pc, "cholesky"));
+    /* the automatic block: at most 64, and 64 for a system this small */
+    CHECK(thx_fem_system_block(S) == 64);
+    double *phi = calloc(n * R, sizeof *phi), *ref = calloc(n * R, sizeof *ref);
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n; i++)
+            if (onb[i]) phi[j * n + i] = ref[j * n + i] = lin(j, v->xyz + 3 * i);
+    /* frame by frame (KSPSolve per column) */
+    for (size_t j = 0; j < R; j++) {
+        thx_fem_solve_stats ss;
+        CHECK_OK(ctx, thx_fem_solve(ctx, S, ref + j * n, NULL, 0, &ss));
+    }
+    /* blocks of 4: 11 = 4 + 4 + 3 */
+    thx_fem_system_set_block(S, 4);
+    CHECK(thx_fem_system_block(S) == 4);
+    thx_fem_solve_stats bs;
+    CHECK_OK(ctx, thx_fem_solve_block(ctx, S, phi, NULL, R, 0, &bs));
+    double exact = 0;
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n; i++) exact = fmax(exact, fabs(phi[j * n + i] - lin(j, v->xyz + 3 * i)));
+    double d = rel_diff(phi, ref, n * R);
+    printf("box (%s): %zu right-hand sides in blocks of 4: linear fields to %.1e, against one by one %.1e, residual %.1e\n",
+           pkg ? pkg : "default", R, exact, d, bs.residual);
+    CHECK(exact < 1e-11);
+    CHECK(d < 1e-12);
+    CHECK(bs.iterations_total == (long)R && bs.iterations == 1 && bs.iterations_min == 1);
+    CHECK(bs.residual < 1e-13);
+    /* one right-hand side, and a block larger than the count */
+    memset(phi, 0, n * R * sizeof *phi);
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n; i++)
+            if (onb[i]) phi[j * n + i] = lin(j, v->xyz + 3 * i);
+    CHECK_OK(ctx, thx_fem_solve_block(ctx, S, phi, NULL, 1, 0, &bs));
+    CHECK(rel_diff(phi, ref, n) < 1e-12 && bs.iterations_total == 1);
+    thx_fem_system_set_block(S, 0);
+    CHECK_OK(ctx, thx_fem_solve_block(ctx, S, phi + n, NULL, R - 1, 0, &bs)); /* 10 columns, block 64 */
+    CHECK(rel_diff(phi + n, ref + n, n * (R - 1)) < 1e-12);
+    /* loads: a dipole of currents inside, on top of the linear field; blocked == one by one */
+    {
+        double *load = calloc(n * R, sizeof *load);
+        size_t a = (N / 2 * N + N / 2) * N + 1, b = (N / 2 * N + N / 2) * N + N - 2;
+        for (size_t j = 0; j < R; j++) {
+            load[j * n + a] = 1.0 + (double)j;
+            load[j * n + b] = -1.0;
+            for (size_t i = 0; i < n; i++)
+                if (onb[i]) phi[j * n + i] = ref[j * n + i] = lin(j, v->xyz + 3 * i);
+                else phi[j * n + i] = ref[j * n + i] = 0;
+        }
+        for (size_t j = 0; j < R; j++) CHECK_OK(ctx, thx_fem_solve(ctx, S, ref + j * n, load + j * n, 0, NULL));
+        thx_fem_system_set_block(S, 5);
+        CHECK_OK(ctx, thx_fem_solve_block(ctx, S, phi, load, R, 0, &bs));
+        double dl = rel_diff(phi, ref, n * R);
+        printf("box (%s): with loads, blocks of 5 against one by one %.1e\n", pkg ? pkg : "default", dl);
+        CHECK(dl < 1e-12);
+        /* the load is felt: the field is no longer linear at the loaded node */
+        CHECK(fabs(phi[a] - lin(0, v->xyz + 3 * a)) > 1e-3);
+        free(load);
+    }
+    free(phi);
+    free(ref);
+out:
+    thx_fem_system_destroy(&S);
+    free(kind);
+    thx_csr_free(&K);
+    thx_volume_destroy(&v);
+    free(onb);
+}
+
+/* Two boxes side by side with no tetrahedron between them; only the first one's boundary is prescribed:
+ * the second is a floating piece and K_ff is singular. */
+static void singular_tests(thx_ctx *ctx)
+{
+    unsigned char *ob1 = NULL, *ob2 = NULL;
+    thx_volume *v1 = box(ctx, 0, &ob1), *v2 = box(ctx, 3 * N, &ob2);
+    size_t n1 = v1->n_nodes, n = n1 + v2->n_nodes;
+    thx_volume *v = NULL;
+    thx_volume_create(ctx, &v);
+    v->n_nodes = n;
+    v->xyz = malloc(3 * n * sizeof *v->xyz);
+    memcpy(v->xyz, v1->xyz, 3 * n1 * sizeof *v->xyz);
+    memcpy(v->xyz + 3 * n1, v2->xyz, 3 * v2->n_nodes * sizeof *v->xyz);
+    v->n_tets = v1->n_tets + v2->n_tets;
+    v->tet = malloc(4 * v->n_tets * sizeof *v->tet);
+    memcpy(v->tet, v1->tet, 4 * v1->n_tets * sizeof *v->tet);
+    for (size_t t = 0; t < 4 * v2->n_tets; t++) v->tet[4 * v1->n_tets + t] = v2->tet[t] + (int32_t)n1;
+    v->region = calloc(v->n_tets, sizeof *v->region);
+    v->n_regions = 1;
+    v->regions = calloc(1, sizeof *v->regions);
+    v->regions[0] = v1->regions[0];
+    thx_csr K;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v, NULL, &K));
+    unsigned char *kind = malloc(n);
+    for (size_t i = 0; i < n; i++) kind[i] = i < n1 && ob1[i] ? 2 : 1;
+    double *phi = calloc(3 * n, sizeof *phi);
+    for (size_t j = 0; j < 3; j++)
+        for (size_t i = 0; i < n1; i++)
+            if (ob1[i]) phi[j * n + i] = lin(j, v->xyz + 3 * i);
+    /* a current into the floating piece has nowhere to go (no solution): refused by CG + GAMG (mode 0) and by
+       the factorization (mode 1), one by one and blocked, with nothing written; without it (mode 2) the
+       system is consistent and the factorization's answer is the linear field on the first box, 0 on the
+       piece, the same both ways */
+    double *load = calloc(3 * n, sizeof *load), *first = NULL;
+    for (size_t j = 0; j < 3; j++) load[j * n + n1 + (N / 2 * N + N / 2) * N + N / 2] = 1;
+    for (int mode = 0; mode < 3; mode++)
+        for (int blocked = 0; blocked < 2; blocked++) {
+            thx_fem_system *S = NULL;
+            CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S));
+            if (!S) continue;
+            if (mode) thx_fem_system_hint_rhs(S, 100);
+            for (size_t j = 0; j < 3; j++)
+                for (size_t i = 0; i < n; i++) phi[j * n + i] = i < n1 && ob1[i] ? lin(j, v->xyz + 3 * i) : 0;
+            const double *L = mode == 2 ? NULL : load;
+            thx_status st = blocked ? thx_fem_solve_block(ctx, S, phi, L, 3, 0, NULL) : thx_fem_solve(ctx, S, phi, L, 0, NULL);
+            double piece = 0, err = 0;
+            for (size_t j = 0; j < (blocked ? 3u : 1u); j++)
+                for (size_t i = 0; i < n; i++)
+                    if (i >= n1) piece = fmax(piece, fabs(phi[j * n + i]));
+                    else err = fmax(err, fabs(phi[j * n + i] - lin(j, v->xyz + 3 * i)));
+            printf("floating piece, %s, %s: %s\n", mode == 0 ? "CG + GAMG, a current into it" : mode == 1 ?
+                   "Cholesky, a current into it" : "Cholesky, no current", blocked ? "blocked" : "one by one",
+                   st ? thx_ctx_message(ctx) : "solved");
+            if (mode < 2) {
+                CHECK(st == THX_ESOLVER);
+                CHECK(strstr(thx_ctx_message(ctx), "did not converge") != NULL);
+                if (mode == 1) CHECK(strstr(thx_ctx_message(ctx), "singular") != NULL);
+                CHECK(piece == 0); /* nothing written */
+            } else {
+                CHECK(st == THX_OK && piece == 0 && err < 1e-11);
+                if (!blocked) first = memcpy(malloc(n * sizeof *first), phi, n * sizeof *first);
+                else if (first) CHECK(rel_diff(phi, first, n) < 1e-12);
+            }
+            thx_fem_system_destroy(&S);
+        }
+    free(first);
+    free(load);
+    /* no prescribed node anywhere: refused when the system is made, as before */
+    memset(kind, 1, n);
+    thx_fem_system *S = NULL;
+    CHECK(thx_fem_system_create(ctx, &K, kind, 0, &S) == THX_EINPUT && S == NULL);
+    CHECK(strstr(thx_ctx_message(ctx), "no prescribed potential") != NULL);
+    free(phi);
+    free(kind);
+    thx_csr_free(&K);
+    thx_volume_destroy(&v);
+    thx_volume_destroy(&v1);
+    thx_volume_destroy(&v2);
+    free(ob1);
+    free(ob2);
+}
+
+/* The phantom at test resolution: the series and both transfer methods, blocked against frame by frame. */
+static void phantom_tests(thx_ctx *ctx)
+{
+    thx_model *m = tl_phantom_surfaces(ctx);
+    thx_mesh_opts mo;
+    thx_mesh_opts_default(&mo);
+    mo.no_heart = 1;
+    CHECK_OK(ctx, thx_mesh_build(ctx, m, &mo, NULL));
+    const thx_surface *heart = NULL, *torso = NULL;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        if (m->surf[s]->role == THX_ROLE_HEART) heart = m->surf[s];
+        if (m->surf[s]->role == THX_ROLE_OUTER) torso = m->surf[s];
+    }
+    /* 29 frames of a rotating dipole-like pattern on the heart (29: prime, no block size divides it) */
+    size_t nh = heart->n_nodes, F = 29;
+    thx_series *epi = NULL;
+    CHECK_OK(ctx, thx_series_create(ctx, nh, F, &epi));
+    double c[3] = {0, 0, 0};
+    for (size_t i = 0; i < nh; i++)
+        for (int d = 0; d < 3; d++) c[d] += heart->xyz[3 * i + d] / (double)nh;
+    for (size_t f = 0; f < F; f++) {
+        double a = 0.2 * (double)f, u[3] = {cos(a), sin(a), 0.3 * cos(2 * a)};
+        for (size_t i = 0; i < nh; i++) {
+            const double *p = heart->xyz + 3 * i;
+            double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]}, r = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            epi->v[f * nh + i] = 1e4 * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) / (r * r * r);
+        }
+    }
+    thx_forward_opts fo;
+    thx_forward_opts_default(&fo);
+    fo.keep_volume = 1;
+    fo.block = 1;
+    thx_forward_result R1, RB;
+    CHECK_OK(ctx, thx_forward_epicardial(ctx, m, epi, &fo, &R1));
+    CHECK(R1.block == 1 && !strcmp(R1.pc, "cholesky"));
+    size_t blocks[] = {0, 8, 1000};
+    for (size_t q = 0; q < sizeof blocks / sizeof *blocks; q++) {
+        fo.block = blocks[q];
+        CHECK_OK(ctx, thx_forward_epicardial(ctx, m, epi, &fo, &RB));
+        if (!RB.torso || !R1.torso) continue;
+        double dt = 0, dv = 0;
+        for (size_t f = 0; f < F; f++) {
+            dt = fmax(dt, rel_diff(RB.torso->v + f * torso->n_nodes, R1.torso->v + f * torso->n_nodes, torso->n_nodes));
+            dv = fmax(dv, rel_diff(RB.volume->v + f * m->volume->n_nodes, R1.volume->v + f * m->volume->n_nodes,
+                                   m->volume->n_nodes));
+        }
+        printf("phantom series, %zu frames in blocks of %zu (asked %zu): torso %.1e, volume %.1e from frame by frame "
+               "(relative, worst frame); solves %.3f s against %.3f s\n",
+               F, RB.block, blocks[q], dt, dv, RB.t_solve, R1.t_solve);
+        CHECK(RB.block == (blocks[q] == 0 ? 29 : blocks[q] > F ? F : blocks[q]));
+        CHECK(dt < 1e-12 && dv < 1e-12);
+        CHECK(RB.it_total == (long)F && RB.max_residual < 1e-12);
+        thx_forward_result_free(&RB);
+    }
+    /* one frame: too few for a factorization, CG + GAMG as before, whatever the block asked */
+    {
+        thx_series *one = NULL;
+        CHECK_OK(ctx, thx_series_create(ctx, nh, 1, &one));
+        memcpy(one->v, epi->v + 5 * nh, nh * sizeof *one->v);
+        fo.block = 16;
+        CHECK_OK(ctx, thx_forward_epicardial(ctx, m, one, &fo, &RB));
+        CHECK(RB.block == 1 && !strcmp(RB.ksp, "cg") && RB.it_min > 1);
+        if (RB.torso) {
+            double d1 = rel_diff(RB.torso->v, R1.torso->v + 5 * torso->n_nodes, torso->n_nodes);
+            printf("phantom, one frame by CG + GAMG (%d iterations): %.1e from the factorization's\n", RB.it_max, d1);
+            CHECK(d1 < 1e-7);
+        }
+        thx_forward_result_free(&RB);
+        thx_series_destroy(&one);
+    }
+    /* transfer matrices: forward (a solve per heart node) and adjoint (13 rows), blocked against one by one */
+    {
+        int32_t rows[13];
+        for (int i = 0; i < 13; i++) rows[i] = (int32_t)((size_t)i * torso->n_nodes / 13);
+        for (int method = 0; method < 2; method++) {
+            thx_series *T1 = NULL, *TB = NULL;
+            thx_forward_result I1, IB;
+            fo.block = 1;
+            CHECK_OK(ctx, thx_forward_transfer(ctx, m, rows, 13, method, &fo, &T1, &I1));
+            fo.block = method ? 5 : 0; /* 13 rows in 5 + 5 + 3; heart nodes in blocks of 64 */
+            CHECK_OK(ctx, thx_forward_transfer(ctx, m, rows, 13, method, &fo, &TB, &IB));
+            if (!T1 || !TB) continue;
+            double d = rel_diff(TB->v, T1->v, T1->n_rows * T1->n_frames);
+            printf("transfer (%s), %zu solves in blocks of %zu: %.1e from one by one; solves %.3f s against %.3f s\n",
+                   method ? "adjoint" : "forward", method ? (size_t)13 : nh, IB.block, d, IB.t_solve, I1.t_solve);
+            CHECK(d < 1e-12);
+            CHECK(I1.block == 1 && IB.block == (method ? 5u : 64u));
+            CHECK(IB.it_total == (long)(method ? 13 : nh));
+            thx_series_destroy(&T1);
+            thx_series_destroy(&TB);
+        }
+    }
+    thx_forward_result_free(&R1);
+    thx_series_destroy(&epi);
+    thx_model_destroy(&m);
+}
+
+int main(int argc, char **argv)
+{
+    thx_ctx *ctx = NULL;
+    thx_ctx_create(&ctx);
+    CHECK_OK(ctx, thx_fem_init(argc, argv, NULL, NULL));
+    box_tests(ctx, NULL);
+    box_tests(ctx, "mumps");
+    singular_tests(ctx);
+    phantom_tests(ctx);
+    thx_fem_finalize();
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
