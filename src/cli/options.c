@@ -10,6 +10,7 @@
 #include <strings.h>
 
 #include "cli/options.h"
+#include "thorax/core/core.h"
 
 #define HELP_WIDTH 79 /* the help's lines are at most this long */
 #define HELP_COLUMN 22 /* where an option's text starts ("  " + 18 for its name, then 2 spaces) */
@@ -351,26 +352,6 @@ int cli_parse(cli_command *c, int argc, char **argv)
 
 /* ------------------------------------------------------------ "did you mean" */
 
-/* Optimal string alignment distance (insertions, deletions, substitutions, adjacent swaps). */
-static size_t edit_distance(const char *a, const char *b)
-{
-    size_t n = strlen(a), m = strlen(b);
-    if (n > 63 || m > 63) return 64;
-    size_t d[64][64];
-    for (size_t i = 0; i <= n; i++) d[i][0] = i;
-    for (size_t j = 0; j <= m; j++) d[0][j] = j;
-    for (size_t i = 1; i <= n; i++)
-        for (size_t j = 1; j <= m; j++) {
-            size_t best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
-            if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
-            if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && d[i - 2][j - 2] + 1 < best)
-                best = d[i - 2][j - 2] + 1;
-            d[i][j] = best;
-        }
-    return d[n][m];
-}
-
 static const char *undash(const char *s)
 {
     while (*s == '-') s++;
@@ -397,7 +378,7 @@ int cli_suggest(const cli_command *c, const char *word, char *buf, size_t cap)
         const char *cn = undash(names[k]);
         size_t len = strlen(cn), limit = len / 4 > 1 ? (len / 4 < 3 ? len / 4 : 3) : 1;
         if (len < 3) continue;
-        size_t d = edit_distance(w, cn);
+        size_t d = thx_name_distance(w, cn);
         if (d > limit || d > bd) continue;
         if (d < bd) nb = 0, bd = d;
         if (nb < 3) best[nb++] = names[k];

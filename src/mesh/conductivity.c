@@ -105,26 +105,6 @@ thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int 
     return THX_OK;
 }
 
-/* Optimal string alignment distance, for the nearest region name (names are under 64 bytes). */
-static size_t name_distance(const char *a, const char *b)
-{
-    size_t n = strlen(a), m = strlen(b);
-    if (n > 63 || m > 63) return 64;
-    size_t d[64][64];
-    for (size_t i = 0; i <= n; i++) d[i][0] = i;
-    for (size_t j = 0; j <= m; j++) d[0][j] = j;
-    for (size_t i = 1; i <= n; i++)
-        for (size_t j = 1; j <= m; j++) {
-            size_t best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
-            if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
-            if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && d[i - 2][j - 2] + 1 < best)
-                best = d[i - 2][j - 2] + 1;
-            d[i][j] = best;
-        }
-    return d[n][m];
-}
-
 thx_status thx_regions_assign(thx_ctx *ctx, thx_region *table, size_t n, const char *assignment, const char *source)
 {
     const char *eq = strchr(assignment, '=');
@@ -142,7 +122,7 @@ thx_status thx_regions_assign(thx_ctx *ctx, thx_region *table, size_t n, const c
         for (size_t r = 0; r < n; r++) {
             size_t at = strlen(names);
             if (at + 70 < sizeof names) snprintf(names + at, sizeof names - at, "%s%s", r ? ", " : "", table[r].name);
-            size_t d = name_distance(name, table[r].name), limit = strlen(table[r].name) / 3 + 1;
+            size_t d = thx_name_distance(name, table[r].name), limit = strlen(table[r].name) / 3 + 1;
             if (d <= limit && d < best) {
                 best = d;
                 snprintf(near, sizeof near, "%s", table[r].name);

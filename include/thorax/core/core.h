@@ -87,6 +87,10 @@ thx_status thx_grow(thx_ctx *ctx, void **arr, size_t *cap, size_t need, size_t e
 /* Monotonic wall clock in seconds. */
 double thx_wtime(void);
 
+/* Optimal string alignment distance between a and b (insertions, deletions, substitutions,
+ * adjacent swaps), for "did you mean" suggestions; 64 when either is longer than 63 bytes. */
+size_t thx_name_distance(const char *a, const char *b);
+
 #ifdef __cplusplus
 }
 #endif
