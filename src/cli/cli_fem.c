@@ -159,3 +159,17 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
     if (warning) *warning = w;
     return st;
 }
+
+thx_status cli_outdir_finish(thx_ctx *ctx, thx_outdir *od, const char *name, cJSON *j, thx_status st)
+{
+    if (st == THX_OK) {
+        char path[sizeof od->tmp + 256];
+        snprintf(path, sizeof path, "%s/%s", od->tmp, name);
+        st = cli_write_json(ctx, path, j);
+    } else {
+        cJSON_Delete(j);
+    }
+    if (st == THX_OK) st = thx_outdir_commit(ctx, od);
+    if (st != THX_OK) thx_outdir_abort(od);
+    return st;
+}

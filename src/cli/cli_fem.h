@@ -4,6 +4,7 @@
 #include <stddef.h>
 
 #include "thorax/core/core.h"
+#include "thorax/core/fileio.h"
 /* The PETSc options of a command line: every argument with a single leading '-' that the command
  * does not know, with its value when the next argument does not start with '-' (or is a number). */
 typedef struct {
@@ -27,6 +28,11 @@ void cli_petsc_finish(cli_petsc_args *pa);
  * a temporary file renamed into place. */
 struct cJSON;
 thx_status cli_write_json(thx_ctx *ctx, const char *path, struct cJSON *j);
+
+/* The end of a command writing into an output directory (thorax/core/fileio.h): when st is THX_OK,
+ * the manifest j as od->tmp/NAME (cli_write_json; j is deleted either way), then the directory
+ * committed; on any failure the directory is abandoned (thx_outdir_abort). Returns the status. */
+thx_status cli_outdir_finish(thx_ctx *ctx, thx_outdir *od, const char *name, struct cJSON *j, thx_status st);
 
 /* A progress bar on stderr ("thorax LABEL [=====>    ] 120/300"); user is the label. */
 void cli_progress(void *user, size_t done, size_t total);

@@ -334,14 +334,8 @@ int cmd_bem(int argc, char **argv)
             cJSON_AddStringToObject(files, keys[q], name);
         }
         cJSON_AddItemToObject(j, "files", files);
-        if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/bem.json", od.tmp);
-            st = cli_write_json(ctx, path, j);
-        } else {
-            cJSON_Delete(j);
-        }
-        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
-        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
+        st = cli_outdir_finish(ctx, &od, "bem.json", j, st);
+        if (st != THX_OK) goto fail;
     }
     if (verbose >= 0) {
         printf("%zu unknowns%s: assembly %.2f s, solve %.2f s\n", info.n_unknowns,

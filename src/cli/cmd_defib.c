@@ -177,14 +177,8 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
             cJSON_AddItemToObject(j, "warnings", warnings);
             warnings = NULL;
         }
-        if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/solution.json", od.tmp);
-            st = cli_write_json(ctx, path, j);
-        } else {
-            cJSON_Delete(j);
-        }
-        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
-        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
+        st = cli_outdir_finish(ctx, &od, "solution.json", j, st);
+        if (st != THX_OK) goto fail;
         if (verbose >= 0) {
             for (int k = 0; k < n_specs; k++)
                 printf("electrode %-10s %4zu nodes, %7.0f mm^2: %s %g %s; current %+.4f A, mean potential %+.3f V\n", p[k].name,

@@ -372,14 +372,8 @@ int cmd_forward(int argc, char **argv)
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
         cJSON_AddItemToObject(j, "solver", solver);
-        if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/solution.json", od.tmp);
-            st = cli_write_json(ctx, path, j);
-        } else {
-            cJSON_Delete(j);
-        }
-        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
-        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
+        st = cli_outdir_finish(ctx, &od, "solution.json", j, st);
+        if (st != THX_OK) goto fail;
         if (verbose >= 0) {
             if (transfer_out)
                 printf("transfer matrix %zu x %zu (%s solves: %d..%d iterations), %.2f s\n", T->n_rows, T->n_frames,

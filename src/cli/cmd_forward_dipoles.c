@@ -108,14 +108,8 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
         cJSON_AddItemToObject(j, "solver", solver);
-        if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/solution.json", od.tmp);
-            st = cli_write_json(ctx, path, j);
-        } else {
-            cJSON_Delete(j);
-        }
-        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
-        if (st != THX_OK) { thx_outdir_abort(&od); goto fail; }
+        st = cli_outdir_finish(ctx, &od, "solution.json", j, st);
+        if (st != THX_OK) goto fail;
         if (verbose >= 0) {
             printf("%zu dipole%s, %zu frame%s: %zu free nodes; %s + %s on %d rank%s, %d..%d iterations per solve; "
                    "assembly %.2f s, setup %.2f s, solves %.2f s\n",

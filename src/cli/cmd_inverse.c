@@ -366,17 +366,8 @@ int cmd_inverse(int argc, char **argv)
         cJSON_AddStringToObject(files, "lambda", "lambda.txt");
         if (R.n_curve) cJSON_AddStringToObject(files, "lcurve", "lcurve.svg");
         cJSON_AddItemToObject(j, "files", files);
-        if (st == THX_OK) {
-            snprintf(path, sizeof path, "%s/inverse.json", od.tmp);
-            st = cli_write_json(ctx, path, j);
-        } else {
-            cJSON_Delete(j);
-        }
-        if (st == THX_OK) st = thx_outdir_commit(ctx, &od);
-        if (st != THX_OK) {
-            thx_outdir_abort(&od);
-            goto fail;
-        }
+        st = cli_outdir_finish(ctx, &od, "inverse.json", j, st);
+        if (st != THX_OK) goto fail;
     }
     if (verbose >= 0) {
         if (truth) {
