@@ -42,7 +42,7 @@ static int spd(const double s[9])
 }
 
 /* Gradients of the barycentric functions (rows, 1/mm) and the volume (mm^3) of tetrahedron q. */
-static double tet_gradients(const double *xyz, const int32_t *q, double g[4][3])
+double thx_fem_tet_gradients(const double *xyz, const int32_t *q, double g[4][3])
 {
     const double *p0 = xyz + 3 * (size_t)q[0];
     double e[3][3];
@@ -116,7 +116,7 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
         if (r < 0 || (size_t)r >= v->n_regions) use[t] = 0;
         if (!use[t]) continue;
         double g[4][3];
-        double vol = tet_gradients(v->xyz, v->tet + 4 * t, g);
+        double vol = thx_fem_tet_gradients(v->xyz, v->tet + 4 * t, g);
         if (!(vol > 0)) {
 #pragma omp critical
             if (bad < 0 || t < bad) bad = t;
@@ -254,7 +254,7 @@ void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, cons
         double J[3] = {0, 0, 0}, vol = 0;
         if (use) {
             double g[4][3];
-            vol = tet_gradients(v->xyz, v->tet + 4 * t, g);
+            vol = thx_fem_tet_gradients(v->xyz, v->tet + 4 * t, g);
             double gp[3] = {0, 0, 0};
             for (int k = 0; k < 4; k++)
                 for (int c = 0; c < 3; c++) gp[c] += phi[v->tet[4 * t + k]] * g[k][c];

@@ -96,27 +96,8 @@ void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[
 static int pi_stencil(const thx_volume *v, long tet, int32_t *node, double (*w)[3])
 {
     const int32_t *c = v->tet + 4 * tet;
-    const double *p0 = v->xyz + 3 * (size_t)c[0];
-    double e[3][3];
-    for (int k = 0; k < 3; k++)
-        for (int j = 0; j < 3; j++) e[k][j] = v->xyz[3 * (size_t)c[k + 1] + j] - p0[j];
-    /* grad l_k (k = 1..3) are the columns of E^-1 (rows of E = the edges from corner 0) */
-    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
-    double inv[3][3];
-    inv[0][0] = (e[1][1] * e[2][2] - e[1][2] * e[2][1]) / det;
-    inv[0][1] = (e[0][2] * e[2][1] - e[0][1] * e[2][2]) / det;
-    inv[0][2] = (e[0][1] * e[1][2] - e[0][2] * e[1][1]) / det;
-    inv[1][0] = (e[1][2] * e[2][0] - e[1][0] * e[2][2]) / det;
-    inv[1][1] = (e[0][0] * e[2][2] - e[0][2] * e[2][0]) / det;
-    inv[1][2] = (e[0][2] * e[1][0] - e[0][0] * e[1][2]) / det;
-    inv[2][0] = (e[1][0] * e[2][1] - e[1][1] * e[2][0]) / det;
-    inv[2][1] = (e[0][1] * e[2][0] - e[0][0] * e[2][1]) / det;
-    inv[2][2] = (e[0][0] * e[1][1] - e[0][1] * e[1][0]) / det;
     double g[4][3];
-    for (int k = 0; k < 3; k++)
-        for (int j = 0; j < 3; j++) g[k + 1][j] = inv[j][k];
-    for (int j = 0; j < 3; j++) g[0][j] = -(g[1][j] + g[2][j] + g[3][j]);
+    thx_fem_tet_gradients(v->xyz, c, g);
     for (int k = 0; k < 4; k++) {
         node[k] = c[k];
         memcpy(w[k], g[k], sizeof g[k]);

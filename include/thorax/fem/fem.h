@@ -365,6 +365,10 @@ typedef struct {
 thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *patches, size_t n_patches, double threshold,
                            double **phi, double **field, thx_defib_report *rep);
 
+/* The gradients of the four hat functions of tetrahedron q (4 node numbers into xyz) as g[k]
+ * (1/length), and the signed volume (positive for a positively oriented tetrahedron). */
+double thx_fem_tet_gradients(const double *xyz, const int32_t *q, double g[4][3]);
+
 #ifdef __cplusplus
 }
 #endif
