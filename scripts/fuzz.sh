@@ -9,7 +9,8 @@
 # seeds as a regression input. Limits per input: FUZZ_RSS_MB (default 1024) of memory, a single
 # allocation above FUZZ_MALLOC_MB (default 256) and FUZZ_TIMEOUT seconds (default 10): a reader
 # given a file of at most FUZZ_MAX_LEN bytes (default 65536) must stay far below those.
-# Prints one line per target: executions, coverage (edges), corpus size and findings.
+# Prints one line per target: executions, coverage (edges), corpus size and findings. JOBS
+# harnesses (default: the number of cores) run side by side.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FUZZ_TIME=${FUZZ_TIME:-60}
@@ -40,18 +41,26 @@ out=${FUZZ_OUT:-}
 if [ -z "$out" ]; then out=$(mktemp -d "${TMPDIR:-/tmp}/thorax-fuzz-findings.XXXXXX"); fi
 mkdir -p "$out"
 
-printf '%-14s %8s %12s %10s %8s %7s %9s\n' target seconds executions exec/s edges corpus findings
-failed=0
-for t in "${targets[@]}"; do
+# One harness: runs it, writes its table line to $out/NAME/line and its findings' summary to
+# $out/NAME/findings (empty: none). JOBS harnesses run at once, each a single process.
+run_one() {
+  local t=$1 bin corpus log rc execs secs edges ncorp nfind
   bin="$FUZZ_BUILD/bin/fuzz_$t"
-  if [ ! -x "$bin" ]; then echo "fuzz: no harness $bin" >&2; failed=1; continue; fi
+  mkdir -p "$out/$t"
+  : > "$out/$t/findings"
+  if [ ! -x "$bin" ]; then
+    echo "fuzz: no harness $bin" > "$out/$t/findings"
+    printf '%-14s %8s %12s %10s %8s %7s %9s\n' "$t" - - - - - missing > "$out/$t/line"
+    return
+  fi
   bin=$(realpath "$bin")
   corpus="$scratch/$t"
-  mkdir -p "$corpus" "$out/$t"
+  mkdir -p "$corpus"
   [ -d "tests/fuzz/corpus/$t" ] && cp -r "tests/fuzz/corpus/$t/." "$corpus/"
   log="$out/$t/fuzz.log"
   set +e
-  # -fork would add parallel jobs; one process keeps the figures comparable run to run.
+  # -fork would add parallel jobs within a harness; one process each keeps the figures
+  # comparable run to run.
   (cd "$out/$t" && ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 \
      "$bin" "$corpus" -max_total_time="$FUZZ_TIME" -rss_limit_mb="$FUZZ_RSS_MB" \
      -malloc_limit_mb="$FUZZ_MALLOC_MB" -timeout="$FUZZ_TIMEOUT" -max_len="$FUZZ_MAX_LEN" \
@@ -64,12 +73,26 @@ for t in "${targets[@]}"; do
   ncorp=$(find "$corpus" -type f | wc -l)
   nfind=$(find "$out/$t" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' -o -name 'slow-unit-*' \) | wc -l)
   if [ "$rc" -ne 0 ] && [ "$nfind" -eq 0 ]; then nfind=1; fi
-  printf '%-14s %8s %12s %10s %8s %7s %9s\n' "$t" "$FUZZ_TIME" "${execs:-?}" "${secs:-?}" "${edges:-?}" "$ncorp" "$nfind"
+  printf '%-14s %8s %12s %10s %8s %7s %9s\n' "$t" "$FUZZ_TIME" "${execs:-?}" "${secs:-?}" "${edges:-?}" "$ncorp" "$nfind" > "$out/$t/line"
   if [ "$nfind" -ne 0 ]; then
-    failed=1
-    echo "fuzz: $t: finding(s) in $out/$t/ (log: $log):" >&2
-    grep -E 'ERROR|SUMMARY|fuzz property|Test unit written' "$log" | head -8 >&2 || true
+    { echo "fuzz: $t: finding(s) in $out/$t/ (log: $log):"
+      grep -E 'ERROR|SUMMARY|fuzz property|Test unit written' "$log" | head -8 || true; } > "$out/$t/findings"
   fi
+}
+
+running=0
+for t in "${targets[@]}"; do
+  if [ "$running" -ge "$JOBS" ]; then wait -n || true; running=$((running - 1)); fi
+  run_one "$t" &
+  running=$((running + 1))
+done
+wait
+
+printf '%-14s %8s %12s %10s %8s %7s %9s\n' target seconds executions exec/s edges corpus findings
+failed=0
+for t in "${targets[@]}"; do
+  cat "$out/$t/line" 2>/dev/null || { printf '%-14s (did not run)\n' "$t"; failed=1; }
+  if [ -s "$out/$t/findings" ]; then failed=1; cat "$out/$t/findings" >&2; fi
 done
 if [ "$failed" -ne 0 ]; then exit 1; fi
 [ -z "${FUZZ_OUT:-}" ] && rm -rf "$out"

@@ -123,8 +123,10 @@ static thx_status sort_tets_by_tag(raw *r, int line)
         memcpy(tet + 4 * t, r->tet + 4 * o, 4 * sizeof *tet);
         tag[t] = r->tag[o];
     }
-    memcpy(r->tet, tet, 4 * n * sizeof *tet);
-    memcpy(r->tag, tag, n * sizeof *tag);
+    if (n) { /* memcpy wants real pointers even for no bytes; an empty file has none */
+        memcpy(r->tet, tet, 4 * n * sizeof *tet);
+        memcpy(r->tag, tag, n * sizeof *tag);
+    }
     for (size_t t = 0; t < n; t++) r->ref[t] = key[2 * t];
 done:
     free(key);
