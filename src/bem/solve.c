@@ -169,6 +169,10 @@ thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, co
         }
         comp[d] = c;
     }
+    if (o->method == THX_BEM_SYMMETRIC) {
+        st = thx_bem_dipoles_symmetric(ctx, b, pos, mom, nd, comp, phi, &inf);
+        goto done;
+    }
     double t0 = thx_wtime();
     B = thx_calloc(ctx, N * N, sizeof *B);
     double *rhs = phi;

@@ -101,12 +101,13 @@ static const char *ext_of(thx_series_format f)
 int cmd_bem(int argc, char **argv)
 {
     const char *out = NULL, *dip_path = NULL, *elec_path = NULL, *cond_path = NULL, *heart_name = NULL;
-    int verbose = 0, transfer = 0, no_ipa = 0, format = THX_SERIES_RAW, scalapack = 0;
+    int verbose = 0, transfer = 0, no_ipa = 0, format = THX_SERIES_RAW, scalapack = 0, method = THX_BEM_SYMMETRIC;
     cli_petsc_args pa;
     cli_petsc_args_init(&pa, argv[0]);
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     static const cli_choice formats[] = {{"raw", THX_SERIES_RAW}, {"text", THX_SERIES_TEXT}, {"mat", THX_SERIES_MAT},
                                          {NULL, 0}};
+    static const cli_choice methods[] = {{"symmetric", THX_BEM_SYMMETRIC}, {"collocation", THX_BEM_COLLOCATION}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
          .help = "the result directory (written whole or not at all)"},
@@ -129,8 +130,11 @@ int cmd_bem(int argc, char **argv)
         {.name = "--scalapack", .type = CLI_FLAG, .i = &scalapack,
          .help = "--transfer: the dense system as PETSc's MATSCALAPACK over the MPI ranks (the default under mpirun "
                  "with more than one rank)"},
+        {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &method,
+         .help = "dipoles: the symmetric Galerkin BEM (potentials and normal currents on every interface; Kybic et "
+                 "al. 2005) or linear collocation (one equation a node); --transfer is always by collocation"},
         {.name = "--no-ipa", .type = CLI_FLAG, .i = &no_ipa,
-         .help = "dipoles: no isolated problem approach (Hamalainen & Sarvas 1989)"},
+         .help = "dipoles by collocation: no isolated problem approach (Hamalainen & Sarvas 1989)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
@@ -138,7 +142,7 @@ int cmd_bem(int argc, char **argv)
     cli_command cmd = {
         .name = "bem",
         .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
-                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--no-ipa] [--format]",
+                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
                  "problem approach, dense LU by LAPACK (OpenBLAS). MODEL is a model directory\n"
@@ -232,6 +236,7 @@ int cmd_bem(int argc, char **argv)
     thx_bem_opts o;
     thx_bem_opts_default(&o);
     o.ipa = !no_ipa;
+    o.method = method;
     size_t N = thx_bem_n_nodes(b), no = m->surf[outer]->n_nodes, oo = thx_bem_offset(b, outer);
     const char *oname = m->surf[outer]->name;
     if (transfer) {
@@ -293,7 +298,9 @@ int cmd_bem(int argc, char **argv)
         cJSON_AddStringToObject(j, "model", realpath(model, abs) ? abs : model);
         cJSON_AddStringToObject(j, "problem", transfer ? "transfer matrix (heart-surface potentials)" : "dipoles");
         cJSON_AddStringToObject(j, "command", cli_command_line());
-        cJSON_AddStringToObject(j, "method", "linear collocation, analytic integrals (de Munck 1992), LAPACK dgetrf");
+        cJSON_AddStringToObject(j, "method", !transfer && method == THX_BEM_SYMMETRIC
+                                                 ? "symmetric Galerkin (Kybic et al. 2005): P1 potentials, P0 currents"
+                                                 : "linear collocation, analytic integrals (de Munck 1992)");
         for (size_t k = 0; k < m->n_surfaces; k++) {
             cJSON *s = cJSON_CreateObject();
             cJSON_AddStringToObject(s, "name", m->surf[k]->name);

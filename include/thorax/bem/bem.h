@@ -87,10 +87,14 @@ thx_status thx_bem_double_layer(thx_ctx *ctx, const thx_bem *b, double *B);
  * triangles at i, from their dihedral angles (sum of the interior dihedrals - (m - 2) pi). */
 double thx_bem_vertex_angle(const thx_bem *b, size_t k, size_t i);
 
+enum { THX_BEM_SYMMETRIC = 0, THX_BEM_COLLOCATION = 1 };
+
 typedef struct {
+    int method;        /* for dipoles: THX_BEM_SYMMETRIC (default; symmetric.c) or THX_BEM_COLLOCATION.
+                          The transfer matrix is always by collocation. */
     int ipa;           /* 1 (default): the isolated problem approach where it applies: dipoles in the
                           compartment inside a surface with no surface inside it, conducting more
-                          than the compartment outside; 0: never */
+                          than the compartment outside; 0: never (collocation only) */
 } thx_bem_opts;
 void thx_bem_opts_default(thx_bem_opts *o);
 

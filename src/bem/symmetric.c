@@ -1,0 +1,438 @@
+/* The symmetric (Galerkin) boundary-element method for dipoles in nested compartments
+ * (thorax/bem/bem.h, thx_bem_dipoles with THX_BEM_SYMMETRIC; docs/decisions.md, "Symmetric
+ * boundary elements").
+ *
+ * Unknowns: the potential V on every surface (linear on each triangle, one value a node) and the
+ * normal current p = sigma dV/dn on every surface but the outermost (constant on each triangle);
+ * outside the outermost surface nothing conducts, so p = 0 there. For a compartment c (the inside
+ * of a surface minus the insides of its children) with conductivity sigma_c, s_{c,k} = +1 when
+ * surface k is c's outer boundary and -1 when it is an inner one, Green's representation gives
+ *     u_c = v_c / sigma_c + sum_{k in dc} s_{c,k} [ S_k p_k / sigma_c - D_k V_k ]
+ * (V in c, 0 outside it; v_c the potential of c's sources in a unit-conductivity infinite medium,
+ * S_k and D_k the single- and double-layer potentials of surface k, G = 1/(4 pi r)). The jump of
+ * u_in - u_out and of sigma_in du_in/dn - sigma_out du_out/dn across surface i vanish; written
+ * with the principal values the jump terms cancel, and for every pair of surfaces (i, k) that
+ * bound a common compartment c:
+ *     Dirichlet row of surface i (tested by each triangle's indicator):
+ *       sum_k sum_c s_ci s_ck [ S_ik p_k / sigma_c - D_ik V_k ] = - sum_c s_ci v_c / sigma_c
+ *     Neumann row (tested by each node's hat function):
+ *       sum_k sum_c s_ci s_ck [ sigma_c N_ik V_k - D*_ik p_k ]  =   sum_c s_ci dv_c/dn
+ * with N = d/dn D the hypersingular operator. Tested by Galerkin the matrix is symmetric
+ * (<psi, D phi> = <D* psi, phi>); N by Nedelec's integration by parts,
+ *     <phi_a, N phi_b> = - int int G(x - y) (n x grad phi_a)(x) . (n x grad phi_b)(y),
+ * so that every block comes from two kinds of triangle-pair integrals: the constant single layer
+ * SS_TT' = int_T int_T' G and the double layer of the hat functions int_T int_T' dG/dn_y h_j.
+ * The inner integral is analytic (thx_bem_triangle) for near pairs, a 7- or 3-point rule for far
+ * ones; the outer one a 12- or 7-point rule. The constant potential (V = 1 everywhere, p = 0) is
+ * the one null vector; it is deflated by alpha w w^T on the outer surface's block (w the hat
+ * functions' integrals), which fixes the area-weighted mean of V on the outer surface to 0. */
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bem/bem_impl.h"
+
+/* pairs nearer than NEAR_ANALYTIC times the larger diameter: analytic inner integral, a 12-point
+ * outer rule below NEAR_FINE diameters, 7 points above; numerical 7 x 7 points below FAR, 3 x 3
+ * beyond (tests/test_bem.c measures the error of each against the analytic 12-point values) */
+#define NEAR_FINE 1.5
+#define NEAR_ANALYTIC 3.0
+#define FAR 8.0
+
+typedef struct {
+    double x[3], w, l[3]; /* point, weight times area, barycentric coordinates */
+} qpt;
+
+typedef struct {
+    const double *v[3];
+    double n[3], area, c[3], diam;
+    double curl[3][3]; /* n x grad h_j (constant on the triangle) */
+    int surf;
+    int32_t node[3]; /* global node indices (unknowns) */
+    qpt q3[3], q7[7];
+} tri;
+
+/* Dunavant's rules: barycentric coordinates and weights */
+static const double R3[3][4] = {{2. / 3, 1. / 6, 1. / 6, 1. / 3}, {1. / 6, 2. / 3, 1. / 6, 1. / 3}, {1. / 6, 1. / 6, 2. / 3, 1. / 3}};
+#define A7 0.059715871789770
+#define B7 0.470142064105115
+#define C7 0.797426985353087
+#define D7 0.101286507323456
+#define W7A 0.132394152788506
+#define W7B 0.125939180544827
+static const double R7[7][4] = {{1. / 3, 1. / 3, 1. / 3, 0.225},
+                                {A7, B7, B7, W7A}, {B7, A7, B7, W7A}, {B7, B7, A7, W7A},
+                                {C7, D7, D7, W7B}, {D7, C7, D7, W7B}, {D7, D7, C7, W7B}};
+#define A12 0.873821971016996
+#define B12 0.063089014491502
+#define C12 0.501426509658179
+#define D12 0.249286745170910
+#define E12 0.636502499121399
+#define F12 0.310352451033785
+#define G12 0.053145049844816
+#define W12A 0.050844906370207
+#define W12B 0.116786275726379
+#define W12C 0.082851075618374
+static const double R12[12][4] = {
+    {A12, B12, B12, W12A}, {B12, A12, B12, W12A}, {B12, B12, A12, W12A},
+    {C12, D12, D12, W12B}, {D12, C12, D12, W12B}, {D12, D12, C12, W12B},
+    {E12, F12, G12, W12C}, {E12, G12, F12, W12C}, {F12, E12, G12, W12C},
+    {F12, G12, E12, W12C}, {G12, E12, F12, W12C}, {G12, F12, E12, W12C}};
+
+static void rule(const tri *t, const double (*r)[4], int m, qpt *q)
+{
+    for (int i = 0; i < m; i++) {
+        for (int k = 0; k < 3; k++) {
+            q[i].x[k] = r[i][0] * t->v[0][k] + r[i][1] * t->v[1][k] + r[i][2] * t->v[2][k];
+            q[i].l[k] = r[i][k];
+        }
+        q[i].w = r[i][3] * t->area;
+    }
+}
+
+static double dist(const double *a, const double *b)
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+static void tri_init(tri *t, const double *a, const double *b, const double *c)
+{
+    t->v[0] = a, t->v[1] = b, t->v[2] = c;
+    double e1[3], e2[3], nn[3];
+    for (int k = 0; k < 3; k++) e1[k] = b[k] - a[k], e2[k] = c[k] - a[k], t->c[k] = (a[k] + b[k] + c[k]) / 3;
+    nn[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    nn[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    nn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+    t->area = l / 2;
+    for (int k = 0; k < 3; k++) t->n[k] = l > 0 ? nn[k] / l : 0;
+    t->diam = fmax(dist(a, b), fmax(dist(b, c), dist(c, a)));
+    /* n x grad h_j = n x (n x e_j)/(2A) = -e_j/(2A), e_j = v_{j+2} - v_{j+1} (in the plane) */
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 3; k++)
+            t->curl[j][k] = l > 0 ? (t->v[(j + 1) % 3][k] - t->v[(j + 2) % 3][k]) / l : 0;
+    rule(t, R3, 3, t->q3);
+    rule(t, R7, 7, t->q7);
+}
+
+/* int_T int_T' G (ss) and int_T int_T' dG(x - y)/dn_y h_j(y) (dd[j]) for the pair (T, T'). */
+static void pair_integrals(const tri *T, const qpt *q12, const tri *U, double *ss, double dd[3])
+{
+    double s = 0, d0 = 0, d1 = 0, d2 = 0;
+    double rho = dist(T->c, U->c) / fmax(T->diam, U->diam);
+    if (rho < NEAR_ANALYTIC) {
+        const qpt *q = rho < NEAR_FINE ? q12 : T->q7;
+        int m = rho < NEAR_FINE ? 12 : 7;
+        for (int i = 0; i < m; i++) {
+            double dl[3], sl[3];
+            thx_bem_triangle(q[i].x, U->v[0], U->v[1], U->v[2], dl, sl);
+            s += q[i].w * (sl[0] + sl[1] + sl[2]);
+            /* dG/dn_y = -n.(y - x)/(4 pi |y - x|^3): the analytic dl carries n.(y - x)/|y - x|^3 */
+            d0 -= q[i].w * dl[0];
+            d1 -= q[i].w * dl[1];
+            d2 -= q[i].w * dl[2];
+        }
+    } else {
+        const qpt *p = rho < FAR ? T->q7 : T->q3, *q = rho < FAR ? U->q7 : U->q3;
+        int m = rho < FAR ? 7 : 3;
+        const double *n = U->n;
+        for (int i = 0; i < m; i++)
+            for (int j = 0; j < m; j++) {
+                double r[3] = {q[j].x[0] - p[i].x[0], q[j].x[1] - p[i].x[1], q[j].x[2] - p[i].x[2]};
+                double inv = 1 / sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+                double w = p[i].w * q[j].w;
+                s += w * inv;
+                double k = -w * (n[0] * r[0] + n[1] * r[1] + n[2] * r[2]) * inv * inv * inv;
+                d0 += k * q[j].l[0];
+                d1 += k * q[j].l[1];
+                d2 += k * q[j].l[2];
+            }
+    }
+    const double f = 1 / (4 * M_PI);
+    *ss = s * f;
+    dd[0] = d0 * f, dd[1] = d1 * f, dd[2] = d2 * f;
+}
+
+/* The potential v of a unit-conductivity dipole (p, q) and its gradient at x. */
+static double dipole_v(const double *x, const double *p, const double *q, double g[3])
+{
+    double R[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+    double r2 = R[0] * R[0] + R[1] * R[1] + R[2] * R[2], r = sqrt(r2), r3 = r2 * r;
+    double qr = q[0] * R[0] + q[1] * R[1] + q[2] * R[2];
+    for (int k = 0; k < 3; k++) g[k] = (q[k] / r3 - 3 * qr * R[k] / (r3 * r2)) / (4 * M_PI);
+    return qr / (4 * M_PI * r3);
+}
+
+/* int_T v (out[0]) and int_T h_j dv/dn (out[1 + j]) over the sub-triangle with barycentric
+ * corners L[0..2] of T, subdivided where the dipole is near (adaptive, 7-point leaves). */
+static void source_integrals(const tri *T, const double L[3][3], const double *p, const double *q, int depth, double out[4])
+{
+    double x[3][3], c[3], h = 0;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) x[i][k] = L[i][0] * T->v[0][k] + L[i][1] * T->v[1][k] + L[i][2] * T->v[2][k];
+    for (int k = 0; k < 3; k++) c[k] = (x[0][k] + x[1][k] + x[2][k]) / 3;
+    for (int i = 0; i < 3; i++) h = fmax(h, dist(x[i], x[(i + 1) % 3]));
+    if (depth < 10 && h > 0.3 * dist(c, p)) {
+        double M[3][3]; /* edge midpoints 01, 12, 20 */
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) M[i][k] = (L[i][k] + L[(i + 1) % 3][k]) / 2;
+        double S[4][3][3];
+        for (int k = 0; k < 3; k++) {
+            S[0][0][k] = L[0][k], S[0][1][k] = M[0][k], S[0][2][k] = M[2][k];
+            S[1][0][k] = M[0][k], S[1][1][k] = L[1][k], S[1][2][k] = M[1][k];
+            S[2][0][k] = M[2][k], S[2][1][k] = M[1][k], S[2][2][k] = L[2][k];
+            S[3][0][k] = M[0][k], S[3][1][k] = M[1][k], S[3][2][k] = M[2][k];
+        }
+        for (int s = 0; s < 4; s++) source_integrals(T, (const double(*)[3])S[s], p, q, depth + 1, out);
+        return;
+    }
+    double area = T->area / (double)(1u << (2 * depth));
+    for (int i = 0; i < 7; i++) {
+        double l[3], y[3], g[3];
+        for (int k = 0; k < 3; k++) l[k] = R7[i][0] * L[0][k] + R7[i][1] * L[1][k] + R7[i][2] * L[2][k];
+        for (int k = 0; k < 3; k++) y[k] = l[0] * T->v[0][k] + l[1] * T->v[1][k] + l[2] * T->v[2][k];
+        double w = R7[i][3] * area;
+        double v = dipole_v(y, p, q, g);
+        double dn = g[0] * T->n[0] + g[1] * T->n[1] + g[2] * T->n[2];
+        out[0] += w * v;
+        for (int j = 0; j < 3; j++) out[1 + j] += w * l[j] * dn;
+    }
+}
+
+/* s_{c,k}: +1 when surface k is compartment c's outer boundary, -1 an inner one, 0 neither
+ * (compartment c is the inside of surface c; the outside of the outermost conducts nothing). */
+static int side(const thx_bem *b, size_t c, size_t k)
+{
+    if (c == k) return 1;
+    if (b->parent[k] == (int)c) return -1;
+    return 0;
+}
+
+/* Coefficients of the pair of surfaces (i, k): sum over their common compartments of
+ * s_ci s_ck / sigma_c, s_ci s_ck sigma_c, s_ci s_ck. Returns 0 when they bound none together. */
+static int pair_coef(const thx_bem *b, size_t i, size_t k, double *cs, double *cn, double *cd)
+{
+    *cs = *cn = *cd = 0;
+    int any = 0;
+    int cand[2] = {(int)i, b->parent[i]};
+    for (int m = 0; m < 2; m++) {
+        if (cand[m] < 0) continue;
+        size_t c = (size_t)cand[m];
+        int si = side(b, c, i), sk = side(b, c, k);
+        if (!si || !sk) continue;
+        double sig = b->sig_in[c];
+        *cs += si * sk / sig;
+        *cn += si * sk * sig;
+        *cd += si * sk;
+        any = 1;
+    }
+    return any;
+}
+
+thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
+                                     const int *comp, double *phi, thx_bem_info *info)
+{
+    const size_t S = b->n, N = b->off[S];
+    thx_status st = THX_OK;
+    size_t nt = 0, np = 0;
+    for (size_t k = 0; k < S; k++) {
+        nt += b->surf[k]->n_tris;
+        if (k != b->outer) np += b->surf[k]->n_tris;
+    }
+    const size_t n = N + np;
+    tri *T = thx_calloc(ctx, nt ? nt : 1, sizeof *T);
+    long *pidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *pidx);
+    size_t *toff = thx_malloc(ctx, (S + 1) * sizeof *toff);
+    unsigned char *share = thx_calloc(ctx, S * S, 1);
+    double *cS = thx_calloc(ctx, S * S, sizeof *cS), *cN = thx_calloc(ctx, S * S, sizeof *cN),
+           *cD = thx_calloc(ctx, S * S, sizeof *cD);
+    size_t *nt_off = thx_calloc(ctx, N + 1, sizeof *nt_off), *nt_idx = thx_malloc(ctx, (3 * nt + 1) * sizeof *nt_idx);
+    double *SS = NULL, *M = NULL, *rhs = NULL;
+    int *piv = NULL;
+    if (!T || !pidx || !toff || !share || !cS || !cN || !cD || !nt_off || !nt_idx) { st = THX_ENOMEM; goto done; }
+    if (n > 46000) {
+        st = thx_error(ctx, THX_EINPUT, "bem: symmetric method: %zu unknowns (%zu nodes, %zu current triangles) would "
+                       "need %.0f GB for the dense system; use fewer nodes", n, N, np, 8.0 * (double)n * (double)n / 1e9);
+        goto done;
+    }
+    /* triangles, their current unknowns, node -> triangles */
+    {
+        size_t t = 0, p = 0;
+        for (size_t k = 0; k < S; k++) {
+            const thx_surface *s = b->surf[k];
+            toff[k] = t;
+            for (size_t j = 0; j < s->n_tris; j++, t++) {
+                const int32_t *v = s->tri + 3 * j;
+                tri_init(&T[t], s->xyz + 3 * v[0], s->xyz + 3 * v[1], s->xyz + 3 * v[2]);
+                T[t].surf = (int)k;
+                for (int m = 0; m < 3; m++) T[t].node[m] = (int32_t)(b->off[k] + (size_t)v[m]);
+                pidx[t] = k == b->outer ? -1 : (long)(N + p++);
+            }
+        }
+        toff[S] = t;
+        for (size_t i = 0; i < nt; i++)
+            for (int m = 0; m < 3; m++) nt_off[T[i].node[m] + 1]++;
+        for (size_t a = 0; a < N; a++) nt_off[a + 1] += nt_off[a];
+        size_t *fill = thx_calloc(ctx, N ? N : 1, sizeof *fill);
+        if (!fill) { st = THX_ENOMEM; goto done; }
+        for (size_t i = 0; i < nt; i++)
+            for (int m = 0; m < 3; m++) {
+                size_t a = (size_t)T[i].node[m];
+                nt_idx[nt_off[a] + fill[a]++] = i;
+            }
+        free(fill);
+    }
+    for (size_t i = 0; i < S; i++)
+        for (size_t k = 0; k < S; k++)
+            share[i * S + k] = (unsigned char)pair_coef(b, i, k, &cS[i * S + k], &cN[i * S + k], &cD[i * S + k]);
+
+    double t0 = thx_wtime();
+    SS = thx_calloc(ctx, nt * nt, sizeof *SS);
+    M = thx_calloc(ctx, n * n, sizeof *M);
+    if (!SS || !M) {
+        st = thx_error(ctx, THX_ENOMEM, "bem: symmetric method: %zu unknowns need %.1f GB", n,
+                       8.0 * ((double)n * (double)n + (double)nt * (double)nt) / 1e9);
+        goto done;
+    }
+    if (info) info->matrix_bytes = 8.0 * ((double)n * (double)n + (double)nt * (double)nt);
+    /* 1. every pair of triangles whose surfaces bound a common compartment: SS, and the double
+     *    layer into the current rows (row p_T: written by T's iteration only) */
+#pragma omp parallel for schedule(dynamic, 8)
+    for (size_t i = 0; i < nt; i++) {
+        const tri *A = &T[i];
+        qpt q12[12];
+        rule(A, R12, 12, q12);
+        for (size_t k = 0; k < S; k++) {
+            if (!share[(size_t)A->surf * S + k]) continue;
+            double cd = cD[(size_t)A->surf * S + k];
+            for (size_t j = toff[k]; j < toff[k + 1]; j++) {
+                double ss, dd[3];
+                pair_integrals(A, q12, &T[j], &ss, dd);
+                SS[i * nt + j] = ss;
+                if (pidx[i] >= 0)
+                    for (int m = 0; m < 3; m++) M[(size_t)T[j].node[m] * n + (size_t)pidx[i]] -= cd * dd[m];
+            }
+        }
+    }
+    /* 2. SS symmetric (the outer rule makes SS_TT' and SS_T'T differ slightly) */
+#pragma omp parallel for schedule(dynamic, 16)
+    for (size_t i = 0; i < nt; i++)
+        for (size_t j = i + 1; j < nt; j++) {
+            double a = 0.5 * (SS[j * nt + i] + SS[i * nt + j]);
+            SS[j * nt + i] = SS[i * nt + j] = a;
+        }
+    /* 3. current-current blocks: sum_c s s / sigma_c SS (column p_T' by its iteration) */
+#pragma omp parallel for schedule(dynamic, 16)
+    for (size_t j = 0; j < nt; j++) {
+        if (pidx[j] < 0) continue;
+        for (size_t i = 0; i < nt; i++) {
+            if (pidx[i] < 0) continue;
+            double c = cS[(size_t)T[i].surf * S + (size_t)T[j].surf];
+            if (c != 0) M[(size_t)pidx[j] * n + (size_t)pidx[i]] = c * SS[j * nt + i];
+        }
+    }
+    /* 4. potential-potential blocks: sum_c s s sigma_c N, N by Nedelec (row a by its iteration) */
+#pragma omp parallel for schedule(dynamic, 8)
+    for (size_t a = 0; a < N; a++) {
+        for (size_t e = nt_off[a]; e < nt_off[a + 1]; e++) {
+            const tri *A = &T[nt_idx[e]];
+            int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+            const double *ra = A->curl[ja];
+            for (size_t j = 0; j < nt; j++) {
+                double c = cN[(size_t)A->surf * S + (size_t)T[j].surf];
+                if (c == 0) continue;
+                double w = -c * SS[j * nt + nt_idx[e]];
+                for (int m = 0; m < 3; m++) {
+                    const double *rb = T[j].curl[m];
+                    M[(size_t)T[j].node[m] * n + a] += w * (ra[0] * rb[0] + ra[1] * rb[1] + ra[2] * rb[2]);
+                }
+            }
+        }
+    }
+    /* 5. the potential rows' current columns: the transpose of the current rows' potential columns */
+    for (size_t i = 0; i < nt; i++) {
+        if (pidx[i] < 0) continue;
+        size_t r = (size_t)pidx[i];
+        for (size_t a = 0; a < N; a++) M[r * n + a] = M[a * n + r];
+    }
+    /* 6. deflation: alpha w w^T on the outer surface's potential block */
+    {
+        size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+        double dmax = 0, wsum = 0;
+        for (size_t a = oo; a < oo + on; a++) dmax = fmax(dmax, fabs(M[a * n + a])), wsum += b->area[a];
+        double alpha = dmax / (wsum / (double)on) / (wsum / (double)on);
+        for (size_t c = oo; c < oo + on; c++)
+            for (size_t a = oo; a < oo + on; a++) M[c * n + a] += alpha * b->area[a] * b->area[c];
+    }
+    free(SS);
+    SS = NULL;
+    double t_asm = thx_wtime() - t0;
+    t0 = thx_wtime();
+    /* right-hand sides */
+    rhs = thx_calloc(ctx, n * (nd ? nd : 1), sizeof *rhs);
+    if (!rhs) { st = THX_ENOMEM; goto done; }
+    for (size_t d = 0; d < nd; d++) {
+        const double *p = pos + 3 * d, *q = mom + 3 * d;
+        size_t c = (size_t)comp[d];
+        double *r = rhs + d * n;
+#pragma omp parallel for schedule(dynamic, 8)
+        for (size_t i = 0; i < nt; i++) {
+            int s = side(b, c, (size_t)T[i].surf);
+            if (!s) continue;
+            static const double L[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+            double out[4] = {0, 0, 0, 0};
+            source_integrals(&T[i], L, p, q, 0, out);
+            if (pidx[i] >= 0) r[pidx[i]] = -s * out[0] / b->sig_in[c];
+            for (int m = 0; m < 3; m++) {
+                double v = s * out[1 + m];
+#pragma omp atomic
+                r[T[i].node[m]] += v;
+            }
+        }
+    }
+    if (n > INT_MAX / 2) { st = thx_error(ctx, THX_EINPUT, "bem: %zu unknowns, more than LAPACK's int", n); goto done; }
+    {
+        int nn = (int)n, R = (int)nd, inf = 0;
+        piv = thx_malloc(ctx, n * sizeof *piv);
+        if (!piv) { st = THX_ENOMEM; goto done; }
+        dgetrf_(&nn, &nn, M, &nn, piv, &inf);
+        if (inf == 0 && R > 0) dgetrs_("N", &nn, &R, M, &nn, piv, rhs, &nn, &inf);
+        if (inf != 0) {
+            st = thx_error(ctx, THX_ESOLVER, "bem: symmetric system (%zu unknowns) singular (LAPACK info %d): are two "
+                           "surfaces touching?", n, inf);
+            goto done;
+        }
+    }
+    /* potentials at the nodes, referenced to the outer surface's area-weighted mean */
+    {
+        size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+        for (size_t d = 0; d < nd; d++) {
+            double m = 0, w = 0;
+            for (size_t a = oo; a < oo + on; a++) m += b->area[a] * rhs[d * n + a], w += b->area[a];
+            for (size_t a = 0; a < N; a++) phi[d * N + a] = rhs[d * n + a] - m / w;
+        }
+    }
+    if (info) {
+        info->n_unknowns = n;
+        info->t_assemble = t_asm;
+        info->t_solve = thx_wtime() - t0;
+        info->ipa_surface = -1;
+    }
+done:
+    free(T);
+    free(pidx);
+    free(toff);
+    free(share);
+    free(cS);
+    free(cN);
+    free(cD);
+    free(nt_off);
+    free(nt_idx);
+    free(SS);
+    free(M);
+    free(rhs);
+    free(piv);
+    return st;
+}
