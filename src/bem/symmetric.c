@@ -37,8 +37,8 @@
  * outer rule below NEAR_FINE diameters, 7 points above; numerical 7 x 7 points below FAR, 3 x 3
  * beyond (tests/test_bem.c measures the error of each against the analytic 12-point values) */
 #define NEAR_FINE 1.5
-#define NEAR_ANALYTIC 3.0
-#define FAR 8.0
+#define NEAR_ANALYTIC 2.5
+#define FAR 4.0
 
 typedef struct {
     double x[3], w, l[3]; /* point, weight times area, barycentric coordinates */
@@ -298,7 +298,8 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
     }
     if (info) info->matrix_bytes = 8.0 * ((double)n * (double)n + (double)nt * (double)nt);
     /* 1. every pair of triangles whose surfaces bound a common compartment: SS, and the double
-     *    layer into the current rows (row p_T: written by T's iteration only) */
+     *    layer into the current columns (column p_T: written by T's iteration only; column-major,
+     *    so each thread writes its own contiguous stretch) */
 #pragma omp parallel for schedule(dynamic, 8)
     for (size_t i = 0; i < nt; i++) {
         const tri *A = &T[i];
@@ -312,7 +313,7 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
                 pair_integrals(A, q12, &T[j], &ss, dd);
                 SS[i * nt + j] = ss;
                 if (pidx[i] >= 0)
-                    for (int m = 0; m < 3; m++) M[(size_t)T[j].node[m] * n + (size_t)pidx[i]] -= cd * dd[m];
+                    for (int m = 0; m < 3; m++) M[(size_t)pidx[i] * n + (size_t)T[j].node[m]] -= cd * dd[m];
             }
         }
     }
@@ -333,29 +334,55 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
             if (c != 0) M[(size_t)pidx[j] * n + (size_t)pidx[i]] = c * SS[j * nt + i];
         }
     }
-    /* 4. potential-potential blocks: sum_c s s sigma_c N, N by Nedelec (row a by its iteration) */
-#pragma omp parallel for schedule(dynamic, 8)
-    for (size_t a = 0; a < N; a++) {
-        for (size_t e = nt_off[a]; e < nt_off[a + 1]; e++) {
-            const tri *A = &T[nt_idx[e]];
-            int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
-            const double *ra = A->curl[ja];
+    /* 4. potential-potential blocks: sum_c s s sigma_c N, N by Nedelec (symmetric: column a by its
+     *    iteration): g_T' = sum_{T at a} c SS_TT' (n x grad h_a)_T, then column a gets g_T'.(n x
+     *    grad h_b)_T' for the three nodes b of each T' */
+    thx_status st4 = THX_OK;
+#pragma omp parallel
+    {
+        double *g = malloc(3 * (nt ? nt : 1) * sizeof *g);
+        if (!g) {
+#pragma omp atomic write
+            st4 = THX_ENOMEM;
+        }
+#pragma omp for schedule(dynamic, 8)
+        for (size_t a = 0; a < N; a++) {
+            if (!g) continue;
+            memset(g, 0, 3 * nt * sizeof *g);
+            for (size_t e = nt_off[a]; e < nt_off[a + 1]; e++) {
+                const tri *A = &T[nt_idx[e]];
+                int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+                const double *ra = A->curl[ja];
+                const double *row = SS + nt_idx[e] * nt;
+                for (size_t k = 0; k < S; k++) {
+                    double c = -cN[(size_t)A->surf * S + k];
+                    if (c == 0) continue;
+                    for (size_t j = toff[k]; j < toff[k + 1]; j++) {
+                        double w = c * row[j];
+                        g[3 * j] += w * ra[0];
+                        g[3 * j + 1] += w * ra[1];
+                        g[3 * j + 2] += w * ra[2];
+                    }
+                }
+            }
+            double *col = M + a * n;
             for (size_t j = 0; j < nt; j++) {
-                double c = cN[(size_t)A->surf * S + (size_t)T[j].surf];
-                if (c == 0) continue;
-                double w = -c * SS[j * nt + nt_idx[e]];
+                const double *gj = g + 3 * j;
+                if (gj[0] == 0 && gj[1] == 0 && gj[2] == 0) continue;
                 for (int m = 0; m < 3; m++) {
                     const double *rb = T[j].curl[m];
-                    M[(size_t)T[j].node[m] * n + a] += w * (ra[0] * rb[0] + ra[1] * rb[1] + ra[2] * rb[2]);
+                    col[T[j].node[m]] += gj[0] * rb[0] + gj[1] * rb[1] + gj[2] * rb[2];
                 }
             }
         }
+        free(g);
     }
-    /* 5. the potential rows' current columns: the transpose of the current rows' potential columns */
+    if (st4 != THX_OK) { st = THX_ENOMEM; goto done; }
+    /* 5. the current rows' potential columns: the transpose of the potential rows' current columns */
     for (size_t i = 0; i < nt; i++) {
         if (pidx[i] < 0) continue;
         size_t r = (size_t)pidx[i];
-        for (size_t a = 0; a < N; a++) M[r * n + a] = M[a * n + r];
+        for (size_t a = 0; a < N; a++) M[a * n + r] = M[r * n + a];
     }
     /* 6. deflation: alpha w w^T on the outer surface's potential block */
     {
@@ -394,11 +421,33 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
     }
     if (n > INT_MAX / 2) { st = thx_error(ctx, THX_EINPUT, "bem: %zu unknowns, more than LAPACK's int", n); goto done; }
     {
-        int nn = (int)n, R = (int)nd, inf = 0;
-        piv = thx_malloc(ctx, n * sizeof *piv);
+        /* M = [A B^T; B C] with C (currents) positive definite: the currents are eliminated by
+         * C's Cholesky factor L (W = L^-1 B, A - W^T W, the right-hand side likewise), and the
+         * potentials' Schur complement, symmetric but indefinite (deflation), by LU: a third of
+         * the LU's work on the whole, all of it in level-3 BLAS */
+        int nN = (int)N, nP = (int)np, ld = (int)n, R = (int)nd, inf = 0;
+        double one = 1, mone = -1;
+        double *C = M + N * n + N, *B = M + N, *A = M;
+        if (nP > 0) {
+            dpotrf_("L", &nP, C, &ld, &inf);
+            if (inf != 0) {
+                st = thx_error(ctx, THX_ESOLVER, "bem: symmetric system: the current block (%zu triangles) is not "
+                               "positive definite (LAPACK dpotrf info %d): are two surfaces touching?", np, inf);
+                goto done;
+            }
+            dtrsm_("L", "L", "N", "N", &nP, &nN, &one, C, &ld, B, &ld);
+            dsyrk_("L", "T", &nN, &nP, &mone, B, &ld, &one, A, &ld);
+            if (R > 0) {
+                dtrsm_("L", "L", "N", "N", &nP, &R, &one, C, &ld, rhs + N, &ld);
+                dgemm_("T", "N", &nN, &R, &nP, &mone, B, &ld, rhs + N, &ld, &one, rhs, &ld);
+            }
+        }
+        for (size_t c = 0; c < N; c++) /* the lower triangle to the upper */
+            for (size_t r = c + 1; r < N; r++) A[r * n + c] = A[c * n + r];
+        piv = thx_malloc(ctx, (N ? N : 1) * sizeof *piv);
         if (!piv) { st = THX_ENOMEM; goto done; }
-        dgetrf_(&nn, &nn, M, &nn, piv, &inf);
-        if (inf == 0 && R > 0) dgetrs_("N", &nn, &R, M, &nn, piv, rhs, &nn, &inf);
+        dgetrf_(&nN, &nN, A, &ld, piv, &inf);
+        if (inf == 0 && R > 0) dgetrs_("N", &nN, &R, A, &ld, piv, rhs, &ld, &inf);
         if (inf != 0) {
             st = thx_error(ctx, THX_ESOLVER, "bem: symmetric system (%zu unknowns) singular (LAPACK info %d): are two "
                            "surfaces touching?", n, inf);
