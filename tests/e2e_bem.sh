@@ -31,7 +31,8 @@ import numpy as np, scipy.io
 D = sys.argv[1]
 j = json.load(open("dip/bem.json"))
 assert j["format"] == "thorax-bem" and j["problem"] == "dipoles", j
-assert j["isolated_problem"] == "cortex", j
+assert j["method"].startswith("symmetric") and "isolated_problem" not in j, j
+assert j["unknowns"] == 3 * 42 + 2 * 80, j
 assert [s["name"] for s in j["surfaces"]] == ["cortex", "skull", "scalp"]
 assert [s["sigma_in"] for s in j["surfaces"]] == [1, 0.0125, 1]
 m = scipy.io.loadmat("dip/electrodes.mat")
@@ -39,13 +40,15 @@ v = [m[k] for k in m if not k.startswith("__") and getattr(m[k], "shape", (0,)) 
 assert len(v) == 1, {k: getattr(m[k], "shape", None) for k in m}
 v = v[0]
 a = np.loadtxt(D + "/tests/analytic/eeg_head1_analytic.txt")
-# measured with this method (docs/validation.md); OpenMEEG's own threshold for Head1 is 0.13
-bound = [0.08, 0.35, 0.62, 0.70, 0.70]
+# OpenMEEG's own threshold for Head1 is 0.13; its suite expects dipoles 4 and 5 to fail it (WILL_FAIL):
+# bounded there by what the symmetric method reaches (docs/validation.md)
+bound = [0.13, 0.13, 0.13, 0.20, 0.26]
 for d in range(5):
     x = v[:, d] - v[:, d].mean(); y = a[:, d] - a[:, d].mean()
     rdm = np.linalg.norm(x / np.linalg.norm(x) - y / np.linalg.norm(y))
     print("Head1 dipole %d: RDM %.4f MAG %.4f" % (d + 1, rdm, np.linalg.norm(x) / np.linalg.norm(y)))
     assert rdm < bound[d], (d, rdm)
+    assert abs(1 - np.linalg.norm(x) / np.linalg.norm(y)) < 0.13, d
 # every node's potentials: the scalp block equals outer.mat
 n = scipy.io.loadmat("dip/nodes.mat"); o = scipy.io.loadmat("dip/outer.mat")
 n = [n[k] for k in n if not k.startswith("__") and getattr(n[k], "ndim", 0) == 2 and n[k].shape[1] == 6][0]
@@ -56,6 +59,13 @@ EOF
 # the same again: byte-identical
 expect_rc 0 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --electrodes "$H/Head1.patches" -o dip2 --format mat -q
 cmp -s dip/electrodes.mat dip2/electrodes.mat || fail "a rerun differs"
+# linear collocation (--method collocation): the isolated problem approach on the cortex
+expect_rc 0 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --electrodes "$H/Head1.patches" -o dipc --method collocation --format text -q
+"$PY" - <<'EOF' || fail "--method collocation"
+import json
+j = json.load(open("dipc/bem.json"))
+assert j["method"].startswith("linear collocation") and j["isolated_problem"] == "cortex" and j["unknowns"] == 126, j
+EOF
 # transfer matrix cortex -> scalp (the cortex as the given-potential surface)
 expect_rc 0 bem "$H/Head1.geom" --transfer --heart cortex -o tr --format text -q
 expect_rc 0 series info tr/transfer.txt

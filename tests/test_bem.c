@@ -273,13 +273,17 @@ static void test_transfer_vs_dipole(void)
     for (int k = 0; k < 3; k++) thx_surface_destroy(&s[k]);
 }
 
-/* OpenMEEG's Head1 and Head2 against the analytic potentials at the electrodes (the patches
- * projected on the scalp mesh and interpolated). Bounds: the figures this method reaches, recorded
- * in docs/validation.md beside OpenMEEG's thresholds (0.13 for Head1, 0.10 for Head2). */
-static void test_heads(void)
+/* OpenMEEG's Head1, Head2 (and Head3 in the plain build) against the analytic potentials at the
+ * electrodes (the patches projected on the scalp mesh and interpolated). The symmetric method must
+ * meet OpenMEEG's own thresholds (RDM and |1 - MAG| below 0.13, 0.10, 0.03), except RDM of Head1's
+ * dipoles 4 and 5, which OpenMEEG's suite itself expects to fail (WILL_FAIL): bounded by what this
+ * method reaches. Collocation: the bounds it reaches (docs/validation.md). */
+static void test_heads(int method)
 {
-    static const double rdm_max[2][5] = {{0.08, 0.35, 0.62, 0.70, 0.70}, {0.05, 0.08, 0.25, 0.55, 0.72}};
-    for (int h = 1; h <= 2; h++) {
+    static const double thr[3] = {0.13, 0.10, 0.03};
+    static const double coll_max[2][5] = {{0.08, 0.35, 0.62, 0.70, 0.70}, {0.05, 0.08, 0.25, 0.55, 0.72}};
+    int last = method == THX_BEM_SYMMETRIC && !getenv("THORAX_QUICK") ? 3 : 2;
+    for (int h = 1; h <= last; h++) {
         thx_model *m = NULL;
         double *sig = NULL, *pos = NULL, *mom = NULL;
         size_t nd = 0;
@@ -294,30 +298,36 @@ static void test_heads(void)
         size_t N = thx_bem_n_nodes(b);
         double *phi = malloc(N * nd * sizeof *phi);
         thx_bem_info info;
-        CHECK_OK(ctx, thx_bem_dipoles(ctx, b, pos, mom, nd, NULL, phi, &info));
-        CHECK(info.ipa_surface >= 0 && !strcmp(thx_bem_surface(b, (size_t)info.ipa_surface)->name, "cortex"));
+        thx_bem_opts o;
+        thx_bem_opts_default(&o);
+        o.method = method;
+        CHECK_OK(ctx, thx_bem_dipoles(ctx, b, pos, mom, nd, &o, phi, &info));
+        if (method == THX_BEM_COLLOCATION)
+            CHECK(info.ipa_surface >= 0 && !strcmp(thx_bem_surface(b, (size_t)info.ipa_surface)->name, "cortex"));
+        else
+            CHECK(info.ipa_surface == -1 && info.n_unknowns == N + 2 * (m->surf[0]->n_tris));
         size_t so = thx_bem_outer(b), off = thx_bem_offset(b, so);
         const thx_surface *S = thx_bem_surface(b, so);
         CHECK(!strcmp(S->name, "scalp"));
         /* electrodes and the analytic values */
         snprintf(p, sizeof p, "%s/openmeeg-spheres/data/Head%d/Head%d.patches", data_dir, h, h);
         FILE *f = fopen(p, "r");
-        double E[64][3], an[64][6], v[64];
+        double E[128][3], an[128][6], v[128];
         size_t ne = 0;
         char line[512], lab[64];
-        while (f && ne < 64 && fgets(line, sizeof line, f))
+        while (f && ne < 128 && fgets(line, sizeof line, f))
             if (sscanf(line, "%lf %lf %lf", &E[ne][0], &E[ne][1], &E[ne][2]) == 3 ||
                 sscanf(line, "%63s %lf %lf %lf", lab, &E[ne][0], &E[ne][1], &E[ne][2]) == 4)
                 ne++;
         if (f) fclose(f);
-        CHECK(ne == (h == 1 ? 32u : 64u));
+        CHECK(ne == (h == 1 ? 32u : h == 2 ? 64u : 128u));
         snprintf(p, sizeof p, "%s/openmeeg-spheres/tests/analytic/eeg_head%d_analytic.txt", data_dir, h);
         f = fopen(p, "r");
         for (size_t i = 0; f && i < ne; i++)
             for (int k = 0; k < 6; k++) CHECK(fscanf(f, "%lf", &an[i][k]) == 1);
         if (f) fclose(f);
         for (int d = 0; d < 5; d++) {
-            double ref[64], rdm, mag;
+            double ref[128], rdm, mag;
             for (size_t i = 0; i < ne; i++) {
                 size_t t;
                 double w[3], q[3];
@@ -327,8 +337,15 @@ static void test_heads(void)
                 ref[i] = an[i][d];
             }
             rdm_mag(v, ref, ne, &rdm, &mag);
-            printf("Head%d dipole %d: RDM %.4f MAG %.4f (OpenMEEG's threshold %.2f)\n", h, d + 1, rdm, mag, h == 1 ? 0.13 : 0.10);
-            CHECK(rdm < rdm_max[h - 1][d]);
+            printf("%s, Head%d dipole %d: RDM %.4f MAG %.4f (OpenMEEG's threshold %.2f)\n",
+                   method == THX_BEM_SYMMETRIC ? "symmetric" : "collocation", h, d + 1, rdm, mag, thr[h - 1]);
+            if (method == THX_BEM_COLLOCATION) {
+                CHECK(rdm < coll_max[h - 1][d]);
+            } else {
+                CHECK(fabs(1 - mag) < thr[h - 1]);
+                /* Head1's dipoles 4 and 5 (0.06 and 0.03 under a cortex of 42 nodes): 0.188, 0.246 */
+                CHECK(rdm < (h == 1 && d == 3 ? 0.20 : h == 1 && d == 4 ? 0.26 : thr[h - 1]));
+            }
         }
         free(phi);
         free(pos);
@@ -337,6 +354,41 @@ static void test_heads(void)
         thx_bem_destroy(&b);
         thx_model_destroy(&m);
     }
+}
+
+/* Compartments side by side (a heart and a lung inside a torso, no chain of shells): the symmetric
+ * method's sums over the compartments two surfaces share, against collocation, for a dipole in the
+ * torso between the organs (its compartment has two inner boundaries) and one in the heart. */
+static void test_siblings(void)
+{
+    double c0[3] = {0, 0, 0}, ch[3] = {-0.2, 0.1, 0}, cl[3] = {0.45, 0, 0.1};
+    thx_surface *s[3] = {icosphere("torso", 3, c0, 1.0), icosphere("heart", 3, ch, 0.3), icosphere("lung", 3, cl, 0.3)};
+    double sig[3] = {0.2, 0.6, 0.05};
+    thx_bem *b = NULL;
+    CHECK_OK(ctx, thx_bem_create(ctx, (const thx_surface *const *)s, 3, sig, &b));
+    if (!b) return;
+    size_t N = thx_bem_n_nodes(b), no = s[0]->n_nodes, o0 = thx_bem_offset(b, 0);
+    double pos[6] = {0.2, -0.4, 0.1, -0.15, 0.12, 0.05}, mom[6] = {1, 0.3, -0.5, 0.3, -0.5, 1};
+    double *ps = malloc(2 * N * sizeof *ps), *pc = malloc(2 * N * sizeof *pc);
+    thx_bem_opts o;
+    thx_bem_opts_default(&o);
+    thx_bem_info info;
+    CHECK_OK(ctx, thx_bem_dipoles(ctx, b, pos, mom, 2, &o, ps, &info));
+    CHECK(info.n_unknowns == N + s[1]->n_tris + s[2]->n_tris);
+    o.method = THX_BEM_COLLOCATION;
+    CHECK_OK(ctx, thx_bem_dipoles(ctx, b, pos, mom, 2, &o, pc, NULL));
+    for (int d = 0; d < 2; d++) {
+        double rdm, mag;
+        rdm_mag(ps + (size_t)d * N + o0, pc + (size_t)d * N + o0, no, &rdm, &mag);
+        printf("heart and lung in a torso, dipole %d (%s): symmetric vs collocation on the torso RDM %.4f MAG %.4f\n",
+               d + 1, d ? "in the heart" : "in the torso", rdm, mag);
+        CHECK(rdm < 0.02);
+        CHECK(fabs(1 - mag) < 0.02);
+    }
+    free(ps);
+    free(pc);
+    thx_bem_destroy(&b);
+    for (int k = 0; k < 3; k++) thx_surface_destroy(&s[k]);
 }
 
 static void test_refusals(void)
@@ -385,7 +437,9 @@ int main(void)
     test_solid_angles();
     test_homogeneous_sphere();
     test_transfer_vs_dipole();
-    test_heads();
+    test_siblings();
+    test_heads(THX_BEM_SYMMETRIC);
+    test_heads(THX_BEM_COLLOCATION);
     test_refusals();
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("bem");

@@ -397,28 +397,31 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
     SS = NULL;
     double t_asm = thx_wtime() - t0;
     t0 = thx_wtime();
-    /* right-hand sides */
+    /* right-hand sides: each triangle's integrals, then summed at the nodes in a fixed order (the
+     *    result does not depend on the threads) */
     rhs = thx_calloc(ctx, n * (nd ? nd : 1), sizeof *rhs);
-    if (!rhs) { st = THX_ENOMEM; goto done; }
+    double *tin = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *tin);
+    if (!rhs || !tin) { free(tin); st = THX_ENOMEM; goto done; }
     for (size_t d = 0; d < nd; d++) {
         const double *p = pos + 3 * d, *q = mom + 3 * d;
         size_t c = (size_t)comp[d];
         double *r = rhs + d * n;
 #pragma omp parallel for schedule(dynamic, 8)
         for (size_t i = 0; i < nt; i++) {
-            int s = side(b, c, (size_t)T[i].surf);
-            if (!s) continue;
             static const double L[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-            double out[4] = {0, 0, 0, 0};
-            source_integrals(&T[i], L, p, q, 0, out);
-            if (pidx[i] >= 0) r[pidx[i]] = -s * out[0] / b->sig_in[c];
-            for (int m = 0; m < 3; m++) {
-                double v = s * out[1 + m];
-#pragma omp atomic
-                r[T[i].node[m]] += v;
-            }
+            double *out = tin + 4 * i;
+            out[0] = out[1] = out[2] = out[3] = 0;
+            if (side(b, c, (size_t)T[i].surf)) source_integrals(&T[i], L, p, q, 0, out);
+        }
+        for (size_t i = 0; i < nt; i++) {
+            int sg = side(b, c, (size_t)T[i].surf);
+            if (!sg) continue;
+            const double *out = tin + 4 * i;
+            if (pidx[i] >= 0) r[pidx[i]] = -sg * out[0] / b->sig_in[c];
+            for (int m = 0; m < 3; m++) r[T[i].node[m]] += sg * out[1 + m];
         }
     }
+    free(tin);
     if (n > INT_MAX / 2) { st = thx_error(ctx, THX_EINPUT, "bem: %zu unknowns, more than LAPACK's int", n); goto done; }
     {
         /* M = [A B^T; B C] with C (currents) positive definite: the currents are eliminated by
