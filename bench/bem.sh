@@ -16,17 +16,31 @@ D=${OPENMEEG_SPHERES:-../shared/data/openmeeg-spheres}
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-peak() { awk -F': ' '/Maximum resident/ { printf "%.0f MB", $2 / 1024 } /Elapsed/ { w = $2 } END { printf ", wall %s", w }' "$1"; }
+peak() { awk -F': ' '/Maximum resident/ { printf "%.0f MB", $2 / 1024 } /User time/ { u = $2 } /System time/ { s = $2 }
+                    /Elapsed/ { w = $2 } END { printf ", wall %s, CPU %.2f s", w, u + s }' "$1"; }
 echo
 echo "OpenMEEG spheres (conductivities 1 / 0.0125 / 1), dipoles 1-5:"
 echo "  OpenMEEG (symmetric BEM, Head3 on this class of machine): 25 s to assemble and invert;"
 echo "  RDM 0.002-0.019, |1-MAG| 0.006-0.021; test thresholds 0.13 / 0.10 / 0.03 (Head1/2/3)"
-for h in 1 2 3; do
+echo "  load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+# the symmetric method (the default) on Head1-3, then Head3 by collocation, and Head3 with
+# OpenBLAS's AVX-512 kernels chosen by hand (docs/decisions.md: it falls back to SSE3 here)
+for run in 1 2 3 3c 3s; do
+    h=${run%[cs]}
     H="$D/data/Head$h"
-    /usr/bin/time -v "$THORAX" bem "$H/Head$h.geom" --dipoles "$H/Head$h.dip" --electrodes "$H/Head$h.patches" \
-        -o "$W/h$h" --format text -q 2> "$W/h$h.time"
-    printf 'Head%d: ' "$h"
-    $PY - "$W/h$h" "$D/tests/analytic/eeg_head${h}_analytic.txt" <<'EOF'
+    extra=() envv=()
+    case $run in
+        *c) extra=(--method collocation) ;;
+        *s) envv=(OPENBLAS_CORETYPE=SkylakeX) ;;
+    esac
+    env "${envv[@]}" /usr/bin/time -v "$THORAX" bem "$H/Head$h.geom" --dipoles "$H/Head$h.dip" --electrodes "$H/Head$h.patches" \
+        -o "$W/h$run" --format text -q "${extra[@]}" 2> "$W/h$run.time"
+    case $run in
+        *c) printf 'Head%d, collocation: ' "$h" ;;
+        *s) printf 'Head%d, OPENBLAS_CORETYPE=SkylakeX: ' "$h" ;;
+        *) printf 'Head%d: ' "$h" ;;
+    esac
+    $PY - "$W/h$run" "$D/tests/analytic/eeg_head${h}_analytic.txt" <<'EOF'
 import json, sys
 import numpy as np
 d, ref = sys.argv[1], sys.argv[2]
@@ -42,8 +56,9 @@ for k in range(5):
 print("%d unknowns, assembly %.2f s, solve %.2f s (%.0f MB of matrices);" % (j["unknowns"], j["seconds_assembly"], j["seconds_solve"], j["matrix_bytes"] / 2**20))
 print("        RDM " + " ".join("%.3f" % r for r, m in out) + ";  MAG " + " ".join("%.3f" % m for r, m in out))
 EOF
-    echo "        peak $(peak "$W/h$h.time")"
+    echo "        peak $(peak "$W/h$run.time")"
 done
+echo "  load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 [ "${PHANTOM:-1}" = 0 ] && exit 0
 echo
 echo "medium phantom (muscle made isotropic, 0.16 S/m: the BEM needs one conductivity a compartment):"
