@@ -1,9 +1,14 @@
 /*
  * thorax/bem/bem.h — boundary elements for nested closed surfaces with piecewise-constant
  * conductivity (paper 4.1: "forward solutions by both methods"; docs/decisions.md, "Boundary
- * elements").
+ * elements" and "Symmetric boundary elements").
  *
- * Method: linear collocation (potentials linear on each triangle, one equation a node) with the
+ * Dipoles are solved by default with the symmetric Galerkin method (Kybic et al. 2005; src/bem/
+ * symmetric.c: potentials linear on each triangle, normal currents constant on each triangle of
+ * every surface but the outermost). The transfer matrix, and dipoles on request
+ * (THX_BEM_COLLOCATION), by the method below.
+ *
+ * Collocation method: linear collocation (potentials linear on each triangle, one equation a node) with the
  * analytic double- and single-layer integrals over a flat triangle of de Munck (1992), the
  * isolated problem approach of Hämäläinen & Sarvas (1989) for a source compartment inside a poorly
  * conducting one, and the constant null space of the pure Neumann problem deflated with the outer
