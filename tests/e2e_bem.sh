@@ -3,7 +3,8 @@
 # electrodes (Head1.patches) against the analytic potentials, read back by scipy from the .mat
 # series; the cortex-to-scalp transfer matrix (--heart cortex) read back and checked (a constant on
 # the cortex gives that constant on the scalp); byte-identical reruns; bad input refused with exit
-# 1 (open surface, dipole outside, malformed dipole line) or 2 (usage), nothing written.
+# 1 (open surface, dipole outside, malformed dipole line) or 2 (usage), nothing written; the
+# Dalhousie torso (map3d's data) meshed: dipoles in its heart by BEM against the FEM, in mV.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -eu
 : "${THORAX:?}" "${SRC:?}" "${WORK:?}"
@@ -133,4 +134,40 @@ grep -q "not closed" err.log || fail "open surface: $(cat err.log)"
 mkdir -p mine && echo keep > mine/notes.txt
 expect_rc 1 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" -o mine
 [ "$(cat mine/notes.txt)" = keep ] || fail "a user's directory was touched"
+
+# A real torso: the Dalhousie torso and epicardium (map3d's daltorsoepi.geom, 352 and 98 nodes),
+# meshed (heart 0.4 S/m inside the torso's 0.239): four dipoles in the heart by the symmetric BEM
+# against the finite elements (thorax forward --dipoles) at the torso's nodes, both in mV
+M3="$SRC/../shared/data/map3d"
+if [ -d "$M3/geom/torso" ]; then
+    "$THORAX" import -q -o dal --up -y --front -z "$M3/geom/torso/daltorsoepi.geom@1" --name torso --role outer \
+        "$M3/geom/torso/daltorsoepi.geom@2" --name epi --role heart || fail "import daltorsoepi.geom"
+    "$THORAX" mesh dal -q || fail "mesh dal"
+    "$PY" - <<'EOF' || fail "dipoles for the Dalhousie heart"
+import numpy as np
+e = np.loadtxt("dal/epi.pts"); c = e.mean(0); x = e.max(0) - e.min(0)
+P = [c, c + 0.15 * x * [1, 0, 0], c + 0.15 * x * [0, 1, 0.5], c - 0.2 * x * [0, 0, 1]]
+Q = [[0, 0, 1], [1, 0, 0], [0, 1, 0], [0.5, 0.5, 0.7]]
+open("dal.dip", "w").write("".join("%.6f %.6f %.6f %g %g %g\n" % (*p, *q) for p, q in zip(P, Q)))
+EOF
+    expect_rc 0 forward dal --dipoles dal.dip -o dalfem --format text -q
+    expect_rc 0 bem dal --dipoles dal.dip -o dalbem --format text -q
+    "$PY" - <<'EOF' || fail "BEM against FEM on the Dalhousie torso"
+import json
+import numpy as np
+def read(p):
+    L = open(p).read().split("\n")
+    i = [k for k, l in enumerate(L) if l.startswith("dt")][0]
+    return np.loadtxt([l for l in L[i + 1:] if l.strip() and l != "end"])
+j = json.load(open("dalbem/bem.json"))
+assert j["unit"] == "mV" and j["moment_unit"] == "mA*m" and j["method"].startswith("symmetric"), j
+F, B = read("dalfem/torso.txt"), read("dalbem/outer.txt")
+assert F.shape == B.shape == (352, 4), (F.shape, B.shape)
+for d in range(4):
+    x = F[:, d] - F[:, d].mean(); y = B[:, d] - B[:, d].mean()
+    rdm = np.linalg.norm(x / np.linalg.norm(x) - y / np.linalg.norm(y)); mag = np.linalg.norm(y) / np.linalg.norm(x)
+    print("Dalhousie torso, dipole %d: BEM against FEM RDM %.4f MAG %.4f" % (d + 1, rdm, mag))
+    assert rdm < 0.04 and abs(1 - mag) < 0.03, (d, rdm, mag)
+EOF
+fi
 echo "e2e_bem: ok"

@@ -115,7 +115,8 @@ int cmd_bem(int argc, char **argv)
          .help = "the heart-surface transfer matrix: DIR/transfer.EXT (rows: the outer surface's nodes, columns: the "
                  "heart's), or with --electrodes DIR/transfer_electrodes.EXT, as thorax forward --transfer-out writes"},
         {.name = "--dipoles", .type = CLI_INPUT, .meta = "FILE", .s = &dip_path,
-         .help = "current dipoles, one a line 'px py pz qx qy qz' (OpenMEEG .dip): DIR/outer.EXT (outer surface's "
+         .help = "current dipoles, one a line 'px py pz qx qy qz' (OpenMEEG .dip; for a thorax model mm and mA*m, "
+                 "potentials in mV as thorax forward --dipoles): DIR/outer.EXT (outer surface's "
                  "nodes x dipoles), DIR/nodes.EXT (every surface's nodes), with --electrodes DIR/electrodes.EXT"},
         {.name = "--electrodes", .type = CLI_INPUT, .meta = "FILE", .s = &elec_path,
          .help = "electrodes on the outer surface: positions '[LABEL] X Y Z' a line (OpenMEEG .patches) or a "
@@ -267,11 +268,15 @@ int cmd_bem(int argc, char **argv)
         if (st == THX_OK) st = thx_series_create(ctx, N, nd, &S2);
         if (st == THX_OK && el) st = thx_series_create(ctx, el->n, nd, &S3);
         if (st != THX_OK) goto fail;
+        /* a thorax model is in mm with moments in mA*m, as thorax forward --dipoles takes them:
+         * mA*m / (S/m * mm^2) = 1e3 V = 1e6 mV; an OpenMEEG geometry keeps its own units */
+        double unit = is_geom ? 1 : 1e6;
+        for (size_t i = 0; i < N * nd; i++) phi[i] *= unit;
         thx_series *all[3] = {S1, S2, S3};
         for (int q = 0; q < 3; q++) {
             if (!all[q]) continue;
             snprintf(all[q]->time_unit, sizeof all[q]->time_unit, "dipole");
-            snprintf(all[q]->unit, sizeof all[q]->unit, "q/(sigma.L^2)");
+            snprintf(all[q]->unit, sizeof all[q]->unit, "%s", is_geom ? "q/(sigma.L^2)" : "mV");
             for (size_t d = 0; d < nd; d++) all[q]->time[d] = (double)(d + 1);
         }
         snprintf(S1->label, sizeof S1->label, "bem dipole potentials on %.40s (zero mean over it)", oname);
@@ -314,6 +319,10 @@ int cmd_bem(int argc, char **argv)
         }
         cJSON_AddItemToObject(j, "surfaces", surfs);
         if (dip_path) cJSON_AddStringToObject(j, "dipoles", realpath(dip_path, abs) ? abs : dip_path);
+        if (dip_path) {
+            cJSON_AddStringToObject(j, "moment_unit", is_geom ? "the geometry's (OpenMEEG)" : "mA*m");
+            cJSON_AddStringToObject(j, "unit", is_geom ? "q/(sigma.L^2)" : "mV");
+        }
         if (elec_path) cJSON_AddStringToObject(j, "electrodes", realpath(elec_path, abs) ? abs : elec_path);
         if (info.ipa_surface >= 0) cJSON_AddStringToObject(j, "isolated_problem", m->surf[info.ipa_surface]->name);
         cJSON_AddNumberToObject(j, "unknowns", (double)info.n_unknowns);
