@@ -30,6 +30,11 @@ double thx_bem_surface_angle(const thx_bem *b, size_t k, const double p[3]);
 /* The checks of thx_bem_transfer (heart not outermost, nothing inside it, conductivities). */
 thx_status thx_bem_transfer_check(thx_ctx *ctx, const thx_bem *b, size_t h);
 
+/* Each dipole's compartment (the innermost surface holding it), with the checks of
+ * thx_bem_dipoles (conducting compartments, finite values, not on a surface, inside the outer). */
+thx_status thx_bem_dipole_compartments(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
+                                       int *comp);
+
 /* The symmetric (Galerkin) method for thx_bem_dipoles (symmetric.c): comp[d] is dipole d's
  * compartment (the innermost surface holding it), checked by the caller; phi as thx_bem_dipoles'. */
 thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,

@@ -120,6 +120,46 @@ static thx_status lu_solve(thx_ctx *ctx, double *A, size_t n, double *rhs, size_
     return THX_OK;
 }
 
+thx_status thx_bem_dipole_compartments(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
+                                       int *comp)
+{
+    size_t S = b->n;
+    for (size_t k = 0; k < S; k++)
+        if (!(b->sig_in[k] > 0))
+            return thx_error(ctx, THX_EINPUT, "bem: surface '%s': conductivity inside %g S/m; dipoles need every "
+                             "compartment conducting", b->surf[k]->name, b->sig_in[k]);
+    /* each dipole's compartment: the innermost surface holding it */
+    for (size_t d = 0; d < nd; d++) {
+        const double *p = pos + 3 * d;
+        const double *q = mom + 3 * d;
+        if (!isfinite(p[0] + p[1] + p[2] + q[0] + q[1] + q[2]))
+            return thx_error(ctx, THX_EINPUT, "dipole %zu: a value is not finite", d + 1);
+        int c = -1;
+        for (size_t k = 0; k < S; k++) {
+            size_t t;
+            double w[3], qq[3];
+            double dist = thx_surface_nearest(b->surf[k], p, &t, w, qq);
+            if (dist <= 1e-9 * b->scale)
+                return thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) lies on surface '%s'", d + 1, p[0], p[1],
+                                 p[2], b->surf[k]->name);
+            if (thx_bem_surface_angle(b, k, p) > 2 * M_PI) {
+                /* innermost: a surface inside the current one */
+                if (c < 0) c = (int)k;
+                else {
+                    int a = (int)k;
+                    while (a >= 0 && a != c) a = b->parent[a];
+                    if (a == c) c = (int)k;
+                }
+            }
+        }
+        if (c < 0)
+            return thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) is outside the outer surface '%s'", d + 1, p[0],
+                             p[1], p[2], b->surf[b->outer]->name);
+        comp[d] = c;
+    }
+    return THX_OK;
+}
+
 thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
                            const thx_bem_opts *o, double *phi, thx_bem_info *info)
 {
@@ -132,43 +172,10 @@ thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, co
     thx_status st = THX_OK;
     double *B = NULL, *A1 = NULL, *rhs1 = NULL;
     int *comp = NULL;
-    for (size_t k = 0; k < S; k++)
-        if (!(b->sig_in[k] > 0))
-            return thx_error(ctx, THX_EINPUT, "bem: surface '%s': conductivity inside %g S/m; dipoles need every "
-                             "compartment conducting", b->surf[k]->name, b->sig_in[k]);
     comp = thx_malloc(ctx, (nd ? nd : 1) * sizeof *comp);
     if (!comp) return THX_ENOMEM;
-    /* each dipole's compartment: the innermost surface holding it */
-    for (size_t d = 0; d < nd; d++) {
-        const double *p = pos + 3 * d;
-        const double *q = mom + 3 * d;
-        if (!isfinite(p[0] + p[1] + p[2] + q[0] + q[1] + q[2])) { st = thx_error(ctx, THX_EINPUT, "dipole %zu: a value is not finite", d + 1); goto done; }
-        int c = -1;
-        for (size_t k = 0; k < S; k++) {
-            size_t t;
-            double w[3], qq[3];
-            double dist = thx_surface_nearest(b->surf[k], p, &t, w, qq);
-            if (dist <= 1e-9 * b->scale) {
-                st = thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) lies on surface '%s'", d + 1, p[0], p[1], p[2], b->surf[k]->name);
-                goto done;
-            }
-            if (thx_bem_surface_angle(b, k, p) > 2 * M_PI) {
-                /* innermost: a surface inside the current one */
-                if (c < 0) c = (int)k;
-                else {
-                    int a = (int)k;
-                    while (a >= 0 && a != c) a = b->parent[a];
-                    if (a == c) c = (int)k;
-                }
-            }
-        }
-        if (c < 0) {
-            st = thx_error(ctx, THX_EINPUT, "dipole %zu at (%g, %g, %g) is outside the outer surface '%s'", d + 1, p[0], p[1],
-                           p[2], b->surf[b->outer]->name);
-            goto done;
-        }
-        comp[d] = c;
-    }
+    st = thx_bem_dipole_compartments(ctx, b, pos, mom, nd, comp);
+    if (st != THX_OK) goto done;
     if (o->method == THX_BEM_SYMMETRIC) {
         st = thx_bem_dipoles_symmetric(ctx, b, pos, mom, nd, comp, phi, &inf);
         goto done;

@@ -231,62 +231,183 @@ static int pair_coef(const thx_bem *b, size_t i, size_t k, double *cs, double *c
     return any;
 }
 
-thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
-                                     const int *comp, double *phi, thx_bem_info *info)
+/* The discrete problem's layout and coefficients, shared by the serial and the distributed paths. */
+typedef struct {
+    size_t S, N, nt, np, n; /* surfaces, nodes, triangles, current unknowns, all unknowns */
+    tri *T;
+    qpt *q12;               /* 12 points a triangle (outer rule of near pairs) */
+    long *pidx;             /* each triangle's current unknown, -1 on the outer surface */
+    size_t *toff;           /* S + 1: first triangle of each surface */
+    unsigned char *share;   /* S x S: the two surfaces bound a common compartment */
+    double *cS, *cN, *cD;   /* S x S coefficients (pair_coef) */
+    size_t *star_off, *star; /* node -> its triangles (ascending) */
+    double alpha;           /* deflation */
+} sym;
+
+static void sym_free(sym *s)
 {
+    free(s->T);
+    free(s->q12);
+    free(s->pidx);
+    free(s->toff);
+    free(s->share);
+    free(s->cS);
+    free(s->cN);
+    free(s->cD);
+    free(s->star_off);
+    free(s->star);
+    memset(s, 0, sizeof *s);
+}
+
+static thx_status sym_init(thx_ctx *ctx, const thx_bem *b, sym *s)
+{
+    memset(s, 0, sizeof *s);
     const size_t S = b->n, N = b->off[S];
-    thx_status st = THX_OK;
     size_t nt = 0, np = 0;
     for (size_t k = 0; k < S; k++) {
         nt += b->surf[k]->n_tris;
         if (k != b->outer) np += b->surf[k]->n_tris;
     }
-    const size_t n = N + np;
-    tri *T = thx_calloc(ctx, nt ? nt : 1, sizeof *T);
-    long *pidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *pidx);
-    size_t *toff = thx_malloc(ctx, (S + 1) * sizeof *toff);
-    unsigned char *share = thx_calloc(ctx, S * S, 1);
-    double *cS = thx_calloc(ctx, S * S, sizeof *cS), *cN = thx_calloc(ctx, S * S, sizeof *cN),
-           *cD = thx_calloc(ctx, S * S, sizeof *cD);
-    size_t *nt_off = thx_calloc(ctx, N + 1, sizeof *nt_off), *nt_idx = thx_malloc(ctx, (3 * nt + 1) * sizeof *nt_idx);
-    double *SS = NULL, *M = NULL, *rhs = NULL;
-    int *piv = NULL;
-    if (!T || !pidx || !toff || !share || !cS || !cN || !cD || !nt_off || !nt_idx) { st = THX_ENOMEM; goto done; }
-    if (n > 46000) {
-        st = thx_error(ctx, THX_EINPUT, "bem: symmetric method: %zu unknowns (%zu nodes, %zu current triangles) would "
-                       "need %.0f GB for the dense system; use fewer nodes", n, N, np, 8.0 * (double)n * (double)n / 1e9);
-        goto done;
-    }
-    /* triangles, their current unknowns, node -> triangles */
-    {
-        size_t t = 0, p = 0;
-        for (size_t k = 0; k < S; k++) {
-            const thx_surface *s = b->surf[k];
-            toff[k] = t;
-            for (size_t j = 0; j < s->n_tris; j++, t++) {
-                const int32_t *v = s->tri + 3 * j;
-                tri_init(&T[t], s->xyz + 3 * v[0], s->xyz + 3 * v[1], s->xyz + 3 * v[2]);
-                T[t].surf = (int)k;
-                for (int m = 0; m < 3; m++) T[t].node[m] = (int32_t)(b->off[k] + (size_t)v[m]);
-                pidx[t] = k == b->outer ? -1 : (long)(N + p++);
-            }
-        }
-        toff[S] = t;
-        for (size_t i = 0; i < nt; i++)
-            for (int m = 0; m < 3; m++) nt_off[T[i].node[m] + 1]++;
-        for (size_t a = 0; a < N; a++) nt_off[a + 1] += nt_off[a];
-        size_t *fill = thx_calloc(ctx, N ? N : 1, sizeof *fill);
-        if (!fill) { st = THX_ENOMEM; goto done; }
-        for (size_t i = 0; i < nt; i++)
-            for (int m = 0; m < 3; m++) {
-                size_t a = (size_t)T[i].node[m];
-                nt_idx[nt_off[a] + fill[a]++] = i;
-            }
+    s->S = S, s->N = N, s->nt = nt, s->np = np, s->n = N + np;
+    if (s->n > 46000)
+        return thx_error(ctx, THX_EINPUT, "bem: symmetric method: %zu unknowns (%zu nodes, %zu current triangles) would "
+                         "need %.0f GB for the dense system; use fewer nodes", s->n, N, np,
+                         8.0 * (double)s->n * (double)s->n / 1e9);
+    s->T = thx_calloc(ctx, nt ? nt : 1, sizeof *s->T);
+    s->q12 = thx_malloc(ctx, 12 * (nt ? nt : 1) * sizeof *s->q12);
+    s->pidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *s->pidx);
+    s->toff = thx_malloc(ctx, (S + 1) * sizeof *s->toff);
+    s->share = thx_calloc(ctx, S * S, 1);
+    s->cS = thx_calloc(ctx, S * S, sizeof *s->cS);
+    s->cN = thx_calloc(ctx, S * S, sizeof *s->cN);
+    s->cD = thx_calloc(ctx, S * S, sizeof *s->cD);
+    s->star_off = thx_calloc(ctx, N + 1, sizeof *s->star_off);
+    s->star = thx_malloc(ctx, (3 * nt + 1) * sizeof *s->star);
+    size_t *fill = thx_calloc(ctx, N ? N : 1, sizeof *fill);
+    if (!s->T || !s->q12 || !s->pidx || !s->toff || !s->share || !s->cS || !s->cN || !s->cD || !s->star_off ||
+        !s->star || !fill) {
         free(fill);
+        sym_free(s);
+        return THX_ENOMEM;
     }
+    size_t t = 0, p = 0;
+    for (size_t k = 0; k < S; k++) {
+        const thx_surface *f = b->surf[k];
+        s->toff[k] = t;
+        for (size_t j = 0; j < f->n_tris; j++, t++) {
+            const int32_t *v = f->tri + 3 * j;
+            tri_init(&s->T[t], f->xyz + 3 * v[0], f->xyz + 3 * v[1], f->xyz + 3 * v[2]);
+            rule(&s->T[t], R12, 12, s->q12 + 12 * t);
+            s->T[t].surf = (int)k;
+            for (int m = 0; m < 3; m++) s->T[t].node[m] = (int32_t)(b->off[k] + (size_t)v[m]);
+            s->pidx[t] = k == b->outer ? -1 : (long)(N + p++);
+        }
+    }
+    s->toff[S] = t;
+    for (size_t i = 0; i < nt; i++)
+        for (int m = 0; m < 3; m++) s->star_off[s->T[i].node[m] + 1]++;
+    for (size_t a = 0; a < N; a++) s->star_off[a + 1] += s->star_off[a];
+    for (size_t i = 0; i < nt; i++)
+        for (int m = 0; m < 3; m++) {
+            size_t a = (size_t)s->T[i].node[m];
+            s->star[s->star_off[a] + fill[a]++] = i;
+        }
+    free(fill);
     for (size_t i = 0; i < S; i++)
         for (size_t k = 0; k < S; k++)
-            share[i * S + k] = (unsigned char)pair_coef(b, i, k, &cS[i * S + k], &cN[i * S + k], &cD[i * S + k]);
+            s->share[i * S + k] =
+                (unsigned char)pair_coef(b, i, k, &s->cS[i * S + k], &s->cN[i * S + k], &s->cD[i * S + k]);
+    return THX_OK;
+}
+
+/* The symmetric single layer of the pair (the mean of the two outer rules; a + b = b + a exactly,
+ * so both paths get the same bits) and the two double layers: dd_tu with t tested, u inner. */
+static double pair_sym(const sym *s, size_t t, size_t u, double dd_tu[3], double dd_ut[3])
+{
+    double a, c, x[3], y[3];
+    pair_integrals(&s->T[t], s->q12 + 12 * t, &s->T[u], &a, dd_tu ? dd_tu : x);
+    pair_integrals(&s->T[u], s->q12 + 12 * u, &s->T[t], &c, dd_ut ? dd_ut : y);
+    return 0.5 * (a + c);
+}
+
+/* The deflation weight: the largest hypersingular diagonal entry on the outer surface over the
+ * squared mean node weight (the same number however the matrix is assembled). */
+static void sym_alpha(sym *s, const thx_bem *b)
+{
+    size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+    double dmax = 0, wsum = 0;
+    size_t o = (size_t)b->outer;
+    for (size_t a = oo; a < oo + on; a++) {
+        /* M_aa = sum over T' at a (ascending) of g_T'.r_{T',a}, g_T' = sum over T at a of -cN ss r_{T,a} */
+        double v = 0;
+        double c = -s->cN[o * s->S + o];
+        for (size_t f = s->star_off[a]; f < s->star_off[a + 1]; f++) {
+            size_t u = s->star[f];
+            const tri *U = &s->T[u];
+            double g[3] = {0, 0, 0};
+            for (size_t e = s->star_off[a]; e < s->star_off[a + 1]; e++) {
+                size_t t = s->star[e];
+                const tri *A = &s->T[t];
+                int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+                double w = c * pair_sym(s, t, u, NULL, NULL);
+                for (int k = 0; k < 3; k++) g[k] += w * A->curl[ja][k];
+            }
+            int jb = U->node[0] == (int32_t)a ? 0 : U->node[1] == (int32_t)a ? 1 : 2;
+            v += g[0] * U->curl[jb][0] + g[1] * U->curl[jb][1] + g[2] * U->curl[jb][2];
+        }
+        dmax = fmax(dmax, fabs(v));
+        wsum += b->area[a];
+    }
+    double wm = wsum / (double)(on ? on : 1);
+    s->alpha = dmax / (wm * wm);
+}
+
+/* The right-hand sides (n x nd, column-major): each triangle's integrals, then summed at the
+ * nodes in a fixed order (the result does not depend on the threads). */
+static thx_status sym_rhs(thx_ctx *ctx, const sym *s, const thx_bem *b, const double *pos, const double *mom,
+                          size_t nd, const int *comp, double *rhs)
+{
+    const size_t nt = s->nt, n = s->n;
+    double *tin = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *tin);
+    if (!tin) return THX_ENOMEM;
+    memset(rhs, 0, n * nd * sizeof *rhs);
+    for (size_t d = 0; d < nd; d++) {
+        const double *p = pos + 3 * d, *q = mom + 3 * d;
+        size_t c = (size_t)comp[d];
+        double *r = rhs + d * n;
+#pragma omp parallel for schedule(dynamic, 8)
+        for (size_t i = 0; i < nt; i++) {
+            static const double L[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+            double *out = tin + 4 * i;
+            out[0] = out[1] = out[2] = out[3] = 0;
+            if (side(b, c, (size_t)s->T[i].surf)) source_integrals(&s->T[i], L, p, q, 0, out);
+        }
+        for (size_t i = 0; i < nt; i++) {
+            int sg = side(b, c, (size_t)s->T[i].surf);
+            if (!sg) continue;
+            const double *out = tin + 4 * i;
+            if (s->pidx[i] >= 0) r[s->pidx[i]] = -sg * out[0] / b->sig_in[c];
+            for (int m = 0; m < 3; m++) r[s->T[i].node[m]] += sg * out[1 + m];
+        }
+    }
+    free(tin);
+    return THX_OK;
+}
+
+thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
+                                     const int *comp, double *phi, thx_bem_info *info)
+{
+    sym sy;
+    THX_CHECK(sym_init(ctx, b, &sy));
+    const size_t S = sy.S, N = sy.N, nt = sy.nt, np = sy.np, n = sy.n;
+    const tri *T = sy.T;
+    const long *pidx = sy.pidx;
+    const size_t *toff = sy.toff, *nt_off = sy.star_off, *nt_idx = sy.star;
+    const unsigned char *share = sy.share;
+    const double *cS = sy.cS, *cN = sy.cN, *cD = sy.cD;
+    thx_status st = THX_OK;
+    double *SS = NULL, *M = NULL, *rhs = NULL;
+    int *piv = NULL;
 
     double t0 = thx_wtime();
     SS = thx_calloc(ctx, nt * nt, sizeof *SS);
@@ -303,14 +424,12 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
 #pragma omp parallel for schedule(dynamic, 8)
     for (size_t i = 0; i < nt; i++) {
         const tri *A = &T[i];
-        qpt q12[12];
-        rule(A, R12, 12, q12);
         for (size_t k = 0; k < S; k++) {
             if (!share[(size_t)A->surf * S + k]) continue;
             double cd = cD[(size_t)A->surf * S + k];
             for (size_t j = toff[k]; j < toff[k + 1]; j++) {
                 double ss, dd[3];
-                pair_integrals(A, q12, &T[j], &ss, dd);
+                pair_integrals(A, sy.q12 + 12 * i, &T[j], &ss, dd);
                 SS[i * nt + j] = ss;
                 if (pidx[i] >= 0)
                     for (int m = 0; m < 3; m++) M[(size_t)pidx[i] * n + (size_t)T[j].node[m]] -= cd * dd[m];
@@ -385,43 +504,19 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
         for (size_t a = 0; a < N; a++) M[a * n + r] = M[r * n + a];
     }
     /* 6. deflation: alpha w w^T on the outer surface's potential block */
+    sym_alpha(&sy, b);
     {
         size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
-        double dmax = 0, wsum = 0;
-        for (size_t a = oo; a < oo + on; a++) dmax = fmax(dmax, fabs(M[a * n + a])), wsum += b->area[a];
-        double alpha = dmax / (wsum / (double)on) / (wsum / (double)on);
         for (size_t c = oo; c < oo + on; c++)
-            for (size_t a = oo; a < oo + on; a++) M[c * n + a] += alpha * b->area[a] * b->area[c];
+            for (size_t a = oo; a < oo + on; a++) M[c * n + a] += sy.alpha * b->area[a] * b->area[c];
     }
     free(SS);
     SS = NULL;
     double t_asm = thx_wtime() - t0;
     t0 = thx_wtime();
-    /* right-hand sides: each triangle's integrals, then summed at the nodes in a fixed order (the
-     *    result does not depend on the threads) */
-    rhs = thx_calloc(ctx, n * (nd ? nd : 1), sizeof *rhs);
-    double *tin = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *tin);
-    if (!rhs || !tin) { free(tin); st = THX_ENOMEM; goto done; }
-    for (size_t d = 0; d < nd; d++) {
-        const double *p = pos + 3 * d, *q = mom + 3 * d;
-        size_t c = (size_t)comp[d];
-        double *r = rhs + d * n;
-#pragma omp parallel for schedule(dynamic, 8)
-        for (size_t i = 0; i < nt; i++) {
-            static const double L[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-            double *out = tin + 4 * i;
-            out[0] = out[1] = out[2] = out[3] = 0;
-            if (side(b, c, (size_t)T[i].surf)) source_integrals(&T[i], L, p, q, 0, out);
-        }
-        for (size_t i = 0; i < nt; i++) {
-            int sg = side(b, c, (size_t)T[i].surf);
-            if (!sg) continue;
-            const double *out = tin + 4 * i;
-            if (pidx[i] >= 0) r[pidx[i]] = -sg * out[0] / b->sig_in[c];
-            for (int m = 0; m < 3; m++) r[T[i].node[m]] += sg * out[1 + m];
-        }
-    }
-    free(tin);
+    rhs = thx_malloc(ctx, n * (nd ? nd : 1) * sizeof *rhs);
+    if (!rhs) { st = THX_ENOMEM; goto done; }
+    THX_TRY(sym_rhs(ctx, &sy, b, pos, mom, nd, comp, rhs));
     if (n > INT_MAX / 2) { st = thx_error(ctx, THX_EINPUT, "bem: %zu unknowns, more than LAPACK's int", n); goto done; }
     {
         /* M = [A B^T; B C] with C (currents) positive definite: the currents are eliminated by
@@ -473,15 +568,7 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
         info->ipa_surface = -1;
     }
 done:
-    free(T);
-    free(pidx);
-    free(toff);
-    free(share);
-    free(cS);
-    free(cN);
-    free(cD);
-    free(nt_off);
-    free(nt_idx);
+    sym_free(&sy);
     free(SS);
     free(M);
     free(rhs);
