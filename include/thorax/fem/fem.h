@@ -257,7 +257,11 @@ void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *l
  * (the reference of the analytic solutions of concentric spheres). r->torso: the outer surface's
  * nodes x the dipole set's frames, mV (a .dip-layout set: one frame per dipole); r->volume with
  * keep_volume. A frame is one solve, or when there are more frames than 3 n, 3 n solves (a unit
- * moment per dipole and axis) are combined. Errors name the dipole file and line: a dipole
+ * moment per dipole and axis) are combined; a frame whose moments are all zero is 0 without a
+ * solve. The right-hand sides are assembled as dense blocks and solved by thx_fem_solve_block
+ * (o->block columns, 0: thx_fem_system_block's choice; r->block says which): with a
+ * factorization, one multi-right-hand-side solve per block, the same answers as one by one to
+ * rounding (o->block = 1). Errors name the dipole file and line: a dipole
  * outside the volume, in a region of conductivity 0, a position or moment that is not finite.
  */
 thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipoles *d, const thx_forward_opts *o,
