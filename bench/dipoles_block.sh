@@ -65,7 +65,9 @@ def rd(p):
     b = open(p, 'rb').read(); r, f = struct.unpack('<QQ', b[8:24])
     return np.frombuffer(b[200 + 8 * f: 200 + 8 * f + 8 * r * f], '<f8').reshape(f, r)
 a, b = rd(sys.argv[1]), rd(sys.argv[2])
-print("  torso %d nodes x %d frames: largest difference %.2e of the largest potential (%.3g mV)" %
-      (a.shape[1], a.shape[0], np.abs(a - b).max() / np.abs(a).max(), np.abs(a).max()))
+print("  torso %d nodes x %d frames: largest difference %.2e of the largest potential (%.3g mV); "
+      "||frames - blocked|| / ||frames|| %.2e (all values)" %
+      (a.shape[1], a.shape[0], np.abs(a - b).max() / np.abs(a).max(), np.abs(a).max(),
+       np.linalg.norm(a - b) / np.linalg.norm(a)))
 PY
 done

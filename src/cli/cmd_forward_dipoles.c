@@ -78,6 +78,8 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddStringToObject(j, "method", method == THX_DIPOLE_PARTIAL ? "partial integration" : "Saint-Venant");
         if (method != THX_DIPOLE_PARTIAL)
             cJSON_AddNumberToObject(j, "partial_integration_fallbacks", (double)R.n_fallback);
+        /* dipoles the walk through the mesh could not place, found by scanning every tetrahedron */
+        cJSON_AddNumberToObject(j, "dipoles_located_by_scan", (double)R.n_located_by_scan);
         cJSON_AddStringToObject(j, "reference", "zero integral over the outer surface");
         cJSON_AddStringToObject(j, "unit", "mV");
         for (size_t s = 0; s < m->n_surfaces; s++)

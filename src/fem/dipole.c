@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "thorax/fem/fem.h"
+#include "thorax/mesh/tet_locate.h"
 
 /* mA·m per mm -> µA: the loads' factor for potentials in mV */
 #define LOAD_SCALE 1e6
@@ -90,6 +91,23 @@ void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[
        the lowest number — the same answer for any thread count */
     *tet = best;
     if (l) memcpy(l, bl, sizeof bl);
+}
+
+int thx_fem_locate_walk(const thx_tet_locator *loc, const thx_volume *v, const double p[3], long start, long *tet,
+                        double l[4])
+{
+    long t = loc ? thx_tet_locate(loc, p, start, NULL) : -1;
+    if (t >= 0) {
+        double b[4];
+        bary(v->xyz, v->tet + 4 * t, p, b);
+        if (fmin(fmin(b[0], b[1]), fmin(b[2], b[3])) > 1e-9) {
+            *tet = t;
+            if (l) memcpy(l, b, sizeof b);
+            return 1;
+        }
+    }
+    thx_fem_locate(v, p, tet, l);
+    return 0;
 }
 
 /* The partial-integration stencil: the corners of tet, w = the gradients of their hat functions (1/mm). */
@@ -265,7 +283,8 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_status st = THX_OK;
     unsigned char *use = NULL, *kind = NULL;
     long *tet = NULL;
-    size_t *col = NULL;
+    size_t *col = NULL, n_scan = 0;
+    thx_tet_locator *loc = NULL;
     double *phi = NULL, *load = NULL, *basis = NULL, *wt = NULL, *work = NULL;
     int *sn = NULL;
     unsigned char *iface = NULL;
@@ -277,15 +296,17 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     const thx_surface *os = m->surf[outer];
     size_t nn = v->n_nodes, ns = os->n_nodes, n = d->n, nf = d->n_frames;
     THX_TRY(conducting(ctx, v, &use));
-    /* every dipole: finite, in a conducting tetrahedron */
+    /* every dipole: finite, in a conducting tetrahedron (found by the walk, each dipole's starting
+       from the previous one's tetrahedron; the scan where the walk cannot decide) */
     tet = thx_malloc(ctx, n * sizeof *tet);
     if (!tet) { st = THX_ENOMEM; goto done; }
+    THX_TRY(thx_tet_locator_create(ctx, v, &loc));
     for (size_t i = 0; i < n; i++) {
         const double *p = d->pos + 3 * i;
         char at[768];
         snprintf(at, sizeof at, "%s:%zu: dipole %zu at (%g, %g, %g) mm", src, d->line[i], i + 1, p[0], p[1], p[2]);
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) { st = thx_error(ctx, THX_EINPUT, "%s: not a finite position", at); goto done; }
-        thx_fem_locate(v, p, &tet[i], NULL);
+        if (!thx_fem_locate_walk(loc, v, p, i > 0 ? tet[i - 1] : -1, &tet[i], NULL)) n_scan++;
         if (tet[i] < 0) { st = thx_error(ctx, THX_EINPUT, "%s lies outside the volume mesh", at); goto done; }
         int32_t rg = v->region[tet[i]];
         if (rg < 0 || (size_t)rg >= v->n_regions) { st = thx_error(ctx, THX_EINPUT, "%s: its tetrahedron %ld has no region", at, tet[i] + 1); goto done; }
@@ -468,12 +489,14 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_fem_system_info(S, &r->n_free, &r->n_prescribed, &r->t_setup);
     r->t_matrix = thx_fem_system_matrix_seconds(S);
     thx_fem_system_describe(S, r->ksp, r->pc, &r->ranks);
+    r->n_located_by_scan = n_scan;
 done:
     if (st != THX_OK) thx_forward_result_free(r);
     thx_fem_system_destroy(&S);
     thx_csr_free(&K);
     free(use);
     free(kind);
+    thx_tet_locator_destroy(&loc);
     free(tet);
     free(col);
     free(phi);
