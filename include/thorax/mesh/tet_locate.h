@@ -6,8 +6,9 @@
  * The walk: at tetrahedron t, for each face (the one opposite corner k), the exact orientation
  * test (thorax/geom/predicates.h, thx_orient3d) with p in place of corner k tells whether p lies
  * strictly beyond that face; if it does for some face the walk crosses it (trying the faces from a
- * varying first one, never straight back through the face it came in by, so it cannot cycle
- * between two tetrahedra), else t holds p (on its boundary included) and the walk ends there. It
+ * pseudo-randomly varying first one, the stochastic walk of Devillers, Pion and Teillaud, so that
+ * it does not go round the same cycle of tetrahedra for ever; the face it came in by is not
+ * tested again: p is strictly on this side of it), else t holds p (on its boundary included) and the walk ends there. It
  * fails — returns -1 — when the face to cross is on the mesh's boundary (p outside the mesh, or a
  * non-convex mesh whose boundary lies between the start and p: the caller then scans), when the
  * tetrahedron is flat (orientation 0), or after max(1000, 20 n_tets^(1/3)) steps. The exact tests make
