@@ -163,7 +163,10 @@ static void draw(plot_pen *p, const thx_inverse_report *r, const thx_lcurve_plot
         snprintf(buf, sizeof buf, "bold: %s %ld of %zu (largest ||b||), \xce\xbb by %s; faint: %zu %s spread evenly",
                  comp ? "temporal component" : "frame", r->mark_frame + 1, comp ? r->n_components : r->n_frames, rule,
                  r->n_frame_curves - 1, comp ? "other components" : "other frames");
-    } else
+    } else if (r->n_components > 0)
+        snprintf(buf, sizeof buf, "the curve of the %zu temporal components summed, one \xce\xbb by %s",
+                 r->n_components, rule);
+    else
         snprintf(buf, sizeof buf, "the series' curve (%zu frames summed), one \xce\xbb by %s", r->n_frames, rule);
     plot_text(p, o->width / 2.0, 50, 0, 1, buf, TEXT, 15, 13);
     plot_text(p, (a->left + a->right) / 2, o->height - 22, 0, 1, "residual norm ||A x - b||", INK, 15, 13);

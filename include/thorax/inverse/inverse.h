@@ -102,7 +102,8 @@ typedef struct {
     double mark_lambda, mark_residual, mark_seminorm;
     double mark_corner_lambda, mark_corner_residual, mark_corner_seminorm;
     /* A λ per frame: the L-curves of up to THX_INVERSE_FRAME_CURVES frames spread evenly over the
-     * series, mark_frame always among them (ascending), each at curve_lambda's n_curve points:
+     * series (the first and the last among them) and of mark_frame when it is not one of those
+     * (so at most THX_INVERSE_FRAME_CURVES + 1; ascending), each at curve_lambda's n_curve points:
      * curve j at frame_curve_residual[j * n_curve ..]. None for one λ per series. */
     size_t n_frame_curves;
     size_t *frame_curve_frame;

@@ -6,7 +6,8 @@
  *
  * What it shows: log-log axes, the residual norm ||A x - b|| across, the solution's (semi)norm
  * ||L x|| up, a grid line and a label at every decade (every second, third ... decade when more
- * than ten). One λ for the series: the series' curve (summed over frames), bold. A λ per frame:
+ * than ten). One λ for the series: the series' curve (summed over frames; Greensite: over the
+ * temporal components), bold. A λ per frame:
  * the curves of up to THX_INVERSE_FRAME_CURVES frames spread over the series, faint, and the
  * representative frame's (the frame with the largest ||b||; report->mark_frame), bold. On the bold
  * curve: the λ used, a filled red disc at the solution's (||A x - b||, ||L x||), labelled
