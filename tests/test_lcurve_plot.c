@@ -100,14 +100,14 @@ static int red_centroid(const thx_image *img, double *x, double *y, int x0, int 
     return 0;
 }
 
-static void check_picture(thx_ctx *ctx, const thx_inverse_report *r, const char *name, int w, int h)
+static void check_picture(thx_ctx *ctx, const thx_inverse_report *r, const char *name, const char *rule, int w, int h)
 {
     thx_lcurve_plot_opts o;
     thx_lcurve_plot_opts_default(&o);
     o.width = w;
     o.height = h;
     o.title = name;
-    o.rule = "lcurve";
+    o.rule = rule;
     const char *path = tl_path(name);
     CHECK_OK(ctx, thx_lcurve_plot_write(ctx, r, &o, path));
     thx_image *img = NULL;
@@ -179,7 +179,7 @@ int main(void)
         CHECK_NEAR(r.mark_residual, sqrt(r2), 1e-12 * sqrt(r2));
         CHECK_NEAR(r.mark_seminorm, sqrt(e2), 1e-12 * sqrt(e2));
     }
-    check_picture(ctx, &r, "series.png", 800, 600);
+    check_picture(ctx, &r, "series.png", "lcurve", 800, 600);
     thx_inverse_report_free(&r);
     thx_series_destroy(&X);
 
@@ -224,7 +224,7 @@ int main(void)
             }
             CHECK(on);
         }
-        check_picture(ctx, &r, tsvd ? "tsvd_frames.png" : "frames.png", tsvd ? 1000 : 800, tsvd ? 700 : 600);
+        check_picture(ctx, &r, tsvd ? "tsvd_frames.png" : "frames.png", "gcv", tsvd ? 1000 : 800, tsvd ? 700 : 600);
         thx_inverse_report_free(&r);
         thx_series_destroy(&X);
     }
