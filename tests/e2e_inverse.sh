@@ -4,7 +4,8 @@
 # measured tank leads (channels 1..192 of cool1-atdr-run1.mat) inverted and compared with the
 # measured sock (channels 193..320 through sock128.channels):
 #  - every method and a λ rule: DIR/heart.raw (128 x 608, read back by thorax series and by scipy
-#    after conversion), DIR/lambda.txt (a line per frame), DIR/inverse.json, DIR/lcurve.svg (parsed
+#    after conversion), DIR/lambda.txt (a line per frame), DIR/inverse.json, DIR/lcurve.png (read by
+#    VTK's PNG reader: 800 x 600, the red mark present), DIR/lcurve.svg (parsed
 #    by Python's XML parser: a polyline and the corner marked);
 #  - CC over the 150 most active frames above a floor measured here (Tikhonov order 2, CRESO);
 #  - the heart surface found through solution.json beside the matrix (tikhonov1/2, tv);
@@ -45,7 +46,7 @@ for method in tikhonov0 tikhonov1 tikhonov2 tsvd greensite tv; do
     rule=lcurve
     [ $method = tv ] && rule=creso
     expect_rc 0 "$THORAX" inverse --transfer $M --data leads.raw --method $method --lambda $rule --truth sock.raw -o inv_$method
-    for f in heart.raw lambda.txt inverse.json lcurve.svg; do [ -f inv_$method/$f ] || fail "$method: no $f"; done
+    for f in heart.raw lambda.txt inverse.json lcurve.svg lcurve.png; do [ -f inv_$method/$f ] || fail "$method: no $f"; done
     grep -q "^median CC" out.txt || fail "$method: no CC summary printed"
     "$THORAX" series info inv_$method/heart.raw > info.txt || fail "$method: heart.raw not read back"
     grep -Eq "^rows +128$" info.txt && grep -Eq "^frames +608$" info.txt || { cat info.txt; fail "$method: heart.raw is not 128 x 608"; }
@@ -55,6 +56,18 @@ import sys, xml.etree.ElementTree as ET
 r = ET.parse(sys.argv[1]).getroot(); ns = '{http://www.w3.org/2000/svg}'
 pl = r.findall('.//' + ns + 'polyline'); assert pl and len(pl[0].get('points').split()) > 5
 assert any(c.get('id') == 'corner' for c in r.iter(ns + 'circle'))
+PY
+    # lcurve.png read by VTK: 800 x 600, and the mark's red present where inverse.json's point maps
+    $PY - inv_$method <<'PY' || fail "$method: lcurve.png"
+import sys, json, math, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+d = sys.argv[1]; rd = vtk.vtkPNGReader(); rd.SetFileName(d + '/lcurve.png'); rd.Update()
+im = rd.GetOutput(); w, h, _ = im.GetDimensions(); assert (w, h) == (800, 600), (w, h)
+a = vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1]  # VTK's rows go up
+red = (a[:, :, 0] == 0xd6) & (a[:, :, 1] == 0x27) & (a[:, :, 2] == 0x28)
+assert red.sum() > 40, red.sum()  # the mark and the legend's disc
+j = json.load(open(d + '/inverse.json')); m = j['lcurve_mark']
+assert m['residual'] > 0 and m['solution_norm'] > 0 and m['lambda'] == m['lambda'], m
 PY
 done
 # accuracy on the measured sock: CC over the 150 frames of largest sock RMS (activity)

@@ -243,6 +243,62 @@ static void test_homogeneous(thx_ctx *ctx)
     for (int k = 0; k < 3; k++) CHECK(rdm[k] < 0.006 && mag1[k] < 0.006);
 }
 
+/* The blocked solve (issue 15): the right-hand sides of all frames (or of all dipoles and axes) as
+ * dense blocks through thx_fem_solve_block give the frame-by-frame answers (o->block = 1, the same
+ * factorization solving one column at a time) to 1e-12 of the largest potential, at the outer
+ * surface and at every volume node; a frame with no moment is exactly 0. Two layouts: 14 frames of
+ * 5 dipoles (a solve per frame, one of them all zero) and 40 frames (> 3 n: 15 solves by axis,
+ * combined). */
+static void test_blocked(thx_ctx *ctx, const thx_model *m, const double *pq)
+{
+    const size_t nfs[2] = {14, 40};
+    for (int lay = 0; lay < 2; lay++) {
+        size_t nf = nfs[lay], n = 5;
+        thx_dipoles *t = NULL;
+        CHECK_OK(ctx, thx_dipoles_create(ctx, n, nf, &t));
+        if (!t) return;
+        for (size_t i = 0; i < n; i++) memcpy(t->pos + 3 * i, pq + 6 * i, 3 * sizeof(double));
+        for (size_t f = 0; f < nf; f++) {
+            t->time[f] = (double)f;
+            for (size_t c = 0; c < 3 * n; c++) t->moment[3 * n * f + c] = f == 3 ? 0 : sin(0.7 + 0.3 * f + 1.3 * c);
+            t->frame_line[f] = f + 1;
+        }
+        for (size_t i = 0; i < n; i++) t->line[i] = i + 1;
+        thx_forward_result R[2];
+        for (int b = 0; b < 2; b++) {
+            thx_forward_opts o;
+            thx_forward_opts_default(&o);
+            o.keep_volume = 1;
+            o.block = b ? 0 : 1; /* frame by frame, then blocked (automatic) */
+            CHECK_OK(ctx, thx_forward_dipoles(ctx, m, t, &o, &R[b]));
+        }
+        if (R[0].torso && R[1].torso) {
+            CHECK(R[0].block == 1 && R[1].block > 1);
+            double e = 0, mx = 0, ev = 0, mv = 0;
+            size_t ns = R[0].torso->n_rows, nn = R[0].volume->n_rows;
+            for (size_t i = 0; i < ns * nf; i++) {
+                e = fmax(e, fabs(R[0].torso->v[i] - R[1].torso->v[i]));
+                mx = fmax(mx, fabs(R[0].torso->v[i]));
+            }
+            for (size_t i = 0; i < nn * nf; i++) {
+                ev = fmax(ev, fabs(R[0].volume->v[i] - R[1].volume->v[i]));
+                mv = fmax(mv, fabs(R[0].volume->v[i]));
+            }
+            printf("blocked dipole solve, %zu frames of %zu dipoles (%s): blocks of %zu, %.2e (surface) and %.2e "
+                   "(volume) of the largest potential from frame by frame; %s %s\n",
+                   nf, n, lay ? "by axis" : "a solve per frame", R[1].block, e / mx, ev / mv, R[1].ksp, R[1].pc);
+            CHECK(mx > 0 && e <= 1e-12 * mx);
+            CHECK(mv > 0 && ev <= 1e-12 * mv);
+            double z = 0;
+            for (size_t i = 0; i < nn; i++) z = fmax(z, fabs(R[1].volume->v[3 * nn + i]));
+            CHECK(z == 0);
+        }
+        thx_forward_result_free(&R[0]);
+        thx_forward_result_free(&R[1]);
+        thx_dipoles_destroy(&t);
+    }
+}
+
 static void test_three_shells(thx_ctx *ctx)
 {
     /* OpenMEEG's dipoles 1-5 (Head*.dip x 100 mm), level 3 (642 nodes a sphere) */
@@ -287,6 +343,7 @@ static void test_three_shells(thx_ctx *ctx)
     CHECK_NEAR(mag1[0][4], mag1[1][4], 1e-6 * mag1[1][4] + 1e-9);
     /* Saint-Venant is the more accurate for the deep dipoles */
     for (int k = 0; k < 3; k++) CHECK(rdm[0][k] < 0.5 * rdm[1][k]);
+    test_blocked(ctx, m, pq);
     /* superposition: the time-series layout (two dipoles, 7 frames > 3 n: solved by axis and
        combined) equals the sum of the single solves */
     thx_dipoles *t = NULL;

@@ -78,6 +78,8 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddStringToObject(j, "method", method == THX_DIPOLE_PARTIAL ? "partial integration" : "Saint-Venant");
         if (method != THX_DIPOLE_PARTIAL)
             cJSON_AddNumberToObject(j, "partial_integration_fallbacks", (double)R.n_fallback);
+        /* dipoles the walk through the mesh could not place, found by scanning every tetrahedron */
+        cJSON_AddNumberToObject(j, "dipoles_located_by_scan", (double)R.n_located_by_scan);
         cJSON_AddStringToObject(j, "reference", "zero integral over the outer surface");
         cJSON_AddStringToObject(j, "unit", "mV");
         for (size_t s = 0; s < m->n_surfaces; s++)
@@ -99,6 +101,7 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddStringToObject(solver, "pc", R.pc);
         cJSON_AddNumberToObject(solver, "ranks", R.ranks);
         cJSON_AddNumberToObject(solver, "free_nodes", (double)R.n_free);
+        cJSON_AddNumberToObject(solver, "block", (double)R.block); /* right-hand sides per solve (1: one by one) */
         cJSON_AddNumberToObject(solver, "iterations_min", R.it_min);
         cJSON_AddNumberToObject(solver, "iterations_max", R.it_max);
         cJSON_AddNumberToObject(solver, "iterations_total", (double)R.it_total);
@@ -111,10 +114,10 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         st = cli_outdir_finish(ctx, &od, "solution.json", j, st);
         if (st != THX_OK) goto fail;
         if (verbose >= 0) {
-            printf("%zu dipole%s, %zu frame%s: %zu free nodes; %s + %s on %d rank%s, %d..%d iterations per solve; "
-                   "assembly %.2f s, setup %.2f s, solves %.2f s\n",
+            printf("%zu dipole%s, %zu frame%s: %zu free nodes; %s + %s on %d rank%s, blocks of %zu, %d..%d iterations per "
+                   "solve; assembly %.2f s, setup %.2f s, solves %.2f s\n",
                    d->n, d->n > 1 ? "s" : "", d->n_frames, d->n_frames > 1 ? "s" : "", R.n_free, R.ksp, R.pc, R.ranks,
-                   R.ranks > 1 ? "s" : "", R.it_min, R.it_max, R.t_assemble, R.t_setup, R.t_solve);
+                   R.ranks > 1 ? "s" : "", R.block, R.it_min, R.it_max, R.t_assemble, R.t_setup, R.t_solve);
             printf("wrote %s\n", out);
         }
     }

@@ -13,6 +13,7 @@
 #include "thorax/inverse/inverse.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
+#include "thorax/picture/lcurve_plot.h"
 
 static const char *ext_of(thx_series_format f)
 {
@@ -110,7 +111,8 @@ int cmd_inverse(int argc, char **argv)
         {.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .s = &data,
          .help = "the body-surface potentials, rows the transfer matrix's rows, one column per frame"},
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
-         .help = "the result directory (written whole or not at all): heart.EXT, lambda.txt, lcurve.svg, inverse.json"},
+         .help = "the result directory (written whole or not at all): heart.EXT, lambda.txt, lcurve.svg, lcurve.png, "
+                 "inverse.json"},
         {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &method,
          .help = "Tikhonov of order 0, 1 (surface gradient) or 2 (surface Laplacian), truncated SVD, Greensite's "
                  "temporal-SVD method, or total variation (IRLS)"},
@@ -150,7 +152,10 @@ int cmd_inverse(int argc, char **argv)
                  "CRESO, GCV, the discrepancy principle, or given; per frame or per series.\n"
                  "Writes DIR/heart.EXT (rows: the matrix's columns, the heart's nodes),\n"
                  "DIR/lambda.txt (λ, residual and solution norm per frame), DIR/lcurve.svg\n"
-                 "(the series' L-curve, its corner and the λ used marked) and DIR/inverse.json.\n",
+                 "(the series' L-curve, its corner and the λ used marked), DIR/lcurve.png (the\n"
+                 "same picture; with a λ per frame the curve of the frame with the largest\n"
+                 "data norm bold, its λ marked, up to 48 other frames' curves faint) and\n"
+                 "DIR/inverse.json.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
     };
     int pr = cli_parse(&cmd, argc, argv);
@@ -290,6 +295,21 @@ int cmd_inverse(int argc, char **argv)
             snprintf(path, sizeof path, "%s/lcurve.svg", od.tmp);
             st = thx_inverse_write_svg(ctx, &R, title, path);
         }
+        if (st == THX_OK && R.n_curve) {
+            /* the same curve as a PNG (thorax/picture/lcurve_plot.h); a λ per frame: the
+               representative frame's curve bold, others faint */
+            thx_lcurve_plot_opts po;
+            thx_lcurve_plot_opts_default(&po);
+            char ptitle[256], rule[96];
+            snprintf(ptitle, sizeof ptitle, "L-curve: %s, %zu x %zu matrix, %zu frames", thx_inverse_method_name(o.method),
+                     A->n_rows, A->n_frames, X->n_frames);
+            if (o.rule == THX_LAMBDA_FIXED) snprintf(rule, sizeof rule, "fixed (%s)", lambda_s);
+            else snprintf(rule, sizeof rule, "%s", thx_lambda_rule_name(o.rule));
+            po.title = ptitle;
+            po.rule = rule;
+            snprintf(path, sizeof path, "%s/lcurve.png", od.tmp);
+            st = thx_lcurve_plot_write(ctx, &R, &po, path);
+        }
         /* lambda.txt: one line per frame */
         if (st == THX_OK) {
             thx_atomic_file af;
@@ -364,7 +384,17 @@ int cmd_inverse(int argc, char **argv)
         snprintf(name, sizeof name, "heart.%s", ext);
         cJSON_AddStringToObject(files, "heart", name);
         cJSON_AddStringToObject(files, "lambda", "lambda.txt");
-        if (R.n_curve) cJSON_AddStringToObject(files, "lcurve", "lcurve.svg");
+        if (R.n_curve) {
+            cJSON_AddStringToObject(files, "lcurve", "lcurve.svg");
+            cJSON_AddStringToObject(files, "lcurve_png", "lcurve.png");
+            cJSON *lc = cJSON_AddObjectToObject(j, "lcurve_mark");
+            if (R.mark_frame >= 0) cJSON_AddNumberToObject(lc, "frame", (double)(R.mark_frame + 1));
+            else cJSON_AddNullToObject(lc, "frame");
+            cJSON_AddNumberToObject(lc, "lambda", R.mark_lambda);
+            cJSON_AddNumberToObject(lc, "residual", R.mark_residual);
+            cJSON_AddNumberToObject(lc, "solution_norm", R.mark_seminorm);
+            cJSON_AddNumberToObject(lc, "corner_lambda", R.mark_corner_lambda);
+        }
         cJSON_AddItemToObject(j, "files", files);
         st = cli_outdir_finish(ctx, &od, "inverse.json", j, st);
         if (st != THX_OK) goto fail;

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "thorax/fem/fem.h"
+#include "thorax/mesh/tet_locate.h"
 
 /* mA·m per mm -> µA: the loads' factor for potentials in mV */
 #define LOAD_SCALE 1e6
@@ -90,6 +91,23 @@ void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[
        the lowest number — the same answer for any thread count */
     *tet = best;
     if (l) memcpy(l, bl, sizeof bl);
+}
+
+int thx_fem_locate_walk(const thx_tet_locator *loc, const thx_volume *v, const double p[3], long start, long *tet,
+                        double l[4])
+{
+    long t = loc ? thx_tet_locate(loc, p, start, NULL) : -1;
+    if (t >= 0) {
+        double b[4];
+        bary(v->xyz, v->tet + 4 * t, p, b);
+        if (fmin(fmin(b[0], b[1]), fmin(b[2], b[3])) > 1e-9) {
+            *tet = t;
+            if (l) memcpy(l, b, sizeof b);
+            return 1;
+        }
+    }
+    thx_fem_locate(v, p, tet, l);
+    return 0;
 }
 
 /* The partial-integration stencil: the corners of tet, w = the gradients of their hat functions (1/mm). */
@@ -265,6 +283,8 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_status st = THX_OK;
     unsigned char *use = NULL, *kind = NULL;
     long *tet = NULL;
+    size_t *col = NULL, n_scan = 0;
+    thx_tet_locator *loc = NULL;
     double *phi = NULL, *load = NULL, *basis = NULL, *wt = NULL, *work = NULL;
     int *sn = NULL;
     unsigned char *iface = NULL;
@@ -276,15 +296,17 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     const thx_surface *os = m->surf[outer];
     size_t nn = v->n_nodes, ns = os->n_nodes, n = d->n, nf = d->n_frames;
     THX_TRY(conducting(ctx, v, &use));
-    /* every dipole: finite, in a conducting tetrahedron */
+    /* every dipole: finite, in a conducting tetrahedron (found by the walk, each dipole's starting
+       from the previous one's tetrahedron; the scan where the walk cannot decide) */
     tet = thx_malloc(ctx, n * sizeof *tet);
     if (!tet) { st = THX_ENOMEM; goto done; }
+    THX_TRY(thx_tet_locator_create(ctx, v, &loc));
     for (size_t i = 0; i < n; i++) {
         const double *p = d->pos + 3 * i;
         char at[768];
         snprintf(at, sizeof at, "%s:%zu: dipole %zu at (%g, %g, %g) mm", src, d->line[i], i + 1, p[0], p[1], p[2]);
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) { st = thx_error(ctx, THX_EINPUT, "%s: not a finite position", at); goto done; }
-        thx_fem_locate(v, p, &tet[i], NULL);
+        if (!thx_fem_locate_walk(loc, v, p, i > 0 ? tet[i - 1] : -1, &tet[i], NULL)) n_scan++;
         if (tet[i] < 0) { st = thx_error(ctx, THX_EINPUT, "%s lies outside the volume mesh", at); goto done; }
         int32_t rg = v->region[tet[i]];
         if (rg < 0 || (size_t)rg >= v->n_regions) { st = thx_error(ctx, THX_EINPUT, "%s: its tetrahedron %ld has no region", at, tet[i] + 1); goto done; }
@@ -361,60 +383,82 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
         if (!(tot > 0)) { st = thx_error(ctx, THX_EINPUT, "forward: the outer surface '%s' has no area", os->name); goto done; }
         for (size_t i = 0; i < ns; i++) wt[i] /= tot;
     }
-    /* solves: one per frame, or (more frames than 3 n) one per dipole and axis, combined */
+    /* solves: one per frame, or (more frames than 3 n) one per dipole and axis, combined. The
+       right-hand sides go to the solver as dense blocks (thx_fem_solve_block: with a factorization,
+       one multi-right-hand-side solve per block; o->block = 1 or an iterative solver: one by one) */
     int by_axis = nf > 3 * n;
     size_t ns_solve = by_axis ? 3 * n : nf;
     size_t keep = o->keep_volume ? nn : ns;
     THX_TRY(thx_series_create(ctx, ns, nf, &r->torso));
     if (o->keep_volume) THX_TRY(thx_series_create(ctx, nn, nf, &r->volume));
-    phi = thx_calloc(ctx, nn ? nn : 1, sizeof *phi);
-    load = thx_calloc(ctx, nn ? nn : 1, sizeof *load);
     if (by_axis) basis = thx_malloc(ctx, 3 * n * keep * sizeof *basis);
-    if (!phi || !load || (by_axis && !basis)) { st = THX_ENOMEM; goto done; }
-    thx_fem_system_hint_rhs(S, ns_solve);
-    r->it_min = 1 << 30;
+    /* the solves with a load (a frame whose moments are all zero has phi = 0: no solve) */
+    col = thx_malloc(ctx, (ns_solve ? ns_solve : 1) * sizeof *col);
+    if (!col || (by_axis && !basis)) { st = THX_ENOMEM; goto done; }
+    size_t n_col = 0;
     for (size_t k = 0; k < ns_solve; k++) {
-        memset(load, 0, nn * sizeof *load);
-        int any = 0;
-        if (by_axis) {
-            double q[3] = {0, 0, 0};
-            q[k % 3] = 1;
-            add_load(snode + (k / 3) * VENANT_MAX, sw + (k / 3) * VENANT_MAX, sn[k / 3], q, load);
-            any = 1;
-        } else {
-            const double *q = d->moment + 3 * n * k;
-            for (size_t i = 0; i < n; i++)
-                if (q[3 * i] != 0 || q[3 * i + 1] != 0 || q[3 * i + 2] != 0) {
-                    add_load(snode + i * VENANT_MAX, sw + i * VENANT_MAX, sn[i], q + 3 * i, load);
-                    any = 1;
-                }
-        }
-        if (!any) memset(phi, 0, nn * sizeof *phi);
+        int any = by_axis;
+        for (size_t i = 0; i < 3 * n && !any; i++) any = d->moment[3 * n * k + i] != 0;
+        if (any) col[n_col++] = k;
         else {
-            if (!(o->warm && k > 0)) memset(phi, 0, nn * sizeof *phi);
-            thx_fem_solve_stats ss;
-            THX_TRY(thx_fem_solve(ctx, S, phi, load, o->warm && k > 0, &ss));
-            r->it_min = ss.iterations < r->it_min ? ss.iterations : r->it_min;
-            r->it_max = ss.iterations > r->it_max ? ss.iterations : r->it_max;
-            r->it_total += ss.iterations;
-            r->max_residual = fmax(r->max_residual, ss.residual);
-            r->t_solve += ss.seconds;
+            memset(r->torso->v + k * ns, 0, ns * sizeof(double));
+            if (r->volume) memset(r->volume->v + k * nn, 0, nn * sizeof(double));
+        }
+    }
+    thx_fem_system_hint_rhs(S, n_col);
+    if (o->block) thx_fem_system_set_block(S, o->block);
+    size_t nb = thx_fem_system_block(S);
+    nb = nb < n_col ? nb : n_col ? n_col : 1;
+    r->block = nb;
+    phi = thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *phi);
+    load = thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *load);
+    if (!phi || !load) { st = THX_ENOMEM; goto done; }
+    r->it_min = 1 << 30;
+    for (size_t c0 = 0; c0 < n_col; c0 += nb) {
+        size_t kb = n_col - c0 < nb ? n_col - c0 : nb;
+        memset(load, 0, nn * kb * sizeof *load);
+        if (!o->warm) memset(phi, 0, nn * kb * sizeof *phi);
+        else if (c0 > 0 && nb > 1) memcpy(phi, phi + (nb - 1) * nn, nn * sizeof *phi); /* the warm start */
+        for (size_t q = 0; q < kb; q++) {
+            size_t k = col[c0 + q];
+            double *lq = load + q * nn;
+            if (by_axis) {
+                double e[3] = {0, 0, 0};
+                e[k % 3] = 1;
+                add_load(snode + (k / 3) * VENANT_MAX, sw + (k / 3) * VENANT_MAX, sn[k / 3], e, lq);
+            } else {
+                const double *qm = d->moment + 3 * n * k;
+                for (size_t i = 0; i < n; i++)
+                    if (qm[3 * i] != 0 || qm[3 * i + 1] != 0 || qm[3 * i + 2] != 0)
+                        add_load(snode + i * VENANT_MAX, sw + i * VENANT_MAX, sn[i], qm + 3 * i, lq);
+            }
+        }
+        thx_fem_solve_stats ss;
+        THX_TRY(thx_fem_solve_block(ctx, S, phi, load, kb, o->warm, &ss));
+        r->it_min = ss.iterations_min < r->it_min ? ss.iterations_min : r->it_min;
+        r->it_max = ss.iterations > r->it_max ? ss.iterations : r->it_max;
+        r->it_total += ss.iterations_total;
+        r->max_residual = fmax(r->max_residual, ss.residual);
+        r->t_solve += ss.seconds;
+        for (size_t q = 0; q < kb; q++) {
+            size_t k = col[c0 + q];
+            double *pq = phi + q * nn;
             /* the reference: zero integral over the outer surface */
             double c = 0;
-            for (size_t i = 0; i < ns; i++) c += wt[i] * phi[v->surf_node[outer][i]];
+            for (size_t i = 0; i < ns; i++) c += wt[i] * pq[v->surf_node[outer][i]];
             for (size_t i = 0; i < nn; i++)
-                if (kind[i]) phi[i] -= c;
+                if (kind[i]) pq[i] -= c;
+            if (by_axis) {
+                double *bk = basis + k * keep;
+                if (o->keep_volume) memcpy(bk, pq, nn * sizeof *pq);
+                else
+                    for (size_t i = 0; i < ns; i++) bk[i] = pq[v->surf_node[outer][i]];
+            } else {
+                for (size_t i = 0; i < ns; i++) r->torso->v[k * ns + i] = pq[v->surf_node[outer][i]];
+                if (r->volume) memcpy(r->volume->v + k * nn, pq, nn * sizeof *pq);
+            }
         }
-        if (by_axis) {
-            double *b = basis + k * keep;
-            if (o->keep_volume) memcpy(b, phi, nn * sizeof *phi);
-            else
-                for (size_t i = 0; i < ns; i++) b[i] = phi[v->surf_node[outer][i]];
-        } else {
-            for (size_t i = 0; i < ns; i++) r->torso->v[k * ns + i] = phi[v->surf_node[outer][i]];
-            if (r->volume) memcpy(r->volume->v + k * nn, phi, nn * sizeof *phi);
-        }
-        if (o->progress) o->progress(o->user, k + 1, ns_solve);
+        if (o->progress) o->progress(o->user, c0 + kb, n_col);
     }
     if (by_axis) {
         /* frame f = sum over dipoles and axes of the moment times that solution */
@@ -445,13 +489,16 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_fem_system_info(S, &r->n_free, &r->n_prescribed, &r->t_setup);
     r->t_matrix = thx_fem_system_matrix_seconds(S);
     thx_fem_system_describe(S, r->ksp, r->pc, &r->ranks);
+    r->n_located_by_scan = n_scan;
 done:
     if (st != THX_OK) thx_forward_result_free(r);
     thx_fem_system_destroy(&S);
     thx_csr_free(&K);
     free(use);
     free(kind);
+    thx_tet_locator_destroy(&loc);
     free(tet);
+    free(col);
     free(phi);
     free(load);
     free(basis);

@@ -43,6 +43,9 @@ void thx_inverse_report_free(thx_inverse_report *r)
     free(r->curve_residual);
     free(r->curve_seminorm);
     free(r->sv);
+    free(r->frame_curve_frame);
+    free(r->frame_curve_residual);
+    free(r->frame_curve_seminorm);
     memset(r, 0, sizeof *r);
 }
 
@@ -190,8 +193,6 @@ static double median(const double *v, size_t n)
     return r;
 }
 
-/* The spectral core: Abar (m x n, destroyed) y ≈ Bb (m x F) by Tikhonov order 0 or TSVD with the rule;
- * Y (n x F) out, per column λ, k, ρ, η; the summed L-curve into r (when curve). */
 typedef struct {
     int tsvd;
     thx_lambda_rule rule;
@@ -200,6 +201,102 @@ typedef struct {
     int n_grid;
     const double *target; /* per column (discrepancy) */
 } core_opts;
+
+/* ρ and η of one right-hand side (β² b2, perp2 outside range(U)) at Tikhonov λ, or TSVD keeping q
+ * components */
+static void point_at(const double *s, const double *b2, size_t kk, double perp2, int tsvd, double lambda, size_t q,
+                     double *rho, double *eta)
+{
+    double r2 = perp2, e2 = 0;
+    if (tsvd) {
+        for (size_t i = 0; i < kk; i++)
+            if (i < q) e2 += b2[i] / (s[i] * s[i]);
+            else r2 += b2[i];
+    } else
+        thx_inv_norms(s, b2, kk, perp2, lambda, &r2, &e2);
+    *rho = sqrt(r2);
+    *eta = sqrt(e2);
+}
+
+/* The L-curve picture's data (thx_inverse_report's mark_* and frame curves): the representative
+ * curve's corner and chosen point; a λ per frame: the curves of frames spread over the series. */
+static thx_status picture_data(thx_ctx *ctx, const double *s, size_t kk, const double *beta, const double *perp,
+                               const double *sum2, double perp_sum, size_t F, const core_opts *co, double series_lam,
+                               int series_k, const double *lam, const int *kept, const double *rho, const double *eta,
+                               thx_inverse_report *r)
+{
+    size_t nc = r->n_curve;
+    double *b2 = thx_malloc(ctx, (kk ? kk : 1) * sizeof *b2);
+    if (!b2) return THX_ENOMEM;
+    const double *cb2 = sum2;
+    double cperp = perp_sum;
+    if (co->per_series) {
+        double r2 = 0, e2 = 0;
+        for (size_t f = 0; f < F; f++) r2 += rho[f] * rho[f], e2 += eta[f] * eta[f];
+        r->mark_frame = -1;
+        r->mark_lambda = series_lam;
+        r->mark_residual = sqrt(r2);
+        r->mark_seminorm = sqrt(e2);
+        (void)series_k;
+    } else {
+        /* the representative frame: the largest ||b||² = Σ β² + the part outside range(U) */
+        size_t rep = 0;
+        double best = -1;
+        for (size_t f = 0; f < F; f++) {
+            double n2 = perp[f];
+            for (size_t i = 0; i < kk; i++) n2 += beta[f * kk + i] * beta[f * kk + i];
+            if (n2 > best) best = n2, rep = f;
+        }
+        for (size_t i = 0; i < kk; i++) b2[i] = beta[rep * kk + i] * beta[rep * kk + i];
+        cb2 = b2;
+        cperp = perp[rep];
+        r->mark_frame = (long)rep;
+        r->mark_lambda = lam[rep];
+        r->mark_residual = rho[rep];
+        r->mark_seminorm = eta[rep];
+        (void)kept;
+        /* frames spread evenly, the representative one among them */
+        size_t want = F < THX_INVERSE_FRAME_CURVES ? F : THX_INVERSE_FRAME_CURVES, n = 0;
+        r->frame_curve_frame = thx_malloc(ctx, (want + 1) * sizeof *r->frame_curve_frame);
+        r->frame_curve_residual = thx_malloc(ctx, (want + 1) * (nc ? nc : 1) * sizeof(double));
+        r->frame_curve_seminorm = thx_malloc(ctx, (want + 1) * (nc ? nc : 1) * sizeof(double));
+        double *fb2 = thx_malloc(ctx, (kk ? kk : 1) * sizeof *fb2);
+        if (!r->frame_curve_frame || !r->frame_curve_residual || !r->frame_curve_seminorm || !fb2) {
+            free(fb2);
+            free(b2);
+            return THX_ENOMEM;
+        }
+        int rep_in = 0;
+        for (size_t j = 0; j < want; j++) {
+            size_t f = want > 1 ? (size_t)llround((double)j * (double)(F - 1) / (double)(want - 1)) : 0;
+            if (!rep_in && rep < f) r->frame_curve_frame[n++] = rep, rep_in = 1;
+            if (f == rep) rep_in = 1;
+            if (n && r->frame_curve_frame[n - 1] == f) continue;
+            r->frame_curve_frame[n++] = f;
+        }
+        if (!rep_in) r->frame_curve_frame[n++] = rep;
+        for (size_t j = 0; j < n; j++) {
+            size_t f = r->frame_curve_frame[j];
+            for (size_t i = 0; i < kk; i++) fb2[i] = beta[f * kk + i] * beta[f * kk + i];
+            for (size_t q = 0; q < nc; q++)
+                point_at(s, fb2, kk, perp[f], co->tsvd, r->curve_lambda[q], q + 1, &r->frame_curve_residual[j * nc + q],
+                         &r->frame_curve_seminorm[j * nc + q]);
+        }
+        r->n_frame_curves = n;
+        free(fb2);
+    }
+    /* that curve's corner */
+    int kc = 0;
+    double lc = thx_inverse_pick(s, cb2, kk, cperp, 1.0, THX_LAMBDA_LCURVE, 0, 0, co->tsvd, co->n_grid, &kc);
+    r->mark_corner_lambda = lc;
+    point_at(s, cb2, kk, cperp, co->tsvd, lc, (size_t)(kc > 0 ? kc : 0), &r->mark_corner_residual,
+             &r->mark_corner_seminorm);
+    free(b2);
+    return THX_OK;
+}
+
+/* The spectral core: Abar (m x n, destroyed) y ≈ Bb (m x F) by Tikhonov order 0 or TSVD with the rule;
+ * Y (n x F) out, per column λ, k, ρ, η; the summed L-curve into r (when curve). */
 
 static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const double *Bb, size_t F,
                            const core_opts *co, double *Y, double *lam, int *kept, double *rho, double *eta,
@@ -323,6 +420,7 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
         }
         r->n_curve = nc;
         r->chosen_lambda = co->per_series ? series_lam : median(lam, F);
+        THX_TRY(picture_data(ctx, s, kk, beta, perp, sum2, perp_sum, F, co, series_lam, series_k, lam, kept, rho, eta, r));
     }
     if (r) r->t_frames += wtime() - t1;
 done:

@@ -12,6 +12,7 @@
 #include "thorax/core/fileio.h"
 #include "thorax/picture/ecg_plot.h"
 #include "thorax/render/image.h"
+#include "picture/plot_pen.h"
 
 #define SVG_MARKER "thorax-ecg-plot"
 
@@ -119,64 +120,22 @@ static thx_status make_layout(thx_ctx *ctx, const thx_series *s, const thx_ecg_p
 
 /* ------------------------------------------------------------------ the two pens */
 
-typedef struct {
-    FILE *svg;          /* SVG: write here */
-    thx_image *img;     /* PNG: draw here */
-    thx_font *fbig, *fsmall;
-    double s;           /* pixels per mm */
-} pen;
+static const plot_rgb GRID_MINOR = {0xf4, 0xc4, 0xc4}, GRID_MAJOR = {0xe0, 0x7c, 0x7c}, INK = {0, 0, 0},
+                      TEXT = {0x30, 0x30, 0x30};
 
-typedef struct {
-    unsigned char r, g, b;
-} rgb;
-
-static const rgb GRID_MINOR = {0xf4, 0xc4, 0xc4}, GRID_MAJOR = {0xe0, 0x7c, 0x7c}, INK = {0, 0, 0},
-                 TEXT = {0x30, 0x30, 0x30};
-
-static void line(pen *p, double x0, double y0, double x1, double y1, double w, rgb c)
+static void line(plot_pen *p, double x0, double y0, double x1, double y1, double w, plot_rgb c)
 {
-    if (p->svg)
-        fprintf(p->svg, "<line x1=\"%.3f\" y1=\"%.3f\" x2=\"%.3f\" y2=\"%.3f\" stroke=\"#%02x%02x%02x\" "
-                        "stroke-width=\"%.2f\"/>\n",
-                x0, y0, x1, y1, c.r, c.g, c.b, w);
-    else {
-        unsigned char k[4] = {c.r, c.g, c.b, 255};
-        thx_draw_line(p->img, x0 * p->s, y0 * p->s, x1 * p->s, y1 * p->s, fmax(1.0, w * p->s), k);
-    }
+    plot_line(p, x0, y0, x1, y1, w, c);
 }
 
-static void svg_escaped(FILE *f, const char *t)
+/* Text with its baseline at y (mm); anchor 0 start, 1 middle, 2 end (SVG: 3.2 and 2.4 mm fonts). */
+static void text(plot_pen *p, double x, double y, int big, int anchor, const char *t)
 {
-    for (; *t; t++) {
-        if (*t == '&') fputs("&amp;", f);
-        else if (*t == '<') fputs("&lt;", f);
-        else if (*t == '>') fputs("&gt;", f);
-        else if (*t == '"') fputs("&quot;", f);
-        else if ((unsigned char)*t >= 0x20 || *t == '\t') fputc(*t, f);
-    }
-}
-
-/* Text with its baseline at y (mm); anchor 0 start, 1 middle, 2 end. */
-static void text(pen *p, double x, double y, int big, int anchor, const char *t)
-{
-    if (p->svg) {
-        static const char *const a[3] = {"start", "middle", "end"};
-        fprintf(p->svg, "<text x=\"%.3f\" y=\"%.3f\" font-size=\"%s\"%s text-anchor=\"%s\">", x, y, big ? "3.2" : "2.4",
-                big ? " font-weight=\"bold\"" : "", a[anchor]);
-        svg_escaped(p->svg, t);
-        fputs("</text>\n", p->svg);
-    } else {
-        thx_font *f = big ? p->fbig : p->fsmall;
-        if (!f) return;
-        unsigned char k[4] = {TEXT.r, TEXT.g, TEXT.b, 255};
-        int w = thx_text_width(f, t);
-        int px = (int)lround(x * p->s) - (anchor == 1 ? w / 2 : anchor == 2 ? w : 0);
-        thx_draw_text(p->img, f, px, (int)lround(y * p->s), t, k);
-    }
+    plot_text(p, x, y, big, anchor, t, p->svg ? (plot_rgb){0, 0, 0} : TEXT, 3.2, 2.4);
 }
 
 /* One lead: its samples from (x0, base), a break at every non-finite one. */
-static void trace(pen *p, const layout *L, const thx_series *s, size_t row, double x0, double base)
+static void trace(plot_pen *p, const layout *L, const thx_series *s, size_t row, double x0, double base)
 {
     size_t n = s->n_frames;
     if (p->svg) {
@@ -218,7 +177,7 @@ static void trace(pen *p, const layout *L, const thx_series *s, size_t row, doub
     }
 }
 
-static void draw(pen *p, const layout *L, const thx_series *s, const char *title)
+static void draw(plot_pen *p, const layout *L, const thx_series *s, const char *title)
 {
     double bottom = L->H - AXIS;
     /* the grid over the whole sheet: 1 mm, every fifth line heavier */
@@ -273,7 +232,7 @@ static thx_status write_svg(thx_ctx *ctx, const layout *L, const thx_series *s, 
             "font-family=\"sans-serif\" data-mm-per-mv=\"%g\" data-mm-per-s=\"%g\" data-t0=\"%g\">\n",
             L->W, L->H, L->W, L->H, L->gain, L->speed, L->t0);
     fprintf(f, "<rect x=\"0\" y=\"0\" width=\"%.1f\" height=\"%.1f\" fill=\"#ffffff\"/>\n", L->W, L->H);
-    pen p = {.svg = f};
+    plot_pen p = {.svg = f};
     draw(&p, L, s, title);
     fputs("</svg>\n", f);
     return thx_atomic_commit(ctx, &af);
@@ -297,7 +256,7 @@ static thx_status write_png(thx_ctx *ctx, const layout *L, const thx_series *s, 
     thx_status st = thx_font_open(ctx, o->font, (int)lround(3.2 * k), &fb);
     if (st == THX_OK) st = thx_font_open(ctx, o->font, (int)lround(2.4 * k), &fs);
     if (st == THX_OK) {
-        pen p = {.img = img, .fbig = fb, .fsmall = fs, .s = k};
+        plot_pen p = {.img = img, .fbig = fb, .fsmall = fs, .s = k};
         draw(&p, L, s, o->title);
         st = thx_image_write_png(ctx, img, path);
     }

@@ -180,6 +180,7 @@ typedef struct {
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
     size_t block;           /* right-hand sides per blocked solve used (1: frame by frame) */
+    size_t n_located_by_scan; /* thx_forward_dipoles: dipoles the walk did not place (thx_fem_locate_walk) */
     size_t n_fallback;      /* thx_forward_dipoles, Saint-Venant: dipoles put on by partial integration instead
                                (every corner of their tetrahedron on an interface between regions) */
 } thx_forward_result;
@@ -234,11 +235,22 @@ thx_status thx_transfer_apply(thx_ctx *ctx, const thx_series *T, const thx_serie
 /* ---- current dipole sources (src/fem/dipole.c; docs/decisions.md, "Dipole sources") ---- */
 
 #include "thorax/io/dipoles_file.h"
+#include "thorax/mesh/tet_locate.h"
 
 /* The tetrahedron holding point p (mm): the one p lies deepest in (largest smallest barycentric
  * coordinate, at least -1e-9; ties: the lowest number), or -1 if p is outside every tetrahedron;
  * l (may be NULL) its barycentric coordinates there. */
 void thx_fem_locate(const thx_volume *v, const double p[3], long *tet, double l[4]);
+
+/* thx_fem_locate's answer through the walk (thorax/mesh/tet_locate.h) from start (< 0: the
+ * locator's seed): the walk's tetrahedron when p lies inside it by more than 1e-9 in every
+ * barycentric coordinate (then no other tetrahedron holds p, and the scan would choose it too);
+ * else — the walk failed (p outside the mesh, or the mesh not convex between the start and p) or
+ * p lies on a face, an edge or a node — thx_fem_locate's scan, whose rule (the tetrahedron p is
+ * deepest in, then the lowest number) decides. Returns 1 if the walk decided, 0 if the scan did.
+ * loc must be built on v. */
+int thx_fem_locate_walk(const thx_tet_locator *loc, const thx_volume *v, const double p[3], long start, long *tet,
+                        double l[4]);
 
 /* Adds the partial-integration load of a dipole of moment q (mA·m) in tetrahedron tet to load
  * (n_nodes; µA, so that the potential comes out in mV): q . grad l_k, times 10^6 for the units, on
@@ -257,7 +269,11 @@ void thx_dipole_load(const thx_volume *v, long tet, const double q[3], double *l
  * (the reference of the analytic solutions of concentric spheres). r->torso: the outer surface's
  * nodes x the dipole set's frames, mV (a .dip-layout set: one frame per dipole); r->volume with
  * keep_volume. A frame is one solve, or when there are more frames than 3 n, 3 n solves (a unit
- * moment per dipole and axis) are combined. Errors name the dipole file and line: a dipole
+ * moment per dipole and axis) are combined; a frame whose moments are all zero is 0 without a
+ * solve. The right-hand sides are assembled as dense blocks and solved by thx_fem_solve_block
+ * (o->block columns, 0: thx_fem_system_block's choice; r->block says which): with a
+ * factorization, one multi-right-hand-side solve per block, the same answers as one by one to
+ * rounding (o->block = 1). Errors name the dipole file and line: a dipole
  * outside the volume, in a region of conductivity 0, a position or moment that is not finite.
  */
 thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipoles *d, const thx_forward_opts *o,

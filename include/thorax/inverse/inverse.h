@@ -77,6 +77,8 @@ void thx_inverse_opts_default(thx_inverse_opts *o);
 
 /* Per-frame figures and the series' L-curve, filled by thx_inverse_solve (all arrays owned;
  * thx_inverse_report_free releases them). */
+#define THX_INVERSE_FRAME_CURVES 48
+
 typedef struct {
     size_t n_frames;
     double *lambda;        /* λ used per frame (TSVD: the truncation threshold s_k; Greensite: NaN) */
@@ -89,6 +91,23 @@ typedef struct {
     double *curve_lambda, *curve_residual, *curve_seminorm;
     double corner_lambda;  /* the curve's maximum-curvature λ */
     double chosen_lambda;  /* the series' λ, or the median of the frames' λ */
+    /* What the L-curve picture marks (thorax/picture/lcurve_plot.h). One λ for the series
+     * (mark_frame = -1): the summed curve above, the series' λ on it. A λ per frame: the curve of
+     * the representative frame mark_frame (0-based), the frame whose data has the largest norm
+     * ||b|| (the peak of the beat; Greensite: the first temporal component), and that frame's own
+     * λ on it. The point is the solution's own (||A x - b||, ||L x||) at that λ (TV: the order-1
+     * solution it starts from, on the order-1 curve); the corner is that curve's maximum-curvature
+     * λ and its point. */
+    long mark_frame;
+    double mark_lambda, mark_residual, mark_seminorm;
+    double mark_corner_lambda, mark_corner_residual, mark_corner_seminorm;
+    /* A λ per frame: the L-curves of up to THX_INVERSE_FRAME_CURVES frames spread evenly over the
+     * series (the first and the last among them) and of mark_frame when it is not one of those
+     * (so at most THX_INVERSE_FRAME_CURVES + 1; ascending), each at curve_lambda's n_curve points:
+     * curve j at frame_curve_residual[j * n_curve ..]. None for one λ per series. */
+    size_t n_frame_curves;
+    size_t *frame_curve_frame;
+    double *frame_curve_residual, *frame_curve_seminorm;
     size_t rank;           /* singular values of the (transformed) matrix, largest first */
     double *sv;
     double noise_sigma;    /* σ used by the discrepancy rule (first frame's, per frame) */
