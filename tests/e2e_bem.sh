@@ -113,6 +113,30 @@ assert abs(a - b).max() < 1e-12 * s and abs(b - c).max() < 1e-12 * s
 j = json.load(open("tr2/bem.json"))
 assert j["ranks"] == 2 and j["dense_solver"].startswith("ScaLAPACK"), j
 EOF2
+# the symmetric dipoles distributed: each rank assembles its rows of the symmetric system from the
+# pair integrals alone; ScaLAPACK on 1 rank and on 2 against the serial LAPACK path (dip/, .mat)
+expect_rc 0 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --electrodes "$H/Head1.patches" -o sd1 --format mat --scalapack -q
+set +e
+mpirun -np 2 "$THORAX" bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --electrodes "$H/Head1.patches" -o sd2 --format mat -q \
+    > out.log 2> err.log
+rc=$?
+set -e
+[ "$rc" -eq 0 ] || fail "mpirun -np 2 thorax bem --dipoles: exit $rc: $(cat err.log)"
+"$PY" - <<'EOF2' || fail "ScaLAPACK symmetric dipoles"
+import json
+import numpy as np, scipy.io
+def read(p):
+    m = scipy.io.loadmat(p)
+    return [m[k] for k in m if not k.startswith("__") and getattr(m[k], "ndim", 0) == 2 and m[k].shape[1] == 6][0]
+a, b, c = read("dip/nodes.mat"), read("sd1/nodes.mat"), read("sd2/nodes.mat")
+s = abs(a).max()
+print("symmetric dipoles: LAPACK vs ScaLAPACK 1 rank: %.2g; 1 vs 2 ranks: %.2g" % (abs(a - b).max() / s, abs(b - c).max() / s))
+assert a.shape == (126, 6) and abs(a - b).max() < 1e-12 * s and abs(b - c).max() < 1e-12 * s
+j = json.load(open("sd2/bem.json"))
+assert j["ranks"] == 2 and j["dense_solver"].startswith("ScaLAPACK") and j["method"].startswith("symmetric"), j
+EOF2
+expect_rc 2 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --method collocation --scalapack -o bad
+grep -q "collocation runs on one process" err.log || fail "collocation under --scalapack: $(cat err.log)"
 # bad input
 expect_rc 2 bem "$H/Head1.geom" --dipoles "$H/Head1.dip" --transfer -o bad
 expect_rc 2 bem "$H/Head1.geom" -o bad

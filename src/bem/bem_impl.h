@@ -40,6 +40,14 @@ thx_status thx_bem_dipole_compartments(thx_ctx *ctx, const thx_bem *b, const dou
 thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t nd,
                                      const int *comp, double *phi, thx_bem_info *info);
 
+/* Rows i0..i1-1 of the symmetric method's matrix (M, ld i1 - i0, column-major: row i is
+ * M[col * (i1 - i0) + i - i0]) and of its right-hand sides (R, the same layout, nd columns; may
+ * be NULL), each computed alone from the pair integrals (the serial path's numbers, so that the
+ * distributed solve gives the same answer). M NULL: *n_out (the number of unknowns: every node,
+ * then every current triangle) only. comp as thx_bem_dipoles_symmetric's. */
+thx_status thx_bem_symmetric_rows(thx_ctx *ctx, const thx_bem *b, size_t i0, size_t i1, const double *pos,
+                                  const double *mom, size_t nd, const int *comp, double *M, double *R, size_t *n_out);
+
 /* LAPACK / BLAS (Fortran interfaces of OpenBLAS) */
 void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
 void dsytrf_(const char *uplo, const int *n, double *a, const int *lda, int *ipiv, double *work, const int *lwork,

@@ -575,3 +575,105 @@ done:
     free(piv);
     return st;
 }
+
+/* Column j of the symmetric matrix (= row j), computed alone from the pair integrals: the entries
+ * the serial assembly gives, in the same order of summation (tests/e2e_bem.sh compares the two
+ * paths). g: 3 nt doubles of scratch. */
+static void sym_column(const sym *s, const thx_bem *b, size_t j, double *col, double *g)
+{
+    const size_t S = s->S, N = s->N, nt = s->nt;
+    const tri *T = s->T;
+    memset(col, 0, s->n * sizeof *col);
+    if (j < N) { /* the potential of node a */
+        size_t a = j;
+        memset(g, 0, 3 * nt * sizeof *g);
+        for (size_t e = s->star_off[a]; e < s->star_off[a + 1]; e++) {
+            size_t t = s->star[e];
+            const tri *A = &T[t];
+            int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+            const double *ra = A->curl[ja];
+            for (size_t k = 0; k < S; k++) {
+                if (!s->share[(size_t)A->surf * S + k]) continue;
+                double c = -s->cN[(size_t)A->surf * S + k];
+                for (size_t u = s->toff[k]; u < s->toff[k + 1]; u++) {
+                    double dd_ut[3];
+                    double ss = pair_sym(s, t, u, NULL, dd_ut);
+                    if (c != 0) {
+                        double w = c * ss;
+                        g[3 * u] += w * ra[0];
+                        g[3 * u + 1] += w * ra[1];
+                        g[3 * u + 2] += w * ra[2];
+                    }
+                    /* the current row of u, tested on u, the hat of a on t inner */
+                    if (s->pidx[u] >= 0) col[s->pidx[u]] -= s->cD[k * S + (size_t)A->surf] * dd_ut[ja];
+                }
+            }
+        }
+        for (size_t u = 0; u < nt; u++) {
+            const double *gu = g + 3 * u;
+            if (gu[0] == 0 && gu[1] == 0 && gu[2] == 0) continue;
+            for (int m = 0; m < 3; m++) {
+                const double *rb = T[u].curl[m];
+                col[T[u].node[m]] += gu[0] * rb[0] + gu[1] * rb[1] + gu[2] * rb[2];
+            }
+        }
+        size_t oo = b->off[b->outer], on = b->off[b->outer + 1] - oo;
+        if (a >= oo && a < oo + on)
+            for (size_t c = oo; c < oo + on; c++) col[c] += s->alpha * b->area[c] * b->area[a];
+    } else { /* the current of triangle t */
+        size_t t = 0;
+        while (s->pidx[t] != (long)j) t++;
+        const tri *A = &T[t];
+        for (size_t k = 0; k < S; k++) {
+            if (!s->share[(size_t)A->surf * S + k]) continue;
+            double cd = s->cD[(size_t)A->surf * S + k], cs = s->cS[k * S + (size_t)A->surf];
+            for (size_t u = s->toff[k]; u < s->toff[k + 1]; u++) {
+                double dd_tu[3];
+                double ss = pair_sym(s, t, u, dd_tu, NULL);
+                if (s->pidx[u] >= 0 && cs != 0) col[s->pidx[u]] = cs * ss;
+                for (int m = 0; m < 3; m++) col[T[u].node[m]] -= cd * dd_tu[m];
+            }
+        }
+    }
+}
+
+thx_status thx_bem_symmetric_rows(thx_ctx *ctx, const thx_bem *b, size_t i0, size_t i1, const double *pos,
+                                  const double *mom, size_t nd, const int *comp, double *M, double *R, size_t *n_out)
+{
+    sym sy;
+    THX_CHECK(sym_init(ctx, b, &sy));
+    thx_status st = THX_OK;
+    const size_t n = sy.n, nl = i1 > i0 ? i1 - i0 : 0;
+    if (n_out) *n_out = n;
+    if (!M) goto done; /* the size alone */
+    sym_alpha(&sy, b);
+    thx_status st2 = THX_OK;
+#pragma omp parallel
+    {
+        double *col = malloc(n * sizeof *col), *g = malloc(3 * (sy.nt ? sy.nt : 1) * sizeof *g);
+        if (!col || !g) {
+#pragma omp atomic write
+            st2 = THX_ENOMEM;
+        }
+#pragma omp for schedule(dynamic, 4)
+        for (size_t j = i0; j < i1; j++) {
+            if (!col || !g) continue;
+            sym_column(&sy, b, j, col, g);
+            for (size_t c = 0; c < n; c++) M[c * nl + (j - i0)] = col[c]; /* row j = column j */
+        }
+        free(col);
+        free(g);
+    }
+    if (st2 != THX_OK) { st = THX_ENOMEM; goto done; }
+    if (R && nd) {
+        double *rhs = thx_malloc(ctx, n * nd * sizeof *rhs);
+        if (!rhs) { st = THX_ENOMEM; goto done; }
+        st = sym_rhs(ctx, &sy, b, pos, mom, nd, comp, rhs);
+        for (size_t d = 0; d < nd && st == THX_OK; d++)
+            for (size_t j = i0; j < i1; j++) R[d * nl + (j - i0)] = rhs[d * n + j];
+        free(rhs);
+    }
+done:
+    sym_free(&sy);
+    return st;
+}

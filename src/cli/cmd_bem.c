@@ -129,8 +129,8 @@ int cmd_bem(int argc, char **argv)
         {.name = "--heart", .type = CLI_STRING, .meta = "NAME", .s = &heart_name, .def = "the surface of role heart",
          .help = "the surface whose potentials are given (--transfer)"},
         {.name = "--scalapack", .type = CLI_FLAG, .i = &scalapack,
-         .help = "--transfer: the dense system as PETSc's MATSCALAPACK over the MPI ranks (the default under mpirun "
-                 "with more than one rank)"},
+         .help = "the dense system as PETSc's MATSCALAPACK over the MPI ranks, each rank assembling its rows (the "
+                 "default under mpirun with more than one rank; dipoles: the symmetric method)"},
         {.name = "--method", .type = CLI_CHOICE, .choices = methods, .i = &method,
          .help = "dipoles: the symmetric Galerkin BEM (potentials and normal currents on every interface; Kybic et "
                  "al. 2005) or linear collocation (one equation a node); --transfer is always by collocation"},
@@ -143,15 +143,15 @@ int cmd_bem(int argc, char **argv)
     cli_command cmd = {
         .name = "bem",
         .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
-                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--format]",
+                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--scalapack] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
                  "problem approach, dense LU by LAPACK (OpenBLAS). MODEL is a model directory\n"
                  "(conductivities from its volume mesh's regions) or an OpenMEEG .geom file\n"
                  "with its .cond. Writes DIR/bem.json (surfaces, conductivities, timings) and\n"
                  "the series (docs/formats.md, \"Boundary-element results\").\n",
-        .epilog = "Under mpirun -np N, --transfer assembles N blocks of rows and solves with ScaLAPACK\n"
-                  "(PETSc MATSCALAPACK); rank 0 writes. PETSc options are passed through.\n",
+        .epilog = "Under mpirun -np N (or with --scalapack), each rank assembles a block of rows and\n"
+                  "ScaLAPACK (PETSc MATSCALAPACK) solves; rank 0 writes. PETSc options are passed through.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
         .pass = cli_petsc_pass,
         .user = &pa,
@@ -164,11 +164,13 @@ int cmd_bem(int argc, char **argv)
     if (transfer + (dip_path != NULL) != 1) return cli_usage_error("bem", "give exactly one of --transfer, --dipoles");
     int is_geom = ends_with(model, ".geom");
     if (cond_path && !is_geom) return cli_usage_error("bem", "--cond goes with an OpenMEEG .geom MODEL");
-    if (scalapack && !transfer) return cli_usage_error("bem", "--scalapack goes with --transfer");
     /* under mpirun (more than one rank), or asked: the distributed path */
     const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
     if (!ws) ws = getenv("PMI_SIZE");
-    int mpi = transfer && (scalapack || (ws && atoi(ws) > 1));
+    int mpi = scalapack || (ws && atoi(ws) > 1);
+    if (mpi && !transfer && method == THX_BEM_COLLOCATION)
+        return cli_usage_error("bem", "--method collocation runs on one process: under mpirun or with --scalapack, "
+                               "dipoles take the symmetric method");
     int rank = 0;
 
     thx_ctx *ctx = cli_ctx(verbose);
@@ -262,7 +264,8 @@ int cmd_bem(int argc, char **argv)
     } else {
         phi = malloc(N * nd * sizeof *phi);
         if (!phi) { st = THX_ENOMEM; goto fail; }
-        st = thx_bem_dipoles(ctx, b, pos, mom, nd, &o, phi, &info);
+        st = mpi ? thx_bem_dipoles_parallel(ctx, b, pos, mom, nd, phi, &info)
+                 : thx_bem_dipoles(ctx, b, pos, mom, nd, &o, phi, &info);
         if (st != THX_OK) goto fail;
         st = thx_series_create(ctx, no, nd, &S1);
         if (st == THX_OK) st = thx_series_create(ctx, N, nd, &S2);
@@ -332,7 +335,9 @@ int cmd_bem(int argc, char **argv)
             cJSON_AddStringToObject(j, "dense_solver", "ScaLAPACK (PETSc MATSCALAPACK)");
             cJSON_AddNumberToObject(j, "ranks", size);
         } else {
-            cJSON_AddStringToObject(j, "dense_solver", "LAPACK dgetrf/dgetrs");
+            cJSON_AddStringToObject(j, "dense_solver", transfer || method == THX_BEM_COLLOCATION
+                                                           ? "LAPACK dgetrf/dgetrs"
+                                                           : "LAPACK dpotrf (currents), dsyrk, dgetrf (Schur complement)");
         }
         cJSON_AddNumberToObject(j, "seconds_assembly", info.t_assemble);
         cJSON_AddNumberToObject(j, "seconds_solve", info.t_solve);

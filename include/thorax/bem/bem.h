@@ -143,6 +143,18 @@ thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t heart, const 
 thx_status thx_bem_transfer_parallel(thx_ctx *ctx, const thx_bem *b, size_t heart, double *T, thx_bem_info *info);
 
 /*
+ * thx_bem_dipoles by the symmetric method under MPI (collective over PETSC_COMM_WORLD; PETSc
+ * initialized by the caller): each rank computes n/size rows of the symmetric system from the pair
+ * integrals alone (no rank holds the matrix whole; the pairs near a row's node are integrated again
+ * by each row that needs them: about three times the serial path's integrals in all), the system is
+ * a MATSCALAPACK matrix factored by ScaLAPACK's LU, every dipole solved at once; phi (as
+ * thx_bem_dipoles') is filled on rank 0 only. The same potentials as the serial path to rounding
+ * (tests/e2e_bem.sh: 1 and 2 ranks against LAPACK).
+ */
+thx_status thx_bem_dipoles_parallel(thx_ctx *ctx, const thx_bem *b, const double *pos, const double *mom, size_t n,
+                                    double *phi, thx_bem_info *info);
+
+/*
  * The conductivity just inside each surface of a meshed model (m->volume), sigma_in[k]: the
  * region of most of the tetrahedra at the surface's nodes on its inner side (by the node's normal).
  * A surface with no tetrahedron inside (a hole, e.g. a heart meshed with --no-heart) gets 0.
