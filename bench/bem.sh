@@ -23,21 +23,18 @@ echo "OpenMEEG spheres (conductivities 1 / 0.0125 / 1), dipoles 1-5:"
 echo "  OpenMEEG (symmetric BEM, Head3 on this class of machine): 25 s to assemble and invert;"
 echo "  RDM 0.002-0.019, |1-MAG| 0.006-0.021; test thresholds 0.13 / 0.10 / 0.03 (Head1/2/3)"
 echo "  load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-# the symmetric method (the default) on Head1-3, then Head3 by collocation, and Head3 with
-# OpenBLAS's AVX-512 kernels chosen by hand (docs/decisions.md: it falls back to SSE3 here)
-for run in 1 2 3 3c 3s; do
+# the symmetric method (the default) on Head1-3, then Head3 by collocation
+for run in 1 2 3 3c; do
     h=${run%[cs]}
     H="$D/data/Head$h"
-    extra=() envv=()
+    extra=()
     case $run in
         *c) extra=(--method collocation) ;;
-        *s) envv=(OPENBLAS_CORETYPE=SkylakeX) ;;
     esac
-    env "${envv[@]}" /usr/bin/time -v "$THORAX" bem "$H/Head$h.geom" --dipoles "$H/Head$h.dip" --electrodes "$H/Head$h.patches" \
+    /usr/bin/time -v "$THORAX" bem "$H/Head$h.geom" --dipoles "$H/Head$h.dip" --electrodes "$H/Head$h.patches" \
         -o "$W/h$run" --format text -q "${extra[@]}" 2> "$W/h$run.time"
     case $run in
         *c) printf 'Head%d, collocation: ' "$h" ;;
-        *s) printf 'Head%d, OPENBLAS_CORETYPE=SkylakeX: ' "$h" ;;
         *) printf 'Head%d: ' "$h" ;;
     esac
     $PY - "$W/h$run" "$D/tests/analytic/eeg_head${h}_analytic.txt" <<'EOF'
