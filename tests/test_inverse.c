@@ -113,10 +113,12 @@ static const char *reference_py =
     "rk = [np.linalg.norm(A @ (Vt[:q].T @ ((U[:, :q].T @ b) / s[:q])) - b) for q in range(1, kmax + 1)]\n"
     "g = [rk[q - 1] ** 2 / (m - q) ** 2 for q in range(1, kmax + 1)]\n"
     "ok = [q for q in range(1, kmax + 1) if rk[q - 1] <= np.sqrt(m) * sigma]\n"
-    "print('tsvd_rules', int(np.argmin(g)) + 1, ok[0] if ok else kmax)\n";
+    "print('tsvd_rules', int(np.argmin(g)) + 1, ok[0] if ok else kmax)\n"
+    "et = [np.linalg.norm(Vt[:q].T @ ((U[:, :q].T @ b) / s[:q]) - x_true) / np.linalg.norm(x_true) for q in range(1, kmax + 1)]\n"
+    "print('tsvd_best', int(np.argmin(et)) + 1, repr(min(et)))\n";
 
 static int reference(const char *a, const char *b, const char *x, double sigma, double lam[5], double err[5],
-                     int *tk, double *terr, int tr[2])
+                     int *tk, double *terr, int tr[2], int *kbest, double *ebest)
 {
     char cmd[4096];
     snprintf(cmd, sizeof cmd, "/usr/bin/python3 %s %s %s %s %.17g", tl_path("ref.py"), a, b, x, sigma);
@@ -129,7 +131,8 @@ static int reference(const char *a, const char *b, const char *x, double sigma, 
         if (fscanf(p, "%31s %lf %lf", name, &lam[k], &err[k]) == 3 && !strcmp(name, names[k])) got++;
     if (fscanf(p, "%31s %d %lf", name, tk, terr) == 3 && !strcmp(name, "tsvd")) got++;
     if (fscanf(p, "%31s %d %d", name, &tr[0], &tr[1]) == 3 && !strcmp(name, "tsvd_rules")) got++;
-    return pclose(p) == 0 && got == 7 ? 0 : -1;
+    if (fscanf(p, "%31s %d %lf", name, kbest, ebest) == 3 && !strcmp(name, "tsvd_best")) got++;
+    return pclose(p) == 0 && got == 8 ? 0 : -1;
 }
 
 static double rel_err(const double *x, const double *t, size_t n)
@@ -159,8 +162,9 @@ static void test_rules_against_numpy(thx_ctx *ctx)
         write_matrix(tl_path("b.txt"), B->v, M, 1);
         write_matrix(tl_path("x.txt"), xt, N, 1);
         double lam[5], err[5], terr;
-        int tk, tr[2];
-        int ok = reference(tl_path("A.txt"), tl_path("b.txt"), tl_path("x.txt"), sigma, lam, err, &tk, &terr, tr);
+        int tk, tr[2], kbest = 0;
+        double ebest = 0;
+        int ok = reference(tl_path("A.txt"), tl_path("b.txt"), tl_path("x.txt"), sigma, lam, err, &tk, &terr, tr, &kbest, &ebest);
         CHECK(ok == 0);
         if (ok) return;
         thx_lambda_rule rules[5] = {THX_LAMBDA_LCURVE, THX_LAMBDA_CRESO, THX_LAMBDA_GCV, THX_LAMBDA_DISCREPANCY,
@@ -221,6 +225,20 @@ static void test_rules_against_numpy(thx_ctx *ctx)
             thx_series_destroy(&X);
             thx_inverse_report_free(&r);
         }
+        /* TSVD's L-curve corner: the components above the Tikhonov L-curve's λ, so an error like
+         * the Tikhonov L-curve's (numpy's, above); the best truncation (numpy tries every k against
+         * the true solution) is printed beside it: the L-curve rule undersmooths this problem */
+        o.rule = THX_LAMBDA_LCURVE;
+        CHECK_OK(ctx, thx_inverse_solve(ctx, A, B, NULL, &o, &X, &r));
+        if (X) {
+            double e = rel_err(X->v, xt, N);
+            printf("noise %g: tsvd L-curve keeps %d components, error %.4f; the best truncation %d, error %.4f (Tikhonov L-curve %.4f, GCV %.4f)\n",
+                   levels[lv], r.k[0], e, kbest, ebest, err[0], err[2]);
+            CHECK(e <= 1.2 * err[0]);
+            CHECK(e >= ebest);
+        }
+        thx_series_destroy(&X);
+        thx_inverse_report_free(&r);
         thx_series_destroy(&A);
         thx_series_destroy(&B);
     }
