@@ -41,7 +41,7 @@ check: build
 # The whole suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
 sanitize: deps
 	@cmake -S . -B $(BUILD)-asan -DCMAKE_BUILD_TYPE=Debug -DTHORAX_SANITIZE=ON >/dev/null
-	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)' || true
+	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|^g?make\[' || true
 	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) --output-on-failure
 
 # Every libFuzzer harness (tests/fuzz/) for FUZZ_TIME seconds each (default 60); fails on a finding.

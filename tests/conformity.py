@@ -101,15 +101,19 @@ def main(d):
     tcen = (A + B + C) / 3
     trad = np.max(np.stack([np.linalg.norm(A - tcen, axis=1), np.linalg.norm(B - tcen, axis=1),
                             np.linalg.norm(C - tcen, axis=1)]), axis=0)
-    tree = cKDTree(tcen)
     nrm = np.cross(B - A, C - A)
     nrm /= np.linalg.norm(nrm, axis=1)[:, None]
-    # every (face, triangle) pair within reach, tested in chunks (vectorized); each face goes to the
-    # first triangle of its list that holds it (in its plane, its centroid inside)
-    cand = tree.query_ball_point(fcen, r=trad.max() + TOL)
+    # every (face, triangle) pair within reach: the face's centroid within the triangle's own radius
+    # of its centroid (each triangle's ball searched among the face centroids: a search with the
+    # largest radius for every face made 50 times as many pairs on the phantom), ordered by face,
+    # then triangle; tested in chunks (vectorized); each face goes to the first triangle of its list
+    # that holds it (in its plane, its centroid inside)
+    cand = cKDTree(fcen).query_ball_point(tcen, r=trad + TOL)
     lens = np.fromiter(map(len, cand), dtype=np.int64, count=len(cand))
-    I = np.repeat(np.arange(len(cand)), lens)
-    J = np.fromiter(itertools.chain.from_iterable(cand), dtype=np.int64, count=int(lens.sum()))
+    J = np.repeat(np.arange(len(cand)), lens)
+    I = np.fromiter(itertools.chain.from_iterable(cand), dtype=np.int64, count=int(lens.sum()))
+    order = np.lexsort((J, I))
+    I, J = I[order], J[order]
     ok = np.zeros(len(I), dtype=bool)
     for lo in range(0, len(I), 1 << 20):
         i, j = I[lo:lo + (1 << 20)], J[lo:lo + (1 << 20)]

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The sanitized suite's shared phantom models (a CTest fixture, registered by CMakeLists.txt only
+# under THORAX_SANITIZE; not an e2e_*.sh test itself). Five end-to-end tests (e2e_forward,
+# e2e_render, e2e_check, e2e_export_data, e2e_view) each begin by meshing the same medium phantom
+# (seed 1) without the heart, two of them with it as well: the same input, the same commands and
+# byte-identical files seven times, at 15 to 30 s a mesh under ASan. Here they are made once, with
+# exactly the commands those tests run:
+#   $OUT/c.txt       thorax phantom --resolution medium --seed 1 -o c.txt
+#   $OUT/model       thorax surfaces c.txt -o model; thorax mesh model --no-heart
+#   $OUT/modelh      thorax mesh model -o modelh (the heart included)
+# and those tests copy them under THORAX_QUICK when THORAX_PHANTOM_MODELS names this folder (the
+# plain build's tests make their own). Written into $OUT.tmp and renamed when whole.
+set -euo pipefail
+: "${THORAX:?}" "${OUT:?}"
+rm -rf "$OUT" "$OUT.tmp"
+mkdir -p "$OUT.tmp"
+cd "$OUT.tmp"
+"$THORAX" phantom --resolution medium --seed 1 -o c.txt -q
+"$THORAX" surfaces c.txt -o model -q
+"$THORAX" mesh model --no-heart -q
+"$THORAX" mesh model -o modelh -q
+"$THORAX" check model -q
+"$THORAX" check modelh -q
+cd ..
+mv "$OUT.tmp" "$OUT"
+echo "phantom_models: $OUT/model (no heart), $OUT/modelh (the heart included), $OUT/c.txt"
