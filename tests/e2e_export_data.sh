@@ -33,15 +33,9 @@ refused() { # RC WHAT PATTERN CMD... : exit RC, message matching PATTERN
 }
 
 # ---- 1. the phantom
-# the medium phantom meshed without the heart; under the sanitizers (THORAX_QUICK) the same files,
-# made once for five tests by the fixture tests/phantom_models.sh (CMakeLists.txt)
-if [ -n "${THORAX_QUICK:-}" ] && [ -d "${THORAX_PHANTOM_MODELS:-}" ]; then
-    cp -r "$THORAX_PHANTOM_MODELS/c.txt" "$THORAX_PHANTOM_MODELS/model" .
-else
-    "$THORAX" phantom --resolution medium --seed 1 -o c.txt -q
-    "$THORAX" surfaces c.txt -o model -q
-    "$THORAX" mesh model --no-heart -q
-fi
+# the medium phantom meshed without the heart (tests/medium_phantom.sh)
+. "$(dirname "$0")/medium_phantom.sh"
+medium_phantom || fail "the medium phantom"
 "$THORAX" beat model -o beat.raw --frames 6 --dt 40 -q
 "$THORAX" forward model --epicardial beat.raw -o sol -q --volume
 "$THORAX" forward model --epicardial beat.raw -o solt -q
