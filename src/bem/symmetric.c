@@ -117,6 +117,12 @@ static void tri_init(tri *t, const double *a, const double *b, const double *c)
     rule(t, R7, 7, t->q7);
 }
 
+/* Which corner of t node a is (a must be one of its three). */
+static int corner(const tri *t, size_t a)
+{
+    return t->node[0] == (int32_t)a ? 0 : t->node[1] == (int32_t)a ? 1 : 2;
+}
+
 /* int_T int_T' G (ss) and int_T int_T' dG(x - y)/dn_y h_j(y) (dd[j]) for the pair (T, T'). */
 static void pair_integrals(const tri *T, const qpt *q12, const tri *U, double *ss, double dd[3])
 {
@@ -348,11 +354,11 @@ static void sym_alpha(sym *s, const thx_bem *b)
             for (size_t e = s->star_off[a]; e < s->star_off[a + 1]; e++) {
                 size_t t = s->star[e];
                 const tri *A = &s->T[t];
-                int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+                int ja = corner(A, a);
                 double w = c * pair_sym(s, t, u, NULL, NULL);
                 for (int k = 0; k < 3; k++) g[k] += w * A->curl[ja][k];
             }
-            int jb = U->node[0] == (int32_t)a ? 0 : U->node[1] == (int32_t)a ? 1 : 2;
+            int jb = corner(U, a);
             v += g[0] * U->curl[jb][0] + g[1] * U->curl[jb][1] + g[2] * U->curl[jb][2];
         }
         dmax = fmax(dmax, fabs(v));
@@ -470,7 +476,7 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
             memset(g, 0, 3 * nt * sizeof *g);
             for (size_t e = nt_off[a]; e < nt_off[a + 1]; e++) {
                 const tri *A = &T[nt_idx[e]];
-                int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+                int ja = corner(A, a);
                 const double *ra = A->curl[ja];
                 const double *row = SS + nt_idx[e] * nt;
                 for (size_t k = 0; k < S; k++) {
@@ -590,7 +596,7 @@ static void sym_column(const sym *s, const thx_bem *b, size_t j, double *col, do
         for (size_t e = s->star_off[a]; e < s->star_off[a + 1]; e++) {
             size_t t = s->star[e];
             const tri *A = &T[t];
-            int ja = A->node[0] == (int32_t)a ? 0 : A->node[1] == (int32_t)a ? 1 : 2;
+            int ja = corner(A, a);
             const double *ra = A->curl[ja];
             for (size_t k = 0; k < S; k++) {
                 if (!s->share[(size_t)A->surf * S + k]) continue;
