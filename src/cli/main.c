@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
+#include "thorax/core/blas_kernels.h"
 
 static const struct {
     const char *name;
@@ -140,6 +141,7 @@ static int manual(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    thx_blas_pick_kernels(argv); /* may run this program again, with OpenBLAS's right kernels */
 #ifdef THORAX_VIEW_PROGRAM
     /* thorax-view: the viewer alone, started by `thorax view ...` as `thorax-view view ...` */
     cli_set_command_line(argc, argv);
