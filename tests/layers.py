@@ -30,7 +30,7 @@ import sys
 import tempfile
 
 LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "leads": 2, "mesh": 3, "check": 3,
-         "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
+         "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
 
 
 def allowed(user, used):
