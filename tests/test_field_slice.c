@@ -135,7 +135,7 @@ static void check_writers(thx_ctx *ctx, const thx_volume *v, const double *phi)
     CHECK_OK(ctx, thx_field_contours(ctx, m, &c, 1));
     double tagv[2] = {1, 2}, *jm = malloc(v->n_tets * sizeof *jm);
     for (size_t t = 0; t < v->n_tets; t++) jm[t] = (double)t;
-    thx_field_write_opts o = {.tag_name = "plane", .tag_value = tagv, .cell_scalar = jm,
+    thx_field_write_opts o = {.tag_name = {"plane", NULL}, .tag_value = {tagv, NULL}, .cell_scalar = jm,
                               .cell_scalar_name = "current_magnitude", .seg_value = &c, .has_time = 1, .time = 2.5};
     if (tl_scratch_make("field_slice") == 0) {
         CHECK_OK(ctx, thx_field_mesh_write_vtp(ctx, m, &o, tl_path("s.vtp")));

@@ -54,6 +54,36 @@ double thx_field_mesh_area(const thx_field_mesh *m, int tag)
     return a;
 }
 
+thx_status thx_field_mesh_append(thx_ctx *ctx, thx_field_mesh *dst, const thx_field_mesh *src, int32_t tag_offset)
+{
+    size_t p0 = dst->n_points, t0 = dst->n_tris, c0 = dst->n_cpoints, s0 = dst->n_segs;
+    THX_CHECK(field_mesh_reserve(ctx, dst, p0 + src->n_points, t0 + src->n_tris));
+    THX_CHECK(field_mesh_reserve_contours(ctx, dst, c0 + src->n_cpoints, s0 + src->n_segs));
+    if (src->n_points) {
+        memcpy(dst->xyz + 3 * p0, src->xyz, 3 * src->n_points * sizeof *src->xyz);
+        memcpy(dst->value + p0, src->value, src->n_points * sizeof *src->value);
+    }
+    for (size_t t = 0; t < src->n_tris; t++) {
+        for (int c = 0; c < 3; c++) dst->tri[3 * (t0 + t) + c] = src->tri[3 * t + c] + (int32_t)p0;
+        dst->tag[t0 + t] = src->tag[t] + tag_offset;
+        dst->cell[t0 + t] = src->cell[t];
+    }
+    if (src->n_cpoints) {
+        memcpy(dst->cxyz + 3 * c0, src->cxyz, 3 * src->n_cpoints * sizeof *src->cxyz);
+        memcpy(dst->cvalue + c0, src->cvalue, src->n_cpoints * sizeof *src->cvalue);
+    }
+    for (size_t s = 0; s < src->n_segs; s++) {
+        for (int c = 0; c < 2; c++) dst->seg[2 * (s0 + s) + c] = src->seg[2 * s + c] + (int32_t)c0;
+        dst->seg_tag[s0 + s] = src->seg_tag[s];
+        dst->seg_tri[s0 + s] = src->seg_tri[s] + (int32_t)t0;
+    }
+    dst->n_points += src->n_points;
+    dst->n_tris += src->n_tris;
+    dst->n_cpoints += src->n_cpoints;
+    dst->n_segs += src->n_segs;
+    return THX_OK;
+}
+
 /* Capacity is not stored: arrays are sized to a power of two above the count, so the capacity
  * follows from the count alone. */
 static size_t cap_of(size_t n)

@@ -78,7 +78,8 @@ thx_status thx_field_mesh_write_vtp(thx_ctx *ctx, const thx_field_mesh *m, const
     thx_field_write_opts none;
     memset(&none, 0, sizeof none);
     if (!o) o = &none;
-    if ((o->tag_name && (!name_ok(o->tag_name) || !o->tag_value)) ||
+    if ((o->tag_name[0] && (!name_ok(o->tag_name[0]) || !o->tag_value[0])) ||
+        (o->tag_name[1] && (!name_ok(o->tag_name[1]) || !o->tag_value[1])) ||
         (o->cell_scalar && !name_ok(o->cell_scalar_name)))
         return thx_error(ctx, THX_EINTERNAL, "%s: a cell array without a printable name or values", path);
     size_t np = m->n_points + m->n_cpoints, nl = m->n_segs, nt = m->n_tris, nc = nl + nt;
@@ -87,7 +88,7 @@ thx_status thx_field_mesh_write_vtp(thx_ctx *ctx, const thx_field_mesh *m, const
     double *xyz = thx_malloc(ctx, 3 * (np + 1) * sizeof *xyz), *pot = thx_malloc(ctx, (np + 1) * sizeof *pot);
     int32_t *lconn = thx_malloc(ctx, (2 * nl + 1) * sizeof *lconn), *loff = thx_malloc(ctx, (nl + 1) * sizeof *loff);
     int32_t *poff = thx_malloc(ctx, (nt + 1) * sizeof *poff), *tet = thx_malloc(ctx, (nc + 1) * sizeof *tet);
-    double *tagv = thx_malloc(ctx, (nc + 1) * sizeof *tagv), *cs = thx_malloc(ctx, (nc + 1) * sizeof *cs);
+    double *tagv = thx_malloc(ctx, 2 * (nc + 1) * sizeof *tagv), *cs = thx_malloc(ctx, (nc + 1) * sizeof *cs);
     double *cv = thx_malloc(ctx, (nc + 1) * sizeof *cv);
     thx_status st = THX_OK;
     if (!xyz || !pot || !lconn || !loff || !poff || !tet || !tagv || !cs || !cv) {
@@ -107,14 +108,15 @@ thx_status thx_field_mesh_write_vtp(thx_ctx *ctx, const thx_field_mesh *m, const
     for (size_t c = 0; c < nc; c++) {
         size_t t = c < nl ? (size_t)m->seg_tri[c] : c - nl; /* a line: the triangle it crosses */
         tet[c] = m->cell[t];
-        tagv[c] = o->tag_value ? o->tag_value[m->tag[t]] : 0;
+        for (int i = 0; i < 2; i++) tagv[i * nc + c] = o->tag_value[i] ? o->tag_value[i][m->tag[t]] : 0;
         cs[c] = o->cell_scalar ? o->cell_scalar[m->cell[t]] : 0;
         cv[c] = c < nl && o->seg_value ? o->seg_value[m->seg_tag[c]] : NAN;
     }
     arr pd[] = {{"potential", 1, 1, np, pot}};
-    arr cd[4];
+    arr cd[5];
     size_t ncd = 0;
-    if (o->tag_name) cd[ncd++] = (arr){o->tag_name, 1, 1, nc, tagv};
+    for (int i = 0; i < 2; i++)
+        if (o->tag_name[i]) cd[ncd++] = (arr){o->tag_name[i], 1, 1, nc, tagv + (size_t)i * nc};
     if (o->cell_scalar) cd[ncd++] = (arr){o->cell_scalar_name, 1, 1, nc, cs};
     if (nl && o->seg_value) cd[ncd++] = (arr){"contour_value", 1, 1, nc, cv};
     cd[ncd++] = (arr){"tetrahedron", 1, 0, nc, tet};

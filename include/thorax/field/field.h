@@ -72,6 +72,8 @@ thx_status thx_field_mesh_create(thx_ctx *ctx, thx_field_mesh **out);
 void thx_field_mesh_destroy(thx_field_mesh **m);
 /* Empties the mesh (triangles and contours), keeping nothing. */
 void thx_field_mesh_clear(thx_field_mesh *m);
+/* Appends src's triangles and contours to dst, src's tags increased by tag_offset. */
+thx_status thx_field_mesh_append(thx_ctx *ctx, thx_field_mesh *dst, const thx_field_mesh *src, int32_t tag_offset);
 /* Total area of the triangles with tag == tag (tag < 0: all), mm^2. */
 double thx_field_mesh_area(const thx_field_mesh *m, int tag);
 
@@ -136,8 +138,8 @@ thx_status thx_field_contours(thx_ctx *ctx, thx_field_mesh *m, const double *val
  * tetrahedron; -1 on a line); field data "TimeValue" when has_time.
  */
 typedef struct {
-    const char *tag_name;       /* cell data name of tag_value[tag] ("iso_value", "plane"), NULL: none */
-    const double *tag_value;    /* per tag: the value written for its triangles */
+    const char *tag_name[2];    /* cell data names of tag_value[i][tag] ("iso_value", "plane"), NULL: none */
+    const double *tag_value[2]; /* per tag: the value written for its triangles (and the lines on them) */
     const double *cell_scalar;  /* per tetrahedron of the volume: written per triangle (e.g. |J|), or NULL */
     const char *cell_scalar_name; /* its name ("current_magnitude") */
     const double *seg_value;    /* per contour value index: written per line as "contour_value", or NULL */
