@@ -4,7 +4,8 @@
  * Two passes. The first (OpenMP, each thread one contiguous block of tetrahedra) finds the
  * (tetrahedron, value) pairs to cut: a tetrahedron whose node scalars span [lo, hi] is cut by
  * every value c with lo < c <= hi (a node at c counts as above: symbolic perturbation s + eps,
- * so no tolerance decides anything). The blocks are joined in thread order and sorted by value
+ * so no tolerance decides anything); it reads each node's bin among the sorted values (node_bins)
+ * rather than its scalar. The blocks are joined in thread order and sorted by value
  * (stably), so the list is the same for any thread count. The second pass (serial, in that
  * order) makes the cut points, one per (edge, value) through a hash table, or one per (node,
  * value) where the cut passes through a node (the node's s equals c, or the interpolated point
@@ -57,24 +58,37 @@ static size_t upper(const double *sv, size_t n, double x)
     return lo;
 }
 
-static void find_pairs(const thx_volume *v, const double *s, const double *sv, const int32_t *ord, size_t n_cuts,
-                       const unsigned char *use, cut_block *b, size_t t0, size_t t1)
+/* The bin of each node: how many of the sorted values are <= its scalar (a node is above value k
+ * when its bin exceeds k), or BIN_BAD for a non-finite scalar. A tetrahedron whose nodes' bins
+ * run from lo to hi is cut by the values lo .. hi-1: two bytes per node read in the pass over the
+ * tetrahedra instead of eight, and integer comparisons. */
+#define BIN_BAD 0xFFFFu
+
+static void node_bins(const double *s, size_t n, const double *sv, size_t n_cuts, uint16_t *bin)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        double x = s[i];
+        bin[i] = !isfinite(x) ? (uint16_t)BIN_BAD : (uint16_t)upper(sv, n_cuts, x);
+    }
+}
+
+static void find_pairs(const thx_volume *v, const uint16_t *bin, const int32_t *ord, const unsigned char *use,
+                       cut_block *b, size_t t0, size_t t1)
 {
     for (size_t t = t0; t < t1; t++) {
-        if (use && !use[v->region[t]]) continue;
         const int32_t *q = v->tet + 4 * t;
-        double a = s[q[0]], c = s[q[1]], d = s[q[2]], e = s[q[3]];
-        double lo = fmin(fmin(a, c), fmin(d, e)), hi = fmax(fmax(a, c), fmax(d, e));
-        if (!isfinite(a + c + d + e) && !(isfinite(a) && isfinite(c) && isfinite(d) && isfinite(e))) {
+        unsigned a = bin[q[0]], c = bin[q[1]], d = bin[q[2]], e = bin[q[3]];
+        unsigned l1 = a < c ? a : c, l2 = d < e ? d : e, h1 = a < c ? c : a, h2 = d < e ? e : d;
+        unsigned lo = l1 < l2 ? l1 : l2, hi = h1 < h2 ? h2 : h1;
+        if (lo == hi && hi != BIN_BAD) continue;
+        if (use && !use[v->region[t]]) continue;
+        if (hi == BIN_BAD) {
             if (t < b->bad) b->bad = t;
             continue;
         }
-        if (n_cuts == 1) {
-            if (sv[0] > lo && sv[0] <= hi && push(b, (int32_t)t, ord[0])) b->oom = 1;
-            continue;
-        }
-        for (size_t i = upper(sv, n_cuts, lo); i < n_cuts && sv[i] <= hi; i++)
-            if (push(b, (int32_t)t, ord[i])) b->oom = 1;
+        for (unsigned k = lo; k < hi; k++)
+            if (push(b, (int32_t)t, ord[k])) b->oom = 1;
     }
 }
 
@@ -201,7 +215,7 @@ thx_status field_cut(thx_ctx *ctx, const thx_volume *v, const double *s, const d
                      thx_field_mesh *out)
 {
     if (!n_cuts) return THX_OK;
-    if (n_cuts > 100000 || v->n_tets > (size_t)INT32_MAX)
+    if (n_cuts > 60000 || v->n_tets > (size_t)INT32_MAX)
         return thx_error(ctx, THX_EINPUT, "too many values (%zu) or tetrahedra (%zu) to cut", n_cuts, v->n_tets);
     for (size_t i = 0; i < n_cuts; i++)
         if (!isfinite(cuts[i])) return thx_error(ctx, THX_EINPUT, "cut value %zu (%g) is not finite", i + 1, cuts[i]);
@@ -214,6 +228,7 @@ thx_status field_cut(thx_ctx *ctx, const thx_volume *v, const double *s, const d
     cut_block *blk = thx_calloc(ctx, (size_t)nthr, sizeof *blk);
     cut_pair *pairs = NULL;
     size_t *cnt = NULL;
+    uint16_t *bins = NULL;
     cutter C = {.v = v, .s = s, .phi = phi, .iso = iso, .out = out, .p0 = out->n_points};
     thx_status st = THX_OK;
     if (!ord || !sv || !blk) {
@@ -239,6 +254,12 @@ thx_status field_cut(thx_ctx *ctx, const thx_volume *v, const double *s, const d
     }
     free(vi);
     for (int i = 0; i < nthr; i++) blk[i].bad = SIZE_MAX;
+    bins = thx_malloc(ctx, (v->n_nodes ? v->n_nodes : 1) * sizeof *bins);
+    if (!bins) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    node_bins(s, v->n_nodes, sv, n_cuts, bins);
 #pragma omp parallel num_threads(nthr)
     {
         int id = 0, T = 1;
@@ -247,7 +268,7 @@ thx_status field_cut(thx_ctx *ctx, const thx_volume *v, const double *s, const d
         T = omp_get_num_threads();
 #endif
         size_t t0 = v->n_tets * (size_t)id / (size_t)T, t1 = v->n_tets * ((size_t)id + 1) / (size_t)T;
-        find_pairs(v, s, sv, ord, n_cuts, use_region, &blk[id], t0, t1);
+        find_pairs(v, bins, ord, use_region, &blk[id], t0, t1);
     }
     size_t total = 0, bad = SIZE_MAX;
     for (int i = 0; i < nthr; i++) {
@@ -303,6 +324,7 @@ done:
     free(sv);
     free(pairs);
     free(cnt);
+    free(bins);
     free(C.is_node);
     field_hash_free(&C.h);
     return st;
