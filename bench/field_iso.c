@@ -57,7 +57,7 @@ int main(int argc, char **argv)
     for (size_t k = 0; k < nv; k++) {
         size_t n = 0;
         for (size_t t = 0; t < mesh->n_tris; t++) n += mesh->tag[t] == (int32_t)k;
-        printf("thorax value %.17g: %zu triangles, area %.10g mm^2\n", val[k], n, thx_field_mesh_area(mesh, (int)k));
+        printf("thorax value %.17g: %zu triangles, area %.15g mm^2\n", val[k], n, thx_field_mesh_area(mesh, (int)k));
     }
     if (argc == 7) {
         size_t nf = (size_t)atol(argv[5]);

@@ -53,4 +53,4 @@ for name, make in (("vtkContour3DLinearGrid", vtk.vtkContour3DLinearGrid), ("vtk
                                                                            out.GetNumberOfPoints()))
     if name == "vtkContour3DLinearGrid":
         for v, (nt, a) in zip(values, areas(out)):
-            print("vtk value %.17g: %d triangles, area %.10g mm^2" % (v, nt, a))
+            print("vtk value %.17g: %d triangles, area %.15g mm^2" % (v, nt, a))
