@@ -270,6 +270,39 @@ int main(void)
         thx_field_mesh_destroy(&m);
         free(phi);
     }
+    /* films: the value exactly on a layer of nodes where the potential peaks (phi = -|z - 3h|):
+       the nodes of the layer count as above, everything else below, so the perturbed surface is a
+       film of no thickness round the layer: every triangle collapses or meets its twin, and
+       nothing is left (no duplicate faces). With the potential flat (0) below the layer and
+       falling above it, the layer is reached from above only: the plane, facing -z (grad phi). */
+    {
+        double *tent = malloc(box->n_nodes * sizeof *tent), *half = malloc(box->n_nodes * sizeof *half), zero = 0;
+        for (size_t i = 0; i < box->n_nodes; i++) {
+            double z = box->xyz[3 * i + 2];
+            tent[i] = -fabs(z - 3 * h);
+            half[i] = z > 3 * h ? 3 * h - z : 0;
+        }
+        thx_field_mesh *m = NULL;
+        CHECK_OK(ctx, thx_field_mesh_create(ctx, &m));
+        CHECK_OK(ctx, thx_field_isosurface(ctx, box, tent, &zero, 1, NULL, m));
+        CHECK(m->n_tris == 0 && m->n_points == 0);
+        CHECK_OK(ctx, thx_field_isosurface(ctx, box, half, &zero, 1, NULL, m));
+        mesh_facts f = mesh_check(m, -1, on_box);
+        CHECK(f.open_edges == 0 && f.bad_edges == 0 && f.degenerate == 0 && f.duplicate == 0);
+        CHECK_NEAR(thx_field_mesh_area(m, -1), G_L[0] * G_L[1], 1e-12 * G_L[0] * G_L[1]);
+        size_t up = 0;
+        for (size_t t = 0; t < m->n_tris; t++) {
+            const int32_t *c = m->tri + 3 * t;
+            const double *p = m->xyz + 3 * (size_t)c[0], *q = m->xyz + 3 * (size_t)c[1], *r = m->xyz + 3 * (size_t)c[2];
+            double nz = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+            up += !(nz < 0) || p[2] != 3 * h || q[2] != 3 * h || r[2] != 3 * h;
+        }
+        CHECK(m->n_tris == 2 * (size_t)N * (size_t)N && up == 0);
+        printf("films: tent 0 triangles; half-tent %zu triangles on the layer, all facing -z\n", m->n_tris);
+        thx_field_mesh_destroy(&m);
+        free(tent);
+        free(half);
+    }
     check_quadratic(ctx, jit);
     check_several(ctx, jit);
     check_values(ctx);

@@ -139,7 +139,7 @@ static void check_writers(thx_ctx *ctx, const thx_volume *v, const double *phi)
                               .cell_scalar_name = "current_magnitude", .seg_value = &c, .has_time = 1, .time = 2.5};
     if (tl_scratch_make("field_slice") == 0) {
         CHECK_OK(ctx, thx_field_mesh_write_vtp(ctx, m, &o, tl_path("s.vtp")));
-        CHECK_OK(ctx, thx_field_mesh_write_obj(ctx, m, "plane", tl_path("s.obj")));
+        CHECK_OK(ctx, thx_field_mesh_write_obj(ctx, m, (const char *const[]){"plane_1", "plane_2"}, 2, tl_path("s.obj")));
         size_t len = 0;
         char *t = tl_slurp(ctx, tl_path("s.vtp"), &len);
         CHECK(t && strstr(t, "<!-- thorax field") && strstr(t, "Name=\"current_magnitude\"") &&

@@ -304,8 +304,19 @@ int cmd_field(int argc, char **argv)
                                       .has_time = 1, .time = times[k]};
             if (!single) snprintf(path, sizeof path, "%s/%s", out, names[k]);
             const char *p = single ? out : path;
-            st = obj ? thx_field_mesh_write_obj(ctx, mesh, rq.iso ? "iso" : "plane", p)
-                     : thx_field_mesh_write_vtp(ctx, mesh, &o, p);
+            char (*gname)[32] = obj ? thx_calloc(ctx, ni + rq.n_planes + 1, sizeof *gname) : NULL;
+            const char **gp = obj ? thx_calloc(ctx, ni + rq.n_planes + 1, sizeof *gp) : NULL;
+            if (obj && (!gname || !gp)) st = THX_ENOMEM;
+            for (size_t i = 0; !st && obj && i < ni + rq.n_planes; i++) {
+                if (i < ni) snprintf(gname[i], sizeof gname[i], "iso_%zu", i + 1);
+                else snprintf(gname[i], sizeof gname[i], "plane_%zu", i - ni + 1);
+                gp[i] = gname[i];
+            }
+            if (!st)
+                st = obj ? thx_field_mesh_write_obj(ctx, mesh, gp, ni + rq.n_planes, p)
+                         : thx_field_mesh_write_vtp(ctx, mesh, &o, p);
+            free(gname);
+            free(gp);
             if (!st)
                 thx_log(ctx, THX_LOG_INFO, "frame %zu: %zu triangles (%zu points, %zu contour segments), area %.6g mm^2 -> %s",
                         frame[k] + 1, mesh->n_tris, mesh->n_points, mesh->n_segs, thx_field_mesh_area(mesh, -1), p);

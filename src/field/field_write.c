@@ -178,10 +178,16 @@ done:
     return st;
 }
 
-thx_status thx_field_mesh_write_obj(thx_ctx *ctx, const thx_field_mesh *m, const char *group_name, const char *path)
+thx_status thx_field_mesh_write_obj(thx_ctx *ctx, const thx_field_mesh *m, const char *const *tag_names, size_t n_tags,
+                                    const char *path)
 {
-    if (!group_name || !*group_name || strpbrk(group_name, " \t\r\n"))
-        return thx_error(ctx, THX_EINTERNAL, "%s: an OBJ group name must be one word", path);
+    for (size_t t = 0; tag_names && t < n_tags; t++)
+        if (!tag_names[t] || !*tag_names[t] || strpbrk(tag_names[t], " \t\r\n"))
+            return thx_error(ctx, THX_EINTERNAL, "%s: OBJ group name %zu is not one word", path, t + 1);
+    for (size_t t = 0; tag_names && t < m->n_tris; t++)
+        if (m->tag[t] < 0 || (size_t)m->tag[t] >= n_tags)
+            return thx_error(ctx, THX_EINTERNAL, "%s: triangle %zu has tag %ld of %zu names", path, t + 1, (long)m->tag[t],
+                             n_tags);
     thx_atomic_file af;
     THX_CHECK(thx_field_claim(ctx, path));
     THX_CHECK(thx_atomic_open(ctx, path, &af));
@@ -196,7 +202,8 @@ thx_status thx_field_mesh_write_obj(thx_ctx *ctx, const thx_field_mesh *m, const
     for (size_t t = 0; t < m->n_tris; t++) {
         if (m->tag[t] != g) {
             g = m->tag[t];
-            fprintf(f, "g %s_%ld\n", group_name, (long)g + 1);
+            if (tag_names) fprintf(f, "g %s\n", tag_names[g]);
+            else fprintf(f, "g cut_%ld\n", (long)g + 1);
         }
         fprintf(f, "f %ld %ld %ld\n", (long)m->tri[3 * t] + 1, (long)m->tri[3 * t + 1] + 1, (long)m->tri[3 * t + 2] + 1);
     }

@@ -151,9 +151,11 @@ typedef struct {
 thx_status thx_field_claim(thx_ctx *ctx, const char *path);
 thx_status thx_field_mesh_write_vtp(thx_ctx *ctx, const thx_field_mesh *m, const thx_field_write_opts *o,
                                     const char *path);
-/* Wavefront OBJ: v lines (mm), one group per tag ("g NAME_TAG"), f lines (1-based), l lines for the
- * contours; the potential is not carried (OBJ has no vertex data): a comment says so. */
-thx_status thx_field_mesh_write_obj(thx_ctx *ctx, const thx_field_mesh *m, const char *group_name, const char *path);
+/* Wavefront OBJ: v lines (mm), one group per tag (tag_names[tag]: one word each, n_tags of them;
+ * NULL: "cut_TAG", 1-based), f lines (1-based), then "g contours" and l lines; the potential is not
+ * carried (OBJ has no vertex data): a comment says so. */
+thx_status thx_field_mesh_write_obj(thx_ctx *ctx, const thx_field_mesh *m, const char *const *tag_names, size_t n_tags,
+                                    const char *path);
 
 #ifdef __cplusplus
 }
