@@ -107,6 +107,14 @@ refused 1 "no volume potentials" "volume" r2.vtp "$THORAX" field solt --isosurfa
 cp -r sol solbad
 cp solt/torso.raw solbad/volume.raw
 refused 1 "rows not the volume's nodes" "rows" r3.vtp "$THORAX" field solbad --isosurface 50% -o r3.vtp
+cp -r sol solmiss
+rm solmiss/volume.raw
+refused 1 "the volume file missing" "volume.raw" r3b.vtp "$THORAX" field solmiss --isosurface 50% -o r3b.vtp
+# several frames into a directory holding a user's file of one frame's name: nothing written at all
+mkdir ufr
+echo "mine" > ufr/field_0007.vtp
+refused 1 "a user's file among the frames" "field_0007.vtp" ufr/field_0001.vtp "$THORAX" field sol --isosurface 50% --frame all -o ufr
+[ "$(ls ufr)" = "field_0007.vtp" ] && [ "$(cat ufr/field_0007.vtp)" = "mine" ] || fail "files written beside a user's: $(ls ufr)"
 refused 2 "a bad plane" "plane" r4.vtp "$THORAX" field sol --slice w=3 -o r4.vtp
 refused 2 "bad values" "isosurface" r5.vtp "$THORAX" field sol --isosurface 5,abc -o r5.vtp
 refused 2 "a frame out of range" "frame" r6.vtp "$THORAX" field sol --isosurface 50% --frame 13 -o r6.vtp
