@@ -136,7 +136,7 @@ int cmd_field(int argc, char **argv)
          .help = "contour lines on the slices at these potentials (as --isosurface's SPEC)"},
         {.name = "--region", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = regions, .count = &n_regions,
          .max = argc, .def = "every region but \"heart\"",
-         .help = "cut only this tissue region's tetrahedra (repeatable)"},
+         .help = "cut only this tissue region's tetrahedra"},
         /* --streamlines (current streamlines, issue 16 item 3) is added here by its own file */
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
@@ -144,15 +144,17 @@ int cmd_field(int argc, char **argv)
     cli_command c = {
         .name = cmd,
         .usage = "SOLUTION [--isosurface] [--slice]... [--contours] [--frame] [--region]... -o",
-        .about = "Cuts the volume potentials of SOLUTION (a directory of `thorax forward ... --volume`)\n"
-                 "by marching tetrahedra: equipotential surfaces at the --isosurface values and\n"
-                 "slices by the --slice planes, exact for the piecewise-linear potentials, with\n"
-                 "the potential at every vertex, per triangle the value or plane and |J| of the\n"
-                 "tetrahedron it lies in, and --contours as lines on the slices. The surfaces are\n"
-                 "closed wherever they do not reach the boundary of the regions cut.\n",
-        .epilog = "Point data \"potential\"; cell data \"iso_value\" (NaN on slices), \"plane\" (1-based,\n"
-                  "0 on isosurfaces), \"current_magnitude\" (|sigma grad phi| of the tetrahedron, A/m^2\n"
-                  "for V), \"contour_value\" (lines), \"tetrahedron\" (0-based); docs/formats.md.\n"
+        .about = "Cuts the volume potentials of SOLUTION (a directory written by\n"
+                 "`thorax forward ... --volume`) by marching tetrahedra: equipotential surfaces\n"
+                 "at the --isosurface values and slices by the --slice planes, exact for the\n"
+                 "piecewise-linear potentials, with the potential at every vertex, per triangle\n"
+                 "the value or plane and |J| of the tetrahedron it lies in, and --contours as\n"
+                 "lines on the slices. The surfaces are closed wherever they do not reach the\n"
+                 "boundary of the regions cut.\n",
+        .epilog = "Point data \"potential\"; cell data \"iso_value\" (NaN on slices), \"plane\"\n"
+                  "(1-based, 0 on isosurfaces), \"current_magnitude\" (|sigma grad phi| of the\n"
+                  "tetrahedron, A/m^2 for V), \"contour_value\" (lines), \"tetrahedron\" (0-based);\n"
+                  "docs/formats.md.\n"
                   "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
         .user = &pu,
