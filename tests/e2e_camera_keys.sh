@@ -135,6 +135,47 @@ out=$("$THORAX" animate "${A[@]}" --keys fly.keys -o fly --mp4 none 2>&1)
 echo "$out" | grep -q "25 frames (25 drawn, 0 kept" || fail "a changed key file reused frames: $out"
 echo "$out" | grep -q "other settings" || fail "no word of the changed settings: $out"
 
+# the viewer flies the same key file (action fly), recording each frame: its pictures are animate's
+cat > fly.txt <<EOF
+$PWD/model
+--size 240x240
+--surface lung_l=flat:1:#00ff00
+--surface lung_r=flat:1:#ff00ff
+--only lung_l
+--only lung_r
+action record $PWD/vrec
+action fly $PWD/fly.keys
+action record-stop
+quit
+EOF
+xvfb-run -a -s "-screen 0 800x600x24" "$THORAX" view --script fly.txt > fly.out 2> fly.err || { cat fly.err; fail "view: action fly"; }
+printf '1 eye 0,-900,100 target 0,0,100 up 0,0,1 fov 30\n5 eye 0,-900,100 up 0,1,0\n' > vbad.keys
+printf '%s\naction fly %s\nquit\n' "$PWD/model" "$PWD/vbad.keys" > vbad.txt
+xvfb-run -a -s "-screen 0 800x600x24" "$THORAX" view --script vbad.txt > /dev/null 2> vbad.err && fail "view: a bad key file flown"
+grep -q "vbad.txt:2: .*vbad.keys:2: up 0,1,0 is along the view direction" vbad.err || fail "view: bad keys: $(cat vbad.err)"
+$PY - <<'EOF'
+import vtk, numpy as np, glob
+from vtk.util.numpy_support import vtk_to_numpy
+def png(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    im = r.GetOutput(); w, h, _ = im.GetDimensions()
+    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1][:, :, :3].astype(int)
+rec = sorted(glob.glob('vrec/frame_*.png'))
+assert len(rec) >= 25, 'the viewer recorded %d frames' % len(rec)
+rec = rec[-25:]   # the flight's 25 frames are the last ones drawn
+worst = 0
+for f in (1, 4, 7, 13, 22):
+    a, b = png(rec[f - 1]), png('fly/frame_%05d.png' % f)
+    if a.shape != b.shape:  # the window may be wider than asked: the same vertical field, the middle compared
+        assert a.shape[0] == b.shape[0] and a.shape[1] >= b.shape[1], (a.shape, b.shape)
+        x0 = (a.shape[1] - b.shape[1]) // 2
+        a = a[:, x0:x0 + b.shape[1]]
+    d = int((np.abs(a - b).max(axis=2) > 24).sum())
+    worst = max(worst, d)
+    assert d < 0.01 * a.shape[0] * a.shape[1], 'viewer frame %d differs from animate in %d pixels' % (f, d)
+print('viewer flight: %d frames recorded; at most %d pixels differ from thorax animate --keys' % (len(rec), worst))
+EOF
+
 # bad key files: the file, the line and the field named; exit non-zero; no output directory
 bad() { # FILE-TEXT EXPECTED
     printf '%b' "$1" > bad.keys
