@@ -3,7 +3,8 @@
 # phantom; the pictures at the key frames equal thorax render's with the key's camera (pixel
 # comparison, VTK's PNG reader); the lungs swap sides as the camera goes round (pixel facts) and the
 # orientation letters change; data frames follow the keys; named views; resuming (a changed key
-# file redraws); bad key files refused with file:line, nothing written; the MP4 read by ffprobe.
+# file redraws); the viewer flying the same file (action fly); real data (map3d's Dalhousie torso and
+# its dipole series); bad key files refused with file:line, nothing written; the MP4 read by ffprobe.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
@@ -175,6 +176,23 @@ for f in (1, 4, 7, 13, 22):
     assert d < 0.01 * a.shape[0] * a.shape[1], 'viewer frame %d differs from animate in %d pixels' % (f, d)
 print('viewer flight: %d frames recorded; at most %d pixels differ from thorax animate --keys' % (len(rec), worst))
 EOF
+
+# real data: map3d's Dalhousie torso (no anatomical frame in the file: --up and --front) round which
+# the camera flies while its six dipole frames play; the closed flight ends on the picture it began with
+DAL="$SRC/../shared/data/map3d"
+cat > dal.keys <<EOF
+ends closed
+1  view anterior distance 1500 fov 30 data 1
+13 view left
+25 view posterior data 6
+37 view right
+49 view anterior data 1
+EOF
+"$THORAX" animate "$DAL/geom/torso/daltorso.pts" --data "$DAL/data/torso/dipole2.tsdf" --up -y --front -z \
+    --keys dal.keys --orientation --colorbar --size 200x200 --mp4 none -o dal -q
+[ "$(ls dal/frame_*.png | wc -l)" = 49 ] || fail "the Dalhousie flight: $(ls dal | wc -l) files"
+cmp -s dal/frame_00001.png dal/frame_00049.png || fail "the closed flight does not end on its first picture"
+cmp -s dal/frame_00001.png dal/frame_00025.png && fail "the flight's posterior frame is its anterior one"
 
 # bad key files: the file, the line and the field named; exit non-zero; no output directory
 bad() { # FILE-TEXT EXPECTED
