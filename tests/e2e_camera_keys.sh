@@ -135,6 +135,16 @@ sed -i 's/fov 30/fov 28/' fly.keys
 out=$("$THORAX" animate "${A[@]}" --keys fly.keys -o fly --mp4 none 2>&1)
 echo "$out" | grep -q "25 frames (25 drawn, 0 kept" || fail "a changed key file reused frames: $out"
 echo "$out" | grep -q "other settings" || fail "no word of the changed settings: $out"
+# a key file copied over with its old time kept (cp -p) is still told apart by its content
+cp -p fly.keys fly.keys.orig
+sed 's/fov 28/fov 26/' fly.keys.orig > fly.keys.new
+touch -r fly.keys.orig fly.keys.new
+cp -p fly.keys.new fly.keys
+out=$("$THORAX" animate "${A[@]}" --keys fly.keys -o fly --mp4 none 2>&1)
+echo "$out" | grep -q "25 frames (25 drawn, 0 kept" || fail "a key file of the same size and time reused frames: $out"
+cp -p fly.keys.orig fly.keys
+out=$("$THORAX" animate "${A[@]}" --keys fly.keys -o fly --mp4 none 2>&1)
+echo "$out" | grep -q "25 frames (25 drawn, 0 kept" || fail "the key file put back reused frames: $out"
 
 # the viewer flies the same key file (action fly), recording each frame: its pictures are animate's
 cat > fly.txt <<EOF

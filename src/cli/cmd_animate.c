@@ -60,7 +60,19 @@ static void animation_signature(int argc, char **argv, const ropts *o, const cha
         snprintf(path, sizeof path, "%s/model.json", o->p.model_dir);
         sig_file(sig, cap, path);
     }
-    if (keys) sig_file(sig, cap, keys);
+    if (keys) { /* the key file by its content too (a file copied over another keeping its time) */
+        sig_file(sig, cap, keys);
+        char *text = NULL;
+        size_t n = 0, len = strlen(sig);
+        unsigned long long h = 1469598103934665603ull; /* FNV-1a, 64 bits */
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (thx_read_file(quiet, keys, &text, &n) == THX_OK)
+            for (size_t i = 0; i < n; i++) h = (h ^ (unsigned char)text[i]) * 1099511628211ull;
+        free(text);
+        thx_ctx_destroy(&quiet);
+        snprintf(sig + len, cap - len, " keys:%016llx", h);
+    }
     sig_file(sig, cap, "/proc/self/exe");
 }
 
