@@ -9,16 +9,20 @@
  * Positions: P(t) = sum_i c_i N_i(t). The nc equations: P(t_j) = X_j at the n keys and one end
  * condition at each end (natural: P'' = 0; rest: P' = 0), ordered interp t_0, end t_0, interp
  * t_1..t_{m-1}, end t_m, interp t_m, so that the matrix is banded (two below and two above the
- * diagonal) and solved by Gaussian elimination with partial pivoting within the band.
+ * diagonal) and solved by Gaussian elimination with partial pivoting within the band. Closed ends
+ * (P' and P'' the same at t_0 and t_m) couple the first and last controls: the band is then the
+ * whole matrix (at most 100 keys).
  *
  * Orientation: Kim, Kim and Shin's cumulative form q(t) = q_0 prod_{i>=1} exp(w_i Bc_i(t)) with
  * w_i = log(q_{i-1}^-1 q_i) and Bc_i = sum_{k>=i} N_k, which on span s is
  * q_{s-3} exp(w_{s-2} Bc_{s-2}) exp(w_{s-1} Bc_{s-1}) exp(w_s Bc_s): unit, C2 because the basis is,
  * and with derivatives from the product rule (d/dt exp(w B) = exp(w B) w B'). The control
  * quaternions solve the nonlinear counterpart of the position system (the key orientations at the
- * keys, zero angular acceleration or velocity at the ends) by Newton's method, its banded Jacobian by
- * central differences in each control's tangent space, started from the spline of the keys'
- * rotation vectors (exact when all the turns share one axis).
+ * keys, zero angular acceleration or velocity at the ends, or the same at both) by Newton's method,
+ * its banded Jacobian by central differences in each control's tangent space, started from the
+ * spline of the keys' rotation vectors (exact when all the turns share one axis). The turns w_i are
+ * kept continuous past half a turn (qlog_near): uneven keys need controls more than 180 degrees
+ * apart, where the principal logarithm would jump.
  */
 #include "thorax/render/camera_path.h"
 
