@@ -316,6 +316,16 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->p.trace,
                        .help = "a signal under the picture with a marker at the frame: an ECG lead (I..V6, from the "
                                "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
+    t[n++] = (cli_opt){.name = "--isosurface", .type = CLI_STRING, .meta = "VALUES", .s = &o->p.isosurface,
+                       .help = "equipotential surfaces from --solution's volume potentials (thorax forward --volume): "
+                               "values '-0.5,0,0.5', a count '5', or percentages of the scale's range '25%,75%'; "
+                               "drawn translucent as the surface 'equipotentials'"};
+    t[n++] = (cli_opt){.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .sv = o->p.slices,
+                       .count = &o->p.n_slices, .max = 8,
+                       .help = "a plane through the volume coloured by potential (with --style's bands or contour "
+                               "lines): x=MM, y=MM, z=MM or PX,PY,PZ:NX,NY,NZ; the surface 'slices'; at most 8"};
+    t[n++] = (cli_opt){.name = "--slice-current", .type = CLI_FLAG, .i = &o->p.slice_current,
+                       .help = "colour the slices by |J| per tetrahedron (their own bar) instead of the potential"};
     t[n++] = (cli_opt){.name = "--arrows", .type = CLI_FLAG, .fn = set_arrows,
                        .help = "current density arrows (the solution's currents_node, for the frame shown)"};
     t[n++] = (cli_opt){.name = "--arrow-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->p.arrow_spacing,

@@ -49,6 +49,7 @@ void thx_picture_data_free(thx_picture_data *d)
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
+    picture_field_free(d);
     thx_model_destroy(&d->m);
 }
 
@@ -250,6 +251,21 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         }
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
+        cJSON *vo = files ? cJSON_GetObjectItem(files, "volume") : NULL;
+        if (st == THX_OK && (o->isosurface || o->n_slices)) {
+            if (!cJSON_IsString(vo))
+                st = thx_error(ctx, THX_EINPUT, "%s: %s needs the volume potentials: run thorax forward ... --volume",
+                               o->solution, o->isosurface ? "--isosurface" : "--slice");
+            else {
+                snprintf(path, sizeof path, "%s/%s", o->solution, vo->valuestring);
+                st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->volume);
+            }
+            if (st == THX_OK && !d->m->volume)
+                st = thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, model_dir);
+            if (st == THX_OK && d->volume->n_rows != d->m->volume->n_nodes)
+                st = thx_error(ctx, THX_EINPUT, "%s: %zu rows, the model's volume mesh has %zu nodes", path,
+                               d->volume->n_rows, d->m->volume->n_nodes);
+        }
         if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
@@ -438,7 +454,13 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 
 thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
 {
+    if ((o->isosurface || o->n_slices) && !o->solution) {
+        memset(d, 0, sizeof *d);
+        return thx_error(ctx, THX_EINPUT, "%s: needs --solution DIR (a solution with volume potentials)",
+                         o->isosurface ? "--isosurface" : "--slice");
+    }
     THX_CHECK(load_data(ctx, o, d));
+    THX_CHECK(picture_field_load(ctx, o, d));
     THX_CHECK(picture_view_frame(ctx, o, d));
     if (o->tetrahedra) {
         if (!d->m || !d->m->volume)
