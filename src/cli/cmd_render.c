@@ -318,7 +318,7 @@ size_t render_options(cli_opt *t, ropts *o)
                                "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
     t[n++] = (cli_opt){.name = "--isosurface", .type = CLI_STRING, .meta = "VALUES", .s = &o->p.isosurface,
                        .help = "equipotential surfaces from --solution's volume potentials (thorax forward --volume): "
-                               "values '-0.5,0,0.5', a count '5', or percentages of the scale's range '25%,75%'; "
+                               "values '-0.5,0,0.5' (a single whole number is a count: write '2.0' for the value), a count '5', or percentages of the scale's range '25%,75%'; "
                                "drawn translucent as the surface 'equipotentials'"};
     t[n++] = (cli_opt){.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .sv = o->p.slices,
                        .count = &o->p.n_slices, .max = 8,

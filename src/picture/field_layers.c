@@ -11,6 +11,7 @@
  * value, linear from 0 to the frame's largest |J| on the slices, viridis.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -50,15 +51,24 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     d->vmax = -INFINITY;
     finite_range(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
     if (!(d->vmin <= d->vmax)) return thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
-    for (int k = 0; k < o->n_slices; k++) {
+    /* the specifications checked once (the values against the series' range), the option named */
+    thx_status st = THX_OK;
+    const char *opt = "--slice";
+    for (int k = 0; k < o->n_slices && st == THX_OK; k++) {
         thx_field_plane p;
-        THX_CHECK(thx_field_plane_parse(ctx, o->slices[k], &p));
+        st = thx_field_plane_parse(ctx, o->slices[k], &p);
     }
-    if (o->isosurface) { /* the specification checked once, against the series' range */
+    if (st == THX_OK && o->isosurface) {
         double *values = NULL;
         size_t n = 0;
-        THX_CHECK(thx_field_values_parse(ctx, o->isosurface, d->vmin, d->vmax, &values, &n));
+        opt = "--isosurface";
+        st = thx_field_values_parse(ctx, o->isosurface, d->vmin, d->vmax, &values, &n);
         free(values);
+    }
+    if (st != THX_OK) {
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
+        return thx_error(ctx, st, "%s: %s", opt, msg);
     }
     return THX_OK;
 }

@@ -83,9 +83,13 @@ static thx_status check_names(thx_ctx *ctx, const thx_picture_opts *o, const thx
     size_t len = 0;
     for (size_t s = 0; s < m->n_surfaces && len < sizeof list - 80; s++)
         len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", s ? ", " : "", m->surf[s]->name);
+    if (o->isosurface) len += (size_t)snprintf(list + len, sizeof list - len, ", equipotentials");
+    if (o->n_slices && len < sizeof list - 20) len += (size_t)snprintf(list + len, sizeof list - len, ", slices");
     for (int k = 0; k < o->n_only + o->n_look + o->n_whole; k++) {
         const char *name = k < o->n_only ? o->only[k] : k < o->n_only + o->n_look ? o->look[k - o->n_only].name
                                                                                    : o->whole[k - o->n_only - o->n_look];
+        if ((o->isosurface && !strcmp(name, "equipotentials")) || (o->n_slices && !strcmp(name, "slices")))
+            continue; /* the volume's cuts (field_layers.c) */
         if (surface_by_name(m, name) < 0)
             return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
                              k < o->n_only ? "--only" : k < o->n_only + o->n_look ? "--surface" : "--no-clip", name, list);
