@@ -66,6 +66,8 @@ int cmd_field_streamlines(int argc, char **argv)
          .help = "along J, against it, or both (two lines per seed; one when the forward line closes a loop)"},
         {.name = "--step", .type = CLI_REAL, .meta = "FRACTION", .d = &so.step, .rule = CLI_GT | CLI_LE, .lo = 0, .hi = 10,
          .help = "the step (rk45: the first) as a fraction of the local tetrahedron's mean edge length"},
+        {.name = "--step-mm", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &so.step_mm, .rule = CLI_GE | CLI_FINITE,
+         .lo = 0, .note = "0: --step", .help = "the step (rk45: the first) in mm instead of --step's fraction"},
         {.name = "--tolerance", .type = CLI_REAL, .meta = "FRACTION", .d = &so.tolerance, .rule = CLI_GT, .lo = 0,
          .help = "rk45: the largest error per step, as a fraction of the local mean edge length"},
         {.name = "--max-length", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &so.max_length, .rule = CLI_GE | CLI_FINITE,
@@ -95,7 +97,7 @@ int cmd_field_streamlines(int argc, char **argv)
         .name = cmd,
         .usage = "SOLUTION --streamlines --frame --seed... [--integrator] [--direction] [--max-length] [--min-current] "
                  "[--tubes] -o\n"
-                 "SOLUTION --streamlines --seed... [--step] [--tolerance] [--max-steps] [--no-loops] [--loop-tol] "
+                 "SOLUTION --streamlines --seed... [--step] [--step-mm] [--tolerance] [--max-steps] [--no-loops] [--loop-tol] "
                  "[--rng-seed] [--tubes] [--sides] [--caps] -o",
         .about = "Current streamlines of one frame of a forward solution (thorax forward ...\n"
                  "--volume): J = -sigma grad phi per tetrahedron, averaged to the nodes and\n"
@@ -183,7 +185,9 @@ int cmd_field_streamlines(int argc, char **argv)
     for (size_t r = 0; r < v->n_regions; r++) use[r] = defib || strcmp(v->regions[r].name, "heart") != 0;
     const double *phi = vol->v + (size_t)(frame - 1) * vol->n_rows;
     thx_fem_currents(v, use, phi, NULL, jn);
+    double tf = thx_wtime();
     THX_TRY(thx_stream_field_create(ctx, v, jn, phi, use, &f));
+    tf = thx_wtime() - tf;
     for (int i = 0; i < n_seeds; i++) THX_TRY(thx_stream_seeds(ctx, f, &specs[i], &sx, &st_tet, &ns));
     so.integrator = integ;
     so.direction = dir;
@@ -198,9 +202,9 @@ int cmd_field_streamlines(int argc, char **argv)
     for (size_t l = 0; l < sl->n_lines; l++) count[sl->stop[l]]++;
     thx_log(ctx, THX_LOG_INFO,
             "wrote %s: %zu lines from %zu seeds, %zu points (%s); stops: %zu boundary, %zu low_current, %zu max_length, "
-            "%zu max_steps, %zu loop; frame %d, max |J| %.4g; tracing %.3f s (%zu steps), all %.2f s",
+            "%zu max_steps, %zu loop; frame %d, max |J| %.4g; field %.3f s, tracing %.3f s (%zu steps, %zu evaluations), all %.2f s",
             out, sl->n_lines, ns, sl->n_points, T ? "as tubes" : "lines", count[0], count[1], count[2], count[3], count[4],
-            frame, thx_stream_field_max(f), t2 - t1, sl->n_steps, thx_wtime() - t0);
+            frame, thx_stream_field_max(f), tf, t2 - t1, sl->n_steps, sl->n_evals, thx_wtime() - t0);
 done:
     free(specs);
     if (st) rc = cli_fail(ctx, cmd, st);

@@ -117,7 +117,7 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
     }
     for (int c = 0; c < 3; c++) k1[c] = sign * J[c] / jm;
     const double k_start[3] = {k1[0], k1[1], k1[2]};
-    double loop_tol = o->loop_tol * f->h[t0], len = 0, h = o->step * f->h[t];
+    double loop_tol = o->loop_tol * f->h[t0], len = 0, h = o->step_mm > 0 ? o->step_mm : o->step * f->h[t];
     int away = 0, fixed = o->integrator != THX_STREAM_RK45;
     for (size_t step = 0;; step++) {
         if (step >= o->max_steps) {
@@ -125,7 +125,7 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
             break;
         }
         double hc = f->h[t];
-        if (fixed) h = o->step * hc;
+        if (fixed) h = o->step_mm > 0 ? o->step_mm : o->step * hc;
         else h = fmin(fmax(h, o->min_step * hc), o->max_step * hc);
         double xn[3], kn[3], h_next = h;
         long tn = -1;
@@ -271,7 +271,7 @@ thx_status thx_streamlines_trace(thx_ctx *ctx, const thx_stream_field *f, const 
         return thx_error(ctx, THX_EINPUT, "streamlines: unknown integrator %d", o->integrator);
     if (!(o->direction >= 1 && o->direction <= 3))
         return thx_error(ctx, THX_EINPUT, "streamlines: unknown direction %d", o->direction);
-    if (!(o->step > 0) || !(o->min_step > 0) || !(o->max_step >= o->min_step) || !(o->tolerance > 0) ||
+    if (!(o->step > 0) || !(o->step_mm >= 0) || !(o->min_step > 0) || !(o->max_step >= o->min_step) || !(o->tolerance > 0) ||
         !(o->min_current >= 0) || !(o->max_length >= 0) || !(o->loop_tol > 0))
         return thx_error(ctx, THX_EINPUT, "streamlines: a step, tolerance or limit out of range");
     long *t0 = thx_malloc(ctx, (n_seeds + 1) * sizeof *t0);

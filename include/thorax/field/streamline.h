@@ -62,6 +62,7 @@ typedef struct {
     int integrator;     /* thx_stream_integrator (default RK2) */
     int direction;      /* THX_STREAM_FORWARD, _BACKWARD or _BOTH (default both) */
     double step;        /* RK2/RK4 step, RK45 first step: fraction of the local mean edge length (0.2) */
+    double step_mm;     /* > 0: the RK2/RK4 step, RK45 first step in mm instead (0) */
     double tolerance;   /* RK45: largest error per step, fraction of the local mean edge length (1e-4) */
     double min_step;    /* RK45: smallest step, fraction of the local mean edge length (0.01) */
     double max_step;    /* RK45: largest step, fraction of the local mean edge length (0.5) */
