@@ -59,6 +59,8 @@ ISO=(--solution "$O/solution" --isosurface 12%,30%,70%,88% --colorbar --orientat
 stage "equipotential surfaces" "$T" render "${ISO[@]}" --size 800x900 --frame $QRS --view anterior -o "$O/equipotentials.png" -q
 stage "slices with contour lines" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view superior \
     --slice z=110 --surface heart=phong:0.35 --style continuous+contours --levels 16 --colorbar --orientation --label -o "$O/slices.png" -q
+stage "current streamlines" "$T" render --solution "$O/solution" --size 800x900 --frame $QRS --view anterior \
+    --streamlines density:220 --only torso --only heart --only streamlines --colorbar --orientation --label -o "$O/streamlines.png" -q
 stage "equipotential animation (300 frames + MP4)" "$T" animate "${ISO[@]}" --size 480x540 --frames 101:400 --fps 30 \
     -o "$O/iso_frames" --mp4 "$O/equipotentials.mp4" -q
 # Measured data, when the shared data folder is beside the checkout (it is in CI; elsewhere this part

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Equipotential surfaces and slices in pictures (thorax render/animate --isosurface, --slice,
-# --slice-current; src/picture/field_layers.c), on the medium phantom's forward solution with its
+# --slice-current, --streamlines; src/picture/field_layers.c), on the medium phantom's forward solution with its
 # volume potentials. Pixel facts read back with VTK's PNG reader:
 #  - one positive equipotential alone is drawn in red shades only, one negative in blue only, the
 #    two together in both (the value's colour under the scale);
 #  - a horizontal slice seen from above covers most of the torso's silhouette and no pixel outside
 #    it; by potential it has red and blue, by |J| (viridis) no red;
+#  - current streamlines seen from above stay inside the torso's silhouette, coloured by |J| (no red);
 #  - the frames of an animation of equipotentials differ;
-# and refusals: no --solution, a solution without volume potentials, a bad plane, bad values.
+# and refusals: no --solution, a solution without volume potentials, a bad plane, bad values, bad
+# seeds, an unknown region.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
@@ -31,6 +33,8 @@ R=(--solution sol --frame 193 --size 300x300)
 "$THORAX" render "${R[@]}" --view superior --only slices --slice z=110 -o slice_phi.png -q
 "$THORAX" render "${R[@]}" --view superior --only slices --slice z=110 --slice-current -o slice_j.png -q
 "$THORAX" render "${R[@]}" --view superior --slice z=110 --slice 0,0,140:0,1,0 --style bands+contours --colorbar -o slices.png -q
+"$THORAX" render "${R[@]}" --view superior --only streamlines --streamlines density:120 -o stream_top.png -q
+"$THORAX" render "${R[@]}" --only streamlines --only heart --streamlines density:120 --streamlines sphere:-30,12,110:65:40 --colorbar -o stream.png -q
 "$THORAX" animate --solution sol --frames 180:182 --size 200x200 --isosurface 3 --mp4 none -o anim -q
 
 $PY - <<'PYEOF'
@@ -71,6 +75,11 @@ r, g, b = sj[:, :, 0], sj[:, :, 1], sj[:, :, 2]
 reddish = m & (r > 1.3 * g) & (r > 1.3 * b) & (r > 90)
 print("slice by |J|: %d pixels, %d red (viridis has none)" % (m.sum(), reddish.sum()))
 assert m.sum() > 0.6 * torso.sum() and reddish.sum() == 0
+st = png("stream_top.png"); m = drawn(st)
+r, g, b = st[:, :, 0], st[:, :, 1], st[:, :, 2]
+reddish = m & (r > 1.3 * g) & (r > 1.3 * b) & (r > 90)
+print("streamlines from above: %d pixels, %d outside the torso's silhouette, %d red" % (m.sum(), (m & ~torso).sum(), reddish.sum()))
+assert m.sum() > 2000 and (m & ~torso).sum() < 0.01 * m.sum() and reddish.sum() == 0
 import glob
 frames = sorted(glob.glob("anim/frame_*.png"))
 print("animation:", len(frames), "pictures")
@@ -90,4 +99,6 @@ expect_fail "no solution" "needs --solution" model --isosurface 0
 expect_fail "no volume potentials" "thorax forward ... --volume" --solution plain --slice z=100
 expect_fail "bad plane" "z=" --solution sol --slice z=abc
 expect_fail "bad values" "isosurface" --solution sol --isosurface 1,,x
+expect_fail "bad seeds" "streamlines" --solution sol --streamlines cube:1
+expect_fail "no region" "lung_x" --solution sol --streamlines region:lung_x:10
 echo "all passed"

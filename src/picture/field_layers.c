@@ -17,18 +17,24 @@
 
 #include "thorax/fem/fem.h"
 #include "thorax/field/field.h"
+#include "thorax/field/streamline.h"
 #include "picture/picture_internal.h"
 
-enum { ISO = 0, SLICE = 1 };
+enum { ISO = 0, SLICE = 1, STREAM = 2 };
 
 void picture_field_free(thx_picture_data *d)
 {
     for (int k = 0; k < 2; k++) {
         thx_field_mesh_destroy(&d->field[k]);
-        free(d->field_values[k]);
         free(d->field_own[k]);
-        d->field_values[k] = d->field_own[k] = NULL;
+        d->field_own[k] = NULL;
     }
+    for (int k = 0; k < 3; k++) {
+        free(d->field_values[k]);
+        d->field_values[k] = NULL;
+    }
+    thx_stream_tubes_destroy(&d->tubes);
+    d->n_stream_lines = 0;
     free(d->field_own_tri);
     d->field_own_tri = NULL;
     d->field_frame = -1;
@@ -57,6 +63,11 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     for (int k = 0; k < o->n_slices && st == THX_OK; k++) {
         thx_field_plane p;
         st = thx_field_plane_parse(ctx, o->slices[k], &p);
+    }
+    for (int k = 0; k < o->n_streamlines && st == THX_OK; k++) {
+        thx_seed_spec spec;
+        opt = "--streamlines";
+        st = thx_seed_spec_parse(ctx, o->streamlines[k], &spec);
     }
     if (st == THX_OK && o->isosurface) {
         double *values = NULL;
@@ -129,6 +140,61 @@ static thx_status slices_by_current(thx_ctx *ctx, thx_picture_data *d, const dou
     return THX_OK;
 }
 
+/* The frame's streamlines: J at the nodes (the finite elements' J per tetrahedron, volume-weighted),
+ * the seeds of every specification, lines both ways by RK2, tubes round them. */
+static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const double *phi,
+                                    double lo, double hi)
+{
+    const thx_volume *v = d->m->volume;
+    double *jn = malloc(3 * (v->n_nodes ? v->n_nodes : 1) * sizeof *jn);
+    if (!jn) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
+    thx_fem_currents(v, NULL, phi, NULL, jn);
+    thx_stream_field *f = NULL;
+    thx_status st = thx_stream_field_create(ctx, v, jn, phi, NULL, &f);
+    free(jn);
+    double *xyz = NULL;
+    long *tet = NULL;
+    size_t n = 0;
+    for (int k = 0; k < o->n_streamlines && st == THX_OK; k++) {
+        thx_seed_spec spec;
+        st = thx_seed_spec_parse(ctx, o->streamlines[k], &spec);
+        if (st == THX_OK) st = thx_stream_seeds(ctx, f, &spec, &xyz, &tet, &n);
+    }
+    thx_streamlines *lines = NULL;
+    thx_stream_opts so;
+    thx_stream_opts_default(&so);
+    if (st == THX_OK) st = thx_streamlines_trace(ctx, f, xyz, tet, n, &so, &lines);
+    free(xyz);
+    free(tet);
+    thx_stream_field_destroy(&f);
+    double radius = o->stream_radius;
+    if (st == THX_OK && !(radius > 0)) {
+        double blo[3], bhi[3];
+        thx_picture_bounds(d, blo, bhi);
+        radius = 0.004 * sqrt((bhi[0] - blo[0]) * (bhi[0] - blo[0]) + (bhi[1] - blo[1]) * (bhi[1] - blo[1]) +
+                              (bhi[2] - blo[2]) * (bhi[2] - blo[2]));
+    }
+    if (st == THX_OK) st = thx_stream_tubes_make(ctx, lines, radius, 8, 1, &d->tubes);
+    if (st == THX_OK) d->n_stream_lines = lines->n_lines;
+    thx_streamlines_destroy(&lines);
+    if (st != THX_OK) return st;
+    const thx_stream_tubes *t = d->tubes;
+    d->field_values[STREAM] = malloc((t->n_vertices ? t->n_vertices : 1) * sizeof(double));
+    if (!d->field_values[STREAM]) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
+    memcpy(d->field_values[STREAM], o->stream_potential ? t->potential : t->current, t->n_vertices * sizeof(double));
+    double jmax = 0;
+    for (size_t i = 0; i < t->n_vertices; i++)
+        if (isfinite(t->current[i]) && t->current[i] > jmax) jmax = t->current[i];
+    d->field_lo[STREAM] = o->stream_potential ? lo : 0;
+    d->field_hi[STREAM] = o->stream_potential ? hi : jmax > 0 ? jmax : 1;
+    thx_surface *sf = &d->field_surf[STREAM];
+    sf->n_nodes = t->n_vertices;
+    sf->xyz = t->xyz;
+    sf->n_tris = t->n_tris;
+    sf->tri = t->tri;
+    return THX_OK;
+}
+
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame)
 {
     if (!d->volume || d->field_frame == frame) return THX_OK;
@@ -142,7 +208,8 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
     memset(d->field_surf, 0, sizeof d->field_surf);
     snprintf(d->field_surf[ISO].name, sizeof d->field_surf[ISO].name, "equipotentials");
     snprintf(d->field_surf[SLICE].name, sizeof d->field_surf[SLICE].name, "slices");
-    d->field_surf[ISO].role = d->field_surf[SLICE].role = THX_ROLE_OTHER;
+    snprintf(d->field_surf[STREAM].name, sizeof d->field_surf[STREAM].name, "streamlines");
+    d->field_surf[ISO].role = d->field_surf[SLICE].role = d->field_surf[STREAM].role = THX_ROLE_OTHER;
     thx_status st = THX_OK;
     if (o->isosurface) {
         double *values = NULL;
@@ -191,6 +258,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
             d->field_hi[SLICE] = hi;
         }
     }
+    if (st == THX_OK && o->n_streamlines) st = build_streamlines(ctx, o, d, phi, lo, hi);
     if (st != THX_OK) {
         picture_field_free(d);
         return st;
@@ -203,9 +271,9 @@ size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, th
 {
     size_t n = 0;
     if (d->field_frame < 0) return 0;
-    for (int k = 0; k < 2 && n < max; k++) {
+    for (int k = 0; k < 3 && n < max; k++) {
         const thx_surface *s = &d->field_surf[k];
-        if (!d->field[k] || s->n_tris == 0) continue;
+        if ((k < 2 ? !d->field[k] : !d->tubes) || s->n_tris == 0) continue;
         int shown = o->n_only == 0;
         for (int q = 0; q < o->n_only; q++) shown |= !strcmp(o->only[q], s->name);
         if (!shown) continue;
@@ -219,7 +287,8 @@ size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, th
         r->line_width = 1.5f;
         r->color[0] = r->color[1] = r->color[2] = 0.8f;
         r->color[3] = k == ISO ? 0.55f : 1.0f; /* nested equipotentials seen through each other */
-        int current = k == SLICE && o->slice_current;
+        int current = (k == SLICE && o->slice_current) || (k == STREAM && !o->stream_potential);
+        d->field_current[k] = (unsigned char)current;
         if (current) {
             r->cmap = THX_CMAP_VIRIDIS;
             r->style = THX_DATA_CONTINUOUS;

@@ -235,7 +235,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
         const thx_picture_look *look = NULL;
         for (int k = 0; k < o->n_look; k++)
             if (!strcmp(o->look[k].name, m->surf[s]->name)) look = &o->look[k];
-        if ((o->isosurface || o->n_slices) && m->surf[s]->role != THX_ROLE_HEART && o->mode != THX_DRAW_WIRE &&
+        if ((o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART && o->mode != THX_DRAW_WIRE &&
             o->mode != THX_DRAW_POINTS && o->mode != THX_DRAW_ORIENTATION)
             r->color[3] = 0.2f; /* the volume's cuts inside are what is shown: the body around them faint */
         if (look) {
@@ -260,7 +260,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             scale_for(o, d, (int)s, (int)f, &r->scale);
             r->contour_color[3] = 1;
             r->color[3] = look && look->opacity >= 0 ? look->opacity
-                          : (o->isosurface || o->n_slices) && m->surf[s]->role != THX_ROLE_HEART ? 0.2f : 1;
+                          : (o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART ? 0.2f : 1;
             if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
                 b->main_surface = (int)s;
             }
@@ -384,10 +384,13 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
             for (size_t k = 0; k < m->n_surfaces && k < THX_PICTURE_SURFACES && s < 0; k++)
                 if (m->surf[k] == r->surf) s = (int)k;
             int map = s >= 0 && d->series[s] && d->map[s][d->active[s]];
-            if (s < 0 && d->volume && (r->surf == &d->field_surf[0] || r->surf == &d->field_surf[1])) {
-                /* equipotentials and slices: the volume's potentials, or |J| per tetrahedron */
+            int field = -1;
+            for (int q = 0; q < 3 && s < 0 && d->volume; q++)
+                if (r->surf == &d->field_surf[q]) field = q;
+            if (field >= 0) {
+                /* equipotentials, slices, streamlines: the volume's potentials, or |J| */
                 char unit[16];
-                int current = r->surf == &d->field_surf[1] && d->field_own[1];
+                int current = d->field_current[field];
                 snprintf(unit, sizeof unit, current ? "A/m^2 per %.4s" : "%.15s", d->volume->unit);
                 add_bar(bars, &r->scale, (int)r->cmap, current ? "|J|" : "potential", unit, r->surf->name);
                 continue;
