@@ -7,7 +7,7 @@
 #  - a horizontal slice seen from above covers most of the torso's silhouette and no pixel outside
 #    it; by potential it has red and blue, by |J| (viridis) no red;
 #  - current streamlines seen from above stay inside the torso's silhouette, coloured by |J| (no red);
-#  - the frames of an animation of equipotentials differ;
+#  - the frames of an animation of equipotentials differ; the viewer draws them too;
 # and refusals: no --solution, a solution without volume potentials, a bad plane, bad values, bad
 # seeds, an unknown region.
 set -euo pipefail
@@ -87,6 +87,35 @@ assert len(frames) == 3
 a, b = png(frames[0]), png(frames[-1])  # frames 180 and 182
 assert np.abs(a - b).sum() > 1000, "the equipotentials do not change between frames"
 PYEOF
+
+# the viewer (the same picture code in a window): a scripted session with streamlines and
+# equipotentials, its screenshot against one without them (xvfb-run; skipped without it)
+if command -v xvfb-run > /dev/null; then
+    for with in 0 1; do
+        {
+            echo "--solution sol"; echo "--size 300x320"; echo "--frame 193"; echo "--only heart"
+            if [ $with = 1 ]; then echo "--streamlines density:60"; echo "--isosurface 15%,85%"
+                echo "--only streamlines"; echo "--only equipotentials"; fi
+            echo "action screenshot $PWD/view$with.png"; echo "quit"
+        } > view$with.txt
+        # one retry: xvfb-run -a can lose the race for a display number to another test
+        xvfb-run -a "$THORAX" view --script view$with.txt > view$with.out 2>&1 ||
+            xvfb-run -a "$THORAX" view --script view$with.txt > view$with.out 2>&1 || { cat view$with.out; fail "viewer session $with"; }
+    done
+    $PY - <<'PYEOF'
+import vtk
+import numpy as np
+from vtk.util.numpy_support import vtk_to_numpy
+def png(p):
+    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
+    im = r.GetOutput(); w, h, _ = im.GetDimensions()
+    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(float)
+a, b = png("view0.png"), png("view1.png")
+changed = (np.abs(a - b).sum(axis=2) > 30).sum()
+print("viewer: %d pixels changed by the streamlines and equipotentials" % changed)
+assert changed > 3000
+PYEOF
+fi
 
 expect_fail() { # WHAT NEEDLE ARGS...
     local what=$1 needle=$2; shift 2
