@@ -128,6 +128,8 @@ expect_fail "no solution" "needs --solution" model --isosurface 0
 expect_fail "no volume potentials" "thorax forward ... --volume" --solution plain --slice z=100
 expect_fail "bad plane" "z=" --solution sol --slice z=abc
 expect_fail "bad values" "isosurface" --solution sol --isosurface 1,,x
+cp -r sol odd && sed -i 's/"problem":[^,]*/"problem": "nonsense"/' odd/solution.json
+expect_fail "unknown problem" "unknown problem" --solution odd --slice z=100
 expect_fail "bad seeds" "streamlines" --solution sol --streamlines cube:1
 expect_fail "no region" "lung_x" --solution sol --streamlines region:lung_x:10
 echo "all passed"

@@ -18,6 +18,7 @@
 #include "thorax/fem/fem.h"
 #include "thorax/field/field.h"
 #include "thorax/field/streamline.h"
+#include "thorax/io/solution_file.h"
 #include "picture/picture_internal.h"
 
 enum { ISO = 0, SLICE = 1, STREAM = 2 };
@@ -53,6 +54,10 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
 {
     d->field_frame = -1;
     if (!d->volume) return THX_OK;
+    const thx_volume *v = d->m->volume;
+    d->field_use = malloc(v->n_regions ? v->n_regions : 1);
+    if (!d->field_use) return thx_error(ctx, THX_ENOMEM, "out of memory (volume cuts)");
+    THX_CHECK(thx_solution_domain(ctx, o->solution, v, d->field_use));
     d->vmin = INFINITY;
     d->vmax = -INFINITY;
     finite_range(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
@@ -117,7 +122,7 @@ static thx_status slices_by_current(thx_ctx *ctx, thx_picture_data *d, const dou
         free(jt);
         return thx_error(ctx, THX_ENOMEM, "out of memory (slices by |J|)");
     }
-    thx_fem_currents(v, NULL, phi, jt, NULL);
+    thx_fem_currents(v, d->field_use, phi, jt, NULL);
     double jmax = 0;
     for (size_t t = 0; t < m->n_tris; t++) {
         const double *j = jt + 3 * (size_t)m->cell[t];
@@ -148,9 +153,9 @@ static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
     const thx_volume *v = d->m->volume;
     double *jn = malloc(3 * (v->n_nodes ? v->n_nodes : 1) * sizeof *jn);
     if (!jn) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
-    thx_fem_currents(v, NULL, phi, NULL, jn);
+    thx_fem_currents(v, d->field_use, phi, NULL, jn);
     thx_stream_field *f = NULL;
-    thx_status st = thx_stream_field_create(ctx, v, jn, phi, NULL, &f);
+    thx_status st = thx_stream_field_create(ctx, v, jn, phi, d->field_use, &f);
     free(jn);
     double *xyz = NULL;
     long *tet = NULL;
@@ -224,7 +229,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
         }
         st = thx_field_values_parse(ctx, o->isosurface, rlo, rhi, &values, &n);
         if (st == THX_OK) st = thx_field_mesh_create(ctx, &d->field[ISO]);
-        if (st == THX_OK) st = thx_field_isosurface(ctx, v, phi, values, n, NULL, d->field[ISO]);
+        if (st == THX_OK) st = thx_field_isosurface(ctx, v, phi, values, n, d->field_use, d->field[ISO]);
         free(values);
         if (st == THX_OK) {
             const thx_field_mesh *m = d->field[ISO];
@@ -243,7 +248,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
         thx_field_plane planes[8];
         for (int k = 0; k < o->n_slices && st == THX_OK; k++) st = thx_field_plane_parse(ctx, o->slices[k], &planes[k]);
         if (st == THX_OK) st = thx_field_mesh_create(ctx, &d->field[SLICE]);
-        if (st == THX_OK) st = thx_field_slice(ctx, v, phi, planes, (size_t)o->n_slices, NULL, d->field[SLICE]);
+        if (st == THX_OK) st = thx_field_slice(ctx, v, phi, planes, (size_t)o->n_slices, d->field_use, d->field[SLICE]);
         if (st == THX_OK && o->slice_current) st = slices_by_current(ctx, d, phi);
         else if (st == THX_OK) {
             const thx_field_mesh *m = d->field[SLICE];

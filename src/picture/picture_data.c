@@ -50,6 +50,8 @@ void thx_picture_data_free(thx_picture_data *d)
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
     picture_field_free(d);
+    free(d->field_use);
+    d->field_use = NULL;
     thx_model_destroy(&d->m);
 }
 

@@ -190,6 +190,7 @@ typedef struct {
     int32_t *field_own_tri;          /* ... and triangles */
     double field_lo[3], field_hi[3]; /* the range their scale covers at field_frame */
     unsigned char field_current[3];  /* 1: drawn by |J| (a bar of its own), 0: by potential */
+    unsigned char *field_use;        /* per volume region: in the solution's domain (thx_solution_domain) */
     int field_frame;                 /* -1: none built */
     double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
     unsigned char sranged[THX_PICTURE_SURFACES];
