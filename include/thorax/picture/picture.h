@@ -288,6 +288,9 @@ int thx_picture_orientation(const thx_picture_opts *o, const thx_picture_data *d
 void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4]);
 /* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes. */
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);
+/* The camera of standard view `view` (a thx_view) whatever o->have_camera says (the named views of
+ * a camera key file, thorax/render/camera_path.h). */
+void thx_picture_view_camera(const thx_picture_opts *o, const thx_picture_data *d, int view, double aspect, thx_camera *cam);
 /* The model's bounding box (all surfaces). */
 void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3]);
 /* The clip plane o->clip asks for, in the model's axes; 0 none, 1 one (in *p), -1 a bad spec (message in ctx). */
