@@ -10,6 +10,7 @@ int cmd_surfaces(int argc, char **argv);
 int cmd_check(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_slice(int argc, char **argv);
+int cmd_field_streamlines(int argc, char **argv); /* thorax streamlines (issue 16), to join thorax field */
 int cmd_import(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_sigma(int argc, char **argv);

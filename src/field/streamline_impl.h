@@ -1,0 +1,33 @@
+/* Private parts of the current streamlines (thorax/field/streamline.h): the field's data, shared by
+ * streamline_field.c (the field, point location), streamline_seeds.c and streamline_trace.c. */
+#ifndef THORAX_FIELD_STREAMLINE_IMPL_H
+#define THORAX_FIELD_STREAMLINE_IMPL_H
+#include "thorax/field/streamline.h"
+#include "thorax/mesh/tet_locate.h"
+
+struct thx_stream_field {
+    const thx_volume *v;       /* borrowed */
+    thx_tet_locator *loc;
+    double *j;                 /* 3 n_nodes */
+    double *phi;               /* n_nodes, or NULL */
+    unsigned char *active;     /* n_tets: in the domain */
+    float *h;                  /* n_tets: mean edge length, mm */
+    double jmax;               /* largest |J| at the domain's nodes */
+    double diag;               /* the bounding box's diagonal, mm */
+};
+
+/* Barycentric coordinates of p in tetrahedron t (sum 1; all >= 0 inside, to rounding). */
+void thx_stream_bary(const thx_volume *v, size_t t, const double p[3], double lam[4]);
+/* J (3) and phi (may be NULL) at p in tetrahedron t, linear interpolation (p may be slightly out). */
+void thx_stream_interp(const thx_stream_field *f, size_t t, const double p[3], double *j, double *phi);
+/*
+ * The straight path from p (in the domain's tetrahedron t) along the unit vector d, walked face to
+ * face through the domain: the distance to where it leaves the domain (the face it leaves by is on
+ * the mesh's boundary or borders a tetrahedron outside the domain), or +infinity if that is farther
+ * than smax. *exit_tet: the last domain tetrahedron.
+ */
+double thx_stream_exit(const thx_stream_field *f, size_t t, const double p[3], const double d[3], double smax,
+                       long *exit_tet);
+/* A uniform double in [0, 1) from the state (splitmix64). */
+double thx_stream_rand(uint64_t *state);
+#endif
