@@ -109,6 +109,10 @@ static int add_slice(void *user, const cli_opt *opt, const char *arg)
 
 int cmd_field(int argc, char **argv)
 {
+    /* thorax field SOLUTION --streamlines ...: the streamlines' own options (cmd_field_streamlines.c) */
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--streamlines")) return cmd_field_streamlines(argc, argv);
+    int streamlines_flag = 0;
     const char *cmd = "field";
     const char *out = NULL, *frames = "1";
     const char **regions = calloc((size_t)argc + 1, sizeof *regions);
@@ -137,13 +141,16 @@ int cmd_field(int argc, char **argv)
         {.name = "--region", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = regions, .count = &n_regions,
          .max = argc, .def = "every region but \"heart\"",
          .help = "cut only this tissue region's tetrahedra"},
-        /* --streamlines (current streamlines, issue 16 item 3) is added here by its own file */
+        {.name = "--streamlines", .type = CLI_FLAG, .i = &streamlines_flag,
+         .help = "current streamlines instead of cuts: thorax field SOLUTION --streamlines --seed ... (the same as "
+                 "thorax streamlines; its options: thorax field --streamlines --help)"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "SOLUTION [--isosurface] [--slice]... [--contours] [--frame] [--region]... -o",
+        .usage = "SOLUTION [--isosurface] [--slice]... [--contours] [--frame] [--region]... -o\n"
+                 "SOLUTION --streamlines [options of thorax streamlines]",
         .about = "Cuts the volume potentials of SOLUTION (a directory written by\n"
                  "`thorax forward ... --volume`) by marching tetrahedra: equipotential surfaces\n"
                  "at the --isosurface values and slices by the --slice planes, exact for the\n"

@@ -32,7 +32,7 @@ static const struct {
     {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},
     {"animate", cmd_animate, "one picture per frame and an MP4 movie (ffmpeg), resumable"},
     {"view", cmd_view, "the interactive viewer (GTK 4): linked surfaces, frames, picking, scripts"},
-    {"streamlines", cmd_field_streamlines, "current streamlines of a forward solution (thorax field --streamlines, issue 16)"},
+    {"streamlines", cmd_field_streamlines, "current streamlines of a solution, as tubes or lines (VTP, OBJ); also thorax field --streamlines"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 
