@@ -63,6 +63,9 @@ stage "current streamlines" "$T" render --solution "$O/solution" --size 800x900 
     --streamlines density:220 --only torso --only heart --only streamlines --colorbar --orientation --label -o "$O/streamlines.png" -q
 stage "equipotential animation (300 frames + MP4)" "$T" animate "${ISO[@]}" --size 480x540 --frames 101:400 --fps 30 \
     -o "$O/iso_frames" --mp4 "$O/equipotentials.mp4" -q
+stage "camera flight round the torso (121 frames + MP4)" "$T" animate --solution "$O/solution" \
+    --keys "$(dirname "$0")/demo_flight.keys" --only torso --only heart --colorbar --orientation --label \
+    --size 480x540 --fps 30 -o "$O/flight_frames" --mp4 "$O/flight.mp4" -q
 # Measured data, when the shared data folder is beside the checkout (it is in CI; elsewhere this part
 # is left out): map3d's recordings drawn from their own files, no model needed.
 MD=${MAP3D_DATA:-../shared/data/map3d}

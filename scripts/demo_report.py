@@ -227,6 +227,11 @@ heart's dipole turns. Right: the heart's current loops at the QRS peak: 220 stre
 from seeds drawn where the current is strong, traced both ways by second-order Runge&ndash;Kutta (the paper's
 recipe), leaving the heart's positive side and returning to its negative side through the torso, coloured by |J|.
 <code>thorax render --streamlines density:220</code>.</p>
+<div class="row">{'<video src="flight.mp4" controls loop></video>' if have('flight.mp4') else ''}</div>
+<p>A key-framed camera flight (paper 4.3, "Animation methods"): five keys a quarter turn apart
+(scripts/demo_flight.keys), the camera's position on an interpolating C2 cubic B-spline and its
+orientation on a C2 quaternion curve through the keys, once round the torso while the QRS plays
+(data frames 150 to 250). <code>thorax animate --keys FILE</code>.</p>
 {measured}
 <h2>The volume mesh and its conductivities</h2>
 <div class="row">{img('tetrahedra.png', 'tetrahedra')}{img('orientation.png', 'orientation')}</div>
