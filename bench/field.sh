@@ -9,7 +9,10 @@
 #    and the ratio;
 #  - thorax on 1 thread and on all (OMP_NUM_THREADS);
 #  - the whole command, thorax field ... -o iso.vtp (reading the solution, writing the file);
-#  - a 300-frame loop of three equipotential surfaces (geometry only, no rendering).
+#  - a 300-frame loop of three equipotential surfaces (geometry only, no rendering);
+#  - the 300-frame animation of three equipotential surfaces as thorax animate draws it (with the
+#    MP4), against the 60 s;
+#  - then bench/field_streamlines.sh: 1,000 streamlines by thorax and by vtkStreamTracer.
 # Prints figures; never fails on time. FIELD_BENCH_DIR=DIR keeps the prepared model and solution
 # there for the next run.
 set -euo pipefail
@@ -62,3 +65,15 @@ echo "--- the whole command (read the solution, cut, write the .vtp)"
 echo "--- 300 frames x three equipotential surfaces (geometry only)"
 OMP_NUM_THREADS=1 "$ISO" "$W/sol" "$FRAME" "$SPEC" 1 300 "$SPEC" | tail -1 | sed 's/^thorax loop:/thorax loop (1 thread):/'
 "$ISO" "$W/sol" "$FRAME" "$SPEC" 1 300 "$SPEC" | tail -1 | sed 's/^thorax loop:/thorax loop (all threads):/'
+echo "--- the 300-frame animation with three equipotential surfaces (thorax animate, rendered, with the MP4)"
+rm -rf "$W/anim"
+/usr/bin/time -f "thorax animate: %e s wall, %U s user + %S s system CPU, %M KB peak" "$THORAX" animate --solution "$W/sol" \
+    --isosurface "$SPEC" --only heart --only equipotentials --only torso --size 640x720 --colorbar --fps 30 \
+    -o "$W/anim" --mp4 "$W/anim/iso.mp4" -q
+echo "  (the issue's target: under 60 s)"
+rm -rf "$W/anim"
+# the streamline half: 1,000 streamlines against vtkStreamTracer on the same volume
+if [ -x bench/field_streamlines.sh ] || [ -f bench/field_streamlines.sh ]; then
+    echo "--- streamlines (bench/field_streamlines.sh)"
+    bash bench/field_streamlines.sh
+fi
