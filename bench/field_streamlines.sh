@@ -46,7 +46,7 @@ import re, sys
 t = open(sys.argv[1]).read()
 m = re.search(r"(\d+) points.*field ([0-9.]+) s, tracing ([0-9.]+) s \((\d+) steps, (\d+) evaluations\)", t)
 assert m, t
-print(sys.argv[2], float(m.group(2)) + float(m.group(3)), "%s (field %s s + tracing %s s, %s steps, %s evaluations)" %
+print(sys.argv[2], "%.3f" % (float(m.group(2)) + float(m.group(3))), "%s (field %s s + tracing %s s, %s steps, %s evaluations)" %
       (m.group(1), m.group(2), m.group(3), m.group(4), m.group(5)))
 PYEOF
     tail -1 "$W/lines/times.txt"
