@@ -105,6 +105,8 @@ thx_status thx_stream_field_create(thx_ctx *ctx, const thx_volume *v, const doub
             lo[a] = fmin(lo[a], v->xyz[3 * i + (size_t)a]);
             hi[a] = fmax(hi[a], v->xyz[3 * i + (size_t)a]);
         }
+    memcpy(f->lo, lo, sizeof lo);
+    memcpy(f->hi, hi, sizeof hi);
     f->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
     thx_status st = thx_tet_locator_create(ctx, v, &f->loc);
     if (st) {
@@ -242,7 +244,9 @@ long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hi
         }
         t = u;
     }
-    if (t < 0 && hint < 0) t = scan(f, p);
+    if (t < 0 && hint < 0 && p[0] >= f->lo[0] && p[0] <= f->hi[0] && p[1] >= f->lo[1] && p[1] <= f->hi[1] &&
+        p[2] >= f->lo[2] && p[2] <= f->hi[2])
+        t = scan(f, p);
     if (t >= 0) thx_stream_interp(f, (size_t)t, p, j, phi);
     return t;
 }

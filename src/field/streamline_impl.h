@@ -12,7 +12,8 @@ struct thx_stream_field {
     double *phi;               /* n_nodes, or NULL */
     unsigned char *active;     /* n_tets: in the domain */
     double jmax;               /* largest |J| at the domain's nodes */
-    double diag;               /* the bounding box's diagonal, mm */
+    double lo[3], hi[3];       /* the mesh's bounding box, mm */
+    double diag;               /* its diagonal, mm */
 };
 
 /* The mean edge length of tetrahedron t, mm: the cell size steps are fractions of. */
