@@ -39,7 +39,7 @@ stage "volume mesh" sh -c "'$T' mesh '$O/model' --no-heart --stats > '$O/mesh.tx
 stage "checks" sh -c "'$T' check '$O/model' --json > '$O/check.json'"
 stage "electrodes" "$T" electrodes "$O/model" -q
 stage "heartbeat (500 frames)" sh -c "'$T' beat '$O/model' -o '$O/beat.raw' > '$O/beat.out' && sed -n 2p '$O/beat.out' > '$O/beat.label'"
-stage "forward solution (500 frames)" "$T" forward "$O/model" --epicardial "$O/beat.raw" -o "$O/solution" --currents $QRS -q
+stage "forward solution (500 frames)" "$T" forward "$O/model" --epicardial "$O/beat.raw" -o "$O/solution" --currents $QRS --volume -q
 stage "12-lead ECG and its plot" "$T" leads "$O/solution" --plot "$O/ecg12.svg" -q
 R=(--solution "$O/solution" --size 800x900 --colorbar --orientation --label --trace II --only torso --only heart)
 stage "anterior map" "$T" render "${R[@]}" --frame $QRS --view anterior -o "$O/anterior.png" -q
@@ -54,6 +54,18 @@ stage "electrodes (anterior)" "$T" render --solution "$O/solution" --frame $QRS 
 stage "electrodes (left)" "$T" render --solution "$O/solution" --frame $QRS --size 700x800 --only torso "${E12[@]}" --orientation --view left -o "$O/electrodes_left.png" -q
 stage "volume mesh picture" "$T" render "$O/model" --size 800x900 --mode hidden --tetrahedra --clip anterior:0.5 --orientation --view anterior -o "$O/tetrahedra.png" -q
 stage "animation (300 frames + MP4)" "$T" animate "${R[@]}" --size 640x720 "${OPEN[@]}" --frames 101:400 --fps 30 -o "$O/frames" --mp4 "$O/beat.mp4" -q
+# Inside the volume (paper 4.3): equipotential surfaces and slices of the volume potentials
+ISO=(--solution "$O/solution" --isosurface 12%,30%,70%,88% --colorbar --orientation --label --only torso --only heart --only equipotentials)
+stage "equipotential surfaces" "$T" render "${ISO[@]}" --size 800x900 --frame $QRS --view anterior -o "$O/equipotentials.png" -q
+stage "slices with contour lines" "$T" render --solution "$O/solution" --size 800x800 --frame $QRS --view superior \
+    --slice z=110 --surface heart=phong:0.35 --style continuous+contours --levels 16 --colorbar --orientation --label -o "$O/slices.png" -q
+stage "current streamlines" "$T" render --solution "$O/solution" --size 800x900 --frame $QRS --view anterior \
+    --streamlines density:220 --only torso --only heart --only streamlines --colorbar --orientation --label -o "$O/streamlines.png" -q
+stage "equipotential animation (300 frames + MP4)" "$T" animate "${ISO[@]}" --size 480x540 --frames 101:400 --fps 30 \
+    -o "$O/iso_frames" --mp4 "$O/equipotentials.mp4" -q
+stage "camera flight round the torso (121 frames + MP4)" "$T" animate --solution "$O/solution" \
+    --keys "$(dirname "$0")/demo_flight.keys" --only torso --only heart --colorbar --orientation --label \
+    --size 480x540 --fps 30 -o "$O/flight_frames" --mp4 "$O/flight.mp4" -q
 # Measured data, when the shared data folder is beside the checkout (it is in CI; elsewhere this part
 # is left out): map3d's recordings drawn from their own files, no model needed.
 MD=${MAP3D_DATA:-../shared/data/map3d}

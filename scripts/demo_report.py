@@ -215,6 +215,23 @@ torso's posterior wall, seen from inside. Right: left lateral view, 16 bands wit
 <div class="row">{'<video src="beat.mp4" controls loop></video>' if have('beat.mp4') else ''}{img('currents.png', 'currents')}</div>
 <p>Left: frames 101 to 400 of the beat in the opened chest, with lead II. Right: current density at the QRS peak,
 averaged on an 18 mm grid (the torso as a wire mesh).</p>
+<h2>Inside the volume</h2>
+<div class="row">{img('equipotentials.png', 'equipotential surfaces')}{img('slices.png', 'slice')}</div>
+<p>Left: four equipotential surfaces of the volume potentials at the QRS peak (12%, 30%, 70% and 88% of the series'
+range), translucent, with the heart; the body surface faint. <code>thorax render --solution DIR --isosurface
+12%,30%,70%,88%</code> (the solution made with <code>thorax forward --volume</code>). Right: the horizontal slice
+z = 110 mm through the heart, seen from above through the translucent heart, with 16 contour lines. <code>thorax render --slice z=110</code>.</p>
+<div class="row">{'<video src="equipotentials.mp4" controls loop></video>' if have('equipotentials.mp4') else ''}{img('streamlines.png', 'current streamlines')}</div>
+<p>Left: the equipotential surfaces through frames 101 to 400 of the beat: they grow from the heart and turn as the
+heart's dipole turns. Right: the heart's current loops at the QRS peak: 220 streamlines of J = &minus;&sigma;&nabla;&phi;
+from seeds drawn where the current is strong, traced both ways by second-order Runge&ndash;Kutta (the paper's
+recipe), leaving the heart's positive side and returning to its negative side through the torso, coloured by |J|.
+<code>thorax render --streamlines density:220</code>.</p>
+<div class="row">{'<video src="flight.mp4" controls loop></video>' if have('flight.mp4') else ''}</div>
+<p>A key-framed camera flight (paper 4.3, "Animation methods"): five keys a quarter turn apart
+(scripts/demo_flight.keys), the camera's position on an interpolating C2 cubic B-spline and its
+orientation on a C2 quaternion curve through the keys, once round the torso while the QRS plays
+(data frames 150 to 250). <code>thorax animate --keys FILE</code>.</p>
 {measured}
 <h2>The volume mesh and its conductivities</h2>
 <div class="row">{img('tetrahedra.png', 'tetrahedra')}{img('orientation.png', 'orientation')}</div>

@@ -76,6 +76,7 @@ static int lead_trace(const char *svg, const char *name, trace_info *ti)
     pts += 8;
     ti->ymin = INFINITY;
     ti->ymax = -INFINITY;
+    ti->x_at_ymin = ti->x_at_ymax = NAN;
     ti->n = 0;
     while (*pts && *pts != '"') {
         char *e;
@@ -188,7 +189,7 @@ static void test_png(void)
     CHECK_OK(ctx, thx_image_read_png(ctx, pp, &img));
     if (svg && img) {
         const char *vb = strstr(svg, "viewBox=\"");
-        double x, y, w, h;
+        double x = 0, y = 0, w = 0, h = 0;
         CHECK(vb && sscanf(vb + 9, "%lf %lf %lf %lf", &x, &y, &w, &h) == 4);
         CHECK(img->w == (int)ceil(w * o.px_per_mm) && img->h == (int)ceil(h * o.px_per_mm));
         /* lead II's peak: dark ink at its place in pixels, the paper's colours elsewhere */

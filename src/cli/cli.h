@@ -22,6 +22,7 @@ int cmd_bem(int argc, char **argv);
 int cmd_inverse(int argc, char **argv);
 int cmd_verify(int argc, char **argv);
 int cmd_leads(int argc, char **argv);
+int cmd_field(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_animate(int argc, char **argv);
 int cmd_view(int argc, char **argv);

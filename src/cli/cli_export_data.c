@@ -26,8 +26,9 @@ typedef struct {
     char unit[32];
 } sources;
 
-/* "A:B[:STEP]" items separated by commas ("1:40:2,45,50"), 1-based, inclusive; "all". Sets sel[]. */
-static int parse_frames(const char *s, size_t n, unsigned char *sel)
+/* "A:B[:STEP]" items separated by commas ("1:40:2,45,50"), 1-based, inclusive; "all". Sets sel[]
+ * (cli_export.h; thorax field reads its --frame with it too). */
+int cli_parse_frames(const char *s, size_t n, unsigned char *sel)
 {
     memset(sel, 0, n);
     if (!strcmp(s, "all")) {
@@ -297,7 +298,7 @@ int cli_export_data(const cli_export_request *rq)
         st = THX_ENOMEM;
         goto fail;
     }
-    if (parse_frames(rq->frames ? rq->frames : "all", nf, sel)) {
+    if (cli_parse_frames(rq->frames ? rq->frames : "all", nf, sel)) {
         rc = cli_usage_error(cmd, "--frames '%s': 1-based frames 1..%zu of %s, as A:B[:STEP] items separated by commas, "
                              "or all", rq->frames, nf, src);
         goto end;

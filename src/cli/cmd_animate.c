@@ -17,6 +17,7 @@ extern char **environ;
 #include "cli/render_cli.h"
 #include "thorax/core/fileio.h"
 #include "thorax/picture/movie.h"
+#include "thorax/render/camera_path.h"
 /* ---- what the frames of an animation were drawn with ---- */
 
 /* Appends "path:size:mtime" of a file (or "path:-" if it cannot be read). */
@@ -34,7 +35,7 @@ static void sig_file(char *sig, size_t cap, const char *path)
 /* The settings that decide a frame's pixels: every option but the frame range, the rate, the movie
  * and the verbosity; the data files and the program (size and time of each), so a changed solution
  * or a rebuilt thorax redraws. */
-static void animation_signature(int argc, char **argv, const ropts *o, char *sig, size_t cap)
+static void animation_signature(int argc, char **argv, const ropts *o, const char *keys, char *sig, size_t cap)
 {
     snprintf(sig, cap, "thorax-animation 1;");
     for (int i = 1; i < argc; i++) {
@@ -59,6 +60,19 @@ static void animation_signature(int argc, char **argv, const ropts *o, char *sig
         snprintf(path, sizeof path, "%s/model.json", o->p.model_dir);
         sig_file(sig, cap, path);
     }
+    if (keys) { /* the key file by its content too (a file copied over another keeping its time) */
+        sig_file(sig, cap, keys);
+        char *text = NULL;
+        size_t n = 0, len = strlen(sig);
+        unsigned long long h = 1469598103934665603ull; /* FNV-1a, 64 bits */
+        thx_ctx *quiet = NULL;
+        thx_ctx_create(&quiet);
+        if (thx_read_file(quiet, keys, &text, &n) == THX_OK)
+            for (size_t i = 0; i < n; i++) h = (h ^ (unsigned char)text[i]) * 1099511628211ull;
+        free(text);
+        thx_ctx_destroy(&quiet);
+        snprintf(sig + len, cap - len, " keys:%016llx", h);
+    }
     sig_file(sig, cap, "/proc/self/exe");
 }
 
@@ -67,7 +81,7 @@ int cmd_animate(int argc, char **argv)
     ropts o;
     render_opts_default(&o);
     o.cmd = "animate";
-    const char *mp4 = NULL, *frames = NULL;
+    const char *mp4 = NULL, *frames = NULL, *keys_path = NULL;
     int a_first = 1, a_last = -1;
     cli_opt own[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &o.out,
@@ -76,6 +90,10 @@ int cmd_animate(int argc, char **argv)
          .help = "frame range, 1-based, inclusive"},
         {.name = "--fps", .type = CLI_INT, .meta = "N", .i = &o.fps, .rule = CLI_GE | CLI_LE, .lo = 1, .hi = 240,
          .bad = "--fps: 1..240", .help = "frames per second of the movie, 1 to 240"},
+        {.name = "--keys", .type = CLI_INPUT, .meta = "FILE", .s = &keys_path,
+         .help = "a camera flight: camera keys at movie frames (docs/formats.md, \"Camera key files\"), the camera "
+                 "between them on a C2 path; the movie runs to the last key's frame, each frame showing the data frame "
+                 "the keys give (else its own number)"},
         {.name = "--mp4", .type = CLI_OUTPUT, .meta = "FILE|none", .s = &mp4, .def = "DIR/animation.mp4",
          .note = "none: no movie", .help = "the movie"},
     };
@@ -97,8 +115,11 @@ int cmd_animate(int argc, char **argv)
         return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
     if (!o.p.model_dir && !o.p.n_files && !o.p.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
+    if (keys_path && o.p.have_camera) return cli_usage_error("animate", "--keys and --camera: the key file gives the camera");
     o.last = 0; /* frames checked below */
     thx_ctx *ctx = cli_ctx(o.verbose);
+    thx_camera_keys keys = {0};
+    thx_camera_path *flight = NULL;
     thx_picture_data d;
     thx_renderer *rr = NULL;
     thx_font *font = NULL;
@@ -108,21 +129,50 @@ int cmd_animate(int argc, char **argv)
     double t0 = thx_wtime();
     char path[PATH_MAX + 64], movie[PATH_MAX + 64];
     const char *out_dir = o.out;
-    thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
+    memset(&d, 0, sizeof d);
+    thx_status st = THX_OK;
+    int named_views = 0;
+    if (keys_path) { /* the key file read first: its errors before any data is loaded */
+        st = thx_camera_keys_read(ctx, keys_path, &keys);
+        for (size_t j = 0; st == THX_OK && j < keys.n; j++) named_views |= keys.keys[j].view >= 0;
+        /* keys with coordinates only need no anatomical frame of the model (as --camera) */
+        if (st == THX_OK && !named_views) o.p.have_camera = 1;
+    }
+    if (st == THX_OK) st = render_setup(ctx, &o, &d, &rr, &font, &img);
     size_t nf = 0;
     if (st == THX_OK) {
         for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)
             if (d.series[s] && d.series[s]->n_frames > nf) nf = d.series[s]->n_frames;
-        if (!nf) st = thx_error(ctx, THX_EINPUT, "animate: no time series to animate (give --solution or --data)");
+        if (!nf && !keys_path) st = thx_error(ctx, THX_EINPUT, "animate: no time series to animate (give --solution or --data)");
+    }
+    if (st == THX_OK && keys_path) {
+        thx_camera views[6];
+        for (int v = 0; v < 6; v++) thx_picture_view_camera(&o.p, &d, v, (double)o.p.w / o.p.h, &views[v]);
+        st = thx_camera_keys_resolve(ctx, &keys, views);
+        if (st == THX_OK) st = thx_camera_path_create(ctx, &keys, &flight);
     }
     if (st == THX_OK) {
-        if (a_last < 0) a_last = (int)nf;
-        if ((size_t)a_last > nf) st = thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
-        /* arrows on every frame: refused before anything is drawn when some frame has no currents */
-        for (int f = a_first; st == THX_OK && o.p.arrows && f <= a_last; f++)
-            if (thx_picture_currents_column(&d, f - 1) < 0)
+        int n_movie = flight ? thx_camera_path_last(flight) : (int)nf;
+        if (a_last < 0) a_last = n_movie;
+        if (a_last > n_movie)
+            st = flight ? thx_error(ctx, THX_EINPUT, "--frames %d:%d: the flight %s ends at frame %d", a_first, a_last, keys_path, n_movie)
+                        : thx_error(ctx, THX_EINPUT, "--frames %d:%d: the data has %zu frames", a_first, a_last, nf);
+        if (flight && !nf && thx_camera_path_data_frame(flight, 1) && o.verbose >= 0)
+            thx_log(ctx, THX_LOG_WARN, "%s: no data is drawn: the keys' data frames are not used", keys_path);
+        /* every movie frame's data frame, checked before anything is drawn */
+        for (int f = a_first; st == THX_OK && f <= a_last; f++) {
+            int df = !nf ? 0 : flight && thx_camera_path_data_frame(flight, f) ? thx_camera_path_data_frame(flight, f) : f;
+            if ((size_t)df > nf)
+                st = nf && flight && !thx_camera_path_data_frame(flight, f)
+                         ? thx_error(ctx, THX_EINPUT, "%s: the flight runs to frame %d, the data has %zu frames: give the data "
+                                     "frame of some keys (data N)", keys_path, a_last, nf)
+                         : thx_error(ctx, THX_EINPUT, "%s: movie frame %d shows data frame %d: the data has %zu frames",
+                                     keys_path, f, df, nf);
+            /* arrows on every frame: refused before anything is drawn when some frame has no currents */
+            else if (o.p.arrows && (!df || thx_picture_currents_column(&d, df - 1) < 0))
                 st = thx_error(ctx, THX_EINPUT, "--arrows: the solution has no currents for frame %d of --frames %d:%d "
-                               "(thorax forward --currents %d-%d)", f, a_first, a_last, a_first, a_last);
+                               "(thorax forward --currents %d-%d)", df, a_first, a_last, a_first, a_last);
+        }
     }
     /* the movie is claimed before any frame is drawn: a user's file of that name stops the run */
     int want_movie = !(mp4 && !strcmp(mp4, "none"));
@@ -139,7 +189,7 @@ int cmd_animate(int argc, char **argv)
     int may_keep = 0;
     if (st == THX_OK) {
         char sig[8192], sigpath[PATH_MAX + 64];
-        animation_signature(argc, argv, &o, sig, sizeof sig);
+        animation_signature(argc, argv, &o, keys_path, sig, sizeof sig);
         snprintf(sigpath, sizeof sigpath, "%s/frames.settings", out_dir);
         char *old = NULL;
         size_t olen = 0;
@@ -171,7 +221,13 @@ int cmd_animate(int argc, char **argv)
             old->h == o.p.h) {
             kept++; /* resumable: a complete PNG of the right size is kept */
         } else {
-            st = thx_picture_draw(ctx, &o.p, &d, rr, font, f - 1, img, &nan);
+            int df = f;
+            if (flight) { /* the flight's camera, and its data frame (else the movie frame's own, or none) */
+                o.p.have_camera = 1;
+                thx_camera_path_camera(flight, f, &o.p.cam);
+                df = !nf ? 1 : thx_camera_path_data_frame(flight, f) ? thx_camera_path_data_frame(flight, f) : f;
+            }
+            st = thx_picture_draw(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
             if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
         }
         thx_image_destroy(&old);
@@ -194,6 +250,8 @@ int cmd_animate(int argc, char **argv)
     thx_font_close(&font);
     thx_renderer_destroy(&rr);
     thx_picture_data_free(&d);
+    thx_camera_path_destroy(&flight);
+    thx_camera_keys_free(&keys);
     thx_ctx_destroy(&ctx);
     return rc;
 }

@@ -96,8 +96,9 @@ static int parse_region(void *user, const cli_opt *opt, const char *v)
     if (eq) *eq = 0;
     if (!buf[0] || strlen(buf) >= 64 || (eq && (!eq[1] || strlen(eq + 1) >= 64)) || (!colon && !eq))
         return cli_usage_error("mesh", "--region %s: expected NAME=NEWNAME, NAME:SIGMA or NAME=NEWNAME:SIGMA", v);
-    snprintf(o->region_set[o->n_region_set].name, 64, "%s", buf);
-    snprintf(o->region_set[o->n_region_set].rename, 64, "%s", eq ? eq + 1 : "");
+    /* both are shorter than 64 (checked above): copied whole, with their NUL */
+    memcpy(o->region_set[o->n_region_set].name, buf, strlen(buf) + 1);
+    memcpy(o->region_set[o->n_region_set].rename, eq ? eq + 1 : "", eq ? strlen(eq + 1) + 1 : 1);
     o->region_set[o->n_region_set].sigma = sigma;
     o->n_region_set++;
     return 0;

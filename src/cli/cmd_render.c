@@ -316,6 +316,26 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->p.trace,
                        .help = "a signal under the picture with a marker at the frame: an ECG lead (I..V6, from the "
                                "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
+    t[n++] = (cli_opt){.name = "--isosurface", .type = CLI_STRING, .meta = "VALUES", .s = &o->p.isosurface,
+                       .help = "equipotential surfaces from --solution's volume potentials (thorax forward --volume): "
+                               "values '-0.5,0,0.5' (a single whole number is a count: write '2.0' for the value), a count '5', or percentages of the scale's range '25%,75%'; "
+                               "drawn translucent as the surface 'equipotentials'"};
+    t[n++] = (cli_opt){.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .sv = o->p.slices,
+                       .count = &o->p.n_slices, .max = 8,
+                       .help = "a plane through the volume coloured by potential (with --style's bands or contour "
+                               "lines): x=MM, y=MM, z=MM or PX,PY,PZ:NX,NY,NZ; the surface 'slices'; at most 8"};
+    t[n++] = (cli_opt){.name = "--slice-current", .type = CLI_FLAG, .i = &o->p.slice_current,
+                       .help = "colour the slices by |J| per tetrahedron (their own bar) instead of the potential"};
+    t[n++] = (cli_opt){.name = "--streamlines", .type = CLI_STRING, .meta = "SEEDS", .flags = CLI_REPEAT,
+                       .sv = o->p.streamlines, .count = &o->p.n_streamlines, .max = 4,
+                       .help = "current streamlines from --solution's volume potentials, traced both ways from the seeds "
+                               "point:X,Y,Z, line:X,Y,Z:X,Y,Z:N, sphere:X,Y,Z:R:N, region:NAME:N (on the heart's "
+                               "surface for the heart) or density:N; tubes named 'streamlines', coloured by |J|; at most 4"};
+    t[n++] = (cli_opt){.name = "--stream-radius", .type = CLI_REAL, .meta = "MM", .d = &o->p.stream_radius,
+                       .unit = "mm", .rule = CLI_GT, .bad = "--stream-radius must be positive (mm)",
+                       .def = "0.4% of the model's diagonal", .help = "the streamline tubes' radius"};
+    t[n++] = (cli_opt){.name = "--stream-potential", .type = CLI_FLAG, .i = &o->p.stream_potential,
+                       .help = "colour the streamlines by the potential (the equipotentials' scale) instead of |J|"};
     t[n++] = (cli_opt){.name = "--arrows", .type = CLI_FLAG, .fn = set_arrows,
                        .help = "current density arrows (the solution's currents_node, for the frame shown)"};
     t[n++] = (cli_opt){.name = "--arrow-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->p.arrow_spacing,

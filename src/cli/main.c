@@ -28,10 +28,11 @@ static const struct {
     {"inverse", cmd_inverse, "the inverse problem: heart-surface potentials from body-surface potentials, regularized"},
     {"verify", cmd_verify, "the finite-element solver against analytic solutions: convergence table"},
     {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
+    {"field", cmd_field, "inside the volume: equipotential surfaces and slices of a solution (VTP, OBJ)"},
     {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},
     {"animate", cmd_animate, "one picture per frame and an MP4 movie (ffmpeg), resumable"},
     {"view", cmd_view, "the interactive viewer (GTK 4): linked surfaces, frames, picking, scripts"},
-    {"streamlines", cmd_field_streamlines, "current streamlines of a forward solution (thorax field --streamlines, issue 16)"},
+    {"streamlines", cmd_field_streamlines, "current streamlines of a solution, as tubes or lines (VTP, OBJ); also thorax field --streamlines"},
 };
 #define N_COMMANDS (sizeof commands / sizeof commands[0])
 

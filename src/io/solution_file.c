@@ -56,3 +56,27 @@ thx_status thx_solution_read_volume(thx_ctx *ctx, const char *dir, thx_model **m
     }
     return st;
 }
+
+thx_status thx_solution_domain(thx_ctx *ctx, const char *dir, const thx_volume *v, unsigned char *use)
+{
+    char path[PATH_MAX + 64];
+    snprintf(path, sizeof path, "%s/solution.json", dir);
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    free(text);
+    const cJSON *pr = cJSON_GetObjectItemCaseSensitive(j, "problem");
+    thx_status st = THX_OK;
+    int whole = 0;
+    if (!cJSON_IsString(pr))
+        st = thx_error(ctx, THX_EINPUT, "%s: no \"problem\"", path);
+    else if (!strcmp(pr->valuestring, "dipoles") || !strcmp(pr->valuestring, "defibrillation"))
+        whole = 1;
+    else if (strcmp(pr->valuestring, "epicardial") && strcmp(pr->valuestring, "transfer matrix (epicardial)"))
+        st = thx_error(ctx, THX_EINPUT, "%s: unknown problem \"%s\"", path, pr->valuestring);
+    cJSON_Delete(j);
+    if (st != THX_OK) return st;
+    for (size_t r = 0; r < v->n_regions; r++) use[r] = (unsigned char)(whole || strcmp(v->regions[r].name, "heart") != 0);
+    return THX_OK;
+}

@@ -759,16 +759,14 @@ static int try_slide(imesh *M, int32_t t, size_t *count)
                 for (int j = 0; j < 3; j++) ww[j] = w[j] + step * dir[di][j];
                 /* on the dyadic grid; the corner weight left out stays exactly zero */
                 int ok = 1;
-                double sum = 0;
-                int last = z >= 0 ? (z + 2) % 3 : 2;
                 for (int j = 0; j < 3; j++) {
                     if (j == z || j == (z >= 0 ? (z + 1) % 3 : 0)) continue;
                     ww[j] = ldexp(nearbyint(ldexp(ww[j], (int)bits)), -(int)bits);
                 }
-                (void)last;
                 if (z >= 0) { ww[z] = 0; ww[(z + 1) % 3] = 1 - ww[(z + 2) % 3]; }
                 else ww[0] = 1 - ww[1] - ww[2];
-                for (int j = 0; j < 3; j++) { if (j != z && !(ww[j] > 0 && ww[j] < 1)) ok = 0; sum += ww[j]; }
+                for (int j = 0; j < 3; j++)
+                    if (j != z && !(ww[j] > 0 && ww[j] < 1)) ok = 0;
                 if (!ok) continue;
                 double p[3];
                 slide_point(M, r, ww, p);

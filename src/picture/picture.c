@@ -235,6 +235,9 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
         const thx_picture_look *look = NULL;
         for (int k = 0; k < o->n_look; k++)
             if (!strcmp(o->look[k].name, m->surf[s]->name)) look = &o->look[k];
+        if ((o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART && o->mode != THX_DRAW_WIRE &&
+            o->mode != THX_DRAW_POINTS && o->mode != THX_DRAW_ORIENTATION)
+            r->color[3] = 0.2f; /* the volume's cuts inside are what is shown: the body around them faint */
         if (look) {
             r->mode = look->mode;
             if (look->opacity >= 0) r->color[3] = look->opacity;
@@ -256,7 +259,8 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             r->cmap = o->cmap;
             scale_for(o, d, (int)s, (int)f, &r->scale);
             r->contour_color[3] = 1;
-            r->color[3] = look && look->opacity >= 0 ? look->opacity : 1;
+            r->color[3] = look && look->opacity >= 0 ? look->opacity
+                          : (o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART ? 0.2f : 1;
             if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
                 b->main_surface = (int)s;
             }
@@ -380,6 +384,17 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
             for (size_t k = 0; k < m->n_surfaces && k < THX_PICTURE_SURFACES && s < 0; k++)
                 if (m->surf[k] == r->surf) s = (int)k;
             int map = s >= 0 && d->series[s] && d->map[s][d->active[s]];
+            int field = -1;
+            for (int q = 0; q < 3 && s < 0 && d->volume; q++)
+                if (r->surf == &d->field_surf[q]) field = q;
+            if (field >= 0) {
+                /* equipotentials, slices, streamlines: the volume's potentials, or |J| */
+                char unit[16];
+                int current = d->field_current[field];
+                snprintf(unit, sizeof unit, current ? "A/m^2 per %.4s" : "%.15s", d->volume->unit);
+                add_bar(bars, &r->scale, (int)r->cmap, current ? "|J|" : "potential", unit, r->surf->name);
+                continue;
+            }
             add_bar(bars, &r->scale, (int)r->cmap, map ? "activation" : "potential",
                     s >= 0 && d->series[s] ? d->series[s]->unit : "", r->surf->name);
         }
@@ -472,10 +487,13 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     thx_clip_plane clip;
     int n_clip = thx_picture_clip(ctx, o, d, &clip);
     if (n_clip < 0) { free(b); return THX_EINPUT; }
+    st = picture_field_build(ctx, o, d, frame);
+    if (st != THX_OK) { free(b); return st; }
     for (size_t s = 0; s < (o->panels ? m->n_surfaces : 1); s++) {
         int only = o->panels ? (int)s : -1;
         memset(b, 0, sizeof *b);
         build_surfaces(o, d, frame, b, only);
+        if (!o->panels) b->n += picture_field_surfaces(o, d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
         if (b->n == 0) continue;
         if (!o->panels) {
             thx_status sa = build_arrows(ctx, o, d, frame, b);

@@ -49,6 +49,9 @@ void thx_picture_data_free(thx_picture_data *d)
     thx_series_destroy(&d->ecg);
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
+    picture_field_free(d);
+    free(d->field_use);
+    d->field_use = NULL;
     thx_model_destroy(&d->m);
 }
 
@@ -82,9 +85,15 @@ static thx_status check_names(thx_ctx *ctx, const thx_picture_opts *o, const thx
     size_t len = 0;
     for (size_t s = 0; s < m->n_surfaces && len < sizeof list - 80; s++)
         len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", s ? ", " : "", m->surf[s]->name);
+    if (o->isosurface) len += (size_t)snprintf(list + len, sizeof list - len, ", equipotentials");
+    if (o->n_slices && len < sizeof list - 20) len += (size_t)snprintf(list + len, sizeof list - len, ", slices");
+    if (o->n_streamlines && len < sizeof list - 20) len += (size_t)snprintf(list + len, sizeof list - len, ", streamlines");
     for (int k = 0; k < o->n_only + o->n_look + o->n_whole; k++) {
         const char *name = k < o->n_only ? o->only[k] : k < o->n_only + o->n_look ? o->look[k - o->n_only].name
                                                                                    : o->whole[k - o->n_only - o->n_look];
+        if ((o->isosurface && !strcmp(name, "equipotentials")) || (o->n_slices && !strcmp(name, "slices")) ||
+            (o->n_streamlines && !strcmp(name, "streamlines")))
+            continue; /* the volume's cuts (field_layers.c) */
         if (surface_by_name(m, name) < 0)
             return thx_error(ctx, THX_EINPUT, "%s: the model has no surface '%s' (it has %s)",
                              k < o->n_only ? "--only" : k < o->n_only + o->n_look ? "--surface" : "--no-clip", name, list);
@@ -250,6 +259,21 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         }
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
+        cJSON *vo = files ? cJSON_GetObjectItem(files, "volume") : NULL;
+        if (st == THX_OK && (o->isosurface || o->n_slices || o->n_streamlines)) {
+            if (!cJSON_IsString(vo))
+                st = thx_error(ctx, THX_EINPUT, "%s: %s needs the volume potentials: run thorax forward ... --volume",
+                               o->solution, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
+            else {
+                snprintf(path, sizeof path, "%s/%s", o->solution, vo->valuestring);
+                st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->volume);
+            }
+            if (st == THX_OK && !d->m->volume)
+                st = thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, model_dir);
+            if (st == THX_OK && d->volume->n_rows != d->m->volume->n_nodes)
+                st = thx_error(ctx, THX_EINPUT, "%s: %zu rows, the model's volume mesh has %zu nodes", path,
+                               d->volume->n_rows, d->m->volume->n_nodes);
+        }
         if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
@@ -438,7 +462,13 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 
 thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
 {
+    if ((o->isosurface || o->n_slices || o->n_streamlines) && !o->solution) {
+        memset(d, 0, sizeof *d);
+        return thx_error(ctx, THX_EINPUT, "%s: needs --solution DIR (a solution with volume potentials)",
+                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
+    }
     THX_CHECK(load_data(ctx, o, d));
+    THX_CHECK(picture_field_load(ctx, o, d));
     THX_CHECK(picture_view_frame(ctx, o, d));
     if (o->tetrahedra) {
         if (!d->m || !d->m->volume)

@@ -108,12 +108,17 @@ thx_status picture_view_frame(thx_ctx *ctx, thx_picture_opts *o, const thx_pictu
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam)
 {
     if (o->have_camera) { *cam = o->cam; return; }
+    thx_picture_view_camera(o, d, o->view, aspect, cam);
+}
+
+void thx_picture_view_camera(const thx_picture_opts *o, const thx_picture_data *d, int view, double aspect, thx_camera *cam)
+{
     double lo[3], hi[3], qlo[3], qhi[3];
     thx_picture_bounds(d, lo, hi);
     box_to_frame(o, lo, hi, qlo, qhi);
     /* the standard view in the anatomical frame, carried back to the model's axes */
     thx_camera c;
-    thx_camera_view(&c, o->view, qlo, qhi, aspect);
+    thx_camera_view(&c, (thx_view)view, qlo, qhi, aspect);
     *cam = c;
     from_frame(o, c.eye, cam->eye);
     from_frame(o, c.center, cam->center);

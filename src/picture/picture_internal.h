@@ -14,4 +14,13 @@ thx_status picture_view_frame(thx_ctx *ctx, thx_picture_opts *o, const thx_pictu
  * after it; at most max): out[k] holds region region[k]; *n_out of them (tets.c). */
 thx_status picture_tet_surfaces(thx_ctx *ctx, const thx_volume *v, const thx_clip_plane *cp, thx_surface **out,
                                 int *region, int max, int *n_out);
+/* Equipotential surfaces and slices (field_layers.c): picture_field_load checks the options against
+ * the volume potentials read (the plane specifications, the value list) and finds their range;
+ * picture_field_build makes the frame's meshes (kept until another frame is asked for);
+ * picture_field_surfaces appends them to rs (at most max) as surfaces with values and scales;
+ * picture_field_free frees what the two made. */
+thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
+thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);
+size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, thx_render_surface *rs, size_t max);
+void picture_field_free(thx_picture_data *d);
 #endif

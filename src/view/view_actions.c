@@ -606,6 +606,11 @@ static void do_record_all(view_app *a, GSimpleAction *act, GVariant *v)
     view_record_all(a, s[0] ? s : "thorax-view-frames");
 }
 
+static void do_fly(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    view_fly(a, g_variant_get_string(v, NULL));
+}
+
 static void do_save_session(view_app *a, GSimpleAction *act, GVariant *v)
 {
     const char *s = g_variant_get_string(v, NULL);
@@ -740,6 +745,7 @@ static const action_def ACTIONS[] = {
     {"record", "s", NULL, do_record, {"<Control>r"}, "''", "record every frame drawn into a directory"},
     {"record-stop", "s", NULL, do_record_stop, {"<Control><Shift>r"}, "''", "stop recording (and make an MP4 at the path given)"},
     {"record-all", "s", NULL, do_record_all, {"<Control><Alt>r"}, "''", "record every frame, unattended, and make DIR/animation.mp4"},
+    {"fly", "s", NULL, do_fly, {NULL}, NULL, "fly the camera along a camera key file (as thorax animate --keys), frame by frame"},
     {"save-session", "s", NULL, do_save_session, {"<Control><Shift>s"}, "''", "save the session as a script of options"},
     {"pick", "s", NULL, do_pick, {NULL}, NULL, "pick at X,Y (window pixels; a click does the same)"},
     {"plot-zoom", "d", NULL, do_plot_zoom, {"<Alt>Page_Up"}, "2.0", "the traces' time axis zoomed by a factor about the frame (the wheel over them; 1: all)"},

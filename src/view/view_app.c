@@ -230,6 +230,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         free(w);
     }
     thx_edit_session_destroy(&a.edit);
+    thx_camera_path_destroy(&a.flight);
     thx_picture_data_free(&a.d);
     if (rc != 0 && a.status == 0) a.status = 1;
     return a.status;

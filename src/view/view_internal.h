@@ -6,6 +6,7 @@
 
 #include "thorax/edit/edit.h"
 #include "thorax/picture/picture.h"
+#include "thorax/render/camera_path.h"
 #include "thorax/view/view.h"
 
 typedef struct view_app view_app;
@@ -93,6 +94,8 @@ struct view_app {
     char rec_dir[1024];
     int recording, rec_count, rec_first;
     int sweep_next;            /* record-all: the next frame to draw (while sweep_id) */
+    thx_camera_path *flight;   /* action fly: the key-framed flight under way (while sweep_id), its next movie frame */
+    int fly_next;
     /* benchmarks (bench/view.sh): N steps of a kind, each drawn before the next, timed */
     int bench_kind, bench_n, bench_i;  /* 1 rotate 1 degree, 2 frame step, 3 pick */
     gint64 bench_t0, bench_last;
@@ -145,6 +148,9 @@ void view_script_start(view_app *a);
 thx_status view_save_session(view_app *a, const char *path);
 thx_status view_movie(view_app *a, const char *path);
 void view_record_all(view_app *a, const char *dir);
+/* Flies every window's camera along a camera key file (thorax animate --keys), one movie frame drawn
+ * after another, each at the flight's data frame; frames are recorded when recording is on. */
+void view_fly(view_app *a, const char *keys);
 void view_bench(view_app *a, int kind, int n);
 
 /* view_edit.c */

@@ -293,6 +293,63 @@ void view_record_all(view_app *a, const char *dir)
     a->sweep_id = g_timeout_add(5, sweep_tick, a);
 }
 
+/* ---- a key-framed flight ---- */
+
+static gboolean fly_tick(gpointer user)
+{
+    view_app *a = user;
+    if (busy(a)) return G_SOURCE_CONTINUE;
+    if (a->flight && a->fly_next <= thx_camera_path_last(a->flight)) {
+        thx_camera cam;
+        thx_camera_path_camera(a->flight, a->fly_next, &cam);
+        for (int k = 0; k < a->n_win; k++) { /* the window's camera is the flight's: no turn, zoom or pan on it */
+            view_win *w = a->win[k];
+            w->o.have_camera = 1;
+            w->o.cam = cam;
+            w->q[0] = 1, w->q[1] = w->q[2] = w->q[3] = 0;
+            w->zoom = 1;
+            w->pan[0] = w->pan[1] = 0;
+        }
+        int df = thx_camera_path_data_frame(a->flight, a->fly_next);
+        if (!df) df = a->fly_next;
+        if (a->n_frames > 0) g_action_group_activate_action(G_ACTION_GROUP(a->gapp), "frame", g_variant_new_int32(df));
+        view_redraw_all(a);
+        a->fly_next++;
+        return G_SOURCE_CONTINUE;
+    }
+    view_set_info(a, "flew %d frames", a->flight ? thx_camera_path_last(a->flight) : 0);
+    thx_camera_path_destroy(&a->flight);
+    a->sweep_id = 0;
+    return G_SOURCE_REMOVE;
+}
+
+void view_fly(view_app *a, const char *path)
+{
+    if (a->sweep_id) { view_set_info(a, "fly: a sweep is under way"); a->status = 1; return; }
+    view_win *w = a->win[0];
+    thx_camera_keys keys;
+    thx_camera views[6];
+    for (int v = 0; v < 6; v++) thx_picture_view_camera(&w->o, &a->d, v, (double)w->o.w / w->o.h, &views[v]);
+    thx_status st = thx_camera_keys_read(a->ctx, path, &keys);
+    if (st == THX_OK) st = thx_camera_keys_resolve(a->ctx, &keys, views);
+    if (st == THX_OK) st = thx_camera_path_create(a->ctx, &keys, &a->flight);
+    thx_camera_keys_free(&keys);
+    for (int f = 1; st == THX_OK && a->n_frames > 0 && f <= thx_camera_path_last(a->flight); f++) {
+        int df = thx_camera_path_data_frame(a->flight, f);
+        if ((df ? df : f) > a->n_frames)
+            st = thx_error(a->ctx, THX_EINPUT, "%s: movie frame %d shows data frame %d: the data has %d frames%s", path, f,
+                           df ? df : f, a->n_frames, df ? "" : " (give the data frame of some keys: data N)");
+    }
+    if (st != THX_OK) {
+        thx_camera_path_destroy(&a->flight);
+        snprintf(a->info, sizeof a->info, "fly: %s", thx_ctx_message(a->ctx));
+        a->status = 1;
+        return;
+    }
+    a->fly_next = 1;
+    a->sweep_id = g_timeout_add(5, fly_tick, a);
+}
+
 /* ---- benchmarks ---- */
 
 static int cmp_ms(const void *x, const void *y)

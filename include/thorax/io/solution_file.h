@@ -26,6 +26,15 @@ extern "C" {
 thx_status thx_solution_read_volume(thx_ctx *ctx, const char *dir, thx_model **model, thx_series **volume,
                                     char *model_dir, size_t model_dir_size);
 
+/*
+ * The regions of v where the solution in DIR holds potentials: use[r] = 1 or 0 for each of the
+ * v->n_regions regions. The heart-surface problems ("epicardial", "transfer matrix (epicardial)")
+ * prescribe the heart's surface and leave its interior (a region named "heart") out of the solve:
+ * its nodes carry no solution; dipoles and defibrillation solve the whole conductor. An unknown
+ * problem is THX_EINPUT naming the file. (The same rule as thx_forward_* use, src/fem/forward.c.)
+ */
+thx_status thx_solution_domain(thx_ctx *ctx, const char *dir, const struct thx_volume *v, unsigned char *use);
+
 #ifdef __cplusplus
 }
 #endif

@@ -18,6 +18,7 @@
 #include "thorax/model/series.h"
 #include "thorax/render/image.h"
 #include "thorax/render/render.h"
+#include "thorax/field/streamline.h"
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -128,6 +129,27 @@ typedef struct {
     /* orientation letters (A/P, L/R, S/I of the anatomical frame) at the middle of each edge of
        every panel, for the camera of that panel (thx_picture_orientation) */
     int orientation;
+    /* inside the volume (paper 4.3; thorax/field/field.h), from the solution's volume potentials
+       (thorax forward --volume): equipotential surfaces at the values of `isosurface` (a list, a
+       count or percentages of the range of the colour scale's scope: thx_field_values_parse),
+       drawn as one surface named "equipotentials", translucent, each in its value's colour; slices
+       by the planes `slices` (thx_field_plane_parse), named "slices", coloured by potential (with
+       the picture's data style: bands, contour lines) or, with slice_current, by |J| per
+       tetrahedron under a scale of its own. Both are clipped like the model unless named in
+       `whole`, and take --surface looks by those names. */
+    const char *isosurface;
+    const char *slices[8];
+    int n_slices;
+    int slice_current;
+    /* current streamlines (thorax/field/streamline.h) from the volume potentials' J = -sigma grad
+       phi averaged to the nodes: one seed specification each (point:, line:, sphere:, region:,
+       density:), traced both ways with RK2, drawn as tubes of stream_radius mm (0: 0.4% of the
+       model's diagonal) named "streamlines", coloured by |J| (viridis, a bar of their own) or, with
+       stream_potential, by the potential under the equipotentials' scale */
+    const char *streamlines[4];
+    int n_streamlines;
+    double stream_radius;
+    int stream_potential;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
@@ -157,7 +179,19 @@ typedef struct {
     int n_tets;
     thx_series *ecg;          /* 12-lead (trace) */
     thx_series *currents;     /* currents_node, for arrows */
-    thx_series *volume;       /* volume potentials (unused for now) */
+    thx_series *volume;       /* the solution's volume potentials (isosurface, slices), or NULL */
+    double vmin, vmax;        /* their finite range over the series */
+    struct thx_field_mesh *field[2]; /* equipotential surfaces, slices: of frame field_frame (owned) */
+    thx_stream_tubes *tubes;         /* streamlines as tubes, of frame field_frame (owned) */
+    size_t n_stream_lines;           /* the lines traced for them */
+    thx_surface field_surf[3];       /* the three as surfaces to draw (arrays borrowed or field_own) */
+    double *field_values[3];         /* the value drawn at each vertex */
+    double *field_own[2];            /* slices by |J|: their own vertices, 3 per triangle (owned) */
+    int32_t *field_own_tri;          /* ... and triangles */
+    double field_lo[3], field_hi[3]; /* the range their scale covers at field_frame */
+    unsigned char field_current[3];  /* 1: drawn by |J| (a bar of its own), 0: by potential */
+    unsigned char *field_use;        /* per volume region: in the solution's domain (thx_solution_domain) */
+    int field_frame;                 /* -1: none built */
     double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
     unsigned char sranged[THX_PICTURE_SURFACES];
     const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
@@ -254,6 +288,9 @@ int thx_picture_orientation(const thx_picture_opts *o, const thx_picture_data *d
 void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4]);
 /* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes. */
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);
+/* The camera of standard view `view` (a thx_view) whatever o->have_camera says (the named views of
+ * a camera key file, thorax/render/camera_path.h). */
+void thx_picture_view_camera(const thx_picture_opts *o, const thx_picture_data *d, int view, double aspect, thx_camera *cam);
 /* The model's bounding box (all surfaces). */
 void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3]);
 /* The clip plane o->clip asks for, in the model's axes; 0 none, 1 one (in *p), -1 a bad spec (message in ctx). */

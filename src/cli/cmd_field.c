@@ -1,0 +1,364 @@
+/* thorax field: inside the volume of a forward solution (paper 4.3, issue 16) as data for ParaView
+ * and other tools: equipotential surfaces (--isosurface) and slices (--slice, with --contours),
+ * per frame, written as VTK XML PolyData (.vtp; a directory of them with a .pvd for several
+ * frames) or OBJ. The library does the work (thorax/field/field.h); here the solution is read,
+ * the regions and frames chosen, |J| per tetrahedron computed (thx_fem_currents) and every output
+ * claimed before anything is written. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli/cli.h"
+#include "cli/cli_export.h"
+#include "thorax/fem/fem.h"
+#include "thorax/field/field.h"
+#include "thorax/io/export_data.h"
+#include "thorax/io/solution_file.h"
+
+#define MAX_SLICES 64
+
+static int ends_with(const char *s, const char *tail)
+{
+    size_t a = strlen(s), b = strlen(tail);
+    return a >= b && !strcmp(s + a - b, tail);
+}
+
+/* What one run makes of each frame. */
+typedef struct {
+    const char *iso;           /* --isosurface SPEC, or NULL */
+    const char *contours;      /* --contours SPEC, or NULL */
+    thx_field_plane plane[MAX_SLICES];
+    size_t n_planes;
+    const unsigned char *use;  /* per region */
+} field_request;
+
+/* The values of SPEC for a frame whose potentials span [lo, hi]. A frame whose potentials are all
+ * one value (before the beat, a silent interval) has no range for a count or percentages: no
+ * values there, with a warning (the texts were checked once before the first frame). */
+static thx_status frame_values(thx_ctx *ctx, const char *spec, const char *what, double lo, double hi, double **v,
+                               size_t *n)
+{
+    if (hi > lo) return thx_field_values_parse(ctx, spec, lo, hi, v, n);
+    thx_ctx *quiet = NULL;
+    if (thx_ctx_create(&quiet)) return THX_ENOMEM;
+    thx_status st = thx_field_values_parse(quiet, spec, lo, hi, v, n);
+    thx_ctx_destroy(&quiet);
+    if (st == THX_ENOMEM) return thx_error(ctx, THX_ENOMEM, "out of memory");
+    if (st) thx_log(ctx, THX_LOG_WARN, "the potentials are all %g in this frame: no %s at \"%s\"", lo, what, spec);
+    return THX_OK;
+}
+
+/* The frame's cut: isosurfaces (tags 0..ni-1) then slices (tags ni..), contours on the slices. The
+ * values go to *iso (n_iso) and *cvals (n_c) (caller frees). */
+static thx_status make_frame(thx_ctx *ctx, const thx_volume *v, const double *phi, const field_request *rq,
+                             thx_field_mesh *out, double **iso, size_t *n_iso, double **cvals, size_t *n_c)
+{
+    thx_status st = THX_OK;
+    thx_field_mesh *s = NULL;
+    *iso = *cvals = NULL;
+    *n_iso = *n_c = 0;
+    /* the range of the potentials over the nodes of the regions cut */
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        if (!rq->use[v->region[t]]) continue;
+        for (int k = 0; k < 4; k++) {
+            double p = phi[v->tet[4 * t + k]];
+            if (p < lo) lo = p;
+            if (p > hi) hi = p;
+        }
+    }
+    if (!(lo <= hi)) return thx_error(ctx, THX_EINPUT, "no tetrahedron in the regions chosen");
+    thx_field_mesh_clear(out);
+    if (rq->iso) {
+        THX_TRY(frame_values(ctx, rq->iso, "equipotential surface", lo, hi, iso, n_iso));
+        THX_TRY(thx_field_isosurface(ctx, v, phi, *iso, *n_iso, rq->use, out));
+    }
+    if (rq->n_planes) {
+        THX_TRY(thx_field_mesh_create(ctx, &s));
+        THX_TRY(thx_field_slice(ctx, v, phi, rq->plane, rq->n_planes, rq->use, s));
+        if (rq->contours) {
+            THX_TRY(frame_values(ctx, rq->contours, "contour", lo, hi, cvals, n_c));
+            THX_TRY(thx_field_contours(ctx, s, *cvals, *n_c));
+        }
+        THX_TRY(thx_field_mesh_append(ctx, out, s, (int32_t)*n_iso));
+    }
+done:
+    thx_field_mesh_destroy(&s);
+    return st;
+}
+
+typedef struct {
+    field_request *rq;
+} parse_user;
+
+static int add_slice(void *user, const cli_opt *opt, const char *arg)
+{
+    (void)opt;
+    field_request *rq = ((parse_user *)user)->rq;
+    if (rq->n_planes == MAX_SLICES) return cli_usage_error("field", "at most %d --slice planes", MAX_SLICES);
+    thx_ctx *ctx = NULL;
+    thx_ctx_create(&ctx);
+    thx_status st = thx_field_plane_parse(ctx, arg, &rq->plane[rq->n_planes]);
+    int rc = st ? cli_usage_error("field", "--slice %s", thx_ctx_message(ctx)) : 0;
+    thx_ctx_destroy(&ctx);
+    if (!rc) rq->n_planes++;
+    return rc;
+}
+
+int cmd_field(int argc, char **argv)
+{
+    /* thorax field SOLUTION --streamlines ...: the streamlines' own options (cmd_field_streamlines.c) */
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--streamlines")) return cmd_field_streamlines(argc, argv);
+    int streamlines_flag = 0;
+    const char *cmd = "field";
+    const char *out = NULL, *frames = "1";
+    const char **regions = calloc((size_t)argc + 1, sizeof *regions);
+    int n_regions = 0, verbose = 0, rc = 0;
+    field_request rq;
+    memset(&rq, 0, sizeof rq);
+    parse_user pu = {&rq};
+    if (!regions) {
+        fprintf(stderr, "thorax field: out of memory\n");
+        return 1;
+    }
+    cli_opt opts[] = {
+        {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "OUT", .s = &out,
+         .help = "OUT.vtp (VTK XML PolyData) or OUT.obj for one frame; a directory for several (OUT/field_FFFF.vtp per "
+                 "frame and OUT/field.pvd with the series' times)"},
+        {.name = "--frame", .type = CLI_STRING, .meta = "N|LIST|all", .s = &frames,
+         .help = "the frames: 1-based N, A:B[:STEP] items separated by commas, or all"},
+        {.name = "--isosurface", .type = CLI_STRING, .meta = "SPEC", .s = &rq.iso,
+         .help = "equipotential surfaces: values (-5,0,5), a count (10: evenly inside the frame's range, ends "
+                 "excluded) or percentages of the range (25%,50%)"},
+        {.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .fn = add_slice, .max = MAX_SLICES,
+         .help = "a plane cut exactly through the tetrahedra: x=MM, y=MM, z=MM or PX,PY,PZ:NX,NY,NZ (a point and a "
+                 "normal, mm)"},
+        {.name = "--contours", .type = CLI_STRING, .meta = "SPEC", .s = &rq.contours,
+         .help = "contour lines on the slices at these potentials (as --isosurface's SPEC)"},
+        {.name = "--region", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = regions, .count = &n_regions,
+         .max = argc, .def = "every region but \"heart\"",
+         .help = "cut only this tissue region's tetrahedra"},
+        {.name = "--streamlines", .type = CLI_FLAG, .i = &streamlines_flag,
+         .help = "current streamlines instead of cuts: thorax field SOLUTION --streamlines --seed ... (the same as "
+                 "thorax streamlines; its options: thorax field --streamlines --help)"},
+        {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
+        {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
+    };
+    cli_command c = {
+        .name = cmd,
+        .usage = "SOLUTION [--isosurface] [--slice]... [--contours] [--frame] [--region]... -o\n"
+                 "SOLUTION --streamlines [options of thorax streamlines]",
+        .about = "Cuts the volume potentials of SOLUTION (a directory written by\n"
+                 "`thorax forward ... --volume`) by marching tetrahedra: equipotential surfaces\n"
+                 "at the --isosurface values and slices by the --slice planes, exact for the\n"
+                 "piecewise-linear potentials, with the potential at every vertex, per triangle\n"
+                 "the value or plane and |J| of the tetrahedron it lies in, and --contours as\n"
+                 "lines on the slices. The surfaces are closed wherever they do not reach the\n"
+                 "boundary of the regions cut.\n",
+        .epilog = "Point data \"potential\"; cell data \"iso_value\" (NaN on slices), \"plane\"\n"
+                  "(1-based, 0 on isosurfaces), \"current_magnitude\" (|sigma grad phi| of the\n"
+                  "tetrahedron, A/m^2 for V), \"contour_value\" (lines), \"tetrahedron\" (0-based);\n"
+                  "docs/formats.md.\n"
+                  "Each file is written atomically. Exit status: 0 ok, 1 error, 2 bad usage.\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+        .user = &pu,
+    };
+    int pr = cli_parse(&c, argc, argv);
+    if (pr) {
+        free(regions);
+        return CLI_EXIT(pr);
+    }
+    if (c.n_pos != 1) {
+        rc = c.n_pos ? cli_usage_error(cmd, "unexpected argument '%s' (one SOLUTION directory expected)", c.pos[1])
+                     : cli_usage_error(cmd, "no SOLUTION directory given");
+        free(regions);
+        return rc;
+    }
+    if (!out || (!rq.iso && !rq.n_planes) || (rq.contours && !rq.n_planes)) {
+        rc = cli_usage_error(cmd, !out ? "-o OUT is required"
+                                  : rq.contours && !rq.n_planes ? "--contours are drawn on slices: give --slice"
+                                                                : "nothing to do: give --isosurface or --slice");
+        free(regions);
+        return rc;
+    }
+    const char *specs[2] = {rq.iso, rq.contours}, *spec_opt[2] = {"--isosurface", "--contours"};
+    for (int k = 0; k < 2; k++) {
+        double *vals = NULL;
+        size_t nv = 0;
+        thx_ctx *chk = NULL;
+        if (!specs[k] || thx_ctx_create(&chk)) continue;
+        if (thx_field_values_parse(chk, specs[k], 0, 1, &vals, &nv)) rc = cli_usage_error(cmd, "%s %s", spec_opt[k], thx_ctx_message(chk));
+        free(vals);
+        thx_ctx_destroy(&chk);
+        if (rc) {
+            free(regions);
+            return rc;
+        }
+    }
+    const char *sol = c.pos[0];
+    thx_ctx *ctx = cli_ctx(verbose);
+    thx_model *m = NULL;
+    thx_series *vol = NULL;
+    thx_field_mesh *mesh = NULL;
+    unsigned char *use = NULL, *sel = NULL;
+    size_t *frame = NULL, nsel = 0, n_names = 0;
+    char **names = NULL;
+    double *jt = NULL, *jm = NULL, *times = NULL;
+    thx_status st = thx_solution_read_volume(ctx, sol, &m, &vol, NULL, 0);
+    if (st) goto fail;
+    const thx_volume *v = m->volume;
+    use = thx_calloc(ctx, v->n_regions + 1, 1);
+    sel = thx_calloc(ctx, vol->n_frames + 1, 1);
+    frame = thx_calloc(ctx, vol->n_frames + 1, sizeof *frame);
+    times = thx_calloc(ctx, vol->n_frames + 1, sizeof *times);
+    if (!use || !sel || !frame || !times) {
+        st = THX_ENOMEM;
+        goto fail;
+    }
+    for (size_t r = 0; r < v->n_regions; r++) use[r] = n_regions == 0 && strcmp(v->regions[r].name, "heart") != 0;
+    for (int k = 0; k < n_regions; k++) {
+        size_t r = 0;
+        while (r < v->n_regions && strcmp(v->regions[r].name, regions[k]) != 0) r++;
+        if (r == v->n_regions) {
+            char list[1024] = "";
+            size_t o = 0;
+            for (size_t q = 0; q < v->n_regions && o < sizeof list; q++)
+                o += (size_t)snprintf(list + o, sizeof list - o, " %s", v->regions[q].name);
+            st = thx_error(ctx, THX_EINPUT, "%s: the model's volume has no region \"%s\"; it has:%s", sol, regions[k], list);
+            goto fail;
+        }
+        use[r] = 1;
+    }
+    rq.use = use;
+    if (cli_parse_frames(frames, vol->n_frames, sel)) {
+        rc = cli_usage_error(cmd, "--frame '%s': 1-based frames 1..%zu of %s, as N, A:B[:STEP] items separated by "
+                             "commas, or all", frames, vol->n_frames, sol);
+        goto end;
+    }
+    for (size_t f = 0; f < vol->n_frames; f++)
+        if (sel[f]) {
+            times[nsel] = vol->time[f];
+            frame[nsel++] = f;
+        }
+    /* the files: OUT itself, or OUT/field_FFFF.vtp per frame and OUT/field.pvd */
+    int single = ends_with(out, ".vtp") || ends_with(out, ".obj");
+    int obj = ends_with(out, ".obj");
+    if (single && nsel > 1) {
+        rc = cli_usage_error(cmd, "%zu frames go to a directory (-o DIR), not to the one file %s", nsel, out);
+        goto end;
+    }
+    int width = 4;
+    for (size_t x = vol->n_frames; x >= 10000; x /= 10) width++;
+    n_names = single ? 1 : nsel + 1;
+    names = thx_calloc(ctx, n_names, sizeof *names);
+    if (!names) {
+        st = THX_ENOMEM;
+        goto fail;
+    }
+    for (size_t k = 0; k < n_names; k++) {
+        char nm[4400];
+        if (single) snprintf(nm, sizeof nm, "%s", out);
+        else if (k == nsel) snprintf(nm, sizeof nm, "field.pvd");
+        else snprintf(nm, sizeof nm, "field_%0*zu.vtp", width, frame[k] + 1);
+        if (!(names[k] = strdup(nm))) {
+            st = thx_error(ctx, THX_ENOMEM, "out of memory");
+            goto fail;
+        }
+    }
+    char path[4400];
+    for (size_t k = 0; k < n_names; k++) {
+        if (!single && (size_t)snprintf(path, sizeof path, "%s/%s", out, names[k]) >= sizeof path) {
+            st = thx_error(ctx, THX_EINPUT, "%s: path too long", out);
+            goto fail;
+        }
+        const char *p = single ? out : path;
+        st = !single && k == nsel ? thx_export_pvd_claim(ctx, p) : thx_field_claim(ctx, p);
+        if (st) goto fail;
+    }
+    if (!single && cli_make_dirs(out) != 0) {
+        st = thx_error(ctx, THX_EIO, "%s: cannot create directory: %s", out, strerror(errno));
+        goto fail;
+    }
+    jt = thx_malloc(ctx, 3 * (v->n_tets + 1) * sizeof *jt);
+    jm = thx_malloc(ctx, (v->n_tets + 1) * sizeof *jm);
+    if (!jt || !jm) {
+        st = THX_ENOMEM;
+        goto fail;
+    }
+    THX_TRY(thx_field_mesh_create(ctx, &mesh));
+    double t0 = thx_wtime();
+    size_t tris = 0;
+    for (size_t k = 0; k < nsel; k++) {
+        const double *phi = vol->v + frame[k] * vol->n_rows;
+        double *iso = NULL, *cv = NULL;
+        size_t ni = 0, nc = 0;
+        st = make_frame(ctx, v, phi, &rq, mesh, &iso, &ni, &cv, &nc);
+        double *tagv = st ? NULL : thx_malloc(ctx, 2 * (ni + rq.n_planes + 1) * sizeof *tagv);
+        if (!st && !tagv) st = THX_ENOMEM;
+        if (!st) {
+            /* per tag: iso_value (NaN on a slice) and plane (1-based, 0 on an isosurface) */
+            double *isov = tagv, *plv = tagv + ni + rq.n_planes + 1;
+            for (size_t i = 0; i < ni + rq.n_planes; i++) {
+                isov[i] = i < ni ? iso[i] : NAN;
+                plv[i] = i < ni ? 0 : (double)(i - ni + 1);
+            }
+            thx_fem_currents(v, use, phi, jt, NULL);
+            for (size_t t = 0; t < v->n_tets; t++)
+                jm[t] = sqrt(jt[3 * t] * jt[3 * t] + jt[3 * t + 1] * jt[3 * t + 1] + jt[3 * t + 2] * jt[3 * t + 2]);
+            thx_field_write_opts o = {.tag_name = {"iso_value", "plane"}, .tag_value = {isov, plv},
+                                      .cell_scalar = jm, .cell_scalar_name = "current_magnitude", .seg_value = cv,
+                                      .has_time = 1, .time = times[k]};
+            if (!single) snprintf(path, sizeof path, "%s/%s", out, names[k]);
+            const char *p = single ? out : path;
+            char (*gname)[32] = obj ? thx_calloc(ctx, ni + rq.n_planes + 1, sizeof *gname) : NULL;
+            const char **gp = obj ? thx_calloc(ctx, ni + rq.n_planes + 1, sizeof *gp) : NULL;
+            if (obj && (!gname || !gp)) st = THX_ENOMEM;
+            for (size_t i = 0; !st && obj && i < ni + rq.n_planes; i++) {
+                if (i < ni) snprintf(gname[i], sizeof gname[i], "iso_%zu", i + 1);
+                else snprintf(gname[i], sizeof gname[i], "plane_%zu", i - ni + 1);
+                gp[i] = gname[i];
+            }
+            if (!st)
+                st = obj ? thx_field_mesh_write_obj(ctx, mesh, gp, ni + rq.n_planes, p)
+                         : thx_field_mesh_write_vtp(ctx, mesh, &o, p);
+            free(gname);
+            free(gp);
+            if (!st)
+                thx_log(ctx, THX_LOG_INFO, "frame %zu: %zu triangles (%zu points, %zu contour segments), area %.6g mm^2 -> %s",
+                        frame[k] + 1, mesh->n_tris, mesh->n_points, mesh->n_segs, thx_field_mesh_area(mesh, -1), p);
+            tris += mesh->n_tris;
+        }
+        free(tagv);
+        free(iso);
+        free(cv);
+        if (st) goto fail;
+    }
+    if (!single) {
+        snprintf(path, sizeof path, "%s/%s", out, names[nsel]);
+        st = thx_export_pvd(ctx, path, (const char *const *)names, times, nsel);
+        if (st) goto fail;
+    }
+    thx_log(ctx, THX_LOG_INFO, "%zu frames, %zu triangles, %.2f s", nsel, tris, thx_wtime() - t0);
+    goto end;
+done:
+fail:
+    rc = cli_fail(ctx, cmd, st);
+end:
+    for (size_t i = 0; names && i < n_names; i++) free(names[i]);
+    free(names);
+    free(use);
+    free(sel);
+    free(frame);
+    free(times);
+    free(jt);
+    free(jm);
+    free(regions);
+    thx_field_mesh_destroy(&mesh);
+    thx_series_destroy(&vol);
+    thx_model_destroy(&m);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
