@@ -53,7 +53,7 @@ PYEOF
 }
 run rk2 "$THREADS" --integrator rk2 --step-mm "$STEP"
 run rk4 "$THREADS" --integrator rk4 --step-mm "$STEP"
-run rk45 "$THREADS" --integrator rk45 --step-mm "$STEP" --tolerance 1e-5
+run rk45 "$THREADS" --integrator rk45 --step-mm "$STEP" --tolerance 1e-6
 run rk2_2threads 2 --integrator rk2 --step-mm "$STEP"
 run ref 2 --integrator rk4 --step-mm 0.02 --max-steps 10000000
 "$PY" bench/field_streamlines_vtk.py "$W/vtu/volume_0004.vtu" "$W/lines" "$STEP" "$MAXLEN" "$MINCUR" "$THREADS"
