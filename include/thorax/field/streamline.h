@@ -193,7 +193,7 @@ void thx_stream_tubes_destroy(thx_stream_tubes **t);
 
 /*
  * Writes the lines (tubes NULL) or the tubes to path, by its extension: .vtp (VTK XML PolyData,
- * ASCII: Lines or Polys, point data current_magnitude, potential, arc_length (lines) and tet (lines),
+ * binary appended: Lines or Polys, point data current_magnitude, potential, arc_length (lines) and tet (lines),
  * cell data stop_reason, direction, seed, length) or .obj (Wavefront: v, then l per line or f per
  * triangle, the cell data in comments). docs/formats.md, "Streamlines". Atomic; an existing file is
  * replaced only if thorax wrote it (thx_atomic_open_output).
