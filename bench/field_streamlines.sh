@@ -46,14 +46,14 @@ import re, sys
 t = open(sys.argv[1]).read()
 m = re.search(r"(\d+) points.*field ([0-9.]+) s, tracing ([0-9.]+) s \((\d+) steps, (\d+) evaluations\)", t)
 assert m, t
-print(sys.argv[2], float(m.group(2)) + float(m.group(3)), "%s (field %s s + tracing %s s, %s steps, %s evaluations)" %
+print(sys.argv[2], "%.3f" % (float(m.group(2)) + float(m.group(3))), "%s (field %s s + tracing %s s, %s steps, %s evaluations)" %
       (m.group(1), m.group(2), m.group(3), m.group(4), m.group(5)))
 PYEOF
     tail -1 "$W/lines/times.txt"
 }
 run rk2 "$THREADS" --integrator rk2 --step-mm "$STEP"
 run rk4 "$THREADS" --integrator rk4 --step-mm "$STEP"
-run rk45 "$THREADS" --integrator rk45 --step-mm "$STEP" --tolerance 1e-5
+run rk45 "$THREADS" --integrator rk45 --step-mm "$STEP" --tolerance 1e-6
 run rk2_2threads 2 --integrator rk2 --step-mm "$STEP"
 run ref 2 --integrator rk4 --step-mm 0.02 --max-steps 10000000
 "$PY" bench/field_streamlines_vtk.py "$W/vtu/volume_0004.vtu" "$W/lines" "$STEP" "$MAXLEN" "$MINCUR" "$THREADS"

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Reads a thorax streamline VTP with VTK (vtkXMLPolyDataReader) and checks it against the model:
-every point inside the tetrahedron its `tet` point data names (barycentric coordinates >= -1e-7,
-the last point of a "boundary" line on a face of the domain's boundary), the arc length increasing,
-the stop reasons and directions in range, |J| and the potential those of the solution's frame
-interpolated there (the potential exactly; |J| against the node-averaged J) — and prints what the lines do.
+every point inside the tetrahedron its `tet` point data names (barycentric coordinates >= -1e-9:
+the last point of a "boundary" line lies on a face, to rounding), the arc length increasing to the
+line's length, the stop reasons and directions in range, the potential the solution's frame
+interpolated there (to 1e-9 of the largest) — and prints what the lines do (with --heart: where the
+lines from the heart's surface end).
 
 usage: streamlines_read.py FILE.vtp MODEL SOLUTION FRAME [--heart REGION] [--expect-lines N]
 """
@@ -57,11 +58,11 @@ M = np.stack([A[:, 1] - A[:, 0], A[:, 2] - A[:, 0], A[:, 3] - A[:, 0]], axis=2)
 lam123 = np.linalg.solve(M, (P - A[:, 0])[:, :, None])[:, :, 0]
 lam = np.column_stack([1 - lam123.sum(1), lam123])
 worst = lam.min(1)
-assert worst.min() > -1e-7, ("a point outside its tetrahedron", worst.min(), int(np.argmin(worst)))
+assert worst.min() > -1e-9, ("a point outside its tetrahedron", worst.min(), int(np.argmin(worst)))
 # the potential there: linear interpolation of the frame's values
 phi_i = (lam * phi[T[tet]]).sum(1)
 scale = np.abs(phi).max()
-assert np.abs(phi_i - pot).max() <= 1e-6 * scale, ("potential", np.abs(phi_i - pot).max())
+assert np.abs(phi_i - pot).max() <= 1e-9 * scale, ("potential", np.abs(phi_i - pot).max())
 # the points' tetrahedra are in the domain (no current in the heart of an epicardial solution)
 if heart:
     assert not np.any(np.array([names[x] for x in reg[tet]]) == heart), "a point in the heart"

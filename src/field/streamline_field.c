@@ -46,7 +46,6 @@ void thx_stream_field_destroy(thx_stream_field **f)
     free((*f)->j);
     free((*f)->phi);
     free((*f)->active);
-    free((*f)->h);
     free(*f);
     *f = NULL;
 }
@@ -66,9 +65,8 @@ thx_status thx_stream_field_create(thx_ctx *ctx, const thx_volume *v, const doub
     f->v = v;
     f->j = thx_malloc(ctx, (3 * nn + 1) * sizeof *f->j);
     f->active = thx_malloc(ctx, nt + 1);
-    f->h = thx_malloc(ctx, (nt + 1) * sizeof *f->h);
     if (phi) f->phi = thx_malloc(ctx, (nn + 1) * sizeof *f->phi);
-    if (!f->j || !f->active || !f->h || (phi && !f->phi)) {
+    if (!f->j || !f->active || (phi && !f->phi)) {
         thx_stream_field_destroy(&f);
         return THX_ENOMEM;
     }
@@ -76,24 +74,25 @@ thx_status thx_stream_field_create(thx_ctx *ctx, const thx_volume *v, const doub
     if (phi) memcpy(f->phi, phi, nn * sizeof *f->phi);
     size_t n_active = 0;
     double jmax = 0;
+    unsigned char *node_on = thx_calloc(ctx, nn + 1, 1);
+    if (!node_on) {
+        thx_stream_field_destroy(&f);
+        return THX_ENOMEM;
+    }
     for (size_t t = 0; t < nt; t++) {
         int32_t r = v->region[t];
         f->active[t] = r >= 0 && (size_t)r < v->n_regions && (!use_region || use_region[r]);
-        const int32_t *q = v->tet + 4 * t;
-        double h = 0;
-        for (int a = 0; a < 4; a++)
-            for (int b = a + 1; b < 4; b++) {
-                const double *P = v->xyz + 3 * (size_t)q[a], *Q = v->xyz + 3 * (size_t)q[b];
-                h += sqrt((P[0] - Q[0]) * (P[0] - Q[0]) + (P[1] - Q[1]) * (P[1] - Q[1]) + (P[2] - Q[2]) * (P[2] - Q[2]));
-            }
-        f->h[t] = (float)(h / 6.0);
         if (!f->active[t]) continue;
         n_active++;
-        for (int a = 0; a < 4; a++) {
-            const double *J = f->j + 3 * (size_t)q[a];
-            jmax = fmax(jmax, sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]));
-        }
+        for (int a = 0; a < 4; a++) node_on[v->tet[4 * t + (size_t)a]] = 1;
     }
+    for (size_t i = 0; i < nn; i++)
+        if (node_on[i]) {
+            const double *J = f->j + 3 * i;
+            jmax = fmax(jmax, J[0] * J[0] + J[1] * J[1] + J[2] * J[2]);
+        }
+    jmax = sqrt(jmax);
+    free(node_on);
     if (!n_active) {
         thx_stream_field_destroy(&f);
         return thx_error(ctx, THX_EINPUT, "streamlines: no tetrahedron is in the domain (every region left out)");
@@ -106,6 +105,8 @@ thx_status thx_stream_field_create(thx_ctx *ctx, const thx_volume *v, const doub
             lo[a] = fmin(lo[a], v->xyz[3 * i + (size_t)a]);
             hi[a] = fmax(hi[a], v->xyz[3 * i + (size_t)a]);
         }
+    memcpy(f->lo, lo, sizeof lo);
+    memcpy(f->hi, hi, sizeof hi);
     f->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
     thx_status st = thx_tet_locator_create(ctx, v, &f->loc);
     if (st) {
@@ -158,6 +159,18 @@ void thx_stream_interp(const thx_stream_field *f, size_t t, const double p[3], d
     }
 }
 
+double thx_stream_cell_size(const thx_volume *v, size_t t)
+{
+    const int32_t *q = v->tet + 4 * t;
+    double h = 0;
+    for (int a = 0; a < 4; a++)
+        for (int b = a + 1; b < 4; b++) {
+            const double *P = v->xyz + 3 * (size_t)q[a], *Q = v->xyz + 3 * (size_t)q[b];
+            h += sqrt((P[0] - Q[0]) * (P[0] - Q[0]) + (P[1] - Q[1]) * (P[1] - Q[1]) + (P[2] - Q[2]) * (P[2] - Q[2]));
+        }
+    return h / 6.0;
+}
+
 /* Whether tetrahedron t holds p (its boundary included), by the exact orientation tests. */
 static int holds(const thx_volume *v, size_t t, const double p[3])
 {
@@ -199,6 +212,28 @@ static long scan(const thx_stream_field *f, const double p[3])
 
 long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hint, double *j, double *phi)
 {
+    /* The walk's first test, in floating point: p clearly inside the hint (every barycentric coordinate
+     * above 1e-9) is in it whatever the rounding; anything closer to a face is left to the exact walk. */
+    if (hint >= 0 && f->active[hint]) {
+        double lam[4];
+        thx_stream_bary(f->v, (size_t)hint, p, lam);
+        if (lam[0] > 1e-9 && lam[1] > 1e-9 && lam[2] > 1e-9 && lam[3] > 1e-9) {
+            const int32_t *q = f->v->tet + 4 * (size_t)hint;
+            if (j) {
+                j[0] = j[1] = j[2] = 0;
+                for (int k = 0; k < 4; k++) {
+                    const double *J = f->j + 3 * (size_t)q[k];
+                    j[0] += lam[k] * J[0], j[1] += lam[k] * J[1], j[2] += lam[k] * J[2];
+                }
+            }
+            if (phi) {
+                *phi = 0;
+                if (f->phi)
+                    for (int k = 0; k < 4; k++) *phi += lam[k] * f->phi[q[k]];
+            }
+            return hint;
+        }
+    }
     long t = thx_tet_locate(f->loc, p, hint, NULL);
     if (t >= 0 && !f->active[t]) {
         /* p on a face between the domain and a region outside it: the domain's side, if it holds p */
@@ -209,7 +244,9 @@ long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hi
         }
         t = u;
     }
-    if (t < 0 && hint < 0) t = scan(f, p);
+    if (t < 0 && hint < 0 && p[0] >= f->lo[0] && p[0] <= f->hi[0] && p[1] >= f->lo[1] && p[1] <= f->hi[1] &&
+        p[2] >= f->lo[2] && p[2] <= f->hi[2])
+        t = scan(f, p);
     if (t >= 0) thx_stream_interp(f, (size_t)t, p, j, phi);
     return t;
 }

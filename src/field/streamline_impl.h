@@ -11,11 +11,13 @@ struct thx_stream_field {
     double *j;                 /* 3 n_nodes */
     double *phi;               /* n_nodes, or NULL */
     unsigned char *active;     /* n_tets: in the domain */
-    float *h;                  /* n_tets: mean edge length, mm */
     double jmax;               /* largest |J| at the domain's nodes */
-    double diag;               /* the bounding box's diagonal, mm */
+    double lo[3], hi[3];       /* the mesh's bounding box, mm */
+    double diag;               /* its diagonal, mm */
 };
 
+/* The mean edge length of tetrahedron t, mm: the cell size steps are fractions of. */
+double thx_stream_cell_size(const thx_volume *v, size_t t);
 /* Barycentric coordinates of p in tetrahedron t (sum 1; all >= 0 inside, to rounding). */
 void thx_stream_bary(const thx_volume *v, size_t t, const double p[3], double lam[4]);
 /* J (3) and phi (may be NULL) at p in tetrahedron t, linear interpolation (p may be slightly out). */

@@ -117,19 +117,20 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
     }
     for (int c = 0; c < 3; c++) k1[c] = sign * J[c] / jm;
     const double k_start[3] = {k1[0], k1[1], k1[2]};
-    double loop_tol = o->loop_tol * f->h[t0], len = 0, h = o->step_mm > 0 ? o->step_mm : o->step * f->h[t];
+    double loop_tol = o->loop_tol * thx_stream_cell_size(f->v, (size_t)t0), len = 0;
+    double h = o->step_mm > 0 ? o->step_mm : o->step * thx_stream_cell_size(f->v, (size_t)t);
     int away = 0, fixed = o->integrator != THX_STREAM_RK45;
     for (size_t step = 0;; step++) {
         if (step >= o->max_steps) {
             b->stop = THX_STOP_MAX_STEPS;
             break;
         }
-        double hc = f->h[t];
+        double hc = thx_stream_cell_size(f->v, (size_t)t);
         if (fixed) h = o->step_mm > 0 ? o->step_mm : o->step * hc;
         else h = fmin(fmax(h, o->min_step * hc), o->max_step * hc);
         double xn[3], kn[3], h_next = h;
         long tn = -1;
-        int last = 0, ok = 0, zero = 0;
+        int last = 0, ok = 0, zero = 0, to_exit = 0;
         for (int attempt = 0; attempt < 64 && !ok; attempt++) {
             last = 0;
             if (len + h >= maxlen) h = maxlen - len, last = 1;
@@ -191,9 +192,17 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
                 ok = 1;
                 break;
             }
-            /* a stage or the end outside the domain: is the boundary within this step, straight ahead? */
+            /* A stage or the end outside the domain: is the boundary within this step, straight ahead? Then
+             * the step again with exactly that length (the curve may still bend out first: halved then); a
+             * point within a thousandth of the cell of the boundary goes straight to it and the line ends. */
             long te = t;
             double se = thx_stream_exit(f, (size_t)t, x, k1, h, &te);
+            if (se < h && se > 1e-3 * hc && !to_exit) {
+                h = se;
+                h_next = h;
+                to_exit = 1;
+                continue;
+            }
             if (se < h) {
                 for (int c = 0; c < 3; c++) xn[c] = x[c] + se * k1[c];
                 thx_stream_interp(f, (size_t)te, xn, J, &phi);

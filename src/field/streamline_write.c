@@ -148,62 +148,89 @@ thx_status thx_stream_tubes_make(thx_ctx *ctx, const thx_streamlines *s, double 
 static const char vtp_marker[] = "<!-- thorax streamlines";
 static const char obj_marker[] = "# thorax streamlines";
 
-static void vtp_doubles(FILE *f, const char *name, const double *x, size_t n, int comps)
-{
-    fprintf(f, "<DataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"%d\" format=\"ascii\">\n", name, comps);
-    for (size_t i = 0; i < n * (size_t)comps; i++) fprintf(f, "%.10g%c", x[i], (i + 1) % (size_t)comps ? ' ' : '\n');
-    fputs("</DataArray>\n", f);
-}
+/* One data array of the VTP: its section, name, VTK type, components, values (count of them, element
+ * size) and its offset in the appended block. */
+typedef struct {
+    int where; /* 0 point data, 1 cell data, 2 points, 3 cells (connectivity, offsets) */
+    const char *name, *type;
+    int comps;
+    const void *data;
+    size_t n, elem, offset;
+} vtp_array;
 
-/* cell data of the lines, per line (tubes: per triangle, through its line) */
-static void vtp_cells(FILE *f, const thx_streamlines *s, const int32_t *line_of, size_t n)
+/* VTK XML PolyData, binary appended (raw, little-endian, UInt64 block headers): every array's values
+ * after the XML header, in the order listed. Returns 0, or -1 when out of memory. */
+static int write_vtp(FILE *f, const thx_streamlines *s, const thx_stream_tubes *T)
 {
-    fputs("<CellData Scalars=\"stop_reason\">\n", f);
-    const char *names[4] = {"stop_reason", "direction", "seed", "line"};
-    for (int a = 0; a < 4; a++) {
-        fprintf(f, "<DataArray type=\"Int32\" Name=\"%s\" format=\"ascii\">\n", names[a]);
-        for (size_t i = 0; i < n; i++) {
-            size_t l = line_of ? (size_t)line_of[i] : i;
-            int val = a == 0 ? s->stop[l] : a == 1 ? s->direction[l] : a == 2 ? s->seed[l] : (int)l;
-            fprintf(f, "%d%c", val, (i + 1) % 16 && i + 1 < n ? ' ' : '\n');
-        }
-        fputs("</DataArray>\n", f);
+    size_t np = T ? T->n_vertices : s->n_points, nc = T ? T->n_tris : s->n_lines;
+    size_t nconn = T ? 3 * T->n_tris : s->n_points;
+    int32_t *cell[4] = {NULL, NULL, NULL, NULL};
+    double *len = malloc((nc + 1) * sizeof *len);
+    int64_t *conn = malloc((nconn + 1) * sizeof *conn), *offs = malloc((nc + 1) * sizeof *offs);
+    int ok = len && conn && offs;
+    for (int k = 0; k < 4; k++) ok = ok && (cell[k] = malloc((nc + 1) * sizeof *cell[k])) != NULL;
+    if (!ok) {
+        for (int k = 0; k < 4; k++) free(cell[k]);
+        free(len), free(conn), free(offs);
+        return -1;
     }
-    fputs("<DataArray type=\"Float64\" Name=\"length\" format=\"ascii\">\n", f);
-    for (size_t i = 0; i < n; i++) fprintf(f, "%.10g\n", s->length[line_of ? (size_t)line_of[i] : i]);
-    fputs("</DataArray>\n</CellData>\n", f);
-}
-
-static void write_vtp(FILE *f, const thx_streamlines *s, const thx_stream_tubes *T)
-{
+    for (size_t i = 0; i < nc; i++) {
+        size_t l = T ? (size_t)T->line[i] : i;
+        cell[0][i] = s->stop[l], cell[1][i] = s->direction[l], cell[2][i] = s->seed[l], cell[3][i] = (int32_t)l;
+        len[i] = s->length[l];
+        offs[i] = T ? (int64_t)(3 * (i + 1)) : (int64_t)s->first[i + 1];
+    }
+    for (size_t i = 0; i < nconn; i++) conn[i] = T ? (int64_t)T->tri[i] : (int64_t)i;
+    vtp_array A[16];
+    int na = 0;
+#define ARR(w, nm, ty, c, d, cnt, el) A[na++] = (vtp_array){w, nm, ty, c, d, cnt, el, 0}
+    ARR(0, "current_magnitude", "Float64", 1, T ? T->current : s->current, np, 8);
+    ARR(0, "potential", "Float64", 1, T ? T->potential : s->potential, np, 8);
+    if (T) ARR(0, "normals", "Float64", 3, T->normal, 3 * np, 8);
+    else {
+        ARR(0, "arc_length", "Float64", 1, s->arc, np, 8);
+        ARR(0, "tet", "Int32", 1, s->tet, np, 4);
+    }
+    ARR(1, "stop_reason", "Int32", 1, cell[0], nc, 4);
+    ARR(1, "direction", "Int32", 1, cell[1], nc, 4);
+    ARR(1, "seed", "Int32", 1, cell[2], nc, 4);
+    ARR(1, "line", "Int32", 1, cell[3], nc, 4);
+    ARR(1, "length", "Float64", 1, len, nc, 8);
+    ARR(2, "Points", "Float64", 3, T ? T->xyz : s->xyz, 3 * np, 8);
+    ARR(3, "connectivity", "Int64", 1, conn, nconn, 8);
+    ARR(3, "offsets", "Int64", 1, offs, nc, 8);
+#undef ARR
+    size_t off = 0;
+    for (int k = 0; k < na; k++) {
+        A[k].offset = off;
+        off += 8 + A[k].n * A[k].elem;
+    }
     fprintf(f, "<?xml version=\"1.0\"?>\n%s, mm: %s; stop_reason 0 boundary, 1 low_current, 2 max_length, 3 max_steps, "
                "4 loop -->\n", vtp_marker, T ? "tubes around the lines" : "lines");
     fputs("<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PolyData>\n", f);
-    size_t np = T ? T->n_vertices : s->n_points, nc = T ? T->n_tris : s->n_lines;
     fprintf(f, "<Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"0\" NumberOfLines=\"%zu\" NumberOfStrips=\"0\" "
                "NumberOfPolys=\"%zu\">\n", np, T ? (size_t)0 : nc, T ? nc : (size_t)0);
-    fprintf(f, "<PointData Scalars=\"current_magnitude\"%s>\n", T ? " Normals=\"normals\"" : "");
-    vtp_doubles(f, "current_magnitude", T ? T->current : s->current, np, 1);
-    vtp_doubles(f, "potential", T ? T->potential : s->potential, np, 1);
-    if (T) vtp_doubles(f, "normals", T->normal, np, 3);
-    else {
-        vtp_doubles(f, "arc_length", s->arc, np, 1);
-        fputs("<DataArray type=\"Int32\" Name=\"tet\" format=\"ascii\">\n", f);
-        for (size_t i = 0; i < np; i++) fprintf(f, "%d%c", (int)s->tet[i], (i + 1) % 16 && i + 1 < np ? ' ' : '\n');
-        fputs("</DataArray>\n", f);
+    static const char *const open[4] = {"<PointData Scalars=\"current_magnitude\"%s>\n", "<CellData Scalars=\"stop_reason\">\n",
+                                        "<Points>\n", "<%s>\n"};
+    static const char *const close[4] = {"</PointData>\n", "</CellData>\n", "</Points>\n", "</%s>\n"};
+    for (int w = 0; w < 4; w++) {
+        fprintf(f, open[w], w == 0 ? (T ? " Normals=\"normals\"" : "") : (T ? "Polys" : "Lines"));
+        for (int k = 0; k < na; k++)
+            if (A[k].where == w)
+                fprintf(f, "<DataArray type=\"%s\" Name=\"%s\" NumberOfComponents=\"%d\" format=\"appended\" "
+                           "offset=\"%zu\"/>\n", A[k].type, A[k].name, A[k].comps, A[k].offset);
+        fprintf(f, close[w], T ? "Polys" : "Lines");
     }
-    fputs("</PointData>\n", f);
-    vtp_cells(f, s, T ? T->line : NULL, nc);
-    fputs("<Points>\n", f);
-    vtp_doubles(f, "Points", T ? T->xyz : s->xyz, np, 3);
-    fputs("</Points>\n", f);
-    fprintf(f, "<%s>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n", T ? "Polys" : "Lines");
-    size_t nconn = T ? 3 * T->n_tris : s->n_points;
-    for (size_t i = 0; i < nconn; i++)
-        fprintf(f, "%zu%c", T ? (size_t)T->tri[i] : i, (i + 1) % 16 && i + 1 < nconn ? ' ' : '\n');
-    fputs("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n", f);
-    for (size_t i = 0; i < nc; i++) fprintf(f, "%zu%c", T ? 3 * (i + 1) : s->first[i + 1], (i + 1) % 16 && i + 1 < nc ? ' ' : '\n');
-    fprintf(f, "</DataArray>\n</%s>\n</Piece>\n</PolyData>\n</VTKFile>\n", T ? "Polys" : "Lines");
+    fputs("</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_", f);
+    for (int k = 0; k < na; k++) {
+        uint64_t bytes = (uint64_t)(A[k].n * A[k].elem);
+        fwrite(&bytes, sizeof bytes, 1, f);
+        if (A[k].n) fwrite(A[k].data, A[k].elem, A[k].n, f);
+    }
+    fputs("\n</AppendedData>\n</VTKFile>\n", f);
+    for (int k = 0; k < 4; k++) free(cell[k]);
+    free(len), free(conn), free(offs);
+    return 0;
 }
 
 static void write_obj(FILE *f, const thx_streamlines *s, const thx_stream_tubes *T)
@@ -249,7 +276,12 @@ thx_status thx_streamlines_write(thx_ctx *ctx, const thx_streamlines *s, const t
     const char *marker = vtp ? vtp_marker : obj_marker;
     thx_atomic_file af;
     THX_CHECK(thx_atomic_open_output(ctx, path, marker, strlen(marker), NULL, 0, &af));
-    if (vtp) write_vtp(af.f, s, tubes);
-    else write_obj(af.f, s, tubes);
+    if (vtp) {
+        if (write_vtp(af.f, s, tubes)) {
+            thx_atomic_abort(&af);
+            return thx_error(ctx, THX_ENOMEM, "%s: out of memory writing the streamlines", path);
+        }
+    } else
+        write_obj(af.f, s, tubes);
     return thx_atomic_commit(ctx, &af);
 }

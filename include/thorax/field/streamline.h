@@ -7,9 +7,10 @@
  * elements. The integrator sees the continuous field made from it: J averaged to the nodes
  * (volume-weighted over the tetrahedra of the domain around each node: thx_fem_currents' j_node) and
  * interpolated linearly (barycentric) inside each tetrahedron. docs/decisions.md, "Current
- * streamlines (issue 16)", says why (the piecewise-constant field's lines zigzag along faces where its
- * normal component jumps; the averaged field is second-order accurate at the nodes, and its lines
- * follow the analytic dipole field lines an order of magnitude closer on the tests).
+ * streamlines (issue 16)", says why: the piecewise-constant field's normal component jumps between
+ * elements, and its exact lines get stuck on faces where the next element's J points back; on the
+ * dipole tests the averaged field's lines stay closer to the exact field lines and all of them reach
+ * the boundary.
  *
  * The domain: the tetrahedra of the regions the caller marks (use_region; thorax forward's epicardial
  * problem leaves the heart's interior out). A line stops where it leaves the domain: on the mesh's
@@ -95,7 +96,9 @@ double thx_stream_field_max(const thx_stream_field *f);
 /*
  * The domain's tetrahedron holding p (walking from hint, a tetrahedron, or < 0: the locator's grid,
  * then a scan of every tetrahedron if the walk fails — a mesh with holes), or -1 when p is outside
- * the domain. If j (3) or phi are not NULL: the interpolated field there. Thread-safe.
+ * the domain. A point clearly inside hint (every barycentric coordinate above 1e-9, in floating
+ * point) is taken there without the walk; every other goes to the walk's exact tests. If j (3) or phi
+ * are not NULL: the interpolated field there. Thread-safe.
  */
 long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hint, double *j, double *phi);
 
@@ -190,7 +193,7 @@ void thx_stream_tubes_destroy(thx_stream_tubes **t);
 
 /*
  * Writes the lines (tubes NULL) or the tubes to path, by its extension: .vtp (VTK XML PolyData,
- * ASCII: Lines or Polys, point data current_magnitude, potential, arc_length (lines) and tet (lines),
+ * binary appended: Lines or Polys, point data current_magnitude, potential, arc_length (lines) and tet (lines),
  * cell data stop_reason, direction, seed, length) or .obj (Wavefront: v, then l per line or f per
  * triangle, the cell data in comments). docs/formats.md, "Streamlines". Atomic; an existing file is
  * replaced only if thorax wrote it (thx_atomic_open_output).
