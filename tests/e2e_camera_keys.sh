@@ -147,6 +147,8 @@ out=$("$THORAX" animate "${A[@]}" --keys fly.keys -o fly --mp4 none 2>&1)
 echo "$out" | grep -q "25 frames (25 drawn, 0 kept" || fail "the key file put back reused frames: $out"
 
 # the viewer flies the same key file (action fly), recording each frame: its pictures are animate's
+# (the viewer's part is left out under the sanitizers, THORAX_QUICK: e2e_view covers the viewer)
+if [ -z "${THORAX_QUICK:-}" ]; then
 cat > fly.txt <<EOF
 $PWD/model
 --size 240x240
@@ -186,9 +188,11 @@ for f in (1, 4, 7, 13, 22):
     assert d < 0.01 * a.shape[0] * a.shape[1], 'viewer frame %d differs from animate in %d pixels' % (f, d)
 print('viewer flight: %d frames recorded; at most %d pixels differ from thorax animate --keys' % (len(rec), worst))
 EOF
+fi
 
 # real data: map3d's Dalhousie torso (no anatomical frame in the file: --up and --front) round which
 # the camera flies while its six dipole frames play; the closed flight ends on the picture it began with
+if [ -z "${THORAX_QUICK:-}" ]; then # (not under the sanitizers: the plain suite flies it)
 DAL="$SRC/../shared/data/map3d"
 cat > dal.keys <<EOF
 ends closed
@@ -203,6 +207,7 @@ EOF
 [ "$(ls dal/frame_*.png | wc -l)" = 49 ] || fail "the Dalhousie flight: $(ls dal | wc -l) files"
 cmp -s dal/frame_00001.png dal/frame_00049.png || fail "the closed flight does not end on its first picture"
 cmp -s dal/frame_00001.png dal/frame_00025.png && fail "the flight's posterior frame is its anterior one"
+fi
 
 # bad key files: the file, the line and the field named; exit non-zero; no output directory
 bad() { # FILE-TEXT EXPECTED
