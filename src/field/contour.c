@@ -148,8 +148,10 @@ static thx_status prune(thx_ctx *ctx, contourer *C, size_t s0)
         w++;
     }
     m->n_segs = w;
-    memcpy(m->cxyz + 3 * C->c0, xyz, 3 * used * sizeof *xyz);
-    memcpy(m->cvalue + C->c0, val, used * sizeof *val);
+    if (used) { /* (m's arrays may still be NULL when nothing was kept) */
+        memcpy(m->cxyz + 3 * C->c0, xyz, 3 * used * sizeof *xyz);
+        memcpy(m->cvalue + C->c0, val, used * sizeof *val);
+    }
     m->n_cpoints = C->c0 + used;
     free(xyz);
     free(val);

@@ -245,8 +245,10 @@ thx_status field_prune(thx_ctx *ctx, thx_field_mesh *m, size_t p0, size_t t0, co
         w++;
     }
     m->n_tris = w;
-    memcpy(m->xyz + 3 * p0, xyz, 3 * used * sizeof *xyz);
-    memcpy(m->value + p0, val, used * sizeof *val);
+    if (used) { /* (m's arrays may still be NULL when nothing was kept) */
+        memcpy(m->xyz + 3 * p0, xyz, 3 * used * sizeof *xyz);
+        memcpy(m->value + p0, val, used * sizeof *val);
+    }
     m->n_points = p0 + used;
     free(map);
     free(xyz);

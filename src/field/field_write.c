@@ -95,10 +95,15 @@ thx_status thx_field_mesh_write_vtp(thx_ctx *ctx, const thx_field_mesh *m, const
         st = THX_ENOMEM;
         goto done;
     }
-    memcpy(xyz, m->xyz, 3 * m->n_points * sizeof *xyz);
-    memcpy(xyz + 3 * m->n_points, m->cxyz, 3 * m->n_cpoints * sizeof *xyz);
-    memcpy(pot, m->value, m->n_points * sizeof *pot);
-    memcpy(pot + m->n_points, m->cvalue, m->n_cpoints * sizeof *pot);
+    /* (an empty array may be NULL, which memcpy must not be given even for 0 bytes) */
+    if (m->n_points) {
+        memcpy(xyz, m->xyz, 3 * m->n_points * sizeof *xyz);
+        memcpy(pot, m->value, m->n_points * sizeof *pot);
+    }
+    if (m->n_cpoints) {
+        memcpy(xyz + 3 * m->n_points, m->cxyz, 3 * m->n_cpoints * sizeof *xyz);
+        memcpy(pot + m->n_points, m->cvalue, m->n_cpoints * sizeof *pot);
+    }
     for (size_t s = 0; s < nl; s++) {
         lconn[2 * s] = m->seg[2 * s] + (int32_t)m->n_points;
         lconn[2 * s + 1] = m->seg[2 * s + 1] + (int32_t)m->n_points;

@@ -186,7 +186,8 @@ static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
     const thx_stream_tubes *t = d->tubes;
     d->field_values[STREAM] = malloc((t->n_vertices ? t->n_vertices : 1) * sizeof(double));
     if (!d->field_values[STREAM]) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
-    memcpy(d->field_values[STREAM], o->stream_potential ? t->potential : t->current, t->n_vertices * sizeof(double));
+    if (t->n_vertices)
+        memcpy(d->field_values[STREAM], o->stream_potential ? t->potential : t->current, t->n_vertices * sizeof(double));
     double jmax = 0;
     for (size_t i = 0; i < t->n_vertices; i++)
         if (isfinite(t->current[i]) && t->current[i] > jmax) jmax = t->current[i];
@@ -235,7 +236,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
             const thx_field_mesh *m = d->field[ISO];
             d->field_values[ISO] = malloc((m->n_points ? m->n_points : 1) * sizeof(double));
             if (!d->field_values[ISO]) st = thx_error(ctx, THX_ENOMEM, "out of memory (equipotentials)");
-            else memcpy(d->field_values[ISO], m->value, m->n_points * sizeof(double));
+            else if (m->n_points) memcpy(d->field_values[ISO], m->value, m->n_points * sizeof(double));
             d->field_surf[ISO].n_nodes = m->n_points;
             d->field_surf[ISO].xyz = m->xyz;
             d->field_surf[ISO].n_tris = m->n_tris;
@@ -254,7 +255,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
             const thx_field_mesh *m = d->field[SLICE];
             d->field_values[SLICE] = malloc((m->n_points ? m->n_points : 1) * sizeof(double));
             if (!d->field_values[SLICE]) st = thx_error(ctx, THX_ENOMEM, "out of memory (slices)");
-            else memcpy(d->field_values[SLICE], m->value, m->n_points * sizeof(double));
+            else if (m->n_points) memcpy(d->field_values[SLICE], m->value, m->n_points * sizeof(double));
             d->field_surf[SLICE].n_nodes = m->n_points;
             d->field_surf[SLICE].xyz = m->xyz;
             d->field_surf[SLICE].n_tris = m->n_tris;
