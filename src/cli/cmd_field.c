@@ -139,7 +139,7 @@ int cmd_field(int argc, char **argv)
         {.name = "--contours", .type = CLI_STRING, .meta = "SPEC", .s = &rq.contours,
          .help = "contour lines on the slices at these potentials (as --isosurface's SPEC)"},
         {.name = "--region", .type = CLI_STRING, .meta = "NAME", .flags = CLI_REPEAT, .sv = regions, .count = &n_regions,
-         .max = argc, .def = "every region but \"heart\"",
+         .max = argc, .def = "the regions the solution covers (all but \"heart\" for heart-surface problems)",
          .help = "cut only this tissue region's tetrahedra"},
         {.name = "--streamlines", .type = CLI_FLAG, .i = &streamlines_flag,
          .help = "current streamlines instead of cuts: thorax field SOLUTION --streamlines --seed ... (the same as "
@@ -218,7 +218,10 @@ int cmd_field(int argc, char **argv)
         st = THX_ENOMEM;
         goto fail;
     }
-    for (size_t r = 0; r < v->n_regions; r++) use[r] = n_regions == 0 && strcmp(v->regions[r].name, "heart") != 0;
+    if (n_regions == 0) { /* the regions the solution holds potentials in (the same rule as thorax render's) */
+        st = thx_solution_domain(ctx, sol, v, use);
+        if (st) goto fail;
+    }
     for (int k = 0; k < n_regions; k++) {
         size_t r = 0;
         while (r < v->n_regions && strcmp(v->regions[r].name, regions[k]) != 0) r++;

@@ -1,7 +1,6 @@
 /* thorax field SOLUTION --streamlines (registered as `thorax streamlines` until `thorax field` takes
  * it): current streamlines of one frame of a forward solution's volume potentials
  * (thorax/field/streamline.h), written as VTP or OBJ lines or tubes. */
-#include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,22 +12,6 @@
 #include "thorax/io/solution_file.h"
 #include "thorax/model/model.h"
 #include "thorax/model/series.h"
-
-/* Whether the solution is a defibrillation problem (its potentials cover the heart too); else the
- * heart's interior is out of the domain, as thorax forward solves it. */
-static int solution_is_defib(thx_ctx *ctx, const char *dir)
-{
-    char path[4200], *text = NULL;
-    size_t len = 0;
-    snprintf(path, sizeof path, "%s/solution.json", dir);
-    if (thx_read_file(ctx, path, &text, &len) != THX_OK) return 0;
-    cJSON *j = cJSON_Parse(text);
-    free(text);
-    const cJSON *p = j ? cJSON_GetObjectItemCaseSensitive(j, "problem") : NULL;
-    int defib = cJSON_IsString(p) && strcmp(p->valuestring, "defibrillation") == 0;
-    cJSON_Delete(j);
-    return defib;
-}
 
 int cmd_field_streamlines(int argc, char **argv)
 {
@@ -175,14 +158,13 @@ int cmd_field_streamlines(int argc, char **argv)
         goto done;
     }
     const thx_volume *v = m->volume;
-    int defib = solution_is_defib(ctx, sol);
     use = calloc(v->n_regions + 1, 1);
     jn = malloc((3 * v->n_nodes + 1) * sizeof *jn);
     if (!use || !jn) {
         st = thx_error(ctx, THX_ENOMEM, "out of memory");
         goto done;
     }
-    for (size_t r = 0; r < v->n_regions; r++) use[r] = defib || strcmp(v->regions[r].name, "heart") != 0;
+    THX_TRY(thx_solution_domain(ctx, sol, v, use)); /* the regions the solution covers */
     const double *phi = vol->v + (size_t)(frame - 1) * vol->n_rows;
     thx_fem_currents(v, use, phi, NULL, jn);
     double tf = thx_wtime();
