@@ -41,15 +41,6 @@ void picture_field_free(thx_picture_data *d)
     d->field_frame = -1;
 }
 
-static void finite_range(const double *v, size_t n, double *lo, double *hi)
-{
-    for (size_t i = 0; i < n; i++)
-        if (isfinite(v[i])) {
-            if (v[i] < *lo) *lo = v[i];
-            if (v[i] > *hi) *hi = v[i];
-        }
-}
-
 thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
 {
     d->field_frame = -1;
@@ -60,7 +51,7 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     THX_CHECK(thx_solution_domain(ctx, o->solution, v, d->field_use));
     d->vmin = INFINITY;
     d->vmax = -INFINITY;
-    finite_range(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
+    picture_range_of(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
     if (!(d->vmin <= d->vmax)) return thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
     /* the specifications checked once (the values against the series' range), the option named */
     thx_status st = THX_OK;
@@ -102,7 +93,7 @@ static void volume_range(const thx_picture_opts *o, const thx_picture_data *d, i
         size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
         *lo = INFINITY;
         *hi = -INFINITY;
-        finite_range(x->v + f * x->n_rows, x->n_rows, lo, hi);
+        picture_range_of(x->v + f * x->n_rows, x->n_rows, lo, hi);
         if (*lo <= *hi) return;
     }
     *lo = d->vmin;
@@ -220,13 +211,12 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
     if (o->isosurface) {
         double *values = NULL;
         size_t n = 0;
-        /* percentages and counts are of the scale's range (true ends, not the symmetric ones) */
+        /* percentages and counts are of the scale's range (true ends, not the symmetric ones); a
+           frame of one value has none: the series' */
         double rlo = lo, rhi = hi;
-        if (o->scope != THX_SCOPE_FIXED) {
-            rlo = INFINITY;
-            rhi = -INFINITY;
-            if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) finite_range(phi, x->n_rows, &rlo, &rhi);
-            if (!(rlo < rhi)) { rlo = d->vmin; rhi = d->vmax; }
+        if (o->scope != THX_SCOPE_FIXED && !(rlo < rhi)) {
+            rlo = d->vmin;
+            rhi = d->vmax;
         }
         st = thx_field_values_parse(ctx, o->isosurface, rlo, rhi, &values, &n);
         if (st == THX_OK) st = thx_field_mesh_create(ctx, &d->field[ISO]);
@@ -302,20 +292,7 @@ size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, th
         } else {
             r->cmap = (thx_colormap)o->cmap;
             r->style = k == ISO ? THX_DATA_CONTINUOUS : (thx_data_style)o->style;
-            if (o->scope == THX_SCOPE_FIXED) {
-                r->scale.model = (thx_scale_model)o->model;
-                r->scale.lo = o->lo;
-                r->scale.hi = o->hi;
-                r->scale.k = o->model == THX_SCALE_LOG ? 10 : 3;
-                r->scale.mapping = (thx_scale_mapping)o->mapping;
-            } else
-                thx_scale_from_range_mapped(&r->scale, (thx_scale_model)o->model, (thx_scale_mapping)o->mapping,
-                                            d->field_lo[k], d->field_hi[k]);
-            if (o->invert) {
-                double t = r->scale.lo;
-                r->scale.lo = r->scale.hi;
-                r->scale.hi = t;
-            }
+            picture_scale_settings(o, d->field_lo[k], d->field_hi[k], 0, &r->scale);
         }
         for (int w = 0; w < o->n_whole; w++) r->no_clip |= !strcmp(o->whole[w], s->name);
         for (int l = 0; l < o->n_look; l++)

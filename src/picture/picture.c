@@ -22,7 +22,7 @@
 #include "picture/picture_internal.h"
 
 /* ---- one picture ---- */
-static void range_of(const double *v, size_t n, double *lo, double *hi)
+void picture_range_of(const double *v, size_t n, double *lo, double *hi)
 {
     for (size_t i = 0; i < n; i++)
         if (isfinite(v[i])) { *lo = fmin(*lo, v[i]); *hi = fmax(*hi, v[i]); }
@@ -35,7 +35,7 @@ static void series_range(thx_picture_data *d, size_t k, double *lo, double *hi)
     const thx_series *x = d->series[k];
     if (!d->sranged[k]) {
         double a = INFINITY, b = -INFINITY;
-        range_of(x->v, x->n_rows * x->n_frames, &a, &b);
+        picture_range_of(x->v, x->n_rows * x->n_frames, &a, &b);
         d->smin[k] = a;
         d->smax[k] = b;
         d->sranged[k] = 1;
@@ -81,9 +81,8 @@ static int shares_scale(const thx_picture_opts *o, const thx_model *m, int s, in
     return 0;
 }
 
-static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int frame, thx_scale *sc)
+void picture_scale_settings(const thx_picture_opts *o, double lo, double hi, int true_range, thx_scale *sc)
 {
-    double lo = INFINITY, hi = -INFINITY;
     memset(sc, 0, sizeof *sc);
     if (o->scope == THX_SCOPE_FIXED) {
         sc->model = o->model;
@@ -91,26 +90,35 @@ static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int
         sc->hi = o->hi;
         sc->k = o->model == THX_SCALE_LOG ? 10 : 3;
         sc->mapping = (thx_scale_mapping)o->mapping;
-    } else {
+    } else
+        thx_scale_from_range_mapped(sc, (thx_scale_model)o->model, true_range ? THX_MAPPING_TRUE : (thx_scale_mapping)o->mapping,
+                                    lo, hi);
+    if (o->invert) { /* the colour map reversed: the scale's ends swapped */
+        double t = sc->lo;
+        sc->lo = sc->hi;
+        sc->hi = t;
+    }
+}
+
+static void scale_for(const thx_picture_opts *o, thx_picture_data *d, int s, int frame, thx_scale *sc)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    int map = 0;
+    if (o->scope != THX_SCOPE_FIXED) {
         s = master_of(o, d->m, s);
         for (size_t k = 0; k < d->m->n_surfaces && k < THX_PICTURE_SURFACES; k++) {
             const thx_series *x = d->series[k];
             if (!x || !shares_scale(o, d->m, s, (int)k)) continue;
             if (d->map[k][d->active[k]] != d->map[s][d->active[s]]) continue; /* times and potentials apart */
             size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
-            if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
+            if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) picture_range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
             else series_range(d, k, &lo, &hi);
         }
         /* the library's one range rule (thorax/render/image.h): symmetric = the largest magnitude;
            a map of times over its true range */
-        int map = s < THX_PICTURE_SURFACES && d->series[s] && d->map[s][d->active[s]];
-        thx_scale_from_range_mapped(sc, (thx_scale_model)o->model, map ? THX_MAPPING_TRUE : (thx_scale_mapping)o->mapping, lo, hi);
+        map = s < THX_PICTURE_SURFACES && d->series[s] && d->map[s][d->active[s]];
     }
-    if (o->invert) { /* the colour map reversed: the scale's ends swapped */
-        double t = sc->lo;
-        sc->lo = sc->hi;
-        sc->hi = t;
-    }
+    picture_scale_settings(o, lo, hi, map, sc);
 }
 
 static const float palette[6][4] = {{0.85f, 0.75f, 0.65f, 1}, {0.95f, 0.85f, 0.55f, 1}, {0.75f, 0.35f, 0.35f, 1},
@@ -235,7 +243,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
         const thx_picture_look *look = NULL;
         for (int k = 0; k < o->n_look; k++)
             if (!strcmp(o->look[k].name, m->surf[s]->name)) look = &o->look[k];
-        if ((o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART && o->mode != THX_DRAW_WIRE &&
+        if (picture_has_field(o) && m->surf[s]->role != THX_ROLE_HEART && o->mode != THX_DRAW_WIRE &&
             o->mode != THX_DRAW_POINTS && o->mode != THX_DRAW_ORIENTATION)
             r->color[3] = 0.2f; /* the volume's cuts inside are what is shown: the body around them faint */
         if (look) {
@@ -260,7 +268,7 @@ static void build_surfaces(const thx_picture_opts *o, thx_picture_data *d, int f
             scale_for(o, d, (int)s, (int)f, &r->scale);
             r->contour_color[3] = 1;
             r->color[3] = look && look->opacity >= 0 ? look->opacity
-                          : (o->isosurface || o->n_slices || o->n_streamlines) && m->surf[s]->role != THX_ROLE_HEART ? 0.2f : 1;
+                          : picture_has_field(o) && m->surf[s]->role != THX_ROLE_HEART ? 0.2f : 1;
             if (b->main_surface < 0 || m->surf[s]->role == THX_ROLE_OUTER) {
                 b->main_surface = (int)s;
             }

@@ -260,7 +260,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
         cJSON *vo = files ? cJSON_GetObjectItem(files, "volume") : NULL;
-        if (st == THX_OK && (o->isosurface || o->n_slices || o->n_streamlines)) {
+        if (st == THX_OK && picture_has_field(o)) {
             if (!cJSON_IsString(vo))
                 st = thx_error(ctx, THX_EINPUT, "%s: %s needs the volume potentials: run thorax forward ... --volume",
                                o->solution, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
@@ -462,7 +462,7 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 
 thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data *d)
 {
-    if ((o->isosurface || o->n_slices || o->n_streamlines) && !o->solution) {
+    if (picture_has_field(o) && !o->solution) {
         memset(d, 0, sizeof *d);
         return thx_error(ctx, THX_EINPUT, "%s: needs --solution DIR (a solution with volume potentials)",
                          o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");

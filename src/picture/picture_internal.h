@@ -3,6 +3,12 @@
 #define THORAX_PICTURE_INTERNAL_H
 #include "thorax/picture/picture.h"
 
+/* The finite range of v[0..n) widened into *lo, *hi (picture.c). */
+void picture_range_of(const double *v, size_t n, double *lo, double *hi);
+/* A scale from the picture's settings: the fixed range (scope fixed), else lo..hi under the
+ * scale model and mapping (true_range: the true range whatever the mapping, for maps of times);
+ * swapped for --invert (picture.c). */
+void picture_scale_settings(const thx_picture_opts *o, double lo, double hi, int true_range, thx_scale *sc);
 /* Node labels and extrema marks over img (marks.c), for a single-panel picture drawn at img's size. */
 thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font, int frame,
                          thx_image *img);
@@ -19,6 +25,10 @@ thx_status picture_tet_surfaces(thx_ctx *ctx, const thx_volume *v, const thx_cli
  * picture_field_build makes the frame's meshes (kept until another frame is asked for);
  * picture_field_surfaces appends them to rs (at most max) as surfaces with values and scales;
  * picture_field_free frees what the two made. */
+static inline int picture_has_field(const thx_picture_opts *o)
+{
+    return o->isosurface || o->n_slices || o->n_streamlines;
+}
 thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);
 size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, thx_render_surface *rs, size_t max);
