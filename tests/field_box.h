@@ -13,6 +13,19 @@
 #include "thorax/field/field.h"
 #include "thorax/model/volume.h"
 
+/* The box's extent (set by the test) and whether an edge's two points lie on one face of it. */
+static double G_L[3];
+static int on_box(const thx_field_mesh *m, int32_t a, int32_t b)
+{
+    const double *p = m->xyz + 3 * (size_t)a, *q = m->xyz + 3 * (size_t)b;
+    for (int k = 0; k < 3; k++) {
+        double e = 1e-9 * G_L[k];
+        if (fabs(p[k]) < e && fabs(q[k]) < e) return 1;
+        if (fabs(p[k] - G_L[k]) < e && fabs(q[k] - G_L[k]) < e) return 1;
+    }
+    return 0;
+}
+
 /* nx x ny x nz cubes of side h from the origin; jitter (fraction of h) moves interior nodes by a
  * fixed pseudo-random amount; region 1 for tetrahedra whose centroid has z > split (0 if none). */
 static thx_volume *box_mesh(thx_ctx *ctx, int nx, int ny, int nz, double h, double jitter, double split)

@@ -15,19 +15,6 @@
 #include "field_box.h"
 #include "testlib.h"
 
-static double G_L[3];
-
-/* an edge whose two points lie on one face of the box */
-static int on_box(const thx_field_mesh *m, int32_t a, int32_t b)
-{
-    const double *p = m->xyz + 3 * (size_t)a, *q = m->xyz + 3 * (size_t)b;
-    for (int k = 0; k < 3; k++) {
-        double e = 1e-9 * G_L[k];
-        if (fabs(p[k]) < e && fabs(q[k]) < e) return 1;
-        if (fabs(p[k] - G_L[k]) < e && fabs(q[k] - G_L[k]) < e) return 1;
-    }
-    return 0;
-}
 
 /* phi = g.x + c0 at every node */
 static double *linear(const thx_volume *v, const double *g, double c0)

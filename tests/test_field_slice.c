@@ -11,18 +11,6 @@
 #include "field_box.h"
 #include "testlib.h"
 
-static double G_L[3];
-
-static int on_box(const thx_field_mesh *m, int32_t a, int32_t b)
-{
-    const double *p = m->xyz + 3 * (size_t)a, *q = m->xyz + 3 * (size_t)b;
-    for (int k = 0; k < 3; k++) {
-        double e = 1e-9 * G_L[k];
-        if (fabs(p[k]) < e && fabs(q[k]) < e) return 1;
-        if (fabs(p[k] - G_L[k]) < e && fabs(q[k] - G_L[k]) < e) return 1;
-    }
-    return 0;
-}
 
 static const double G[3] = {1.0, 2.0, 3.0}, C0 = -0.5;
 static double field(const double *x) { return G[0] * x[0] + G[1] * x[1] + G[2] * x[2] + C0; }
