@@ -399,7 +399,9 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
                 /* equipotentials, slices, streamlines: the volume's potentials, or |J| */
                 char unit[16];
                 int current = d->field_current[field];
-                snprintf(unit, sizeof unit, current ? "A/m^2 per %.4s" : "%.15s", d->volume->unit);
+                /* (as thorax forward labels its currents: "per unit" for potentials without a unit) */
+                const char *vu = d->volume->unit[0] ? d->volume->unit : current ? "unit" : "";
+                snprintf(unit, sizeof unit, current ? "A/m^2 per %.4s" : "%.15s", vu);
                 add_bar(bars, &r->scale, (int)r->cmap, current ? "|J|" : "potential", unit, r->surf->name);
                 continue;
             }
