@@ -10,6 +10,91 @@
 #include "thorax/model/series.h"
 #include "thorax/io/series_file.h"
 #include "thorax/io/channels_file.h"
+#include "thorax/io/model_dir.h"
+#include "thorax/io/surface_read.h"
+#include "thorax/leads/bad_leads.h"
+
+/* --surface MODEL:NAME (a surface of a model directory: *m holds it) or a surface file (FILE.pts
+ * with its .fac, or any format thorax import reads: *own holds it). Caller destroys both. */
+static thx_status check_surface(thx_ctx *ctx, const char *spec, thx_model **m, thx_surface **own, const thx_surface **out)
+{
+    *out = NULL;
+    const char *colon = strrchr(spec, ':');
+    if (colon && colon > spec) {
+        char dir[1024], manifest[1100];
+        snprintf(dir, sizeof dir, "%.*s", (int)(colon - spec), spec);
+        snprintf(manifest, sizeof manifest, "%s/model.json", dir);
+        FILE *f = fopen(manifest, "r");
+        if (f) {
+            fclose(f);
+            THX_CHECK(thx_model_read(ctx, dir, m));
+            for (size_t k = 0; k < (*m)->n_surfaces; k++)
+                if (!strcmp((*m)->surf[k]->name, colon + 1)) *out = (*m)->surf[k];
+            if (!*out) return thx_error(ctx, THX_EINPUT, "--surface %s: the model %s has no surface '%s'", spec, dir, colon + 1);
+            return THX_OK;
+        }
+    }
+    char name[64];
+    const char *base = strrchr(spec, '/') ? strrchr(spec, '/') + 1 : spec;
+    snprintf(name, sizeof name, "%.*s", (int)strcspn(base, ".@"), base);
+    THX_CHECK(thx_surface_read_file(ctx, spec, NULL, THX_IMPORT_AUTO, name, THX_ROLE_OTHER, own, NULL));
+    *out = *own;
+    return THX_OK;
+}
+
+/* thorax series check: every row's scores, the bad ones, and the list written to out (if given). */
+static thx_status series_check(thx_ctx *ctx, const char *in, const thx_series *s, const thx_surface *surf,
+                               const thx_channels *ch, const char *out)
+{
+    thx_bad_leads *b = NULL;
+    THX_CHECK(thx_bad_leads_detect(ctx, s, surf, NULL, &b));
+    size_t n = s->n_rows;
+    int32_t *chan = malloc((n + 1) * sizeof *chan);
+    if (!chan) {
+        thx_bad_leads_destroy(&b);
+        return thx_error(ctx, THX_ENOMEM, "out of memory");
+    }
+    for (size_t i = 0; i < n; i++) chan[i] = ch ? ch->channel[i] + 1 : (int32_t)i + 1;
+    printf("file        %s\n", in);
+    printf("rows        %zu %s\n", n, ch ? "(nodes of the channel map; 'channel' = the recording's row, 1-based)"
+                                        : "(channels = rows, 1-based)");
+    printf("surface     %s\n", surf ? surf->name : "(none: no neighbour checks)");
+    printf("median rms  %.6g %s\n", b->median_rms, s->unit);
+    printf("%8s %6s %11s %7s %8s %7s %8s %7s %7s %6s %3s  %s\n", "channel", "node", "rms", "extr%", "nearest", "d",
+           "contrast", "unlike", "ratio", "corr", "nb", "verdict");
+    char why[512];
+    for (size_t i = 0; i < n; i++) {
+        thx_bad_leads_reason(b, i, chan, why, sizeof why);
+        if (chan[i] > 0) printf("%8d", (int)chan[i]);
+        else printf("%8s", "-");
+        printf(" %6zu", i + 1);
+        if (b->missing[i]) {
+            printf(" %11s %7s %8s %7s %8s %7s %7s %6s %3s  missing (NaN or Inf values)\n", "-", "-", "-", "-", "-", "-",
+                   "-", "-", "-");
+            continue;
+        }
+        printf(" %11.5g %7.2f", b->rms[i], 100 * b->extreme[i]);
+        if (b->nearest[i] >= 0) printf(" %8d %7.4f", (int)chan[b->nearest[i]], b->d[i]);
+        else printf(" %8s %7s", "-", "-");
+        printf(" %8.3f %7.3f %7.3f %6.3f %3d  %s\n", b->contrast[i], b->unlike[i], b->ratio[i], b->corr[i], (int)b->n_nb[i],
+               b->flags[i] ? why : "ok");
+    }
+    printf("bad         %zu of %zu%s", b->n_bad, n, b->n_bad ? " (channels:" : "");
+    for (size_t i = 0; i < n; i++)
+        if (b->flags[i]) printf(" %d", (int)chan[i]);
+    printf("%s\n", b->n_bad ? ")" : "");
+    if (b->n_missing) printf("missing     %zu rows not checked (NaN or Inf values)\n", b->n_missing);
+    thx_status st = THX_OK;
+    if (out) {
+        char note[1200];
+        snprintf(note, sizeof note, "thorax series check %s%s%s", in, surf ? " on surface " : "", surf ? surf->name : "");
+        st = thx_bad_list_write(ctx, out, b, chan, note);
+        if (st == THX_OK) thx_log(ctx, THX_LOG_INFO, "wrote %s (%zu bad channel%s)", out, b->n_bad, b->n_bad == 1 ? "" : "s");
+    }
+    free(chan);
+    thx_bad_leads_destroy(&b);
+    return st;
+}
 /* map3d fiducials: one line each, values as frames counted from 0 (map3d's convention). */
 static void print_fiducials(const thx_series *s)
 {
@@ -75,13 +160,13 @@ static void print_info(const char *path, const thx_series *s)
 int cmd_series(int argc, char **argv)
 {
     const char *cmd = "series";
-    const char *out = NULL, *fids = NULL, *channels = NULL;
+    const char *out = NULL, *fids = NULL, *channels = NULL, *surface = NULL;
     int verbose = 0, format = THX_SERIES_AUTO, transpose = 0;
     static const cli_choice formats[] = {{"text", THX_SERIES_TEXT}, {"raw", THX_SERIES_RAW}, {"mat", THX_SERIES_MAT},
                                          {"csv", THX_SERIES_CSV}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "OUT", .s = &out,
-         .help = "file to write (convert)"},
+         .help = "file to write (convert; check: the bad-lead list)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .def = "from OUT's extension",
          .help = "format of OUT (convert)"},
         {.name = "--fids", .type = CLI_INPUT, .meta = "FIDS", .s = &fids,
@@ -91,12 +176,15 @@ int cmd_series(int argc, char **argv)
         {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
          .help = "map3d .channels: IN's rows are recording channels; the series taken is one row per node of the "
                  "file (NaN for a node with no channel)"},
+        {.name = "--surface", .type = CLI_STRING, .meta = "MODEL:NAME|FILE", .s = &surface,
+         .help = "check: the surface whose nodes the rows are (after --channels): its neighbours judge each lead"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "info FILE [--fids] [--transpose] [--channels]\nconvert IN -o [--format] [--fids] [--transpose] [--channels]",
+        .usage = "info FILE [--fids] [--transpose] [--channels]\nconvert IN -o [--format] [--fids] [--transpose] [--channels]\n"
+                 "check SERIES [--surface] [--channels] [-o] [--transpose]",
         .about = "A time series is a rows x frames matrix of values (one row per node or lead,\n"
                  "one column per time instant) with a time axis, units and a label.\n"
                  "\n"
@@ -104,6 +192,10 @@ int cmd_series(int argc, char **argv)
                  "                     smallest and largest finite value and the number of\n"
                  "                     NaN/Inf values (with the first one's row and frame)\n"
                  "  convert IN -o OUT  reads IN and writes it as OUT (atomically)\n"
+                 "  check SERIES       flags flat, saturated, duplicated and (with --surface)\n"
+                 "                     outlying channels; prints every channel's scores; -o LIST\n"
+                 "                     writes the bad-lead list that --bad-leads reads\n"
+                 "                     (docs/cli.md \"series check\", docs/formats.md)\n"
                  "  --channels FILE    first takes IN's rows as recording channels and maps them\n"
                  "                     to nodes by a map3d .channels file (docs/formats.md)\n"
                  "\n"
@@ -130,10 +222,11 @@ int cmd_series(int argc, char **argv)
     if (pr) return CLI_EXIT(pr);
     if (c.n_pos > 2) return cli_usage_error(cmd, "unexpected argument '%s' (one input file expected)", c.pos[2]);
     const char *sub = c.n_pos > 0 ? c.pos[0] : NULL, *in = c.n_pos > 1 ? c.pos[1] : NULL;
-    if (!sub) return cli_usage_error(cmd, "no subcommand given (info or convert)");
-    int convert = !strcmp(sub, "convert");
-    if (!convert && strcmp(sub, "info") != 0)
-        return cli_usage_error(cmd, "unknown subcommand '%s' (info or convert)", sub);
+    if (!sub) return cli_usage_error(cmd, "no subcommand given (info, convert or check)");
+    int convert = !strcmp(sub, "convert"), check = !strcmp(sub, "check");
+    if (!convert && !check && strcmp(sub, "info") != 0)
+        return cli_usage_error(cmd, "unknown subcommand '%s' (info, convert or check)", sub);
+    if (surface && !check) return cli_usage_error(cmd, "--surface goes with check");
     if (!in) return cli_usage_error(cmd, "%s: no input file given", sub);
     thx_series_format fmt = (thx_series_format)format;
     if (convert) {
@@ -142,18 +235,21 @@ int cmd_series(int argc, char **argv)
             return cli_usage_error(cmd, "cannot tell the format of '%s' from its extension (.txt, .dat, .raw, .mat, .csv); "
                                         "give --format",
                                    out);
-    } else if (out || format != THX_SERIES_AUTO) {
-        return cli_usage_error(cmd, "info: -o and --format apply only to convert");
+    } else if (check ? format != THX_SERIES_AUTO || fids : out || format != THX_SERIES_AUTO) {
+        return cli_usage_error(cmd, check ? "check: --format and --fids do not apply" : "info: -o and --format apply only to convert");
     }
 
     thx_ctx *ctx = cli_ctx(verbose);
     thx_series *s = NULL;
+    thx_channels *ch = NULL;
+    thx_model *sm = NULL;
+    thx_surface *own = NULL;
+    const thx_surface *surf = NULL;
     int rc = 0;
     thx_status st = thx_series_read(ctx, in, THX_SERIES_AUTO, &s);
     if (st == THX_OK && transpose) st = thx_series_transpose(ctx, &s);
     if (st == THX_OK && fids) st = thx_series_read_fids(ctx, fids, s);
     if (st == THX_OK && channels) { /* the recording's channels as the nodes of the .channels file */
-        thx_channels *ch = NULL;
         thx_series *mapped = NULL;
         st = thx_channels_read(ctx, channels, &ch);
         if (st == THX_OK) st = thx_channels_apply(ctx, ch, s, &mapped);
@@ -163,10 +259,15 @@ int cmd_series(int argc, char **argv)
             thx_series_destroy(&s);
             s = mapped;
         }
-        thx_channels_destroy(&ch);
     }
+    if (st == THX_OK && surface) st = check_surface(ctx, surface, &sm, &own, &surf);
     if (st) {
         rc = cli_fail(ctx, cmd, st);
+        goto done;
+    }
+    if (check) {
+        st = series_check(ctx, in, s, surf, ch, out);
+        if (st) rc = cli_fail(ctx, cmd, st);
         goto done;
     }
     if (!convert) {
@@ -182,6 +283,9 @@ int cmd_series(int argc, char **argv)
     thx_log(ctx, THX_LOG_INFO, "wrote %s (%zu rows x %zu frames%s)", out, s->n_rows, s->n_frames,
             bad ? ", with NaN/Inf values" : "");
 done:
+    thx_channels_destroy(&ch);
+    thx_model_destroy(&sm);
+    thx_surface_destroy(&own);
     thx_series_destroy(&s);
     thx_ctx_destroy(&ctx);
     return rc;
