@@ -10,6 +10,7 @@
 #include "cli/options.h"
 #include "thorax/core/core.h"
 #include "thorax/model/series.h"
+#include "thorax/model/model.h"
 #include "thorax/model/surface.h"
 
 /* The option's table entry (value into *spec); what: what the command does with them. */
@@ -25,6 +26,10 @@
  * spec NULL: does nothing.
  */
 thx_status cli_bad_leads_fill(thx_ctx *ctx, const char *spec, const char *channels, const thx_surface *surf, thx_series *s);
+
+/* The same on the model's surface of that role (forward: the heart); an error if it has none. */
+thx_status cli_bad_leads_fill_role(thx_ctx *ctx, const char *spec, const char *channels, const thx_model *m, thx_role role,
+                                   thx_series *s);
 
 /*
  * Leaves the bad rows out of the data B (rows = leads = channels) and the same rows out of the

@@ -12,6 +12,7 @@
 #include "thorax/model/electrodes.h"
 #include "thorax/io/electrodes_file.h"
 #include "thorax/io/channels_file.h"
+#include "cli/cli_bad_leads.h"
 #include "thorax/io/series_file.h"
 #include "thorax/leads/leads.h"
 #include "thorax/phantom/phantom.h"
@@ -45,7 +46,7 @@ static const char *ext_of(thx_series_format f)
 int cmd_forward(int argc, char **argv)
 {
     const char *out = NULL, *epi_path = NULL, *currents = NULL, *transfer_in = NULL, *rows_path = NULL, *dump = NULL;
-    const char *channels = NULL, *dipoles = NULL;
+    const char *channels = NULL, *dipoles = NULL, *bad_leads = NULL;
     int dip_method = THX_DIPOLE_VENANT;
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0, format = THX_SERIES_RAW, meth = -1;
@@ -71,6 +72,7 @@ int cmd_forward(int argc, char **argv)
         {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
          .help = "map3d .channels: the --epicardial rows are recording channels, heart node i takes channel c "
                  "(a node with no channel is refused)"},
+        CLI_BAD_LEADS_OPT(&bad_leads, "filled by Laplacian interpolation on the heart surface before the solve"),
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
          .help = "the solution directory (written whole or not at all)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
@@ -112,7 +114,7 @@ int cmd_forward(int argc, char **argv)
     cli_command cmd = {
         .name = "forward",
         .usage = "MODEL --dipoles -o [--dipole-method] [--rows] [--max-offset] [--format] [--volume] [--no-warm] [--force] [PETSc options]\n"
-                 "MODEL --epicardial [--channels] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
+                 "MODEL --epicardial [--channels] [--bad-leads] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
                  "[--no-warm] [--dump-system] [--force] [PETSc options]\n"
                  "MODEL --transfer-out -o [--rows] [--max-offset] [--method] [--format] [--force] [PETSc options]\n"
                  "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
@@ -161,7 +163,7 @@ int cmd_forward(int argc, char **argv)
                                    &pa, verbose, force);
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
     if (rows_path && !transfer_out && !epi_path) return cli_usage_error("forward", "--rows goes with --transfer-out, --epicardial or --dipoles");
-    if (channels && !epi_path) return cli_usage_error("forward", "--channels needs --epicardial (its rows are the channels)");
+    if ((channels || bad_leads) && !epi_path) return cli_usage_error("forward", "--channels and --bad-leads need --epicardial (its rows are the channels)");
     if (n_electrodes)
         return cli_forward_defib(model_dir, out, electrodes, n_electrodes, threshold, format_name, &pa, verbose, force);
 
@@ -208,6 +210,7 @@ int cmd_forward(int argc, char **argv)
         thx_series_destroy(&mapped);
         thx_channels_destroy(&ch);
     }
+    if (st == THX_OK) st = cli_bad_leads_fill_role(ctx, bad_leads, channels, m, THX_ROLE_HEART, epi);
     if (st == THX_OK && rows_path) {
         /* any electrode set on the outer surface: the transfer rows, or the signals sampled */
         const char *outer = NULL;

@@ -14,6 +14,7 @@
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
 #include "thorax/picture/lcurve_plot.h"
+#include "cli/cli_bad_leads.h"
 
 static const char *ext_of(thx_series_format f)
 {
@@ -95,7 +96,7 @@ static double quantile(const double *v, size_t n, double q)
 int cmd_inverse(int argc, char **argv)
 {
     const char *transfer = NULL, *data = NULL, *out = NULL, *lambda_s = "lcurve", *noise_s = NULL, *heart_dir = NULL;
-    const char *truth_path = NULL, *truth_model = NULL;
+    const char *truth_path = NULL, *truth_model = NULL, *bad_leads = NULL;
     int verbose = 0, method = THX_INVERSE_TIKHONOV0, per = 0, format = THX_SERIES_RAW, gs_rank = 0, tv_it = 10;
     static const cli_choice methods[] = {{"tikhonov0", THX_INVERSE_TIKHONOV0}, {"tikhonov1", THX_INVERSE_TIKHONOV1},
                                          {"tikhonov2", THX_INVERSE_TIKHONOV2}, {"tsvd", THX_INVERSE_TSVD},
@@ -110,6 +111,7 @@ int cmd_inverse(int argc, char **argv)
                  "a variable)"},
         {.name = "--data", .type = CLI_INPUT, .meta = "SERIES", .s = &data,
          .help = "the body-surface potentials, rows the transfer matrix's rows, one column per frame"},
+        CLI_BAD_LEADS_OPT(&bad_leads, "left out (their rows of --data and of the transfer matrix; channel = row of --data)"),
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out,
          .help = "the result directory (written whole or not at all): heart.EXT, lambda.txt, lcurve.svg, lcurve.png, "
                  "inverse.json"},
@@ -143,7 +145,7 @@ int cmd_inverse(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "inverse",
-        .usage = "--transfer --data -o [--method] [--lambda] [--lambda-per] [--noise] [--heart] [--truth] "
+        .usage = "--transfer --data [--bad-leads] -o [--method] [--lambda] [--lambda-per] [--noise] [--heart] [--truth] "
                  "[--truth-model] [--rank] [--iterations] [--format]",
         .about = "The inverse problem (paper 4.1): heart-surface potentials from body-surface\n"
                  "potentials through a transfer matrix, regularized. Tikhonov of order 0, 1, 2\n"
@@ -213,6 +215,7 @@ int cmd_inverse(int argc, char **argv)
     st = thx_outdir_claim(ctx, &od, out, "inverse.json", "thorax-inverse", inputs, 5);
     if (st == THX_OK) st = thx_series_read(ctx, transfer, THX_SERIES_AUTO, &A);
     if (st == THX_OK) st = thx_series_read(ctx, data, THX_SERIES_AUTO, &B);
+    if (st == THX_OK) st = cli_bad_leads_drop(ctx, bad_leads, &A, &B);
     int needs_heart = method == THX_INVERSE_TIKHONOV1 || method == THX_INVERSE_TIKHONOV2 || method == THX_INVERSE_TV;
     if (st == THX_OK && (needs_heart || heart_dir || truth_model)) {
         char dir[PATH_MAX];

@@ -11,6 +11,7 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
+#include "cli/cli_bad_leads.h"
 #include "thorax/io/series_file.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/channels_file.h"
@@ -49,7 +50,7 @@ static thx_status load_set(thx_ctx *ctx, const char *given, const char *def, con
 
 int cmd_leads(int argc, char **argv)
 {
-    const char *out = NULL, *twelve = NULL, *array = NULL, *data = NULL, *channels = NULL, *surface = NULL,
+    const char *out = NULL, *twelve = NULL, *array = NULL, *data = NULL, *channels = NULL, *surface = NULL, *bad_leads = NULL,
                *plot = NULL;
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0, format = THX_SERIES_TEXT;
@@ -70,6 +71,7 @@ int cmd_leads(int argc, char **argv)
                  "argument is then a MODEL"},
         {.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &channels,
          .help = "map3d .channels: the --data rows are recording channels, node i takes channel c"},
+        CLI_BAD_LEADS_OPT(&bad_leads, "filled by Laplacian interpolation on the surface before the leads are sampled"),
         {.name = "--surface", .type = CLI_STRING, .meta = "NAME", .s = &surface, .def = "the outer surface",
          .help = "the surface the potentials and the electrodes are on"},
         {.name = "--max-offset", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &max_offset, .rule = CLI_GE, .lo = 0,
@@ -84,7 +86,7 @@ int cmd_leads(int argc, char **argv)
     cli_command c = {
         .name = "leads",
         .usage = "SOLUTION [-o] [--twelve] [--array] [--max-offset] [--format] [--plot]\n"
-                 "MODEL --data [--channels] -o [--twelve] [--array] [--surface] [--max-offset] [--format] [--plot]",
+                 "MODEL --data [--channels] [--bad-leads] -o [--twelve] [--array] [--surface] [--max-offset] [--format] [--plot]",
         .about = "Reads potentials on the torso - a solution of thorax forward (its torso\n"
                  "potentials and its model), or a MODEL and --data SERIES (a recording, its\n"
                  "channels mapped to nodes by --channels) - and writes the standard 12-lead\n"
@@ -102,7 +104,7 @@ int cmd_leads(int argc, char **argv)
     if (c.n_pos > 1) return cli_usage_error("leads", "more than one %s given", data ? "model" : "solution");
     const char *sol = c.n_pos ? c.pos[0] : NULL;
     if (!sol) return cli_usage_error("leads", "no %s given", data ? "model" : "solution");
-    if (channels && !data) return cli_usage_error("leads", "--channels goes with --data (its rows are the channels)");
+    if ((channels || bad_leads) && !data) return cli_usage_error("leads", "--channels and --bad-leads go with --data (its rows are the channels)");
     if (data && !out) return cli_usage_error("leads", "--data needs -o DIR (the model is not written into)");
     if (!out) out = sol;
     if (plot) { /* checked before anything is read or written */
@@ -184,6 +186,7 @@ int cmd_leads(int argc, char **argv)
                 st = thx_error(ctx, THX_EINPUT, "%s%s%s: %zu rows, but surface \"%s\" has %zu nodes%s", data,
                                channels ? " mapped by " : "", channels ? channels : "", torso->n_rows, s->name, s->n_nodes,
                                channels ? "" : " (a recording's channels need --channels)");
+            if (st == THX_OK) st = cli_bad_leads_fill(ctx, bad_leads, channels, s, torso);
         } else {
             snprintf(path, sizeof path, "%s/%s", sol, torso_file);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &torso);

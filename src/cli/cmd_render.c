@@ -16,6 +16,7 @@
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "cli/render_cli.h"
+#include "cli/cli_bad_leads.h"
 #include "thorax/core/fileio.h"
 #include "thorax/render/image.h"
 #include "thorax/import/import.h"
@@ -214,6 +215,7 @@ size_t render_options(cli_opt *t, ropts *o)
                                "nodes"};
     t[n++] = (cli_opt){.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &o->p.channels,
                        .help = "map3d .channels: the --data rows are recording channels, node i takes channel c"};
+    t[n++] = (cli_opt)CLI_BAD_LEADS_OPT(&o->p.bad_leads, "filled by Laplacian interpolation on the --data's surface");
     t[n++] = (cli_opt){.name = "--size", .type = CLI_STRING, .meta = "WxH", .fn = parse_size, .def = "800x800",
                        .unit = "pixels", .help = "image size, 16 to 8192 each"};
     t[n++] = (cli_opt){.name = "--view", .type = CLI_CHOICE, .meta = "V", .choices = views, .i = &o->p.view,
@@ -405,7 +407,7 @@ int cmd_render(int argc, char **argv)
         .name = "render",
         .usage = "MODEL [--data [--data-surface]] [--frame] -o [options]\n"
                  "--solution [--frame] -o [options]\n"
-                 "SURFACE_FILE... [--data [--channels]] [--frame] -o [options]",
+                 "SURFACE_FILE... [--data [--channels] [--bad-leads]] [--frame] -o [options]",
         .about = "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a\n"
                  "GPU), with potentials coloured per pixel (the value interpolated, then the colour\n"
                  "looked up, so bands and contours are exact), following the field's display\n"

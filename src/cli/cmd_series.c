@@ -49,12 +49,12 @@ static thx_status series_check(thx_ctx *ctx, const char *in, const thx_series *s
     thx_bad_leads *b = NULL;
     THX_CHECK(thx_bad_leads_detect(ctx, s, surf, NULL, &b));
     size_t n = s->n_rows;
-    int32_t *chan = malloc((n + 1) * sizeof *chan);
+    int *chan = malloc((n + 1) * sizeof *chan);
     if (!chan) {
         thx_bad_leads_destroy(&b);
         return thx_error(ctx, THX_ENOMEM, "out of memory");
     }
-    for (size_t i = 0; i < n; i++) chan[i] = ch ? ch->channel[i] + 1 : (int32_t)i + 1;
+    for (size_t i = 0; i < n; i++) chan[i] = ch ? (int)ch->channel[i] + 1 : (int)i + 1;
     printf("file        %s\n", in);
     printf("rows        %zu %s\n", n, ch ? "(nodes of the channel map; 'channel' = the recording's row, 1-based)"
                                         : "(channels = rows, 1-based)");

@@ -332,6 +332,15 @@ thx_status thx_bad_leads_detect(thx_ctx *ctx, const thx_series *s, const thx_sur
             if (isnan(b->d[i]) || d < b->d[i]) { b->d[i] = d; b->nearest[i] = (int32_t)j; }
             if (isnan(b->d[j]) || d < b->d[j]) { b->d[j] = d; b->nearest[j] = (int32_t)i; }
         }
+    /* with a surface, how well each row's neighbours predict it (flat, saturated and missing rows
+       left out): of a duplicated pair, a row its neighbours predict (unlike <= 1) is the original */
+    if (surf) {
+        for (size_t i = 0; i < n; i++) good[i] = !b->missing[i] && !(b->flags[i] & (THX_BAD_FLAT | THX_BAD_SATURATED));
+        for (size_t i = 0; i < n; i++)
+            if (good[i])
+                b->n_nb[i] = (int32_t)neighbour_scores(&r, X, nf, b->rms, good, i, m, w, &b->unlike[i], &b->ratio[i],
+                                                       &b->corr[i]);
+    }
     for (size_t i = 0; i < n; i++) {
         int32_t j = b->nearest[i];
         if (j < 0) continue;
@@ -351,7 +360,7 @@ thx_status thx_bad_leads_detect(thx_ctx *ctx, const thx_series *s, const thx_sur
                 }
             double cm = c[0] < c[1] ? c[0] : c[1];
             b->contrast[i] = isfinite(cm) && cm > 0 ? b->d[i] / cm : NAN;
-            dup = isfinite(cm) && b->d[i] <= o->duplicate_contrast * cm;
+            dup = isfinite(cm) && b->d[i] <= o->duplicate_contrast * cm && !(b->n_nb[i] >= 2 && b->unlike[i] <= 1);
         }
         if (dup) {
             b->flags[i] |= THX_BAD_DUPLICATE;
@@ -418,7 +427,7 @@ static void appendf(char *buf, size_t cap, size_t *len, const char *fmt, ...)
     if (k > 0) *len = *len + (size_t)k < cap ? *len + (size_t)k : cap - 1;
 }
 
-void thx_bad_leads_reason(const thx_bad_leads *b, size_t i, const int32_t *channel, char *buf, size_t cap)
+void thx_bad_leads_reason(const thx_bad_leads *b, size_t i, const int *channel, char *buf, size_t cap)
 {
     size_t len = 0;
     if (!cap) return;
@@ -526,7 +535,7 @@ static int cmp_chan_row(const void *a, const void *b)
     return (x->row > y->row) - (x->row < y->row);
 }
 
-thx_status thx_bad_list_write(thx_ctx *ctx, const char *path, const thx_bad_leads *b, const int32_t *channel,
+thx_status thx_bad_list_write(thx_ctx *ctx, const char *path, const thx_bad_leads *b, const int *channel,
                               const char *note)
 {
     chan_row *cr = thx_malloc(ctx, (b->n + 1) * sizeof *cr);
@@ -552,6 +561,68 @@ thx_status thx_bad_list_write(thx_ctx *ctx, const char *path, const thx_bad_lead
     free(cr);
     st = thx_atomic_commit(ctx, &af);
     if (st != THX_OK) thx_atomic_abort(&af);
+    return st;
+}
+
+/* ------------------------------------------------------------------ marking and filling */
+
+thx_status thx_bad_leads_mark(thx_ctx *ctx, const char *spec, const thx_series *s, const thx_surface *surf,
+                              const int *channel, unsigned char *bad, size_t *n_bad)
+{
+    size_t n = s->n_rows, cnt = 0, len = 0;
+    char list[480] = "";
+    memset(bad, 0, n);
+    *n_bad = 0;
+    if (!strcmp(spec, "auto")) {
+        thx_bad_leads *b = NULL;
+        THX_CHECK(thx_bad_leads_detect(ctx, s, surf, NULL, &b));
+        char why[512];
+        for (size_t i = 0; i < n; i++) {
+            if (!b->flags[i]) continue;
+            bad[i] = 1;
+            thx_bad_leads_reason(b, i, channel, why, sizeof why);
+            thx_log(ctx, THX_LOG_DEBUG, "--bad-leads auto: channel %d: %s", channel ? channel[i] : (int)i + 1, why);
+        }
+        thx_bad_leads_destroy(&b);
+    } else {
+        int32_t *ch = NULL;
+        size_t nl = 0;
+        THX_CHECK(thx_bad_list_read(ctx, spec, 0, &ch, &nl));
+        for (size_t k = 0; k < nl; k++) {
+            int hit = 0;
+            for (size_t i = 0; i < n; i++)
+                if ((channel ? channel[i] : (int)i + 1) == (int)ch[k] + 1) bad[i] = 1, hit = 1;
+            if (!hit) thx_log(ctx, THX_LOG_INFO, "%s: channel %d is not in the series (ignored)", spec, (int)ch[k] + 1);
+        }
+        free(ch);
+    }
+    for (size_t i = 0; i < n; i++)
+        if (bad[i]) {
+            cnt++;
+            if (len < sizeof list - 16)
+                appendf(list, sizeof list, &len, "%s%d", cnt > 1 ? ", " : ": ", channel ? channel[i] : (int)i + 1);
+            else if (len < sizeof list - 1)
+                appendf(list, sizeof list, &len, " ...");
+        }
+    *n_bad = cnt;
+    thx_log(ctx, THX_LOG_INFO, "--bad-leads %s: %zu bad channel%s%s", spec, cnt, cnt == 1 ? "" : "s", list);
+    return THX_OK;
+}
+
+thx_status thx_bad_leads_fill(thx_ctx *ctx, const char *spec, const thx_surface *surf, const int *channel, thx_series *s)
+{
+    if (surf->n_nodes != s->n_rows)
+        return thx_error(ctx, THX_EINPUT, "--bad-leads: %zu rows, surface '%s' has %zu nodes", s->n_rows, surf->name,
+                         surf->n_nodes);
+    unsigned char *bad = thx_malloc(ctx, s->n_rows + 1);
+    if (!bad) return THX_ENOMEM;
+    size_t n_bad = 0;
+    thx_status st = thx_bad_leads_mark(ctx, spec, s, surf, channel, bad, &n_bad);
+    if (st == THX_OK && n_bad) st = thx_bad_leads_interpolate(ctx, surf, s, bad);
+    if (st == THX_OK && n_bad)
+        thx_log(ctx, THX_LOG_INFO, "--bad-leads: %zu node%s of '%s' filled by Laplacian interpolation", n_bad,
+                n_bad == 1 ? "" : "s", surf->name);
+    free(bad);
     return st;
 }
 

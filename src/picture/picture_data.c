@@ -16,6 +16,7 @@
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
 #include "thorax/io/channels_file.h"
+#include "thorax/leads/bad_leads.h"
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/geom/pick.h"
 #include "thorax/io/landmarks_file.h"
@@ -323,6 +324,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         if (bad == THX_OK && d->n_sets[target] >= THX_PICTURE_SETS)
             bad = thx_error(ctx, THX_EINPUT, "%s: surface '%s' has %d data sets already (at most %d)", dpath,
                             d->m->surf[target]->name, d->n_sets[target], THX_PICTURE_SETS);
+        if (bad == THX_OK && o->bad_leads) bad = thx_bad_leads_fill(ctx, o->bad_leads, d->m->surf[target], chan, s);
         if (bad != THX_OK) { thx_series_destroy(&s); free(chan); return bad; }
         d->sets[target][d->n_sets[target]++] = s;
         d->active[target] = d->n_sets[target] - 1;

@@ -19,7 +19,9 @@
  *               larger of the two. Without a surface: d_ij <= duplicate_exact (a copy). With a
  *               surface: i and j are not neighbours, d_ij <= duplicate and d_ij <= duplicate_contrast
  *               * min(c_i, c_j), c_i = the smallest d_ik over i's neighbours k: two distant leads
- *               alike while each is unlike the leads around it. (Adjacent leads on a smooth body
+ *               alike while each is unlike the leads around it; of such a pair, a row whose neighbours'
+ *               mean predicts it (the unlike score below <= 1) is taken for the original and kept
+ *               (without a surface both rows of a pair are flagged). (Adjacent leads on a smooth body
  *               surface field are near copies of each other: the Utah tank's 146 and 147 have
  *               d = 0.031; hence no looser test without a surface.)
  * With a surface (rows = its nodes; neighbours = the nodes sharing a triangle edge, missing and
@@ -111,7 +113,7 @@ void thx_bad_leads_destroy(thx_bad_leads **b);
 
 /* Why row i is bad, in words, with its scores ("duplicate of channel 308 (d 0.046); unlike its
  * neighbours (7.8)"), rows named as channel[row] (1-based; NULL: row + 1). "" for a good row. */
-void thx_bad_leads_reason(const thx_bad_leads *b, size_t i, const int32_t *channel, char *buf, size_t cap);
+void thx_bad_leads_reason(const thx_bad_leads *b, size_t i, const int *channel, char *buf, size_t cap);
 
 /*
  * Bad-lead list (docs/formats.md): text; '#' starts a comment; blank lines skipped; every other
@@ -126,8 +128,19 @@ thx_status thx_bad_list_read(thx_ctx *ctx, const char *path, size_t max_channel,
  * a comment line `note` (may be NULL), then "CHANNEL  REASON" per bad row, in channel order,
  * channels channel[row] (1-based; NULL: row + 1).
  */
-thx_status thx_bad_list_write(thx_ctx *ctx, const char *path, const thx_bad_leads *b, const int32_t *channel,
+thx_status thx_bad_list_write(thx_ctx *ctx, const char *path, const thx_bad_leads *b, const int *channel,
                               const char *note);
+
+/*
+ * The rows of s that spec names bad (bad[i] = 1, n_rows of them; *n_bad counted): spec "auto" runs
+ * thx_bad_leads_detect (on surf when not NULL), else spec is a bad-lead list's path. channel: the
+ * 1-based channel of each row (0 = none; NULL: row + 1): a list names channels. A listed channel
+ * no row has is logged and ignored. Logs the bad channels (INFO) and each reason (DEBUG).
+ */
+thx_status thx_bad_leads_mark(thx_ctx *ctx, const char *spec, const thx_series *s, const thx_surface *surf,
+                              const int *channel, unsigned char *bad, size_t *n_bad);
+/* thx_bad_leads_mark, then thx_bad_leads_interpolate of those rows on surf (rows = its nodes). */
+thx_status thx_bad_leads_fill(thx_ctx *ctx, const char *spec, const thx_surface *surf, const int *channel, thx_series *s);
 
 /*
  * Laplacian interpolation on a triangulated surface (Oostendorp, van Oosterom and Huiskamp 1989,

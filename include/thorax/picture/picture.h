@@ -60,6 +60,8 @@ typedef struct {
     int n_data_surface;
     const char *files[THX_PICTURE_MAX]; /* surface files drawn without a model (any format thorax import reads) */
     const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
+    const char *bad_leads;  /* a bad-lead list or "auto": the --data's bad channels filled on their surface
+                               (thorax/leads/bad_leads.h) */
     int n_files;
     int w, h;               /* picture size, pixels */
     int view;               /* a thx_view */
