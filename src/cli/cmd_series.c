@@ -76,8 +76,14 @@ static thx_status series_check(thx_ctx *ctx, const char *in, const thx_series *s
         printf(" %11.5g %7.2f", b->rms[i], 100 * b->extreme[i]);
         if (b->nearest[i] >= 0) printf(" %8d %7.4f", (int)chan[b->nearest[i]], b->d[i]);
         else printf(" %8s %7s", "-", "-");
-        printf(" %8.3f %7.3f %7.3f %6.3f %3d  %s\n", b->contrast[i], b->unlike[i], b->ratio[i], b->corr[i], (int)b->n_nb[i],
-               b->flags[i] ? why : "ok");
+        /* a score that does not apply (no duplicate to contrast, no neighbours) prints as '-', not nan */
+        const double score[4] = {b->contrast[i], b->unlike[i], b->ratio[i], b->corr[i]};
+        const int width[4] = {8, 7, 7, 6}, prec[4] = {3, 3, 3, 3};
+        for (int k = 0; k < 4; k++) {
+            if (isfinite(score[k])) printf(" %*.*f", width[k], prec[k], score[k]);
+            else printf(" %*s", width[k], "-");
+        }
+        printf(" %3d  %s\n", (int)b->n_nb[i], b->flags[i] ? why : "ok");
     }
     printf("bad         %zu of %zu%s", b->n_bad, n, b->n_bad ? " (channels:" : "");
     for (size_t i = 0; i < n; i++)
