@@ -402,12 +402,13 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
         /* a frame whose data is below the noise (its signal's energy ||b||² - dof σ² below the
          * noise's dof σ²): no rule finds anything but noise there; the series' λ */
         if (fallback && sigma > 0 && n2 < 2 * co->dof * sigma * sigma) {
-            ff |= THX_LAMBDA_BELOW_NOISE;
-            if (!co->no_fallback) {
+            if (!co->no_fallback) { /* the flags say what the λ used is: the series' */
                 l = series_lam;
                 kf = series_k;
+                ff = series_flags;
                 n_fb++;
             }
+            ff |= THX_LAMBDA_BELOW_NOISE;
         }
         if (co->tsvd)
             for (size_t i = 0; i < kk; i++) fl[i] = (int)i < kf ? 1.0 : 0.0;

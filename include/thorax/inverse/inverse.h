@@ -124,7 +124,8 @@ typedef struct {
     size_t rank;           /* singular values of the (transformed) matrix, largest first */
     double *sv;
     double noise_sigma;    /* σ used by the discrepancy rule (first frame's, per frame) */
-    int *flags;            /* per frame: THX_LAMBDA_AT_LOW | ... of the frame's own rule (Greensite: 0) */
+    int *flags;            /* per frame: THX_LAMBDA_AT_LOW | ... of the λ used (the frame's own rule's, or with
+                              THX_LAMBDA_BELOW_NOISE and the fallback the series'; Greensite: 0) */
     int series_flags;      /* the same of the series' λ (one λ per series, or the fallback's) */
     double series_lambda;  /* λ per frame: the series' λ by the same rule (the fallback), else NaN */
     double frame_noise;    /* λ per frame: the σ that tells the frames below the noise (given, or the series'
