@@ -450,6 +450,54 @@ static void test_series_lambda(thx_ctx *ctx)
     thx_series_destroy(&B);
 }
 
+/* GCV on the spectral data of a problem with as many degrees of freedom as nonzero singular values
+ * (m < n: every row fitted as λ → 0; dof = m - p0 with the operator's null space taken off): the
+ * trace(I - H) = dof - Σ f goes to 0 with the residual, and the minimum is inside the range, no
+ * flag; thorax's λ is at least as good as any of 2000 λ on a fine grid, G computed here in long
+ * double from the definition. With one degree of freedom too many (the old m - Σ f where the
+ * null space must be taken off) G → 0 at the bottom: the λ is there and flagged range_low.
+ * The discrepancy's target out of reach either way: flagged at that end. */
+static void test_pick_dof_and_flags(void)
+{
+    enum { K = 40 };
+    double s[K], b2[K];
+    for (int i = 0; i < K; i++) {
+        s[i] = pow(10.0, -0.25 * i);
+        double x = 1.0 / (1 + i), e = 1e-4 * nrand();
+        b2[i] = (s[i] * x + e) * (s[i] * x + e);
+    }
+    int fl = -1;
+    double lam = thx_inverse_pick(s, b2, K, 0.0, (double)K, THX_LAMBDA_GCV, 0, 0, 0, 100, NULL, &fl);
+    CHECK(fl == 0);
+    CHECK(lam > s[K - 1] * 1.5 && lam < s[0] / 1.5);
+    long double gbest = INFINITY, gl = 0;
+    for (int q = -1; q < 2000; q++) {
+        long double l = q < 0 ? lam : powl(10.0L, -10.5L + 11.0L * q / 1999), r2 = 0, tr = 0;
+        for (int i = 0; i < K; i++) {
+            long double g = l * l / ((long double)s[i] * s[i] + l * l);
+            r2 += g * g * b2[i];
+            tr += g;
+        }
+        long double G = r2 / (tr * tr);
+        if (q < 0) gl = G;
+        else if (G < gbest) gbest = G;
+    }
+    if (!(gl <= gbest * (1 + 1e-6L))) fprintf(stderr, "GCV at thorax's λ %g: %Lg, grid minimum %Lg\n", lam, gl, gbest);
+    CHECK(gl <= gbest * (1 + 1e-6L));
+    lam = thx_inverse_pick(s, b2, K, 0.0, (double)K + 1, THX_LAMBDA_GCV, 0, 0, 0, 100, NULL, &fl);
+    CHECK(fl == THX_LAMBDA_AT_LOW && fabs(lam / s[K - 1] - 1) < 1e-9);
+    double n2 = 0;
+    for (int i = 0; i < K; i++) n2 += b2[i];
+    lam = thx_inverse_pick(s, b2, K, 0.0, K, THX_LAMBDA_DISCREPANCY, 0, 10 * sqrt(n2), 0, 100, NULL, &fl);
+    CHECK(fl == THX_LAMBDA_AT_HIGH && fabs(lam / s[0] - 1) < 1e-9);
+    lam = thx_inverse_pick(s, b2, K, 0.0, K, THX_LAMBDA_DISCREPANCY, 0, 0.0, 0, 100, NULL, &fl);
+    CHECK(fl == THX_LAMBDA_AT_LOW && fabs(lam / s[K - 1] - 1) < 1e-9);
+    /* TSVD: GCV's denominator dof - k: with dof = K the last k (K) is never taken */
+    int kept = 0;
+    thx_inverse_pick(s, b2, K, 0.0, (double)K, THX_LAMBDA_GCV, 0, 0, 1, 100, &kept, &fl);
+    CHECK(kept > 1 && kept < K && fl == 0);
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -459,6 +507,7 @@ int main(void)
     test_operators(ctx);
     test_bad_input(ctx);
     test_series_lambda(ctx);
+    test_pick_dof_and_flags(); /* last: it draws from the noise generator the others use */
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("inverse");
 }

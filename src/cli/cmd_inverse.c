@@ -22,7 +22,8 @@ static const char *ext_of(thx_series_format f)
 }
 
 /* The heart surface of a model directory (or of the model a thorax solution directory names). */
-static thx_status load_heart(thx_ctx *ctx, const char *dir, thx_model **m, const thx_surface **heart)
+static thx_status load_heart(thx_ctx *ctx, const char *dir, thx_model **m, const thx_surface **heart, char *used,
+                             size_t n_used)
 {
     char path[PATH_MAX + 32];
     *heart = NULL;
@@ -46,6 +47,12 @@ static thx_status load_heart(thx_ctx *ctx, const char *dir, thx_model **m, const
         cJSON_Delete(j);
         dir = path;
     }
+    if (used) {
+        size_t l = strlen(dir);
+        if (l >= n_used) l = n_used - 1;
+        memcpy(used, dir, l);
+        used[l] = '\0';
+    }
     THX_CHECK(thx_model_read(ctx, dir, m));
     for (size_t k = 0; k < (*m)->n_surfaces; k++)
         if ((*m)->surf[k]->role == THX_ROLE_HEART) {
@@ -65,6 +72,29 @@ static void dir_of(const char *file, char *dir, size_t n)
     char *slash = strrchr(dir, '/');
     if (slash) *slash = '\0';
     else snprintf(dir, n, ".");
+}
+
+static const char *const flag_names[4] = {"range_low", "range_high", "no_corner", "below_noise"};
+
+/* the THX_LAMBDA_* bits as an array of names (empty: the rule found its λ inside the range) */
+static void add_flags(cJSON *o, const char *key, int flags)
+{
+    cJSON *a = cJSON_AddArrayToObject(o, key);
+    for (int b = 0; b < 4 && a; b++)
+        if (flags >> b & 1) cJSON_AddItemToArray(a, cJSON_CreateString(flag_names[b]));
+}
+
+/* one warning line for the frames with a flag: how many, and the first few (1-based) */
+static void warn_flag(const thx_inverse_report *R, int bit, const char *what)
+{
+    size_t c = 0;
+    for (size_t k = 0; k < R->n_frames; k++) c += (R->flags[k] & bit) != 0;
+    if (!c) return;
+    fprintf(stderr, "thorax inverse: warning: %s on %zu of %zu frames (", what, c, R->n_frames);
+    size_t shown = 0;
+    for (size_t k = 0; k < R->n_frames && shown < 10; k++)
+        if (R->flags[k] & bit) fprintf(stderr, "%s%zu", shown++ ? ", " : "", k + 1);
+    fprintf(stderr, "%s; inverse.json per_frame flags)\n", c > shown ? ", ..." : "");
 }
 
 static int cmp_d(const void *a, const void *b)
@@ -98,6 +128,8 @@ int cmd_inverse(int argc, char **argv)
     const char *transfer = NULL, *data = NULL, *out = NULL, *lambda_s = "lcurve", *noise_s = NULL, *heart_dir = NULL;
     const char *truth_path = NULL, *truth_model = NULL, *bad_leads = NULL;
     int verbose = 0, method = THX_INVERSE_TIKHONOV0, per = 0, format = THX_SERIES_RAW, gs_rank = 0, tv_it = 10;
+    int no_fallback = 0;
+    char heart_used[PATH_MAX];
     static const cli_choice methods[] = {{"tikhonov0", THX_INVERSE_TIKHONOV0}, {"tikhonov1", THX_INVERSE_TIKHONOV1},
                                          {"tikhonov2", THX_INVERSE_TIKHONOV2}, {"tsvd", THX_INVERSE_TSVD},
                                          {"greensite", THX_INVERSE_GREENSITE}, {"tv", THX_INVERSE_TV}, {NULL, 0}};
@@ -123,12 +155,14 @@ int cmd_inverse(int argc, char **argv)
         {.name = "--lambda-per", .type = CLI_CHOICE, .choices = pers, .i = &per,
          .help = "a λ for every frame (greensite: every temporal component), or one for the whole series"},
         {.name = "--noise", .type = CLI_STRING, .meta = "SIGMA", .s = &noise_s,
-         .help = "the data's noise for the discrepancy principle (and Greensite's rank): a standard deviation per "
-                 "lead in the data's unit, or a signal-to-noise ratio such as 30dB"},
+         .help = "the data's noise for the discrepancy principle, Greensite's rank and the frames below the noise (a "
+                 "λ per frame): a standard deviation per lead in the data's unit, or a signal-to-noise ratio such as "
+                 "30dB"},
         {.name = "--heart", .type = CLI_INPUT, .meta = "MODEL", .s = &heart_dir,
          .def = "the model of the solution.json beside --transfer",
          .help = "the model (or solution directory) whose heart surface's nodes are the matrix's columns: the mesh of "
-                 "the gradient and Laplacian (tikhonov1, tikhonov2, tv)"},
+                 "the gradient and Laplacian (tikhonov1, tikhonov2, tv); with any method its node count is checked "
+                 "against the matrix's columns"},
         {.name = "--truth", .type = CLI_INPUT, .meta = "SERIES", .s = &truth_path,
          .help = "the true heart potentials: CC and RE per frame printed, with their median and 10th percentile"},
         {.name = "--truth-model", .type = CLI_INPUT, .meta = "MODEL", .s = &truth_model,
@@ -139,6 +173,9 @@ int cmd_inverse(int argc, char **argv)
          .help = "greensite: the temporal components kept"},
         {.name = "--iterations", .type = CLI_INT, .meta = "N", .i = &tv_it, .rule = CLI_GE, .lo = 1,
          .help = "tv: reweighted least-squares iterations at most"},
+        {.name = "--no-fallback", .type = CLI_SET, .i = &no_fallback, .ival = 1,
+         .help = "a λ per frame: keep each frame's own λ on frames whose data is below the noise level (by default "
+                 "they take the series' λ by the same rule; the noise: --noise, else the series' GCV estimate)"},
         {.name = "--format", .type = CLI_CHOICE, .choices = formats, .i = &format, .help = "format of the series written"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
@@ -146,7 +183,7 @@ int cmd_inverse(int argc, char **argv)
     cli_command cmd = {
         .name = "inverse",
         .usage = "--transfer --data [--bad-leads] -o [--method] [--lambda] [--lambda-per] [--noise] [--heart] [--truth] "
-                 "[--truth-model] [--rank] [--iterations] [--format]",
+                 "[--truth-model] [--rank] [--iterations] [--no-fallback] [--format]",
         .about = "The inverse problem (paper 4.1): heart-surface potentials from body-surface\n"
                  "potentials through a transfer matrix, regularized. Tikhonov of order 0, 1, 2\n"
                  "(orders 1 and 2 brought to standard form, so one SVD serves every λ), TSVD,\n"
@@ -173,6 +210,7 @@ int cmd_inverse(int argc, char **argv)
     o.per_series = per;
     o.greensite_rank = gs_rank;
     o.tv_iterations = tv_it;
+    o.no_fallback = no_fallback;
     o.matrix_name = transfer;
     o.data_name = data;
     static const cli_choice rules[] = {{"lcurve", THX_LAMBDA_LCURVE}, {"creso", THX_LAMBDA_CRESO},
@@ -221,7 +259,8 @@ int cmd_inverse(int argc, char **argv)
         char dir[PATH_MAX];
         if (heart_dir) snprintf(dir, sizeof dir, "%s", heart_dir);
         else dir_of(transfer, dir, sizeof dir);
-        st = load_heart(ctx, dir, &hm, &heart);
+        st = load_heart(ctx, dir, &hm, &heart, heart_used, sizeof heart_used);
+        o.heart_name = heart_used;
         if (st != THX_OK && !heart_dir) {
             char msg[1024];
             snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
@@ -231,7 +270,7 @@ int cmd_inverse(int argc, char **argv)
     }
     if (st == THX_OK && truth_path) st = thx_series_read(ctx, truth_path, THX_SERIES_AUTO, &truth);
     if (st == THX_OK && truth_model) {
-        st = load_heart(ctx, truth_model, &tm, &theart);
+        st = load_heart(ctx, truth_model, &tm, &theart, NULL, 0);
         if (st == THX_OK && theart->n_nodes != truth->n_rows)
             st = thx_error(ctx, THX_EINPUT, "%s has %zu rows but the heart of %s has %zu nodes", truth_path,
                            truth->n_rows, truth_model, theart->n_nodes);
@@ -294,11 +333,22 @@ int cmd_inverse(int argc, char **argv)
         char title[256];
         snprintf(title, sizeof title, "L-curve: %s, lambda by %s (%s), %zu frames", thx_inverse_method_name(o.method),
                  thx_lambda_rule_name(o.rule), per ? "one for the series" : "per frame", X->n_frames);
-        if (st == THX_OK && R.n_curve) {
+        /* a curve with fewer than two points that a log-log picture can show (one row; a matrix of
+           rank 1 with its one component fitting exactly): no picture, and a note */
+        size_t n_pts = 0;
+        for (size_t q = 0; q < R.n_curve; q++)
+            n_pts += R.curve_residual[q] > 0 && R.curve_seminorm[q] > 0 && isfinite(R.curve_residual[q]) &&
+                     isfinite(R.curve_seminorm[q]);
+        int pictures = n_pts >= 2;
+        if (!pictures && R.n_curve && verbose >= 0)
+            fprintf(stderr, "thorax inverse: warning: no L-curve picture: the curve has %zu point%s with a positive "
+                            "residual and norm (a %zu x %zu matrix)\n",
+                    n_pts, n_pts == 1 ? "" : "s", A->n_rows, A->n_frames);
+        if (st == THX_OK && R.n_curve && pictures) {
             snprintf(path, sizeof path, "%s/lcurve.svg", od.tmp);
             st = thx_inverse_write_svg(ctx, &R, title, path);
         }
-        if (st == THX_OK && R.n_curve) {
+        if (st == THX_OK && R.n_curve && pictures) {
             /* the same curve as a PNG (thorax/picture/lcurve_plot.h); a λ per frame: the
                representative frame's curve bold, others faint */
             thx_lcurve_plot_opts po;
@@ -349,6 +399,25 @@ int cmd_inverse(int argc, char **argv)
         cJSON_AddNumberToObject(j, "frames", (double)X->n_frames);
         cJSON_AddNumberToObject(j, "lambda_used", R.chosen_lambda);
         cJSON_AddNumberToObject(j, "lambda_corner", R.corner_lambda);
+        cJSON_AddNumberToObject(j, "null_space_dim", (double)R.null_dim);
+        if (!per && o.rule != THX_LAMBDA_FIXED && o.method != THX_INVERSE_GREENSITE) {
+            cJSON *fb = cJSON_AddObjectToObject(j, "fallback");
+            cJSON_AddBoolToObject(fb, "on", !no_fallback);
+            cJSON_AddNumberToObject(fb, "series_lambda", R.series_lambda);
+            add_flags(fb, "series_flags", R.series_flags);
+            cJSON_AddNumberToObject(fb, "noise_sigma", R.frame_noise);
+            cJSON_AddStringToObject(fb, "noise_from", R.frame_noise_estimated ? "gcv" : "noise");
+            cJSON_AddNumberToObject(fb, "frames", (double)R.n_fallback);
+        } else if (per && o.rule != THX_LAMBDA_FIXED)
+            add_flags(j, "series_flags", R.series_flags);
+        {
+            cJSON *cnt = cJSON_AddObjectToObject(j, "lambda_flag_frames");
+            for (int b = 0; b < 4; b++) {
+                size_t c = 0;
+                for (size_t k = 0; k < X->n_frames; k++) c += (R.flags[k] >> b) & 1;
+                cJSON_AddNumberToObject(cnt, flag_names[b], (double)c);
+            }
+        }
         cJSON_AddNumberToObject(j, "seconds_svd", R.t_svd);
         cJSON_AddNumberToObject(j, "seconds_frames", R.t_frames);
         cJSON_AddNumberToObject(j, "seconds_total", thx_wtime() - t0);
@@ -364,6 +433,7 @@ int cmd_inverse(int argc, char **argv)
             if (isfinite(R.lambda[k])) cJSON_AddNumberToObject(e, "lambda", R.lambda[k]);
             else cJSON_AddNullToObject(e, "lambda");
             if (o.method == THX_INVERSE_TSVD) cJSON_AddNumberToObject(e, "kept", R.k[k]);
+            add_flags(e, "flags", R.flags[k]);
             cJSON_AddNumberToObject(e, "residual", R.residual[k]);
             cJSON_AddNumberToObject(e, "solution_norm", R.seminorm[k]);
             if (truth) {
@@ -387,7 +457,7 @@ int cmd_inverse(int argc, char **argv)
         snprintf(name, sizeof name, "heart.%s", ext);
         cJSON_AddStringToObject(files, "heart", name);
         cJSON_AddStringToObject(files, "lambda", "lambda.txt");
-        if (R.n_curve) {
+        if (R.n_curve && pictures) {
             cJSON_AddStringToObject(files, "lcurve", "lcurve.svg");
             cJSON_AddStringToObject(files, "lcurve_png", "lcurve.png");
             cJSON *lc = cJSON_AddObjectToObject(j, "lcurve_mark");
@@ -403,6 +473,28 @@ int cmd_inverse(int argc, char **argv)
         if (st != THX_OK) goto fail;
     }
     if (verbose >= 0) {
+        const char *rn = o.rule == THX_LAMBDA_FIXED ? "fixed" : thx_lambda_rule_name(o.rule);
+        char w[256];
+        snprintf(w, sizeof w, "λ (%s) at the small end of its search range (%s)", rn,
+                 o.method == THX_INVERSE_TSVD ? "every nonzero component kept" : "the smallest nonzero singular value");
+        warn_flag(&R, THX_LAMBDA_AT_LOW, w);
+        snprintf(w, sizeof w, "λ (%s) at the large end of its search range (%s)", rn,
+                 o.method == THX_INVERSE_TSVD ? "one component kept" : "the largest singular value");
+        warn_flag(&R, THX_LAMBDA_AT_HIGH, w);
+        snprintf(w, sizeof w, "%s found no %s", rn, o.rule == THX_LAMBDA_CRESO ? "local maximum" : "corner");
+        warn_flag(&R, THX_LAMBDA_NO_CORNER, w);
+        if (R.series_flags & (THX_LAMBDA_AT_LOW | THX_LAMBDA_AT_HIGH | THX_LAMBDA_NO_CORNER))
+            fprintf(stderr, "thorax inverse: warning: the series' λ %.4g (%s) is %s\n",
+                    per ? R.chosen_lambda : R.series_lambda, rn,
+                    R.series_flags & THX_LAMBDA_NO_CORNER ? "not at a corner"
+                    : R.series_flags & THX_LAMBDA_AT_LOW  ? "at the small end of its search range"
+                                                          : "at the large end of its search range");
+        if (R.flags) {
+            snprintf(w, sizeof w, "data below the noise level (σ %.4g%s): %s", R.frame_noise,
+                     R.frame_noise_estimated ? ", the series' GCV estimate" : "",
+                     no_fallback ? "their own λ kept (--no-fallback)" : "the series' λ used");
+            warn_flag(&R, THX_LAMBDA_BELOW_NOISE, w);
+        }
         if (truth) {
             printf("frame CC RE\n");
             for (size_t k = 0; k < X->n_frames; k++) printf("%zu %.4f %.4f\n", k + 1, cc[k], re[k]);
@@ -417,6 +509,18 @@ int cmd_inverse(int argc, char **argv)
     }
     goto end;
 fail:
+    /* a message naming the temporary directory names the output instead */
+    if (od.tmp[0] && strstr(thx_ctx_message(ctx), od.tmp)) {
+        char msg[8192], *at;
+        snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
+        at = strstr(msg, od.tmp);
+        if (at) {
+            char rest[8192];
+            snprintf(rest, sizeof rest, "%s", at + strlen(od.tmp));
+            *at = '\0';
+            st = thx_error(ctx, st, "%s%s%s", msg, out, rest);
+        }
+    }
     rc = cli_fail(ctx, "inverse", st);
 end:
     free(cc);

@@ -93,17 +93,18 @@ static double f_creso(const spec *q, double lambda)
     return c;
 }
 
-/* minus GCV's G(λ) = ρ² / (m - Σ f)² */
+/* minus GCV's G(λ) = ρ² / trace(I - H)², trace(I - H) = dof - Σ f = (dof - k) + Σ (1 - f): the sum of
+ * 1 - f = λ²/(s² + λ²) directly, so that the trace keeps its digits where it goes to 0 (m < n, λ
+ * small: dof = k there) instead of being the difference of two nearly equal numbers */
 static double f_mgcv(const spec *q, double lambda)
 {
-    double l2 = lambda * lambda, rho2 = q->perp2, tr = 0;
+    double l2 = lambda * lambda, rho2 = q->perp2, tr = q->m - (double)q->k;
     for (size_t i = 0; i < q->k; i++) {
-        double f = q->s2[i] / (q->s2[i] + l2), g = 1 - f;
+        double g = l2 / (q->s2[i] + l2);
         rho2 += g * g * q->b2[i];
-        tr += f;
+        tr += g;
     }
-    double d = q->m - tr;
-    return d > 0 ? -rho2 / (d * d) : -INFINITY;
+    return tr > 0 ? -rho2 / (tr * tr) : -INFINITY;
 }
 
 typedef double (*fn1)(const spec *q, double lambda);
@@ -144,7 +145,7 @@ size_t thx_inv_grid(const double *s, size_t k, int n_grid, double *grid)
 
 
 static double pick_tsvd(const double *s, const double *beta2, size_t k, double perp2, double m, thx_lambda_rule rule,
-                        double fixed, double target, int n_grid, int *kept)
+                        double fixed, double target, int n_grid, int *kept, int *flags)
 {
     size_t kmax = 0;
     while (kmax < k && s[kmax] > s[0] * 16 * DBL_EPSILON) kmax++;
@@ -171,12 +172,15 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
         }
     } else if (rule == THX_LAMBDA_DISCREPANCY) {
         best = kmax;
+        int met = 0;
         for (size_t kk = 1; kk <= kmax; kk++) {
             if (sqrt(R2[kk]) <= target) {
                 best = kk;
+                met = 1;
                 break;
             }
         }
+        if (!met) *flags |= THX_LAMBDA_AT_LOW; /* the target below every residual: all components kept */
     } else {
         /* L-curve: the corner of the continuous Tikhonov L-curve of the same data, λ*, and the
          * components above it (Hansen: the TSVD and Tikhonov L-curves turn at the same place,
@@ -186,21 +190,33 @@ static double pick_tsvd(const double *s, const double *beta2, size_t k, double p
          * noise), and the point farthest from its chord follows the last, noise-dominated
          * components; this keeps 25, 32, 36 components there (errors 0.11, 0.16, 0.05 at 1, 0.1,
          * 0.01% noise, the Tikhonov L-curve's 0.10, 0.16, 0.13) */
-        double lam = thx_inverse_pick(s, beta2, k, perp2, m, THX_LAMBDA_LCURVE, fixed, target, 0, n_grid, NULL);
+        double lam = thx_inverse_pick(s, beta2, k, perp2, m, THX_LAMBDA_LCURVE, fixed, target, 0, n_grid, NULL, flags);
+        *flags &= ~(THX_LAMBDA_AT_LOW | THX_LAMBDA_AT_HIGH);
         best = 0;
         while (best < kmax && s[best] > lam) best++;
         if (best == 0) best = 1;
     }
     free(R2);
+    if (rule != THX_LAMBDA_FIXED && kmax > 0) {
+        if (best >= kmax) *flags |= THX_LAMBDA_AT_LOW;
+        if (best <= 1) *flags |= THX_LAMBDA_AT_HIGH;
+    }
     if (kept) *kept = (int)best;
     if (best == 0) return s[0];
     return s[best - 1];
 }
 
 double thx_inverse_pick(const double *s, const double *beta2, size_t k, double perp2, double m, thx_lambda_rule rule,
-                        double fixed, double target, int tsvd, int n_grid, int *kept)
+                        double fixed, double target, int tsvd, int n_grid, int *kept, int *flags)
 {
-    if (tsvd) return pick_tsvd(s, beta2, k, perp2, m, rule, fixed, target, n_grid, kept);
+    int dummy = 0;
+    if (!flags) flags = &dummy;
+    *flags = 0;
+    if (!(k > 0 && s[0] > 0)) {
+        if (kept) *kept = 0;
+        return rule == THX_LAMBDA_FIXED ? fixed : 0;
+    }
+    if (tsvd) return pick_tsvd(s, beta2, k, perp2, m, rule, fixed, target, n_grid, kept, flags);
     if (kept) *kept = 0;
     if (rule == THX_LAMBDA_FIXED) return fixed;
     if (n_grid < 3) n_grid = 200;
@@ -215,11 +231,15 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
          * in-range part of the residual is set to its expected share instead, k/m of target² */
         if (perp2 >= target * target && m > 0) target = sqrt(perp2 + target * target * (double)k / m);
         thx_inv_norms(s, beta2, k, perp2, grid[0], &r2, &e2);
-        if (sqrt(r2) >= target) lam = grid[0];
-        else {
+        if (sqrt(r2) >= target) {
+            lam = grid[0];
+            *flags |= THX_LAMBDA_AT_LOW;
+        } else {
             thx_inv_norms(s, beta2, k, perp2, grid[n - 1], &r2, &e2);
-            if (sqrt(r2) <= target) lam = grid[n - 1];
-            else {
+            if (sqrt(r2) <= target) {
+                lam = grid[n - 1];
+                *flags |= THX_LAMBDA_AT_HIGH;
+            } else {
                 for (int it = 0; it < 200 && hi - lo > 1e-12; it++) {
                     double mid = 0.5 * (lo + hi);
                     thx_inv_norms(s, beta2, k, perp2, exp(mid), &r2, &e2);
@@ -257,6 +277,7 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
                 break;
             }
         if (at == n) {
+            *flags |= THX_LAMBDA_NO_CORNER;
             at = 0;
             for (size_t i = 1; i < n; i++)
                 if (v[i] > v[at]) at = i;
@@ -264,7 +285,11 @@ double thx_inverse_pick(const double *s, const double *beta2, size_t k, double p
     } else {
         for (size_t i = 1; i < n; i++)
             if (v[i] > v[at]) at = i;
+        /* the L-curve bends the wrong way everywhere (no corner): the most curved point is not one */
+        if (rule == THX_LAMBDA_LCURVE && !(v[at] > 0)) *flags |= THX_LAMBDA_NO_CORNER;
     }
+    if (at == 0) *flags |= THX_LAMBDA_AT_LOW;
+    if (at + 1 == n) *flags |= THX_LAMBDA_AT_HIGH;
     if (at > 0 && at + 1 < n) lam = golden_max(g, &q, grid[at - 1], grid[at + 1]);
     else lam = grid[at];
     free(v);

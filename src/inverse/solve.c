@@ -46,6 +46,7 @@ void thx_inverse_report_free(thx_inverse_report *r)
     free(r->frame_curve_frame);
     free(r->frame_curve_residual);
     free(r->frame_curve_seminorm);
+    free(r->flags);
     memset(r, 0, sizeof *r);
 }
 
@@ -89,7 +90,7 @@ static thx_status svd(thx_ctx *ctx, double *a, size_t m, size_t n, double *s, do
 /* Eldén's standard form for M = L^T L (n x n, destroyed): P = L_A^+ (n x n) and, when L has a null
  * space W (constants), Q = W (AW)^+ (n x m) so that x = P y + Q b. Returns the null space's size. */
 static thx_status standard_form(thx_ctx *ctx, const double *A, size_t m, size_t n, double *M, double **P, double **Q,
-                                size_t *null_dim)
+                                size_t *null_dim, const char *mname)
 {
     thx_status st = THX_OK;
     int N = (int)n, lwork = -1, liwork = -1, info = 0, qi;
@@ -131,8 +132,8 @@ static thx_status standard_form(thx_ctx *ctx, const double *A, size_t m, size_t 
         int K0 = (int)k0, Mi = (int)m;
         dposv_("U", &K0, &Mi, Nm, &K0, AWp, &K0, &info);
         if (info)
-            THX_TRY(thx_error(ctx, THX_EINPUT, "the transfer matrix maps the regularization operator's null space "
-                                               "(constant potentials) to zero: order 1 and 2 need A 1 != 0"));
+            THX_TRY(thx_error(ctx, THX_EINPUT, "%s maps the regularization operator's null space (constant "
+                                               "potentials) to zero: order 1 and 2 need A 1 != 0", mname));
         /* P = Lp - W (AWp (A Lp)),  Q = W AWp */
         double *S = thx_malloc(ctx, k0 * n * sizeof *S);
         *Q = thx_malloc(ctx, n * m * sizeof **Q);
@@ -200,6 +201,11 @@ typedef struct {
     int per_series;
     int n_grid;
     const double *target; /* per column (discrepancy) */
+    const char *matrix_name;
+    double dof;           /* GCV's degrees of freedom: rows minus the operator's null-space dimension */
+    int frames;           /* the columns are frames (not Greensite's components): the fallback applies */
+    int no_fallback;      /* flag frames below the noise but keep their own λ */
+    double noise;         /* σ per row for the fallback (0: estimated from the series' GCV fit) */
 } core_opts;
 
 /* ρ and η of one right-hand side (β² b2, perp2 outside range(U)) at Tikhonov λ, or TSVD keeping q
@@ -287,7 +293,7 @@ static thx_status picture_data(thx_ctx *ctx, const double *s, size_t kk, const d
     }
     /* that curve's corner */
     int kc = 0;
-    double lc = thx_inverse_pick(s, cb2, kk, cperp, 1.0, THX_LAMBDA_LCURVE, 0, 0, co->tsvd, co->n_grid, &kc);
+    double lc = thx_inverse_pick(s, cb2, kk, cperp, 1.0, THX_LAMBDA_LCURVE, 0, 0, co->tsvd, co->n_grid, &kc, NULL);
     r->mark_corner_lambda = lc;
     point_at(s, cb2, kk, cperp, co->tsvd, lc, (size_t)(kc > 0 ? kc : 0), &r->mark_corner_residual,
              &r->mark_corner_seminorm);
@@ -300,29 +306,38 @@ static thx_status picture_data(thx_ctx *ctx, const double *s, size_t kk, const d
 
 static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const double *Bb, size_t F,
                            const core_opts *co, double *Y, double *lam, int *kept, double *rho, double *eta,
-                           thx_inverse_report *r, int curve)
+                           int *flags, thx_inverse_report *r, int curve)
 {
     thx_status st = THX_OK;
-    size_t kk = m < n ? m : n;
-    double *s = thx_malloc(ctx, kk * sizeof *s), *U = thx_malloc(ctx, m * kk * sizeof *U),
-           *VT = thx_malloc(ctx, kk * n * sizeof *VT), *beta = thx_malloc(ctx, kk * F * sizeof *beta),
-           *perp = thx_malloc(ctx, F * sizeof *perp), *C = thx_calloc(ctx, kk * F, sizeof *C),
-           *sum2 = thx_calloc(ctx, kk, sizeof *sum2);
+    size_t kfull = m < n ? m : n, kk = kfull;
+    double *s = thx_malloc(ctx, kfull * sizeof *s), *U = thx_malloc(ctx, m * kfull * sizeof *U),
+           *VT = thx_malloc(ctx, kfull * n * sizeof *VT), *beta = thx_malloc(ctx, kfull * F * sizeof *beta),
+           *perp = thx_malloc(ctx, F * sizeof *perp), *C = thx_calloc(ctx, kfull * F, sizeof *C),
+           *sum2 = thx_calloc(ctx, kfull, sizeof *sum2);
     if (!s || !U || !VT || !beta || !perp || !C || !sum2) THX_TRY(THX_ENOMEM);
     double t0 = wtime();
     THX_TRY(svd(ctx, Abar, m, n, s, U, VT));
     if (r) {
         r->t_svd += wtime() - t0;
         free(r->sv);
-        r->sv = thx_malloc(ctx, kk * sizeof *r->sv);
+        r->sv = thx_malloc(ctx, kfull * sizeof *r->sv);
         if (!r->sv) THX_TRY(THX_ENOMEM);
-        memcpy(r->sv, s, kk * sizeof *s);
-        r->rank = kk;
+        memcpy(r->sv, s, kfull * sizeof *s);
+        r->rank = kfull;
     }
     double t1 = wtime();
-    if (!(s[0] > 0)) THX_TRY(thx_error(ctx, THX_EINPUT, "the transfer matrix is zero"));
+    if (!(s[0] > 0)) THX_TRY(thx_error(ctx, THX_EINPUT, "%s: the transfer matrix is zero", co->matrix_name));
+    /* the numerical rank (LAPACK's and numpy's tolerance, s_1 max(m, n) ε): the components below it
+     * are zero (a rank-deficient matrix; m < n with orders 1 and 2: the operator's null space, whose
+     * image is taken off b); they are not solved for, their part of b is residual, and the rules'
+     * search ranges end at the smallest nonzero singular value */
+    {
+        double tol = s[0] * (double)(m > n ? m : n) * DBL_EPSILON;
+        kk = 0;
+        while (kk < kfull && s[kk] > tol) kk++;
+    }
     thx_inv_gemm('T', 'N', kk, F, m, U, m, Bb, m, 0.0, beta, kk);
-    /* the part of b outside range(U), as a vector (||b||² - ||β||² would cancel digits away) */
+    /* the part of b outside those components, as a vector (||b||² - ||β||² would cancel digits away) */
     double *Rb = thx_malloc(ctx, m * F * sizeof *Rb);
     if (!Rb) THX_TRY(THX_ENOMEM);
     memcpy(Rb, Bb, m * F * sizeof *Rb);
@@ -342,46 +357,80 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
     }
     free(Rb);
     double series_lam = NAN;
-    int series_k = 0;
-    if (co->per_series)
-        /* the stacked problem: ρ² and η² summed over the frames; its GCV denominator is F (m - Σ f),
-         * so the minimizer is that of ρ²_sum / (m - Σ f)² */
-        series_lam = thx_inverse_pick(s, sum2, kk, perp_sum, (double)m, co->rule, co->fixed, sqrt(target2),
-                                      co->tsvd, co->n_grid, &series_k);
+    int series_k = 0, series_flags = 0;
+    /* λ per frame with a rule: the series' λ too (the fallback for frames below the noise) */
+    int fallback = co->frames && !co->per_series && co->rule != THX_LAMBDA_FIXED;
+    if (co->per_series || fallback)
+        /* the stacked problem: ρ² and η² summed over the frames; its GCV denominator is F (dof - Σ f),
+         * so the minimizer is that of ρ²_sum / (dof - Σ f)² */
+        series_lam = thx_inverse_pick(s, sum2, kk, perp_sum, co->dof, co->rule, co->fixed, sqrt(target2), co->tsvd,
+                                      co->n_grid, &series_k, &series_flags);
+    /* the noise level that tells a frame below it: given, or the series' GCV estimate
+     * σ² = ||A x - b||² / trace(I - H) (per row and frame) at the series' GCV λ (Wahba) */
+    double sigma = co->noise;
+    if (fallback && !(sigma > 0)) {
+        double lg = thx_inverse_pick(s, sum2, kk, perp_sum, co->dof, THX_LAMBDA_GCV, 0, 0, 0, co->n_grid, NULL, NULL);
+        double r2, e2, tr = co->dof - (double)kk, l2 = lg * lg;
+        thx_inv_norms(s, sum2, kk, perp_sum, lg, &r2, &e2);
+        for (size_t i = 0; i < kk; i++) tr += l2 / (s[i] * s[i] + l2);
+        sigma = tr > 0 ? sqrt(r2 / (tr * (double)F)) : 0;
+        if (r) r->frame_noise_estimated = 1;
+    }
+    if (r && fallback) {
+        r->frame_noise = sigma;
+        r->series_lambda = series_lam;
+        r->series_flags = series_flags;
+    } else if (r && co->per_series)
+        r->series_flags = series_flags;
     int fail = 0;
-#pragma omp parallel for schedule(dynamic, 8) reduction(| : fail)
+    size_t n_fb = 0;
+#pragma omp parallel for schedule(dynamic, 8) reduction(| : fail) reduction(+ : n_fb)
     for (size_t f = 0; f < F; f++) {
-        double *b2 = malloc(kk * sizeof *b2), *fl = malloc(kk * sizeof *fl);
+        double *b2 = malloc((kk ? kk : 1) * sizeof *b2), *fl = malloc((kk ? kk : 1) * sizeof *fl);
         if (!b2 || !fl) {
             fail = 1;
             free(b2);
             free(fl);
             continue;
         }
-        for (size_t i = 0; i < kk; i++) b2[i] = beta[f * kk + i] * beta[f * kk + i];
-        int kf = series_k;
+        double n2 = perp[f];
+        for (size_t i = 0; i < kk; i++) n2 += b2[i] = beta[f * kk + i] * beta[f * kk + i];
+        int kf = series_k, ff = series_flags;
         double l = co->per_series ? series_lam
-                                  : thx_inverse_pick(s, b2, kk, perp[f], (double)m, co->rule, co->fixed,
-                                                     co->target ? co->target[f] : 0, co->tsvd, co->n_grid, &kf);
+                                  : thx_inverse_pick(s, b2, kk, perp[f], co->dof, co->rule, co->fixed,
+                                                     co->target ? co->target[f] : 0, co->tsvd, co->n_grid, &kf, &ff);
+        /* a frame whose data is below the noise (its signal's energy ||b||² - dof σ² below the
+         * noise's dof σ²): no rule finds anything but noise there; the series' λ */
+        if (fallback && sigma > 0 && n2 < 2 * co->dof * sigma * sigma) {
+            if (!co->no_fallback) { /* the flags say what the λ used is: the series' */
+                l = series_lam;
+                kf = series_k;
+                ff = series_flags;
+                n_fb++;
+            }
+            ff |= THX_LAMBDA_BELOW_NOISE;
+        }
         if (co->tsvd)
             for (size_t i = 0; i < kk; i++) fl[i] = (int)i < kf ? 1.0 : 0.0;
         else
             thx_inverse_filter(s, kk, l, 0, fl);
         double r2 = perp[f], e2 = 0;
         for (size_t i = 0; i < kk; i++) {
-            C[f * kk + i] = s[i] > 0 ? fl[i] * beta[f * kk + i] / s[i] : 0;
+            C[f * kk + i] = fl[i] * beta[f * kk + i] / s[i];
             r2 += (1 - fl[i]) * (1 - fl[i]) * b2[i];
-            e2 += s[i] > 0 ? fl[i] * fl[i] * b2[i] / (s[i] * s[i]) : 0;
+            e2 += fl[i] * fl[i] * b2[i] / (s[i] * s[i]);
         }
         lam[f] = l;
         if (kept) kept[f] = co->tsvd ? kf : 0;
+        if (flags) flags[f] = ff;
         rho[f] = sqrt(r2);
         eta[f] = sqrt(e2);
         free(b2);
         free(fl);
     }
+    if (r) r->n_fallback = n_fb;
     if (fail) THX_TRY(THX_ENOMEM);
-    thx_inv_gemm('T', 'N', n, F, kk, VT, kk, C, kk, 0.0, Y, n);
+    thx_inv_gemm('T', 'N', n, F, kk, VT, kfull, C, kk, 0.0, Y, n);
     if (r && curve) {
         /* the series' L-curve: Tikhonov on the λ grid, or TSVD at each k */
         size_t nc = co->tsvd ? kk : (size_t)(co->n_grid > 2 ? co->n_grid : 200);
@@ -405,8 +454,8 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
             }
             nc = nk;
             int kc = 0;
-            r->corner_lambda = thx_inverse_pick(s, sum2, kk, perp_sum, (double)m * (double)F, THX_LAMBDA_LCURVE, 0, 0,
-                                                1, co->n_grid, &kc);
+            r->corner_lambda = thx_inverse_pick(s, sum2, kk, perp_sum, co->dof, THX_LAMBDA_LCURVE, 0, 0, 1, co->n_grid,
+                                                &kc, NULL);
         } else {
             thx_inv_grid(s, kk, (int)nc, r->curve_lambda);
             for (size_t q = 0; q < nc; q++) {
@@ -415,8 +464,8 @@ static thx_status spectral(thx_ctx *ctx, double *Abar, size_t m, size_t n, const
                 r->curve_residual[q] = sqrt(r2);
                 r->curve_seminorm[q] = sqrt(e2);
             }
-            r->corner_lambda = thx_inverse_pick(s, sum2, kk, perp_sum, (double)m * (double)F, THX_LAMBDA_LCURVE, 0, 0,
-                                                0, co->n_grid, NULL);
+            r->corner_lambda = thx_inverse_pick(s, sum2, kk, perp_sum, co->dof, THX_LAMBDA_LCURVE, 0, 0, 0, co->n_grid,
+                                                NULL, NULL);
         }
         r->n_curve = nc;
         r->chosen_lambda = co->per_series ? series_lam : median(lam, F);
@@ -436,8 +485,10 @@ done:
 
 /* Total variation by IRLS from the order-1 solution X (n x F, updated in place), λ per frame. */
 static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, const double *B, size_t F,
-                            const thx_surface *h, const double *lam, int iters, double *X, double *tvnorm)
+                            const thx_surface *h, const double *lam, int iters, double *X, double *tvnorm,
+                            const char *mname)
 {
+    size_t bad_f = F;
     thx_status st = THX_OK;
     size_t nt = h->n_tris, r3 = 3 * nt;
     double *G = NULL, *sqa = NULL, *AtA = thx_malloc(ctx, n * n * sizeof *AtA), *AtB = thx_malloc(ctx, n * F * sizeof *AtB);
@@ -501,6 +552,8 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
             dposv_("U", &N, &one, S, &N, x, &N, &info);
             if (info) {
                 fail = 2;
+#pragma omp critical(thx_tv_bad)
+                if (f < bad_f) bad_f = f;
                 break;
             }
             double d2 = 0, x2 = 0;
@@ -530,8 +583,11 @@ static thx_status tv_refine(thx_ctx *ctx, const double *A, size_t m, size_t n, c
         free(x);
     }
     if (fail == 1) THX_TRY(THX_ENOMEM);
-    if (fail) THX_TRY(thx_error(ctx, THX_ESOLVER, "total variation: the reweighted system is not positive definite "
-                                                  "(LAPACK dposv); the transfer matrix may vanish on constants"));
+    if (fail)
+        THX_TRY(thx_error(ctx, THX_ESOLVER, "%s: total variation, frame %zu, λ %.3g: the reweighted system A^T A + λ² "
+                          "G^T W G is not positive definite (LAPACK dposv); λ too small for the rows (%zu) and the "
+                          "heart nodes (%zu), or the matrix vanishes on constants", mname, bad_f + 1,
+                          bad_f < F ? lam[bad_f] : NAN, m, n));
 done:
     free(G);
     free(sqa);
@@ -557,9 +613,14 @@ static thx_status check_inputs(thx_ctx *ctx, const thx_series *A, const thx_seri
     if (needs_heart && !heart)
         return thx_error(ctx, THX_EINPUT, "%s needs the heart surface (its gradient or Laplacian): none given for %s",
                          thx_inverse_method_name(o->method), o->matrix_name);
-    if (needs_heart && heart->n_nodes != A->n_frames)
-        return thx_error(ctx, THX_EINPUT, "%s has %zu columns but the heart surface \"%s\" has %zu nodes", o->matrix_name,
-                         A->n_frames, heart->name, heart->n_nodes);
+    /* any method given a heart (the CLI's --heart): its nodes must be the matrix's columns */
+    if (heart && heart->n_nodes != A->n_frames)
+        return thx_error(ctx, THX_EINPUT, "%s has %zu columns (heart nodes) but the heart surface \"%s\" of %s has %zu "
+                         "nodes: the columns must be that surface's nodes", o->matrix_name, A->n_frames, heart->name,
+                         o->heart_name ? o->heart_name : "the model", heart->n_nodes);
+    if (A->n_rows == 0 || A->n_frames == 0)
+        return thx_error(ctx, THX_EINPUT, "%s is empty (%zu x %zu)", o->matrix_name, A->n_rows, A->n_frames);
+    if (B->n_frames == 0) return thx_error(ctx, THX_EINPUT, "%s has no frames", o->data_name);
     if (o->method == THX_INVERSE_TSVD && o->rule == THX_LAMBDA_CRESO)
         return thx_error(ctx, THX_EINPUT, "CRESO is a Tikhonov rule (a derivative in λ); with tsvd use lcurve, gcv, "
                                           "discrepancy or a value");
@@ -593,14 +654,17 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
     double *Ub = NULL, *sb = NULL, *Vbt = NULL, *D = NULL, *Yr = NULL;
     thx_series *x = NULL;
     core_opts co = {.tsvd = o->method == THX_INVERSE_TSVD, .rule = o->rule, .fixed = o->lambda,
-                    .per_series = o->per_series, .n_grid = o->n_grid > 2 ? o->n_grid : 200};
+                    .per_series = o->per_series, .n_grid = o->n_grid > 2 ? o->n_grid : 200,
+                    .matrix_name = o->matrix_name, .dof = (double)m, .no_fallback = o->no_fallback};
     r->n_frames = F;
+    r->series_lambda = NAN;
+    r->flags = thx_calloc(ctx, F, sizeof *r->flags);
     r->lambda = thx_malloc(ctx, F * sizeof *r->lambda);
     r->k = thx_calloc(ctx, F, sizeof *r->k);
     r->residual = thx_malloc(ctx, F * sizeof *r->residual);
     r->seminorm = thx_malloc(ctx, F * sizeof *r->seminorm);
     THX_TRY(thx_series_create(ctx, n, F, &x));
-    if (!r->lambda || !r->k || !r->residual || !r->seminorm) THX_TRY(THX_ENOMEM);
+    if (!r->lambda || !r->k || !r->residual || !r->seminorm || !r->flags) THX_TRY(THX_ENOMEM);
     memcpy(x->time, B->time, F * sizeof *x->time);
     snprintf(x->unit, sizeof x->unit, "%s", B->unit);
     snprintf(x->time_unit, sizeof x->time_unit, "%s", B->time_unit);
@@ -661,7 +725,7 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
         co.target = target;
         co.tsvd = 0;
         r->t_svd = wtime() - t0;
-        st = spectral(ctx, Abar, m, n, D, rk, &co, Yr, r->component_lambda, NULL, rho, eta, r, 1);
+        st = spectral(ctx, Abar, m, n, D, rk, &co, Yr, r->component_lambda, NULL, rho, eta, NULL, r, 1);
         free(rho);
         free(eta);
         if (st != THX_OK) goto done;
@@ -701,7 +765,7 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
     size_t null_dim = 0;
     if (order > 0) {
         THX_TRY(thx_inverse_operator(ctx, heart, order, &M));
-        THX_TRY(standard_form(ctx, A->v, m, n, M, &P, &Q, &null_dim));
+        THX_TRY(standard_form(ctx, A->v, m, n, M, &P, &Q, &null_dim, o->matrix_name));
         thx_inv_gemm('N', 'N', m, n, n, A->v, m, P, n, 0.0, Abar, m);
         if (Q) { /* b̄ = b - A Q b */
             double *QB = thx_malloc(ctx, n * F * sizeof *QB);
@@ -718,7 +782,13 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
     }
     r->t_svd = wtime() - t0;
     co.target = target;
-    THX_TRY(spectral(ctx, Abar, m, n, Bb, F, &co, Y, r->lambda, r->k, r->residual, r->seminorm, r, 1));
+    /* trace(I - H) = m - null_dim - Σ f_i (docs/design/inverse.md): the null space's image is fitted
+     * exactly, whatever λ */
+    co.dof = (double)m - (double)null_dim;
+    r->null_dim = null_dim;
+    co.frames = 1;
+    if (o->noise > 0 || o->snr_db > 0) co.noise = series_sigma(o, B);
+    THX_TRY(spectral(ctx, Abar, m, n, Bb, F, &co, Y, r->lambda, r->k, r->residual, r->seminorm, r->flags, r, 1));
     double t1 = wtime();
     if (order > 0) thx_inv_gemm('N', 'N', n, F, n, P, n, Y, n, Q ? 1.0 : 0.0, x->v, n);
     else memcpy(x->v, Y, n * F * sizeof *Y);
@@ -726,7 +796,7 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
     if (o->method == THX_INVERSE_TV) {
         double t2 = wtime();
         THX_TRY(tv_refine(ctx, A->v, m, n, B->v, F, heart, r->lambda, o->tv_iterations > 0 ? o->tv_iterations : 10,
-                          x->v, r->seminorm));
+                          x->v, r->seminorm, o->matrix_name));
         /* the residuals of the TV solutions */
         for (size_t f = 0; f < F; f++) {
             double r2 = 0;
@@ -740,6 +810,16 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
         r->t_frames += wtime() - t2;
     }
 finish:
+    /* nothing that is not a number leaves here (a rule or a solve gone wrong is an error, not a file of NaN) */
+    for (size_t i = 0; i < n * F; i++)
+        if (!isfinite(x->v[i]))
+            THX_TRY(thx_error(ctx, THX_ESOLVER, "%s with %s: heart node %zu, frame %zu came out %s; nothing written",
+                              o->matrix_name, thx_inverse_method_name(o->method), i % n + 1, i / n + 1,
+                              isnan(x->v[i]) ? "NaN" : "infinite"));
+    for (size_t f = 0; f < F; f++)
+        if (!isfinite(r->residual[f]) || !isfinite(r->seminorm[f]))
+            THX_TRY(thx_error(ctx, THX_ESOLVER, "%s with %s: frame %zu's residual or solution norm is not a number; "
+                              "nothing written", o->matrix_name, thx_inverse_method_name(o->method), f + 1));
     *X = x;
     x = NULL;
 done:

@@ -19,7 +19,8 @@
  *                            squares on the gradient-Tikhonov system, λ from the order-1 rule.
  * λ rules: the L-curve's corner (maximum curvature of (log ||Ax-b||, log ||Lx||)), CRESO (the first
  * local maximum of C(λ) = ||Lx||² + 2λ² d||Lx||²/dλ² met coming down from λ = s_1), GCV (minimum of
- * ||Ax-b||² / (m - Σ f_i)²), the discrepancy principle (||Ax-b|| = sqrt(m) σ, σ the noise's
+ * ||Ax-b||² / (m - p0 - Σ f_i)², p0 the dimension of L's null space: the trace of I minus the
+ * influence matrix, docs/design/inverse.md), the discrepancy principle (||Ax-b|| = sqrt(m) σ, σ the noise's
  * standard deviation per row), or a fixed value; per frame or one λ for the whole series (the
  * curves summed over frames: the series as one long vector).
  *
@@ -59,6 +60,17 @@ typedef enum {
 const char *thx_inverse_method_name(thx_inverse_method m);
 const char *thx_lambda_rule_name(thx_lambda_rule r);
 
+/* What a rule says of the λ it picked (thx_inverse_report.flags, per frame; bits) */
+enum {
+    THX_LAMBDA_AT_LOW = 1,     /* at the small end of the search range (s_min of the nonzero singular values;
+                                  TSVD: every nonzero component kept; discrepancy: the target out of reach below) */
+    THX_LAMBDA_AT_HIGH = 2,    /* at the large end (s_1; TSVD: one component; discrepancy: out of reach above) */
+    THX_LAMBDA_NO_CORNER = 4,  /* the rule's feature is not there: an L-curve with no positive curvature, CRESO
+                                  with no local maximum */
+    THX_LAMBDA_BELOW_NOISE = 8 /* λ per frame: the frame's data below the noise level (||b||² < 2 m σ²); the
+                                  series' λ used instead of the frame's own (unless opts.no_fallback) */
+};
+
 typedef struct {
     thx_inverse_method method;
     thx_lambda_rule rule;
@@ -70,7 +82,8 @@ typedef struct {
     int greensite_rank;   /* temporal components kept (0: by the noise level if given, else 99.99% energy) */
     int tv_iterations;    /* IRLS iterations (default 10) */
     int n_grid;           /* λ grid points for the rules (default 100, log-spaced; then golden section) */
-    const char *matrix_name, *data_name; /* names for messages (file names) */
+    int no_fallback;      /* λ per frame: keep each frame's own λ on frames below the noise level */
+    const char *matrix_name, *data_name, *heart_name; /* names for messages (file names) */
 } thx_inverse_opts;
 
 void thx_inverse_opts_default(thx_inverse_opts *o);
@@ -111,6 +124,15 @@ typedef struct {
     size_t rank;           /* singular values of the (transformed) matrix, largest first */
     double *sv;
     double noise_sigma;    /* σ used by the discrepancy rule (first frame's, per frame) */
+    int *flags;            /* per frame: THX_LAMBDA_AT_LOW | ... of the λ used (the frame's own rule's, or with
+                              THX_LAMBDA_BELOW_NOISE and the fallback the series'; Greensite: 0) */
+    int series_flags;      /* the same of the series' λ (one λ per series, or the fallback's) */
+    double series_lambda;  /* λ per frame: the series' λ by the same rule (the fallback), else NaN */
+    double frame_noise;    /* λ per frame: the σ that tells the frames below the noise (given, or the series'
+                              GCV estimate ||Ax-b||²/trace(I-H) per row); 0: none */
+    int frame_noise_estimated; /* 1: frame_noise estimated by GCV, 0: from --noise */
+    size_t n_fallback;     /* frames whose λ is the series' (THX_LAMBDA_BELOW_NOISE and the fallback on) */
+    size_t null_dim;       /* dimension of the regularization operator's null space (orders 1, 2, TV: 1) */
     double t_svd, t_frames; /* seconds: standard form + SVD; everything per frame */
     char note[256];        /* a remark for the report (e.g. discrepancy target out of reach) */
 } thx_inverse_report;
@@ -144,12 +166,14 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
 void thx_inverse_filter(const double *s, size_t k, double lambda, int tsvd, double *f);
 
 /* The λ a rule picks from the spectral data of one right-hand side (or a series summed):
- * s[k] singular values (decreasing), beta2[k] = (u_i^T b)² summed over the frames concerned,
- * perp2 = the part of ||b||² outside range(U), m = rows (times frames for a series), target = the
- * discrepancy's residual norm. Tikhonov (tsvd = 0) or TSVD (tsvd = 1, λ = s_k, *kept = k).
- * Returns the λ (and *kept for TSVD). */
-double thx_inverse_pick(const double *s, const double *beta2, size_t k, double perp2, double m, thx_lambda_rule rule,
-                        double fixed, double target, int tsvd, int n_grid, int *kept);
+ * s[k] the nonzero singular values (decreasing; the numerically zero ones left out, their β² in
+ * perp2), beta2[k] = (u_i^T b)² summed over the frames concerned, perp2 = the part of ||b||² outside
+ * the span of those u_i, dof = GCV's degrees of freedom at λ → ∞: rows minus the dimension of the
+ * regularization operator's null space (trace(I - H) = dof - Σ f_i), target = the discrepancy's
+ * residual norm. Tikhonov (tsvd = 0) or TSVD (tsvd = 1, λ = s_k, *kept = k). Returns the λ (and
+ * *kept for TSVD); *flags (may be NULL) the THX_LAMBDA_AT_LOW ... bits. */
+double thx_inverse_pick(const double *s, const double *beta2, size_t k, double perp2, double dof, thx_lambda_rule rule,
+                        double fixed, double target, int tsvd, int n_grid, int *kept, int *flags);
 
 /* Correlation coefficient and relative error ||x - t|| / ||t|| of two vectors of n values. */
 void thx_inverse_compare(const double *x, const double *t, size_t n, double *cc, double *re);
