@@ -40,7 +40,7 @@ R=(--solution sol --frame 193 --size 300x300)
 "$THORAX" render "${R[@]}" --view superior --slice z=110 --slice 0,0,140:0,1,0 --style bands+contours --colorbar -o slices.png -q
 "$THORAX" render "${R[@]}" --view superior --only streamlines --streamlines density:120 -o stream_top.png -q
 "$THORAX" render "${R[@]}" --only streamlines --only heart --streamlines density:120 --streamlines sphere:-30,12,110:65:40 --colorbar -o stream.png -q
-"$THORAX" animate --solution sol --frames 180:182 --size 200x200 --isosurface 3 --mp4 none -o anim -q
+"$THORAX" animate --solution sol --frames 180:182 --size 200x200 --isosurface count:3 --mp4 none -o anim -q
 
 $PY - <<'PYEOF'
 import vtk

@@ -156,7 +156,7 @@ static int live_option(void *user, thx_picture_opts *p, const char *line)
     }
     int rc = cli_parse(&cmd, argc, argv);
     if (rc) { free(copy); return 1; }
-    if (o.r.p.solution != p->solution || o.r.p.n_data != p->n_data || o.r.p.channels != p->channels ||
+    if (o.r.p.solution != p->solution || o.r.p.n_data != p->n_data || o.r.p.channels != p->channels || o.r.p.n_channels != p->n_channels ||
         o.r.p.n_data_surface != p->n_data_surface || o.r.p.trace != p->trace || o.r.p.arrows != p->arrows ||
         o.r.p.model_dir != p->model_dir || o.r.p.n_files != p->n_files || o.r.p.n_landmarks != p->n_landmarks ||
         o.r.p.n_electrodes != p->n_electrodes || o.r.p.tetrahedra != p->tetrahedra) {
