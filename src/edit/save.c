@@ -147,11 +147,11 @@ static thx_status move_mesh_aside(thx_ctx *ctx, const thx_edit_session *s, const
         else if (errno != EEXIST) return thx_error(ctx, THX_EIO, "%s: cannot create: %s", aside, strerror(errno));
     }
     if (!made) return thx_error(ctx, THX_EIO, "%.*s.mesh-before-edit-99: 99 such folders are there already", (int)n, dir);
-    const char *fixed[] = {"volume.pts", "volume.tet", THX_MODEL_MANIFEST};
-    for (size_t k = 0; k < 3 + s->n_mesh_surf; k++) {
+    const char *fixed[] = {"volume.pts", "volume.tet", "volume.steiner", THX_MODEL_MANIFEST};
+    for (size_t k = 0; k < 4 + s->n_mesh_surf; k++) {
         char name[96], a[PATH_MAX], b[PATH_MAX];
-        if (k < 3) snprintf(name, sizeof name, "%s", fixed[k]);
-        else snprintf(name, sizeof name, "%s.vmap", s->mesh_surf[k - 3]->name);
+        if (k < 4) snprintf(name, sizeof name, "%s", fixed[k]);
+        else snprintf(name, sizeof name, "%s.vmap", s->mesh_surf[k - 4]->name);
         if ((size_t)snprintf(a, sizeof a, "%.*s/%s", (int)n, dir, name) >= sizeof a ||
             (size_t)snprintf(b, sizeof b, "%s/%s", aside, name) >= sizeof b)
             return thx_error(ctx, THX_EIO, "%s/%s: path too long", aside, name);

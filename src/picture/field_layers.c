@@ -194,8 +194,18 @@ static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
 
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame)
 {
-    if (!d->volume || d->field_frame == frame) return THX_OK;
+    if (!d->volume) return THX_OK;
+    /* built again for another frame, or other options (a viewer's script line may change them) */
+    char key[sizeof d->field_key];
+    size_t kl = (size_t)snprintf(key, sizeof key, "%s|%d|%d|%.17g|%d|%d|%.17g|%.17g|%d", o->isosurface ? o->isosurface : "",
+                                 o->slice_current, o->stream_potential, o->stream_radius, o->scope, o->mapping, o->lo, o->hi,
+                                 o->style);
+    for (int k = 0; k < o->n_slices && kl < sizeof key; k++) kl += (size_t)snprintf(key + kl, sizeof key - kl, "|s%s", o->slices[k]);
+    for (int k = 0; k < o->n_streamlines && kl < sizeof key; k++)
+        kl += (size_t)snprintf(key + kl, sizeof key - kl, "|l%s", o->streamlines[k]);
+    if (d->field_frame == frame && !strcmp(key, d->field_key)) return THX_OK;
     picture_field_free(d);
+    memcpy(d->field_key, key, sizeof key);
     const thx_volume *v = d->m->volume;
     const thx_series *x = d->volume;
     size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
