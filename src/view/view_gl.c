@@ -288,7 +288,11 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     w->ms_sum += w->draw_ms;
     w->ms_n++;
     w->drawn++;
-    if (w->drawn == 1) view_pick_prepare(a);
+    if (w->drawn == 1) {
+        view_pick_prepare(a);
+        /* the state a test waits for (instead of sleeping): this window is up and drawn */
+        if (a->vo->verbose > 0) fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels)\n", w->id, fb_w, fb_h);
+    }
     return TRUE;
 }
 
