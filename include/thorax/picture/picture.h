@@ -198,6 +198,7 @@ typedef struct {
     unsigned char *field_use;        /* per volume region: in the solution's domain (thx_solution_domain) */
     int field_frame;                 /* -1: none built */
     char field_key[1024];            /* the options they were built with (a script may change them) */
+    int field_warned;                /* a frame without equipotentials was told (once per field_key) */
     double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
     unsigned char sranged[THX_PICTURE_SURFACES];
     const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
