@@ -144,7 +144,7 @@ refused 1 "a value outside the range" "outside the potentials" far.vtp "$THORAX"
 refused 1 "contours outside the range" "outside the potentials" farc.vtp "$THORAX" field sol --slice z=150 --contours -1000 --frame 7 -o farc.vtp
 refused 1 "a value outside every frame" "outside the potentials" farall "$THORAX" field sol --isosurface 1000 --frame all -o farall
 "$THORAX" field sol --isosurface 0.01 --frame 1,12 -o part 2> part.log || { cat part.log; fail "a value inside one frame of two"; }
-grep -q "warning: frame 1: --isosurface value 0.01 is outside this frame's potentials" part.log || { cat part.log; fail "no warning for the frame without the value"; }
+grep -q "warning: --isosurface value 0.01 is outside the potentials of 1 of the 2 frames (frame 1)" part.log || { cat part.log; fail "no warning for the frame without the value"; }
 [ -s part/field_0001.vtp ] && [ -s part/field_0012.vtp ] || fail "the series of two frames"
 echo "ok empty results: refused with the reason, nothing written; a frame without the value warned"
 if ls -a | grep -q '\.tmp'; then fail "a temporary file left: $(ls -a | grep '\.tmp')"; fi

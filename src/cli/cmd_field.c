@@ -134,10 +134,19 @@ static thx_status check_empty(thx_ctx *ctx, const char *sol, const thx_volume *v
                 free(x);
                 return st;
             }
-            for (size_t k = 0; k < nsel && nsel > 1; k++)
-                if (!(frame_lo[k] <= x[i] && x[i] <= frame_hi[k]))
-                    thx_log(ctx, THX_LOG_WARN, "frame %zu: %s value %g is outside this frame's potentials (%g to %g): "
-                            "nothing at it in this frame", frame[k] + 1, names[s], x[i], frame_lo[k], frame_hi[k]);
+            if (hit == nsel) continue;
+            /* one warning per value, naming the first frames without it (not one line per frame) */
+            char list[160] = "";
+            size_t len = 0, shown = 0;
+            for (size_t k = 0; k < nsel && shown < 6; k++)
+                if (!(frame_lo[k] <= x[i] && x[i] <= frame_hi[k]) && len < sizeof list - 24) {
+                    len += (size_t)snprintf(list + len, sizeof list - len, "%s%zu", shown ? ", " : "",
+                                            shown == 5 ? (size_t)0 : frame[k] + 1);
+                    if (shown == 5) snprintf(list + len - 1, sizeof list - len + 1, "...");
+                    shown++;
+                }
+            thx_log(ctx, THX_LOG_WARN, "%s value %g is outside the potentials of %zu of the %zu frames (frame%s %s): nothing "
+                    "at it there", names[s], x[i], nsel - hit, nsel, nsel - hit > 1 ? "s" : "", list);
         }
         free(x);
     }
