@@ -11,7 +11,9 @@
 #     epicardium's nodes), the same checks;
 #  3. refusals: not a solution, a solution without volume potentials, volume potentials whose rows
 #     are not the volume's nodes, a user's file in the way, bad planes / values / frames / regions;
-#     nothing written.
+#     nothing written;
+#  4. issue 24: --isosurface 0 is the zero equipotential (a count is count:N); a slice missing the
+#     volume or a value outside the potentials is refused naming why, nothing written.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
@@ -42,12 +44,12 @@ medium_phantom || fail "the medium phantom"
 "$THORAX" forward model --epicardial beat.raw --volume -o sol -q
 "$THORAX" forward model --epicardial beat.raw -o solt -q
 "$THORAX" export model --solution sol --format vtu --frames 7,12 -o vtu -q
-"$THORAX" field sol --isosurface 25%,50%,75% --slice z=150 --slice 10,20,150:1,1,0.5 --contours 8 --frame 7 -o one.vtp -q
+"$THORAX" field sol --isosurface 25%,50%,75% --slice z=150 --slice 10,20,150:1,1,0.5 --contours count:8 --frame 7 -o one.vtp -q
 read_back one.vtp vtu/volume_0007.vtu z=150 10,20,150:1,1,0.5
 # a list and a count, at another frame
 "$THORAX" field sol --isosurface -0.02,0,0.02 --frame 12 -o list.vtp -q
 read_back list.vtp vtu/volume_0012.vtu
-"$THORAX" field sol --isosurface 4 --frame 12 -o count.vtp -q
+"$THORAX" field sol --isosurface count:4 --frame 12 -o count.vtp -q
 read_back count.vtp vtu/volume_0012.vtu
 # every frame: a directory and its collection with the series' times; frames of constant potential
 # (before the beat) have empty surfaces, with a warning
@@ -80,8 +82,8 @@ assert r.GetOutput().GetNumberOfPolys() == n_iso, (r.GetOutput().GetNumberOfPoly
 print("ok obj: %d triangles read by vtkOBJReader, as the vtp's isosurfaces" % n_iso)
 EOF
 # the same output for 1 and 2 threads
-OMP_NUM_THREADS=1 "$THORAX" field sol --isosurface 10 --slice x=5 --frame 7 -o t1.vtp -q
-OMP_NUM_THREADS=2 "$THORAX" field sol --isosurface 10 --slice x=5 --frame 7 -o t2.vtp -q
+OMP_NUM_THREADS=1 "$THORAX" field sol --isosurface count:10 --slice x=5 --frame 7 -o t1.vtp -q
+OMP_NUM_THREADS=2 "$THORAX" field sol --isosurface count:10 --slice x=5 --frame 7 -o t2.vtp -q
 cmp t1.vtp t2.vtp || fail "output depends on the thread count"
 # a region alone: the cut stays in its tetrahedra
 "$THORAX" field sol --isosurface 50% --frame 7 --region lung_l -o lung.vtp -q
@@ -121,6 +123,30 @@ refused 2 "a frame out of range" "frame" r6.vtp "$THORAX" field sol --isosurface
 refused 1 "an unknown region" "no region" r7.vtp "$THORAX" field sol --isosurface 50% --region liver -o r7.vtp
 refused 2 "several frames into one file" "directory" r8.vtp "$THORAX" field sol --isosurface 50% --frame 7,8 -o r8.vtp
 refused 2 "contours without slices" "slice" r9.vtp "$THORAX" field sol --isosurface 50% --contours 3 -o r9.vtp
+# ---- 4. what a user types (issue 24): "0" is the zero equipotential (it was refused as a count of
+#      none), a count is count:N; an empty result is refused, naming why, and nothing is written
+#      (a slice missing the volume, a value outside the potentials of every frame asked for); a value
+#      outside some frames' range only is a warning for each, the series written whole
+"$THORAX" field sol --isosurface 0 --frame 12 -o zero.vtp -q || fail "--isosurface 0 refused"
+"$PY" - <<'EOF' || fail "the zero equipotential"
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName("zero.vtp"); r.Update()
+o = r.GetOutput()
+phi = vtk_to_numpy(o.GetPointData().GetArray("potential"))
+iso = vtk_to_numpy(o.GetCellData().GetArray("iso_value"))
+assert o.GetNumberOfPolys() > 100 and abs(phi).max() < 1e-9 and (iso == 0).all(), (o.GetNumberOfPolys(), abs(phi).max())
+print("ok --isosurface 0: %d triangles, every vertex at potential 0 (max |phi| %.2g)" % (o.GetNumberOfPolys(), abs(phi).max()))
+EOF
+refused 2 "a count of none" "count:N" c0.vtp "$THORAX" field sol --isosurface count:0 --frame 12 -o c0.vtp
+refused 1 "a slice missing the volume" "misses the regions cut" miss.vtp "$THORAX" field sol --slice z=5000 --frame 7 -o miss.vtp
+refused 1 "a value outside the range" "outside the potentials" far.vtp "$THORAX" field sol --isosurface 1000 --frame 7 -o far.vtp
+refused 1 "contours outside the range" "outside the potentials" farc.vtp "$THORAX" field sol --slice z=150 --contours -1000 --frame 7 -o farc.vtp
+refused 1 "a value outside every frame" "outside the potentials" farall "$THORAX" field sol --isosurface 1000 --frame all -o farall
+"$THORAX" field sol --isosurface 0.01 --frame 1,12 -o part 2> part.log || { cat part.log; fail "a value inside one frame of two"; }
+grep -q "warning: --isosurface value 0.01 is outside the potentials of 1 of the 2 frames (frame 1)" part.log || { cat part.log; fail "no warning for the frame without the value"; }
+[ -s part/field_0001.vtp ] && [ -s part/field_0012.vtp ] || fail "the series of two frames"
+echo "ok empty results: refused with the reason, nothing written; a frame without the value warned"
 if ls -a | grep -q '\.tmp'; then fail "a temporary file left: $(ls -a | grep '\.tmp')"; fi
 
 # ---- 2. the real Dalhousie torso (map3d)
@@ -143,9 +169,9 @@ EOF
 "$THORAX" forward dal --epicardial epi.txt --volume -o dsol -q
 "$THORAX" export dal --solution dsol --format vtu -o dvtu -q
 c=$("$PY" -c "import numpy as np; x=np.loadtxt('$G/daltorso.pts'); print('%.3f,%.3f,%.3f' % tuple(x.mean(axis=0)))")
-"$THORAX" field dsol --isosurface 20%,40%,60%,80% --slice "$c:0,0,1" --slice "$c:1,0.3,0" --contours 9 --frame 1 -o dal1.vtp -q
+"$THORAX" field dsol --isosurface 20%,40%,60%,80% --slice "$c:0,0,1" --slice "$c:1,0.3,0" --contours count:9 --frame 1 -o dal1.vtp -q
 read_back dal1.vtp dvtu/volume_0001.vtu "$c:0,0,1" "$c:1,0.3,0"
-"$THORAX" field dsol --isosurface 5 --frame 2 -o dal2.vtp -q
+"$THORAX" field dsol --isosurface count:5 --frame 2 -o dal2.vtp -q
 read_back dal2.vtp dvtu/volume_0002.vtu
 fi
 echo "e2e_field: ok"

@@ -3,7 +3,8 @@
 #  1. the medium phantom (meshed without the heart), thorax forward --volume: lines from |J|-density,
 #     sphere, rake and region seeds with RK2, RK4 and RK45, read back by VTK (tests/streamlines_read.py:
 #     every point inside its tetrahedron, the potential the frame's there); tubes (VTP polygons read by VTK,
-#     OBJ); the same file whatever the number of threads; bad seeds and other bad input refused by name,
+#     OBJ); the same file whatever the number of threads; without --seed, 100 seeds by |J| x volume
+#     (issue 24); bad seeds and other bad input refused by name,
 #     nothing written; a file thorax did not write never replaced.
 #  2. the real Dalhousie torso and epicardium (map3d's daltorsoepi.geom@1/@2) meshed with the heart, the
 #     1992 epicardial potentials p2_3200_77_epi.tsdf (record 77) as the epicardial problem: lines from
@@ -45,6 +46,20 @@ r = vtk.vtkXMLPolyDataReader(); r.SetFileName("fwd.vtp"); r.Update(); o = r.GetO
 d, L = n(o.GetCellData().GetArray("direction")), n(o.GetCellData().GetArray("length"))
 assert o.GetNumberOfLines() == 40 and (d == 1).all() and L.max() <= 50 + 1e-9, (o.GetNumberOfLines(), L.max())
 PYEOF
+# without --seed (issue 24: it was refused): seeded by |J| x volume, 100 seeds, the same file as
+# --seed density:100 given, through thorax field as through thorax streamlines
+"$THORAX" field sol --streamlines --frame 4 -o def.vtp -q || fail "thorax field --streamlines without --seed"
+$S --seed density:100 -o d100.vtp -q
+cmp -s def.vtp d100.vtp || fail "the default seeds are not density:100"
+$PY - <<'PYEOF' || fail "default seeds"
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy as n
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName("def.vtp"); r.Update(); o = r.GetOutput()
+s = n(o.GetCellData().GetArray("seed"))
+assert len(set(s.tolist())) == 100 and s.min() == 0 and s.max() == 99, (len(set(s.tolist())), s.min(), s.max())
+print("no --seed: %d lines from 100 seeds drawn by |J| x volume (the file of --seed density:100)" % o.GetNumberOfLines())
+PYEOF
+$PY "$HERE/streamlines_read.py" def.vtp model sol 4 || fail "default lines read back"
 # threads do not change the file
 OMP_NUM_THREADS=1 $S --seed density:60 -o t1.vtp -q
 OMP_NUM_THREADS=2 $S --seed density:60 -o t2.vtp -q

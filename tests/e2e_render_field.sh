@@ -9,7 +9,8 @@
 #  - current streamlines seen from above stay inside the torso's silhouette, coloured by |J| (no red);
 #  - the frames of an animation of equipotentials differ; the viewer draws them too;
 # and refusals: no --solution, a solution without volume potentials, a bad plane, bad values, bad
-# seeds, an unknown region.
+# seeds, an unknown region, a slice missing the volume, a value outside every frame (issue 24);
+# --isosurface 0 draws the zero equipotential.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}" "${SRC:?}"
 rm -rf "$WORK"
@@ -40,7 +41,7 @@ R=(--solution sol --frame 193 --size 300x300)
 "$THORAX" render "${R[@]}" --view superior --slice z=110 --slice 0,0,140:0,1,0 --style bands+contours --colorbar -o slices.png -q
 "$THORAX" render "${R[@]}" --view superior --only streamlines --streamlines density:120 -o stream_top.png -q
 "$THORAX" render "${R[@]}" --only streamlines --only heart --streamlines density:120 --streamlines sphere:-30,12,110:65:40 --colorbar -o stream.png -q
-"$THORAX" animate --solution sol --frames 180:182 --size 200x200 --isosurface 3 --mp4 none -o anim -q
+"$THORAX" animate --solution sol --frames 180:182 --size 200x200 --isosurface count:3 --mp4 none -o anim -q
 
 $PY - <<'PYEOF'
 import vtk
@@ -138,4 +139,21 @@ cp -r sol odd && sed -i 's/"problem":[^,]*/"problem": "nonsense"/' odd/solution.
 expect_fail "unknown problem" "unknown problem" --solution odd --slice z=100
 expect_fail "bad seeds" "streamlines" --solution sol --streamlines cube:1
 expect_fail "no region" "lung_x" --solution sol --streamlines region:lung_x:10
+# issue 24: a cut that cannot cut anything is refused, as thorax field refuses it; 0 is the zero
+# equipotential (it was a count of none); a value outside one frame's potentials is said once
+expect_fail "a slice missing the volume" "misses the volume" --solution sol --slice z=5000
+expect_fail "a value outside every frame" "outside the volume potentials" --solution sol --isosurface 1000
+"$THORAX" render "${R[@]}" --only equipotentials --surface equipotentials=phong:1 --isosurface 0 -o iso_zero.png -q
+"$THORAX" render --solution sol --frame 1 --size 100x100 --isosurface 1.0 -o iso_f1.png 2> iso_f1.err
+grep -q "warning: --isosurface 1.0: no equipotential surface in frame 1" iso_f1.err || { cat iso_f1.err; fail "no warning for a frame without the value"; }
+$PY - <<'PYEOF'
+import numpy as np, vtk
+from vtk.util.numpy_support import vtk_to_numpy
+r = vtk.vtkPNGReader(); r.SetFileName("iso_zero.png"); r.Update()
+d = r.GetOutput(); w, h, _ = d.GetDimensions()
+a = vtk_to_numpy(d.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(int)
+n = (np.abs(a - a[0, 0]).max(axis=2) > 20).sum()
+print("ok: --isosurface 0 draws the zero equipotential: %d pixels" % n)
+assert n > 2000
+PYEOF
 echo "all passed"

@@ -31,49 +31,53 @@ cp -r emodel emodel.orig
 cat > inside.sh <<'INNER'
 set -euo pipefail
 fail() { echo "FAIL: $*"; exit 1; }
-V=("$THORAX" view --solution sol)
+V=("$THORAX" view --solution sol -v)
+# Every wait is for the state checked, polled every 0.1 s up to a generous limit (never a fixed
+# sleep), so the checks pass at any load (issue 24: "Escape did not close the keys window" once,
+# under load, after 5 s): waitfor SECONDS CMD... succeeds as soon as CMD does.
+T=60
+waitfor() { local end=$((SECONDS + $1)); shift; until "$@" > /dev/null 2>&1; do [ $SECONDS -lt $end ] || return 1; sleep 0.1; done; }
+drawn() { grep -q "window $2 drawn" "$1"; }          # FILE.err N: window N is up and drawn
+titled() { xdotool getwindowname "$1" | grep -q "$2"; }
+keys_open() { xdotool search --onlyvisible --name "thorax — keys"; }
+gone() { ! kill -0 "$1" 2>/dev/null; }
 
 # 1. real keys: the title shows the frame; Right steps it; ? opens the keys' window; a click picks
 "${V[@]}" --size 400x440 --frame 193 > keys.out 2> keys.err &
 VP=$!
-W=""
-for i in $(seq 300); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
+waitfor $T drawn keys.err 1 || { cat keys.err; fail "no viewer window was drawn"; }
+W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
 [ -n "$W" ] || { cat keys.err; fail "no viewer window appeared"; }
-sleep 0.5
 title() { xdotool getwindowname "$W"; }
 title | grep -q "frame 193 of 300" || fail "title: $(title)"
 xdotool windowactivate --sync "$W" 2>/dev/null || xdotool windowfocus --sync "$W" || true
 xdotool key --window "$W" Right
-for i in $(seq 50); do title | grep -q "frame 194 of 300" && break; sleep 0.1; done
-title | grep -q "frame 194 of 300" || fail "Right did not step the frame: $(title)"
+waitfor $T titled "$W" "frame 194 of 300" || fail "Right did not step the frame: $(title)"
 xdotool key --window "$W" Right Right Left
-for i in $(seq 50); do title | grep -q "frame 195 of 300" && break; sleep 0.1; done
-title | grep -q "frame 195 of 300" || fail "Right Right Left: $(title)"
+waitfor $T titled "$W" "frame 195 of 300" || fail "Right Right Left: $(title)"
 echo "keys: $(title)"
 xdotool key --window "$W" question
-for i in $(seq 50); do xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 && break; sleep 0.1; done
-xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 || fail "? did not open the keys window"
-KW=$(xdotool search --onlyvisible --name "thorax — keys" | head -1)
-xdotool key --window "$KW" Escape
-for i in $(seq 50); do xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 || break; sleep 0.1; done
-xdotool search --onlyvisible --name "thorax — keys" > /dev/null 2>&1 && fail "Escape did not close the keys window"
+waitfor $T keys_open || fail "? did not open the keys window"
+KW=$(keys_open | head -1)
+# Escape until the keys window is gone (a key sent before it takes keys is lost; closing is idempotent)
+esc_closes() { xdotool key --window "$KW" Escape 2>/dev/null; sleep 0.2; ! keys_open; }
+waitfor $T esc_closes || fail "Escape did not close the keys window"
 xdotool windowfocus --sync "$W" 2>/dev/null || true
 # the middle of the window's drawing area (below the menu bar): the torso's front
 xdotool mousemove --window "$W" 200 250 click 1
-for i in $(seq 50); do grep -q "^pick: surface" keys.out && break; sleep 0.1; done
+waitfor $T grep -q "^pick: surface" keys.out || true
 grep -q "^pick: surface torso node" keys.out || { cat keys.out keys.err; fail "a click did not pick the torso"; }
 echo "click: $(grep '^pick' keys.out)"
 xdotool windowfocus --sync "$W" 2>/dev/null || true
 xdotool key --window "$W" ctrl+q
-for i in $(seq 50); do kill -0 $VP 2>/dev/null || break; sleep 0.1; done
-kill -0 $VP 2>/dev/null && { kill $VP; fail "ctrl+q did not quit"; }
+waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit"; }
 wait $VP || fail "the viewer exited $?"
 
 # 1b. two windows (the torso and the heart, mixed with the lungs): the frame lock steps both; with
 #     the lock off (Shift+F) Right steps only the window it is typed in
 "${V[@]}" --size 340x300 --frame 100 --window torso,lung_l --window heart > win.out 2> win.err &
 VP=$!
-for i in $(seq 300); do [ "$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.1; done
+waitfor $T drawn win.err 1 && waitfor $T drawn win.err 2 || { cat win.err; fail "two windows were not drawn"; }
 WS=($(xdotool search --onlyvisible --name "^thorax " 2>/dev/null))
 [ "${#WS[@]}" -ge 2 ] || { cat win.err; fail "two windows did not appear"; }
 W1=""; W2=""
@@ -81,21 +85,16 @@ for w in "${WS[@]}"; do
     case "$(xdotool getwindowname "$w")" in *"torso, lung_l"*) W1=$w ;; *"— heart —"*) W2=$w ;; esac
 done
 [ -n "$W1" ] && [ -n "$W2" ] || fail "the windows' titles: $(for w in "${WS[@]}"; do xdotool getwindowname "$w"; done)"
-sleep 0.5
 xdotool windowfocus --sync "$W1" 2>/dev/null || true
 xdotool key --window "$W1" Right
-for i in $(seq 50); do xdotool getwindowname "$W2" | grep -q "frame 101 of" && break; sleep 0.1; done
-xdotool getwindowname "$W2" | grep -q "frame 101 of" || fail "frame lock: the heart's window did not step: $(xdotool getwindowname "$W2")"
-xdotool key --window "$W1" shift+f
-sleep 0.3
-xdotool key --window "$W1" Right
-for i in $(seq 50); do xdotool getwindowname "$W1" | grep -q "frame 102 of" && break; sleep 0.1; done
-xdotool getwindowname "$W1" | grep -q "frame 102 of" || fail "unlocked: the torso's window did not step: $(xdotool getwindowname "$W1")"
+waitfor $T titled "$W2" "frame 101 of" || fail "frame lock: the heart's window did not step: $(xdotool getwindowname "$W2")"
+# (X delivers the two keys in order: the lock is off before the Right arrives)
+xdotool key --window "$W1" shift+f Right
+waitfor $T titled "$W1" "frame 102 of" || fail "unlocked: the torso's window did not step: $(xdotool getwindowname "$W1")"
 xdotool getwindowname "$W2" | grep -q "frame 101 of" || fail "unlocked: the heart's window stepped too: $(xdotool getwindowname "$W2")"
 echo "windows: $(xdotool getwindowname "$W1") | $(xdotool getwindowname "$W2")"
 xdotool key --window "$W1" ctrl+q
-for i in $(seq 50); do kill -0 $VP 2>/dev/null || break; sleep 0.1; done
-kill -0 $VP 2>/dev/null && { kill $VP; fail "ctrl+q did not quit the two windows"; }
+waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit the two windows"; }
 wait $VP || fail "the two-window viewer exited $?"
 
 # 2. a scripted session: frame, look, camera turned; screenshot, session saved, and the
@@ -256,20 +255,18 @@ EOF
 "$THORAX" view --script e2.txt > e2.out 2> e2.err || { cat e2.err; fail "edit and undo session"; }
 for f in emodel/*.pts emodel/*.fac; do cmp -s "$f" "undone/${f#emodel/}" || fail "undo is not byte for byte: $f"; done
 # Alt+drag: the node under the pointer follows it; saved, one line of one surface changed
-"$THORAX" view emodel --size 400x440 > drag.out 2> drag.err &
+"$THORAX" view emodel --size 400x440 -v > drag.out 2> drag.err &
 VP=$!
-W=""
-for i in $(seq 300); do W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true); [ -n "$W" ] && break; sleep 0.1; done
+waitfor $T drawn drag.err 1 || { cat drag.err; fail "no window drawn for the drag"; }
+W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
 [ -n "$W" ] || fail "no window for the drag"
-sleep 0.5
 xdotool windowfocus --sync "$W" 2>/dev/null || true
 xdotool mousemove --window "$W" 200 250 keydown alt mousedown 1
 for k in 1 2 3 4 5 6; do xdotool mousemove_relative -- 4 -3; sleep 0.05; done
 xdotool mouseup 1 keyup alt
-for i in $(seq 50); do grep -q "^edit: node_move" drag.out && break; sleep 0.1; done
-grep -q "^edit: node_move" drag.out || { cat drag.out drag.err; fail "Alt+drag made no edit"; }
+waitfor $T grep -q "^edit: node_move" drag.out || { cat drag.out drag.err; fail "Alt+drag made no edit"; }
 xdotool key --window "$W" ctrl+shift+m
-for i in $(seq 50); do grep -q "^edit: saved" drag.out && break; sleep 0.1; done
+waitfor $T grep -q "^edit: saved" drag.out || { cat drag.out drag.err; fail "Ctrl+Shift+M did not save"; }
 xdotool key --window "$W" ctrl+q
 wait $VP || fail "the drag session exited $?"
 echo "drag: $(grep '^edit: node_move' drag.out | head -1)"

@@ -5,6 +5,7 @@
  *    colour of a plate's pixel, found on the strip of the bar drawn for that plate, reads the
  *    value the plate holds there (-5, 20); on the other bar it would read something else, so a
  *    shared bar would lie; a picture too small for both bars is refused, naming both scales;
+ *  - an activation map's bar spans its earliest to latest time (not a symmetric range);
  *  - the letters at the edges: for the anterior view of a RAS model 'R' on the viewer's left
  *    (where a point toward the subject's right projects), 'L' on the right, 'S' above, 'I' below,
  *    drawn as those glyphs; the other standard views, another model frame, any camera.
@@ -247,6 +248,66 @@ static void test_bars(thx_renderer *r, thx_font *font)
     thx_picture_data_free(&d);
 }
 
+/*
+ * An activation map's colour bar runs from the earliest to the latest activation time (issue 24's
+ * missed mutant: the symmetric range of potentials, -latest..latest, would pass unseen): a plate
+ * whose columns activate at 20, 30, 40, 50, 60 ms (a downstroke -10 tanh((t - t_a) / 2) mV, 1 ms
+ * samples), so its map is linear in x and each pixel's colour, read on the bar as spanning the
+ * map's earliest (bottom) to latest (top) time, gives the time of its column.
+ */
+static void test_activation_bar(thx_renderer *r, thx_font *font)
+{
+    thx_picture_data d;
+    memset(&d, 0, sizeof d);
+    CHECK_OK(ctx, thx_model_create(ctx, &d.m));
+    d.m->frame = thx_frame_ras();
+    thx_surface *a = plate("sock", -25);
+    CHECK_OK(ctx, thx_model_add_surface(ctx, d.m, &a));
+    thx_series *x = NULL;
+    CHECK_OK(ctx, thx_series_create(ctx, 25, 100, &x));
+    snprintf(x->unit, sizeof x->unit, "mV");
+    for (int f = 0; f < 100; f++) {
+        x->time[f] = f;
+        for (int i = 0; i < 25; i++) x->v[(size_t)f * 25 + i] = -10 * tanh((f - (20 + 10 * (i % 5))) / 2.0);
+    }
+    d.sets[0][0] = d.series[0] = x;
+    d.n_sets[0] = 1;
+    CHECK_OK(ctx, thx_picture_add_activation(ctx, &d, 0, NAN, NAN));
+    const thx_series *map = d.series[0];
+    CHECK(map != x && d.map[0][d.active[0]]);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < 25; i++) {
+        lo = fmin(lo, map->v[i]);
+        hi = fmax(hi, map->v[i]);
+    }
+    printf("activation map: %.3f to %.3f ms\n", lo, hi);
+    CHECK_NEAR(lo, 20, 0.1);
+    CHECK_NEAR(hi, 60, 0.1);
+    thx_picture_opts o;
+    thx_picture_opts_default(&o);
+    o.w = 600;
+    o.h = 400;
+    o.mode = THX_DRAW_FLAT;
+    o.colorbar = 1;
+    thx_image *img = NULL;
+    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &img));
+    CHECK_OK(ctx, thx_picture_draw(ctx, &o, &d, r, font, 0, img, NULL));
+    int box[THX_PICTURE_BARS][4];
+    CHECK(thx_picture_bar_layout(&o, font, o.w, o.h, 1, box) == 1);
+    for (int col = 1; col <= 3; col++) {
+        double p[3] = {-25 + 12.5 * col, 0, 6.25}, want = map->v[5 + col];
+        int px_x, px_y, e;
+        where(&o, &d, font, p, &px_x, &px_y);
+        double v = read_bar(img, box[0], lo, hi, px(img, px_x, px_y), &e);
+        printf("activation column %d: pixel (%d, %d) reads %.2f ms on the bar (map %.2f; colour distance %d)\n", col, px_x,
+               px_y, v, want, e);
+        CHECK(e <= 6);
+        CHECK_NEAR(v, want, (hi - lo) / box[0][3] + 0.5);
+    }
+    thx_image_destroy(&img);
+    thx_picture_data_free(&d);
+}
+
 /* The letters of o's camera (have_camera or the view) for the plates' model. */
 static void letters(const thx_picture_opts *o, const thx_picture_data *d, char out[4][4])
 {
@@ -389,6 +450,7 @@ int main(void)
     CHECK_OK(ctx, thx_font_open(ctx, NULL, 14, &font));
     if (font) {
         test_bars(r, font);
+        test_activation_bar(r, font);
         test_orientation(r, font);
     }
     thx_font_close(&font);

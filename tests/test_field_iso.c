@@ -200,8 +200,16 @@ static void check_values(thx_ctx *ctx)
     CHECK_OK(ctx, thx_field_values_parse(ctx, "-5,0,5", -10, 10, &v, &n));
     CHECK(n == 3 && v[0] == -5 && v[1] == 0 && v[2] == 5);
     free(v);
-    CHECK_OK(ctx, thx_field_values_parse(ctx, "3", -10, 10, &v, &n));
+    CHECK_OK(ctx, thx_field_values_parse(ctx, "count:3", -10, 10, &v, &n));
     CHECK(n == 3 && v[0] == -5 && v[1] == 0 && v[2] == 5); /* evenly inside, ends excluded */
+    free(v);
+    /* a number is always a value (issue 24: "0", the zero equipotential, was refused as a count of
+       none, and "3" gave three values) */
+    CHECK_OK(ctx, thx_field_values_parse(ctx, "0", -1, 1, &v, &n));
+    CHECK(n == 1 && v[0] == 0);
+    free(v);
+    CHECK_OK(ctx, thx_field_values_parse(ctx, "3", -10, 10, &v, &n));
+    CHECK(n == 1 && v[0] == 3);
     free(v);
     CHECK_OK(ctx, thx_field_values_parse(ctx, "25%,50%,100%", 0, 8, &v, &n));
     CHECK(n == 3 && v[0] == 2 && v[1] == 4 && v[2] == 8);
@@ -209,13 +217,15 @@ static void check_values(thx_ctx *ctx)
     CHECK_OK(ctx, thx_field_values_parse(ctx, "10,", -1, 1, &v, &n));
     CHECK(n == 1 && v[0] == 10);
     free(v);
-    CHECK(thx_field_values_parse(ctx, "0", -1, 1, &v, &n) == THX_EINPUT && !v);
+    CHECK(thx_field_values_parse(ctx, "count:0", -1, 1, &v, &n) == THX_EINPUT && !v && tl_msg_has(ctx, "count:N"));
+    CHECK(thx_field_values_parse(ctx, "count:1001", -1, 1, &v, &n) == THX_EINPUT && !v);
+    CHECK(thx_field_values_parse(ctx, "count:3,4", -1, 1, &v, &n) == THX_EINPUT && !v);
     CHECK(thx_field_values_parse(ctx, "120%", -1, 1, &v, &n) == THX_EINPUT && tl_msg_has(ctx, "outside"));
     CHECK(thx_field_values_parse(ctx, "1,1.0", -1, 1, &v, &n) == THX_EINPUT && tl_msg_has(ctx, "twice"));
     CHECK(thx_field_values_parse(ctx, "1,abc", -1, 1, &v, &n) == THX_EINPUT && tl_msg_has(ctx, "item 2"));
     CHECK(thx_field_values_parse(ctx, "", -1, 1, &v, &n) == THX_EINPUT);
     CHECK(thx_field_values_parse(ctx, "nan", -1, 1, &v, &n) == THX_EINPUT);
-    CHECK(thx_field_values_parse(ctx, "4", 2, 2, &v, &n) == THX_EINPUT);
+    CHECK(thx_field_values_parse(ctx, "count:4", 2, 2, &v, &n) == THX_EINPUT);
 }
 
 int main(void)

@@ -55,6 +55,8 @@ static void animation_signature(int argc, char **argv, const ropts *o, const cha
     }
     for (int k = 0; k < o->p.n_data; k++) sig_file(sig, cap, o->p.data[k]);
     if (o->p.channels) sig_file(sig, cap, o->p.channels);
+    for (int k = 1; k < o->p.n_data; k++)
+        if (o->p.data_channels[k]) sig_file(sig, cap, o->p.data_channels[k]);
     for (int k = 0; k < o->p.n_files; k++) sig_file(sig, cap, o->p.files[k]);
     if (o->p.model_dir) {
         snprintf(path, sizeof path, "%s/model.json", o->p.model_dir);

@@ -30,6 +30,7 @@ typedef struct {
     const char *iso;           /* --isosurface SPEC, or NULL */
     const char *contours;      /* --contours SPEC, or NULL */
     thx_field_plane plane[MAX_SLICES];
+    const char *plane_text[MAX_SLICES];
     size_t n_planes;
     const unsigned char *use;  /* per region */
 } field_request;
@@ -50,6 +51,108 @@ static thx_status frame_values(thx_ctx *ctx, const char *spec, const char *what,
     return THX_OK;
 }
 
+/* The range of phi over the nodes of the tetrahedra of the regions cut (lo > hi: none). */
+static void cut_range(const thx_volume *v, const double *phi, const unsigned char *use, double *lo, double *hi)
+{
+    *lo = INFINITY;
+    *hi = -INFINITY;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        if (!use[v->region[t]]) continue;
+        for (int k = 0; k < 4; k++) {
+            double p = phi[v->tet[4 * t + k]];
+            if (p < *lo) *lo = p;
+            if (p > *hi) *hi = p;
+        }
+    }
+}
+
+/* The values of SPEC written as numbers (not counts or percentages): those the range does not move
+ * (SPEC read against two ranges). *n of them into *out (caller frees). */
+static thx_status explicit_values(thx_ctx *ctx, const char *spec, double **out, size_t *n)
+{
+    double *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    *out = NULL;
+    *n = 0;
+    thx_status st = thx_field_values_parse(ctx, spec, 0, 1, &a, &na);
+    if (!st) st = thx_field_values_parse(ctx, spec, 2, 3, &b, &nb);
+    if (!st && na == nb) {
+        for (size_t k = 0; k < na; k++)
+            if (a[k] == b[k]) a[(*n)++] = a[k];
+        *out = a;
+        a = NULL;
+    }
+    free(a);
+    free(b);
+    return st;
+}
+
+/*
+ * Empty results (issue 24): a slice whose plane misses the regions cut, or a value outside the
+ * potentials of every frame asked for, is refused before anything is written (exit status 1, the
+ * cut and the range named); a value outside some frames' range only is a warning for each such
+ * frame, whose file is written (a series keeps every frame).
+ */
+static thx_status check_empty(thx_ctx *ctx, const char *sol, const thx_volume *v, const thx_series *vol,
+                              const size_t *frame, size_t nsel, const field_request *rq, double *frame_lo, double *frame_hi)
+{
+    double glo = INFINITY, ghi = -INFINITY;
+    for (size_t k = 0; k < nsel; k++) {
+        cut_range(v, vol->v + frame[k] * vol->n_rows, rq->use, &frame_lo[k], &frame_hi[k]);
+        if (frame_lo[k] < glo) glo = frame_lo[k];
+        if (frame_hi[k] > ghi) ghi = frame_hi[k];
+    }
+    for (size_t p = 0; p < rq->n_planes; p++) {
+        const thx_field_plane *pl = &rq->plane[p];
+        double dmin = INFINITY, dmax = -INFINITY;
+        for (size_t t = 0; t < v->n_tets; t++) {
+            if (!rq->use[v->region[t]]) continue;
+            for (int k = 0; k < 4; k++) {
+                const double *x = v->xyz + 3 * (size_t)v->tet[4 * t + k];
+                double dd = pl->n[0] * x[0] + pl->n[1] * x[1] + pl->n[2] * x[2] - pl->d;
+                if (dd < dmin) dmin = dd;
+                if (dd > dmax) dmax = dd;
+            }
+        }
+        if (!(dmin <= 0 && dmax >= 0))
+            return thx_error(ctx, THX_EINPUT, "--slice %s misses the regions cut of %s: they lie %.6g to %.6g mm from the "
+                             "plane (all on one side): no slice; nothing written", rq->plane_text[p], sol, dmin, dmax);
+    }
+    const char *specs[2] = {rq->iso, rq->contours}, *names[2] = {"--isosurface", "--contours"};
+    for (int s = 0; s < 2; s++) {
+        if (!specs[s]) continue;
+        double *x = NULL;
+        size_t nx = 0;
+        THX_CHECK(explicit_values(ctx, specs[s], &x, &nx));
+        for (size_t i = 0; i < nx; i++) {
+            size_t hit = 0;
+            for (size_t k = 0; k < nsel; k++) hit += frame_lo[k] <= x[i] && x[i] <= frame_hi[k];
+            if (!hit) {
+                thx_status st = thx_error(ctx, THX_EINPUT, "%s %s: the value %g is outside the potentials of %s in the "
+                                          "frames asked for (%g to %g over the regions cut): it cuts nothing; nothing written",
+                                          names[s], specs[s], x[i], sol, glo, ghi);
+                free(x);
+                return st;
+            }
+            if (hit == nsel) continue;
+            /* one warning per value, naming the first frames without it (not one line per frame) */
+            char list[160] = "";
+            size_t len = 0, shown = 0;
+            for (size_t k = 0; k < nsel && shown < 6; k++)
+                if (!(frame_lo[k] <= x[i] && x[i] <= frame_hi[k]) && len < sizeof list - 24) {
+                    len += (size_t)snprintf(list + len, sizeof list - len, "%s%zu", shown ? ", " : "",
+                                            shown == 5 ? (size_t)0 : frame[k] + 1);
+                    if (shown == 5) snprintf(list + len - 1, sizeof list - len + 1, "...");
+                    shown++;
+                }
+            thx_log(ctx, THX_LOG_WARN, "%s value %g is outside the potentials of %zu of the %zu frames (frame%s %s): nothing "
+                    "at it there", names[s], x[i], nsel - hit, nsel, nsel - hit > 1 ? "s" : "", list);
+        }
+        free(x);
+    }
+    return THX_OK;
+}
+
 /* The frame's cut: isosurfaces (tags 0..ni-1) then slices (tags ni..), contours on the slices. The
  * values go to *iso (n_iso) and *cvals (n_c) (caller frees). */
 static thx_status make_frame(thx_ctx *ctx, const thx_volume *v, const double *phi, const field_request *rq,
@@ -60,15 +163,8 @@ static thx_status make_frame(thx_ctx *ctx, const thx_volume *v, const double *ph
     *iso = *cvals = NULL;
     *n_iso = *n_c = 0;
     /* the range of the potentials over the nodes of the regions cut */
-    double lo = INFINITY, hi = -INFINITY;
-    for (size_t t = 0; t < v->n_tets; t++) {
-        if (!rq->use[v->region[t]]) continue;
-        for (int k = 0; k < 4; k++) {
-            double p = phi[v->tet[4 * t + k]];
-            if (p < lo) lo = p;
-            if (p > hi) hi = p;
-        }
-    }
+    double lo, hi;
+    cut_range(v, phi, rq->use, &lo, &hi);
     if (!(lo <= hi)) return thx_error(ctx, THX_EINPUT, "no tetrahedron in the regions chosen");
     thx_field_mesh_clear(out);
     if (rq->iso) {
@@ -103,7 +199,7 @@ static int add_slice(void *user, const cli_opt *opt, const char *arg)
     thx_status st = thx_field_plane_parse(ctx, arg, &rq->plane[rq->n_planes]);
     int rc = st ? cli_usage_error("field", "--slice %s", thx_ctx_message(ctx)) : 0;
     thx_ctx_destroy(&ctx);
-    if (!rc) rq->n_planes++;
+    if (!rc) rq->plane_text[rq->n_planes++] = arg;
     return rc;
 }
 
@@ -131,8 +227,8 @@ int cmd_field(int argc, char **argv)
         {.name = "--frame", .type = CLI_STRING, .meta = "N|LIST|all", .s = &frames,
          .help = "the frames: 1-based N, A:B[:STEP] items separated by commas, or all"},
         {.name = "--isosurface", .type = CLI_STRING, .meta = "SPEC", .s = &rq.iso,
-         .help = "equipotential surfaces: values (-5,0,5), a count (10: evenly inside the frame's range, ends "
-                 "excluded) or percentages of the range (25%,50%)"},
+         .help = "equipotential surfaces: values (-5,0,5; 0 is the zero equipotential), a count (count:10: evenly "
+                 "inside the frame's range, ends excluded) or percentages of the range (25%,50%)"},
         {.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .fn = add_slice, .max = MAX_SLICES,
          .help = "a plane cut exactly through the tetrahedra: x=MM, y=MM, z=MM or PX,PY,PZ:NX,NY,NZ (a point and a "
                  "normal, mm)"},
@@ -142,7 +238,8 @@ int cmd_field(int argc, char **argv)
          .max = argc, .def = "the regions the solution covers (all but \"heart\" for heart-surface problems)",
          .help = "cut only this tissue region's tetrahedra"},
         {.name = "--streamlines", .type = CLI_FLAG, .i = &streamlines_flag,
-         .help = "current streamlines instead of cuts: thorax field SOLUTION --streamlines --seed ... (the same as "
+         .help = "current streamlines instead of cuts: thorax field SOLUTION --streamlines [--seed ...] (seeded by |J| x "
+                 "volume, density:100, without --seed; the same as "
                  "thorax streamlines; its options: thorax field --streamlines --help)"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
@@ -246,6 +343,13 @@ int cmd_field(int argc, char **argv)
             times[nsel] = vol->time[f];
             frame[nsel++] = f;
         }
+    {
+        double *flo = thx_calloc(ctx, 2 * (nsel + 1), sizeof *flo);
+        if (!flo) { st = THX_ENOMEM; goto fail; }
+        st = check_empty(ctx, sol, v, vol, frame, nsel, &rq, flo, flo + nsel + 1);
+        free(flo);
+        if (st) goto fail;
+    }
     /* the files: OUT itself, or OUT/field_FFFF.vtp per frame and OUT/field.pvd */
     int single = ends_with(out, ".vtp") || ends_with(out, ".obj");
     int obj = ends_with(out, ".obj");
@@ -324,6 +428,9 @@ int cmd_field(int argc, char **argv)
                 else snprintf(gname[i], sizeof gname[i], "plane_%zu", i - ni + 1);
                 gp[i] = gname[i];
             }
+            if (!st && single && mesh->n_tris == 0 && mesh->n_segs == 0)
+                st = thx_error(ctx, THX_EINPUT, "%s: frame %zu: the cuts asked for are empty (no triangle, no contour line): "
+                               "nothing written", sol, frame[k] + 1);
             if (!st)
                 st = obj ? thx_field_mesh_write_obj(ctx, mesh, gp, ni + rq.n_planes, p)
                          : thx_field_mesh_write_vtp(ctx, mesh, &o, p);

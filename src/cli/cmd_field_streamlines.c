@@ -37,8 +37,8 @@ int cmd_field_streamlines(int argc, char **argv)
         {.name = "--frame", .type = CLI_INT, .meta = "N", .i = &frame, .rule = CLI_GE, .lo = 1,
          .help = "the frame of the volume potentials (1-based)"},
         {.name = "--seed", .type = CLI_STRING, .meta = "SPEC", .flags = CLI_REPEAT, .sv = seeds, .count = &n_seeds,
-         .max = argc, .def = "",
-         .help = "where lines start (required; repeatable): point:X,Y,Z; line:X,Y,Z:X,Y,Z:N (N evenly from one point to "
+         .max = argc, .def = "density:100",
+         .help = "where lines start (repeatable): point:X,Y,Z; line:X,Y,Z:X,Y,Z:N (N evenly from one point to "
                  "the other); sphere:X,Y,Z:R:N (N spread evenly on the sphere, a Fibonacci lattice); region:NAME:N (N "
                  "uniformly in the region's volume; a region without current, the heart of an epicardial solution, on "
                  "its surface); density:N (drawn with probability proportional to |J| x volume); mm"},
@@ -78,9 +78,9 @@ int cmd_field_streamlines(int argc, char **argv)
     };
     cli_command c = {
         .name = cmd,
-        .usage = "SOLUTION --streamlines --frame --seed... [--integrator] [--direction] [--max-length] [--min-current] "
+        .usage = "SOLUTION --streamlines --frame [--seed]... [--integrator] [--direction] [--max-length] [--min-current] "
                  "[--tubes] -o\n"
-                 "SOLUTION --streamlines --seed... [--step] [--step-mm] [--tolerance] [--max-steps] [--no-loops] [--loop-tol] "
+                 "SOLUTION --streamlines [--seed]... [--step] [--step-mm] [--tolerance] [--max-steps] [--no-loops] [--loop-tol] "
                  "[--rng-seed] [--tubes] [--sides] [--caps] -o",
         .about = "Current streamlines of one frame of a forward solution (thorax forward ...\n"
                  "--volume): J = -sigma grad phi per tetrahedron, averaged to the nodes and\n"
@@ -88,7 +88,8 @@ int cmd_field_streamlines(int argc, char **argv)
                  "each seed (paper 4.3), the containing tetrahedron found by walking from the\n"
                  "last one. A line stops where it leaves the domain (the torso's surface, or the\n"
                  "heart's, which an epicardial solution leaves out), where |J| is low, at the\n"
-                 "length or step limit, or when it closes a loop back to its seed.\n",
+                 "length or step limit, or when it closes a loop back to its seed. Without\n"
+                 "--seed, 100 seeds are drawn with probability |J| x volume (density:100).\n",
         .epilog = "Point data current_magnitude (|J|, mA/m^2 for potentials in mV), potential; cell\n"
                   "data stop_reason (0 boundary, 1 low_current, 2 max_length, 3 max_steps, 4 loop),\n"
                   "direction (+1, -1), seed, line, length (docs/formats.md, \"Streamlines\").\n"
@@ -120,10 +121,8 @@ int cmd_field_streamlines(int argc, char **argv)
         rc = cli_usage_error(cmd, "say what to draw: --streamlines");
         goto out;
     }
-    if (!n_seeds) {
-        rc = cli_usage_error(cmd, "no --seed given (point:X,Y,Z, line:..., sphere:..., region:NAME:N or density:N)");
-        goto out;
-    }
+    if (!n_seeds) /* seeded by |J| x volume, as ParaView's and SCIRun's default seeding does (issue 24) */
+        seeds[n_seeds++] = "density:100";
     if (!out) {
         rc = cli_usage_error(cmd, "no output file given (-o OUT.vtp or OUT.obj)");
         goto out;

@@ -181,6 +181,21 @@ static int parse_box(void *user, const cli_opt *opt, const char *v)
     return 0;
 }
 
+/* --channels FILE: the channels of the --data given last (before any --data: the first), one each. */
+static int pair_channels(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    int k = o->p.n_data ? o->p.n_data - 1 : 0;
+    if (o->p.data_channels[k])
+        return cli_usage_error(o->cmd, "--channels %s: data set %d (%s) has its channels already (%s); give each --data its "
+                                       "--channels after it", v, k + 1, o->p.n_data ? o->p.data[k] : "the first --data",
+                               o->p.data_channels[k]);
+    o->p.data_channels[k] = v;
+    o->p.n_channels++;
+    if (!o->p.channels) o->p.channels = v;
+    return 0;
+}
+
 static const cli_choice views[] = {{"anterior", THX_VIEW_ANTERIOR}, {"posterior", THX_VIEW_POSTERIOR},
                                    {"left", THX_VIEW_LEFT},         {"right", THX_VIEW_RIGHT},
                                    {"superior", THX_VIEW_SUPERIOR}, {"inferior", THX_VIEW_INFERIOR},
@@ -213,8 +228,9 @@ size_t render_options(cli_opt *t, ropts *o)
                        .sv = o->p.data_surface, .count = &o->p.n_data_surface, .max = THX_PICTURE_MAX,
                        .help = "the surface the k-th --data belongs to (the k-th --data-surface), when several have that many "
                                "nodes"};
-    t[n++] = (cli_opt){.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .s = &o->p.channels,
-                       .help = "map3d .channels: the --data rows are recording channels, node i takes channel c"};
+    t[n++] = (cli_opt){.name = "--channels", .type = CLI_INPUT, .meta = "FILE", .flags = CLI_REPEAT, .fn = pair_channels,
+                       .help = "map3d .channels of the --data it follows (before any --data: the first): that data "
+                               "set's rows are recording channels, node i takes channel c; repeat for more data sets"};
     t[n++] = (cli_opt)CLI_BAD_LEADS_OPT(&o->p.bad_leads, "filled by Laplacian interpolation on the --data's surface");
     t[n++] = (cli_opt){.name = "--size", .type = CLI_STRING, .meta = "WxH", .fn = parse_size, .def = "800x800",
                        .unit = "pixels", .help = "image size, 16 to 8192 each"};
@@ -320,7 +336,8 @@ size_t render_options(cli_opt *t, ropts *o)
                                "solution's ecg12), or SURFACE:NODE / NODE (1-based) of the data"};
     t[n++] = (cli_opt){.name = "--isosurface", .type = CLI_STRING, .meta = "VALUES", .s = &o->p.isosurface,
                        .help = "equipotential surfaces from --solution's volume potentials (thorax forward --volume): "
-                               "values '-0.5,0,0.5' (a single whole number is a count: write '2.0' for the value), a count '5', or percentages of the scale's range '25%,75%'; "
+                               "values '-0.5,0,0.5' ('0' is the zero equipotential), a count 'count:5' (evenly inside the scale's range, "
+                               "ends excluded), or percentages of the scale's range '25%,75%'; "
                                "drawn translucent as the surface 'equipotentials'"};
     t[n++] = (cli_opt){.name = "--slice", .type = CLI_STRING, .meta = "PLANE", .flags = CLI_REPEAT, .sv = o->p.slices,
                        .count = &o->p.n_slices, .max = 8,
@@ -407,7 +424,7 @@ int cmd_render(int argc, char **argv)
         .name = "render",
         .usage = "MODEL [--data [--data-surface]] [--frame] -o [options]\n"
                  "--solution [--frame] -o [options]\n"
-                 "SURFACE_FILE... [--data [--channels] [--bad-leads]] [--frame] -o [options]",
+                 "SURFACE_FILE... [--data [--channels]] [--bad-leads] [--frame] -o [options]",
         .about = "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a\n"
                  "GPU), with potentials coloured per pixel (the value interpolated, then the colour\n"
                  "looked up, so bands and contours are exact), following the field's display\n"

@@ -157,7 +157,7 @@ static int live_option(void *user, thx_picture_opts *p, const char *line)
     int rc = cli_parse(&cmd, argc, argv);
     if (rc) { free(copy); return 1; }
     if (o.r.p.solution != p->solution || o.r.p.n_data != p->n_data || o.r.p.channels != p->channels ||
-        o.r.p.bad_leads != p->bad_leads ||
+        o.r.p.n_channels != p->n_channels || o.r.p.bad_leads != p->bad_leads ||
         o.r.p.n_data_surface != p->n_data_surface || o.r.p.trace != p->trace || o.r.p.arrows != p->arrows ||
         o.r.p.model_dir != p->model_dir || o.r.p.n_files != p->n_files || o.r.p.n_landmarks != p->n_landmarks ||
         o.r.p.n_electrodes != p->n_electrodes || o.r.p.tetrahedra != p->tetrahedra) {
@@ -220,7 +220,7 @@ int cmd_view(int argc, char **argv)
         .name = "view",
         .usage = "MODEL [--data [--data-surface]] [--frame] [--script] [options]\n"
                  "--solution [--frame] [--window]... [--separate] [options]\n"
-                 "SURFACE_FILE... [--data [--channels] [--bad-leads]] [options]\n"
+                 "SURFACE_FILE... [--data [--channels]] [--bad-leads] [options]\n"
                  "--script FILE",
         .about = "The interactive viewer (GTK 4; paper 4.2): the surfaces and their data in one window or\n"
                  "several, frames stepped with the left and right arrow keys (in step on every surface),\n"

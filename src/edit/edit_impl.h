@@ -42,7 +42,21 @@ struct thx_edit_session {
     thx_edit *redo;
     size_t n_redo, cap_redo;
     size_t *mesh_edits;       /* per model surface */
+    /* the volume mesh the model was read with (held apart from m: an edit may leave it stale), the
+       surfaces it was built on (copies, to tell whether the edits changed them), the directory the
+       model was read from ("" when made in memory), and what the last save did with the mesh */
+    thx_volume *kept_volume;
+    thx_surface **mesh_surf;
+    size_t n_mesh_surf;
+    char source_dir[4096];
+    char save_note[1024];
 };
+
+/* The volume mesh and the surfaces it was built on set apart (at session create). */
+thx_status edit_keep_volume(thx_ctx *ctx, thx_edit_session *s);
+void edit_kept_free(thx_edit_session *s);
+/* The session's log text into s->m->edit_log (for a save). */
+thx_status edit_session_set_log(thx_ctx *ctx, thx_edit_session *s);
 
 
 /* Applies e in the session, pushing its undo record and counting it, then checks the surface into

@@ -170,6 +170,7 @@ thx_status thx_edit_session_open(thx_ctx *ctx, const char *model_dir, const char
     THX_TRY(thx_edit_session_create(ctx, &m, &c, has_rec ? &rec : NULL, path[0] ? path : NULL, path[0] ? sha : NULL,
                                     o, &s));
     if (note[0]) snprintf(s->note, sizeof s->note, "%s", note);
+    snprintf(s->source_dir, sizeof s->source_dir, "%s", model_dir);
     *out = s;
 done:
     cJSON_Delete(prov);

@@ -114,6 +114,7 @@ void thx_edit_session_destroy(thx_edit_session **sp)
     free(s->base_text);
     thx_model_destroy(&s->m);
     thx_contours_destroy(&s->c);
+    edit_kept_free(s);
     free(s);
     *sp = NULL;
 }
@@ -214,7 +215,7 @@ thx_status thx_edit_session_create(thx_ctx *ctx, thx_model **model, thx_contours
                            "edit the surfaces model (before thorax mesh), or drop the volume and mesh again");
             goto fail;
         }
-        thx_volume_destroy(&s->m->volume);
+        THX_TRY(edit_keep_volume(ctx, s)); /* kept apart: saved again while the surfaces are as it was built on */
     }
     s->mesh_edits = thx_calloc(ctx, s->m->n_surfaces ? s->m->n_surfaces : 1, sizeof *s->mesh_edits);
     if (!s->mesh_edits) { st = THX_ENOMEM; goto fail; }
@@ -398,17 +399,7 @@ static thx_status set_model_log(thx_ctx *ctx, thx_edit_session *s)
     return THX_OK;
 }
 
-thx_status thx_edit_session_save(thx_ctx *ctx, thx_edit_session *s, const char *dir)
-{
-    THX_CHECK(set_model_log(ctx, s));
-    return thx_model_write(ctx, s->m, dir);
-}
-
-thx_status thx_edit_session_save_claimed(thx_ctx *ctx, thx_edit_session *s, thx_outdir *od)
-{
-    THX_CHECK(set_model_log(ctx, s));
-    return thx_model_write_claimed(ctx, s->m, od);
-}
+thx_status edit_session_set_log(thx_ctx *ctx, thx_edit_session *s) { return set_model_log(ctx, s); }
 
 thx_status thx_edit_session_finish(thx_ctx *ctx, thx_edit_session **sp, thx_model **model, thx_contours **contours)
 {

@@ -1,5 +1,5 @@
 /* The texts that name cuts (thorax/field/field.h): planes ("x=MM", "P:N") and value lists
- * ("-5,0,5", "10", "25%,50%"). */
+ * ("-5,0,5", "0", "count:10", "25%,50%"). */
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -58,21 +58,20 @@ thx_status thx_field_values_parse(thx_ctx *ctx, const char *spec, double lo, dou
     *n = 0;
     if (!isfinite(lo) || !isfinite(hi) || lo > hi)
         return thx_error(ctx, THX_EINPUT, "values \"%s\": the range [%g, %g] is not a range", spec, lo, hi);
-    /* a count: one plain integer, nothing else */
-    size_t len = strlen(spec), digits = strspn(spec, "0123456789");
-    if (len && digits == len) {
-        long c = strtol(spec, NULL, 10);
-        if (len > 4 || c < 1 || c > 1000)
-            return thx_error(ctx, THX_EINPUT, "values \"%s\": a count of values is 1 to 1000 (write \"%s,\" for the "
-                             "value itself)", spec, spec);
+    /* a count has its own spelling, count:N; a number is always a value ("0" is the zero
+       equipotential, the one asked for first) */
+    if (!strncmp(spec, "count:", 6)) {
+        const char *c0 = spec + 6;
+        size_t len = strlen(c0), digits = strspn(c0, "0123456789");
+        long c = len && digits == len && len <= 4 ? strtol(c0, NULL, 10) : 0;
+        if (c < 1 || c > 1000)
+            return thx_error(ctx, THX_EINPUT, "values \"%s\": count:N takes a count of values from 1 to 1000", spec);
+        if (c > 1 && !(hi > lo))
+            return thx_error(ctx, THX_EINPUT, "values \"%s\": the range is one value (%g): no %ld distinct values in it",
+                             spec, lo, c);
         double *v = thx_malloc(ctx, (size_t)c * sizeof *v);
         if (!v) return THX_ENOMEM;
         for (long k = 1; k <= c; k++) v[k - 1] = lo + (hi - lo) * (double)k / (double)(c + 1);
-        if (c > 1 && !(hi > lo)) {
-            free(v);
-            return thx_error(ctx, THX_EINPUT, "values \"%s\": the range is one value (%g): no %ld distinct values in it",
-                             spec, lo, c);
-        }
         *values = v;
         *n = (size_t)c;
         return THX_OK;
@@ -89,7 +88,7 @@ thx_status thx_field_values_parse(thx_ctx *ctx, const char *spec, double lo, dou
         double x = strtod(p, &e);
         if (e == p || errno || !isfinite(x)) {
             free(v);
-            return thx_error(ctx, THX_EINPUT, "values \"%s\": item %zu: a number, N%% or a count expected", spec, k + 1);
+            return thx_error(ctx, THX_EINPUT, "values \"%s\": item %zu: a number or N%% expected (a count is count:N)", spec, k + 1);
         }
         if (*e == '%') {
             if (x < 0 || x > 100) {

@@ -41,6 +41,46 @@ void picture_field_free(thx_picture_data *d)
     d->field_frame = -1;
 }
 
+/* Cuts that cannot cut anything are refused (as thorax field refuses them, issue 24): a slice whose
+ * plane leaves every node of the regions cut on one side, an isovalue written as a number that lies
+ * outside the volume potentials of every frame. */
+static thx_status empty_cuts(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d)
+{
+    const thx_volume *v = d->m->volume;
+    for (int k = 0; k < o->n_slices; k++) {
+        thx_field_plane p;
+        THX_CHECK(thx_field_plane_parse(ctx, o->slices[k], &p));
+        double dmin = INFINITY, dmax = -INFINITY;
+        for (size_t t = 0; t < v->n_tets; t++) {
+            if (!d->field_use[v->region[t]]) continue;
+            for (int c = 0; c < 4; c++) {
+                const double *x = v->xyz + 3 * (size_t)v->tet[4 * t + c];
+                double dd = p.n[0] * x[0] + p.n[1] * x[1] + p.n[2] * x[2] - p.d;
+                dmin = fmin(dmin, dd);
+                dmax = fmax(dmax, dd);
+            }
+        }
+        if (!(dmin <= 0 && dmax >= 0))
+            return thx_error(ctx, THX_EINPUT, "--slice %s misses the volume of %s: its nodes lie %.6g to %.6g mm from the plane "
+                             "(all on one side)", o->slices[k], o->solution, dmin, dmax);
+    }
+    if (o->isosurface) {
+        /* the values written as numbers: those the range does not move */
+        double *a = NULL, *b = NULL;
+        size_t na = 0, nb = 0;
+        thx_status st = thx_field_values_parse(ctx, o->isosurface, 0, 1, &a, &na);
+        if (st == THX_OK) st = thx_field_values_parse(ctx, o->isosurface, 2, 3, &b, &nb);
+        for (size_t k = 0; st == THX_OK && k < na && na == nb; k++)
+            if (a[k] == b[k] && !(d->vmin <= a[k] && a[k] <= d->vmax))
+                st = thx_error(ctx, THX_EINPUT, "--isosurface %s: the value %g is outside the volume potentials of %s in "
+                               "every frame (%g to %g): it cuts nothing", o->isosurface, a[k], o->solution, d->vmin, d->vmax);
+        free(a);
+        free(b);
+        return st;
+    }
+    return THX_OK;
+}
+
 thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
 {
     d->field_frame = -1;
@@ -77,7 +117,7 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         snprintf(msg, sizeof msg, "%s", thx_ctx_message(ctx));
         return thx_error(ctx, st, "%s: %s", opt, msg);
     }
-    return THX_OK;
+    return empty_cuts(ctx, o, d);
 }
 
 /* The range the potentials' scale covers at a frame: the picture's scope over the volume. */
@@ -194,8 +234,19 @@ static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
 
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame)
 {
-    if (!d->volume || d->field_frame == frame) return THX_OK;
+    if (!d->volume) return THX_OK;
+    /* built again for another frame, or other options (a viewer's script line may change them) */
+    char key[sizeof d->field_key];
+    size_t kl = (size_t)snprintf(key, sizeof key, "%s|%d|%d|%.17g|%d|%d|%.17g|%.17g|%d", o->isosurface ? o->isosurface : "",
+                                 o->slice_current, o->stream_potential, o->stream_radius, o->scope, o->mapping, o->lo, o->hi,
+                                 o->style);
+    for (int k = 0; k < o->n_slices && kl < sizeof key; k++) kl += (size_t)snprintf(key + kl, sizeof key - kl, "|s%s", o->slices[k]);
+    for (int k = 0; k < o->n_streamlines && kl < sizeof key; k++)
+        kl += (size_t)snprintf(key + kl, sizeof key - kl, "|l%s", o->streamlines[k]);
+    if (d->field_frame == frame && !strcmp(key, d->field_key)) return THX_OK;
     picture_field_free(d);
+    if (strcmp(key, d->field_key)) d->field_warned = 0;
+    memcpy(d->field_key, key, sizeof key);
     const thx_volume *v = d->m->volume;
     const thx_series *x = d->volume;
     size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
@@ -233,6 +284,11 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
             d->field_surf[ISO].tri = m->tri;
             d->field_lo[ISO] = lo;
             d->field_hi[ISO] = hi;
+            if (n && m->n_tris == 0 && !d->field_warned) { /* said once, not at every frame of a movie */
+                d->field_warned = 1;
+                thx_log(ctx, THX_LOG_WARN, "--isosurface %s: no equipotential surface in frame %d (its values lie outside "
+                        "the potentials of that frame); the picture is drawn without it", o->isosurface, frame + 1);
+            }
         }
     }
     if (st == THX_OK && o->n_slices) {

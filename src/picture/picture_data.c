@@ -299,8 +299,9 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         thx_series *s = NULL;
         int *chan = NULL;
         THX_CHECK(thx_series_read(ctx, dpath, THX_SERIES_AUTO, &s));
-        if (o->channels) {
-            thx_status sc = apply_channels(ctx, o->channels, &s, &chan);
+        const char *cpath = o->n_channels ? o->data_channels[k] : o->channels;
+        if (cpath) {
+            thx_status sc = apply_channels(ctx, cpath, &s, &chan);
             if (sc != THX_OK) { thx_series_destroy(&s); return sc; }
         }
         int target = -1;
@@ -472,6 +473,7 @@ thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data 
     THX_CHECK(load_data(ctx, o, d));
     THX_CHECK(picture_field_load(ctx, o, d));
     THX_CHECK(picture_view_frame(ctx, o, d));
+    THX_CHECK(thx_picture_clip_check(ctx, o, d));
     if (o->tetrahedra) {
         if (!d->m || !d->m->volume)
             return thx_error(ctx, THX_EINPUT, "--tetrahedra: %s has no volume mesh (thorax mesh makes one)",

@@ -62,7 +62,11 @@ static int parse_clip(const char *spec, const double lo[3], const double hi[3], 
     double f = 0.5;
     const char *colon = strchr(spec, ':');
     snprintf(name, sizeof name, "%.*s", colon ? (int)(colon - spec) : (int)strlen(spec), spec);
-    if (colon) f = atof(colon + 1);
+    if (colon) { /* the fraction of the depth kept, 0 < F <= 1 (0 or less removes everything) */
+        char *end;
+        f = strtod(colon + 1, &end);
+        if (end == colon + 1 || *end || !(f > 0 && f <= 1)) return -2;
+    }
     for (int k = 0; k < 6; k++)
         if (!strcmp(name, names[k])) {
             int a = axis[k];
@@ -132,8 +136,18 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
     thx_picture_bounds(d, lo, hi);
     box_to_frame(o, lo, hi, qlo, qhi);
     int named = 0;
-    if (parse_clip(o->clip, qlo, qhi, p, &named)) {
+    int pc = parse_clip(o->clip, qlo, qhi, p, &named);
+    if (pc == -2) {
+        thx_error(ctx, THX_EINPUT, "--clip '%s': the fraction of the depth kept is a number above 0 and at most 1 (0 or "
+                  "less would remove the whole model)", o->clip);
+        return -1;
+    }
+    if (pc) {
         thx_error(ctx, THX_EINPUT, "--clip '%s': a side (anterior, posterior, left, right, superior, inferior[:fraction]) or nx,ny,nz,d", o->clip);
+        return -1;
+    }
+    if (!named && !(p->n[0] != 0 || p->n[1] != 0 || p->n[2] != 0)) {
+        thx_error(ctx, THX_EINPUT, "--clip '%s': the plane's normal nx,ny,nz is zero", o->clip);
         return -1;
     }
     if (!named) { /* an explicit plane is in the model's axes */
@@ -146,3 +160,30 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
 }
 
 /* The scales of the surfaces with data in b, the main one first, each distinct one once. */
+
+thx_status thx_picture_clip_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d)
+{
+    thx_clip_plane p;
+    int nc = thx_picture_clip(ctx, o, d, &p);
+    if (nc < 0) return THX_EINPUT;
+    if (nc == 0) return THX_OK;
+    const thx_model *m = d->m;
+    size_t kept = 0, cut = 0;
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        int shown = o->n_only == 0, whole = 0;
+        for (int k = 0; k < o->n_only; k++) shown |= !strcmp(o->only[k], m->surf[s]->name);
+        for (int k = 0; k < o->n_whole; k++) whole |= !strcmp(o->whole[k], m->surf[s]->name);
+        if (!shown) continue;
+        if (whole) return THX_OK; /* drawn whole: something is left */
+        const thx_surface *sf = m->surf[s];
+        for (size_t i = 0; i < sf->n_nodes; i++) {
+            const double *x = sf->xyz + 3 * i;
+            kept += p.n[0] * x[0] + p.n[1] * x[1] + p.n[2] * x[2] + p.d >= 0;
+        }
+        cut += sf->n_nodes;
+    }
+    if (cut && !kept)
+        return thx_error(ctx, THX_EINPUT, "--clip '%s' removes the whole picture: none of the %zu nodes of the surfaces drawn "
+                         "is on the kept side (n.x + d >= 0 with n = %g,%g,%g, d = %g)", o->clip, cut, p.n[0], p.n[1], p.n[2], p.d);
+    return THX_OK;
+}

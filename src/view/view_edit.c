@@ -99,7 +99,8 @@ static int ensure_session(view_app *a)
                 a->d.model_dir, warnings);
     const char *note = thx_edit_session_note(a->edit);
     if (a->d.m->volume)
-        fprintf(stderr, "thorax view: editing %s: its volume mesh is left out of the edited model (run thorax mesh again)\n", a->d.model_dir);
+        fprintf(stderr, "thorax view: editing %s: its volume mesh is saved with the model while the surfaces are as it was "
+                        "built on; an edit kept moves it aside at the save (then: thorax mesh)\n", a->d.model_dir);
     if (note && *note) fprintf(stderr, "thorax view: editing %s: %s\n", a->d.model_dir, note);
     return 0;
 }
@@ -164,7 +165,10 @@ int view_edit_save(view_app *a, const char *dir)
     if (!a->edit) { view_set_info(a, "save-model: no edits to save"); a->status = 1; return -1; }
     if (!dir[0]) dir = a->d.model_dir;
     if (thx_edit_session_save(a->ctx, a->edit, dir) != THX_OK) { view_report(a, "save-model"); a->status = 1; return -1; }
-    view_set_info(a, "model saved to %s with its edit log (%zu edits in this session)", dir, thx_edit_undo_count(a->edit));
+    const char *note = thx_edit_session_save_note(a->edit);
+    if (note[0]) fprintf(stderr, "thorax view: save-model %s: %s\n", dir, note);
+    view_set_info(a, "model saved to %s with its edit log (%zu edits in this session)%s%s", dir, thx_edit_undo_count(a->edit),
+                  note[0] ? "; " : "", note);
     if (a->vo->verbose >= 0) printf("edit: saved %s\n", dir);
     fflush(stdout);
     return 0;

@@ -223,6 +223,27 @@ static void record_frame(view_win *w, const thx_image *img)
     a->rec_count++;
 }
 
+/* A picture that cannot be drawn. At the start, or while a script runs, it stops the viewer with
+ * exit status 1 and the message thorax render gives for the same options (a blank window waiting
+ * for a draw that never comes was the alternative: the script waits for each line's drawing). Later,
+ * from a key or menu, the status line says why and the window stays up; either way the draw counts
+ * as done, so nothing waits for it. */
+static void draw_failed(view_win *w)
+{
+    view_app *a = w->app;
+    int fatal = w->drawn == 0 || a->script_id || a->sweep_id || a->bench_id;
+    w->drawn++;
+    if (!fatal) { view_report(a, "drawing"); return; }
+    if (w->drawn > 1 && a->script_id && a->line > 0) /* after a script line: name it */
+        fprintf(stderr, "thorax view: %s:%d: %s\n", a->vo->script ? a->vo->script : "script", a->vo->script_line0 + a->line - 1,
+                thx_ctx_message(a->ctx));
+    else
+        fprintf(stderr, "thorax view: %s\n", thx_ctx_message(a->ctx));
+    snprintf(a->info, sizeof a->info, "%s", thx_ctx_message(a->ctx));
+    a->status = 1;
+    g_application_quit(G_APPLICATION(a->gapp));
+}
+
 static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
 {
     view_win *w = user;
@@ -239,7 +260,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     thx_picture_bars bars;
     int frame = view_frame_of(w);
     thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bars, NULL);
-    if (st != THX_OK) { view_report(a, "drawing"); return TRUE; }
+    if (st != THX_OK) { draw_failed(w); return TRUE; }
     int annotated = w->font != NULL;
     int need_pixels = annotated || w->shot_path || (a->recording && w->id == 1);
     if (need_pixels) {
@@ -267,7 +288,11 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     w->ms_sum += w->draw_ms;
     w->ms_n++;
     w->drawn++;
-    if (w->drawn == 1) view_pick_prepare(a);
+    if (w->drawn == 1) {
+        view_pick_prepare(a);
+        /* the state a test waits for (instead of sleeping): this window is up and drawn */
+        if (a->vo->verbose > 0) fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels)\n", w->id, fb_w, fb_h);
+    }
     return TRUE;
 }
 

@@ -65,8 +65,13 @@ static int run_line(view_app *a, const char *text, int line, int *wait_ms)
         for (int k = 0; k < a->n_win; k++) {
             thx_picture_opts o = a->win[k]->o;
             if (a->vo->option_fn(a->vo->option_user, &o, buf)) { script_fail(a, line, "'%s': see the message above", buf); return -1; }
-            thx_clip_plane p;
-            if (o.clip[0] && thx_picture_clip(a->ctx, &o, &a->d, &p) < 0) {
+            if ((o.isosurface || o.n_slices || o.n_streamlines) && !a->d.volume) {
+                /* the volume potentials are read at the start only when a cut is asked for there */
+                script_fail(a, line, "'%s': the volume potentials were not read at the start: give --isosurface, --slice "
+                            "or --streamlines on the command line or at the head of the script", buf);
+                return -1;
+            }
+            if (o.clip[0] && thx_picture_clip_check(a->ctx, &o, &a->d) != THX_OK) {
                 script_fail(a, line, "%s", thx_ctx_message(a->ctx));
                 return -1;
             }
@@ -215,9 +220,12 @@ thx_status view_save_session(view_app *a, const char *path)
     if (o->model_dir) fprintf(f, "%s\n", o->model_dir);
     for (int k = 0; k < o->n_files; k++) fprintf(f, "%s\n", o->files[k]);
     if (o->solution) fprintf(f, "--solution %s\n", o->solution);
-    for (int k = 0; k < o->n_data; k++) fprintf(f, "--data %s\n", o->data[k]);
+    for (int k = 0; k < o->n_data; k++) { /* each data set with the channels that follow it */
+        fprintf(f, "--data %s\n", o->data[k]);
+        if (o->n_channels && o->data_channels[k]) fprintf(f, "--channels %s\n", o->data_channels[k]);
+    }
     for (int k = 0; k < o->n_data_surface; k++) fprintf(f, "--data-surface %s\n", o->data_surface[k]);
-    if (o->channels) fprintf(f, "--channels %s\n", o->channels);
+    if (!o->n_channels && o->channels) fprintf(f, "--channels %s\n", o->channels);
     for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
     for (int k = 0; k < o->n_electrodes; k++) fprintf(f, "--electrodes %s\n", o->electrodes[k]);
     if (o->tetrahedra) fprintf(f, "--tetrahedra\n");

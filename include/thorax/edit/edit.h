@@ -176,7 +176,8 @@ typedef struct thx_edit_session thx_edit_session; /* opaque: the model, its cont
 typedef struct {
     thx_check_opts check; /* the check after each edit (thx_check_opts_default) */
     int drop_volume;      /* a model with a volume mesh: 0 refuses it (an edit would invalidate the mesh
-                             built on the surfaces), 1 drops the volume (run thorax mesh again) */
+                             built on the surfaces), 1 holds it apart from the edited model: saved
+                             again only while the surfaces are unchanged (thx_edit_session_save) */
 } thx_edit_session_opts;
 
 void thx_edit_session_opts_default(thx_edit_session_opts *o);
@@ -237,9 +238,18 @@ thx_status thx_edit_session_log_text(thx_ctx *ctx, const thx_edit_session *s, ch
 thx_status thx_edit_session_write_log(thx_ctx *ctx, const thx_edit_session *s, const char *path);
 /* Saves the edited model: the model directory with the log as edits.txt (thx_model_write: dir is
  * replaced only when it is thorax's own model). The session's model keeps the log
- * (model->edit_log). save_claimed writes into a directory claimed earlier (thx_outdir_claim). */
+ * (model->edit_log). save_claimed writes into a directory claimed earlier (thx_outdir_claim).
+ * The volume mesh the model was opened with (drop_volume) is saved with it while the surfaces are
+ * still those it was built on (no edit, or all undone). Saved into the directory the session was
+ * opened on (thx_edit_session_open), the model keeps the folders other commands wrote into it (its
+ * electrodes), and a mesh the edits made stale is moved aside into DIR.mesh-before-edit, never
+ * deleted (src/edit/save.c); thx_edit_session_save_note then says where and how to mesh again. */
 thx_status thx_edit_session_save(thx_ctx *ctx, thx_edit_session *s, const char *dir);
 thx_status thx_edit_session_save_claimed(thx_ctx *ctx, thx_edit_session *s, thx_outdir *od);
+/* What the last save did with a volume mesh it could not keep ("" nothing to say). */
+const char *thx_edit_session_save_note(const thx_edit_session *s);
+/* Whether the session holds a volume mesh apart (the model was opened with one, drop_volume). */
+int thx_edit_session_has_mesh(const thx_edit_session *s);
 /* Ends the session and hands its model over (with its log in model->edit_log) and its contours
  * (may be NULL to free them). *s is destroyed and nulled, also on failure. */
 thx_status thx_edit_session_finish(thx_ctx *ctx, thx_edit_session **s, thx_model **model, thx_contours **contours);

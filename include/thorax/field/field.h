@@ -92,12 +92,12 @@ thx_status thx_field_plane_parse(thx_ctx *ctx, const char *spec, thx_field_plane
 
 /*
  * Parses a list of values to cut at, relative to a range [lo, hi] (a frame's potentials):
- *   "-5,0,5"     the values themselves;
- *   "10"         a count: 10 values evenly inside the range, ends excluded (lo + k (hi-lo)/11);
+ *   "-5,0,5"     the values themselves ("0": the zero equipotential; a number is always a value);
+ *   "count:10"   a count: 10 values evenly inside the range, ends excluded (lo + k (hi-lo)/11);
  *   "25%,50%"    percentages of the range (lo + p/100 (hi - lo)), each in [0, 100].
- * A single plain integer is a count; write "10," or "10.0" for the value 10. Mixing percentages
- * and plain values is allowed item by item. *values (n of them) is the caller's (free). Values
- * must be finite and distinct; a count between 1 and 1000.
+ * Mixing percentages and plain values is allowed item by item. *values (n of them) is the
+ * caller's (free). Values must be finite and distinct; a count between 1 and 1000. (Before issue
+ * 24 a lone integer was a count, so "--isosurface 0" was refused as a count of none.)
  */
 thx_status thx_field_values_parse(thx_ctx *ctx, const char *spec, double lo, double hi, double **values, size_t *n);
 

@@ -59,7 +59,12 @@ typedef struct {
     const char *data_surface[THX_PICTURE_MAX];
     int n_data_surface;
     const char *files[THX_PICTURE_MAX]; /* surface files drawn without a model (any format thorax import reads) */
-    const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c */
+    const char *channels;   /* map3d .channels: node i of the data surface takes recording channel c (the first
+                               given; with n_channels == 0, every data set's) */
+    /* the channels file of each data set (data_channels[k] for data[k], NULL: its rows are the
+       surface's nodes): a --channels belongs to the --data it follows, as --data-surface does */
+    const char *data_channels[THX_PICTURE_MAX];
+    int n_channels;
     const char *bad_leads;  /* a bad-lead list or "auto": the --data's bad channels filled on their surface
                                (thorax/leads/bad_leads.h) */
     int n_files;
@@ -194,6 +199,8 @@ typedef struct {
     unsigned char field_current[3];  /* 1: drawn by |J| (a bar of its own), 0: by potential */
     unsigned char *field_use;        /* per volume region: in the solution's domain (thx_solution_domain) */
     int field_frame;                 /* -1: none built */
+    char field_key[1024];            /* the options they were built with (a script may change them) */
+    int field_warned;                /* a frame without equipotentials was told (once per field_key) */
     double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
     unsigned char sranged[THX_PICTURE_SURFACES];
     const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
@@ -297,6 +304,10 @@ void thx_picture_view_camera(const thx_picture_opts *o, const thx_picture_data *
 void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3]);
 /* The clip plane o->clip asks for, in the model's axes; 0 none, 1 one (in *p), -1 a bad spec (message in ctx). */
 int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d, thx_clip_plane *p);
+/* o->clip checked against the model: a bad spec, or a plane that removes every node of the
+ * surfaces drawn (none left whole by --no-clip), is THX_EINPUT saying so (a blank picture is never
+ * drawn without a word). thx_picture_load calls it; the viewer again for a script's --clip. */
+thx_status thx_picture_clip_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d);
 
 /* Shows data set k (0-based) of surface s; -1 when there is no such set. */
 int thx_picture_set_active(thx_picture_data *d, int s, int k);
