@@ -164,32 +164,50 @@ typedef struct { double x0, x1; size_t t; } tri_span;
 static int cmp_span(const void *a, const void *b)
 {
     const tri_span *p = a, *q = b;
-    return (p->x0 > q->x0) - (p->x0 < q->x0);
+    if (p->x0 != q->x0) return (p->x0 > q->x0) - (p->x0 < q->x0);
+    return (p->t > q->t) - (p->t < q->t);
 }
 
 static int tris_cross(const double *xyz, const int32_t *tri, size_t nt)
 {
     tri_span *sp = malloc((nt ? nt : 1) * sizeof *sp);
-    double *box = malloc((nt ? nt : 1) * 4 * sizeof *box); /* y0 y1 z0 z1 */
+    double *box = malloc((nt ? nt : 1) * 6 * sizeof *box); /* x0 x1 y0 y1 z0 z1 */
     if (!sp || !box) { free(sp); free(box); return -1; }
     size_t m = 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, span[3] = {0, 0, 0};
     for (size_t t = 0; t < nt; t++) {
         const double *a = xyz + 3 * (size_t)tri[3 * t], *b = xyz + 3 * (size_t)tri[3 * t + 1], *c = xyz + 3 * (size_t)tri[3 * t + 2];
         double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
         double cr = fabs(u[1] * v[2] - u[2] * v[1]) + fabs(u[2] * v[0] - u[0] * v[2]) + fabs(u[0] * v[1] - u[1] * v[0]);
         if (!(cr > 0)) continue;
-        sp[m] = (tri_span){fmin(a[0], fmin(b[0], c[0])), fmax(a[0], fmax(b[0], c[0])), t};
-        double *bx = box + 4 * t;
-        bx[0] = fmin(a[1], fmin(b[1], c[1])); bx[1] = fmax(a[1], fmax(b[1], c[1]));
-        bx[2] = fmin(a[2], fmin(b[2], c[2])); bx[3] = fmax(a[2], fmax(b[2], c[2]));
-        m++;
+        double *bx = box + 6 * t;
+        for (int k = 0; k < 3; k++) {
+            bx[2 * k] = fmin(a[k], fmin(b[k], c[k]));
+            bx[2 * k + 1] = fmax(a[k], fmax(b[k], c[k]));
+            lo[k] = fmin(lo[k], bx[2 * k]);
+            hi[k] = fmax(hi[k], bx[2 * k + 1]);
+            span[k] += bx[2 * k + 1] - bx[2 * k];
+        }
+        sp[m++].t = t;
+    }
+    /* Sweep along the axis where the triangles overlap least (extent over the mean extent of a
+       triangle: along a tall comb's teeth, not across them, issue 24), so a triangle meets few others. */
+    int ax = 0;
+    double bestr = -1;
+    for (int k = 0; k < 3; k++) {
+        double r = m ? (hi[k] - lo[k]) / (span[k] / (double)m + 1e-300) : 0;
+        if (r > bestr) { bestr = r; ax = k; }
+    }
+    for (size_t i = 0; i < m; i++) {
+        sp[i].x0 = box[6 * sp[i].t + 2 * ax];
+        sp[i].x1 = box[6 * sp[i].t + 2 * ax + 1];
     }
     qsort(sp, m, sizeof *sp, cmp_span);
     int hit = 0;
     for (size_t i = 0; i < m && !hit; i++)
         for (size_t j = i + 1; j < m && sp[j].x0 <= sp[i].x1 && !hit; j++) {
-            const double *p = box + 4 * sp[i].t, *q = box + 4 * sp[j].t;
-            if (p[1] < q[0] || q[1] < p[0] || p[3] < q[2] || q[3] < p[2]) continue;
+            const double *p = box + 6 * sp[i].t, *q = box + 6 * sp[j].t;
+            if (p[1] < q[0] || q[1] < p[0] || p[3] < q[2] || q[3] < p[2] || p[5] < q[4] || q[5] < p[4]) continue;
             hit = thx_triangles_intersect(xyz, tri + 3 * sp[i].t, tri + 3 * sp[j].t);
         }
     free(sp);
