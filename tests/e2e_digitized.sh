@@ -7,7 +7,8 @@
 # the caps (the nodes of the layer loops) must lie within 1 mm of the true (original triangulated)
 # surface (tests/digitized_compare.py). Sparse polygons (the crossing points only, --densify 0:
 # up to 60 mm between points) are resampled without overshoot: every layer node within half the
-# node spacing of the digitized polygon. --strict refuses what is otherwise repaired, with the
+# node spacing of the digitized polygon and within 1 mm of the true surface (issue 24: the spline
+# strayed up to 2 mm from 60 mm edges). --strict refuses what is otherwise repaired, with the
 # same message; the repairs are listed in model.json's provenance.
 # THORAX_DIGITIZED_FULL=1 also runs jitter seeds 2 and 3 (the figures of the notes).
 # The shared data sets are skipped (with a message) when ../shared/data is not beside the checkout.
@@ -64,9 +65,9 @@ print('%.0f' % best)" "${m}_sparse.txt")
     if ! "$THORAX" surfaces "$c.txt" -o "$c" --spacing 5 -q 2> "$c.err"; then bad "$c: surfaces: $(head -3 "$c.err")"; continue; fi
     "$THORAX" check "$c" -q 2> "$c.check" && ok "$c: thorax check" || bad "$c: check: $(head -3 "$c.check")"
     for surf in $(surfaces_of $m); do
-        if r=$($PY -B "$SRC/tests/digitized_compare.py" "$c.txt" $surf "$c/$surf.pts" "$c/$surf.fac" --max 2.5 --ref "$m/$surf.pts" "$m/$surf.fac"); then
-            ok "$c $surf (up to $longest mm between points, spacing 5 mm): $(echo "$r" | head -1)"
-        else bad "$c $surf: nodes beyond half the spacing from the polygon: $(echo "$r" | tr '\n' ' ')"; fi
+        if r=$($PY -B "$SRC/tests/digitized_compare.py" "$c.txt" $surf "$c/$surf.pts" "$c/$surf.fac" --max 2.5 --ref "$m/$surf.pts" "$m/$surf.fac" --ref-max 1.0); then
+            ok "$c $surf (up to $longest mm between points, spacing 5 mm): $(echo "$r" | tr '\n' ';')"
+        else bad "$c $surf: nodes beyond half the spacing from the polygon or 1 mm from the true surface: $(echo "$r" | tr '\n' ' ')"; fi
     done
 done
 

@@ -25,14 +25,15 @@ static void replay_line(void *user, const thx_edit_log *log, const thx_edit *e, 
 
 /* The repairs on stderr (issue 24: a dense loop gave one warning line per merge, tens of
  * thousands): the count per kind, then the first REPAIRS_SHOWN of each kind (in file order) with
- * their FILE:LINE, and how many more; every one with -v. All are in model.json's provenance. */
+ * their FILE:LINE, and how many more; every one with -v, none with -q (as every warning). All are
+ * in model.json's provenance. */
 #define REPAIRS_SHOWN 3
 static void print_repairs(const thx_repair_log *r, int verbose)
 {
     static const char *what[THX_REPAIR_KINDS] = {"closing points dropped", "near-coincident point runs merged",
                                                  "spikes removed", "self-crossings untangled", "narrow holes dropped"};
     size_t count[THX_REPAIR_KINDS] = {0}, shown[THX_REPAIR_KINDS] = {0};
-    if (!r->n) return;
+    if (!r->n || verbose < 0) return; /* -q hides warnings */
     for (size_t k = 0; k < r->n; k++) count[r->kind[k]]++;
     char line[600];
     int w = snprintf(line, sizeof line, "%zu repair%s of digitization noise:", r->n, r->n == 1 ? "" : "s");
