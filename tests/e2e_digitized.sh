@@ -7,7 +7,8 @@
 # the caps (the nodes of the layer loops) must lie within 1 mm of the true (original triangulated)
 # surface (tests/digitized_compare.py). Sparse polygons (the crossing points only, --densify 0:
 # up to 60 mm between points) are resampled without overshoot: every layer node within half the
-# node spacing of the digitized polygon. --strict refuses what is otherwise repaired, with the
+# node spacing of the digitized polygon and within 1 mm of the true surface (issue 24: the spline
+# strayed up to 2 mm from 60 mm edges). --strict refuses what is otherwise repaired, with the
 # same message; the repairs are listed in model.json's provenance.
 # THORAX_DIGITIZED_FULL=1 also runs jitter seeds 2 and 3 (the figures of the notes).
 # The shared data sets are skipped (with a message) when ../shared/data is not beside the checkout.
@@ -38,7 +39,7 @@ for m in tank dal; do
             c="${m}_${s}_j$seed"
             $PY -B "$SRC/tests/digitize.py" "${m}_$s.txt" "$c.txt" --jitter 0.5 --seed $seed
             if ! "$THORAX" surfaces "$c.txt" -o "$c" > "$c.out" 2> "$c.err"; then bad "$c: surfaces: $(grep -v warning "$c.err" | head -3)"; continue; fi
-            ok "$c: built ($(grep -c warning "$c.err") repairs reported)"
+            ok "$c: built ($(sed -n 's/.*warning: \([0-9]*\) repairs\{0,1\} of digitization noise.*/\1/p' "$c.err") repairs reported)"
             if "$THORAX" check "$c" -q 2> "$c.check"; then ok "$c: thorax check"; else bad "$c: check: $(head -3 "$c.check")"; fi
             for surf in $(surfaces_of $m); do
                 if r=$($PY -B "$SRC/tests/digitized_compare.py" "$c.txt" $surf "$c/$surf.pts" "$c/$surf.fac" --ref "$m/$surf.pts" "$m/$surf.fac" --ref-max 1.0); then
@@ -64,21 +65,21 @@ print('%.0f' % best)" "${m}_sparse.txt")
     if ! "$THORAX" surfaces "$c.txt" -o "$c" --spacing 5 -q 2> "$c.err"; then bad "$c: surfaces: $(head -3 "$c.err")"; continue; fi
     "$THORAX" check "$c" -q 2> "$c.check" && ok "$c: thorax check" || bad "$c: check: $(head -3 "$c.check")"
     for surf in $(surfaces_of $m); do
-        if r=$($PY -B "$SRC/tests/digitized_compare.py" "$c.txt" $surf "$c/$surf.pts" "$c/$surf.fac" --max 2.5 --ref "$m/$surf.pts" "$m/$surf.fac"); then
-            ok "$c $surf (up to $longest mm between points, spacing 5 mm): $(echo "$r" | head -1)"
-        else bad "$c $surf: nodes beyond half the spacing from the polygon: $(echo "$r" | tr '\n' ' ')"; fi
+        if r=$($PY -B "$SRC/tests/digitized_compare.py" "$c.txt" $surf "$c/$surf.pts" "$c/$surf.fac" --max 2.5 --ref "$m/$surf.pts" "$m/$surf.fac" --ref-max 1.0); then
+            ok "$c $surf (up to $longest mm between points, spacing 5 mm): $(echo "$r" | tr '\n' ';')"
+        else bad "$c $surf: nodes beyond half the spacing from the polygon or 1 mm from the true surface: $(echo "$r" | tr '\n' ' ')"; fi
     done
 done
 
 # --strict refuses what is repaired otherwise, with the same message, and writes nothing
 c=dal_5_j1
 if [ -f "$c.err" ]; then
-    first=$(grep -m1 warning "$c.err" | sed 's/^thorax: warning: //')
+    first=$(grep -m1 'warning: .*:[0-9]*: surface' "$c.err" | sed 's/^thorax: warning: //')
     if "$THORAX" surfaces "$c.txt" -o strict_out --strict -q 2> strict.err; then bad "--strict: exit 0"
     elif grep -qF "$first" strict.err && [ ! -e strict_out ]; then ok "--strict refuses, same message: $(head -c 160 strict.err)"
     else bad "--strict: message differs or output written: $(cat strict.err) / $first"; fi
-    # every repair is in the provenance
-    n=$(grep -c warning "$c.err")
+    # every repair is in the provenance (the warnings give the count and the first few)
+    n=$(sed -n 's/.*warning: \([0-9]*\) repairs\{0,1\} of digitization noise.*/\1/p' "$c.err")
     $PY -c "
 import json, sys
 r = json.load(open('$c/model.json'))['provenance']['repairs']

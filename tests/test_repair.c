@@ -183,6 +183,49 @@ static void test_frame(thx_ctx *ctx)
     CHECK(has(thx_ctx_message(ctx), "c.txt:2: "));
 }
 
+/* Issue 24: every message has its kind, in order; a quiet log keeps the messages without logging
+ * them (thorax surfaces summarizes them), a log that is not quiet logs each as a warning. */
+static void count_warnings(void *user, thx_log_level level, const char *message)
+{
+    (void)message;
+    if (level == THX_LOG_WARN) ++*(int *)user;
+}
+
+static void test_kinds_quiet(void)
+{
+    /* a repeated point, a spike (10 0 -> 20 0 -> 15 0 folds back), a closing point */
+    const char *text = file_with("0 0\n10 0\n10 0\n20 0\n15 0\n20 20\n0 20\n0 0\n");
+    for (int quiet = 0; quiet < 2; quiet++) {
+        thx_ctx *ctx = NULL;
+        int warned = 0;
+        thx_ctx_create(&ctx);
+        thx_ctx_set_log(ctx, count_warnings, &warned, THX_LOG_DEBUG);
+        thx_contours *c = NULL;
+        thx_repair_log log;
+        memset(&log, 0, sizeof log);
+        log.quiet = quiet;
+        CHECK_OK(ctx, thx_contours_parse_raw(ctx, "c.txt", text, strlen(text), &c));
+        thx_repair_opts o;
+        thx_repair_opts_default(&o, 5.0);
+        if (c) CHECK_OK(ctx, thx_contours_repair(ctx, c, &o, &log));
+        size_t count[THX_REPAIR_KINDS] = {0};
+        for (size_t k = 0; k < log.n && log.kind; k++) {
+            CHECK(log.kind[k] >= 0 && log.kind[k] < THX_REPAIR_KINDS);
+            if (log.kind[k] >= 0 && log.kind[k] < THX_REPAIR_KINDS) count[log.kind[k]]++;
+            /* the kind says what the message says */
+            static const char *word[THX_REPAIR_KINDS] = {"repeats the first point", "merged", "spike", "crosses itself", "hole"};
+            CHECK(has(log.msg[k], word[log.kind[k] >= 0 && log.kind[k] < THX_REPAIR_KINDS ? log.kind[k] : 0]));
+        }
+        CHECK(log.n == 3 && count[THX_REPAIR_CLOSING] == 1 && count[THX_REPAIR_MERGED] == 1 && count[THX_REPAIR_SPIKE] == 1);
+        CHECK(warned == (quiet ? 0 : (int)log.n));
+        printf("%s log: %zu repairs (%zu closing, %zu merged, %zu spike), %d warnings logged\n", quiet ? "quiet" : "loud",
+               log.n, count[THX_REPAIR_CLOSING], count[THX_REPAIR_MERGED], count[THX_REPAIR_SPIKE], warned);
+        thx_repair_log_free(&log);
+        thx_contours_destroy(&c);
+        thx_ctx_destroy(&ctx);
+    }
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -192,6 +235,7 @@ int main(void)
     test_untangle(ctx);
     test_spike_hole(ctx);
     test_frame(ctx);
+    test_kinds_quiet();
     thx_ctx_destroy(&ctx);
     return tl_finish();
 }

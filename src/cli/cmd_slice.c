@@ -13,6 +13,7 @@ int cmd_slice(int argc, char **argv)
     thx_slice_opts o;
     thx_slice_opts_default(&o);
     int verbose = 0;
+    static const cli_choice axes[] = {{"x", 0}, {"y", 1}, {"z", 2}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "CONTOURS", .s = &out,
          .help = "contour file to write (atomically)"},
@@ -27,15 +28,20 @@ int cmd_slice(int argc, char **argv)
         {.name = "--node-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o.node_spacing, .rule = CLI_GT,
          .bad = "--node-spacing must be positive", .def = "--spacing",
          .help = "the contour file's suggested node spacing"},
+        {.name = "--axis", .type = CLI_CHOICE, .choices = axes, .i = &o.axis, .def = "z",
+         .help = "the planes are perpendicular to this axis; for x and y the contours are those of the model turned "
+                 "(x, y, z) -> (y, z, x) or (z, x, y), a rotation, so the layer coordinate is that axis (the frame "
+                 "turned with it)"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE,
          .help = "less logging (no summary line)"},
     };
     cli_command cmd = {
         .name = "slice",
-        .usage = "MODEL -o [--spacing] [--margin] [--densify] [--node-spacing]",
-        .about = "Cuts every surface of the model directory MODEL with planes z = const spread\n"
-                 "evenly from the lowest node + margin to the highest - margin, at most spacing\n"
+        .usage = "MODEL -o [--spacing] [--margin] [--densify] [--node-spacing] [--axis]",
+        .about = "Cuts every surface of the model directory MODEL with planes z = const (or\n"
+                 "x, y: --axis) spread evenly from the lowest node + margin to the highest -\n"
+                 "margin, at most spacing\n"
                  "apart, and writes the cross-sections as a contour file\n"
                  "(docs/formats.md), names and roles kept: the contours the surfaces would have\n"
                  "been digitized as. `thorax surfaces` rebuilds surfaces from them.\n",

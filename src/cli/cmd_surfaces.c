@@ -23,6 +23,39 @@ static void replay_line(void *user, const thx_edit_log *log, const thx_edit *e, 
     if (r->discarded || (*verbose > 0 && r->note[0])) printf("%s:%d:   %s\n", log->path, e->line, r->note);
 }
 
+/* The repairs on stderr (issue 24: a dense loop gave one warning line per merge, tens of
+ * thousands): the count per kind, then the first REPAIRS_SHOWN of each kind (in file order) with
+ * their FILE:LINE, and how many more; every one with -v, none with -q (as every warning). All are
+ * in model.json's provenance. */
+#define REPAIRS_SHOWN 3
+static void print_repairs(const thx_repair_log *r, int verbose)
+{
+    static const char *what[THX_REPAIR_KINDS] = {"closing points dropped", "near-coincident point runs merged",
+                                                 "spikes removed", "self-crossings untangled", "narrow holes dropped"};
+    size_t count[THX_REPAIR_KINDS] = {0}, shown[THX_REPAIR_KINDS] = {0};
+    if (!r->n || verbose < 0) return; /* -q hides warnings */
+    for (size_t k = 0; k < r->n; k++) count[r->kind[k]]++;
+    char line[600];
+    int w = snprintf(line, sizeof line, "%zu repair%s of digitization noise:", r->n, r->n == 1 ? "" : "s");
+    const char *sep = " ";
+    for (int k = 0; k < THX_REPAIR_KINDS; k++)
+        if (count[k] && w > 0 && (size_t)w < sizeof line) {
+            w += snprintf(line + w, sizeof line - (size_t)w, "%s%zu %s", sep, count[k], what[k]);
+            sep = ", ";
+        }
+    fprintf(stderr, "thorax: warning: %s\n", line);
+    for (size_t k = 0; k < r->n; k++)
+        if (verbose > 0 || shown[r->kind[k]] < REPAIRS_SHOWN) {
+            shown[r->kind[k]]++;
+            fprintf(stderr, "thorax: warning: %s\n", r->msg[k]);
+        }
+    size_t more = 0;
+    for (int k = 0; k < THX_REPAIR_KINDS; k++) more += count[k] - shown[k];
+    if (more)
+        fprintf(stderr, "thorax: warning: ... and %zu more repair%s (the first %d of each kind shown; -v lists them all, "
+                        "model.json's provenance keeps them all)\n", more, more == 1 ? "" : "s", REPAIRS_SHOWN);
+}
+
 int cmd_surfaces(int argc, char **argv)
 {
     const char *outdir = NULL, *start = NULL, *edits = NULL;
@@ -90,9 +123,10 @@ int cmd_surfaces(int argc, char **argv)
         .about = "Builds one closed, outward-oriented triangle surface per contour surface\n"
                  "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
                  "NAME.fac). Nothing is written unless every surface builds.\n\n"
-                 "Digitization noise is repaired, each repair reported as a warning (file:line,\n"
-                 "surface, layer, loop, what was done) and listed in model.json's provenance\n"
-                 "(\"repairs\"): a repeated closing point is dropped, near-coincident points are\n"
+                 "Digitization noise is repaired and listed in model.json's provenance\n"
+                 "(\"repairs\": file:line, surface, layer, loop, what was done); the warnings give\n"
+                 "the count per kind and the first 3 of each kind, -v all of them. A repeated\n"
+                 "closing point is dropped, near-coincident points are\n"
                  "merged, spikes removed, small self-crossings untangled, holes narrower than the\n"
                  "node spacing dropped. --strict refuses instead.\n\n"
                  "With --edits LOG the surfaces are edited as the log says (paper 3.2, \"Manual\n"
@@ -116,6 +150,7 @@ int cmd_surfaces(int argc, char **argv)
     thx_model *m = NULL;
     thx_surfaces_stats *per = NULL, tot;
     thx_repair_log rlog = {0};
+    rlog.quiet = 1; /* summarized here (print_repairs) */
     thx_repair_opts ro;
     int rc = 0;
     double t0 = thx_wtime();
@@ -131,6 +166,7 @@ int cmd_surfaces(int argc, char **argv)
         if (untangle_tol >= 0) ro.untangle_tol = untangle_tol;
         ro.strict = strict;
         st = thx_contours_repair(ctx, c, &ro, &rlog);
+        print_repairs(&rlog, verbose);
     }
     if (st != THX_OK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
     /* The lacing start point (paper 3.2, step 1: the anterior midline) follows the contours'

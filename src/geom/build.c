@@ -164,37 +164,80 @@ typedef struct { double x0, x1; size_t t; } tri_span;
 static int cmp_span(const void *a, const void *b)
 {
     const tri_span *p = a, *q = b;
-    return (p->x0 > q->x0) - (p->x0 < q->x0);
+    if (p->x0 != q->x0) return (p->x0 > q->x0) - (p->x0 < q->x0);
+    return (p->t > q->t) - (p->t < q->t);
 }
 
 static int tris_cross(const double *xyz, const int32_t *tri, size_t nt)
 {
     tri_span *sp = malloc((nt ? nt : 1) * sizeof *sp);
-    double *box = malloc((nt ? nt : 1) * 4 * sizeof *box); /* y0 y1 z0 z1 */
+    double *box = malloc((nt ? nt : 1) * 6 * sizeof *box); /* x0 x1 y0 y1 z0 z1 */
     if (!sp || !box) { free(sp); free(box); return -1; }
     size_t m = 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, span[3] = {0, 0, 0};
     for (size_t t = 0; t < nt; t++) {
         const double *a = xyz + 3 * (size_t)tri[3 * t], *b = xyz + 3 * (size_t)tri[3 * t + 1], *c = xyz + 3 * (size_t)tri[3 * t + 2];
         double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
         double cr = fabs(u[1] * v[2] - u[2] * v[1]) + fabs(u[2] * v[0] - u[0] * v[2]) + fabs(u[0] * v[1] - u[1] * v[0]);
         if (!(cr > 0)) continue;
-        sp[m] = (tri_span){fmin(a[0], fmin(b[0], c[0])), fmax(a[0], fmax(b[0], c[0])), t};
-        double *bx = box + 4 * t;
-        bx[0] = fmin(a[1], fmin(b[1], c[1])); bx[1] = fmax(a[1], fmax(b[1], c[1]));
-        bx[2] = fmin(a[2], fmin(b[2], c[2])); bx[3] = fmax(a[2], fmax(b[2], c[2]));
-        m++;
+        double *bx = box + 6 * t;
+        for (int k = 0; k < 3; k++) {
+            bx[2 * k] = fmin(a[k], fmin(b[k], c[k]));
+            bx[2 * k + 1] = fmax(a[k], fmax(b[k], c[k]));
+            lo[k] = fmin(lo[k], bx[2 * k]);
+            hi[k] = fmax(hi[k], bx[2 * k + 1]);
+            span[k] += bx[2 * k + 1] - bx[2 * k];
+        }
+        sp[m++].t = t;
+    }
+    /* Sweep along the axis where the triangles overlap least (extent over the mean extent of a
+       triangle: along a tall comb's teeth, not across them, issue 24), so a triangle meets few others. */
+    int ax = 0;
+    double bestr = -1;
+    for (int k = 0; k < 3; k++) {
+        double r = m ? (hi[k] - lo[k]) / (span[k] / (double)m + 1e-300) : 0;
+        if (r > bestr) { bestr = r; ax = k; }
+    }
+    for (size_t i = 0; i < m; i++) {
+        sp[i].x0 = box[6 * sp[i].t + 2 * ax];
+        sp[i].x1 = box[6 * sp[i].t + 2 * ax + 1];
     }
     qsort(sp, m, sizeof *sp, cmp_span);
     int hit = 0;
     for (size_t i = 0; i < m && !hit; i++)
         for (size_t j = i + 1; j < m && sp[j].x0 <= sp[i].x1 && !hit; j++) {
-            const double *p = box + 4 * sp[i].t, *q = box + 4 * sp[j].t;
-            if (p[1] < q[0] || q[1] < p[0] || p[3] < q[2] || q[3] < p[2]) continue;
+            const double *p = box + 6 * sp[i].t, *q = box + 6 * sp[j].t;
+            if (p[1] < q[0] || q[1] < p[0] || p[3] < q[2] || q[3] < p[2] || p[5] < q[4] || q[5] < p[4]) continue;
             hit = thx_triangles_intersect(xyz, tri + 3 * sp[i].t, tri + 3 * sp[j].t);
         }
     free(sp);
     free(box);
     return hit;
+}
+
+/* Does an edge lie in three or more of the nt triangles (a lacing that is no manifold: a branching
+ * chain joined to one node of the other chain twice)? -1 out of memory. */
+typedef struct { int32_t a, b; } slice_edge;
+static int cmp_slice_edge(const void *x, const void *y)
+{
+    const slice_edge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+static int edge_overused(const int32_t *tri, size_t nt)
+{
+    slice_edge *e = malloc((nt ? 3 * nt : 1) * sizeof *e);
+    if (!e) return -1;
+    for (size_t k = 0; k < 3 * nt; k++) {
+        int32_t a = tri[k], b = tri[k % 3 == 2 ? k - 2 : k + 1];
+        e[k] = (slice_edge){a < b ? a : b, a < b ? b : a};
+    }
+    qsort(e, 3 * nt, sizeof *e, cmp_slice_edge);
+    int bad = 0;
+    for (size_t k = 0; k + 2 < 3 * nt && !bad; k++) bad = e[k].a == e[k + 2].a && e[k].b == e[k + 2].b;
+    free(e);
+    return bad;
 }
 
 /* Layered inside test: signed distance at p (negative inside), from the chains
@@ -226,6 +269,55 @@ static int cmp_edge(const void *x, const void *y)
     if (p->a != q->a) return p->a < q->a ? -1 : 1;
     if (p->b != q->b) return p->b < q->b ? -1 : 1;
     return p->t - q->t;
+}
+
+/* An edge (u, v) in three or more triangles of a slice's lacing comes from a bridge node (a
+ * branching chain visits it twice) joined to the same node of the other chain on both visits,
+ * the small loop between fanned to that node. Each such edge is mended by flipping it in two of
+ * its triangles, (u, v, x) and (v, u, y) -> (u, x, y) and (v, x, y): x and y on different layers,
+ * the new edge x-y not in the lacing yet, and no triangle crossing another after the flip. 1 when
+ * every overused edge is mended, 0 when one cannot be, -1 out of memory. */
+static int mend_overused(const double *xyz, int32_t *tri, size_t nt)
+{
+    for (int round = 0; round < 16; round++) {
+        edge_rec *e = malloc((nt ? 3 * nt : 1) * sizeof *e);
+        if (!e) return -1;
+        for (size_t k = 0; k < 3 * nt; k++) {
+            int32_t a = tri[k], b = tri[k % 3 == 2 ? k - 2 : k + 1];
+            e[k] = (edge_rec){a < b ? a : b, a < b ? b : a, (int32_t)(k / 3)};
+        }
+        qsort(e, 3 * nt, sizeof *e, cmp_edge);
+        size_t at = 3 * nt, cnt = 0;
+        for (size_t k = 0; k + 2 < 3 * nt; k++)
+            if (e[k].a == e[k + 2].a && e[k].b == e[k + 2].b) { at = k; break; }
+        if (at == 3 * nt) { free(e); return 1; }
+        int32_t u = e[at].a, v = e[at].b, ts[8];
+        while (at + cnt < 3 * nt && cnt < 8 && e[at + cnt].a == u && e[at + cnt].b == v) { ts[cnt] = e[at + cnt].t; cnt++; }
+        int mended = 0;
+        for (size_t i = 0; i < cnt && !mended; i++)
+            for (size_t j = i + 1; j < cnt && !mended; j++) {
+                int32_t *ti = tri + 3 * (size_t)ts[i], *tj = tri + 3 * (size_t)ts[j], x = -1, y = -1;
+                for (int q = 0; q < 3; q++) {
+                    if (ti[q] != u && ti[q] != v) x = ti[q];
+                    if (tj[q] != u && tj[q] != v) y = tj[q];
+                }
+                if (x < 0 || y < 0 || x == y || xyz[3 * (size_t)x + 2] == xyz[3 * (size_t)y + 2]) continue;
+                edge_rec key = {x < y ? x : y, x < y ? y : x, -1};
+                int exists = 0;
+                for (size_t k = 0; k < 3 * nt && !exists; k++) exists = e[k].a == key.a && e[k].b == key.b;
+                if (exists) continue;
+                int32_t oi[3] = {ti[0], ti[1], ti[2]}, oj[3] = {tj[0], tj[1], tj[2]};
+                ti[0] = u; ti[1] = x; ti[2] = y;
+                tj[0] = v; tj[1] = y; tj[2] = x;
+                int c = tris_cross(xyz, tri, nt);
+                if (c < 0) { free(e); return -1; }
+                if (c == 0) { mended = 1; break; }
+                for (int q = 0; q < 3; q++) { ti[q] = oi[q]; tj[q] = oj[q]; }
+            }
+        free(e);
+        if (!mended) return 0;
+    }
+    return 0;
 }
 
 /*
@@ -720,6 +812,13 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
                                  &slices[i].cap, &slices[i].st);
                     if (r != THX_OK) break;
                     int x = tris_cross(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first);
+                    /* an edge in three triangles is laced again as well (issue 24: the Dalhousie torso
+                       cut across its long axis at 10 mm, where a layer's loop branches in two) */
+                    if (x == 0) x = edge_overused(slices[i].tris + 3 * first, slices[i].n_tris - first);
+                    if (x == 1 && !tris_cross(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first)) {
+                        int m = mend_overused(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first);
+                        x = m < 0 ? -1 : !m;
+                    }
                     if (x < 0) { r = thx_error(lc, THX_ENOMEM, "out of memory"); break; }
                     if (!x) {
                         if (attempt) slices[i].st.relaced_crossing++;

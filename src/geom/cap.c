@@ -38,6 +38,18 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+typedef struct {
+    double y; /* the lower end's y */
+    size_t k; /* edge k -> k+1 */
+} edge_low;
+
+static int cmp_edge_low(const void *a, const void *b)
+{
+    const edge_low *u = a, *v = b;
+    if (u->y != v->y) return (u->y > v->y) - (u->y < v->y);
+    return (u->k > v->k) - (u->k < v->k);
+}
+
 static int cmp_edge(const void *a, const void *b)
 {
     const edge_rec *u = a, *v = b;
@@ -111,13 +123,27 @@ thx_status thx_cap_triangulate(thx_ctx *ctx, const thx_vec2 *loop, size_t n, dou
            within a hair of the loop are decided by the exact test of inside.h. */
         chain_index ci;
         double *xs = NULL;
-        size_t xcap = 0;
+        size_t xcap = 0, n_act = 0, next_edge = 0;
         if (chain_index_init(&ci, loop, n) != 0) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
+        /* The edges by their lower end, and those that may cross the current row (rows rise):
+           each row costs its crossings, not the whole loop (issue 24: a tall comb's cap). */
+        edge_low *by_low = thx_malloc(ctx, n * sizeof *by_low);
+        size_t *act = thx_malloc(ctx, n * sizeof *act);
+        if (!by_low || !act) { free(by_low); free(act); chain_index_free(&ci); st = THX_ENOMEM; goto done; }
+        for (size_t k = 0; k < n; k++) by_low[k] = (edge_low){fmin(loop[k].y, loop[(k + 1) % n].y), k};
+        qsort(by_low, n, sizeof *by_low, cmp_edge_low);
         double hair = 1e-9 * fmax(fmax(fabs(x0), fabs(x1)), fmax(fmax(fabs(y0), fabs(y1)), h));
         for (double j = j0; j <= j1 && st == THX_OK; j += 1.0) {
             double gy = (j + 0.5) * h;
-            size_t nx = 0;
-            for (size_t k = 0; k < n; k++) {
+            size_t nx = 0, kept = 0;
+            while (next_edge < n && by_low[next_edge].y <= gy) act[n_act++] = by_low[next_edge++].k;
+            for (size_t q = 0; q < n_act; q++) { /* an edge wholly at or below the row is done */
+                size_t k = act[q];
+                if (fmax(loop[k].y, loop[(k + 1) % n].y) > gy) act[kept++] = k;
+            }
+            n_act = kept;
+            for (size_t q = 0; q < n_act; q++) {
+                size_t k = act[q];
                 thx_vec2 a = loop[k], b = loop[(k + 1) % n];
                 if ((a.y <= gy) == (b.y <= gy)) continue;
                 if (nx == xcap) {
@@ -144,6 +170,8 @@ thx_status thx_cap_triangulate(thx_ctx *ctx, const thx_vec2 *loop, size_t n, dou
             }
         }
         free(xs);
+        free(by_low);
+        free(act);
         chain_index_free(&ci);
         if (st != THX_OK) goto done;
     }

@@ -534,19 +534,28 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         thx_vec2 *np = NULL;
         int32_t *nid = NULL;
         double margin = 0.5 * o->spacing;
+        /* A pocket whose polygon is not simple (it passes a bridge node of a branching chain twice,
+           or touches itself where a layer lies along a flat cap: issue 24) is not cut: THX_EGEOM
+           from its triangulation leaves the lacing as it is, instead of refusing the surface. */
         if (have && find_pocket(ctx, a, b, 1, gi0, gi1, margin, &pk)) {
             st = cut_pocket(ctx, a, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
-            if (st == THX_OK) st = lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
-            free(np);
-            free(nid);
-            goto done;
+            if (st != THX_EGEOM) {
+                if (st == THX_OK) st = lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                free(np);
+                free(nid);
+                goto done;
+            }
+            st = THX_OK;
         }
         if (have && find_pocket(ctx, b, a, 0, gj0, gj1, margin, &pk)) {
             st = cut_pocket(ctx, b, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
-            if (st == THX_OK) st = lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1);
-            free(np);
-            free(nid);
-            goto done;
+            if (st != THX_EGEOM) {
+                if (st == THX_OK) st = lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1);
+                free(np);
+                free(nid);
+                goto done;
+            }
+            st = THX_OK;
         }
     }
     /* Step 5: a long fan (one node joined to a long run of the other chain) where that run is a
@@ -565,13 +574,16 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
                     thx_chain nc;
                     thx_vec2 *np = NULL;
                     int32_t *nid = NULL;
-                    stats->tongues++;
                     st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
-                    if (st == THX_OK) st = bm ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
-                                              : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
-                    free(np);
-                    free(nid);
-                    goto done;
+                    if (st != THX_EGEOM) { /* a tongue that is not a simple polygon stays laced */
+                        if (st == THX_OK) stats->tongues++;
+                        if (st == THX_OK) st = bm ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
+                                                  : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                        free(np);
+                        free(nid);
+                        goto done;
+                    }
+                    st = THX_OK;
                 }
             }
             k += r;

@@ -24,6 +24,7 @@ void thx_repair_log_free(thx_repair_log *log)
     if (!log) return;
     for (size_t i = 0; i < log->n; i++) free(log->msg[i]);
     free(log->msg);
+    free(log->kind);
     memset(log, 0, sizeof *log);
 }
 
@@ -41,8 +42,8 @@ typedef struct {
 
 static int line_of(const job *j, size_t k) { return j->lp->lines ? j->lp->lines[k] : j->loop_line; }
 
-/* One repair: refused under strict, else logged and kept. */
-static thx_status report(job *j, int line, const char *fmt, ...)
+/* One repair of kind `kind`: refused under strict, else logged (unless the log is quiet) and kept. */
+static thx_status report(job *j, thx_repair_kind kind, int line, const char *fmt, ...)
 {
     char what[400];
     va_list ap;
@@ -54,15 +55,19 @@ static thx_status report(job *j, int line, const char *fmt, ...)
              j->z, j->loop_no, what);
     if (j->o->strict)
         return thx_error(j->ctx, THX_EINPUT, "%s (refused: --strict; without it this is repaired)", msg);
-    thx_log(j->ctx, THX_LOG_WARN, "%s", msg);
+    if (!j->log || !j->log->quiet) thx_log(j->ctx, THX_LOG_WARN, "%s", msg);
     if (j->log) {
         if (j->log->n == j->log->cap) {
             size_t nc = j->log->cap ? 2 * j->log->cap : 16;
             char **nm = thx_realloc(j->ctx, j->log->msg, nc * sizeof *nm);
             if (!nm) return THX_ENOMEM;
             j->log->msg = nm;
+            int *nk = thx_realloc(j->ctx, j->log->kind, nc * sizeof *nk);
+            if (!nk) return THX_ENOMEM;
+            j->log->kind = nk;
             j->log->cap = nc;
         }
+        j->log->kind[j->log->n] = (int)kind;
         char *m = thx_malloc(j->ctx, strlen(msg) + 1);
         if (!m) return THX_ENOMEM;
         memcpy(m, msg, strlen(msg) + 1);
@@ -105,7 +110,7 @@ static thx_status drop_closing(job *j)
 {
     thx_loop *lp = j->lp;
     while (lp->n > 1 && lp->p[lp->n - 1].x == lp->p[0].x && lp->p[lp->n - 1].y == lp->p[0].y) {
-        THX_CHECK(report(j, line_of(j, lp->n - 1),
+        THX_CHECK(report(j, THX_REPAIR_CLOSING, line_of(j, lp->n - 1),
                          "the last point (%zu) repeats the first point (%g, %g): dropped (a loop closes "
                          "without repeating its first point)",
                          lp->n, lp->p[0].x, lp->p[0].y));
@@ -149,14 +154,14 @@ static thx_status merge_near(job *j, int *changed)
             if (far == 0)
             {
                 if (e - i == 2)
-                    THX_CHECK(report(j, line_of(j, i + 1), "the point repeats the point before (%g, %g): merged into one",
+                    THX_CHECK(report(j, THX_REPAIR_MERGED, line_of(j, i + 1), "the point repeats the point before (%g, %g): merged into one",
                                      lp->p[i].x, lp->p[i].y));
                 else
-                    THX_CHECK(report(j, line_of(j, i + 1), "%zu points (lines %d-%d) repeat the point before (%g, %g): merged into one",
+                    THX_CHECK(report(j, THX_REPAIR_MERGED, line_of(j, i + 1), "%zu points (lines %d-%d) repeat the point before (%g, %g): merged into one",
                                      e - i - 1, line_of(j, i + 1), l1, lp->p[i].x, lp->p[i].y));
             }
             else
-                THX_CHECK(report(j, l0,
+                THX_CHECK(report(j, THX_REPAIR_MERGED, l0,
                                  "%zu near-coincident points (lines %d-%d, %.3g mm apart, within the merge tolerance "
                                  "%g mm) merged into their centroid (%g, %g)",
                                  e - i, l0, l1, far, tol, c.x, c.y));
@@ -174,7 +179,7 @@ static thx_status merge_near(job *j, int *changed)
     lp->n = w;
     /* The last run may end within tol of the first point (after the rotation: only by merging). */
     while (lp->n > 1 && (dist(lp->p[lp->n - 1], lp->p[0]) == 0 || dist(lp->p[lp->n - 1], lp->p[0]) <= tol)) {
-        THX_CHECK(report(j, line_of(j, lp->n - 1),
+        THX_CHECK(report(j, THX_REPAIR_MERGED, line_of(j, lp->n - 1),
                          "the last point (%zu) lies %.3g mm from the first point (within the merge tolerance "
                          "%g mm): merged into it",
                          lp->n, dist(lp->p[lp->n - 1], lp->p[0]), tol));
@@ -200,7 +205,7 @@ static thx_status remove_spikes(job *j, int *changed)
             }
         }
         if (hit == n) break;
-        THX_CHECK(report(j, line_of(j, hit), "the point (%g, %g) is a spike (the loop folds straight back on itself "
+        THX_CHECK(report(j, THX_REPAIR_SPIKE, line_of(j, hit), "the point (%g, %g) is a spike (the loop folds straight back on itself "
                                              "there): removed",
                          lp->p[hit].x, lp->p[hit].y));
         /* remove point `hit` in place (the order is kept, so the scan can go on before it) */
@@ -274,7 +279,7 @@ static thx_status untangle_one(job *j, int *found)
         prev = q;
     }
     area = fabs(area) / 2;
-    THX_CHECK(report(j, line,
+    THX_CHECK(report(j, THX_REPAIR_UNTANGLED, line,
                      "loop crosses itself (the edge from line %d crosses the edge from line %d at (%g, %g)): the "
                      "small loop of %zu point%s (within %.3g mm of the crossing, %.3g mm^2) cut off",
                      line, line_of(j, e2), x.x, x.y, m, m == 1 ? "" : "s", rr, area));
@@ -379,7 +384,7 @@ static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_su
                            j.path, j.loop_line, cs->name, j.layer_no, L->z, i + 1, outer + 1, width);
             break;
         }
-        st = report(&j, j.loop_line,
+        st = report(&j, THX_REPAIR_HOLE, j.loop_line,
                     "the loop lies inside loop %zu of the same surface (a hole of %.3g mm^2, %.3g mm wide: "
                     "narrower than the node spacing %g mm, which cannot resolve it): dropped",
                     outer + 1, area, width, spacing);

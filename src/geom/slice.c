@@ -140,7 +140,12 @@ void thx_slice_opts_default(thx_slice_opts *o)
     o->margin = -1;
     o->densify = -1;
     o->node_spacing = 0;
+    o->axis = 2;
 }
+
+/* Where axis a of the model goes when the model is turned so that `axis` becomes z:
+ * (x, y, z) -> (y, z, x) for x, (z, x, y) for y (rotations). */
+static int turned(int a, int axis) { return (a - axis - 1 + 6) % 3; }
 
 /* Appends loop p to surface k of c at height z, with points inserted along long segments
  * and points closer than 1 micrometre to their predecessor dropped. */
@@ -167,7 +172,46 @@ static thx_status add_dense(thx_ctx *ctx, thx_contours *c, size_t k, double z, c
     return st;
 }
 
+static thx_status model_slice(thx_ctx *ctx, const thx_model *m, const thx_slice_opts *o, thx_contours **out);
+
 thx_status thx_model_slice(thx_ctx *ctx, const thx_model *m, const thx_slice_opts *o, thx_contours **out)
+{
+    *out = NULL;
+    if (o->axis < 0 || o->axis > 2) return thx_error(ctx, THX_EINPUT, "slice: axis %d is not 0, 1 or 2 (x, y, z)", o->axis);
+    if (o->axis == 2) return model_slice(ctx, m, o, out);
+    /* the model turned: shallow copies of the surfaces with turned coordinates */
+    thx_model t = *m;
+    thx_surface *ts = thx_calloc(ctx, m->n_surfaces ? m->n_surfaces : 1, sizeof *ts);
+    thx_surface **tp = thx_calloc(ctx, m->n_surfaces ? m->n_surfaces : 1, sizeof *tp);
+    thx_status st = ts && tp ? THX_OK : THX_ENOMEM;
+    size_t made = 0;
+    for (size_t k = 0; k < m->n_surfaces && st == THX_OK; k++) {
+        ts[k] = *m->surf[k];
+        double *xyz = thx_malloc(ctx, (m->surf[k]->n_nodes ? m->surf[k]->n_nodes : 1) * 3 * sizeof *xyz);
+        if (!xyz) { st = THX_ENOMEM; break; }
+        for (size_t i = 0; i < m->surf[k]->n_nodes; i++)
+            for (int a = 0; a < 3; a++) xyz[3 * i + (size_t)turned(a, o->axis)] = m->surf[k]->xyz[3 * i + (size_t)a];
+        ts[k].xyz = xyz;
+        tp[k] = &ts[k];
+        made++;
+    }
+    if (st == THX_OK) {
+        t.surf = tp;
+        if (t.frame.set) {
+            t.frame.up.axis = turned(m->frame.up.axis, o->axis);
+            t.frame.front.axis = turned(m->frame.front.axis, o->axis);
+        }
+        thx_slice_opts o2 = *o;
+        o2.axis = 2;
+        st = model_slice(ctx, &t, &o2, out);
+    }
+    for (size_t k = 0; k < made; k++) free(ts[k].xyz);
+    free(ts);
+    free(tp);
+    return st;
+}
+
+static thx_status model_slice(thx_ctx *ctx, const thx_model *m, const thx_slice_opts *o, thx_contours **out)
 {
     *out = NULL;
     if (!(o->spacing > 0)) return thx_error(ctx, THX_EINPUT, "slice: plane spacing must be positive (got %g)", o->spacing);

@@ -24,8 +24,8 @@
  *      the node spacing (width = 2 area / perimeter: a groove the layer cuts
  *      across, which nodes `spacing` apart cannot resolve), else refused.
  * Every repair is one message "FILE:LINE: surface "S" layer L (z=Z) loop K:
- * WHAT" (LINE: the first point concerned), logged as a warning and kept in
- * the log for the model's provenance. With strict set, the first repair
+ * WHAT" (LINE: the first point concerned), logged as a warning (unless the
+ * log is quiet) and kept in the log, with its kind, for the model's provenance. With strict set, the first repair
  * needed is refused instead: THX_EINPUT with the same message.
  * A loop left with fewer than 3 points is refused. After a successful
  * repair the contours satisfy thx_contours_validate's invariants.
@@ -52,10 +52,23 @@ typedef struct {
  * anyway; spacing / 2 left the jittered tip of the Utah sock, 3.3 mm, refused at 5 mm). */
 void thx_repair_opts_default(thx_repair_opts *o, double spacing);
 
+/* The kinds of repair, in the order above. */
+typedef enum {
+    THX_REPAIR_CLOSING,
+    THX_REPAIR_MERGED,
+    THX_REPAIR_SPIKE,
+    THX_REPAIR_UNTANGLED,
+    THX_REPAIR_HOLE,
+    THX_REPAIR_KINDS
+} thx_repair_kind;
+
 typedef struct {
     size_t n, cap;
     char **msg;                                  /* n messages, one per repair (owned) */
     size_t closing, merged, spikes, untangled, holes; /* counts by kind (merged: points removed) */
+    int *kind;                                   /* n kinds (thx_repair_kind), parallel to msg (owned) */
+    int quiet; /* set by the caller: the messages are only kept, not logged (the caller summarizes
+                  them: thorax surfaces prints a count per kind and the first few, issue 24) */
 } thx_repair_log;
 
 /* Repairs every loop of c in place (see above); appends one message per repair to *log

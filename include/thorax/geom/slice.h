@@ -38,11 +38,15 @@ typedef struct {
     double densify;      /* insert points so that no loop segment is longer than this, mm
                             (0 = keep the crossing points only; default spacing / 2) */
     double node_spacing; /* written as the contour file's `spacing` (default: spacing) */
+    int axis;            /* the planes are perpendicular to this axis, 0 x, 1 y, 2 z (default 2). For x
+                            and y the model is turned first, (x, y, z) -> (y, z, x) or (z, x, y): a
+                            rotation (orientation kept), so the contours' layer coordinate is that
+                            axis; the frame is turned with it (issue 24: every axis of a torso) */
 } thx_slice_opts;
 
 void thx_slice_opts_default(thx_slice_opts *o);
 
-/* Slices every surface of the model with common planes spread evenly from zmin + margin to
+/* Slices every surface of the model (turned as o->axis says) with common planes spread evenly from zmin + margin to
  * zmax - margin (over all surfaces), at most `spacing` apart, and returns the cross-sections
  * as contours, surface names, roles and the model's frame kept, grid
  * caps. A surface whose cross-section is empty on a plane between two non-empty ones is an
