@@ -101,7 +101,10 @@ static thx_status read_contours(thx_ctx *ctx, const char *path, const thx_edit_r
 {
     thx_contours *c = NULL;
     THX_CHECK(thx_contours_read_raw(ctx, path, &c));
+    /* quiet: these repairs were reported (and recorded in model.json) when the model was built;
+       replaying them must not print one line per repair again (a dense loop: tens of thousands) */
     thx_repair_log rlog = {0};
+    rlog.quiet = 1;
     thx_status st = thx_contours_repair(ctx, c, &r->repair, &rlog);
     thx_repair_log_free(&rlog);
     if (st != THX_OK) thx_contours_destroy(&c);
