@@ -142,14 +142,31 @@ thx_status thx_bem_create(thx_ctx *ctx, const thx_surface *const *surf, size_t n
         for (size_t l = 0; l < n && st == THX_OK; l++) {
             if (k == l) continue;
             const thx_surface *s = b->surf[k];
-            size_t n_in = 0, first_in = 0, first_out = 0, n_test = 0;
+            size_t n_in = 0, n_on = 0, first_in = 0, first_out = 0, n_test = 0;
             int have_in = 0, have_out = 0;
             /* at most NEST_SAMPLES nodes, evenly spread over the surface's numbering */
             size_t stride = s->n_nodes > NEST_SAMPLES ? s->n_nodes / NEST_SAMPLES : 1;
             for (size_t i = 0; i < s->n_nodes; i += stride) n_test++;
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_in)
-            for (size_t i = 0; i < s->n_nodes; i += stride) n_in += thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
-            if (n_in > 0 && n_in < n_test) {
+            /* a node on l (a coincident or touching surface) sees about 2 pi; off it, 0 or 4 pi
+               however near (the solid angle jumps across the surface) */
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_in, n_on)
+            for (size_t i = 0; i < s->n_nodes; i += stride) {
+                double w = thx_bem_surface_angle(b, l, s->xyz + 3 * i);
+                n_in += w > 2 * M_PI;
+                n_on += w > M_PI && w < 3 * M_PI;
+            }
+            if (n_on > 0) {
+                size_t first_on = 0;
+                for (size_t i = 0; i < s->n_nodes; i += stride) {
+                    double w = thx_bem_surface_angle(b, l, s->xyz + 3 * i);
+                    if (w > M_PI && w < 3 * M_PI) { first_on = i; break; }
+                }
+                const double *x = s->xyz + 3 * first_on;
+                st = thx_error(ctx, THX_EGEOM, "surfaces '%s' and '%s' %s: node %zu of '%s' (%.6g, %.6g, %.6g) lies on '%s' "
+                               "(%zu of %zu nodes tested); the surfaces must be nested or apart, without touching",
+                               s->name, b->surf[l]->name, n_on == n_test ? "coincide" : "touch", first_on + 1, s->name,
+                               x[0], x[1], x[2], b->surf[l]->name, n_on, n_test);
+            } else if (n_in > 0 && n_in < n_test) {
                 for (size_t i = 0; i < s->n_nodes && !(have_in && have_out); i += stride) {
                     int in = thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
                     if (in && !have_in) { have_in = 1; first_in = i; }

@@ -167,7 +167,8 @@ int cmd_bem(int argc, char **argv)
     /* under mpirun (more than one rank), or asked: the distributed path */
     const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
     if (!ws) ws = getenv("PMI_SIZE");
-    int mpi = scalapack || (ws && atoi(ws) > 1);
+    long n_ranks = 1;
+    int mpi = scalapack || (ws && !cli_parse_long(ws, 1, LONG_MAX, &n_ranks, NULL) && n_ranks > 1);
     if (mpi && !transfer && method == THX_BEM_COLLOCATION)
         return cli_usage_error("bem", "--method collocation runs on one process: under mpirun or with --scalapack, "
                                "dipoles take the symmetric method");
