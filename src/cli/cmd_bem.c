@@ -294,6 +294,22 @@ int cmd_bem(int argc, char **argv)
         }
         if (S3) snprintf(S3->label, sizeof S3->label, "bem dipole potentials at electrodes on %.40s", oname);
     }
+    /* NaN is never written with exit 0: every method's result checked before anything is written
+       (by rank 0, which writes) */
+    if (rank == 0) {
+        thx_series *res[3] = {S1, S2, S3};
+        const char *what[3] = {transfer ? "the transfer matrix" : "the outer surface's potentials", "the nodes' potentials",
+                               "the electrodes' potentials"};
+        for (int q = 0; q < 3 && st == THX_OK; q++)
+            for (size_t i = 0; res[q] && i < res[q]->n_rows * res[q]->n_frames; i++)
+                if (!isfinite(res[q]->v[i])) {
+                    st = thx_error(ctx, THX_ESOLVER, "bem: %s: row %zu, %s %zu is %g (method %s): nothing written", what[q],
+                                   i % res[q]->n_rows + 1, transfer ? "column" : "dipole", i / res[q]->n_rows + 1,
+                                   res[q]->v[i], method == THX_BEM_COLLOCATION ? "collocation" : "symmetric");
+                    break;
+                }
+        if (st != THX_OK) goto fail;
+    }
     if (rank != 0) goto end; /* rank 0 writes */
     /* write */
     st = thx_outdir_begin(ctx, &od);
