@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # End-to-end: every input bounded, every refusal early and named (issue 24). Each block is a
 # finding of the issue, failing on the code before it (commit 4ac4878), with what it did then:
-#  1. frame lists: --frames 1:1:9223372036854775807 exports frame 1 (was a segfault: k += step
-#     overflowed), a range past long's end is refused (exit 2), an empty list is refused before
+#  1. frame lists: export's --frames and field's --frame 1:1:9223372036854775807 take frame 1
+#     (were a segfault: k += step overflowed), a range past long's end is refused (exit 2), an empty list is refused before
 #     the output directory is made (was exit 0 and an empty folder); animate's A:B too (an int
 #     overflow read as another frame).
 #  2. thorax sigma refuses 1e-320 and 1e308 S/m (and a --scale that takes a region there) with
@@ -45,6 +45,12 @@ set -e
 ls f1 | tr '\n' ' ' | grep -qx "heart.pvd heart_0001.vtp " || fail "--frames 1:1:LONG_MAX: $(ls f1)"
 "$THORAX" export model --data beat.raw --format vtp --frames 2:4:9223372036854775807 -o f2 -q
 ls f2 | tr '\n' ' ' | grep -qx "heart.pvd heart_0002.vtp " || fail "--frames 2:4:LONG_MAX: $(ls f2)"
+# the issue's own command: thorax field's --frame, the same parser
+"$THORAX" forward model --epicardial beat.raw -o sol --volume -q
+"$THORAX" field sol --slice z=0 --frame 1:1:9223372036854775807 -o fld.vtp -q || fail "field --frame 1:1:LONG_MAX"
+[ -s fld.vtp ] || fail "field --frame 1:1:LONG_MAX: no fld.vtp"
+refused 2 "field: an empty frame list" "--frame ''" "$THORAX" field sol --slice z=0 --frame "" -o fld2.vtp
+[ ! -e fld2.vtp ] || fail "fld2.vtp written"
 refused 2 "a range past long" "--frames '1:9223372036854775808'" \
     "$THORAX" export model --data beat.raw --format vtp --frames 1:9223372036854775808 -o f3
 [ ! -e f3 ] || fail "f3 written"
