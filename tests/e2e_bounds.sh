@@ -71,6 +71,13 @@ refused 1 "sigma 1e308" "beyond 1e+12 S/m" "$THORAX" sigma m fat=1e308
 refused 1 "sigma 1e308 off the diagonal" "beyond 1e+12 S/m" "$THORAX" sigma m muscle=1,1,1,1e308,0,0
 refused 1 "sigma --scale 1e300" "--scale 1e+300: region" "$THORAX" sigma m --scale 1e300
 cmp -s before.json m/model.json || fail "a refused thorax sigma changed model.json"
+# the other places a conductivity is given: mesh's and import's --region NAME:SIGMA (usage errors)
+refused 2 "mesh --region fat:1e-320" "the conductivity must be a number from 1e-12 to 1e+12" \
+    "$THORAX" mesh m --region fat:1e-320
+refused 2 "import --region 1=heart:1e308" "the conductivity must be a number from 1e-12 to 1e+12" \
+    "$THORAX" import -o imp m/volume.pts --region 1=heart:1e308
+[ ! -e imp ] || fail "imp written"
+cmp -s before.json m/model.json || fail "a refused thorax mesh changed model.json"
 "$THORAX" sigma m fat=1e-12 muscle=1e12 -q
 grep -q '1e-12' m/model.json || fail "fat=1e-12 (the bound itself) not written"
 
