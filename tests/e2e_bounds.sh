@@ -11,9 +11,10 @@
 #     33% off here, 48% in the issue's case) and a surface touching another, and still solves the
 #     nested spheres; conductivities of 1e308 or 1e-320 S/m are refused (were NaN potentials
 #     written with exit 0, by both methods).
-#  4. writers: a surface with coordinates of 1e56 mm exported as vtk, vtp, obj and ply reads back
-#     exactly (was cut at 63 characters); binary STL refuses it, nothing written (wrote inf,
-#     which thorax import then refused).
+#  4. writers: a surface with coordinates of 1e70 mm exported as vtk, vtp, obj and ply reads back
+#     exactly (the text was cut at 63 characters: from 1e56 the decimals, from 1e63 the number
+#     itself, 1e70 read back as 1e62); binary STL refuses it, nothing written (wrote inf, which
+#     thorax import then refused).
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
 : "${THORAX:?}" "${SRC:?}" "${WORK:?}"
@@ -143,7 +144,7 @@ done
 
 # ---- 4. writers round-trip what they accept, or refuse it
 "$PY" -c "
-S = 1e56
+S = 1e70
 V = [(0, 0, 0), (S, 0, 0), (0, S, 0), (0, 0, S)]
 open('t.pts', 'w').write(''.join('%r %r %r\n' % v for v in V))
 open('t.fac', 'w').write('1 3 2\n1 2 4\n1 4 3\n2 3 4\n')
@@ -153,15 +154,15 @@ for f in vtk vtp obj ply; do
     "$THORAX" export big --format $f -o ex -q
     [ $f = vtp ] && continue  # thorax import reads vtk, obj and ply back
     rm -rf back_$f
-    "$THORAX" import -o back_$f ex/t.$f --name t --role outer -q || fail "$f with 1e56 mm does not read back"
+    "$THORAX" import -o back_$f ex/t.$f --name t --role outer -q || fail "$f with 1e70 mm does not read back"
     "$PY" - big/t.pts back_$f/t.pts <<'EOF' || fail "$f: the coordinates changed"
 import sys
 a = [[float(x) for x in l.split()] for l in open(sys.argv[1]) if l.strip()]
 b = [[float(x) for x in l.split()] for l in open(sys.argv[2]) if l.strip()]
-assert a == b and max(max(r) for r in a) == 1e56, (a, b)
+assert a == b and max(max(r) for r in a) == 1e70, (a, b)
 EOF
 done
-grep -q "1.0000000000000001e+56" ex/t.vtp || fail "vtp: 1e56 not written in full"
-refused 1 "STL beyond float32" "coordinate 1e+56 is beyond float32's range" "$THORAX" export big --format stl -o ex
+grep -q "1.0000000000000001e+70" ex/t.vtp || fail "vtp: 1e70 not written in full"
+refused 1 "STL beyond float32" "coordinate 1e+70 is beyond float32's range" "$THORAX" export big --format stl -o ex
 [ ! -e ex/t.stl ] || fail "ex/t.stl written"
 echo "e2e_bounds: ok"
