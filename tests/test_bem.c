@@ -407,6 +407,28 @@ static void test_refusals(void)
     a->n_tris++;
     double bad = -1;
     CHECK(thx_bem_create(ctx, (const thx_surface *const *)&a, 1, &bad, &b) == THX_EINPUT && tl_msg_has(ctx, "conductivity"));
+    /* issue 24: conductivities beyond thorax sigma's bounds (NaN potentials before), two copies of
+       one surface under different names (solved, 33% off, before), a surface touching another */
+    double huge = 1e308, tiny = 1e-320;
+    CHECK(thx_bem_create(ctx, (const thx_surface *const *)&a, 1, &huge, &b) == THX_EINPUT &&
+          tl_msg_has(ctx, "outside 1e-12..1e+12") && !b);
+    CHECK(thx_bem_create(ctx, (const thx_surface *const *)&a, 1, &tiny, &b) == THX_EINPUT &&
+          tl_msg_has(ctx, "outside 1e-12..1e+12") && !b);
+    {
+        thx_surface *copy = icosphere("copy", 1, c0, 1.0), *in = icosphere("in", 1, c0, 0.5);
+        double c3[3] = {0.5, 0, 0}, s3[3] = {1, 1, 1};
+        thx_surface *touch = icosphere("t2", 1, c3, 0.5); /* reaches x = 1: on a */
+        const thx_surface *dup[3] = {a, in, copy};
+        CHECK(thx_bem_create(ctx, dup, 3, s3, &b) == THX_EGEOM && tl_msg_has(ctx, "coincide") && !b);
+        const thx_surface *tt[2] = {a, touch};
+        CHECK(thx_bem_create(ctx, tt, 2, s3, &b) == THX_EGEOM && tl_msg_has(ctx, "touch: node") && !b);
+        const thx_surface *ok[2] = {a, in};
+        CHECK_OK(ctx, thx_bem_create(ctx, ok, 2, s3, &b));
+        thx_bem_destroy(&b);
+        thx_surface_destroy(&copy);
+        thx_surface_destroy(&in);
+        thx_surface_destroy(&touch);
+    }
     CHECK_OK(ctx, thx_bem_create(ctx, (const thx_surface *const *)&a, 1, sig, &b));
     double pos[3] = {0, 0, 1.5}, mom[3] = {0, 0, 1}, phi[64];
     CHECK(thx_bem_dipoles(ctx, b, pos, mom, 1, NULL, phi, NULL) == THX_EINPUT && tl_msg_has(ctx, "dipole 1") &&

@@ -160,7 +160,7 @@ static void test_errors(void)
         {{"--tol", "inf", NULL}, "is out of range"},
         {{"-s", "-1", NULL}, "demo: -s: '-1' is out of range (>= 0)"},
         {{"--seed", "1.5", NULL}, "demo: --seed: '1.5' is not an integer"},
-        {{"--seed", "99999999999999999999", NULL}, "is not an integer"},
+        {{"--seed", "99999999999999999999", NULL}, "is out of range (it overflows a long)"}, {{"--seed", " 5", NULL}, "is not an integer"},
         {{"--small", "3000000000", NULL}, "demo: --small: '3000000000' is out of range"},
         {{"--size", "huge", NULL}, "demo: --size: 'huge': expected small or large"},
         {{"--only", "a", "--only", NULL}, "--only needs a value"},
@@ -361,8 +361,81 @@ static void test_check(void)
     free(buf);
 }
 
+
+/* The one integer parser and the frame lists and ranges made of it (issue 24: thorax field --frame
+ * 1:1:9223372036854775807 overflowed k += step and wrote far outside sel, a segfault). */
+static void test_integers(void)
+{
+    long x = 0, a = 0, b = 0;
+    const char *e = NULL;
+    CHECK(cli_parse_long("42", 0, 100, &x, NULL) == 0 && x == 42);
+    CHECK(cli_parse_long("-7", -10, 10, &x, NULL) == 0 && x == -7);
+    CHECK(cli_parse_long("9223372036854775807", 0, LONG_MAX, &x, NULL) == 0 && x == LONG_MAX);
+    CHECK(cli_parse_long("9223372036854775808", 0, LONG_MAX, &x, NULL) == -1);   /* overflows */
+    CHECK(cli_parse_long("-9223372036854775809", LONG_MIN, 0, &x, NULL) == -1);  /* underflows */
+    CHECK(cli_parse_long("101", 0, 100, &x, NULL) == -1);
+    CHECK(cli_parse_long("", 0, 100, &x, NULL) == -1);
+    CHECK(cli_parse_long(" 5", 0, 100, &x, NULL) == -1);
+    CHECK(cli_parse_long("5x", 0, 100, &x, NULL) == -1);
+    CHECK(cli_parse_long("5x", 0, 100, &x, &e) == 0 && x == 5 && *e == 'x');
+    CHECK(cli_parse_pair("1:40", ':', 1, 100, &a, &b) == 0 && a == 1 && b == 40);
+    CHECK(cli_parse_pair("40:1", ':', 1, 100, &a, &b) == -1);
+    CHECK(cli_parse_pair("1:99999999999999999999", ':', 1, INT_MAX, &a, &b) == -1);
+    CHECK(cli_parse_pair("1:2junk", ':', 1, 100, &a, &b) == -1);
+    CHECK(cli_parse_pair("800x600", 'x', 16, 8192, &a, &b) == 0 && a == 800 && b == 600);
+    CHECK(cli_parse_pair("4294967312x16", 'x', 16, 8192, &a, &b) == -1); /* 2^32 + 16: not 16 as an int */
+
+    unsigned char sel[12];
+    CHECK(cli_parse_frames("all", 12, sel) == 0 && sel[0] && sel[11]);
+    CHECK(cli_parse_frames("1:9:4,12", 12, sel) == 0);
+    int want[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1}, same = 1;
+    for (int k = 0; k < 12; k++) same &= sel[k] == want[k];
+    CHECK(same);
+    CHECK(cli_parse_frames("2-4", 12, sel) == 0 && !sel[0] && sel[1] && sel[2] && sel[3] && !sel[4]); /* forward's form */
+    /* the step and the bounds at the ends of long: no overflow, nothing outside sel */
+    CHECK(cli_parse_frames("1:1:9223372036854775807", 12, sel) == 0 && sel[0] && !sel[1]);
+    CHECK(cli_parse_frames("1:12:9223372036854775807", 12, sel) == 0 && sel[0] && !sel[11]);
+    CHECK(cli_parse_frames("1:12:9223372036854775808", 12, sel) == -1);
+    CHECK(cli_parse_frames("9223372036854775807", 12, sel) == -1);
+    CHECK(cli_parse_frames("1:9223372036854775807", 12, sel) == -1);
+    CHECK(cli_parse_frames("-1", 12, sel) == -1);
+    CHECK(cli_parse_frames("0", 12, sel) == -1);
+    CHECK(cli_parse_frames("13", 12, sel) == -1);
+    CHECK(cli_parse_frames("5:3", 12, sel) == -1);
+    CHECK(cli_parse_frames("1:5:0", 12, sel) == -1);
+    CHECK(cli_parse_frames("2-4:2", 12, sel) == -1);
+    /* an empty list selects nothing: refused (it left an empty output folder) */
+    CHECK(cli_parse_frames("", 12, sel) == -1);
+    CHECK(cli_parse_frames(",", 12, sel) == -1);
+    CHECK(cli_parse_frames("1,", 12, sel) == -1);
+    CHECK(cli_parse_frames("1,,2", 12, sel) == -1);
+    CHECK(cli_parse_frames(" 1", 12, sel) == -1);
+    {
+        size_t big = 200000;
+        unsigned char *s = malloc(big);
+        CHECK(s && cli_parse_frames("3:200000:99991", big, s) == 0 && s[2] && s[99993] && !s[199999]);
+        free(s);
+    }
+
+    /* counts bounded by memory, the limit named */
+    setenv("THORAX_MAX_MEMORY", "1e9", 1);
+    CHECK(cli_count_limit(100) == 1e7);
+    err_begin();
+    int r = cli_check_count("field", "--seed density:100000000", 1e8, 108);
+    err_end();
+    CHECK(r == 2 && strstr(err_text, "--seed density:100000000: 1e+08 items need 10.8 GB") &&
+          strstr(err_text, "at most 9259259"));
+    err_begin();
+    r = cli_check_count("field", "--seed density:1000", 1000, 108);
+    err_end();
+    CHECK(r == 0 && !err_text[0]);
+    unsetenv("THORAX_MAX_MEMORY");
+    CHECK(cli_count_limit(1) >= 1e6); /* half this machine's memory */
+}
+
 int main(void)
 {
+    test_integers();
     test_values();
     test_errors();
     test_callbacks();

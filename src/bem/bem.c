@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "bem/bem_impl.h"
+#include "thorax/mesh/mesh.h"
 
 /* Nodes of a surface tested against each other surface for the nesting (all of a smaller one). */
 #define NEST_SAMPLES 400
@@ -108,9 +109,33 @@ thx_status thx_bem_create(thx_ctx *ctx, const thx_surface *const *surf, size_t n
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t k = 0; k < n; k++) {
         THX_TRY(thx_surface_validate(ctx, surf[k]));
+        {
+            /* the solid angles and integrals take products of three lengths: a surface whose size
+               is beyond 1e-30..1e30 (in the model's units) underflows or overflows them (at 1e-110
+               nested spheres were taken for touching ones, at 1e110 for empty ones) */
+            double slo[3] = {INFINITY, INFINITY, INFINITY}, shi[3] = {-INFINITY, -INFINITY, -INFINITY}, d2 = 0;
+            for (size_t i = 0; i < 3 * surf[k]->n_nodes; i++) {
+                slo[i % 3] = fmin(slo[i % 3], surf[k]->xyz[i]);
+                shi[i % 3] = fmax(shi[i % 3], surf[k]->xyz[i]);
+            }
+            for (int c = 0; c < 3; c++) d2 += (shi[c] - slo[c]) / 1e30 * ((shi[c] - slo[c]) / 1e30);
+            double size = sqrt(d2) * 1e30;
+            if (!(size >= 1e-30 && size <= 1e30)) {
+                st = thx_error(ctx, THX_EGEOM, "surface '%s': its size %g (bounding-box diagonal, in the model's units) is "
+                               "outside 1e-30..1e30, where the boundary integrals underflow or overflow", surf[k]->name, size);
+                goto done;
+            }
+        }
         if (surf[k]->n_tris < 4) { st = thx_error(ctx, THX_EGEOM, "surface '%s': %zu triangles cannot close a volume", surf[k]->name, surf[k]->n_tris); goto done; }
         if (!isfinite(sigma_in[k]) || sigma_in[k] < 0) {
             st = thx_error(ctx, THX_EINPUT, "surface '%s': conductivity inside %g S/m is not a finite value >= 0", surf[k]->name, sigma_in[k]);
+            goto done;
+        }
+        /* thorax sigma's bounds (thorax/mesh/mesh.h), or 0 (an insulator): beyond them the systems
+           overflow or underflow (1e308 and 1e-320 gave NaN potentials with exit 0) */
+        if (sigma_in[k] != 0 && !(sigma_in[k] >= THX_SIGMA_MIN && sigma_in[k] <= THX_SIGMA_MAX)) {
+            st = thx_error(ctx, THX_EINPUT, "surface '%s': conductivity inside %g S/m is outside %g..%g S/m (or 0, an "
+                           "insulator)", surf[k]->name, sigma_in[k], THX_SIGMA_MIN, THX_SIGMA_MAX);
             goto done;
         }
         THX_TRY(copy_surface(ctx, surf[k], &b->surf[k]));
@@ -142,14 +167,31 @@ thx_status thx_bem_create(thx_ctx *ctx, const thx_surface *const *surf, size_t n
         for (size_t l = 0; l < n && st == THX_OK; l++) {
             if (k == l) continue;
             const thx_surface *s = b->surf[k];
-            size_t n_in = 0, first_in = 0, first_out = 0, n_test = 0;
+            size_t n_in = 0, n_on = 0, first_in = 0, first_out = 0, n_test = 0;
             int have_in = 0, have_out = 0;
             /* at most NEST_SAMPLES nodes, evenly spread over the surface's numbering */
             size_t stride = s->n_nodes > NEST_SAMPLES ? s->n_nodes / NEST_SAMPLES : 1;
             for (size_t i = 0; i < s->n_nodes; i += stride) n_test++;
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_in)
-            for (size_t i = 0; i < s->n_nodes; i += stride) n_in += thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
-            if (n_in > 0 && n_in < n_test) {
+            /* a node on l (a coincident or touching surface) sees about 2 pi; off it, 0 or 4 pi
+               however near (the solid angle jumps across the surface) */
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : n_in, n_on)
+            for (size_t i = 0; i < s->n_nodes; i += stride) {
+                double w = thx_bem_surface_angle(b, l, s->xyz + 3 * i);
+                n_in += w > 2 * M_PI;
+                n_on += w > M_PI && w < 3 * M_PI;
+            }
+            if (n_on > 0) {
+                size_t first_on = 0;
+                for (size_t i = 0; i < s->n_nodes; i += stride) {
+                    double w = thx_bem_surface_angle(b, l, s->xyz + 3 * i);
+                    if (w > M_PI && w < 3 * M_PI) { first_on = i; break; }
+                }
+                const double *x = s->xyz + 3 * first_on;
+                st = thx_error(ctx, THX_EGEOM, "surfaces '%s' and '%s' %s: node %zu of '%s' (%.6g, %.6g, %.6g) lies on '%s' "
+                               "(%zu of %zu nodes tested); the surfaces must be nested or apart, without touching",
+                               s->name, b->surf[l]->name, n_on == n_test ? "coincide" : "touch", first_on + 1, s->name,
+                               x[0], x[1], x[2], b->surf[l]->name, n_on, n_test);
+            } else if (n_in > 0 && n_in < n_test) {
                 for (size_t i = 0; i < s->n_nodes && !(have_in && have_out); i += stride) {
                     int in = thx_bem_surface_angle(b, l, s->xyz + 3 * i) > 2 * M_PI;
                     if (in && !have_in) { have_in = 1; first_in = i; }

@@ -48,6 +48,18 @@ thx_status thx_bem_dipoles_symmetric(thx_ctx *ctx, const thx_bem *b, const doubl
 thx_status thx_bem_symmetric_rows(thx_ctx *ctx, const thx_bem *b, size_t i0, size_t i1, const double *pos,
                                   const double *mom, size_t nd, const int *comp, double *M, double *R, size_t *n_out);
 
+/* The triangle quadrature rules of src/bem: point i at barycentric (r[i][0], r[i][1], r[i][2]),
+ * weight r[i][3] (the weights sum to 1: times the area), exact for every polynomial of degree
+ * `degree` (tests/test_bem_quadrature.c). The table ends with name NULL. */
+typedef struct {
+    const char *name;
+    int n, degree;
+    const double (*r)[4];
+} thx_bem_quad_rule;
+extern const thx_bem_quad_rule thx_bem_quad_rules[];
+/* The edge-midpoint rule of the isolated problem's right-hand side (solve.c). */
+extern const double thx_bem_edge_midpoints[3][4];
+
 /* LAPACK / BLAS (Fortran interfaces of OpenBLAS) */
 void dgetrf_(const int *m, const int *n, double *a, const int *lda, int *ipiv, int *info);
 void dsytrf_(const char *uplo, const int *n, double *a, const int *lda, int *ipiv, double *work, const int *lwork,

@@ -9,6 +9,7 @@
 
 #include "thorax/bem/bem.h"
 #include "thorax/io/surface_read.h"
+#include "thorax/mesh/mesh.h"
 
 #define MAX_IF 64
 
@@ -157,6 +158,11 @@ thx_status thx_bem_read_openmeeg(thx_ctx *ctx, const char *geom, const char *con
         char extra[8];
         if (sscanf(s, "%63s %lf %7s", name, &v, extra) != 2 || !isfinite(v) || v < 0) {
             st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'DOMAIN CONDUCTIVITY' (a number >= 0)", cond, ln);
+            break;
+        }
+        if (v != 0 && !(v >= THX_SIGMA_MIN && v <= THX_SIGMA_MAX)) { /* thorax sigma's bounds (thorax/mesh/mesh.h) */
+            st = thx_error(ctx, THX_EINPUT, "%s:%d: domain '%s': conductivity %g is outside %g..%g (or 0, an insulator)",
+                           cond, ln, name, v, THX_SIGMA_MIN, THX_SIGMA_MAX);
             break;
         }
         size_t d = 0;

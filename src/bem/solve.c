@@ -31,6 +31,8 @@ static void fix_diagonal(const thx_bem *b, double *B, size_t ld, size_t i0, size
 }
 
 
+const double thx_bem_edge_midpoints[3][4] = {{.5, .5, 0, 1. / 3}, {0, .5, .5, 1. / 3}, {.5, 0, .5, 1. / 3}};
+
 /* V_inf of dipole (p, q) times the double-layer kernel seen from x, integrated over the triangle
  * (a, b, c) with normal n: the 3-point midpoint rule (exact for quadratics) on a recursive
  * subdivision fine enough near the dipole and near x. */
@@ -57,15 +59,16 @@ static double quad_tri(const double *x, const double *p, const double *q, const 
     double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     double area = 0.5 * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
     double sum = 0;
+    const double (*r)[4] = thx_bem_edge_midpoints;
     for (int i = 0; i < 3; i++) {
-        const double *u = v[i], *w = v[(i + 1) % 3];
-        double m[3] = {(u[0] + w[0]) / 2, (u[1] + w[1]) / 2, (u[2] + w[2]) / 2};
+        double m[3];
+        for (int k = 0; k < 3; k++) m[k] = r[i][0] * a[k] + r[i][1] * b[k] + r[i][2] * c[k];
         double rp[3] = {m[0] - p[0], m[1] - p[1], m[2] - p[2]}, rx[3] = {m[0] - x[0], m[1] - x[1], m[2] - x[2]};
         double lp = sqrt(rp[0] * rp[0] + rp[1] * rp[1] + rp[2] * rp[2]), lx = sqrt(rx[0] * rx[0] + rx[1] * rx[1] + rx[2] * rx[2]);
         double vinf = (q[0] * rp[0] + q[1] * rp[1] + q[2] * rp[2]) / (4 * M_PI * lp * lp * lp);
-        sum += vinf * (n[0] * rx[0] + n[1] * rx[1] + n[2] * rx[2]) / (lx * lx * lx);
+        sum += r[i][3] * vinf * (n[0] * rx[0] + n[1] * rx[1] + n[2] * rx[2]) / (lx * lx * lx);
     }
-    return sum * area / 3;
+    return sum * area;
 }
 
 /* The isolated problem's right-hand side for chi = phi0 - (2/sigma) V_inf (smooth where V_inf is

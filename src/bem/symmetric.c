@@ -35,7 +35,8 @@
 
 /* pairs nearer than NEAR_ANALYTIC times the larger diameter: analytic inner integral, a 12-point
  * outer rule below NEAR_FINE diameters, 7 points above; numerical 7 x 7 points below FAR, 3 x 3
- * beyond (tests/test_bem.c measures the error of each against the analytic 12-point values) */
+ * beyond (the thresholds chosen against the analytic 12-point values; each rule's exactness on
+ * the polynomials of its degree: tests/test_bem_quadrature.c, over thx_bem_quad_rules) */
 #define NEAR_FINE 1.5
 #define NEAR_ANALYTIC 2.5
 #define FAR 4.0
@@ -79,6 +80,13 @@ static const double R12[12][4] = {
     {C12, D12, D12, W12B}, {D12, C12, D12, W12B}, {D12, D12, C12, W12B},
     {E12, F12, G12, W12C}, {E12, G12, F12, W12C}, {F12, E12, G12, W12C},
     {F12, G12, E12, W12C}, {G12, E12, F12, W12C}, {G12, F12, E12, W12C}};
+
+const thx_bem_quad_rule thx_bem_quad_rules[] = {
+    {"3-point (interior, Strang-Fix)", 3, 2, R3},
+    {"7-point (Dunavant)", 7, 5, R7},
+    {"12-point (Dunavant)", 12, 6, R12},
+    {"3-point (edge midpoints, solve.c)", 3, 2, thx_bem_edge_midpoints},
+    {NULL, 0, 0, NULL}};
 
 static void rule(const tri *t, const double (*r)[4], int m, qpt *q)
 {

@@ -18,9 +18,7 @@ typedef struct {
 /* Runs the export; the exit status (0, 1, or 2 for a bad --frames). */
 int cli_export_data(const cli_export_request *rq);
 
-/* Frame lists "A:B[:STEP],N,...", 1-based, inclusive, or "all": sel[0..n-1] set; 0, or -1 when the
- * text is not such a list within 1..n. */
-int cli_parse_frames(const char *s, size_t n, unsigned char *sel);
+/* Frame lists: cli_parse_frames (cli/options.h). */
 
 /* Creates dir and its missing parents (mode 0755); 0, or -1 with errno set. */
 int cli_make_dirs(const char *dir);

@@ -26,42 +26,6 @@ typedef struct {
     char unit[32];
 } sources;
 
-/* "A:B[:STEP]" items separated by commas ("1:40:2,45,50"), 1-based, inclusive; "all". Sets sel[]
- * (cli_export.h; thorax field reads its --frame with it too). */
-int cli_parse_frames(const char *s, size_t n, unsigned char *sel)
-{
-    memset(sel, 0, n);
-    if (!strcmp(s, "all")) {
-        memset(sel, 1, n);
-        return 0;
-    }
-    const char *p = s;
-    while (*p) {
-        char *e;
-        long a, b, step = 1;
-        errno = 0;
-        a = strtol(p, &e, 10);
-        if (e == p || errno) return -1;
-        b = a;
-        if (*e == ':') {
-            p = e + 1;
-            b = strtol(p, &e, 10);
-            if (e == p || errno) return -1;
-            if (*e == ':') {
-                p = e + 1;
-                step = strtol(p, &e, 10);
-                if (e == p || errno || step < 1) return -1;
-            }
-        }
-        if (a < 1 || b < a || (size_t)b > n) return -1;
-        for (long k = a; k <= b; k += step) sel[k - 1] = 1;
-        p = e;
-        if (*p == ',') p++;
-        else if (*p) return -1;
-    }
-    return 0;
-}
-
 static thx_status join(thx_ctx *ctx, char *out, size_t size, const char *dir, const char *file)
 {
     if ((size_t)snprintf(out, size, "%s/%s", dir, file) >= size)

@@ -113,8 +113,13 @@ int cmd_animate(int argc, char **argv)
     };
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
-    if (frames && (sscanf(frames, "%d:%d", &a_first, &a_last) != 2 || a_first < 1 || a_last < a_first))
-        return cli_usage_error("animate", "--frames A:B (1-based, A <= B)");
+    if (frames) {
+        long fa, fb;
+        if (cli_parse_pair(frames, ':', 1, INT_MAX, &fa, &fb))
+            return cli_usage_error("animate", "--frames '%s': A:B (1-based, A <= B <= %d)", frames, INT_MAX);
+        a_first = (int)fa;
+        a_last = (int)fb;
+    }
     if (!o.p.model_dir && !o.p.n_files && !o.p.solution) return cli_usage_error("animate", "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
     if (keys_path && o.p.have_camera) return cli_usage_error("animate", "--keys and --camera: the key file gives the camera");

@@ -167,7 +167,8 @@ int cmd_bem(int argc, char **argv)
     /* under mpirun (more than one rank), or asked: the distributed path */
     const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
     if (!ws) ws = getenv("PMI_SIZE");
-    int mpi = scalapack || (ws && atoi(ws) > 1);
+    long n_ranks = 1;
+    int mpi = scalapack || (ws && !cli_parse_long(ws, 1, LONG_MAX, &n_ranks, NULL) && n_ranks > 1);
     if (mpi && !transfer && method == THX_BEM_COLLOCATION)
         return cli_usage_error("bem", "--method collocation runs on one process: under mpirun or with --scalapack, "
                                "dipoles take the symmetric method");
@@ -292,6 +293,22 @@ int cmd_bem(int argc, char **argv)
                 for (size_t i = 0; i < el->n; i++) S3->v[d * el->n + i] = thx_electrode_value(el, i, phi + d * N + oo);
         }
         if (S3) snprintf(S3->label, sizeof S3->label, "bem dipole potentials at electrodes on %.40s", oname);
+    }
+    /* NaN is never written with exit 0: every method's result checked before anything is written
+       (by rank 0, which writes) */
+    if (rank == 0) {
+        thx_series *res[3] = {S1, S2, S3};
+        const char *what[3] = {transfer ? "the transfer matrix" : "the outer surface's potentials", "the nodes' potentials",
+                               "the electrodes' potentials"};
+        for (int q = 0; q < 3 && st == THX_OK; q++)
+            for (size_t i = 0; res[q] && i < res[q]->n_rows * res[q]->n_frames; i++)
+                if (!isfinite(res[q]->v[i])) {
+                    st = thx_error(ctx, THX_ESOLVER, "bem: %s: row %zu, %s %zu is %g (method %s): nothing written", what[q],
+                                   i % res[q]->n_rows + 1, transfer ? "column" : "dipole", i / res[q]->n_rows + 1,
+                                   res[q]->v[i], method == THX_BEM_COLLOCATION ? "collocation" : "symmetric");
+                    break;
+                }
+        if (st != THX_OK) goto fail;
     }
     if (rank != 0) goto end; /* rank 0 writes */
     /* write */

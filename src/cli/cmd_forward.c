@@ -18,26 +18,6 @@
 #include "thorax/phantom/phantom.h"
 #include "thorax/fem/fem.h"
 #include "thorax/core/fileio.h"
-/* "5,10,20-30" or "all" -> flags over n frames */
-static int parse_frames(const char *s, size_t n, unsigned char *sel)
-{
-    memset(sel, 0, n);
-    if (!strcmp(s, "all")) { memset(sel, 1, n); return 0; }
-    const char *p = s;
-    while (*p) {
-        char *e;
-        long a = strtol(p, &e, 10), b = a;
-        if (e == p) return -1;
-        if (*e == '-') { p = e + 1; b = strtol(p, &e, 10); if (e == p) return -1; }
-        if (a < 1 || b < a || (size_t)b > n) return -1;
-        for (long k = a; k <= b; k++) sel[k - 1] = 1;
-        p = e;
-        if (*p == ',') p++;
-        else if (*p) return -1;
-    }
-    return 0;
-}
-
 static const char *ext_of(thx_series_format f)
 {
     return f == THX_SERIES_TEXT ? "txt" : f == THX_SERIES_MAT ? "mat" : "raw";
@@ -236,7 +216,7 @@ int cmd_forward(int argc, char **argv)
         size_t nf = epi ? epi->n_frames : 0;
         sel = thx_malloc(ctx, nf ? nf : 1);
         if (!sel) st = THX_ENOMEM;
-        else if (parse_frames(currents, nf, sel)) { rc = cli_usage_error("forward", "--currents '%s': frames 1..%zu, as 5,10,20-30 or all", currents, nf); goto end; }
+        else if (cli_parse_frames(currents, nf, sel)) { rc = cli_usage_error("forward", "--currents '%s': frames 1..%zu, as 5,10,20-30 or all", currents, nf); goto end; }
     }
     if (st != THX_OK) goto fail;
     /* PETSc only where a solve is needed */

@@ -141,8 +141,9 @@ static int parse_region(const char *cmd, const char *v, thx_region_map *mp)
     if (colon) {
         errno = 0;
         double sg = strtod(colon + 1, &end);
-        if (end == colon + 1 || *end || errno || !(sg > 0) || isinf(sg)) {
-            cli_usage_error(cmd, "--region '%s': the conductivity must be a number > 0 (S/m)", v);
+        if (end == colon + 1 || *end || errno || !(sg >= THX_SIGMA_MIN && sg <= THX_SIGMA_MAX)) {
+            cli_usage_error(cmd, "--region '%s': the conductivity must be a number from %g to %g (S/m)", v, THX_SIGMA_MIN,
+                            THX_SIGMA_MAX);
             return -1;
         }
         mp->sigma = sg;

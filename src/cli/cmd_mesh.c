@@ -90,8 +90,9 @@ static int parse_region(void *user, const cli_opt *opt, const char *v)
         *colon = 0;
         char *end = NULL;
         sigma = strtod(colon + 1, &end);
-        if (end == colon + 1 || *end || !(sigma > 0) || !isfinite(sigma))
-            return cli_usage_error("mesh", "--region %s: the conductivity must be a positive number (S/m)", v);
+        if (end == colon + 1 || *end || !(sigma >= THX_SIGMA_MIN && sigma <= THX_SIGMA_MAX))
+            return cli_usage_error("mesh", "--region %s: the conductivity must be a number from %g to %g (S/m)", v,
+                                   THX_SIGMA_MIN, THX_SIGMA_MAX);
     }
     if (eq) *eq = 0;
     if (!buf[0] || strlen(buf) >= 64 || (eq && (!eq[1] || strlen(eq + 1) >= 64)) || (!colon && !eq))

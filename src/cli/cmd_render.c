@@ -115,8 +115,10 @@ int render_positional(void *user, const char *a)
 static int parse_size(void *user, const cli_opt *opt, const char *v)
 {
     ropts *o = user;
-    if (sscanf(v, "%dx%d", &o->p.w, &o->p.h) != 2 || o->p.w < 16 || o->p.h < 16 || o->p.w > 8192 || o->p.h > 8192)
-        return cli_usage_error(o->cmd, "--size WxH (16..8192)");
+    long w, h;
+    if (cli_parse_pair(v, 'x', 16, 8192, &w, &h)) return cli_usage_error(o->cmd, "--size WxH (16..8192)");
+    o->p.w = (int)w;
+    o->p.h = (int)h;
     return 0;
 }
 

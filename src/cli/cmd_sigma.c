@@ -72,6 +72,12 @@ int cmd_sigma(int argc, char **argv)
     if (st == THX_OK && scale != 1)
         for (size_t r = 0; r < v->n_regions; r++) {
             for (int k = 0; k < 9; k++) v->regions[r].sigma[k] *= scale;
+            char why[160];
+            if (!thx_sigma_in_range(v->regions[r].sigma, why, sizeof why)) {
+                st = thx_error(ctx, THX_EINPUT, "--scale %g: region \"%s\": %s (thorax takes %g to %g S/m)", scale,
+                               v->regions[r].name, why, THX_SIGMA_MIN, THX_SIGMA_MAX);
+                break;
+            }
             char *src = v->regions[r].source;
             size_t at = strlen(src);
             if (at + 32 < sizeof v->regions[r].source) snprintf(src + at, sizeof v->regions[r].source - at, "; scaled by %g", scale);

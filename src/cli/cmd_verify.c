@@ -57,11 +57,11 @@ int cmd_verify(int argc, char **argv)
     if (pr) return CLI_EXIT(pr);
     if (cmd.n_pos) return cli_usage_error("verify", "unexpected argument '%s'", cmd.pos[0]);
     if (spheres) {
-        int f = 0, l = 0, end = 0;
+        long f = 0, l = 0;
         if (!strcmp(spheres, "off")) sph_first = sph_last = 0;
-        else if (sscanf(spheres, "%d:%d%n", &f, &l, &end) == 2 && spheres[end] == '\0' && f >= 2 && l <= 6 && f < l) {
-            sph_first = f;
-            sph_last = l;
+        else if (!cli_parse_pair(spheres, ':', 2, 6, &f, &l) && f < l) {
+            sph_first = (int)f;
+            sph_last = (int)l;
         } else
             return cli_usage_error("verify", "--spheres %s: expected FIRST:LAST with 2 <= FIRST < LAST <= 6 (e.g. 4:5), or off", spheres);
     }

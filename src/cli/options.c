@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "cli/options.h"
 #include "thorax/core/core.h"
@@ -257,9 +258,11 @@ static int store(const cli_command *c, const cli_opt *o, const char *typed, cons
         }
         return 0;
     case CLI_INT: {
-        errno = 0;
-        long x = strtol(v, &end, 10);
-        if (end == v || *end || errno) return cli_usage_error(c->name, "%s: '%s' is not an integer", typed, v);
+        long x;
+        if (cli_parse_long(v, LONG_MIN, LONG_MAX, &x, NULL))
+            return cli_usage_error(c->name, "%s: '%s' is %s", typed, v,
+                                   *v && strspn(v + (*v == '-' || *v == '+'), "0123456789") == strlen(v + (*v == '-' || *v == '+'))
+                                       ? "out of range (it overflows a long)" : "not an integer");
         int r = check_rule(c, o, typed, v, (double)x);
         if (r) return r;
         if (o->l) *o->l = x;
@@ -684,4 +687,90 @@ int cli_check(const cli_command *c, FILE *f)
         if (!seen[k] && !(o->flags & CLI_NOUSAGE))
             fprintf(f, "%s: %s is in no usage line (and no line says [options])\n", c->name, o->name), problems++;
     return problems;
+}
+
+/* ------------------------------------------- integers, frame lists, counts */
+
+int cli_parse_long(const char *s, long lo, long hi, long *out, const char **end)
+{
+    const char *p = s;
+    if (*p == '+' || *p == '-') p++;
+    if (*p < '0' || *p > '9') return -1; /* strtol would skip blanks and take "" as 0 */
+    char *e = NULL;
+    errno = 0;
+    long x = strtol(s, &e, 10);
+    if (errno || e == s || (!end && *e) || x < lo || x > hi) return -1;
+    if (end) *end = e;
+    *out = x;
+    return 0;
+}
+
+int cli_parse_pair(const char *s, char sep, long lo, long hi, long *a, long *b)
+{
+    const char *e;
+    if (cli_parse_long(s, lo, hi, a, &e) || *e != sep) return -1;
+    if (cli_parse_long(e + 1, lo, hi, b, NULL)) return -1;
+    return sep != 'x' && *b < *a ? -1 : 0;
+}
+
+int cli_parse_frames(const char *s, size_t n, unsigned char *sel)
+{
+    memset(sel, 0, n);
+    if (!strcmp(s, "all")) {
+        memset(sel, 1, n);
+        return 0;
+    }
+    long top = n > (size_t)LONG_MAX ? LONG_MAX : (long)n;
+    const char *p = s;
+    do {
+        const char *e;
+        long a, b, step = 1;
+        if (cli_parse_long(p, 1, top, &a, &e)) return -1;
+        b = a;
+        if (*e == ':' || *e == '-') {
+            int colon = *e == ':';
+            if (cli_parse_long(e + 1, a, top, &b, &e)) return -1;
+            if (colon && *e == ':' && cli_parse_long(e + 1, 1, LONG_MAX, &step, &e)) return -1;
+        }
+        /* a <= b <= n: the step is added only while it stays within b (no overflow) */
+        for (long k = a;; k += step) {
+            sel[k - 1] = 1;
+            if (b - k < step) break;
+        }
+        if (*e == ',') p = e + 1;
+        else if (*e) return -1;
+        else p = e;
+    } while (*p);
+    return p > s && p[-1] == ',' ? -1 : 0;
+}
+
+double cli_count_limit(double each)
+{
+    double mem = 0;
+    const char *env = getenv("THORAX_MAX_MEMORY");
+    if (env && *env) mem = strtod(env, NULL);
+    if (!(mem > 0)) {
+        long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+        mem = pages > 0 && page > 0 ? (double)pages * (double)page / 2 : 4e9;
+    }
+    return floor(mem / (each > 1 ? each : 1));
+}
+
+/* "10.8 GB" */
+static void bytes_text(double b, char *buf, size_t cap)
+{
+    if (b >= 1e9) snprintf(buf, cap, "%.1f GB", b / 1e9);
+    else if (b >= 1e6) snprintf(buf, cap, "%.1f MB", b / 1e6);
+    else snprintf(buf, cap, "%.0f kB", ceil(b / 1e3));
+}
+
+int cli_check_count(const char *cmd, const char *what, double n, double each)
+{
+    double lim = cli_count_limit(each);
+    if (n <= lim) return 0;
+    char need[32], have[32];
+    bytes_text(n * each, need, sizeof need);
+    bytes_text(lim * each, have, sizeof have);
+    return cli_usage_error(cmd, "%s: %.4g items need %s, more than the limit of %s (half this machine's memory, or "
+                           "THORAX_MAX_MEMORY): at most %.0f", what, n, need, have, lim);
 }

@@ -156,4 +156,33 @@ int cli_check(const cli_command *c, FILE *f);
 /* The closest option names to word (edit distance or prefix): "--grid", or "--a or --b", in buf;
  * 0 if there is none close enough. */
 int cli_suggest(const cli_command *c, const char *word, char *buf, size_t cap);
+
+/* ---- integers, ranges, frame lists and counts the user gives: one overflow-safe parser ----
+ * Every integer the CLI reads from a word (an option's value, a part of a spec) goes through
+ * cli_parse_long: decimal digits with an optional sign, no blank, no overflow (strtol's ERANGE),
+ * within [lo, hi]. The frame lists of export, field and forward and the ranges of animate,
+ * verify and render are made of such integers. */
+
+/* The integer at the start of s, within [lo, hi]; *end past its digits (NULL: the whole of s must
+ * be the integer). 0, or -1 when there is no integer there, it overflows or it is outside [lo, hi]. */
+int cli_parse_long(const char *s, long lo, long hi, long *out, const char **end);
+
+/* "A SEP B" (SEP the character sep, "1:40", "800x600"), both within [lo, hi] and A <= B unless
+ * sep is 'x'. 0, or -1. */
+int cli_parse_pair(const char *s, char sep, long lo, long hi, long *a, long *b);
+
+/* A frame list: items "N", "A:B" or "A:B:STEP" (forward's older "A-B" too) separated by commas,
+ * 1-based, inclusive, within 1..n; or "all". Sets sel[0..n-1] (those listed to 1). 0, or -1 when
+ * s is not such a list (an empty one included: it would select nothing). No integer overflows
+ * and no index leaves sel, whatever the text (tests/fuzz/fuzz_cli_frames.c). */
+int cli_parse_frames(const char *s, size_t n, unsigned char *sel);
+
+/* The most items of `each` bytes a command may allocate for a count the user gave: half of
+ * this machine's memory (THORAX_MAX_MEMORY bytes when set), over each. */
+double cli_count_limit(double each);
+
+/* A count the user gave (seeds, frames, keys, ranks, ...) checked before anything is allocated:
+ * 0 when n items of `each` bytes fit cli_count_limit, else 2 after a usage error naming the
+ * option, the count, the memory it needs and the limit. what: "--seed density:N" ... */
+int cli_check_count(const char *cmd, const char *what, double n, double each);
 #endif

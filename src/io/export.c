@@ -8,8 +8,10 @@
  *    so outward normals computed by the reading tool point outward.
  *  - Text formats write coordinates "%.6f" mm, the precision of the model's
  *    .pts files (src/io/model.c), so exporting a model reproduces its
- *    coordinates exactly; "-0.000000" is written as "0.000000".
- *  - STL stores float32 (the format allows nothing else); facet normals are the
+ *    coordinates exactly; "-0.000000" is written as "0.000000"; from 1e15 mm
+ *    on "%.17g" (thx_io_put_coord), which reads back exactly.
+ *  - STL stores float32 (the format allows nothing else): a coordinate beyond
+ *    float's range (3.4e38) is refused, not written as inf; facet normals are the
  *    unit normal of (b - a) x (c - a) computed in double, (0,0,0) for a
  *    degenerate triangle. The 80-byte header never starts with "solid", which
  *    some readers take as the mark of an ASCII STL.
@@ -17,6 +19,7 @@
  *    validated (finite coordinates, indices in range) before it is opened.
  *  - Output depends only on the surface: byte-identical for the same input.
  */
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -25,6 +28,7 @@
 #include "thorax/core/fileio.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
+#include "io/volume_io.h"
 int thx_export_format_parse(const char *s, thx_export_format *out)
 {
     static const struct { const char *name; thx_export_format f; } tab[] = {
@@ -43,12 +47,8 @@ int thx_export_format_parse(const char *s, thx_export_format *out)
 
 int thx_export_format_is_volume(thx_export_format fmt) { return fmt == THX_EXPORT_VTU || fmt == THX_EXPORT_MSH; }
 
-static void put_coord(FILE *f, double v)
-{
-    char buf[64];
-    snprintf(buf, sizeof buf, "%.6f", v);
-    fputs(strcmp(buf, "-0.000000") == 0 ? "0.000000" : buf, f);
-}
+/* "%.6f", "%.17g" from 1e15 on (thx_io_put_coord: the model's .pts rule) */
+static void put_coord(FILE *f, double v) { thx_io_put_coord(f, v); }
 
 static void put_xyz(FILE *f, const thx_surface *s, size_t i, const char *sep, const char *eol)
 {
@@ -224,6 +224,12 @@ thx_status thx_surface_export(thx_ctx *ctx, const thx_surface *s, thx_export_for
                          s->name);
     }
     if (!writer) return thx_error(ctx, THX_EINTERNAL, "%s: unknown export format %d", path, (int)fmt);
+    if (fmt == THX_EXPORT_STL) /* float32: a larger coordinate would be written as inf, which no reader takes */
+        for (size_t i = 0; i < 3 * s->n_nodes; i++)
+            if (!isfinite((float)s->xyz[i]))
+                return thx_error(ctx, THX_EINPUT, "%s: surface \"%s\": node %zu: coordinate %g is beyond float32's range "
+                                 "(%g), which binary STL stores; export it as vtk, vtp, obj or ply", path, s->name,
+                                 i / 3 + 1, s->xyz[i], (double)FLT_MAX);
     thx_atomic_file af;
     THX_CHECK(thx_atomic_open_output(ctx, path, marker[fmt], strlen(marker[fmt]), NULL, 0, &af));
     writer(af.f, s);

@@ -29,11 +29,14 @@
 #include "thorax/io/model_dir.h"
 #include "io/volume_io.h"
 
-/* Writes one coordinate "%.6f", with a value that rounds to zero as +0 (the rule is in model.c). */
+/* Writes one coordinate "%.6f", with a value that rounds to zero as +0 (the rule is in model.c);
+ * from 1e15 on (where a double holds no more than whole millimetres and "%.6f" only grows:
+ * 1e56 took 64 characters and was cut at 63), "%.17g", which reads back exactly. */
 void thx_io_put_coord(FILE *f, double v)
 {
     char buf[64];
-    snprintf(buf, sizeof buf, "%.6f", v);
+    if (fabs(v) >= 1e15) snprintf(buf, sizeof buf, "%.17g", v);
+    else snprintf(buf, sizeof buf, "%.6f", v);
     if (strcmp(buf, "-0.000000") == 0) fputs("0.000000", f);
     else fputs(buf, f);
 }

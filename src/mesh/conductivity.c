@@ -56,6 +56,22 @@ void thx_regions_orient(thx_region *table, size_t n, const thx_frame *frame)
     }
 }
 
+int thx_sigma_in_range(const double sigma[9], char *why, size_t size)
+{
+    for (int k = 0; k < 9; k++) {
+        double x = sigma[k];
+        if (k % 4 == 0 && !(x >= THX_SIGMA_MIN)) {
+            snprintf(why, size, "the diagonal entry %g is below %g S/m", x, THX_SIGMA_MIN);
+            return 0;
+        }
+        if (!(fabs(x) <= THX_SIGMA_MAX)) {
+            snprintf(why, size, "the %s %g is beyond %g S/m", k % 4 ? "entry" : "diagonal entry", x, THX_SIGMA_MAX);
+            return 0;
+        }
+    }
+    return 1;
+}
+
 thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int *anisotropic)
 {
     double c[7];
@@ -95,6 +111,9 @@ thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int 
         }
     }
     char why[160];
+    if (!thx_sigma_in_range(sigma, why, sizeof why))
+        return thx_error(ctx, THX_EINPUT, "conductivity '%s': %s (thorax takes %g to %g S/m)", text, why, THX_SIGMA_MIN,
+                         THX_SIGMA_MAX);
     if (!thx_tensor_spd(sigma, why, sizeof why))
         return thx_error(ctx, THX_EINPUT, "conductivity '%s': the tensor is %s", text, why);
     /* a tensor that is a multiple of the identity is stored as the number it is */

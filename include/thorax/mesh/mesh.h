@@ -113,10 +113,21 @@ void thx_regions_orient(thx_region *table, size_t n, const thx_frame *frame);
  * anatomical frame): "S" (isotropic), "SXX,SYY,SZZ" (a diagonal tensor) or
  * "SXX,SYY,SZZ,SXY,SXZ,SYZ" (a symmetric tensor). Refused (THX_EINPUT, the message quoting the
  * text): another count, a value that is not a finite number, a diagonal entry that is not
- * positive, a tensor that is not positive definite. sigma gets the 3x3 row-major tensor;
- * *anisotropic is 0 when it is a multiple of the identity.
+ * positive, a tensor that is not positive definite, a value outside the bounds below. sigma
+ * gets the 3x3 row-major tensor; *anisotropic is 0 when it is a multiple of the identity.
  */
 thx_status thx_sigma_parse(thx_ctx *ctx, const char *text, double sigma[9], int *anisotropic);
+/*
+ * The conductivities thorax accepts, S/m: each diagonal entry in [THX_SIGMA_MIN, THX_SIGMA_MAX],
+ * each entry at most THX_SIGMA_MAX in magnitude (1e-12: far below any tissue's, or glass's 1e-11;
+ * 1e12: far above copper's 6e7). Beyond them the solvers' checks (the minors of the tensor, the
+ * stiffness matrix) underflow or overflow: 1e-320 and 1e308 were accepted by thorax sigma, then
+ * refused by thorax forward (issue 24). thx_sigma_in_range: 1 when sigma is within them, else 0
+ * and why ("the diagonal entry 1e-320 is below 1e-12 S/m").
+ */
+#define THX_SIGMA_MIN 1e-12
+#define THX_SIGMA_MAX 1e12
+int thx_sigma_in_range(const double sigma[9], char *why, size_t size);
 /*
  * Applies one assignment "NAME=SIGMA" (SIGMA as thx_sigma_parse reads it) to the region table
  * table[0..n-1]: region NAME gets the conductivity and `source` as its source (NULL: "set by the
