@@ -96,6 +96,14 @@ refused "a file thorax did not write" /nonexistent "mine.vtp" $S --seed density:
 [ "$(cat mine.vtp)" = "my notes" ] || fail "mine.vtp replaced"
 ls | grep -q '\.tmp' && fail "temporary files left"
 
+# a seed count bounded by memory before anything is read (issue 24: density:100000000 took 10.8 GB)
+if THORAX_MAX_MEMORY=1000000 $S --seed density:100000 -o big.vtp 2> big.err; then fail "100,000 seeds in 1 MB accepted"; fi
+grep -q 'at most 3906' big.err || { cat big.err; fail "the seed bound's message"; }
+[ -e big.vtp ] && fail "big.vtp written"
+if THORAX_MAX_MEMORY=1000000 "$THORAX" render model/torso.pts --solution sol --streamlines density:100000 -o big.png 2> big.err
+then fail "render: 100,000 seeds in 1 MB accepted"; fi
+grep -q 'at most 3906' big.err || { cat big.err; fail "render: the seed bound's message"; }
+
 # ---- 2. the real Dalhousie torso, the heart meshed, record 77's epicardial potentials
 if [ -z "${THORAX_QUICK:-}" ]; then # (the plain suite's; left out under the sanitizers)
 D="$DATA"

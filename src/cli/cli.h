@@ -11,6 +11,9 @@ int cmd_check(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_slice(int argc, char **argv);
 int cmd_field_streamlines(int argc, char **argv); /* thorax streamlines (issue 16), to join thorax field */
+/* 0 when the streamline seeds of specs (density:N, region:NAME:N ...) fit in memory, else the exit
+ * code after a message naming the limit (cmd_field_streamlines.c; field, render, animate, view). */
+int cli_check_seed_counts(const char *cmd, const char *const *specs, int n);
 int cmd_import(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_sigma(int argc, char **argv);

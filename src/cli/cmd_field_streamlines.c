@@ -13,6 +13,25 @@
 #include "thorax/model/model.h"
 #include "thorax/model/series.h"
 
+/* Streamline seeds cost memory before a line is traced: a seed's position and tetrahedron, its line
+ * record and its first points, at least THX_SEED_BYTES each (measured: density:100000000 took
+ * 10.8 GB, 108 bytes a seed for the draw alone). The seed specs' counts added up are bounded by
+ * cli_count_limit before anything is read (issue 24: density:1e8 had no bound). 0 when they fit,
+ * else the exit code after a message naming the limit; a malformed spec is left to its parser. */
+#define THX_SEED_BYTES 256.0
+int cli_check_seed_counts(const char *cmd, const char *const *specs, int n)
+{
+    double total = 0;
+    thx_ctx *quiet = NULL;
+    if (thx_ctx_create(&quiet) != THX_OK) return 0; /* the parse below will say it */
+    for (int i = 0; i < n; i++) {
+        thx_seed_spec sp;
+        if (thx_seed_spec_parse(quiet, specs[i], &sp) == THX_OK) total += (double)sp.n;
+    }
+    thx_ctx_destroy(&quiet);
+    return cli_check_count(cmd, "--seed/--streamlines: streamline seeds", total, THX_SEED_BYTES);
+}
+
 int cmd_field_streamlines(int argc, char **argv)
 {
     const char *cmd = argv[0];
@@ -123,6 +142,7 @@ int cmd_field_streamlines(int argc, char **argv)
     }
     if (!n_seeds) /* seeded by |J| x volume, as ParaView's and SCIRun's default seeding does (issue 24) */
         seeds[n_seeds++] = "density:100";
+    if ((rc = cli_check_seed_counts(cmd, seeds, n_seeds))) goto out;
     if (!out) {
         rc = cli_usage_error(cmd, "no output file given (-o OUT.vtp or OUT.obj)");
         goto out;

@@ -392,6 +392,8 @@ thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_rendere
     memset(d, 0, sizeof *d);
     o->p.frame = o->frame;
     o->p.check_frame = o->last < 0; /* animate checks its range of frames itself */
+    if (cli_check_seed_counts(o->cmd, o->p.streamlines, o->p.n_streamlines))
+        return thx_error(ctx, THX_EINPUT, "--streamlines: too many seeds for this machine's memory (above)");
     THX_CHECK(thx_picture_load(ctx, &o->p, d));
     THX_CHECK(thx_renderer_create(ctx, o->p.w, o->p.h, rr));
     THX_CHECK(thx_image_create(ctx, o->p.w, o->p.h, img));
