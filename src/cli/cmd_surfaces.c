@@ -6,6 +6,7 @@
 
 #include "cli/cli.h"
 #include "thorax/core/fileio.h"
+#include "thorax/check/check.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/contours_file.h"
 #include "thorax/geom/repair.h"
@@ -59,7 +60,7 @@ static void print_repairs(const thx_repair_log *r, int verbose)
 int cmd_surfaces(int argc, char **argv)
 {
     const char *outdir = NULL, *start = NULL, *edits = NULL;
-    int verbose = 0, want_stats = 0, strict = 0;
+    int verbose = 0, want_stats = 0, strict = 0, unchecked = 0;
     double merge_tol = -1, untangle_tol = -1;
     thx_surfaces_opts o;
     thx_surfaces_opts_default(&o);
@@ -107,6 +108,9 @@ int cmd_surfaces(int argc, char **argv)
          .lo = 1, .bad = "--projected-aspect must be >= 1",
          .help = "nested loops whose lacing has a triangle of aspect ratio over A (or a fan over 3 times the fan "
                  "limit) are laced in projection if that is better"},
+        {.name = "--unchecked", .type = CLI_FLAG, .i = &unchecked,
+         .help = "write the model even when it fails thorax check's surface checks (to correct it by hand in thorax "
+                 "view; mesh refuses it until it passes): a warning instead of exit 1"},
         {.name = "--edits", .type = CLI_INPUT, .meta = "LOG", .s = &edits,
          .help = "then apply the edit log LOG (thorax-edits 1: node, triangle and layer edits, as the viewer saves "
                  "them in MODEL/edits.txt) in order, and write the edited model with the log; an edit that no longer "
@@ -225,6 +229,37 @@ int cmd_surfaces(int argc, char **argv)
                 tot.n_tris += per[k].n_tris;
             }
         }
+    }
+    {
+        /* never write what our own check fails (closure, orientation, 4π, self-intersection): a
+           lacing that crossed itself is refused here, naming the surface and the first triangles,
+           not found later by thorax check or mesh (issue 24); --unchecked keeps it for hand correction */
+        thx_check_opts co;
+        thx_check_opts_default(&co);
+        thx_model_report *rep = NULL;
+        double tc = thx_wtime();
+        st = thx_model_check(ctx, m, &co, &rep);
+        if (st != THX_OK && st != THX_ECHECK) { rc = cli_fail(ctx, "surfaces", st); goto done; }
+        thx_log(ctx, THX_LOG_DEBUG, "checked the surfaces in %.3f s", thx_wtime() - tc);
+        if (st == THX_ECHECK) {
+            for (size_t k = 0; k < rep->n_surfaces; k++) {
+                const thx_surface_report *r = &rep->surf[k];
+                for (size_t j = 0; !r->ok && j < r->n_reasons; j++)
+                    fprintf(stderr, "thorax surfaces: %s: surface \"%s\" fails the check: %s\n", in, r->name, r->reasons[j]);
+            }
+            thx_model_report_destroy(&rep);
+            if (!unchecked) {
+                fprintf(stderr, "thorax surfaces: %s: nothing written: the surfaces built from these contours fail thorax "
+                                "check (above); other --spacing, --smoothing or --cap options may lace them, or "
+                                "--unchecked writes them to correct by hand (thorax view)\n", in);
+                rc = 1;
+                goto done;
+            }
+            fprintf(stderr, "thorax surfaces: warning: %s written failing the check (--unchecked): correct it by hand "
+                            "(thorax view) and check it again before meshing\n", outdir);
+            st = THX_OK;
+        }
+        thx_model_report_destroy(&rep);
     }
     double t1 = thx_wtime();
     st = thx_model_write_claimed(ctx, m, &od);
