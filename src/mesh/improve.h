@@ -36,7 +36,7 @@
 #define THORAX_MESH_IMPROVE_H
 
 #include "thorax/model/volume.h"
-enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16 };
+enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16, IMPROVE_INSERT = 32 };
 
 typedef struct {
     double target_deg; /* repair tetrahedra whose smallest dihedral angle is below this */
@@ -55,7 +55,7 @@ typedef struct {
 typedef struct {
     size_t below_before, below_after; /* tetrahedra below target_deg */
     double min_before, min_after;     /* smallest dihedral angle in the mesh, degrees */
-    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses;
+    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses, n_inserts;
     size_t tets_before, tets_after;
     double seconds;
 } improve_stats;
