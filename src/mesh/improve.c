@@ -100,6 +100,8 @@ static double quality(const double *p[4], double re_bound, double re_scale)
     return needle < sine ? needle : sine;
 }
 
+double mesh_tet_quality(const double *p[4], double re_bound, double re_scale) { return quality(p, re_bound, re_scale); }
+
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
 {
     thx_vec3 P[4], n[4];

@@ -60,6 +60,12 @@ typedef struct {
     double seconds;
 } improve_stats;
 
+/* The repair's quality of tetrahedron (p0, p1, p2, p3) (right-handed): the smallest sine of its
+ * dihedral angles; for a radius-edge ratio RE above re_bound (> 0), re_scale / RE where that is
+ * smaller, but never below sin(2 deg) on that account (a needle is no worse than a 2 deg sliver);
+ * 0 when flat or inverted. The repair uses re_scale = sin(target) * re_bound. */
+double mesh_tet_quality(const double *p[4], double re_bound, double re_scale);
+
 /* Smallest dihedral angle of the tetrahedron q (node indices into xyz), degrees; either orientation. */
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q);
 
