@@ -302,9 +302,9 @@ int cmd_mesh(int argc, char **argv)
                    S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
         if (want_stats)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
-                   "%zu face removals, %zu grid nodes moved, %zu Steiner nodes slid, %zu collapsed, %zu inserted; %.3f s\n",
+                   "%zu face removals, %zu grid nodes moved, %zu Steiner nodes slid, %zu collapsed, %zu inserted; %zu surface nodes in pockets of their own surface, %zu given a free node; %.3f s\n",
                    fmax(o.repair_deg, THX_MESH_REPAIR_FLOOR), S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
-                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_slides, S.n_collapses, S.n_inserts, S.t_repair);
+                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_slides, S.n_collapses, S.n_inserts, S.n_pockets, S.n_pocket_nodes, S.t_repair);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

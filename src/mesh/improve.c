@@ -24,14 +24,11 @@
 #define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
 #define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */
 #define MAX_NEW 64     /* tetrahedra a replacement may take out or put in */
-#define MAX_CAV 16     /* tetrahedra of a vertex insertion's cavity */
-#define INSERT_FIRST_DEG 2.0 /* slivers below this try node insertion before moves and slides */
+#define MAX_CAV 24     /* tetrahedra of a vertex insertion's cavity */
 #define SELECT_RE 1.25
-/* sin(2 deg): however long, a needle (its dihedral angles fine) counts as no worse than a sliver of
-   2 deg, so that a sliver flatter than that is traded for a needle where nothing else helps (a
-   needle triangle of the surface, as at ECGSim's right-ventricular rim, leaves no other choice);
-   thorax check refuses dihedral angles below 1 deg and accepts any radius-edge ratio */
-#define NEEDLE_FLOOR 0.034899496702500969  /* needles above this times the radius-edge bound are repaired */
+/* sin(2 deg): the pocket pass's insertions may leave tetrahedra this flat (thorax check refuses
+   dihedral angles below 1 deg) */
+#define POCKET_FLOOR 0.034899496702500969
 /* Quality is the smallest dihedral sine, or, for a tetrahedron whose radius-edge ratio RE exceeds
    the bound B (the refinement's), sin(target) * B / RE where that is smaller: such a needle counts
    as a sliver of the target angle or worse, so the repair takes it on, and no operation trades a
@@ -96,11 +93,33 @@ static double quality(const double *p[4], double re_bound, double re_scale)
     double r2 = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (4 * vol6 * vol6);
     if (!(re_bound > 0) || r2 <= re_bound * re_bound * lmin2) return sine;
     double needle = re_scale * sqrt(lmin2 / r2);
-    if (needle < NEEDLE_FLOOR) needle = NEEDLE_FLOOR; /* a needle is never worse than a 2 deg sliver */
     return needle < sine ? needle : sine;
 }
 
 double mesh_tet_quality(const double *p[4], double re_bound, double re_scale) { return quality(p, re_bound, re_scale); }
+
+/* Radius-edge ratio of (p0, p1, p2, p3) (INFINITY when flat). */
+static double radius_edge_of(const double *p[4])
+{
+    double e[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 3; c++) e[k][c] = p[k + 1][c] - p[0][c];
+    double vol6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                  e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    if (!(fabs(vol6) > 0)) return INFINITY;
+    double c[3] = {0, 0, 0}, lmin2 = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        double w = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+        lmin2 = fmin(lmin2, w);
+        c[0] += w * (a[1] * b[2] - a[2] * b[1]);
+        c[1] += w * (a[2] * b[0] - a[0] * b[2]);
+        c[2] += w * (a[0] * b[1] - a[1] * b[0]);
+        const double *u = e[k], *v = e[(k + 1) % 3];
+        lmin2 = fmin(lmin2, (u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]) + (u[2] - v[2]) * (u[2] - v[2]));
+    }
+    return sqrt((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (4 * vol6 * vol6) / lmin2);
+}
 
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
 {
@@ -151,7 +170,19 @@ typedef struct {
     int32_t star2[MAX_STAR];
     uint32_t *nmark, nstamp; /* node marks (recovery: the neighbours of an edge's far end) */
     uint32_t *tmark, tstamp; /* per slot: visited by the current star search */
+    /* the pocket pass (NULL uf: off): an insertion's cavity must reach the main body of the nodes off
+       surface pocket_surf (union-find roots uf, the main one pocket_root; nodes from pocket_nn on
+       were inserted by the pass, next to it) */
+    const int32_t *pocket_owner, *pocket_uf;
+    int32_t pocket_surf, pocket_root;
+    size_t pocket_nn;
 } imesh;
+
+static int in_main(const imesh *M, int32_t w)
+{
+    if ((size_t)w >= M->pocket_nn) return 1;
+    return M->pocket_owner[w] != M->pocket_surf && M->pocket_uf[w] == M->pocket_root;
+}
 
 static const double *X(const imesh *M, int32_t i) { return M->xyz + 3 * (size_t)i; }
 
@@ -947,9 +978,13 @@ static double fan_quality(const imesh *M, const int32_t (*f)[3], int n, const do
  * node reaches. The cavity holds no face or edge of a surface inside it (those stay), every node
  * of it stays, and the new tetrahedra fill it exactly (all positive, exact test; volumes summed).
  */
-static int try_insert(imesh *M, int32_t t, double qt, size_t *count)
+static int try_insert_to(imesh *M, int32_t t, double qt, double need, size_t *count);
+static int try_insert(imesh *M, int32_t t, double qt, size_t *count) { return try_insert_to(M, t, qt, INFINITY, count); }
+
+/* As try_insert; the new tetrahedra's worst must beat the cavity's worst, or reach `need`. */
+static int try_insert_to(imesh *M, int32_t t, double qt, double need, size_t *count)
 {
-    for (int level = 1; level <= 2; level++) {
+    for (int level = 1; level <= (M->pocket_uf ? 3 : 2); level++) {
         int32_t cav[MAX_CAV];
         int nc = 0, ok = 1;
         cav[nc++] = t;
@@ -972,10 +1007,12 @@ static int try_insert(imesh *M, int32_t t, double qt, size_t *count)
         /* the boundary faces (outward), the old quality and volume; no surface face inside */
         int32_t F[4 * MAX_CAV][3];
         int nf = 0;
-        double q_old = qt, vol_old = 0;
+        double q_old = qt, vol_old = 0, re_old = M->re_bound;
         for (int i = 0; i < nc && ok; i++) {
             const int32_t *q = M->tet + 4 * (size_t)cav[i];
             q_old = fmin(q_old, qtet(M, cav[i]));
+            const double *pq[4] = {X(M, q[0]), X(M, q[1]), X(M, q[2]), X(M, q[3])};
+            re_old = fmax(re_old, radius_edge_of(pq));
             vol_old += tet_volume6(M, q);
             for (int f = 0; f < 4; f++) {
                 int32_t u = M->nbr[4 * (size_t)cav[i] + f];
@@ -1005,6 +1042,12 @@ static int try_insert(imesh *M, int32_t t, double qt, size_t *count)
                 }
         }
         if (!ok) continue;
+        if (M->pocket_uf) { /* the pocket pass: the new node must join the main body */
+            int reach = 0;
+            for (int j = 0; j < nf && !reach; j++)
+                for (int k = 0; k < 3 && !reach; k++) reach = in_main(M, F[j][k]);
+            if (!reach) continue;
+        }
         /* length scale: the mean edge of the sliver */
         const int32_t *qt4 = M->tet + 4 * (size_t)t;
         double h = 0;
@@ -1057,7 +1100,14 @@ static int try_insert(imesh *M, int32_t t, double qt, size_t *count)
             if (bestq > cur) { cur = bestq; memcpy(p, bp, sizeof p); }
             else step *= 0.5;
         }
-        if (!(cur > q_old + EPS_GAIN)) continue;
+        if (!(cur > q_old + EPS_GAIN) && !(cur >= need)) continue;
+        /* no needle longer than the cavity had, or than the bound (a sliver is not traded for one) */
+        double re_new = 0;
+        for (int j = 0; j < nf; j++) {
+            const double *pq[4] = {X(M, F[j][0]), X(M, F[j][2]), X(M, F[j][1]), p};
+            re_new = fmax(re_new, radius_edge_of(pq));
+        }
+        if (re_new > re_old) continue;
         int32_t nw[MAX_NEW][4], nreg[MAX_NEW];
         int32_t v = add_node(M, p);
         if (v < 0) return 0;
@@ -1250,7 +1300,7 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
     }
     S.tets_before = M.nt;
     S.min_before = min_dihedral_and_count(&M, o->target_deg, &S.below_before);
-    double sin_target = sin(o->target_deg * M_PI / 180.0), sin_first = sin(INSERT_FIRST_DEG * M_PI / 180.0);
+    double sin_target = sin(o->target_deg * M_PI / 180.0);
     M.re_bound = o->radius_edge;
     M.re_scale = sin_target * o->radius_edge;
     unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_SLIDE | IMPROVE_COLLAPSE | IMPROVE_INSERT;
@@ -1279,21 +1329,86 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
                 }
                 if (last <= M.failed[t]) continue;
             }
-            /* a sliver flatter than INSERT_FIRST_DEG gets a new node before moves and slides are tried:
-               those often better it by a little each pass and never enough (ECGSim's heart) */
-            int early = q < sin_first;
             if (((ops & IMPROVE_EDGE) && try_edge_removal(&M, t, q, &S.n_edge_removals)) ||
                 ((ops & IMPROVE_FACE) && try_face_removal(&M, t, q, &S.n_face_removals)) ||
-                (early && (ops & IMPROVE_INSERT) && try_insert(&M, t, q, &S.n_inserts)) ||
                 ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)) ||
                 ((ops & IMPROVE_SLIDE) && try_slide(&M, t, &S.n_slides)) ||
                 ((ops & IMPROVE_COLLAPSE) && try_collapse(&M, t, &S.n_collapses)) ||
-                (!early && (ops & IMPROVE_INSERT) && try_insert(&M, t, q, &S.n_inserts)))
+                ((ops & IMPROVE_INSERT) && try_insert(&M, t, q, &S.n_inserts)))
                 changed++;
             else
                 M.failed[t] = M.clock;
         }
         if (!changed) break;
+    }
+    /* Pockets: a surface node none of whose neighbours is a node of the main body of the rest (the
+       largest connected set of nodes not on its surface, Steiner nodes included) gets a free node
+       joined to both. Where a surface's potentials are given (the heart's), such a node's value
+       reaches no free node that reaches the torso: its transfer column would be zero (a narrow
+       cavity pocket of ECGSim's right ventricle, no grid node in it). Accepted when the new
+       tetrahedra are no worse than the cavity's worst, or than a 2 deg sliver. */
+    if ((ops & IMPROVE_INSERT) && v->node_surf) {
+        size_t nv = v->n_nodes; /* nodes the volume's tables cover; later ones were inserted (free) */
+        int32_t *owner = NULL, *uf = NULL;
+        for (int32_t s = 0; (size_t)s < v->n_surfaces; s++) {
+            size_t nn0 = M.nn; /* the nodes now, insertions for earlier surfaces included */
+            int32_t *o2 = realloc(owner, (nn0 ? nn0 : 1) * sizeof *o2);
+            if (o2) owner = o2;
+            int32_t *u2 = realloc(uf, (nn0 ? nn0 : 1) * sizeof *u2);
+            if (u2) uf = u2;
+            if (!o2 || !u2) { free(owner); free(uf); st = thx_error(ctx, THX_ENOMEM, "mesh: out of memory repairing slivers"); goto done; }
+            for (size_t i = 0; i < nn0; i++) owner[i] = i < nv ? v->node_surf[i] : -1;
+            for (size_t i = 0; i < v->n_steiner; i++) owner[v->steiner[i].node] = v->steiner[i].surf;
+            /* components of the nodes off surface s (union-find over the tetrahedra's edges) */
+            for (size_t i = 0; i < nn0; i++) uf[i] = (int32_t)i;
+            for (size_t t = 0; t < M.nt; t++) {
+                if (M.dead[t]) continue;
+                const int32_t *q = M.tet + 4 * t;
+                int32_t first = -1;
+                for (int c = 0; c < 4; c++) {
+                    if (owner[q[c]] == s) continue;
+                    int32_t r = q[c];
+                    while (uf[r] != r) r = uf[r] = uf[uf[r]];
+                    if (first < 0) first = r;
+                    else if (r != first) { if (r < first) { uf[first] = r; first = r; } else uf[r] = first; }
+                }
+            }
+            size_t *cnt = thx_calloc(ctx, nn0 ? nn0 : 1, sizeof *cnt);
+            if (!cnt) { free(owner); free(uf); st = THX_ENOMEM; goto done; }
+            int32_t root = -1;
+            for (size_t i = 0; i < nn0; i++) {
+                if (owner[i] == s || M.node_tet[i] < 0) continue;
+                int32_t r = (int32_t)i;
+                while (uf[r] != r) r = uf[r] = uf[uf[r]];
+                uf[i] = r;
+                if (++cnt[r] > (root >= 0 ? cnt[root] : 0)) root = r;
+            }
+            free(cnt);
+            if (root < 0) continue;
+            M.pocket_owner = owner;
+            M.pocket_uf = uf;
+            M.pocket_surf = s;
+            M.pocket_root = root;
+            M.pocket_nn = nn0;
+            for (size_t i = 0; i < nn0 && i < nv; i++) {
+                if (owner[i] != s || v->node_surf[i] != s || M.node_tet[i] < 0) continue;
+                int32_t *star = M.star2;
+                int n = vertex_star(&M, (int32_t)i, star, 1);
+                int reach = 0;
+                for (int k = 0; k < n && !reach; k++)
+                    for (int c = 0; c < 4 && !reach; c++) reach = in_main(&M, M.tet[4 * (size_t)star[k] + c]);
+                if (!n || reach) continue;
+                S.n_pockets++;
+                for (int k = 0; k < n; k++)
+                    if (!M.dead[star[k]] && try_insert_to(&M, star[k], qtet(&M, star[k]), POCKET_FLOOR, &S.n_inserts)) {
+                        S.n_pocket_nodes++;
+                        break;
+                    }
+            }
+            M.pocket_uf = NULL;
+        }
+        free(owner);
+        free(uf);
     }
     S.min_after = min_dihedral_and_count(&M, o->target_deg, &S.below_after);
     if (M.nn > v->n_nodes) { /* inserted nodes: free, on no surface */

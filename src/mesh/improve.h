@@ -56,14 +56,14 @@ typedef struct {
     size_t below_before, below_after; /* tetrahedra below target_deg */
     double min_before, min_after;     /* smallest dihedral angle in the mesh, degrees */
     size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses, n_inserts;
+    size_t n_pockets, n_pocket_nodes; /* surface nodes with only their own surface's nodes around; given a free node */
     size_t tets_before, tets_after;
     double seconds;
 } improve_stats;
 
 /* The repair's quality of tetrahedron (p0, p1, p2, p3) (right-handed): the smallest sine of its
  * dihedral angles; for a radius-edge ratio RE above re_bound (> 0), re_scale / RE where that is
- * smaller, but never below sin(2 deg) on that account (a needle is no worse than a 2 deg sliver);
- * 0 when flat or inverted. The repair uses re_scale = sin(target) * re_bound. */
+ * smaller; 0 when flat or inverted. The repair uses re_scale = sin(target) * re_bound. */
 double mesh_tet_quality(const double *p[4], double re_bound, double re_scale);
 
 /* Smallest dihedral angle of the tetrahedron q (node indices into xyz), degrees; either orientation. */

@@ -678,6 +678,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_slides = is.n_slides;
         S.n_collapses = is.n_collapses;
         S.n_inserts = is.n_inserts;
+        S.n_pockets = is.n_pockets;
+        S.n_pocket_nodes = is.n_pocket_nodes;
         S.t_repair = is.seconds;
     }
     /* nodes in no tetrahedron (collapsed by the repair, or any the removed pieces held) go */

@@ -84,6 +84,8 @@ typedef struct {
     double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
     size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses; /* repair operations applied */
     size_t n_inserts;         /* repair: free nodes inserted (slivers between surface faces, pockets) */
+    size_t n_pockets, n_pocket_nodes; /* surface nodes with only their own surface's nodes around them;
+                                         of those, given a free node beside them */
     double t_repair;          /* seconds */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */
