@@ -176,14 +176,14 @@ int cmd_mesh(int argc, char **argv)
          .def = "the layers of the outer surface when it was built from contours, else --grid",
          .help = "grid planes this far apart"},
         {.name = "--no-heart", .type = CLI_FLAG, .i = &o.no_heart, .help = "leave the heart's interior out of the domain"},
-        {.name = "--quality", .type = CLI_STRING, .meta = "R/D", .def = quality, .note = "0 = off (the repair still removes slivers)", .fn = parse_quality,
+        {.name = "--quality", .type = CLI_STRING, .meta = "R/D", .def = quality, .note = "0 = off", .fn = parse_quality,
          .help = "Delaunay refinement: circumcentres of tetrahedra whose radius-edge ratio exceeds R or whose smallest "
-                 "dihedral angle is below D degrees"},
+                 "dihedral angle is below D degrees; with 0 the repair still removes the slivers"},
         {.name = "--repair", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &o.repair_deg, .rule = CLI_GE | CLI_LT,
-         .lo = 0, .hi = 70, .bad = "--repair must be between 0 and 70 degrees", .note = "below 5, 0 included: 5",
+         .lo = 0, .hi = 70, .bad = "--repair must be between 0 and 70 degrees", .note = "0: 5",
          .help = "repair tetrahedra inside with a dihedral angle below DEG by edge/face flips, moving nodes and "
-                 "inserting nodes; the repair never targets less than 5 deg, so that the mesh passes thorax check "
-                 "(--repair 0 = only the slivers below 5 deg)"},
+                 "inserting nodes; never less than 5 deg, so that the mesh passes thorax check: --repair 0 "
+                 "repairs only the slivers below 5 deg"},
         {.name = "--region", .type = CLI_STRING, .meta = "NAME[=NEW][:SIGMA]", .unit = "S/m", .flags = CLI_REPEAT,
          .fn = parse_region,
          .help = "rename a tissue region and/or set its isotropic conductivity SIGMA, e.g. --region "
