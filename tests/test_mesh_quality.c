@@ -201,7 +201,7 @@ static void test_insert(thx_ctx *ctx)
     double vol0 = 0;
     for (size_t t = 0; t < v->n_tets; t++) vol0 += thx_volume_tet_volume(v, t);
     const int32_t prot[2][3] = {{A, Bn, C}, {Bn, D, C}};
-    improve_opts o = {15.0, 1.6, 6, IMPROVE_INSERT, NULL, NULL, NULL};
+    improve_opts o = {15.0, 1.6, 6, IMPROVE_INSERT, NULL, NULL, NULL, -2};
     improve_stats S;
     CHECK_OK(ctx, mesh_improve(ctx, v, NULL, &prot[0][0], 2, &o, &S));
     double after = 180, vol1 = 0;

@@ -1347,10 +1347,11 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
        reaches no free node that reaches the torso: its transfer column would be zero (a narrow
        cavity pocket of ECGSim's right ventricle, no grid node in it). Accepted when the new
        tetrahedra are no worse than the cavity's worst, or than a 2 deg sliver. */
-    if ((ops & IMPROVE_INSERT) && v->node_surf) {
+    if ((ops & IMPROVE_INSERT) && v->node_surf && o->pocket_surface >= -1) {
         size_t nv = v->n_nodes; /* nodes the volume's tables cover; later ones were inserted (free) */
         int32_t *owner = NULL, *uf = NULL;
         for (int32_t s = 0; (size_t)s < v->n_surfaces; s++) {
+            if (o->pocket_surface >= 0 && s != o->pocket_surface) continue;
             size_t nn0 = M.nn; /* the nodes now, insertions for earlier surfaces included */
             int32_t *o2 = realloc(owner, (nn0 ? nn0 : 1) * sizeof *o2);
             if (o2) owner = o2;

@@ -50,6 +50,9 @@ typedef struct {
     /* NULL, or 3 volume nodes per Steiner record of v (its surface triangle's corners, in the
        order of its barycentric coordinates): those Steiner nodes may slide in their triangle */
     const int32_t *steiner_corners;
+    /* the surface whose nodes the pocket pass looks after (its potentials given: the heart's);
+       -1: every surface (the default of a zeroed struct is surface 0) */
+    int pocket_surface;
 } improve_opts;
 
 typedef struct {

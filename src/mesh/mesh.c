@@ -655,7 +655,8 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         for (size_t i = 0; i < v->n_steiner; i++)
             for (int k = 0; k < 3; k++)
                 corners[3 * i + k] = v->surf_node[v->steiner[i].surf][m->surf[v->steiner[i].surf]->tri[3 * (size_t)v->steiner[i].tri + k]];
-        improve_opts io = {repair_deg, o->radius_edge > 0 ? o->radius_edge : 2.0, 6, 0, classify_cb, &rc, corners};
+        /* the pocket pass for the heart's nodes (their potentials are given in forward problems) */
+        improve_opts io = {repair_deg, o->radius_edge > 0 ? o->radius_edge : 2.0, 6, 0, classify_cb, &rc, corners, heart >= 0 ? heart : -2};
         improve_stats is;
         int32_t *prot = thx_malloc(ctx, 3 * (n_sub ? n_sub : 1) * sizeof *prot);
         if (!prot) { free(corners); st = THX_ENOMEM; goto done; }
