@@ -1,4 +1,5 @@
 /* thorax mesh: the tetrahedral volume mesh of a surface model (paper 3.3). */
+#include <cjson/cJSON.h>
 #include <limits.h>
 #include <math.h>
 #include <unistd.h>
@@ -62,6 +63,33 @@ static double nearest_triangle(const thx_model *m, const double c[3], size_t *ws
         }
     }
     return angle;
+}
+
+/* --min-dihedral: the mesh passed with the bar lowered below the check's default. Warns and records
+ * it in the model's provenance ("mesh": the bar, the smallest angle and the warning), so that the
+ * model says what thorax check without the option will say. */
+static thx_status record_low_bar(thx_ctx *ctx, thx_model *m, const char *in, double got, double bar, double def)
+{
+    int low = got < def;
+    if (!low && (!m->provenance_json || !strstr(m->provenance_json, "\"mesh\""))) return THX_OK;
+    char warn[256];
+    snprintf(warn, sizeof warn, "smallest dihedral angle %.3g deg is below thorax check's %g deg; accepted by --min-dihedral "
+             "%g (thorax check fails this mesh unless given --min-dihedral %g)", got, def, bar, bar);
+    if (low) fprintf(stderr, "thorax mesh: %s: warning: %s\n", in, warn);
+    cJSON *prov = m->provenance_json ? cJSON_Parse(m->provenance_json) : cJSON_CreateObject();
+    if (!prov || !cJSON_IsObject(prov)) { cJSON_Delete(prov); return thx_error(ctx, THX_EINPUT, "mesh: the model's provenance is not a JSON object"); }
+    cJSON_DeleteItemFromObjectCaseSensitive(prov, "mesh"); /* an earlier mesh's warning goes with it */
+    cJSON *mj = NULL;
+    if (low)
+        mj = cJSON_AddObjectToObject(prov, "mesh");
+    if (low && (!mj || !cJSON_AddNumberToObject(mj, "min_dihedral_limit_deg", bar) || !cJSON_AddNumberToObject(mj, "min_dihedral_deg", got) ||
+        !cJSON_AddStringToObject(mj, "warning", warn))) { cJSON_Delete(prov); return THX_ENOMEM; }
+    char *txt = cJSON_PrintUnformatted(prov);
+    cJSON_Delete(prov);
+    if (!txt) return THX_ENOMEM;
+    free(m->provenance_json);
+    m->provenance_json = txt;
+    return THX_OK;
 }
 
 /* --quality R/D (or 0): the Delaunay refinement's radius-edge ratio and dihedral angle */
@@ -131,6 +159,7 @@ int cmd_mesh(int argc, char **argv)
     progress_state ps = {"", 0, 0};
     const char *out = NULL;
     int verbose = 0, want_stats = 0;
+    double min_dihedral = -1; /* the check's bar; < 0: its default (1 deg) */
     thx_mesh_opts o;
     thx_mesh_opts_default(&o);
     char quality[40];
@@ -150,10 +179,12 @@ int cmd_mesh(int argc, char **argv)
         {.name = "--no-heart", .type = CLI_FLAG, .i = &o.no_heart, .help = "leave the heart's interior out of the domain"},
         {.name = "--quality", .type = CLI_STRING, .meta = "R/D", .def = quality, .note = "0 = off", .fn = parse_quality,
          .help = "Delaunay refinement: circumcentres of tetrahedra whose radius-edge ratio exceeds R or whose smallest "
-                 "dihedral angle is below D degrees"},
+                 "dihedral angle is below D degrees; with 0 the repair still removes the slivers"},
         {.name = "--repair", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &o.repair_deg, .rule = CLI_GE | CLI_LT,
-         .lo = 0, .hi = 70, .bad = "--repair must be between 0 and 70 degrees", .note = "0 = off",
-         .help = "repair tetrahedra inside with a dihedral angle below DEG by edge/face flips and moving grid nodes"},
+         .lo = 0, .hi = 70, .bad = "--repair must be between 0 and 70 degrees", .note = "0: 5",
+         .help = "repair tetrahedra inside with a dihedral angle below DEG by edge/face flips, moving nodes and "
+                 "inserting nodes; never less than 5 deg, so that the mesh passes thorax check: --repair 0 "
+                 "repairs only the slivers below 5 deg"},
         {.name = "--region", .type = CLI_STRING, .meta = "NAME[=NEW][:SIGMA]", .unit = "S/m", .flags = CLI_REPEAT,
          .fn = parse_region,
          .help = "rename a tissue region and/or set its isotropic conductivity SIGMA, e.g. --region "
@@ -164,13 +195,19 @@ int cmd_mesh(int argc, char **argv)
                  "the model's axes, its diagonal or all six entries; e.g. --sigma lung_l=0.08 --sigma "
                  "muscle=0.04,0.04,0.4 (docs/decisions.md lists the defaults and their sources; thorax sigma "
                  "changes them later)"},
+        {.name = "--min-dihedral", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &min_dihedral,
+         .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 1, .bad = "--min-dihedral must be between 0 and 1 degree (the check's default)",
+         .def = "1 (thorax check's default)",
+         .help = "accept a mesh whose smallest dihedral angle is below the check's 1 deg but at least DEG (0: any "
+                 "positive): a last resort where a sliver truly remains; a warning is printed and recorded in "
+                 "model.json (provenance.mesh), and thorax check without --min-dihedral DEG fails the mesh"},
         {.name = "--stats", .type = CLI_FLAG, .i = &want_stats, .help = "print counts and times"},
         {.name = "-v", .type = CLI_SET, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_SET, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command cmd = {
         .name = "mesh",
-        .usage = "MODEL [-o] [--grid] [--tol] [--layer-spacing] [--no-heart] [--quality] [--repair] [--region]... [--sigma]... [--stats]",
+        .usage = "MODEL [-o] [--grid] [--tol] [--layer-spacing] [--no-heart] [--quality] [--repair] [--min-dihedral] [--region]... [--sigma]... [--stats]",
         .about = "Tetrahedralizes the domain inside the model's outer surface (paper 3.3, the\n"
                  "hybrid method, made conforming): the surface nodes plus a square grid on each\n"
                  "layer plane, points within a tolerance of any surface dropped; Delaunay; points\n"
@@ -209,7 +246,11 @@ int cmd_mesh(int argc, char **argv)
     if (st == THX_OK) {
         thx_volume_report r;
         memset(&r, 0, sizeof r);
-        thx_status cs = thx_volume_check(ctx, m->volume, m, NULL, &r);
+        thx_volume_check_opts co;
+        thx_volume_check_opts_default(&co);
+        double bar = co.min_dihedral_deg;
+        if (min_dihedral >= 0) co.min_dihedral_deg = min_dihedral;
+        thx_status cs = thx_volume_check(ctx, m->volume, m, &co, &r);
         if (cs == THX_ECHECK) {
             for (size_t k = 0; k < r.n_reasons; k++) fprintf(stderr, "thorax mesh: %s: %s\n", in, r.reasons[k]);
             if (r.failures & THX_VCHECKF_QUALITY) {
@@ -222,9 +263,13 @@ int cmd_mesh(int argc, char **argv)
                 fprintf(stderr, "thorax mesh: the worst tetrahedron is at (%.3f, %.3f, %.3f), by surface \"%s\" triangle %zu, "
                         "whose smallest angle is %.2f deg%s\n", c[0], c[1], c[2], m->surf[ws]->name, wt + 1, ang,
                         ang < 5 ? ": a needle in the surface forces flat tetrahedra there (repair the surface)" : "");
+                if (min_dihedral < 0 && r.min_dihedral > 0 && !(r.failures & ~THX_VCHECKF_QUALITY))
+                    fprintf(stderr, "thorax mesh: only the dihedral angle fails: --min-dihedral %.2g accepts this mesh, "
+                            "with a warning recorded in model.json\n", floor(r.min_dihedral * 100) / 100);
             }
             st = thx_error(ctx, THX_ECHECK, "mesh: the volume fails its check (above); nothing written");
         } else if (cs != THX_OK) st = cs;
+        if (st == THX_OK) st = record_low_bar(ctx, m, in, r.min_dihedral, co.min_dihedral_deg, bar);
         thx_volume_report_free(&r);
     }
     if (st == THX_OK) mesh_progress(&ps, "writing", 0.0);
@@ -256,11 +301,11 @@ int cmd_mesh(int argc, char **argv)
                    "%zu points on the surfaces instead, %zu tetrahedra left at small pieces, %zu rounds%s; %.3f s\n",
                    o.radius_edge, o.refine_deg, S.n_refine_points, S.n_refine_near, S.n_refine_surface, S.n_refine_left,
                    S.refine_rounds, S.refine_limited ? " (stopped at its point limit)" : "", S.t_refine);
-        if (want_stats && o.repair_deg > 0)
+        if (want_stats)
             printf("repair below %g deg: %zu -> %zu tetrahedra, smallest dihedral %.2f -> %.2f deg; %zu edge removals, "
-                   "%zu face removals, %zu grid nodes moved, %zu Steiner nodes slid, %zu collapsed; %.3f s\n",
-                   o.repair_deg, S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
-                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_slides, S.n_collapses, S.t_repair);
+                   "%zu face removals, %zu grid nodes moved, %zu Steiner nodes slid, %zu collapsed, %zu inserted; %zu surface nodes in pockets of their own surface, %zu given a free node; %.3f s\n",
+                   fmax(o.repair_deg, THX_MESH_REPAIR_FLOOR), S.repair_below_before, S.repair_below_after, S.repair_min_before, S.repair_min_after,
+                   S.n_edge_removals, S.n_face_removals, S.n_moves, S.n_slides, S.n_collapses, S.n_inserts, S.n_pockets, S.n_pocket_nodes, S.t_repair);
     }
     thx_model_destroy(&m);
     thx_ctx_destroy(&ctx);

@@ -23,7 +23,12 @@
 #define MAX_RING 12    /* edges with more tetrahedra around them are not removed */
 #define MAX_STAR 512   /* vertices with more tetrahedra around them are not moved */
 #define EPS_GAIN 1e-9  /* an operation must raise the worst quality by more than this */
-#define SELECT_RE 1.25  /* needles above this times the radius-edge bound are repaired */
+#define MAX_NEW 64     /* tetrahedra a replacement may take out or put in */
+#define MAX_CAV 24     /* tetrahedra of a vertex insertion's cavity */
+#define SELECT_RE 1.25
+/* sin(2 deg): the pocket pass's insertions may leave tetrahedra this flat (thorax check refuses
+   dihedral angles below 1 deg) */
+#define POCKET_FLOOR 0.034899496702500969
 /* Quality is the smallest dihedral sine, or, for a tetrahedron whose radius-edge ratio RE exceeds
    the bound B (the refinement's), sin(target) * B / RE where that is smaller: such a needle counts
    as a sliver of the target angle or worse, so the repair takes it on, and no operation trades a
@@ -91,6 +96,31 @@ static double quality(const double *p[4], double re_bound, double re_scale)
     return needle < sine ? needle : sine;
 }
 
+double mesh_tet_quality(const double *p[4], double re_bound, double re_scale) { return quality(p, re_bound, re_scale); }
+
+/* Radius-edge ratio of (p0, p1, p2, p3) (INFINITY when flat). */
+static double radius_edge_of(const double *p[4])
+{
+    double e[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 3; c++) e[k][c] = p[k + 1][c] - p[0][c];
+    double vol6 = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                  e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    if (!(fabs(vol6) > 0)) return INFINITY;
+    double c[3] = {0, 0, 0}, lmin2 = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        double w = e[k][0] * e[k][0] + e[k][1] * e[k][1] + e[k][2] * e[k][2];
+        lmin2 = fmin(lmin2, w);
+        c[0] += w * (a[1] * b[2] - a[2] * b[1]);
+        c[1] += w * (a[2] * b[0] - a[0] * b[2]);
+        c[2] += w * (a[0] * b[1] - a[1] * b[0]);
+        const double *u = e[k], *v = e[(k + 1) % 3];
+        lmin2 = fmin(lmin2, (u[0] - v[0]) * (u[0] - v[0]) + (u[1] - v[1]) * (u[1] - v[1]) + (u[2] - v[2]) * (u[2] - v[2]));
+    }
+    return sqrt((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (4 * vol6 * vol6) / lmin2);
+}
+
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
 {
     thx_vec3 P[4], n[4];
@@ -118,7 +148,7 @@ double mesh_tet_min_dihedral(const double *xyz, const int32_t *q)
 typedef struct {
     thx_ctx *ctx;
     double *xyz;
-    size_t nn;
+    size_t nn, nn_cap; /* nodes; room for them in xyz and the per-node arrays (insertion adds nodes) */
     int32_t *tet, *nbr, *reg; /* nbr[4t + f]: across the face opposite corner f, -1 on the boundary */
     unsigned char *dead;
     uint32_t *failed;  /* per slot: the clock when every operation failed on it (0: not tried) */
@@ -140,7 +170,19 @@ typedef struct {
     int32_t star2[MAX_STAR];
     uint32_t *nmark, nstamp; /* node marks (recovery: the neighbours of an edge's far end) */
     uint32_t *tmark, tstamp; /* per slot: visited by the current star search */
+    /* the pocket pass (NULL uf: off): an insertion's cavity must reach the main body of the nodes off
+       surface pocket_surf (union-find roots uf, the main one pocket_root; nodes from pocket_nn on
+       were inserted by the pass, next to it) */
+    const int32_t *pocket_owner, *pocket_uf;
+    int32_t pocket_surf, pocket_root;
+    size_t pocket_nn;
 } imesh;
+
+static int in_main(const imesh *M, int32_t w)
+{
+    if ((size_t)w >= M->pocket_nn) return 1;
+    return M->pocket_owner[w] != M->pocket_surf && M->pocket_uf[w] == M->pocket_root;
+}
 
 static const double *X(const imesh *M, int32_t i) { return M->xyz + 3 * (size_t)i; }
 
@@ -265,8 +307,9 @@ typedef struct { triple k; int32_t out; int fo; int used; } oface;
 static int replace_any(imesh *M, const int32_t *old, int n_old, const int32_t (*nw)[4], const int32_t *nreg, int n_new,
                        int open)
 {
-    oface of[4 * 2 * MAX_RING];
+    oface of[4 * MAX_NEW];
     int nof = 0;
+    if (n_old > MAX_NEW || n_new > MAX_NEW) return -1;
     for (int i = 0; i < n_old; i++) {
         int32_t o = old[i];
         for (int f = 0; f < 4; f++) {
@@ -286,7 +329,7 @@ static int replace_any(imesh *M, const int32_t *old, int n_old, const int32_t (*
         }
     }
     /* match every new face before changing anything */
-    int32_t link[2 * MAX_RING][4]; /* >= 0: outer face index; < 0: -(new tet * 4 + face) - 1 */
+    int32_t link[MAX_NEW][4]; /* >= 0: outer face index; < 0: -(new tet * 4 + face) - 1 */
     for (int n = 0; n < n_new; n++)
         for (int g = 0; g < 4; g++) {
             triple k = tri_sorted(nw[n][face_of[g][0]], nw[n][face_of[g][1]], nw[n][face_of[g][2]]);
@@ -317,7 +360,7 @@ static int replace_any(imesh *M, const int32_t *old, int n_old, const int32_t (*
     }
     M->clock++;
     /* slots: the old ones, then free ones, then new */
-    int32_t slot[2 * MAX_RING];
+    int32_t slot[MAX_NEW];
     for (int n = 0; n < n_new; n++) {
         if (n < n_old) slot[n] = old[n];
         else if (M->n_free) slot[n] = M->freel[--M->n_free];
@@ -866,6 +909,226 @@ static int try_collapse(imesh *M, int32_t t, size_t *count)
     return 0;
 }
 
+
+/* ---- vertex insertion ---- */
+
+/* Room for one more node: xyz and the per-node arrays grow; returns the new node (free, at p), or -1
+ * when out of memory. */
+static int32_t add_node(imesh *M, const double p[3])
+{
+    if (M->nn >= (size_t)INT32_MAX) return -1;
+    if (M->nn + 1 > M->nn_cap) {
+        size_t cap = M->nn_cap * 5 / 4 + 256;
+        double *x = realloc(M->xyz, 3 * cap * sizeof *x);
+        if (x) M->xyz = x;
+        int32_t *nt = realloc(M->node_tet, cap * sizeof *nt);
+        if (nt) M->node_tet = nt;
+        uint32_t *nc = realloc(M->node_clock, cap * sizeof *nc);
+        if (nc) M->node_clock = nc;
+        unsigned char *fx = realloc(M->fixed, cap);
+        if (fx) M->fixed = fx;
+        int32_t *sl = M->slide ? realloc(M->slide, cap * sizeof *sl) : NULL;
+        if (sl) M->slide = sl;
+        if (!x || !nt || !nc || !fx || (M->slide && !sl)) return -1;
+        M->nn_cap = cap;
+    }
+    int32_t v = (int32_t)M->nn++;
+    memcpy(M->xyz + 3 * (size_t)v, p, 3 * sizeof *p);
+    M->node_tet[v] = -1;
+    M->node_clock[v] = 0;
+    M->fixed[v] = 0;
+    if (M->slide) M->slide[v] = -1;
+    return v;
+}
+
+/* Worst quality of the tetrahedra joining p to the faces f[0..n) (each outward from the cavity);
+ * below -1 when one is not positive, the more so the farther p lies on the wrong side of a face
+ * (h: a length scale), so that a search can walk into the cavity's kernel. */
+static double fan_quality(const imesh *M, const int32_t (*f)[3], int n, const double *p, double h)
+{
+    double w = INFINITY, wrong = 0;
+    for (int i = 0; i < n; i++) {
+        const double *a = X(M, f[i][0]), *b = X(M, f[i][1]), *c = X(M, f[i][2]);
+        if (!right_handed(a, c, b, p)) {
+            /* signed distance of p from the face's plane, positive outside */
+            double u[3], v[3], nrm[3];
+            for (int k = 0; k < 3; k++) { u[k] = b[k] - a[k]; v[k] = c[k] - a[k]; }
+            nrm[0] = u[1] * v[2] - u[2] * v[1];
+            nrm[1] = u[2] * v[0] - u[0] * v[2];
+            nrm[2] = u[0] * v[1] - u[1] * v[0];
+            double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+            double d = l > 0 ? (nrm[0] * (p[0] - a[0]) + nrm[1] * (p[1] - a[1]) + nrm[2] * (p[2] - a[2])) / l : h;
+            wrong = fmax(wrong, fmax(d, 0) / h + 1e-3);
+            continue;
+        }
+        const double *q[4] = {a, c, b, p};
+        double s = quality(q, M->re_bound, M->re_scale);
+        if (s < w) w = s;
+    }
+    return wrong > 0 ? -1 - fmin(wrong, 1) : w;
+}
+
+/*
+ * A new free node inside the domain replaces sliver t and its neighbours (the cavity: t, then the
+ * tetrahedra across its faces that are not on a surface, then theirs): it is joined to every face
+ * of the cavity's boundary, at the position (pattern search, rounded to the stored precision) where
+ * the worst of those tetrahedra is best, and kept when that betters the cavity's worst. What flips
+ * and moves cannot do: a sliver whose four nodes lie on the surfaces (two of its faces on a nearly
+ * flat surface, the edge between them with no other tetrahedron around it), or in a pocket no free
+ * node reaches. The cavity holds no face or edge of a surface inside it (those stay), every node
+ * of it stays, and the new tetrahedra fill it exactly (all positive, exact test; volumes summed).
+ */
+static int try_insert_to(imesh *M, int32_t t, double qt, double need, size_t *count);
+static int try_insert(imesh *M, int32_t t, double qt, size_t *count) { return try_insert_to(M, t, qt, INFINITY, count); }
+
+/* As try_insert; the new tetrahedra's worst must beat the cavity's worst, or reach `need`. */
+static int try_insert_to(imesh *M, int32_t t, double qt, double need, size_t *count)
+{
+    for (int level = 1; level <= (M->pocket_uf ? 3 : 2); level++) {
+        int32_t cav[MAX_CAV];
+        int nc = 0, ok = 1;
+        cav[nc++] = t;
+        for (int l = 0; l < level && ok; l++) {
+            int n0 = nc;
+            for (int i = 0; i < n0 && ok; i++)
+                for (int f = 0; f < 4 && ok; f++) {
+                    int32_t u = M->nbr[4 * (size_t)cav[i] + f];
+                    if (u < 0) continue;
+                    const int32_t *q = M->tet + 4 * (size_t)cav[i];
+                    if (tset_has(&M->prot, tri_sorted(q[face_of[f][0]], q[face_of[f][1]], q[face_of[f][2]]))) continue;
+                    int seen = 0;
+                    for (int j = 0; j < nc && !seen; j++) seen = cav[j] == u;
+                    if (seen) continue;
+                    if (nc >= MAX_CAV || M->reg[u] != M->reg[t]) { ok = 0; break; }
+                    cav[nc++] = u;
+                }
+        }
+        if (!ok) continue;
+        /* the boundary faces (outward), the old quality and volume; no surface face inside */
+        int32_t F[4 * MAX_CAV][3];
+        int nf = 0;
+        double q_old = qt, vol_old = 0, re_old = M->re_bound;
+        for (int i = 0; i < nc && ok; i++) {
+            const int32_t *q = M->tet + 4 * (size_t)cav[i];
+            q_old = fmin(q_old, qtet(M, cav[i]));
+            const double *pq[4] = {X(M, q[0]), X(M, q[1]), X(M, q[2]), X(M, q[3])};
+            re_old = fmax(re_old, radius_edge_of(pq));
+            vol_old += tet_volume6(M, q);
+            for (int f = 0; f < 4; f++) {
+                int32_t u = M->nbr[4 * (size_t)cav[i] + f];
+                int inside = 0;
+                for (int j = 0; j < nc && !inside; j++) inside = cav[j] == u;
+                int32_t a = q[face_of[f][0]], b = q[face_of[f][1]], c = q[face_of[f][2]];
+                if (inside) {
+                    if (tset_has(&M->prot, tri_sorted(a, b, c))) { ok = 0; break; }
+                    continue;
+                }
+                F[nf][0] = a; F[nf][1] = b; F[nf][2] = c; nf++;
+            }
+        }
+        if (!ok || nf > MAX_NEW) continue;
+        /* every node and every surface edge of the cavity stays on its boundary */
+        for (int i = 0; i < nc && ok; i++) {
+            const int32_t *q = M->tet + 4 * (size_t)cav[i];
+            for (int a = 0; a < 4 && ok; a++)
+                for (int b = a; b < 4 && ok; b++) {
+                    int on = 0;
+                    for (int j = 0; j < nf && !on; j++) {
+                        int ha = F[j][0] == q[a] || F[j][1] == q[a] || F[j][2] == q[a];
+                        int hb = F[j][0] == q[b] || F[j][1] == q[b] || F[j][2] == q[b];
+                        on = ha && hb;
+                    }
+                    if (!on && (a == b || tset_has(&M->prot, edge_sorted(q[a], q[b])))) ok = 0;
+                }
+        }
+        if (!ok) continue;
+        if (M->pocket_uf) { /* the pocket pass: the new node must join the main body */
+            int reach = 0;
+            for (int j = 0; j < nf && !reach; j++)
+                for (int k = 0; k < 3 && !reach; k++) reach = in_main(M, F[j][k]);
+            if (!reach) continue;
+        }
+        /* length scale: the mean edge of the sliver */
+        const int32_t *qt4 = M->tet + 4 * (size_t)t;
+        double h = 0;
+        for (int a = 0; a < 4; a++)
+            for (int b = a + 1; b < 4; b++) {
+                const double *x = X(M, qt4[a]), *y = X(M, qt4[b]);
+                h += sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2])) / 6;
+            }
+        if (!(h > 0)) continue;
+        /* starting points: the centroids of the cavity's tetrahedra; the best one searched from */
+        double p[3] = {0, 0, 0}, cur = -INFINITY;
+        for (int i = 0; i < nc; i++) {
+            const int32_t *q = M->tet + 4 * (size_t)cav[i];
+            double c[3];
+            for (int k = 0; k < 3; k++) c[k] = stored(0.25 * (X(M, q[0])[k] + X(M, q[1])[k] + X(M, q[2])[k] + X(M, q[3])[k]));
+            double w = fan_quality(M, (const int32_t (*)[3])F, nf, c, h);
+            if (w > cur) { cur = w; memcpy(p, c, sizeof p); }
+        }
+        /* ... and points off each boundary face, inward, at heights of a fifth to the whole of its size
+           (a sliver flat on a surface wants its node above the surface) */
+        for (int j = 0; j < nf; j++) {
+            const double *a = X(M, F[j][0]), *b = X(M, F[j][1]), *c = X(M, F[j][2]);
+            double u[3], w[3], nrm[3], m[3];
+            for (int k = 0; k < 3; k++) { u[k] = b[k] - a[k]; w[k] = c[k] - a[k]; m[k] = (a[k] + b[k] + c[k]) / 3; }
+            nrm[0] = u[1] * w[2] - u[2] * w[1];
+            nrm[1] = u[2] * w[0] - u[0] * w[2];
+            nrm[2] = u[0] * w[1] - u[1] * w[0];
+            double l = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+            if (!(l > 0)) continue;
+            double size = sqrt(0.5 * l);
+            for (int hk = 1; hk <= 5; hk++) {
+                double c2[3];
+                for (int k = 0; k < 3; k++) c2[k] = stored(m[k] - nrm[k] / l * size * 0.2 * hk); /* outward normal: inward is minus */
+                double wq = fan_quality(M, (const int32_t (*)[3])F, nf, c2, h);
+                if (wq > cur) { cur = wq; memcpy(p, c2, sizeof p); }
+            }
+        }
+        double step = 0.25 * h;
+        for (int it = 0; it < 100 && step > 1e-4 * h; it++) {
+            static const double dir[14][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
+                                              {1, 1, 1}, {-1, -1, -1}, {1, -1, 1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1},
+                                              {-1, 1, 1}, {1, -1, -1}};
+            double bestq = cur, bp[3] = {0, 0, 0};
+            for (int di = 0; di < 14; di++) {
+                double r = di < 6 ? 1 : 0.57735026918962573, x[3];
+                for (int k = 0; k < 3; k++) x[k] = stored(p[k] + step * r * dir[di][k]);
+                double w = fan_quality(M, (const int32_t (*)[3])F, nf, x, h);
+                if (w > bestq + EPS_GAIN) { bestq = w; memcpy(bp, x, sizeof bp); }
+            }
+            if (bestq > cur) { cur = bestq; memcpy(p, bp, sizeof p); }
+            else step *= 0.5;
+        }
+        if (!(cur > q_old + EPS_GAIN) && !(cur >= need)) continue;
+        /* no needle longer than the cavity had, or than the bound (a sliver is not traded for one) */
+        double re_new = 0;
+        for (int j = 0; j < nf; j++) {
+            const double *pq[4] = {X(M, F[j][0]), X(M, F[j][2]), X(M, F[j][1]), p};
+            re_new = fmax(re_new, radius_edge_of(pq));
+        }
+        if (re_new > re_old) continue;
+        int32_t nw[MAX_NEW][4], nreg[MAX_NEW];
+        int32_t v = add_node(M, p);
+        if (v < 0) return 0;
+        double vol_new = 0;
+        for (int j = 0; j < nf; j++) {
+            nw[j][0] = F[j][0]; nw[j][1] = F[j][2]; nw[j][2] = F[j][1]; nw[j][3] = v;
+            nreg[j] = M->reg[t];
+            vol_new += tet_volume6(M, nw[j]);
+        }
+        if (fabs(vol_new - vol_old) > 1e-9 * fabs(vol_old) ||
+            replace(M, cav, nc, (const int32_t (*)[4])nw, nreg, nf) != 0) {
+            M->nn--; /* not used: given back */
+            continue;
+        }
+        M->node_clock[v] = M->clock;
+        (*count)++;
+        return 1;
+    }
+    return 0;
+}
+
 /* ---- driver ---- */
 typedef struct { double q; int32_t t; } qrec;
 static int cmp_qrec(const void *x, const void *y)
@@ -896,7 +1159,7 @@ static thx_status imesh_open(imesh *M, thx_ctx *ctx, double *xyz, size_t nn, int
     memset(M, 0, sizeof *M);
     M->ctx = ctx;
     M->xyz = xyz;
-    M->nn = nn;
+    M->nn = M->nn_cap = nn;
     M->nt = nt;
     M->node_surf = node_surf;
     M->o = o;
@@ -1040,7 +1303,7 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
     double sin_target = sin(o->target_deg * M_PI / 180.0);
     M.re_bound = o->radius_edge;
     M.re_scale = sin_target * o->radius_edge;
-    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_SLIDE | IMPROVE_COLLAPSE;
+    unsigned ops = o->ops ? o->ops : IMPROVE_EDGE | IMPROVE_FACE | IMPROVE_MOVE | IMPROVE_SLIDE | IMPROVE_COLLAPSE | IMPROVE_INSERT;
     for (int pass = 0; pass < o->max_passes; pass++) {
         size_t nb = 0;
         free(bad);
@@ -1070,19 +1333,100 @@ thx_status mesh_improve(thx_ctx *ctx, thx_volume *v, int32_t *nbr, const int32_t
                 ((ops & IMPROVE_FACE) && try_face_removal(&M, t, q, &S.n_face_removals)) ||
                 ((ops & IMPROVE_MOVE) && try_move(&M, t, &S.n_moves)) ||
                 ((ops & IMPROVE_SLIDE) && try_slide(&M, t, &S.n_slides)) ||
-                ((ops & IMPROVE_COLLAPSE) && try_collapse(&M, t, &S.n_collapses)))
+                ((ops & IMPROVE_COLLAPSE) && try_collapse(&M, t, &S.n_collapses)) ||
+                ((ops & IMPROVE_INSERT) && try_insert(&M, t, q, &S.n_inserts)))
                 changed++;
             else
                 M.failed[t] = M.clock;
         }
         if (!changed) break;
     }
+    /* Pockets: a surface node none of whose neighbours is a node of the main body of the rest (the
+       largest connected set of nodes not on its surface, Steiner nodes included) gets a free node
+       joined to both. Where a surface's potentials are given (the heart's), such a node's value
+       reaches no free node that reaches the torso: its transfer column would be zero (a narrow
+       cavity pocket of ECGSim's right ventricle, no grid node in it). Accepted when the new
+       tetrahedra are no worse than the cavity's worst, or than a 2 deg sliver. */
+    if ((ops & IMPROVE_INSERT) && v->node_surf && o->pocket_surface >= -1) {
+        size_t nv = v->n_nodes; /* nodes the volume's tables cover; later ones were inserted (free) */
+        int32_t *owner = NULL, *uf = NULL;
+        for (int32_t s = 0; (size_t)s < v->n_surfaces; s++) {
+            if (o->pocket_surface >= 0 && s != o->pocket_surface) continue;
+            size_t nn0 = M.nn; /* the nodes now, insertions for earlier surfaces included */
+            int32_t *o2 = realloc(owner, (nn0 ? nn0 : 1) * sizeof *o2);
+            if (o2) owner = o2;
+            int32_t *u2 = realloc(uf, (nn0 ? nn0 : 1) * sizeof *u2);
+            if (u2) uf = u2;
+            if (!o2 || !u2) { free(owner); free(uf); st = thx_error(ctx, THX_ENOMEM, "mesh: out of memory repairing slivers"); goto done; }
+            for (size_t i = 0; i < nn0; i++) owner[i] = i < nv ? v->node_surf[i] : -1;
+            for (size_t i = 0; i < v->n_steiner; i++) owner[v->steiner[i].node] = v->steiner[i].surf;
+            /* components of the nodes off surface s (union-find over the tetrahedra's edges) */
+            for (size_t i = 0; i < nn0; i++) uf[i] = (int32_t)i;
+            for (size_t t = 0; t < M.nt; t++) {
+                if (M.dead[t]) continue;
+                const int32_t *q = M.tet + 4 * t;
+                int32_t first = -1;
+                for (int c = 0; c < 4; c++) {
+                    if (owner[q[c]] == s) continue;
+                    int32_t r = q[c];
+                    while (uf[r] != r) r = uf[r] = uf[uf[r]];
+                    if (first < 0) first = r;
+                    else if (r != first) { if (r < first) { uf[first] = r; first = r; } else uf[r] = first; }
+                }
+            }
+            size_t *cnt = thx_calloc(ctx, nn0 ? nn0 : 1, sizeof *cnt);
+            if (!cnt) { free(owner); free(uf); st = THX_ENOMEM; goto done; }
+            int32_t root = -1;
+            for (size_t i = 0; i < nn0; i++) {
+                if (owner[i] == s || M.node_tet[i] < 0) continue;
+                int32_t r = (int32_t)i;
+                while (uf[r] != r) r = uf[r] = uf[uf[r]];
+                uf[i] = r;
+                if (++cnt[r] > (root >= 0 ? cnt[root] : 0)) root = r;
+            }
+            free(cnt);
+            if (root < 0) continue;
+            M.pocket_owner = owner;
+            M.pocket_uf = uf;
+            M.pocket_surf = s;
+            M.pocket_root = root;
+            M.pocket_nn = nn0;
+            for (size_t i = 0; i < nn0 && i < nv; i++) {
+                if (owner[i] != s || v->node_surf[i] != s || M.node_tet[i] < 0) continue;
+                int32_t *star = M.star2;
+                int n = vertex_star(&M, (int32_t)i, star, 1);
+                int reach = 0;
+                for (int k = 0; k < n && !reach; k++)
+                    for (int c = 0; c < 4 && !reach; c++) reach = in_main(&M, M.tet[4 * (size_t)star[k] + c]);
+                if (!n || reach) continue;
+                S.n_pockets++;
+                for (int k = 0; k < n; k++)
+                    if (!M.dead[star[k]] && try_insert_to(&M, star[k], qtet(&M, star[k]), POCKET_FLOOR, &S.n_inserts)) {
+                        S.n_pocket_nodes++;
+                        break;
+                    }
+            }
+            M.pocket_uf = NULL;
+        }
+        free(owner);
+        free(uf);
+    }
     S.min_after = min_dihedral_and_count(&M, o->target_deg, &S.below_after);
+    if (M.nn > v->n_nodes) { /* inserted nodes: free, on no surface */
+        int32_t *ns = realloc(v->node_surf, M.nn * sizeof *ns);
+        if (ns) v->node_surf = ns;
+        int32_t *nd = realloc(v->node_snode, M.nn * sizeof *nd);
+        if (nd) v->node_snode = nd;
+        if (!ns || !nd) { st = thx_error(ctx, THX_ENOMEM, "mesh: out of memory repairing slivers"); goto done; }
+        for (size_t i = v->n_nodes; i < M.nn; i++) v->node_surf[i] = v->node_snode[i] = -1;
+        v->n_nodes = M.nn;
+    }
     THX_TRY(imesh_close(&M, &v->tet, &v->region, NULL, &v->n_tets));
     S.tets_after = v->n_tets;
     S.seconds = thx_wtime() - t0;
     if (stats) *stats = S;
 done:
+    v->xyz = M.xyz; /* insertions may have moved it */
     free(bad);
     imesh_free(&M);
     return st;

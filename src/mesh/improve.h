@@ -36,7 +36,7 @@
 #define THORAX_MESH_IMPROVE_H
 
 #include "thorax/model/volume.h"
-enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16 };
+enum { IMPROVE_EDGE = 1, IMPROVE_FACE = 2, IMPROVE_MOVE = 4, IMPROVE_COLLAPSE = 8, IMPROVE_SLIDE = 16, IMPROVE_INSERT = 32 };
 
 typedef struct {
     double target_deg; /* repair tetrahedra whose smallest dihedral angle is below this */
@@ -50,15 +50,24 @@ typedef struct {
     /* NULL, or 3 volume nodes per Steiner record of v (its surface triangle's corners, in the
        order of its barycentric coordinates): those Steiner nodes may slide in their triangle */
     const int32_t *steiner_corners;
+    /* the surface whose nodes the pocket pass looks after (its potentials given: the heart's);
+       -1: every surface (the default of a zeroed struct is surface 0) */
+    int pocket_surface;
 } improve_opts;
 
 typedef struct {
     size_t below_before, below_after; /* tetrahedra below target_deg */
     double min_before, min_after;     /* smallest dihedral angle in the mesh, degrees */
-    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses;
+    size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses, n_inserts;
+    size_t n_pockets, n_pocket_nodes; /* surface nodes with only their own surface's nodes around; given a free node */
     size_t tets_before, tets_after;
     double seconds;
 } improve_stats;
+
+/* The repair's quality of tetrahedron (p0, p1, p2, p3) (right-handed): the smallest sine of its
+ * dihedral angles; for a radius-edge ratio RE above re_bound (> 0), re_scale / RE where that is
+ * smaller; 0 when flat or inverted. The repair uses re_scale = sin(target) * re_bound. */
+double mesh_tet_quality(const double *p[4], double re_bound, double re_scale);
 
 /* Smallest dihedral angle of the tetrahedron q (node indices into xyz), degrees; either orientation. */
 double mesh_tet_min_dihedral(const double *xyz, const int32_t *q);

@@ -581,7 +581,10 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     v->regions = thx_malloc(ctx, (size_t)n_regions * sizeof *v->regions);
     if (!v->tet || !v->region || !v->regions) { st = THX_ENOMEM; goto done; }
     /* the kept tetrahedra's adjacency, for the sliver repair (Delaunay numbering -> kept numbering) */
-    if (o->repair_deg > 0) {
+    /* the repair always runs: at --repair's target, and at least at THX_MESH_REPAIR_FLOOR, so that the
+       slivers the mesher itself makes (which thorax check refuses) are removed even with --repair 0 */
+    const double repair_deg = fmax(o->repair_deg, THX_MESH_REPAIR_FLOOR);
+    {
         int32_t *newidx = thx_malloc(ctx, (nt ? nt : 1) * sizeof *newidx);
         vnbr = thx_malloc(ctx, 4 * (kept ? kept : 1) * sizeof *vnbr);
         if (!newidx || !vnbr) { free(newidx); st = THX_ENOMEM; goto done; }
@@ -645,14 +648,15 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
     v->n_steiner = n_steiner;
     steiner = NULL;
     /* slivers: repaired (flips, moving grid nodes) with the faces on the surfaces kept, never removed */
-    if (o->repair_deg > 0) {
+    {
         region_ctx rc = {m, loc, surf_region};
         int32_t *corners = thx_malloc(ctx, 3 * (v->n_steiner ? v->n_steiner : 1) * sizeof *corners);
         if (!corners) { st = THX_ENOMEM; goto done; }
         for (size_t i = 0; i < v->n_steiner; i++)
             for (int k = 0; k < 3; k++)
                 corners[3 * i + k] = v->surf_node[v->steiner[i].surf][m->surf[v->steiner[i].surf]->tri[3 * (size_t)v->steiner[i].tri + k]];
-        improve_opts io = {o->repair_deg, o->radius_edge > 0 ? o->radius_edge : 2.0, 6, 0, classify_cb, &rc, corners};
+        /* the pocket pass for the heart's nodes (their potentials are given in forward problems) */
+        improve_opts io = {repair_deg, o->radius_edge > 0 ? o->radius_edge : 2.0, 6, 0, classify_cb, &rc, corners, heart >= 0 ? heart : -2};
         improve_stats is;
         int32_t *prot = thx_malloc(ctx, 3 * (n_sub ? n_sub : 1) * sizeof *prot);
         if (!prot) { free(corners); st = THX_ENOMEM; goto done; }
@@ -674,6 +678,9 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         S.n_moves = is.n_moves;
         S.n_slides = is.n_slides;
         S.n_collapses = is.n_collapses;
+        S.n_inserts = is.n_inserts;
+        S.n_pockets = is.n_pockets;
+        S.n_pocket_nodes = is.n_pocket_nodes;
         S.t_repair = is.seconds;
     }
     /* nodes in no tetrahedron (collapsed by the repair, or any the removed pieces held) go */

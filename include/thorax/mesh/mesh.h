@@ -24,6 +24,10 @@
 extern "C" {
 #endif
 
+/* The repair's smallest target, degrees: thx_mesh_build removes tetrahedra below it whatever
+   repair_deg says (thorax check refuses dihedral angles below 1 degree). */
+#define THX_MESH_REPAIR_FLOOR 5.0
+
 typedef struct {
     double grid;          /* grid spacing in each layer plane, mm; 0 (default) = 6.5 + 0.3 (d - 5) for a
                              median gap d between the planes (5 mm layers: 6.5 mm; 10 mm layers: 8 mm) */
@@ -35,7 +39,9 @@ typedef struct {
                              circumcentre (default 2; 0 = off) */
     double refine_deg;    /* ... and those with a smaller dihedral angle, degrees (default 10; 0 = off) */
     double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
-                             flips and by moving grid nodes (default 15; 0 = no repair) */
+                             flips, node moves and node insertion (default 15); below THX_MESH_REPAIR_FLOOR
+                             (0 included) the repair still runs at that floor: the slivers the mesher
+                             makes are its own to remove */
     /* region table changes: region `name` (mean_thorax, fat, muscle, lung, heart or a surface's name)
        renamed to `rename` (when not empty) and given the isotropic conductivity sigma (S/m, when > 0) */
     struct { char name[64], rename[64]; double sigma; } region_set[16];
@@ -77,6 +83,9 @@ typedef struct {
     size_t repair_below_before, repair_below_after; /* tetrahedra below repair_deg before/after the repair */
     double repair_min_before, repair_min_after;     /* smallest dihedral angle before/after, degrees */
     size_t n_edge_removals, n_face_removals, n_moves, n_slides, n_collapses; /* repair operations applied */
+    size_t n_inserts;         /* repair: free nodes inserted (slivers between surface faces, pockets) */
+    size_t n_pockets, n_pocket_nodes; /* surface nodes with only their own surface's nodes around them;
+                                         of those, given a free node beside them */
     double t_repair;          /* seconds */
     size_t n_tets, n_nodes;   /* the result */
     size_t per_region[16];    /* tetrahedra per region (the region table's order) */
