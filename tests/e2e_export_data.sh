@@ -128,7 +128,7 @@ read_back dal dsol/volume.raw volume dout/msh3 msh
 "$THORAX" export dal --solution dfb --format vtu -o dout/dfb -q
 read_back dal dfb/volume.raw volume dout/dfb vtu all all
 # a solution of another model, and a series whose rows are not the named surface's
-refused 1 "another model's solution" "sol/volume.raw: 49640 rows, but the model's volume mesh has" \
+refused 1 "another model's solution" "sol/volume.raw: [0-9]* rows, but the model.s volume mesh has" \
     "$THORAX" export dal --solution sol --format vtu -o dout/no
 refused 1 "rows of another surface" "among the --surface names" \
     "$THORAX" export model --data beat.raw --surface torso --format vtp -o dout/no
