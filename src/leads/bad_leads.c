@@ -517,7 +517,7 @@ thx_status thx_bad_list_read(thx_ctx *ctx, const char *path, size_t max_channel,
         free(ch);
         return st;
     }
-    qsort(ch, cnt, sizeof *ch, cmp_i32);
+    if (cnt) qsort(ch, cnt, sizeof *ch, cmp_i32); /* an empty list has no array (UBSan: qsort(NULL, 0)) */
     *channels = ch;
     *n = cnt;
     return THX_OK;
