@@ -28,14 +28,7 @@ rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK"
 fail() { echo "e2e_bad_leads: FAIL: $*" >&2; exit 1; }
-expect_rc() { # CODE ARGS...
-    local want=$1; shift
-    set +e
-    "$@" > out.txt 2> err.txt
-    local rc=$?
-    set -e
-    [ $rc -eq "$want" ] || { cat err.txt >&2; fail "exit $rc, expected $want: $*"; }
-}
+. "$SRC/tests/expect_rc.sh"
 REC=$D/data/tank/cool1-atdr-run1.mat
 G=$D/geom/tank
 CH=$G/sock128.channels

@@ -24,14 +24,7 @@ rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK"
 fail() { echo "e2e_inverse: FAIL: $*" >&2; exit 1; }
-expect_rc() { # CODE ARGS...
-    local want=$1; shift
-    set +e
-    "$@" > out.txt 2> err.txt
-    local rc=$?
-    set -e
-    [ $rc -eq "$want" ] || { cat err.txt >&2; fail "exit $rc, expected $want: $*"; }
-}
+. "$SRC/tests/expect_rc.sh"
 T=$D/geom/tank
 REC=$D/data/tank/cool1-atdr-run1.mat
 "$THORAX" import -o tank "$T/tank_full_771.pts" --name tank --role outer "$T/25feb97_sock_closed.pts" --name sock --role heart -q

@@ -31,14 +31,7 @@ rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK"
 fail() { echo "e2e_inverse_shapes: FAIL: $*" >&2; exit 1; }
-expect_rc() { # CODE ARGS...
-    local want=$1; shift
-    set +e
-    "$@" > out.txt 2> err.txt
-    local rc=$?
-    set -e
-    [ $rc -eq "$want" ] || { cat err.txt >&2; fail "exit $rc, expected $want: $*"; }
-}
+. "$SRC/tests/expect_rc.sh"
 inv() { # OUT ARGS...: thorax inverse, exit 0 expected, stderr kept in OUT.err
     local out=$1; shift
     "$THORAX" inverse "$@" -o "$out" -q 2> "$out.err" || { cat "$out.err" >&2; fail "thorax inverse $* -o $out"; }
