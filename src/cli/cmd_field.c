@@ -66,27 +66,6 @@ static void cut_range(const thx_volume *v, const double *phi, const unsigned cha
     }
 }
 
-/* The values of SPEC written as numbers (not counts or percentages): those the range does not move
- * (SPEC read against two ranges). *n of them into *out (caller frees). */
-static thx_status explicit_values(thx_ctx *ctx, const char *spec, double **out, size_t *n)
-{
-    double *a = NULL, *b = NULL;
-    size_t na = 0, nb = 0;
-    *out = NULL;
-    *n = 0;
-    thx_status st = thx_field_values_parse(ctx, spec, 0, 1, &a, &na);
-    if (!st) st = thx_field_values_parse(ctx, spec, 2, 3, &b, &nb);
-    if (!st && na == nb) {
-        for (size_t k = 0; k < na; k++)
-            if (a[k] == b[k]) a[(*n)++] = a[k];
-        *out = a;
-        a = NULL;
-    }
-    free(a);
-    free(b);
-    return st;
-}
-
 /*
  * Empty results (issue 24): a slice whose plane misses the regions cut, or a value outside the
  * potentials of every frame asked for, is refused before anything is written (exit status 1, the
@@ -103,17 +82,8 @@ static thx_status check_empty(thx_ctx *ctx, const char *sol, const thx_volume *v
         if (frame_hi[k] > ghi) ghi = frame_hi[k];
     }
     for (size_t p = 0; p < rq->n_planes; p++) {
-        const thx_field_plane *pl = &rq->plane[p];
-        double dmin = INFINITY, dmax = -INFINITY;
-        for (size_t t = 0; t < v->n_tets; t++) {
-            if (!rq->use[v->region[t]]) continue;
-            for (int k = 0; k < 4; k++) {
-                const double *x = v->xyz + 3 * (size_t)v->tet[4 * t + k];
-                double dd = pl->n[0] * x[0] + pl->n[1] * x[1] + pl->n[2] * x[2] - pl->d;
-                if (dd < dmin) dmin = dd;
-                if (dd > dmax) dmax = dd;
-            }
-        }
+        double dmin, dmax;
+        thx_field_plane_span(v, rq->use, &rq->plane[p], &dmin, &dmax);
         if (!(dmin <= 0 && dmax >= 0))
             return thx_error(ctx, THX_EINPUT, "--slice %s misses the regions cut of %s: they lie %.6g to %.6g mm from the "
                              "plane (all on one side): no slice; nothing written", rq->plane_text[p], sol, dmin, dmax);
@@ -123,7 +93,7 @@ static thx_status check_empty(thx_ctx *ctx, const char *sol, const thx_volume *v
         if (!specs[s]) continue;
         double *x = NULL;
         size_t nx = 0;
-        THX_CHECK(explicit_values(ctx, specs[s], &x, &nx));
+        THX_CHECK(thx_field_values_explicit(ctx, specs[s], &x, &nx));
         for (size_t i = 0; i < nx; i++) {
             size_t hit = 0;
             for (size_t k = 0; k < nsel; k++) hit += frame_lo[k] <= x[i] && x[i] <= frame_hi[k];

@@ -119,3 +119,40 @@ thx_status thx_field_values_parse(thx_ctx *ctx, const char *spec, double lo, dou
     *n = k;
     return THX_OK;
 }
+
+thx_status thx_field_values_explicit(thx_ctx *ctx, const char *spec, double **values, size_t *n)
+{
+    /* read against two ranges: a count or a percentage moves with the range, a number does not */
+    double *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0, k = 0;
+    *values = NULL;
+    *n = 0;
+    thx_status st = thx_field_values_parse(ctx, spec, 0, 1, &a, &na);
+    if (st == THX_OK) st = thx_field_values_parse(ctx, spec, 2, 3, &b, &nb);
+    if (st == THX_OK && na == nb) {
+        for (size_t i = 0; i < na; i++)
+            if (a[i] == b[i]) a[k++] = a[i];
+        *values = a;
+        *n = k;
+        a = NULL;
+    }
+    free(a);
+    free(b);
+    return st;
+}
+
+void thx_field_plane_span(const thx_volume *v, const unsigned char *use, const thx_field_plane *p, double *dmin,
+                          double *dmax)
+{
+    *dmin = INFINITY;
+    *dmax = -INFINITY;
+    for (size_t t = 0; t < v->n_tets; t++) {
+        if (use && !use[v->region[t]]) continue;
+        for (int c = 0; c < 4; c++) {
+            const double *x = v->xyz + 3 * (size_t)v->tet[4 * t + c];
+            double d = p->n[0] * x[0] + p->n[1] * x[1] + p->n[2] * x[2] - p->d;
+            if (d < *dmin) *dmin = d;
+            if (d > *dmax) *dmax = d;
+        }
+    }
+}

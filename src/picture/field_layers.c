@@ -50,32 +50,21 @@ static thx_status empty_cuts(thx_ctx *ctx, const thx_picture_opts *o, const thx_
     for (int k = 0; k < o->n_slices; k++) {
         thx_field_plane p;
         THX_CHECK(thx_field_plane_parse(ctx, o->slices[k], &p));
-        double dmin = INFINITY, dmax = -INFINITY;
-        for (size_t t = 0; t < v->n_tets; t++) {
-            if (!d->field_use[v->region[t]]) continue;
-            for (int c = 0; c < 4; c++) {
-                const double *x = v->xyz + 3 * (size_t)v->tet[4 * t + c];
-                double dd = p.n[0] * x[0] + p.n[1] * x[1] + p.n[2] * x[2] - p.d;
-                dmin = fmin(dmin, dd);
-                dmax = fmax(dmax, dd);
-            }
-        }
+        double dmin, dmax;
+        thx_field_plane_span(v, d->field_use, &p, &dmin, &dmax);
         if (!(dmin <= 0 && dmax >= 0))
             return thx_error(ctx, THX_EINPUT, "--slice %s misses the volume of %s: its nodes lie %.6g to %.6g mm from the plane "
                              "(all on one side)", o->slices[k], o->solution, dmin, dmax);
     }
     if (o->isosurface) {
-        /* the values written as numbers: those the range does not move */
-        double *a = NULL, *b = NULL;
-        size_t na = 0, nb = 0;
-        thx_status st = thx_field_values_parse(ctx, o->isosurface, 0, 1, &a, &na);
-        if (st == THX_OK) st = thx_field_values_parse(ctx, o->isosurface, 2, 3, &b, &nb);
-        for (size_t k = 0; st == THX_OK && k < na && na == nb; k++)
-            if (a[k] == b[k] && !(d->vmin <= a[k] && a[k] <= d->vmax))
+        double *x = NULL;
+        size_t nx = 0;
+        thx_status st = thx_field_values_explicit(ctx, o->isosurface, &x, &nx);
+        for (size_t k = 0; st == THX_OK && k < nx; k++)
+            if (!(d->vmin <= x[k] && x[k] <= d->vmax))
                 st = thx_error(ctx, THX_EINPUT, "--isosurface %s: the value %g is outside the volume potentials of %s in "
-                               "every frame (%g to %g): it cuts nothing", o->isosurface, a[k], o->solution, d->vmin, d->vmax);
-        free(a);
-        free(b);
+                               "every frame (%g to %g): it cuts nothing", o->isosurface, x[k], o->solution, d->vmin, d->vmax);
+        free(x);
         return st;
     }
     return THX_OK;

@@ -102,6 +102,21 @@ thx_status thx_field_plane_parse(thx_ctx *ctx, const char *spec, thx_field_plane
 thx_status thx_field_values_parse(thx_ctx *ctx, const char *spec, double lo, double hi, double **values, size_t *n);
 
 /*
+ * The values of a list that are numbers, not counts or percentages (those the range does not
+ * move): *n of them into *values (caller frees; NULL when none). Used to tell, before cutting,
+ * that a value lies outside every frame's potentials (issue 24).
+ */
+thx_status thx_field_values_explicit(thx_ctx *ctx, const char *spec, double **values, size_t *n);
+
+/*
+ * The signed distances of the plane to the nodes of the tetrahedra of the regions with use[r]
+ * set (NULL = all), their least in *dmin and largest in *dmax (mm; +inf, -inf when no tetrahedron
+ * is used). The plane cuts those regions iff dmin <= 0 <= dmax.
+ */
+void thx_field_plane_span(const thx_volume *v, const unsigned char *use, const thx_field_plane *p, double *dmin,
+                          double *dmax);
+
+/*
  * Equipotential surfaces of phi (v->n_nodes values, one frame) at values[0..n_values-1] by
  * marching tetrahedra, appended to out (tag = value index, cell = tetrahedron). use_region
  * (v->n_regions flags, NULL = all) restricts the cut to those regions' tetrahedra: the surface
