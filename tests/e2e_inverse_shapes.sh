@@ -154,6 +154,15 @@ grep -q "warning: data below the noise level.*the series' λ used on 10 of 40 fr
     { cat fb_warn.err; fail "no warning for the frames below the noise"; }
 # Greensite with the noise level
 inv gs --transfer A_ecgi.mat --data B_ecgi.mat --method greensite --lambda gcv --noise "$SIGMA"
+# its per-frame λ: a number on every line (NaN before), the components' median as inverse.json's lambda_used
+$PY - gs <<'PY' || fail "greensite's lambda.txt"
+import sys, json, math
+j = json.load(open(sys.argv[1] + '/inverse.json'))
+L = [float(l.split()[2]) for l in open(sys.argv[1] + '/lambda.txt') if not l.startswith('#')]
+c = sorted(j['component_lambda']); k = len(c); med = c[k // 2] if k % 2 else 0.5 * (c[k // 2 - 1] + c[k // 2])
+assert len(L) == j['frames'] and all(math.isfinite(x) and x > 0 for x in L), L[:3]
+assert all(abs(x - j['lambda_used']) <= 1e-8 * j['lambda_used'] for x in L) and abs(med - j['lambda_used']) <= 1e-12 * med, (L[0], j['lambda_used'], med)
+PY
 # a λ no rule reaches: the discrepancy's target above every residual
 "$THORAX" inverse --transfer A_square.mat --data B_square.mat --lambda discrepancy --noise 1e6 --no-fallback -o hi > /dev/null 2> hi.err ||
     fail "discrepancy out of reach: $(cat hi.err)"

@@ -745,10 +745,12 @@ thx_status thx_inverse_solve(thx_ctx *ctx, const thx_series *A, const thx_series
             for (size_t j = 0; j < n; j++) e2 += x->v[f * n + j] * x->v[f * n + j];
             r->residual[f] = sqrt(r2);
             r->seminorm[f] = sqrt(e2);
-            r->lambda[f] = NAN;
         }
         free(res);
         r->chosen_lambda = median(r->component_lambda, rk);
+        /* a frame has no λ of its own (each temporal component has one): every frame reports the median
+         * of the components' λ, the figure the picture and inverse.json's lambda_used give, never NaN */
+        for (size_t f = 0; f < F; f++) r->lambda[f] = r->chosen_lambda;
         r->t_frames += wtime() - t1;
         goto finish;
     }
@@ -817,8 +819,8 @@ finish:
                               o->matrix_name, thx_inverse_method_name(o->method), i % n + 1, i / n + 1,
                               isnan(x->v[i]) ? "NaN" : "infinite"));
     for (size_t f = 0; f < F; f++)
-        if (!isfinite(r->residual[f]) || !isfinite(r->seminorm[f]))
-            THX_TRY(thx_error(ctx, THX_ESOLVER, "%s with %s: frame %zu's residual or solution norm is not a number; "
+        if (!isfinite(r->residual[f]) || !isfinite(r->seminorm[f]) || !isfinite(r->lambda[f]))
+            THX_TRY(thx_error(ctx, THX_ESOLVER, "%s with %s: frame %zu's λ, residual or solution norm is not a number; "
                               "nothing written", o->matrix_name, thx_inverse_method_name(o->method), f + 1));
     *X = x;
     x = NULL;
