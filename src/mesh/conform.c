@@ -773,9 +773,13 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
         double dih, re;
         shape(p, &dih, &re);
         int bad = (Q->radius_edge > 0 && re > Q->radius_edge) || (Q->min_dihedral > 0 && dih < Q->min_dihedral);
-        if (!bad) continue;
         double c[3];
         for (int k = 0; k < 3; k++) c[k] = 0.25 * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
+        if (!bad && Q->size) {
+            double cs[3];
+            bad = circumcentre3(p[0], p[1], p[2], p[3], cs) && dist3(cs, p[0]) > Q->size(Q->user, c);
+        }
+        if (!bad) continue;
         if (!Q->inside(Q->user, c)) continue;
         if (!thx_dt_has_tet(C->dt, q)) continue;
         if (thx_dt_n_points(C->dt) - start >= limit) { C->S.refine_limited = 1; break; }
@@ -954,7 +958,7 @@ thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf
     st = conform_loop(&C, surf);
     if (st != THX_OK) goto done;
     if (quality && quality->progress) quality->progress(quality->progress_user, "conformity", 1.0);
-    if (quality && (quality->radius_edge > 0 || quality->min_dihedral > 0)) {
+    if (quality && (quality->radius_edge > 0 || quality->min_dihedral > 0 || quality->size)) {
         st = refine_quality(&C, quality, surf);
         if (st != THX_OK) goto done;
     }

@@ -68,6 +68,9 @@ typedef struct {
                                are not split for quality (the mesher: 0.12) */
     void (*progress)(void *user, const char *stage, double done); /* optional */
     void *progress_user;
+    /* optional size bound: a tetrahedron of the domain whose circumradius exceeds size(user, its
+       centroid) is refined like a badly shaped one (NULL: none; INFINITY: no bound there) */
+    double (*size)(void *user, const double p[3]);
 } conform_quality;
 
 /*

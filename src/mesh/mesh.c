@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "mesh/conform.h"
+#include "mesh/folds.h"
 #include "mesh/improve.h"
 #include "mesh/locate.h"
 #include "mesh/triset.h"
@@ -44,6 +45,8 @@ void thx_mesh_opts_default(thx_mesh_opts *o)
     o->repair_deg = 15.0;
     o->radius_edge = 1.6;
     o->refine_deg = 10.0;
+    o->fold_deg = 120.0;
+    o->fold_size = 0;
 }
 
 /* x on the mesher's binary grid (spacing unit, a power of two: exact). */
@@ -154,13 +157,20 @@ static thx_vec3 tet_centroid(const double *xyz, const int32_t *q)
 }
 
 /* The domain for the quality refinement: inside the outer surface, not inside an excluded heart. */
-typedef struct { const locator *outer, *heart; double on_eps; } domain_ctx;
+typedef struct { const locator *outer, *heart; double on_eps; const mesh_folds *folds; } domain_ctx;
 static int in_domain_cb(void *user, const double p[3])
 {
     const domain_ctx *d = user;
     thx_vec3 v = thx_v3(p[0], p[1], p[2]);
     if (outside_domain(d->outer, v, d->on_eps)) return 0;
     return !(d->heart && locator_inside(d->heart, v));
+}
+
+/* The size bound of the quality refinement: graded towards the excluded heart's folds. */
+static double size_cb(void *user, const double p[3])
+{
+    const domain_ctx *d = user;
+    return mesh_folds_size(d->folds, p);
 }
 
 /*
@@ -394,10 +404,22 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         double t_dt = thx_wtime();
         S.t_delaunay = t_dt - t1;
         conform_stats cs;
-        domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps};
-        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.12, o->progress, o->progress_user};
+        /* the excluded heart's sharp folds: a graded size bound around them (folds.h) */
+        mesh_folds folds;
+        memset(&folds, 0, sizeof folds);
+        if (o->no_heart && heart >= 0 && o->fold_deg > 0) {
+            double h0 = o->fold_size > 0 ? o->fold_size : grid / 14.0;
+            st = mesh_folds_find(ctx, m->surf[heart], o->fold_deg, h0, THX_MESH_FOLD_GRADE, grid, &folds);
+            if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
+            S.n_folds = folds.n;
+            S.fold_size = folds.n ? h0 : 0;
+        }
+        domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps, &folds};
+        conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.12, o->progress, o->progress_user,
+                             folds.n ? size_cb : NULL};
         st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
                           &n_sub, &cs);
+        mesh_folds_free(&folds);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
         S.n_surface_tris = cs.n_triangles;
         S.n_missing_before = cs.missing_before;

@@ -28,6 +28,9 @@ extern "C" {
    repair_deg says (thorax check refuses dihedral angles below 1 degree). */
 #define THX_MESH_REPAIR_FLOOR 5.0
 
+/* the growth of the size bound away from a fold: mm of circumradius per mm of distance */
+#define THX_MESH_FOLD_GRADE 0.2
+
 typedef struct {
     double grid;          /* grid spacing in each layer plane, mm; 0 (default) = 6.5 + 0.3 (d - 5) for a
                              median gap d between the planes (5 mm layers: 6.5 mm; 10 mm layers: 8 mm) */
@@ -38,6 +41,11 @@ typedef struct {
     double radius_edge;   /* Delaunay refinement: tetrahedra with a larger radius-edge ratio get their
                              circumcentre (default 2; 0 = off) */
     double refine_deg;    /* ... and those with a smaller dihedral angle, degrees (default 10; 0 = off) */
+    double fold_deg;      /* with no_heart: the heart's edges whose interior dihedral angle is below this
+                             (degrees) are folds, re-entrant edges of the domain, and the tetrahedra around
+                             them are refined to a circumradius of fold_size + THX_MESH_FOLD_GRADE * (distance)
+                             (default 120; 0 = off) */
+    double fold_size;     /* mm at the fold (0 = grid / 14) */
     double repair_deg;    /* tetrahedra inside with a dihedral angle below this (degrees) are repaired by
                              flips, node moves and node insertion (default 15); below THX_MESH_REPAIR_FLOOR
                              (0 included) the repair still runs at that floor: the slivers the mesher
@@ -75,6 +83,8 @@ typedef struct {
     size_t refine_rounds;
     int refine_limited;       /* stopped at its point limit */
     double t_refine;
+    size_t n_folds;           /* the heart's fold edges refined around (no_heart) */
+    double fold_size;         /* the circumradius bound at them, mm */
     size_t n_pieces;          /* pieces of space between the surfaces (flood fill) */
     size_t n_centroid_tested;   /* tetrahedra whose centroid was classified (about 512 per piece) */
     size_t n_centroid_disagree; /* of those, disagreeing with their piece's majority */
