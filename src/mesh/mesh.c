@@ -417,7 +417,21 @@ thx_status thx_mesh_build(thx_ctx *ctx, thx_model *m, const thx_mesh_opts *o, th
         domain_ctx dc = {&loc[outer], o->no_heart && heart >= 0 ? &loc[heart] : NULL, on_eps, &folds};
         conform_quality q = {o->radius_edge, o->refine_deg, in_domain_cb, &dc, 0, 0.12, o->progress, o->progress_user,
                              folds.n ? size_cb : NULL};
-        st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, 0, &q, &steiner, &n_steiner, &sub,
+        /* the Steiner budget (mesh_conform's default: 20 a surface triangle, plus 1000), plus the surface
+           points a graded band around the folds needs: on each side of a fold of length L about
+           L / (grade h0) points (the integral of L dr / h(r)^2), counted four times over */
+        size_t max_steiner = 0;
+        if (folds.n) {
+            size_t n_tris = 0;
+            for (size_t s = 0; s < ns; s++) n_tris += m->surf[s]->n_tris;
+            double L = 0;
+            for (size_t k = 0; k < folds.n; k++) {
+                const double *a = folds.seg + 6 * k;
+                L += sqrt((a[3] - a[0]) * (a[3] - a[0]) + (a[4] - a[1]) * (a[4] - a[1]) + (a[5] - a[2]) * (a[5] - a[2]));
+            }
+            max_steiner = 20 * n_tris + 1000 + (size_t)(8.0 * L / (folds.grade * folds.h0));
+        }
+        st = mesh_conform(ctx, dt, (const thx_surface *const *)m->surf, offset, ns, unit, max_steiner, &q, &steiner, &n_steiner, &sub,
                           &n_sub, &cs);
         mesh_folds_free(&folds);
         if (st != THX_OK) { thx_dt_destroy(&dt); goto done; }
