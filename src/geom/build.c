@@ -2,10 +2,12 @@
  * Surfaces from contours (paper 3.1-3.2): the whole pipeline for every surface
  *   1. layers: each loop -> smoothing spline -> nodes at constant spacing,
  *      counterclockwise, starting nearest the anatomical start point;
- *   2. slices: the loops of adjacent layers are matched by overlap; a group of
- *      matched loops with more than one loop on a layer (a branching surface)
- *      is joined into one chain by bridges between nearest nodes; each group is
- *      laced (lace.c);
+ *   2. slices: the loops of adjacent layers are matched by overlap; in a group
+ *      of one loop on one layer and k on the other (a branching surface) the one
+ *      loop is cut by chords into k polygons, each laced with its loop
+ *      (split_single); other groups with more than one loop on a layer, and a
+ *      split that fails, are joined into one chain by bridges between nearest
+ *      nodes; each group is laced (lace.c);
  *   3. caps: every loop with no partner on the layer below (above) is closed by
  *      a cap in its plane, triangulating the loop itself or a grid inside it;
  *   4. orientation: every triangle is tested as in the paper: the two candidate
@@ -720,9 +722,9 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
  * Sloan 1992, "Surfaces from contours", section 5): where one loop S of a layer meets k loops
  * P_1..P_k of the next, the loops joined by bridges into one chain can be too unlike S for any
  * lacing (issue 24: the Utah tank cut across x, where a loop at the flat bottom and the shoulders'
- * loop 97 mm above it meet one loop of the full height; the bridge's node was fanned to half of S).
- * S is cut instead by chords between its own nodes into k polygons, one around each P_i, and each
- * pair is laced alone. A node of S belongs to the loop P_i of least signed distance; the run of
+ * loop 97 mm above it meet one loop of the full height; the bridge's node was fanned to half of S
+ * and the lacing crossed itself). S is cut instead by chords between its own nodes into k
+ * polygons, one around each P_i, and each pair is laced alone. A node of S belongs to the loop P_i of least signed distance; the run of
  * P_i's nodes along S, widened to the node on each side nearer the bisector, is cut off by the
  * chord between its ends, provided the chord lies inside S (it touches no other edge of S and its
  * midpoint is inside) and touches no P_j. The chord, in S's plane, is the ridge where the laced
@@ -836,37 +838,34 @@ static int split_single(const thx_chain *S, const thx_chain *parts, int k, poly_
     return ok;
 }
 
-/* A branching group (one loop on one layer, k on the other) whose bridged lacing crosses itself
- * is laced again by split_single; kept when no triangle of the group crosses another, else the
- * bridged lacing stays (and *crossing stays 1). */
+/* A branching group (one loop on one layer, k on the other) laced by split_single, each part by
+ * lace_tries. *done = 1 when that lacing is kept: it was found and no triangle of the group
+ * crosses another and no edge is in three triangles; else nothing is added (*done = 0) and the
+ * caller laces the bridged chains. */
 static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const owned_chain *gb, const thx_lace_opts *lo,
-                                    const double *lxyz, slice *sl, size_t first, int *crossing)
+                                    const double *lxyz, slice *sl, int *done)
 {
+    *done = 0;
     int single_lower = ga->n_sel == 1 && gb->n_sel > 1;
     if (!single_lower && !(gb->n_sel == 1 && ga->n_sel > 1)) return THX_OK;
     const owned_chain *one = single_lower ? ga : gb, *many = single_lower ? gb : ga;
     int k = many->n_sel;
-    poly_buf *sub = calloc((size_t)k, sizeof *sub);
-    int32_t *old = malloc((sl->n_tris - first) * 3 * sizeof *old + 1);
-    size_t old_n = sl->n_tris;
+    size_t first = sl->n_tris;
     thx_lace_stats old_st = sl->st;
     thx_status r = THX_OK;
-    if (!sub || !old) { free(sub); free(old); return thx_error(lc, THX_ENOMEM, "out of memory"); }
-    memcpy(old, sl->tris + 3 * first, (old_n - first) * 3 * sizeof *old);
-    int ok = split_single(&one->c, many->c.parts, k, sub);
+    poly_buf *sub = calloc((size_t)k, sizeof *sub);
+    if (!sub) return thx_error(lc, THX_ENOMEM, "out of memory");
+    int ok = split_single(&one->c, many->c.parts, k, sub), x = 1;
     if (ok < 0) r = thx_error(lc, THX_ENOMEM, "out of memory");
     if (ok == 1) {
-        sl->n_tris = first;
-        int x = 0;
+        x = 0;
         for (int q = 0; q < k && r == THX_OK && !x; q++) {
-            thx_chain sc = one->c;
+            thx_chain sc = one->c, pq = many->c.parts[q];
             sc.n = sub[q].n;
             sc.p = sub[q].p;
             sc.id = sub[q].id;
             sc.parts = NULL;
             sc.n_parts = 0;
-            const thx_chain *pc = &many->c.parts[q];
-            thx_chain pq = *pc;
             pq.beyond = many->c.beyond;
             pq.n_beyond = many->c.n_beyond;
             r = single_lower ? lace_tries(lc, &sc, &pq, lo, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, lo, lxyz, sl, &x);
@@ -876,18 +875,14 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
             if (x == 0) x = edge_overused(sl->tris + 3 * first, sl->n_tris - first);
             if (x < 0) r = thx_error(lc, THX_ENOMEM, "out of memory");
         }
-        if (r == THX_OK && !x) {
-            *crossing = 0;
-            sl->st.relaced_crossing++;
-        } else if (r == THX_OK) { /* the bridged lacing stays */
-            sl->n_tris = old_n;
-            sl->st = old_st;
-            memcpy(sl->tris + 3 * first, old, (old_n - first) * 3 * sizeof *old);
-        }
+    }
+    if (r == THX_OK && !x) *done = 1;
+    else {
+        sl->n_tris = first;
+        sl->st = old_st;
     }
     for (int q = 0; q < k; q++) { free(sub[q].p); free(sub[q].id); }
     free(sub);
-    free(old);
     return r;
 }
 
@@ -1009,10 +1004,11 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             thx_ctx *lc = NULL;
             if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
             for (size_t g = 0; g < slices[i].n_groups; g++) {
-                size_t first = slices[i].n_tris;
-                int x = 0;
-                thx_status r = lace_tries(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, lxyz, &slices[i], &x);
-                if (r == THX_OK && x) r = lace_branch_split(lc, &slices[i].ga[g], &slices[i].gb[g], &lo, lxyz, &slices[i], first, &x);
+                int split = 0, x = 0;
+                /* a branching group of one loop and k is laced by splitting the one loop first; the
+                   loops joined by bridges when no split is found or it crosses */
+                thx_status r = lace_branch_split(lc, &slices[i].ga[g], &slices[i].gb[g], &lo, lxyz, &slices[i], &split);
+                if (r == THX_OK && !split) r = lace_tries(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, lxyz, &slices[i], &x);
                 if (r == THX_OK && x) slices[i].st.crossing++;
                 if (r != THX_OK) {
 #pragma omp critical(thx_build_err)
