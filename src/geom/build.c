@@ -838,8 +838,27 @@ static int split_single(const thx_chain *S, const thx_chain *parts, int k, poly_
     return ok;
 }
 
+/* Do the k loops lie strictly inside S in projection (every node inside, no edges touching)?
+ * -1 out of memory. */
+static int parts_nested(const thx_chain *S, const thx_chain *parts, int k)
+{
+    chain_index si;
+    if (chain_index_init(&si, S->p, S->n) != 0) return -1;
+    int in = 1;
+    for (int q = 0; q < k && in; q++)
+        for (size_t v = 0; v < parts[q].n && in; v++) in = chain_index_sdf(&si, parts[q].p[v]) < 0;
+    chain_index_free(&si);
+    for (int q = 0; q < k && in; q++)
+        for (size_t v = 0; v < parts[q].n && in; v++)
+            for (size_t e = 0; e < S->n && in; e++)
+                in = !thx_segments_touch(&parts[q].p[v].x, &parts[q].p[(v + 1) % parts[q].n].x, &S->p[e].x,
+                                         &S->p[(e + 1) % S->n].x);
+    return in;
+}
+
 /* A branching group (one loop on one layer, k on the other) laced by split_single, each part by
- * lace_tries. *done = 1 when that lacing is kept: it was found and no triangle of the group
+ * lace_tries, unless the k loops lie strictly inside the one (the ring between them is then
+ * triangulated in projection by thx_lace: islands under a large loop, test_surfaces). *done = 1 when that lacing is kept: it was found and no triangle of the group
  * crosses another and no edge is in three triangles; else nothing is added (*done = 0) and the
  * caller laces the bridged chains. */
 static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const owned_chain *gb, const thx_lace_opts *lo,
@@ -850,6 +869,9 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
     if (!single_lower && !(gb->n_sel == 1 && ga->n_sel > 1)) return THX_OK;
     const owned_chain *one = single_lower ? ga : gb, *many = single_lower ? gb : ga;
     int k = many->n_sel;
+    int nest = parts_nested(&one->c, many->c.parts, k);
+    if (nest < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
+    if (nest) return THX_OK; /* thx_lace triangulates the ring between them in projection */
     size_t first = sl->n_tris;
     thx_lace_stats old_st = sl->st;
     thx_status r = THX_OK;
