@@ -815,8 +815,13 @@ static int split_single(const thx_chain *S, const thx_chain *parts, int k, poly_
             size_t len = (c2 + m - c1) % m + 1;
             if (len < 3 || m - len + 2 < 3) continue;
             if (!chord_valid(&cur, c1, c2, parts, alive, k)) continue;
-            poly_buf rest;
-            if (arc_copy(&cur, c1, c2, &sub[q]) || arc_copy(&cur, c2, c1, &rest)) { ok = -1; break; }
+            poly_buf rest = {0, NULL, NULL};
+            if (arc_copy(&cur, c1, c2, &sub[q]) || arc_copy(&cur, c2, c1, &rest)) {
+                free(rest.p);
+                free(rest.id);
+                ok = -1;
+                break;
+            }
             free(cur.p);
             free(cur.id);
             cur = rest;
