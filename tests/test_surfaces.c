@@ -257,6 +257,52 @@ static void test_branching(thx_ctx *ctx)
     thx_contours_destroy(&c);
 }
 
+/* A rounded rectangle's corner arcs (points about 5 mm apart; its straight sides are single edges). */
+static void add_rrect(thx_ctx *ctx, thx_contours *c, size_t s, double z, double x0, double x1, double y0, double y1,
+                      double r)
+{
+    thx_vec2 p[256];
+    size_t n = 0;
+    const double cx[4] = {x1 - r, x1 - r, x0 + r, x0 + r}, cy[4] = {y0 + r, y1 - r, y1 - r, y0 + r};
+    for (int q = 0; q < 4; q++) {
+        int m = (int)(M_PI / 2 * r / 5);
+        if (m < 2) m = 2;
+        for (int k = 0; k < m && n < 256; k++) {
+            double a = (-90.0 + 90.0 * q + 90.0 * k / m) * M_PI / 180;
+            p[n++] = (thx_vec2){cx[q] + r * cos(a), cy[q] + r * sin(a)};
+        }
+    }
+    CHECK_OK(ctx, thx_contours_add_loop(ctx, c, s, z, p, n));
+}
+
+/* A branching slice of very unlike loops, as the Utah tank cut across x gives it (issue 24): on
+ * one layer a small loop at the flat bottom and the shoulders' loop 195 mm above it, on the next one
+ * loop of the full height. Joined by a bridge, the two were laced to the one loop with 14 pairs of
+ * crossing triangles; the one loop split by a chord between them laces each alone. */
+static void test_branch_unlike(thx_ctx *ctx)
+{
+    thx_contours *c = NULL;
+    thx_contours_create(ctx, &c);
+    size_t s;
+    thx_contours_add_surface(ctx, c, "tank", THX_ROLE_OUTER, THX_CAP_GRID, 0, &s);
+    double bx = 65.086, bw = 22.621, bh = 20.790, uy = 215.997;
+    add_rrect(ctx, c, s, 0, 10, 140, uy + 20, 390, 30);
+    add_rrect(ctx, c, s, 10, 0, 150, uy, 400, 30);
+    add_rrect(ctx, c, s, 10, bx, bx + bw, 0, bh, fmin(bw, bh) / 3);
+    add_rrect(ctx, c, s, 20, -5, 160, 0, 400, 30);
+    add_rrect(ctx, c, s, 30, 5, 150, 10, 390, 30);
+    thx_surfaces_stats st;
+    thx_model *m = build_and_check(ctx, c, 10.0, &st, "branching, unlike loops");
+    if (m) {
+        CHECK(st.n_branch_slices == 1);
+        CHECK(st.lace.crossing == 0);
+        /* one closed genus-0 surface: V - E + F = 2 with E = 3F/2 */
+        CHECK((long)m->surf[0]->n_nodes - (long)m->surf[0]->n_tris / 2 == 2);
+    }
+    thx_model_destroy(&m);
+    thx_contours_destroy(&c);
+}
+
 /* ---- round trip from analytic closed surfaces ---------------------------------- */
 
 /* Ellipsoid semi-axes 80, 55, 60 (z): the cross-section at z is an ellipse. */
@@ -480,6 +526,7 @@ int main(void)
     test_cylinder_cone_offset(ctx);
     test_concave(ctx);
     test_branching(ctx);
+    test_branch_unlike(ctx);
     test_tongues(ctx);
     test_projected(ctx);
     test_orientation_majority(ctx);

@@ -2,10 +2,12 @@
  * Surfaces from contours (paper 3.1-3.2): the whole pipeline for every surface
  *   1. layers: each loop -> smoothing spline -> nodes at constant spacing,
  *      counterclockwise, starting nearest the anatomical start point;
- *   2. slices: the loops of adjacent layers are matched by overlap; a group of
- *      matched loops with more than one loop on a layer (a branching surface)
- *      is joined into one chain by bridges between nearest nodes; each group is
- *      laced (lace.c);
+ *   2. slices: the loops of adjacent layers are matched by overlap; in a group
+ *      of one loop on one layer and k on the other (a branching surface) the one
+ *      loop is cut by chords into k polygons, each laced with its loop
+ *      (split_single); other groups with more than one loop on a layer, and a
+ *      split that fails, are joined into one chain by bridges between nearest
+ *      nodes; each group is laced (lace.c);
  *   3. caps: every loop with no partner on the layer below (above) is closed by
  *      a cap in its plane, triangulating the loop itself or a grid inside it;
  *   4. orientation: every triangle is tested as in the paper: the two candidate
@@ -26,6 +28,7 @@
 #include "thorax/geom/cdt.h"
 #include "thorax/geom/tri_intersect.h"
 #include "thorax/geom/inside.h"
+#include "thorax/geom/predicates.h"
 #include "thorax/geom/surfaces.h"
 #include "geom/chain_sdf.h"
 
@@ -672,6 +675,244 @@ done:
     return st;
 }
 
+/* Laces chain a with chain b into sl->tris, appending. A lacing whose triangles cross each other (a
+ * fold the lacing's own tests do not see, e.g. a narrow protrusion of one layer fanned across to
+ * the other side of the other layer) is laced again with other settings: a tighter and a looser
+ * outside test, tongues cut from shorter fans, the position-only metric. The first that does not
+ * cross is kept (else the last, with *crossing = 1). */
+static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *lo,
+                             const double *lxyz, slice *sl, int *crossing)
+{
+    enum { N_TRY = 6 };
+    size_t first = sl->n_tris;
+    thx_lace_stats keep = sl->st;
+    thx_status r = THX_OK;
+    *crossing = 0;
+    for (int attempt = 0; attempt < N_TRY; attempt++) {
+        thx_lace_opts la = *lo;
+        if (attempt == 1) la.concave_tol *= 0.5;
+        if (attempt == 2) la.concave_tol *= 2;
+        if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
+        if (attempt == 4) la.phase_weight = 0;
+        if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
+        sl->n_tris = first;
+        sl->st = keep;
+        r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
+        if (r != THX_OK) return r;
+        int x = tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first);
+        /* an edge in three triangles is laced again as well (issue 24: the Dalhousie torso
+           cut across its long axis at 10 mm, where a layer's loop branches in two) */
+        if (x == 0) x = edge_overused(sl->tris + 3 * first, sl->n_tris - first);
+        if (x == 1 && !tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first)) {
+            int m = mend_overused(lxyz, sl->tris + 3 * first, sl->n_tris - first);
+            x = m < 0 ? -1 : !m;
+        }
+        if (x < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
+        if (!x) {
+            if (attempt) sl->st.relaced_crossing++;
+            return THX_OK;
+        }
+    }
+    *crossing = 1;
+    return THX_OK;
+}
+
+/*
+ * Branching by splitting the single loop (Christiansen and Sederberg 1978; Meyers, Skinner and
+ * Sloan 1992, "Surfaces from contours", section 5): where one loop S of a layer meets k loops
+ * P_1..P_k of the next, the loops joined by bridges into one chain can be too unlike S for any
+ * lacing (issue 24: the Utah tank cut across x, where a loop at the flat bottom and the shoulders'
+ * loop 97 mm above it meet one loop of the full height; the bridge's node was fanned to half of S
+ * and the lacing crossed itself). S is cut instead by chords between its own nodes into k
+ * polygons, one around each P_i, and each pair is laced alone. A node of S belongs to the loop P_i of least signed distance; the run of
+ * P_i's nodes along S, widened to the node on each side nearer the bisector, is cut off by the
+ * chord between its ends, provided the chord lies inside S (it touches no other edge of S and its
+ * midpoint is inside) and touches no P_j. The chord, in S's plane, is the ridge where the laced
+ * bands meet: each of its two triangles belongs to one band, so the surface stays a manifold.
+ * One P_i at a time is cut off what is left of S. Fills sub[0..k-1] (points and ids, malloc'd;
+ * sub[i] around parts[i]); *ok = 0 when no such chords exist.
+ */
+typedef struct { size_t n; thx_vec2 *p; int32_t *id; } poly_buf;
+
+static int chord_valid(const poly_buf *c, size_t i1, size_t i2, const thx_chain *parts, const int *alive, int k)
+{
+    size_t m = c->n;
+    const double *a = &c->p[i1].x, *b = &c->p[i2].x;
+    if (c->p[i1].x == c->p[i2].x && c->p[i1].y == c->p[i2].y) return 0;
+    for (size_t e = 0; e < m; e++) {
+        size_t e1 = (e + 1) % m;
+        if (e == i1 || e == i2 || e1 == i1 || e1 == i2) continue;
+        if (thx_segments_touch(a, b, &c->p[e].x, &c->p[e1].x)) return 0;
+    }
+    chain_index ci;
+    if (chain_index_init(&ci, c->p, c->n) != 0) return 0;
+    thx_vec2 mid = {0.5 * (c->p[i1].x + c->p[i2].x), 0.5 * (c->p[i1].y + c->p[i2].y)};
+    int inside = chain_index_sdf(&ci, mid) < 0;
+    chain_index_free(&ci);
+    if (!inside) return 0;
+    for (int q = 0; q < k; q++) {
+        if (!alive[q]) continue;
+        for (size_t e = 0; e < parts[q].n; e++)
+            if (thx_segments_touch(a, b, &parts[q].p[e].x, &parts[q].p[(e + 1) % parts[q].n].x)) return 0;
+    }
+    return 1;
+}
+
+/* The arc c[i1..i2] (cyclic, inclusive) as a new polygon. */
+static int arc_copy(const poly_buf *c, size_t i1, size_t i2, poly_buf *out)
+{
+    size_t len = (i2 + c->n - i1) % c->n + 1;
+    out->p = malloc(len * sizeof *out->p);
+    out->id = malloc(len * sizeof *out->id);
+    if (!out->p || !out->id) return -1;
+    for (size_t s = 0; s < len; s++) { out->p[s] = c->p[(i1 + s) % c->n]; out->id[s] = c->id[(i1 + s) % c->n]; }
+    out->n = len;
+    return 0;
+}
+
+static int split_single(const thx_chain *S, const thx_chain *parts, int k, poly_buf *sub)
+{
+    poly_buf cur = {S->n, malloc(S->n * sizeof(thx_vec2)), malloc(S->n * sizeof(int32_t))};
+    int *alive = malloc((size_t)k * sizeof *alive), *lab = malloc(S->n * sizeof *lab), ok = 1, left = k;
+    double *d = malloc(S->n * (size_t)k * sizeof *d);
+    chain_index *ix = calloc((size_t)k, sizeof *ix);
+    if (!cur.p || !cur.id || !alive || !lab || !d || !ix) ok = -1;
+    for (int q = 0; ok == 1 && q < k; q++) if (chain_index_init(&ix[q], parts[q].p, parts[q].n) != 0) ok = -1;
+    if (ok == 1) {
+        memcpy(cur.p, S->p, S->n * sizeof *cur.p);
+        memcpy(cur.id, S->id, S->n * sizeof *cur.id);
+        for (int q = 0; q < k; q++) alive[q] = 1;
+    }
+    while (ok == 1 && left > 1) {
+        size_t m = cur.n;
+        for (size_t v = 0; v < m; v++) {
+            lab[v] = -1;
+            for (int q = 0; q < k; q++) {
+                if (!alive[q]) continue;
+                d[v * (size_t)k + (size_t)q] = chain_index_sdf(&ix[q], cur.p[v]);
+                if (lab[v] < 0 || d[v * (size_t)k + (size_t)q] < d[v * (size_t)k + (size_t)lab[v]]) lab[v] = q;
+            }
+        }
+        int done = 0;
+        for (int q = 0; q < k && !done; q++) {
+            if (!alive[q]) continue;
+            /* the one run of q's nodes: s0 its first node (after a node of another loop), s1 its last */
+            size_t s0 = m, s1 = m;
+            int runs = 0;
+            for (size_t v = 0; v < m; v++) {
+                int here = lab[v] == q, prev = lab[(v + m - 1) % m] == q, next = lab[(v + 1) % m] == q;
+                if (here && !prev) { runs++; s0 = v; }
+                if (here && !next) s1 = v;
+            }
+            if (runs != 1) continue;
+            /* widen each end to the neighbour when that is nearer the bisector */
+            size_t b0 = (s0 + m - 1) % m, b1 = (s1 + 1) % m;
+            double g0 = d[s0 * (size_t)k + (size_t)q] - d[s0 * (size_t)k + (size_t)lab[b0]];
+            double h0 = d[b0 * (size_t)k + (size_t)lab[b0]] - d[b0 * (size_t)k + (size_t)q];
+            double g1 = d[s1 * (size_t)k + (size_t)q] - d[s1 * (size_t)k + (size_t)lab[b1]];
+            double h1 = d[b1 * (size_t)k + (size_t)lab[b1]] - d[b1 * (size_t)k + (size_t)q];
+            size_t c1 = fabs(h0) < fabs(g0) ? b0 : s0, c2 = fabs(h1) < fabs(g1) ? b1 : s1;
+            size_t len = (c2 + m - c1) % m + 1;
+            if (len < 3 || m - len + 2 < 3) continue;
+            if (!chord_valid(&cur, c1, c2, parts, alive, k)) continue;
+            poly_buf rest = {0, NULL, NULL};
+            if (arc_copy(&cur, c1, c2, &sub[q]) || arc_copy(&cur, c2, c1, &rest)) {
+                free(rest.p);
+                free(rest.id);
+                ok = -1;
+                break;
+            }
+            free(cur.p);
+            free(cur.id);
+            cur = rest;
+            alive[q] = 0;
+            left--;
+            done = 1;
+        }
+        if (!done && ok == 1) ok = 0;
+    }
+    for (int q = 0; ok == 1 && q < k; q++)
+        if (alive[q]) { sub[q] = cur; cur.p = NULL; cur.id = NULL; }
+    free(cur.p);
+    free(cur.id);
+    for (int q = 0; ix && q < k; q++) chain_index_free(&ix[q]);
+    free(ix);
+    free(alive);
+    free(lab);
+    free(d);
+    return ok;
+}
+
+/* Do the k loops lie strictly inside S in projection (every node inside, no edges touching)?
+ * -1 out of memory. */
+static int parts_nested(const thx_chain *S, const thx_chain *parts, int k)
+{
+    chain_index si;
+    if (chain_index_init(&si, S->p, S->n) != 0) return -1;
+    int in = 1;
+    for (int q = 0; q < k && in; q++)
+        for (size_t v = 0; v < parts[q].n && in; v++) in = chain_index_sdf(&si, parts[q].p[v]) < 0;
+    chain_index_free(&si);
+    for (int q = 0; q < k && in; q++)
+        for (size_t v = 0; v < parts[q].n && in; v++)
+            for (size_t e = 0; e < S->n && in; e++)
+                in = !thx_segments_touch(&parts[q].p[v].x, &parts[q].p[(v + 1) % parts[q].n].x, &S->p[e].x,
+                                         &S->p[(e + 1) % S->n].x);
+    return in;
+}
+
+/* A branching group (one loop on one layer, k on the other) laced by split_single, each part by
+ * lace_tries, unless the k loops lie strictly inside the one (the ring between them is then
+ * triangulated in projection by thx_lace: islands under a large loop, test_surfaces). *done = 1 when that lacing is kept: it was found and no triangle of the group
+ * crosses another and no edge is in three triangles; else nothing is added (*done = 0) and the
+ * caller laces the bridged chains. */
+static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const owned_chain *gb, const thx_lace_opts *lo,
+                                    const double *lxyz, slice *sl, int *done)
+{
+    *done = 0;
+    int single_lower = ga->n_sel == 1 && gb->n_sel > 1;
+    if (!single_lower && !(gb->n_sel == 1 && ga->n_sel > 1)) return THX_OK;
+    const owned_chain *one = single_lower ? ga : gb, *many = single_lower ? gb : ga;
+    int k = many->n_sel;
+    int nest = parts_nested(&one->c, many->c.parts, k);
+    if (nest < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
+    if (nest) return THX_OK; /* thx_lace triangulates the ring between them in projection */
+    size_t first = sl->n_tris;
+    thx_lace_stats old_st = sl->st;
+    thx_status r = THX_OK;
+    poly_buf *sub = calloc((size_t)k, sizeof *sub);
+    if (!sub) return thx_error(lc, THX_ENOMEM, "out of memory");
+    int ok = split_single(&one->c, many->c.parts, k, sub), x = 1;
+    if (ok < 0) r = thx_error(lc, THX_ENOMEM, "out of memory");
+    if (ok == 1) {
+        x = 0;
+        for (int q = 0; q < k && r == THX_OK && !x; q++) {
+            thx_chain sc = one->c, pq = many->c.parts[q];
+            sc.n = sub[q].n;
+            sc.p = sub[q].p;
+            sc.id = sub[q].id;
+            sc.parts = NULL;
+            sc.n_parts = 0;
+            pq.beyond = many->c.beyond;
+            pq.n_beyond = many->c.n_beyond;
+            r = single_lower ? lace_tries(lc, &sc, &pq, lo, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, lo, lxyz, sl, &x);
+        }
+        if (r == THX_OK && !x) {
+            x = tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first);
+            if (x == 0) x = edge_overused(sl->tris + 3 * first, sl->n_tris - first);
+            if (x < 0) r = thx_error(lc, THX_ENOMEM, "out of memory");
+        }
+    }
+    if (r == THX_OK && !x) *done = 1;
+    else {
+        sl->n_tris = first;
+        sl->st = old_st;
+    }
+    for (int q = 0; q < k; q++) { free(sub[q].p); free(sub[q].id); }
+    free(sub);
+    return r;
+}
+
 static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_contour_surface *cs, const thx_surfaces_opts *o,
                             double spacing, thx_surface **out, thx_vec3 *interior, thx_surfaces_stats *stats)
 {
@@ -790,42 +1031,12 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             thx_ctx *lc = NULL;
             if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
             for (size_t g = 0; g < slices[i].n_groups; g++) {
-                /* A lacing whose triangles cross each other (a fold the lacing's own tests do not see,
-                   e.g. a narrow protrusion of one layer fanned across to the other side of the
-                   other layer) is laced again with other settings: a tighter and a looser outside
-                   test, tongues cut from shorter fans, the position-only metric. The first that
-                   does not cross is kept (else the last: the surface check reports it). */
-                enum { N_TRY = 6 };
-                size_t first = slices[i].n_tris;
-                thx_lace_stats keep = slices[i].st;
-                thx_status r = THX_OK;
-                for (int attempt = 0; attempt < N_TRY; attempt++) {
-                    thx_lace_opts la = lo;
-                    if (attempt == 1) la.concave_tol *= 0.5;
-                    if (attempt == 2) la.concave_tol *= 2;
-                    if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
-                    if (attempt == 4) la.phase_weight = 0;
-                    if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
-                    slices[i].n_tris = first;
-                    slices[i].st = keep;
-                    r = thx_lace(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &la, &slices[i].tris, &slices[i].n_tris,
-                                 &slices[i].cap, &slices[i].st);
-                    if (r != THX_OK) break;
-                    int x = tris_cross(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first);
-                    /* an edge in three triangles is laced again as well (issue 24: the Dalhousie torso
-                       cut across its long axis at 10 mm, where a layer's loop branches in two) */
-                    if (x == 0) x = edge_overused(slices[i].tris + 3 * first, slices[i].n_tris - first);
-                    if (x == 1 && !tris_cross(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first)) {
-                        int m = mend_overused(lxyz, slices[i].tris + 3 * first, slices[i].n_tris - first);
-                        x = m < 0 ? -1 : !m;
-                    }
-                    if (x < 0) { r = thx_error(lc, THX_ENOMEM, "out of memory"); break; }
-                    if (!x) {
-                        if (attempt) slices[i].st.relaced_crossing++;
-                        break;
-                    }
-                    if (attempt == N_TRY - 1) slices[i].st.crossing++;
-                }
+                int split = 0, x = 0;
+                /* a branching group of one loop and k is laced by splitting the one loop first; the
+                   loops joined by bridges when no split is found or it crosses */
+                thx_status r = lace_branch_split(lc, &slices[i].ga[g], &slices[i].gb[g], &lo, lxyz, &slices[i], &split);
+                if (r == THX_OK && !split) r = lace_tries(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, lxyz, &slices[i], &x);
+                if (r == THX_OK && x) slices[i].st.crossing++;
                 if (r != THX_OK) {
 #pragma omp critical(thx_build_err)
                     if (!failed) {
