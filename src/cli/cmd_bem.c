@@ -152,8 +152,8 @@ int cmd_bem(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "bem",
-        .usage = "MODEL --transfer -o DIR [--refine] [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
-                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--scalapack] [--format]",
+        .usage = "MODEL --transfer -o [--refine] [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
+                 "MODEL --dipoles -o [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--scalapack] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
                  "problem approach, dense LU by LAPACK (OpenBLAS). MODEL is a model directory\n"
@@ -254,16 +254,19 @@ int cmd_bem(int argc, char **argv)
     if (transfer && refine) {
         /* the refined dense system, checked against the machine before anything is allocated */
         size_t nh = m->surf[heart]->n_nodes, nf = 0;
+        if (refine > THX_BEM_REFINE_MAX) { /* the counts as numbers: they pass size_t's range soon */
+            double n = (double)nh, t = (double)m->surf[heart]->n_tris, e = 1.5 * t;
+            for (int l = 0; l < refine; l++) { n += e; e = 2 * e + 3 * t; t *= 4; }
+            double Nn = (double)(thx_bem_n_nodes(b) - nh) + n;
+            rc = cli_usage_error("bem", "--refine %d: at most %d (each subdivision makes about 4 heart nodes of one): %d "
+                                 "would make '%s' %.4g nodes and the dense system %.4g GB", refine, THX_BEM_REFINE_MAX,
+                                 refine, m->surf[heart]->name, n, Nn * Nn * sizeof(double) / 1e9);
+            goto usage;
+        }
         thx_bem_refined_counts(nh, m->surf[heart]->n_tris, refine, &nf, NULL);
         double Nf = (double)(thx_bem_n_nodes(b) - nh) + (double)nf;
         double bytes = mpi ? (Nf * Nf + 2.0 * Nf * (double)nf) * sizeof(double)
                            : thx_bem_transfer_refined_bytes(b, heart, refine);
-        if (refine > THX_BEM_REFINE_MAX) {
-            rc = cli_usage_error("bem", "--refine %d: at most %d (each subdivision makes about 4 heart nodes of one): %d "
-                                 "would make '%s' %.4g nodes and the dense system %.4g GB", refine, THX_BEM_REFINE_MAX,
-                                 refine, m->surf[heart]->name, (double)nf, bytes / 1e9);
-            goto usage;
-        }
         char what[160];
         snprintf(what, sizeof what, "--refine %d ('%s' %zu -> %zu nodes, %.0f unknowns): the dense system's doubles",
                  refine, m->surf[heart]->name, nh, nf, Nf);
