@@ -373,3 +373,77 @@ done:
     if (info) *info = inf;
     return st;
 }
+
+/* Rows of the refined system assembled at a time (the blocks' right-hand sides are combined by W
+ * as they come, so the fine right-hand sides are never held whole). */
+#define REFINE_ROW_BLOCK 128
+
+double thx_bem_transfer_refined_bytes(const thx_bem *b, size_t heart, int levels)
+{
+    if (heart >= b->n) return 0;
+    size_t nh = b->off[heart + 1] - b->off[heart], nf = nh;
+    thx_bem_refined_counts(nh, b->surf[heart]->n_tris, levels, &nf, NULL);
+    double N = (double)(b->off[b->n] - nh) + (double)nf, blk = REFINE_ROW_BLOCK;
+    if (levels <= 0) return (N * N + 2.0 * N * (double)nh) * sizeof(double);
+    /* the matrix, the combined right-hand sides, a block of rows of the matrix, of the fine
+     * right-hand sides and of the single layer */
+    return (N * N + N * (double)nh + blk * (N + 2.0 * (double)nf)) * sizeof(double);
+}
+
+thx_status thx_bem_transfer_refined(thx_ctx *ctx, const thx_bem *b, size_t h, int levels, const thx_bem_opts *o,
+                                    double *T, thx_bem_info *info)
+{
+    if (levels == 0) return thx_bem_transfer(ctx, b, h, o, T, info);
+    thx_bem_info inf;
+    memset(&inf, 0, sizeof inf);
+    inf.ipa_surface = -1;
+    THX_CHECK(thx_bem_transfer_check(ctx, b, h));
+    thx_status st = THX_OK;
+    thx_bem *f = NULL;
+    thx_bem_refinement W;
+    memset(&W, 0, sizeof W);
+    double *M = NULL, *RW = NULL, *Mb = NULL, *Rb = NULL;
+    double t0 = thx_wtime();
+    THX_TRY(thx_bem_refine(ctx, b, h, levels, &f, &W));
+    size_t N = f->off[f->n], nf = W.n_fine, nc = W.n_coarse;
+    size_t oo = f->off[f->outer], on = f->off[f->outer + 1] - oo;
+    size_t blk = REFINE_ROW_BLOCK < N ? REFINE_ROW_BLOCK : N;
+    M = thx_malloc(ctx, N * N * sizeof *M);
+    RW = thx_calloc(ctx, N * nc, sizeof *RW);
+    Mb = thx_malloc(ctx, blk * N * sizeof *Mb);
+    Rb = thx_malloc(ctx, blk * nf * sizeof *Rb);
+    if (!M || !RW || !Mb || !Rb) { st = THX_ENOMEM; goto done; }
+    inf.matrix_bytes = thx_bem_transfer_refined_bytes(b, h, levels);
+    for (size_t i0 = 0; i0 < N; i0 += blk) {
+        size_t i1 = i0 + blk < N ? i0 + blk : N, ld = i1 - i0;
+        THX_TRY(thx_bem_transfer_rows(ctx, f, h, i0, i1, Mb, Rb, ld));
+        for (size_t j = 0; j < N; j++) memcpy(M + j * N + i0, Mb + j * ld, ld * sizeof *M);
+        /* the right-hand side of a coarse hat function: its fine nodes' columns, weighted */
+        for (size_t q = 0; q < nf; q++)
+            for (int k = 0; k < 3; k++) {
+                double w = W.w[3 * q + k];
+                if (w == 0) continue;
+                double *dst = RW + W.node[3 * q + k] * N + i0;
+                const double *src = Rb + q * ld;
+                for (size_t i = 0; i < ld; i++) dst[i] += w * src[i];
+            }
+    }
+    free(Mb);
+    free(Rb);
+    Mb = Rb = NULL;
+    inf.t_assemble = thx_wtime() - t0;
+    t0 = thx_wtime();
+    THX_TRY(lu_solve(ctx, M, N, RW, nc, "transfer matrix (refined heart)"));
+    for (size_t j = 0; j < nc; j++) memcpy(T + j * on, RW + j * N + oo, on * sizeof *T);
+    inf.t_solve = thx_wtime() - t0;
+    inf.n_unknowns = N;
+done:
+    free(M);
+    free(RW);
+    free(Mb);
+    free(Rb);
+    thx_bem_refinement_free(&W);
+    thx_bem_destroy(&f);
+    if (info) *info = inf;
+    return st;
+}

@@ -18,6 +18,9 @@
 #include "thorax/io/series_file.h"
 #include "thorax/model/electrodes.h"
 
+#define THX_BEM_REFINE_STR "4"
+_Static_assert(THX_BEM_REFINE_MAX == 4, "THX_BEM_REFINE_STR names THX_BEM_REFINE_MAX");
+
 static int ends_with(const char *s, const char *t)
 {
     size_t a = strlen(s), b = strlen(t);
@@ -101,7 +104,7 @@ static const char *ext_of(thx_series_format f)
 int cmd_bem(int argc, char **argv)
 {
     const char *out = NULL, *dip_path = NULL, *elec_path = NULL, *cond_path = NULL, *heart_name = NULL;
-    int verbose = 0, transfer = 0, no_ipa = 0, format = THX_SERIES_RAW, scalapack = 0, method = THX_BEM_SYMMETRIC;
+    int verbose = 0, transfer = 0, refine = 0, no_ipa = 0, format = THX_SERIES_RAW, scalapack = 0, method = THX_BEM_SYMMETRIC;
     cli_petsc_args pa;
     cli_petsc_args_init(&pa, argv[0]);
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
@@ -126,6 +129,13 @@ int cmd_bem(int argc, char **argv)
          .help = "farthest an electrode may lie from the outer surface (model units)"},
         {.name = "--cond", .type = CLI_INPUT, .meta = "FILE", .s = &cond_path, .def = "MODEL's name with .cond",
          .help = "OpenMEEG conductivities for a MODEL given as an OpenMEEG .geom file"},
+        {.name = "--refine", .type = CLI_INT, .meta = "N", .i = &refine, .rule = CLI_GE, .lo = 0,
+         .bad = "--refine must be an integer >= 0 (at most " THX_BEM_REFINE_STR ")",
+         .help = "--transfer: the heart surface subdivided N times by edge midpoints (flat: the same geometry; "
+                 "each time 4 triangles a triangle) for the solve, the columns combined back onto the heart's own "
+                 "nodes (their hat functions on the fine surface): the same rows and columns, converged further where "
+                 "the heart's triangles are coarse for its shape (endocardial cavities); at most " THX_BEM_REFINE_STR,
+         .note = "0: the heart as it is"},
         {.name = "--heart", .type = CLI_STRING, .meta = "NAME", .s = &heart_name, .def = "the surface of role heart",
          .help = "the surface whose potentials are given (--transfer)"},
         {.name = "--scalapack", .type = CLI_FLAG, .i = &scalapack,
@@ -142,8 +152,8 @@ int cmd_bem(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "bem",
-        .usage = "MODEL --transfer -o DIR [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
-                 "MODEL --dipoles FILE -o DIR [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--scalapack] [--format]",
+        .usage = "MODEL --transfer -o [--refine] [--heart] [--electrodes] [--max-offset] [--cond] [--scalapack] [--format] [PETSc options]\n"
+                 "MODEL --dipoles -o [--electrodes] [--max-offset] [--cond] [--method] [--no-ipa] [--scalapack] [--format]",
         .about = "Boundary-element forward solutions on the model's closed surfaces (paper 4.1):\n"
                  "linear collocation with analytic integrals (de Munck 1992), the isolated\n"
                  "problem approach, dense LU by LAPACK (OpenBLAS). MODEL is a model directory\n"
@@ -162,6 +172,7 @@ int cmd_bem(int argc, char **argv)
     const char *model = cmd.pos[0];
     if (!out) return cli_usage_error("bem", "no output directory given (-o DIR)");
     if (transfer + (dip_path != NULL) != 1) return cli_usage_error("bem", "give exactly one of --transfer, --dipoles");
+    if (refine && !transfer) return cli_usage_error("bem", "--refine goes with --transfer (the heart's subdivision)");
     int is_geom = ends_with(model, ".geom");
     if (cond_path && !is_geom) return cli_usage_error("bem", "--cond goes with an OpenMEEG .geom MODEL");
     /* under mpirun (more than one rank), or asked: the distributed path */
@@ -178,7 +189,10 @@ int cmd_bem(int argc, char **argv)
     thx_status st = THX_OK;
     int rc = 0;
     thx_model *m = NULL;
-    thx_bem *b = NULL;
+    thx_bem *b = NULL, *bf = NULL;
+    thx_bem_refinement W;
+    memset(&W, 0, sizeof W);
+    double *Tf = NULL;
     thx_electrodes *el = NULL;
     thx_series *S1 = NULL, *S2 = NULL, *S3 = NULL;
     double *sig = NULL, *pos = NULL, *mom = NULL, *phi = NULL, *T = NULL;
@@ -237,6 +251,27 @@ int cmd_bem(int argc, char **argv)
                        m->surf[outer]->name, m->surf[thx_bem_outer(b)]->name);
         goto fail;
     }
+    if (transfer && refine) {
+        /* the refined dense system, checked against the machine before anything is allocated */
+        size_t nh = m->surf[heart]->n_nodes, nf = 0;
+        if (refine > THX_BEM_REFINE_MAX) { /* the counts as numbers: they pass size_t's range soon */
+            double n = (double)nh, t = (double)m->surf[heart]->n_tris, e = 1.5 * t;
+            for (int l = 0; l < refine; l++) { n += e; e = 2 * e + 3 * t; t *= 4; }
+            double Nn = (double)(thx_bem_n_nodes(b) - nh) + n;
+            rc = cli_usage_error("bem", "--refine %d: at most %d (each subdivision makes about 4 heart nodes of one): %d "
+                                 "would make '%s' %.4g nodes and the dense system %.4g GB", refine, THX_BEM_REFINE_MAX,
+                                 refine, m->surf[heart]->name, n, Nn * Nn * sizeof(double) / 1e9);
+            goto usage;
+        }
+        thx_bem_refined_counts(nh, m->surf[heart]->n_tris, refine, &nf, NULL);
+        double Nf = (double)(thx_bem_n_nodes(b) - nh) + (double)nf;
+        double bytes = mpi ? (Nf * Nf + 2.0 * Nf * (double)nf) * sizeof(double)
+                           : thx_bem_transfer_refined_bytes(b, heart, refine);
+        char what[160];
+        snprintf(what, sizeof what, "--refine %d ('%s' %zu -> %zu nodes, %.0f unknowns): the dense system's doubles",
+                 refine, m->surf[heart]->name, nh, nf, Nf);
+        if ((rc = cli_check_count("bem", what, bytes / sizeof(double), sizeof(double))) != 0) goto usage;
+    }
     thx_bem_opts o;
     thx_bem_opts_default(&o);
     o.ipa = !no_ipa;
@@ -247,7 +282,18 @@ int cmd_bem(int argc, char **argv)
         size_t nh = m->surf[heart]->n_nodes;
         T = malloc(no * nh * sizeof *T);
         if (!T) { st = THX_ENOMEM; goto fail; }
-        st = mpi ? thx_bem_transfer_parallel(ctx, b, heart, T, &info) : thx_bem_transfer(ctx, b, heart, &o, T, &info);
+        if (!mpi) {
+            st = thx_bem_transfer_refined(ctx, b, heart, refine, &o, T, &info);
+        } else if (!refine) {
+            st = thx_bem_transfer_parallel(ctx, b, heart, T, &info);
+        } else { /* the fine columns on rank 0, combined there */
+            st = thx_bem_refine(ctx, b, heart, refine, &bf, &W);
+            if (st == THX_OK) {
+                Tf = malloc(no * W.n_fine * sizeof *Tf);
+                st = Tf ? thx_bem_transfer_parallel(ctx, bf, heart, Tf, &info) : THX_ENOMEM;
+            }
+            if (st == THX_OK && rank == 0) thx_bem_refinement_apply(&W, Tf, no, T);
+        }
         if (st != THX_OK) goto fail;
         size_t nr = el ? el->n : no;
         st = thx_series_create(ctx, nr, nh, &S1);
@@ -344,6 +390,10 @@ int cmd_bem(int argc, char **argv)
             cJSON_AddStringToObject(j, "unit", is_geom ? "q/(sigma.L^2)" : "mV");
         }
         if (elec_path) cJSON_AddStringToObject(j, "electrodes", realpath(elec_path, abs) ? abs : elec_path);
+        if (transfer) {
+            cJSON_AddNumberToObject(j, "heart_refine", refine);
+            cJSON_AddNumberToObject(j, "heart_nodes_solved", (double)(info.n_unknowns - (N - m->surf[heart]->n_nodes)));
+        }
         if (info.ipa_surface >= 0) cJSON_AddStringToObject(j, "isolated_problem", m->surf[info.ipa_surface]->name);
         cJSON_AddNumberToObject(j, "unknowns", (double)info.n_unknowns);
         if (mpi) {
@@ -381,6 +431,9 @@ int cmd_bem(int argc, char **argv)
         printf("wrote %s\n", out);
     }
     goto end;
+usage:
+    if (rank == 0) thx_outdir_abort(&od);
+    goto end;
 fail:
     if (rank == 0) thx_outdir_abort(&od);
     rc = cli_fail(ctx, "bem", st);
@@ -390,6 +443,9 @@ end:
     thx_series_destroy(&S3);
     thx_electrodes_destroy(&el);
     thx_bem_destroy(&b);
+    thx_bem_destroy(&bf);
+    thx_bem_refinement_free(&W);
+    free(Tf);
     thx_model_destroy(&m);
     free(sig);
     free(pos);

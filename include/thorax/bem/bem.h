@@ -133,6 +133,53 @@ thx_status thx_bem_dipoles(thx_ctx *ctx, const thx_bem *b, const double *pos, co
 thx_status thx_bem_transfer(thx_ctx *ctx, const thx_bem *b, size_t heart, const thx_bem_opts *o, double *T,
                             thx_bem_info *info);
 
+/* The most subdivisions of thx_bem_subdivide (each multiplies a surface's nodes by about 4 and the
+ * dense system by up to 16). */
+#define THX_BEM_REFINE_MAX 4
+
+/* The linear interpolation from a surface's nodes (n_coarse) to those of its subdivision (n_fine):
+ * fine node f = sum over k < 3 of w[3f + k] * coarse node node[3f + k] (a weight 0 means nothing;
+ * the weights sum to 1). As a matrix W (n_fine x n_coarse), the coarse hat functions written in the
+ * fine ones: a coarse hat function is exactly piecewise linear on the fine surface. */
+typedef struct {
+    size_t n_fine, n_coarse;
+    size_t *node;
+    double *w;
+} thx_bem_refinement;
+void thx_bem_refinement_free(thx_bem_refinement *W);
+/* T (n_rows x n_coarse, column-major) = Tf (n_rows x n_fine) W: columns on the fine nodes combined
+ * into columns on the coarse nodes' hat functions. */
+void thx_bem_refinement_apply(const thx_bem_refinement *W, const double *Tf, size_t n_rows, double *T);
+/* The node and triangle counts of a closed surface of n_nodes, n_tris subdivided `levels` times
+ * (n + e nodes and 4 t triangles a level, e = 3 t / 2 edges); either output may be NULL. */
+void thx_bem_refined_counts(size_t n_nodes, size_t n_tris, int levels, size_t *n_fine, size_t *t_fine);
+
+/*
+ * s subdivided `levels` times (0..THX_BEM_REFINE_MAX) by edge midpoints: one new node amid each
+ * edge (shared by its two triangles; numbered after the old nodes, in the order of the edges'
+ * sorted (lower, higher) node pairs), each triangle (a, b, c) into (a, ab, ca), (ab, b, bc),
+ * (ca, bc, c), (ab, bc, ca): flat, so the geometry is the same, and the orientation kept. The old
+ * nodes keep their numbers. *fine (caller destroys) and W (caller frees with
+ * thx_bem_refinement_free) from s's nodes to *fine's.
+ */
+thx_status thx_bem_subdivide(thx_ctx *ctx, const thx_surface *s, int levels, thx_surface **fine,
+                             thx_bem_refinement *W);
+/* b with surface k subdivided `levels` times (thx_bem_subdivide; the same conductivities):
+ * *out (caller destroys) and W from b's surface k to *out's. */
+thx_status thx_bem_refine(thx_ctx *ctx, const thx_bem *b, size_t k, int levels, thx_bem **out, thx_bem_refinement *W);
+
+/*
+ * thx_bem_transfer with the heart subdivided `levels` times (thx_bem_refine): the system solved on
+ * the fine heart, its right-hand sides (one a fine heart node) combined by W into one a coarse
+ * node's hat function before the solve (T = T_fine W, without holding T_fine: the right-hand sides
+ * are assembled a block of rows at a time). T as thx_bem_transfer's on b (n_outer x the heart's
+ * nodes of b); levels 0 is thx_bem_transfer. info->n_unknowns: the fine system's.
+ */
+thx_status thx_bem_transfer_refined(thx_ctx *ctx, const thx_bem *b, size_t heart, int levels, const thx_bem_opts *o,
+                                    double *T, thx_bem_info *info);
+/* The dense memory (bytes) thx_bem_transfer_refined holds at its peak for b and these levels. */
+double thx_bem_transfer_refined_bytes(const thx_bem *b, size_t heart, int levels);
+
 /*
  * thx_bem_transfer under MPI (collective over PETSC_COMM_WORLD; PETSc initialized by the caller):
  * each rank assembles N/size rows, the system is a PETSc MATSCALAPACK matrix (block-cyclic over
