@@ -716,21 +716,75 @@ static int perp_unit(const double *A, const double *e, const double *P, double o
 
 /* Small corners at sharp folds (ECGSim's heart: triangle 214 has a 2.05 deg corner at node 195 whose
  * edge 195-197 is a fold where the surface turns back to a 16 deg wedge, triangle 213 on its other
- * side). The concentric shells (split_piece) put points a and b on the corner's two edges at the
- * same distances r from the apex v, so the corner's piece (v, a, b) is a well-shaped needle; but
- * inside the wedge the tetrahedron on that piece must take its fourth point on the fold's other
- * side, and the nearest one there, c on the other edge of triangle 213 at 42 deg from the fold, makes
- * a tetrahedron (v, a, b, c) whose smallest dihedral angle is about alpha W / psi (alpha the corner,
- * W the wedge, psi the other triangle's angle at v: 0.88 deg), whatever the radii: no flip or free
- * node can help (every free node inside the wedge leaves some such flat triangle in the link of v).
- * The fix looks at the link of v (the tetrahedra at v seen on a small sphere around it): the wedge
- * is a lune of width W holding b at alpha from the fold on one side and c at psi on the other; one
- * more point on the other side at phi = sqrt(alpha psi) from the fold (9.3 deg for ECGSim) splits
- * the flat triangle (fold, b, c) into well-shaped ones. So for every point of the fold edge's chain
- * at distance r from v (the shells), a point is put inside the other triangle at distance r from v
- * and angle phi from the fold: a surface point (recorded like the others), after which the surface
- * is made a union of faces again. Returns the number of points added in *added. */
+ * side, while triangle 365 continues 214 across its other edge 195-196, 3.5 deg off its plane).
+ * The concentric shells (split_piece) put points a and b on the corner's two edges at the same
+ * distances r from the apex v, so the corner's piece (v, a, b) is a well-shaped needle; but inside
+ * the wedge the tetrahedron on that piece must take its fourth point on the fold's other side, and
+ * the nearest one there, c on the other edge of triangle 213 at psi = 42 deg from the fold, makes a
+ * tetrahedron (v, a, b, c) of smallest dihedral angle 0.88 deg whatever the radii (b lies 2.05 deg
+ * from the fold, so only 0.01 r off the plane of v, a and c): no flip or free node of the repair can
+ * help. Seen on a small sphere around v (the link of v: the tetrahedra at v as spherical
+ * triangles), the wedge is a lune of width W holding b at alpha from the fold on one side and c at
+ * psi on the other, and every triangle of the link joining b to two points of the other side is flat
+ * (for any two: b is almost on that side's great circle). So the lune gets one point on each side,
+ * every shell: on the fold's other side at phi = sqrt(alpha psi) from the fold (9.3 deg for ECGSim:
+ * the triangle (fold, b, that point) has angles of several degrees, e.g. 4.5 deg at r), and on b's
+ * side, in the triangle beyond the corner's other edge, halfway across that triangle's corner at v
+ * (then b's link triangles in the lune are (fold, b, phi point) and (b, phi point, that point); with
+ * only the first point the tetrahedralization may still take (b, phi point, c): 0.889 deg with
+ * --repair 0; a point on b's side close to b's edge, at phi as well, made a 0.83 deg flat
+ * tetrahedron across the 3.5 deg bend between 214 and 365 instead). For every point of the fold
+ * edge's chain at distance r from v (the shells), the two are put inside those triangles at
+ * distance r from v: surface points (recorded like the others), after which the surfaces are made
+ * unions of faces again (fold_loop). Returns the number of points added in *added. */
 static thx_status add_inside_quiet(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf, int *done);
+
+/* The triangle across edge e from triangle ti (-1: none), and its corner off e. */
+static int32_t across(const conformer *C, int32_t e, int32_t ti, int32_t *off)
+{
+    const cedge *G = &C->E[e];
+    int32_t tn = G->t0 == ti ? G->t1 : G->t0;
+    *off = -1;
+    if (tn < 0) return -1;
+    for (int j = 0; j < 3; j++)
+        if (C->T[tn].c[j] != G->a && C->T[tn].c[j] != G->b) *off = C->T[tn].c[j];
+    return *off < 0 ? -1 : tn;
+}
+
+/* Puts a point inside triangle tn at distance r from its corner v and angle phi from its edge v-f
+ * (unless one is there already or it falls outside the triangle); *added counts it. */
+static thx_status fold_point(conformer *C, int32_t tn, int32_t v, int32_t f, double phi, double r,
+                             const thx_surface *const *surf, size_t *added)
+{
+    const ctri *U = &C->T[tn];
+    int32_t off = -1;
+    for (int j = 0; j < 3; j++)
+        if (U->c[j] != v && U->c[j] != f) off = U->c[j];
+    const double *V = X(C, v), *F = X(C, f);
+    double L = dist3(V, F), ed[3], nu[3];
+    if (off < 0 || !(L > 0)) return THX_OK;
+    for (int d = 0; d < 3; d++) ed[d] = (F[d] - V[d]) / L;
+    if (!perp_unit(V, ed, X(C, off), nu)) return THX_OK;
+    double y[3];
+    for (int d = 0; d < 3; d++) y[d] = V[d] + r * (cos(phi) * ed[d] + sin(phi) * nu[d]);
+    for (size_t j = 0; j < U->n_in; j++)
+        if (dist3(X(C, U->in[j]), y) < 1e-3 * r) return THX_OK; /* an earlier round's */
+    const double *c0 = X(C, U->c[0]), *c1 = X(C, U->c[1]), *c2 = X(C, U->c[2]);
+    double a1[3], a2[3], dv[3];
+    for (int d = 0; d < 3; d++) { a1[d] = c1[d] - c0[d]; a2[d] = c2[d] - c0[d]; dv[d] = y[d] - c0[d]; }
+    double g11 = a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2], g12 = a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2],
+           g22 = a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2], det = g11 * g22 - g12 * g12;
+    if (!(det > 0)) return THX_OK;
+    double b1 = a1[0] * dv[0] + a1[1] * dv[1] + a1[2] * dv[2], b2 = a2[0] * dv[0] + a2[1] * dv[1] + a2[2] * dv[2];
+    double w1 = (g22 * b1 - g12 * b2) / det, w2 = (g11 * b2 - g12 * b1) / det;
+    double w[3] = {1 - w1 - w2, w1, w2};
+    if (!(w[0] > 1e-6 && w[1] > 1e-6 && w[2] > 1e-6)) return THX_OK;
+    int done = 0;
+    THX_CHECK(add_inside_quiet(C, (size_t)tn, w, surf, &done));
+    *added += (size_t)done;
+    return THX_OK;
+}
+
 static thx_status protect_folds(conformer *C, const thx_surface *const *surf, size_t *added)
 {
     *added = 0;
@@ -746,22 +800,17 @@ static thx_status protect_folds(conformer *C, const thx_surface *const *surf, si
             if (!(alpha > 0 && alpha < lim)) continue;
             /* either edge at v may be the fold: edge k joins v and p, edge k+2 joins q and v */
             for (int side = 0; side < 2; side++) {
-                int32_t e = T->e[side ? (k + 2) % 3 : k], w_t = side ? p : q; /* w_t: t's vertex off the fold */
-                const cedge *G = &C->E[e];
-                int32_t tn = G->t0 == (int32_t)ti ? G->t1 : G->t0;
+                int32_t e = T->e[side ? (k + 2) % 3 : k], e2 = T->e[side ? k : (k + 2) % 3];
+                int32_t far = side ? q : p, far2 = side ? p : q; /* the fold's other end; the other edge's */
+                int32_t w_u, w_2;
+                int32_t tn = across(C, e, (int32_t)ti, &w_u), t2 = across(C, e2, (int32_t)ti, &w_2);
                 if (tn < 0) continue;
-                const ctri *U = &C->T[tn];
-                int32_t far = side ? q : p; /* the fold's other end */
-                int32_t w_u = -1;         /* the other triangle's vertex off the fold */
-                for (int j = 0; j < 3; j++)
-                    if (U->c[j] != v && U->c[j] != far) w_u = U->c[j];
-                if (w_u < 0) continue;
                 const double *F = X(C, far);
                 double L = dist3(V, F), ed[3];
                 if (!(L > 0)) continue;
                 for (int d = 0; d < 3; d++) ed[d] = (F[d] - V[d]) / L;
                 double nt[3], nu[3];
-                if (!perp_unit(V, ed, X(C, w_t), nt) || !perp_unit(V, ed, X(C, w_u), nu)) continue;
+                if (!perp_unit(V, ed, X(C, far2), nt) || !perp_unit(V, ed, X(C, w_u), nu)) continue;
                 double W = angle3(nt, nu); /* the wedge between the two triangles */
                 if (!(W < fold)) continue;
                 double uw[3];
@@ -769,31 +818,18 @@ static thx_status protect_folds(conformer *C, const thx_surface *const *surf, si
                 double psi = angle3(ed, uw); /* the other triangle's angle at v */
                 double phi = sqrt(alpha * psi);
                 if (!(phi < 0.5 * psi)) continue;
-                const double *c0 = X(C, U->c[0]), *c1 = X(C, U->c[1]), *c2 = X(C, U->c[2]);
-                double a1[3], a2[3];
-                for (int d = 0; d < 3; d++) { a1[d] = c1[d] - c0[d]; a2[d] = c2[d] - c0[d]; }
-                double g11 = a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2], g12 = a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2],
-                       g22 = a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2], det = g11 * g22 - g12 * g12;
-                if (!(det > 0)) continue;
-                for (size_t i = 1; i + 1 < G->n; i++) {
-                    G = &C->E[e]; /* the chain may have moved (insertions split pieces only later) */
-                    double r = dist3(V, X(C, G->pt[i].node));
-                    double y[3], dv[3];
-                    for (int d = 0; d < 3; d++) {
-                        y[d] = V[d] + r * (cos(phi) * ed[d] + sin(phi) * nu[d]);
-                        dv[d] = y[d] - c0[d];
-                    }
-                    /* already there (an earlier pass)? */
-                    int have = 0;
-                    for (size_t j = 0; j < C->T[tn].n_in && !have; j++) have = dist3(X(C, C->T[tn].in[j]), y) < 1e-3 * r;
-                    if (have) continue;
-                    double b1 = a1[0] * dv[0] + a1[1] * dv[1] + a1[2] * dv[2], b2 = a2[0] * dv[0] + a2[1] * dv[1] + a2[2] * dv[2];
-                    double w1 = (g22 * b1 - g12 * b2) / det, w2 = (g11 * b2 - g12 * b1) / det;
-                    double w[3] = {1 - w1 - w2, w1, w2};
-                    if (!(w[0] > 1e-6 && w[1] > 1e-6 && w[2] > 1e-6)) continue;
-                    int done = 0;
-                    THX_CHECK(add_inside_quiet(C, (size_t)tn, w, surf, &done));
-                    *added += (size_t)done;
+                double psi2 = -1;
+                if (t2 >= 0) {
+                    double u3[3], u4[3];
+                    for (int d = 0; d < 3; d++) { u3[d] = X(C, far2)[d] - V[d]; u4[d] = X(C, w_2)[d] - V[d]; }
+                    psi2 = angle3(u3, u4);
+                }
+                for (size_t i = 1; i + 1 < C->E[e].n; i++) {
+                    double r = dist3(V, X(C, C->E[e].pt[i].node));
+                    /* on the fold's other side, phi from the fold; on this side, phi from the fold too:
+                       in the triangle beyond the small corner's other edge, phi - alpha from that edge */
+                    THX_CHECK(fold_point(C, tn, v, far, phi, r, surf, added));
+                    if (t2 >= 0 && psi2 > 0) THX_CHECK(fold_point(C, t2, v, far2, 0.5 * psi2, r, surf, added));
                 }
             }
         }
