@@ -588,11 +588,6 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     return add_inside_at(C, ti, w, surf, NULL);
 }
 
-static thx_status add_inside_quiet(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf, int *done)
-{
-    return add_inside_at(C, ti, w, surf, done);
-}
-
 /* Splits the longest piece of triangle ti's edges (points gathered). */
 static thx_status split_longest(conformer *C, size_t ti, const thx_surface *const *surf)
 {
@@ -714,31 +709,6 @@ static int perp_unit(const double *A, const double *e, const double *P, double o
     return 1;
 }
 
-/* Small corners at sharp folds (ECGSim's heart: triangle 214 has a 2.05 deg corner at node 195 whose
- * edge 195-197 is a fold where the surface turns back to a 16 deg wedge, triangle 213 on its other
- * side, while triangle 365 continues 214 across its other edge 195-196, 3.5 deg off its plane).
- * The concentric shells (split_piece) put points a and b on the corner's two edges at the same
- * distances r from the apex v, so the corner's piece (v, a, b) is a well-shaped needle; but inside
- * the wedge the tetrahedron on that piece must take its fourth point on the fold's other side, and
- * the nearest one there, c on the other edge of triangle 213 at psi = 42 deg from the fold, makes a
- * tetrahedron (v, a, b, c) of smallest dihedral angle 0.88 deg whatever the radii (b lies 2.05 deg
- * from the fold, so only 0.01 r off the plane of v, a and c): no flip or free node of the repair can
- * help. Seen on a small sphere around v (the link of v: the tetrahedra at v as spherical
- * triangles), the wedge is a lune of width W holding b at alpha from the fold on one side and c at
- * psi on the other, and every triangle of the link joining b to two points of the other side is flat
- * (for any two: b is almost on that side's great circle). So the lune gets one point on each side,
- * every shell: on the fold's other side at phi = sqrt(alpha psi) from the fold (9.3 deg for ECGSim:
- * the triangle (fold, b, that point) has angles of several degrees, e.g. 4.5 deg at r), and on b's
- * side, in the triangle beyond the corner's other edge, halfway across that triangle's corner at v
- * (then b's link triangles in the lune are (fold, b, phi point) and (b, phi point, that point); with
- * only the first point the tetrahedralization may still take (b, phi point, c): 0.889 deg with
- * --repair 0; a point on b's side close to b's edge, at phi as well, made a 0.83 deg flat
- * tetrahedron across the 3.5 deg bend between 214 and 365 instead). For every point of the fold
- * edge's chain at distance r from v (the shells), the two are put inside those triangles at
- * distance r from v: surface points (recorded like the others), after which the surfaces are made
- * unions of faces again (fold_loop). Returns the number of points added in *added. */
-static thx_status add_inside_quiet(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf, int *done);
-
 /* The triangle across edge e from triangle ti (-1: none), and its corner off e. */
 static int32_t across(const conformer *C, int32_t e, int32_t ti, int32_t *off)
 {
@@ -780,11 +750,34 @@ static thx_status fold_point(conformer *C, int32_t tn, int32_t v, int32_t f, dou
     double w[3] = {1 - w1 - w2, w1, w2};
     if (!(w[0] > 1e-6 && w[1] > 1e-6 && w[2] > 1e-6)) return THX_OK;
     int done = 0;
-    THX_CHECK(add_inside_quiet(C, (size_t)tn, w, surf, &done));
+    THX_CHECK(add_inside_at(C, (size_t)tn, w, surf, &done));
     *added += (size_t)done;
     return THX_OK;
 }
 
+/* Small corners at sharp folds (ECGSim's heart: triangle 214 has a 2.05 deg corner at node 195 whose
+ * edge 195-197 is a fold where the surface turns back to a 16 deg wedge, triangle 213 on its other
+ * side, while triangle 365 continues 214 across its other edge 195-196, 3.5 deg off its plane).
+ * The concentric shells (split_piece) put points a and b on the corner's two edges at the same
+ * distances r from the apex v, so the corner's piece (v, a, b) is a well-shaped needle; but inside
+ * the wedge the tetrahedron on that piece must take its fourth point on the fold's other side, and
+ * the nearest one there, c on the other edge of triangle 213 at psi = 42 deg from the fold, makes a
+ * tetrahedron (v, a, b, c) of smallest dihedral angle 0.88 deg whatever the radii (b lies 2.05 deg
+ * from the fold, so only 0.01 r off the plane of v, a and c): no flip or free node of the repair can
+ * help. Seen on a small sphere around v (the link of v: the tetrahedra at v as spherical
+ * triangles), the wedge is a lune of width W holding b at alpha from the fold on one side and c at
+ * psi on the other, and every triangle of the link joining b to two points of the other side is flat
+ * (for any two: b is almost on that side's great circle). So the lune gets one point on each side,
+ * every shell: on the fold's other side at phi = sqrt(alpha psi) from the fold (9.3 deg for ECGSim:
+ * the triangle (fold, b, that point) has angles of several degrees, e.g. 4.5 deg at r), and on b's
+ * side, in the triangle beyond the corner's other edge, halfway across that triangle's corner at v
+ * (then b's link triangles in the lune are (fold, b, phi point) and (b, phi point, that point); with
+ * only the first point the tetrahedralization may still take (b, phi point, c): 0.889 deg with
+ * --repair 0; a point on b's side close to b's edge, at phi as well, made a 0.83 deg flat
+ * tetrahedron across the 3.5 deg bend between 214 and 365 instead). For every point of the fold
+ * edge's chain at distance r from v (the shells), the two are put inside those triangles at
+ * distance r from v: surface points (recorded like the others), after which the surfaces are made
+ * unions of faces again (fold_loop). Returns the number of points added in *added. */
 static thx_status protect_folds(conformer *C, const thx_surface *const *surf, size_t *added)
 {
     *added = 0;
@@ -826,8 +819,7 @@ static thx_status protect_folds(conformer *C, const thx_surface *const *surf, si
                 }
                 for (size_t i = 1; i + 1 < C->E[e].n; i++) {
                     double r = dist3(V, X(C, C->E[e].pt[i].node));
-                    /* on the fold's other side, phi from the fold; on this side, phi from the fold too:
-                       in the triangle beyond the small corner's other edge, phi - alpha from that edge */
+                    /* across the fold, phi from it; on this side, halfway across the next triangle's corner */
                     THX_CHECK(fold_point(C, tn, v, far, phi, r, surf, added));
                     if (t2 >= 0 && psi2 > 0) THX_CHECK(fold_point(C, t2, v, far2, 0.5 * psi2, r, surf, added));
                 }
