@@ -550,9 +550,12 @@ static thx_status cover(conformer *C, size_t ti, int *covered)
     return THX_OK;
 }
 
-/* Inserts a point inside triangle ti at 2D position (x, y) of its frame. */
-static thx_status add_inside(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf)
+/* Inserts a point inside triangle ti at barycentric coordinates w (rounded to a dyadic grid);
+ * *done (if not NULL) says whether it was: with done, a point on an existing node is left out
+ * instead of an error. */
+static thx_status add_inside_at(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf, int *done)
 {
+    if (done) *done = 0;
     ctri *T = &C->T[ti];
     const double *c0 = X(C, T->c[0]), *c1 = X(C, T->c[1]), *c2 = X(C, T->c[2]);
     double p[3];
@@ -568,6 +571,7 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     int32_t idx;
     int32_t fdummy[3];
     thx_status st = thx_dt_insert_checked(C->dt, p, T->c[0], record_removed, C, &idx, fdummy);
+    if (st == THX_EGEOM && done) { thx_ctx_clear(C->ctx); return THX_OK; }
     if (st == THX_EGEOM) return too_fine(C, T->surf, T->tri, p, "a point added on a surface triangle falls on another node", surf);
     THX_CHECK(st);
     if (T->n_in >= T->cap_in) THX_CHECK(thx_grow(C->ctx, (void **)&T->in, &T->cap_in, T->n_in + 1, sizeof *T->in));
@@ -575,7 +579,13 @@ static thx_status add_inside(conformer *C, size_t ti, const double w[3], const t
     THX_CHECK(add_record(C, idx, T->surf, T->tri, ww));
     THX_CHECK(own_add(C, idx, (int32_t)ti));
     C->S.n_face_points++;
+    if (done) *done = 1;
     return after_insert(C, idx);
+}
+
+static thx_status add_inside(conformer *C, size_t ti, const double w[3], const thx_surface *const *surf)
+{
+    return add_inside_at(C, ti, w, surf, NULL);
 }
 
 /* Splits the longest piece of triangle ti's edges (points gathered). */
@@ -672,6 +682,151 @@ static thx_status refine(conformer *C, size_t ti, const thx_surface *const *surf
     free(tris);
     if (best_r < 0) return split_longest(C, ti, surf); /* no missing piece seen */
     return place(C, ti, cx, cy, surf);
+}
+
+/* ---- small input angles at sharp folds ---- */
+
+#define FIN_CORNER_DEG 8.0 /* corners of a triangle below this... */
+#define FIN_FOLD_DEG 60.0  /* ...on an edge where the surface folds to less than this */
+
+static double angle3(const double *u, const double *v)
+{
+    double d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    double c = d / (lu * lv);
+    return acos(c < -1 ? -1 : c > 1 ? 1 : c);
+}
+
+/* The unit vector from the line through A along unit e to the point P, perpendicular to e. */
+static int perp_unit(const double *A, const double *e, const double *P, double out[3])
+{
+    double d[3] = {P[0] - A[0], P[1] - A[1], P[2] - A[2]};
+    double t = d[0] * e[0] + d[1] * e[1] + d[2] * e[2];
+    for (int k = 0; k < 3; k++) out[k] = d[k] - t * e[k];
+    double l = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+    if (!(l > 0)) return 0;
+    for (int k = 0; k < 3; k++) out[k] /= l;
+    return 1;
+}
+
+/* The triangle across edge e from triangle ti (-1: none), and its corner off e. */
+static int32_t across(const conformer *C, int32_t e, int32_t ti, int32_t *off)
+{
+    const cedge *G = &C->E[e];
+    int32_t tn = G->t0 == ti ? G->t1 : G->t0;
+    *off = -1;
+    if (tn < 0) return -1;
+    for (int j = 0; j < 3; j++)
+        if (C->T[tn].c[j] != G->a && C->T[tn].c[j] != G->b) *off = C->T[tn].c[j];
+    return *off < 0 ? -1 : tn;
+}
+
+/* Puts a point inside triangle tn at distance r from its corner v and angle phi from its edge v-f
+ * (unless one is there already or it falls outside the triangle); *added counts it. */
+static thx_status fold_point(conformer *C, int32_t tn, int32_t v, int32_t f, double phi, double r,
+                             const thx_surface *const *surf, size_t *added)
+{
+    const ctri *U = &C->T[tn];
+    int32_t off = -1;
+    for (int j = 0; j < 3; j++)
+        if (U->c[j] != v && U->c[j] != f) off = U->c[j];
+    const double *V = X(C, v), *F = X(C, f);
+    double L = dist3(V, F), ed[3], nu[3];
+    if (off < 0 || !(L > 0)) return THX_OK;
+    for (int d = 0; d < 3; d++) ed[d] = (F[d] - V[d]) / L;
+    if (!perp_unit(V, ed, X(C, off), nu)) return THX_OK;
+    double y[3];
+    for (int d = 0; d < 3; d++) y[d] = V[d] + r * (cos(phi) * ed[d] + sin(phi) * nu[d]);
+    for (size_t j = 0; j < U->n_in; j++)
+        if (dist3(X(C, U->in[j]), y) < 1e-3 * r) return THX_OK; /* an earlier round's */
+    const double *c0 = X(C, U->c[0]), *c1 = X(C, U->c[1]), *c2 = X(C, U->c[2]);
+    double a1[3], a2[3], dv[3];
+    for (int d = 0; d < 3; d++) { a1[d] = c1[d] - c0[d]; a2[d] = c2[d] - c0[d]; dv[d] = y[d] - c0[d]; }
+    double g11 = a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2], g12 = a1[0] * a2[0] + a1[1] * a2[1] + a1[2] * a2[2],
+           g22 = a2[0] * a2[0] + a2[1] * a2[1] + a2[2] * a2[2], det = g11 * g22 - g12 * g12;
+    if (!(det > 0)) return THX_OK;
+    double b1 = a1[0] * dv[0] + a1[1] * dv[1] + a1[2] * dv[2], b2 = a2[0] * dv[0] + a2[1] * dv[1] + a2[2] * dv[2];
+    double w1 = (g22 * b1 - g12 * b2) / det, w2 = (g11 * b2 - g12 * b1) / det;
+    double w[3] = {1 - w1 - w2, w1, w2};
+    if (!(w[0] > 1e-6 && w[1] > 1e-6 && w[2] > 1e-6)) return THX_OK;
+    int done = 0;
+    THX_CHECK(add_inside_at(C, (size_t)tn, w, surf, &done));
+    *added += (size_t)done;
+    return THX_OK;
+}
+
+/* Small corners at sharp folds (ECGSim's heart: triangle 214 has a 2.05 deg corner at node 195 whose
+ * edge 195-197 is a fold where the surface turns back to a 16 deg wedge, triangle 213 on its other
+ * side, while triangle 365 continues 214 across its other edge 195-196, 3.5 deg off its plane).
+ * The concentric shells (split_piece) put points a and b on the corner's two edges at the same
+ * distances r from the apex v, so the corner's piece (v, a, b) is a well-shaped needle; but inside
+ * the wedge the tetrahedron on that piece must take its fourth point on the fold's other side, and
+ * the nearest one there, c on the other edge of triangle 213 at psi = 42 deg from the fold, makes a
+ * tetrahedron (v, a, b, c) of smallest dihedral angle 0.88 deg whatever the radii (b lies 2.05 deg
+ * from the fold, so only 0.01 r off the plane of v, a and c): no flip or free node of the repair can
+ * help. Seen on a small sphere around v (the link of v: the tetrahedra at v as spherical
+ * triangles), the wedge is a lune of width W holding b at alpha from the fold on one side and c at
+ * psi on the other, and every triangle of the link joining b to two points of the other side is flat
+ * (for any two: b is almost on that side's great circle). So the lune gets one point on each side,
+ * every shell: on the fold's other side at phi = sqrt(alpha psi) from the fold (9.3 deg for ECGSim:
+ * the triangle (fold, b, that point) has angles of several degrees, e.g. 4.5 deg at r), and on b's
+ * side, in the triangle beyond the corner's other edge, halfway across that triangle's corner at v
+ * (then b's link triangles in the lune are (fold, b, phi point) and (b, phi point, that point); with
+ * only the first point the tetrahedralization may still take (b, phi point, c): 0.889 deg with
+ * --repair 0; a point on b's side close to b's edge, at phi as well, made a 0.83 deg flat
+ * tetrahedron across the 3.5 deg bend between 214 and 365 instead). For every point of the fold
+ * edge's chain at distance r from v (the shells), the two are put inside those triangles at
+ * distance r from v: surface points (recorded like the others), after which the surfaces are made
+ * unions of faces again (fold_loop). Returns the number of points added in *added. */
+static thx_status protect_folds(conformer *C, const thx_surface *const *surf, size_t *added)
+{
+    *added = 0;
+    const double lim = FIN_CORNER_DEG * M_PI / 180.0, fold = FIN_FOLD_DEG * M_PI / 180.0;
+    for (size_t ti = 0; ti < C->nT; ti++) {
+        for (int k = 0; k < 3; k++) {
+            const ctri *T = &C->T[ti];
+            int32_t v = T->c[k], p = T->c[(k + 1) % 3], q = T->c[(k + 2) % 3];
+            const double *V = X(C, v);
+            double u1[3], u2[3];
+            for (int d = 0; d < 3; d++) { u1[d] = X(C, p)[d] - V[d]; u2[d] = X(C, q)[d] - V[d]; }
+            double alpha = angle3(u1, u2);
+            if (!(alpha > 0 && alpha < lim)) continue;
+            /* either edge at v may be the fold: edge k joins v and p, edge k+2 joins q and v */
+            for (int side = 0; side < 2; side++) {
+                int32_t e = T->e[side ? (k + 2) % 3 : k], e2 = T->e[side ? k : (k + 2) % 3];
+                int32_t far = side ? q : p, far2 = side ? p : q; /* the fold's other end; the other edge's */
+                int32_t w_u, w_2;
+                int32_t tn = across(C, e, (int32_t)ti, &w_u), t2 = across(C, e2, (int32_t)ti, &w_2);
+                if (tn < 0) continue;
+                const double *F = X(C, far);
+                double L = dist3(V, F), ed[3];
+                if (!(L > 0)) continue;
+                for (int d = 0; d < 3; d++) ed[d] = (F[d] - V[d]) / L;
+                double nt[3], nu[3];
+                if (!perp_unit(V, ed, X(C, far2), nt) || !perp_unit(V, ed, X(C, w_u), nu)) continue;
+                double W = angle3(nt, nu); /* the wedge between the two triangles */
+                if (!(W < fold)) continue;
+                double uw[3];
+                for (int d = 0; d < 3; d++) uw[d] = X(C, w_u)[d] - V[d];
+                double psi = angle3(ed, uw); /* the other triangle's angle at v */
+                double phi = sqrt(alpha * psi);
+                if (!(phi < 0.5 * psi)) continue;
+                double psi2 = -1;
+                if (t2 >= 0) {
+                    double u3[3], u4[3];
+                    for (int d = 0; d < 3; d++) { u3[d] = X(C, far2)[d] - V[d]; u4[d] = X(C, w_2)[d] - V[d]; }
+                    psi2 = angle3(u3, u4);
+                }
+                for (size_t i = 1; i + 1 < C->E[e].n; i++) {
+                    double r = dist3(V, X(C, C->E[e].pt[i].node));
+                    /* across the fold, phi from it; on this side, halfway across the next triangle's corner */
+                    THX_CHECK(fold_point(C, tn, v, far, phi, r, surf, added));
+                    if (t2 >= 0 && psi2 > 0) THX_CHECK(fold_point(C, t2, v, far2, 0.5 * psi2, r, surf, added));
+                }
+            }
+        }
+    }
+    return THX_OK;
 }
 
 /* ---- Delaunay refinement for quality ---- */
@@ -928,6 +1083,20 @@ static thx_status conform_loop(conformer *C, const thx_surface *const *surf)
     return THX_OK;
 }
 
+/* The points at small corners on folds, and the surfaces made faces again, until no more are added
+ * (the conformity makes new shells; at most 8 rounds). */
+static thx_status fold_loop(conformer *C, const thx_surface *const *surf)
+{
+    for (int round = 0; round < 8; round++) {
+        size_t added = 0;
+        THX_CHECK(protect_folds(C, surf, &added));
+        if (!added) break;
+        C->S.n_fold_points += added;
+        THX_CHECK(conform_loop(C, surf));
+    }
+    return THX_OK;
+}
+
 thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf, const size_t *offset, size_t n_surf,
                         double unit, size_t max_steiner, const conform_quality *quality, thx_steiner **steiner, size_t *n_steiner, mesh_subface **sub, size_t *n_sub,
                         conform_stats *stats)
@@ -957,9 +1126,13 @@ thx_status mesh_conform(thx_ctx *ctx, thx_dt *dt, const thx_surface *const *surf
         C.S.missing_before += !thx_dt_has_face(dt, C.T[ti].c[0], C.T[ti].c[1], C.T[ti].c[2]);
     st = conform_loop(&C, surf);
     if (st != THX_OK) goto done;
+    st = fold_loop(&C, surf);
+    if (st != THX_OK) goto done;
     if (quality && quality->progress) quality->progress(quality->progress_user, "conformity", 1.0);
     if (quality && (quality->radius_edge > 0 || quality->min_dihedral > 0 || quality->size)) {
         st = refine_quality(&C, quality, surf);
+        if (st != THX_OK) goto done;
+        st = fold_loop(&C, surf); /* the refinement made new shells */
         if (st != THX_OK) goto done;
     }
     st = collect(&C, sub, n_sub);

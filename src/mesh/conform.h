@@ -48,6 +48,7 @@ typedef struct {
     size_t n_refine_skipped; /* bad tetrahedra left because their surface piece was already small */
     size_t n_refine_near;    /* centres inserted close to such a piece (no piece removed) */
     double t_refine;
+    size_t n_fold_points;    /* of n_face_points: points at small corners on sharp folds (conform.c) */
     double seconds;
 } conform_stats;
 
