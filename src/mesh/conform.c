@@ -786,7 +786,9 @@ static thx_status protect_folds(conformer *C, const thx_surface *const *surf, si
         for (int k = 0; k < 3; k++) {
             const ctri *T = &C->T[ti];
             int32_t v = T->c[k], p = T->c[(k + 1) % 3], q = T->c[(k + 2) % 3];
-            const double *V = X(C, v);
+            /* a copy: the points' array moves when fold_point inserts */
+            double V[3];
+            memcpy(V, X(C, v), sizeof V);
             double u1[3], u2[3];
             for (int d = 0; d < 3; d++) { u1[d] = X(C, p)[d] - V[d]; u2[d] = X(C, q)[d] - V[d]; }
             double alpha = angle3(u1, u2);
@@ -798,7 +800,8 @@ static thx_status protect_folds(conformer *C, const thx_surface *const *surf, si
                 int32_t w_u, w_2;
                 int32_t tn = across(C, e, (int32_t)ti, &w_u), t2 = across(C, e2, (int32_t)ti, &w_2);
                 if (tn < 0) continue;
-                const double *F = X(C, far);
+                double F[3];
+                memcpy(F, X(C, far), sizeof F);
                 double L = dist3(V, F), ed[3];
                 if (!(L > 0)) continue;
                 for (int d = 0; d < 3; d++) ed[d] = (F[d] - V[d]) / L;
