@@ -6,6 +6,7 @@
  * and free of self-intersections (thx_surface_check).
  */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +14,9 @@
 #include "testlib.h"
 #include "thorax/check/check.h"
 #include "thorax/geom/inside.h"
+#include "thorax/geom/repair.h"
 #include "thorax/geom/surfaces.h"
+#include "thorax/io/contours_file.h"
 /* Builds the contours with default options and checks the invariants of every surface. */
 static thx_model *build_and_check(thx_ctx *ctx, thx_contours *c, double spacing, thx_surfaces_stats *st, const char *what)
 {
@@ -519,6 +522,150 @@ static void test_orientation_majority(thx_ctx *ctx)
     thx_contours_destroy(&c);
 }
 
+/* Issue 24 item 3: a loop the repair's merge leaves with fewer than 3 points (a plane grazing the
+ * body's end or a bump of it) is dropped where the plane missing the body would give the same
+ * surface, refused where the file is broken. The contours below are texts with squares (40 mm,
+ * layers 10 mm apart) and tiny loops (3 points within 0.2 mm: below the merge tolerance 0.5 mm at
+ * spacing 5); `tiny_line` is the tiny loop's header line. */
+static char tbuf[8192];
+static int tiny_line;
+static void t_add(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    size_t n = strlen(tbuf);
+    vsnprintf(tbuf + n, sizeof tbuf - n, fmt, ap);
+    va_end(ap);
+}
+static void t_square(double x0, double y0, double w) { t_add("loop s\n%g %g\n%g %g\n%g %g\n%g %g\n", x0, y0, x0 + w, y0, x0 + w, y0 + w, x0, y0 + w); }
+static void t_tiny(double x, double y)
+{
+    int line = 1;
+    for (const char *q = tbuf; *q; q++) line += *q == '\n';
+    tiny_line = line;
+    t_add("loop s\n%g %g\n%g %g\n%g %g\n", x, y, x + 0.2, y, x, y + 0.2);
+}
+/* The text as repaired with the defaults for spacing 5: the status, the log, the contours (or NULL). */
+static thx_status t_repair(thx_ctx *ctx, thx_repair_log *log, thx_contours **out)
+{
+    thx_contours *c = NULL;
+    memset(log, 0, sizeof *log);
+    t_add("end\n");
+    thx_status st = thx_contours_parse_raw(ctx, "c.txt", tbuf, strlen(tbuf), &c);
+    if (st == THX_OK) {
+        thx_repair_opts o;
+        thx_repair_opts_default(&o, 5.0);
+        st = thx_contours_repair(ctx, c, &o, log);
+    }
+    if (st != THX_OK) thx_contours_destroy(&c);
+    *out = c;
+    return st;
+}
+static void t_start(void) { snprintf(tbuf, sizeof tbuf, "thorax-contours 1\nspacing 5\nsurface s outer\n"); }
+
+/* The models built from a and b have the same nodes and triangles. */
+static int same_model(thx_ctx *ctx, thx_contours *a, thx_contours *b)
+{
+    thx_surfaces_stats sa, sb;
+    thx_model *ma = build_and_check(ctx, a, 5, &sa, "tiny loop dropped"), *mb = build_and_check(ctx, b, 5, &sb, "no tiny loop");
+    int same = ma && mb && ma->surf[0]->n_nodes == mb->surf[0]->n_nodes && ma->surf[0]->n_tris == mb->surf[0]->n_tris &&
+               !memcmp(ma->surf[0]->xyz, mb->surf[0]->xyz, 3 * ma->surf[0]->n_nodes * sizeof *ma->surf[0]->xyz) &&
+               !memcmp(ma->surf[0]->tri, mb->surf[0]->tri, 3 * ma->surf[0]->n_tris * sizeof *ma->surf[0]->tri);
+    thx_model_destroy(&ma);
+    thx_model_destroy(&mb);
+    return same;
+}
+
+static void test_tiny_loops(thx_ctx *ctx)
+{
+    thx_repair_log log;
+    thx_contours *c = NULL, *ref = NULL;
+    char want[64];
+    /* 1. the only loop of the first layer (the plane grazed the end): the layer is dropped, and
+       the model is the one built without it */
+    t_start();
+    t_add("layer -10\n");
+    t_tiny(20, 20);
+    for (int z = 0; z <= 30; z += 10) { t_add("layer %d\n", z); t_square(0, 0, 40); }
+    CHECK_OK(ctx, t_repair(ctx, &log, &c));
+    snprintf(want, sizeof want, "c.txt:%d: surface \"s\" layer 1 (z=-10) loop 1: ", tiny_line);
+    CHECK(c && c->surf[0].n_layers == 4 && c->surf[0].layers[0].z == 0);
+    CHECK(log.tiny == 1 && log.n >= 1 && log.kind[log.n - 1] == THX_REPAIR_TINY);
+    CHECK(log.n >= 1 && strstr(log.msg[log.n - 1], want) && strstr(log.msg[log.n - 1], "dropped (its layer keeps no loop"));
+    if (log.n) printf("tiny end loop: %s\n", log.msg[log.n - 1]);
+    thx_repair_log_free(&log);
+    t_start();
+    for (int z = 0; z <= 30; z += 10) { t_add("layer %d\n", z); t_square(0, 0, 40); }
+    CHECK_OK(ctx, t_repair(ctx, &log, &ref));
+    thx_repair_log_free(&log);
+    if (c && ref) CHECK(same_model(ctx, c, ref));
+    thx_contours_destroy(&c);
+    /* 2. beside a loop on the last layer, and 3. inside a loop (a hole): the loops are dropped, the
+       layers kept, the model the same */
+    t_start();
+    for (int z = 0; z <= 30; z += 10) {
+        t_add("layer %d\n", z);
+        t_square(0, 0, 40);
+        if (z == 10) t_tiny(20, 20);
+        if (z == 30) t_tiny(60, 60);
+    }
+    CHECK_OK(ctx, t_repair(ctx, &log, &c));
+    CHECK(c && c->surf[0].n_layers == 4 && c->surf[0].layers[1].n_loops == 1 && c->surf[0].layers[3].n_loops == 1);
+    CHECK(log.tiny == 2);
+    snprintf(want, sizeof want, "c.txt:%d: surface \"s\" layer 4 (z=30) loop 2: ", tiny_line);
+    int seen_hole = 0, seen_last = 0;
+    for (size_t k = 0; k < log.n; k++) {
+        seen_hole += log.kind[k] == THX_REPAIR_TINY && strstr(log.msg[k], "inside loop 1 of its layer") != NULL;
+        seen_last += log.kind[k] == THX_REPAIR_TINY && strstr(log.msg[k], want) && strstr(log.msg[k], "surface's last");
+    }
+    CHECK(seen_hole == 1 && seen_last == 1);
+    thx_repair_log_free(&log);
+    if (c && ref) CHECK(same_model(ctx, c, ref));
+    thx_contours_destroy(&c);
+    thx_contours_destroy(&ref);
+    /* 4. a branch begins at it (no loop of the layer below encloses it, the one above does): dropped */
+    t_start();
+    for (int z = 0; z <= 40; z += 10) {
+        t_add("layer %d\n", z);
+        t_square(0, 0, 40);
+        if (z == 20) t_tiny(60, 60);
+        if (z >= 30) t_square(55, 55, 10);
+    }
+    CHECK_OK(ctx, t_repair(ctx, &log, &c));
+    CHECK(log.tiny == 1 && c && c->surf[0].layers[2].n_loops == 1);
+    CHECK(log.n && strstr(log.msg[log.n - 1], "a branch of the surface ends at it, and is capped at z=30"));
+    thx_repair_log_free(&log);
+    if (c) {
+        thx_surfaces_stats st;
+        thx_model *m = build_and_check(ctx, c, 5, &st, "a branch begins above a tiny loop");
+        thx_model_destroy(&m);
+    }
+    thx_contours_destroy(&c);
+    /* refused, naming the loop and why: 5. the surface's only loop; 6. the only loop of a layer
+       between others (a gap); 7. enclosed by loops above and below (dropping it would cut the
+       surface in two); 8. leaving one layer */
+    const char *why[4] = {"it is the surface's only loop", "the surface would vanish and reappear",
+                          "dropping it would cut the surface in two", "would leave it 1 layer"};
+    for (int k = 0; k < 4; k++) {
+        t_start();
+        if (k == 0) { t_add("layer 0\n"); t_tiny(20, 20); }
+        for (int z = 0; k > 0 && z <= (k == 3 ? 10 : 40); z += 10) {
+            t_add("layer %d\n", z);
+            if (k == 1 && z == 20) t_tiny(20, 20);
+            else if (k == 2 && z == 20) { t_tiny(20, 20); t_square(100, 0, 40); }
+            else if (k == 3 && z == 0) t_tiny(20, 20);
+            else if (k == 2) { t_square(0, 0, 40); t_square(100, 0, 40); }
+            else t_square(0, 0, 40);
+        }
+        CHECK(t_repair(ctx, &log, &c) == THX_EINPUT && !c);
+        const char *m = thx_ctx_message(ctx);
+        snprintf(want, sizeof want, "c.txt:%d: surface \"s\" layer ", tiny_line);
+        CHECK(strstr(m, want) && strstr(m, "fewer than 3 distinct points") && strstr(m, why[k]));
+        printf("refused: %s\n", m);
+        thx_repair_log_free(&log);
+    }
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -530,6 +677,7 @@ int main(void)
     test_tongues(ctx);
     test_projected(ctx);
     test_orientation_majority(ctx);
+    test_tiny_loops(ctx);
     {
         /* default tolerance: gaps occur and are always re-laced */
         size_t removed = 0, inplane = 0, unresolved = 0;

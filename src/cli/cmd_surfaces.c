@@ -32,7 +32,8 @@ static void replay_line(void *user, const thx_edit_log *log, const thx_edit *e, 
 static void print_repairs(const thx_repair_log *r, int verbose)
 {
     static const char *what[THX_REPAIR_KINDS] = {"closing points dropped", "near-coincident point runs merged",
-                                                 "spikes removed", "self-crossings untangled", "narrow holes dropped"};
+                                                 "spikes removed", "self-crossings untangled", "narrow holes dropped",
+                                                 "tiny loops dropped"};
     size_t count[THX_REPAIR_KINDS] = {0}, shown[THX_REPAIR_KINDS] = {0};
     if (!r->n || verbose < 0) return; /* -q hides warnings */
     for (size_t k = 0; k < r->n; k++) count[r->kind[k]]++;
@@ -274,8 +275,8 @@ int cmd_surfaces(int argc, char **argv)
         printf("%-12s %8zu %9zu\n", "total", tot.n_nodes, tot.n_tris);
         if (rlog.n)
             printf("repairs: %zu (%zu closing points dropped, %zu near-coincident points merged, %zu spikes removed, "
-                   "%zu self-crossings untangled, %zu narrow holes dropped; listed in model.json)\n",
-                   rlog.n, rlog.closing, rlog.merged, rlog.spikes, rlog.untangled, rlog.holes);
+                   "%zu self-crossings untangled, %zu narrow holes dropped, %zu tiny loops dropped; listed in model.json)\n",
+                   rlog.n, rlog.closing, rlog.merged, rlog.spikes, rlog.untangled, rlog.holes, rlog.tiny);
         printf("wrote %s (spacing %g mm) in %.3f s\n", outdir, spacing, thx_wtime() - t0);
     }
     if (want_stats) {

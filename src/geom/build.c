@@ -895,7 +895,37 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
             sc.n_parts = 0;
             pq.beyond = many->c.beyond;
             pq.n_beyond = many->c.n_beyond;
+            size_t before = sl->n_tris;
+            thx_lace_stats st_before = sl->st;
             r = single_lower ? lace_tries(lc, &sc, &pq, lo, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, lo, lxyz, sl, &x);
+            if (r == THX_OK && x) {
+                /* Laced again with the seam opposite the chord: both chains start there (the part at
+                   its node nearest the polygon's middle node). The chord is one long edge with no
+                   node between its ends; a lacing that starts at one of them can twist there (issue
+                   24: the Utah tank across x at 7 mm, where the bottom part's top nodes were laced
+                   to the far end of the chord). Only after a crossing, so what laced stays as it was. */
+                size_t ns = sub[q].n, np = pq.n, h = ns / 2, j0 = 0;
+                thx_vec2 *rp = malloc((ns + np) * sizeof *rp);
+                int32_t *ri = malloc((ns + np) * sizeof *ri);
+                if (!rp || !ri) { free(rp); free(ri); r = thx_error(lc, THX_ENOMEM, "out of memory"); break; }
+                double best = INFINITY;
+                for (size_t v = 0; v < np; v++) {
+                    double d = hypot(pq.p[v].x - sub[q].p[h].x, pq.p[v].y - sub[q].p[h].y);
+                    if (d < best) { best = d; j0 = v; }
+                }
+                for (size_t v = 0; v < ns; v++) { rp[v] = sub[q].p[(h + v) % ns]; ri[v] = sub[q].id[(h + v) % ns]; }
+                for (size_t v = 0; v < np; v++) { rp[ns + v] = pq.p[(j0 + v) % np]; ri[ns + v] = pq.id[(j0 + v) % np]; }
+                thx_chain sr = sc, pr = pq;
+                sr.p = rp;
+                sr.id = ri;
+                pr.p = rp + ns;
+                pr.id = ri + ns;
+                sl->n_tris = before;
+                sl->st = st_before;
+                r = single_lower ? lace_tries(lc, &sr, &pr, lo, lxyz, sl, &x) : lace_tries(lc, &pr, &sr, lo, lxyz, sl, &x);
+                free(rp);
+                free(ri);
+            }
         }
         if (r == THX_OK && !x) {
             x = tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first);

@@ -5,6 +5,7 @@
 #include "thorax/geom/repair.h"
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -288,12 +289,25 @@ static thx_status untangle_one(job *j, int *found)
     return THX_OK;
 }
 
+static void loop_box(const thx_loop *lp, double box[4])
+{
+    box[0] = box[2] = INFINITY;
+    box[1] = box[3] = -INFINITY;
+    for (size_t k = 0; k < lp->n; k++) {
+        box[0] = fmin(box[0], lp->p[k].x); box[1] = fmax(box[1], lp->p[k].x);
+        box[2] = fmin(box[2], lp->p[k].y); box[3] = fmax(box[3], lp->p[k].y);
+    }
+}
+
 /* A loop that crosses itself more often than this is not digitization noise (and each untangling
  * costs a sweep of the loop: the bound keeps the repair O(n log n)). */
 #define MAX_UNTANGLE 64
 
-static thx_status repair_loop(job *j)
+static thx_status repair_loop(job *j, double *extent)
 {
+    double box[4];
+    loop_box(j->lp, box);
+    *extent = hypot(box[1] - box[0], box[3] - box[2]);
     THX_CHECK(drop_closing(j));
     size_t untangled = 0;
     for (;;) { /* each round removes at least one point or ends */
@@ -319,12 +333,7 @@ static thx_status repair_loop(job *j)
         if (!found || j->lp->n < 3) break;
         untangled++;
     }
-    if (j->lp->n < 3)
-        return thx_error(j->ctx, THX_EINPUT,
-                         "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: fewer than 3 distinct points are left "
-                         "after merging points within %g mm (the loop is smaller than the merge tolerance)",
-                         j->path, j->loop_line, j->surf, j->layer_no, j->z, j->loop_no, j->o->merge_tol);
-    return THX_OK;
+    return THX_OK; /* a loop left with fewer than 3 points is dropped or refused by resolve_tiny */
 }
 
 /* Is point q inside the closed loop p (crossing number; points on the boundary count either way)? */
@@ -338,22 +347,12 @@ static int point_in_loop(thx_vec2 q, const thx_loop *lp)
     return in;
 }
 
-static void loop_box(const thx_loop *lp, double box[4])
-{
-    box[0] = box[2] = INFINITY;
-    box[1] = box[3] = -INFINITY;
-    for (size_t k = 0; k < lp->n; k++) {
-        box[0] = fmin(box[0], lp->p[k].x); box[1] = fmax(box[1], lp->p[k].x);
-        box[2] = fmin(box[2], lp->p[k].y); box[3] = fmax(box[3], lp->p[k].y);
-    }
-}
-
 /* 5. Holes: a loop inside another loop of its surface on the same layer. The surfaces are built
  * from solid loops only (a hole would be laced as a second solid inside the first), so a hole
  * narrower than the node spacing (width 2 area / perimeter: a groove the layer cuts across,
  * which the nodes could not resolve) is dropped and reported; a wider one is refused. */
 static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_surface *cs, size_t l,
-                             const thx_repair_opts *o, double spacing, thx_repair_log *log)
+                             const thx_repair_opts *o, double spacing, thx_repair_log *log, double *extent)
 {
     thx_contour_layer *L = &cs->layers[l];
     if (L->n_loops < 2) return THX_OK;
@@ -365,9 +364,10 @@ static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_su
         const thx_loop *b = &L->loops[i];
         const double *bb = box + 4 * i;
         size_t outer = L->n_loops;
+        if (b->n < 3) continue; /* collapsed by the merge: resolve_tiny's */
         for (size_t k = 0; k < L->n_loops && outer == L->n_loops; k++) {
             const double *ab = box + 4 * k;
-            if (k == i || bb[0] < ab[0] || bb[1] > ab[1] || bb[2] < ab[2] || bb[3] > ab[3]) continue;
+            if (k == i || L->loops[k].n < 3 || bb[0] < ab[0] || bb[1] > ab[1] || bb[2] < ab[2] || bb[3] > ab[3]) continue;
             if (point_in_loop(b->p[0], &L->loops[k])) outer = k;
         }
         if (outer == L->n_loops) continue;
@@ -393,12 +393,135 @@ static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_su
         free(L->loops[i].lines);
         memmove(&L->loops[i], &L->loops[i + 1], (L->n_loops - i - 1) * sizeof *L->loops);
         memmove(box + 4 * i, box + 4 * (i + 1), (L->n_loops - i - 1) * 4 * sizeof *box);
+        memmove(extent + i, extent + i + 1, (L->n_loops - i - 1) * sizeof *extent);
         L->n_loops--;
         log->holes++;
         i--;
     }
     free(box);
     return st;
+}
+
+/* Is point q inside a loop (of 3 points or more) of layer L other than loop `not`? Its index, or L->n_loops. */
+static size_t inside_layer(thx_vec2 q, const thx_contour_layer *L, size_t not)
+{
+    for (size_t k = 0; k < L->n_loops; k++)
+        if (k != not && L->loops[k].n >= 3 && point_in_loop(q, &L->loops[k])) return k;
+    return L->n_loops;
+}
+
+static size_t alive_loops(const thx_contour_layer *L)
+{
+    size_t m = 0;
+    for (size_t k = 0; k < L->n_loops; k++) m += L->loops[k].n >= 3;
+    return m;
+}
+
+/* 6. Loops the merge left with fewer than 3 points (issue 24: a plane that just grazes the body's
+ * end or a bump of it cuts a sliver smaller than the merge tolerance). Such a loop is dropped
+ * where that is what the plane missing the body would give: on a layer at an end of the surface's
+ * stack (a layer left without loops is dropped, and the surface is capped at its neighbour); inside
+ * another loop of its layer (a hole too small to resolve); on a layer between others, where no loop
+ * of the layer below or none of the layer above encloses it (a branch of the surface ends, or
+ * begins, at it: the branch is capped at its next layer). It is refused (the file is broken, or
+ * dropping would change the surface's shape) when it would leave the surface fewer than 2 layers
+ * (e.g. it is the surface's only loop), when it is the only loop of a layer between others (the
+ * surface would vanish and reappear), and when loops of both neighbouring layers enclose it (the
+ * surface narrows to it: dropping it would cut the surface in two). extent[base[l] + i]: the size of
+ * loop i of layer l before the repair (its bounding box's diagonal). */
+static thx_status resolve_tiny(thx_ctx *ctx, const thx_contours *c, thx_contour_surface *cs, const thx_repair_opts *o,
+                               thx_repair_log *log, const double *extent, const size_t *base)
+{
+    size_t nl = cs->n_layers, n_tiny = 0, n_loops = 0;
+    for (size_t l = 0; l < nl; l++) {
+        n_loops += cs->layers[l].n_loops;
+        n_tiny += cs->layers[l].n_loops - alive_loops(&cs->layers[l]);
+    }
+    if (!n_tiny) return THX_OK;
+    const char *path = c->path[0] ? c->path : "<contours>";
+    /* the layers that keep a loop: first .. last (those outside are dropped whole) */
+    size_t first = 0, last = nl;
+    while (first < nl && !alive_loops(&cs->layers[first])) first++;
+    while (last > first && !alive_loops(&cs->layers[last - 1])) last--;
+    /* pass 0 decides (and refuses), pass 1 reports and drops */
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t l = 0; l < nl; l++) {
+            thx_contour_layer *L = &cs->layers[l];
+            for (size_t i = 0; i < L->n_loops; i++) {
+                size_t e = base[l] + i;
+                thx_loop *lp = &L->loops[i];
+                if (lp->n >= 3) continue;
+                job j = {ctx, o, log, path, cs->name, L->index >= 0 ? L->index + 1 : (int)l + 1,
+                         lp->line ? lp->line : L->line, i + 1, L->z, lp};
+                thx_vec2 q = lp->p[0];
+                if (lp->n == 2) { q.x = 0.5 * (lp->p[0].x + lp->p[1].x); q.y = 0.5 * (lp->p[0].y + lp->p[1].y); }
+                char why[300] = "";
+                size_t hole = l >= first && l < last ? inside_layer(q, L, i) : L->n_loops;
+                if (last - first < 2) {
+                    if (n_loops == 1) snprintf(why, sizeof why, "it is the surface's only loop");
+                    else snprintf(why, sizeof why, "dropping the surface's loops smaller than the merge tolerance "
+                                                   "would leave it %zu layer%s (at least 2 needed)",
+                                  last - first, last - first == 1 ? "" : "s");
+                } else if (l > first && l + 1 < last && !alive_loops(L)) {
+                    snprintf(why, sizeof why, "it is the only loop of its layer, which lies between layers that keep "
+                                              "loops (the surface would vanish and reappear)");
+                } else if (l > first && l + 1 < last && hole == L->n_loops &&
+                           inside_layer(q, &cs->layers[l - 1], SIZE_MAX) < cs->layers[l - 1].n_loops &&
+                           inside_layer(q, &cs->layers[l + 1], SIZE_MAX) < cs->layers[l + 1].n_loops) {
+                    snprintf(why, sizeof why, "loops of the layers below (z=%g) and above (z=%g) both enclose it (the "
+                                              "surface narrows to it: dropping it would cut the surface in two)",
+                             cs->layers[l - 1].z, cs->layers[l + 1].z);
+                }
+                if (why[0]) {
+                    if (pass == 1) continue; /* not reached: pass 0 refused */
+                    return thx_error(ctx, THX_EINPUT,
+                                     "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: fewer than 3 distinct points are "
+                                     "left after merging points within %g mm (the loop is smaller than the merge "
+                                     "tolerance: %.3g mm across); it is not dropped: %s",
+                                     path, j.loop_line, cs->name, j.layer_no, L->z, i + 1, o->merge_tol, extent[e], why);
+                }
+                if (pass == 0) continue;
+                if (l < first || l >= last)
+                    snprintf(why, sizeof why, "its layer keeps no loop and is dropped: the surface ends at z=%g, "
+                                              "capped there, as if the plane had missed the body",
+                             l < first ? cs->layers[first].z : cs->layers[last - 1].z);
+                else if (hole < L->n_loops)
+                    snprintf(why, sizeof why, "it lies inside loop %zu of its layer (a hole too small to resolve)",
+                             hole + 1);
+                else if (l == first || l + 1 == last)
+                    snprintf(why, sizeof why, "its layer is the surface's %s: the layer's other loops are kept",
+                             l == first ? "first" : "last");
+                else {
+                    /* the side with no enclosing loop, and the layer the branch is capped on */
+                    int below = inside_layer(q, &cs->layers[l - 1], SIZE_MAX) < cs->layers[l - 1].n_loops;
+                    snprintf(why, sizeof why, "no loop of the layer %s (z=%g) encloses it: a branch of the surface "
+                                              "ends at it, and is capped at z=%g instead",
+                             below ? "above" : "below", cs->layers[below ? l + 1 : l - 1].z,
+                             cs->layers[below ? l - 1 : l + 1].z);
+                }
+                THX_CHECK(report(&j, THX_REPAIR_TINY, j.loop_line,
+                                 "%zu distinct point%s left after merging points within %g mm (the loop, %.3g mm "
+                                 "across, is smaller than the merge tolerance): dropped (%s)",
+                                 lp->n, lp->n == 1 ? " is" : "s are", o->merge_tol, extent[e], why));
+                log->tiny++;
+            }
+        }
+    }
+    /* drop them: the collapsed loops, then the layers left empty (at the ends only) */
+    for (size_t l = 0; l < nl; l++) {
+        thx_contour_layer *L = &cs->layers[l];
+        size_t w = 0;
+        for (size_t i = 0; i < L->n_loops; i++) {
+            if (L->loops[i].n >= 3) { L->loops[w++] = L->loops[i]; continue; }
+            free(L->loops[i].p);
+            free(L->loops[i].lines);
+        }
+        L->n_loops = w;
+        if (!w) { free(L->loops); L->loops = NULL; }
+    }
+    memmove(cs->layers, cs->layers + first, (last - first) * sizeof *cs->layers);
+    cs->n_layers = last - first;
+    return THX_OK;
 }
 
 thx_status thx_contours_repair(thx_ctx *ctx, thx_contours *c, const thx_repair_opts *o, thx_repair_log *log)
@@ -409,16 +532,25 @@ thx_status thx_contours_repair(thx_ctx *ctx, thx_contours *c, const thx_repair_o
     thx_status st = THX_OK;
     for (size_t s = 0; s < c->n_surfaces && st == THX_OK; s++) {
         thx_contour_surface *cs = &c->surf[s];
+        size_t n_loops = 0;
+        size_t *base = thx_malloc(ctx, (cs->n_layers + 1) * sizeof *base);
+        if (!base) { st = THX_ENOMEM; break; }
+        for (size_t l = 0; l < cs->n_layers; l++) { base[l] = n_loops; n_loops += cs->layers[l].n_loops; }
+        double *extent = thx_malloc(ctx, (n_loops ? n_loops : 1) * sizeof *extent);
+        if (!extent) { free(base); st = THX_ENOMEM; break; }
         for (size_t l = 0; l < cs->n_layers && st == THX_OK; l++) {
             thx_contour_layer *L = &cs->layers[l];
             for (size_t i = 0; i < L->n_loops && st == THX_OK; i++) {
                 job j = {ctx, o, log, c->path[0] ? c->path : "<contours>", cs->name,
                          L->index >= 0 ? L->index + 1 : (int)l + 1, L->loops[i].line ? L->loops[i].line : L->line,
                          i + 1, L->z, &L->loops[i]};
-                st = repair_loop(&j);
+                st = repair_loop(&j, &extent[base[l] + i]);
             }
-            if (st == THX_OK) st = drop_holes(ctx, c, cs, l, o, o->spacing, log);
+            if (st == THX_OK) st = drop_holes(ctx, c, cs, l, o, o->spacing, log, extent + base[l]);
         }
+        if (st == THX_OK) st = resolve_tiny(ctx, c, cs, o, log, extent, base);
+        free(extent);
+        free(base);
     }
     if (log == &dummy) thx_repair_log_free(&dummy);
     if (st == THX_OK) st = thx_contours_validate(ctx, c);

@@ -27,7 +27,17 @@
  * WHAT" (LINE: the first point concerned), logged as a warning (unless the
  * log is quiet) and kept in the log, with its kind, for the model's provenance. With strict set, the first repair
  * needed is refused instead: THX_EINPUT with the same message.
- * A loop left with fewer than 3 points is refused. After a successful
+ *   6. tiny loops: a loop that steps 2-4 leave with fewer than 3 points (a
+ *      plane grazing the body's end or a bump of it) is dropped where the
+ *      plane missing the body would give the same surface: on a layer at an
+ *      end of the surface's stack (a layer left without loops is dropped and
+ *      the surface capped at its neighbour), inside another loop of its
+ *      layer, or where no loop of one neighbouring layer encloses it (a
+ *      branch ends at it). It is refused, naming it, when dropping would
+ *      leave the surface fewer than 2 layers (its only loop), a gap in its
+ *      stack (the only loop of a layer between others), or the surface cut
+ *      in two (loops of both neighbouring layers enclose it).
+ * After a successful
  * repair the contours satisfy thx_contours_validate's invariants.
  */
 #ifndef THORAX_REPAIR_H
@@ -59,13 +69,14 @@ typedef enum {
     THX_REPAIR_SPIKE,
     THX_REPAIR_UNTANGLED,
     THX_REPAIR_HOLE,
+    THX_REPAIR_TINY,
     THX_REPAIR_KINDS
 } thx_repair_kind;
 
 typedef struct {
     size_t n, cap;
     char **msg;                                  /* n messages, one per repair (owned) */
-    size_t closing, merged, spikes, untangled, holes; /* counts by kind (merged: points removed) */
+    size_t closing, merged, spikes, untangled, holes, tiny; /* counts by kind (merged: points removed) */
     int *kind;                                   /* n kinds (thx_repair_kind), parallel to msg (owned) */
     int quiet; /* set by the caller: the messages are only kept, not logged (the caller summarizes
                   them: thorax surfaces prints a count per kind and the first few, issue 24) */
