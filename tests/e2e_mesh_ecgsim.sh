@@ -28,7 +28,7 @@ bad() { echo "FAIL: $1" >&2; fails=$((fails + 1)); }
 "$THORAX" import -o ecg -q --scale 1000 "$D/thorax.tri" --name torso --role outer "$D/heart.tri" --name heart --role heart ||
     { bad "import"; exit 1; }
 "$THORAX" check ecg -q && ok "the model is valid" || bad "thorax check of the model"
-variants=("" "--no-heart" "--repair 0")
+variants=("" "--no-heart" "--repair 0" "--quality 0" "--quality 0 --repair 0")
 [ -n "${THORAX_QUICK:-}" ] && variants=("")
 for o in "${variants[@]}"; do
     tag=v$(echo "$o" | tr -d ' -')
