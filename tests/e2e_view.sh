@@ -258,16 +258,29 @@ for f in emodel/*.pts emodel/*.fac; do cmp -s "$f" "undone/${f#emodel/}" || fail
 "$THORAX" view emodel --size 400x440 -v > drag.out 2> drag.err &
 VP=$!
 waitfor $T drawn drag.err 1 || { cat drag.err; fail "no window drawn for the drag"; }
-W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
+# the drag viewer's own window (by its process; a window of a viewer still closing, or a passing
+# surface of this one, can vanish between the search and the event: BadWindow killed the script once)
+drag_window() { { xdotool search --onlyvisible --pid $VP --name "^thorax — " 2>/dev/null ||
+                  xdotool search --onlyvisible --name "^thorax — " 2>/dev/null; } | head -1 || true; }
+drag_key() { # KEYS: sent to the drag viewer's window, found again and sent again if it went away
+    local i w
+    for i in $(seq 1 20); do
+        w=$(drag_window)
+        [ -n "$w" ] && xdotool key --window "$w" "$1" 2>/dev/null && return 0
+        sleep 0.25
+    done
+    return 1
+}
+W=$(drag_window)
 [ -n "$W" ] || fail "no window for the drag"
 xdotool windowfocus --sync "$W" 2>/dev/null || true
 xdotool mousemove --window "$W" 200 250 keydown alt mousedown 1
 for k in 1 2 3 4 5 6; do xdotool mousemove_relative -- 4 -3; sleep 0.05; done
 xdotool mouseup 1 keyup alt
 waitfor $T grep -q "^edit: node_move" drag.out || { cat drag.out drag.err; fail "Alt+drag made no edit"; }
-xdotool key --window "$W" ctrl+shift+m
+drag_key ctrl+shift+m || fail "Ctrl+Shift+M could not be sent to the drag viewer"
 waitfor $T grep -q "^edit: saved" drag.out || { cat drag.out drag.err; fail "Ctrl+Shift+M did not save"; }
-xdotool key --window "$W" ctrl+q
+drag_key ctrl+q || fail "Ctrl+Q could not be sent to the drag viewer"
 wait $VP || fail "the drag session exited $?"
 echo "drag: $(grep '^edit: node_move' drag.out | head -1)"
 grep -q "^node_move " emodel/edits.txt || fail "the dragged model's log"
