@@ -48,45 +48,12 @@ fi
 
 $PY - ecg/heart.pts ecg/heart.fac "${levels[@]}" <<'PYEOF' || bad "the refined transfer matrices"
 import sys, math, json, os
-P = [list(map(float, l.split())) for l in open(sys.argv[1]) if l.strip()]
-F = [[int(x) - 1 for x in l.split()] for l in open(sys.argv[2]) if l.strip()]
+sys.path.insert(0, os.path.join(os.environ["SRC"], "tests"))
+from ecgsim_columns import read_heart, endocardial, load_rows, column_re, median
+P, F = read_heart(sys.argv[1], sys.argv[2])
 levels = [int(x) for x in sys.argv[3:]]
-# the ray test of tests/e2e_mesh_ecgsim.sh (copied: endocardial = a ray along the outward normal
-# meets the heart again for at least two of three directions)
-def sub(a, b): return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-def cross(a, b): return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-def dot(a, b): return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-assert min(min(t) for t in F) >= 0 and max(max(t) for t in F) < len(P)
-N = [[0.0] * 3 for _ in P]
-for t in F:
-    n = cross(sub(P[t[1]], P[t[0]]), sub(P[t[2]], P[t[0]]))
-    for v in t: N[v] = [N[v][k] + n[k] for k in range(3)]
-def hits(o, d, skip):
-    c = 0
-    for t in F:
-        if skip in t: continue
-        a = P[t[0]]; e1, e2 = sub(P[t[1]], a), sub(P[t[2]], a); h = cross(d, e2); det = dot(e1, h)
-        if abs(det) < 1e-12: continue
-        s = sub(o, a); u = dot(s, h) / det
-        if u < 0 or u > 1: continue
-        q = cross(s, e1); w = dot(d, q) / det
-        if w < 0 or u + w > 1: continue
-        c += dot(e2, q) / det > 1e-9
-    return c
-endo = set()
-for v, n in enumerate(N):
-    l = math.sqrt(dot(n, n)); n = [x / l for x in n]
-    a = [1, 0, 0] if abs(n[0]) < 0.9 else [0, 1, 0]
-    u = cross(n, a); lu = math.sqrt(dot(u, u)); u = [x / lu for x in u]; w = cross(n, u)
-    dirs = (n, [n[k] * math.cos(0.17) + u[k] * math.sin(0.17) for k in range(3)], [n[k] * math.cos(0.17) + w[k] * math.sin(0.17) for k in range(3)])
-    if sum(hits(P[v], d, v) > 0 for d in dirs) >= 2: endo.add(v)
-def load(p):
-    R = []
-    for l in open(p):
-        f = l.split()
-        try: R.append([float(x) for x in f])
-        except ValueError: continue
-    return [r for r in R if len(r) == len(P)]
+endo = endocardial(P, F)
+def load(p): return load_rows(p, len(P))
 good = True
 def check(c, what):
     global good
@@ -104,13 +71,7 @@ for n in levels:
           % (n, j.get("heart_refine"), j.get("heart_nodes_solved"), nf, j.get("unknowns")))
 def med_change(A, B, nodes):
     """median over the columns of |A_j - B_j| / |B_j|, each column less its mean (B the finer)"""
-    re = []
-    for j in nodes:
-        a = [r[j] for r in A]; b = [r[j] for r in B]
-        ma, mb = sum(a) / len(a), sum(b) / len(b)
-        a = [x - ma for x in a]; b = [x - mb for x in b]
-        re.append(math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b))) / math.sqrt(sum(y * y for y in b)))
-    return sorted(re)[len(re) // 2]
+    return median([column_re(A, B, j) for j in nodes])
 en = sorted(endo); ep = [v for v in range(len(P)) if v not in endo]
 check(60 < len(en) < 130, "%d endocardial nodes, %d epicardial" % (len(en), len(ep)))
 ch = {}

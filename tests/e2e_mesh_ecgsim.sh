@@ -51,53 +51,16 @@ done
 "$THORAX" forward vnoheart --transfer-out -o fem --format text -q || bad "forward --transfer-out"
 "$THORAX" bem vnoheart --transfer --refine 2 -o bem --format text -q || bad "bem --transfer --refine 2"
 $PY - ecg/heart.pts ecg/heart.fac fem/transfer.txt bem/transfer.txt <<'PYEOF' || bad "FEM against BEM columns"
-import sys, math
-P = [list(map(float, l.split())) for l in open(sys.argv[1]) if l.strip()]
-F = [[int(x) - 1 for x in l.split()] for l in open(sys.argv[2]) if l.strip()]
-def sub(a, b): return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-def cross(a, b): return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-def dot(a, b): return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-assert min(min(t) for t in F) >= 0 and max(max(t) for t in F) < len(P)
-N = [[0.0] * 3 for _ in P]
-for t in F:
-    n = cross(sub(P[t[1]], P[t[0]]), sub(P[t[2]], P[t[0]]))
-    for v in t: N[v] = [N[v][k] + n[k] for k in range(3)]
-def hits(o, d, skip):
-    c = 0
-    for t in F:
-        if skip in t: continue
-        a = P[t[0]]; e1, e2 = sub(P[t[1]], a), sub(P[t[2]], a); h = cross(d, e2); det = dot(e1, h)
-        if abs(det) < 1e-12: continue
-        s = sub(o, a); u = dot(s, h) / det
-        if u < 0 or u > 1: continue
-        q = cross(s, e1); w = dot(d, q) / det
-        if w < 0 or u + w > 1: continue
-        c += dot(e2, q) / det > 1e-9
-    return c
-endo = set()
-for v, n in enumerate(N):
-    l = math.sqrt(dot(n, n)); n = [x / l for x in n]
-    a = [1, 0, 0] if abs(n[0]) < 0.9 else [0, 1, 0]
-    u = cross(n, a); lu = math.sqrt(dot(u, u)); u = [x / lu for x in u]; w = cross(n, u)
-    dirs = (n, [n[k] * math.cos(0.17) + u[k] * math.sin(0.17) for k in range(3)], [n[k] * math.cos(0.17) + w[k] * math.sin(0.17) for k in range(3)])
-    if sum(hits(P[v], d, v) > 0 for d in dirs) >= 2: endo.add(v)
-def load(p):
-    R = []
-    for l in open(p):
-        f = l.split()
-        try: R.append([float(x) for x in f])
-        except ValueError: continue
-    return [r for r in R if len(r) == len(P)]
-A, B = load(sys.argv[3]), load(sys.argv[4])
+import sys, os
+sys.path.insert(0, os.path.join(os.environ["SRC"], "tests"))
+from ecgsim_columns import read_heart, endocardial, load_rows, column_re, median as med
+P, F = read_heart(sys.argv[1], sys.argv[2])
+endo = endocardial(P, F)
+A, B = load_rows(sys.argv[3], len(P)), load_rows(sys.argv[4], len(P))
 assert len(A) == len(B) == 300 and len(A[0]) == len(P), (len(A), len(B))
-zero, re = [], []
-for j in range(len(P)):
-    f = [r[j] for r in A]; b = [r[j] for r in B]
-    mf, mb = sum(f) / len(f), sum(b) / len(b)
-    f = [x - mf for x in f]; b = [x - mb for x in b]
-    if max(abs(x) for x in f) == 0: zero.append(j + 1)
-    re.append(math.sqrt(sum((x - y) ** 2 for x, y in zip(f, b))) / math.sqrt(sum(y * y for y in b)))
-med = lambda xs: sorted(xs)[len(xs) // 2]
+mean = [sum(r[j] for r in A) / len(A) for j in range(len(P))]
+zero = [j + 1 for j in range(len(P)) if max(abs(r[j] - mean[j]) for r in A) == 0]
+re = [column_re(A, B, j) for j in range(len(P))]
 ren = [re[j] for j in range(len(P)) if j in endo]; rep = [re[j] for j in range(len(P)) if j not in endo]
 print("heart nodes %d: endocardial %d, epicardial %d; all-zero FEM columns %s; median RE endocardial %.3f, epicardial %.3f"
       % (len(P), len(ren), len(rep), zero or "none", med(ren), med(rep)))
