@@ -850,8 +850,9 @@ static int circumcentre3(const double *a, const double *b, const double *c, cons
     return 1;
 }
 
-/* Smallest dihedral angle (degrees) and radius-edge ratio of a tetrahedron. */
-static void shape(const double *p[4], double *min_dih, double *radius_edge)
+/* Smallest dihedral angle (degrees), radius-edge ratio and circumradius of a tetrahedron (a flat
+ * one: 0, INFINITY, INFINITY). */
+static void shape(const double *p[4], double *min_dih, double *radius_edge, double *radius)
 {
     static const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
     double n[4][3];
@@ -860,7 +861,7 @@ static void shape(const double *p[4], double *min_dih, double *radius_edge)
         double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
         double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
         double l = sqrt(x * x + y * y + z * z);
-        if (!(l > 0)) { *min_dih = 0; *radius_edge = INFINITY; return; }
+        if (!(l > 0)) { *min_dih = 0; *radius_edge = *radius = INFINITY; return; }
         n[f][0] = x / l; n[f][1] = y / l; n[f][2] = z / l;
         /* outward: away from the opposite corner */
         const double *o = p[f];
@@ -876,8 +877,9 @@ static void shape(const double *p[4], double *min_dih, double *radius_edge)
         }
     *min_dih = best;
     double cc[3];
-    if (!circumcentre3(p[0], p[1], p[2], p[3], cc)) { *radius_edge = INFINITY; return; }
+    if (!circumcentre3(p[0], p[1], p[2], p[3], cc)) { *radius_edge = *radius = INFINITY; return; }
     double r = dist3(cc, p[0]), e = INFINITY;
+    *radius = r;
     for (int i = 0; i < 4; i++)
         for (int j = i + 1; j < 4; j++) { double l = dist3(p[i], p[j]); if (l < e) e = l; }
     *radius_edge = r / e;
@@ -928,15 +930,12 @@ static thx_status refine_quality(conformer *C, const conform_quality *Q, const t
         }
         const double *p[4];
         for (int k = 0; k < 4; k++) p[k] = X(C, q[k]);
-        double dih, re;
-        shape(p, &dih, &re);
+        double dih, re, rad;
+        shape(p, &dih, &re, &rad);
         int bad = (Q->radius_edge > 0 && re > Q->radius_edge) || (Q->min_dihedral > 0 && dih < Q->min_dihedral);
         double c[3];
         for (int k = 0; k < 3; k++) c[k] = 0.25 * (p[0][k] + p[1][k] + p[2][k] + p[3][k]);
-        if (!bad && Q->size) {
-            double cs[3];
-            bad = circumcentre3(p[0], p[1], p[2], p[3], cs) && dist3(cs, p[0]) > Q->size(Q->user, c);
-        }
+        if (!bad && Q->size) bad = isfinite(rad) && rad > Q->size(Q->user, c);
         if (!bad) continue;
         if (!Q->inside(Q->user, c)) continue;
         if (!thx_dt_has_tet(C->dt, q)) continue;
