@@ -23,7 +23,11 @@ packages=(
   time                               # bench: peak memory (/usr/bin/time -v)
   man-db groff-base                  # tests: man -l renders the man pages made from the help (e2e_install)
   tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
-  libcgal-dev                        # bench: CGAL's Delaunay_triangulation_3 beside ours (bench/delaunay_cgal.cpp, g++)
+  libcgal-dev                        # bench: CGAL's Delaunay_triangulation_3 beside ours (bench/delaunay_cgal.cpp, g++); Mesh_3 on label maps (bench/image.sh)
+  libnifti2-dev libniftiio-dev       # images: NIfTI-1/2 (.nii, .nii.gz) through nifti2_io (src/image/nifti.c)
+  libgdcm-dev libgdcm-tools g++      # images: DICOM series through GDCM (src/image/dicom_gdcm.cc); gdcmimg/gdcmdump in tests
+  python3-nibabel                    # tests: nibabel reads and writes NIfTI beside us
+  invesalius-examples                # tests: a real CT (InVesalius's Cranium.inv3)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -3,7 +3,7 @@
 
     level 0  core
     level 1  model
-    level 2  geom, io, leads
+    level 2  geom, io, image, leads
     level 3  mesh, check
     level 4  fem, bem, render, phantom, import, edit, inverse
     level 5  picture (a picture's settings and data -> scenes and annotations; render and view share it),
@@ -29,7 +29,7 @@ import subprocess
 import sys
 import tempfile
 
-LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "leads": 2, "mesh": 3, "check": 3,
+LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3,
          "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
 
 
