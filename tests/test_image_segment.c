@@ -69,8 +69,8 @@ int main(void)
                 if (r > 26 && frand(&seed) < 0.002) v = 500;      /* speckle */
                 ct.v[thx_image_at(&ct, i, j, k)] = v;
             }
-    thx_threshold tissues[2] = {{-400, 4000, 1}, {226, 4000, 2}};
-    thx_segment_opts o = {tissues, 2, 0, 1, 1};
+    thx_threshold tissues[2] = {{-400, 4000, 1, 0}, {226, 4000, 2, 0}};
+    thx_segment_opts o = {tissues, 2, 1, 1};
     thx_image lab;
     thx_segment_report rep;
     CHECK_OK(ctx, thx_image_segment(ctx, &ct, &o, &lab, &rep));
@@ -103,8 +103,8 @@ int main(void)
                 int in_c = i >= 10 && i < 50 && j >= 35 && j < 50 && k >= 10 && k < 30 && (i < 28 || i > 32);
                 ct.v[thx_image_at(&ct, (size_t)i, (size_t)j, (size_t)k)] = (in_a || in_b || in_c) ? 100.0f : 0.0f;
             }
-    thx_threshold one = {50, 200, 3};
-    thx_segment_opts oc = {&one, 1, 1.5, 0, 0};
+    thx_threshold one = {50, 200, 3, 1.5};
+    thx_segment_opts oc = {&one, 1, 0, 0};
     CHECK_OK(ctx, thx_image_segment(ctx, &ct, &oc, &lab, NULL));
     CHECK(lab.v[thx_image_at(&lab, 30, 20, 20)] == 3);  /* bridged */
     CHECK(lab.v[thx_image_at(&lab, 30, 40, 20)] == 0);  /* not bridged */
@@ -113,8 +113,8 @@ int main(void)
     thx_image_free(&lab);
 
     /* bad ranges */
-    thx_threshold bad = {10, 5, 1};
-    thx_segment_opts ob = {&bad, 1, 0, 0, 0};
+    thx_threshold bad = {10, 5, 1, 0};
+    thx_segment_opts ob = {&bad, 1, 0, 0};
     CHECK(thx_image_segment(ctx, &ct, &ob, &lab, NULL) == THX_EINPUT);
     CHECK(tl_msg_has(ctx, "is empty"));
     CHECK(lab.v == NULL);

@@ -7,13 +7,15 @@
  * Tissues are nested, outer first (skin, then bone; torso, then lungs...): tissue t's region is
  * the voxels inside its value range, together with every later tissue's, kept inside the
  * previous tissue's final region. Each region in turn is
- *   1. closed morphologically with a ball of `close_mm` (gaps narrower than 2 * close_mm bridged;
- *      exact Euclidean distances in mm, anisotropic voxels handled);
+ *   1. closed morphologically with a ball of the tissue's `close_mm` (gaps narrower than 2 * close_mm
+ *      bridged; exact Euclidean distances in mm, anisotropic voxels handled: a thin skull wall broken
+ *      by partial volume wants several mm, a scalp with ears and a head holder beside it wants little);
  *   2. cut to its largest 6-connected component (when `largest`);
  *   3. filled plane by plane along the image's superior axis (when `fill_planes`): every part of
- *      a plane not 4-connected to the plane's border through the outside joins the region, so
- *      each plane holds no holes (a skull becomes its outer surface's inside; sinuses and airways
- *      join the head);
+ *      a plane not 4-connected to the plane's border through the outside of the region closed in
+ *      the plane by a disc of `close_mm` joins the region, so each plane holds no holes (a skull
+ *      becomes its outer surface's inside even where partial volume broke its wall wider than the
+ *      3-D closing bridges; sinuses and airways join the head);
  * and the output voxel is the label of the innermost tissue whose region holds it, 0 outside.
  */
 #ifndef THORAX_IMAGE_SEGMENT_H
@@ -28,12 +30,12 @@ extern "C" {
 typedef struct {
     double lo, hi;   /* value range, inclusive (after the image's rescale: Hounsfield units for CT) */
     int label;       /* label written (1..65535) */
+    double close_mm; /* closing radius of this tissue's region, mm (0: none) */
 } thx_threshold;
 
 typedef struct {
     const thx_threshold *tissues;  /* outer first */
     size_t n_tissues;
-    double close_mm;               /* closing radius, mm (0: none) */
     int largest;                   /* keep the largest 6-connected component of each region */
     int fill_planes;               /* fill each plane's holes along the superior axis */
 } thx_segment_opts;
@@ -45,7 +47,7 @@ typedef struct {
 } thx_segment_report;
 
 /* Writes the label map into *out (allocated here, the input's geometry, integral, format ""). THX_EINPUT
- * when a range is empty or reversed, a label is out of 1..65535, or there are no tissues; rep may be NULL. */
+ * when a range is empty or reversed, a label is out of 1..65535, a closing radius is negative, or there are no tissues; rep may be NULL. */
 thx_status thx_image_segment(thx_ctx *ctx, const thx_image *in, const thx_segment_opts *opts, thx_image *out,
                              thx_segment_report *rep);
 
