@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "thorax/core/fileio.h"
-#include "io/parse_uint.h"
+#include "io/common/parse_uint.h"
 
 static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 

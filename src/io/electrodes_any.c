@@ -18,7 +18,7 @@
 #include <string.h>
 
 #include "thorax/core/fileio.h"
-#include "io/parse_uint.h"
+#include "io/common/parse_uint.h"
 
 const char *thx_electrodes_kind_name(thx_electrodes_kind k)
 {

@@ -28,7 +28,7 @@
 #include "thorax/core/fileio.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
-#include "io/volume_io.h"
+#include "io/common/io_text.h"
 int thx_export_format_parse(const char *s, thx_export_format *out)
 {
     static const struct { const char *name; thx_export_format f; } tab[] = {

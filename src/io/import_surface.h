@@ -21,7 +21,7 @@
 
 #include "thorax/io/surface_read.h"
 #include "thorax/core/fileio.h"
-#include "io/import_text.h"
+#include "io/common/import_text.h"
 
 /* ------------------------------------------------------- the surface store */
 

@@ -19,7 +19,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "io/import_text.h"
+#include "io/common/import_text.h"
 #include "thorax/core/fileio.h"
 #include "thorax/io/volume_read.h"
 /* Can path be opened for reading? */

@@ -35,7 +35,7 @@
 #include <strings.h>
 
 #include "thorax/core/fileio.h"
-#include "io/parse_uint.h"
+#include "io/common/parse_uint.h"
 
 /* Fewest bytes a segment takes in a file ("1 lead 1\n0 0 0 0\n", 17, less a last newline), and a
  * point ("0 0 0 0\n", 8, less a last newline): the counts a file can hold are bounded by these

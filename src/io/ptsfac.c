@@ -27,7 +27,7 @@
 #include "thorax/core/fileio.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
-#include "io/volume_io.h"
+#include "io/common/io_text.h"
 
 /* Writes one coordinate "%.6f", with a value that rounds to zero as +0 (the rule is in model.c);
  * from 1e15 on (where a double holds no more than whole millimetres and "%.6f" only grows:

@@ -32,7 +32,7 @@
 #include <matio.h>
 
 #include "thorax/core/fileio.h"
-#include "io/parse_uint.h"
+#include "io/common/parse_uint.h"
 #include "io/series_impl.h"
 
 /* ------------------------------------------------------------ text out */
