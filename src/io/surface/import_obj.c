@@ -1,7 +1,7 @@
 /*
  * Surfaces made elsewhere: Wavefront OBJ (thorax/io/surface_read.h).
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* ------------------------------------------------------------- OBJ */
 

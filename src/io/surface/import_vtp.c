@@ -1,7 +1,7 @@
 /*
  * Surfaces made elsewhere: VTK XML PolyData (.vtp) with ascii arrays (thorax/io/surface_read.h).
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* Reads an ascii DataArray starting at tag into *out (count values). */
 static thx_status vtp_array(build *b, const char *buf, const char *tag, const char *end, const char *what, size_t count,

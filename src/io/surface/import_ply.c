@@ -1,7 +1,7 @@
 /*
  * Surfaces made elsewhere: PLY, ascii and binary (thorax/io/surface_read.h).
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* -------------------------------------------------- scalar types (PLY, VTK) */
 

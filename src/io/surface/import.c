@@ -22,7 +22,7 @@
  *    (v0, vi, vi+1), which keeps their winding; a non-convex polygon may give
  *    overlapping triangles, which the self-intersection check then finds.
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/graphicsio.h"
 /* ------------------------------------------------------------ formats */

@@ -6,7 +6,7 @@
  * appearance, so the result is deterministic. Nothing is merged within a
  * tolerance: that would change the geometry behind the user's back.
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* ------------------------------------------------- binary helpers, vertex merge */
 

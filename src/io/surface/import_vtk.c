@@ -2,7 +2,7 @@
  * Surfaces made elsewhere: legacy VTK POLYDATA (thorax/io/surface_read.h); its cell reader serves
  * the .vtp reader too (import_vtp.c).
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* ------------------------------------------------------- legacy VTK */
 

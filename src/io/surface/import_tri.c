@@ -8,7 +8,7 @@
  * counts 1, 2, 3, ... (or 0, 1, 2, ...). Labels are otherwise ignored, as
  * in Oostendorp's loadtri.m: entries are numbered by position.
  */
-#include "io/import_surface.h"
+#include "io/surface/import_surface.h"
 
 /* ------------------------------------------------------------- .tri */
 
