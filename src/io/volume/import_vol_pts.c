@@ -1,7 +1,7 @@
 /*
  * Volume meshes made elsewhere: .pts + .tet / .elem, plain and CARP (thorax/io/volume_read.h).
  */
-#include "io/import_volume_impl.h"
+#include "io/volume/import_volume_impl.h"
 
 /* ------------------------------------------------- .pts + .tet / .elem */
 

@@ -4,7 +4,7 @@
  */
 #include <zlib.h>
 
-#include "io/import_volume_impl.h"
+#include "io/volume/import_volume_impl.h"
 
 /* ---------------------------------------------------------- VTK XML (.vtu) */
 

@@ -2,7 +2,7 @@
  * Volume meshes made elsewhere: legacy VTK UNSTRUCTURED_GRID, and the VTK
  * cell handling the XML reader shares (thorax/io/volume_read.h).
  */
-#include "io/import_volume_impl.h"
+#include "io/volume/import_volume_impl.h"
 
 /* ------------------------------------------------------------ cell types */
 

@@ -21,7 +21,7 @@
  *    complete (the closing line of every Gmsh section, the last value of
  *    every array): a file cut short is an error, never half a mesh.
  */
-#include "io/import_volume_impl.h"
+#include "io/volume/import_volume_impl.h"
 /* ------------------------------------------------------------ formats */
 
 static const char *const vformat_names[] = {"none", "pts/tet", "vtk", "vtu", "msh"};

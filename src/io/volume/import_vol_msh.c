@@ -1,7 +1,7 @@
 /*
  * Volume meshes made elsewhere: Gmsh MSH 4.1 ASCII (thorax/io/volume_read.h).
  */
-#include "io/import_volume_impl.h"
+#include "io/volume/import_volume_impl.h"
 
 /* ---------------------------------------------------------- Gmsh .msh */
 
