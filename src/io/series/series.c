@@ -32,7 +32,7 @@
 
 #include "thorax/core/fileio.h"
 #include "thorax/io/graphicsio.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 int thx_series_format_parse(const char *name, thx_series_format *fmt)
 {

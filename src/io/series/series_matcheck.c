@@ -53,7 +53,7 @@
 
 #include <zlib.h>
 
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 #define MAT_MAX_DEPTH 32
 #define ZLIB_MAX_RATIO 1032u

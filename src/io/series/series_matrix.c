@@ -38,7 +38,7 @@
 #include <strings.h>
 
 #include "thorax/core/fileio.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 /* One cell at *p (skipping blanks and one comma); returns its length, 0 at the end of the line. */
 static size_t cell(char **p, const char **start, int *commas)

@@ -33,7 +33,7 @@
 
 #include "thorax/core/fileio.h"
 #include "io/common/parse_uint.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 /* ------------------------------------------------------------ text out */
 

@@ -32,7 +32,7 @@
 #include <matio.h>
 
 #include "thorax/core/fileio.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 /* ------------------------------------------------------------- MATLAB */
 

@@ -19,7 +19,7 @@
 #include <matio.h>
 
 #include "thorax/core/fileio.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 /* map3d .pot: the values of one time instant, one per node (any whitespace between them). */
 thx_status series_read_pot(thx_ctx *ctx, const char *path, thx_series **out)

@@ -26,7 +26,7 @@
 #include <matio.h>
 
 #include "thorax/core/fileio.h"
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 #define RAW_MAGIC "THXSER01"
 #define RAW_HEADER 200 /* 8 magic + 8 rows + 8 frames + 32 unit + 16 time_unit + 128 label */

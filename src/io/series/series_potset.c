@@ -21,7 +21,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 
-#include "io/series_impl.h"
+#include "io/series/series_impl.h"
 
 typedef struct {
     unsigned long long num;
