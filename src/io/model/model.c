@@ -34,7 +34,7 @@
 
 #include "thorax/core/fileio.h"
 #include "thorax/core/sha256.h"
-#include "io/volume_io.h"
+#include "io/model/volume_io.h"
 
 #define MODEL_FORMAT "thorax-model"
 #define MODEL_VERSION 1

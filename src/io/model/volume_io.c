@@ -39,7 +39,7 @@
  *    entities, which Gmsh reads.
  *  - Output is deterministic; every file is written atomically.
  */
-#include "io/volume_io.h"
+#include "io/model/volume_io.h"
 
 #include <errno.h>
 #include <limits.h>
