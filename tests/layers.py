@@ -12,13 +12,24 @@
     level 7  cli
 
 A module may use itself and any module of a lower level, never a sibling or a module above.
+Within io, the same rule one floor down (docs/design/io.md, "io by family"): src/io/ is split by
+family, each a folder, and a family uses only itself, io common and the families below it:
+
+    io level 0  common   private headers several families share (text scanning, integers, text helpers)
+    io level 1  map3d    map3d/CVRTI/SCIRun files: graphicsio (.geom, .tsdf), .pts/.fac, channels, lmarks
+    io level 2  surface, volume, series, export   readers of surfaces, volume meshes; time series; exports
+    io level 3  model    thorax's own files: model directory, volume mesh, contours, solution, electrodes, dipoles
+
 Checked three ways, each failing with the file and what it uses:
   includes  every #include "thorax/M/..." in src/X/ and include/thorax/X/ (and a private header
-            "M/..." of src/M/ is used only inside src/M/);
+            "M/..." of src/M/ is used only inside src/M/; a private header "io/F/..." of an io family
+            only inside src/io/F/, unless F is common; every file of src/io/ is in a known family);
   headers   every public header is include/thorax/M/NAME.h of a known module M, and each function
             it declares is defined in src/M/ (header names match their modules);
   calls     with --build BUILD: every thx_ symbol an object file of src/X/ needs (nm -u) is
-            defined in src/X/ or a module below it.
+            defined in src/X/ or a module below it; within io, every symbol (thx_ or a family's
+            own, e.g. series_read_pot) an object of src/io/F/ needs from another io object is
+            defined in F or a family below F.
 Usage: layers.py SRC [--build BUILD]     exit 0 when all hold, 1 with the violations listed;
        layers.py --self-test             the checker on made-up trees with planted violations.
 """
@@ -33,8 +44,23 @@ LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mes
          "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
 
 
+IO_LEVEL = {"common": 0, "map3d": 1, "surface": 2, "volume": 2, "series": 2, "export": 2, "model": 3}
+
+
 def allowed(user, used):
     return user == used or LEVEL[used] < LEVEL[user]
+
+
+def io_allowed(user, used):
+    return user == used or IO_LEVEL[used] < IO_LEVEL[user]
+
+
+def io_family(rel):
+    """The io family of a path src/io/F/... (None outside src/io/; "" for a file directly in src/io/)."""
+    parts = rel.replace(os.sep, "/").split("/")
+    if parts[:2] != ["src", "io"]:
+        return None
+    return parts[2] if len(parts) > 3 else ""
 
 
 def strip_comments(text):
@@ -71,6 +97,11 @@ def check_includes(root, files):
         if mod not in LEVEL:
             bad.append(f"{rel}: '{mod}' is not a module of the layer table (tests/layers.py)")
             continue
+        fam = io_family(rel)
+        if fam is not None and fam not in IO_LEVEL:
+            bad.append(f"{rel}: '{fam or 'src/io/'}' is not an io family of the table (tests/layers.py, IO_LEVEL)"
+                       if fam else f"{rel}: a file directly in src/io/, not in a family folder (tests/layers.py, IO_LEVEL)")
+            continue
         text = strip_comments(open(os.path.join(root, rel), errors="replace").read())
         for m in inc.finditer(text):
             name = m.group(1)
@@ -83,8 +114,15 @@ def check_includes(root, files):
                 elif not allowed(mod, used):
                     bad.append(f"{rel}:{line}: {mod} (level {LEVEL[mod]}) includes {name} of {used} "
                                f"(level {LEVEL[used]}): against the direction")
-            elif len(parts) == 2 and parts[0] in LEVEL and parts[0] != mod:
+            elif len(parts) >= 2 and parts[0] in LEVEL and parts[0] != mod:
                 bad.append(f"{rel}:{line}: {mod} includes {name}, a private header of {parts[0]}")
+            elif parts[0] == "io" and mod == "io":
+                used = parts[1] if len(parts) == 3 else None
+                if used not in IO_LEVEL:
+                    bad.append(f"{rel}:{line}: includes {name}, not a header of an io family (io/FAMILY/NAME.h)")
+                elif used != fam and used != "common":
+                    bad.append(f"{rel}:{line}: io family {fam} includes {name}, a private header of io family "
+                               f"{used} (only io/common/ headers are shared)")
     return bad
 
 
@@ -177,6 +215,34 @@ def check_calls(root, build, defs):
     return bad
 
 
+def check_io_calls(root, build):
+    """Within io: an object of family F needs from another io object only symbols of F or a family below."""
+    objdir = os.path.join(build, "CMakeFiles", "thorax.dir", "src")
+    objs = [o for m, o in objects(objdir, root) if m == "io"]
+    fam_of = lambda obj: os.path.relpath(obj, os.path.join(objdir, "io")).split(os.sep)[0]
+    defs = {}
+    for obj in objs:
+        r = subprocess.run(["nm", "-g", "--defined-only", obj], capture_output=True, text=True)
+        for ln in r.stdout.splitlines():
+            p = ln.split()
+            if len(p) == 3:
+                defs[p[2]] = fam_of(obj)
+    bad = []
+    for obj in objs:
+        fam = fam_of(obj)
+        if fam not in IO_LEVEL:
+            continue  # named by check_includes
+        r = subprocess.run(["nm", "-u", obj], capture_output=True, text=True)
+        for ln in r.stdout.splitlines():
+            sym = ln.split()[-1]
+            used = defs.get(sym)
+            if used in IO_LEVEL and not io_allowed(fam, used):
+                src = os.path.relpath(obj, objdir).replace(".o", "")
+                bad.append(f"src/{src}: io family {fam} (io level {IO_LEVEL[fam]}) calls {sym} of io family "
+                           f"{used} (io level {IO_LEVEL[used]}): against the direction")
+    return bad
+
+
 def run(root, build):
     files = sources(root)
     bad = check_includes(root, files)
@@ -186,7 +252,7 @@ def run(root, build):
         if not defs:
             bad.append(f"{build}: no object files of the library (build it first)")
         bad += check_headers(root, files, defs)
-        calls = check_calls(root, build, defs)
+        calls = check_calls(root, build, defs) + check_io_calls(root, build)
         ncalls = len(defs)
         bad += calls
     return files, bad, ncalls
@@ -204,6 +270,9 @@ def self_test():
         put("include/thorax/geom/g.h", "#include \"thorax/model/a.h\"\nint thx_g(void);\n")
         put("src/model/a.c", "#include \"thorax/model/a.h\"\nint thx_a(void) { return 1; }\n")
         put("src/geom/g.c", "#include \"thorax/geom/g.h\"\n/* #include \"thorax/mesh/m.h\" in a comment */\n")
+        put("src/io/common/t.h", "int t;\n")
+        put("src/io/series/s.c", "#include \"io/common/t.h\"\n#include \"io/series/impl.h\"\n")
+        put("src/io/series/impl.h", "int u;\n")
         _, bad, _ = run(tmp, None)
         ok = not bad
         cases = [
@@ -212,11 +281,39 @@ def self_test():
             ("src/mesh/m.c", "#include \"check/private.h\"\n", "a private header of check"),
             ("include/thorax/stray.h", "int thx_s(void);\n", "outside include/thorax/MODULE/"),
             ("src/viewer/v.c", "int v;\n", "'viewer' is not a module"),
+            ("src/io/surface/s.c", "#include \"io/series/series_impl.h\"\n",
+             "io family surface includes io/series/series_impl.h, a private header of io family series"),
+            ("src/io/stray.c", "int s;\n", "a file directly in src/io/"),
+            ("src/io/images/i.c", "int i;\n", "'images' is not an io family"),
+            ("src/mesh/n.c", "#include \"io/common/parse_uint.h\"\n", "mesh includes io/common/parse_uint.h, a private header of io"),
         ]
         for rel, text, want in cases:
             put(rel, text)
             _, bad, _ = run(tmp, None)
             found = any(want in b for b in bad)
+            print(f"self-test: {rel}: {'found' if found else 'MISSED'} ({want})")
+            ok &= found
+            os.remove(os.path.join(tmp, rel))
+        # calls within io, on object files compiled here: down is allowed, up and sideways are not
+        objdir = os.path.join(tmp, "build", "CMakeFiles", "thorax.dir", "src")
+        def obj(rel, text):
+            put(rel, text)
+            o = os.path.join(objdir, rel[len("src/"):] + ".o")
+            os.makedirs(os.path.dirname(o), exist_ok=True)
+            subprocess.run(["cc", "-c", "-o", o, os.path.join(tmp, rel)], check=True)
+        obj("src/io/map3d/m.c", "int thx_m(void) { return 1; }\n")
+        obj("src/io/surface/s.c", "int thx_m(void);\nint surface_s(void) { return thx_m(); }\n")
+        good = check_io_calls(tmp, os.path.join(tmp, "build"))
+        print(f"self-test: io calls down (surface -> map3d): {'passed' if not good else good}")
+        ok &= not good
+        for rel, text, want in [
+            ("src/io/map3d/up.c", "int surface_s(void);\nint thx_u(void) { return surface_s(); }\n",
+             "io family map3d (io level 1) calls surface_s of io family surface"),
+            ("src/io/series/side.c", "int surface_s(void);\nint thx_v(void) { return surface_s(); }\n",
+             "io family series (io level 2) calls surface_s of io family surface"),
+        ]:
+            obj(rel, text)
+            found = any(want in b for b in check_io_calls(tmp, os.path.join(tmp, "build")))
             print(f"self-test: {rel}: {'found' if found else 'MISSED'} ({want})")
             ok &= found
             os.remove(os.path.join(tmp, rel))

@@ -1,4 +1,4 @@
-/* Current dipole sources (src/fem/dipole.c, src/io/dipoles_file.c): the dipole file (both layouts,
+/* Current dipole sources (src/fem/dipole.c, src/io/model/dipoles_file.c): the dipole file (both layouts,
  * bad input named by file and line); the homogeneous sphere against its closed form, converging;
  * OpenMEEG's three shells (radii 87, 92, 100 mm; 1, 0.0125, 1 S/m) on a coarse mesh against the
  * Legendre series of Zhang (1995) (the formula of OpenMEEG's analytic files); superposition of

@@ -1,6 +1,6 @@
 /*
  * Tests of electrodes, leads and the phantom's beat (thorax/model/electrodes.h:
- * src/io/electrodes.c, src/io/leads.c, src/phantom/electrodes_phantom.c,
+ * src/io/model/electrodes.c, src/io/leads.c, src/phantom/electrodes_phantom.c,
  * src/phantom/beat.c):
  *  - electrode files: round trip, byte-identical output, malformed files
  *    refused with the file, line and electrode named and nothing returned,
@@ -185,7 +185,7 @@ static void test_bad_files(void)
         CHECK(thx_electrodes_read(ctx, tl_path("nul.txt"), &e) == THX_EINPUT && e == NULL);
         CHECK(strstr(thx_ctx_message(ctx), "nul.txt:5: NUL byte at byte offset 54") != NULL);
     }
-    /* counts and node numbers: digits only, overflow-checked (src/io/parse_uint.h) */
+    /* counts and node numbers: digits only, overflow-checked (src/io/common/parse_uint.h) */
     expect_read_fail("count64.txt", "thorax-electrodes 1\nsurface torso\ncount 18446744073709551617\nRA 1 0 0 0\nend\n",
                      "count64.txt:3: expected 'count N' with N a positive integer", NULL);
     expect_read_fail("countbig.txt", "thorax-electrodes 1\nsurface torso\ncount 2147483646\nRA 1 0 0 0\nend\n",

@@ -1,6 +1,6 @@
 /*
  * Tests of electrodes anywhere on a surface, channel maps and lead links
- * (src/model/surface_nearest.c, electrodes_place.c, channels.c; src/io/channels.c,
+ * (src/model/surface_nearest.c, electrodes_place.c, channels.c; src/io/map3d/channels.c,
  * electrodes_any.c; src/leads/leads.c), on the phantom's torso:
  *  - a field linear in space, given at the nodes, is reproduced exactly at
  *    electrodes between nodes (on a triangle, or off the surface and projected);

@@ -1,5 +1,5 @@
 /*
- * Tests of surface import (src/io/import.c): every format written here by
+ * Tests of surface import (src/io/surface/import.c): every format written here by
  * hand (a cube, and variants) and read back; the index base of .fac and .tri;
  * OpenMEEG's .tri (normals, strict counts);
  * OBJ quads, v/vt/vn and negative indices; STL vertex merging; PLY ascii and

@@ -1,5 +1,5 @@
 /*
- * Tests of volume mesh import (src/io/import_volume.c, thorax/import/import.h):
+ * Tests of volume mesh import (src/io/volume/import_volume.c, thorax/import/import.h):
  * a hand-made two-region cube written by hand in every format (.pts/.tet
  * with either index base, CARP .pts/.elem, legacy VTK, VTU, Gmsh MSH 4.1)
  * and read back into the same model; regions named and given conductivities

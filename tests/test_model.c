@@ -1,6 +1,6 @@
 /*
  * Tests of model directories, .pts/.fac reading and writing, and surface export
- * (src/io/model.c, src/io/export.c).
+ * (src/io/model/model.c, src/io/export/export.c).
  *
  * A model.json written by thx_model_write looks like this (the schema the
  * reader checks):

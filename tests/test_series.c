@@ -1,5 +1,5 @@
 /*
- * Tests of the time series files (src/io/series.c, thorax/model/series.h):
+ * Tests of the time series files (src/io/series/series.c, thorax/model/series.h):
  * round trips through text, raw and .mat (values, times, units and label;
  * NaN and infinities), byte-identical output, every malformed input refused
  * with the file, line and fault named and nothing written, .mat files made

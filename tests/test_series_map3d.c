@@ -1,5 +1,5 @@
 /*
- * Tests of map3d's files (src/io/graphicsio.c, series_potset.c, series_fids.c,
+ * Tests of map3d's files (src/io/map3d/graphicsio.c, src/io/series/series_potset.c, series_fids.c,
  * series_matrix.c, the fids and kept fields of series_mat.c) on the real files
  * of shared/data/map3d:
  *  - every .geom surface equals the .pts/.fac text pair holding the same surface

@@ -1,7 +1,7 @@
 /*
  * Tests of the volume mesh files of a model directory (volume.pts,
  * volume.tet, NAME.vmap, the "volume" and "regions" parts of model.json) and
- * of the volume exports .vtu and Gmsh .msh (src/io/volume_io.c).
+ * of the volume exports .vtu and Gmsh .msh (src/io/model/volume_io.c).
  *
  * The test volume: a 10 mm cube with its 8 corners, its 6 face centres, the
  * 6 nodes of an octahedron (radius 2 about the centre) and random interior

@@ -1,5 +1,5 @@
 /*
- * Fuzz harness: a model's volume mesh files (thx_model_read -> src/io/volume_io.c). The manifest
+ * Fuzz harness: a model's volume mesh files (thx_model_read -> src/io/model/volume_io.c). The manifest
  * and the surfaces are the fixed model of model_fixture.h; the input, cut at its NUL bytes, gives
  * volume.pts, volume.tet, volume.steiner and box.vmap in that order (a part not given keeps the
  * fixture's file). Properties of an accepted model: no more nodes, tetrahedra and Steiner records

@@ -1,0 +1,30 @@
+/*
+ * The text helpers of src/io/map3d/ptsfac.c that several io families share (io common, docs/design/io.md,
+ * "io by family"): the model directory (src/io/model/), the exports (src/io/export/) and the .pts/.fac
+ * reader itself. Not installed, not public. Moved unchanged from volume_io.h, which keeps the model
+ * directory's own private interface (src/io/model/volume_io.h).
+ */
+#ifndef THORAX_IO_COMMON_IO_TEXT_H
+#define THORAX_IO_COMMON_IO_TEXT_H
+
+#include <stdio.h>
+
+#include "thorax/model/model.h"
+
+/* Shared text helpers (defined in ptsfac.c). */
+/* Writes one coordinate "%.6f", a value that rounds to zero as "0.000000". */
+void thx_io_put_coord(FILE *f, double v);
+/* Reads a whole text file (thx_read_file), refusing one with a NUL byte (naming its line):
+ * the line parsers stop at a NUL, which would cut the file short without a word. */
+thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
+/* Splits the line at p into at most max whitespace-separated tokens
+ * (NUL-terminated in place); returns the count (max + 1 = "more than max");
+ * *next = start of the following line or NULL. */
+int thx_io_split_line(char *p, char **tok, int max, char **next);
+/* Reads "x y z" lines (blank lines allowed); `what` prefixes the messages after FILE:LINE:. */
+thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out);
+/* Reads a .pts/.fac pair; want_base 0 or 1 requires that .fac base, -1 detects it (ptsfac.c). */
+thx_status thx_io_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fac, const char *name, thx_role role,
+                              int want_base, thx_surface **out, int *base);
+
+#endif
