@@ -6,6 +6,7 @@
  * plane, a colour per contour surface (the label table's colour k + 1 for the file's surface k).
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -188,4 +189,32 @@ void picture_scan_free(thx_picture_data *d)
     }
     thx_contours_destroy(&d->contours);
     pic_scan_close(&d->scan);
+}
+
+int thx_picture_scan_move(thx_picture_data *d, int k, int n)
+{
+    if (!d->scan || k < 0 || k >= d->n_scan_planes) return 0;
+    double lo, hi, step, old = d->scan_pos[k], pos;
+    pic_scan_range(d->scan, d->scan_axis[k], &lo, &hi, &step);
+    if (d->scan_axis[k] >= 'i' && d->scan_axis[k] <= 'k') { /* an index: the next whole index */
+        pos = floor(old + 0.5) + n;
+        pos = fmin(fmax(pos, lo), hi);
+    } else { /* millimetres: the planes of voxel centres, half a step inside the faces */
+        double c0 = lo + 0.5 * step, m = floor((old - c0) / step + 0.5) + n, top = floor((hi - lo) / step + 1e-6) - 1;
+        m = fmin(fmax(m, 0), fmax(top, 0));
+        pos = c0 + m * step;
+    }
+    d->scan_pos[k] = pos;
+    return pos != old;
+}
+
+void thx_picture_scan_describe(const thx_picture_data *d, char *buf, size_t size)
+{
+    if (!d->scan || !d->n_scan_planes) {
+        snprintf(buf, size, "no image");
+        return;
+    }
+    int ras = d->scan_axis[0] <= 'z' && d->scan_axis[0] >= 'x';
+    snprintf(buf, size, "image plane %c=%g%s, window %g level %g", d->scan_axis[0], d->scan_pos[0], ras ? " mm" : "",
+             d->window, d->level);
 }

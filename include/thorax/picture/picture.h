@@ -348,6 +348,13 @@ thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, 
 /* After the model's surfaces changed (an edit): forget what was computed from their geometry. */
 void thx_picture_geometry_changed(thx_picture_data *d);
 
+/* The scan's plane k (o->image) moved by n of the image's planes along its axis (a RAS plane to the
+ * plane of voxel centres n steps on, an index plane to index + n), kept inside the image. Returns
+ * 1 when it moved, 0 when already at the image's end (or no such plane). */
+int thx_picture_scan_move(thx_picture_data *d, int k, int n);
+/* What the scan shows, for a status line: "image plane z=1 mm, window 900 level 550". */
+void thx_picture_scan_describe(const thx_picture_data *d, char *buf, size_t size);
+
 /* The column of the solution's currents_node at the time of frame, or -1. */
 long thx_picture_currents_column(const thx_picture_data *d, int frame);
 /* The number of frames of the data shown (the body surface's, else the first surface's with data;
