@@ -4,7 +4,7 @@
 # fixed orthographic camera looking down, the pixels read back with VTK's PNG reader:
 #  - the square lands where its RAS corners project, bright, and the plane elsewhere dark;
 #  - the default window (a label map: its full range; Hounsfield units: 400/40) and a given
-#    --window/--level give the grey values (value - L + W/2) / W computed here;
+#    --image-window/--image-level give the grey values (value - L + W/2) / W computed here;
 #  - an opaque surface in front hides the plane, a translucent one shows it through (dimmer);
 #  - --contours draws the layer nearest the plane on it, each contour surface in its colour,
 #    on the loops' edges; a coronal plane and an index plane land where they should;
@@ -75,7 +75,7 @@ EOF
 # looking down from +z: screen right +x, screen up +y; 400 px for 100 mm: pixel (200 + 4 x, 200 - 4 y)
 CAM=(--camera 0,0,200:0,0,0:0,1,0:0:100 --size 400x400)
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane z=0 -o plane.png -q
-"$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane z=0 --window 2000 --level 1000 -o wl.png -q
+"$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane z=0 --image-window 2000 --image-level 1000 -o wl.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image ct.nii.gz --image-plane z=1 -o ct.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=flat:1:#ff0000 --image sq.nii.gz --image-plane z=0 -o opaque.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=flat:0.4:#ff0000 --image sq.nii.gz --image-plane z=0 -o trans.png -q
@@ -111,12 +111,12 @@ m = (a == 255).all(axis=2)
 ys, xs = m.nonzero()
 print('plane: the square %d px, columns %d..%d, rows %d..%d (expected 160..239, 120..199)' % (m.sum(), xs.min(), xs.max(), ys.min(), ys.max()))
 assert abs(xs.min() - 160) <= 1 and abs(xs.max() - 239) <= 1 and abs(ys.min() - 120) <= 1 and abs(ys.max() - 199) <= 1
-# --window 2000 --level 1000
+# --image-window 2000 --image-level 1000
 b = png('wl.png')
 for (x, y, v) in ((0, 10, 1000), (-20, -20, 100)):
     g = b[px(x, y)]
     assert (abs(g - grey(v, 2000, 1000)) <= 1).all(), ((x, y), g, grey(v, 2000, 1000))
-print('window 2000 level 1000: square %d (computed %d), around %d (computed %d)' % (b[px(0, 10)][0], grey(1000, 2000, 1000), b[px(-20, -20)][0], grey(100, 2000, 1000)))
+print('--image-window 2000 --image-level 1000: square %d (computed %d), around %d (computed %d)' % (b[px(0, 10)][0], grey(1000, 2000, 1000), b[px(-20, -20)][0], grey(100, 2000, 1000)))
 # Hounsfield units: soft-tissue window 400 / 40 by default
 c = png('ct.png')
 assert (abs(c[px(0, 10)] - grey(40, 400, 40)) <= 1).all() and (c[px(-20, -20)] == 0).all(), (c[px(0, 10)], c[px(-20, -20)])

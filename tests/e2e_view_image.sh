@@ -5,6 +5,7 @@
 #    moves it to z = 1 and the square appears there; image-window 2 doubles the window and the
 #    grey values become (value - L + W/2) / W of the new window; the first screenshot equals
 #    thorax render's picture of the same options;
+#  - the session saved after the move reopens the plane where it was (--image-plane z=1);
 #  - a real key: ] moves the plane one image plane up (the status line says z=1 mm), [ back.
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}"
@@ -35,6 +36,7 @@ OPTS=(--size 300x300 --camera 0,0,200:0,0,0:0,1,0:0:100 --surface box=hidden --i
     echo "action screenshot $PWD/a.png"
     echo "action image-plane 1"
     echo "action screenshot $PWD/b.png"
+    echo "action save-session $PWD/sess.txt"
     echo "action image-window 2"
     echo "action screenshot $PWD/c.png"
     echo "action image-plane -5"
@@ -67,6 +69,8 @@ INNER
 THORAX="$THORAX" xvfb-run -a -s "-screen 0 1024x768x24" bash inside.sh 2>&1 | grep -v "dbus\|session bus\|^$" || true
 [ -s a.png ] && [ -s b.png ] && [ -s c.png ] && [ -s d.png ] || fail "the screenshots: $(ls; cat s.err 2>/dev/null)"
 grep -q "image plane z=-3 mm" k.err || fail "the key session: $(cat k.err)"
+grep -qx -- "--image-plane z=1" sess.txt && grep -qx -- "--image-window 900" sess.txt && grep -qx -- "--image-level 550" sess.txt ||
+    fail "the saved session: $(cat sess.txt)"
 
 $PY - <<'EOF'
 import vtk, numpy as np

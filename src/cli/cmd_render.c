@@ -183,14 +183,14 @@ static int parse_box(void *user, const cli_opt *opt, const char *v)
     return 0;
 }
 
-/* --level L: the image's grey level centre (any finite value; given: not the image's default). */
+/* --image-level L: the image's grey level centre (any finite value; given: not the image's default). */
 static int parse_level(void *user, const cli_opt *opt, const char *v)
 {
     ropts *o = user;
     char *end = NULL;
     double x = strtod(v, &end);
     if (!end || end == v || *end || !isfinite(x))
-        return cli_usage_error(o->cmd, "--level L: the grey level's centre, a number in the image's values");
+        return cli_usage_error(o->cmd, "--image-level L: the grey level's centre, a number in the image's values");
     o->p.level = x;
     o->p.have_level = 1;
     return 0;
@@ -380,12 +380,12 @@ size_t render_options(cli_opt *t, ropts *o)
                        .def = "the axial plane through the image's middle",
                        .help = "a plane of --image: z=MM (axial), y=MM (coronal), x=MM (sagittal) in RAS millimetres, or "
                                "the image's own plane k=N, j=N, i=N (0-based index); inside the image; at most 4"};
-    t[n++] = (cli_opt){.name = "--window", .type = CLI_REAL, .meta = "W", .d = &o->p.window, .rule = CLI_GT,
-                       .bad = "--window must be positive (in the image's values)",
+    t[n++] = (cli_opt){.name = "--image-window", .type = CLI_REAL, .meta = "W", .d = &o->p.window, .rule = CLI_GT,
+                       .bad = "--image-window must be positive (in the image's values)",
                        .def = "a label map: its full range; Hounsfield units: 400; else the 1st to 99th percentile",
                        .help = "the width of the image's values spread from black to white"};
-    t[n++] = (cli_opt){.name = "--level", .type = CLI_STRING, .meta = "L", .fn = parse_level,
-                       .def = "as --window: the range's middle; Hounsfield units: 40",
+    t[n++] = (cli_opt){.name = "--image-level", .type = CLI_STRING, .meta = "L", .fn = parse_level,
+                       .def = "as --image-window: the range's middle; Hounsfield units: 40",
                        .help = "the image value drawn mid-grey (grey = (value - L + W/2) / W, clamped to black..white)"};
     t[n++] = (cli_opt){.name = "--image-labels", .type = CLI_FLAG, .i = &o->p.image_labels,
                        .help = "--image is a label map: a colour per label value (0 black; 1 orange, 2 sky blue, 3 green, "

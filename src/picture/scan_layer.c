@@ -21,7 +21,7 @@ thx_status picture_scan_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictur
         if (o->n_image_planes || o->contours || o->image_labels || o->window > 0 || o->have_level)
             return thx_error(ctx, THX_EINPUT, "%s: needs --image IMG (the scan the planes are cut from)",
                              o->contours ? "--contours" : o->n_image_planes ? "--image-plane" : o->image_labels ? "--image-labels"
-                             : o->window > 0 ? "--window" : "--level");
+                             : o->window > 0 ? "--image-window" : "--image-level");
         return THX_OK;
     }
     THX_CHECK(pic_scan_open(ctx, o->image, &d->scan));
