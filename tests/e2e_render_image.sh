@@ -6,6 +6,7 @@
 #  - the default window (a label map: its full range; Hounsfield units: 400/40) and a given
 #    --image-window/--image-level give the grey values (value - L + W/2) / W computed here;
 #  - an opaque surface in front hides the plane, a translucent one shows it through (dimmer);
+#  - --image-labels colours each label from the categorical table;
 #  - --contours draws the layer nearest the plane on it, each contour surface in its colour,
 #    on the loops' edges; a coronal plane and an index plane land where they should;
 #  - a plane outside the image, a file that is not an image, --contours without an axial plane:
@@ -30,6 +31,9 @@ v[15:25, 20:30, :] = 1000
 nib.save(nib.Nifti1Image(v, aff), 'sq.nii.gz')
 c = np.where(v == 1000, 40, -1000).astype(np.int16)
 c[35:, :, :] = 700
+# lab.nii.gz: a label map, 0 around, label 1 the square, label 2 the strip x in 30..40
+lab = np.zeros((40, 40, 20), np.uint8); lab[15:25, 20:30, :] = 1; lab[35:, :, :] = 2
+nib.save(nib.Nifti1Image(lab, aff), 'lab.nii.gz')
 nib.save(nib.Nifti1Image(c, aff), 'ct.nii.gz')
 # the box around the plane z = 0: x, y in -30..30, z in -15..15, triangles outward (map3d .pts/.fac)
 P = [(x, y, z) for z in (-15, 15) for y in (-30, 30) for x in (-30, 30)]
@@ -81,6 +85,7 @@ CAM=(--camera 0,0,200:0,0,0:0,1,0:0:100 --size 400x400)
 "$THORAX" render box.pts "${CAM[@]}" --surface box=flat:0.4:#ff0000 --image sq.nii.gz --image-plane z=0 -o trans.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane z=0 --contours c.txt -o cont.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane k=10 -o index.png -q
+"$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image lab.nii.gz --image-plane z=0 --image-labels -o labels.png -q
 # a coronal plane through the square seen from the front (-y toward +y... the eye at -y? no: anterior is +y)
 "$THORAX" render box.pts --camera 0,200,0:0,0,0:0,0,1:0:100 --size 400x400 --surface box=hidden --image sq.nii.gz \
     --image-plane y=10 -o coronal.png -q
@@ -130,8 +135,12 @@ assert (o[px(35, 0)] == 0).all() and (o[px(0, 35)] == a[px(0, 35)]).all(), (o[px
 # a translucent box shows it through: the square brighter than the dark plane beneath the same box
 t = png('trans.png')
 ts, tb = t[px(0, 10)], t[px(-20, -20)]
-assert ts[1] > tb[1] + 60 and ts[0] > tb[0] + 60, (ts, tb)
-assert ts[0] > ts[1], ts   # still tinted by the red box
+# over the plane only the box's top face blends (its bottom lies behind the plane, depth-tested
+# away): 0.4 of the box's red (flat, facing the eye: 255, 0, 0, as in the opaque picture) over 0.6
+# of the plane beneath
+for p, under in ((ts, 255), (tb, 0)):
+    want = np.array([0.4 * inside[0] + 0.6 * under, 0.6 * under, 0.6 * under])
+    assert (abs(p - want) <= 2).all(), (p, want)
 print('opaque box: %s over the square; translucent box: %s over it, %s over the dark plane' % (inside, ts, tb))
 # contours: outer (orange 230,159,0) on the square loop of half side 25; inner (sky blue 86,180,233)
 k = png('cont.png')
@@ -146,6 +155,10 @@ assert not orange(k[px(0, 35)]) and (k[px(0, 35)] == a[px(0, 35)]).all(), k[px(0
 assert (k[px(0, 10)] == 255).all() and (k[px(-15, 5)] == 0).all()
 no = sum(orange(k[r, c]) for r in range(400) for c in range(0, 400, 2))
 print('contours: outer and inner loops on the plane (%d orange pixels in every other column)' % no)
+# --image-labels: label 1 orange (230,159,0), label 2 sky blue (86,180,233), 0 black
+g = png('labels.png')
+assert tuple(g[px(0, 10)]) == (230, 159, 0) and tuple(g[px(35, 0)]) == (86, 180, 233) and tuple(g[px(-20, -20)]) == (0, 0, 0), (g[px(0, 10)], g[px(35, 0)], g[px(-20, -20)])
+print('labels: 1 -> %s, 2 -> %s, 0 -> %s' % (tuple(g[px(0, 10)]), tuple(g[px(35, 0)]), tuple(g[px(-20, -20)])))
 # the image's own plane k = 10 (z = 1): the same picture as z = 1 (exact voxel values) where no
 # interpolation differs: the square and the dark around it
 i = png('index.png')
