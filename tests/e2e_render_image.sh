@@ -86,9 +86,12 @@ CAM=(--camera 0,0,200:0,0,0:0,1,0:0:100 --size 400x400)
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane z=0 --contours c.txt -o cont.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image sq.nii.gz --image-plane k=10 -o index.png -q
 "$THORAX" render box.pts "${CAM[@]}" --surface box=hidden --image lab.nii.gz --image-plane z=0 --image-labels -o labels.png -q
-# a coronal plane through the square seen from the front (-y toward +y... the eye at -y? no: anterior is +y)
+# a coronal plane through the square seen from the front (the eye at +y, anterior; up +z: screen right is -x)
 "$THORAX" render box.pts --camera 0,200,0:0,0,0:0,0,1:0:100 --size 400x400 --surface box=hidden --image sq.nii.gz \
     --image-plane y=10 -o coronal.png -q
+# a sagittal plane x = 0 seen from the subject's right (eye at +x, up +z: screen right is +y)
+"$THORAX" render box.pts --camera 200,0,0:0,0,0:0,0,1:0:100 --size 400x400 --surface box=hidden --image sq.nii.gz \
+    --image-plane x=0 -o sagittal.png -q
 
 $PY - <<'EOF'
 import vtk, numpy as np
@@ -169,6 +172,11 @@ cx = lambda x, z: (int(round(200 - 4 * z)), int(round(200 - 4 * x)))
 assert (q[cx(0, 0)] == 255).all() and (q[cx(15, 0)] == 0).all() and (q[cx(0, 19.5)] == 255).all(), (q[cx(0, 0)], q[cx(15, 0)])
 assert (q[cx(0, 20.5)] == bg).all(), q[cx(0, 20.5)]
 print('coronal y=10: the square spans z -20..20 in the plane, bright; dark beside it')
+v = png('sagittal.png')
+sx = lambda y, z: (int(round(200 - 4 * z)), int(round(200 + 4 * y)))
+assert (v[sx(10, 0)] == 255).all() and (v[sx(-10, 0)] == 0).all() and (v[sx(35, 15)] == 0).all(), (v[sx(10, 0)], v[sx(-10, 0)])
+assert (v[sx(0, 20.5)] == bg).all() and (v[sx(39.5, 0)] == 0).all() and (v[sx(40.5, 0)] == bg).all()
+print('sagittal x=0: the square at y 0..20, the plane y -40..40, z -20..20')
 EOF
 
 # bad input: a named message, exit 1, nothing written
