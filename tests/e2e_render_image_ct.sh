@@ -32,7 +32,7 @@ mx = meta['matrix']
 shape, sp = mx['shape'], meta['spacing']
 v = np.fromfile(d + '/' + mx['filename'], mx['dtype']).reshape(shape).transpose(2, 1, 0)   # (i, j, k)
 aff = np.diag([sp[0], -sp[1], sp[2], 1.0])
-nib.save(nib.Nifti1Image(np.ascontiguousarray(v), aff), 'cranium.nii.gz')
+nib.save(nib.Nifti1Image(np.ascontiguousarray(v), aff), 'cranium.nii')
 r = vtk.vtkXMLPolyDataReader(); r.SetFileName(d + '/surface_0.vtp'); r.Update()
 pl = vtk.vtkPlane(); pl.SetOrigin(0, 0, 90); pl.SetNormal(0, 0, 1)
 cut = vtk.vtkCutter(); cut.SetInputConnection(r.GetOutputPort()); cut.SetCutFunction(pl)
@@ -67,9 +67,9 @@ EOF
 
 # seen from above: RAS (x, y) at pixel (row 250 - (y + 110) * 500 / 260, column 250 + (x - 125) * 500 / 260)
 CAM=(--camera 125,-110,500:125,-110,80:0,1,0:0:260 --size 500x500)
-"$THORAX" render bone.pts "${CAM[@]}" --surface bone=hidden --image cranium.nii.gz --image-plane z=90 -o ct.png -q
-"$THORAX" render bone.pts "${CAM[@]}" --surface bone=hidden --image cranium.nii.gz --image-plane z=90 --contours bone.txt -o ct_lines.png -q
-"$THORAX" render bone.pts "${CAM[@]}" --surface bone=flat:1:#00ff00 --image cranium.nii.gz --image-plane z=90 -o ct_bone.png -q
+"$THORAX" render bone.pts "${CAM[@]}" --surface bone=hidden --image cranium.nii --image-plane z=90 -o ct.png -q
+"$THORAX" render bone.pts "${CAM[@]}" --surface bone=hidden --image cranium.nii --image-plane z=90 --contours bone.txt -o ct_lines.png -q
+"$THORAX" render bone.pts "${CAM[@]}" --surface bone=flat:1:#00ff00 --image cranium.nii --image-plane z=90 -o ct_bone.png -q
 
 $PY - <<'EOF'
 import vtk, numpy as np
@@ -101,7 +101,7 @@ assert near > 0.95 and near_moved < near - 0.3, (near, near_moved)
 # inside the skull, the brain: each pixel the CT at its RAS place (bilinear in the plane k = 60,
 # scipy) under the soft-tissue window 400 / 40, computed here
 import nibabel as nib, scipy.ndimage as ndi
-img = nib.load('cranium.nii.gz'); v = np.asarray(img.dataobj, float); sx, sy, sz = img.header.get_zooms()
+img = nib.load('cranium.nii'); v = np.asarray(img.dataobj, float); sx, sy, sz = img.header.get_zooms()
 rows, cols = np.mgrid[200:300, 200:300]
 x = 125 + (cols + 0.5 - 250) * 260 / 500; y = -110 - (rows + 0.5 - 250) * 260 / 500
 hu = ndi.map_coordinates(v[:, :, int(round(90 / sz))], [x / sx, -y / sy], order=1)
