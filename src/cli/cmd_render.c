@@ -183,6 +183,19 @@ static int parse_box(void *user, const cli_opt *opt, const char *v)
     return 0;
 }
 
+/* --image-level L: the image's grey level centre (any finite value; given: not the image's default). */
+static int parse_level(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    char *end = NULL;
+    double x = strtod(v, &end);
+    if (!end || end == v || *end || !isfinite(x))
+        return cli_usage_error(o->cmd, "--image-level L: the grey level's centre, a number in the image's values");
+    o->p.level = x;
+    o->p.have_level = 1;
+    return 0;
+}
+
 /* --channels FILE: the channels of the --data given last (before any --data: the first), one each. */
 static int pair_channels(void *user, const cli_opt *opt, const char *v)
 {
@@ -357,6 +370,30 @@ size_t render_options(cli_opt *t, ropts *o)
                        .def = "0.4% of the model's diagonal", .help = "the streamline tubes' radius"};
     t[n++] = (cli_opt){.name = "--stream-potential", .type = CLI_FLAG, .i = &o->p.stream_potential,
                        .help = "colour the streamlines by the potential (the equipotentials' scale) instead of |J|"};
+    t[n++] = (cli_opt){.name = "--image", .type = CLI_INPUT, .meta = "IMG", .s = &o->p.image,
+                       .help = "the scan under the model: an image (.nii, .nii.gz, and the formats thorax image reads) "
+                               "in the model's coordinates (RAS mm, as a model built from it), its --image-plane drawn "
+                               "with the surfaces in grey levels (an opaque surface in front hides it, a translucent one "
+                               "shows it through)"};
+    t[n++] = (cli_opt){.name = "--image-plane", .type = CLI_STRING, .meta = "AXIS=POS", .flags = CLI_REPEAT,
+                       .sv = o->p.image_planes, .count = &o->p.n_image_planes, .max = 4,
+                       .def = "the axial plane through the image's middle",
+                       .help = "a plane of --image: z=MM (axial), y=MM (coronal), x=MM (sagittal) in RAS millimetres, or "
+                               "the image's own plane k=N, j=N, i=N (0-based index); inside the image; at most 4"};
+    t[n++] = (cli_opt){.name = "--image-window", .type = CLI_REAL, .meta = "W", .d = &o->p.window, .rule = CLI_GT,
+                       .bad = "--image-window must be positive (in the image's values)",
+                       .def = "a label map: its full range; Hounsfield units: 400; else the 1st to 99th percentile",
+                       .help = "the width of the image's values spread from black to white"};
+    t[n++] = (cli_opt){.name = "--image-level", .type = CLI_STRING, .meta = "L", .fn = parse_level,
+                       .def = "as --image-window: the range's middle; Hounsfield units: 40",
+                       .help = "the image value drawn mid-grey (grey = (value - L + W/2) / W, clamped to black..white)"};
+    t[n++] = (cli_opt){.name = "--image-labels", .type = CLI_FLAG, .i = &o->p.image_labels,
+                       .help = "--image is a label map: a colour per label value (0 black; 1 orange, 2 sky blue, 3 green, "
+                               "4 yellow, 5 blue, 6 vermilion, 7 pink, 8 white, ... then again), nearest voxel"};
+    t[n++] = (cli_opt){.name = "--contours", .type = CLI_INPUT, .meta = "FILE", .s = &o->p.contours,
+                       .help = "a contour file drawn on the axial --image-plane: the loops of its layer nearest the plane "
+                               "(within half the widest gap between layers), a line per loop, surface k of the file in "
+                               "--image-labels' colour k"};
     t[n++] = (cli_opt){.name = "--arrows", .type = CLI_FLAG, .fn = set_arrows,
                        .help = "current density arrows (the solution's currents_node, for the frame shown)"};
     t[n++] = (cli_opt){.name = "--arrow-spacing", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &o->p.arrow_spacing,

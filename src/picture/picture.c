@@ -498,12 +498,14 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     int n_clip = thx_picture_clip(ctx, o, d, &clip);
     if (n_clip < 0) { free(b); return THX_EINPUT; }
     st = picture_field_build(ctx, o, d, frame);
+    if (st == THX_OK) st = picture_scan_build(ctx, o, d);
     if (st != THX_OK) { free(b); return st; }
     for (size_t s = 0; s < (o->panels ? m->n_surfaces : 1); s++) {
         int only = o->panels ? (int)s : -1;
         memset(b, 0, sizeof *b);
         build_surfaces(o, d, frame, b, only);
         if (!o->panels) b->n += picture_field_surfaces(o, d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
+        if (!o->panels) b->n += picture_scan_surfaces(d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
         if (b->n == 0) continue;
         if (!o->panels) {
             thx_status sa = build_arrows(ctx, o, d, frame, b);
@@ -515,6 +517,8 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         sc.n_surfaces = b->n;
         sc.arrows = b->have_arrows ? &b->arrows : NULL;
         sc.n_arrows = b->have_arrows ? 1 : 0;
+        sc.planes = d->scan_plane;
+        sc.n_planes = (size_t)d->n_scan_planes;
         int pw = vp[2] / cols, ph = vp[3] / rows;
         sc.viewport[0] = (panel % cols) * pw;
         sc.viewport[1] = vp[1] + (panel / cols) * ph;

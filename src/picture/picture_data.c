@@ -51,6 +51,7 @@ void thx_picture_data_free(thx_picture_data *d)
     thx_series_destroy(&d->currents);
     thx_series_destroy(&d->volume);
     picture_field_free(d);
+    picture_scan_free(d);
     free(d->field_use);
     d->field_use = NULL;
     thx_model_destroy(&d->m);
@@ -472,6 +473,7 @@ thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data 
     }
     THX_CHECK(load_data(ctx, o, d));
     THX_CHECK(picture_field_load(ctx, o, d));
+    THX_CHECK(picture_scan_load(ctx, o, d));
     THX_CHECK(picture_view_frame(ctx, o, d));
     THX_CHECK(thx_picture_clip_check(ctx, o, d));
     if (o->tetrahedra) {

@@ -33,4 +33,12 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);
 size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, thx_render_surface *rs, size_t max);
 void picture_field_free(thx_picture_data *d);
+/* The scan under the model (scan_layer.c): picture_scan_load reads o->image and o->contours and
+ * checks the planes; picture_scan_build (re)makes the planes' textures and the contour lines on
+ * them when a plane, the window or the level changed; picture_scan_surfaces appends the contour
+ * lines to rs (at most max) as wire surfaces; picture_scan_free frees what the three made. */
+thx_status picture_scan_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
+thx_status picture_scan_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
+size_t picture_scan_surfaces(const thx_picture_data *d, thx_render_surface *rs, size_t max);
+void picture_scan_free(thx_picture_data *d);
 #endif

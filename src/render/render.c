@@ -75,6 +75,10 @@ static void free_gl_objects(thx_renderer *r)
     r->n_variants = 0;
     if (r->p_arrow.id) glDeleteProgram(r->p_arrow.id);
     if (r->p_blit.id) glDeleteProgram(r->p_blit.id);
+    if (r->p_plane.id) glDeleteProgram(r->p_plane.id);
+    glDeleteTextures(1, &r->plane_tex);
+    glDeleteVertexArrays(1, &r->vao_plane);
+    glDeleteBuffers(1, &r->vbo_plane);
     glDeleteTextures(6, r->cmap_tex);
     glDeleteTextures(1, &r->blit_tex);
     glDeleteVertexArrays(1, &r->vao_empty);

@@ -310,6 +310,44 @@ static thx_status pack_arrows(thx_ctx *ctx, thx_renderer *r, const thx_render_ar
     return THX_OK;
 }
 
+/* An image plane (thx_render_plane): its texels into the renderer's one plane texture, its corners
+ * into the quad, drawn unlit with a polygon offset behind what lies in its plane (contour lines). */
+static thx_status draw_plane(thx_ctx *ctx, thx_renderer *r, const thx_render_plane *pl, const frame_state *fs)
+{
+    const double *o = pl->origin, *u = pl->u, *v = pl->v;
+    float quad[4][5];
+    for (int c = 0; c < 4; c++) {
+        double a = (c == 1 || c == 2) ? 1 : 0, b = c >= 2 ? 1 : 0;
+        for (int k = 0; k < 3; k++) quad[c][k] = (float)(o[k] + a * u[k] + b * v[k]);
+        quad[c][3] = (float)a;
+        quad[c][4] = (float)b;
+    }
+    glUseProgram(r->p_plane.id);
+    glUniformMatrix4fv(r->p_plane.view, 1, GL_FALSE, fs->view);
+    glUniformMatrix4fv(r->p_plane.proj, 1, GL_FALSE, fs->proj);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, r->plane_tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, pl->w, pl->h, 0, GL_RGBA, GL_UNSIGNED_BYTE, pl->rgba);
+    GLint filter = pl->nearest ? GL_NEAREST : GL_LINEAR;
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindVertexArray(r->vao_plane);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_plane);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)sizeof quad, quad);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 1.0f);
+    glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    glBindVertexArray(0);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    (void)ctx;
+    return THX_OK;
+}
+
 typedef struct {
     size_t index;
     double depth;
@@ -374,8 +412,16 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
     if (!sc) return thx_error(ctx, THX_EINPUT, "renderer: no scene");
     if (sc->n_clip < 0 || sc->n_clip > 4)
         return thx_error(ctx, THX_EINPUT, "renderer: %d clip planes (at most 4)", sc->n_clip);
-    if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows))
-        return thx_error(ctx, THX_EINPUT, "renderer: the scene's surface or arrow array is NULL");
+    if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
+        return thx_error(ctx, THX_EINPUT, "renderer: the scene's surface, arrow or plane array is NULL");
+    for (size_t i = 0; i < sc->n_planes; i++) {
+        const thx_render_plane *pl = &sc->planes[i];
+        double q = 0;
+        for (int k = 0; k < 3; k++) q += pl->origin[k] + pl->u[k] + pl->v[k];
+        if (pl->w < 1 || pl->h < 1 || pl->w > 16384 || pl->h > 16384 || !pl->rgba || !isfinite(q))
+            return thx_error(ctx, THX_EINPUT, "renderer: image plane %zu: %d x %d texels%s", i + 1, pl->w, pl->h,
+                             !pl->rgba ? " without texels" : !isfinite(q) ? " at a non-finite place" : " (1 to 16384 each)");
+    }
     frame_state fs;
     memset(&fs, 0, sizeof fs);
     double right[3], up[3];
@@ -435,6 +481,14 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
         size_t m;
         THX_TRY(pack_arrows(ctx, r, &sc->arrows[i], &m, lo, hi));
     }
+    for (size_t i = 0; i < sc->n_planes; i++) /* the planes' corners */
+        for (int c = 0; c < 4; c++)
+            for (int k = 0; k < 3; k++) {
+                const thx_render_plane *pl = &sc->planes[i];
+                double x = pl->origin[k] + (c & 1 ? pl->u[k] : 0) + (c & 2 ? pl->v[k] : 0);
+                lo[k] = fmin(lo[k], x);
+                hi[k] = fmax(hi[k], x);
+            }
     if (!(lo[0] <= hi[0])) goto done; /* nothing to draw */
 
     double zn, zf, view[16], proj[16];
@@ -485,6 +539,8 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
         glDepthMask(GL_TRUE);
         glDisable(GL_BLEND);
     }
+    /* The image planes: with the opaque things (depth written), before the translucent surfaces. */
+    for (size_t i = 0; i < sc->n_planes; i++) THX_TRY(draw_plane(ctx, r, &sc->planes[i], &fs));
     if (n_trans) {
         sort_item *order = thx_malloc(ctx, n_trans * sizeof *order);
         if (!order) {

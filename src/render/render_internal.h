@@ -71,11 +71,12 @@ struct thx_renderer {
     GLuint fbo_out, rb_out;              /* the multisampled drawing resolved, read back */
     int gl_ready;
     char info[256];
-    program p_arrow, p_blit;
+    program p_arrow, p_blit, p_plane;
     variant_prog *variants;   /* compiled at their first use */
     size_t n_variants, cap_variants;
     GLuint cmap_tex[6];
     GLuint vao_empty, vao_arrow, vbo_arrow, blit_tex;
+    GLuint vao_plane, vbo_plane, plane_tex; /* image planes (render_draw.c): one quad, one texture, refilled per plane */
     size_t arrow_cap;
     surf_entry **cache;
     size_t n_cache, cap_cache;

@@ -297,6 +297,29 @@ static const char *const FS_BLIT =
     "    o_color = texelFetch(u_tex, ivec2(q.x, u_rect.w - 1 - q.y), 0);\n"
     "}\n";
 
+/* An image plane: a textured quad, unlit; texels outside the image (alpha < 0.5) are not drawn. */
+static const char *const VS_PLANE =
+    "layout(location = 0) in vec3 a_pos;\n"
+    "layout(location = 1) in vec2 a_tc;\n"
+    "uniform mat4 u_view, u_proj;\n"
+    "out vec2 v_tc;\n"
+    "out float gl_ClipDistance[4];\n"
+    "void main() {\n"
+    "    v_tc = a_tc;\n"
+    "    for (int i = 0; i < 4; i++) gl_ClipDistance[i] = 1.0; /* never cut by the clip planes */\n"
+    "    gl_Position = u_proj * u_view * vec4(a_pos, 1.0);\n"
+    "}\n";
+
+static const char *const FS_PLANE =
+    "uniform sampler2D u_tex;\n"
+    "in vec2 v_tc;\n"
+    "out vec4 o_color;\n"
+    "void main() {\n"
+    "    vec4 c = texture(u_tex, v_tc);\n"
+    "    if (c.a < 0.5) discard;\n"
+    "    o_color = vec4(c.rgb, 1.0);\n"
+    "}\n";
+
 /* ------------------------------------------------------------ GL resources */
 
 static const char *gl_error_name(GLenum e)
@@ -422,6 +445,17 @@ thx_status rn_gl_init(thx_ctx *ctx, thx_renderer *r)
     THX_CHECK(rn_surface_program(ctx, r, first, &unused)); /* a compile error shows at once */
     THX_CHECK(make_program(ctx, "arrow", "", VS_ARROW, GS_ARROW, FS_ARROW, &r->p_arrow));
     THX_CHECK(make_program(ctx, "blit", "", VS_BLIT, NULL, FS_BLIT, &r->p_blit));
+    THX_CHECK(make_program(ctx, "image plane", "", VS_PLANE, NULL, FS_PLANE, &r->p_plane));
+    glGenVertexArrays(1, &r->vao_plane);
+    glGenBuffers(1, &r->vbo_plane);
+    glBindVertexArray(r->vao_plane);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_plane);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(4 * 5 * sizeof(float)), NULL, GL_DYNAMIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 5 * sizeof(float), (void *)0);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 5 * sizeof(float), (void *)(3 * sizeof(float)));
+    glGenTextures(1, &r->plane_tex);
     glGenVertexArrays(1, &r->vao_empty);
     glGenVertexArrays(1, &r->vao_arrow);
     glGenBuffers(1, &r->vbo_arrow);

@@ -559,6 +559,28 @@ static void do_clip_move(view_app *a, GSimpleAction *act, GVariant *v)
     view_redraw_all(a);
 }
 
+/* The scan under the model (--image): its planes moved plane by plane, its window and level. */
+static void do_image(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    const char *name = g_action_get_name(G_ACTION(act));
+    if (!a->d.scan) { view_set_info(a, "%s: no image (--image IMG)", name); a->status = 1; return; }
+    if (!strcmp(name, "image-plane")) {
+        int n = g_variant_get_int32(v), moved = 0;
+        for (int k = 0; k < a->d.n_scan_planes; k++) moved |= thx_picture_scan_move(&a->d, k, n);
+        if (!moved) { char t[160]; thx_picture_scan_describe(&a->d, t, sizeof t); view_set_info(a, "%s (the image's end)", t); return; }
+    } else if (!strcmp(name, "image-window")) {
+        double f = g_variant_get_double(v);
+        if (!(f > 0)) { view_set_info(a, "image-window %g: a factor > 0", f); a->status = 1; return; }
+        a->d.window *= f;
+    } else { /* image-level: by a fraction of the window */
+        a->d.level += g_variant_get_double(v) * a->d.window;
+    }
+    char t[160];
+    thx_picture_scan_describe(&a->d, t, sizeof t);
+    view_set_info(a, "%s", t);
+    view_redraw_all(a);
+}
+
 static void do_screenshot(view_app *a, GSimpleAction *act, GVariant *v)
 {
     const char *s = g_variant_get_string(v, NULL);
@@ -741,6 +763,12 @@ static const action_def ACTIONS[] = {
     {"clip-back", NULL, NULL, do_clip_view, {"<Control><Shift>c"}, NULL, "a clip plane facing the viewer, cutting away the far half"},
     {"clip-lock", NULL, NULL, do_clip_lock, {"<Control>l"}, NULL, "fix the clip plane to the object (it then turns with it)"},
     {"clip-move", "d", NULL, do_clip_move, {"<Shift>Page_Up"}, "5.0", "move the clip plane (mm; Ctrl+drag)"},
+    {"image-plane", "i", NULL, do_image, {"bracketright", "<Control>Page_Up"}, "1", "move the image's planes (--image) by N of its planes (] or Ctrl+Page Up: 1; [ or Ctrl+Page Down: -1)"},
+    {"image-plane-back", NULL, NULL, NULL, {"bracketleft", "<Control>Page_Down"}, NULL, "the image's planes one plane back"},
+    {"image-window", "d", NULL, do_image, {"w"}, "1.25", "the image's window (grey range) times a factor (w: wider; Shift+W: narrower)"},
+    {"image-window-narrower", NULL, NULL, NULL, {"<Shift>w"}, NULL, "the image's window narrower (times 0.8)"},
+    {"image-level", "d", NULL, do_image, {"e"}, "0.1", "the image's level up by a fraction of the window (e: up; Shift+E: down)"},
+    {"image-level-down", NULL, NULL, NULL, {"<Shift>e"}, NULL, "the image's level down by a tenth of the window"},
     {"screenshot", "s", NULL, do_screenshot, {"<Control>s"}, "''", "save the window as PNG (path; empty: next free name)"},
     {"record", "s", NULL, do_record, {"<Control>r"}, "''", "record every frame drawn into a directory"},
     {"record-stop", "s", NULL, do_record_stop, {"<Control><Shift>r"}, "''", "stop recording (and make an MP4 at the path given)"},
@@ -780,6 +808,8 @@ static const struct {
     {"view-posterior", "view", "'posterior'"}, {"view-left", "view", "'left'"},       {"view-right", "view", "'right'"},
     {"view-superior", "view", "'superior'"},   {"view-inferior", "view", "'inferior'"}, {"rotate-left", "rotate", "'right:-15'"},
     {"rotate-up", "rotate", "'up:15'"},        {"rotate-down", "rotate", "'up:-15'"},   {"zoom-out", "zoom", "0.8"},
+    {"image-plane-back", "image-plane", "-1"}, {"image-window-narrower", "image-window", "0.8"},
+    {"image-level-down", "image-level", "-0.1"},
     {"layer-x-back", "layer-x", "-1.0"},       {"layer-y-back", "layer-y", "-1.0"},     {"layer-rotate-back", "layer-rotate", "-1.0"},
 };
 

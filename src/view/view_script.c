@@ -229,6 +229,13 @@ thx_status view_save_session(view_app *a, const char *path)
     for (int k = 0; k < o->n_landmarks; k++) fprintf(f, "--landmarks %s\n", o->landmarks[k]);
     for (int k = 0; k < o->n_electrodes; k++) fprintf(f, "--electrodes %s\n", o->electrodes[k]);
     if (o->tetrahedra) fprintf(f, "--tetrahedra\n");
+    if (o->image) { /* the scan: its planes where they are now, the window and level in use */
+        fprintf(f, "--image %s\n", o->image);
+        for (int k = 0; k < a->d.n_scan_planes; k++) fprintf(f, "--image-plane %c=%.17g\n", a->d.scan_axis[k], a->d.scan_pos[k]);
+        fprintf(f, "--image-window %.17g\n--image-level %.17g\n", a->d.window, a->d.level);
+        if (o->image_labels) fprintf(f, "--image-labels\n");
+        if (o->contours) fprintf(f, "--contours %s\n", o->contours);
+    }
     /* the maps shown: those asked for at the start, and those made since */
     for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
         if (!a->d.series[s] || !a->d.map[s][a->d.active[s]]) continue;

@@ -14,6 +14,7 @@
 
 #include "thorax/model/model.h"
 #include "thorax/model/electrodes.h"
+#include "thorax/model/contours.h"
 #include "thorax/geom/landmark_mesh.h"
 #include "thorax/model/series.h"
 #include "thorax/render/image.h"
@@ -157,6 +158,21 @@ typedef struct {
     int n_streamlines;
     double stream_radius;
     int stream_potential;
+    /* the scan under the model (issue 25): the image `image` (any format thx_image_read takes, in the
+       model's coordinates: RAS mm for a model built from it) cut by the planes `image_planes` ("z=MM",
+       "y=MM", "x=MM" or the image's own "k=N", "j=N", "i=N"; none given: the axial plane through the
+       image's middle), each drawn as a textured rectangle with the surfaces (depth-tested: an opaque
+       surface in front hides it, a translucent one shows it through). Grey levels under `window` and
+       `level` (window 0 / have_level 0: the image's defaults, thorax/image/sample.h); image_labels: a
+       colour per label value instead. `contours`: a contour file whose layer nearest each axial plane
+       is drawn on it, a colour per contour surface (picture/scan_layer.c). */
+    const char *image;
+    const char *image_planes[4];
+    int n_image_planes;
+    double window, level;
+    int have_level;
+    int image_labels;
+    const char *contours;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
@@ -203,6 +219,21 @@ typedef struct {
     int field_warned;                /* a frame without equipotentials was told (once per field_key) */
     double smin[THX_PICTURE_SURFACES], smax[THX_PICTURE_SURFACES]; /* finite range of each surface's series */
     unsigned char sranged[THX_PICTURE_SURFACES];
+    /* the scan (o->image; picture/scan_layer.c) */
+    struct pic_scan *scan;           /* the image read, or NULL */
+    int n_scan_planes;
+    char scan_axis[4];               /* the planes shown: axis ('x'..'z', 'i'..'k') and position (the viewer moves them) */
+    double scan_pos[4];
+    double window, level;            /* the grey levels in use */
+    thx_render_plane scan_plane[4];  /* the planes as drawn (their texels in scan_rgba) */
+    unsigned char *scan_rgba[4];
+    double scan_key[4][4];           /* what each was built for: position, window, level, labels */
+    int scan_built[4];
+    thx_contours *contours;          /* o->contours, or NULL */
+    thx_surface *contour_lines[64];  /* the loops on the planes: a wire surface per plane and contour surface */
+    float contour_rgba[64][4];
+    int n_contour_lines;
+    double contour_z[4];             /* the layer drawn on each plane (NaN: none near it) */
     const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
     size_t trace_row;
     char trace_label[96];
@@ -316,6 +347,13 @@ int thx_picture_set_active(thx_picture_data *d, int s, int k);
 thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1);
 /* After the model's surfaces changed (an edit): forget what was computed from their geometry. */
 void thx_picture_geometry_changed(thx_picture_data *d);
+
+/* The scan's plane k (o->image) moved by n of the image's planes along its axis (a RAS plane to the
+ * plane of voxel centres n steps on, an index plane to index + n), kept inside the image. Returns
+ * 1 when it moved, 0 when already at the image's end (or no such plane). */
+int thx_picture_scan_move(thx_picture_data *d, int k, int n);
+/* What the scan shows, for a status line: "image plane z=1 mm, window 900 level 550". */
+void thx_picture_scan_describe(const thx_picture_data *d, char *buf, size_t size);
 
 /* The column of the solution's currents_node at the time of frame, or -1. */
 long thx_picture_currents_column(const thx_picture_data *d, int frame);

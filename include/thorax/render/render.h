@@ -112,6 +112,21 @@ int thx_camera_project(const thx_camera *cam, int w, int h, const double p[3], d
  * degenerate camera. The inverse of thx_camera_project: a point on the ray projects to (x, y). */
 int thx_camera_ray(const thx_camera *cam, int w, int h, double x, double y, double origin[3], double dir[3]);
 
+/* An image plane (a scan's axial, coronal or sagittal plane, issue 25): a textured rectangle at
+ * its place in 3D, depth-tested with the surfaces (an opaque surface in front hides it, a
+ * translucent one shows it through), unlit, not cut by the clip planes. Texel (0, 0) is first
+ * in rgba, rows run along u: texel (a, b)'s centre is origin + (a + 0.5) / w u + (b + 0.5) / h v.
+ * Texels of alpha below 128 (outside the image) are not drawn. The plane is drawn after the
+ * opaque surfaces with a polygon offset (1, 1) behind them, so lines lying in it (a wire surface
+ * of contours drawn on it) stay in front. */
+typedef struct {
+    int w, h;                   /* texels */
+    const unsigned char *rgba;  /* 4 w h bytes */
+    double origin[3];           /* the outer corner of texel (0, 0), model mm */
+    double u[3], v[3];          /* the rectangle's whole edges: w texels along u, h along v */
+    int nearest;                /* 1: each texel a block (a label map); 0: bilinear between texels */
+} thx_render_plane;
+
 /* Keeps the half space n . x + d >= 0. */
 typedef struct {
     double n[3], d;
@@ -129,6 +144,8 @@ typedef struct {
     float nan_color[4];  /* default magenta-grey if all zero */
     int viewport[4];     /* x, y (from the top left), w, h within the image; w = 0: the whole image */
     int clear;           /* clear the viewport to the background first (else draw over its pixels) */
+    const thx_render_plane *planes; /* image planes drawn with the surfaces (may be NULL) */
+    size_t n_planes;
 } thx_scene;
 
 typedef struct thx_renderer thx_renderer;
