@@ -40,7 +40,7 @@
 
 #define MAX_REGIONS 255
 
-static const char *const TISSUE_NAME[THX_TISSUE_COUNT] = {"air", "fat", "muscle", "soft tissue", "lung", "heart"};
+static const char *const TISSUE_NAME[THX_TISSUE_COUNT] = {"air", "fat", "muscle", "soft_tissue", "lung", "heart"};
 /* CT: Hounsfield units (air -1000, subcutaneous fat about -100, skeletal muscle 40, soft tissue of the
  * mediastinum 30, aerated lung about -800, heart (myocardium ~50 with blood ~40) 45). MR: a T1-weighted
  * spin-echo-like scale 0..1000 (fat brightest, muscle and myocardium grey, lung and air dark; slow blood
