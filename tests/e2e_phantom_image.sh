@@ -15,7 +15,8 @@
 #  - the same seed gives the same bytes, another seed another image;
 #  - the Utah tank + sock and the Dalhousie torso + epicardium (../shared/data/map3d) voxelized at
 #    2 mm: each region's label volume within 1.5% of the volumes their surfaces enclose (divergence
-#    theorem computed here from the model's .pts/.fac);
+#    theorem computed here from the model's .pts/.fac); the tank imported with a frame (superior
+#    +x, anterior +z) is written in RAS: the sock's centroid where the frame puts it;
 #  - usage errors (exit 2) and a missing model (exit 1), nothing written.
 set -uo pipefail
 : "${THORAX:?}" "${WORK:?}"
@@ -156,6 +157,29 @@ sys.exit(1 if bad else 0)
 PYEOF
         then ok "$m: label volumes within 1.5% of the enclosed volumes"; else bad "$m: label volumes"; fi
     done
+    # a model with a frame (superior +x, anterior +z: RAS = (y, z, x) of the model's coordinates):
+    # the image's affine turns the grid into RAS; the sock's labelled voxels' centroid lands on
+    # its polyhedron's centroid mapped so, within a quarter voxel
+    "$THORAX" import -o tankf -q "$G/tank/tank_full_771.pts" --name tank --role outer "$G/tank/25feb97_sock_closed.pts" \
+        --name sock --role heart --up +x --front +z && run tankf phantom --image tankf.nii.gz --from tankf --voxel 2 -q &&
+    if $PY - <<'PYEOF'
+import sys
+import nibabel as nib, numpy as np
+img = nib.load("tankf.nii.gz")
+lab = np.asarray(img.dataobj).astype(int)
+p = np.loadtxt("tankf/sock.pts")
+f = np.loadtxt("tankf/sock.fac", dtype=int) - 1
+a, b, c = p[f[:, 0]], p[f[:, 1]], p[f[:, 2]]
+v6 = np.einsum("ij,ij->i", a, np.cross(b, c))
+cen = (v6[:, None] * (a + b + c)).sum(0) / (4 * v6.sum())  # centroid of the polyhedron (tetrahedra from 0)
+want = np.array([cen[1], cen[2], cen[0]])
+idx = np.argwhere(lab == 2)
+got = (img.affine[:3, :3] @ idx.T).T.mean(0) + img.affine[:3, 3]
+d = np.linalg.norm(got - want)
+print(f"sock centroid in RAS {got.round(2)}, expected {want.round(2)}, {d:.3f} mm apart; axes {nib.aff2axcodes(img.affine)}")
+sys.exit(0 if d < 0.5 else 1)
+PYEOF
+    then ok "a model's frame turns the image into RAS"; else bad "a model's frame: the image's affine"; fi
 else
     echo "skip: $DATA/map3d not found (Utah tank, Dalhousie torso)"
 fi
