@@ -4,7 +4,8 @@
  *  - a box whose faces, edges and vertices lie exactly on the rays (the symbolic perturbation must
  *    count every ray once): its volume exactly, for either orientation of the triangles;
  *  - nested icospheres (either order, one turned inside out): each region's volume against the
- *    polyhedra's volumes computed here (tetrahedra from the centre), by label and by fraction;
+ *    polyhedra's volumes computed here (tetrahedra from a node), by label and by fraction; the same
+ *    on an oblique grid (a rotated direction matrix);
  *  - a surface with a triangle missing: refused, named;
  *  - the phantom at 2 mm: every region's label volume within 1% of the phantom's section-integral
  *    volumes, the torso by fractions within 0.1%; the heart's slab of its ellipsoid against the
@@ -201,6 +202,40 @@ static void test_nested_spheres(void)
         CHECK(fabs(label_volume(&lab, r_in) - vi) < 0.02 * vi);
         fprintf(stderr, "spheres (order %d): shell %.2f by fractions, %.2f by labels, polyhedra %.2f; core %.2f vs %.2f\n",
                 order, sum_volume(&mix), label_volume(&lab, r_out), shell, label_volume(&lab, r_in), vi);
+        thx_image_free(&mix);
+        thx_image_free(&lab);
+    }
+    /* an oblique grid (dir a rotation by 40 degrees about (1, 2, 2)/3, origin off the centre): the
+     * rays run along its third axis, the volumes stay */
+    {
+        thx_image lab, mix;
+        CHECK_OK(ctx, thx_voxel_grid(ctx, lo, hi, 1.0, 3, &lab));
+        double ax[3] = {1.0 / 3, 2.0 / 3, 2.0 / 3}, t = 40 * M_PI / 180, cs = cos(t), sn = sin(t);
+        for (int r = 0; r < 3; r++)
+            for (int q = 0; q < 3; q++) {
+                double k = r == q ? cs : 0, x = 0;
+                if (r != q) {
+                    int e = 3 - r - q; /* the cross-product matrix entry */
+                    x = ((r + 1) % 3 == q ? -1 : 1) * ax[e] * sn;
+                }
+                lab.dir[3 * r + q] = k + (1 - cs) * ax[r] * ax[q] + x;
+            }
+        /* keep the sphere inside: the grid turns about its own centre */
+        double ctr[3] = {0.5 * (double)(lab.n[0] - 1), 0.5 * (double)(lab.n[1] - 1), 0.5 * (double)(lab.n[2] - 1)}, rc[3];
+        lab.origin[0] = lab.origin[1] = lab.origin[2] = 0;
+        thx_image_index_to_ras(&lab, ctr, rc);
+        for (int q = 0; q < 3; q++) lab.origin[q] = 0.2 - rc[q];
+        CHECK_OK(ctx, thx_image_validate(ctx, &lab, "oblique grid"));
+        CHECK_OK(ctx, thx_image_alloc(ctx, lab.n, &mix));
+        const thx_surface *ss[2] = {out, in};
+        double values[3] = {0, 1, 0};
+        thx_voxelize_opts o;
+        thx_voxelize_opts_default(&o);
+        o.values = values;
+        CHECK_OK(ctx, thx_voxelize(ctx, ss, 2, &o, &lab, &mix));
+        double shell = vo - vi;
+        fprintf(stderr, "spheres, oblique grid: shell %.2f by fractions, polyhedra %.2f\n", sum_volume(&mix), shell);
+        CHECK(fabs(sum_volume(&mix) - shell) < 0.001 * shell);
         thx_image_free(&mix);
         thx_image_free(&lab);
     }
