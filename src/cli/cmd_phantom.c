@@ -245,7 +245,7 @@ int cmd_phantom(int argc, char **argv)
                  "fat, 3 the rest inside muscle, 4 right lung, 5 left lung, 6 heart) or a scan\n"
                  "(--modality ct|mr: tissue intensities mixed by partial volume, noise, bias); with\n"
                  "--from MODEL, MODEL's closed surfaces instead. The label table goes to standard\n"
-                 "output (docs/formats.md, \"Phantom images\").\n",
+                 "output (docs/formats.md, \"Phantom images and voxelized models\").\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
     };
     /* --beat MODEL: the heartbeat (epicardial sequence) of a phantom model, as thorax beat, which
