@@ -1132,3 +1132,28 @@ thx_status thx_phantom_volumes(thx_ctx *ctx, const thx_phantom_field *f, double 
     }
     return THX_OK;
 }
+
+thx_status thx_phantom_section(thx_ctx *ctx, const thx_phantom_field *f, int surface, double z, thx_vec2 **pts,
+                               size_t *n)
+{
+    *pts = NULL;
+    *n = 0;
+    if (surface < 0 || surface >= THX_PHANTOM_N_SURFACES)
+        return thx_error(ctx, THX_EINPUT, "phantom: no surface %d", surface);
+    if (z < LAYER_DZ * f->pl.first[surface] || z > LAYER_DZ * f->pl.last[surface]) return THX_OK;
+    outline o;
+    memset(&o, 0, sizeof o);
+    int nl = 0;
+    thx_status st;
+    if (surface <= S_MUSCLE) st = shell_outline(ctx, surface, z, &o);
+    else if (surface == S_HEART) st = heart_section(z).ok ? heart_outline(ctx, z, &o) : THX_OK;
+    else st = lung_outline(ctx, surface - S_LUNG_R, z, &o, &nl);
+    if (st != THX_OK) {
+        outline_free(&o);
+        return st;
+    }
+    free(o.s);
+    *pts = o.p;
+    *n = o.n;
+    return THX_OK;
+}

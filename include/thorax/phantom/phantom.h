@@ -197,6 +197,12 @@ void thx_phantom_plane_set(const thx_phantom_field *f, double z, thx_phantom_pla
 void thx_phantom_plane_destroy(thx_phantom_plane **p);
 /* Region (0..6, above) of the point (x, y) of the plane; a point on a surface belongs to the outer side. */
 int thx_phantom_region(const thx_phantom_plane *p, double x, double y);
+/* The smooth outline of `surface` on the plane z, counterclockwise: the curve the contours are digitized
+ * from (the shells 720 points in theta, the heart 360 on its ellipse, a lung its marching-squares trace
+ * at 1.25 mm, the largest loop), for measuring distances to the analytic surfaces. *pts is the caller's
+ * to free; *n = 0 when z lies outside the surface's slab. */
+thx_status thx_phantom_section(thx_ctx *ctx, const thx_phantom_field *f, int surface, double z, thx_vec2 **pts,
+                               size_t *n);
 /* Volume (mm^3) enclosed by each surface: Simpson's rule in z (steps of about dz mm) over the areas
  * of the sections (the shells by the trapezoid rule in theta, the heart's ellipses exactly, the
  * lungs the areas of the outlines the contours are drawn from). Independent of the point test. */
