@@ -986,6 +986,11 @@ struct thx_phantom_plane {
     torso_par tp;
     ellipse2 heart;
     lung_fn lung[2];
+    /* bounds on the plane (1 mm beyond the extremes of 720 samples in theta, which the curves
+     * cannot pass between samples by more than ~0.01 mm): r >= r_out is outside the torso, r < r_in
+     * inside the innermost shell present; between them the shells are evaluated */
+    double r_in, r_out;
+    int inner; /* that innermost shell */
 };
 
 thx_status thx_phantom_field_create(thx_ctx *ctx, thx_phantom_field **out)
@@ -1045,19 +1050,33 @@ void thx_phantom_plane_set(const thx_phantom_field *f, double z, thx_phantom_pla
     for (int s = 0; s < THX_PHANTOM_N_SURFACES; s++)
         P->on[s] = z >= LAYER_DZ * f->pl.first[s] && z <= LAYER_DZ * f->pl.last[s];
     P->tp = torso_at(z);
+    P->inner = P->on[S_MUSCLE] ? S_MUSCLE : P->on[S_FAT] ? S_FAT : S_TORSO;
     P->heart = heart_section(z);
     if (!P->heart.ok) P->on[S_HEART] = 0;
     for (int side = 0; side < 2; side++) {
-        lung_fn *L = &P->lung[side];
-        L->side = side;
-        L->z = z;
-        L->heart = P->heart;
-        if (!P->on[S_LUNG_R + side]) continue;
-        for (int i = 0; i <= N_POLAR; i++) {
-            double th = 2.0 * M_PI * i / N_POLAR;
-            L->wall[i] = shell_r(S_MUSCLE, &P->tp, th, z) - LUNG_GAP_WALL;
-        }
+        P->lung[side].side = side;
+        P->lung[side].z = z;
+        P->lung[side].heart = P->heart;
     }
+    P->r_in = P->r_out = 0;
+    if (!P->on[S_TORSO]) return; /* the lungs and heart lie inside the torso's slab */
+    /* the shells at the samples theta_i, each radius once (the same operations as shell_r, so the
+       lungs' walls are the values lung_outline uses, bit for bit) */
+    double mn = 1e300, mx = 0;
+    for (int i = 0; i <= N_POLAR; i++) {
+        double th = 2.0 * M_PI * i / N_POLAR, r[3];
+        r[S_TORSO] = torso_r(&P->tp, th);
+        r[S_FAT] = r[S_TORSO] - fat_t(th);
+        r[S_MUSCLE] = r[S_FAT] - muscle_t(th, z);
+        if (i < N_POLAR) {
+            mx = fmax(mx, r[S_TORSO]);
+            mn = fmin(mn, r[P->inner]);
+        }
+        for (int side = 0; side < 2; side++)
+            if (P->on[S_LUNG_R + side]) P->lung[side].wall[i] = r[S_MUSCLE] - LUNG_GAP_WALL;
+    }
+    P->r_out = mx + 1.0;
+    P->r_in = fmax(0.0, mn - 1.0);
 }
 
 void thx_phantom_plane_destroy(thx_phantom_plane **P)
@@ -1078,7 +1097,10 @@ int thx_phantom_region(const thx_phantom_plane *P, double x, double y)
     for (int side = 0; side < 2; side++)
         if (P->on[S_LUNG_R + side] && lung_f(&P->lung[side], x, y) < 0) return 1 + S_LUNG_R + side;
     if (!P->on[S_TORSO]) return 0;
-    double r = len2d(x, y), th = atan2(y, x);
+    double r = len2d(x, y);
+    if (r >= P->r_out) return 0;
+    if (r < P->r_in) return 1 + P->inner;
+    double th = atan2(y, x);
     double R = torso_r(&P->tp, th);
     if (r >= R) return 0;
     if (!P->on[S_FAT]) return 1 + S_TORSO;
