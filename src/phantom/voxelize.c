@@ -410,12 +410,26 @@ thx_status thx_phantom_voxelize(thx_ctx *ctx, const thx_voxelize_opts *o, thx_im
                     }
             }
             double f[PH_REGIONS];
+            int centre_set = 0;
             for (size_t j = 0; j < nj; j++)
                 for (size_t i = 0; i < ni; i++) {
                     const uint16_t *cn = cnt + (j * ni + i) * PH_REGIONS;
                     for (int r = 0; r < PH_REGIONS; r++) f[r] = cn[r] / (double)(n * n * n);
                     size_t at = thx_image_at(labels, i, j, k);
                     finish_voxel(f, PH_REGIONS, values, &labels->v[at], values ? &mix->v[at] : NULL);
+                    /* a tie for the largest count (an even n: 32 of 64, 4 of 8): the region at the voxel's
+                     * centre decides when it is one of the tied, rather than always the higher number */
+                    int best = (int)labels->v[at], tied = 0;
+                    for (int r = 0; r < best; r++) tied |= cn[r] == cn[best];
+                    if (!tied || !mx[j * ni + i]) continue;
+                    if (!centre_set) {
+                        thx_phantom_plane_set(fld, labels->origin[2] + d[8] * labels->spacing[2] * (double)k, P);
+                        centre_set = 1;
+                    }
+                    double x, y;
+                    plane_xy(labels, (double)i, (double)j, &x, &y);
+                    int rc = thx_phantom_region(P, x, y);
+                    if (cn[rc] == cn[best]) labels->v[at] = (float)rc;
                 }
         }
         unsigned char *t = c0;

@@ -16,7 +16,8 @@
  * closed surface the right number of times); thx_phantom_voxelize evaluates the analytic point
  * test at n x n x n points per voxel wherever the voxel's eight corners are not all in one region
  * (elsewhere the voxel is that region whole). The label of a voxel is the region of the largest
- * fraction (the plurality; ties go to the higher region number); a scan mixes the tissues'
+ * fraction (the plurality; ties go to the higher region number, except that for the phantom the
+ * region at the voxel's centre decides a tie it is part of); a scan mixes the tissues'
  * intensities by the fractions.
  */
 #ifndef THORAX_PHANTOM_VOXELIZE_H
