@@ -246,6 +246,7 @@ thx_status thx_voxelize(thx_ctx *ctx, const thx_surface *const *s, size_t ns, co
                     double p[2] = {U, V};
                     if (!edge_in(A, B, p) || !edge_in(B, C, p) || !edge_in(C, A, p)) continue;
                     double la = thx_orient2d(B, C, p) / area2, lb = thx_orient2d(C, A, p) / area2;
+                    int flat = A[2] == B[2] && B[2] == C[2]; /* a plane of constant w: crossed exactly there */
                     if (ncr == cap) {
                         size_t nc = cap ? 2 * cap : 4096;
                         crossing *x = thx_realloc(ctx, cr, nc * sizeof *x);
@@ -257,7 +258,7 @@ thx_status thx_voxelize(thx_ctx *ctx, const thx_surface *const *s, size_t ns, co
                     c->col = (uint32_t)((size_t)(V - (double)(j * (size_t)n)) * ncol + (size_t)U);
                     c->surf = (uint16_t)a;
                     c->sign = (int16_t)sign;
-                    c->w = la * A[2] + lb * B[2] + (1.0 - la - lb) * C[2];
+                    c->w = flat ? A[2] : la * A[2] + lb * B[2] + (1.0 - la - lb) * C[2];
                 }
         }
         qsort(cr, ncr, sizeof *cr, crossing_cmp);
@@ -312,6 +313,18 @@ thx_status thx_voxelize(thx_ctx *ctx, const thx_surface *const *s, size_t ns, co
                 f[0] = fmax(0.0, 1.0 - in);
                 size_t at = thx_image_at(labels, i, j, k);
                 finish_voxel(f, nr, values, &labels->v[at], values ? &mix->v[at] : NULL);
+                /* An exact tie (to rounding) is a boundary through the voxel's centre (a flat face on the
+                   plane of voxel centres: a cap at an odd millimetre in a 2 mm grid). No side is right;
+                   the voxels of such a layer alternate (by the parity of i + j + k) between the higher
+                   and the lower of the tied regions, so that the layer keeps its volume (always the
+                   higher had added half a layer of voxels per such cap). */
+                int best = (int)labels->v[at];
+                if ((i + j + k) % 2)
+                    for (int r = 0; r < best; r++)
+                        if (f[best] - f[r] <= 1e-9) {
+                            labels->v[at] = (float)r;
+                            break;
+                        }
             }
     }
     labels->integral = 1;

@@ -16,9 +16,11 @@
  * closed surface the right number of times); thx_phantom_voxelize evaluates the analytic point
  * test at n x n x n points per voxel wherever the voxel's eight corners are not all in one region
  * (elsewhere the voxel is that region whole). The label of a voxel is the region of the largest
- * fraction (the plurality; ties go to the higher region number, except that for the phantom the
- * region at the voxel's centre decides a tie it is part of); a scan mixes the tissues'
- * intensities by the fractions.
+ * fraction (the plurality). Ties: for the phantom the region at the voxel's centre decides a tie
+ * it is part of (else the higher region); for surfaces, whose fractions are exact, a tie is a
+ * boundary through the voxel's centre and goes to the higher region when i + j + k is even, to the
+ * lower when odd (a layer of such voxels keeps its volume). A scan mixes the tissues' intensities by
+ * the fractions.
  */
 #ifndef THORAX_PHANTOM_VOXELIZE_H
 #define THORAX_PHANTOM_VOXELIZE_H
