@@ -968,3 +968,214 @@ thx_status thx_phantom_estimate(thx_ctx *ctx, const thx_phantom_opts *o, thx_pha
     }
     return THX_OK;
 }
+
+/* ---- the smooth anatomy as a point test (the phantom as a scan) --------- */
+
+/* The solid of each surface, between its first and last layer (flat caps on those planes, as the
+ * surfaces built from the contours have): torso, fat and muscle r < R(theta, z) of their polar
+ * curves; the heart inside its ellipsoid; a lung where lung_f < 0 (the function whose zero set
+ * lung_outline traces on the layers). A point's region is 0 outside the torso, else 1 + the
+ * index of the innermost surface holding it. */
+struct thx_phantom_field {
+    layer_plan pl;
+};
+
+struct thx_phantom_plane {
+    double z;
+    int on[THX_PHANTOM_N_SURFACES]; /* z within the surface's slab */
+    torso_par tp;
+    ellipse2 heart;
+    lung_fn lung[2];
+    /* bounds on the plane (1 mm beyond the extremes of 720 samples in theta, which the curves
+     * cannot pass between samples by more than ~0.01 mm): r >= r_out is outside the torso, r < r_in
+     * inside the innermost shell present; between them the shells are evaluated */
+    double r_in, r_out;
+    int inner; /* that innermost shell */
+};
+
+thx_status thx_phantom_field_create(thx_ctx *ctx, thx_phantom_field **out)
+{
+    *out = NULL;
+    thx_phantom_field *f = thx_calloc(ctx, 1, sizeof *f);
+    if (!f) return THX_ENOMEM;
+    thx_status st = make_plan(ctx, &f->pl);
+    if (st != THX_OK) {
+        free(f);
+        return st;
+    }
+    *out = f;
+    return THX_OK;
+}
+
+void thx_phantom_field_destroy(thx_phantom_field **f)
+{
+    if (!f || !*f) return;
+    free(*f);
+    *f = NULL;
+}
+
+void thx_phantom_slab(const thx_phantom_field *f, int surface, double *z0, double *z1)
+{
+    *z0 = LAYER_DZ * f->pl.first[surface];
+    *z1 = LAYER_DZ * f->pl.last[surface];
+}
+
+void thx_phantom_bounds(const thx_phantom_field *f, double lo[3], double hi[3])
+{
+    /* The torso's half-widths are the largest at any height (the spine groove only takes away). */
+    lo[0] = lo[1] = 1e300;
+    hi[0] = hi[1] = -1e300;
+    for (int k = 0; k <= 4 * K_TOP; k++) {
+        torso_par p = torso_at(0.25 * LAYER_DZ * k);
+        lo[0] = fmin(lo[0], -p.al);
+        hi[0] = fmax(hi[0], p.ar);
+        lo[1] = fmin(lo[1], -p.bb);
+        hi[1] = fmax(hi[1], p.bf);
+    }
+    thx_phantom_slab(f, S_TORSO, &lo[2], &hi[2]);
+}
+
+thx_status thx_phantom_plane_create(thx_ctx *ctx, const thx_phantom_field *f, double z, thx_phantom_plane **out)
+{
+    thx_phantom_plane *P = thx_calloc(ctx, 1, sizeof *P);
+    *out = P;
+    if (!P) return THX_ENOMEM;
+    thx_phantom_plane_set(f, z, P);
+    return THX_OK;
+}
+
+void thx_phantom_plane_set(const thx_phantom_field *f, double z, thx_phantom_plane *P)
+{
+    P->z = z;
+    for (int s = 0; s < THX_PHANTOM_N_SURFACES; s++)
+        P->on[s] = z >= LAYER_DZ * f->pl.first[s] && z <= LAYER_DZ * f->pl.last[s];
+    P->tp = torso_at(z);
+    P->inner = P->on[S_MUSCLE] ? S_MUSCLE : P->on[S_FAT] ? S_FAT : S_TORSO;
+    P->heart = heart_section(z);
+    if (!P->heart.ok) P->on[S_HEART] = 0;
+    for (int side = 0; side < 2; side++) {
+        P->lung[side].side = side;
+        P->lung[side].z = z;
+        P->lung[side].heart = P->heart;
+    }
+    P->r_in = P->r_out = 0;
+    if (!P->on[S_TORSO]) return; /* the lungs and heart lie inside the torso's slab */
+    /* the shells at the samples theta_i, each radius once (the same operations as shell_r, so the
+       lungs' walls are the values lung_outline uses, bit for bit) */
+    double mn = 1e300, mx = 0;
+    for (int i = 0; i <= N_POLAR; i++) {
+        double th = 2.0 * M_PI * i / N_POLAR, r[3];
+        r[S_TORSO] = torso_r(&P->tp, th);
+        r[S_FAT] = r[S_TORSO] - fat_t(th);
+        r[S_MUSCLE] = r[S_FAT] - muscle_t(th, z);
+        if (i < N_POLAR) {
+            mx = fmax(mx, r[S_TORSO]);
+            mn = fmin(mn, r[P->inner]);
+        }
+        for (int side = 0; side < 2; side++)
+            if (P->on[S_LUNG_R + side]) P->lung[side].wall[i] = r[S_MUSCLE] - LUNG_GAP_WALL;
+    }
+    P->r_out = mx + 1.0;
+    P->r_in = fmax(0.0, mn - 1.0);
+}
+
+void thx_phantom_plane_destroy(thx_phantom_plane **P)
+{
+    if (!P) return;
+    free(*P);
+    *P = NULL;
+}
+
+int thx_phantom_region(const thx_phantom_plane *P, double x, double y)
+{
+    if (P->on[S_HEART]) {
+        const ellipse2 *e = &P->heart;
+        double dx = x - e->cx, dy = y - e->cy;
+        double px = (dx * e->e1x + dy * e->e1y) / e->ra, py = (-dx * e->e1y + dy * e->e1x) / e->rb;
+        if (px * px + py * py < 1.0) return 1 + S_HEART;
+    }
+    for (int side = 0; side < 2; side++)
+        if (P->on[S_LUNG_R + side] && lung_f(&P->lung[side], x, y) < 0) return 1 + S_LUNG_R + side;
+    if (!P->on[S_TORSO]) return 0;
+    double r = len2d(x, y);
+    if (r >= P->r_out) return 0;
+    if (r < P->r_in) return 1 + P->inner;
+    double th = atan2(y, x);
+    double R = torso_r(&P->tp, th);
+    if (r >= R) return 0;
+    if (!P->on[S_FAT]) return 1 + S_TORSO;
+    R -= fat_t(th);
+    if (r >= R) return 1 + S_TORSO;
+    if (!P->on[S_MUSCLE]) return 1 + S_FAT;
+    R -= muscle_t(th, P->z);
+    return r >= R ? 1 + S_FAT : 1 + S_MUSCLE;
+}
+
+/* Area enclosed by surface s on the plane z: the shells by the trapezoid rule in theta (periodic and
+ * smooth: the error falls fast with the number of samples), the heart's ellipse exactly, a lung the
+ * polygon lung_outline traces (marching squares at LUNG_GRID: the contour model's own outline). */
+static thx_status section_area(thx_ctx *ctx, int s, double z, double *area)
+{
+    *area = 0;
+    if (s <= S_MUSCLE) {
+        torso_par p = torso_at(z);
+        const int n = 8192;
+        double sum = 0;
+        for (int i = 0; i < n; i++) {
+            double r = shell_r(s, &p, 2.0 * M_PI * i / n, z);
+            sum += r * r;
+        }
+        *area = 0.5 * sum * (2.0 * M_PI / n);
+    } else if (s == S_HEART) {
+        ellipse2 e = heart_section(z);
+        if (e.ok) *area = M_PI * e.ra * e.rb;
+    } else {
+        outline o;
+        int nl;
+        THX_CHECK(lung_outline(ctx, s - S_LUNG_R, z, &o, &nl));
+        if (o.n) *area = fabs(poly_area(o.p, o.n));
+        outline_free(&o);
+    }
+    return THX_OK;
+}
+
+thx_status thx_phantom_volumes(thx_ctx *ctx, const thx_phantom_field *f, double dz, double vol[THX_PHANTOM_N_SURFACES])
+{
+    for (int s = 0; s < THX_PHANTOM_N_SURFACES; s++) {
+        double z0 = LAYER_DZ * f->pl.first[s], z1 = LAYER_DZ * f->pl.last[s];
+        long n = lround(ceil((z1 - z0) / dz / 2.0)) * 2; /* even: Simpson */
+        double h = (z1 - z0) / (double)n, sum = 0;
+        for (long i = 0; i <= n; i++) {
+            double a;
+            THX_CHECK(section_area(ctx, s, z0 + h * (double)i, &a));
+            sum += a * (i == 0 || i == n ? 1.0 : i % 2 ? 4.0 : 2.0);
+        }
+        vol[s] = sum * h / 3.0;
+    }
+    return THX_OK;
+}
+
+thx_status thx_phantom_section(thx_ctx *ctx, const thx_phantom_field *f, int surface, double z, thx_vec2 **pts,
+                               size_t *n)
+{
+    *pts = NULL;
+    *n = 0;
+    if (surface < 0 || surface >= THX_PHANTOM_N_SURFACES)
+        return thx_error(ctx, THX_EINPUT, "phantom: no surface %d", surface);
+    if (z < LAYER_DZ * f->pl.first[surface] || z > LAYER_DZ * f->pl.last[surface]) return THX_OK;
+    outline o;
+    memset(&o, 0, sizeof o);
+    int nl = 0;
+    thx_status st;
+    if (surface <= S_MUSCLE) st = shell_outline(ctx, surface, z, &o);
+    else if (surface == S_HEART) st = heart_section(z).ok ? heart_outline(ctx, z, &o) : THX_OK;
+    else st = lung_outline(ctx, surface - S_LUNG_R, z, &o, &nl);
+    if (st != THX_OK) {
+        outline_free(&o);
+        return st;
+    }
+    free(o.s);
+    *pts = o.p;
+    *n = o.n;
+    return THX_OK;
+}

@@ -171,6 +171,43 @@ thx_status thx_torso_electrodes(thx_ctx *ctx, const thx_model *m, const thx_fram
 thx_status thx_torso_epicardial(thx_ctx *ctx, const thx_surface *heart, const thx_frame *frame, const thx_beat_opts *o,
                                 thx_series **out);
 
+/*
+ * The phantom's smooth anatomy as a point test (the phantom as a scan, thorax/phantom/voxelize.h).
+ * Each surface is the solid of its smooth outlines between its first and last layer, with flat
+ * caps on those planes (as the surfaces built from the contours have): torso, fat and muscle the
+ * polar curves r < R(theta, z), the heart its ellipsoid, a lung the region of the implicit
+ * function whose zero set the lung outlines trace. The region of a point is 0 outside the torso,
+ * else 1 + the index (order above) of the innermost surface that holds it: 1 subcutaneous fat
+ * (inside torso, outside fat), 2 skeletal muscle (inside fat, outside muscle), 3 the rest of the
+ * thorax inside the muscle, 4 right lung, 5 left lung, 6 heart. The field is independent of the
+ * seed, jitter and shifts (those are the digitization's, not the anatomy's).
+ */
+typedef struct thx_phantom_field thx_phantom_field;
+typedef struct thx_phantom_plane thx_phantom_plane; /* the field on one plane z = const */
+
+thx_status thx_phantom_field_create(thx_ctx *ctx, thx_phantom_field **out);
+void thx_phantom_field_destroy(thx_phantom_field **f);
+/* Heights (mm) of surface s's first and last layers (its caps). */
+void thx_phantom_slab(const thx_phantom_field *f, int surface, double *z0, double *z1);
+/* A box holding the torso (RAS mm). */
+void thx_phantom_bounds(const thx_phantom_field *f, double lo[3], double hi[3]);
+/* The field on the plane z: create allocates, set refills one (for another z). */
+thx_status thx_phantom_plane_create(thx_ctx *ctx, const thx_phantom_field *f, double z, thx_phantom_plane **out);
+void thx_phantom_plane_set(const thx_phantom_field *f, double z, thx_phantom_plane *p);
+void thx_phantom_plane_destroy(thx_phantom_plane **p);
+/* Region (0..6, above) of the point (x, y) of the plane; a point on a surface belongs to the outer side. */
+int thx_phantom_region(const thx_phantom_plane *p, double x, double y);
+/* The smooth outline of `surface` on the plane z, counterclockwise: the curve the contours are digitized
+ * from (the shells 720 points in theta, the heart 360 on its ellipse, a lung its marching-squares trace
+ * at 1.25 mm, the largest loop), for measuring distances to the analytic surfaces. *pts is the caller's
+ * to free; *n = 0 when z lies outside the surface's slab. */
+thx_status thx_phantom_section(thx_ctx *ctx, const thx_phantom_field *f, int surface, double z, thx_vec2 **pts,
+                               size_t *n);
+/* Volume (mm^3) enclosed by each surface: Simpson's rule in z (steps of about dz mm) over the areas
+ * of the sections (the shells by the trapezoid rule in theta, the heart's ellipses exactly, the
+ * lungs the areas of the outlines the contours are drawn from). Independent of the point test. */
+thx_status thx_phantom_volumes(thx_ctx *ctx, const thx_phantom_field *f, double dz, double vol[THX_PHANTOM_N_SURFACES]);
+
 #ifdef __cplusplus
 }
 #endif
