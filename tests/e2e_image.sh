@@ -1,0 +1,198 @@
+#!/bin/bash
+# End-to-end: `thorax image info|convert` against files other programs write and read.
+#  - nibabel writes NIfTI-1 and NIfTI-2 files: sform only, qform only, neither (pixdim: the standard's
+#    method 1, x = pixdim * i, no offset), scl_slope/scl_inter, int8, uint16, float64, a 4-D file with
+#    one volume (read) and one with several (refused); `info --json` gives each one's affine as
+#    nibabel computes it (sform, else qform), and the voxels (converted to .nii by thorax, read back
+#    by nibabel) equal nibabel's scaled data;
+#  - convert between every format (.nii, .nii.gz, .nrrd, .mha) in a chain: identical voxels and
+#    geometry at every step, nibabel reading the last one;
+#  - VTK (python3-vtk9's vtkNrrdReader and vtkMetaImageReader) reads thorax's .nrrd and .mha: the same
+#    voxels, spacing and origin (NRRD: RAS as written; MetaImage: ITK's LPS, x and y negated);
+#  - info's text: the superior/anterior/left axes and their cosines of an oblique grid against numpy,
+#    the label counts and volumes of a label map against numpy;
+#  - bad images exit 1 with a message naming the file, and convert writes nothing: truncated data, a
+#    NaN voxel, a zero spacing, a skewed sform, an NRRD file named .nii, a non-image; usage errors exit 2.
+# Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
+set -eu
+: "${THORAX:?}" "${SRC:?}" "${WORK:?}"
+PY=/usr/bin/python3
+rm -rf "$WORK"
+mkdir -p "$WORK"
+cd "$WORK"
+fail() { echo "e2e_image: FAIL: $*" >&2; exit 1; }
+. "$SRC/tests/expect_rc.sh"
+
+# ---- usage
+expect_rc 2 "$THORAX" image
+expect_rc 2 "$THORAX" image frobnicate x.nii
+expect_rc 2 "$THORAX" image info
+expect_rc 2 "$THORAX" image convert x.nii
+expect_rc 2 "$THORAX" image info x.nii -o y.nii
+expect_rc 1 "$THORAX" image info missing.nii
+grep -q "missing.nii" err.txt || fail "missing file: no name in the message"
+
+# ---- nibabel's NIfTI files
+$PY - <<'EOF'
+import nibabel as nib, numpy as np
+rng = np.random.default_rng(5)
+A = np.array([[0.9, 0.1, 0.0, -40.0], [-0.1, 0.9, 0.2, 12.5], [0.0, -0.2, 0.9, 80.0], [0, 0, 0, 1]])
+# an orthonormal rotation scaled by the spacing
+q, _ = np.linalg.qr(A[:3, :3])
+q = q @ np.diag(np.sign(np.diag(q)))
+sp = np.array([0.8, 1.2, 2.5])
+aff = np.eye(4); aff[:3, :3] = q * sp; aff[:3, 3] = [-40, 12.5, 80]
+data = rng.integers(-50, 200, size=(12, 9, 7)).astype(np.int16)
+def save(img, name):
+    nib.save(img, name)
+img = nib.Nifti1Image(data, None); img.set_sform(aff, code=1); img.set_qform(None, code=0); save(img, 'sform.nii.gz')
+img = nib.Nifti1Image(data, None); img.set_qform(aff, code=1); img.set_sform(None, code=0); save(img, 'qform.nii')
+img = nib.Nifti1Image(data, None); img.set_qform(None, code=0); img.set_sform(None, code=0)
+img.header.set_zooms((0.7, 0.9, 3.0)); save(img, 'pixdim.nii')
+img = nib.Nifti2Image(data, aff); save(img, 'nifti2.nii')
+img = nib.Nifti1Image(data, aff); img.header.set_slope_inter(0.5, -3.0); save(img, 'scaled.nii')
+for t in ('int8', 'uint16', 'float64'):
+    d = (data % 100).astype(t) if t != 'float64' else data.astype(t) * 0.25
+    nib.save(nib.Nifti1Image(d, aff), 'type_%s.nii.gz' % t)
+nib.save(nib.Nifti1Image(data[..., None], aff), 'four1.nii.gz')
+nib.save(nib.Nifti1Image(np.stack([data, data], axis=3), aff), 'four2.nii.gz')
+EOF
+check_nifti() { # FILE: info's affine = nibabel's (sform > qform > pixdim), voxels equal nibabel's scaled data
+    local f=$1
+    "$THORAX" image info "$f" --json > info.json || fail "info $f"
+    "$THORAX" image convert "$f" -o back.nii --type float32 -q || fail "convert $f"
+    $PY - "$f" <<'EOF' || fail "nibabel disagrees on $f"
+import json, sys, numpy as np, nibabel as nib
+f = sys.argv[1]
+j = json.load(open('info.json'))
+img = nib.load(f)
+h = img.header
+if int(h['sform_code']) > 0: want = h.get_sform()
+elif int(h['qform_code']) > 0: want = h.get_qform()
+else:
+    want = np.diag(list(h.get_zooms()[:3]) + [1.0])
+D = np.array(j['direction_rows']); sp = np.array(j['spacing_mm']); o = np.array(j['origin_ras_mm'])
+got = np.eye(4); got[:3, :3] = D * sp; got[:3, 3] = o
+if not np.allclose(got, want, atol=2e-5):
+    sys.exit('%s: affine\n%s\nnibabel\n%s' % (f, got, want))
+data = np.asanyarray(img.dataobj).astype(np.float64)
+if data.ndim == 4: data = data[..., 0]
+mine = np.asanyarray(nib.load('back.nii').dataobj).astype(np.float64)
+if mine.shape != data.shape or not np.array_equal(mine, data.astype(np.float32).astype(np.float64)):
+    sys.exit('%s: voxels differ' % f)
+back = nib.load('back.nii')
+if not np.allclose(back.affine, want, atol=2e-5): sys.exit('%s: our .nii affine differs' % f)
+lo, hi = data.min(), data.max()
+if abs(j['min'] - lo) > 1e-6 or abs(j['max'] - hi) > 1e-6: sys.exit('%s: range' % f)
+EOF
+}
+for f in sform.nii.gz qform.nii pixdim.nii nifti2.nii scaled.nii type_int8.nii.gz type_uint16.nii.gz \
+         type_float64.nii.gz four1.nii.gz; do
+    check_nifti "$f"
+done
+grep -q '"format":	"nifti2"' <("$THORAX" image info nifti2.nii --json) || fail "nifti2 not reported"
+"$THORAX" image info pixdim.nii | grep -q "pixdim" || fail "pixdim frame not reported"
+expect_rc 1 "$THORAX" image info four2.nii.gz
+grep -q "four2.nii.gz: a 4-D image" err.txt || fail "4-D: $(cat err.txt)"
+
+# ---- convert between every format: identical voxels and geometry
+prev=sform.nii.gz
+for out in a.nrrd b.mha c.nii d.nii.gz e.nrrd f.mha g.nii; do
+    "$THORAX" image convert "$prev" -o "$out" -q || fail "convert $prev -> $out"
+    $PY - "$prev" "$out" "$THORAX" <<'EOF' || fail "$prev -> $out changed the image"
+import json, subprocess, sys, numpy as np
+a, b, T = sys.argv[1:4]
+ja = json.loads(subprocess.check_output([T, 'image', 'info', a, '--json']))
+jb = json.loads(subprocess.check_output([T, 'image', 'info', b, '--json']))
+for k in ('dimensions', 'labels', 'min', 'max'):
+    assert ja[k] == jb[k], (k, ja[k], jb[k])
+for k in ('spacing_mm', 'origin_ras_mm', 'direction_rows'):
+    assert np.allclose(ja[k], jb[k], atol=1e-6), (k, ja[k], jb[k])
+EOF
+    prev=$out
+done
+$PY - <<'EOF' || fail "the chain's last .nii differs from the first (nibabel)"
+import nibabel as nib, numpy as np
+a, b = nib.load('sform.nii.gz'), nib.load('g.nii')
+assert np.array_equal(np.asanyarray(a.dataobj), np.asanyarray(b.dataobj))
+assert np.allclose(a.affine, b.affine, atol=1e-5)
+EOF
+head -c 300 a.nrrd | grep -q "^# thorax-image" || fail "no marker in the NRRD header"
+head -c 300 b.mha | grep -q "^Comment = thorax-image" || fail "no marker in the MetaImage header"
+# ... and over a file thorax did not write: refused, the file untouched
+cp sform.nii.gz theirs.nii.gz
+expect_rc 1 "$THORAX" image convert a.nrrd -o theirs.nii.gz
+cmp -s sform.nii.gz theirs.nii.gz || fail "convert replaced a file thorax did not write"
+
+# ---- VTK reads our NRRD and MetaImage files (axis-aligned: VTK 9.1's readers keep no direction)
+$PY - <<'EOF'
+import nibabel as nib, numpy as np
+d = (np.arange(14 * 11 * 5) % 23).astype(np.int16).reshape(14, 11, 5, order='F') - 5
+aff = np.diag([0.75, 1.5, 2.0, 1.0]); aff[:3, 3] = [-20.0, 31.5, 7.25]
+nib.save(nib.Nifti1Image(d, aff), 'plain.nii.gz')
+EOF
+"$THORAX" image convert plain.nii.gz -o plain.nrrd -q
+"$THORAX" image convert plain.nii.gz -o plain.mha -q
+$PY - <<'EOF' || fail "VTK reads our NRRD/MetaImage differently"
+import numpy as np, nibabel as nib
+from vtkmodules.vtkIOImage import vtkNrrdReader, vtkMetaImageReader
+from vtkmodules.util.numpy_support import vtk_to_numpy
+d = np.asanyarray(nib.load('plain.nii.gz').dataobj)
+for R, f, o in ((vtkNrrdReader, 'plain.nrrd', (-20, 31.5, 7.25)), (vtkMetaImageReader, 'plain.mha', (20, -31.5, 7.25))):
+    r = R(); r.SetFileName(f); r.Update(); img = r.GetOutput()
+    dims = img.GetDimensions()
+    assert dims == d.shape, (f, dims)
+    v = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(dims[::-1]).transpose(2, 1, 0)
+    assert np.array_equal(v, d), f
+    assert np.allclose(img.GetSpacing(), (0.75, 1.5, 2.0)), (f, img.GetSpacing())
+    assert np.allclose(img.GetOrigin(), o), (f, img.GetOrigin())
+EOF
+
+# ---- info's text: the meaning of an oblique grid; a label map's counts and volumes
+"$THORAX" image info sform.nii.gz > info.txt
+$PY - <<'EOF' || fail "info's axes or labels disagree with numpy: $(cat info.txt)"
+import re, numpy as np, nibabel as nib
+t = open('info.txt').read()
+img = nib.load('sform.nii.gz'); a = img.affine[:3, :3]; D = a / np.linalg.norm(a, axis=0)
+sup = int(np.argmax(abs(D[2]))); sgn = '+' if D[2, sup] > 0 else '-'
+m = re.search(r'^superior\s+([+-])([ijk]) \(cos ([0-9.]+)\)', t, re.M)
+assert m and m.group(1) == sgn and 'ijk'.index(m.group(2)) == sup, m
+assert abs(float(m.group(3)) - abs(D[2, sup])) < 1e-6
+assert re.search(r'^planes\s+oblique, nearest axial', t, re.M)
+vals, cnt = np.unique(np.asanyarray(img.dataobj), return_counts=True)
+ml = np.prod(np.linalg.norm(a, axis=0)) / 1000  # the sform's spacing (pixdim is not set here)
+assert 'labels      %d distinct values' % len(vals) in t
+for v, c in zip(vals, cnt):
+    m = re.search(r'^\s+%d: (\d+) voxels, ([0-9.e+-]+) mL' % v, t, re.M)
+    assert m and int(m.group(1)) == c and abs(float(m.group(2)) - c * ml) <= 1e-5 * c * ml, (v, m)
+EOF
+grep -q "^sha256      $(sha256sum sform.nii.gz | cut -d' ' -f1)" info.txt || fail "sha256 differs from sha256sum"
+
+# ---- bad images: exit 1, the file named, nothing written
+$PY - <<'EOF'
+import nibabel as nib, numpy as np
+d = np.ones((6, 5, 4), np.float32)
+img = nib.Nifti1Image(d, np.eye(4)); nib.save(img, 'good.nii')
+b = open('good.nii', 'rb').read(); open('cut.nii', 'wb').write(b[:-10])
+d2 = d.copy(); d2[2, 1, 3] = np.nan; nib.save(nib.Nifti1Image(d2, np.eye(4)), 'nan.nii.gz')
+z = np.eye(4); z[1, 1] = 0; img = nib.Nifti1Image(d, None); img.set_sform(z, 1); img.set_qform(None, 0); nib.save(img, 'zero.nii.gz')
+s = np.eye(4); s[0, 1] = 0.5; img = nib.Nifti1Image(d, None); img.set_sform(s, 1); img.set_qform(None, 0); nib.save(img, 'skew.nii.gz')
+open('really.nii', 'w').write('NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: raw\nendian: little\n\n' + 'x' * 16)
+open('words.nrrd', 'w').write('hello\n')
+EOF
+for bad in "cut.nii:truncated" "nan.nii.gz:is NaN" "zero.nii.gz:spacing along axis 2 is 0" \
+           "skew.nii.gz:not orthonormal" "really.nii:named as NIfTI but the file is a NRRD file" \
+           "words.nrrd:not an NRRD file"; do
+    f=${bad%%:*} want=${bad#*:}
+    expect_rc 1 "$THORAX" image info "$f"
+    grep -q "$f" err.txt && grep -q "$want" err.txt || fail "$f: expected \"$want\", got: $(cat err.txt)"
+    for o in out.nii.gz out.nrrd out.mha; do
+        expect_rc 1 "$THORAX" image convert "$f" -o "$o"
+        [ ! -e "$o" ] || fail "convert of $f wrote $o"
+    done
+done
+ls -a | grep -q '\.tmp' && fail "temporary files left: $(ls -a | grep '\.tmp')"
+expect_rc 1 "$THORAX" image convert good.nii -o out.nhdr
+grep -q ".nrrd" err.txt || fail ".nhdr writing: $(cat err.txt)"
+[ ! -e out.nhdr ] || fail ".nhdr written"
+echo "e2e_image: ok"
