@@ -57,39 +57,34 @@ for t in ('int8', 'uint16', 'float64'):
 nib.save(nib.Nifti1Image(data[..., None], aff), 'four1.nii.gz')
 nib.save(nib.Nifti1Image(np.stack([data, data], axis=3), aff), 'four2.nii.gz')
 EOF
-check_nifti() { # FILE: info's affine = nibabel's (sform > qform > pixdim), voxels equal nibabel's scaled data
-    local f=$1
-    "$THORAX" image info "$f" --json > info.json || fail "info $f"
-    "$THORAX" image convert "$f" -o back.nii --type float32 -q || fail "convert $f"
-    $PY - "$f" <<'EOF' || fail "nibabel disagrees on $f"
-import json, sys, numpy as np, nibabel as nib
-f = sys.argv[1]
-j = json.load(open('info.json'))
-img = nib.load(f)
-h = img.header
-if int(h['sform_code']) > 0: want = h.get_sform()
-elif int(h['qform_code']) > 0: want = h.get_qform()
-else:
-    want = np.diag(list(h.get_zooms()[:3]) + [1.0])
-D = np.array(j['direction_rows']); sp = np.array(j['spacing_mm']); o = np.array(j['origin_ras_mm'])
-got = np.eye(4); got[:3, :3] = D * sp; got[:3, 3] = o
-if not np.allclose(got, want, atol=2e-5):
-    sys.exit('%s: affine\n%s\nnibabel\n%s' % (f, got, want))
-data = np.asanyarray(img.dataobj).astype(np.float64)
-if data.ndim == 4: data = data[..., 0]
-mine = np.asanyarray(nib.load('back.nii').dataobj).astype(np.float64)
-if mine.shape != data.shape or not np.array_equal(mine, data.astype(np.float32).astype(np.float64)):
-    sys.exit('%s: voxels differ' % f)
-back = nib.load('back.nii')
-if not np.allclose(back.affine, want, atol=2e-5): sys.exit('%s: our .nii affine differs' % f)
-lo, hi = data.min(), data.max()
-if abs(j['min'] - lo) > 1e-6 or abs(j['max'] - hi) > 1e-6: sys.exit('%s: range' % f)
-EOF
-}
-for f in sform.nii.gz qform.nii pixdim.nii nifti2.nii scaled.nii type_int8.nii.gz type_uint16.nii.gz \
-         type_float64.nii.gz four1.nii.gz; do
-    check_nifti "$f"
+NIFTIS="sform.nii.gz qform.nii pixdim.nii nifti2.nii scaled.nii type_int8.nii.gz type_uint16.nii.gz type_float64.nii.gz four1.nii.gz"
+for f in $NIFTIS; do
+    "$THORAX" image info "$f" --json > "$f.json" || fail "info $f"
+    "$THORAX" image convert "$f" -o "$f.back.nii" --type float32 -q || fail "convert $f"
 done
+# info's affine = nibabel's (sform > qform > pixdim), our voxels = nibabel's scaled data
+$PY - $NIFTIS <<'EOF' || fail "nibabel disagrees"
+import json, sys, numpy as np, nibabel as nib
+for f in sys.argv[1:]:
+    j = json.load(open(f + '.json'))
+    img = nib.load(f)
+    h = img.header
+    if int(h['sform_code']) > 0: want = h.get_sform()
+    elif int(h['qform_code']) > 0: want = h.get_qform()
+    else: want = np.diag(list(h.get_zooms()[:3]) + [1.0])
+    D = np.array(j['direction_rows']); sp = np.array(j['spacing_mm']); o = np.array(j['origin_ras_mm'])
+    got = np.eye(4); got[:3, :3] = D * sp; got[:3, 3] = o
+    if not np.allclose(got, want, atol=2e-5):
+        sys.exit('%s: affine\n%s\nnibabel\n%s' % (f, got, want))
+    data = np.asanyarray(img.dataobj).astype(np.float64)
+    if data.ndim == 4: data = data[..., 0]
+    back = nib.load(f + '.back.nii')
+    mine = np.asanyarray(back.dataobj).astype(np.float64)
+    if mine.shape != data.shape or not np.array_equal(mine, data.astype(np.float32).astype(np.float64)):
+        sys.exit('%s: voxels differ' % f)
+    if not np.allclose(back.affine, want, atol=2e-5): sys.exit('%s: our .nii affine differs' % f)
+    if abs(j['min'] - data.min()) > 1e-6 or abs(j['max'] - data.max()) > 1e-6: sys.exit('%s: range' % f)
+EOF
 grep -q '"format":	"nifti2"' <("$THORAX" image info nifti2.nii --json) || fail "nifti2 not reported"
 "$THORAX" image info pixdim.nii | grep -q "pixdim" || fail "pixdim frame not reported"
 expect_rc 1 "$THORAX" image info four2.nii.gz
@@ -97,20 +92,24 @@ grep -q "four2.nii.gz: a 4-D image" err.txt || fail "4-D: $(cat err.txt)"
 
 # ---- convert between every format: identical voxels and geometry
 prev=sform.nii.gz
+"$THORAX" image info "$prev" --json > chain0.json
+k=0
 for out in a.nrrd b.mha c.nii d.nii.gz e.nrrd f.mha g.nii; do
     "$THORAX" image convert "$prev" -o "$out" -q || fail "convert $prev -> $out"
-    $PY - "$prev" "$out" "$THORAX" <<'EOF' || fail "$prev -> $out changed the image"
-import json, subprocess, sys, numpy as np
-a, b, T = sys.argv[1:4]
-ja = json.loads(subprocess.check_output([T, 'image', 'info', a, '--json']))
-jb = json.loads(subprocess.check_output([T, 'image', 'info', b, '--json']))
-for k in ('dimensions', 'labels', 'min', 'max'):
-    assert ja[k] == jb[k], (k, ja[k], jb[k])
-for k in ('spacing_mm', 'origin_ras_mm', 'direction_rows'):
-    assert np.allclose(ja[k], jb[k], atol=1e-6), (k, ja[k], jb[k])
-EOF
+    k=$((k + 1))
+    "$THORAX" image info "$out" --json > "chain$k.json"
     prev=$out
 done
+$PY - <<'EOF' || fail "a conversion changed the image"
+import json, numpy as np
+ja = json.load(open('chain0.json'))
+for k in range(1, 8):
+    jb = json.load(open('chain%d.json' % k))
+    for key in ('dimensions', 'labels', 'min', 'max'):
+        assert ja[key] == jb[key], (k, key, ja[key], jb[key])
+    for key in ('spacing_mm', 'origin_ras_mm', 'direction_rows'):
+        assert np.allclose(ja[key], jb[key], atol=1e-6), (k, key, ja[key], jb[key])
+EOF
 $PY - <<'EOF' || fail "the chain's last .nii differs from the first (nibabel)"
 import nibabel as nib, numpy as np
 a, b = nib.load('sform.nii.gz'), nib.load('g.nii')
