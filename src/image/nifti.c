@@ -164,6 +164,17 @@ thx_status thx_image_read_nifti(thx_ctx *ctx, const char *path, thx_image *img)
                            (long long)sb.st_size);
             goto done;
         }
+    } else {
+        /* a compressed file: no more voxels than its bytes can inflate to (checked before allocating) */
+        struct stat sb;
+        double need = (double)nim->iname_offset + (double)nim->nvox * nim->nbyper;
+        if (stat(path, &sb) == 0 && need > thx_image_inflate_bound((size_t)sb.st_size)) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: the header claims %zu x %zu x %zu %s voxels but %lld compressed bytes cannot hold them: "
+                           "truncated",
+                           path, n[0], n[1], n[2], tn, (long long)sb.st_size);
+            goto done;
+        }
     }
     if ((st = thx_image_alloc(ctx, n, img)) != THX_OK) goto done;
     size_t badq = 0;
