@@ -240,6 +240,9 @@ int main(void)
         text[strlen(text) - 6] = '\0'; /* the last value gone */
         write_file(tl_path("asciicut.nrrd"), text, NULL, 0);
         CHECK(refused(ctx, tl_path("asciicut.nrrd"), "truncated"));
+        write_file(tl_path("ascii300.nrrd"), "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 2 1\nencoding: ascii\n\n7 300\n",
+                   NULL, 0);
+        CHECK(refused(ctx, tl_path("ascii300.nrrd"), "text value 2 (at byte 2) 300 is outside the range of uint8"));
     }
     /* every type alias decodes 1 2 3 4 as 1 2 3 4 (little endian; 2-D: one plane) */
     {

@@ -108,6 +108,12 @@ thx_status thx_image_decode_ascii(thx_ctx *ctx, thx_image *img, const char *text
         if (*end || end == word || (integer && v != floor(v)))
             return thx_error(ctx, THX_EINPUT, "%s: text value %zu (at byte %zu) \"%s\" is not %s", what, q + 1,
                              start, word, integer ? "an integer" : "a number");
+        static const double lo[] = {-128, 0, -32768, 0, -2147483648.0, 0, -9223372036854775808.0, 0},
+                            hi[] = {127, 255, 32767, 65535, 2147483647.0, 4294967295.0, 9223372036854775807.0,
+                                    18446744073709551615.0};
+        if (integer && (v < lo[t] || v > hi[t]))
+            return thx_error(ctx, THX_EINPUT, "%s: text value %zu (at byte %zu) %s is outside the range of %s", what,
+                             q + 1, start, word, thx_raw_name(t));
         img->v[q++] = (float)v;
     }
     if (q < count)
