@@ -230,6 +230,12 @@ thx_status thx_image_read_metaimage(thx_ctx *ctx, const char *path, thx_image *i
         goto done;
     }
     size_t n[3] = {(size_t)h.dimsize[0], (size_t)h.dimsize[1], h.ndims == 3 ? (size_t)h.dimsize[2] : 1};
+    for (int c = 0; c < 3; c++)
+        if (!n[c]) {
+            st = thx_error(ctx, THX_EINPUT, "%s: DimSize gives fewer than NDims = %d sizes (NDims after DimSize?)", path,
+                           h.ndims);
+            goto done;
+        }
     size_t vsize = thx_raw_size(h.type), need = vsize;
     for (int c = 0; c < 3; c++) {
         if (need > SIZE_MAX / n[c]) {

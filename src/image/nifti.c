@@ -4,6 +4,7 @@
  * NIfTI-1 with the same matrix as sform and qform (codes "scanner"), units mm. */
 #include "image/image_impl.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -288,6 +289,13 @@ thx_status thx_image_write_nifti(thx_ctx *ctx, const thx_image *img, thx_voxel_t
     static const int dt_of[] = {DT_UINT8, DT_INT16, DT_UINT16, DT_INT32, DT_FLOAT32};
     nifti_set_debug_level(0);
     int gz = thx_image_has_suffix(af->path, ".gz");
+    /* NIfTI-1 keeps the geometry in float32: a spacing or coordinate beyond its range (or a spacing
+       that would round to 0) cannot be written */
+    for (int c = 0; c < 3; c++)
+        if (img->spacing[c] > FLT_MAX || img->spacing[c] < FLT_MIN || fabs(img->origin[c]) > FLT_MAX)
+            return thx_error(ctx, THX_EINPUT,
+                             "%s: spacing %g or origin %g (axis %d) is beyond the float32 range of a NIfTI-1 header",
+                             af->path, img->spacing[c], img->origin[c], c + 1);
     char tmp[1200] = "", tmpgz[1200] = "";
     thx_status st = THX_OK;
     int64_t dims[8] = {3, (int64_t)img->n[0], (int64_t)img->n[1], (int64_t)img->n[2], 1, 1, 1, 1};
