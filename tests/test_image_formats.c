@@ -288,6 +288,22 @@ int main(void)
         }
         CHECK(all);
     }
+    /* a 2-D plane in LPS: its third axis the right-handed normal u x w, spacing 1 */
+    {
+        unsigned char d4[4] = {1, 2, 3, 4};
+        write_file(tl_path("plane.nrrd"),
+                   "NRRD0004\ntype: uchar\ndimension: 2\nspace: LPS\nsizes: 2 2\nspace directions: (0,2,0) (0.5,0,0)\n"
+                   "encoding: raw\nspace origin: (1,2,3)\n\n",
+                   d4, 4);
+        CHECK_OK(ctx, thx_image_read(ctx, tl_path("plane.nrrd"), NULL, &img));
+        if (img.v) {
+            /* RAS u = (0,-1,0), w = (-1,0,0): u x w = (0,0,-1) */
+            CHECK(img.dir[3] == -1 && img.dir[1] == -1 && img.dir[8] == -1 && img.dir[2] == 0 && img.dir[5] == 0);
+            CHECK(img.spacing[0] == 2 && img.spacing[1] == 0.5 && img.spacing[2] == 1 && img.n[2] == 1);
+            CHECK(img.origin[0] == -1 && img.origin[1] == -2 && img.origin[2] == 3 && img.v[3] == 4);
+            thx_image_free(&img);
+        }
+    }
     /* LAS and scanner-xyz: x negated; x and y negated */
     {
         const char *spaces[] = {"left-anterior-superior", "scanner-xyz", "right-anterior-superior"};

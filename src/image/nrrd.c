@@ -315,7 +315,7 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
     h.version = buf[7] - '0';
     /* the header: lines up to a blank line (or the end of a detached header) */
     size_t pos = 0, data_off = len;
-    int ln = 0, ended = 0;
+    int ln = 0;
     while (pos < len) {
         size_t eol = pos;
         while (eol < len && buf[eol] != '\n') eol++;
@@ -333,7 +333,6 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
         pos = eol < len ? eol + 1 : len;
         if (ln == 1) continue; /* the magic */
         if (n == 0) {
-            ended = 1;
             data_off = pos;
             break;
         }
@@ -357,7 +356,6 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
         char *name = trim(line), *value = trim(sep[1] ? sep + 2 : sep + 1);
         if ((st = field(ctx, &h, ln, name, value)) != THX_OK) goto done;
     }
-    (void)ended;
     if (!h.n_dim || !h.have_sizes || !h.have_type) {
         st = thx_error(ctx, THX_EINPUT, "%s: the header lacks \"%s\" (dimension, type, sizes and encoding are required)",
                        path, !h.n_dim ? "dimension" : !h.have_type ? "type" : "sizes");
@@ -464,8 +462,8 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
     }
     if (h.n_dim == 2) {
         /* one plane: the third axis is the normal, right-handed, 1 mm */
-        const double *a = img->dir, *d = img->dir;
-        double u[3] = {a[0], a[3], a[6]}, w[3] = {d[1], d[4], d[7]};
+        const double *d = img->dir;
+        double u[3] = {d[0], d[3], d[6]}, w[3] = {d[1], d[4], d[7]};
         img->dir[2] = u[1] * w[2] - u[2] * w[1];
         img->dir[5] = u[2] * w[0] - u[0] * w[2];
         img->dir[8] = u[0] * w[1] - u[1] * w[0];
