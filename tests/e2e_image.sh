@@ -181,10 +181,14 @@ z = np.eye(4); z[1, 1] = 0; img = nib.Nifti1Image(d, None); img.set_sform(z, 1);
 s = np.eye(4); s[0, 1] = 0.5; img = nib.Nifti1Image(d, None); img.set_sform(s, 1); img.set_qform(None, 0); nib.save(img, 'skew.nii.gz')
 open('really.nii', 'w').write('NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: raw\nendian: little\n\n' + 'x' * 16)
 open('words.nrrd', 'w').write('hello\n')
+# headers claiming more voxels than their files hold (4 x 4 x 4 int16 = 128 bytes; 100 there)
+open('short.nrrd', 'wb').write(b'NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nendian: little\nencoding: raw\n\n' + bytes(100))
+open('short.mha', 'wb').write(b'ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_SHORT\nElementDataFile = LOCAL\n' + bytes(100))
 EOF
 for bad in "cut.nii:truncated" "nan.nii.gz:is NaN" "zero.nii.gz:spacing along axis 2 is 0" \
            "skew.nii.gz:not orthonormal" "really.nii:named as NIfTI but the file is a NRRD file" \
-           "words.nrrd:not an NRRD file"; do
+           "words.nrrd:not an NRRD file" "short.nrrd:(128 bytes) but the data hold 100 bytes: truncated" \
+           "short.mha:(128 bytes) but the data hold 100 bytes: truncated"; do
     f=${bad%%:*} want=${bad#*:}
     expect_rc 1 "$THORAX" image info "$f"
     grep -q "$f" err.txt && grep -q "$want" err.txt || fail "$f: expected \"$want\", got: $(cat err.txt)"
