@@ -7,6 +7,9 @@
 #    by nibabel) equal nibabel's scaled data;
 #  - convert between every format (.nii, .nii.gz, .nrrd, .mha) in a chain: identical voxels and
 #    geometry at every step, nibabel reading the last one;
+#  - pynrrd's NRRD test files (tests/data/pynrrd: raw, gzip, detached, line and byte skips, ascii)
+#    read as the ball of the NIfTI file beside them, voxel for voxel and affine for affine; the
+#    variants thorax does not read (bzip2, 4-D, 1-D, a negative byte skip) refused by name;
 #  - VTK (python3-vtk9's vtkNrrdReader and vtkMetaImageReader) reads thorax's .nrrd and .mha: the same
 #    voxels, spacing and origin (NRRD: RAS as written; MetaImage: ITK's LPS, x and y negated);
 #  - info's text: the superior/anterior/left axes and their cosines of an oblique grid against numpy,
@@ -149,6 +152,41 @@ for R, f, o in ((vtkNrrdReader, 'plain.nrrd', (-20, 31.5, 7.25)), (vtkMetaImageR
     assert np.allclose(img.GetSpacing(), (0.75, 1.5, 2.0)), (f, img.GetSpacing())
     assert np.allclose(img.GetOrigin(), o), (f, img.GetOrigin())
 EOF
+
+# ---- pynrrd's test files (tests/data/pynrrd, written by ITK/teem-style writers): every readable
+# variant gives the ball of the NIfTI file beside them, voxel for voxel, with the same RAS affine
+# (their LPS identity = RAS diag(-1, -1, 1)); the ones thorax does not read are refused by name
+P=$SRC/tests/data/pynrrd
+for f in BallBinary30x30x30.nrrd BallBinary30x30x30.nhdr BallBinary30x30x30_gz.nrrd BallBinary30x30x30_gz_lineskip.nrrd \
+         BallBinary30x30x30_gz_byteskip_minus_one.nrrd BallBinary30x30x30_byteskip_minus_one.nhdr \
+         BallBinary30x30x30_byteskip_minus_one_nifti.nhdr test2d_ascii.nrrd; do
+    "$THORAX" image convert "$P/$f" -o "pynrrd_$f.nii" -q || fail "pynrrd's $f"
+done
+$PY - "$P" <<'EOF' || fail "pynrrd's files read differently from their NIfTI twin"
+import sys, glob, numpy as np, nibabel as nib
+P = sys.argv[1]
+ref = nib.load(P + '/BallBinary30x30x30.nii.gz')
+want = np.asanyarray(ref.dataobj)
+assert np.allclose(ref.affine, np.diag([-1.0, -1, 1, 1]))
+names = sorted(glob.glob('pynrrd_Ball*.nii'))
+assert len(names) == 7, names
+for name in names:
+    img = nib.load(name)
+    assert np.array_equal(np.asanyarray(img.dataobj), want), name
+    assert np.allclose(img.affine, ref.affine), (name, img.affine)
+a = nib.load('pynrrd_test2d_ascii.nrrd.nii')
+assert a.shape == (3, 9, 1)
+assert np.array_equal(np.asanyarray(a.dataobj)[:, :, 0], np.arange(1, 28).reshape(9, 3).T)
+assert np.allclose(a.header.get_zooms(), (1.0458, 2, 1))
+EOF
+for bad in "BallBinary30x30x30_bz2.nrrd:encoding \"bzip2\" is not supported" \
+           "test_simple4d_raw.nrrd:dimension 4" "test_customFields.nrrd:dimension 1" \
+           "BallBinary30x30x30_byteskip_minus_five.nhdr:byte skip \"-5\"" \
+           "BallBinary30x30x30_nifti.nhdr:hold more than the header's 54000 bytes"; do
+    f=${bad%%:*} want=${bad#*:}
+    expect_rc 1 "$THORAX" image info "$P/$f"
+    grep -qF "$want" err.txt || fail "pynrrd's $f: expected \"$want\", got: $(cat err.txt)"
+done
 
 # ---- info's text: the meaning of an oblique grid; a label map's counts and volumes
 "$THORAX" image info sform.nii.gz > info.txt

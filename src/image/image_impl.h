@@ -63,6 +63,10 @@ thx_status thx_image_decode_ascii(thx_ctx *ctx, thx_image *img, const char *text
  * sooner ("truncated"), is corrupt, or holds more (or bytes after it) is refused naming `what`. */
 thx_status thx_image_inflate(thx_ctx *ctx, const unsigned char *src, size_t n, unsigned char *dst, size_t need,
                              const char *what);
+/* Inflates the whole zlib or gzip stream src[0..n) into a new buffer (*out, *len bytes; caller frees), at
+ * most thx_image_inflate_bound(n) bytes; corrupt, unfinished or followed by other bytes: refused. */
+thx_status thx_image_inflate_all(thx_ctx *ctx, const unsigned char *src, size_t n, unsigned char **out, size_t *len,
+                                 const char *what);
 /* The most a deflate stream of n bytes can inflate to (zlib's limit, about 1032:1, with slack): a
  * header claiming more voxels than that is refused before anything is allocated. */
 double thx_image_inflate_bound(size_t n);

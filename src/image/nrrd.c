@@ -395,9 +395,12 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
         avail -= (size_t)(nl + 1 - data);
         data = nl + 1;
     }
-    if (h.byte_skip == -1) {
+    /* a gzip stream's byte skip counts decompressed bytes (teem's rule, pynrrd's too): applied below */
+    if (h.encoding == 1) {
+        /* gzip: the skip is applied after inflating */
+    } else if (h.byte_skip == -1) {
         if (h.encoding != 0) {
-            st = thx_error(ctx, THX_EINPUT, "%s: byte skip -1 goes only with raw encoding", path);
+            st = thx_error(ctx, THX_EINPUT, "%s: byte skip -1 goes only with raw or gzip encoding", path);
             goto done;
         }
         if (avail < need) goto short_data;
@@ -421,6 +424,27 @@ thx_status thx_image_read_nrrd(thx_ctx *ctx, const char *path, thx_image *img)
     if ((st = thx_image_alloc(ctx, n, img)) != THX_OK) goto done;
     if (h.encoding == 0) {
         thx_image_decode(img, (const unsigned char *)data, t, h.endian == 1);
+    } else if (h.encoding == 1 && h.byte_skip != 0) {
+        /* the whole stream, then the voxels at the skip (-1: its last bytes) */
+        unsigned char *all = NULL;
+        size_t nall = 0;
+        if ((st = thx_image_inflate_all(ctx, (const unsigned char *)data, avail, &all, &nall, what)) != THX_OK)
+            goto done;
+        size_t off = h.byte_skip == -1 ? (nall >= need ? nall - need : 0) : (size_t)h.byte_skip;
+        if (nall < need || nall - need < off) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: the compressed data give %zu bytes but the header claims %zu bytes of voxels after a byte "
+                           "skip of %ld: truncated",
+                           what, nall, need, h.byte_skip);
+        } else if (h.byte_skip >= 0 && nall - need > off) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: the compressed data hold %zu bytes more than the byte skip and the header's voxels", what,
+                           nall - need - off);
+        } else {
+            thx_image_decode(img, all + off, t, h.endian == 1);
+        }
+        free(all);
+        if (st != THX_OK) goto done;
     } else if (h.encoding == 1) {
         unsigned char *raw = malloc(need ? need : 1);
         if (!raw) {

@@ -174,6 +174,61 @@ thx_status thx_image_inflate(thx_ctx *ctx, const unsigned char *src, size_t n, u
     return THX_OK;
 }
 
+thx_status thx_image_inflate_all(thx_ctx *ctx, const unsigned char *src, size_t n, unsigned char **out, size_t *len,
+                                 const char *what)
+{
+    double bound = thx_image_inflate_bound(n);
+    size_t cap = n * 4 + 4096, done = 0, in_done = 0;
+    unsigned char *b = malloc(cap);
+    z_stream z;
+    memset(&z, 0, sizeof z);
+    if (!b || inflateInit2(&z, 15 + 32) != Z_OK) {
+        free(b);
+        return thx_error(ctx, THX_ENOMEM, "%s: out of memory inflating the data", what);
+    }
+    int rc = Z_OK;
+    while (rc == Z_OK) {
+        if (cap - done < 65536) {
+            size_t nc = cap * 2;
+            if ((double)nc > bound + 65536) nc = (size_t)bound + 65536;
+            unsigned char *nb = nc > cap ? realloc(b, nc) : NULL;
+            if (!nb) {
+                rc = Z_MEM_ERROR;
+                break;
+            }
+            b = nb;
+            cap = nc;
+        }
+        size_t ci = n - in_done, co = cap - done;
+        z.next_in = (Bytef *)(src + in_done);
+        z.avail_in = (uInt)(ci > (1u << 30) ? (1u << 30) : ci);
+        z.next_out = b + done;
+        z.avail_out = (uInt)(co > (1u << 30) ? (1u << 30) : co);
+        uInt ai = z.avail_in, ao = z.avail_out;
+        rc = inflate(&z, Z_NO_FLUSH);
+        in_done += ai - z.avail_in;
+        done += ao - z.avail_out;
+        if (rc == Z_BUF_ERROR && ai == z.avail_in && ao == z.avail_out) break; /* input ended */
+        if (rc == Z_BUF_ERROR) rc = Z_OK;
+    }
+    inflateEnd(&z);
+    thx_status st = THX_OK;
+    if (rc == Z_MEM_ERROR)
+        st = thx_error(ctx, THX_EINPUT, "%s: the compressed data inflate to more than %.0f bytes", what, bound);
+    else if (rc != Z_STREAM_END)
+        st = thx_error(ctx, THX_EINPUT, "%s: the compressed data are corrupt or stop before their end mark: truncated",
+                       what);
+    else if (in_done < n)
+        st = thx_error(ctx, THX_EINPUT, "%s: %zu bytes follow the compressed voxel data", what, n - in_done);
+    if (st != THX_OK) {
+        free(b);
+        return st;
+    }
+    *out = b;
+    *len = done;
+    return THX_OK;
+}
+
 thx_status thx_image_encode(thx_ctx *ctx, const thx_image *img, thx_voxel_type t, unsigned char **out, size_t *len)
 {
     thx_raw_type r = thx_raw_of_voxel(t);
