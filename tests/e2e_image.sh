@@ -12,6 +12,8 @@
 #    variants thorax does not read (bzip2, 4-D, 1-D, a negative byte skip) refused by name;
 #  - VTK (python3-vtk9's vtkNrrdReader and vtkMetaImageReader) reads thorax's .nrrd and .mha: the same
 #    voxels, spacing and origin (NRRD: RAS as written; MetaImage: ITK's LPS, x and y negated);
+#  - VTK's vtkMetaImageWriter (MetaIO) writes a compressed .mha and a .mhd + .raw: thorax reads its
+#    voxels and spacing, and its Offset as LPS;
 #  - info's text: the superior/anterior/left axes and their cosines of an oblique grid against numpy,
 #    the label counts and volumes of a label map against numpy;
 #  - bad images exit 1 with a message naming the file, and convert writes nothing: truncated data, a
@@ -187,6 +189,35 @@ for bad in "BallBinary30x30x30_bz2.nrrd:encoding \"bzip2\" is not supported" \
     expect_rc 1 "$THORAX" image info "$P/$f"
     grep -qF "$want" err.txt || fail "pynrrd's $f: expected \"$want\", got: $(cat err.txt)"
 done
+
+# ---- VTK writes MetaImage (vtkMetaImageWriter, MetaIO inside): a compressed .mha and a .mhd with its
+# .raw; thorax reads VTK's voxels, spacing, and its Offset as LPS (RAS: x and y negated)
+$PY - <<'EOF'
+import numpy as np
+from vtkmodules.vtkIOImage import vtkMetaImageWriter
+from vtkmodules.vtkCommonDataModel import vtkImageData
+from vtkmodules.util.numpy_support import numpy_to_vtk
+d = (np.arange(13 * 7 * 5) % 17).astype(np.int16) - 3   # i fastest
+img = vtkImageData(); img.SetDimensions(13, 7, 5); img.SetSpacing(0.5, 1.25, 3.0); img.SetOrigin(-7.5, 12, 30)
+img.GetPointData().SetScalars(numpy_to_vtk(d, deep=1))
+for comp, name in ((1, 'vtk_z.mha'), (0, 'vtk_raw.mhd')):
+    w = vtkMetaImageWriter(); w.SetInputData(img); w.SetFileName(name); w.SetCompression(comp); w.Write()
+EOF
+for f in vtk_z.mha vtk_raw.mhd; do
+    "$THORAX" image info "$f" --json > "$f.json" || fail "VTK's $f"
+    "$THORAX" image convert "$f" -o "$f.nii" -q || fail "VTK's $f"
+done
+$PY - <<'EOF' || fail "VTK's MetaImage files read wrongly"
+import json, numpy as np, nibabel as nib
+d = (np.arange(13 * 7 * 5) % 17).astype(np.int16) - 3
+for f in ('vtk_z.mha', 'vtk_raw.mhd'):
+    j = json.load(open(f + '.json'))
+    assert j['dimensions'] == [13, 7, 5] and np.allclose(j['spacing_mm'], (0.5, 1.25, 3.0)), f
+    assert np.allclose(j['origin_ras_mm'], (7.5, -12, 30)), (f, j['origin_ras_mm'])
+    assert np.allclose(j['direction_rows'], np.diag([-1.0, -1, 1])), f
+    v = np.asanyarray(nib.load(f + '.nii').dataobj)
+    assert np.array_equal(v.ravel(order='F'), d), f
+EOF
 
 # ---- info's text: the meaning of an oblique grid; a label map's counts and volumes
 "$THORAX" image info sform.nii.gz > info.txt
