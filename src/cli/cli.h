@@ -7,6 +7,7 @@ typedef int (*cli_cmd_fn)(int argc, char **argv);
 
 int cmd_phantom(int argc, char **argv);
 int cmd_surfaces(int argc, char **argv);
+int cmd_image(int argc, char **argv);
 int cmd_check(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_slice(int argc, char **argv);

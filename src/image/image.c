@@ -233,18 +233,70 @@ thx_status thx_image_temp_beside(thx_ctx *ctx, const thx_atomic_file *af, const 
     return THX_OK;
 }
 
+/* What a file's first bytes say it is ("NRRD", "NIfTI-1", "NIfTI-2", "MetaImage", "DICOM", "gzip"),
+ * or NULL: the check that a file is what its name says, so that a misnamed file gets a message that
+ * says what it is rather than a reader's complaint about a header it was never meant to read. */
+static const char *sniff(const char *path)
+{
+    unsigned char b[600];
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    size_t n = fread(b, 1, sizeof b, f);
+    fclose(f);
+    if (n >= 7 && !memcmp(b, "NRRD000", 7)) return "NRRD";
+    if (n >= 2 && b[0] == 0x1f && b[1] == 0x8b) return "gzip";
+    if (n >= 348 && (!memcmp(b + 344, "n+1", 4) || !memcmp(b + 344, "ni1", 4))) return "NIfTI-1";
+    if (n >= 12 && (!memcmp(b + 4, "n+2", 4) || !memcmp(b + 4, "ni2", 4))) return "NIfTI-2";
+    if (n >= 132 && !memcmp(b + 128, "DICM", 4)) return "DICOM";
+    /* MetaImage: a first line "Key = Value" with a MetaIO key */
+    static const char *const keys[] = {"ObjectType", "NDims", "Comment", "ObjectSubType", "Name"};
+    for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++) {
+        size_t m = strlen(keys[k]);
+        if (n > m && !memcmp(b, keys[k], m) && (b[m] == ' ' || b[m] == '=')) return "MetaImage";
+    }
+    return NULL;
+}
+
+/* The format a name says, or NULL. */
+static const char *named(const char *path)
+{
+    if (thx_image_has_suffix(path, ".nii") || thx_image_has_suffix(path, ".nii.gz")) return "NIfTI";
+    if (thx_image_has_suffix(path, ".nrrd") || thx_image_has_suffix(path, ".nhdr")) return "NRRD";
+    if (thx_image_has_suffix(path, ".mha") || thx_image_has_suffix(path, ".mhd")) return "MetaImage";
+    return NULL;
+}
+
+static const char *suffix_of(const char *kind)
+{
+    return !strcmp(kind, "NRRD") ? ".nrrd" : !strcmp(kind, "MetaImage") ? ".mha" : !strcmp(kind, "DICOM") ? ".dcm"
+                                                                                                             : ".nii";
+}
+
 thx_status thx_image_read(thx_ctx *ctx, const char *path, const thx_image_read_opts *opts, thx_image *img)
 {
     (void)opts;
     memset(img, 0, sizeof *img);
     struct stat st;
     if (stat(path, &st) != 0) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
+    const char *name = named(path), *kind = S_ISREG(st.st_mode) ? sniff(path) : NULL;
+    if (name && kind && strcmp(kind, "gzip") != 0 && strncmp(kind, name, strlen(name)) != 0)
+        return thx_error(ctx, THX_EINPUT, "%s: named as %s but the file is a %s file (by its first bytes): rename it %s",
+                         path, name, kind, suffix_of(kind));
     thx_status s;
-    if (thx_image_has_suffix(path, ".nii") || thx_image_has_suffix(path, ".nii.gz"))
+    if (name && !strcmp(name, "NIfTI"))
         s = thx_image_read_nifti(ctx, path, img);
+    else if (name && !strcmp(name, "NRRD"))
+        s = thx_image_read_nrrd(ctx, path, img);
+    else if (name && !strcmp(name, "MetaImage"))
+        s = thx_image_read_metaimage(ctx, path, img);
+    else if (kind)
+        return thx_error(ctx, THX_EINPUT, "%s: not named as an image thorax reads, but it is %s file: rename it %s",
+                         path, !strcmp(kind, "gzip") ? "a gzip" : kind, !strcmp(kind, "gzip") ? ".nii.gz" : suffix_of(kind));
     else
         return thx_error(ctx, THX_EINPUT,
-                         "%s: not an image thorax reads (by its name: .nii or .nii.gz for NIfTI)", path);
+                         "%s: not an image thorax reads (by its name: .nii or .nii.gz for NIfTI, .nrrd or .nhdr for "
+                         "NRRD, .mha or .mhd for MetaImage)",
+                         path);
     if (s != THX_OK) {
         thx_image_free(img);
         return s;
@@ -263,10 +315,15 @@ thx_status thx_image_write(thx_ctx *ctx, const thx_image *img, const char *path,
     THX_CHECK(thx_image_validate(ctx, img, "image to write"));
     thx_voxel_type type;
     THX_CHECK(thx_image_choose_type(ctx, img, type_name, path, &type));
-    int nifti = thx_image_has_suffix(path, ".nii") || thx_image_has_suffix(path, ".nii.gz");
-    if (!nifti)
-        return thx_error(ctx, THX_EINPUT, "%s: thorax writes images as .nii or .nii.gz (by the name given)", path);
+    const char *name = named(path);
+    if (!name)
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: thorax writes images as .nii or .nii.gz (NIfTI-1), .nrrd (NRRD) or .mha (MetaImage), by "
+                         "the name given",
+                         path);
     thx_atomic_file af;
     THX_CHECK(thx_output_claim(ctx, path, THX_IMAGE_MARKER, strlen(THX_IMAGE_MARKER), NULL, 0, &af));
+    if (!strcmp(name, "NRRD")) return thx_image_write_nrrd(ctx, img, type, &af);
+    if (!strcmp(name, "MetaImage")) return thx_image_write_metaimage(ctx, img, type, &af);
     return thx_image_write_nifti(ctx, img, type, &af);
 }

@@ -4,6 +4,7 @@
  * NIfTI-1 with the same matrix as sform and qform (codes "scanner"), units mm. */
 #include "image/image_impl.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -62,10 +63,70 @@ static const char *type_name(int dt)
     }
 }
 
+/* Whether the file (gzipped or not) begins with a NIfTI-2 header: sizeof_hdr 540 in either byte order
+ * and the magic "n+2" or "ni2". Debian's libnifti2 2.1 reads such files but its is_nifti_file()
+ * answers -1 for them (and nifti_type says NIfTI-1), so the version is told here. */
+static int nifti2_magic(const char *path)
+{
+    gzFile g = gzopen(path, "rb");
+    if (!g) return 0;
+    unsigned char b[8];
+    int n = gzread(g, b, sizeof b);
+    gzclose(g);
+    if (n != (int)sizeof b) return 0;
+    int le = b[0] == 0x1c && b[1] == 0x02 && !b[2] && !b[3], be = !b[0] && !b[1] && b[2] == 0x02 && b[3] == 0x1c;
+    return (le || be) && (!memcmp(b + 4, "n+2", 4) || !memcmp(b + 4, "ni2", 4));
+}
+
+/* libnifti replaces NaN and infinite float voxels by 0 as it loads them, silently: the file's own
+ * float data are read here first and a non-finite value is refused (index q; *bad = 1). */
+static thx_status nonfinite_voxel(thx_ctx *ctx, const nifti_image *nim, const char *path, size_t *q, int *bad)
+{
+    *bad = 0;
+    if (nim->datatype != DT_FLOAT32 && nim->datatype != DT_FLOAT64) return THX_OK;
+    const char *data_file = nim->iname ? nim->iname : path;
+    gzFile g = gzopen(data_file, "rb");
+    if (!g) return thx_error(ctx, THX_EIO, "%s: cannot open its data", path);
+    thx_status st = THX_OK;
+    int swap = nim->byteorder != nifti_short_order();
+    size_t size = (size_t)nim->nbyper, count = (size_t)nim->nvox, done = 0;
+    if (gzseek(g, (z_off_t)nim->iname_offset, SEEK_SET) < 0) {
+        gzclose(g);
+        return thx_error(ctx, THX_EINPUT, "%s: the voxel data are missing: truncated", path);
+    }
+    unsigned char buf[1 << 16];
+    while (done < count && !*bad) {
+        size_t want = (count - done) * size < sizeof buf ? (count - done) * size : sizeof buf;
+        int got = gzread(g, buf, (unsigned)want);
+        if (got <= 0 || (size_t)got % size) break; /* short: nifti_image_load reports it */
+        for (size_t k = 0; k < (size_t)got / size; k++) {
+            unsigned char v[8];
+            for (size_t b = 0; b < size; b++) v[b] = buf[k * size + (swap ? size - 1 - b : b)];
+            double x;
+            if (size == 4) {
+                float f;
+                memcpy(&f, v, 4);
+                x = f;
+            } else {
+                memcpy(&x, v, 8);
+            }
+            if (!isfinite(x)) {
+                *q = done + k;
+                *bad = isnan(x) ? 1 : 2;
+                break;
+            }
+        }
+        done += (size_t)got / size;
+    }
+    gzclose(g);
+    return st;
+}
+
 thx_status thx_image_read_nifti(thx_ctx *ctx, const char *path, thx_image *img)
 {
     nifti_set_debug_level(0);
-    int kind = is_nifti_file(path);
+    int v2 = nifti2_magic(path);
+    int kind = v2 ? 1 : is_nifti_file(path);
     if (kind <= 0)
         return thx_error(ctx, THX_EINPUT, "%s: not a NIfTI-1 or NIfTI-2 file (no valid header%s)", path,
                          kind == 0 ? "; an ANALYZE 7.5 header, which carries no orientation" : "");
@@ -104,8 +165,27 @@ thx_status thx_image_read_nifti(thx_ctx *ctx, const char *path, thx_image *img)
                            (long long)sb.st_size);
             goto done;
         }
+    } else {
+        /* a compressed file: no more voxels than its bytes can inflate to (checked before allocating) */
+        struct stat sb;
+        double need = (double)nim->iname_offset + (double)nim->nvox * nim->nbyper;
+        if (stat(path, &sb) == 0 && need > thx_image_inflate_bound((size_t)sb.st_size)) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: the header claims %zu x %zu x %zu %s voxels but %lld compressed bytes cannot hold them: "
+                           "truncated",
+                           path, n[0], n[1], n[2], tn, (long long)sb.st_size);
+            goto done;
+        }
     }
     if ((st = thx_image_alloc(ctx, n, img)) != THX_OK) goto done;
+    size_t badq = 0;
+    int bad = 0;
+    if ((st = nonfinite_voxel(ctx, nim, path, &badq, &bad)) != THX_OK) goto done;
+    if (bad) {
+        st = thx_error(ctx, THX_EINPUT, "%s: voxel (%zu, %zu, %zu) is %s (every value must be finite)", path,
+                       badq % n[0], (badq / n[0]) % n[1], badq / (n[0] * n[1]), bad == 1 ? "NaN" : "infinite");
+        goto done;
+    }
     if (nifti_image_load(nim) != 0 || !nim->data) {
         st = thx_error(ctx, THX_EINPUT, "%s: the voxel data are shorter than the header claims (%zu x %zu x %zu %s): truncated",
                        path, n[0], n[1], n[2], tn);
@@ -122,7 +202,8 @@ thx_status thx_image_read_nifti(thx_ctx *ctx, const char *path, thx_image *img)
     }
     snprintf(img->stored_type, sizeof img->stored_type, "%s", tn);
     snprintf(img->format, sizeof img->format, "%s",
-             nim->nifti_type == NIFTI_FTYPE_NIFTI2_1 || nim->nifti_type == NIFTI_FTYPE_NIFTI2_2 ? "nifti2" : "nifti1");
+             v2 || nim->nifti_type == NIFTI_FTYPE_NIFTI2_1 || nim->nifti_type == NIFTI_FTYPE_NIFTI2_2 ? "nifti2"
+                                                                                                 : "nifti1");
     /* geometry: 4x4 index -> world */
     double m[3][4];
     if (nim->sform_code > 0 || nim->qform_code > 0) {
@@ -208,6 +289,13 @@ thx_status thx_image_write_nifti(thx_ctx *ctx, const thx_image *img, thx_voxel_t
     static const int dt_of[] = {DT_UINT8, DT_INT16, DT_UINT16, DT_INT32, DT_FLOAT32};
     nifti_set_debug_level(0);
     int gz = thx_image_has_suffix(af->path, ".gz");
+    /* NIfTI-1 keeps the geometry in float32: a spacing or coordinate beyond its range (or a spacing
+       that would round to 0) cannot be written */
+    for (int c = 0; c < 3; c++)
+        if (img->spacing[c] > FLT_MAX || img->spacing[c] < FLT_MIN || fabs(img->origin[c]) > FLT_MAX)
+            return thx_error(ctx, THX_EINPUT,
+                             "%s: spacing %g or origin %g (axis %d) is beyond the float32 range of a NIfTI-1 header",
+                             af->path, img->spacing[c], img->origin[c], c + 1);
     char tmp[1200] = "", tmpgz[1200] = "";
     thx_status st = THX_OK;
     int64_t dims[8] = {3, (int64_t)img->n[0], (int64_t)img->n[1], (int64_t)img->n[2], 1, 1, 1, 1};
