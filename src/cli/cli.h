@@ -51,8 +51,11 @@ typedef struct {
     long min_size;       /* voxels */
     double node_spacing; /* mm; 0: the default */
     int holes;           /* thx_trace_holes */
+    /* out: the image's format, declared frame and the model-to-RAS rotation (row-major) */
+    char format[16], source_frame[32];
+    double to_ras[9];
 } cli_trace_args;
-int cli_trace_labels(const char *cmd, const char *image, const cli_trace_args *a, int verbose, thx_ctx *ctx,
+int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int verbose, thx_ctx *ctx,
                      thx_contours **out);
 /* The options they share (in a cli_opt table): --label, PLANE (the plane spacing's option name),
  * --axis, --min-size, --holes. */

@@ -83,7 +83,7 @@ static int parse_label(const char *cmd, const char *spec, long *vals, size_t *nv
     return 0;
 }
 
-int cli_trace_labels(const char *cmd, const char *image, const cli_trace_args *a, int verbose, thx_ctx *ctx,
+int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int verbose, thx_ctx *ctx,
                      thx_contours **out)
 {
     static long vals[MAX_VALUES];
@@ -162,6 +162,9 @@ int cli_trace_labels(const char *cmd, const char *image, const cli_trace_args *a
             printf("%s)\n", r->n_removed > THX_TRACE_SIZES_KEPT ? " ..." : "");
         }
     }
+    snprintf(a->format, sizeof a->format, "%s", img.format);
+    snprintf(a->source_frame, sizeof a->source_frame, "%s", img.source_frame);
+    memcpy(a->to_ras, rep.to_ras, sizeof a->to_ras);
     thx_image_free(&img);
     thx_trace_report_free(&rep);
     *out = c;
@@ -190,7 +193,7 @@ int cmd_digitize(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "digitize",
-        .usage = "LABELS --label [--label ...] [--spacing] [--axis] [--min-size] [--node-spacing] [--holes] -o",
+        .usage = "LABELS --label [--spacing] [--axis] [--min-size] [--node-spacing] [--holes] -o",
         .about = "Traces a label map (NIfTI, or any image thorax reads, of integer labels) into\n"
                  "the contour file thorax surfaces reads: one closed loop per tissue boundary per\n"
                  "plane (paper 3.1, \"a layer\"). Planes are cut across the image's superior axis:\n"
