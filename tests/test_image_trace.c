@@ -377,14 +377,14 @@ static void test_split_caps(void)
     thx_image_free(&img);
 }
 
-/* An oblique grid (rotated 20 degrees about x) and a flipped one (LPS-like: -x, -y, and z running
- * down): model coordinates are RAS for the flipped one, the image's axes for the oblique one
+/* An oblique grid (rotated 20 degrees about x) and a flipped one (i along -y, j along -x, k running
+ * down: the in-plane index order mirrored): model coordinates are RAS for the flipped one, the image's axes for the oblique one
  * (RAS = Q model), loops counterclockwise, nodes within half a voxel of the sphere. */
 static void test_oblique_flipped(void)
 {
     double a = 20 * M_PI / 180;
     double rot[9] = {1, 0, 0, 0, cos(a), -sin(a), 0, sin(a), cos(a)};
-    double flip[9] = {-1, 0, 0, 0, -1, 0, 0, 0, -1};
+    double flip[9] = {0, -1, 0, -1, 0, 0, 0, 0, -1}; /* i -> -y, j -> -x, k -> -z: the in-plane order mirrored */
     const double *dirs[2] = {rot, flip};
     for (int d = 0; d < 2; d++) {
         ball b = {{3, -2, 5}, 20};

@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# Label maps -> contours -> model (issue 25 item 2): a NIfTI label map written by nibabel (a body,
+# two lungs of one label, a heart, and a stray voxel), at 3 mm voxels with a mirrored x axis:
+#  - thorax digitize: the report (the stray voxel removed, two loops per lung plane), the contour
+#    file's frame and image line (the SHA-256 sha256sum prints), every node within 0.61 voxel of its
+#    analytic sphere (the label map's own voxel faces reach 0.6 voxel) in RAS, computed here;
+#  - thorax surfaces on the contours, thorax check, thorax mesh;
+#  - thorax surfaces LABELS.nii --label ... straight from the image: the same surfaces, model.json's
+#    provenance names the image (file, SHA-256, format, identity model-to-RAS) and the frame;
+#  - refusals: bad --label syntax, an unknown role, a value absent from the image (a warning) and a
+#    surface with no voxel (refused), a non-integral image, --edits with an image: a named message,
+#    a non-zero exit, nothing written.
+set -euo pipefail
+: "${THORAX:?}" "${SRC:?}" "${WORK:?}"
+PY=/usr/bin/python3
+rm -rf "$WORK" && mkdir -p "$WORK" && cd "$WORK"
+fail() { echo "e2e_digitize: FAIL: $*" >&2; exit 1; }
+$PY -c "import nibabel" 2>/dev/null || { echo "skip: python3-nibabel not installed"; exit 0; }
+
+$PY - <<'EOF'
+import numpy as np, nibabel as nib
+h = 3.0; n = 46
+# voxel centres: x mirrored (i runs toward the subject's left), centred on 0
+ax = (np.arange(n) - (n - 1) / 2) * h
+balls = [((0, 0, 0), 60, 1), ((28, 0, 5), 18, 2), ((-28, 0, 5), 18, 2), ((0, 25, -5), 10, 3)]
+sub = (np.arange(4) + 0.5) / 4 - 0.5
+votes = np.zeros((4, n, n, n))
+for a in sub:
+    for b in sub:
+        for d in sub:
+            X, Y, Z = np.meshgrid(-(ax + a * h), ax + b * h, ax + d * h, indexing='ij')
+            lab = np.zeros((n, n, n), int)
+            for c, r, v in balls:
+                lab[(X - c[0])**2 + (Y - c[1])**2 + (Z - c[2])**2 <= r * r] = v
+            for v in range(1, 4): votes[v] += lab == v
+lab = np.zeros((n, n, n), np.int16)
+for v in range(1, 4): lab[votes[v] > 32] = v
+lab[2, 2, 2] = 1  # a stray voxel outside the body
+aff = np.diag([-h, h, h, 1.0]); aff[:3, 3] = [-ax[0], ax[0], ax[0]]
+nib.save(nib.Nifti1Image(lab, aff), 'labels.nii.gz')
+f = lab.astype(np.float32) + 0.5
+nib.save(nib.Nifti1Image(f, aff), 'float.nii.gz')
+EOF
+
+"$THORAX" digitize labels.nii.gz --label 1=torso:outer --label 2=lungs:lung --label 3=heart:heart -o c.txt >rep.txt
+cat rep.txt
+grep -q "46 planes across index axis k (superior), 3 mm apart" rep.txt || fail "report planes"
+grep -q "^torso: removed 1 component of 1 voxel in all (sizes: 1)" rep.txt || fail "the stray voxel not reported"
+sha=$(sha256sum labels.nii.gz | cut -d' ' -f1)
+grep -qx "image sha256:$sha labels.nii.gz" c.txt || fail "image line: $(grep '^image' c.txt)"
+grep -qx "frame +z +y" c.txt || fail "frame line"
+$PY - <<'EOF' || fail "contour nodes"
+import math
+balls = {'torso': [((0, 0, 0), 60)], 'lungs': [((28, 0, 5), 18), ((-28, 0, 5), 18)], 'heart': [((0, 25, -5), 10)]}
+z = None; cur = None; worst = {}; loops = {}
+for line in open('c.txt'):
+    w = line.split('#')[0].split()
+    if not w: continue
+    if w[0] == 'layer': z = float(w[1])
+    elif w[0] == 'loop':
+        cur = w[1]; loops.setdefault(cur, {}).setdefault(z, 0); loops[cur][z] += 1
+    elif len(w) == 2 and cur:
+        x, y = map(float, w)
+        d = min(abs(math.dist((x, y, z), c) - r) for c, r in balls[cur])
+        worst[cur] = max(worst.get(cur, 0), d)
+print('max distance from the spheres (mm):', {k: round(v, 3) for k, v in worst.items()})
+assert set(worst) == set(balls), worst
+assert all(v <= 0.61 * 3 for v in worst.values()), worst
+# the lungs: two loops on every plane they both cross (|z - 5| < 18 - 3)
+both = [zz for zz in loops['lungs'] if abs(zz - 5) < 15]
+assert both and all(loops['lungs'][zz] == 2 for zz in both), loops['lungs']
+assert all(v == 1 for v in loops['torso'].values())
+EOF
+
+"$THORAX" surfaces c.txt -o m -q
+"$THORAX" check m >chk.txt || { cat chk.txt; fail "thorax check on the digitized model"; }
+"$THORAX" mesh m -o mm -q || fail "thorax mesh"
+[ -f mm/volume.tet ] || fail "no volume mesh"
+
+# straight from the image
+"$THORAX" surfaces labels.nii.gz --label 1=torso:outer --label 2=lungs:lung --label 3=heart:heart -o m2 >s2.txt
+"$THORAX" check m2 >chk2.txt || { cat chk2.txt; fail "thorax check on the model from the image"; }
+$PY - "$sha" <<'EOF' || fail "model.json from the image"
+import json, sys
+m = json.load(open('m2/model.json')); m1 = json.load(open('m/model.json'))
+im = m['provenance']['image']
+assert im['file'] == 'labels.nii.gz' and im['sha256'] == sys.argv[1] and im['format'] == 'nifti1', im
+assert im['model_to_ras'] == [1, 0, 0, 0, 1, 0, 0, 0, 1], im
+assert m['frame'] == {'superior': '+z', 'anterior': '+y', 'left': '-x'}, m['frame']
+assert m1['provenance']['image']['sha256'] == sys.argv[1]  # recorded from the contour file's line
+for s, s1 in zip(m['surfaces'], m1['surfaces']):
+    assert s['name'] == s1['name'] and s['n_nodes'] == s1['n_nodes'], (s, s1)
+    a = [list(map(float, l.split())) for l in open('m2/' + s['pts'])]
+    b = [list(map(float, l.split())) for l in open('m/' + s1['pts'])]
+    assert max(abs(p - q) for u, v in zip(a, b) for p, q in zip(u, v)) < 1e-4
+EOF
+
+# refusals: a named message, a non-zero exit, nothing written
+bad() { # CODE PATTERN ARGS...
+    local want=$1 pat=$2; shift 2
+    set +e
+    "$@" >out.txt 2>err.txt
+    local rc=$?
+    set -e
+    [ $rc -eq "$want" ] || fail "exit $rc, expected $want: $* ($(cat err.txt))"
+    grep -q -- "$pat" err.txt || fail "message for $*: $(cat err.txt)"
+    [ ! -e out_c.txt ] && [ ! -e out_m ] || fail "something written: $*"
+}
+bad 2 "expected VALUE\[,VALUE...\]=NAME:ROLE" "$THORAX" digitize labels.nii.gz --label 1torso -o out_c.txt
+bad 2 "label value 'x' is not an integer" "$THORAX" digitize labels.nii.gz --label 1,x=torso:outer -o out_c.txt
+bad 2 "unknown role 'skin'" "$THORAX" digitize labels.nii.gz --label 1=torso:skin -o out_c.txt
+bad 2 "no --label given" "$THORAX" digitize labels.nii.gz -o out_c.txt
+bad 1 'tissue "nothing": none of its label values is in the image' \
+    "$THORAX" digitize labels.nii.gz --label 1=torso:outer --label 9=nothing:other -o out_c.txt
+bad 1 "not a label map" "$THORAX" digitize float.nii.gz --label 1=torso:outer -o out_c.txt
+bad 1 "not a label map" "$THORAX" surfaces float.nii.gz --label 1=torso:outer -o out_m
+bad 2 "digitize the label map first" "$THORAX" surfaces labels.nii.gz --label 1=torso:outer --edits x.txt -o out_m
+bad 1 "no_such.nii" "$THORAX" digitize no_such.nii --label 1=torso:outer -o out_c.txt
+# a value absent from the image: a warning, the surface traced from the others
+"$THORAX" digitize labels.nii.gz --label 1,7=torso:outer -o c7.txt >/dev/null 2>err.txt
+grep -q "label value 7 (--label) is not in the image" err.txt || fail "absent value warning: $(cat err.txt)"
+grep -q "^loop torso" c7.txt || fail "absent value: no contours"
+echo "e2e_digitize: ok"
