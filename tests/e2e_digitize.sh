@@ -120,4 +120,12 @@ bad 1 "no_such.nii" "$THORAX" digitize no_such.nii --label 1=torso:outer -o out_
 "$THORAX" digitize labels.nii.gz --label 1,7=torso:outer -o c7.txt >/dev/null 2>err.txt
 grep -q "label value 7 (--label) is not in the image" err.txt || fail "absent value warning: $(cat err.txt)"
 grep -q "^loop torso" c7.txt || fail "absent value: no contours"
+# a path with '#' and '%' (the image line escapes them as %XX; the reader gives the path back)
+cp labels.nii.gz 'we#ird%20.nii.gz'
+"$THORAX" digitize 'we#ird%20.nii.gz' --label 1=torso:outer -o cw.txt -q
+grep -qx "image sha256:$sha we%23ird%2520.nii.gz" cw.txt || fail "escaped image line: $(grep '^image' cw.txt)"
+"$THORAX" surfaces cw.txt -o mw -q
+$PY -c "
+import json; im = json.load(open('mw/model.json'))['provenance']['image']
+assert im == {'file': 'we#ird%20.nii.gz', 'sha256': '$sha'}, im" || fail "the escaped path read back"
 echo "e2e_digitize: ok"

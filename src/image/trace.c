@@ -790,9 +790,14 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
         snprintf(trr.name, sizeof trr.name, "%s", ti->name);
         size_t sidx;
         THX_TRY(thx_contours_add_surface(ctx, c, ti->name, ti->role, THX_CAP_GRID, 0, &sidx));
-        /* the mask and its box */
+        /* the mask, its box and the in-plane box of each plane (before cleaning: a removed component
+           only widens its planes' boxes) */
         THX_TRY(build_labelset(ctx, o, t, vlo, vhi, &ls));
-        size_t lo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, hi[3] = {0, 0, 0};
+        for (size_t k = 0; k < g.ns; k++) {
+            pb[4 * k] = pb[4 * k + 2] = LONG_MAX;
+            pb[4 * k + 1] = pb[4 * k + 3] = LONG_MIN;
+        }
+        size_t lo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, hi[3] = {0, 0, 0}, count = 0;
         for (size_t k = 0; k < img->n[2]; k++)
             for (size_t j = 0; j < img->n[1]; j++)
                 for (size_t i = 0; i < img->n[0]; i++) {
@@ -801,10 +806,16 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                     mask[s] = (unsigned char)m;
                     if (m) {
                         size_t idx[3] = {i, j, k};
+                        count++;
                         for (int q = 0; q < 3; q++) {
                             if (idx[q] < lo[q]) lo[q] = idx[q];
                             if (idx[q] + 1 > hi[q]) hi[q] = idx[q] + 1;
                         }
+                        long *b = pb + 4 * idx[g.s], u = (long)idx[g.a0], v = (long)idx[g.a1];
+                        if (u < b[0]) b[0] = u;
+                        if (u > b[1]) b[1] = u;
+                        if (v < b[2]) b[2] = v;
+                        if (v > b[3]) b[3] = v;
                     }
                 }
         labelset_free(&ls);
@@ -813,7 +824,9 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             st = thx_error(ctx, THX_EINPUT, "%s: tissue \"%s\": none of its label values is in the image", what, ti->name);
             goto done;
         }
-        /* 3D cleaning in the box widened by one voxel (the outside of a cavity reaches the rim) */
+        /* 3D cleaning in the box widened by one voxel (the outside of a cavity reaches the rim). With
+           holes filled, a cavity is a hole in each of its planes and is filled with them: only kept
+           holes need the cavity pass. */
         for (int q = 0; q < 3; q++) {
             if (lo[q] > 0) lo[q]--;
             if (hi[q] < img->n[q]) hi[q]++;
@@ -821,26 +834,10 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
         if (o->min_size > 1) {
             THX_TRY(clean(ctx, mask, img->n, lo, hi, 1, 0, o->min_size, 1, &trr.n_removed, &trr.removed_voxels,
                           trr.removed_size));
-            THX_TRY(clean(ctx, mask, img->n, lo, hi, 0, 1, o->min_size, 0, &trr.n_cavities, &trr.cavity_voxels, NULL));
+            if (o->holes == THX_TRACE_HOLES_KEEP)
+                THX_TRY(clean(ctx, mask, img->n, lo, hi, 0, 1, o->min_size, 0, &trr.n_cavities, &trr.cavity_voxels, NULL));
         }
-        /* per-plane in-plane boxes */
-        for (size_t k = 0; k < g.ns; k++) {
-            pb[4 * k] = pb[4 * k + 2] = LONG_MAX;
-            pb[4 * k + 1] = pb[4 * k + 3] = LONG_MIN;
-        }
-        for (size_t k = lo[2]; k < hi[2]; k++)
-            for (size_t j = lo[1]; j < hi[1]; j++)
-                for (size_t i = lo[0]; i < hi[0]; i++) {
-                    if (!mask[thx_image_at(img, i, j, k)]) continue;
-                    trr.voxels++;
-                    size_t idx[3] = {i, j, k};
-                    long kk = (long)idx[g.s], u = (long)idx[g.a0], v = (long)idx[g.a1];
-                    long *b = pb + 4 * kk;
-                    if (u < b[0]) b[0] = u;
-                    if (u > b[1]) b[1] = u;
-                    if (v < b[2]) b[2] = v;
-                    if (v > b[3]) b[3] = v;
-                }
+        trr.voxels = count - trr.removed_voxels + trr.cavity_voxels;
         if (!trr.voxels) {
             st = thx_error(ctx, THX_EINPUT,
                            "%s: tissue \"%s\": all of its %zu voxels are in components of fewer than %zu voxels "

@@ -16,8 +16,8 @@
  *
  * Planes. Along the image's index axis nearest to superior (thx_image_axes): every image plane, or
  * planes `spacing` mm apart. Per tissue: its indicator (1 inside, 0 outside) cleaned in 3D
- * (6-connected components of fewer than min_size voxels removed, and cavities of fewer than
- * min_size voxels filled), smoothed by a Gaussian of sigma voxels in the plane (and across planes
+ * (6-connected components of fewer than min_size voxels removed; with holes kept, cavities of
+ * fewer than min_size voxels filled too — with holes filled a cavity goes with the holes), smoothed by a Gaussian of sigma voxels in the plane (and across planes
  * when resampling, then interpolated linearly between the two image planes around the resampled
  * one: the trilinear interpolation of the smoothed indicator), traced by marching squares at 0.5
  * (saddle cells by the asymptotic decider: the bilinear interpolant's value at its saddle point),
@@ -75,7 +75,7 @@ typedef struct {
     size_t n_flat_dropped;          /* loops with no partner on either neighbouring plane, dropped */
     size_t n_removed, removed_voxels; /* 3D components below min_size removed */
     size_t removed_size[THX_TRACE_SIZES_KEPT]; /* the voxel counts of the first of them */
-    size_t n_cavities, cavity_voxels; /* cavities below min_size filled */
+    size_t n_cavities, cavity_voxels; /* cavities below min_size filled (holes kept only) */
     size_t voxels;                  /* voxels of the tissue after cleaning */
     double z_first, z_last;         /* its first and last layer */
     double area_sum;                /* sum of its loops' signed areas (holes negative), mm^2 */
