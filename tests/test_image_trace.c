@@ -18,6 +18,7 @@
 #include "thorax/geom/surfaces.h"
 #include "thorax/image/image.h"
 #include "thorax/image/trace.h"
+#include "thorax/io/contours_file.h"
 #include "thorax/model/model.h"
 
 static thx_ctx *ctx;
@@ -44,7 +45,22 @@ static void make_map(thx_image *img, size_t n0, size_t n1, size_t n2, double h, 
     for (size_t k = 0; k < n2; k++)
         for (size_t j = 0; j < n1; j++)
             for (size_t i = 0; i < n0; i++) {
-                int votes[8] = {0};
+                int votes[8] = {0}, first = -1, same = 1;
+                /* the centre and the 8 corners agree: the voxel is whole (the solids here have no
+                   feature smaller than a voxel) */
+                for (int s = 0; s < 9 && same; s++) {
+                    double ijk[3] = {(double)i, (double)j, (double)k}, p[3];
+                    if (s < 8)
+                        for (int c = 0; c < 3; c++) ijk[c] += (s >> c & 1) ? 0.5 : -0.5;
+                    thx_image_index_to_ras(img, ijk, p);
+                    int v = f(p, user);
+                    if (first < 0) first = v;
+                    same = v == first;
+                }
+                if (same) {
+                    img->v[thx_image_at(img, i, j, k)] = (float)first;
+                    continue;
+                }
                 for (int s = 0; s < 64; s++) {
                     double ijk[3] = {(double)i + ((s & 3) + 0.5) / 4 - 0.5, (double)j + (((s >> 2) & 3) + 0.5) / 4 - 0.5,
                                      (double)k + (((s >> 4) & 3) + 0.5) / 4 - 0.5},
@@ -457,9 +473,59 @@ static void test_refusals(void)
     thx_image_free(&img);
 }
 
+/* The contour file's image line (docs/formats.md): written and read back (a path with '#', '%',
+ * a space and a tab escaped), and refused when malformed, given twice or after a layer. */
+static void test_image_line(void)
+{
+    thx_contours *c = NULL, *r = NULL;
+    CHECK_OK(ctx, thx_contours_create(ctx, &c));
+    size_t s;
+    CHECK_OK(ctx, thx_contours_add_surface(ctx, c, "a", THX_ROLE_OTHER, THX_CAP_GRID, 0, &s));
+    thx_vec2 sq[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    CHECK_OK(ctx, thx_contours_add_loop(ctx, c, s, 0, sq, 4));
+    CHECK_OK(ctx, thx_contours_add_loop(ctx, c, s, 1, sq, 4));
+    const char *path = " we#ird %41\tname.nii ";
+    snprintf(c->image, sizeof c->image, "%s", path);
+    snprintf(c->image_sha256, sizeof c->image_sha256, "%s",
+             "6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a");
+    CHECK_OK(ctx, thx_contours_write(ctx, c, tl_path("c.txt"), NULL));
+    char *text = tl_slurp(ctx, tl_path("c.txt"), NULL);
+    CHECK(text && strstr(text, "\nimage sha256:6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a "
+                               "%20we%23ird %2541%09name.nii%20\n"));
+    free(text);
+    CHECK_OK(ctx, thx_contours_read_raw(ctx, tl_path("c.txt"), &r));
+    CHECK(r && strcmp(r->image, path) == 0 && strcmp(r->image_sha256, c->image_sha256) == 0);
+    thx_contours_destroy(&r);
+    thx_contours_destroy(&c);
+    static const struct {
+        const char *text, *msg;
+    } bad[] = {
+        {"thorax-contours 1\nimage sha256:abc x.nii\nsurface a other\nlayer 0\nloop a\n0 0\n1 0\n0 1\nend\n",
+         "c.txt:2: expected 'image sha256:HEX PATH'"},
+        {"thorax-contours 1\nimage sha256:6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a\nend\n",
+         "c.txt:2: expected 'image sha256:HEX PATH'"},
+        {"thorax-contours 1\nimage sha256:6A8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a x\nend\n",
+         "c.txt:2: expected 'image sha256:HEX PATH'"},
+        {"thorax-contours 1\nimage sha256:6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a x\n"
+         "image sha256:6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a y\nend\n",
+         "c.txt:3: 'image' given twice"},
+        {"thorax-contours 1\nsurface a other\nlayer 0\nloop a\n0 0\n1 0\n0 1\n"
+         "image sha256:6a8901c1e6f5dcd0fc82de7818db38b78e8801adaab86df431d972058fba303a x\nend\n",
+         "c.txt:8: 'image' must come before the first layer"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        thx_contours *b = NULL;
+        CHECK(thx_contours_parse_raw(ctx, "c.txt", bad[k].text, strlen(bad[k].text), &b) == THX_EINPUT && !b);
+        CHECK(tl_msg_has(ctx, bad[k].msg));
+        thx_ctx_clear(ctx);
+    }
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
+    if (tl_scratch_make("test_image_trace") != 0) return 1;
+    test_image_line();
     test_sphere(1.0, 0);
     test_sphere(2.0, 0);
     test_sphere(5.0, 0);
@@ -470,5 +536,5 @@ int main(void)
     test_oblique_flipped();
     test_refusals();
     thx_ctx_destroy(&ctx);
-    return tl_finish();
+    return tl_scratch_finish("test_image_trace");
 }
