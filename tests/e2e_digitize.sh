@@ -95,6 +95,72 @@ for s, s1 in zip(m['surfaces'], m1['surfaces']):
     assert max(abs(p - q) for u, v in zip(a, b) for p, q in zip(u, v)) < 1e-4
 EOF
 
+# topology, computed here independently: a random pattern (many saddle cells) extruded over 4
+# planes, traced with --min-size 0 --holes keep. The loops of a plane are the boundaries of the
+# superlevel set {f > 0.5} of the bilinear interpolant of the smoothed indicator f: every
+# component holds a grid node (a bilinear cell takes its maximum at a corner), so the components
+# are the inside nodes joined along cell edges and across the saddle cells whose saddle value is
+# above 0.5 (the asymptotic decider); holes are the bounded components of the rest, joined across
+# the other saddle cells. Counted by a union-find here and compared with the file's counterclockwise
+# and clockwise loops on every layer.
+$PY - <<'EOF'
+import numpy as np, nibabel as nib
+rng = np.random.default_rng(7)
+n = 30
+pat = (rng.random((n, n)) < 0.5).astype(np.uint8)
+lab = np.repeat(pat[:, :, None], 4, axis=2)
+nib.save(nib.Nifti1Image(lab, np.diag([2.0, 2.0, 2.0, 1.0])), 'random.nii.gz')
+from scipy.ndimage import convolve1d
+w = np.exp(-0.5 * np.arange(-2, 3) ** 2 / 0.25); w /= w.sum()
+f = np.pad(pat.astype(np.float64), 3)
+f = convolve1d(f, w, axis=0, mode='constant').astype(np.float32)
+f = convolve1d(f.astype(np.float64), w, axis=1, mode='constant').astype(np.float32).astype(np.float64)
+f[f == np.float32(0.5)] = np.nextafter(np.float32(0.5), np.float32(0))
+W, H = f.shape
+parent = list(range(W * H))
+def find(a):
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]; a = parent[a]
+    return a
+def union(a, b): parent[find(a)] = find(b)
+inside = f > 0.5
+idx = lambda i, j: i * H + j
+for i in range(W):
+    for j in range(H):
+        if i + 1 < W and inside[i, j] == inside[i + 1, j]: union(idx(i, j), idx(i + 1, j))
+        if j + 1 < H and inside[i, j] == inside[i, j + 1]: union(idx(i, j), idx(i, j + 1))
+        if i + 1 < W and j + 1 < H:
+            c = [f[i, j], f[i + 1, j], f[i + 1, j + 1], f[i, j + 1]]
+            ins = [v > 0.5 for v in c]
+            if sum(ins) == 2 and ins[0] == ins[2]:
+                den = c[0] + c[2] - c[1] - c[3]
+                sv = (c[0] * c[2] - c[1] * c[3]) / den if den != 0 else sum(c) / 4
+                if ins[0] == (sv > 0.5): union(idx(i, j), idx(i + 1, j + 1))  # the 0-2 diagonal joined
+                else: union(idx(i + 1, j), idx(i, j + 1))                     # the 1-3 diagonal joined
+roots_in = {find(idx(i, j)) for i in range(W) for j in range(H) if inside[i, j]}
+roots_out = {find(idx(i, j)) for i in range(W) for j in range(H) if not inside[i, j]} - {find(0)}
+open('topology.txt', 'w').write(f"{len(roots_in)} {len(roots_out)}\n")
+EOF
+"$THORAX" digitize random.nii.gz --label 1=blobs:other --min-size 0 --holes keep -o rnd.txt -q
+$PY - <<'EOF' || fail "topology of the random pattern"
+want = tuple(map(int, open('topology.txt').read().split()))
+layers = {}; z = None; pts = None
+def close():
+    if pts:
+        a = 0.5 * sum(pts[i - 1][0] * pts[i][1] - pts[i][0] * pts[i - 1][1] for i in range(len(pts)))
+        layers[z][0 if a > 0 else 1] += 1
+for line in open('rnd.txt'):
+    w = line.split('#')[0].split()
+    if not w: continue
+    if w[0] in ('layer', 'loop', 'end'):
+        close(); pts = [] if w[0] == 'loop' else None
+        if w[0] == 'layer': z = float(w[1]); layers[z] = [0, 0]
+    elif pts is not None and len(w) == 2: pts.append(tuple(map(float, w)))
+print('random pattern: components and holes (union-find)', want, 'traced per layer', sorted(layers.values()))
+assert len(layers) == 4 and all(tuple(v) == want for v in layers.values()), (want, layers)
+assert want[0] > 20 and want[1] > 0
+EOF
+
 # refusals: a named message, a non-zero exit, nothing written
 bad() { # CODE PATTERN ARGS...
     local want=$1 pat=$2; shift 2

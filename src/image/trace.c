@@ -429,6 +429,15 @@ static int point_in(const thx_vec2 *p, size_t n, thx_vec2 q)
     return in;
 }
 
+/* The midpoint of edge i of a counterclockwise loop, moved a thousandth of the edge's length to its left (inside). */
+static thx_vec2 inward(const poly *P, size_t i)
+{
+    thx_vec2 a = P->p[i], b = P->p[(i + 1) % P->n], q;
+    q.x = 0.5 * (a.x + b.x) - 1e-3 * (b.y - a.y);
+    q.y = 0.5 * (a.y + b.y) + 1e-3 * (b.x - a.x);
+    return q;
+}
+
 static void bbox(const thx_vec2 *p, size_t n, double b[4])
 {
     b[0] = b[2] = INFINITY;
@@ -998,8 +1007,10 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                         const poly *B = &tt.loops.l[k];
                         const double *bb = tt.area + 5 * k + 1;
                         if (tt.area[5 * k] < 0 || ab[0] > bb[1] || bb[0] > ab[1] || ab[2] > bb[3] || bb[2] > ab[3]) continue;
-                        for (size_t i = 0; i < A->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(B->p, B->n, A->p[i]);
-                        for (size_t i = 0; i < B->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(A->p, A->n, B->p[i]);
+                        /* a point just inside each edge (to its left: outer loops run counterclockwise)
+                           in the other loop: loops that coincide (a straight stack) overlap too */
+                        for (size_t i = 0; i < A->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(B->p, B->n, inward(A, i));
+                        for (size_t i = 0; i < B->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(A->p, A->n, inward(B, i));
                     }
                 }
             }
