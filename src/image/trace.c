@@ -147,12 +147,10 @@ static thx_status clean(thx_ctx *ctx, unsigned char *mask, const size_t n[3], co
                         unsigned char val, unsigned char to, size_t min, int touching_ok, size_t *count, size_t *voxels,
                         size_t *sizes)
 {
-    size_t nb = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
     size_t cap = 1024, qn;
     size_t *q = thx_malloc(ctx, cap * sizeof *q);
     if (!q) return THX_ENOMEM;
     const size_t st[3] = {1, n[0], n[0] * n[1]};
-    (void)nb;
     for (size_t k = lo[2]; k < hi[2]; k++)
         for (size_t j = lo[1]; j < hi[1]; j++)
             for (size_t i = lo[0]; i < hi[0]; i++) {
@@ -644,7 +642,7 @@ static void labelset_free(labelset *ls)
 
 /* The smoothed field of output plane `p` for the tissue's mask into pl (box: the in-plane index
  * box of the mask's planes involved, per-plane boxes in pb). */
-static thx_status plane_field(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb, const thx_trace_opts *o,
+static thx_status plane_field(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb,
                               double t, int resampled, const double w[2 * KR + 1], plane *pl, int *empty)
 {
     long k0 = (long)floor(t);
@@ -673,7 +671,6 @@ static thx_status plane_field(thx_ctx *ctx, const cut *g, const unsigned char *m
         else
             for (int d = -KR; d <= KR; d++) plane_add(g, mask, pl, kc + d, ws * w[d + KR]);
     }
-    (void)o;
     plane_smooth(pl, w);
     return THX_OK;
 }
@@ -865,7 +862,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
             if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - p);
             int empty;
-            THX_TRY(plane_field(ctx, &g, mask, pb, o, tk, resampled, w, &pl, &empty));
+            THX_TRY(plane_field(ctx, &g, mask, pb, tk, resampled, w, &pl, &empty));
             if (empty) continue;
             polyset_clear(&raw);
             THX_TRY(march(ctx, &pl, &nxt, &nxt_cap, &raw));
