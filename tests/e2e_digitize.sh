@@ -205,6 +205,14 @@ assert d <= 0.61 * 3, d
 assert abs(vol / true - 1) < 0.06, vol / true
 EOF
 
+# planes resampled 5 mm apart (--spacing; --plane-spacing for surfaces)
+"$THORAX" digitize labels.nii.gz --label 1=torso:outer --label 3=heart:heart --spacing 5 -o c5.txt -q
+$PY -c "
+z = [float(l.split()[1]) for l in open('c5.txt') if l.startswith('layer ')]
+assert len(z) > 20 and all(abs(b - a - 5) < 1e-9 for a, b in zip(z, z[1:])), z" || fail "--spacing 5: layers"
+"$THORAX" surfaces labels.nii.gz --label 1=torso:outer --label 3=heart:heart --plane-spacing 5 -o m5 -q
+"$THORAX" check m5 >/dev/null || fail "check of the model from planes 5 mm apart"
+
 # refusals: a named message, a non-zero exit, nothing written
 bad() { # CODE PATTERN ARGS...
     local want=$1 pat=$2; shift 2
