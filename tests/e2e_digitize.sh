@@ -233,6 +233,8 @@ bad 1 'tissue "nothing": none of its label values is in the image' \
 bad 1 "not a label map" "$THORAX" digitize float.nii.gz --label 1=torso:outer -o out_c.txt
 bad 1 "not a label map" "$THORAX" surfaces float.nii.gz --label 1=torso:outer -o out_m
 bad 2 "digitize the label map first" "$THORAX" surfaces labels.nii.gz --label 1=torso:outer --edits x.txt -o out_m
+bad 2 "labels.nii.gz is an image: give the surfaces' labels" "$THORAX" surfaces labels.nii.gz -o out_m
+bad 2 "are for a label map: give --label" "$THORAX" surfaces c.txt --min-size 3 -o out_m
 bad 1 "no_such.nii" "$THORAX" digitize no_such.nii --label 1=torso:outer -o out_c.txt
 # a value absent from the image: a warning, the surface traced from the others
 "$THORAX" digitize labels.nii.gz --label 1,7=torso:outer -o c7.txt >/dev/null 2>err.txt

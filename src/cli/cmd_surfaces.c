@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 #include "thorax/core/fileio.h"
@@ -167,6 +168,18 @@ int cmd_surfaces(int argc, char **argv)
     if (start && sscanf(start, "%lf,%lf", &o.start.x, &o.start.y) != 2) return cli_usage_error("surfaces", "--start needs X,Y");
     if (!in) return cli_usage_error("surfaces", "no contour file given");
     if (!outdir) return cli_usage_error("surfaces", "no output directory given (-o MODEL)");
+    if (!n_labels && (ta.spacing != 0 || min_size != 8 || ta.holes != THX_TRACE_HOLES_FILL))
+        return cli_usage_error("surfaces", "--plane-spacing, --min-size and --holes are for a label map: give --label");
+    if (!n_labels) {
+        static const char *const image_ext[] = {".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".dcm", NULL};
+        size_t ln = strlen(in);
+        for (int k = 0; image_ext[k]; k++) {
+            size_t le = strlen(image_ext[k]);
+            if (ln >= le && strcasecmp(in + ln - le, image_ext[k]) == 0)
+                return cli_usage_error("surfaces", "%s is an image: give the surfaces' labels (--label VALUES=NAME:ROLE ...), "
+                                                   "or a contour file", in);
+        }
+    }
     if (n_labels && edits)
         return cli_usage_error("surfaces", "--edits replays edits on surfaces built from a contour file: digitize the "
                                            "label map first (thorax digitize LABELS --label ... -o CONTOURS)");
