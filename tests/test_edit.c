@@ -549,6 +549,36 @@ static void test_phantom(thx_ctx *ctx)
 
 static void test_session_cases(thx_ctx *ctx)
 {
+    /* a model built straight from a label map (thorax surfaces LABELS --label ...; issue 25): its
+       provenance names the image and no contour file; the note says so (not "built before thorax
+       recorded it") */
+    {
+        thx_model *mi = NULL;
+        thx_contours *ci = NULL;
+        thx_edit_recipe ri;
+        char shai[65];
+        CHECK_OK(ctx, build_like_cli(ctx, tl_path("small.txt"), tl_path("qi"), &mi, &ci, &ri, shai));
+        thx_contours_destroy(&ci);
+        cJSON *p = mi ? cJSON_Parse(mi->provenance_json) : NULL;
+        if (p) {
+            cJSON_DeleteItemFromObject(p, "input_sha256");
+            cJSON_DeleteItemFromObject(p, "input_from_model");
+            cJSON_ReplaceItemInObject(p, "input", cJSON_CreateString("labels.nii.gz"));
+            cJSON *im = cJSON_AddObjectToObject(p, "image");
+            cJSON_AddStringToObject(im, "file", "labels.nii.gz");
+            free(mi->provenance_json);
+            mi->provenance_json = cJSON_PrintUnformatted(p);
+            cJSON_Delete(p);
+            CHECK_OK(ctx, thx_model_write(ctx, mi, tl_path("qi")));
+        }
+        thx_model_destroy(&mi);
+        thx_edit_session *si = NULL;
+        CHECK_OK(ctx, thx_edit_session_open(ctx, tl_path("qi"), NULL, NULL, &si));
+        CHECK(si && thx_edit_session_contours(si) == NULL &&
+              strstr(thx_edit_session_note(si), "built straight from the label map labels.nii.gz, without a contour "
+                                                "file: mesh edits only") != NULL);
+        thx_edit_session_destroy(&si);
+    }
     /* a model without provenance: mesh edits only, and a layer edit says why it cannot */
     thx_model *m = NULL;
     thx_contours *c = NULL;

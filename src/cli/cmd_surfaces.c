@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli/cli.h"
 #include "thorax/core/fileio.h"
@@ -12,6 +13,7 @@
 #include "thorax/geom/repair.h"
 #include "thorax/geom/surfaces.h"
 #include "thorax/edit/edit.h"
+#include "thorax/image/trace.h"
 
 /* One line per replayed edit: where it is in the log, what it is, what the check found. */
 static void replay_line(void *user, const thx_edit_log *log, const thx_edit *e, const thx_edit_result *r)
@@ -65,6 +67,14 @@ int cmd_surfaces(int argc, char **argv)
     double merge_tol = -1, untangle_tol = -1;
     thx_surfaces_opts o;
     thx_surfaces_opts_default(&o);
+    /* a label map in (LABELS --label ...): traced as thorax digitize traces it (cmd_digitize.c) */
+    const char *labels[64];
+    int n_labels = 0, axis = 0;
+    long min_size = 8;
+    cli_trace_args ta = {0};
+    static const cli_choice axes[] = {{"superior", 0}, {NULL, 0}};
+    static const cli_choice holes[] = {{"fill", THX_TRACE_HOLES_FILL}, {"keep", THX_TRACE_HOLES_KEEP}, {NULL, 0}};
+    cli_opt image_opts[] = {CLI_TRACE_OPTIONS(ta, labels, n_labels, min_size, axis, axes, holes, "--plane-spacing")};
     static const cli_choice caps[] = {{"polygon", THX_CAP_POLYGON}, {"grid", THX_CAP_GRID}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "MODEL", .s = &outdir,
@@ -124,7 +134,8 @@ int cmd_surfaces(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "surfaces",
-        .usage = "CONTOURS -o [--edits] [options]",
+        .usage = "CONTOURS -o [--edits] [options]\n"
+                 "LABELS --label [--plane-spacing] [--axis] [--min-size] [--holes] -o [options]",
         .about = "Builds one closed, outward-oriented triangle surface per contour surface\n"
                  "(paper 3.1-3.2) and writes the model directory MODEL (model.json, NAME.pts,\n"
                  "NAME.fac). Nothing is written unless every surface builds.\n\n"
@@ -142,8 +153,12 @@ int cmd_surfaces(int argc, char **argv)
                  "(its 'build' line), each edit's check is printed, and the model is written with\n"
                  "the log as MODEL/edits.txt: the same model the editing session saved.\n"
                  "model.json records the contours' SHA-256 and their path from MODEL, so that an\n"
-                 "editing session finds them.\n",
-        .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
+                 "editing session finds them.\n\n"
+                 "With --label the input is a label map (thorax digitize's): it is traced into\n"
+                 "contours in memory and the model built from them, its frame from the image;\n"
+                 "model.json's provenance records the image (file, SHA-256, format, frame).\n",
+        .group = {{NULL, opts, sizeof opts / sizeof opts[0]},
+                  {"options for a label map (LABELS --label ...)", image_opts, sizeof image_opts / sizeof image_opts[0]}},
     };
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
@@ -153,6 +168,21 @@ int cmd_surfaces(int argc, char **argv)
     if (start && sscanf(start, "%lf,%lf", &o.start.x, &o.start.y) != 2) return cli_usage_error("surfaces", "--start needs X,Y");
     if (!in) return cli_usage_error("surfaces", "no contour file given");
     if (!outdir) return cli_usage_error("surfaces", "no output directory given (-o MODEL)");
+    if (!n_labels && (ta.spacing != 0 || min_size != 8 || ta.holes != THX_TRACE_HOLES_FILL))
+        return cli_usage_error("surfaces", "--plane-spacing, --min-size and --holes are for a label map: give --label");
+    if (!n_labels) {
+        static const char *const image_ext[] = {".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd", ".dcm", NULL};
+        size_t ln = strlen(in);
+        for (int k = 0; image_ext[k]; k++) {
+            size_t le = strlen(image_ext[k]);
+            if (ln >= le && strcasecmp(in + ln - le, image_ext[k]) == 0)
+                return cli_usage_error("surfaces", "%s is an image: give the surfaces' labels (--label VALUES=NAME:ROLE ...), "
+                                                   "or a contour file", in);
+        }
+    }
+    if (n_labels && edits)
+        return cli_usage_error("surfaces", "--edits replays edits on surfaces built from a contour file: digitize the "
+                                           "label map first (thorax digitize LABELS --label ... -o CONTOURS)");
     thx_ctx *ctx = cli_ctx(verbose);
     thx_contours *c = NULL;
     thx_model *m = NULL;
@@ -166,7 +196,17 @@ int cmd_surfaces(int argc, char **argv)
     thx_outdir od;
     const char *inputs[] = {in};
     thx_status st = thx_outdir_claim(ctx, &od, outdir, THX_MODEL_MANIFEST, THX_MODEL_FORMAT, inputs, 1);
-    if (st == THX_OK) st = thx_contours_read_raw(ctx, in, &c);
+    if (st == THX_OK && n_labels) {
+        ta.labels = labels;
+        ta.n_labels = n_labels;
+        ta.min_size = min_size;
+        ta.node_spacing = o.spacing > 0 ? o.spacing : 0;
+        int trc = cli_trace_labels("surfaces", in, &ta, verbose, ctx, &c);
+        if (trc) {
+            thx_ctx_destroy(&ctx);
+            return trc;
+        }
+    } else if (st == THX_OK) st = thx_contours_read_raw(ctx, in, &c);
     if (st == THX_OK) {
         /* digitization noise (paper 3.1): repaired and reported, or refused under --strict */
         thx_repair_opts_default(&ro, o.spacing > 0 ? o.spacing : (c->spacing > 0 ? c->spacing : 5.0));
@@ -204,7 +244,18 @@ int cmd_surfaces(int argc, char **argv)
         cJSON_AddStringToObject(p, "command", cli_command_line());
         cJSON_AddStringToObject(p, "input", in);
         /* where the contours are, for an editing session on the model (thorax/edit/edit.h) */
-        st = thx_edit_record_contours(ctx, p, in, outdir, sha);
+        if (!n_labels) st = thx_edit_record_contours(ctx, p, in, outdir, sha);
+        if (c->image[0]) {
+            /* the image the contours were traced from (issue 25): file, SHA-256, format, frame */
+            cJSON *im = cJSON_AddObjectToObject(p, "image");
+            cJSON_AddStringToObject(im, "file", c->image);
+            cJSON_AddStringToObject(im, "sha256", c->image_sha256);
+            if (n_labels) {
+                cJSON_AddStringToObject(im, "format", ta.format);
+                cJSON_AddStringToObject(im, "source_frame", ta.source_frame);
+                cJSON_AddItemToObject(im, "model_to_ras", cJSON_CreateDoubleArray(ta.to_ras, 9));
+            }
+        }
         cJSON *op = cJSON_AddObjectToObject(p, "options");
         if (st == THX_OK) st = thx_edit_recipe_json(ctx, &recipe, op);
         cJSON *rp = cJSON_AddArrayToObject(p, "repairs");

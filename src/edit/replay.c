@@ -163,6 +163,11 @@ thx_status thx_edit_session_open(thx_ctx *ctx, const char *model_dir, const char
                      "the contour file the model was built from (%s, SHA-256 %.12s...) was not found unchanged: mesh "
                      "edits only (open the session with its path)",
                      input ? input : "?", recorded);
+    } else if (has_rec && cJSON_GetObjectItemCaseSensitive(prov, "image") && input) {
+        /* built straight from a label map (thorax surfaces LABELS --label ...): no contour file */
+        snprintf(note, sizeof note,
+                 "the model was built straight from the label map %s, without a contour file: mesh edits only "
+                 "(thorax digitize writes its contours; build from them to edit layers)", input);
     } else if (has_rec) {
         snprintf(note, sizeof note,
                  "the model does not record its contours' SHA-256 (built before thorax recorded it): mesh edits only "

@@ -6,7 +6,7 @@
  *    header 7 ("loop a\n"), a surface line 13; every loop has >= 3 points, finite coordinates;
  *  - the repair either refuses or leaves contours that pass thx_contours_validate, with no
  *    more points than it was given;
- *  - written and read back (strict), the repaired contours keep their counts and frame.
+ *  - written and read back (strict), the repaired contours keep their counts, frame and image line.
  */
 #include <math.h>
 
@@ -65,6 +65,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 count_points(back, &l4);
                 FUZZ_ASSERT(l4 == l3 && back->n_surfaces == raw->n_surfaces);
                 FUZZ_ASSERT(back->frame.set == raw->frame.set);
+                /* the image line (issue 25): path and SHA-256 back as read (the path escaped and decoded) */
+                FUZZ_ASSERT(strcmp(back->image, raw->image) == 0 && strcmp(back->image_sha256, raw->image_sha256) == 0);
                 if (raw->frame.set)
                     FUZZ_ASSERT(back->frame.up.axis == raw->frame.up.axis && back->frame.up.sign == raw->frame.up.sign &&
                                 back->frame.front.axis == raw->frame.front.axis);

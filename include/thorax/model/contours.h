@@ -63,6 +63,8 @@ typedef struct {
     size_t n_layers;   /* number of layers in the file (all surfaces together) */
     double spacing;    /* suggested node spacing for resampling, mm (0 = not given) */
     thx_frame frame;   /* the anatomical frame ("frame UP FRONT" line; .set = 0 when absent) */
+    char image[1024];  /* the image the contours were traced from ("image sha256:HEX PATH" line; "" if none) */
+    char image_sha256[65]; /* its SHA-256, 64 lowercase hex digits ("" if none) */
     size_t n_surfaces;
     thx_contour_surface *surf;
 } thx_contours;

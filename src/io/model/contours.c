@@ -181,6 +181,32 @@ static thx_status parse(thx_ctx *ctx, const char *name, const char *text, size_t
             snprintf(what, sizeof what, "%s:%d: frame", name, line);
             THX_TRY(thx_frame_from_names(ctx, up, front, what, &c->frame));
             frame_line = line;
+        } else if (strcmp(kw, "image") == 0) {
+            /* image sha256:HEX PATH: the image the contours were traced from (PATH: the rest of the
+               line, '#', '%' and control characters as %XX) */
+            char *h = next_token(&cursor);
+            while (*cursor && isspace((unsigned char)*cursor)) cursor++;
+            size_t pl = strlen(cursor);
+            while (pl && isspace((unsigned char)cursor[pl - 1])) cursor[--pl] = '\0';
+            int hex_ok = h && strlen(h) == 71 && strncmp(h, "sha256:", 7) == 0;
+            for (int k = 7; hex_ok && k < 71; k++) hex_ok = isdigit((unsigned char)h[k]) || (h[k] >= 'a' && h[k] <= 'f');
+            if (n_layers > 0) { st = thx_error(ctx, THX_EINPUT, "%s:%d: 'image' must come before the first layer", name, line); goto done; }
+            if (c->image[0]) { st = thx_error(ctx, THX_EINPUT, "%s:%d: 'image' given twice", name, line); goto done; }
+            if (!hex_ok || !pl || pl >= sizeof c->image) {
+                st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 'image sha256:HEX PATH' (the image's SHA-256, 64 lowercase hex digits, then its path)", name, line);
+                goto done;
+            }
+            size_t o = 0;
+            for (size_t k = 0; k < pl; k++) {
+                unsigned v;
+                if (cursor[k] == '%' && k + 2 < pl && isxdigit((unsigned char)cursor[k + 1]) &&
+                    isxdigit((unsigned char)cursor[k + 2]) && sscanf(cursor + k + 1, "%2x", &v) == 1) {
+                    c->image[o++] = (char)v;
+                    k += 2;
+                } else c->image[o++] = cursor[k];
+            }
+            c->image[o] = '\0';
+            memcpy(c->image_sha256, h + 7, 65);
         } else if (strcmp(kw, "surface") == 0) {
             char *sname = next_token(&cursor), *srole = next_token(&cursor);
             thx_role role;
@@ -349,6 +375,14 @@ thx_status thx_contours_write(thx_ctx *ctx, const thx_contours *c, const char *p
     if (c->frame.set) {
         char u[3], v[3];
         fprintf(f, "frame %s %s\n", thx_axis_name(c->frame.up, u), thx_axis_name(c->frame.front, v));
+    }
+    if (c->image[0] && strlen(c->image_sha256) == 64) {
+        fprintf(f, "image sha256:%s ", c->image_sha256);
+        for (const unsigned char *q = (const unsigned char *)c->image; *q; q++)
+            if (*q == '#' || *q == '%' || *q < 0x20 || *q == 0x7f || (q[1] == '\0' && isspace(*q)) || (q == (const unsigned char *)c->image && isspace(*q)))
+                fprintf(f, "%%%02X", *q);
+            else fputc(*q, f);
+        fprintf(f, "\n");
     }
     for (size_t s = 0; s < c->n_surfaces; s++) {
         const thx_contour_surface *cs = &c->surf[s];

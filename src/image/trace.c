@@ -1,0 +1,1109 @@
+/*
+ * Label maps -> contours (thorax/image/trace.h; docs/design/image.md, "Tracing label maps"):
+ * per tissue a 3D mask cleaned by 6-connected flood fills, per plane the smoothed indicator traced
+ * by marching squares at 0.5 (asymptotic decider), loops resampled at the node spacing.
+ */
+#include "thorax/image/trace.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define ISO 0.5
+#define PAD 3 /* zero cells around a plane's box: the smoothed field is below 0.5 on the buffer's rim */
+#define KR 2  /* Gaussian kernel radius, cells (sigma 0.5: the weight at 3 is 1e-8) */
+
+void thx_trace_opts_default(thx_trace_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->min_size = 8;
+    o->sigma = 0.5;
+    o->holes = THX_TRACE_HOLES_FILL;
+}
+
+void thx_trace_report_free(thx_trace_report *rep)
+{
+    if (!rep) return;
+    free(rep->tissue);
+    rep->tissue = NULL;
+    rep->n_tissues = 0;
+}
+
+/* ---- geometry of the cut ---------------------------------------------------------------------- */
+
+typedef struct {
+    const thx_image *img;
+    int s, a0, a1;        /* superior index axis; the in-plane axes (a0 < a1) */
+    size_t ns, n0, n1;    /* planes, and the plane's size along a0, a1 */
+    size_t st[3];         /* stride of each index axis in the voxel array */
+    double P0[2], A0[2], A1[2]; /* model (x, y) = P0 + A0 u + A1 v for in-plane indices (u, v) */
+    double z0, dz;        /* model z of image plane k = z0 + dz k (dz = +-spacing) */
+    double Q[9];          /* RAS = Q model, row-major */
+} cut;
+
+static void cross3(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void cut_init(const thx_image *img, cut *g, double *oblique_deg)
+{
+    int sa, ss, aa, as;
+    double cosine;
+    thx_image_axes(img, &sa, &ss, &aa, &as, &cosine);
+    g->img = img;
+    g->s = sa;
+    g->a0 = sa == 0 ? 1 : 0;
+    g->a1 = sa == 2 ? 1 : 2;
+    g->ns = img->n[sa];
+    g->n0 = img->n[g->a0];
+    g->n1 = img->n[g->a1];
+    g->st[0] = 1;
+    g->st[1] = img->n[0];
+    g->st[2] = img->n[0] * img->n[1];
+    double u[3][3]; /* u[c] = RAS unit vector of index axis c */
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++) u[c][r] = img->dir[r * 3 + c];
+    double zx[3], yx[3], xx[3];
+    for (int r = 0; r < 3; r++) {
+        zx[r] = ss * u[sa][r];
+        yx[r] = as * u[aa][r];
+    }
+    cross3(yx, zx, xx);
+    if (thx_image_axis_aligned(img)) /* exactly RAS: no rounding residue in the coordinates */
+        for (int r = 0; r < 3; r++) {
+            xx[r] = round(xx[r]);
+            yx[r] = round(yx[r]);
+            zx[r] = round(zx[r]);
+        }
+    for (int r = 0; r < 3; r++) {
+        g->Q[r * 3 + 0] = xx[r];
+        g->Q[r * 3 + 1] = yx[r];
+        g->Q[r * 3 + 2] = zx[r];
+    }
+    /* model p = Q^T ras; ras = origin + sum_c u_c spacing_c i_c */
+    double po[3], pc[3][3];
+    for (int m = 0; m < 3; m++) {
+        const double *ax = m == 0 ? xx : m == 1 ? yx : zx;
+        po[m] = ax[0] * img->origin[0] + ax[1] * img->origin[1] + ax[2] * img->origin[2];
+        for (int c = 0; c < 3; c++) pc[c][m] = (ax[0] * u[c][0] + ax[1] * u[c][1] + ax[2] * u[c][2]) * img->spacing[c];
+    }
+    g->P0[0] = po[0];
+    g->P0[1] = po[1];
+    g->A0[0] = pc[g->a0][0];
+    g->A0[1] = pc[g->a0][1];
+    g->A1[0] = pc[g->a1][0];
+    g->A1[1] = pc[g->a1][1];
+    g->z0 = po[2];
+    g->dz = pc[sa][2];
+    if (oblique_deg) *oblique_deg = acos(fmin(1.0, fabs(zx[2]))) * 180.0 / M_PI;
+}
+
+static size_t vox(const cut *g, size_t k, size_t u, size_t v)
+{
+    return k * g->st[g->s] + u * g->st[g->a0] + v * g->st[g->a1];
+}
+
+/* ---- the tissue's mask and its cleaning ------------------------------------------------------ */
+
+typedef struct {
+    long lo, hi;              /* LUT range */
+    unsigned char *lut;       /* hi - lo + 1 entries, or NULL: search `vals` */
+    long *vals;
+    size_t n;
+    int all;
+} labelset;
+
+static int in_set(const labelset *ls, long v)
+{
+    if (ls->all && v != 0) return 1;
+    if (ls->lut) return v >= ls->lo && v <= ls->hi && ls->lut[v - ls->lo];
+    size_t a = 0, b = ls->n;
+    while (a < b) {
+        size_t m = (a + b) / 2;
+        if (ls->vals[m] < v) a = m + 1;
+        else b = m;
+    }
+    return a < ls->n && ls->vals[a] == v;
+}
+
+static int cmp_long(const void *a, const void *b)
+{
+    long x = *(const long *)a, y = *(const long *)b;
+    return (x > y) - (x < y);
+}
+
+/* 6-connected components of mask voxels equal to `val` inside box [lo, hi) (inclusive lo, exclusive
+ * hi per axis) that have fewer than min voxels (and, when !touching_ok, do not touch the box's
+ * border) are set to `to`. Visited voxels are marked with bit 2 and cleared afterwards. Returns
+ * the number of components changed; their sizes go to sizes (first THX_TRACE_SIZES_KEPT), the
+ * total to *voxels. */
+static thx_status clean(thx_ctx *ctx, unsigned char *mask, const size_t n[3], const size_t lo[3], const size_t hi[3],
+                        unsigned char val, unsigned char to, size_t min, int touching_ok, size_t *count, size_t *voxels,
+                        size_t *sizes)
+{
+    size_t cap = 1024, qn;
+    size_t *q = thx_malloc(ctx, cap * sizeof *q);
+    if (!q) return THX_ENOMEM;
+    const size_t st[3] = {1, n[0], n[0] * n[1]};
+    for (size_t k = lo[2]; k < hi[2]; k++)
+        for (size_t j = lo[1]; j < hi[1]; j++)
+            for (size_t i = lo[0]; i < hi[0]; i++) {
+                size_t s = i + st[1] * j + st[2] * k;
+                if (mask[s] != val) continue;
+                qn = 0;
+                q[qn++] = s;
+                mask[s] |= 2;
+                int touches = 0;
+                for (size_t h = 0; h < qn; h++) {
+                    size_t p = q[h];
+                    size_t idx[3] = {p % n[0], (p / n[0]) % n[1], p / st[2]};
+                    for (int c = 0; c < 3; c++) {
+                        if (idx[c] == lo[c] || idx[c] + 1 == hi[c]) touches = 1;
+                        for (int d = -1; d <= 1; d += 2) {
+                            if (d < 0 ? idx[c] == lo[c] : idx[c] + 1 == hi[c]) continue;
+                            size_t r = d < 0 ? p - st[c] : p + st[c];
+                            if (mask[r] != val) continue;
+                            if (qn == cap) {
+                                size_t *nq = thx_realloc(ctx, q, 2 * cap * sizeof *q);
+                                if (!nq) {
+                                    free(q);
+                                    return THX_ENOMEM;
+                                }
+                                q = nq;
+                                cap *= 2;
+                            }
+                            mask[r] |= 2;
+                            q[qn++] = r;
+                        }
+                    }
+                }
+                int change = qn < min && (touching_ok || !touches);
+                if (change) {
+                    if (*count < THX_TRACE_SIZES_KEPT && sizes) sizes[*count] = qn;
+                    (*count)++;
+                    *voxels += qn;
+                }
+                /* marked: bit 2 set; the final value keeps bit 2 until the sweep below */
+                for (size_t h = 0; h < qn; h++) mask[q[h]] = (unsigned char)((change ? to : val) | 4);
+            }
+    free(q);
+    for (size_t k = lo[2]; k < hi[2]; k++)
+        for (size_t j = lo[1]; j < hi[1]; j++)
+            for (size_t i = lo[0]; i < hi[0]; i++) mask[i + st[1] * j + st[2] * k] &= 1;
+    return THX_OK;
+}
+
+/* ---- the smoothed plane ----------------------------------------------------------------------- */
+
+typedef struct {
+    size_t W, H;          /* buffer size (cells) */
+    long u0, v0;          /* in-plane index of buffer cell (0, 0) */
+    float *f, *tmp;
+    size_t cap;
+} plane;
+
+static thx_status plane_size(thx_ctx *ctx, plane *pl, size_t W, size_t H)
+{
+    pl->W = W;
+    pl->H = H;
+    if (W * H > pl->cap) {
+        free(pl->f);
+        free(pl->tmp);
+        pl->f = thx_malloc(ctx, W * H * sizeof *pl->f);
+        pl->tmp = thx_malloc(ctx, W * H * sizeof *pl->tmp);
+        if (!pl->f || !pl->tmp) return THX_ENOMEM;
+        pl->cap = W * H;
+    }
+    memset(pl->f, 0, W * H * sizeof *pl->f);
+    return THX_OK;
+}
+
+/* Adds w * mask plane k into the buffer. */
+static void plane_add(const cut *g, const unsigned char *mask, plane *pl, long k, double w)
+{
+    if (k < 0 || (size_t)k >= g->ns) return;
+    for (size_t y = 0; y < pl->H; y++) {
+        long v = pl->v0 + (long)y;
+        if (v < 0 || (size_t)v >= g->n1) continue;
+        for (size_t x = 0; x < pl->W; x++) {
+            long u = pl->u0 + (long)x;
+            if (u < 0 || (size_t)u >= g->n0) continue;
+            if (mask[vox(g, (size_t)k, (size_t)u, (size_t)v)]) pl->f[y * pl->W + x] += (float)w;
+        }
+    }
+}
+
+static void gauss_weights(double sigma, double w[2 * KR + 1])
+{
+    double sum = 0;
+    for (int d = -KR; d <= KR; d++) {
+        w[d + KR] = sigma > 0 ? exp(-0.5 * d * d / (sigma * sigma)) : (d == 0);
+        sum += w[d + KR];
+    }
+    for (int d = 0; d <= 2 * KR; d++) w[d] /= sum;
+}
+
+/* Separable in-plane smoothing of pl->f (zero outside the buffer). */
+static void plane_smooth(plane *pl, const double w[2 * KR + 1])
+{
+    size_t W = pl->W, H = pl->H;
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double s = 0;
+            for (int d = -KR; d <= KR; d++) {
+                long xx = (long)x + d;
+                if (xx >= 0 && (size_t)xx < W) s += w[d + KR] * pl->f[y * W + (size_t)xx];
+            }
+            pl->tmp[y * W + x] = (float)s;
+        }
+    for (size_t y = 0; y < H; y++)
+        for (size_t x = 0; x < W; x++) {
+            double s = 0;
+            for (int d = -KR; d <= KR; d++) {
+                long yy = (long)y + d;
+                if (yy >= 0 && (size_t)yy < H) s += w[d + KR] * pl->tmp[(size_t)yy * W + x];
+            }
+            pl->f[y * W + x] = (float)s;
+        }
+}
+
+/* ---- marching squares ------------------------------------------------------------------------ */
+
+typedef struct {
+    size_t n, cap;
+    thx_vec2 *p;
+} poly;
+
+typedef struct {
+    size_t n, cap;
+    poly *l;
+} polyset;
+
+static thx_status poly_push(thx_ctx *ctx, poly *p, double x, double y)
+{
+    if (p->n == p->cap) {
+        size_t nc = p->cap ? 2 * p->cap : 16;
+        thx_vec2 *np = thx_realloc(ctx, p->p, nc * sizeof *np);
+        if (!np) return THX_ENOMEM;
+        p->p = np;
+        p->cap = nc;
+    }
+    p->p[p->n].x = x;
+    p->p[p->n].y = y;
+    p->n++;
+    return THX_OK;
+}
+
+static void polyset_clear(polyset *s)
+{
+    for (size_t i = 0; i < s->n; i++) free(s->l[i].p);
+    s->n = 0;
+}
+
+static void polyset_free(polyset *s)
+{
+    polyset_clear(s);
+    free(s->l);
+    s->l = NULL;
+    s->cap = 0;
+}
+
+static thx_status polyset_new(thx_ctx *ctx, polyset *s, poly **out)
+{
+    if (s->n == s->cap) {
+        size_t nc = s->cap ? 2 * s->cap : 8;
+        poly *nl = thx_realloc(ctx, s->l, nc * sizeof *nl);
+        if (!nl) return THX_ENOMEM;
+        s->l = nl;
+        s->cap = nc;
+    }
+    memset(&s->l[s->n], 0, sizeof s->l[s->n]);
+    *out = &s->l[s->n++];
+    return THX_OK;
+}
+
+static double poly_area(const thx_vec2 *p, size_t n)
+{
+    double a = 0;
+    for (size_t i = 0, j = n - 1; i < n; j = i++) a += p[j].x * p[i].y - p[i].x * p[j].y;
+    return 0.5 * a;
+}
+
+/* The crossing point on edge id of the buffer (buffer cell coordinates). Edge 2 (y W + x) joins
+ * (x, y)-(x+1, y); edge 2 (y W + x) + 1 joins (x, y)-(x, y+1). */
+static void edge_point(const plane *pl, size_t e, double *px, double *py)
+{
+    size_t c = e / 2, x = c % pl->W, y = c / pl->W;
+    double fa = pl->f[c], fb = (e & 1) ? pl->f[c + pl->W] : pl->f[c + 1];
+    double t = (ISO - fa) / (fb - fa);
+    *px = (double)x + ((e & 1) ? 0 : t);
+    *py = (double)y + ((e & 1) ? t : 0);
+}
+
+/* Traces the 0.5 level of pl->f into loops (buffer coordinates), inside on the left: outer loops
+ * counterclockwise, holes clockwise. next is scratch of 2 W H entries. */
+static thx_status march(thx_ctx *ctx, plane *pl, uint32_t **next, size_t *next_cap, polyset *out)
+{
+    size_t W = pl->W, H = pl->H, ne = 2 * W * H;
+    if (ne > UINT32_MAX) return thx_error(ctx, THX_EINPUT, "trace: a plane of %zu x %zu cells is too large", W, H);
+    if (ne > *next_cap) {
+        free(*next);
+        *next = thx_malloc(ctx, ne * sizeof **next);
+        if (!*next) return THX_ENOMEM;
+        *next_cap = ne;
+    }
+    uint32_t *nx = *next;
+    const uint32_t NONE = UINT32_MAX;
+    for (size_t e = 0; e < ne; e++) nx[e] = NONE;
+    /* a value exactly at the level is moved just outside it: every crossing strictly inside its edge */
+    for (size_t c = 0; c < W * H; c++)
+        if (pl->f[c] == (float)ISO) pl->f[c] = nextafterf((float)ISO, 0.0f);
+    for (size_t y = 0; y + 1 < H; y++)
+        for (size_t x = 0; x + 1 < W; x++) {
+            size_t c = y * W + x;
+            double f[4] = {pl->f[c], pl->f[c + 1], pl->f[c + 1 + W], pl->f[c + W]};
+            int in[4], cnt = 0;
+            for (int k = 0; k < 4; k++) cnt += in[k] = f[k] > ISO;
+            if (cnt == 0 || cnt == 4) continue;
+            /* edges counterclockwise: e0 c0->c1, e1 c1->c2, e2 c2->c3 (reversed), e3 c3->c0 */
+            size_t eid[4] = {2 * c, 2 * (c + 1) + 1, 2 * (c + W), 2 * c + 1};
+            int exit_[4], entry[4];
+            for (int k = 0; k < 4; k++) {
+                exit_[k] = in[k] && !in[(k + 1) % 4];
+                entry[k] = !in[k] && in[(k + 1) % 4];
+            }
+            int saddle = cnt == 2 && in[0] == in[2];
+            int connected = 0;
+            if (saddle) {
+                /* asymptotic decider: the bilinear interpolant's value at its saddle point */
+                double den = f[0] + f[2] - f[1] - f[3];
+                double sv = den != 0 ? (f[0] * f[2] - f[1] * f[3]) / den : 0.25 * (f[0] + f[1] + f[2] + f[3]);
+                connected = sv > ISO;
+            }
+            for (int k = 0; k < 4; k++) {
+                if (!exit_[k]) continue;
+                int to;
+                if (saddle) to = connected ? (k + 1) % 4 : (k + 3) % 4;
+                else {
+                    to = -1;
+                    for (int m = 0; m < 4; m++)
+                        if (entry[m]) to = m;
+                }
+                nx[eid[k]] = (uint32_t)eid[to];
+            }
+        }
+    for (size_t e = 0; e < ne; e++) {
+        if (nx[e] == NONE) continue;
+        poly *p;
+        THX_CHECK(polyset_new(ctx, out, &p));
+        size_t cur = e;
+        while (nx[cur] != NONE) {
+            double px, py;
+            edge_point(pl, cur, &px, &py);
+            THX_CHECK(poly_push(ctx, p, px, py));
+            size_t nn = nx[cur];
+            nx[cur] = NONE;
+            cur = nn;
+        }
+        if (cur != e) return thx_error(ctx, THX_EINPUT, "trace: internal error: an open contour");
+    }
+    return THX_OK;
+}
+
+/* ---- loops: holes, resampling, crossing --------------------------------------------------------- */
+
+static int point_in(const thx_vec2 *p, size_t n, thx_vec2 q)
+{
+    int in = 0;
+    for (size_t i = 0, j = n - 1; i < n; j = i++)
+        if ((p[i].y > q.y) != (p[j].y > q.y) && q.x < (p[j].x - p[i].x) * (q.y - p[i].y) / (p[j].y - p[i].y) + p[i].x)
+            in = !in;
+    return in;
+}
+
+/* The midpoint of edge i of a counterclockwise loop, moved a thousandth of the edge's length to its left (inside). */
+static thx_vec2 inward(const poly *P, size_t i)
+{
+    thx_vec2 a = P->p[i], b = P->p[(i + 1) % P->n], q;
+    q.x = 0.5 * (a.x + b.x) - 1e-3 * (b.y - a.y);
+    q.y = 0.5 * (a.y + b.y) + 1e-3 * (b.x - a.x);
+    return q;
+}
+
+static void bbox(const thx_vec2 *p, size_t n, double b[4])
+{
+    b[0] = b[2] = INFINITY;
+    b[1] = b[3] = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        b[0] = fmin(b[0], p[i].x);
+        b[1] = fmax(b[1], p[i].x);
+        b[2] = fmin(b[2], p[i].y);
+        b[3] = fmax(b[3], p[i].y);
+    }
+}
+
+static int box_in(const double in[4], const double out[4])
+{
+    return in[0] >= out[0] && in[1] <= out[1] && in[2] >= out[2] && in[3] <= out[3];
+}
+
+/* Arc-length resampling of a closed polyline into m points (m < n), from point 0. */
+static thx_status resample(thx_ctx *ctx, const poly *src, size_t m, poly *dst)
+{
+    size_t n = src->n;
+    double per = 0;
+    for (size_t i = 0; i < n; i++) per += hypot(src->p[(i + 1) % n].x - src->p[i].x, src->p[(i + 1) % n].y - src->p[i].y);
+    dst->n = 0;
+    size_t i = 0;
+    double acc = 0; /* arc length at src point i */
+    for (size_t k = 0; k < m; k++) {
+        double s = per * (double)k / (double)m;
+        for (;;) {
+            thx_vec2 a = src->p[i], b = src->p[(i + 1) % n];
+            double len = hypot(b.x - a.x, b.y - a.y);
+            if (acc + len >= s || i + 1 == n) {
+                double t = len > 0 ? (s - acc) / len : 0;
+                t = t < 0 ? 0 : t > 1 ? 1 : t;
+                THX_CHECK(poly_push(ctx, dst, a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)));
+                break;
+            }
+            acc += len;
+            i++;
+        }
+    }
+    return THX_OK;
+}
+
+static double orient(thx_vec2 a, thx_vec2 b, thx_vec2 c)
+{
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+static int seg_cross(thx_vec2 a, thx_vec2 b, thx_vec2 c, thx_vec2 d)
+{
+    double d1 = orient(a, b, c), d2 = orient(a, b, d), d3 = orient(c, d, a), d4 = orient(c, d, b);
+    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 1;
+    /* touching counts (the contour model's rule) */
+    if (d1 == 0 && fmin(a.x, b.x) <= c.x && c.x <= fmax(a.x, b.x) && fmin(a.y, b.y) <= c.y && c.y <= fmax(a.y, b.y)) return 1;
+    if (d2 == 0 && fmin(a.x, b.x) <= d.x && d.x <= fmax(a.x, b.x) && fmin(a.y, b.y) <= d.y && d.y <= fmax(a.y, b.y)) return 1;
+    if (d3 == 0 && fmin(c.x, d.x) <= a.x && a.x <= fmax(c.x, d.x) && fmin(c.y, d.y) <= a.y && a.y <= fmax(c.y, d.y)) return 1;
+    if (d4 == 0 && fmin(c.x, d.x) <= b.x && b.x <= fmax(c.x, d.x) && fmin(c.y, d.y) <= b.y && b.y <= fmax(c.y, d.y)) return 1;
+    return 0;
+}
+
+/* Whether any two edges of the loops cross or touch (other than consecutive edges of a loop at
+ * their shared point): segments bucketed in a uniform grid. */
+static thx_status any_crossing(thx_ctx *ctx, const polyset *s, int *crossing)
+{
+    *crossing = 0;
+    size_t ns = 0;
+    double b[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY}, maxlen = 0;
+    for (size_t l = 0; l < s->n; l++) {
+        double lb[4];
+        bbox(s->l[l].p, s->l[l].n, lb);
+        b[0] = fmin(b[0], lb[0]);
+        b[1] = fmax(b[1], lb[1]);
+        b[2] = fmin(b[2], lb[2]);
+        b[3] = fmax(b[3], lb[3]);
+        ns += s->l[l].n;
+        for (size_t i = 0; i < s->l[l].n; i++) {
+            thx_vec2 p = s->l[l].p[i], q = s->l[l].p[(i + 1) % s->l[l].n];
+            maxlen = fmax(maxlen, hypot(q.x - p.x, q.y - p.y));
+        }
+    }
+    if (ns < 3) return THX_OK;
+    double w = b[1] - b[0], h = b[3] - b[2];
+    double cs = fmax(maxlen, sqrt(fmax(w * h, 1e-300) / (double)ns));
+    size_t gx = (size_t)(w / cs) + 1, gy = (size_t)(h / cs) + 1;
+    while (gx * gy > 4 * ns + 16) {
+        cs *= 2;
+        gx = (size_t)(w / cs) + 1;
+        gy = (size_t)(h / cs) + 1;
+    }
+    /* counting sort of (cell, segment) pairs */
+    size_t *cnt = thx_calloc(ctx, gx * gy + 1, sizeof *cnt);
+    if (!cnt) return THX_ENOMEM;
+    size_t npair = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        size_t *ent = NULL;
+        if (pass == 1) {
+            for (size_t c = 1; c <= gx * gy; c++) cnt[c] += cnt[c - 1];
+            ent = thx_malloc(ctx, (npair ? npair : 1) * 2 * sizeof *ent);
+            if (!ent) {
+                free(cnt);
+                return THX_ENOMEM;
+            }
+        }
+        size_t *fill = NULL;
+        if (pass == 1) {
+            fill = thx_malloc(ctx, (gx * gy + 1) * sizeof *fill);
+            if (!fill) {
+                free(ent);
+                free(cnt);
+                return THX_ENOMEM;
+            }
+            memcpy(fill, cnt, (gx * gy + 1) * sizeof *fill);
+        }
+        for (size_t l = 0; l < s->n; l++)
+            for (size_t i = 0; i < s->l[l].n; i++) {
+                thx_vec2 p = s->l[l].p[i], q = s->l[l].p[(i + 1) % s->l[l].n];
+                size_t x0 = (size_t)((fmin(p.x, q.x) - b[0]) / cs), x1 = (size_t)((fmax(p.x, q.x) - b[0]) / cs);
+                size_t y0 = (size_t)((fmin(p.y, q.y) - b[2]) / cs), y1 = (size_t)((fmax(p.y, q.y) - b[2]) / cs);
+                if (x1 >= gx) x1 = gx - 1;
+                if (y1 >= gy) y1 = gy - 1;
+                for (size_t y = y0; y <= y1; y++)
+                    for (size_t x = x0; x <= x1; x++) {
+                        size_t c = y * gx + x;
+                        if (pass == 0) {
+                            cnt[c + 1]++;
+                            npair++;
+                        } else {
+                            ent[2 * fill[c]] = l;
+                            ent[2 * fill[c] + 1] = i;
+                            fill[c]++;
+                        }
+                    }
+            }
+        if (pass == 1) {
+            for (size_t c = 0; c < gx * gy && !*crossing; c++)
+                for (size_t a = cnt[c]; a < cnt[c + 1] && !*crossing; a++)
+                    for (size_t e = a + 1; e < cnt[c + 1]; e++) {
+                        size_t la = ent[2 * a], ia = ent[2 * a + 1], lb = ent[2 * e], ib = ent[2 * e + 1];
+                        const poly *A = &s->l[la], *B = &s->l[lb];
+                        if (la == lb) {
+                            size_t n = A->n;
+                            if (ia == ib || (ia + 1) % n == ib || (ib + 1) % n == ia) continue;
+                        }
+                        if (seg_cross(A->p[ia], A->p[(ia + 1) % A->n], B->p[ib], B->p[(ib + 1) % B->n])) {
+                            *crossing = 1;
+                            break;
+                        }
+                    }
+            free(fill);
+            free(ent);
+        }
+    }
+    free(cnt);
+    return THX_OK;
+}
+
+/* ---- the driver --------------------------------------------------------------------------------- */
+
+typedef struct {
+    size_t plane;   /* output plane number */
+    size_t loop0, n; /* its loops in the tissue's loop list */
+} layer_rec;
+
+typedef struct {
+    polyset loops;        /* all loops of the tissue (model coordinates), plane by plane */
+    double *area;         /* signed area per loop */
+    layer_rec *layers;
+    size_t n_layers, cap_layers, cap_area;
+} tissue_trace;
+
+static thx_status build_labelset(thx_ctx *ctx, const thx_trace_opts *o, size_t t, float lo, float hi, labelset *ls)
+{
+    memset(ls, 0, sizeof *ls);
+    const thx_trace_tissue *ti = &o->tissues[t];
+    int outer = ti->role == THX_ROLE_OUTER;
+    size_t n = 0;
+    for (size_t k = 0; k < o->n_tissues; k++)
+        if (k == t || outer) n += o->tissues[k].n_values;
+    for (size_t k = 0; k < o->n_tissues; k++)
+        if (o->tissues[k].all && (k == t || outer)) ls->all = 1;
+    ls->vals = thx_malloc(ctx, (n ? n : 1) * sizeof *ls->vals);
+    if (!ls->vals) return THX_ENOMEM;
+    for (size_t k = 0; k < o->n_tissues; k++)
+        if (k == t || outer)
+            for (size_t j = 0; j < o->tissues[k].n_values; j++) ls->vals[ls->n++] = o->tissues[k].values[j];
+    qsort(ls->vals, ls->n, sizeof *ls->vals, cmp_long);
+    if (hi - lo < 16777216.0f) {
+        ls->lo = (long)lo;
+        ls->hi = (long)hi;
+        ls->lut = thx_calloc(ctx, (size_t)(ls->hi - ls->lo + 1), 1);
+        if (!ls->lut) return THX_ENOMEM;
+        for (size_t j = 0; j < ls->n; j++)
+            if (ls->vals[j] >= ls->lo && ls->vals[j] <= ls->hi) ls->lut[ls->vals[j] - ls->lo] = 1;
+    }
+    return THX_OK;
+}
+
+static void labelset_free(labelset *ls)
+{
+    free(ls->lut);
+    free(ls->vals);
+}
+
+/* The smoothed field of output plane `p` for the tissue's mask into pl (box: the in-plane index
+ * box of the mask's planes involved, per-plane boxes in pb). */
+static thx_status plane_field(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb,
+                              double t, int resampled, const double w[2 * KR + 1], plane *pl, int *empty)
+{
+    long k0 = (long)floor(t);
+    double a = t - (double)k0;
+    if (a < 1e-9) a = 0;
+    long kmin = k0 - (resampled ? KR : 0), kmax = (a > 0 ? k0 + 1 : k0) + (resampled ? KR : 0);
+    long u0 = LONG_MAX, u1 = LONG_MIN, v0 = LONG_MAX, v1 = LONG_MIN;
+    for (long k = kmin; k <= kmax; k++) {
+        if (k < 0 || (size_t)k >= g->ns || pb[4 * k] > pb[4 * k + 1]) continue;
+        u0 = pb[4 * k] < u0 ? pb[4 * k] : u0;
+        u1 = pb[4 * k + 1] > u1 ? pb[4 * k + 1] : u1;
+        v0 = pb[4 * k + 2] < v0 ? pb[4 * k + 2] : v0;
+        v1 = pb[4 * k + 3] > v1 ? pb[4 * k + 3] : v1;
+    }
+    *empty = u0 > u1;
+    if (*empty) return THX_OK;
+    THX_CHECK(plane_size(ctx, pl, (size_t)(u1 - u0 + 1 + 2 * PAD), (size_t)(v1 - v0 + 1 + 2 * PAD)));
+    pl->u0 = u0 - PAD;
+    pl->v0 = v0 - PAD;
+    /* across planes: the Gaussian (when resampling) of each image plane, then linear in t */
+    for (int side = 0; side < 2; side++) {
+        double ws = side == 0 ? 1 - a : a;
+        if (ws == 0) continue;
+        long kc = k0 + side;
+        if (!resampled) plane_add(g, mask, pl, kc, ws);
+        else
+            for (int d = -KR; d <= KR; d++) plane_add(g, mask, pl, kc + d, ws * w[d + KR]);
+    }
+    plane_smooth(pl, w);
+    return THX_OK;
+}
+
+thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_opts *o, thx_contours **out,
+                           thx_trace_report *rep)
+{
+    *out = NULL;
+    if (rep) memset(rep, 0, sizeof *rep);
+    const char *what = img->path[0] ? img->path : "<image>";
+    if (!img->integral)
+        return thx_error(ctx, THX_EINPUT,
+                         "%s: not a label map: its voxels are stored as %s, not integers (threshold or segment the "
+                         "image first)", what, img->stored_type[0] ? img->stored_type : "non-integral values");
+    if (!o->n_tissues) return thx_error(ctx, THX_EINPUT, "%s: no tissue to trace (give at least one label)", what);
+    if (!(o->spacing >= 0) || !(o->node_spacing >= 0) || !(o->sigma >= 0) || !isfinite(o->spacing) ||
+        !isfinite(o->node_spacing) || o->sigma > 2)
+        return thx_error(ctx, THX_EINPUT, "trace: bad options (spacing %g, node spacing %g, sigma %g)", o->spacing,
+                         o->node_spacing, o->sigma);
+    for (size_t t = 0; t < o->n_tissues; t++) {
+        if (!o->tissues[t].all && !o->tissues[t].n_values)
+            return thx_error(ctx, THX_EINPUT, "tissue \"%s\": no label value", o->tissues[t].name);
+        for (size_t k = 0; k < t; k++)
+            if (strcmp(o->tissues[k].name, o->tissues[t].name) == 0)
+                return thx_error(ctx, THX_EINPUT, "tissue \"%s\" given twice", o->tissues[t].name);
+    }
+    cut g;
+    double oblique;
+    cut_init(img, &g, &oblique);
+    float vlo, vhi;
+    thx_image_range(img, &vlo, &vhi);
+    size_t nv = thx_image_count(img);
+
+    /* planes: every image plane (in increasing z), or `spacing` apart from the lowest */
+    double hs = img->spacing[g.s];
+    int resampled = o->spacing > 0;
+    double zlo = g.dz > 0 ? g.z0 : g.z0 + g.dz * (double)(g.ns - 1);
+    double span = hs * (double)(g.ns - 1);
+    double pspace = resampled ? o->spacing : hs;
+    size_t np = resampled ? (size_t)floor(span / pspace + 1e-9) + 1 : g.ns;
+    double inplane = fmax(img->spacing[g.a0], img->spacing[g.a1]);
+    double h = o->node_spacing > 0 ? o->node_spacing : fmax(inplane, pspace);
+
+    thx_status st = THX_OK;
+    thx_contours *c = NULL;
+    unsigned char *mask = NULL;
+    long *pb = NULL;
+    plane pl = {0};
+    uint32_t *nxt = NULL;
+    size_t nxt_cap = 0;
+    polyset raw = {0}, fin = {0}, tmpset = {0};
+    tissue_trace tt = {0};
+    labelset ls = {0};
+    double w[2 * KR + 1];
+    gauss_weights(o->sigma, w);
+    if (rep) {
+        rep->tissue = thx_calloc(ctx, o->n_tissues, sizeof *rep->tissue);
+        if (!rep->tissue) return THX_ENOMEM;
+        rep->n_tissues = o->n_tissues;
+        rep->n_planes = np;
+        rep->plane_spacing = pspace;
+        rep->node_spacing = h;
+        rep->z_first = zlo;
+        rep->sup_axis = g.s;
+        rep->oblique_deg = oblique;
+        memcpy(rep->to_ras, g.Q, sizeof g.Q);
+    }
+    /* listed values absent from the image */
+    {
+        size_t nval = 0;
+        for (size_t t = 0; t < o->n_tissues; t++) nval += o->tissues[t].n_values;
+        long *vals = thx_malloc(ctx, (nval ? nval : 1) * sizeof *vals);
+        unsigned char *seen = thx_calloc(ctx, nval ? nval : 1, 1);
+        if (!vals || !seen) {
+            free(vals);
+            free(seen);
+            st = THX_ENOMEM;
+            goto done;
+        }
+        nval = 0;
+        for (size_t t = 0; t < o->n_tissues; t++)
+            for (size_t j = 0; j < o->tissues[t].n_values; j++) vals[nval++] = o->tissues[t].values[j];
+        qsort(vals, nval, sizeof *vals, cmp_long);
+        size_t left = nval;
+        for (size_t i = 0; i < nv && left; i++) {
+            long v = (long)img->v[i];
+            size_t a = 0, b = nval;
+            while (a < b) {
+                size_t m = (a + b) / 2;
+                if (vals[m] < v) a = m + 1;
+                else b = m;
+            }
+            for (; a < nval && vals[a] == v; a++)
+                if (!seen[a]) {
+                    seen[a] = 1;
+                    left--;
+                }
+        }
+        for (size_t j = 0; j < nval; j++)
+            if (!seen[j] && (j == 0 || vals[j] != vals[j - 1]) && rep) {
+                if (rep->n_absent < THX_TRACE_SIZES_KEPT) rep->absent[rep->n_absent] = vals[j];
+                rep->n_absent++;
+            }
+        free(vals);
+        free(seen);
+    }
+
+    THX_TRY(thx_contours_create(ctx, &c));
+    c->spacing = h;
+    c->frame = thx_frame_ras();
+    snprintf(c->image, sizeof c->image, "%s", img->path);
+    snprintf(c->image_sha256, sizeof c->image_sha256, "%s", img->sha256);
+    mask = thx_malloc(ctx, nv);
+    pb = thx_malloc(ctx, 4 * g.ns * sizeof *pb);
+    if (!mask || !pb) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    for (size_t t = 0; t < o->n_tissues; t++) {
+        const thx_trace_tissue *ti = &o->tissues[t];
+        thx_trace_tissue_report trr;
+        memset(&trr, 0, sizeof trr);
+        snprintf(trr.name, sizeof trr.name, "%s", ti->name);
+        size_t sidx;
+        THX_TRY(thx_contours_add_surface(ctx, c, ti->name, ti->role, THX_CAP_GRID, 0, &sidx));
+        /* the mask, its box and the in-plane box of each plane (before cleaning: a removed component
+           only widens its planes' boxes) */
+        THX_TRY(build_labelset(ctx, o, t, vlo, vhi, &ls));
+        for (size_t k = 0; k < g.ns; k++) {
+            pb[4 * k] = pb[4 * k + 2] = LONG_MAX;
+            pb[4 * k + 1] = pb[4 * k + 3] = LONG_MIN;
+        }
+        size_t lo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, hi[3] = {0, 0, 0}, count = 0;
+        for (size_t k = 0; k < img->n[2]; k++)
+            for (size_t j = 0; j < img->n[1]; j++)
+                for (size_t i = 0; i < img->n[0]; i++) {
+                    size_t s = thx_image_at(img, i, j, k);
+                    int m = in_set(&ls, (long)img->v[s]);
+                    mask[s] = (unsigned char)m;
+                    if (m) {
+                        size_t idx[3] = {i, j, k};
+                        count++;
+                        for (int q = 0; q < 3; q++) {
+                            if (idx[q] < lo[q]) lo[q] = idx[q];
+                            if (idx[q] + 1 > hi[q]) hi[q] = idx[q] + 1;
+                        }
+                        long *b = pb + 4 * idx[g.s], u = (long)idx[g.a0], v = (long)idx[g.a1];
+                        if (u < b[0]) b[0] = u;
+                        if (u > b[1]) b[1] = u;
+                        if (v < b[2]) b[2] = v;
+                        if (v > b[3]) b[3] = v;
+                    }
+                }
+        labelset_free(&ls);
+        memset(&ls, 0, sizeof ls);
+        if (lo[0] == SIZE_MAX) {
+            st = thx_error(ctx, THX_EINPUT, "%s: tissue \"%s\": none of its label values is in the image", what, ti->name);
+            goto done;
+        }
+        /* 3D cleaning in the box widened by one voxel (the outside of a cavity reaches the rim). With
+           holes filled, a cavity is a hole in each of its planes and is filled with them: only kept
+           holes need the cavity pass. */
+        for (int q = 0; q < 3; q++) {
+            if (lo[q] > 0) lo[q]--;
+            if (hi[q] < img->n[q]) hi[q]++;
+        }
+        if (o->min_size > 1) {
+            THX_TRY(clean(ctx, mask, img->n, lo, hi, 1, 0, o->min_size, 1, &trr.n_removed, &trr.removed_voxels,
+                          trr.removed_size));
+            if (o->holes == THX_TRACE_HOLES_KEEP)
+                THX_TRY(clean(ctx, mask, img->n, lo, hi, 0, 1, o->min_size, 0, &trr.n_cavities, &trr.cavity_voxels, NULL));
+        }
+        trr.voxels = count - trr.removed_voxels + trr.cavity_voxels;
+        if (!trr.voxels) {
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: tissue \"%s\": all of its %zu voxels are in components of fewer than %zu voxels "
+                           "(--min-size): nothing left to trace",
+                           what, ti->name, trr.removed_voxels, o->min_size);
+            goto done;
+        }
+        /* trace plane by plane (increasing z) */
+        polyset_clear(&tt.loops);
+        tt.n_layers = 0;
+        for (size_t p = 0; p < np; p++) {
+            double z = zlo + pspace * (double)p;
+            /* continuous image plane index of z */
+            double tk = (z - g.z0) / g.dz;
+            if (tk < 0) tk = 0;
+            if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
+            if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - p);
+            int empty;
+            THX_TRY(plane_field(ctx, &g, mask, pb, tk, resampled, w, &pl, &empty));
+            if (empty) continue;
+            polyset_clear(&raw);
+            THX_TRY(march(ctx, &pl, &nxt, &nxt_cap, &raw));
+            if (!raw.n) continue;
+            /* to model coordinates; the orientation kept (inside on the left) */
+            double det = g.A0[0] * g.A1[1] - g.A0[1] * g.A1[0];
+            for (size_t l = 0; l < raw.n; l++) {
+                poly *P = &raw.l[l];
+                for (size_t i = 0; i < P->n; i++) {
+                    double u = P->p[i].x + (double)pl.u0, v = P->p[i].y + (double)pl.v0;
+                    P->p[i].x = g.P0[0] + g.A0[0] * u + g.A1[0] * v;
+                    P->p[i].y = g.P0[1] + g.A0[1] * u + g.A1[1] * v;
+                }
+                if (det < 0)
+                    for (size_t i = 0, j = P->n - 1; i < j; i++, j--) {
+                        thx_vec2 tmp = P->p[i];
+                        P->p[i] = P->p[j];
+                        P->p[j] = tmp;
+                    }
+            }
+            /* holes: loops of negative area; filled (dropped, with any loop inside them) or kept */
+            double *ar = thx_malloc(ctx, raw.n * 5 * sizeof *ar);
+            if (!ar) {
+                st = THX_ENOMEM;
+                goto done;
+            }
+            for (size_t l = 0; l < raw.n; l++) {
+                ar[5 * l] = poly_area(raw.l[l].p, raw.l[l].n);
+                bbox(raw.l[l].p, raw.l[l].n, ar + 5 * l + 1);
+            }
+            polyset_clear(&fin);
+            for (size_t l = 0; l < raw.n; l++) {
+                int hole = ar[5 * l] < 0, drop = 0;
+                if (hole) trr.n_holes++;
+                if (o->holes == THX_TRACE_HOLES_FILL) {
+                    if (hole) drop = 1;
+                    else
+                        for (size_t k = 0; k < raw.n && !drop; k++)
+                            if (k != l && ar[5 * k] > 0 && box_in(ar + 5 * l + 1, ar + 5 * k + 1) &&
+                                point_in(raw.l[k].p, raw.l[k].n, raw.l[l].p[0]))
+                                drop = 1;
+                    if (drop && !hole) trr.n_islands_filled++;
+                }
+                if (drop) continue;
+                poly *d;
+                THX_TRY(polyset_new(ctx, &fin, &d));
+                *d = raw.l[l];
+                raw.l[l].p = NULL;
+                raw.l[l].n = raw.l[l].cap = 0;
+            }
+            free(ar);
+            /* resampled at the node spacing; finer while loops would cross */
+            double hh = h;
+            for (int attempt = 0; attempt < 6; attempt++) {
+                polyset_clear(&tmpset);
+                int shrunk = 0;
+                for (size_t l = 0; l < fin.n; l++) {
+                    const poly *P = &fin.l[l];
+                    double per = 0;
+                    for (size_t i = 0; i < P->n; i++)
+                        per += hypot(P->p[(i + 1) % P->n].x - P->p[i].x, P->p[(i + 1) % P->n].y - P->p[i].y);
+                    size_t m = (size_t)floor(per / hh + 0.5);
+                    if (m < 8) m = 8;
+                    poly *d;
+                    THX_TRY(polyset_new(ctx, &tmpset, &d));
+                    if (attempt == 5 || m >= P->n) {
+                        for (size_t i = 0; i < P->n; i++) THX_TRY(poly_push(ctx, d, P->p[i].x, P->p[i].y));
+                    } else {
+                        THX_TRY(resample(ctx, P, m, d));
+                        shrunk = 1;
+                    }
+                }
+                if (!shrunk) break;
+                int crossing;
+                THX_TRY(any_crossing(ctx, &tmpset, &crossing));
+                if (!crossing) break;
+                hh /= 2;
+            }
+            if (!tmpset.n) continue;
+            /* the layer */
+            if (tt.n_layers == tt.cap_layers) {
+                size_t ncap = tt.cap_layers ? 2 * tt.cap_layers : 64;
+                layer_rec *nl = thx_realloc(ctx, tt.layers, ncap * sizeof *nl);
+                if (!nl) {
+                    st = THX_ENOMEM;
+                    goto done;
+                }
+                tt.layers = nl;
+                tt.cap_layers = ncap;
+            }
+            tt.layers[tt.n_layers].plane = p;
+            tt.layers[tt.n_layers].loop0 = tt.loops.n;
+            tt.layers[tt.n_layers].n = tmpset.n;
+            tt.n_layers++;
+            for (size_t l = 0; l < tmpset.n; l++) {
+                poly *d;
+                THX_TRY(polyset_new(ctx, &tt.loops, &d));
+                *d = tmpset.l[l];
+                tmpset.l[l].p = NULL;
+                tmpset.l[l].n = 0;
+            }
+            tmpset.n = 0;
+        }
+        /* loops with no partner on either neighbouring plane: dropped (the lacing cannot close them) */
+        size_t nl = tt.loops.n;
+        if (nl > tt.cap_area) {
+            free(tt.area);
+            tt.area = thx_malloc(ctx, nl * 5 * sizeof *tt.area);
+            if (!tt.area) {
+                st = THX_ENOMEM;
+                goto done;
+            }
+            tt.cap_area = nl;
+        }
+        for (size_t l = 0; l < nl; l++) {
+            tt.area[5 * l] = poly_area(tt.loops.l[l].p, tt.loops.l[l].n);
+            bbox(tt.loops.l[l].p, tt.loops.l[l].n, tt.area + 5 * l + 1);
+        }
+        unsigned char *keep = thx_malloc(ctx, nl ? nl : 1);
+        if (!keep) {
+            st = THX_ENOMEM;
+            goto done;
+        }
+        for (size_t L = 0; L < tt.n_layers; L++) {
+            const layer_rec *lr = &tt.layers[L];
+            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
+                keep[l] = 0;
+                if (tt.area[5 * l] < 0) {
+                    keep[l] = 1; /* a kept hole goes with its outer loop */
+                    continue;
+                }
+                for (int side = -1; side <= 1 && !keep[l]; side += 2) {
+                    if ((side < 0 && L == 0) || (side > 0 && L + 1 == tt.n_layers)) continue;
+                    const layer_rec *nb = &tt.layers[L + (size_t)side];
+                    if (nb->plane != lr->plane + (size_t)side) continue;
+                    const poly *A = &tt.loops.l[l];
+                    const double *ab = tt.area + 5 * l + 1;
+                    for (size_t k = nb->loop0; k < nb->loop0 + nb->n && !keep[l]; k++) {
+                        const poly *B = &tt.loops.l[k];
+                        const double *bb = tt.area + 5 * k + 1;
+                        if (tt.area[5 * k] < 0 || ab[0] > bb[1] || bb[0] > ab[1] || ab[2] > bb[3] || bb[2] > ab[3]) continue;
+                        /* a point just inside each edge (to its left: outer loops run counterclockwise)
+                           in the other loop: loops that coincide (a straight stack) overlap too */
+                        for (size_t i = 0; i < A->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(B->p, B->n, inward(A, i));
+                        for (size_t i = 0; i < B->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(A->p, A->n, inward(B, i));
+                    }
+                }
+            }
+        }
+        /* a layer of holes only (its outer loops dropped) goes too */
+        for (size_t L = 0; L < tt.n_layers; L++) {
+            const layer_rec *lr = &tt.layers[L];
+            int outer_kept = 0;
+            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) outer_kept |= keep[l] && tt.area[5 * l] > 0;
+            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
+                if (!outer_kept) keep[l] = 0;
+                if (!keep[l] && tt.area[5 * l] > 0) trr.n_flat_dropped++;
+            }
+        }
+        /* one stack of consecutive planes */
+        long first = -1, last = -1, gap_at = -1;
+        for (size_t L = 0; L < tt.n_layers; L++) {
+            const layer_rec *lr = &tt.layers[L];
+            int any = 0;
+            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) any |= keep[l];
+            if (!any) continue;
+            if (first < 0) first = (long)lr->plane;
+            else if ((long)lr->plane != last + 1 && gap_at < 0) gap_at = last;
+            last = (long)lr->plane;
+        }
+        if (first < 0) {
+            free(keep);
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: tissue \"%s\": no plane holds a loop with a partner above or below (its %zu voxels lie "
+                           "within single planes)", what, ti->name, trr.voxels);
+            goto done;
+        }
+        if (gap_at >= 0) {
+            /* the next plane with loops after the gap */
+            long resume = -1;
+            for (size_t L = 0; L < tt.n_layers && resume < 0; L++)
+                if ((long)tt.layers[L].plane > gap_at + 1) {
+                    for (size_t l = tt.layers[L].loop0; l < tt.layers[L].loop0 + tt.layers[L].n; l++)
+                        if (keep[l]) resume = (long)tt.layers[L].plane;
+                }
+            free(keep);
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: tissue \"%s\" vanishes and reappears along the superior axis: it is in the planes "
+                           "z=%g..%g and again from z=%g to z=%g, none between (a surface is one stack of consecutive "
+                           "layers: trace the parts as tissues of their own, or remove the stray part with a larger "
+                           "--min-size)",
+                           what, ti->name, zlo + pspace * (double)first, zlo + pspace * (double)gap_at,
+                           zlo + pspace * (double)resume, zlo + pspace * (double)last);
+            goto done;
+        }
+        if (first == last) {
+            free(keep);
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: tissue \"%s\" lies in one plane only (z=%g): a surface needs at least two layers (a finer "
+                           "--spacing may give it more)", what, ti->name, zlo + pspace * (double)first);
+            goto done;
+        }
+        for (size_t L = 0; L < tt.n_layers; L++) {
+            const layer_rec *lr = &tt.layers[L];
+            double z = zlo + pspace * (double)lr->plane;
+            int any = 0;
+            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
+                if (!keep[l]) continue;
+                any = 1;
+                st = thx_contours_add_loop(ctx, c, sidx, z, tt.loops.l[l].p, tt.loops.l[l].n);
+                if (st != THX_OK) break;
+                trr.n_loops++;
+                trr.area_sum += tt.area[5 * l];
+            }
+            if (st != THX_OK) break;
+            if (any) {
+                if (!trr.n_layers) trr.z_first = z;
+                trr.z_last = z;
+                trr.n_layers++;
+            }
+        }
+        free(keep);
+        if (st != THX_OK) goto done;
+        if (rep) rep->tissue[t] = trr;
+    }
+    *out = c;
+    c = NULL;
+done:
+    labelset_free(&ls);
+    polyset_free(&raw);
+    polyset_free(&fin);
+    polyset_free(&tmpset);
+    polyset_free(&tt.loops);
+    free(tt.layers);
+    free(tt.area);
+    free(pl.f);
+    free(pl.tmp);
+    free(nxt);
+    free(mask);
+    free(pb);
+    thx_contours_destroy(&c);
+    if (st != THX_OK && rep) thx_trace_report_free(rep);
+    return st;
+}
