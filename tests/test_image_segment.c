@@ -8,6 +8,13 @@
 #include "testlib.h"
 #include "thorax/image/segment.h"
 
+/* distance of voxel q of the 64^3 test grid from its centre */
+static double lab_ball_r(size_t q)
+{
+    double x = (double)(q % 64) - 31.5, y = (double)(q / 64 % 64) - 31.5, z = (double)(q / 4096) - 31.5;
+    return sqrt(x * x + y * y + z * z);
+}
+
 static double frand(unsigned *s)
 {
     *s = *s * 1103515245u + 12345u;
@@ -85,6 +92,18 @@ int main(void)
     CHECK(lab.v[thx_image_at(&lab, 53, 32, 32)] == 1); /* the sinus's centre */
     CHECK(lab.v[thx_image_at(&lab, 61, 32, 5)] == 0);  /* on the holder */
     CHECK(lab.integral);
+    /* the bone keeps a voxel of scalp round it: no bone voxel has an outside voxel among its 26 neighbours */
+    size_t touching = 0; /* reused below */
+    for (size_t k = 1; k + 1 < 64; k++)
+        for (size_t j = 1; j + 1 < 64; j++)
+            for (size_t i = 1; i + 1 < 64; i++) {
+                if (lab.v[thx_image_at(&lab, i, j, k)] != 2) continue;
+                for (int d = 0; d < 27; d++)
+                    if (lab.v[thx_image_at(&lab, i + (size_t)(d % 3) - 1, j + (size_t)(d / 3 % 3) - 1,
+                                           k + (size_t)(d / 9) - 1)] == 0)
+                        touching++;
+            }
+    CHECK(touching == 0);
     thx_image_free(&lab);
 
     /* without the clean-up the holder stays and the brain is not bone */
@@ -92,6 +111,27 @@ int main(void)
     CHECK_OK(ctx, thx_image_segment(ctx, &ct, &o, &lab, &rep));
     CHECK(lab.v[thx_image_at(&lab, 32, 32, 32)] == 1);
     CHECK(lab.v[thx_image_at(&lab, 53, 32, 32)] == 0);
+    thx_image_free(&lab);
+
+    /* bone out to the skin (no scalp in the scan): the map still keeps a voxel of label 1 round label 2 */
+    for (size_t q = 0; q < thx_image_count(&ct); q++)
+        if (ct.v[q] == 40 && lab_ball_r(q) >= 14) ct.v[q] = 1200;
+    thx_segment_opts o2 = {tissues, 2, 1, 1};
+    CHECK_OK(ctx, thx_image_segment(ctx, &ct, &o2, &lab, &rep));
+    touching = 0;
+    size_t scalp = 0;
+    for (size_t k = 1; k + 1 < 64; k++)
+        for (size_t j = 1; j + 1 < 64; j++)
+            for (size_t i = 1; i + 1 < 64; i++) {
+                float v = lab.v[thx_image_at(&lab, i, j, k)];
+                scalp += v == 1;
+                if (v != 2) continue;
+                for (int d = 0; d < 27; d++)
+                    if (lab.v[thx_image_at(&lab, i + (size_t)(d % 3) - 1, j + (size_t)(d / 3 % 3) - 1,
+                                           k + (size_t)(d / 9) - 1)] == 0)
+                        touching++;
+            }
+    CHECK(touching == 0 && scalp > 0);
     thx_image_free(&lab);
 
     /* 3. closing bridges a 1-voxel gap with a 1.5 mm ball, not a 5-voxel gap */

@@ -521,6 +521,39 @@ static void test_image_line(void)
     }
 }
 
+/* A scan that cuts a neck: an outer cylinder and an inner one both run through every plane of the
+ * image. The inner surface must close inside the outer's end planes (else both caps lie in one plane
+ * and the mesher meets coincident nodes): its first and last planes are trimmed, counted, and the two
+ * surfaces build and check; the nesting follows the roles, whatever the order the tissues are given in. */
+static int in_cylinders(const double p[3], void *user)
+{
+    (void)user;
+    double r = hypot(p[0], p[1]);
+    return r < 8 ? 2 : r < 14 ? 1 : 0;
+}
+
+static void test_cut_ends(void)
+{
+    thx_image img;
+    make_map(&img, 20, 20, 10, 2.0, NULL, in_cylinders, NULL);
+    long v_in[] = {2}, v_out[] = {1, 2};
+    thx_trace_tissue t[2] = {tissue(v_in, 1, "inner", THX_ROLE_OTHER), tissue(v_out, 2, "outer", THX_ROLE_OUTER)};
+    thx_contours *c = NULL;
+    thx_trace_report rep;
+    CHECK_OK(ctx, trace(&img, t, 2, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    if (!c) exit(1);
+    CHECK(strcmp(c->surf[0].name, "inner") == 0 && strcmp(c->surf[1].name, "outer") == 0); /* the order given */
+    CHECK(c->surf[1].n_layers == 10 && rep.tissue[1].n_trimmed_layers == 0);
+    CHECK(c->surf[0].n_layers == 8 && rep.tissue[0].n_trimmed_layers == 2);
+    CHECK(c->surf[0].layers[0].z > c->surf[1].layers[0].z);
+    CHECK(c->surf[0].layers[c->surf[0].n_layers - 1].z < c->surf[1].layers[c->surf[1].n_layers - 1].z);
+    double vol = 0;
+    CHECK(builds_and_checks(c, &vol));
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -535,6 +568,7 @@ int main(void)
     test_split_caps();
     test_oblique_flipped();
     test_refusals();
+    test_cut_ends();
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("test_image_trace");
 }

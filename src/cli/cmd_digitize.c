@@ -143,15 +143,16 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
         printf("%s: %zu planes across index axis %c (superior), %g mm apart, z = %g .. %g mm; nodes %g mm apart\n",
                image, rep.n_planes, axis[rep.sup_axis], rep.plane_spacing, rep.z_first,
                rep.z_first + rep.plane_spacing * (double)(rep.n_planes - 1), rep.node_spacing);
-        printf("%-16s %7s %7s %7s %7s %9s %7s %9s %10s\n", "surface", "voxels", "layers", "loops", "holes", "islands",
-               "flat", "removed", "cavities");
+        printf("%-16s %7s %7s %7s %7s %9s %7s %8s %9s %10s\n", "surface", "voxels", "layers", "loops", "holes",
+               "islands", "flat", "trimmed", "removed", "cavities");
         for (size_t t = 0; t < rep.n_tissues; t++) {
             const thx_trace_tissue_report *r = &rep.tissue[t];
-            printf("%-16s %7zu %7zu %7zu %7zu %9zu %7zu %9zu %10zu\n", r->name, r->voxels, r->n_layers, r->n_loops,
-                   r->n_holes, r->n_islands_filled, r->n_flat_dropped, r->n_removed, r->n_cavities);
+            printf("%-16s %7zu %7zu %7zu %7zu %9zu %7zu %8zu %9zu %10zu\n", r->name, r->voxels, r->n_layers,
+                   r->n_loops, r->n_holes, r->n_islands_filled, r->n_flat_dropped, r->n_trimmed_layers, r->n_removed,
+                   r->n_cavities);
         }
         printf("holes: %s; islands: loops inside a filled hole; flat: loops with no partner on either neighbouring "
-               "plane, dropped; removed/cavities: 3D components/cavities under %zu voxels (--min-size)\n",
+               "plane, dropped; trimmed: layers on or beyond the end planes of the surface holding it (outer > fat > muscle > organs), dropped; removed/cavities: 3D components/cavities under %zu voxels (--min-size)\n",
                o.holes == THX_TRACE_HOLES_FILL ? "filled" : "kept as clockwise loops", o.min_size);
         for (size_t t = 0; t < rep.n_tissues; t++) {
             const thx_trace_tissue_report *r = &rep.tissue[t];

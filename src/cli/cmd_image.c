@@ -10,6 +10,7 @@
 
 #include "cli/cli.h"
 #include "thorax/image/image.h"
+#include "thorax/image/segment.h"
 
 /* Up to 256 distinct values and their voxel counts, in increasing order; *n_out = 257 when there
  * are more. */
@@ -189,11 +190,71 @@ static int print_json(const thx_image *img)
     return 0;
 }
 
+/* "LO:HI=LABEL[/CLOSE]" (LO or HI may be empty: no bound) -> *t; 0, or -1 with a reason in why. */
+static int parse_tissue(const char *spec, thx_threshold *t, const char **why)
+{
+    char buf[128];
+    if (strlen(spec) >= sizeof buf) return *why = "too long", -1;
+    snprintf(buf, sizeof buf, "%s", spec);
+    char *eq = strchr(buf, '='), *colon = strchr(buf, ':');
+    if (!eq || !colon || colon > eq) return *why = "expected LO:HI=LABEL[/CLOSE_MM]", -1;
+    *eq = *colon = '\0';
+    char *end;
+    t->lo = -INFINITY;
+    t->hi = INFINITY;
+    if (buf[0] && (t->lo = strtod(buf, &end), *end || !isfinite(t->lo))) return *why = "LO is not a number", -1;
+    if (colon[1] && (t->hi = strtod(colon + 1, &end), *end || !isfinite(t->hi))) return *why = "HI is not a number", -1;
+    char *slash = strchr(eq + 1, '/');
+    t->close_mm = 0;
+    if (slash) {
+        *slash = '\0';
+        t->close_mm = strtod(slash + 1, &end);
+        if (!slash[1] || *end || !isfinite(t->close_mm) || t->close_mm < 0)
+            return *why = "CLOSE_MM is not a number >= 0", -1;
+    }
+    long lab = strtol(eq + 1, &end, 10);
+    if (!eq[1] || *end || lab < 1 || lab > 65535) return *why = "LABEL is not an integer in 1..65535", -1;
+    t->label = (int)lab;
+    if (!(t->lo <= t->hi)) return *why = "LO is above HI", -1;
+    return 0;
+}
+
+#define MAX_TISSUES 16
+
+/* thorax image label: thresholds and clean-up (thorax/image/segment.h). */
+static int run_label(thx_ctx *ctx, const char *cmd, const thx_image *img, const char *const *specs, int n_specs,
+                     int largest, int fill, const char *out)
+{
+    thx_threshold t[MAX_TISSUES];
+    for (int k = 0; k < n_specs; k++) {
+        const char *why = "";
+        if (parse_tissue(specs[k], &t[k], &why) != 0) {
+            fprintf(stderr, "thorax %s: --tissue '%s': %s\n", cmd, specs[k], why);
+            return 2;
+        }
+    }
+    thx_segment_opts so = {t, (size_t)n_specs, largest, fill};
+    thx_segment_report rep;
+    thx_image lab;
+    thx_status st = thx_image_segment(ctx, img, &so, &lab, &rep);
+    if (st) return cli_fail(ctx, cmd, st);
+    double voxel_ml = img->spacing[0] * img->spacing[1] * img->spacing[2] / 1000.0;
+    for (int k = 0; k < n_specs && k < 16; k++)
+        printf("label %d: %zu voxels (%.1f mL); %zu outside the largest component dropped, %zu filled in the planes\n",
+               t[k].label, rep.voxels[k], (double)rep.voxels[k] * voxel_ml, rep.dropped[k], rep.filled[k]);
+    st = thx_image_write(ctx, &lab, out, NULL);
+    thx_image_free(&lab);
+    if (st) return cli_fail(ctx, cmd, st);
+    thx_log(ctx, THX_LOG_INFO, "wrote %s", out);
+    return 0;
+}
+
 int cmd_image(int argc, char **argv)
 {
     const char *cmd = "image";
     const char *out = NULL, *type = NULL, *series = NULL;
-    int verbose = 0, json = 0;
+    int verbose = 0, json = 0, n_tissues = 0, largest = 0, fill = 0;
+    const char *tissues[MAX_TISSUES];
     cli_opt opts[] = {
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "OUT", .s = &out,
          .help = "image to write (convert); the format by its name: .nii, .nii.gz, .nrrd, .mha"},
@@ -204,12 +265,22 @@ int cmd_image(int argc, char **argv)
         {.name = "--series", .type = CLI_STRING, .meta = "S", .s = &series,
          .help = "DICOM: the series to read when a folder holds several (its UID, or its number as info lists them)"},
         {.name = "--json", .type = CLI_FLAG, .i = &json, .help = "info: print as JSON"},
+        {.name = "--tissue", .type = CLI_STRING, .meta = "LO:HI=LABEL[/MM]", .flags = CLI_REPEAT, .sv = tissues,
+         .count = &n_tissues, .max = MAX_TISSUES,
+         .help = "label: voxels with LO <= value <= HI (either may be left empty) become LABEL (1..65535), the region "
+                 "closed by a ball of MM; outer tissue first (skin, then bone), each later one kept inside it"},
+        {.name = "--largest", .type = CLI_FLAG, .i = &largest,
+         .help = "label: keep each tissue's largest 6-connected component (drops a CT table, a head holder, speckle)"},
+        {.name = "--fill-planes", .type = CLI_FLAG, .i = &fill,
+         .help = "label: fill each plane's holes along the superior axis (sinuses join the head; a skull becomes the "
+                 "inside of its outer surface), the outside flooding against the region closed in the plane by MM"},
         {.name = "-v", .type = CLI_COUNT, .i = &verbose, .ival = 1, .flags = CLI_NOUSAGE, .help = "more logging"},
         {.name = "-q", .type = CLI_COUNT, .i = &verbose, .ival = -1, .flags = CLI_NOUSAGE, .help = "less logging"},
     };
     cli_command c = {
         .name = cmd,
-        .usage = "info IMG [--json] [--series]\nconvert IMG -o [--type] [--series]",
+        .usage = "info IMG [--json] [--series]\nconvert IMG -o [--type] [--series]\n"
+                 "label IMG --tissue... [--largest] [--fill-planes] -o [--series]",
         .about = "Image volumes: scans and label maps, the model's starting point (paper 3.1).\n"
                  "\n"
                  "  info IMG           prints the format, the stored voxel type, the dimensions,\n"
@@ -221,6 +292,11 @@ int cmd_image(int argc, char **argv)
                  "                     label's voxels and volume (mL), and the file's SHA-256\n"
                  "  convert IMG -o OUT reads IMG and writes it as OUT (atomically; only over an\n"
                  "                     image thorax wrote): the same voxels and geometry\n"
+                 "  label IMG -o OUT   a label map from a scan by value ranges (--tissue, outer\n"
+                 "                     first), each region closed, cut to its largest component\n"
+                 "                     and filled plane by plane as asked; prints each label's\n"
+                 "                     voxels and what the clean-up dropped and filled. For\n"
+                 "                     thorax digitize or thorax surfaces LABELS --label ...\n"
                  "\n"
                  "Read: NIfTI-1 and NIfTI-2 (.nii, .nii.gz: sform, else qform, else pixdim),\n"
                  "NRRD (.nrrd, .nhdr with its data file: raw, gzip or ascii; space RAS, LAS,\n"
@@ -236,14 +312,18 @@ int cmd_image(int argc, char **argv)
     if (pr) return CLI_EXIT(pr);
     if (c.n_pos > 2) return cli_usage_error(cmd, "unexpected argument '%s' (one image expected)", c.pos[2]);
     const char *sub = c.n_pos > 0 ? c.pos[0] : NULL, *in = c.n_pos > 1 ? c.pos[1] : NULL;
-    if (!sub) return cli_usage_error(cmd, "no subcommand given (info or convert)");
-    int convert = !strcmp(sub, "convert");
-    if (!convert && strcmp(sub, "info") != 0)
-        return cli_usage_error(cmd, "unknown subcommand '%s' (info or convert)", sub);
+    if (!sub) return cli_usage_error(cmd, "no subcommand given (info, convert or label)");
+    int convert = !strcmp(sub, "convert"), label = !strcmp(sub, "label");
+    if (!convert && !label && strcmp(sub, "info") != 0)
+        return cli_usage_error(cmd, "unknown subcommand '%s' (info, convert or label)", sub);
     if (!in) return cli_usage_error(cmd, "%s: no image given", sub);
-    if (convert && !out) return cli_usage_error(cmd, "convert: no output file given (-o OUT)");
-    if (convert && json) return cli_usage_error(cmd, "--json goes with info");
-    if (!convert && (out || type)) return cli_usage_error(cmd, "info: -o and --type apply only to convert");
+    if ((convert || label) && !out) return cli_usage_error(cmd, "%s: no output file given (-o OUT)", sub);
+    if ((convert || label) && json) return cli_usage_error(cmd, "--json goes with info");
+    if (!convert && !label && out) return cli_usage_error(cmd, "info: -o applies only to convert and label");
+    if (!convert && type) return cli_usage_error(cmd, "--type applies only to convert");
+    if (!label && (n_tissues || largest || fill))
+        return cli_usage_error(cmd, "--tissue, --largest and --fill-planes apply only to label");
+    if (label && n_tissues == 0) return cli_usage_error(cmd, "label: no --tissue LO:HI=LABEL given");
 
     thx_ctx *ctx = cli_ctx(verbose);
     thx_image img;
@@ -254,7 +334,9 @@ int cmd_image(int argc, char **argv)
         rc = cli_fail(ctx, cmd, st);
         goto done;
     }
-    if (!convert) {
+    if (label) {
+        rc = run_label(ctx, cmd, &img, tissues, n_tissues, largest, fill, out);
+    } else if (!convert) {
         rc = json ? print_json(&img) : (print_info(&img), 0);
     } else if ((st = thx_image_write(ctx, &img, out, type)) != THX_OK) {
         rc = cli_fail(ctx, cmd, st);

@@ -13,7 +13,7 @@ static const struct {
     const char *summary;
 } commands[] = {
     {"phantom", cmd_phantom, "write the built-in synthetic thorax as digitized contours"},
-    {"image", cmd_image, "image volumes (NIfTI, NRRD, MetaImage): grid, orientation, values, labels; convert"},
+    {"image", cmd_image, "image volumes (NIfTI, NRRD, MetaImage, DICOM): grid, orientation, values, labels; convert; label by thresholds"},
     {"digitize", cmd_digitize, "a label map (NIfTI ...) -> contours: each tissue's boundary traced plane by plane"},
     {"surfaces", cmd_surfaces, "contours -> spline layers -> laced, capped, oriented surfaces (a model)"},
     {"check", cmd_check, "verify a model: closure, orientation, 4 pi solid angle, intersections, quality"},

@@ -202,6 +202,27 @@ static thx_status fill_planes(thx_ctx *ctx, const thx_image *g, unsigned char *r
     return st;
 }
 
+/* Erosion by the 3 x 3 x 3 cube, separably (a voxel stays when its whole cube is in; outside the grid counts
+ * as out). */
+static void erode_cube(const size_t n[3], unsigned char *r)
+{
+    size_t stride[3] = {1, n[0], n[0] * n[1]};
+    for (int a = 0; a < 3; a++) {
+        int b = (a + 1) % 3, c = (a + 2) % 3;
+        for (size_t jb = 0; jb < n[b]; jb++)
+            for (size_t jc = 0; jc < n[c]; jc++) {
+                unsigned char *line = r + jb * stride[b] + jc * stride[c];
+                size_t s = stride[a], m = n[a];
+                unsigned char before = 0; /* the original value of the previous voxel */
+                for (size_t i = 0; i < m; i++) {
+                    unsigned char here = line[i * s], after = i + 1 < m ? line[(i + 1) * s] : 0;
+                    line[i * s] = (unsigned char)(before && here && after);
+                    before = here;
+                }
+            }
+    }
+}
+
 thx_status thx_image_segment(thx_ctx *ctx, const thx_image *in, const thx_segment_opts *opts, thx_image *out,
                              thx_segment_report *rep)
 {
@@ -265,6 +286,9 @@ thx_status thx_image_segment(thx_ctx *ctx, const thx_image *in, const thx_segmen
             goto done;
         }
         memcpy(prev, r, count);
+        /* the next tissue keeps a voxel's distance from this one's boundary (and from the image's faces):
+           their traced boundaries never meet, and the inner surface's caps lie inside the outer's */
+        erode_cube(in->n, prev);
     }
     if (rep)
         for (size_t q = 0; q < count; q++)

@@ -119,6 +119,18 @@ typedef struct {
     int all;
 } labelset;
 
+/* The paper's nesting (3.1): the torso's outer boundary holds the fat/muscle interface, which holds the
+ * inner border of the muscle, which holds the organs. */
+static int nest_depth(thx_role r)
+{
+    switch (r) {
+    case THX_ROLE_OUTER: return 0;
+    case THX_ROLE_FAT: return 1;
+    case THX_ROLE_MUSCLE: return 2;
+    default: return 3;
+    }
+}
+
 static int in_set(const labelset *ls, long v)
 {
     if (ls->all && v != 0) return 1;
@@ -716,6 +728,8 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
 
     thx_status st = THX_OK;
     thx_contours *c = NULL;
+    size_t *sidx_of = NULL, *order = NULL;
+    long *t_first = NULL, *t_last = NULL;
     unsigned char *mask = NULL;
     long *pb = NULL;
     plane pl = {0};
@@ -789,13 +803,42 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
         st = THX_ENOMEM;
         goto done;
     }
-    for (size_t t = 0; t < o->n_tissues; t++) {
+    /* the surfaces in the order given; traced in the paper's nesting order (outer, fat, muscle, then the
+       organs) so that each tissue's container is traced before it: an inner surface must close inside its
+       container's end planes, or the two caps would lie in one plane (a scan that cuts a torso or a neck
+       cuts every layer at its end planes) */
+    sidx_of = thx_malloc(ctx, o->n_tissues * sizeof *sidx_of);
+    order = thx_malloc(ctx, o->n_tissues * sizeof *order);
+    t_first = thx_malloc(ctx, o->n_tissues * sizeof *t_first);
+    t_last = thx_malloc(ctx, o->n_tissues * sizeof *t_last);
+    if (!sidx_of || !order || !t_first || !t_last) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    for (size_t t = 0; t < o->n_tissues; t++)
+        THX_TRY(thx_contours_add_surface(ctx, c, o->tissues[t].name, o->tissues[t].role, THX_CAP_GRID, 0, &sidx_of[t]));
+    {
+        size_t k = 0;
+        for (int d = 0; d <= 3; d++)
+            for (size_t t = 0; t < o->n_tissues; t++)
+                if (nest_depth(o->tissues[t].role) == d) order[k++] = t;
+    }
+    for (size_t oi = 0; oi < o->n_tissues; oi++) {
+        size_t t = order[oi];
         const thx_trace_tissue *ti = &o->tissues[t];
         thx_trace_tissue_report trr;
         memset(&trr, 0, sizeof trr);
         snprintf(trr.name, sizeof trr.name, "%s", ti->name);
-        size_t sidx;
-        THX_TRY(thx_contours_add_surface(ctx, c, ti->name, ti->role, THX_CAP_GRID, 0, &sidx));
+        size_t sidx = sidx_of[t];
+        t_first[t] = t_last[t] = -1;
+        /* the container: the deepest tissue traced before of a lesser depth */
+        long container = -1;
+        for (size_t oj = 0; oj < oi; oj++) {
+            size_t u = order[oj];
+            if (nest_depth(o->tissues[u].role) >= nest_depth(ti->role)) continue;
+            if (container < 0 || nest_depth(o->tissues[u].role) > nest_depth(o->tissues[container].role))
+                container = (long)u;
+        }
         /* the mask, its box and the in-plane box of each plane (before cleaning: a removed component
            only widens its planes' boxes) */
         THX_TRY(build_labelset(ctx, o, t, vlo, vhi, &ls));
@@ -986,28 +1029,36 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             st = THX_ENOMEM;
             goto done;
         }
-        for (size_t L = 0; L < tt.n_layers; L++) {
-            const layer_rec *lr = &tt.layers[L];
-            for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
-                keep[l] = 0;
-                if (tt.area[5 * l] < 0) {
-                    keep[l] = 1; /* a kept hole goes with its outer loop */
-                    continue;
-                }
-                for (int side = -1; side <= 1 && !keep[l]; side += 2) {
-                    if ((side < 0 && L == 0) || (side > 0 && L + 1 == tt.n_layers)) continue;
-                    const layer_rec *nb = &tt.layers[L + (size_t)side];
-                    if (nb->plane != lr->plane + (size_t)side) continue;
-                    const poly *A = &tt.loops.l[l];
-                    const double *ab = tt.area + 5 * l + 1;
-                    for (size_t k = nb->loop0; k < nb->loop0 + nb->n && !keep[l]; k++) {
-                        const poly *B = &tt.loops.l[k];
-                        const double *bb = tt.area + 5 * k + 1;
-                        if (tt.area[5 * k] < 0 || ab[0] > bb[1] || bb[0] > ab[1] || ab[2] > bb[3] || bb[2] > ab[3]) continue;
-                        /* a point just inside each edge (to its left: outer loops run counterclockwise)
-                           in the other loop: loops that coincide (a straight stack) overlap too */
-                        for (size_t i = 0; i < A->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(B->p, B->n, inward(A, i));
-                        for (size_t i = 0; i < B->n && !keep[l]; i++) keep[l] = (unsigned char)point_in(A->p, A->n, inward(B, i));
+        /* to a fixed point: a loop whose only partners are dropped has none */
+        for (size_t l = 0; l < nl; l++) keep[l] = 1;
+        for (int changed = 1; changed;) {
+            changed = 0;
+            for (size_t L = 0; L < tt.n_layers; L++) {
+                const layer_rec *lr = &tt.layers[L];
+                for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
+                    if (!keep[l] || tt.area[5 * l] < 0) continue; /* a kept hole goes with its outer loop */
+                    int partner = 0;
+                    for (int side = -1; side <= 1 && !partner; side += 2) {
+                        if ((side < 0 && L == 0) || (side > 0 && L + 1 == tt.n_layers)) continue;
+                        const layer_rec *nb = &tt.layers[L + (size_t)side];
+                        if (nb->plane != lr->plane + (size_t)side) continue;
+                        const poly *A = &tt.loops.l[l];
+                        const double *ab = tt.area + 5 * l + 1;
+                        for (size_t k = nb->loop0; k < nb->loop0 + nb->n && !partner; k++) {
+                            const poly *B = &tt.loops.l[k];
+                            const double *bb = tt.area + 5 * k + 1;
+                            if (!keep[k] || tt.area[5 * k] < 0 || ab[0] > bb[1] || bb[0] > ab[1] || ab[2] > bb[3] ||
+                                bb[2] > ab[3])
+                                continue;
+                            /* a point just inside each edge (to its left: outer loops run counterclockwise)
+                               in the other loop: loops that coincide (a straight stack) overlap too */
+                            for (size_t i = 0; i < A->n && !partner; i++) partner = point_in(B->p, B->n, inward(A, i));
+                            for (size_t i = 0; i < B->n && !partner; i++) partner = point_in(A->p, A->n, inward(B, i));
+                        }
+                    }
+                    if (!partner) {
+                        keep[l] = 0;
+                        changed = 1;
                     }
                 }
             }
@@ -1020,6 +1071,19 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
                 if (!outer_kept) keep[l] = 0;
                 if (!keep[l] && tt.area[5 * l] > 0) trr.n_flat_dropped++;
+            }
+        }
+        /* inside the container's end planes */
+        if (container >= 0 && t_first[container] >= 0) {
+            for (size_t L = 0; L < tt.n_layers; L++) {
+                const layer_rec *lr = &tt.layers[L];
+                if ((long)lr->plane > t_first[container] && (long)lr->plane < t_last[container]) continue;
+                int had = 0;
+                for (size_t l = lr->loop0; l < lr->loop0 + lr->n; l++) {
+                    had |= keep[l];
+                    keep[l] = 0;
+                }
+                trr.n_trimmed_layers += (size_t)had;
             }
         }
         /* one stack of consecutive planes */
@@ -1086,6 +1150,8 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
         }
         free(keep);
         if (st != THX_OK) goto done;
+        t_first[t] = first;
+        t_last[t] = last;
         if (rep) rep->tissue[t] = trr;
     }
     *out = c;
@@ -1104,6 +1170,10 @@ done:
     free(mask);
     free(pb);
     thx_contours_destroy(&c);
+    free(sidx_of);
+    free(order);
+    free(t_first);
+    free(t_last);
     if (st != THX_OK && rep) thx_trace_report_free(rep);
     return st;
 }

@@ -6,7 +6,9 @@
  *
  * Tissues are nested, outer first (skin, then bone; torso, then lungs...): tissue t's region is
  * the voxels inside its value range, together with every later tissue's, kept inside the
- * previous tissue's final region. Each region in turn is
+ * previous tissue's final region less its boundary voxels (the 3 x 3 x 3 erosion: an inner
+ * boundary never meets the outer one, and never reaches the image's faces, so the surfaces traced
+ * from the map never touch). Each region in turn is
  *   1. closed morphologically with a ball of the tissue's `close_mm` (gaps narrower than 2 * close_mm
  *      bridged; exact Euclidean distances in mm, anisotropic voxels handled: a thin skull wall broken
  *      by partial volume wants several mm, a scalp with ears and a head holder beside it wants little);

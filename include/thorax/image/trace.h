@@ -73,6 +73,8 @@ typedef struct {
     size_t n_holes;                 /* holes met (filled, or kept as loops) */
     size_t n_islands_filled;        /* loops inside a filled hole */
     size_t n_flat_dropped;          /* loops with no partner on either neighbouring plane, dropped */
+    size_t n_trimmed_layers;        /* layers on or beyond its container's end planes, dropped (the paper's
+                                       nesting: outer > fat > muscle > the organs; caps never share a plane) */
     size_t n_removed, removed_voxels; /* 3D components below min_size removed */
     size_t removed_size[THX_TRACE_SIZES_KEPT]; /* the voxel counts of the first of them */
     size_t n_cavities, cavity_voxels; /* cavities below min_size filled (holes kept only) */
