@@ -869,9 +869,56 @@ static void test_determinism_and_timing(void)
     thx_surface_destroy(&t);
 }
 
+/* Surfaces that meet: nested spheres pass; a sphere crossing another, one touching it at a node, and a
+ * copy of a node on the other surface (coincident nodes, as two caps in one plane give) fail, naming
+ * both surfaces; without the intersection search they are not looked for. */
+static void test_surfaces_meet(void)
+{
+    thx_model *m = NULL;
+    CHECK_OK(ctx, thx_model_create(ctx, &m));
+    thx_surface *a = icosphere(2, 10.0), *b = icosphere(2, 6.0);
+    snprintf(a->name, sizeof a->name, "outer");
+    snprintf(b->name, sizeof b->name, "inner");
+    CHECK_OK(ctx, thx_model_add_surface(ctx, m, &a));
+    CHECK_OK(ctx, thx_model_add_surface(ctx, m, &b));
+    thx_model_report *rep = NULL;
+    CHECK_OK(ctx, thx_model_check(ctx, m, NULL, &rep));
+    CHECK(rep && rep->ok && rep->meetings_checked && rep->n_meeting_pairs == 0);
+    thx_model_report_destroy(&rep);
+    /* the inner sphere moved 5 mm: it crosses the outer */
+    thx_surface *in = m->surf[1];
+    for (size_t k = 0; k < in->n_nodes; k++) in->xyz[3 * k] += 5.0;
+    CHECK(thx_model_check(ctx, m, NULL, &rep) == THX_ECHECK);
+    CHECK(tl_msg_has(ctx, "surfaces \"outer\" and \"inner\" meet"));
+    CHECK(rep && !rep->ok && rep->surf[0].ok && rep->surf[1].ok && rep->n_meeting_pairs == 1 && rep->meet_tris > 0);
+    thx_model_report_destroy(&rep);
+    /* moved by exactly 4 mm along x: the node (6, 0, 0) lands on the outer's node (10, 0, 0) */
+    for (size_t k = 0; k < in->n_nodes; k++) in->xyz[3 * k] -= 1.0;
+    int on = 0;
+    for (size_t k = 0; k < in->n_nodes; k++) on |= in->xyz[3 * k] == 10.0 && in->xyz[3 * k + 1] == 0 && in->xyz[3 * k + 2] == 0;
+    CHECK(on);
+    CHECK(thx_model_check(ctx, m, NULL, &rep) == THX_ECHECK);
+    CHECK(rep && rep->n_meeting_pairs == 1);
+    cJSON *j = thx_model_report_json(ctx, rep, m);
+    cJSON *mt = j ? cJSON_GetObjectItem(j, "meetings") : NULL;
+    CHECK(mt && cJSON_GetObjectItem(mt, "pairs")->valuedouble == 1);
+    CHECK(mt && !strcmp(cJSON_GetObjectItem(cJSON_GetObjectItem(mt, "first"), "b")->valuestring, "inner"));
+    cJSON_Delete(j);
+    thx_model_report_destroy(&rep);
+    /* not looked for without the intersection search */
+    thx_check_opts o;
+    thx_check_opts_default(&o);
+    o.check_intersections = 0;
+    CHECK_OK(ctx, thx_model_check(ctx, m, &o, &rep));
+    CHECK(rep && rep->ok && !rep->meetings_checked);
+    thx_model_report_destroy(&rep);
+    thx_model_destroy(&m);
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    test_surfaces_meet();
     test_cube();
     test_icosahedron_quality();
     test_icosphere();

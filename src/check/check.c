@@ -825,6 +825,123 @@ done:
     return st;
 }
 
+/* Surfaces that meet: for every pair whose boxes overlap, each triangle of the first against the second's
+ * triangles in its box (a BVH), by the exact test with the second's nodes numbered after the first's, so
+ * that no node is shared by index and a common node, edge or face counts. Degenerate triangles (their own
+ * surface's check names them) and surfaces with bad indices are left out. */
+typedef struct {
+    const double *xyz;
+    const int32_t *tb;      /* the second surface's triangles, offset */
+    const unsigned char *dgb;
+    int32_t ta[3];
+    size_t i, count, first_i, first_j;
+} meet_state;
+
+static int meet_visit(void *user, size_t j)
+{
+    meet_state *st = user;
+    if (st->dgb[j]) return 0;
+    if (thx_triangles_intersect(st->xyz, st->ta, st->tb + 3 * j)) {
+        if (st->count == 0 || st->i < st->first_i || (st->i == st->first_i && j < st->first_j)) {
+            st->first_i = st->i;
+            st->first_j = j;
+        }
+        st->count++;
+    }
+    return 0;
+}
+
+static void surface_box(const thx_surface *s, double lo[3], double hi[3])
+{
+    for (int a = 0; a < 3; a++) lo[a] = INFINITY, hi[a] = -INFINITY;
+    for (size_t k = 0; k < s->n_nodes; k++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], s->xyz[3 * k + a]);
+            hi[a] = fmax(hi[a], s->xyz[3 * k + a]);
+        }
+}
+
+static thx_status meetings(thx_ctx *ctx, const thx_model *m, thx_model_report *r)
+{
+    size_t ns = m->n_surfaces;
+    thx_status st = THX_OK;
+    r->meetings_checked = 1;
+    for (size_t a = 0; a < ns; a++) {
+        const thx_surface *A = m->surf[a];
+        if (!A->n_tris || r->surf[a].n_bad_index_tris) continue;
+        double alo[3], ahi[3];
+        surface_box(A, alo, ahi);
+        for (size_t b = a + 1; b < ns; b++) {
+            const thx_surface *B = m->surf[b];
+            if (!B->n_tris || r->surf[b].n_bad_index_tris) continue;
+            double blo[3], bhi[3];
+            surface_box(B, blo, bhi);
+            int apart = 0;
+            for (int k = 0; k < 3; k++) apart |= ahi[k] < blo[k] || bhi[k] < alo[k];
+            if (apart) continue;
+            double *xyz = malloc((A->n_nodes + B->n_nodes) * 3 * sizeof *xyz);
+            int32_t *tb = malloc(B->n_tris * 3 * sizeof *tb);
+            unsigned char *dga = degeneracy(ctx, A), *dgb = degeneracy(ctx, B);
+            thx_bvh *bvh = NULL;
+            if (!xyz || !tb || !dga || !dgb) {
+                free(xyz), free(tb), free(dga), free(dgb);
+                return thx_error(ctx, THX_ENOMEM, "check: out of memory");
+            }
+            memcpy(xyz, A->xyz, A->n_nodes * 3 * sizeof *xyz);
+            memcpy(xyz + 3 * A->n_nodes, B->xyz, B->n_nodes * 3 * sizeof *xyz);
+            for (size_t k = 0; k < 3 * B->n_tris; k++) tb[k] = B->tri[k] + (int32_t)A->n_nodes;
+            st = thx_bvh_create_triangles(ctx, B->xyz, B->n_nodes, B->tri, B->n_tris, &bvh);
+            size_t count = 0, fi = 0, fj = 0;
+            if (st == THX_OK) {
+                long long nt = (long long)A->n_tris;
+THX_OMP(omp parallel)
+                {
+                    meet_state ms = {xyz, tb, dgb, {0, 0, 0}, 0, 0, 0, 0};
+THX_OMP(omp for schedule(dynamic, 256))
+                    for (long long i = 0; i < nt; i++) {
+                        if (dga[i]) continue;
+                        const int32_t *v = A->tri + 3 * i;
+                        double lo[3], hi[3];
+                        for (int k = 0; k < 3; k++) {
+                            double x0 = A->xyz[3 * (size_t)v[0] + k], x1 = A->xyz[3 * (size_t)v[1] + k];
+                            double x2 = A->xyz[3 * (size_t)v[2] + k];
+                            lo[k] = fmin(x0, fmin(x1, x2));
+                            hi[k] = fmax(x0, fmax(x1, x2));
+                        }
+                        memcpy(ms.ta, v, sizeof ms.ta);
+                        ms.i = (size_t)i;
+                        thx_bvh_query_box(bvh, lo, hi, meet_visit, &ms);
+                    }
+THX_OMP(omp critical(thx_check_meet))
+                    {
+                        if (ms.count && (count == 0 || ms.first_i < fi || (ms.first_i == fi && ms.first_j < fj))) {
+                            fi = ms.first_i;
+                            fj = ms.first_j;
+                        }
+                        count += ms.count;
+                    }
+                }
+            }
+            thx_bvh_destroy(&bvh);
+            free(xyz), free(tb), free(dga), free(dgb);
+            if (st != THX_OK) return st;
+            if (!count) continue;
+            if (r->n_meeting_pairs++ == 0) {
+                r->meet_a = a;
+                r->meet_b = b;
+                r->meet_tris = count;
+                r->meet_tri_a = fi;
+                r->meet_tri_b = fj;
+                snprintf(r->meet_reason, sizeof r->meet_reason,
+                         "surfaces \"%s\" and \"%s\" meet: %zu triangle pairs touch or cross (first: triangle %zu of "
+                         "\"%s\" and triangle %zu of \"%s\"); a volume mesh needs every surface apart from the others",
+                         A->name, B->name, count, fi + 1, A->name, fj + 1, B->name);
+            }
+        }
+    }
+    return THX_OK;
+}
+
 thx_status thx_model_check(thx_ctx *ctx, const thx_model *m, const thx_check_opts *opts, thx_model_report **out)
 {
     *out = NULL;
@@ -851,6 +968,17 @@ thx_status thx_model_check(thx_ctx *ctx, const thx_model *m, const thx_check_opt
         } else if (st != THX_OK) {
             thx_model_report_destroy(&r);
             return st;
+        }
+    }
+    if (o.check_intersections) {
+        thx_status st = meetings(ctx, m, r);
+        if (st != THX_OK) {
+            thx_model_report_destroy(&r);
+            return st;
+        }
+        if (r->n_meeting_pairs) {
+            if (r->ok) snprintf(first, sizeof first, "%s", r->meet_reason);
+            r->ok = 0;
         }
     }
     *out = r;
@@ -1011,6 +1139,24 @@ cJSON *thx_model_report_json(thx_ctx *ctx, const thx_model_report *r, const thx_
             return NULL;
         }
         cJSON_AddItemToArray(arr, so);
+    }
+    cJSON *mt = cJSON_AddObjectToObject(o, "meetings");
+    if (!mt) {
+        cJSON_Delete(o);
+        goto nomem;
+    }
+    cJSON_AddBoolToObject(mt, "checked", r->meetings_checked);
+    cJSON_AddNumberToObject(mt, "pairs", (double)r->n_meeting_pairs);
+    if (r->n_meeting_pairs && r->meet_a < r->n_surfaces && r->meet_b < r->n_surfaces) {
+        cJSON *f = cJSON_AddObjectToObject(mt, "first");
+        if (f) {
+            cJSON_AddStringToObject(f, "a", r->surf[r->meet_a].name);
+            cJSON_AddStringToObject(f, "b", r->surf[r->meet_b].name);
+            cJSON_AddNumberToObject(f, "triangle_pairs", (double)r->meet_tris);
+            cJSON_AddNumberToObject(f, "triangle_a", (double)r->meet_tri_a + 1);
+            cJSON_AddNumberToObject(f, "triangle_b", (double)r->meet_tri_b + 1);
+        }
+        cJSON_AddStringToObject(mt, "reason", r->meet_reason);
     }
     return o;
 nomem:

@@ -285,6 +285,9 @@ int cmd_check(int argc, char **argv)
         for (size_t k = 0; k < rep->surf[i].n_reasons; k++)
             fprintf(stderr, "thorax check: %s: surface \"%s\": %s\n", model_dir, rep->surf[i].name,
                     rep->surf[i].reasons[k]);
+    if (rep->n_meeting_pairs)
+        fprintf(stderr, "thorax check: %s: %s%s\n", model_dir, rep->meet_reason,
+                rep->n_meeting_pairs > 1 ? " (and other pairs)" : "");
     if (m->volume)
         for (size_t k = 0; k < vrep.n_reasons; k++)
             fprintf(stderr, "thorax check: %s: volume: %s\n", model_dir, vrep.reasons[k]);

@@ -302,6 +302,7 @@ int cmd_surfaces(int argc, char **argv)
                 for (size_t j = 0; !r->ok && j < r->n_reasons; j++)
                     fprintf(stderr, "thorax surfaces: %s: surface \"%s\" fails the check: %s\n", in, r->name, r->reasons[j]);
             }
+            if (rep->n_meeting_pairs) fprintf(stderr, "thorax surfaces: %s: %s\n", in, rep->meet_reason);
             thx_model_report_destroy(&rep);
             if (!unchecked) {
                 fprintf(stderr, "thorax surfaces: %s: nothing written: the surfaces built from these contours fail thorax "

@@ -177,15 +177,23 @@ thx_status thx_surface_find_interior(thx_ctx *ctx, const thx_surface *s, thx_vec
 
 /* Per-surface reports of a whole model. */
 typedef struct {
-    int ok;                    /* 1 iff every surface passed */
+    int ok;                    /* 1 iff every surface passed and no two surfaces meet */
     size_t n_surfaces;
     thx_surface_report *surf;  /* n_surfaces reports, owned */
     double solid_angle_tol;
+    /* surfaces that meet (touch or cross: a common point, exactly, as the self-intersection test with no
+       node shared by index; with check_intersections): a volume mesh needs them apart */
+    int meetings_checked;
+    size_t n_meeting_pairs;    /* pairs of surfaces that meet */
+    size_t meet_a, meet_b;     /* the first such pair (surface indices, a < b) */
+    size_t meet_tris;          /* triangle pairs of meet_a and meet_b that meet */
+    size_t meet_tri_a, meet_tri_b; /* the first of them (0-based triangles of meet_a and meet_b) */
+    char meet_reason[768];     /* "" when none meet */
 } thx_model_report;
 
 /* Checks every surface of m (using m's stored interior points where
- * has_interior[s] is set) into a new *out (caller destroys; filled even when a
- * surface fails). Returns THX_OK if all passed, THX_ECHECK if any failed
+ * has_interior[s] is set), and with check_intersections every pair of surfaces for a common point,
+ * into a new *out (caller destroys; filled even when a surface fails). Returns THX_OK if all passed, THX_ECHECK if any failed
  * (message names the first failing surface), or another error (then *out is NULL). */
 thx_status thx_model_check(thx_ctx *ctx, const thx_model *m, const thx_check_opts *opts, thx_model_report **out);
 /* Frees the report; accepts NULL; nulls *r. */
