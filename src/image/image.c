@@ -1,6 +1,7 @@
 /* Image volumes: the in-memory form, its geometry and checks, and the read/write dispatch by name
  * (thorax/image/image.h). The formats are in nifti.c (and the other readers beside it). */
 #include "image/image_impl.h"
+#include "image/dicom.h"
 
 #include <errno.h>
 #include <math.h>
@@ -235,13 +236,14 @@ thx_status thx_image_temp_beside(thx_ctx *ctx, const thx_atomic_file *af, const 
 
 thx_status thx_image_read(thx_ctx *ctx, const char *path, const thx_image_read_opts *opts, thx_image *img)
 {
-    (void)opts;
     memset(img, 0, sizeof *img);
     struct stat st;
     if (stat(path, &st) != 0) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
     thx_status s;
     if (thx_image_has_suffix(path, ".nii") || thx_image_has_suffix(path, ".nii.gz"))
         s = thx_image_read_nifti(ctx, path, img);
+    else if (S_ISDIR(st.st_mode) || thx_image_has_suffix(path, ".dcm") || thx_image_is_dicom_file(path))
+        s = thx_image_read_dicom(ctx, path, opts ? opts->series : NULL, img);
     else
         return thx_error(ctx, THX_EINPUT,
                          "%s: not an image thorax reads (by its name: .nii or .nii.gz for NIfTI)", path);
