@@ -451,24 +451,29 @@ static thx_status assemble(thx_ctx *ctx, const char *path, slice *sl, size_t ns,
         step = e0->thickness > 0 ? e0->thickness : 1.0;
     }
 
+    /* the volume and the slice buffer are allocated once GDCM has decoded the first slice: a header
+     * claiming a huge image in a small file costs nothing */
     size_t n[3] = {e0->columns, e0->rows, ns};
-    THX_CHECK(thx_image_alloc(ctx, n, img));
     size_t plane = n[0] * n[1];
-    double *buf = malloc(plane * sizeof *buf);
-    if (!buf) {
-        thx_image_free(img);
-        return thx_error(ctx, THX_ENOMEM, "%s: out of memory for a slice of %u x %u", path, e0->rows, e0->columns);
-    }
+    double *buf = NULL;
     thx_sha256_ctx hash;
     thx_sha256_init(&hash);
     int integral = 1;
-    child ch;
+    child ch = {0, -1};
     pixel_job job = {sl, ns};
     pixel_record *rec = malloc(sizeof *rec);
     thx_status st = rec ? spawn(ctx, path, pixel_child, &job, &ch) : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
     for (size_t s = 0; st == THX_OK && s < ns; s++) {
         const thx_dicom_entry *e = sl[s].e;
-        if (!read_all(ch.fd, rec, sizeof *rec) || (rec->status == 0 && !read_all(ch.fd, buf, plane * sizeof *buf))) {
+        int got = read_all(ch.fd, rec, sizeof *rec);
+        if (got && rec->status == 0 && !buf) {
+            if ((st = thx_image_alloc(ctx, n, img)) != THX_OK) break;
+            if (!(buf = malloc(plane * sizeof *buf))) {
+                st = thx_error(ctx, THX_ENOMEM, "%s: out of memory for a slice of %u x %u", path, e0->rows, e0->columns);
+                break;
+            }
+        }
+        if (!got || (rec->status == 0 && !read_all(ch.fd, buf, plane * sizeof *buf))) {
             char how[200];
             reap(&ch, how, sizeof how);
             st = thx_error(ctx, THX_EINPUT, "%s: its pixels cannot be read: %s (a truncated or corrupt file?)", e->file, how);
@@ -493,6 +498,10 @@ static thx_status assemble(thx_ctx *ctx, const char *path, slice *sl, size_t ns,
             char how[200];
             reap(&ch, how, sizeof how);
         }
+    }
+    if (ch.fd >= 0) {
+        char how[200];
+        reap(&ch, how, sizeof how);
     }
     free(rec);
     if (st != THX_OK) {
