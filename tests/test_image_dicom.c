@@ -5,7 +5,7 @@
  * for voxel, with the origin, directions and spacing the construction implies (an oblique grid, the
  * two in-plane spacings different, shuffled file names, slope/intercept differing per slice).
  * Then: two series in one folder (listed; picked by number and by UID; a file picks its own), and
- * the refusals: gantry tilt, uneven spacing, a missing slice, two slices at one position, an
+ * the refusals: gantry tilt, positions off one line, uneven spacing, a missing slice, two slices at one position, an
  * orientation differing within the series, a truncated slice (pixel data and header), naming files. */
 #include <math.h>
 #include <stdint.h>
@@ -35,6 +35,7 @@ typedef struct {
     int skip;                   /* slice left out (-1: none) */
     int duplicate;              /* slice 2 placed at slice 1's position */
     int odd_orientation;        /* slice 1 rotated by 2 degrees in its plane */
+    double zig;                 /* slice 2 shifted by this many mm along the row direction */
     double slope_base;          /* slope of slice k: slope_base + (k % 2) (0: 1 + k % 2) */
     double inter_base;          /* intercept of slice k: inter_base + 3k */
     char files[MAXS][64];       /* file name of slice k (position order) */
@@ -82,6 +83,7 @@ static int write_series(spec *s)
             row[c] = flip[c] * (cos(a) * ri + sin(a) * cj);
             col[c] = flip[c] * (-sin(a) * ri + cos(a) * cj);
             p[c] = flip[c] * (s->duplicate && k == 2 ? pos[c] - s->spacing[2] * s->dir[c * 3 + 2] : pos[c]);
+            if (k == 2) p[c] += flip[c] * s->zig * s->dir[c * 3 + 0];
         }
         char cmd[4096];
         snprintf(cmd, sizeof cmd,
@@ -275,7 +277,14 @@ int main(void)
     base_spec(&t, "tilt2", "1.2.826.0.1.3680043.9.7.15", 1, "tilt");
     t.n[2] = 4, t.tilt_deg = 2;
     CHECK(write_series(&t) == 0);
-    refused(ctx, tl_path("tilt2"), NULL, (const char *const[]){"2.00 degrees off", "gantry tilt", t.files[0], t.files[1], NULL});
+    refused(ctx, tl_path("tilt2"), NULL, (const char *const[]){"leans 2.00 degrees off", "gantry tilt", t.files[0], t.files[3], NULL});
+
+    /* positions off one line: the middle slice shifted by half a pixel in its plane */
+    spec z;
+    base_spec(&z, "zig", "1.2.826.0.1.3680043.9.7.20", 1, "zig");
+    z.n[2] = 5, z.zig = 0.3;
+    CHECK(write_series(&z) == 0);
+    refused(ctx, tl_path("zig"), NULL, (const char *const[]){"0.3 mm off the line", "not one stack", z.files[2], z.files[0], z.files[4], NULL});
 
     /* uneven spacing: one gap 2.8 mm among 2.5 */
     spec u;

@@ -6,8 +6,8 @@
  *   - the slices of the series are sorted by d = ImagePositionPatient . n, n = row x column
  *     direction (ImageOrientationPatient); the spacing between slices comes from the positions;
  *   - refused, naming the files: orientation, pixel spacing or size differing within the series,
- *     two slices at one position, a step between neighbours more than 0.5 degrees off the normal
- *     (gantry tilt), a gap more than 1% away from the median gap (uneven spacing, a missing slice),
+ *     two slices at one position, a stack leaning more than 0.5 degrees off the normal (gantry
+ *     tilt) or positions off one line by more than a tenth of a pixel, a gap more than 1% away from the median gap (uneven spacing, a missing slice),
  *     several frames in one file;
  *   - values = RescaleSlope * stored + RescaleIntercept, slice by slice;
  *   - DICOM's patient frame is LPS: origin and directions negate x and y into RAS. */
@@ -33,7 +33,8 @@
 #define ORIENT_TOL 1e-4      /* |difference| of any ImageOrientationPatient component */
 #define SPACING_TOL 1e-4     /* relative difference of PixelSpacing */
 #define DUPLICATE_MM 1e-3    /* two positions closer than this along the normal are one position */
-#define TILT_DEG 0.5         /* largest angle between a step and the normal */
+#define TILT_DEG 0.5         /* largest angle between the stack (first -> last position) and the normal */
+#define LINE_TOL 0.1         /* largest distance of a position from that line, in pixels (the smaller spacing) */
 #define GAP_TOL 0.01         /* largest relative difference of a gap from the median gap */
 
 int thx_image_is_dicom_file(const char *path)
@@ -409,18 +410,40 @@ static thx_status assemble(thx_ctx *ctx, const char *path, slice *sl, size_t ns,
                                  "phases or acquisitions in one series?)",
                                  a->file, b->file, b->position[0], b->position[1], b->position[2]);
             }
-            double o[3] = {b->position[0] - a->position[0], b->position[1] - a->position[1], b->position[2] - a->position[2]};
-            double len = sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
-            double angle = acos(fmin(1.0, g / len)) * 180.0 / M_PI;
-            if (angle > TILT_DEG) {
+            gaps[s] = g;
+        }
+        /* the line of positions: the stack's lean (first -> last against n), then each position's
+         * distance from that line */
+        {
+            const thx_dicom_entry *a = sl[0].e, *b = sl[ns - 1].e;
+            double span = sl[ns - 1].d - sl[0].d, off[3];
+            for (int q = 0; q < 3; q++) off[q] = (b->position[q] - a->position[q]) - span * nrm[q];
+            double lean = atan2(sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]), span) * 180.0 / M_PI;
+            if (lean > TILT_DEG) {
                 free(gaps);
                 return thx_error(ctx, THX_EINPUT,
-                                 "%s (%g, %g, %g) -> %s (%g, %g, %g): the step between the slices is %.2f degrees off "
-                                 "their normal (a gantry tilt or a sheared stack; at most %g degrees): not a box of voxels",
+                                 "%s (%g, %g, %g) -> %s (%g, %g, %g): the stack of slices leans %.2f degrees off their "
+                                 "normal (a gantry tilt or a sheared stack; at most %g degrees): not a box of voxels",
                                  a->file, a->position[0], a->position[1], a->position[2], b->file, b->position[0],
-                                 b->position[1], b->position[2], angle, TILT_DEG);
+                                 b->position[1], b->position[2], lean, TILT_DEG);
             }
-            gaps[s] = g;
+            double tol = LINE_TOL * fmin(e0->pixel_spacing[0], e0->pixel_spacing[1]);
+            for (size_t s = 1; s + 1 < ns; s++) {
+                const double *p = sl[s].e->position;
+                double f = (sl[s].d - sl[0].d) / span, dev = 0;
+                for (int q = 0; q < 3; q++) {
+                    double x = p[q] - (a->position[q] + f * (b->position[q] - a->position[q]));
+                    dev += x * x;
+                }
+                dev = sqrt(dev);
+                if (dev > tol) {
+                    free(gaps);
+                    return thx_error(ctx, THX_EINPUT,
+                                     "%s (%g, %g, %g): %g mm off the line from %s to %s (at most %g mm, a tenth of a "
+                                     "pixel): the slices are not one stack",
+                                     sl[s].e->file, p[0], p[1], p[2], dev, a->file, b->file, tol);
+                }
+            }
         }
         double *sorted = malloc((ns - 1) * sizeof *sorted);
         if (!sorted) {
