@@ -25,7 +25,7 @@ packages=(
   tetgen qhull-bin                   # bench: peer Delaunay tetrahedralizers run beside ours
   libcgal-dev                        # bench: CGAL's Delaunay_triangulation_3 beside ours (bench/delaunay_cgal.cpp, g++); Mesh_3 on label maps (bench/image.sh)
   libnifti2-dev libniftiio-dev       # images: NIfTI-1/2 (.nii, .nii.gz) through nifti2_io (src/image/nifti.c)
-  libgdcm-dev libgdcm-tools g++      # images: DICOM series through GDCM (src/image/dicom_gdcm.cc); gdcmimg/gdcmdump in tests
+  libgdcm-dev libgdcm-tools g++      # images: DICOM series through GDCM (src/image/dicom_gdcm.cc); gdcmimg/gdcmanon/gdcmconv/gdcmdump write the test series
   python3-nibabel                    # tests: nibabel reads and writes NIfTI beside us
   invesalius-examples                # tests: a real CT (InVesalius's Cranium.inv3)
 )

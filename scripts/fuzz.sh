@@ -39,7 +39,7 @@ build=()
 for t in "${targets[@]}"; do
   [ -f "tests/fuzz/fuzz_$t.c" ] && build+=("fuzz_$t")
 done
-cmake -S . -B "$FUZZ_BUILD" -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTHORAX_FUZZ=ON >/dev/null
+cmake -S . -B "$FUZZ_BUILD" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTHORAX_FUZZ=ON >/dev/null
 if [ ${#build[@]} -gt 0 ]; then
   cmake --build "$FUZZ_BUILD" -j "$JOBS" --target "${build[@]}" 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|^g?make\[' || true
 fi

@@ -69,7 +69,7 @@ def strip_comments(text):
 
 
 def sources(root):
-    """(module, path) of every .c/.h under src/ and include/thorax/."""
+    """(module, path) of every .c/.cc/.h under src/ and include/thorax/."""
     out = []
     for base in ("src", os.path.join("include", "thorax")):
         top = os.path.join(root, base)
@@ -82,7 +82,7 @@ def sources(root):
                 continue
             for dirpath, _, files in os.walk(d):
                 for f in sorted(files):
-                    if f.endswith((".c", ".h")):
+                    if f.endswith((".c", ".cc", ".h")):
                         out.append((mod, os.path.relpath(os.path.join(dirpath, f), root)))
     return out
 

@@ -1,6 +1,7 @@
 /* Image volumes: the in-memory form, its geometry and checks, and the read/write dispatch by name
  * (thorax/image/image.h). The formats are in nifti.c (and the other readers beside it). */
 #include "image/image_impl.h"
+#include "image/dicom.h"
 
 #include <errno.h>
 #include <math.h>
@@ -274,7 +275,6 @@ static const char *suffix_of(const char *kind)
 
 thx_status thx_image_read(thx_ctx *ctx, const char *path, const thx_image_read_opts *opts, thx_image *img)
 {
-    (void)opts;
     memset(img, 0, sizeof *img);
     struct stat st;
     if (stat(path, &st) != 0) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
@@ -289,13 +289,15 @@ thx_status thx_image_read(thx_ctx *ctx, const char *path, const thx_image_read_o
         s = thx_image_read_nrrd(ctx, path, img);
     else if (name && !strcmp(name, "MetaImage"))
         s = thx_image_read_metaimage(ctx, path, img);
+    else if (S_ISDIR(st.st_mode) || thx_image_has_suffix(path, ".dcm") || thx_image_is_dicom_file(path))
+        s = thx_image_read_dicom(ctx, path, opts ? opts->series : NULL, img);
     else if (kind)
         return thx_error(ctx, THX_EINPUT, "%s: not named as an image thorax reads, but it is %s file: rename it %s",
                          path, !strcmp(kind, "gzip") ? "a gzip" : kind, !strcmp(kind, "gzip") ? ".nii.gz" : suffix_of(kind));
     else
         return thx_error(ctx, THX_EINPUT,
                          "%s: not an image thorax reads (by its name: .nii or .nii.gz for NIfTI, .nrrd or .nhdr for "
-                         "NRRD, .mha or .mhd for MetaImage)",
+                         "NRRD, .mha or .mhd for MetaImage; a folder or .dcm file for a DICOM series)",
                          path);
     if (s != THX_OK) {
         thx_image_free(img);
