@@ -2,7 +2,8 @@
 // map. A C++ bench program built by the script with g++ when libcgal-dev is installed, never by the
 // project's CMake.
 //
-//   mesh3_labels LABELS.nii[.gz] OUTDIR [FACET_SIZE FACET_DISTANCE CELL_SIZE]   (mm; default 4 1 8)
+//   mesh3_labels LABELS.nii[.gz] OUTDIR [FACET_SIZE FACET_DISTANCE CELL_SIZE [OPTIMIZERS]]
+//   (mm; default 4 1 8 timed)
 //
 // Reads the label map with Debian's libnifti2 (uint8 voxels and an axis-aligned, positive-diagonal
 // qform or sform: what bench/torso_labels.py writes; anything else is refused), builds a CGAL::Image_3
@@ -12,9 +13,14 @@
 // Labeled_mesh_domain_3::create_labeled_image_mesh_domain (label 0 is outside; the subdomain index
 // is the label; CGAL's default labellized trilinear interpolation of the labels), relative error bound
 // 1e-6 of the bounding box. Criteria: facet angle 30 degrees, facet size FACET_SIZE, facet distance
-// FACET_DISTANCE, cell radius-edge ratio 3, cell size CELL_SIZE; make_mesh_3's defaults for the
-// optimizers (no Lloyd, no ODT, sliver perturbation and exudation on). Sequential (Debian's
-// libcgal-dev without libtbb-dev gives no Parallel_tag); the default CGAL random generator (seed 0).
+// FACET_DISTANCE, cell radius-edge ratio 3, cell size CELL_SIZE; make_mesh_3's default optimizers (no
+// Lloyd, no ODT, sliver perturbation and exudation with their default bounds). OPTIMIZERS `timed`
+// (the default: CGAL's own, where each optimizer stops after as long as the refinement took, so the
+// mesh depends on the machine's load and differs slightly from run to run) or `untimed` (no time
+// limit: the same mesh every run, and slower). Sequential (Debian's
+// libcgal-dev without libtbb-dev gives no Parallel_tag). CGAL's default random generator is seeded from
+// the clock: the bench reseeds it (seed 0) and gives the domain its own (seed 0), so that `untimed`
+// is deterministic (measured: the same .node/.ele bytes in three runs).
 //
 // Prints (one figure a line, `key value ...`):
 //   read S                 seconds to read the file and build the image
@@ -84,14 +90,17 @@ static double min_dihedral(const std::array<Point, 4> &p)
 
 int main(int argc, char **argv)
 {
-    if (argc != 3 && argc != 6) {
-        std::fprintf(stderr, "usage: %s LABELS.nii[.gz] OUTDIR [FACET_SIZE FACET_DISTANCE CELL_SIZE]\n", argv[0]);
+    if ((argc != 3 && argc != 6 && argc != 7) ||
+        (argc == 7 && std::strcmp(argv[6], "timed") != 0 && std::strcmp(argv[6], "untimed") != 0)) {
+        std::fprintf(stderr, "usage: %s LABELS.nii[.gz] OUTDIR [FACET_SIZE FACET_DISTANCE CELL_SIZE [timed|untimed]]\n",
+                     argv[0]);
         return 2;
     }
     const std::string out = argv[2];
-    const double facet_size = argc == 6 ? std::atof(argv[3]) : 4.0;
-    const double facet_distance = argc == 6 ? std::atof(argv[4]) : 1.0;
-    const double cell_size = argc == 6 ? std::atof(argv[5]) : 8.0;
+    const double facet_size = argc >= 6 ? std::atof(argv[3]) : 4.0;
+    const double facet_distance = argc >= 6 ? std::atof(argv[4]) : 1.0;
+    const double cell_size = argc >= 6 ? std::atof(argv[5]) : 8.0;
+    const bool untimed = argc == 7 && std::strcmp(argv[6], "untimed") == 0;
 
     auto t0 = std::chrono::steady_clock::now();
     nifti_image *nim = nifti_image_read(argv[1], 1);
@@ -126,16 +135,22 @@ int main(int argc, char **argv)
     std::printf("read %.3f\n", seconds_since(t0));
     std::printf("image %zu %zu %zu spacing %g %g %g origin %g %g %g\n", nx, ny, nz, image.vx(), image.vy(),
                 image.vz(), double(im->tx), double(im->ty), double(im->tz));
-    std::printf("criteria facet_angle 30 facet_size %g facet_distance %g cell_radius_edge_ratio 3 cell_size %g\n",
-                facet_size, facet_distance, cell_size);
+    std::printf("criteria facet_angle 30 facet_size %g facet_distance %g cell_radius_edge_ratio 3 cell_size %g "
+                "optimizers %s\n", facet_size, facet_distance, cell_size, untimed ? "untimed" : "timed");
     std::fflush(stdout);
 
     t0 = std::chrono::steady_clock::now();
-    Mesh_domain domain = Mesh_domain::create_labeled_image_mesh_domain(image, params::relative_error_bound = 1e-6);
+    CGAL::get_default_random() = CGAL::Random(0);
+    CGAL::Random rng(0);
+    Mesh_domain domain = Mesh_domain::create_labeled_image_mesh_domain(image, params::relative_error_bound = 1e-6,
+                                                                       params::p_rng = &rng);
     Mesh_criteria criteria(params::facet_angle = 30, params::facet_size = facet_size,
                            params::facet_distance = facet_distance, params::cell_radius_edge_ratio = 3,
                            params::cell_size = cell_size);
-    C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria);
+    // untimed: time limit 0 (none) for the optimizers, instead of CGAL's default (the refinement's time)
+    C3t3 c3t3 = untimed ? CGAL::make_mesh_3<C3t3>(domain, criteria, params::perturb(params::time_limit = 0),
+                                                  params::exude(params::time_limit = 0))
+                        : CGAL::make_mesh_3<C3t3>(domain, criteria);
     std::printf("mesh %.3f\n", seconds_since(t0));
 
     // vertices of the cells in the complex, numbered from 1
