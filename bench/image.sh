@@ -8,7 +8,9 @@
 #     surfaces` (contours -> model); `thorax check` on the model; `thorax mesh` on it (MESH=0 skips).
 #   CGAL: bench/mesh3_labels.cpp (built here with g++ when libcgal-dev is installed, never by the
 #     project's CMake): Labeled_mesh_domain_3 on the same voxels, facet angle 30, facet size /
-#     facet distance / cell size from CGAL_CRITERIA (mm, default "4 1 8"), cell radius-edge 3.
+#     facet distance / cell size from CGAL_CRITERIA (mm, default "4 1 8"; a fourth word `untimed`
+#     lifts CGAL's default time limit on its sliver optimizers: slower, the same mesh every run),
+#     cell radius-edge 3.
 # For each: whole-process wall time and peak memory (/usr/bin/time; thorax the median of RUNS runs,
 # CGAL of CGAL_RUNS), surfaces / tetrahedra, the smallest dihedral angle (bench/tet_quality.py,
 # one program for both meshes), and how far the interfaces lie from the label boundaries
@@ -32,7 +34,7 @@ THORAX_LABELS=${THORAX_LABELS:---label 1,2,3,4,5=torso:outer --label 2,3,4,5=fat
 command -v /usr/bin/time > /dev/null || { echo "needs /usr/bin/time (scripts/deps.sh)"; exit 1; }
 $PY -c 'import nibabel, scipy' 2> /dev/null || { echo "needs python3-nibabel and python3-scipy"; exit 1; }
 W=$(mktemp -d)
-[ "${KEEP:-0}" = 1 ] && echo "work directory: $W" || trap 'rm -rf "$W"' EXIT
+if [ "${KEEP:-0}" = 1 ]; then echo "work directory: $W"; else trap 'rm -rf "$W"' EXIT; fi
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), OMP_NUM_THREADS=${OMP_NUM_THREADS:-default}"
 read -r NX NY NZ <<< "${SIZE//x/ }"
@@ -91,6 +93,7 @@ else
         else echo "  thorax check: FAILED: $(tail -2 "$W/check.out")"; fi
         # the surfaces' label sets, from THORAX_LABELS: NAME:NAME.pts:VALUES:rest
         args=()
+        # shellcheck disable=SC2086
         set -- $THORAX_LABELS
         while [ $# -gt 0 ]; do
             if [ "$1" = --label ]; then
@@ -141,7 +144,7 @@ else
             "$nt tetrahedra, $(awk '/^vertices/ {print $2}' "$W/cgal.out") vertices, smallest dihedral $dmin deg ($b5 < 5, $b10 < 10), radius-edge max $remax mean $remean"
         echo "    in-process: read $(awk '/^read/ {print $2}' "$W/cgal.out") s, domain + make_mesh_3 $(awk '/^mesh/ {print $2}' "$W/cgal.out") s (last run); tetrahedra per label: $(grep '^tets_per_label' "$W/cgal.out" | cut -d' ' -f2-)"
         args=()
-        while read -r _ a b nf nv; do
+        while read -r _ a b _; do
             args+=("$a|$b:$W/cg/iface_${a}_${b}.pts:$a:$b")
         done < <(grep '^interface' "$W/cgal.out")
         echo "  distance of the interface facets' vertices to the boundary between their two labels (mm: points mean p95 max):"
