@@ -17,7 +17,9 @@
 # (bench/label_distance.py, one metric for both: thorax's surface nodes, CGAL's interface facets'
 # vertices; the exact distance to the voxel faces between the labels on either side; mean, 95th
 # percentile, max in mm). Prints figures; never passes or fails on time.
-# Environment: SIZE (default 512x512x300; the body keeps its size, the voxels scale), RUNS (3),
+# Environment: SIZE (default 512x512x300; the body keeps its size, the voxels scale), ENDS (cut: the
+# body cut flat near both ends of the volume, as a scan's field of view cuts it; closed: rounded ends,
+# every tissue enclosed by the next), RUNS (3), MESH_TIMEOUT (600 s for thorax mesh),
 # CGAL_RUNS (1), CGAL_CRITERIA, MESH (1), THORAX_LABELS (the --label options), KEEP=1 keeps the
 # work directory.
 set -euo pipefail
@@ -25,6 +27,8 @@ cd "$(dirname "$0")/.."
 THORAX=${THORAX:-build/bin/thorax}
 PY=/usr/bin/python3
 SIZE=${SIZE:-512x512x300}
+ENDS=${ENDS:-cut}
+MESH_TIMEOUT=${MESH_TIMEOUT:-600}
 RUNS=${RUNS:-3}
 CGAL_RUNS=${CGAL_RUNS:-1}
 CGAL_CRITERIA=${CGAL_CRITERIA:-4 1 8}
@@ -39,8 +43,13 @@ if [ "${KEEP:-0}" = 1 ]; then echo "work directory: $W"; else trap 'rm -rf "$W"'
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), OMP_NUM_THREADS=${OMP_NUM_THREADS:-default}"
 read -r NX NY NZ <<< "${SIZE//x/ }"
 MAP=$W/torso.nii.gz
-/usr/bin/time -f "%e %M" -o "$W/gen.time" $PY bench/torso_labels.py "$MAP" "$NX" "$NY" "$NZ" > "$W/gen.out"
-echo "input: $(sed "s|$W/||" "$W/gen.out")"
+case $ENDS in
+    cut) GEN=() ;;
+    closed) GEN=(--closed) ;;
+    *) echo "ENDS: cut or closed"; exit 1 ;;
+esac
+/usr/bin/time -f "%e %M" -o "$W/gen.time" $PY bench/torso_labels.py "${GEN[@]}" "$MAP" "$NX" "$NY" "$NZ" > "$W/gen.out"
+echo "input: $(sed "s|$W/||" "$W/gen.out"), ends $ENDS"
 echo "  ($(du -k "$MAP" | cut -f1) KB; generated in $(cut -d' ' -f1 "$W/gen.time") s)"
 echo
 
@@ -108,13 +117,14 @@ else
         done
         $PY bench/label_distance.py "$MAP" "${args[@]}" > "$W/thx.dist"
         if [ "$MESH" = 1 ]; then
-            if /usr/bin/time -f "%e %M" -o "$W/mesh.time" "$THORAX" mesh "$W/m" -o "$W/mm" -q > "$W/mesh.out" 2>&1; then
+            if /usr/bin/time -f "%e %M" -o "$W/mesh.time" timeout "$MESH_TIMEOUT" "$THORAX" mesh "$W/m" -o "$W/mm" -q \
+                   > "$W/mesh.out" 2>&1; then
                 read -r wall rss < "$W/mesh.time"
                 read -r nt dmin b5 b10 remax remean < <($PY bench/tet_quality.py thorax "$W/mm")
                 row "mesh (surfaces -> tetrahedra, 1 run)" "$wall" "$(mb "$rss")" \
                     "$nt tetrahedra, smallest dihedral $dmin deg ($b5 < 5, $b10 < 10), radius-edge max $remax mean $remean"
             else
-                echo "  thorax mesh: FAILED: $(tail -2 "$W/mesh.out")"
+                echo "  thorax mesh: FAILED (or over MESH_TIMEOUT=$MESH_TIMEOUT s): $(tail -2 "$W/mesh.out")"
             fi
         fi
         echo "  distance of the surface nodes to their label boundary (mm: points mean p95 max):"

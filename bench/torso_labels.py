@@ -3,12 +3,12 @@
 written as NIfTI-1 (.nii or .nii.gz) through nibabel. Deterministic (no random numbers; the same
 bytes for the same arguments).
 
-Usage: torso_labels.py OUT.nii[.gz] [NX NY NZ]       (default 512 512 300)
+Usage: torso_labels.py [--closed] OUT.nii[.gz] [NX NY NZ]       (default 512 512 300)
 
 The volume covers the same body at any size: 409.6 x 409.6 x 300 mm (a CT's 0.8 x 0.8 x 1.0 mm
 voxels at 512 x 512 x 300; other sizes scale the spacing). Frame: RAS mm (+x the subject's right,
 +y anterior, +z superior); index axes i, j, k along +x, +y, +z; voxel (0, 0, 0)'s centre at
-(-204.4, -204.4, 0) at the default size (the x-y centre of the volume is x = y = 0).
+(-204.4, -204.4, 0.5) at the default size (the x-y centre of the volume is x = y = 0).
 
 Values (uint8):
   0  air (outside the body)
@@ -16,11 +16,16 @@ Values (uint8):
   2  muscle / lean soft tissue: everything inside the fat layer that is not lung or heart
      (chest-wall muscle, mediastinum, spine region, and below the diaphragm the abdomen)
   3  lung: two lungs (right larger; the left with a cardiac notch), domes on the diaphragm,
-     apices near the top, each wrapped around the spine behind and kept >= 4 mm off the heart
+     apices near the top, each wrapped around the spine behind and kept about 6 mm off the heart
   4  heart: the myocardium, a tilted ellipsoidal shell (long axis toward left, anterior, inferior)
   5  blood: the two ventricular pools inside it (the right a crescent beside the left)
 The body is a superellipse in every plane, wider toward the shoulders; no tissue touches the
-volume's border. Interfaces: 0|1, 1|2, 2|3, 2|4, 4|5 (and nothing else)."""
+volume's border. By default the body is cut flat 6 mm inside both ends of the volume, as a scan's
+field of view cuts a torso: fat and muscle reach the cut, so air, fat and muscle meet along its
+edges (interfaces 0|1, 0|2, 1|2, 2|3, 2|4, 4|5). --closed rounds both ends instead (the skin's
+cross-section shrinks as a superellipse of exponent 6 to nothing at 6 mm from the ends, the fat
+layer 14 mm further in), so every tissue is enclosed by the next (interfaces 0|1, 1|2, 2|3, 2|4,
+4|5): nested closed surfaces."""
 import sys
 import numpy as np
 import nibabel as nib
@@ -70,7 +75,14 @@ def fat_depth(theta, t):
     return 6.0 + 10.0 * c * c + 6.0 * np.clip(-s, 0, 1) + 3.0 * np.sin(2.0 * np.pi * t) ** 2
 
 
-def make(n):
+def end_scale(z, margin):
+    """1 in the middle, falling to 0 at `margin` mm from either end (a superellipse of exponent 6)."""
+    h = FOV[2] / 2.0 - margin
+    u = min(abs(z - FOV[2] / 2.0) / h, 1.0)
+    return (1.0 - u ** 6) ** (1.0 / 6.0)
+
+
+def make(n, closed=False):
     sp = np.array(FOV) / np.array(n)
     origin = np.array([-(n[0] - 1) / 2.0 * sp[0], -(n[1] - 1) / 2.0 * sp[1], sp[2] / 2.0])
     x = origin[0] + sp[0] * np.arange(n[0])
@@ -88,9 +100,13 @@ def make(n):
             out[:, :, k] = lab
             continue
         R = body_radius(theta, t)
-        inside = r < R
+        if closed:
+            inside = r < R * end_scale(z, 6.0)
+            lean = r < (R - fat_depth(theta, t)) * end_scale(z, 20.0)
+        else:
+            inside = r < R
+            lean = r < R - fat_depth(theta, t)
         lab[inside] = 1
-        lean = r < R - fat_depth(theta, t)
         lab[lean] = 2
         # heart, in its own axes
         P = np.stack([X - HEART_C[0], Y - HEART_C[1], np.full_like(X, z - HEART_C[2])], axis=-1)
@@ -113,7 +129,7 @@ def make(n):
             spine = np.hypot(X, Y + 78.0) < 34.0
             lung &= ~spine & ~keep_off & (r < R - fat_depth(theta, t) - 14.0)
             lungs |= lung
-        lab[lungs] = 3
+        lab[lungs & lean] = 3
         lab[heart & lean] = 4
         lab[(lv | rv) & inner_wall & lean] = 5
         out[:, :, k] = lab
@@ -123,19 +139,23 @@ def make(n):
 
 
 def main():
-    if len(sys.argv) not in (2, 5):
+    args = sys.argv[1:]
+    closed = bool(args) and args[0] == "--closed"
+    if closed:
+        args = args[1:]
+    if len(args) not in (1, 4):
         sys.exit(__doc__)
-    n = (512, 512, 300) if len(sys.argv) == 2 else tuple(int(a) for a in sys.argv[2:5])
-    lab, aff = make(n)
+    n = (512, 512, 300) if len(args) == 1 else tuple(int(a) for a in args[1:4])
+    lab, aff = make(n, closed)
     img = nib.Nifti1Image(lab, aff)
     img.header.set_xyzt_units("mm")
     img.header.set_qform(aff, code=1)
     img.header.set_sform(aff, code=1)
     img.header["descrip"] = b"bench/torso_labels.py"
-    nib.save(img, sys.argv[1])
+    nib.save(img, args[0])
     counts = np.bincount(lab.ravel(), minlength=6)
     print("%s: %d x %d x %d, spacing %.3f %.3f %.3f mm, voxels per label 0-5: %s" %
-          (sys.argv[1], n[0], n[1], n[2], aff[0, 0], aff[1, 1], aff[2, 2], " ".join(str(c) for c in counts)))
+          (args[0], n[0], n[1], n[2], aff[0, 0], aff[1, 1], aff[2, 2], " ".join(str(c) for c in counts)))
 
 
 if __name__ == "__main__":
