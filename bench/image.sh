@@ -5,7 +5,9 @@
 # voxels; the values are in its header), written as .nii.gz.
 #   thorax: `thorax surfaces MAP.nii.gz --label ...` (the image straight to the model; the target:
 #     < 10 s on 2 cores, < 2 GB), and its two halves `thorax digitize` (-> contours) and `thorax
-#     surfaces` (contours -> model); `thorax check` on the model; `thorax mesh` on it (MESH=0 skips).
+#     surfaces` (contours -> model); `thorax check` on the model; `thorax mesh` (MESH=0 skips) on a
+#     model traced MESH_SPACING mm apart (planes and loop nodes; default 4 = CGAL's facet size: the
+#     1 mm model's million triangles take thorax mesh over 10 minutes).
 #   CGAL: bench/mesh3_labels.cpp (built here with g++ when libcgal-dev is installed, never by the
 #     project's CMake): Labeled_mesh_domain_3 on the same voxels, facet angle 30, facet size /
 #     facet distance / cell size from CGAL_CRITERIA (mm, default "4 1 8"; a fourth word `untimed`
@@ -19,7 +21,7 @@
 # percentile, max in mm). Prints figures; never passes or fails on time.
 # Environment: SIZE (default 512x512x300; the body keeps its size, the voxels scale), ENDS (cut: the
 # body cut flat near both ends of the volume, as a scan's field of view cuts it; closed: rounded ends,
-# every tissue enclosed by the next), RUNS (3), MESH_TIMEOUT (600 s for thorax mesh),
+# every tissue enclosed by the next), RUNS (3), MESH_TIMEOUT (600 s for thorax mesh), MESH_SPACING (4),
 # CGAL_RUNS (1), CGAL_CRITERIA, MESH (1), THORAX_LABELS (the --label options), KEEP=1 keeps the
 # work directory.
 set -euo pipefail
@@ -29,6 +31,7 @@ PY=/usr/bin/python3
 SIZE=${SIZE:-512x512x300}
 ENDS=${ENDS:-cut}
 MESH_TIMEOUT=${MESH_TIMEOUT:-600}
+MESH_SPACING=${MESH_SPACING:-4}
 RUNS=${RUNS:-3}
 CGAL_RUNS=${CGAL_RUNS:-1}
 CGAL_CRITERIA=${CGAL_CRITERIA:-4 1 8}
@@ -100,35 +103,52 @@ else
     if [ -f "$W/m/model.json" ]; then
         if "$THORAX" check "$W/m" -q > "$W/check.out" 2>&1; then echo "  thorax check: all surfaces pass"
         else echo "  thorax check: FAILED: $(tail -2 "$W/check.out")"; fi
-        # the surfaces' label sets, from THORAX_LABELS: NAME:NAME.pts:VALUES:rest
-        args=()
-        # shellcheck disable=SC2086
-        set -- $THORAX_LABELS
-        while [ $# -gt 0 ]; do
-            if [ "$1" = --label ]; then
-                spec=$2
-                vals=${spec%%=*}
-                name=${spec#*=}
-                name=${name%%:*}
-                args+=("$name:$W/m/$name.pts:$vals:rest")
+        # the surfaces' label sets, from THORAX_LABELS: NAME:MODEL/NAME.pts:VALUES:rest
+        dist_args() {
+            local model=$1
+            args=()
+            # shellcheck disable=SC2086
+            set -- $THORAX_LABELS
+            while [ $# -gt 0 ]; do
+                if [ "$1" = --label ]; then
+                    local spec=$2 vals name
+                    vals=${spec%%=*}
+                    name=${spec#*=}
+                    name=${name%%:*}
+                    args+=("$name:$model/$name.pts:$vals:rest")
+                    shift
+                fi
                 shift
-            fi
-            shift
-        done
+            done
+        }
+        dist_args "$W/m"
         $PY bench/label_distance.py "$MAP" "${args[@]}" > "$W/thx.dist"
+        echo "  distance of the surface nodes to their label boundary (mm: points mean p95 max):"
+        sed 's/^/    /' "$W/thx.dist"
+        # the mesh: of a model traced MESH_SPACING mm apart (planes and nodes), CGAL's facet size
         if [ "$MESH" = 1 ]; then
-            if /usr/bin/time -f "%e %M" -o "$W/mesh.time" timeout "$MESH_TIMEOUT" "$THORAX" mesh "$W/m" -o "$W/mm" -q \
-                   > "$W/mesh.out" 2>&1; then
+            rc=0
+            # shellcheck disable=SC2086
+            "$THORAX" digitize "$MAP" $THORAX_LABELS --spacing "$MESH_SPACING" --node-spacing "$MESH_SPACING" \
+                -o "$W/c4.txt" -q > "$W/mesh.out" 2>&1 && "$THORAX" surfaces "$W/c4.txt" -o "$W/m4" -q >> "$W/mesh.out" 2>&1 ||
+                rc=$?
+            [ "$rc" = 0 ] && { /usr/bin/time -f "%e %M" -o "$W/mesh.time" timeout "$MESH_TIMEOUT" \
+                "$THORAX" mesh "$W/m4" -o "$W/mm" -q > "$W/mesh.out" 2>&1 || rc=$?; }
+            echo "  the mesh, of a model traced $MESH_SPACING mm apart (planes and nodes):"
+            if [ "$rc" = 0 ]; then
                 read -r wall rss < "$W/mesh.time"
                 read -r nt dmin b5 b10 remax remean < <($PY bench/tet_quality.py thorax "$W/mm")
                 row "mesh (surfaces -> tetrahedra, 1 run)" "$wall" "$(mb "$rss")" \
-                    "$nt tetrahedra, smallest dihedral $dmin deg ($b5 < 5, $b10 < 10), radius-edge max $remax mean $remean"
+                    "$($PY -c 'import json,sys; s=json.load(open(sys.argv[1]))["surfaces"]; print("%d surface nodes;" % sum(x["n_nodes"] for x in s))' "$W/m4/model.json") $nt tetrahedra, smallest dihedral $dmin deg ($b5 < 5, $b10 < 10), radius-edge max $remax mean $remean"
+                dist_args "$W/m4"
+                echo "    distance of its surface nodes to their label boundary (mm: points mean p95 max):"
+                $PY bench/label_distance.py "$MAP" "${args[@]}" | sed 's/^/      /'
+            elif [ "$rc" = 124 ]; then
+                echo "  thorax mesh: stopped after MESH_TIMEOUT=$MESH_TIMEOUT s"
             else
-                echo "  thorax mesh: FAILED (or over MESH_TIMEOUT=$MESH_TIMEOUT s): $(tail -2 "$W/mesh.out")"
+                echo "  thorax mesh: FAILED: $(tail -2 "$W/mesh.out")"
             fi
         fi
-        echo "  distance of the surface nodes to their label boundary (mm: points mean p95 max):"
-        sed 's/^/    /' "$W/thx.dist"
     fi
 fi
 echo
