@@ -52,6 +52,9 @@ typedef struct {
     long min_size;       /* voxels */
     double node_spacing; /* mm; 0: the default */
     int holes;           /* thx_trace_holes */
+    double surfaces_spacing, surfaces_smoothing; /* how thorax surfaces will resample the loops (its --spacing and
+                                                    --smoothing; 0 and -1: its defaults): loops it would find with no
+                                                    partner are dropped (thx_contours_drop_flat) */
     /* out: the image's format, declared frame and the model-to-RAS rotation (row-major) */
     char format[16], source_frame[32];
     double to_ras[9];

@@ -9,6 +9,7 @@
 
 #include "cli/cli.h"
 #include "thorax/geom/contours_valid.h"
+#include "thorax/geom/surfaces.h"
 #include "thorax/image/image.h"
 #include "thorax/image/trace.h"
 #include "thorax/io/contours_file.h"
@@ -123,6 +124,22 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
     thx_contours *c = NULL;
     thx_status st = thx_image_read(ctx, image, NULL, &img);
     if (st == THX_OK) st = thx_image_trace(ctx, &img, &o, &c, &rep);
+    /* loops the lacing would find without a partner once its splines resample them (small loops move):
+       dropped here, as thorax surfaces will see them, and counted with the tracer's flat loops */
+    if (st == THX_OK) {
+        thx_surfaces_opts so;
+        thx_surfaces_opts_default(&so);
+        so.spacing = a->surfaces_spacing;
+        if (a->surfaces_smoothing >= 0) so.smoothing = a->surfaces_smoothing;
+        size_t *gone = calloc(c->n_surfaces ? c->n_surfaces : 1, sizeof *gone);
+        st = gone ? thx_contours_drop_flat(ctx, c, &so, gone) : THX_ENOMEM;
+        for (size_t k = 0; st == THX_OK && k < c->n_surfaces && k < rep.n_tissues; k++) {
+            rep.tissue[k].n_flat_dropped += gone[k];
+            rep.tissue[k].n_loops -= gone[k];
+            rep.tissue[k].n_layers = c->surf[k].n_layers;
+        }
+        free(gone);
+    }
     /* the contours' invariants (exact predicates), before anything is written */
     if (st == THX_OK) st = thx_contours_validate(ctx, c);
     if (st != THX_OK) {
@@ -178,6 +195,7 @@ int cmd_digitize(int argc, char **argv)
     int n_labels = 0, verbose = 0, axis = 0;
     long min_size = 8;
     cli_trace_args a = {0};
+    a.surfaces_smoothing = -1; /* thorax surfaces' defaults */
     static const cli_choice axes[] = {{"superior", 0}, {NULL, 0}};
     static const cli_choice holes[] = {{"fill", THX_TRACE_HOLES_FILL}, {"keep", THX_TRACE_HOLES_KEEP}, {NULL, 0}};
     cli_opt opts[] = {

@@ -201,6 +201,8 @@ int cmd_surfaces(int argc, char **argv)
         ta.n_labels = n_labels;
         ta.min_size = min_size;
         ta.node_spacing = o.spacing > 0 ? o.spacing : 0;
+        ta.surfaces_spacing = o.spacing;
+        ta.surfaces_smoothing = o.smoothing;
         int trc = cli_trace_labels("surfaces", in, &ta, verbose, ctx, &c);
         if (trc) {
             thx_ctx_destroy(&ctx);

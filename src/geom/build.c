@@ -1287,3 +1287,111 @@ thx_status thx_surface_build(thx_ctx *ctx, const thx_contours *c, size_t k, cons
     thx_surfaces_stats local;
     return build_one(ctx, c, &c->surf[k], o, spacing, out, interior, stats ? stats : &local);
 }
+
+thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfaces_opts *o, size_t *dropped)
+{
+    double spacing = o->spacing > 0 ? o->spacing : (c->spacing > 0 ? c->spacing : 5.0);
+    const char *path = c->path[0] ? c->path : "<contours>";
+    for (size_t k = 0; k < c->n_surfaces; k++) {
+        thx_contour_surface *cs = &c->surf[k];
+        size_t nl = cs->n_layers, gone = 0;
+        if (dropped) dropped[k] = 0;
+        rlayer *layers = thx_calloc(ctx, nl ? nl : 1, sizeof *layers);
+        unsigned char **keep = thx_calloc(ctx, nl ? nl : 1, sizeof *keep);
+        thx_status st = THX_OK;
+        if (!layers || !keep) {
+            free(layers), free(keep);
+            return THX_ENOMEM;
+        }
+        /* the loops as the lacing sees them: resampled by the same splines at the same spacing */
+        for (size_t l = 0; l < nl && st == THX_OK; l++) {
+            size_t n = cs->layers[l].n_loops;
+            layers[l].n_loops = n;
+            layers[l].loops = thx_calloc(ctx, n ? n : 1, sizeof(rloop));
+            keep[l] = thx_malloc(ctx, n ? n : 1);
+            if (!layers[l].loops || !keep[l]) {
+                st = THX_ENOMEM;
+                break;
+            }
+            memset(keep[l], 1, n ? n : 1);
+            for (size_t i = 0; i < n && st == THX_OK; i++) {
+                const thx_loop *lp = &cs->layers[l].loops[i];
+                st = thx_loop_resample(ctx, lp->p, lp->n, spacing, o->smoothing, o->start, &layers[l].loops[i].p,
+                                       &layers[l].loops[i].n);
+                if (st != THX_OK) {
+                    char why[512];
+                    snprintf(why, sizeof why, "%s", thx_ctx_message(ctx));
+                    thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path, lp->line, cs->name,
+                              LAYER_NO(cs, l), cs->layers[l].z, why);
+                }
+            }
+        }
+        /* to a fixed point: a loop with no kept partner on either neighbouring layer (the rule of the
+           slices: two single loops always pair, else their projections must overlap) is dropped */
+        for (int changed = 1; changed && st == THX_OK;) {
+            changed = 0;
+            for (size_t l = 0; l < nl; l++)
+                for (size_t i = 0; i < layers[l].n_loops; i++) {
+                    if (!keep[l][i]) continue;
+                    int partner = 0;
+                    size_t na = 0;
+                    for (size_t q = 0; q < layers[l].n_loops; q++) na += keep[l][q];
+                    for (int side = -1; side <= 1 && !partner; side += 2) {
+                        if ((side < 0 && l == 0) || (side > 0 && l + 1 == nl)) continue;
+                        size_t m = l + (size_t)side, nb = 0;
+                        for (size_t q = 0; q < layers[m].n_loops; q++) nb += keep[m][q];
+                        for (size_t j = 0; j < layers[m].n_loops && !partner; j++)
+                            if (keep[m][j])
+                                partner = (na == 1 && nb == 1) || loops_overlap(&layers[l].loops[i], &layers[m].loops[j]);
+                    }
+                    if (!partner) {
+                        keep[l][i] = 0;
+                        changed = 1;
+                    }
+                }
+        }
+        /* the loops dropped from the contours, and the layers left empty at either end */
+        for (size_t l = 0; l < nl && st == THX_OK; l++) {
+            thx_contour_layer *L = &cs->layers[l];
+            size_t w = 0;
+            for (size_t i = 0; i < L->n_loops; i++) {
+                if (keep[l][i]) {
+                    L->loops[w++] = L->loops[i];
+                    continue;
+                }
+                free(L->loops[i].p);
+                free(L->loops[i].lines);
+                gone++;
+            }
+            L->n_loops = w;
+        }
+        size_t first = 0, last = nl;
+        while (first < last && cs->layers[first].n_loops == 0) first++;
+        while (last > first && cs->layers[last - 1].n_loops == 0) last--;
+        for (size_t l = first; l < last && st == THX_OK; l++)
+            if (cs->layers[l].n_loops == 0)
+                st = thx_error(ctx, THX_EINPUT,
+                               "%s: surface \"%s\": with the loops that no neighbouring layer's loop overlaps dropped, "
+                               "layer %d (z=%g) holds none: the surface would break in two",
+                               path, cs->name, LAYER_NO(cs, l), cs->layers[l].z);
+        if (st == THX_OK && last - first < 2 && nl >= 2)
+            st = thx_error(ctx, THX_EINPUT,
+                           "%s: surface \"%s\": no two consecutive layers hold overlapping loops (a surface needs two)",
+                           path, cs->name);
+        if (st == THX_OK && (first > 0 || last < nl)) {
+            for (size_t l = 0; l < nl; l++)
+                if (l < first || l >= last) free(cs->layers[l].loops);
+            memmove(cs->layers, cs->layers + first, (last - first) * sizeof *cs->layers);
+            cs->n_layers = last - first;
+        }
+        for (size_t l = 0; l < nl; l++) {
+            for (size_t i = 0; layers[l].loops && i < layers[l].n_loops; i++) free(layers[l].loops[i].p);
+            free(layers[l].loops);
+            free(keep[l]);
+        }
+        free(layers), free(keep);
+        if (st != THX_OK) return st;
+        if (dropped) dropped[k] = gone;
+    }
+    return THX_OK;
+}

@@ -151,6 +151,15 @@ void thx_surfaces_opts_default(thx_surfaces_opts *o);
 thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_surfaces_opts *o, thx_model **out,
                               thx_surfaces_stats *stats, thx_surfaces_stats *total);
 
+/* Drops, to a fixed point, every loop that the lacing would find without a partner on either
+ * neighbouring layer (the loops resampled as thx_surfaces_build resamples them, with o's spacing and
+ * smoothing, and paired by its rule), and the layers so left empty at a surface's ends; dropped[k]
+ * (may be NULL; c->n_surfaces entries) counts surface k's. For contours traced from a label map
+ * (thorax/image/trace.h), whose small loops a spline may move off their neighbours; a contour file a
+ * person digitized keeps its error instead. THX_EINPUT when a layer inside a surface is left empty or
+ * fewer than two layers remain. */
+thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfaces_opts *o, size_t *dropped);
+
 /* Builds the one surface c->surf[k] as thx_surfaces_build does (the same code: a surface never
  * depends on the others, so the result is byte for byte the surface thx_surfaces_build makes from
  * the same contours), after checking that surface's loops (thx_contours_validate on it alone).
