@@ -33,8 +33,19 @@ stage() { # NAME CMD...
     awk -v n="$name" -v a="$t0" -v b="$t1" 'BEGIN { printf "  %-46s %7.1f s\n", n, b - a }'
 }
 QRS=193   # the QRS peak of the phantom's beat (frame 193 = 192 ms)
-stage "contours (thorax phantom)" "$T" phantom --resolution medium --seed 1 -o "$O/contours.txt" -q
+# The pipeline opens at the scan (paper 3.1): the phantom as a label map (what a segmentation tool writes) and as a
+# simulated CT; the label map traced plane by plane into the contours (10 mm apart, nodes 11 mm apart: the paper's
+# scale), the contours laced into surfaces.
+LABELS=(--label 1,2,3,4,5,6=torso:outer --label 2,3,4,5,6=fat:fat --label 3,4,5,6=muscle:muscle
+        --label 4=lung_r:lung --label 5=lung_l:lung --label 6=heart:heart)
+stage "scan: label map (thorax phantom --image)" "$T" phantom --image "$O/labels.nii.gz" --voxel 2 --modality labels -q
+stage "scan: simulated CT" "$T" phantom --image "$O/ct.nii.gz" --voxel 2 --modality ct --noise 20 --seed 1 -q
+stage "contours (thorax digitize)" sh -c "'$T' digitize '$O/labels.nii.gz' ${LABELS[*]} --spacing 10 --node-spacing 11 -o '$O/contours.txt' > '$O/digitize.txt'"
 stage "surfaces" "$T" surfaces "$O/contours.txt" -o "$O/model" -q
+HIDE=(--surface torso=hidden --surface fat=hidden --surface muscle=hidden --surface lung_r=hidden --surface lung_l=hidden
+      --surface heart=hidden)
+stage "the scan with its contours" "$T" render "$O/model" --image "$O/ct.nii.gz" --image-plane z=100 --contours "$O/contours.txt" \
+    "${HIDE[@]}" --view superior --size 800x600 --orientation -o "$O/scan.png" -q
 stage "volume mesh" sh -c "'$T' mesh '$O/model' --no-heart --stats > '$O/mesh.txt'"
 stage "checks" sh -c "'$T' check '$O/model' --json > '$O/check.json'"
 stage "electrodes" "$T" electrodes "$O/model" -q

@@ -188,13 +188,19 @@ table.glance td{{text-align:left}} table.glance td:first-child{{font-weight:bold
 .sw{{display:inline-block;width:0.9em;height:0.9em;border:1px solid #888;vertical-align:middle;margin-right:4px}}
 .missing{{color:#a00}} pre{{background:#f8f8f8;padding:0.6em;overflow-x:auto;font-size:0.85em}}
 </style></head><body>
-<h1>thorax: the built-in phantom, from contours to the ECG</h1>
-<p>Digitized contours of a synthetic thorax are spline-resampled and laced into closed surfaces, meshed into
+<h1>thorax: the built-in phantom, from the scan to the ECG</h1>
+<p>A scan of a synthetic thorax (its label map, as a segmentation tool writes one) is traced plane by plane into
+contours, which are spline-resampled and laced into closed surfaces, meshed into
 tetrahedra with tissue regions and their conductivities; a heartbeat on the epicardium (one current dipole tracing a
 vectorcardiogram loop) drives the finite-element forward solution of every frame; the 12-lead ECG is taken from the
 body surface. Colours follow the field's convention: red positive, blue negative, white zero.</p>
 <h2>At a glance</h2>
 <table class="glance">{''.join('<tr><td>%s</td><td>%s</td></tr>' % (a, b) for a, b in glance)}</table>
+<h2>The scan and its contours</h2>
+{img('scan.png', 'the simulated CT with the traced contours')}
+<p>The phantom as a simulated CT (2 mm voxels, Hounsfield units, noise 20 HU; window 400/40), the plane
+z&nbsp;=&nbsp;100&nbsp;mm, and on it the contours <code>thorax digitize</code> traced from the phantom's label map
+(torso, fat, muscle, lungs, heart; one colour a surface): the model below is built from them.</p>
 <h2>The 12-lead ECG</h2>
 {img('ecg12.svg', '12-lead ECG', 'wide')}
 <p>The standard 3 &times; 4 layout on ECG paper: 25 mm/s and 10 mm/mV, small squares 1 mm = 40 ms &times; 0.1 mV,
