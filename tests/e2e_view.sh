@@ -240,7 +240,7 @@ grep -q "^edit: tri_delete torso 9 -> torso: FAILS: 3 open edges" e1.out || { ca
 grep -q "^edit: layer_move heart layer=3 2 1 -> heart: passes" e1.out || { cat e1.out; fail "the layer edit"; }
 [ "$(sed -n 5p edited/torso.pts)" = "10.000000 20.000000 30.000000" ] || fail "node 5 not moved: $(sed -n 5p edited/torso.pts)"
 [ "$(grep -cE '^(node_move|tri_|layer_)' edited/edits.txt)" = 2 ] || { cat edited/edits.txt; fail "the log holds more than the two kept edits"; }
-"$THORAX" surfaces c.txt --edits edited/edits.txt -o replayed -q 2> /dev/null
+"$THORAX" surfaces c.txt --edits edited/edits.txt -o replayed -q --unchecked 2> /dev/null   # node 5 moved inside: torso crosses fat
 for f in edited/*.pts edited/*.fac edited/edits.txt; do cmp -s "$f" "replayed/${f#edited/}" || fail "replay differs: $f"; done
 cat > e2.txt <<EOF
 $PWD/emodel

@@ -9,6 +9,8 @@ the surfaces: the real-data check of label-map tracing (tests/e2e_digitize_real.
   voxelize_surfaces.py dist CONTOURS STEP FRAME NAME=PTS,FAC ...
       every STEP-th node of each named surface's loops: its exact distance from the original surface
       (point-triangle, Ericson), in RAS; prints max, mean and the 99th percentile.
+  voxelize_surfaces.py mdist MODEL FRAME NAME=PTS,FAC ...
+      every node of each named surface of the rebuilt model (MODEL/NAME.pts, RAS): the same distance.
 """
 import sys
 import numpy as np
@@ -108,9 +110,26 @@ def dist(contours, step, frame, specs):
     print(f"worst {worst:.3f}")
 
 
+def mdist(model, frame, specs):
+    worst = 0.0
+    for spec in specs:
+        name, files = spec.split("=")
+        V, F = load(*files.split(","), frame)
+        P = np.loadtxt(f"{model}/{name}.pts")
+        d = np.full(len(P), np.inf)
+        for f in F:
+            d = np.minimum(d, ptri(P, V[f[0]], V[f[1]], V[f[2]]))
+        print(f"{name}: {len(P)} surface nodes of the rebuilt model: distance to the original surface max "
+              f"{d.max():.3f} mm, mean {d.mean():.3f}, 99% {np.percentile(d, 99):.3f}")
+        worst = max(worst, d.max())
+    print(f"worst {worst:.3f}")
+
+
 if __name__ == "__main__":
     a = sys.argv[1:]
     if a[0] == "label":
         label(a[1], float(a[2]), a[3], a[4:])
+    elif a[0] == "mdist":
+        mdist(a[1], a[2], a[3:])
     else:
         dist(a[1], int(a[2]), a[3], a[4:])
