@@ -74,7 +74,7 @@ static void setup(thx_picture_data *d)
     d->n_sets[0] = d->n_sets[1] = 1;
 }
 
-static const unsigned char *px(const thx_image *img, int x, int y) { return img->rgba + 4 * ((size_t)y * img->w + x); }
+static const unsigned char *px(const thx_raster *img, int x, int y) { return img->rgba + 4 * ((size_t)y * img->w + x); }
 
 static int dist(const unsigned char *a, const unsigned char *b)
 {
@@ -83,7 +83,7 @@ static int dist(const unsigned char *a, const unsigned char *b)
 
 /* The value colour c reads on the bar whose strip is box, spanning lo (bottom) .. hi (top); the
  * colour distance of the best row in *best. */
-static double read_bar(const thx_image *img, const int box[4], double lo, double hi, const unsigned char *c, int *best)
+static double read_bar(const thx_raster *img, const int box[4], double lo, double hi, const unsigned char *c, int *best)
 {
     int x = box[0] + box[2] / 2, brow = -1;
     *best = 1 << 30;
@@ -97,14 +97,14 @@ static double read_bar(const thx_image *img, const int box[4], double lo, double
 
 /* Whether text is drawn in img with its left end at x and its baseline within y0..y1: the pixels of
  * the glyphs' box (and one around it) exactly as the font draws text on the background. */
-static int text_at(const thx_image *img, thx_font *font, int x, int y0, int y1, const char *text)
+static int text_at(const thx_raster *img, thx_font *font, int x, int y0, int y1, const char *text)
 {
-    thx_image *ref = NULL;
-    if (thx_image_create(ctx, img->w, img->h, &ref) != THX_OK) return 0;
+    thx_raster *ref = NULL;
+    if (thx_raster_create(ctx, img->w, img->h, &ref) != THX_OK) return 0;
     static const unsigned char bg[4] = {24, 24, 28, 255}, ink[4] = {255, 255, 255, 255};
     int found = 0;
     for (int y = y0; y <= y1 && !found; y++) {
-        thx_image_fill(ref, bg);
+        thx_raster_fill(ref, bg);
         thx_draw_text(ref, font, x, y, text, ink);
         int bx0 = img->w, by0 = img->h, bx1 = -1, by1 = -1;
         for (int j = 0; j < img->h; j++)
@@ -122,7 +122,7 @@ static int text_at(const thx_image *img, thx_font *font, int x, int y0, int y1, 
                 if (i >= 0 && j >= 0 && i < img->w && j < img->h) same = dist(px(ref, i, j), px(img, i, j)) == 0;
         found = same;
     }
-    thx_image_destroy(&ref);
+    thx_raster_destroy(&ref);
     return found;
 }
 
@@ -149,8 +149,8 @@ static void test_bars(thx_renderer *r, thx_font *font)
     o.h = 400;
     o.mode = THX_DRAW_FLAT; /* flat, facing an orthographic camera: the colour map's colour itself */
     o.colorbar = 1;
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, o.w, o.h, &img));
     CHECK_OK(ctx, thx_picture_draw(ctx, &o, &d, r, font, 0, img, NULL));
     int box[THX_PICTURE_BARS][4];
     CHECK(thx_picture_bar_layout(&o, font, o.w, o.h, 2, box) == 2);
@@ -209,10 +209,10 @@ static void test_bars(thx_renderer *r, thx_font *font)
     }
     /* too small for two bars: refused, naming both scales */
     o.scope = THX_SCOPE_SERIES;
-    thx_image *small = NULL;
+    thx_raster *small = NULL;
     thx_renderer *rs = NULL;
     o.h = 100;
-    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &small));
+    CHECK_OK(ctx, thx_raster_create(ctx, o.w, o.h, &small));
     CHECK_OK(ctx, thx_renderer_create(ctx, o.w, o.h, &rs));
     CHECK(thx_picture_draw(ctx, &o, &d, rs, font, 0, small, NULL) == THX_EINPUT);
     CHECK(tl_msg_has(ctx, "2 different scales") && tl_msg_has(ctx, "-10..10 mV") && tl_msg_has(ctx, "-40..40 mV"));
@@ -242,9 +242,9 @@ static void test_bars(thx_renderer *r, thx_font *font)
     o.n_bar_title = 2;
     thx_picture_bar_title(&o, &bars, 1, head, sizeof head, unit, sizeof unit);
     CHECK(!strcmp(head, "B"));
-    thx_image_destroy(&small);
+    thx_raster_destroy(&small);
     thx_renderer_destroy(&rs);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_picture_data_free(&d);
 }
 
@@ -289,8 +289,8 @@ static void test_activation_bar(thx_renderer *r, thx_font *font)
     o.h = 400;
     o.mode = THX_DRAW_FLAT;
     o.colorbar = 1;
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, o.w, o.h, &img));
     CHECK_OK(ctx, thx_picture_draw(ctx, &o, &d, r, font, 0, img, NULL));
     int box[THX_PICTURE_BARS][4];
     CHECK(thx_picture_bar_layout(&o, font, o.w, o.h, 1, box) == 1);
@@ -304,7 +304,7 @@ static void test_activation_bar(thx_renderer *r, thx_font *font)
         CHECK(e <= 6);
         CHECK_NEAR(v, want, (hi - lo) / box[0][3] + 0.5);
     }
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_picture_data_free(&d);
 }
 
@@ -395,9 +395,9 @@ static void test_orientation(thx_renderer *r, thx_font *font)
     /* pixel facts: the anterior picture has an 'R' glyph at the left edge, 'L' at the right, 'S'
        at the top, 'I' at the bottom, exactly as the font draws them on the background */
     o.view = THX_VIEW_ANTERIOR;
-    thx_image *img = NULL, *ref = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &img));
-    CHECK_OK(ctx, thx_image_create(ctx, o.w, o.h, &ref));
+    thx_raster *img = NULL, *ref = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, o.w, o.h, &img));
+    CHECK_OK(ctx, thx_raster_create(ctx, o.w, o.h, &ref));
     CHECK_OK(ctx, thx_picture_draw(ctx, &o, &d, r, font, 0, img, NULL));
     thx_picture_letter L[8];
     CHECK(thx_picture_orientation(&o, &d, font, o.w, o.h, L, 8) == 4);
@@ -410,7 +410,7 @@ static void test_orientation(thx_renderer *r, thx_font *font)
         CHECK(x0 >= 0 && y0 >= 0 && x1 <= o.w && y1 <= o.h);
         int differ_right = 0, differ_wrong = 0, lit = 0;
         for (int pass = 0; pass < 2; pass++) {
-            thx_image_fill(ref, img->rgba); /* the background: the picture's top-left pixel */
+            thx_raster_fill(ref, img->rgba); /* the background: the picture's top-left pixel */
             thx_draw_text(ref, font, L[k].x, L[k].y, pass ? wrong[k] : expect[k], FG);
             for (int y = y0; y < y1; y++)
                 for (int x = x0; x < x1; x++) {
@@ -430,8 +430,8 @@ static void test_orientation(thx_renderer *r, thx_font *font)
     thx_picture_letter P[16];
     CHECK(thx_picture_orientation(&o, &d, font, o.w, o.h, P, 16) == 8);
     CHECK(!strcmp(P[4].text, "R") && P[4].x > P[1].x);
-    thx_image_destroy(&img);
-    thx_image_destroy(&ref);
+    thx_raster_destroy(&img);
+    thx_raster_destroy(&ref);
     thx_picture_data_free(&d);
 }
 

@@ -185,8 +185,8 @@ static void test_png(void)
     CHECK_OK(ctx, thx_ecg_plot_write(ctx, s, &o, pp, NULL, 0));
     size_t len;
     char *svg = tl_slurp(ctx, ps, &len);
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_read_png(ctx, pp, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_read_png(ctx, pp, &img));
     if (svg && img) {
         const char *vb = strstr(svg, "viewBox=\"");
         double x = 0, y = 0, w = 0, h = 0;
@@ -208,7 +208,7 @@ static void test_png(void)
         CHECK(q[0] > 200);
     }
     free(svg);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_series_destroy(&s);
 }
 

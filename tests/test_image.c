@@ -25,17 +25,17 @@ static thx_ctx *ctx;
 
 /* ------------------------------------------------------------- helpers */
 
-static thx_image *new_image(int w, int h, unsigned char r, unsigned char g, unsigned char b)
+static thx_raster *new_image(int w, int h, unsigned char r, unsigned char g, unsigned char b)
 {
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, w, h, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, w, h, &img));
     if (!img) exit(1);
     const unsigned char c[4] = {r, g, b, 255};
-    thx_image_fill(img, c);
+    thx_raster_fill(img, c);
     return img;
 }
 
-static unsigned char *px(thx_image *img, int i, int j) { return img->rgba + 4 * ((size_t)j * img->w + i); }
+static unsigned char *px(thx_raster *img, int i, int j) { return img->rgba + 4 * ((size_t)j * img->w + i); }
 
 /* CIELAB L* of an 8-bit sRGB colour, written here independently of colormap.c. */
 static double lstar(const unsigned char c[3])
@@ -66,23 +66,23 @@ static double seg_dist(double px_, double py_, double x0, double y0, double x1, 
 
 static void test_image_basic(void)
 {
-    thx_image *img = (thx_image *)&img;
-    CHECK(thx_image_create(ctx, 0, 10, &img) == THX_EINPUT && img == NULL);
-    CHECK(thx_image_create(ctx, 10, -1, &img) == THX_EINPUT && img == NULL);
-    CHECK(thx_image_create(ctx, 100000, 100000, &img) == THX_EINPUT && img == NULL);
-    CHECK_OK(ctx, thx_image_create(ctx, 3, 2, &img));
+    thx_raster *img = (thx_raster *)&img;
+    CHECK(thx_raster_create(ctx, 0, 10, &img) == THX_EINPUT && img == NULL);
+    CHECK(thx_raster_create(ctx, 10, -1, &img) == THX_EINPUT && img == NULL);
+    CHECK(thx_raster_create(ctx, 100000, 100000, &img) == THX_EINPUT && img == NULL);
+    CHECK_OK(ctx, thx_raster_create(ctx, 3, 2, &img));
     CHECK(img && img->w == 3 && img->h == 2);
     if (!img) return;
     int zero = 1;
     for (int i = 0; i < 24; i++) zero &= img->rgba[i] == 0;
     CHECK(zero); /* transparent black */
     const unsigned char c[4] = {1, 2, 3, 4};
-    thx_image_fill(img, c);
+    thx_raster_fill(img, c);
     CHECK(memcmp(px(img, 2, 1), c, 4) == 0 && memcmp(px(img, 0, 0), c, 4) == 0);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     CHECK(img == NULL);
-    thx_image_destroy(&img);
-    thx_image_destroy(NULL);
+    thx_raster_destroy(&img);
+    thx_raster_destroy(NULL);
 }
 
 /* The IHDR of a PNG file: width, height, bit depth, colour type. */
@@ -116,8 +116,8 @@ static int same_file(const char *a, const char *b)
 static void test_png(void)
 {
     /* RGBA with every alpha, odd size */
-    thx_image *a = NULL, *b = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, 37, 23, &a));
+    thx_raster *a = NULL, *b = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 37, 23, &a));
     if (!a) return;
     for (int j = 0; j < a->h; j++)
         for (int i = 0; i < a->w; i++) {
@@ -125,24 +125,24 @@ static void test_png(void)
             p[0] = (unsigned char)(7 * i + j), p[1] = (unsigned char)(13 * j), p[2] = (unsigned char)(i * j);
             p[3] = (unsigned char)((i + 37 * j) % 256);
         }
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgba.png")));
+    CHECK_OK(ctx, thx_raster_write_png(ctx, a, tl_path("rgba.png")));
     unsigned w = 0, h = 0;
     int depth = 0, ctype = -1;
     CHECK(png_header(tl_path("rgba.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 6);
-    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("rgba.png"), &b));
+    CHECK_OK(ctx, thx_raster_read_png(ctx, tl_path("rgba.png"), &b));
     CHECK(b && b->w == 37 && b->h == 23 && memcmp(a->rgba, b->rgba, 4 * 37 * 23) == 0);
-    thx_image_destroy(&b);
+    thx_raster_destroy(&b);
 
     /* opaque: written as RGB, read back with alpha 255 */
     for (int i = 0; i < a->w * a->h; i++) a->rgba[4 * i + 3] = 255;
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgb.png")));
+    CHECK_OK(ctx, thx_raster_write_png(ctx, a, tl_path("rgb.png")));
     CHECK(png_header(tl_path("rgb.png"), &w, &h, &depth, &ctype) && w == 37 && h == 23 && depth == 8 && ctype == 2);
-    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("rgb.png"), &b));
+    CHECK_OK(ctx, thx_raster_read_png(ctx, tl_path("rgb.png"), &b));
     CHECK(b && b->w == 37 && b->h == 23 && memcmp(a->rgba, b->rgba, 4 * 37 * 23) == 0);
-    thx_image_destroy(&b);
+    thx_raster_destroy(&b);
 
     /* the same image twice: the same bytes */
-    CHECK_OK(ctx, thx_image_write_png(ctx, a, tl_path("rgb2.png")));
+    CHECK_OK(ctx, thx_raster_write_png(ctx, a, tl_path("rgb2.png")));
     CHECK(same_file(tl_path("rgb.png"), tl_path("rgb2.png")));
 
     /* VTK's PNG reader sees the size, three components and the pixels (VTK's rows run bottom up) */
@@ -167,7 +167,7 @@ static void test_png(void)
              tl_path("grey.png"));
     CHECK(system(cmd) == 0);
     CHECK(png_header(tl_path("grey.png"), &w, &h, &depth, &ctype) && w == 3 && h == 2 && depth == 8 && ctype == 0);
-    CHECK_OK(ctx, thx_image_read_png(ctx, tl_path("grey.png"), &b));
+    CHECK_OK(ctx, thx_raster_read_png(ctx, tl_path("grey.png"), &b));
     if (b) {
         const int want[6] = {128, 200, 255, 0, 1, 127};
         int grey = b->w == 3 && b->h == 2;
@@ -175,27 +175,27 @@ static void test_png(void)
             grey &= b->rgba[4 * i] == want[i] && b->rgba[4 * i + 1] == want[i] && b->rgba[4 * i + 2] == want[i] &&
                     b->rgba[4 * i + 3] == 255;
         CHECK(grey);
-        thx_image_destroy(&b);
+        thx_raster_destroy(&b);
     }
 
     /* a write into a directory that does not exist: an error, nothing written */
     thx_ctx_clear(ctx);
-    CHECK(thx_image_write_png(ctx, a, tl_path("no/such/dir/x.png")) == THX_EIO);
+    CHECK(thx_raster_write_png(ctx, a, tl_path("no/such/dir/x.png")) == THX_EIO);
     CHECK(strstr(thx_ctx_message(ctx), "no/such/dir/x.png") != NULL);
     CHECK(!tl_exists(tl_path("no/such/dir/x.png")) && !tl_exists(tl_path("no")));
     CHECK(!tl_leftover_tmp(""));
 
     /* reads that must fail */
-    b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, tl_path("missing.png"), &b) == THX_EIO && b == NULL);
+    b = (thx_raster *)&b;
+    CHECK(thx_raster_read_png(ctx, tl_path("missing.png"), &b) == THX_EIO && b == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "missing.png") != NULL);
     FILE *f = fopen(tl_path("text.png"), "w");
     if (f) {
         fputs("this is not a picture\n", f);
         fclose(f);
     }
-    b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, tl_path("text.png"), &b) == THX_EINPUT && b == NULL);
+    b = (thx_raster *)&b;
+    CHECK(thx_raster_read_png(ctx, tl_path("text.png"), &b) == THX_EINPUT && b == NULL);
     CHECK(strstr(thx_ctx_message(ctx), "not a PNG") != NULL);
     /* truncated after the header */
     char *data = NULL;
@@ -207,9 +207,9 @@ static void test_png(void)
         fclose(f);
     }
     free(data);
-    b = (thx_image *)&b;
-    CHECK(thx_image_read_png(ctx, tl_path("cut.png"), &b) == THX_EINPUT && b == NULL);
-    thx_image_destroy(&a);
+    b = (thx_raster *)&b;
+    CHECK(thx_raster_read_png(ctx, tl_path("cut.png"), &b) == THX_EINPUT && b == NULL);
+    thx_raster_destroy(&a);
 }
 
 /* ------------------------------------------------------------- colour maps */
@@ -483,7 +483,7 @@ static void test_scales(void)
 #define DEJAVU "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 
 /* The box of pixels that differ from the background colour bg; 0 if none. */
-static int changed_box(thx_image *img, const unsigned char bg[4], int *x0, int *y0, int *x1, int *y1, long *count)
+static int changed_box(thx_raster *img, const unsigned char bg[4], int *x0, int *y0, int *x1, int *y1, long *count)
 {
     *x0 = *y0 = 1 << 30, *x1 = *y1 = -1, *count = 0;
     for (int j = 0; j < img->h; j++)
@@ -538,7 +538,7 @@ static void test_text(void)
     /* "Hg" on its baseline: pixels change inside [x, x + width] x [y - ascender, y + descender]
        (a pixel of slack) and nowhere else; H rises above the baseline, g hangs below it */
     const unsigned char bg[4] = {0, 0, 0, 255}, white[4] = {255, 255, 255, 255};
-    thx_image *img = new_image(120, 60, 0, 0, 0);
+    thx_raster *img = new_image(120, 60, 0, 0, 0);
     const int x = 30, y = 35;
     thx_draw_text(img, f, x, y, "Hg", white);
     int x0, y0, x1, y1;
@@ -556,14 +556,14 @@ static void test_text(void)
         }
     CHECK(full > 20 && partial > 10); /* solid stems and antialiased edges */
     /* longer text reaches further right */
-    thx_image_fill(img, bg);
+    thx_raster_fill(img, bg);
     thx_draw_text(img, f, x, y, "Hgg", white);
     int x1b = 0;
     CHECK(changed_box(img, bg, &x0, &y0, &x1b, &y1, &count) && x1b > x1 + 5);
     /* clipped at the image's edges without harm */
     thx_draw_text(img, f, -10, 5, "Hg Hg Hg Hg Hg Hg Hg Hg", white);
     thx_draw_text(img, f, 100, 70, "Hg", white);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_font_close(&f);
 }
 
@@ -572,7 +572,7 @@ static void test_text(void)
 static void test_lines(void)
 {
     const unsigned char white[4] = {255, 255, 255, 255}, half[4] = {255, 255, 255, 128};
-    thx_image *img = new_image(64, 32, 0, 0, 0);
+    thx_raster *img = new_image(64, 32, 0, 0, 0);
     /* a horizontal line through pixel centres, one pixel wide, covers exactly its row */
     thx_draw_line(img, 5.5, 10.5, 50.5, 10.5, 1, white);
     int row = 1, others = 1;
@@ -582,7 +582,7 @@ static void test_lines(void)
             if (j != 10 && px(img, i, j)[0] != 0) others = 0;
     CHECK(row && others);
     /* a diagonal line: antialiased (partial coverage), every lit pixel within w/2 + 1 of it */
-    thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 255});
+    thx_raster_fill(img, (const unsigned char[4]){0, 0, 0, 255});
     thx_draw_line(img, 2, 3, 60, 28, 2, white);
     int partial = 0, near = 1;
     for (int j = 0; j < 32; j++)
@@ -595,7 +595,7 @@ static void test_lines(void)
     CHECK(px(img, 31, 15)[0] > 200 || px(img, 31, 16)[0] > 200); /* on the line's middle */
     /* a wide line: its spine and round caps fully covered (coverage saturates at 1), nothing
        beyond its half-width; a cap pixel is judged from the end point, not from the segment */
-    thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 255});
+    thx_raster_fill(img, (const unsigned char[4]){0, 0, 0, 255});
     thx_draw_line(img, 10.5, 16.5, 40.5, 16.5, 5, white);
     int spine = 1;
     for (int i = 10; i <= 40; i++) spine &= px(img, i, 16)[0] == 255 && px(img, i, 15)[0] == 255 && px(img, i, 17)[0] == 255;
@@ -604,15 +604,15 @@ static void test_lines(void)
     CHECK(px(img, 44, 16)[0] == 0 && px(img, 6, 16)[0] == 0);       /* 4 px past */
     CHECK(px(img, 25, 13)[0] == 0 && px(img, 25, 19)[0] == 0);      /* 3 px beside */
     /* half-transparent rectangle over black: half grey; over a transparent image: the colour itself */
-    thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 255});
+    thx_raster_fill(img, (const unsigned char[4]){0, 0, 0, 255});
     thx_draw_rect(img, -5, -5, 10, 10, half); /* clipped */
     CHECK(abs(px(img, 0, 0)[0] - 128) <= 1 && px(img, 0, 0)[3] == 255 && px(img, 4, 4)[0] > 0 && px(img, 5, 5)[0] == 0);
-    thx_image_fill(img, (const unsigned char[4]){0, 0, 0, 0});
+    thx_raster_fill(img, (const unsigned char[4]){0, 0, 0, 0});
     thx_draw_rect(img, 60, 30, 100, 100, half);
     CHECK(px(img, 63, 31)[0] == 255 && px(img, 63, 31)[3] == 128 && px(img, 59, 31)[3] == 0);
     thx_draw_line(img, NAN, 0, 10, 10, 1, white); /* nothing, no crash */
     thx_draw_line(img, -1e300, -1e300, 1e300, 1e300, 1, white);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 }
 
 /* ------------------------------------------------------------- colour bar */
@@ -625,7 +625,7 @@ static void test_colorbar(void)
     const int bx = 20, by = 30, bw = 16, bh = 200;
 
     /* vertical, continuous: the strip's column shows the map from the bottom up */
-    thx_image *img = new_image(160, 260, 255, 255, 255);
+    thx_raster *img = new_image(160, 260, 255, 255, 255);
     thx_draw_colorbar(img, f, bx, by, bw, bh, THX_CMAP_ECG, &s, 0, 5, "potential", "mV");
     int exact = 1;
     for (int p = 0; p < bh; p++) {
@@ -645,7 +645,7 @@ static void test_colorbar(void)
         for (int i = 0; i < 160; i++) ink_above += px(img, i, j)[0] < 128;
     CHECK(ink_right > 50 && ink_above > 30);
     CHECK(px(img, bx - 1, by + 50)[0] == 0 && px(img, bx + bw, by + 50)[0] == 0);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 
     /* horizontal, 4 bands: exactly 4 colours, in order from the left */
     img = new_image(300, 80, 0, 0, 0);
@@ -669,7 +669,7 @@ static void test_colorbar(void)
     for (int j = 40; j < 80; j++)
         for (int i = 0; i < 300; i++) ink_below += px(img, i, j)[0] > 128;
     CHECK(ink_below > 50);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 
     /* at the right edge: the title and the unit do not fit on one line beside the strip, so they
      * stand on two lines above it, both wholly inside the image (ink rows in two separate groups,
@@ -685,7 +685,7 @@ static void test_colorbar(void)
     }
     CHECK(groups == 2);
     CHECK(right_col == 0); /* nothing cut at the edge */
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 
     /* labels too wide for the room beside the strip move the strip left, whole labels in the image;
        large values without an exponent ("12600") */
@@ -701,7 +701,7 @@ static void test_colorbar(void)
         }
         CHECK(edge == 0);
         CHECK(strip_at >= 0 && strip_at < 100);
-        thx_image_destroy(&img);
+        thx_raster_destroy(&img);
     }
 
     /* no font: strip only; log scale, bands */
@@ -709,7 +709,7 @@ static void test_colorbar(void)
     thx_scale sl = {THX_SCALE_LOG, -1, 1, 10, THX_MAPPING_TRUE};
     thx_draw_colorbar(img, NULL, 10, 5, 10, 50, THX_CMAP_COOLWARM, &sl, 0, 3, "x", "y");
     CHECK(px(img, 40, 30)[0] == 0 && px(img, 15, 30)[0] > 150);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_font_close(&f);
 }
 
@@ -724,7 +724,7 @@ static void test_trace(void)
     const size_t marker = 30;
     const unsigned char red[4] = {255, 0, 0, 255}, bg[4] = {0, 0, 0, 255};
     const int bx = 10, by = 10, bw = 280, bh = 100;
-    thx_image *img = new_image(300, 120, 0, 0, 0);
+    thx_raster *img = new_image(300, 120, 0, 0, 0);
     thx_draw_trace(img, NULL, bx, by, bw, bh, v, N, 0, 2, marker, "II", "mV", red);
 
     /* the layout documented in annotate.c, without a font: the box inset by 2 pixels */
@@ -800,7 +800,7 @@ static void test_trace(void)
     /* with a font: the label in the header row, the trace below it, still inside the box */
     thx_font *f = NULL;
     CHECK_OK(ctx, thx_font_open(ctx, NULL, 12, &f));
-    thx_image_fill(img, bg);
+    thx_raster_fill(img, bg);
     thx_draw_trace(img, f, bx, by, bw, bh, v, N, 0, 2, N, "II", "mV", red);
     int label = 0;
     for (int j = by; j < by + 2 + thx_font_height(f); j++)
@@ -812,7 +812,7 @@ static void test_trace(void)
     CHECK(label > 10 && outside == 0);
     /* a box too narrow for its text, the marker at the first sample (its dot reaches past the plot):
        clipped to the box */
-    thx_image_fill(img, bg);
+    thx_raster_fill(img, bg);
     thx_draw_trace(img, f, 100, 20, 40, 90, v, N, -250, 2, 0, "aVR", "millivolts", red);
     outside = 0;
     for (int j = 0; j < img->h; j++)
@@ -826,7 +826,7 @@ static void test_trace(void)
     thx_draw_trace(img, f, bx, by, bw, bh, nan1, 3, 0, 1, 1, "I", "mV", red);
     thx_draw_trace(img, f, bx, by, 3, 3, v, N, 0, 1, 5, "I", "mV", red);
     thx_font_close(&f);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 }
 
 int main(void)

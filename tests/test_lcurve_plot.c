@@ -60,7 +60,7 @@ static void problem(thx_ctx *ctx, thx_series **A, thx_series **B)
     }
 }
 
-static double dark(const thx_image *img, int i, int j)
+static double dark(const thx_raster *img, int i, int j)
 {
     const unsigned char *p = img->rgba + 4 * ((size_t)j * img->w + i);
     return 255.0 - (p[0] + p[1] + p[2]) / 3.0;
@@ -68,7 +68,7 @@ static double dark(const thx_image *img, int i, int j)
 
 /* The centre of the frame line near x = guess (a vertical line: columns guess-3 .. guess+3,
  * darkness summed over rows y0..y1, weighted by each column's centre i + 0.5); likewise rows. */
-static double edge(const thx_image *img, int vertical, double guess, int a0, int a1)
+static double edge(const thx_raster *img, int vertical, double guess, int a0, int a1)
 {
     double sw = 0, sx = 0;
     for (int k = (int)guess - 3; k <= (int)guess + 3; k++) {
@@ -86,7 +86,7 @@ static double edge(const thx_image *img, int vertical, double guess, int a0, int
 }
 
 /* the centroid of the pixels of exactly the mark's red */
-static int red_centroid(const thx_image *img, double *x, double *y, int x0, int x1)
+static int red_centroid(const thx_raster *img, double *x, double *y, int x0, int x1)
 {
     double n = 0, sx = 0, sy = 0;
     for (int j = 0; j < img->h; j++)
@@ -110,8 +110,8 @@ static void check_picture(thx_ctx *ctx, const thx_inverse_report *r, const char 
     o.rule = rule;
     const char *path = tl_path(name);
     CHECK_OK(ctx, thx_lcurve_plot_write(ctx, r, &o, path));
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_read_png(ctx, path, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_read_png(ctx, path, &img));
     if (!img) return;
     CHECK(img->w == w && img->h == h);
     thx_lcurve_axes ax;
@@ -153,7 +153,7 @@ static void check_picture(thx_ctx *ctx, const thx_inverse_report *r, const char 
     CHECK_NEAR(cy, ey, 0.5);
     printf("%s: %dx%d, decades 1e%g..1e%g x 1e%g..1e%g, mark λ %.4g at (%.2f, %.2f) px, expected (%.2f, %.2f)\n", name,
            img->w, img->h, ax.lx0, ax.lx1, ax.ly0, ax.ly1, r->mark_lambda, cx, cy, ex, ey);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
 }
 
 int main(void)

@@ -84,7 +84,7 @@ static thx_surface *plane(int n)
     return s;
 }
 
-static const unsigned char *px(const thx_image *im, int x, int y) { return im->rgba + 4 * ((size_t)y * im->w + x); }
+static const unsigned char *px(const thx_raster *im, int x, int y) { return im->rgba + 4 * ((size_t)y * im->w + x); }
 
 static int near_rgb(const unsigned char *p, double r, double g, double b, int tol)
 {
@@ -97,13 +97,13 @@ static int diff3(const unsigned char *p, const unsigned char *q)
     return abs(p[0] - q[0]) + abs(p[1] - q[1]) + abs(p[2] - q[2]);
 }
 
-static void save(const thx_image *im, const char *name)
+static void save(const thx_raster *im, const char *name)
 {
     const char *dir = getenv("THX_RENDER_PNG");
     if (!dir) return;
     char path[512];
     snprintf(path, sizeof path, "%s/%s_%d.png", dir, name, ren ? thx_renderer_samples(ren) : 0);
-    CHECK_OK(ctx, thx_image_write_png(ctx, im, path));
+    CHECK_OK(ctx, thx_raster_write_png(ctx, im, path));
 }
 
 static thx_scene base_scene(const thx_render_surface *rs, size_t n)
@@ -175,8 +175,8 @@ static void test_ecg_map(void)
     thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
     rs.values = v;
     thx_scene sc = base_scene(&rs, 1);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     size_t n_nan = 99;
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
     save(im, "ecg_map");
@@ -214,7 +214,7 @@ static void test_ecg_map(void)
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     CHECK(near_rgb(px(im, 20, 64), 0.1, 0.2, 0.3, 1));
     CHECK(!near_rgb(px(im, 50, 64), 0.1, 0.2, 0.3, 10));
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
 }
@@ -233,8 +233,8 @@ static void test_bands_contours(void)
     rs.line_width = 2;
     thx_scene sc = base_scene(&rs, 1);
     plane_camera(&sc.camera);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     save(im, "bands");
     /* band k covers x in [-1 + k/2, -1/2 + k/2): pixels 32 k .. 32 k + 31 */
@@ -275,7 +275,7 @@ static void test_bands_contours(void)
     unsigned char mid[3];
     thx_colormap_eval(THX_CMAP_ECG, 0.5, mid);
     CHECK(diff3(px(im, 63, 64), mid) <= 12);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
 }
@@ -297,8 +297,8 @@ static void test_lab_bands(void)
     CHECK(thx_scale_bands(&rs.scale, rs.n_levels) == 16);
     thx_scene sc = base_scene(&rs, 1);
     plane_camera(&sc.camera);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     save(im, "lab_bands");
     int seen[16] = {0}, exact = 1, distinct = 0;
@@ -320,7 +320,7 @@ static void test_lab_bands(void)
     for (int b = 0; b < 16; b++) distinct += seen[b];
     CHECK(exact);
     CHECK(distinct >= 13);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
 }
@@ -341,8 +341,8 @@ static void test_nan(void)
     plane_camera(&sc.camera);
     const float nanc[4] = {0.5f, 0.9f, 0.1f, 1};
     memcpy(sc.nan_color, nanc, sizeof nanc);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     size_t n_nan = 0;
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
     save(im, "nan");
@@ -358,12 +358,12 @@ static void test_nan(void)
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, &n_nan));
     p = px(im, 120, 64);
     CHECK(p[0] > p[1] + 20 && p[2] > p[1] + 20);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
 }
 
-static int count_color(const thx_image *im, int r, int g, int b, int tol)
+static int count_color(const thx_raster *im, int r, int g, int b, int tol)
 {
     int n = 0;
     for (int y = 0; y < im->h; y++)
@@ -382,8 +382,8 @@ static void test_orientation(void)
     double c[3] = {0, 0, 0};
     thx_surface *good = sphere(24, 36, 1, c, 0), *bad = sphere(24, 36, 1, c, 1);
     CHECK(thx_surface_volume(good) > 0 && thx_surface_volume(bad) < 0);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     for (int f = 0; f < 2; f++) {
         thx_render_surface rs = surf_defaults(f ? bad : good, THX_DRAW_ORIENTATION);
         rs.color[0] = 0.2f, rs.color[1] = 0.7f, rs.color[2] = 0.2f;
@@ -402,7 +402,7 @@ static void test_orientation(void)
         }
         CHECK(near_rgb(px(im, 0, 0), 0.1, 0.2, 0.3, 1));
     }
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&good);
     thx_surface_destroy(&bad);
 }
@@ -418,8 +418,8 @@ static void test_clip(void)
     thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
     rs.values = v;
     thx_scene sc = base_scene(&rs, 1);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     const unsigned char *p = px(im, 64, 64);
     CHECK(p[0] > p[2] + 40); /* the front: red */
@@ -474,7 +474,7 @@ static void test_clip(void)
     }
     sc.n_clip = 5;
     CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
 }
@@ -486,10 +486,10 @@ static void test_viewports(void)
     double c[3] = {0, 0, 0};
     thx_surface *s = sphere(20, 30, 1, c, 0);
     thx_render_surface rs = surf_defaults(s, THX_DRAW_PHONG);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     const unsigned char grey[4] = {128, 128, 128, 255};
-    thx_image_fill(im, grey);
+    thx_raster_fill(im, grey);
     thx_scene a = base_scene(&rs, 1), b = base_scene(&rs, 1);
     double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
     thx_camera_view(&a.camera, THX_VIEW_ANTERIOR, lo, hi, 64.0 / 128);
@@ -529,7 +529,7 @@ static void test_viewports(void)
     memcpy(a.viewport, bad, sizeof bad);
     CHECK(thx_render(ctx, ren, &a, im, NULL) == THX_EINPUT);
     CHECK(strstr(thx_ctx_message(ctx), "viewport") != NULL);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&s);
     thx_surface_destroy(&s2);
 }
@@ -539,8 +539,8 @@ static void test_modes(void)
 {
     double c[3] = {0, 0, 0};
     thx_surface *s = sphere(16, 24, 1, c, 0);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     thx_render_surface rs = surf_defaults(s, THX_DRAW_POINTS);
     rs.color[0] = 1, rs.color[1] = 1, rs.color[2] = 0;
     rs.point_size = 5;
@@ -601,20 +601,20 @@ static void test_modes(void)
     unsigned char red[3];
     thx_colormap_eval(THX_CMAP_ECG, 1.0, red);
     CHECK(diff3(px(im, 40, 96), red) <= 6); /* |v| = 4 at the top of the scale */
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&s);
     thx_surface_destroy(&inner);
 }
 
 static void test_errors(void)
 {
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, 64, 64, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 64, 64, &im));
     thx_scene sc = base_scene(NULL, 0);
     CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT); /* wrong image size */
     CHECK(strstr(thx_ctx_message(ctx), "64 x 64") != NULL);
-    thx_image_destroy(&im);
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster_destroy(&im);
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     sc.camera.center[0] = sc.camera.eye[0], sc.camera.center[1] = sc.camera.eye[1];
     sc.camera.center[2] = sc.camera.eye[2];
     CHECK(thx_render(ctx, ren, &sc, im, NULL) == THX_EINPUT);
@@ -641,7 +641,7 @@ static void test_errors(void)
     thx_renderer_destroy(&bad);
     CHECK(bad == NULL);
     thx_renderer_destroy(&bad);
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&s);
 }
 
@@ -652,8 +652,8 @@ static void test_sides(void)
 {
     double c[3] = {0, 0, 0};
     thx_surface *good = sphere(24, 36, 1, c, 0), *bad = sphere(24, 36, 1, c, 1), *pl = plane(4);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     for (int f = 0; f < 2; f++) {
         thx_render_surface rs = surf_defaults(f ? bad : good, THX_DRAW_PHONG);
         thx_scene sc = base_scene(&rs, 1);
@@ -680,7 +680,7 @@ static void test_sides(void)
     sc.camera.eye[1] = 5;
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     CHECK(near_rgb(px(im, 64, 64), 0.8, 0.8, 0.8, 2));
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&good);
     thx_surface_destroy(&bad);
     thx_surface_destroy(&pl);
@@ -693,8 +693,8 @@ static void test_sides(void)
 static void test_perspective(void)
 {
     thx_surface *pl = plane(4);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     const double fovs[2] = {60, 30};
     for (int k = 0; k < 2; k++) {
         thx_render_surface rs = surf_defaults(pl, THX_DRAW_FLAT);
@@ -715,7 +715,7 @@ static void test_perspective(void)
         CHECK(abs(row - N / 2) <= 2 && abs(col - N / 2) <= 2);
         CHECK(!near_rgb(px(im, N / 4 + 2, N / 2), 0.1, 0.2, 0.3, 40) && near_rgb(px(im, N / 4 - 2, N / 2), 0.1, 0.2, 0.3, 3));
     }
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&pl);
 }
 
@@ -725,8 +725,8 @@ static void test_perspective(void)
  * every pixel's ray projects back to that pixel. */
 static void test_project(void)
 {
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     for (int persp = 0; persp < 2; persp++) {
         thx_camera cam;
         memset(&cam, 0, sizeof cam);
@@ -779,7 +779,7 @@ static void test_project(void)
         if (persp) CHECK(thx_camera_project(&cam, N, N, q, &a, &b2, &d2) == -1); /* the eye itself is not in front */
         thx_surface_destroy(&sq);
     }
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
 }
 
 /* A renderer without a context of its own (the viewer's case) drawing with thx_render_scene_gl into
@@ -846,18 +846,18 @@ static void test_second_renderer(void)
     thx_scene sc = base_scene(&rs, 1);
     double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
     thx_camera_view(&sc.camera, THX_VIEW_LEFT, lo, hi, 2.0);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, 200, 100, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 200, 100, &im));
     CHECK_OK(ctx, thx_render(ctx, r2, &sc, im, NULL));
     CHECK(near_rgb(px(im, 10, 50), 0.1, 0.2, 0.3, 1));
     CHECK(!near_rgb(px(im, 100, 50), 0.1, 0.2, 0.3, 10));
     thx_renderer_destroy(&r2);
-    thx_image_destroy(&im);
-    CHECK_OK(ctx, thx_image_create(ctx, N, N, &im));
+    thx_raster_destroy(&im);
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &im));
     sc = base_scene(&rs, 1);
     CHECK_OK(ctx, thx_render(ctx, ren, &sc, im, NULL));
     CHECK(!near_rgb(px(im, 64, 64), 0.1, 0.2, 0.3, 10));
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     thx_surface_destroy(&s);
 }
 
@@ -884,8 +884,8 @@ static void bench(void)
     thx_scene sc = base_scene(&rs, 1);
     double lo[3] = {-100, -100, -100}, hi[3] = {100, 100, 100};
     thx_camera_view(&sc.camera, THX_VIEW_ANTERIOR, lo, hi, 1.0);
-    thx_image *im = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, 1024, 1024, &im));
+    thx_raster *im = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 1024, 1024, &im));
     for (int pass = 0; pass < 3; pass++) {
         /* automatic samples; 4x multisampling; automatic with a clip plane (both sides drawn) */
         CHECK_OK(ctx, thx_renderer_set_samples(ctx, big, pass == 1 ? 4 : 0));
@@ -906,7 +906,7 @@ static void bench(void)
                thx_renderer_samples(big) > 1 ? "s" : " + FXAA", pass == 2 ? ", clip plane" : "", 1e3 * t[0],
                1e3 * 0.5 * (t[5] + t[6]), 1e3 * t[1], 1e3 * t[10]);
     }
-    thx_image_destroy(&im);
+    thx_raster_destroy(&im);
     free(v);
     thx_surface_destroy(&s);
     thx_renderer_destroy(&big);

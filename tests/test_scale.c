@@ -413,7 +413,7 @@ static void test_ranges(void)
 
 /* ------------------------------------------------------------- the colour bar */
 
-static const unsigned char *px(const thx_image *im, int x, int y) { return im->rgba + 4 * ((size_t)y * im->w + x); }
+static const unsigned char *px(const thx_raster *im, int x, int y) { return im->rgba + 4 * ((size_t)y * im->w + x); }
 
 static void test_colorbar(void)
 {
@@ -421,15 +421,15 @@ static void test_colorbar(void)
     CHECK_OK(ctx, thx_font_open(ctx, NULL, 12, &f));
     const int bx = 20, by = 20, bw = 16, bh = 320;
     const unsigned char white[4] = {255, 255, 255, 255};
-    thx_image *img = NULL;
-    CHECK_OK(ctx, thx_image_create(ctx, 120, 360, &img));
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 120, 360, &img));
     if (!img) return;
 
     /* lab7, SYMMETRIC over -37..52, 12 shades asked: 16 bands; a tick at each of the 15 levels and
        nowhere else */
     thx_scale s = make(THX_SCALE_LAB7, THX_MAPPING_SYMMETRIC, -37, 52);
     for (int pass = 0; pass < 2; pass++) {
-        thx_image_fill(img, white);
+        thx_raster_fill(img, white);
         thx_draw_colorbar(img, pass ? f : NULL, bx, by, bw, bh, THX_CMAP_ECG, &s, 12, 5, "V", "mV");
         int changes = 0;
         for (int p = 1; p < bh; p++) changes += memcmp(px(img, bx + bw / 2, by + p), px(img, bx + bw / 2, by + p - 1), 3) != 0;
@@ -450,7 +450,7 @@ static void test_colorbar(void)
     }
     /* reversed: ticks at the same places (the strip is the map in t; the labels run the other way) */
     thx_scale rev = make(THX_SCALE_LAB7, THX_MAPPING_SYMMETRIC, 52, -37);
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_draw_colorbar(img, NULL, bx, by, bw, bh, THX_CMAP_ECG, &rev, 12, 5, NULL, NULL);
     int rticks = 0, ron = 1;
     for (int row = by; row < by + bh; row++)
@@ -462,7 +462,7 @@ static void test_colorbar(void)
     CHECK(rticks == 15 && ron);
     /* lab13 in a short bar: 28 bands, labels on every k-th level only, never touching */
     thx_scale s13 = make(THX_SCALE_LAB13, THX_MAPPING_SYMMETRIC, -37, 52);
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_draw_colorbar(img, f, bx, by, bw, 200, THX_CMAP_ECG, &s13, 4, 5, NULL, NULL);
     int groups = 0, in = 0, ticks = 0;
     for (int row = by - 10; row < by + 210; row++) {
@@ -476,7 +476,7 @@ static void test_colorbar(void)
 
     /* SEPARATE, linear, 4 labels (none at the middle): a line across the strip at zero, and a "0" */
     thx_scale sep = make(THX_SCALE_LINEAR, THX_MAPPING_SEPARATE, -1, 10);
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_draw_colorbar(img, f, bx, by, bw, bh, THX_CMAP_ECG, &sep, 0, 4, NULL, NULL);
     int zero_row = by + bh - bh / 2, across = 1, ticks4 = 0;
     for (int i = bx; i < bx + bw; i++) across &= px(img, i, zero_row)[0] < 64 && px(img, i, zero_row)[2] < 64;
@@ -484,12 +484,12 @@ static void test_colorbar(void)
     CHECK(across && ticks4 == 5);
     /* ... which a TRUE mapping does not have */
     sep.mapping = THX_MAPPING_TRUE;
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_draw_colorbar(img, f, bx, by, bw, bh, THX_CMAP_ECG, &sep, 0, 4, NULL, NULL);
     int dark = 0;
     for (int i = bx; i < bx + bw; i++) dark += px(img, i, zero_row)[0] < 64 && px(img, i, zero_row)[2] < 64;
     CHECK(dark == 0);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_font_close(&f);
 }
 

@@ -130,7 +130,7 @@ int cmd_animate(int argc, char **argv)
     thx_picture_data d;
     thx_renderer *rr = NULL;
     thx_font *font = NULL;
-    thx_image *img = NULL;
+    thx_raster *img = NULL;
     int rc = 0;
     size_t nan = 0;
     double t0 = thx_wtime();
@@ -221,10 +221,10 @@ int cmd_animate(int argc, char **argv)
     int done = 0, kept = 0, total = a_last - a_first + 1;
     for (int f = a_first; st == THX_OK && f <= a_last; f++) {
         snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
-        thx_image *old = NULL;
+        thx_raster *old = NULL;
         thx_ctx *quiet = NULL;
         thx_ctx_create(&quiet);
-        if (may_keep && access(path, R_OK) == 0 && thx_image_read_png(quiet, path, &old) == THX_OK && old->w == o.p.w &&
+        if (may_keep && access(path, R_OK) == 0 && thx_raster_read_png(quiet, path, &old) == THX_OK && old->w == o.p.w &&
             old->h == o.p.h) {
             kept++; /* resumable: a complete PNG of the right size is kept */
         } else {
@@ -235,9 +235,9 @@ int cmd_animate(int argc, char **argv)
                 df = !nf ? 1 : thx_camera_path_data_frame(flight, f) ? thx_camera_path_data_frame(flight, f) : f;
             }
             st = thx_picture_draw(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
-            if (st == THX_OK) st = thx_image_write_png(ctx, img, path);
+            if (st == THX_OK) st = thx_raster_write_png(ctx, img, path);
         }
-        thx_image_destroy(&old);
+        thx_raster_destroy(&old);
         thx_ctx_destroy(&quiet);
         done++;
         if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
@@ -253,7 +253,7 @@ int cmd_animate(int argc, char **argv)
         if (want_movie) printf(", %s", movie);
         printf("\n");
     }
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_font_close(&font);
     thx_renderer_destroy(&rr);
     thx_picture_data_free(&d);

@@ -424,7 +424,7 @@ size_t render_options(cli_opt *t, ropts *o)
 }
 
 
-thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_renderer **rr, thx_font **font, thx_image **img)
+thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_renderer **rr, thx_font **font, thx_raster **img)
 {
     memset(d, 0, sizeof *d);
     o->p.frame = o->frame;
@@ -433,7 +433,7 @@ thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_rendere
         return thx_error(ctx, THX_EINPUT, "--streamlines: too many seeds for this machine's memory (above)");
     THX_CHECK(thx_picture_load(ctx, &o->p, d));
     THX_CHECK(thx_renderer_create(ctx, o->p.w, o->p.h, rr));
-    THX_CHECK(thx_image_create(ctx, o->p.w, o->p.h, img));
+    THX_CHECK(thx_raster_create(ctx, o->p.w, o->p.h, img));
     if (o->p.colorbar || o->p.label || o->p.trace || o->p.panels || o->p.n_labels || o->p.extrema || o->p.orientation ||
         o->p.n_electrodes)
         THX_CHECK(thx_font_open(ctx, o->p.font, o->p.h / 40 > 11 ? o->p.h / 40 : 11, font));
@@ -483,7 +483,7 @@ int cmd_render(int argc, char **argv)
     thx_picture_data d;
     thx_renderer *rr = NULL;
     thx_font *font = NULL;
-    thx_image *img = NULL;
+    thx_raster *img = NULL;
     size_t nan = 0;
     double t0 = thx_wtime();
     thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
@@ -495,7 +495,7 @@ int cmd_render(int argc, char **argv)
         st = thx_picture_draw(ctx, &o.p, &d, rr, font, o.frame, img, &nan);
         times[k] = thx_wtime() - t1;
     }
-    if (st == THX_OK) st = thx_image_write_png(ctx, img, o.out);
+    if (st == THX_OK) st = thx_raster_write_png(ctx, img, o.out);
     if (st == THX_OK && repeat > 1 && o.verbose >= 0) {
         qsort(times, (size_t)repeat, sizeof *times, cmp_dbl);
         printf("render: %d repetitions, median %.1f ms a frame (min %.1f, max %.1f), %.1f frames per second\n", repeat,
@@ -508,7 +508,7 @@ int cmd_render(int argc, char **argv)
         if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
         if (o.verbose >= 0) printf("wrote %s (%dx%d, %.3f s; %s)\n", o.out, o.p.w, o.p.h, thx_wtime() - t0, thx_renderer_info(rr));
     }
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     thx_font_close(&font);
     thx_renderer_destroy(&rr);
     thx_picture_data_free(&d);

@@ -31,5 +31,5 @@ size_t render_options(cli_opt *t, ropts *o);
 int render_positional(void *user, const char *a);
 /* Reads the data (d, zeroed first), settles the views' frame, creates the renderer, the image and
  * (for annotations) the font. */
-thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_renderer **rr, thx_font **font, thx_image **img);
+thx_status render_setup(thx_ctx *ctx, ropts *o, thx_picture_data *d, thx_renderer **rr, thx_font **font, thx_raster **img);
 #endif

@@ -248,21 +248,21 @@ static thx_status write_png(thx_ctx *ctx, const layout *L, const thx_series *s, 
     if ((double)w * h > 1e8)
         return thx_error(ctx, THX_EINPUT, "ECG plot %s: %d x %d pixels is too large; give fewer pixels per mm", path, w,
                          h);
-    thx_image *img = NULL;
+    thx_raster *img = NULL;
     thx_font *fb = NULL, *fs = NULL;
-    THX_CHECK(thx_image_create(ctx, w, h, &img));
+    THX_CHECK(thx_raster_create(ctx, w, h, &img));
     static const unsigned char white[4] = {255, 255, 255, 255};
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_status st = thx_font_open(ctx, o->font, (int)lround(3.2 * k), &fb);
     if (st == THX_OK) st = thx_font_open(ctx, o->font, (int)lround(2.4 * k), &fs);
     if (st == THX_OK) {
         plot_pen p = {.img = img, .fbig = fb, .fsmall = fs, .s = k};
         draw(&p, L, s, o->title);
-        st = thx_image_write_png(ctx, img, path);
+        st = thx_raster_write_png(ctx, img, path);
     }
     thx_font_close(&fb);
     thx_font_close(&fs);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     return st;
 }
 

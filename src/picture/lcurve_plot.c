@@ -200,20 +200,20 @@ thx_status thx_lcurve_plot_write(thx_ctx *ctx, const thx_inverse_report *r, cons
                          o->width, o->height);
     thx_lcurve_axes a;
     THX_CHECK(thx_lcurve_plot_axes(ctx, r, o, &a));
-    thx_image *img = NULL;
+    thx_raster *img = NULL;
     thx_font *fb = NULL, *fs = NULL;
-    THX_CHECK(thx_image_create(ctx, o->width, o->height, &img));
+    THX_CHECK(thx_raster_create(ctx, o->width, o->height, &img));
     static const unsigned char white[4] = {255, 255, 255, 255};
-    thx_image_fill(img, white);
+    thx_raster_fill(img, white);
     thx_status st = thx_font_open(ctx, o->font, 16, &fb);
     if (st == THX_OK) st = thx_font_open(ctx, o->font, 14, &fs);
     if (st == THX_OK) {
         plot_pen p = {.img = img, .fbig = fb, .fsmall = fs, .s = 1};
         draw(&p, r, o, &a);
-        st = thx_image_write_png(ctx, img, path);
+        st = thx_raster_write_png(ctx, img, path);
     }
     thx_font_close(&fb);
     thx_font_close(&fs);
-    thx_image_destroy(&img);
+    thx_raster_destroy(&img);
     return st;
 }

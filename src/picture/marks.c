@@ -64,7 +64,7 @@ static int visible(thx_ctx *ctx, const thx_picture_data *d, const seeing *v, int
     return hit.t >= t - v->tol;
 }
 
-static void text_shadowed(thx_image *img, thx_font *font, int x, int y, const char *s, const unsigned char rgba[4])
+static void text_shadowed(thx_raster *img, thx_font *font, int x, int y, const char *s, const unsigned char rgba[4])
 {
     static const unsigned char black[4] = {0, 0, 0, 200};
     thx_draw_text(img, font, x + 1, y + 1, s, black);
@@ -72,7 +72,7 @@ static void text_shadowed(thx_image *img, thx_font *font, int x, int y, const ch
 }
 
 thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font, int frame,
-                         thx_image *img)
+                         thx_raster *img)
 {
     const thx_model *m = d->m;
     if (!font || o->panels || (!o->n_labels && !o->extrema && !d->n_elec)) return THX_OK;

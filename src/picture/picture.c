@@ -482,7 +482,7 @@ thx_status thx_picture_bars_check(thx_ctx *ctx, const thx_picture_opts *o, thx_f
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
  * into the current framebuffer (img NULL, fb_w x fb_h). */
 static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *rr,
-                              thx_font *font, int frame, int fb_w, int fb_h, thx_image *img, thx_picture_bars *bars,
+                              thx_font *font, int frame, int fb_w, int fb_h, thx_raster *img, thx_picture_bars *bars,
                               size_t *nan_total)
 {
     thx_status st = THX_OK;
@@ -550,7 +550,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
 }
 
 thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font,
-                                int frame, const thx_picture_bars *bars, thx_image *img)
+                                int frame, const thx_picture_bars *bars, thx_raster *img)
 {
     const thx_model *m = d->m;
     if (!font) return THX_OK;
@@ -620,9 +620,9 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
 }
 
 thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
-                            thx_font *font, int frame, thx_image *img, size_t *nan_total)
+                            thx_font *font, int frame, thx_raster *img, size_t *nan_total)
 {
-    thx_image_fill(img, BG);
+    thx_raster_fill(img, BG);
     thx_picture_bars bars;
     THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bars, nan_total));
     if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, &bars));

@@ -11,7 +11,7 @@ void picture_range_of(const double *v, size_t n, double *lo, double *hi);
 void picture_scale_settings(const thx_picture_opts *o, double lo, double hi, int true_range, thx_scale *sc);
 /* Node labels and extrema marks over img (marks.c), for a single-panel picture drawn at img's size. */
 thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font, int frame,
-                         thx_image *img);
+                         thx_raster *img);
 /* The views' frame (o->ax, o->sg) from --up/--front over the model's frame; refuses a model with
  * no frame where a named view or clip side needs one (picture_frame.c). */
 thx_status picture_view_frame(thx_ctx *ctx, thx_picture_opts *o, const thx_picture_data *d);

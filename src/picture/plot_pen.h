@@ -10,7 +10,7 @@
 
 typedef struct {
     FILE *svg;          /* SVG: write here */
-    thx_image *img;     /* PNG: draw here */
+    thx_raster *img;     /* PNG: draw here */
     thx_font *fbig, *fsmall;
     double s;           /* pixels per layout unit */
 } plot_pen;

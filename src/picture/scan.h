@@ -2,9 +2,9 @@
  * The scan under the model (issue 25; picture/scan.c): the image of --image read once, and its
  * planes made into textures (grey levels under a window and level, or a colour per label).
  *
- * Internal to src/picture. Kept apart from thorax/picture/picture.h on purpose: the image module's
- * volume type (thorax/image/image.h) and the renderer's RGBA picture (thorax/render/image.h) are
- * both called thx_image and cannot meet in one file, so the volume stays behind pic_scan here.
+ * Internal to src/picture. The volume (thorax/image/image.h's thx_image) stays behind pic_scan, so
+ * that a picture's settings and the renderer's RGBA raster (thx_raster, thorax/render/image.h) need
+ * not know the image module.
  */
 #ifndef THORAX_PICTURE_SCAN_H
 #define THORAX_PICTURE_SCAN_H

@@ -1,5 +1,5 @@
 /*
- * 2D annotation on a thx_image (thorax/image.h): text, lines, rectangles,
+ * 2D annotation on a thx_raster (thorax/image.h): text, lines, rectangles,
  * the colour bar and the signal trace.
  *
  * Geometry: pixel (i, j) is the unit square [i, i + 1) x [j, j + 1), its centre
@@ -61,7 +61,7 @@ typedef struct {
 } clip_rect;
 
 /* The box (x, y, w, h) clipped to the image (empty when they do not meet). */
-static clip_rect clip_box(const thx_image *img, long x, long y, long w, long h)
+static clip_rect clip_box(const thx_raster *img, long x, long y, long w, long h)
 {
     clip_rect c = {0, 0, 0, 0};
     long x1 = x + w, y1 = y + h;
@@ -72,15 +72,15 @@ static clip_rect clip_box(const thx_image *img, long x, long y, long w, long h)
     return c;
 }
 
-static clip_rect whole(const thx_image *img) { return clip_box(img, 0, 0, img->w, img->h); }
+static clip_rect whole(const thx_raster *img) { return clip_box(img, 0, 0, img->w, img->h); }
 
-static void blend_at(thx_image *img, const clip_rect *c, int i, int j, const unsigned char rgba[4], double cov)
+static void blend_at(thx_raster *img, const clip_rect *c, int i, int j, const unsigned char rgba[4], double cov)
 {
     if (i < c->x0 || j < c->y0 || i >= c->x1 || j >= c->y1) return;
     blend(img->rgba + 4 * ((size_t)j * img->w + i), rgba, cov);
 }
 
-void thx_draw_rect(thx_image *img, int x, int y, int w, int h, const unsigned char rgba[4])
+void thx_draw_rect(thx_raster *img, int x, int y, int w, int h, const unsigned char rgba[4])
 {
     if (!img || w <= 0 || h <= 0) return;
     clip_rect c = clip_box(img, x, y, w, h);
@@ -121,7 +121,7 @@ typedef struct {
     float *m;
 } cov_sink;
 
-static void capsule(thx_image *img, cov_sink *sink, double x0, double y0, double x1, double y1, double width,
+static void capsule(thx_raster *img, cov_sink *sink, double x0, double y0, double x1, double y1, double width,
                     const unsigned char rgba[4])
 {
     if (!isfinite(x0) || !isfinite(y0) || !isfinite(x1) || !isfinite(y1) || !(width > 0)) return;
@@ -143,7 +143,7 @@ static void capsule(thx_image *img, cov_sink *sink, double x0, double y0, double
         }
 }
 
-void thx_draw_line(thx_image *img, double x0, double y0, double x1, double y1, double width,
+void thx_draw_line(thx_raster *img, double x0, double y0, double x1, double y1, double width,
                    const unsigned char rgba[4])
 {
     if (!img) return;
@@ -152,7 +152,7 @@ void thx_draw_line(thx_image *img, double x0, double y0, double x1, double y1, d
 }
 
 /* A line drawn only inside the clip rectangle. */
-static void line_in(thx_image *img, const clip_rect *c, double x0, double y0, double x1, double y1, double width,
+static void line_in(thx_raster *img, const clip_rect *c, double x0, double y0, double x1, double y1, double width,
                     const unsigned char rgba[4])
 {
     cov_sink sink = {*c, NULL};
@@ -161,7 +161,7 @@ static void line_in(thx_image *img, const clip_rect *c, double x0, double y0, do
 
 /* A polyline through (x[i], y[i]) drawn inside the clip rectangle. A non-finite point breaks the
    line; a finite point with no finite neighbour is drawn as a dot. */
-static void polyline(thx_image *img, const clip_rect *c, const double *x, const double *y, size_t n, double width,
+static void polyline(thx_raster *img, const clip_rect *c, const double *x, const double *y, size_t n, double width,
                      const unsigned char rgba[4])
 {
     int bw = c->x1 - c->x0, bh = c->y1 - c->y0;
@@ -312,7 +312,7 @@ static uint32_t utf8_next(const char **s)
 }
 
 /* Copies a glyph's coverage bitmap, its top-left at (x, y), blended in rgba. */
-static void blit_glyph(thx_image *img, const clip_rect *clip, const FT_Bitmap *bm, int x, int y,
+static void blit_glyph(thx_raster *img, const clip_rect *clip, const FT_Bitmap *bm, int x, int y,
                        const unsigned char rgba[4])
 {
     if (bm->pixel_mode != FT_PIXEL_MODE_GRAY && bm->pixel_mode != FT_PIXEL_MODE_MONO) return;
@@ -331,7 +331,7 @@ static void blit_glyph(thx_image *img, const clip_rect *clip, const FT_Bitmap *b
 /* Lays out a string from pen position x on baseline y: draws it inside the clip rectangle when img
    is given, and returns its advance width in pixels. Missing glyphs come out as the font's .notdef
    box. */
-static int layout(thx_font *f, const char *s, thx_image *img, const clip_rect *clip, int x, int y,
+static int layout(thx_font *f, const char *s, thx_raster *img, const clip_rect *clip, int x, int y,
                   const unsigned char rgba[4])
 {
     if (!f || !s) return 0;
@@ -363,7 +363,7 @@ static int layout(thx_font *f, const char *s, thx_image *img, const clip_rect *c
 
 int thx_text_width(thx_font *f, const char *utf8) { return layout(f, utf8, NULL, NULL, 0, 0, NULL); }
 
-void thx_draw_text(thx_image *img, thx_font *f, int x, int y, const char *utf8, const unsigned char rgba[4])
+void thx_draw_text(thx_raster *img, thx_font *f, int x, int y, const char *utf8, const unsigned char rgba[4])
 {
     if (!img) return;
     clip_rect c = whole(img);
@@ -374,7 +374,7 @@ void thx_draw_text(thx_image *img, thx_font *f, int x, int y, const char *utf8, 
 
 /* Mean luminance in [0, 1] of the image in a box (transparent pixels count as white: an image with
    a transparent background will most likely be put on a page). 1 when the box is outside. */
-static double mean_luminance(const thx_image *img, int x, int y, int w, int h)
+static double mean_luminance(const thx_raster *img, int x, int y, int w, int h)
 {
     double sum = 0;
     long n = 0;
@@ -389,7 +389,7 @@ static double mean_luminance(const thx_image *img, int x, int y, int w, int h)
 }
 
 /* Black on a light background, white on a dark one. */
-static void ink_for(const thx_image *img, int x, int y, int w, int h, unsigned char ink[4])
+static void ink_for(const thx_raster *img, int x, int y, int w, int h, unsigned char ink[4])
 {
     unsigned char v = mean_luminance(img, x, y, w, h) > 0.5 ? 0 : 255;
     ink[0] = ink[1] = ink[2] = v;
@@ -410,7 +410,7 @@ static void format_value(char *buf, size_t size, double v, double range)
 }
 
 /* The tick of the value at t beside the strip, and its label (text NULL: the tick alone). */
-static void bar_label(thx_image *img, thx_font *f, int vertical, int x, int y, int w, int h, double t,
+static void bar_label(thx_raster *img, thx_font *f, int vertical, int x, int y, int w, int h, double t,
                       const char *text, const unsigned char ink[4])
 {
     if (vertical) {
@@ -455,7 +455,7 @@ static void bar_marks_of(const thx_scale *s, int n_labels, bar_marks *m)
  * Text and the frame are black or white, whichever contrasts with the image where the labels go.
  * With no font only the strip, its frame and the ticks are drawn.
  */
-void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, thx_colormap c, const thx_scale *s,
+void thx_draw_colorbar(thx_raster *img, thx_font *f, int x, int y, int w, int h, thx_colormap c, const thx_scale *s,
                        int n_shades, int n_labels, const char *title, const char *unit)
 {
     if (!img || !s || w <= 0 || h <= 0) return;
@@ -579,7 +579,7 @@ void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, 
  * pixel wide, on the pixel centres nearest their place), the trace 1.5 pixels wide, the marker's
  * dot 6 pixels across, on the trace. Everything, text included, is clipped to the box.
  */
-void thx_draw_trace(thx_image *img, thx_font *f, int x, int y, int w, int h, const double *v, size_t n, double t0,
+void thx_draw_trace(thx_raster *img, thx_font *f, int x, int y, int w, int h, const double *v, size_t n, double t0,
                     double dt, size_t marker, const char *label, const char *unit, const unsigned char rgba[4])
 {
     if (!img || w <= 0 || h <= 0) return;

@@ -26,13 +26,13 @@
    allocating (32768^2 RGBA is 4 GiB). */
 #define THX_IMAGE_MAX_SIDE 32768
 
-thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out)
+thx_status thx_raster_create(thx_ctx *ctx, int w, int h, thx_raster **out)
 {
     *out = NULL;
     if (w <= 0 || h <= 0 || w > THX_IMAGE_MAX_SIDE || h > THX_IMAGE_MAX_SIDE)
         return thx_error(ctx, THX_EINPUT, "image size %d x %d: each side must be 1 to %d pixels", w, h,
                          THX_IMAGE_MAX_SIDE);
-    thx_image *img = thx_calloc(ctx, 1, sizeof *img);
+    thx_raster *img = thx_calloc(ctx, 1, sizeof *img);
     if (!img) return THX_ENOMEM;
     img->rgba = thx_calloc(ctx, (size_t)w * (size_t)h, 4);
     if (!img->rgba) {
@@ -45,7 +45,7 @@ thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out)
     return THX_OK;
 }
 
-void thx_image_destroy(thx_image **img)
+void thx_raster_destroy(thx_raster **img)
 {
     if (!img || !*img) return;
     free((*img)->rgba);
@@ -53,13 +53,13 @@ void thx_image_destroy(thx_image **img)
     *img = NULL;
 }
 
-void thx_image_fill(thx_image *img, const unsigned char rgba[4])
+void thx_raster_fill(thx_raster *img, const unsigned char rgba[4])
 {
     size_t n = (size_t)img->w * (size_t)img->h;
     for (size_t i = 0; i < n; i++) memcpy(img->rgba + 4 * i, rgba, 4);
 }
 
-static int all_opaque(const thx_image *img)
+static int all_opaque(const thx_raster *img)
 {
     size_t n = (size_t)img->w * (size_t)img->h;
     for (size_t i = 0; i < n; i++)
@@ -67,7 +67,7 @@ static int all_opaque(const thx_image *img)
     return 1;
 }
 
-thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *path)
+thx_status thx_raster_write_png(thx_ctx *ctx, const thx_raster *img, const char *path)
 {
     if (!img || !img->rgba || img->w <= 0 || img->h <= 0)
         return thx_error(ctx, THX_EINPUT, "%s: no image to write", path);
@@ -127,7 +127,7 @@ thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *p
     return thx_atomic_commit(ctx, &af);
 }
 
-thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out)
+thx_status thx_raster_read_png(thx_ctx *ctx, const char *path, thx_raster **out)
 {
     *out = NULL;
     FILE *f = fopen(path, "rb");
@@ -143,7 +143,7 @@ thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out)
     png_image pi;
     memset(&pi, 0, sizeof pi);
     pi.version = PNG_IMAGE_VERSION;
-    thx_image *img = NULL;
+    thx_raster *img = NULL;
     thx_status st = THX_OK;
     if (!png_image_begin_read_from_stdio(&pi, f)) {
         st = thx_error(ctx, THX_EINPUT, "%s: unreadable PNG: %s", path, pi.message);
@@ -157,11 +157,11 @@ thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out)
     /* 8-bit sRGB RGBA, not premultiplied; a file without colour-space chunks is taken as sRGB,
        so 8-bit files come through unchanged. */
     pi.format = PNG_FORMAT_RGBA;
-    st = thx_image_create(ctx, (int)pi.width, (int)pi.height, &img);
+    st = thx_raster_create(ctx, (int)pi.width, (int)pi.height, &img);
     if (st != THX_OK) goto done;
     if (!png_image_finish_read(&pi, NULL, img->rgba, 0, NULL)) {
         st = thx_error(ctx, THX_EINPUT, "%s: unreadable PNG: %s", path, pi.message);
-        thx_image_destroy(&img);
+        thx_raster_destroy(&img);
         goto done;
     }
     *out = img;

@@ -7,7 +7,7 @@
  * multisampled drawing (on a GPU) or smooth the single-sampled one with FXAA
  * on the CPU (on llvmpipe, where multisampling triples the time: see
  * docs/decisions.md, "Renderer"), read it back and flip it into the image
- * (GL's rows run bottom to top, thx_image's top to bottom).
+ * (GL's rows run bottom to top, thx_raster's top to bottom).
  *
  * Invariants and conventions:
  *  - Colours are premultiplied by alpha inside the framebuffer (blending
@@ -172,7 +172,7 @@ thx_status thx_renderer_set_samples(thx_ctx *ctx, thx_renderer *r, int samples)
 
 int thx_renderer_samples(const thx_renderer *r) { return r && r->own ? r->samples : 0; }
 
-thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx_image *img, size_t *n_nan)
+thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx_raster *img, size_t *n_nan)
 {
     if (n_nan) *n_nan = 0;
     if (!r || !r->own)

@@ -130,8 +130,8 @@ thx_status rn_viewport_rect(thx_ctx *ctx, const thx_scene *sc, int fb_w, int fb_
 thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int fb_w, int fb_h, size_t *n_nan);
 
 /* render_readback.c: the image into the framebuffer (clear = 0) and the drawing back out. */
-thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_image *img, const int rect[4]);
-thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_image *img, const int rect[4]);
+thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_raster *img, const int rect[4]);
+thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4]);
 
 /* The camera's orthonormal frame: right, up and back (from the centre toward the eye). Returns -1
  * when the camera is degenerate (eye at the centre, up along the line of sight, non-finite). */

@@ -9,7 +9,7 @@
 #include <string.h>
 
 /* The image's pixels under the viewport into the framebuffer, premultiplied (clear = 0). */
-thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_image *img, const int rect[4])
+thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_raster *img, const int rect[4])
 {
     int x0 = rect[0], w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
     THX_CHECK(rn_grow(ctx, (void **)&r->pix, &r->pix_cap, (size_t)4 * w * h, 1));
@@ -138,7 +138,7 @@ static void fxaa(const unsigned char *src, unsigned char *dst, float *luma, int 
 
 /* Resolves the viewport (multisampled) or smooths it (FXAA), reads it back, flips it into img and
  * divides out alpha. */
-thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_image *img, const int rect[4])
+thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4])
 {
     int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
     size_t n = (size_t)w * h;

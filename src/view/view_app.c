@@ -223,7 +223,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         view_win *w = a.win[k];
         thx_font_close(&w->font);
         thx_font_close(&w->plot_font);
-        thx_image_destroy(&w->img);
+        thx_raster_destroy(&w->img);
         g_free(w->shot_path);
         if (a.vo->verbose > 0 && w->ms_n)
             fprintf(stderr, "thorax view: window %d: %d draws, %.1f ms a draw on average\n", w->id, w->ms_n, w->ms_sum / w->ms_n);

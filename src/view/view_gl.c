@@ -163,7 +163,7 @@ static int font_for(view_win *w, int fb_h)
     return 0;
 }
 
-static void read_back(thx_image *img)
+static void read_back(thx_raster *img)
 {
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(0, 0, img->w, img->h, GL_RGBA, GL_UNSIGNED_BYTE, img->rgba);
@@ -180,7 +180,7 @@ static void read_back(thx_image *img)
     for (size_t i = 3; i < row * (size_t)img->h; i += 4) img->rgba[i] = 255;
 }
 
-static void show_image(view_win *w, const thx_image *img)
+static void show_image(view_win *w, const thx_raster *img)
 {
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
@@ -208,13 +208,13 @@ static void show_image(view_win *w, const thx_image *img)
     glUseProgram(0);
 }
 
-static void record_frame(view_win *w, const thx_image *img)
+static void record_frame(view_win *w, const thx_raster *img)
 {
     view_app *a = w->app;
     /* numbered in the order drawn, from 1, so the movie's frames are consecutive */
     char path[1100];
     snprintf(path, sizeof path, "%s/frame_%05d.png", a->rec_dir, a->rec_count + 1);
-    if (thx_image_write_png(a->ctx, img, path) != THX_OK) {
+    if (thx_raster_write_png(a->ctx, img, path) != THX_OK) {
         view_report(a, "recording");
         a->recording = 0;
         return;
@@ -265,8 +265,8 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     int need_pixels = annotated || w->shot_path || (a->recording && w->id == 1);
     if (need_pixels) {
         if (!w->img || w->img->w != fb_w || w->img->h != fb_h) {
-            thx_image_destroy(&w->img);
-            if (thx_image_create(a->ctx, fb_w, fb_h, &w->img) != THX_OK) { view_report(a, "image"); return TRUE; }
+            thx_raster_destroy(&w->img);
+            if (thx_raster_create(a->ctx, fb_w, fb_h, &w->img) != THX_OK) { view_report(a, "image"); return TRUE; }
         }
         read_back(w->img);
         if (annotated) {
@@ -275,7 +275,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
             show_image(w, w->img);
         }
         if (w->shot_path) {
-            if (thx_image_write_png(a->ctx, w->img, w->shot_path) == THX_OK) view_set_info(a, "saved %s (%dx%d)", w->shot_path, fb_w, fb_h);
+            if (thx_raster_write_png(a->ctx, w->img, w->shot_path) == THX_OK) view_set_info(a, "saved %s (%dx%d)", w->shot_path, fb_w, fb_h);
             else { view_report(a, "screenshot"); a->status = 1; }
             g_free(w->shot_path);
             w->shot_path = NULL;

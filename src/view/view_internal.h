@@ -58,7 +58,7 @@ typedef struct view_win {
     /* the overlay of annotations */
     unsigned tex, prog, vao, vbo;
     int tex_w, tex_h;
-    thx_image *img;
+    thx_raster *img;
     /* a screenshot wanted at the next draw (path owned), and its outcome */
     char *shot_path;
     int drawn;                 /* draws since open */

@@ -57,12 +57,12 @@ void view_plot_update(view_app *a)
         int width = gtk_widget_get_width(w->gl);
         if (width < 64) width = a->vo->win_w;
         int height = TRACE_H * a->n_traces;
-        thx_image *img = NULL;
-        if (thx_image_create(a->ctx, width, height, &img) != THX_OK) return;
+        thx_raster *img = NULL;
+        if (thx_raster_create(a->ctx, width, height, &img) != THX_OK) return;
         static const unsigned char bg[4] = {24, 24, 28, 255};
         static const unsigned char colors[VIEW_MAX_TRACES][4] = {{120, 230, 120, 255}, {250, 200, 80, 255}, {110, 180, 250, 255},
                                                                  {240, 120, 200, 255}, {200, 200, 200, 255}, {250, 120, 90, 255}};
-        thx_image_fill(img, bg);
+        thx_raster_fill(img, bg);
         if (!w->plot_font) thx_font_open(a->ctx, w->o.font, 13, &w->plot_font);
         int frame = view_frame_of(w);
         for (int t = 0; t < a->n_traces; t++) {
@@ -88,7 +88,7 @@ void view_plot_update(view_app *a)
         gtk_widget_set_visible(w->plot, TRUE);
         g_object_unref(tex);
         g_bytes_unref(bytes);
-        thx_image_destroy(&img);
+        thx_raster_destroy(&img);
     }
 }
 

@@ -273,7 +273,7 @@ void thx_picture_data_free(thx_picture_data *d);
 /* The picture of frame (0-based) into img (o->w x o->h), offscreen with r (made with that size).
  * *nan_total (may be NULL) counts the values that are not numbers. font may be NULL (no text). */
 thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
-                            thx_font *font, int frame, thx_image *img, size_t *nan_total);
+                            thx_font *font, int frame, thx_raster *img, size_t *nan_total);
 
 /* The same picture's 3D part, into the framebuffer bound in the caller's current OpenGL 3.3
  * context (fb_w x fb_h pixels; r made with w = h = 0), the whole framebuffer cleared to the
@@ -284,7 +284,7 @@ thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
 /* The annotations (surface names of panels, colour bar, time label, trace) over img, which holds
  * the 3D part drawn by thx_picture_draw_gl at img's size. */
 thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font,
-                                int frame, const thx_picture_bars *bars, thx_image *img);
+                                int frame, const thx_picture_bars *bars, thx_raster *img);
 
 /* Where the colour bars of a picture of w x h pixels go: the strip of bar k (x, y from the top
  * left, w, h) in box[k], for n bars stacked beside the 3D part (o->colorbar). Returns how many of

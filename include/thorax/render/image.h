@@ -2,7 +2,7 @@
  * thorax/render/image.h — images, colour maps, scaling models, and 2D annotation
  * (text, colour bars, signal traces) for the renderer (paper 4.2,
  * "Standards"). Everything here is CPU-side and needs no OpenGL: the 3D
- * renderer (thorax/render/render.h) draws into a thx_image, the annotations are
+ * renderer (thorax/render/render.h) draws into a thx_raster, the annotations are
  * composited on top.
  */
 #ifndef THORAX_IMAGE_H
@@ -19,18 +19,18 @@ extern "C" {
 typedef struct {
     int w, h;
     unsigned char *rgba; /* 4 w h */
-} thx_image;
+} thx_raster;
 
-thx_status thx_image_create(thx_ctx *ctx, int w, int h, thx_image **out);
-void thx_image_destroy(thx_image **img);
-void thx_image_fill(thx_image *img, const unsigned char rgba[4]);
+thx_status thx_raster_create(thx_ctx *ctx, int w, int h, thx_raster **out);
+void thx_raster_destroy(thx_raster **img);
+void thx_raster_fill(thx_raster *img, const unsigned char rgba[4]);
 /* The tEXt chunk thorax writes in every PNG ("Software" = "thorax"): an existing file is replaced
  * only when it has it (thorax/core/fileio.h, thx_atomic_open_output). */
 #define THX_PNG_MARKER "Software\0thorax"
 /* PNG through libpng, 8-bit RGBA (or RGB when every alpha is 255); atomic; an existing file is
  * replaced only when thorax's own (above), never through a link. */
-thx_status thx_image_write_png(thx_ctx *ctx, const thx_image *img, const char *path);
-thx_status thx_image_read_png(thx_ctx *ctx, const char *path, thx_image **out);
+thx_status thx_raster_write_png(thx_ctx *ctx, const thx_raster *img, const char *path);
+thx_status thx_raster_read_png(thx_ctx *ctx, const char *path, thx_raster **out);
 
 /* ---- colour maps ----
  * ECG: the field's convention (default): negative blue, zero white, positive red.
@@ -152,11 +152,11 @@ void thx_font_close(thx_font **f);
 int thx_font_height(const thx_font *f);
 int thx_text_width(thx_font *f, const char *utf8);
 /* Text with its baseline at y, alpha-blended. */
-void thx_draw_text(thx_image *img, thx_font *f, int x, int y, const char *utf8, const unsigned char rgba[4]);
+void thx_draw_text(thx_raster *img, thx_font *f, int x, int y, const char *utf8, const unsigned char rgba[4]);
 /* Antialiased line of the given width (pixels), alpha-blended. */
-void thx_draw_line(thx_image *img, double x0, double y0, double x1, double y1, double width, const unsigned char rgba[4]);
+void thx_draw_line(thx_raster *img, double x0, double y0, double x1, double y1, double width, const unsigned char rgba[4]);
 /* Filled rectangle, alpha-blended. */
-void thx_draw_rect(thx_image *img, int x, int y, int w, int h, const unsigned char rgba[4]);
+void thx_draw_rect(thx_raster *img, int x, int y, int w, int h, const unsigned char rgba[4]);
 
 /* A colour bar in the box (x, y, w, h): the map under the scale (n_shades > 0: discrete bands,
  * thx_scale_bands(s, n_shades) of them; 0: continuous), n_labels labelled values (printf "%.3g") at
@@ -167,14 +167,14 @@ void thx_draw_rect(thx_image *img, int x, int y, int w, int h, const unsigned ch
  * labelled "0". The box is the colour strip
  * itself: labels go to its right (vertical) or below it (horizontal), "title (unit)" above it, in
  * black or white, whichever contrasts with the image there. f NULL: no text. */
-void thx_draw_colorbar(thx_image *img, thx_font *f, int x, int y, int w, int h, thx_colormap c, const thx_scale *s,
+void thx_draw_colorbar(thx_raster *img, thx_font *f, int x, int y, int w, int h, thx_colormap c, const thx_scale *s,
                        int n_shades, int n_labels, const char *title, const char *unit);
 
 /* A signal trace in the box (x, y, w, h): values v[0..n) against time t0 + i dt, axes with a zero
  * line, a label (e.g. "II") and the unit, and a marker (vertical line and dot) at sample `marker`
  * (none when marker >= n). Non-finite samples leave gaps. Nothing is drawn outside the box;
  * f NULL: no text. */
-void thx_draw_trace(thx_image *img, thx_font *f, int x, int y, int w, int h, const double *v, size_t n, double t0,
+void thx_draw_trace(thx_raster *img, thx_font *f, int x, int y, int w, int h, const double *v, size_t n, double t0,
                     double dt, size_t marker, const char *label, const char *unit, const unsigned char rgba[4]);
 
 #ifdef __cplusplus

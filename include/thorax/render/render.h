@@ -169,7 +169,7 @@ int thx_renderer_samples(const thx_renderer *r);
 /* Draws the scene into the renderer's framebuffer and reads it back into img (w x h of the
  * renderer), leaving the pixels outside the viewport as they were in img. n_nan (may be NULL):
  * the number of NaN values met in the data of the surfaces drawn with it. */
-thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx_image *img, size_t *n_nan);
+thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx_raster *img, size_t *n_nan);
 
 /* The drawing alone, into whatever framebuffer (with a depth buffer) is bound in the current 3.3
  * context (for the interactive viewer; the renderer made with w = h = 0). */
