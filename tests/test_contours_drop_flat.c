@@ -83,6 +83,15 @@ int main(void)
     CHECK(tl_msg_has(ctx, "would break in two"));
     thx_contours_destroy(&c);
 
+    /* single loops on neighbouring layers always pair, as the build pairs them, overlapping or not */
+    CHECK_OK(ctx, thx_contours_create(ctx, &c));
+    c->spacing = 2.0;
+    CHECK_OK(ctx, thx_contours_add_surface(ctx, c, "slant", THX_ROLE_OTHER, THX_CAP_POLYGON, 0, &s));
+    for (int l = 0; l < 3; l++) ring(c, s, 2.0 * l, 30.0 * l, 0, 5, 16);
+    CHECK_OK(ctx, thx_contours_drop_flat(ctx, c, &o, &gone));
+    CHECK(gone == 0 && c->surf[0].n_layers == 3);
+    thx_contours_destroy(&c);
+
     thx_ctx_destroy(&ctx);
     return tl_finish();
 }
