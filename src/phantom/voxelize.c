@@ -261,7 +261,7 @@ thx_status thx_voxelize(thx_ctx *ctx, const thx_surface *const *s, size_t ns, co
                     c->w = flat ? A[2] : la * A[2] + lb * B[2] + (1.0 - la - lb) * C[2];
                 }
         }
-        qsort(cr, ncr, sizeof *cr, crossing_cmp);
+        if (ncr) qsort(cr, ncr, sizeof *cr, crossing_cmp); /* cr is NULL while no row has crossed yet */
         memset(acc, 0, ni * nk * (size_t)nr * sizeof *acc);
         for (size_t e = 0; e < ncr;) {
             uint32_t col = cr[e].col;
