@@ -29,7 +29,16 @@ fi
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   for f in tests/fuzz/fuzz_*.c; do
-    n=$(basename "$f" .c); targets+=("${n#fuzz_}")
+    n=$(basename "$f" .c)
+    # The DICOM reader decodes in a forked child (Debian's GDCM aborts on truncated files); libFuzzer's
+    # crash and malloc-limit handlers follow the fork and record the child's deaths as findings, though
+    # the parent refuses those files by name. Left out of the default campaign (its seeds replay in
+    # ctest: fuzz_replay_image_dicom) until the child runs by exec; `scripts/fuzz.sh image_dicom` runs it.
+    if [ "$n" = fuzz_image_dicom ]; then
+      echo "fuzz: image_dicom left out (its GDCM child's deaths would count as findings; docs/design/image.md)"
+      continue
+    fi
+    targets+=("${n#fuzz_}")
   done
 fi
 # Only the harnesses asked for (and the library they link): not the programs, the unit tests, the
