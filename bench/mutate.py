@@ -70,6 +70,19 @@ def targets(build, regex):
     return sorted(t)
 
 
+def test_names():
+    """The ctest names CMakeLists.txt makes from the tree (tests/test_*.c, tests/e2e_*.sh, fuzz replays)."""
+    t = os.path.join(ROOT, "tests")
+    names = ["python_binding", "phantom_models", "tree_stamp", "tree_clean"]
+    for f in sorted(os.listdir(t)):
+        if re.fullmatch(r"test_\w+\.c", f) or re.fullmatch(r"e2e_\w+\.sh", f):
+            names.append(f.rsplit(".", 1)[0])
+    for f in sorted(os.listdir(os.path.join(t, "fuzz"))):
+        if re.fullmatch(r"fuzz_\w+\.c", f):
+            names.append("fuzz_replay_" + f[5:-2])
+    return names
+
+
 def run(cmd, cwd, timeout=None):
     return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
 
@@ -85,11 +98,17 @@ def main():
     if only:
         muts = [m for m in muts if m["name"] in only]
     bad = 0
+    names = test_names()
     for m in muts:
         src = open(os.path.join(ROOT, m["file"])).read() if os.path.exists(os.path.join(ROOT, m["file"])) else ""
         n = src.count(m["old"]) if m["old"] else 0
         if n != 1 or not m["tests"]:
             print(f"mutant {m['name']}: does not apply: text found {n} times in {m['file']}" + ("" if m["tests"] else ", no tests"))
+            bad += 1
+        elif not any(re.search(m["tests"], t) for t in names):
+            # ctest -R with a regex that matches nothing runs nothing and passes: the mutant would
+            # "survive" untested (a space-separated list is one such regex)
+            print(f"mutant {m['name']}: tests regex {m['tests']!r} matches no test")
             bad += 1
     modules = sorted({m["file"].split("/")[1] for m in muts if m["file"].startswith("src/")})
     print(f"{len(muts)} mutants over {len(modules)} modules ({', '.join(modules)})")
