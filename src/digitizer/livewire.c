@@ -8,6 +8,7 @@
 #include "digitizer/dig_impl.h"
 #include "thorax/digitizer/livewire.h"
 
+#define NACOS 4096 /* intervals of the acos table */
 #define NB (THX_LIVEWIRE_MAX_LINK + 1) /* buckets: every cost in the queue lies within [d, d + MAX_LINK] */
 
 /* The 8 neighbours, counterclockwise from +a; the opposite of k is k ^ 4. */
@@ -16,11 +17,29 @@ static const int DB[8] = {0, 1, 1, 1, 0, -1, -1, -1};
 
 enum { UNSEEN = 0, QUEUED = 1, DONE = 2 };
 
+/* acos on [-1, 1] from a table of the livewire's (NACOS intervals, linear: error below 1e-4 rad, far
+ * below one step of the integer scale). */
+
+static inline double acos_fast(const double *acos_t, double x)
+{
+    double u = (x + 1) * (NACOS / 2.0);
+    u = u < 0 ? 0 : u > NACOS ? NACOS : u;
+    int i = (int)u;
+    return acos_t[i] + (u - i) * (acos_t[i + 1] - acos_t[i]);
+}
+
 struct thx_livewire {
     size_t w, h, n;
     double origin[3], du[3], dv[3], su, sv;
     thx_livewire_opts o;
-    uint8_t *link;   /* n * 8 link costs p -> neighbour k (0: no link) */
+    /* per pixel, what the link costs need (computed once per plane; the links themselves on the fly,
+     * when the search expands a pixel: Falcão's live-wire on the fly, so a short path costs little) */
+    float *dx, *dy;  /* unit vector across the gradient, (Iy, -Ix) / G; 0 where G = 0 */
+    float *fg;       /* 1 - G / max G */
+    uint8_t *zc;     /* 1 on a zero crossing of the Laplacian */
+    uint8_t *ok;     /* 1 for a finite sample */
+    double lxk[8], lyk[8], lenk[8], diag, sz, sg, sd; /* unit links, their lengths; the terms' integer scales */
+    double acos_t[NACOS + 2];
     float *g, *gx, *gy; /* gradient of the smoothed plane (sub-voxel step) */
     /* the search */
     int seeded;
@@ -46,7 +65,11 @@ void thx_livewire_destroy(thx_livewire **lw)
 {
     if (!lw || !*lw) return;
     thx_livewire *L = *lw;
-    free(L->link);
+    free(L->dx);
+    free(L->dy);
+    free(L->fg);
+    free(L->zc);
+    free(L->ok);
     free(L->g);
     free(L->gx);
     free(L->gy);
@@ -105,18 +128,21 @@ thx_status thx_livewire_create(thx_ctx *ctx, const thx_image_slice *plane, const
     memcpy(L->dv, plane->dv, sizeof L->dv);
     size_t nf = 0;
     f = dig_smooth(ctx, plane, o->sigma, &nf);
-    L->link = thx_calloc(ctx, n * 8, 1);
+    L->dx = thx_malloc(ctx, n * sizeof *L->dx);
+    L->dy = thx_malloc(ctx, n * sizeof *L->dy);
+    L->fg = thx_malloc(ctx, n * sizeof *L->fg);
+    L->ok = thx_malloc(ctx, n);
     L->g = thx_malloc(ctx, n * sizeof *L->g);
     L->gx = thx_malloc(ctx, n * sizeof *L->gx);
     L->gy = thx_malloc(ctx, n * sizeof *L->gy);
     lap = thx_malloc(ctx, n * sizeof *lap);
-    zc = thx_calloc(ctx, n, 1);
+    L->zc = zc = thx_calloc(ctx, n, 1);
     L->dist = thx_malloc(ctx, n * sizeof *L->dist);
     L->parent = thx_malloc(ctx, n * sizeof *L->parent);
     L->bnext = thx_malloc(ctx, n * sizeof *L->bnext);
     L->bprev = thx_malloc(ctx, n * sizeof *L->bprev);
     L->state = thx_calloc(ctx, n, 1);
-    if (!f || !L->link || !L->g || !L->gx || !L->gy || !lap || !zc || !L->dist || !L->parent || !L->bnext ||
+    if (!f || !L->dx || !L->dy || !L->fg || !L->ok || !L->g || !L->gx || !L->gy || !lap || !zc || !L->dist || !L->parent || !L->bnext ||
         !L->bprev || !L->state) {
         st = THX_ENOMEM;
         goto done;
@@ -152,44 +178,53 @@ thx_status thx_livewire_create(thx_ctx *ctx, const thx_image_slice *plane, const
     double gmax = 0;
     for (size_t p = 0; p < n; p++)
         if (isfinite(plane->v[p]) && L->g[p] > gmax) gmax = L->g[p];
-    const double wsum = o->wz + o->wg + o->wd, diag = sqrt(su * su + sv * sv), c3 = 2.0 / (3.0 * M_PI);
-    for (size_t b = 0; b < h; b++)
-        for (size_t a = 0; a < w; a++) {
-            size_t p = a + w * b;
-            if (!isfinite(plane->v[p])) continue;
-            double gp = L->g[p], dpx = gp > 0 ? L->gy[p] / gp : 0, dpy = gp > 0 ? -L->gx[p] / gp : 0;
-            for (int k = 0; k < 8; k++) {
-                long qa = (long)a + DA[k], qb = (long)b + DB[k];
-                if (qa < 0 || qb < 0 || qa >= (long)w || qb >= (long)h) continue;
-                size_t q = (size_t)qa + w * (size_t)qb;
-                if (!isfinite(plane->v[q])) continue;
-                double lx = DA[k] * su, ly = DB[k] * sv, len = sqrt(lx * lx + ly * ly);
-                lx /= len;
-                ly /= len;
-                double gq = L->g[q], dqx = gq > 0 ? L->gy[q] / gq : 0, dqy = gq > 0 ? -L->gx[q] / gq : 0;
-                if (dpx * lx + dpy * ly < 0) {
-                    lx = -lx;
-                    ly = -ly;
-                }
-                double dp = dpx * lx + dpy * ly, dq = lx * dqx + ly * dqy;
-                dp = dp > 1 ? 1 : dp;
-                dq = dq > 1 ? 1 : dq < -1 ? -1 : dq;
-                double fz = zc[q] ? 0.0 : 1.0;
-                double fg = (gmax > 0 ? 1.0 - gq / gmax : 1.0) * len / diag;
-                double fd = c3 * (acos(dp) + acos(dq));
-                double c = (o->wz * fz + o->wg * fg + o->wd * fd) / wsum;
-                long ic = lround(c * THX_LIVEWIRE_MAX_LINK);
-                L->link[8 * p + (size_t)k] = (uint8_t)(ic < 1 ? 1 : ic > THX_LIVEWIRE_MAX_LINK ? THX_LIVEWIRE_MAX_LINK : ic);
-            }
-        }
+    const double wsum = o->wz + o->wg + o->wd;
+    for (int i = 0; i <= NACOS; i++) L->acos_t[i] = acos(i / (NACOS / 2.0) - 1.0);
+    L->acos_t[NACOS + 1] = L->acos_t[NACOS];
+    L->diag = sqrt(su * su + sv * sv);
+    for (int k = 0; k < 8; k++) {
+        L->lenk[k] = sqrt(DA[k] * su * DA[k] * su + DB[k] * sv * DB[k] * sv);
+        L->lxk[k] = DA[k] * su / L->lenk[k];
+        L->lyk[k] = DB[k] * sv / L->lenk[k];
+    }
+    L->sz = o->wz / wsum * THX_LIVEWIRE_MAX_LINK;
+    L->sg = o->wg / wsum * THX_LIVEWIRE_MAX_LINK;
+    L->sd = o->wd / wsum * THX_LIVEWIRE_MAX_LINK * 2.0 / (3.0 * M_PI);
+    for (size_t p = 0; p < n; p++) {
+        double gp = L->g[p];
+        L->dx[p] = gp > 0 ? (float)(L->gy[p] / gp) : 0.0f;
+        L->dy[p] = gp > 0 ? (float)(-L->gx[p] / gp) : 0.0f;
+        L->fg[p] = (float)(gmax > 0 ? 1.0 - gp / gmax : 1.0);
+        L->ok[p] = isfinite(plane->v[p]) ? 1 : 0;
+    }
     *out = L;
     L = NULL;
 done:
     free(f);
     free(lap);
-    free(zc);
     thx_livewire_destroy(&L);
     return st;
+}
+
+/* The cost of the link from p (at a, b) to its neighbour k; 0 when there is none (the plane's edge, a
+ * NaN sample). */
+static inline int link_cost(const thx_livewire *L, size_t p, size_t a, size_t b, int k)
+{
+    long qa = (long)a + DA[k], qb = (long)b + DB[k];
+    if (qa < 0 || qb < 0 || qa >= (long)L->w || qb >= (long)L->h) return 0;
+    size_t q = (size_t)qa + L->w * (size_t)qb;
+    if (!L->ok[p] || !L->ok[q]) return 0;
+    double lx = L->lxk[k], ly = L->lyk[k], dp = L->dx[p] * lx + L->dy[p] * ly;
+    if (dp < 0) { /* the link taken the way the boundary runs at p */
+        lx = -lx;
+        ly = -ly;
+        dp = -dp;
+    }
+    double dq = lx * L->dx[q] + ly * L->dy[q];
+    double c = L->sz * (L->zc[q] ? 0.0 : 1.0) + L->sg * L->fg[q] * L->lenk[k] / L->diag +
+               L->sd * (acos_fast(L->acos_t, dp) + acos_fast(L->acos_t, dq));
+    long ic = (long)(c + 0.5);
+    return ic < 1 ? 1 : ic > THX_LIVEWIRE_MAX_LINK ? THX_LIVEWIRE_MAX_LINK : (int)ic;
 }
 
 long thx_livewire_link_cost(const thx_livewire *L, size_t p, size_t q)
@@ -197,7 +232,10 @@ long thx_livewire_link_cost(const thx_livewire *L, size_t p, size_t q)
     if (p >= L->n || q >= L->n) return -1;
     long pa = (long)(p % L->w), pb = (long)(p / L->w), qa = (long)(q % L->w), qb = (long)(q / L->w);
     for (int k = 0; k < 8; k++)
-        if (pa + DA[k] == qa && pb + DB[k] == qb) return L->link[8 * p + (size_t)k] ? L->link[8 * p + (size_t)k] : -1;
+        if (pa + DA[k] == qa && pb + DB[k] == qb) {
+            int c = link_cost(L, p, (size_t)pa, (size_t)pb, k);
+            return c ? c : -1;
+        }
     return -1;
 }
 
@@ -250,9 +288,7 @@ static thx_status seed_at(thx_ctx *ctx, thx_livewire *L, size_t a, size_t b)
         return thx_error(ctx, THX_EINPUT, "livewire: seed pixel (%zu, %zu) outside the plane (%zu x %zu)", a, b, L->w,
                          L->h);
     size_t p = a + L->w * b;
-    int any = 0;
-    for (int k = 0; k < 8; k++) any |= L->link[8 * p + (size_t)k] != 0;
-    if (!any) return thx_error(ctx, THX_EINPUT, "livewire: seed pixel (%zu, %zu) lies outside the image", a, b);
+    if (!L->ok[p]) return thx_error(ctx, THX_EINPUT, "livewire: seed pixel (%zu, %zu) lies outside the image", a, b);
     memset(L->state, UNSEEN, L->n);
     for (int i = 0; i < NB; i++) L->head[i] = -1;
     L->queued = L->done = 0;
@@ -300,12 +336,12 @@ static int expand_to(thx_livewire *L, size_t t)
         L->state[p] = DONE;
         L->done++;
         size_t a = p % L->w, b = p / L->w;
-        const uint8_t *lk = L->link + 8 * p;
         for (int k = 0; k < 8; k++) {
-            if (!lk[k]) continue;
-            size_t q = (size_t)((long)a + DA[k]) + L->w * (size_t)((long)b + DB[k]);
-            if (L->state[q] == DONE) continue;
-            int64_t d = L->dist[p] + lk[k];
+            long qa = (long)a + DA[k], qb = (long)b + DB[k];
+            if (qa < 0 || qb < 0 || qa >= (long)L->w || qb >= (long)L->h) continue;
+            size_t q = (size_t)qa + L->w * (size_t)qb;
+            if (L->state[q] == DONE || !L->ok[q]) continue;
+            int64_t d = L->dist[p] + link_cost(L, p, a, b, k);
             if (L->state[q] == QUEUED) {
                 if (d >= L->dist[q]) continue;
                 q_remove(L, q);
