@@ -298,8 +298,78 @@ static void test_on_the_fly(void)
     thx_ctx_destroy(&ctx);
 }
 
+/* The link costs against the paper's formulas on planes where they are known exactly (no smoothing). */
+static double ramp(double x, double y)
+{
+    (void)y;
+    return x;
+}
+static void test_costs(void)
+{
+    thx_ctx *ctx;
+    thx_ctx_create(&ctx);
+    const size_t W = 24, H = 20;
+    thx_image_slice s;
+    make_plane(&s, W, H, ramp, 1, 0); /* replaced below */
+    thx_livewire_opts o;
+    thx_livewire_opts_default(&o);
+    o.sigma = 0;
+    thx_livewire *lw = NULL;
+    /* 1. I = x: G constant (fG = 0), no zero crossing (fZ = 1), D = (0, -1): fD = 2/(3 pi) 2 acos|dy| for a
+     * link of unit direction (dx, dy): horizontal 2/3, vertical 0, diagonal 1/3 */
+    for (size_t p = 0; p < W * H; p++) s.v[p] = (float)(p % W);
+    CHECK_OK(ctx, thx_livewire_create(ctx, &s, &o, &lw));
+    int ok1 = 1;
+    for (size_t b = 2; b + 2 < H; b++)
+        for (size_t a = 2; a + 3 < W; a++) /* (the mirrored border makes column W - 2 a zero crossing) */
+            for (int db = -1; db <= 1; db++)
+                for (int da = -1; da <= 1; da++) {
+                    if (!da && !db) continue;
+                    double dy = db / hypot(da, db), fd = 2 / (3 * M_PI) * 2 * acos(fabs(dy));
+                    long want = lround(255 * (0.43 + 0.14 * fd));
+                    long got = thx_livewire_link_cost(lw, a + W * b, (a + da) + W * (b + db));
+                    if (got != want) ok1 = 0;
+                }
+    CHECK(ok1);
+    CHECK(thx_livewire_link_cost(lw, 5, 7) == -1); /* not neighbours */
+    thx_livewire_destroy(&lw);
+    /* 2. gradient term alone, I = x^2 / 2: G = |x| (central differences exact), max G = W - 1.5 (one-sided
+     * at the last column); fG(q) scaled by the link's length over the diagonal's */
+    o.wz = 0, o.wg = 1, o.wd = 0;
+    for (size_t p = 0; p < W * H; p++) s.v[p] = (float)(0.5 * (double)(p % W) * (double)(p % W));
+    CHECK_OK(ctx, thx_livewire_create(ctx, &s, &o, &lw));
+    int ok2 = 1;
+    for (size_t b = 1; b + 1 < H; b++)
+        for (size_t a = 1; a + 2 < W; a++)
+            for (int k = 0; k < 2; k++) {
+                size_t q = (a + 1) + W * (b + (size_t)k);
+                double fg = 1 - (double)(a + 1) / (W - 1.5), len = k ? 1 : 1 / sqrt(2);
+                long want = lround(255 * fg * len), got = thx_livewire_link_cost(lw, a + W * b, q);
+                if (want < 1) want = 1;
+                if (got != want) ok2 = 0;
+            }
+    CHECK(ok2);
+    thx_livewire_destroy(&lw);
+    /* 3. zero crossings alone, I = tanh((x - 10.3) / 3): the Laplacian changes sign between columns 10 and
+     * 11, column 10 nearer zero: links into column 10 cost the minimum 1, elsewhere 255 */
+    o.wz = 1, o.wg = 0, o.wd = 0;
+    for (size_t p = 0; p < W * H; p++) s.v[p] = (float)tanh(((double)(p % W) - 10.3) / 3);
+    CHECK_OK(ctx, thx_livewire_create(ctx, &s, &o, &lw));
+    int ok3 = 1;
+    for (size_t b = 1; b + 1 < H; b++)
+        for (size_t a = 3; a + 3 < W; a++) {
+            long got = thx_livewire_link_cost(lw, (a - 1) + W * b, a + W * b);
+            if (got != (a == 10 ? 1 : 255)) ok3 = 0;
+        }
+    CHECK(ok3);
+    thx_livewire_destroy(&lw);
+    free(s.v);
+    thx_ctx_destroy(&ctx);
+}
+
 int main(void)
 {
+    test_costs();
     test_disc();
     test_shapes();
     test_optimum();

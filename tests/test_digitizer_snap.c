@@ -19,6 +19,8 @@ static double unif(void)
 static double gauss(void) { return sqrt(-2 * log(unif())) * cos(2 * M_PI * unif()); }
 
 static const double CX = 64.3, CY = 63.7, R = 40;
+#define BX (CX + (R + 4) * cos(1.0))
+#define BY (CY + (R + 4) * sin(1.0))
 
 static double area_xy(const double *p, size_t n)
 {
@@ -45,7 +47,9 @@ int main(void)
     s.normal[2] = 1;
     for (size_t b = 0; b < H; b++)
         for (size_t a = 0; a < W; a++)
-            s.v[a + W * b] = (float)(100 * 0.5 * (1 + erf((R - hypot(a - CX, b - CY)) / (sqrt(2) * 1.5))) + 3 * gauss());
+            s.v[a + W * b] = (float)(100 * 0.5 * (1 + erf((R - hypot(a - CX, b - CY)) / (sqrt(2) * 1.5))) + 3 * gauss() +
+                                     /* a small bright spot 4 px outside the edge: a stray edge for a node or two */
+                                     300 * 0.5 * (1 + erf((1.5 - hypot(a - BX, b - BY)) / (sqrt(2) * 0.7))));
     for (int dir = 1; dir >= -1; dir -= 2) {
         double *in = malloc(3 * N * sizeof *in), *out = malloc(3 * N * sizeof *out);
         for (size_t i = 0; i < N; i++) {
