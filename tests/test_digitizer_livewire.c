@@ -367,8 +367,56 @@ static void test_costs(void)
     thx_ctx_destroy(&ctx);
 }
 
+/* Path cooling: the free point moving along the circle; the part of the path near the seed freezes. */
+static void test_cooling(void)
+{
+    thx_ctx *ctx;
+    thx_ctx_create(&ctx);
+    thx_image_slice s;
+    make_plane(&s, 128, 128, disc, 1.5, 3.0);
+    thx_livewire *lw = NULL;
+    CHECK_OK(ctx, thx_livewire_create(ctx, &s, NULL, &lw));
+    double A[3], T[3], *xyz = NULL, *last = NULL, *fr = NULL;
+    size_t n = 0, nl = 0, nf = 0;
+    ras(CX + R, CY, A);
+    CHECK_OK(ctx, thx_livewire_seed(ctx, lw, A));
+    CHECK_OK(ctx, thx_livewire_cool(ctx, lw, 3, 10, &fr, &nf));
+    CHECK(nf == 0 && fr == NULL); /* nothing asked yet */
+    for (int i = 0; i < 5; i++) {
+        double th = 1.2 + 0.06 * i;
+        ras(CX + R * cos(th), CY + R * sin(th), T);
+        free(last);
+        CHECK_OK(ctx, thx_livewire_path(ctx, lw, T, &last, &nl));
+    }
+    CHECK_OK(ctx, thx_livewire_cool(ctx, lw, 3, 10, &fr, &nf));
+    printf("cooling: %zu of the last path's %zu points frozen\n", nf, nl);
+    CHECK(nf >= 10 && nf < nl);
+    int prefix = 1, on = 1;
+    for (size_t i = 0; i < 3 * nf && i < 3 * nl; i++) prefix &= fr[i] == last[i];
+    for (size_t i = 0; i < nf; i++) {
+        double a, b;
+        px(fr + 3 * i, &a, &b);
+        on &= fabs(hypot(a - CX, b - CY) - R) <= 1.0;
+    }
+    CHECK(prefix && on);
+    /* the seed is now the frozen part's end: the next path starts there and ends at the target */
+    CHECK_OK(ctx, thx_livewire_path(ctx, lw, T, &xyz, &n));
+    CHECK(n >= 2 && memcmp(xyz, fr + 3 * (nf - 1), 3 * sizeof *xyz) == 0 &&
+          memcmp(xyz + 3 * (n - 1), last + 3 * (nl - 1), 3 * sizeof *xyz) == 0);
+    free(xyz);
+    free(fr);
+    CHECK_OK(ctx, thx_livewire_cool(ctx, lw, 3, 10, &fr, &nf));
+    CHECK(nf == 0); /* one query since: nothing cooled */
+    CHECK(thx_livewire_cool(ctx, lw, 0, 10, &fr, &nf) == THX_EINPUT);
+    free(last);
+    thx_livewire_destroy(&lw);
+    free(s.v);
+    thx_ctx_destroy(&ctx);
+}
+
 int main(void)
 {
+    test_cooling();
     test_costs();
     test_disc();
     test_shapes();

@@ -50,6 +50,10 @@ struct thx_livewire {
     int32_t head[NB];
     int64_t cur;     /* cost of the bucket scanned last */
     size_t queued, done;
+    /* path cooling: the last path asked for, and the prefix each query shared with the one before */
+    size_t *last, n_last, last_cap;
+    size_t shared[THX_LIVEWIRE_COOL_MAX];
+    int n_shared;
 };
 
 void thx_livewire_opts_default(thx_livewire_opts *o)
@@ -78,6 +82,7 @@ void thx_livewire_destroy(thx_livewire **lw)
     free(L->bnext);
     free(L->bprev);
     free(L->state);
+    free(L->last);
     free(L);
     *lw = NULL;
 }
@@ -292,6 +297,8 @@ static thx_status seed_at(thx_ctx *ctx, thx_livewire *L, size_t a, size_t b)
     memset(L->state, UNSEEN, L->n);
     for (int i = 0; i < NB; i++) L->head[i] = -1;
     L->queued = L->done = 0;
+    L->n_last = 0;
+    L->n_shared = 0;
     L->cur = 0;
     L->seed = p;
     L->seeded = 1;
@@ -375,6 +382,22 @@ thx_status thx_livewire_path_pixels(thx_ctx *ctx, thx_livewire *L, size_t a, siz
         out[--i] = p;
         if (L->parent[p] < 0) break;
     }
+    /* for path cooling: the prefix shared with the previous path, then this path kept */
+    size_t c = 0;
+    while (c < m && c < L->n_last && L->last[c] == out[c]) c++;
+    if (L->n_last) {
+        if (L->n_shared == THX_LIVEWIRE_COOL_MAX) {
+            memmove(L->shared, L->shared + 1, (THX_LIVEWIRE_COOL_MAX - 1) * sizeof *L->shared);
+            L->n_shared--;
+        }
+        L->shared[L->n_shared++] = c;
+    }
+    if (thx_grow(ctx, (void **)&L->last, &L->last_cap, m, sizeof *L->last) != THX_OK) {
+        free(out);
+        return THX_ENOMEM;
+    }
+    memcpy(L->last, out, m * sizeof *out);
+    L->n_last = m;
     *idx = out;
     *n = m;
     if (cost) *cost = (long)L->dist[t];
@@ -445,4 +468,31 @@ thx_status thx_livewire_loop(thx_ctx *ctx, thx_livewire *L, const double *clicke
 done:
     free(all);
     return st;
+}
+
+thx_status thx_livewire_cool(thx_ctx *ctx, thx_livewire *L, int k, size_t min_pixels, double **xyz, size_t *n)
+{
+    *xyz = NULL;
+    *n = 0;
+    if (k < 1 || k > THX_LIVEWIRE_COOL_MAX)
+        return thx_error(ctx, THX_EINPUT, "livewire: cooling over %d paths (1..%d)", k, THX_LIVEWIRE_COOL_MAX);
+    if (!L->seeded || L->n_shared < k) return THX_OK;
+    size_t m = L->n_last;
+    for (int i = L->n_shared - k; i < L->n_shared; i++)
+        if (L->shared[i] < m) m = L->shared[i];
+    if (m < 2 || m < min_pixels) return THX_OK;
+    size_t *frozen = thx_malloc(ctx, m * sizeof *frozen);
+    if (!frozen) return THX_ENOMEM;
+    memcpy(frozen, L->last, m * sizeof *frozen);
+    size_t end = frozen[m - 1];
+    thx_status st = to_ras(ctx, L, frozen, m, xyz);
+    if (st == THX_OK) st = seed_at(ctx, L, end % L->w, end / L->w);
+    free(frozen);
+    if (st != THX_OK) {
+        free(*xyz);
+        *xyz = NULL;
+        return st;
+    }
+    *n = m;
+    return THX_OK;
 }

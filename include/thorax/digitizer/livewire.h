@@ -23,7 +23,9 @@
  *           costs more). Where G is 0, D is 0 and the term is 2/3.
  * Dijkstra from the seed with Dial's bucket queue (integer costs below MAX_LINK + 1: a circular array
  * of buckets), expanded on the fly: a path query expands only until its target leaves the queue, and
- * later queries continue from where the last stopped.
+ * later queries continue from where the last stopped. The per-pixel features (smoothing, gradient,
+ * zero crossings) are computed once per plane by create; a link's cost when the search expands its
+ * pixel, so a short path touches only the pixels around it.
  */
 #ifndef THORAX_DIGITIZER_LIVEWIRE_H
 #define THORAX_DIGITIZER_LIVEWIRE_H
@@ -71,8 +73,8 @@ thx_status thx_livewire_seed_pixel(thx_ctx *ctx, thx_livewire *lw, size_t a, siz
  */
 thx_status thx_livewire_path(thx_ctx *ctx, thx_livewire *lw, const double to[3], double **xyz, size_t *n);
 
-/* The same by pixel index, as pixel indices (a + w b, seed first) and the path's total integer
- * cost (either may be NULL... idx and n are required; cost may be NULL). No sub-voxel step. */
+/* The same by pixel index (a, b), as pixel indices (a + w b, seed first; *idx malloc'd) and the path's
+ * total integer cost (cost may be NULL). No sub-voxel step. */
 thx_status thx_livewire_path_pixels(thx_ctx *ctx, thx_livewire *lw, size_t a, size_t b, size_t **idx, size_t *n,
                                     long *cost);
 
@@ -82,6 +84,18 @@ long thx_livewire_link_cost(const thx_livewire *lw, size_t p, size_t q);
 
 /* Plane size and the number of pixels whose cost is final (the on-the-fly expansion so far). */
 void thx_livewire_size(const thx_livewire *lw, size_t *w, size_t *h, size_t *n_done);
+
+/*
+ * Path cooling (Mortensen & Barrett 1995, 3.4): while the free point moves, the part of the path next
+ * to the seed stops changing; it is frozen and its far end becomes the new seed, so the user clicks
+ * less on a long boundary. Each path query (thx_livewire_path, _path_pixels) records the prefix it
+ * shares with the query before it (since the seed). When each of the last k queries shared at least
+ * min_pixels (and 2) pixels with the one before, the prefix the last k + 1 paths have in common is returned (*xyz malloc'd, *n RAS points, the
+ * seed first, as thx_livewire_path gives them) and the seed moves to its last pixel (the next
+ * path's first); otherwise *n = 0 and nothing changes. THX_EINPUT for k outside 1..COOL_MAX.
+ */
+#define THX_LIVEWIRE_COOL_MAX 32
+thx_status thx_livewire_cool(thx_ctx *ctx, thx_livewire *lw, int k, size_t min_pixels, double **xyz, size_t *n);
 
 /*
  * A closed loop through the points clicked[0..m-1] (RAS, m >= 2): the livewire from each to the
