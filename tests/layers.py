@@ -4,7 +4,8 @@
     level 0  core
     level 1  model
     level 2  geom, io, image, leads
-    level 3  mesh, check
+    level 3  mesh, check, digitizer (tracing on image planes: livewire, threshold regions, snap,
+             interpolation; uses image and geom)
     level 4  fem, bem, render, phantom, import, edit, inverse
     level 5  picture (a picture's settings and data -> scenes and annotations; render and view share it),
              capi (flat accessors for bindings: python/thorax over libthorax.so)
@@ -40,7 +41,7 @@ import subprocess
 import sys
 import tempfile
 
-LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3,
+LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3, "digitizer": 3,
          "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
 
 
