@@ -678,12 +678,14 @@ done:
 /* Laces chain a with chain b into sl->tris, appending. A lacing whose triangles cross each other (a
  * fold the lacing's own tests do not see, e.g. a narrow protrusion of one layer fanned across to
  * the other side of the other layer) is laced again with other settings: a tighter and a looser
- * outside test, tongues cut from shorter fans, the position-only metric. The first that does not
- * cross is kept (else the last, with *crossing = 1). */
+ * outside test, tongues cut from shorter fans, the position-only metric, and last the pockets of
+ * either layer that the other fills cut in their plane first (a CT skull's loop that runs in
+ * through the frontal sinus's notch around the cranial cavity, against a full disc: issue 25). The
+ * first that does not cross is kept (else the last, with *crossing = 1). */
 static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *lo,
                              const double *lxyz, slice *sl, int *crossing)
 {
-    enum { N_TRY = 6 };
+    enum { N_TRY = 7 };
     size_t first = sl->n_tris;
     thx_lace_stats keep = sl->st;
     thx_status r = THX_OK;
@@ -695,6 +697,7 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
         if (attempt == 4) la.phase_weight = 0;
         if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
+        if (attempt == 6) la.cut_filled_pockets = 1;
         sl->n_tris = first;
         sl->st = keep;
         r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
@@ -1100,7 +1103,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
         a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
-        a->tongues += b->tongues; a->projected += b->projected; a->crossing += b->crossing;
+        a->tongues += b->tongues; a->filled_pockets += b->filled_pockets; a->projected += b->projected; a->crossing += b->crossing;
         a->relaced_crossing += b->relaced_crossing;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
@@ -1236,9 +1239,10 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
         m->interior[m->n_surfaces - 1] = interior;
         thx_log(ctx, THX_LOG_DEBUG,
                 "surface %s: %zu nodes, %zu triangles; lacing removed %zu outside triangles, re-laced %zu gaps, "
-                "%zu in-plane, %zu unresolved, %zu too large, largest fan %d; %zu caps; orientation: %zu by test, "
-                "%zu from neighbours (%zu votes overruled), %zu flipped",
+                "%zu in-plane (%zu filled pockets), %zu unresolved, %zu too large, largest fan %d; %zu caps; "
+                "orientation: %zu by test, %zu from neighbours (%zu votes overruled), %zu flipped",
                 c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
+                one.lace.filled_pockets,
                 one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
                 one.orient_by_neighbours, one.orient_overruled, one.orient_flipped);
         if (one.lace.crossing)
@@ -1254,6 +1258,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
             total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
             total->lace.tongues += one.lace.tongues; total->lace.projected += one.lace.projected;
+            total->lace.filled_pockets += one.lace.filled_pockets;
             total->lace.unresolved += one.lace.unresolved; total->lace.crossing += one.lace.crossing;
             total->lace.relaced_crossing += one.lace.relaced_crossing; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;

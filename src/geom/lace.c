@@ -62,6 +62,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->fan_limit = 6;
     o->projected_aspect = 10;
     o->phase_weight = 0.25;
+    o->cut_filled_pockets = 0;
 }
 
 typedef struct {
@@ -227,6 +228,7 @@ static double cross3(thx_vec2 o, thx_vec2 a, thx_vec2 b) { return (a.x - o.x) * 
 static int hull_flags(thx_ctx *ctx, const thx_chain *c, unsigned char *on_hull)
 {
     int n = (int)c->n;
+    if (n <= 0) return -1;
     sort_pt *sp = malloc((size_t)n * sizeof *sp);
     int *idx = malloc((size_t)n * sizeof *idx), *h = malloc((size_t)(2 * n + 2) * sizeof *h);
     if (!sp || !idx || !h) { free(sp); free(idx); free(h); return -1; }
@@ -325,6 +327,48 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
     } while (k != first);
     free(on);
     return found;
+}
+
+/* The deepest pocket of chain c that the other layer fills (io: its signed distance): a bay
+ * between consecutive convex-hull vertices, deeper than margin, with at least 90% of the nodes of
+ * its arc inside the other layer's curve by more than margin (the other layer covers the bay, not
+ * merely a shallower bay of its own along it); unless c is the slice's lower chain, the
+ * layer beyond c must not cover it (a dent of one layer is cut by one slice only). This is the
+ * frontal sinus of a CT's skull (issue 25): a loop that runs in through a narrow notch and around
+ * the whole cranial cavity, against the next layer's loop without the notch (a full disc). Laced
+ * as one chain, the cavity's side is fanned to a few nodes of the disc across the skull, and those
+ * triangles pass the outside test (their centroids lie inside the disc). 1 if found. */
+static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_index *io, int c_is_lower, double margin,
+                              pocket *pk)
+{
+    int n = (int)c->n;
+    if (n < 4) return 0;
+    unsigned char *on = malloc((size_t)n);
+    if (!on || hull_flags(ctx, c, on) != 0) { free(on); return 0; }
+    int first = -1;
+    double best_depth = -1;
+    for (int k = 0; k < n; k++) if (on[k]) { first = k; break; }
+    int k = first;
+    do {
+        if (first < 0) break;
+        int nx = (k + 1) % n;
+        while (!on[nx]) nx = (nx + 1) % n;
+        int len = (nx - k + n) % n;
+        double depth;
+        int deep = len > 1 ? deepest_node(c, k, len, &depth) : -1;
+        int filled = 0;
+        for (int q = 1; deep >= 0 && depth > margin && depth > best_depth && q < len; q++)
+            filled += chain_index_sdf(io, c->p[(k + q) % n]) < -margin;
+        if (deep >= 0 && depth > margin && depth > best_depth && filled >= 0.9 * (len - 1) &&
+            (c_is_lower || !pocket_covered(c->beyond, c->n_beyond, c->p[k], c->p[nx], c->p[deep], margin))) {
+            best_depth = depth;
+            pk->lo = k;
+            pk->hi = nx;
+        }
+        k = nx;
+    } while (k != first);
+    free(on);
+    return best_depth > 0;
 }
 
 /* Is the arc c[lo .. lo+len] (cyclic) a tongue of c that the other layer lacks, to be cut in
@@ -447,6 +491,36 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         for (int j = 0; j < nb; j++) {
             double d = ndist(&L, 0, j);
             if (d < best) { best = d; L.j0 = j; }
+        }
+    }
+    if (o->cut_filled_pockets && depth < 8) {
+        /* Step 0 of a retry (thx_surfaces_build, after a lacing that crosses itself): a pocket of
+           either chain that the other layer fills is cut off in its own plane first, and the rest
+           laced again (recursively: one pocket per level). */
+        for (int side = 0; side < 2; side++) {
+            pocket pk;
+            const thx_chain *c = side ? b : a;
+            if (!find_filled_pocket(ctx, c, side ? &L.ia : &L.ib, !side, 0.5 * o->spacing, &pk)) continue;
+            thx_chain nc;
+            thx_vec2 *np = NULL;
+            int32_t *nid = NULL;
+            size_t keep = *n_tris, keep_inplane = stats->inplane_tris;
+            st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            if (st == THX_OK && nc.n >= 3) {
+                stats->filled_pockets++;
+                st = side ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
+                          : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                free(np);
+                free(nid);
+                goto done;
+            }
+            free(np);
+            free(nid);
+            if (st != THX_OK && st != THX_EGEOM) goto done;
+            /* a pocket that is no simple polygon stays laced */
+            *n_tris = keep;
+            stats->inplane_tris = keep_inplane;
+            st = THX_OK;
         }
     }
     greedy_path(&L, mv);
@@ -842,6 +916,7 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     stats->relaced_gaps += local.relaced_gaps;
     stats->inplane_tris += local.inplane_tris;
     stats->tongues += local.tongues;
+    stats->filled_pockets += local.filled_pockets;
     stats->projected += local.projected;
     stats->unresolved += local.unresolved;
     stats->too_large += local.too_large;

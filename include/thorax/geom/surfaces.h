@@ -57,6 +57,9 @@ typedef struct {
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
     double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
                               fan over 3 fan_limit) are laced in projection if that is better */
+    int cut_filled_pockets; /* 1: before lacing, cut in its plane every pocket of either chain that the
+                              other layer fills (the retry of a crossing lacing, thx_surfaces_build;
+                              default 0) */
 } thx_lace_opts;
 
 typedef struct {
@@ -65,6 +68,8 @@ typedef struct {
     size_t relaced_gaps;   /* gaps re-triangulated */
     size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, tongues; caps excluded) */
     size_t tongues;        /* tongues of one layer cut in its plane (instead of a long fan) */
+    size_t filled_pockets; /* pockets of one layer that the other fills, cut in its plane before
+                              lacing (the retry of a crossing lacing: thx_lace_opts.cut_filled_pockets) */
     size_t projected;      /* slices of nested loops laced by triangulating the ring between them
                               in projection (fallback for fans and unresolved triangles) */
     size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
