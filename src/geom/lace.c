@@ -884,6 +884,27 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     THX_CHECK(lace_rec(ctx, a, b, o, tris, n_tris, cap, &local, 0));
     /* Largest fan: triangles per node id within this slice. */
     if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
+    if (!o->cut_filled_pockets && o->fan_limit > 0 && local.max_fan > 3 * o->fan_limit) {
+        /* A long fan where one layer has a pocket the other fills (a CT skull's loop around the
+           cranial cavity through the frontal sinus's notch, against a full disc: issue 25): the
+           cavity's side fanned to one node of the other layer closes the pocket with a cone, not a
+           floor. Laced again with the filled pockets cut in their plane first; kept if it cut one
+           and leaves no more triangles outside the surface. (Its largest fan may be as long: the
+           in-plane triangulation of a large pocket joins a node of its notch to many.) */
+        thx_lace_opts o2 = *o;
+        o2.cut_filled_pockets = 1;
+        size_t keep = *n_tris;
+        thx_lace_stats l2 = {0};
+        THX_CHECK(lace_rec(ctx, a, b, &o2, tris, n_tris, cap, &l2, 0));
+        if (slice_max_fan(ctx, *tris, keep, *n_tris, &l2.max_fan)) return THX_ENOMEM;
+        if (l2.filled_pockets > 0 && l2.unresolved <= local.unresolved) {
+            memmove(*tris + 3 * first, *tris + 3 * keep, (*n_tris - keep) * 3 * sizeof **tris);
+            *n_tris = first + (*n_tris - keep);
+            local = l2;
+        } else {
+            *n_tris = keep;
+        }
+    }
     int overused = slice_overused_edge(*tris, first, *n_tris);
     if (overused < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
     int must = local.unresolved > 0 || overused;
