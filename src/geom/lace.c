@@ -329,11 +329,27 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
     return found;
 }
 
+/* Do at least 90% of the inner nodes of the arc c[lo .. lo+len] (cyclic) lie inside one of the
+ * n_ix curves ix by more than margin? */
+static int arc_filled(const thx_chain *c, int lo, int len, const chain_index *ix, size_t n_ix, double margin)
+{
+    int n = (int)c->n, in = 0;
+    if (n_ix == 0 || len < 2) return 0;
+    for (int q = 1; q < len; q++) {
+        int inside = 0;
+        for (size_t r = 0; r < n_ix && !inside; r++) inside = chain_index_sdf(&ix[r], c->p[(lo + q) % n]) < -margin;
+        in += inside;
+    }
+    return in >= 0.9 * (len - 1);
+}
+
 /* The deepest pocket of chain c that the other layer fills (io: its signed distance): a bay
  * between consecutive convex-hull vertices, deeper than margin, with at least 90% of the nodes of
  * its arc inside the other layer's curve by more than margin (the other layer covers the bay, not
  * merely a shallower bay of its own along it); unless c is the slice's lower chain, the
- * layer beyond c must not cover it (a dent of one layer is cut by one slice only). This is the
+ * layer beyond c must not fill it the same way (a dent of one layer is cut by one slice only;
+ * the bay's deepest node inside the layer beyond, pocket_covered's test, is not enough: there
+ * the notched loops of the next layers hold it in their bone). This is the
  * frontal sinus of a CT's skull (issue 25): a loop that runs in through a narrow notch and around
  * the whole cranial cavity, against the next layer's loop without the notch (a full disc). Laced
  * as one chain, the cavity's side is fanned to a few nodes of the disc across the skull, and those
@@ -344,7 +360,15 @@ static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_inde
     int n = (int)c->n;
     if (n < 4) return 0;
     unsigned char *on = malloc((size_t)n);
-    if (!on || hull_flags(ctx, c, on) != 0) { free(on); return 0; }
+    chain_index *bi = c_is_lower || !c->n_beyond ? NULL : calloc(c->n_beyond, sizeof *bi);
+    if (!on || hull_flags(ctx, c, on) != 0 || (!c_is_lower && c->n_beyond && !bi)) { free(on); free(bi); return 0; }
+    for (size_t q = 0; bi && q < c->n_beyond; q++)
+        if (chain_index_init(&bi[q], c->beyond[q].p, c->beyond[q].n)) {
+            for (size_t r = 0; r < q; r++) chain_index_free(&bi[r]);
+            free(bi);
+            free(on);
+            return 0;
+        }
     int first = -1;
     double best_depth = -1;
     for (int k = 0; k < n; k++) if (on[k]) { first = k; break; }
@@ -356,17 +380,16 @@ static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_inde
         int len = (nx - k + n) % n;
         double depth;
         int deep = len > 1 ? deepest_node(c, k, len, &depth) : -1;
-        int filled = 0;
-        for (int q = 1; deep >= 0 && depth > margin && depth > best_depth && q < len; q++)
-            filled += chain_index_sdf(io, c->p[(k + q) % n]) < -margin;
-        if (deep >= 0 && depth > margin && depth > best_depth && filled >= 0.9 * (len - 1) &&
-            (c_is_lower || !pocket_covered(c->beyond, c->n_beyond, c->p[k], c->p[nx], c->p[deep], margin))) {
+        if (deep >= 0 && depth > margin && depth > best_depth && arc_filled(c, k, len, io, 1, margin) &&
+            (c_is_lower || !arc_filled(c, k, len, bi, c->n_beyond, margin))) {
             best_depth = depth;
             pk->lo = k;
             pk->hi = nx;
         }
         k = nx;
     } while (k != first);
+    for (size_t q = 0; bi && q < c->n_beyond; q++) chain_index_free(&bi[q]);
+    free(bi);
     free(on);
     return best_depth > 0;
 }
