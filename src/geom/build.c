@@ -697,7 +697,7 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
         if (attempt == 4) la.phase_weight = 0;
         if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
-        if (attempt == 6) la.cut_filled_pockets = 1;
+        if (attempt == 6) la.cut_filled_pockets = 2;
         sl->n_tris = first;
         sl->st = keep;
         r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);

@@ -347,15 +347,17 @@ static int arc_filled(const thx_chain *c, int lo, int len, const chain_index *ix
  * between consecutive convex-hull vertices, deeper than margin, with at least 90% of the nodes of
  * its arc inside the other layer's curve by more than margin (the other layer covers the bay, not
  * merely a shallower bay of its own along it); unless c is the slice's lower chain, the
- * layer beyond c must not fill it the same way (a dent of one layer is cut by one slice only;
- * the bay's deepest node inside the layer beyond, pocket_covered's test, is not enough: there
- * the notched loops of the next layers hold it in their bone). This is the
+ * layer beyond c must not fill it the same way (a dent of one layer is cut by one slice only),
+ * and at level 1 not even hold its deepest node (pocket_covered, the test of step 4: the slice
+ * beyond may cut it there as its lower chain). At level 2 (the retry of a lacing that crosses
+ * itself) that second test is dropped: the notched loops of the next layers up, whose cavity is
+ * shifted a little, hold the deepest node in their bone, and no slice would cut the pocket. This is the
  * frontal sinus of a CT's skull (issue 25): a loop that runs in through a narrow notch and around
  * the whole cranial cavity, against the next layer's loop without the notch (a full disc). Laced
  * as one chain, the cavity's side is fanned to a few nodes of the disc across the skull, and those
  * triangles pass the outside test (their centroids lie inside the disc). 1 if found. */
-static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_index *io, int c_is_lower, double margin,
-                              pocket *pk)
+static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_index *io, int c_is_lower, int level,
+                              double margin, pocket *pk)
 {
     int n = (int)c->n;
     if (n < 4) return 0;
@@ -381,7 +383,8 @@ static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_inde
         double depth;
         int deep = len > 1 ? deepest_node(c, k, len, &depth) : -1;
         if (deep >= 0 && depth > margin && depth > best_depth && arc_filled(c, k, len, io, 1, margin) &&
-            (c_is_lower || !arc_filled(c, k, len, bi, c->n_beyond, margin))) {
+            (c_is_lower || (!arc_filled(c, k, len, bi, c->n_beyond, margin) &&
+                            (level >= 2 || !pocket_covered(c->beyond, c->n_beyond, c->p[k], c->p[nx], c->p[deep], margin))))) {
             best_depth = depth;
             pk->lo = k;
             pk->hi = nx;
@@ -523,7 +526,8 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         for (int side = 0; side < 2; side++) {
             pocket pk;
             const thx_chain *c = side ? b : a;
-            if (!find_filled_pocket(ctx, c, side ? &L.ia : &L.ib, !side, 0.5 * o->spacing, &pk)) continue;
+            if (!find_filled_pocket(ctx, c, side ? &L.ia : &L.ib, !side, o->cut_filled_pockets, 0.5 * o->spacing, &pk))
+                continue;
             thx_chain nc;
             thx_vec2 *np = NULL;
             int32_t *nid = NULL;

@@ -57,9 +57,10 @@ typedef struct {
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
     double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
                               fan over 3 fan_limit) are laced in projection if that is better */
-    int cut_filled_pockets; /* 1: before lacing, cut in its plane every pocket of either chain that the
-                              other layer fills (the retry of a crossing lacing, thx_surfaces_build;
-                              default 0) */
+    int cut_filled_pockets; /* before lacing, cut in its plane the pockets of either chain that the
+                              other layer fills: 0 no (default; thx_lace still does it for a fan over
+                              3 fan_limit, at level 1), 1 those the slice beyond cannot cut, 2 also
+                              those it might (the retry of a lacing that crosses, thx_surfaces_build) */
 } thx_lace_opts;
 
 typedef struct {
