@@ -702,6 +702,18 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         sl->st = keep;
         r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
         if (r != THX_OK) return r;
+        if (attempt == 6 && sl->st.filled_pockets == keep.filled_pockets) {
+            /* no filled pocket: the slice stays as the previous retry laced it (what a slice that
+               crosses kept before this retry existed) */
+            la = *lo;
+            la.phase_weight *= 4;
+            la.concave_tol *= 0.5;
+            sl->n_tris = first;
+            sl->st = keep;
+            r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
+            if (r != THX_OK) return r;
+            break;
+        }
         int x = tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first);
         /* an edge in three triangles is laced again as well (issue 24: the Dalhousie torso
            cut across its long axis at 10 mm, where a layer's loop branches in two) */
