@@ -690,14 +690,18 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
     thx_lace_stats keep = sl->st;
     thx_status r = THX_OK;
     *crossing = 0;
+    int without = 0; /* 1: this attempt again without the long fan's filled-pocket cut */
     for (int attempt = 0; attempt < N_TRY; attempt++) {
         thx_lace_opts la = *lo;
+        if (without) la.cut_filled_pockets = -1;
         if (attempt == 1) la.concave_tol *= 0.5;
         if (attempt == 2) la.concave_tol *= 2;
         if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
         if (attempt == 4) la.phase_weight = 0;
         if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
         if (attempt == 6) la.cut_filled_pockets = 2;
+        int was_without = without;
+        without = 0;
         sl->n_tris = first;
         sl->st = keep;
         r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
@@ -708,6 +712,7 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
             la = *lo;
             la.phase_weight *= 4;
             la.concave_tol *= 0.5;
+            la.cut_filled_pockets = -1;
             sl->n_tris = first;
             sl->st = keep;
             r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
@@ -721,6 +726,13 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         if (x == 1 && !tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first)) {
             int m = mend_overused(lxyz, sl->tris + 3 * first, sl->n_tris - first);
             x = m < 0 ? -1 : !m;
+        }
+        if (x == 1 && attempt < 6 && !was_without && sl->st.filled_pockets > keep.filled_pockets) {
+            /* the long fan's filled pocket, cut (thx_lace), made the lacing cross: these settings
+               again without it (the bench's torso map's lungs, two loops merging) */
+            without = 1;
+            attempt--;
+            continue;
         }
         if (x < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
         if (!x) {
@@ -884,6 +896,11 @@ static int parts_nested(const thx_chain *S, const thx_chain *parts, int k)
 static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const owned_chain *gb, const thx_lace_opts *lo,
                                     const double *lxyz, slice *sl, int *done)
 {
+    /* the parts are laced without the long fan's filled-pocket cut (thx_lace): each part's lacing
+       is checked alone, and a cut that passes there made the parts cross each other (the bench's
+       torso map's lungs, issue 25) */
+    thx_lace_opts lp = *lo;
+    lp.cut_filled_pockets = -1;
     *done = 0;
     int single_lower = ga->n_sel == 1 && gb->n_sel > 1;
     if (!single_lower && !(gb->n_sel == 1 && ga->n_sel > 1)) return THX_OK;
@@ -912,7 +929,7 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
             pq.n_beyond = many->c.n_beyond;
             size_t before = sl->n_tris;
             thx_lace_stats st_before = sl->st;
-            r = single_lower ? lace_tries(lc, &sc, &pq, lo, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, lo, lxyz, sl, &x);
+            r = single_lower ? lace_tries(lc, &sc, &pq, &lp, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, &lp, lxyz, sl, &x);
             if (r == THX_OK && x) {
                 /* Laced again with the seam opposite the chord: both chains start there (the part at
                    its node nearest the polygon's middle node). The chord is one long edge with no
@@ -937,7 +954,7 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
                 pr.id = ri + ns;
                 sl->n_tris = before;
                 sl->st = st_before;
-                r = single_lower ? lace_tries(lc, &sr, &pr, lo, lxyz, sl, &x) : lace_tries(lc, &pr, &sr, lo, lxyz, sl, &x);
+                r = single_lower ? lace_tries(lc, &sr, &pr, &lp, lxyz, sl, &x) : lace_tries(lc, &pr, &sr, &lp, lxyz, sl, &x);
                 free(rp);
                 free(ri);
             }

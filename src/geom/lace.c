@@ -519,7 +519,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             if (d < best) { best = d; L.j0 = j; }
         }
     }
-    if (o->cut_filled_pockets && depth < 8) {
+    if (o->cut_filled_pockets > 0 && depth < 8) {
         /* Step 0 of a retry (thx_surfaces_build, after a lacing that crosses itself): a pocket of
            either chain that the other layer fills is cut off in its own plane first, and the rest
            laced again (recursively: one pocket per level). */
@@ -911,7 +911,7 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     THX_CHECK(lace_rec(ctx, a, b, o, tris, n_tris, cap, &local, 0));
     /* Largest fan: triangles per node id within this slice. */
     if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
-    if (!o->cut_filled_pockets && o->fan_limit > 0 && local.max_fan > 3 * o->fan_limit) {
+    if (o->cut_filled_pockets == 0 && o->fan_limit > 0 && local.max_fan > 3 * o->fan_limit) {
         /* A long fan where one layer has a pocket the other fills (a CT skull's loop around the
            cranial cavity through the frontal sinus's notch, against a full disc: issue 25): the
            cavity's side fanned to one node of the other layer closes the pocket with a cone, not a

@@ -59,8 +59,8 @@ typedef struct {
                               fan over 3 fan_limit) are laced in projection if that is better */
     int cut_filled_pockets; /* before lacing, cut in its plane the pockets of either chain that the
                               other layer fills: 0 no (default; thx_lace still does it for a fan over
-                              3 fan_limit, at level 1), 1 those the slice beyond cannot cut, 2 also
-                              those it might (the retry of a lacing that crosses, thx_surfaces_build) */
+                              3 fan_limit, at level 1), -1 never, 1 those the slice beyond cannot cut,
+                              2 also those it might (the retry of a lacing that crosses, thx_surfaces_build) */
 } thx_lace_opts;
 
 typedef struct {
