@@ -38,6 +38,10 @@
  *     consecutive convex-hull vertices of its chain) is cut off with triangles in
  *     the plane of its layer, the chain is shortened to the pocket's chord, and
  *     the slice is laced again.
+ *  0. (Before 1, when asked: thx_lace for a fan over 3 fan_limit, thx_surfaces_build's last retry
+ *     of a lacing that crosses.) A pocket of one chain that the other layer fills (a CT skull's
+ *     loop around the cranial cavity through the frontal sinus's notch, against the full loop of
+ *     the next plane: issue 25) is cut as in step 4 first; no outside triangle reveals it.
  */
 #include <math.h>
 #include <stdlib.h>
