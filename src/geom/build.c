@@ -678,27 +678,47 @@ done:
 /* Laces chain a with chain b into sl->tris, appending. A lacing whose triangles cross each other (a
  * fold the lacing's own tests do not see, e.g. a narrow protrusion of one layer fanned across to
  * the other side of the other layer) is laced again with other settings: a tighter and a looser
- * outside test, tongues cut from shorter fans, the position-only metric. The first that does not
- * cross is kept (else the last, with *crossing = 1). */
+ * outside test, tongues cut from shorter fans, the position-only metric, and last the pockets of
+ * either layer that the other fills cut in their plane first (a CT skull's loop that runs in
+ * through the frontal sinus's notch around the cranial cavity, against a full disc: issue 25). The
+ * first that does not cross is kept (else the last, with *crossing = 1). */
 static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *lo,
                              const double *lxyz, slice *sl, int *crossing)
 {
-    enum { N_TRY = 6 };
+    enum { N_TRY = 7 };
     size_t first = sl->n_tris;
     thx_lace_stats keep = sl->st;
     thx_status r = THX_OK;
     *crossing = 0;
+    int without = 0; /* 1: this attempt again without the long fan's filled-pocket cut */
     for (int attempt = 0; attempt < N_TRY; attempt++) {
         thx_lace_opts la = *lo;
+        if (without) la.cut_filled_pockets = -1;
         if (attempt == 1) la.concave_tol *= 0.5;
         if (attempt == 2) la.concave_tol *= 2;
         if (attempt == 3 && la.fan_limit > 3) la.fan_limit = 3;
         if (attempt == 4) la.phase_weight = 0;
         if (attempt == 5) { la.phase_weight *= 4; la.concave_tol *= 0.5; }
+        if (attempt == 6) la.cut_filled_pockets = 2;
+        int was_without = without;
+        without = 0;
         sl->n_tris = first;
         sl->st = keep;
         r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
         if (r != THX_OK) return r;
+        if (attempt == 6 && sl->st.filled_pockets == keep.filled_pockets) {
+            /* no filled pocket: the slice stays as the previous retry laced it (what a slice that
+               crosses kept before this retry existed) */
+            la = *lo;
+            la.phase_weight *= 4;
+            la.concave_tol *= 0.5;
+            la.cut_filled_pockets = -1;
+            sl->n_tris = first;
+            sl->st = keep;
+            r = thx_lace(lc, a, b, &la, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
+            if (r != THX_OK) return r;
+            break;
+        }
         int x = tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first);
         /* an edge in three triangles is laced again as well (issue 24: the Dalhousie torso
            cut across its long axis at 10 mm, where a layer's loop branches in two) */
@@ -706,6 +726,13 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         if (x == 1 && !tris_cross(lxyz, sl->tris + 3 * first, sl->n_tris - first)) {
             int m = mend_overused(lxyz, sl->tris + 3 * first, sl->n_tris - first);
             x = m < 0 ? -1 : !m;
+        }
+        if (x == 1 && attempt < 6 && !was_without && sl->st.filled_pockets > keep.filled_pockets) {
+            /* the long fan's filled pocket, cut (thx_lace), made the lacing cross: these settings
+               again without it (the bench's torso map's lungs, two loops merging) */
+            without = 1;
+            attempt--;
+            continue;
         }
         if (x < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
         if (!x) {
@@ -869,6 +896,11 @@ static int parts_nested(const thx_chain *S, const thx_chain *parts, int k)
 static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const owned_chain *gb, const thx_lace_opts *lo,
                                     const double *lxyz, slice *sl, int *done)
 {
+    /* the parts are laced without the long fan's filled-pocket cut (thx_lace): each part's lacing
+       is checked alone, and a cut that passes there made the parts cross each other (the bench's
+       torso map's lungs, issue 25) */
+    thx_lace_opts lp = *lo;
+    lp.cut_filled_pockets = -1;
     *done = 0;
     int single_lower = ga->n_sel == 1 && gb->n_sel > 1;
     if (!single_lower && !(gb->n_sel == 1 && ga->n_sel > 1)) return THX_OK;
@@ -897,7 +929,7 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
             pq.n_beyond = many->c.n_beyond;
             size_t before = sl->n_tris;
             thx_lace_stats st_before = sl->st;
-            r = single_lower ? lace_tries(lc, &sc, &pq, lo, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, lo, lxyz, sl, &x);
+            r = single_lower ? lace_tries(lc, &sc, &pq, &lp, lxyz, sl, &x) : lace_tries(lc, &pq, &sc, &lp, lxyz, sl, &x);
             if (r == THX_OK && x) {
                 /* Laced again with the seam opposite the chord: both chains start there (the part at
                    its node nearest the polygon's middle node). The chord is one long edge with no
@@ -922,7 +954,7 @@ static thx_status lace_branch_split(thx_ctx *lc, const owned_chain *ga, const ow
                 pr.id = ri + ns;
                 sl->n_tris = before;
                 sl->st = st_before;
-                r = single_lower ? lace_tries(lc, &sr, &pr, lo, lxyz, sl, &x) : lace_tries(lc, &pr, &sr, lo, lxyz, sl, &x);
+                r = single_lower ? lace_tries(lc, &sr, &pr, &lp, lxyz, sl, &x) : lace_tries(lc, &pr, &sr, &lp, lxyz, sl, &x);
                 free(rp);
                 free(ri);
             }
@@ -1100,7 +1132,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         thx_lace_stats *a = &stats->lace, *b = &slices[i].st;
         a->n_tris += b->n_tris; a->removed += b->removed; a->relaced_gaps += b->relaced_gaps;
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
-        a->tongues += b->tongues; a->projected += b->projected; a->crossing += b->crossing;
+        a->tongues += b->tongues; a->filled_pockets += b->filled_pockets; a->projected += b->projected; a->crossing += b->crossing;
         a->relaced_crossing += b->relaced_crossing;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
@@ -1236,9 +1268,10 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
         m->interior[m->n_surfaces - 1] = interior;
         thx_log(ctx, THX_LOG_DEBUG,
                 "surface %s: %zu nodes, %zu triangles; lacing removed %zu outside triangles, re-laced %zu gaps, "
-                "%zu in-plane, %zu unresolved, %zu too large, largest fan %d; %zu caps; orientation: %zu by test, "
-                "%zu from neighbours (%zu votes overruled), %zu flipped",
+                "%zu in-plane (%zu filled pockets), %zu unresolved, %zu too large, largest fan %d; %zu caps; "
+                "orientation: %zu by test, %zu from neighbours (%zu votes overruled), %zu flipped",
                 c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
+                one.lace.filled_pockets,
                 one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
                 one.orient_by_neighbours, one.orient_overruled, one.orient_flipped);
         if (one.lace.crossing)
@@ -1254,6 +1287,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->lace.n_tris += one.lace.n_tris; total->lace.removed += one.lace.removed;
             total->lace.relaced_gaps += one.lace.relaced_gaps; total->lace.inplane_tris += one.lace.inplane_tris;
             total->lace.tongues += one.lace.tongues; total->lace.projected += one.lace.projected;
+            total->lace.filled_pockets += one.lace.filled_pockets;
             total->lace.unresolved += one.lace.unresolved; total->lace.crossing += one.lace.crossing;
             total->lace.relaced_crossing += one.lace.relaced_crossing; total->lace.too_large += one.lace.too_large;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;

@@ -38,6 +38,10 @@
  *     consecutive convex-hull vertices of its chain) is cut off with triangles in
  *     the plane of its layer, the chain is shortened to the pocket's chord, and
  *     the slice is laced again.
+ *  0. (Before 1, when asked: thx_lace for a fan over 3 fan_limit, thx_surfaces_build's last retry
+ *     of a lacing that crosses.) A pocket of one chain that the other layer fills (a CT skull's
+ *     loop around the cranial cavity through the frontal sinus's notch, against the full loop of
+ *     the next plane: issue 25) is cut as in step 4 first; no outside triangle reveals it.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -62,6 +66,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->fan_limit = 6;
     o->projected_aspect = 10;
     o->phase_weight = 0.25;
+    o->cut_filled_pockets = 0;
 }
 
 typedef struct {
@@ -227,6 +232,7 @@ static double cross3(thx_vec2 o, thx_vec2 a, thx_vec2 b) { return (a.x - o.x) * 
 static int hull_flags(thx_ctx *ctx, const thx_chain *c, unsigned char *on_hull)
 {
     int n = (int)c->n;
+    if (n <= 0) return -1;
     sort_pt *sp = malloc((size_t)n * sizeof *sp);
     int *idx = malloc((size_t)n * sizeof *idx), *h = malloc((size_t)(2 * n + 2) * sizeof *h);
     if (!sp || !idx || !h) { free(sp); free(idx); free(h); return -1; }
@@ -325,6 +331,74 @@ static int find_pocket(thx_ctx *ctx, const thx_chain *c, const thx_chain *o, int
     } while (k != first);
     free(on);
     return found;
+}
+
+/* Do at least 90% of the inner nodes of the arc c[lo .. lo+len] (cyclic) lie inside one of the
+ * n_ix curves ix by more than margin? */
+static int arc_filled(const thx_chain *c, int lo, int len, const chain_index *ix, size_t n_ix, double margin)
+{
+    int n = (int)c->n, in = 0;
+    if (n_ix == 0 || len < 2) return 0;
+    for (int q = 1; q < len; q++) {
+        int inside = 0;
+        for (size_t r = 0; r < n_ix && !inside; r++) inside = chain_index_sdf(&ix[r], c->p[(lo + q) % n]) < -margin;
+        in += inside;
+    }
+    return in >= 0.9 * (len - 1);
+}
+
+/* The deepest pocket of chain c that the other layer fills (io: its signed distance): a bay
+ * between consecutive convex-hull vertices, deeper than margin, with at least 90% of the nodes of
+ * its arc inside the other layer's curve by more than margin (the other layer covers the bay, not
+ * merely a shallower bay of its own along it); unless c is the slice's lower chain, the
+ * layer beyond c must not fill it the same way (a dent of one layer is cut by one slice only),
+ * and at level 1 not even hold its deepest node (pocket_covered, the test of step 4: the slice
+ * beyond may cut it there as its lower chain). At level 2 (the retry of a lacing that crosses
+ * itself) that second test is dropped: the notched loops of the next layers up, whose cavity is
+ * shifted a little, hold the deepest node in their bone, and no slice would cut the pocket. This is the
+ * frontal sinus of a CT's skull (issue 25): a loop that runs in through a narrow notch and around
+ * the whole cranial cavity, against the next layer's loop without the notch (a full disc). Laced
+ * as one chain, the cavity's side is fanned to a few nodes of the disc across the skull, and those
+ * triangles pass the outside test (their centroids lie inside the disc). 1 if found. */
+static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_index *io, int c_is_lower, int level,
+                              double margin, pocket *pk)
+{
+    int n = (int)c->n;
+    if (n < 4) return 0;
+    unsigned char *on = malloc((size_t)n);
+    chain_index *bi = c_is_lower || !c->n_beyond ? NULL : calloc(c->n_beyond, sizeof *bi);
+    if (!on || hull_flags(ctx, c, on) != 0 || (!c_is_lower && c->n_beyond && !bi)) { free(on); free(bi); return 0; }
+    for (size_t q = 0; bi && q < c->n_beyond; q++)
+        if (chain_index_init(&bi[q], c->beyond[q].p, c->beyond[q].n)) {
+            for (size_t r = 0; r < q; r++) chain_index_free(&bi[r]);
+            free(bi);
+            free(on);
+            return 0;
+        }
+    int first = -1;
+    double best_depth = -1;
+    for (int k = 0; k < n; k++) if (on[k]) { first = k; break; }
+    int k = first;
+    do {
+        if (first < 0) break;
+        int nx = (k + 1) % n;
+        while (!on[nx]) nx = (nx + 1) % n;
+        int len = (nx - k + n) % n;
+        double depth;
+        int deep = len > 1 ? deepest_node(c, k, len, &depth) : -1;
+        if (deep >= 0 && depth > margin && depth > best_depth && arc_filled(c, k, len, io, 1, margin) &&
+            (c_is_lower || (!arc_filled(c, k, len, bi, c->n_beyond, margin) &&
+                            (level >= 2 || !pocket_covered(c->beyond, c->n_beyond, c->p[k], c->p[nx], c->p[deep], margin))))) {
+            best_depth = depth;
+            pk->lo = k;
+            pk->hi = nx;
+        }
+        k = nx;
+    } while (k != first);
+    for (size_t q = 0; bi && q < c->n_beyond; q++) chain_index_free(&bi[q]);
+    free(bi);
+    free(on);
+    return best_depth > 0;
 }
 
 /* Is the arc c[lo .. lo+len] (cyclic) a tongue of c that the other layer lacks, to be cut in
@@ -447,6 +521,37 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         for (int j = 0; j < nb; j++) {
             double d = ndist(&L, 0, j);
             if (d < best) { best = d; L.j0 = j; }
+        }
+    }
+    if (o->cut_filled_pockets > 0 && depth < 8) {
+        /* Step 0 of a retry (thx_surfaces_build, after a lacing that crosses itself): a pocket of
+           either chain that the other layer fills is cut off in its own plane first, and the rest
+           laced again (recursively: one pocket per level). */
+        for (int side = 0; side < 2; side++) {
+            pocket pk;
+            const thx_chain *c = side ? b : a;
+            if (!find_filled_pocket(ctx, c, side ? &L.ia : &L.ib, !side, o->cut_filled_pockets, 0.5 * o->spacing, &pk))
+                continue;
+            thx_chain nc;
+            thx_vec2 *np = NULL;
+            int32_t *nid = NULL;
+            size_t keep = *n_tris, keep_inplane = stats->inplane_tris;
+            st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            if (st == THX_OK && nc.n >= 3) {
+                stats->filled_pockets++;
+                st = side ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
+                          : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                free(np);
+                free(nid);
+                goto done;
+            }
+            free(np);
+            free(nid);
+            if (st != THX_OK && st != THX_EGEOM) goto done;
+            /* a pocket that is no simple polygon stays laced */
+            *n_tris = keep;
+            stats->inplane_tris = keep_inplane;
+            st = THX_OK;
         }
     }
     greedy_path(&L, mv);
@@ -810,6 +915,27 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     THX_CHECK(lace_rec(ctx, a, b, o, tris, n_tris, cap, &local, 0));
     /* Largest fan: triangles per node id within this slice. */
     if (slice_max_fan(ctx, *tris, first, *n_tris, &local.max_fan)) return THX_ENOMEM;
+    if (o->cut_filled_pockets == 0 && o->fan_limit > 0 && local.max_fan > 3 * o->fan_limit) {
+        /* A long fan where one layer has a pocket the other fills (a CT skull's loop around the
+           cranial cavity through the frontal sinus's notch, against a full disc: issue 25): the
+           cavity's side fanned to one node of the other layer closes the pocket with a cone, not a
+           floor. Laced again with the filled pockets cut in their plane first; kept if it cut one
+           and leaves no more triangles outside the surface. (Its largest fan may be as long: the
+           in-plane triangulation of a large pocket joins a node of its notch to many.) */
+        thx_lace_opts o2 = *o;
+        o2.cut_filled_pockets = 1;
+        size_t keep = *n_tris;
+        thx_lace_stats l2 = {0};
+        THX_CHECK(lace_rec(ctx, a, b, &o2, tris, n_tris, cap, &l2, 0));
+        if (slice_max_fan(ctx, *tris, keep, *n_tris, &l2.max_fan)) return THX_ENOMEM;
+        if (l2.filled_pockets > 0 && l2.unresolved <= local.unresolved) {
+            memmove(*tris + 3 * first, *tris + 3 * keep, (*n_tris - keep) * 3 * sizeof **tris);
+            *n_tris = first + (*n_tris - keep);
+            local = l2;
+        } else {
+            *n_tris = keep;
+        }
+    }
     int overused = slice_overused_edge(*tris, first, *n_tris);
     if (overused < 0) return thx_error(ctx, THX_ENOMEM, "out of memory");
     int must = local.unresolved > 0 || overused;
@@ -842,6 +968,7 @@ thx_status thx_lace(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const 
     stats->relaced_gaps += local.relaced_gaps;
     stats->inplane_tris += local.inplane_tris;
     stats->tongues += local.tongues;
+    stats->filled_pockets += local.filled_pockets;
     stats->projected += local.projected;
     stats->unresolved += local.unresolved;
     stats->too_large += local.too_large;

@@ -57,6 +57,10 @@ typedef struct {
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
     double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
                               fan over 3 fan_limit) are laced in projection if that is better */
+    int cut_filled_pockets; /* before lacing, cut in its plane the pockets of either chain that the
+                              other layer fills: 0 no (default; thx_lace still does it for a fan over
+                              3 fan_limit, at level 1), -1 never, 1 those the slice beyond cannot cut,
+                              2 also those it might (the retry of a lacing that crosses, thx_surfaces_build) */
 } thx_lace_opts;
 
 typedef struct {
@@ -65,6 +69,8 @@ typedef struct {
     size_t relaced_gaps;   /* gaps re-triangulated */
     size_t inplane_tris;   /* triangles made in the plane of a layer (pockets, tongues; caps excluded) */
     size_t tongues;        /* tongues of one layer cut in its plane (instead of a long fan) */
+    size_t filled_pockets; /* pockets of one layer that the other fills, cut in its plane before
+                              lacing (the retry of a crossing lacing: thx_lace_opts.cut_filled_pockets) */
     size_t projected;      /* slices of nested loops laced by triangulating the ring between them
                               in projection (fallback for fans and unresolved triangles) */
     size_t unresolved;     /* triangles still failing the outside test (reported, kept closed) */
