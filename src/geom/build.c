@@ -1303,7 +1303,9 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
             free(layers), free(keep);
             return THX_ENOMEM;
         }
-        /* the loops as the lacing sees them: resampled by the same splines at the same spacing */
+        /* the loops as the lacing sees them: resampled by the same splines at the same spacing; the
+           layers in parallel (each thread its own context; the first failing layer's message wins, as
+           the serial loop's would) */
         for (size_t l = 0; l < nl && st == THX_OK; l++) {
             size_t n = cs->layers[l].n_loops;
             layers[l].n_loops = n;
@@ -1314,17 +1316,37 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
                 break;
             }
             memset(keep[l], 1, n ? n : 1);
-            for (size_t i = 0; i < n && st == THX_OK; i++) {
-                const thx_loop *lp = &cs->layers[l].loops[i];
-                st = thx_loop_resample(ctx, lp->p, lp->n, spacing, o->smoothing, o->start, &layers[l].loops[i].p,
-                                       &layers[l].loops[i].n);
-                if (st != THX_OK) {
-                    char why[512];
-                    snprintf(why, sizeof why, "%s", thx_ctx_message(ctx));
-                    thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path, lp->line, cs->name,
-                              LAYER_NO(cs, l), cs->layers[l].z, why);
+        }
+        if (st == THX_OK) {
+            long bad = -1;
+            thx_status bad_st = THX_OK;
+            char bad_msg[1024] = "";
+#pragma omp parallel
+            {
+                thx_ctx *lc = NULL;
+                int ok = thx_ctx_create(&lc) == THX_OK;
+#pragma omp for schedule(dynamic, 4)
+                for (long l = 0; l < (long)nl; l++) {
+                    for (size_t i = 0; i < layers[l].n_loops; i++) {
+                        const thx_loop *lp = &cs->layers[l].loops[i];
+                        thx_status r = ok ? thx_loop_resample(lc, lp->p, lp->n, spacing, o->smoothing, o->start,
+                                                              &layers[l].loops[i].p, &layers[l].loops[i].n)
+                                          : THX_ENOMEM;
+                        if (r == THX_OK) continue;
+#pragma omp critical(thx_drop_flat_err)
+                        if (bad < 0 || l < bad) {
+                            bad = l;
+                            bad_st = r;
+                            snprintf(bad_msg, sizeof bad_msg, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path,
+                                     lp->line, cs->name, LAYER_NO(cs, (size_t)l), cs->layers[l].z,
+                                     ok ? thx_ctx_message(lc) : "out of memory");
+                        }
+                        break;
+                    }
                 }
+                thx_ctx_destroy(&lc);
             }
+            if (bad >= 0) st = thx_error(ctx, bad_st, "%s", bad_msg);
         }
         /* to a fixed point: a loop with no kept partner on either neighbouring layer (the rule of the
            slices: two single loops always pair, else their projections must overlap) is dropped */
