@@ -1163,53 +1163,94 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     }
     int method = o->cap_method >= 0 ? o->cap_method : (int)cs->cap;
     double grid = o->cap_grid > 0 ? o->cap_grid : (cs->cap_grid > 0 ? cs->cap_grid : spacing);
-    for (size_t l = 0; l < nl; l++)
-        for (size_t k = 0; k < layers[l].n_loops; k++) {
-            rloop *r = &layers[l].loops[k];
-            for (int side = 0; side < 2; side++) {
-                if (side == 0 ? r->down : r->up) continue;
-                thx_vec2 *cp = NULL;
-                int32_t *ct = NULL;
-                size_t ncp = 0, nct = 0;
-                st = thx_cap_triangulate(ctx, r->p, r->n, method == THX_CAP_GRID ? grid : 0.0,
-                                         method == THX_CAP_GRID ? 0.5 * grid : 0.0, &cp, &ncp, &ct, &nct);
-                if (st != THX_OK) {
-                    char m[1024];
-                    snprintf(m, sizeof m, "%s", thx_ctx_message(ctx));
-                    st = thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): end cap: %s", path,
-                                   cs->layers[l].line, cs->name, LAYER_NO(cs, l), layers[l].z, m);
-                    goto done;
-                }
-                size_t base = s->n_nodes;
-                if (s->n_nodes + ncp > node_cap) {
-                    node_cap = (s->n_nodes + ncp) * 2;
-                    double *nx = thx_realloc(ctx, s->xyz, node_cap * 3 * sizeof *nx);
-                    if (!nx) { free(cp); free(ct); st = THX_ENOMEM; goto done; }
-                    s->xyz = nx;
-                }
-                for (size_t i = r->n; i < ncp; i++) {
-                    s->xyz[3 * s->n_nodes] = cp[i].x;
-                    s->xyz[3 * s->n_nodes + 1] = cp[i].y;
-                    s->xyz[3 * s->n_nodes + 2] = layers[l].z;
-                    s->n_nodes++;
-                }
-                if (s->n_tris + nct > tri_cap) {
-                    tri_cap = (s->n_tris + nct) * 2;
-                    int32_t *nt2 = thx_realloc(ctx, s->tri, tri_cap * 3 * sizeof *nt2);
-                    if (!nt2) { free(cp); free(ct); st = THX_ENOMEM; goto done; }
-                    s->tri = nt2;
-                }
-                for (size_t t = 0; t < nct; t++)
-                    for (int v = 0; v < 3; v++) {
-                        int32_t q = ct[3 * t + v];
-                        s->tri[3 * (s->n_tris + t) + v] = (size_t)q < r->n ? r->first + q : (int32_t)(base + (size_t)q - r->n);
+    {
+        /* the caps: triangulated in parallel (each thread its own context), appended in the order of the
+           serial loop (layer, loop, bottom then top); the first failing cap's message, as that loop's */
+        typedef struct {
+            size_t l, k;
+            thx_vec2 *cp;
+            int32_t *ct;
+            size_t ncp, nct;
+            thx_status st;
+            char msg[512];
+        } cap_job;
+        size_t nj = 0;
+        for (size_t l = 0; l < nl; l++)
+            for (size_t k = 0; k < layers[l].n_loops; k++)
+                nj += (size_t)!layers[l].loops[k].down + (size_t)!layers[l].loops[k].up;
+        cap_job *jobs = thx_calloc(ctx, nj ? nj : 1, sizeof *jobs);
+        if (!jobs) { st = THX_ENOMEM; goto done; }
+        nj = 0;
+        for (size_t l = 0; l < nl; l++)
+            for (size_t k = 0; k < layers[l].n_loops; k++)
+                for (int side = 0; side < 2; side++)
+                    if (!(side == 0 ? layers[l].loops[k].down : layers[l].loops[k].up)) {
+                        jobs[nj].l = l;
+                        jobs[nj].k = k;
+                        nj++;
                     }
-                s->n_tris += nct;
-                stats->n_caps++;
-                free(cp);
-                free(ct);
+#pragma omp parallel
+        {
+            thx_ctx *lc = NULL;
+            int ok = thx_ctx_create(&lc) == THX_OK;
+#pragma omp for schedule(dynamic, 1)
+            for (long j = 0; j < (long)nj; j++) {
+                cap_job *jb = &jobs[j];
+                const rloop *r = &layers[jb->l].loops[jb->k];
+                jb->st = ok ? thx_cap_triangulate(lc, r->p, r->n, method == THX_CAP_GRID ? grid : 0.0,
+                                                  method == THX_CAP_GRID ? 0.5 * grid : 0.0, &jb->cp, &jb->ncp, &jb->ct,
+                                                  &jb->nct)
+                            : THX_ENOMEM;
+                if (jb->st != THX_OK) snprintf(jb->msg, sizeof jb->msg, "%s", ok ? thx_ctx_message(lc) : "out of memory");
             }
+            thx_ctx_destroy(&lc);
         }
+        for (size_t j = 0; j < nj && st == THX_OK; j++) {
+            cap_job *jb = &jobs[j];
+            size_t l = jb->l;
+            rloop *r = &layers[l].loops[jb->k];
+            if (jb->st != THX_OK) {
+                st = thx_error(ctx, jb->st, "%s:%d: surface \"%s\" layer %d (z=%g): end cap: %s", path,
+                               cs->layers[l].line, cs->name, LAYER_NO(cs, l), layers[l].z, jb->msg);
+                break;
+            }
+            thx_vec2 *cp = jb->cp;
+            int32_t *ct = jb->ct;
+            size_t ncp = jb->ncp, nct = jb->nct;
+            size_t base = s->n_nodes;
+            if (s->n_nodes + ncp > node_cap) {
+                node_cap = (s->n_nodes + ncp) * 2;
+                double *nx = thx_realloc(ctx, s->xyz, node_cap * 3 * sizeof *nx);
+                if (!nx) { st = THX_ENOMEM; break; }
+                s->xyz = nx;
+            }
+            for (size_t i = r->n; i < ncp; i++) {
+                s->xyz[3 * s->n_nodes] = cp[i].x;
+                s->xyz[3 * s->n_nodes + 1] = cp[i].y;
+                s->xyz[3 * s->n_nodes + 2] = layers[l].z;
+                s->n_nodes++;
+            }
+            if (s->n_tris + nct > tri_cap) {
+                tri_cap = (s->n_tris + nct) * 2;
+                int32_t *nt2 = thx_realloc(ctx, s->tri, tri_cap * 3 * sizeof *nt2);
+                if (!nt2) { st = THX_ENOMEM; break; }
+                s->tri = nt2;
+            }
+            for (size_t t = 0; t < nct; t++)
+                for (int v = 0; v < 3; v++) {
+                    int32_t q = ct[3 * t + v];
+                    s->tri[3 * (s->n_tris + t) + v] = (size_t)q < r->n ? r->first + q : (int32_t)(base + (size_t)q - r->n);
+                }
+            s->n_tris += nct;
+            stats->n_caps++;
+        }
+        for (size_t j = 0; j < nj; j++) {
+            free(jobs[j].cp);
+            free(jobs[j].ct);
+        }
+        free(jobs);
+        if (st != THX_OK) goto done;
+    }
     double t3 = thx_wtime();
     stats->t_caps = t3 - t2;
     /* 4. orientation */
@@ -1337,7 +1378,9 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
             free(layers), free(keep);
             return THX_ENOMEM;
         }
-        /* the loops as the lacing sees them: resampled by the same splines at the same spacing */
+        /* the loops as the lacing sees them: resampled by the same splines at the same spacing; the
+           layers in parallel (each thread its own context; the first failing layer's message wins, as
+           the serial loop's would) */
         for (size_t l = 0; l < nl && st == THX_OK; l++) {
             size_t n = cs->layers[l].n_loops;
             layers[l].n_loops = n;
@@ -1348,17 +1391,37 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
                 break;
             }
             memset(keep[l], 1, n ? n : 1);
-            for (size_t i = 0; i < n && st == THX_OK; i++) {
-                const thx_loop *lp = &cs->layers[l].loops[i];
-                st = thx_loop_resample(ctx, lp->p, lp->n, spacing, o->smoothing, o->start, &layers[l].loops[i].p,
-                                       &layers[l].loops[i].n);
-                if (st != THX_OK) {
-                    char why[512];
-                    snprintf(why, sizeof why, "%s", thx_ctx_message(ctx));
-                    thx_error(ctx, st, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path, lp->line, cs->name,
-                              LAYER_NO(cs, l), cs->layers[l].z, why);
+        }
+        if (st == THX_OK) {
+            long bad = -1;
+            thx_status bad_st = THX_OK;
+            char bad_msg[1024] = "";
+#pragma omp parallel
+            {
+                thx_ctx *lc = NULL;
+                int ok = thx_ctx_create(&lc) == THX_OK;
+#pragma omp for schedule(dynamic, 4)
+                for (long l = 0; l < (long)nl; l++) {
+                    for (size_t i = 0; i < layers[l].n_loops; i++) {
+                        const thx_loop *lp = &cs->layers[l].loops[i];
+                        thx_status r = ok ? thx_loop_resample(lc, lp->p, lp->n, spacing, o->smoothing, o->start,
+                                                              &layers[l].loops[i].p, &layers[l].loops[i].n)
+                                          : THX_ENOMEM;
+                        if (r == THX_OK) continue;
+#pragma omp critical(thx_drop_flat_err)
+                        if (bad < 0 || l < bad) {
+                            bad = l;
+                            bad_st = r;
+                            snprintf(bad_msg, sizeof bad_msg, "%s:%d: surface \"%s\" layer %d (z=%g): %s", path,
+                                     lp->line, cs->name, LAYER_NO(cs, (size_t)l), cs->layers[l].z,
+                                     ok ? thx_ctx_message(lc) : "out of memory");
+                        }
+                        break;
+                    }
                 }
+                thx_ctx_destroy(&lc);
             }
+            if (bad >= 0) st = thx_error(ctx, bad_st, "%s", bad_msg);
         }
         /* to a fixed point: a loop with no kept partner on either neighbouring layer (the rule of the
            slices: two single loops always pair, else their projections must overlap) is dropped */

@@ -196,9 +196,26 @@ thx_status thx_image_read_nifti(thx_ctx *ctx, const char *path, thx_image *img)
     int integer_type = nim->datatype != DT_FLOAT32 && nim->datatype != DT_FLOAT64;
     img->integral = integer_type && (!rescale || (slope == floor(slope) && inter == floor(inter)));
     size_t count = thx_image_count(img);
-    for (size_t q = 0; q < count; q++) {
-        double v = stored(nim->data, nim->datatype, q);
-        img->v[q] = (float)(rescale ? slope * v + inter : v);
+    /* the common label map types without rescale converted straight (exact in float, the same values
+       as through double); every type in parallel, each voxel on its own */
+    const void *data = nim->data;
+    float *out = img->v;
+    if (!rescale && nim->datatype == DT_UINT8) {
+#pragma omp parallel for schedule(static)
+        for (long q = 0; q < (long)count; q++) out[q] = ((const uint8_t *)data)[q];
+    } else if (!rescale && nim->datatype == DT_INT16) {
+#pragma omp parallel for schedule(static)
+        for (long q = 0; q < (long)count; q++) out[q] = ((const int16_t *)data)[q];
+    } else if (!rescale && nim->datatype == DT_UINT16) {
+#pragma omp parallel for schedule(static)
+        for (long q = 0; q < (long)count; q++) out[q] = ((const uint16_t *)data)[q];
+    } else {
+        int dt = nim->datatype;
+#pragma omp parallel for schedule(static)
+        for (long q = 0; q < (long)count; q++) {
+            double v = stored(data, dt, (size_t)q);
+            out[q] = (float)(rescale ? slope * v + inter : v);
+        }
     }
     snprintf(img->stored_type, sizeof img->stored_type, "%s", tn);
     snprintf(img->format, sizeof img->format, "%s",

@@ -3,6 +3,8 @@
  * "Distance transforms of sampled functions": the lower envelope of parabolas, one axis at a time). */
 #include "thorax/image/segment.h"
 
+#include "components.h"
+
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -91,50 +93,37 @@ static thx_status close_region(thx_ctx *ctx, const thx_image *g, unsigned char *
     return THX_OK;
 }
 
-/* Keeps the largest 6-connected component of r (the first found among equals); returns the voxels dropped. */
+/* The largest component: found in a first pass (the first found among equals), kept in a second. */
+typedef struct {
+    size_t best, best_size, total;
+    int pass;
+} largest;
+
+static unsigned char largest_decide(void *user, size_t size, int touches, size_t ordinal)
+{
+    largest *l = user;
+    (void)touches;
+    if (l->pass == 1) return ordinal == l->best;
+    l->total += size;
+    if (size > l->best_size) {
+        l->best_size = size;
+        l->best = ordinal;
+    }
+    return 1;
+}
+
+/* Keeps the largest 6-connected component of r (the first found among equals); returns the voxels
+ * dropped. thx_components6 (src/image/components.c), shared with the tracer's cleaning. */
 static thx_status keep_largest(thx_ctx *ctx, const thx_image *g, unsigned char *r, size_t *dropped)
 {
-    size_t count = thx_image_count(g), nx = g->n[0], ny = g->n[1], nz = g->n[2];
-    uint32_t *id = calloc(count, sizeof *id);
-    size_t *queue = malloc(count * sizeof *queue);
-    if (!id || !queue) {
-        free(id), free(queue);
-        return thx_error(ctx, THX_ENOMEM, "largest component: out of memory");
-    }
-    uint32_t next = 0, best = 0;
-    size_t best_size = 0, total = 0;
-    for (size_t s = 0; s < count; s++) {
-        if (!r[s] || id[s]) continue;
-        uint32_t c = ++next;
-        size_t head = 0, tail = 0;
-        queue[tail++] = s;
-        id[s] = c;
-        while (head < tail) {
-            size_t q = queue[head++];
-            size_t i = q % nx, j = (q / nx) % ny, k = q / (nx * ny);
-            size_t nb[6];
-            int m = 0;
-            if (i > 0) nb[m++] = q - 1;
-            if (i + 1 < nx) nb[m++] = q + 1;
-            if (j > 0) nb[m++] = q - nx;
-            if (j + 1 < ny) nb[m++] = q + nx;
-            if (k > 0) nb[m++] = q - nx * ny;
-            if (k + 1 < nz) nb[m++] = q + nx * ny;
-            for (int t = 0; t < m; t++)
-                if (r[nb[t]] && !id[nb[t]]) {
-                    id[nb[t]] = c;
-                    queue[tail++] = nb[t];
-                }
-        }
-        total += tail;
-        if (tail > best_size) {
-            best_size = tail;
-            best = c;
-        }
-    }
-    for (size_t q = 0; q < count; q++) r[q] = r[q] && id[q] == best;
-    *dropped = total - best_size;
-    free(id), free(queue);
+    const size_t lo[3] = {0, 0, 0};
+    largest l = {0, 0, 0, 0};
+    thx_status st = thx_components6(ctx, r, g->n, lo, g->n, 1, largest_decide, &l, NULL);
+    if (st != THX_OK) return thx_error(ctx, st, "largest component: out of memory");
+    l.pass = 1;
+    st = thx_components6(ctx, r, g->n, lo, g->n, 1, largest_decide, &l, NULL);
+    if (st != THX_OK) return thx_error(ctx, st, "largest component: out of memory");
+    *dropped = l.total - l.best_size;
     return THX_OK;
 }
 

@@ -5,6 +5,8 @@
  */
 #include "thorax/image/trace.h"
 
+#include "components.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -150,65 +152,36 @@ static int cmp_long(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Small components: those of fewer than `min` voxels (and, when !touching_ok, not touching the box's
+ * faces) are set to `to`; counted, their voxels summed, the first THX_TRACE_SIZES_KEPT sizes kept. */
+typedef struct {
+    unsigned char val, to;
+    size_t min;
+    int touching_ok;
+    size_t *count, *voxels, *sizes;
+} clean_rule;
+
+static unsigned char clean_decide(void *user, size_t size, int touches, size_t ordinal)
+{
+    clean_rule *r = user;
+    (void)ordinal;
+    if (!(size < r->min && (r->touching_ok || !touches))) return r->val;
+    if (*r->count < THX_TRACE_SIZES_KEPT && r->sizes) r->sizes[*r->count] = size;
+    (*r->count)++;
+    *r->voxels += size;
+    return r->to;
+}
+
 /* 6-connected components of mask voxels equal to `val` inside box [lo, hi) (inclusive lo, exclusive
  * hi per axis) that have fewer than min voxels (and, when !touching_ok, do not touch the box's
- * border) are set to `to`. Visited voxels are marked with bit 2 and cleared afterwards. Returns
- * the number of components changed; their sizes go to sizes (first THX_TRACE_SIZES_KEPT), the
- * total to *voxels. */
+ * border) are set to `to` (thx_components6, shared with the segmentation). The number of components
+ * changed goes to *count, their sizes to sizes (first THX_TRACE_SIZES_KEPT), the total to *voxels. */
 static thx_status clean(thx_ctx *ctx, unsigned char *mask, const size_t n[3], const size_t lo[3], const size_t hi[3],
                         unsigned char val, unsigned char to, size_t min, int touching_ok, size_t *count, size_t *voxels,
                         size_t *sizes)
 {
-    size_t cap = 1024, qn;
-    size_t *q = thx_malloc(ctx, cap * sizeof *q);
-    if (!q) return THX_ENOMEM;
-    const size_t st[3] = {1, n[0], n[0] * n[1]};
-    for (size_t k = lo[2]; k < hi[2]; k++)
-        for (size_t j = lo[1]; j < hi[1]; j++)
-            for (size_t i = lo[0]; i < hi[0]; i++) {
-                size_t s = i + st[1] * j + st[2] * k;
-                if (mask[s] != val) continue;
-                qn = 0;
-                q[qn++] = s;
-                mask[s] |= 2;
-                int touches = 0;
-                for (size_t h = 0; h < qn; h++) {
-                    size_t p = q[h];
-                    size_t idx[3] = {p % n[0], (p / n[0]) % n[1], p / st[2]};
-                    for (int c = 0; c < 3; c++) {
-                        if (idx[c] == lo[c] || idx[c] + 1 == hi[c]) touches = 1;
-                        for (int d = -1; d <= 1; d += 2) {
-                            if (d < 0 ? idx[c] == lo[c] : idx[c] + 1 == hi[c]) continue;
-                            size_t r = d < 0 ? p - st[c] : p + st[c];
-                            if (mask[r] != val) continue;
-                            if (qn == cap) {
-                                size_t *nq = thx_realloc(ctx, q, 2 * cap * sizeof *q);
-                                if (!nq) {
-                                    free(q);
-                                    return THX_ENOMEM;
-                                }
-                                q = nq;
-                                cap *= 2;
-                            }
-                            mask[r] |= 2;
-                            q[qn++] = r;
-                        }
-                    }
-                }
-                int change = qn < min && (touching_ok || !touches);
-                if (change) {
-                    if (*count < THX_TRACE_SIZES_KEPT && sizes) sizes[*count] = qn;
-                    (*count)++;
-                    *voxels += qn;
-                }
-                /* marked: bit 2 set; the final value keeps bit 2 until the sweep below */
-                for (size_t h = 0; h < qn; h++) mask[q[h]] = (unsigned char)((change ? to : val) | 4);
-            }
-    free(q);
-    for (size_t k = lo[2]; k < hi[2]; k++)
-        for (size_t j = lo[1]; j < hi[1]; j++)
-            for (size_t i = lo[0]; i < hi[0]; i++) mask[i + st[1] * j + st[2] * k] &= 1;
-    return THX_OK;
+    clean_rule r = {val, to, min, touching_ok, count, voxels, sizes};
+    return thx_components6(ctx, mask, n, lo, hi, val, clean_decide, &r, NULL);
 }
 
 /* ---- the smoothed plane ----------------------------------------------------------------------- */
@@ -236,18 +209,23 @@ static thx_status plane_size(thx_ctx *ctx, plane *pl, size_t W, size_t H)
     return THX_OK;
 }
 
-/* Adds w * mask plane k into the buffer. */
+/* Adds w * mask plane k into the buffer (rows of the buffer inside the image; a row walked by the
+ * stride of the in-plane axis a0). */
 static void plane_add(const cut *g, const unsigned char *mask, plane *pl, long k, double w)
 {
     if (k < 0 || (size_t)k >= g->ns) return;
+    long x0 = pl->u0 < 0 ? -pl->u0 : 0, x1 = (long)g->n0 - pl->u0; /* buffer columns inside the image */
+    if (x1 > (long)pl->W) x1 = (long)pl->W;
+    if (x0 >= x1) return;
+    const size_t sa0 = g->st[g->a0];
+    const float fw = (float)w;
     for (size_t y = 0; y < pl->H; y++) {
         long v = pl->v0 + (long)y;
         if (v < 0 || (size_t)v >= g->n1) continue;
-        for (size_t x = 0; x < pl->W; x++) {
-            long u = pl->u0 + (long)x;
-            if (u < 0 || (size_t)u >= g->n0) continue;
-            if (mask[vox(g, (size_t)k, (size_t)u, (size_t)v)]) pl->f[y * pl->W + x] += (float)w;
-        }
+        const unsigned char *m = mask + vox(g, (size_t)k, (size_t)(pl->u0 + x0), (size_t)v);
+        float *f = pl->f + y * pl->W;
+        for (long x = x0; x < x1; x++, m += sa0)
+            if (*m) f[x] += fw;
     }
 }
 
@@ -261,28 +239,47 @@ static void gauss_weights(double sigma, double w[2 * KR + 1])
     for (int d = 0; d <= 2 * KR; d++) w[d] /= sum;
 }
 
-/* Separable in-plane smoothing of pl->f (zero outside the buffer). */
+/* Separable in-plane smoothing of pl->f (zero outside the buffer). Each output is the same sum in
+ * the same order (taps -KR..KR, in double, from 0) in the interior, without the bounds tests, as at
+ * the rim with them. */
 static void plane_smooth(plane *pl, const double w[2 * KR + 1])
 {
     size_t W = pl->W, H = pl->H;
-    for (size_t y = 0; y < H; y++)
+    for (size_t y = 0; y < H; y++) {
+        const float *f = pl->f + y * W;
+        float *t = pl->tmp + y * W;
         for (size_t x = 0; x < W; x++) {
             double s = 0;
-            for (int d = -KR; d <= KR; d++) {
-                long xx = (long)x + d;
-                if (xx >= 0 && (size_t)xx < W) s += w[d + KR] * pl->f[y * W + (size_t)xx];
-            }
-            pl->tmp[y * W + x] = (float)s;
+            if (x >= KR && x + KR < W)
+                for (int d = -KR; d <= KR; d++) s += w[d + KR] * f[x + (size_t)((long)d)];
+            else
+                for (int d = -KR; d <= KR; d++) {
+                    long xx = (long)x + d;
+                    if (xx >= 0 && (size_t)xx < W) s += w[d + KR] * f[xx];
+                }
+            t[x] = (float)s;
         }
-    for (size_t y = 0; y < H; y++)
-        for (size_t x = 0; x < W; x++) {
-            double s = 0;
-            for (int d = -KR; d <= KR; d++) {
-                long yy = (long)y + d;
-                if (yy >= 0 && (size_t)yy < H) s += w[d + KR] * pl->tmp[(size_t)yy * W + x];
+    }
+    for (size_t y = 0; y < H; y++) {
+        float *f = pl->f + y * W;
+        if (y >= KR && y + KR < H) {
+            const float *r[2 * KR + 1];
+            for (int d = -KR; d <= KR; d++) r[d + KR] = pl->tmp + (size_t)((long)y + d) * W;
+            for (size_t x = 0; x < W; x++) {
+                double s = 0;
+                for (int d = 0; d <= 2 * KR; d++) s += w[d] * r[d][x];
+                f[x] = (float)s;
             }
-            pl->f[y * W + x] = (float)s;
-        }
+        } else
+            for (size_t x = 0; x < W; x++) {
+                double s = 0;
+                for (int d = -KR; d <= KR; d++) {
+                    long yy = (long)y + d;
+                    if (yy >= 0 && (size_t)yy < H) s += w[d + KR] * pl->tmp[(size_t)yy * W + x];
+                }
+                f[x] = (float)s;
+            }
+    }
 }
 
 /* ---- marching squares ------------------------------------------------------------------------ */
@@ -687,6 +684,117 @@ static thx_status plane_field(thx_ctx *ctx, const cut *g, const unsigned char *m
     return THX_OK;
 }
 
+/* Per-thread scratch of the plane loop. */
+typedef struct {
+    plane pl;
+    uint32_t *nxt;
+    size_t nxt_cap;
+    polyset raw, fin;
+} plane_scratch;
+
+static void scratch_free(plane_scratch *sc)
+{
+    free(sc->pl.f);
+    free(sc->pl.tmp);
+    free(sc->nxt);
+    polyset_free(&sc->raw);
+    polyset_free(&sc->fin);
+}
+
+/* One output plane of a tissue (continuous image plane index tk): its loops in model coordinates,
+ * holes filled or kept, resampled at the node spacing h, into *out (empty: no loop); the holes seen
+ * and the islands filled counted into *n_holes, *n_islands. Reads only the mask and the plane boxes,
+ * so planes are traced in parallel. */
+static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb, double tk,
+                              int resampled, const double w[2 * KR + 1], thx_trace_holes holes, double h,
+                              plane_scratch *sc, polyset *out, size_t *n_holes, size_t *n_islands)
+{
+    polyset *raw = &sc->raw, *fin = &sc->fin;
+    int empty;
+    polyset_clear(out);
+    THX_CHECK(plane_field(ctx, g, mask, pb, tk, resampled, w, &sc->pl, &empty));
+    if (empty) return THX_OK;
+    polyset_clear(raw);
+    THX_CHECK(march(ctx, &sc->pl, &sc->nxt, &sc->nxt_cap, raw));
+    if (!raw->n) return THX_OK;
+    /* to model coordinates; the orientation kept (inside on the left) */
+    double det = g->A0[0] * g->A1[1] - g->A0[1] * g->A1[0];
+    for (size_t l = 0; l < raw->n; l++) {
+        poly *P = &raw->l[l];
+        for (size_t i = 0; i < P->n; i++) {
+            double u = P->p[i].x + (double)sc->pl.u0, v = P->p[i].y + (double)sc->pl.v0;
+            P->p[i].x = g->P0[0] + g->A0[0] * u + g->A1[0] * v;
+            P->p[i].y = g->P0[1] + g->A0[1] * u + g->A1[1] * v;
+        }
+        if (det < 0)
+            for (size_t i = 0, j = P->n - 1; i < j; i++, j--) {
+                thx_vec2 tmp = P->p[i];
+                P->p[i] = P->p[j];
+                P->p[j] = tmp;
+            }
+    }
+    /* holes: loops of negative area; filled (dropped, with any loop inside them) or kept */
+    double *ar = thx_malloc(ctx, raw->n * 5 * sizeof *ar);
+    if (!ar) return THX_ENOMEM;
+    for (size_t l = 0; l < raw->n; l++) {
+        ar[5 * l] = poly_area(raw->l[l].p, raw->l[l].n);
+        bbox(raw->l[l].p, raw->l[l].n, ar + 5 * l + 1);
+    }
+    polyset_clear(fin);
+    for (size_t l = 0; l < raw->n; l++) {
+        int hole = ar[5 * l] < 0, drop = 0;
+        if (hole) (*n_holes)++;
+        if (holes == THX_TRACE_HOLES_FILL) {
+            if (hole) drop = 1;
+            else
+                for (size_t k = 0; k < raw->n && !drop; k++)
+                    if (k != l && ar[5 * k] > 0 && box_in(ar + 5 * l + 1, ar + 5 * k + 1) &&
+                        point_in(raw->l[k].p, raw->l[k].n, raw->l[l].p[0]))
+                        drop = 1;
+            if (drop && !hole) (*n_islands)++;
+        }
+        if (drop) continue;
+        poly *d;
+        thx_status r = polyset_new(ctx, fin, &d);
+        if (r != THX_OK) {
+            free(ar);
+            return r;
+        }
+        *d = raw->l[l];
+        raw->l[l].p = NULL;
+        raw->l[l].n = raw->l[l].cap = 0;
+    }
+    free(ar);
+    /* resampled at the node spacing; finer while loops would cross */
+    double hh = h;
+    for (int attempt = 0; attempt < 6; attempt++) {
+        polyset_clear(out);
+        int shrunk = 0;
+        for (size_t l = 0; l < fin->n; l++) {
+            const poly *P = &fin->l[l];
+            double per = 0;
+            for (size_t i = 0; i < P->n; i++)
+                per += hypot(P->p[(i + 1) % P->n].x - P->p[i].x, P->p[(i + 1) % P->n].y - P->p[i].y);
+            size_t m = (size_t)floor(per / hh + 0.5);
+            if (m < 8) m = 8;
+            poly *d;
+            THX_CHECK(polyset_new(ctx, out, &d));
+            if (attempt == 5 || m >= P->n) {
+                for (size_t i = 0; i < P->n; i++) THX_CHECK(poly_push(ctx, d, P->p[i].x, P->p[i].y));
+            } else {
+                THX_CHECK(resample(ctx, P, m, d));
+                shrunk = 1;
+            }
+        }
+        if (!shrunk) break;
+        int crossing;
+        THX_CHECK(any_crossing(ctx, out, &crossing));
+        if (!crossing) break;
+        hh /= 2;
+    }
+    return THX_OK;
+}
+
 thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_opts *o, thx_contours **out,
                            thx_trace_report *rep)
 {
@@ -732,10 +840,10 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     long *t_first = NULL, *t_last = NULL;
     unsigned char *mask = NULL;
     long *pb = NULL;
-    plane pl = {0};
-    uint32_t *nxt = NULL;
-    size_t nxt_cap = 0;
-    polyset raw = {0}, fin = {0}, tmpset = {0};
+    polyset *pout = NULL;    /* per output plane: its loops */
+    thx_status *pst = NULL;  /* per output plane: the status of its tracing */
+    size_t *pcount = NULL;   /* per output plane: holes seen, islands filled */
+    size_t *kcount = NULL;   /* per image plane along the superior axis: the tissue's voxels */
     tissue_trace tt = {0};
     labelset ls = {0};
     double w[2 * KR + 1];
@@ -799,7 +907,11 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     snprintf(c->image_sha256, sizeof c->image_sha256, "%s", img->sha256);
     mask = thx_malloc(ctx, nv);
     pb = thx_malloc(ctx, 4 * g.ns * sizeof *pb);
-    if (!mask || !pb) {
+    pout = thx_calloc(ctx, np, sizeof *pout);
+    pst = thx_calloc(ctx, np, sizeof *pst);
+    pcount = thx_calloc(ctx, 2 * np, sizeof *pcount);
+    kcount = thx_malloc(ctx, g.ns * sizeof *kcount);
+    if (!mask || !pb || !pout || !pst || !pcount || !kcount) {
         st = THX_ENOMEM;
         goto done;
     }
@@ -846,30 +958,51 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             pb[4 * k] = pb[4 * k + 2] = LONG_MAX;
             pb[4 * k + 1] = pb[4 * k + 3] = LONG_MIN;
         }
-        size_t lo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, hi[3] = {0, 0, 0}, count = 0;
-        for (size_t k = 0; k < img->n[2]; k++)
-            for (size_t j = 0; j < img->n[1]; j++)
-                for (size_t i = 0; i < img->n[0]; i++) {
-                    size_t s = thx_image_at(img, i, j, k);
-                    int m = in_set(&ls, (long)img->v[s]);
-                    mask[s] = (unsigned char)m;
+        /* plane by plane along the superior axis, in parallel (each plane writes its own voxels, box
+           and count) */
+#pragma omp parallel for schedule(dynamic, 4)
+        for (long k = 0; k < (long)g.ns; k++) {
+            long *b = pb + 4 * k;
+            size_t cnt = 0;
+            for (size_t v = 0; v < g.n1; v++) {
+                size_t row = 0, first = 0, last = 0;
+                for (size_t u = 0; u < g.n0; u++) {
+                    size_t q = vox(&g, (size_t)k, u, v);
+                    long x = (long)img->v[q];
+                    /* in_set, its look-up table inlined */
+                    unsigned char m = (ls.all && x != 0) ? 1
+                                      : ls.lut ? ((unsigned long)(x - ls.lo) <= (unsigned long)(ls.hi - ls.lo) ? ls.lut[x - ls.lo] : 0)
+                                               : (unsigned char)in_set(&ls, x);
+                    mask[q] = m;
                     if (m) {
-                        size_t idx[3] = {i, j, k};
-                        count++;
-                        for (int q = 0; q < 3; q++) {
-                            if (idx[q] < lo[q]) lo[q] = idx[q];
-                            if (idx[q] + 1 > hi[q]) hi[q] = idx[q] + 1;
-                        }
-                        long *b = pb + 4 * idx[g.s], u = (long)idx[g.a0], v = (long)idx[g.a1];
-                        if (u < b[0]) b[0] = u;
-                        if (u > b[1]) b[1] = u;
-                        if (v < b[2]) b[2] = v;
-                        if (v > b[3]) b[3] = v;
+                        if (!row) first = u;
+                        last = u;
+                        row++;
                     }
                 }
+                if (!row) continue;
+                cnt += row;
+                if ((long)first < b[0]) b[0] = (long)first;
+                if ((long)last > b[1]) b[1] = (long)last;
+                if ((long)v < b[2]) b[2] = (long)v;
+                if ((long)v > b[3]) b[3] = (long)v;
+            }
+            kcount[k] = cnt;
+        }
+        size_t lo[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX}, hi[3] = {0, 0, 0}, count = 0;
+        for (size_t k = 0; k < g.ns; k++) {
+            if (!kcount[k]) continue;
+            count += kcount[k];
+            if (k < lo[g.s]) lo[g.s] = k;
+            hi[g.s] = k + 1;
+            if ((size_t)pb[4 * k] < lo[g.a0]) lo[g.a0] = (size_t)pb[4 * k];
+            if ((size_t)pb[4 * k + 1] + 1 > hi[g.a0]) hi[g.a0] = (size_t)pb[4 * k + 1] + 1;
+            if ((size_t)pb[4 * k + 2] < lo[g.a1]) lo[g.a1] = (size_t)pb[4 * k + 2];
+            if ((size_t)pb[4 * k + 3] + 1 > hi[g.a1]) hi[g.a1] = (size_t)pb[4 * k + 3] + 1;
+        }
         labelset_free(&ls);
         memset(&ls, 0, sizeof ls);
-        if (lo[0] == SIZE_MAX) {
+        if (!count) {
             st = thx_error(ctx, THX_EINPUT, "%s: tissue \"%s\": none of its label values is in the image", what, ti->name);
             goto done;
         }
@@ -894,97 +1027,57 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                            what, ti->name, trr.removed_voxels, o->min_size);
             goto done;
         }
-        /* trace plane by plane (increasing z) */
+        /* trace plane by plane (increasing z): the planes are independent, traced in parallel each into
+           its own slot (each thread with its own scratch and context), then joined in plane order, so
+           the contours are the same bytes whatever the thread count */
         polyset_clear(&tt.loops);
         tt.n_layers = 0;
         for (size_t p = 0; p < np; p++) {
-            double z = zlo + pspace * (double)p;
-            /* continuous image plane index of z */
-            double tk = (z - g.z0) / g.dz;
-            if (tk < 0) tk = 0;
-            if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
-            if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - p);
-            int empty;
-            THX_TRY(plane_field(ctx, &g, mask, pb, tk, resampled, w, &pl, &empty));
-            if (empty) continue;
-            polyset_clear(&raw);
-            THX_TRY(march(ctx, &pl, &nxt, &nxt_cap, &raw));
-            if (!raw.n) continue;
-            /* to model coordinates; the orientation kept (inside on the left) */
-            double det = g.A0[0] * g.A1[1] - g.A0[1] * g.A1[0];
-            for (size_t l = 0; l < raw.n; l++) {
-                poly *P = &raw.l[l];
-                for (size_t i = 0; i < P->n; i++) {
-                    double u = P->p[i].x + (double)pl.u0, v = P->p[i].y + (double)pl.v0;
-                    P->p[i].x = g.P0[0] + g.A0[0] * u + g.A1[0] * v;
-                    P->p[i].y = g.P0[1] + g.A0[1] * u + g.A1[1] * v;
-                }
-                if (det < 0)
-                    for (size_t i = 0, j = P->n - 1; i < j; i++, j--) {
-                        thx_vec2 tmp = P->p[i];
-                        P->p[i] = P->p[j];
-                        P->p[j] = tmp;
+            polyset_clear(&pout[p]);
+            pst[p] = THX_OK;
+            pcount[2 * p] = pcount[2 * p + 1] = 0;
+        }
+        {
+            long bad = -1;
+            char bad_msg[1024] = "";
+#pragma omp parallel
+            {
+                plane_scratch sc;
+                memset(&sc, 0, sizeof sc);
+                thx_ctx *lc = NULL;
+                int ok = thx_ctx_create(&lc) == THX_OK;
+#pragma omp for schedule(dynamic, 1)
+                for (long p = 0; p < (long)np; p++) {
+                    double z = zlo + pspace * (double)p;
+                    /* continuous image plane index of z */
+                    double tk = (z - g.z0) / g.dz;
+                    if (tk < 0) tk = 0;
+                    if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
+                    if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - (size_t)p);
+                    thx_status r = ok ? trace_plane(lc, &g, mask, pb, tk, resampled, w, o->holes, h, &sc, &pout[p],
+                                                    &pcount[2 * p], &pcount[2 * p + 1])
+                                      : THX_ENOMEM;
+                    pst[p] = r;
+                    if (r != THX_OK) {
+#pragma omp critical(thx_trace_err)
+                        if (bad < 0 || p < bad) {
+                            bad = p;
+                            snprintf(bad_msg, sizeof bad_msg, "%s", ok ? thx_ctx_message(lc) : "out of memory");
+                        }
                     }
+                }
+                scratch_free(&sc);
+                thx_ctx_destroy(&lc);
             }
-            /* holes: loops of negative area; filled (dropped, with any loop inside them) or kept */
-            double *ar = thx_malloc(ctx, raw.n * 5 * sizeof *ar);
-            if (!ar) {
-                st = THX_ENOMEM;
+            if (bad >= 0) {
+                st = thx_error(ctx, pst[bad], "%s", bad_msg);
                 goto done;
             }
-            for (size_t l = 0; l < raw.n; l++) {
-                ar[5 * l] = poly_area(raw.l[l].p, raw.l[l].n);
-                bbox(raw.l[l].p, raw.l[l].n, ar + 5 * l + 1);
-            }
-            polyset_clear(&fin);
-            for (size_t l = 0; l < raw.n; l++) {
-                int hole = ar[5 * l] < 0, drop = 0;
-                if (hole) trr.n_holes++;
-                if (o->holes == THX_TRACE_HOLES_FILL) {
-                    if (hole) drop = 1;
-                    else
-                        for (size_t k = 0; k < raw.n && !drop; k++)
-                            if (k != l && ar[5 * k] > 0 && box_in(ar + 5 * l + 1, ar + 5 * k + 1) &&
-                                point_in(raw.l[k].p, raw.l[k].n, raw.l[l].p[0]))
-                                drop = 1;
-                    if (drop && !hole) trr.n_islands_filled++;
-                }
-                if (drop) continue;
-                poly *d;
-                THX_TRY(polyset_new(ctx, &fin, &d));
-                *d = raw.l[l];
-                raw.l[l].p = NULL;
-                raw.l[l].n = raw.l[l].cap = 0;
-            }
-            free(ar);
-            /* resampled at the node spacing; finer while loops would cross */
-            double hh = h;
-            for (int attempt = 0; attempt < 6; attempt++) {
-                polyset_clear(&tmpset);
-                int shrunk = 0;
-                for (size_t l = 0; l < fin.n; l++) {
-                    const poly *P = &fin.l[l];
-                    double per = 0;
-                    for (size_t i = 0; i < P->n; i++)
-                        per += hypot(P->p[(i + 1) % P->n].x - P->p[i].x, P->p[(i + 1) % P->n].y - P->p[i].y);
-                    size_t m = (size_t)floor(per / hh + 0.5);
-                    if (m < 8) m = 8;
-                    poly *d;
-                    THX_TRY(polyset_new(ctx, &tmpset, &d));
-                    if (attempt == 5 || m >= P->n) {
-                        for (size_t i = 0; i < P->n; i++) THX_TRY(poly_push(ctx, d, P->p[i].x, P->p[i].y));
-                    } else {
-                        THX_TRY(resample(ctx, P, m, d));
-                        shrunk = 1;
-                    }
-                }
-                if (!shrunk) break;
-                int crossing;
-                THX_TRY(any_crossing(ctx, &tmpset, &crossing));
-                if (!crossing) break;
-                hh /= 2;
-            }
-            if (!tmpset.n) continue;
+        }
+        for (size_t p = 0; p < np; p++) {
+            trr.n_holes += pcount[2 * p];
+            trr.n_islands_filled += pcount[2 * p + 1];
+            if (!pout[p].n) continue;
             /* the layer */
             if (tt.n_layers == tt.cap_layers) {
                 size_t ncap = tt.cap_layers ? 2 * tt.cap_layers : 64;
@@ -998,16 +1091,16 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             }
             tt.layers[tt.n_layers].plane = p;
             tt.layers[tt.n_layers].loop0 = tt.loops.n;
-            tt.layers[tt.n_layers].n = tmpset.n;
+            tt.layers[tt.n_layers].n = pout[p].n;
             tt.n_layers++;
-            for (size_t l = 0; l < tmpset.n; l++) {
+            for (size_t l = 0; l < pout[p].n; l++) {
                 poly *d;
                 THX_TRY(polyset_new(ctx, &tt.loops, &d));
-                *d = tmpset.l[l];
-                tmpset.l[l].p = NULL;
-                tmpset.l[l].n = 0;
+                *d = pout[p].l[l];
+                pout[p].l[l].p = NULL;
+                pout[p].l[l].n = 0;
             }
-            tmpset.n = 0;
+            pout[p].n = 0;
         }
         /* loops with no partner on either neighbouring plane: dropped (the lacing cannot close them) */
         size_t nl = tt.loops.n;
@@ -1158,15 +1251,14 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     c = NULL;
 done:
     labelset_free(&ls);
-    polyset_free(&raw);
-    polyset_free(&fin);
-    polyset_free(&tmpset);
+    for (size_t p = 0; pout && p < np; p++) polyset_free(&pout[p]);
+    free(pout);
+    free(pst);
+    free(pcount);
+    free(kcount);
     polyset_free(&tt.loops);
     free(tt.layers);
     free(tt.area);
-    free(pl.f);
-    free(pl.tmp);
-    free(nxt);
     free(mask);
     free(pb);
     thx_contours_destroy(&c);
