@@ -31,7 +31,7 @@ void thx_check_opts_default(thx_check_opts *o)
 {
     o->solid_angle_tol = 1e-6;
     o->check_intersections = 1;
-    o->min_angle_deg = 0.0;
+    o->min_angle_deg = THX_CHECK_MIN_ANGLE_DEG;
     o->max_aspect = 0.0;
 }
 
@@ -550,7 +550,7 @@ done:
 /* ------------------------------------------------------------------ */
 /* Geometry and quality (serial: sums in a fixed order). */
 
-static void geometry(const thx_surface *s, const unsigned char *dg, thx_surface_report *r)
+static void geometry(const thx_surface *s, const unsigned char *dg, double min_angle_deg, thx_surface_report *r)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < s->n_nodes; i++)
@@ -585,6 +585,7 @@ static void geometry(const thx_surface *s, const unsigned char *dg, thx_surface_
             r->max_aspect = INFINITY;
             r->max_aspect_tri = t;
             r->aspect_hist[THX_CHECK_ASPECT_BINS - 1]++;
+            r->n_small_angle_tris += min_angle_deg > 0.0;
             continue;
         }
         if (ar < r->min_area) r->min_area = ar;
@@ -597,13 +598,16 @@ static void geometry(const thx_surface *s, const unsigned char *dg, thx_surface_
             r->min_edge = fmin(r->min_edge, len[k]);
             r->max_edge = fmax(r->max_edge, len[k]);
         }
+        double tmin = INFINITY;
         for (int k = 0; k < 3; k++) {
             /* angle at p[k] by atan2(|u x w|, u.w): accurate for small and large angles */
             thx_vec3 u = thx_v3_sub(p[(k + 1) % 3], p[k]), w = thx_v3_sub(p[(k + 2) % 3], p[k]);
             double ang = atan2(thx_v3_norm(thx_v3_cross(u, w)), thx_v3_dot(u, w)) * (180.0 / M_PI);
             if (ang < r->min_angle) { r->min_angle = ang; r->min_angle_tri = t; }
             if (ang > r->max_angle) { r->max_angle = ang; r->max_angle_tri = t; }
+            tmin = fmin(tmin, ang);
         }
+        r->n_small_angle_tris += tmin < min_angle_deg;
         /* longest edge / (2 sqrt(3) inradius), inradius = 2 area / perimeter */
         double asp = ar > 0.0 ? lmax * per / (4.0 * sqrt(3.0) * ar) : INFINITY;
         if (asp > r->max_aspect) { r->max_aspect = asp; r->max_aspect_tri = t; }
@@ -748,7 +752,7 @@ thx_status thx_surface_check(thx_ctx *ctx, const thx_surface *s, const thx_vec3 
         goto done;
     }
     THX_TRY(topology(ctx, s, dg, r));
-    geometry(s, dg, r);
+    geometry(s, dg, opts.min_angle_deg, r);
     THX_TRY(thx_bvh_create_triangles(ctx, s->xyz, s->n_nodes, s->tri, s->n_tris, &bvh));
 
     /* 4 pi about an interior point (paper 3.2) */
@@ -809,9 +813,11 @@ thx_status thx_surface_check(thx_ctx *ctx, const thx_surface *s, const thx_vec3 
         add_reason(r, THX_CHECKF_INTERSECTION, "self-intersection: %zu triangle pairs intersect (first: triangles %zu and %zu)",
                    r->n_intersecting_pairs, r->pairs[0][0] + 1, r->pairs[0][1] + 1);
     if (opts.min_angle_deg > 0.0 && (r->n_degenerate_tris || r->min_angle < opts.min_angle_deg))
-        add_reason(r, THX_CHECKF_QUALITY, "quality: smallest angle %.3g deg < %.3g deg (triangle %zu)",
-                   r->n_degenerate_tris ? 0.0 : r->min_angle, opts.min_angle_deg,
-                   (r->n_degenerate_tris ? r->ex_degenerate_tri : r->min_angle_tri) + 1);
+        add_reason(r, THX_CHECKF_QUALITY,
+                   "quality: triangle %zu has a %.3g deg angle (< %.3g deg; %zu triangles below it): thorax mesh "
+                   "cannot take it (the tetrahedra on it would be as flat)",
+                   (r->n_degenerate_tris ? r->ex_degenerate_tri : r->min_angle_tri) + 1,
+                   r->n_degenerate_tris ? 0.0 : r->min_angle, opts.min_angle_deg, r->n_small_angle_tris);
     if (opts.max_aspect > 0.0 && !(r->max_aspect <= opts.max_aspect))
         add_reason(r, THX_CHECKF_QUALITY, "quality: aspect ratio %.4g > %.4g (triangle %zu)", r->max_aspect,
                    opts.max_aspect, r->max_aspect_tri + 1);
@@ -1091,6 +1097,7 @@ cJSON *thx_surface_report_json(thx_ctx *ctx, const thx_surface_report *r, const 
     cJSON *q = cJSON_AddObjectToObject(o, "quality");
     add_num(q, "min_angle_deg", r->min_angle);
     if (isfinite(r->min_angle)) cJSON_AddNumberToObject(q, "min_angle_triangle", (double)r->min_angle_tri + 1);
+    cJSON_AddNumberToObject(q, "triangles_below_min_angle", (double)r->n_small_angle_tris);
     add_num(q, "max_angle_deg", r->max_angle);
     if (isfinite(r->max_angle)) cJSON_AddNumberToObject(q, "max_angle_triangle", (double)r->max_angle_tri + 1);
     add_num(q, "min_area", r->min_area);

@@ -277,6 +277,7 @@ thx_status cv_boundary(thx_ctx *ctx, const thx_volume *v, const unsigned char *b
     thx_check_opts so;
     thx_check_opts_default(&so);
     so.check_intersections = o->check_intersections;
+    so.min_angle_deg = 0.0; /* reported only: the tetrahedra's own dihedral floor decides (check.md) */
     st = thx_surface_check(ctx, s, NULL, &so, &r->boundary);
     if (st == THX_ECHECK) {
         thx_ctx_clear(ctx);

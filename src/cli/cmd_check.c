@@ -140,8 +140,9 @@ int cmd_check(int argc, char **argv)
         {.name = "--tol", .type = CLI_REAL, .meta = "T", .d = &opts.solid_angle_tol, .rule = CLI_GE | CLI_FINITE,
          .bad = "--tol must be a finite number >= 0", .help = "tolerance of the 4 pi check, relative"},
         {.name = "--min-angle", .type = CLI_REAL, .meta = "DEG", .unit = "deg", .d = &opts.min_angle_deg,
-         .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 60, .bad = "--min-angle must be in [0, 60] degrees", .def = "none",
-         .help = "also fail if a triangle has a smaller angle"},
+         .rule = CLI_GE | CLI_LE, .lo = 0, .hi = 60, .bad = "--min-angle must be in [0, 60] degrees",
+         .help = "fail if a triangle has a smaller angle (the default is the smallest thorax mesh can take: the "
+                 "tetrahedra on a triangle are as flat as its smallest angle; 0 only reports)"},
         {.name = "--max-aspect", .type = CLI_REAL, .meta = "A", .d = &opts.max_aspect, .rule = CLI_GE | CLI_FINITE,
          .lo = 1, .bad = "--max-aspect must be a finite number >= 1", .def = "none",
          .help = "also fail if a triangle's aspect ratio exceeds A"},
@@ -176,8 +177,9 @@ int cmd_check(int argc, char **argv)
             "                      else one found by ray parity) is 4 pi: |Omega/4pi - 1| <= T\n"
             "  intersections       no two triangles meet except where they share nodes\n"
             "                      (exact predicates)\n"
-            "  quality             smallest/largest angle, aspect ratio histogram (reported;\n"
-            "                      a failure only with --min-angle / --max-aspect)\n"
+            "  quality             no angle below --min-angle (1 deg: thorax mesh cannot take a\n"
+            "                      flatter triangle); largest angle and the aspect ratio\n"
+            "                      histogram reported (a failure only with --max-aspect)\n"
             "\n"
             "Aspect ratio = longest edge / (2 sqrt(3) inradius): 1 for an equilateral triangle.\n"
             "\n"

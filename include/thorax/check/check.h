@@ -21,8 +21,9 @@
  *    |Omega / (4 pi) - 1| <= opts->solid_angle_tol;
  *  - no self-intersection: no two triangles share a point other than the
  *    vertices and edges they share by index (exact predicates, see below);
- *  - triangle quality only fails the check if opts asks for it
- *    (min_angle_deg / max_aspect > 0); otherwise it is reported.
+ *  - no triangle with an angle below opts->min_angle_deg (default
+ *    THX_CHECK_MIN_ANGLE_DEG, 1 deg: what thorax mesh can take, see below; 0: report
+ *    only); the aspect ratio fails only if opts asks for it (max_aspect > 0).
  * Euler characteristic and the number of connected components are reported,
  * never failed on: a torus or two disjoint spheres are valid closed surfaces.
  *
@@ -55,10 +56,18 @@ extern "C" {
 
 struct cJSON; /* <cjson/cJSON.h>; the JSON functions return cJSON trees */
 
+/* The default smallest triangle angle (deg). thorax mesh cannot take a surface triangle with a smaller
+ * angle: the tetrahedra on it are as flat as its smallest angle (measured: a box with one such triangle
+ * meshes at 1.0 deg and is refused below it, at every grid, by the volume check's smallest dihedral
+ * angle, THX_VCHECK default 1 deg), and far below it the conformity gives up ("a surface edge would be cut
+ * in more than 2^22 pieces"). docs/design/check.md, "The smallest angle a surface may have". */
+#define THX_CHECK_MIN_ANGLE_DEG 1.0
+
 typedef struct {
     double solid_angle_tol;  /* max |Omega/(4 pi) - 1|; default 1e-6 */
     int check_intersections; /* default 1; 0 skips the self-intersection search */
-    double min_angle_deg;    /* > 0: fail if any triangle has a smaller angle (deg); default 0 (report only) */
+    double min_angle_deg;    /* > 0: fail if any triangle has a smaller angle (deg); default THX_CHECK_MIN_ANGLE_DEG;
+                                0: report only */
     double max_aspect;       /* > 0: fail if any aspect ratio exceeds it; default 0 (report only) */
 } thx_check_opts;
 
@@ -137,6 +146,7 @@ typedef struct {
     /* quality (over non-degenerate triangles; angles in degrees) */
     double min_angle, max_angle;
     size_t min_angle_tri, max_angle_tri;
+    size_t n_small_angle_tris; /* triangles with an angle below opts->min_angle_deg (degenerate ones included) */
     double min_area, max_area;
     double min_edge, max_edge;
     double max_aspect, mean_aspect; /* max_aspect is +inf when a triangle is degenerate */
@@ -213,7 +223,8 @@ void thx_model_report_destroy(thx_model_report **r);
  *    "solid_angle": {"interior_source": "found", "interior": [x, y, z], "omega": 12.547,
  *                    "omega_over_4pi": 0.99846, "rel_error": 0.00154, "tolerance": 1e-6, "ok": false},
  *    "intersections": {"checked": true, "pairs": 0, "first_pairs": [[i, j], ...]},
- *    "quality": {"min_angle_deg": 7.93, "min_angle_triangle": 1177, "max_angle_deg": 138.3,
+ *    "quality": {"min_angle_deg": 7.93, "min_angle_triangle": 1177, "triangles_below_min_angle": 0,
+ *                "max_angle_deg": 138.3,
  *                "max_angle_triangle": 1369, "min_area": .., "max_area": .., "min_edge": ..,
  *                "max_edge": .., "aspect_ratio": {"definition": "...", "max": 4.57,
  *                "max_triangle": 11, "mean": 1.37, "histogram": {"edges": [1, 1.25, 1.5, 2, 3, 5,
