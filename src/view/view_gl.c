@@ -122,6 +122,15 @@ void view_scene_viewport(const view_win *w, int fb_w, int fb_h, int vp[4])
 void view_picture(const view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
 {
     *o = w->o;
+    /* the picked nodes of the traces, each marked in its trace's colour */
+    const view_app *a = w->app;
+    o->n_pins = 0;
+    for (int t = 0; t < a->n_traces && o->n_pins < (int)(sizeof o->pins / sizeof o->pins[0]); t++) {
+        o->pins[o->n_pins].surface = a->traces[t].surface;
+        o->pins[o->n_pins].node = a->traces[t].node;
+        memcpy(o->pins[o->n_pins].rgba, view_trace_colors[t % VIEW_MAX_TRACES], 4);
+        o->n_pins++;
+    }
     int vp[4];
     thx_picture_viewport(&w->o, w->font, fb_w, fb_h, vp);
     view_camera(w, vp[3] > 0 ? (double)vp[2] / vp[3] : 1, &o->cam);
@@ -154,7 +163,7 @@ void view_picture(const view_win *w, int fb_w, int fb_h, thx_picture_opts *o)
 static int font_for(view_win *w, int fb_h)
 {
     int px = fb_h / 40 > 11 ? fb_h / 40 : 11;
-    int want = w->o.colorbar || w->o.label || w->o.trace || w->o.panels || w->o.n_labels || w->o.extrema;
+    int want = w->o.colorbar || w->o.label || w->o.trace || w->o.panels || w->o.n_labels || w->o.extrema || w->app->n_traces;
     if (!want) { thx_font_close(&w->font); w->font_px = 0; return 0; }
     if (w->font && w->font_px == px) return 0;
     thx_font_close(&w->font);

@@ -25,11 +25,13 @@ typedef struct {
 } view_trace;
 
 #define VIEW_MAX_TRACES 6
+extern const unsigned char view_trace_colors[VIEW_MAX_TRACES][4];
 
 typedef struct view_win {
     view_app *app;
     int id;                    /* 1-based, in titles */
     GtkWidget *window, *gl, *status, *plot, *paned;
+    GtkWidget *plot_scroll;    /* the trace pane: a fixed height, scrolled when the traces need more */
     thx_picture_opts o;        /* this window's picture; o.only[] = its surfaces (none: all) */
     char only_buf[THX_PICTURE_MAX][64];
     char label_buf[THX_PICTURE_MAX][80]; /* node-labels entries set by the action */
