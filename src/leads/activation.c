@@ -212,8 +212,7 @@ thx_status thx_activation_from_fiducials(thx_ctx *ctx, const thx_series *s, int 
     snprintf(r->unit, sizeof r->unit, "%s", s->time_unit);
     r->time_unit[0] = '\0';
     const char *name = thx_fiducial_type_name(type);
-    snprintf(r->label, sizeof r->label, "%s times from the record's fiducials (%s)", type == 13 ? "recovery" : "activation",
-             name ? name : "?");
+    snprintf(r->label, sizeof r->label, "%s: the record's %s fiducials", type == 13 ? "recovery" : "activation", name ? name : "?");
     for (size_t i = 0; i < s->n_rows; i++) r->v[i] = time_at_frame(s, f->v[i]);
     *out = r;
     return THX_OK;
@@ -236,7 +235,6 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     w->t1 = s->time[n - 1];
     w->rec_t0 = w->rec_t1 = NAN;
     w->source = THX_WINDOW_WHOLE;
-    const char *tu = s->time_unit;
 
     /* the record's fiducials */
     double qon = fid_frame(s, 2), soff = fid_frame(s, 4), stoff = fid_frame(s, 5), toff = fid_frame(s, 7);
@@ -248,11 +246,11 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
         w->rec_t0 = r0;
         w->rec_t1 = isfinite(r1) && r1 > r0 ? r1 : s->time[n - 1];
         w->source = THX_WINDOW_FIDUCIALS;
-        snprintf(w->why, sizeof w->why, "QRS %.4g-%.4g %s from the record's fiducials (qon, soff)", a0, a1, tu);
+        snprintf(w->why, sizeof w->why, "fiducials qon-soff");
         return THX_OK;
     }
     if (n < 8) {
-        snprintf(w->why, sizeof w->why, "the whole series (%zu frames: too short to find a beat)", n);
+        snprintf(w->why, sizeof w->why, "whole series: %zu frames, too short for a beat", n);
         return THX_OK;
     }
 
@@ -307,7 +305,7 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     }
     if (nb == 0) {
         free(c);
-        snprintf(w->why, sizeof w->why, "the whole series (no beat on the RMS curve)");
+        snprintf(w->why, sizeof w->why, "whole series: no beat on the RMS curve");
         return THX_OK;
     }
     int b = -1;
@@ -331,6 +329,6 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     w->rec_t0 = s->time[w1];
     w->rec_t1 = s->time[r1];
     w->source = THX_WINDOW_RMS;
-    snprintf(w->why, sizeof w->why, "QRS %.4g-%.4g %s found on the RMS curve (beat %d of %d)", w->t0, w->t1, tu, b + 1, nb);
+    snprintf(w->why, sizeof w->why, "RMS curve, beat %d of %d", b + 1, nb);
     return THX_OK;
 }

@@ -454,11 +454,11 @@ thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kin
             map = both;
         }
         if (chosen)
-            snprintf(map->label, sizeof map->label, "%s, %s", kind == 2 ? "recovery (T upstroke)" : "activation (downstroke)", w.why);
-        else if (kind == 2)
-            snprintf(map->label, sizeof map->label, "recovery (T upstroke), T wave %.4g-%.4g %s as given", t0, t1, pot->time_unit);
+            snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %.15s (%.60s)", kind == 2 ? "recovery, T" : "activation, QRS",
+                     kind == 2 ? w.rec_t0 : w.t0, kind == 2 ? w.rec_t1 : w.t1, pot->time_unit, w.why);
         else
-            snprintf(map->label, sizeof map->label, "activation (downstroke), window %.4g-%.4g %s as given", t0, t1, pot->time_unit);
+            snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %s (as given)", kind == 2 ? "recovery, T" : "activation, window",
+                     t0, t1, pot->time_unit);
     }
     int k = d->n_sets[s]++;
     d->sets[s][k] = map;

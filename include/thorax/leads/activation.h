@@ -74,7 +74,8 @@ typedef struct {
     double t0, t1;         /* activation: the QRS, in the series' time unit */
     double rec_t0, rec_t1; /* recovery: the T wave, after the QRS to the beat's end */
     thx_window_source source;
-    char why[96];          /* for a picture: "QRS 160-197 ms from the RMS curve (beat 1 of 2)" */
+    char why[96];          /* where from, for a picture: "RMS curve, beat 1 of 2", "fiducials qon-soff",
+                              "whole series: no beat on the RMS curve" */
 } thx_activation_window;
 
 /*
