@@ -227,6 +227,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         thx_font_close(&w->font);
         thx_font_close(&w->plot_font);
         thx_raster_destroy(&w->img);
+        free(w->scene);
         g_free(w->shot_path);
         if (a.vo->verbose > 0 && w->ms_n)
             fprintf(stderr, "thorax view: window %d: %d draws, %.1f ms a draw on average\n", w->id, w->ms_n, w->ms_sum / w->ms_n);

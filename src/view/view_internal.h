@@ -61,6 +61,7 @@ typedef struct view_win {
     unsigned tex, prog, vao, vbo;
     int tex_w, tex_h;
     thx_raster *img;
+    unsigned char *scene;      /* the scene as read back, before the annotations (what changed is uploaded) */
     /* a screenshot wanted at the next draw (path owned), and its outcome */
     char *shot_path;
     int drawn;                 /* draws since open */
@@ -70,6 +71,8 @@ typedef struct view_win {
     int ms_n;
     int gl_failed;
     int bench;                 /* benchmarking: each draw finished (glFinish) before it is timed */
+    double phase_ms[4];        /* ... and its phases summed: the scene (finished), the readback, the
+                                  annotations, their upload and quad (finished) */
 } view_win;
 
 struct view_app {
