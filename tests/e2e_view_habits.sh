@@ -41,6 +41,7 @@ action activation
 action screenshot a2.png
 action recovery
 action screenshot r1.png
+action save-session sess.txt
 quit
 EOF
 xvfb-run -a -s "-screen 0 1024x768x24" "$THORAX" view --script a.txt > a.out 2> a.err || { cat a.err; fail "activation session"; }
@@ -63,6 +64,10 @@ quit
 EOF
 xvfb-run -a -s "-screen 0 1024x768x24" "$THORAX" view --script s.txt > s.out 2> s.err || { cat s.err; fail "490 sock session"; }
 grep "^activation\|^recovery" a.out t.out s.out
+grep -q "^--recovery 25feb97_sock$" sess.txt || { cat sess.txt; fail "the session does not keep the recovery map"; }
+# thorax render draws the same maps (--recovery), from the .tsdf's fiducials: qon..soff, then soff..toff
+"$THORAX" render "$SOCK" --data "$D/data/tank/cool1-atdr-run1.tsdf" --channels "$CH" --recovery 25feb97_sock \
+    --label --size 300x300 -o rec.png -q -v 2> rec.err || { cat rec.err; fail "render --recovery"; }
 
 # b, c. the sock alone in a window; two scripted picks marked
 cat > b.txt <<EOF

@@ -598,6 +598,7 @@ static void test_window_choice(void)
     if (!s) return;
     CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
     CHECK(w.source == THX_WINDOW_FIDUCIALS && w.t0 == 155 && w.t1 == 196 && w.rec_t0 == 196 && w.rec_t1 == 384);
+    CHECK(!strcmp(w.why, "fiducials qon-soff") && !strcmp(w.rec_why, "fiducials soff-toff"));
     thx_series_destroy(&s);
 
     /* the 490-lead sock's own activation and recovery fiducials */

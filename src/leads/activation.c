@@ -247,10 +247,13 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
         w->rec_t1 = isfinite(r1) && r1 > r0 ? r1 : s->time[n - 1];
         w->source = THX_WINDOW_FIDUCIALS;
         snprintf(w->why, sizeof w->why, "fiducials qon-soff");
+        snprintf(w->rec_why, sizeof w->rec_why, "fiducials %s-%s", isfinite(stoff) && stoff > soff ? "stoff" : "soff",
+                 isfinite(r1) && r1 > r0 ? "toff" : "end");
         return THX_OK;
     }
     if (n < 8) {
         snprintf(w->why, sizeof w->why, "whole series: %zu frames, too short for a beat", n);
+        memcpy(w->rec_why, w->why, sizeof w->why);
         return THX_OK;
     }
 
@@ -306,6 +309,7 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     if (nb == 0) {
         free(c);
         snprintf(w->why, sizeof w->why, "whole series: no beat on the RMS curve");
+        memcpy(w->rec_why, w->why, sizeof w->why);
         return THX_OK;
     }
     int b = -1;
@@ -330,5 +334,6 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     w->rec_t1 = s->time[r1];
     w->source = THX_WINDOW_RMS;
     snprintf(w->why, sizeof w->why, "RMS curve, beat %d of %d", b + 1, nb);
+    memcpy(w->rec_why, w->why, sizeof w->why);
     return THX_OK;
 }

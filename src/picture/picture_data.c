@@ -349,17 +349,19 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         d->sranged[target] = 0;
         if (chan) { free(d->channel[target]); d->channel[target] = chan; }
     }
-    for (int k = 0; k < o->n_activation; k++) {
+    for (int k = 0; k < o->n_activation + o->n_recovery; k++) {
+        int rec = k >= o->n_activation;
+        const char *spec = rec ? o->recovery[k - o->n_activation] : o->activation[k], *opt = rec ? "--recovery" : "--activation";
         char name[64];
         double t0 = NAN, t1 = NAN;
-        const char *colon = strchr(o->activation[k], ':');
-        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - o->activation[k] : (long)strlen(o->activation[k])), o->activation[k]);
+        const char *colon = strchr(spec, ':');
+        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - spec : (long)strlen(spec)), spec);
         if (colon && (sscanf(colon + 1, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1)))
-            return thx_error(ctx, THX_EINPUT, "--activation '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", o->activation[k]);
+            return thx_error(ctx, THX_EINPUT, "%s '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", opt, spec);
         int s = surface_by_name(d->m, name);
-        if (s < 0) return thx_error(ctx, THX_EINPUT, "--activation '%s': the model has no surface '%s'", o->activation[k], name);
-        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "--activation '%s': surface '%s' has no data", o->activation[k], name);
-        THX_CHECK(thx_picture_add_activation(ctx, d, s, t0, t1));
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "%s '%s': the model has no surface '%s'", opt, spec, name);
+        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "%s '%s': surface '%s' has no data", opt, spec, name);
+        THX_CHECK(thx_picture_add_map(ctx, d, s, rec ? 2 : 1, t0, t1));
     }
     for (int k = 0; k < o->n_landmarks; k++) {
         thx_landmarks *lm = NULL;
@@ -455,7 +457,7 @@ thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kin
         }
         if (chosen)
             snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %.15s (%.60s)", kind == 2 ? "recovery, T" : "activation, QRS",
-                     kind == 2 ? w.rec_t0 : w.t0, kind == 2 ? w.rec_t1 : w.t1, pot->time_unit, w.why);
+                     kind == 2 ? w.rec_t0 : w.t0, kind == 2 ? w.rec_t1 : w.t1, pot->time_unit, kind == 2 ? w.rec_why : w.why);
         else
             snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %s (as given)", kind == 2 ? "recovery, T" : "activation, window",
                      t0, t1, pot->time_unit);

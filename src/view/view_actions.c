@@ -518,7 +518,6 @@ static void do_map(view_app *a, GSimpleAction *act, GVariant *v)
     if (!spec[0] && d->map[s][d->active[s]] == kind) { /* the key again: back to the potentials */
         int src = d->map_src[s][d->active[s]];
         thx_picture_set_active(d, s, src);
-        a->act_spec[s][0] = '\0';
         view_set_info(a, "%s: the potentials again (%s shows the map)", d->m->surf[s]->name, kind == 2 ? "Shift+A" : "a");
         view_redraw_all(a);
         return;
@@ -532,7 +531,7 @@ static void do_map(view_app *a, GSimpleAction *act, GVariant *v)
         if (d->map[s][d->active[s]]) thx_picture_set_active(d, s, src);
         if (thx_picture_add_map(a->ctx, d, s, kind, t0, t1) != THX_OK) { view_report(a, what); a->status = 1; return; }
     }
-    if (kind == 1) snprintf(a->act_spec[s], sizeof a->act_spec[s], "%s", spec);
+    snprintf(kind == 1 ? a->act_spec[s] : a->rec_spec[s], sizeof a->act_spec[s], "%s", spec);
     const thx_series *m = d->series[s];
     double lo = INFINITY, hi = -INFINITY;
     for (size_t i = 0; i < m->n_rows; i++)

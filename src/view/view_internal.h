@@ -110,6 +110,7 @@ struct view_app {
     /* picking */
     view_trace traces[VIEW_MAX_TRACES];
     char act_spec[THX_PICTURE_SURFACES][40]; /* the window of each surface's activation map ("" whole series) */
+    char rec_spec[THX_PICTURE_SURFACES][40]; /* ... and of its recovery map */
     double plot_zoom;
     thx_edit_session *edit;    /* opened at the first edit (view_edit.c) */
     view_pick picked[3];       /* the last three picks, oldest first */

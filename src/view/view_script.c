@@ -239,12 +239,14 @@ thx_status view_save_session(view_app *a, const char *path)
     /* the maps shown: those asked for at the start, and those made since */
     for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
         if (!a->d.series[s] || !a->d.map[s][a->d.active[s]]) continue;
-        const char *spec = a->act_spec[s];
-        for (int k = 0; k < o->n_activation; k++) /* the start's own spec for this surface */
-            if (!strncmp(o->activation[k], a->d.m->surf[s]->name, strlen(a->d.m->surf[s]->name)) &&
-                (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':' || !o->activation[k][strlen(a->d.m->surf[s]->name)]) && !spec[0])
-                spec = o->activation[k] + strlen(a->d.m->surf[s]->name) + (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':');
-        fprintf(f, "--activation %s%s%s\n", a->d.m->surf[s]->name, spec[0] ? ":" : "", spec);
+        int rec = a->d.map[s][a->d.active[s]] == 2;
+        const char *spec = rec ? a->rec_spec[s] : a->act_spec[s];
+        const char *const *given = rec ? o->recovery : o->activation;
+        size_t nl = strlen(a->d.m->surf[s]->name);
+        for (int k = 0; k < (rec ? o->n_recovery : o->n_activation); k++) /* the start's own spec for this surface */
+            if (!strncmp(given[k], a->d.m->surf[s]->name, nl) && (given[k][nl] == ':' || !given[k][nl]) && !spec[0])
+                spec = given[k] + nl + (given[k][nl] == ':');
+        fprintf(f, "--%s %s%s%s\n", rec ? "recovery" : "activation", a->d.m->surf[s]->name, spec[0] ? ":" : "", spec);
     }
     view_win *w = a->win[0];
     write_picture(f, w);

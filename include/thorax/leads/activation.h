@@ -76,6 +76,7 @@ typedef struct {
     thx_window_source source;
     char why[96];          /* where from, for a picture: "RMS curve, beat 1 of 2", "fiducials qon-soff",
                               "whole series: no beat on the RMS curve" */
+    char rec_why[96];      /* ... of the recovery window: "fiducials soff-toff", else as why */
 } thx_activation_window;
 
 /*

@@ -136,6 +136,11 @@ typedef struct {
        range, isochrones with a contour style (thorax/leads/activation.h) */
     const char *activation[THX_PICTURE_MAX];
     int n_activation;
+    /* recovery-time maps, "SURFACE[:T0:T1]": each node's steepest T-wave upstroke after its
+       activation, T0:T1 the T wave's window (without it the record's rec fiducials, else the chosen
+       beat's T wave: thx_picture_add_map) */
+    const char *recovery[THX_PICTURE_MAX];
+    int n_recovery;
     int extrema;
     /* colour bars: the k-th bar's title and unit (given once: every bar's), in place of what is
        shown ("potential", "activation", "|J|") and the data's unit */
