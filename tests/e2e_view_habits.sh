@@ -50,7 +50,9 @@ $SOCK
 --data $D/data/tank/cool1-atdr-run1.tsdf
 --channels $CH
 --size 300x300
+action screenshot t0.png
 action activation
+action screenshot t1.png
 quit
 EOF
 xvfb-run -a -s "-screen 0 1024x768x24" "$THORAX" view --script t.txt > t.out 2> t.err || { cat t.err; fail "tsdf session"; }
@@ -156,6 +158,10 @@ assert "the record's act fiducials" in s_why and 263 < s_lo and s_hi < 291, (s_l
 s_rlo, s_rhi, s_rwhy = rng(line("s.out", "recovery"))
 assert "the record's rec fiducials" in s_rwhy and 315 < s_rlo and s_rhi < 505, (s_rlo, s_rhi, s_rwhy)
 p0, a1, p1, a2, r1 = (png(f + ".png") for f in ("p0", "a1", "p1", "a2", "r1"))
+# without --label, the map turns the label line on: text (light pixels) in the top strip
+t0, t1 = png("t0.png"), png("t1.png")
+light0, light1 = ((t[:16].min(axis=2) > 180).sum() for t in (t0, t1))   # (the sock's top reaches the strip in t0)
+assert light1 > 200 and light1 > 4 * light0, ("the map's window is not said in the picture", light0, light1)
 assert np.array_equal(p0, p1), "a twice: not the potentials' picture again"
 assert np.array_equal(a1, a2), "a a third time: not the same map"
 assert np.abs(p0 - a1).sum(axis=2).astype(bool).mean() > 0.05 and not np.array_equal(a1, r1), "the maps look like the potentials"

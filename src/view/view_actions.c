@@ -540,6 +540,9 @@ static void do_map(view_app *a, GSimpleAction *act, GVariant *v)
                   m->unit, m->label, d->active[s] + 1, kind == 2 ? "Shift+A" : "a");
     if (a->vo->verbose >= 0) printf("%s: %s %.6g %.6g %s | %s\n", what, d->m->surf[s]->name, lo, hi, m->unit, m->label);
     fflush(stdout);
+    /* the picture says which window the map took: its label line, turned on with the map */
+    view_win *aw = view_active(a);
+    if (aw && !aw->o.label) g_action_group_change_action_state(G_ACTION_GROUP(a->gapp), "label", g_variant_new_boolean(TRUE));
     view_redraw_all(a);
 }
 
