@@ -6,6 +6,11 @@
 #               drawings, what a user dragging the mouse sees);
 #   frame-step: 299 frame steps of the potentials;
 #   pick:       100 picks over a grid of the window;
+#   rotate again with the colour bar and the time label (a map3d user's picture: the annotations
+#   drawn over the scene read back, and what they changed uploaded), with each draw's phases
+#   (scene, readback, annotations, their upload; each finished) and the load average beside it:
+#   the step's time grows with the machine's load through the scene's rasterization (Mesa llvmpipe's
+#   threads), docs/design/view.md "Responsiveness under load";
 #   peak memory of the process;
 # then VTK 9 (bench/vtk_view.py) drawing the same meshes and data in an on-screen window of the same
 # size, in the same run, and the ratios. Prints figures; never fails on time.
@@ -44,6 +49,9 @@ cat > "$W/bench.txt" <<EOF
 action bench-rotate 360
 action bench-frames 299
 action bench-pick 100
+--colorbar
+--label
+action bench-rotate 360
 quit
 EOF
 xvfb-run -a -s "-screen 0 1600x1100x24" "$THORAX" view --script "$W/bench.txt" 2> "$W/view.err" | tee "$W/ours.txt"
@@ -59,6 +67,9 @@ o_rot_ms = num(r'rotate .*?median ([\d.]+) ms a step', ours)
 o_fs = num(r'frame-step \d+ steps in [\d.]+ s: ([\d.]+) per second', ours)
 o_fs_ms = num(r'frame-step .*?median ([\d.]+) ms a step', ours)
 o_pick = num(r'pick \d+ picks, median ([\d.]+) ms', ours)
+rots = re.findall(r'rotate \d+ steps in [\d.]+ s: [\d.]+ per second; median ([\d.]+) ms a step', ours)
+o_rot_ann = float(rots[1]) if len(rots) > 1 else float('nan')
+ph = re.findall(r'rotate phases: scene ([\d.]+) ms, readback ([\d.]+) ms, annotations ([\d.]+) ms, their upload ([\d.]+) ms', ours)
 o_peak = max(float(x) for x in re.findall(r'peak (\d+) MB', ours)) if 'peak' in ours else float('nan')
 v_rot_ms = num(r'vtk: rotate ([\d.]+) ms/frame', vtk)
 v_fs_ms = num(r'frame-step ([\d.]+) ms', vtk)
@@ -67,7 +78,11 @@ print()
 print('%-26s %16s %16s %10s' % ('1280x800, llvmpipe', 'thorax view', 'VTK 9', 'VTK/thorax'))
 print('%-26s %10.1f ms %3.0f/s %10.1f ms %3.0f/s %9.1fx' % ('rotate (a frame)', o_rot_ms, o_rot, v_rot_ms, 1000 / v_rot_ms, v_rot_ms / o_rot_ms))
 print('%-26s %10.1f ms %3.0f/s %10.1f ms %3.0f/s %9.1fx' % ('frame step', o_fs_ms, o_fs, v_fs_ms, 1000 / v_fs_ms, v_fs_ms / o_fs_ms))
+print('%-26s %10.1f ms %3.0f/s %16s' % ('rotate, bar and label', o_rot_ann, 1000 / o_rot_ann, '-'))
+if len(ph) > 1:
+    print('%-26s scene %s ms, readback %s, annotations %s, upload %s' % ('  its phases (a draw)', *ph[1]))
 print('%-26s %13.2f ms %16s' % ('pick (median)', o_pick, '-'))
 print('%-26s %13.0f MB %13.0f MB' % ('peak memory', o_peak, v_peak))
 print('targets: >= 30 frames a second rotating and stepping, picks < 50 ms')
+print('load average after: %s' % open('/proc/loadavg').read().split(' ', 3)[:3])
 EOF

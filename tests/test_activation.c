@@ -18,6 +18,7 @@
  *    times fall between the end of QRS and the end of T.
  */
 #include <math.h>
+#include <stdio.h>
 #include <matio.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -493,6 +494,135 @@ static void test_sock(void)
     thx_series_destroy(&s);
 }
 
+/* The data folder of the project's setup (../shared/data/map3d beside the worktree). */
+static void map3d_path(char *out, size_t size, const char *rel)
+{
+    char dir[2048];
+    snprintf(dir, sizeof dir, "%s", __FILE__);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = '\0';
+    else snprintf(dir, sizeof dir, ".");
+    snprintf(out, size, "%s/../../shared/data/map3d/%s", dir, rel);
+}
+
+/*
+ * The window an activation map is taken from (thx_activation_window_choose) and the record's own
+ * per-lead fiducials as a map (thx_activation_from_fiducials):
+ *  - synthetic: three beats (Gaussian QRS on 4 rows) with the record starting inside the first:
+ *    the second beat is taken (the first complete one), its window holds its QRS and none of the
+ *    other beats; global fiducials qon/soff at fractional frames on a 2 ms axis from 100 ms give
+ *    their times; a flat record and a 6-frame one give the whole series;
+ *  - the Utah tank run (2 beats, 512 channels): the .mat (no fiducials) gives beat 1 of 2 from the
+ *    RMS curve, within 10 ms of the QRS map3d's own .tsdf fiducials mark (qon 155, soff 196), and
+ *    the steepest downstrokes of the sock's 128 leads in it span under 40 ms (the whole series gave
+ *    88.9-589 ms); the .tsdf gives exactly its fiducials' window (recovery soff .. toff 384);
+ *  - the 490-lead sock: its act and rec fiducials as maps equal the file's values read through
+ *    libmatio (frames = ms here), and its window is its qon .. soff.
+ */
+static void test_window_choice(void)
+{
+    thx_activation_window w;
+    /* synthetic: beats at frames 10 (cut by the start), 130, 250; 4 rows, 2 ms from 100 ms */
+    thx_series *s = make(4, 300, 100, 2);
+    for (size_t f = 0; f < 300; f++)
+        for (size_t r = 0; r < 4; r++) {
+            double v = 0;
+            for (int b = 0; b < 3; b++) {
+                double c = 10 + 120.0 * b + 2.0 * (double)r, x = ((double)f - c) / 6;
+                v += (r % 2 ? -5 : 5) * exp(-0.5 * x * x);
+            }
+            V(s, r, f) = v + 0.01 * (double)r;
+        }
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_RMS && strstr(w.why, "beat 2 of 3"));
+    /* beat 2's QRS (frames 130 +- 3 sigma, rows offset up to 6 frames) inside; beats 1 and 3 outside */
+    CHECK(w.t0 >= 100 + 2 * 60.0 && w.t0 <= 100 + 2 * 125.0 && w.t1 >= 100 + 2 * 136.0 && w.t1 <= 100 + 2 * 200.0);
+    CHECK(w.rec_t0 == w.t1 && w.rec_t1 > w.t1 && w.rec_t1 < 100 + 2 * 245.0);
+    /* global fiducials at fractional frames */
+    double q = 110.5, so = 140.25;
+    CHECK_OK(ctx, thx_series_add_fiducial(ctx, s, 2, 0, 1, &q));
+    CHECK_OK(ctx, thx_series_add_fiducial(ctx, s, 4, 0, 1, &so));
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_FIDUCIALS && fabs(w.t0 - 321) < 1e-9 && fabs(w.t1 - 380.5) < 1e-9);
+    CHECK(fabs(w.rec_t0 - 380.5) < 1e-9 && w.rec_t1 == s->time[299]);
+    thx_series *none = NULL;
+    CHECK_OK(ctx, thx_activation_from_fiducials(ctx, s, 10, &none));
+    CHECK(none == NULL);
+    thx_series_destroy(&s);
+    s = make(4, 50, 0, 1); /* flat */
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_WHOLE && w.t0 == 0 && w.t1 == 49);
+    thx_series_destroy(&s);
+    s = make(2, 6, 0, 1);
+    V(s, 0, 3) = 1;
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_WHOLE && w.t1 == 5);
+    thx_series_destroy(&s);
+
+    /* the Utah tank run */
+    char mat[2300], tsdf[2300], rec[2300];
+    map3d_path(mat, sizeof mat, "data/tank/cool1-atdr-run1.mat");
+    map3d_path(tsdf, sizeof tsdf, "data/tank/cool1-atdr-run1.tsdf");
+    map3d_path(rec, sizeof rec, "data/socks/10jan01/rsm10jan01-cs-0004.mat");
+    CHECK(tl_exists(mat) && tl_exists(tsdf) && tl_exists(rec));
+    if (!tl_exists(mat) || !tl_exists(tsdf) || !tl_exists(rec)) return;
+    CHECK_OK(ctx, thx_series_read(ctx, mat, THX_SERIES_AUTO, &s));
+    if (!s) return;
+    CHECK(s->n_rows == 512 && s->n_frames == 608 && s->n_fids == 0);
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_RMS && strstr(w.why, "beat 1 of 2"));
+    CHECK(fabs(w.t0 - 155) <= 10 && fabs(w.t1 - 196) <= 10);
+    CHECK(w.rec_t0 == w.t1 && w.rec_t1 > 384 && w.rec_t1 < 560);
+    /* the sock's leads: channels 193..320 (sock128.channels maps node i to channel 192 + i) */
+    thx_series *sock = make(128, 608, 0, 1);
+    for (size_t f = 0; f < 608; f++)
+        for (size_t r = 0; r < 128; r++) V(sock, r, f) = V(s, 192 + r, f);
+    thx_activation_opts ao;
+    thx_activation_opts_default(&ao);
+    ao.t0 = w.t0;
+    ao.t1 = w.t1;
+    thx_series *t = times(sock, &ao), *all = times(sock, NULL);
+    double lo = INFINITY, hi = -INFINITY, alo = INFINITY, ahi = -INFINITY;
+    for (size_t r = 0; t && all && r < 128; r++) {
+        if (isfinite(t->v[r])) { lo = fmin(lo, t->v[r]); hi = fmax(hi, t->v[r]); }
+        if (isfinite(all->v[r])) { alo = fmin(alo, all->v[r]); ahi = fmax(ahi, all->v[r]); }
+    }
+    CHECK(hi - lo < 40 && lo >= w.t0 && hi <= w.t1);
+    CHECK(ahi - alo > 400); /* the whole series: both beats and the artefacts between */
+    printf("tank: window %s; sock activation %.1f-%.1f ms (whole series %.1f-%.1f)\n", w.why, lo, hi, alo, ahi);
+    thx_series_destroy(&t);
+    thx_series_destroy(&all);
+    thx_series_destroy(&sock);
+    thx_series_destroy(&s);
+    CHECK_OK(ctx, thx_series_read(ctx, tsdf, THX_SERIES_AUTO, &s));
+    if (!s) return;
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_FIDUCIALS && w.t0 == 155 && w.t1 == 196 && w.rec_t0 == 196 && w.rec_t1 == 384);
+    CHECK(!strcmp(w.why, "fiducials qon-soff") && !strcmp(w.rec_why, "fiducials soff-toff"));
+    thx_series_destroy(&s);
+
+    /* the 490-lead sock's own activation and recovery fiducials */
+    CHECK_OK(ctx, thx_series_read(ctx, rec, THX_SERIES_AUTO, &s));
+    if (!s) return;
+    double qrs_on = NAN, qrs_off = NAN, t_off = NAN, *fid = malloc(490 * sizeof *fid);
+    CHECK(read_fids(rec, &qrs_on, &qrs_off, &t_off, fid, 490) == 0);
+    CHECK_OK(ctx, thx_activation_from_fiducials(ctx, s, 10, &t));
+    CHECK(t && t->n_rows == 490 && t->n_frames == 1 && !strcmp(t->unit, "ms"));
+    size_t same = 0;
+    for (size_t r = 0; t && r < 490; r++) same += fabs(t->v[r] - fid[r]) < 1e-9;
+    CHECK(same == 490);
+    thx_series_destroy(&t);
+    CHECK_OK(ctx, thx_activation_from_fiducials(ctx, s, 13, &t));
+    size_t in_t = 0;
+    for (size_t r = 0; t && r < 490; r++) in_t += t->v[r] > qrs_off && t->v[r] < t_off;
+    CHECK(t && in_t == 490);
+    thx_series_destroy(&t);
+    CHECK_OK(ctx, thx_activation_window_choose(ctx, s, &w));
+    CHECK(w.source == THX_WINDOW_FIDUCIALS && fabs(w.t0 - qrs_on) < 1e-9 && fabs(w.t1 - qrs_off) < 1e-9);
+    free(fid);
+    thx_series_destroy(&s);
+}
+
 int main(void)
 {
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
@@ -503,6 +633,7 @@ int main(void)
     test_window();
     test_bad();
     test_sock();
+    test_window_choice();
     int rc = tl_finish();
     thx_ctx_destroy(&ctx);
     return rc;

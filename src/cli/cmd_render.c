@@ -343,7 +343,14 @@ size_t render_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--activation", .type = CLI_STRING, .meta = "SURFACE[:T0:T1]", .flags = CLI_REPEAT,
                        .sv = o->p.activation, .count = &o->p.n_activation, .max = THX_PICTURE_MAX,
                        .help = "the surface's activation-time map (each node's steepest downstroke, between T0 and T1 "
-                               "in the data's time unit) instead of its potentials; isochrones with --style contours"};
+                               "in the data's time unit) instead of its potentials; without T0:T1 the record's own "
+                               "activation fiducials (act), else its QRS (qon..soff fiducials), else one beat found on "
+                               "the RMS curve, as the label says; isochrones with --style contours"};
+    t[n++] = (cli_opt){.name = "--recovery", .type = CLI_STRING, .meta = "SURFACE[:T0:T1]", .flags = CLI_REPEAT,
+                       .sv = o->p.recovery, .count = &o->p.n_recovery, .max = THX_PICTURE_MAX,
+                       .help = "the surface's recovery-time map (each node's steepest T-wave upstroke after its "
+                               "activation; T0:T1 the T wave) instead of its potentials; without T0:T1 the record's "
+                               "rec fiducials, else the T wave of the beat --activation would take"};
     t[n++] = (cli_opt){.name = "--extrema", .type = CLI_FLAG, .i = &o->p.extrema,
                        .help = "marks at the largest and smallest value of each surface's data (grey when behind)"};
     t[n++] = (cli_opt){.name = "--trace", .type = CLI_STRING, .meta = "T", .s = &o->p.trace,

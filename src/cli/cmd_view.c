@@ -226,9 +226,12 @@ int cmd_view(int argc, char **argv)
                  "several, frames stepped with the left and right arrow keys (in step on every surface),\n"
                  "the surface a command acts on chosen with up and down, turned with the mouse (arcball),\n"
                  "panned, zoomed and clipped, the field's display standards in the menus and keys, a click\n"
-                 "showing the node's time signal. The window shows what thorax render draws from the same\n"
-                 "options (--size is the drawing area). `?` lists the keys; every key and menu item is an\n"
-                 "action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n",
+                 "showing the node's time signal (a ring and its number on the node in its trace's colour;\n"
+                 "the trace pane keeps the window's size and scrolls). `a` the activation map from the\n"
+                 "record's fiducials, else one beat's QRS (never a multi-beat record's whole), `a` again the\n"
+                 "potentials; Shift+A the recovery map. The window shows what thorax render draws from the\n"
+                 "same options (--size is the drawing area). `?` lists the keys; every key and menu item is\n"
+                 "an action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how (as thorax render)", common, render_options(common, &o.r)}},
         .positional = render_positional,
         .user = &o,

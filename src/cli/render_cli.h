@@ -25,7 +25,7 @@ typedef struct {
 void render_opts_default(ropts *o);
 /* The options render and animate share (what is drawn, and how), into t[N_RENDER_OPTS], their values
  * into o; returns their count. Their callbacks and render_positional take o as the user pointer. */
-#define N_RENDER_OPTS 65
+#define N_RENDER_OPTS 66
 size_t render_options(cli_opt *t, ropts *o);
 /* cli_command.positional: the model directory, or a surface file (at most 16). */
 int render_positional(void *user, const char *a);

@@ -57,6 +57,11 @@ thx_status edit_keep_volume(thx_ctx *ctx, thx_edit_session *s);
 void edit_kept_free(thx_edit_session *s);
 /* The session's log text into s->m->edit_log (for a save). */
 thx_status edit_session_set_log(thx_ctx *ctx, thx_edit_session *s);
+/* The model's record of its contours ("input_from_model") made relative to dir, where the model is
+ * about to be saved, from the contour file the session read: a saved model finds its contours from
+ * wherever it is opened (the record relative to the old folder pointed elsewhere). Nothing changes
+ * when the session has no contours or the record already says so. */
+thx_status edit_rebase_contours(thx_ctx *ctx, thx_edit_session *s, const char *dir);
 
 
 /* Applies e in the session, pushing its undo record and counting it, then checks the surface into

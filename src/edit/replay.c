@@ -83,6 +83,27 @@ thx_status thx_edit_record_contours(thx_ctx *ctx, cJSON *prov, const char *conto
     return THX_OK;
 }
 
+thx_status edit_rebase_contours(thx_ctx *ctx, thx_edit_session *s, const char *dir)
+{
+    if (!s->contours_name[0] || !s->m->provenance_json) return THX_OK;
+    char a[PATH_MAX], b[PATH_MAX], rel[PATH_MAX];
+    if (absolute(s->contours_name, 0, a) != 0 || absolute(dir, 1, b) != 0 || relative(b, a, rel, sizeof rel) != 0) return THX_OK;
+    cJSON *prov = cJSON_Parse(s->m->provenance_json);
+    if (!prov) return THX_OK;
+    const cJSON *old = cJSON_GetObjectItemCaseSensitive(prov, "input_from_model");
+    if (cJSON_IsString(old) && !strcmp(old->valuestring, rel)) { cJSON_Delete(prov); return THX_OK; }
+    cJSON *v = cJSON_CreateString(rel);
+    int ok = v && (cJSON_HasObjectItem(prov, "input_from_model") ? cJSON_ReplaceItemInObjectCaseSensitive(prov, "input_from_model", v)
+                                                                   : cJSON_AddItemToObject(prov, "input_from_model", v));
+    if (!ok) cJSON_Delete(v);
+    char *text = ok ? cJSON_PrintUnformatted(prov) : NULL;
+    cJSON_Delete(prov);
+    if (!text) return thx_error(ctx, THX_ENOMEM, "out of memory (the model's provenance)");
+    free(s->m->provenance_json); /* as thx_model_read made it: cJSON's text, freed with free */
+    s->m->provenance_json = text;
+    return THX_OK;
+}
+
 /* A string member of a JSON object, or NULL. */
 static const char *jstr(const cJSON *o, const char *key)
 {

@@ -209,6 +209,7 @@ thx_status thx_edit_session_save(thx_ctx *ctx, thx_edit_session *s, const char *
     THX_CHECK(edit_session_set_log(ctx, s));
     int keep = s->kept_volume && mesh_surfaces_same(s);
     int in_place = s->source_dir[0] && same_dir(dir, s->source_dir);
+    if (!in_place) THX_CHECK(edit_rebase_contours(ctx, s, dir));
     if (keep) s->m->volume = s->kept_volume; /* lent for the write */
     thx_status st = in_place ? save_in_place(ctx, s, dir, s->kept_volume && !keep) : thx_model_write(ctx, s->m, dir);
     if (keep) s->m->volume = NULL;

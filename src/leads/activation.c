@@ -2,6 +2,7 @@
 #include "thorax/leads/activation.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -160,5 +161,179 @@ thx_status thx_activation_times(thx_ctx *ctx, const thx_series *s, const thx_act
         r->v[s->n_rows + i] = tr;
     }
     *out = r;
+    return THX_OK;
+}
+
+/* The time at frame f (0-based, fractional), linear between frames; NaN outside the frames. */
+static double time_at_frame(const thx_series *s, double f)
+{
+    if (!isfinite(f) || f < 0 || f > (double)(s->n_frames - 1)) return NAN;
+    size_t i = (size_t)f;
+    if (i >= s->n_frames - 1) return s->time[s->n_frames - 1];
+    return s->time[i] + (f - (double)i) * (s->time[i + 1] - s->time[i]);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* A fiducial's frame: its value (a global one) or the median of its finite values (one per row); NaN if none. */
+static double fid_frame(const thx_series *s, int type)
+{
+    for (size_t k = 0; k < s->n_fids; k++) {
+        const thx_fiducial *f = &s->fids[k];
+        if (f->type != type) continue;
+        if (f->n == 1) return f->v[0];
+        double *c = malloc(f->n * sizeof *c);
+        if (!c) return NAN;
+        size_t m = 0;
+        for (size_t i = 0; i < f->n; i++)
+            if (isfinite(f->v[i])) c[m++] = f->v[i];
+        qsort(c, m, sizeof *c, cmp_double);
+        double med = m ? (m % 2 ? c[m / 2] : 0.5 * (c[m / 2 - 1] + c[m / 2])) : NAN;
+        free(c);
+        return med;
+    }
+    return NAN;
+}
+
+thx_status thx_activation_from_fiducials(thx_ctx *ctx, const thx_series *s, int type, thx_series **out)
+{
+    *out = NULL;
+    THX_CHECK(thx_series_validate(ctx, s, "fiducial map"));
+    const thx_fiducial *f = NULL;
+    for (size_t k = 0; k < s->n_fids && !f; k++)
+        if (s->fids[k].type == type && s->fids[k].n == s->n_rows && s->n_rows > 1) f = &s->fids[k];
+    if (!f) return THX_OK;
+    thx_series *r = NULL;
+    THX_CHECK(thx_series_create(ctx, s->n_rows, 1, &r));
+    snprintf(r->unit, sizeof r->unit, "%s", s->time_unit);
+    r->time_unit[0] = '\0';
+    const char *name = thx_fiducial_type_name(type);
+    snprintf(r->label, sizeof r->label, "%s: the record's %s fiducials", type == 13 ? "recovery" : "activation", name ? name : "?");
+    for (size_t i = 0; i < s->n_rows; i++) r->v[i] = time_at_frame(s, f->v[i]);
+    *out = r;
+    return THX_OK;
+}
+
+/* The smoothed curve's first local minimum after p, or where c falls under thr; at most n - 1. */
+static size_t qrs_end(const double *c, const double *sm, size_t n, size_t p, double thr)
+{
+    size_t f = p + 1;
+    while (f + 1 < n && c[f] > thr && !(sm[f] <= sm[f + 1] && sm[f] < sm[p])) f++;
+    return f < n ? f : n - 1;
+}
+
+thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_activation_window *w)
+{
+    THX_CHECK(thx_series_validate(ctx, s, "activation window"));
+    size_t n = s->n_frames;
+    memset(w, 0, sizeof *w);
+    w->t0 = s->time[0];
+    w->t1 = s->time[n - 1];
+    w->rec_t0 = w->rec_t1 = NAN;
+    w->source = THX_WINDOW_WHOLE;
+
+    /* the record's fiducials */
+    double qon = fid_frame(s, 2), soff = fid_frame(s, 4), stoff = fid_frame(s, 5), toff = fid_frame(s, 7);
+    double a0 = time_at_frame(s, qon), a1 = time_at_frame(s, soff);
+    if (isfinite(a0) && isfinite(a1) && a0 < a1) {
+        w->t0 = a0;
+        w->t1 = a1;
+        double r0 = time_at_frame(s, isfinite(stoff) && stoff > soff ? stoff : soff), r1 = time_at_frame(s, toff);
+        w->rec_t0 = r0;
+        w->rec_t1 = isfinite(r1) && r1 > r0 ? r1 : s->time[n - 1];
+        w->source = THX_WINDOW_FIDUCIALS;
+        snprintf(w->why, sizeof w->why, "fiducials qon-soff");
+        snprintf(w->rec_why, sizeof w->rec_why, "fiducials %s-%s", isfinite(stoff) && stoff > soff ? "stoff" : "soff",
+                 isfinite(r1) && r1 > r0 ? "toff" : "end");
+        return THX_OK;
+    }
+    if (n < 8) {
+        snprintf(w->why, sizeof w->why, "whole series: %zu frames, too short for a beat", n);
+        memcpy(w->rec_why, w->why, sizeof w->why);
+        return THX_OK;
+    }
+
+    /* one beat of the RMS curve */
+    double *c = malloc(3 * n * sizeof *c);
+    if (!c) return thx_error(ctx, THX_ENOMEM, "out of memory (RMS curve of %zu frames)", n);
+    double *sm = c + n, *srt = c + 2 * n;
+    for (size_t f = 0; f < n; f++) {
+        double ss = 0;
+        size_t m = 0;
+        const double *vals = s->v + f * s->n_rows;
+        for (size_t i = 0; i < s->n_rows; i++)
+            if (isfinite(vals[i])) { ss += vals[i] * vals[i]; m++; }
+        c[f] = m ? sqrt(ss / (double)m) : 0;
+    }
+    for (size_t f = 0; f < n; f++) {
+        size_t lo = f >= 2 ? f - 2 : 0, hi = f + 2 < n ? f + 2 : n - 1;
+        double a = 0;
+        for (size_t k = lo; k <= hi; k++) a += c[k];
+        sm[f] = a / (double)(hi - lo + 1);
+    }
+    memcpy(srt, c, n * sizeof *c);
+    qsort(srt, n, sizeof *srt, cmp_double);
+    double base = srt[n / 10], top = srt[n - 1], half = base + 0.5 * (top - base);
+    /* the beats: runs above half way, each with its QRS (onset, end) and window (w0, w1) */
+    enum { MAXB = 64 };
+    size_t on[MAXB], en[MAXB], pk[MAXB];
+    int nb = 0, complete[MAXB];
+    for (size_t f = 0; top > base && f < n && nb < MAXB;) {
+        if (c[f] <= half) { f++; continue; }
+        size_t p = f;
+        while (f < n && c[f] > half) {
+            if (c[f] > c[p]) p = f;
+            f++;
+        }
+        double thr = base + 0.1 * (c[p] - base);
+        size_t o = p;
+        while (o > 0 && c[o - 1] > thr) o--;
+        size_t e = qrs_end(c, sm, n, p, thr);
+        if (nb && o <= en[nb - 1]) { /* a second peak of the same QRS */
+            if (c[p] > c[pk[nb - 1]]) pk[nb - 1] = p;
+            if (e > en[nb - 1]) en[nb - 1] = e;
+            if (f < e) f = e;
+            continue;
+        }
+        on[nb] = o;
+        en[nb] = e;
+        pk[nb] = p;
+        complete[nb] = o > 0 && e < n - 1;
+        nb++;
+        if (f < e) f = e;
+    }
+    if (nb == 0) {
+        free(c);
+        snprintf(w->why, sizeof w->why, "whole series: no beat on the RMS curve");
+        memcpy(w->rec_why, w->why, sizeof w->why);
+        return THX_OK;
+    }
+    int b = -1;
+    for (int k = 0; k < nb && b < 0; k++)
+        if (complete[k]) b = k;
+    if (b < 0)
+        for (int k = 0; k < nb; k++)
+            if (b < 0 || c[pk[k]] > c[pk[b]]) b = k;
+    size_t width = en[b] - on[b], margin = width / 4 > 3 ? width / 4 : 3;
+    size_t w0 = on[b] > margin ? on[b] - margin : 0, w1 = en[b] + margin < n - 1 ? en[b] + margin : n - 1;
+    if (b > 0 && w0 <= en[b - 1]) w0 = en[b - 1] + 1;
+    if (b + 1 < nb && w1 >= on[b + 1]) w1 = on[b + 1] - 1;
+    size_t r1 = n - 1;
+    if (b + 1 < nb) {
+        size_t nw = en[b + 1] - on[b + 1], nm = nw / 4 > 3 ? nw / 4 : 3;
+        r1 = on[b + 1] > nm + w1 ? on[b + 1] - nm : w1;
+    }
+    free(c);
+    w->t0 = s->time[w0];
+    w->t1 = s->time[w1];
+    w->rec_t0 = s->time[w1];
+    w->rec_t1 = s->time[r1];
+    w->source = THX_WINDOW_RMS;
+    snprintf(w->why, sizeof w->why, "RMS curve, beat %d of %d", b + 1, nb);
+    memcpy(w->rec_why, w->why, sizeof w->why);
     return THX_OK;
 }

@@ -75,7 +75,7 @@ thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_da
                          thx_raster *img)
 {
     const thx_model *m = d->m;
-    if (!font || o->panels || (!o->n_labels && !o->extrema && !d->n_elec)) return THX_OK;
+    if (!font || o->panels || (!o->n_labels && !o->extrema && !d->n_elec && !o->n_pins)) return THX_OK;
     size_t n = m->n_surfaces < THX_PICTURE_SURFACES ? m->n_surfaces : THX_PICTURE_SURFACES;
     if (!d->pick) {
         const thx_surface *surf[THX_PICTURE_SURFACES];
@@ -183,6 +183,30 @@ thx_status picture_marks(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_da
             int cx = v.vp[0] + (int)lround(px), cy = v.vp[1] + (int)lround(py);
             text_shadowed(img, font, cx + 8, cy + fh / 3, e->name[i], seen ? white : grey);
         }
+    }
+    /* picked nodes: a ring in the pin's colour (filled when seen) and the node's number */
+    for (int k = 0; k < o->n_pins && k < 8; k++) {
+        int s = o->pins[k].surface;
+        size_t i = o->pins[k].node;
+        if (s < 0 || (size_t)s >= n || i >= m->surf[s]->n_nodes || v.skip[s]) continue;
+        double px, py, dep;
+        if (thx_camera_project(&v.cam, v.vp[2], v.vp[3], m->surf[s]->xyz + 3 * i, &px, &py, &dep)) continue;
+        if (px < 0 || py < 0 || px >= v.vp[2] || py >= v.vp[3]) continue;
+        int seen = visible(ctx, d, &v, s, i, px, py) == 1;
+        unsigned char col[4] = {o->pins[k].rgba[0], o->pins[k].rgba[1], o->pins[k].rgba[2], 255};
+        if (!seen)
+            for (int c = 0; c < 3; c++) col[c] = (unsigned char)((col[c] + 2 * 110) / 3);
+        static const unsigned char dark[4] = {0, 0, 0, 255};
+        int cx = v.vp[0] + (int)lround(px), cy = v.vp[1] + (int)lround(py);
+        for (int a = 0; a < 24; a++) { /* a dark ring under a coloured one: seen on any colour */
+            double t0 = 2 * M_PI * a / 24, t1 = 2 * M_PI * (a + 1) / 24;
+            thx_draw_line(img, cx + 6 * cos(t0), cy + 6 * sin(t0), cx + 6 * cos(t1), cy + 6 * sin(t1), 3.5, dark);
+            thx_draw_line(img, cx + 6 * cos(t0), cy + 6 * sin(t0), cx + 6 * cos(t1), cy + 6 * sin(t1), 2, col);
+        }
+        if (seen) thx_draw_rect(img, cx - 2, cy - 2, 5, 5, col);
+        char text[32];
+        snprintf(text, sizeof text, "%zu", i + 1);
+        text_shadowed(img, font, cx + 9, cy - 4, text, col);
     }
     /* extrema of each surface's data at the frame */
     if (o->extrema)

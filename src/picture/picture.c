@@ -391,7 +391,7 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
             int s = -1;
             for (size_t k = 0; k < m->n_surfaces && k < THX_PICTURE_SURFACES && s < 0; k++)
                 if (m->surf[k] == r->surf) s = (int)k;
-            int map = s >= 0 && d->series[s] && d->map[s][d->active[s]];
+            int map = s >= 0 && d->series[s] ? d->map[s][d->active[s]] : 0;
             int field = -1;
             for (int q = 0; q < 3 && s < 0 && d->volume; q++)
                 if (r->surf == &d->field_surf[q]) field = q;
@@ -405,7 +405,7 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
                 add_bar(bars, &r->scale, (int)r->cmap, current ? "|J|" : "potential", unit, r->surf->name);
                 continue;
             }
-            add_bar(bars, &r->scale, (int)r->cmap, map ? "activation" : "potential",
+            add_bar(bars, &r->scale, (int)r->cmap, map == 2 ? "recovery" : map ? "activation" : "potential",
                     s >= 0 && d->series[s] ? d->series[s]->unit : "", r->surf->name);
         }
     if (b->have_arrows && b->arrows.unit_length)
@@ -599,9 +599,22 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
         for (int k = 0; k < nl; k++) thx_draw_text(img, font, L[k].x, L[k].y, L[k].text, FG);
     }
     if (o->label && any) {
-        char text[128];
-        size_t f = (size_t)frame < any->n_frames ? (size_t)frame : 0;
-        snprintf(text, sizeof text, "t = %g %s   (frame %d of %zu)", any->time[f], any->time_unit, frame + 1, any->n_frames);
+        /* the time of the potentials shown, then what each map is and which window it took */
+        char text[512];
+        const thx_series *pot = NULL;
+        for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES; s++)
+            if (d->series[s] && !d->map[s][d->active[s]] && (!pot || m->surf[s]->role == THX_ROLE_OUTER)) pot = d->series[s];
+        size_t len = 0;
+        text[0] = '\0';
+        if (pot) {
+            size_t f = (size_t)frame < pot->n_frames ? (size_t)frame : 0;
+            len += (size_t)snprintf(text, sizeof text, "t = %g %s   (frame %d of %zu)", pot->time[f], pot->time_unit, frame + 1,
+                                    pot->n_frames);
+        }
+        for (size_t s = 0; s < m->n_surfaces && s < THX_PICTURE_SURFACES && len < sizeof text - 1; s++)
+            if (d->series[s] && d->map[s][d->active[s]])
+                len += (size_t)snprintf(text + len, sizeof text - len, "%s%s: %s", len ? "   " : "", m->surf[s]->name,
+                                        d->series[s]->label);
         thx_draw_text(img, font, 8, thx_font_height(font) + 2, text, FG);
     }
     if (d->trace) {

@@ -217,6 +217,21 @@ static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp
         else
             for (size_t i = 0; i < c->n; i++) chan[i] = c->channel[i] + 1;
     }
+    /* the recording's fiducials follow (the activation map's window, its per-lead times): a global
+       one as it is, a per-channel one to the nodes as the values are (NaN for a node without one) */
+    const thx_series *in = *sp;
+    if (st == THX_OK && outs->n_fids == 0)
+        for (size_t k = 0; k < in->n_fids && st == THX_OK; k++) {
+            const thx_fiducial *f = &in->fids[k];
+            if (f->n == 1) { st = thx_series_add_fiducial(ctx, outs, f->type, f->fidset, 1, f->v); continue; }
+            if (f->n != in->n_rows || outs->n_rows < 2) continue;
+            double *v = malloc(outs->n_rows * sizeof *v);
+            if (!v) { st = thx_error(ctx, THX_ENOMEM, "out of memory (fiducials)"); break; }
+            for (size_t i = 0; i < outs->n_rows; i++)
+                v[i] = i < c->n && c->channel[i] >= 0 && (size_t)c->channel[i] < f->n ? f->v[c->channel[i]] : NAN;
+            st = thx_series_add_fiducial(ctx, outs, f->type, f->fidset, outs->n_rows, v);
+            free(v);
+        }
     thx_channels_destroy(&c);
     if (st != THX_OK) { thx_series_destroy(&outs); return st; }
     thx_series_destroy(sp);
@@ -334,17 +349,19 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         d->sranged[target] = 0;
         if (chan) { free(d->channel[target]); d->channel[target] = chan; }
     }
-    for (int k = 0; k < o->n_activation; k++) {
+    for (int k = 0; k < o->n_activation + o->n_recovery; k++) {
+        int rec = k >= o->n_activation;
+        const char *spec = rec ? o->recovery[k - o->n_activation] : o->activation[k], *opt = rec ? "--recovery" : "--activation";
         char name[64];
         double t0 = NAN, t1 = NAN;
-        const char *colon = strchr(o->activation[k], ':');
-        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - o->activation[k] : (long)strlen(o->activation[k])), o->activation[k]);
+        const char *colon = strchr(spec, ':');
+        snprintf(name, sizeof name, "%.*s", (int)(colon ? colon - spec : (long)strlen(spec)), spec);
         if (colon && (sscanf(colon + 1, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1)))
-            return thx_error(ctx, THX_EINPUT, "--activation '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", o->activation[k]);
+            return thx_error(ctx, THX_EINPUT, "%s '%s': give SURFACE or SURFACE:T0:T1 (T0 < T1, the series' time unit)", opt, spec);
         int s = surface_by_name(d->m, name);
-        if (s < 0) return thx_error(ctx, THX_EINPUT, "--activation '%s': the model has no surface '%s'", o->activation[k], name);
-        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "--activation '%s': surface '%s' has no data", o->activation[k], name);
-        THX_CHECK(thx_picture_add_activation(ctx, d, s, t0, t1));
+        if (s < 0) return thx_error(ctx, THX_EINPUT, "%s '%s': the model has no surface '%s'", opt, spec, name);
+        if (!d->series[s]) return thx_error(ctx, THX_EINPUT, "%s '%s': surface '%s' has no data", opt, spec, name);
+        THX_CHECK(thx_picture_add_map(ctx, d, s, rec ? 2 : 1, t0, t1));
     }
     for (int k = 0; k < o->n_landmarks; k++) {
         thx_landmarks *lm = NULL;
@@ -387,20 +404,69 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
 
 thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1)
 {
+    return thx_picture_add_map(ctx, d, s, 1, t0, t1);
+}
+
+thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kind, double t0, double t1)
+{
     if (s < 0 || s >= THX_PICTURE_SURFACES || (size_t)s >= d->m->n_surfaces || !d->series[s])
-        return thx_error(ctx, THX_EINPUT, "activation: surface %d has no data", s + 1);
+        return thx_error(ctx, THX_EINPUT, "%s: surface %d has no data", kind == 2 ? "recovery" : "activation", s + 1);
     if (d->n_sets[s] >= THX_PICTURE_SETS)
-        return thx_error(ctx, THX_EINPUT, "activation: surface '%s' has %d data sets already (at most %d)", d->m->surf[s]->name,
-                         d->n_sets[s], THX_PICTURE_SETS);
-    thx_activation_opts ao;
-    thx_activation_opts_default(&ao);
-    ao.t0 = t0;
-    ao.t1 = t1;
+        return thx_error(ctx, THX_EINPUT, "%s: surface '%s' has %d data sets already (at most %d)",
+                         kind == 2 ? "recovery" : "activation", d->m->surf[s]->name, d->n_sets[s], THX_PICTURE_SETS);
+    int src = d->active[s];
+    if (d->map[s][src]) /* a map of a map: of the potentials it came from */
+        src = d->map_src[s][src] >= 0 ? d->map_src[s][src] : src;
+    const thx_series *pot = d->sets[s][src];
+    if (d->map[s][src]) return thx_error(ctx, THX_EINPUT, "activation: surface '%s' shows a map, not potentials", d->m->surf[s]->name);
     thx_series *map = NULL;
-    THX_CHECK(thx_activation_times(ctx, d->series[s], &ao, &map));
+    int chosen = isnan(t0) && isnan(t1);
+    if (chosen) THX_CHECK(thx_activation_from_fiducials(ctx, pot, kind == 2 ? 13 : 10, &map));
+    if (!map) {
+        thx_activation_window w = {0};
+        if (chosen) THX_CHECK(thx_activation_window_choose(ctx, pot, &w));
+        thx_activation_opts ao;
+        thx_activation_opts_default(&ao);
+        if (kind == 2) {
+            ao.recovery = 1;
+            ao.t0 = chosen ? w.t0 : NAN;
+            ao.t1 = chosen ? w.t1 : NAN;
+            ao.rec_t0 = chosen ? w.rec_t0 : t0;
+            ao.rec_t1 = chosen ? w.rec_t1 : t1;
+            if (!chosen) { /* the activation window before the T wave given: the beat's QRS if it lies before */
+                thx_activation_window q;
+                THX_CHECK(thx_activation_window_choose(ctx, pot, &q));
+                ao.t0 = q.t1 < t0 ? q.t0 : NAN;
+                ao.t1 = q.t1 < t0 ? q.t1 : t0;
+            }
+        } else {
+            ao.t0 = chosen ? w.t0 : t0;
+            ao.t1 = chosen ? w.t1 : t1;
+        }
+        thx_series *both = NULL;
+        THX_CHECK(thx_activation_times(ctx, pot, &ao, &both));
+        if (kind == 2) { /* the recovery frame alone */
+            thx_status st = thx_series_create(ctx, pot->n_rows, 1, &map);
+            if (st != THX_OK) { thx_series_destroy(&both); return st; }
+            memcpy(map->v, both->v + pot->n_rows, pot->n_rows * sizeof *map->v);
+            snprintf(map->unit, sizeof map->unit, "%s", both->unit);
+            map->time_unit[0] = '\0';
+            thx_series_destroy(&both);
+        } else {
+            map = both;
+        }
+        if (chosen)
+            snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %.15s (%.60s)", kind == 2 ? "recovery, T" : "activation, QRS",
+                     kind == 2 ? w.rec_t0 : w.t0, kind == 2 ? w.rec_t1 : w.t1, pot->time_unit, kind == 2 ? w.rec_why : w.why);
+        else
+            snprintf(map->label, sizeof map->label, "%s %.4g-%.4g %s (as given)", kind == 2 ? "recovery, T" : "activation, window",
+                     t0, t1, pot->time_unit);
+    }
     int k = d->n_sets[s]++;
     d->sets[s][k] = map;
-    d->map[s][k] = 1;
+    d->map[s][k] = (unsigned char)kind;
+    d->map_src[s][k] = (signed char)src;
+    d->map_auto[s][k] = (unsigned char)chosen;
     thx_picture_set_active(d, s, k);
     return THX_OK;
 }

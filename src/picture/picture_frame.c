@@ -115,10 +115,31 @@ void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, do
     thx_picture_view_camera(o, d, o->view, aspect, cam);
 }
 
+/* The box of the surfaces drawn (o->only; all when none is named or none of them has a node). */
+static void shown_bounds(const thx_picture_opts *o, const thx_picture_data *d, double lo[3], double hi[3])
+{
+    thx_picture_bounds(d, lo, hi);
+    if (o->n_only == 0) return;
+    const thx_model *m = d->m;
+    double a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t s = 0; s < m->n_surfaces; s++) {
+        int shown = 0;
+        for (int k = 0; k < o->n_only; k++) shown |= !strcmp(o->only[k], m->surf[s]->name);
+        if (!shown) continue;
+        for (size_t i = 0; i < m->surf[s]->n_nodes; i++)
+            for (int k = 0; k < 3; k++) {
+                a[k] = fmin(a[k], m->surf[s]->xyz[3 * i + k]);
+                b[k] = fmax(b[k], m->surf[s]->xyz[3 * i + k]);
+            }
+    }
+    if (a[0] <= b[0])
+        for (int k = 0; k < 3; k++) { lo[k] = a[k]; hi[k] = b[k]; }
+}
+
 void thx_picture_view_camera(const thx_picture_opts *o, const thx_picture_data *d, int view, double aspect, thx_camera *cam)
 {
     double lo[3], hi[3], qlo[3], qhi[3];
-    thx_picture_bounds(d, lo, hi);
+    shown_bounds(o, d, lo, hi); /* each window of --separate (or --only) framed on its own surfaces */
     box_to_frame(o, lo, hi, qlo, qhi);
     /* the standard view in the anatomical frame, carried back to the model's axes */
     thx_camera c;

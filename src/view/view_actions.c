@@ -494,25 +494,55 @@ static void do_scale_rel(view_app *a, GSimpleAction *act, GVariant *v)
     view_redraw_all(a);
 }
 
-/* The current surface's activation-time map ("T0:T1" or "" for the whole series), as a new data set. */
-static void do_activation(view_app *a, GSimpleAction *act, GVariant *v)
+/* The current surface's activation (recovery) map: "T0:T1" a new map of that window; "" (the key)
+ * the record's fiducials or the chosen beat (thx_picture_add_map), and the key again shows the
+ * potentials back (map3d's toggle), a third time the same map without computing it again. */
+static void do_map(view_app *a, GSimpleAction *act, GVariant *v)
 {
     const char *spec = g_variant_get_string(v, NULL);
+    int kind = !strcmp(g_action_get_name(G_ACTION(act)), "recovery") ? 2 : 1;
+    const char *what = kind == 2 ? "recovery" : "activation";
     double t0 = NAN, t1 = NAN;
     if (spec[0] && (sscanf(spec, "%lf:%lf", &t0, &t1) != 2 || !(t0 < t1))) {
-        view_set_info(a, "activation '%s': give T0:T1 (the data's time unit), or nothing for the whole series", spec);
+        view_set_info(a, "%s '%s': give T0:T1 (the data's time unit), or nothing for the record's own window", what, spec);
         a->status = 1;
         return;
     }
-    if (thx_picture_add_activation(a->ctx, &a->d, a->current, t0, t1) != THX_OK) { view_report(a, "activation"); a->status = 1; return; }
     int s = a->current;
-    snprintf(a->act_spec[s], sizeof a->act_spec[s], "%s", spec);
-    const thx_series *m = a->d.series[s];
+    thx_picture_data *d = &a->d;
+    if (s < 0 || s >= THX_PICTURE_SURFACES || !d->series[s]) {
+        view_set_info(a, "%s: the surface has no data", what);
+        a->status = 1;
+        return;
+    }
+    if (!spec[0] && d->map[s][d->active[s]] == kind) { /* the key again: back to the potentials */
+        int src = d->map_src[s][d->active[s]];
+        thx_picture_set_active(d, s, src);
+        view_set_info(a, "%s: the potentials again (%s shows the map)", d->m->surf[s]->name, kind == 2 ? "Shift+A" : "a");
+        view_redraw_all(a);
+        return;
+    }
+    int src = d->map[s][d->active[s]] ? d->map_src[s][d->active[s]] : d->active[s], found = -1;
+    for (int k = 0; k < d->n_sets[s] && !spec[0]; k++)
+        if (d->map[s][k] == kind && d->map_auto[s][k] && d->map_src[s][k] == src) found = k;
+    if (found >= 0) {
+        thx_picture_set_active(d, s, found);
+    } else {
+        if (d->map[s][d->active[s]]) thx_picture_set_active(d, s, src);
+        if (thx_picture_add_map(a->ctx, d, s, kind, t0, t1) != THX_OK) { view_report(a, what); a->status = 1; return; }
+    }
+    snprintf(kind == 1 ? a->act_spec[s] : a->rec_spec[s], sizeof a->act_spec[s], "%s", spec);
+    const thx_series *m = d->series[s];
     double lo = INFINITY, hi = -INFINITY;
     for (size_t i = 0; i < m->n_rows; i++)
         if (isfinite(m->v[i])) { lo = fmin(lo, m->v[i]); hi = fmax(hi, m->v[i]); }
-    view_set_info(a, "%s: activation times %.4g to %.4g %s (data set %d; d steps back)", a->d.m->surf[s]->name, lo, hi, m->unit,
-                  a->d.n_sets[s]);
+    view_set_info(a, "%s: %s times %.4g to %.4g %s: %s (data set %d; %s again: the potentials)", d->m->surf[s]->name, what, lo, hi,
+                  m->unit, m->label, d->active[s] + 1, kind == 2 ? "Shift+A" : "a");
+    if (a->vo->verbose >= 0) printf("%s: %s %.6g %.6g %s | %s\n", what, d->m->surf[s]->name, lo, hi, m->unit, m->label);
+    fflush(stdout);
+    /* the picture says which window the map took: its label line, turned on with the map */
+    view_win *aw = view_active(a);
+    if (aw && !aw->o.label) g_action_group_change_action_state(G_ACTION_GROUP(a->gapp), "label", g_variant_new_boolean(TRUE));
     view_redraw_all(a);
 }
 
@@ -740,7 +770,8 @@ static const action_def ACTIONS[] = {
     {"data-next", NULL, NULL, do_data_next, {"d"}, NULL, "the surface's next data set"},
     {"scale-group", "s", NULL, do_scale_rel, {"g"}, "'all'", "surfaces sharing one scale: A,B,..., all (key g), or none"},
     {"slave", "s", NULL, do_scale_rel, {NULL}, NULL, "a surface drawn with another's scale: NAME=MASTER, or none"},
-    {"activation", "s", NULL, do_activation, {"a"}, "''", "the surface's activation-time map (T0:T1, or the whole series)"},
+    {"activation", "s", NULL, do_map, {"a"}, "''", "activation map (the record's fiducials, else one beat's QRS; or T0:T1); again: the potentials"},
+    {"recovery", "s", NULL, do_map, {"<Shift>a"}, "''", "recovery map (the record's fiducials, else the beat's T wave; or T0:T1); again: the potentials"},
     {"extrema", NULL, "b", do_toggle, {"x"}, NULL, "marks at the largest and smallest values"},
     {"node-labels", "s", NULL, do_node_labels, {"n"}, "'index'", "label the surface's nodes: index, channel, value or none"},
     {"colorbar", NULL, "b", do_toggle, {"<Shift>b"}, NULL, "colour bar"},

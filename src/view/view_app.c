@@ -125,13 +125,16 @@ static view_win *new_window(view_app *a, const char *surfaces)
     gtk_widget_set_hexpand(w->gl, TRUE);
     gtk_widget_set_vexpand(w->gl, TRUE);
     w->plot = gtk_picture_new();
-    gtk_widget_set_visible(w->plot, FALSE);
+    w->plot_scroll = gtk_scrolled_window_new();
+    gtk_scrolled_window_set_policy(GTK_SCROLLED_WINDOW(w->plot_scroll), GTK_POLICY_NEVER, GTK_POLICY_AUTOMATIC);
+    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(w->plot_scroll), w->plot);
+    gtk_widget_set_visible(w->plot_scroll, FALSE);
     w->status = gtk_label_new("");
     gtk_label_set_xalign(GTK_LABEL(w->status), 0);
     gtk_label_set_ellipsize(GTK_LABEL(w->status), PANGO_ELLIPSIZE_END);
     gtk_widget_set_margin_start(w->status, 6);
     gtk_box_append(GTK_BOX(box), w->gl);
-    gtk_box_append(GTK_BOX(box), w->plot);
+    gtk_box_append(GTK_BOX(box), w->plot_scroll);
     gtk_box_append(GTK_BOX(box), w->status);
     gtk_window_set_child(GTK_WINDOW(w->window), box);
     gtk_window_set_resizable(GTK_WINDOW(w->window), TRUE);
@@ -224,6 +227,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         thx_font_close(&w->font);
         thx_font_close(&w->plot_font);
         thx_raster_destroy(&w->img);
+        free(w->scene);
         g_free(w->shot_path);
         if (a.vo->verbose > 0 && w->ms_n)
             fprintf(stderr, "thorax view: window %d: %d draws, %.1f ms a draw on average\n", w->id, w->ms_n, w->ms_sum / w->ms_n);

@@ -25,11 +25,13 @@ typedef struct {
 } view_trace;
 
 #define VIEW_MAX_TRACES 6
+extern const unsigned char view_trace_colors[VIEW_MAX_TRACES][4];
 
 typedef struct view_win {
     view_app *app;
     int id;                    /* 1-based, in titles */
     GtkWidget *window, *gl, *status, *plot, *paned;
+    GtkWidget *plot_scroll;    /* the trace pane: a fixed height, scrolled when the traces need more */
     thx_picture_opts o;        /* this window's picture; o.only[] = its surfaces (none: all) */
     char only_buf[THX_PICTURE_MAX][64];
     char label_buf[THX_PICTURE_MAX][80]; /* node-labels entries set by the action */
@@ -59,6 +61,7 @@ typedef struct view_win {
     unsigned tex, prog, vao, vbo;
     int tex_w, tex_h;
     thx_raster *img;
+    unsigned char *scene;      /* the scene as read back, before the annotations (what changed is uploaded) */
     /* a screenshot wanted at the next draw (path owned), and its outcome */
     char *shot_path;
     int drawn;                 /* draws since open */
@@ -68,6 +71,8 @@ typedef struct view_win {
     int ms_n;
     int gl_failed;
     int bench;                 /* benchmarking: each draw finished (glFinish) before it is timed */
+    double phase_ms[4];        /* ... and its phases summed: the scene (finished), the readback, the
+                                  annotations, their upload and quad (finished) */
 } view_win;
 
 struct view_app {
@@ -105,6 +110,7 @@ struct view_app {
     /* picking */
     view_trace traces[VIEW_MAX_TRACES];
     char act_spec[THX_PICTURE_SURFACES][40]; /* the window of each surface's activation map ("" whole series) */
+    char rec_spec[THX_PICTURE_SURFACES][40]; /* ... and of its recovery map */
     double plot_zoom;
     thx_edit_session *edit;    /* opened at the first edit (view_edit.c) */
     view_pick picked[3];       /* the last three picks, oldest first */

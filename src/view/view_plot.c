@@ -15,7 +15,20 @@
 #include "thorax/geom/pick.h"
 #include "view/view_internal.h"
 
-#define TRACE_H 110 /* pixels per trace */
+#define TRACE_H 110    /* pixels per trace, when they fit */
+#define TRACE_MIN_H 64 /* ... at least: more traces than fit the pane are scrolled */
+#define PANE_H 220     /* the trace pane's height (at most a third of the window's drawing area) */
+
+/* The pane's height: two traces, or a third of the drawing area of a small window. */
+static int pane_height(const view_app *a)
+{
+    int h = a->vo->win_h / 3;
+    return h < PANE_H ? (h < TRACE_MIN_H ? TRACE_MIN_H : h) : PANE_H;
+}
+
+/* Each trace's colour, also its picked node's marker in the picture (view_picture). */
+const unsigned char view_trace_colors[VIEW_MAX_TRACES][4] = {{120, 230, 120, 255}, {250, 200, 80, 255}, {110, 180, 250, 255},
+                                                             {240, 120, 200, 255}, {200, 200, 200, 255}, {250, 120, 90, 255}};
 
 static gboolean on_plot_scroll(GtkEventControllerScroll *c, double dx, double dy, gpointer user)
 {
@@ -50,18 +63,23 @@ void view_plot_update(view_app *a)
 {
     for (int k = 0; k < a->n_win; k++) {
         view_win *w = a->win[k];
+        int pane = pane_height(a);
         if (a->n_traces == 0) {
-            gtk_widget_set_visible(w->plot, FALSE);
+            /* the drawing area takes the pane's room back: the window keeps its size */
+            if (gtk_widget_get_visible(w->plot_scroll)) gtk_widget_set_size_request(w->gl, a->vo->win_w, a->vo->win_h);
+            gtk_widget_set_visible(w->plot_scroll, FALSE);
             continue;
         }
         int width = gtk_widget_get_width(w->gl);
         if (width < 64) width = a->vo->win_w;
-        int height = TRACE_H * a->n_traces;
+        /* the traces share the pane (stacked), each at least TRACE_MIN_H high; beyond, it scrolls */
+        int trace_h = pane / a->n_traces;
+        if (trace_h > TRACE_H) trace_h = TRACE_H;
+        if (trace_h < TRACE_MIN_H) trace_h = TRACE_MIN_H;
+        int height = trace_h * a->n_traces;
         thx_raster *img = NULL;
         if (thx_raster_create(a->ctx, width, height, &img) != THX_OK) return;
         static const unsigned char bg[4] = {24, 24, 28, 255};
-        static const unsigned char colors[VIEW_MAX_TRACES][4] = {{120, 230, 120, 255}, {250, 200, 80, 255}, {110, 180, 250, 255},
-                                                                 {240, 120, 200, 255}, {200, 200, 200, 255}, {250, 120, 90, 255}};
         thx_raster_fill(img, bg);
         if (!w->plot_font) thx_font_open(a->ctx, w->o.font, 13, &w->plot_font);
         int frame = view_frame_of(w);
@@ -77,15 +95,25 @@ void view_plot_update(view_app *a)
             char label[128];
             snprintf(label, sizeof label, "%s node %zu", a->d.m->surf[a->traces[t].surface]->name, row + 1);
             double dt = n > 1 ? x->time[1] - x->time[0] : 1;
-            thx_draw_trace(img, w->plot_font, 8, t * TRACE_H + 4, width - 16, TRACE_H - 8, v, n, x->time[f0], dt, fr - f0,
-                           label, x->unit, colors[t % VIEW_MAX_TRACES]);
+            thx_draw_trace(img, w->plot_font, 8, t * trace_h + 4, width - 16, trace_h - 8, v, n, x->time[f0], dt, fr - f0,
+                           label, x->unit, view_trace_colors[t % VIEW_MAX_TRACES]);
             free(v);
         }
         GBytes *bytes = g_bytes_new(img->rgba, (size_t)width * (size_t)height * 4);
         GdkTexture *tex = gdk_memory_texture_new(width, height, GDK_MEMORY_R8G8B8A8, bytes, (size_t)width * 4);
         gtk_picture_set_paintable(GTK_PICTURE(w->plot), GDK_PAINTABLE(tex));
         gtk_widget_set_size_request(w->plot, -1, height);
-        gtk_widget_set_visible(w->plot, TRUE);
+        gtk_scrolled_window_set_min_content_height(GTK_SCROLLED_WINDOW(w->plot_scroll), pane);
+        gtk_scrolled_window_set_max_content_height(GTK_SCROLLED_WINDOW(w->plot_scroll), pane);
+        if (!gtk_widget_get_visible(w->plot_scroll)) {
+            /* the pane takes its room from the drawing area, not from the screen: the window keeps its size */
+            int gh = a->vo->win_h - pane;
+            gtk_widget_set_size_request(w->gl, a->vo->win_w, gh > 64 ? gh : 64);
+            gtk_widget_set_visible(w->plot_scroll, TRUE);
+        }
+        /* the newest trace in sight */
+        GtkAdjustment *adj = gtk_scrolled_window_get_vadjustment(GTK_SCROLLED_WINDOW(w->plot_scroll));
+        gtk_adjustment_set_value(adj, height);
         g_object_unref(tex);
         g_bytes_unref(bytes);
         thx_raster_destroy(&img);

@@ -239,12 +239,14 @@ thx_status view_save_session(view_app *a, const char *path)
     /* the maps shown: those asked for at the start, and those made since */
     for (size_t s = 0; s < a->d.m->n_surfaces && s < THX_PICTURE_SURFACES; s++) {
         if (!a->d.series[s] || !a->d.map[s][a->d.active[s]]) continue;
-        const char *spec = a->act_spec[s];
-        for (int k = 0; k < o->n_activation; k++) /* the start's own spec for this surface */
-            if (!strncmp(o->activation[k], a->d.m->surf[s]->name, strlen(a->d.m->surf[s]->name)) &&
-                (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':' || !o->activation[k][strlen(a->d.m->surf[s]->name)]) && !spec[0])
-                spec = o->activation[k] + strlen(a->d.m->surf[s]->name) + (o->activation[k][strlen(a->d.m->surf[s]->name)] == ':');
-        fprintf(f, "--activation %s%s%s\n", a->d.m->surf[s]->name, spec[0] ? ":" : "", spec);
+        int rec = a->d.map[s][a->d.active[s]] == 2;
+        const char *spec = rec ? a->rec_spec[s] : a->act_spec[s];
+        const char *const *given = rec ? o->recovery : o->activation;
+        size_t nl = strlen(a->d.m->surf[s]->name);
+        for (int k = 0; k < (rec ? o->n_recovery : o->n_activation); k++) /* the start's own spec for this surface */
+            if (!strncmp(given[k], a->d.m->surf[s]->name, nl) && (given[k][nl] == ':' || !given[k][nl]) && !spec[0])
+                spec = given[k] + nl + (given[k][nl] == ':');
+        fprintf(f, "--%s %s%s%s\n", rec ? "recovery" : "activation", a->d.m->surf[s]->name, spec[0] ? ":" : "", spec);
     }
     view_win *w = a->win[0];
     write_picture(f, w);
@@ -429,6 +431,13 @@ static gboolean bench_tick(gpointer user)
                "on average; window %dx%d; peak %.0f MB\n", kinds[a->bench_kind], n, total, n / total, a->bench_ms[n / 2],
                a->bench_ms[n - 1], nd ? draw / nd : 0, gtk_widget_get_width(w->gl) * scale, gtk_widget_get_height(w->gl) * scale,
                peak_mb());
+    if (a->bench_kind != 3 && nd) {
+        double ph[4] = {0};
+        for (int k = 0; k < a->n_win; k++)
+            for (int j = 0; j < 4; j++) ph[j] += a->win[k]->phase_ms[j];
+        printf("view bench: %s phases: scene %.1f ms, readback %.1f ms, annotations %.1f ms, their upload %.1f ms (a draw, "
+               "each finished)\n", kinds[a->bench_kind], ph[0] / nd, ph[1] / nd, ph[2] / nd, ph[3] / nd);
+    }
     fflush(stdout);
     free(a->bench_ms);
     a->bench_ms = NULL;
@@ -440,7 +449,12 @@ void view_bench(view_app *a, int kind, int n)
 {
     a->bench_ms = calloc((size_t)n, sizeof *a->bench_ms);
     if (!a->bench_ms) { view_set_info(a, "bench: out of memory"); a->status = 1; return; }
-    for (int k = 0; k < a->n_win; k++) { a->win[k]->ms_sum = 0; a->win[k]->ms_n = 0; a->win[k]->bench = 1; }
+    for (int k = 0; k < a->n_win; k++) {
+        a->win[k]->ms_sum = 0;
+        a->win[k]->ms_n = 0;
+        a->win[k]->bench = 1;
+        memset(a->win[k]->phase_ms, 0, sizeof a->win[k]->phase_ms);
+    }
     a->bench_kind = kind;
     a->bench_n = n;
     a->bench_i = 0;

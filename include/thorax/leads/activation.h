@@ -62,6 +62,47 @@ void thx_activation_opts_default(thx_activation_opts *o);
  */
 thx_status thx_activation_times(thx_ctx *ctx, const thx_series *s, const thx_activation_opts *o, thx_series **out);
 
+/* Where the windows of an activation map came from (thx_activation_window). */
+typedef enum {
+    THX_WINDOW_GIVEN = 0,     /* the caller's T0:T1 */
+    THX_WINDOW_FIDUCIALS = 1, /* the record's global fiducials: qon .. soff (recovery: soff .. toff) */
+    THX_WINDOW_RMS = 2,       /* one beat found on the RMS curve of all rows */
+    THX_WINDOW_WHOLE = 3      /* the whole series (no beat found: too short or flat) */
+} thx_window_source;
+
+typedef struct {
+    double t0, t1;         /* activation: the QRS, in the series' time unit */
+    double rec_t0, rec_t1; /* recovery: the T wave, after the QRS to the beat's end */
+    thx_window_source source;
+    char why[96];          /* where from, for a picture: "RMS curve, beat 1 of 2", "fiducials qon-soff",
+                              "whole series: no beat on the RMS curve" */
+    char rec_why[96];      /* ... of the recovery window: "fiducials soff-toff", else as why */
+} thx_activation_window;
+
+/*
+ * The window a map3d user expects an activation map to be taken from, never the whole of a
+ * multi-beat record: the record's global fiducials qon and soff when it has both (recovery from
+ * soff, or stoff, to toff, else to the end); otherwise one beat of the RMS curve of all rows (the
+ * square root of the mean square over the rows' finite values at each frame): the beats are the
+ * runs of frames above half way from the curve's 10th percentile (its baseline) to its maximum;
+ * the first beat whose QRS lies inside the record is taken (else the tallest); its QRS runs from
+ * where the curve, going back from the beat's peak, falls under a tenth of the peak's height over
+ * the baseline, to the first minimum of the curve (smoothed over 5 frames) after the peak or where
+ * it falls under that tenth, whichever comes first; the window is that QRS widened by a quarter of
+ * its width on each side (at least 3 frames), kept clear of the other beats. Recovery: from the
+ * window's end to the next beat's window (else the record's end). A series too short (fewer than
+ * 8 frames) or with no beat (a flat curve) gives the whole series. Errors: an invalid series.
+ */
+thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_activation_window *w);
+
+/*
+ * The map of the record's own per-row fiducials of type `type` (10 act, 13 rec: map3d's; values
+ * frames counted from 0) as times (the series' time axis, linearly interpolated; a value outside
+ * the frames is NaN): a new series of s->n_rows rows and one frame, as thx_activation_times gives.
+ * Returns THX_OK with *out NULL when s has no such fiducial with one value per row.
+ */
+thx_status thx_activation_from_fiducials(thx_ctx *ctx, const thx_series *s, int type, thx_series **out);
+
 #ifdef __cplusplus
 }
 #endif

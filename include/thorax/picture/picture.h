@@ -111,6 +111,15 @@ typedef struct {
        from the camera, decluttered), and the extrema of each surface's data at the frame */
     const char *labels[THX_PICTURE_MAX];
     int n_labels;
+    /* picked nodes (the viewer's traces; single-panel pictures): a ring at each node and its
+       number (1-based) beside it, in the colour given (its trace's); a ring left open and the
+       number dimmed when the node is behind the surfaces or clipped away */
+    struct {
+        int surface;
+        size_t node;
+        unsigned char rgba[4];
+    } pins[8];
+    int n_pins;
     /* map3d landmark files (.lmarks): arteries as tubes, sites as spheres, drawn with the surfaces
        in their own colours, never clipped (markers of where things are) */
     const char *landmarks[THX_PICTURE_MAX];
@@ -127,6 +136,11 @@ typedef struct {
        range, isochrones with a contour style (thorax/leads/activation.h) */
     const char *activation[THX_PICTURE_MAX];
     int n_activation;
+    /* recovery-time maps, "SURFACE[:T0:T1]": each node's steepest T-wave upstroke after its
+       activation, T0:T1 the T wave's window (without it the record's rec fiducials, else the chosen
+       beat's T wave: thx_picture_add_map) */
+    const char *recovery[THX_PICTURE_MAX];
+    int n_recovery;
     int extrema;
     /* colour bars: the k-th bar's title and unit (given once: every bar's), in place of what is
        shown ("potential", "activation", "|J|") and the data's unit */
@@ -190,7 +204,10 @@ typedef struct {
     thx_series *series[THX_PICTURE_SURFACES]; /* the set shown per surface (sets[s][active[s]]), or NULL */
     int *channel[THX_PICTURE_SURFACES]; /* the recording channel of each node (1-based; 0 none), from --channels */
     unsigned char map[THX_PICTURE_SURFACES][THX_PICTURE_SETS]; /* a map of times, not potentials: drawn over
-                                                                  its true range whatever the mapping */
+                                                                  its true range whatever the mapping
+                                                                  (1 activation, 2 recovery) */
+    signed char map_src[THX_PICTURE_SURFACES][THX_PICTURE_SETS]; /* a map's potentials (their set), -1 none */
+    unsigned char map_auto[THX_PICTURE_SURFACES][THX_PICTURE_SETS]; /* a map whose window was chosen (not given) */
     struct thx_pick_index *pick; /* for the marks' visibility, built at the first use (thorax/geom/pick.h) */
     thx_landmark_meshes *marks[THX_PICTURE_MAX]; /* the meshes of o->landmarks[k] */
     char model_dir[4096];     /* the model directory read ("" for surface files) */
@@ -326,7 +343,8 @@ int thx_picture_orientation(const thx_picture_opts *o, const thx_picture_data *d
 /* The 3D part's viewport (x, y from the top left, w, h) of a picture of w x h pixels: the picture
  * less the label strip above, the colour bar beside and the trace below, as o asks for them. */
 void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4]);
-/* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes. */
+/* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes,
+ * framing the surfaces drawn (o->only when given, else all). */
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);
 /* The camera of standard view `view` (a thx_view) whatever o->have_camera says (the named views of
  * a camera key file, thorax/render/camera_path.h). */
@@ -343,8 +361,14 @@ thx_status thx_picture_clip_check(thx_ctx *ctx, const thx_picture_opts *o, const
 /* Shows data set k (0-based) of surface s; -1 when there is no such set. */
 int thx_picture_set_active(thx_picture_data *d, int s, int k);
 /* Adds the activation-time map of surface s's shown data (steepest downstroke between t0 and t1;
- * NaN: the whole series) as its next data set, and shows it. */
+ * NaN: the window a map3d user expects, thx_activation_window_choose) as its next data set, and
+ * shows it. Same as thx_picture_add_map(ctx, d, s, 1, t0, t1). */
 thx_status thx_picture_add_activation(thx_ctx *ctx, thx_picture_data *d, int s, double t0, double t1);
+/* A map of surface s's shown potentials as its next data set, shown: kind 1 activation, 2 recovery.
+ * With t0, t1 NaN: the record's own per-lead fiducials (act, rec) when it has them, else the
+ * window thx_activation_window_choose finds (the label of the map says which); given, t0..t1 is
+ * the activation window (kind 1) or the T wave's (kind 2). */
+thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kind, double t0, double t1);
 /* After the model's surfaces changed (an edit): forget what was computed from their geometry. */
 void thx_picture_geometry_changed(thx_picture_data *d);
 
