@@ -216,8 +216,8 @@ grep -q -- '--min-dihedral DEG  volume: fail if a dihedral angle is smaller (def
 "$THORAX" surfaces "$WORK/c.txt" -o "$WORK/m" -q
 for variant in heart no-heart; do
     opt=""; [ $variant = no-heart ] && opt="--no-heart"
-    if [ -n "${THORAX_QUICK:-}" ] && [ -d "${THORAX_PHANTOM_MODELS:-}" ]; then
-        # under the sanitizers the same meshes, made once (tests/phantom_models.sh)
+    if [ -d "${THORAX_PHANTOM_MODELS:-}" ]; then
+        # the same meshes, made once (tests/phantom_models.sh)
         cp -r "$THORAX_PHANTOM_MODELS/$([ $variant = heart ] && echo modelh || echo model)" "$WORK/v_$variant"
     else
         "$THORAX" mesh "$WORK/m" -o "$WORK/v_$variant" $opt -q || fail "mesh ($variant)"

@@ -11,39 +11,23 @@
 #    on the loops' edges; a coronal plane and an index plane land where they should;
 #  - a plane outside the image, a file that is not an image, --contours without an axial plane:
 #    a message naming the problem, exit 1, no picture written.
-set -euo pipefail
-: "${THORAX:?}" "${WORK:?}"
-rm -rf "$WORK"
-mkdir -p "$WORK"
-cd "$WORK"
-PY=/usr/bin/python3
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/image_fixture.sh"
 
-# The image: 40 x 40 x 20 voxels of 2 mm, voxel centres x, y from -39 to 39 and z from -19 to 19
-# (faces at +-40 and +-20); value 100, and 1000 where x in -10..10 and y in 0..20 (voxel faces), at
-# every z. ct.nii.gz: the same square at 40 HU in air (-1000), and a strip of bone (700 HU) at
-# x in 30..40.
+# The image (tests/image_fixture.py): 40 x 40 x 20 voxels of 2 mm, voxel centres x, y from -39 to 39
+# and z from -19 to 19 (faces at +-40 and +-20); value 100, and 1000 where x in -10..10 and y in
+# 0..20 (voxel faces), at every z; the box around the plane z = 0: x, y in -30..30, z in -15..15.
+# ct.nii.gz: the same square at 40 HU in air (-1000), and a strip of bone (700 HU) at x in 30..40.
 $PY - <<'EOF'
 import numpy as np, nibabel as nib
-aff = np.diag([2.0, 2.0, 2.0, 1.0]); aff[:3, 3] = (-39, -39, -19)
-v = np.full((40, 40, 20), 100, np.int16)
-v[15:25, 20:30, :] = 1000
-nib.save(nib.Nifti1Image(v, aff), 'sq.nii.gz')
+from image_fixture import square_image, box
+v, aff = square_image('sq.nii.gz')
+box()
 c = np.where(v == 1000, 40, -1000).astype(np.int16)
 c[35:, :, :] = 700
 # lab.nii.gz: a label map, 0 around, label 1 the square, label 2 the strip x in 30..40
 lab = np.zeros((40, 40, 20), np.uint8); lab[15:25, 20:30, :] = 1; lab[35:, :, :] = 2
 nib.save(nib.Nifti1Image(lab, aff), 'lab.nii.gz')
 nib.save(nib.Nifti1Image(c, aff), 'ct.nii.gz')
-# the box around the plane z = 0: x, y in -30..30, z in -15..15, triangles outward (map3d .pts/.fac)
-P = [(x, y, z) for z in (-15, 15) for y in (-30, 30) for x in (-30, 30)]
-F = [(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4), (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6),
-     (1, 3, 5), (3, 7, 5)]
-P = np.array(P, float)
-for a, b, c in F:   # outward: the normal points away from the centre
-    n = np.cross(P[b] - P[a], P[c] - P[a]); assert n @ (P[a] + P[b] + P[c]) > 0
-open('box.pts', 'w').write(''.join('%g %g %g\n' % tuple(p) for p in P))
-open('box.fac', 'w').write(''.join('%d %d %d\n' % (a + 1, b + 1, c + 1) for a, b, c in F))
 # contours: surface 'outer' a square loop of half side 25 and 'inner' one of 5 about (0, -15), on
 # layers z = 0.5 and 10.5 (the plane z = 0 takes the first); 'outer' at 10.5 is a larger square
 open('c.txt', 'w').write('''thorax-contours 1
@@ -94,12 +78,8 @@ CAM=(--camera 0,0,200:0,0,0:0,1,0:0:100 --size 400x400)
     --image-plane x=0 -o sagittal.png -q
 
 $PY - <<'EOF'
-import vtk, numpy as np
-from vtk.util.numpy_support import vtk_to_numpy
-def png(p):
-    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
-    im = r.GetOutput(); w, h, _ = im.GetDimensions()
-    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1][:, :, :3].astype(int)
+import numpy as np
+from image_fixture import png
 px = lambda x, y: (int(round(200 - 4 * y)), int(round(200 + 4 * x)))   # (row, column) of RAS (x, y)
 def grey(v, W, L): return round(255 * min(max((v - (L - W / 2)) / W, 0), 1))
 

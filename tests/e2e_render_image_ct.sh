@@ -11,15 +11,9 @@
 #    CT's value there (bilinear, scipy) under 400 / 40;
 #  - the plane drawn with the opaque bone surface above it (seen from above) is hidden where the
 #    skull covers it.
-set -euo pipefail
-: "${THORAX:?}" "${WORK:?}"
 INV=/usr/share/doc/invesalius-examples/examples/Cranium.inv3
 [ -r "$INV" ] || { echo "SKIP: $INV (Debian package invesalius-examples) is not installed"; exit 0; }
-rm -rf "$WORK"
-mkdir -p "$WORK"
-cd "$WORK"
-PY=/usr/bin/python3
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/image_fixture.sh"
 
 tar xzf "$INV"
 D=$(dirname "$(find . -name main.plist | head -1)")
@@ -72,12 +66,8 @@ CAM=(--camera 125,-110,500:125,-110,80:0,1,0:0:260 --size 500x500)
 "$THORAX" render bone.pts "${CAM[@]}" --surface bone=flat:1:#00ff00 --image cranium.nii --image-plane z=90 -o ct_bone.png -q
 
 $PY - <<'EOF'
-import vtk, numpy as np
-from vtk.util.numpy_support import vtk_to_numpy
-def png(p):
-    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
-    im = r.GetOutput(); w, h, _ = im.GetDimensions()
-    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1][:, :, :3].astype(int)
+import numpy as np
+from image_fixture import png
 a, b, c = png('ct.png'), png('ct_lines.png'), png('ct_bone.png')
 # the lines: bone's colour (orange 230,159,0) where the picture without them is grey
 line = (abs(b[:, :, 0] - 230) < 40) & (abs(b[:, :, 1] - 159) < 40) & (b[:, :, 2] < 60)

@@ -7,26 +7,11 @@
 #    thorax render's picture of the same options;
 #  - the session saved after the move reopens the plane where it was (--image-plane z=1);
 #  - a real key: ] moves the plane one image plane up (the status line says z=1 mm), [ back.
-set -euo pipefail
-: "${THORAX:?}" "${WORK:?}"
-rm -rf "$WORK"
-mkdir -p "$WORK"
-cd "$WORK"
-PY=/usr/bin/python3
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/image_fixture.sh"
 
-$PY - <<'EOF'
-import numpy as np, nibabel as nib
-aff = np.diag([2.0, 2.0, 2.0, 1.0]); aff[:3, 3] = (-39, -39, -19)
-v = np.full((40, 40, 20), 100, np.int16)
-v[15:25, 20:30, 10] = 1000          # x -10..10, y 0..20, only the plane z = 1
-nib.save(nib.Nifti1Image(v, aff), 'sq.nii.gz')
-P = [(x, y, z) for z in (-15, 15) for y in (-30, 30) for x in (-30, 30)]
-F = [(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4), (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6),
-     (1, 3, 5), (3, 7, 5)]
-open('box.pts', 'w').write(''.join('%g %g %g\n' % p for p in P))
-open('box.fac', 'w').write(''.join('%d %d %d\n' % (a + 1, b + 1, c + 1) for a, b, c in F))
-EOF
+# the square (tests/image_fixture.py: x -10..10, y 0..20) only in the plane k = 10 (z = 1); the box
+square_image sq.nii.gz 10
+box
 OPTS=(--size 300x300 --camera 0,0,200:0,0,0:0,1,0:0:100 --surface box=hidden --image sq.nii.gz --image-plane z=-1)
 "$THORAX" render box.pts "${OPTS[@]}" -o ref.png -q
 {
@@ -73,12 +58,8 @@ grep -qx -- "--image-plane z=1" sess.txt && grep -qx -- "--image-window 900" ses
     fail "the saved session: $(cat sess.txt)"
 
 $PY - <<'EOF'
-import vtk, numpy as np
-from vtk.util.numpy_support import vtk_to_numpy
-def png(p):
-    r = vtk.vtkPNGReader(); r.SetFileName(p); r.Update()
-    im = r.GetOutput(); w, h, _ = im.GetDimensions()
-    return vtk_to_numpy(im.GetPointData().GetScalars()).reshape(h, w, -1)[::-1][:, :, :3].astype(int)
+import numpy as np
+from image_fixture import png
 a, b, c, d, ref = [png(f + '.png') for f in ('a', 'b', 'c', 'd', 'ref')]
 # the window's drawing area may be a few pixels wider than asked (GTK's minimum width): the same
 # scale (the camera's height fills the rows), centred; compare the middle

@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# The sanitized suite's shared phantom models (a CTest fixture, registered by CMakeLists.txt only
-# under THORAX_SANITIZE; not an e2e_*.sh test itself). Five end-to-end tests (e2e_forward,
-# e2e_render, e2e_check, e2e_export_data, e2e_view) each begin by meshing the same medium phantom
-# (seed 1) without the heart, two of them with it as well: the same input, the same commands and
-# byte-identical files seven times, at 15 to 30 s a mesh under ASan. Here they are made once, with
+# The shared phantom models (a CTest fixture, registered by CMakeLists.txt in every build;
+# not an e2e_*.sh test itself). Ten end-to-end tests (THORAX_PHANTOM_USERS in CMakeLists.txt:
+# e2e_forward, e2e_render, e2e_check, e2e_export_data, e2e_view, e2e_field, ...) each begin by meshing
+# the same medium phantom (seed 1) without the heart, two of them with it as well: the same input,
+# the same commands and byte-identical files twelve times, at 3 CPU-s a mesh in the plain build and
+# 15 to 30 s under ASan. Here they are made once, with
 # exactly the commands those tests run:
 #   $OUT/c.txt       thorax phantom --resolution medium --seed 1 -o c.txt
 #   $OUT/model       thorax surfaces c.txt -o model; thorax mesh model --no-heart
 #   $OUT/modelh      thorax mesh model -o modelh (the heart included)
-# and those tests copy them under THORAX_QUICK when THORAX_PHANTOM_MODELS names this folder (the
-# plain build's tests make their own). Written into $OUT.tmp and renamed when whole.
+# and those tests copy them when THORAX_PHANTOM_MODELS names this folder (run alone, without it,
+# they make their own). Written into $OUT.tmp and renamed when whole.
 set -euo pipefail
 : "${THORAX:?}" "${OUT:?}"
 rm -rf "$OUT" "$OUT.tmp"

@@ -21,6 +21,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "io/common/tokens.h"
+
 /* The extension of the last path component (after its last '.'), or "". */
 static inline const char *path_extension(const char *path)
 {
@@ -38,7 +40,8 @@ typedef struct {
     int line; /* line of pos, 1-based */
 } cursor;
 
-static inline int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+/* The blanks of the line readers (io/common/tokens.h): space, tab, CR, vertical tab, form feed. */
+static inline int is_blank(char c) { return thx_io_is_blank(c); }
 
 /* The next whitespace-separated token, crossing line ends. Returns its length
  * (0 at the end) and sets *t and *line. */

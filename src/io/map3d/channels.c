@@ -13,22 +13,7 @@
 
 #include "thorax/core/fileio.h"
 #include "io/common/parse_uint.h"
-
-static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-/* Up to `max` blank-separated tokens of a line, NUL-terminated in place; returns how many there are. */
-static int split(char *p, char **tok, int max)
-{
-    int n = 0;
-    for (;;) {
-        while (is_blank(*p)) p++;
-        if (!*p) return n;
-        if (n < max) tok[n] = p;
-        n++;
-        while (*p && !is_blank(*p)) p++;
-        if (*p) *p++ = '\0';
-    }
-}
+#include "io/common/tokens.h"
 
 /* A signed decimal integer that fits in 32 bits (the whole token). */
 static int parse_int(const char *t, long *out)
@@ -61,13 +46,9 @@ static thx_status sfail(const scan *r, const char *fmt, ...)
 /* The next non-blank line's tokens (0 at the end of the file). */
 static int next_line(scan *r, char **tok, int max)
 {
-    while (*r->p) {
-        char *nl = strchr(r->p, '\n');
-        if (nl) *nl = '\0';
-        char *line = r->p;
-        r->p = nl ? nl + 1 : r->p + strlen(r->p);
+    for (char *line; (line = thx_io_next_line(&r->p, 0));) {
         r->line++;
-        int n = split(line, tok, max);
+        int n = thx_io_split(line, tok, max);
         if (n) return n;
     }
     return 0;
@@ -83,8 +64,7 @@ static thx_status open_pairs(thx_ctx *ctx, const char *path, const char *what, s
     r->p = r->text;
     const char *z = memchr(r->text, '\0', r->len);
     if (z) {
-        for (const char *c = r->text; c < z; c++) r->line += *c == '\n';
-        r->line++;
+        r->line = thx_io_line_at(r->text, z);
         return sfail(r, "NUL byte at byte offset %zu (a %s file is text)", (size_t)(z - r->text), what);
     }
     char *tok[4];

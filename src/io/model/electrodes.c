@@ -33,6 +33,7 @@
 
 #include "thorax/core/fileio.h"
 #include "io/common/parse_uint.h"
+#include "io/common/tokens.h"
 
 /* ------------------------------------------------------------ writing */
 
@@ -68,24 +69,6 @@ thx_status thx_electrodes_write(thx_ctx *ctx, const thx_electrodes *e, const cha
 }
 
 /* ------------------------------------------------------------ reading */
-
-static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-/* Splits a line (comment already cut) into at most `max` blank-separated
- * tokens, NUL-terminated in place; returns the number of tokens found (which
- * may exceed max: the extra ones are counted, not stored). */
-static int split(char *p, char **tok, int max)
-{
-    int n = 0;
-    for (;;) {
-        while (is_blank(*p)) p++;
-        if (!*p) return n;
-        if (n < max) tok[n] = p;
-        n++;
-        while (*p && !is_blank(*p)) p++;
-        if (*p) *p++ = '\0';
-    }
-}
 
 typedef struct {
     thx_ctx *ctx;
@@ -156,23 +139,16 @@ thx_status thx_electrodes_read(thx_ctx *ctx, const char *path, thx_electrodes **
     if (memchr(text, '\0', len)) {
         /* name the line of the first NUL */
         const char *z = memchr(text, '\0', len);
-        for (const char *c = text; c < z; c++) r.line += *c == '\n';
-        r.line++;
+        r.line = thx_io_line_at(text, z);
         st = rfail(&r, "NUL byte at byte offset %zu (a text file holds none: a binary file, or a damaged one?)",
                    (size_t)(z - text));
         goto done;
     }
     char *p = text;
-    while (*p) {
-        char *nl = strchr(p, '\n');
-        if (nl) *nl = '\0';
-        char *line = p;
-        p = nl ? nl + 1 : p + strlen(p);
+    for (char *line; (line = thx_io_next_line(&p, '#'));) {
         r.line++;
-        char *hash = strchr(line, '#');
-        if (hash) *hash = '\0';
         char *tok[6];
-        int ntok = split(line, tok, 6);
+        int ntok = thx_io_split(line, tok, 6);
         if (ntok == 0) continue;
         if (seen_end) {
             st = rfail(&r, "text after 'end'");

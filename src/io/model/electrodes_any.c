@@ -19,6 +19,7 @@
 
 #include "thorax/core/fileio.h"
 #include "io/common/parse_uint.h"
+#include "io/common/tokens.h"
 
 const char *thx_electrodes_kind_name(thx_electrodes_kind k)
 {
@@ -29,21 +30,6 @@ const char *thx_electrodes_kind_name(thx_electrodes_kind k)
     case THX_ELECTRODES_POINTS: return "positions";
     }
     return "?";
-}
-
-static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-static int split(char *p, char **tok, int max)
-{
-    int n = 0;
-    for (;;) {
-        while (is_blank(*p)) p++;
-        if (!*p) return n;
-        if (n < max) tok[n] = p;
-        n++;
-        while (*p && !is_blank(*p)) p++;
-        if (*p) *p++ = '\0';
-    }
 }
 
 static int is_number(const char *t)
@@ -80,16 +66,11 @@ static thx_status read_list(thx_ctx *ctx, const char *path, char *text, const th
     node = thx_malloc(ctx, cap * sizeof *node);
     xyz = thx_malloc(ctx, 3 * cap * sizeof *xyz);
     if (!node || !xyz) { st = THX_ENOMEM; goto done; }
-    for (char *p = text; *p && st == THX_OK;) {
-        char *nl = strchr(p, '\n');
-        if (nl) *nl = '\0';
-        char *l = p;
-        p = nl ? nl + 1 : p + strlen(p);
+    char *p = text;
+    for (char *l; st == THX_OK && (l = thx_io_next_line(&p, '#'));) {
         line++;
-        char *hash = strchr(l, '#');
-        if (hash) *hash = '\0';
         char *tok[4];
-        int nt = split(l, tok, 4);
+        int nt = thx_io_split(l, tok, 4);
         if (!nt) continue;
         if (n == cap) {
             cap *= 2;
@@ -174,7 +155,7 @@ thx_status thx_electrodes_load(thx_ctx *ctx, const char *path, const thx_model *
         char *hash = strchr(line, '#');
         if (hash) *hash = '\0';
         char *tok[4];
-        int nt = split(line, tok, 4);
+        int nt = thx_io_split(line, tok, 4);
         if (!nt) continue;
         known = 1;
         if (!strcmp(tok[0], "thorax-electrodes")) k = THX_ELECTRODES_FILE;
