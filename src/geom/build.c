@@ -31,6 +31,7 @@
 #include "thorax/geom/predicates.h"
 #include "thorax/geom/surfaces.h"
 #include "geom/chain_sdf.h"
+#include "geom/inplane.h"
 
 /* Layer number for messages: the file's layer number, or the surface's own for contours built in memory. */
 #define LAYER_NO(cs, l) ((cs)->layers[l].index >= 0 ? (cs)->layers[l].index + 1 : (int)(l) + 1)
@@ -82,6 +83,10 @@ typedef struct {
     int branch;
 } slice;
 
+
+/* A laced in-plane patch with a smaller angle (degrees) is triangulated again with grid nodes (step 3b;
+   thorax check fails triangles under 1 degree) */
+#define THX_INPLANE_MIN_ANGLE 2.0
 
 /* A loop whose every overlapping partner on the neighbouring layers encloses over this many times its
    area is a speck (thx_contours_drop_flat) */
@@ -1262,6 +1267,15 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         free(jobs);
         if (st != THX_OK) goto done;
     }
+    /* 3b. the lacing's in-plane patches (pockets cut in their plane: a CT skull's cavity closed where the
+       frontal sinus notches its loop, ~300 boundary nodes) have triangles from their boundary nodes only,
+       down to 0.2 degrees, which thorax check fails and thorax mesh cannot take: a patch with an angle
+       under THX_INPLANE_MIN_ANGLE is triangulated again as a grid cap (geom/inplane.h) */
+    {
+        size_t nr = 0;
+        THX_TRY(thx_inplane_refine(ctx, s, ntri, grid, THX_INPLANE_MIN_ANGLE, &node_cap, &tri_cap, &nr));
+        stats->n_inplane_refined += nr;
+    }
     double t3 = thx_wtime();
     stats->t_caps = t3 - t2;
     /* 4. orientation */
@@ -1320,10 +1334,11 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
         m->interior[m->n_surfaces - 1] = interior;
         thx_log(ctx, THX_LOG_DEBUG,
                 "surface %s: %zu nodes, %zu triangles; lacing removed %zu outside triangles, re-laced %zu gaps, "
-                "%zu in-plane (%zu filled pockets), %zu unresolved, %zu too large, largest fan %d; %zu caps; "
-                "orientation: %zu by test, %zu from neighbours (%zu votes overruled), %zu flipped",
+                "%zu in-plane (%zu filled pockets; %zu in-plane patches given grid nodes), %zu unresolved, %zu too "
+                "large, largest fan %d; %zu caps; orientation: %zu by test, %zu from neighbours (%zu votes overruled), "
+                "%zu flipped",
                 c->surf[k].name, one.n_nodes, one.n_tris, one.lace.removed, one.lace.relaced_gaps, one.lace.inplane_tris,
-                one.lace.filled_pockets,
+                one.lace.filled_pockets, one.n_inplane_refined,
                 one.lace.unresolved, one.lace.too_large, one.lace.max_fan, one.n_caps, one.orient_by_test,
                 one.orient_by_neighbours, one.orient_overruled, one.orient_flipped);
         if (one.lace.crossing)
@@ -1346,6 +1361,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
             total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;
             total->n_flat_flipped += one.n_flat_flipped;
+            total->n_inplane_refined += one.n_inplane_refined;
             total->t_layers += one.t_layers; total->t_lace += one.t_lace; total->t_caps += one.t_caps;
             total->t_orient += one.t_orient;
         }
