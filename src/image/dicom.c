@@ -501,12 +501,14 @@ static thx_status payload(thx_ctx *ctx, helper *h, unsigned char *buf, size_t le
                      how);
 }
 
-/* A message reply: its text (control characters shown as '?') as the error. */
-static thx_status helper_message(thx_ctx *ctx, unsigned char *buf, size_t len)
+/* A message reply: its text (control characters shown as '?') as the error, prefixed with the
+ * file's name unless the text names it. */
+static thx_status helper_message(thx_ctx *ctx, unsigned char *buf, size_t len, const char *file)
 {
     for (size_t k = 0; k < len; k++)
         if (buf[k] < 32 || buf[k] == 127) buf[k] = '?';
-    return thx_error(ctx, THX_EINPUT, "%s", (const char *)buf);
+    if (strstr((const char *)buf, file)) return thx_error(ctx, THX_EINPUT, "%s", (const char *)buf);
+    return thx_error(ctx, THX_EINPUT, "%s: %s", file, (const char *)buf);
 }
 
 static int name_cmp(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
@@ -603,7 +605,7 @@ static thx_status scan_folder(thx_ctx *ctx, helper *h, const char *dir, thx_dico
         if ((s = ask(ctx, h, THX_DICOM_OP_SCAN, 0, 0, files[k], doing, &status, &len, &deadline)) != THX_OK) break;
         if ((s = payload(ctx, h, buf, (size_t)len, files[k], doing, &deadline)) != THX_OK) break;
         if (status < 0) {
-            s = helper_message(ctx, buf, (size_t)len);
+            s = helper_message(ctx, buf, (size_t)len, files[k]);
         } else if (status == 1) {
             thx_dicom_entry *e = &(*entries)[*count];
             memset(e, 0, sizeof *e);
@@ -803,7 +805,7 @@ static thx_status assemble(thx_ctx *ctx, helper *h, const char *path, slice *sl,
             break;
         if (status != 0) {
             if ((st = payload(ctx, h, chunk, (size_t)len, e->file, doing, &deadline)) == THX_OK)
-                st = helper_message(ctx, chunk, (size_t)len);
+                st = helper_message(ctx, chunk, (size_t)len, e->file);
             break;
         }
         if ((st = payload(ctx, h, chunk, 12, e->file, doing, &deadline)) != THX_OK) break;

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -265,6 +266,8 @@ extern "C" int thx_dicom_pixels(const char *file, unsigned rows, unsigned column
     *len = 0;
     try {
         return pixels(file, rows, columns, data, len, type, msg, msgsize);
+    } catch (const std::bad_alloc &) {
+        say(msg, msgsize, std::string(file) + ": GDCM ran out of memory while decoding the pixels");
     } catch (const std::exception &e) {
         say(msg, msgsize, std::string(file) + ": GDCM failed while decoding the pixels: " + e.what());
     } catch (...) {

@@ -193,6 +193,10 @@ int main(int argc, char **argv)
             int type = 0;
             if (thx_dicom_pixels(path, req[1], req[2], &data, &len, &type, msg, sizeof msg) != 0) {
                 free(data);
+                if (strstr(msg, "out of memory")) {
+                    size_t m = strlen(msg);
+                    snprintf(msg + m, sizeof msg - m, " (the helper's limit: %ld MB of address space, THORAX_DICOM_MEMORY_MB)", mb);
+                }
                 if (reply_msg(req[0], msg) != 0) _exit(1);
                 continue;
             }
