@@ -9,6 +9,10 @@
 # seeds as a regression input. Limits per input: FUZZ_RSS_MB (default 1024) of memory, a single
 # allocation above FUZZ_MALLOC_MB (default 256) and FUZZ_TIMEOUT seconds (default 10): a reader
 # given a file of at most FUZZ_MAX_LEN bytes (default 65536) must stay far below those.
+# The DICOM reader runs GDCM in its helper program (exec'd: none of libFuzzer's handlers follow it),
+# held to FUZZ_RSS_MB of address space and FUZZ_TIMEOUT/2 seconds per file (THORAX_DICOM_MEMORY_MB,
+# THORAX_DICOM_SECONDS), so that the reader refuses a file GDCM chokes on before libFuzzer's own
+# timeout would call it a finding (docs/design/image.md, "The DICOM helper program").
 # Prints one line per target: executions, coverage (edges), corpus size and findings. JOBS
 # harnesses (default: the number of cores) run side by side.
 set -euo pipefail
@@ -30,14 +34,6 @@ targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   for f in tests/fuzz/fuzz_*.c; do
     n=$(basename "$f" .c)
-    # The DICOM reader decodes in a forked child (Debian's GDCM aborts on truncated files); libFuzzer's
-    # crash and malloc-limit handlers follow the fork and record the child's deaths as findings, though
-    # the parent refuses those files by name. Left out of the default campaign (its seeds replay in
-    # ctest: fuzz_replay_image_dicom) until the child runs by exec; `scripts/fuzz.sh image_dicom` runs it.
-    if [ "$n" = fuzz_image_dicom ]; then
-      echo "fuzz: image_dicom left out (its GDCM child's deaths would count as findings; docs/design/image.md)"
-      continue
-    fi
     targets+=("${n#fuzz_}")
   done
 fi
@@ -79,6 +75,7 @@ run_one() {
   # -fork would add parallel jobs within a harness; one process each keeps the figures
   # comparable run to run.
   (cd "$out/$t" && ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 \
+     THORAX_DICOM_MEMORY_MB="$FUZZ_RSS_MB" THORAX_DICOM_SECONDS=$(( FUZZ_TIMEOUT > 3 ? FUZZ_TIMEOUT / 2 : 1 )) \
      "$bin" "$corpus" -max_total_time="$FUZZ_TIME" -rss_limit_mb="$FUZZ_RSS_MB" \
      -malloc_limit_mb="$FUZZ_MALLOC_MB" -timeout="$FUZZ_TIMEOUT" -max_len="$FUZZ_MAX_LEN" \
      -print_final_stats=1 -artifact_prefix="$out/$t/" >"$log" 2>&1)

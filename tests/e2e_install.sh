@@ -6,6 +6,8 @@
 #    public headers (not the viewer's), thorax.pc, the CMake package, thorax and thorax-view, the man
 #    pages, the licence, the Python package;
 #  - the installed thorax runs on the installed libthorax.so (ldd), not the build tree's;
+#  - the DICOM helper libexec/thorax/thorax-dicom is installed and found by the installed thorax (in a
+#    copy of the prefix moved elsewhere too), and its absence is a message naming where it was sought;
 #  - a C program built with `cc prog.c $(pkg-config --cflags --libs thorax)` alone reads the
 #    Dalhousie torso (map3d daltorso.pts/.fac) and prints its node and triangle counts, the enclosed
 #    volume and the Euler characteristic: compared with the same computed by NumPy from the files;
@@ -65,6 +67,25 @@ for prog in thorax thorax-view; do
     [ "$(loaded "$P/bin/$prog")" = "$L/libthorax.so.$VER" ] || fail "bin/$prog loads $(loaded "$P/bin/$prog"), not $L/libthorax.so.$VER"
 done
 [ "$("$P/bin/thorax" --version)" = "thorax $VER" ] || fail "installed thorax --version: $("$P/bin/thorax" --version)"
+
+# the DICOM helper (docs/design/image.md, "The DICOM helper program"): installed in libexec/thorax/,
+# where the installed thorax looks for it (relative to bin/, so also in a moved prefix); without it
+# a read of DICOM says what is missing and where it looked
+[ -x "$P/libexec/thorax/thorax-dicom" ] || fail "not installed: libexec/thorax/thorax-dicom"
+mkdir -p dcm && head -c 24 /dev/zero >px.raw
+gdcmimg --size 4,3 --depth 16 --sign 1 -C 1.2.840.10008.5.1.4.1.1.2 -i px.raw -o px.dcm \
+    && gdcmanon --dumb --replace '0020,0032=0\0\0' --replace '0020,0037=1\0\0\0\1\0' --replace '0028,0030=0.5\0.5' \
+        -i px.dcm -o dcm/s.dcm || fail "gdcmimg/gdcmanon could not write a slice"
+cp -a "$P" "$WORK/moved"
+for prefix in "$P" "$WORK/moved"; do
+    env -u THORAX_DICOM_HELPER "$prefix/bin/thorax" image info dcm >dcm.txt 2>&1 || fail "$prefix/bin/thorax image info (DICOM): $(cat dcm.txt)"
+    grep -q '^format *dicom' dcm.txt && grep -q '^dimensions *4 x 3 x 1' dcm.txt || fail "$prefix/bin/thorax image info: $(cat dcm.txt)"
+done
+rm "$WORK/moved/libexec/thorax/thorax-dicom"
+! env -u THORAX_DICOM_HELPER "$WORK/moved/bin/thorax" image info dcm >dcm.txt 2>&1 || fail "read DICOM without its helper"
+grep -q "thorax-dicom is missing (looked for .*$WORK/moved/bin/../libexec/thorax/thorax-dicom" dcm.txt \
+    || fail "without the helper: $(cat dcm.txt)"
+rm -rf "$WORK/moved"
 
 # the reference: the same facts computed by NumPy from the files (0- or 1-based .fac detected alike)
 "$PY" - "$PTS" "$FAC" >expected.txt <<'EOF'

@@ -6,15 +6,31 @@
  * two in-plane spacings different, shuffled file names, slope/intercept differing per slice).
  * Then: two series in one folder (listed; picked by number and by UID; a file picks its own), and
  * the refusals: gantry tilt, positions off one line, uneven spacing, a missing slice, two slices at one position, an
- * orientation differing within the series, a truncated slice (pixel data and header), naming files. */
+ * orientation differing within the series, a truncated slice (pixel data and header), naming files;
+ * one slice cut at every eleventh length, each refused naming the file (none accepted, the test process
+ * never dies); a 2048 x 2048 slice (8 MB of pixels through the socket, larger than its buffer), read
+ * whole under the default memory limit of the helper and refused under 40 MB; reads interrupted by
+ * a 1 ms interval timer (EINTR); no child left unreaped.
+ * The helper program's replies are not trusted (src/image/dicom.c): this program is also a fake
+ * helper (run with --protocol, THORAX_DICOM_HELPER pointing at it, the fault chosen by THX_FAKE)
+ * that speaks the protocol of src/image/dicom.h and breaks it one way at a time: each break is a
+ * refusal naming the file and what was wrong, a hung helper is stopped after THORAX_DICOM_SECONDS,
+ * and one that has shut its socket leaves EPIPE, not a SIGPIPE that would end this process. */
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/time.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
+#include "image/dicom.h"
 #include "testlib.h"
 #include "thorax/core/sha256.h"
 #include "thorax/image/image.h"
@@ -171,6 +187,156 @@ static void check_image(const spec *s, const thx_image *img, int integral)
     thx_ctx_destroy(&c2);
 }
 
+/* ---- the fake helper (this program run with --protocol): THX_FAKE names the fault ---- */
+
+static void fake_write(const void *b, size_t n)
+{
+    const char *p = b;
+    while (n > 0) {
+        ssize_t w = write(3, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) _exit(1);
+        p += w;
+        n -= (size_t)w;
+    }
+}
+static int fake_read(void *b, size_t n)
+{
+    char *p = b;
+    while (n > 0) {
+        ssize_t r = read(3, p, n);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) return 0;
+        p += r;
+        n -= (size_t)r;
+    }
+    return 1;
+}
+static void fake_put(unsigned char *b, size_t *n, const void *v, size_t len)
+{
+    memcpy(b + *n, v, len);
+    *n += len;
+}
+static void fake_u32(unsigned char *b, size_t *n, uint32_t v) { fake_put(b, n, &v, 4); }
+static void fake_f64(unsigned char *b, size_t *n, double v) { fake_put(b, n, &v, 8); }
+static void fake_str(unsigned char *b, size_t *n, const char *s)
+{
+    uint16_t len = (uint16_t)strlen(s);
+    fake_put(b, n, &len, 2);
+    fake_put(b, n, s, len);
+}
+static void fake_head(uint32_t op, int32_t status, uint64_t len)
+{
+    unsigned char h[16];
+    memcpy(h, &op, 4);
+    memcpy(h + 4, &status, 4);
+    memcpy(h + 8, &len, 8);
+    fake_write(h, 16);
+}
+
+/* Two slices, s1.dcm and s2.dcm (k = 0, 1): 3 x 2 pixels 10k + q (int16), at z = 2k mm, intercept
+ * 100k; everything else as a real helper would say it, but for the fault. */
+static int fake_helper(void)
+{
+    const char *mode = getenv("THX_FAKE");
+    if (!mode) mode = "ok";
+#define IS(m) (strcmp(mode, m) == 0)
+    if (IS("epipe")) shutdown(3, SHUT_RD); /* the parent's next send meets a closed socket */
+    unsigned char hello[12];
+    uint32_t v = IS("version") ? THX_DICOM_PROTOCOL + 1 : THX_DICOM_PROTOCOL;
+    memcpy(hello, IS("greeting") ? "NOTDICOM" : THX_DICOM_HELLO, 8);
+    memcpy(hello + 8, &v, 4);
+    fake_write(hello, 12);
+    if (IS("epipe")) {
+        struct timespec nap = {0, 200000000};
+        nanosleep(&nap, NULL);
+        _exit(0);
+    }
+    for (;;) {
+        uint32_t req[4];
+        char path[THX_DICOM_MAX_PATH + 1];
+        if (!fake_read(req, 16) || req[3] > THX_DICOM_MAX_PATH || !fake_read(path, req[3])) _exit(0);
+        path[req[3]] = '\0';
+        int k = strstr(path, "s2.dcm") != NULL;
+        if (req[0] == THX_DICOM_OP_SCAN) {
+            if (IS("abort_scan")) abort();
+            unsigned char b[2048];
+            size_t n = 0;
+            char longer[200];
+            memset(longer, '7', sizeof longer - 1);
+            longer[sizeof longer - 1] = '\0';
+            fake_str(b, &n, IS("long_string") ? longer : "1.2.826.0.1.3680043.9.7.77");
+            fake_str(b, &n, "1");
+            fake_str(b, &n, "fake");
+            fake_str(b, &n, "CT");
+            fake_u32(b, &n, IS("flag") ? 2 : 1); /* image */
+            fake_u32(b, &n, 1);                  /* frames */
+            for (int q = 0; q < 3; q++) fake_u32(b, &n, 1);
+            fake_f64(b, &n, 0);
+            fake_f64(b, &n, 0);
+            fake_f64(b, &n, IS("nan") ? NAN : 2.0 * k);
+            const double o[6] = {1, 0, 0, 0, 1, 0};
+            for (int q = 0; q < 6; q++) fake_f64(b, &n, o[q]);
+            fake_f64(b, &n, 0.5);
+            fake_f64(b, &n, 0.5);
+            fake_f64(b, &n, 2);       /* thickness */
+            fake_f64(b, &n, 1);       /* slope */
+            fake_f64(b, &n, 100.0 * k); /* intercept */
+            fake_u32(b, &n, 2);       /* rows */
+            fake_u32(b, &n, 3);       /* columns */
+            if (IS("leftover")) fake_u32(b, &n, 0);
+            fake_head(IS("wrong_op") ? THX_DICOM_OP_PIXELS : req[0], IS("bad_status") ? 7 : 1,
+                      IS("scan_len_huge") ? (uint64_t)1 << 40 : n);
+            if (IS("short_reply")) {
+                fake_write(b, n / 2);
+                _exit(0);
+            }
+            fake_write(b, n);
+        } else {
+            if (IS("hang")) sleep(30);
+            if (IS("message")) {
+                const char m[] = "fake: no pixels\x01\x1b[31m here";
+                fake_head(req[0], -1, sizeof m - 1);
+                fake_write(m, sizeof m - 1);
+                continue;
+            }
+            uint32_t ph[3] = {IS("bad_type") ? 9 : THX_DICOM_T_INT16, IS("wrong_size") ? req[2] : req[1],
+                              IS("wrong_size") ? req[1] : req[2]};
+            int16_t px[6];
+            for (int q = 0; q < 6; q++) px[q] = (int16_t)(10 * k + q);
+            fake_head(req[0], 0, IS("pixel_len_huge") ? 12 + ((uint64_t)1 << 40) : 12 + sizeof px);
+            fake_write(ph, 12);
+            fake_write(px, sizeof px);
+        }
+    }
+#undef IS
+}
+
+/* Reads path expecting `code` and a message holding each of the needles. */
+static void refused_as(thx_ctx *ctx, const char *path, thx_status code, const char *const *needles)
+{
+    thx_image img;
+    thx_status s = thx_image_read(ctx, path, NULL, &img);
+    CHECK(s == code);
+    if (s != code) fprintf(stderr, "status %d, expected %d: %s\n", s, code, thx_ctx_message(ctx));
+    CHECK(img.v == NULL);
+    for (; *needles; needles++) CHECK(tl_msg_has(ctx, *needles));
+}
+
+static volatile sig_atomic_t ticks;
+static void tick(int sig)
+{
+    (void)sig;
+    ticks++;
+}
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 /* Reads path expecting THX_EINPUT and a message holding each of the needles (NULL-terminated). */
 static void refused(thx_ctx *ctx, const char *path, const char *series, const char *const *needles)
 {
@@ -181,8 +347,9 @@ static void refused(thx_ctx *ctx, const char *path, const char *series, const ch
     for (; *needles; needles++) CHECK(tl_msg_has(ctx, *needles));
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--protocol") == 0) return fake_helper();
     if (tl_scratch_make("test_image_dicom") != 0) return 1;
     thx_ctx *ctx = NULL;
     thx_ctx_create(&ctx);
@@ -329,6 +496,153 @@ int main(void)
     snprintf(victim, sizeof victim, "%s/%s", tl_path("cuthead"), a.files[5]);
     CHECK(truncate(victim, 200) == 0);
     refused(ctx, tl_path("cuthead"), NULL, (const char *const[]){victim, "truncated or corrupt", NULL});
+
+    /* one slice cut at every eleventh length (and each of the last ten), alone in its folder: every
+     * length refused with the file's name, the test process alive throughout */
+    {
+        char src[1200];
+        snprintf(src, sizeof src, "%s/%s", tl_path("a"), a.files[0]);
+        size_t len = 0;
+        char *bytes = tl_slurp(ctx, src, &len);
+        CHECK(bytes != NULL && len > 100);
+        mkdir(tl_path("sweep"), 0755);
+        char cut[1200];
+        snprintf(cut, sizeof cut, "%s/s.dcm", tl_path("sweep"));
+        size_t tried = 0, named = 0;
+        double t_sweep = now_s();
+        for (size_t l = 0; bytes && l < len; l += (l + 10 >= len ? 1 : 11)) {
+            tl_write_bytes(cut, bytes, l);
+            thx_status rs = thx_image_read(ctx, cut, NULL, &img);
+            tried++;
+            if (rs != THX_OK && img.v == NULL && strstr(thx_ctx_message(ctx), cut)) named++;
+            else fprintf(stderr, "cut at %zu of %zu bytes: status %d: %s\n", l, len, rs, thx_ctx_message(ctx));
+            if (rs == THX_OK) thx_image_free(&img);
+        }
+        fprintf(stderr, "truncation sweep: %zu of %zu lengths refused naming the file (%.2f s)\n", named, tried, now_s() - t_sweep);
+        CHECK(tried > 80 && named == tried);
+        free(bytes);
+    }
+
+    /* a 2048 x 2048 slice of zeros, RLE-compressed (small file, 8 MB of int16 pixels through the
+     * socket): read whole with the default memory limit, refused under a 40 MB address space */
+    mkdir(tl_path("big"), 0755);
+    {
+        int16_t *zeros = calloc((size_t)2048 * 2048, sizeof *zeros);
+        tl_write_bytes(tl_path("big.raw"), zeros, (size_t)2048 * 2048 * sizeof *zeros);
+        free(zeros);
+    }
+    snprintf(cmd, sizeof cmd,
+             "gdcmimg --size 2048,2048 --depth 16 --sign 1 -C 1.2.840.10008.5.1.4.1.1.2 -i '%s' -o '%s' && "
+             "gdcmanon --dumb --replace '0020,0032=0\\0\\0' --replace '0020,0037=1\\0\\0\\0\\1\\0' --replace '0028,0030=0.5\\0.5' "
+             "-i '%s' -o '%s' && gdcmconv --rle '%s' '%s/big.dcm'",
+             tl_path("big.raw"), tl_path("big0.dcm"), tl_path("big0.dcm"), tl_path("big1.dcm"), tl_path("big1.dcm"), tl_path("big"));
+    CHECK(run(cmd) == 0);
+    CHECK_OK(ctx, thx_image_read(ctx, tl_path("big"), NULL, &img));
+    if (img.v) {
+        size_t nonzero = 0;
+        for (size_t q = 0; q < thx_image_count(&img); q++) nonzero += img.v[q] != 0;
+        CHECK(img.n[0] == 2048 && img.n[1] == 2048 && img.n[2] == 1 && nonzero == 0);
+    }
+    thx_image_free(&img);
+    setenv("THORAX_DICOM_MEMORY_MB", "40", 1);
+    {
+        thx_image im2;
+        CHECK(thx_image_read(ctx, tl_path("big"), NULL, &im2) == THX_EINPUT);
+        CHECK(im2.v == NULL);
+        CHECK(tl_msg_has(ctx, "big.dcm")); /* GDCM out of memory, or its assert on a failed allocation */
+    }
+    unsetenv("THORAX_DICOM_MEMORY_MB");
+
+    /* reads under a 1 ms interval timer whose handler interrupts system calls (no SA_RESTART) */
+    {
+        struct sigaction sa, old;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = tick;
+        sigemptyset(&sa.sa_mask);
+        sigaction(SIGALRM, &sa, &old);
+        struct itimerval it = {{0, 1000}, {0, 1000}}, off = {{0, 0}, {0, 0}};
+        setitimer(ITIMER_REAL, &it, NULL);
+        CHECK_OK(ctx, thx_image_read(ctx, tl_path("a"), NULL, &img));
+        check_image(&a, &img, 1);
+        thx_image_free(&img);
+        CHECK_OK(ctx, thx_image_read(ctx, tl_path("big"), NULL, &img));
+        CHECK(img.n[0] == 2048);
+        thx_image_free(&img);
+        setitimer(ITIMER_REAL, &off, NULL);
+        sigaction(SIGALRM, &old, NULL);
+        fprintf(stderr, "interval timer: %d signals during the reads\n", (int)ticks);
+        CHECK(ticks > 10);
+    }
+
+    /* the fake helper: each break of the protocol refused by name */
+    {
+        char self[1024];
+        ssize_t ns = readlink("/proc/self/exe", self, sizeof self - 1);
+        CHECK(ns > 0);
+        self[ns > 0 ? ns : 0] = '\0';
+        mkdir(tl_path("fake"), 0755);
+        tl_write_text(tl_path("fake/s1.dcm"), "the fake helper answers for this file\n");
+        tl_write_text(tl_path("fake/s2.dcm"), "and for this one\n");
+        char s1[1200];
+        snprintf(s1, sizeof s1, "%s/s1.dcm", tl_path("fake"));
+        setenv("THORAX_DICOM_HELPER", self, 1);
+        setenv("THX_FAKE", "ok", 1);
+        CHECK_OK(ctx, thx_image_read(ctx, tl_path("fake"), NULL, &img));
+        if (img.v) {
+            CHECK(img.n[0] == 3 && img.n[1] == 2 && img.n[2] == 2);
+            for (size_t k = 0; k < 2; k++)
+                for (size_t q = 0; q < 6; q++) CHECK(img.v[k * 6 + q] == (float)(10 * k + q + 100 * k));
+            CHECK_NEAR(img.spacing[2], 2, 1e-12);
+            CHECK(strcmp(img.stored_type, "int16") == 0);
+        }
+        thx_image_free(&img);
+        static const struct {
+            const char *mode;
+            thx_status code;
+            const char *needle;
+        } faults[] = {
+            {"version", THX_EIO, "speaks protocol version 2, this library version 1"},
+            {"greeting", THX_EIO, "is not the DICOM helper"},
+            {"abort_scan", THX_EINPUT, "its tags cannot be read: GDCM crashed on it (signal 6"},
+            {"short_reply", THX_EINPUT, "reply stops short of its"},
+            {"long_string", THX_EIO, "garbled (a text longer than its field)"},
+            {"scan_len_huge", THX_EIO, "garbled (an entry of impossible length"},
+            {"pixel_len_huge", THX_EIO, "garbled (a pixel count that is not rows x columns"},
+            {"wrong_size", THX_EIO, "garbled (pixels of another size than asked for"},
+            {"bad_type", THX_EIO, "garbled (an unknown stored type"},
+            {"nan", THX_EIO, "garbled (a number is not finite)"},
+            {"leftover", THX_EIO, "garbled (bytes left over after the entry)"},
+            {"bad_status", THX_EIO, "garbled (an unknown status"},
+            {"wrong_op", THX_EIO, "garbled (an answer to another request"},
+            {"flag", THX_EIO, "garbled (a yes/no field is neither)"},
+            {"message", THX_EINPUT, "fake: no pixels??[31m here"},
+            {"epipe", THX_EINPUT, "the DICOM helper was gone before the request"},
+        };
+        for (size_t q = 0; q < sizeof faults / sizeof *faults; q++) {
+            setenv("THX_FAKE", faults[q].mode, 1);
+            int names_file = strcmp(faults[q].mode, "version") != 0 && strcmp(faults[q].mode, "greeting") != 0;
+            refused_as(ctx, tl_path("fake"), faults[q].code,
+                       (const char *const[]){faults[q].needle, names_file ? "s1.dcm" : self, NULL});
+        }
+        /* a helper that hangs: stopped after THORAX_DICOM_SECONDS */
+        setenv("THX_FAKE", "hang", 1);
+        setenv("THORAX_DICOM_SECONDS", "1", 1);
+        double t0 = now_s();
+        refused_as(ctx, tl_path("fake"), THX_EINPUT, (const char *const[]){"s1.dcm", "no reply from GDCM within 1 s", NULL});
+        double dt = now_s() - t0;
+        CHECK(dt >= 0.9 && dt < 10);
+        setenv("THORAX_DICOM_SECONDS", "soon", 1);
+        refused_as(ctx, tl_path("fake"), THX_EINPUT, (const char *const[]){"THORAX_DICOM_SECONDS=soon", NULL});
+        unsetenv("THORAX_DICOM_SECONDS");
+        unsetenv("THX_FAKE");
+        /* a missing helper */
+        setenv("THORAX_DICOM_HELPER", "/nonexistent/thorax-dicom", 1);
+        refused_as(ctx, tl_path("a"), THX_EIO, (const char *const[]){"THORAX_DICOM_HELPER=/nonexistent/thorax-dicom", "thorax-dicom", NULL});
+        unsetenv("THORAX_DICOM_HELPER");
+        /* every helper collected: no child of this process is left, not even a zombie */
+        errno = 0;
+        CHECK(waitpid(-1, NULL, WNOHANG) == -1 && errno == ECHILD);
+    }
 
     /* a folder with no DICOM image */
     mkdir(tl_path("empty"), 0755);

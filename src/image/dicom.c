@@ -22,9 +22,15 @@
 #include <stdlib.h>
 #include <signal.h>
 #include <string.h>
+#include <spawn.h>
+#include <stdint.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
+#include <dlfcn.h>
+#include <poll.h>
 
 #include "image/image_impl.h"
 #include "thorax/core/sha256.h"
@@ -119,16 +125,137 @@ static void unit(double *v)
         for (int c = 0; c < 3; c++) v[c] /= l;
 }
 
-/* ---- GDCM in a child process: Debian's GDCM keeps its assert()s, and a truncated or corrupt file
- * aborts inside it (measured on one slice cut at each length: most lengths abort). The child runs
- * the C++ calls and sends fixed-size records through a pipe; a child that dies mid-file is an error
- * naming that file. */
+/* ---- GDCM in the helper program thorax-dicom (src/image/dicom_helper.c), started by posix_spawn:
+ * Debian's GDCM keeps its assert()s, and a truncated or corrupt file aborts inside it (measured on
+ * one slice cut at each length: most lengths abort). The helper is exec'd, so nothing of the
+ * caller's process follows it (signal handlers, a fuzzer's or sanitizer's allocator hooks), and it
+ * answers the requests of src/image/dicom.h's protocol on a socket. Its replies are not trusted:
+ * every length is checked against its bound before anything is read or allocated for it, and a
+ * helper that dies, answers late or answers garbage is an error naming the file. */
 
-static int write_all(int fd, const void *buf, size_t n)
+#ifndef THORAX_DICOM_HELPER_INSTALLED /* CMakeLists.txt sets these three from the install directories */
+#define THORAX_DICOM_HELPER_INSTALLED "/usr/local/libexec/thorax/thorax-dicom"
+#endif
+#ifndef THORAX_DICOM_HELPER_FROM_BIN
+#define THORAX_DICOM_HELPER_FROM_BIN "../libexec/thorax/thorax-dicom"
+#endif
+#ifndef THORAX_DICOM_HELPER_FROM_LIB
+#define THORAX_DICOM_HELPER_FROM_LIB "../libexec/thorax/thorax-dicom"
+#endif
+#define HELPER_CHANNEL 3          /* the helper's end of the socket */
+#define HELPER_SECONDS 30         /* default wall time for one reply (THORAX_DICOM_SECONDS) */
+#define HELPER_MEMORY_MB 4096     /* default address space of the helper (THORAX_DICOM_MEMORY_MB) */
+
+typedef struct {
+    pid_t pid;     /* 0: not running (or reaped) */
+    int fd;        /* the parent's end of the socket; -1 when closed */
+    int seconds;   /* wall time allowed for each reply */
+    char path[1100];
+} helper;
+
+/* dirname(object)/rel into out; 0, or -1 (no slash, too long). */
+static int beside(const char *object, const char *rel, char *out, size_t size)
+{
+    const char *slash = strrchr(object, '/');
+    if (!slash) return -1;
+    int n = snprintf(out, size, "%.*s/%s", (int)(slash - object), object, rel);
+    return n > 0 && (size_t)n < size ? 0 : -1;
+}
+
+/* The helper's path: $THORAX_DICOM_HELPER; else LIBEXECDIR/thorax/thorax-dicom relative to the object
+ * holding this code (libthorax.so in LIBDIR) or to the running program (in BINDIR: the build tree's
+ * bin/ and tests/ sit beside its libexec/ alike), so that a moved prefix keeps working; else the
+ * absolute path the build was configured to install it at. */
+static thx_status find_helper(thx_ctx *ctx, const char *what, char *out, size_t size)
+{
+    const char *env = getenv("THORAX_DICOM_HELPER");
+    if (env && *env) {
+        if (access(env, X_OK) != 0)
+            return thx_error(ctx, THX_EIO, "%s: THORAX_DICOM_HELPER=%s: %s (DICOM is read through the helper program thorax-dicom)",
+                             what, env, strerror(errno));
+        snprintf(out, size, "%s", env);
+        return THX_OK;
+    }
+    char cand[3][1100];
+    int nc = 0;
+    char exe[1024];
+    ssize_t ne = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[ne > 0 ? ne : 0] = '\0';
+    Dl_info info;
+    if (dladdr((void *)find_helper, &info) && info.dli_fname && strcmp(info.dli_fname, exe) != 0 &&
+        beside(info.dli_fname, THORAX_DICOM_HELPER_FROM_LIB, cand[nc], sizeof cand[nc]) == 0)
+        nc++;
+    if (ne > 0 && beside(exe, THORAX_DICOM_HELPER_FROM_BIN, cand[nc], sizeof cand[nc]) == 0) nc++;
+    snprintf(cand[nc++], sizeof cand[0], "%s", THORAX_DICOM_HELPER_INSTALLED);
+    for (int k = 0; k < nc; k++)
+        if (access(cand[k], X_OK) == 0) {
+            snprintf(out, size, "%s", cand[k]);
+            return THX_OK;
+        }
+    return thx_error(ctx, THX_EIO,
+                     "%s: the DICOM helper program thorax-dicom is missing (looked for %s%s%s%s%s): thorax reads DICOM through "
+                     "it; install thorax (cmake --install) or set THORAX_DICOM_HELPER to its path",
+                     what, cand[0], nc > 1 ? ", " : "", nc > 1 ? cand[1] : "", nc > 2 ? ", " : "", nc > 2 ? cand[2] : "");
+}
+
+/* A positive integer from the environment (at most max), or def; -1 when set but not one. */
+static long env_limit(const char *name, long def, long max)
+{
+    const char *v = getenv(name);
+    if (!v || !*v) return def;
+    char *end;
+    errno = 0;
+    long x = strtol(v, &end, 10);
+    return *end == '\0' && errno == 0 && x > 0 && x <= max ? x : -1;
+}
+
+/* Milliseconds left until deadline (0 when past). */
+static int ms_left(const struct timespec *deadline)
+{
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    double ms = (double)(deadline->tv_sec - now.tv_sec) * 1e3 + (double)(deadline->tv_nsec - now.tv_nsec) / 1e6;
+    return ms <= 0 ? 0 : ms > 1e9 ? 1000000000 : (int)ceil(ms);
+}
+
+static void deadline_in(struct timespec *d, int seconds)
+{
+    clock_gettime(CLOCK_MONOTONIC, d);
+    d->tv_sec += seconds;
+}
+
+enum { GOT = 0, GONE = 1, LATE = 2 };
+
+/* Reads n bytes from the helper by the deadline: GOT; GONE (the socket ended or failed: the helper
+ * closed it or died); LATE (the deadline passed). Reads as the helper writes (a slice larger than
+ * the socket's buffer streams through), and a signal interrupting poll or read is not an error. */
+static int recv_exact(helper *h, void *buf, size_t n, const struct timespec *deadline)
+{
+    char *p = buf;
+    while (n > 0) {
+        int ms = ms_left(deadline);
+        if (ms == 0) return LATE;
+        struct pollfd pf = {h->fd, POLLIN, 0};
+        int r = poll(&pf, 1, ms);
+        if (r < 0 && errno == EINTR) continue;
+        if (r < 0) return GONE;
+        if (r == 0) continue; /* the deadline is checked above */
+        ssize_t got = read(h->fd, p, n);
+        if (got < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+        if (got <= 0) return GONE;
+        p += got;
+        n -= (size_t)got;
+    }
+    return GOT;
+}
+
+/* 0, or -1 (the helper is gone). send(MSG_NOSIGNAL): a helper that died leaves EPIPE here, never a
+ * SIGPIPE that would end the caller's process. */
+static int send_all(int fd, const void *buf, size_t n)
 {
     const char *p = buf;
     while (n > 0) {
-        ssize_t w = write(fd, p, n);
+        ssize_t w = send(fd, p, n, MSG_NOSIGNAL);
         if (w < 0 && errno == EINTR) continue;
         if (w <= 0) return -1;
         p += w;
@@ -137,92 +264,251 @@ static int write_all(int fd, const void *buf, size_t n)
     return 0;
 }
 
-/* 1: all n bytes read; 0: the pipe ended first (the child is gone). */
-static int read_all(int fd, void *buf, size_t n)
+/* Ends the helper and collects it (no zombie is left): the socket closed, then (kill_it) SIGKILL at
+ * once, or up to 2 s for it to end by itself (it exits on the closed socket; one that died already
+ * is collected with its status), then SIGKILL. How it ended into how[]. */
+static void helper_stop(helper *h, int kill_it, char *how, size_t size)
 {
-    char *p = buf;
-    while (n > 0) {
-        ssize_t r = read(fd, p, n);
-        if (r < 0 && errno == EINTR) continue;
-        if (r <= 0) return 0;
-        p += r;
-        n -= (size_t)r;
+    if (size) how[0] = '\0';
+    if (h->fd >= 0) close(h->fd);
+    h->fd = -1;
+    if (h->pid <= 0) return;
+    int st = 0;
+    pid_t r = 0;
+    if (!kill_it) {
+        struct timespec d;
+        deadline_in(&d, 2);
+        while ((r = waitpid(h->pid, &st, WNOHANG)) == 0 && ms_left(&d) > 0) {
+            struct timespec nap = {0, 2000000};
+            nanosleep(&nap, NULL);
+        }
+        if (r < 0 && errno == EINTR) r = 0;
     }
-    return 1;
+    if (r == 0) {
+        kill(h->pid, SIGKILL); /* not yet collected: the pid is still ours */
+        while ((r = waitpid(h->pid, &st, 0)) < 0 && errno == EINTR) {
+        }
+    }
+    h->pid = 0;
+    if (r < 0) snprintf(how, size, "the DICOM helper ended, how is unknown (%s)", strerror(errno));
+    else if (WIFSIGNALED(st) && WTERMSIG(st) == SIGXCPU)
+        snprintf(how, size, "GDCM used more than %d s of processor time on it (signal %d, %s)", h->seconds, SIGXCPU,
+                 strsignal(SIGXCPU));
+    else if (WIFSIGNALED(st))
+        snprintf(how, size, "GDCM crashed on it (signal %d, %s)", WTERMSIG(st), strsignal(WTERMSIG(st)));
+    else
+        snprintf(how, size, "the DICOM helper ended (status %d)", WIFEXITED(st) ? WEXITSTATUS(st) : -1);
 }
 
-typedef struct {
-    pid_t pid;
-    int fd; /* read end */
-} child;
-
-/* Starts a child that runs fn(arg, write end) then exits; the parent reads c->fd. */
-static thx_status spawn(thx_ctx *ctx, const char *what, void (*fn)(void *, int), void *arg, child *c)
+/* Starts the helper and checks its greeting (the protocol's name and version). */
+static thx_status helper_start(thx_ctx *ctx, const char *what, helper *h)
 {
-    int p[2];
-    if (pipe(p) != 0) return thx_error(ctx, THX_EIO, "%s: cannot make a pipe: %s", what, strerror(errno));
-    fflush(NULL);
-    pid_t pid = fork();
-    if (pid < 0) {
-        int e = errno;
-        close(p[0]);
-        close(p[1]);
-        return thx_error(ctx, THX_EIO, "%s: cannot start a process to read DICOM: %s", what, strerror(e));
-    }
-    if (pid == 0) {
-        close(p[0]);
-        signal(SIGPIPE, SIG_DFL);
-        /* GDCM's codecs and its assert()s print: not from the library */
-        int dn = open("/dev/null", O_WRONLY);
-        if (dn >= 0) {
-            dup2(dn, 1);
-            dup2(dn, 2);
-            close(dn);
+    h->pid = 0;
+    h->fd = -1;
+    THX_CHECK(find_helper(ctx, what, h->path, sizeof h->path));
+    long seconds = env_limit("THORAX_DICOM_SECONDS", HELPER_SECONDS, 86400);
+    long mb = env_limit("THORAX_DICOM_MEMORY_MB", HELPER_MEMORY_MB, 1L << 30);
+    if (seconds < 0 || mb < 0)
+        return thx_error(ctx, THX_EINPUT, "%s: %s=%s: a whole number of %s is needed", what,
+                         seconds < 0 ? "THORAX_DICOM_SECONDS" : "THORAX_DICOM_MEMORY_MB",
+                         getenv(seconds < 0 ? "THORAX_DICOM_SECONDS" : "THORAX_DICOM_MEMORY_MB"),
+                         seconds < 0 ? "seconds (1 to 86400)" : "megabytes");
+    h->seconds = (int)seconds;
+    int sv[2];
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+        return thx_error(ctx, THX_EIO, "%s: cannot make a socket for the DICOM helper: %s", what, strerror(errno));
+    if (sv[1] == HELPER_CHANNEL) { /* dup2 onto itself would keep close-on-exec */
+        int d = fcntl(sv[1], F_DUPFD_CLOEXEC, HELPER_CHANNEL + 1);
+        close(sv[1]);
+        sv[1] = d;
+        if (d < 0) {
+            close(sv[0]);
+            return thx_error(ctx, THX_EIO, "%s: cannot make a socket for the DICOM helper: %s", what, strerror(errno));
         }
-        fn(arg, p[1]);
-        close(p[1]);
-        _exit(0);
     }
-    close(p[1]);
-    c->pid = pid;
-    c->fd = p[0];
+    posix_spawn_file_actions_t fa;
+    posix_spawnattr_t at;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawnattr_init(&at);
+    posix_spawn_file_actions_adddup2(&fa, sv[1], HELPER_CHANNEL);
+    /* GDCM's codecs and its assert()s print: not from the library */
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 34))
+    posix_spawn_file_actions_addclosefrom_np(&fa, HELPER_CHANNEL + 1); /* none of the caller's descriptors */
+#endif
+    /* handlers are reset by exec anyway; ignored signals and the mask would carry over */
+    sigset_t none, dfl;
+    sigemptyset(&none);
+    sigemptyset(&dfl);
+    const int sigs[] = {SIGPIPE, SIGINT, SIGQUIT, SIGHUP, SIGTERM, SIGALRM, SIGCHLD, SIGXCPU, SIGXFSZ, SIGUSR1, SIGUSR2};
+    for (size_t k = 0; k < sizeof sigs / sizeof *sigs; k++) sigaddset(&dfl, sigs[k]);
+    posix_spawnattr_setsigmask(&at, &none);
+    posix_spawnattr_setsigdefault(&at, &dfl);
+    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+    char version[16], mbs[32], secs[32];
+    snprintf(version, sizeof version, "%d", THX_DICOM_PROTOCOL);
+    snprintf(mbs, sizeof mbs, "%ld", mb);
+    snprintf(secs, sizeof secs, "%ld", seconds);
+    char *argv[] = {h->path, "--protocol", version, "--memory-mb", mbs, "--seconds", secs, NULL};
+    pid_t pid;
+    int e = posix_spawn(&pid, h->path, &fa, &at, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    posix_spawnattr_destroy(&at);
+    close(sv[1]);
+    if (e != 0) {
+        close(sv[0]);
+        return thx_error(ctx, THX_EIO, "%s: cannot start the DICOM helper %s: %s", what, h->path, strerror(e));
+    }
+    h->pid = pid;
+    h->fd = sv[0];
+    unsigned char hello[12];
+    struct timespec d;
+    deadline_in(&d, h->seconds);
+    int r = recv_exact(h, hello, sizeof hello, &d);
+    uint32_t v = 0;
+    if (r == GOT) memcpy(&v, hello + 8, 4);
+    if (r != GOT || memcmp(hello, THX_DICOM_HELLO, 8) != 0 || v != THX_DICOM_PROTOCOL) {
+        char how[200];
+        helper_stop(h, r != GONE, how, sizeof how);
+        if (r == GOT && memcmp(hello, THX_DICOM_HELLO, 8) != 0)
+            return thx_error(ctx, THX_EIO, "%s: %s is not the DICOM helper (its greeting is not the protocol's)", what, h->path);
+        if (r == GOT)
+            return thx_error(ctx, THX_EIO, "%s: the DICOM helper %s speaks protocol version %u, this library version %d "
+                             "(the helper and the library come from different builds: reinstall thorax)", what, h->path, v,
+                             THX_DICOM_PROTOCOL);
+        return thx_error(ctx, THX_EIO, "%s: the DICOM helper %s did not start: %s", what, h->path,
+                         r == LATE ? "no greeting within the time limit" : how);
+    }
     return THX_OK;
 }
 
-/* Closes the pipe and collects the child; a description of how it ended into how[]. */
-static void reap(child *c, char *how, size_t size)
+/* A reply's payload, read in full (small payloads: a message, a scan entry), taken field by field;
+ * `bad` holds the first fault. */
+typedef struct {
+    const unsigned char *p;
+    size_t left;
+    const char *bad;
+} cursor;
+
+static void take(cursor *c, void *dst, size_t n)
 {
-    if (c->fd >= 0) close(c->fd);
-    c->fd = -1;
-    int st = 0;
-    while (waitpid(c->pid, &st, 0) < 0 && errno == EINTR) {
+    if (c->bad || n > c->left) {
+        if (!c->bad) c->bad = "it ends inside a field";
+        memset(dst, 0, n);
+        return;
     }
-    if (WIFSIGNALED(st)) snprintf(how, size, "GDCM crashed on it (signal %d, %s)", WTERMSIG(st), strsignal(WTERMSIG(st)));
-    else snprintf(how, size, "GDCM's process ended (status %d)", WIFEXITED(st) ? WEXITSTATUS(st) : -1);
+    memcpy(dst, c->p, n);
+    c->p += n;
+    c->left -= n;
+}
+static uint32_t take_u32(cursor *c)
+{
+    uint32_t v;
+    take(c, &v, 4);
+    return v;
+}
+static double take_f64(cursor *c, int needed)
+{
+    double v;
+    take(c, &v, 8);
+    if (needed && !isfinite(v) && !c->bad) c->bad = "a number is not finite";
+    return v;
+}
+static void take_str(cursor *c, char *dst, size_t cap)
+{
+    uint16_t n = 0;
+    take(c, &n, 2);
+    dst[0] = '\0';
+    if (c->bad) return;
+    if (n >= cap) {
+        c->bad = "a text longer than its field";
+        return;
+    }
+    take(c, dst, n);
+    dst[c->bad ? 0 : n] = '\0';
+    if (!c->bad && strlen(dst) != n) c->bad = "a text holds a NUL";
+}
+static int take_flag(cursor *c)
+{
+    uint32_t v = take_u32(c);
+    if (v > 1 && !c->bad) c->bad = "a yes/no field is neither";
+    return (int)v;
 }
 
-typedef struct {
-    int status; /* 1 DICOM, 0 not DICOM, -1 error */
-    thx_dicom_entry e;
-    char msg[1400];
-} scan_record;
-
-typedef struct {
-    char **files;
-    size_t n;
-} scan_job;
-
-static void scan_child(void *arg, int fd)
+/* Sends one request about `file` and reads the reply's header: *status and *len, both checked
+ * (op echoed; status one the op may answer; a length within its bound). On any failure the helper
+ * is stopped and the error names the file: `doing` is what could not be done ("its tags cannot be
+ * read"). */
+static thx_status ask(thx_ctx *ctx, helper *h, uint32_t op, unsigned rows, unsigned columns, const char *file,
+                      const char *doing, int32_t *status, uint64_t *len, struct timespec *deadline)
 {
-    const scan_job *job = arg;
-    scan_record *r = malloc(sizeof *r);
-    if (!r) return;
-    for (size_t k = 0; k < job->n; k++) {
-        memset(r, 0, sizeof *r);
-        r->status = thx_dicom_scan_file(job->files[k], &r->e, r->msg, sizeof r->msg);
-        if (write_all(fd, r, sizeof *r) != 0 || r->status < 0) break;
+    size_t pl = strlen(file);
+    if (pl == 0 || pl > THX_DICOM_MAX_PATH)
+        return thx_error(ctx, THX_EINPUT, "%s: a path of %zu bytes (at most %d)", file, pl, THX_DICOM_MAX_PATH);
+    unsigned char req[16 + THX_DICOM_MAX_PATH];
+    uint32_t head[4] = {op, rows, columns, (uint32_t)pl};
+    memcpy(req, head, 16);
+    memcpy(req + 16, file, pl);
+    char how[200];
+    deadline_in(deadline, h->seconds);
+    if (send_all(h->fd, req, 16 + pl) != 0) {
+        helper_stop(h, 0, how, sizeof how);
+        return thx_error(ctx, THX_EINPUT, "%s: %s: the DICOM helper was gone before the request: %s", file, doing, how);
     }
-    free(r);
+    unsigned char rh[16];
+    int r = recv_exact(h, rh, sizeof rh, deadline);
+    if (r != GOT) {
+        helper_stop(h, r == LATE, how, sizeof how);
+        if (r == LATE)
+            return thx_error(ctx, THX_EINPUT, "%s: %s: no reply from GDCM within %d s (THORAX_DICOM_SECONDS; the helper was stopped)",
+                             file, doing, h->seconds);
+        return thx_error(ctx, THX_EINPUT, "%s: %s: %s (a truncated or corrupt file?)", file, doing, how);
+    }
+    uint32_t rop;
+    memcpy(&rop, rh, 4);
+    memcpy(status, rh + 4, 4);
+    memcpy(len, rh + 8, 8);
+    const char *bad = NULL;
+    if (rop != op) bad = "an answer to another request";
+    else if (*status != -1 && *status != 0 && !(op == THX_DICOM_OP_SCAN && *status == 1)) bad = "an unknown status";
+    else if (*status == -1 && (*len == 0 || *len > THX_DICOM_MAX_MESSAGE)) bad = "a message of impossible length";
+    else if (op == THX_DICOM_OP_SCAN && *status == 0 && *len != 0) bad = "a payload after \"not DICOM\"";
+    else if (op == THX_DICOM_OP_SCAN && *status == 1 && *len > THX_DICOM_MAX_ENTRY) bad = "an entry of impossible length";
+    else if (op == THX_DICOM_OP_PIXELS && *status == 0 && *len < 12) bad = "pixels without their header";
+    if (bad) {
+        helper_stop(h, 1, how, sizeof how);
+        return thx_error(ctx, THX_EIO, "%s: %s: the DICOM helper's reply is garbled (%s: op %u, status %d, %llu bytes)", file,
+                         doing, bad, rop, *status, (unsigned long long)*len);
+    }
+    return THX_OK;
+}
+
+/* Reads a reply's small payload (len checked by ask()) into buf[len + 1], NUL-terminated. */
+static thx_status payload(thx_ctx *ctx, helper *h, unsigned char *buf, size_t len, const char *file, const char *doing,
+                          const struct timespec *deadline)
+{
+    int r = recv_exact(h, buf, len, deadline);
+    buf[len] = '\0';
+    if (r == GOT) return THX_OK;
+    char how[200];
+    helper_stop(h, r == LATE, how, sizeof how);
+    if (r == LATE)
+        return thx_error(ctx, THX_EINPUT, "%s: %s: the reply did not arrive whole within %d s (THORAX_DICOM_SECONDS; the helper was stopped)",
+                         file, doing, h->seconds);
+    return thx_error(ctx, THX_EINPUT, "%s: %s: the DICOM helper's reply stops short of its %zu bytes: %s", file, doing, len,
+                     how);
+}
+
+/* A message reply: its text (control characters shown as '?') as the error, prefixed with the
+ * file's name unless the text names it. */
+static thx_status helper_message(thx_ctx *ctx, unsigned char *buf, size_t len, const char *file)
+{
+    for (size_t k = 0; k < len; k++)
+        if (buf[k] < 32 || buf[k] == 127) buf[k] = '?';
+    if (strstr((const char *)buf, file)) return thx_error(ctx, THX_EINPUT, "%s", (const char *)buf);
+    return thx_error(ctx, THX_EINPUT, "%s: %s", file, (const char *)buf);
 }
 
 static int name_cmp(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
@@ -268,8 +554,37 @@ static thx_status list_files(thx_ctx *ctx, const char *dir, char ***files, size_
     return s;
 }
 
-/* Every file's tags, read in a child process: *entries the DICOM files (in name order). */
-static thx_status scan_folder(thx_ctx *ctx, const char *dir, thx_dicom_entry **entries, size_t *count)
+/* One SCAN reply's entry payload into *e (file set by the caller); NULL, or what is wrong with it. */
+static const char *decode_entry(const unsigned char *buf, size_t len, thx_dicom_entry *e)
+{
+    cursor c = {buf, len, NULL};
+    take_str(&c, e->series_uid, sizeof e->series_uid);
+    take_str(&c, e->series_number, sizeof e->series_number);
+    take_str(&c, e->description, sizeof e->description);
+    take_str(&c, e->modality, sizeof e->modality);
+    e->image = take_flag(&c);
+    e->frames = (int)take_u32(&c);
+    e->has_position = take_flag(&c);
+    e->has_orientation = take_flag(&c);
+    e->has_spacing = take_flag(&c);
+    for (int q = 0; q < 3; q++) e->position[q] = take_f64(&c, e->has_position);
+    for (int q = 0; q < 6; q++) e->orientation[q] = take_f64(&c, e->has_orientation);
+    for (int q = 0; q < 2; q++) e->pixel_spacing[q] = take_f64(&c, e->has_spacing);
+    e->thickness = take_f64(&c, 1);
+    e->slope = take_f64(&c, 1);
+    e->intercept = take_f64(&c, 1);
+    e->rows = take_u32(&c);
+    e->columns = take_u32(&c);
+    if (c.bad) return c.bad;
+    if (c.left) return "bytes left over after the entry";
+    if (e->frames < 1) return "a number of frames below 1";
+    if (e->rows > 65535 || e->columns > 65535) return "rows or columns above 65535";
+    if (e->image && (e->rows == 0 || e->columns == 0)) return "an image without rows or columns";
+    return NULL;
+}
+
+/* Every file's tags, read by the helper (started here): *entries the DICOM files (in name order). */
+static thx_status scan_folder(thx_ctx *ctx, helper *h, const char *dir, thx_dicom_entry **entries, size_t *count)
 {
     *entries = NULL;
     *count = 0;
@@ -278,31 +593,32 @@ static thx_status scan_folder(thx_ctx *ctx, const char *dir, thx_dicom_entry **e
     thx_status s = list_files(ctx, dir, &files, &n);
     if (s == THX_OK && n > 0) {
         *entries = malloc(n * sizeof **entries);
-        scan_record *r = malloc(sizeof *r);
-        child c;
-        scan_job job = {files, n};
-        if (!*entries || !r) s = thx_error(ctx, THX_ENOMEM, "%s: out of memory", dir);
-        else s = spawn(ctx, dir, scan_child, &job, &c);
-        for (size_t k = 0; s == THX_OK && k < n; k++) {
-            if (!read_all(c.fd, r, sizeof *r)) {
+        if (!*entries) s = thx_error(ctx, THX_ENOMEM, "%s: out of memory", dir);
+        else s = helper_start(ctx, dir, h);
+    }
+    static const char doing[] = "its tags cannot be read";
+    unsigned char buf[THX_DICOM_MAX_MESSAGE + THX_DICOM_MAX_ENTRY + 1];
+    for (size_t k = 0; s == THX_OK && k < n; k++) {
+        int32_t status;
+        uint64_t len;
+        struct timespec deadline;
+        if ((s = ask(ctx, h, THX_DICOM_OP_SCAN, 0, 0, files[k], doing, &status, &len, &deadline)) != THX_OK) break;
+        if ((s = payload(ctx, h, buf, (size_t)len, files[k], doing, &deadline)) != THX_OK) break;
+        if (status < 0) {
+            s = helper_message(ctx, buf, (size_t)len, files[k]);
+        } else if (status == 1) {
+            thx_dicom_entry *e = &(*entries)[*count];
+            memset(e, 0, sizeof *e);
+            snprintf(e->file, sizeof e->file, "%s", files[k]);
+            const char *bad = decode_entry(buf, (size_t)len, e);
+            if (bad) {
                 char how[200];
-                reap(&c, how, sizeof how);
-                s = thx_error(ctx, THX_EINPUT, "%s: its tags cannot be read: %s (a truncated or corrupt file?)", files[k], how);
-                break;
-            }
-            if (r->status < 0) {
-                r->msg[sizeof r->msg - 1] = '\0';
-                s = thx_error(ctx, THX_EINPUT, "%s", r->msg);
-            } else if (r->status == 1) {
-                r->e.file[sizeof r->e.file - 1] = '\0';
-                (*entries)[(*count)++] = r->e;
-            }
-            if (s != THX_OK || k + 1 == n) {
-                char how[200];
-                reap(&c, how, sizeof how);
+                helper_stop(h, 1, how, sizeof how);
+                s = thx_error(ctx, THX_EIO, "%s: %s: the DICOM helper's reply is garbled (%s)", files[k], doing, bad);
+            } else {
+                (*count)++;
             }
         }
-        free(r);
     }
     for (size_t k = 0; k < n; k++) free(files[k]);
     free(files);
@@ -314,40 +630,34 @@ static thx_status scan_folder(thx_ctx *ctx, const char *dir, thx_dicom_entry **e
     return s;
 }
 
-typedef struct {
-    int status; /* 0 or -1 */
-    int integer;
-    char type[16];
-    char msg[1400];
-} pixel_record;
+static const char *const type_name[] = {"", "uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64"};
+static const size_t type_size[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
 
-typedef struct {
-    const slice *sl;
-    size_t ns;
-} pixel_job;
-
-static void pixel_child(void *arg, int fd)
+/* count stored values of `type` -> slope * v + inter, as float. */
+static void convert(const unsigned char *b, size_t count, int type, double slope, double inter, float *dst)
 {
-    const pixel_job *job = arg;
-    const thx_dicom_entry *e0 = job->sl[0].e;
-    size_t plane = (size_t)e0->rows * e0->columns;
-    double *buf = malloc(plane * sizeof *buf);
-    pixel_record *r = malloc(sizeof *r);
-    if (!buf || !r) goto out;
-    for (size_t s = 0; s < job->ns; s++) {
-        memset(r, 0, sizeof *r);
-        const thx_dicom_entry *e = job->sl[s].e;
-        r->status = thx_dicom_pixels(e->file, e->rows, e->columns, buf, r->type, &r->integer, r->msg, sizeof r->msg);
-        if (write_all(fd, r, sizeof *r) != 0 || r->status != 0) break;
-        if (write_all(fd, buf, plane * sizeof *buf) != 0) break;
+#define CONVERT(T)                                                      \
+    for (size_t q = 0; q < count; q++) {                                \
+        T x;                                                            \
+        memcpy(&x, b + q * sizeof x, sizeof x);                         \
+        dst[q] = (float)(slope * (double)x + inter);                    \
+    }                                                                   \
+    break;
+    switch (type) {
+    case THX_DICOM_T_UINT8: CONVERT(uint8_t)
+    case THX_DICOM_T_INT8: CONVERT(int8_t)
+    case THX_DICOM_T_UINT16: CONVERT(uint16_t)
+    case THX_DICOM_T_INT16: CONVERT(int16_t)
+    case THX_DICOM_T_UINT32: CONVERT(uint32_t)
+    case THX_DICOM_T_INT32: CONVERT(int32_t)
+    case THX_DICOM_T_FLOAT32: CONVERT(float)
+    default: CONVERT(double)
     }
-out:
-    free(r);
-    free(buf);
+#undef CONVERT
 }
 
 /* The series' slices checked, sorted and read into *img. */
-static thx_status assemble(thx_ctx *ctx, const char *path, slice *sl, size_t ns, thx_image *img)
+static thx_status assemble(thx_ctx *ctx, helper *h, const char *path, slice *sl, size_t ns, thx_image *img)
 {
     const thx_dicom_entry *e0 = sl[0].e;
     for (size_t s = 0; s < ns; s++) {
@@ -474,65 +784,71 @@ static thx_status assemble(thx_ctx *ctx, const char *path, slice *sl, size_t ns,
         step = e0->thickness > 0 ? e0->thickness : 1.0;
     }
 
-    /* the volume and the slice buffer are allocated once GDCM has decoded the first slice: a header
-     * claiming a huge image in a small file costs nothing */
+    /* the volume is allocated once the helper has decoded the first slice: a header claiming a huge
+     * image in a small file costs nothing; each slice streams from the socket through a small
+     * buffer straight into its plane */
     size_t n[3] = {e0->columns, e0->rows, ns};
     size_t plane = n[0] * n[1];
-    double *buf = NULL;
     thx_sha256_ctx hash;
     thx_sha256_init(&hash);
     int integral = 1;
-    child ch = {0, -1};
-    pixel_job job = {sl, ns};
-    pixel_record *rec = malloc(sizeof *rec);
-    thx_status st = rec ? spawn(ctx, path, pixel_child, &job, &ch) : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+    static const char doing[] = "its pixels cannot be read";
+    enum { CHUNK = 1 << 16 }; /* a multiple of every stored type's size */
+    unsigned char *chunk = malloc(CHUNK > THX_DICOM_MAX_MESSAGE + 1 ? CHUNK : THX_DICOM_MAX_MESSAGE + 1);
+    thx_status st = chunk ? THX_OK : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
     for (size_t s = 0; st == THX_OK && s < ns; s++) {
         const thx_dicom_entry *e = sl[s].e;
-        int got = read_all(ch.fd, rec, sizeof *rec);
-        if (got && rec->status == 0 && !buf) {
-            if ((st = thx_image_alloc(ctx, n, img)) != THX_OK) break;
-            if (!(buf = malloc(plane * sizeof *buf))) {
-                st = thx_error(ctx, THX_ENOMEM, "%s: out of memory for a slice of %u x %u", path, e0->rows, e0->columns);
-                break;
-            }
-        }
-        if (!got || (rec->status == 0 && !read_all(ch.fd, buf, plane * sizeof *buf))) {
-            char how[200];
-            reap(&ch, how, sizeof how);
-            st = thx_error(ctx, THX_EINPUT, "%s: its pixels cannot be read: %s (a truncated or corrupt file?)", e->file, how);
+        int32_t status;
+        uint64_t len;
+        struct timespec deadline;
+        if ((st = ask(ctx, h, THX_DICOM_OP_PIXELS, e->rows, e->columns, e->file, doing, &status, &len, &deadline)) != THX_OK)
+            break;
+        if (status != 0) {
+            if ((st = payload(ctx, h, chunk, (size_t)len, e->file, doing, &deadline)) == THX_OK)
+                st = helper_message(ctx, chunk, (size_t)len, e->file);
             break;
         }
-        if (rec->status != 0) {
-            rec->msg[sizeof rec->msg - 1] = '\0';
-            st = thx_error(ctx, THX_EINPUT, "%s", rec->msg);
-        } else {
-            rec->type[sizeof rec->type - 1] = '\0';
-            if (s == 0) snprintf(img->stored_type, sizeof img->stored_type, "%s", rec->type);
-            else if (strcmp(rec->type, img->stored_type) != 0) snprintf(img->stored_type, sizeof img->stored_type, "mixed");
-            double slope = e->slope, inter = e->intercept;
-            if (!rec->integer || slope != floor(slope) || inter != floor(inter)) integral = 0;
-            float *dst = img->v + s * plane;
-            for (size_t q = 0; q < plane; q++) dst[q] = (float)(slope * buf[q] + inter);
-            char hex[65];
-            st = thx_sha256_file(ctx, e->file, hex);
-            if (st == THX_OK) thx_sha256_update(&hash, hex, 64);
-        }
-        if (st != THX_OK || s + 1 == ns) {
+        if ((st = payload(ctx, h, chunk, 12, e->file, doing, &deadline)) != THX_OK) break;
+        uint32_t head[3];
+        memcpy(head, chunk, 12);
+        const char *bad = NULL;
+        if (head[0] < THX_DICOM_T_UINT8 || head[0] > THX_DICOM_T_FLOAT64) bad = "an unknown stored type";
+        else if (head[1] != e->rows || head[2] != e->columns) bad = "pixels of another size than asked for";
+        else if (len - 12 != (uint64_t)plane * type_size[head[0]]) bad = "a pixel count that is not rows x columns";
+        if (bad) {
             char how[200];
-            reap(&ch, how, sizeof how);
+            helper_stop(h, 1, how, sizeof how);
+            st = thx_error(ctx, THX_EIO, "%s: %s: the DICOM helper's reply is garbled (%s: type %u, %u x %u, %llu bytes)",
+                           e->file, doing, bad, head[0], head[1], head[2], (unsigned long long)len);
+            break;
         }
+        if (!img->v && (st = thx_image_alloc(ctx, n, img)) != THX_OK) {
+            char how[200];
+            helper_stop(h, 1, how, sizeof how);
+            break;
+        }
+        int type = (int)head[0];
+        double slope = e->slope, inter = e->intercept;
+        float *dst = img->v + s * plane;
+        for (size_t done = 0; done < plane;) {
+            size_t count = plane - done < CHUNK / type_size[type] ? plane - done : CHUNK / type_size[type];
+            if ((st = payload(ctx, h, chunk, count * type_size[type], e->file, doing, &deadline)) != THX_OK) break;
+            convert(chunk, count, type, slope, inter, dst + done);
+            done += count;
+        }
+        if (st != THX_OK) break;
+        if (s == 0) snprintf(img->stored_type, sizeof img->stored_type, "%s", type_name[type]);
+        else if (strcmp(type_name[type], img->stored_type) != 0) snprintf(img->stored_type, sizeof img->stored_type, "mixed");
+        if (type >= THX_DICOM_T_FLOAT32 || slope != floor(slope) || inter != floor(inter)) integral = 0;
+        char hex[65];
+        st = thx_sha256_file(ctx, e->file, hex);
+        if (st == THX_OK) thx_sha256_update(&hash, hex, 64);
     }
-    if (ch.fd >= 0) {
-        char how[200];
-        reap(&ch, how, sizeof how);
-    }
-    free(rec);
+    free(chunk);
     if (st != THX_OK) {
-        free(buf);
         thx_image_free(img);
         return st;
     }
-    free(buf);
     unsigned char digest[32];
     thx_sha256_final(&hash, digest);
     for (int b = 0; b < 32; b++) snprintf(img->sha256 + 2 * b, 3, "%02x", digest[b]);
@@ -571,9 +887,13 @@ thx_status thx_image_read_dicom(thx_ctx *ctx, const char *path, const char *seri
     }
     thx_dicom_entry *all = NULL;
     size_t count = 0;
-    THX_CHECK(scan_folder(ctx, dir, &all, &count));
-
-    thx_status s = THX_OK;
+    helper h = {0, -1, 0, ""};
+    char how[200];
+    thx_status s = scan_folder(ctx, &h, dir, &all, &count);
+    if (s != THX_OK) {
+        helper_stop(&h, 1, how, sizeof how);
+        return s;
+    }
     series_info *list = NULL;
     slice *sl = NULL;
     /* the images only; a file given names its series */
@@ -659,8 +979,9 @@ thx_status thx_image_read_dicom(thx_ctx *ctx, const char *path, const char *seri
     }
     for (size_t k = 0; k < ni; k++)
         if (strcmp(all[k].series_uid, uid) == 0) sl[ns++].e = &all[k];
-    s = assemble(ctx, path, sl, ns, img);
+    s = assemble(ctx, &h, path, sl, ns, img);
 done:
+    helper_stop(&h, s != THX_OK, how, sizeof how); /* done: it exits on the closed socket */
     free(sl);
     free(list);
     free(all);

@@ -1,8 +1,9 @@
 /* GDCM (Debian's libgdcm-dev) behind the C interface of src/image/dicom.h: one file's tags
  * (gdcm::Scanner, up to the pixel data) and one slice's pixels (gdcm::ImageReader, which
- * decodes the compressed transfer syntaxes with GDCM's own codecs). The only C++ in the library:
+ * decodes the compressed transfer syntaxes with GDCM's own codecs). The only C++ of the project,
+ * linked into the helper program thorax-dicom (src/image/dicom_helper.c), not into the library:
  * no exception crosses the extern "C" boundary, and GDCM's warning and error streams are
- * silenced (their text would be printing inside the library; our messages say what failed). */
+ * silenced (our messages say what failed). */
 #include "image/dicom.h"
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -150,16 +152,7 @@ int scan_file(const char *file, thx_dicom_entry *e, char *msg, size_t msgsize)
     return 1;
 }
 
-template <typename T> void widen(const char *buf, size_t n, double *out)
-{
-    for (size_t q = 0; q < n; q++) {
-        T x;
-        std::memcpy(&x, buf + q * sizeof(T), sizeof(T));
-        out[q] = (double)x;
-    }
-}
-
-int pixels(const char *file, unsigned rows, unsigned columns, double *out, char type[16], int *integer, char *msg,
+int pixels(const char *file, unsigned rows, unsigned columns, void **data, size_t *datalen, int *type, char *msg,
            size_t msgsize)
 {
     quiet();
@@ -216,15 +209,16 @@ int pixels(const char *file, unsigned rows, unsigned columns, double *out, char 
     size_t n = (size_t)rows * columns;
     const char *name = nullptr;
     size_t bytes = 0;
+    int code = 0;
     switch (pf.GetScalarType()) {
-    case gdcm::PixelFormat::UINT8: name = "uint8", bytes = 1; break;
-    case gdcm::PixelFormat::INT8: name = "int8", bytes = 1; break;
-    case gdcm::PixelFormat::UINT16: name = "uint16", bytes = 2; break;
-    case gdcm::PixelFormat::INT16: name = "int16", bytes = 2; break;
-    case gdcm::PixelFormat::UINT32: name = "uint32", bytes = 4; break;
-    case gdcm::PixelFormat::INT32: name = "int32", bytes = 4; break;
-    case gdcm::PixelFormat::FLOAT32: name = "float32", bytes = 4; break;
-    case gdcm::PixelFormat::FLOAT64: name = "float64", bytes = 8; break;
+    case gdcm::PixelFormat::UINT8: name = "uint8", bytes = 1, code = THX_DICOM_T_UINT8; break;
+    case gdcm::PixelFormat::INT8: name = "int8", bytes = 1, code = THX_DICOM_T_INT8; break;
+    case gdcm::PixelFormat::UINT16: name = "uint16", bytes = 2, code = THX_DICOM_T_UINT16; break;
+    case gdcm::PixelFormat::INT16: name = "int16", bytes = 2, code = THX_DICOM_T_INT16; break;
+    case gdcm::PixelFormat::UINT32: name = "uint32", bytes = 4, code = THX_DICOM_T_UINT32; break;
+    case gdcm::PixelFormat::INT32: name = "int32", bytes = 4, code = THX_DICOM_T_INT32; break;
+    case gdcm::PixelFormat::FLOAT32: name = "float32", bytes = 4, code = THX_DICOM_T_FLOAT32; break;
+    case gdcm::PixelFormat::FLOAT64: name = "float64", bytes = 8, code = THX_DICOM_T_FLOAT64; break;
     default:
         say(msg, msgsize, f + ": pixel format " + std::string(pf.GetScalarTypeAsString()) + " is not one thorax reads");
         return -1;
@@ -235,23 +229,19 @@ int pixels(const char *file, unsigned rows, unsigned columns, double *out, char 
                               " " + name + " pixels need " + std::to_string(n * bytes));
         return -1;
     }
-    std::vector<char> buf(len);
-    if (!im.GetBuffer(buf.data())) {
+    void *buf = std::malloc(len ? len : 1);
+    if (!buf) {
+        say(msg, msgsize, f + ": out of memory for " + std::to_string(len) + " bytes of pixels");
+        return -1;
+    }
+    if (!im.GetBuffer((char *)buf)) {
+        std::free(buf);
         say(msg, msgsize, f + ": the pixel data cannot be decoded (truncated or corrupt)");
         return -1;
     }
-    switch (pf.GetScalarType()) {
-    case gdcm::PixelFormat::UINT8: widen<uint8_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::INT8: widen<int8_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::UINT16: widen<uint16_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::INT16: widen<int16_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::UINT32: widen<uint32_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::INT32: widen<int32_t>(buf.data(), n, out); break;
-    case gdcm::PixelFormat::FLOAT32: widen<float>(buf.data(), n, out); break;
-    default: widen<double>(buf.data(), n, out); break;
-    }
-    std::snprintf(type, 16, "%s", name);
-    *integer = pf.GetScalarType() != gdcm::PixelFormat::FLOAT32 && pf.GetScalarType() != gdcm::PixelFormat::FLOAT64;
+    *data = buf;
+    *datalen = len;
+    *type = code;
     return 0;
 }
 
@@ -269,11 +259,15 @@ extern "C" int thx_dicom_scan_file(const char *file, thx_dicom_entry *e, char *m
     return -1;
 }
 
-extern "C" int thx_dicom_pixels(const char *file, unsigned rows, unsigned columns, double *out, char type[16],
-                                int *integer, char *msg, size_t msgsize)
+extern "C" int thx_dicom_pixels(const char *file, unsigned rows, unsigned columns, void **data, size_t *len, int *type,
+                                char *msg, size_t msgsize)
 {
+    *data = nullptr;
+    *len = 0;
     try {
-        return pixels(file, rows, columns, out, type, integer, msg, msgsize);
+        return pixels(file, rows, columns, data, len, type, msg, msgsize);
+    } catch (const std::bad_alloc &) {
+        say(msg, msgsize, std::string(file) + ": GDCM ran out of memory while decoding the pixels");
     } catch (const std::exception &e) {
         say(msg, msgsize, std::string(file) + ": GDCM failed while decoding the pixels: " + e.what());
     } catch (...) {

@@ -1,8 +1,10 @@
-/* Fuzz harness: DICOM (thx_image_read on one .dcm file: the folder scan, GDCM in its child process,
- * the series logic of src/image/dicom.c). An accepted file is one slice whose image passes the
- * invariants; a refused one leaves nothing allocated. GDCM itself runs in a child process (Debian's
- * build aborts on truncated input), so a crash inside GDCM is a refusal here, not a finding; what
- * is fuzzed is our side: the records through the pipe, the checks, the assembly. */
+/* Fuzz harness: DICOM (thx_image_read on one .dcm file: the folder scan, GDCM in the helper program
+ * thorax-dicom, the series logic of src/image/dicom.c). An accepted file is one slice whose image
+ * passes the invariants; a refused one leaves nothing allocated. GDCM runs in the helper, started by
+ * posix_spawn + exec (Debian's build aborts on truncated input): a crash inside GDCM is a refusal
+ * here, not a finding, and none of libFuzzer's handlers follow the helper. What is fuzzed is our
+ * side: the requests and the checked replies through the socket, the checks, the assembly. In the
+ * default campaign of scripts/fuzz.sh. */
 #include "fuzz.h"
 
 #include "thorax/image/image.h"
