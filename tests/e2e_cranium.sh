@@ -45,11 +45,12 @@ EOF
     fail "image label"
 
 # 1. the whole resolution (every plane, nodes 1.5 mm apart): the failing case. The lacing no longer
-#    crosses (1,658 pairs before); the cavity it now cuts in the plane of the notch is triangulated
-#    from its ~300 boundary nodes only, which gives triangles under the check's 1-degree floor (what
-#    thorax mesh can take), so `surfaces` refuses the model by that name alone and every other check
-#    passes. Open (docs/design/geom.md, "Filled pockets"): the cut needs interior nodes, as a grid cap
-#    has. The 6 mm model below passes the whole check and is meshed and solved.
+#    crosses (1,658 pairs before), and the cavity it cuts in the notch's plane is given grid nodes
+#    (build step 3b), but the slice between z = 99 and 100.5 keeps a fan of ~440 triangles across
+#    the skull (edges ~115 mm long, angles under the check's 1-degree floor: what thorax mesh can
+#    take), so `surfaces` refuses the model by that name alone and every other check passes. Open
+#    (docs/design/geom.md, "The cut's triangles"). The 6 mm model below passes the whole check and is
+#    meshed and solved.
 "$THORAX" surfaces labels.nii.gz --label 1,2=scalp:outer --label 2=skull:other -o full -v > full.log 2>&1 &&
     fail "surfaces at 1.5 mm passed the check: the in-plane cut's thin triangles are gone? then check it whole"
 grep -q 'surface "skull" fails the check: quality: triangle [0-9]* has a [0-9.]* deg angle (< 1 deg' full.log ||

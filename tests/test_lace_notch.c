@@ -111,13 +111,10 @@ int main(void)
         thx_surface_report rep;
         thx_check_opts co;
         thx_check_opts_default(&co);
-        /* the whole check, the 1-degree floor included, for the notch below: the cavity's cut in its
-           plane, triangulated by the lacing from its ~300 boundary nodes (0.63 degrees), is given grid
-           nodes (step 3b: 1.25 degrees). Above, the cut's chord (10.7 mm, among 1.5 mm edges) meets
-           the slit's wall at 1.38 degrees, and the ear there has 0.23 degrees whatever is inside: the
-           chord needs nodes along it (open; docs/design/geom.md, "Filled pockets"), so every check
-           but the angles' */
-        if (!strcmp(m->surf[k]->name, "notch_above")) co.min_angle_deg = 0;
+        /* the whole check, the 1-degree floor included: the cavity's cut in its plane, triangulated by
+           the lacing from its ~300 boundary nodes (0.63 and 0.23 degrees), is triangulated again with
+           grid nodes, its chord (10.7 mm among 1.5 mm edges) split with the triangle beyond it (build
+           step 3b, src/geom/inplane.c) */
         CHECK_OK(ctx, thx_surface_check(ctx, m->surf[k], &m->interior[k], &co, &rep));
         CHECK(rep.ok);
         for (size_t e = 0; !rep.ok && e < rep.n_reasons; e++) fprintf(stderr, "  %s: %s\n", m->surf[k]->name, rep.reasons[e]);

@@ -50,6 +50,32 @@ static double tri_min_angle(const thx_surface *s, size_t t)
     return min_angle2(a[0], a[1], b[0], b[1], c[0], c[1]);
 }
 
+/* smallest angle (degrees) of a triangle in space */
+static double min_angle3(const double *a, const double *b, const double *c)
+{
+    const double *P[3] = {a, b, c};
+    double m = 180.0;
+    for (int k = 0; k < 3; k++) {
+        const double *o = P[k], *u = P[(k + 1) % 3], *v = P[(k + 2) % 3];
+        double x[3] = {u[0] - o[0], u[1] - o[1], u[2] - o[2]}, y[3] = {v[0] - o[0], v[1] - o[1], v[2] - o[2]};
+        double cr[3] = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+        double ang = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), x[0] * y[0] + x[1] * y[1] + x[2] * y[2]);
+        m = fmin(m, ang * 180.0 / M_PI);
+    }
+    return m;
+}
+
+static thx_status grow_tris(thx_ctx *ctx, thx_surface *s, size_t *tri_cap, size_t more)
+{
+    if (s->n_tris + more <= *tri_cap) return THX_OK;
+    size_t nc = (s->n_tris + more) * 2;
+    int32_t *ntr = thx_realloc(ctx, s->tri, nc * 3 * sizeof *ntr);
+    if (!ntr) return THX_ENOMEM;
+    s->tri = ntr;
+    *tri_cap = nc;
+    return THX_OK;
+}
+
 /* The boundary of a patch (its edges used once, from the sorted edge list) as one closed loop of node
  * ids in *loop (n_loop), or 0 when it is not one simple loop (a node with other than two boundary
  * edges, or several loops). */
@@ -138,8 +164,9 @@ thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, doub
     thx_status st = THX_OK;
     unsigned char *flat = thx_calloc(ctx, n_laced ? n_laced : 1, 1);
     size_t *grp = thx_malloc(ctx, (nt ? nt : 1) * sizeof *grp);
-    iedge *e = NULL;
+    iedge *e = NULL, *ae = NULL;
     double *wa = NULL;
+    unsigned char *touched = NULL;
     if (!flat || !grp) { st = THX_ENOMEM; goto done; }
     for (size_t t = 0; t < nt; t++) grp[t] = t;
     for (size_t t = 0; t < n_laced; t++) {
@@ -178,66 +205,161 @@ thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, doub
         int r = patch_loop(ctx, e, ne, grp, g, &loop, &nl);
         if (r < 0) { st = THX_ENOMEM; break; }
         if (r == 0) continue;
-        thx_vec2 *lp = thx_malloc(ctx, nl * sizeof *lp);
-        if (!lp) { free(loop); st = THX_ENOMEM; break; }
-        for (size_t i = 0; i < nl; i++) lp[i] = (thx_vec2){s->xyz[3 * loop[i]], s->xyz[3 * loop[i] + 1]};
+        if (!ae) { /* every triangle's edges, for the triangle beyond a long boundary edge */
+            ae = thx_malloc(ctx, 3 * nt * sizeof *ae);
+            touched = thx_calloc(ctx, nt ? nt : 1, 1);
+            if (!ae || !touched) { free(loop); st = THX_ENOMEM; break; }
+            for (size_t t = 0; t < nt; t++)
+                for (int k = 0; k < 3; k++) {
+                    int32_t x = s->tri[3 * t + k], y = s->tri[3 * t + (k + 1) % 3];
+                    ae[3 * t + (size_t)k] = (iedge){x < y ? x : y, x < y ? y : x, t};
+                }
+            qsort(ae, 3 * nt, sizeof *ae, cmp_iedge);
+        }
+        /* a boundary edge over 1.5 grid spacings long (the cut's chord, one edge among the node
+           spacing's short ones) is split in pieces about a grid spacing long, and so is the triangle
+           beyond it (a fan from its third node: the same plane, the same surface), unless that one is
+           in a patch itself or already split */
+        size_t *pieces = thx_malloc(ctx, nl * sizeof *pieces), *beyond = thx_malloc(ctx, nl * sizeof *beyond);
+        if (!pieces || !beyond) { free(loop), free(pieces), free(beyond); st = THX_ENOMEM; break; }
+        size_t nl2 = 0;
+        for (size_t i = 0; i < nl; i++) {
+            int32_t u = loop[i], v = loop[(i + 1) % nl];
+            double L = hypot(s->xyz[3 * v] - s->xyz[3 * u], s->xyz[3 * v + 1] - s->xyz[3 * u + 1]);
+            size_t k = L > 1.5 * grid ? (size_t)floor(L / grid + 0.5) : 1;
+            pieces[i] = 1;
+            beyond[i] = SIZE_MAX;
+            if (k >= 2) {
+                iedge key = {u < v ? u : v, u < v ? v : u, 0};
+                const iedge *f = ae, *l = ae + 3 * nt; /* lower bound of the edge */
+                while (f < l) {
+                    const iedge *mid = f + (l - f) / 2;
+                    if (mid->a < key.a || (mid->a == key.a && mid->b < key.b)) f = mid + 1;
+                    else l = mid;
+                }
+                size_t other = SIZE_MAX, count = 0;
+                for (; f < ae + 3 * nt && f->a == key.a && f->b == key.b; f++, count++)
+                    if (grp[f->t] != g) other = f->t;
+                int dup = 0;
+                for (size_t j = 0; j < i; j++) dup |= beyond[j] == other;
+                if (count == 2 && other != SIZE_MAX && grp[other] == (size_t)-1 && !touched[other] && !dup) {
+                    pieces[i] = k;
+                    beyond[i] = other;
+                }
+            }
+            nl2 += pieces[i];
+        }
+        thx_vec2 *lp = thx_malloc(ctx, nl2 * sizeof *lp);
+        int64_t *ids = thx_malloc(ctx, nl2 * sizeof *ids); /* >= 0: a node; < 0: -(1 + j), split point j */
+        if (!lp || !ids) { free(loop), free(pieces), free(beyond), free(lp), free(ids); st = THX_ENOMEM; break; }
+        size_t q = 0, n_split = 0;
+        for (size_t i = 0; i < nl; i++) {
+            int32_t u = loop[i], v = loop[(i + 1) % nl];
+            for (size_t j = 0; j < pieces[i]; j++, q++) {
+                double t = (double)j / (double)pieces[i];
+                lp[q] = (thx_vec2){s->xyz[3 * u] + t * (s->xyz[3 * v] - s->xyz[3 * u]),
+                                   s->xyz[3 * u + 1] + t * (s->xyz[3 * v + 1] - s->xyz[3 * u + 1])};
+                ids[q] = j ? -(int64_t)(1 + n_split++) : u;
+            }
+        }
         double z = s->xyz[3 * loop[0] + 2];
         thx_ctx *lc = NULL; /* a loop the cap cannot take keeps its patch; its message is not the caller's */
         thx_vec2 *cp = NULL;
         int32_t *ct = NULL;
         size_t ncp = 0, nct = 0;
         thx_status cs = thx_ctx_create(&lc);
-        if (cs == THX_OK) cs = thx_cap_triangulate(lc, lp, nl, grid, 0.5 * grid, &cp, &ncp, &ct, &nct);
+        if (cs == THX_OK) cs = thx_cap_triangulate(lc, lp, nl2, grid, 0.5 * grid, &cp, &ncp, &ct, &nct);
         thx_ctx_destroy(&lc);
-        free(lp);
-        if (cs == THX_ENOMEM) { free(loop); st = THX_ENOMEM; break; }
+        if (cs == THX_ENOMEM) { free(loop), free(pieces), free(beyond), free(lp), free(ids); st = THX_ENOMEM; break; }
         double better = 180.0;
         for (size_t t = 0; cs == THX_OK && t < nct; t++) {
             const thx_vec2 *a = &cp[ct[3 * t]], *b = &cp[ct[3 * t + 1]], *c = &cp[ct[3 * t + 2]];
             better = fmin(better, min_angle2(a->x, a->y, b->x, b->y, c->x, c->y));
         }
+        /* the fans beyond the split edges */
+        for (size_t i = 0, q0 = 0; cs == THX_OK && i < nl; q0 += pieces[i], i++) {
+            if (pieces[i] < 2) continue;
+            const int32_t *tv = s->tri + 3 * beyond[i];
+            int32_t x = tv[0] + tv[1] + tv[2] - loop[i] - loop[(i + 1) % nl];
+            for (size_t j = 0; j < pieces[i]; j++) {
+                const thx_vec2 *p0 = &lp[q0 + j], *p1 = &lp[(q0 + j + 1) % nl2];
+                double P0[3] = {p0->x, p0->y, z}, P1[3] = {p1->x, p1->y, z};
+                better = fmin(better, min_angle3(P0, P1, s->xyz + 3 * x));
+            }
+        }
+        free(lp);
         if (cs != THX_OK || !(better > worst)) {
-            free(cp), free(ct), free(loop);
+            free(cp), free(ct), free(loop), free(pieces), free(beyond), free(ids);
             continue;
         }
-        /* the new nodes, then the triangles: the patch's slots first, the rest appended */
-        size_t base = s->n_nodes, add = ncp - nl;
+        /* the new nodes (split points, then grid nodes), then the triangles: the patch's slots first,
+           the rest appended, then each split edge's fan in place of the triangle beyond it */
+        size_t base = s->n_nodes, add = n_split + ncp - nl2;
         if (s->n_nodes + add > *node_cap) {
             size_t nc = (s->n_nodes + add) * 2;
             double *nx = thx_realloc(ctx, s->xyz, nc * 3 * sizeof *nx);
-            if (!nx) { free(cp), free(ct), free(loop); st = THX_ENOMEM; break; }
+            if (!nx) { free(cp), free(ct), free(loop), free(pieces), free(beyond), free(ids); st = THX_ENOMEM; break; }
             s->xyz = nx;
             *node_cap = nc;
         }
-        for (size_t i = nl; i < ncp; i++) {
+        for (size_t i = 0; i < nl2; i++)
+            if (ids[i] < 0) {
+                size_t j = (size_t)(-ids[i] - 1);
+                s->xyz[3 * (base + j)] = cp[i].x;
+                s->xyz[3 * (base + j) + 1] = cp[i].y;
+                s->xyz[3 * (base + j) + 2] = z;
+                ids[i] = (int64_t)(base + j);
+            }
+        s->n_nodes += n_split;
+        for (size_t i = nl2; i < ncp; i++) {
             s->xyz[3 * s->n_nodes] = cp[i].x;
             s->xyz[3 * s->n_nodes + 1] = cp[i].y;
             s->xyz[3 * s->n_nodes + 2] = z;
             s->n_nodes++;
         }
+        size_t grid_base = base + n_split;
         size_t used = g; /* the patch's first triangle is its root */
-        for (size_t t = 0; t < nct; t++) {
+        for (size_t t = 0; t < nct && st == THX_OK; t++) {
             size_t slot = SIZE_MAX;
             while (used < n_laced && slot == SIZE_MAX) {
                 if (grp[used] == g) slot = used;
                 used++;
             }
             if (slot == SIZE_MAX) {
-                if (s->n_tris + 1 > *tri_cap) {
-                    size_t nc = (s->n_tris + 1) * 2;
-                    int32_t *ntr = thx_realloc(ctx, s->tri, nc * 3 * sizeof *ntr);
-                    if (!ntr) { st = THX_ENOMEM; break; }
-                    s->tri = ntr;
-                    *tri_cap = nc;
-                }
+                st = grow_tris(ctx, s, tri_cap, 1);
+                if (st != THX_OK) break;
                 slot = s->n_tris++;
             } else
                 grp[slot] = (size_t)-1; /* a slot of the patch filled: not the patch's any more */
             for (int v = 0; v < 3; v++) {
-                int32_t q = ct[3 * t + v];
-                s->tri[3 * slot + v] = (size_t)q < nl ? loop[q] : (int32_t)(base + (size_t)q - nl);
+                size_t qv = (size_t)ct[3 * t + v];
+                s->tri[3 * slot + v] = qv < nl2 ? (int32_t)ids[qv] : (int32_t)(grid_base + qv - nl2);
             }
         }
+        for (size_t i = 0, q0 = 0; st == THX_OK && i < nl; q0 += pieces[i], i++) {
+            if (pieces[i] < 2) continue;
+            size_t t0 = beyond[i];
+            int32_t tv[3] = {s->tri[3 * t0], s->tri[3 * t0 + 1], s->tri[3 * t0 + 2]};
+            int32_t u = loop[i], v = loop[(i + 1) % nl];
+            int p = 0;
+            while (p < 3 && !((tv[p] == u && tv[(p + 1) % 3] == v) || (tv[p] == v && tv[(p + 1) % 3] == u))) p++;
+            if (p == 3) { st = thx_error(ctx, THX_EGEOM, "in-plane patch: the triangle beyond a split edge lost it"); break; }
+            int fwd = tv[p] == u; /* the triangle runs along the edge as the loop does */
+            int32_t x = tv[(p + 2) % 3];
+            st = grow_tris(ctx, s, tri_cap, pieces[i] - 1);
+            if (st != THX_OK) break;
+            for (size_t j = 0; j < pieces[i]; j++) {
+                /* the j-th piece in the triangle's direction along the edge */
+                size_t jj = fwd ? j : pieces[i] - 1 - j;
+                int32_t c0 = (int32_t)ids[q0 + jj], c1 = (int32_t)ids[(q0 + jj + 1) % nl2];
+                if (!fwd) { int32_t tmp = c0; c0 = c1; c1 = tmp; }
+                size_t slot = j ? s->n_tris++ : t0;
+                s->tri[3 * slot] = c0, s->tri[3 * slot + 1] = c1, s->tri[3 * slot + 2] = x;
+            }
+            touched[t0] = 1;
+        }
+        free(pieces), free(beyond), free(ids);
+        if (st != THX_OK) { free(cp), free(ct), free(loop); break; }
         /* the patch's slots left over are removed below */
         for (size_t t = used; t < n_laced; t++)
             if (grp[t] == g) grp[t] = (size_t)-2;
@@ -254,6 +376,6 @@ thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, doub
         s->n_tris = w;
     }
 done:
-    free(flat), free(grp), free(e), free(wa);
+    free(flat), free(grp), free(e), free(wa), free(ae), free(touched);
     return st;
 }
