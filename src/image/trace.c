@@ -629,14 +629,17 @@ static int lab_in(const labelset *ls, long x)
     return in_set(ls, x);
 }
 
-/* The voxels equal to 1 in box [lo, hi): their count and the RAS centroid of their centres. */
+/* The voxels equal to 1 in box [lo, hi): their count, the RAS centroid of their centres and the
+ * RAS x range of their index box's corners. */
 static void box_centroid(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3],
-                         size_t *count, double ras[3])
+                         size_t *count, double ras[3], double xr[2])
 {
     double s0 = 0, s1 = 0, s2 = 0;
     size_t cnt = 0;
+    long mn0 = LONG_MAX, mn1 = LONG_MAX, mn2 = LONG_MAX, mx0 = -1, mx1 = -1, mx2 = -1;
     const size_t n0 = img->n[0], n01 = img->n[0] * img->n[1];
-#pragma omp parallel for reduction(+ : s0, s1, s2, cnt) schedule(static)
+#pragma omp parallel for reduction(+ : s0, s1, s2, cnt) reduction(min : mn0, mn1, mn2) reduction(max : mx0, mx1, mx2) \
+    schedule(static)
     for (long k = (long)lo[2]; k < (long)hi[2]; k++)
         for (size_t j = lo[1]; j < hi[1]; j++) {
             const unsigned char *r = m + (size_t)k * n01 + j * n0;
@@ -646,8 +649,23 @@ static void box_centroid(const thx_image *img, const unsigned char *m, const siz
                     s1 += (double)j;
                     s2 += (double)k;
                     cnt++;
+                    if ((long)i < mn0) mn0 = (long)i;
+                    if ((long)i > mx0) mx0 = (long)i;
+                    if ((long)j < mn1) mn1 = (long)j;
+                    if ((long)j > mx1) mx1 = (long)j;
+                    if (k < mn2) mn2 = k;
+                    if (k > mx2) mx2 = k;
                 }
         }
+    xr[0] = INFINITY;
+    xr[1] = -INFINITY;
+    for (int corner = 0; cnt && corner < 8; corner++) {
+        double id[3] = {(double)(corner & 1 ? mx0 : mn0), (double)(corner & 2 ? mx1 : mn1), (double)(corner & 4 ? mx2 : mn2)};
+        double x = img->origin[0];
+        for (int c = 0; c < 3; c++) x += img->dir[c] * img->spacing[c] * id[c];
+        xr[0] = fmin(xr[0], x);
+        xr[1] = fmax(xr[1], x);
+    }
     *count = cnt;
     double idx[3] = {cnt ? s0 / (double)cnt : 0, cnt ? s1 / (double)cnt : 0, cnt ? s2 / (double)cnt : 0};
     for (int r = 0; r < 3; r++) {
@@ -733,7 +751,8 @@ static thx_status order_surfaces(thx_ctx *ctx, thx_contours *c, const thx_trace_
             size_t k = i - a, nk = m - a;
             char nm[160];
             if (nk == 1) snprintf(nm, sizeof nm, "%s", o->tissues[t].name);
-            else if (nk == 2) snprintf(nm, sizeof nm, "%s_%s", o->tissues[t].name, k == 0 ? "right" : "left");
+            else if (nk == 2 && (sr[perm[a]].ras_x_range[0] > sr[perm[a + 1]].ras_x_range[1]))
+                snprintf(nm, sizeof nm, "%s_%s", o->tissues[t].name, k == 0 ? "right" : "left");
             else snprintf(nm, sizeof nm, "%s_%zu", o->tissues[t].name, k + 1);
             if (strlen(nm) >= sizeof c->surf[0].name) {
                 thx_status e = thx_error(ctx, THX_EINPUT,
@@ -1265,7 +1284,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                 size_t pick = comp;
                 THX_TRY(thx_components6(ctx, work, img->n, lo, hi, 1, pick_decide, &pick, NULL));
             }
-            box_centroid(img, work, lo, hi, &trr.voxels, trr.centroid_ras);
+            box_centroid(img, work, lo, hi, &trr.voxels, trr.centroid_ras, trr.ras_x_range);
             if (has_sib) trr.contact_voxels = mark_siblings(img, work, &ls, wlo, whi, lo, hi);
             /* trace plane by plane (increasing z): the planes are independent, traced in parallel each into
                its own slot (each thread with its own scratch and context), then joined in plane order, so

@@ -28,9 +28,9 @@
  *
  * Components (organs). A tissue of an organ role (not outer, fat or muscle) whose cleaned region
  * has several 6-connected 3D components (two lungs under one label) gives one surface per
- * component: two are NAME_right and NAME_left (by their centroids' RAS x: +x is the subject's
- * right), more are NAME_1, NAME_2, ... from right to left (decreasing centroid RAS x), in place of
- * the tissue's surface. A component whose loops all lack a partner (one plane thick) is dropped when
+ * component: two side by side (their RAS x ranges apart) are NAME_right and NAME_left (+x is the
+ * subject's right), others NAME_1, NAME_2, ... from right to left (decreasing centroid RAS x; ties in
+ * the order of their first voxel in memory), in place of the tissue's surface. A component whose loops all lack a partner (one plane thick) is dropped when
  * another remains. A region that branches between planes is one component: one surface.
  *
  * Siblings. Organ tissues whose label sets are disjoint (heart and lungs; not blood in the heart,
@@ -87,6 +87,7 @@ typedef struct {
     size_t component, n_components; /* which of the tissue's surfaces (0-based) and how many it gave */
     size_t components_dropped;      /* its components dropped (one plane thick) */
     double centroid_ras[3];         /* the centroid of its voxels, RAS mm */
+    double ras_x_range[2];          /* the RAS x range of its voxels' index box, mm */
     size_t contact_voxels;          /* its voxels with a face on a sibling tissue's voxel (pulled apart) */
     size_t n_layers, n_loops;       /* of the surface traced */
     size_t n_holes;                 /* holes met (filled, or kept as loops) */
