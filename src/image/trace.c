@@ -614,12 +614,52 @@ static unsigned char keep_all_decide(void *user, size_t size, int touches, size_
     return 1;
 }
 
-/* keeps the component whose ordinal is *user */
+#define MAX_SPLIT 16 /* more components than this: a fragmented region, traced as one surface */
+
+/* keeps the components of group `want` */
+typedef struct {
+    const size_t *grp;
+    size_t want;
+} pick_rule;
 static unsigned char pick_decide(void *user, size_t size, int touches, size_t ordinal)
 {
+    const pick_rule *r = user;
     (void)size;
     (void)touches;
-    return ordinal == *(const size_t *)user;
+    return r->grp[ordinal] == r->want;
+}
+
+/* The index box of the voxels equal to 1 in box [lo, hi): b = {min i, max i, min j, max j, min k, max k}. */
+static void index_box(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3], long b[6])
+{
+    long mn0 = LONG_MAX, mn1 = LONG_MAX, mn2 = LONG_MAX, mx0 = -1, mx1 = -1, mx2 = -1;
+    const size_t n0 = img->n[0], n01 = img->n[0] * img->n[1];
+#pragma omp parallel for reduction(min : mn0, mn1, mn2) reduction(max : mx0, mx1, mx2) schedule(static)
+    for (long k = (long)lo[2]; k < (long)hi[2]; k++)
+        for (size_t j = lo[1]; j < hi[1]; j++) {
+            const unsigned char *r = m + (size_t)k * n01 + j * n0;
+            for (size_t i = lo[0]; i < hi[0]; i++)
+                if (r[i] == 1) {
+                    if ((long)i < mn0) mn0 = (long)i;
+                    if ((long)i > mx0) mx0 = (long)i;
+                    if ((long)j < mn1) mn1 = (long)j;
+                    if ((long)j > mx1) mx1 = (long)j;
+                    if (k < mn2) mn2 = k;
+                    if (k > mx2) mx2 = k;
+                }
+        }
+    b[0] = mn0;
+    b[1] = mx0;
+    b[2] = mn1;
+    b[3] = mx1;
+    b[4] = mn2;
+    b[5] = mx2;
+}
+
+static size_t uf_find(size_t *par, size_t a)
+{
+    while (par[a] != a) a = par[a] = par[par[a]];
+    return a;
 }
 
 static int lab_in(const labelset *ls, long x)
@@ -1251,13 +1291,55 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
         size_t ncomp = 1;
         int is_organ = nest_depth(ti->role) == 3, has_sib = 0;
         for (size_t k = 0; k < o->n_tissues; k++) has_sib |= siblings(o, t, k);
+        size_t grp[MAX_SPLIT];
         if (is_organ) THX_TRY(thx_components6(ctx, mask, img->n, lo, hi, 1, keep_all_decide, NULL, &ncomp));
+        if (ncomp > MAX_SPLIT) ncomp = 1;
         if (ncomp > 1 && !scratch) {
             scratch = thx_calloc(ctx, nv, 1);
             if (!scratch) {
                 st = THX_ENOMEM;
                 goto done;
             }
+        }
+        if (ncomp > 1) {
+            /* components whose index boxes, widened by the smoothing's reach in the plane (KR + 1 voxels)
+               and a plane across, overlap are one group, one surface: only organs well apart are split
+               (two lungs; not parts that touch along an edge, whose loops would merge in the field) */
+            long bx[MAX_SPLIT][6];
+            size_t par[MAX_SPLIT];
+            for (size_t cc = 0; cc < ncomp; cc++) {
+                for (size_t k = lo[2]; k < hi[2]; k++)
+                    for (size_t j = lo[1]; j < hi[1]; j++) {
+                        size_t q = k * img->n[0] * img->n[1] + j * img->n[0];
+                        memcpy(scratch + q + lo[0], mask + q + lo[0], hi[0] - lo[0]);
+                    }
+                for (size_t q = 0; q < ncomp; q++) grp[q] = q;
+                pick_rule pr = {grp, cc};
+                THX_TRY(thx_components6(ctx, scratch, img->n, lo, hi, 1, pick_decide, &pr, NULL));
+                index_box(img, scratch, lo, hi, bx[cc]);
+                for (size_t k = lo[2]; k < hi[2]; k++)
+                    for (size_t j = lo[1]; j < hi[1]; j++)
+                        memset(scratch + k * img->n[0] * img->n[1] + j * img->n[0] + lo[0], 0, hi[0] - lo[0]);
+                par[cc] = cc;
+            }
+            for (size_t a = 0; a < ncomp; a++)
+                for (size_t b = a + 1; b < ncomp; b++) {
+                    int apart = 0;
+                    for (int q = 0; q < 3; q++) {
+                        long r = q == g.s ? 1 : KR + 1;
+                        apart |= bx[a][2 * q] > bx[b][2 * q + 1] + r || bx[b][2 * q] > bx[a][2 * q + 1] + r;
+                    }
+                    if (!apart) par[uf_find(par, a)] = uf_find(par, b);
+                }
+            size_t ng = 0, gid[MAX_SPLIT];
+            for (size_t a = 0; a < ncomp; a++) gid[a] = SIZE_MAX;
+            for (size_t a = 0; a < ncomp; a++) {
+                size_t r = uf_find(par, a);
+                if (gid[r] == SIZE_MAX) gid[r] = ng++;
+                grp[a] = gid[r];
+            }
+            trr.n_components = ncomp; /* before grouping, for the report */
+            ncomp = ng;
         }
         /* the box the field reads: the tissue's box widened by the buffer's rim (and the smoothing across
            planes) */
@@ -1275,14 +1357,14 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             snprintf(trr.tissue, sizeof trr.tissue, "%s", ti->name);
             trr.component = comp;
             if (ncomp > 1) {
-                work = scratch;
+                work = scratch; /* the group's components only */
                 for (size_t k = lo[2]; k < hi[2]; k++)
                     for (size_t j = lo[1]; j < hi[1]; j++) {
                         size_t q = k * img->n[0] * img->n[1] + j * img->n[0];
                         memcpy(work + q + lo[0], mask + q + lo[0], hi[0] - lo[0]);
                     }
-                size_t pick = comp;
-                THX_TRY(thx_components6(ctx, work, img->n, lo, hi, 1, pick_decide, &pick, NULL));
+                pick_rule pr = {grp, comp};
+                THX_TRY(thx_components6(ctx, work, img->n, lo, hi, 1, pick_decide, &pr, NULL));
             }
             box_centroid(img, work, lo, hi, &trr.voxels, trr.centroid_ras, trr.ras_x_range);
             if (has_sib) trr.contact_voxels = mark_siblings(img, work, &ls, wlo, whi, lo, hi);
