@@ -183,6 +183,9 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
             if (r->component == 0 && r->components_dropped)
                 printf("%s: %zu component%s one plane thick dropped\n", r->tissue, r->components_dropped,
                        r->components_dropped == 1 ? "" : "s");
+            if (r->n_tiny)
+                printf("%s: %zu loop%s of less than a voxel's in-plane area dropped (beads of a gently sloping "
+                       "boundary; none with --min-size 0 or 1)\n", r->name, r->n_tiny, r->n_tiny == 1 ? "" : "s");
             if (r->contact_voxels)
                 printf("%s: %zu voxels face a sibling tissue's (no voxel between): its boundary pulled in there\n",
                        r->name, r->contact_voxels);

@@ -965,7 +965,8 @@ static void scratch_free(plane_scratch *sc)
  * so planes are traced in parallel. */
 static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb, double tk,
                               int resampled, const double w[2 * KR + 1], thx_trace_holes holes, double h,
-                              plane_scratch *sc, polyset *out, size_t *n_holes, size_t *n_islands)
+                              double amin, plane_scratch *sc, polyset *out, size_t *n_holes, size_t *n_islands,
+                              size_t *n_tiny)
 {
     polyset *raw = &sc->raw, *fin = &sc->fin;
     int empty;
@@ -1001,6 +1002,10 @@ static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *m
     polyset_clear(fin);
     for (size_t l = 0; l < raw->n; l++) {
         int hole = ar[5 * l] < 0, drop = 0;
+        if (fabs(ar[5 * l]) < amin) { /* below the image's resolution: a bead of the staircase */
+            (*n_tiny)++;
+            continue;
+        }
         if (hole) (*n_holes)++;
         if (holes == THX_TRACE_HOLES_FILL) {
             if (hole) drop = 1;
@@ -1091,6 +1096,10 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     size_t np = resampled ? (size_t)floor(span / pspace + 1e-9) + 1 : g.ns;
     double inplane = fmax(img->spacing[g.a0], img->spacing[g.a1]);
     double h = o->node_spacing > 0 ? o->node_spacing : fmax(inplane, pspace);
+    /* loops enclosing less than one voxel's in-plane area are dropped when cleaning (min_size > 1): at a
+       gently sloping boundary (a lung's dome) the staircase's single-voxel steps give beads of the
+       smoothed field just over 0.5, loops of a tenth of a voxel that the lacing would have to branch to */
+    double amin = o->min_size > 1 ? img->spacing[g.a0] * img->spacing[g.a1] : 0;
 
     thx_status st = THX_OK;
     thx_contours *c = NULL;
@@ -1103,7 +1112,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     long *pb = NULL;
     polyset *pout = NULL;    /* per output plane: its loops */
     thx_status *pst = NULL;  /* per output plane: the status of its tracing */
-    size_t *pcount = NULL;   /* per output plane: holes seen, islands filled */
+    size_t *pcount = NULL;   /* per output plane: holes seen, islands filled, tiny loops dropped */
     size_t *kcount = NULL;   /* per image plane along the superior axis: the tissue's voxels */
     tissue_trace tt = {0};
     labelset ls = {0};
@@ -1170,7 +1179,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     pb = thx_malloc(ctx, 4 * g.ns * sizeof *pb);
     pout = thx_calloc(ctx, np, sizeof *pout);
     pst = thx_calloc(ctx, np, sizeof *pst);
-    pcount = thx_calloc(ctx, 2 * np, sizeof *pcount);
+    pcount = thx_calloc(ctx, 3 * np, sizeof *pcount);
     kcount = thx_malloc(ctx, g.ns * sizeof *kcount);
     if (!mask || !pb || !pout || !pst || !pcount || !kcount) {
         st = THX_ENOMEM;
@@ -1376,7 +1385,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
             for (size_t p = 0; p < np; p++) {
                 polyset_clear(&pout[p]);
                 pst[p] = THX_OK;
-                pcount[2 * p] = pcount[2 * p + 1] = 0;
+                pcount[3 * p] = pcount[3 * p + 1] = pcount[3 * p + 2] = 0;
             }
             {
                 long bad = -1;
@@ -1395,8 +1404,8 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                         if (tk < 0) tk = 0;
                         if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
                         if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - (size_t)p);
-                        thx_status r = ok ? trace_plane(lc, &g, work, pb, tk, resampled, w, o->holes, h, &sc, &pout[p],
-                                                        &pcount[2 * p], &pcount[2 * p + 1])
+                        thx_status r = ok ? trace_plane(lc, &g, work, pb, tk, resampled, w, o->holes, h, amin, &sc, &pout[p],
+                                                        &pcount[3 * p], &pcount[3 * p + 1], &pcount[3 * p + 2])
                                           : THX_ENOMEM;
                         pst[p] = r;
                         if (r != THX_OK) {
@@ -1416,8 +1425,9 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                 }
             }
             for (size_t p = 0; p < np; p++) {
-                trr.n_holes += pcount[2 * p];
-                trr.n_islands_filled += pcount[2 * p + 1];
+                trr.n_holes += pcount[3 * p];
+                trr.n_islands_filled += pcount[3 * p + 1];
+                trr.n_tiny += pcount[3 * p + 2];
                 if (!pout[p].n) continue;
                 /* the layer */
                 if (tt.n_layers == tt.cap_layers) {

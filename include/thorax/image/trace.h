@@ -92,6 +92,7 @@ typedef struct {
     size_t n_layers, n_loops;       /* of the surface traced */
     size_t n_holes;                 /* holes met (filled, or kept as loops) */
     size_t n_islands_filled;        /* loops inside a filled hole */
+    size_t n_tiny;                  /* loops of less than a voxel's in-plane area, dropped (min_size > 1) */
     size_t n_flat_dropped;          /* loops with no partner on either neighbouring plane, dropped */
     size_t n_trimmed_layers;        /* layers on or beyond its container's end planes, dropped (the paper's
                                        nesting: outer > fat > muscle > the organs; caps never share a plane) */
