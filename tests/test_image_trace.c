@@ -678,6 +678,51 @@ static void test_siblings(void)
     thx_image_free(&img);
 }
 
+/* A bead: one voxel set just outside a ball, face-joined to it across planes only (its own plane holds
+ * nothing else there), as a gently sloping boundary's staircase leaves them. Its loop encloses less
+ * than a voxel's area: dropped when cleaning (counted), kept with min_size 0. */
+static void test_tiny_loops(void)
+{
+    balls B = {{{{0, 0, 0}, 10}}, 1, {1}};
+    thx_image img;
+    make_map(&img, 16, 16, 16, 2.0, NULL, in_balls, &B);
+    /* the ball's top voxel column at the centre; the voxel beside it one plane up */
+    size_t ktop = 0;
+    for (size_t k = 0; k < 16; k++)
+        if (img.v[thx_image_at(&img, 8, 8, k)] == 1) ktop = k;
+    CHECK(ktop + 1 < 16 && img.v[thx_image_at(&img, 8, 8, ktop + 1)] == 0);
+    img.v[thx_image_at(&img, 8, 8, ktop + 1)] = 1;
+    long one = 1;
+    thx_trace_tissue t = tissue(&one, 1, "ball", THX_ROLE_OTHER);
+    thx_contours *c = NULL;
+    thx_trace_report rep;
+    CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    CHECK(rep.tissue[0].n_tiny >= 1);
+    double amin = INFINITY;
+    for (size_t l = 0; c && l < c->surf[0].n_layers; l++)
+        for (size_t i = 0; i < c->surf[0].layers[l].n_loops; i++) amin = fmin(amin, loop_area(&c->surf[0].layers[l].loops[i]));
+    printf("bead: %zu loop(s) under a voxel's area dropped; the smallest loop kept %.2f mm^2 (voxel 4 mm^2)\n",
+           rep.tissue[0].n_tiny, amin);
+    CHECK(amin >= 4.0);
+    CHECK(c && builds_and_checks(c, NULL));
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_trace_opts o;
+    thx_trace_opts_default(&o);
+    o.tissues = &t;
+    o.n_tissues = 1;
+    o.min_size = 0;
+    CHECK_OK(ctx, thx_image_trace(ctx, &img, &o, &c, &rep));
+    CHECK(rep.tissue[0].n_tiny == 0);
+    amin = INFINITY;
+    for (size_t l = 0; c && l < c->surf[0].n_layers; l++)
+        for (size_t i = 0; i < c->surf[0].layers[l].n_loops; i++) amin = fmin(amin, loop_area(&c->surf[0].layers[l].loops[i]));
+    CHECK(amin < 4.0); /* the bead's loop, kept */
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -694,6 +739,7 @@ int main(void)
     test_refusals();
     test_cut_ends();
     test_siblings();
+    test_tiny_loops();
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("test_image_trace");
 }
