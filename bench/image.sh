@@ -113,7 +113,8 @@ else
     if [ -f "$W/m/model.json" ]; then
         if "$THORAX" check "$W/m" -q > "$W/check.out" 2>&1; then echo "  thorax check: all surfaces pass"
         else echo "  thorax check: FAILED: $(tail -2 "$W/check.out")"; fi
-        # the surfaces' label sets, from THORAX_LABELS: NAME:MODEL/NAME.pts:VALUES:rest
+        # the surfaces' label sets, from THORAX_LABELS: NAME:MODEL/NAME.pts:VALUES:rest (a part's
+        # distance is to its label's boundary, all parts of the label included)
         dist_args() {
             local model=$1
             args=()
@@ -125,7 +126,11 @@ else
                     vals=${spec%%=*}
                     name=${spec#*=}
                     name=${name%%:*}
-                    args+=("$name:$model/$name.pts:$vals:rest")
+                    # an organ label of parts well apart gives NAME_right/NAME_left or NAME_1.. (one per part)
+                    local f
+                    for f in "$model/$name.pts" "$model/${name}"_right.pts "$model/${name}"_left.pts "$model/${name}"_[0-9]*.pts; do
+                        [ -f "$f" ] && args+=("$(basename "$f" .pts):$f:$vals:rest")
+                    done
                     shift
                 fi
                 shift

@@ -293,9 +293,23 @@ static void test_islands_noise_nesting(void)
     CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
     if (!c) exit(1);
     CHECK_OK(ctx, thx_contours_validate(ctx, c));
-    for (size_t l = 0; l < c->surf[0].n_layers; l++) CHECK(c->surf[0].layers[l].n_loops == 2);
+    /* two 3D components of one organ label: a surface each, named by side (+x the subject's right) */
+    CHECK(c->n_surfaces == 2 && rep.n_tissues == 2);
+    CHECK(strcmp(c->surf[0].name, "pair_right") == 0 && strcmp(c->surf[1].name, "pair_left") == 0);
+    CHECK(rep.tissue[0].centroid_ras[0] > 14 && rep.tissue[0].centroid_ras[0] < 16);
+    CHECK(rep.tissue[1].centroid_ras[0] < -14 && rep.tissue[1].centroid_ras[0] > -16);
+    CHECK(rep.tissue[0].n_components == 2 && rep.tissue[1].component == 1 && strcmp(rep.tissue[1].tissue, "pair") == 0);
+    for (int s = 0; s < 2; s++) {
+        for (size_t l = 0; l < c->surf[s].n_layers; l++) {
+            CHECK(c->surf[s].layers[l].n_loops == 1);
+            /* every node on its own side */
+            for (size_t i = 0; i < c->surf[s].layers[l].loops[0].n; i++)
+                CHECK(s == 0 ? c->surf[s].layers[l].loops[0].p[i].x > 0 : c->surf[s].layers[l].loops[0].p[i].x < 0);
+        }
+        CHECK(rep.tissue[s].voxels == rep.tissue[1 - s].voxels); /* mirror images */
+    }
     CHECK(builds_and_checks(c, NULL));
-    size_t loops = rep.tissue[0].n_loops;
+    size_t loops = rep.tissue[0].n_loops + rep.tissue[1].n_loops;
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
     /* noise: three single voxels away from the balls, a one-voxel cavity in one */
@@ -314,8 +328,8 @@ static void test_islands_noise_nesting(void)
     CHECK(rep.tissue[0].n_removed == 3 && rep.tissue[0].removed_voxels == 3);
     CHECK(rep.tissue[0].removed_size[0] == 1 && rep.tissue[0].removed_size[2] == 1);
     CHECK(rep.tissue[0].n_cavities == 1 && rep.tissue[0].cavity_voxels == 1);
-    CHECK(rep.tissue[0].n_loops == loops); /* the noise left nothing */
-    CHECK(rep.tissue[0].n_holes == 0);
+    CHECK(rep.n_tissues == 2 && rep.tissue[0].n_loops + rep.tissue[1].n_loops == loops); /* the noise left nothing */
+    CHECK(rep.tissue[0].n_holes == 0 && rep.tissue[1].n_holes == 0);
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
     /* without cleaning the noise is traced (and its one-plane loops dropped as flat) */
@@ -326,7 +340,13 @@ static void test_islands_noise_nesting(void)
     o.min_size = 0;
     o.holes = THX_TRACE_HOLES_KEEP;
     CHECK_OK(ctx, thx_image_trace(ctx, &img, &o, &c, &rep));
-    CHECK(rep.tissue[0].n_removed == 0 && rep.tissue[0].n_flat_dropped == 3 && rep.tissue[0].n_holes == 1);
+    /* the three noise voxels are components of their own, one plane thick: dropped, as a group of their
+       own or as a flat loop of the ball's group (the voxel beside a ball's box) */
+    CHECK(rep.n_tissues == 2 && rep.tissue[0].n_removed == 0);
+    printf("noise: %zu groups dropped, flat loops %zu + %zu\n", rep.tissue[0].components_dropped,
+           rep.tissue[0].n_flat_dropped, rep.tissue[1].n_flat_dropped);
+    CHECK(rep.tissue[0].components_dropped + rep.tissue[0].n_flat_dropped + rep.tissue[1].n_flat_dropped == 3);
+    CHECK(rep.tissue[0].n_holes + rep.tissue[1].n_holes == 1);
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
     thx_image_free(&img);
@@ -388,6 +408,8 @@ static void test_split_caps(void)
     CHECK(s->n_layers == 20);
     for (size_t l = 0; l < s->n_layers; l++) CHECK(s->layers[l].n_loops == (s->layers[l].z < 4 ? 1u : 2u));
     CHECK(builds_and_checks(c, NULL));
+    CHECK(c->n_surfaces == 1 && rep.n_tissues == 1 && rep.tissue[0].n_components == 1); /* one component: one surface */
+    CHECK(strcmp(c->surf[0].name, "fork") == 0);
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
     thx_image_free(&img);
@@ -456,12 +478,20 @@ static void test_refusals(void)
     thx_image img;
     make_map(&img, 10, 10, 24, 2.0, NULL, in_balls, &B);
     long one = 1, nine = 9;
-    thx_trace_tissue t = tissue(&one, 1, "two", THX_ROLE_OTHER);
+    thx_trace_tissue t = tissue(&one, 1, "two", THX_ROLE_MUSCLE);
     thx_contours *c = NULL;
     thx_trace_report rep;
     CHECK(trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep) == THX_EINPUT && !c);
     CHECK(strstr(thx_ctx_message(ctx), "\"two\" vanishes and reappears") != NULL);
     thx_ctx_clear(ctx);
+    /* an organ: a surface per component; one above the other (x ranges overlap): numbered, ties in
+       memory order (the lower first) */
+    t.role = THX_ROLE_OTHER;
+    CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    CHECK(c && c->n_surfaces == 2 && strcmp(c->surf[0].name, "two_1") == 0 && strcmp(c->surf[1].name, "two_2") == 0);
+    CHECK(c && c->surf[0].layers[0].z < 0 && c->surf[1].layers[0].z > 0);
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
     thx_trace_tissue none = tissue(&nine, 1, "none", THX_ROLE_OTHER);
     CHECK(trace(&img, &none, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep) == THX_EINPUT && !c);
     CHECK(strstr(thx_ctx_message(ctx), "\"none\": none of its label values is in the image") != NULL);
@@ -554,6 +584,145 @@ static void test_cut_ends(void)
     thx_image_free(&img);
 }
 
+/* Siblings that touch: a lung ball and a heart ball whose voxels meet face to face over many planes
+ * (no voxel between them, as in a segmentation's map). Their loops keep a gap in every plane (the
+ * competition field: each boundary at 0.75 of its own smoothed indicator where they face), the
+ * surfaces build and pass the check (which fails surfaces that meet); a sibling farther than the
+ * smoothing's reach leaves the contours byte-identical, and a nested tissue (blood inside the heart:
+ * labels a subset) is no sibling. */
+static void test_siblings(void)
+{
+    balls B = {{{{-9, 0, 0}, 14}, {{9, 0, 0}, 12}}, 2, {2, 3}};
+    thx_image img;
+    make_map(&img, 30, 24, 24, 2.0, NULL, in_balls, &B);
+    size_t faces = 0;
+    for (size_t k = 0; k < 24; k++)
+        for (size_t j = 0; j < 24; j++)
+            for (size_t i = 0; i + 1 < 30; i++) {
+                float a = img.v[thx_image_at(&img, i, j, k)], b = img.v[thx_image_at(&img, i + 1, j, k)];
+                faces += (a == 2 && b == 3) || (a == 3 && b == 2);
+            }
+    CHECK(faces > 40);
+    long l2 = 2, l3 = 3;
+    thx_trace_tissue tt[2] = {tissue(&l2, 1, "lung", THX_ROLE_LUNG), tissue(&l3, 1, "heart", THX_ROLE_HEART)};
+    thx_contours *c = NULL;
+    thx_trace_report rep;
+    CHECK_OK(ctx, trace(&img, tt, 2, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    if (!c) exit(1);
+    CHECK(rep.tissue[0].contact_voxels > 40 && rep.tissue[1].contact_voxels > 40);
+    /* the gap per plane: the least distance from a node of one loop to the edges of the other */
+    double gmin = INFINITY;
+    size_t planes = 0;
+    for (size_t a = 0; a < c->surf[0].n_layers; a++)
+        for (size_t b = 0; b < c->surf[1].n_layers; b++) {
+            if (c->surf[0].layers[a].z != c->surf[1].layers[b].z) continue;
+            planes++;
+            for (int w = 0; w < 2; w++) {
+                const thx_loop *P = &c->surf[w].layers[w ? b : a].loops[0], *Q = &c->surf[1 - w].layers[w ? a : b].loops[0];
+                for (size_t i = 0; i < P->n; i++)
+                    for (size_t j = 0; j < Q->n; j++) {
+                        thx_vec2 q0 = Q->p[j], q1 = Q->p[(j + 1) % Q->n], p = P->p[i];
+                        double dx = q1.x - q0.x, dy = q1.y - q0.y, L2 = dx * dx + dy * dy;
+                        double t = L2 > 0 ? ((p.x - q0.x) * dx + (p.y - q0.y) * dy) / L2 : 0;
+                        t = t < 0 ? 0 : t > 1 ? 1 : t;
+                        gmin = fmin(gmin, hypot(q0.x + t * dx - p.x, q0.y + t * dy - p.y));
+                    }
+            }
+        }
+    printf("siblings touching over %zu voxel faces: %zu planes with both loops, least gap %.3f mm (%.3f voxel)\n", faces,
+           planes, gmin, gmin / 2.0);
+    CHECK(planes >= 8);
+    CHECK(gmin > 0.4 * 2.0); /* 0.636 voxel where the faces meet square on; less on the staircase */
+    CHECK(builds_and_checks(c, NULL));
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+
+    /* a heart 6 voxels away: the lung's contours the bytes they are without it */
+    balls F = {{{{-9, 0, 0}, 14}, {{20, 0, 0}, 4}}, 2, {2, 3}};
+    make_map(&img, 30, 24, 24, 2.0, NULL, in_balls, &F);
+    thx_contours *c1 = NULL, *c2 = NULL;
+    CHECK_OK(ctx, trace(&img, tt, 2, 0, THX_TRACE_HOLES_FILL, &c1, &rep));
+    CHECK(rep.tissue[0].contact_voxels == 0);
+    thx_trace_report_free(&rep);
+    CHECK_OK(ctx, trace(&img, tt, 1, 0, THX_TRACE_HOLES_FILL, &c2, &rep));
+    thx_trace_report_free(&rep);
+    int same = c1 && c2 && c1->surf[0].n_layers == c2->surf[0].n_layers;
+    for (size_t l = 0; same && l < c1->surf[0].n_layers; l++) {
+        const thx_loop *p = &c1->surf[0].layers[l].loops[0], *q = &c2->surf[0].layers[l].loops[0];
+        same = p->n == q->n && memcmp(p->p, q->p, p->n * sizeof *p->p) == 0;
+    }
+    CHECK(same);
+    thx_contours_destroy(&c1);
+    thx_contours_destroy(&c2);
+    thx_image_free(&img);
+
+    /* nested: blood (3) inside the heart (2, 3): the heart's contours the same with the blood listed */
+    balls N = {{{{0, 0, 0}, 14}, {{0, 0, 0}, 6}}, 2, {2, 3}};
+    make_map(&img, 24, 24, 24, 2.0, NULL, in_balls, &N);
+    long hv[2] = {2, 3};
+    thx_trace_tissue hb[2] = {tissue(hv, 2, "heart", THX_ROLE_HEART), tissue(&l3, 1, "blood", THX_ROLE_OTHER)};
+    CHECK_OK(ctx, trace(&img, hb, 2, 0, THX_TRACE_HOLES_FILL, &c1, &rep));
+    CHECK(rep.tissue[0].contact_voxels == 0 && rep.tissue[1].contact_voxels == 0);
+    thx_trace_report_free(&rep);
+    CHECK_OK(ctx, trace(&img, hb, 1, 0, THX_TRACE_HOLES_FILL, &c2, &rep));
+    thx_trace_report_free(&rep);
+    same = c1 && c2 && c1->surf[0].n_layers == c2->surf[0].n_layers;
+    for (size_t l = 0; same && l < c1->surf[0].n_layers; l++) {
+        const thx_loop *p = &c1->surf[0].layers[l].loops[0], *q = &c2->surf[0].layers[l].loops[0];
+        same = p->n == q->n && memcmp(p->p, q->p, p->n * sizeof *p->p) == 0;
+    }
+    CHECK(same);
+    thx_contours_destroy(&c1);
+    thx_contours_destroy(&c2);
+    thx_image_free(&img);
+}
+
+/* A bead: one voxel set just outside a ball, face-joined to it across planes only (its own plane holds
+ * nothing else there), as a gently sloping boundary's staircase leaves them. Its loop encloses less
+ * than a voxel's area: dropped when cleaning (counted), kept with min_size 0. */
+static void test_tiny_loops(void)
+{
+    balls B = {{{{0, 0, 0}, 10}}, 1, {1}};
+    thx_image img;
+    make_map(&img, 16, 16, 16, 2.0, NULL, in_balls, &B);
+    /* the ball's top voxel column at the centre; the voxel beside it one plane up */
+    size_t ktop = 0;
+    for (size_t k = 0; k < 16; k++)
+        if (img.v[thx_image_at(&img, 8, 8, k)] == 1) ktop = k;
+    CHECK(ktop + 1 < 16 && img.v[thx_image_at(&img, 8, 8, ktop + 1)] == 0);
+    img.v[thx_image_at(&img, 8, 8, ktop + 1)] = 1;
+    long one = 1;
+    thx_trace_tissue t = tissue(&one, 1, "ball", THX_ROLE_OTHER);
+    thx_contours *c = NULL;
+    thx_trace_report rep;
+    CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    CHECK(rep.tissue[0].n_tiny >= 1);
+    double amin = INFINITY;
+    for (size_t l = 0; c && l < c->surf[0].n_layers; l++)
+        for (size_t i = 0; i < c->surf[0].layers[l].n_loops; i++) amin = fmin(amin, loop_area(&c->surf[0].layers[l].loops[i]));
+    printf("bead: %zu loop(s) under a voxel's area dropped; the smallest loop kept %.2f mm^2 (voxel 4 mm^2)\n",
+           rep.tissue[0].n_tiny, amin);
+    CHECK(amin >= 4.0);
+    CHECK(c && builds_and_checks(c, NULL));
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_trace_opts o;
+    thx_trace_opts_default(&o);
+    o.tissues = &t;
+    o.n_tissues = 1;
+    o.min_size = 0;
+    CHECK_OK(ctx, thx_image_trace(ctx, &img, &o, &c, &rep));
+    CHECK(rep.tissue[0].n_tiny == 0);
+    amin = INFINITY;
+    for (size_t l = 0; c && l < c->surf[0].n_layers; l++)
+        for (size_t i = 0; i < c->surf[0].layers[l].n_loops; i++) amin = fmin(amin, loop_area(&c->surf[0].layers[l].loops[i]));
+    CHECK(amin < 4.0); /* the bead's loop, kept */
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -569,6 +738,8 @@ int main(void)
     test_oblique_flipped();
     test_refusals();
     test_cut_ends();
+    test_siblings();
+    test_tiny_loops();
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("test_image_trace");
 }

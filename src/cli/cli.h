@@ -69,7 +69,9 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
      .help = "a surface traced from the label map: the label values (integers, comma-separated, or 'all' for every "    \
              "non-zero value) whose union it bounds, its name and role (outer, fat, muscle, lung, heart, other; an "    \
              "outer surface also takes every other --label's values); a value absent from the image is a warning, a "  \
-             "surface with none an error"},                                                                            \
+             "surface with none an error. An organ (lung, heart, other) whose voxels form parts well apart (two "      \
+             "lungs under one label) gives a surface per part: NAME_right and NAME_left side by side, else NAME_1.. "  \
+             "right to left; organs of disjoint labels that touch are traced apart (a gap of ~0.6 voxel)"},           \
     {.name = PLANE, .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &(A).spacing, .rule = CLI_GE | CLI_FINITE,      \
      .bad = PLANE " must be >= 0", .def = "0", .note = "0 = every image plane",                                         \
      .help = "distance between the planes cut across the label map (resampled by interpolating each tissue's "         \

@@ -173,8 +173,27 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
                o.holes == THX_TRACE_HOLES_FILL ? "filled" : "kept as clockwise loops", o.min_size);
         for (size_t t = 0; t < rep.n_tissues; t++) {
             const thx_trace_tissue_report *r = &rep.tissue[t];
-            if (!r->n_removed) continue;
-            printf("%s: removed %zu component%s of %zu voxel%s in all (sizes:", r->name, r->n_removed,
+            if (r->n_components > 1 && r->component == 0) {
+                printf("%s: %zu components (6-connected in 3D), a surface each, right to left:", r->tissue, r->n_components);
+                for (size_t k = t; k < rep.n_tissues && k < t + r->n_components; k++)
+                    printf(" %s (%zu voxels, centroid RAS x %.1f mm)", rep.tissue[k].name, rep.tissue[k].voxels,
+                           rep.tissue[k].centroid_ras[0]);
+                printf("\n");
+            }
+            if (r->component == 0 && r->components_dropped)
+                printf("%s: %zu component%s one plane thick dropped\n", r->tissue, r->components_dropped,
+                       r->components_dropped == 1 ? "" : "s");
+            if (r->n_tiny)
+                printf("%s: %zu loop%s of less than a voxel's in-plane area dropped (beads of a gently sloping "
+                       "boundary; none with --min-size 0 or 1)\n", r->name, r->n_tiny, r->n_tiny == 1 ? "" : "s");
+            if (r->contact_voxels)
+                printf("%s: %zu voxels face a sibling tissue's (no voxel between): its boundary pulled in there\n",
+                       r->name, r->contact_voxels);
+        }
+        for (size_t t = 0; t < rep.n_tissues; t++) {
+            const thx_trace_tissue_report *r = &rep.tissue[t];
+            if (!r->n_removed || r->component) continue;
+            printf("%s: removed %zu component%s of %zu voxel%s in all (sizes:", r->tissue, r->n_removed,
                    r->n_removed == 1 ? "" : "s", r->removed_voxels, r->removed_voxels == 1 ? "" : "s");
             for (size_t k = 0; k < r->n_removed && k < THX_TRACE_SIZES_KEPT; k++) printf(" %zu", r->removed_size[k]);
             printf("%s)\n", r->n_removed > THX_TRACE_SIZES_KEPT ? " ..." : "");

@@ -26,6 +26,20 @@
  * overlapping it on either neighbouring plane (a component one plane thick, which the lacing
  * cannot close) is dropped and counted.
  *
+ * Components (organs). A tissue of an organ role (not outer, fat or muscle) whose cleaned region
+ * has several 6-connected 3D components (two lungs under one label) gives one surface per
+ * component: two side by side (their RAS x ranges apart) are NAME_right and NAME_left (+x is the
+ * subject's right), others NAME_1, NAME_2, ... from right to left (decreasing centroid RAS x; ties in
+ * the order of their first voxel in memory), in place of the tissue's surface. A component whose loops all lack a partner (one plane thick) is dropped when
+ * another remains. A region that branches between planes is one component: one surface.
+ *
+ * Siblings. Organ tissues whose label sets are disjoint (heart and lungs; not blood in the heart,
+ * whose labels are a subset) are siblings: where one's voxels face another's (a map with no voxel
+ * between them), each boundary is pulled into its own tissue. The field traced at 0.5 is then
+ * S(tissue) - S(siblings) (S the smoothed indicator): unchanged beyond the smoothing's reach of a
+ * sibling, at 0.75 of S(tissue) at a face contact, so the two loops keep a gap (docs/design/image.md,
+ * "Siblings that touch").
+ *
  * Coordinates. Model axes are the image's: z along the superior index axis (pointing superior),
  * y along the index axis nearest anterior (pointing anterior), x = y cross z; the model point of
  * RAS point q is Q^T q with Q = [x y z] (a rotation). For an axis-aligned image Q = I: model
@@ -68,10 +82,17 @@ void thx_trace_opts_default(thx_trace_opts *o);
 
 #define THX_TRACE_SIZES_KEPT 16
 typedef struct {
-    char name[64];
+    char name[64];                  /* the surface's name (the tissue's, or NAME_right/_left/_1.. below) */
+    char tissue[64];                /* the tissue (the --label) it comes from */
+    size_t component, n_components; /* which of the tissue's surfaces (0-based) and how many it gave */
+    size_t components_dropped;      /* its components dropped (one plane thick) */
+    double centroid_ras[3];         /* the centroid of its voxels, RAS mm */
+    double ras_x_range[2];          /* the RAS x range of its voxels' index box, mm */
+    size_t contact_voxels;          /* its voxels with a face on a sibling tissue's voxel (pulled apart) */
     size_t n_layers, n_loops;       /* of the surface traced */
     size_t n_holes;                 /* holes met (filled, or kept as loops) */
     size_t n_islands_filled;        /* loops inside a filled hole */
+    size_t n_tiny;                  /* loops of less than a voxel's in-plane area, dropped (min_size > 1) */
     size_t n_flat_dropped;          /* loops with no partner on either neighbouring plane, dropped */
     size_t n_trimmed_layers;        /* layers on or beyond its container's end planes, dropped (the paper's
                                        nesting: outer > fat > muscle > the organs; caps never share a plane) */
@@ -93,8 +114,9 @@ typedef struct {
     double to_ras[9];               /* Q, row-major: RAS = Q * model */
     long absent[THX_TRACE_SIZES_KEPT]; /* listed values with no voxel in the image */
     size_t n_absent;
-    size_t n_tissues;
-    thx_trace_tissue_report *tissue; /* n_tissues (owned: thx_trace_report_free) */
+    size_t n_tissues;               /* surfaces traced (one per tissue, or more: components) */
+    thx_trace_tissue_report *tissue; /* one per surface of the contours, in their order (owned:
+                                       thx_trace_report_free) */
 } thx_trace_report;
 
 /*
