@@ -1471,31 +1471,41 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
                     if (!partner) {
                         keep[l][i] = 0;
                         changed = 1;
-                        continue;
                     }
-                    /* a speck: every loop of the neighbouring layers that it overlaps is over
-                       THX_SPECK_RATIO times its area (the end plane of a ray-voxelized torso: 0.9 mm
-                       specks of single voxels under the body's 300 mm loop). Laced, it fans the big
-                       loop's nodes to its own into needles (thorax check fails triangles under 1
-                       degree: thorax mesh cannot take them); dropped, the big loop is capped or
-                       laced on. A speck that is its layer's only loop between two layers leaves the
-                       layer empty and the surface is refused below. */
+                }
+            /* an end layer of specks: every kept loop of the layer has partners on one side only, and
+               every partner exceeds it over THX_SPECK_RATIO times in area (the bottom plane of a
+               ray-voxelized torso, on a plane of voxel centres: 143 one-voxel specks 0.9 mm across
+               under the body's 300 mm loop). Laced, they fan the big loop's nodes into needles
+               (thorax check fails triangles under 1 degree: thorax mesh cannot take them); dropped,
+               the surface is capped on its big loop. Only a layer of nothing but specks: a small
+               loop beside a big one on its layer is a branch of the lacing, and dropping such loops
+               changed how bench/image.sh's lungs branched (edges in three triangles) */
+            for (size_t l = 0; l < nl; l++) {
+                size_t n_kept = 0, n_speck = 0;
+                for (size_t i = 0; i < layers[l].n_loops; i++) {
+                    if (!keep[l][i]) continue;
+                    n_kept++;
                     double ai = rloop_area(&layers[l].loops[i]);
-                    int speck = 1, any = 0;
+                    int speck = 1, sides = 0;
                     for (int side = -1; side <= 1 && speck; side += 2) {
                         if ((side < 0 && l == 0) || (side > 0 && l + 1 == nl)) continue;
                         size_t m = l + (size_t)side;
+                        int any = 0;
                         for (size_t j = 0; j < layers[m].n_loops && speck; j++)
                             if (keep[m][j] && loops_overlap(&layers[l].loops[i], &layers[m].loops[j])) {
                                 any = 1;
                                 speck = rloop_area(&layers[m].loops[j]) > THX_SPECK_RATIO * ai;
                             }
+                        sides += any;
                     }
-                    if (any && speck) {
-                        keep[l][i] = 0;
-                        changed = 1;
-                    }
+                    n_speck += speck && sides == 1;
                 }
+                if (n_kept && n_speck == n_kept) {
+                    memset(keep[l], 0, layers[l].n_loops);
+                    changed = 1;
+                }
+            }
         }
         /* the loops dropped from the contours, and the layers left empty at either end */
         for (size_t l = 0; l < nl && st == THX_OK; l++) {

@@ -83,7 +83,7 @@ static int patch_loop(thx_ctx *ctx, const iedge *e, size_t ne, const size_t *grp
                       size_t *n_loop)
 {
     /* the patch's boundary edges */
-    size_t nb = 0, cap = 0;
+    size_t nb = 0, cap = 0, n_edges = 0, n_sides = 0;
     int32_t *be = NULL; /* pairs */
     for (size_t i = 0; i < ne;) {
         size_t j = i, in = 0, last = 0;
@@ -91,6 +91,8 @@ static int patch_loop(thx_ctx *ctx, const iedge *e, size_t ne, const size_t *grp
             if (grp[e[j].t] == g) in++, last = j;
             j++;
         }
+        n_edges += in > 0;
+        n_sides += in;
         if (in == 1) {
             if (nb == cap) {
                 cap = cap ? 2 * cap : 64;
@@ -107,7 +109,10 @@ static int patch_loop(thx_ctx *ctx, const iedge *e, size_t ne, const size_t *grp
         }
         i = j;
     }
-    if (nb < 3) { free(be); return 0; }
+    /* a disc of F triangles and E edges has V = 1 + E - F nodes (Euler); every one must be on the
+       boundary, or the patch holds nodes (a loop's, cut in the plane with it) that a triangulation from
+       the boundary would leave in no triangle */
+    if (nb < 3 || 1 + n_edges - n_sides / 3 != nb) { free(be); return 0; }
     /* each node's two boundary neighbours: sort the half-edges by node */
     int32_t (*h)[2] = thx_malloc(ctx, 2 * nb * sizeof *h);
     int32_t *out = thx_malloc(ctx, nb * sizeof *out);
