@@ -282,7 +282,10 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
     enum { MAXB = 64 };
     size_t on[MAXB], en[MAXB], pk[MAXB];
     int nb = 0, complete[MAXB];
-    for (size_t f = 0; top > base && f < n && nb < MAXB;) {
+    /* beats only where the curve falls between them to under half its peak (a record at rest between
+       beats); a curve that never falls so far (a slow activation sequence that keeps every lead away
+       from zero: test_bars' plate) is one beat */
+    for (size_t f = 0; top > base && base < 0.5 * top && f < n && nb < MAXB;) {
         if (c[f] <= half) { f++; continue; }
         size_t p = f;
         while (f < n && c[f] > half) {
@@ -306,9 +309,13 @@ thx_status thx_activation_window_choose(thx_ctx *ctx, const thx_series *s, thx_a
         nb++;
         if (f < e) f = e;
     }
-    if (nb == 0) {
+    if (nb < 2) {
+        /* one beat (or none) in the record: the whole series is that beat, and its activation may
+           run as long as the series does (a slow sequence keeps the RMS curve high throughout, and a
+           window cut at its one QRS would clip the late nodes: test_bars' 20-60 ms plate read
+           20-31 ms) */
         free(c);
-        snprintf(w->why, sizeof w->why, "whole series: no beat on the RMS curve");
+        snprintf(w->why, sizeof w->why, "whole series: %s beat on the RMS curve", nb ? "one" : "no");
         memcpy(w->rec_why, w->why, sizeof w->why);
         return THX_OK;
     }
