@@ -794,7 +794,8 @@ static thx_status assemble(thx_ctx *ctx, helper *h, const char *path, slice *sl,
     int integral = 1;
     static const char doing[] = "its pixels cannot be read";
     enum { CHUNK = 1 << 16 }; /* a multiple of every stored type's size */
-    unsigned char *chunk = malloc(CHUNK > THX_DICOM_MAX_MESSAGE + 1 ? CHUNK : THX_DICOM_MAX_MESSAGE + 1);
+    /* payload() NUL-terminates what it reads: room for a whole chunk of pixels or the longest message, and one */
+    unsigned char *chunk = malloc((CHUNK > THX_DICOM_MAX_MESSAGE ? CHUNK : THX_DICOM_MAX_MESSAGE) + 1);
     thx_status st = chunk ? THX_OK : thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
     for (size_t s = 0; st == THX_OK && s < ns; s++) {
         const thx_dicom_entry *e = sl[s].e;
