@@ -46,6 +46,8 @@ void dig_loops_free(dig_loops *L);
 thx_status dig_march(thx_ctx *ctx, const double *f, size_t w, size_t h, int conn8, dig_loops *out);
 /* Signed area (a, b) of a loop (positive counterclockwise). */
 double dig_area(const double *xy, size_t n);
+/* The loop of largest positive area (the outer boundary of the region), or (size_t)-1 if none. */
+size_t dig_largest_loop(const dig_loops *L);
 /* Is the point inside the loop (even-odd)? */
 int dig_inside(const double *xy, size_t n, double x, double y);
 

@@ -118,15 +118,7 @@ thx_status thx_loop_interpolate(thx_ctx *ctx, const thx_vec2 *a, size_t na, cons
     if ((st = signed_dist(ctx, b, nb, x0, y0, step, nx, ny, band, sb)) != THX_OK) goto done;
     for (size_t c = 0; c < nx * ny; c++) sa[c] = (1 - t) * sa[c] + t * sb[c];
     if ((st = dig_march(ctx, sa, nx, ny, 1, &L)) != THX_OK) goto done;
-    size_t best = (size_t)-1;
-    double barea = 0;
-    for (size_t i = 0; i < L.n; i++) {
-        double ar = dig_area(L.loop[i].xy, L.loop[i].n);
-        if (ar > barea) {
-            barea = ar;
-            best = i;
-        }
-    }
+    size_t best = dig_largest_loop(&L);
     if (best == (size_t)-1) {
         st = thx_error(ctx, THX_EGEOM, "interpolate: the loops mixed at t = %g enclose nothing (too far apart)", t);
         goto done;

@@ -159,6 +159,20 @@ double dig_area(const double *xy, size_t n)
     return 0.5 * s;
 }
 
+size_t dig_largest_loop(const dig_loops *L)
+{
+    size_t best = (size_t)-1;
+    double barea = 0;
+    for (size_t i = 0; i < L->n; i++) {
+        double ar = dig_area(L->loop[i].xy, L->loop[i].n);
+        if (ar > barea) {
+            barea = ar;
+            best = i;
+        }
+    }
+    return best;
+}
+
 int dig_inside(const double *xy, size_t n, double x, double y)
 {
     int in = 0;

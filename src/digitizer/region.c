@@ -61,15 +61,7 @@ thx_status thx_region_loop(thx_ctx *ctx, const thx_image_slice *plane, double lo
         else f[p] = m < -tiny ? m : -tiny;
     }
     if ((st = dig_march(ctx, f, w, h, conn8, &L)) != THX_OK) goto done;
-    size_t best = (size_t)-1;
-    double barea = 0;
-    for (size_t i = 0; i < L.n; i++) {
-        double ar = dig_area(L.loop[i].xy, L.loop[i].n);
-        if (ar > barea) {
-            barea = ar;
-            best = i;
-        }
-    }
+    size_t best = dig_largest_loop(&L);
     if (best == (size_t)-1) {
         st = thx_error(ctx, THX_EINTERNAL, "region: no outer boundary traced round %zu pixels", count);
         goto done;
@@ -90,7 +82,7 @@ thx_status thx_region_loop(thx_ctx *ctx, const thx_image_slice *plane, double lo
         cx[0] = plane->du[1] * plane->dv[2] - plane->du[2] * plane->dv[1];
         cx[1] = plane->du[2] * plane->dv[0] - plane->du[0] * plane->dv[2];
         cx[2] = plane->du[0] * plane->dv[1] - plane->du[1] * plane->dv[0];
-        info->area = barea * dig_len3(cx); /* pixel area times the area of one pixel */
+        info->area = dig_area(L.loop[best].xy, L.loop[best].n) * dig_len3(cx); /* pixel area times the area of one pixel */
     }
 done:
     dig_loops_free(&L);
