@@ -723,6 +723,69 @@ static void test_tiny_loops(void)
     thx_image_free(&img);
 }
 
+static int nothing(const double p[3], void *user)
+{
+    (void)p, (void)user;
+    return 0;
+}
+
+/* The most loops a layer of the traced surface has, and that layer's z. */
+static size_t most_loops(const thx_contours *c, double *z)
+{
+    size_t m = 0;
+    for (size_t l = 0; c && l < c->surf[0].n_layers; l++)
+        if (c->surf[0].layers[l].n_loops > m) m = c->surf[0].layers[l].n_loops, *z = c->surf[0].layers[l].z;
+    return m;
+}
+
+/* Pinched beads: in one plane a block, a piece of 2 x 2 voxels one voxel from its corner (a saddle of
+ * the smoothed field: where a lung's dome meets its outer wall the tracer leaves such a piece between
+ * the two loops' tips) and a like piece four voxels away; the plane above joins all three. The near
+ * piece's loop (more than a voxel's area, under four) is dropped and counted with the beads; the far
+ * one is kept; with min_size 0 both are kept. */
+static void test_pinch_beads(void)
+{
+    thx_image img;
+    make_map(&img, 20, 20, 6, 2.0, NULL, nothing, NULL);
+    for (size_t k = 1; k <= 4; k++)
+        for (size_t j = 4; j < 16; j++)
+            for (size_t i = 4; i < 10; i++) img.v[thx_image_at(&img, i, j, k)] = 1;
+    /* plane 2: the near piece of 2 x 2 voxels at i = 11..12, j = 14..15 (one voxel right of the block, at
+       its corner); the far piece at i = 14..15, j = 8..9 (four voxels right) */
+    size_t near_at[4][2] = {{11, 14}, {11, 15}, {12, 14}, {12, 15}}, far_at[4][2] = {{14, 8}, {14, 9}, {15, 8}, {15, 9}};
+    for (int q = 0; q < 4; q++) {
+        img.v[thx_image_at(&img, near_at[q][0], near_at[q][1], 2)] = 1;
+        img.v[thx_image_at(&img, far_at[q][0], far_at[q][1], 2)] = 1;
+    }
+    /* plane 3 joins them to the block */
+    for (size_t j = 4; j < 18; j++)
+        for (size_t i = 4; i < 15; i++) img.v[thx_image_at(&img, i, j, 3)] = 1;
+    double z2 = 0, z0 = 0;
+    long one = 1;
+    thx_trace_tissue t = tissue(&one, 1, "lung", THX_ROLE_LUNG);
+    thx_contours *c = NULL;
+    thx_trace_report rep;
+    CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    size_t kept = most_loops(c, &z0), tiny = rep.tissue[0].n_tiny;
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_trace_opts o;
+    thx_trace_opts_default(&o);
+    o.tissues = &t;
+    o.n_tissues = 1;
+    o.min_size = 0;
+    CHECK_OK(ctx, thx_image_trace(ctx, &img, &o, &c, &rep));
+    size_t all = most_loops(c, &z2);
+    printf("pinched bead: plane z=%g keeps %zu loops of %zu (%zu beads dropped in all)\n", z2, kept, all, tiny);
+    CHECK(all == 3);
+    CHECK(kept == 2 && z0 == z2);
+    CHECK(tiny >= 1);
+    CHECK(rep.tissue[0].n_tiny == 0);
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -740,6 +803,7 @@ int main(void)
     test_cut_ends();
     test_siblings();
     test_tiny_loops();
+    test_pinch_beads();
     thx_ctx_destroy(&ctx);
     return tl_scratch_finish("test_image_trace");
 }

@@ -87,6 +87,9 @@ typedef struct {
 /* A laced in-plane patch with a smaller angle (degrees) is triangulated again with grid nodes (step 3b;
    thorax check fails triangles under 1 degree) */
 #define THX_INPLANE_MIN_ANGLE 2.0
+/* A layer's plane whose in-plane triangles have a smaller angle (degrees: thorax check's floor) after
+   step 3b is triangulated again from its laced triangles' edges (step 3c). */
+#define THX_RESOLVE_MIN_ANGLE 1.0
 
 /* A loop whose every overlapping partner on the neighbouring layers encloses over this many times its
    area is a speck (thx_contours_drop_flat) */
@@ -352,7 +355,7 @@ static int mend_overused(const double *xyz, int32_t *tri, size_t nt)
  * number of overruled votes is reported.
  */
 static thx_status orient_surface(thx_ctx *ctx, thx_surface *s, const rlayer *layers, size_t nl, const slice *slices,
-                                 double spacing, thx_surfaces_stats *stats)
+                                 double spacing, size_t no_test_from, thx_surfaces_stats *stats)
 {
     size_t nt = s->n_tris;
     thx_status st = THX_OK;
@@ -365,6 +368,7 @@ static thx_status orient_surface(thx_ctx *ctx, thx_surface *s, const rlayer *lay
     long by_test = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : by_test)
     for (long t = 0; t < (long)nt; t++) {
+        if ((size_t)t >= no_test_from) continue; /* step 3c's in-plane triangles: from their neighbours */
         const int32_t *v = s->tri + 3 * t;
         thx_vec3 P[3] = {thx_surface_node(s, (size_t)v[0]), thx_surface_node(s, (size_t)v[1]), thx_surface_node(s, (size_t)v[2])};
         thx_vec3 nrm = thx_v3_cross(thx_v3_sub(P[1], P[0]), thx_v3_sub(P[2], P[0]));
@@ -1276,10 +1280,16 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         THX_TRY(thx_inplane_refine(ctx, s, ntri, grid, THX_INPLANE_MIN_ANGLE, &node_cap, &tri_cap, &nr));
         stats->n_inplane_refined += nr;
     }
+    /* 3c. a layer's plane where in-plane triangles overlap or double an edge (two slices cut the same
+       pocket of their shared layer), or have an angle under 1 degree that step 3b could not mend, gets
+       one triangulation of the region its laced triangles bound (geom/inplane.h) */
+    size_t n_resolved = 0, n_resolved_tris = 0;
+    THX_TRY(thx_inplane_resolve(ctx, s, grid, THX_RESOLVE_MIN_ANGLE, &node_cap, &tri_cap, &n_resolved, &n_resolved_tris));
+    stats->n_inplane_resolved += n_resolved;
     double t3 = thx_wtime();
     stats->t_caps = t3 - t2;
     /* 4. orientation */
-    THX_TRY(orient_surface(ctx, s, layers, nl, slices, spacing, stats));
+    THX_TRY(orient_surface(ctx, s, layers, nl, slices, spacing, s->n_tris - n_resolved_tris, stats));
     /* 5. nearly flat triangles swapped away */
     {
         /* The swaps are local; one that makes triangles cross elsewhere (coplanar in-plane triangles
@@ -1296,6 +1306,10 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         free(before);
         if (st != THX_OK) goto done;
         stats->n_flat_flipped += nf;
+    }
+    if (n_resolved) { /* the nodes of the in-plane triangles replaced in step 3c and no other */
+        size_t nd = 0;
+        THX_TRY(thx_surface_drop_unused(ctx, s, &nd));
     }
     *interior = interior_point(layers, nl);
     stats->t_orient = thx_wtime() - t3;
@@ -1362,6 +1376,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;
             total->n_flat_flipped += one.n_flat_flipped;
             total->n_inplane_refined += one.n_inplane_refined;
+            total->n_inplane_resolved += one.n_inplane_resolved;
             total->t_layers += one.t_layers; total->t_lace += one.t_lace; total->t_caps += one.t_caps;
             total->t_orient += one.t_orient;
         }

@@ -26,4 +26,20 @@
 thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, double grid, double min_angle_deg,
                               size_t *node_cap, size_t *tri_cap, size_t *n_refined);
 
+/* Step 3c (inplane_resolve.c): in each layer plane where the in-plane triangles (caps, cut pockets and
+ * tongues) overlap or an in-plane edge is in other than two triangles (the slices below and above both
+ * cut the same part of their shared layer), those triangles are replaced by one triangulation of the
+ * region they should cover: the even-odd interior of the in-plane edges that exactly one laced ("wall")
+ * triangle uses, by a constrained Delaunay triangulation with grid nodes `grid` mm apart (at least
+ * grid/2 from the boundary). A plane where that region is not well formed (an edge in three wall
+ * triangles, a boundary node with other than two boundary edges, boundary edges that cross) is left as
+ * it was. The new in-plane triangles come last (*n_new_tris of them). A well-formed plane with an in-plane angle under min_angle_deg (a patch step 3b could not
+ * take) is triangulated the same way, kept when its smallest angle is larger. New triangles are appended, new nodes appended (the plane's z); nodes only the old triangles
+ * used stay (thx_surface_drop_unused). *n_resolved: the planes replaced. Deterministic. */
+thx_status thx_inplane_resolve(thx_ctx *ctx, thx_surface *s, double grid, double min_angle_deg, size_t *node_cap,
+                               size_t *tri_cap, size_t *n_resolved, size_t *n_new_tris);
+
+/* Removes the nodes no triangle uses, renumbering the rest in order. *n_dropped: how many. */
+thx_status thx_surface_drop_unused(thx_ctx *ctx, thx_surface *s, size_t *n_dropped);
+
 #endif

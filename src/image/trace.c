@@ -959,6 +959,33 @@ static void scratch_free(plane_scratch *sc)
     polyset_free(&sc->fin);
 }
 
+/* Is loop l of the plane (ar: area and bounding box of each, 5 values) a bead pinched off another
+ * loop: under PINCH_BEAD_VOXELS voxels' in-plane area (amin: one voxel's) and nearer than
+ * PINCH_BEAD_GAP voxels to another loop of the same tissue? Where a boundary meets another at a saddle
+ * of the smoothed field (a lung's dome where it touches the lung's outer wall), marching squares leaves
+ * a few voxels between the two loops' tips as a loop of their own; laced, it is a branch of a voxel
+ * the lacing must bridge into its neighbour (issue 25: the bench map's lungs crossed there). */
+#define PINCH_BEAD_VOXELS 4.0
+#define PINCH_BEAD_GAP 1.5
+static int pinch_bead(const polyset *raw, const double *ar, size_t l, double amin)
+{
+    if (!(amin > 0) || !(fabs(ar[5 * l]) < PINCH_BEAD_VOXELS * amin)) return 0;
+    double gap = PINCH_BEAD_GAP * sqrt(amin), g2 = gap * gap;
+    const double *bl = ar + 5 * l + 1; /* xmin xmax ymin ymax */
+    const poly *P = &raw->l[l];
+    for (size_t k = 0; k < raw->n; k++) {
+        const double *bk = ar + 5 * k + 1;
+        if (k == l || bk[0] > bl[1] + gap || bk[1] < bl[0] - gap || bk[2] > bl[3] + gap || bk[3] < bl[2] - gap) continue;
+        const poly *Q = &raw->l[k];
+        for (size_t i = 0; i < P->n; i++)
+            for (size_t j = 0; j < Q->n; j++) {
+                double dx = P->p[i].x - Q->p[j].x, dy = P->p[i].y - Q->p[j].y;
+                if (dx * dx + dy * dy < g2) return 1;
+            }
+    }
+    return 0;
+}
+
 /* One output plane of a tissue (continuous image plane index tk): its loops in model coordinates,
  * holes filled or kept, resampled at the node spacing h, into *out (empty: no loop); the holes seen
  * and the islands filled counted into *n_holes, *n_islands. Reads only the mask and the plane boxes,
@@ -993,16 +1020,18 @@ static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *m
             }
     }
     /* holes: loops of negative area; filled (dropped, with any loop inside them) or kept */
-    double *ar = thx_malloc(ctx, raw->n * 5 * sizeof *ar);
+    double *ar = thx_malloc(ctx, raw->n * 6 * sizeof *ar); /* area, box; then 1: a pinched bead */
     if (!ar) return THX_ENOMEM;
     for (size_t l = 0; l < raw->n; l++) {
         ar[5 * l] = poly_area(raw->l[l].p, raw->l[l].n);
         bbox(raw->l[l].p, raw->l[l].n, ar + 5 * l + 1);
     }
+    for (size_t l = 0; l < raw->n; l++) ar[5 * raw->n + l] = ar[5 * l] > 0 && pinch_bead(raw, ar, l, amin);
     polyset_clear(fin);
     for (size_t l = 0; l < raw->n; l++) {
         int hole = ar[5 * l] < 0, drop = 0;
-        if (fabs(ar[5 * l]) < amin) { /* below the image's resolution: a bead of the staircase */
+        if (fabs(ar[5 * l]) < amin || ar[5 * raw->n + l] != 0) {
+            /* below the image's resolution: a bead of the staircase, or a bead pinched off another loop */
             (*n_tiny)++;
             continue;
         }

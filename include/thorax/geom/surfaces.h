@@ -147,6 +147,7 @@ typedef struct {
     size_t orient_flipped;           /* triangles whose stored order the test reversed */
     size_t n_flat_flipped;           /* nearly flat triangles swapped with their neighbour (step 5) */
     size_t n_inplane_refined;        /* the lacing's in-plane patches triangulated again with grid nodes (step 3b) */
+    size_t n_inplane_resolved;       /* layer planes whose overlapping in-plane triangles were made one region (step 3c) */
     double t_layers, t_lace, t_caps, t_orient, t_total; /* seconds */
 } thx_surfaces_stats;
 
