@@ -2,8 +2,9 @@
  * Step 3c of the surface build (src/geom/inplane_resolve.c): a layer's plane whose in-plane triangles
  * overlap or double an edge gets one triangulation of the region its laced ("wall") triangles bound.
  *  1. Two boxes stacked, with the shared layer's square covered twice by in-plane triangles (the slices
- *     below and above both cut it): the four are removed, nothing replaces them, and the surface is the
- *     2 x 2 x 2 box: closed, manifold, 4 pi, volume 8.
+ *     below and above both cut it), or once (its edges in three triangles, nothing overlapping): those
+ *     triangles are removed, nothing replaces them, and the surface is the 2 x 2 x 2 box: closed,
+ *     manifold, 4 pi, volume 8.
  *  2. A bow-tie: the walls below and above bound edges in the plane that cross (two cut pockets' chords:
  *     the bench map's lungs, issue 25). Both edges and their wall triangles are split at the crossing
  *     point, and the region is its two lobes, area 1 each: every edge in the plane in exactly two
@@ -70,7 +71,9 @@ static int plane_manifold(const thx_surface *s, double z)
     return 1;
 }
 
-static void test_doubled_square(void)
+/* twice: the shared layer covered twice (from below and from above) or once (an edge in three
+ * triangles, no overlap) */
+static void test_doubled_square(int twice_covered)
 {
     /* layers z = 0, 1, 2: the square [0,2]^2, corners counterclockwise */
     double xyz[12 * 3];
@@ -95,8 +98,9 @@ static void test_doubled_square(void)
     nt += 4;
     /* the shared layer covered twice: from below (facing up) and from above (facing down) */
     int32_t twice[12] = {4, 5, 6, 4, 6, 7, 4, 6, 5, 4, 7, 6};
-    memcpy(tri + 3 * nt, twice, sizeof twice);
-    nt += 4;
+    size_t extra = twice_covered ? 4 : 2;
+    memcpy(tri + 3 * nt, twice, extra * 3 * sizeof *twice);
+    nt += extra;
     size_t ncap, tcap, nres = 0, nnew = 0, nd = 0;
     thx_surface *s = make(xyz, 12, tri, nt, &ncap, &tcap);
     thx_check_opts o;
@@ -105,10 +109,11 @@ static void test_doubled_square(void)
     CHECK(thx_surface_check(ctx, s, NULL, &o, &rep) == THX_ECHECK); /* non-manifold as laced */
     CHECK(thx_inplane_resolve(ctx, s, 1.0, 1.0, &ncap, &tcap, &nres, &nnew) == THX_OK);
     CHECK(nres == 1 && nnew == 0);
-    CHECK(s->n_tris == nt - 4);
+    CHECK(s->n_tris == nt - extra);
     CHECK(thx_surface_drop_unused(ctx, s, &nd) == THX_OK && nd == 0);
     thx_status cs = thx_surface_check(ctx, s, NULL, &o, &rep);
-    printf("doubled square: %zu plane resolved, %zu triangles left; check %s, volume %g, 4 pi error %.1e\n", nres, s->n_tris,
+    printf("square covered %s: %zu plane resolved, %zu triangles left; check %s, volume %g, 4 pi error %.1e\n",
+           twice_covered ? "twice" : "once", nres, s->n_tris,
            cs == THX_OK ? "passed" : "failed", rep.volume, rep.solid_angle_rel_err);
     CHECK(cs == THX_OK);
     CHECK_NEAR(rep.volume, 8.0, 1e-12);
@@ -185,7 +190,8 @@ static void test_drop_unused(void)
 int main(void)
 {
     thx_ctx_create(&ctx);
-    test_doubled_square();
+    test_doubled_square(1);
+    test_doubled_square(0);
     test_bow_tie();
     test_left_alone();
     test_drop_unused();
