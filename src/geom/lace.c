@@ -56,6 +56,7 @@
 
 #define BIG 1e9       /* cost of a triangle outside the surface */
 #define LARGE 1e4     /* cost of a triangle with an edge that is too long */
+#define OUTSIDE_MEMO_MAX ((size_t)64 << 20) /* bytes of remembered outside tests per slice */
 
 void thx_lace_opts_default(thx_lace_opts *o)
 {
@@ -77,6 +78,8 @@ typedef struct {
     chain_index ia, ib; /* signed distances to the chains */
     int i0, j0;         /* first connective segment */
     double big_edge;    /* "too large" edge length */
+    unsigned char *outside; /* NULL, or per (node of A, node of B, move): 0 not known yet, 1 inside, 2 outside
+                               (the dynamic programming's outside tests, each made once: issue 25) */
 } lacer;
 
 /* The three 3D points of the triangle of a move from state (ca, cb). */
@@ -136,7 +139,12 @@ static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
     double c = bmove ? ndist(L, i, (j + 1) % nb) : ndist(L, (i + 1) % na, j);
     double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
     if (e > L->big_edge) c += LARGE;
-    if (check && tri_outside(L, t)) c += BIG;
+    if (check) {
+        unsigned char *m = L->outside ? &L->outside[((size_t)i * (size_t)nb + (size_t)j) * 2 + (size_t)bmove] : NULL;
+        int out = m && *m ? *m == 2 : tri_outside(L, t);
+        if (m) *m = (unsigned char)(1 + out);
+        if (out) c += BIG;
+    }
     return c;
 }
 
@@ -589,6 +597,9 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         }
     }
     stats->removed += (size_t)nbad;
+    /* the gaps' dynamic programming meets the same moves again as its window grows: their outside tests
+       remembered (up to OUTSIDE_MEMO_MAX bytes; beyond, each made again) */
+    if (nbad && (size_t)na * (size_t)nb * 2 <= OUTSIDE_MEMO_MAX) L.outside = calloc((size_t)na * (size_t)nb * 2, 1);
     int unresolved_pocket = 0;
     for (int k = 0; k < N && nbad;) {
         if (!bad[k]) { k++; continue; }
@@ -705,6 +716,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         st = emit(ctx, tris, n_tris, cap, id);
     }
 done:
+    free(L.outside);
     chain_index_free(&L.ia);
     chain_index_free(&L.ib);
     free(L.na);
