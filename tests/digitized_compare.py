@@ -5,7 +5,7 @@ usage: digitized_compare.py CONTOURS.txt SURFACE MODEL/SURFACE.pts MODEL/SURFACE
                             [--ref REF.pts REF.fac --ref-max MM]
 For every node on a layer loop (a node of a triangle that joins two layers: the nodes away from
 the caps; cap nodes, at the surface's ends and where a loop starts or ends mid-surface, are left
-out), the 2D distance to the nearest edge of that surface's digitized loops on the node's layer,
+out, and so are the nodes the build put on a straight in-plane edge, see split_nodes), the 2D distance to the nearest edge of that surface's digitized loops on the node's layer,
 and with --ref the 3D distance to the reference (true) triangulated surface. Prints max / mean /
 p99; exits 1 when a max exceeds --max / --ref-max.
 """
@@ -37,6 +37,37 @@ def loops(path, surf):
     return out
 
 
+def split_nodes(p, f):
+    """Nodes the build put on a straight in-plane edge: a long chord of a pocket cut in its plane split in
+    pieces (step 3b, src/geom/inplane.c), two crossing chords split where they cross (step 3c,
+    src/geom/inplane_resolve.c). No loop's node, so left out. Such a node lies strictly between two of
+    its neighbours in its plane on a straight line (to the precision of the .pts file), and has at least three neighbours there (the grid
+    nodes of the region cut, the other chord's pieces). A loop's node on a straight run (the tank's flat
+    sides) with another neighbour in its plane is left out too; a displaced straight run would still show
+    at its ends."""
+    nb = {}
+    for t in f:
+        for k in range(3):
+            a, b = int(t[k]), int(t[(k + 1) % 3])
+            if p[a, 2] == p[b, 2]:
+                nb.setdefault(a, set()).add(b)
+                nb.setdefault(b, set()).add(a)
+    out = []
+    for x, ns in nb.items():
+        if len(ns) < 3:
+            continue
+        ns = sorted(ns)
+        through = False
+        for i in range(len(ns)):
+            for j in range(i + 1, len(ns)):
+                u, v = p[ns[i], :2] - p[x, :2], p[ns[j], :2] - p[x, :2]
+                scale = np.linalg.norm(u) * np.linalg.norm(v)
+                through |= bool(scale > 0 and abs(u[0] * v[1] - u[1] * v[0]) < 1e-6 * scale and u @ v < 0)
+        if through:
+            out.append(x)
+    return np.array(out, dtype=np.int64)
+
+
 def main():
     a = sys.argv[1:]
     L = loops(a[0], a[1])
@@ -46,6 +77,7 @@ def main():
     joins = (zt.max(axis=1) - zt.min(axis=1)) > 0
     on = np.zeros(len(p), bool)
     on[f[joins].ravel()] = True
+    on[split_nodes(p, f)] = False
     zs = np.array(sorted(L))
     d = np.full(len(p), np.nan)
     for z in zs:

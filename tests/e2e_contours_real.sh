@@ -154,9 +154,12 @@ with open(sys.argv[4], 'w') as f:
         $PY -B "$SRC/tests/digitize.py" "tank_x_$s.txt" "tank_x_${s}_j1.txt" --jitter 0.5 --seed 1
         # without the check's 1-degree floor (merged later, issue 25: what thorax mesh can take): where
         # the tank's bottom meets the shoulders the lacing leaves 1-3 triangles of 0.49-1.0 degrees
-        # (a node cluster 0.24 mm across laced to nodes 10 mm above): open (docs/design/geom.md)
+        # (a node cluster 0.24 mm across laced to nodes 10 mm above): open (docs/design/geom.md). The
+        # jittered cut at 5 mm passes the whole check since a lacing with an angle under 1 degree is laced
+        # again on the chains' own positions (src/geom/build.c, quality_retry)
         ANGLE_FLOOR=0 build_case "tank_x_$s" tank1 tank "tank1_x_"
-        ANGLE_FLOOR=0 build_case "tank_x_${s}_j1" tank1 tank "tank1_x_"
+        if [ $s = 5 ]; then build_case "tank_x_${s}_j1" tank1 tank "tank1_x_"
+        else ANGLE_FLOOR=0 build_case "tank_x_${s}_j1" tank1 tank "tank1_x_"; fi
     done
     # a plane that grazes the body cuts a loop smaller than the merge tolerance (a tenth of the
     # spacing), which the merge left with fewer than 3 points: the whole model was refused. Such a

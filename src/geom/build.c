@@ -87,6 +87,9 @@ typedef struct {
 /* A laced in-plane patch with a smaller angle (degrees) is triangulated again with grid nodes (step 3b;
    thorax check fails triangles under 1 degree) */
 #define THX_INPLANE_MIN_ANGLE 2.0
+/* A slice's lacing with a smaller angle (degrees: thorax check's floor) is laced once more on the chains'
+   own positions (quality_retry). */
+#define THX_LACE_MIN_ANGLE 1.0
 /* A layer's plane whose in-plane triangles have a smaller angle (degrees: thorax check's floor) after
    step 3b is triangulated again from its laced triangles' edges (step 3c). */
 #define THX_RESOLVE_MIN_ANGLE 1.0
@@ -702,6 +705,47 @@ done:
  * either layer that the other fills cut in their plane first (a CT skull's loop that runs in
  * through the frontal sinus's notch around the cranial cavity, against a full disc: issue 25). The
  * first that does not cross is kept (else the last, with *crossing = 1). */
+/* smallest angle (degrees) of triangles tri[0 .. nt) in space */
+static double tris_min_angle(const double *xyz, const int32_t *tri, size_t nt)
+{
+    double m = 180.0;
+    for (size_t t = 0; t < nt; t++)
+        m = fmin(m, min_corner(xyz + 3 * tri[3 * t], xyz + 3 * tri[3 * t + 1], xyz + 3 * tri[3 * t + 2]));
+    return m;
+}
+
+/* A lacing (sl's triangles from `first`, made with options la) that does not cross but has an angle under
+ * THX_LACE_MIN_ANGLE is laced once more with the metric on the chains' own positions (thin crescents of
+ * unequal length at a lung's base: mapped to a common centroid, one crescent's tip node is fanned to a
+ * run of the other's side, issue 25); that one is kept when it does not cross and its smallest angle is
+ * larger. */
+static thx_status quality_retry(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *la,
+                                const double *lxyz, slice *sl, size_t first, const thx_lace_stats *keep)
+{
+    double ang = tris_min_angle(lxyz, sl->tris + 3 * first, sl->n_tris - first);
+    if (ang >= THX_LACE_MIN_ANGLE || la->raw_positions) return THX_OK;
+    size_t n0 = sl->n_tris;
+    thx_lace_stats st0 = sl->st;
+    thx_lace_opts lr = *la;
+    lr.raw_positions = 1;
+    lr.phase_weight = 0;
+    thx_status r = thx_lace(lc, a, b, &lr, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
+    if (r != THX_OK) return r;
+    int x = tris_cross(lxyz, sl->tris + 3 * n0, sl->n_tris - n0);
+    if (x == 0) x = edge_overused(sl->tris + 3 * n0, sl->n_tris - n0);
+    if (x < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
+    int better = !x && tris_min_angle(lxyz, sl->tris + 3 * n0, sl->n_tris - n0) > ang;
+    sl->n_tris = n0;
+    sl->st = st0;
+    if (better) { /* laced again in its place, the statistics as that lacing's alone (the same lacing) */
+        sl->n_tris = first;
+        sl->st = *keep;
+        r = thx_lace(lc, a, b, &lr, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
+        sl->st.relaced_quality++;
+    }
+    return r;
+}
+
 static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *lo,
                              const double *lxyz, slice *sl, int *crossing)
 {
@@ -757,7 +801,7 @@ static thx_status lace_tries(thx_ctx *lc, const thx_chain *a, const thx_chain *b
         if (x < 0) return thx_error(lc, THX_ENOMEM, "out of memory");
         if (!x) {
             if (attempt) sl->st.relaced_crossing++;
-            return THX_OK;
+            return quality_retry(lc, a, b, &la, lxyz, sl, first, &keep);
         }
     }
     *crossing = 1;
@@ -1154,6 +1198,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         a->inplane_tris += b->inplane_tris; a->unresolved += b->unresolved; a->too_large += b->too_large;
         a->tongues += b->tongues; a->filled_pockets += b->filled_pockets; a->projected += b->projected; a->crossing += b->crossing;
         a->relaced_crossing += b->relaced_crossing;
+        a->relaced_quality += b->relaced_quality;
         if (b->max_fan > a->max_fan) a->max_fan = b->max_fan;
         stats->n_branch_slices += (size_t)slices[i].branch;
     }
@@ -1371,6 +1416,7 @@ thx_status thx_surfaces_build(thx_ctx *ctx, const thx_contours *c, const thx_sur
             total->lace.filled_pockets += one.lace.filled_pockets;
             total->lace.unresolved += one.lace.unresolved; total->lace.crossing += one.lace.crossing;
             total->lace.relaced_crossing += one.lace.relaced_crossing; total->lace.too_large += one.lace.too_large;
+            total->lace.relaced_quality += one.lace.relaced_quality;
             if (one.lace.max_fan > total->lace.max_fan) total->lace.max_fan = one.lace.max_fan;
             total->orient_by_test += one.orient_by_test; total->orient_by_neighbours += one.orient_by_neighbours;
             total->orient_flipped += one.orient_flipped; total->orient_overruled += one.orient_overruled;

@@ -68,6 +68,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->projected_aspect = 10;
     o->phase_weight = 0.25;
     o->cut_filled_pockets = 0;
+    o->raw_positions = 0;
 }
 
 typedef struct {
@@ -519,8 +520,13 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
     unsigned char *fromb = NULL;
     if (!L.na || !L.nb || !L.pa || !L.pb || !mv || !bad || !sa || !sb) { st = THX_ENOMEM; goto done; }
     if (chain_index_init(&L.ia, a->p, a->n) || chain_index_init(&L.ib, b->p, b->n)) { st = thx_error(ctx, THX_ENOMEM, "out of memory"); goto done; }
-    normalize(a, L.na);
-    normalize(b, L.nb);
+    if (o->raw_positions) {
+        memcpy(L.na, a->p, (size_t)na * sizeof *L.na);
+        memcpy(L.nb, b->p, (size_t)nb * sizeof *L.nb);
+    } else {
+        normalize(a, L.na);
+        normalize(b, L.nb);
+    }
     phases(a, o->phase_weight, L.pa);
     phases(b, o->phase_weight, L.pb);
     /* First connective segment: A's start node and the nearest node of B (normalized). */

@@ -54,6 +54,9 @@ typedef struct {
     double max_edge;       /* an edge longer than max_edge * max(spacing, layer gap) makes a triangle "too large" */
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
     double phase_weight;   /* weight of the arc-length phase in the lacing metric (0 = position only) */
+    int raw_positions;     /* 1: the lacing metric takes the chains' own positions, not mapped to a common
+                              centroid and RMS radius (thin crescents of unequal length: the retry of a
+                              lacing with an angle under 1 degree) */
     int fan_limit;         /* a run of this many triangles at one node is cut as a tongue where it is one */
     double projected_aspect; /* nested loops whose lacing has a triangle of worse aspect ratio (or a
                               fan over 3 fan_limit) are laced in projection if that is better */
@@ -77,6 +80,7 @@ typedef struct {
     size_t too_large;      /* triangles with an edge longer than the max_edge bound */
     size_t relaced_crossing; /* groups whose lacing had crossing triangles, laced again with other
                               settings until it had none (thx_surfaces_build) */
+    size_t relaced_quality;  /* groups laced again on the chains' own positions for an angle under 1 degree */
     size_t crossing;       /* groups whose lacing still has crossing triangles after the retries
                               (thx_surfaces_build; reported, the check then fails) */
     int max_fan;           /* largest number of triangles at one node of this slice */
