@@ -4,9 +4,9 @@
  * crescents at the lung's base, with the loops of the layers beyond), as the surface build laces
  * them. The default lacing (metric on the chains mapped to a common centroid and RMS radius, with
  * the arc-length phase) fans a node over a straight run of the other crescent: 0.13 degree. On the
- * chains' own positions: 0.69 degree. The whole slice by one dynamic programme that penalizes a
- * triangle under 1 degree (thx_lace_opts.min_angle_deg): every angle above 1 degree, as thorax check
- * and thorax mesh need. Each lacing must be a closed band: na + nb triangles, every edge of either
+ * chains' own positions: 0.69 degree. The whole slice by one dynamic programme over every pair of
+ * nodes on the own positions (thx_lace_opts.whole_dp): every angle above 1 degree (13.6), as thorax
+ * check and thorax mesh need. Each lacing must be a closed band: na + nb triangles, every edge of either
  * chain in exactly one triangle, every diagonal in two.
  */
 #include <math.h>
@@ -120,7 +120,7 @@ int main(void)
         thx_lace_opts_default(&o);
         o.spacing = 1.0;
         if (v >= 1) o.raw_positions = 1, o.phase_weight = 0;
-        if (v == 2) o.min_angle_deg = 1.0;
+        if (v == 2) o.whole_dp = 1;
         int32_t *t = NULL;
         size_t nt = 0, cap = 0;
         thx_lace_stats st;

@@ -719,13 +719,13 @@ static double tris_min_angle(const double *xyz, const int32_t *tri, size_t nt)
 }
 
 /* The options of quality_retry's variant v: the lacing metric on the chains' own positions, no phase;
- * variant 1 also laces the whole slice by one dynamic programme that penalizes a triangle under 1 degree. */
+ * variant 1 also laces the whole slice by one dynamic programme. */
 static thx_lace_opts quality_opts(const thx_lace_opts *la, int v)
 {
     thx_lace_opts lr = *la;
     lr.raw_positions = 1;
     lr.phase_weight = 0;
-    if (v == 1) lr.min_angle_deg = THX_LACE_MIN_ANGLE;
+    if (v == 1) lr.whole_dp = 1;
     return lr;
 }
 
@@ -733,9 +733,9 @@ static thx_lace_opts quality_opts(const thx_lace_opts *la, int v)
  * THX_LACE_MIN_ANGLE is laced again: (0) with the metric on the chains' own positions (thin crescents of
  * unequal length at a lung's base: mapped to a common centroid, one crescent's tip node is fanned to a
  * run of the other's side, issue 25); (1) if that still has a thin triangle, the whole slice by one
- * dynamic programme over every pair of nodes whose cost penalizes a triangle under 1 degree (after an
- * outside one): the lacing with the fewest thin triangles, then the shortest diagonals. The one with
- * the largest smallest angle that does not cross is kept. (1) only for slices of at most THX_LACE_DP_PAIRS
+ * dynamic programme over every pair of nodes (the path of least cost, where the greedy walk took the
+ * next shortest diagonal and could not undo an offset of a whole straight run). The one with the
+ * largest smallest angle that does not cross is kept. (1) only for slices of at most THX_LACE_DP_PAIRS
  * pairs of nodes. */
 static thx_status quality_retry(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *la,
                                 const double *lxyz, slice *sl, size_t first, const thx_lace_stats *keep)

@@ -56,7 +56,6 @@
 
 #define BIG 1e9       /* cost of a triangle outside the surface */
 #define LARGE 1e4     /* cost of a triangle with an edge that is too long */
-#define THIN 1e6      /* cost of a triangle with an angle under thx_lace_opts.min_angle_deg */
 #define OUTSIDE_MEMO_MAX ((size_t)64 << 20) /* bytes of remembered outside tests per slice */
 
 void thx_lace_opts_default(thx_lace_opts *o)
@@ -70,7 +69,7 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->phase_weight = 0.25;
     o->cut_filled_pockets = 0;
     o->raw_positions = 0;
-    o->min_angle_deg = 0;
+    o->whole_dp = 0;
 }
 
 typedef struct {
@@ -130,18 +129,6 @@ static double ndist(const lacer *L, int i, int j)
     return sqrt(dx * dx + dy * dy + px * px + py * py);
 }
 
-/* smallest angle (degrees) of a triangle in space */
-static double tri_min_angle3(const thx_vec3 t[3])
-{
-    double m = 180.0;
-    for (int k = 0; k < 3; k++) {
-        thx_vec3 u = thx_v3_sub(t[(k + 1) % 3], t[k]), v = thx_v3_sub(t[(k + 2) % 3], t[k]);
-        double a = atan2(thx_v3_norm(thx_v3_cross(u, v)), thx_v3_dot(u, v)) * 180.0 / M_PI;
-        if (a < m) m = a;
-    }
-    return m;
-}
-
 /* Cost of a move: the length of its new diagonal, plus penalties. */
 static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
 {
@@ -154,7 +141,6 @@ static double move_cost(const lacer *L, int ca, int cb, int bmove, int check)
     double c = bmove ? ndist(L, i, (j + 1) % nb) : ndist(L, (i + 1) % na, j);
     double e = fmax(dist3(t[0], t[1]), fmax(dist3(t[1], t[2]), dist3(t[2], t[0])));
     if (e > L->big_edge) c += LARGE;
-    if (L->o->min_angle_deg > 0 && tri_min_angle3(t) < L->o->min_angle_deg) c += THIN;
     if (check) {
         unsigned char *m = L->outside ? &L->outside[((size_t)i * (size_t)nb + (size_t)j) * 2 + (size_t)bmove] : NULL;
         int out = m && *m ? *m == 2 : tri_outside(L, t);
@@ -584,9 +570,10 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
         }
     }
     greedy_path(&L, mv);
-    if (o->min_angle_deg > 0 && (size_t)na * (size_t)nb * 2 <= OUTSIDE_MEMO_MAX) {
-        /* the whole slice by one dynamic programme: the path of least cost, where a triangle outside
-           costs BIG and one under min_angle_deg THIN (the retry of a lacing with a thin triangle) */
+    if (o->whole_dp && (size_t)na * (size_t)nb * 2 <= OUTSIDE_MEMO_MAX) {
+        /* the whole slice by one dynamic programme from the first connective segment: the path of
+           least cost over every pair of nodes (the retry of a lacing with a thin triangle), where the
+           greedy walk goes by the next shortest diagonal */
         L.outside = calloc((size_t)na * (size_t)nb * 2, 1);
         costb = malloc((size_t)(na + 1) * (size_t)(nb + 1) * sizeof *costb);
         fromb = malloc((size_t)(na + 1) * (size_t)(nb + 1));

@@ -54,9 +54,10 @@ typedef struct {
     double max_edge;       /* an edge longer than max_edge * max(spacing, layer gap) makes a triangle "too large" */
     int window;            /* initial half-width (nodes) of the re-lacing window around a gap */
     double phase_weight;   /* weight of the arc-length phase in the lacing metric (0 = position only) */
-    double min_angle_deg;  /* > 0: the whole slice laced by one dynamic programme over every pair of nodes, a
-                              triangle with a smaller angle (degrees) penalized after an outside one (the
-                              second retry of a lacing with an angle under 1 degree); 0: greedy, gaps by DP */
+    int whole_dp;          /* 1: the whole slice laced by one dynamic programme over every pair of nodes (the
+                              path of least cost: diagonals, outside and too long triangles penalized; the
+                              second retry of a lacing with an angle under 1 degree); 0: the greedy
+                              shortest-diagonal walk, its outside runs mended by windowed DP */
     int raw_positions;     /* 1: the lacing metric takes the chains' own positions, not mapped to a common
                               centroid and RMS radius (thin crescents of unequal length: the retry of a
                               lacing with an angle under 1 degree) */
