@@ -959,31 +959,47 @@ static void scratch_free(plane_scratch *sc)
     polyset_free(&sc->fin);
 }
 
-/* Is loop l of the plane (ar: area and bounding box of each, 5 values) a bead pinched off another
- * loop: under PINCH_BEAD_VOXELS voxels' in-plane area (amin: one voxel's) and nearer than
- * PINCH_BEAD_GAP voxels to another loop of the same tissue? Where a boundary meets another at a saddle
- * of the smoothed field (a lung's dome where it touches the lung's outer wall), marching squares leaves
- * a few voxels between the two loops' tips as a loop of their own; laced, it is a branch of a voxel
- * the lacing must bridge into its neighbour (issue 25: the bench map's lungs crossed there). */
+/* Is loop l of the plane (ar: area and bounding box of each, 5 values) a bead pinched off: under
+ * PINCH_BEAD_VOXELS voxels' in-plane area (amin: one voxel's), with nodes of the tissue's other loops
+ * nearer than PINCH_BEAD_GAP voxels at two places, on two loops or on one loop more than
+ * PINCH_BEAD_APART of its nodes apart? Where a boundary meets another at a saddle of the smoothed
+ * field (a lung's dome where it touches the lung's outer wall), marching squares leaves the voxels
+ * between the two loops' tips as a loop of their own; laced, it is a branch of a voxel the lacing must
+ * bridge into its neighbour (issue 25: the bench map's lungs crossed there). A bead beside one stretch
+ * of a loop (a dome's sliver along the lung) is not pinched: the branching lacing takes it. */
 #define PINCH_BEAD_VOXELS 4.0
 #define PINCH_BEAD_GAP 1.5
+#define PINCH_BEAD_APART 10
 static int pinch_bead(const polyset *raw, const double *ar, size_t l, double amin)
 {
     if (!(amin > 0) || !(fabs(ar[5 * l]) < PINCH_BEAD_VOXELS * amin)) return 0;
     double gap = PINCH_BEAD_GAP * sqrt(amin), g2 = gap * gap;
     const double *bl = ar + 5 * l + 1; /* xmin xmax ymin ymax */
     const poly *P = &raw->l[l];
-    for (size_t k = 0; k < raw->n; k++) {
+    int places = 0;
+    for (size_t k = 0; k < raw->n && places < 2; k++) {
         const double *bk = ar + 5 * k + 1;
         if (k == l || bk[0] > bl[1] + gap || bk[1] < bl[0] - gap || bk[2] > bl[3] + gap || bk[3] < bl[2] - gap) continue;
         const poly *Q = &raw->l[k];
-        for (size_t i = 0; i < P->n; i++)
-            for (size_t j = 0; j < Q->n; j++) {
+        /* Q's nodes near the bead, in order along Q: the places are the runs of them, split where two
+           consecutive ones (cyclically) are more than PINCH_BEAD_APART nodes apart */
+        long first = -1, prev = -1;
+        int runs = 0;
+        for (size_t j = 0; j < Q->n; j++) {
+            int near = 0;
+            for (size_t i = 0; i < P->n && !near; i++) {
                 double dx = P->p[i].x - Q->p[j].x, dy = P->p[i].y - Q->p[j].y;
-                if (dx * dx + dy * dy < g2) return 1;
+                near = dx * dx + dy * dy < g2;
             }
+            if (!near) continue;
+            if (first < 0) first = (long)j, runs = 1;
+            else if ((long)j - prev > PINCH_BEAD_APART) runs++;
+            prev = (long)j;
+        }
+        if (first >= 0 && runs > 1 && first + (long)Q->n - prev <= PINCH_BEAD_APART) runs--; /* joined across the start */
+        places += runs;
     }
-    return 0;
+    return places >= 2;
 }
 
 /* One output plane of a tissue (continuous image plane index tk): its loops in model coordinates,
