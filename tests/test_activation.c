@@ -371,15 +371,9 @@ static int cmp_double(const void *a, const void *b)
 
 static void test_sock(void)
 {
-    char dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    char rec[2300], pts[2300], fac[2300];
-    snprintf(rec, sizeof rec, "%s/../../shared/data/map3d/data/socks/10jan01/rsm10jan01-cs-0004.mat", dir);
-    snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/socks/490sock.pts", dir);
-    snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/socks/490sock.fac", dir);
+    const char *rec = tl_src_path(__FILE__, "../../shared/data/map3d/data/socks/10jan01/rsm10jan01-cs-0004.mat");
+    const char *pts = tl_src_path(__FILE__, "../../shared/data/map3d/geom/socks/490sock.pts");
+    const char *fac = tl_src_path(__FILE__, "../../shared/data/map3d/geom/socks/490sock.fac");
     /* the data folder is part of the project's setup: its absence is a failure */
     CHECK(tl_exists(rec) && tl_exists(pts) && tl_exists(fac));
     if (!tl_exists(rec) || !tl_exists(pts) || !tl_exists(fac)) return;
@@ -497,12 +491,9 @@ static void test_sock(void)
 /* The data folder of the project's setup (../shared/data/map3d beside the worktree). */
 static void map3d_path(char *out, size_t size, const char *rel)
 {
-    char dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    snprintf(out, size, "%s/../../shared/data/map3d/%s", dir, rel);
+    char r[1024];
+    snprintf(r, sizeof r, "../../shared/data/map3d/%s", rel);
+    snprintf(out, size, "%s", tl_src_path(__FILE__, r));
 }
 
 /*

@@ -442,13 +442,7 @@ static void run_cap(thx_ctx *ctx, thx_vec2 *loop, size_t n, double h, double tol
  * rebuild held were the lacing's, not the cap's. */
 static void test_cap_real_loop(thx_ctx *ctx)
 {
-    char path[2300], dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    snprintf(path, sizeof path, "%s/data/cap/dal_bottom_loop.txt", dir);
-    FILE *f = fopen(path, "r");
+    FILE *f = fopen(tl_src_path(__FILE__, "data/cap/dal_bottom_loop.txt"), "r");
     CHECK(f != NULL);
     if (!f) return;
     thx_vec2 loop[400];

@@ -584,6 +584,17 @@ static void test_cut_ends(void)
     thx_image_free(&img);
 }
 
+/* Do c1 and c2 hold the same first surface: as many layers, each layer's first loop the same bytes? */
+static int same_first_surface(const thx_contours *c1, const thx_contours *c2)
+{
+    int same = c1 && c2 && c1->surf[0].n_layers == c2->surf[0].n_layers;
+    for (size_t l = 0; same && l < c1->surf[0].n_layers; l++) {
+        const thx_loop *p = &c1->surf[0].layers[l].loops[0], *q = &c2->surf[0].layers[l].loops[0];
+        same = p->n == q->n && memcmp(p->p, q->p, p->n * sizeof *p->p) == 0;
+    }
+    return same;
+}
+
 /* Siblings that touch: a lung ball and a heart ball whose voxels meet face to face over many planes
  * (no voxel between them, as in a segmentation's map). Their loops keep a gap in every plane (the
  * competition field: each boundary at 0.75 of its own smoothed indicator where they face), the
@@ -647,12 +658,7 @@ static void test_siblings(void)
     thx_trace_report_free(&rep);
     CHECK_OK(ctx, trace(&img, tt, 1, 0, THX_TRACE_HOLES_FILL, &c2, &rep));
     thx_trace_report_free(&rep);
-    int same = c1 && c2 && c1->surf[0].n_layers == c2->surf[0].n_layers;
-    for (size_t l = 0; same && l < c1->surf[0].n_layers; l++) {
-        const thx_loop *p = &c1->surf[0].layers[l].loops[0], *q = &c2->surf[0].layers[l].loops[0];
-        same = p->n == q->n && memcmp(p->p, q->p, p->n * sizeof *p->p) == 0;
-    }
-    CHECK(same);
+    CHECK(same_first_surface(c1, c2));
     thx_contours_destroy(&c1);
     thx_contours_destroy(&c2);
     thx_image_free(&img);
@@ -667,12 +673,7 @@ static void test_siblings(void)
     thx_trace_report_free(&rep);
     CHECK_OK(ctx, trace(&img, hb, 1, 0, THX_TRACE_HOLES_FILL, &c2, &rep));
     thx_trace_report_free(&rep);
-    same = c1 && c2 && c1->surf[0].n_layers == c2->surf[0].n_layers;
-    for (size_t l = 0; same && l < c1->surf[0].n_layers; l++) {
-        const thx_loop *p = &c1->surf[0].layers[l].loops[0], *q = &c2->surf[0].layers[l].loops[0];
-        same = p->n == q->n && memcmp(p->p, q->p, p->n * sizeof *p->p) == 0;
-    }
-    CHECK(same);
+    CHECK(same_first_surface(c1, c2));
     thx_contours_destroy(&c1);
     thx_contours_destroy(&c2);
     thx_image_free(&img);

@@ -71,6 +71,19 @@ static int plane_manifold(const thx_surface *s, double z)
     return 1;
 }
 
+/* The 8 outward walls between a square's corners first .. first + 3 (counterclockwise) and the corners
+ * 4 above them, appended to tri after nt triangles; the new count. */
+static size_t square_walls(int32_t *tri, size_t nt, int32_t first)
+{
+    for (int32_t k = 0; k < 4; k++) {
+        int32_t a = first + k, b = first + (k + 1) % 4, c = a + 4, d = b + 4;
+        int32_t w[6] = {a, b, d, a, d, c};
+        memcpy(tri + 3 * nt, w, sizeof w);
+        nt += 2;
+    }
+    return nt;
+}
+
 /* twice: the shared layer covered twice (from below and from above) or once (an edge in three
  * triangles, no overlap) */
 static void test_doubled_square(int twice_covered)
@@ -86,13 +99,7 @@ static void test_doubled_square(int twice_covered)
         }
     int32_t tri[3 * 24];
     size_t nt = 0;
-    for (int l = 0; l < 2; l++)
-        for (int k = 0; k < 4; k++) { /* outward walls */
-            int32_t a = 4 * l + k, b = 4 * l + (k + 1) % 4, c = a + 4, d = b + 4;
-            int32_t w[6] = {a, b, d, a, d, c};
-            memcpy(tri + 3 * nt, w, sizeof w);
-            nt += 2;
-        }
+    for (int l = 0; l < 2; l++) nt = square_walls(tri, nt, 4 * l);
     int32_t caps[12] = {0, 2, 1, 0, 3, 2, 8, 9, 10, 8, 10, 11};
     memcpy(tri + 3 * nt, caps, sizeof caps);
     nt += 4;
@@ -157,12 +164,7 @@ static void test_left_alone(void)
     double xyz[8 * 3] = {0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 0, 0, 1, 2, 0, 1, 2, 2, 1, 0, 2, 1};
     int32_t tri[3 * 12];
     size_t nt = 0;
-    for (int k = 0; k < 4; k++) {
-        int32_t a = k, b = (k + 1) % 4, c = a + 4, d = b + 4;
-        int32_t w[6] = {a, b, d, a, d, c};
-        memcpy(tri + 3 * nt, w, sizeof w);
-        nt += 2;
-    }
+    nt = square_walls(tri, nt, 0);
     int32_t caps[12] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7};
     memcpy(tri + 3 * nt, caps, sizeof caps);
     nt += 4;

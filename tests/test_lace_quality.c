@@ -30,13 +30,7 @@ static double xyz[3 * 2 * MAXN];
 
 static int load(void)
 {
-    char path[2300], dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    snprintf(path, sizeof path, "%s/data/lace/crescents.txt", dir);
-    FILE *f = fopen(path, "r");
+    FILE *f = fopen(tl_src_path(__FILE__, "data/lace/crescents.txt"), "r");
     if (!f) return -1;
     char line[256], word[16];
     size_t n;

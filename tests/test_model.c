@@ -375,14 +375,8 @@ static void test_bad_manifest(void)
 static void test_real_data(void)
 {
     /* __FILE__ is tests/test_model.c under the source tree; the data sit beside it. */
-    char dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    char pts[2300], fac[2300];
-    snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/tank/tank_full_771.pts", dir);
-    snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/tank/tank_full_771.fac", dir);
+    const char *pts = tl_src_path(__FILE__, "../../shared/data/map3d/geom/tank/tank_full_771.pts");
+    const char *fac = tl_src_path(__FILE__, "../../shared/data/map3d/geom/tank/tank_full_771.fac");
     /* The data folder is part of the project's setup: its absence is a failure, not a skip. */
     CHECK(tl_exists(pts) && tl_exists(fac));
     if (!tl_exists(pts)) {
@@ -418,8 +412,8 @@ static void test_real_data(void)
     }
     thx_surface_destroy(&s);
 
-    snprintf(pts, sizeof pts, "%s/../../shared/data/map3d/geom/torso/daltorso.pts", dir);
-    snprintf(fac, sizeof fac, "%s/../../shared/data/map3d/geom/torso/daltorso.fac", dir);
+    pts = tl_src_path(__FILE__, "../../shared/data/map3d/geom/torso/daltorso.pts");
+    fac = tl_src_path(__FILE__, "../../shared/data/map3d/geom/torso/daltorso.fac");
     CHECK_OK(ctx, thx_surface_read_ptsfac(ctx, pts, fac, "torso", THX_ROLE_OUTER, &s, &base));
     CHECK(base == 1 && s && s->n_nodes == 352 && s->n_tris == 700);
     thx_surface_destroy(&s);

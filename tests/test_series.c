@@ -748,13 +748,8 @@ static void test_failed_writes(void)
 /* The real recording: map3d's struct `onerun` with potvals (512 x 608) and unit 'uV'. */
 static void test_real_recording(void)
 {
-    char dir[2048];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
     char path[2300];
-    snprintf(path, sizeof path, "%s/../../shared/data/map3d/data/tank/cool1-atdr-run1.mat", dir);
+    snprintf(path, sizeof path, "%s", tl_src_path(__FILE__, "../../shared/data/map3d/data/tank/cool1-atdr-run1.mat"));
     /* the data folder is part of the project's setup: its absence is a failure */
     CHECK(tl_exists(path));
     if (!tl_exists(path)) {

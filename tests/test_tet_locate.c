@@ -151,7 +151,7 @@ static thx_model *openmeeg_head(thx_ctx *ctx, const char *dir)
     thx_import_opts_default(&io);
     io.scale = 100;
     for (int s = 0; s < 3 && m; s++) {
-        char path[1200];
+        char path[2300];
         snprintf(path, sizeof path, "%s/%s", dir, file[s]);
         thx_surface *su = NULL;
         CHECK_OK(ctx, thx_surface_import(ctx, path, NULL, name[s], s ? THX_ROLE_OTHER : THX_ROLE_OUTER, &io, &su, NULL));
@@ -200,11 +200,7 @@ int main(void)
     thx_ctx_create(&ctx);
     /* the data beside the checkout: tests/../../shared/data */
     char dir[2100];
-    snprintf(dir, sizeof dir, "%s", __FILE__);
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-    strncat(dir, "/../../shared/data/openmeeg-spheres/data/Head2", sizeof dir - strlen(dir) - 1);
+    snprintf(dir, sizeof dir, "%s", tl_src_path(__FILE__, "../../shared/data/openmeeg-spheres/data/Head2"));
     FILE *f = NULL;
     {
         char probe[2200];

@@ -56,6 +56,17 @@ const char *tl_path(const char *file)
     return buf[k];
 }
 
+const char *tl_src_path(const char *here, const char *rel)
+{
+    static char buf[8][4096];
+    static int k;
+    k = (k + 1) % 8;
+    const char *slash = strrchr(here, '/');
+    if (slash) snprintf(buf[k], sizeof buf[k], "%.*s/%s", (int)(slash - here), here, rel);
+    else snprintf(buf[k], sizeof buf[k], "./%s", rel);
+    return buf[k];
+}
+
 void tl_write_bytes(const char *path, const void *data, size_t n)
 {
     FILE *f = fopen(path, "wb");

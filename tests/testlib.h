@@ -47,6 +47,9 @@ int tl_scratch_make(const char *name);
 int tl_scratch_finish(const char *name);
 /* tl_scratch/file (eight rotating buffers: up to eight such paths may be in use at once). */
 const char *tl_path(const char *file);
+/* rel under the directory of the source file here (pass __FILE__: the tests' data, tests/data/..., and
+ * the setup's ../../shared/data beside the checkout); eight rotating buffers, as tl_path. */
+const char *tl_src_path(const char *here, const char *rel);
 /* Writes the bytes or the text to path; exits the test on failure. */
 void tl_write_bytes(const char *path, const void *data, size_t n);
 void tl_write_text(const char *path, const char *text);

@@ -31,7 +31,7 @@ static int cmp_iedge(const void *x, const void *y)
 }
 
 /* smallest angle (degrees) of a triangle in the (x, y) plane */
-static double min_angle2(double ax, double ay, double bx, double by, double cx, double cy)
+double inplane_min_angle2(double ax, double ay, double bx, double by, double cx, double cy)
 {
     double P[3][2] = {{ax, ay}, {bx, by}, {cx, cy}}, m = 180.0;
     for (int k = 0; k < 3; k++) {
@@ -43,11 +43,11 @@ static double min_angle2(double ax, double ay, double bx, double by, double cx, 
     return m;
 }
 
-static double tri_min_angle(const thx_surface *s, size_t t)
+double inplane_tri_min_angle(const thx_surface *s, size_t t)
 {
     const int32_t *v = s->tri + 3 * t;
     const double *a = s->xyz + 3 * v[0], *b = s->xyz + 3 * v[1], *c = s->xyz + 3 * v[2];
-    return min_angle2(a[0], a[1], b[0], b[1], c[0], c[1]);
+    return inplane_min_angle2(a[0], a[1], b[0], b[1], c[0], c[1]);
 }
 
 /* smallest angle (degrees) of a triangle in space */
@@ -199,7 +199,7 @@ thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, doub
     if (!wa) { st = THX_ENOMEM; goto done; }
     for (size_t t = 0; t < n_laced; t++) wa[t] = 180.0;
     for (size_t t = 0; t < n_laced; t++)
-        if (grp[t] != (size_t)-1) wa[grp[t]] = fmin(wa[grp[t]], tri_min_angle(s, t));
+        if (grp[t] != (size_t)-1) wa[grp[t]] = fmin(wa[grp[t]], inplane_tri_min_angle(s, t));
     /* each patch (root = its first triangle), in the order of its first triangle */
     for (size_t g = 0; g < n_laced && st == THX_OK; g++) {
         if (grp[g] != g) continue;
@@ -279,7 +279,7 @@ thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, doub
         double better = 180.0;
         for (size_t t = 0; cs == THX_OK && t < nct; t++) {
             const thx_vec2 *a = &cp[ct[3 * t]], *b = &cp[ct[3 * t + 1]], *c = &cp[ct[3 * t + 2]];
-            better = fmin(better, min_angle2(a->x, a->y, b->x, b->y, c->x, c->y));
+            better = fmin(better, inplane_min_angle2(a->x, a->y, b->x, b->y, c->x, c->y));
         }
         /* the fans beyond the split edges */
         for (size_t i = 0, q0 = 0; cs == THX_OK && i < nl; q0 += pieces[i], i++) {

@@ -26,6 +26,11 @@
 thx_status thx_inplane_refine(thx_ctx *ctx, thx_surface *s, size_t n_laced, double grid, double min_angle_deg,
                               size_t *node_cap, size_t *tri_cap, size_t *n_refined);
 
+/* Smallest angle (degrees) of the triangle (a, b, c) in the (x, y) plane; of triangle t of s in the
+ * (x, y) plane (an in-plane one). */
+double inplane_min_angle2(double ax, double ay, double bx, double by, double cx, double cy);
+double inplane_tri_min_angle(const thx_surface *s, size_t t);
+
 /* Step 3c (inplane_resolve.c): in each layer plane where the in-plane triangles (caps, cut pockets and
  * tongues) overlap or an in-plane edge is in other than two triangles (the slices below and above both
  * cut the same part of their shared layer), those triangles are replaced by one triangulation of the

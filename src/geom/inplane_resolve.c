@@ -124,25 +124,6 @@ static int any_overlap(const thx_surface *s, const size_t *tl, size_t n)
     return hit;
 }
 
-static double angle_min(const double *P0, const double *P1, const double *P2)
-{
-    const double *P[3] = {P0, P1, P2};
-    double m = 180.0;
-    for (int k = 0; k < 3; k++) {
-        const double *o = P[k], *u = P[(k + 1) % 3], *v = P[(k + 2) % 3];
-        double ux = u[0] - o[0], uy = u[1] - o[1], vx = v[0] - o[0], vy = v[1] - o[1];
-        m = fmin(m, fabs(atan2(ux * vy - uy * vx, ux * vx + uy * vy)) * 180.0 / M_PI);
-    }
-    return m;
-}
-
-/* smallest angle (degrees) of an in-plane triangle */
-static double flat_min_angle(const thx_surface *s, size_t t)
-{
-    const int32_t *v = s->tri + 3 * t;
-    return angle_min(s->xyz + 3 * v[0], s->xyz + 3 * v[1], s->xyz + 3 * v[2]);
-}
-
 /* Even-odd test of point p against the segments (node pairs into pts). */
 static int inside_parity(const thx_vec2 *pts, const int32_t *seg, size_t ns, double px, double py)
 {
@@ -447,12 +428,13 @@ out:
 
 /* smallest angle (degrees) of a plane's new triangles (the split wall triangles not counted: a split
  * at a crossing point only happens in a plane that is resolved whatever its angles) */
-static double fix_min_angle(const thx_surface *s, const plane_fix *pf)
+static double fix_min_angle(const plane_fix *pf)
 {
     double m = 180.0;
-    (void)s;
-    for (size_t t = 0; t < pf->nt; t++)
-        m = fmin(m, angle_min(&pf->pts[pf->tris[3 * t]].x, &pf->pts[pf->tris[3 * t + 1]].x, &pf->pts[pf->tris[3 * t + 2]].x));
+    for (size_t t = 0; t < pf->nt; t++) {
+        const thx_vec2 *a = &pf->pts[pf->tris[3 * t]], *b = &pf->pts[pf->tris[3 * t + 1]], *c = &pf->pts[pf->tris[3 * t + 2]];
+        m = fmin(m, inplane_min_angle2(a->x, a->y, b->x, b->y, c->x, c->y));
+    }
     return m;
 }
 
@@ -521,12 +503,12 @@ thx_status thx_inplane_resolve(thx_ctx *ctx, thx_surface *s, double grid, double
         /* a plane that is well formed but has an in-plane angle under min_angle_deg (a patch step 3b
            could not take: its boundary is no one simple loop) is triangulated again when that is better */
         double worst = 180.0;
-        for (size_t f = i; f < j; f++) worst = fmin(worst, flat_min_angle(s, ft[f].t));
+        for (size_t f = i; f < j; f++) worst = fmin(worst, inplane_tri_min_angle(s, ft[f].t));
         int quality = !bad && worst < min_angle_deg;
         if (bad || quality) {
             plane_fix pf = {0};
             int r = resolve_plane(s, e, ne, grid, &pf);
-            if (r == 1 && quality && !(fix_min_angle(s, &pf) > worst)) r = 0;
+            if (r == 1 && quality && !(fix_min_angle(&pf) > worst)) r = 0;
             if (r == 1) {
                 pf.z = z;
                 pf.n_old = j - i;

@@ -6,6 +6,7 @@
 #include "thorax/image/trace.h"
 
 #include "components.h"
+#include "thorax/core/union_find.h"
 
 #include <limits.h>
 #include <math.h>
@@ -629,50 +630,10 @@ static unsigned char pick_decide(void *user, size_t size, int touches, size_t or
     return r->grp[ordinal] == r->want;
 }
 
-/* The index box of the voxels equal to 1 in box [lo, hi): b = {min i, max i, min j, max j, min k, max k}. */
-static void index_box(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3], long b[6])
-{
-    long mn0 = LONG_MAX, mn1 = LONG_MAX, mn2 = LONG_MAX, mx0 = -1, mx1 = -1, mx2 = -1;
-    const size_t n0 = img->n[0], n01 = img->n[0] * img->n[1];
-#pragma omp parallel for reduction(min : mn0, mn1, mn2) reduction(max : mx0, mx1, mx2) schedule(static)
-    for (long k = (long)lo[2]; k < (long)hi[2]; k++)
-        for (size_t j = lo[1]; j < hi[1]; j++) {
-            const unsigned char *r = m + (size_t)k * n01 + j * n0;
-            for (size_t i = lo[0]; i < hi[0]; i++)
-                if (r[i] == 1) {
-                    if ((long)i < mn0) mn0 = (long)i;
-                    if ((long)i > mx0) mx0 = (long)i;
-                    if ((long)j < mn1) mn1 = (long)j;
-                    if ((long)j > mx1) mx1 = (long)j;
-                    if (k < mn2) mn2 = k;
-                    if (k > mx2) mx2 = k;
-                }
-        }
-    b[0] = mn0;
-    b[1] = mx0;
-    b[2] = mn1;
-    b[3] = mx1;
-    b[4] = mn2;
-    b[5] = mx2;
-}
-
-static size_t uf_find(size_t *par, size_t a)
-{
-    while (par[a] != a) a = par[a] = par[par[a]];
-    return a;
-}
-
-static int lab_in(const labelset *ls, long x)
-{
-    if (ls->all && x != 0) return 1;
-    if (ls->lut) return (unsigned long)(x - ls->lo) <= (unsigned long)(ls->hi - ls->lo) ? ls->lut[x - ls->lo] : 0;
-    return in_set(ls, x);
-}
-
-/* The voxels equal to 1 in box [lo, hi): their count, the RAS centroid of their centres and the
- * RAS x range of their index box's corners. */
-static void box_centroid(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3],
-                         size_t *count, double ras[3], double xr[2])
+/* The voxels equal to 1 in box [lo, hi): their count, the sums of their indices and their index box
+ * b = {min i, max i, min j, max j, min k, max k}. */
+static void box_scan(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3], size_t *count,
+                     double sum[3], long b[6])
 {
     double s0 = 0, s1 = 0, s2 = 0;
     size_t cnt = 0;
@@ -697,6 +658,29 @@ static void box_centroid(const thx_image *img, const unsigned char *m, const siz
                     if (k > mx2) mx2 = k;
                 }
         }
+    *count = cnt;
+    sum[0] = s0, sum[1] = s1, sum[2] = s2;
+    b[0] = mn0, b[1] = mx0, b[2] = mn1, b[3] = mx1, b[4] = mn2, b[5] = mx2;
+}
+
+static int lab_in(const labelset *ls, long x)
+{
+    if (ls->all && x != 0) return 1;
+    if (ls->lut) return (unsigned long)(x - ls->lo) <= (unsigned long)(ls->hi - ls->lo) ? ls->lut[x - ls->lo] : 0;
+    return in_set(ls, x);
+}
+
+/* The voxels equal to 1 in box [lo, hi): their count, the RAS centroid of their centres and the
+ * RAS x range of their index box's corners. */
+static void box_centroid(const thx_image *img, const unsigned char *m, const size_t lo[3], const size_t hi[3],
+                         size_t *count, double ras[3], double xr[2])
+{
+    double sum[3];
+    size_t cnt;
+    long bx[6];
+    box_scan(img, m, lo, hi, &cnt, sum, bx);
+    long mn0 = bx[0], mx0 = bx[1], mn1 = bx[2], mx1 = bx[3], mn2 = bx[4], mx2 = bx[5];
+    double s0 = sum[0], s1 = sum[1], s2 = sum[2];
     xr[0] = INFINITY;
     xr[1] = -INFINITY;
     for (int corner = 0; cnt && corner < 8; corner++) {
@@ -1370,7 +1354,9 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                 for (size_t q = 0; q < ncomp; q++) grp[q] = q;
                 pick_rule pr = {grp, cc};
                 THX_TRY(thx_components6(ctx, scratch, img->n, lo, hi, 1, pick_decide, &pr, NULL));
-                index_box(img, scratch, lo, hi, bx[cc]);
+                size_t cnt;
+                double sum[3];
+                box_scan(img, scratch, lo, hi, &cnt, sum, bx[cc]);
                 for (size_t k = lo[2]; k < hi[2]; k++)
                     for (size_t j = lo[1]; j < hi[1]; j++)
                         memset(scratch + k * img->n[0] * img->n[1] + j * img->n[0] + lo[0], 0, hi[0] - lo[0]);
@@ -1383,7 +1369,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                         long r = q == g.s ? 1 : KR + 1;
                         apart |= bx[a][2 * q] > bx[b][2 * q + 1] + r || bx[b][2 * q] > bx[a][2 * q + 1] + r;
                     }
-                    if (!apart) par[uf_find(par, a)] = uf_find(par, b);
+                    if (!apart) uf_union(par, a, b);
                 }
             size_t ng = 0, gid[MAX_SPLIT];
             for (size_t a = 0; a < ncomp; a++) gid[a] = SIZE_MAX;
