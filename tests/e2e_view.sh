@@ -69,7 +69,9 @@ waitfor $T grep -q "^pick: surface" keys.out || true
 grep -q "^pick: surface torso node" keys.out || { cat keys.out keys.err; fail "a click did not pick the torso"; }
 echo "click: $(grep '^pick' keys.out)"
 xdotool windowfocus --sync "$W" 2>/dev/null || true
-xdotool key --window "$W" ctrl+q
+# (the viewer may close its window between the key's press and release: the release then meets no
+# window, which is not a failure; the wait below is the check)
+xdotool key --window "$W" ctrl+q 2>/dev/null || true
 waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit"; }
 wait $VP || fail "the viewer exited $?"
 
@@ -93,7 +95,9 @@ xdotool key --window "$W1" shift+f Right
 waitfor $T titled "$W1" "frame 102 of" || fail "unlocked: the torso's window did not step: $(xdotool getwindowname "$W1")"
 xdotool getwindowname "$W2" | grep -q "frame 101 of" || fail "unlocked: the heart's window stepped too: $(xdotool getwindowname "$W2")"
 echo "windows: $(xdotool getwindowname "$W1") | $(xdotool getwindowname "$W2")"
-xdotool key --window "$W1" ctrl+q
+# (the viewer may close its window between the key's press and release: the release then meets no
+# window, which is not a failure; the wait below is the check)
+xdotool key --window "$W1" ctrl+q 2>/dev/null || true
 waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit the two windows"; }
 wait $VP || fail "the two-window viewer exited $?"
 

@@ -117,7 +117,9 @@ waitfor $T titled "$W" "frame 2 of" || fail "Right: $(xdotool getwindowname "$W"
 G6=$(xdotool getwindowgeometry "$W" | grep Geometry)
 echo "window before the picks: $G0; after six: $G6"
 [ "$G0" = "$G6" ] || fail "six picks changed the window's size: $G0 -> $G6"
-xdotool key --window "$W" ctrl+q
+# (the viewer may close its window between the key's press and release: the release then meets no
+# window, which is not a failure; the wait below is the check)
+xdotool key --window "$W" ctrl+q 2>/dev/null || true
 waitfor $T eval '! kill -0 $VP' || { kill $VP; fail "ctrl+q did not quit"; }
 echo "inside: passed"
 INNER

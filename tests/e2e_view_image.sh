@@ -47,7 +47,9 @@ waitfor $T grep -q "image plane z=1 mm" k.err || { cat k.err; kill $VP; fail "] 
 xdotool key --window "$W" bracketleft bracketleft
 waitfor $T grep -q "image plane z=-3 mm" k.err || { cat k.err; kill $VP; fail "[ [ did not move the plane to z=-3"; }
 grep "image plane" k.err | sed 's/^/keys: /'
-xdotool key --window "$W" ctrl+q
+# (the viewer may close its window between the key's press and release: the release then meets no
+# window, which is not a failure; the wait below is the check)
+xdotool key --window "$W" ctrl+q 2>/dev/null || true
 waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit"; }
 wait $VP || fail "the viewer exited $?"
 INNER
