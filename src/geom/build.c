@@ -81,6 +81,7 @@ typedef struct {
     size_t n_tris, cap;
     thx_lace_stats st;
     int branch;
+    thx_lace_nodes nodes; /* the nodes its lacings added (filled pockets' chords; ids from nodes.base) */
 } slice;
 
 
@@ -719,13 +720,18 @@ static double tris_min_angle(const double *xyz, const int32_t *tri, size_t nt)
 }
 
 /* The options of quality_retry's variant v: the lacing metric on the chains' own positions, no phase;
- * variant 1 also laces the whole slice by one dynamic programme. */
+ * variant 1 also laces the whole slice by one dynamic programme, variant 2 cuts the pockets of either
+ * layer that the other fills, or else its tongues one voxel wide, in their plane first. */
 static thx_lace_opts quality_opts(const thx_lace_opts *la, int v)
 {
     thx_lace_opts lr = *la;
     lr.raw_positions = 1;
     lr.phase_weight = 0;
     if (v == 1) lr.whole_dp = 1;
+    if (v == 2) {
+        lr.cut_filled_pockets = 1;
+        lr.cut_tongue_runs = 1;
+    }
     return lr;
 }
 
@@ -734,9 +740,12 @@ static thx_lace_opts quality_opts(const thx_lace_opts *la, int v)
  * unequal length at a lung's base: mapped to a common centroid, one crescent's tip node is fanned to a
  * run of the other's side, issue 25); (1) if that still has a thin triangle, the whole slice by one
  * dynamic programme over every pair of nodes (the path of least cost, where the greedy walk took the
- * next shortest diagonal and could not undo an offset of a whole straight run). The one with the
- * largest smallest angle that does not cross is kept. (1) only for slices of at most THX_LACE_DP_PAIRS
- * pairs of nodes. */
+ * next shortest diagonal and could not undo an offset of a whole straight run); (2) if that still
+ * has one, with the pockets that the other layer fills cut in their plane first (a dome's top: a
+ * pocket in one layer's loop, none in the next, whose side was fanned to the other's run), or if
+ * there are none the tongues the other layer lacks (a wedge's tail one voxel wide). The one
+ * with the largest smallest angle that does not cross is kept. (1) only for slices of at most
+ * THX_LACE_DP_PAIRS pairs of nodes. */
 static thx_status quality_retry(thx_ctx *lc, const thx_chain *a, const thx_chain *b, const thx_lace_opts *la,
                                 const double *lxyz, slice *sl, size_t first, const thx_lace_stats *keep)
 {
@@ -745,7 +754,7 @@ static thx_status quality_retry(thx_ctx *lc, const thx_chain *a, const thx_chain
     size_t n0 = sl->n_tris;
     thx_lace_stats st0 = sl->st;
     int best = -1;
-    for (int v = 0; v < 2 && ang < THX_LACE_MIN_ANGLE; v++) {
+    for (int v = 0; v < 3 && ang < THX_LACE_MIN_ANGLE; v++) {
         thx_lace_opts lr = quality_opts(la, v);
         if (v == 1 && a->n * b->n > THX_LACE_DP_PAIRS) break;
         thx_status r = thx_lace(lc, a, b, &lr, &sl->tris, &sl->n_tris, &sl->cap, &sl->st);
@@ -1159,8 +1168,20 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             for (int q = 0; q < cb->n_sel; q++)
                 if (!layers[i + 1].loops[cb->sel[q]].up) { cb->c.beyond = NULL; cb->c.n_beyond = 0; }
         }
-    lxyz = thx_malloc(ctx, ((size_t)next_id + 1) * 3 * sizeof *lxyz); /* the layer nodes, for the crossing test */
+    /* the layer nodes, for the crossing test, then each slice's room for the nodes its lacing may add
+       (thx_lace_nodes: twice its chains' nodes; pages never written are never touched) */
+    size_t n_room = 0;
+    for (size_t i = 0; i < ns; i++) {
+        size_t r = 64;
+        for (size_t g = 0; g < slices[i].n_groups; g++) r += 2 * (slices[i].ga[g].c.n + slices[i].gb[g].c.n);
+        slices[i].nodes.base = next_id + (int32_t)n_room;
+        slices[i].nodes.cap = r;
+        n_room += r;
+    }
+    if ((size_t)next_id + n_room >= (size_t)INT32_MAX) { st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\" has too many nodes", path, cs->name); goto done; }
+    lxyz = thx_malloc(ctx, ((size_t)next_id + n_room + 1) * 3 * sizeof *lxyz);
     if (!lxyz) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < ns; i++) slices[i].nodes.xyz = lxyz + 3 * (size_t)slices[i].nodes.base;
     for (size_t l = 0; l < nl; l++)
         for (size_t k = 0; k < layers[l].n_loops; k++)
             for (size_t q = 0; q < layers[l].loops[k].n; q++) {
@@ -1179,12 +1200,14 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         for (long i = 0; i < (long)ns; i++) {
             thx_ctx *lc = NULL;
             if (thx_ctx_create(&lc) != THX_OK) { failed = 1; continue; }
+            thx_lace_opts lo_i = lo;
+            lo_i.nodes = &slices[i].nodes;
             for (size_t g = 0; g < slices[i].n_groups; g++) {
                 int split = 0, x = 0;
                 /* a branching group of one loop and k is laced by splitting the one loop first; the
                    loops joined by bridges when no split is found or it crosses */
-                thx_status r = lace_branch_split(lc, &slices[i].ga[g], &slices[i].gb[g], &lo, lxyz, &slices[i], &split);
-                if (r == THX_OK && !split) r = lace_tries(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo, lxyz, &slices[i], &x);
+                thx_status r = lace_branch_split(lc, &slices[i].ga[g], &slices[i].gb[g], &lo_i, lxyz, &slices[i], &split);
+                if (r == THX_OK && !split) r = lace_tries(lc, &slices[i].ga[g].c, &slices[i].gb[g].c, &lo_i, lxyz, &slices[i], &x);
                 if (r == THX_OK && x) slices[i].st.crossing++;
                 if (r != THX_OK) {
 #pragma omp critical(thx_build_err)
@@ -1230,7 +1253,9 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     stats->t_lace = t2 - t1;
     /* 3. caps, appended after the laced triangles; grid nodes after the layer nodes. */
     THX_TRY(thx_surface_create(ctx, cs->name, cs->role, &s));
-    size_t node_cap = (size_t)next_id + 64, tri_cap = ntri + 64;
+    size_t n_added = 0; /* the nodes the lacings added, after the layer nodes */
+    for (size_t i = 0; i < ns; i++) n_added += slices[i].nodes.n;
+    size_t node_cap = (size_t)next_id + n_added + 64, tri_cap = ntri + 64;
     s->xyz = thx_malloc(ctx, node_cap * 3 * sizeof *s->xyz);
     s->tri = thx_malloc(ctx, tri_cap * 3 * sizeof *s->tri);
     if (!s->xyz || !s->tri) { st = THX_ENOMEM; goto done; }
@@ -1246,7 +1271,15 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         }
     s->n_nodes = (size_t)next_id;
     for (size_t i = 0; i < ns; i++) {
-        memcpy(s->tri + 3 * s->n_tris, slices[i].tris, slices[i].n_tris * 3 * sizeof *s->tri);
+        const thx_lace_nodes *nd = &slices[i].nodes;
+        int32_t shift = (int32_t)s->n_nodes - nd->base; /* the slice's added nodes, packed */
+        memcpy(s->xyz + 3 * s->n_nodes, nd->xyz, nd->n * 3 * sizeof *s->xyz);
+        s->n_nodes += nd->n;
+        int32_t *T = s->tri + 3 * s->n_tris;
+        memcpy(T, slices[i].tris, slices[i].n_tris * 3 * sizeof *s->tri);
+        if (nd->n)
+            for (size_t k = 0; k < 3 * slices[i].n_tris; k++)
+                if (T[k] >= next_id) T[k] += shift;
         s->n_tris += slices[i].n_tris;
     }
     int method = o->cap_method >= 0 ? o->cap_method : (int)cs->cap;
@@ -1375,7 +1408,8 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
         if (st != THX_OK) goto done;
         stats->n_flat_flipped += nf;
     }
-    if (n_resolved) { /* the nodes of the in-plane triangles replaced in step 3c and no other */
+    if (n_resolved || n_added) { /* the nodes of the in-plane triangles replaced in step 3c, and those added
+                                     by lacings laced again and discarded, and no other */
         size_t nd = 0;
         THX_TRY(thx_surface_drop_unused(ctx, s, &nd));
     }

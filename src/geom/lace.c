@@ -70,6 +70,8 @@ void thx_lace_opts_default(thx_lace_opts *o)
     o->cut_filled_pockets = 0;
     o->raw_positions = 0;
     o->whole_dp = 0;
+    o->cut_tongue_runs = 0;
+    o->nodes = NULL;
 }
 
 typedef struct {
@@ -357,6 +359,109 @@ static int arc_filled(const thx_chain *c, int lo, int len, const chain_index *ix
     return in >= 0.9 * (len - 1);
 }
 
+/* Does the chord c[lo]-c[hi] cross (or touch) an edge of c other than those at its ends? */
+static int chord_crosses(const thx_chain *c, int lo, int hi)
+{
+    int n = (int)c->n;
+    for (int k = 0; k < n; k++) {
+        int k1 = (k + 1) % n;
+        if (k == lo || k1 == lo || k == hi || k1 == hi) continue;
+        if (thx_segments_touch(&c->p[lo].x, &c->p[hi].x, &c->p[k].x, &c->p[k1].x)) return 1;
+    }
+    return 0;
+}
+
+/* Twice the signed area of the polygon of the arc c[lo .. lo+len] (cyclic) closed by its chord
+ * (positive: counterclockwise, a tongue of a counterclockwise chain; negative: a dent). */
+static double arc_area2(const thx_chain *c, int lo, int len)
+{
+    int n = (int)c->n, hi = (lo + len) % n;
+    double area = 0;
+    for (int s = 0; s < len; s++) {
+        thx_vec2 p = c->p[(lo + s) % n], q = c->p[(lo + s + 1) % n];
+        area += p.x * q.y - q.x * p.y;
+    }
+    return area + c->p[hi].x * c->p[lo].y - c->p[lo].x * c->p[hi].y;
+}
+
+/* The runs of c's nodes deeper than margin on one side of the other layer's curve io (side -1:
+ * inside it, +1: outside), each as the arc c[q .. q+len] (cyclic) from the node before the run to
+ * the node after it: for each, fn(c, q, len, user). */
+static void deep_runs(const thx_chain *c, const chain_index *io, int side, double margin,
+                      void (*fn)(const thx_chain *c, int q, int len, void *user), void *user)
+{
+    int n = (int)c->n, start = -1;
+    unsigned char *deep = malloc((size_t)n);
+    if (!deep) return; /* no run found: the lacing goes on without the cut */
+    for (int k = 0; k < n; k++) deep[k] = side * chain_index_sdf(io, c->p[k]) > margin;
+    for (int k = 0; k < n && start < 0; k++)
+        if (!deep[k]) start = k;
+    for (int k = 0; start >= 0 && k < n;) {
+        int q = (start + k) % n;
+        if (!deep[(q + 1) % n]) { k++; continue; }
+        int len = 1; /* c[q] not deep, c[q+1 ..] deep */
+        while (len < n && deep[(q + len) % n]) len++;
+        k += len;
+        fn(c, q, len, user);
+    }
+    free(deep);
+}
+
+typedef struct {
+    int c_is_lower, level;
+    const chain_index *bi;
+    double margin, best_depth;
+    pocket pk;
+} run_find;
+
+/* A pocket of c inside a concave bay of its hull (find_filled_pocket's hull bays miss it: the bay's
+ * arc runs along the other layer's curve, and only the pocket's nodes lie inside it): the arc of a
+ * run of c's nodes inside the other layer's curve by more than margin (deep_runs). It must be a dent
+ * (the arc with its chord runs clockwise), deeper than 4 margins (two node spacings: a shallower one
+ * is the other layer's curve bending past a chord just cut, and its in-plane triangles would be as
+ * thin), with a chord that crosses no edge of c, and pass the hull bays' test of the layer beyond c.
+ * The left lung's dome top of the 512 bench map (issue 25): the diaphragm's dome cuts an oval pocket
+ * into the lower layer's loop from the crescent's concave side; the layer above is the crescent
+ * without it. Laced as one chain, the oval's side is fanned to the crescent's concave run, down to
+ * 0.8 degrees. The deepest is kept in f->pk. */
+static void run_pocket(const thx_chain *c, int q, int len, void *user)
+{
+    run_find *f = user;
+    int n = (int)c->n, hi = (q + len) % n;
+    if (len < 2 || len >= n - 1 || !(arc_area2(c, q, len) < 0)) return;
+    double depth;
+    int deep = deepest_node(c, q, len, &depth);
+    if (deep < 0 || !(depth > 4 * f->margin) || !(depth > f->best_depth) || chord_crosses(c, q, hi)) return;
+    if (!f->c_is_lower &&
+        (arc_filled(c, q, len, f->bi, c->n_beyond, f->margin) ||
+         (f->level < 2 && pocket_covered(c->beyond, c->n_beyond, c->p[q], c->p[hi], c->p[deep], f->margin))))
+        return;
+    f->best_depth = depth;
+    f->pk = (pocket){q, hi};
+}
+
+/* A tongue of c that the other layer lacks, found as a run of c's nodes outside the other layer's
+ * curve by more than margin (deep_runs), where the fan rule of step 5 sees only one side of it: a
+ * tongue one voxel wide (a wedge of tissue whose tip line runs nearly along the layers: the right
+ * lung of the 512 bench map beside the mediastinum, issue 25, 14 mm further on each layer up) is
+ * fanned side by side to the other layer's tip, down to 0.1 degrees, and no lacing without new
+ * nodes does better. Cut in its plane, its in-plane triangles join its two sides a node spacing
+ * apart. It must bulge (the arc with its chord runs counterclockwise), reach deeper than 4 margins,
+ * have a chord that crosses no edge of c, and, as in is_tongue, not lie on the surface's end layer
+ * and be held by the layer beyond unless c is the lower chain. The deepest is kept in f->pk. */
+static void run_tongue(const thx_chain *c, int q, int len, void *user)
+{
+    run_find *f = user;
+    int n = (int)c->n, hi = (q + len) % n;
+    if (len < 2 || len >= n - 1 || c->n_beyond == 0 || !(arc_area2(c, q, len) > 0)) return;
+    double depth;
+    int deep = deepest_node(c, q, len, &depth);
+    if (deep < 0 || !(depth > 4 * f->margin) || !(depth > f->best_depth) || chord_crosses(c, q, hi)) return;
+    if (!f->c_is_lower && !pocket_covered(c->beyond, c->n_beyond, c->p[q], c->p[hi], c->p[deep], -1e300)) return;
+    f->best_depth = depth;
+    f->pk = (pocket){q, hi};
+}
+
 /* The deepest pocket of chain c that the other layer fills (io: its signed distance): a bay
  * between consecutive convex-hull vertices, deeper than margin, with at least 90% of the nodes of
  * its arc inside the other layer's curve by more than margin (the other layer covers the bay, not
@@ -369,7 +474,8 @@ static int arc_filled(const thx_chain *c, int lo, int len, const chain_index *ix
  * frontal sinus of a CT's skull (issue 25): a loop that runs in through a narrow notch and around
  * the whole cranial cavity, against the next layer's loop without the notch (a full disc). Laced
  * as one chain, the cavity's side is fanned to a few nodes of the disc across the skull, and those
- * triangles pass the outside test (their centroids lie inside the disc). 1 if found. */
+ * triangles pass the outside test (their centroids lie inside the disc). Without such a bay, a
+ * pocket inside a bay (run_pocket). 1 if found. */
 static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_index *io, int c_is_lower, int level,
                               double margin, pocket *pk)
 {
@@ -405,6 +511,12 @@ static int find_filled_pocket(thx_ctx *ctx, const thx_chain *c, const chain_inde
         }
         k = nx;
     } while (k != first);
+    if (best_depth < 0) {
+        run_find f = {c_is_lower, level, bi, margin, -1, {0, 0}};
+        deep_runs(c, io, -1, margin, run_pocket, &f);
+        best_depth = f.best_depth;
+        *pk = f.pk;
+    }
     for (size_t q = 0; bi && q < c->n_beyond; q++) chain_index_free(&bi[q]);
     free(bi);
     free(on);
@@ -421,18 +533,7 @@ static int is_tongue(const thx_chain *c, const chain_index *io, int c_is_lower, 
 {
     int n = (int)c->n, hi = (lo + len) % n;
     if (len < 2 || len >= n - 1) return 0;
-    double area = 0;
-    for (int s = 0; s < len; s++) {
-        thx_vec2 p = c->p[(lo + s) % n], q = c->p[(lo + s + 1) % n];
-        area += p.x * q.y - q.x * p.y;
-    }
-    area += c->p[hi].x * c->p[lo].y - c->p[lo].x * c->p[hi].y;
-    if (!(area > 0)) return 0;
-    for (int k = 0; k < n; k++) {
-        int k1 = (k + 1) % n;
-        if (k == lo || k1 == lo || k == hi || k1 == hi) continue;
-        if (thx_segments_touch(&c->p[lo].x, &c->p[hi].x, &c->p[k].x, &c->p[k1].x)) return 0;
-    }
+    if (!(arc_area2(c, lo, len) > 0) || chord_crosses(c, lo, hi)) return 0;
     thx_vec2 a = c->p[lo], b = c->p[hi];
     double best;
     int deep = deepest_node(c, lo, len, &best);
@@ -453,36 +554,53 @@ static thx_status emit(thx_ctx *ctx, int32_t **tris, size_t *n_tris, size_t *cap
 static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b, const thx_lace_opts *o, int32_t **tris,
                            size_t *n_tris, size_t *cap, thx_lace_stats *stats, int depth);
 
-/* Cuts pocket pk of chain c with in-plane triangles (cap triangulation of the
- * pocket polygon) and returns the shortened chain in *out (arrays malloc'd). */
-static thx_status cut_pocket(thx_ctx *ctx, const thx_chain *c, pocket pk, int32_t **tris, size_t *n_tris, size_t *cap,
-                             thx_lace_stats *stats, thx_chain *out, thx_vec2 **op, int32_t **oid)
+/* Cuts pocket pk of chain c with in-plane triangles (cap triangulation of the pocket polygon) and
+ * returns the shortened chain in *out (arrays malloc'd). A chord longer than 1.5 spacings gets nodes
+ * along it at the spacing when nd (not NULL) has room (thx_lace_nodes: so far the filled pockets'
+ * chords only; the other cuts, older, keep their whole chords and outputs). */
+static thx_status cut_pocket(thx_ctx *ctx, const thx_chain *c, pocket pk, thx_lace_nodes *nd, double spacing, int32_t **tris,
+                             size_t *n_tris, size_t *cap, thx_lace_stats *stats, thx_chain *out, thx_vec2 **op,
+                             int32_t **oid)
 {
     int n = (int)c->n, len = (pk.hi - pk.lo + n) % n;
+    thx_vec2 a = c->p[pk.lo], b = c->p[pk.hi];
+    double chord = hypot(b.x - a.x, b.y - a.y);
+    int m = 0; /* nodes on the chord, b to a in the polygon */
+    if (nd && spacing > 0 && chord > 1.5 * spacing) {
+        m = (int)lround(chord / spacing) - 1;
+        if (nd->n + (size_t)m > nd->cap) m = 0;
+    }
+    int32_t id0 = m ? nd->base + (int32_t)nd->n : 0;
     thx_status st = THX_OK;
-    thx_vec2 *poly = thx_malloc(ctx, (size_t)(len + 1) * sizeof *poly);
+    thx_vec2 *poly = thx_malloc(ctx, (size_t)(len + 1 + m) * sizeof *poly);
     if (!poly) return THX_ENOMEM;
     for (int s = 0; s <= len; s++) poly[s] = c->p[(pk.lo + s) % n];
+    for (int j = 1; j <= m; j++) {
+        double t = (double)j / (m + 1);
+        poly[len + j] = (thx_vec2){b.x + t * (a.x - b.x), b.y + t * (a.y - b.y)};
+    }
     thx_vec2 *cp = NULL;
     int32_t *ct = NULL;
     size_t ncp = 0, nct = 0;
-    st = thx_cap_triangulate(ctx, poly, (size_t)len + 1, 0.0, 0.0, &cp, &ncp, &ct, &nct);
+    st = thx_cap_triangulate(ctx, poly, (size_t)(len + 1 + m), 0.0, 0.0, &cp, &ncp, &ct, &nct);
     if (st == THX_OK) {
         for (size_t t = 0; t < nct && st == THX_OK; t++) {
             int32_t id[3];
-            for (int v = 0; v < 3; v++) id[v] = c->id[(pk.lo + ct[3 * t + v]) % n];
+            for (int v = 0; v < 3; v++) {
+                int q = ct[3 * t + v];
+                id[v] = q <= len ? c->id[(pk.lo + q) % n] : id0 + (q - len - 1);
+            }
             st = emit(ctx, tris, n_tris, cap, id);
             stats->inplane_tris++;
         }
     }
     free(cp);
     free(ct);
-    free(poly);
-    if (st != THX_OK) return st;
-    int m = n - (len - 1);
-    *op = thx_malloc(ctx, (size_t)m * sizeof **op);
-    *oid = thx_malloc(ctx, (size_t)m * sizeof **oid);
-    if (!*op || !*oid) return THX_ENOMEM;
+    if (st != THX_OK) { free(poly); return st; }
+    int mo = n - (len - 1) + m;
+    *op = thx_malloc(ctx, (size_t)mo * sizeof **op);
+    *oid = thx_malloc(ctx, (size_t)mo * sizeof **oid);
+    if (!*op || !*oid) { free(poly); return THX_ENOMEM; }
     int k = 0;
     for (int s = 0; s < n; s++) {
         int off = (s - pk.lo + n) % n;
@@ -490,7 +608,21 @@ static thx_status cut_pocket(thx_ctx *ctx, const thx_chain *c, pocket pk, int32_
         (*op)[k] = c->p[s];
         (*oid)[k] = c->id[s];
         k++;
+        if (off == 0)
+            for (int j = m; j >= 1; j--) { /* a to b along the chord */
+                (*op)[k] = poly[len + j];
+                (*oid)[k] = id0 + (j - 1);
+                k++;
+            }
     }
+    for (int j = 1; j <= m; j++) {
+        double *x = nd->xyz + 3 * (nd->n + (size_t)j - 1);
+        x[0] = poly[len + j].x;
+        x[1] = poly[len + j].y;
+        x[2] = c->z;
+    }
+    if (m) nd->n += (size_t)m;
+    free(poly);
     out->n = (size_t)k;
     out->p = *op;
     out->id = *oid;
@@ -541,21 +673,30 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
     if (o->cut_filled_pockets > 0 && depth < 8) {
         /* Step 0 of a retry (thx_surfaces_build, after a lacing that crosses itself): a pocket of
            either chain that the other layer fills is cut off in its own plane first, and the rest
-           laced again (recursively: one pocket per level). */
-        for (int side = 0; side < 2; side++) {
+           laced again (recursively: one pocket per level); with cut_tongue_runs, when neither chain has
+           such a pocket, a tongue run of either (run_tongue) the same way. */
+        for (int side = 0; side < 2 * (1 + (o->cut_tongue_runs > 0)); side++) {
             pocket pk;
-            const thx_chain *c = side ? b : a;
-            if (!find_filled_pocket(ctx, c, side ? &L.ia : &L.ib, !side, o->cut_filled_pockets, 0.5 * o->spacing, &pk))
+            const thx_chain *c = side % 2 ? b : a;
+            const chain_index *io = side % 2 ? &L.ia : &L.ib;
+            if (side < 2 && !find_filled_pocket(ctx, c, io, !side, o->cut_filled_pockets, 0.5 * o->spacing, &pk))
                 continue;
+            if (side >= 2) { /* no filled pocket: a tongue run (cut_tongue_runs) */
+                run_find f = {side == 2, 0, NULL, 0.5 * o->spacing, -1, {0, 0}};
+                deep_runs(c, io, +1, f.margin, run_tongue, &f);
+                if (f.best_depth < 0) continue;
+                pk = f.pk;
+            }
             thx_chain nc;
             thx_vec2 *np = NULL;
             int32_t *nid = NULL;
             size_t keep = *n_tris, keep_inplane = stats->inplane_tris;
-            st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            st = cut_pocket(ctx, c, pk, o->nodes, o->spacing, tris, n_tris, cap, stats, &nc, &np, &nid);
             if (st == THX_OK && nc.n >= 3) {
-                stats->filled_pockets++;
-                st = side ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
-                          : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
+                if (side < 2) stats->filled_pockets++;
+                else stats->tongues++;
+                st = side % 2 ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)
+                              : lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
                 free(np);
                 free(nid);
                 goto done;
@@ -671,7 +812,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
            or touches itself where a layer lies along a flat cap: issue 24) is not cut: THX_EGEOM
            from its triangulation leaves the lacing as it is, instead of refusing the surface. */
         if (have && find_pocket(ctx, a, b, 1, gi0, gi1, margin, &pk)) {
-            st = cut_pocket(ctx, a, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            st = cut_pocket(ctx, a, pk, NULL, 0, tris, n_tris, cap, stats, &nc, &np, &nid);
             if (st != THX_EGEOM) {
                 if (st == THX_OK) st = lace_rec(ctx, &nc, b, o, tris, n_tris, cap, stats, depth + 1);
                 free(np);
@@ -681,7 +822,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
             st = THX_OK;
         }
         if (have && find_pocket(ctx, b, a, 0, gj0, gj1, margin, &pk)) {
-            st = cut_pocket(ctx, b, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+            st = cut_pocket(ctx, b, pk, NULL, 0, tris, n_tris, cap, stats, &nc, &np, &nid);
             if (st != THX_EGEOM) {
                 if (st == THX_OK) st = lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1);
                 free(np);
@@ -707,7 +848,7 @@ static thx_status lace_rec(thx_ctx *ctx, const thx_chain *a, const thx_chain *b,
                     thx_chain nc;
                     thx_vec2 *np = NULL;
                     int32_t *nid = NULL;
-                    st = cut_pocket(ctx, c, pk, tris, n_tris, cap, stats, &nc, &np, &nid);
+                    st = cut_pocket(ctx, c, pk, NULL, 0, tris, n_tris, cap, stats, &nc, &np, &nid);
                     if (st != THX_EGEOM) { /* a tongue that is not a simple polygon stays laced */
                         if (st == THX_OK) stats->tongues++;
                         if (st == THX_OK) st = bm ? lace_rec(ctx, a, &nc, o, tris, n_tris, cap, stats, depth + 1)

@@ -27,7 +27,9 @@ extern "C" {
  *   smoothing: bandwidth of the smoothing, mm (0 = interpolating spline). The
  *              spline minimizes sum |p_i - s(t_i)|^2 + lambda * int |s''|^2 with
  *              lambda = smoothing^4 * (points per mm), so the same value smooths
- *              alike whatever the digitization density.
+ *              alike whatever the digitization density. A loop the smoothing would shrink
+ *              below half its digitized area (one not much larger than the bandwidth) is
+ *              fitted with half the smoothing, and so on down to none.
  *   spacing:   target node spacing along the curve, mm. The loop gets
  *              N = max(3, round(L / spacing)) nodes exactly L/N apart in arc length.
  *              A digitized edge longer than the spacing along which the spline strays
@@ -45,6 +47,18 @@ thx_status thx_loop_resample(thx_ctx *ctx, const thx_vec2 *pts, size_t n, double
                              thx_vec2 start, thx_vec2 **out, size_t *n_out);
 
 /* ---- lacing (3.2) ------------------------------------------------------- */
+
+/* Nodes a lacing may add. A chord that cuts a filled pocket (cut_filled_pockets) off in its layer's
+ * plane, longer than 1.5 node spacings, gets nodes along it at the spacing (without them the other layer's
+ * run along the chord is fanned to its two ends: a dome's top, 27 mm across, gave 22 triangles under 1
+ * degree). The caller gives the room: ids base .. base + cap - 1, their points at xyz[3 * (id - base)];
+ * n counts those taken (a lacing laced again and discarded leaves its nodes unused: the caller drops
+ * them). Full: the chord is left whole. */
+typedef struct thx_lace_nodes {
+    double *xyz;
+    int32_t base;
+    size_t n, cap;
+} thx_lace_nodes;
 
 typedef struct {
     double spacing;        /* node spacing of the layers, mm (scales the tolerances) */
@@ -68,6 +82,11 @@ typedef struct {
                               other layer fills: 0 no (default; thx_lace still does it for a fan over
                               3 fan_limit, at level 1), -1 never, 1 those the slice beyond cannot cut,
                               2 also those it might (the retry of a lacing that crosses, thx_surfaces_build) */
+    int cut_tongue_runs;   /* 1: with the filled pockets (cut_filled_pockets > 0), also cut in its plane a
+                              tongue of either chain found as a run of its nodes outside the other layer's
+                              curve (one voxel wide: the retry of a lacing with an angle under 1 degree);
+                              0 (default): no */
+    thx_lace_nodes *nodes; /* where cut chords' nodes go; NULL (default): chords are not split */
 } thx_lace_opts;
 
 typedef struct {
