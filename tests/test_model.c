@@ -15,6 +15,8 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,6 +70,58 @@ static thx_model *make_model(void)
 }
 
 /* ------------------------------------------------------------- tests */
+
+/* The .pts writer formats the millionths itself (ptsfac.c, format_coord): its text must be the bytes of
+   "%.6f" (a value that rounds to zero as "0.000000"; "%.17g" from 1e15 on), for values on both sides of
+   every half-millionth, negative ones, ones that round to zero, large ones and random ones; the .fac's
+   the bytes of "%ld %ld %ld". 200,000 values. */
+static void test_coord_text(void)
+{
+    enum { N = 66667 };
+    double *xyz = malloc(3 * (size_t)N * sizeof *xyz);
+    int32_t tri[3] = {0, 1, 2};
+    uint64_t r = 88172645463325252ull;
+    for (size_t k = 0; k < 3 * (size_t)N; k++) {
+        r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+        double u = (double)(r >> 11) / 9007199254740992.0; /* [0, 1) */
+        long long m = (long long)(r % 2000000001ull) - 1000000000ll;
+        switch (k % 6) {
+        case 0: xyz[k] = (u - 0.5) * 600; break;                                  /* a body's millimetres */
+        case 1: xyz[k] = (m + 0.5) * 1e-6 + ((r >> 3) % 3 - 1) * 1e-12; break;    /* at a half-millionth */
+        case 2: xyz[k] = (u - 0.5) * 2e-6; break;                                 /* rounds to zero, or -0.000001 */
+        case 3: xyz[k] = (u - 0.5) * 4e6 * (1 + (r >> 7) % 1000); break;         /* beyond 1e6, up to 2e9 */
+        case 4: xyz[k] = (m + 0.5) * 1e-6 * 997; break;                           /* halves at larger values */
+        default: xyz[k] = ((r >> 5) % 2 ? 1 : -1) * (1e15 + u * 1e16); break;   /* "%.17g" */
+        }
+    }
+    thx_surface *s = make_surface("coords", THX_ROLE_OTHER, N, xyz, 1, tri);
+    char pts[1200], fac[1200];
+    snprintf(pts, sizeof pts, "%s/coords.pts", tl_scratch);
+    snprintf(fac, sizeof fac, "%s/coords.fac", tl_scratch);
+    CHECK_OK(ctx, thx_surface_write_ptsfac(ctx, s, pts, fac));
+    FILE *f = fopen(pts, "r");
+    CHECK(f != NULL);
+    size_t bad = 0, lines = 0;
+    char line[400], want[400];
+    for (size_t i = 0; f && i < (size_t)N && fgets(line, sizeof line, f); i++, lines++) {
+        int n = 0;
+        for (int k = 0; k < 3; k++) {
+            char b[64];
+            double v = xyz[3 * i + (size_t)k];
+            snprintf(b, sizeof b, fabs(v) >= 1e15 ? "%.17g" : "%.6f", v);
+            n += snprintf(want + n, sizeof want - (size_t)n, "%s%c", strcmp(b, "-0.000000") ? b : "0.000000", k < 2 ? ' ' : '\n');
+        }
+        if (strcmp(line, want) != 0 && bad++ < 3) printf("line %zu: \"%s\" where \"%%.6f\" gives \"%s\"\n", i + 1, line, want);
+    }
+    if (f) fclose(f);
+    printf("coordinate text: %zu lines, %zu unlike \"%%.6f\"\n", lines, bad);
+    CHECK(lines == (size_t)N && bad == 0);
+    f = fopen(fac, "r");
+    CHECK(f != NULL && fgets(line, sizeof line, f) && strcmp(line, "1 2 3\n") == 0);
+    if (f) fclose(f);
+    thx_surface_destroy(&s);
+    free(xyz);
+}
 
 static void test_round_trip(void)
 {
@@ -575,6 +629,7 @@ int main(void)
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
     if (tl_scratch_make("test_model")) return 1;
     test_round_trip();
+    test_coord_text();
     test_failed_write();
     test_base_detection();
     test_bad_files();
