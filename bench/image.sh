@@ -93,8 +93,7 @@ else
     if median_run direct "$RUNS" "$THORAX" surfaces "$MAP" $THORAX_LABELS -o "$W/m" -q; then
         row "image -> surfaces (one command)" "$WALL" "$CPU" "$PEAK_MB" \
             "$($PY -c 'import json,sys; m=json.load(open(sys.argv[1])); s=m["surfaces"]; print("%d surfaces, %d nodes, %d triangles" % (len(s), sum(x["n_nodes"] for x in s), sum(x["n_tris"] for x in s)))' "$W/m/model.json")"
-        echo "      target: < 10 s on 2 cores, < 2 GB; measured without the lungs (docs/design/image.md, \"The speed"
-        echo "      work\"): 9.2 s of CPU (10.4 before), 449 MB; about 6 s of wall when both cores are idle"
+        echo "      target: < 10 s on 2 cores, < 2 GB (issue 25, item 6)"
     else
         echo "  thorax surfaces $(basename "$MAP"): FAILED: $(tail -2 "$W/direct.out")"
     fi
