@@ -38,7 +38,9 @@ CGAL_RUNS=${CGAL_RUNS:-1}
 CGAL_CRITERIA=${CGAL_CRITERIA:-4 1 8}
 MESH=${MESH:-1}
 # surface NAME = boundary of the union of these labels (the model's nesting: the torso is every label)
-THORAX_LABELS=${THORAX_LABELS:---label 1,2,3,4,5=torso:outer --label 2,3,4,5=fat:fat --label 3=lungs:lung --label 4,5=heart:heart --label 5=blood:other}
+# (--holes keep: the lungs wrap around the diaphragm's dome, a hole in their planes; filled, the lung's
+# surface would close over the dome, up to 9.5 mm off its label: docs/design/image.md)
+THORAX_LABELS=${THORAX_LABELS:---label 1,2,3,4,5=torso:outer --label 2,3,4,5=fat:fat --label 3=lungs:lung --label 4,5=heart:heart --label 5=blood:other --holes keep}
 command -v /usr/bin/time > /dev/null || { echo "needs /usr/bin/time (scripts/deps.sh)"; exit 1; }
 $PY -c 'import nibabel, scipy' 2> /dev/null || { echo "needs python3-nibabel and python3-scipy"; exit 1; }
 W=$(mktemp -d)

@@ -85,6 +85,6 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
              "with fewer filled"},                                                                                      \
     {.name = "--holes", .type = CLI_CHOICE, .choices = HOLES, .i = &(A).holes, .def = "fill",                            \
      .help = "a hole of a surface's labels in a plane: filled (surfaces bound solids; the inner boundary is the "        \
-             "surface of what lies inside) or kept as a clockwise loop (thorax surfaces refuses holes wider than the "  \
-             "node spacing)"}
+             "surface of what lies inside) or kept as a clockwise loop, laced to the next plane's holes (a lung "     \
+             "around the diaphragm's dome; a hole on a surface's end plane is not capped: the check fails it)"}
 #endif

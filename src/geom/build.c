@@ -54,6 +54,8 @@ typedef struct {
     int32_t first; /* node id of p[0]; nodes are consecutive */
     int32_t *id;   /* first, first + 1, ... (for chains) */
     int down, up;  /* has a partner loop on the layer below / above */
+    int hole;      /* 1: inside an odd number of the layer's other loops (a hole of the surface's section,
+                      laced to holes only, as the solid it bounds; mark_holes) */
 } rloop;
 
 typedef struct {
@@ -61,10 +63,13 @@ typedef struct {
     size_t n_loops;
     rloop *loops;
     thx_chain *ch; /* the loops as chains (for the pocket rule of lacing) */
+    thx_chain *kind_ch[2]; /* the same, outer loops [0] and holes [1] apart (the beyond chains of a group) */
+    size_t n_kind[2];
 } rlayer;
 
 /* A chain owned by a slice (merged loops). */
 typedef struct {
+    int hole;         /* its loops are holes (rloop.hole) */
     thx_chain c;
     thx_vec2 *p;
     int32_t *id;
@@ -135,11 +140,140 @@ static int loops_overlap(const rloop *a, const rloop *b)
     return 0;
 }
 
-/* Joins loops (indices sel[0..m-1] of layer L) into one chain with bridges between nearest nodes. */
-static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int m, owned_chain *out)
+/* Sets each loop's hole flag: inside an odd number of the layer's other loops (tested at its first node).
+   Loops of one layer do not cross (the contours' check), so one node decides. 0, or -1 out of memory. */
+static int mark_holes(rlayer *L)
+{
+    for (size_t k = 0; k < L->n_loops; k++) L->loops[k].hole = 0;
+    if (L->n_loops < 2) return 0;
+    for (size_t j = 0; j < L->n_loops; j++) {
+        const rloop *o = &L->loops[j];
+        chain_index ci;
+        if (chain_index_init(&ci, o->p, o->n) != 0) return -1;
+        for (size_t k = 0; k < L->n_loops; k++)
+            if (k != j && chain_index_sdf(&ci, L->loops[k].p[0]) < 0) L->loops[k].hole ^= 1;
+        chain_index_free(&ci);
+    }
+    return 0;
+}
+
+/* Is most of hole h's region (probes just inside its edges) inside layer O's outer loops? */
+static int hole_covered(const rloop *h, const rlayer *O)
+{
+    size_t in = 0, probes = 0;
+    for (size_t j = 0; j < O->n_loops; j++) {
+        if (O->loops[j].hole) continue;
+        chain_index cq;
+        if (chain_index_init(&cq, O->loops[j].p, O->loops[j].n) != 0) return 1; /* (out of memory: capped) */
+        for (size_t k = 0; k < h->n; k++) {
+            thx_vec2 u = h->p[k], v = h->p[(k + 1) % h->n];
+            thx_vec2 m = {0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
+            in += chain_index_sdf(&cq, m) < 0;
+        }
+        chain_index_free(&cq);
+    }
+    probes = h->n;
+    return 2 * in > probes;
+}
+
+/* The outer loop of layer L that hole i lies in (the innermost, by area), or -1. */
+static int enclosing_outer(const rlayer *L, size_t i)
+{
+    int best = -1;
+    double best_area = INFINITY;
+    for (size_t j = 0; j < L->n_loops; j++) {
+        if (j == i || L->loops[j].hole) continue;
+        chain_index c;
+        if (chain_index_init(&c, L->loops[j].p, L->loops[j].n) != 0) return -1;
+        int inside = chain_index_sdf(&c, L->loops[i].p[0]) < 0;
+        chain_index_free(&c);
+        double a = rloop_area(&L->loops[j]);
+        if (inside && a < best_area) { best_area = a; best = (int)j; }
+    }
+    return best;
+}
+
+/* The region of the other layer's loops in a slice group (inside an outer loop, outside the holes):
+   where a hole's bridge must not run. */
+typedef struct {
+    chain_index *ix;
+    const rloop **lp;
+    size_t n;
+} group_region;
+
+static int in_region(const group_region *g, thx_vec2 q)
+{
+    int in = 0;
+    for (size_t k = 0; k < g->n; k++)
+        if (chain_index_sdf(&g->ix[k], q) < 0) in ^= 1; /* (holes lie inside their outer loop: parity) */
+    return in;
+}
+
+/* The bridge of hole q into the chain out->p[0..n): the nearest pair of nodes whose segment's midpoint
+   lies outside the other layer's region (the mouth where the other layer's horseshoe opens into the
+   hole's pocket), else the nearest pair. */
+static void hole_bridge(const thx_vec2 *p, size_t n, const rloop *q, const group_region *other, size_t *bp, size_t *bq)
+{
+    typedef struct { double d; size_t i, j; } cand;
+    cand *c = malloc(q->n * sizeof *c);
+    double best = INFINITY;
+    for (size_t j = 0; j < q->n; j++) {
+        double dj = INFINITY;
+        size_t ij = 0;
+        for (size_t i = 0; i < n; i++) {
+            double d = hypot(p[i].x - q->p[j].x, p[i].y - q->p[j].y);
+            if (d < dj) { dj = d; ij = i; }
+        }
+        if (c) c[j] = (cand){dj, ij, j};
+        if (dj < best) { best = dj; *bp = ij; *bq = j; }
+    }
+    if (!c || !other || !other->n) { free(c); return; }
+    double found = INFINITY;
+    for (size_t j = 0; j < q->n; j++) {
+        if (!(c[j].d < found)) continue;
+        thx_vec2 m = {0.5 * (p[c[j].i].x + q->p[j].x), 0.5 * (p[c[j].i].y + q->p[j].y)};
+        if (!in_region(other, m)) { found = c[j].d; *bp = c[j].i; *bq = j; }
+    }
+    free(c);
+}
+
+static void group_region_free(group_region *g)
+{
+    for (size_t k = 0; k < g->n; k++) chain_index_free(&g->ix[k]);
+    free(g->ix);
+    free(g->lp);
+    memset(g, 0, sizeof *g);
+}
+
+/* The region of layer L's loops in component c (comp[off + k] for loop k); empty unless one of the
+   group's loops (on either layer) is a hole: only holes' bridges look at it. */
+static thx_status group_region_make(thx_ctx *ctx, const rlayer *L, const int *comp, size_t off, int c, group_region *g)
+{
+    memset(g, 0, sizeof *g);
+    size_t m = 0;
+    for (size_t k = 0; k < L->n_loops; k++) m += comp[off + k] == c;
+    if (!m) return THX_OK;
+    g->ix = thx_calloc(ctx, m, sizeof *g->ix);
+    g->lp = thx_calloc(ctx, m, sizeof *g->lp);
+    if (!g->ix || !g->lp) { group_region_free(g); return THX_ENOMEM; }
+    for (size_t k = 0; k < L->n_loops; k++) {
+        if (comp[off + k] != c) continue;
+        if (chain_index_init(&g->ix[g->n], L->loops[k].p, L->loops[k].n) != 0) { group_region_free(g); return THX_ENOMEM; }
+        g->lp[g->n++] = &L->loops[k];
+    }
+    return THX_OK;
+}
+
+/* Joins loops (indices sel[0..m-1] of layer L) into one chain with bridges between nearest nodes; a
+   hole is walked clockwise and bridged where `other` (the slice's other layer's loops of the group,
+   or NULL) leaves the way open (hole_bridge). */
+static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int m, const group_region *other,
+                              thx_lace_nodes *nd, double spacing, owned_chain *out)
 {
     size_t total = 0;
     for (int k = 0; k < m; k++) total += L->loops[sel[k]].n + 2;
+    for (int k = 0; k < m && nd; k++) /* a hole's bridge, both ways: room for nodes at the spacing */
+        if (L->loops[sel[k]].hole) total += 2 * (nd->cap - nd->n < (size_t)1 << 20 ? nd->cap - nd->n : (size_t)1 << 20);
     out->p = thx_malloc(ctx, total * sizeof *out->p);
     out->id = thx_malloc(ctx, total * sizeof *out->id);
     if (!out->p || !out->id) return THX_ENOMEM;
@@ -150,22 +284,52 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
         const rloop *q = &L->loops[sel[g]];
         double best = INFINITY;
         size_t bp = 0, bq = 0;
-        for (size_t i = 0; i < n; i++)
-            for (size_t j = 0; j < q->n; j++) {
-                double d = hypot(out->p[i].x - q->p[j].x, out->p[i].y - q->p[j].y);
-                if (d < best) { best = d; bp = i; bq = j; }
-            }
-        /* chain[0..bp], q[bq..bq-1], q[bq], chain[bp..n-1] */
-        size_t ins = q->n + 2;
+        if (q->hole)
+            hole_bridge(out->p, n, q, other, &bp, &bq);
+        else
+            for (size_t i = 0; i < n; i++)
+                for (size_t j = 0; j < q->n; j++) {
+                    double d = hypot(out->p[i].x - q->p[j].x, out->p[i].y - q->p[j].y);
+                    if (d < best) { best = d; bp = i; bq = j; }
+                }
+        /* chain[0..bp], [bridge in], q[bq..bq-1], q[bq], [bridge out], chain[bp..n-1]; a hole's bridge
+           gets nodes at the spacing in the layer's plane (else the other layer's channel walls, nodes a
+           spacing apart, are fanned to its two ends), the same nodes both ways */
+        size_t nb_ = 0;
+        thx_vec2 a = out->p[bp], b = q->p[bq];
+        if (q->hole && nd && spacing > 0) {
+            double len = hypot(b.x - a.x, b.y - a.y);
+            nb_ = len > 1.5 * spacing ? (size_t)lround(len / spacing) - 1 : 0;
+            if (nd->n + nb_ > nd->cap) nb_ = 0;
+        }
+        int32_t id0 = nb_ ? nd->base + (int32_t)nd->n : 0;
+        for (size_t t = 0; t < nb_; t++) {
+            double f = (double)(t + 1) / (double)(nb_ + 1);
+            double *x = nd->xyz + 3 * (nd->n + t);
+            x[0] = a.x + f * (b.x - a.x), x[1] = a.y + f * (b.y - a.y), x[2] = L->z;
+        }
+        nd = nb_ ? nd : NULL;
+        size_t ins = q->n + 2 + 2 * nb_, w = bp + 1;
         memmove(out->p + bp + 1 + ins, out->p + bp + 1, (n - bp - 1) * sizeof *out->p);
         memmove(out->id + bp + 1 + ins, out->id + bp + 1, (n - bp - 1) * sizeof *out->id);
-        for (size_t s = 0; s <= q->n; s++) {
-            size_t j = (bq + s) % q->n;
-            out->p[bp + 1 + s] = q->p[j];
-            out->id[bp + 1 + s] = q->first + (int32_t)j;
+        for (size_t t = 0; t < nb_; t++, w++) {
+            double f = (double)(t + 1) / (double)(nb_ + 1);
+            out->p[w] = (thx_vec2){a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)};
+            out->id[w] = id0 + (int32_t)t;
         }
-        out->p[bp + 1 + q->n + 1] = out->p[bp];
-        out->id[bp + 1 + q->n + 1] = out->id[bp];
+        for (size_t s = 0; s <= q->n; s++, w++) { /* a hole walked clockwise: the chain then bounds the annulus */
+            size_t j = q->hole ? (bq + q->n - s % q->n) % q->n : (bq + s) % q->n;
+            out->p[w] = q->p[j];
+            out->id[w] = q->first + (int32_t)j;
+        }
+        for (size_t t = nb_; t-- > 0; w++) {
+            double f = (double)(t + 1) / (double)(nb_ + 1);
+            out->p[w] = (thx_vec2){a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)};
+            out->id[w] = id0 + (int32_t)t;
+        }
+        out->p[w] = out->p[bp];
+        out->id[w] = out->id[bp];
+        if (nd) nd->n += nb_;
         n += ins;
     }
     out->c.n = n;
@@ -284,12 +448,13 @@ static double layered_sdf(const rlayer *layers, size_t nl, const slice *slices, 
     const slice *s = &slices[lo];
     double t = (p.z - layers[lo].z) / (layers[lo + 1].z - layers[lo].z);
     thx_vec2 q = {p.x, p.y};
-    double best = INFINITY;
+    double best[2] = {INFINITY, INFINITY}; /* the outer groups' solids, the holes' */
     for (size_t g = 0; g < s->n_groups; g++) {
         double d = (1 - t) * chain_index_sdf(&s->ga[g].ix, q) + t * chain_index_sdf(&s->gb[g].ix, q);
-        if (d < best) best = d;
+        int h = s->ga[g].hole;
+        if (d < best[h]) best[h] = d;
     }
-    return best;
+    return fmax(best[0], -best[1]); /* inside the outer solids and outside the holes */
 }
 
 typedef struct { int32_t a, b; int32_t t; } edge_rec;
@@ -592,8 +757,18 @@ static thx_vec3 interior_point(const rlayer *layers, size_t nl)
     if (nl >= 2 && nl % 2 == 0) L = &layers[nl / 2 - 1];
     thx_vec3 best = {0, 0, L->z};
     double bestd = INFINITY;
+    size_t nh = 0;
+    for (size_t k = 0; k < L->n_loops; k++) nh += (size_t)L->loops[k].hole;
+    chain_index *hi = nh ? calloc(nh, sizeof *hi) : NULL; /* the holes: the point lies outside them */
+    if (nh && !hi) nh = 0;
+    for (size_t k = 0, m = 0; k < L->n_loops && m < nh; k++)
+        if (L->loops[k].hole && chain_index_init(&hi[m++], L->loops[k].p, L->loops[k].n) != 0) {
+            for (size_t q = 0; q + 1 < m; q++) chain_index_free(&hi[q]);
+            nh = 0;
+        }
     for (size_t k = 0; k < L->n_loops; k++) {
         const rloop *r = &L->loops[k];
+        if (r->hole) continue;
         chain_index c;
         if (chain_index_init(&c, r->p, r->n) != 0) continue;
         double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
@@ -602,10 +777,13 @@ static thx_vec3 interior_point(const rlayer *layers, size_t nl)
             for (int j = 1; j < 40; j++) {
                 thx_vec2 q = {x0 + (x1 - x0) * i / 40.0, y0 + (y1 - y0) * j / 40.0};
                 double d = chain_index_sdf(&c, q);
+                for (size_t m = 0; m < nh; m++) d = fmax(d, -chain_index_sdf(&hi[m], q));
                 if (d < bestd) { bestd = d; best = thx_v3(q.x, q.y, L->z); }
             }
         chain_index_free(&c);
     }
+    for (size_t m = 0; m < nh; m++) chain_index_free(&hi[m]);
+    free(hi);
     /* Lift it half-way toward the next layer so it is not exactly in a layer plane. */
     const rlayer *N = (L + 1 < layers + nl) ? L + 1 : NULL;
     if (N) best.z = L->z + 0.5 * (N->z - L->z);
@@ -622,6 +800,8 @@ static void free_layers(rlayer *layers, size_t nl)
         }
         free(layers[l].loops);
         free(layers[l].ch);
+        free(layers[l].kind_ch[0]);
+        free(layers[l].kind_ch[1]);
     }
     free(layers);
 }
@@ -643,20 +823,40 @@ static void free_slices(slice *s, size_t ns)
 
 /* Groups of overlapping loops between layers A and B (connected components);
  * fills slice groups with merged chains and marks partners. */
-static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k, slice *s)
+static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k, double spacing, slice *s)
 {
     rlayer *A = &layers[k], *B = &layers[k + 1];
     const rlayer *below = k > 0 ? &layers[k - 1] : NULL, *above = k + 2 < nl ? &layers[k + 2] : NULL;
     size_t na = A->n_loops, nb = B->n_loops, n = na + nb;
     int *comp = thx_malloc(ctx, n * sizeof *comp);
     unsigned char *adj = thx_calloc(ctx, (na * nb > 0) ? na * nb : 1, 1);
-    int *sel = thx_malloc(ctx, n * sizeof *sel);
+    int *sel = thx_malloc(ctx, n * sizeof *sel), *host = NULL;
     thx_status st = THX_OK;
     if (!comp || !adj || !sel) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i < na; i++)
         for (size_t j = 0; j < nb; j++)
-            adj[i * nb + j] = (unsigned char)((na == 1 && nb == 1) ? 1 : loops_overlap(&A->loops[i], &B->loops[j]));
+            adj[i * nb + j] = (unsigned char)(A->loops[i].hole == B->loops[j].hole &&
+                                              ((na == 1 && nb == 1) || loops_overlap(&A->loops[i], &B->loops[j])));
     for (size_t i = 0; i < n; i++) comp[i] = -1;
+    /* A hole with no hole of the other layer to lace to, over a region the other layer does not cover
+       (the lung's annulus around the diaphragm's dome over the horseshoe below it, the dome's section
+       open at one saddle): joined to the loop it lies in, so that its walls are laced to the other
+       layer's pocket (merge_loops bridges it in, walked clockwise). One the other layer covers (the
+       dome's top under a full disc) is capped. */
+    host = thx_malloc(ctx, (n ? n : 1) * sizeof *host);
+    if (!host) { st = THX_ENOMEM; goto done; }
+    for (size_t r = 0; r < n; r++) {
+        host[r] = -1;
+        const rlayer *L = r < na ? A : B, *O = r < na ? B : A;
+        size_t i = r < na ? r : r - na;
+        if (!L->loops[i].hole) continue;
+        int partnered = 0;
+        for (size_t j = 0; j < O->n_loops && !partnered; j++)
+            partnered = r < na ? adj[i * nb + j] : adj[j * nb + i];
+        if (partnered || hole_covered(&L->loops[i], O)) continue;
+        host[r] = enclosing_outer(L, i);
+        if (host[r] >= 0 && r >= na) host[r] += (int)na;
+    }
     int nc = 0;
     for (size_t r = 0; r < n; r++) {
         if (comp[r] >= 0) continue;
@@ -668,9 +868,9 @@ static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k,
             int u = stack[--top];
             for (size_t v = 0; v < n; v++) {
                 if (comp[v] >= 0) continue;
-                int linked = 0;
-                if ((size_t)u < na && v >= na) linked = adj[(size_t)u * nb + (v - na)];
-                if ((size_t)u >= na && v < na) linked = adj[v * nb + ((size_t)u - na)];
+                int linked = host[v] == u || host[u] == (int)v;
+                if ((size_t)u < na && v >= na) linked = linked || adj[(size_t)u * nb + (v - na)];
+                if ((size_t)u >= na && v < na) linked = linked || adj[v * nb + ((size_t)u - na)];
                 if (linked) { comp[v] = nc; stack[top++] = (int)v; }
             }
         }
@@ -685,12 +885,22 @@ static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k,
         if (ma == 0) continue;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) mb++;
         if (mb == 0) continue; /* loop(s) of A end here: capped */
-        THX_TRY(merge_loops(ctx, A, sel, ma, &s->ga[s->n_groups]));
+        group_region ra = {0}, rb = {0}; /* each layer's loops of the group: where the other's hole bridges may not run */
+        st = group_region_make(ctx, A, comp, 0, c, &ra);
+        if (st == THX_OK) st = group_region_make(ctx, B, comp, na, c, &rb);
+        if (st == THX_OK) st = merge_loops(ctx, A, sel, ma, &rb, &s->nodes, spacing, &s->ga[s->n_groups]);
         mb = 0;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) sel[mb++] = (int)j;
-        THX_TRY(merge_loops(ctx, B, sel, mb, &s->gb[s->n_groups]));
-        if (below) { s->ga[s->n_groups].c.beyond = below->ch; s->ga[s->n_groups].c.n_beyond = below->n_loops; }
-        if (above) { s->gb[s->n_groups].c.beyond = above->ch; s->gb[s->n_groups].c.n_beyond = above->n_loops; }
+        if (st == THX_OK) st = merge_loops(ctx, B, sel, mb, &ra, &s->nodes, spacing, &s->gb[s->n_groups]);
+        group_region_free(&ra);
+        group_region_free(&rb);
+        if (st != THX_OK) goto done;
+        int h = 1; /* a group of holes only (a hole joined to its loop is part of that loop's group) */
+        for (size_t i = 0; i < na; i++) if (comp[i] == c && !A->loops[i].hole) h = 0;
+        for (size_t j = 0; j < nb; j++) if (comp[na + j] == c && !B->loops[j].hole) h = 0;
+        s->ga[s->n_groups].hole = s->gb[s->n_groups].hole = h;
+        if (below) { s->ga[s->n_groups].c.beyond = below->kind_ch[h]; s->ga[s->n_groups].c.n_beyond = below->n_kind[h]; }
+        if (above) { s->gb[s->n_groups].c.beyond = above->kind_ch[h]; s->gb[s->n_groups].c.n_beyond = above->n_kind[h]; }
         for (size_t i = 0; i < na; i++) if (comp[i] == c) A->loops[i].up = 1;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) B->loops[j].down = 1;
         if (ma > 1 || mb > 1) s->branch = 1;
@@ -700,6 +910,7 @@ done:
     free(comp);
     free(adj);
     free(sel);
+    free(host);
     return st;
 }
 
@@ -1131,6 +1342,7 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     }
     int32_t next_id = 0;
     for (size_t l = 0; l < nl; l++) {
+        if (mark_holes(&layers[l]) != 0) { st = THX_ENOMEM; goto done; }
         layers[l].ch = thx_calloc(ctx, layers[l].n_loops, sizeof *layers[l].ch);
         if (!layers[l].ch) { st = THX_ENOMEM; goto done; }
         for (size_t k = 0; k < layers[l].n_loops; k++) {
@@ -1145,6 +1357,12 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             layers[l].ch[k].id = r->id;
             layers[l].ch[k].z = layers[l].z;
         }
+        for (int h = 0; h < 2; h++) { /* the beyond chains of a group: its kind's loops */
+            layers[l].kind_ch[h] = thx_calloc(ctx, layers[l].n_loops ? layers[l].n_loops : 1, sizeof *layers[l].kind_ch[h]);
+            if (!layers[l].kind_ch[h]) { st = THX_ENOMEM; goto done; }
+            for (size_t k = 0; k < layers[l].n_loops; k++)
+                if (layers[l].loops[k].hole == h) layers[l].kind_ch[h][layers[l].n_kind[h]++] = layers[l].ch[k];
+        }
     }
     stats->n_loops = n_loops;
     double t1 = thx_wtime();
@@ -1153,8 +1371,24 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
     size_t ns = nl > 1 ? nl - 1 : 0;
     slices = thx_calloc(ctx, ns ? ns : 1, sizeof *slices);
     if (!slices) { st = THX_ENOMEM; goto done; }
+    /* the layer nodes, for the crossing test, then each slice's room for the nodes it may add (its
+       holes' bridges, build_slice; its lacings' chords, thx_lace_nodes): four times its layers' nodes
+       (pages never written are never touched) */
+    size_t n_room = 0;
     for (size_t i = 0; i < ns; i++) {
-        st = build_slice(ctx, layers, nl, i, &slices[i]);
+        size_t r = 64;
+        for (size_t l = i; l <= i + 1; l++)
+            for (size_t k = 0; k < layers[l].n_loops; k++) r += 4 * layers[l].loops[k].n;
+        slices[i].nodes.base = next_id + (int32_t)n_room;
+        slices[i].nodes.cap = r;
+        n_room += r;
+    }
+    if ((size_t)next_id + n_room >= (size_t)INT32_MAX) { st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\" has too many nodes", path, cs->name); goto done; }
+    lxyz = thx_malloc(ctx, ((size_t)next_id + n_room + 1) * 3 * sizeof *lxyz);
+    if (!lxyz) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < ns; i++) slices[i].nodes.xyz = lxyz + 3 * (size_t)slices[i].nodes.base;
+    for (size_t i = 0; i < ns; i++) {
+        st = build_slice(ctx, layers, nl, i, spacing, &slices[i]);
         if (st != THX_OK) goto done;
     }
     /* A chain with a loop that ends at its layer (capped on the far side: no partner on the layer
@@ -1168,20 +1402,6 @@ static thx_status build_one(thx_ctx *ctx, const thx_contours *c, const thx_conto
             for (int q = 0; q < cb->n_sel; q++)
                 if (!layers[i + 1].loops[cb->sel[q]].up) { cb->c.beyond = NULL; cb->c.n_beyond = 0; }
         }
-    /* the layer nodes, for the crossing test, then each slice's room for the nodes its lacing may add
-       (thx_lace_nodes: twice its chains' nodes; pages never written are never touched) */
-    size_t n_room = 0;
-    for (size_t i = 0; i < ns; i++) {
-        size_t r = 64;
-        for (size_t g = 0; g < slices[i].n_groups; g++) r += 2 * (slices[i].ga[g].c.n + slices[i].gb[g].c.n);
-        slices[i].nodes.base = next_id + (int32_t)n_room;
-        slices[i].nodes.cap = r;
-        n_room += r;
-    }
-    if ((size_t)next_id + n_room >= (size_t)INT32_MAX) { st = thx_error(ctx, THX_EINPUT, "%s: surface \"%s\" has too many nodes", path, cs->name); goto done; }
-    lxyz = thx_malloc(ctx, ((size_t)next_id + n_room + 1) * 3 * sizeof *lxyz);
-    if (!lxyz) { st = THX_ENOMEM; goto done; }
-    for (size_t i = 0; i < ns; i++) slices[i].nodes.xyz = lxyz + 3 * (size_t)slices[i].nodes.base;
     for (size_t l = 0; l < nl; l++)
         for (size_t k = 0; k < layers[l].n_loops; k++)
             for (size_t q = 0; q < layers[l].loops[k].n; q++) {
@@ -1567,6 +1787,8 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
                 thx_ctx_destroy(&lc);
             }
             if (bad >= 0) st = thx_error(ctx, bad_st, "%s", bad_msg);
+            for (size_t l = 0; l < nl && st == THX_OK; l++)
+                if (mark_holes(&layers[l]) != 0) st = THX_ENOMEM;
         }
         /* to a fixed point: a loop with no kept partner on either neighbouring layer (the rule of the
            slices: two single loops always pair, else their projections must overlap) is dropped */
@@ -1583,7 +1805,7 @@ thx_status thx_contours_drop_flat(thx_ctx *ctx, thx_contours *c, const thx_surfa
                         size_t m = l + (size_t)side, nb = 0;
                         for (size_t q = 0; q < layers[m].n_loops; q++) nb += keep[m][q];
                         for (size_t j = 0; j < layers[m].n_loops && !partner; j++)
-                            if (keep[m][j])
+                            if (keep[m][j] && layers[l].loops[i].hole == layers[m].loops[j].hole)
                                 partner = (na == 1 && nb == 1) || loops_overlap(&layers[l].loops[i], &layers[m].loops[j]);
                     }
                     if (!partner) {

@@ -347,10 +347,10 @@ static int point_in_loop(thx_vec2 q, const thx_loop *lp)
     return in;
 }
 
-/* 5. Holes: a loop inside another loop of its surface on the same layer. The surfaces are built
- * from solid loops only (a hole would be laced as a second solid inside the first), so a hole
- * narrower than the node spacing (width 2 area / perimeter: a groove the layer cuts across,
- * which the nodes could not resolve) is dropped and reported; a wider one is refused. */
+/* 5. Holes: a loop inside another loop of its surface on the same layer. The build laces holes to
+ * holes (src/geom/build.c, rloop.hole); a hole narrower than the node spacing (width 2 area /
+ * perimeter: a groove the layer cuts across, which the nodes could not resolve) is dropped and
+ * reported; a wider one is kept. */
 static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_surface *cs, size_t l,
                              const thx_repair_opts *o, double spacing, thx_repair_log *log, double *extent)
 {
@@ -376,14 +376,7 @@ static thx_status drop_holes(thx_ctx *ctx, const thx_contours *c, thx_contour_su
         double width = per > 0 ? 2 * area / per : 0;
         job j = {ctx, o, log, c->path[0] ? c->path : "<contours>", cs->name, L->index >= 0 ? L->index + 1 : (int)l + 1,
                  b->line ? b->line : L->line, i + 1, L->z, &L->loops[i]};
-        if (!(width < spacing)) {
-            st = thx_error(ctx, THX_EINPUT,
-                           "%s:%d: surface \"%s\" layer %d (z=%g) loop %zu: the loop lies inside loop %zu of the same "
-                           "surface (a hole, %.3g mm wide): surfaces with holes are not supported (make the inner "
-                           "boundary a surface of its own)",
-                           j.path, j.loop_line, cs->name, j.layer_no, L->z, i + 1, outer + 1, width);
-            break;
-        }
+        if (!(width < spacing)) continue; /* a hole the nodes resolve: kept */
         st = report(&j, THX_REPAIR_HOLE, j.loop_line,
                     "the loop lies inside loop %zu of the same surface (a hole of %.3g mm^2, %.3g mm wide: "
                     "narrower than the node spacing %g mm, which cannot resolve it): dropped",
