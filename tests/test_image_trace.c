@@ -216,6 +216,13 @@ static int in_torus(const double p[3], void *user)
     return q * q + p[2] * p[2] <= t->r * t->r;
 }
 
+static int in_shell(const double p[3], void *user)
+{
+    const double *r = user;
+    double d = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return d >= r[0] && d <= r[1];
+}
+
 static void test_torus(void)
 {
     torus tor = {30, 10};
@@ -230,6 +237,10 @@ static void test_torus(void)
     CHECK_OK(ctx, thx_contours_validate(ctx, c));
     CHECK(rep.tissue[0].n_holes == c->surf[0].n_layers); /* every plane of the torus is a ring */
     for (size_t l = 0; l < c->surf[0].n_layers; l++) CHECK(c->surf[0].layers[l].n_loops == 1);
+    /* the filled holes that open onto the outside on a neighbouring plane: the two end planes' (the
+       torus's hole runs through), none between (the plane beyond is filled there too) */
+    CHECK(rep.tissue[0].n_holes_open == 2);
+    CHECK(rep.tissue[0].z_hole_open == c->surf[0].layers[0].z);
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
 
@@ -259,6 +270,19 @@ static void test_torus(void)
            vol, vtrue, 100 * (vol / vtrue - 1), dmax);
     CHECK(fabs(vol / vtrue - 1) < 0.02);
     CHECK(dmax <= 1.0);
+    CHECK(rep.tissue[0].n_holes_open == 0); /* (kept, none filled) */
+    thx_trace_report_free(&rep);
+    thx_contours_destroy(&c);
+    thx_image_free(&img);
+
+    /* a hollow ball (radii 6 and 14 mm): its cavity's holes are filled, and none opens (the planes
+       beyond the cavity's ends are full discs) */
+    double shell[2] = {6, 14};
+    make_map(&img, 16, 16, 16, 2.0, NULL, in_shell, shell);
+    CHECK_OK(ctx, trace(&img, &t, 1, 0, THX_TRACE_HOLES_FILL, &c, &rep));
+    if (c) CHECK(rep.tissue[0].n_holes > 0 && rep.tissue[0].n_holes_open == 0);
+    printf("hollow ball: %zu holes filled, %zu open; torus: 2 open (its end planes)\n", c ? rep.tissue[0].n_holes : 0,
+           c ? rep.tissue[0].n_holes_open : 0);
     thx_trace_report_free(&rep);
     thx_contours_destroy(&c);
     thx_image_free(&img);

@@ -155,6 +155,15 @@ int cli_trace_labels(const char *cmd, const char *image, cli_trace_args *a, int 
                 "%s: the image is oblique (its superior axis %.3g deg from RAS superior): the model's axes are the "
                 "image's (z across the planes, y nearest anterior); frame +z +y is the nearest",
                 image, rep.oblique_deg);
+    for (size_t t = 0; t < rep.n_tissues; t++)
+        if (rep.tissue[t].n_holes_open)
+            thx_log(ctx, THX_LOG_WARN,
+                    "%s: surface \"%s\": %zu filled hole%s open%s onto the tissue's outside on the next plane (the first "
+                    "at z=%g mm): filled, the surface closes over what is not the tissue there (a lung around the "
+                    "diaphragm's dome); --holes keep traces %s",
+                    image, rep.tissue[t].name, rep.tissue[t].n_holes_open, rep.tissue[t].n_holes_open == 1 ? "" : "s",
+                    rep.tissue[t].n_holes_open == 1 ? "s" : "", rep.tissue[t].z_hole_open,
+                    rep.tissue[t].n_holes_open == 1 ? "it" : "them");
     if (verbose >= 0) {
         static const char axis[] = "ijk";
         printf("%s: %zu planes across index axis %c (superior), %g mm apart, z = %g .. %g mm; nodes %g mm apart\n",

@@ -986,6 +986,21 @@ static int pinch_bead(const polyset *raw, const double *ar, size_t l, double ami
     return places >= 2;
 }
 
+/* A point just inside hole P (a clockwise loop): its longest edge's midpoint moved a tenth of that
+ * edge to the right, into the hole. */
+static thx_vec2 hole_probe(const poly *P)
+{
+    size_t best = 0;
+    double bl = -1;
+    for (size_t k = 0; k < P->n; k++) {
+        thx_vec2 a = P->p[k], b = P->p[(k + 1) % P->n];
+        double l = hypot(b.x - a.x, b.y - a.y);
+        if (l > bl) { bl = l; best = k; }
+    }
+    thx_vec2 a = P->p[best], b = P->p[(best + 1) % P->n];
+    return (thx_vec2){0.5 * (a.x + b.x) + 0.1 * (b.y - a.y), 0.5 * (a.y + b.y) - 0.1 * (b.x - a.x)};
+}
+
 /* One output plane of a tissue (continuous image plane index tk): its loops in model coordinates,
  * holes filled or kept, resampled at the node spacing h, into *out (empty: no loop); the holes seen
  * and the islands filled counted into *n_holes, *n_islands. Reads only the mask and the plane boxes,
@@ -993,10 +1008,11 @@ static int pinch_bead(const polyset *raw, const double *ar, size_t l, double ami
 static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *mask, const long *pb, double tk,
                               int resampled, const double w[2 * KR + 1], thx_trace_holes holes, double h,
                               double amin, plane_scratch *sc, polyset *out, size_t *n_holes, size_t *n_islands,
-                              size_t *n_tiny)
+                              size_t *n_tiny, thx_vec2 *probe)
 {
     polyset *raw = &sc->raw, *fin = &sc->fin;
     int empty;
+    probe->x = probe->y = NAN;
     polyset_clear(out);
     THX_CHECK(plane_field(ctx, g, mask, pb, tk, resampled, w, &sc->pl, &empty));
     if (empty) return THX_OK;
@@ -1028,6 +1044,7 @@ static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *m
     }
     for (size_t l = 0; l < raw->n; l++) ar[5 * raw->n + l] = ar[5 * l] > 0 && pinch_bead(raw, ar, l, amin);
     polyset_clear(fin);
+    double probe_area = 0;
     for (size_t l = 0; l < raw->n; l++) {
         int hole = ar[5 * l] < 0, drop = 0;
         if (fabs(ar[5 * l]) < amin || ar[5 * raw->n + l] != 0) {
@@ -1037,6 +1054,10 @@ static thx_status trace_plane(thx_ctx *ctx, const cut *g, const unsigned char *m
         }
         if (hole) (*n_holes)++;
         if (holes == THX_TRACE_HOLES_FILL) {
+            if (hole && -ar[5 * l] > probe_area) { /* the largest filled hole: a point just inside it */
+                probe_area = -ar[5 * l];
+                *probe = hole_probe(&raw->l[l]);
+            }
             if (hole) drop = 1;
             else
                 for (size_t k = 0; k < raw->n && !drop; k++)
@@ -1142,6 +1163,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     polyset *pout = NULL;    /* per output plane: its loops */
     thx_status *pst = NULL;  /* per output plane: the status of its tracing */
     size_t *pcount = NULL;   /* per output plane: holes seen, islands filled, tiny loops dropped */
+    thx_vec2 *pprobe = NULL; /* per output plane: a point inside its largest filled hole, or NaN */
     size_t *kcount = NULL;   /* per image plane along the superior axis: the tissue's voxels */
     tissue_trace tt = {0};
     labelset ls = {0};
@@ -1209,8 +1231,9 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
     pout = thx_calloc(ctx, np, sizeof *pout);
     pst = thx_calloc(ctx, np, sizeof *pst);
     pcount = thx_calloc(ctx, 3 * np, sizeof *pcount);
+    pprobe = thx_calloc(ctx, np ? np : 1, sizeof *pprobe);
     kcount = thx_malloc(ctx, g.ns * sizeof *kcount);
-    if (!mask || !pb || !pout || !pst || !pcount || !kcount) {
+    if (!mask || !pb || !pout || !pst || !pcount || !pprobe || !kcount) {
         st = THX_ENOMEM;
         goto done;
     }
@@ -1436,7 +1459,7 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                         if (tk > (double)(g.ns - 1)) tk = (double)(g.ns - 1);
                         if (!resampled) tk = g.dz > 0 ? (double)p : (double)(g.ns - 1 - (size_t)p);
                         thx_status r = ok ? trace_plane(lc, &g, work, pb, tk, resampled, w, o->holes, h, amin, &sc, &pout[p],
-                                                        &pcount[3 * p], &pcount[3 * p + 1], &pcount[3 * p + 2])
+                                                        &pcount[3 * p], &pcount[3 * p + 1], &pcount[3 * p + 2], &pprobe[p])
                                           : THX_ENOMEM;
                         pst[p] = r;
                         if (r != THX_OK) {
@@ -1454,6 +1477,19 @@ thx_status thx_image_trace(thx_ctx *ctx, const thx_image *img, const thx_trace_o
                     st = thx_error(ctx, pst[bad], "%s", bad_msg);
                     goto done;
                 }
+            }
+            /* a filled hole that opens: its probe outside every loop of a neighbouring plane */
+            for (size_t p = 0; p < np; p++) {
+                if (isnan(pprobe[p].x)) continue;
+                int open = 0;
+                for (int side = -1; side <= 1 && !open; side += 2) {
+                    if ((side < 0 && p == 0) || (side > 0 && p + 1 == np)) continue;
+                    const polyset *N = &pout[p + (size_t)side];
+                    int in = 0;
+                    for (size_t l = 0; l < N->n && !in; l++) in = point_in(N->l[l].p, N->l[l].n, pprobe[p]);
+                    open = !in;
+                }
+                if (open && !trr.n_holes_open++) trr.z_hole_open = zlo + pspace * (double)p;
             }
             for (size_t p = 0; p < np; p++) {
                 trr.n_holes += pcount[3 * p];
@@ -1671,6 +1707,7 @@ done:
     free(pout);
     free(pst);
     free(pcount);
+    free(pprobe);
     free(kcount);
     polyset_free(&tt.loops);
     free(tt.layers);

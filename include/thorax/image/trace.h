@@ -91,6 +91,10 @@ typedef struct {
     size_t contact_voxels;          /* its voxels with a face on a sibling tissue's voxel (pulled apart) */
     size_t n_layers, n_loops;       /* of the surface traced */
     size_t n_holes;                 /* holes met (filled, or kept as loops) */
+    size_t n_holes_open;            /* filled holes whose region lies outside the tissue on a neighbouring
+                                       plane (it opens there: a lung around the diaphragm's dome), where
+                                       filling closes the surface over what is not the tissue */
+    double z_hole_open;             /* the first such hole's plane */
     size_t n_islands_filled;        /* loops inside a filled hole */
     size_t n_tiny;                  /* loops of less than a voxel's in-plane area, dropped (min_size > 1) */
     size_t n_flat_dropped;          /* loops with no partner on either neighbouring plane, dropped */
