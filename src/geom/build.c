@@ -245,8 +245,8 @@ static void group_region_free(group_region *g)
     memset(g, 0, sizeof *g);
 }
 
-/* The region of layer L's loops in component c (comp[off + k] for loop k); empty unless one of the
-   group's loops (on either layer) is a hole: only holes' bridges look at it. */
+/* The region of layer L's loops in component c (comp[off + k] for loop k): made only for a group with
+   a hole (build_slice), whose bridge looks at it. */
 static thx_status group_region_make(thx_ctx *ctx, const rlayer *L, const int *comp, size_t off, int c, group_region *g)
 {
     memset(g, 0, sizeof *g);
@@ -886,8 +886,13 @@ static thx_status build_slice(thx_ctx *ctx, rlayer *layers, size_t nl, size_t k,
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) mb++;
         if (mb == 0) continue; /* loop(s) of A end here: capped */
         group_region ra = {0}, rb = {0}; /* each layer's loops of the group: where the other's hole bridges may not run */
-        st = group_region_make(ctx, A, comp, 0, c, &ra);
-        if (st == THX_OK) st = group_region_make(ctx, B, comp, na, c, &rb);
+        int any_hole = 0;
+        for (size_t i = 0; i < na; i++) any_hole |= comp[i] == c && A->loops[i].hole;
+        for (size_t j = 0; j < nb; j++) any_hole |= comp[na + j] == c && B->loops[j].hole;
+        if (any_hole) {
+            st = group_region_make(ctx, A, comp, 0, c, &ra);
+            if (st == THX_OK) st = group_region_make(ctx, B, comp, na, c, &rb);
+        }
         if (st == THX_OK) st = merge_loops(ctx, A, sel, ma, &rb, &s->nodes, spacing, &s->ga[s->n_groups]);
         mb = 0;
         for (size_t j = 0; j < nb; j++) if (comp[na + j] == c) sel[mb++] = (int)j;
