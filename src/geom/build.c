@@ -115,6 +115,13 @@ static double rloop_area(const rloop *r)
     return fabs(0.5 * a);
 }
 
+/* A point just inside counterclockwise loop r: edge k's midpoint moved inward by a tenth of the edge. */
+static thx_vec2 edge_probe(const rloop *r, size_t k)
+{
+    thx_vec2 u = r->p[k], v = r->p[(k + 1) % r->n];
+    return (thx_vec2){0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
+}
+
 /* Do the projections of two loops overlap? */
 static int loops_overlap(const rloop *a, const rloop *b)
 {
@@ -130,11 +137,8 @@ static int loops_overlap(const rloop *a, const rloop *b)
         const rloop *p = pair[r][0], *q = pair[r][1];
         chain_index cq;
         if (chain_index_init(&cq, q->p, q->n) != 0) return 1;
-        for (size_t k = 0; k < p->n; k++) {
-            thx_vec2 u = p->p[k], v = p->p[(k + 1) % p->n];
-            thx_vec2 m = {0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
-            if (chain_index_sdf(&cq, m) < 0) { chain_index_free(&cq); return 1; }
-        }
+        for (size_t k = 0; k < p->n; k++)
+            if (chain_index_sdf(&cq, edge_probe(p, k)) < 0) { chain_index_free(&cq); return 1; }
         chain_index_free(&cq);
     }
     return 0;
@@ -160,20 +164,15 @@ static int mark_holes(rlayer *L)
 /* Is most of hole h's region (probes just inside its edges) inside layer O's outer loops? */
 static int hole_covered(const rloop *h, const rlayer *O)
 {
-    size_t in = 0, probes = 0;
+    size_t in = 0;
     for (size_t j = 0; j < O->n_loops; j++) {
         if (O->loops[j].hole) continue;
         chain_index cq;
         if (chain_index_init(&cq, O->loops[j].p, O->loops[j].n) != 0) return 1; /* (out of memory: capped) */
-        for (size_t k = 0; k < h->n; k++) {
-            thx_vec2 u = h->p[k], v = h->p[(k + 1) % h->n];
-            thx_vec2 m = {0.5 * (u.x + v.x) - 0.1 * (v.y - u.y), 0.5 * (u.y + v.y) + 0.1 * (v.x - u.x)};
-            in += chain_index_sdf(&cq, m) < 0;
-        }
+        for (size_t k = 0; k < h->n; k++) in += chain_index_sdf(&cq, edge_probe(h, k)) < 0;
         chain_index_free(&cq);
     }
-    probes = h->n;
-    return 2 * in > probes;
+    return 2 * in > h->n;
 }
 
 /* The outer loop of layer L that hole i lies in (the innermost, by area), or -1. */
@@ -197,7 +196,6 @@ static int enclosing_outer(const rlayer *L, size_t i)
    where a hole's bridge must not run. */
 typedef struct {
     chain_index *ix;
-    const rloop **lp;
     size_t n;
 } group_region;
 
@@ -241,7 +239,6 @@ static void group_region_free(group_region *g)
 {
     for (size_t k = 0; k < g->n; k++) chain_index_free(&g->ix[k]);
     free(g->ix);
-    free(g->lp);
     memset(g, 0, sizeof *g);
 }
 
@@ -254,12 +251,11 @@ static thx_status group_region_make(thx_ctx *ctx, const rlayer *L, const int *co
     for (size_t k = 0; k < L->n_loops; k++) m += comp[off + k] == c;
     if (!m) return THX_OK;
     g->ix = thx_calloc(ctx, m, sizeof *g->ix);
-    g->lp = thx_calloc(ctx, m, sizeof *g->lp);
-    if (!g->ix || !g->lp) { group_region_free(g); return THX_ENOMEM; }
+    if (!g->ix) return THX_ENOMEM;
     for (size_t k = 0; k < L->n_loops; k++) {
         if (comp[off + k] != c) continue;
         if (chain_index_init(&g->ix[g->n], L->loops[k].p, L->loops[k].n) != 0) { group_region_free(g); return THX_ENOMEM; }
-        g->lp[g->n++] = &L->loops[k];
+        g->n++;
     }
     return THX_OK;
 }
@@ -303,33 +299,28 @@ static thx_status merge_loops(thx_ctx *ctx, const rlayer *L, const int *sel, int
             if (nd->n + nb_ > nd->cap) nb_ = 0;
         }
         int32_t id0 = nb_ ? nd->base + (int32_t)nd->n : 0;
-        for (size_t t = 0; t < nb_; t++) {
-            double f = (double)(t + 1) / (double)(nb_ + 1);
-            double *x = nd->xyz + 3 * (nd->n + t);
-            x[0] = a.x + f * (b.x - a.x), x[1] = a.y + f * (b.y - a.y), x[2] = L->z;
-        }
-        nd = nb_ ? nd : NULL;
         size_t ins = q->n + 2 + 2 * nb_, w = bp + 1;
         memmove(out->p + bp + 1 + ins, out->p + bp + 1, (n - bp - 1) * sizeof *out->p);
         memmove(out->id + bp + 1 + ins, out->id + bp + 1, (n - bp - 1) * sizeof *out->id);
-        for (size_t t = 0; t < nb_; t++, w++) {
+        for (size_t t = 0; t < nb_; t++, w++) { /* the bridge in: its nodes, kept for the surface too */
             double f = (double)(t + 1) / (double)(nb_ + 1);
             out->p[w] = (thx_vec2){a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)};
             out->id[w] = id0 + (int32_t)t;
+            double *x = nd->xyz + 3 * (nd->n + t);
+            x[0] = out->p[w].x, x[1] = out->p[w].y, x[2] = L->z;
         }
         for (size_t s = 0; s <= q->n; s++, w++) { /* a hole walked clockwise: the chain then bounds the annulus */
             size_t j = q->hole ? (bq + q->n - s % q->n) % q->n : (bq + s) % q->n;
             out->p[w] = q->p[j];
             out->id[w] = q->first + (int32_t)j;
         }
-        for (size_t t = nb_; t-- > 0; w++) {
-            double f = (double)(t + 1) / (double)(nb_ + 1);
-            out->p[w] = (thx_vec2){a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)};
+        for (size_t t = nb_; t-- > 0; w++) { /* the bridge out: the same nodes, back */
+            out->p[w] = out->p[bp + 1 + t];
             out->id[w] = id0 + (int32_t)t;
         }
         out->p[w] = out->p[bp];
         out->id[w] = out->id[bp];
-        if (nd) nd->n += nb_;
+        if (nb_) nd->n += nb_;
         n += ins;
     }
     out->c.n = n;
