@@ -51,6 +51,7 @@ typedef struct {
     char *text;        /* the file, cut into lines and words in place */
     char **words;
     int n_words, cap;
+    int cap_lines;     /* of the view options' lines (grown here) */
 } script_text;
 
 static int push_word(script_text *t, char *w)
@@ -104,10 +105,12 @@ static int read_script(const char *path, script_text *t, thx_view_opts *vo)
             vo->script_line0 = line;
         }
         if (!in_head) {
-            if (vo->n_lines >= (int)(sizeof vo->lines / sizeof vo->lines[0])) {
-                fprintf(stderr, "thorax view: %s:%d: more than %zu lines after the options\n", path, line,
-                        sizeof vo->lines / sizeof vo->lines[0]);
-                return 1;
+            if (vo->n_lines == t->cap_lines) { /* a traced session's log runs to thousands of lines */
+                int cap = t->cap_lines ? 2 * t->cap_lines : 256;
+                const char **grown = realloc(vo->lines, (size_t)cap * sizeof *grown);
+                if (!grown) { fprintf(stderr, "thorax view: %s:%d: out of memory\n", path, line); return 1; }
+                vo->lines = grown;
+                t->cap_lines = cap;
             }
             vo->lines[vo->n_lines++] = s;
             continue;
@@ -187,7 +190,7 @@ int cmd_view(int argc, char **argv)
     for (int k = 0; k < argc; k++) {
         if (!strcmp(argv[k], "--script") && k + 1 < argc && !script) {
             script = argv[++k];
-            if (read_script(script, &st, &o.v)) { free(args); free(st.words); free(st.text); return 1; }
+            if (read_script(script, &st, &o.v)) { free(args); free(st.words); free(st.text); free(o.v.lines); return 1; }
             char **grown = realloc(args, ((size_t)argc + (size_t)st.n_words + 1) * sizeof *args);
             if (!grown) return 1;
             args = grown;
@@ -214,6 +217,11 @@ int cmd_view(int argc, char **argv)
         {.name = "--loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing and stepping wrap around (the default)"},
         {.name = "--no-loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing stops at the last frame"},
         {.name = "--play", .type = CLI_FLAG, .i = &o.v.play, .help = "start playing"},
+        {.name = "--trace", .type = CLI_STRING, .meta = "NAME[:ROLE]", .flags = CLI_REPEAT, .sv = o.v.trace_names,
+         .count = &o.v.n_trace_names, .max = 16,
+         .help = "with --image: trace this surface on the image's planes (repeat: the surfaces offered, in order; ROLE "
+                 "outer, fat, muscle, lung, heart or other). Without a model --image alone traces torso, fat, muscle, "
+                 "lungs and heart; --contours FILE goes on with a contour file traced on the image"},
     };
     cli_opt common[N_RENDER_OPTS];
     cli_command cmd = {
@@ -221,6 +229,8 @@ int cmd_view(int argc, char **argv)
         .usage = "MODEL [--data [--data-surface]] [--frame] [--script] [options]\n"
                  "--solution [--frame] [--window]... [--separate] [options]\n"
                  "SURFACE_FILE... [--data [--channels]] [--bad-leads] [options]\n"
+                 "--image [--trace]... [--contours] [options]\n"
+                 "MODEL --image --trace... [--contours] [options]\n"
                  "--script FILE",
         .about = "The interactive viewer (GTK 4; paper 4.2): the surfaces and their data in one window or\n"
                  "several, frames stepped with the left and right arrow keys (in step on every surface),\n"
@@ -231,7 +241,12 @@ int cmd_view(int argc, char **argv)
                  "record's fiducials, else one beat's QRS (never a multi-beat record's whole), `a` again the\n"
                  "potentials; Shift+A the recovery map. The window shows what thorax render draws from the\n"
                  "same options (--size is the drawing area). `?` lists the keys; every key and menu item is\n"
-                 "an action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n",
+                 "an action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n"
+                 "With --image and no model (or --trace), a slice pane beside the 3D view traces the scan:\n"
+                 "loops laid on its axial planes surface by surface (points, the livewire, threshold and\n"
+                 "seed, copy and snap, interpolation; undo, redo, a log that replays), each surface built\n"
+                 "and checked as it is traced, and `trace-save DIR` writes the contours, the model, the label\n"
+                 "map and the session (docs/cli.md, \"Tracing a scan\").\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how (as thorax render)", common, render_options(common, &o.r)}},
         .positional = render_positional,
         .user = &o,
@@ -240,12 +255,22 @@ int cmd_view(int argc, char **argv)
        r is vopts' first member, so both see what they expect */
     cmd.user = &o.r;
     int pr = cli_parse(&cmd, n_args, args);
-    if (pr) { free(args); free(st.words); free(st.text); return CLI_EXIT(pr); }
-    if (!o.r.p.model_dir && !o.r.p.n_files && !o.r.p.solution) {
-        free(args); free(st.words); free(st.text);
-        return cli_usage_error("view", "no model, surface file or --solution given");
+    if (pr) { free(args); free(st.words); free(st.text); free(o.v.lines); return CLI_EXIT(pr); }
+    int no_model = !o.r.p.model_dir && !o.r.p.n_files && !o.r.p.solution;
+    if (o.v.n_trace_names && !o.r.p.image) {
+        free(args); free(st.words); free(st.text); free(o.v.lines);
+        return cli_usage_error("view", "--trace: give --image IMG (the scan traced)");
+    }
+    o.v.trace_on = o.r.p.image && (no_model || o.v.n_trace_names);
+    if (no_model && !o.r.p.image) {
+        free(args); free(st.words); free(st.text); free(o.v.lines);
+        return cli_usage_error("view", "no model, surface file, --solution or --image given");
     }
     o.v.pic = o.r.p;
+    if (o.v.trace_on) { /* the contours are the tracing's to go on with, not lines drawn on the scan */
+        o.v.trace_contours = o.v.pic.contours;
+        o.v.pic.contours = NULL;
+    }
     o.v.frame = frame - 1;
     o.v.win_w = o.r.p.w;
     o.v.win_h = o.r.p.h;
@@ -262,6 +287,6 @@ int cmd_view(int argc, char **argv)
 #endif
     free(args);
     free(st.words);
-    free(st.text);
+    free(st.text); free(o.v.lines);
     return rc;
 }

@@ -613,6 +613,81 @@ static thx_status do_tool(thx_ctx *ctx, thx_dig_session *s, const words *wd)
     return THX_OK;
 }
 
+/* Whether segments pq and rs cross at a point inside both (not at their ends); *u: the place on pq. */
+static int segments_cross(thx_vec2 p, thx_vec2 q, thx_vec2 r, thx_vec2 t, double *u)
+{
+    double dx = q.x - p.x, dy = q.y - p.y, ex = t.x - r.x, ey = t.y - r.y;
+    double den = dx * ey - dy * ex;
+    if (den == 0) return 0;
+    double a = ((r.x - p.x) * ey - (r.y - p.y) * ex) / den, b = ((r.x - p.x) * dy - (r.y - p.y) * dx) / den;
+    if (!(a > 0 && a < 1 && b > 0 && b < 1)) return 0;
+    *u = a;
+    return 1;
+}
+
+/* Removes the twists where two livewire paths meet at a click (a path may leave the click on the
+ * side the last one came in by): where an edge added from point `from` on crosses another edge of
+ * the loop, the smaller of the two loops the crossing makes (for an open loop, the one between the
+ * two edges) is cut off and the crossing point put in its place; until no new edge crosses. */
+static void untwist(thx_dig_loop *l, size_t from)
+{
+    for (int again = 1; again;) {
+        again = 0;
+        size_t n = l->n, edges = l->closed ? n : n - 1;
+        if (n < 4) return;
+        for (size_t j = from ? from - 1 : 0; j < edges && !again; j++)
+            for (size_t i = 0; i < edges && !again; i++) {
+                size_t lo = i < j ? i : j, hi = i < j ? j : i;
+                if (hi - lo < 2 || (l->closed && lo == 0 && hi == n - 1)) continue; /* neighbours */
+                double u;
+                thx_vec2 c;
+                if (l->p[lo + 1].x == l->p[hi].x && l->p[lo + 1].y == l->p[hi].y && hi - lo >= 2) {
+                    c = l->p[hi]; /* the loop comes back through one of its points: a spur closed on itself */
+                } else {
+                    if (!segments_cross(l->p[lo], l->p[lo + 1], l->p[hi], l->p[(hi + 1) % n], &u)) continue;
+                    c.x = l->p[lo].x + u * (l->p[lo + 1].x - l->p[lo].x);
+                    c.y = l->p[lo].y + u * (l->p[lo + 1].y - l->p[lo].y);
+                }
+                size_t inner = hi - lo; /* points lo+1 .. hi */
+                if (!l->closed || inner <= n - inner) {
+                    l->p[lo + 1] = c;
+                    memmove(&l->p[lo + 2], &l->p[hi + 1], (n - hi - 1) * sizeof *l->p);
+                    l->n = n - inner + 1;
+                } else { /* the outer part is the twist: keep lo+1 .. hi, then c */
+                    memmove(&l->p[0], &l->p[lo + 1], inner * sizeof *l->p);
+                    l->p[inner] = c;
+                    l->n = inner + 1;
+                }
+                from = 0;
+                again = 1;
+            }
+    }
+}
+
+/* Removes the spurs where a livewire path goes back the way the last one came (to a click beside
+ * the edge and back): a point where the loop turns back on itself (the edges before and after it at
+ * more than 160 degrees), or that repeats the point before it, goes; until none is left from point
+ * `from` - 1 on (the whole loop when closed: the join with the first point). */
+static void despike(thx_dig_loop *l, size_t from)
+{
+    for (int again = 1; again;) {
+        again = 0;
+        size_t n = l->n;
+        if (n < 3) return;
+        size_t first = l->closed ? 0 : (from > 1 ? from - 1 : 1), last = l->closed ? n : n - 1;
+        for (size_t i = first; i < last; i++) {
+            thx_vec2 a = l->p[(i + n - 1) % n], b = l->p[i], c = l->p[(i + 1) % n];
+            double ux = b.x - a.x, uy = b.y - a.y, vx = c.x - b.x, vy = c.y - b.y;
+            double nu = hypot(ux, uy), nv = hypot(vx, vy);
+            if (nu > 0 && nv > 0 && ux * vx + uy * vy > -0.94 * nu * nv) continue;
+            memmove(&l->p[i], &l->p[i + 1], (n - i - 1) * sizeof *l->p);
+            l->n--;
+            again = l->n >= 3;
+            break;
+        }
+    }
+}
+
 /* Appends the livewire's path from the loop's last point to (x, y), without its two ends. */
 static thx_status append_path(thx_ctx *ctx, thx_dig_session *s, thx_dig_loop *l, double x, double y)
 {
@@ -642,8 +717,14 @@ static thx_status do_point(thx_ctx *ctx, thx_dig_session *s, const words *wd)
     THX_CHECK(get_layer(ctx, s, (size_t)s->cur, s->k, &L));
     thx_dig_loop *l = open_loop(s, NULL);
     if (!l) THX_CHECK(layer_add_loop(ctx, L, &l));
+    size_t before = l->n;
     if (s->tool == THX_DIG_LIVEWIRE) THX_CHECK(append_path(ctx, s, l, x, y));
-    return loop_push(ctx, l, x, y);
+    THX_CHECK(loop_push(ctx, l, x, y));
+    if (s->tool == THX_DIG_LIVEWIRE) {
+        despike(l, before);
+        untwist(l, before);
+    }
+    return THX_OK;
 }
 
 static thx_status do_close(thx_ctx *ctx, thx_dig_session *s, const words *wd)
@@ -653,10 +734,16 @@ static thx_status do_close(thx_ctx *ctx, thx_dig_session *s, const words *wd)
     thx_dig_loop *l = open_loop(s, NULL);
     if (!l) return bad(ctx, wd, "%s has no open loop on plane z=%.4f", surf_name(s), thx_dig_plane_z(s, s->k));
     THX_CHECK(touch(ctx, s, (size_t)s->cur, s->k));
+    size_t before = l->n;
     if (s->tool == THX_DIG_LIVEWIRE && l->n >= 2) THX_CHECK(append_path(ctx, s, l, l->p[0].x, l->p[0].y));
     while (l->n > 1 && l->p[l->n - 1].x == l->p[0].x && l->p[l->n - 1].y == l->p[0].y) l->n--;
     if (l->n < 3) return bad(ctx, wd, "a loop needs 3 points (it has %zu)", l->n);
     l->closed = 1;
+    if (s->tool == THX_DIG_LIVEWIRE) {
+        despike(l, before);
+        untwist(l, before);
+        if (l->n < 3) return bad(ctx, wd, "a loop needs 3 points (it has %zu)", l->n);
+    }
     return THX_OK;
 }
 

@@ -506,7 +506,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         build_surfaces(o, d, frame, b, only);
         if (!o->panels) b->n += picture_field_surfaces(o, d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
         if (!o->panels) b->n += picture_scan_surfaces(d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
-        if (b->n == 0) continue;
+        if (b->n == 0 && (o->panels || !d->n_scan_planes)) continue; /* (a scan alone is drawn: tracing starts so) */
         if (!o->panels) {
             thx_status sa = build_arrows(ctx, o, d, frame, b);
             if (sa != THX_OK) { free(b->apos); free(b->avec); free(b); return sa; }

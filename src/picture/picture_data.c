@@ -23,6 +23,7 @@
 #include "thorax/io/electrodes_file.h"
 #include "thorax/leads/activation.h"
 #include "picture/picture_internal.h"
+#include "picture/scan.h"
 
 static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_data *d);
 
@@ -261,8 +262,12 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         snprintf(model_dir, sizeof model_dir, "%s", mo->valuestring);
     }
     if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
-    thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m) : thx_model_read(ctx, model_dir, &d->m);
+    /* a scan alone (thorax view --image IMG: tracing starts from nothing): a model without surfaces */
+    int scan_only = !o->n_files && !model_dir[0] && o->image;
+    thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m)
+                  : scan_only ? thx_model_create(ctx, &d->m) : thx_model_read(ctx, model_dir, &d->m);
     if (!o->n_files) snprintf(d->model_dir, sizeof d->model_dir, "%s", model_dir);
+    if (st == THX_OK && scan_only) d->m->frame = thx_frame_ras(); /* the scan's RAS millimetres */
     if (st == THX_OK) st = check_names(ctx, o, d->m);
     if (st != THX_OK) { cJSON_Delete(j); return st; }
     if (j) {
@@ -573,5 +578,12 @@ void thx_picture_bounds(const thx_picture_data *d, double lo[3], double hi[3])
                 lo[k] = fmin(lo[k], m->surf[s]->xyz[3 * i + k]);
                 hi[k] = fmax(hi[k], m->surf[s]->xyz[3 * i + k]);
             }
+    if ((!(lo[0] <= hi[0]) || d->bounds_from_scan) && d->scan) { /* no node yet (a scan being traced): the image's box */
+        static const char axes[3] = {'x', 'y', 'z'};
+        for (int k = 0; k < 3; k++) {
+            double step;
+            pic_scan_range(d->scan, axes[k], &lo[k], &hi[k], &step);
+        }
+    }
 }
 

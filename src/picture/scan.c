@@ -32,6 +32,8 @@ thx_status pic_scan_open(thx_ctx *ctx, const char *path, pic_scan **out)
     return THX_OK;
 }
 
+const struct thx_image *pic_scan_image(const pic_scan *s) { return &s->img; }
+
 void pic_scan_close(pic_scan **s)
 {
     if (!s || !*s) return;

@@ -25,6 +25,9 @@ typedef struct {
 /* Reads the image (any format thx_image_read takes) and settles its default window. */
 thx_status pic_scan_open(thx_ctx *ctx, const char *path, pic_scan **out);
 void pic_scan_close(pic_scan **s);
+/* The image read (thx_picture_scan_image). */
+struct thx_image;
+const struct thx_image *pic_scan_image(const pic_scan *s);
 /* The default window and level, and why ("label map, full range", ...). */
 void pic_scan_window(const pic_scan *s, double *window, double *level, const char **why);
 /* Whether the image looks like a label map (integral, >= 0, at most 256 distinct values). */

@@ -208,6 +208,11 @@ int thx_picture_scan_move(thx_picture_data *d, int k, int n)
     return pos != old;
 }
 
+const struct thx_image *thx_picture_scan_image(const thx_picture_data *d)
+{
+    return d->scan ? pic_scan_image(d->scan) : NULL;
+}
+
 void thx_picture_scan_describe(const thx_picture_data *d, char *buf, size_t size)
 {
     if (!d->scan || !d->n_scan_planes) {

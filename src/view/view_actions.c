@@ -55,6 +55,8 @@ static thx_picture_look *look_of(view_win *w, const char *name)
     return l;
 }
 
+thx_picture_look *view_look_of(view_win *w, const char *name) { return look_of(w, name); }
+
 static const char *current_name(view_app *a)
 {
     const thx_model *m = a->d.m;
@@ -594,6 +596,12 @@ static void do_image(view_app *a, GSimpleAction *act, GVariant *v)
 {
     const char *name = g_action_get_name(G_ACTION(act));
     if (!a->d.scan) { view_set_info(a, "%s: no image (--image IMG)", name); a->status = 1; return; }
+    if (!strcmp(name, "image-plane") && a->trace) { /* tracing: the traced plane moves, the 3D view's with it */
+        char line[32];
+        snprintf(line, sizeof line, "plane %+d", g_variant_get_int32(v));
+        view_trace_line(a, line);
+        return;
+    }
     if (!strcmp(name, "image-plane")) {
         int n = g_variant_get_int32(v), moved = 0;
         for (int k = 0; k < a->d.n_scan_planes; k++) moved |= thx_picture_scan_move(&a->d, k, n);
@@ -706,8 +714,17 @@ static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v);
 
 /* ---- editing (view_edit.c) ---- */
 static void do_edit(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_line(a, g_variant_get_string(v, NULL)); }
-static void do_undo(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_undo(a, 0); }
-static void do_redo(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_undo(a, 1); }
+/* while tracing (and no model edit under way) undo and redo are the tracing's */
+static void do_undo(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    if (a->trace && !a->edit) view_trace_line(a, "undo");
+    else view_edit_undo(a, 0);
+}
+static void do_redo(view_app *a, GSimpleAction *act, GVariant *v)
+{
+    if (a->trace && !a->edit) view_trace_line(a, "redo");
+    else view_edit_undo(a, 1);
+}
 static void do_save_model(view_app *a, GSimpleAction *act, GVariant *v) { view_edit_save(a, g_variant_get_string(v, NULL)); }
 static void do_edit_picked(view_app *a, GSimpleAction *act, GVariant *v)
 {

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "thorax/geom/pick.h"
-#include "view/view_internal.h"
+#include "view/view_trace.h"
 
 view_win *view_active(view_app *a)
 {
@@ -133,10 +133,24 @@ static view_win *new_window(view_app *a, const char *surfaces)
     gtk_label_set_xalign(GTK_LABEL(w->status), 0);
     gtk_label_set_ellipsize(GTK_LABEL(w->status), PANGO_ELLIPSIZE_END);
     gtk_widget_set_margin_start(w->status, 6);
-    gtk_box_append(GTK_BOX(box), w->gl);
+    if (a->trace && w->id == 1) { /* tracing: the slice pane on the first window's left */
+        GtkWidget *paned = gtk_paned_new(GTK_ORIENTATION_HORIZONTAL);
+        gtk_paned_set_start_child(GTK_PANED(paned), view_slice_new(a));
+        gtk_paned_set_end_child(GTK_PANED(paned), w->gl);
+        gtk_paned_set_resize_start_child(GTK_PANED(paned), TRUE);
+        gtk_paned_set_shrink_start_child(GTK_PANED(paned), FALSE);
+        gtk_widget_set_vexpand(paned, TRUE);
+        gtk_box_append(GTK_BOX(box), paned);
+    } else {
+        gtk_box_append(GTK_BOX(box), w->gl);
+    }
     gtk_box_append(GTK_BOX(box), w->plot_scroll);
     gtk_box_append(GTK_BOX(box), w->status);
     gtk_window_set_child(GTK_WINDOW(w->window), box);
+    if (a->trace) { /* the traced (axial) plane seen from above and in front, not edge on */
+        const double x_axis[3] = {1, 0, 0};
+        view_quat_axis_angle(x_axis, -55, w->q);
+    }
     gtk_window_set_resizable(GTK_WINDOW(w->window), TRUE);
     view_gl_attach(w);
     view_input_attach(w);
@@ -150,6 +164,7 @@ static void on_activate(GtkApplication *gapp, gpointer user)
     thx_view_opts *vo = a->vo;
     if (a->n_win) return;
     view_actions_install(a);
+    view_trace_install(a);
     gtk_application_set_menubar(gapp, view_menu());
     const thx_model *m = a->d.m;
     if (vo->separate) {
@@ -207,6 +222,11 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         thx_picture_data_free(&a.d);
         return 1;
     }
+    if (view_trace_open(&a)) {
+        view_trace_close(&a);
+        thx_picture_data_free(&a.d);
+        return 1;
+    }
     a.n_frames = (int)thx_picture_n_frames(&a.d);
     for (size_t s = 0; s < a.d.m->n_surfaces; s++)
         if (a.d.series[s] && (a.current <= 0 || a.d.m->surf[s]->role == THX_ROLE_OUTER)) a.current = (int)s;
@@ -234,6 +254,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
         free(w);
     }
     thx_edit_session_destroy(&a.edit);
+    view_trace_close(&a);
     thx_camera_path_destroy(&a.flight);
     thx_picture_data_free(&a.d);
     if (rc != 0 && a.status == 0) a.status = 1;

@@ -10,6 +10,7 @@
 #include "thorax/view/view.h"
 
 typedef struct view_app view_app;
+typedef struct view_tracing view_tracing; /* view_trace.h */
 
 /* A pick kept for the edits: the surface, the triangle hit and its nearest node, where the node was. */
 typedef struct {
@@ -118,6 +119,7 @@ struct view_app {
     int n_traces;
     char info[512];            /* the status line's pick/edit information */
     int shots;                 /* screenshots saved by the menu (numbering) */
+    view_tracing *trace;       /* tracing a scan (view_trace.c), or NULL */
 };
 
 /* view_app.c */
@@ -147,6 +149,7 @@ double view_mm_per_pixel(const view_win *w);
 
 /* view_actions.c */
 void view_actions_install(view_app *a);
+thx_picture_look *view_look_of(view_win *w, const char *name); /* the window's look of a surface (made when new) */
 GMenuModel *view_menu(void);
 
 /* view_script.c */
@@ -166,6 +169,14 @@ int view_edit_undo(view_app *a, int redo);
 int view_edit_save(view_app *a, const char *dir);
 int view_edit_picked(view_app *a, const char *what, double x);
 void view_edit_drag(view_win *w, double dx, double dy, int done);
+
+/* view_trace.c (tracing a scan; view_trace.h holds the rest) */
+int view_trace_open(view_app *a);
+void view_trace_close(view_app *a);
+void view_trace_install(view_app *a);
+int view_trace_line(view_app *a, const char *line);
+/* The tracing actions' rows for the key list: key (GTK accelerator text, "" none), action, help. */
+size_t view_trace_help(const char *(*rows)[3], size_t max);
 
 /* view_plot.c */
 void view_plot_attach(view_win *w);

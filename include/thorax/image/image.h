@@ -33,7 +33,7 @@ extern "C" {
  * gzip header's comment, the NRRD/MetaImage header): thorax replaces only its own images. */
 #define THX_IMAGE_MARKER "thorax-image"
 
-typedef struct {
+typedef struct thx_image {
     size_t n[3];            /* voxels along index axes i, j, k */
     float *v;               /* n[0]*n[1]*n[2] values, i fastest, then j, then k */
     double spacing[3];      /* mm between voxel centres along each index axis, > 0 */

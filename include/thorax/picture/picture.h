@@ -246,6 +246,7 @@ typedef struct {
     unsigned char *scan_rgba[4];
     double scan_key[4][4];           /* what each was built for: position, window, level, labels */
     int scan_built[4];
+    int bounds_from_scan;            /* frame the scan's box, not the surfaces' (tracing: they grow as traced) */
     thx_contours *contours;          /* o->contours, or NULL */
     thx_surface *contour_lines[64];  /* the loops on the planes: a wire surface per plane and contour surface */
     float contour_rgba[64][4];
@@ -376,6 +377,10 @@ void thx_picture_geometry_changed(thx_picture_data *d);
  * plane of voxel centres n steps on, an index plane to index + n), kept inside the image. Returns
  * 1 when it moved, 0 when already at the image's end (or no such plane). */
 int thx_picture_scan_move(thx_picture_data *d, int k, int n);
+/* The image of o->image as read (NULL without one): the digitizer traces on it (thorax/digitizer/
+ * session.h) without a second copy in memory. */
+struct thx_image;
+const struct thx_image *thx_picture_scan_image(const thx_picture_data *d);
 /* What the scan shows, for a status line: "image plane z=1 mm, window 900 level 550". */
 void thx_picture_scan_describe(const thx_picture_data *d, char *buf, size_t size);
 

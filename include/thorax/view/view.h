@@ -35,8 +35,17 @@ typedef struct {
     int loop;               /* playing wraps around */
     int step;               /* frames per step of the arrow keys */
     int play;               /* start playing */
-    const char *lines[1024]; /* the script lines run once the windows are up (after its leading options) */
+    const char **lines;     /* the script lines run once the windows are up (after its leading options; the
+                               caller's array) */
     int n_lines;
+    /* tracing (issue 26; thorax/digitizer/session.h): with `image` and no model, or trace_on, a slice
+       pane beside the 3D view where loops are traced on the image's axial planes; trace_names: the
+       surfaces offered (NAME[:ROLE]; none: torso, fat, muscle, lungs, heart); trace_contours: a contour
+       file traced on this image to go on with */
+    int trace_on;
+    const char *trace_names[16];
+    int n_trace_names;
+    const char *trace_contours;
     const char *script;     /* the script's path (messages) */
     int script_line0;       /* the line number of lines[0] in it */
     thx_view_option_fn option_fn; /* applies a script's option line; NULL: option lines refused */
