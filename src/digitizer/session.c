@@ -696,8 +696,15 @@ static thx_status append_path(thx_ctx *ctx, thx_dig_session *s, thx_dig_loop *l,
     double *xyz = NULL;
     size_t n = 0;
     THX_CHECK(livewire_path(ctx, s, x0, y0, x, y, &xyz, &n));
+    /* the path's ends within a pixel of the clicks give way to the clicks: they are the seed's and the
+       target's pixels and their neighbours, placed by the pixel grid, where the click is the user's */
+    const thx_image_slice *sl = thx_dig_slice(ctx, s);
+    double pix = sl ? fmax(dig_len3(sl->du), dig_len3(sl->dv)) : 0;
+    size_t i0 = 1, i1 = n ? n - 1 : 0;
+    while (i0 < i1 && hypot(xyz[3 * i0] - x0, xyz[3 * i0 + 1] - y0) < pix) i0++;
+    while (i1 > i0 && hypot(xyz[3 * (i1 - 1)] - x, xyz[3 * (i1 - 1) + 1] - y) < pix) i1--;
     thx_status st = THX_OK;
-    for (size_t i = 1; i + 1 < n && st == THX_OK; i++) st = loop_push(ctx, l, xyz[3 * i], xyz[3 * i + 1]);
+    for (size_t i = i0; i < i1 && st == THX_OK; i++) st = loop_push(ctx, l, xyz[3 * i], xyz[3 * i + 1]);
     free(xyz);
     return st;
 }

@@ -264,8 +264,11 @@ static int save(view_app *a, const char *dir)
     thx_contours *c = NULL;
     size_t skipped = 0;
     thx_status st = thx_dig_contours(a->ctx, t->s, -1, &c, &skipped);
-    char comment[256];
-    snprintf(comment, sizeof comment, "traced by hand in thorax view on %s", a->vo->pic.image);
+    /* the image by its absolute path: the same file whichever directory the session ran in */
+    char img[PATH_MAX], comment[PATH_MAX + 64];
+    if (!realpath(a->vo->pic.image, img)) snprintf(img, sizeof img, "%s", a->vo->pic.image);
+    snprintf(comment, sizeof comment, "traced by hand in thorax view on %s", img);
+    if (st == THX_OK) snprintf(c->image, sizeof c->image, "%s", img);
     if (st == THX_OK) st = thx_contours_write(a->ctx, c, p_contours, comment);
     if (st == THX_OK) st = write_session(a, p_session);
     if (st != THX_OK) {
