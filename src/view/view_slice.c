@@ -346,6 +346,11 @@ static void draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user)
     t->last_draw_ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
 }
 
+void view_slice_draw(view_app *a, cairo_t *cr, int W, int H)
+{
+    draw(GTK_DRAWING_AREA(a->trace->area), cr, W, H, a);
+}
+
 int view_slice_png(view_app *a, const char *path)
 {
     view_tracing *t = a->trace;

@@ -268,7 +268,7 @@ static int save(view_app *a, const char *dir)
     char img[PATH_MAX], comment[PATH_MAX + 64];
     if (!realpath(a->vo->pic.image, img)) snprintf(img, sizeof img, "%s", a->vo->pic.image);
     snprintf(comment, sizeof comment, "traced by hand in thorax view on %s", img);
-    if (st == THX_OK) snprintf(c->image, sizeof c->image, "%s", img);
+    if (st == THX_OK && strlen(img) < sizeof c->image) memcpy(c->image, img, strlen(img) + 1);
     if (st == THX_OK) st = thx_contours_write(a->ctx, c, p_contours, comment);
     if (st == THX_OK) st = write_session(a, p_session);
     if (st != THX_OK) {
@@ -333,6 +333,65 @@ static void do_pane_png(GSimpleAction *act, GVariant *v, gpointer user)
     view_trace_rebuild_now(a);
     if (!*path || view_slice_png(a, path)) { view_set_info(a, "trace-screenshot '%s': not written", path); a->status = 1; return; }
     view_set_info(a, "saved the slice pane as %s", path);
+}
+
+static int by_value(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* Benchmarks (bench/trace.sh): N plane steps, each followed by the pane drawn (offscreen, its size):
+ * the plane sampled, its grey levels, the loops; or N edits of the current surface's first point
+ * (1 mm along x and back), each followed by that surface built again and checked. Medians printed. */
+static void do_bench(GSimpleAction *act, GVariant *v, gpointer user)
+{
+    view_app *a = user;
+    view_tracing *t = a->trace;
+    const char *name = g_action_get_name(G_ACTION(act));
+    int n = g_variant_get_int32(v);
+    if (!t || n < 1 || n > 100000) { view_set_info(a, "%s: tracing, and 1 to 100000 steps", name); a->status = 1; return; }
+    double *ms = calloc((size_t)n, sizeof *ms);
+    if (!ms) return;
+    int edit = !strcmp(name, "bench-trace-edit"), dir = 1, done = 0;
+    for (int i = 0; i < n; i++) {
+        double t0 = now_ms();
+        char line[160];
+        if (edit) {
+            int cur = thx_dig_current_surface(t->s);
+            const thx_dig_loop *l;
+            if (cur < 0 || !thx_dig_loops(t->s, (size_t)cur, thx_dig_current_plane(t->s), &l)) {
+                view_set_info(a, "%s: no loop of the current surface on this plane", name);
+                a->status = 1;
+                break;
+            }
+            snprintf(line, sizeof line, "move 1 1 %.2f %.2f", l[0].p[0].x + (i % 2 ? -1.0 : 1.0), l[0].p[0].y);
+            if (view_trace_line(a, line)) break;
+            view_trace_rebuild_now(a);
+        } else {
+            if (thx_dig_current_plane(t->s) + dir < 0 || thx_dig_current_plane(t->s) + dir >= thx_dig_n_planes(t->s)) dir = -dir;
+            snprintf(line, sizeof line, "plane %+d", dir);
+            if (view_trace_line(a, line)) break;
+            if (t->area) {
+                int W = gtk_widget_get_width(t->area), H = gtk_widget_get_height(t->area);
+                cairo_surface_t *cs = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W > 0 ? W : 560, H > 0 ? H : 480);
+                cairo_t *cr = cairo_create(cs);
+                view_slice_draw(a, cr, W > 0 ? W : 560, H > 0 ? H : 480);
+                cairo_destroy(cr);
+                cairo_surface_destroy(cs);
+            }
+        }
+        ms[done++] = now_ms() - t0;
+    }
+    if (done) {
+        qsort(ms, (size_t)done, sizeof *ms, by_value);
+        int cur = thx_dig_current_surface(t->s);
+        const thx_image_slice *sl = thx_dig_slice(a->ctx, t->s);
+        printf("%s %d steps: median %.2f ms, min %.2f, max %.2f (%s; plane %zux%zu)\n", name, done, ms[done / 2], ms[0],
+               ms[done - 1], edit && cur >= 0 ? t->surf[cur].verdict : "plane stepped, pane drawn", sl ? sl->w : 0, sl ? sl->h : 0);
+        fflush(stdout);
+    }
+    free(ms);
 }
 
 static void do_tool(GSimpleAction *act, GVariant *v, gpointer user)
@@ -481,6 +540,8 @@ static const trace_action TRACE_ACTIONS[] = {
     {"image-preset-auto", NULL, NULL, {"F8"}, NULL, "the image's 1st to 99th percentile"},
     {"trace-save", "s", G_CALLBACK(do_save), {NULL}, NULL, "write DIR/contours.txt, model/, labels.nii.gz and session.txt"},
     {"trace-screenshot", "s", G_CALLBACK(do_pane_png), {NULL}, NULL, "save the slice pane as PNG"},
+    {"bench-trace-scroll", "i", G_CALLBACK(do_bench), {NULL}, NULL, "benchmark: N plane steps, the pane drawn after each"},
+    {"bench-trace-edit", "i", G_CALLBACK(do_bench), {NULL}, NULL, "benchmark: N moves of a point, the surface built and checked after each"},
 };
 
 static const struct {

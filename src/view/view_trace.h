@@ -66,6 +66,8 @@ void view_trace_rebuild_now(view_app *a);
 /* view_slice.c */
 GtkWidget *view_slice_new(view_app *a);
 void view_slice_redraw(view_app *a);
+/* The pane drawn into cr (W x H: the pane's size, which its geometry takes). */
+void view_slice_draw(view_app *a, cairo_t *cr, int W, int H);
 /* The pane as drawn now, into a PNG (cairo); 0, or -1. */
 int view_slice_png(view_app *a, const char *path);
 #endif
