@@ -91,7 +91,7 @@ static void clicks(FILE *f, int surface, double z)
 
 static void head(FILE *f)
 {
-    fprintf(f, "--image ph.nii.gz\n--size 640x480\n--trace torso:outer\n--trace lungs:lung\n");
+    fprintf(f, "--image ph.nii.gz\n--size 640x480\n--trace-surface torso:outer\n--trace-surface lungs:lung\n");
 }
 
 /* The torso on the 20 planes by livewire; with `edits`, edits undone and redone on the way. */

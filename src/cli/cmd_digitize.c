@@ -240,7 +240,8 @@ int cmd_digitize(int argc, char **argv)
     };
     cli_command cmd = {
         .name = "digitize",
-        .usage = "LABELS --label [--spacing] [--axis] [--min-size] [--node-spacing] [--holes] -o",
+        .usage = "LABELS --label [--spacing] [--axis] [--min-size] [--node-spacing] [--holes] -o\n"
+                 "SCAN",
         .about = "Traces a label map (NIfTI, or any image thorax reads, of integer labels) into\n"
                  "the contour file thorax surfaces reads: one closed loop per tissue boundary per\n"
                  "plane (paper 3.1, \"a layer\"). Planes are cut across the image's superior axis:\n"
@@ -251,12 +252,19 @@ int cmd_digitize(int argc, char **argv)
                  "union of its labels and every other --label's (the paper's nesting). Components\n"
                  "under --min-size voxels are removed and reported. The file records the frame\n"
                  "(+z superior, +y anterior: model coordinates are RAS mm for an axis-aligned\n"
-                 "image) and the image's path and SHA-256. Nothing is written on an error.\n",
+                 "image) and the image's path and SHA-256. Nothing is written on an error.\n"
+                 "A SCAN alone (no --label: an MR or CT without labels) opens the viewer to trace it\n"
+                 "by hand, surface by surface (thorax view --image SCAN; docs/cli.md, \"Tracing a\n"
+                 "scan\"); its trace-save action writes the contours, the model and the label map.\n",
         .group = {{NULL, opts, sizeof opts / sizeof opts[0]}},
     };
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
     if (cmd.n_pos != 1) return cli_usage_error("digitize", "%s", cmd.n_pos ? "more than one label map" : "no label map given");
+    if (!n_labels && !out) { /* a scan to trace by hand: the viewer's slice pane */
+        char *view_argv[] = {"view", "--image", (char *)cmd.pos[0], NULL};
+        return cmd_view(3, view_argv);
+    }
     if (!out) return cli_usage_error("digitize", "no output file given (-o CONTOURS)");
     a.labels = labels;
     a.n_labels = n_labels;

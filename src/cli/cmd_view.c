@@ -217,7 +217,7 @@ int cmd_view(int argc, char **argv)
         {.name = "--loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing and stepping wrap around (the default)"},
         {.name = "--no-loop", .type = CLI_FLAG, .fn = set_loop, .help = "playing stops at the last frame"},
         {.name = "--play", .type = CLI_FLAG, .i = &o.v.play, .help = "start playing"},
-        {.name = "--trace", .type = CLI_STRING, .meta = "NAME[:ROLE]", .flags = CLI_REPEAT, .sv = o.v.trace_names,
+        {.name = "--trace-surface", .type = CLI_STRING, .meta = "NAME[:ROLE]", .flags = CLI_REPEAT, .sv = o.v.trace_names,
          .count = &o.v.n_trace_names, .max = 16,
          .help = "with --image: trace this surface on the image's planes (repeat: the surfaces offered, in order; ROLE "
                  "outer, fat, muscle, lung, heart or other). Without a model --image alone traces torso, fat, muscle, "
@@ -229,8 +229,8 @@ int cmd_view(int argc, char **argv)
         .usage = "MODEL [--data [--data-surface]] [--frame] [--script] [options]\n"
                  "--solution [--frame] [--window]... [--separate] [options]\n"
                  "SURFACE_FILE... [--data [--channels]] [--bad-leads] [options]\n"
-                 "--image [--trace]... [--contours] [options]\n"
-                 "MODEL --image --trace... [--contours] [options]\n"
+                 "--image [--trace-surface]... [--contours] [options]\n"
+                 "MODEL --image --trace-surface... [--contours] [options]\n"
                  "--script FILE",
         .about = "The interactive viewer (GTK 4; paper 4.2): the surfaces and their data in one window or\n"
                  "several, frames stepped with the left and right arrow keys (in step on every surface),\n"
@@ -242,11 +242,12 @@ int cmd_view(int argc, char **argv)
                  "potentials; Shift+A the recovery map. The window shows what thorax render draws from the\n"
                  "same options (--size is the drawing area). `?` lists the keys; every key and menu item is\n"
                  "an action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n"
-                 "With --image and no model (or --trace), a slice pane beside the 3D view traces the scan:\n"
-                 "loops laid on its axial planes surface by surface (points, the livewire, threshold and\n"
-                 "seed, copy and snap, interpolation; undo, redo, a log that replays), each surface built\n"
-                 "and checked as it is traced, and `trace-save DIR` writes the contours, the model, the label\n"
-                 "map and the session (docs/cli.md, \"Tracing a scan\").\n",
+                 "With --image and no model (or --trace-surface), a slice pane beside the 3D view\n"
+                 "traces the scan: loops laid on its axial planes surface by surface (points, the\n"
+                 "livewire, threshold and seed, copy and snap, interpolation; undo, redo, a log that\n"
+                 "replays), each surface built and checked as it is traced; `trace-save DIR` writes\n"
+                 "the contours, the model, the label map and the session (docs/cli.md, \"Tracing\n"
+                 "a scan\").\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how (as thorax render)", common, render_options(common, &o.r)}},
         .positional = render_positional,
         .user = &o,
@@ -259,7 +260,7 @@ int cmd_view(int argc, char **argv)
     int no_model = !o.r.p.model_dir && !o.r.p.n_files && !o.r.p.solution;
     if (o.v.n_trace_names && !o.r.p.image) {
         free(args); free(st.words); free(st.text); free(o.v.lines);
-        return cli_usage_error("view", "--trace: give --image IMG (the scan traced)");
+        return cli_usage_error("view", "--trace-surface: give --image IMG (the scan traced)");
     }
     o.v.trace_on = o.r.p.image && (no_model || o.v.n_trace_names);
     if (no_model && !o.r.p.image) {

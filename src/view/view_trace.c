@@ -175,7 +175,7 @@ static void describe(view_app *a)
 int view_trace_line(view_app *a, const char *line)
 {
     view_tracing *t = a->trace;
-    if (!t) { view_set_info(a, "trace: not tracing (thorax view --image IMG, without a model or with --trace)"); a->status = 1; return -1; }
+    if (!t) { view_set_info(a, "trace: not tracing (thorax view --image IMG, without a model or with --trace-surface)"); a->status = 1; return -1; }
     double t0 = now_ms();
     if (thx_dig_apply(a->ctx, t->s, line) != THX_OK) {
         view_set_info(a, "%s", thx_ctx_message(a->ctx));
@@ -216,7 +216,7 @@ static thx_status write_session(view_app *a, const char *path)
     if (!realpath(ip, img)) snprintf(img, sizeof img, "%s", ip);
     fprintf(af.f, "%s (resume: thorax view --script %s)\n", marker, path);
     fprintf(af.f, "--image %s\n--image-window %.9g\n--image-level %.9g\n", img, a->d.window, a->d.level);
-    for (int k = 0; k < t->n_names; k++) fprintf(af.f, "--trace %s\n", t->names[k]);
+    for (int k = 0; k < t->n_names; k++) fprintf(af.f, "--trace-surface %s\n", t->names[k]);
     if (t->start[0]) fprintf(af.f, "--contours %s\n", t->start);
     const char *const *lines;
     size_t n = thx_dig_log(t->s, &lines);
