@@ -262,8 +262,8 @@ int cmd_digitize(int argc, char **argv)
     if (pr) return CLI_EXIT(pr);
     if (cmd.n_pos != 1) return cli_usage_error("digitize", "%s", cmd.n_pos ? "more than one label map" : "no label map given");
     if (!n_labels && !out) { /* a scan to trace by hand: the viewer's slice pane */
-        char *view_argv[] = {"view", "--image", (char *)cmd.pos[0], NULL};
-        return cmd_view(3, view_argv);
+        char *view_argv[] = {"view", "--image", (char *)cmd.pos[0], verbose > 0 ? "-v" : verbose < 0 ? "-q" : NULL, NULL};
+        return cmd_view(verbose ? 4 : 3, view_argv);
     }
     if (!out) return cli_usage_error("digitize", "no output file given (-o CONTOURS)");
     a.labels = labels;

@@ -377,7 +377,7 @@ void view_slice_redraw(view_app *a)
 static int at_ras(view_app *a, double x, double y, double p[3])
 {
     view_tracing *t = a->trace;
-    const thx_image_slice *sl = t->shown;
+    const thx_image_slice *sl = t->shown = shown_plane(a); /* (a line may have changed the plane since the draw) */
     if (!sl) return -1;
     pane_geo g = geo_of(t, sl);
     double pa, pb;
@@ -391,7 +391,7 @@ static int node_at(view_app *a, double x, double y, size_t *loop, size_t *pt)
 {
     view_tracing *t = a->trace;
     int cur = thx_dig_current_surface(t->s);
-    if (cur < 0 || !t->shown || t->orient != 'z') return -1;
+    if (cur < 0 || t->orient != 'z' || !(t->shown = shown_plane(a))) return -1;
     pane_geo g = geo_of(t, t->shown);
     long k = thx_dig_current_plane(t->s);
     double z = thx_dig_plane_z(t->s, k), best = 49;
@@ -414,7 +414,7 @@ static int edge_at(view_app *a, double x, double y, size_t *loop, size_t *pt)
 {
     view_tracing *t = a->trace;
     int cur = thx_dig_current_surface(t->s);
-    if (cur < 0 || !t->shown || t->orient != 'z') return -1;
+    if (cur < 0 || t->orient != 'z' || !(t->shown = shown_plane(a))) return -1;
     pane_geo g = geo_of(t, t->shown);
     long k = thx_dig_current_plane(t->s);
     double z = thx_dig_plane_z(t->s, k), best = 49;
@@ -507,15 +507,17 @@ static void on_drag_end(GtkGestureDrag *gd, double dx, double dy, gpointer user)
     if (button != 1) return;
     double x = t->drag_x0 + dx, y = t->drag_y0 + dy, p[3];
     char line[200];
-    if (t->drag_node) {
+    if (t->drag_node && hypot(dx, dy) >= 1) {
         t->drag_node = 0;
-        if (hypot(dx, dy) >= 1 && at_ras(a, x, y, p) == 0) {
+        if (at_ras(a, x, y, p) == 0) {
             snprintf(line, sizeof line, "move %zu %zu %.2f %.2f", t->drag_loop + 1, t->drag_i + 1, p[0], p[1]);
             view_trace_line(a, line);
         }
         view_slice_redraw(a);
         return;
     }
+    int on_node = t->drag_node;
+    t->drag_node = 0;
     if (hypot(dx, dy) > 4 || at_ras(a, x, y, p) != 0) return; /* a drag that took nothing: not a click */
     if (t->orient != 'z') { /* coronal or sagittal: the axial plane clicked */
         snprintf(line, sizeof line, "plane z=%.4f", p[2]);
@@ -528,6 +530,13 @@ static void on_drag_end(GtkGestureDrag *gd, double dx, double dy, gpointer user)
     last_click_xy[0] = x;
     last_click_xy[1] = y;
     if (twice && t->tool != VIEW_TOOL_REGION) { view_trace_line(a, "close"); return; }
+    if (on_node) { /* a click on a point: on the open loop's first, it closes the loop; else it only takes it */
+        const thx_dig_loop *l;
+        int cur = thx_dig_current_surface(t->s);
+        size_t n = cur >= 0 ? thx_dig_loops(t->s, (size_t)cur, thx_dig_current_plane(t->s), &l) : 0;
+        if (t->drag_loop < n && !l[t->drag_loop].closed && t->drag_i == 0 && l[t->drag_loop].n >= 3) view_trace_line(a, "close");
+        return;
+    }
     if (t->tool == VIEW_TOOL_REGION) {
         double lo = t->have_thr ? t->thr_lo : a->d.level - 0.5 * a->d.window;
         double hi = t->have_thr ? t->thr_hi : a->d.level + 0.5 * a->d.window;
