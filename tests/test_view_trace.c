@@ -286,11 +286,18 @@ int main(void)
     char *sess = tl_slurp(ctx, tl_path("A/session.txt"), NULL);
     CHECK(sess && strstr(sess, "action trace close"));
     f = fopen(tl_path("e.txt"), "w");
-    fprintf(f, "%saction trace-save E\nquit\n", sess ? sess : "");
+    fprintf(f, "%saction trace-screenshot E.png\naction trace-save E\nquit\n", sess ? sess : "");
     fclose(f);
     CHECK(run_view("e.txt", "e.out") == 0);
     char *fe = tl_slurp(ctx, tl_path("E/contours.txt"), NULL);
     CHECK(fa && fe && !strcmp(fa, fe));
+    /* ... and the same picture in the pane, pixel for pixel */
+    thx_raster *pa = NULL, *pe = NULL;
+    CHECK_OK(ctx, thx_raster_read_png(ctx, tl_path("A.png"), &pa));
+    CHECK_OK(ctx, thx_raster_read_png(ctx, tl_path("E.png"), &pe));
+    CHECK(pa && pe && pa->w == pe->w && pa->h == pe->h && !memcmp(pa->rgba, pe->rgba, 4 * (size_t)pa->w * (size_t)pa->h));
+    thx_raster_destroy(&pa);
+    thx_raster_destroy(&pe);
     printf("undo/redo (%s) and the session replayed (%s): the contour file byte for byte\n", fa && fd && !strcmp(fa, fd) ? "same" : "DIFFERENT",
            fa && fe && !strcmp(fa, fe) ? "same" : "DIFFERENT");
     free(fa);

@@ -215,7 +215,8 @@ static thx_status write_session(view_app *a, const char *path)
     const char *ip = a->vo->pic.image;
     if (!realpath(ip, img)) snprintf(img, sizeof img, "%s", ip);
     fprintf(af.f, "%s (resume: thorax view --script %s)\n", marker, path);
-    fprintf(af.f, "--image %s\n--image-window %.9g\n--image-level %.9g\n", img, a->d.window, a->d.level);
+    fprintf(af.f, "--image %s\n--image-window %.9g\n--image-level %.9g\n--size %dx%d\n", img, a->d.window, a->d.level,
+            a->vo->win_w, a->vo->win_h);
     for (int k = 0; k < t->n_names; k++) fprintf(af.f, "--trace-surface %s\n", t->names[k]);
     if (t->start[0]) fprintf(af.f, "--contours %s\n", t->start);
     const char *const *lines;
