@@ -56,6 +56,24 @@ static int model_surface(view_app *a, size_t i)
     return t->surf[i].model_index;
 }
 
+/* FNV-1a over what a surface is built from: its closed loops, plane by plane. */
+static unsigned long long contours_hash(const thx_contours *c)
+{
+    unsigned long long h = 1469598103934665603ULL;
+    for (size_t s = 0; c && s < c->n_surfaces; s++)
+        for (size_t j = 0; j < c->surf[s].n_layers; j++) {
+            const thx_contour_layer *L = &c->surf[s].layers[j];
+            const unsigned char *z = (const unsigned char *)&L->z;
+            for (size_t b = 0; b < sizeof L->z; b++) h = (h ^ z[b]) * 1099511628211ULL;
+            for (size_t l = 0; l < L->n_loops; l++) {
+                const unsigned char *p = (const unsigned char *)L->loops[l].p;
+                for (size_t b = 0; b < L->loops[l].n * sizeof *L->loops[l].p; b++) h = (h ^ p[b]) * 1099511628211ULL;
+                h = (h ^ 0xff) * 1099511628211ULL;
+            }
+        }
+    return h;
+}
+
 /* Builds session surface i from its loops (thx_surface_build: the spline, lacing and caps of thorax
  * surfaces) and checks it; the model shows the result (or nothing, with the reason, when it cannot be
  * built). */
@@ -66,16 +84,21 @@ static void build_one(view_app *a, size_t i)
     int mi = model_surface(a, i);
     if (mi < 0) return;
     double t0 = now_ms();
-    ts->built_gen = thx_dig_surface_gen(t->s, i);
-    ts->built = 1;
-    ts->ok = 0;
     thx_contours *c = NULL;
     thx_surface *s = NULL;
     thx_vec3 interior;
-    size_t skipped = 0;
     const char *name = thx_dig_surface_name(t->s, i);
-    size_t n_planes = thx_dig_planes_traced(t->s, i, NULL, 0);
-    thx_status st = thx_dig_contours(a->ctx, t->s, (int)i, &c, &skipped);
+    thx_status st = thx_dig_contours(a->ctx, t->s, (int)i, &c, NULL);
+    unsigned long long hash = st == THX_OK ? contours_hash(c) : 0;
+    int again = ts->built && hash == ts->built_hash;
+    ts->built_gen = thx_dig_surface_gen(t->s, i);
+    ts->built = 1;
+    if (again) { /* only open loops changed: nothing to build again */
+        thx_contours_destroy(&c);
+        return;
+    }
+    ts->built_hash = hash;
+    ts->ok = 0;
     if (st != THX_OK) {
         snprintf(ts->verdict, sizeof ts->verdict, "nothing closed yet");
     } else if (c->surf[0].n_layers < 2) {
@@ -101,11 +124,6 @@ static void build_one(view_app *a, size_t i)
                          rep.n_reasons ? rep.reasons[0] : thx_ctx_message(a->ctx));
             thx_surface_report_free(&rep);
         }
-    }
-    (void)n_planes;
-    if (skipped) {
-        size_t len = strlen(ts->verdict);
-        snprintf(ts->verdict + len, sizeof ts->verdict - len, " (%zu open loop%s left out)", skipped, skipped == 1 ? "" : "s");
     }
     thx_contours_destroy(&c);
     thx_model *m = a->d.m;

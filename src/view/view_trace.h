@@ -15,6 +15,8 @@
 typedef struct {
     int model_index;        /* -1: not in the model yet */
     unsigned long built_gen;
+    unsigned long long built_hash;  /* of the closed loops it was built from: an open loop's points change
+                                       nothing built, and are not built again for */
     int built;              /* built at least once */
     int ok;                 /* built and passes thorax check */
     char verdict[256];      /* "passes: 12 planes, 1240 nodes", "open: ...", "one plane traced", ... */
