@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "testlib.h"
 #include "thorax/check/check.h"
@@ -30,6 +31,13 @@ static thx_ctx *ctx;
 static thx_phantom_field *fld;
 static double planes[NPLANES];
 
+static double wall(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 /* Runs a viewer script under Xvfb; its standard output kept in OUT. */
 static int run_view(const char *script, const char *out)
 {
@@ -37,7 +45,9 @@ static int run_view(const char *script, const char *out)
     snprintf(cmd, sizeof cmd,
              "cd '%s' && timeout 300 xvfb-run -a -s '-screen 0 1600x1000x24' ../../bin/thorax view --script '%s' > '%s' 2> '%s.err'",
              tl_scratch, script, out, out);
+    double t0 = wall();
     int rc = system(cmd);
+    printf("  (%s: %.1f s)\n", script, wall() - t0);
     if (rc != 0) {
         char *err = tl_slurp(ctx, tl_path(out), NULL);
         fprintf(stderr, "thorax view --script %s: exit %d\n%s\n", script, rc, err ? err : "");
@@ -91,7 +101,7 @@ static void clicks(FILE *f, int surface, double z)
 
 static void head(FILE *f)
 {
-    fprintf(f, "--image ph.nii.gz\n--size 640x480\n--trace-surface torso:outer\n--trace-surface lungs:lung\n");
+    fprintf(f, "--image ph.nii.gz\n--size 360x300\n--trace-surface torso:outer\n--trace-surface lungs:lung\n");
 }
 
 /* The torso on the 20 planes by livewire; with `edits`, edits undone and redone on the way. */

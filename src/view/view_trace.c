@@ -205,10 +205,12 @@ int view_trace_line(view_app *a, const char *line)
     free(t->preview);
     t->preview = NULL;
     t->n_preview = 0;
+    double z_before = a->d.n_scan_planes ? a->d.scan_pos[0] : NAN;
     follow_plane(a);
     if (!t->rebuild_id) t->rebuild_id = g_idle_add(rebuild_idle, a);
     describe(a);
-    view_redraw_all(a);
+    /* the 3D view changes with the plane, or when a surface is built again (rebuild_idle draws it) */
+    if (!(a->d.n_scan_planes && a->d.scan_pos[0] == z_before)) view_redraw_all(a);
     view_slice_redraw(a);
     return 0;
 }
