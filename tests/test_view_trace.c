@@ -7,7 +7,9 @@
  *  - threshold and seed on each lung: within a voxel (2 mm);
  *  - the same session with edits undone and redone, and the saved session replayed: the contour
  *    file byte for byte;
- *  - a loop that crosses itself: drawn red in the pane, and the surface's verdict says so.
+ *  - a loop that crosses itself: drawn red in the pane, and the surface's verdict says so;
+ *  - two surfaces that cross each other: drawn red, and the model (it would fail the check) not
+ *    written.
  * The viewer is the program (../bin/thorax view, run through xvfb-run); the distances are measured
  * here against thx_phantom_section. */
 #include <math.h>
@@ -332,6 +334,33 @@ int main(void)
     CHECK(out && strstr(out, "trace: torso: not built:") && strstr(out, "intersects itself"));
     CHECK(out && strstr(out, "model not written"));
     CHECK(!tl_exists(tl_path("F/model")));
+    free(out);
+
+    /* 6. two surfaces that each pass but cross each other: marked, and the model (which would fail
+     *    thorax check) not written, the contours and session are */
+    f = fopen(tl_path("g.txt"), "w");
+    head(f);
+    fprintf(f, "action trace surface torso\naction trace tool livewire\n");
+    for (int p = 3; p <= 4; p++) {
+        fprintf(f, "action trace plane z=%g\n", planes[p]);
+        clicks(f, 0, planes[p]);
+        fprintf(f, "action trace close\n");
+    }
+    fprintf(f, "action trace surface heart\naction trace tool points\n");
+    for (int p = 3; p <= 4; p++)
+        fprintf(f, "action trace plane z=%g\naction trace point 100 -20\naction trace point 178 -20\naction trace point 178 20\n"
+                   "action trace point 100 20\naction trace close\n", planes[p]);
+    fprintf(f, "action trace-screenshot G.png\naction trace-save G\nquit\n");
+    fclose(f);
+    CHECK(run_view("g.txt", "g.out") == 0);
+    out = tl_slurp(ctx, tl_path("g.out"), NULL);
+    red = count_red("G.png");
+    printf("torso and a surface across it: %d red pixels; %s\n", red, out && strstr(out, "model not written") ? "the model not written" : "?");
+    CHECK(out && strstr(out, "trace: torso: passes thorax check: 2 planes") && strstr(out, "trace: heart: passes thorax check: 2 planes"));
+    CHECK(out && strstr(out, "model not written"));
+    CHECK(red > 50);
+    CHECK(tl_exists(tl_path("G/contours.txt")) && tl_exists(tl_path("G/session.txt")));
+    CHECK(!tl_exists(tl_path("G/model")) && !tl_exists(tl_path("G/labels.nii.gz")));
     free(out);
 
     thx_contours_destroy(&A);
