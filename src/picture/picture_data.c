@@ -471,6 +471,25 @@ thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kin
     return THX_OK;
 }
 
+int thx_picture_drop_set(thx_picture_data *d, int s, int k)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s] || !d->map[s][k]) return -1;
+    int src = d->map_src[s][k] >= 0 ? d->map_src[s][k] : 0;
+    thx_series_destroy(&d->sets[s][k]);
+    for (int j = k; j + 1 < d->n_sets[s]; j++) {
+        d->sets[s][j] = d->sets[s][j + 1];
+        d->map[s][j] = d->map[s][j + 1];
+        d->map_src[s][j] = d->map_src[s][j + 1];
+        d->map_auto[s][j] = d->map_auto[s][j + 1];
+    }
+    d->n_sets[s]--;
+    d->sets[s][d->n_sets[s]] = NULL;
+    for (int j = 0; j < d->n_sets[s]; j++) /* the maps' sources after k moved down one */
+        if (d->map_src[s][j] > k) d->map_src[s][j]--;
+    if (src > k) src--;
+    return thx_picture_set_active(d, s, src);
+}
+
 int thx_picture_set_active(thx_picture_data *d, int s, int k)
 {
     if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s]) return -1;

@@ -75,9 +75,15 @@ static int run_line(view_app *a, const char *text, int line, int *wait_ms)
                 script_fail(a, line, "%s", thx_ctx_message(a->ctx));
                 return -1;
             }
+            /* a cut that cannot be made is this line's error, not a failed drawing's */
+            if (thx_picture_cuts_check(a->ctx, &o, &a->d) != THX_OK) {
+                script_fail(a, line, "%s", thx_ctx_message(a->ctx));
+                return -1;
+            }
             a->win[k]->o = o;
         }
         view_redraw_all(a);
+        view_panel_refresh(a);
         return 0;
     }
     if (strncmp(buf, "action ", 7)) {
@@ -194,6 +200,13 @@ static void write_picture(FILE *f, view_win *w)
     if (o->extrema) fprintf(f, "--extrema\n");
     if (o->font) fprintf(f, "--font %s\n", o->font);
     if (o->clip[0]) fprintf(f, "--clip %s\n", o->clip);
+    /* the volume's cuts as they are now (the panel, its gestures and script lines change them) */
+    if (o->isosurface) fprintf(f, "--isosurface %s\n", o->isosurface);
+    for (int k = 0; k < o->n_slices; k++) fprintf(f, "--slice %s\n", o->slices[k]);
+    if (o->slice_current) fprintf(f, "--slice-current\n");
+    for (int k = 0; k < o->n_streamlines; k++) fprintf(f, "--streamlines %s\n", o->streamlines[k]);
+    if (o->stream_radius > 0) fprintf(f, "--stream-radius %.17g\n", o->stream_radius);
+    if (o->stream_potential) fprintf(f, "--stream-potential\n");
     if (o->arrows) {
         fprintf(f, "--arrows\n--arrow-spacing %.17g\n--arrow-length %.17g\n--arrow-max %d\n", o->arrow_spacing,
                 o->arrow_scale, o->arrow_max);
