@@ -956,7 +956,8 @@ static const char *const GESTURES[][2] = {
     {"wheel over the traces", "zoom their time axis about the frame"},
 };
 
-static GtkWidget *cell(GtkWidget *grid, int col, int row, const char *text, int markup, int wrap)
+/* A label of the overlay's grid at (col, row), spanning `span` columns, wrapped when wrap. */
+static GtkWidget *cell(GtkWidget *grid, int col, int row, int span, const char *text, int markup, int wrap)
 {
     GtkWidget *l = gtk_label_new(NULL);
     if (markup) gtk_label_set_markup(GTK_LABEL(l), text);
@@ -969,7 +970,7 @@ static GtkWidget *cell(GtkWidget *grid, int col, int row, const char *text, int 
         gtk_label_set_max_width_chars(GTK_LABEL(l), 70);
         gtk_label_set_width_chars(GTK_LABEL(l), 50);
     }
-    gtk_grid_attach(GTK_GRID(grid), l, col, row, wrap ? 3 - col : 1, 1);
+    gtk_grid_attach(GTK_GRID(grid), l, col, row, span, 1);
     return l;
 }
 
@@ -1000,16 +1001,16 @@ static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
     gtk_widget_set_margin_top(grid, 10);
     gtk_widget_set_margin_bottom(grid, 14);
     int row = 0;
-    cell(grid, 0, row++, "<b>Mouse</b> (in the picture, unless said)", 1, 0);
+    cell(grid, 0, row++, 3, "<b>Mouse</b> (in the picture, unless said)", 1, 0);
     for (size_t k = 0; k < sizeof GESTURES / sizeof GESTURES[0]; k++) {
-        cell(grid, 0, row, GESTURES[k][0], 0, 0);
-        cell(grid, 1, row++, GESTURES[k][1], 0, 1);
+        cell(grid, 0, row, 1, GESTURES[k][0], 0, 0);
+        cell(grid, 1, row++, 2, GESTURES[k][1], 0, 1);
     }
-    GtkWidget *gap = cell(grid, 0, row++, "<b>Keys</b> and actions: menus and script lines <tt>action NAME [VALUE]</tt> run the same", 1, 0);
+    GtkWidget *gap = cell(grid, 0, row++, 3, "<b>Keys</b> and actions: menus and script lines <tt>action NAME [VALUE]</tt> run the same", 1, 0);
     gtk_widget_set_margin_top(gap, 12);
-    cell(grid, 0, row, "<i>key</i>", 1, 0);
-    cell(grid, 1, row, "<i>action</i>", 1, 0);
-    cell(grid, 2, row++, "<i>what it does</i>", 1, 0);
+    cell(grid, 0, row, 1, "<i>key</i>", 1, 0);
+    cell(grid, 1, row, 1, "<i>action</i>", 1, 0);
+    cell(grid, 2, row++, 1, "<i>what it does</i>", 1, 0);
     for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++) {
         const action_def *d = &ACTIONS[k];
         GString *keys = g_string_new("");
@@ -1018,13 +1019,15 @@ static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
             GdkModifierType mods;
             if (gtk_accelerator_parse(d->keys[j], &key, &mods)) {
                 char *label = gtk_accelerator_get_label(key, mods);
+                /* a letter alone is the lower-case key (GTK writes it in capitals, like Shift+A's) */
+                if (!mods && label[0] && !label[1]) label[0] = (char)g_ascii_tolower(label[0]);
                 g_string_append_printf(keys, "%s%s", j ? ", " : "", label);
                 g_free(label);
             }
         }
-        cell(grid, 0, row, keys->str, 0, 0);
-        cell(grid, 1, row, d->fn ? d->name : "", 0, 0);
-        GtkWidget *help = cell(grid, 2, row++, d->help, 0, 0);
+        cell(grid, 0, row, 1, keys->str, 0, 0);
+        cell(grid, 1, row, 1, d->fn ? d->name : "", 0, 0);
+        GtkWidget *help = cell(grid, 2, row++, 1, d->help, 0, 0);
         gtk_label_set_wrap(GTK_LABEL(help), TRUE);
         gtk_label_set_max_width_chars(GTK_LABEL(help), 60);
         gtk_label_set_width_chars(GTK_LABEL(help), 40);

@@ -383,7 +383,10 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     if (w->drawn == 1) {
         view_pick_prepare(a);
         /* the state a test waits for (instead of sleeping): this window is up and drawn */
-        if (a->vo->verbose > 0) fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels)\n", w->id, fb_w, fb_h);
+        graphene_point_t at = GRAPHENE_POINT_INIT(0, 0), in;
+        if (!gtk_widget_compute_point(GTK_WIDGET(area), w->window, &at, &in)) in = at;
+        if (a->vo->verbose > 0)
+            fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels, at %.0f,%.0f in the window)\n", w->id, fb_w, fb_h, in.x, in.y);
     }
     return TRUE;
 }

@@ -278,6 +278,16 @@ static void fail(view_app *a, const char *fmt, const char *arg)
     a->status = 1;
 }
 
+/* A GTK 4 window keeps the largest size it had: after the panel is hidden, a default size below its
+ * minimum makes it take the minimum again, the drawing area's --size (set once the panel's hiding
+ * is laid out; unset again when it is shown, so that the next hiding is a change). */
+static gboolean shrink_window(gpointer user)
+{
+    view_win *w = user;
+    gtk_window_set_default_size(GTK_WINDOW(w->window), 1, 1);
+    return G_SOURCE_REMOVE;
+}
+
 static void act_panel(view_app *a, GSimpleAction *act, GVariant *v)
 {
     int on = g_variant_get_boolean(v);
@@ -285,10 +295,13 @@ static void act_panel(view_app *a, GSimpleAction *act, GVariant *v)
     for (int k = 0; k < a->n_win; k++) {
         view_win *w = a->win[k];
         if (!w->panel) continue;
-        gtk_widget_set_visible(w->panel->root, on);
+        if (gtk_widget_get_visible(w->panel->root) == on) continue;
         /* the drawing area keeps its size: the window grows by the panel, and shrinks back after */
-        if (!on) gtk_window_set_default_size(GTK_WINDOW(w->window), 1, 1);
+        gtk_widget_set_visible(w->panel->root, on);
+        if (!on) g_idle_add(shrink_window, w);
+        else gtk_window_set_default_size(GTK_WINDOW(w->window), -1, -1);
     }
+    view_set_info(a, "side panel %s", on ? "shown (F9 hides it)" : "hidden");
     view_panel_refresh(a);
 }
 
@@ -756,6 +769,16 @@ static void on_slice_add(GtkWidget *b, gpointer user)
     run(p->w, "slice-add", g_variant_new_string(spec));
 }
 
+/* A new slice's position starts at the model's middle along the axis chosen. */
+static void on_axis(GObject *dd, GParamSpec *ps, gpointer user)
+{
+    view_panel *p = user;
+    double lo[3], hi[3];
+    guint k = gtk_drop_down_get_selected(GTK_DROP_DOWN(dd));
+    thx_picture_bounds(&p->w->app->d, lo, hi);
+    if (k < 3) gtk_spin_button_set_value(GTK_SPIN_BUTTON(p->slice_pos), round(0.5 * (lo[k] + hi[k])));
+}
+
 static void on_slice_move(GtkWidget *b, gpointer user)
 {
     view_panel *p = user;
@@ -867,6 +890,21 @@ static GtkWidget *entry(GtkWidget *r, const char *placeholder, int chars)
     return e;
 }
 
+/* Typing into the panel's fields: a key that types text is the field's, not the viewer's (`6` is a
+ * digit there, not the inferior view): the window's first look at a key hands it to the field
+ * (the application's keys would otherwise take it first). Keys with Control or Alt, F1-F12 and
+ * Escape stay the viewer's. */
+static gboolean on_key(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mods, gpointer user)
+{
+    view_win *w = user;
+    GtkWidget *f = gtk_root_get_focus(GTK_ROOT(w->window));
+    if (!f || !GTK_IS_TEXT(f) || (mods & (GDK_CONTROL_MASK | GDK_ALT_MASK | GDK_SUPER_MASK | GDK_META_MASK)) ||
+        (key >= GDK_KEY_F1 && key <= GDK_KEY_F12) || key == GDK_KEY_Escape)
+        return FALSE;
+    gtk_event_controller_key_forward(c, f);
+    return TRUE;
+}
+
 void view_panel_attach(view_win *w, GtkWidget *box)
 {
     view_panel *p = calloc(1, sizeof *p);
@@ -900,20 +938,23 @@ void view_panel_attach(view_win *w, GtkWidget *box)
     static const char *axes[] = {"x =", "y =", "z =", NULL};
     p->slice_axis = gtk_drop_down_new_from_strings(axes);
     gtk_drop_down_set_selected(GTK_DROP_DOWN(p->slice_axis), 2);
+    g_signal_connect(p->slice_axis, "notify::selected", G_CALLBACK(on_axis), p);
     gtk_box_append(GTK_BOX(r), p->slice_axis);
     p->slice_pos = gtk_spin_button_new_with_range(-10000, 10000, 1);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(p->slice_pos), 1);
+    gtk_editable_set_width_chars(GTK_EDITABLE(p->slice_pos), 6);
     gtk_widget_set_hexpand(p->slice_pos, TRUE);
     gtk_box_append(GTK_BOX(r), p->slice_pos);
     button(r, "Add", G_CALLBACK(on_slice_add), p);
+    on_axis(G_OBJECT(p->slice_axis), NULL, p);
+    hint(c, "Move the selected slice along its normal (mm), or Ctrl+Shift+drag it in the view:");
     r = row(c);
-    gtk_box_append(GTK_BOX(r), gtk_label_new("Move the selected"));
     static const char *steps[] = {"-10", "-1", "+1", "+10"};
     for (int k = 0; k < 4; k++) {
         GtkWidget *b = button(r, steps[k], G_CALLBACK(on_slice_move), p);
+        gtk_widget_set_hexpand(b, TRUE);
         g_object_set_data(G_OBJECT(b), "mm", (gpointer)steps[k]);
     }
-    hint(c, "mm along its normal; Ctrl+Shift+drag in the view moves it too.");
 
     c = p->cut_boxes[2];
     heading(c, "Streamline seeds");
@@ -966,6 +1007,10 @@ void view_panel_attach(view_win *w, GtkWidget *box)
     gtk_widget_set_visible(p->root, FALSE);
     gtk_box_append(GTK_BOX(box), p->root);
 
+    GtkEventController *keys = gtk_event_controller_key_new();
+    gtk_event_controller_set_propagation_phase(keys, GTK_PHASE_CAPTURE);
+    g_signal_connect(keys, "key-pressed", G_CALLBACK(on_key), w);
+    gtk_widget_add_controller(w->window, keys);
     GtkGesture *drag = gtk_gesture_drag_new();
     g_signal_connect(drag, "drag-begin", G_CALLBACK(plot_drag_begin), w);
     g_signal_connect(drag, "drag-update", G_CALLBACK(plot_drag_update), w);
