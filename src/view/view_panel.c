@@ -911,7 +911,11 @@ void view_panel_attach(view_win *w, GtkWidget *box)
     if (!p) return;
     w->panel = p;
     p->w = w;
-    if (w->app->cuts.rake_n < 2) w->app->cuts.rake_n = 10;
+    if (w->app->cuts.rake_n < 2) { /* the first window: the tools' defaults */
+        w->app->cuts.rake_n = 10;
+        /* range auto goes back to the scope a fixed range replaced; fixed from the start: the series' */
+        w->app->cuts.scope_auto = w->o.scope != THX_SCOPE_FIXED ? w->o.scope : THX_SCOPE_SERIES;
+    }
     GtkWidget *col = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
     gtk_widget_set_margin_start(col, 10);
     gtk_widget_set_margin_end(col, 10);
@@ -1007,6 +1011,10 @@ void view_panel_attach(view_win *w, GtkWidget *box)
     gtk_widget_set_visible(p->root, FALSE);
     gtk_box_append(GTK_BOX(box), p->root);
 
+    /* the traces at their own size under the drawing area (a GtkPicture given more room scales its
+       image up, blurred, and centres it under the drawing area and the panel) */
+    gtk_widget_set_halign(w->plot, GTK_ALIGN_START);
+    gtk_widget_set_valign(w->plot, GTK_ALIGN_START);
     GtkEventController *keys = gtk_event_controller_key_new();
     gtk_event_controller_set_propagation_phase(keys, GTK_PHASE_CAPTURE);
     g_signal_connect(keys, "key-pressed", G_CALLBACK(on_key), w);

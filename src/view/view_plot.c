@@ -78,8 +78,11 @@ int view_plot_time_at(view_win *w, double x, double *t)
 {
     const GdkPaintable *p = gtk_picture_get_paintable(GTK_PICTURE(w->plot));
     if (!p) return -1;
-    int iw = gdk_paintable_get_intrinsic_width((GdkPaintable *)p);
-    x -= 0.5 * (gtk_widget_get_width(w->plot) - iw); /* the image is centred in the pane */
+    int iw = gdk_paintable_get_intrinsic_width((GdkPaintable *)p), ih = gdk_paintable_get_intrinsic_height((GdkPaintable *)p);
+    double ww = gtk_widget_get_width(w->plot), wh = gtk_widget_get_height(w->plot);
+    double scale = iw > 0 && ih > 0 ? fmin(ww / iw, wh / ih) : 1; /* the image as GtkPicture shows it: fitted, centred */
+    if (!(scale > 0)) scale = 1;
+    x = (x - 0.5 * (ww - scale * iw)) / scale;
     size_t f0, f1;
     double px, pw;
     const thx_series *s = plot_axis(w, iw, &f0, &f1, &px, &pw);
