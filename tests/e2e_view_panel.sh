@@ -128,11 +128,19 @@ waitfor $T eval '[ "$(geom)" != "$G0" ]' || { kill $VP; fail "the window did not
 G1=$(geom)
 painted() { xwd -id "$W" -out panel.xwd && $PY -c 'import sys; sys.path.insert(0, "."); from xwd import xwd; sys.exit(0 if xwd("panel.xwd")[:, -200:].mean() > 100 else 1)'; }
 waitfor $T painted || { kill $VP; fail "the panel was not drawn"; }
+# the drawing area on the screen (rows OY.. of the window, 400 x 267 after the trace pane took its
+# room) before the value is typed, and after: it changes with no other event (redrawn at once)
+area() { xwd -id "$W" -out area.xwd && $PY -c 'import sys, numpy as np; sys.path.insert(0, "."); from xwd import xwd
+np.save(sys.argv[1], xwd("area.xwd")[int(sys.argv[2]):int(sys.argv[2]) + 267, :400])' "$1" "$OY"; }
+changed() { area after.npy && $PY -c 'import sys, numpy as np; a, b = np.load("before.npy"), np.load("after.npy")
+sys.exit(0 if (np.abs(a - b).sum(axis=2) > 30).sum() > 100 else 1)'; }
+area before.npy
 xdotool mousemove --window "$W" $((OX + 490)) $((OY + 120)) click 1
 sleep 0.3
 xdotool type --window "$W" "0.6"
 xdotool key --window "$W" Return
 waitfor $T said k.err "equipotentials: -0.3,0.3,0.6" || { cat k.err; kill $VP; fail "0.6 typed into the panel did not add the value"; }
+waitfor $T changed || { kill $VP; fail "the window did not show the new equipotential"; }
 ! said k.err "inferior view" || { kill $VP; fail "6 typed into the panel's field turned the view"; }
 key F9
 waitfor $T said k.err "side panel hidden" || { kill $VP; fail "F9 did not hide the panel"; }
