@@ -6,7 +6,7 @@
 #     after is thorax render's of the new options, not of the old ones); removing what was added
 #     gives the same pixels; saved sessions hold the new --isosurface, --slice, --streamlines and
 #     --scope fixed:LO:HI; a value outside the potentials and a slice missing the volume stop the
-#     script naming the line;
+#     script naming the line; a viewer opened without a cut reads the volume potentials at the first;
 #  b. real input (xdotool): F9 shows the panel (the window grows by it, the drawing area keeps its
 #     size) and hides it (the window back to its size); a value typed into the panel's field is the
 #     field's (6 is not the inferior view); the colour bar's top end dragged fixes the range, a
@@ -60,6 +60,8 @@ R=(--solution sol --frame 7 --size 400x400 --colorbar --scope fixed:-1.5:1.5)
     echo "action save-session $PWD/s3.txt"
     echo "quit"
 } > a.txt
+# opened without a cut: the first one reads the volume potentials then
+{ head -5 a.txt; echo "action isovalue-add 0.3"; echo "action screenshot $PWD/c1.png"; echo quit; } > c.txt
 { head -6 a.txt; echo "action isovalue-add 5"; echo quit; } > bad1.txt
 { head -6 a.txt; echo "action slice-add z=9999"; echo quit; } > bad2.txt
 
@@ -83,6 +85,7 @@ waitfor() { local end=$((SECONDS + $1)); shift; until "$@" > /dev/null 2>&1; do 
 gone() { ! kill -0 "$1" 2>/dev/null; }
 said() { grep -q -- "$2" "$1"; }
 timeout 120 "$THORAX" view --script a.txt > a.out 2> a.err || { cat a.err; fail "the scripted session: exit $?"; }
+timeout 120 "$THORAX" view --script c.txt > c.out 2> c.err || { cat c.err; fail "a first cut without the volume potentials read: exit $?"; }
 for b in bad1 bad2; do
     if timeout 60 "$THORAX" view --script $b.txt > $b.out 2> $b.err; then fail "$b.txt: exit 0"; fi
 done
@@ -216,6 +219,7 @@ for k, new, old, what in ((1, 1, 0, "--isosurface line"), (2, 2, 1, "isovalue-ad
     print(f"a. {what}: {dn} pixels differ from render of the new options, {do} from the old")
     assert do > 400 and dn < do / 4 and dn < 0.02 * 304 * 400, (what, dn, do)   # (the edges: no FXAA in the window)
 assert np.array_equal(a[3], a[1]), "isovalue-remove did not give the picture before isovalue-add"
+assert np.array_equal(png("c1.png"), a[0]), "the first cut of a viewer opened without one is not the picture opened with it"
 s1, s2, s3 = opts("s1.txt"), opts("s2.txt"), opts("s3.txt")
 assert "--isosurface -0.3,0.3" in s1 and "--slice y=15" in s1, s1
 assert "--scope fixed:-1:1" in s2 and "--streamlines density:40" in s2 and not any(o.startswith("--slice") for o in s2), s2

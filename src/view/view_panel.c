@@ -390,7 +390,6 @@ static void act_seed(view_app *a, const char *name, GSimpleAction *act, GVariant
         const char *s = g_variant_get_string(v, NULL);
         int t = !strcmp(s, "none") ? 0 : !strcmp(s, "point") ? 1 : !strcmp(s, "rake") ? 2 : -1;
         if (t < 0) { fail(a, "seed-tool '%s': none, point or rake", s); return; }
-        if (t && !a->d.volume) { fail(a, "seed-tool %s: the streamlines need the volume potentials (open with a cut of --solution)", s); return; }
         a->cuts.seed_tool = t;
         a->cuts.have_rake_a = 0;
         g_simple_action_set_state(act, g_variant_new_string(s));
@@ -450,9 +449,12 @@ void view_panel_action(view_app *a, GSimpleAction *act, GVariant *v)
         set_range(a, 1, lo, hi);
         return;
     }
-    if (strcmp(name, "seed-tool") && !a->d.volume) {
-        fail(a, "%s: the cuts need the solution's volume potentials, read at the start: open with --solution and a cut "
-                "(--isosurface, --slice or --streamlines)", name);
+    /* the volume potentials, read at the first cut (without a cut at the start they were not) */
+    if ((strcmp(name, "seed-tool") || strcmp(g_variant_get_string(v, NULL), "none")) &&
+        thx_picture_volume_load(a->ctx, &a->win[0]->o, &a->d, name) != THX_OK) {
+        view_report(a, name);
+        a->status = 1;
+        view_panel_refresh(a);
         return;
     }
     if (!strcmp(name, "isosurface")) {
@@ -1052,10 +1054,10 @@ static void refresh_one(view_panel *p)
     view_app *a = p->w->app;
     const thx_picture_opts *o = &p->w->o;
     p->refreshing = 1;
-    int vol = a->d.volume != NULL;
-    gtk_label_set_text(GTK_LABEL(p->note), vol ? "" : "The equipotentials, slices and streamlines need the solution's volume "
-                                                     "potentials, read at the start: open with --solution and a cut "
-                                                     "(--isosurface, --slice or --streamlines).");
+    int vol = a->d.volume || o->solution; /* (read at the first cut) */
+    gtk_label_set_text(GTK_LABEL(p->note), vol ? "" : "The equipotentials, slices and streamlines need a solution with "
+                                                     "volume potentials (--solution DIR; thorax forward --volume makes "
+                                                     "them).");
     gtk_widget_set_visible(p->note, !vol);
     for (int k = 0; k < 3; k++) gtk_widget_set_sensitive(p->cut_boxes[k], vol);
     clear(p->iso_list);

@@ -65,10 +65,9 @@ static int run_line(view_app *a, const char *text, int line, int *wait_ms)
         for (int k = 0; k < a->n_win; k++) {
             thx_picture_opts o = a->win[k]->o;
             if (a->vo->option_fn(a->vo->option_user, &o, buf)) { script_fail(a, line, "'%s': see the message above", buf); return -1; }
-            if ((o.isosurface || o.n_slices || o.n_streamlines) && !a->d.volume) {
-                /* the volume potentials are read at the start only when a cut is asked for there */
-                script_fail(a, line, "'%s': the volume potentials were not read at the start: give --isosurface, --slice "
-                            "or --streamlines on the command line or at the head of the script", buf);
+            /* the volume potentials are read at the start only when a cut is asked for there: now, else */
+            if ((o.isosurface || o.n_slices || o.n_streamlines) && thx_picture_volume_load(a->ctx, &o, &a->d, buf) != THX_OK) {
+                script_fail(a, line, "%s", thx_ctx_message(a->ctx));
                 return -1;
             }
             if (o.clip[0] && thx_picture_clip_check(a->ctx, &o, &a->d) != THX_OK) {

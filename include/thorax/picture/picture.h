@@ -358,6 +358,11 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
  * drawn without a word). thx_picture_load calls it; the viewer again for a script's --clip. */
 thx_status thx_picture_clip_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d);
 
+/* The solution's volume potentials read now, when thx_picture_load did not read them (no cut was
+ * asked for then): a viewer's first cut. Nothing when they are read; THX_EINPUT naming `what` (the
+ * option or action asking) when o has no solution, or a solution without them (thorax forward
+ * --volume makes them). */
+thx_status thx_picture_volume_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const char *what);
 /* The cuts o asks for (isosurface, slices, streamlines) checked against the volume potentials read
  * at load, as thx_picture_load checks them: a bad specification, a slice that misses the volume or
  * a value outside every frame's potentials is THX_EINPUT naming the option; cuts without the volume
