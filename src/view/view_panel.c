@@ -642,6 +642,7 @@ int view_panel_click(view_win *w, double x, double y)
     view_app *a = w->app;
     if (!a->cuts.seed_tool || !a->d.volume) return 0;
     double p[3], dir[3], q[3], lo[3], hi[3];
+    gint64 t0 = g_get_monotonic_time();
     if (!view_pick_point(w, x, y, p, dir)) { view_set_info(a, "seed: no surface under the pointer"); return 1; }
     /* the point hit is on a surface, the volume's boundary: the seed goes just inside, along the ray
        (beyond a surface facing the viewer, before one met from inside) */
@@ -672,7 +673,7 @@ int view_panel_click(view_win *w, double x, double y)
     int before = a->status;
     g_action_group_activate_action(G_ACTION_GROUP(a->gapp), "seed-add", g_variant_new_string(spec));
     a->status = before; /* a click's failure is the status line's, not the exit status's */
-    if (a->vo->verbose >= 0) printf("seed: %s\n", spec);
+    if (a->vo->verbose >= 0) printf("seed: %s (placed in %.1f ms)\n", spec, (double)(g_get_monotonic_time() - t0) / 1000.0);
     fflush(stdout);
     return 1;
 }
