@@ -133,6 +133,7 @@ void view_plot_update(view_app *a)
         if (trace_h > TRACE_H) trace_h = TRACE_H;
         if (trace_h < TRACE_MIN_H) trace_h = TRACE_MIN_H;
         int height = trace_h * a->n_traces;
+        if (height < pane) height = pane; /* the pane's background under fewer traces than fill it */
         thx_raster *img = NULL;
         if (thx_raster_create(a->ctx, width, height, &img) != THX_OK) return;
         static const unsigned char bg[4] = {24, 24, 28, 255};
