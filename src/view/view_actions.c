@@ -1114,6 +1114,7 @@ GMenuModel *view_menu(void)
     add(view, "Fix the clip plane to the object", "app.clip-lock");
     add(view, "Colour bar", "app.colorbar");
     add(view, "Time label", "app.label");
+    add(view, "Side panel", "app.panel");
     add(view, "Keys", "app.shortcuts");
     g_menu_append_submenu(bar, "View", G_MENU_MODEL(view));
     GMenu *surf = g_menu_new();

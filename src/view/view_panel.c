@@ -18,6 +18,7 @@
  *     activation map from it.
  */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -270,10 +271,15 @@ static void set_range(view_app *a, int fixed, double lo, double hi)
 
 /* ---- the actions (the table in view_actions.c names them) ---- */
 
-static void fail(view_app *a, const char *fmt, const char *arg)
+/* An action refused: the status line says why, and a script stops at its line. */
+static void fail(view_app *a, const char *fmt, ...) G_GNUC_PRINTF(2, 3);
+static void fail(view_app *a, const char *fmt, ...)
 {
     char msg[512];
-    snprintf(msg, sizeof msg, fmt, arg);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
     view_set_info(a, "%s", msg);
     a->status = 1;
 }
@@ -309,7 +315,8 @@ static void act_isovalue(view_app *a, const char *name, double x)
 {
     double v[MAX_ISO + 1];
     int n = iso_values(a, v, MAX_ISO), at = -1;
-    double lo = a->d.vmin, hi = a->d.vmax, tol = 1e-9 * fmax(fabs(lo), fabs(hi));
+    /* a value as listed (6 digits) is the value: the list shows them so */
+    double tol = 1e-6 * fmax(fabs(x), fmax(fabs(a->d.vmin), fabs(a->d.vmax)));
     for (int k = 0; k < n; k++)
         if (fabs(v[k] - x) <= tol) at = k;
     char s[64];
@@ -322,8 +329,7 @@ static void act_isovalue(view_app *a, const char *name, double x)
         if (at < 0) {
             char list[1024];
             format_list(v, n, list, sizeof list);
-            view_set_info(a, "isovalue-remove %s: not among the values (%.400s)", s, n ? list : "none");
-            a->status = 1;
+            fail(a, "isovalue-remove %s: not among the values (%.400s)", s, n ? list : "none");
             return;
         }
         v[at] = v[--n];
@@ -354,7 +360,7 @@ static void act_slice(view_app *a, const char *name, GVariant *v)
     if (!strcmp(name, "slice-move")) {
         double mm = g_variant_get_double(v);
         int k = a->cuts.slice_sel;
-        if (k >= ns) { fail(a, "slice-move: no slice (slice-add x=MM|y=MM|z=MM|P:N)%s", ""); return; }
+        if (k >= ns) { fail(a, "slice-move: no slice (slice-add x=MM|y=MM|z=MM|P:N)"); return; }
         char moved[96];
         if (move_plane(sl[k], mm, moved, sizeof moved)) { fail(a, "slice-move: cannot move the plane %s", sl[k]); return; }
         snprintf(sl[k], sizeof sl[k], "%s", moved);
@@ -363,11 +369,8 @@ static void act_slice(view_app *a, const char *name, GVariant *v)
     }
     int k = g_variant_get_int32(v);
     if (k < 1 || k > ns) {
-        char s[32];
-        snprintf(s, sizeof s, "%d", k);
-        char msg[128];
-        snprintf(msg, sizeof msg, "%s %s: the slices are 1 to %d", name, s, ns);
-        fail(a, "%s", msg);
+        if (ns) fail(a, "%s %d: the slices are 1 to %d", name, k, ns);
+        else fail(a, "%s %d: there is no slice (slice-add)", name, k);
         return;
     }
     if (!strcmp(name, "slice-select")) {
@@ -410,9 +413,9 @@ static void act_seed(view_app *a, const char *name, GSimpleAction *act, GVariant
         int at = -1;
         for (int j = 0; j < nse; j++)
             if (!strncmp(se[j], "density:", 8)) at = j;
-        if (k < 0 || k > 100000) { fail(a, "seed-density %s: 0 (none) to 100000", k < 0 ? "below 0" : "above 100000"); return; }
+        if (k < 0 || k > 100000) { fail(a, "seed-density %d: 0 (none) to 100000", k); return; }
         if (at < 0 && k == 0) return;
-        if (at < 0 && nse == 4) { fail(a, "seed-density: 4 seed specifications at most (seed-remove K)%s", ""); return; }
+        if (at < 0 && nse == 4) { fail(a, "seed-density: 4 seed specifications at most (seed-remove K)"); return; }
         if (at < 0) at = nse++;
         snprintf(se[at], sizeof se[at], "density:%d", k);
         if (k == 0) {
@@ -423,9 +426,8 @@ static void act_seed(view_app *a, const char *name, GSimpleAction *act, GVariant
         return;
     }
     if (k < 1 || k > nse) {
-        char s[64];
-        snprintf(s, sizeof s, "%d: the seeds are 1 to %d", k, nse);
-        fail(a, "seed-remove %s", s);
+        if (nse) fail(a, "seed-remove %d: the seed specifications are 1 to %d", k, nse);
+        else fail(a, "seed-remove %d: there are no seeds (seed-add, seed-density)", k);
         return;
     }
     for (int j = k - 1; j + 1 < nse; j++) memcpy(se[j], se[j + 1], sizeof se[j]);
