@@ -230,8 +230,11 @@ int cmd_view(int argc, char **argv)
                  "the trace pane keeps the window's size and scrolls). `a` the activation map from the\n"
                  "record's fiducials, else one beat's QRS (never a multi-beat record's whole), `a` again the\n"
                  "potentials; Shift+A the recovery map. The window shows what thorax render draws from the\n"
-                 "same options (--size is the drawing area). `?` lists the keys; every key and menu item is\n"
-                 "an action a script line `action NAME [VALUE]` runs alike. Needs a display (or xvfb-run).\n",
+                 "same options (--size is the drawing area). F9 shows a side panel for the equipotentials,\n"
+                 "slices, streamline seeds, colour range and activation window (the colour bar's ends and\n"
+                 "the values' marks drag too). `?` lists the keys and mouse gestures; every key and menu\n"
+                 "item is an action a script line `action NAME [VALUE]` runs alike. Needs a display (or\n"
+                 "xvfb-run).\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how (as thorax render)", common, render_options(common, &o.r)}},
         .positional = render_positional,
         .user = &o,
