@@ -139,7 +139,7 @@ changed() { area after.npy && $PY -c 'import sys, numpy as np; a, b = np.load("b
 sys.exit(0 if (np.abs(a - b).sum(axis=2) > 30).sum() > 100 else 1)'; }
 area before.npy
 xdotool mousemove --window "$W" $((OX + 490)) $((OY + 120)) click 1
-sleep 0.3
+waitfor $T said k.err "a field of the panel has the keyboard" || { kill $VP; fail "a click on the panel's value field"; }
 xdotool type --window "$W" "0.6"
 xdotool key --window "$W" Return
 waitfor $T said k.err "equipotentials: -0.3,0.3,0.6" || { cat k.err; kill $VP; fail "0.6 typed into the panel did not add the value"; }

@@ -916,6 +916,15 @@ static gboolean on_key(GtkEventControllerKey *c, guint key, guint code, GdkModif
     return TRUE;
 }
 
+/* Under -v, a field of the panel taking the keyboard is said (a test types once it has it). */
+static void on_focus(GObject *win, GParamSpec *ps, gpointer user)
+{
+    view_win *w = user;
+    GtkWidget *f = gtk_root_get_focus(GTK_ROOT(win));
+    if (w->app->vo->verbose > 0 && f && GTK_IS_TEXT(f) && w->panel && gtk_widget_is_ancestor(f, w->panel->root))
+        fprintf(stderr, "thorax view: window %d: a field of the panel has the keyboard\n", w->id);
+}
+
 void view_panel_attach(view_win *w, GtkWidget *box)
 {
     view_panel *p = calloc(1, sizeof *p);
@@ -1026,6 +1035,7 @@ void view_panel_attach(view_win *w, GtkWidget *box)
        image up, blurred, and centres it under the drawing area and the panel) */
     gtk_widget_set_halign(w->plot, GTK_ALIGN_START);
     gtk_widget_set_valign(w->plot, GTK_ALIGN_START);
+    g_signal_connect(w->window, "notify::focus-widget", G_CALLBACK(on_focus), w);
     GtkEventController *keys = gtk_event_controller_key_new();
     gtk_event_controller_set_propagation_phase(keys, GTK_PHASE_CAPTURE);
     g_signal_connect(keys, "key-pressed", G_CALLBACK(on_key), w);
