@@ -11,8 +11,9 @@
 #     size) and hides it (the window back to its size); a value typed into the panel's field is the
 #     field's (6 is not the inferior view); the colour bar's top end dragged fixes the range, a
 #     value's mark dragged moves the value, Ctrl+Shift+drag moves the selected slice, a click with
-#     the seed tool seeds a streamline inside the volume, a drag across the traces is the
-#     activation window; the session saved by Ctrl+Shift+S has them all;
+#     the seed tool seeds a streamline inside the volume (two clicks a rake), a drag across the
+#     traces is the activation window (nine windows in turn: each replaces the last); the session
+#     saved by Ctrl+Shift+S has them all;
 #  c. the keys window (`?`): nothing cut off at the default Xvfb screen (the list as wide as its
 #     view, the window on the screen), no text selected, the mouse's gestures listed; and every
 #     action of the table is in docs/cli.md.
@@ -62,6 +63,8 @@ R=(--solution sol --frame 7 --size 400x400 --colorbar --scope fixed:-1.5:1.5)
 } > a.txt
 # opened without a cut: the first one reads the volume potentials then
 { head -5 a.txt; echo "action isovalue-add 0.3"; echo "action screenshot $PWD/c1.png"; echo quit; } > c.txt
+# nine activation windows one after another (a surface holds eight data sets: each replaces the last)
+{ head -5 a.txt; for t in 30 40 50 60 70 80 90 100 110; do echo "action activation $t:$((t + 120))"; done; echo quit; } > w.txt
 { head -6 a.txt; echo "action isovalue-add 5"; echo quit; } > bad1.txt
 { head -6 a.txt; echo "action slice-add z=9999"; echo quit; } > bad2.txt
 
@@ -86,6 +89,7 @@ gone() { ! kill -0 "$1" 2>/dev/null; }
 said() { grep -q -- "$2" "$1"; }
 timeout 120 "$THORAX" view --script a.txt > a.out 2> a.err || { cat a.err; fail "the scripted session: exit $?"; }
 timeout 120 "$THORAX" view --script c.txt > c.out 2> c.err || { cat c.err; fail "a first cut without the volume potentials read: exit $?"; }
+timeout 120 "$THORAX" view --script w.txt > w.out 2> w.err || { cat w.err; fail "nine activation windows: exit $?"; }
 for b in bad1 bad2; do
     if timeout 60 "$THORAX" view --script $b.txt > $b.out 2> $b.err; then fail "$b.txt: exit 0"; fi
 done
@@ -186,6 +190,18 @@ key ctrl+shift+s
 waitfor $T test -s thorax-view-session.txt || { kill $VP; fail "Ctrl+Shift+S"; }
 key ctrl+q 2>/dev/null || true
 waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit"; }
+# a rake: two clicks, its ends
+{ head -7 k.txt; echo "action seed-tool rake"; echo "wait 300000"; } > r.txt
+"$THORAX" view --script r.txt -v > r.out 2> r.err &
+VP=$!
+waitfor $T said r.err "seed tool: two clicks" || { cat r.err; kill $VP; fail "the rake's set-up"; }
+W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
+xdotool mousemove --window "$W" $(at 120 200) click 1
+waitfor $T said r.err "rake: one end at" || { tail r.err; kill $VP; fail "the rake's first click"; }
+xdotool mousemove --window "$W" $(at 200 120) click 1
+waitfor $T said r.out "^seed: line:" || { tail r.err; kill $VP; fail "the rake's second click"; }
+key ctrl+q 2>/dev/null || true
+waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit the rake's viewer"; }
 echo "inside: passed"
 INNER
 PY="$PY" THORAX="$THORAX" xvfb-run -a bash inside.sh 2>&1 | grep -v "dbus\|session bus\|^$" | tee inside.out || true
@@ -240,6 +256,11 @@ z = float(get("--slice")[0].split("=")[1])
 assert abs(z - (110 + 20 * mmpp)) < 1.5 * mmpp, (z, mmpp)
 seed = get("--streamlines")
 assert len(seed) == 1 and seed[0].startswith("point:"), seed
+rake = [l for l in open("r.out") if l.startswith("seed: line:")][0]
+assert rake.split()[1].endswith(":10"), rake            # the panel's default: 10 seeds along it
+wins = [l for l in open("w.out") if l.startswith("activation:")]
+assert len(wins) == 9 and "window 110-230" in wins[-1], wins
+print(f"b. a rake: {rake.split()[1]}; nine activation windows in turn, the last {wins[-1].split('|')[1].strip()}")
 act = [l for l in open("k.out") if l.startswith("activation:")]
 m = re.search(r"window ([-\d.]+)-([-\d.]+) ms \(as given\)", act[-1])
 t0, t1 = float(m.group(1)), float(m.group(2))
