@@ -82,7 +82,17 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     d->vmax = -INFINITY;
     picture_range_of(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
     if (!(d->vmin <= d->vmax)) return thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
-    /* the specifications checked once (the values against the series' range), the option named */
+    return thx_picture_cuts_check(ctx, o, d);
+}
+
+thx_status thx_picture_cuts_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d)
+{
+    if (!d->volume) {
+        if (!picture_has_field(o)) return THX_OK;
+        return thx_error(ctx, THX_EINPUT, "%s: the volume potentials were not read (give a cut with the --solution at the start)",
+                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
+    }
+    /* the specifications checked (the values against the series' range), the option named */
     thx_status st = THX_OK;
     const char *opt = "--slice";
     for (int k = 0; k < o->n_slices && st == THX_OK; k++) {

@@ -241,6 +241,49 @@ static thx_status apply_channels(thx_ctx *ctx, const char *path, thx_series **sp
     return THX_OK;
 }
 
+/* The volume potentials of the solution whose solution.json is j (its files.volume) into d->volume,
+ * checked against the model's volume mesh; `what` asked for them (an option, in the messages). */
+static thx_status read_volume(thx_ctx *ctx, const thx_picture_opts *o, const cJSON *j, const char *what, thx_picture_data *d)
+{
+    char path[PATH_MAX + 64];
+    const cJSON *files = cJSON_GetObjectItem(j, "files"), *vo = files ? cJSON_GetObjectItem(files, "volume") : NULL;
+    if (!cJSON_IsString(vo))
+        return thx_error(ctx, THX_EINPUT, "%s: %s needs the volume potentials: run thorax forward ... --volume", o->solution, what);
+    if (!d->m->volume) return thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, d->model_dir);
+    snprintf(path, sizeof path, "%s/%s", o->solution, vo->valuestring);
+    THX_CHECK(thx_series_read(ctx, path, THX_SERIES_AUTO, &d->volume));
+    if (d->volume->n_rows != d->m->volume->n_nodes)
+        return thx_error(ctx, THX_EINPUT, "%s: %zu rows, the model's volume mesh has %zu nodes", path, d->volume->n_rows,
+                         d->m->volume->n_nodes);
+    return THX_OK;
+}
+
+thx_status thx_picture_volume_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const char *what)
+{
+    if (d->volume) return THX_OK;
+    if (!o->solution) return thx_error(ctx, THX_EINPUT, "%s: needs --solution DIR (a solution with volume potentials)", what);
+    char path[PATH_MAX + 64], *text = NULL;
+    size_t len = 0;
+    snprintf(path, sizeof path, "%s/solution.json", o->solution);
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    cJSON *j = cJSON_Parse(text);
+    free(text);
+    if (!j) return thx_error(ctx, THX_EINPUT, "%s: not a thorax solution", path);
+    thx_status st = read_volume(ctx, o, j, what, d);
+    cJSON_Delete(j);
+    /* the range and the domain the cuts take (picture_field_load), for no cut yet */
+    thx_picture_opts none = *o;
+    none.isosurface = NULL;
+    none.n_slices = none.n_streamlines = 0;
+    if (st == THX_OK) st = picture_field_load(ctx, &none, d);
+    if (st != THX_OK) {
+        thx_series_destroy(&d->volume);
+        free(d->field_use);
+        d->field_use = NULL;
+    }
+    return st;
+}
+
 static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
 {
     memset(d, 0, sizeof *d);
@@ -281,21 +324,8 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         }
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
-        cJSON *vo = files ? cJSON_GetObjectItem(files, "volume") : NULL;
-        if (st == THX_OK && picture_has_field(o)) {
-            if (!cJSON_IsString(vo))
-                st = thx_error(ctx, THX_EINPUT, "%s: %s needs the volume potentials: run thorax forward ... --volume",
-                               o->solution, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
-            else {
-                snprintf(path, sizeof path, "%s/%s", o->solution, vo->valuestring);
-                st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->volume);
-            }
-            if (st == THX_OK && !d->m->volume)
-                st = thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, model_dir);
-            if (st == THX_OK && d->volume->n_rows != d->m->volume->n_nodes)
-                st = thx_error(ctx, THX_EINPUT, "%s: %zu rows, the model's volume mesh has %zu nodes", path,
-                               d->volume->n_rows, d->m->volume->n_nodes);
-        }
+        if (st == THX_OK && picture_has_field(o))
+            st = read_volume(ctx, o, j, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines", d);
         if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
@@ -474,6 +504,25 @@ thx_status thx_picture_add_map(thx_ctx *ctx, thx_picture_data *d, int s, int kin
     d->map_auto[s][k] = (unsigned char)chosen;
     thx_picture_set_active(d, s, k);
     return THX_OK;
+}
+
+int thx_picture_drop_set(thx_picture_data *d, int s, int k)
+{
+    if (s < 0 || s >= THX_PICTURE_SURFACES || k < 0 || k >= d->n_sets[s] || !d->map[s][k]) return -1;
+    int src = d->map_src[s][k] >= 0 ? d->map_src[s][k] : 0;
+    thx_series_destroy(&d->sets[s][k]);
+    for (int j = k; j + 1 < d->n_sets[s]; j++) {
+        d->sets[s][j] = d->sets[s][j + 1];
+        d->map[s][j] = d->map[s][j + 1];
+        d->map_src[s][j] = d->map_src[s][j + 1];
+        d->map_auto[s][j] = d->map_auto[s][j + 1];
+    }
+    d->n_sets[s]--;
+    d->sets[s][d->n_sets[s]] = NULL;
+    for (int j = 0; j < d->n_sets[s]; j++) /* the maps' sources after k moved down one */
+        if (d->map_src[s][j] > k) d->map_src[s][j]--;
+    if (src > k) src--;
+    return thx_picture_set_active(d, s, src);
 }
 
 int thx_picture_set_active(thx_picture_data *d, int s, int k)

@@ -530,7 +530,11 @@ static void do_map(view_app *a, GSimpleAction *act, GVariant *v)
     if (found >= 0) {
         thx_picture_set_active(d, s, found);
     } else {
-        if (d->map[s][d->active[s]]) thx_picture_set_active(d, s, src);
+        /* a window given replaces the map of a window given before (the panel, a drag on the traces:
+           one after another would fill the surface's data sets), else the potentials are mapped */
+        int k = d->active[s];
+        if (spec[0] && d->map[s][k] == kind && !d->map_auto[s][k]) thx_picture_drop_set(d, s, k);
+        else if (d->map[s][d->active[s]]) thx_picture_set_active(d, s, src);
         if (thx_picture_add_map(a->ctx, d, s, kind, t0, t1) != THX_OK) { view_report(a, what); a->status = 1; return; }
     }
     snprintf(kind == 1 ? a->act_spec[s] : a->rec_spec[s], sizeof a->act_spec[s], "%s", spec);
@@ -844,6 +848,20 @@ static const action_def ACTIONS[] = {
     {"bench-rotate", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N drawings each turned 1 degree"},
     {"bench-frames", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N frame steps"},
     {"bench-pick", "i", NULL, do_bench, {NULL}, NULL, "benchmark: N picks over a grid of the window"},
+    /* the side panel and what it edits (view_panel.c) */
+    {"panel", NULL, "b", view_panel_action, {"F9"}, NULL, "the side panel: equipotentials, slices, seeds, colour range, activation window"},
+    {"isosurface", "s", NULL, view_panel_action, {NULL}, NULL, "the equipotentials: a --isosurface list (values, count:N, P%), or none"},
+    {"isovalue-add", "d", NULL, view_panel_action, {NULL}, NULL, "an equipotential at this value (its mark on the colour bar drags)"},
+    {"isovalue-remove", "d", NULL, view_panel_action, {NULL}, NULL, "the equipotential at this value removed"},
+    {"slice-add", "s", NULL, view_panel_action, {NULL}, NULL, "a slice: x=MM, y=MM, z=MM or PX,PY,PZ:NX,NY,NZ (it becomes the selected)"},
+    {"slice-remove", "i", NULL, view_panel_action, {NULL}, NULL, "slice K removed (1-based)"},
+    {"slice-select", "i", NULL, view_panel_action, {NULL}, NULL, "slice K is the one slice-move and Ctrl+Shift+drag move"},
+    {"slice-move", "d", NULL, view_panel_action, {NULL}, NULL, "the selected slice moved along its normal (mm; Ctrl+Shift+drag)"},
+    {"seed-add", "s", NULL, view_panel_action, {NULL}, NULL, "streamline seeds: a --streamlines spec (point:X,Y,Z, line:A:B:N, ...)"},
+    {"seed-remove", "i", NULL, view_panel_action, {NULL}, NULL, "seed specification K removed (1-based)"},
+    {"seed-density", "i", NULL, view_panel_action, {NULL}, NULL, "N seeds spread by |J| (density:N; 0 none)"},
+    {"seed-tool", "s", "s", view_panel_action, {NULL}, NULL, "what a click does: none (picks a node), point (a seed), rake (two clicks: a line of seeds)"},
+    {"range", "s", NULL, view_panel_action, {NULL}, NULL, "the colour range fixed, LO:HI, or auto (drag the colour bar's ends)"},
     {"shortcuts", NULL, NULL, do_shortcuts, {"question", "F1"}, NULL, "this list"},
     {"quit", NULL, NULL, do_quit, {"<Control>q"}, NULL, "quit"},
 };
@@ -898,6 +916,7 @@ static GVariant *initial_state(view_app *a, const action_def *d)
                : !strcmp(d->name, "invert") ? o->invert : !strcmp(d->name, "extrema") ? o->extrema : 0;
         return g_variant_new_boolean(on);
     }
+    if (!strcmp(d->name, "seed-tool")) return g_variant_new_string("none");
     const char *s = !strcmp(d->name, "mode") ? mode_names[o->mode] : !strcmp(d->name, "style") ? style_names[o->style]
                   : !strcmp(d->name, "colormap") ? cmap_names[o->cmap] : !strcmp(d->name, "scale") ? scale_names[o->model]
                   : !strcmp(d->name, "mapping") ? mapping_names[o->mapping] : scope_names[o->scope];
@@ -938,49 +957,161 @@ void view_actions_install(view_app *a)
 
 /* ---- the keyboard overlay (`?`): the table above, as it is ---- */
 
+/* The mouse's gestures, the overlay's first part (docs/cli.md lists the same). */
+static const char *const GESTURES[][2] = {
+    {"drag", "turn the object (arcball; round the rim: about the line of sight)"},
+    {"Shift+drag, middle drag", "pan"},
+    {"wheel", "zoom"},
+    {"Ctrl+drag", "move the clip plane along its normal"},
+    {"Ctrl+Shift+drag", "move the selected slice along its normal (panel, slice-select)"},
+    {"click", "pick the node under the pointer: its ring, number and trace; with the seed tool a streamline seed "
+              "(rake: two clicks)"},
+    {"Alt+drag", "move the node under the pointer (an edit)"},
+    {"drag a colour bar's end", "fix the colour range there (symmetric mapping: both ends)"},
+    {"drag a value's mark", "move that equipotential (its mark on the equipotentials' colour bar)"},
+    {"drag across the traces", "the current surface's activation map from that time window"},
+    {"wheel over the traces", "zoom their time axis about the frame"},
+};
+
+/* A label of the overlay's grid at (col, row), spanning `span` columns, wrapped when wrap. */
+static GtkWidget *cell(GtkWidget *grid, int col, int row, int span, const char *text, int markup, int wrap)
+{
+    GtkWidget *l = gtk_label_new(NULL);
+    if (markup) gtk_label_set_markup(GTK_LABEL(l), text);
+    else gtk_label_set_text(GTK_LABEL(l), text);
+    gtk_label_set_selectable(GTK_LABEL(l), FALSE); /* nothing selected when the window opens */
+    gtk_label_set_xalign(GTK_LABEL(l), 0);
+    gtk_label_set_yalign(GTK_LABEL(l), 0);
+    if (wrap) {
+        gtk_label_set_wrap(GTK_LABEL(l), TRUE);
+        gtk_label_set_max_width_chars(GTK_LABEL(l), 70);
+        gtk_label_set_width_chars(GTK_LABEL(l), 50);
+    }
+    gtk_grid_attach(GTK_GRID(grid), l, col, row, span, 1);
+    return l;
+}
+
+/* Under -v, the window's size and its list's once they are laid out: a test checks that nothing is
+ * cut off (the list as wide as the window's view of it; only its height scrolls). */
+static gboolean keys_laid_out(GtkWidget *win, GdkFrameClock *clock, gpointer user)
+{
+    GtkWidget *grid = user;
+    int ww = gtk_widget_get_width(win), gw = gtk_widget_get_width(grid);
+    if (ww <= 0 || gw <= 0) return G_SOURCE_CONTINUE;
+    int min, nat;
+    gtk_widget_measure(grid, GTK_ORIENTATION_HORIZONTAL, -1, &min, &nat, NULL, NULL);
+    int hmin, hnat;
+    gtk_widget_measure(grid, GTK_ORIENTATION_VERTICAL, gw, &hmin, &hnat, NULL, NULL);
+    GtkWidget *scroll = gtk_widget_get_parent(gtk_widget_get_parent(grid));
+    fprintf(stderr, "thorax view: keys window %dx%d, its list %dx%d (needs at least %d wide), in view %dx%d\n", ww,
+            gtk_widget_get_height(win), gw, hnat, min, gtk_widget_get_width(scroll), gtk_widget_get_height(scroll));
+    return G_SOURCE_REMOVE;
+}
+
+/* The slice pane's gestures (view_slice.c), listed while tracing. */
+static const char *const PANE_GESTURES[][2] = {
+    {"click", "a point at the end of the open loop (region tool: the region's seed); on a coronal or sagittal plane: that axial plane"},
+    {"double click, or a click on the first point", "close the loop"},
+    {"drag a point", "move it (the current surface's, on this plane)"},
+    {"Shift+click on an edge", "insert a point there"},
+    {"Ctrl+click on a point", "delete it"},
+    {"wheel", "the next or previous plane (Ctrl+wheel: zoom)"},
+    {"right button drag", "across: the grey window wider or narrower; up and down: the level"},
+    {"middle button drag", "pan"},
+};
+
+/* One row of the key list: the keys (GTK accelerator texts, up to 3), the action, what it does. */
+static void key_row(GtkWidget *grid, int *row, const char *const keys_in[3], const char *name, const char *what)
+{
+    GString *keys = g_string_new("");
+    for (int j = 0; j < 3 && keys_in[j]; j++) {
+        guint key;
+        GdkModifierType mods;
+        if (gtk_accelerator_parse(keys_in[j], &key, &mods)) {
+            char *label = gtk_accelerator_get_label(key, mods);
+            /* a letter alone is the lower-case key (GTK writes it in capitals, like Shift+A's) */
+            if (!mods && label[0] && !label[1]) label[0] = (char)g_ascii_tolower(label[0]);
+            g_string_append_printf(keys, "%s%s", j ? ", " : "", label);
+            g_free(label);
+        }
+    }
+    cell(grid, 0, *row, 1, keys->str, 0, 0);
+    cell(grid, 1, *row, 1, name, 0, 0);
+    GtkWidget *help = cell(grid, 2, (*row)++, 1, what, 0, 0);
+    gtk_label_set_wrap(GTK_LABEL(help), TRUE);
+    gtk_label_set_max_width_chars(GTK_LABEL(help), 60);
+    gtk_label_set_width_chars(GTK_LABEL(help), 40);
+    g_string_free(keys, TRUE);
+}
+
 static void do_shortcuts(view_app *a, GSimpleAction *act, GVariant *v)
 {
-    GString *text = g_string_new("");
-    g_string_append(text, "<b>Keys</b> (every one an action: menus and script lines `action NAME [VALUE]` do the same)\n\n");
+    GtkWidget *grid = gtk_grid_new();
+    gtk_grid_set_column_spacing(GTK_GRID(grid), 18);
+    gtk_grid_set_row_spacing(GTK_GRID(grid), 3);
+    gtk_widget_set_margin_start(grid, 14);
+    gtk_widget_set_margin_end(grid, 14);
+    gtk_widget_set_margin_top(grid, 10);
+    gtk_widget_set_margin_bottom(grid, 14);
+    int row = 0;
+    cell(grid, 0, row++, 3, "<b>Mouse</b> (in the picture, unless said)", 1, 0);
+    for (size_t k = 0; k < sizeof GESTURES / sizeof GESTURES[0]; k++) {
+        cell(grid, 0, row, 1, GESTURES[k][0], 0, 0);
+        cell(grid, 1, row++, 2, GESTURES[k][1], 0, 1);
+    }
+    GtkWidget *gap = cell(grid, 0, row++, 3, "<b>Keys</b> and actions: menus and script lines <tt>action NAME [VALUE]</tt> run the same", 1, 0);
+    gtk_widget_set_margin_top(gap, 12);
+    cell(grid, 0, row, 1, "<i>key</i>", 1, 0);
+    cell(grid, 1, row, 1, "<i>action</i>", 1, 0);
+    cell(grid, 2, row++, 1, "<i>what it does</i>", 1, 0);
     for (size_t k = 0; k < sizeof ACTIONS / sizeof ACTIONS[0]; k++) {
         const action_def *d = &ACTIONS[k];
-        GString *keys = g_string_new("");
-        for (int j = 0; j < 3 && d->keys[j]; j++) {
-            guint key;
-            GdkModifierType mods;
-            if (gtk_accelerator_parse(d->keys[j], &key, &mods)) {
-                char *label = gtk_accelerator_get_label(key, mods);
-                g_string_append_printf(keys, "%s%s", j ? ", " : "", label);
-                g_free(label);
-            }
-        }
-        char *help = g_markup_escape_text(d->help, -1), *k2 = g_markup_escape_text(keys->str, -1);
-        g_string_append_printf(text, "<tt>%-16s</tt> %-14s  %s\n", k2, d->fn ? d->name : "", help);
-        g_free(help);
-        g_free(k2);
-        g_string_free(keys, TRUE);
+        key_row(grid, &row, d->keys, d->fn ? d->name : "", d->help);
     }
-    g_string_append(text, "\n<b>Mouse</b>: drag turns (arcball), Shift+drag or the middle button pans, the wheel zooms,\n"
-                          "Ctrl+drag moves the clip plane, a click picks the node under the pointer, Alt+drag moves it (an edit).");
+    if (a->trace) { /* tracing a scan: the slice pane's mouse and the tracing keys (view_trace.c) */
+        gap = cell(grid, 0, row++, 3, "<b>Tracing</b>: the slice pane's mouse, and the tracing keys", 1, 0);
+        gtk_widget_set_margin_top(gap, 12);
+        for (size_t k = 0; k < sizeof PANE_GESTURES / sizeof PANE_GESTURES[0]; k++) {
+            cell(grid, 0, row, 1, PANE_GESTURES[k][0], 0, 0);
+            cell(grid, 1, row++, 2, PANE_GESTURES[k][1], 0, 1);
+        }
+        const char *rows[32][3];
+        size_t n = view_trace_help(rows, 32);
+        for (size_t k = 0; k < n; k++) {
+            const char *keys[3] = {rows[k][0][0] ? rows[k][0] : NULL, NULL, NULL};
+            key_row(grid, &row, keys, rows[k][1], rows[k][2]);
+        }
+    }
     GtkWidget *win = gtk_window_new();
     gtk_window_set_title(GTK_WINDOW(win), "thorax — keys");
     view_win *w = view_active(a);
     if (w) gtk_window_set_transient_for(GTK_WINDOW(win), GTK_WINDOW(w->window));
-    GtkWidget *label = gtk_label_new(NULL);
-    gtk_label_set_markup(GTK_LABEL(label), text->str);
-    gtk_label_set_selectable(GTK_LABEL(label), TRUE);
+    /* as wide as the list (nothing cut off at the right), as high as it or most of the screen: then
+       the list scrolls */
     GtkWidget *scroll = gtk_scrolled_window_new();
-    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(scroll), label);
+    gtk_scrolled_window_set_policy(GTK_SCROLLED_WINDOW(scroll), GTK_POLICY_NEVER, GTK_POLICY_AUTOMATIC);
+    gtk_scrolled_window_set_propagate_natural_width(GTK_SCROLLED_WINDOW(scroll), TRUE);
+    gtk_scrolled_window_set_propagate_natural_height(GTK_SCROLLED_WINDOW(scroll), TRUE);
+    int screen_h = 768;
+    GListModel *mons = gdk_display_get_monitors(gdk_display_get_default());
+    GdkMonitor *mon = mons && g_list_model_get_n_items(mons) ? g_list_model_get_item(mons, 0) : NULL;
+    if (mon) {
+        GdkRectangle r;
+        gdk_monitor_get_geometry(mon, &r);
+        screen_h = r.height;
+        g_object_unref(mon);
+    }
+    gtk_scrolled_window_set_max_content_height(GTK_SCROLLED_WINDOW(scroll), screen_h * 85 / 100);
+    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(scroll), grid);
     gtk_window_set_child(GTK_WINDOW(win), scroll);
-    gtk_window_set_default_size(GTK_WINDOW(win), 720, 640);
     /* Escape closes it */
     GtkEventController *sc = gtk_shortcut_controller_new();
     gtk_shortcut_controller_add_shortcut(GTK_SHORTCUT_CONTROLLER(sc),
                                          gtk_shortcut_new(gtk_keyval_trigger_new(GDK_KEY_Escape, 0),
                                                           gtk_named_action_new("window.close")));
     gtk_widget_add_controller(win, sc);
+    if (a->vo->verbose > 0) gtk_widget_add_tick_callback(win, keys_laid_out, grid, NULL);
     gtk_window_present(GTK_WINDOW(win));
-    g_string_free(text, TRUE);
 }
 
 /* ---- the menus ---- */
@@ -1032,6 +1163,7 @@ GMenuModel *view_menu(void)
     add(view, "Fix the clip plane to the object", "app.clip-lock");
     add(view, "Colour bar", "app.colorbar");
     add(view, "Time label", "app.label");
+    add(view, "Side panel", "app.panel");
     add(view, "Keys", "app.shortcuts");
     g_menu_append_submenu(bar, "View", G_MENU_MODEL(view));
     GMenu *surf = g_menu_new();

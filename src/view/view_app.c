@@ -133,6 +133,7 @@ static view_win *new_window(view_app *a, const char *surfaces)
     gtk_label_set_xalign(GTK_LABEL(w->status), 0);
     gtk_label_set_ellipsize(GTK_LABEL(w->status), PANGO_ELLIPSIZE_END);
     gtk_widget_set_margin_start(w->status, 6);
+    GtkWidget *row = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0); /* the drawing area, the side panel at its right */
     if (a->trace && w->id == 1) { /* tracing: the slice pane on the first window's left */
         GtkWidget *paned = gtk_paned_new(GTK_ORIENTATION_HORIZONTAL);
         gtk_paned_set_start_child(GTK_PANED(paned), view_slice_new(a));
@@ -140,10 +141,12 @@ static view_win *new_window(view_app *a, const char *surfaces)
         gtk_paned_set_resize_start_child(GTK_PANED(paned), TRUE);
         gtk_paned_set_shrink_start_child(GTK_PANED(paned), FALSE);
         gtk_widget_set_vexpand(paned, TRUE);
-        gtk_box_append(GTK_BOX(box), paned);
+        gtk_widget_set_hexpand(paned, TRUE);
+        gtk_box_append(GTK_BOX(row), paned);
     } else {
-        gtk_box_append(GTK_BOX(box), w->gl);
+        gtk_box_append(GTK_BOX(row), w->gl);
     }
+    gtk_box_append(GTK_BOX(box), row);
     gtk_box_append(GTK_BOX(box), w->plot_scroll);
     gtk_box_append(GTK_BOX(box), w->status);
     gtk_window_set_child(GTK_WINDOW(w->window), box);
@@ -155,6 +158,7 @@ static view_win *new_window(view_app *a, const char *surfaces)
     view_gl_attach(w);
     view_input_attach(w);
     view_plot_attach(w);
+    view_panel_attach(w, row);
     return w;
 }
 
@@ -242,6 +246,7 @@ int thx_view_run(thx_ctx *ctx, thx_view_opts *o)
     if (a.play_id) g_source_remove(a.play_id);
     if (a.script_id) g_source_remove(a.script_id);
     g_object_unref(a.gapp);
+    view_panel_free(&a);
     for (int k = 0; k < a.n_win; k++) {
         view_win *w = a.win[k];
         thx_font_close(&w->font);

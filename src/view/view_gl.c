@@ -330,6 +330,9 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     int frame = view_frame_of(w);
     thx_status st = thx_picture_draw_gl(a->ctx, &o, &a->d, w->r, w->font, frame, fb_w, fb_h, &bars, NULL);
     if (st != THX_OK) { draw_failed(w); return TRUE; }
+    w->bars = bars; /* where the colour bars are, for their gestures (view_panel.c) */
+    w->fb_w = fb_w;
+    w->fb_h = fb_h;
     gint64 tp = t0, tn;
 #define PHASE(k) /* a benchmark's phases, each finished */                                            \
     if (w->bench) {                                                                                     \
@@ -357,6 +360,7 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
             if (w->scene) memcpy(w->scene, w->img->rgba, nb);
             st = thx_picture_annotate(a->ctx, &o, &a->d, w->font, frame, &bars, w->img);
             if (st != THX_OK) { view_report(a, "annotations"); return TRUE; }
+            view_panel_marks(w, &o, w->img); /* the equipotentials' values on their colour bar */
             PHASE(2)
             show_changes(w, w->img);
             PHASE(3)
@@ -379,7 +383,10 @@ static gboolean on_render(GtkGLArea *area, GdkGLContext *context, gpointer user)
     if (w->drawn == 1) {
         view_pick_prepare(a);
         /* the state a test waits for (instead of sleeping): this window is up and drawn */
-        if (a->vo->verbose > 0) fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels)\n", w->id, fb_w, fb_h);
+        graphene_point_t at = GRAPHENE_POINT_INIT(0, 0), in;
+        if (!gtk_widget_compute_point(GTK_WIDGET(area), w->window, &at, &in)) in = at;
+        if (a->vo->verbose > 0)
+            fprintf(stderr, "thorax view: window %d drawn (%dx%d pixels, at %.0f,%.0f in the window)\n", w->id, fb_w, fb_h, in.x, in.y);
     }
     return TRUE;
 }

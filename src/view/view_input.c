@@ -140,7 +140,8 @@ static void drag_begin(GtkGestureDrag *g, double x, double y, gpointer user)
     memcpy(w->drag_q, w->q, sizeof w->q);
     memcpy(w->drag_pan, w->pan, sizeof w->pan);
     w->drag_clip = w->clip_offset;
-    if (button == 2 || (m & GDK_SHIFT_MASK)) w->drag_mode = 2;
+    if (view_panel_drag_begin(w, x, y, m, button)) w->drag_mode = 5; /* the colour bar, a slice (view_panel.c) */
+    else if (button == 2 || (m & GDK_SHIFT_MASK)) w->drag_mode = 2;
     else if (m & GDK_CONTROL_MASK) w->drag_mode = 3;
     else if (m & GDK_ALT_MASK) {
         /* moving a node: the one under the pointer */
@@ -176,6 +177,9 @@ static void drag_update(GtkGestureDrag *g, double dx, double dy, gpointer user)
     } else if (w->drag_mode == 4) {
         view_edit_drag(w, dx, dy, 0);
         return;
+    } else if (w->drag_mode == 5) {
+        view_panel_drag_update(w, dx, dy);
+        return;
     } else if (w->drag_mode == 3) {
         if (!w->o.clip[0] && !w->clip_view) return;
         w->clip_offset = w->drag_clip - dy * view_mm_per_pixel(w);
@@ -190,9 +194,11 @@ static void drag_end(GtkGestureDrag *g, double dx, double dy, gpointer user)
     int mode = w->drag_mode;
     w->drag_mode = 0;
     if (mode == 4) { view_edit_drag(w, dx, dy, 1); return; }
+    if (mode == 5) { view_panel_drag_end(w, dx, dy); return; }
     if (mode == 1 && fabs(dx) < 3 && fabs(dy) < 3) {
         memcpy(w->q, w->drag_q, sizeof w->q);
-        view_pick_at(w, w->drag_x0, w->drag_y0);
+        /* with the panel's seed tool on, a click seeds a streamline; else it picks the node */
+        if (!view_panel_click(w, w->drag_x0, w->drag_y0)) view_pick_at(w, w->drag_x0, w->drag_y0);
     }
     view_update_titles(w->app);
 }

@@ -28,6 +28,24 @@ typedef struct {
 #define VIEW_MAX_TRACES 6
 extern const unsigned char view_trace_colors[VIEW_MAX_TRACES][4];
 
+/* What the side panel edits for every window (view_panel.c): the strings the pictures' cut options
+ * point to, and the state of its tools. */
+typedef struct {
+    char iso[1024];            /* --isosurface's list */
+    char slice[8][96];         /* --slice planes */
+    char seed[4][256];         /* --streamlines seeds */
+    int slice_sel;             /* the selected slice (0-based): slice-move and Ctrl+Shift+drag move it */
+    int seed_tool;             /* 0 none, 1 a click seeds a point, 2 two clicks a rake */
+    int rake_n;                /* seeds along a rake */
+    int have_rake_a;           /* the rake's first end picked, at rake_a */
+    double rake_a[3];
+    int scope_auto;            /* the scope a fixed range replaced (range auto goes back to it) */
+    int selecting;             /* a time window dragged on the trace pane, sel[0] to sel[1] */
+    double sel[2];
+} view_cuts;
+
+typedef struct view_panel view_panel;
+
 typedef struct view_win {
     view_app *app;
     int id;                    /* 1-based, in titles */
@@ -74,6 +92,9 @@ typedef struct view_win {
     int bench;                 /* benchmarking: each draw finished (glFinish) before it is timed */
     double phase_ms[4];        /* ... and its phases summed: the scene (finished), the readback, the
                                   annotations, their upload and quad (finished) */
+    view_panel *panel;         /* the side panel (view_panel.c) */
+    thx_picture_bars bars;     /* the colour bars of the last draw, at fb_w x fb_h (the bar's gestures) */
+    int fb_w, fb_h;
 } view_win;
 
 struct view_app {
@@ -120,6 +141,7 @@ struct view_app {
     char info[512];            /* the status line's pick/edit information */
     int shots;                 /* screenshots saved by the menu (numbering) */
     view_tracing *trace;       /* tracing a scan (view_trace.c), or NULL */
+    view_cuts cuts;            /* the side panel's (view_panel.c) */
 };
 
 /* view_app.c */
@@ -183,6 +205,23 @@ void view_plot_attach(view_win *w);
 void view_plot_update(view_app *a);
 thx_status view_plot_export(view_app *a, const char *path);
 int view_pick_at(view_win *w, double x, double y);
+/* The point of the surfaces shown under (x, y) and the ray's direction; 1, or 0 when nothing is hit. */
+int view_pick_point(view_win *w, double x, double y, double p[3], double dir[3]);
+/* The time under x (the pane's pixels) on the traces' axis; 0, or -1 without traces. */
+int view_plot_time_at(view_win *w, double x, double *t);
 void view_pick_prepare(view_app *a);
 void view_pick_quiet(view_win *w, double x, double y);
+
+/* view_panel.c: the side panel (issue 26, item 4) at the right of the drawing area (F9, action
+ * panel), its actions, and the gestures on the colour bar, of the selected slice and of the seed
+ * tool. */
+void view_panel_attach(view_win *w, GtkWidget *box);
+void view_panel_refresh(view_app *a);
+void view_panel_free(view_app *a);
+void view_panel_action(view_app *a, GSimpleAction *act, GVariant *v);
+void view_panel_marks(view_win *w, const thx_picture_opts *o, thx_raster *img);
+int view_panel_drag_begin(view_win *w, double x, double y, GdkModifierType m, guint button);
+void view_panel_drag_update(view_win *w, double dx, double dy);
+void view_panel_drag_end(view_win *w, double dx, double dy);
+int view_panel_click(view_win *w, double x, double y);
 #endif

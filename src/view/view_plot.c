@@ -58,6 +58,62 @@ static void plot_window(const view_app *a, size_t n, size_t frame, size_t *f0, s
     *f1 = lo + span;
 }
 
+/* The first trace's time axis in a pane image `width` pixels wide (thx_draw_trace's layout in the box
+ * at x = 8, 16 pixels narrower, inset by 2): the frames shown f0..f1 and the series. NULL: no traces. */
+static const thx_series *plot_axis(const view_win *w, int width, size_t *f0, size_t *f1, double *px, double *pw)
+{
+    const view_app *a = w->app;
+    if (a->n_traces == 0) return NULL;
+    const thx_series *x = a->d.series[a->traces[0].surface];
+    if (!x || x->n_frames < 2) return NULL;
+    int frame = view_frame_of(w);
+    size_t fr = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
+    plot_window(a, x->n_frames, fr, f0, f1);
+    *px = 8 + 2 + 0.5;
+    *pw = width - 16 - 4 - 1;
+    return *f1 - *f0 > 1 && *pw > 1 ? x : NULL;
+}
+
+int view_plot_time_at(view_win *w, double x, double *t)
+{
+    const GdkPaintable *p = gtk_picture_get_paintable(GTK_PICTURE(w->plot));
+    if (!p) return -1;
+    int iw = gdk_paintable_get_intrinsic_width((GdkPaintable *)p), ih = gdk_paintable_get_intrinsic_height((GdkPaintable *)p);
+    double ww = gtk_widget_get_width(w->plot), wh = gtk_widget_get_height(w->plot);
+    double scale = iw > 0 && ih > 0 ? fmin(ww / iw, wh / ih) : 1; /* the image as GtkPicture shows it: fitted, centred */
+    if (!(scale > 0)) scale = 1;
+    x = (x - 0.5 * (ww - scale * iw)) / scale;
+    size_t f0, f1;
+    double px, pw;
+    const thx_series *s = plot_axis(w, iw, &f0, &f1, &px, &pw);
+    if (!s) return -1;
+    double i = (x - px) / pw * (double)(f1 - f0 - 1), dt = s->time[1] - s->time[0];
+    if (i < 0) i = 0;
+    if (i > (double)(f1 - f0 - 1)) i = (double)(f1 - f0 - 1);
+    *t = s->time[f0] + i * dt;
+    return 0;
+}
+
+/* The window being dragged on the pane (the panel's activation window), shaded over the traces. */
+static void shade_selection(const view_win *w, thx_raster *img)
+{
+    const view_app *a = w->app;
+    size_t f0, f1;
+    double px, pw;
+    const thx_series *s = plot_axis(w, img->w, &f0, &f1, &px, &pw);
+    if (!s || !a->cuts.selecting) return;
+    double dt = s->time[1] - s->time[0], t0 = fmin(a->cuts.sel[0], a->cuts.sel[1]), t1 = fmax(a->cuts.sel[0], a->cuts.sel[1]);
+    int x0 = (int)floor(px + (t0 - s->time[f0]) / dt / (double)(f1 - f0 - 1) * pw);
+    int x1 = (int)ceil(px + (t1 - s->time[f0]) / dt / (double)(f1 - f0 - 1) * pw);
+    for (int y = 0; y < img->h; y++)
+        for (int x = x0 < 0 ? 0 : x0; x <= x1 && x < img->w; x++) {
+            unsigned char *q = img->rgba + 4 * ((size_t)y * (size_t)img->w + (size_t)x);
+            q[0] = (unsigned char)((q[0] + 2 * 90) / 3);
+            q[1] = (unsigned char)((q[1] + 2 * 110) / 3);
+            q[2] = (unsigned char)((q[2] + 2 * 170) / 3);
+        }
+}
+
 /* The traces as one image, one row each (thx_draw_trace), then shown in every window's pane. */
 void view_plot_update(view_app *a)
 {
@@ -77,6 +133,7 @@ void view_plot_update(view_app *a)
         if (trace_h > TRACE_H) trace_h = TRACE_H;
         if (trace_h < TRACE_MIN_H) trace_h = TRACE_MIN_H;
         int height = trace_h * a->n_traces;
+        if (height < pane) height = pane; /* the pane's background under fewer traces than fill it */
         thx_raster *img = NULL;
         if (thx_raster_create(a->ctx, width, height, &img) != THX_OK) return;
         static const unsigned char bg[4] = {24, 24, 28, 255};
@@ -99,6 +156,7 @@ void view_plot_update(view_app *a)
                            label, x->unit, view_trace_colors[t % VIEW_MAX_TRACES]);
             free(v);
         }
+        shade_selection(w, img);
         GBytes *bytes = g_bytes_new(img->rgba, (size_t)width * (size_t)height * 4);
         GdkTexture *tex = gdk_memory_texture_new(width, height, GDK_MEMORY_R8G8B8A8, bytes, (size_t)width * 4);
         gtk_picture_set_paintable(GTK_PICTURE(w->plot), GDK_PAINTABLE(tex));
@@ -191,14 +249,16 @@ void view_pick_quiet(view_win *w, double x, double y)
     pick(w, x, y, 1);
 }
 
-/* 1 when something was hit (and, unless quiet, kept among the picks and reported), else 0. */
-static int pick(view_win *w, double x, double y, int quiet)
+/* The ray under (x, y) cast into the surfaces shown (hidden ones skipped, the clip plane honoured):
+ * the hit in *hit (surface -1: none), the ray's direction in dir. 1 when the point is outside the
+ * 3D viewport (nothing cast), else the status. */
+static int cast(view_win *w, double x, double y, thx_pick_hit *out, double dir[3])
 {
     view_app *a = w->app;
     const thx_model *m = a->d.m;
-    double origin[3], dir[3];
-    if (ray_at(w, x, y, origin, dir)) { view_set_info(a, "pick: outside the picture"); return 0; }
-    gint64 t0 = g_get_monotonic_time();
+    double origin[3];
+    if (ray_at(w, x, y, origin, dir)) return 1;
+    out->surface = -1;
     const thx_surface *surf[THX_PICTURE_SURFACES];
     unsigned char skip[THX_PICTURE_SURFACES];
     size_t n = m->n_surfaces < THX_PICTURE_SURFACES ? m->n_surfaces : THX_PICTURE_SURFACES;
@@ -212,7 +272,7 @@ static int pick(view_win *w, double x, double y, int quiet)
         skip[s] = !shown;
     }
     thx_pick_index *idx = NULL;
-    thx_pick_hit hit;
+    thx_pick_hit hit = {.surface = -1};
     thx_pick_opts po;
     thx_pick_opts_default(&po);
     po.skip = skip;
@@ -248,8 +308,32 @@ static int pick(view_win *w, double x, double y, int quiet)
         st = thx_pick_ray(a->ctx, idx, origin, dir, &p2, &h2);
         if (st == THX_OK && h2.surface >= 0 && (hit.surface < 0 || h2.t < hit.t)) hit = h2;
     }
+    *out = hit;
+    return st == THX_OK ? 0 : -1;
+}
+
+int view_pick_point(view_win *w, double x, double y, double p[3], double dir[3])
+{
+    thx_pick_hit hit;
+    int rc = cast(w, x, y, &hit, dir);
+    if (rc < 0) view_report(w->app, "pick");
+    if (rc || hit.surface < 0) return 0;
+    memcpy(p, hit.point, sizeof hit.point);
+    return 1;
+}
+
+/* 1 when something was hit (and, unless quiet, kept among the picks and reported), else 0. */
+static int pick(view_win *w, double x, double y, int quiet)
+{
+    view_app *a = w->app;
+    const thx_model *m = a->d.m;
+    double dir[3];
+    thx_pick_hit hit;
+    gint64 t0 = g_get_monotonic_time();
+    int rc = cast(w, x, y, &hit, dir);
+    if (rc > 0) { view_set_info(a, "pick: outside the picture"); return 0; }
     double ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
-    if (st != THX_OK) { view_report(a, "pick"); return 0; }
+    if (rc < 0) { view_report(a, "pick"); return 0; }
     if (quiet) return hit.surface >= 0;
     if (hit.surface < 0) { view_set_info(a, "pick: nothing under the pointer (%.1f ms)", ms); return 0; }
     const thx_surface *s = m->surf[hit.surface];

@@ -65,19 +65,24 @@ static int run_line(view_app *a, const char *text, int line, int *wait_ms)
         for (int k = 0; k < a->n_win; k++) {
             thx_picture_opts o = a->win[k]->o;
             if (a->vo->option_fn(a->vo->option_user, &o, buf)) { script_fail(a, line, "'%s': see the message above", buf); return -1; }
-            if ((o.isosurface || o.n_slices || o.n_streamlines) && !a->d.volume) {
-                /* the volume potentials are read at the start only when a cut is asked for there */
-                script_fail(a, line, "'%s': the volume potentials were not read at the start: give --isosurface, --slice "
-                            "or --streamlines on the command line or at the head of the script", buf);
+            /* the volume potentials are read at the start only when a cut is asked for there: now, else */
+            if ((o.isosurface || o.n_slices || o.n_streamlines) && thx_picture_volume_load(a->ctx, &o, &a->d, buf) != THX_OK) {
+                script_fail(a, line, "%s", thx_ctx_message(a->ctx));
                 return -1;
             }
             if (o.clip[0] && thx_picture_clip_check(a->ctx, &o, &a->d) != THX_OK) {
                 script_fail(a, line, "%s", thx_ctx_message(a->ctx));
                 return -1;
             }
+            /* a cut that cannot be made is this line's error, not a failed drawing's */
+            if (thx_picture_cuts_check(a->ctx, &o, &a->d) != THX_OK) {
+                script_fail(a, line, "%s", thx_ctx_message(a->ctx));
+                return -1;
+            }
             a->win[k]->o = o;
         }
         view_redraw_all(a);
+        view_panel_refresh(a);
         return 0;
     }
     if (strncmp(buf, "action ", 7)) {
@@ -194,6 +199,13 @@ static void write_picture(FILE *f, view_win *w)
     if (o->extrema) fprintf(f, "--extrema\n");
     if (o->font) fprintf(f, "--font %s\n", o->font);
     if (o->clip[0]) fprintf(f, "--clip %s\n", o->clip);
+    /* the volume's cuts as they are now (the panel, its gestures and script lines change them) */
+    if (o->isosurface) fprintf(f, "--isosurface %s\n", o->isosurface);
+    for (int k = 0; k < o->n_slices; k++) fprintf(f, "--slice %s\n", o->slices[k]);
+    if (o->slice_current) fprintf(f, "--slice-current\n");
+    for (int k = 0; k < o->n_streamlines; k++) fprintf(f, "--streamlines %s\n", o->streamlines[k]);
+    if (o->stream_radius > 0) fprintf(f, "--stream-radius %.17g\n", o->stream_radius);
+    if (o->stream_potential) fprintf(f, "--stream-potential\n");
     if (o->arrows) {
         fprintf(f, "--arrows\n--arrow-spacing %.17g\n--arrow-length %.17g\n--arrow-max %d\n", o->arrow_spacing,
                 o->arrow_scale, o->arrow_max);

@@ -359,8 +359,21 @@ int thx_picture_clip(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_
  * drawn without a word). thx_picture_load calls it; the viewer again for a script's --clip. */
 thx_status thx_picture_clip_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d);
 
+/* The solution's volume potentials read now, when thx_picture_load did not read them (no cut was
+ * asked for then): a viewer's first cut. Nothing when they are read; THX_EINPUT naming `what` (the
+ * option or action asking) when o has no solution, or a solution without them (thorax forward
+ * --volume makes them). */
+thx_status thx_picture_volume_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const char *what);
+/* The cuts o asks for (isosurface, slices, streamlines) checked against the volume potentials read
+ * at load, as thx_picture_load checks them: a bad specification, a slice that misses the volume or
+ * a value outside every frame's potentials is THX_EINPUT naming the option; cuts without the volume
+ * potentials likewise. The viewer calls it before a changed cut is drawn. */
+thx_status thx_picture_cuts_check(thx_ctx *ctx, const thx_picture_opts *o, const thx_picture_data *d);
 /* Shows data set k (0-based) of surface s; -1 when there is no such set. */
 int thx_picture_set_active(thx_picture_data *d, int s, int k);
+/* Removes data set k of surface s, a map (a viewer's map replaced by one of another window): the sets
+ * after it move down one, and the potentials it was made from are shown. -1 when k is not a map. */
+int thx_picture_drop_set(thx_picture_data *d, int s, int k);
 /* Adds the activation-time map of surface s's shown data (steepest downstroke between t0 and t1;
  * NaN: the window a map3d user expects, thx_activation_window_choose) as its next data set, and
  * shows it. Same as thx_picture_add_map(ctx, d, s, 1, t0, t1). */
