@@ -5,8 +5,9 @@
 #     the head) on 10 axial planes 7.5 mm apart gives a closed surface that passes thorax check; the
 #     model, the contour file (the image's line and frame) and the label map are written, and
 #     nibabel reads the label map on the CT's grid;
-#  2. real gestures (xdotool): clicks in the slice pane lay points, a double click closes the loop,
-#     the wheel steps the plane, a right-button drag changes the grey window; the session saved
+#  2. real gestures (xdotool): clicks in the slice pane lay points, a click on the first point closes
+#     the loop, a drag moves a point, Shift+click inserts one, Ctrl+click deletes one, the wheel
+#     steps the plane, a right-button drag changes the grey window; the session saved
 #     afterwards holds the lines those gestures became, and replaying it gives the same contours;
 #  3. thorax digitize SCAN (no --label) opens the same viewer.
 # Env: THORAX (built CLI), SRC, WORK.
@@ -59,7 +60,14 @@ for xy in "200 200" "360 200" "360 380" "200 380"; do
     xdotool mousemove --window "$W" "$1" "$2" click 1
     sleep 0.6
 done
-xdotool mousemove --window "$W" 200 200 click --repeat 2 --delay 80 1
+xdotool mousemove --window "$W" 200 200 click 1
+sleep 0.6
+# a point dragged, a point inserted on an edge (Shift+click), a point deleted (Ctrl+click)
+xdotool mousemove --window "$W" 360 380 mousedown 1 mousemove --window "$W" 370 390 mousemove --window "$W" 380 400 mouseup 1
+sleep 0.6
+xdotool mousemove --window "$W" 280 200 keydown shift click 1 keyup shift
+sleep 0.6
+xdotool mousemove --window "$W" 200 380 keydown ctrl click 1 keyup ctrl
 sleep 0.6
 # the wheel up one notch: the next plane; a right-button drag to the right: a wider window
 xdotool mousemove --window "$W" 280 300 click 4
@@ -93,7 +101,10 @@ echo "skin: $(grep 'passes thorax check: 10 planes' skin.out | tail -1)"
 # 2. what the gestures became
 [ -s gest/session.txt ] || fail "no session from the gestures: $(cat g.out)"
 grep -c "^action trace point " gest/session.txt | grep -qx 4 || fail "4 points expected: $(grep 'action trace' gest/session.txt)"
-grep -q "^action trace close" gest/session.txt || fail "the double click did not close the loop: $(grep 'action trace' gest/session.txt)"
+grep -q "^action trace close" gest/session.txt || fail "the click on the first point did not close the loop: $(grep 'action trace' gest/session.txt)"
+grep -q "^action trace move 1 3 " gest/session.txt || fail "the drag did not move point 3: $(grep 'action trace' gest/session.txt)"
+grep -q "^action trace insert 1 1 " gest/session.txt || fail "Shift+click did not insert after point 1: $(grep 'action trace' gest/session.txt)"
+grep -q "^action trace delete 1 5$" gest/session.txt || fail "Ctrl+click did not delete point 5: $(grep 'action trace' gest/session.txt)"
 grep -q "^action trace plane +1" gest/session.txt || fail "the wheel did not step the plane: $(grep 'action trace' gest/session.txt)"
 w=$(sed -n 's/^--image-window //p' gest/session.txt)
 $PY -c "import sys; sys.exit(0 if float('$w') > 500 else 1)" || fail "the right-button drag did not widen the window (400 -> $w)"

@@ -386,8 +386,9 @@ static int at_ras(view_app *a, double x, double y, double p[3])
     return 0;
 }
 
-/* The current surface's point nearest pane pixel (x, y) within 7 pixels: 0 and loop, point; -1 none. */
-static int node_at(view_app *a, double x, double y, size_t *loop, size_t *pt)
+/* The current surface's point (edge 0) or edge (edge 1: from that point to the next) nearest pane
+ * pixel (x, y), within 7 pixels, on the axial plane shown: 0 and its loop and point; -1 none. */
+static int nearest_at(view_app *a, double x, double y, int edge, size_t *loop, size_t *pt)
 {
     view_tracing *t = a->trace;
     int cur = thx_dig_current_surface(t->s);
@@ -400,41 +401,24 @@ static int node_at(view_app *a, double x, double y, size_t *loop, size_t *pt)
     int found = -1;
     for (size_t j = 0; j < n; j++)
         for (size_t i = 0; i < l[j].n; i++) {
-            double sx, sy;
-            ras_to_screen(&g, t->shown, l[j].p[i].x, l[j].p[i].y, z, &sx, &sy);
-            double d = (sx - x) * (sx - x) + (sy - y) * (sy - y);
+            if (edge && !l[j].closed && i + 1 == l[j].n) break;
+            double ax, ay, bx, by, u = 0;
+            ras_to_screen(&g, t->shown, l[j].p[i].x, l[j].p[i].y, z, &ax, &ay);
+            if (edge) {
+                ras_to_screen(&g, t->shown, l[j].p[(i + 1) % l[j].n].x, l[j].p[(i + 1) % l[j].n].y, z, &bx, &by);
+                double ex = bx - ax, ey = by - ay, len2 = ex * ex + ey * ey;
+                u = len2 > 0 ? fmin(fmax(((x - ax) * ex + (y - ay) * ey) / len2, 0), 1) : 0;
+                ax += u * ex;
+                ay += u * ey;
+            }
+            double d = (ax - x) * (ax - x) + (ay - y) * (ay - y);
             if (d < best) { best = d; *loop = j; *pt = i; found = 0; }
         }
     return found;
 }
 
-/* The current surface's edge nearest pane pixel (x, y) within 7 pixels: 0 and its loop and first
- * point; -1 none. */
-static int edge_at(view_app *a, double x, double y, size_t *loop, size_t *pt)
-{
-    view_tracing *t = a->trace;
-    int cur = thx_dig_current_surface(t->s);
-    if (cur < 0 || t->orient != 'z' || !(t->shown = shown_plane(a))) return -1;
-    pane_geo g = geo_of(t, t->shown);
-    long k = thx_dig_current_plane(t->s);
-    double z = thx_dig_plane_z(t->s, k), best = 49;
-    const thx_dig_loop *l;
-    size_t n = thx_dig_loops(t->s, (size_t)cur, k, &l);
-    int found = -1;
-    for (size_t j = 0; j < n; j++)
-        for (size_t i = 0; i < l[j].n; i++) {
-            if (!l[j].closed && i + 1 == l[j].n) break;
-            double ax, ay, bx, by;
-            ras_to_screen(&g, t->shown, l[j].p[i].x, l[j].p[i].y, z, &ax, &ay);
-            ras_to_screen(&g, t->shown, l[j].p[(i + 1) % l[j].n].x, l[j].p[(i + 1) % l[j].n].y, z, &bx, &by);
-            double ex = bx - ax, ey = by - ay, len2 = ex * ex + ey * ey;
-            double u = len2 > 0 ? ((x - ax) * ex + (y - ay) * ey) / len2 : 0;
-            u = fmin(fmax(u, 0), 1);
-            double dx = ax + u * ex - x, dy = ay + u * ey - y, d = dx * dx + dy * dy;
-            if (d < best) { best = d; *loop = j; *pt = i; found = 0; }
-        }
-    return found;
-}
+static int node_at(view_app *a, double x, double y, size_t *loop, size_t *pt) { return nearest_at(a, x, y, 0, loop, pt); }
+static int edge_at(view_app *a, double x, double y, size_t *loop, size_t *pt) { return nearest_at(a, x, y, 1, loop, pt); }
 
 static gint64 last_click_time;
 static double last_click_xy[2];
