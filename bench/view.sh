@@ -13,7 +13,7 @@
 #   threads), docs/design/view.md "Responsiveness under load";
 #   peak memory of the process;
 # then VTK 9 (bench/vtk_view.py) drawing the same meshes and data in an on-screen window of the same
-# size, in the same run, and the ratios; then bench/trace.sh (tracing a scan: the livewire beside
+# size, in the same run, and the ratios; then bench/digitize.sh (tracing a scan: the livewire beside
 # OpenCV's, plane steps in the slice pane, the model after a loop edit). Prints figures; never fails on time.
 #   DATA=DIR   reuse DIR/m (model) and DIR/sol (solution) instead of making them (about 3 minutes)
 set -euo pipefail
@@ -89,4 +89,4 @@ print('load average after: %s' % open('/proc/loadavg').read().split(' ', 3)[:3])
 EOF
 # tracing a scan (issue 26 item 8): the livewire beside OpenCV's, plane steps, the model after an edit
 echo
-bash bench/trace.sh
+bash bench/digitize.sh

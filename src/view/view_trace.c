@@ -362,7 +362,7 @@ static int by_value(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-/* Benchmarks (bench/trace.sh): N plane steps, each followed by the pane drawn (offscreen, its size):
+/* Benchmarks (bench/digitize.sh): N plane steps, each followed by the pane drawn (offscreen, its size):
  * the plane sampled, its grey levels, the loops; or N edits of the current surface's first point
  * (1 mm along x and back), each followed by that surface built again and checked. Medians printed. */
 static void do_bench(GSimpleAction *act, GVariant *v, gpointer user)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Benchmark of tracing a scan in the viewer (issue 26 item 8), in one run:
 #   1. the livewire between two clicks on a 512 x 512 plane: ours (bench/livewire.c, wall clock)
-#      beside OpenCV's intelligent scissors (bench/trace_opencv.py: the same costs, the whole plane's
+#      beside OpenCV's intelligent scissors (bench/digitize_opencv.py: the same costs, the whole plane's
 #      Dijkstra at each seed) on the same synthetic plane; target under 50 ms;
 #   2. plane scrolling in the slice pane (bench-trace-scroll: a plane step, the plane sampled, its grey
 #      levels, the loops drawn; the pane 560 x 800): on the InVesalius CT (256 x 256) and on a
@@ -11,7 +11,7 @@
 #      builds and checks that surface again; target under 1 s;
 #   4. the livewire inside the viewer: two clicks 130 mm apart along the 512 x 512 map's outline,
 #      each `trace point` line's time (-v).
-# Prints figures; never fails on time. Usage: bench/trace.sh (build first).
+# Prints figures; never fails on time. Usage: bench/digitize.sh (build first).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THORAX=${THORAX:-$PWD/build/bin/thorax}
@@ -24,7 +24,7 @@ XV=(xvfb-run -a -s "-screen 0 1600x1100x24")
 
 echo; echo "== 1. livewire between two clicks, 512 x 512 =="
 LIVEWIRE_WALL=1 build/bin/livewire_bench 15
-$PY bench/trace_opencv.py 15 || echo "(OpenCV: python3-opencv missing)"
+$PY bench/digitize_opencv.py 15 || echo "(OpenCV: python3-opencv missing)"
 
 echo; echo "== 2. plane scrolling in the slice pane =="
 INV=/usr/share/doc/invesalius-examples/examples/Cranium.inv3

@@ -2,7 +2,7 @@
 """OpenCV's intelligent scissors (cv2.segmentation.IntelligentScissorsMB: Mortensen & Barrett's
 livewire, zero-crossing, gradient magnitude and direction costs, the paper's weights 0.43/0.43/0.14)
 timed on the same synthetic 512 x 512 torso-like plane bench/livewire.c times ours on (an ellipse
-400 x 300 px, blurred, with an inner ellipse, uniform noise of 30), so that bench/trace.sh prints the
+400 x 300 px, blurred, with an inner ellipse, uniform noise of 30), so that bench/digitize.sh prints the
 two side by side. OpenCV takes an 8-bit image (the plane scaled to 0..255); buildMap(seed) runs
 Dijkstra over the whole plane (no search on the fly), getContour(target) reads a path off the map.
 Prints the median of RUNS runs in milliseconds (wall clock). Timing only."""
