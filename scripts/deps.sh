@@ -28,6 +28,7 @@ packages=(
   libgdcm-dev libgdcm-tools g++      # images: DICOM series through GDCM (src/image/dicom_gdcm.cc); gdcmimg/gdcmanon/gdcmconv/gdcmdump write the test series
   python3-nibabel                    # tests: nibabel reads and writes NIfTI beside us
   invesalius-examples                # tests: a real CT (InVesalius's Cranium.inv3)
+  libembree-dev embree-tools         # ray tracing (RaySpray, src/raytrace): Embree 3; embree-tools' benchmark beside ours (bench/trace.sh)
   python3-opencv                     # bench: OpenCV's intelligent scissors (Mortensen & Barrett) beside our livewire (bench/digitize.sh)
 )
 missing=()

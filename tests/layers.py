@@ -7,10 +7,11 @@
     level 3  mesh, check, digitizer (tracing on image planes: livewire, threshold regions, snap,
              interpolation; uses image and geom)
     level 4  fem, bem, render, phantom, import, edit, inverse
-    level 5  picture (a picture's settings and data -> scenes and annotations; render and view share it),
+    level 5  raytrace (RaySpray: render's scenes traced with Embree)
+    level 6  picture (a picture's settings and data -> scenes and annotations; render and view share it),
              capi (flat accessors for bindings: python/thorax over libthorax.so)
-    level 6  view (the interactive viewer, GTK 4)
-    level 7  cli
+    level 7  view (the interactive viewer, GTK 4)
+    level 8  cli
 
 A module may use itself and any module of a lower level, never a sibling or a module above.
 Within io, the same rule one floor down (docs/design/io.md, "io by family"): src/io/ is split by
@@ -42,7 +43,7 @@ import sys
 import tempfile
 
 LEVEL = {"core": 0, "model": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3, "digitizer": 3,
-         "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "picture": 5, "capi": 5, "view": 6, "cli": 7}
+         "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "raytrace": 5, "picture": 6, "capi": 6, "view": 7, "cli": 8}
 
 
 IO_LEVEL = {"common": 0, "map3d": 1, "surface": 2, "volume": 2, "series": 2, "export": 2, "model": 3}

@@ -1,0 +1,96 @@
+/*
+ * thorax/raytrace/raytrace.h — RaySpray (paper 4.3: "an integrated ray tracer/volume renderer"):
+ * the scene of thorax/render/render.h traced with Embree 3 (its BVH: today's form of the paper's
+ * "'voxel'-based method"), with shadows, reflection, refraction, ambient occlusion and
+ * anti-aliasing. The same thx_scene as the OpenGL renderer, so the picture module draws either;
+ * colours are the OpenGL renderer's (the same scale, bands and colour map per hit, the same
+ * headlight by default). docs/design/raytrace.md.
+ *
+ * What is traced: surfaces in the flat, Gouraud, Phong and orientation modes (points and wire modes
+ * are drawn as Phong surfaces; hidden ones not), with their colours, data and contour lines, and the
+ * scene's clip planes. Arrows and image planes are not traced yet.
+ *
+ * Deterministic: every random number is a hash of (pixel, sample, bounce, use), tiles are
+ * independent, so the same input gives the same picture whatever the number of threads.
+ */
+#ifndef THORAX_RAYTRACE_H
+#define THORAX_RAYTRACE_H
+
+#include <stdint.h>
+
+#include "thorax/render/render.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define THX_RAYTRACE_MAX_LIGHTS 8
+#define THX_RAYTRACE_MAX_SURFACES 64
+
+typedef enum {
+    THX_LIGHT_HEAD = 0,   /* at the eye (the OpenGL renderer's headlight): two-sided, never shadowed */
+    THX_LIGHT_POINT,      /* at pos */
+    THX_LIGHT_DIRECTIONAL,/* from infinitely far along -dir (dir: where the light travels) */
+    THX_LIGHT_AREA        /* a rectangle: corner pos, edges u and v (soft shadows) */
+} thx_light_kind;
+
+typedef struct {
+    thx_light_kind kind;
+    double pos[3], dir[3], u[3], v[3];
+    double intensity;     /* multiplies the diffuse and specular terms (1) */
+    int shadows;          /* cast shadows (point, directional, area) */
+} thx_light;
+
+typedef struct {
+    double reflect;       /* mirror reflectance 0..1 */
+    double transmit;      /* 0..1: the part that passes through (glass); 0 and the colour's alpha < 1:
+                             1 - alpha, without refraction */
+    double ior;           /* index of refraction inside the surface (1: none; glass 1.5) */
+    int texture;          /* 0 none, 1 grid lines, 2 checkerboard (in model mm, every texture_mm) */
+    double texture_mm;
+} thx_raytrace_material;
+
+typedef struct {
+    int samples;          /* per pixel side: samples^2 stratified, jittered samples (1: the centre) */
+    int max_depth;        /* reflection and refraction bounces (6) */
+    thx_light lights[THX_RAYTRACE_MAX_LIGHTS];
+    int n_lights;         /* 0: the headlight alone */
+    double ambient;       /* the ambient term (0.25, the OpenGL renderer's) */
+    int ao_samples;       /* ambient occlusion: rays per hit (0: none); the ambient term scaled by the
+                             unoccluded fraction within ao_distance mm */
+    double ao_distance;
+    thx_raytrace_material material[THX_RAYTRACE_MAX_SURFACES]; /* per scene surface (index in thx_scene) */
+    int progress;         /* a progress bar on stderr */
+} thx_raytrace_opts;
+
+void thx_raytrace_opts_default(thx_raytrace_opts *o);
+
+typedef struct {
+    double seconds, build_seconds;
+    size_t primary_rays, rays;   /* primary (eye) rays, and all rays traced */
+    size_t builds;               /* geometries built (BVH) during the call */
+} thx_raytrace_stats;
+
+typedef struct thx_tracer thx_tracer;
+
+/* An Embree device (robust mode) and the geometry cache: a surface keeps its BVH across calls while
+ * its nodes and triangles stay the same (a frame step only changes values). */
+thx_status thx_tracer_create(thx_ctx *ctx, thx_tracer **out);
+void thx_tracer_destroy(thx_tracer **t);
+/* "Embree 3.13.5" */
+const char *thx_tracer_info(const thx_tracer *t);
+
+/* Traces sc into img at sc->viewport (w = 0: the whole image; sc->clear fills it with the
+ * background first, else the background is left where no surface is hit). stats may be NULL. */
+thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, thx_raster *img,
+                           thx_raytrace_stats *stats);
+
+/* What each pixel's centre sees in a w x h viewport: the index of the scene surface hit (-1 none) and
+ * the triangle (the primary ray through the pixel centre, after the clip planes). */
+thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, int w, int h, int32_t *surface,
+                         int32_t *tri);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,391 @@
+/*
+ * RaySpray's tracer (thorax/raytrace/raytrace.h): the Embree device, the geometry cache (a surface's
+ * BVH is built once and kept while its nodes and triangles stay the same), the scene assembled per
+ * call from the cached geometries, and the image traced tile by tile (OpenMP; every pixel
+ * independent, every random number a hash, so the picture does not depend on the thread count).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "raytrace/rt_impl.h"
+
+#define TILE 16
+#define CACHE_MAX 256
+
+struct thx_tracer {
+    RTCDevice dev;
+    rt_geom cache[CACHE_MAX];
+    size_t n_cache;
+    unsigned long call;
+    char info[64];
+};
+
+static double wall(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    /* a 32-bit mix (lowbias32) over the keys in turn */
+    uint32_t h = 0x9e3779b9u;
+    uint32_t k[4] = {a, b, c, d};
+    for (int i = 0; i < 4; i++) {
+        h ^= k[i] + 0x7f4a7c15u + (h << 6) + (h >> 2);
+        h ^= h >> 16;
+        h *= 0x7feb352du;
+        h ^= h >> 15;
+        h *= 0x846ca68bu;
+        h ^= h >> 16;
+    }
+    return (double)h / 4294967296.0;
+}
+
+void thx_raytrace_opts_default(thx_raytrace_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->samples = 2;
+    o->max_depth = 6;
+    o->ambient = 0.25;
+    o->ao_distance = 30;
+    for (int k = 0; k < THX_RAYTRACE_MAX_SURFACES; k++) {
+        o->material[k].ior = 1;
+        o->material[k].texture_mm = 10;
+    }
+}
+
+static void on_error(void *user, enum RTCError code, const char *str)
+{
+    (void)user;
+    fprintf(stderr, "thorax: Embree error %d: %s\n", (int)code, str ? str : "");
+}
+
+thx_status thx_tracer_create(thx_ctx *ctx, thx_tracer **out)
+{
+    *out = NULL;
+    thx_tracer *t = thx_calloc(ctx, 1, sizeof *t);
+    if (!t) return THX_ENOMEM;
+    t->dev = rtcNewDevice("verbose=0");
+    if (!t->dev) {
+        free(t);
+        return thx_error(ctx, THX_EIO, "Embree: no device (%d)", (int)rtcGetDeviceError(NULL));
+    }
+    rtcSetDeviceErrorFunction(t->dev, on_error, NULL);
+    snprintf(t->info, sizeof t->info, "Embree %d.%d.%d", (int)rtcGetDeviceProperty(t->dev, RTC_DEVICE_PROPERTY_VERSION_MAJOR),
+             (int)rtcGetDeviceProperty(t->dev, RTC_DEVICE_PROPERTY_VERSION_MINOR),
+             (int)rtcGetDeviceProperty(t->dev, RTC_DEVICE_PROPERTY_VERSION_PATCH));
+    *out = t;
+    return THX_OK;
+}
+
+static void geom_free(rt_geom *g)
+{
+    if (g->geom) rtcReleaseGeometry(g->geom);
+    free(g->nrm);
+    memset(g, 0, sizeof *g);
+}
+
+void thx_tracer_destroy(thx_tracer **tp)
+{
+    thx_tracer *t = tp ? *tp : NULL;
+    if (!t) return;
+    for (size_t i = 0; i < t->n_cache; i++) geom_free(&t->cache[i]);
+    rtcReleaseDevice(t->dev);
+    free(t);
+    *tp = NULL;
+}
+
+const char *thx_tracer_info(const thx_tracer *t) { return t->info; }
+
+/* The cached geometry of surface s, built when new or changed. */
+static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, const rt_geom **out, size_t *builds)
+{
+    for (size_t i = 0; i < t->n_cache; i++) {
+        rt_geom *g = &t->cache[i];
+        if (g->surf == s && g->xyz == s->xyz && g->tri == s->tri && g->n_nodes == s->n_nodes && g->n_tris == s->n_tris) {
+            g->used = t->call;
+            *out = g;
+            return THX_OK;
+        }
+    }
+    /* a slot: a free one, else the least recently used */
+    size_t slot = t->n_cache;
+    if (slot == CACHE_MAX) {
+        slot = 0;
+        for (size_t i = 1; i < t->n_cache; i++)
+            if (t->cache[i].used < t->cache[slot].used) slot = i;
+        if (t->cache[slot].used == t->call) return thx_error(ctx, THX_EINPUT, "ray tracer: more than %d surfaces", CACHE_MAX);
+        geom_free(&t->cache[slot]);
+    } else {
+        t->n_cache++;
+    }
+    rt_geom *g = &t->cache[slot];
+    memset(g, 0, sizeof *g);
+    g->geom = rtcNewGeometry(t->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float *v = rtcSetNewGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                       s->n_nodes ? s->n_nodes : 1);
+    unsigned *ix = rtcSetNewGeometryBuffer(g->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                           s->n_tris ? s->n_tris : 1);
+    g->nrm = thx_calloc(ctx, 3 * (s->n_nodes ? s->n_nodes : 1), sizeof *g->nrm);
+    if (!v || !ix || !g->nrm) { geom_free(g); t->n_cache -= slot == t->n_cache - 1; return THX_ENOMEM; }
+    for (size_t i = 0; i < 3 * s->n_nodes; i++) v[i] = (float)s->xyz[i];
+    double *acc = thx_calloc(ctx, 3 * (s->n_nodes ? s->n_nodes : 1), sizeof *acc);
+    if (!acc) { geom_free(g); return THX_ENOMEM; }
+    for (size_t k = 0; k < s->n_tris; k++) {
+        const int32_t *c = s->tri + 3 * k;
+        for (int j = 0; j < 3; j++) ix[3 * k + j] = (unsigned)c[j];
+        const double *a = s->xyz + 3 * c[0], *b = s->xyz + 3 * c[1], *d = s->xyz + 3 * c[2];
+        double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int j = 0; j < 3; j++)
+            for (int q = 0; q < 3; q++) acc[3 * c[j] + q] += n[q]; /* area-weighted */
+    }
+    for (size_t i = 0; i < s->n_nodes; i++) {
+        double l = sqrt(acc[3 * i] * acc[3 * i] + acc[3 * i + 1] * acc[3 * i + 1] + acc[3 * i + 2] * acc[3 * i + 2]);
+        for (int q = 0; q < 3; q++) g->nrm[3 * i + q] = l > 0 ? (float)(acc[3 * i + q] / l) : 0.0f;
+    }
+    free(acc);
+    rtcCommitGeometry(g->geom);
+    g->surf = s;
+    g->xyz = s->xyz;
+    g->tri = s->tri;
+    g->n_nodes = s->n_nodes;
+    g->n_tris = s->n_tris;
+    g->used = t->call;
+    (*builds)++;
+    *out = g;
+    return THX_OK;
+}
+
+int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                 struct RTCRayHit *rh, size_t *rays)
+{
+    for (int pass = 0; pass < 256; pass++) {
+        struct RTCIntersectContext c;
+        rtcInitIntersectContext(&c);
+        memset(rh, 0, sizeof *rh);
+        rh->ray.org_x = (float)org[0];
+        rh->ray.org_y = (float)org[1];
+        rh->ray.org_z = (float)org[2];
+        rh->ray.dir_x = (float)dir[0];
+        rh->ray.dir_y = (float)dir[1];
+        rh->ray.dir_z = (float)dir[2];
+        rh->ray.tnear = (float)tnear;
+        rh->ray.tfar = (float)tfar;
+        rh->ray.mask = 0xffffffffu;
+        rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(f->scene, &c, rh);
+        (*rays)++;
+        if (rh->hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
+        const rt_surf *s = &f->s[rh->hit.geomID];
+        if (!f->any_clip || s->no_clip) return 1;
+        double t = rh->ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+        int kept = 1;
+        for (int k = 0; k < f->sc->n_clip; k++) {
+            const thx_clip_plane *cp = &f->sc->clip[k];
+            if (cp->n[0] * p[0] + cp->n[1] * p[1] + cp->n[2] * p[2] + cp->d < 0) kept = 0;
+        }
+        if (kept) return 1;
+        tnear = nextafterf((float)t, INFINITY); /* clipped away: on along the ray */
+    }
+    return 0;
+}
+
+/* The call's frame: the scene surfaces' geometries (built when needed), their per-node t, the
+ * camera's frame. */
+static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, rt_frame *f,
+                              size_t *builds)
+{
+    memset(f, 0, sizeof *f);
+    f->sc = sc;
+    f->o = o;
+    f->n_s = sc->n_surfaces;
+    f->s = thx_calloc(ctx, sc->n_surfaces ? sc->n_surfaces : 1, sizeof *f->s);
+    if (!f->s) return THX_ENOMEM;
+    f->scene = rtcNewScene(t->dev);
+    rtcSetSceneFlags(f->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(f->scene, RTC_BUILD_QUALITY_HIGH);
+    static const float grey[4] = {0.85f, 0.85f, 0.85f, 1}, nan_default[4] = {0.7f, 0.45f, 0.7f, 1};
+    for (size_t i = 0; i < sc->n_surfaces; i++) {
+        const thx_render_surface *rs = &sc->surfaces[i];
+        rt_surf *s = &f->s[i];
+        s->rs = rs;
+        if (rs->mode == THX_DRAW_HIDDEN || !rs->surf || !rs->surf->n_tris) continue;
+        THX_CHECK(geom_of(ctx, t, rs->surf, &s->g, builds));
+        int zero = rs->color[0] == 0 && rs->color[1] == 0 && rs->color[2] == 0 && rs->color[3] == 0;
+        memcpy(s->color, zero ? grey : rs->color, sizeof s->color);
+        s->mat = i < THX_RAYTRACE_MAX_SURFACES ? o->material[i] : o->material[0];
+        if (!(s->mat.ior > 0)) s->mat.ior = 1;
+        s->transmit = s->mat.transmit > 0 ? s->mat.transmit : s->color[3] < 1 ? 1 - s->color[3] : 0;
+        s->no_clip = rs->no_clip;
+        if (rs->values) {
+            s->t = thx_malloc(ctx, rs->surf->n_nodes * sizeof *s->t);
+            if (!s->t) return THX_ENOMEM;
+            thx_scale_apply_n(&rs->scale, rs->values, rs->surf->n_nodes, s->t);
+        }
+        rtcAttachGeometryByID(f->scene, s->g->geom, (unsigned)i);
+    }
+    rtcCommitScene(f->scene);
+    int zero_nan = sc->nan_color[0] == 0 && sc->nan_color[1] == 0 && sc->nan_color[2] == 0 && sc->nan_color[3] == 0;
+    memcpy(f->nan_color, zero_nan ? nan_default : sc->nan_color, sizeof f->nan_color);
+    memcpy(f->bg, sc->background, sizeof f->bg);
+    f->any_clip = sc->n_clip > 0;
+    /* the camera's frame */
+    const thx_camera *c = &sc->camera;
+    double v[3] = {c->center[0] - c->eye[0], c->center[1] - c->eye[1], c->center[2] - c->eye[2]};
+    double lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(lv > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (eye at the centre)");
+    for (int k = 0; k < 3; k++) { f->view[k] = v[k] / lv; f->eye[k] = c->eye[k]; }
+    double r[3] = {f->view[1] * c->up[2] - f->view[2] * c->up[1], f->view[2] * c->up[0] - f->view[0] * c->up[2],
+                   f->view[0] * c->up[1] - f->view[1] * c->up[0]};
+    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (!(lr > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (up along the line of sight)");
+    for (int k = 0; k < 3; k++) f->right[k] = r[k] / lr;
+    f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
+    f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
+    f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
+    f->ortho = !(c->fov_deg > 0);
+    if (f->ortho) { /* how far behind the eye's plane the scene reaches */
+        struct RTCBounds b;
+        rtcGetSceneBounds(f->scene, &b);
+        for (int q = 0; q < 8 && b.lower_x <= b.upper_x; q++) {
+            double corner[3] = {q & 1 ? b.upper_x : b.lower_x, q & 2 ? b.upper_y : b.lower_y, q & 4 ? b.upper_z : b.lower_z};
+            double d = 0;
+            for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
+            f->back = fmax(f->back, d + 1);
+        }
+    }
+    return THX_OK;
+}
+
+static void frame_free(rt_frame *f)
+{
+    for (size_t i = 0; i < f->n_s; i++) free(f->s[i].t);
+    free(f->s);
+    if (f->scene) rtcReleaseScene(f->scene);
+    memset(f, 0, sizeof *f);
+}
+
+/* The eye ray through viewport point (x, y); an orthographic ray starts behind everything traced
+ * (thx_camera_ray puts its origin on the eye's plane, which may cut the model). */
+static int primary_ray(const rt_frame *f, int w, int h, double x, double y, double org[3], double dir[3])
+{
+    if (thx_camera_ray(&f->sc->camera, w, h, x, y, org, dir)) return -1;
+    if (f->ortho && f->back > 0)
+        for (int k = 0; k < 3; k++) org[k] -= f->back * dir[k];
+    return 0;
+}
+
+static void viewport_of(const thx_scene *sc, const thx_raster *img, int vp[4])
+{
+    if (sc->viewport[2] > 0) memcpy(vp, sc->viewport, sizeof(int) * 4);
+    else { vp[0] = vp[1] = 0; vp[2] = img->w; vp[3] = img->h; }
+}
+
+thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o_in, thx_raster *img,
+                           thx_raytrace_stats *stats)
+{
+    double t0 = wall();
+    thx_raytrace_opts od;
+    if (!o_in) thx_raytrace_opts_default(&od);
+    const thx_raytrace_opts *o = o_in ? o_in : &od;
+    int vp[4];
+    viewport_of(sc, img, vp);
+    if (vp[2] < 1 || vp[3] < 1 || vp[0] < 0 || vp[1] < 0 || vp[0] + vp[2] > img->w || vp[1] + vp[3] > img->h)
+        return thx_error(ctx, THX_EINPUT, "ray tracer: viewport %d,%d %dx%d outside the %dx%d image", vp[0], vp[1], vp[2], vp[3],
+                         img->w, img->h);
+    if (o->samples < 1 || o->samples > 64) return thx_error(ctx, THX_EINPUT, "ray tracer: %d samples a side (1 to 64)", o->samples);
+    t->call++;
+    size_t builds = 0;
+    rt_frame f;
+    thx_status st = frame_build(ctx, t, sc, o, &f, &builds);
+    double t1 = wall();
+    if (st != THX_OK) { frame_free(&f); return st; }
+    f.pixel_mm = f.ortho ? sc->camera.height / vp[3] : 2 * tan(0.5 * sc->camera.fov_deg * M_PI / 180) / vp[3];
+    int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
+    size_t rays = 0;
+    int ns = o->samples;
+#pragma omp parallel for schedule(dynamic) reduction(+ : rays)
+    for (int tile = 0; tile < n_tiles; tile++) {
+        int x0 = (tile % tw) * TILE, y0 = (tile / tw) * TILE;
+        for (int y = y0; y < y0 + TILE && y < vp[3]; y++)
+            for (int x = x0; x < x0 + TILE && x < vp[2]; x++) {
+                double acc[3] = {0, 0, 0}, cov = 0;
+                uint32_t px = (uint32_t)(y * vp[2] + x);
+                for (int sy = 0; sy < ns; sy++)
+                    for (int sx = 0; sx < ns; sx++) {
+                        uint32_t sample = (uint32_t)(sy * ns + sx);
+                        double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
+                        double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
+                        double org[3], dir[3], rgb[3], alpha;
+                        if (primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
+                        rt_shade(&f, org, dir, 0, px, sample, rgb, &alpha, &rays);
+                        for (int k = 0; k < 3; k++) acc[k] += rgb[k] * alpha;
+                        cov += alpha;
+                    }
+                double n = (double)(ns * ns);
+                unsigned char *p = img->rgba + 4 * ((size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x));
+                double a = cov / n, bga = sc->clear ? f.bg[3] : p[3] / 255.0;
+                for (int k = 0; k < 3; k++) {
+                    double bg = sc->clear ? f.bg[k] : p[k] / 255.0;
+                    double c = acc[k] / n + (1 - a) * bg; /* the samples' colours over the background */
+                    p[k] = (unsigned char)lround(fmin(fmax(c, 0), 1) * 255);
+                }
+                p[3] = (unsigned char)lround(fmin(fmax(a + (1 - a) * bga, 0), 1) * 255);
+            }
+        if (o->progress) {
+#pragma omp critical
+            {
+                done++;
+                if (done % 16 == 0 || done == n_tiles) {
+                    int bar = 40 * done / n_tiles;
+                    fprintf(stderr, "\rtracing [%.*s%*s] %3d%%", bar, "########################################", 40 - bar, "",
+                            100 * done / n_tiles);
+                    if (done == n_tiles) fputc('\n', stderr);
+                }
+            }
+        }
+    }
+    frame_free(&f);
+    if (stats) {
+        stats->seconds = wall() - t0;
+        stats->build_seconds = t1 - t0;
+        stats->primary_rays = (size_t)vp[2] * (size_t)vp[3] * (size_t)(ns * ns);
+        stats->rays = rays;
+        stats->builds = builds;
+    }
+    return THX_OK;
+}
+
+thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, int w, int h, int32_t *surface, int32_t *tri)
+{
+    thx_raytrace_opts o;
+    thx_raytrace_opts_default(&o);
+    t->call++;
+    size_t builds = 0;
+    rt_frame f;
+    thx_status st = frame_build(ctx, t, sc, &o, &f, &builds);
+    if (st != THX_OK) { frame_free(&f); return st; }
+    size_t rays = 0;
+#pragma omp parallel for schedule(dynamic) reduction(+ : rays)
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            double org[3], dir[3];
+            struct RTCRayHit rh;
+            size_t i = (size_t)y * (size_t)w + (size_t)x;
+            surface[i] = -1;
+            tri[i] = -1;
+            if (primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir)) continue;
+            if (rt_intersect(&f, org, dir, 0, INFINITY, &rh, &rays)) {
+                surface[i] = (int32_t)rh.hit.geomID;
+                tri[i] = (int32_t)rh.hit.primID;
+            }
+        }
+    frame_free(&f);
+    return THX_OK;
+}

@@ -1,0 +1,59 @@
+/* src/raytrace/rt_impl.h — what the ray tracer's files share (private to src/raytrace). */
+#ifndef THORAX_RT_IMPL_H
+#define THORAX_RT_IMPL_H
+
+#include <embree3/rtcore.h>
+#include <stdint.h>
+
+#include "thorax/raytrace/raytrace.h"
+
+/* A surface's geometry as Embree holds it, kept across calls while the surface is the same. */
+typedef struct {
+    const thx_surface *surf;        /* the key: the surface, */
+    const double *xyz;              /* its arrays and sizes as they were at the build */
+    const int32_t *tri;
+    size_t n_nodes, n_tris;
+    RTCGeometry geom;
+    float *nrm;                     /* per-node normals (area-weighted), 3 n_nodes */
+    unsigned long used;             /* the call that last used it */
+} rt_geom;
+
+/* One scene surface during a call: its cache entry, its colours' inputs, its material. */
+typedef struct {
+    const thx_render_surface *rs;
+    const rt_geom *g;
+    float *t;                       /* per-node t = scale(value) (NULL: no data) */
+    float color[4];
+    thx_raytrace_material mat;
+    double transmit;                /* mat.transmit, or 1 - alpha */
+    int no_clip;
+} rt_surf;
+
+/* A call's frame: what the shading reads. */
+typedef struct {
+    const thx_scene *sc;
+    const thx_raytrace_opts *o;
+    RTCScene scene;
+    rt_surf *s;                     /* by Embree geometry ID (= the scene surface's index) */
+    size_t n_s;
+    double eye[3], view[3], right[3], up[3]; /* camera frame; view: the line of sight */
+    int ortho;
+    double back;                    /* orthographic: eye rays start this far behind the eye's plane */
+    double pixel_mm;                /* orthographic: a pixel's size; perspective: per mm of distance */
+    float bg[4], nan_color[4];
+    int any_clip;
+} rt_frame;
+
+/* A random number in [0, 1) from a hash of the four keys (deterministic). */
+double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
+
+/* The colour along a ray (rt_shade.c): rgb, and *alpha the coverage (0 where the ray meets only the
+ * background). px, sample: the random keys. *rays counts the rays traced. */
+void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, uint32_t px, uint32_t sample,
+              double rgb[3], double *alpha, size_t *rays);
+
+/* The nearest hit along the ray beyond tnear that the clip planes keep: 1 and the hit in *rh; 0
+ * none. */
+int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                 struct RTCRayHit *rh, size_t *rays);
+#endif

@@ -1,0 +1,243 @@
+/*
+ * RaySpray's shading (thorax/raytrace/raytrace.h): at a hit, the surface's colour as the OpenGL
+ * renderer computes it (the value's t interpolated, banded, looked up; contour lines of the same
+ * pixel width), lit by the headlight or the scene's lights (Blinn-Phong; shadows by rays, soft from
+ * an area light), ambient occlusion, a texture, then mirror reflection and refraction (Snell's law,
+ * Schlick's Fresnel) traced on, up to the depth limit.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "raytrace/rt_impl.h"
+
+/* The OpenGL renderer's lighting constants (src/render/render_shaders.c) */
+#define KD 0.75
+#define KS 0.2
+#define SHINE 40.0
+#define EPS 1e-3
+
+static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static void norm3(double a[3])
+{
+    double l = sqrt(dot3(a, a));
+    if (l > 0) { a[0] /= l; a[1] /= l; a[2] /= l; }
+}
+
+/* The surface's colour at the hit (before lighting): rgb and the contour line's cover. */
+static void base_color(const rt_frame *f, const rt_surf *s, unsigned prim, double u, double v, const double p[3],
+                       const double n[3], double rgb[3])
+{
+    const thx_render_surface *rs = s->rs;
+    for (int k = 0; k < 3; k++) rgb[k] = s->color[k];
+    if (rs->mode == THX_DRAW_ORIENTATION) return;
+    if (s->t) {
+        const int32_t *c = rs->surf->tri + 3 * (size_t)prim;
+        double t0 = s->t[c[0]], t1 = s->t[c[1]], t2 = s->t[c[2]], w = 1 - u - v;
+        double t = w * t0 + u * t1 + v * t2;
+        if (!isfinite(t) || fabs(t) > 2) {
+            for (int k = 0; k < 3; k++) rgb[k] = f->nan_color[k];
+            return;
+        }
+        int nl = thx_scale_bands(&rs->scale, rs->n_levels > 0 ? rs->n_levels : 1);
+        double n_lev = nl > 0 ? nl : 1, tc = fmin(fmax(t, 0), 1);
+        if (rs->style == THX_DATA_BANDS || rs->style == THX_DATA_BANDS_CONTOURS) tc = (fmin(floor(tc * n_lev), n_lev - 1) + 0.5) / n_lev;
+        if (rs->style != THX_DATA_CONTOURS) {
+            unsigned char c8[3];
+            thx_colormap_eval(rs->cmap, tc, c8);
+            for (int k = 0; k < 3; k++) rgb[k] = c8[k] / 255.0;
+        }
+        if (rs->style == THX_DATA_CONTOURS || rs->style == THX_DATA_BANDS_CONTOURS || rs->style == THX_DATA_CONTINUOUS_CONTOURS) {
+            /* the line's half width in f = t n: the change of f across a pixel (the shader's fwidth) from
+               t's gradient on the triangle and the pixel's footprint on it */
+            const double *a = rs->surf->xyz + 3 * c[0], *b = rs->surf->xyz + 3 * c[1], *d = rs->surf->xyz + 3 * c[2];
+            double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+            double g11 = dot3(e1, e1), g12 = dot3(e1, e2), g22 = dot3(e2, e2), det = g11 * g22 - g12 * g12;
+            double fw = 0;
+            if (det > 0) {
+                double d1 = (t1 - t0) * n_lev, d2 = (t2 - t0) * n_lev;
+                double al = (g22 * d1 - g12 * d2) / det, be = (g11 * d2 - g12 * d1) / det, g[3];
+                for (int k = 0; k < 3; k++) g[k] = al * e1[k] + be * e2[k];
+                double dist = f->ortho ? 1 : sqrt((p[0] - f->eye[0]) * (p[0] - f->eye[0]) + (p[1] - f->eye[1]) * (p[1] - f->eye[1]) +
+                                                  (p[2] - f->eye[2]) * (p[2] - f->eye[2]));
+                double px = f->pixel_mm * dist, nv = dot3(n, f->view);
+                for (int axis = 0; axis < 2; axis++) {
+                    const double *sdir = axis ? f->up : f->right;
+                    double ns = dot3(n, sdir), step[3];
+                    for (int k = 0; k < 3; k++) step[k] = px * (sdir[k] - (fabs(nv) > 1e-6 ? f->view[k] * ns / nv : 0));
+                    fw += fabs(dot3(g, step));
+                }
+            }
+            double ff = t * n_lev, kk = floor(ff + 0.5), lw = rs->line_width > 0 ? rs->line_width : 1.5;
+            if (kk >= 1 && kk <= n_lev - 1 && fw > 0) {
+                double line = fmin(fmax(0.5 * lw - fabs(ff - kk) / fw + 0.5, 0), 1);
+                const float *cc = rs->contour_color;
+                int zero = cc[0] == 0 && cc[1] == 0 && cc[2] == 0 && cc[3] == 0;
+                double ca = zero ? 1 : cc[3];
+                for (int k = 0; k < 3; k++) rgb[k] = rgb[k] + (zero ? 0 - rgb[k] : cc[k] - rgb[k]) * line * ca;
+            }
+        }
+    }
+    if (s->mat.texture && s->mat.texture_mm > 0) { /* a grid or a checkerboard in model millimetres */
+        double q = s->mat.texture_mm;
+        if (s->mat.texture == 1) {
+            double w = 0.06 * q, dmin = INFINITY;
+            for (int k = 0; k < 3; k++) {
+                if (fabs(n[k]) > 0.9) continue; /* lines across the surface, not along its normal */
+                double r = fabs(p[k] / q - floor(p[k] / q + 0.5)) * q;
+                dmin = fmin(dmin, r);
+            }
+            if (dmin < w) for (int k = 0; k < 3; k++) rgb[k] *= 0.25;
+        } else {
+            long par = (long)floor(p[0] / q) + (long)floor(p[1] / q) + (long)floor(p[2] / q);
+            if (par & 1) for (int k = 0; k < 3; k++) rgb[k] *= 0.2;
+        }
+    }
+}
+
+/* How much light passes from p to a point `dist` along l (1: none blocked; transparent surfaces let
+ * their transmitted part through). */
+static double visibility(const rt_frame *f, const double p[3], const double l[3], double dist, size_t *rays)
+{
+    double vis = 1, tnear = EPS;
+    for (int k = 0; k < 32 && vis > 1e-3; k++) {
+        struct RTCRayHit rh;
+        if (!rt_intersect(f, p, l, tnear, dist - EPS, &rh, rays)) return vis;
+        vis *= f->s[rh.hit.geomID].transmit;
+        tnear = nextafterf(rh.ray.tfar, INFINITY);
+    }
+    return vis;
+}
+
+/* A unit vector in the cosine-weighted hemisphere about n, from two random numbers. */
+static void hemisphere(const double n[3], double r1, double r2, double out[3])
+{
+    double a[3] = {fabs(n[0]) < 0.9 ? 1 : 0, fabs(n[0]) < 0.9 ? 0 : 1, 0}, t[3], b[3];
+    t[0] = n[1] * a[2] - n[2] * a[1];
+    t[1] = n[2] * a[0] - n[0] * a[2];
+    t[2] = n[0] * a[1] - n[1] * a[0];
+    norm3(t);
+    b[0] = n[1] * t[2] - n[2] * t[1];
+    b[1] = n[2] * t[0] - n[0] * t[2];
+    b[2] = n[0] * t[1] - n[1] * t[0];
+    double phi = 2 * M_PI * r1, sr = sqrt(r2), z = sqrt(1 - r2);
+    for (int k = 0; k < 3; k++) out[k] = sr * cos(phi) * t[k] + sr * sin(phi) * b[k] + z * n[k];
+}
+
+void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, uint32_t px, uint32_t sample,
+              double rgb[3], double *alpha, size_t *rays)
+{
+    struct RTCRayHit rh;
+    rgb[0] = f->bg[0];
+    rgb[1] = f->bg[1];
+    rgb[2] = f->bg[2];
+    *alpha = 0;
+    if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
+    const rt_surf *s = &f->s[rh.hit.geomID];
+    const thx_render_surface *rs = s->rs;
+    double t = rh.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+    double u = rh.hit.u, v = rh.hit.v, w = 1 - u - v;
+    double ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    norm3(ng);
+    int outside = dot3(ng, dir) < 0; /* the ray meets the surface's outward side (surfaces are outward) */
+    double n[3];
+    if (rs->mode == THX_DRAW_FLAT || rs->mode == THX_DRAW_ORIENTATION) {
+        memcpy(n, ng, sizeof n);
+    } else {
+        const int32_t *c = rs->surf->tri + 3 * (size_t)rh.hit.primID;
+        const float *n0 = s->g->nrm + 3 * c[0], *n1 = s->g->nrm + 3 * c[1], *n2 = s->g->nrm + 3 * c[2];
+        for (int k = 0; k < 3; k++) n[k] = w * n0[k] + u * n1[k] + v * n2[k];
+        norm3(n);
+        if (dot3(n, n) == 0) memcpy(n, ng, sizeof n);
+    }
+    if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k]; /* facing the ray: two-sided */
+    double base[3];
+    base_color(f, s, rh.hit.primID, u, v, p, n, base);
+    if (rs->mode == THX_DRAW_ORIENTATION && !outside) { /* the inward side: the back colour */
+        const float *bc = rs->back_color;
+        int zero = bc[0] == 0 && bc[1] == 0 && bc[2] == 0 && bc[3] == 0;
+        for (int k = 0; k < 3; k++) base[k] = zero ? 1 : bc[k];
+    }
+    /* lighting */
+    const thx_raytrace_opts *o = f->o;
+    double amb = o->ambient;
+    if (o->ao_samples > 0) { /* the ambient term scaled by the unoccluded fraction */
+        int free_ = 0;
+        for (int k = 0; k < o->ao_samples; k++) {
+            double d[3];
+            hemisphere(n, rt_rand(px, sample, (uint32_t)depth, 100 + 2 * (uint32_t)k),
+                       rt_rand(px, sample, (uint32_t)depth, 101 + 2 * (uint32_t)k), d);
+            free_ += visibility(f, p, d, o->ao_distance, rays) > 0.5;
+        }
+        amb *= (double)free_ / o->ao_samples;
+    }
+    double local[3] = {base[0] * amb, base[1] * amb, base[2] * amb}, toeye[3] = {-dir[0], -dir[1], -dir[2]};
+    int n_lights = o->n_lights > 0 ? o->n_lights : 1;
+    for (int li = 0; li < n_lights; li++) {
+        thx_light head = {.kind = THX_LIGHT_HEAD, .intensity = 1};
+        const thx_light *L = o->n_lights > 0 ? &o->lights[li] : &head;
+        double l[3], dist = INFINITY, inten = L->intensity > 0 ? L->intensity : 1;
+        if (L->kind == THX_LIGHT_HEAD) {
+            if (f->ortho) for (int k = 0; k < 3; k++) l[k] = -f->view[k];
+            else for (int k = 0; k < 3; k++) l[k] = f->eye[k] - p[k];
+            norm3(l);
+            double d = fabs(dot3(n, l)); /* the OpenGL renderer's two-sided headlight */
+            for (int k = 0; k < 3; k++) local[k] += inten * (KD * d * base[k] + KS * pow(d, SHINE));
+            continue;
+        }
+        if (L->kind == THX_LIGHT_DIRECTIONAL) {
+            for (int k = 0; k < 3; k++) l[k] = -L->dir[k];
+            norm3(l);
+        } else {
+            double q[3];
+            memcpy(q, L->pos, sizeof q);
+            if (L->kind == THX_LIGHT_AREA) { /* a point of the rectangle, stratified by the pixel's samples */
+                double r1 = rt_rand(px, sample, (uint32_t)depth, 10 + (uint32_t)li), r2 = rt_rand(px, sample, (uint32_t)depth, 20 + (uint32_t)li);
+                for (int k = 0; k < 3; k++) q[k] += r1 * L->u[k] + r2 * L->v[k];
+            }
+            for (int k = 0; k < 3; k++) l[k] = q[k] - p[k];
+            dist = sqrt(dot3(l, l));
+            norm3(l);
+        }
+        double d = dot3(n, l);
+        if (d <= 0) continue;
+        double vis = L->shadows ? visibility(f, p, l, dist, rays) : 1;
+        if (vis <= 0) continue;
+        double h[3] = {l[0] + toeye[0], l[1] + toeye[1], l[2] + toeye[2]};
+        norm3(h);
+        double sp = pow(fmax(dot3(n, h), 0), SHINE);
+        for (int k = 0; k < 3; k++) local[k] += vis * inten * (KD * d * base[k] + KS * sp);
+    }
+    double refl = s->mat.reflect, trans = s->transmit;
+    if (depth >= o->max_depth) refl = trans = 0;
+    double out[3];
+    for (int k = 0; k < 3; k++) out[k] = (1 - refl - trans) * local[k];
+    if (trans > 0) {
+        /* refraction: Snell's law into (outside) or out of the surface, Schlick's Fresnel; total
+           internal reflection reflects */
+        double eta = outside ? 1 / s->mat.ior : s->mat.ior, cosi = -dot3(n, dir);
+        double k2 = 1 - eta * eta * (1 - cosi * cosi), tdir[3], fr = 0;
+        if (s->mat.ior != 1) {
+            double r0 = (1 - s->mat.ior) / (1 + s->mat.ior);
+            r0 *= r0;
+            fr = r0 + (1 - r0) * pow(1 - cosi, 5);
+        }
+        if (k2 < 0) { fr = 1; }
+        else for (int k = 0; k < 3; k++) tdir[k] = eta * dir[k] + (eta * cosi - sqrt(k2)) * n[k];
+        if (fr < 1) {
+            double c[3], a;
+            rt_shade(f, p, tdir, depth + 1, px, sample, c, &a, rays);
+            for (int k = 0; k < 3; k++) out[k] += trans * (1 - fr) * (a > 0 ? c[k] : f->bg[k]);
+        }
+        refl += trans * fr;
+    }
+    if (refl > 0) {
+        double r[3], c[3], a;
+        double dn = dot3(dir, n);
+        for (int k = 0; k < 3; k++) r[k] = dir[k] - 2 * dn * n[k];
+        rt_shade(f, p, r, depth + 1, px, sample, c, &a, rays);
+        for (int k = 0; k < 3; k++) out[k] += refl * (a > 0 ? c[k] : f->bg[k]);
+    }
+    for (int k = 0; k < 3; k++) rgb[k] = fmin(fmax(out[k], 0), 1);
+    *alpha = 1;
+}

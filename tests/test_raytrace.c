@@ -1,0 +1,323 @@
+/* RaySpray (thorax/raytrace/raytrace.h) against known answers:
+ *  - a sphere over a plane lit by a point light straight above: the shadow's edge at the radius the
+ *    tangent cone gives, L R / sqrt((L - h)^2 - R^2), to a pixel;
+ *  - a mirror at 45 degrees reflecting a checkerboard: each pixel's light or dark square is the one
+ *    the reflected ray reaches;
+ *  - a glass slab (n = 1.5) tilted in front of a dark line: the line seen shifted by the slab's lateral
+ *    displacement T sin(i - r) / cos r, Snell's law;
+ *  - the same picture for 1 and 2 threads; a frame step (new values only) builds no geometry.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/raytrace/raytrace.h"
+
+static thx_ctx *ctx;
+
+/* THX_TEST_PNG=DIR: the pictures written there, to look at */
+static void keep(const thx_raster *img, const char *name)
+{
+    const char *dir = getenv("THX_TEST_PNG");
+    if (!dir) return;
+    char p[1024];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    thx_raster_write_png(ctx, img, p);
+}
+
+/* a surface from arrays (copied) */
+static thx_surface *mesh(const char *name, const double *xyz, size_t nn, const int32_t *tri, size_t nt)
+{
+    thx_surface *s = NULL;
+    CHECK_OK(ctx, thx_surface_create(ctx, name, THX_ROLE_OTHER, &s));
+    s->xyz = malloc(3 * nn * sizeof *s->xyz);
+    s->tri = malloc(3 * nt * sizeof *s->tri);
+    memcpy(s->xyz, xyz, 3 * nn * sizeof *s->xyz);
+    memcpy(s->tri, tri, 3 * nt * sizeof *s->tri);
+    s->n_nodes = nn;
+    s->n_tris = nt;
+    return s;
+}
+
+/* a UV sphere (outward), nlon x nlat */
+static thx_surface *sphere(double cx, double cy, double cz, double r, int nlon, int nlat)
+{
+    size_t nn = 2 + (size_t)nlon * (size_t)(nlat - 1), nt = 2 * (size_t)nlon * (size_t)(nlat - 1);
+    double *x = malloc(3 * nn * sizeof *x);
+    int32_t *t = malloc(3 * nt * sizeof *t);
+    size_t k = 0, m = 0;
+    x[k++] = cx; x[k++] = cy; x[k++] = cz + r;
+    for (int j = 1; j < nlat; j++)
+        for (int i = 0; i < nlon; i++) {
+            double th = M_PI * j / nlat, ph = 2 * M_PI * i / nlon;
+            x[k++] = cx + r * sin(th) * cos(ph);
+            x[k++] = cy + r * sin(th) * sin(ph);
+            x[k++] = cz + r * cos(th);
+        }
+    x[k++] = cx; x[k++] = cy; x[k++] = cz - r;
+    int32_t south = (int32_t)nn - 1;
+    for (int i = 0; i < nlon; i++) {
+        int32_t a = 1 + i, b = 1 + (i + 1) % nlon;
+        t[m++] = 0; t[m++] = a; t[m++] = b;
+    }
+    for (int j = 1; j < nlat - 1; j++)
+        for (int i = 0; i < nlon; i++) {
+            int32_t a = 1 + (j - 1) * nlon + i, b = 1 + (j - 1) * nlon + (i + 1) % nlon, c = a + nlon, d = b + nlon;
+            t[m++] = a; t[m++] = c; t[m++] = d;
+            t[m++] = a; t[m++] = d; t[m++] = b;
+        }
+    for (int i = 0; i < nlon; i++) {
+        int32_t a = 1 + (nlat - 2) * nlon + i, b = 1 + (nlat - 2) * nlon + (i + 1) % nlon;
+        t[m++] = a; t[m++] = south; t[m++] = b;
+    }
+    thx_surface *s = mesh("sphere", x, nn, t, nt);
+    free(x);
+    free(t);
+    return s;
+}
+
+/* a rectangle: corner o, edges u and v (two triangles, normal u x v) */
+static thx_surface *rect(const char *name, const double o[3], const double u[3], const double v[3])
+{
+    double x[12];
+    for (int k = 0; k < 3; k++) {
+        x[k] = o[k];
+        x[3 + k] = o[k] + u[k];
+        x[6 + k] = o[k] + u[k] + v[k];
+        x[9 + k] = o[k] + v[k];
+    }
+    int32_t t[6] = {0, 1, 2, 0, 2, 3};
+    return mesh(name, x, 4, t, 2);
+}
+
+/* a box lo..hi (outward) */
+static thx_surface *box(const char *name, const double lo[3], const double hi[3])
+{
+    double x[24];
+    for (int c = 0; c < 8; c++) {
+        x[3 * c] = c & 1 ? hi[0] : lo[0];
+        x[3 * c + 1] = c & 2 ? hi[1] : lo[1];
+        x[3 * c + 2] = c & 4 ? hi[2] : lo[2];
+    }
+    int32_t t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                     2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    return mesh(name, x, 8, t, 12);
+}
+
+static double lum(const thx_raster *img, int x, int y)
+{
+    const unsigned char *p = img->rgba + 4 * ((size_t)y * (size_t)img->w + (size_t)x);
+    return (p[0] + p[1] + p[2]) / 3.0;
+}
+
+static void camera_down(thx_scene *sc, double height)
+{
+    sc->camera = (thx_camera){{0, 0, 500}, {0, 0, 0}, {0, 1, 0}, 0, height};
+}
+
+static void test_shadow(thx_tracer *tr)
+{
+    const double R = 20, H = 40, L = 160; /* sphere radius and centre height, light height */
+    thx_surface *sph = sphere(0, 0, H, R, 256, 128);
+    double o[3] = {-100, -100, 0}, u[3] = {200, 0, 0}, v[3] = {0, 200, 0};
+    thx_surface *pl = rect("plane", o, u, v);
+    thx_render_surface rs[2];
+    memset(rs, 0, sizeof rs);
+    rs[0].surf = pl;
+    rs[0].mode = THX_DRAW_FLAT;
+    rs[1].surf = sph;
+    rs[1].mode = THX_DRAW_PHONG;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = 2;
+    camera_down(&sc, 200);
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.n_lights = 1;
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_POINT, .pos = {0, 0, L}, .intensity = 1, .shadows = 1};
+    const int N = 400; /* 0.5 mm a pixel */
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &img));
+    thx_raytrace_stats st;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, &st));
+    keep(img, "shadow.png");
+    /* along the row through the centre, right of the sphere: where the plane turns from dark to lit */
+    double rs_exact = L * R / sqrt((L - H) * (L - H) - R * R), mm = 200.0 / N, edge = -1;
+    int yc = N / 2;
+    for (int x = N / 2 + (int)(R / mm) + 2; x < N - 1; x++)
+        if (lum(img, x, yc) < 100 && lum(img, x + 1, yc) >= 100) edge = (x + 1 - N / 2.0) * mm;
+    printf("sphere R %g at height %g, point light at %g: shadow edge %.2f mm, the tangent cone's %.2f mm (pixel %.2f mm); "
+           "%zu rays in %.3f s\n", R, H, L, edge, rs_exact, mm, st.rays, st.seconds);
+    CHECK(fabs(edge - rs_exact) <= mm);
+    /* the same picture on 1 and 2 threads */
+    thx_raster *img1 = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &img1));
+    to.samples = 2;
+    to.ao_samples = 4;
+    omp_set_num_threads(2);
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+    omp_set_num_threads(1);
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img1, &st));
+    omp_set_num_threads(2);
+    CHECK(!memcmp(img->rgba, img1->rgba, 4 * (size_t)N * N));
+    CHECK(st.builds == 0); /* the surfaces' geometry kept from the first call */
+    thx_raster_destroy(&img);
+    thx_raster_destroy(&img1);
+    thx_surface_destroy(&sph);
+    thx_surface_destroy(&pl);
+}
+
+static void test_mirror(thx_tracer *tr)
+{
+    /* camera looking down -z; the mirror z = x (normal (-1, 0, 1)/sqrt 2) sends the rays along -x to
+       a checkerboard on the plane x = -60 (facing +x) */
+    const double q = 10, D = 60;
+    double mo[3] = {-40, -40, -40}, mu[3] = {80, 0, 80}, mv[3] = {0, 80, 0};
+    thx_surface *mir = rect("mirror", mo, mv, mu); /* normal mv x mu = (80 * 80, 0, -80 * 80)?: see below */
+    double co[3] = {-D, -100, -100}, cu[3] = {0, 200, 0}, cv[3] = {0, 0, 200};
+    thx_surface *chk = rect("checker", co, cu, cv);
+    thx_render_surface rs[2];
+    memset(rs, 0, sizeof rs);
+    rs[0].surf = mir;
+    rs[0].mode = THX_DRAW_FLAT;
+    rs[0].color[0] = rs[0].color[1] = rs[0].color[2] = 0.1f;
+    rs[0].color[3] = 1;
+    rs[1].surf = chk;
+    rs[1].mode = THX_DRAW_FLAT;
+    rs[1].color[0] = rs[1].color[1] = rs[1].color[2] = 1;
+    rs[1].color[3] = 1;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = 2;
+    camera_down(&sc, 60);
+    sc.camera.eye[2] = 300;
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.ambient = 1; /* unlit: the colours as they are */
+    to.n_lights = 1;
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .dir = {0, 0, -1}, .intensity = 1e-9};
+    to.material[0].reflect = 1;
+    to.material[1].texture = 2;
+    to.material[1].texture_mm = q;
+    const int N = 240;
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &img));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+    keep(img, "mirror.png");
+    size_t agree = 0, counted = 0;
+    double mm = 60.0 / N;
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++) {
+            /* the pixel's ray: x to the right is -x in the model (the camera's right is view x up =
+               (0,0,-1) x (0,1,0) = (1, 0, 0)); compute from the camera frame */
+            double px = (x + 0.5 - N / 2.0) * mm, py = (N / 2.0 - y - 0.5) * mm; /* camera right = +x, up = +y */
+            /* the mirror at z = x: the reflected ray reaches (-D, py, px) */
+            double yy = py, zz = px;
+            double fy = yy / q - floor(yy / q), fz = zz / q - floor(zz / q);
+            if (fmin(fy, 1 - fy) * q < 1.5 * mm || fmin(fz, 1 - fz) * q < 1.5 * mm) continue; /* near a square's edge */
+            long par = (long)floor(-D / q) + (long)floor(yy / q) + (long)floor(zz / q);
+            int dark = (int)(par & 1);
+            double l = lum(img, x, y);
+            counted++;
+            agree += dark ? l < 128 : l >= 128;
+        }
+    printf("mirror at 45 degrees over a checkerboard: %zu of %zu pixels show the square the reflected ray reaches\n", agree, counted);
+    CHECK(counted > (size_t)(N * N / 2) && agree == counted);
+    thx_raster_destroy(&img);
+    thx_surface_destroy(&mir);
+    thx_surface_destroy(&chk);
+}
+
+static void test_refraction(thx_tracer *tr)
+{
+    /* a white plane z = 0 with a dark line x in [-0.5, 0.5] (a thin box on it); camera straight down;
+       a glass slab of thickness T between, tilted by i about the y axis: a ray through it is shifted
+       sideways by T sin(i - r) / cos r, r = asin(sin i / n) */
+    const double T = 20, deg = 30, n = 1.5, i = deg * M_PI / 180, r = asin(sin(i) / n);
+    const double shift = T * sin(i - r) / cos(r); /* perpendicular to the ray, i.e. along x here */
+    double po[3] = {-100, -100, 0}, pu[3] = {200, 0, 0}, pv[3] = {0, 200, 0};
+    thx_surface *pl = rect("plane", po, pu, pv);
+    double llo[3] = {-0.5, -100, 0}, lhi[3] = {0.5, 100, 0.5};
+    thx_surface *line = box("line", llo, lhi);
+    double slo[3] = {-60, -60, -T / 2}, shi[3] = {60, 60, T / 2};
+    thx_surface *slab = box("slab", slo, shi);
+    /* tilt the slab by i about y and lift it to z = 50 */
+    for (size_t k = 0; k < slab->n_nodes; k++) {
+        double *p = slab->xyz + 3 * k, x = p[0], z = p[2];
+        p[0] = cos(i) * x + sin(i) * z;
+        p[2] = -sin(i) * x + cos(i) * z + 50;
+    }
+    thx_render_surface rs[3];
+    memset(rs, 0, sizeof rs);
+    for (int k = 0; k < 3; k++) { rs[k].mode = THX_DRAW_FLAT; rs[k].color[3] = 1; }
+    rs[0].surf = pl;
+    rs[0].color[0] = rs[0].color[1] = rs[0].color[2] = 1;
+    rs[1].surf = line;
+    rs[2].surf = slab;
+    rs[2].color[0] = rs[2].color[1] = rs[2].color[2] = 1;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = 3;
+    camera_down(&sc, 40);
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.ambient = 1;
+    to.n_lights = 1;
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .dir = {0, 0, -1}, .intensity = 1e-9};
+    to.material[2].transmit = 1;
+    to.material[2].ior = n;
+    const int N = 400; /* 0.1 mm a pixel */
+    double mm = 40.0 / N, seen[2];
+    for (int with = 0; with < 2; with++) {
+        sc.n_surfaces = with ? 3 : 2;
+        thx_raster *img = NULL;
+        CHECK_OK(ctx, thx_raster_create(ctx, N, N, &img));
+        CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+        keep(img, with ? "slab.png" : "noslab.png");
+        /* the line's centre along the middle row: the mean x of the dark pixels */
+        double sx = 0;
+        int cnt = 0;
+        for (int x = 0; x < N; x++)
+            if (lum(img, x, N / 2) < 100) { sx += (x + 0.5 - N / 2.0) * mm; cnt++; }
+        seen[with] = cnt ? sx / cnt : NAN;
+        thx_raster_destroy(&img);
+    }
+    printf("glass slab (n = %.1f, %g mm, tilted %g degrees): the line seen %.3f mm aside, Snell's law %.3f mm (pixel %.2f mm)\n",
+           n, T, deg, fabs(seen[1] - seen[0]), shift, mm);
+    CHECK(fabs(seen[0]) <= mm);
+    CHECK(fabs(fabs(seen[1] - seen[0]) - shift) <= mm);
+    thx_surface_destroy(&pl);
+    thx_surface_destroy(&line);
+    thx_surface_destroy(&slab);
+}
+
+int main(void)
+{
+    thx_ctx_create(&ctx);
+    thx_tracer *tr = NULL;
+    CHECK_OK(ctx, thx_tracer_create(ctx, &tr));
+    if (tr) {
+        printf("%s\n", thx_tracer_info(tr));
+        test_shadow(tr);
+        test_mirror(tr);
+        test_refraction(tr);
+    }
+    thx_tracer_destroy(&tr);
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
