@@ -29,6 +29,7 @@ int cmd_verify(int argc, char **argv);
 int cmd_leads(int argc, char **argv);
 int cmd_field(int argc, char **argv);
 int cmd_render(int argc, char **argv);
+int cmd_trace(int argc, char **argv);
 int cmd_animate(int argc, char **argv);
 int cmd_view(int argc, char **argv);
 int cmd_digitize(int argc, char **argv);

@@ -15,6 +15,7 @@ extern char **environ;
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "cli/render_cli.h"
+#include "cli/cli_raytrace.h"
 #include "thorax/core/fileio.h"
 #include "thorax/picture/movie.h"
 #include "thorax/render/camera_path.h"
@@ -99,7 +100,7 @@ int cmd_animate(int argc, char **argv)
         {.name = "--mp4", .type = CLI_OUTPUT, .meta = "FILE|none", .s = &mp4, .def = "DIR/animation.mp4",
          .note = "none: no movie", .help = "the movie"},
     };
-    cli_opt common[N_RENDER_OPTS];
+    cli_opt common[N_RENDER_OPTS], rt[N_RAYTRACE_OPTS];
     cli_command cmd = {
         .name = "animate",
         .usage = "MODEL|--solution -o [--frames] [--fps] [--mp4] [options]",
@@ -107,7 +108,8 @@ int cmd_animate(int argc, char **argv)
                  "whose PNG exists are kept if drawn with the same options, data and program:\n"
                  "DIR/frames.settings), a progress bar on a terminal, then an MP4 (H.264) through\n"
                  "ffmpeg.\n",
-        .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)}},
+        .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)},
+                  {"ray tracing (--renderer trace)", rt, raytrace_options(rt, &o)}},
         .positional = render_positional,
         .user = &o,
     };

@@ -32,6 +32,7 @@ static const struct {
     {"leads", cmd_leads, "the 12-lead ECG and electrode-array signals of a forward solution"},
     {"field", cmd_field, "inside the volume: equipotential surfaces and slices of a solution (VTP, OBJ)"},
     {"render", cmd_render, "pictures of surfaces and potentials (headless OpenGL): views, clip planes, colour bar, ECG trace"},
+    {"trace", cmd_trace, "the same pictures ray traced (RaySpray, Embree): shadows, glass and mirrors, ambient occlusion"},
     {"animate", cmd_animate, "one picture per frame and an MP4 movie (ffmpeg), resumable"},
     {"view", cmd_view, "the interactive viewer (GTK 4): linked surfaces, frames, picking, scripts"},
     {"streamlines", cmd_field_streamlines, "current streamlines of a solution, as tubes or lines (VTP, OBJ); also thorax field --streamlines"},

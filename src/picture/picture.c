@@ -319,6 +319,7 @@ void thx_picture_opts_default(thx_picture_opts *o)
     o->arrow_spacing = 20;
     o->arrow_scale = 15;
     o->arrow_max = 400;
+    thx_raytrace_opts_default(&o->rt);
 }
 
 static const unsigned char BG[4] = {24, 24, 28, 255}, FG[4] = {235, 235, 235, 255};
@@ -479,6 +480,45 @@ thx_status thx_picture_bars_check(thx_ctx *ctx, const thx_picture_opts *o, thx_f
                      bars->more ? "more than " : "", bars->n, list, fit, fit == 1 ? "" : "s", w, h);
 }
 
+/* A panel traced (RaySpray): the materials given by name placed at their surfaces' places in the
+ * scene, the tracer made at the first traced draw and kept (its geometry cache spans frames). */
+static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
+                              thx_raster *img)
+{
+    if (!d->tracer) THX_CHECK(thx_tracer_create(ctx, &d->tracer));
+    thx_raytrace_opts *rt = malloc(sizeof *rt);
+    if (!rt) return thx_error(ctx, THX_ENOMEM, "out of memory (ray tracer options)");
+    *rt = o->rt;
+    if (o->rt_key && rt->n_lights == 0) { /* the headlight dimmed, and a key light over the viewer's right shoulder */
+        const thx_camera *c = &sc->camera;
+        double v[3], u[3], r[3], lv = 0, lr = 0;
+        for (int k = 0; k < 3; k++) { v[k] = c->center[k] - c->eye[k]; lv += v[k] * v[k]; }
+        r[0] = v[1] * c->up[2] - v[2] * c->up[1];
+        r[1] = v[2] * c->up[0] - v[0] * c->up[2];
+        r[2] = v[0] * c->up[1] - v[1] * c->up[0];
+        for (int k = 0; k < 3; k++) lr += r[k] * r[k];
+        lv = sqrt(lv);
+        lr = sqrt(lr);
+        u[0] = r[1] * v[2] - r[2] * v[1];
+        u[1] = r[2] * v[0] - r[0] * v[2];
+        u[2] = r[0] * v[1] - r[1] * v[0];
+        double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        rt->lights[0] = (thx_light){.kind = THX_LIGHT_HEAD, .intensity = 0.35};
+        rt->lights[1] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .intensity = 0.8, .shadows = 1};
+        for (int k = 0; k < 3; k++)
+            rt->lights[1].dir[k] = (lv > 0 ? v[k] / lv : 0) - 0.9 * (lu > 0 ? u[k] / lu : 0) - 0.5 * (lr > 0 ? r[k] / lr : 0);
+        rt->n_lights = 2;
+    }
+    for (size_t i = 0; i < sc->n_surfaces && i < THX_RAYTRACE_MAX_SURFACES; i++) {
+        const thx_surface *s = sc->surfaces[i].surf;
+        for (int k = 0; s && k < o->n_rt_mat; k++)
+            if (!strcmp(o->rt_mat[k].name, s->name)) rt->material[i] = o->rt_mat[k].m;
+    }
+    thx_status st = thx_raytrace_scene(ctx, d->tracer, sc, rt, img, &d->rt_stats);
+    free(rt);
+    return st;
+}
+
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
  * into the current framebuffer (img NULL, fb_w x fb_h). */
 static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *rr,
@@ -536,7 +576,8 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         thx_picture_camera(o, d, (double)pw / ph, &sc.camera);
         if (n_clip > 0) { sc.clip[0] = clip; sc.n_clip = 1; }
         size_t nn = 0;
-        st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
+        if (o->renderer == 1 && img) st = trace_panel(ctx, o, d, &sc, img);
+        else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
         if (nan_total) *nan_total += b->nan_count;
         free(b->apos);
         free(b->avec);

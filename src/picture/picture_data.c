@@ -29,6 +29,7 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 
 void thx_picture_data_free(thx_picture_data *d)
 {
+    thx_tracer_destroy(&d->tracer);
     for (int s = 0; s < THX_PICTURE_SURFACES; s++) {
         int owned = 0;
         for (int k = 0; k < d->n_sets[s]; k++) {

@@ -324,7 +324,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
                         double org[3], dir[3], rgb[3], alpha;
                         if (primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
-                        rt_shade(&f, org, dir, 0, px, sample, rgb, &alpha, &rays);
+                        rt_shade(&f, org, dir, 0, 1.0, px, sample, rgb, &alpha, &rays);
                         for (int k = 0; k < 3; k++) acc[k] += rgb[k] * alpha;
                         cov += alpha;
                     }

@@ -48,9 +48,10 @@ typedef struct {
 double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
 
 /* The colour along a ray (rt_shade.c): rgb, and *alpha the coverage (0 where the ray meets only the
- * background). px, sample: the random keys. *rays counts the rays traced. */
-void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, uint32_t px, uint32_t sample,
-              double rgb[3], double *alpha, size_t *rays);
+ * background). weight: what the ray's colour counts for in the pixel (1 for an eye ray; branches
+ * below 1/256 are not traced). px, sample: the random keys. *rays counts the rays traced. */
+void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
+              uint32_t sample, double rgb[3], double *alpha, size_t *rays);
 
 /* The nearest hit along the ray beyond tnear that the clip planes keep: 1 and the hit in *rh; 0
  * none. */

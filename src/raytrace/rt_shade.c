@@ -124,8 +124,8 @@ static void hemisphere(const double n[3], double r1, double r2, double out[3])
     for (int k = 0; k < 3; k++) out[k] = sr * cos(phi) * t[k] + sr * sin(phi) * b[k] + z * n[k];
 }
 
-void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, uint32_t px, uint32_t sample,
-              double rgb[3], double *alpha, size_t *rays)
+void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
+              uint32_t sample, double rgb[3], double *alpha, size_t *rays)
 {
     struct RTCRayHit rh;
     rgb[0] = f->bg[0];
@@ -158,10 +158,10 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         int zero = bc[0] == 0 && bc[1] == 0 && bc[2] == 0 && bc[3] == 0;
         for (int k = 0; k < 3; k++) base[k] = zero ? 1 : bc[k];
     }
-    /* lighting */
+    /* lighting: what the surface shows of itself counts for (1 - reflect - transmit) of the ray */
     const thx_raytrace_opts *o = f->o;
-    double amb = o->ambient;
-    if (o->ao_samples > 0) { /* the ambient term scaled by the unoccluded fraction */
+    double amb = o->ambient, own = weight * (1 - s->mat.reflect - s->transmit);
+    if (o->ao_samples > 0 && own > 0.2) { /* the ambient term scaled by the unoccluded fraction (where it shows) */
         int free_ = 0;
         for (int k = 0; k < o->ao_samples; k++) {
             double d[3];
@@ -172,7 +172,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         amb *= (double)free_ / o->ao_samples;
     }
     double local[3] = {base[0] * amb, base[1] * amb, base[2] * amb}, toeye[3] = {-dir[0], -dir[1], -dir[2]};
-    int n_lights = o->n_lights > 0 ? o->n_lights : 1;
+    int n_lights = own < 1.0 / 256 ? 0 : o->n_lights > 0 ? o->n_lights : 1; /* nothing of its own to light */
     for (int li = 0; li < n_lights; li++) {
         thx_light head = {.kind = THX_LIGHT_HEAD, .intensity = 1};
         const thx_light *L = o->n_lights > 0 ? &o->lights[li] : &head;
@@ -210,6 +210,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
     }
     double refl = s->mat.reflect, trans = s->transmit;
     if (depth >= o->max_depth) refl = trans = 0;
+    const double cut = 1.0 / 256; /* a branch that adds less than a grey level is not traced */
     double out[3];
     for (int k = 0; k < 3; k++) out[k] = (1 - refl - trans) * local[k];
     if (trans > 0) {
@@ -224,18 +225,18 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         }
         if (k2 < 0) { fr = 1; }
         else for (int k = 0; k < 3; k++) tdir[k] = eta * dir[k] + (eta * cosi - sqrt(k2)) * n[k];
-        if (fr < 1) {
+        if (fr < 1 && weight * trans * (1 - fr) >= cut) {
             double c[3], a;
-            rt_shade(f, p, tdir, depth + 1, px, sample, c, &a, rays);
+            rt_shade(f, p, tdir, depth + 1, weight * trans * (1 - fr), px, sample, c, &a, rays);
             for (int k = 0; k < 3; k++) out[k] += trans * (1 - fr) * (a > 0 ? c[k] : f->bg[k]);
         }
         refl += trans * fr;
     }
-    if (refl > 0) {
+    if (refl > 0 && weight * refl >= cut) {
         double r[3], c[3], a;
         double dn = dot3(dir, n);
         for (int k = 0; k < 3; k++) r[k] = dir[k] - 2 * dn * n[k];
-        rt_shade(f, p, r, depth + 1, px, sample, c, &a, rays);
+        rt_shade(f, p, r, depth + 1, weight * refl, px, sample, c, &a, rays);
         for (int k = 0; k < 3; k++) out[k] += refl * (a > 0 ? c[k] : f->bg[k]);
     }
     for (int k = 0; k < 3; k++) rgb[k] = fmin(fmax(out[k], 0), 1);

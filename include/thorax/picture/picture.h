@@ -19,6 +19,7 @@
 #include "thorax/model/series.h"
 #include "thorax/render/image.h"
 #include "thorax/render/render.h"
+#include "thorax/raytrace/raytrace.h"
 #include "thorax/field/streamline.h"
 #ifdef __cplusplus
 extern "C" {
@@ -187,6 +188,18 @@ typedef struct {
     int have_level;
     int image_labels;
     const char *contours;
+    /* the renderer (issue 27): 0 OpenGL (the paper's HiPPR), 1 the ray tracer (RaySpray,
+       thorax/raytrace/raytrace.h): the same scene, traced with rt's lights, samples, ambient
+       occlusion and depth, and the materials rt_mat[] give surfaces by name (the viewer draws with
+       OpenGL) */
+    int renderer;
+    thx_raytrace_opts rt;
+    struct {
+        char name[64];
+        thx_raytrace_material m;
+    } rt_mat[THX_PICTURE_MAX];
+    int n_rt_mat;
+    int rt_key;             /* add a key light (directional, shadows) from above the viewer's right shoulder */
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
@@ -247,6 +260,8 @@ typedef struct {
     double scan_key[4][4];           /* what each was built for: position, window, level, labels */
     int scan_built[4];
     int bounds_from_scan;            /* frame the scan's box, not the surfaces' (tracing: they grow as traced) */
+    thx_tracer *tracer;              /* the ray tracer (o->renderer 1), made at the first traced draw (owned) */
+    thx_raytrace_stats rt_stats;     /* ... and what its last draw took */
     thx_contours *contours;          /* o->contours, or NULL */
     thx_surface *contour_lines[64];  /* the loops on the planes: a wire surface per plane and contour surface */
     float contour_rgba[64][4];

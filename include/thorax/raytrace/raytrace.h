@@ -41,7 +41,7 @@ typedef struct {
     int shadows;          /* cast shadows (point, directional, area) */
 } thx_light;
 
-typedef struct {
+typedef struct thx_raytrace_material {
     double reflect;       /* mirror reflectance 0..1 */
     double transmit;      /* 0..1: the part that passes through (glass); 0 and the colour's alpha < 1:
                              1 - alpha, without refraction */
@@ -50,7 +50,7 @@ typedef struct {
     double texture_mm;
 } thx_raytrace_material;
 
-typedef struct {
+typedef struct thx_raytrace_opts {
     int samples;          /* per pixel side: samples^2 stratified, jittered samples (1: the centre) */
     int max_depth;        /* reflection and refraction bounces (6) */
     thx_light lights[THX_RAYTRACE_MAX_LIGHTS];
