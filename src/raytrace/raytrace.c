@@ -17,6 +17,7 @@
 
 struct thx_tracer {
     RTCDevice dev;
+    rt_vmesh vm;
     rt_geom cache[CACHE_MAX];
     size_t n_cache;
     unsigned long call;
@@ -95,12 +96,23 @@ void thx_tracer_destroy(thx_tracer **tp)
     thx_tracer *t = tp ? *tp : NULL;
     if (!t) return;
     for (size_t i = 0; i < t->n_cache; i++) geom_free(&t->cache[i]);
+    rt_vmesh_free(&t->vm);
     rtcReleaseDevice(t->dev);
     free(t);
     *tp = NULL;
 }
 
 const char *thx_tracer_info(const thx_tracer *t) { return t->info; }
+
+thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v)
+{
+    if (!v->xyz || !v->tet || !v->n_tets || (!v->point_values && !v->cell_values))
+        return thx_error(ctx, THX_EINPUT, "volume rendering: a mesh (nodes, tetrahedra) and its values are needed");
+    if (!(v->density >= 0) || !isfinite(v->density)) return thx_error(ctx, THX_EINPUT, "volume rendering: density %g", v->density);
+    return rt_vmesh_build(ctx, t->dev, v, &t->vm);
+}
+
+const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t) { return &t->vm; }
 
 /* The cached geometry of surface s, built when new or changed. */
 static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, const rt_geom **out, size_t *builds)
@@ -307,6 +319,17 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     double t1 = wall();
     if (st != THX_OK) { frame_free(&f); return st; }
     f.pixel_mm = f.ortho ? sc->camera.height / vp[3] : 2 * tan(0.5 * sc->camera.fov_deg * M_PI / 180) / vp[3];
+    rt_tf *tf = NULL;
+    if (o->volume) { /* the field inside its mesh: the mesh's faces kept across calls, the values new */
+        size_t before = t->vm.builds;
+        st = rt_tracer_vmesh(ctx, t, o->volume);
+        tf = st == THX_OK ? thx_malloc(ctx, sizeof *tf) : NULL;
+        if (st != THX_OK || !tf) { frame_free(&f); return st != THX_OK ? st : THX_ENOMEM; }
+        rt_tf_build(o->volume, tf);
+        f.vm = &t->vm;
+        f.tf = tf;
+        builds += t->vm.builds - before;
+    }
     int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
     size_t rays = 0;
     int ns = o->samples;
@@ -322,9 +345,18 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         uint32_t sample = (uint32_t)(sy * ns + sx);
                         double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
                         double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
-                        double org[3], dir[3], rgb[3], alpha;
+                        double org[3], dir[3], rgb[3], alpha, thit;
                         if (primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
-                        rt_shade(&f, org, dir, 0, 1.0, px, sample, rgb, &alpha, &rays);
+                        rt_shade(&f, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
+                        if (f.vm) { /* the field in front of the surface hit (or of the background) */
+                            double vc[3], T;
+                            rt_volume_march(f.vm, o->volume, f.tf, org, dir, 0, thit, vc, &T, &rays);
+                            /* premultiplied: the volume's emission, then the surface behind it through
+                               what the volume lets pass; the coverage likewise */
+                            double vcov = (1 - T) + T * alpha;
+                            for (int k = 0; k < 3; k++) rgb[k] = vcov > 0 ? (vc[k] + T * alpha * rgb[k]) / vcov : 0;
+                            alpha = vcov;
+                        }
                         for (int k = 0; k < 3; k++) acc[k] += rgb[k] * alpha;
                         cov += alpha;
                     }
@@ -352,6 +384,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         }
     }
     frame_free(&f);
+    free(tf);
     if (stats) {
         stats->seconds = wall() - t0;
         stats->build_seconds = t1 - t0;

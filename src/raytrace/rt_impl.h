@@ -29,6 +29,26 @@ typedef struct {
     int no_clip;
 } rt_surf;
 
+/* A volume mesh as the volume renderer walks it (rt_volume.c): kept across calls while (xyz, tet)
+ * stay the same. */
+typedef struct {
+    const double *xyz;
+    const int32_t *tet;
+    size_t n_nodes, n_tets;
+    int32_t *nbr;                   /* 4 n_tets: the tetrahedron across face k (opposite vertex k), -1 none */
+    int32_t *nbr_face;              /* ... and that face's number in it */
+    int32_t *bface;                 /* boundary face (Embree primitive) -> tet * 4 + k */
+    size_t n_bface;
+    RTCScene scene;                 /* the boundary faces */
+    size_t builds;
+} rt_vmesh;
+
+/* The transfer function: 256 entries over t in [0, 1]. */
+typedef struct {
+    double c[256][3];
+    double tau[256];                /* extinction per mm */
+} rt_tf;
+
 /* A call's frame: what the shading reads. */
 typedef struct {
     const thx_scene *sc;
@@ -42,7 +62,19 @@ typedef struct {
     double pixel_mm;                /* orthographic: a pixel's size; perspective: per mm of distance */
     float bg[4], nan_color[4];
     int any_clip;
+    const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function */
+    const rt_tf *tf;
 } rt_frame;
+
+thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume *v, rt_vmesh *m);
+void rt_vmesh_free(rt_vmesh *m);
+void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf);
+/* The volume integral from tnear to tfar: rgb (premultiplied) and the transmittance *T left. */
+void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double o[3], const double d[3],
+                     double tnear, double tfar, double rgb[3], double *T, size_t *rays);
+/* The tracer's volume mesh for v, built when new (raytrace.c). */
+thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v);
+const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);
 
 /* A random number in [0, 1) from a hash of the four keys (deterministic). */
 double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
@@ -51,7 +83,7 @@ double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
  * background). weight: what the ray's colour counts for in the pixel (1 for an eye ray; branches
  * below 1/256 are not traced). px, sample: the random keys. *rays counts the rays traced. */
 void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
-              uint32_t sample, double rgb[3], double *alpha, size_t *rays);
+              uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays);
 
 /* The nearest hit along the ray beyond tnear that the clip planes keep: 1 and the hit in *rh; 0
  * none. */

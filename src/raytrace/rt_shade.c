@@ -125,14 +125,16 @@ static void hemisphere(const double n[3], double r1, double r2, double out[3])
 }
 
 void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
-              uint32_t sample, double rgb[3], double *alpha, size_t *rays)
+              uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays)
 {
     struct RTCRayHit rh;
     rgb[0] = f->bg[0];
     rgb[1] = f->bg[1];
     rgb[2] = f->bg[2];
     *alpha = 0;
+    *thit = INFINITY;
     if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
+    *thit = rh.ray.tfar;
     const rt_surf *s = &f->s[rh.hit.geomID];
     const thx_render_surface *rs = s->rs;
     double t = rh.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
@@ -226,17 +228,17 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         if (k2 < 0) { fr = 1; }
         else for (int k = 0; k < 3; k++) tdir[k] = eta * dir[k] + (eta * cosi - sqrt(k2)) * n[k];
         if (fr < 1 && weight * trans * (1 - fr) >= cut) {
-            double c[3], a;
-            rt_shade(f, p, tdir, depth + 1, weight * trans * (1 - fr), px, sample, c, &a, rays);
+            double c[3], a, th;
+            rt_shade(f, p, tdir, depth + 1, weight * trans * (1 - fr), px, sample, c, &a, &th, rays);
             for (int k = 0; k < 3; k++) out[k] += trans * (1 - fr) * (a > 0 ? c[k] : f->bg[k]);
         }
         refl += trans * fr;
     }
     if (refl > 0 && weight * refl >= cut) {
-        double r[3], c[3], a;
+        double r[3], c[3], a, th;
         double dn = dot3(dir, n);
         for (int k = 0; k < 3; k++) r[k] = dir[k] - 2 * dn * n[k];
-        rt_shade(f, p, r, depth + 1, weight * refl, px, sample, c, &a, rays);
+        rt_shade(f, p, r, depth + 1, weight * refl, px, sample, c, &a, &th, rays);
         for (int k = 0; k < 3; k++) out[k] += refl * (a > 0 ? c[k] : f->bg[k]);
     }
     for (int k = 0; k < 3; k++) rgb[k] = fmin(fmax(out[k], 0), 1);

@@ -8,7 +8,8 @@
  *
  * What is traced: surfaces in the flat, Gouraud, Phong and orientation modes (points and wire modes
  * are drawn as Phong surfaces; hidden ones not), with their colours, data and contour lines, and the
- * scene's clip planes. Arrows and image planes are not traced yet.
+ * scene's clip planes; a field inside a tetrahedral mesh (thx_raytrace_volume). Arrows and image
+ * planes are not traced yet.
  *
  * Deterministic: every random number is a hash of (pixel, sample, bounce, use), tiles are
  * independent, so the same input gives the same picture whatever the number of threads.
@@ -50,6 +51,30 @@ typedef struct thx_raytrace_material {
     double texture_mm;
 } thx_raytrace_material;
 
+/* A field inside a tetrahedral mesh, rendered by emission and absorption along each ray (the volume
+ * renderer of paper 4.3's RaySpray): the ray enters the mesh where Embree finds a boundary face, walks
+ * from tetrahedron to tetrahedron through their shared faces, and integrates each piece exactly for a
+ * field linear in the tetrahedron (point data) or constant in it (cell data). Colour from cmap over
+ * scale (the field's colour scale), extinction tau(t) = density * opacity(t) per mm with opacity
+ * piecewise linear through the control points (t, opacity), t = scale(value) in [0, 1]; none: 0 at
+ * t = 1/2 rising to 1 at both ends (a symmetric potential's zero clear, its extremes opaque). The
+ * mesh's boundary faces and neighbours are built once per mesh (xyz, tet) and kept: a frame step
+ * changes the values alone. */
+#define THX_RAYTRACE_MAX_OPACITY 16
+typedef struct {
+    const double *xyz;       /* 3 n_nodes */
+    size_t n_nodes;
+    const int32_t *tet;      /* 4 n_tets, positively oriented */
+    size_t n_tets;
+    const double *point_values; /* per node (linear in each tetrahedron), or NULL */
+    const double *cell_values;  /* per tetrahedron (constant), when point_values is NULL */
+    thx_colormap cmap;
+    thx_scale scale;
+    double opacity[THX_RAYTRACE_MAX_OPACITY][2];
+    int n_opacity;
+    double density;          /* extinction per mm at opacity 1 */
+} thx_raytrace_volume;
+
 typedef struct thx_raytrace_opts {
     int samples;          /* per pixel side: samples^2 stratified, jittered samples (1: the centre) */
     int max_depth;        /* reflection and refraction bounces (6) */
@@ -61,6 +86,7 @@ typedef struct thx_raytrace_opts {
     double ao_distance;
     thx_raytrace_material material[THX_RAYTRACE_MAX_SURFACES]; /* per scene surface (index in thx_scene) */
     int progress;         /* a progress bar on stderr */
+    const thx_raytrace_volume *volume; /* a field rendered inside its mesh (NULL: none) */
 } thx_raytrace_opts;
 
 void thx_raytrace_opts_default(thx_raytrace_opts *o);
@@ -84,6 +110,11 @@ const char *thx_tracer_info(const thx_tracer *t);
  * background first, else the background is left where no surface is hit). stats may be NULL. */
 thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, thx_raster *img,
                            thx_raytrace_stats *stats);
+
+/* The volume integral along one ray from tnear to tfar (RAS mm; dir unit): the emitted colour
+ * (premultiplied) and the transmittance left, as the tracer composites it (tests). */
+thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, const double org[3],
+                                   const double dir[3], double tnear, double tfar, double rgb[3], double *transmittance);
 
 /* What each pixel's centre sees in a w x h viewport: the index of the scene surface hit (-1 none) and
  * the triangle (the primary ray through the pixel centre, after the clip planes). */
