@@ -104,6 +104,42 @@ static int parse_material(void *user, const cli_opt *opt, const char *v)
     return 0;
 }
 
+static int parse_volume(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    if (strcmp(v, "potential") && strcmp(v, "current")) return cli_usage_error(o->cmd, "--volume potential or --volume current");
+    o->p.volume_render = v;
+    return 0;
+}
+
+/* T:A[,T:A...], T ascending in [0, 1], A >= 0 */
+static int parse_opacity(void *user, const cli_opt *opt, const char *v)
+{
+    ropts *o = user;
+    thx_picture_opts *p = &o->p;
+    static const char *usage = "--volume-opacity T:A[,T:A...]: points of the opacity over the colour scale, T from 0 to 1 "
+                               "ascending, A >= 0 (e.g. 0:1,0.4:0,0.6:0,1:1)";
+    p->n_volume_opacity = 0;
+    const char *s = v;
+    while (*s) {
+        char *end;
+        double t = strtod(s, &end);
+        if (end == s || *end != ':') return cli_usage_error(o->cmd, "%s", usage);
+        s = end + 1;
+        double a = strtod(s, &end);
+        if (end == s || (*end && *end != ',')) return cli_usage_error(o->cmd, "%s", usage);
+        s = *end ? end + 1 : end;
+        int n = p->n_volume_opacity;
+        if (n >= THX_RAYTRACE_MAX_OPACITY || !(t >= 0 && t <= 1) || !(a >= 0) || !isfinite(a) || (n && t < p->volume_opacity[n - 1][0]))
+            return cli_usage_error(o->cmd, "%s", usage);
+        p->volume_opacity[n][0] = t;
+        p->volume_opacity[n][1] = a;
+        p->n_volume_opacity++;
+    }
+    if (!p->n_volume_opacity) return cli_usage_error(o->cmd, "%s", usage);
+    return 0;
+}
+
 static const cli_choice renderers[] = {{"gl", 0}, {"trace", 1}, {NULL, 0}};
 
 size_t raytrace_options(cli_opt *t, ropts *o)
@@ -131,5 +167,15 @@ size_t raytrace_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--depth", .type = CLI_INT, .meta = "N", .i = &o->p.rt.max_depth, .rule = CLI_GE | CLI_LE,
                        .lo = 0, .hi = 32, .bad = "--depth: 0 to 32",
                        .help = "trace: reflection and refraction bounces at most"};
+    t[n++] = (cli_opt){.name = "--volume", .type = CLI_STRING, .meta = "FIELD", .fn = parse_volume,
+                       .help = "trace: the field rendered inside the torso by emission and absorption (needs --solution "
+                               "with volume potentials): potential (linear in each tetrahedron, the colour scale's) or "
+                               "current (|J| per tetrahedron, viridis)"};
+    t[n++] = (cli_opt){.name = "--volume-opacity", .type = CLI_STRING, .meta = "T:A,...", .fn = parse_opacity,
+                       .help = "trace: the volume's opacity over its colour scale, points T:A (default: clear at the "
+                               "middle, opaque at both ends; current: rising from 0)"};
+    t[n++] = (cli_opt){.name = "--volume-density", .type = CLI_REAL, .meta = "PER_MM", .unit = "1/mm", .d = &o->p.volume_density,
+                       .rule = CLI_GT | CLI_FINITE, .lo = 0, .bad = "--volume-density: above 0", .def = "0.02",
+                       .help = "trace: the volume's extinction per mm at opacity 1"};
     return n;
 }

@@ -115,6 +115,7 @@ int cmd_animate(int argc, char **argv)
     };
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
+    if (o.p.volume_render && o.p.renderer != 1) return cli_usage_error("animate", "--volume: volume rendering is the ray tracer's (--renderer trace)");
     if (frames) {
         long fa, fb;
         if (cli_parse_pair(frames, ':', 1, INT_MAX, &fa, &fb))

@@ -90,7 +90,7 @@ thx_status thx_picture_cuts_check(thx_ctx *ctx, const thx_picture_opts *o, const
     if (!d->volume) {
         if (!picture_has_field(o)) return THX_OK;
         return thx_error(ctx, THX_EINPUT, "%s: the volume potentials were not read (give a cut with the --solution at the start)",
-                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
+                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : o->n_streamlines ? "--streamlines" : "--volume");
     }
     /* the specifications checked (the values against the series' range), the option named */
     thx_status st = THX_OK;

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "thorax/core/fileio.h"
+#include "thorax/fem/fem.h"
 #include "thorax/import/import.h"
 #include "thorax/io/model_dir.h"
 #include "thorax/io/series_file.h"
@@ -482,10 +483,75 @@ thx_status thx_picture_bars_check(thx_ctx *ctx, const thx_picture_opts *o, thx_f
 
 /* A panel traced (RaySpray): the materials given by name placed at their surfaces' places in the
  * scene, the tracer made at the first traced draw and kept (its geometry cache spans frames). */
-static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
+/* The field rendered inside the mesh (o->volume_render): the tetrahedra of the solution's domain
+ * (once), the frame's potentials (point data) or |J| per tetrahedron (cell data), the scale. */
+static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, thx_raytrace_volume *v)
+{
+    const thx_volume *vm = d->m->volume;
+    if (!d->volume || !vm) return thx_error(ctx, THX_EINPUT, "--volume: needs --solution with volume potentials (thorax forward --volume)");
+    int current = !strcmp(o->volume_render, "current");
+    if (!d->vr_tet) {
+        d->vr_tet = malloc(4 * (vm->n_tets ? vm->n_tets : 1) * sizeof *d->vr_tet);
+        if (!d->vr_tet) return thx_error(ctx, THX_ENOMEM, "out of memory (volume rendering)");
+        d->vr_n_tets = 0;
+        for (size_t t = 0; t < vm->n_tets; t++)
+            if (!d->field_use || d->field_use[vm->region[t]]) memcpy(d->vr_tet + 4 * d->vr_n_tets++, vm->tet + 4 * t, 4 * sizeof *d->vr_tet);
+    }
+    size_t f = (size_t)frame < d->volume->n_frames ? (size_t)frame : d->volume->n_frames - 1;
+    const double *phi = d->volume->v + f * d->volume->n_rows;
+    memset(v, 0, sizeof *v);
+    v->xyz = vm->xyz;
+    v->n_nodes = vm->n_nodes;
+    v->tet = d->vr_tet;
+    v->n_tets = d->vr_n_tets;
+    v->cmap = current ? THX_CMAP_VIRIDIS : o->cmap;
+    if (current) {
+        double *j = malloc(3 * (vm->n_tets ? vm->n_tets : 1) * sizeof *j);
+        free(d->vr_cell);
+        d->vr_cell = malloc((d->vr_n_tets ? d->vr_n_tets : 1) * sizeof *d->vr_cell);
+        if (!j || !d->vr_cell) { free(j); return thx_error(ctx, THX_ENOMEM, "out of memory (volume rendering)"); }
+        thx_fem_currents(vm, d->field_use, phi, j, NULL);
+        double hi = 0;
+        for (size_t t = 0, k = 0; t < vm->n_tets; t++) {
+            if (d->field_use && !d->field_use[vm->region[t]]) continue;
+            d->vr_cell[k] = sqrt(j[3 * t] * j[3 * t] + j[3 * t + 1] * j[3 * t + 1] + j[3 * t + 2] * j[3 * t + 2]);
+            if (isfinite(d->vr_cell[k])) hi = fmax(hi, d->vr_cell[k]);
+            k++;
+        }
+        free(j);
+        v->cell_values = d->vr_cell;
+        thx_scale_from_range(&v->scale, THX_SCALE_LINEAR, 0, hi > 0 ? hi : 1, 0);
+    } else {
+        /* the frame's own range: the volume's contrast at every frame (the series' extremes, near the
+           heart at the peak of the beat, would leave most frames clear) */
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < d->vr_n_tets * 4; i++) {
+            double x = phi[d->vr_tet[i]];
+            if (isfinite(x)) { lo = fmin(lo, x); hi = fmax(hi, x); }
+        }
+        if (!(lo < hi)) { lo = d->vmin; hi = d->vmax; }
+        v->point_values = phi;
+        picture_scale_settings(o, lo, hi, 0, &v->scale);
+    }
+    memcpy(v->opacity, o->volume_opacity, sizeof v->opacity);
+    v->n_opacity = o->n_volume_opacity;
+    if (!o->n_volume_opacity && current) { /* |J|: clear where weak, rising to opaque */
+        v->opacity[0][0] = 0;
+        v->opacity[0][1] = 0;
+        v->opacity[1][0] = 1;
+        v->opacity[1][1] = 1;
+        v->n_opacity = 2;
+    }
+    v->density = o->volume_density > 0 ? o->volume_density : 0.02;
+    return THX_OK;
+}
+
+static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc, int frame,
                               thx_raster *img)
 {
     if (!d->tracer) THX_CHECK(thx_tracer_create(ctx, &d->tracer));
+    thx_raytrace_volume vol;
+    if (o->volume_render) THX_CHECK(volume_of(ctx, o, d, frame, &vol));
     thx_raytrace_opts *rt = malloc(sizeof *rt);
     if (!rt) return thx_error(ctx, THX_ENOMEM, "out of memory (ray tracer options)");
     *rt = o->rt;
@@ -514,6 +580,7 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         for (int k = 0; s && k < o->n_rt_mat; k++)
             if (!strcmp(o->rt_mat[k].name, s->name)) rt->material[i] = o->rt_mat[k].m;
     }
+    rt->volume = o->volume_render ? &vol : NULL;
     thx_status st = thx_raytrace_scene(ctx, d->tracer, sc, rt, img, &d->rt_stats);
     free(rt);
     return st;
@@ -576,7 +643,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         thx_picture_camera(o, d, (double)pw / ph, &sc.camera);
         if (n_clip > 0) { sc.clip[0] = clip; sc.n_clip = 1; }
         size_t nn = 0;
-        if (o->renderer == 1 && img) st = trace_panel(ctx, o, d, &sc, img);
+        if (o->renderer == 1 && img) st = trace_panel(ctx, o, d, &sc, frame, img);
         else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
         if (nan_total) *nan_total += b->nan_count;
         free(b->apos);

@@ -30,6 +30,10 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 void thx_picture_data_free(thx_picture_data *d)
 {
     thx_tracer_destroy(&d->tracer);
+    free(d->vr_tet);
+    free(d->vr_cell);
+    d->vr_tet = NULL;
+    d->vr_cell = NULL;
     for (int s = 0; s < THX_PICTURE_SURFACES; s++) {
         int owned = 0;
         for (int k = 0; k < d->n_sets[s]; k++) {
@@ -326,7 +330,7 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
         if (st == THX_OK && picture_has_field(o))
-            st = read_volume(ctx, o, j, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines", d);
+            st = read_volume(ctx, o, j, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : o->n_streamlines ? "--streamlines" : "--volume", d);
         if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
@@ -590,7 +594,7 @@ thx_status thx_picture_load(thx_ctx *ctx, thx_picture_opts *o, thx_picture_data 
     if (picture_has_field(o) && !o->solution) {
         memset(d, 0, sizeof *d);
         return thx_error(ctx, THX_EINPUT, "%s: needs --solution DIR (a solution with volume potentials)",
-                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : "--streamlines");
+                         o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : o->n_streamlines ? "--streamlines" : "--volume");
     }
     THX_CHECK(load_data(ctx, o, d));
     THX_CHECK(picture_field_load(ctx, o, d));

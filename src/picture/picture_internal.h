@@ -27,7 +27,7 @@ thx_status picture_tet_surfaces(thx_ctx *ctx, const thx_volume *v, const thx_cli
  * picture_field_free frees what the two made. */
 static inline int picture_has_field(const thx_picture_opts *o)
 {
-    return o->isosurface || o->n_slices || o->n_streamlines;
+    return o->isosurface || o->n_slices || o->n_streamlines || o->volume_render;
 }
 thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);

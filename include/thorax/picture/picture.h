@@ -200,6 +200,14 @@ typedef struct {
     } rt_mat[THX_PICTURE_MAX];
     int n_rt_mat;
     int rt_key;             /* add a key light (directional, shadows) from above the viewer's right shoulder */
+    /* volume rendering (the ray tracer; needs --solution with volume potentials): "potential" (linear
+       in each tetrahedron) or "current" (|J| = |sigma grad phi| per tetrahedron), in the solution's
+       domain; opacity control points (t, opacity) over the field's colour scale (none: clear at the
+       middle, opaque at both ends) and the extinction per mm at opacity 1 */
+    const char *volume_render;
+    double volume_opacity[THX_RAYTRACE_MAX_OPACITY][2];
+    int n_volume_opacity;
+    double volume_density;
     int check_frame;        /* thx_picture_load: refuse when `frame` is past a surface's data */
     int frame;              /* 0-based, for that check */
 } thx_picture_opts;
@@ -261,6 +269,9 @@ typedef struct {
     int scan_built[4];
     int bounds_from_scan;            /* frame the scan's box, not the surfaces' (tracing: they grow as traced) */
     thx_tracer *tracer;              /* the ray tracer (o->renderer 1), made at the first traced draw (owned) */
+    int32_t *vr_tet;                 /* volume rendering: the tetrahedra in the solution's domain (owned) */
+    size_t vr_n_tets;
+    double *vr_cell;                 /* ... and |J| per tetrahedron of the frame drawn (owned) */
     thx_raytrace_stats rt_stats;     /* ... and what its last draw took */
     thx_contours *contours;          /* o->contours, or NULL */
     thx_surface *contour_lines[64];  /* the loops on the planes: a wire surface per plane and contour surface */
