@@ -38,6 +38,7 @@ typedef struct {
     int32_t *nbr;                   /* 4 n_tets: the tetrahedron across face k (opposite vertex k), -1 none */
     int32_t *nbr_face;              /* ... and that face's number in it */
     int32_t *bface;                 /* boundary face (Embree primitive) -> tet * 4 + k */
+    double *plane;                  /* 16 n_tets: per tetrahedron the 4 barycentric coordinates as a . p + b */
     size_t n_bface;
     RTCScene scene;                 /* the boundary faces */
     size_t builds;

@@ -6,9 +6,11 @@
  * and each tetrahedron's four face neighbours (the tetrahedron across the face opposite vertex k, and
  * that face's number there) into a table; both are built once per mesh and kept.
  *
- * The walk. A ray enters at the nearest boundary face Embree finds, in that face's tetrahedron. In
- * a tetrahedron entered through face `in`, it leaves through the face among the other three whose
- * plane it reaches first going outward; the neighbour across that face is entered through the same
+ * The walk. A ray enters at the nearest boundary face Embree finds, in that face's tetrahedron. Each
+ * tetrahedron keeps its four barycentric coordinates as affine functions (built with the mesh), so
+ * along the ray each is linear: in a tetrahedron entered through face `in`, the ray leaves through
+ * the face among the other three whose coordinate falls to 0 first, and the field there is the
+ * coordinates' mix of the corner values; the neighbour across that face is entered through the same
  * face (its number there from the table), so no face is tested twice and a ray is never lost
  * between two tetrahedra. At a boundary face the ray leaves the mesh and Embree finds where it
  * enters again (a concave mesh).
@@ -48,6 +50,7 @@ void rt_vmesh_free(rt_vmesh *m)
     free(m->nbr);
     free(m->nbr_face);
     free(m->bface);
+    free(m->plane);
     memset(m, 0, sizeof *m);
 }
 
@@ -99,6 +102,23 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
         i = j;
     }
     free(f);
+    /* each tetrahedron's barycentric coordinates as affine functions: lambda_k(p) = a_k . p + b_k, 1 at
+       vertex k and 0 on the face opposite it (what the walk and the field's interpolation read) */
+    m->plane = thx_malloc(ctx, 16 * (nt ? nt : 1) * sizeof *m->plane);
+    if (!m->plane) { rt_vmesh_free(m); return THX_ENOMEM; }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 4; k++) {
+            const int32_t *c = v->tet + 4 * t;
+            const double *p0 = v->xyz + 3 * c[(k + 1) % 4], *p1 = v->xyz + 3 * c[(k + 2) % 4], *p2 = v->xyz + 3 * c[(k + 3) % 4];
+            const double *vk = v->xyz + 3 * c[k];
+            double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+            double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            double sk = n[0] * (vk[0] - p0[0]) + n[1] * (vk[1] - p0[1]) + n[2] * (vk[2] - p0[2]);
+            double *pl = m->plane + 16 * t + 4 * (size_t)k;
+            if (sk == 0) { pl[0] = pl[1] = pl[2] = 0; pl[3] = 0.25; continue; } /* a flat tetrahedron: never crossed */
+            for (int q = 0; q < 3; q++) pl[q] = n[q] / sk;
+            pl[3] = -(pl[0] * p0[0] + pl[1] * p0[1] + pl[2] * p0[2]);
+        }
     /* the boundary faces, as Embree triangles (each face's tetrahedron slot kept) */
     m->bface = thx_malloc(ctx, (nb ? nb : 1) * sizeof *m->bface);
     if (!m->bface) { rt_vmesh_free(m); return THX_ENOMEM; }
@@ -220,50 +240,30 @@ static void segment(const rt_tf *tf, double ta, double tb, double L, double rgb[
     }
 }
 
-/* The field's t at point p in tetrahedron tt. */
-static double field_t(const thx_raytrace_volume *v, size_t tt, const double p[3])
+/* The field's t at point p in tetrahedron tt (its barycentric planes). */
+static double field_t(const rt_vmesh *m, const thx_raytrace_volume *v, size_t tt, const double p[3])
 {
     if (!v->point_values) return thx_scale_apply(&v->scale, v->cell_values[tt]);
     const int32_t *c = v->tet + 4 * tt;
-    const double *a = v->xyz + 3 * c[0], *b = v->xyz + 3 * c[1], *d = v->xyz + 3 * c[2], *e = v->xyz + 3 * c[3];
-    double m[3][3] = {{b[0] - a[0], d[0] - a[0], e[0] - a[0]}, {b[1] - a[1], d[1] - a[1], e[1] - a[1]}, {b[2] - a[2], d[2] - a[2], e[2] - a[2]}};
-    double r[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    if (det == 0) return thx_scale_apply(&v->scale, v->point_values[c[0]]);
-    /* Cramer: p - a = l1 (b - a) + l2 (d - a) + l3 (e - a) */
-    double l[3];
-    for (int col = 0; col < 3; col++) {
-        double q[3][3];
-        memcpy(q, m, sizeof q);
-        for (int row = 0; row < 3; row++) q[row][col] = r[row];
-        l[col] = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-                  q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / det;
-    }
-    double val = (1 - l[0] - l[1] - l[2]) * v->point_values[c[0]] + l[0] * v->point_values[c[1]] + l[1] * v->point_values[c[2]] +
-                 l[2] * v->point_values[c[3]];
+    const double *pl = m->plane + 16 * tt;
+    double val = 0;
+    for (int k = 0; k < 4; k++) val += (pl[4 * k] * p[0] + pl[4 * k + 1] * p[1] + pl[4 * k + 2] * p[2] + pl[4 * k + 3]) * v->point_values[c[k]];
     return thx_scale_apply(&v->scale, val);
 }
 
-/* Where the ray leaves tetrahedron tt entered through face `in` (-1: unknown): the face and the
- * distance; -1 when no face lies ahead (a ray grazing a face). */
-static int exit_face(const thx_raytrace_volume *v, size_t tt, int in, const double o[3], const double d[3], double tmin,
-                     double *texit)
+/* Where the ray leaves tetrahedron tt entered through face `in` (-1: unknown): the face whose
+ * barycentric coordinate falls to 0 first, and the distance; -1 when none falls (a ray grazing). */
+static int exit_face(const rt_vmesh *m, size_t tt, int in, const double o[3], const double d[3], double tmin, double *texit)
 {
-    const int32_t *c = v->tet + 4 * tt;
+    const double *pl = m->plane + 16 * tt;
     int best = -1;
     double bt = INFINITY;
     for (int k = 0; k < 4; k++) {
         if (k == in) continue;
-        const double *p0 = v->xyz + 3 * c[(k + 1) % 4], *p1 = v->xyz + 3 * c[(k + 2) % 4], *p2 = v->xyz + 3 * c[(k + 3) % 4];
-        const double *opp = v->xyz + 3 * c[k];
-        double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        double so = n[0] * (opp[0] - p0[0]) + n[1] * (opp[1] - p0[1]) + n[2] * (opp[2] - p0[2]);
-        if (so > 0) for (int q = 0; q < 3; q++) n[q] = -n[q]; /* outward: away from the opposite vertex */
-        double den = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
-        if (!(den > 0)) continue; /* the ray does not leave through this face's plane */
-        double t = (n[0] * (p0[0] - o[0]) + n[1] * (p0[1] - o[1]) + n[2] * (p0[2] - o[2])) / den;
+        const double *a = pl + 4 * k;
+        double rate = a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
+        if (!(rate < 0)) continue; /* the coordinate does not fall: the ray does not leave by this face */
+        double t = -(a[0] * o[0] + a[1] * o[1] + a[2] * o[2] + a[3]) / rate;
         if (t < bt) { bt = t; best = k; }
     }
     if (best < 0) return -1;
@@ -309,13 +309,13 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
             if ((toopp > 0) != (along > 0)) { t = nextafterf((float)tin, INFINITY); continue; }
         }
         double pt = tin;
-        double p[3] = {o[0] + pt * d[0], o[1] + pt * d[1], o[2] + pt * d[2]}, ta = field_t(v, tt, p);
+        double p[3] = {o[0] + pt * d[0], o[1] + pt * d[1], o[2] + pt * d[2]}, ta = field_t(m, v, tt, p);
         for (size_t steps = 0; steps < 4 * v->n_tets + 16 && *T > 1e-4; steps++) {
             double tx;
-            int out = exit_face(v, tt, in, o, d, pt, &tx);
+            int out = exit_face(m, tt, in, o, d, pt, &tx);
             if (out < 0) { tx = pt; break; }
             double stop = fmin(tx, tfar);
-            double q[3] = {o[0] + stop * d[0], o[1] + stop * d[1], o[2] + stop * d[2]}, tb = field_t(v, tt, q);
+            double q[3] = {o[0] + stop * d[0], o[1] + stop * d[1], o[2] + stop * d[2]}, tb = field_t(m, v, tt, q);
             segment(tf, ta, tb, stop - pt, rgb, T);
             pt = stop;
             if (stop >= tfar) return;
@@ -323,7 +323,7 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
             if (nb < 0) break; /* out of the mesh: Embree finds where it enters again */
             in = m->nbr_face[4 * tt + (size_t)out];
             tt = (size_t)nb;
-            ta = field_t(v, tt, q);
+            ta = field_t(m, v, tt, q);
         }
         t = nextafterf((float)pt, INFINITY);
     }
