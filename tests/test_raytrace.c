@@ -412,6 +412,39 @@ static void test_volume(thx_tracer *tr)
     thx_tracer_destroy(&t2);
 }
 
+/* The environment: rays leaving the scene upward see its top row, downward its bottom row. */
+static void test_environment(thx_tracer *tr)
+{
+    thx_raster *env = NULL, *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 8, 4, &env));
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 8; x++) {
+            unsigned char *p = env->rgba + 4 * (y * 8 + x);
+            p[0] = y < 2 ? 200 : 10;
+            p[1] = 20;
+            p[2] = y < 2 ? 10 : 220;
+            p[3] = 255;
+        }
+    CHECK_OK(ctx, thx_raster_create(ctx, 16, 16, &img));
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.environment = env;
+    for (int up = 0; up < 2; up++) {
+        sc.camera = (thx_camera){{0, 0, up ? -100 : 100}, {0, 0, 0}, {0, 1, 0}, 0, 10};
+        CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+        const unsigned char *p = img->rgba + 4 * (8 * 16 + 8);
+        printf("environment, looking %s: %d %d %d\n", up ? "up" : "down", p[0], p[1], p[2]);
+        CHECK(up ? p[0] == 200 && p[2] == 10 : p[0] == 10 && p[2] == 220);
+    }
+    thx_raster_destroy(&env);
+    thx_raster_destroy(&img);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -423,6 +456,7 @@ int main(void)
         test_mirror(tr);
         test_refraction(tr);
         test_volume(tr);
+        test_environment(tr);
     }
     thx_tracer_destroy(&tr);
     thx_ctx_destroy(&ctx);

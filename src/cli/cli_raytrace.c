@@ -167,6 +167,9 @@ size_t raytrace_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--depth", .type = CLI_INT, .meta = "N", .i = &o->p.rt.max_depth, .rule = CLI_GE | CLI_LE,
                        .lo = 0, .hi = 32, .bad = "--depth: 0 to 32",
                        .help = "trace: reflection and refraction bounces at most"};
+    t[n++] = (cli_opt){.name = "--environment", .type = CLI_STRING, .meta = "PNG|sky", .s = &o->p.environment,
+                       .help = "trace: what rays leaving the scene see, the background and reflections: an "
+                               "equirectangular PNG (longitude across, superior at the top) or sky (a gradient)"};
     t[n++] = (cli_opt){.name = "--volume", .type = CLI_STRING, .meta = "FIELD", .fn = parse_volume,
                        .help = "trace: the field rendered inside the torso by emission and absorption (needs --solution "
                                "with volume potentials): potential (linear in each tetrahedron, the colour scale's) or "

@@ -581,6 +581,13 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
             if (!strcmp(o->rt_mat[k].name, s->name)) rt->material[i] = o->rt_mat[k].m;
     }
     rt->volume = o->volume_render ? &vol : NULL;
+    if (o->environment && !strcmp(o->environment, "sky")) {
+        rt->sky = 1;
+    } else if (o->environment) {
+        thx_status se = d->rt_env ? THX_OK : thx_raster_read_png(ctx, o->environment, &d->rt_env);
+        if (se != THX_OK) { free(rt); return se; }
+        rt->environment = d->rt_env;
+    }
     thx_status st = thx_raytrace_scene(ctx, d->tracer, sc, rt, img, &d->rt_stats);
     free(rt);
     return st;

@@ -30,6 +30,7 @@ static thx_status electrode_marks(thx_ctx *ctx, const char *path, thx_picture_da
 void thx_picture_data_free(thx_picture_data *d)
 {
     thx_tracer_destroy(&d->tracer);
+    thx_raster_destroy(&d->rt_env);
     free(d->vr_tet);
     free(d->vr_cell);
     d->vr_tet = NULL;

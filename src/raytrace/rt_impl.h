@@ -86,6 +86,10 @@ double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
 void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
               uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays);
 
+/* What a ray that leaves the scene sees along dir: the environment image, the sky, or the
+ * background colour. */
+void rt_environment(const rt_frame *f, const double dir[3], double rgb[3]);
+
 /* The nearest hit along the ray beyond tnear that the clip planes keep: 1 and the hit in *rh; 0
  * none. */
 int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,

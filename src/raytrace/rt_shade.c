@@ -124,14 +124,40 @@ static void hemisphere(const double n[3], double r1, double r2, double out[3])
     for (int k = 0; k < 3; k++) out[k] = sr * cos(phi) * t[k] + sr * sin(phi) * b[k] + z * n[k];
 }
 
+void rt_environment(const rt_frame *f, const double dir[3], double rgb[3])
+{
+    const thx_raytrace_opts *o = f->o;
+    double l = sqrt(dot3(dir, dir)), z = l > 0 ? dir[2] / l : 0;
+    if (o->environment && o->environment->w > 0 && o->environment->h > 0) {
+        const thx_raster *e = o->environment;
+        double u = (atan2(dir[1], dir[0]) / (2 * M_PI) + 0.5) * e->w - 0.5, v = acos(fmin(fmax(z, -1), 1)) / M_PI * e->h - 0.5;
+        int x0 = (int)floor(u), y0 = (int)floor(v);
+        double fu = u - x0, fv = v - y0;
+        for (int k = 0; k < 3; k++) rgb[k] = 0;
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < 2; i++) {
+                int x = ((x0 + i) % e->w + e->w) % e->w, y = y0 + j < 0 ? 0 : y0 + j >= e->h ? e->h - 1 : y0 + j;
+                double w = (i ? fu : 1 - fu) * (j ? fv : 1 - fv);
+                const unsigned char *p = e->rgba + 4 * ((size_t)y * (size_t)e->w + (size_t)x);
+                for (int k = 0; k < 3; k++) rgb[k] += w * p[k] / 255.0;
+            }
+        return;
+    }
+    if (o->sky) { /* a ground below the horizon, a sky paling towards it */
+        static const double zen[3] = {0.22, 0.38, 0.70}, hor[3] = {0.80, 0.85, 0.92}, gnd[3] = {0.30, 0.28, 0.26};
+        double a = fabs(z);
+        for (int k = 0; k < 3; k++) rgb[k] = z >= 0 ? hor[k] + (zen[k] - hor[k]) * pow(a, 0.6) : hor[k] + (gnd[k] - hor[k]) * pow(a, 0.3);
+        return;
+    }
+    for (int k = 0; k < 3; k++) rgb[k] = f->bg[k];
+}
+
 void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
               uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays)
 {
     struct RTCRayHit rh;
-    rgb[0] = f->bg[0];
-    rgb[1] = f->bg[1];
-    rgb[2] = f->bg[2];
-    *alpha = 0;
+    rt_environment(f, dir, rgb);
+    *alpha = f->o->environment || f->o->sky ? 1 : 0; /* the environment covers what it is seen in */
     *thit = INFINITY;
     if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
     *thit = rh.ray.tfar;

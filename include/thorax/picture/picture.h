@@ -200,6 +200,7 @@ typedef struct {
     } rt_mat[THX_PICTURE_MAX];
     int n_rt_mat;
     int rt_key;             /* add a key light (directional, shadows) from above the viewer's right shoulder */
+    const char *environment; /* the ray tracer's environment: an equirectangular PNG, or "sky" */
     /* volume rendering (the ray tracer; needs --solution with volume potentials): "potential" (linear
        in each tetrahedron) or "current" (|J| = |sigma grad phi| per tetrahedron), in the solution's
        domain; opacity control points (t, opacity) over the field's colour scale (none: clear at the
@@ -273,6 +274,7 @@ typedef struct {
     size_t vr_n_tets;
     double *vr_cell;                 /* ... and |J| per tetrahedron of the frame drawn (owned) */
     thx_raytrace_stats rt_stats;     /* ... and what its last draw took */
+    thx_raster *rt_env;              /* o->environment read (owned) */
     thx_contours *contours;          /* o->contours, or NULL */
     thx_surface *contour_lines[64];  /* the loops on the planes: a wire surface per plane and contour surface */
     float contour_rgba[64][4];

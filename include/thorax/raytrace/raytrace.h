@@ -87,6 +87,11 @@ typedef struct thx_raytrace_opts {
     thx_raytrace_material material[THX_RAYTRACE_MAX_SURFACES]; /* per scene surface (index in thx_scene) */
     int progress;         /* a progress bar on stderr */
     const thx_raytrace_volume *volume; /* a field rendered inside its mesh (NULL: none) */
+    /* the environment: what rays that leave the scene see, the background included (reflections show
+       it): an equirectangular image (longitude along its width, +z at its top row; the raster is the
+       caller's), or sky = 1 for a sky gradient; neither: the scene's background colour */
+    const thx_raster *environment;
+    int sky;
 } thx_raytrace_opts;
 
 void thx_raytrace_opts_default(thx_raytrace_opts *o);
