@@ -72,6 +72,14 @@ stage "slices with contour lines" "$T" render --solution "$O/solution" --size 80
     --slice z=110 --surface heart=phong:0.35 --style continuous+contours --levels 16 --colorbar --orientation --label -o "$O/slices.png" -q
 stage "current streamlines" "$T" render --solution "$O/solution" --size 800x900 --frame $QRS --view anterior \
     --streamlines density:220 --only torso --only heart --only streamlines --colorbar --orientation --label -o "$O/streamlines.png" -q
+# RaySpray (paper 4.3): the picture ray traced (the heart through a glass torso, shadows, a sky), and the
+# potential rendered inside the torso by emission and absorption
+stage "ray traced: the heart through a glass torso" "$T" trace --solution "$O/solution" --size 800x900 --frame $QRS --view anterior \
+    --material torso=glass --material fat=transparent:0.9 --material muscle=transparent:0.9 --environment sky --colorbar \
+    --orientation --label -o "$O/traced.png" -q
+stage "volume-rendered potential" "$T" trace --solution "$O/solution" --size 800x900 --frame $QRS --view anterior \
+    --volume potential --volume-opacity 0:1,0.3:0,0.7:0,1:1 --volume-density 0.08 --only heart --colorbar --orientation \
+    --label -o "$O/volume.png" -q
 stage "equipotential animation (300 frames + MP4)" "$T" animate "${ISO[@]}" --size 480x540 --frames 101:400 --fps 30 \
     -o "$O/iso_frames" --mp4 "$O/equipotentials.mp4" -q
 stage "camera flight round the torso (121 frames + MP4)" "$T" animate --solution "$O/solution" \

@@ -233,6 +233,14 @@ heart's dipole turns. Right: the heart's current loops at the QRS peak: 220 stre
 from seeds drawn where the current is strong, traced both ways by second-order Runge&ndash;Kutta (the paper's
 recipe), leaving the heart's positive side and returning to its negative side through the torso, coloured by |J|.
 <code>thorax render --streamlines density:220</code>.</p>
+<h2>Ray traced (RaySpray)</h2>
+<div class="row">{img('traced.png', 'ray traced')}{img('volume.png', 'volume rendered')}</div>
+<p>The paper's second renderer (4.3, "an integrated ray tracer/volume renderer"), on Embree. Left: the same
+picture as the maps above, ray traced: the torso glass (refracting, Fresnel reflections), fat and muscle
+transparent, the heart, lungs and their shadows under a key light, a sky behind. <code>thorax trace --material
+torso=glass</code>. Right: the potential inside the torso at the QRS peak, rendered by emission and absorption
+along each ray through the tetrahedra (each piece integrated exactly for the field, linear in its tetrahedron):
+clear near zero, opaque towards the extremes. <code>thorax trace --volume potential</code>.</p>
 <div class="row">{'<video src="flight.mp4" controls loop></video>' if have('flight.mp4') else ''}</div>
 <p>A key-framed camera flight (paper 4.3, "Animation methods"): five keys a quarter turn apart
 (scripts/demo_flight.keys), the camera's position on an interpolating C2 cubic B-spline and its
