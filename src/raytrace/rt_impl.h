@@ -63,16 +63,19 @@ typedef struct {
     double pixel_mm;                /* orthographic: a pixel's size; perspective: per mm of distance */
     float bg[4], nan_color[4];
     int any_clip;
-    const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function */
+    const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function, its t per node */
     const rt_tf *tf;
+    const double *tnode;
 } rt_frame;
 
 thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume *v, rt_vmesh *m);
 void rt_vmesh_free(rt_vmesh *m);
 void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf);
 /* The volume integral from tnear to tfar: rgb (premultiplied) and the transmittance *T left. */
-void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double o[3], const double d[3],
-                     double tnear, double tfar, double rgb[3], double *T, size_t *rays);
+void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double *tnode, const double o[3],
+                     const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays);
+/* Point data: the scale applied to each node's value (malloc'd; NULL for cell data or no memory). */
+double *rt_volume_tnode(thx_ctx *ctx, const thx_raytrace_volume *v);
 /* The tracer's volume mesh for v, built when new (raytrace.c). */
 thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v);
 const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);
