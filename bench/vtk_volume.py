@@ -56,6 +56,13 @@ win = vtk.vtkRenderWindow()
 win.SetOffScreenRendering(1)
 win.AddRenderer(ren)
 win.SetSize(n, n)
+# thorax's anterior view: from +y (anterior), superior (+z) up
+b = g.GetBounds()
+c = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
+cam = ren.GetActiveCamera()
+cam.SetFocalPoint(*c)
+cam.SetPosition(c[0], c[1] + 4 * (b[3] - b[2] + b[5] - b[4]), c[2])
+cam.SetViewUp(0, 0, 1)
 ren.ResetCamera()
 t0 = time.perf_counter()
 win.Render()
@@ -74,5 +81,5 @@ png = vtk.vtkPNGWriter()
 png.SetFileName(os.path.join(d, 'vtk_volume.png'))
 png.SetInputConnection(w2i.GetOutputPort())
 png.Write()
-print('vtkUnstructuredGridVolumeRayCastMapper, %d tetrahedra, %dx%d: first %.0f ms, then median %.0f ms' % (
-    tri.GetOutput().GetNumberOfCells(), n, n, 1000 * first, 1000 * times[1]))
+print('vtkUnstructuredGridVolumeRayCastMapper, %d tetrahedra, point data "%s", %dx%d: first %.0f ms, then median %.0f ms' % (
+    tri.GetOutput().GetNumberOfCells(), arr.GetName(), n, n, 1000 * first, 1000 * times[1]))
