@@ -556,23 +556,8 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     if (!rt) return thx_error(ctx, THX_ENOMEM, "out of memory (ray tracer options)");
     *rt = o->rt;
     if (o->rt_key && rt->n_lights == 0) { /* the headlight dimmed, and a key light over the viewer's right shoulder */
-        const thx_camera *c = &sc->camera;
-        double v[3], u[3], r[3], lv = 0, lr = 0;
-        for (int k = 0; k < 3; k++) { v[k] = c->center[k] - c->eye[k]; lv += v[k] * v[k]; }
-        r[0] = v[1] * c->up[2] - v[2] * c->up[1];
-        r[1] = v[2] * c->up[0] - v[0] * c->up[2];
-        r[2] = v[0] * c->up[1] - v[1] * c->up[0];
-        for (int k = 0; k < 3; k++) lr += r[k] * r[k];
-        lv = sqrt(lv);
-        lr = sqrt(lr);
-        u[0] = r[1] * v[2] - r[2] * v[1];
-        u[1] = r[2] * v[0] - r[0] * v[2];
-        u[2] = r[0] * v[1] - r[1] * v[0];
-        double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
         rt->lights[0] = (thx_light){.kind = THX_LIGHT_HEAD, .intensity = 0.35};
-        rt->lights[1] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .intensity = 0.8, .shadows = 1};
-        for (int k = 0; k < 3; k++)
-            rt->lights[1].dir[k] = (lv > 0 ? v[k] / lv : 0) - 0.9 * (lu > 0 ? u[k] / lu : 0) - 0.5 * (lr > 0 ? r[k] / lr : 0);
+        rt->lights[1] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .in_camera = 1, .dir = {-0.5, -0.9, 1}, .intensity = 0.8, .shadows = 1};
         rt->n_lights = 2;
     }
     for (size_t i = 0; i < sc->n_surfaces && i < THX_RAYTRACE_MAX_SURFACES; i++) {

@@ -261,6 +261,12 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
     f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
     f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
+    for (int i = 0; i < o->n_lights && i < THX_RAYTRACE_MAX_LIGHTS; i++) {
+        thx_light *L = &f->lights[i];
+        *L = o->lights[i];
+        if (L->in_camera)
+            for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
+    }
     f->ortho = !(c->fov_deg > 0);
     if (f->ortho) { /* how far behind the eye's plane the scene reaches */
         struct RTCBounds b;

@@ -63,6 +63,7 @@ typedef struct {
     double pixel_mm;                /* orthographic: a pixel's size; perspective: per mm of distance */
     float bg[4], nan_color[4];
     int any_clip;
+    thx_light lights[THX_RAYTRACE_MAX_LIGHTS]; /* the options' lights, camera-relative ones turned into the model's axes */
     const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function, its t per node */
     const rt_tf *tf;
     const double *tnode;

@@ -203,7 +203,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
     int n_lights = own < 1.0 / 256 ? 0 : o->n_lights > 0 ? o->n_lights : 1; /* nothing of its own to light */
     for (int li = 0; li < n_lights; li++) {
         thx_light head = {.kind = THX_LIGHT_HEAD, .intensity = 1};
-        const thx_light *L = o->n_lights > 0 ? &o->lights[li] : &head;
+        const thx_light *L = o->n_lights > 0 ? &f->lights[li] : &head;
         double l[3], dist = INFINITY, inten = L->intensity > 0 ? L->intensity : 1;
         if (L->kind == THX_LIGHT_HEAD) {
             if (f->ortho) for (int k = 0; k < 3; k++) l[k] = -f->view[k];

@@ -294,7 +294,6 @@ static void draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user)
     (void)area;
     view_app *a = user;
     view_tracing *t = a->trace;
-    gint64 t0 = g_get_monotonic_time();
     cairo_set_source_rgb(cr, 0.05, 0.05, 0.07);
     cairo_paint(cr);
     if (!t) return;
@@ -343,7 +342,6 @@ static void draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user)
         y -= 17;
     }
     (void)W;
-    t->last_draw_ms = (double)(g_get_monotonic_time() - t0) / 1000.0;
 }
 
 void view_slice_draw(view_app *a, cairo_t *cr, int W, int H)
@@ -536,9 +534,6 @@ static void on_motion(GtkEventControllerMotion *mc, double x, double y, gpointer
     (void)mc;
     view_app *a = user;
     view_tracing *t = a->trace;
-    t->mouse[0] = x;
-    t->mouse[1] = y;
-    t->have_mouse = 1;
     if (t->tool != VIEW_TOOL_LIVEWIRE || t->orient != 'z' || t->drag_button) return;
     double p[3];
     if (at_ras(a, x, y, p) != 0) return;

@@ -146,7 +146,6 @@ void view_trace_rebuild_now(view_app *a)
     view_tracing *t = a->trace;
     if (!t) return;
     if (t->rebuild_id) { g_source_remove(t->rebuild_id); t->rebuild_id = 0; }
-    double t0 = now_ms();
     int any = 0;
     for (size_t i = 0; i < thx_dig_n_surfaces(t->s) && i < VIEW_TRACE_MAX; i++)
         if (!t->surf[i].built || t->surf[i].built_gen != thx_dig_surface_gen(t->s, i)) {
@@ -154,7 +153,6 @@ void view_trace_rebuild_now(view_app *a)
             any = 1;
         }
     if (!any) return;
-    t->update_ms = now_ms() - t0;
     thx_picture_geometry_changed(&a->d);
     view_pick_prepare(a);
     view_redraw_all(a);

@@ -36,7 +36,6 @@ struct view_tracing {
     double thr_lo, thr_hi;          /* the region tool's window (have_thr 0: the grey window shown) */
     int have_thr;
     guint rebuild_id;
-    double update_ms;               /* the last model update (all dirty surfaces), wall */
     /* the pane */
     GtkWidget *area;
     char orient;                    /* 'z' axial (traced on), 'y' coronal, 'x' sagittal */
@@ -49,8 +48,6 @@ struct view_tracing {
     double grey_key[5];
     const thx_image_slice *shown;   /* the plane drawn last (its geometry maps the mouse) */
     /* the mouse */
-    double mouse[2];
-    int have_mouse;
     double *preview;                /* the livewire's path to the pointer (RAS), drawn live */
     size_t n_preview;
     int drag_button;
@@ -58,7 +55,6 @@ struct view_tracing {
     size_t drag_loop, drag_i;
     double drag_x0, drag_y0, drag_pan[2], drag_window, drag_level;
     double drag_at[2];              /* the dragged node's position now (RAS x, y) */
-    double last_draw_ms;            /* the pane's last draw */
 };
 
 /* view_trace.c (also view_internal.h: open, close, install, line, help) */

@@ -38,6 +38,8 @@ typedef enum {
 typedef struct {
     thx_light_kind kind;
     double pos[3], dir[3], u[3], v[3];
+    int in_camera;        /* directional: dir given along the camera's right, up and line of sight
+                             (a light that keeps its place over the viewer's shoulder whatever the view) */
     double intensity;     /* multiplies the diffuse and specular terms (1) */
     int shadows;          /* cast shadows (point, directional, area) */
 } thx_light;
