@@ -87,6 +87,8 @@ T=60
 waitfor() { local end=$((SECONDS + $1)); shift; until "$@" > /dev/null 2>&1; do [ $SECONDS -lt $end ] || return 1; sleep 0.1; done; }
 gone() { ! kill -0 "$1" 2>/dev/null; }
 said() { grep -q -- "$2" "$1"; }
+# (a failure's own commands must not fail: under set -e that would end the script with no word)
+stop() { if kill -0 "$VP" 2>/dev/null; then kill "$VP" 2>/dev/null || true; else echo "(the viewer had ended: $(tail -3 k.err r.err 2>/dev/null | tr '\n' ' '))"; fi; }
 timeout 120 "$THORAX" view --script a.txt > a.out 2> a.err || { cat a.err; fail "the scripted session: exit $?"; }
 timeout 120 "$THORAX" view --script c.txt > c.out 2> c.err || { cat c.err; fail "a first cut without the volume potentials read: exit $?"; }
 timeout 120 "$THORAX" view --script w.txt > w.out 2> w.err || { cat w.err; fail "nine activation windows: exit $?"; }
@@ -109,32 +111,32 @@ wait 300000
 EOF
 "$THORAX" view --script k.txt -v > k.out 2> k.err &
 VP=$!
-waitfor $T said k.err "window 1 drawn" || { cat k.err; kill $VP; fail "no viewer window was drawn"; }
-waitfor $T said k.err "seed tool: a click" || { cat k.err; kill $VP; fail "the script's set-up"; }
+waitfor $T said k.err "window 1 drawn" || { cat k.err; stop; fail "no viewer window was drawn"; }
+waitfor $T said k.err "seed tool: a click" || { cat k.err; stop; fail "the script's set-up"; }
 OX=$(sed -n 's/.*window 1 drawn .* at \([0-9]*\),\([0-9]*\) in the window.*/\1/p' k.err)
 OY=$(sed -n 's/.*window 1 drawn .* at \([0-9]*\),\([0-9]*\) in the window.*/\2/p' k.err)
 W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
-[ -n "$W" ] || { kill $VP; fail "no viewer window appeared"; }
+[ -n "$W" ] || { stop; fail "no viewer window appeared"; }
 geom() { xdotool getwindowgeometry "$W" | sed -n 's/.*Geometry: //p'; }
 key() { xdotool windowfocus --sync "$W" 2>/dev/null || true; xdotool key --window "$W" "$@"; }
 at() { echo $((OX + $1)) $((OY + $2)); }   # drawing-area pixels to the window's
 G0=$(geom)
 # the keys window
 key question
-waitfor $T said k.err "keys window" || { kill $VP; fail "? did not open the keys window"; }
+waitfor $T said k.err "keys window" || { stop; fail "? did not open the keys window"; }
 K=$(xdotool search --onlyvisible --name "keys" 2>/dev/null | head -1 || true)
-[ -n "$K" ] || { kill $VP; fail "no keys window"; }
+[ -n "$K" ] || { stop; fail "no keys window"; }
 xwd -id "$K" -out keys.xwd
 xdotool getwindowgeometry "$K" | sed -n 's/.*Geometry: /keys window geometry /p' > keys.geom
 closed() { ! xdotool search --onlyvisible --name "keys" > /dev/null 2>&1; }
-end=$((SECONDS + T)); until closed; do xdotool key --window "$K" Escape 2>/dev/null || true; [ $SECONDS -lt $end ] || { kill $VP; fail "Escape did not close the keys window"; }; sleep 0.3; done
+end=$((SECONDS + T)); until closed; do xdotool key --window "$K" Escape 2>/dev/null || true; [ $SECONDS -lt $end ] || { stop; fail "Escape did not close the keys window"; }; sleep 0.3; done
 # the panel: shown, typed into, hidden
 key F9
-waitfor $T said k.err "side panel shown" || { kill $VP; fail "F9 did not show the panel"; }
-waitfor $T eval '[ "$(geom)" != "$G0" ]' || { kill $VP; fail "the window did not grow by the panel: $(geom)"; }
+waitfor $T said k.err "side panel shown" || { stop; fail "F9 did not show the panel"; }
+waitfor $T eval '[ "$(geom)" != "$G0" ]' || { stop; fail "the window did not grow by the panel: $(geom)"; }
 G1=$(geom)
 painted() { xwd -id "$W" -out panel.xwd && $PY -c 'import sys; sys.path.insert(0, "."); from xwd import xwd; sys.exit(0 if xwd("panel.xwd")[:, -200:].mean() > 100 else 1)'; }
-waitfor $T painted || { kill $VP; fail "the panel was not drawn"; }
+waitfor $T painted || { stop; fail "the panel was not drawn"; }
 # the drawing area on the screen (rows OY.. of the window, 400 x 267 after the trace pane took its
 # room) before the value is typed, and after: it changes with no other event (redrawn at once)
 area() { xwd -id "$W" -out area.xwd && $PY -c 'import sys, numpy as np; sys.path.insert(0, "."); from xwd import xwd
@@ -143,16 +145,25 @@ changed() { area after.npy && $PY -c 'import sys, numpy as np; a, b = np.load("b
 sys.exit(0 if (np.abs(a - b).sum(axis=2) > 30).sum() > 100 else 1)'; }
 area before.npy
 xdotool mousemove --window "$W" $((OX + 490)) $((OY + 120)) click 1
-waitfor $T said k.err "a field of the panel has the keyboard" || { kill $VP; fail "a click on the panel's value field"; }
+waitfor $T said k.err "a field of the panel has the keyboard" || { stop; fail "a click on the panel's value field"; }
 xdotool type --window "$W" "0.6"
 xdotool key --window "$W" Return
-waitfor $T said k.err "equipotentials: -0.3,0.3,0.6" || { cat k.err; kill $VP; fail "0.6 typed into the panel did not add the value"; }
-waitfor $T changed || { kill $VP; fail "the window did not show the new equipotential"; }
-! said k.err "inferior view" || { kill $VP; fail "6 typed into the panel's field turned the view"; }
+waitfor $T said k.err "equipotentials: -0.3,0.3,0.6" || { cat k.err; stop; fail "0.6 typed into the panel did not add the value"; }
+waitfor $T changed || { stop; fail "the window did not show the new equipotential"; }
+! said k.err "inferior view" || { stop; fail "6 typed into the panel's field turned the view"; }
 key F9
-waitfor $T said k.err "side panel hidden" || { kill $VP; fail "F9 did not hide the panel"; }
-waitfor $T eval '[ "$(geom)" = "$G0" ]' || { kill $VP; fail "the window kept the panel's width: $G0 -> $G1 -> $(geom)"; }
+waitfor $T said k.err "side panel hidden" || { stop; fail "F9 did not hide the panel"; }
+waitfor $T eval '[ "$(geom)" = "$G0" ]' || { stop; fail "the window kept the panel's width: $G0 -> $G1 -> $(geom)"; }
 echo "window $G0, with the panel $G1, without it again $(geom)"
+# the drags below find the colour bar where the last picture put it: wait until the drawing area
+# shows the bar in its place and two screenshots agree (the window's relayout done; under load a
+# press during it lands on a picture of a passing size)
+bar_shown() { area bar1.npy && $PY -c 'import sys, numpy as np; a = np.load("bar1.npy")
+s = a[40:220, 330:350]; b = np.load("bar0.npy") if len(sys.argv) > 1 else None
+lit = (s.sum(axis=2) > 300).mean()   # (the bar light on the dark background)
+sys.exit(0 if lit > 0.5 and b is not None and np.array_equal(a, b) else 1)' x || { cp bar1.npy bar0.npy; false; }; }
+area bar0.npy
+waitfor $T bar_shown || { tail -5 k.err; stop; fail "the drawing area did not settle with its colour bar after the panel was hidden"; }
 drag() { # X0 Y0 DX DY [MODIFIERS]: a press, two moves and a release (drawing-area pixels)
     local x=$(($OX + $1)) y=$(($OY + $2))
     [ -n "${5:-}" ] && xdotool keydown $5
@@ -170,38 +181,38 @@ drag() { # X0 Y0 DX DY [MODIFIERS]: a press, two moves and a release (drawing-ar
 # y 33-233, its ends -1.5 and 1.5; the top end 50 pixels down is 0.75 mV (symmetric mapping: -0.75
 # to 0.75)
 drag 340 40 0 50
-waitfor $T said k.err "colour range fixed: -0.75 to 0.75" || { grep "colour range" k.err; kill $VP; fail "the bar's end dragged"; }
+waitfor $T said k.err "colour range fixed: -0.75 to 0.75" || { grep "colour range" k.err || tail -5 k.err; stop; fail "the bar's end dragged"; }
 # the mark of 0.3 on the bar of -0.75..0.75 is at t = 0.7, row 233 - 140 = 93; 20 up: t 0.8, 0.45 mV
 drag 340 93 0 -20
-waitfor $T said k.err "equipotential 0.45 (was 0.3)" || { grep "equipotential" k.err; kill $VP; fail "the value's mark dragged"; }
+waitfor $T said k.err "equipotential 0.45 (was 0.3)" || { grep "equipotential" k.err || tail -5 k.err; stop; fail "the value's mark dragged"; }
 # the slice z=110 seen from the front: 20 pixels up moves it up by 20 pixels' worth of mm
 drag 150 130 0 -20 "ctrl+shift"
-waitfor $T said k.err "slice 1: z=" || { tail k.err; kill $VP; fail "Ctrl+Shift+drag did not move the slice"; }
+waitfor $T said k.err "slice 1: z=" || { tail k.err; stop; fail "Ctrl+Shift+drag did not move the slice"; }
 key ctrl+shift+s   # (the camera of this picture: the map below turns the label line on, which changes it)
-waitfor $T test -s thorax-view-session.txt || { kill $VP; fail "Ctrl+Shift+S"; }
+waitfor $T test -s thorax-view-session.txt || { stop; fail "Ctrl+Shift+S"; }
 mv thorax-view-session.txt slice-session.txt
 # the seed tool's click
 xdotool mousemove --window "$W" $(at 150 140) click 1
-waitfor $T said k.out "^seed: point:" || { tail k.err; kill $VP; fail "the seed tool's click"; }
+waitfor $T said k.out "^seed: point:" || { tail k.err; stop; fail "the seed tool's click"; }
 # a drag across the trace under the picture (pane: the last third of the 400 rows)
 drag 100 340 150 0
-waitfor $T said k.err "activation window .* dragged on the traces" || { tail k.err; kill $VP; fail "the drag across the traces"; }
+waitfor $T said k.err "activation window .* dragged on the traces" || { tail k.err; stop; fail "the drag across the traces"; }
 key ctrl+shift+s
-waitfor $T test -s thorax-view-session.txt || { kill $VP; fail "Ctrl+Shift+S"; }
+waitfor $T test -s thorax-view-session.txt || { stop; fail "Ctrl+Shift+S"; }
 key ctrl+q 2>/dev/null || true
-waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit"; }
+waitfor $T gone $VP || { stop; fail "ctrl+q did not quit"; }
 # a rake: two clicks, its ends
 { head -7 k.txt; echo "action seed-tool rake"; echo "wait 300000"; } > r.txt
 "$THORAX" view --script r.txt -v > r.out 2> r.err &
 VP=$!
-waitfor $T said r.err "seed tool: two clicks" || { cat r.err; kill $VP; fail "the rake's set-up"; }
+waitfor $T said r.err "seed tool: two clicks" || { cat r.err; stop; fail "the rake's set-up"; }
 W=$(xdotool search --onlyvisible --name "^thorax " 2>/dev/null | head -1 || true)
 xdotool mousemove --window "$W" $(at 120 200) click 1
-waitfor $T said r.err "rake: one end at" || { tail r.err; kill $VP; fail "the rake's first click"; }
+waitfor $T said r.err "rake: one end at" || { tail r.err; stop; fail "the rake's first click"; }
 xdotool mousemove --window "$W" $(at 200 120) click 1
-waitfor $T said r.out "^seed: line:" || { tail r.err; kill $VP; fail "the rake's second click"; }
+waitfor $T said r.out "^seed: line:" || { tail r.err; stop; fail "the rake's second click"; }
 key ctrl+q 2>/dev/null || true
-waitfor $T gone $VP || { kill $VP; fail "ctrl+q did not quit the rake's viewer"; }
+waitfor $T gone $VP || { stop; fail "ctrl+q did not quit the rake's viewer"; }
 echo "inside: passed"
 INNER
 PY="$PY" THORAX="$THORAX" xvfb-run -a bash inside.sh 2>&1 | grep -v "dbus\|session bus\|^$" | tee inside.out || true
