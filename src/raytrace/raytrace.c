@@ -334,8 +334,8 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         rt_tf_build(o->volume, tf);
         f.vm = &t->vm;
         f.tf = tf;
-        f.tnode = rt_volume_tnode(ctx, o->volume);
-        if (o->volume->point_values && !f.tnode) { free(tf); frame_free(&f); return THX_ENOMEM; }
+        f.fld = rt_volume_field(ctx, &t->vm, o->volume);
+        if (!f.fld) { free(tf); frame_free(&f); return THX_ENOMEM; }
         builds += t->vm.builds - before;
     }
     int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
@@ -358,7 +358,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         rt_shade(&f, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
                         if (f.vm) { /* the field in front of the surface hit (or of the background) */
                             double vc[3], T;
-                            rt_volume_march(f.vm, o->volume, f.tf, f.tnode, org, dir, 0, thit, vc, &T, &rays);
+                            rt_volume_march(f.vm, o->volume, f.tf, f.fld, org, dir, 0, thit, vc, &T, &rays);
                             /* premultiplied: the volume's emission, then the surface behind it through
                                what the volume lets pass; the coverage likewise */
                             double vcov = (1 - T) + T * alpha;
@@ -391,7 +391,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             }
         }
     }
-    free((void *)f.tnode);
+    free((void *)f.fld);
     frame_free(&f);
     free(tf);
     if (stats) {

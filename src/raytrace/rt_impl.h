@@ -29,16 +29,26 @@ typedef struct {
     int no_clip;
 } rt_surf;
 
+/* A tetrahedron as the volume renderer walks it, in one 64-byte cache line: three of its four
+ * barycentric coordinates as affine functions (lambda_k(p) = pl[4k..4k+2] . p + pl[4k+3], 1 at
+ * vertex k, 0 on the face opposite it; lambda_3 = 1 - lambda_0 - lambda_1 - lambda_2), and across
+ * each face the neighbour (its tetrahedron * 4 + its number of that face; -1 the mesh's boundary). */
+typedef struct {
+    float pl[12];
+    int32_t nb[4];
+} rt_tet;
+
 /* A volume mesh as the volume renderer walks it (rt_volume.c): kept across calls while (xyz, tet)
  * stay the same. */
 typedef struct {
     const double *xyz;
     const int32_t *tet;
     size_t n_nodes, n_tets;
-    int32_t *nbr;                   /* 4 n_tets: the tetrahedron across face k (opposite vertex k), -1 none */
-    int32_t *nbr_face;              /* ... and that face's number in it */
+    rt_tet *tets;                   /* n_tets, in the walk's order (64-byte aligned) */
+    int32_t *order;                 /* the walk's tetrahedron i is the mesh's order[i] (a Morton order of
+                                       their centres: a ray's next tetrahedra, and its neighbour rays',
+                                       near in memory) */
     int32_t *bface;                 /* boundary face (Embree primitive) -> tet * 4 + k */
-    double *plane;                  /* 16 n_tets: per tetrahedron the 4 barycentric coordinates as a . p + b */
     size_t n_bface;
     RTCScene scene;                 /* the boundary faces */
     size_t builds;
@@ -66,17 +76,19 @@ typedef struct {
     thx_light lights[THX_RAYTRACE_MAX_LIGHTS]; /* the options' lights, camera-relative ones turned into the model's axes */
     const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function, its t per node */
     const rt_tf *tf;
-    const double *tnode;
+    const float *fld;               /* the frame's field per tetrahedron (rt_volume_field) */
 } rt_frame;
 
 thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume *v, rt_vmesh *m);
 void rt_vmesh_free(rt_vmesh *m);
 void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf);
 /* The volume integral from tnear to tfar: rgb (premultiplied) and the transmittance *T left. */
-void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double *tnode, const double o[3],
+void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, const double o[3],
                      const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays);
-/* Point data: the scale applied to each node's value (malloc'd; NULL for cell data or no memory). */
-double *rt_volume_tnode(thx_ctx *ctx, const thx_raytrace_volume *v);
+/* The frame's field as the walk reads it: per tetrahedron t = scale(value) as g . p + c (4 floats:
+ * g, c; point data: the linear interpolant of the corners' scaled values, as the OpenGL renderer
+ * interpolates a surface's; cell data: g = 0). malloc'd, NULL when out of memory. */
+float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v);
 /* The tracer's volume mesh for v, built when new (raytrace.c). */
 thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v);
 const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);
