@@ -417,6 +417,13 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
         tf_at(tf, xa, &va);
         for (size_t steps = 0; steps < 4 * v->n_tets + 16 && *T > 1e-4; steps++) {
             const rt_tet *X = m->tets + tt;
+            /* the ray's next tetrahedron is one of three: their lines asked for now, while this one's
+               exit is found and its piece integrated (the walk is bound by memory latency) */
+            for (int k = 0; k < 4; k++)
+                if (k != in && X->nb[k] >= 0) {
+                    __builtin_prefetch(m->tets + X->nb[k] / 4);
+                    __builtin_prefetch(fld + 4 * (X->nb[k] / 4));
+                }
             double sx;
             int out = exit_face(X, in, e, d, s, &sx);
             if (out < 0) break;
