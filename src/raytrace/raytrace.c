@@ -174,32 +174,41 @@ static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, con
     return THX_OK;
 }
 
-int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
-                 struct RTCRayHit *rh, size_t *rays)
+/* One Embree ray through scene sc from tnear to tfar. */
+static void ray_once(RTCScene sc, const double org[3], const double dir[3], double tnear, double tfar, struct RTCRayHit *rh)
+{
+    struct RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    memset(rh, 0, sizeof *rh);
+    rh->ray.org_x = (float)org[0];
+    rh->ray.org_y = (float)org[1];
+    rh->ray.org_z = (float)org[2];
+    rh->ray.dir_x = (float)dir[0];
+    rh->ray.dir_y = (float)dir[1];
+    rh->ray.dir_z = (float)dir[2];
+    rh->ray.tnear = (float)tnear;
+    rh->ray.tfar = (float)tfar;
+    rh->ray.mask = 0xffffffffu;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(sc, &c, rh);
+}
+
+/* The surfaces and arrows: the nearest hit the clip planes keep (surfaces with no_clip are kept
+ * whole; arrows are cut as the OpenGL renderer cuts them). */
+static int hit_solid(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                     struct RTCRayHit *rh, size_t *rays)
 {
     for (int pass = 0; pass < 256; pass++) {
-        struct RTCIntersectContext c;
-        rtcInitIntersectContext(&c);
-        memset(rh, 0, sizeof *rh);
-        rh->ray.org_x = (float)org[0];
-        rh->ray.org_y = (float)org[1];
-        rh->ray.org_z = (float)org[2];
-        rh->ray.dir_x = (float)dir[0];
-        rh->ray.dir_y = (float)dir[1];
-        rh->ray.dir_z = (float)dir[2];
-        rh->ray.tnear = (float)tnear;
-        rh->ray.tfar = (float)tfar;
-        rh->ray.mask = 0xffffffffu;
-        rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(f->scene, &c, rh);
+        ray_once(f->scene, org, dir, tnear, tfar, rh);
         (*rays)++;
         if (rh->hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-        const rt_surf *s = &f->s[rh->hit.geomID];
-        if (!f->any_clip || s->no_clip) return 1;
+        size_t k;
+        int kind = rt_kind(f, rh->hit.geomID, &k);
+        if (!f->any_clip || (kind == RT_SURFACE && f->s[k].no_clip)) return 1;
         double t = rh->ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
         int kept = 1;
-        for (int k = 0; k < f->sc->n_clip; k++) {
-            const thx_clip_plane *cp = &f->sc->clip[k];
+        for (int c = 0; c < f->sc->n_clip; c++) {
+            const thx_clip_plane *cp = &f->sc->clip[c];
             if (cp->n[0] * p[0] + cp->n[1] * p[1] + cp->n[2] * p[2] + cp->d < 0) kept = 0;
         }
         if (kept) return 1;
@@ -208,17 +217,69 @@ int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], do
     return 0;
 }
 
-/* The call's frame: the scene surfaces' geometries (built when needed), their per-node t, the
- * camera's frame. */
-static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, rt_frame *f,
+int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                 struct RTCRayHit *rh, size_t *rays)
+{
+    int hit = hit_solid(f, org, dir, tnear, tfar, rh, rays);
+    if (!f->planes) return hit;
+    /* the image planes (never clipped), in front of the solid hit by more than a hair: a surface in a
+       plane's own plane wins (the OpenGL renderer's polygon offset behind it); transparent texels let
+       the ray on */
+    double lim = tfar;
+    if (hit) lim = rh->ray.tfar - 1e-4 * fmax(1, fabs(rh->ray.tfar));
+    struct RTCRayHit ph;
+    for (int pass = 0; pass < 64 && tnear < lim; pass++) {
+        ray_once(f->planes, org, dir, tnear, lim, &ph);
+        (*rays)++;
+        if (ph.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+        double t = ph.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+        size_t k;
+        rt_kind(f, ph.hit.geomID, &k);
+        if (rt_plane_texel(&f->pl[k], p, NULL)) {
+            *rh = ph;
+            return 1;
+        }
+        tnear = nextafterf((float)t, INFINITY);
+    }
+    return hit;
+}
+
+/* The call's frame for a viewport vp_h pixels high: the camera's frame, the scene surfaces'
+ * geometries (built when needed) and their per-node t, the image planes and the arrows' glyphs
+ * (built per call). */
+static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, int vp_h, rt_frame *f,
                               size_t *builds)
 {
     memset(f, 0, sizeof *f);
     f->sc = sc;
     f->o = o;
-    f->n_s = sc->n_surfaces;
+    if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
+        return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's surface, arrow or plane array is NULL");
+    /* the camera's frame */
+    const thx_camera *c = &sc->camera;
+    double v[3] = {c->center[0] - c->eye[0], c->center[1] - c->eye[1], c->center[2] - c->eye[2]};
+    double lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(lv > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (eye at the centre)");
+    for (int k = 0; k < 3; k++) { f->view[k] = v[k] / lv; f->eye[k] = c->eye[k]; }
+    double r[3] = {f->view[1] * c->up[2] - f->view[2] * c->up[1], f->view[2] * c->up[0] - f->view[0] * c->up[2],
+                   f->view[0] * c->up[1] - f->view[1] * c->up[0]};
+    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (!(lr > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (up along the line of sight)");
+    for (int k = 0; k < 3; k++) f->right[k] = r[k] / lr;
+    f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
+    f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
+    f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
+    f->ortho = !(c->fov_deg > 0);
+    f->pixel_mm = f->ortho ? c->height / vp_h : 2 * tan(0.5 * c->fov_deg * M_PI / 180) / vp_h;
+    for (int i = 0; i < o->n_lights && i < THX_RAYTRACE_MAX_LIGHTS; i++) {
+        thx_light *L = &f->lights[i];
+        *L = o->lights[i];
+        if (L->in_camera)
+            for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
+    }
     f->s = thx_calloc(ctx, sc->n_surfaces ? sc->n_surfaces : 1, sizeof *f->s);
     if (!f->s) return THX_ENOMEM;
+    f->n_s = sc->n_surfaces;
     f->scene = rtcNewScene(t->dev);
     rtcSetSceneFlags(f->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(f->scene, RTC_BUILD_QUALITY_HIGH);
@@ -242,47 +303,31 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         }
         rtcAttachGeometryByID(f->scene, s->g->geom, (unsigned)i);
     }
+    THX_CHECK(rt_planes_build(ctx, t->dev, f));
+    THX_CHECK(rt_arrows_build(ctx, t->dev, f));
     rtcCommitScene(f->scene);
     int zero_nan = sc->nan_color[0] == 0 && sc->nan_color[1] == 0 && sc->nan_color[2] == 0 && sc->nan_color[3] == 0;
     memcpy(f->nan_color, zero_nan ? nan_default : sc->nan_color, sizeof f->nan_color);
     memcpy(f->bg, sc->background, sizeof f->bg);
     f->any_clip = sc->n_clip > 0;
-    /* the camera's frame */
-    const thx_camera *c = &sc->camera;
-    double v[3] = {c->center[0] - c->eye[0], c->center[1] - c->eye[1], c->center[2] - c->eye[2]};
-    double lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (!(lv > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (eye at the centre)");
-    for (int k = 0; k < 3; k++) { f->view[k] = v[k] / lv; f->eye[k] = c->eye[k]; }
-    double r[3] = {f->view[1] * c->up[2] - f->view[2] * c->up[1], f->view[2] * c->up[0] - f->view[0] * c->up[2],
-                   f->view[0] * c->up[1] - f->view[1] * c->up[0]};
-    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-    if (!(lr > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (up along the line of sight)");
-    for (int k = 0; k < 3; k++) f->right[k] = r[k] / lr;
-    f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
-    f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
-    f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
-    for (int i = 0; i < o->n_lights && i < THX_RAYTRACE_MAX_LIGHTS; i++) {
-        thx_light *L = &f->lights[i];
-        *L = o->lights[i];
-        if (L->in_camera)
-            for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
-    }
-    f->ortho = !(c->fov_deg > 0);
-    if (f->ortho) { /* how far behind the eye's plane the scene reaches */
-        struct RTCBounds b;
-        rtcGetSceneBounds(f->scene, &b);
-        for (int q = 0; q < 8 && b.lower_x <= b.upper_x; q++) {
-            double corner[3] = {q & 1 ? b.upper_x : b.lower_x, q & 2 ? b.upper_y : b.lower_y, q & 4 ? b.upper_z : b.lower_z};
-            double d = 0;
-            for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
-            f->back = fmax(f->back, d + 1);
+    if (f->ortho) /* how far behind the eye's plane the scene (its planes too) reaches */
+        for (int q = 0; q < 2; q++) {
+            struct RTCBounds b;
+            if (q == 1 && !f->planes) break;
+            rtcGetSceneBounds(q ? f->planes : f->scene, &b);
+            for (int i = 0; i < 8 && b.lower_x <= b.upper_x; i++) {
+                double corner[3] = {i & 1 ? b.upper_x : b.lower_x, i & 2 ? b.upper_y : b.lower_y, i & 4 ? b.upper_z : b.lower_z};
+                double d = 0;
+                for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
+                f->back = fmax(f->back, d + 1);
+            }
         }
-    }
     return THX_OK;
 }
 
 static void frame_free(rt_frame *f)
 {
+    rt_glyphs_free(f);
     for (size_t i = 0; i < f->n_s; i++) free(f->s[i].t);
     free(f->s);
     if (f->scene) rtcReleaseScene(f->scene);
@@ -321,10 +366,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     t->call++;
     size_t builds = 0;
     rt_frame f;
-    thx_status st = frame_build(ctx, t, sc, o, &f, &builds);
+    thx_status st = frame_build(ctx, t, sc, o, vp[3], &f, &builds);
     double t1 = wall();
     if (st != THX_OK) { frame_free(&f); return st; }
-    f.pixel_mm = f.ortho ? sc->camera.height / vp[3] : 2 * tan(0.5 * sc->camera.fov_deg * M_PI / 180) / vp[3];
     rt_tf *tf = NULL;
     if (o->volume) { /* the field inside its mesh: the mesh's faces kept across calls, the values new */
         size_t before = t->vm.builds;
@@ -411,7 +455,8 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
     t->call++;
     size_t builds = 0;
     rt_frame f;
-    thx_status st = frame_build(ctx, t, sc, &o, &f, &builds);
+    if (w < 1 || h < 1) return thx_error(ctx, THX_EINPUT, "ray tracer: id image %d x %d", w, h);
+    thx_status st = frame_build(ctx, t, sc, &o, h, &f, &builds);
     if (st != THX_OK) { frame_free(&f); return st; }
     size_t rays = 0;
 #pragma omp parallel for schedule(dynamic) reduction(+ : rays)
@@ -424,8 +469,19 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
             tri[i] = -1;
             if (primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir)) continue;
             if (rt_intersect(&f, org, dir, 0, INFINITY, &rh, &rays)) {
-                surface[i] = (int32_t)rh.hit.geomID;
-                tri[i] = (int32_t)rh.hit.primID;
+                size_t k;
+                int kind = rt_kind(&f, rh.hit.geomID, &k);
+                if (kind == RT_SURFACE) {
+                    surface[i] = (int32_t)k;
+                    tri[i] = (int32_t)rh.hit.primID;
+                } else if (kind == RT_PLANE) {
+                    surface[i] = THX_RAYTRACE_ID_PLANE;
+                    tri[i] = (int32_t)k;
+                } else {
+                    double n[3], col[4];
+                    surface[i] = THX_RAYTRACE_ID_ARROW;
+                    rt_arrow_hit(&f.ar[k], rh.hit.primID, rh.hit.u, rh.hit.v, n, col, &tri[i]);
+                }
             }
         }
     frame_free(&f);

@@ -38,6 +38,26 @@ typedef struct {
     int32_t nb[4];
 } rt_tet;
 
+/* An image plane during a call (rt_glyphs.c): the inverse of its edges' Gram matrix (g11 g12; g12
+ * g22)^-1 as (a, b, c) = ((a b; b c)), which takes a point's dot products with u and v to its place
+ * (s, t) in [0, 1]^2 on the rectangle. */
+typedef struct {
+    const thx_render_plane *pl;
+    double gi[3];
+} rt_plane;
+
+/* One thx_render_arrows during a call (rt_glyphs.c): the glyphs of the arrows drawn, RT_ARROW_TRIS
+ * triangles each, in order; per arrow its colour and its index in the input. */
+#define RT_ARROW_TRIS 60
+typedef struct {
+    const thx_render_arrows *a;
+    size_t n;                       /* arrows drawn */
+    int32_t *index;                 /* n: the arrow's index in a->pos */
+    float (*color)[4];              /* n: rgba */
+    float *nrm;                     /* per vertex normals */
+    const unsigned *ib;             /* the triangles (Embree's buffer) */
+} rt_arrows;
+
 /* A volume mesh as the volume renderer walks it (rt_volume.c): kept across calls while (xyz, tet)
  * stay the same. */
 typedef struct {
@@ -65,8 +85,13 @@ typedef struct {
     const thx_scene *sc;
     const thx_raytrace_opts *o;
     RTCScene scene;
-    rt_surf *s;                     /* by Embree geometry ID (= the scene surface's index) */
+    rt_surf *s;                     /* Embree geometry IDs: 0 .. n_s - 1 the scene's surfaces, */
     size_t n_s;
+    RTCScene planes;                /* n_s .. n_s + n_pl - 1 its image planes (a scene of their own), */
+    rt_plane *pl;
+    size_t n_pl;
+    rt_arrows *ar;                  /* then its arrow sets (in scene, with the surfaces) */
+    size_t n_ar;
     double eye[3], view[3], right[3], up[3]; /* camera frame; view: the line of sight */
     int ortho;
     double back;                    /* orthographic: eye rays start this far behind the eye's plane */
@@ -78,6 +103,29 @@ typedef struct {
     const rt_tf *tf;
     const float *fld;               /* the frame's field per tetrahedron (rt_volume_field) */
 } rt_frame;
+
+/* What an Embree geometry ID names (rt_frame): RT_SURFACE, RT_PLANE or RT_ARROWS, and *k its index
+ * among them. */
+enum { RT_SURFACE, RT_PLANE, RT_ARROWS };
+static inline int rt_kind(const rt_frame *f, unsigned id, size_t *k)
+{
+    if (id < f->n_s) { *k = id; return RT_SURFACE; }
+    if (id < f->n_s + f->n_pl) { *k = id - f->n_s; return RT_PLANE; }
+    *k = id - f->n_s - f->n_pl;
+    return RT_ARROWS;
+}
+
+/* rt_glyphs.c: the scene's image planes into f->planes, its arrows' glyphs into f->scene (before
+ * its commit; f's camera frame and pixel size set); freed by rt_glyphs_free. */
+thx_status rt_planes_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
+thx_status rt_arrows_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
+void rt_glyphs_free(rt_frame *f);
+/* The plane's colour at point pt on it (rgb may be NULL): 1 where its texel is drawn (alpha at least
+ * 1/2), 0 where it is transparent. */
+int rt_plane_texel(const rt_plane *p, const double pt[3], double rgb[3]);
+/* At a hit (prim, u, v) on an arrow set: the shading normal, the colour (rgba), *index the arrow's
+ * index in its input (may be NULL). */
+void rt_arrow_hit(const rt_arrows *r, unsigned prim, double u, double v, double n[3], double color[4], int32_t *index);
 
 thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume *v, rt_vmesh *m);
 void rt_vmesh_free(rt_vmesh *m);
