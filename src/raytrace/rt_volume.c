@@ -261,7 +261,8 @@ static inline double absorbed(double x)
  * shared by the three channels. b is exact in closed form where tau is constant (b = 1 - a / x, x =
  * tau L; its series where x is small), else 3-point Gauss-Legendre on a smooth integrand (D
  * quadratic). No cancellation: a and b are both small where the piece is thin. */
-static void piece(const double c0[3], double tau0, const double c1[3], double tau1, double L, double rgb[3], double *T)
+static inline __attribute__((always_inline)) void piece(const double c0[3], double tau0, const double c1[3], double tau1, double L,
+                                                        double rgb[3], double *T)
 {
     if (!(L > 0) || (tau0 == 0 && tau1 == 0)) return; /* clear: nothing emitted or absorbed */
     double x = 0.5 * (tau0 + tau1) * L, a = absorbed(x), b;
@@ -298,6 +299,13 @@ static void segment(const rt_tf *tf, double xa, double xb, double L, tf_val *v, 
     tf_val e;
     if (xb == xa) {
         piece(v->c, v->tau, v->c, v->tau, L, rgb, T);
+        return;
+    }
+    int ia = (int)xa, ib = (int)xb;
+    if (ia == ib && (double)ia != xa && (double)ib != xb) { /* within one entry's interval: one piece (most steps) */
+        tf_at(tf, xb, &e);
+        piece(v->c, v->tau, e.c, e.tau, L, rgb, T);
+        *v = e;
         return;
     }
     /* the entries strictly between xa and xb, in the ray's order */
@@ -350,10 +358,10 @@ float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volum
  * the others whose barycentric coordinate falls to 0 first, *sexit its distance (at least smin); -1
  * when none falls (a ray grazing). The candidates are compared by cross-multiplication, one division
  * for the winner. */
-static inline int exit_face(const rt_tet *T, int in, const double o[3], const double d[3], double smin, double *sexit)
+static inline int exit_face(const rt_tet *T, int in, const float o[3], const float d[3], float smin, float *sexit)
 {
     const float *a = T->pl;
-    double fall[4], val[4];
+    float fall[4], val[4];
     for (int k = 0; k < 3; k++) {
         fall[k] = -(a[4 * k] * d[0] + a[4 * k + 1] * d[1] + a[4 * k + 2] * d[2]);
         val[k] = a[4 * k] * o[0] + a[4 * k + 1] * o[1] + a[4 * k + 2] * o[2] + a[4 * k + 3];
@@ -361,13 +369,13 @@ static inline int exit_face(const rt_tet *T, int in, const double o[3], const do
     fall[3] = -(fall[0] + fall[1] + fall[2]);
     val[3] = 1 - (val[0] + val[1] + val[2]);
     int best = -1;
-    double bnum = 0, bden = 1; /* the best distance as bnum / bden, bden > 0 */
+    float bnum = 0, bden = 1; /* the best distance as bnum / bden, bden > 0 */
     for (int k = 0; k < 4; k++) {
         if (k == in || !(fall[k] > 0)) continue; /* the coordinate does not fall: the ray does not leave by this face */
         if (best < 0 || val[k] * bden < bnum * fall[k]) { best = k; bnum = val[k]; bden = fall[k]; }
     }
     if (best < 0) return -1;
-    double s = bnum / bden;
+    float s = bnum / bden;
     *sexit = s > smin ? s : smin;
     return best;
 }
@@ -410,7 +418,8 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
             if ((toopp > 0) != (along > 0)) { t = nextafterf((float)tin, INFINITY); continue; }
         }
         /* the walk measures s from the entry point (a perspective eye may be a metre and a half away) */
-        double e[3] = {o[0] + tin * d[0], o[1] + tin * d[1], o[2] + tin * d[2]}, send = tfar - tin, s = 0;
+        float e[3] = {(float)(o[0] + tin * d[0]), (float)(o[1] + tin * d[1]), (float)(o[2] + tin * d[2])};
+        float df[3] = {(float)d[0], (float)d[1], (float)d[2]}, send = (float)(tfar - tin), s = 0;
         const float *g = fld + 4 * tt;
         double xa = tf_pos(g[0] * e[0] + g[1] * e[1] + g[2] * e[2] + g[3]);
         tf_val va;
@@ -424,13 +433,13 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
                     __builtin_prefetch(m->tets + X->nb[k] / 4);
                     __builtin_prefetch(fld + 4 * (X->nb[k] / 4));
                 }
-            double sx;
-            int out = exit_face(X, in, e, d, s, &sx);
+            float sx;
+            int out = exit_face(X, in, e, df, s, &sx);
             if (out < 0) break;
-            double stop = sx < send ? sx : send;
+            float stop = sx < send ? sx : send;
             g = fld + 4 * tt;
-            double xb = tf_pos(g[0] * (e[0] + stop * d[0]) + g[1] * (e[1] + stop * d[1]) + g[2] * (e[2] + stop * d[2]) + g[3]);
-            segment(tf, xa, xb, stop - s, &va, rgb, T);
+            double xb = tf_pos(g[0] * (e[0] + stop * df[0]) + g[1] * (e[1] + stop * df[1]) + g[2] * (e[2] + stop * df[2]) + g[3]);
+            segment(tf, xa, xb, (double)stop - s, &va, rgb, T);
             xa = xb;
             s = stop;
             if (stop >= send) return;
