@@ -9,7 +9,9 @@
  *  - an image plane with a checker texture seen face-on: every pixel its texel (nearest), what is
  *    behind where alpha < 128, the mean of two texels midway between them (bilinear);
  *  - an arrow of known length: its pixels' extent, its shaft's and head's widths in pixels, and its
- *    shadow on a floor under a directional light.
+ *    shadow on a floor under a directional light;
+ *  - a coarse smooth-shaded sphere alone under a side light: a convex body casts no shadow on itself,
+ *    so its picture with shadows is the one without (the shadow terminator's bands absent).
  */
 #include <math.h>
 #include <omp.h>
@@ -176,6 +178,48 @@ static void test_shadow(thx_tracer *tr)
     thx_raster_destroy(&img1);
     thx_surface_destroy(&sph);
     thx_surface_destroy(&pl);
+}
+
+static void test_terminator(thx_tracer *tr)
+{
+    thx_surface *sph = sphere(0, 0, 0, 40, 10, 4); /* 36 x 45 degrees a facet: the bands would be wide */
+    thx_render_surface rs;
+    memset(&rs, 0, sizeof rs);
+    rs.surf = sph;
+    rs.mode = THX_DRAW_PHONG;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = &rs;
+    sc.n_surfaces = 1;
+    sc.camera = (thx_camera){{0, -500, 0}, {0, 0, 0}, {0, 0, 1}, 0, 100}; /* from the front */
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.n_lights = 1;
+    /* from above and a little in front: the terminator runs along the facets' bands */
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .dir = {0, 0.4, -1}, .intensity = 1, .shadows = 1};
+    const int N = 300;
+    thx_raster *on = NULL, *off = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &on));
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &off));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, on, NULL));
+    to.lights[0].shadows = 0;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, off, NULL));
+    keep(on, "terminator.png");
+    size_t differ = 0, lit = 0;
+    for (size_t i = 0; i < (size_t)N * N; i++) {
+        int d = 0;
+        for (int k = 0; k < 3; k++) d += abs(on->rgba[4 * i + k] - off->rgba[4 * i + k]);
+        differ += d > 3;
+        lit += off->rgba[4 * i] > 40;
+    }
+    printf("a 10 x 4 facet sphere under a light from above: %zu of %zu lit pixels differ with shadows on\n", differ, lit);
+    CHECK(lit > 10000 && differ <= lit / 100); /* (without the lift: 5,937 of 40,724, bands across the lower facets) */
+    thx_raster_destroy(&on);
+    thx_raster_destroy(&off);
+    thx_surface_destroy(&sph);
 }
 
 static void test_mirror(thx_tracer *tr)
@@ -633,6 +677,7 @@ int main(void)
     if (tr) {
         printf("%s\n", thx_tracer_info(tr));
         test_shadow(tr);
+        test_terminator(tr);
         test_mirror(tr);
         test_refraction(tr);
         test_volume(tr);

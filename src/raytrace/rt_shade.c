@@ -171,6 +171,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
     if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
     *thit = rh.ray.tfar;
     double t = rh.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+    double ps[3] = {p[0], p[1], p[2]}; /* where shadow and occlusion rays start */
     size_t idx;
     int kind = rt_kind(f, rh.hit.geomID, &idx);
     if (kind == RT_PLANE) { /* an image plane: its texel, unlit */
@@ -201,6 +202,19 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
             for (int k = 0; k < 3; k++) n[k] = w * n0[k] + u * n1[k] + v * n2[k];
             norm3(n);
             if (dot3(n, n) == 0) memcpy(n, ng, sizeof n);
+            /* the shadow terminator: on a coarse smooth-shaded surface, a point the smooth normal turns
+               to the light may sit below its neighbour triangles, which then shadow it in bands. The
+               shadow and occlusion rays start instead from the point lifted onto the corners' tangent
+               planes (each corner's lift where the point lies below its plane, mixed by the
+               barycentric weights), on the side the ray sees (Hanika, Ray Tracing Gems II, ch. 4) */
+            double side = dot3(n, dir) > 0 ? -1 : 1, bw[3] = {w, u, v};
+            const float *nc[3] = {n0, n1, n2};
+            for (int j = 0; j < 3; j++) {
+                const double *x = rs->surf->xyz + 3 * (size_t)c[j];
+                double below = side * ((p[0] - x[0]) * nc[j][0] + (p[1] - x[1]) * nc[j][1] + (p[2] - x[2]) * nc[j][2]);
+                if (below < 0)
+                    for (int k = 0; k < 3; k++) ps[k] -= bw[j] * below * side * nc[j][k];
+            }
         }
         if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k]; /* facing the ray: two-sided */
         base_color(f, s, rh.hit.primID, u, v, p, n, base);
@@ -222,7 +236,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
             double d[3];
             hemisphere(n, rt_rand(px, sample, (uint32_t)depth, 100 + 2 * (uint32_t)k),
                        rt_rand(px, sample, (uint32_t)depth, 101 + 2 * (uint32_t)k), d);
-            free_ += visibility(f, p, d, o->ao_distance, rays) > 0.5;
+            free_ += visibility(f, ps, d, o->ao_distance, rays) > 0.5;
         }
         amb *= (double)free_ / o->ao_samples;
     }
@@ -256,7 +270,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         }
         double d = dot3(n, l);
         if (d <= 0) continue;
-        double vis = L->shadows ? visibility(f, p, l, dist, rays) : 1;
+        double vis = L->shadows ? visibility(f, ps, l, dist, rays) : 1;
         if (vis <= 0) continue;
         double h[3] = {l[0] + toeye[0], l[1] + toeye[1], l[2] + toeye[2]};
         norm3(h);
