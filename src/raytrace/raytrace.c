@@ -291,7 +291,8 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             if (!s->t) return THX_ENOMEM;
             thx_scale_apply_n(&rs->scale, rs->values, rs->surf->n_nodes, s->t);
             const thx_render_surface *nx = f->next ? &f->next->surfaces[i] : NULL;
-            if (nx && nx->values) { /* the next frame's, on its own scale */
+            if (nx && nx->values && (nx->values != rs->values || memcmp(&nx->scale, &rs->scale, sizeof rs->scale))) {
+                /* the next frame's values, on its own scale (the same as this frame's: none) */
                 s->t_next = thx_malloc(ctx, rs->surf->n_nodes * sizeof *s->t_next);
                 if (!s->t_next) return THX_ENOMEM;
                 thx_scale_apply_n(&nx->scale, nx->values, rs->surf->n_nodes, s->t_next);
