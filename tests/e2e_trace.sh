@@ -13,7 +13,11 @@
 #    blurred frame differs from the unblurred one only near the edges that move between it and the
 #    next frame; --motion-blur refused under OpenGL;
 #  - thorax trace --frame F --motion-blur 1 on the phantom's solution: the potentials blurred towards
-#    frame F + 1 (the picture differs), the last frame (nothing after it) the unblurred picture.
+#    frame F + 1 (the picture differs), the last frame (nothing after it) the unblurred picture;
+#  - on the medium phantom's solution: a scan's image plane (a label map of the model) traced as the
+#    OpenGL renderer draws it (the same foreground, the same colours), current arrows traced as 3D
+#    glyphs where the OpenGL renderer draws its own, and --volume potential --colorbar adds the
+#    volume's bar (red to blue) to the surfaces' bars.
 # Env: THORAX, SRC, WORK.
 set -euo pipefail
 : "${THORAX:?}" "${SRC:?}" "${WORK:?}"
@@ -143,4 +147,68 @@ d = np.abs(a - b).sum(axis=2)
 print("trace --frame 20 --motion-blur 1: %.1f %% of the pixels differ from frame 20 alone (at most %d levels)" % (100 * (d > 0).mean(), d.max()))
 assert (d > 0).mean() > 0.01
 EOF
+
+# Image planes, arrows and the volume's colour bar, on the medium phantom's forward solution (the shared
+# fixture's model, tests/medium_phantom.sh) and a label map of its surfaces.
+mkdir -p med
+cd med
+. "$SRC/tests/medium_phantom.sh"
+medium_phantom || fail "the medium phantom"
+"$THORAX" beat model -o beat.raw --frames 300 -q
+"$THORAX" forward model --epicardial beat.raw --volume --currents 193 -o sol -q || fail "forward"
+"$THORAX" phantom --image scan.nii.gz --from model --voxel 4 -q > /dev/null || fail "the label map"
+R=(--solution sol --frame 193 --size 300x300)
+T=(--renderer trace --samples 1 --ao 0)
+P=(--view anterior --only heart --image scan.nii.gz --image-labels --image-plane y=10)
+A=(--view anterior --only heart --arrows)
+"$THORAX" render "${R[@]}" "${P[@]}" -o plane_gl.png -q || fail "render --image"
+"$THORAX" render "${R[@]}" "${P[@]}" "${T[@]}" -o plane_rt.png -q || fail "render --image --renderer trace"
+"$THORAX" render "${R[@]}" "${A[@]}" -o arrows_gl.png -q || fail "render --arrows"
+"$THORAX" render "${R[@]}" "${A[@]}" "${T[@]}" -o arrows_rt.png -q || fail "render --arrows --renderer trace"
+"$THORAX" trace "${R[@]}" --view anterior --colorbar --samples 1 -o bars.png -q || fail "trace --colorbar"
+"$THORAX" trace "${R[@]}" --view anterior --colorbar --samples 1 --volume potential -o vbars.png -q || fail "trace --volume --colorbar"
+$PY - <<'EOF' || fail "the planes, arrows and bars"
+import numpy as np
+from PIL import Image
+load = lambda f: np.asarray(Image.open(f).convert('RGB')).astype(int)
+def near(m):   # m, or a pixel next to one of m
+    p = np.pad(m, 1)
+    return np.any([p[1 + dy:1 + dy + m.shape[0], 1 + dx:1 + dx + m.shape[1]] for dy in (-1, 0, 1) for dx in (-1, 0, 1)], axis=0)
+# the image plane (unlit label colours) and the heart: the same foreground, the same colours mostly
+gl, rt = load('plane_gl.png'), load('plane_rt.png')
+bg = gl[0, 0]
+fg_gl, fg_rt = np.abs(gl - bg).sum(axis=2) > 6, np.abs(rt - bg).sum(axis=2) > 6
+agree = 1 - ((fg_gl != fg_rt) & ~(near(fg_rt) & near(~fg_rt))).mean()
+same = (np.abs(gl - rt).sum(axis=2) <= 12)[fg_gl & fg_rt].mean()
+print("image plane: foreground the same on %.2f %% of the pixels (%.1f %% of the picture); %.1f %% of it the same colour within 12 levels"
+      % (100 * agree, 100 * fg_gl.mean(), 100 * same))
+assert fg_gl.mean() > 0.2 and agree >= 0.99 and same >= 0.9, (fg_gl.mean(), agree, same)
+# the arrows (yellow, lit in the traced picture): where the OpenGL renderer draws them, give or take a pixel
+gl, rt = load('arrows_gl.png'), load('arrows_rt.png')
+yel = lambda a: (a[..., 0] > 90) & (a[..., 1] > 0.7 * a[..., 0]) & (a[..., 2] < 0.5 * a[..., 0])
+ygl, yrt = yel(gl), yel(rt)
+hit, back = (ygl & near(yrt)).sum() / max(ygl.sum(), 1), (yrt & near(ygl)).sum() / max(yrt.sum(), 1)
+print("arrows: %d yellow pixels OpenGL, %d traced; %.1f %% of OpenGL's next to traced ones, %.1f %% of the traced next to OpenGL's"
+      % (ygl.sum(), yrt.sum(), 100 * hit, 100 * back))
+assert ygl.sum() > 200 and 0.6 < yrt.sum() / ygl.sum() < 1.6 and hit > 0.8 and back > 0.8, (ygl.sum(), yrt.sum(), hit, back)
+# the colour bars: the volume-rendered potential (the frame's own range) adds one, red to blue
+def strips(a):   # runs of 16 rows or more over the background in the bar column (the right sixth's most saturated)
+    w = a.shape[1]
+    sat = (a.max(axis=2) - a.min(axis=2)) > 60
+    col = max(range(w - w // 6, w), key=lambda x: sat[:, x].sum())
+    drawn = (abs(a[:, col] - a[0, 0]).sum(axis=1) > 30).astype(int)
+    e = np.flatnonzero(np.diff(np.concatenate([[0], drawn, [0]])))
+    return [(s, t) for s, t in zip(e[0::2], e[1::2]) if t - s >= 16], col
+(b0, _), (b1, col) = strips(load('bars.png')), strips(load('vbars.png'))
+v = load('vbars.png')
+s, t = b1[-1]
+box = v[s:t, v.shape[1] - v.shape[1] // 3:]   # the last bar (three bars are laid out across, not down)
+red = ((box[..., 0] > box[..., 1] + 60) & (box[..., 0] > box[..., 2] + 60)).sum()
+blue = ((box[..., 2] > box[..., 0] + 60) & (box[..., 2] > box[..., 1] + 20)).sum()
+print("colour bars: %d without the volume, %d with it; the last (rows %d..%d) has %d red and %d blue pixels"
+      % (len(b0), len(b1), s, t, red, blue))
+assert len(b1) == len(b0) + 1, (b0, b1)
+assert red > 20 and blue > 20, (red, blue)
+EOF
+cd ..
 echo "e2e_trace: ok"

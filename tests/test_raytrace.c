@@ -11,6 +11,10 @@
  *    screen (to a pixel), on the side the square moves to; shutter 0 the unblurred picture byte for
  *    byte; values going from 0 to 1 between the frames: the mean colour the colour map's mean over
  *    [0, 1] (to a few levels); the same bytes on 1 and 2 threads; no geometry built.
+ *  - an image plane with a checker texture seen face-on: every pixel its texel (nearest), what is
+ *    behind where alpha < 128, the mean of two texels midway between them (bilinear);
+ *  - an arrow of known length: its pixels' extent, its shaft's and head's widths in pixels, and its
+ *    shadow on a floor under a directional light.
  */
 #include <math.h>
 #include <omp.h>
@@ -581,6 +585,182 @@ static void test_motion_blur(thx_tracer *tr)
     thx_surface_destroy(&sq);
 }
 
+/* An image plane seen face-on, nearest texels: each pixel shows the texel the geometry puts under its
+ * centre (texel (a, b) covers origin + [a, a + 1] / w u + [b, b + 1] / h v), unlit, exactly; a texel of
+ * alpha below 128 shows what is behind it (the same pixel as the picture without the plane); the id
+ * image names the plane where it is drawn. */
+static void test_plane(thx_tracer *tr)
+{
+    enum { TW = 8, TH = 6, W = 240, H = 180 }; /* 10 mm texels, 0.5 mm pixels */
+    unsigned char tex[4 * TW * TH];
+    for (int b = 0; b < TH; b++)
+        for (int a = 0; a < TW; a++) {
+            unsigned char *q = tex + 4 * (b * TW + a);
+            q[0] = (unsigned char)(20 + 30 * a);
+            q[1] = (unsigned char)(15 + 40 * b);
+            q[2] = (a + b) & 1 ? 230 : 40;
+            q[3] = a == b ? 100 : (a + 2 == b ? 127 : (a == b + 3 ? 128 : 255)); /* 100 and 127: not drawn */
+        }
+    thx_render_plane pl = {.w = TW, .h = TH, .rgba = tex, .origin = {-40, -30, 5}, .u = {80, 0, 0}, .v = {0, 60, 0}, .nearest = 1};
+    double o[3] = {-100, -100, -10}, u[3] = {200, 0, 0}, v[3] = {0, 200, 0};
+    thx_surface *floor_ = rect("floor", o, u, v);
+    thx_render_surface rs;
+    memset(&rs, 0, sizeof rs);
+    rs.surf = floor_;
+    rs.mode = THX_DRAW_FLAT;
+    rs.color[0] = 0.2f;
+    rs.color[1] = 0.5f;
+    rs.color[2] = 0.3f;
+    rs.color[3] = 1;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = &rs;
+    sc.n_surfaces = 1;
+    camera_down(&sc, 90);
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    thx_raster *img = NULL, *under = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, W, H, &img));
+    CHECK_OK(ctx, thx_raster_create(ctx, W, H, &under));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, under, NULL));
+    sc.planes = &pl;
+    sc.n_planes = 1;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+    keep(img, "plane.png");
+    int32_t *sid = malloc((size_t)W * H * sizeof *sid), *tid = malloc((size_t)W * H * sizeof *tid);
+    CHECK_OK(ctx, thx_raytrace_ids(ctx, tr, &sc, W, H, sid, tid));
+    size_t texel_ok = 0, texel_n = 0, behind_ok = 0, behind_n = 0, ids_ok = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double mx = -60 + (x + 0.5) * 0.5, my = 45 - (y + 0.5) * 0.5; /* the pixel centre in the model */
+            int a = (int)floor((mx + 40) / 10), b = (int)floor((my + 30) / 10);
+            int in = a >= 0 && a < TW && b >= 0 && b < TH, drawn = in && tex[4 * (b * TW + a) + 3] >= 128;
+            size_t i = (size_t)y * W + (size_t)x;
+            const unsigned char *p = img->rgba + 4 * i, *q = under->rgba + 4 * i;
+            if (drawn) {
+                const unsigned char *t = tex + 4 * (b * TW + a);
+                texel_n++;
+                texel_ok += p[0] == t[0] && p[1] == t[1] && p[2] == t[2];
+                ids_ok += sid[i] == THX_RAYTRACE_ID_PLANE && tid[i] == 0;
+            } else {
+                behind_n++;
+                behind_ok += !memcmp(p, q, 4);
+                ids_ok += sid[i] == 0;
+            }
+        }
+    printf("image plane, %d x %d texels of 10 mm face-on, 0.5 mm pixels: %zu of %zu pixels show their texel exactly, "
+           "%zu of %zu (transparent texels and around) what is behind; ids %zu of %d\n",
+           TW, TH, texel_ok, texel_n, behind_ok, behind_n, ids_ok, W * H);
+    CHECK(texel_n > 0 && texel_ok == texel_n);
+    CHECK(behind_n > 0 && behind_ok == behind_n);
+    CHECK(ids_ok == (size_t)W * H);
+    /* bilinear: at the middle between two texel centres along u, the mean of the two */
+    pl.nearest = 0;
+    camera_down(&sc, 2);
+    sc.camera.eye[0] = sc.camera.center[0] = -20; /* texels (1, 4) and (2, 4): centres x = -25 and -15 */
+    sc.camera.eye[1] = sc.camera.center[1] = 15;
+    thx_raster *one = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, 1, 1, &one));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, one, NULL));
+    const unsigned char *t1 = tex + 4 * (4 * TW + 1), *t2 = tex + 4 * (4 * TW + 2);
+    printf("bilinear between texels (1, 4) and (2, 4): %d %d %d, their mean %.1f %.1f %.1f\n", one->rgba[0], one->rgba[1],
+           one->rgba[2], (t1[0] + t2[0]) / 2.0, (t1[1] + t2[1]) / 2.0, (t1[2] + t2[2]) / 2.0);
+    for (int k = 0; k < 3; k++) CHECK(fabs(one->rgba[k] - (t1[k] + t2[k]) / 2.0) <= 0.51);
+    free(sid);
+    free(tid);
+    thx_raster_destroy(&one);
+    thx_raster_destroy(&img);
+    thx_raster_destroy(&under);
+    thx_surface_destroy(&floor_);
+}
+
+/* An arrow along +x, 60 mm long, 20 mm over a floor, seen from above (orthographic, 0.25 mm pixels): its
+ * pixels span the projected length to a pixel, its shaft is the width asked in pixels and its head
+ * the OpenGL renderer's (2 max(0.4 hl, w), hl = min(0.4 length, 4 w + 6)); a directional light down
+ * and towards +y casts its shadow on the floor 20 mm along +y, as long as the arrow. */
+static void test_arrow(thx_tracer *tr)
+{
+    enum { N = 401 };
+    const double px = 0.25, L = 60, Z = 20, x0 = -30.1, wpx = 6;
+    double o[3] = {-100, -100, 0}, u[3] = {200, 0, 0}, v[3] = {0, 200, 0};
+    thx_surface *floor_ = rect("floor", o, u, v);
+    thx_render_surface rs;
+    memset(&rs, 0, sizeof rs);
+    rs.surf = floor_;
+    rs.mode = THX_DRAW_FLAT;
+    double tail[3] = {x0, 0, Z}, vec[3] = {2, 0, 0};
+    thx_render_arrows ar;
+    memset(&ar, 0, sizeof ar);
+    ar.pos = tail;
+    ar.vec = vec;
+    ar.n = 1;
+    ar.scale = L / 2; /* length |v| scale */
+    ar.color[0] = 1;
+    ar.color[3] = 1;
+    ar.width = (float)wpx;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = &rs;
+    sc.n_surfaces = 1;
+    sc.arrows = &ar;
+    sc.n_arrows = 1;
+    camera_down(&sc, N * px); /* the middle row and column through the model's axes */
+    sc.clear = 1;
+    sc.background[3] = 1;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 1;
+    to.n_lights = 1;
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .dir = {0, 1, -1}, .intensity = 1, .shadows = 1};
+    thx_raster *img = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &img));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, img, NULL));
+    keep(img, "arrow.png");
+    int xmin = N, xmax = -1, shaft = 0, head = 0;
+    double hl = fmin(0.4 * L, (4 * wpx + 6) * px), r_head = fmax(0.4 * hl, wpx * px);
+    /* columns: the shaft's middle (x = 0), and 0.5 mm into the head (its width there 2 r_head (1 - 0.5 / hl)) */
+    int xs = N / 2, xh = (int)lround((x0 + L - hl + 0.5 + N * px / 2) / px - 0.5);
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++) {
+            const unsigned char *p = img->rgba + 4 * ((size_t)y * N + (size_t)x);
+            if (!(p[0] > p[1] + 40 && p[0] > p[2] + 40)) continue; /* red: the arrow */
+            xmin = x < xmin ? x : xmin;
+            xmax = x > xmax ? x : xmax;
+            shaft += x == xs;
+            head += x == xh;
+        }
+    double ext = (xmax - xmin + 1) * px, head_exp = 2 * r_head * (1 - 0.5 / hl) / px;
+    printf("arrow of %.0f mm along +x, %g px wide: its pixels span %.2f mm (pixel %.2f mm); shaft %d px wide, head %d px "
+           "0.5 mm from its back (%.1f expected)\n", L, wpx, ext, px, shaft, head, head_exp);
+    CHECK(fabs(ext - L) <= px);
+    CHECK(abs(shaft - (int)wpx) <= 1);
+    CHECK(fabs(head - head_exp) <= 1.5);
+    /* the shadow: light along (0, 1, -1) moves it Z along +y; along that row, dark from the tail to the tip */
+    int ys = (int)lround((N * px / 2 - Z) / px - 0.5), dmin = N, dmax = -1;
+    for (int x = 0; x < N; x++)
+        if (lum(img, x, ys) < 80) {
+            dmin = x < dmin ? x : dmin;
+            dmax = x > dmax ? x : dmax;
+        }
+    double sh = (dmax - dmin + 1) * px;
+    int lit_beside = lum(img, N / 2, ys - 20) > 120 && lum(img, N / 2, ys + 20) > 120;
+    printf("its shadow %.0f mm along +y: dark over %.2f mm of the row (x %.2f..%.2f mm), lit 5 mm either side: %s\n", Z, sh,
+           (dmin + 0.5) * px - N * px / 2, (dmax + 0.5) * px - N * px / 2, lit_beside ? "yes" : "no");
+    CHECK(fabs(sh - L) <= 2 * px);
+    CHECK(lit_beside);
+    /* the id image: the arrow's index */
+    int32_t sid[1], tid[1];
+    sc.camera.eye[0] = sc.camera.center[0] = 0;
+    sc.camera.height = 0.1;
+    CHECK_OK(ctx, thx_raytrace_ids(ctx, tr, &sc, 1, 1, sid, tid));
+    CHECK(sid[0] == THX_RAYTRACE_ID_ARROW && tid[0] == 0);
+    thx_raster_destroy(&img);
+    thx_surface_destroy(&floor_);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -588,12 +768,18 @@ int main(void)
     CHECK_OK(ctx, thx_tracer_create(ctx, &tr));
     if (tr) {
         printf("%s\n", thx_tracer_info(tr));
-        test_shadow(tr);
-        test_mirror(tr);
-        test_refraction(tr);
-        test_volume(tr);
-        test_environment(tr);
-        test_motion_blur(tr);
+        /* THX_TEST_ONLY=NAME: that test alone (e.g. motion_blur under valgrind) */
+        const char *only = getenv("THX_TEST_ONLY");
+#define RUN(name) if (!only || !strcmp(only, #name)) test_##name(tr)
+        RUN(shadow);
+        RUN(mirror);
+        RUN(refraction);
+        RUN(volume);
+        RUN(environment);
+        RUN(motion_blur);
+        RUN(plane);
+        RUN(arrow);
+#undef RUN
     }
     thx_tracer_destroy(&tr);
     thx_ctx_destroy(&ctx);

@@ -174,7 +174,7 @@ size_t raytrace_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--volume", .type = CLI_STRING, .meta = "FIELD", .fn = parse_volume,
                        .help = "trace: the field rendered inside the torso by emission and absorption (needs --solution "
                                "with volume potentials): potential (linear in each tetrahedron, the colour scale's) or "
-                               "current (|J| per tetrahedron, viridis)"};
+                               "current (|J| per tetrahedron, viridis), each over the frame's own range; --colorbar adds its bar"};
     t[n++] = (cli_opt){.name = "--volume-opacity", .type = CLI_STRING, .meta = "T:A,...", .fn = parse_opacity,
                        .help = "trace: the volume's opacity over its colour scale, points T:A (default: clear at the "
                                "middle, opaque at both ends; current: rising from 0)"};

@@ -415,6 +415,18 @@ static void collect_bars(const thx_picture_data *d, const built_scene *b, thx_pi
         add_bar(bars, &b->arrows.mag_scale, (int)b->arrows.cmap, "|J|", d->currents ? d->currents->unit : "", "currents");
 }
 
+/* The bar of the volume-rendered field (--volume potential|current): its colour map, the scale volume_of
+ * gave it (the frame's own range), titled and with the unit as the field's surfaces have theirs. */
+static void add_volume_bar(const thx_picture_opts *o, const thx_picture_data *d, const thx_scale *sc, thx_colormap cmap,
+                           thx_picture_bars *bars)
+{
+    int current = !strcmp(o->volume_render, "current");
+    char unit[16];
+    const char *vu = d->volume && d->volume->unit[0] ? d->volume->unit : current ? "unit" : "";
+    snprintf(unit, sizeof unit, current ? "A/m^2 per %.4s" : "%.15s", vu);
+    add_bar(bars, sc, (int)cmap, current ? "|J|" : "potential", unit, "volume");
+}
+
 int thx_picture_bar_layout(const thx_picture_opts *o, thx_font *font, int w, int h, int n, int box[][4])
 {
     int vp[4];
@@ -547,12 +559,18 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
     return THX_OK;
 }
 
+/* The panel traced into img, blurred towards next (NULL: no motion blur); with --volume, *vol_scale
+ * and *vol_cmap the volume's colours (for its bar). */
 static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
-                              const thx_scene *next, int frame, thx_raster *img)
+                              const thx_scene *next, int frame, thx_raster *img, thx_scale *vol_scale, thx_colormap *vol_cmap)
 {
     if (!d->tracer) THX_CHECK(thx_tracer_create(ctx, &d->tracer));
     thx_raytrace_volume vol;
-    if (o->volume_render) THX_CHECK(volume_of(ctx, o, d, frame, &vol));
+    if (o->volume_render) {
+        THX_CHECK(volume_of(ctx, o, d, frame, &vol));
+        *vol_scale = vol.scale;
+        *vol_cmap = vol.cmap;
+    }
     thx_raytrace_opts *rt = malloc(sizeof *rt);
     if (!rt) return thx_error(ctx, THX_ENOMEM, "out of memory (ray tracer options)");
     *rt = o->rt;
@@ -665,11 +683,14 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         thx_picture_camera(o, d, (double)pw / ph, &sc.camera);
         if (n_clip > 0) { sc.clip[0] = clip; sc.n_clip = 1; }
         size_t nn = 0;
-        if (o->renderer == 1 && img) {
+        thx_scale vol_scale;
+        thx_colormap vol_cmap = THX_CMAP_ECG;
+        int traced = o->renderer == 1 && img;
+        if (traced) {
             thx_scene next;
             thx_render_surface *nrs = NULL;
             if (o->rt.shutter > 0) st = next_scene(ctx, o, d, frame, only, &sc, &next, &nrs);
-            if (st == THX_OK) st = trace_panel(ctx, o, d, &sc, o->rt.shutter > 0 ? &next : NULL, frame, img);
+            if (st == THX_OK) st = trace_panel(ctx, o, d, &sc, o->rt.shutter > 0 ? &next : NULL, frame, img, &vol_scale, &vol_cmap);
             free(nrs);
         } else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
         if (nan_total) *nan_total += b->nan_count;
@@ -678,6 +699,8 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         b->apos = b->avec = NULL;
         if (st != THX_OK) break;
         collect_bars(d, b, bars);
+        if (traced && o->volume_render) /* the field rendered inside the mesh: its bar (one with the surfaces' when the same) */
+            add_volume_bar(o, d, &vol_scale, vol_cmap, bars);
         panel++;
     }
     free(b);

@@ -174,32 +174,41 @@ static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, con
     return THX_OK;
 }
 
-int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
-                 struct RTCRayHit *rh, size_t *rays)
+/* One Embree ray through scene sc from tnear to tfar. */
+static void ray_once(RTCScene sc, const double org[3], const double dir[3], double tnear, double tfar, struct RTCRayHit *rh)
+{
+    struct RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    memset(rh, 0, sizeof *rh);
+    rh->ray.org_x = (float)org[0];
+    rh->ray.org_y = (float)org[1];
+    rh->ray.org_z = (float)org[2];
+    rh->ray.dir_x = (float)dir[0];
+    rh->ray.dir_y = (float)dir[1];
+    rh->ray.dir_z = (float)dir[2];
+    rh->ray.tnear = (float)tnear;
+    rh->ray.tfar = (float)tfar;
+    rh->ray.mask = 0xffffffffu;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(sc, &c, rh);
+}
+
+/* The surfaces and arrows: the nearest hit the clip planes keep (surfaces with no_clip are kept
+ * whole; arrows are cut as the OpenGL renderer cuts them). */
+static int hit_solid(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                     struct RTCRayHit *rh, size_t *rays)
 {
     for (int pass = 0; pass < 256; pass++) {
-        struct RTCIntersectContext c;
-        rtcInitIntersectContext(&c);
-        memset(rh, 0, sizeof *rh);
-        rh->ray.org_x = (float)org[0];
-        rh->ray.org_y = (float)org[1];
-        rh->ray.org_z = (float)org[2];
-        rh->ray.dir_x = (float)dir[0];
-        rh->ray.dir_y = (float)dir[1];
-        rh->ray.dir_z = (float)dir[2];
-        rh->ray.tnear = (float)tnear;
-        rh->ray.tfar = (float)tfar;
-        rh->ray.mask = 0xffffffffu;
-        rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(f->scene, &c, rh);
+        ray_once(f->scene, org, dir, tnear, tfar, rh);
         (*rays)++;
         if (rh->hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-        const rt_surf *s = &f->s[rh->hit.geomID];
-        if (!f->any_clip || s->no_clip) return 1;
+        size_t k;
+        int kind = rt_kind(f, rh->hit.geomID, &k);
+        if (!f->any_clip || (kind == RT_SURFACE && f->s[k].no_clip)) return 1;
         double t = rh->ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
         int kept = 1;
-        for (int k = 0; k < f->sc->n_clip; k++) {
-            const thx_clip_plane *cp = &f->sc->clip[k];
+        for (int c = 0; c < f->sc->n_clip; c++) {
+            const thx_clip_plane *cp = &f->sc->clip[c];
             if (cp->n[0] * p[0] + cp->n[1] * p[1] + cp->n[2] * p[2] + cp->d < 0) kept = 0;
         }
         if (kept) return 1;
@@ -208,8 +217,29 @@ int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], do
     return 0;
 }
 
+/* A pixel's size: orthographic, in mm; perspective, per mm of distance from the eye. */
+static double pixel_mm_of(const thx_camera *c, int h)
+{
+    return c->fov_deg > 0 ? 2 * tan(0.5 * c->fov_deg * M_PI / 180) / h : c->height / h;
+}
+
+/* Orthographic: how far behind the eye's plane the scene's box (f->box_lo..box_hi, the image planes
+ * in it) reaches, where eye rays start. */
+static void frame_back(rt_frame *f)
+{
+    f->back = 0;
+    if (f->ortho)
+        for (int q = 0; q < 8 && f->box_lo[0] <= f->box_hi[0]; q++) {
+            double corner[3] = {q & 1 ? f->box_hi[0] : f->box_lo[0], q & 2 ? f->box_hi[1] : f->box_lo[1],
+                                q & 4 ? f->box_hi[2] : f->box_lo[2]};
+            double d = 0;
+            for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
+            f->back = fmax(f->back, d + 1);
+        }
+}
+
 /* The camera's frame in f (f->cam, eye, view, right, up; the lights given in the camera's axes
- * turned into the model's; how far behind the eye's plane an orthographic ray starts): 0, or 1 eye at
+ * turned into the model's; how far behind the eye's plane an orthographic ray starts, from f's box): 0, or 1 eye at
  * the centre, 2 up along the line of sight. */
 static int frame_camera(rt_frame *f, const thx_camera *c)
 {
@@ -234,29 +264,58 @@ static int frame_camera(rt_frame *f, const thx_camera *c)
             for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
     }
     f->ortho = !(c->fov_deg > 0);
-    f->back = 0;
-    if (f->ortho) /* how far behind the eye's plane the scene reaches */
-        for (int q = 0; q < 8 && f->box_lo[0] <= f->box_hi[0]; q++) {
-            double corner[3] = {q & 1 ? f->box_hi[0] : f->box_lo[0], q & 2 ? f->box_hi[1] : f->box_lo[1],
-                                q & 4 ? f->box_hi[2] : f->box_lo[2]};
-            double d = 0;
-            for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
-            f->back = fmax(f->back, d + 1);
-        }
+    frame_back(f);
     return 0;
 }
 
-/* The call's frame: the scene surfaces' geometries (built when needed), their per-node t, the
- * camera's frame. */
-static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, rt_frame *f,
+int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
+                 struct RTCRayHit *rh, size_t *rays)
+{
+    int hit = hit_solid(f, org, dir, tnear, tfar, rh, rays);
+    if (!f->planes) return hit;
+    /* the image planes (never clipped), in front of the solid hit by more than a hair: a surface in a
+       plane's own plane wins (the OpenGL renderer's polygon offset behind it); transparent texels let
+       the ray on */
+    double lim = tfar;
+    if (hit) lim = rh->ray.tfar - 1e-4 * fmax(1, fabs(rh->ray.tfar));
+    struct RTCRayHit ph;
+    for (int pass = 0; pass < 64 && tnear < lim; pass++) {
+        ray_once(f->planes, org, dir, tnear, lim, &ph);
+        (*rays)++;
+        if (ph.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+        double t = ph.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+        size_t k;
+        rt_kind(f, ph.hit.geomID, &k);
+        if (rt_plane_texel(&f->pl[k], p, NULL)) {
+            *rh = ph;
+            return 1;
+        }
+        tnear = nextafterf((float)t, INFINITY);
+    }
+    return hit;
+}
+
+/* The call's frame for a viewport vp_h pixels high: the camera's frame, the scene surfaces'
+ * geometries (built when needed) and their per-node t, the image planes and the arrows' glyphs
+ * (built per call). */
+static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, int vp_h, rt_frame *f,
                               size_t *builds)
 {
     memset(f, 0, sizeof *f);
     f->sc = sc;
     f->o = o;
-    f->n_s = sc->n_surfaces;
+    if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
+        return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's surface, arrow or plane array is NULL");
+    /* the camera's frame (the scene's box, where orthographic rays start, after the build) */
+    static const char *why[] = {"", "eye at the centre", "up along the line of sight"};
+    f->box_lo[0] = 1;
+    f->box_hi[0] = 0;
+    int bad = frame_camera(f, &sc->camera);
+    if (bad) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (%s)", why[bad]);
+    f->pixel_mm = pixel_mm_of(&sc->camera, vp_h);
     f->s = thx_calloc(ctx, sc->n_surfaces ? sc->n_surfaces : 1, sizeof *f->s);
     if (!f->s) return THX_ENOMEM;
+    f->n_s = sc->n_surfaces;
     if (o->next && o->shutter > 0) { /* motion blur: the next frame's scene, the same surfaces */
         if (o->next->n_surfaces != sc->n_surfaces)
             return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's scene has %zu surfaces, this frame's %zu (the same "
@@ -267,6 +326,10 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                 return thx_error(ctx, THX_EINPUT, "motion blur: surface %zu of the next frame's scene is not this frame's (%zu "
                                  "nodes, %zu)", i, b ? b->n_nodes : 0, a ? a->n_nodes : 0);
         }
+        rt_frame probe = {.o = o};
+        int bad_next = frame_camera(&probe, &o->next->camera);
+        if (bad_next)
+            return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's camera is degenerate (%s)", why[bad_next]);
         f->next = o->next;
         f->shutter = fmin(o->shutter, 1);
     }
@@ -300,28 +363,33 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         }
         rtcAttachGeometryByID(f->scene, s->g->geom, (unsigned)i);
     }
+    THX_CHECK(rt_planes_build(ctx, t->dev, f));
+    THX_CHECK(rt_arrows_build(ctx, t->dev, f));
     rtcCommitScene(f->scene);
     int zero_nan = sc->nan_color[0] == 0 && sc->nan_color[1] == 0 && sc->nan_color[2] == 0 && sc->nan_color[3] == 0;
     memcpy(f->nan_color, zero_nan ? nan_default : sc->nan_color, sizeof f->nan_color);
     memcpy(f->bg, sc->background, sizeof f->bg);
     f->any_clip = sc->n_clip > 0;
-    struct RTCBounds b;
-    rtcGetSceneBounds(f->scene, &b);
-    f->box_lo[0] = b.lower_x; f->box_lo[1] = b.lower_y; f->box_lo[2] = b.lower_z;
-    f->box_hi[0] = b.upper_x; f->box_hi[1] = b.upper_y; f->box_hi[2] = b.upper_z;
-    static const char *why[] = {"", "eye at the centre", "up along the line of sight"};
-    int bad = frame_camera(f, &sc->camera), bad_next = 0;
-    if (bad) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (%s)", why[bad]);
-    if (f->next) {
-        rt_frame probe = {.o = o};
-        bad_next = frame_camera(&probe, &f->next->camera);
+    /* the scene's box (its image planes too): where orthographic eye rays start */
+    for (int q = 0; q < 2; q++) {
+        struct RTCBounds b;
+        if (q == 1 && !f->planes) break;
+        rtcGetSceneBounds(q ? f->planes : f->scene, &b);
+        if (!(b.lower_x <= b.upper_x)) continue;
+        double lo[3] = {b.lower_x, b.lower_y, b.lower_z}, hi[3] = {b.upper_x, b.upper_y, b.upper_z};
+        int empty = !(f->box_lo[0] <= f->box_hi[0]);
+        for (int k = 0; k < 3; k++) {
+            f->box_lo[k] = empty ? lo[k] : fmin(f->box_lo[k], lo[k]);
+            f->box_hi[k] = empty ? hi[k] : fmax(f->box_hi[k], hi[k]);
+        }
     }
-    if (bad_next) return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's camera is degenerate (%s)", why[bad_next]);
+    frame_back(f);
     return THX_OK;
 }
 
 static void frame_free(rt_frame *f)
 {
+    rt_glyphs_free(f);
     for (size_t i = 0; i < f->n_s; i++) {
         free(f->s[i].t);
         free(f->s[i].t_next);
@@ -339,12 +407,6 @@ static int primary_ray(const rt_frame *f, int w, int h, double x, double y, doub
     if (f->ortho && f->back > 0)
         for (int k = 0; k < 3; k++) org[k] -= f->back * dir[k];
     return 0;
-}
-
-/* A pixel's size: orthographic, in mm; perspective, per mm of distance from the eye. */
-static double pixel_mm_of(const thx_camera *c, int h)
-{
-    return c->fov_deg > 0 ? 2 * tan(0.5 * c->fov_deg * M_PI / 180) / h : c->height / h;
 }
 
 /* The camera at time tau of the frame interval: eye, centre, up, field of view and height linear
@@ -386,10 +448,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     t->call++;
     size_t builds = 0;
     rt_frame f;
-    thx_status st = frame_build(ctx, t, sc, o, &f, &builds);
+    thx_status st = frame_build(ctx, t, sc, o, vp[3], &f, &builds);
     double t1 = wall();
     if (st != THX_OK) { frame_free(&f); return st; }
-    f.pixel_mm = pixel_mm_of(&sc->camera, vp[3]);
     f.n_samples = o->samples * o->samples;
     for (f.tau_stride = (int)(0.618 * f.n_samples); f.tau_stride > 1 && gcd(f.tau_stride, f.n_samples) != 1; f.tau_stride--) {}
     if (f.tau_stride < 1) f.tau_stride = 1;
@@ -402,8 +463,8 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         rt_tf_build(o->volume, tf);
         f.vm = &t->vm;
         f.tf = tf;
-        f.tnode = rt_volume_tnode(ctx, o->volume);
-        if (o->volume->point_values && !f.tnode) { free(tf); frame_free(&f); return THX_ENOMEM; }
+        f.fld = rt_volume_field(ctx, &t->vm, o->volume);
+        if (!f.fld) { free(tf); frame_free(&f); return THX_ENOMEM; }
         builds += t->vm.builds - before;
     }
     int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
@@ -436,7 +497,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         rt_shade(fp, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
                         if (f.vm) { /* the field in front of the surface hit (or of the background) */
                             double vc[3], T;
-                            rt_volume_march(f.vm, o->volume, f.tf, f.tnode, org, dir, 0, thit, vc, &T, &rays);
+                            rt_volume_march(f.vm, o->volume, f.tf, f.fld, org, dir, 0, thit, vc, &T, &rays);
                             /* premultiplied: the volume's emission, then the surface behind it through
                                what the volume lets pass; the coverage likewise */
                             double vcov = (1 - T) + T * alpha;
@@ -469,7 +530,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             }
         }
     }
-    free((void *)f.tnode);
+    free((void *)f.fld);
     frame_free(&f);
     free(tf);
     if (stats) {
@@ -489,7 +550,8 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
     t->call++;
     size_t builds = 0;
     rt_frame f;
-    thx_status st = frame_build(ctx, t, sc, &o, &f, &builds);
+    if (w < 1 || h < 1) return thx_error(ctx, THX_EINPUT, "ray tracer: id image %d x %d", w, h);
+    thx_status st = frame_build(ctx, t, sc, &o, h, &f, &builds);
     if (st != THX_OK) { frame_free(&f); return st; }
     size_t rays = 0;
 #pragma omp parallel for schedule(dynamic) reduction(+ : rays)
@@ -502,8 +564,19 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
             tri[i] = -1;
             if (primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir)) continue;
             if (rt_intersect(&f, org, dir, 0, INFINITY, &rh, &rays)) {
-                surface[i] = (int32_t)rh.hit.geomID;
-                tri[i] = (int32_t)rh.hit.primID;
+                size_t k;
+                int kind = rt_kind(&f, rh.hit.geomID, &k);
+                if (kind == RT_SURFACE) {
+                    surface[i] = (int32_t)k;
+                    tri[i] = (int32_t)rh.hit.primID;
+                } else if (kind == RT_PLANE) {
+                    surface[i] = THX_RAYTRACE_ID_PLANE;
+                    tri[i] = (int32_t)k;
+                } else {
+                    double n[3], col[4];
+                    surface[i] = THX_RAYTRACE_ID_ARROW;
+                    rt_arrow_hit(&f.ar[k], rh.hit.primID, rh.hit.u, rh.hit.v, n, col, &tri[i]);
+                }
             }
         }
     frame_free(&f);

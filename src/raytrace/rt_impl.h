@@ -30,16 +30,46 @@ typedef struct {
     int no_clip;
 } rt_surf;
 
+/* A tetrahedron as the volume renderer walks it, in one 64-byte cache line: three of its four
+ * barycentric coordinates as affine functions (lambda_k(p) = pl[4k..4k+2] . p + pl[4k+3], 1 at
+ * vertex k, 0 on the face opposite it; lambda_3 = 1 - lambda_0 - lambda_1 - lambda_2), and across
+ * each face the neighbour (its tetrahedron * 4 + its number of that face; -1 the mesh's boundary). */
+typedef struct {
+    float pl[12];
+    int32_t nb[4];
+} rt_tet;
+
+/* An image plane during a call (rt_glyphs.c): the inverse of its edges' Gram matrix (g11 g12; g12
+ * g22)^-1 as (a, b, c) = ((a b; b c)), which takes a point's dot products with u and v to its place
+ * (s, t) in [0, 1]^2 on the rectangle. */
+typedef struct {
+    const thx_render_plane *pl;
+    double gi[3];
+} rt_plane;
+
+/* One thx_render_arrows during a call (rt_glyphs.c): the glyphs of the arrows drawn, RT_ARROW_TRIS
+ * triangles each, in order; per arrow its colour and its index in the input. */
+#define RT_ARROW_TRIS 60
+typedef struct {
+    const thx_render_arrows *a;
+    size_t n;                       /* arrows drawn */
+    int32_t *index;                 /* n: the arrow's index in a->pos */
+    float (*color)[4];              /* n: rgba */
+    float *nrm;                     /* per vertex normals */
+    const unsigned *ib;             /* the triangles (Embree's buffer) */
+} rt_arrows;
+
 /* A volume mesh as the volume renderer walks it (rt_volume.c): kept across calls while (xyz, tet)
  * stay the same. */
 typedef struct {
     const double *xyz;
     const int32_t *tet;
     size_t n_nodes, n_tets;
-    int32_t *nbr;                   /* 4 n_tets: the tetrahedron across face k (opposite vertex k), -1 none */
-    int32_t *nbr_face;              /* ... and that face's number in it */
+    rt_tet *tets;                   /* n_tets, in the walk's order (64-byte aligned) */
+    int32_t *order;                 /* the walk's tetrahedron i is the mesh's order[i] (a Morton order of
+                                       their centres: a ray's next tetrahedra, and its neighbour rays',
+                                       near in memory) */
     int32_t *bface;                 /* boundary face (Embree primitive) -> tet * 4 + k */
-    double *plane;                  /* 16 n_tets: per tetrahedron the 4 barycentric coordinates as a . p + b */
     size_t n_bface;
     RTCScene scene;                 /* the boundary faces */
     size_t builds;
@@ -56,8 +86,13 @@ typedef struct {
     const thx_scene *sc;
     const thx_raytrace_opts *o;
     RTCScene scene;
-    rt_surf *s;                     /* by Embree geometry ID (= the scene surface's index) */
+    rt_surf *s;                     /* Embree geometry IDs: 0 .. n_s - 1 the scene's surfaces, */
     size_t n_s;
+    RTCScene planes;                /* n_s .. n_s + n_pl - 1 its image planes (a scene of their own), */
+    rt_plane *pl;
+    size_t n_pl;
+    rt_arrows *ar;                  /* then its arrow sets (in scene, with the surfaces) */
+    size_t n_ar;
     double eye[3], view[3], right[3], up[3]; /* camera frame; view: the line of sight */
     int ortho;
     double back;                    /* orthographic: eye rays start this far behind the eye's plane */
@@ -67,7 +102,7 @@ typedef struct {
     thx_light lights[THX_RAYTRACE_MAX_LIGHTS]; /* the options' lights, camera-relative ones turned into the model's axes */
     const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function, its t per node */
     const rt_tf *tf;
-    const double *tnode;
+    const float *fld;               /* the frame's field per tetrahedron (rt_volume_field) */
     /* motion blur (o->next and o->shutter > 0; else next is NULL): the camera of the sample being
        traced (cam; without blur the scene's), the scene's box (where orthographic eye rays start),
        the samples a pixel and the stride of their times' strata */
@@ -78,14 +113,39 @@ typedef struct {
     double box_lo[3], box_hi[3];
 } rt_frame;
 
+/* What an Embree geometry ID names (rt_frame): RT_SURFACE, RT_PLANE or RT_ARROWS, and *k its index
+ * among them. */
+enum { RT_SURFACE, RT_PLANE, RT_ARROWS };
+static inline int rt_kind(const rt_frame *f, unsigned id, size_t *k)
+{
+    if (id < f->n_s) { *k = id; return RT_SURFACE; }
+    if (id < f->n_s + f->n_pl) { *k = id - f->n_s; return RT_PLANE; }
+    *k = id - f->n_s - f->n_pl;
+    return RT_ARROWS;
+}
+
+/* rt_glyphs.c: the scene's image planes into f->planes, its arrows' glyphs into f->scene (before
+ * its commit; f's camera frame and pixel size set); freed by rt_glyphs_free. */
+thx_status rt_planes_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
+thx_status rt_arrows_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
+void rt_glyphs_free(rt_frame *f);
+/* The plane's colour at point pt on it (rgb may be NULL): 1 where its texel is drawn (alpha at least
+ * 1/2), 0 where it is transparent. */
+int rt_plane_texel(const rt_plane *p, const double pt[3], double rgb[3]);
+/* At a hit (prim, u, v) on an arrow set: the shading normal, the colour (rgba), *index the arrow's
+ * index in its input (may be NULL). */
+void rt_arrow_hit(const rt_arrows *r, unsigned prim, double u, double v, double n[3], double color[4], int32_t *index);
+
 thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume *v, rt_vmesh *m);
 void rt_vmesh_free(rt_vmesh *m);
 void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf);
 /* The volume integral from tnear to tfar: rgb (premultiplied) and the transmittance *T left. */
-void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double *tnode, const double o[3],
+void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, const double o[3],
                      const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays);
-/* Point data: the scale applied to each node's value (malloc'd; NULL for cell data or no memory). */
-double *rt_volume_tnode(thx_ctx *ctx, const thx_raytrace_volume *v);
+/* The frame's field as the walk reads it: per tetrahedron t = scale(value) as g . p + c (4 floats:
+ * g, c; point data: the linear interpolant of the corners' scaled values, as the OpenGL renderer
+ * interpolates a surface's; cell data: g = 0). malloc'd, NULL when out of memory. */
+float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v);
 /* The tracer's volume mesh for v, built when new (raytrace.c). */
 thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v);
 const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);

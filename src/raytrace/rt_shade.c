@@ -3,7 +3,8 @@
  * renderer computes it (the value's t interpolated, banded, looked up; contour lines of the same
  * pixel width), lit by the headlight or the scene's lights (Blinn-Phong; shadows by rays, soft from
  * an area light), ambient occlusion, a texture, then mirror reflection and refraction (Snell's law,
- * Schlick's Fresnel) traced on, up to the depth limit.
+ * Schlick's Fresnel) traced on, up to the depth limit. An image plane shows its texel, unlit; an
+ * arrow is lit as a surface of its own colour.
  */
 #include <math.h>
 #include <string.h>
@@ -110,7 +111,15 @@ static double visibility(const rt_frame *f, const double p[3], const double l[3]
     for (int k = 0; k < 32 && vis > 1e-3; k++) {
         struct RTCRayHit rh;
         if (!rt_intersect(f, p, l, tnear, dist - EPS, &rh, rays)) return vis;
-        vis *= f->s[rh.hit.geomID].transmit;
+        size_t ix;
+        int kind = rt_kind(f, rh.hit.geomID, &ix);
+        if (kind == RT_PLANE) return 0; /* an opaque texel */
+        if (kind == RT_SURFACE) vis *= f->s[ix].transmit;
+        else {
+            double n[3], c[4];
+            rt_arrow_hit(&f->ar[ix], rh.hit.primID, rh.hit.u, rh.hit.v, n, c, NULL);
+            vis *= 1 - c[3];
+        }
         tnear = nextafterf(rh.ray.tfar, INFINITY);
     }
     return vis;
@@ -168,34 +177,52 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
     *thit = INFINITY;
     if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
     *thit = rh.ray.tfar;
-    const rt_surf *s = &f->s[rh.hit.geomID];
-    const thx_render_surface *rs = s->rs;
     double t = rh.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
+    size_t idx;
+    int kind = rt_kind(f, rh.hit.geomID, &idx);
+    if (kind == RT_PLANE) { /* an image plane: its texel, unlit */
+        rt_plane_texel(&f->pl[idx], p, rgb);
+        *alpha = 1;
+        return;
+    }
     double u = rh.hit.u, v = rh.hit.v, w = 1 - u - v;
     double ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
     norm3(ng);
     int outside = dot3(ng, dir) < 0; /* the ray meets the surface's outward side (surfaces are outward) */
-    double n[3];
-    if (rs->mode == THX_DRAW_FLAT || rs->mode == THX_DRAW_ORIENTATION) {
-        memcpy(n, ng, sizeof n);
-    } else {
-        const int32_t *c = rs->surf->tri + 3 * (size_t)rh.hit.primID;
-        const float *n0 = s->g->nrm + 3 * c[0], *n1 = s->g->nrm + 3 * c[1], *n2 = s->g->nrm + 3 * c[2];
-        for (int k = 0; k < 3; k++) n[k] = w * n0[k] + u * n1[k] + v * n2[k];
-        norm3(n);
+    double n[3], base[3], reflect = 0, transmit, ior = 1;
+    if (kind == RT_ARROWS) { /* an arrow's glyph: its colour, its smooth normal, translucent as its alpha */
+        double c[4];
+        rt_arrow_hit(&f->ar[idx], rh.hit.primID, u, v, n, c, NULL);
         if (dot3(n, n) == 0) memcpy(n, ng, sizeof n);
-    }
-    if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k]; /* facing the ray: two-sided */
-    double base[3];
-    base_color(f, s, rh.hit.primID, u, v, p, n, rt_tau(f, px, sample), base);
-    if (rs->mode == THX_DRAW_ORIENTATION && !outside) { /* the inward side: the back colour */
-        const float *bc = rs->back_color;
-        int zero = bc[0] == 0 && bc[1] == 0 && bc[2] == 0 && bc[3] == 0;
-        for (int k = 0; k < 3; k++) base[k] = zero ? 1 : bc[k];
+        if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k];
+        for (int k = 0; k < 3; k++) base[k] = c[k];
+        transmit = 1 - c[3];
+    } else {
+        const rt_surf *s = &f->s[idx];
+        const thx_render_surface *rs = s->rs;
+        if (rs->mode == THX_DRAW_FLAT || rs->mode == THX_DRAW_ORIENTATION) {
+            memcpy(n, ng, sizeof n);
+        } else {
+            const int32_t *c = rs->surf->tri + 3 * (size_t)rh.hit.primID;
+            const float *n0 = s->g->nrm + 3 * c[0], *n1 = s->g->nrm + 3 * c[1], *n2 = s->g->nrm + 3 * c[2];
+            for (int k = 0; k < 3; k++) n[k] = w * n0[k] + u * n1[k] + v * n2[k];
+            norm3(n);
+            if (dot3(n, n) == 0) memcpy(n, ng, sizeof n);
+        }
+        if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k]; /* facing the ray: two-sided */
+        base_color(f, s, rh.hit.primID, u, v, p, n, rt_tau(f, px, sample), base);
+        if (rs->mode == THX_DRAW_ORIENTATION && !outside) { /* the inward side: the back colour */
+            const float *bc = rs->back_color;
+            int zero = bc[0] == 0 && bc[1] == 0 && bc[2] == 0 && bc[3] == 0;
+            for (int k = 0; k < 3; k++) base[k] = zero ? 1 : bc[k];
+        }
+        reflect = s->mat.reflect;
+        transmit = s->transmit;
+        ior = s->mat.ior;
     }
     /* lighting: what the surface shows of itself counts for (1 - reflect - transmit) of the ray */
     const thx_raytrace_opts *o = f->o;
-    double amb = o->ambient, own = weight * (1 - s->mat.reflect - s->transmit);
+    double amb = o->ambient, own = weight * (1 - reflect - transmit);
     if (o->ao_samples > 0 && own > 0.2) { /* the ambient term scaled by the unoccluded fraction (where it shows) */
         int free_ = 0;
         for (int k = 0; k < o->ao_samples; k++) {
@@ -243,7 +270,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         double sp = pow(fmax(dot3(n, h), 0), SHINE);
         for (int k = 0; k < 3; k++) local[k] += vis * inten * (KD * d * base[k] + KS * sp);
     }
-    double refl = s->mat.reflect, trans = s->transmit;
+    double refl = reflect, trans = transmit;
     if (depth >= o->max_depth) refl = trans = 0;
     const double cut = 1.0 / 256; /* a branch that adds less than a grey level is not traced */
     double out[3];
@@ -251,10 +278,10 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
     if (trans > 0) {
         /* refraction: Snell's law into (outside) or out of the surface, Schlick's Fresnel; total
            internal reflection reflects */
-        double eta = outside ? 1 / s->mat.ior : s->mat.ior, cosi = -dot3(n, dir);
+        double eta = outside ? 1 / ior : ior, cosi = -dot3(n, dir);
         double k2 = 1 - eta * eta * (1 - cosi * cosi), tdir[3], fr = 0;
-        if (s->mat.ior != 1) {
-            double r0 = (1 - s->mat.ior) / (1 + s->mat.ior);
+        if (ior != 1) {
+            double r0 = (1 - ior) / (1 + ior);
             r0 *= r0;
             fr = r0 + (1 - r0) * pow(1 - cosi, 5);
         }

@@ -36,6 +36,60 @@ typedef struct {
     int32_t slot;   /* tet * 4 + k */
 } face_rec;
 
+typedef struct {
+    uint64_t key;
+    int32_t tet;
+} morton_rec;
+
+static int morton_cmp(const void *a, const void *b)
+{
+    const morton_rec *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return (x->tet > y->tet) - (x->tet < y->tet);
+}
+
+/* 21 bits spread to every third place. */
+static uint64_t spread3(uint64_t x)
+{
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+/* The tetrahedra in the Morton order of their centres (malloc'd; NULL when out of memory). */
+static int32_t *morton_order(thx_ctx *ctx, const thx_raytrace_volume *v)
+{
+    size_t nt = v->n_tets;
+    morton_rec *r = thx_malloc(ctx, (nt ? nt : 1) * sizeof *r);
+    int32_t *order = thx_malloc(ctx, (nt ? nt : 1) * sizeof *order);
+    if (!r || !order) { free(r); free(order); return NULL; }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < v->n_nodes; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], v->xyz[3 * i + (size_t)k]);
+            hi[k] = fmax(hi[k], v->xyz[3 * i + (size_t)k]);
+        }
+    double span = fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]), q = span > 0 ? 2097151.0 / span : 0;
+    for (size_t t = 0; t < nt; t++) {
+        uint64_t key = 0;
+        for (int k = 0; k < 3; k++) {
+            double c = 0;
+            for (int j = 0; j < 4; j++) c += 0.25 * v->xyz[3 * (size_t)v->tet[4 * t + (size_t)j] + (size_t)k];
+            key |= spread3((uint64_t)fmin(fmax((c - lo[k]) * q, 0), 2097151)) << k;
+        }
+        r[t].key = key;
+        r[t].tet = (int32_t)t;
+    }
+    qsort(r, nt, sizeof *r, morton_cmp);
+    for (size_t t = 0; t < nt; t++) order[t] = r[t].tet;
+    free(r);
+    return order;
+}
+
 static int face_cmp(const void *a, const void *b)
 {
     const face_rec *x = a, *y = b;
@@ -47,10 +101,9 @@ static int face_cmp(const void *a, const void *b)
 void rt_vmesh_free(rt_vmesh *m)
 {
     if (m->scene) rtcReleaseScene(m->scene);
-    free(m->nbr);
-    free(m->nbr_face);
+    free(m->tets);
+    free(m->order);
     free(m->bface);
-    free(m->plane);
     memset(m, 0, sizeof *m);
 }
 
@@ -63,23 +116,25 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
         if (v->tet[i] < 0 || (size_t)v->tet[i] >= v->n_nodes)
             return thx_error(ctx, THX_EINPUT, "volume rendering: tetrahedron %zu names node %d of %zu", i / 4 + 1, v->tet[i] + 1, v->n_nodes);
     face_rec *f = thx_malloc(ctx, (nf ? nf : 1) * sizeof *f);
-    m->nbr = thx_malloc(ctx, (nf ? nf : 1) * sizeof *m->nbr);
-    m->nbr_face = thx_malloc(ctx, (nf ? nf : 1) * sizeof *m->nbr_face);
-    if (!f || !m->nbr || !m->nbr_face) { free(f); rt_vmesh_free(m); return THX_ENOMEM; }
+    m->order = morton_order(ctx, v);
+    if (posix_memalign((void **)&m->tets, 64, (nt ? nt : 1) * sizeof *m->tets)) {
+        m->tets = NULL;
+        thx_error(ctx, THX_ENOMEM, "out of memory (%zu tetrahedra to walk)", nt);
+    }
+    if (!f || !m->tets || !m->order) { free(f); rt_vmesh_free(m); return THX_ENOMEM; }
     for (size_t t = 0; t < nt; t++)
         for (int k = 0; k < 4; k++) {
             face_rec *r = &f[4 * t + (size_t)k];
             int32_t a[3], n = 0;
             for (int j = 0; j < 4; j++)
-                if (j != k) a[n++] = v->tet[4 * t + (size_t)j];
+                if (j != k) a[n++] = v->tet[4 * (size_t)m->order[t] + (size_t)j];
             /* sorted corners: the key both tetrahedra of a face share */
             if (a[0] > a[1]) { int32_t x = a[0]; a[0] = a[1]; a[1] = x; }
             if (a[1] > a[2]) { int32_t x = a[1]; a[1] = a[2]; a[2] = x; }
             if (a[0] > a[1]) { int32_t x = a[0]; a[0] = a[1]; a[1] = x; }
             memcpy(r->key, a, sizeof a);
             r->slot = (int32_t)(4 * t + (size_t)k);
-            m->nbr[4 * t + (size_t)k] = -1;
-            m->nbr_face[4 * t + (size_t)k] = -1;
+            m->tets[t].nb[k] = -1;
         }
     qsort(f, nf, sizeof *f, face_cmp);
     size_t nb = 0;
@@ -88,10 +143,8 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
         while (j < nf && !memcmp(f[j].key, f[i].key, sizeof f[i].key)) j++;
         if (j - i == 2) {
             int32_t a = f[i].slot, b = f[i + 1].slot;
-            m->nbr[a] = b / 4;
-            m->nbr_face[a] = b % 4;
-            m->nbr[b] = a / 4;
-            m->nbr_face[b] = a % 4;
+            m->tets[a / 4].nb[a % 4] = b;
+            m->tets[b / 4].nb[b % 4] = a;
         } else if (j - i == 1) {
             nb++;
         } else {
@@ -104,20 +157,19 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
     free(f);
     /* each tetrahedron's barycentric coordinates as affine functions: lambda_k(p) = a_k . p + b_k, 1 at
        vertex k and 0 on the face opposite it (what the walk and the field's interpolation read) */
-    m->plane = thx_malloc(ctx, 16 * (nt ? nt : 1) * sizeof *m->plane);
-    if (!m->plane) { rt_vmesh_free(m); return THX_ENOMEM; }
     for (size_t t = 0; t < nt; t++)
-        for (int k = 0; k < 4; k++) {
-            const int32_t *c = v->tet + 4 * t;
+        for (int k = 0; k < 3; k++) {
+            const int32_t *c = v->tet + 4 * (size_t)m->order[t];
             const double *p0 = v->xyz + 3 * c[(k + 1) % 4], *p1 = v->xyz + 3 * c[(k + 2) % 4], *p2 = v->xyz + 3 * c[(k + 3) % 4];
             const double *vk = v->xyz + 3 * c[k];
             double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
             double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
             double sk = n[0] * (vk[0] - p0[0]) + n[1] * (vk[1] - p0[1]) + n[2] * (vk[2] - p0[2]);
-            double *pl = m->plane + 16 * t + 4 * (size_t)k;
-            if (sk == 0) { pl[0] = pl[1] = pl[2] = 0; pl[3] = 0.25; continue; } /* a flat tetrahedron: never crossed */
-            for (int q = 0; q < 3; q++) pl[q] = n[q] / sk;
-            pl[3] = -(pl[0] * p0[0] + pl[1] * p0[1] + pl[2] * p0[2]);
+            float *pl = m->tets[t].pl + 4 * k;
+            if (sk == 0) { pl[0] = pl[1] = pl[2] = 0; pl[3] = 0.25f; continue; } /* a flat tetrahedron: never crossed */
+            double a[3] = {n[0] / sk, n[1] / sk, n[2] / sk};
+            for (int q = 0; q < 3; q++) pl[q] = (float)a[q];
+            pl[3] = (float)-(a[0] * p0[0] + a[1] * p0[1] + a[2] * p0[2]);
         }
     /* the boundary faces, as Embree triangles (each face's tetrahedron slot kept) */
     m->bface = thx_malloc(ctx, (nb ? nb : 1) * sizeof *m->bface);
@@ -129,11 +181,11 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
     for (size_t i = 0; i < 3 * v->n_nodes; i++) vb[i] = (float)v->xyz[i];
     size_t q = 0;
     for (size_t s = 0; s < nf; s++) {
-        if (m->nbr[s] >= 0) continue;
+        if (m->tets[s / 4].nb[s % 4] >= 0) continue;
         size_t t = s / 4, n = 0;
         int k = (int)(s % 4);
         for (int j = 0; j < 4; j++)
-            if (j != k) ib[3 * q + n++] = (unsigned)v->tet[4 * t + (size_t)j];
+            if (j != k) ib[3 * q + n++] = (unsigned)v->tet[4 * (size_t)m->order[t] + (size_t)j];
         m->bface[q++] = (int32_t)s;
     }
     rtcCommitGeometry(g);
@@ -175,132 +227,152 @@ void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf)
     }
 }
 
-static inline double clamp01(double t) { return t < 0 ? 0 : t > 1 ? 1 : t; }
+/* The transfer function at table position x in [0, TF_N - 1] (linear between entries). */
+typedef struct {
+    double c[3], tau;
+} tf_val;
 
-/* The transfer function at t (linear between entries; t clamped to [0, 1]). */
-static void tf_at(const rt_tf *tf, double t, double c[3], double *tau)
+static inline void tf_at(const rt_tf *tf, double x, tf_val *v)
 {
-    double x = clamp01(t) * (TF_N - 1);
-    int i = (int)floor(x);
-    if (i >= TF_N - 1) i = TF_N - 2;
+    int i = (int)x;
+    if (i > TF_N - 2) i = TF_N - 2;
     double w = x - i;
-    for (int k = 0; k < 3; k++) c[k] = (1 - w) * tf->c[i][k] + w * tf->c[i + 1][k];
-    *tau = (1 - w) * tf->tau[i] + w * tf->tau[i + 1];
+    for (int k = 0; k < 3; k++) v->c[k] = tf->c[i][k] + w * (tf->c[i + 1][k] - tf->c[i][k]);
+    v->tau = tf->tau[i] + w * (tf->tau[i + 1] - tf->tau[i]);
 }
 
-/* One sub-piece of length L with C and tau linear from (c0, tau0) to (c1, tau1): its emission added
- * to rgb under the transmittance *T, and *T reduced. */
-/* e^(-x) for x >= 0: a Taylor polynomial where x is small (most pieces of a fine mesh: the error
- * under 1e-13 for x < 0.01), exp elsewhere. */
-static double exp_neg(double x)
+/* t = scale(value) as a table position (t clamped to [0, 1]). */
+static inline double tf_pos(double t) { return (t < 0 ? 0 : t > 1 ? 1 : t) * (TF_N - 1); }
+
+/* 1 - e^(-x) for x >= 0, without the cancellation where x is small (most pieces of a fine mesh:
+ * a Taylor polynomial, its error under 1e-13 relative for x < 0.01). */
+static inline double absorbed(double x)
 {
-    if (x < 0.01) return 1 - x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x / 120))));
-    return exp(-x);
+    if (x < 0.01) return x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))));
+    return -expm1(-x);
 }
 
+/* One sub-piece of length L along which the colour C and the extinction tau are linear, from (c0,
+ * tau0) to (c1, tau1): its emission added to rgb under the transmittance *T, and *T reduced.
+ *
+ * With the optical depth D(z) = int_0^z tau, and tau e^(-D) = d/dz (-e^(-D)), integration by parts
+ * gives the emission int_0^L C tau e^(-D) dz = c0 b + c1 (a - b), where a = 1 - e^(-D(L)) (what the
+ * piece absorbs) and b = (1 / L) int_0^L (1 - e^(-D(z))) dz: exact for C linear, in two numbers
+ * shared by the three channels. b is exact in closed form where tau is constant (b = 1 - a / x, x =
+ * tau L; its series where x is small), else 3-point Gauss-Legendre on a smooth integrand (D
+ * quadratic). No cancellation: a and b are both small where the piece is thin. */
 static void piece(const double c0[3], double tau0, const double c1[3], double tau1, double L, double rgb[3], double *T)
 {
     if (!(L > 0) || (tau0 == 0 && tau1 == 0)) return; /* clear: nothing emitted or absorbed */
-    double depth = 0.5 * (tau0 + tau1) * L;
-    if (fabs(tau1 - tau0) <= 1e-12 * (fabs(tau0) + fabs(tau1)) || tau0 == tau1) {
-        double tau = 0.5 * (tau0 + tau1), x = tau * L, a, b;
-        /* exact: int_0^L (c0 + s z) tau e^(-tau z) dz = c0 a + s b, s = (c1 - c0) / L, with
-           a = 1 - e^(-x) and b = (1 - e^(-x) (1 + x)) / tau (series where x is small) */
-        if (x < 0.01) {
-            a = x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x / 120))));
-            b = x * x * (0.5 - x * (1.0 / 3 - x * (0.125 - x / 30))) / tau;
-        } else {
-            double e = exp(-x);
-            a = 1 - e;
-            b = (1 - e * (1 + x)) / tau;
-        }
-        for (int k = 0; k < 3; k++) rgb[k] += *T * (c0[k] * a + (c1[k] - c0[k]) / L * b);
-        *T *= 1 - a;
-        return;
+    double x = 0.5 * (tau0 + tau1) * L, a = absorbed(x), b;
+    if (tau0 == tau1) {
+        b = x < 0.01 ? x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))) : 1 - a / x;
+    } else if (x < 0.01) {
+        /* D(z) = u z / L + v z^2 / L^2 (u = tau0 L, v = (tau1 - tau0) L / 2, D <= x): b is the mean of
+           D - D^2 / 2 + D^3 / 6 - D^4 / 24 over the piece, each power's mean exact (the next term
+           under x^5 / 120: 1e-12) */
+        double u = tau0 * L, v = 0.5 * (tau1 - tau0) * L, u2 = u * u, v2 = v * v;
+        double m1 = u / 2 + v / 3, m2 = u2 / 3 + u * v / 2 + v2 / 5;
+        double m3 = u2 * u / 4 + 0.6 * u2 * v + u * v2 / 2 + v2 * v / 7;
+        double m4 = u2 * u2 / 5 + 2.0 / 3 * u2 * u * v + 6.0 / 7 * u2 * v2 + u * v2 * v / 2 + v2 * v2 / 9;
+        b = m1 - m2 / 2 + m3 / 6 - m4 / 24;
     } else {
-        /* 3-point Gauss-Legendre; the optical depth D(x) = tau0 x + (tau1 - tau0) x^2 / (2 L) exact */
-        static const double gx[3] = {-0.7745966692414834, 0, 0.7745966692414834}, gw[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
+        /* D(z) = tau0 z + (tau1 - tau0) z^2 / (2 L) at the nodes z = L (1 + g) / 2 */
+        static const double gx[3] = {-0.7745966692414834, 0, 0.7745966692414834}, gw[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+        b = 0;
         for (int g = 0; g < 3; g++) {
-            double x = 0.5 * L * (gx[g] + 1), w = x / L, D = tau0 * x + (tau1 - tau0) * x * x / (2 * L);
-            double tau = tau0 + w * (tau1 - tau0), f = 0.5 * L * gw[g] * tau * exp_neg(D);
-            for (int k = 0; k < 3; k++) rgb[k] += *T * f * (c0[k] + w * (c1[k] - c0[k]));
+            double z = 0.5 * L * (gx[g] + 1);
+            b += gw[g] * absorbed(tau0 * z + (tau1 - tau0) * z * z / (2 * L));
         }
     }
-    *T *= exp_neg(depth);
+    double w = *T;
+    for (int k = 0; k < 3; k++) rgb[k] += w * (c0[k] * b + c1[k] * (a - b));
+    *T = w * (1 - a);
 }
 
-/* A segment of length L along which t goes linearly from ta to tb: split where t crosses a table
- * entry, each sub-piece integrated. */
-static void segment(const rt_tf *tf, double ta, double tb, double L, double rgb[3], double *T)
+/* A segment of length L along which the table position goes linearly from xa (where the transfer
+ * function is *v) to xb: split where it crosses a table entry, each sub-piece integrated; *v becomes
+ * the transfer function at xb. */
+static void segment(const rt_tf *tf, double xa, double xb, double L, tf_val *v, double rgb[3], double *T)
 {
-    ta = clamp01(ta);
-    tb = clamp01(tb);
-    double xa = ta * (TF_N - 1), xb = tb * (TF_N - 1);
-    double c0[3], tau0, c1[3], tau1;
-    tf_at(tf, ta, c0, &tau0);
-    if (fabs(xb - xa) < 1e-12) {
-        piece(c0, tau0, c0, tau0, L, rgb, T);
+    tf_val e;
+    if (xb == xa) {
+        piece(v->c, v->tau, v->c, v->tau, L, rgb, T);
         return;
     }
-    int dir = xb > xa ? 1 : -1;
-    double x = xa, s = 0; /* s: the fraction of L done */
-    while (*T > 1e-4) {
-        double next = dir > 0 ? floor(x) + 1 : ceil(x) - 1;
-        if ((dir > 0 && next >= xb) || (dir < 0 && next <= xb)) next = xb;
-        double s1 = (next - xa) / (xb - xa);
-        tf_at(tf, next / (TF_N - 1), c1, &tau1);
-        piece(c0, tau0, c1, tau1, (s1 - s) * L, rgb, T);
-        memcpy(c0, c1, sizeof c0);
-        tau0 = tau1;
+    /* the entries strictly between xa and xb, in the ray's order */
+    int up = xb > xa, k = up ? (int)xa + 1 : (int)ceil(xa) - 1, kend = up ? (int)ceil(xb) : (int)xb;
+    double s = 0, inv = 1 / (xb - xa); /* s: the fraction of L done */
+    for (; up ? k < kend : k > kend; k += up ? 1 : -1) {
+        double s1 = (k - xa) * inv;
+        tf_at(tf, k, &e);
+        piece(v->c, v->tau, e.c, e.tau, (s1 - s) * L, rgb, T);
+        *v = e;
         s = s1;
-        x = next;
-        if (next == xb) break;
+        if (*T <= 1e-4) return;
     }
+    tf_at(tf, xb, &e);
+    piece(v->c, v->tau, e.c, e.tau, (1 - s) * L, rgb, T);
+    *v = e;
 }
 
-/* The field's t at point p in tetrahedron tt: the corners' t (tnode, the scale applied per node,
- * interpolated as the OpenGL renderer interpolates a surface's t) mixed by the barycentric
- * coordinates; cell data: the tetrahedron's. */
-static double field_t(const rt_vmesh *m, const thx_raytrace_volume *v, const double *tnode, size_t tt, const double p[3])
+float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v)
 {
-    if (!v->point_values) return thx_scale_apply(&v->scale, v->cell_values[tt]);
-    const int32_t *c = v->tet + 4 * tt;
-    const double *pl = m->plane + 16 * tt;
-    double t = 0;
-    for (int k = 0; k < 4; k++) t += (pl[4 * k] * p[0] + pl[4 * k + 1] * p[1] + pl[4 * k + 2] * p[2] + pl[4 * k + 3]) * tnode[c[k]];
-    return t;
+    size_t nt = v->n_tets;
+    float *fld = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *fld);
+    double *tn = v->point_values ? thx_malloc(ctx, (v->n_nodes ? v->n_nodes : 1) * sizeof *tn) : NULL;
+    if (!fld || (v->point_values && !tn)) { free(fld); free(tn); return NULL; }
+    if (tn)
+        for (size_t i = 0; i < v->n_nodes; i++) tn[i] = thx_scale_apply(&v->scale, v->point_values[i]);
+#pragma omp parallel for schedule(static)
+    for (size_t t = 0; t < nt; t++) {
+        float *g = fld + 4 * t;
+        if (!tn) {
+            g[0] = g[1] = g[2] = 0;
+            g[3] = (float)thx_scale_apply(&v->scale, v->cell_values[m->order[t]]);
+            continue;
+        }
+        /* t(p) = sum_k lambda_k(p) t_k: the coordinates' affine functions mixed by the corner values */
+        double acc[4] = {0, 0, 0, 0};
+        const float *pl = m->tets[t].pl;
+        const int32_t *c = v->tet + 4 * (size_t)m->order[t];
+        double t3 = tn[c[3]]; /* lambda_3 = 1 - the others */
+        for (int k = 0; k < 3; k++)
+            for (int q = 0; q < 4; q++) acc[q] += (double)pl[4 * k + q] * (tn[c[k]] - t3);
+        acc[3] += t3;
+        for (int q = 0; q < 4; q++) g[q] = (float)acc[q];
+    }
+    free(tn);
+    return fld;
 }
 
-double *rt_volume_tnode(thx_ctx *ctx, const thx_raytrace_volume *v)
+/* Where the ray o + s d leaves tetrahedron T entered through face `in` (-1: unknown): the face among
+ * the others whose barycentric coordinate falls to 0 first, *sexit its distance (at least smin); -1
+ * when none falls (a ray grazing). The candidates are compared by cross-multiplication, one division
+ * for the winner. */
+static inline int exit_face(const rt_tet *T, int in, const double o[3], const double d[3], double smin, double *sexit)
 {
-    if (!v->point_values) return NULL;
-    double *t = thx_malloc(ctx, (v->n_nodes ? v->n_nodes : 1) * sizeof *t);
-    if (t)
-        for (size_t i = 0; i < v->n_nodes; i++) t[i] = thx_scale_apply(&v->scale, v->point_values[i]);
-    return t;
-}
-
-/* Where the ray leaves tetrahedron tt entered through face `in` (-1: unknown): the face whose
- * barycentric coordinate falls to 0 first, and the distance; -1 when none falls (a ray grazing). */
-static int exit_face(const rt_vmesh *m, size_t tt, int in, const double o[3], const double d[3], double tmin, double *texit)
-{
-    const double *pl = m->plane + 16 * tt;
+    const float *a = T->pl;
+    double fall[4], val[4];
+    for (int k = 0; k < 3; k++) {
+        fall[k] = -(a[4 * k] * d[0] + a[4 * k + 1] * d[1] + a[4 * k + 2] * d[2]);
+        val[k] = a[4 * k] * o[0] + a[4 * k + 1] * o[1] + a[4 * k + 2] * o[2] + a[4 * k + 3];
+    }
+    fall[3] = -(fall[0] + fall[1] + fall[2]);
+    val[3] = 1 - (val[0] + val[1] + val[2]);
     int best = -1;
-    double bt = INFINITY;
+    double bnum = 0, bden = 1; /* the best distance as bnum / bden, bden > 0 */
     for (int k = 0; k < 4; k++) {
-        if (k == in) continue;
-        const double *a = pl + 4 * k;
-        double rate = a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
-        if (!(rate < 0)) continue; /* the coordinate does not fall: the ray does not leave by this face */
-        double t = -(a[0] * o[0] + a[1] * o[1] + a[2] * o[2] + a[3]) / rate;
-        if (t < bt) { bt = t; best = k; }
+        if (k == in || !(fall[k] > 0)) continue; /* the coordinate does not fall: the ray does not leave by this face */
+        if (best < 0 || val[k] * bden < bnum * fall[k]) { best = k; bnum = val[k]; bden = fall[k]; }
     }
     if (best < 0) return -1;
-    *texit = bt > tmin ? bt : tmin;
+    double s = bnum / bden;
+    *sexit = s > smin ? s : smin;
     return best;
 }
 
-void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const double *tnode, const double o[3],
+void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, const double o[3],
                      const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays)
 {
     rgb[0] = rgb[1] = rgb[2] = 0;
@@ -330,31 +402,49 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
         size_t tt = (size_t)slot / 4;
         int in = slot % 4;
         {
-            const int32_t *cc = v->tet + 4 * tt;
+            const int32_t *cc = v->tet + 4 * (size_t)m->order[tt];
             const double *opp = v->xyz + 3 * cc[in], *p0 = v->xyz + 3 * cc[(in + 1) % 4];
             double ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
             double toopp = ng[0] * (opp[0] - p0[0]) + ng[1] * (opp[1] - p0[1]) + ng[2] * (opp[2] - p0[2]);
             double along = ng[0] * d[0] + ng[1] * d[1] + ng[2] * d[2];
             if ((toopp > 0) != (along > 0)) { t = nextafterf((float)tin, INFINITY); continue; }
         }
-        double pt = tin;
-        double p[3] = {o[0] + pt * d[0], o[1] + pt * d[1], o[2] + pt * d[2]}, ta = field_t(m, v, tnode, tt, p);
+        /* the walk measures s from the entry point (a perspective eye may be a metre and a half away) */
+        double e[3] = {o[0] + tin * d[0], o[1] + tin * d[1], o[2] + tin * d[2]}, send = tfar - tin, s = 0;
+        const float *g = fld + 4 * tt;
+        double xa = tf_pos(g[0] * e[0] + g[1] * e[1] + g[2] * e[2] + g[3]);
+        tf_val va;
+        tf_at(tf, xa, &va);
         for (size_t steps = 0; steps < 4 * v->n_tets + 16 && *T > 1e-4; steps++) {
-            double tx;
-            int out = exit_face(m, tt, in, o, d, pt, &tx);
-            if (out < 0) { tx = pt; break; }
-            double stop = tx < tfar ? tx : tfar;
-            double q[3] = {o[0] + stop * d[0], o[1] + stop * d[1], o[2] + stop * d[2]}, tb = field_t(m, v, tnode, tt, q);
-            segment(tf, ta, tb, stop - pt, rgb, T);
-            pt = stop;
-            if (stop >= tfar) return;
-            int32_t nb = m->nbr[4 * tt + (size_t)out];
+            const rt_tet *X = m->tets + tt;
+            /* the ray's next tetrahedron is one of three: their lines asked for now, while this one's
+               exit is found and its piece integrated (the walk is bound by memory latency) */
+            for (int k = 0; k < 4; k++)
+                if (k != in && X->nb[k] >= 0) {
+                    __builtin_prefetch(m->tets + X->nb[k] / 4);
+                    __builtin_prefetch(fld + 4 * (X->nb[k] / 4));
+                }
+            double sx;
+            int out = exit_face(X, in, e, d, s, &sx);
+            if (out < 0) break;
+            double stop = sx < send ? sx : send;
+            g = fld + 4 * tt;
+            double xb = tf_pos(g[0] * (e[0] + stop * d[0]) + g[1] * (e[1] + stop * d[1]) + g[2] * (e[2] + stop * d[2]) + g[3]);
+            segment(tf, xa, xb, stop - s, &va, rgb, T);
+            xa = xb;
+            s = stop;
+            if (stop >= send) return;
+            int32_t nb = X->nb[out];
             if (nb < 0) break; /* out of the mesh: Embree finds where it enters again */
-            in = m->nbr_face[4 * tt + (size_t)out];
-            tt = (size_t)nb;
-            ta = field_t(m, v, tnode, tt, q);
+            tt = (size_t)nb / 4;
+            in = nb % 4;
+            /* point data: the field continuous across the face (the same value there); cell data jumps */
+            if (!v->point_values) {
+                xa = tf_pos(fld[4 * tt + 3]);
+                tf_at(tf, xa, &va);
+            }
         }
-        t = nextafterf((float)pt, INFINITY);
+        t = nextafterf((float)(tin + s), INFINITY);
     }
 }
 
@@ -365,9 +455,10 @@ thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytra
     rt_tf tf;
     rt_tf_build(v, &tf);
     size_t rays = 0;
-    double *tnode = rt_volume_tnode(ctx, v);
-    if (v->point_values && !tnode) return THX_ENOMEM;
-    rt_volume_march(rt_tracer_vmesh_get(t), v, &tf, tnode, org, dir, tnear, tfar, rgb, transmittance, &rays);
-    free(tnode);
+    const rt_vmesh *m = rt_tracer_vmesh_get(t);
+    float *fld = rt_volume_field(ctx, m, v);
+    if (!fld) return THX_ENOMEM;
+    rt_volume_march(m, v, &tf, fld, org, dir, tnear, tfar, rgb, transmittance, &rays);
+    free(fld);
     return THX_OK;
 }

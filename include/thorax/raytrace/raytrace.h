@@ -8,8 +8,12 @@
  *
  * What is traced: surfaces in the flat, Gouraud, Phong and orientation modes (points and wire modes
  * are drawn as Phong surfaces; hidden ones not), with their colours, data and contour lines, and the
- * scene's clip planes; a field inside a tetrahedral mesh (thx_raytrace_volume). Arrows and image
- * planes are not traced yet.
+ * scene's clip planes; image planes (a quad each, its texels as the OpenGL renderer addresses and
+ * filters them, unlit, not clipped, transparent where a texel's alpha is below 128; they cast
+ * shadows, and a surface lying in a plane's own plane is seen in front of it, as the OpenGL
+ * renderer's polygon offset has it); arrows as 3D glyphs (a cylinder shaft and a cone head, of the
+ * OpenGL renderer's widths in pixels at the arrow's distance, its colours, lit and casting shadows,
+ * cut by the clip planes); a field inside a tetrahedral mesh (thx_raytrace_volume).
  *
  * Motion blur across animation frames (the paper's RaySpray had it): with opts.next (the same scene
  * at the next frame) and opts.shutter > 0, each pixel sample has its time tau in [0, shutter) of the
@@ -138,7 +142,11 @@ thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytra
                                    const double dir[3], double tnear, double tfar, double rgb[3], double *transmittance);
 
 /* What each pixel's centre sees in a w x h viewport: the index of the scene surface hit (-1 none) and
- * the triangle (the primary ray through the pixel centre, after the clip planes). */
+ * the triangle (the primary ray through the pixel centre, after the clip planes). An image plane's
+ * texel: surface THX_RAYTRACE_ID_PLANE and tri the plane's index in sc->planes; an arrow: surface
+ * THX_RAYTRACE_ID_ARROW and tri the arrow's index in its thx_render_arrows. */
+#define THX_RAYTRACE_ID_PLANE (-2)
+#define THX_RAYTRACE_ID_ARROW (-3)
 thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, int w, int h, int32_t *surface,
                          int32_t *tri);
 
