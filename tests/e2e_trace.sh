@@ -7,6 +7,13 @@
 #  - thorax trace with a glass torso shows the heart through it (red pixels the opaque picture has
 #    none of), and the same bytes on 1 and 2 threads;
 #  - bad lights and materials are refused by name (exit 2), nothing written;
+#  - animate --renderer trace with a camera flight (--keys; 5 frames at 160x120, 1 sample, an
+#    orthographic camera sliding sideways): every frame written, the movie when ffmpeg is there; a
+#    second run redraws nothing (the frames' times unchanged), another --motion-blur redraws all; a
+#    blurred frame differs from the unblurred one only near the edges that move between it and the
+#    next frame; --motion-blur refused under OpenGL;
+#  - thorax trace --frame F --motion-blur 1 on the phantom's solution: the potentials blurred towards
+#    frame F + 1 (the picture differs), the last frame (nothing after it) the unblurred picture;
 #  - on the medium phantom's solution: a scan's image plane (a label map of the model) traced as the
 #    OpenGL renderer draws it (the same foreground, the same colours), current arrows traced as 3D
 #    glyphs where the OpenGL renderer draws its own, and --volume potential --colorbar adds the
@@ -57,6 +64,90 @@ for bad in "--material torso=plastic" "--material =glass" "--light point:1,2" "-
     [ ! -e bad.png ] || fail "'$bad' wrote a picture"
     grep -q -- "${bad%%[ =:]*}" bad.err || fail "'$bad': the message does not name the option: $(cat bad.err)"
 done
+
+# ---- animate --renderer trace with --keys, resuming, motion blur ----
+# a flight sliding sideways: an orthographic camera, 60 mm in 4 frames (a few pixels a frame); lit
+# from behind (the ambient term alone: each surface one flat colour), so that only what moves on
+# the screen, the edges, changes from a frame to the next
+read -r XL XR CY CZ EY HT < <($PY - <<'EOF'
+import numpy as np
+p = np.loadtxt('m/torso.pts')
+c = (p.min(0) + p.max(0)) / 2
+print('%.3f %.3f %.3f %.3f %.3f %.3f' % (c[0] - 30, c[0] + 30, c[1], c[2], c[1] + 1000, 1.3 * (p.max(0) - p.min(0))[2]))
+EOF
+)
+cat > fly.keys <<EOF
+# sideways, orthographic
+1 eye $XL,$EY,$CZ target $XL,$CY,$CZ up 0,0,1 fov 0 height $HT
+5 eye $XR,$EY,$CZ target $XR,$CY,$CZ
+EOF
+MOVIE=(--mp4 none)
+if command -v ffmpeg > /dev/null; then MOVIE=(); fi
+AN=(m --keys fly.keys --renderer trace --samples 1 --light directional:0,1,0 --size 160x120 -o fly "${MOVIE[@]}")
+"$THORAX" animate "${AN[@]}" > fly1.log || fail "animate --renderer trace --keys: $(cat fly1.log)"
+grep -q "5 frames (5 drawn, 0 kept" fly1.log || fail "the flight's frames: $(cat fly1.log)"
+for f in 1 2 3 4 5; do [ -s "fly/frame_0000$f.png" ] || fail "frame $f missing"; done
+[ ! -e fly/frame_00006.png ] || fail "a frame past the last key"
+if command -v ffmpeg > /dev/null; then
+    [ -s fly/animation.mp4 ] || fail "no movie"
+    n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 fly/animation.mp4)
+    [ "$n" = 5 ] || fail "the movie has $n frames, not 5"
+fi
+stat -c '%n %y' fly/frame_*.png > times1
+"$THORAX" animate "${AN[@]}" > fly2.log || fail "animate, resumed"
+grep -q "5 frames (0 drawn, 5 kept" fly2.log || fail "the same settings redrew: $(cat fly2.log)"
+stat -c '%n %y' fly/frame_*.png > times2
+cmp -s times1 times2 || fail "frames rewritten by a resumed run"
+mkdir still && cp fly/frame_*.png still/
+"$THORAX" animate "${AN[@]}" --motion-blur 1 > fly3.log 2>&1 || fail "animate --motion-blur 1: $(cat fly3.log)"
+grep -q "5 frames (5 drawn, 0 kept" fly3.log && grep -q "other settings" fly3.log || fail "another shutter kept frames: $(cat fly3.log)"
+$PY - <<'EOF' || fail "the blurred frames"
+import numpy as np
+from PIL import Image
+rd = lambda f: np.asarray(Image.open(f).convert('RGB')).astype(int)
+total = 0
+for k in range(1, 5):
+    u0, u1, b = rd('still/frame_%05d.png' % k), rd('still/frame_%05d.png' % (k + 1)), rd('fly/frame_%05d.png' % k)
+    moving = np.abs(u0 - u1).sum(axis=2) > 6           # what changes between this frame and the next
+    near = moving.copy()                                # ... and the pixels next to it (2 pixels)
+    for dy in range(-2, 3):
+        for dx in range(-2, 3):
+            near |= np.roll(np.roll(moving, dy, 0), dx, 1)
+    blurred = np.abs(b - u0).sum(axis=2) > 6
+    far = (blurred & ~near).sum()
+    print("frame %d: %d pixels blurred, %d of them away from the moving edges (%d pixels change towards the next frame)"
+          % (k, blurred.sum(), far, moving.sum()))
+    assert far == 0, far
+    total += blurred.sum()
+    assert blurred.sum() > 0.3 * moving.sum()
+assert total > 100, total
+# the last frame (the flight's camera stays after its last key): the unblurred picture
+assert (rd('fly/frame_00005.png') == rd('still/frame_00005.png')).all()
+EOF
+if "$THORAX" animate "${AN[@]}" --renderer gl --motion-blur 0.5 -o flygl 2> gl.err; then fail "--motion-blur taken under OpenGL"; fi
+grep -q -- "--motion-blur" gl.err || fail "the refusal does not name the option: $(cat gl.err)"
+[ ! -e flygl ] || fail "a refused animate wrote its directory"
+
+# ---- thorax trace --frame F --motion-blur 1 on the solution: the values blurred towards F + 1 ----
+"$THORAX" mesh m --no-heart -q
+"$THORAX" beat m -o beat.raw --frames 40 -q
+"$THORAX" forward m --epicardial beat.raw -o sol -q
+T=(--solution sol --size 160x160 --samples 2 --ao 0)
+"$THORAX" trace "${T[@]}" --frame 20 -o f20.png -q || fail "trace --frame 20"
+"$THORAX" trace "${T[@]}" --frame 20 --motion-blur 1 -o f20b.png -q || fail "trace --frame 20 --motion-blur 1"
+"$THORAX" trace "${T[@]}" --frame 40 -o f40.png -q || fail "trace --frame 40"
+"$THORAX" trace "${T[@]}" --frame 40 --motion-blur 1 -o f40b.png -q || fail "trace --frame 40 --motion-blur 1"
+if cmp -s f20.png f20b.png; then fail "frame 20 blurred towards frame 21 is frame 20 alone"; fi
+cmp -s f40.png f40b.png || fail "the last frame blurred (nothing after it) differs from the unblurred one"
+$PY - <<'EOF' || fail "the blurred potentials"
+import numpy as np
+from PIL import Image
+a, b = [np.asarray(Image.open(f).convert('RGB')).astype(int) for f in ('f20.png', 'f20b.png')]
+d = np.abs(a - b).sum(axis=2)
+print("trace --frame 20 --motion-blur 1: %.1f %% of the pixels differ from frame 20 alone (at most %d levels)" % (100 * (d > 0).mean(), d.max()))
+assert (d > 0).mean() > 0.01
+EOF
+
 # Image planes, arrows and the volume's colour bar, on the medium phantom's forward solution (the shared
 # fixture's model, tests/medium_phantom.sh) and a label map of its surfaces.
 mkdir -p med

@@ -6,6 +6,11 @@
  *  - a glass slab (n = 1.5) tilted in front of a dark line: the line seen shifted by the slab's lateral
  *    displacement T sin(i - r) / cos r, Snell's law;
  *  - the same picture for 1 and 2 threads; a frame step (new values only) builds no geometry;
+ *  - motion blur: a square seen by a camera that moves sideways by a known offset between two frames,
+ *    with the shutter open the whole interval: the blurred edge as wide as the move projected to the
+ *    screen (to a pixel), on the side the square moves to; shutter 0 the unblurred picture byte for
+ *    byte; values going from 0 to 1 between the frames: the mean colour the colour map's mean over
+ *    [0, 1] (to a few levels); the same bytes on 1 and 2 threads; no geometry built.
  *  - an image plane with a checker texture seen face-on: every pixel its texel (nearest), what is
  *    behind where alpha < 128, the mean of two texels midway between them (bilinear);
  *  - an arrow of known length: its pixels' extent, its shaft's and head's widths in pixels, and its
@@ -493,6 +498,137 @@ static void test_environment(thx_tracer *tr)
     thx_raster_destroy(&img);
 }
 
+/* The position along row y where lum crosses level going from x0 towards x1 (linear between pixel
+ * centres; -1 none). */
+static double crossing(const thx_raster *img, int y, int x0, int x1, double level)
+{
+    int step = x1 > x0 ? 1 : -1;
+    for (int x = x0; x != x1; x += step) {
+        double a = lum(img, x, y), b = lum(img, x + step, y);
+        if ((a - level) * (b - level) <= 0 && a != b) return x + 0.5 + step * (level - a) / (b - a);
+    }
+    return -1;
+}
+
+static void test_motion_blur(thx_tracer *tr)
+{
+    /* a 40 mm square facing an orthographic camera looking down, 0.5 mm pixels; the next frame's
+       camera 10 mm further along +x (the screen's right): the square moves 20 pixels left */
+    const int N = 200;
+    const double H = 100, MOVE = 10, mm = H / N, move_px = MOVE / mm;
+    double o[3] = {-20, -20, 0}, u[3] = {40, 0, 0}, v[3] = {0, 40, 0};
+    thx_surface *sq = rect("square", o, u, v);
+    double val0[4] = {0, 0, 0, 0}, val1[4] = {1, 1, 1, 1};
+    thx_render_surface rs[1], rn[1];
+    memset(rs, 0, sizeof rs);
+    rs[0].surf = sq;
+    rs[0].mode = THX_DRAW_FLAT;
+    rs[0].color[0] = rs[0].color[1] = rs[0].color[2] = rs[0].color[3] = 1;
+    thx_scene sc, nx;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = 1;
+    camera_down(&sc, H);
+    sc.clear = 1;
+    sc.background[3] = 1;
+    nx = sc;
+    rn[0] = rs[0];
+    nx.surfaces = rn;
+    nx.camera.eye[0] += MOVE;
+    nx.camera.center[0] += MOVE;
+    thx_raytrace_opts to;
+    thx_raytrace_opts_default(&to);
+    to.samples = 16; /* 256 samples a pixel, 256 strata of the shutter */
+    thx_raster *still = NULL, *blur = NULL, *zero = NULL;
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &still));
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &blur));
+    CHECK_OK(ctx, thx_raster_create(ctx, N, N, &zero));
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, still, NULL));
+    to.next = &nx;
+    to.shutter = 0;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, zero, NULL));
+    CHECK(!memcmp(still->rgba, zero->rgba, 4 * (size_t)N * N)); /* shutter 0: the picture of this frame */
+    to.shutter = 1;
+    thx_raytrace_stats st;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, blur, &st));
+    keep(still, "blur_still.png");
+    keep(blur, "blur_square.png");
+    CHECK(st.builds == 0);
+    /* the centre row: the still square's edges, the blurred left edge's 10 % and 90 % crossings (a
+       linear ramp over the move: the width is their distance / 0.8), and the right edge likewise */
+    int yc = N / 2;
+    double top = lum(still, N / 2, yc), bg = lum(still, 2, yc);
+    double lo = bg + 0.1 * (top - bg), hi = bg + 0.9 * (top - bg), mid = 0.5 * (top + bg);
+    double still_l = crossing(still, yc, N / 2, 0, mid), still_r = crossing(still, yc, N / 2, N - 1, mid);
+    double l10 = crossing(blur, yc, 0, N / 2, lo), l90 = crossing(blur, yc, 0, N / 2, hi);
+    double r90 = crossing(blur, yc, N - 1, N / 2, hi), r10 = crossing(blur, yc, N - 1, N / 2, lo);
+    double wl = (l90 - l10) / 0.8, wr = (r90 - r10) / -0.8;
+    printf("motion blur: camera moved %g mm = %g pixels; still edges at %.2f and %.2f px, blurred edges %.2f and %.2f px "
+           "wide (10-90 %%: %.2f..%.2f, %.2f..%.2f)\n", MOVE, move_px, still_l, still_r, wl, wr, l10, l90, r90, r10);
+    CHECK(fabs(wl - move_px) <= 1 && fabs(wr - move_px) <= 1);
+    /* the ramps run from the still edges towards the left, where the square goes */
+    CHECK(fabs(0.5 * (l10 + l90) - (still_l - move_px / 2)) <= 1);
+    CHECK(fabs(0.5 * (r10 + r90) - (still_r - move_px / 2)) <= 1);
+    CHECK(fabs(lum(blur, N / 2, yc) - top) < 1); /* the middle covered all the time */
+    /* the same bytes on 1 and 2 threads */
+    to.samples = 3;
+    omp_set_num_threads(1);
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, blur, NULL));
+    omp_set_num_threads(2);
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, zero, NULL));
+    CHECK(!memcmp(blur->rgba, zero->rgba, 4 * (size_t)N * N));
+
+    /* values 0 at this frame, 1 at the next, the camera still: the square's colour is the colour
+       map's mean over [0, 1]. Lit by the ambient term alone (1; a light from behind), so a pixel's
+       colour is the map's. */
+    rs[0].values = val0;
+    rn[0].values = val1;
+    rs[0].cmap = rn[0].cmap = THX_CMAP_VIRIDIS;
+    thx_scale_from_range_mapped(&rs[0].scale, THX_SCALE_LINEAR, THX_MAPPING_TRUE, 0, 1);
+    rn[0].scale = rs[0].scale;
+    nx.camera = sc.camera;
+    to.samples = 16;
+    to.ambient = 1;
+    to.n_lights = 1;
+    to.lights[0] = (thx_light){.kind = THX_LIGHT_DIRECTIONAL, .dir = {0, 0, 1}, .intensity = 1};
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, blur, NULL));
+    keep(blur, "blur_values.png");
+    double ref[3] = {0, 0, 0}, got[3] = {0, 0, 0};
+    const int M = 100000;
+    for (int i = 0; i < M; i++) {
+        unsigned char c[3];
+        thx_colormap_eval(THX_CMAP_VIRIDIS, (i + 0.5) / M, c);
+        for (int k = 0; k < 3; k++) ref[k] += c[k] / (double)M;
+    }
+    size_t n = 0;
+    for (int y = N / 2 - 30; y < N / 2 + 30; y++) /* inside the square */
+        for (int x = N / 2 - 30; x < N / 2 + 30; x++, n++)
+            for (int k = 0; k < 3; k++) got[k] += blur->rgba[4 * ((size_t)y * N + x) + k];
+    double worst = 0;
+    for (int k = 0; k < 3; k++) worst = fmax(worst, fabs(got[k] / n - ref[k]));
+    unsigned char c0[3];
+    thx_colormap_eval(THX_CMAP_VIRIDIS, 0, c0);
+    printf("motion blur of values 0 -> 1: mean colour %.2f %.2f %.2f, viridis' mean over [0, 1] %.2f %.2f %.2f (%.2f levels "
+           "apart; the still frame's %d %d %d)\n", got[0] / n, got[1] / n, got[2] / n, ref[0], ref[1], ref[2], worst, c0[0],
+           c0[1], c0[2]);
+    CHECK(worst <= 2);
+    to.shutter = 0;
+    CHECK_OK(ctx, thx_raytrace_scene(ctx, tr, &sc, &to, zero, NULL));
+    const unsigned char *p = zero->rgba + 4 * ((size_t)(N / 2) * N + N / 2);
+    CHECK(p[0] == c0[0] && p[1] == c0[1] && p[2] == c0[2]);
+    /* refused: a next frame with other surfaces, a shutter outside 0..1 */
+    to.shutter = 1.5;
+    CHECK(thx_raytrace_scene(ctx, tr, &sc, &to, zero, NULL) == THX_EINPUT);
+    to.shutter = 1;
+    nx.n_surfaces = 0;
+    CHECK(thx_raytrace_scene(ctx, tr, &sc, &to, zero, NULL) == THX_EINPUT);
+    printf("refused: %s\n", thx_ctx_message(ctx));
+    thx_raster_destroy(&still);
+    thx_raster_destroy(&blur);
+    thx_raster_destroy(&zero);
+    thx_surface_destroy(&sq);
+}
+
 /* An image plane seen face-on, nearest texels: each pixel shows the texel the geometry puts under its
  * centre (texel (a, b) covers origin + [a, a + 1] / w u + [b, b + 1] / h v), unlit, exactly; a texel of
  * alpha below 128 shows what is behind it (the same pixel as the picture without the plane); the id
@@ -676,14 +812,19 @@ int main(void)
     CHECK_OK(ctx, thx_tracer_create(ctx, &tr));
     if (tr) {
         printf("%s\n", thx_tracer_info(tr));
-        test_shadow(tr);
-        test_terminator(tr);
-        test_mirror(tr);
-        test_refraction(tr);
-        test_volume(tr);
-        test_environment(tr);
-        test_plane(tr);
-        test_arrow(tr);
+        /* THX_TEST_ONLY=NAME: that test alone (e.g. motion_blur under valgrind) */
+        const char *only = getenv("THX_TEST_ONLY");
+#define RUN(name) if (!only || !strcmp(only, #name)) test_##name(tr)
+        RUN(shadow);
+        RUN(terminator);
+        RUN(mirror);
+        RUN(refraction);
+        RUN(volume);
+        RUN(environment);
+        RUN(motion_blur);
+        RUN(plane);
+        RUN(arrow);
+#undef RUN
     }
     thx_tracer_destroy(&tr);
     thx_ctx_destroy(&ctx);

@@ -1,6 +1,7 @@
 /*
  * The ray tracer's options (RaySpray, thorax/raytrace/raytrace.h) for thorax render, animate and
- * trace: the renderer, lights, materials by surface name, samples, ambient occlusion, depth.
+ * trace: the renderer, lights, materials by surface name, samples, ambient occlusion, depth, the
+ * volume, motion blur.
  */
 #include <math.h>
 #include <stdio.h>
@@ -180,5 +181,11 @@ size_t raytrace_options(cli_opt *t, ropts *o)
     t[n++] = (cli_opt){.name = "--volume-density", .type = CLI_REAL, .meta = "PER_MM", .unit = "1/mm", .d = &o->p.volume_density,
                        .rule = CLI_GT | CLI_FINITE, .lo = 0, .bad = "--volume-density: above 0", .def = "0.02",
                        .help = "trace: the volume's extinction per mm at opacity 1"};
+    t[n++] = (cli_opt){.name = "--motion-blur", .type = CLI_REAL, .meta = "S", .d = &o->p.rt.shutter,
+                       .rule = CLI_GE | CLI_LE | CLI_FINITE, .lo = 0, .hi = 1, .bad = "--motion-blur: 0 to 1", .def = "0",
+                       .help = "trace: motion blur towards the next frame, S the shutter (0 to 1 of the frame interval; "
+                               "0: none): each sample sees the camera and the surfaces' values at its own time (the "
+                               "volume unblurred); animate: the flight's next camera (--keys); trace: --frame K "
+                               "blurred towards K + 1"};
     return n;
 }

@@ -4,6 +4,6 @@
 #include "cli/render_cli.h"
 
 /* Into t[N_RAYTRACE_OPTS]; their values into o->p (renderer, rt, rt_mat); returns their count. */
-#define N_RAYTRACE_OPTS 11
+#define N_RAYTRACE_OPTS 12
 size_t raytrace_options(cli_opt *t, ropts *o);
 #endif

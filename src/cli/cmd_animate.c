@@ -34,7 +34,7 @@ static void sig_file(char *sig, size_t cap, const char *path)
 }
 
 /* The settings that decide a frame's pixels: every option but the frame range, the rate, the movie
- * and the verbosity; the data files and the program (size and time of each), so a changed solution
+ * and the verbosity (so --motion-blur too: another shutter redraws); the data files and the program (size and time of each), so a changed solution
  * or a rebuilt thorax redraws. */
 static void animation_signature(int argc, char **argv, const ropts *o, const char *keys, char *sig, size_t cap)
 {
@@ -116,6 +116,8 @@ int cmd_animate(int argc, char **argv)
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
     if (o.p.volume_render && o.p.renderer != 1) return cli_usage_error("animate", "--volume: volume rendering is the ray tracer's (--renderer trace)");
+    if (o.p.rt.shutter > 0 && o.p.renderer != 1)
+        return cli_usage_error("animate", "--motion-blur: motion blur is the ray tracer's (--renderer trace)");
     if (frames) {
         long fa, fb;
         if (cli_parse_pair(frames, ':', 1, INT_MAX, &fa, &fb))
@@ -236,6 +238,12 @@ int cmd_animate(int argc, char **argv)
                 o.p.have_camera = 1;
                 thx_camera_path_camera(flight, f, &o.p.cam);
                 df = !nf ? 1 : thx_camera_path_data_frame(flight, f) ? thx_camera_path_data_frame(flight, f) : f;
+                /* motion blur: towards the next movie frame's camera and data frame (past the flight's
+                   end, its last camera; past the data's, its last frame) */
+                o.p.have_next_cam = 1;
+                thx_camera_path_camera(flight, f + 1, &o.p.next_cam);
+                int dn = thx_camera_path_data_frame(flight, f + 1);
+                o.p.next_frame = !nf ? 0 : dn ? dn - 1 : f;
             }
             st = thx_picture_draw(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
             if (st == THX_OK) st = thx_raster_write_png(ctx, img, path);

@@ -500,6 +500,8 @@ static int render_main(int argc, char **argv, int traced)
     if (pr) return CLI_EXIT(pr);
     o.frame = frame - 1;
     if (o.p.volume_render && o.p.renderer != 1) return cli_usage_error(o.cmd, "--volume: volume rendering is the ray tracer's (--renderer trace, or thorax trace)");
+    if (o.p.rt.shutter > 0 && o.p.renderer != 1)
+        return cli_usage_error(o.cmd, "--motion-blur: motion blur is the ray tracer's (--renderer trace, or thorax trace)");
     if (!o.p.model_dir && !o.p.n_files && !o.p.solution) return cli_usage_error(o.cmd, "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error(o.cmd, "no output image given (-o IMAGE.png)");
     thx_ctx *ctx = cli_ctx(o.verbose);

@@ -321,6 +321,7 @@ void thx_picture_opts_default(thx_picture_opts *o)
     o->arrow_scale = 15;
     o->arrow_max = 400;
     thx_raytrace_opts_default(&o->rt);
+    o->next_frame = -1;
 }
 
 static const unsigned char BG[4] = {24, 24, 28, 255}, FG[4] = {235, 235, 235, 255};
@@ -558,9 +559,10 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
     return THX_OK;
 }
 
-/* The panel traced into img; with --volume, *vol_scale and *vol_cmap the volume's colours (for its bar). */
-static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc, int frame,
-                              thx_raster *img, thx_scale *vol_scale, thx_colormap *vol_cmap)
+/* The panel traced into img, blurred towards next (NULL: no motion blur); with --volume, *vol_scale
+ * and *vol_cmap the volume's colours (for its bar). */
+static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
+                              const thx_scene *next, int frame, thx_raster *img, thx_scale *vol_scale, thx_colormap *vol_cmap)
 {
     if (!d->tracer) THX_CHECK(thx_tracer_create(ctx, &d->tracer));
     thx_raytrace_volume vol;
@@ -583,6 +585,7 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
             if (!strcmp(o->rt_mat[k].name, s->name)) rt->material[i] = o->rt_mat[k].m;
     }
     rt->volume = o->volume_render ? &vol : NULL;
+    rt->next = next;
     if (o->environment && !strcmp(o->environment, "sky")) {
         rt->sky = 1;
     } else if (o->environment) {
@@ -593,6 +596,34 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     thx_status st = thx_raytrace_scene(ctx, d->tracer, sc, rt, img, &d->rt_stats);
     free(rt);
     return st;
+}
+
+/* Motion blur: the panel's scene sc at the next frame (o->next_frame, o->next_cam), into *next with
+ * its surfaces in *rs_out (malloc'd): the model's surfaces with the next frame's values and scales,
+ * everything else as in sc. */
+static thx_status next_scene(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, int only,
+                             const thx_scene *sc, thx_scene *next, thx_render_surface **rs_out)
+{
+    built_scene *bn = calloc(1, sizeof *bn);
+    thx_render_surface *rs = malloc((sc->n_surfaces ? sc->n_surfaces : 1) * sizeof *rs);
+    if (!bn || !rs) {
+        free(bn);
+        free(rs);
+        return thx_error(ctx, THX_ENOMEM, "out of memory (motion blur's next scene)");
+    }
+    build_surfaces(o, d, o->next_frame >= 0 ? o->next_frame : frame + 1, bn, only);
+    memcpy(rs, sc->surfaces, sc->n_surfaces * sizeof *rs);
+    for (size_t i = 0; i < bn->n && i < sc->n_surfaces; i++)
+        if (rs[i].surf == bn->rs[i].surf) {
+            rs[i].values = bn->rs[i].values;
+            rs[i].scale = bn->rs[i].scale;
+        }
+    free(bn);
+    *next = *sc;
+    next->surfaces = rs;
+    if (o->have_next_cam) next->camera = o->next_cam;
+    *rs_out = rs;
+    return THX_OK;
 }
 
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
@@ -655,8 +686,13 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         thx_scale vol_scale;
         thx_colormap vol_cmap = THX_CMAP_ECG;
         int traced = o->renderer == 1 && img;
-        if (traced) st = trace_panel(ctx, o, d, &sc, frame, img, &vol_scale, &vol_cmap);
-        else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
+        if (traced) {
+            thx_scene next;
+            thx_render_surface *nrs = NULL;
+            if (o->rt.shutter > 0) st = next_scene(ctx, o, d, frame, only, &sc, &next, &nrs);
+            if (st == THX_OK) st = trace_panel(ctx, o, d, &sc, o->rt.shutter > 0 ? &next : NULL, frame, img, &vol_scale, &vol_cmap);
+            free(nrs);
+        } else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
         if (nan_total) *nan_total += b->nan_count;
         free(b->apos);
         free(b->avec);

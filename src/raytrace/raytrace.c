@@ -217,6 +217,57 @@ static int hit_solid(const rt_frame *f, const double org[3], const double dir[3]
     return 0;
 }
 
+/* A pixel's size: orthographic, in mm; perspective, per mm of distance from the eye. */
+static double pixel_mm_of(const thx_camera *c, int h)
+{
+    return c->fov_deg > 0 ? 2 * tan(0.5 * c->fov_deg * M_PI / 180) / h : c->height / h;
+}
+
+/* Orthographic: how far behind the eye's plane the scene's box (f->box_lo..box_hi, the image planes
+ * in it) reaches, where eye rays start. */
+static void frame_back(rt_frame *f)
+{
+    f->back = 0;
+    if (f->ortho)
+        for (int q = 0; q < 8 && f->box_lo[0] <= f->box_hi[0]; q++) {
+            double corner[3] = {q & 1 ? f->box_hi[0] : f->box_lo[0], q & 2 ? f->box_hi[1] : f->box_lo[1],
+                                q & 4 ? f->box_hi[2] : f->box_lo[2]};
+            double d = 0;
+            for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
+            f->back = fmax(f->back, d + 1);
+        }
+}
+
+/* The camera's frame in f (f->cam, eye, view, right, up; the lights given in the camera's axes
+ * turned into the model's; how far behind the eye's plane an orthographic ray starts, from f's box): 0, or 1 eye at
+ * the centre, 2 up along the line of sight. */
+static int frame_camera(rt_frame *f, const thx_camera *c)
+{
+    const thx_raytrace_opts *o = f->o;
+    f->cam = *c;
+    double v[3] = {c->center[0] - c->eye[0], c->center[1] - c->eye[1], c->center[2] - c->eye[2]};
+    double lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(lv > 0)) return 1;
+    for (int k = 0; k < 3; k++) { f->view[k] = v[k] / lv; f->eye[k] = c->eye[k]; }
+    double r[3] = {f->view[1] * c->up[2] - f->view[2] * c->up[1], f->view[2] * c->up[0] - f->view[0] * c->up[2],
+                   f->view[0] * c->up[1] - f->view[1] * c->up[0]};
+    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (!(lr > 0)) return 2;
+    for (int k = 0; k < 3; k++) f->right[k] = r[k] / lr;
+    f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
+    f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
+    f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
+    for (int i = 0; i < o->n_lights && i < THX_RAYTRACE_MAX_LIGHTS; i++) {
+        thx_light *L = &f->lights[i];
+        *L = o->lights[i];
+        if (L->in_camera)
+            for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
+    }
+    f->ortho = !(c->fov_deg > 0);
+    frame_back(f);
+    return 0;
+}
+
 int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], double tnear, double tfar,
                  struct RTCRayHit *rh, size_t *rays)
 {
@@ -255,31 +306,33 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     f->o = o;
     if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
         return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's surface, arrow or plane array is NULL");
-    /* the camera's frame */
-    const thx_camera *c = &sc->camera;
-    double v[3] = {c->center[0] - c->eye[0], c->center[1] - c->eye[1], c->center[2] - c->eye[2]};
-    double lv = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (!(lv > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (eye at the centre)");
-    for (int k = 0; k < 3; k++) { f->view[k] = v[k] / lv; f->eye[k] = c->eye[k]; }
-    double r[3] = {f->view[1] * c->up[2] - f->view[2] * c->up[1], f->view[2] * c->up[0] - f->view[0] * c->up[2],
-                   f->view[0] * c->up[1] - f->view[1] * c->up[0]};
-    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-    if (!(lr > 0)) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (up along the line of sight)");
-    for (int k = 0; k < 3; k++) f->right[k] = r[k] / lr;
-    f->up[0] = f->right[1] * f->view[2] - f->right[2] * f->view[1];
-    f->up[1] = f->right[2] * f->view[0] - f->right[0] * f->view[2];
-    f->up[2] = f->right[0] * f->view[1] - f->right[1] * f->view[0];
-    f->ortho = !(c->fov_deg > 0);
-    f->pixel_mm = f->ortho ? c->height / vp_h : 2 * tan(0.5 * c->fov_deg * M_PI / 180) / vp_h;
-    for (int i = 0; i < o->n_lights && i < THX_RAYTRACE_MAX_LIGHTS; i++) {
-        thx_light *L = &f->lights[i];
-        *L = o->lights[i];
-        if (L->in_camera)
-            for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
-    }
+    /* the camera's frame (the scene's box, where orthographic rays start, after the build) */
+    static const char *why[] = {"", "eye at the centre", "up along the line of sight"};
+    f->box_lo[0] = 1;
+    f->box_hi[0] = 0;
+    int bad = frame_camera(f, &sc->camera);
+    if (bad) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (%s)", why[bad]);
+    f->pixel_mm = pixel_mm_of(&sc->camera, vp_h);
     f->s = thx_calloc(ctx, sc->n_surfaces ? sc->n_surfaces : 1, sizeof *f->s);
     if (!f->s) return THX_ENOMEM;
     f->n_s = sc->n_surfaces;
+    if (o->next && o->shutter > 0) { /* motion blur: the next frame's scene, the same surfaces */
+        if (o->next->n_surfaces != sc->n_surfaces)
+            return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's scene has %zu surfaces, this frame's %zu (the same "
+                             "surfaces in the same order)", o->next->n_surfaces, sc->n_surfaces);
+        for (size_t i = 0; i < sc->n_surfaces; i++) {
+            const thx_surface *a = sc->surfaces[i].surf, *b = o->next->surfaces[i].surf;
+            if ((a == NULL) != (b == NULL) || (a && a->n_nodes != b->n_nodes))
+                return thx_error(ctx, THX_EINPUT, "motion blur: surface %zu of the next frame's scene is not this frame's (%zu "
+                                 "nodes, %zu)", i, b ? b->n_nodes : 0, a ? a->n_nodes : 0);
+        }
+        rt_frame probe = {.o = o};
+        int bad_next = frame_camera(&probe, &o->next->camera);
+        if (bad_next)
+            return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's camera is degenerate (%s)", why[bad_next]);
+        f->next = o->next;
+        f->shutter = fmin(o->shutter, 1);
+    }
     f->scene = rtcNewScene(t->dev);
     rtcSetSceneFlags(f->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(f->scene, RTC_BUILD_QUALITY_HIGH);
@@ -300,6 +353,13 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             s->t = thx_malloc(ctx, rs->surf->n_nodes * sizeof *s->t);
             if (!s->t) return THX_ENOMEM;
             thx_scale_apply_n(&rs->scale, rs->values, rs->surf->n_nodes, s->t);
+            const thx_render_surface *nx = f->next ? &f->next->surfaces[i] : NULL;
+            if (nx && nx->values && (nx->values != rs->values || memcmp(&nx->scale, &rs->scale, sizeof rs->scale))) {
+                /* the next frame's values, on its own scale (the same as this frame's: none) */
+                s->t_next = thx_malloc(ctx, rs->surf->n_nodes * sizeof *s->t_next);
+                if (!s->t_next) return THX_ENOMEM;
+                thx_scale_apply_n(&nx->scale, nx->values, rs->surf->n_nodes, s->t_next);
+            }
         }
         rtcAttachGeometryByID(f->scene, s->g->geom, (unsigned)i);
     }
@@ -310,25 +370,30 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     memcpy(f->nan_color, zero_nan ? nan_default : sc->nan_color, sizeof f->nan_color);
     memcpy(f->bg, sc->background, sizeof f->bg);
     f->any_clip = sc->n_clip > 0;
-    if (f->ortho) /* how far behind the eye's plane the scene (its planes too) reaches */
-        for (int q = 0; q < 2; q++) {
-            struct RTCBounds b;
-            if (q == 1 && !f->planes) break;
-            rtcGetSceneBounds(q ? f->planes : f->scene, &b);
-            for (int i = 0; i < 8 && b.lower_x <= b.upper_x; i++) {
-                double corner[3] = {i & 1 ? b.upper_x : b.lower_x, i & 2 ? b.upper_y : b.lower_y, i & 4 ? b.upper_z : b.lower_z};
-                double d = 0;
-                for (int k = 0; k < 3; k++) d -= (corner[k] - f->eye[k]) * f->view[k];
-                f->back = fmax(f->back, d + 1);
-            }
+    /* the scene's box (its image planes too): where orthographic eye rays start */
+    for (int q = 0; q < 2; q++) {
+        struct RTCBounds b;
+        if (q == 1 && !f->planes) break;
+        rtcGetSceneBounds(q ? f->planes : f->scene, &b);
+        if (!(b.lower_x <= b.upper_x)) continue;
+        double lo[3] = {b.lower_x, b.lower_y, b.lower_z}, hi[3] = {b.upper_x, b.upper_y, b.upper_z};
+        int empty = !(f->box_lo[0] <= f->box_hi[0]);
+        for (int k = 0; k < 3; k++) {
+            f->box_lo[k] = empty ? lo[k] : fmin(f->box_lo[k], lo[k]);
+            f->box_hi[k] = empty ? hi[k] : fmax(f->box_hi[k], hi[k]);
         }
+    }
+    frame_back(f);
     return THX_OK;
 }
 
 static void frame_free(rt_frame *f)
 {
     rt_glyphs_free(f);
-    for (size_t i = 0; i < f->n_s; i++) free(f->s[i].t);
+    for (size_t i = 0; i < f->n_s; i++) {
+        free(f->s[i].t);
+        free(f->s[i].t_next);
+    }
     free(f->s);
     if (f->scene) rtcReleaseScene(f->scene);
     memset(f, 0, sizeof *f);
@@ -338,11 +403,26 @@ static void frame_free(rt_frame *f)
  * (thx_camera_ray puts its origin on the eye's plane, which may cut the model). */
 static int primary_ray(const rt_frame *f, int w, int h, double x, double y, double org[3], double dir[3])
 {
-    if (thx_camera_ray(&f->sc->camera, w, h, x, y, org, dir)) return -1;
+    if (thx_camera_ray(&f->cam, w, h, x, y, org, dir)) return -1;
     if (f->ortho && f->back > 0)
         for (int k = 0; k < 3; k++) org[k] -= f->back * dir[k];
     return 0;
 }
+
+/* The camera at time tau of the frame interval: eye, centre, up, field of view and height linear
+ * between this frame's (a) and the next's (b); tau = 0 gives a exactly. */
+static void camera_lerp(const thx_camera *a, const thx_camera *b, double tau, thx_camera *c)
+{
+    for (int k = 0; k < 3; k++) {
+        c->eye[k] = a->eye[k] + tau * (b->eye[k] - a->eye[k]);
+        c->center[k] = a->center[k] + tau * (b->center[k] - a->center[k]);
+        c->up[k] = a->up[k] + tau * (b->up[k] - a->up[k]);
+    }
+    c->fov_deg = a->fov_deg + tau * (b->fov_deg - a->fov_deg);
+    c->height = a->height + tau * (b->height - a->height);
+}
+
+static int gcd(int a, int b) { return b ? gcd(b, a % b) : a; }
 
 static void viewport_of(const thx_scene *sc, const thx_raster *img, int vp[4])
 {
@@ -363,12 +443,17 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         return thx_error(ctx, THX_EINPUT, "ray tracer: viewport %d,%d %dx%d outside the %dx%d image", vp[0], vp[1], vp[2], vp[3],
                          img->w, img->h);
     if (o->samples < 1 || o->samples > 64) return thx_error(ctx, THX_EINPUT, "ray tracer: %d samples a side (1 to 64)", o->samples);
+    if (!(o->shutter >= 0 && o->shutter <= 1))
+        return thx_error(ctx, THX_EINPUT, "motion blur: shutter %g (0 to 1 of the frame interval)", o->shutter);
     t->call++;
     size_t builds = 0;
     rt_frame f;
     thx_status st = frame_build(ctx, t, sc, o, vp[3], &f, &builds);
     double t1 = wall();
     if (st != THX_OK) { frame_free(&f); return st; }
+    f.n_samples = o->samples * o->samples;
+    for (f.tau_stride = (int)(0.618 * f.n_samples); f.tau_stride > 1 && gcd(f.tau_stride, f.n_samples) != 1; f.tau_stride--) {}
+    if (f.tau_stride < 1) f.tau_stride = 1;
     rt_tf *tf = NULL;
     if (o->volume) { /* the field inside its mesh: the mesh's faces kept across calls, the values new */
         size_t before = t->vm.builds;
@@ -398,8 +483,18 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
                         double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
                         double org[3], dir[3], rgb[3], alpha, thit;
-                        if (primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
-                        rt_shade(&f, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
+                        const rt_frame *fp = &f;
+                        rt_frame fs;
+                        if (f.next) { /* motion blur: the camera at the sample's time */
+                            thx_camera c;
+                            camera_lerp(&sc->camera, &f.next->camera, rt_tau(&f, px, sample), &c);
+                            fs = f;
+                            if (frame_camera(&fs, &c)) continue;
+                            fs.pixel_mm = pixel_mm_of(&c, vp[3]);
+                            fp = &fs;
+                        }
+                        if (primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
+                        rt_shade(fp, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
                         if (f.vm) { /* the field in front of the surface hit (or of the background) */
                             double vc[3], T;
                             rt_volume_march(f.vm, o->volume, f.tf, f.fld, org, dir, 0, thit, vc, &T, &rays);

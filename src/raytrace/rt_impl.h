@@ -23,6 +23,7 @@ typedef struct {
     const thx_render_surface *rs;
     const rt_geom *g;
     float *t;                       /* per-node t = scale(value) (NULL: no data) */
+    float *t_next;                  /* motion blur: the next frame's t (NULL: the values do not move) */
     float color[4];
     thx_raytrace_material mat;
     double transmit;                /* mat.transmit, or 1 - alpha */
@@ -102,6 +103,14 @@ typedef struct {
     const rt_vmesh *vm;             /* the volume rendered (NULL none), its transfer function, its t per node */
     const rt_tf *tf;
     const float *fld;               /* the frame's field per tetrahedron (rt_volume_field) */
+    /* motion blur (o->next and o->shutter > 0; else next is NULL): the camera of the sample being
+       traced (cam; without blur the scene's), the scene's box (where orthographic eye rays start),
+       the samples a pixel and the stride of their times' strata */
+    thx_camera cam;
+    const thx_scene *next;
+    double shutter;
+    int n_samples, tau_stride;
+    double box_lo[3], box_hi[3];
 } rt_frame;
 
 /* What an Embree geometry ID names (rt_frame): RT_SURFACE, RT_PLANE or RT_ARROWS, and *k its index
@@ -143,6 +152,18 @@ const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);
 
 /* A random number in [0, 1) from a hash of the four keys (deterministic). */
 double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);
+
+/* A sample's time in the shutter interval [0, shutter) (0 without motion blur): the pixel's n
+ * samples take the n strata of the interval, sample k stratum (k stride + offset) mod n (the offset a
+ * hash of the pixel, the stride coprime with n so that time and place in the pixel do not go
+ * together), jittered within it by a hash of (pixel, sample). */
+static inline double rt_tau(const rt_frame *f, uint32_t px, uint32_t sample)
+{
+    if (!f->next) return 0;
+    uint32_t n = (uint32_t)f->n_samples, off = (uint32_t)(rt_rand(px, 0, 0, 4) * n);
+    uint32_t k = (sample * (uint32_t)f->tau_stride + off) % n;
+    return f->shutter * (k + rt_rand(px, sample, 0, 3)) / n;
+}
 
 /* The colour along a ray (rt_shade.c): rgb, and *alpha the coverage (0 where the ray meets only the
  * background). weight: what the ray's colour counts for in the pixel (1 for an eye ray; branches

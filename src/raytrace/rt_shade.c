@@ -32,16 +32,23 @@ static void norm3(double a[3])
     if (l > 0) { a[0] /= l; a[1] /= l; a[2] /= l; }
 }
 
-/* The surface's colour at the hit (before lighting): rgb and the contour line's cover. */
+/* A node's t at time tau of the frame interval (motion blur: between this frame's and the next's). */
+static double node_t(const rt_surf *s, int32_t i, double tau)
+{
+    return s->t_next && tau > 0 ? (1 - tau) * s->t[i] + tau * s->t_next[i] : s->t[i];
+}
+
+/* The surface's colour at the hit (before lighting) at the sample's time tau: rgb and the contour
+ * line's cover. */
 static void base_color(const rt_frame *f, const rt_surf *s, unsigned prim, double u, double v, const double p[3],
-                       const double n[3], double rgb[3])
+                       const double n[3], double tau, double rgb[3])
 {
     const thx_render_surface *rs = s->rs;
     for (int k = 0; k < 3; k++) rgb[k] = s->color[k];
     if (rs->mode == THX_DRAW_ORIENTATION) return;
     if (s->t) {
         const int32_t *c = rs->surf->tri + 3 * (size_t)prim;
-        double t0 = s->t[c[0]], t1 = s->t[c[1]], t2 = s->t[c[2]], w = 1 - u - v;
+        double t0 = node_t(s, c[0], tau), t1 = node_t(s, c[1], tau), t2 = node_t(s, c[2], tau), w = 1 - u - v;
         double t = w * t0 + u * t1 + v * t2;
         if (!isfinite(t) || fabs(t) > 2) {
             for (int k = 0; k < 3; k++) rgb[k] = f->nan_color[k];
@@ -224,7 +231,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
             }
         }
         if (dot3(n, dir) > 0) for (int k = 0; k < 3; k++) n[k] = -n[k]; /* facing the ray: two-sided */
-        base_color(f, s, rh.hit.primID, u, v, p, n, base);
+        base_color(f, s, rh.hit.primID, u, v, p, n, rt_tau(f, px, sample), base);
         if (rs->mode == THX_DRAW_ORIENTATION && !outside) { /* the inward side: the back colour */
             const float *bc = rs->back_color;
             int zero = bc[0] == 0 && bc[1] == 0 && bc[2] == 0 && bc[3] == 0;

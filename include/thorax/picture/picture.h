@@ -201,6 +201,14 @@ typedef struct {
     int n_rt_mat;
     int rt_key;             /* add a key light (directional, shadows) from above the viewer's right shoulder */
     const char *environment; /* the ray tracer's environment: an equirectangular PNG, or "sky" */
+    /* motion blur (the ray tracer, rt.shutter > 0): each frame blurred towards the next one, whose
+       data frame is next_frame (0-based; -1: the frame after the one drawn, the series' last its own
+       next) and whose camera is next_cam when have_next_cam (a camera flight's at the next movie
+       frame), else the frame's own camera. The surfaces of the model take the next frame's values
+       and scales; the field's (slices, isosurfaces) and the volume stay this frame's. */
+    int next_frame;
+    int have_next_cam;
+    thx_camera next_cam;
     /* volume rendering (the ray tracer; needs --solution with volume potentials): "potential" (linear
        in each tetrahedron) or "current" (|J| = |sigma grad phi| per tetrahedron), in the solution's
        domain; opacity control points (t, opacity) over the field's colour scale (none: clear at the

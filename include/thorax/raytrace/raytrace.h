@@ -15,6 +15,14 @@
  * OpenGL renderer's widths in pixels at the arrow's distance, its colours, lit and casting shadows,
  * cut by the clip planes); a field inside a tetrahedral mesh (thx_raytrace_volume).
  *
+ * Motion blur across animation frames (the paper's RaySpray had it): with opts.next (the same scene
+ * at the next frame) and opts.shutter > 0, each pixel sample has its time tau in [0, shutter) of the
+ * frame interval (stratified over the pixel's samples, a hash of pixel and sample), and sees the
+ * camera and the surfaces' values between the two frames: the camera's eye, centre, up, field of
+ * view and height linear in tau, the value's t = scale(value) at each node (1 - tau) t_this +
+ * tau t_next. The surfaces' geometry does not move (no BVH is built for a frame step); the volume
+ * (opts.volume) is this frame's, unblurred.
+ *
  * Deterministic: every random number is a hash of (pixel, sample, bounce, use), tiles are
  * independent, so the same input gives the same picture whatever the number of threads.
  */
@@ -98,6 +106,12 @@ typedef struct thx_raytrace_opts {
        caller's), or sky = 1 for a sky gradient; neither: the scene's background colour */
     const thx_raster *environment;
     int sky;
+    /* motion blur: the same scene at the next frame (the same surfaces in the same order, with the
+       next frame's values, scales and camera; borrowed) and the shutter, the part of the frame
+       interval the samples' times spread over (0 to 1; 0 or next NULL: no blur, the picture of this
+       frame alone) */
+    const thx_scene *next;
+    double shutter;
 } thx_raytrace_opts;
 
 void thx_raytrace_opts_default(thx_raytrace_opts *o);
