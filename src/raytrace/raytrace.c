@@ -238,9 +238,10 @@ static void frame_back(rt_frame *f)
         }
 }
 
-/* The camera's frame in f (f->cam, eye, view, right, up; the lights given in the camera's axes
- * turned into the model's; how far behind the eye's plane an orthographic ray starts, from f's box): 0, or 1 eye at
- * the centre, 2 up along the line of sight. */
+/* The camera's frame in f (f->cam, eye, view, right, up; the view's half extents at f->aspect; the
+ * lights given in the camera's axes turned into the model's; how far behind the eye's plane an
+ * orthographic ray starts, from f's box): 0, or 1 eye at the centre, 2 up along the line of sight, 3
+ * orthographic with no height. */
 static int frame_camera(rt_frame *f, const thx_camera *c)
 {
     const thx_raytrace_opts *o = f->o;
@@ -264,6 +265,9 @@ static int frame_camera(rt_frame *f, const thx_camera *c)
             for (int k = 0; k < 3; k++) L->dir[k] = o->lights[i].dir[0] * f->right[k] + o->lights[i].dir[1] * f->up[k] + o->lights[i].dir[2] * f->view[k];
     }
     f->ortho = !(c->fov_deg > 0);
+    f->half_h = f->ortho ? 0.5 * c->height : tan(0.5 * c->fov_deg * M_PI / 180);
+    f->half_w = f->half_h * f->aspect;
+    if (f->ortho && !(f->half_h > 0)) return 3;
     frame_back(f);
     return 0;
 }
@@ -295,19 +299,20 @@ int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], do
     return hit;
 }
 
-/* The call's frame for a viewport vp_h pixels high: the camera's frame, the scene surfaces'
+/* The call's frame for a viewport vp_w x vp_h pixels: the camera's frame, the scene surfaces'
  * geometries (built when needed) and their per-node t, the image planes and the arrows' glyphs
  * (built per call). */
-static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, int vp_h, rt_frame *f,
-                              size_t *builds)
+static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, const thx_raytrace_opts *o, int vp_w, int vp_h,
+                              rt_frame *f, size_t *builds)
 {
     memset(f, 0, sizeof *f);
     f->sc = sc;
     f->o = o;
+    f->aspect = (double)vp_w / vp_h;
     if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
         return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's surface, arrow or plane array is NULL");
     /* the camera's frame (the scene's box, where orthographic rays start, after the build) */
-    static const char *why[] = {"", "eye at the centre", "up along the line of sight"};
+    static const char *why[] = {"", "eye at the centre", "up along the line of sight", "orthographic with no height"};
     f->box_lo[0] = 1;
     f->box_hi[0] = 0;
     int bad = frame_camera(f, &sc->camera);
@@ -326,7 +331,7 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                 return thx_error(ctx, THX_EINPUT, "motion blur: surface %zu of the next frame's scene is not this frame's (%zu "
                                  "nodes, %zu)", i, b ? b->n_nodes : 0, a ? a->n_nodes : 0);
         }
-        rt_frame probe = {.o = o};
+        rt_frame probe = {.o = o, .aspect = f->aspect};
         int bad_next = frame_camera(&probe, &o->next->camera);
         if (bad_next)
             return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's camera is degenerate (%s)", why[bad_next]);
@@ -399,14 +404,29 @@ static void frame_free(rt_frame *f)
     memset(f, 0, sizeof *f);
 }
 
-/* The eye ray through viewport point (x, y); an orthographic ray starts behind everything traced
- * (thx_camera_ray puts its origin on the eye's plane, which may cut the model). */
-static int primary_ray(const rt_frame *f, int w, int h, double x, double y, double org[3], double dir[3])
+/* The eye ray through viewport point (x, y) of a w x h viewport: thx_camera_ray's ray, from the
+ * camera's frame made once (f->right, up, view, half_w, half_h) rather than per pixel; an
+ * orthographic ray starts behind everything traced (thx_camera_ray puts its origin on the eye's
+ * plane, which may cut the model). */
+static inline void primary_ray(const rt_frame *f, int w, int h, double x, double y, double org[3], double dir[3])
 {
-    if (thx_camera_ray(&f->cam, w, h, x, y, org, dir)) return -1;
-    if (f->ortho && f->back > 0)
-        for (int k = 0; k < 3; k++) org[k] -= f->back * dir[k];
-    return 0;
+    double nx = 2 * x / w - 1, ny = 1 - 2 * y / h;
+    if (!f->ortho) {
+        double a = nx * f->half_w, b = ny * f->half_h, n = 0;
+        for (int k = 0; k < 3; k++) {
+            org[k] = f->eye[k];
+            dir[k] = f->view[k] + a * f->right[k] + b * f->up[k];
+            n += dir[k] * dir[k];
+        }
+        n = 1 / sqrt(n);
+        for (int k = 0; k < 3; k++) dir[k] *= n;
+    } else {
+        double a = nx * f->half_w, b = ny * f->half_h;
+        for (int k = 0; k < 3; k++) {
+            dir[k] = f->view[k];
+            org[k] = f->eye[k] + a * f->right[k] + b * f->up[k] - f->back * dir[k];
+        }
+    }
 }
 
 /* The camera at time tau of the frame interval: eye, centre, up, field of view and height linear
@@ -448,7 +468,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     t->call++;
     size_t builds = 0;
     rt_frame f;
-    thx_status st = frame_build(ctx, t, sc, o, vp[3], &f, &builds);
+    thx_status st = frame_build(ctx, t, sc, o, vp[2], vp[3], &f, &builds);
     double t1 = wall();
     if (st != THX_OK) { frame_free(&f); return st; }
     f.n_samples = o->samples * o->samples;
@@ -493,7 +513,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                             fs.pixel_mm = pixel_mm_of(&c, vp[3]);
                             fp = &fs;
                         }
-                        if (primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org, dir)) continue;
+                        primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org, dir);
                         rt_shade(fp, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
                         if (f.vm) { /* the field in front of the surface hit (or of the background) */
                             double vc[3], T;
@@ -513,9 +533,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                 for (int k = 0; k < 3; k++) {
                     double bg = sc->clear ? f.bg[k] : p[k] / 255.0;
                     double c = acc[k] / n + (1 - a) * bg; /* the samples' colours over the background */
-                    p[k] = (unsigned char)lround(fmin(fmax(c, 0), 1) * 255);
+                    p[k] = (unsigned char)(fmin(fmax(c, 0), 1) * 255 + 0.5);
                 }
-                p[3] = (unsigned char)lround(fmin(fmax(a + (1 - a) * bga, 0), 1) * 255);
+                p[3] = (unsigned char)(fmin(fmax(a + (1 - a) * bga, 0), 1) * 255 + 0.5);
             }
         if (o->progress) {
 #pragma omp critical
@@ -551,7 +571,7 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
     size_t builds = 0;
     rt_frame f;
     if (w < 1 || h < 1) return thx_error(ctx, THX_EINPUT, "ray tracer: id image %d x %d", w, h);
-    thx_status st = frame_build(ctx, t, sc, &o, h, &f, &builds);
+    thx_status st = frame_build(ctx, t, sc, &o, w, h, &f, &builds);
     if (st != THX_OK) { frame_free(&f); return st; }
     size_t rays = 0;
 #pragma omp parallel for schedule(dynamic) reduction(+ : rays)
@@ -562,7 +582,7 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
             size_t i = (size_t)y * (size_t)w + (size_t)x;
             surface[i] = -1;
             tri[i] = -1;
-            if (primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir)) continue;
+            primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir);
             if (rt_intersect(&f, org, dir, 0, INFINITY, &rh, &rays)) {
                 size_t k;
                 int kind = rt_kind(&f, rh.hit.geomID, &k);

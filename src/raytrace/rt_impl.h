@@ -96,6 +96,9 @@ typedef struct {
     double eye[3], view[3], right[3], up[3]; /* camera frame; view: the line of sight */
     int ortho;
     double back;                    /* orthographic: eye rays start this far behind the eye's plane */
+    double aspect;                  /* the viewport's width over its height */
+    double half_w, half_h;          /* the view's half extents: perspective tan(fov/2) times the aspect
+                                       and tan(fov/2); orthographic in mm (eye rays, primary_ray) */
     double pixel_mm;                /* orthographic: a pixel's size; perspective: per mm of distance */
     float bg[4], nan_color[4];
     int any_clip;
