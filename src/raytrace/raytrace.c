@@ -490,53 +490,110 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
     size_t rays = 0;
     int ns = o->samples;
+    /* eye rays in packets of a tile's row (Embree's SIMD traversal of coherent rays), where the frame
+       has no motion blur (one camera) and no image planes (looked for after the solid hit) */
+    int packets = !f.next && !f.planes;
 #pragma omp parallel for schedule(dynamic) reduction(+ : rays)
     for (int tile = 0; tile < n_tiles; tile++) {
-        int x0 = (tile % tw) * TILE, y0 = (tile / tw) * TILE;
-        for (int y = y0; y < y0 + TILE && y < vp[3]; y++)
-            for (int x = x0; x < x0 + TILE && x < vp[2]; x++) {
-                double acc[3] = {0, 0, 0}, cov = 0;
-                uint32_t px = (uint32_t)(y * vp[2] + x);
-                for (int sy = 0; sy < ns; sy++)
-                    for (int sx = 0; sx < ns; sx++) {
-                        uint32_t sample = (uint32_t)(sy * ns + sx);
+        int x0 = (tile % tw) * TILE, y0 = (tile / tw) * TILE, x1 = x0 + TILE < vp[2] ? x0 + TILE : vp[2];
+        for (int y = y0; y < y0 + TILE && y < vp[3]; y++) {
+            double acc[TILE][3], cov[TILE];
+            memset(acc, 0, sizeof acc);
+            memset(cov, 0, sizeof cov);
+            /* the samples in the same order for each pixel as one pixel at a time (the same sums) */
+            for (int sy = 0; sy < ns; sy++)
+                for (int sx = 0; sx < ns; sx++) {
+                    uint32_t sample = (uint32_t)(sy * ns + sx);
+                    double org[TILE][3], dir[TILE][3];
+                    struct RTCRayHit16 pk;
+                    _Alignas(64) int valid[TILE]; /* (Embree reads it as one vector) */
+                    for (int x = x0; x < x0 + TILE; x++) {
+                        int i = x - x0;
+                        valid[i] = x < x1 ? -1 : 0;
+                        if (!valid[i]) continue;
+                        uint32_t px = (uint32_t)(y * vp[2] + x);
                         double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
                         double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
-                        double org[3], dir[3], rgb[3], alpha, thit;
+                        primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org[i], dir[i]);
+                        if (!packets) continue;
+                        pk.ray.org_x[i] = (float)org[i][0];
+                        pk.ray.org_y[i] = (float)org[i][1];
+                        pk.ray.org_z[i] = (float)org[i][2];
+                        pk.ray.dir_x[i] = (float)dir[i][0];
+                        pk.ray.dir_y[i] = (float)dir[i][1];
+                        pk.ray.dir_z[i] = (float)dir[i][2];
+                        pk.ray.tnear[i] = 0;
+                        pk.ray.tfar[i] = INFINITY;
+                        pk.ray.time[i] = 0;
+                        pk.ray.mask[i] = 0xffffffffu;
+                        pk.ray.id[i] = (unsigned)i;
+                        pk.ray.flags[i] = 0;
+                        pk.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+                        pk.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    if (packets) {
+                        struct RTCIntersectContext c;
+                        rtcInitIntersectContext(&c);
+                        c.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                        rtcIntersect16(valid, f.scene, &c, &pk);
+                    }
+                    for (int x = x0; x < x1; x++) {
+                        int i = x - x0;
+                        uint32_t px = (uint32_t)(y * vp[2] + x);
+                        double rgb[3], alpha, thit;
                         const rt_frame *fp = &f;
                         rt_frame fs;
                         if (f.next) { /* motion blur: the camera at the sample's time */
-                            thx_camera c;
-                            camera_lerp(&sc->camera, &f.next->camera, rt_tau(&f, px, sample), &c);
+                            thx_camera cm;
+                            camera_lerp(&sc->camera, &f.next->camera, rt_tau(&f, px, sample), &cm);
                             fs = f;
-                            if (frame_camera(&fs, &c)) continue;
-                            fs.pixel_mm = pixel_mm_of(&c, vp[3]);
+                            if (frame_camera(&fs, &cm)) continue;
+                            fs.pixel_mm = pixel_mm_of(&cm, vp[3]);
                             fp = &fs;
+                            double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
+                            double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
+                            primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org[i], dir[i]);
                         }
-                        primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org, dir);
-                        rt_shade(fp, org, dir, 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
+                        if (packets) {
+                            struct RTCRayHit h;
+                            h.ray.tfar = pk.ray.tfar[i];
+                            h.hit.geomID = pk.hit.geomID[i];
+                            h.hit.primID = pk.hit.primID[i];
+                            h.hit.u = pk.hit.u[i];
+                            h.hit.v = pk.hit.v[i];
+                            h.hit.Ng_x = pk.hit.Ng_x[i];
+                            h.hit.Ng_y = pk.hit.Ng_y[i];
+                            h.hit.Ng_z = pk.hit.Ng_z[i];
+                            rt_shade_first(fp, org[i], dir[i], &h, px, sample, rgb, &alpha, &thit, &rays);
+                        } else {
+                            rt_shade(fp, org[i], dir[i], 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
+                        }
                         if (f.vm) { /* the field in front of the surface hit (or of the background) */
                             double vc[3], T;
-                            rt_volume_march(f.vm, o->volume, f.tf, f.fld, org, dir, 0, thit, vc, &T, &rays);
+                            rt_volume_march(f.vm, o->volume, f.tf, f.fld, org[i], dir[i], 0, thit, vc, &T, &rays);
                             /* premultiplied: the volume's emission, then the surface behind it through
                                what the volume lets pass; the coverage likewise */
                             double vcov = (1 - T) + T * alpha;
                             for (int k = 0; k < 3; k++) rgb[k] = vcov > 0 ? (vc[k] + T * alpha * rgb[k]) / vcov : 0;
                             alpha = vcov;
                         }
-                        for (int k = 0; k < 3; k++) acc[k] += rgb[k] * alpha;
-                        cov += alpha;
+                        for (int k = 0; k < 3; k++) acc[i][k] += rgb[k] * alpha;
+                        cov[i] += alpha;
                     }
+                }
+            for (int x = x0; x < x1; x++) {
+                int i = x - x0;
                 double n = (double)(ns * ns);
                 unsigned char *p = img->rgba + 4 * ((size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x));
-                double a = cov / n, bga = sc->clear ? f.bg[3] : p[3] / 255.0;
+                double a = cov[i] / n, bga = sc->clear ? f.bg[3] : p[3] / 255.0;
                 for (int k = 0; k < 3; k++) {
                     double bg = sc->clear ? f.bg[k] : p[k] / 255.0;
-                    double c = acc[k] / n + (1 - a) * bg; /* the samples' colours over the background */
+                    double c = acc[i][k] / n + (1 - a) * bg; /* the samples' colours over the background */
                     p[k] = (unsigned char)(fmin(fmax(c, 0), 1) * 255 + 0.5);
                 }
                 p[3] = (unsigned char)(fmin(fmax(a + (1 - a) * bga, 0), 1) * 255 + 0.5);
             }
+        }
         if (o->progress) {
 #pragma omp critical
             {

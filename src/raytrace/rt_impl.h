@@ -173,6 +173,11 @@ static inline double rt_tau(const rt_frame *f, uint32_t px, uint32_t sample)
  * below 1/256 are not traced). px, sample: the random keys. *rays counts the rays traced. */
 void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
               uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays);
+/* The same for an eye ray whose first Embree hit in f->scene (from 0 to infinity) is already known
+ * (a packet of eye rays traced together): first, counted in *rays here. Only for a frame without
+ * image planes; a hit the clip planes may cut is looked for again. */
+void rt_shade_first(const rt_frame *f, const double org[3], const double dir[3], const struct RTCRayHit *first, uint32_t px,
+                    uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays);
 
 /* What a ray that leaves the scene sees along dir: the environment image, the sky, or the
  * background colour. */

@@ -175,14 +175,25 @@ void rt_environment(const rt_frame *f, const double dir[3], double rgb[3])
     for (int k = 0; k < 3; k++) rgb[k] = f->bg[k];
 }
 
-void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
-              uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays)
+static void shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
+                  uint32_t sample, const struct RTCRayHit *first, double rgb[3], double *alpha, double *thit, size_t *rays)
 {
     struct RTCRayHit rh;
-    rt_environment(f, dir, rgb);
-    *alpha = f->o->environment || f->o->sky ? 1 : 0; /* the environment covers what it is seen in */
     *thit = INFINITY;
-    if (!rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays)) return;
+    int hit;
+    if (first) {
+        rh = *first;
+        (*rays)++;
+        hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        if (hit && f->any_clip) hit = rt_intersect(f, org, dir, 0, INFINITY, &rh, rays); /* maybe clipped away */
+    } else {
+        hit = rt_intersect(f, org, dir, depth ? EPS : 0, INFINITY, &rh, rays);
+    }
+    if (!hit) {
+        rt_environment(f, dir, rgb);
+        *alpha = f->o->environment || f->o->sky ? 1 : 0; /* the environment covers what it is seen in */
+        return;
+    }
     *thit = rh.ray.tfar;
     double t = rh.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
     double ps[3] = {p[0], p[1], p[2]}; /* where shadow and occlusion rays start */
@@ -310,7 +321,7 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         else for (int k = 0; k < 3; k++) tdir[k] = eta * dir[k] + (eta * cosi - sqrt(k2)) * n[k];
         if (fr < 1 && weight * trans * (1 - fr) >= cut) {
             double c[3], a, th;
-            rt_shade(f, p, tdir, depth + 1, weight * trans * (1 - fr), px, sample, c, &a, &th, rays);
+            shade(f, p, tdir, depth + 1, weight * trans * (1 - fr), px, sample, NULL, c, &a, &th, rays);
             for (int k = 0; k < 3; k++) out[k] += trans * (1 - fr) * (a > 0 ? c[k] : f->bg[k]);
         }
         refl += trans * fr;
@@ -319,9 +330,21 @@ void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int d
         double r[3], c[3], a, th;
         double dn = dot3(dir, n);
         for (int k = 0; k < 3; k++) r[k] = dir[k] - 2 * dn * n[k];
-        rt_shade(f, p, r, depth + 1, weight * refl, px, sample, c, &a, &th, rays);
+        shade(f, p, r, depth + 1, weight * refl, px, sample, NULL, c, &a, &th, rays);
         for (int k = 0; k < 3; k++) out[k] += refl * (a > 0 ? c[k] : f->bg[k]);
     }
     for (int k = 0; k < 3; k++) rgb[k] = fmin(fmax(out[k], 0), 1);
     *alpha = 1;
+}
+
+void rt_shade(const rt_frame *f, const double org[3], const double dir[3], int depth, double weight, uint32_t px,
+              uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays)
+{
+    shade(f, org, dir, depth, weight, px, sample, NULL, rgb, alpha, thit, rays);
+}
+
+void rt_shade_first(const rt_frame *f, const double org[3], const double dir[3], const struct RTCRayHit *first, uint32_t px,
+                    uint32_t sample, double rgb[3], double *alpha, double *thit, size_t *rays)
+{
+    shade(f, org, dir, 0, 1.0, px, sample, first, rgb, alpha, thit, rays);
 }
