@@ -442,6 +442,9 @@ static void camera_lerp(const thx_camera *a, const thx_camera *b, double tau, th
     c->height = a->height + tau * (b->height - a->height);
 }
 
+/* A colour component in [0, 1] (clamped) as a byte, rounded. */
+static inline unsigned char byte01(double c) { return (unsigned char)((c > 1 ? 1 : c > 0 ? c : 0) * 255 + 0.5); }
+
 static int gcd(int a, int b) { return b ? gcd(b, a % b) : a; }
 
 static void viewport_of(const thx_scene *sc, const thx_raster *img, int vp[4])
@@ -498,8 +501,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         int x0 = (tile % tw) * TILE, y0 = (tile / tw) * TILE, x1 = x0 + TILE < vp[2] ? x0 + TILE : vp[2];
         for (int y = y0; y < y0 + TILE && y < vp[3]; y++) {
             double acc[TILE][3], cov[TILE];
-            memset(acc, 0, sizeof acc);
-            memset(cov, 0, sizeof cov);
+            for (int i = 0; i < TILE; i++) acc[i][0] = acc[i][1] = acc[i][2] = cov[i] = 0;
             /* the samples in the same order for each pixel as one pixel at a time (the same sums) */
             for (int sy = 0; sy < ns; sy++)
                 for (int sx = 0; sx < ns; sx++) {
@@ -589,9 +591,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                 for (int k = 0; k < 3; k++) {
                     double bg = sc->clear ? f.bg[k] : p[k] / 255.0;
                     double c = acc[i][k] / n + (1 - a) * bg; /* the samples' colours over the background */
-                    p[k] = (unsigned char)(fmin(fmax(c, 0), 1) * 255 + 0.5);
+                    p[k] = byte01(c);
                 }
-                p[3] = (unsigned char)(fmin(fmax(a + (1 - a) * bga, 0), 1) * 255 + 0.5);
+                p[3] = byte01(a + (1 - a) * bga);
             }
         }
         if (o->progress) {
