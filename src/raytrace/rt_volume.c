@@ -244,11 +244,14 @@ static inline void tf_at(const rt_tf *tf, double x, tf_val *v)
 /* t = scale(value) as a table position (t clamped to [0, 1]). */
 static inline double tf_pos(double t) { return (t < 0 ? 0 : t > 1 ? 1 : t) * (TF_N - 1); }
 
-/* 1 - e^(-x) for x >= 0, without the cancellation where x is small (most pieces of a fine mesh:
- * a Taylor polynomial, its error under 1e-13 relative for x < 0.01). */
+/* Below this optical depth a piece is integrated by series (most pieces of a fine mesh). */
+#define THIN 0.05
+
+/* 1 - e^(-x) for x >= 0, without the cancellation where x is small (a Taylor polynomial below THIN:
+ * the next term under x^7 / 5040, 2e-13). */
 static inline double absorbed(double x)
 {
-    if (x < 0.01) return x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))));
+    if (x < THIN) return x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))));
     return -expm1(-x);
 }
 
@@ -259,24 +262,27 @@ static inline double absorbed(double x)
  * gives the emission int_0^L C tau e^(-D) dz = c0 b + c1 (a - b), where a = 1 - e^(-D(L)) (what the
  * piece absorbs) and b = (1 / L) int_0^L (1 - e^(-D(z))) dz: exact for C linear, in two numbers
  * shared by the three channels. b is exact in closed form where tau is constant (b = 1 - a / x, x =
- * tau L; its series where x is small), else 3-point Gauss-Legendre on a smooth integrand (D
- * quadratic). No cancellation: a and b are both small where the piece is thin. */
+ * tau L; its series where x is small); elsewhere its series to the fifth power of D where the piece is
+ * thin (x < THIN), else 3-point Gauss-Legendre on a smooth integrand (D quadratic). No cancellation: a
+ * and b are both small where the piece is thin. */
 static inline __attribute__((always_inline)) void piece(const double c0[3], double tau0, const double c1[3], double tau1, double L,
                                                         double rgb[3], double *T)
 {
     if (!(L > 0) || (tau0 == 0 && tau1 == 0)) return; /* clear: nothing emitted or absorbed */
     double x = 0.5 * (tau0 + tau1) * L, a = absorbed(x), b;
     if (tau0 == tau1) {
-        b = x < 0.01 ? x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))) : 1 - a / x;
-    } else if (x < 0.01) {
+        b = x < THIN ? x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))) : 1 - a / x;
+    } else if (x < THIN) {
         /* D(z) = u z / L + v z^2 / L^2 (u = tau0 L, v = (tau1 - tau0) L / 2, D <= x): b is the mean of
-           D - D^2 / 2 + D^3 / 6 - D^4 / 24 over the piece, each power's mean exact (the next term
-           under x^5 / 120: 1e-12) */
-        double u = tau0 * L, v = 0.5 * (tau1 - tau0) * L, u2 = u * u, v2 = v * v;
+           D - D^2 / 2 + D^3 / 6 - D^4 / 24 + D^5 / 120 over the piece, each power's mean exact (the
+           mean of (u s + v s^2)^n over s in [0, 1] is sum_j C(n, j) u^(n-j) v^j / (n + j + 1)); the
+           next term under x^6 / 720, 2e-11 */
+        double u = tau0 * L, v = 0.5 * (tau1 - tau0) * L, u2 = u * u, v2 = v * v, u3 = u2 * u, v3 = v2 * v;
         double m1 = u / 2 + v / 3, m2 = u2 / 3 + u * v / 2 + v2 / 5;
-        double m3 = u2 * u / 4 + 0.6 * u2 * v + u * v2 / 2 + v2 * v / 7;
-        double m4 = u2 * u2 / 5 + 2.0 / 3 * u2 * u * v + 6.0 / 7 * u2 * v2 + u * v2 * v / 2 + v2 * v2 / 9;
-        b = m1 - m2 / 2 + m3 / 6 - m4 / 24;
+        double m3 = u3 / 4 + 0.6 * u2 * v + u * v2 / 2 + v3 / 7;
+        double m4 = u2 * u2 / 5 + 2.0 / 3 * u3 * v + 6.0 / 7 * u2 * v2 + u * v3 / 2 + v2 * v2 / 9;
+        double m5 = u3 * u2 / 6 + 5.0 / 7 * u2 * u2 * v + 1.25 * u3 * v2 + 10.0 / 9 * u2 * v3 + 0.5 * u * v2 * v2 + v3 * v2 / 11;
+        b = m1 - m2 / 2 + m3 / 6 - m4 / 24 + m5 / 120;
     } else {
         /* D(z) = tau0 z + (tau1 - tau0) z^2 / (2 L) at the nodes z = L (1 + g) / 2 */
         static const double gx[3] = {-0.7745966692414834, 0, 0.7745966692414834}, gw[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
