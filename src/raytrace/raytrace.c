@@ -174,8 +174,7 @@ static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, con
     return THX_OK;
 }
 
-/* One Embree ray through scene sc from tnear to tfar. */
-static void ray_once(RTCScene sc, const double org[3], const double dir[3], double tnear, double tfar, struct RTCRayHit *rh)
+void rt_ray_once(RTCScene sc, const double org[3], const double dir[3], double tnear, double tfar, struct RTCRayHit *rh)
 {
     struct RTCIntersectContext c;
     rtcInitIntersectContext(&c);
@@ -199,7 +198,7 @@ static int hit_solid(const rt_frame *f, const double org[3], const double dir[3]
                      struct RTCRayHit *rh, size_t *rays)
 {
     for (int pass = 0; pass < 256; pass++) {
-        ray_once(f->scene, org, dir, tnear, tfar, rh);
+        rt_ray_once(f->scene, org, dir, tnear, tfar, rh);
         (*rays)++;
         if (rh->hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
         size_t k;
@@ -217,12 +216,6 @@ static int hit_solid(const rt_frame *f, const double org[3], const double dir[3]
     return 0;
 }
 
-/* A pixel's size: orthographic, in mm; perspective, per mm of distance from the eye. */
-static double pixel_mm_of(const thx_camera *c, int h)
-{
-    return c->fov_deg > 0 ? 2 * tan(0.5 * c->fov_deg * M_PI / 180) / h : c->height / h;
-}
-
 /* Orthographic: how far behind the eye's plane the scene's box (f->box_lo..box_hi, the image planes
  * in it) reaches, where eye rays start. */
 static void frame_back(rt_frame *f)
@@ -238,7 +231,8 @@ static void frame_back(rt_frame *f)
         }
 }
 
-/* The camera's frame in f (f->cam, eye, view, right, up; the view's half extents at f->aspect; the
+/* The camera's frame in f (f->cam, eye, view, right, up; the view's half extents at f->aspect and a
+ * pixel's size for f->vp_h rows; the
  * lights given in the camera's axes turned into the model's; how far behind the eye's plane an
  * orthographic ray starts, from f's box): 0, or 1 eye at the centre, 2 up along the line of sight, 3
  * orthographic with no height. */
@@ -267,6 +261,7 @@ static int frame_camera(rt_frame *f, const thx_camera *c)
     f->ortho = !(c->fov_deg > 0);
     f->half_h = f->ortho ? 0.5 * c->height : tan(0.5 * c->fov_deg * M_PI / 180);
     f->half_w = f->half_h * f->aspect;
+    f->pixel_mm = 2 * f->half_h / f->vp_h;
     if (f->ortho && !(f->half_h > 0)) return 3;
     frame_back(f);
     return 0;
@@ -284,7 +279,7 @@ int rt_intersect(const rt_frame *f, const double org[3], const double dir[3], do
     if (hit) lim = rh->ray.tfar - 1e-4 * fmax(1, fabs(rh->ray.tfar));
     struct RTCRayHit ph;
     for (int pass = 0; pass < 64 && tnear < lim; pass++) {
-        ray_once(f->planes, org, dir, tnear, lim, &ph);
+        rt_ray_once(f->planes, org, dir, tnear, lim, &ph);
         (*rays)++;
         if (ph.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
         double t = ph.ray.tfar, p[3] = {org[0] + t * dir[0], org[1] + t * dir[1], org[2] + t * dir[2]};
@@ -308,6 +303,7 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     memset(f, 0, sizeof *f);
     f->sc = sc;
     f->o = o;
+    f->vp_h = vp_h;
     f->aspect = (double)vp_w / vp_h;
     if ((sc->n_surfaces && !sc->surfaces) || (sc->n_arrows && !sc->arrows) || (sc->n_planes && !sc->planes))
         return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's surface, arrow or plane array is NULL");
@@ -317,7 +313,6 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     f->box_hi[0] = 0;
     int bad = frame_camera(f, &sc->camera);
     if (bad) return thx_error(ctx, THX_EINPUT, "ray tracer: degenerate camera (%s)", why[bad]);
-    f->pixel_mm = pixel_mm_of(&sc->camera, vp_h);
     f->s = thx_calloc(ctx, sc->n_surfaces ? sc->n_surfaces : 1, sizeof *f->s);
     if (!f->s) return THX_ENOMEM;
     f->n_s = sc->n_surfaces;
@@ -331,7 +326,7 @@ static thx_status frame_build(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                 return thx_error(ctx, THX_EINPUT, "motion blur: surface %zu of the next frame's scene is not this frame's (%zu "
                                  "nodes, %zu)", i, b ? b->n_nodes : 0, a ? a->n_nodes : 0);
         }
-        rt_frame probe = {.o = o, .aspect = f->aspect};
+        rt_frame probe = {.o = o, .aspect = f->aspect, .vp_h = vp_h};
         int bad_next = frame_camera(&probe, &o->next->camera);
         if (bad_next)
             return thx_error(ctx, THX_EINPUT, "motion blur: the next frame's camera is degenerate (%s)", why[bad_next]);
@@ -506,7 +501,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             for (int sy = 0; sy < ns; sy++)
                 for (int sx = 0; sx < ns; sx++) {
                     uint32_t sample = (uint32_t)(sy * ns + sx);
-                    double org[TILE][3], dir[TILE][3];
+                    double org[TILE][3], dir[TILE][3], jx[TILE], jy[TILE]; /* jx, jy: the sample's place in its pixel */
                     struct RTCRayHit16 pk;
                     _Alignas(64) int valid[TILE]; /* (Embree reads it as one vector) */
                     for (int x = x0; x < x0 + TILE; x++) {
@@ -514,9 +509,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         valid[i] = x < x1 ? -1 : 0;
                         if (!valid[i]) continue;
                         uint32_t px = (uint32_t)(y * vp[2] + x);
-                        double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
-                        double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
-                        primary_ray(&f, vp[2], vp[3], x + jx, y + jy, org[i], dir[i]);
+                        jx[i] = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
+                        jy[i] = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
+                        primary_ray(&f, vp[2], vp[3], x + jx[i], y + jy[i], org[i], dir[i]);
                         if (!packets) continue;
                         pk.ray.org_x[i] = (float)org[i][0];
                         pk.ray.org_y[i] = (float)org[i][1];
@@ -550,11 +545,8 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                             camera_lerp(&sc->camera, &f.next->camera, rt_tau(&f, px, sample), &cm);
                             fs = f;
                             if (frame_camera(&fs, &cm)) continue;
-                            fs.pixel_mm = pixel_mm_of(&cm, vp[3]);
                             fp = &fs;
-                            double jx = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
-                            double jy = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
-                            primary_ray(fp, vp[2], vp[3], x + jx, y + jy, org[i], dir[i]);
+                            primary_ray(fp, vp[2], vp[3], x + jx[i], y + jy[i], org[i], dir[i]);
                         }
                         if (packets) {
                             struct RTCRayHit h;

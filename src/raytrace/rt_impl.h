@@ -96,6 +96,7 @@ typedef struct {
     double eye[3], view[3], right[3], up[3]; /* camera frame; view: the line of sight */
     int ortho;
     double back;                    /* orthographic: eye rays start this far behind the eye's plane */
+    int vp_h;                       /* the viewport's rows */
     double aspect;                  /* the viewport's width over its height */
     double half_w, half_h;          /* the view's half extents: perspective tan(fov/2) times the aspect
                                        and tan(fov/2); orthographic in mm (eye rays, primary_ray) */
@@ -182,6 +183,9 @@ void rt_shade_first(const rt_frame *f, const double org[3], const double dir[3],
 /* What a ray that leaves the scene sees along dir: the environment image, the sky, or the
  * background colour. */
 void rt_environment(const rt_frame *f, const double dir[3], double rgb[3]);
+
+/* One Embree ray through scene sc from tnear to tfar (float, all geometry, robust as the scene is). */
+void rt_ray_once(RTCScene sc, const double org[3], const double dir[3], double tnear, double tfar, struct RTCRayHit *rh);
 
 /* The nearest hit along the ray beyond tnear that the clip planes keep: 1 and the hit in *rh; 0
  * none. */

@@ -393,21 +393,8 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
     *T = 1;
     double t = tnear;
     for (int entries = 0; entries < 64 && *T > 1e-4 && t < tfar; entries++) {
-        struct RTCIntersectContext c;
-        rtcInitIntersectContext(&c);
         struct RTCRayHit rh;
-        memset(&rh, 0, sizeof rh);
-        rh.ray.org_x = (float)o[0];
-        rh.ray.org_y = (float)o[1];
-        rh.ray.org_z = (float)o[2];
-        rh.ray.dir_x = (float)d[0];
-        rh.ray.dir_y = (float)d[1];
-        rh.ray.dir_z = (float)d[2];
-        rh.ray.tnear = (float)t;
-        rh.ray.tfar = (float)tfar;
-        rh.ray.mask = 0xffffffffu;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(m->scene, &c, &rh);
+        rt_ray_once(m->scene, o, d, t, tfar, &rh);
         (*rays)++;
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
         int32_t slot = m->bface[rh.hit.primID];
