@@ -34,7 +34,6 @@ thx_status rt_planes_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f)
 {
     const thx_scene *sc = f->sc;
     if (!sc->n_planes) return THX_OK;
-    if (!sc->planes) return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's plane array is NULL");
     f->pl = thx_calloc(ctx, sc->n_planes, sizeof *f->pl);
     if (!f->pl) return THX_ENOMEM;
     f->n_pl = sc->n_planes;
@@ -185,7 +184,6 @@ thx_status rt_arrows_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f)
 {
     const thx_scene *sc = f->sc;
     if (!sc->n_arrows) return THX_OK;
-    if (!sc->arrows) return thx_error(ctx, THX_EINPUT, "ray tracer: the scene's arrow array is NULL");
     f->ar = thx_calloc(ctx, sc->n_arrows, sizeof *f->ar);
     if (!f->ar) return THX_ENOMEM;
     f->n_ar = sc->n_arrows;

@@ -129,7 +129,8 @@ static inline int rt_kind(const rt_frame *f, unsigned id, size_t *k)
 }
 
 /* rt_glyphs.c: the scene's image planes into f->planes, its arrows' glyphs into f->scene (before
- * its commit; f's camera frame and pixel size set); freed by rt_glyphs_free. */
+ * its commit; f's camera frame and pixel size set; the scene's arrays checked by frame_build); freed by
+ * rt_glyphs_free. */
 thx_status rt_planes_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
 thx_status rt_arrows_build(thx_ctx *ctx, RTCDevice dev, rt_frame *f);
 void rt_glyphs_free(rt_frame *f);
