@@ -30,13 +30,22 @@ typedef struct {
     int no_clip;
 } rt_surf;
 
+/* Four floats as one SSE register (GCC's and Clang's vector extension): a transfer function's
+ * colour and extinction (r, g, b, tau) travel together, and a tetrahedron's four faces are tested
+ * at once. */
+typedef float rt_v4f __attribute__((vector_size(16)));
+typedef int32_t rt_v4i __attribute__((vector_size(16)));
+
 /* A tetrahedron as the volume renderer walks it, in one 64-byte cache line: three of its four
- * barycentric coordinates as affine functions (lambda_k(p) = pl[4k..4k+2] . p + pl[4k+3], 1 at
- * vertex k, 0 on the face opposite it; lambda_3 = 1 - lambda_0 - lambda_1 - lambda_2), and across
- * each face the neighbour (its tetrahedron * 4 + its number of that face; -1 the mesh's boundary). */
-typedef struct {
-    float pl[12];
-    int32_t nb[4];
+ * barycentric coordinates as affine functions (lambda_k(p) = a_k . p + b_k, 1 at vertex k, 0 on the
+ * face opposite it; lambda_3 = 1 - lambda_0 - lambda_1 - lambda_2) stored lane by lane, q[0] = (a_0x,
+ * a_1x, a_2x, .), q[1] the y components, q[2] the z, q[3] = (b_0, b_1, b_2, .), so that one vector
+ * operation serves the four faces; the fourth lanes hold the neighbours across faces 0..3 (each as
+ * its tetrahedron * 4 + its number of that face; -1 the mesh's boundary): nb(k) = i[4 k + 3]. */
+typedef union {
+    rt_v4f q[4];
+    float f[16];
+    int32_t i[16];
 } rt_tet;
 
 /* An image plane during a call (rt_glyphs.c): the inverse of its edges' Gram matrix (g11 g12; g12
@@ -75,10 +84,12 @@ typedef struct {
     size_t builds;
 } rt_vmesh;
 
-/* The transfer function: 256 entries over t in [0, 1]. */
+/* The transfer function: 256 entries over t in [0, 1], each (r, g, b, tau) with tau the extinction
+ * per mm, and each entry's step to the next (d[255] zero), so that its value between entries is one
+ * vector multiply-add. */
 typedef struct {
-    double c[256][3];
-    double tau[256];                /* extinction per mm */
+    rt_v4f v[256];
+    rt_v4f d[256];
 } rt_tf;
 
 /* A call's frame: what the shading reads. */

@@ -29,6 +29,10 @@
 
 #include "raytrace/rt_impl.h"
 
+#ifdef __SSE2__
+#include <immintrin.h>
+#endif
+
 #define TF_N 256
 
 typedef struct {
@@ -134,7 +138,7 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
             if (a[0] > a[1]) { int32_t x = a[0]; a[0] = a[1]; a[1] = x; }
             memcpy(r->key, a, sizeof a);
             r->slot = (int32_t)(4 * t + (size_t)k);
-            m->tets[t].nb[k] = -1;
+            m->tets[t].i[4 * k + 3] = -1;
         }
     qsort(f, nf, sizeof *f, face_cmp);
     size_t nb = 0;
@@ -143,8 +147,8 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
         while (j < nf && !memcmp(f[j].key, f[i].key, sizeof f[i].key)) j++;
         if (j - i == 2) {
             int32_t a = f[i].slot, b = f[i + 1].slot;
-            m->tets[a / 4].nb[a % 4] = b;
-            m->tets[b / 4].nb[b % 4] = a;
+            m->tets[a / 4].i[4 * (a % 4) + 3] = b;
+            m->tets[b / 4].i[4 * (b % 4) + 3] = a;
         } else if (j - i == 1) {
             nb++;
         } else {
@@ -165,11 +169,11 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
             double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
             double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
             double sk = n[0] * (vk[0] - p0[0]) + n[1] * (vk[1] - p0[1]) + n[2] * (vk[2] - p0[2]);
-            float *pl = m->tets[t].pl + 4 * k;
-            if (sk == 0) { pl[0] = pl[1] = pl[2] = 0; pl[3] = 0.25f; continue; } /* a flat tetrahedron: never crossed */
+            float *pl = m->tets[t].f + k; /* lane k of the four vectors */
+            if (sk == 0) { pl[0] = pl[4] = pl[8] = 0; pl[12] = 0.25f; continue; } /* a flat tetrahedron: never crossed */
             double a[3] = {n[0] / sk, n[1] / sk, n[2] / sk};
-            for (int q = 0; q < 3; q++) pl[q] = (float)a[q];
-            pl[3] = (float)-(a[0] * p0[0] + a[1] * p0[1] + a[2] * p0[2]);
+            for (int q = 0; q < 3; q++) pl[4 * q] = (float)a[q];
+            pl[12] = (float)-(a[0] * p0[0] + a[1] * p0[1] + a[2] * p0[2]);
         }
     /* the boundary faces, as Embree triangles (each face's tetrahedron slot kept) */
     m->bface = thx_malloc(ctx, (nb ? nb : 1) * sizeof *m->bface);
@@ -181,7 +185,7 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
     for (size_t i = 0; i < 3 * v->n_nodes; i++) vb[i] = (float)v->xyz[i];
     size_t q = 0;
     for (size_t s = 0; s < nf; s++) {
-        if (m->tets[s / 4].nb[s % 4] >= 0) continue;
+        if (m->tets[s / 4].i[4 * (s % 4) + 3] >= 0) continue;
         size_t t = s / 4, n = 0;
         int k = (int)(s % 4);
         for (int j = 0; j < 4; j++)
@@ -209,7 +213,6 @@ void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf)
         double t = (double)i / (TF_N - 1), op;
         unsigned char c[3];
         thx_colormap_eval(v->cmap, t, c);
-        for (int k = 0; k < 3; k++) tf->c[i][k] = c[k] / 255.0;
         if (v->n_opacity <= 0) {
             op = fabs(t - 0.5) * 2;
         } else if (t <= v->opacity[0][0]) {
@@ -223,111 +226,108 @@ void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf)
             double w = t1 > t0 ? (t - t0) / (t1 - t0) : 0;
             op = v->opacity[j][1] + w * (v->opacity[j + 1][1] - v->opacity[j][1]);
         }
-        tf->tau[i] = fmax(op, 0) * v->density;
+        tf->v[i] = (rt_v4f){c[0] / 255.0f, c[1] / 255.0f, c[2] / 255.0f, (float)(fmax(op, 0) * v->density)};
     }
+    for (int i = 0; i < TF_N; i++) tf->d[i] = i + 1 < TF_N ? tf->v[i + 1] - tf->v[i] : (rt_v4f){0, 0, 0, 0};
 }
 
-/* The transfer function at table position x in [0, TF_N - 1] (linear between entries). */
-typedef struct {
-    double c[3], tau;
-} tf_val;
-
-static inline void tf_at(const rt_tf *tf, double x, tf_val *v)
+/* The transfer function (r, g, b, tau) at table position x in [0, TF_N - 1], linear between entries. */
+static inline rt_v4f tf_at(const rt_tf *tf, float x)
 {
     int i = (int)x;
     if (i > TF_N - 2) i = TF_N - 2;
-    double w = x - i;
-    for (int k = 0; k < 3; k++) v->c[k] = tf->c[i][k] + w * (tf->c[i + 1][k] - tf->c[i][k]);
-    v->tau = tf->tau[i] + w * (tf->tau[i + 1] - tf->tau[i]);
+    return tf->v[i] + (x - (float)i) * tf->d[i];
 }
 
 /* t = scale(value) as a table position (t clamped to [0, 1]). */
-static inline double tf_pos(double t) { return (t < 0 ? 0 : t > 1 ? 1 : t) * (TF_N - 1); }
+static inline float tf_pos(float t) { return (t < 0 ? 0 : t > 1 ? 1 : t) * (TF_N - 1); }
 
 /* Below this optical depth a piece is integrated by series (most pieces of a fine mesh). */
 #define THIN 0.05
 
-/* 1 - e^(-x) for x >= 0, without the cancellation where x is small (a Taylor polynomial below THIN:
- * the next term under x^7 / 5040, 2e-13). */
-static inline double absorbed(double x)
+/* The sum of a vector's four lanes. */
+static inline float hsum4(rt_v4f x)
 {
-    if (x < THIN) return x * (1 - x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))));
-    return -expm1(-x);
+    x += __builtin_shufflevector(x, x, 2, 3, 0, 1);
+    return x[0] + x[1];
 }
 
-/* One sub-piece of length L along which the colour C and the extinction tau are linear, from (c0,
- * tau0) to (c1, tau1): its emission added to rgb under the transmittance *T, and *T reduced.
+/* 4-point Gauss-Legendre on [0, 1] (exact for polynomials to degree 7): nodes and weights. */
+static const rt_v4f GL_S = {0.0694318442f, 0.3300094782f, 0.6699905218f, 0.9305681558f};
+static const rt_v4f GL_W = {0.1739274226f, 0.3260725774f, 0.3260725774f, 0.1739274226f};
+
+/* One sub-piece of length L along which the colour C and the extinction tau are linear, from p0 =
+ * (c0, tau0) to p1 = (c1, tau1): its emission added to acc (r, g, b in its first three lanes) under
+ * the transmittance *T, and *T reduced.
  *
  * With the optical depth D(z) = int_0^z tau, and tau e^(-D) = d/dz (-e^(-D)), integration by parts
  * gives the emission int_0^L C tau e^(-D) dz = c0 b + c1 (a - b), where a = 1 - e^(-D(L)) (what the
  * piece absorbs) and b = (1 / L) int_0^L (1 - e^(-D(z))) dz: exact for C linear, in two numbers
- * shared by the three channels. b is exact in closed form where tau is constant (b = 1 - a / x, x =
- * tau L; its series where x is small); elsewhere its series to the fifth power of D where the piece is
- * thin (x < THIN), else 3-point Gauss-Legendre on a smooth integrand (D quadratic). No cancellation: a
- * and b are both small where the piece is thin. */
-static inline __attribute__((always_inline)) void piece(const double c0[3], double tau0, const double c1[3], double tau1, double L,
-                                                        double rgb[3], double *T)
+ * shared by the three channels, the channels then one vector operation. D is quadratic along the
+ * piece (tau linear): D(sL) = u s + v s^2, u = tau0 L, v = (tau1 - tau0) L / 2, and D <= x = (tau0 +
+ * tau1) L / 2.
+ * - Where the piece is thin (x < THIN, most pieces of a fine mesh; and an empty or clear piece, which
+ *   gives a = b = 0, so the usual step has no branch the processor cannot foresee), in float: a by
+ *   its Taylor polynomial (the next term under x^6 / 720, 2e-11), b by 4-point Gauss-Legendre over
+ *   the piece of 1 - e^(-D) by its Taylor polynomial to D^4 (the next term under x^5 / 120, 3e-9;
+ *   the quadrature exact for the polynomial to D^3, the D^4 term's error under 1e-11): each 1e-7
+ *   of itself, float's own precision, and no cancellation (a and b are both small).
+ * - Else, in double: a = -expm1(-x), b exact in closed form where tau is constant (b = 1 - a / x),
+ *   else by 3-point Gauss-Legendre on the smooth 1 - e^(-D). */
+static inline __attribute__((always_inline)) void piece(rt_v4f p0, rt_v4f p1, float L, rt_v4f *acc, double *T)
 {
-    if (!(L > 0) || (tau0 == 0 && tau1 == 0)) return; /* clear: nothing emitted or absorbed */
-    double x = 0.5 * (tau0 + tau1) * L, a = absorbed(x), b;
-    if (tau0 == tau1) {
-        b = x < THIN ? x * (0.5 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x / 720)))) : 1 - a / x;
-    } else if (x < THIN) {
-        /* D(z) = u z / L + v z^2 / L^2 (u = tau0 L, v = (tau1 - tau0) L / 2, D <= x): b is the mean of
-           D - D^2 / 2 + D^3 / 6 - D^4 / 24 + D^5 / 120 over the piece, each power's mean exact (the
-           mean of (u s + v s^2)^n over s in [0, 1] is sum_j C(n, j) u^(n-j) v^j / (n + j + 1)); the
-           next term under x^6 / 720, 2e-11 */
-        double u = tau0 * L, v = 0.5 * (tau1 - tau0) * L, u2 = u * u, v2 = v * v, u3 = u2 * u, v3 = v2 * v;
-        double m1 = u / 2 + v / 3, m2 = u2 / 3 + u * v / 2 + v2 / 5;
-        double m3 = u3 / 4 + 0.6 * u2 * v + u * v2 / 2 + v3 / 7;
-        double m4 = u2 * u2 / 5 + 2.0 / 3 * u3 * v + 6.0 / 7 * u2 * v2 + u * v3 / 2 + v2 * v2 / 9;
-        double m5 = u3 * u2 / 6 + 5.0 / 7 * u2 * u2 * v + 1.25 * u3 * v2 + 10.0 / 9 * u2 * v3 + 0.5 * u * v2 * v2 + v3 * v2 / 11;
-        b = m1 - m2 / 2 + m3 / 6 - m4 / 24 + m5 / 120;
+    float tau0 = p0[3], tau1 = p1[3], x = 0.5f * (tau0 + tau1) * L, a, b;
+    if (x < THIN) {
+        a = x * (1 - x * (0.5f - x * (1.0f / 6 - x * (1.0f / 24 - x * (1.0f / 120)))));
+        float u = tau0 * L, v = 0.5f * (tau1 - tau0) * L;
+        rt_v4f D = (u + v * GL_S) * GL_S;
+        b = hsum4(GL_W * (D * (1 - D * (0.5f - D * (1.0f / 6 - D * (1.0f / 24))))));
     } else {
-        /* D(z) = tau0 z + (tau1 - tau0) z^2 / (2 L) at the nodes z = L (1 + g) / 2 */
-        static const double gx[3] = {-0.7745966692414834, 0, 0.7745966692414834}, gw[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
-        b = 0;
-        for (int g = 0; g < 3; g++) {
-            double z = 0.5 * L * (gx[g] + 1);
-            b += gw[g] * absorbed(tau0 * z + (tau1 - tau0) * z * z / (2 * L));
+        double xd = x, ad = -expm1(-xd), bd;
+        if (tau0 == tau1) {
+            bd = 1 - ad / xd;
+        } else {
+            /* D(z) = tau0 z + (tau1 - tau0) z^2 / (2 L) at the nodes z = L (1 + g) / 2 */
+            static const double gx[3] = {-0.7745966692414834, 0, 0.7745966692414834}, gw[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+            bd = 0;
+            for (int g = 0; g < 3; g++) {
+                double z = 0.5 * L * (gx[g] + 1);
+                bd += gw[g] * -expm1(-((double)tau0 * z + ((double)tau1 - tau0) * z * z / (2.0 * L)));
+            }
         }
+        a = (float)ad;
+        b = (float)bd;
     }
-    double w = *T;
-    for (int k = 0; k < 3; k++) rgb[k] += w * (c0[k] * b + c1[k] * (a - b));
-    *T = w * (1 - a);
+    *acc += (float)*T * (p0 * b + p1 * (a - b));
+    *T *= 1 - (double)a;
 }
 
 /* A segment of length L along which the table position goes linearly from xa (where the transfer
- * function is *v) to xb: split where it crosses a table entry, each sub-piece integrated; *v becomes
+ * function is va) to xb: split where it crosses a table entry, each sub-piece integrated; returns
  * the transfer function at xb. */
-static void segment(const rt_tf *tf, double xa, double xb, double L, tf_val *v, double rgb[3], double *T)
+static inline __attribute__((always_inline)) rt_v4f segment(const rt_tf *tf, float xa, float xb, float L, rt_v4f va,
+                                                            rt_v4f *acc, double *T)
 {
-    tf_val e;
-    if (xb == xa) {
-        piece(v->c, v->tau, v->c, v->tau, L, rgb, T);
-        return;
-    }
-    int ia = (int)xa, ib = (int)xb;
-    if (ia == ib && (double)ia != xa && (double)ib != xb) { /* within one entry's interval: one piece (most steps) */
-        tf_at(tf, xb, &e);
-        piece(v->c, v->tau, e.c, e.tau, L, rgb, T);
-        *v = e;
-        return;
+    int ia = (int)xa, ib = (int)xb; /* the table intervals [i, i + 1) of the two ends (x >= 0) */
+    if (ia == ib) { /* within one interval, where the function is linear: one piece (most steps) */
+        rt_v4f vb = tf_at(tf, xb);
+        piece(va, vb, L, acc, T);
+        return vb;
     }
     /* the entries strictly between xa and xb, in the ray's order */
-    int up = xb > xa, k = up ? (int)xa + 1 : (int)ceil(xa) - 1, kend = up ? (int)ceil(xb) : (int)xb;
-    double s = 0, inv = 1 / (xb - xa); /* s: the fraction of L done */
+    int up = xb > xa, k = up ? ia + 1 : (int)ceilf(xa) - 1, kend = up ? (int)ceilf(xb) : ib;
+    double s = 0, inv = 1 / ((double)xb - xa); /* s: the fraction of L done */
     for (; up ? k < kend : k > kend; k += up ? 1 : -1) {
-        double s1 = (k - xa) * inv;
-        tf_at(tf, k, &e);
-        piece(v->c, v->tau, e.c, e.tau, (s1 - s) * L, rgb, T);
-        *v = e;
+        double s1 = (k - (double)xa) * inv;
+        rt_v4f e = tf_at(tf, (float)k);
+        piece(va, e, (float)((s1 - s) * L), acc, T);
+        va = e;
         s = s1;
-        if (*T <= 1e-4) return;
+        if (*T <= 1e-4) return va;
     }
-    tf_at(tf, xb, &e);
-    piece(v->c, v->tau, e.c, e.tau, (1 - s) * L, rgb, T);
-    *v = e;
+    rt_v4f e = tf_at(tf, xb);
+    piece(va, e, (float)((1 - s) * L), acc, T);
+    return e;
 }
 
 float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v)
@@ -348,11 +348,11 @@ float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volum
         }
         /* t(p) = sum_k lambda_k(p) t_k: the coordinates' affine functions mixed by the corner values */
         double acc[4] = {0, 0, 0, 0};
-        const float *pl = m->tets[t].pl;
+        const float *pl = m->tets[t].f;
         const int32_t *c = v->tet + 4 * (size_t)m->order[t];
         double t3 = tn[c[3]]; /* lambda_3 = 1 - the others */
         for (int k = 0; k < 3; k++)
-            for (int q = 0; q < 4; q++) acc[q] += (double)pl[4 * k + q] * (tn[c[k]] - t3);
+            for (int q = 0; q < 4; q++) acc[q] += (double)pl[4 * q + k] * (tn[c[k]] - t3);
         acc[3] += t3;
         for (int q = 0; q < 4; q++) g[q] = (float)acc[q];
     }
@@ -362,41 +362,51 @@ float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volum
 
 /* Where the ray o + s d leaves tetrahedron T entered through face `in` (-1: unknown): the face among
  * the others whose barycentric coordinate falls to 0 first, *sexit its distance (at least smin); -1
- * when none falls (a ray grazing). The candidates are compared by cross-multiplication, one division
- * for the winner. */
-static inline int exit_face(const rt_tet *T, int in, const float o[3], const float d[3], float smin, float *sexit)
+ * when none falls (a ray grazing). The four faces at once and without a branch (which face wins is
+ * the data's whim, and a mispredicted branch a step cost more than the division): each coordinate's
+ * value at o and its fall along d from the planes' lanes, the fourth face's as 1 - and 0 - the
+ * others', the distances val / fall where the coordinate falls (+inf elsewhere), the least. Ties go
+ * to the lower face, the same way for every ray. */
+static inline int exit_face(const rt_tet *T, int in, rt_v4f o, rt_v4f d, float smin, float *sexit)
 {
-    const float *a = T->pl;
-    float fall[4], val[4];
-    for (int k = 0; k < 3; k++) {
-        fall[k] = -(a[4 * k] * d[0] + a[4 * k + 1] * d[1] + a[4 * k + 2] * d[2]);
-        val[k] = a[4 * k] * o[0] + a[4 * k + 1] * o[1] + a[4 * k + 2] * o[2] + a[4 * k + 3];
-    }
-    fall[3] = -(fall[0] + fall[1] + fall[2]);
-    val[3] = 1 - (val[0] + val[1] + val[2]);
-    int best = -1;
-    float bnum = 0, bden = 1; /* the best distance as bnum / bden, bden > 0 */
-    for (int k = 0; k < 4; k++) {
-        if (k == in || !(fall[k] > 0)) continue; /* the coordinate does not fall: the ray does not leave by this face */
-        if (best < 0 || val[k] * bden < bnum * fall[k]) { best = k; bnum = val[k]; bden = fall[k]; }
-    }
-    if (best < 0) return -1;
-    float s = bnum / bden;
-    *sexit = s > smin ? s : smin;
-    return best;
+    const rt_v4i planes = {-1, -1, -1, 0}, lane = {0, 1, 2, 3};
+    rt_v4f x = (rt_v4f)((rt_v4i)T->q[0] & planes), y = (rt_v4f)((rt_v4i)T->q[1] & planes);
+    rt_v4f z = (rt_v4f)((rt_v4i)T->q[2] & planes), c = (rt_v4f)((rt_v4i)T->q[3] & planes);
+    rt_v4f fall = -(x * d[0] + y * d[1] + z * d[2]), val = x * o[0] + y * o[1] + z * o[2] + c;
+    float f3 = -hsum4(fall), v3 = 1 - hsum4(val);
+    fall[3] = f3;
+    val[3] = v3;
+    rt_v4i ok = (fall > 0) & (lane != in);
+    const rt_v4f inf = {INFINITY, INFINITY, INFINITY, INFINITY};
+    rt_v4f s = (rt_v4f)((ok & (rt_v4i)(val / fall)) | (~ok & (rt_v4i)inf));
+#ifdef __SSE2__
+    __m128 m = _mm_min_ps((__m128)s, _mm_shuffle_ps((__m128)s, (__m128)s, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1))); /* the least in every lane */
+    float least = _mm_cvtss_f32(m);
+    if (!(least < INFINITY)) return -1;
+    int out = __builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps((__m128)s, m)));
+#else
+    int out = 0;
+    for (int k = 1; k < 4; k++)
+        if (s[k] < s[out]) out = k;
+    float least = s[out];
+    if (!(least < INFINITY)) return -1;
+#endif
+    *sexit = least > smin ? least : smin;
+    return out;
 }
 
 void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, const double o[3],
                      const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays)
 {
-    rgb[0] = rgb[1] = rgb[2] = 0;
-    *T = 1;
+    rt_v4f acc = {0, 0, 0, 0}; /* r, g, b (and a lane unused), in a register while the walk runs */
+    double acc_T = 1;
     double t = tnear;
-    for (int entries = 0; entries < 64 && *T > 1e-4 && t < tfar; entries++) {
+    for (int entries = 0; entries < 64 && acc_T > 1e-4 && t < tfar; entries++) {
         struct RTCRayHit rh;
         rt_ray_once(m->scene, o, d, t, tfar, &rh);
         (*rays)++;
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
         int32_t slot = m->bface[rh.hit.primID];
         double tin = rh.ray.tfar;
         /* entering only: a ray that meets a boundary face from inside (leaving) goes on past it */
@@ -410,44 +420,40 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
             double along = ng[0] * d[0] + ng[1] * d[1] + ng[2] * d[2];
             if ((toopp > 0) != (along > 0)) { t = nextafterf((float)tin, INFINITY); continue; }
         }
-        /* the walk measures s from the entry point (a perspective eye may be a metre and a half away) */
-        float e[3] = {(float)(o[0] + tin * d[0]), (float)(o[1] + tin * d[1]), (float)(o[2] + tin * d[2])};
-        float df[3] = {(float)d[0], (float)d[1], (float)d[2]}, send = (float)(tfar - tin), s = 0;
-        const float *g = fld + 4 * tt;
-        double xa = tf_pos(g[0] * e[0] + g[1] * e[1] + g[2] * e[2] + g[3]);
-        tf_val va;
-        tf_at(tf, xa, &va);
-        for (size_t steps = 0; steps < 4 * v->n_tets + 16 && *T > 1e-4; steps++) {
+        /* the walk measures s from the entry point (a perspective eye may be a metre and a half away);
+           a point as (x, y, z, 1), so that the field there is one product with its (g, c) */
+        rt_v4f e = {(float)(o[0] + tin * d[0]), (float)(o[1] + tin * d[1]), (float)(o[2] + tin * d[2]), 1};
+        rt_v4f df = {(float)d[0], (float)d[1], (float)d[2], 0};
+        float send = (float)(tfar - tin), s = 0;
+        const rt_v4f *fv = (const rt_v4f *)fld;
+        float xa = tf_pos(hsum4(fv[tt] * e));
+        rt_v4f va = tf_at(tf, xa);
+        for (size_t steps = 0; steps < 4 * v->n_tets + 16 && acc_T > 1e-4; steps++) {
             const rt_tet *X = m->tets + tt;
-            /* the ray's next tetrahedron is one of three: their lines asked for now, while this one's
-               exit is found and its piece integrated (the walk is bound by memory latency) */
-            for (int k = 0; k < 4; k++)
-                if (k != in && X->nb[k] >= 0) {
-                    __builtin_prefetch(m->tets + X->nb[k] / 4);
-                    __builtin_prefetch(fld + 4 * (X->nb[k] / 4));
-                }
             float sx;
             int out = exit_face(X, in, e, df, s, &sx);
             if (out < 0) break;
             float stop = sx < send ? sx : send;
-            g = fld + 4 * tt;
-            double xb = tf_pos(g[0] * (e[0] + stop * df[0]) + g[1] * (e[1] + stop * df[1]) + g[2] * (e[2] + stop * df[2]) + g[3]);
-            segment(tf, xa, xb, (double)stop - s, &va, rgb, T);
+            float xb = tf_pos(hsum4(fv[tt] * (e + stop * df)));
+            va = segment(tf, xa, xb, stop - s, va, &acc, &acc_T);
             xa = xb;
             s = stop;
-            if (stop >= send) return;
-            int32_t nb = X->nb[out];
+            if (stop >= send) goto done;
+            int32_t nb = X->i[4 * out + 3];
             if (nb < 0) break; /* out of the mesh: Embree finds where it enters again */
             tt = (size_t)nb / 4;
             in = nb % 4;
             /* point data: the field continuous across the face (the same value there); cell data jumps */
             if (!v->point_values) {
-                xa = tf_pos(fld[4 * tt + 3]);
-                tf_at(tf, xa, &va);
+                xa = tf_pos(fv[tt][3]);
+                va = tf_at(tf, xa);
             }
         }
         t = nextafterf((float)(tin + s), INFINITY);
     }
+done:
+    for (int k = 0; k < 3; k++) rgb[k] = acc[k];
+    *T = acc_T;
 }
 
 thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, const double org[3],
