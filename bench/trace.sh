@@ -10,6 +10,7 @@
 #      (vtkUnstructuredGridVolumeRayCastMapper, bench/vtk_volume.py) on the same mesh and field;
 # memory printed. Prints figures; never fails on time.
 #   DATA=DIR   reuse DIR/m (model, meshed) and DIR/sol (solution with volume potentials)
+#   KEEP=DIR   keep the pictures there (trace.png, opengl.png, primary.png, volume.png, vtk_volume.png)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THORAX=${THORAX:-$PWD/build/bin/thorax}
@@ -68,6 +69,12 @@ printf '%-34s %10s ms (median of 3; the first builds the mesh'"'"'s faces)\n' "t
 if [ -d "$W/vtu" ]; then
     xvfb-run -a -s "-screen 0 1600x1200x24" $PY bench/vtk_volume.py "$W/vtu" 1024 2> "$W/vtk.err" | sed 's/^/VTK: /' ||
         echo "VTK: (failed: $(tail -2 "$W/vtk.err"))"
+fi
+if [ -n "${KEEP:-}" ]; then
+    mkdir -p "$KEEP"
+    for f in t:trace g:opengl p:primary v:volume; do [ -f "$W/${f%%:*}.png" ] && cp "$W/${f%%:*}.png" "$KEEP/${f#*:}.png"; done
+    [ -f "$W/vtu/vtk_volume.png" ] && cp "$W/vtu/vtk_volume.png" "$KEEP/"
+    echo "pictures kept in $KEEP"
 fi
 echo
 echo "targets: surfaces 1920x1080 with shadows and reflections < 1 s; volume 1024^2 < 1 s and >= 3x VTK's ray caster"

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """The peer of bench/trace.sh's volume rendering: VTK 9's unstructured-grid ray caster
 (vtkUnstructuredGridVolumeRayCastMapper, Bunyk's) on the tetrahedral mesh and potential thorax
-exported (thorax export --solution --format vtu): the first .vtu of DIR, its first point-data
-array, an N x N offscreen window, a colour ramp cool-warm and an opacity clear at zero and opaque
-at the extremes (as thorax's default). Prints the first render (the mapper's setup included) and the
+exported (thorax export --solution --format vtu): the first .vtu of DIR, its point-data array
+"potential" (else its first), an N x N offscreen window, a colour ramp cool-warm and an opacity
+clear at zero and opaque at the extremes (as thorax's default). Prints the first render (the mapper's setup included) and the
 median of the next 3, in ms, wall clock; writes DIR/vtk_volume.png.
 Usage: vtk_volume.py DIR [N]"""
 import glob
@@ -23,7 +23,9 @@ r.SetFileName(files[0])
 r.Update()
 g = r.GetOutput()
 pd = g.GetPointData()
-arr = pd.GetArray(0)
+arr = pd.GetArray('potential')  # not the node tables (surface, surface_node)
+if arr is None:
+    arr = pd.GetArray(0)
 if arr is None:
     sys.exit('no point data in %s' % files[0])
 g.GetPointData().SetActiveScalars(arr.GetName())

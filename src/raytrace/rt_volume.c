@@ -18,10 +18,9 @@
  * The integral. Along a piece the field is linear (point data) or constant (cell data), so t =
  * scale(value) is linear in the distance. The transfer function is a table of 256 entries over t,
  * linear between entries; the piece is split where t crosses an entry, and on each sub-piece the
- * colour C and the extinction tau are linear in the distance. Where tau is constant there (a
- * constant field, or a flat opacity) the emission integral of C tau exp(-tau x) is taken in closed
- * form, exact for C linear; elsewhere by 3-point Gauss-Legendre with the optical depth exact
- * (quadratic). Front to back: colour += T E, T *= exp(-depth).
+ * colour C and the extinction tau are linear in the distance; each sub-piece's emission and
+ * absorption by `piece` (by parts, in two numbers; a thin piece in float by its series, a thick one
+ * in double, in closed form where tau is constant). Front to back: colour += T E, T *= exp(-depth).
  */
 #include <math.h>
 #include <stdlib.h>
