@@ -3,8 +3,9 @@
 (vtkUnstructuredGridVolumeRayCastMapper, Bunyk's) on the tetrahedral mesh and potential thorax
 exported (thorax export --solution --format vtu): the first .vtu of DIR, its point-data array
 "potential" (else its first), an N x N offscreen window, a colour ramp cool-warm and an opacity
-clear at zero and opaque at the extremes (as thorax's default). Prints the first render (the mapper's setup included) and the
-median of the next 3, in ms, wall clock; writes DIR/vtk_volume.png.
+clear at zero and opaque at the extremes (as thorax's default). Prints the first render (the
+mapper's setup included) and the median of the next 3, in ms, wall clock; writes
+DIR/vtk_volume.png.
 Usage: vtk_volume.py DIR [N]"""
 import glob
 import os

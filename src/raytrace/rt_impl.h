@@ -41,12 +41,13 @@ typedef int32_t rt_v4i __attribute__((vector_size(16)));
  * face opposite it; lambda_3 = 1 - lambda_0 - lambda_1 - lambda_2) stored lane by lane, q[0] = (a_0x,
  * a_1x, a_2x, .), q[1] the y components, q[2] the z, q[3] = (b_0, b_1, b_2, .), so that one vector
  * operation serves the four faces; the fourth lanes hold the neighbours across faces 0..3 (each as
- * its tetrahedron * 4 + its number of that face; -1 the mesh's boundary): nb(k) = i[4 k + 3]. */
+ * its tetrahedron * 4 + its number of that face; -1 the mesh's boundary): RT_TET_NB(T, k). */
 typedef union {
     rt_v4f q[4];
     float f[16];
     int32_t i[16];
 } rt_tet;
+#define RT_TET_NB(T, k) ((T)->i[4 * (k) + 3])
 
 /* An image plane during a call (rt_glyphs.c): the inverse of its edges' Gram matrix (g11 g12; g12
  * g22)^-1 as (a, b, c) = ((a b; b c)), which takes a point's dot products with u and v to its place

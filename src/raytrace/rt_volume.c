@@ -137,7 +137,7 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
             if (a[0] > a[1]) { int32_t x = a[0]; a[0] = a[1]; a[1] = x; }
             memcpy(r->key, a, sizeof a);
             r->slot = (int32_t)(4 * t + (size_t)k);
-            m->tets[t].i[4 * k + 3] = -1;
+            RT_TET_NB(&m->tets[t], k) = -1;
         }
     qsort(f, nf, sizeof *f, face_cmp);
     size_t nb = 0;
@@ -146,8 +146,8 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
         while (j < nf && !memcmp(f[j].key, f[i].key, sizeof f[i].key)) j++;
         if (j - i == 2) {
             int32_t a = f[i].slot, b = f[i + 1].slot;
-            m->tets[a / 4].i[4 * (a % 4) + 3] = b;
-            m->tets[b / 4].i[4 * (b % 4) + 3] = a;
+            RT_TET_NB(&m->tets[a / 4], a % 4) = b;
+            RT_TET_NB(&m->tets[b / 4], b % 4) = a;
         } else if (j - i == 1) {
             nb++;
         } else {
@@ -184,7 +184,7 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
     for (size_t i = 0; i < 3 * v->n_nodes; i++) vb[i] = (float)v->xyz[i];
     size_t q = 0;
     for (size_t s = 0; s < nf; s++) {
-        if (m->tets[s / 4].i[4 * (s % 4) + 3] >= 0) continue;
+        if (RT_TET_NB(&m->tets[s / 4], s % 4) >= 0) continue;
         size_t t = s / 4, n = 0;
         int k = (int)(s % 4);
         for (int j = 0; j < 4; j++)
@@ -438,7 +438,7 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
             xa = xb;
             s = stop;
             if (stop >= send) goto done;
-            int32_t nb = X->i[4 * out + 3];
+            int32_t nb = RT_TET_NB(X, out);
             if (nb < 0) break; /* out of the mesh: Embree finds where it enters again */
             tt = (size_t)nb / 4;
             in = nb % 4;
