@@ -5,7 +5,7 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 THORAX = $(BUILD)/bin/thorax
 OUT ?= out/demo
 
-.PHONY: all deps build demo check sanitize fuzz bench clean install
+.PHONY: all deps build demo check check-full sanitize fuzz bench clean install
 
 all: build
 
@@ -35,14 +35,20 @@ build: deps $(BUILD)/CMakeCache.txt
 demo: build
 	@THORAX=$(THORAX) OUT=$(OUT) bash scripts/demo.sh
 
+# The suite with the heaviest tests in their quick forms (label quick; docs/design/testing.md, "Tiers").
 check: build
-	@cd $(BUILD) && ctest -j $(JOBS) --output-on-failure
+	@cd $(BUILD) && ctest -j $(JOBS) -LE full --output-on-failure
+
+# Every test whole: the quick forms' NAME_full instead of NAME (run it before changing the mesher, the
+# surfaces or the solvers).
+check-full: build
+	@cd $(BUILD) && ctest -j $(JOBS) -LE quick --output-on-failure
 
 # The whole suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
 sanitize: deps
 	@cmake -S . -B $(BUILD)-asan -DCMAKE_BUILD_TYPE=Debug -DTHORAX_SANITIZE=ON >/dev/null
 	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|^g?make\[' || true
-	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) --output-on-failure
+	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) -LE full --output-on-failure
 
 # Every libFuzzer harness (tests/fuzz/) for FUZZ_TIME seconds each (default 60); fails on a finding.
 FUZZ_TIME ?= 60

@@ -15,7 +15,7 @@ import numpy as np
 
 sys.dont_write_bytecode = True  # nothing written into the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from surface_compare_lib import point_triangle_distance  # noqa: E402
+from surface_compare_lib import point_surface_distance  # noqa: E402
 
 
 def loops(path, surf):
@@ -104,10 +104,7 @@ def main():
         i = a.index("--ref")
         rp = np.loadtxt(a[i + 1], ndmin=2)
         rf = np.loadtxt(a[i + 2], dtype=np.int64, ndmin=2) - 1
-        P = p[on]
-        e = np.full(len(P), np.inf)
-        for t in rf:
-            e = np.minimum(e, point_triangle_distance(P, rp[t[0]], rp[t[1]], rp[t[2]]))
+        e = point_surface_distance(p[on], rp, rf)
         print("layer nodes to the true surface: max %.3f mean %.3f p99 %.3f mm (%d nodes)"
               % (e.max(), e.mean(), np.percentile(e, 99), len(e)))
         if "--ref-max" in a and e.max() > float(a[a.index("--ref-max") + 1]):

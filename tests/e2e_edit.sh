@@ -65,7 +65,7 @@ print("layer_rotate heart z=110 5")
 print("layer_smooth torso z=150 4")
 print("end")
 EOF
-if "$THORAX" surfaces c.txt --edits e.txt -o m1 > out1.txt 2> err1.txt; then ok "surfaces --edits"; else bad "surfaces --edits: $(cat err1.txt)"; fi
+if OMP_NUM_THREADS=1 "$THORAX" surfaces c.txt --edits e.txt -o m1 > out1.txt 2> err1.txt; then ok "surfaces --edits"; else bad "surfaces --edits: $(cat err1.txt)"; fi
 grep -q "^e.txt:6: tri_delete heart 10: heart: FAILS: 3 open edges" out1.txt && ok "the deleted triangle opens the heart, and the check says so" || bad "tri_delete line: $(cat out1.txt)"
 grep -q "^e.txt:7: tri_add heart .*: heart: passes: closed, orientation ok, solid angle 4pi within" out1.txt && ok "the same triangle added back closes it" || bad "tri_add line"
 grep -q "^e.txt:8: tri_flip fat 3: fat: FAILS: closed, orientation: 3 edges traversed twice the same way" out1.txt && ok "a flipped triangle is an orientation fault" || bad "tri_flip line"
@@ -100,7 +100,7 @@ for s in ("fat",):
 EOF
 
 # ---- deterministic, whatever the thread count; an edited model replaced by thorax itself --------
-OMP_NUM_THREADS=1 "$THORAX" surfaces c.txt --edits e.txt -o m2 -q > /dev/null 2>&1 || bad "surfaces --edits (1 thread)"
+OMP_NUM_THREADS=2 "$THORAX" surfaces c.txt --edits e.txt -o m2 -q > /dev/null 2>&1 || bad "surfaces --edits (2 threads)"
 diff -r -q -x model.json m1 m2 > /dev/null && ok "the replay is deterministic (1 and 2 threads)" || bad "replays differ"
 "$THORAX" surfaces c.txt --edits e.txt -o m1 -q > /dev/null 2>&1 && ok "an edited model is thorax's own output (replaced)" || bad "m1 not replaced"
 

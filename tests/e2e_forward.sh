@@ -26,6 +26,15 @@ medium_phantom || fail "the medium phantom"
 "$THORAX" electrodes model -q
 "$THORAX" beat model -o beat.raw --frames 40 -q
 
+# 0. the solver module (PETSc and MPI, loaded on the first solve) missing or foreign: refused with
+#    the places tried and the loader's reason, nothing written
+refused "no solver module" nomod env THORAX_PETSC_MODULE="$WORK/none.so" "$THORAX" forward model --epicardial beat.raw -o nomod -q
+grep -q "the solver module libthorax-petsc.so (PETSc and MPI) could not be loaded ($WORK/none.so: not found)" err.log ||
+    fail "no solver module: $(cat err.log)"
+printf 'not a library\n' > fake.so
+refused "a foreign solver module" nomod env THORAX_PETSC_MODULE="$WORK/fake.so" "$THORAX" forward model --epicardial beat.raw -o nomod -q
+grep -q "could not be loaded ($WORK/fake.so: " err.log || fail "foreign solver module: $(cat err.log)"
+
 # 1. the epicardial problem
 "$THORAX" forward model --epicardial beat.raw -o sol -q
 [ -f sol/solution.json ] && [ -f sol/torso.raw ] || fail "solution files"

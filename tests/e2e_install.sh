@@ -48,7 +48,7 @@ for f in lib/libthorax.so.$VER lib/libthorax.a include/thorax/core/core.h includ
     include/thorax/fem/fem.h lib/pkgconfig/thorax.pc lib/cmake/thorax/thoraxConfig.cmake \
     lib/cmake/thorax/thoraxConfigVersion.cmake lib/cmake/thorax/thoraxTargets.cmake bin/thorax bin/thorax-view \
     share/man/man1/thorax.1 share/man/man1/thorax-forward.1 share/man/man1/thorax-view.1 share/doc/thorax/LICENSE \
-    share/doc/thorax/examples/surface_facts.c share/doc/thorax/examples/dipole_forward.py \
+    share/doc/thorax/examples/surface_facts.c share/doc/thorax/examples/dipole_forward.py lib/thorax/libthorax-petsc.so \
     lib/python3/dist-packages/thorax/__init__.py lib/python3/dist-packages/thorax/_installed.py; do
     [ -e "$P/$f" ] || fail "not installed: $f"
 done
@@ -85,6 +85,21 @@ rm "$WORK/moved/libexec/thorax/thorax-dicom"
 ! env -u THORAX_DICOM_HELPER "$WORK/moved/bin/thorax" image info dcm >dcm.txt 2>&1 || fail "read DICOM without its helper"
 grep -q "thorax-dicom is missing (looked for .*$WORK/moved/bin/../libexec/thorax/thorax-dicom" dcm.txt \
     || fail "without the helper: $(cat dcm.txt)"
+# the solver module (docs/design/fem.md, "The solver module"): PETSc and MPI are loaded from
+# lib/thorax/libthorax-petsc.so beside the installed library (in the moved copy too) on the first
+# solve, never at start; without it a solve says where it looked
+[ -z "$(ldd "$P/bin/thorax" | grep -E 'libpetsc|libmpi')" ] || fail "the installed thorax loads PETSc or MPI at start"
+for prefix in "$P" "$WORK/moved"; do
+    env -u THORAX_PETSC_MODULE LD_DEBUG=files "$prefix/bin/thorax" verify --levels 2 --spheres off >verify.txt 2>verify.err \
+        || fail "$prefix/bin/thorax verify: $(tail -3 verify.txt verify.err)"
+    mod=$(sed -n 's/.*file=\([^ ]*libthorax-petsc\.so\) .*generating link map.*/\1/p' verify.err | head -1)
+    [ -n "$mod" ] && [ "$(realpath "$mod")" = "$(realpath "$prefix/lib/thorax/libthorax-petsc.so")" ] \
+        || fail "$prefix/bin/thorax verify did not load $prefix/lib/thorax/libthorax-petsc.so: $(grep -m3 'thorax-petsc' verify.err)"
+done
+rm "$WORK/moved/lib/thorax/libthorax-petsc.so"
+! env -u THORAX_PETSC_MODULE "$WORK/moved/bin/thorax" verify --levels 2 --spheres off >verify.txt 2>&1 || fail "a solve without the solver module"
+grep -q "the solver module libthorax-petsc.so (PETSc and MPI) could not be loaded ($WORK/moved/[a-z./]*/thorax/libthorax-petsc.so: not found" verify.txt \
+    || fail "without the solver module: $(cat verify.txt)"
 rm -rf "$WORK/moved"
 
 # the reference: the same facts computed by NumPy from the files (0- or 1-based .fac detected alike)

@@ -154,13 +154,44 @@ def declared(header_text):
     return names
 
 
+_NM = {}
+
+
+def nm(obj, flag):
+    """`nm FLAG obj`'s lines (flag: "-u" or "--defined-only", the latter with -g). Asked for one object,
+    it runs nm once over every object in the same directory tree not yet read (one process, not one per
+    object: the tree has about 350) and keeps the answers."""
+    key = (obj, flag)
+    if key not in _NM:
+        cut = obj.find(".dir" + os.sep)
+        top = obj[:cut + 4] if cut >= 0 else os.path.dirname(obj)
+        objs = sorted(os.path.join(d, f) for d, _, fs in os.walk(top) for f in fs
+                      if f.endswith(".o") and (os.path.join(d, f), flag) not in _NM)
+        args = ["nm", "-g", "--defined-only"] if flag == "--defined-only" else ["nm", "-u"]
+        for k in range(0, len(objs), 200):
+            chunk = objs[k:k + 200]
+            r = subprocess.run(args + chunk, capture_output=True, text=True)
+            cur = None
+            lines = {o: [] for o in chunk}
+            for ln in r.stdout.splitlines():
+                if ln.endswith(":") and ln[:-1] in lines:
+                    cur = ln[:-1]
+                elif cur is not None and ln.strip():
+                    lines[cur].append(ln)
+            if len(chunk) == 1:  # nm names no file when given one
+                lines[chunk[0]] = [ln for ln in r.stdout.splitlines() if ln.strip()]
+            for o in chunk:
+                _NM[(o, flag)] = lines[o]
+        _NM.setdefault(key, [])
+    return _NM[key]
+
+
 def defined_symbols(root, build):
     """symbol -> module, from the library's object files."""
     objdir = os.path.join(build, "CMakeFiles", "thorax.dir", "src")
     out = {}
     for mod, obj in objects(objdir, root):
-        r = subprocess.run(["nm", "-g", "--defined-only", obj], capture_output=True, text=True)
-        for ln in r.stdout.splitlines():
+        for ln in nm(obj, "--defined-only"):
             p = ln.split()
             if len(p) == 3 and p[2].startswith("thx_"):
                 out[p[2]] = mod
@@ -198,6 +229,7 @@ def check_headers(root, files, defs):
 def check_calls(root, build, defs):
     bad = []
     objdirs = [(os.path.join(build, "CMakeFiles", "thorax.dir", "src"), None),
+               (os.path.join(build, "CMakeFiles", "thorax_petsc.dir", "src"), None),
                (os.path.join(build, "CMakeFiles", "thorax_view.dir", "src"), "view"),
                (os.path.join(build, "CMakeFiles", "thorax_cli.dir", "src"), "cli")]
     for objdir, force in objdirs:
@@ -206,8 +238,7 @@ def check_calls(root, build, defs):
             if mod not in LEVEL:
                 bad.append(f"{obj}: object of an unknown module '{mod}'")
                 continue
-            r = subprocess.run(["nm", "-u", obj], capture_output=True, text=True)
-            for ln in r.stdout.splitlines():
+            for ln in nm(obj, "-u"):
                 sym = ln.split()[-1]
                 used = defs.get(sym)
                 if used and not allowed(mod, used):
@@ -224,8 +255,7 @@ def check_io_calls(root, build):
     fam_of = lambda obj: os.path.relpath(obj, os.path.join(objdir, "io")).split(os.sep)[0]
     defs = {}
     for obj in objs:
-        r = subprocess.run(["nm", "-g", "--defined-only", obj], capture_output=True, text=True)
-        for ln in r.stdout.splitlines():
+        for ln in nm(obj, "--defined-only"):
             p = ln.split()
             if len(p) == 3:
                 defs[p[2]] = fam_of(obj)
@@ -234,8 +264,7 @@ def check_io_calls(root, build):
         fam = fam_of(obj)
         if fam not in IO_LEVEL:
             continue  # named by check_includes
-        r = subprocess.run(["nm", "-u", obj], capture_output=True, text=True)
-        for ln in r.stdout.splitlines():
+        for ln in nm(obj, "-u"):
             sym = ln.split()[-1]
             used = defs.get(sym)
             if used in IO_LEVEL and not io_allowed(fam, used):

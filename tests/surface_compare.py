@@ -16,7 +16,7 @@ import numpy as np
 # the point-to-triangle distance, shared with tests/digitized_compare.py
 sys.dont_write_bytecode = True  # nothing written into the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from surface_compare_lib import point_triangle_distance  # noqa: E402
+from surface_compare_lib import point_surface_distance  # noqa: E402
 
 def read(pts, fac):
     p = np.loadtxt(pts, ndmin=2)
@@ -33,9 +33,7 @@ def main():
     rp, rf = read(a[0], a[1])
     npnt, nf = read(a[2], a[3])
     v0, v1 = volume(rp, rf), volume(npnt, nf)
-    d = np.full(len(npnt), np.inf)
-    for t in rf:
-        d = np.minimum(d, point_triangle_distance(npnt, rp[t[0]], rp[t[1]], rp[t[2]]))
+    d = point_surface_distance(npnt, rp, rf)
     z = npnt[:, 2]
     cap = (z <= z.min() + opt['--cap-band']) | (z >= z.max() - opt['--cap-band'])
     side = ~cap

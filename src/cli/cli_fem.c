@@ -1,5 +1,4 @@
 /* PETSc option pass-through and progress display for the solving commands. */
-#include <petscsys.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,7 +43,9 @@ int cli_petsc_pass(void *user, char **argv, int argc, int i)
 thx_status cli_petsc_init(thx_ctx *ctx, cli_petsc_args *pa, int *rank)
 {
     pa->argv[pa->argc] = NULL;
-    thx_status st = thx_fem_init(pa->argc, pa->argv, rank, NULL);
+    thx_status st = thx_fem_available(ctx);
+    if (st != THX_OK) return st;
+    st = thx_fem_init(pa->argc, pa->argv, rank, NULL);
     if (st != THX_OK) return thx_error(ctx, THX_ESOLVER, "PETSc could not be initialized (PetscInitialize failed)");
     pa->inited = 1;
     return THX_OK;
@@ -53,13 +54,12 @@ thx_status cli_petsc_init(thx_ctx *ctx, cli_petsc_args *pa, int *rank)
 void cli_petsc_finish(cli_petsc_args *pa)
 {
     if (!pa->inited) return;
-    PetscInt left = 0;
-    PetscOptionsAllUsed(NULL, &left);
+    int left = thx_fem_options_unused(0);
     if (left > 0) {
         int rank = 0;
         thx_fem_init(0, NULL, &rank, NULL);
-        if (rank == 0) fprintf(stderr, "thorax: warning: %d PETSc option%s given but not used:\n", (int)left, left > 1 ? "s" : "");
-        if (rank == 0) PetscOptionsLeft(NULL);
+        if (rank == 0) fprintf(stderr, "thorax: warning: %d PETSc option%s given but not used:\n", left, left > 1 ? "s" : "");
+        thx_fem_options_unused(1);
     }
     thx_fem_finalize();
     pa->inited = 0;

@@ -1,7 +1,6 @@
 /* thorax bem: boundary-element forward solutions (paper 4.1): the heart-surface transfer matrix
  * and dipole sources (thorax/bem/bem.h). */
 #include <cjson/cJSON.h>
-#include <mpi.h>
 #include <ctype.h>
 #include <limits.h>
 #include <math.h>
@@ -11,6 +10,7 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
+#include "thorax/fem/fem.h"
 #include "thorax/bem/bem.h"
 #include "thorax/core/fileio.h"
 #include "thorax/io/electrodes_file.h"
@@ -398,7 +398,7 @@ int cmd_bem(int argc, char **argv)
         cJSON_AddNumberToObject(j, "unknowns", (double)info.n_unknowns);
         if (mpi) {
             int size = 1;
-            MPI_Comm_size(MPI_COMM_WORLD, &size);
+            thx_fem_init(0, NULL, NULL, &size);
             cJSON_AddStringToObject(j, "dense_solver", "ScaLAPACK (PETSc MATSCALAPACK)");
             cJSON_AddNumberToObject(j, "ranks", size);
         } else {

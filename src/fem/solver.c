@@ -47,6 +47,19 @@ void thx_fem_finalize(void)
     g_inited = g_we_inited = 0;
 }
 
+int thx_fem_options_unused(int list)
+{
+    if (!g_inited) return 0;
+    PetscInt left = 0;
+    PetscOptionsAllUsed(NULL, &left);
+    if (left > 0 && list) {
+        PetscMPIInt r = 0;
+        MPI_Comm_rank(PETSC_COMM_WORLD, &r);
+        if (r == 0) PetscOptionsLeft(NULL);
+    }
+    return (int)left;
+}
+
 struct thx_fem_system {
     int32_t n;           /* nodes */
     int32_t nf, nd;      /* free, prescribed */

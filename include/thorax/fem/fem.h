@@ -53,6 +53,12 @@ thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigne
  * single '-' that is not one of ours are left to PETSc); idempotent. rank/size of PETSC_COMM_WORLD. */
 thx_status thx_fem_init(int argc, char **argv, int *rank, int *size);
 void thx_fem_finalize(void);
+/* PETSc options given to thx_fem_init that no solver used (0 before it); with list, rank 0 has PETSc
+ * list them (PetscOptionsLeft). */
+int thx_fem_options_unused(int list);
+/* Whether the solver module (PETSc and MPI, loaded on the first solve: docs/design/fem.md, "The solver
+ * module") can be loaded; when not, THX_ESOLVER with the loader's reason and where it looked. */
+thx_status thx_fem_available(thx_ctx *ctx);
 
 typedef struct thx_fem_system thx_fem_system;
 

@@ -1,0 +1,107 @@
+/* Loading the solver module (thorax/core/module.h). */
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "thorax/core/module.h"
+
+#define MODULE_NAME "libthorax-petsc.so"
+#ifndef THORAX_PETSC_MODULE_INSTALLED /* CMakeLists.txt sets these two from the install directories */
+#define THORAX_PETSC_MODULE_INSTALLED "/usr/local/lib/thorax/" MODULE_NAME
+#endif
+#ifndef THORAX_PETSC_MODULE_FROM_BIN
+#define THORAX_PETSC_MODULE_FROM_BIN "../lib/thorax/" MODULE_NAME
+#endif
+
+static pthread_once_t g_once = PTHREAD_ONCE_INIT;
+static void *g_handle;
+static char g_why[2048]; /* why it could not be loaded */
+
+/* dirname(object)/rel into out; 0, or -1 (no slash, too long). */
+static int beside(const char *object, const char *rel, char *out, size_t size)
+{
+    const char *slash = strrchr(object, '/');
+    if (!slash) return -1;
+    int n = snprintf(out, size, "%.*s/%s", (int)(slash - object), object, rel);
+    return n > 0 && (size_t)n < size ? 0 : -1;
+}
+
+/* Appends "path: reason" to g_why. */
+static void why(const char *path, const char *reason)
+{
+    size_t n = strlen(g_why);
+    snprintf(g_why + n, sizeof g_why - n, "%s%s: %s", n ? "; " : "", path, reason);
+}
+
+/* Loads the module at path; 1 on success (g_handle set). */
+static int try_load(const char *path)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0) {
+        why(path, "not found");
+        return 0;
+    }
+    /* RTLD_GLOBAL: Open MPI loads its own plugins later, and they look for libmpi's symbols in the
+     * global scope. The module itself exports only its tables' getters (a version script). */
+    void *h = dlopen(path, RTLD_NOW | RTLD_GLOBAL);
+    if (!h) {
+        const char *e = dlerror();
+        size_t n = strlen(path);
+        if (e && strncmp(e, path, n) == 0 && strncmp(e + n, ": ", 2) == 0) e += n + 2; /* the path once */
+        why(path, e ? e : "dlopen failed");
+        return 0;
+    }
+    if (!dlsym(h, "thx_fem_petsc_get")) {
+        why(path, "not thorax's solver module (no thx_fem_petsc_get)");
+        dlclose(h);
+        return 0;
+    }
+    g_handle = h; /* never closed: PETSc and MPI cannot be unloaded and loaded again */
+    return 1;
+}
+
+static void load(void)
+{
+    const char *env = getenv("THORAX_PETSC_MODULE");
+    if (env && *env) {
+        try_load(env);
+        return;
+    }
+    char cand[4][1100];
+    int nc = 0;
+    char exe[1024];
+    ssize_t ne = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[ne > 0 ? ne : 0] = '\0';
+    Dl_info info;
+    if (dladdr((void *)load, &info) && info.dli_fname && strcmp(info.dli_fname, exe) != 0 &&
+        beside(info.dli_fname, "thorax/" MODULE_NAME, cand[nc], sizeof cand[nc]) == 0)
+        nc++;
+    if (ne > 0 && beside(exe, THORAX_PETSC_MODULE_FROM_BIN, cand[nc], sizeof cand[nc]) == 0) nc++;
+    if (ne > 0 && beside(exe, "../thorax/" MODULE_NAME, cand[nc], sizeof cand[nc]) == 0) nc++;
+    snprintf(cand[nc++], sizeof cand[0], "%s", THORAX_PETSC_MODULE_INSTALLED);
+    for (int k = 0; k < nc; k++) {
+        int seen = 0;
+        for (int j = 0; j < k; j++) seen |= strcmp(cand[j], cand[k]) == 0;
+        if (!seen && try_load(cand[k])) return;
+    }
+}
+
+void *thx_solver_module_symbol(thx_ctx *ctx, const char *name)
+{
+    pthread_once(&g_once, load);
+    void *sym = g_handle ? dlsym(g_handle, name) : NULL;
+    if (!sym && ctx) {
+        if (g_handle)
+            thx_error(ctx, THX_ESOLVER, "the solver module " MODULE_NAME " has no %s: it was built for another version of thorax", name);
+        else
+            thx_error(ctx, THX_ESOLVER,
+                      "the solver module " MODULE_NAME " (PETSc and MPI) could not be loaded (%s): install thorax "
+                      "(cmake --install) or set THORAX_PETSC_MODULE to the module's path",
+                      g_why);
+    }
+    return sym;
+}

@@ -1,0 +1,89 @@
+/*
+ * The library's side of fem's solver functions (thorax/fem/fem.h): forwarders to the solver
+ * module's table (src/fem/solver_module.h), loaded on the first call that needs PETSc. A run that
+ * never solves never loads PETSc. A system exists only once the module is loaded.
+ */
+#include <pthread.h>
+#include <stddef.h>
+
+#include "fem/solver_module.h"
+#include "thorax/core/module.h"
+
+static const thx_fem_petsc *g_api;
+static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* The table, or NULL with the reason in ctx (when not NULL). */
+static const thx_fem_petsc *api(thx_ctx *ctx)
+{
+    pthread_mutex_lock(&g_lock);
+    if (!g_api) {
+        const thx_fem_petsc *(*get)(void) = (const thx_fem_petsc *(*)(void))thx_solver_module_symbol(ctx, "thx_fem_petsc_get");
+        const thx_fem_petsc *t = get ? get() : NULL;
+        if (t && t->abi == THX_FEM_PETSC_ABI)
+            g_api = t;
+        else if (t && ctx)
+            thx_error(ctx, THX_ESOLVER, "the solver module libthorax-petsc.so was built for another version of thorax");
+    }
+    pthread_mutex_unlock(&g_lock);
+    return g_api;
+}
+
+thx_status thx_fem_available(thx_ctx *ctx) { return api(ctx) ? THX_OK : THX_ESOLVER; }
+
+thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)
+{
+    return api(NULL) ? g_api->init(argc, argv, rank, size) : THX_ESOLVER;
+}
+
+void thx_fem_finalize(void)
+{
+    if (g_api) g_api->finalize();
+}
+
+int thx_fem_options_unused(int list) { return g_api ? g_api->options_unused(list) : 0; }
+
+thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                 thx_fem_system **out)
+{
+    return api(ctx) ? g_api->system_create(ctx, K, kind, pin_one, out) : THX_ESOLVER;
+}
+
+void thx_fem_system_destroy(thx_fem_system **s)
+{
+    if (g_api && s && *s) g_api->system_destroy(s);
+}
+
+thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
+                         thx_fem_solve_stats *st)
+{
+    return g_api->solve(ctx, s, phi, load, warm, st);
+}
+
+thx_status thx_fem_system_dump(thx_ctx *ctx, thx_fem_system *s, const double *phi, const double *load, const char *path)
+{
+    return g_api->system_dump(ctx, s, phi, load, path);
+}
+
+void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs) { g_api->system_hint_rhs(s, n_rhs); }
+
+thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, int warm,
+                               thx_fem_solve_stats *st)
+{
+    return g_api->solve_block(ctx, s, phi, load, k, warm, st);
+}
+
+size_t thx_fem_system_block(const thx_fem_system *s) { return g_api->system_block(s); }
+
+void thx_fem_system_set_block(thx_fem_system *s, size_t k) { g_api->system_set_block(s, k); }
+
+void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds)
+{
+    g_api->system_info(s, n_free, n_prescribed, setup_seconds);
+}
+
+double thx_fem_system_matrix_seconds(const thx_fem_system *s) { return g_api->system_matrix_seconds(s); }
+
+void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
+{
+    g_api->system_describe(s, ksp, pc, ranks);
+}
