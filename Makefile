@@ -44,11 +44,12 @@ check: build
 check-full: build
 	@cd $(BUILD) && ctest -j $(JOBS) -LE quick --output-on-failure
 
-# The whole suite again under AddressSanitizer and UndefinedBehaviorSanitizer.
+# Under AddressSanitizer and UndefinedBehaviorSanitizer: every unit test and fuzz replay, and the
+# end-to-end tests that run each command once (CMakeLists.txt, THORAX_SANITIZED_E2E).
 sanitize: deps
 	@cmake -S . -B $(BUILD)-asan -DCMAKE_BUILD_TYPE=Debug -DTHORAX_SANITIZE=ON >/dev/null
 	@cmake --build $(BUILD)-asan -j $(JOBS) 2>&1 | grep -Ev '^\[ *[0-9]+%\]|^(Consolidate|Scanning)|^g?make\[' || true
-	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) -LE full --output-on-failure
+	@cd $(BUILD)-asan && ASAN_OPTIONS=detect_leaks=1 ctest -j $(JOBS) -LE 'full|plain' --output-on-failure
 
 # Every libFuzzer harness (tests/fuzz/) for FUZZ_TIME seconds each (default 60); fails on a finding.
 FUZZ_TIME ?= 60
