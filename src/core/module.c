@@ -64,6 +64,26 @@ static int try_load(const char *path)
     return 1;
 }
 
+int thx_shipped_paths(const char *from_lib, const char *const *from_bin, int n_bin, const char *installed, char *out,
+                      size_t size, int max)
+{
+    int nc = 0;
+    char exe[1024];
+    ssize_t ne = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[ne > 0 ? ne : 0] = '\0';
+    Dl_info info;
+    if (nc < max && from_lib && dladdr((void *)thx_shipped_paths, &info) && info.dli_fname &&
+        strcmp(info.dli_fname, exe) != 0 && beside(info.dli_fname, from_lib, out + (size_t)nc * size, size) == 0)
+        nc++;
+    for (int i = 0; i < n_bin && ne > 0; i++)
+        if (nc < max && beside(exe, from_bin[i], out + (size_t)nc * size, size) == 0) nc++;
+    if (nc < max && installed) snprintf(out + (size_t)nc++ * size, size, "%s", installed);
+    return nc;
+}
+
+/* $THORAX_PETSC_MODULE alone when set; else LIBDIR/thorax/ beside libthorax.so (the build tree puts
+ * the module in thorax/ beside its libthorax.so), then from the program (installed: BINDIR's way to
+ * LIBDIR/thorax/; the build tree's bin/ and tests/: ../thorax/), then the configured install path. */
 static void load(void)
 {
     const char *env = getenv("THORAX_PETSC_MODULE");
@@ -72,17 +92,8 @@ static void load(void)
         return;
     }
     char cand[4][1100];
-    int nc = 0;
-    char exe[1024];
-    ssize_t ne = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[ne > 0 ? ne : 0] = '\0';
-    Dl_info info;
-    if (dladdr((void *)load, &info) && info.dli_fname && strcmp(info.dli_fname, exe) != 0 &&
-        beside(info.dli_fname, "thorax/" MODULE_NAME, cand[nc], sizeof cand[nc]) == 0)
-        nc++;
-    if (ne > 0 && beside(exe, THORAX_PETSC_MODULE_FROM_BIN, cand[nc], sizeof cand[nc]) == 0) nc++;
-    if (ne > 0 && beside(exe, "../thorax/" MODULE_NAME, cand[nc], sizeof cand[nc]) == 0) nc++;
-    snprintf(cand[nc++], sizeof cand[0], "%s", THORAX_PETSC_MODULE_INSTALLED);
+    const char *from_bin[] = {THORAX_PETSC_MODULE_FROM_BIN, "../thorax/" MODULE_NAME};
+    int nc = thx_shipped_paths("thorax/" MODULE_NAME, from_bin, 2, THORAX_PETSC_MODULE_INSTALLED, cand[0], sizeof cand[0], 4);
     for (int k = 0; k < nc; k++) {
         int seen = 0;
         for (int j = 0; j < k; j++) seen |= strcmp(cand[j], cand[k]) == 0;

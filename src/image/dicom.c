@@ -29,10 +29,10 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
-#include <dlfcn.h>
 #include <poll.h>
 
 #include "image/image_impl.h"
+#include "thorax/core/module.h"
 #include "thorax/core/sha256.h"
 
 /* Tolerances (docs/design/image.md, "DICOM"). */
@@ -153,15 +153,6 @@ typedef struct {
     char path[1100];
 } helper;
 
-/* dirname(object)/rel into out; 0, or -1 (no slash, too long). */
-static int beside(const char *object, const char *rel, char *out, size_t size)
-{
-    const char *slash = strrchr(object, '/');
-    if (!slash) return -1;
-    int n = snprintf(out, size, "%.*s/%s", (int)(slash - object), object, rel);
-    return n > 0 && (size_t)n < size ? 0 : -1;
-}
-
 /* The helper's path: $THORAX_DICOM_HELPER; else LIBEXECDIR/thorax/thorax-dicom relative to the object
  * holding this code (libthorax.so in LIBDIR) or to the running program (in BINDIR: the build tree's
  * bin/ and tests/ sit beside its libexec/ alike), so that a moved prefix keeps working; else the
@@ -177,19 +168,12 @@ static thx_status find_helper(thx_ctx *ctx, const char *what, char *out, size_t 
         return THX_OK;
     }
     char cand[3][1100];
-    int nc = 0;
-    char exe[1024];
-    ssize_t ne = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[ne > 0 ? ne : 0] = '\0';
-    Dl_info info;
-    if (dladdr((void *)find_helper, &info) && info.dli_fname && strcmp(info.dli_fname, exe) != 0 &&
-        beside(info.dli_fname, THORAX_DICOM_HELPER_FROM_LIB, cand[nc], sizeof cand[nc]) == 0)
-        nc++;
-    if (ne > 0 && beside(exe, THORAX_DICOM_HELPER_FROM_BIN, cand[nc], sizeof cand[nc]) == 0) nc++;
-    snprintf(cand[nc++], sizeof cand[0], "%s", THORAX_DICOM_HELPER_INSTALLED);
+    const char *from_bin[] = {THORAX_DICOM_HELPER_FROM_BIN};
+    int nc = thx_shipped_paths(THORAX_DICOM_HELPER_FROM_LIB, from_bin, 1, THORAX_DICOM_HELPER_INSTALLED, cand[0],
+                               sizeof cand[0], 3);
     for (int k = 0; k < nc; k++)
         if (access(cand[k], X_OK) == 0) {
-            snprintf(out, size, "%s", cand[k]);
+            snprintf(out, size, "%.1099s", cand[k]); /* (cand[k] is one row: gcc cannot see it) */
             return THX_OK;
         }
     return thx_error(ctx, THX_EIO,

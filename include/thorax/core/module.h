@@ -1,5 +1,6 @@
 /*
- * thorax/core/module.h — the solver module, loaded when first needed.
+ * thorax/core/module.h — files shipped beside the library: where they are looked for, and the
+ * solver module, loaded when first needed.
  *
  * The code that calls PETSc and MPI (the FEM system and its solves, boundary elements over MPI
  * ranks) is built as a shared object of its own, libthorax-petsc.so, which the library loads on
@@ -12,6 +13,14 @@
 #define THORAX_CORE_MODULE_H
 
 #include "thorax/core/core.h"
+
+/* Where to look for a file shipped with thorax (a helper program, the solver module), in order:
+ * dirname(libthorax.so)/from_lib when the library's code is in a shared object (not the running
+ * program itself), dirname(the running program)/from_bin[i] for each of the n_bin, then installed:
+ * relative paths, so that a moved prefix keeps working. Writes up to max paths of size bytes each
+ * into out (out + k * size); returns how many. */
+int thx_shipped_paths(const char *from_lib, const char *const *from_bin, int n_bin, const char *installed, char *out,
+                      size_t size, int max);
 
 /* The solver module's symbol `name` (loading the module once, thread-safe), or NULL with
  * THX_ESOLVER recorded in ctx (when not NULL): the places looked in and the loader's reason for
