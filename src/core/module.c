@@ -116,3 +116,20 @@ void *thx_solver_module_symbol(thx_ctx *ctx, const char *name)
     }
     return sym;
 }
+
+const void *thx_solver_module_table(thx_ctx *ctx, const char *getter, int abi, const void *volatile *cache)
+{
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+    pthread_mutex_lock(&lock);
+    if (!*cache) {
+        const void *(*get)(void) = (const void *(*)(void))thx_solver_module_symbol(ctx, getter);
+        const int *t = get ? (const int *)get() : NULL; /* every table begins with `int abi` */
+        if (t && *t == abi)
+            *cache = t;
+        else if (t && ctx)
+            thx_error(ctx, THX_ESOLVER, "the solver module " MODULE_NAME " was built for another version of thorax");
+    }
+    const void *r = *cache;
+    pthread_mutex_unlock(&lock);
+    return r;
+}

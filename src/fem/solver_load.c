@@ -3,29 +3,17 @@
  * module's table (src/fem/solver_module.h), loaded on the first call that needs PETSc. A run that
  * never solves never loads PETSc. A system exists only once the module is loaded.
  */
-#include <pthread.h>
 #include <stddef.h>
 
 #include "fem/solver_module.h"
 #include "thorax/core/module.h"
 
-static const thx_fem_petsc *g_api;
-static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
+static const thx_fem_petsc *volatile g_api;
 
 /* The table, or NULL with the reason in ctx (when not NULL). */
 static const thx_fem_petsc *api(thx_ctx *ctx)
 {
-    pthread_mutex_lock(&g_lock);
-    if (!g_api) {
-        const thx_fem_petsc *(*get)(void) = (const thx_fem_petsc *(*)(void))thx_solver_module_symbol(ctx, "thx_fem_petsc_get");
-        const thx_fem_petsc *t = get ? get() : NULL;
-        if (t && t->abi == THX_FEM_PETSC_ABI)
-            g_api = t;
-        else if (t && ctx)
-            thx_error(ctx, THX_ESOLVER, "the solver module libthorax-petsc.so was built for another version of thorax");
-    }
-    pthread_mutex_unlock(&g_lock);
-    return g_api;
+    return (const thx_fem_petsc *)thx_solver_module_table(ctx, "thx_fem_petsc_get", THX_FEM_PETSC_ABI, (const void *volatile *)&g_api);
 }
 
 thx_status thx_fem_available(thx_ctx *ctx) { return api(ctx) ? THX_OK : THX_ESOLVER; }

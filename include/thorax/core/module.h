@@ -29,4 +29,10 @@ int thx_shipped_paths(const char *from_lib, const char *const *from_bin, int n_b
  * the build tree's bin/ and tests/: ../thorax/), then the configured install path. */
 void *thx_solver_module_symbol(thx_ctx *ctx, const char *name);
 
+/* The table the module's function `getter` returns (looked up and called once per cache, under a
+ * lock), or NULL with THX_ESOLVER in ctx (when not NULL). Every table begins with `int abi`; a table
+ * whose abi is not `abi` is refused as built for another version of thorax. *cache holds the table
+ * once found, so the caller's later calls cost one load. */
+const void *thx_solver_module_table(thx_ctx *ctx, const char *getter, int abi, const void *volatile *cache);
+
 #endif
