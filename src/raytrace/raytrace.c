@@ -534,11 +534,13 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         c.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
                         rtcIntersect16(valid, f.scene, &c, &pk);
                     }
+                    double rgb[TILE][3], alpha[TILE], thit[TILE];
+                    int drawn[TILE];
                     for (int x = x0; x < x1; x++) {
                         int i = x - x0;
                         uint32_t px = (uint32_t)(y * vp[2] + x);
-                        double rgb[3], alpha, thit;
                         const rt_frame *fp = &f;
+                        drawn[i] = 0;
                         rt_frame fs;
                         if (f.next) { /* motion blur: the camera at the sample's time */
                             thx_camera cm;
@@ -558,21 +560,37 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                             h.hit.Ng_x = pk.hit.Ng_x[i];
                             h.hit.Ng_y = pk.hit.Ng_y[i];
                             h.hit.Ng_z = pk.hit.Ng_z[i];
-                            rt_shade_first(fp, org[i], dir[i], &h, px, sample, rgb, &alpha, &thit, &rays);
+                            rt_shade_first(fp, org[i], dir[i], &h, px, sample, rgb[i], &alpha[i], &thit[i], &rays);
                         } else {
-                            rt_shade(fp, org[i], dir[i], 0, 1.0, px, sample, rgb, &alpha, &thit, &rays);
+                            rt_shade(fp, org[i], dir[i], 0, 1.0, px, sample, rgb[i], &alpha[i], &thit[i], &rays);
                         }
-                        if (f.vm) { /* the field in front of the surface hit (or of the background) */
-                            double vc[3], T;
-                            rt_volume_march(f.vm, o->volume, f.tf, f.fld, org[i], dir[i], 0, thit, vc, &T, &rays);
+                        drawn[i] = 1;
+                    }
+                    if (f.vm) { /* the field in front of each surface hit (or of the background), the row's rays together */
+                        double vo[TILE][3], vd[TILE][3], vt[TILE], vc[TILE][3], T[TILE];
+                        int n = 0;
+                        for (int i = 0; i < x1 - x0; i++)
+                            if (drawn[i]) {
+                                memcpy(vo[n], org[i], sizeof vo[n]);
+                                memcpy(vd[n], dir[i], sizeof vd[n]);
+                                vt[n++] = thit[i];
+                            }
+                        rt_volume_march_n(f.vm, o->volume, f.tf, f.fld, n, (const double(*)[3])vo, (const double(*)[3])vd, vt, vc, T, &rays);
+                        n = 0;
+                        for (int i = 0; i < x1 - x0; i++) {
+                            if (!drawn[i]) continue;
                             /* premultiplied: the volume's emission, then the surface behind it through
                                what the volume lets pass; the coverage likewise */
-                            double vcov = (1 - T) + T * alpha;
-                            for (int k = 0; k < 3; k++) rgb[k] = vcov > 0 ? (vc[k] + T * alpha * rgb[k]) / vcov : 0;
-                            alpha = vcov;
+                            double vcov = (1 - T[n]) + T[n] * alpha[i];
+                            for (int k = 0; k < 3; k++) rgb[i][k] = vcov > 0 ? (vc[n][k] + T[n] * alpha[i] * rgb[i][k]) / vcov : 0;
+                            alpha[i] = vcov;
+                            n++;
                         }
-                        for (int k = 0; k < 3; k++) acc[i][k] += rgb[k] * alpha;
-                        cov[i] += alpha;
+                    }
+                    for (int i = 0; i < x1 - x0; i++) {
+                        if (!drawn[i]) continue;
+                        for (int k = 0; k < 3; k++) acc[i][k] += rgb[i][k] * alpha[i];
+                        cov[i] += alpha[i];
                     }
                 }
             for (int x = x0; x < x1; x++) {

@@ -159,6 +159,10 @@ void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf);
 /* The volume integral from tnear to tfar: rgb (premultiplied) and the transmittance *T left. */
 void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, const double o[3],
                      const double d[3], double tnear, double tfar, double rgb[3], double *T, size_t *rays);
+/* The same for n rays from tnear 0 (o, d, tfar, rgb and T: n each), eight at a time in AVX2's lanes
+ * where the processor has them (rt_volume_lanes.c). */
+void rt_volume_march_n(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, int n,
+                       const double (*o)[3], const double (*d)[3], const double *tfar, double (*rgb)[3], double *T, size_t *rays);
 /* The frame's field as the walk reads it: per tetrahedron t = scale(value) as g . p + c (4 floats:
  * g, c; point data: the linear interpolant of the corners' scaled values, as the OpenGL renderer
  * interpolates a surface's; cell data: g = 0). malloc'd, NULL when out of memory. */

@@ -141,6 +141,14 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
 thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, const double org[3],
                                    const double dir[3], double tnear, double tfar, double rgb[3], double *transmittance);
 
+/* The same for n rays from 0 to tfar[i] (org, dir, tfar, rgb and transmittance: n each), walked
+ * together as thx_raytrace_scene walks a row's eye rays: eight at a time in AVX2's lanes where the
+ * processor has them (the same integrals to float's rounding; elsewhere one at a time). */
+thx_status thx_raytrace_volume_rays(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, size_t n, const double (*org)[3],
+                                    const double (*dir)[3], const double *tfar, double (*rgb)[3], double *transmittance);
+/* How many rays the volume walk takes at once on this processor: 8 (AVX2 and FMA), else 1. */
+int thx_raytrace_volume_lanes(void);
+
 /* What each pixel's centre sees in a w x h viewport: the index of the scene surface hit (-1 none) and
  * the triangle (the primary ray through the pixel centre, after the clip planes). An image plane's
  * texel: surface THX_RAYTRACE_ID_PLANE and tri the plane's index in sc->planes; an arrow: surface
