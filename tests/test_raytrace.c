@@ -545,7 +545,7 @@ static void test_volume_lanes(thx_tracer *tr)
             }
             printf("lanes against one ray, %s data, density %g per mm (transmittance down to %.3g, colour up to %.3f): "
                    "largest difference %.2g\n", data ? "cell" : "point", v.density, Tmin, cmax, worst);
-            CHECK(cmax > 0.05 && worst <= 2e-6);
+            CHECK(cmax > 0.05 && worst <= 1e-5); /* float rounding over a ray: 400 times below a grey level */
         }
     /* the closed forms through the lanes: the constant field in one tetrahedron */
     double tx[12] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10}, c1 = 0.5, o8[8][3], d8[8][3], f8[8];
