@@ -3,8 +3,9 @@
 #   1. the high-resolution phantom's surfaces with the potentials at 1920 x 1080, a key light with
 #      shadows, the heart a mirror: thorax trace (wall clock, median of 3; peak memory) beside
 #      thorax render (OpenGL, Mesa's llvmpipe) of the same picture;
-#   2. primary rays alone (one sample, the headlight, no bounces): rays a second, beside Embree's own
-#      viewer (embree-tools, its primID shader: one ray a pixel) on the same surfaces as OBJ;
+#   2. primary rays (one sample, the headlight, no bounces): rays a second of the shaded frame, and of
+#      the id image alone (bench/trace_ids.c: the surface and triangle each pixel sees), beside Embree's
+#      own viewer (embree-tools, its primID shader: one ray a pixel) on the same surfaces as OBJ;
 #   3. the volume rendering of the potential inside the mesh at 1024 x 1024: thorax trace, a frame
 #      and the next (no rebuild), beside VTK 9's unstructured-grid ray caster
 #      (vtkUnstructuredGridVolumeRayCastMapper, bench/vtk_volume.py) on the same mesh and field;
@@ -50,6 +51,15 @@ echo; echo "== 2. primary rays (the same perspective camera for both) =="
     --repeat 5 -o "$W/p.png" > "$W/p.out" 2> /dev/null
 ms=$(median "$W/p.out")
 $PY -c "print('%-34s %10.1f M rays/s (%s ms a frame of 2.07 M rays, shaded and coloured)' % ('thorax trace, primary rays', 1920 * 1080 / (float('$ms') / 1000) / 1e6, '$ms'))"
+IDS=$(dirname "$THORAX")/trace_ids
+if [ -x "$IDS" ]; then
+    "$IDS" "$M" 1920 1080 0,1500,135 0,0,135 0,0,1 22 20 > "$W/i.out"
+    $PY - "$W/i.out" <<'EOF'
+import re, sys
+m = re.search(r'median ([0-9.]+) ms of \d+, ([0-9.]+) M rays/s', open(sys.argv[1]).read())
+print('%-34s %10.1f M rays/s (%s ms a frame; the id image, what the primID shader computes)' % ('thorax, primary rays alone', float(m.group(2)), m.group(1)))
+EOF
+fi
 "$THORAX" export "$M" --format obj -o "$W/obj" -q
 $PY bench/obj_merge.py "$W/obj" "$W/all.obj"
 if command -v viewer > /dev/null; then

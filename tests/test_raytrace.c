@@ -917,6 +917,41 @@ static void test_arrow(thx_tracer *tr)
     thx_surface_destroy(&floor_);
 }
 
+/* The id image's eye rays in packets of 16 (rtcIntersect16) against one at a time (a clip plane
+ * that cuts nothing sends them one by one): the same surface and triangle at every pixel, a sphere
+ * before a box from a perspective camera, 203 x 117 pixels (rows not a multiple of 16). */
+static void test_ids_packets(thx_tracer *tr)
+{
+    enum { W = 203, H = 117 };
+    thx_surface *ball = sphere(0, 0, 0, 20, 48, 24), *back = box("back", (double[3]){-60, -60, -90}, (double[3]){60, 60, -70});
+    thx_render_surface rs[2];
+    memset(rs, 0, sizeof rs);
+    rs[0].surf = ball;
+    rs[1].surf = back;
+    rs[0].mode = rs[1].mode = THX_DRAW_PHONG;
+    thx_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.surfaces = rs;
+    sc.n_surfaces = 2;
+    sc.camera = (thx_camera){{30, 20, 120}, {0, 0, -20}, {0, 1, 0}, 40, 0};
+    static int32_t s1[W * H], t1[W * H], s2[W * H], t2[W * H];
+    CHECK_OK(ctx, thx_raytrace_ids(ctx, tr, &sc, W, H, s1, t1));
+    sc.clip[0] = (thx_clip_plane){{0, 0, 1}, 1000}; /* keeps z >= -1000: everything */
+    sc.n_clip = 1;
+    CHECK_OK(ctx, thx_raytrace_ids(ctx, tr, &sc, W, H, s2, t2));
+    size_t same = 0, ball_px = 0, back_px = 0;
+    for (size_t i = 0; i < (size_t)W * H; i++) {
+        same += s1[i] == s2[i] && t1[i] == t2[i];
+        ball_px += s1[i] == 0;
+        back_px += s1[i] == 1;
+    }
+    printf("id image in packets against one ray at a time: %zu of %d pixels the same (sphere %zu, box %zu)\n", same, W * H, ball_px,
+           back_px);
+    CHECK(same == (size_t)W * H && ball_px > 1000 && back_px > 1000);
+    thx_surface_destroy(&ball);
+    thx_surface_destroy(&back);
+}
+
 int main(void)
 {
     thx_ctx_create(&ctx);
@@ -937,6 +972,7 @@ int main(void)
         RUN(motion_blur);
         RUN(plane);
         RUN(arrow);
+        RUN(ids_packets);
 #undef RUN
     }
     thx_tracer_destroy(&tr);

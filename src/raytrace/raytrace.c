@@ -5,6 +5,9 @@
  * independent, every random number a hash, so the picture does not depend on the thread count).
  */
 #include <math.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -424,6 +427,95 @@ static inline void primary_ray(const rt_frame *f, int w, int h, double x, double
     }
 }
 
+/* The id image's eye rays for the pixels x0 .. x0 + n - 1 of row y (n at most TILE), through their
+ * centres, as a packet: in float, the directions not normalized (what a ray meets first does not
+ * depend on its direction's length), the others not valid. */
+static void packet_ids_row(const rt_frame *f, int w, int h, int x0, int n, int y, struct RTCRayHit16 *pk, int *valid)
+{
+    float ny = (float)(1 - 2 * (y + 0.5) / h), b = ny * (float)f->half_h;
+    float e[3], v[3], r[3], u[3];
+    for (int k = 0; k < 3; k++) e[k] = (float)f->eye[k], v[k] = (float)f->view[k], r[k] = (float)f->right[k], u[k] = (float)f->up[k];
+    for (int i = 0; i < TILE; i++) {
+        float a = (float)((2 * (x0 + i + 0.5) / w - 1) * f->half_w), o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            if (f->ortho) {
+                d[k] = v[k];
+                o[k] = e[k] + a * r[k] + b * u[k] - (float)f->back * v[k];
+            } else {
+                d[k] = v[k] + a * r[k] + b * u[k];
+                o[k] = e[k];
+            }
+        }
+        valid[i] = i < n ? -1 : 0;
+        pk->ray.org_x[i] = o[0], pk->ray.org_y[i] = o[1], pk->ray.org_z[i] = o[2];
+        pk->ray.dir_x[i] = d[0], pk->ray.dir_y[i] = d[1], pk->ray.dir_z[i] = d[2];
+        pk->ray.tnear[i] = 0;
+        pk->ray.tfar[i] = INFINITY;
+        pk->ray.time[i] = 0;
+        pk->ray.mask[i] = 0xffffffffu;
+        pk->ray.id[i] = (unsigned)i;
+        pk->ray.flags[i] = 0;
+        pk->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        pk->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
+/* Ray i of an eye-ray packet: from org along dir, from 0 to infinity, no hit yet. */
+static inline void packet_ray(struct RTCRayHit16 *pk, int i, const double org[3], const double dir[3])
+{
+    pk->ray.org_x[i] = (float)org[0];
+    pk->ray.org_y[i] = (float)org[1];
+    pk->ray.org_z[i] = (float)org[2];
+    pk->ray.dir_x[i] = (float)dir[0];
+    pk->ray.dir_y[i] = (float)dir[1];
+    pk->ray.dir_z[i] = (float)dir[2];
+    pk->ray.tnear[i] = 0;
+    pk->ray.tfar[i] = INFINITY;
+    pk->ray.time[i] = 0;
+    pk->ray.mask[i] = 0xffffffffu;
+    pk->ray.id[i] = (unsigned)i;
+    pk->ray.flags[i] = 0;
+    pk->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    pk->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/* The packet's rays (those valid) through the scene together: Embree's SIMD traversal of coherent
+ * rays (a row of a tile's eye rays). */
+static inline void packet_trace(RTCScene scene, const int *valid, struct RTCRayHit16 *pk)
+{
+    struct RTCIntersectContext c;
+    rtcInitIntersectContext(&c);
+    c.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcIntersect16(valid, scene, &c, pk);
+}
+
+/* primary_ray for the TILE eye rays of a packet at (xs[i], ys[i]), the same rays to the last bit: the
+ * perspective directions' lengths taken two at a time in SSE2's lanes (one square root and one
+ * division a ray, one at a time, were a tenth of a primary-ray frame). */
+static void primary_row(const rt_frame *f, int w, int h, const double *xs, const double *ys, double (*org)[3], double (*dir)[3])
+{
+#ifdef __SSE2__
+    if (!f->ortho) {
+        _Alignas(16) double n2[TILE];
+        for (int i = 0; i < TILE; i++) {
+            double a = (2 * xs[i] / w - 1) * f->half_w, b = (1 - 2 * ys[i] / h) * f->half_h;
+            n2[i] = 0;
+            for (int k = 0; k < 3; k++) {
+                org[i][k] = f->eye[k];
+                dir[i][k] = f->view[k] + a * f->right[k] + b * f->up[k];
+                n2[i] += dir[i][k] * dir[i][k];
+            }
+        }
+        for (int i = 0; i < TILE; i += 2)
+            _mm_store_pd(n2 + i, _mm_div_pd(_mm_set1_pd(1), _mm_sqrt_pd(_mm_load_pd(n2 + i))));
+        for (int i = 0; i < TILE; i++)
+            for (int k = 0; k < 3; k++) dir[i][k] *= n2[i];
+        return;
+    }
+#endif
+    for (int i = 0; i < TILE; i++) primary_ray(f, w, h, xs[i], ys[i], org[i], dir[i]);
+}
+
 /* The camera at time tau of the frame interval: eye, centre, up, field of view and height linear
  * between this frame's (a) and the next's (b); tau = 0 gives a exactly. */
 static void camera_lerp(const thx_camera *a, const thx_camera *b, double tau, thx_camera *c)
@@ -504,36 +596,20 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                     double org[TILE][3], dir[TILE][3], jx[TILE], jy[TILE]; /* jx, jy: the sample's place in its pixel */
                     struct RTCRayHit16 pk;
                     _Alignas(64) int valid[TILE]; /* (Embree reads it as one vector) */
+                    double xs[TILE], ys[TILE];
                     for (int x = x0; x < x0 + TILE; x++) {
                         int i = x - x0;
-                        valid[i] = x < x1 ? -1 : 0;
-                        if (!valid[i]) continue;
                         uint32_t px = (uint32_t)(y * vp[2] + x);
-                        jx[i] = ns == 1 ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
-                        jy[i] = ns == 1 ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
-                        primary_ray(&f, vp[2], vp[3], x + jx[i], y + jy[i], org[i], dir[i]);
-                        if (!packets) continue;
-                        pk.ray.org_x[i] = (float)org[i][0];
-                        pk.ray.org_y[i] = (float)org[i][1];
-                        pk.ray.org_z[i] = (float)org[i][2];
-                        pk.ray.dir_x[i] = (float)dir[i][0];
-                        pk.ray.dir_y[i] = (float)dir[i][1];
-                        pk.ray.dir_z[i] = (float)dir[i][2];
-                        pk.ray.tnear[i] = 0;
-                        pk.ray.tfar[i] = INFINITY;
-                        pk.ray.time[i] = 0;
-                        pk.ray.mask[i] = 0xffffffffu;
-                        pk.ray.id[i] = (unsigned)i;
-                        pk.ray.flags[i] = 0;
-                        pk.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-                        pk.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+                        valid[i] = x < x1 ? -1 : 0;
+                        jx[i] = ns == 1 || !valid[i] ? 0.5 : (sx + rt_rand(px, sample, 0, 1)) / ns;
+                        jy[i] = ns == 1 || !valid[i] ? 0.5 : (sy + rt_rand(px, sample, 0, 2)) / ns;
+                        xs[i] = x + jx[i];
+                        ys[i] = y + jy[i];
                     }
-                    if (packets) {
-                        struct RTCIntersectContext c;
-                        rtcInitIntersectContext(&c);
-                        c.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-                        rtcIntersect16(valid, f.scene, &c, &pk);
-                    }
+                    primary_row(&f, vp[2], vp[3], xs, ys, org, dir);
+                    if (packets)
+                        for (int i = 0; i < x1 - x0; i++) packet_ray(&pk, i, org[i], dir[i]);
+                    if (packets) packet_trace(f.scene, valid, &pk);
                     double rgb[TILE][3], alpha[TILE], thit[TILE];
                     int drawn[TILE];
                     for (int x = x0; x < x1; x++) {
@@ -643,28 +719,49 @@ thx_status thx_raytrace_ids(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, in
     thx_status st = frame_build(ctx, t, sc, &o, w, h, &f, &builds);
     if (st != THX_OK) { frame_free(&f); return st; }
     size_t rays = 0;
+    /* eye rays in packets of 16 along a row where no image plane or clip plane asks for a second look */
+    int packets = !f.planes && !f.any_clip;
 #pragma omp parallel for schedule(dynamic) reduction(+ : rays)
     for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            double org[3], dir[3];
-            struct RTCRayHit rh;
-            size_t i = (size_t)y * (size_t)w + (size_t)x;
-            surface[i] = -1;
-            tri[i] = -1;
-            primary_ray(&f, w, h, x + 0.5, y + 0.5, org, dir);
-            if (rt_intersect(&f, org, dir, 0, INFINITY, &rh, &rays)) {
+        for (int x0 = 0; x0 < w; x0 += TILE) {
+            int x1 = x0 + TILE < w ? x0 + TILE : w;
+            double org[TILE][3], dir[TILE][3];
+            struct RTCRayHit16 pk;
+            _Alignas(64) int valid[TILE]; /* (Embree reads it as one vector) */
+            if (packets) {
+                packet_ids_row(&f, w, h, x0, x1 - x0, y, &pk, valid);
+                packet_trace(f.scene, valid, &pk);
+                rays += (size_t)(x1 - x0);
+            } else {
+                for (int x = x0; x < x1; x++) primary_ray(&f, w, h, x + 0.5, y + 0.5, org[x - x0], dir[x - x0]);
+            }
+            for (int x = x0; x < x1; x++) {
+                int i = x - x0;
+                size_t px = (size_t)y * (size_t)w + (size_t)x;
+                struct RTCRayHit rh;
+                surface[px] = -1;
+                tri[px] = -1;
+                if (packets) {
+                    if (pk.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
+                    rh.hit.geomID = pk.hit.geomID[i];
+                    rh.hit.primID = pk.hit.primID[i];
+                    rh.hit.u = pk.hit.u[i];
+                    rh.hit.v = pk.hit.v[i];
+                } else if (!rt_intersect(&f, org[i], dir[i], 0, INFINITY, &rh, &rays)) {
+                    continue;
+                }
                 size_t k;
                 int kind = rt_kind(&f, rh.hit.geomID, &k);
                 if (kind == RT_SURFACE) {
-                    surface[i] = (int32_t)k;
-                    tri[i] = (int32_t)rh.hit.primID;
+                    surface[px] = (int32_t)k;
+                    tri[px] = (int32_t)rh.hit.primID;
                 } else if (kind == RT_PLANE) {
-                    surface[i] = THX_RAYTRACE_ID_PLANE;
-                    tri[i] = (int32_t)k;
+                    surface[px] = THX_RAYTRACE_ID_PLANE;
+                    tri[px] = (int32_t)k;
                 } else {
                     double n[3], col[4];
-                    surface[i] = THX_RAYTRACE_ID_ARROW;
-                    rt_arrow_hit(&f.ar[k], rh.hit.primID, rh.hit.u, rh.hit.v, n, col, &tri[i]);
+                    surface[px] = THX_RAYTRACE_ID_ARROW;
+                    rt_arrow_hit(&f.ar[k], rh.hit.primID, rh.hit.u, rh.hit.v, n, col, &tri[px]);
                 }
             }
         }
