@@ -41,13 +41,10 @@ typedef struct {
     v8f r, g, b, t;
 } v8c;
 
-/* The eight walks, lane by lane: rt_walk's fields; the transfer function's table row (v, d) of the
- * interval [fi, fi + 1) that holds xa; the colour and the transmittance gathered so far. */
+/* The eight walks, lane by lane: rt_walk's fields; the colour and the transmittance gathered so far. */
 typedef struct {
     v8f ex, ey, ez, dx, dy, dz, s, send, xa;
     v8c va;                         /* the transfer function at xa */
-    v8c tv, td;                     /* the table's entry at the interval's start, and the step to the next */
-    v8f fi;                         /* the interval's start (its index, clamped to TF_N - 2) */
     v8c acc;                        /* r, g, b gathered (t unused) */
     v8f T;
     v8i tt, in, steps;
@@ -77,21 +74,16 @@ AVX2 static inline v8f self(v8i m, v8f a, v8f b) { return (v8f)_mm256_blendv_ps(
 AVX2 static inline v8i seli(v8i m, v8i a, v8i b) { return (m & a) | (~m & b); }
 AVX2 static inline v8f vmin(v8f a, v8f b) { return (v8f)_mm256_min_ps((__m256)a, (__m256)b); }
 AVX2 static inline v8f vmax(v8f a, v8f b) { return (v8f)_mm256_max_ps((__m256)a, (__m256)b); }
-AVX2 static inline v8i vmini(v8i a, v8i b) { return (v8i)_mm256_min_epi32((__m256i)a, (__m256i)b); }
+/* a clamped to [lo, hi] */
+AVX2 static inline v8i clampi(v8i a, int32_t lo, int32_t hi)
+{
+    return (v8i)_mm256_max_epi32(_mm256_min_epi32((__m256i)a, _mm256_set1_epi32(hi)), _mm256_set1_epi32(lo));
+}
 AVX2 static inline v8f gatherf(const float *base, v8i idx) { return (v8f)_mm256_i32gather_ps(base, (__m256i)idx, 4); }
 AVX2 static inline unsigned bits(v8i m) { return (unsigned)_mm256_movemask_ps((__m256)m); }
 AVX2 static inline v8c csel(v8i m, v8c a, v8c b) { return (v8c){self(m, a.r, b.r), self(m, a.g, b.g), self(m, a.b, b.b), self(m, a.t, b.t)}; }
 /* v + u d, channel by channel */
 AVX2 static inline v8c clerp(v8c v, v8c d, v8f u) { return (v8c){v.r + u * d.r, v.g + u * d.g, v.b + u * d.b, v.t + u * d.t}; }
-/* the rows of a table of (r, g, b, tau) vectors at idx, in the lanes of mask (src's elsewhere) */
-AVX2 static inline v8c cgather(const rt_v4f *rows, v8i idx, v8i mask, v8c src)
-{
-    const float *f = (const float *)rows;
-    v8i i4 = idx * 4;
-#define G(k, c) (v8f) _mm256_mask_i32gather_ps((__m256)src.c, f + k, (__m256i)i4, (__m256)mask, 4)
-    return (v8c){G(0, r), G(1, g), G(2, b), G(3, t)};
-#undef G
-}
 
 /* 1 - e^-D by its Taylor polynomial to D^4, as piece() takes it */
 AVX2 static inline v8f one_minus_exp(v8f D) { return D * (1 - D * (0.5f - D * (1.0f / 6 - D * (1.0f / 24)))); }
@@ -167,11 +159,6 @@ AVX2 static void lane_set(lanes *L, const rt_tf *tf, int l, const rt_walk *w, rt
     L->tt[l] = (int32_t)w->tt;
     L->in[l] = w->in;
     L->tin[l] = w->tin;
-    int i = (int)w->xa;
-    if (i > TF_N - 2) i = TF_N - 2;
-    L->fi[l] = (float)i;
-    L->tv.r[l] = tf->v[i][0], L->tv.g[l] = tf->v[i][1], L->tv.b[l] = tf->v[i][2], L->tv.t[l] = tf->v[i][3];
-    L->td.r[l] = tf->d[i][0], L->td.g[l] = tf->d[i][1], L->td.b[l] = tf->d[i][2], L->td.t[l] = tf->d[i][3];
     L->acc.r[l] = acc[0], L->acc.g[l] = acc[1], L->acc.b[l] = acc[2];
     L->T[l] = (float)T;
 }
@@ -252,6 +239,16 @@ AVX2 static inline void rows4(const float *base, const int32_t ix[8], size_t str
     o[3] = (v8f)_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
+/* The rows of a table of (r, g, b, tau) vectors (the transfer function's) at idx, channel by channel. */
+AVX2 static inline v8c trow(const rt_v4f *tab, v8i idx)
+{
+    _Alignas(32) int32_t ix[8];
+    *(v8i *)ix = idx;
+    v8f c[4];
+    rows4((const float *)tab, ix, 4, c);
+    return (v8c){c[0], c[1], c[2], c[3]};
+}
+
 /* The largest of eight non-negative integers. */
 AVX2 static inline int hmax(v8i x)
 {
@@ -322,22 +319,15 @@ AVX2 static void march_lanes(batch *b)
         v8i is0 = s0 == least, is1 = s1 == least, is2 = s2 == least;
         v8i nb = (v8i)self(is0, q0[3], self(is1, q1[3], self(is2, q2[3], q3[3])));
         v8f stop = vmin(vmax(least, L.s), L.send);
-        /* the field at the exit, its place in the table, the transfer function there (the row of
-           its interval carried from the last step, or gathered where the step crosses an entry) */
+        /* the field at the exit, its place in the table, the transfer function there (the table's
+           row of its interval; the clamp keeps an idle lane's index in the table) */
         v8f px = L.ex + stop * L.dx, py = L.ey + stop * L.dy, pz = L.ez + stop * L.dz;
         v8f xb = vmin(vmax((g[0] * px + g[2] * pz) + (g[1] * py + g[3]), zero), one) * (TF_N - 1);
         v8i ia = __builtin_convertvector(L.xa, v8i), ib = __builtin_convertvector(xb, v8i);
         v8i cross = on & (ia != ib);
         unsigned any_cross = bits(cross);
-        v8c tvb = L.tv, tdb = L.td;
-        v8f fib = L.fi;
-        if (any_cross) {
-            v8i ic = vmini(ib, splati(TF_N - 2));
-            tvb = cgather(tf->v, ic, cross, tvb);
-            tdb = cgather(tf->d, ic, cross, tdb);
-            fib = self(cross, __builtin_convertvector(ic, v8f), fib);
-        }
-        v8c vb = clerp(tvb, tdb, xb - fib);
+        v8i ic = clampi(ib, 0, TF_N - 2);
+        v8c vb = clerp(trow(tf->v, ic), trow(tf->d, ic), xb - __builtin_convertvector(ic, v8f));
         v8f len = stop - L.s;
         /* the common step: an exit short of the ray's end; the others take the one-ray step */
         v8i common = on & (least < inf) & (stop < L.send) & (L.steps < max_steps);
@@ -357,7 +347,7 @@ AVX2 static void march_lanes(batch *b)
             for (int j = 0; j <= most; j++) {
                 v8i mid = alive & (splati(j) < count), last = alive & (splati(j) == count);
                 v8i k = k0 + splati(j) * dir;
-                v8c ve = cgather(tf->v, vmini(k, splati(TF_N - 1)), mid, vb);
+                v8c ve = csel(mid, trow(tf->v, clampi(k, 0, TF_N - 1)), vb);
                 v8f upto = self(mid, (__builtin_convertvector(k, v8f) - L.xa) * inv, one); /* of the segment */
                 vpiece(mid | last, vcur, ve, (upto - done_s) * len, &L.acc, &L.T);
                 vcur = csel(mid, ve, vcur);
@@ -366,7 +356,6 @@ AVX2 static void march_lanes(batch *b)
             }
         }
         L.va = csel(common, vb, L.va);
-        if (any_cross) L.tv = csel(common, tvb, L.tv), L.td = csel(common, tdb, L.td), L.fi = self(common, fib, L.fi);
         L.xa = self(common, xb, L.xa);
         L.s = self(common, stop, L.s);
         L.steps += on & splati(1);
@@ -375,14 +364,11 @@ AVX2 static void march_lanes(batch *b)
         v8i move = go & (nb >= 0);
         L.tt = seli(move, nb >> 2, L.tt);
         L.in = seli(move, nb & 3, L.in);
-        if (cell) { /* cell data: the field jumps at the face; the table's row found again */
+        if (cell) { /* cell data: the field jumps at the face */
             v8f xc = vmin(vmax(gatherf(fld + 3, L.tt * 4), zero), one) * (TF_N - 1);
-            v8i ic = vmini(__builtin_convertvector(xc, v8i), splati(TF_N - 2));
-            v8f fc = __builtin_convertvector(ic, v8f);
-            L.xa = self(move, xc, L.xa), L.fi = self(move, fc, L.fi);
-            L.tv = cgather(tf->v, ic, move, L.tv);
-            L.td = cgather(tf->d, ic, move, L.td);
-            L.va = csel(move, clerp(L.tv, L.td, xc - fc), L.va);
+            v8i jc = clampi(__builtin_convertvector(xc, v8i), 0, TF_N - 2);
+            L.xa = self(move, xc, L.xa);
+            L.va = csel(move, clerp(trow(tf->v, jc), trow(tf->d, jc), xc - __builtin_convertvector(jc, v8f)), L.va);
         }
         /* the lanes whose step was not the common one, whose ray is done or whose walk left the
            mesh, lane by lane */
