@@ -452,6 +452,40 @@ static void test_volume(thx_tracer *tr)
            rgb[0], exact, T, exp(-tau * L));
     CHECK_NEAR(rgb[0], exact, 1e-6);
     CHECK_NEAR(T, exp(-tau * L), 1e-6);
+    /* thin pieces (the series' branch) with the extinction varying along each: the field z over a
+       scale of 0 to 1000, so t = z / 1000 spans 2.55 of the table's entries over the ray and the
+       pieces are millimetres long; the opacity a ramp (0 at t = 0, 1 at t = 1) and 2 per mm at
+       opacity 1, so tau = 2 z / 1000 and C = z / 1000; the emission int_0^10 C tau e^(-D) dz with D
+       = z^2 / 1000, against Simpson's rule on 100,000 intervals; the transmittance e^(-0.1); one
+       ray, and eight through the lanes */
+    thx_scale_from_range(&v.scale, THX_SCALE_LINEAR, 0, 1000, 0);
+    v.opacity[0][1] = 0;
+    v.density = 2;
+    double ref = 0, hz = 10.0 / 100000;
+    for (int i = 0; i <= 100000; i++) {
+        double z = i * hz, f = (z / 1000) * (2 * z / 1000) * exp(-z * z / 1000);
+        ref += f * (i == 0 || i == 100000 ? 1 : i % 2 ? 4 : 2);
+    }
+    ref *= hz / 3;
+    CHECK_OK(ctx, thx_raytrace_volume_ray(ctx, tr, &v, o2, d, 0, INFINITY, rgb, &T));
+    double o8[8][3], d8[8][3], f8[8], rgb8[8][3], T8[8];
+    for (int r = 0; r < 8; r++) {
+        memcpy(o8[r], o2, sizeof o2);
+        memcpy(d8[r], d, sizeof d8[r]);
+        f8[r] = INFINITY;
+    }
+    CHECK_OK(ctx, thx_raytrace_volume_rays(ctx, tr, &v, 8, (const double(*)[3])o8, (const double(*)[3])d8, f8, rgb8, T8));
+    printf("thin pieces, extinction ramping along each: colour %.12g one ray, %.12g in the lanes (quadrature %.12g), "
+           "transmittance %.12f (exact %.12f)\n", rgb[0], rgb8[0][0], ref, T, exp(-0.1));
+    CHECK(fabs(rgb[0] - ref) <= 1e-6 * ref);
+    CHECK_NEAR(T, exp(-0.1), 1e-7);
+    for (int r = 0; r < 8; r++) {
+        CHECK(fabs(rgb8[r][0] - ref) <= 1e-6 * ref);
+        CHECK_NEAR(T8[r], exp(-0.1), 1e-7);
+    }
+    thx_scale_from_range(&v.scale, THX_SCALE_LINEAR, 0, 10, 0);
+    v.opacity[0][1] = 1;
+    v.density = tau;
     /* in a picture: the first frame builds the mesh's faces, a frame step (other values) builds nothing */
     thx_scene sc;
     memset(&sc, 0, sizeof sc);

@@ -85,9 +85,6 @@ AVX2 static inline v8c csel(v8i m, v8c a, v8c b) { return (v8c){self(m, a.r, b.r
 /* v + u d, channel by channel */
 AVX2 static inline v8c clerp(v8c v, v8c d, v8f u) { return (v8c){v.r + u * d.r, v.g + u * d.g, v.b + u * d.b, v.t + u * d.t}; }
 
-/* 1 - e^-D by its Taylor polynomial to D^4, as piece() takes it */
-AVX2 static inline v8f one_minus_exp(v8f D) { return D * (1 - D * (0.5f - D * (1.0f / 6 - D * (1.0f / 24)))); }
-
 /* e^x for x <= 0, in float (to e^-87, about 1e-38; 0 below): x = n ln 2 + r with |r| <= ln 2 / 2
  * (ln 2 in two parts, so that r is exact), e^r by its Taylor polynomial to r^7 (the next term under
  * 6e-9 of it), times 2^n built in the exponent's bits. */
@@ -112,9 +109,7 @@ AVX2 static inline __attribute__((always_inline)) void vpiece(v8i m, v8c p0, v8c
     v8f x = 0.5f * (p0.t + p1.t) * len;
     v8f a = x * (1 - x * (0.5f - x * (1.0f / 6 - x * (1.0f / 24 - x * (1.0f / 120)))));
     v8f u = p0.t * len, v = 0.5f * (p1.t - p0.t) * len;
-#define NODE(g) (GL_W[g] * one_minus_exp((u + v * GL_S[g]) * GL_S[g]))
-    v8f b = (NODE(0) + NODE(2)) + (NODE(1) + NODE(3));
-#undef NODE
+    v8f b = RT_THIN_B(u, v);
     v8i thick = m & (x >= (float)THIN);
     if (bits(thick)) {
         v8f at = 1 - vexp_neg(-x);
