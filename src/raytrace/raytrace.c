@@ -115,7 +115,7 @@ thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volum
     return rt_vmesh_build(ctx, t->dev, v, &t->vm);
 }
 
-const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t) { return &t->vm; }
+rt_vmesh *rt_tracer_vmesh_get(thx_tracer *t) { return &t->vm; }
 
 /* The cached geometry of surface s, built when new or changed. */
 static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, const rt_geom **out, size_t *builds)
@@ -695,7 +695,6 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             }
         }
     }
-    free((void *)f.fld);
     frame_free(&f);
     free(tf);
     if (stats) {

@@ -82,6 +82,8 @@ typedef struct {
     int32_t *bface;                 /* boundary face (Embree primitive) -> tet * 4 + k */
     size_t n_bface;
     RTCScene scene;                 /* the boundary faces */
+    float *fld;                     /* the call's field (rt_volume_field): 4 floats a tetrahedron, kept
+                                       with the mesh so that a frame step allocates nothing */
     size_t builds;
 } rt_vmesh;
 
@@ -163,13 +165,13 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
  * where the processor has them (rt_volume_lanes.c). */
 void rt_volume_march_n(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_tf *tf, const float *fld, int n,
                        const double (*o)[3], const double (*d)[3], const double *tfar, double (*rgb)[3], double *T, size_t *rays);
-/* The frame's field as the walk reads it: per tetrahedron t = scale(value) as g . p + c (4 floats:
- * g, c; point data: the linear interpolant of the corners' scaled values, as the OpenGL renderer
- * interpolates a surface's; cell data: g = 0). malloc'd, NULL when out of memory. */
-float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v);
+/* The frame's field as the walk reads it, into m->fld (returned; NULL when out of memory): per
+ * tetrahedron t = scale(value) as g . p + c (4 floats: g, c; point data: the linear interpolant of
+ * the corners' scaled values, as the OpenGL renderer interpolates a surface's; cell data: g = 0). */
+float *rt_volume_field(thx_ctx *ctx, rt_vmesh *m, const thx_raytrace_volume *v);
 /* The tracer's volume mesh for v, built when new (raytrace.c). */
 thx_status rt_tracer_vmesh(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v);
-const rt_vmesh *rt_tracer_vmesh_get(const thx_tracer *t);
+rt_vmesh *rt_tracer_vmesh_get(thx_tracer *t);
 
 /* A random number in [0, 1) from a hash of the four keys (deterministic). */
 double rt_rand(uint32_t a, uint32_t b, uint32_t c, uint32_t d);

@@ -104,6 +104,7 @@ void rt_vmesh_free(rt_vmesh *m)
     free(m->tets);
     free(m->order);
     free(m->bface);
+    free(m->fld);
     memset(m, 0, sizeof *m);
 }
 
@@ -117,11 +118,10 @@ thx_status rt_vmesh_build(thx_ctx *ctx, RTCDevice dev, const thx_raytrace_volume
             return thx_error(ctx, THX_EINPUT, "volume rendering: tetrahedron %zu names node %d of %zu", i / 4 + 1, v->tet[i] + 1, v->n_nodes);
     face_rec *f = thx_malloc(ctx, (nf ? nf : 1) * sizeof *f);
     m->order = morton_order(ctx, v);
-    if (posix_memalign((void **)&m->tets, 64, (nt ? nt : 1) * sizeof *m->tets)) {
-        m->tets = NULL;
-        thx_error(ctx, THX_ENOMEM, "out of memory (%zu tetrahedra to walk)", nt);
-    }
-    if (!f || !m->tets || !m->order) { free(f); rt_vmesh_free(m); return THX_ENOMEM; }
+    if (posix_memalign((void **)&m->tets, 64, (nt ? nt : 1) * sizeof *m->tets)) m->tets = NULL;
+    if (posix_memalign((void **)&m->fld, 64, 4 * (nt ? nt : 1) * sizeof *m->fld)) m->fld = NULL;
+    if (!m->tets || !m->fld) thx_error(ctx, THX_ENOMEM, "out of memory (%zu tetrahedra to walk)", nt);
+    if (!f || !m->tets || !m->fld || !m->order) { free(f); rt_vmesh_free(m); return THX_ENOMEM; }
     for (size_t t = 0; t < nt; t++)
         for (int k = 0; k < 4; k++) {
             face_rec *r = &f[4 * t + (size_t)k];
@@ -227,12 +227,12 @@ void rt_tf_build(const thx_raytrace_volume *v, rt_tf *tf)
     for (int i = 0; i < TF_N; i++) tf->d[i] = i + 1 < TF_N ? tf->v[i + 1] - tf->v[i] : (rt_v4f){0, 0, 0, 0};
 }
 
-float *rt_volume_field(thx_ctx *ctx, const rt_vmesh *m, const thx_raytrace_volume *v)
+float *rt_volume_field(thx_ctx *ctx, rt_vmesh *m, const thx_raytrace_volume *v)
 {
     size_t nt = v->n_tets;
-    float *fld = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *fld);
+    float *fld = m->fld;
     double *tn = v->point_values ? thx_malloc(ctx, (v->n_nodes ? v->n_nodes : 1) * sizeof *tn) : NULL;
-    if (!fld || (v->point_values && !tn)) { free(fld); free(tn); return NULL; }
+    if (v->point_values && !tn) return NULL;
     if (tn)
         for (size_t i = 0; i < v->n_nodes; i++) tn[i] = thx_scale_apply(&v->scale, v->point_values[i]);
 #pragma omp parallel for schedule(static)
@@ -277,18 +277,27 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
     *T = acc_T;
 }
 
+/* What a call of the volume API needs: the tracer's mesh for v (built when new), the transfer
+ * function, the field. */
+static thx_status volume_call(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, rt_tf *tf, rt_vmesh **m,
+                              const float **fld)
+{
+    THX_CHECK(rt_tracer_vmesh(ctx, t, v));
+    rt_tf_build(v, tf);
+    *m = rt_tracer_vmesh_get(t);
+    *fld = rt_volume_field(ctx, *m, v);
+    return *fld ? THX_OK : THX_ENOMEM;
+}
+
 thx_status thx_raytrace_volume_ray(thx_ctx *ctx, thx_tracer *t, const thx_raytrace_volume *v, const double org[3],
                                    const double dir[3], double tnear, double tfar, double rgb[3], double *transmittance)
 {
-    THX_CHECK(rt_tracer_vmesh(ctx, t, v));
     rt_tf tf;
-    rt_tf_build(v, &tf);
+    rt_vmesh *m;
+    const float *fld;
+    THX_CHECK(volume_call(ctx, t, v, &tf, &m, &fld));
     size_t rays = 0;
-    const rt_vmesh *m = rt_tracer_vmesh_get(t);
-    float *fld = rt_volume_field(ctx, m, v);
-    if (!fld) return THX_ENOMEM;
     rt_volume_march(m, v, &tf, fld, org, dir, tnear, tfar, rgb, transmittance, &rays);
-    free(fld);
     return THX_OK;
 }
 
@@ -296,14 +305,11 @@ thx_status thx_raytrace_volume_rays(thx_ctx *ctx, thx_tracer *t, const thx_raytr
                                     const double (*dir)[3], const double *tfar, double (*rgb)[3], double *transmittance)
 {
     if (n > INT_MAX) return thx_error(ctx, THX_EINPUT, "volume rendering: %zu rays in one call (at most %d)", n, INT_MAX);
-    THX_CHECK(rt_tracer_vmesh(ctx, t, v));
     rt_tf tf;
-    rt_tf_build(v, &tf);
+    rt_vmesh *m;
+    const float *fld;
+    THX_CHECK(volume_call(ctx, t, v, &tf, &m, &fld));
     size_t rays = 0;
-    const rt_vmesh *m = rt_tracer_vmesh_get(t);
-    float *fld = rt_volume_field(ctx, m, v);
-    if (!fld) return THX_ENOMEM;
     rt_volume_march_n(m, v, &tf, fld, (int)n, org, dir, tfar, rgb, transmittance, &rays);
-    free(fld);
     return THX_OK;
 }
