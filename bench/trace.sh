@@ -71,14 +71,16 @@ if command -v viewer > /dev/null; then
 fi
 
 echo; echo "== 3. volume rendering of the potential, 1024 x 1024 =="
-"$THORAX" trace --solution "$S" --frame 193 --size 1024x1024 --samples 1 --ao 0 --volume potential --surface torso=hidden \
+/usr/bin/time -v "$THORAX" trace --solution "$S" --frame 193 --size 1024x1024 --samples 1 --ao 0 --volume potential --surface torso=hidden \
     --surface fat=hidden --surface muscle=hidden --surface lung_l=hidden --surface lung_r=hidden --repeat 3 -o "$W/v.png" \
     > "$W/v.out" 2> "$W/v.time" || true
-printf '%-34s %10s ms (median of 3; the first builds the mesh'"'"'s faces)\n' "thorax trace --volume potential" "$(median "$W/v.out")"
+printf '%-34s %10s ms %8s MB (median of 3; the first builds the mesh'"'"'s faces; the memory holds the whole series read)\n' \
+    "thorax trace --volume potential" "$(median "$W/v.out")" "$(peak "$W/v.time")"
 "$THORAX" export "$M" --solution "$S" --format vtu --frames 193:193 -o "$W/vtu" -q 2> /dev/null || true
 if [ -d "$W/vtu" ]; then
-    xvfb-run -a -s "-screen 0 1600x1200x24" $PY bench/vtk_volume.py "$W/vtu" 1024 2> "$W/vtk.err" | sed 's/^/VTK: /' ||
+    xvfb-run -a -s "-screen 0 1600x1200x24" /usr/bin/time -v $PY bench/vtk_volume.py "$W/vtu" 1024 2> "$W/vtk.err" | sed 's/^/VTK: /' ||
         echo "VTK: (failed: $(tail -2 "$W/vtk.err"))"
+    [ -n "$(peak "$W/vtk.err")" ] && echo "VTK: peak memory $(peak "$W/vtk.err") MB (one frame's .vtu read)"
 fi
 if [ -n "${KEEP:-}" ]; then
     mkdir -p "$KEEP"
