@@ -2,6 +2,8 @@
 """Reads thorax's exports with data back with VTK and Gmsh themselves and checks every value.
 
 usage: export_data_read.py MODEL SERIES ROWS OUTDIR FORMAT [FRAMES] [DOMAIN]
+       export_data_read.py --jobs FILE     (one such line of arguments a line: all in one process,
+                                            each model read once; exit 1 if any job fails)
 
 MODEL   the model directory (model.json, NAME.pts/.fac, volume.pts/.tet, NAME.vmap)
 SERIES  the series that was exported: a thorax raw series (THXSER01); ROWS says whose nodes
@@ -62,7 +64,16 @@ def rel(a, b):
     return np.abs(a - b).max() / scale
 
 
+_models = {}
+
+
 def load_model(d):
+    if d not in _models:
+        _models[d] = read_model(d)
+    return _models[d]
+
+
+def read_model(d):
     j = json.load(open(os.path.join(d, "model.json")))
     m = {"surf": [], "regions": [], "volume": None}
     for s in j["surfaces"]:
@@ -127,12 +138,32 @@ def arr(data, where, name):
 
 
 def main():
-    if len(sys.argv) < 6:
+    if len(sys.argv) == 3 and sys.argv[1] == "--jobs":
+        failed = []
+        for line in open(sys.argv[2]):
+            args = line.split()
+            if not args:
+                continue
+            print("== " + " ".join(args))
+            if job(args) != 0:
+                failed.append(" ".join(args))
+        for a in failed:
+            print("FAIL job: " + a)
+        print("%d of the jobs failed" % len(failed) if failed else "all jobs passed")
+        return 1 if failed else 0
+    return job(sys.argv[1:])
+
+
+def job(argv):
+    """One read-back (the arguments of the first usage line): 0 when every check passed."""
+    global fails
+    fails = 0
+    if len(argv) < 5:
         print(__doc__, file=sys.stderr)
         return 2
-    model_dir, series, rows, outdir, fmt = sys.argv[1:6]
-    frames_arg = sys.argv[6] if len(sys.argv) > 6 else "all"
-    domain = sys.argv[7] if len(sys.argv) > 7 else "all"
+    model_dir, series, rows, outdir, fmt = argv[:5]
+    frames_arg = argv[5] if len(argv) > 5 else "all"
+    domain = argv[6] if len(argv) > 6 else "all"
     m = load_model(model_dir)
     S, T = raw_series(series)
     frames = list(range(S.shape[1])) if frames_arg == "all" else [int(x) - 1 for x in frames_arg.split(",")]
