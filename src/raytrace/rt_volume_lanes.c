@@ -3,19 +3,20 @@
  * step each per round, in AVX2's eight float lanes, where the one-ray walk (rt_volume.c) tests one
  * tetrahedron's four faces in SSE's four lanes and does the rest of the step in scalar code.
  *
- * Each lane holds one ray's walk (rt_walk's fields, lane by lane). A round gathers the eight
- * tetrahedra's planes and fields, finds each exit face, the field at each exit and, for the lanes
- * whose step is the common one (an exit found short of the ray's end, the segment within one entry
- * of the transfer function's table, a thin piece), the piece's emission and absorption, as the
- * one-ray walk's thin piece computes them. Any other step (a crossing of the table's entries, about
- * one step in five; a thick piece; a grazing ray) is done by the one-ray walk's step in its lane,
- * from the same state. A walk that leaves the mesh, and a ray's entry, are Embree's, lane by lane.
+ * Each lane holds one ray's walk (rt_walk's fields, lane by lane). A round loads the eight
+ * tetrahedra's planes and fields (two rows a load, transposed: rows4), finds each exit face and the
+ * field at each exit, and integrates each lane's segment as segment() and piece() do: the first
+ * piece for every lane, then one more iteration for each table entry the most crossing lane
+ * crosses; thin pieces by the same polynomials, thick ones with a vector e^x. What stays lane by
+ * lane, through the one-ray walk's own code (lane_event): a ray's entry into the mesh and its
+ * re-entry after leaving it (Embree), the end of a ray short of the mesh's far side, a grazing ray.
  * A lane whose ray is done takes the batch's next ray, so that the lanes stay full until the last
  * rays.
  *
  * The lanes need AVX2 and FMA (compiled for them here, chosen at run time); elsewhere, and with
  * THORAX_VOLUME_LANES=0 in the environment, the rays walk one at a time. The two walks give the
- * same picture to float's rounding (tests/test_raytrace.c compares them).
+ * same integrals to float's rounding (tests/test_raytrace.c compares them; docs/design/raytrace.md,
+ * "The volume walk in eight lanes").
  */
 #include <stdlib.h>
 #include <string.h>
@@ -86,8 +87,8 @@ AVX2 static inline v8c csel(v8i m, v8c a, v8c b) { return (v8c){self(m, a.r, b.r
 AVX2 static inline v8c clerp(v8c v, v8c d, v8f u) { return (v8c){v.r + u * d.r, v.g + u * d.g, v.b + u * d.b, v.t + u * d.t}; }
 
 /* e^x for x <= 0, in float (to e^-87, about 1e-38; 0 below): x = n ln 2 + r with |r| <= ln 2 / 2
- * (ln 2 in two parts, so that r is exact), e^r by its Taylor polynomial to r^7 (the next term under
- * 6e-9 of it), times 2^n built in the exponent's bits. */
+ * (ln 2 in two parts, so that r keeps no error of ln 2's rounding), e^r by its Taylor polynomial to
+ * r^7 (the next term under 6e-9 of it), times 2^n built in the exponent's bits. */
 AVX2 static inline v8f vexp_neg(v8f x)
 {
     v8i under = x < -87.0f;
@@ -203,7 +204,7 @@ AVX2 static int lane_fill(lanes *L, batch *b, int l)
         lane_finish(L, b, l);
     }
     L->ray[l] = -1;
-    L->tt[l] = 0; /* a valid tetrahedron for the gathers; what they read is not used */
+    L->tt[l] = 0; /* a valid tetrahedron for the round's loads; what they read is not used */
     return 0;
 }
 
@@ -217,7 +218,7 @@ AVX2 static int lane_reenter(lanes *L, batch *b, int l)
     return lane_fill(L, b, l);
 }
 
-/* Eight rows of four floats, base + ix[l] * stride for lane l (16-byte aligned), as four vectors:
+/* Eight rows of four floats, base + ix[l] * stride for lane l, as four vectors:
  * o[k] lane l = row l's float k. Two rows a load (lanes l and l + 4), then a 4 x 4 transposition in
  * each half: cheaper than four gathers. */
 AVX2 static inline void rows4(const float *base, const int32_t ix[8], size_t stride, v8f o[4])
