@@ -379,13 +379,15 @@ AVX2 static void march_lanes(batch *b)
 /* Whether this processor has the lanes' instructions (THORAX_VOLUME_LANES=0: as if it had not). */
 static int lanes_cpu(void)
 {
-    static int cpu = -1;
-    if (cpu < 0) {
+    static int cpu = -1; /* the tile threads may ask at once: each finds the same answer */
+    int c = __atomic_load_n(&cpu, __ATOMIC_RELAXED);
+    if (c < 0) {
         __builtin_cpu_init();
         const char *e = getenv("THORAX_VOLUME_LANES");
-        cpu = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && !(e && strcmp(e, "0") == 0);
+        c = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && !(e && strcmp(e, "0") == 0);
+        __atomic_store_n(&cpu, c, __ATOMIC_RELAXED);
     }
-    return cpu;
+    return c;
 }
 #endif
 
