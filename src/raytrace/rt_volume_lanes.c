@@ -143,8 +143,8 @@ AVX2 static void lane_get(const lanes *L, int l, rt_walk *w, rt_v4f *acc, double
     *T = L->T[l];
 }
 
-/* Lane l's walk from the one-ray walk's: the table's row for xa's interval found again. */
-AVX2 static void lane_set(lanes *L, const rt_tf *tf, int l, const rt_walk *w, rt_v4f acc, double T)
+/* Lane l's walk and sums from the one-ray walk's. */
+AVX2 static void lane_set(lanes *L, int l, const rt_walk *w, rt_v4f acc, double T)
 {
     L->ex[l] = w->e[0], L->ey[l] = w->e[1], L->ez[l] = w->e[2];
     L->dx[l] = w->df[0], L->dy[l] = w->df[1], L->dz[l] = w->df[2];
@@ -181,7 +181,7 @@ AVX2 static int lane_enter(lanes *L, batch *b, int l)
         if (in == 0) return 0;
         if (in > 0) {
             rt_v4f acc = {L->acc.r[l], L->acc.g[l], L->acc.b[l], 0};
-            lane_set(L, b->tf, l, &w, acc, L->T[l]);
+            lane_set(L, l, &w, acc, L->T[l]);
             L->steps[l] = 0;
             return 1;
         }
@@ -269,7 +269,7 @@ __attribute__((noinline)) AVX2 static int lane_event(lanes *L, batch *b, int l, 
     double T;
     lane_get(L, l, &w, &acc, &T);
     int r = L->steps[l] > max_steps ? -1 : walk_step(b->m, b->v, b->tf, b->fld, &w, &acc, &T);
-    lane_set(L, b->tf, l, &w, acc, T);
+    lane_set(L, l, &w, acc, T);
     if (r > 0 && T > T_MIN) return 1;
     if (r == 0 || T <= T_MIN) {
         lane_finish(L, b, l);
