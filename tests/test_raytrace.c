@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "testlib.h"
+#include "thorax/geom/predicates.h"
 #include "thorax/raytrace/raytrace.h"
 
 static thx_ctx *ctx;
@@ -380,15 +381,33 @@ static void cube_grid(int n, double h, double *xyz, int32_t *tet)
                     int a = path[t][0], b = a | path[t][1], c[4] = {0, a, b, 7};
                     int32_t q[4];
                     for (int r = 0; r < 4; r++) q[r] = (i + (c[r] & 1)) + m * ((j + (c[r] >> 1 & 1)) + m * (k + (c[r] >> 2 & 1)));
-                    /* orient positively */
-                    const double *p0 = xyz + 3 * q[0], *p1 = xyz + 3 * q[1], *p2 = xyz + 3 * q[2], *p3 = xyz + 3 * q[3];
-                    double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]},
-                           e3[3] = {p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]};
-                    double det = e1[0] * (e2[1] * e3[2] - e2[2] * e3[1]) - e1[1] * (e2[0] * e3[2] - e2[2] * e3[0]) +
-                                 e1[2] * (e2[0] * e3[1] - e2[1] * e3[0]);
-                    if (det < 0) { int32_t x = q[1]; q[1] = q[2]; q[2] = x; }
+                    /* orient positively: det[p1 - p0; p2 - p0; p3 - p0] > 0 */
+                    if (thx_orient3d(xyz + 3 * q[1], xyz + 3 * q[2], xyz + 3 * q[3], xyz + 3 * q[0]) < 0) {
+                        int32_t x = q[1];
+                        q[1] = q[2];
+                        q[2] = x;
+                    }
                     memcpy(tet + 4 * nt++, q, sizeof q);
                 }
+}
+
+/* One tetrahedron, corners at the origin and 10 mm along each axis, a constant field 0.5 on the grey
+ * map over [0, 1] with a flat opacity 1, extinction tau per mm (the closed form's case). */
+static void const_tet_volume(thx_raytrace_volume *v, double tau)
+{
+    static const double tx[12] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10}, cv = 0.5;
+    static const int32_t tt[4] = {0, 1, 2, 3};
+    memset(v, 0, sizeof *v);
+    v->xyz = tx;
+    v->n_nodes = 4;
+    v->tet = tt;
+    v->n_tets = 1;
+    v->cell_values = &cv;
+    v->cmap = THX_CMAP_GRAY;
+    thx_scale_from_range(&v->scale, THX_SCALE_LINEAR, 0, 1, 0);
+    v->opacity[0][0] = 0, v->opacity[0][1] = 1, v->opacity[1][0] = 1, v->opacity[1][1] = 1;
+    v->n_opacity = 2;
+    v->density = tau;
 }
 
 /* The volume integral against closed forms: a constant field in one tetrahedron (colour C and
@@ -399,24 +418,8 @@ static void cube_grid(int n, double h, double *xyz, int32_t *tet)
 static void test_volume(thx_tracer *tr)
 {
     const double tau = 0.1;
-    double tx[12] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10};
-    int32_t tt[4] = {0, 1, 2, 3};
-    double cv = 0.5;
     thx_raytrace_volume v;
-    memset(&v, 0, sizeof v);
-    v.xyz = tx;
-    v.n_nodes = 4;
-    v.tet = tt;
-    v.n_tets = 1;
-    v.cell_values = &cv;
-    v.cmap = THX_CMAP_GRAY;
-    thx_scale_from_range(&v.scale, THX_SCALE_LINEAR, 0, 1, 0);
-    v.opacity[0][0] = 0;
-    v.opacity[0][1] = 1;
-    v.opacity[1][0] = 1;
-    v.opacity[1][1] = 1;
-    v.n_opacity = 2;
-    v.density = tau;
+    const_tet_volume(&v, tau);
     double o[3] = {2, 2, -5}, d[3] = {0, 0, 1}, rgb[3], T;
     CHECK_OK(ctx, thx_raytrace_volume_ray(ctx, tr, &v, o, d, 0, INFINITY, rgb, &T));
     double L = 6, eT = exp(-tau * L), eC = 0.5 * (1 - eT); /* from z = 0 to the face x + y + z = 10 */
@@ -582,19 +585,8 @@ static void test_volume_lanes(thx_tracer *tr)
             CHECK(cmax > 0.05 && worst <= 1e-5); /* float rounding over a ray: 400 times below a grey level */
         }
     /* the closed forms through the lanes: the constant field in one tetrahedron */
-    double tx[12] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10}, c1 = 0.5, o8[8][3], d8[8][3], f8[8];
-    int32_t tt[4] = {0, 1, 2, 3};
-    memset(&v, 0, sizeof v);
-    v.xyz = tx;
-    v.n_nodes = 4;
-    v.tet = tt;
-    v.n_tets = 1;
-    v.cell_values = &c1;
-    v.cmap = THX_CMAP_GRAY;
-    thx_scale_from_range(&v.scale, THX_SCALE_LINEAR, 0, 1, 0);
-    v.opacity[0][0] = 0, v.opacity[0][1] = 1, v.opacity[1][0] = 1, v.opacity[1][1] = 1;
-    v.n_opacity = 2;
-    v.density = 0.1;
+    double o8[8][3], d8[8][3], f8[8];
+    const_tet_volume(&v, 0.1);
     for (int r = 0; r < 8; r++) {
         o8[r][0] = 2, o8[r][1] = 2, o8[r][2] = -5;
         d8[r][0] = 0, d8[r][1] = 0, d8[r][2] = 1;

@@ -427,6 +427,29 @@ static inline void primary_ray(const rt_frame *f, int w, int h, double x, double
     }
 }
 
+/* Ray i of an eye-ray packet: from o along d (float, as Embree takes them), from 0 to infinity, no
+ * hit yet. */
+static inline void packet_rayf(struct RTCRayHit16 *pk, int i, const float o[3], const float d[3])
+{
+    pk->ray.org_x[i] = o[0], pk->ray.org_y[i] = o[1], pk->ray.org_z[i] = o[2];
+    pk->ray.dir_x[i] = d[0], pk->ray.dir_y[i] = d[1], pk->ray.dir_z[i] = d[2];
+    pk->ray.tnear[i] = 0;
+    pk->ray.tfar[i] = INFINITY;
+    pk->ray.time[i] = 0;
+    pk->ray.mask[i] = 0xffffffffu;
+    pk->ray.id[i] = (unsigned)i;
+    pk->ray.flags[i] = 0;
+    pk->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    pk->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/* The same from a ray in double. */
+static inline void packet_ray(struct RTCRayHit16 *pk, int i, const double org[3], const double dir[3])
+{
+    float o[3] = {(float)org[0], (float)org[1], (float)org[2]}, d[3] = {(float)dir[0], (float)dir[1], (float)dir[2]};
+    packet_rayf(pk, i, o, d);
+}
+
 /* The id image's eye rays for the pixels x0 .. x0 + n - 1 of row y (n at most TILE), through their
  * centres, as a packet: in float, the directions not normalized (what a ray meets first does not
  * depend on its direction's length), the others not valid. */
@@ -447,36 +470,8 @@ static void packet_ids_row(const rt_frame *f, int w, int h, int x0, int n, int y
             }
         }
         valid[i] = i < n ? -1 : 0;
-        pk->ray.org_x[i] = o[0], pk->ray.org_y[i] = o[1], pk->ray.org_z[i] = o[2];
-        pk->ray.dir_x[i] = d[0], pk->ray.dir_y[i] = d[1], pk->ray.dir_z[i] = d[2];
-        pk->ray.tnear[i] = 0;
-        pk->ray.tfar[i] = INFINITY;
-        pk->ray.time[i] = 0;
-        pk->ray.mask[i] = 0xffffffffu;
-        pk->ray.id[i] = (unsigned)i;
-        pk->ray.flags[i] = 0;
-        pk->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-        pk->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        packet_rayf(pk, i, o, d);
     }
-}
-
-/* Ray i of an eye-ray packet: from org along dir, from 0 to infinity, no hit yet. */
-static inline void packet_ray(struct RTCRayHit16 *pk, int i, const double org[3], const double dir[3])
-{
-    pk->ray.org_x[i] = (float)org[0];
-    pk->ray.org_y[i] = (float)org[1];
-    pk->ray.org_z[i] = (float)org[2];
-    pk->ray.dir_x[i] = (float)dir[0];
-    pk->ray.dir_y[i] = (float)dir[1];
-    pk->ray.dir_z[i] = (float)dir[2];
-    pk->ray.tnear[i] = 0;
-    pk->ray.tfar[i] = INFINITY;
-    pk->ray.time[i] = 0;
-    pk->ray.mask[i] = 0xffffffffu;
-    pk->ray.id[i] = (unsigned)i;
-    pk->ray.flags[i] = 0;
-    pk->hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    pk->hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
 }
 
 /* The packet's rays (those valid) through the scene together: Embree's SIMD traversal of coherent
