@@ -347,6 +347,23 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
             cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
             cJSON_AddNumberToObject(solver, "seconds_matrix", R.t_matrix);
+            if (R.factor.used) {
+                /* thorax's own direct path (docs/design/parallel.md): the factor's figures, so that a reader can
+                   put the time beside the flops */
+                cJSON *f = cJSON_CreateObject();
+                cJSON_AddStringToObject(f, "package", "CHOLMOD (supernodal), driven by thorax");
+                cJSON_AddStringToObject(f, "ordering", "METIS nested dissection");
+                cJSON_AddBoolToObject(f, "ordering_cached", R.factor.ordering_cached);
+                if (R.factor.cache_note[0]) cJSON_AddStringToObject(f, "cache_note", R.factor.cache_note);
+                cJSON_AddNumberToObject(f, "seconds_ordering", R.factor.t_ordering);
+                cJSON_AddNumberToObject(f, "seconds_analysis", R.factor.t_analysis);
+                cJSON_AddNumberToObject(f, "seconds_factorization", R.factor.t_factor);
+                cJSON_AddNumberToObject(f, "flops_factorization", R.factor.flops);
+                cJSON_AddNumberToObject(f, "flops_solves", R.factor.solve_flops);
+                cJSON_AddNumberToObject(f, "nonzeros", R.factor.nonzeros);
+                cJSON_AddNumberToObject(f, "bytes", (double)R.factor.factor_bytes);
+                cJSON_AddItemToObject(solver, "factor", f);
+            }
         } else {
             cJSON_AddStringToObject(solver, "method", "transfer matrix applied");
             char abs[PATH_MAX];
@@ -368,6 +385,14 @@ int cmd_forward(int argc, char **argv)
                        R.it_max, R.t_assemble, R.t_setup, R.t_solve);
             else
                 printf("%zu frames by the transfer matrix, %.3f s\n", epi->n_frames, R.t_solve);
+            if (verbose > 0 && R.factor.used)
+                printf("factor (CHOLMOD, driven by thorax): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
+                       "(%.3g flops, %.1f GF/s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
+                       R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
+                       R.factor.t_factor, R.factor.flops, R.factor.t_factor > 0 ? R.factor.flops / R.factor.t_factor * 1e-9 : 0,
+                       R.factor.nonzeros, (double)R.factor.factor_bytes / 1048576, R.factor.solve_flops,
+                       R.t_solve > 0 ? R.factor.solve_flops / R.t_solve * 1e-9 : 0, R.factor.cache_note[0] ? "; " : "",
+                       R.factor.cache_note);
             printf("wrote %s\n", out);
         }
     }

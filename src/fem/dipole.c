@@ -489,6 +489,7 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
     thx_fem_system_info(S, &r->n_free, &r->n_prescribed, &r->t_setup);
     r->t_matrix = thx_fem_system_matrix_seconds(S);
     thx_fem_system_describe(S, r->ksp, r->pc, &r->ranks);
+    thx_fem_system_factor_info(S, &r->factor);
     r->n_located_by_scan = n_scan;
 done:
     if (st != THX_OK) thx_forward_result_free(r);

@@ -209,6 +209,7 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     thx_fem_system_info(P.sys, &r->n_free, &r->n_prescribed, &r->t_setup);
     r->t_matrix = thx_fem_system_matrix_seconds(P.sys);
     thx_fem_system_describe(P.sys, r->ksp, r->pc, &r->ranks);
+    thx_fem_system_factor_info(P.sys, &r->factor);
     r->t_assemble = P.t_assemble;
 done:
     if (st != THX_OK) thx_forward_result_free(r);
@@ -321,6 +322,7 @@ static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows
         thx_fem_system_info(P.sys, &info->n_free, &info->n_prescribed, &info->t_setup);
         info->t_matrix = thx_fem_system_matrix_seconds(P.sys);
         thx_fem_system_describe(P.sys, info->ksp, info->pc, &info->ranks);
+        thx_fem_system_factor_info(P.sys, &info->factor);
         info->t_assemble = P.t_assemble;
         info->t_solve = tsolve;
         info->it_min = it_min;

@@ -3,14 +3,20 @@
  * solves. Every rank holds the whole assembled matrix (thx_csr) and hands
  * PETSc its own block of rows; results are gathered to every rank.
  */
+#include <dlfcn.h>
 #include <math.h>
 #include <petscksp.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
+#include "fem/cholesky.h"
 #include "thorax/fem/fem.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 static int g_inited = 0, g_we_inited = 0;
 
 thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)
@@ -60,6 +66,36 @@ int thx_fem_options_unused(int list)
     return (int)left;
 }
 
+/* A thread's buffers for the own path: b and x of up to r columns (row-major, the factor's order), the
+   solve's work space, the residual's sums. Kept across blocks (fresh pages cost a fault each, and faults
+   are dear on virtual machines), on huge pages where the kernel gives them. */
+#define THX_FEM_OWN_THREADS 64
+typedef struct own_work_s {
+    double *B, *X, *E, *acc;
+    size_t r;
+} own_work;
+
+static void *big_alloc(size_t bytes)
+{
+    void *p = NULL;
+    size_t align = (size_t)2 << 20;
+    bytes = (bytes + align - 1) / align * align;
+    if (posix_memalign(&p, align, bytes ? bytes : align)) return NULL;
+#ifdef MADV_HUGEPAGE
+    madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
+static void own_work_free(own_work *w)
+{
+    free(w->B);
+    free(w->X);
+    free(w->E);
+    free(w->acc);
+    memset(w, 0, sizeof *w);
+}
+
 struct thx_fem_system {
     int32_t n;           /* nodes */
     int32_t nf, nd;      /* free, prescribed */
@@ -79,6 +115,14 @@ struct thx_fem_system {
     double t_matrix;     /* the matrix alone */
     int pc_ready;
     size_t block;        /* columns per dense block (thx_fem_system_set_block), 0 = automatic */
+    /* thorax's own direct path (src/fem/cholesky.h), one rank: K_ff's CSR kept, and its factor */
+    PetscInt *ii, *jj;
+    PetscScalar *aa;
+    int own;             /* 1: many right-hand sides on one rank, no solver chosen on the command line */
+    thx_chol *chol;
+    thx_chol_info chol_info;
+    own_work *work;          /* THX_FEM_OWN_THREADS of them */
+    double solve_flops;      /* the own path's solves so far */
 };
 
 /* A PETSc call inside a thx function: on failure record the message and jump to done. */
@@ -192,6 +236,17 @@ thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned 
     }
     PCALL(ctx, KSPSetTolerances(s->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 10000));
     PCALL(ctx, KSPSetFromOptions(s->ksp));
+    {
+        PetscMPIInt size = 1;
+        MPI_Comm_size(PETSC_COMM_WORLD, &size);
+        if (size == 1) { /* the whole K_ff: kept for thorax's own direct path */
+            s->ii = ii;
+            s->jj = jj;
+            s->aa = aa;
+            ii = jj = NULL;
+            aa = NULL;
+        }
+    }
     s->t_setup = s->t_matrix = thx_wtime() - t0;
     *out = s;
     s = NULL;
@@ -215,6 +270,13 @@ void thx_fem_system_destroy(thx_fem_system **sp)
     if (s->r) VecDestroy(&s->r);
     if (s->toall) VecScatterDestroy(&s->toall);
     thx_csr_free(&s->kfd);
+    thx_chol_free(&s->chol);
+    if (s->work)
+        for (int t = 0; t < THX_FEM_OWN_THREADS; t++) own_work_free(&s->work[t]);
+    free(s->work);
+    free(s->ii);
+    free(s->jj);
+    free(s->aa);
     free(s->fidx);
     free(s->didx);
     free(s->free_node);
@@ -231,6 +293,23 @@ void thx_fem_system_info(const thx_fem_system *s, size_t *n_free, size_t *n_pres
 }
 
 double thx_fem_system_matrix_seconds(const thx_fem_system *s) { return s->t_matrix; }
+
+void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!s->chol) return;
+    const thx_chol_info *c = &s->chol_info;
+    out->used = 1;
+    out->ordering_cached = c->ordering_cached;
+    out->t_ordering = c->t_order;
+    out->t_analysis = c->t_analyze;
+    out->t_factor = c->t_factor;
+    out->flops = c->flops;
+    out->nonzeros = c->lnz;
+    out->solve_flops = s->solve_flops;
+    out->factor_bytes = c->factor_bytes;
+    snprintf(out->cache_note, sizeof out->cache_note, "%s", c->cache_note);
+}
 
 void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
 {
@@ -250,6 +329,9 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
 /* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
 #define THX_FEM_BLOCK_BYTES ((size_t)512 << 20)
 #define THX_FEM_BLOCK_MAX 64
+/* The same for thorax's own path: its blocks are split among the threads, and wider ones keep BLAS busier. */
+#define THX_FEM_OWN_BYTES ((size_t)768 << 20)
+#define THX_FEM_OWN_MAX 256
 /* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
  * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system
  * (currents into a piece of the mesh with no prescribed potential) whose tiny pivot the package took. */
@@ -323,6 +405,178 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
     KSPGetPC(s->ksp, &pc);
     PCSetType(pc, PCCHOLESKY);
     PCFactorSetMatSolverType(pc, size == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS);
+    /* one rank: CHOLMOD's factor driven by thorax (src/fem/cholesky.h), unless -thorax_direct petsc asks for
+       PETSc's interface to it (the path before; bench/forward.sh compares the two) */
+    char how[16] = "thorax";
+    PetscOptionsGetString(NULL, NULL, "-thorax_direct", how, sizeof how, NULL);
+    s->own = size == 1 && s->ii && strcmp(how, "petsc") != 0;
+}
+
+/* The own path's factorization, once (timed as the setup, as PETSc's is). */
+static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
+{
+    if (s->chol) return THX_OK;
+    double t0 = thx_wtime();
+    thx_status st = THX_OK;
+    size_t n = (size_t)s->nf, nz = (size_t)s->ii[n];
+    int64_t *rowp = thx_malloc(ctx, (n + 1) * sizeof *rowp);
+    int32_t *col = thx_malloc(ctx, (nz ? nz : 1) * sizeof *col);
+    if (!rowp || !col) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i <= n; i++) rowp[i] = (int64_t)s->ii[i];
+    for (size_t k = 0; k < nz; k++) col[k] = (int32_t)s->jj[k];
+    st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &s->chol, &s->chol_info);
+    if (st == THX_ESOLVER && s->chol_info.not_posdef) {
+        /* a singular system (a piece of the mesh with no prescribed potential): PETSc's interface to the
+           same package decides, as before the own path existed (a consistent system may still solve) */
+        s->own = 0;
+        st = THX_OK;
+    }
+    s->pc_ready = st == THX_OK && s->own;
+done:
+    free(rowp);
+    free(col);
+    s->t_setup += thx_wtime() - t0;
+    return st;
+}
+
+/* OpenBLAS's thread count, where OpenBLAS is the BLAS (else -1): our threads each call BLAS alone. */
+static int blas_threads(int set)
+{
+    static void (*setn)(int);
+    static int (*getn)(void);
+    static int looked;
+    if (!looked) {
+        setn = (void (*)(int))dlsym(RTLD_DEFAULT, "openblas_set_num_threads");
+        getn = (int (*)(void))dlsym(RTLD_DEFAULT, "openblas_get_num_threads");
+        looked = 1;
+    }
+    if (!setn || !getn) return -1;
+    int was = getn();
+    if (set > 0) setn(set);
+    return was;
+}
+
+/* b = load_f - K_fd phi_d for columns c0 .. c0 + r - 1, row-major in the factor's order. */
+static void own_rhs(const thx_fem_system *s, const double *phi, const double *load, size_t c0, size_t r,
+                    double *restrict B)
+{
+    const size_t n = (size_t)s->n, nf = (size_t)s->nf;
+    const int64_t *iperm = thx_chol_iperm(s->chol);
+    memset(B, 0, nf * r * sizeof *B);
+    for (size_t q = 0; q < nf; q++) {
+        double *restrict bq = B + (size_t)iperm[q] * r;
+        for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
+            const double a = s->kfd.val[e], *pd = phi + c0 * n + (size_t)s->pres_node[s->kfd.col[e]];
+            for (size_t j = 0; j < r; j++) bq[j] -= a * pd[j * n];
+        }
+    }
+    if (load)
+        for (size_t j = 0; j < r; j++) {
+            const double *lj = load + (c0 + j) * n;
+            for (size_t q = 0; q < nf; q++) B[(size_t)iperm[q] * r + j] += lj[s->free_node[q]];
+        }
+}
+
+/* rn[j] = ||b - K_ff x||^2 and bn[j] = ||b||^2 for the r columns, rows visited in the factor's order (their
+   neighbours are near them there). */
+static void own_residual(const thx_fem_system *s, const double *restrict B, const double *restrict X, size_t r,
+                         double *restrict acc, double *restrict rn, double *restrict bn)
+{
+    const size_t nf = (size_t)s->nf;
+    const int64_t *perm = thx_chol_perm(s->chol), *iperm = thx_chol_iperm(s->chol);
+    for (size_t j = 0; j < r; j++) rn[j] = bn[j] = 0;
+    for (size_t p = 0; p < nf; p++) {
+        const size_t q = (size_t)perm[p];
+        const double *restrict bq = B + p * r;
+#pragma omp simd
+        for (size_t j = 0; j < r; j++) acc[j] = bq[j];
+        for (PetscInt e = s->ii[q]; e < s->ii[q + 1]; e++) {
+            const double a = s->aa[e];
+            const double *restrict xc = X + (size_t)iperm[s->jj[e]] * r;
+#pragma omp simd
+            for (size_t j = 0; j < r; j++) acc[j] -= a * xc[j];
+        }
+#pragma omp simd
+        for (size_t j = 0; j < r; j++) {
+            rn[j] += acc[j] * acc[j];
+            bn[j] += bq[j] * bq[j];
+        }
+    }
+}
+
+/* k columns of phi (and load) through the own factor: the columns dealt to the threads in contiguous
+   groups, each group row-major in the factor's order (src/fem/cholesky.h), its residuals ||b - A x||
+   from the kept CSR. rel[j]: column j's relative residual. */
+static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, double *rel)
+{
+    const size_t n = (size_t)s->n, nf = (size_t)s->nf;
+    int T = 1;
+#ifdef _OPENMP
+    T = omp_get_max_threads();
+#endif
+    if (T > THX_FEM_OWN_THREADS) T = THX_FEM_OWN_THREADS;
+    if ((size_t)T > k) T = (int)k;
+    if (T < 1) T = 1;
+    const int64_t *iperm = thx_chol_iperm(s->chol);
+    if (!s->work && !(s->work = thx_calloc(ctx, THX_FEM_OWN_THREADS, sizeof *s->work))) return THX_ENOMEM;
+    int failed = 0;
+    int was = T > 1 ? blas_threads(1) : -1;
+#pragma omp parallel for num_threads(T) schedule(static, 1) reduction(| : failed)
+    for (int t = 0; t < T; t++) {
+        size_t c0 = k * (size_t)t / (size_t)T, c1 = k * (size_t)(t + 1) / (size_t)T, r = c1 - c0;
+        own_work *w = &s->work[t];
+        if (w->r < r) {
+            own_work_free(w);
+            w->B = big_alloc(nf * r * sizeof *w->B);
+            w->X = big_alloc(nf * r * sizeof *w->X);
+            w->E = big_alloc(thx_chol_work_bytes(s->chol, r));
+            w->acc = malloc(3 * r * sizeof *w->acc);
+            w->r = w->B && w->X && w->E && w->acc ? r : 0;
+        }
+        if (!w->r) failed = 1;
+        else {
+            double *rn = w->acc + r, *bn = w->acc + 2 * r;
+            own_rhs(s, phi, load, c0, r, w->B);
+            memcpy(w->X, w->B, nf * r * sizeof *w->X);
+            thx_chol_solve_rows(s->chol, w->X, r, w->E);
+            own_residual(s, w->B, w->X, r, w->acc, rn, bn);
+            for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
+            /* the free values into phi; nodes neither free nor prescribed are 0 */
+            for (size_t q = 0; q < nf; q++) {
+                const double *xq = w->X + (size_t)iperm[q] * r;
+                double *pq = phi + c0 * n + (size_t)s->free_node[q];
+                for (size_t j = 0; j < r; j++) pq[j * n] = xq[j];
+            }
+            for (size_t j = 0; j < r; j++)
+                for (int32_t i = 0; i < s->n; i++)
+                    if (s->fidx[i] < 0 && s->didx[i] < 0) phi[(c0 + j) * n + (size_t)i] = 0;
+        }
+    }
+    if (was > 0) blas_threads(was);
+    return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
+}
+
+/* The own path for k columns: factor once, solve, refuse a singular system as the PETSc path does. */
+static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k,
+                                  thx_fem_solve_stats *out)
+{
+    double t0 = thx_wtime();
+    if (s->pinned >= 0)
+        for (size_t j = 0; j < k; j++) phi[j * (size_t)s->n + (size_t)s->pinned] = 0;
+    double *rel = thx_malloc(ctx, (k ? k : 1) * sizeof *rel);
+    if (!rel) return THX_ENOMEM;
+    thx_status st = own_solve(ctx, s, phi, load, k, rel);
+    s->solve_flops += 4.0 * thx_chol_stored(s->chol) * (double)k;
+    for (size_t j = 0; j < k && st == THX_OK; j++) {
+        if (!(rel[j] <= THX_FEM_DIRECT_RTOL))
+            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
+                           "relative residual of %g at right-hand side %zu of a block of %zu: the system is singular, e.g. "
+                           "currents into a part of the mesh with no prescribed potential)", rel[j], j + 1, k);
+        if (out) out->residual = fmax(out->residual, rel[j]);
+    }
+    free(rel);
+    if (out) out->seconds += thx_wtime() - t0;
+    return st;
 }
 
 thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
@@ -330,6 +584,17 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
 {
     thx_status st = THX_OK;
     double t0 = thx_wtime();
+    if (s->own) THX_CHECK(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) {
+        thx_fem_solve_stats one;
+        memset(&one, 0, sizeof one);
+        st = own_solve_block(ctx, s, phi, load, 1, &one);
+        one.iterations = one.iterations_min = 1;
+        one.iterations_total = 1;
+        one.converged = st == THX_OK;
+        if (out) *out = one;
+        return st;
+    }
     if (s->pinned >= 0) phi[s->pinned] = 0;
     /* b = load_f - K_fd phi_d over the own rows; x = the guess */
     st = fill_rhs(ctx, s, phi, load, warm);
@@ -411,6 +676,12 @@ size_t thx_fem_system_block(const thx_fem_system *s)
     PetscBool set = PETSC_FALSE;
     PetscOptionsGetInt(NULL, NULL, "-thorax_block_size", &want, &set);
     if (set && want >= 1) return (size_t)want;
+    if (s->own) {
+        /* per right-hand side: the caller's column of every node, and two of the free nodes in the solve (b and
+           x, row-major); the factor itself is on top */
+        size_t k = THX_FEM_OWN_BYTES / (sizeof(double) * ((size_t)(s->n > 0 ? s->n : 1) + 2 * (size_t)s->nf));
+        return k < 1 ? 1 : k > THX_FEM_OWN_MAX ? THX_FEM_OWN_MAX : k;
+    }
     /* five columns of every node's value per right-hand side live at once: the caller's block, PETSc's
        dense B and X, CHOLMOD's workspace and the residual's block (docs/decisions.md) */
     size_t k = THX_FEM_BLOCK_BYTES / (5 * sizeof(double) * (size_t)(s->n > 0 ? s->n : 1));
@@ -509,6 +780,15 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
     sum.iterations_min = 1 << 30;
     sum.converged = 1;
     if (!k) { sum.iterations_min = 0; goto done; }
+    if (s->own) THX_TRY(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) {
+        size_t nb = thx_fem_system_block(s);
+        for (size_t j0 = 0; j0 < k; j0 += nb)
+            THX_TRY(own_solve_block(ctx, s, phi + j0 * n, load ? load + j0 * n : NULL, k - j0 < nb ? k - j0 : nb, &sum));
+        sum.iterations = sum.iterations_min = 1;
+        sum.iterations_total = (long)k;
+        goto done;
+    }
     if (k == 1 || !is_direct(s)) {
         /* column by column: exactly thx_fem_solve, column j > 0 warm-started from column j - 1's solution */
         for (size_t j = 0; j < k; j++) {

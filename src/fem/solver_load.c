@@ -75,3 +75,5 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
 {
     g_api->system_describe(s, ksp, pc, ranks);
 }
+
+void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out) { g_api->system_factor_info(s, out); }

@@ -9,7 +9,7 @@
 #include "thorax/fem/fem.h"
 
 /* Raised whenever the table changes: a module from another build is refused, not misused. */
-#define THX_FEM_PETSC_ABI 1
+#define THX_FEM_PETSC_ABI 2
 
 typedef struct {
     int abi; /* THX_FEM_PETSC_ABI */
@@ -31,6 +31,7 @@ typedef struct {
     void (*system_info)(const thx_fem_system *s, size_t *n_free, size_t *n_prescribed, double *setup_seconds);
     double (*system_matrix_seconds)(const thx_fem_system *s);
     void (*system_describe)(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks);
+    void (*system_factor_info)(const thx_fem_system *s, thx_fem_factor_info *out);
 } thx_fem_petsc;
 
 /* Exported by the module. */

@@ -18,6 +18,7 @@ static const thx_fem_petsc table = {
     .system_info = thx_fem_system_info,
     .system_matrix_seconds = thx_fem_system_matrix_seconds,
     .system_describe = thx_fem_system_describe,
+    .system_factor_info = thx_fem_system_factor_info,
 };
 
 const thx_fem_petsc *thx_fem_petsc_get(void) { return &table; }

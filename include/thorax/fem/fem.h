@@ -154,6 +154,22 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
 void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, const double *phi, double *j_tet,
                       double *j_node);
 
+/* thorax's own direct path (one rank, many right-hand sides, no solver named on the command line:
+ * CHOLMOD's supernodal Cholesky factor driven by thorax, docs/design/parallel.md): what it did. All
+ * zero when the system was solved another way. */
+typedef struct {
+    int used;               /* 1: the factor was made by the own path */
+    int ordering_cached;    /* 1: the fill-reducing ordering came from the cache (else METIS ran) */
+    double t_ordering, t_analysis, t_factor; /* seconds */
+    double flops;           /* the factorization's (CHOLMOD's count) */
+    double nonzeros;        /* in the factor L */
+    double solve_flops;     /* the solves so far: 4 flops per stored entry of L per right-hand side */
+    size_t factor_bytes;
+    char cache_note[160];   /* why the ordering was not cached (empty when it was, or was read) */
+} thx_fem_factor_info;
+
+void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out);
+
 /* ---- forward problems (paper 4.1) ---- */
 
 #include "thorax/model/model.h"
@@ -189,6 +205,7 @@ typedef struct {
     size_t n_located_by_scan; /* thx_forward_dipoles: dipoles the walk did not place (thx_fem_locate_walk) */
     size_t n_fallback;      /* thx_forward_dipoles, Saint-Venant: dipoles put on by partial integration instead
                                (every corner of their tetrahedron on an interface between regions) */
+    thx_fem_factor_info factor; /* the own direct path's figures (factor.used 0 when not taken) */
 } thx_forward_result;
 
 void thx_forward_opts_default(thx_forward_opts *o);

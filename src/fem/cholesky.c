@@ -1,0 +1,303 @@
+/*
+ * thorax's own direct path (src/fem/cholesky.h): CHOLMOD's supernodal factor with a cached METIS
+ * ordering, and blocked triangular solves on row-major right-hand sides.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <suitesparse/cholmod.h>
+
+#include "fem/cholesky.h"
+#include "thorax/core/sha256.h"
+
+/* BLAS, Fortran calling convention (OpenBLAS behind libblas.so.3) */
+void dtrsm_(const char *side, const char *uplo, const char *transa, const char *diag, const int *m, const int *n,
+            const double *alpha, const double *a, const int *lda, double *b, const int *ldb);
+void dgemm_(const char *ta, const char *tb, const int *m, const int *n, const int *k, const double *alpha,
+            const double *a, const int *lda, const double *b, const int *ldb, const double *beta, double *c,
+            const int *ldc);
+
+struct thx_chol {
+    cholmod_common c;
+    cholmod_factor *L;
+    int64_t n;
+    int64_t *perm, *iperm;
+    size_t max_below; /* the most rows below a supernode's diagonal block */
+};
+
+static const char k_magic[8] = {'T', 'H', 'X', 'O', 'R', 'D', '0', '1'};
+
+const char *thx_chol_cache_dir(char *buf, size_t n)
+{
+    const char *d = getenv("THORAX_CACHE_DIR");
+    if (d && *d) return snprintf(buf, n, "%s", d) < (int)n ? buf : NULL;
+    d = getenv("XDG_CACHE_HOME");
+    if (d && *d == '/') return snprintf(buf, n, "%s/thorax", d) < (int)n ? buf : NULL;
+    d = getenv("HOME");
+    if (d && *d == '/') return snprintf(buf, n, "%s/.cache/thorax", d) < (int)n ? buf : NULL;
+    return NULL;
+}
+
+/* mkdir -p for the cache directory; 0 on success */
+static int make_dirs(const char *dir)
+{
+    char p[4096];
+    if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) return -1;
+    for (char *s = p + 1; *s; s++) {
+        if (*s != '/') continue;
+        *s = 0;
+        if (mkdir(p, 0755) && errno != EEXIST) return -1;
+        *s = '/';
+    }
+    return mkdir(p, 0755) && errno != EEXIST ? -1 : 0;
+}
+
+/* The graph's key: SHA-256 of a tag, n, rowp and col. */
+static void graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32])
+{
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    static const char tag[] = "thorax ordering: METIS nested dissection of a CSR graph, v1";
+    thx_sha256_update(&h, tag, sizeof tag);
+    thx_sha256_update(&h, &n, sizeof n);
+    thx_sha256_update(&h, rowp, (size_t)(n + 1) * sizeof *rowp);
+    thx_sha256_update(&h, col, (size_t)rowp[n] * sizeof *col);
+    thx_sha256_final(&h, key);
+}
+
+static void cache_path(char *buf, size_t n, const char *dir, const unsigned char key[32])
+{
+    char hex[65];
+    for (int i = 0; i < 32; i++) snprintf(hex + 2 * i, 3, "%02x", key[i]);
+    snprintf(buf, n, "%s/ordering-%s.bin", dir, hex);
+}
+
+/* 1 when perm (n entries) is a permutation of 0..n-1 */
+static int is_permutation(const int64_t *perm, int64_t n)
+{
+    unsigned char *seen = calloc((size_t)(n ? n : 1), 1);
+    if (!seen) return 0;
+    int ok = 1;
+    for (int64_t i = 0; i < n && ok; i++) {
+        if (perm[i] < 0 || perm[i] >= n || seen[perm[i]]) ok = 0;
+        else seen[perm[i]] = 1;
+    }
+    free(seen);
+    return ok;
+}
+
+/* The cached ordering, or 0 (missing, another graph, damaged: the caller computes it again). */
+static int cache_read(const char *path, int64_t n, const unsigned char key[32], int64_t *perm)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    char magic[8];
+    uint64_t nn = 0;
+    unsigned char k2[32], sum[32], sum2[32];
+    int ok = fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_magic, 8) && fread(&nn, sizeof nn, 1, f) == 1 &&
+             nn == (uint64_t)n && fread(k2, 1, 32, f) == 32 && !memcmp(k2, key, 32) &&
+             fread(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fread(sum, 1, 32, f) == 32 && fgetc(f) == EOF;
+    fclose(f);
+    if (!ok) return 0;
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
+    thx_sha256_final(&h, sum2);
+    return !memcmp(sum, sum2, 32) && is_permutation(perm, n);
+}
+
+/* Writes the ordering atomically (a temporary file renamed); a note on failure, none on success. */
+static void cache_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
+                        char *note, size_t note_n)
+{
+    if (make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
+    char tmp[4300];
+    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    unsigned char sum[32];
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
+    thx_sha256_final(&h, sum);
+    uint64_t nn = (uint64_t)n;
+    int ok = fwrite(k_magic, 1, 8, f) == 8 && fwrite(&nn, sizeof nn, 1, f) == 1 && fwrite(key, 1, 32, f) == 32 &&
+             fwrite(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fwrite(sum, 1, 32, f) == 32;
+    ok = (fclose(f) == 0) && ok;
+    if (!ok || rename(tmp, path)) {
+        unlink(tmp);
+        snprintf(note, note_n, "cannot write the ordering into the cache directory %s", dir);
+    }
+}
+
+void thx_chol_free(thx_chol **fp)
+{
+    if (!fp || !*fp) return;
+    thx_chol *f = *fp;
+    if (f->L) cholmod_l_free_factor(&f->L, &f->c);
+    cholmod_l_finish(&f->c);
+    free(f->perm);
+    free(f->iperm);
+    free(f);
+    *fp = NULL;
+}
+
+thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
+                           thx_chol **out, thx_chol_info *info)
+{
+    *out = NULL;
+    thx_chol_info inf;
+    memset(&inf, 0, sizeof inf);
+    thx_status st = THX_OK;
+    cholmod_sparse *A = NULL;
+    int64_t *order = NULL;
+    thx_chol *f = thx_calloc(ctx, 1, sizeof *f);
+    if (!f) return THX_ENOMEM;
+    cholmod_l_start(&f->c);
+    f->c.print = 0;
+    f->c.error_handler = NULL;
+    f->c.supernodal = CHOLMOD_SUPERNODAL;
+    /* larger supernodes than CHOLMOD's default (4, 16, 48 columns): fewer, larger BLAS calls in the
+       factorization and in our solves (measured in docs/design/parallel.md) */
+    f->c.nrelax[0] = 16;
+    f->c.nrelax[1] = 64;
+    f->c.nrelax[2] = 192;
+    f->n = n;
+    /* the upper triangle, column by column: CSR row i is column i of the symmetric matrix */
+    size_t nz = 0;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t k = rowp[i]; k < rowp[i + 1]; k++) nz += col[k] <= i;
+    A = cholmod_l_allocate_sparse((size_t)n, (size_t)n, nz, 1, 1, 1, CHOLMOD_REAL, &f->c);
+    f->perm = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *f->perm);
+    f->iperm = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *f->iperm);
+    order = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *order);
+    if (!A || !f->perm || !f->iperm || !order) { st = THX_ENOMEM; goto done; }
+    {
+        SuiteSparse_long *Ap = A->p, *Ai = A->i;
+        double *Ax = A->x;
+        size_t w = 0;
+        for (int64_t i = 0; i < n; i++) {
+            Ap[i] = (SuiteSparse_long)w;
+            for (int64_t k = rowp[i]; k < rowp[i + 1]; k++)
+                if (col[k] <= i) { Ai[w] = col[k]; Ax[w] = val[k]; w++; }
+        }
+        Ap[n] = (SuiteSparse_long)w;
+    }
+    /* the ordering: the cache, else METIS (stored for the next run) */
+    double t0 = thx_wtime();
+    unsigned char key[32];
+    graph_key(n, rowp, col, key);
+    char dir[4096], path[4200];
+    const char *cd = thx_chol_cache_dir(dir, sizeof dir);
+    if (cd) cache_path(path, sizeof path, cd, key);
+    inf.ordering_cached = cd && cache_read(path, n, key, order);
+    if (!inf.ordering_cached) {
+        if (!cholmod_l_metis(A, NULL, 0, 0, (SuiteSparse_long *)order, &f->c) || f->c.status < 0) {
+            st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
+                           "fem: the fill-reducing ordering (METIS through CHOLMOD) failed (CHOLMOD status %d)", f->c.status);
+            goto done;
+        }
+        if (cd) cache_write(cd, path, n, key, order, inf.cache_note, sizeof inf.cache_note);
+        else snprintf(inf.cache_note, sizeof inf.cache_note, "no cache directory (HOME, XDG_CACHE_HOME and THORAX_CACHE_DIR unset)");
+    }
+    inf.t_order = thx_wtime() - t0;
+    /* the symbolic analysis with exactly that ordering, postordered: the same for a cached and a fresh one */
+    t0 = thx_wtime();
+    f->c.nmethods = 1;
+    f->c.method[0].ordering = CHOLMOD_GIVEN;
+    f->c.postorder = 1;
+    f->L = cholmod_l_analyze_p(A, (SuiteSparse_long *)order, NULL, 0, &f->c);
+    if (!f->L || f->c.status < 0) {
+        st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
+                       "fem: the symbolic factorization (CHOLMOD) failed (status %d)", f->c.status);
+        goto done;
+    }
+    inf.t_analyze = thx_wtime() - t0;
+    t0 = thx_wtime();
+    int ok = cholmod_l_factorize(A, f->L, &f->c);
+    inf.t_factor = thx_wtime() - t0;
+    if (f->c.status == CHOLMOD_NOT_POSDEF) {
+        int64_t bad = (int64_t)f->L->minor;
+        inf.not_posdef = 1;
+        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: zero or negative "
+                       "pivot at row %lld of %lld: the matrix is singular, e.g. currents into a part of the mesh with no "
+                       "prescribed potential)", (long long)(bad < n ? ((int64_t *)f->L->Perm)[bad] + 1 : bad + 1), (long long)n);
+        goto done;
+    }
+    if (!ok || f->c.status < 0 || !f->L->is_super) {
+        st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
+                       "fem: the numeric factorization (CHOLMOD) failed (status %d)", f->c.status);
+        goto done;
+    }
+    inf.flops = f->c.fl;
+    inf.lnz = f->c.lnz;
+    inf.n_super = f->L->nsuper;
+    inf.factor_bytes = f->L->xsize * sizeof(double) + f->L->ssize * sizeof(SuiteSparse_long);
+    {
+        const SuiteSparse_long *P = f->L->Perm, *super = f->L->super, *pi = f->L->pi;
+        for (int64_t i = 0; i < n; i++) {
+            f->perm[i] = P[i];
+            f->iperm[P[i]] = i;
+        }
+        for (size_t s = 0; s < f->L->nsuper; s++) {
+            size_t below = (size_t)((pi[s + 1] - pi[s]) - (super[s + 1] - super[s]));
+            if (below > f->max_below) f->max_below = below;
+        }
+    }
+    *out = f;
+    f = NULL;
+done:
+    if (A) cholmod_l_free_sparse(&A, f ? &f->c : &(*out)->c);
+    free(order);
+    thx_chol_free(&f);
+    if (info) *info = inf;
+    return st;
+}
+
+const int64_t *thx_chol_perm(const thx_chol *f) { return f->perm; }
+const int64_t *thx_chol_iperm(const thx_chol *f) { return f->iperm; }
+
+double thx_chol_stored(const thx_chol *f) { return (double)f->L->xsize; }
+
+size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ? f->max_below : 1) * r * sizeof(double); }
+
+void thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
+{
+    const cholmod_factor *L = f->L;
+    const SuiteSparse_long *super = L->super, *pi = L->pi, *px = L->px, *Ls = L->s;
+    const double *Lx = L->x;
+    const size_t ns = L->nsuper;
+    const int ir = (int)r;
+    const double one = 1, zero = 0, minus = -1;
+    /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (r x nscol, ld r). */
+    for (size_t s = 0; s < ns; s++) {
+        int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
+        const double *L1 = Lx + px[s];
+        double *Xs = X + (size_t)super[s] * r;
+        dtrsm_("R", "L", "T", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
+        if (nb <= 0) continue;
+        dgemm_("N", "T", &ir, &nb, &nscol, &one, Xs, &ir, L1 + nscol, &nsrow, &zero, E, &ir);
+        const SuiteSparse_long *rows = Ls + pi[s] + nscol;
+        for (int t = 0; t < nb; t++) {
+            double *xr = X + (size_t)rows[t] * r;
+            const double *e = E + (size_t)t * r;
+            for (size_t j = 0; j < r; j++) xr[j] -= e[j];
+        }
+    }
+    /* backward: L^T X = Y */
+    for (size_t s = ns; s-- > 0;) {
+        int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
+        const double *L1 = Lx + px[s];
+        double *Xs = X + (size_t)super[s] * r;
+        if (nb > 0) {
+            const SuiteSparse_long *rows = Ls + pi[s] + nscol;
+            for (int t = 0; t < nb; t++) memcpy(E + (size_t)t * r, X + (size_t)rows[t] * r, r * sizeof *E);
+            dgemm_("N", "N", &ir, &nscol, &nb, &minus, E, &ir, L1 + nscol, &nsrow, &one, Xs, &ir);
+        }
+        dtrsm_("R", "L", "N", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
+    }
+}

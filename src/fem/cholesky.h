@@ -1,0 +1,57 @@
+/*
+ * thorax's own direct path for many right-hand sides on one rank (docs/design/parallel.md, "The
+ * forward problem at the high resolution in seconds"): CHOLMOD's supernodal factor of the free-node
+ * system, with its fill-reducing ordering (METIS nested dissection) kept in the user's cache keyed
+ * by the matrix's graph, and triangular solves of our own on row-major blocks (a supernode's rows of
+ * every right-hand side contiguous), one block of columns per thread. Built into the solver module
+ * beside src/fem/solver.c, which decides when to take this path.
+ */
+#ifndef THORAX_FEM_CHOLESKY_H
+#define THORAX_FEM_CHOLESKY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "thorax/core/core.h"
+
+typedef struct thx_chol thx_chol;
+
+typedef struct {
+    double t_order;     /* the ordering: computed (METIS) or read from the cache */
+    double t_analyze;   /* CHOLMOD's symbolic analysis with that ordering */
+    double t_factor;    /* the numeric factorization */
+    double flops;       /* CHOLMOD's count for the factorization */
+    double lnz;         /* nonzeros in L (CHOLMOD's count) */
+    size_t factor_bytes;/* the factor's values and row indices */
+    size_t n_super;     /* supernodes */
+    int ordering_cached;/* 1: the ordering came from the cache */
+    int not_posdef;     /* 1: refused as not positive definite (a zero or negative pivot) */
+    char cache_note[160];/* why the cache was not used or not written (empty when it was) */
+} thx_chol_info;
+
+/* Factors the symmetric positive definite matrix of order n given as a full CSR (both triangles,
+ * sorted columns). The ordering is looked up in the cache (thx_chol_cache_dir) by the SHA-256 of
+ * (n, rowp, col); when missing it is computed and stored there. A matrix that is not positive
+ * definite is THX_ESOLVER naming the column. */
+thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
+                           thx_chol **out, thx_chol_info *info);
+void thx_chol_free(thx_chol **f);
+
+/* The factor's order: row i of the permuted system is row perm[i] of the matrix; iperm its inverse. */
+const int64_t *thx_chol_perm(const thx_chol *f);
+const int64_t *thx_chol_iperm(const thx_chol *f);
+
+/* Entries stored in L (its supernodes' columns, zeros of the relaxed amalgamation included). */
+double thx_chol_stored(const thx_chol *f);
+/* Bytes of work space one thread needs to solve r right-hand sides at once (beyond X itself). */
+size_t thx_chol_work_bytes(const thx_chol *f, size_t r);
+/* Solves A X = B in place for r right-hand sides held row-major in the factor's order: row i of X
+ * (r values, contiguous) is row perm[i] of the system. work: thx_chol_work_bytes(f, r) bytes. Calls
+ * BLAS from the calling thread alone; safe to run from several threads on the same factor. */
+void thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work);
+
+/* The cache directory: $THORAX_CACHE_DIR, else $XDG_CACHE_HOME/thorax, else $HOME/.cache/thorax;
+ * NULL when none can be named. Writes into buf (size n). */
+const char *thx_chol_cache_dir(char *buf, size_t n);
+
+#endif
