@@ -7,6 +7,7 @@
 
 #include "cli/cli_fem.h"
 #include "thorax/check/check_volume.h"
+#include "thorax/check/verdict.h"
 #include "thorax/core/fileio.h"
 #include "thorax/fem/fem.h"
 #include "thorax/model/model.h"
@@ -100,8 +101,26 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
     if (warning) *warning = NULL;
     /* no volume: the solver says so in its own words */
     if (!m->volume || !m->volume->n_tets) return THX_OK;
-    thx_volume_report r;
     double t0 = thx_wtime();
+    /* a verdict `thorax mesh` kept for exactly these files (thorax/check/verdict.h): the check is not run again */
+    char why[512];
+    if (thx_volume_verdict_trusted(ctx, model_dir, why, sizeof why)) {
+        thx_log(ctx, THX_LOG_DEBUG, "volume check (%zu tetrahedra): passed, the verdict kept in model.json (its files "
+                "unchanged: SHA-256 in %.2f s)", m->volume->n_tets, thx_wtime() - t0);
+        if (note) {
+            cJSON *j = cJSON_CreateObject();
+            if (!j || !cJSON_AddArrayToObject(j, "failures") || !cJSON_AddArrayToObject(j, "reasons") ||
+                !cJSON_AddBoolToObject(j, "ok", 1) || !cJSON_AddBoolToObject(j, "forced", 0) ||
+                !cJSON_AddStringToObject(j, "verdict", "kept in model.json (thorax mesh's check; the files unchanged since)")) {
+                cJSON_Delete(j);
+                return thx_error(ctx, THX_ENOMEM, "out of memory recording the volume check");
+            }
+            *note = j;
+        }
+        return THX_OK;
+    }
+    thx_log(ctx, THX_LOG_DEBUG, "volume check: %s: checking", why);
+    thx_volume_report r;
     thx_status st = thx_volume_check(ctx, m->volume, m, NULL, &r);
     if (st != THX_OK && st != THX_ECHECK) {
         thx_volume_report_free(&r);

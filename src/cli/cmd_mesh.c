@@ -10,6 +10,7 @@
 
 #include "cli/cli.h"
 #include "thorax/check/check_volume.h"
+#include "thorax/check/verdict.h"
 #include "thorax/mesh/mesh.h"
 /* A progress bar on a terminal (stderr) for a stage once it has run a second; one line per stage. */
 typedef struct { char stage[32]; double t0; int shown; } progress_state;
@@ -269,7 +270,13 @@ int cmd_mesh(int argc, char **argv)
     if (st == THX_OK) st = thx_model_read(ctx, in, &m);
     if (st == THX_OK) st = thx_mesh_build(ctx, m, &o, &S);
     if (ps.shown) fputc('\n', stderr);
-    /* never write a mesh its own check fails: refuse it, naming the fault and where it sits */
+    /* never write a mesh its own check fails: refuse it, naming the fault and where it sits. The surfaces
+       are checked at the values their files will give back (volume.pts is written exactly), so that the
+       verdict kept in model.json covers the files a solver reads (thorax/check/verdict.h) */
+    int default_check = min_dihedral < 0;
+    if (st == THX_OK)
+        for (size_t k = 0; k < m->n_surfaces; k++)
+            for (size_t i = 0; i < 3 * m->surf[k]->n_nodes; i++) m->surf[k]->xyz[i] = thx_surface_stored_coord(m->surf[k]->xyz[i]);
     if (st == THX_OK) {
         thx_volume_report r;
         memset(&r, 0, sizeof r);
@@ -301,6 +308,7 @@ int cmd_mesh(int argc, char **argv)
     }
     if (st == THX_OK) mesh_progress(&ps, "writing", 0.0);
     if (st == THX_OK) st = thx_model_write_claimed(ctx, m, &od);
+    if (st == THX_OK && default_check) st = thx_volume_verdict_record(ctx, out);
     if (ps.shown && !strcmp(ps.stage, "writing")) { mesh_progress(&ps, "writing", 1.0); fputc('\n', stderr); }
     if (st != THX_OK) rc = cli_fail(ctx, "mesh", st);
     else {

@@ -74,6 +74,10 @@ thx_status thx_surface_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fa
                                    thx_role role, thx_surface **out, int *base);
 /* Writes a .pts/.fac pair (1-based). Each file written atomically. */
 thx_status thx_surface_write_ptsfac(thx_ctx *ctx, const thx_surface *s, const char *pts, const char *fac);
+/* The value a coordinate v reads back as from a NAME.pts file thx_surface_write_ptsfac wrote ("%.6f";
+ * a value that rounds to zero reads back as +0). `thorax mesh` checks its surfaces at these values, so
+ * that the verdict it keeps covers the files (thorax/check/verdict.h). */
+double thx_surface_stored_coord(double v);
 
 /* Export formats: surface formats (VTK ... PLY), then volume formats (VTU, MSH). */
 typedef enum {

@@ -63,6 +63,13 @@ static int format_coord(char *buf, double v)
     return (int)strlen(buf);
 }
 
+double thx_surface_stored_coord(double v)
+{
+    char buf[64];
+    format_coord(buf, v);
+    return strtod(buf, NULL);
+}
+
 void thx_io_put_coord(FILE *f, double v)
 {
     char buf[64];

@@ -238,7 +238,7 @@ static const char *const ROOT_KEYS[] = {"format", "version", "units", "surfaces"
 static const char *const SURFACE_KEYS[] = {"name", "role", "pts", "fac", "n_nodes", "n_tris", "interior", "vmap", NULL};
 static const char *const FRAME_KEYS[] = {"superior", "anterior", "left", NULL};
 static const char *const VOLUME_KEYS[] = {"pts",   "tet",         "n_nodes",     "n_tets",  "n_regions", "units",
-                                          "index_base", "orientation", "node_tables", "steiner", "n_steiner", NULL};
+                                          "index_base", "orientation", "node_tables", "steiner", "n_steiner", "check", NULL};
 static const char *const REGION_KEYS[] = {"id", "name", "sigma", "units", "source", NULL};
 
 /* Refuses a key of o outside `keys` or a key given twice (cJSON keeps both and
@@ -310,6 +310,10 @@ static thx_status check_volume_keys(thx_ctx *ctx, const char *mpath, const cJSON
             if (v && !cJSON_IsString(v))
                 return thx_error(ctx, THX_EINPUT, "%s: \"volume\".\"%s\" must be a string", mpath, strs[k]);
         }
+        const cJSON *ck = cJSON_GetObjectItemCaseSensitive(vo, "check");
+        if (ck && !cJSON_IsObject(ck))
+            return thx_error(ctx, THX_EINPUT, "%s: \"volume\".\"check\" must be an object (the volume check's verdict, "
+                             "thorax/check/verdict.h)", mpath);
         static const char *const nums[] = {"n_nodes", "n_tets", "n_regions", "index_base", "n_steiner"};
         for (size_t k = 0; k < sizeof nums / sizeof *nums; k++) {
             const cJSON *v = cJSON_GetObjectItemCaseSensitive(vo, nums[k]);
