@@ -5,7 +5,7 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
-#include "thorax/core/blas_kernels.h"
+#include "thorax/core/startup.h"
 
 static const struct {
     const char *name;
@@ -180,12 +180,13 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < N_COMMANDS; i++)
         if (strcmp(name, commands[i].name) == 0) {
             /* The commands whose time goes into dense or sparse-direct algebra (factorizations, the
-               boundary elements' dense systems, the SVDs) first make sure OpenBLAS runs the right
-               kernels, which may mean starting again (thorax/core/blas_kernels.h); the others are
-               not worth the second start (about 0.08 s). */
+               boundary elements' dense systems, the SVDs) and large blocks of memory first make sure
+               OpenBLAS runs the right kernels and malloc's large blocks are on huge pages, which may
+               mean starting again (thorax/core/startup.h); the others are not worth the second start
+               (about 0.08 s). */
             static const char *const blas_heavy[] = {"forward", "bem", "inverse", "verify"};
             for (size_t k = 0; k < sizeof blas_heavy / sizeof blas_heavy[0]; k++)
-                if (!strcmp(name, blas_heavy[k])) thx_blas_pick_kernels(argv);
+                if (!strcmp(name, blas_heavy[k])) thx_startup_heavy(argv);
             return commands[i].fn(argc - 1, argv + 1);
         }
     fprintf(stderr, "thorax: unknown command '%s' (see 'thorax help')\n", name);

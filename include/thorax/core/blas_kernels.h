@@ -8,7 +8,7 @@
  * when the library is loaded, from the environment variable OPENBLAS_CORETYPE,
  * so a program that wants the right kernels must have it set before it starts.
  *
- * thx_blas_pick_kernels does that for a program's main(): when OpenBLAS is the
+ * thx_startup_heavy (thorax/core/startup.h) does that for a program's main(): when OpenBLAS is the
  * BLAS in the process, says "Prescott", OPENBLAS_CORETYPE is not set, and the
  * processor (and the operating system) support AVX-512 (F, CD, BW, DQ, VL:
  * SkylakeX's kernels) or AVX2 and FMA (Haswell's), it sets OPENBLAS_CORETYPE and
@@ -24,7 +24,5 @@
  * be done (see above); `loaded` is the core OpenBLAS chose, as it reports it. */
 const char *thx_blas_better_core(const char *loaded);
 
-/* Call first in main(), before any thread is started; argv as main received it. */
-void thx_blas_pick_kernels(char **argv);
 
 #endif
