@@ -11,6 +11,9 @@
  * two block sizes of the series and the adjoint transfer alone).
  */
 #include <math.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <petscsys.h>
 #include <stdlib.h>
 #include <string.h>
@@ -360,6 +363,121 @@ static void phantom_tests(thx_ctx *ctx)
     thx_model_destroy(&m);
 }
 
+/* One solve of R columns of linear fields on the box with a fresh system; the answers into phi, the
+   factor's figures into fi. */
+static thx_status own_solve_box(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, const thx_volume *v,
+                                const unsigned char *onb, size_t R, double *phi, thx_fem_factor_info *fi)
+{
+    size_t n = v->n_nodes;
+    memset(phi, 0, n * R * sizeof *phi);
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n; i++)
+            if (onb[i]) phi[j * n + i] = lin(j, v->xyz + 3 * i);
+    thx_fem_system *S = NULL;
+    thx_status st = thx_fem_system_create(ctx, K, kind, 0, &S);
+    if (st == THX_OK) {
+        thx_fem_system_hint_rhs(S, R);
+        st = thx_fem_solve_block(ctx, S, phi, NULL, R, 0, NULL);
+        thx_fem_system_factor_info(S, fi);
+    }
+    thx_fem_system_destroy(&S);
+    return st;
+}
+
+/* thorax's own direct path (src/fem/cholesky.h): the ordering computed once and kept in the cache
+   (THORAX_CACHE_DIR), read back the next time with the same answers to the bit, a damaged cache file
+   computed again, an unwritable cache said and solved anyway; linear fields exact; the same answers as
+   PETSc's interface to CHOLMOD (-thorax_direct petsc) and on 1 and 2 threads. */
+static void own_path_tests(thx_ctx *ctx)
+{
+    if (tl_scratch_make("fem_own") != 0) { CHECK(0); return; }
+    setenv("THORAX_CACHE_DIR", tl_path("cache"), 1);
+    unsigned char *onb = NULL;
+    thx_volume *v = box(ctx, 0, &onb);
+    thx_csr K;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v, NULL, &K));
+    size_t n = v->n_nodes, R = 20;
+    unsigned char *kind = malloc(n);
+    for (size_t i = 0; i < n; i++) kind[i] = onb[i] ? 2 : 1;
+    double *a = malloc(n * R * sizeof *a), *b = malloc(n * R * sizeof *b);
+    thx_fem_factor_info fi;
+    /* first: METIS runs, the ordering is stored */
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, a, &fi));
+    CHECK(fi.used == 1 && fi.ordering_cached == 0 && fi.cache_note[0] == 0 && fi.flops > 0 && fi.nonzeros > 0);
+    CHECK(fi.solve_flops > 0);
+    double err = 0;
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n; i++) err = fmax(err, fabs(a[j * n + i] - lin(j, v->xyz + 3 * i)));
+    CHECK(err < 1e-11);
+    char cmd[1400], file[1200] = "";
+    snprintf(cmd, sizeof cmd, "ls '%s'/ordering-*.bin 2>/dev/null", tl_path("cache"));
+    FILE *ls = popen(cmd, "r");
+    int listed = ls && fgets(file, sizeof file, ls) != NULL;
+    if (ls) pclose(ls);
+    file[strcspn(file, "\n")] = 0;
+    CHECK(listed);
+    /* second: read from the cache, the same answers to the bit */
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+    CHECK(fi.used == 1 && fi.ordering_cached == 1);
+    CHECK(memcmp(a, b, n * R * sizeof *a) == 0);
+    /* a damaged cache file (two entries of the ordering swapped: still a permutation, but not the one its
+       checksum names) is computed again, with the same answers, and stored whole again */
+    if (listed) {
+        FILE *f = fopen(file, "r+b");
+        int64_t p[2];
+        int ok = f && fseek(f, 8 + 8 + 32, SEEK_SET) == 0 && fread(p, sizeof *p, 2, f) == 2;
+        int64_t q[2] = {p[1], p[0]};
+        ok = ok && fseek(f, 8 + 8 + 32, SEEK_SET) == 0 && fwrite(q, sizeof *q, 2, f) == 2;
+        if (f) fclose(f);
+        CHECK(ok);
+        CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+        CHECK(fi.used == 1 && fi.ordering_cached == 0);
+        CHECK(memcmp(a, b, n * R * sizeof *a) == 0);
+        CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+        CHECK(fi.ordering_cached == 1);
+    }
+    /* a cache directory that cannot be made (under a regular file): said, and solved the same */
+    FILE *blocker = fopen(tl_path("plainfile"), "w");
+    if (blocker) fclose(blocker);
+    char sub[1200];
+    snprintf(sub, sizeof sub, "%s/cache", tl_path("plainfile"));
+    setenv("THORAX_CACHE_DIR", sub, 1);
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+    CHECK(fi.used == 1 && fi.ordering_cached == 0 && strstr(fi.cache_note, "cache directory") != NULL);
+    CHECK(memcmp(a, b, n * R * sizeof *a) == 0);
+    printf("own path: linear fields to %.1e; ordering cached, recomputed when damaged, unwritable cache: \"%s\"\n", err,
+           fi.cache_note);
+    setenv("THORAX_CACHE_DIR", tl_path("cache"), 1);
+    /* two threads (columns dealt in two groups) against one */
+#ifdef _OPENMP
+    int was = omp_get_max_threads();
+    omp_set_num_threads(2);
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+    omp_set_num_threads(was);
+    double d2 = rel_diff(b, a, n * R);
+    CHECK(d2 < 1e-13);
+    printf("own path: 2 threads against %d: %.1e\n", was, d2);
+#endif
+    /* PETSc's interface to the same package */
+    PetscOptionsSetValue(NULL, "-thorax_direct", "petsc");
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+    PetscOptionsClearValue(NULL, "-thorax_direct");
+    CHECK(fi.used == 0);
+    double dp = rel_diff(b, a, n * R);
+    CHECK(dp < 1e-12);
+    printf("own path against PETSc's interface to CHOLMOD: %.1e\n", dp);
+    free(a);
+    free(b);
+    free(kind);
+    free(onb);
+    thx_csr_free(&K);
+    thx_volume_destroy(&v);
+    unsetenv("THORAX_CACHE_DIR");
+    char rm[1200];
+    snprintf(rm, sizeof rm, "rm -rf '%s'", tl_scratch);
+    if (!tl_fail && system(rm) != 0) fprintf(stderr, "could not remove %s\n", tl_scratch);
+}
+
 int main(int argc, char **argv)
 {
     thx_ctx *ctx = NULL;
@@ -367,6 +485,7 @@ int main(int argc, char **argv)
     CHECK_OK(ctx, thx_fem_init(argc, argv, NULL, NULL));
     box_tests(ctx, NULL);
     box_tests(ctx, "mumps");
+    own_path_tests(ctx);
     singular_tests(ctx);
     phantom_tests(ctx);
     thx_fem_finalize();

@@ -66,12 +66,12 @@ int thx_fem_options_unused(int list)
     return (int)left;
 }
 
-/* A thread's buffers for the own path: b and x of up to r columns (row-major, the factor's order), the
+/* A thread's buffers for the own path: x (b before the solve) of up to r columns (row-major, the factor's order), the
    solve's work space, the residual's sums. Kept across blocks (fresh pages cost a fault each, and faults
    are dear on virtual machines), on huge pages where the kernel gives them. */
 #define THX_FEM_OWN_THREADS 64
 typedef struct own_work_s {
-    double *B, *X, *E, *acc;
+    double *X, *E, *acc;
     size_t r;
 } own_work;
 
@@ -89,7 +89,6 @@ static void *big_alloc(size_t bytes)
 
 static void own_work_free(own_work *w)
 {
-    free(w->B);
     free(w->X);
     free(w->E);
     free(w->acc);
@@ -477,17 +476,36 @@ static void own_rhs(const thx_fem_system *s, const double *phi, const double *lo
         }
 }
 
+/* Row q of b (original free numbering) for the r columns into out: load_f - K_fd phi_d, as own_rhs puts it. */
+static inline void own_rhs_row(const thx_fem_system *s, const double *phi, const double *load, size_t c0, size_t r,
+                               size_t q, double *restrict out)
+{
+    const size_t n = (size_t)s->n;
+    for (size_t j = 0; j < r; j++) out[j] = 0;
+    for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
+        const double a = s->kfd.val[e], *pd = phi + c0 * n + (size_t)s->pres_node[s->kfd.col[e]];
+        for (size_t j = 0; j < r; j++) out[j] -= a * pd[j * n];
+    }
+    if (load) {
+        const double *lq = load + c0 * n + (size_t)s->free_node[q];
+        for (size_t j = 0; j < r; j++) out[j] += lq[j * n];
+    }
+}
+
 /* rn[j] = ||b - K_ff x||^2 and bn[j] = ||b||^2 for the r columns, rows visited in the factor's order (their
-   neighbours are near them there). */
-static void own_residual(const thx_fem_system *s, const double *restrict B, const double *restrict X, size_t r,
-                         double *restrict acc, double *restrict rn, double *restrict bn)
+   neighbours are near them there); b rebuilt row by row from phi's prescribed values and the loads (not
+   kept: a block of it is as large as x). */
+static void own_residual(const thx_fem_system *s, const double *phi, const double *load, size_t c0,
+                         const double *restrict X, size_t r, double *restrict acc, double *restrict rn,
+                         double *restrict bn)
 {
     const size_t nf = (size_t)s->nf;
     const int64_t *perm = thx_chol_perm(s->chol), *iperm = thx_chol_iperm(s->chol);
+    double *restrict bq = acc + r;
     for (size_t j = 0; j < r; j++) rn[j] = bn[j] = 0;
     for (size_t p = 0; p < nf; p++) {
         const size_t q = (size_t)perm[p];
-        const double *restrict bq = B + p * r;
+        own_rhs_row(s, phi, load, c0, r, q, bq);
 #pragma omp simd
         for (size_t j = 0; j < r; j++) acc[j] = bq[j];
         for (PetscInt e = s->ii[q]; e < s->ii[q + 1]; e++) {
@@ -527,19 +545,17 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const 
         own_work *w = &s->work[t];
         if (w->r < r) {
             own_work_free(w);
-            w->B = big_alloc(nf * r * sizeof *w->B);
             w->X = big_alloc(nf * r * sizeof *w->X);
             w->E = big_alloc(thx_chol_work_bytes(s->chol, r));
-            w->acc = malloc(3 * r * sizeof *w->acc);
-            w->r = w->B && w->X && w->E && w->acc ? r : 0;
+            w->acc = malloc(4 * r * sizeof *w->acc);
+            w->r = w->X && w->E && w->acc ? r : 0;
         }
         if (!w->r) failed = 1;
         else {
-            double *rn = w->acc + r, *bn = w->acc + 2 * r;
-            own_rhs(s, phi, load, c0, r, w->B);
-            memcpy(w->X, w->B, nf * r * sizeof *w->X);
+            double *rn = w->acc + 2 * r, *bn = w->acc + 3 * r;
+            own_rhs(s, phi, load, c0, r, w->X);
             thx_chol_solve_rows(s->chol, w->X, r, w->E);
-            own_residual(s, w->B, w->X, r, w->acc, rn, bn);
+            own_residual(s, phi, load, c0, w->X, r, w->acc, rn, bn);
             for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
             /* the free values into phi; nodes neither free nor prescribed are 0 */
             for (size_t q = 0; q < nf; q++) {
@@ -677,9 +693,9 @@ size_t thx_fem_system_block(const thx_fem_system *s)
     PetscOptionsGetInt(NULL, NULL, "-thorax_block_size", &want, &set);
     if (set && want >= 1) return (size_t)want;
     if (s->own) {
-        /* per right-hand side: the caller's column of every node, and two of the free nodes in the solve (b and
-           x, row-major); the factor itself is on top */
-        size_t k = THX_FEM_OWN_BYTES / (sizeof(double) * ((size_t)(s->n > 0 ? s->n : 1) + 2 * (size_t)s->nf));
+        /* per right-hand side: the caller's column of every node, and one of the free nodes in the solve (x,
+           row-major); the factor itself is on top */
+        size_t k = THX_FEM_OWN_BYTES / (sizeof(double) * ((size_t)(s->n > 0 ? s->n : 1) + (size_t)s->nf));
         return k < 1 ? 1 : k > THX_FEM_OWN_MAX ? THX_FEM_OWN_MAX : k;
     }
     /* five columns of every node's value per right-hand side live at once: the caller's block, PETSc's
