@@ -261,23 +261,28 @@ done:
 const int64_t *thx_chol_perm(const thx_chol *f) { return f->perm; }
 const int64_t *thx_chol_iperm(const thx_chol *f) { return f->iperm; }
 
-double thx_chol_stored(const thx_chol *f) { return (double)f->L->xsize; }
-
 size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ? f->max_below : 1) * r * sizeof(double); }
 
-void thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
+double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
 {
+    double flops = 0;
     const cholmod_factor *L = f->L;
     const SuiteSparse_long *super = L->super, *pi = L->pi, *px = L->px, *Ls = L->s;
     const double *Lx = L->x;
     const size_t ns = L->nsuper;
     const int ir = (int)r;
     const double one = 1, zero = 0, minus = -1;
-    /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (r x nscol, ld r). */
+    /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (r x nscol, ld r). A supernode
+       whose rows are all zero (no right-hand side there, no update from below: the forward problem's b lives
+       at the nodes next to the heart) is skipped: its rows stay zero and it updates nothing, exactly. */
     for (size_t s = 0; s < ns; s++) {
         int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
         const double *L1 = Lx + px[s];
         double *Xs = X + (size_t)super[s] * r;
+        size_t z = 0, nz = (size_t)nscol * r;
+        while (z < nz && Xs[z] == 0) z++;
+        if (z == nz) continue;
+        flops += (double)r * nscol * ((double)nscol + 2.0 * nb);
         dtrsm_("R", "L", "T", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
         if (nb <= 0) continue;
         dgemm_("N", "T", &ir, &nb, &nscol, &one, Xs, &ir, L1 + nscol, &nsrow, &zero, E, &ir);
@@ -299,5 +304,7 @@ void thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
             dgemm_("N", "N", &ir, &nscol, &nb, &minus, E, &ir, L1 + nscol, &nsrow, &one, Xs, &ir);
         }
         dtrsm_("R", "L", "N", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
+        flops += (double)r * nscol * ((double)nscol + 2.0 * nb);
     }
+    return flops;
 }

@@ -41,14 +41,15 @@ void thx_chol_free(thx_chol **f);
 const int64_t *thx_chol_perm(const thx_chol *f);
 const int64_t *thx_chol_iperm(const thx_chol *f);
 
-/* Entries stored in L (its supernodes' columns, zeros of the relaxed amalgamation included). */
-double thx_chol_stored(const thx_chol *f);
 /* Bytes of work space one thread needs to solve r right-hand sides at once (beyond X itself). */
 size_t thx_chol_work_bytes(const thx_chol *f, size_t r);
 /* Solves A X = B in place for r right-hand sides held row-major in the factor's order: row i of X
  * (r values, contiguous) is row perm[i] of the system. work: thx_chol_work_bytes(f, r) bytes. Calls
- * BLAS from the calling thread alone; safe to run from several threads on the same factor. */
-void thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work);
+ * BLAS from the calling thread alone; safe to run from several threads on the same factor. Supernodes
+ * whose rows of B are all zero are skipped in the forward sweep (exactly: they would stay zero).
+ * Returns the flops done (the triangular blocks' r nscol^2 and the rectangles' 2 r nscol nb, both
+ * sweeps). */
+double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work);
 
 /* The cache directory: $THORAX_CACHE_DIR, else $XDG_CACHE_HOME/thorax, else $HOME/.cache/thorax;
  * NULL when none can be named. Writes into buf (size n). */

@@ -73,6 +73,7 @@ int thx_fem_options_unused(int list)
 typedef struct own_work_s {
     double *X, *E, *acc;
     size_t r;
+    double flops; /* the solves' flops so far (thx_chol_solve_rows) */
 } own_work;
 
 static void *big_alloc(size_t bytes)
@@ -121,7 +122,6 @@ struct thx_fem_system {
     thx_chol *chol;
     thx_chol_info chol_info;
     own_work *work;          /* THX_FEM_OWN_THREADS of them */
-    double solve_flops;      /* the own path's solves so far */
 };
 
 /* A PETSc call inside a thx function: on failure record the message and jump to done. */
@@ -305,7 +305,7 @@ void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *ou
     out->t_factor = c->t_factor;
     out->flops = c->flops;
     out->nonzeros = c->lnz;
-    out->solve_flops = s->solve_flops;
+    for (int t = 0; s->work && t < THX_FEM_OWN_THREADS; t++) out->solve_flops += s->work[t].flops;
     out->factor_bytes = c->factor_bytes;
     snprintf(out->cache_note, sizeof out->cache_note, "%s", c->cache_note);
 }
@@ -544,7 +544,9 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const 
         size_t c0 = k * (size_t)t / (size_t)T, c1 = k * (size_t)(t + 1) / (size_t)T, r = c1 - c0;
         own_work *w = &s->work[t];
         if (w->r < r) {
+            double done = w->flops;
             own_work_free(w);
+            w->flops = done;
             w->X = big_alloc(nf * r * sizeof *w->X);
             w->E = big_alloc(thx_chol_work_bytes(s->chol, r));
             w->acc = malloc(4 * r * sizeof *w->acc);
@@ -554,7 +556,7 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const 
         else {
             double *rn = w->acc + 2 * r, *bn = w->acc + 3 * r;
             own_rhs(s, phi, load, c0, r, w->X);
-            thx_chol_solve_rows(s->chol, w->X, r, w->E);
+            w->flops += thx_chol_solve_rows(s->chol, w->X, r, w->E);
             own_residual(s, phi, load, c0, w->X, r, w->acc, rn, bn);
             for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
             /* the free values into phi; nodes neither free nor prescribed are 0 */
@@ -582,7 +584,6 @@ static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, 
     double *rel = thx_malloc(ctx, (k ? k : 1) * sizeof *rel);
     if (!rel) return THX_ENOMEM;
     thx_status st = own_solve(ctx, s, phi, load, k, rel);
-    s->solve_flops += 4.0 * thx_chol_stored(s->chol) * (double)k;
     for (size_t j = 0; j < k && st == THX_OK; j++) {
         if (!(rel[j] <= THX_FEM_DIRECT_RTOL))
             st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "

@@ -163,7 +163,8 @@ typedef struct {
     double t_ordering, t_analysis, t_factor; /* seconds */
     double flops;           /* the factorization's (CHOLMOD's count) */
     double nonzeros;        /* in the factor L */
-    double solve_flops;     /* the solves so far: 4 flops per stored entry of L per right-hand side */
+    double solve_flops;     /* the solves' so far (the supernodes they touched: both sweeps, less the forward
+                               sweep's supernodes with no right-hand side below them) */
     size_t factor_bytes;
     char cache_note[160];   /* why the ordering was not cached (empty when it was, or was read) */
 } thx_fem_factor_info;
