@@ -227,6 +227,33 @@ assert json.load(open('defibh/solution.json'))['volume_check']['ok'] is True
 print('volume check: refused without --force; forced solution records %d reasons' % len(c['reasons']))
 EOF
 
+# 6. the electrodes alone (--rows-only): the route with the fewer solves. The 12-lead set's 9 electrodes
+#    against 40 frames: their transfer matrix (9 adjoint solves) applied to the frames; the same signals
+#    as a solve per frame (--route frames) to 1e-10; the array's 192 electrodes against 40 frames: a
+#    solve per frame. Misuse refused.
+"$THORAX" forward model --epicardial beat.raw --rows model/electrodes/12lead.txt --rows-only -o ro_auto -q
+"$THORAX" forward model --epicardial beat.raw --rows model/electrodes/12lead.txt --rows-only --route frames -o ro_frames -q
+"$THORAX" forward model --epicardial beat8.raw --rows model/electrodes/array.txt --rows-only -o ro_array -q
+[ -f ro_auto/electrodes.raw ] && [ ! -e ro_auto/torso.raw ] || fail "--rows-only: $(ls ro_auto)"
+grep -q '"route":	"transfer: the 9 electrodes' ro_auto/solution.json || fail "--rows-only: not the transfer route"
+grep -q '"route":	"frames: ' ro_frames/solution.json || fail "--route frames: $(grep route ro_frames/solution.json)"
+grep -q '"route":	"frames: a solve per frame (8 frames, 192 electrodes)' ro_array/solution.json || fail "192 electrodes, 8 frames: not a solve per frame"
+$PY - <<'EOF'
+import numpy as np
+def raw(p):
+    b = open(p, 'rb').read()
+    r, f = np.frombuffer(b[8:24], dtype='<u8')
+    return np.frombuffer(b[200 + 8 * int(f):], dtype='<f8').reshape(int(f), int(r))
+a, b = raw('ro_auto/electrodes.raw'), raw('ro_frames/electrodes.raw')
+assert a.shape == b.shape == (40, 9), (a.shape, b.shape)
+d = np.abs(a - b).max() / np.abs(b).max()
+assert d < 1e-10, d
+print('--rows-only: the transfer route against a solve per frame: %.1e (relative to the largest signal)' % d)
+EOF
+refused "--rows-only without --rows" ro_bad "$THORAX" forward model --epicardial beat.raw --rows-only -o ro_bad
+refused "--rows-only with --volume" ro_bad "$THORAX" forward model --epicardial beat.raw --rows model/electrodes/12lead.txt --rows-only --volume -o ro_bad
+refused "--route without --rows-only" ro_bad "$THORAX" forward model --epicardial beat.raw --route transfer -o ro_bad
+
 # the verdict kept in model.json (thorax/check/verdict.h): written by thorax mesh, trusted only when the
 # files, model.json and the checker's rules are the ones it names; badvol above (a region changed in
 # volume.tet) was checked again and refused. thorax check reads a model with a verdict.

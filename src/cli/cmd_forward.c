@@ -30,6 +30,7 @@ int cmd_forward(int argc, char **argv)
     int dip_method = THX_DIPOLE_VENANT;
     double max_offset = THX_ELECTRODE_MAX_OFFSET_MM;
     int verbose = 0, want_volume = 0, transfer_out = 0, warm = 1, force = 0, format = THX_SERIES_RAW, meth = -1;
+    int rows_only = 0, route = -1; /* route: 0 a solve per frame, 1 the electrodes' transfer matrix, -1 the fewer solves */
     double threshold = 5.0;
     const char *electrodes[16];
     int n_electrodes = 0;
@@ -39,6 +40,7 @@ int cmd_forward(int argc, char **argv)
                                          {NULL, 0}};
     static const cli_choice dip_methods[] = {{"venant", THX_DIPOLE_VENANT}, {"partial", THX_DIPOLE_PARTIAL}, {NULL, 0}};
     static const cli_choice methods[] = {{"forward", 0}, {"adjoint", 1}, {"auto", -1}, {NULL, 0}};
+    static const cli_choice routes[] = {{"frames", 0}, {"transfer", 1}, {"auto", -1}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--epicardial", .type = CLI_INPUT, .meta = "SERIES", .s = &epi_path,
          .help = "heart-surface potentials, rows the heart surface's nodes (text, raw or .mat; see thorax series)"},
@@ -74,6 +76,13 @@ int cmd_forward(int argc, char **argv)
          .help = "electrodes on the outer surface: the rows of --transfer-out's matrix (DIR/transfer_electrodes.EXT), or "
                  "with --epicardial the signals written as DIR/electrodes.EXT; a thorax electrode file, a map3d "
                  ".leadlinks, a node list or positions (X Y Z a line; between nodes: interpolated on the triangle)"},
+        {.name = "--rows-only", .type = CLI_FLAG, .i = &rows_only,
+         .help = "with --epicardial and --rows: write the electrodes' signals alone (DIR/electrodes.EXT, no torso.EXT); "
+                 "when the electrodes are fewer than the frames they are computed through the electrodes' transfer "
+                 "matrix (a solve per electrode, applied to every frame at once) instead of a solve per frame"},
+        {.name = "--route", .type = CLI_CHOICE, .choices = routes, .i = &route,
+         .help = "with --rows-only: frames (a solve per frame), transfer (a solve per electrode), auto (the fewer "
+                 "solves; said in solution.json)"},
         {.name = "--max-offset", .type = CLI_REAL, .meta = "MM", .unit = "mm", .d = &max_offset, .rule = CLI_GE,
          .lo = 0, .bad = "--max-offset must be a number of mm >= 0",
          .help = "farthest a --rows position may lie from the outer surface (it is projected onto it)"},
@@ -94,7 +103,7 @@ int cmd_forward(int argc, char **argv)
     cli_command cmd = {
         .name = "forward",
         .usage = "MODEL --dipoles -o [--dipole-method] [--rows] [--max-offset] [--format] [--volume] [--no-warm] [--force] [PETSc options]\n"
-                 "MODEL --epicardial [--channels] [--bad-leads] -o [--rows] [--format] [--volume] [--currents] [--transfer] "
+                 "MODEL --epicardial [--channels] [--bad-leads] -o [--rows [--rows-only [--route]]] [--format] [--volume] [--currents] [--transfer] "
                  "[--no-warm] [--dump-system] [--force] [PETSc options]\n"
                  "MODEL --transfer-out -o [--rows] [--max-offset] [--method] [--format] [--force] [PETSc options]\n"
                  "MODEL --electrode... -o [--threshold] [--format] [--force] [PETSc options]",
@@ -142,6 +151,12 @@ int cmd_forward(int argc, char **argv)
         return cli_forward_dipoles(model_dir, out, dipoles, dip_method, rows_path, max_offset, format_name, want_volume, warm,
                                    &pa, verbose, force);
     if (transfer_in && !epi_path) return cli_usage_error("forward", "--transfer needs --epicardial");
+    if (rows_only && (!epi_path || !rows_path))
+        return cli_usage_error("forward", "--rows-only needs --epicardial and --rows");
+    if (rows_only && (want_volume || currents || transfer_in || dump))
+        return cli_usage_error("forward", "--rows-only writes the electrodes alone: not with --volume, --currents, "
+                                          "--transfer or --dump-system");
+    if (route != -1 && !rows_only) return cli_usage_error("forward", "--route goes with --rows-only");
     if (rows_path && !transfer_out && !epi_path) return cli_usage_error("forward", "--rows goes with --transfer-out, --epicardial or --dipoles");
     if ((channels || bad_leads) && !epi_path) return cli_usage_error("forward", "--channels and --bad-leads need --epicardial (its rows are the channels)");
     if (n_electrodes)
@@ -243,21 +258,36 @@ int cmd_forward(int argc, char **argv)
         st = thx_transfer_apply(ctx, T, epi, &torso);
         if (st != THX_OK) goto fail;
         R.t_solve = thx_wtime() - t1;
+    } else if (rows_only && (route == 1 || (route == -1 && rowset->n < epi->n_frames))) {
+        /* the electrodes' transfer matrix (a solve per electrode with the adjoint method, or per heart node if
+           fewer), applied to the frames as one product */
+        thx_series *Te = NULL;
+        st = thx_forward_transfer_weighted(ctx, m, rowset->corner, rowset->weight, rowset->n, meth, &fo, &Te, &R);
+        if (st == THX_OK) {
+            double t1 = thx_wtime();
+            st = thx_transfer_apply(ctx, Te, epi, &at_electrodes);
+            R.t_solve += thx_wtime() - t1;
+            route = 1;
+        }
+        thx_series_destroy(&Te);
+        if (st != THX_OK) goto fail;
     } else {
         st = thx_forward_epicardial(ctx, m, epi, &fo, &R);
         if (st != THX_OK) goto fail;
         torso = R.torso;
         R.torso = NULL;
+        if (rows_only) route = 0;
     }
     /* the electrodes' signals: from the torso's nodes (the matrix applied gave them directly) */
     if (!transfer_out) {
         if (T && !fo.keep_volume && t_electrodes) {
             at_electrodes = torso;
             torso = NULL;
-        } else if (rowset && rank == 0) { /* rank 0 holds the torso's potentials and writes */
+        } else if (rowset && rank == 0 && !at_electrodes) { /* rank 0 holds the torso's potentials and writes */
             st = thx_electrodes_sample(ctx, rowset, torso, &at_electrodes);
             if (st != THX_OK) goto fail;
         }
+        if (rows_only) thx_series_destroy(&torso); /* the electrodes alone are written */
     }
     /* currents for the chosen frames */
     if (currents && R.volume) {
@@ -296,6 +326,16 @@ int cmd_forward(int argc, char **argv)
         char absmodel[PATH_MAX];
         cJSON_AddStringToObject(j, "model", realpath(model_dir, absmodel) ? absmodel : model_dir);
         cJSON_AddStringToObject(j, "problem", transfer_out ? "transfer matrix (epicardial)" : "epicardial");
+        char route_txt[200] = "";
+        if (rows_only) {
+            if (route == 1)
+                snprintf(route_txt, sizeof route_txt, "transfer: the %zu electrodes' transfer matrix (%ld solves), applied to "
+                         "the %zu frames", rowset->n, R.it_total > 0 && R.it_min == 1 && R.it_max == 1 ? R.it_total : (long)rowset->n,
+                         epi->n_frames);
+            else snprintf(route_txt, sizeof route_txt, "frames: a solve per frame (%zu frames, %zu electrodes)", epi->n_frames,
+                          rowset->n);
+            cJSON_AddStringToObject(j, "route", route_txt);
+        }
         cJSON_AddStringToObject(j, "command", cli_command_line());
         if (epi_path) {
             char abs[PATH_MAX];
@@ -385,6 +425,7 @@ int cmd_forward(int argc, char **argv)
                        R.it_max, R.t_assemble, R.t_setup, R.t_solve);
             else
                 printf("%zu frames by the transfer matrix, %.3f s\n", epi->n_frames, R.t_solve);
+            if (route_txt[0]) printf("route: %s\n", route_txt);
             if (verbose > 0 && R.factor.used)
                 printf("factor (CHOLMOD, driven by thorax): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
                        "(%.3g flops, %.1f GF/s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",

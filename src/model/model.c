@@ -23,6 +23,7 @@ void thx_model_destroy(thx_model **m)
     free(p->interior);
     free(p->provenance_json);
     free(p->edit_log);
+    free(p->volume_check_json);
     thx_volume_destroy(&p->volume);
     free(p);
     *m = NULL;

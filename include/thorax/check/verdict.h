@@ -11,10 +11,10 @@
  * and the volume (NAME.pts, NAME.fac, NAME.vmap, volume.pts, volume.tet, volume.steiner), in that
  * order. R is THX_VOLUME_CHECK_RULES. A solver trusts the verdict, and skips the check, only when
  * all of it holds: passed, these rules, the default options, the same digest. Any change of a
- * byte in those files, of model.json, or of the checker's rules means a check as before. Commands
- * that write a model from memory do not carry the member over (the model in memory has no verdict),
- * so a rewritten model is checked again until `mesh` writes a new verdict. `thorax check` never
- * writes into a model.
+ * byte in those files, of model.json, or of the checker's rules means a check as before. A model
+ * read and written again carries the member over as it was (thx_model.volume_check_json): when the
+ * files are the same it is still trusted, when anything changed its digest no longer matches and the
+ * model is checked again until `mesh` writes a new verdict. `thorax check` never writes into a model.
  */
 #ifndef THORAX_CHECK_VERDICT_H
 #define THORAX_CHECK_VERDICT_H

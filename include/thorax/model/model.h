@@ -26,6 +26,10 @@ typedef struct thx_model {
     char *edit_log;          /* owned text of the edit log the surfaces went through (thorax/edit/edit.h;
                                 the model directory's edits.txt, named in the provenance), or NULL: the
                                 surfaces are as built or imported. Opaque text to the model and io layers. */
+    char *volume_check_json; /* owned JSON text of model.json's "volume"."check" (the volume check's verdict,
+                                thorax/check/verdict.h) as read, written back as it was; NULL: none. The verdict
+                                names the SHA-256 of the files it covers, so one carried over to a changed model
+                                is simply not trusted. */
 } thx_model;
 
 thx_status thx_model_create(thx_ctx *ctx, thx_model **out);

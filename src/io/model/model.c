@@ -96,6 +96,15 @@ static thx_status build_manifest(thx_ctx *ctx, const thx_model *m, cJSON **out)
     if (m->volume) {
         st = thx_io_volume_manifest(ctx, m, root);
         if (st) goto fail;
+        if (m->volume_check_json) { /* the verdict as it was read (thorax/check/verdict.h) */
+            cJSON *ck = cJSON_Parse(m->volume_check_json), *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
+            if (!cJSON_IsObject(ck) || !cJSON_IsObject(vo)) {
+                cJSON_Delete(ck);
+                st = thx_error(ctx, THX_EINPUT, "the volume check's verdict is not a JSON object");
+                goto fail;
+            }
+            cJSON_AddItemToObject(vo, "check", ck);
+        }
     }
     if (m->provenance_json || m->edit_log) {
         cJSON *prov = m->provenance_json ? cJSON_Parse(m->provenance_json) : cJSON_CreateObject();
@@ -546,6 +555,13 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         m->interior[m->n_surfaces - 1] = in;
     }
     THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m));
+    {
+        const cJSON *ck = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "volume"), "check");
+        if (m->volume && cJSON_IsObject(ck) && !(m->volume_check_json = cJSON_PrintUnformatted(ck))) {
+            st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", mpath);
+            goto done;
+        }
+    }
     if (prov && !cJSON_IsNull(prov)) THX_TRY(read_edit_log(ctx, dir, mpath, prov, m));
     if (prov && !cJSON_IsNull(prov)) {
         m->provenance_json = cJSON_PrintUnformatted(prov);
