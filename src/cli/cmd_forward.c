@@ -262,6 +262,7 @@ int cmd_forward(int argc, char **argv)
         /* the electrodes' transfer matrix (a solve per electrode with the adjoint method, or per heart node if
            fewer), applied to the frames as one product */
         thx_series *Te = NULL;
+        fo.direct = 1; /* the factorization (unless the command line names a solver): both routes give the same signals */
         st = thx_forward_transfer_weighted(ctx, m, rowset->corner, rowset->weight, rowset->n, meth, &fo, &Te, &R);
         if (st == THX_OK) {
             double t1 = thx_wtime();

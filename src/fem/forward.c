@@ -255,7 +255,7 @@ static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows
     snprintf(A->time_unit, sizeof A->time_unit, "node");
     snprintf(A->unit, sizeof A->unit, "1");
     if (method < 0) method = nr < nh ? 1 : 0;
-    thx_fem_system_hint_rhs(P.sys, method ? nr : nh);
+    thx_fem_system_hint_rhs(P.sys, o->direct ? (size_t)-1 : method ? nr : nh);
     if (corner)
         snprintf(A->label, sizeof A->label, "transfer matrix electrodes on %.40s <- %.40s (%s)", os->name, hs->name,
                  method ? "adjoint" : "forward");

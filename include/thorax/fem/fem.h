@@ -186,6 +186,9 @@ typedef struct {
     size_t block;           /* right-hand sides per blocked solve (thx_fem_solve_block); 0 = automatic
                                (thx_fem_system_block), 1 = frame by frame */
     int dipole_method;      /* thx_forward_dipoles: THX_DIPOLE_VENANT (default) or THX_DIPOLE_PARTIAL */
+    int direct;             /* transfer matrices: factor the system even for a few solves (as for many:
+                               thx_fem_system_hint_rhs), so that the matrix is as exact as the factorization
+                               and not as the iterative solver's tolerance (default 0) */
 } thx_forward_opts;
 
 /* How thx_forward_dipoles puts a dipole on the mesh (docs/decisions.md, "Dipole sources"). */
