@@ -30,6 +30,11 @@ thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)
             static char **s_argv;
             s_argc = argc;
             s_argv = argv;
+            /* A process no launcher started is an MPI singleton: Open MPI would start its daemon (orted) for
+               it, 0.3-1.0 s of every solve on this machine, to serve features thorax never uses (spawning
+               processes, connecting jobs). Isolated, it starts alone. A user's setting is kept; under mpirun
+               the variable is not read. */
+            if (!getenv("OMPI_COMM_WORLD_SIZE")) setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
             if (PetscInitialize(&s_argc, &s_argv, NULL, NULL) != 0) return THX_ESOLVER;
             g_we_inited = 1;
         }
