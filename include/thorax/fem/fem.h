@@ -116,7 +116,10 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
  * cholesky or lu: thx_fem_system_hint_rhs's choice for many right-hand sides)
  * the columns go to the factorization's package as dense blocks of
  * thx_fem_system_block(s) columns (MatMatSolve: CHOLMOD and MUMPS traverse the
- * factor once per block, not once per column, with level-3 BLAS); the answers
+ * factor once per block, not once per column, with level-3 BLAS; on one rank
+ * with no solver named, thorax's own path: CHOLMOD's factor with the ordering
+ * kept in the cache and row-major blocked solves over the threads,
+ * thx_fem_system_factor_info, docs/design/parallel.md); the answers
  * agree with column-by-column solves to rounding (1e-14 relative measured),
  * the residuals are the true ones (||b - A x|| / ||b|| per column), and a
  * failed factorization or a non-finite answer is THX_ESOLVER as in
@@ -135,7 +138,9 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
  * -thorax_block_size N, or as many as keep five n_nodes-long columns per
  * right-hand side (the caller's block, PETSc's B and X, CHOLMOD's workspace,
  * the residuals) within 512 MB, at most 64 (docs/decisions.md: the measured
- * gain flattens there). Call after thx_fem_system_hint_rhs. A block size of 1
+ * gain flattens there); on thorax's own path as many as keep the caller's
+ * column and one free-node column per right-hand side within 768 MB, at most
+ * 256 (split among the threads). Call after thx_fem_system_hint_rhs. A block size of 1
  * is the frame-by-frame solve exactly (KSPSolve per column).
  */
 size_t thx_fem_system_block(const thx_fem_system *s);
