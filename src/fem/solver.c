@@ -76,7 +76,7 @@ int thx_fem_options_unused(int list)
    are dear on virtual machines), on huge pages where the kernel gives them. */
 #define THX_FEM_OWN_THREADS 64
 typedef struct own_work_s {
-    double *X, *E, *acc;
+    double *X, *E, *acc, *P; /* P: the prescribed values of the r columns, row-major */
     size_t r;
     double flops; /* the solves' flops so far (thx_chol_solve_rows) */
 } own_work;
@@ -96,6 +96,7 @@ static void *big_alloc(size_t bytes)
 static void own_work_free(own_work *w)
 {
     free(w->X);
+    free(w->P);
     free(w->E);
     free(w->acc);
     memset(w, 0, sizeof *w);
@@ -461,7 +462,7 @@ static int blas_threads(int set)
 }
 
 /* b = load_f - K_fd phi_d for columns c0 .. c0 + r - 1, row-major in the factor's order. */
-static void own_rhs(const thx_fem_system *s, const double *phi, const double *load, size_t c0, size_t r,
+static void own_rhs(const thx_fem_system *s, const double *P, const double *load, size_t c0, size_t r,
                     double *restrict B)
 {
     const size_t n = (size_t)s->n, nf = (size_t)s->nf;
@@ -470,8 +471,8 @@ static void own_rhs(const thx_fem_system *s, const double *phi, const double *lo
     for (size_t q = 0; q < nf; q++) {
         double *restrict bq = B + (size_t)iperm[q] * r;
         for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
-            const double a = s->kfd.val[e], *pd = phi + c0 * n + (size_t)s->pres_node[s->kfd.col[e]];
-            for (size_t j = 0; j < r; j++) bq[j] -= a * pd[j * n];
+            const double a = s->kfd.val[e], *pd = P + (size_t)s->kfd.col[e] * r;
+            for (size_t j = 0; j < r; j++) bq[j] -= a * pd[j];
         }
     }
     if (load)
@@ -481,15 +482,31 @@ static void own_rhs(const thx_fem_system *s, const double *phi, const double *lo
         }
 }
 
-/* Row q of b (original free numbering) for the r columns into out: load_f - K_fd phi_d, as own_rhs puts it. */
-static inline void own_rhs_row(const thx_fem_system *s, const double *phi, const double *load, size_t c0, size_t r,
+/* Rows of phi, tiled: T[i * r + j] = phi[(c0 + j) * n + node[i]] for m nodes (a block of rows at a time,
+   so that each column's reads stay near each other). */
+static void own_gather_rows(const double *phi, size_t n, size_t c0, size_t r, const int32_t *node, size_t m,
+                            double *restrict T)
+{
+    const size_t tile = 256;
+    for (size_t i0 = 0; i0 < m; i0 += tile) {
+        size_t i1 = i0 + tile < m ? i0 + tile : m;
+        for (size_t j = 0; j < r; j++) {
+            const double *pj = phi + (c0 + j) * n;
+            for (size_t i = i0; i < i1; i++) T[i * r + j] = pj[node[i]];
+        }
+    }
+}
+
+/* Row q of b (original free numbering) for the r columns into out: load_f - K_fd phi_d, as own_rhs puts it
+   (P: the prescribed values, row-major, own_gather_rows). */
+static inline void own_rhs_row(const thx_fem_system *s, const double *P, const double *load, size_t c0, size_t r,
                                size_t q, double *restrict out)
 {
     const size_t n = (size_t)s->n;
     for (size_t j = 0; j < r; j++) out[j] = 0;
     for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
-        const double a = s->kfd.val[e], *pd = phi + c0 * n + (size_t)s->pres_node[s->kfd.col[e]];
-        for (size_t j = 0; j < r; j++) out[j] -= a * pd[j * n];
+        const double a = s->kfd.val[e], *pd = P + (size_t)s->kfd.col[e] * r;
+        for (size_t j = 0; j < r; j++) out[j] -= a * pd[j];
     }
     if (load) {
         const double *lq = load + c0 * n + (size_t)s->free_node[q];
@@ -498,9 +515,9 @@ static inline void own_rhs_row(const thx_fem_system *s, const double *phi, const
 }
 
 /* rn[j] = ||b - K_ff x||^2 and bn[j] = ||b||^2 for the r columns, rows visited in the factor's order (their
-   neighbours are near them there); b rebuilt row by row from phi's prescribed values and the loads (not
+   neighbours are near them there); b rebuilt row by row from the prescribed values P and the loads (not
    kept: a block of it is as large as x). */
-static void own_residual(const thx_fem_system *s, const double *phi, const double *load, size_t c0,
+static void own_residual(const thx_fem_system *s, const double *P, const double *load, size_t c0,
                          const double *restrict X, size_t r, double *restrict acc, double *restrict rn,
                          double *restrict bn)
 {
@@ -510,7 +527,7 @@ static void own_residual(const thx_fem_system *s, const double *phi, const doubl
     for (size_t j = 0; j < r; j++) rn[j] = bn[j] = 0;
     for (size_t p = 0; p < nf; p++) {
         const size_t q = (size_t)perm[p];
-        own_rhs_row(s, phi, load, c0, r, q, bq);
+        own_rhs_row(s, P, load, c0, r, q, bq);
 #pragma omp simd
         for (size_t j = 0; j < r; j++) acc[j] = bq[j];
         for (PetscInt e = s->ii[q]; e < s->ii[q + 1]; e++) {
@@ -555,20 +572,25 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const 
             w->X = big_alloc(nf * r * sizeof *w->X);
             w->E = big_alloc(thx_chol_work_bytes(s->chol, r));
             w->acc = malloc(4 * r * sizeof *w->acc);
-            w->r = w->X && w->E && w->acc ? r : 0;
+            w->P = malloc(((size_t)s->nd ? (size_t)s->nd : 1) * r * sizeof *w->P);
+            w->r = w->X && w->E && w->acc && w->P ? r : 0;
         }
         if (!w->r) failed = 1;
         else {
             double *rn = w->acc + 2 * r, *bn = w->acc + 3 * r;
-            own_rhs(s, phi, load, c0, r, w->X);
+            own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
+            own_rhs(s, w->P, load, c0, r, w->X);
             w->flops += thx_chol_solve_rows(s->chol, w->X, r, w->E);
-            own_residual(s, phi, load, c0, w->X, r, w->acc, rn, bn);
+            own_residual(s, w->P, load, c0, w->X, r, w->acc, rn, bn);
             for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
-            /* the free values into phi; nodes neither free nor prescribed are 0 */
-            for (size_t q = 0; q < nf; q++) {
-                const double *xq = w->X + (size_t)iperm[q] * r;
-                double *pq = phi + c0 * n + (size_t)s->free_node[q];
-                for (size_t j = 0; j < r; j++) pq[j * n] = xq[j];
+            /* the free values into phi, a block of rows at a time (each column's writes near each other); nodes
+               neither free nor prescribed are 0 */
+            for (size_t q0 = 0; q0 < nf; q0 += 256) {
+                size_t q1 = q0 + 256 < nf ? q0 + 256 : nf;
+                for (size_t j = 0; j < r; j++) {
+                    double *pj = phi + (c0 + j) * n;
+                    for (size_t q = q0; q < q1; q++) pj[s->free_node[q]] = w->X[(size_t)iperm[q] * r + j];
+                }
             }
             for (size_t j = 0; j < r; j++)
                 for (int32_t i = 0; i < s->n; i++)
