@@ -91,18 +91,6 @@ static thx_status digest_of(thx_ctx *ctx, const char *dir, const cJSON *root, ch
     return THX_OK;
 }
 
-thx_status thx_volume_verdict_digest(thx_ctx *ctx, const char *dir, char hex[65])
-{
-    char path[4200];
-    cJSON *root = NULL;
-    THX_CHECK(read_manifest(ctx, dir, path, sizeof path, &root));
-    cJSON *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
-    if (cJSON_IsObject(vo)) cJSON_DeleteItemFromObjectCaseSensitive(vo, "check");
-    thx_status st = digest_of(ctx, dir, root, hex);
-    cJSON_Delete(root);
-    return st;
-}
-
 int thx_volume_verdict_trusted(thx_ctx *ctx, const char *dir, char *why, size_t why_n)
 {
     char path[4200], hex[65];

@@ -8,7 +8,8 @@
 #include "thorax/core/blas_kernels.h"
 #include "thorax/core/startup.h"
 
-int thx_startup_thp_available(void)
+/* 1 when the kernel gives transparent huge pages to a process that asks (madvise) or always. */
+static int thp_available(void)
 {
     FILE *f = fopen("/sys/kernel/mm/transparent_hugepage/enabled", "r");
     if (!f) return 0;
@@ -30,7 +31,7 @@ void thx_startup_heavy(char **argv)
         if (corename) core = thx_blas_better_core(corename());
     }
     const char *tun = getenv("GLIBC_TUNABLES");
-    int thp = !(tun && strstr(tun, "glibc.malloc.hugetlb")) && thx_startup_thp_available();
+    int thp = !(tun && strstr(tun, "glibc.malloc.hugetlb")) && thp_available();
     if (!core && !thp) return;
     char *old_tun = tun ? strdup(tun) : NULL;
     if (tun && !old_tun) return;

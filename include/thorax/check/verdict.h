@@ -31,9 +31,6 @@ extern "C" {
  * verdict an older thorax kept is not trusted. */
 #define THX_VOLUME_CHECK_RULES 1
 
-/* The digest above of the model in directory dir, as 64 lowercase hex digits. */
-thx_status thx_volume_verdict_digest(thx_ctx *ctx, const char *dir, char hex[65]);
-
 /* 1 when dir's model.json holds a verdict a solver may trust (above), 0 when not, with the reason in
  * why ("no verdict", "the files changed since", ...). Reading errors count as "no" with their
  * message in why: the check that follows reports them in its own words. */

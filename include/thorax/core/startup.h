@@ -20,9 +20,6 @@
 #ifndef THORAX_CORE_STARTUP_H
 #define THORAX_CORE_STARTUP_H
 
-/* 1 when the kernel gives transparent huge pages to a process that asks (madvise) or always. */
-int thx_startup_thp_available(void);
-
 /* Call first in main(), before any thread is started; argv as main received it. */
 void thx_startup_heavy(char **argv);
 
