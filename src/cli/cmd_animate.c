@@ -15,6 +15,7 @@ extern char **environ;
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "cli/render_cli.h"
+#include "cli/cli_share.h"
 #include "cli/cli_raytrace.h"
 #include "thorax/core/fileio.h"
 #include "thorax/picture/movie.h"
@@ -129,6 +130,11 @@ int cmd_animate(int argc, char **argv)
     if (!o.out) return cli_usage_error("animate", "no output directory given (-o DIR)");
     if (keys_path && o.p.have_camera) return cli_usage_error("animate", "--keys and --camera: the key file gives the camera");
     o.last = 0; /* frames checked below */
+    /* under mpirun: the frames dealt among the ranks (frame k of the range to rank k mod N), each
+       rank writing its own; rank 0 keeps the settings and makes the movie */
+    int prc = cli_share_start("animate", &o.verbose);
+    if (prc) return prc;
+    int rank = thx_par_rank(), ranks = thx_par_size();
     thx_ctx *ctx = cli_ctx(o.verbose);
     thx_camera_keys keys = {0};
     thx_camera_path *flight = NULL;
@@ -186,6 +192,7 @@ int cmd_animate(int argc, char **argv)
                                "(thorax forward --currents %d-%d)", df, a_first, a_last, a_first, a_last);
         }
     }
+    st = thx_par_agree(ctx, st, NULL); /* every rank read the same data and found the same frames */
     /* the movie is claimed before any frame is drawn: a user's file of that name stops the run */
     int want_movie = !(mp4 && !strcmp(mp4, "none"));
     thx_atomic_file maf;
@@ -193,13 +200,14 @@ int cmd_animate(int argc, char **argv)
         if (mp4) snprintf(movie, sizeof movie, "%s", mp4);
         else snprintf(movie, sizeof movie, "%s/animation.mp4", out_dir);
     }
-    if (st == THX_OK && want_movie)
+    if (st == THX_OK && want_movie && rank == 0)
         st = thx_movie_claim(ctx, movie, &maf);
-    if (st == THX_OK && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
+    if (st == THX_OK && rank == 0 && mkdir(out_dir, 0777) != 0 && errno != EEXIST)
         st = thx_error(ctx, THX_EIO, "%s: cannot create the directory", out_dir);
-    /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn */
+    /* frames are kept only if drawn with the same settings (DIR/frames.settings), else redrawn:
+       rank 0 decides and tells the others */
     int may_keep = 0;
-    if (st == THX_OK) {
+    if (st == THX_OK && rank == 0) {
         char sig[8192], sigpath[PATH_MAX + 64];
         animation_signature(argc, argv, &o, keys_path, sig, sizeof sig);
         snprintf(sigpath, sizeof sigpath, "%s/frames.settings", out_dir);
@@ -223,8 +231,10 @@ int cmd_animate(int argc, char **argv)
             }
         }
     }
-    int done = 0, kept = 0, total = a_last - a_first + 1;
-    for (int f = a_first; st == THX_OK && f <= a_last; f++) {
+    st = thx_par_agree(ctx, st, NULL);
+    if (st == THX_OK) st = thx_par_bcast(ctx, &may_keep, sizeof may_keep, 0);
+    int done = 0, kept = 0, total = a_last - a_first + 1, mine = total / ranks + (rank < total % ranks);
+    for (int f = a_first + rank; st == THX_OK && f <= a_last; f += ranks) {
         snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
         thx_raster *old = NULL;
         thx_ctx *quiet = NULL;
@@ -251,16 +261,22 @@ int cmd_animate(int argc, char **argv)
         thx_raster_destroy(&old);
         thx_ctx_destroy(&quiet);
         done++;
-        if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)total);
+        if (o.verbose >= 0 && isatty(2)) cli_progress((void *)"animate", (size_t)done, (size_t)mine);
     }
-    if (st == THX_OK && want_movie) {
+    /* every rank's frames written before the movie is made of them */
+    st = thx_par_agree(ctx, st, NULL);
+    long long counts[2] = {kept, (long long)nan};
+    if (st == THX_OK) st = thx_par_sum(ctx, counts, 2);
+    if (st == THX_OK && want_movie && rank == 0) {
         st = thx_movie_make(ctx, &maf, out_dir, a_first, total, o.fps);
     }
-    if (st != THX_OK) rc = cli_fail(ctx, "animate", st);
-    else if (o.verbose >= 0) {
-        if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
-        printf("%d frames (%d drawn, %d kept from an earlier run) in %.1f s -> %s", total, total - kept, kept,
-               thx_wtime() - t0, out_dir);
+    rc = cli_share_end(ctx, "animate", st);
+    if (!rc && o.verbose >= 0) {
+        if (counts[1]) thx_log(ctx, THX_LOG_WARN, "%lld values are not numbers (drawn in the NaN colour)", counts[1]);
+        printf("%d frames (%lld drawn, %lld kept from an earlier run) in %.1f s", total, total - counts[0], counts[0],
+               thx_wtime() - t0);
+        if (ranks > 1) printf(" by %d ranks", ranks);
+        printf(" -> %s", out_dir);
         if (want_movie) printf(", %s", movie);
         printf("\n");
     }

@@ -16,6 +16,7 @@
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
 #include "cli/render_cli.h"
+#include "cli/cli_share.h"
 #include "cli/cli_raytrace.h"
 #include "cli/cli_bad_leads.h"
 #include "thorax/core/fileio.h"
@@ -504,6 +505,9 @@ static int render_main(int argc, char **argv, int traced)
         return cli_usage_error(o.cmd, "--motion-blur: motion blur is the ray tracer's (--renderer trace, or thorax trace)");
     if (!o.p.model_dir && !o.p.n_files && !o.p.solution) return cli_usage_error(o.cmd, "no model, surface file or --solution given");
     if (!o.out) return cli_usage_error(o.cmd, "no output image given (-o IMAGE.png)");
+    /* under mpirun: the picture's pixels shared among the ranks (sort-first), rank 0 writes */
+    int prc = cli_share_start(o.cmd, &o.verbose);
+    if (prc) return prc;
     thx_ctx *ctx = cli_ctx(o.verbose);
     thx_picture_data d;
     thx_renderer *rr = NULL;
@@ -514,27 +518,33 @@ static int render_main(int argc, char **argv, int traced)
     thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
     double *times = malloc((size_t)repeat * sizeof *times);
     if (!times) st = THX_ENOMEM;
+    st = thx_par_agree(ctx, st, NULL); /* every rank draws, or none */
     for (int k = 0; k < repeat && st == THX_OK; k++) { /* --repeat: the same frame again, timed (benchmarks) */
         double t1 = thx_wtime();
         nan = 0;
-        st = thx_picture_draw(ctx, &o.p, &d, rr, font, o.frame, img, &nan);
+        st = cli_share_picture(ctx, &o.p, &d, rr, font, o.frame, img, &nan);
         times[k] = thx_wtime() - t1;
     }
-    if (st == THX_OK) st = thx_raster_write_png(ctx, img, o.out);
+    int rank = thx_par_rank(), ranks = thx_par_size();
+    long long rays = (long long)d.rt_stats.rays;
+    if (st == THX_OK) st = thx_par_sum(ctx, &rays, 1); /* (every rank reaches it: st is agreed) */
+    if (st == THX_OK && rank == 0) st = thx_raster_write_png(ctx, img, o.out);
     if (st == THX_OK && repeat > 1 && o.verbose >= 0) {
         qsort(times, (size_t)repeat, sizeof *times, cmp_dbl);
         printf("render: %d repetitions, median %.1f ms a frame (min %.1f, max %.1f), %.1f frames per second\n", repeat,
                1000 * times[repeat / 2], 1000 * times[0], 1000 * times[repeat - 1], 1.0 / times[repeat / 2]);
     }
     free(times);
-    int rc = 0;
-    if (st != THX_OK) rc = cli_fail(ctx, "render", st);
-    else {
+    char by[48] = "";
+    if (ranks > 1) snprintf(by, sizeof by, ", %d ranks", ranks);
+    int rc = cli_share_end(ctx, "render", st);
+    if (!rc) {
         if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
         if (o.verbose >= 0 && o.p.renderer == 1)
-            printf("wrote %s (%dx%d, %.3f s; traced with %s: %zu rays, %.3f s)\n", o.out, o.p.w, o.p.h, thx_wtime() - t0,
-                   thx_tracer_info(d.tracer), d.rt_stats.rays, d.rt_stats.seconds);
-        else if (o.verbose >= 0) printf("wrote %s (%dx%d, %.3f s; %s)\n", o.out, o.p.w, o.p.h, thx_wtime() - t0, thx_renderer_info(rr));
+            printf("wrote %s (%dx%d, %.3f s%s; traced with %s: %lld rays, %.3f s)\n", o.out, o.p.w, o.p.h, thx_wtime() - t0, by,
+                   thx_tracer_info(d.tracer), rays, d.rt_stats.seconds);
+        else if (o.verbose >= 0)
+            printf("wrote %s (%dx%d, %.3f s%s; %s)\n", o.out, o.p.w, o.p.h, thx_wtime() - t0, by, thx_renderer_info(rr));
     }
     thx_raster_destroy(&img);
     thx_font_close(&font);

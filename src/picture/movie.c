@@ -25,8 +25,12 @@ static int run_ffmpeg(int fps, int first, int count, const char *dir, const char
     snprintf(start, sizeof start, "%d", first);
     snprintf(nframes, sizeof nframes, "%d", count);
     snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", dir);
+    /* the encoder's threads fixed (-threads 4): x264 picks its count from the cores it may use (one
+       under mpirun's binding, two here, more elsewhere), records it in the stream, and its frame
+       threads shape the rate control; fixed, the same frames give the same movie on any machine and
+       any number of ranks */
     char *args[] = {"ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", start,
-                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf",
+                    "-i", pattern, "-frames:v", nframes, "-c:v", "libx264", "-threads", "4", "-pix_fmt", "yuv420p", "-vf",
                     "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-metadata", "comment=" THX_MOVIE_MARKER, "-movflags", "+faststart",
                     "-f", "mp4", (char *)out, NULL};
     pid_t pid;

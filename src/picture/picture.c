@@ -561,8 +561,15 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
 
 /* The panel traced into img, blurred towards next (NULL: no motion blur); with --volume, *vol_scale
  * and *vol_cmap the volume's colours (for its bar). */
+/* Sort-first's share of a picture (thx_picture_draw_share): rank, size, and the pixels written. */
+typedef struct {
+    int rank, size;
+    unsigned char *own;
+} share_of;
+
 static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
-                              const thx_scene *next, int frame, thx_raster *img, thx_scale *vol_scale, thx_colormap *vol_cmap)
+                              const thx_scene *next, int frame, thx_raster *img, thx_scale *vol_scale, thx_colormap *vol_cmap,
+                              const share_of *share)
 {
     if (!d->tracer) THX_CHECK(thx_tracer_create(ctx, &d->tracer));
     thx_raytrace_volume vol;
@@ -592,6 +599,11 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         thx_status se = d->rt_env ? THX_OK : thx_raster_read_png(ctx, o->environment, &d->rt_env);
         if (se != THX_OK) { free(rt); return se; }
         rt->environment = d->rt_env;
+    }
+    if (share) { /* sort-first: this rank's tiles */
+        rt->share_rank = share->rank;
+        rt->share_size = share->size;
+        rt->own = share->own;
     }
     thx_status st = thx_raytrace_scene(ctx, d->tracer, sc, rt, img, &d->rt_stats);
     free(rt);
@@ -628,9 +640,11 @@ static thx_status next_scene(thx_ctx *ctx, const thx_picture_opts *o, thx_pictur
 
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
  * into the current framebuffer (img NULL, fb_w x fb_h). */
+/* share (NULL: the whole picture): sort-first's rank, size and own mask (thx_picture_draw_share) */
+
 static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *rr,
                               thx_font *font, int frame, int fb_w, int fb_h, thx_raster *img, thx_picture_bars *bars,
-                              size_t *nan_total)
+                              size_t *nan_total, const share_of *share)
 {
     thx_status st = THX_OK;
     const thx_model *m = d->m;
@@ -690,8 +704,13 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
             thx_scene next;
             thx_render_surface *nrs = NULL;
             if (o->rt.shutter > 0) st = next_scene(ctx, o, d, frame, only, &sc, &next, &nrs);
-            if (st == THX_OK) st = trace_panel(ctx, o, d, &sc, o->rt.shutter > 0 ? &next : NULL, frame, img, &vol_scale, &vol_cmap);
+            if (st == THX_OK)
+                st = trace_panel(ctx, o, d, &sc, o->rt.shutter > 0 ? &next : NULL, frame, img, &vol_scale, &vol_cmap, share);
             free(nrs);
+        } else if (img && share) { /* sort-first: this rank's band of rows */
+            st = thx_renderer_set_share(ctx, rr, share->rank, share->size, share->own);
+            if (st == THX_OK) st = thx_render(ctx, rr, &sc, img, &nn);
+            thx_renderer_set_share(NULL, rr, 0, 1, NULL);
         } else st = img ? thx_render(ctx, rr, &sc, img, &nn) : thx_render_scene_gl(ctx, rr, &sc, fb_w, fb_h, &nn);
         if (nan_total) *nan_total += b->nan_count;
         free(b->apos);
@@ -795,9 +814,22 @@ thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
 {
     thx_raster_fill(img, BG);
     thx_picture_bars bars;
-    THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bars, nan_total));
+    THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, &bars, nan_total, NULL));
     if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, &bars));
     return thx_picture_annotate(ctx, o, d, font, frame, &bars, img);
+}
+
+thx_status thx_picture_draw_share(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
+                                  thx_font *font, int frame, int rank, int size, thx_raster *img, unsigned char *own,
+                                  thx_picture_bars *bars, size_t *nan_total)
+{
+    if (size < 1 || rank < 0 || rank >= size) return thx_error(ctx, THX_EINPUT, "picture: share %d of %d", rank, size);
+    thx_raster_fill(img, BG);
+    memset(own, 0, (size_t)img->w * (size_t)img->h);
+    share_of share = {rank, size, own};
+    THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, bars, nan_total, &share));
+    if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, bars));
+    return THX_OK;
 }
 
 thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
@@ -815,6 +847,6 @@ thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
     bgs.camera.eye[1] = 1;
     bgs.camera.height = 1;
     THX_CHECK(thx_render_scene_gl(ctx, r, &bgs, fb_w, fb_h, NULL));
-    return draw_panels(ctx, o, d, r, font, frame, fb_w, fb_h, NULL, bars, nan_total);
+    return draw_panels(ctx, o, d, r, font, frame, fb_w, fb_h, NULL, bars, nan_total, NULL);
 }
 

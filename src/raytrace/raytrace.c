@@ -573,13 +573,22 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
         builds += t->vm.builds - before;
     }
     int tw = (vp[2] + TILE - 1) / TILE, th = (vp[3] + TILE - 1) / TILE, n_tiles = tw * th, done = 0;
-    size_t rays = 0;
+    /* sort-first: this rank's tiles alone (tile k to rank k mod size) */
+    int share = o->share_size > 1 ? o->share_size : 1, mine = o->share_size > 1 ? o->share_rank : 0;
+    if (mine < 0 || mine >= share) {
+        frame_free(&f);
+        free(tf);
+        return thx_error(ctx, THX_EINPUT, "ray tracer: share %d of %d", o->share_rank, o->share_size);
+    }
+    int n_mine = n_tiles / share + (mine < n_tiles % share);
+    size_t rays = 0, primary = 0;
     int ns = o->samples;
     /* eye rays in packets of a tile's row (Embree's SIMD traversal of coherent rays), where the frame
        has no motion blur (one camera) and no image planes (looked for after the solid hit) */
     int packets = !f.next && !f.planes;
-#pragma omp parallel for schedule(dynamic) reduction(+ : rays)
+#pragma omp parallel for schedule(dynamic) reduction(+ : rays, primary)
     for (int tile = 0; tile < n_tiles; tile++) {
+        if (tile % share != mine) continue;
         int x0 = (tile % tw) * TILE, y0 = (tile / tw) * TILE, x1 = x0 + TILE < vp[2] ? x0 + TILE : vp[2];
         for (int y = y0; y < y0 + TILE && y < vp[3]; y++) {
             double acc[TILE][3], cov[TILE];
@@ -675,17 +684,19 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                     p[k] = byte01(c);
                 }
                 p[3] = byte01(a + (1 - a) * bga);
+                if (o->own) o->own[(size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x)] = 1;
             }
+            primary += (size_t)(x1 - x0) * (size_t)(ns * ns);
         }
         if (o->progress) {
 #pragma omp critical
             {
                 done++;
-                if (done % 16 == 0 || done == n_tiles) {
-                    int bar = 40 * done / n_tiles;
+                if (done % 16 == 0 || done == n_mine) {
+                    int bar = 40 * done / n_mine;
                     fprintf(stderr, "\rtracing [%.*s%*s] %3d%%", bar, "########################################", 40 - bar, "",
-                            100 * done / n_tiles);
-                    if (done == n_tiles) fputc('\n', stderr);
+                            100 * done / n_mine);
+                    if (done == n_mine) fputc('\n', stderr);
                 }
             }
         }
@@ -695,7 +706,7 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
     if (stats) {
         stats->seconds = wall() - t0;
         stats->build_seconds = t1 - t0;
-        stats->primary_rays = (size_t)vp[2] * (size_t)vp[3] * (size_t)(ns * ns);
+        stats->primary_rays = primary;
         stats->rays = rays;
         stats->builds = builds;
     }

@@ -182,18 +182,46 @@ thx_status thx_render(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, thx
         return thx_error(ctx, THX_EINPUT, "thx_render: the image is %d x %d, the renderer %d x %d", img ? img->w : 0,
                          img ? img->h : 0, r->w, r->h);
     if (!scene) return thx_error(ctx, THX_EINPUT, "thx_render: no scene");
-    int rect[4];
+    int rect[4], draw[4], keep[4];
     THX_CHECK(rn_viewport_rect(ctx, scene, r->w, r->h, rect));
+    memcpy(draw, rect, sizeof draw);
+    memcpy(keep, rect, sizeof keep);
+    if (r->share_size > 1) { /* sort-first: this rank's band of rows (GL's rows count from the bottom) */
+        if (!scene->clear)
+            return thx_error(ctx, THX_EINPUT, "thx_render: sort-first draws scenes that clear their viewport only");
+        int g0 = r->h - (int)((long long)r->h * (r->share_rank + 1) / r->share_size);
+        int g1 = r->h - (int)((long long)r->h * r->share_rank / r->share_size);
+        int k0 = g0 > rect[1] ? g0 : rect[1], k1 = g1 < rect[1] + rect[3] ? g1 : rect[1] + rect[3];
+        if (k1 <= k0) return THX_OK; /* none of the viewport's rows is this rank's */
+        int m = r->samples == 1 ? RN_FXAA_REACH : 0;
+        int d0 = k0 - m > rect[1] ? k0 - m : rect[1], d1 = k1 + m < rect[1] + rect[3] ? k1 + m : rect[1] + rect[3];
+        keep[1] = k0, keep[3] = k1 - k0;
+        draw[1] = d0, draw[3] = d1 - d0;
+    }
     egl_current prev;
     THX_CHECK(rn_make_current(ctx, r, &prev));
     thx_status st = THX_OK;
     glBindFramebuffer(GL_FRAMEBUFFER, r->fbo_draw);
     if (!scene->clear) THX_TRY(rn_blit_image(ctx, r, img, rect));
-    THX_TRY(rn_draw_scene(ctx, r, scene, r->w, r->h, n_nan));
-    THX_TRY(rn_read_back(ctx, r, img, rect));
+    if (r->share_size > 1) memcpy(r->scissor, draw, sizeof draw);
+    st = rn_draw_scene(ctx, r, scene, r->w, r->h, n_nan);
+    memset(r->scissor, 0, sizeof r->scissor);
+    if (st != THX_OK) goto done;
+    THX_TRY(rn_read_back(ctx, r, img, draw, keep, r->share_own));
 done:
     rn_restore_current(r, &prev);
     return st;
+}
+
+thx_status thx_renderer_set_share(thx_ctx *ctx, thx_renderer *r, int rank, int size, unsigned char *own)
+{
+    if (!r || !r->own) return thx_error(ctx, THX_EINPUT, "thx_renderer_set_share: the renderer has no offscreen framebuffer");
+    if (size < 0 || rank < 0 || (size > 1 && rank >= size) || (size <= 1 && rank != 0))
+        return thx_error(ctx, THX_EINPUT, "thx_renderer_set_share: rank %d of %d", rank, size);
+    r->share_rank = rank;
+    r->share_size = size;
+    r->share_own = own;
+    return THX_OK;
 }
 
 thx_status thx_render_scene_gl(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, int fb_w, int fb_h,

@@ -451,7 +451,10 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
 
     glViewport(rect[0], rect[1], rect[2], rect[3]);
     glEnable(GL_SCISSOR_TEST);
-    glScissor(rect[0], rect[1], rect[2], rect[3]);
+    if (r->scissor[2] > 0) /* sort-first: this rank's band and the rows FXAA reads around it */
+        glScissor(r->scissor[0], r->scissor[1], r->scissor[2], r->scissor[3]);
+    else
+        glScissor(rect[0], rect[1], rect[2], rect[3]);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDepthMask(GL_TRUE);
     if (sc->clear) {

@@ -94,6 +94,11 @@ struct thx_renderer {
     size_t luma_cap;
     surf_entry **ents;
     size_t ents_cap;
+    /* sort-first (thx_renderer_set_share), and the scissor rn_draw_scene uses while thx_render draws
+       a band (GL's rows, from the bottom; scissor[2] == 0: the viewport's) */
+    int share_rank, share_size;
+    unsigned char *share_own;
+    int scissor[4];
 };
 
 /* The caller's EGL context, display and surfaces, given back after a frame. */
@@ -131,7 +136,11 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
 
 /* render_readback.c: the image into the framebuffer (clear = 0) and the drawing back out. */
 thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_raster *img, const int rect[4]);
-thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4]);
+/* The framebuffer's rect (resolved, or smoothed by FXAA over rect), its rows keep (within rect) into
+ * img, divided by alpha; own (may be NULL): those pixels set to 1. */
+thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own);
+/* The rows FXAA reads above and below a pixel it smooths, and one more (render_readback.c). */
+#define RN_FXAA_REACH 26
 
 /* The camera's orthonormal frame: right, up and back (from the centre toward the eye). Returns -1
  * when the camera is degenerate (eye at the centre, up along the line of sight, non-finite). */

@@ -100,6 +100,8 @@ static void fxaa(const unsigned char *src, unsigned char *dst, float *luma, int 
             float llocal = 0.5f * ((step < 0 ? l1 : l2) + lm);
             /* the luma on the edge (between this row and the next across it), k pixels along */
 #define EDGE(k) (horz ? 0.5f * (L(x + (k), y) + L(x + (k), y + step)) : 0.5f * (L(x, y + (k)) + L(x + step, y + (k))))
+            /* the farthest a search reaches is 1 + 23 = 24 rows or columns away: RN_FXAA_REACH (26) must
+               stay above it, or sort-first's bands would differ from the whole picture near their edges */
             static const int STEPS[10] = {1, 1, 1, 1, 1, 2, 2, 2, 4, 8};
             int k1 = -1, k2 = 1;
             float d1 = EDGE(k1) - llocal, d2 = EDGE(k2) - llocal;
@@ -136,9 +138,9 @@ static void fxaa(const unsigned char *src, unsigned char *dst, float *luma, int 
 #undef MINF
 #undef ABSF
 
-/* Resolves the viewport (multisampled) or smooths it (FXAA), reads it back, flips it into img and
+/* Resolves rect (multisampled) or smooths it (FXAA), reads it back, flips its rows keep into img and
  * divides out alpha. */
-thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4])
+thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own)
 {
     int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
     size_t n = (size_t)w * h;
@@ -164,8 +166,11 @@ thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const in
         pix = r->pix2;
     }
     for (int y = 0; y < h; y++) {
+        int gl_row = rect[1] + h - 1 - y; /* this image row's in GL's order */
+        if (gl_row < keep[1] || gl_row >= keep[1] + keep[3]) continue;
         const unsigned char *src = pix + (size_t)4 * w * (h - 1 - y);
         unsigned char *dst = img->rgba + 4 * ((size_t)(y_top + y) * img->w + rect[0]);
+        if (own) memset(own + (size_t)(y_top + y) * img->w + rect[0], 1, (size_t)w);
         for (int x = 0; x < w; x++) {
             unsigned a = src[4 * x + 3];
             if (a == 255) {

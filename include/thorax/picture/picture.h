@@ -329,6 +329,17 @@ void thx_picture_data_free(thx_picture_data *d);
 thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
                             thx_font *font, int frame, thx_raster *img, size_t *nan_total);
 
+/* Sort-first (thorax/parallel/parallel.h): the 3D part of the same picture, only rank's share of
+ * its pixels among size ranks, into img filled with the background first: the ray tracer's tiles of
+ * 16 x 16 pixels of each viewport, tile k for rank k mod size; OpenGL's rows [h * rank / size,
+ * h * (rank + 1) / size) from the top. own (a byte a pixel of img, zeroed first) is set to 1 where
+ * this rank wrote. The colour scales drawn are left in *bars, checked as thx_picture_draw checks
+ * them. Once rank 0 holds every rank's pixels (thx_par_gather_pixels), thx_picture_annotate there
+ * gives the picture thx_picture_draw gives, byte for byte. */
+thx_status thx_picture_draw_share(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
+                                  thx_font *font, int frame, int rank, int size, thx_raster *img, unsigned char *own,
+                                  thx_picture_bars *bars, size_t *nan_total);
+
 /* The same picture's 3D part, into the framebuffer bound in the caller's current OpenGL 3.3
  * context (fb_w x fb_h pixels; r made with w = h = 0), the whole framebuffer cleared to the
  * picture's background first. The colour scales drawn are left in *bars for thx_picture_annotate.

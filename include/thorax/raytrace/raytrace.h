@@ -112,6 +112,12 @@ typedef struct thx_raytrace_opts {
        frame alone) */
     const thx_scene *next;
     double shutter;
+    /* sort-first (thorax/parallel/parallel.h): of the viewport's tiles of 16 x 16 pixels, numbered
+       row by row, only those whose number modulo share_size is share_rank are traced (share_size 0
+       or 1: all); the others' pixels are left as they are. A pixel's colour does not depend on who
+       traces it. own (when not NULL): a byte per pixel of the image, set to 1 where this call wrote */
+    int share_rank, share_size;
+    unsigned char *own;
 } thx_raytrace_opts;
 
 void thx_raytrace_opts_default(thx_raytrace_opts *o);

@@ -166,6 +166,15 @@ thx_status thx_renderer_set_samples(thx_ctx *ctx, thx_renderer *r, int samples);
 /* The samples per pixel in use (4 or 1; 0 for a renderer without its own framebuffer). */
 int thx_renderer_samples(const thx_renderer *r);
 
+/* Sort-first rendering (thorax/parallel/parallel.h): thx_render then draws only this rank's band of
+ * the image's rows, [h * rank / size, h * (rank + 1) / size) from the top, leaves the other rows as
+ * they were in img, and sets to 1 in own (a byte per pixel of the image, when not NULL) the pixels it
+ * wrote. Each band's pixels are those of the whole picture, byte for byte: the drawing is scissored
+ * to the band and to the rows FXAA reads around it (one sample: 26 rows on each side), whose
+ * fragments are the same with or without the scissor. size 0 or 1: the whole image, as before.
+ * Only scenes that clear their viewport (a blended one would need its neighbours' rows). */
+thx_status thx_renderer_set_share(thx_ctx *ctx, thx_renderer *r, int rank, int size, unsigned char *own);
+
 /* Draws the scene into the renderer's framebuffer and reads it back into img (w x h of the
  * renderer), leaving the pixels outside the viewport as they were in img. n_nan (may be NULL):
  * the number of NaN values met in the data of the surfaces drawn with it. */
