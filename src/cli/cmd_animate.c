@@ -108,7 +108,8 @@ int cmd_animate(int argc, char **argv)
         .about = "One image per frame (DIR/frame_00001.png ...), unattended and resumable (frames\n"
                  "whose PNG exists are kept if drawn with the same options, data and program:\n"
                  "DIR/frames.settings), a progress bar on a terminal, then an MP4 (H.264) through\n"
-                 "ffmpeg.\n",
+                 "ffmpeg. Under mpirun -np N the frames are dealt to the ranks (frame k to rank\n"
+                 "k mod N) and rank 0 makes the movie: the same frames and movie as one process.\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)},
                   {"ray tracing (--renderer trace)", rt, raytrace_options(rt, &o)}},
         .positional = render_positional,

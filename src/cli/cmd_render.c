@@ -487,11 +487,15 @@ static int render_main(int argc, char **argv, int traced)
                           "viewer's shoulder, unless --light gives others), ambient occlusion, mirror\n"
                           "reflection and refraction (--material torso=glass shows the heart through a glass\n"
                           "torso), anti-aliasing. Deterministic: the same picture for the same input on any\n"
-                          "number of threads. thorax render --renderer trace is the same.\n"
+                          "number of threads. thorax render --renderer trace is the same. Under mpirun -np N the\n"
+                          "picture's tiles are dealt to the ranks and gathered by rank 0, which writes: the\n"
+                          "same bytes as one process.\n"
                         : "Draws the model's surfaces, headless (EGL, OpenGL 3.3; Mesa's llvmpipe without a\n"
                           "GPU), with potentials coloured per pixel (the value interpolated, then the colour\n"
                           "looked up, so bands and contours are exact), following the field's display\n"
-                          "conventions (paper 4.2). --renderer trace traces it instead (thorax trace).\n",
+                          "conventions (paper 4.2). --renderer trace traces it instead (thorax trace). Under\n"
+                          "mpirun -np N each rank draws a band of the picture's rows, gathered by rank 0, which\n"
+                          "writes: the same bytes as one process.\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)},
                   {"ray tracing (--renderer trace)", rt, raytrace_options(rt, &o)}},
         .positional = render_positional,
