@@ -83,6 +83,12 @@ thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigne
 
 thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K)
 {
+    return thx_fem_assemble_rows(ctx, v, use_region, NULL, K);
+}
+
+thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region,
+                                 const unsigned char *rows, thx_csr *K)
+{
     memset(K, 0, sizeof *K);
     size_t nn = v->n_nodes, nt = v->n_tets;
     if (nn > INT32_MAX) return thx_error(ctx, THX_EINPUT, "fem: %zu nodes: more than 32-bit indices hold", nn);
@@ -114,6 +120,10 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
         int32_t r = v->region[t];
         use[t] = !use_region || (r >= 0 && (size_t)r < v->n_regions && use_region[r]);
         if (r < 0 || (size_t)r >= v->n_regions) use[t] = 0;
+        if (rows && use[t]) { /* only the tetrahedra around a row asked for */
+            const int32_t *q = v->tet + 4 * t;
+            use[t] = rows[q[0]] || rows[q[1]] || rows[q[2]] || rows[q[3]];
+        }
         if (!use[t]) continue;
         double g[4][3];
         double vol = thx_fem_tet_gradients(v->xyz, v->tet + 4 * t, g);
@@ -167,6 +177,7 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
 #pragma omp for schedule(dynamic, 1024)
             for (long i = 0; i < (long)nn; i++) {
                 int64_t u = 0;
+                if (rows && !rows[i]) continue; /* a row not asked for stays empty */
                 for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
                     for (int c = 0; c < 4; c++) {
                         int32_t j = v->tet[4 * (size_t)ntet[k] + c];
@@ -195,6 +206,7 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
                 int32_t *c = col + row[i];
                 double *a = val + row[i];
                 int32_t u = 0;
+                if (rows && !rows[i]) continue;
                 for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
                     for (int q = 0; q < 4; q++) {
                         int32_t j = v->tet[4 * (size_t)ntet[k] + q];

@@ -45,6 +45,7 @@ typedef struct {
     size_t heart, outer;
     unsigned char *use_region, *kind;
     thx_csr K;
+    int32_t *part;             /* under mpirun: node -> rank (thx_fem_partition), else NULL */
     thx_fem_system *sys;
     double t_assemble;
     size_t n_st;            /* Steiner nodes on the heart surface (active ones) */
@@ -61,6 +62,7 @@ static void epi_free(epi_problem *p)
     free(p->st_corner);
     free(p->st_w);
     thx_csr_free(&p->K);
+    free(p->part);
     thx_fem_system_destroy(&p->sys);
 }
 
@@ -78,9 +80,6 @@ static thx_status epi_setup(thx_ctx *ctx, const thx_model *m, epi_problem *p)
     p->use_region = thx_malloc(ctx, v->n_regions ? v->n_regions : 1);
     if (!p->use_region) return THX_ENOMEM;
     for (size_t r = 0; r < v->n_regions; r++) p->use_region[r] = strcmp(v->regions[r].name, "heart") != 0;
-    double t0 = thx_wtime();
-    THX_TRY(thx_fem_assemble(ctx, v, p->use_region, &p->K));
-    p->t_assemble = thx_wtime() - t0;
     THX_TRY(thx_fem_active_nodes(ctx, v, p->use_region, &p->kind));
     size_t on = 0;
     for (size_t i = 0; i < m->surf[p->heart]->n_nodes; i++) {
@@ -113,7 +112,27 @@ static thx_status epi_setup(thx_ctx *ctx, const thx_model *m, epi_problem *p)
             p->st_node[p->n_st++] = r->node;
         }
     }
-    THX_TRY(thx_fem_system_create(ctx, &p->K, p->kind, 0, &p->sys));
+    {
+        /* under mpirun: the nodes partitioned among the ranks, each assembling the rows it owns (and
+           the prescribed nodes' rows, which the transfer matrix's adjoint method reads) */
+        int rank = 0, size = 1;
+        THX_TRY(thx_fem_init(0, NULL, &rank, &size));
+        unsigned char *rows = NULL;
+        if (size > 1) {
+            size_t nn = v->n_nodes;
+            p->part = thx_malloc(ctx, (nn ? nn : 1) * sizeof *p->part);
+            rows = thx_malloc(ctx, nn ? nn : 1);
+            if (!p->part || !rows) { free(rows); st = THX_ENOMEM; goto done; }
+            st = thx_fem_partition(ctx, v, p->kind, size, p->part);
+            for (size_t i = 0; st == THX_OK && i < nn; i++) rows[i] = p->part[i] == rank || p->kind[i] == 2;
+        }
+        double t0 = thx_wtime();
+        if (st == THX_OK) st = thx_fem_assemble_rows(ctx, v, p->use_region, rows, &p->K);
+        p->t_assemble = thx_wtime() - t0;
+        free(rows);
+        if (st != THX_OK) goto done;
+    }
+    THX_TRY(thx_fem_system_create_parts(ctx, &p->K, p->kind, 0, p->part, &p->sys));
     return THX_OK;
 done:
     epi_free(p);

@@ -145,6 +145,24 @@ struct thx_fem_system {
 thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
                                  thx_fem_system **out)
 {
+    return thx_fem_system_create_parts(ctx, K, kind, pin_one, NULL, out);
+}
+
+/* Sorts row r's columns (and values) of a CSR: insertion sort, the rows are short. */
+static void sort_row(PetscInt *jj, PetscScalar *aa, PetscInt n)
+{
+    for (PetscInt x = 1; x < n; x++) {
+        PetscInt key = jj[x], y = x - 1;
+        PetscScalar v = aa[x];
+        while (y >= 0 && jj[y] > key) { jj[y + 1] = jj[y]; aa[y + 1] = aa[y]; y--; }
+        jj[y + 1] = key;
+        aa[y + 1] = v;
+    }
+}
+
+thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                       const int32_t *part, thx_fem_system **out)
+{
     *out = NULL;
     if (!g_inited) return thx_error(ctx, THX_EINTERNAL, "fem: thx_fem_init was not called");
     double t0 = thx_wtime();
@@ -174,11 +192,29 @@ thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned 
         s->didx[first_free] = s->nd;
         s->pres_node[s->nd++] = first_free;
     }
-    for (int32_t i = 0; i < n; i++)
-        if (kind[i] == 1 && i != s->pinned) { s->fidx[i] = s->nf; s->free_node[s->nf++] = i; }
+    PetscMPIInt my_rank = 0, n_ranks = 1;
+    MPI_Comm_rank(PETSC_COMM_WORLD, &my_rank);
+    MPI_Comm_size(PETSC_COMM_WORLD, &n_ranks);
+    PetscInt m = PETSC_DECIDE;
+    if (!part) { /* the free nodes in the nodes' order, split in equal ranges */
+        for (int32_t i = 0; i < n; i++)
+            if (kind[i] == 1 && i != s->pinned) { s->fidx[i] = s->nf; s->free_node[s->nf++] = i; }
+    } else { /* a partition: each rank's free nodes together, ranks in order, the nodes' order within */
+        for (int32_t i = 0; i < n; i++)
+            if (kind[i] == 1 && i != s->pinned && (part[i] < 0 || part[i] >= n_ranks))
+                { st = thx_error(ctx, THX_EINTERNAL, "fem: free node %d in part %d of %d ranks", i + 1, part[i], n_ranks); goto done; }
+        m = 0;
+        for (PetscMPIInt r = 0; r < n_ranks; r++)
+            for (int32_t i = 0; i < n; i++)
+                if (kind[i] == 1 && i != s->pinned && part[i] == r) {
+                    s->fidx[i] = s->nf;
+                    s->free_node[s->nf++] = i;
+                    m += r == my_rank;
+                }
+    }
     if (s->nf == 0) { st = thx_error(ctx, THX_EINPUT, "fem: every node is prescribed: nothing to solve"); goto done; }
     /* own rows */
-    PetscInt m = PETSC_DECIDE, N = s->nf;
+    PetscInt N = s->nf;
     PCALL(ctx, PetscSplitOwnership(PETSC_COMM_WORLD, &m, &N));
     PetscInt rend = 0;
     MPI_Scan(&m, &rend, 1, MPIU_INT, MPI_SUM, PETSC_COMM_WORLD);
@@ -216,8 +252,13 @@ thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned 
             }
             ii[r - s->rstart + 1] = (PetscInt)a;
             s->kfd.row[r - s->rstart + 1] = d;
+            if (i >= 0 && K->row[i] == K->row[i + 1])
+                { st = thx_error(ctx, THX_EINTERNAL, "fem: rank %d owns node %d's row, which was not assembled", my_rank, i + 1); goto done; }
         }
-        /* columns of K are sorted and the free numbering keeps the node order: rows stay sorted */
+        /* columns of K are sorted: without a partition the free numbering keeps the node order and
+           rows stay sorted; with one, each row is sorted again */
+        if (part)
+            for (PetscInt r = 0; r < m; r++) sort_row(jj + ii[r], aa + ii[r], ii[r + 1] - ii[r]);
     }
     PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &s->A));
     PCALL(ctx, MatSetSizes(s->A, m, m, s->nf, s->nf));

@@ -36,6 +36,12 @@ thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned 
     return api(ctx) ? g_api->system_create(ctx, K, kind, pin_one, out) : THX_ESOLVER;
 }
 
+thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                       const int32_t *part, thx_fem_system **out)
+{
+    return api(ctx) ? g_api->system_create_parts(ctx, K, kind, pin_one, part, out) : THX_ESOLVER;
+}
+
 void thx_fem_system_destroy(thx_fem_system **s)
 {
     if (g_api && s && *s) g_api->system_destroy(s);

@@ -9,7 +9,7 @@
 #include "thorax/fem/fem.h"
 
 /* Raised whenever the table changes: a module from another build is refused, not misused. */
-#define THX_FEM_PETSC_ABI 2
+#define THX_FEM_PETSC_ABI 3
 
 typedef struct {
     int abi; /* THX_FEM_PETSC_ABI */
@@ -32,6 +32,8 @@ typedef struct {
     double (*system_matrix_seconds)(const thx_fem_system *s);
     void (*system_describe)(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks);
     void (*system_factor_info)(const thx_fem_system *s, thx_fem_factor_info *out);
+    thx_status (*system_create_parts)(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                      const int32_t *part, thx_fem_system **out);
 } thx_fem_petsc;
 
 /* Exported by the module. */

@@ -19,6 +19,7 @@ static const thx_fem_petsc table = {
     .system_matrix_seconds = thx_fem_system_matrix_seconds,
     .system_describe = thx_fem_system_describe,
     .system_factor_info = thx_fem_system_factor_info,
+    .system_create_parts = thx_fem_system_create_parts,
 };
 
 const thx_fem_petsc *thx_fem_petsc_get(void) { return &table; }

@@ -43,6 +43,11 @@ void thx_csr_mul(const thx_csr *a, const double *x, double *y);
  * with non-positive volume (numbered).
  */
 thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K);
+/* The same matrix's rows where rows[node] != 0 (NULL: all), the other rows empty: the rows one MPI
+ * rank owns, from the tetrahedra around them alone (a partitioned system's share of the work and
+ * memory). Each row kept is the whole matrix's row, to the bit. */
+thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region,
+                                 const unsigned char *rows, thx_csr *K);
 
 /* Nodes used by the enabled tetrahedra (1) or not (0), n_nodes bytes. */
 thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, unsigned char **active);
@@ -72,6 +77,18 @@ typedef struct thx_fem_system thx_fem_system;
  */
 thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
                                  thx_fem_system **out);
+/* The same system partitioned over the MPI ranks: rank r owns the free nodes with part[node] == r
+ * (thx_fem_partition), numbered rank after rank, and needs K's rows of those nodes alone
+ * (thx_fem_assemble_rows); part NULL: the free nodes in order, split in equal ranges (as
+ * thx_fem_system_create). An owned row that K lacks is refused (THX_EINTERNAL). */
+thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
+                                       const int32_t *part, thx_fem_system **out);
+/* A partition of the active nodes (kind[i] != 0) into n_parts parts for as many ranks: recursive
+ * coordinate bisection, each cut across the longest side of its nodes' box at the median of the
+ * free nodes (kind 1) it holds, so that every part holds as many free nodes (rows) as the others
+ * within one, and every part is a box (convex: the parts can be ordered along any ray). Ties broken
+ * by node number: the same partition on every rank. part[i] = -1 for an inactive node. */
+thx_status thx_fem_partition(thx_ctx *ctx, const thx_volume *v, const unsigned char *kind, int n_parts, int32_t *part);
 void thx_fem_system_destroy(thx_fem_system **s);
 
 typedef struct {
