@@ -1,0 +1,159 @@
+/*
+ * The partitioned forward problem's two library halves (thorax/fem/fem.h), without MPI:
+ *  - thx_fem_partition on a block of tetrahedra with a skewed density (the nodes bunched towards one
+ *    corner) and a hole of inactive nodes: every active node in one part, every inactive one in
+ *    none; the parts' free nodes (rows) equal within one; every two parts separated by a plane (the
+ *    parts are boxes: their boxes of nodes overlap nowhere inside); the same partition twice;
+ *    1 part: everything in part 0; 0 parts refused;
+ *  - thx_fem_assemble_rows: the rows asked for are the whole matrix's rows to the bit (columns and
+ *    values), the others empty; the tetrahedra of a region left out are left out as before.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testlib.h"
+#include "thorax/fem/fem.h"
+#include "thorax/geom/predicates.h"
+#include "thorax/model/volume.h"
+
+static thx_ctx *ctx;
+
+/* n^3 cubes of 6 tetrahedra each on a grid x = (i / n)^1.5 * 100 (denser towards the origin), two
+ * regions: the cubes with i + j + k < n in region 1, the rest region 0. */
+static thx_volume *block(int n)
+{
+    thx_volume *v = NULL;
+    if (thx_volume_create(ctx, &v) != THX_OK) return NULL;
+    int m = n + 1;
+    v->n_nodes = (size_t)m * m * m;
+    v->n_tets = 6 * (size_t)n * n * n;
+    v->xyz = malloc(3 * v->n_nodes * sizeof *v->xyz);
+    v->tet = malloc(4 * v->n_tets * sizeof *v->tet);
+    v->region = malloc(v->n_tets * sizeof *v->region);
+    v->n_regions = 2;
+    v->regions = calloc(2, sizeof *v->regions);
+    for (int r = 0; r < 2; r++) {
+        snprintf(v->regions[r].name, sizeof v->regions[r].name, "r%d", r);
+        v->regions[r].sigma[0] = v->regions[r].sigma[4] = v->regions[r].sigma[8] = r ? 0.05 : 0.2;
+    }
+    for (int k = 0; k < m; k++)
+        for (int j = 0; j < m; j++)
+            for (int i = 0; i < m; i++) {
+                double *p = v->xyz + 3 * (i + m * (j + m * k));
+                p[0] = 100 * pow((double)i / n, 1.5), p[1] = 100 * pow((double)j / n, 1.5), p[2] = 100 * pow((double)k / n, 1.5);
+            }
+    static const int path[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};
+    size_t nt = 0;
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++)
+                for (int t = 0; t < 6; t++) {
+                    int a = path[t][0], b = a | path[t][1], c[4] = {0, a, b, 7};
+                    int32_t q[4];
+                    for (int r = 0; r < 4; r++) q[r] = (i + (c[r] & 1)) + m * ((j + (c[r] >> 1 & 1)) + m * (k + (c[r] >> 2 & 1)));
+                    if (thx_orient3d(v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3], v->xyz + 3 * q[0]) < 0) {
+                        int32_t x = q[1];
+                        q[1] = q[2];
+                        q[2] = x;
+                    }
+                    v->region[nt] = i + j + k < n;
+                    memcpy(v->tet + 4 * nt++, q, sizeof q);
+                }
+    return v;
+}
+
+static void test_partition(const thx_volume *v, const unsigned char *kind)
+{
+    size_t nn = v->n_nodes;
+    int32_t *part = malloc(nn * sizeof *part), *again = malloc(nn * sizeof *again);
+    for (int np = 1; np <= 7; np++) {
+        CHECK_OK(ctx, thx_fem_partition(ctx, v, kind, np, part));
+        CHECK_OK(ctx, thx_fem_partition(ctx, v, kind, np, again));
+        CHECK(memcmp(part, again, nn * sizeof *part) == 0);
+        size_t rows[8] = {0}, misplaced = 0;
+        double lo[8][3], hi[8][3];
+        for (int p = 0; p < np; p++)
+            for (int c = 0; c < 3; c++) lo[p][c] = INFINITY, hi[p][c] = -INFINITY;
+        for (size_t i = 0; i < nn; i++) {
+            if (!kind[i]) { misplaced += part[i] != -1; continue; }
+            if (part[i] < 0 || part[i] >= np) { misplaced++; continue; }
+            rows[part[i]] += kind[i] == 1;
+            for (int c = 0; c < 3; c++) {
+                double x = v->xyz[3 * i + c];
+                if (x < lo[part[i]][c]) lo[part[i]][c] = x;
+                if (x > hi[part[i]][c]) hi[part[i]][c] = x;
+            }
+        }
+        size_t rmin = rows[0], rmax = rows[0];
+        for (int p = 1; p < np; p++) {
+            if (rows[p] < rmin) rmin = rows[p];
+            if (rows[p] > rmax) rmax = rows[p];
+        }
+        /* separated: for every two parts some axis on which one's box ends where the other's begins */
+        int apart = 1;
+        for (int p = 0; p < np; p++)
+            for (int q = p + 1; q < np; q++) {
+                int sep = 0;
+                for (int c = 0; c < 3; c++) sep |= hi[p][c] <= lo[q][c] || hi[q][c] <= lo[p][c];
+                apart &= sep;
+            }
+        printf("%d parts: free nodes per part %zu .. %zu, %zu nodes misplaced, boxes %s\n", np, rmin, rmax, misplaced,
+               apart ? "apart" : "OVERLAPPING");
+        CHECK(misplaced == 0);
+        CHECK(rmax - rmin <= 1);
+        CHECK(apart);
+    }
+    CHECK(thx_fem_partition(ctx, v, kind, 0, part) == THX_EINPUT);
+    free(part);
+    free(again);
+}
+
+static void test_rows(const thx_volume *v, const unsigned char *use_region)
+{
+    size_t nn = v->n_nodes;
+    thx_csr K, R;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v, use_region, &K));
+    unsigned char *rows = malloc(nn);
+    for (size_t i = 0; i < nn; i++) rows[i] = (i * 7919) % 5 < 2; /* about 2 rows in 5, scattered */
+    CHECK_OK(ctx, thx_fem_assemble_rows(ctx, v, use_region, rows, &R));
+    size_t same = 0, empty = 0, wrong = 0;
+    for (size_t i = 0; i < nn; i++) {
+        int64_t a = K.row[i], b = R.row[i], na = K.row[i + 1] - a, nb = R.row[i + 1] - b;
+        if (!rows[i]) { if (nb == 0) empty++; else wrong++; continue; }
+        if (na == nb && memcmp(K.col + a, R.col + b, (size_t)na * sizeof *K.col) == 0 &&
+            memcmp(K.val + a, R.val + b, (size_t)na * sizeof *K.val) == 0)
+            same++;
+        else
+            wrong++;
+    }
+    printf("rows asked for: %zu the same to the bit; rows not asked for: %zu empty; %zu wrong\n", same, empty, wrong);
+    CHECK(wrong == 0);
+    CHECK(same + empty == nn && same > 0 && empty > 0);
+    thx_csr_free(&K);
+    thx_csr_free(&R);
+    free(rows);
+}
+
+int main(void)
+{
+    if (thx_ctx_create(&ctx) != THX_OK) return 1;
+    thx_volume *v = block(12);
+    unsigned char use[2] = {1, 0}; /* region 1 (the corner) left out: its inner nodes inactive */
+    unsigned char *kind = NULL;
+    CHECK_OK(ctx, thx_fem_active_nodes(ctx, v, use, &kind));
+    size_t inactive = 0;
+    for (size_t i = 0; i < v->n_nodes; i++) {
+        if (kind[i] && v->xyz[3 * i + 2] == 0) kind[i] = 2; /* the bottom face prescribed */
+        inactive += !kind[i];
+    }
+    CHECK(inactive > 0);
+    test_partition(v, kind);
+    test_rows(v, use);
+    test_rows(v, NULL);
+    free(kind);
+    thx_volume_destroy(&v);
+    thx_ctx_destroy(&ctx);
+    return tl_finish();
+}
