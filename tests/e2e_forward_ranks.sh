@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# thorax forward on 1, 2 and 3 MPI ranks gives the same answers (issue 28, items 3 and 5: the baseline
-# before the tetrahedra are partitioned; docs/design/parallel.md, "The forward problem partitioned").
+# thorax forward on 1, 2 and 3 MPI ranks gives the same answers (issue 28, items 3 and 5; docs/design/
+# parallel.md, "The forward problem partitioned"): under mpirun the nodes are cut into boxes among the
+# ranks and each rank assembles only the rows it owns.
 # On the medium phantom meshed without the heart (tests/medium_phantom.sh), each case is solved by one
 # process (no launcher: what a user runs) and under `mpirun -np 2` and `-np 3`, and every series it
 # writes must agree with the one-process answer to 1e-10 of each frame's largest |value| (a transfer
@@ -17,10 +18,10 @@
 # Not here, because they do not agree to 1e-10 and are not meant to: the default for fewer than 12
 # right-hand sides, CG + GAMG at thorax's -ksp_rtol 1e-10 (2 and 3 ranks differ from one by 7e-10 of a
 # frame's largest value on 4 frames, 1.9e-9 of a column on the 12-lead transfer: another partition,
-# another preconditioner, an answer within the tolerance, not the same one). Nor a transfer matrix
-# applied (--epicardial S --transfer T, no --volume): that path starts no MPI, so under mpirun every
-# process is a rank 0 and writes DIR; all but one stop with "DIR was changed by another command" and
-# mpirun exits 1 (found while writing this test; the C code is not changed here).
+# another preconditioner, an answer within the tolerance, not the same one).
+# A transfer matrix applied (--epicardial S --transfer T, no --volume: no solve) on 2 ranks gives the
+# 12-frame solve: that path started no MPI, so every process took itself for rank 0 and wrote DIR, and all
+# but one stopped with "DIR was changed by another command" (found while writing this test; fixed).
 # Real properties asserted besides: each run's solution.json names its rank count and solver; the
 # potentials are not trivially small; a transfer matrix's rows sum to 1 (a constant heart gives that
 # constant on the torso); the iterative answers agree with the direct ones to 1e-10 on one rank.
@@ -85,6 +86,8 @@ solve tr12_mumps --transfer-out --rows model/electrodes/12lead.txt "${MUMPS[@]}"
 solve tr12_gamg --transfer-out --rows model/electrodes/12lead.txt "${GAMG[@]}"
 solve ep12_default --epicardial e12.raw --volume
 solve ep4_gamg --epicardial e4.raw --volume "${GAMG[@]}"
+"${MPIRUN[@]}" -np 2 "$THORAX" forward model --epicardial e12.raw --transfer tr_default_1/transfer.raw -o applied_2 \
+    > applied_2.log 2>&1 || { cat applied_2.log; fail "a transfer matrix applied on 2 ranks"; }
 
 "$PY" - <<'EOF' || fail "the answers (above)"
 import json, numpy as np
@@ -148,5 +151,9 @@ T = raw('tr_default_1/transfer.raw').T                       # torso rows x hear
 E = raw('e12.raw').T                                          # heart nodes x frames
 t = raw('ep12_default_1/torso.raw').T
 assert np.abs(T @ E - t).max() <= TOL * np.abs(t).max(), np.abs(T @ E - t).max()
+# and applied by thorax on 2 ranks (rank 0 writing alone)
+a = rel(raw('ep12_default_1/torso.raw'), raw('applied_2/torso.raw'))
+print('the transfer matrix applied on 2 ranks against the 12-frame solve: %.2e' % a)
+assert a <= TOL, a
 EOF
 echo "e2e_forward_ranks: all checks passed"

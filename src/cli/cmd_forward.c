@@ -9,6 +9,7 @@
 
 #include "cli/cli.h"
 #include "cli/cli_fem.h"
+#include "thorax/parallel/parallel.h"
 #include "thorax/model/electrodes.h"
 #include "thorax/io/electrodes_file.h"
 #include "thorax/io/channels_file.h"
@@ -234,11 +235,14 @@ int cmd_forward(int argc, char **argv)
         else if (cli_parse_frames(currents, nf, sel)) { rc = cli_usage_error("forward", "--currents '%s': frames 1..%zu, as 5,10,20-30 or all", currents, nf); goto end; }
     }
     if (st != THX_OK) goto fail;
-    /* PETSc only where a solve is needed */
+    /* PETSc only where a solve is needed, or under mpirun with more than one rank (applying a
+       transfer matrix needs no solve, but the ranks must know who writes: rank 0) */
     int need_solver = !(T && !want_volume && !currents);
-    if (need_solver) {
+    if (need_solver || thx_par_launched() > 1) {
         st = cli_petsc_init(ctx, &pa, &rank);
         if (st != THX_OK) goto fail;
+    }
+    if (need_solver) {
         /* the volume the solve runs on must pass the volume check (or --force) */
         st = cli_volume_gate(ctx, "forward", model_dir, m, force, rank, &vcheck, &warnings);
         if (st != THX_OK) goto fail;
