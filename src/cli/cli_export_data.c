@@ -189,18 +189,7 @@ done:
     return st;
 }
 
-int cli_make_dirs(const char *dir)
-{
-    char p[4096];
-    if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) return -1;
-    for (char *c = p + 1; *c; c++)
-        if (*c == '/') {
-            *c = '\0';
-            if (mkdir(p, 0755) != 0 && errno != EEXIST) return -1;
-            *c = '/';
-        }
-    return mkdir(p, 0755) != 0 && errno != EEXIST ? -1 : 0;
-}
+int cli_make_dirs(const char *dir) { return thx_make_dirs(dir); }
 
 /* The msh view's values: frame k of the selection. */
 typedef struct {

@@ -12,6 +12,7 @@
 #include <suitesparse/cholmod.h>
 
 #include "fem/cholesky.h"
+#include "thorax/core/fileio.h"
 #include "thorax/core/sha256.h"
 
 /* BLAS, Fortran calling convention (OpenBLAS behind libblas.so.3) */
@@ -42,19 +43,6 @@ const char *thx_chol_cache_dir(char *buf, size_t n)
     return NULL;
 }
 
-/* mkdir -p for the cache directory; 0 on success */
-static int make_dirs(const char *dir)
-{
-    char p[4096];
-    if (snprintf(p, sizeof p, "%s", dir) >= (int)sizeof p) return -1;
-    for (char *s = p + 1; *s; s++) {
-        if (*s != '/') continue;
-        *s = 0;
-        if (mkdir(p, 0755) && errno != EEXIST) return -1;
-        *s = '/';
-    }
-    return mkdir(p, 0755) && errno != EEXIST ? -1 : 0;
-}
 
 /* The graph's key: SHA-256 of a tag, n, rowp and col. */
 static void graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32])
@@ -114,7 +102,7 @@ static int cache_read(const char *path, int64_t n, const unsigned char key[32], 
 static void cache_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
                         char *note, size_t note_n)
 {
-    if (make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
+    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
     char tmp[4300];
     snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
     FILE *f = fopen(tmp, "wb");

@@ -93,4 +93,7 @@ void thx_outdir_abort(thx_outdir *od);
 
 /* Reads a whole file into a NUL-terminated buffer (caller frees). */
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len);
+/* mkdir -p: dir and the directories above it that are missing (mode 0755); 0, or -1 with errno set
+ * (a path of 4096 bytes or more: ENAMETOOLONG). */
+int thx_make_dirs(const char *dir);
 #endif
