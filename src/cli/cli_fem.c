@@ -105,8 +105,9 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
     /* a verdict `thorax mesh` kept for exactly these files (thorax/check/verdict.h): the check is not run again */
     char why[512];
     if (thx_volume_verdict_trusted(ctx, model_dir, why, sizeof why)) {
-        thx_log(ctx, THX_LOG_DEBUG, "volume check (%zu tetrahedra): passed, the verdict kept in model.json (its files "
-                "unchanged: SHA-256 in %.2f s)", m->volume->n_tets, thx_wtime() - t0);
+        if (rank == 0) /* (rank 0 speaks for all) */
+            thx_log(ctx, THX_LOG_DEBUG, "volume check (%zu tetrahedra): passed, the verdict kept in model.json (its files "
+                    "unchanged: SHA-256 in %.2f s)", m->volume->n_tets, thx_wtime() - t0);
         if (note) {
             cJSON *j = cJSON_CreateObject();
             if (!j || !cJSON_AddArrayToObject(j, "failures") || !cJSON_AddArrayToObject(j, "reasons") ||
@@ -119,7 +120,7 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
         }
         return THX_OK;
     }
-    thx_log(ctx, THX_LOG_DEBUG, "volume check: %s: checking", why);
+    if (rank == 0) thx_log(ctx, THX_LOG_DEBUG, "volume check: %s: checking", why);
     thx_volume_report r;
     thx_status st = thx_volume_check(ctx, m->volume, m, NULL, &r);
     if (st != THX_OK && st != THX_ECHECK) {
