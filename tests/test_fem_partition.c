@@ -5,6 +5,10 @@
  *    none; the parts' free nodes (rows) equal within one; every two parts separated by a plane (the
  *    parts are boxes: their boxes of nodes overlap nowhere inside); the same partition twice;
  *    1 part: everything in part 0; 0 parts refused;
+ *  - thx_fem_partition_cuts: the same partition, with its cuts: each node off the cut planes in its
+ *    own part's box, each tetrahedron's centroid in exactly one; the parts back to front from five
+ *    eyes (around and inside the block): of any two parts, the one on the eye's side of the cut
+ *    between them is listed later;
  *  - thx_fem_assemble_rows: the rows asked for are the whole matrix's rows to the bit (columns and
  *    values), the others empty; the tetrahedra of a region left out are left out as before.
  */
@@ -110,6 +114,63 @@ static void test_partition(const thx_volume *v, const unsigned char *kind)
     free(again);
 }
 
+/* The cuts: every node off the cut planes in its own part's box, every centroid in one part, and the
+ * order back to front from eyes around and inside the block: for any two parts, the one on the eye's
+ * side of the cut between them comes later. */
+static void test_cuts(const thx_volume *v, const unsigned char *kind)
+{
+    size_t nn = v->n_nodes;
+    int32_t *part = malloc(nn * sizeof *part), *plain = malloc(nn * sizeof *plain);
+    for (int np = 1; np <= 7; np++) {
+        thx_fem_cut cuts[8];
+        CHECK_OK(ctx, thx_fem_partition_cuts(ctx, v, kind, np, part, cuts));
+        CHECK_OK(ctx, thx_fem_partition(ctx, v, kind, np, plain));
+        CHECK(memcmp(part, plain, nn * sizeof *part) == 0);
+        size_t off = 0, on_plane = 0, centroid_bad = 0;
+        for (size_t i = 0; i < nn; i++) {
+            if (part[i] < 0) continue;
+            int at_plane = 0;
+            for (int k = 0; k < np - 1; k++) at_plane |= v->xyz[3 * i + cuts[k].axis] == cuts[k].at;
+            if (at_plane) { on_plane++; continue; }
+            off += thx_fem_cut_part(cuts, np, v->xyz + 3 * i) != part[i];
+        }
+        size_t count[8] = {0};
+        for (size_t t = 0; t < v->n_tets; t++) {
+            double c[3] = {0, 0, 0};
+            for (int k = 0; k < 4; k++)
+                for (int d = 0; d < 3; d++) c[d] += 0.25 * v->xyz[3 * (size_t)v->tet[4 * t + k] + d];
+            int p = thx_fem_cut_part(cuts, np, c);
+            if (p < 0 || p >= np) centroid_bad++;
+            else count[p]++;
+        }
+        int wrong_order = 0;
+        const double eyes[5][3] = {{-500, 50, 50}, {50, 700, -20}, {40, 40, 40}, {150, -300, 400}, {10, 90, 60}};
+        for (int e = 0; e < 5; e++) {
+            int order[8], seen[8] = {0};
+            thx_fem_cut_order(cuts, np, eyes[e], order);
+            for (int a = 0; a < np; a++) seen[order[a]]++;
+            for (int q = 0; q < np; q++) wrong_order += seen[q] != 1;
+            for (int a = 0; a < np; a++)
+                for (int b = a + 1; b < np; b++) {
+                    int p = order[a], q = order[b]; /* p drawn before q: q must not be behind p */
+                    for (int k = 0; k < np - 1; k++) {
+                        const thx_fem_cut *c = &cuts[k];
+                        if (p < c->lo || p >= c->hi || q < c->lo || q >= c->hi || (p < c->mid) == (q < c->mid)) continue;
+                        int eye_below = eyes[e][c->axis] < c->at, q_below = q < c->mid;
+                        wrong_order += eye_below != q_below; /* q, drawn later, on the eye's side */
+                    }
+                }
+        }
+        printf("%d parts: %zu nodes off their box (%zu on a cut plane), %zu centroids outside, tetrahedra per part", np,
+               off, on_plane, centroid_bad);
+        for (int p = 0; p < np; p++) printf(" %zu", count[p]);
+        printf("; %d pairs out of order\n", wrong_order);
+        CHECK(off == 0 && centroid_bad == 0 && wrong_order == 0);
+    }
+    free(part);
+    free(plain);
+}
+
 static void test_rows(const thx_volume *v, const unsigned char *use_region)
 {
     size_t nn = v->n_nodes;
@@ -150,6 +211,7 @@ int main(void)
     }
     CHECK(inactive > 0);
     test_partition(v, kind);
+    test_cuts(v, kind);
     test_rows(v, use);
     test_rows(v, NULL);
     free(kind);

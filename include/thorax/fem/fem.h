@@ -89,6 +89,22 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
  * within one, and every part is a box (convex: the parts can be ordered along any ray). Ties broken
  * by node number: the same partition on every rank. part[i] = -1 for an inactive node. */
 thx_status thx_fem_partition(thx_ctx *ctx, const thx_volume *v, const unsigned char *kind, int n_parts, int32_t *part);
+/* A cut of the bisection: parts [lo, hi) split into [lo, mid), where the coordinate on axis is below
+ * at, and [mid, hi), at or above it. */
+typedef struct {
+    int lo, mid, hi, axis;
+    double at;
+} thx_fem_cut;
+/* The same partition, and its n_parts - 1 cuts into cuts (a cut before the cuts inside its sides):
+ * the boxes as planes, so that any point (a tetrahedron's centroid) falls in exactly one part's box. */
+thx_status thx_fem_partition_cuts(thx_ctx *ctx, const thx_volume *v, const unsigned char *kind, int n_parts, int32_t *part,
+                                  thx_fem_cut *cuts);
+/* The part whose box holds p (-1 for cuts that are not a bisection's). */
+int thx_fem_cut_part(const thx_fem_cut *cuts, int n_parts, const double p[3]);
+/* The parts back to front for an eye at eye (sort-last's blending order; an orthographic camera: a
+ * point far back along its view): a part is listed after every part it hides, since for each cut the
+ * side away from the eye comes first. order: n_parts ints. */
+void thx_fem_cut_order(const thx_fem_cut *cuts, int n_parts, const double eye[3], int *order);
 void thx_fem_system_destroy(thx_fem_system **s);
 
 typedef struct {
