@@ -8,7 +8,9 @@
 #    movie on 1, 2 and 3 ranks; a run on 2 ranks over the frames 1 rank drew keeps them all;
 #  - a picture refused under 3 ranks is refused once (one message, from one rank), with a non-zero
 #    exit and nothing written; a launcher's rank count that is not a number, and MPI out of reach
-#    (the solver module missing), are refused by name before anything is drawn.
+#    (the solver module missing), are refused by name before anything is drawn;
+#  - a command that runs in one process (electrodes) started on 2 ranks is refused once, writing
+#    nothing (every rank would write the same files).
 # Env: THORAX, WORK, SRC. Skipped (77) without mpirun (Debian package openmpi-bin).
 set -euo pipefail
 : "${THORAX:?}" "${WORK:?}"
@@ -82,4 +84,8 @@ if OMPI_COMM_WORLD_SIZE=2 THORAX_PETSC_MODULE=/nonexistent/libthorax-petsc.so "$
     -o bad2.png 2> bad2.err; then fail "2 ranks without MPI accepted"; fi
 grep -q 'started by mpirun with 2 ranks, but MPI cannot be reached' bad2.err || fail "MPI out of reach: $(cat bad2.err)"
 [ ! -e bad1.png ] && [ ! -e bad2.png ] || fail "a refused run wrote its picture"
+# a command that does not share its work, under mpirun: refused once, before it writes anything
+if "${MPI[@]}" -np 2 "$THORAX" electrodes model -q > one.out 2> one.err; then fail "electrodes ran on 2 ranks"; fi
+[ "$(grep -c 'runs in one process' one.err)" = 1 ] || fail "electrodes on 2 ranks, the refusal not once: $(cat one.err)"
+[ ! -e model/electrodes ] || fail "electrodes on 2 ranks wrote its files"
 echo "e2e_render_ranks: ok"

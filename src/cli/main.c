@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
+#include "thorax/parallel/parallel.h"
 #include "thorax/core/startup.h"
 
 static const struct {
@@ -184,6 +185,22 @@ int main(int argc, char **argv)
                OpenBLAS runs the right kernels and malloc's large blocks are on huge pages, which may
                mean starting again (thorax/core/startup.h); the others are not worth the second start
                (about 0.08 s). */
+            /* Under mpirun with more than one rank, only the commands that share their work among the
+               ranks run: any other would be run whole by every rank, each writing the same outputs. */
+            int ranks = thx_par_launched();
+            if (ranks != 1) {
+                static const char *const shared[] = {"forward", "bem", "verify", "render", "trace", "animate"};
+                int ok = 0;
+                for (size_t k = 0; k < sizeof shared / sizeof shared[0]; k++) ok |= !strcmp(name, shared[k]);
+                if (!ok) {
+                    if (thx_par_launched_rank() == 0) /* (rank 0 speaks for all) */
+                        fprintf(stderr, "thorax %s: started by mpirun with %s ranks, but %s runs in one process (every rank "
+                            "would do the whole work and write the same outputs): run it without mpirun, or with -np 1. "
+                            "The commands that share their work among ranks: forward, bem, verify, render, trace, "
+                            "animate\n", name, ranks > 1 ? "several" : "an unreadable count of", name);
+                    return 2;
+                }
+            }
             static const char *const blas_heavy[] = {"forward", "bem", "inverse", "verify"};
             for (size_t k = 0; k < sizeof blas_heavy / sizeof blas_heavy[0]; k++)
                 if (!strcmp(name, blas_heavy[k])) thx_startup_heavy(argv);

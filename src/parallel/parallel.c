@@ -39,6 +39,16 @@ int thx_par_launched(void)
     return 1;
 }
 
+int thx_par_launched_rank(void)
+{
+    static const char *names[] = {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"};
+    for (int k = 0; k < 3; k++) {
+        const char *s = getenv(names[k]);
+        if (s) return atoi(s);
+    }
+    return 0;
+}
+
 /* MPI's failure rc as THX_ESOLVER in ctx, doing what. */
 static thx_status mpi_fail(thx_ctx *ctx, int rc, const char *what)
 {

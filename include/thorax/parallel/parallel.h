@@ -26,6 +26,10 @@ extern "C" {
  * not a positive number (the caller refuses to run: two processes might write the same file). */
 int thx_par_launched(void);
 
+/* This process's rank as the launcher numbered it (OMPI_COMM_WORLD_RANK, PMI_RANK or PMIX_RANK), 0
+ * when none is set: who speaks for a run that will not start MPI. */
+int thx_par_launched_rank(void);
+
 /* Starts MPI when the launcher started more than one rank (collective), else nothing: *rank and
  * *size (either may be NULL) are this process's. Fails with THX_ESOLVER when MPI is needed but the
  * solver module (MPI) cannot be loaded or started. Called once, before any other call below. */
