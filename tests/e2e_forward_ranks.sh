@@ -151,6 +151,41 @@ T = raw('tr_default_1/transfer.raw').T                       # torso rows x hear
 E = raw('e12.raw').T                                          # heart nodes x frames
 t = raw('ep12_default_1/torso.raw').T
 assert np.abs(T @ E - t).max() <= TOL * np.abs(t).max(), np.abs(T @ E - t).max()
+# the volume in parts (--volume under mpirun; docs/formats.md, "Partitioned volume potentials"): read by
+# this program from the format's description, every active tetrahedron in exactly one part, each part's
+# nodes' values those of volume.raw to the bit, the checksum right
+import hashlib, struct
+def part(p):
+    b = open(p, 'rb').read()
+    assert b[:8] == b'THXPART1' and hashlib.sha256(b[:-32]).digest() == b[-32:], p
+    rank, ranks = struct.unpack_from('<II', b, 8)
+    nn, nt, nf, ng = struct.unpack_from('<4Q', b, 16)
+    o = 64 + 24 * (ranks - 1)
+    node = np.frombuffer(b, '<i4', nn, o); o += 4 * nn
+    o += 24 * nn
+    tet = np.frombuffer(b, '<i4', 4 * nt, o).reshape(nt, 4); o += 16 * nt
+    o += 4 * nt
+    val = np.frombuffer(b, '<f8', nf * nn, o).reshape(nf, nn); o += 8 * nf * nn
+    assert o + 32 == len(b), p
+    return rank, ranks, node, tet, val
+vol_tets = None
+for n in (2, 3):
+    d = 'ep12_default_%d' % n
+    assert json.load(open(d + '/solution.json'))['volume_parts']['ranks'] == n
+    man = json.load(open(d + '/parts/parts.json'))
+    assert man['format'] == 'thorax-parts' and len(man['files']) == n
+    whole = raw(d + '/volume.raw')
+    seen, same = set(), True
+    for k, f in enumerate(man['files']):
+        rank, ranks, node, tet, val = part(d + '/parts/' + f)
+        assert (rank, ranks) == (k, n)
+        same &= bool((val == whole[:, node]).all())
+        g = [tuple(sorted(t)) for t in node[tet]]
+        assert not seen.intersection(g), 'a tetrahedron in two parts'
+        seen.update(g)
+    assert same, 'a part holds other values than volume.raw'
+    assert len(seen) == man['tetrahedra'], (len(seen), man['tetrahedra'])
+    print('%d parts: %d tetrahedra, each in one part; every value that of volume.raw' % (n, len(seen)))
 # and applied by thorax on 2 ranks (rank 0 writing alone)
 a = rel(raw('ep12_default_1/torso.raw'), raw('applied_2/torso.raw'))
 print('the transfer matrix applied on 2 ranks against the 12-frame solve: %.2e' % a)

@@ -9,6 +9,8 @@
  *    own part's box, each tetrahedron's centroid in exactly one; the parts back to front from five
  *    eyes (around and inside the block): of any two parts, the one on the eye's side of the cut
  *    between them is listed later;
+ *  - the volume in parts (thorax/fem/parts.h): 3 parts hold every used tetrahedron once and the
+ *    whole's values; each written and read back the same; a changed byte or a short file refused;
  *  - thx_fem_assemble_rows: the rows asked for are the whole matrix's rows to the bit (columns and
  *    values), the others empty; the tetrahedra of a region left out are left out as before.
  */
@@ -19,6 +21,7 @@
 
 #include "testlib.h"
 #include "thorax/fem/fem.h"
+#include "thorax/fem/parts.h"
 #include "thorax/geom/predicates.h"
 #include "thorax/model/volume.h"
 
@@ -197,8 +200,59 @@ static void test_rows(const thx_volume *v, const unsigned char *use_region)
     free(rows);
 }
 
+/* The volume in parts: made for 3 ranks, every used tetrahedron in one part and each part's values
+ * the whole's; written and read back equal; a byte changed, or the file cut short, refused by name. */
+static void test_parts(const thx_volume *v, const unsigned char *use, const unsigned char *kind)
+{
+    const int np = 3, nf = 2;
+    size_t nn = v->n_nodes;
+    int32_t *part = malloc(nn * sizeof *part);
+    double *values = malloc(nf * nn * sizeof *values);
+    thx_fem_cut cuts[2];
+    for (size_t i = 0; i < nf * nn; i++) values[i] = sin(0.001 * (double)i) + (double)(i / nn);
+    CHECK_OK(ctx, thx_fem_partition_cuts(ctx, v, kind, np, part, cuts));
+    size_t used = 0, in_parts = 0, wrong = 0;
+    for (size_t t = 0; t < v->n_tets; t++) used += use[v->region[t]] != 0;
+    for (int r = 0; r < np; r++) {
+        thx_fem_part p, q;
+        CHECK_OK(ctx, thx_fem_part_make(ctx, v, use, cuts, np, r, values, nf, &p));
+        in_parts += p.n_tets;
+        for (size_t f = 0; f < (size_t)nf; f++)
+            for (size_t j = 0; j < p.n_nodes; j++) wrong += p.values[f * p.n_nodes + j] != values[f * nn + (size_t)p.node[j]];
+        char name[32];
+        snprintf(name, sizeof name, "part_%d.bin", r);
+        CHECK_OK(ctx, thx_fem_part_write(ctx, tl_path(name), &p));
+        CHECK_OK(ctx, thx_fem_part_read(ctx, tl_path(name), &q));
+        CHECK(q.rank == (uint32_t)r && q.ranks == (uint32_t)np && q.n_nodes == p.n_nodes && q.n_tets == p.n_tets &&
+              q.n_frames == p.n_frames && q.n_global == nn);
+        CHECK(!memcmp(q.node, p.node, p.n_nodes * 4) && !memcmp(q.xyz, p.xyz, p.n_nodes * 24) &&
+              !memcmp(q.tet, p.tet, p.n_tets * 16) && !memcmp(q.region, p.region, p.n_tets * 4) &&
+              !memcmp(q.values, p.values, p.n_nodes * nf * 8) && !memcmp(q.cuts, cuts, sizeof cuts));
+        thx_fem_part_free(&q);
+        if (r == 1) { /* damaged: a byte of the values changed; the file cut short */
+            size_t len = 0;
+            char *b = tl_slurp(ctx, tl_path(name), &len);
+            b[len - 40] ^= 1;
+            tl_write_bytes(tl_path("bad.bin"), b, len);
+            CHECK(thx_fem_part_read(ctx, tl_path("bad.bin"), &q) == THX_EINPUT);
+            CHECK(strstr(thx_ctx_message(ctx), "checksum") != NULL);
+            tl_write_bytes(tl_path("short.bin"), b, len - 9);
+            CHECK(thx_fem_part_read(ctx, tl_path("short.bin"), &q) == THX_EINPUT);
+            CHECK(strstr(thx_ctx_message(ctx), "does not fill") != NULL);
+            printf("a damaged part: %s\n", thx_ctx_message(ctx));
+            free(b);
+        }
+        thx_fem_part_free(&p);
+    }
+    printf("3 parts: %zu tetrahedra of %zu used, %zu values not the whole's\n", in_parts, used, wrong);
+    CHECK(in_parts == used && wrong == 0);
+    free(part);
+    free(values);
+}
+
 int main(void)
 {
+    if (tl_scratch_make("test_fem_partition") != 0) return 1;
     if (thx_ctx_create(&ctx) != THX_OK) return 1;
     thx_volume *v = block(12);
     unsigned char use[2] = {1, 0}; /* region 1 (the corner) left out: its inner nodes inactive */
@@ -214,8 +268,9 @@ int main(void)
     test_cuts(v, kind);
     test_rows(v, use);
     test_rows(v, NULL);
+    test_parts(v, use, kind);
     free(kind);
     thx_volume_destroy(&v);
     thx_ctx_destroy(&ctx);
-    return tl_finish();
+    return tl_scratch_finish("test_fem_partition");
 }

@@ -5,6 +5,8 @@
 
 #include "thorax/core/core.h"
 #include "thorax/core/fileio.h"
+#include "thorax/model/model.h"
+#include "thorax/model/series.h"
 /* The PETSc options of a command line: every argument with a single leading '-' that the command
  * does not know, with its value when the next argument does not start with '-' (or is a number). */
 typedef struct {
@@ -65,4 +67,8 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
 int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_path, int method, const char *rows_path,
                         double max_offset, const char *format, int want_volume, int warm, cli_petsc_args *pa, int verbose,
                         int force);
+/* forward under mpirun with --volume (collective): rank 0 begins od (thx_outdir_begin) and makes
+ * od->tmp/parts; every rank writes its part of the volume potentials there (thorax/fem/parts.h), rank
+ * 0 the parts' manifest parts.json ("format": "thorax-parts"). */
+thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, const thx_series *volume, int rank, int ranks);
 #endif

@@ -320,10 +320,16 @@ int cmd_forward(int argc, char **argv)
                      q ? "node (volume-weighted)" : "tetrahedron");
         }
     }
+    /* under mpirun with the volume: each rank's part of it too (sort-last's data) */
+    int parts = want_volume && R.volume && R.ranks > 1;
+    if (parts) {
+        st = cli_forward_parts(ctx, &od, m, R.volume, rank, R.ranks);
+        if (st != THX_OK) goto fail;
+    }
     /* write (rank 0): a temporary directory renamed as a whole */
     if (rank == 0) {
         char path[4400];
-        st = thx_outdir_begin(ctx, &od);
+        if (!parts) st = thx_outdir_begin(ctx, &od);
         if (st != THX_OK) goto fail;
         cJSON *j = cJSON_CreateObject(), *files = cJSON_CreateObject(), *solver = cJSON_CreateObject();
         cJSON_AddStringToObject(j, "format", "thorax-solution");
@@ -370,6 +376,13 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddStringToObject(j, "channels", realpath(channels, abs) ? abs : channels);
         }
         cJSON_AddItemToObject(j, "files", files);
+        if (parts) { /* DIR/parts, its own manifest naming the parts */
+            cJSON *pj = cJSON_CreateObject();
+            cJSON_AddStringToObject(pj, "dir", "parts");
+            cJSON_AddStringToObject(pj, "manifest", "parts/parts.json");
+            cJSON_AddNumberToObject(pj, "ranks", R.ranks);
+            cJSON_AddItemToObject(j, "volume_parts", pj);
+        }
         if (vcheck) {
             cJSON_AddItemToObject(j, "volume_check", vcheck);
             vcheck = NULL;
@@ -445,6 +458,7 @@ int cmd_forward(int argc, char **argv)
     goto end;
 fail:
     rc = cli_fail(ctx, "forward", st);
+    if (rank == 0) thx_outdir_abort(&od); /* (begun early for the parts: nothing left behind) */
 end:
     cJSON_Delete(vcheck);
     cJSON_Delete(warnings);

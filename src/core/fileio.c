@@ -235,7 +235,8 @@ static int empty_dir(const char *dir)
 static thx_status owned(thx_ctx *ctx, const char *dir, const char *manifest, const char *format);
 
 /* Outputs that thorax writes inside another one, by their manifests. */
-static const struct { const char *manifest, *format; } sub_outputs[] = {{"electrodes.json", "thorax-electrodes"}};
+static const struct { const char *manifest, *format; } sub_outputs[] = {{"electrodes.json", "thorax-electrodes"},
+                                                                        {"parts.json", "thorax-parts"}};
 
 static thx_status owned_sub(thx_ctx *ctx, const char *dir)
 {

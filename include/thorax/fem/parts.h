@@ -1,0 +1,47 @@
+/*
+ * thorax/fem/parts.h — a solution's volume potentials in parts, one per MPI rank (sort-last's data,
+ * docs/design/parallel.md): the tetrahedra whose centroid lies in the rank's box of a bisection
+ * (thx_fem_partition_cuts), their nodes (global numbers, coordinates) and the nodes' values at every
+ * frame, in one file per part (docs/formats.md, "Partitioned volume potentials"). A rank reads its
+ * part alone; one process can read them all back into the whole.
+ */
+#ifndef THORAX_FEM_PARTS_H
+#define THORAX_FEM_PARTS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "thorax/fem/fem.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    uint32_t rank, ranks;
+    size_t n_nodes, n_tets, n_frames;
+    size_t n_global;        /* the whole volume's nodes */
+    thx_fem_cut *cuts;      /* ranks - 1 */
+    int32_t *node;          /* the part's nodes' global numbers, ascending */
+    double *xyz;            /* 3 per node */
+    int32_t *tet;           /* 4 per tetrahedron, the part's own node numbers */
+    int32_t *region;        /* per tetrahedron */
+    double *values;         /* frame after frame: n_frames x n_nodes */
+} thx_fem_part;
+
+/* Part rank of ranks: the tetrahedra of the volume whose region is used (use_region NULL: all)
+ * and whose centroid thx_fem_cut_part puts in rank, with the values of their nodes from values
+ * (n_frames frames of v->n_nodes values each, as a series holds them). */
+thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, const thx_fem_cut *cuts,
+                             int ranks, int rank, const double *values, size_t n_frames, thx_fem_part *out);
+/* Writes the part to path atomically (a temporary file renamed), with its SHA-256 at the end. */
+thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part *p);
+/* Reads a part back whole, or fails naming the file and what is wrong (magic, sizes, a node or
+ * tetrahedron out of range, nodes not ascending, the checksum): never a part half-read. */
+thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out);
+void thx_fem_part_free(thx_fem_part *p);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,210 @@
+/*
+ * A solution's volume potentials in parts (thorax/fem/parts.h): one part per rank of a bisection,
+ * made, written and read back (docs/formats.md, "Partitioned volume potentials").
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/core/fileio.h"
+#include "thorax/core/sha256.h"
+#include "thorax/fem/parts.h"
+
+#define MAGIC "THXPART1"
+#define HEAD 64
+#define CUT_BYTES 24
+
+void thx_fem_part_free(thx_fem_part *p)
+{
+    if (!p) return;
+    free(p->cuts);
+    free(p->node);
+    free(p->xyz);
+    free(p->tet);
+    free(p->region);
+    free(p->values);
+    memset(p, 0, sizeof *p);
+}
+
+thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, const thx_fem_cut *cuts,
+                             int ranks, int rank, const double *values, size_t n_frames, thx_fem_part *out)
+{
+    memset(out, 0, sizeof *out);
+    if (ranks < 1 || rank < 0 || rank >= ranks) return thx_error(ctx, THX_EINPUT, "parts: part %d of %d", rank, ranks);
+    size_t nn = v->n_nodes, nt = 0;
+    int32_t *local = thx_malloc(ctx, (nn ? nn : 1) * sizeof *local);
+    unsigned char *mine = thx_calloc(ctx, v->n_tets ? v->n_tets : 1, 1);
+    thx_status st = local && mine ? THX_OK : THX_ENOMEM;
+    for (size_t i = 0; st == THX_OK && i < nn; i++) local[i] = -1;
+    for (size_t t = 0; st == THX_OK && t < v->n_tets; t++) {
+        int32_t r = v->region[t];
+        if (r < 0 || (size_t)r >= v->n_regions || (use_region && !use_region[r])) continue;
+        double c[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            for (int d = 0; d < 3; d++) c[d] += 0.25 * v->xyz[3 * (size_t)v->tet[4 * t + k] + d];
+        if (thx_fem_cut_part(cuts, ranks, c) != rank) continue;
+        mine[t] = 1;
+        nt++;
+        for (int k = 0; k < 4; k++) local[v->tet[4 * t + k]] = 0;
+    }
+    size_t n = 0;
+    for (size_t i = 0; st == THX_OK && i < nn; i++)
+        if (local[i] == 0) local[i] = (int32_t)n++;
+    out->rank = (uint32_t)rank;
+    out->ranks = (uint32_t)ranks;
+    out->n_nodes = n;
+    out->n_tets = nt;
+    out->n_frames = n_frames;
+    out->n_global = nn;
+    if (st == THX_OK) {
+        out->cuts = thx_malloc(ctx, (ranks > 1 ? (size_t)ranks - 1 : 1) * sizeof *out->cuts);
+        out->node = thx_malloc(ctx, (n ? n : 1) * sizeof *out->node);
+        out->xyz = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *out->xyz);
+        out->tet = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *out->tet);
+        out->region = thx_malloc(ctx, (nt ? nt : 1) * sizeof *out->region);
+        out->values = thx_malloc(ctx, (n * n_frames > 0 ? n * n_frames : 1) * sizeof *out->values);
+        if (!out->cuts || !out->node || !out->xyz || !out->tet || !out->region || !out->values) st = THX_ENOMEM;
+    }
+    if (st == THX_OK) {
+        if (ranks > 1) memcpy(out->cuts, cuts, ((size_t)ranks - 1) * sizeof *cuts);
+        for (size_t i = 0; i < nn; i++)
+            if (local[i] >= 0) {
+                out->node[local[i]] = (int32_t)i;
+                memcpy(out->xyz + 3 * (size_t)local[i], v->xyz + 3 * i, 3 * sizeof *v->xyz);
+            }
+        size_t k = 0;
+        for (size_t t = 0; t < v->n_tets; t++) {
+            if (!mine[t]) continue;
+            for (int c = 0; c < 4; c++) out->tet[4 * k + c] = local[v->tet[4 * t + c]];
+            out->region[k++] = v->region[t];
+        }
+        for (size_t f = 0; f < n_frames; f++)
+            for (size_t j = 0; j < n; j++) out->values[f * n + j] = values[f * nn + (size_t)out->node[j]];
+    }
+    free(local);
+    free(mine);
+    if (st != THX_OK) thx_fem_part_free(out);
+    return st;
+}
+
+/* n bytes to the file and the hash; 0, or -1 */
+static int put(FILE *f, thx_sha256_ctx *h, const void *p, size_t n)
+{
+    thx_sha256_update(h, p, n);
+    return n && fwrite(p, 1, n, f) != n ? -1 : 0;
+}
+
+thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part *p)
+{
+    thx_atomic_file af;
+    THX_CHECK(thx_atomic_open(ctx, path, &af));
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    unsigned char head[HEAD];
+    memset(head, 0, sizeof head);
+    memcpy(head, MAGIC, 8);
+    uint64_t sizes[4] = {p->n_nodes, p->n_tets, p->n_frames, p->n_global};
+    memcpy(head + 8, &p->rank, 4);
+    memcpy(head + 12, &p->ranks, 4);
+    memcpy(head + 16, sizes, sizeof sizes);
+    int bad = put(af.f, &h, head, sizeof head);
+    for (uint32_t k = 0; k + 1 < p->ranks && !bad; k++) {
+        unsigned char c[CUT_BYTES];
+        int32_t iv[4] = {p->cuts[k].lo, p->cuts[k].mid, p->cuts[k].hi, p->cuts[k].axis};
+        memcpy(c, iv, 16);
+        memcpy(c + 16, &p->cuts[k].at, 8);
+        bad = put(af.f, &h, c, sizeof c);
+    }
+    if (!bad) bad = put(af.f, &h, p->node, p->n_nodes * sizeof *p->node);
+    if (!bad) bad = put(af.f, &h, p->xyz, 3 * p->n_nodes * sizeof *p->xyz);
+    if (!bad) bad = put(af.f, &h, p->tet, 4 * p->n_tets * sizeof *p->tet);
+    if (!bad) bad = put(af.f, &h, p->region, p->n_tets * sizeof *p->region);
+    if (!bad) bad = put(af.f, &h, p->values, p->n_frames * p->n_nodes * sizeof *p->values);
+    unsigned char digest[32];
+    thx_sha256_final(&h, digest);
+    if (!bad) bad = fwrite(digest, 1, 32, af.f) != 32;
+    if (bad) {
+        thx_atomic_abort(&af);
+        return thx_error(ctx, THX_EIO, "%s: cannot write the part", path);
+    }
+    return thx_atomic_commit(ctx, &af);
+}
+
+thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
+{
+    memset(out, 0, sizeof *out);
+    char *b = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &b, &len));
+    thx_status st = THX_OK;
+    uint64_t sz[4];
+    if (len < HEAD + 32 || memcmp(b, MAGIC, 8) != 0) {
+        st = thx_error(ctx, THX_EINPUT, "%s: not a thorax volume part (magic %s expected)", path, MAGIC);
+        goto done;
+    }
+    memcpy(&out->rank, b + 8, 4);
+    memcpy(&out->ranks, b + 12, 4);
+    memcpy(sz, b + 16, sizeof sz);
+    /* the sizes must give the file's length exactly (each bounded first, so the sum cannot wrap) */
+    if (out->ranks < 1 || out->rank >= out->ranks || out->ranks > (1u << 24) || sz[0] > len || sz[1] > len ||
+        sz[2] > len || sz[3] > INT32_MAX || sz[0] > sz[3] || (sz[0] && sz[2] > len / 8 / sz[0]) ||
+        (uint64_t)HEAD + CUT_BYTES * ((uint64_t)out->ranks - 1) + 28 * sz[0] + 20 * sz[1] + 8 * sz[2] * sz[0] + 32 != len) {
+        st = thx_error(ctx, THX_EINPUT, "%s: part %u of %u with %llu nodes, %llu tetrahedra, %llu frames does not fill the "
+                       "file's %zu bytes (cut short, or not a part)", path, out->rank, out->ranks, (unsigned long long)sz[0],
+                       (unsigned long long)sz[1], (unsigned long long)sz[2], len);
+        goto done;
+    }
+    {
+        unsigned char digest[32];
+        thx_sha256_ctx h;
+        thx_sha256_init(&h);
+        thx_sha256_update(&h, b, len - 32);
+        thx_sha256_final(&h, digest);
+        if (memcmp(digest, b + len - 32, 32) != 0) {
+            st = thx_error(ctx, THX_EINPUT, "%s: the part's checksum does not match its bytes (damaged)", path);
+            goto done;
+        }
+    }
+    out->n_nodes = sz[0], out->n_tets = sz[1], out->n_frames = sz[2], out->n_global = sz[3];
+    size_t n = out->n_nodes, t = out->n_tets, r = out->ranks - 1;
+    out->cuts = thx_malloc(ctx, (r ? r : 1) * sizeof *out->cuts);
+    out->node = thx_malloc(ctx, (n ? n : 1) * sizeof *out->node);
+    out->xyz = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *out->xyz);
+    out->tet = thx_malloc(ctx, 4 * (t ? t : 1) * sizeof *out->tet);
+    out->region = thx_malloc(ctx, (t ? t : 1) * sizeof *out->region);
+    out->values = thx_malloc(ctx, (n * out->n_frames > 0 ? n * out->n_frames : 1) * sizeof *out->values);
+    if (!out->cuts || !out->node || !out->xyz || !out->tet || !out->region || !out->values) { st = THX_ENOMEM; goto done; }
+    const char *q = b + HEAD;
+    for (size_t k = 0; k < r; k++, q += CUT_BYTES) {
+        int32_t iv[4];
+        memcpy(iv, q, 16);
+        out->cuts[k] = (thx_fem_cut){.lo = iv[0], .mid = iv[1], .hi = iv[2], .axis = iv[3]};
+        memcpy(&out->cuts[k].at, q + 16, 8);
+        if (iv[3] < 0 || iv[3] > 2 || iv[0] < 0 || iv[0] >= iv[1] || iv[1] >= iv[2] || (uint32_t)iv[2] > out->ranks) {
+            st = thx_error(ctx, THX_EINPUT, "%s: cut %zu (parts %d, %d, %d, axis %d) is not a bisection's", path, k + 1, iv[0],
+                           iv[1], iv[2], iv[3]);
+            goto done;
+        }
+    }
+    memcpy(out->node, q, n * 4), q += n * 4;
+    memcpy(out->xyz, q, n * 24), q += n * 24;
+    memcpy(out->tet, q, t * 16), q += t * 16;
+    memcpy(out->region, q, t * 4), q += t * 4;
+    memcpy(out->values, q, n * out->n_frames * 8);
+    for (size_t i = 0; i < n; i++)
+        if (out->node[i] < 0 || (size_t)out->node[i] >= out->n_global || (i && out->node[i] <= out->node[i - 1])) {
+            st = thx_error(ctx, THX_EINPUT, "%s: node %zu's global number %d is out of range or not ascending", path, i + 1,
+                           out->node[i]);
+            goto done;
+        }
+    for (size_t k = 0; k < 4 * t; k++)
+        if (out->tet[k] < 0 || (size_t)out->tet[k] >= n) {
+            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu names node %d of the part's %zu", path, k / 4 + 1,
+                           out->tet[k] + 1, n);
+            goto done;
+        }
+done:
+    free(b);
+    if (st != THX_OK) thx_fem_part_free(out);
+    return st;
+}
