@@ -7,8 +7,9 @@
 #      ranks' scaling; 2: this machine's two cores in one process, what sharing costs here);
 #   2. thorax render (OpenGL, llvmpipe) of the same picture (rows in bands);
 #   3. thorax animate of 24 frames at 800 x 600 (frames dealt to the ranks).
-# This machine has 2 cores: the figures say what sharing costs and gains here; across machines each
-# rank brings its own cores. Prints figures; never fails on time.
+# Threads: OpenMP's (the tracer) and llvmpipe's (OpenGL: LP_NUM_THREADS) are both set, one a rank and
+# BASE_THREADS for the one process. This machine has 2 cores: the figures say what sharing costs and
+# gains here; across machines each rank brings its own cores. Prints figures; never fails on time.
 #   DATA=DIR   reuse DIR/m (model, meshed) and DIR/sol (solution); else the high phantom is made
 #   RUNS=N     farm-bench pairs (default 3)
 #   BASE_THREADS=N  the one process's OpenMP threads (default 1)
@@ -43,8 +44,8 @@ case_() {
     echo "== $name: $*"
     # (the outputs removed before each run: animate would keep the frames of the run before)
     farm-bench -n "$RUNS" --warmup 1 --timeout 1200 \
-        --vs "sh -c 'rm -rf $o1; OMP_NUM_THREADS=$BT exec $THORAX $* -o $o1 -q'" \
-        -- sh -c "rm -rf $o2; OMP_NUM_THREADS=1 exec $MPI -np 2 $THORAX $* -o $o2 -q" 2>&1 | sed 's/^/  /'
+        --vs "sh -c 'rm -rf $o1; OMP_NUM_THREADS=$BT LP_NUM_THREADS=$BT exec $THORAX $* -o $o1 -q'" \
+        -- sh -c "rm -rf $o2; OMP_NUM_THREADS=1 LP_NUM_THREADS=1 exec $MPI -np 2 $THORAX $* -o $o2 -q" 2>&1 | sed 's/^/  /'
     echo "  (A: 2 ranks of 1 thread; B: 1 process of $BT thread(s); A/B below 1: sharing gains)"
 }
 case_ "trace, one picture of 1920 x 1080" "$W/t1.png" "$W/t2.png" trace --solution "$S" --frame 150 --size 1920x1080 --colorbar
