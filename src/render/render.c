@@ -213,6 +213,57 @@ done:
     return st;
 }
 
+thx_status thx_render_layer(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, unsigned char *rgba, float *depth,
+                            size_t *n_nan)
+{
+    if (n_nan) *n_nan = 0;
+    if (!r || !r->own) return thx_error(ctx, THX_EINPUT, "thx_render_layer: the renderer has no offscreen framebuffer");
+    if (r->samples != 1)
+        return thx_error(ctx, THX_EINPUT, "thx_render_layer: %d samples a pixel; layers are composited by depth, one "
+                         "sample a pixel (thx_renderer_set_samples 1)", r->samples);
+    if (!scene || !scene->clear) return thx_error(ctx, THX_EINPUT, "thx_render_layer: a scene that clears its viewport");
+    int rect[4];
+    THX_CHECK(rn_viewport_rect(ctx, scene, r->w, r->h, rect));
+    egl_current prev;
+    THX_CHECK(rn_make_current(ctx, r, &prev));
+    thx_status st = THX_OK;
+    float *z = NULL;
+    glBindFramebuffer(GL_FRAMEBUFFER, r->fbo_draw);
+    THX_TRY(rn_draw_scene(ctx, r, scene, r->w, r->h, n_nan));
+    THX_TRY(rn_read_pixels(ctx, r, rect));
+    int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
+    z = thx_malloc(ctx, (size_t)w * h * sizeof *z);
+    if (!z) { st = THX_ENOMEM; goto done; }
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, r->fbo_draw);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(rect[0], rect[1], w, h, GL_DEPTH_COMPONENT, GL_FLOAT, z);
+    glBindFramebuffer(GL_FRAMEBUFFER, r->fbo_draw);
+    THX_TRY(rn_gl_check(ctx, "reading the depth back"));
+    for (int y = 0; y < h; y++) { /* GL's rows from the bottom: flipped */
+        size_t src = (size_t)w * (h - 1 - y), dst = (size_t)(y_top + y) * r->w + rect[0];
+        memcpy(rgba + 4 * dst, r->pix + 4 * src, 4 * (size_t)w);
+        memcpy(depth + dst, z + src, (size_t)w * sizeof *z);
+    }
+done:
+    free(z);
+    rn_restore_current(r, &prev);
+    return st;
+}
+
+thx_status thx_render_layer_finish(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, const unsigned char *rgba,
+                                   thx_raster *img)
+{
+    if (!r || !r->own || !img || img->w != r->w || img->h != r->h)
+        return thx_error(ctx, THX_EINPUT, "thx_render_layer_finish: no renderer of the image's size");
+    int rect[4];
+    THX_CHECK(rn_viewport_rect(ctx, scene, r->w, r->h, rect));
+    int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
+    THX_CHECK(rn_grow(ctx, (void **)&r->pix, &r->pix_cap, 4 * (size_t)w * h, 1));
+    for (int y = 0; y < h; y++) /* back to GL's rows, as rn_read_pixels leaves them */
+        memcpy(r->pix + 4 * (size_t)w * (h - 1 - y), rgba + 4 * ((size_t)(y_top + y) * r->w + rect[0]), 4 * (size_t)w);
+    return rn_finish(ctx, r, img, rect, rect, NULL);
+}
+
 thx_status thx_renderer_set_share(thx_ctx *ctx, thx_renderer *r, int rank, int size, unsigned char *own)
 {
     if (!r || !r->own) return thx_error(ctx, THX_EINPUT, "thx_renderer_set_share: the renderer has no offscreen framebuffer");

@@ -493,6 +493,8 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
                 hi[k] = fmax(hi[k], x);
             }
     if (!(lo[0] <= hi[0])) goto done; /* nothing to draw */
+    if (sc->have_box) /* one depth scale for every part of a scene (sort-last) */
+        for (int k = 0; k < 3; k++) lo[k] = sc->box[0][k], hi[k] = sc->box[1][k];
 
     double zn, zf, view[16], proj[16];
     cam_depth_range(&sc->camera, lo, hi, &zn, &zf);

@@ -139,6 +139,10 @@ thx_status rn_blit_image(thx_ctx *ctx, thx_renderer *r, const thx_raster *img, c
 /* The framebuffer's rect (resolved, or smoothed by FXAA over rect), its rows keep (within rect) into
  * img, divided by alpha; own (may be NULL): those pixels set to 1. */
 thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own);
+/* rn_read_back's two halves: rect's pixels into r->pix (GL's rows), and r->pix smoothed, flipped and
+ * divided by alpha into img's rows keep. */
+thx_status rn_read_pixels(thx_ctx *ctx, thx_renderer *r, const int rect[4]);
+thx_status rn_finish(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own);
 /* The rows FXAA reads above and below a pixel it smooths, and one more (render_readback.c). */
 #define RN_FXAA_REACH 26
 

@@ -142,7 +142,14 @@ static void fxaa(const unsigned char *src, unsigned char *dst, float *luma, int 
  * divides out alpha. */
 thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own)
 {
-    int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
+    THX_CHECK(rn_read_pixels(ctx, r, rect));
+    return rn_finish(ctx, r, img, rect, keep, own);
+}
+
+/* rect's pixels (resolved when multisampled) into r->pix, GL's rows (from the bottom), premultiplied. */
+thx_status rn_read_pixels(thx_ctx *ctx, thx_renderer *r, const int rect[4])
+{
+    int w = rect[2], h = rect[3];
     size_t n = (size_t)w * h;
     if (r->samples > 1) {
         glBindFramebuffer(GL_READ_FRAMEBUFFER, r->fbo_draw);
@@ -157,7 +164,15 @@ thx_status rn_read_back(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const in
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(rect[0], rect[1], w, h, GL_RGBA, GL_UNSIGNED_BYTE, r->pix);
     glBindFramebuffer(GL_FRAMEBUFFER, r->fbo_draw);
-    THX_CHECK(rn_gl_check(ctx, "reading the image back"));
+    return rn_gl_check(ctx, "reading the image back");
+}
+
+/* r->pix (rect's pixels, as rn_read_pixels leaves them) smoothed by FXAA (one sample), its rows keep
+ * flipped into img and divided by alpha; own (may be NULL): those pixels set to 1. */
+thx_status rn_finish(thx_ctx *ctx, thx_renderer *r, thx_raster *img, const int rect[4], const int keep[4], unsigned char *own)
+{
+    int w = rect[2], h = rect[3], y_top = r->h - rect[1] - h;
+    size_t n = (size_t)w * h;
     const unsigned char *pix = r->pix;
     if (r->samples == 1) {
         THX_CHECK(rn_grow(ctx, (void **)&r->pix2, &r->pix2_cap, 4 * n, 1));

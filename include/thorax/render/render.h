@@ -146,6 +146,10 @@ typedef struct {
     int clear;           /* clear the viewport to the background first (else draw over its pixels) */
     const thx_render_plane *planes; /* image planes drawn with the surfaces (may be NULL) */
     size_t n_planes;
+    /* the box the depth range is fitted to (have_box): in place of the box around what is drawn, so
+       that pictures of parts of one scene (sort-last's ranks) share one depth scale */
+    int have_box;
+    double box[2][3];
 } thx_scene;
 
 typedef struct thx_renderer thx_renderer;
@@ -174,6 +178,20 @@ int thx_renderer_samples(const thx_renderer *r);
  * fragments are the same with or without the scissor. size 0 or 1: the whole image, as before.
  * Only scenes that clear their viewport (a blended one would need its neighbours' rows). */
 thx_status thx_renderer_set_share(thx_ctx *ctx, thx_renderer *r, int rank, int size, unsigned char *own);
+
+/* Sort-last (docs/design/parallel.md): the scene drawn as thx_render draws it, read back raw: the
+ * viewport's premultiplied RGBA into rgba and its window depth into depth (0 near .. 1 far; 1 where
+ * nothing was drawn), a value a pixel of the whole image, rows from the top; the pixels outside the
+ * viewport left as they are. One sample a pixel only (thx_renderer_set_samples 1, llvmpipe's
+ * default): a layer's pixel is one fragment. Layers of parts of one scene, drawn with the same
+ * camera and box (thx_scene.have_box), composited by depth (the nearer fragment) and finished by
+ * thx_render_layer_finish, give thx_render's picture of the whole scene. */
+thx_status thx_render_layer(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, unsigned char *rgba, float *depth,
+                            size_t *n_nan);
+/* The end of thx_render over a layer (a composited one): FXAA over the scene's viewport, then
+ * divided by alpha into img (w x h of the renderer; the other pixels left as they are). */
+thx_status thx_render_layer_finish(thx_ctx *ctx, thx_renderer *r, const thx_scene *scene, const unsigned char *rgba,
+                                   thx_raster *img);
 
 /* Draws the scene into the renderer's framebuffer and reads it back into img (w x h of the
  * renderer), leaving the pixels outside the viewport as they were in img. n_nan (may be NULL):
