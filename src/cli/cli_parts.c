@@ -37,6 +37,11 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
     memset(&p, 0, sizeof p);
     if (!use || !part || !cuts) st = thx_error(ctx, THX_ENOMEM, "out of memory (the volume's parts)");
     for (size_t r = 0; st == THX_OK && r < v->n_regions; r++) use[r] = strcmp(v->regions[r].name, "heart") != 0;
+    size_t active = 0; /* the tetrahedra the parts must hold between them, each once */
+    for (size_t t = 0; st == THX_OK && t < v->n_tets; t++) {
+        int32_t r = v->region[t];
+        active += r >= 0 && (size_t)r < v->n_regions && use[r];
+    }
     if (st == THX_OK) st = thx_fem_active_nodes(ctx, v, use, &kind);
     if (st == THX_OK) st = thx_fem_partition_cuts(ctx, v, kind, ranks, part, cuts);
     if (st == THX_OK) st = thx_fem_part_make(ctx, v, use, cuts, ranks, rank, volume->v, volume->n_frames, &p);
@@ -51,6 +56,8 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
     free(cuts);
     st = thx_par_agree(ctx, st, NULL); /* every part written */
     if (st == THX_OK) st = thx_par_sum(ctx, counts, 1);
+    if (st == THX_OK && rank == 0 && (size_t)counts[0] != active) /* every tetrahedron in exactly one part */
+        st = thx_error(ctx, THX_EINTERNAL, "parts: %lld tetrahedra in the parts, %zu in the volume", counts[0], active);
     if (st == THX_OK && rank == 0) { /* the parts' own manifest */
         cJSON *j = cJSON_CreateObject(), *files = cJSON_AddArrayToObject(j, "files");
         cJSON_AddStringToObject(j, "format", "thorax-parts");
@@ -74,15 +81,6 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
             st = thx_atomic_commit(ctx, &af);
         }
         free(text);
-        if (st == THX_OK && counts[0] != (long long)0 && (size_t)counts[0] != 0) {
-            size_t active = 0;
-            for (size_t t = 0; t < v->n_tets; t++) {
-                int32_t r = v->region[t];
-                active += r >= 0 && (size_t)r < v->n_regions && strcmp(v->regions[r].name, "heart") != 0;
-            }
-            if ((size_t)counts[0] != active) /* every tetrahedron in exactly one part */
-                st = thx_error(ctx, THX_EINTERNAL, "parts: %lld tetrahedra in the parts, %zu in the volume", counts[0], active);
-        }
     }
     return st;
 }
