@@ -20,7 +20,4 @@ int cli_export_data(const cli_export_request *rq);
 
 /* Frame lists: cli_parse_frames (cli/options.h). */
 
-/* Creates dir and its missing parents (mode 0755); 0, or -1 with errno set. */
-int cli_make_dirs(const char *dir);
-
 #endif

@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 
 #include "cli/cli.h"
+#include "thorax/core/fileio.h"
 #include "cli/cli_export.h"
 #include "thorax/fem/fem.h"
 #include "thorax/io/export_data.h"
@@ -189,8 +190,6 @@ done:
     return st;
 }
 
-int cli_make_dirs(const char *dir) { return thx_make_dirs(dir); }
-
 /* The msh view's values: frame k of the selection. */
 typedef struct {
     const thx_series *s;
@@ -305,7 +304,7 @@ int cli_export_data(const cli_export_request *rq)
         st = l > 4 && !strcmp(names[i] + l - 4, ".pvd") ? thx_export_pvd_claim(ctx, path) : thx_export_claim(ctx, fmt, path);
         if (st) goto fail;
     }
-    if (cli_make_dirs(rq->out_dir) != 0) {
+    if (thx_make_dirs(rq->out_dir) != 0) {
         st = thx_error(ctx, THX_EIO, "%s: cannot create directory: %s", rq->out_dir, strerror(errno));
         goto fail;
     }

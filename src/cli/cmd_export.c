@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "thorax/core/fileio.h"
 #include "cli/cli_export.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
@@ -161,7 +162,7 @@ int cmd_export(int argc, char **argv)
             goto done;
         }
     }
-    if (cli_make_dirs(out_dir) != 0) {
+    if (thx_make_dirs(out_dir) != 0) {
         fprintf(stderr, "thorax export: %s: cannot create directory: %s\n", out_dir, strerror(errno));
         rc = 1;
         goto done;

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "thorax/core/fileio.h"
 #include "cli/cli_export.h"
 #include "thorax/fem/fem.h"
 #include "thorax/field/field.h"
@@ -355,7 +356,7 @@ int cmd_field(int argc, char **argv)
         st = !single && k == nsel ? thx_export_pvd_claim(ctx, p) : thx_field_claim(ctx, p);
         if (st) goto fail;
     }
-    if (!single && cli_make_dirs(out) != 0) {
+    if (!single && thx_make_dirs(out) != 0) {
         st = thx_error(ctx, THX_EIO, "%s: cannot create directory: %s", out, strerror(errno));
         goto fail;
     }

@@ -4,6 +4,7 @@
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "parallel/mpi_module.h"
 
@@ -72,7 +73,7 @@ static int gatherv(const void *send, size_t n, void *recv, const size_t *counts,
     for (int r = 0; r < size && rc == MPI_SUCCESS; r++) {
         char *dst = (char *)recv + at;
         if (r == root) {
-            for (size_t i = 0; i < counts[r]; i++) dst[i] = ((const char *)send)[i];
+            memcpy(dst, send, counts[r]);
         } else {
             for (size_t off = 0; off < counts[r] && rc == MPI_SUCCESS;) {
                 int part = counts[r] - off > INT_MAX ? INT_MAX : (int)(counts[r] - off);
