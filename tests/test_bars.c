@@ -15,37 +15,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shapes.h"
 #include "testlib.h"
 #include "thorax/model/model.h"
 #include "thorax/picture/picture.h"
 
 static thx_ctx *ctx;
-
-/* A plate of 5 x 5 nodes in the plane y = 0 (facing the anterior view), x in x0..x0+50, z in -25..25. */
-static thx_surface *plate(const char *name, double x0)
-{
-    thx_surface *s = NULL;
-    if (thx_surface_create(ctx, name, THX_ROLE_OTHER, &s) != THX_OK) return NULL;
-    s->n_nodes = 25;
-    s->xyz = calloc(3 * 25, sizeof *s->xyz);
-    s->n_tris = 32;
-    s->tri = calloc(3 * 32, sizeof *s->tri);
-    for (int j = 0; j < 5; j++)
-        for (int i = 0; i < 5; i++) {
-            double *p = s->xyz + 3 * (5 * j + i);
-            p[0] = x0 + 12.5 * i;
-            p[1] = 0;
-            p[2] = -25 + 12.5 * j;
-        }
-    int t = 0;
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 4; i++) {
-            int a = 5 * j + i, b = a + 1, c = a + 5, d = c + 1;
-            int32_t q[6] = {a, b, d, a, d, c};
-            memcpy(s->tri + 6 * t++, q, sizeof q);
-        }
-    return s;
-}
 
 /* A series over a plate: every node `v`, but the first corner `lo` and the last `hi`. */
 static thx_series *plate_data(double v, double lo, double hi)
@@ -64,7 +39,7 @@ static void setup(thx_picture_data *d)
     memset(d, 0, sizeof *d);
     CHECK_OK(ctx, thx_model_create(ctx, &d->m));
     d->m->frame = thx_frame_ras();
-    thx_surface *a = plate("left", -60), *b = plate("right", 10);
+    thx_surface *a = shape_plate(ctx, "left", -60), *b = shape_plate(ctx, "right", 10);
     CHECK_OK(ctx, thx_model_add_surface(ctx, d->m, &a));
     CHECK_OK(ctx, thx_model_add_surface(ctx, d->m, &b));
     /* plate "left" (x < 0: the subject's left, the viewer's right in the anterior view) -5 within
@@ -261,7 +236,7 @@ static void test_activation_bar(thx_renderer *r, thx_font *font)
     memset(&d, 0, sizeof d);
     CHECK_OK(ctx, thx_model_create(ctx, &d.m));
     d.m->frame = thx_frame_ras();
-    thx_surface *a = plate("sock", -25);
+    thx_surface *a = shape_plate(ctx, "sock", -25);
     CHECK_OK(ctx, thx_model_add_surface(ctx, d.m, &a));
     thx_series *x = NULL;
     CHECK_OK(ctx, thx_series_create(ctx, 25, 100, &x));

@@ -19,10 +19,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shapes.h"
 #include "testlib.h"
 #include "thorax/fem/fem.h"
 #include "thorax/fem/parts.h"
-#include "thorax/geom/predicates.h"
 #include "thorax/model/volume.h"
 
 static thx_ctx *ctx;
@@ -45,29 +45,12 @@ static thx_volume *block(int n)
         snprintf(v->regions[r].name, sizeof v->regions[r].name, "r%d", r);
         v->regions[r].sigma[0] = v->regions[r].sigma[4] = v->regions[r].sigma[8] = r ? 0.05 : 0.2;
     }
-    for (int k = 0; k < m; k++)
-        for (int j = 0; j < m; j++)
-            for (int i = 0; i < m; i++) {
-                double *p = v->xyz + 3 * (i + m * (j + m * k));
-                p[0] = 100 * pow((double)i / n, 1.5), p[1] = 100 * pow((double)j / n, 1.5), p[2] = 100 * pow((double)k / n, 1.5);
-            }
-    static const int path[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};
-    size_t nt = 0;
-    for (int k = 0; k < n; k++)
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < n; i++)
-                for (int t = 0; t < 6; t++) {
-                    int a = path[t][0], b = a | path[t][1], c[4] = {0, a, b, 7};
-                    int32_t q[4];
-                    for (int r = 0; r < 4; r++) q[r] = (i + (c[r] & 1)) + m * ((j + (c[r] >> 1 & 1)) + m * (k + (c[r] >> 2 & 1)));
-                    if (thx_orient3d(v->xyz + 3 * q[1], v->xyz + 3 * q[2], v->xyz + 3 * q[3], v->xyz + 3 * q[0]) < 0) {
-                        int32_t x = q[1];
-                        q[1] = q[2];
-                        q[2] = x;
-                    }
-                    v->region[nt] = i + j + k < n;
-                    memcpy(v->tet + 4 * nt++, q, sizeof q);
-                }
+    shape_cube_grid(n, 1.0 / n, v->xyz, v->tet); /* on the unit cube, then bunched (the tetrahedra stay positive) */
+    for (size_t i = 0; i < 3 * v->n_nodes; i++) v->xyz[i] = 100 * pow(v->xyz[i], 1.5);
+    for (size_t t = 0; t < v->n_tets; t++) {
+        size_t c = t / 6; /* cube (i, j, k) = c % n, c / n % n, c / n^2 */
+        v->region[t] = (int32_t)(c % (size_t)n + c / (size_t)n % (size_t)n + c / ((size_t)n * (size_t)n)) < n;
+    }
     return v;
 }
 

@@ -13,75 +13,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shapes.h"
 #include "testlib.h"
 #include "thorax/model/model.h"
 #include "thorax/picture/picture.h"
 
 static thx_ctx *ctx;
-
-/* A plate of 5 x 5 nodes in the plane y = 0, x in x0..x0+50, z in -25..25, values rising along x. */
-static thx_surface *plate(const char *name, double x0)
-{
-    thx_surface *s = NULL;
-    if (thx_surface_create(ctx, name, THX_ROLE_OTHER, &s) != THX_OK) return NULL;
-    s->n_nodes = 25;
-    s->xyz = calloc(3 * 25, sizeof *s->xyz);
-    s->n_tris = 32;
-    s->tri = calloc(3 * 32, sizeof *s->tri);
-    for (int j = 0; j < 5; j++)
-        for (int i = 0; i < 5; i++) {
-            double *p = s->xyz + 3 * (5 * j + i);
-            p[0] = x0 + 12.5 * i;
-            p[1] = 0;
-            p[2] = -25 + 12.5 * j;
-        }
-    int t = 0;
-    for (int j = 0; j < 4; j++)
-        for (int i = 0; i < 4; i++) {
-            int a = 5 * j + i, b = a + 1, c = a + 5, d = c + 1;
-            int32_t q[6] = {a, b, d, a, d, c};
-            memcpy(s->tri + 6 * t++, q, sizeof q);
-        }
-    return s;
-}
-
-/* A UV sphere (outward) of radius r at c, 24 x 12. */
-static thx_surface *sphere(const double c[3], double r)
-{
-    const int nlon = 24, nlat = 12;
-    thx_surface *s = NULL;
-    if (thx_surface_create(ctx, "ball", THX_ROLE_OTHER, &s) != THX_OK) return NULL;
-    size_t nn = 2 + (size_t)nlon * (nlat - 1), nt = 2 * (size_t)nlon * (nlat - 1);
-    s->xyz = malloc(3 * nn * sizeof *s->xyz);
-    s->tri = malloc(3 * nt * sizeof *s->tri);
-    s->n_nodes = nn;
-    s->n_tris = nt;
-    double *x = s->xyz;
-    int32_t *t = s->tri;
-    size_t k = 0, m = 0;
-    x[k++] = c[0], x[k++] = c[1], x[k++] = c[2] + r;
-    for (int j = 1; j < nlat; j++)
-        for (int i = 0; i < nlon; i++) {
-            double th = M_PI * j / nlat, ph = 2 * M_PI * i / nlon;
-            x[k++] = c[0] + r * sin(th) * cos(ph);
-            x[k++] = c[1] + r * sin(th) * sin(ph);
-            x[k++] = c[2] + r * cos(th);
-        }
-    x[k++] = c[0], x[k++] = c[1], x[k++] = c[2] - r;
-    int32_t south = (int32_t)nn - 1;
-    for (int i = 0; i < nlon; i++) t[m++] = 0, t[m++] = 1 + i, t[m++] = 1 + (i + 1) % nlon;
-    for (int j = 1; j < nlat - 1; j++)
-        for (int i = 0; i < nlon; i++) {
-            int32_t a = 1 + (j - 1) * nlon + i, b = 1 + (j - 1) * nlon + (i + 1) % nlon, cc = a + nlon, d = b + nlon;
-            t[m++] = a, t[m++] = cc, t[m++] = d;
-            t[m++] = a, t[m++] = d, t[m++] = b;
-        }
-    for (int i = 0; i < nlon; i++) {
-        int32_t a = 1 + (nlat - 2) * nlon + i, b = 1 + (nlat - 2) * nlon + (i + 1) % nlon;
-        t[m++] = a, t[m++] = south, t[m++] = b;
-    }
-    return s;
-}
 
 /* A series over surface s: x + z / 2 at each node (a gradient across every band and tile). */
 static thx_series *gradient(const thx_surface *s)
@@ -99,7 +36,7 @@ static void setup(thx_picture_data *d)
     CHECK_OK(ctx, thx_model_create(ctx, &d->m));
     d->m->frame = thx_frame_ras();
     double c[3] = {0, -20, 10};
-    thx_surface *s[3] = {plate("left", -60), plate("right", 10), sphere(c, 22)};
+    thx_surface *s[3] = {shape_plate(ctx, "left", -60), shape_plate(ctx, "right", 10), shape_sphere(ctx, "ball", c, 22, 24, 12)};
     for (int k = 0; k < 3; k++) {
         d->sets[k][0] = d->series[k] = gradient(s[k]);
         d->n_sets[k] = 1;

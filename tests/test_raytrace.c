@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shapes.h"
 #include "testlib.h"
 #include "thorax/geom/predicates.h"
 #include "thorax/raytrace/raytrace.h"
@@ -54,40 +55,11 @@ static thx_surface *mesh(const char *name, const double *xyz, size_t nn, const i
     return s;
 }
 
-/* a UV sphere (outward), nlon x nlat */
+/* a UV sphere (outward), nlon x nlat (tests/shapes.h) */
 static thx_surface *sphere(double cx, double cy, double cz, double r, int nlon, int nlat)
 {
-    size_t nn = 2 + (size_t)nlon * (size_t)(nlat - 1), nt = 2 * (size_t)nlon * (size_t)(nlat - 1);
-    double *x = malloc(3 * nn * sizeof *x);
-    int32_t *t = malloc(3 * nt * sizeof *t);
-    size_t k = 0, m = 0;
-    x[k++] = cx; x[k++] = cy; x[k++] = cz + r;
-    for (int j = 1; j < nlat; j++)
-        for (int i = 0; i < nlon; i++) {
-            double th = M_PI * j / nlat, ph = 2 * M_PI * i / nlon;
-            x[k++] = cx + r * sin(th) * cos(ph);
-            x[k++] = cy + r * sin(th) * sin(ph);
-            x[k++] = cz + r * cos(th);
-        }
-    x[k++] = cx; x[k++] = cy; x[k++] = cz - r;
-    int32_t south = (int32_t)nn - 1;
-    for (int i = 0; i < nlon; i++) {
-        int32_t a = 1 + i, b = 1 + (i + 1) % nlon;
-        t[m++] = 0; t[m++] = a; t[m++] = b;
-    }
-    for (int j = 1; j < nlat - 1; j++)
-        for (int i = 0; i < nlon; i++) {
-            int32_t a = 1 + (j - 1) * nlon + i, b = 1 + (j - 1) * nlon + (i + 1) % nlon, c = a + nlon, d = b + nlon;
-            t[m++] = a; t[m++] = c; t[m++] = d;
-            t[m++] = a; t[m++] = d; t[m++] = b;
-        }
-    for (int i = 0; i < nlon; i++) {
-        int32_t a = 1 + (nlat - 2) * nlon + i, b = 1 + (nlat - 2) * nlon + (i + 1) % nlon;
-        t[m++] = a; t[m++] = south; t[m++] = b;
-    }
-    thx_surface *s = mesh("sphere", x, nn, t, nt);
-    free(x);
-    free(t);
+    thx_surface *s = shape_sphere(ctx, "sphere", (const double[3]){cx, cy, cz}, r, nlon, nlat);
+    CHECK(s != NULL);
     return s;
 }
 
@@ -360,37 +332,6 @@ static void test_refraction(thx_tracer *tr)
     thx_surface_destroy(&slab);
 }
 
-/* A cube of n x n x n cells of side h from the origin, each cell six positive tetrahedra round its
- * diagonal: nodes (i, j, k) numbered i + (n + 1) (j + (n + 1) k), 3 (n + 1)^3 coordinates into xyz,
- * 24 n^3 corner numbers into tet. */
-static void cube_grid(int n, double h, double *xyz, int32_t *tet)
-{
-    int m = n + 1;
-    for (int k = 0; k < m; k++)
-        for (int j = 0; j < m; j++)
-            for (int i = 0; i < m; i++) {
-                double *p = xyz + 3 * (i + m * (j + m * k));
-                p[0] = i * h, p[1] = j * h, p[2] = k * h;
-            }
-    static const int path[6][2] = {{1, 2}, {1, 4}, {2, 1}, {2, 4}, {4, 1}, {4, 2}};
-    size_t nt = 0;
-    for (int k = 0; k < n; k++)
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < n; i++)
-                for (int t = 0; t < 6; t++) {
-                    int a = path[t][0], b = a | path[t][1], c[4] = {0, a, b, 7};
-                    int32_t q[4];
-                    for (int r = 0; r < 4; r++) q[r] = (i + (c[r] & 1)) + m * ((j + (c[r] >> 1 & 1)) + m * (k + (c[r] >> 2 & 1)));
-                    /* orient positively: det[p1 - p0; p2 - p0; p3 - p0] > 0 */
-                    if (thx_orient3d(xyz + 3 * q[1], xyz + 3 * q[2], xyz + 3 * q[3], xyz + 3 * q[0]) < 0) {
-                        int32_t x = q[1];
-                        q[1] = q[2];
-                        q[2] = x;
-                    }
-                    memcpy(tet + 4 * nt++, q, sizeof q);
-                }
-}
-
 /* One tetrahedron, corners at the origin and 10 mm along each axis, a constant field 0.5 on the grey
  * map over [0, 1] with a flat opacity 1, extinction tau per mm (the closed form's case). */
 static void const_tet_volume(thx_raytrace_volume *v, double tau)
@@ -430,7 +371,7 @@ static void test_volume(thx_tracer *tr)
     /* the cube [0, 10]^3 as six tetrahedra round its diagonal (0,0,0)-(10,10,10), each positive */
     double cx[24];
     int32_t ct[24];
-    cube_grid(1, 10, cx, ct);
+    shape_cube_grid(1, 10, cx, ct);
     double pv[8];
     for (int c = 0; c < 8; c++) pv[c] = cx[3 * c + 2]; /* the field z */
     memset(&v, 0, sizeof v);
@@ -531,7 +472,7 @@ static void test_volume_lanes(thx_tracer *tr)
            thx_raytrace_volume_lanes() == 1 ? " (no AVX2: both walks below are the one-ray walk)" : "");
     static double xyz[3 * NN], pv[NN], cv[NT];
     static int32_t tet[4 * NT];
-    cube_grid(N, 5, xyz, tet);
+    shape_cube_grid(N, 5, xyz, tet);
     for (int i = 0; i < NN; i++) {
         const double *p = xyz + 3 * i;
         pv[i] = sin(p[0] / 7) + cos(p[1] / 5) * p[2] / 30;

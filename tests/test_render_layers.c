@@ -12,49 +12,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shapes.h"
 #include "testlib.h"
 #include "thorax/model/surface.h"
 #include "thorax/render/render.h"
 
 static thx_ctx *ctx;
-
-/* A UV sphere (outward) of radius r at c, 32 x 16. */
-static thx_surface *sphere(const double c[3], double r)
-{
-    const int nlon = 32, nlat = 16;
-    thx_surface *s = NULL;
-    if (thx_surface_create(ctx, "ball", THX_ROLE_OTHER, &s) != THX_OK) return NULL;
-    size_t nn = 2 + (size_t)nlon * (nlat - 1), nt = 2 * (size_t)nlon * (nlat - 1);
-    s->xyz = malloc(3 * nn * sizeof *s->xyz);
-    s->tri = malloc(3 * nt * sizeof *s->tri);
-    s->n_nodes = nn;
-    s->n_tris = nt;
-    double *x = s->xyz;
-    int32_t *t = s->tri;
-    size_t k = 0, m = 0;
-    x[k++] = c[0], x[k++] = c[1], x[k++] = c[2] + r;
-    for (int j = 1; j < nlat; j++)
-        for (int i = 0; i < nlon; i++) {
-            double th = M_PI * j / nlat, ph = 2 * M_PI * i / nlon;
-            x[k++] = c[0] + r * sin(th) * cos(ph);
-            x[k++] = c[1] + r * sin(th) * sin(ph);
-            x[k++] = c[2] + r * cos(th);
-        }
-    x[k++] = c[0], x[k++] = c[1], x[k++] = c[2] - r;
-    int32_t south = (int32_t)nn - 1;
-    for (int i = 0; i < nlon; i++) t[m++] = 0, t[m++] = 1 + i, t[m++] = 1 + (i + 1) % nlon;
-    for (int j = 1; j < nlat - 1; j++)
-        for (int i = 0; i < nlon; i++) {
-            int32_t a = 1 + (j - 1) * nlon + i, b = 1 + (j - 1) * nlon + (i + 1) % nlon, cc = a + nlon, d = b + nlon;
-            t[m++] = a, t[m++] = cc, t[m++] = d;
-            t[m++] = a, t[m++] = d, t[m++] = b;
-        }
-    for (int i = 0; i < nlon; i++) {
-        int32_t a = 1 + (nlat - 2) * nlon + i, b = 1 + (nlat - 2) * nlon + (i + 1) % nlon;
-        t[m++] = a, t[m++] = south, t[m++] = b;
-    }
-    return s;
-}
 
 static void layers(thx_renderer *r, const thx_render_surface rs[2], const thx_camera *cam, const int vp[4], const char *what)
 {
@@ -122,7 +85,7 @@ int main(void)
     }
     CHECK_OK(ctx, thx_renderer_set_samples(ctx, r, 1));
     const double c0[3] = {-0.35, 0, 0}, c1[3] = {0.3, 0.15, 0.1};
-    thx_surface *s[2] = {sphere(c0, 0.6), sphere(c1, 0.55)};
+    thx_surface *s[2] = {shape_sphere(ctx, "ball", c0, 0.6, 32, 16), shape_sphere(ctx, "ball", c1, 0.55, 32, 16)};
     double *v[2];
     thx_render_surface rs[2];
     for (int k = 0; k < 2; k++) {
