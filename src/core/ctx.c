@@ -57,10 +57,14 @@ void thx_ctx_set_log(thx_ctx *ctx, thx_log_fn fn, void *user, thx_log_level min_
 
 thx_status thx_error(thx_ctx *ctx, thx_status code, const char *fmt, ...)
 {
+    /* formatted apart, then copied: an argument may be the message already there (a caller quoting
+       the reason a call below gave), which vsnprintf must not read while it writes over it */
+    char text[sizeof ctx->message];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(ctx->message, sizeof ctx->message, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    memcpy(ctx->message, text, sizeof text);
     return code;
 }
 

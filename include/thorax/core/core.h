@@ -45,7 +45,8 @@ void thx_ctx_destroy(thx_ctx **ctx);
 void thx_ctx_set_log(thx_ctx *ctx, thx_log_fn fn, void *user, thx_log_level min_level);
 
 /* Records an error message (printf format) in ctx and returns code, so that
- * `return thx_error(ctx, THX_EINPUT, "%s:%d: ...", path, line);` reads naturally. */
+ * `return thx_error(ctx, THX_EINPUT, "%s:%d: ...", path, line);` reads naturally. An argument may be
+ * thx_ctx_message(ctx) itself (the message is formatted before it is replaced). */
 thx_status thx_error(thx_ctx *ctx, thx_status code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* The last error message ("" if none). Owned by ctx, valid until the next call. */
