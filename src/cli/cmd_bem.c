@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "thorax/parallel/parallel.h"
 #include "cli/cli_fem.h"
 #include "thorax/fem/fem.h"
 #include "thorax/bem/bem.h"
@@ -176,10 +177,7 @@ int cmd_bem(int argc, char **argv)
     int is_geom = ends_with(model, ".geom");
     if (cond_path && !is_geom) return cli_usage_error("bem", "--cond goes with an OpenMEEG .geom MODEL");
     /* under mpirun (more than one rank), or asked: the distributed path */
-    const char *ws = getenv("OMPI_COMM_WORLD_SIZE");
-    if (!ws) ws = getenv("PMI_SIZE");
-    long n_ranks = 1;
-    int mpi = scalapack || (ws && !cli_parse_long(ws, 1, LONG_MAX, &n_ranks, NULL) && n_ranks > 1);
+    int mpi = scalapack || thx_par_launched() > 1;
     if (mpi && !transfer && method == THX_BEM_COLLOCATION)
         return cli_usage_error("bem", "--method collocation runs on one process: under mpirun or with --scalapack, "
                                "dipoles take the symmetric method");
