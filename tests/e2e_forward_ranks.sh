@@ -157,17 +157,20 @@ assert np.abs(T @ E - t).max() <= TOL * np.abs(t).max(), np.abs(T @ E - t).max()
 import hashlib, struct
 def part(p):
     b = open(p, 'rb').read()
-    assert b[:8] == b'THXPART1' and hashlib.sha256(b[:-32]).digest() == b[-32:], p
+    assert b[:8] == b'THXPART2' and hashlib.sha256(b[:-32]).digest() == b[-32:], p
     rank, ranks = struct.unpack_from('<II', b, 8)
-    nn, nt, nf, ng = struct.unpack_from('<4Q', b, 16)
+    nn, nt, nf, ng, ngt = struct.unpack_from('<5Q', b, 16)
     o = 64 + 24 * (ranks - 1)
     node = np.frombuffer(b, '<i4', nn, o); o += 4 * nn
     o += 24 * nn
     tet = np.frombuffer(b, '<i4', 4 * nt, o).reshape(nt, 4); o += 16 * nt
     o += 4 * nt
+    tid = np.frombuffer(b, '<i4', nt, o); o += 4 * nt
+    own = np.frombuffer(b, '<i4', nt, o); o += 4 * nt
     val = np.frombuffer(b, '<f8', nf * nn, o).reshape(nf, nn); o += 8 * nf * nn
     assert o + 32 == len(b), p
-    return rank, ranks, node, tet, val
+    assert (np.diff(tid) > 0).all() and ((own >= 0) & (own < ranks)).all()
+    return rank, ranks, node, tet[own == rank], val
 vol_tets = None
 for n in (2, 3):
     d = 'ep12_default_%d' % n

@@ -199,7 +199,36 @@ static void test_parts(const thx_volume *v, const unsigned char *use, const unsi
     for (int r = 0; r < np; r++) {
         thx_fem_part p, q;
         CHECK_OK(ctx, thx_fem_part_make(ctx, v, use, cuts, np, r, values, nf, &p));
-        in_parts += p.n_tets;
+        in_parts += p.n_own;
+        /* the ghosts: exactly the used tetrahedra of other parts that share a node with an own one,
+           each with its owner; the numbers ascending */
+        unsigned char *near = calloc(nn, 1), *in = calloc(v->n_tets, 1);
+        size_t own = 0, ghosts_wrong = 0;
+        for (size_t k = 0; k < p.n_tets; k++) {
+            in[p.tet_id[k]] = 1;
+            CHECK(k == 0 || p.tet_id[k] > p.tet_id[k - 1]);
+            CHECK(p.region[k] == v->region[p.tet_id[k]]);
+            for (int c = 0; c < 4; c++) CHECK(p.node[p.tet[4 * k + c]] == v->tet[4 * (size_t)p.tet_id[k] + c]);
+            if (p.owner[k] != r) continue;
+            own++;
+            for (int c = 0; c < 4; c++) near[p.node[p.tet[4 * k + c]]] = 1;
+        }
+        CHECK(own == p.n_own);
+        for (size_t t = 0; t < v->n_tets; t++) {
+            const int32_t *c4 = v->tet + 4 * t;
+            int want = use[v->region[t]] && (near[c4[0]] || near[c4[1]] || near[c4[2]] || near[c4[3]]);
+            ghosts_wrong += want != in[t];
+        }
+        for (size_t k = 0; k < p.n_tets; k++) {
+            double c[3] = {0, 0, 0};
+            for (int j = 0; j < 4; j++)
+                for (int d = 0; d < 3; d++) c[d] += 0.25 * p.xyz[3 * (size_t)p.tet[4 * k + j] + d];
+            ghosts_wrong += thx_fem_cut_part(cuts, np, c) != p.owner[k];
+        }
+        printf("part %d: %zu own tetrahedra, %zu ghosts, %zu wrong\n", r, p.n_own, p.n_tets - p.n_own, ghosts_wrong);
+        CHECK(ghosts_wrong == 0 && p.n_tets > p.n_own);
+        free(near);
+        free(in);
         for (size_t f = 0; f < (size_t)nf; f++)
             for (size_t j = 0; j < p.n_nodes; j++) wrong += p.values[f * p.n_nodes + j] != values[f * nn + (size_t)p.node[j]];
         char name[32];
@@ -210,6 +239,8 @@ static void test_parts(const thx_volume *v, const unsigned char *use, const unsi
               q.n_frames == p.n_frames && q.n_global == nn);
         CHECK(!memcmp(q.node, p.node, p.n_nodes * 4) && !memcmp(q.xyz, p.xyz, p.n_nodes * 24) &&
               !memcmp(q.tet, p.tet, p.n_tets * 16) && !memcmp(q.region, p.region, p.n_tets * 4) &&
+              !memcmp(q.tet_id, p.tet_id, p.n_tets * 4) && !memcmp(q.owner, p.owner, p.n_tets * 4) && q.n_own == p.n_own &&
+              q.n_global_tets == v->n_tets &&
               !memcmp(q.values, p.values, p.n_nodes * nf * 8) && !memcmp(q.cuts, cuts, sizeof cuts));
         thx_fem_part_free(&q);
         if (r == 1) { /* damaged: a byte of the values changed; the file cut short */

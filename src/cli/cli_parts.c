@@ -48,7 +48,7 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
     char path[4400];
     snprintf(path, sizeof path, "%s/part_%04d.bin", dir, rank);
     if (st == THX_OK) st = thx_fem_part_write(ctx, path, &p);
-    long long counts[2] = {(long long)p.n_tets, 0};
+    long long counts[2] = {(long long)p.n_own, 0};
     thx_fem_part_free(&p);
     free(use);
     free(kind);
@@ -61,11 +61,11 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
     if (st == THX_OK && rank == 0) { /* the parts' own manifest */
         cJSON *j = cJSON_CreateObject(), *files = cJSON_AddArrayToObject(j, "files");
         cJSON_AddStringToObject(j, "format", "thorax-parts");
-        cJSON_AddNumberToObject(j, "version", 1);
+        cJSON_AddNumberToObject(j, "version", 2);
         cJSON_AddNumberToObject(j, "ranks", ranks);
         cJSON_AddStringToObject(j, "partition", "recursive coordinate bisection of the active nodes; each tetrahedron in "
-                                "the box of its centroid");
-        cJSON_AddNumberToObject(j, "tetrahedra", (double)counts[0]);
+                                "the box of its centroid, with a layer of ghosts (the tetrahedra sharing a node)");
+        cJSON_AddNumberToObject(j, "tetrahedra", (double)counts[0]); /* owned: each once */
         for (int r = 0; r < ranks; r++) {
             char name[32];
             snprintf(name, sizeof name, "part_%04d.bin", r);

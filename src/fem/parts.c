@@ -10,9 +10,12 @@
 #include "thorax/core/sha256.h"
 #include "thorax/fem/parts.h"
 
-#define MAGIC "THXPART1"
+#define MAGIC "THXPART2"
 #define HEAD 64
 #define CUT_BYTES 24
+/* bytes a node (number, coordinates), a tetrahedron (corners, region, number, owner) */
+#define NODE_BYTES 28
+#define TET_BYTES 28
 
 void thx_fem_part_free(thx_fem_part *p)
 {
@@ -22,8 +25,27 @@ void thx_fem_part_free(thx_fem_part *p)
     free(p->xyz);
     free(p->tet);
     free(p->region);
+    free(p->tet_id);
+    free(p->owner);
     free(p->values);
     memset(p, 0, sizeof *p);
+}
+
+/* The arrays of a part of n nodes and t tetrahedra; THX_ENOMEM (p freed) when one cannot be had. */
+static thx_status part_alloc(thx_ctx *ctx, thx_fem_part *p, size_t n, size_t t)
+{
+    size_t r = p->ranks > 1 ? (size_t)p->ranks - 1 : 1, nf = n * p->n_frames;
+    p->cuts = thx_malloc(ctx, r * sizeof *p->cuts);
+    p->node = thx_malloc(ctx, (n ? n : 1) * sizeof *p->node);
+    p->xyz = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *p->xyz);
+    p->tet = thx_malloc(ctx, 4 * (t ? t : 1) * sizeof *p->tet);
+    p->region = thx_malloc(ctx, (t ? t : 1) * sizeof *p->region);
+    p->tet_id = thx_malloc(ctx, (t ? t : 1) * sizeof *p->tet_id);
+    p->owner = thx_malloc(ctx, (t ? t : 1) * sizeof *p->owner);
+    p->values = thx_malloc(ctx, (nf ? nf : 1) * sizeof *p->values);
+    if (p->cuts && p->node && p->xyz && p->tet && p->region && p->tet_id && p->owner && p->values) return THX_OK;
+    thx_fem_part_free(p);
+    return THX_ENOMEM;
 }
 
 thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, const thx_fem_cut *cuts,
@@ -31,41 +53,50 @@ thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned c
 {
     memset(out, 0, sizeof *out);
     if (ranks < 1 || rank < 0 || rank >= ranks) return thx_error(ctx, THX_EINPUT, "parts: part %d of %d", rank, ranks);
-    size_t nn = v->n_nodes, nt = 0;
+    if (v->n_tets > INT32_MAX || v->n_nodes > INT32_MAX)
+        return thx_error(ctx, THX_EINPUT, "parts: %zu nodes and %zu tetrahedra: more than a part's 32-bit numbers hold",
+                         v->n_nodes, v->n_tets);
+    size_t nn = v->n_nodes, nt = 0, n_own = 0;
     int32_t *local = thx_malloc(ctx, (nn ? nn : 1) * sizeof *local);
-    unsigned char *mine = thx_calloc(ctx, v->n_tets ? v->n_tets : 1, 1);
-    thx_status st = local && mine ? THX_OK : THX_ENOMEM;
-    for (size_t i = 0; st == THX_OK && i < nn; i++) local[i] = -1;
+    int32_t *owner = thx_malloc(ctx, (v->n_tets ? v->n_tets : 1) * sizeof *owner); /* -1: not used */
+    unsigned char *near = thx_calloc(ctx, nn ? nn : 1, 1);                          /* a node of an own tetrahedron */
+    thx_status st = local && owner && near ? THX_OK : THX_ENOMEM;
     for (size_t t = 0; st == THX_OK && t < v->n_tets; t++) {
         int32_t r = v->region[t];
+        owner[t] = -1;
         if (r < 0 || (size_t)r >= v->n_regions || (use_region && !use_region[r])) continue;
         double c[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++)
             for (int d = 0; d < 3; d++) c[d] += 0.25 * v->xyz[3 * (size_t)v->tet[4 * t + k] + d];
-        if (thx_fem_cut_part(cuts, ranks, c) != rank) continue;
-        mine[t] = 1;
+        owner[t] = thx_fem_cut_part(cuts, ranks, c);
+        if (owner[t] != rank) continue;
+        n_own++;
+        for (int k = 0; k < 4; k++) near[v->tet[4 * t + k]] = 1;
+    }
+    /* the part: its own tetrahedra and every used one sharing a node with them; then their nodes */
+    for (size_t i = 0; st == THX_OK && i < nn; i++) local[i] = -1;
+    for (size_t t = 0; st == THX_OK && t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        if (owner[t] < 0 || !(owner[t] == rank || near[q[0]] || near[q[1]] || near[q[2]] || near[q[3]])) {
+            owner[t] = -1 - (owner[t] >= 0); /* -2: used, not in this part */
+            continue;
+        }
         nt++;
-        for (int k = 0; k < 4; k++) local[v->tet[4 * t + k]] = 0;
+        for (int k = 0; k < 4; k++) local[q[k]] = 0;
     }
     size_t n = 0;
     for (size_t i = 0; st == THX_OK && i < nn; i++)
         if (local[i] == 0) local[i] = (int32_t)n++;
     out->rank = (uint32_t)rank;
     out->ranks = (uint32_t)ranks;
-    out->n_nodes = n;
-    out->n_tets = nt;
     out->n_frames = n_frames;
-    out->n_global = nn;
+    if (st == THX_OK) st = part_alloc(ctx, out, n, nt);
     if (st == THX_OK) {
-        out->cuts = thx_malloc(ctx, (ranks > 1 ? (size_t)ranks - 1 : 1) * sizeof *out->cuts);
-        out->node = thx_malloc(ctx, (n ? n : 1) * sizeof *out->node);
-        out->xyz = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *out->xyz);
-        out->tet = thx_malloc(ctx, 4 * (nt ? nt : 1) * sizeof *out->tet);
-        out->region = thx_malloc(ctx, (nt ? nt : 1) * sizeof *out->region);
-        out->values = thx_malloc(ctx, (n * n_frames > 0 ? n * n_frames : 1) * sizeof *out->values);
-        if (!out->cuts || !out->node || !out->xyz || !out->tet || !out->region || !out->values) st = THX_ENOMEM;
-    }
-    if (st == THX_OK) {
+        out->n_nodes = n;
+        out->n_tets = nt;
+        out->n_own = n_own;
+        out->n_global = nn;
+        out->n_global_tets = v->n_tets;
         if (ranks > 1) memcpy(out->cuts, cuts, ((size_t)ranks - 1) * sizeof *cuts);
         for (size_t i = 0; i < nn; i++)
             if (local[i] >= 0) {
@@ -74,15 +105,18 @@ thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned c
             }
         size_t k = 0;
         for (size_t t = 0; t < v->n_tets; t++) {
-            if (!mine[t]) continue;
+            if (owner[t] < 0) continue;
             for (int c = 0; c < 4; c++) out->tet[4 * k + c] = local[v->tet[4 * t + c]];
-            out->region[k++] = v->region[t];
+            out->region[k] = v->region[t];
+            out->tet_id[k] = (int32_t)t;
+            out->owner[k++] = owner[t];
         }
         for (size_t f = 0; f < n_frames; f++)
             for (size_t j = 0; j < n; j++) out->values[f * n + j] = values[f * nn + (size_t)out->node[j]];
     }
     free(local);
-    free(mine);
+    free(owner);
+    free(near);
     if (st != THX_OK) thx_fem_part_free(out);
     return st;
 }
@@ -103,7 +137,7 @@ thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part
     unsigned char head[HEAD];
     memset(head, 0, sizeof head);
     memcpy(head, MAGIC, 8);
-    uint64_t sizes[4] = {p->n_nodes, p->n_tets, p->n_frames, p->n_global};
+    uint64_t sizes[5] = {p->n_nodes, p->n_tets, p->n_frames, p->n_global, p->n_global_tets};
     memcpy(head + 8, &p->rank, 4);
     memcpy(head + 12, &p->ranks, 4);
     memcpy(head + 16, sizes, sizeof sizes);
@@ -119,6 +153,8 @@ thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part
     if (!bad) bad = put(af.f, &h, p->xyz, 3 * p->n_nodes * sizeof *p->xyz);
     if (!bad) bad = put(af.f, &h, p->tet, 4 * p->n_tets * sizeof *p->tet);
     if (!bad) bad = put(af.f, &h, p->region, p->n_tets * sizeof *p->region);
+    if (!bad) bad = put(af.f, &h, p->tet_id, p->n_tets * sizeof *p->tet_id);
+    if (!bad) bad = put(af.f, &h, p->owner, p->n_tets * sizeof *p->owner);
     if (!bad) bad = put(af.f, &h, p->values, p->n_frames * p->n_nodes * sizeof *p->values);
     unsigned char digest[32];
     thx_sha256_final(&h, digest);
@@ -137,20 +173,27 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
     size_t len = 0;
     THX_CHECK(thx_read_file(ctx, path, &b, &len));
     thx_status st = THX_OK;
-    uint64_t sz[4];
+    uint64_t sz[5];
+    uint32_t rank, ranks;
+    if (len >= 8 && memcmp(b, "THXPART1", 8) == 0) {
+        st = thx_error(ctx, THX_EINPUT, "%s: a volume part of the first format (no ghost tetrahedra): run thorax forward "
+                       "--volume under mpirun again to write it in this thorax's", path);
+        goto done;
+    }
     if (len < HEAD + 32 || memcmp(b, MAGIC, 8) != 0) {
         st = thx_error(ctx, THX_EINPUT, "%s: not a thorax volume part (magic %s expected)", path, MAGIC);
         goto done;
     }
-    memcpy(&out->rank, b + 8, 4);
-    memcpy(&out->ranks, b + 12, 4);
+    memcpy(&rank, b + 8, 4);
+    memcpy(&ranks, b + 12, 4);
     memcpy(sz, b + 16, sizeof sz);
     /* the sizes must give the file's length exactly (each bounded first, so the sum cannot wrap) */
-    if (out->ranks < 1 || out->rank >= out->ranks || out->ranks > (1u << 24) || sz[0] > len || sz[1] > len ||
-        sz[2] > len || sz[3] > INT32_MAX || sz[0] > sz[3] || (sz[0] && sz[2] > len / 8 / sz[0]) ||
-        (uint64_t)HEAD + CUT_BYTES * ((uint64_t)out->ranks - 1) + 28 * sz[0] + 20 * sz[1] + 8 * sz[2] * sz[0] + 32 != len) {
+    if (ranks < 1 || rank >= ranks || ranks > (1u << 24) || sz[0] > len || sz[1] > len || sz[2] > len || sz[3] > INT32_MAX ||
+        sz[4] > INT32_MAX || sz[0] > sz[3] || sz[1] > sz[4] || (sz[0] && sz[2] > len / 8 / sz[0]) ||
+        (uint64_t)HEAD + CUT_BYTES * ((uint64_t)ranks - 1) + NODE_BYTES * sz[0] + TET_BYTES * sz[1] + 8 * sz[2] * sz[0] + 32 !=
+            len) {
         st = thx_error(ctx, THX_EINPUT, "%s: part %u of %u with %llu nodes, %llu tetrahedra, %llu frames does not fill the "
-                       "file's %zu bytes (cut short, or not a part)", path, out->rank, out->ranks, (unsigned long long)sz[0],
+                       "file's %zu bytes (cut short, or not a part)", path, rank, ranks, (unsigned long long)sz[0],
                        (unsigned long long)sz[1], (unsigned long long)sz[2], len);
         goto done;
     }
@@ -165,22 +208,19 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
             goto done;
         }
     }
-    out->n_nodes = sz[0], out->n_tets = sz[1], out->n_frames = sz[2], out->n_global = sz[3];
-    size_t n = out->n_nodes, t = out->n_tets, r = out->ranks - 1;
-    out->cuts = thx_malloc(ctx, (r ? r : 1) * sizeof *out->cuts);
-    out->node = thx_malloc(ctx, (n ? n : 1) * sizeof *out->node);
-    out->xyz = thx_malloc(ctx, 3 * (n ? n : 1) * sizeof *out->xyz);
-    out->tet = thx_malloc(ctx, 4 * (t ? t : 1) * sizeof *out->tet);
-    out->region = thx_malloc(ctx, (t ? t : 1) * sizeof *out->region);
-    out->values = thx_malloc(ctx, (n * out->n_frames > 0 ? n * out->n_frames : 1) * sizeof *out->values);
-    if (!out->cuts || !out->node || !out->xyz || !out->tet || !out->region || !out->values) { st = THX_ENOMEM; goto done; }
+    out->rank = rank;
+    out->ranks = ranks;
+    out->n_frames = sz[2];
+    size_t n = sz[0], t = sz[1], r = ranks - 1;
+    if ((st = part_alloc(ctx, out, n, t)) != THX_OK) goto done;
+    out->n_nodes = n, out->n_tets = t, out->n_global = sz[3], out->n_global_tets = sz[4];
     const char *q = b + HEAD;
     for (size_t k = 0; k < r; k++, q += CUT_BYTES) {
         int32_t iv[4];
         memcpy(iv, q, 16);
         out->cuts[k] = (thx_fem_cut){.lo = iv[0], .mid = iv[1], .hi = iv[2], .axis = iv[3]};
         memcpy(&out->cuts[k].at, q + 16, 8);
-        if (iv[3] < 0 || iv[3] > 2 || iv[0] < 0 || iv[0] >= iv[1] || iv[1] >= iv[2] || (uint32_t)iv[2] > out->ranks) {
+        if (iv[3] < 0 || iv[3] > 2 || iv[0] < 0 || iv[0] >= iv[1] || iv[1] >= iv[2] || (uint32_t)iv[2] > ranks) {
             st = thx_error(ctx, THX_EINPUT, "%s: cut %zu (parts %d, %d, %d, axis %d) is not a bisection's", path, k + 1, iv[0],
                            iv[1], iv[2], iv[3]);
             goto done;
@@ -190,6 +230,8 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
     memcpy(out->xyz, q, n * 24), q += n * 24;
     memcpy(out->tet, q, t * 16), q += t * 16;
     memcpy(out->region, q, t * 4), q += t * 4;
+    memcpy(out->tet_id, q, t * 4), q += t * 4;
+    memcpy(out->owner, q, t * 4), q += t * 4;
     memcpy(out->values, q, n * out->n_frames * 8);
     for (size_t i = 0; i < n; i++)
         if (out->node[i] < 0 || (size_t)out->node[i] >= out->n_global || (i && out->node[i] <= out->node[i - 1])) {
@@ -203,6 +245,19 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
                            out->tet[k] + 1, n);
             goto done;
         }
+    for (size_t k = 0; k < t; k++) {
+        if (out->tet_id[k] < 0 || (size_t)out->tet_id[k] >= out->n_global_tets || (k && out->tet_id[k] <= out->tet_id[k - 1])) {
+            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu's global number %d is out of range or not ascending", path,
+                           k + 1, out->tet_id[k]);
+            goto done;
+        }
+        if (out->owner[k] < 0 || (uint32_t)out->owner[k] >= ranks) {
+            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu's owner %d is not one of the %u parts", path, k + 1,
+                           out->owner[k], ranks);
+            goto done;
+        }
+        out->n_own += (uint32_t)out->owner[k] == rank;
+    }
 done:
     free(b);
     if (st != THX_OK) thx_fem_part_free(out);

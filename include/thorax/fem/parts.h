@@ -20,24 +20,30 @@ extern "C" {
 typedef struct {
     uint32_t rank, ranks;
     size_t n_nodes, n_tets, n_frames;
+    size_t n_own;           /* the tetrahedra owned (owner == rank); the others are ghosts */
     size_t n_global;        /* the whole volume's nodes */
+    size_t n_global_tets;   /* the whole volume's tetrahedra */
     thx_fem_cut *cuts;      /* ranks - 1 */
     int32_t *node;          /* the part's nodes' global numbers, ascending */
     double *xyz;            /* 3 per node */
-    int32_t *tet;           /* 4 per tetrahedron, the part's own node numbers */
+    int32_t *tet;           /* 4 per tetrahedron, the part's own node numbers, in the whole's corner order */
     int32_t *region;        /* per tetrahedron */
+    int32_t *tet_id;        /* per tetrahedron its number in the whole, ascending (own and ghosts mixed) */
+    int32_t *owner;         /* per tetrahedron the part that owns it (rank: this part's own) */
     double *values;         /* frame after frame: n_frames x n_nodes */
 } thx_fem_part;
 
 /* Part rank of ranks: the tetrahedra of the volume whose region is used (use_region NULL: all)
- * and whose centroid thx_fem_cut_part puts in rank, with the values of their nodes from values
- * (n_frames frames of v->n_nodes values each, as a series holds them). */
+ * and whose centroid thx_fem_cut_part puts in rank, with their ghosts (the used tetrahedra of other
+ * parts that share a node with them), with the values of their nodes from values (n_frames frames
+ * of v->n_nodes values each, as a series holds them). */
 thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, const thx_fem_cut *cuts,
                              int ranks, int rank, const double *values, size_t n_frames, thx_fem_part *out);
 /* Writes the part to path atomically (a temporary file renamed), with its SHA-256 at the end. */
 thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part *p);
 /* Reads a part back whole, or fails naming the file and what is wrong (magic, sizes, a node or
- * tetrahedron out of range, nodes not ascending, the checksum): never a part half-read. */
+ * tetrahedron out of range, numbers not ascending, an owner that is no part, the checksum): never a
+ * part half-read. */
 thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out);
 void thx_fem_part_free(thx_fem_part *p);
 
