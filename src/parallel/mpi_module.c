@@ -8,6 +8,10 @@
 
 #include "parallel/mpi_module.h"
 
+/* src/parallel/icet_module.c */
+int thx_par_icet_composite(int mode, int w, int h, void *color, float *depth, const int *order, char *why, size_t why_size);
+void thx_par_icet_end(void);
+
 static int init(int *rank, int *size, int *started)
 {
     int inited = 0, rc = MPI_Initialized(&inited);
@@ -27,6 +31,7 @@ static void finalize(void)
 {
     int done = 0;
     MPI_Finalized(&done);
+    if (!done) thx_par_icet_end();
     if (!done) MPI_Finalize();
 }
 
@@ -106,6 +111,7 @@ static const thx_par_mpi table = {
     .gather_size = gather_size,
     .gatherv = gatherv,
     .error_string = error_string,
+    .composite = thx_par_icet_composite,
 };
 
 const thx_par_mpi *thx_par_mpi_get(void) { return &table; }

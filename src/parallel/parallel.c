@@ -229,3 +229,40 @@ done:
     free(counts);
     return st;
 }
+
+/* One composite (the ranks agree on any failure first, so that none waits in IceT for one gone). */
+static thx_status composite(thx_ctx *ctx, int mode, void *color, float *depth, int w, int h, const int *order)
+{
+    if (!g_running || g_size == 1) return THX_OK;
+    if (w <= 0 || h <= 0 || (size_t)w * (size_t)h > (size_t)INT_MAX / 16)
+        return thx_par_agree(ctx, thx_error(ctx, THX_EINPUT, "sort-last: a %d x %d picture cannot be composited", w, h), NULL);
+    char why[512] = "";
+    int rc = g_api->composite(mode, w, h, NULL, NULL, NULL, why, sizeof why);
+    thx_status st = rc ? thx_error(ctx, THX_ESOLVER, "sort-last compositing (rank %d of %d): %s", g_rank, g_size, why) : THX_OK;
+    THX_CHECK(thx_par_agree(ctx, st, NULL));
+    rc = g_api->composite(mode, w, h, color, depth, order, why, sizeof why);
+    st = rc ? thx_error(ctx, THX_ESOLVER, "sort-last compositing (rank %d of %d): %s", g_rank, g_size, why) : THX_OK;
+    return thx_par_agree(ctx, st, NULL);
+}
+
+thx_status thx_par_composite_depth(thx_ctx *ctx, unsigned char *rgba, float *depth, int w, int h)
+{
+    return composite(ctx, THX_PAR_COMPOSITE_DEPTH, rgba, depth, w, h, NULL);
+}
+
+thx_status thx_par_composite_blend(thx_ctx *ctx, float *rgba, int w, int h, const int *order)
+{
+    if (g_running && g_size > 1) { /* every rank once */
+        unsigned char *seen = calloc((size_t)g_size, 1);
+        int ok = seen != NULL;
+        for (int k = 0; ok && k < g_size; k++) {
+            ok = order[k] >= 0 && order[k] < g_size && !seen[order[k]];
+            if (ok) seen[order[k]] = 1;
+        }
+        free(seen);
+        if (!ok)
+            return thx_par_agree(ctx, thx_error(ctx, THX_EINTERNAL, "sort-last: the blending order does not name every rank "
+                                                "once"), NULL);
+    }
+    return composite(ctx, THX_PAR_COMPOSITE_BLEND, rgba, NULL, w, h, order);
+}

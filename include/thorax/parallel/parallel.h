@@ -63,6 +63,17 @@ thx_status thx_par_barrier(thx_ctx *ctx);
  * rank but 0, where it ends with every gathered pixel marked. */
 thx_status thx_par_gather_pixels(thx_ctx *ctx, unsigned char *rgba, unsigned char *own, int w, int h);
 
+/* Collective, sort-last's compositing (IceT, through the solver module): every rank's w x h layer
+ * (rows in any order alike on every rank) into rank 0's. Depth: rgba bytes and depth floats in
+ * [0, 1] (1: nothing drawn there); rank 0's rgba and depth end with the nearest fragment of each
+ * pixel over all ranks (a pixel no rank drew: rgba 0, depth 1). Blend: premultiplied RGBA floats;
+ * order[thx_par_size()] the ranks front to back; rank 0's rgba ends with the ranks' layers blended
+ * "over" in that order (a pixel no rank drew: 0). With one rank, nothing is done. THX_ESOLVER when
+ * this thorax was built without IceT or its library cannot be loaded (the message names the package),
+ * or when IceT fails. */
+thx_status thx_par_composite_depth(thx_ctx *ctx, unsigned char *rgba, float *depth, int w, int h);
+thx_status thx_par_composite_blend(thx_ctx *ctx, float *rgba, int w, int h, const int *order);
+
 #ifdef __cplusplus
 }
 #endif
