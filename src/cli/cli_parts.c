@@ -66,6 +66,7 @@ thx_status cli_forward_parts(thx_ctx *ctx, thx_outdir *od, const thx_model *m, c
         cJSON_AddStringToObject(j, "partition", "recursive coordinate bisection of the active nodes; each tetrahedron in "
                                 "the box of its centroid, with a layer of ghosts (the tetrahedra sharing a node)");
         cJSON_AddNumberToObject(j, "tetrahedra", (double)counts[0]); /* owned: each once */
+        cJSON_AddStringToObject(j, "unit", volume->unit); /* the values' (a reader of the parts alone labels with it) */
         for (int r = 0; r < ranks; r++) {
             char name[32];
             snprintf(name, sizeof name, "part_%04d.bin", r);

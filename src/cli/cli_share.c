@@ -1,4 +1,5 @@
-/* Sort-first rendering for render, trace and animate (cli/cli_share.h). */
+/* Rendering shared among ranks for render, trace and animate (cli/cli_share.h): sort-first, or
+ * sort-last when each rank reads its part of a partitioned solution. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -22,6 +23,12 @@ thx_status cli_share_picture(thx_ctx *ctx, const thx_picture_opts *p, thx_pictur
     int rank = thx_par_rank(), size = thx_par_size();
     if (size == 1) return thx_picture_draw(ctx, p, d, rr, font, frame, img, nan);
     thx_picture_bars bars;
+    if (d->part_size > 1) { /* sort-last: each rank its part of the volume, composited on rank 0 */
+        thx_status st = thx_picture_draw_part(ctx, p, d, rr, font, frame, img, &bars, nan);
+        if (st == THX_OK && rank == 0 && font) st = thx_picture_bars_check(ctx, p, font, img->w, img->h, &bars);
+        if (st == THX_OK && rank == 0) st = thx_picture_annotate(ctx, p, d, font, frame, &bars, img);
+        return thx_par_agree(ctx, st, NULL);
+    }
     unsigned char *own = thx_malloc(ctx, (size_t)img->w * (size_t)img->h);
     thx_status st = own ? thx_picture_draw_share(ctx, p, d, rr, font, frame, rank, size, img, own, &bars, nan) : THX_ENOMEM;
     st = thx_par_agree(ctx, st, NULL);

@@ -522,7 +522,7 @@ static int render_main(int argc, char **argv, int traced)
     thx_status st = render_setup(ctx, &o, &d, &rr, &font, &img);
     double *times = malloc((size_t)repeat * sizeof *times);
     if (!times) st = THX_ENOMEM;
-    st = thx_par_agree(ctx, st, NULL); /* every rank draws, or none */
+    st = thx_picture_parts_settle(ctx, &o.p, &d, st); /* every rank draws, or none; sort-last's parts made one */
     for (int k = 0; k < repeat && st == THX_OK; k++) { /* --repeat: the same frame again, timed (benchmarks) */
         double t1 = thx_wtime();
         nan = 0;

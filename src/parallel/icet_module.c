@@ -57,6 +57,7 @@ static struct {
     const IceTUByte *(*color_ub)(const IceTImage);
     const IceTFloat *(*color_f)(const IceTImage);
     const IceTFloat *(*depth_f)(const IceTImage);
+    IceTSizeType (*n_pixels)(const IceTImage);
     IceTCommunicator comm;
     IceTContext context;
     int ready;
@@ -84,6 +85,7 @@ static int load(char *why, size_t why_size)
         {(void **)&g.diagnostics, "icetDiagnostics"},           {(void **)&g.get_error, "icetGetError"},
         {(void **)&g.composite_image, "icetCompositeImage"},    {(void **)&g.color_ub, "icetImageGetColorcub"},
         {(void **)&g.color_f, "icetImageGetColorcf"},           {(void **)&g.depth_f, "icetImageGetDepthcf"},
+        {(void **)&g.n_pixels, "icetImageGetNumPixels"},
     };
     for (size_t k = 0; k < sizeof syms / sizeof syms[0]; k++) {
         *syms[k].fn = dlsym(g.lib, syms[k].sym);
@@ -118,6 +120,7 @@ int thx_par_icet_composite(int mode, int w, int h, void *color, float *depth, co
         g.depth_format(ICET_IMAGE_DEPTH_FLOAT);
         g.composite_mode(ICET_COMPOSITE_MODE_Z_BUFFER);
         g.disable(ICET_ORDERED_COMPOSITE);
+        g.disable(ICET_COMPOSITE_ONE_BUFFER); /* the depth kept in the result: the caller reads what no rank drew */
     } else {
         int size = 1;
         MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -145,6 +148,12 @@ int thx_par_icet_composite(int mode, int w, int h, void *color, float *depth, co
     }
     if (rank != 0) return 0;
     size_t n = (size_t)w * (size_t)h;
+    const void *c = mode == THX_PAR_COMPOSITE_DEPTH ? (const void *)g.color_ub(img) : (const void *)g.color_f(img);
+    if ((size_t)g.n_pixels(img) != n || !c || (mode == THX_PAR_COMPOSITE_DEPTH && !g.depth_f(img))) {
+        snprintf(why, why_size, "IceT returned a picture of %ld pixels%s, where %zu were composited", (long)g.n_pixels(img),
+                 c ? "" : " without colours", n);
+        return -1;
+    }
     if (mode == THX_PAR_COMPOSITE_DEPTH) {
         memcpy(color, g.color_ub(img), 4 * n);
         memcpy(depth, g.depth_f(img), n * sizeof *depth);

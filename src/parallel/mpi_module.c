@@ -51,6 +51,7 @@ static int bcast(void *buf, size_t n, int root)
 
 static int max_int(int *v, int n) { return MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_INT, MPI_MAX, MPI_COMM_WORLD); }
 static int min_int(int *v, int n) { return MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_INT, MPI_MIN, MPI_COMM_WORLD); }
+static int max_dbl(double *v, int n) { return MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD); }
 static int sum_ll(long long *v, int n) { return MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD); }
 
 static int gather_size(size_t n, size_t *counts, int root)
@@ -108,6 +109,7 @@ static const thx_par_mpi table = {
     .max_int = max_int,
     .min_int = min_int,
     .sum_ll = sum_ll,
+    .max_dbl = max_dbl,
     .gather_size = gather_size,
     .gatherv = gatherv,
     .error_string = error_string,

@@ -27,6 +27,7 @@ typedef struct {
     int (*max_int)(int *v, int n);          /* in place, over MPI_COMM_WORLD */
     int (*min_int)(int *v, int n);
     int (*sum_ll)(long long *v, int n);
+    int (*max_dbl)(double *v, int n);
     /* every rank's n into counts[size] on root (counts may be NULL elsewhere) */
     int (*gather_size)(size_t n, size_t *counts, int root);
     /* every rank's n bytes of send into recv on root, rank after rank (counts from gather_size) */

@@ -266,3 +266,16 @@ thx_status thx_par_composite_blend(thx_ctx *ctx, float *rgba, int w, int h, cons
     }
     return composite(ctx, THX_PAR_COMPOSITE_BLEND, rgba, NULL, w, h, order);
 }
+
+thx_status thx_par_max(thx_ctx *ctx, thx_status st, double *v, int n)
+{
+    if (!g_running || g_size == 1) return st;
+    if (n < 0 || n > 64) return thx_par_agree(ctx, thx_error(ctx, THX_EINTERNAL, "thx_par_max: %d values (at most 64)", n), NULL);
+    THX_CHECK(thx_par_agree(ctx, st, NULL));
+    double buf[64];
+    if (n) memcpy(buf, v, (size_t)n * sizeof *v);
+    int rc = g_api->max_dbl(buf, n);
+    if (rc) return mpi_fail(ctx, rc, "the largest values over the ranks");
+    if (n) memcpy(v, buf, (size_t)n * sizeof *v);
+    return THX_OK;
+}

@@ -34,6 +34,12 @@ void picture_field_free(thx_picture_data *d)
         free(d->field_values[k]);
         d->field_values[k] = NULL;
     }
+    for (int k = 0; k < 3; k++) {
+        free(d->field_normals[k]);
+        free(d->field_part_tri[k]);
+        d->field_normals[k] = NULL;
+        d->field_part_tri[k] = NULL;
+    }
     thx_stream_tubes_destroy(&d->tubes);
     d->n_stream_lines = 0;
     free(d->field_own_tri);
@@ -51,7 +57,10 @@ static thx_status empty_cuts(thx_ctx *ctx, const thx_picture_opts *o, const thx_
         thx_field_plane p;
         THX_CHECK(thx_field_plane_parse(ctx, o->slices[k], &p));
         double dmin, dmax;
-        thx_field_plane_span(v, d->field_use, &p, &dmin, &dmax);
+        if (d->part_size > 1) /* sort-last: the whole volume's span (thx_picture_parts_settle) */
+            dmin = d->part_span[k][0], dmax = d->part_span[k][1];
+        else
+            thx_field_plane_span(v, d->field_use, &p, &dmin, &dmax);
         if (!(dmin <= 0 && dmax >= 0))
             return thx_error(ctx, THX_EINPUT, "--slice %s misses the volume of %s: its nodes lie %.6g to %.6g mm from the plane "
                              "(all on one side)", o->slices[k], o->solution, dmin, dmax);
@@ -81,6 +90,7 @@ thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
     d->vmin = INFINITY;
     d->vmax = -INFINITY;
     picture_range_of(d->volume->v, d->volume->n_rows * d->volume->n_frames, &d->vmin, &d->vmax);
+    if (d->part_size > 1) return THX_OK; /* a part: the range and the cuts are the whole's (thx_picture_parts_settle) */
     if (!(d->vmin <= d->vmax)) return thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
     return thx_picture_cuts_check(ctx, o, d);
 }
@@ -127,7 +137,11 @@ static void volume_range(const thx_picture_opts *o, const thx_picture_data *d, i
         *hi = o->hi;
         return;
     }
-    if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) {
+    if ((o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) && d->part_size > 1) {
+        *lo = d->part_lo; /* sort-last: the whole's, over the ranks (picture_part_frame_range) */
+        *hi = d->part_hi;
+        if (*lo <= *hi) return;
+    } else if (o->scope == THX_SCOPE_FRAME || o->scope == THX_SCOPE_SURFACES) {
         const thx_series *x = d->volume;
         size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
         *lo = INFINITY;
@@ -157,7 +171,7 @@ static thx_status slices_by_current(thx_ctx *ctx, thx_picture_data *d, const dou
     for (size_t t = 0; t < m->n_tris; t++) {
         const double *j = jt + 3 * (size_t)m->cell[t];
         double a = sqrt(j[0] * j[0] + j[1] * j[1] + j[2] * j[2]);
-        if (isfinite(a) && a > jmax) jmax = a;
+        if (isfinite(a) && a > jmax && (!d->part_own || d->part_own[m->cell[t]])) jmax = a;
         for (int c = 0; c < 3; c++) {
             memcpy(d->field_own[SLICE] + 9 * t + 3 * c, m->xyz + 3 * (size_t)m->tri[3 * t + c], 3 * sizeof(double));
             d->field_own_tri[3 * t + c] = (int32_t)(3 * t + (size_t)c);
@@ -310,6 +324,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
         }
     }
     if (st == THX_OK && o->n_streamlines) st = build_streamlines(ctx, o, d, phi, lo, hi);
+    if (st == THX_OK && d->part_size > 1) st = picture_part_cuts(ctx, d); /* sort-last: the own triangles drawn */
     if (st != THX_OK) {
         picture_field_free(d);
         return st;
@@ -333,6 +348,7 @@ size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, th
         r->surf = s;
         r->mode = THX_DRAW_PHONG;
         r->values = d->field_values[k];
+        r->normals = d->field_normals[k]; /* sort-last: the whole's (NULL: the surface's own) */
         r->n_levels = o->levels;
         r->contour_color[3] = 1;
         r->line_width = 1.5f;

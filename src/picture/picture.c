@@ -21,6 +21,7 @@
 #include "thorax/io/landmarks_file.h"
 #include "thorax/leads/activation.h"
 #include "picture/picture_internal.h"
+#include "thorax/parallel/parallel.h"
 
 /* ---- one picture ---- */
 void picture_range_of(const double *v, size_t n, double *lo, double *hi)
@@ -638,6 +639,35 @@ static thx_status next_scene(thx_ctx *ctx, const thx_picture_opts *o, thx_pictur
     return THX_OK;
 }
 
+/* The scene of panel (of cols x rows in the viewport vp): b's surfaces and arrows, the scan's planes,
+ * the background, the camera; no clip plane. */
+static void panel_scene(const thx_picture_opts *o, const thx_picture_data *d, const built_scene *b, const int vp[4], int cols,
+                        int rows, int panel, thx_scene *sc)
+{
+    memset(sc, 0, sizeof *sc);
+    sc->surfaces = b->rs;
+    sc->n_surfaces = b->n;
+    sc->arrows = b->have_arrows ? &b->arrows : NULL;
+    sc->n_arrows = b->have_arrows ? 1 : 0;
+    sc->planes = d->scan_plane;
+    sc->n_planes = (size_t)d->n_scan_planes;
+    int pw = vp[2] / cols, ph = vp[3] / rows;
+    sc->viewport[0] = (panel % cols) * pw;
+    sc->viewport[1] = vp[1] + (panel / cols) * ph;
+    sc->viewport[2] = pw;
+    sc->viewport[3] = ph;
+    sc->clear = 1;
+    sc->background[0] = BG[0] / 255.0f;
+    sc->background[1] = BG[1] / 255.0f;
+    sc->background[2] = BG[2] / 255.0f;
+    sc->background[3] = 1;
+    sc->nan_color[0] = 0.6f;
+    sc->nan_color[1] = 0.6f;
+    sc->nan_color[2] = 0.2f;
+    sc->nan_color[3] = 1;
+    thx_picture_camera(o, d, (double)pw / ph, &sc->camera);
+}
+
 /* The 3D part of the picture, panel by panel: offscreen into img (r of the picture's size), or
  * into the current framebuffer (img NULL, fb_w x fb_h). */
 /* share (NULL: the whole picture): sort-first's rank, size and own mask (thx_picture_draw_share) */
@@ -673,28 +703,7 @@ static thx_status draw_panels(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
             if (sa != THX_OK) { free(b->apos); free(b->avec); free(b); return sa; }
         }
         thx_scene sc;
-        memset(&sc, 0, sizeof sc);
-        sc.surfaces = b->rs;
-        sc.n_surfaces = b->n;
-        sc.arrows = b->have_arrows ? &b->arrows : NULL;
-        sc.n_arrows = b->have_arrows ? 1 : 0;
-        sc.planes = d->scan_plane;
-        sc.n_planes = (size_t)d->n_scan_planes;
-        int pw = vp[2] / cols, ph = vp[3] / rows;
-        sc.viewport[0] = (panel % cols) * pw;
-        sc.viewport[1] = vp[1] + (panel / cols) * ph;
-        sc.viewport[2] = pw;
-        sc.viewport[3] = ph;
-        sc.clear = 1;
-        sc.background[0] = BG[0] / 255.0f;
-        sc.background[1] = BG[1] / 255.0f;
-        sc.background[2] = BG[2] / 255.0f;
-        sc.background[3] = 1;
-        sc.nan_color[0] = 0.6f;
-        sc.nan_color[1] = 0.6f;
-        sc.nan_color[2] = 0.2f;
-        sc.nan_color[3] = 1;
-        thx_picture_camera(o, d, (double)pw / ph, &sc.camera);
+        panel_scene(o, d, b, vp, cols, rows, panel, &sc);
         if (n_clip > 0) { sc.clip[0] = clip; sc.n_clip = 1; }
         size_t nn = 0;
         thx_scale vol_scale;
@@ -830,6 +839,97 @@ thx_status thx_picture_draw_share(thx_ctx *ctx, const thx_picture_opts *o, thx_p
     THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, bars, nan_total, &share));
     if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, bars));
     return THX_OK;
+}
+
+/* The box around what the renderer would draw of the scene: every node of its surfaces (as the
+ * renderer's box is), for one depth scale over the ranks. */
+static void scene_box(const thx_scene *sc, double lo[3], double hi[3])
+{
+    for (size_t i = 0; i < sc->n_surfaces; i++) {
+        const thx_render_surface *rs = &sc->surfaces[i];
+        if (rs->mode == THX_DRAW_HIDDEN || !rs->surf) continue;
+        for (size_t n = 0; n < rs->surf->n_nodes; n++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], rs->surf->xyz[3 * n + k]);
+                hi[k] = fmax(hi[k], rs->surf->xyz[3 * n + k]);
+            }
+    }
+}
+
+thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r, thx_font *font,
+                                 int frame, thx_raster *img, thx_picture_bars *bars, size_t *nan_total)
+{
+    int w = img->w, h = img->h, rank = thx_par_rank();
+    thx_raster_fill(img, BG);
+    memset(bars, 0, sizeof *bars);
+    built_scene *b = calloc(1, sizeof *b);
+    unsigned char *rgba = malloc(4 * (size_t)w * h), *mine = malloc(4 * (size_t)w * h);
+    float *depth = malloc((size_t)w * h * sizeof *depth);
+    thx_status st = b && rgba && mine && depth ? THX_OK : thx_error(ctx, THX_ENOMEM, "out of memory (sort-last layers)");
+    /* collective steps, each reached by every rank whatever befell it before (st carried) */
+    st = picture_part_frame_range(ctx, o, d, frame, st); /* 1: the frame's range over the whole volume */
+    if (st == THX_OK) st = picture_field_build(ctx, o, d, frame);
+    int vp[4];
+    thx_scene sc;
+    thx_picture_viewport(o, font, w, h, vp);
+    if (st == THX_OK) {
+        if (rank == 0) build_surfaces(o, d, frame, b, -1); /* the model's surfaces: rank 0's alone */
+        b->n += picture_field_surfaces(o, d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
+        panel_scene(o, d, b, vp, 1, 1, 0, &sc);
+        for (size_t i = 0; i < b->n && st == THX_OK; i++)
+            if (b->rs[i].mode != THX_DRAW_HIDDEN && b->rs[i].color[3] < 1)
+                st = thx_error(ctx, THX_EINPUT, "sort-last rendering composites by depth, so every surface drawn must be opaque: "
+                               "'%s' is drawn at opacity %.2f (give it --surface %s=phong:1, or leave it out with --only)",
+                               b->rs[i].surf->name, b->rs[i].color[3], b->rs[i].surf->name);
+    }
+    /* 2: one depth scale (the box of everything drawn, over the ranks), and |J|'s largest on the slices */
+    double g[7] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    if (st == THX_OK) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        scene_box(&sc, lo, hi);
+        if (rank != 0) { /* the model's surfaces are in rank 0's box: the others draw none, but they count */
+            built_scene *m = calloc(1, sizeof *m);
+            if (m) {
+                build_surfaces(o, d, frame, m, -1);
+                thx_scene ms = sc;
+                ms.surfaces = m->rs;
+                ms.n_surfaces = m->n;
+                scene_box(&ms, lo, hi);
+                free(m);
+            } else st = thx_error(ctx, THX_ENOMEM, "out of memory (scene)");
+        }
+        for (int k = 0; k < 3; k++) g[k] = -lo[k], g[3 + k] = hi[k];
+        if (o->slice_current && d->field[1]) g[6] = d->field_hi[1];
+    }
+    st = thx_par_max(ctx, st, g, 7);
+    if (st == THX_OK) {
+        for (int k = 0; k < 3; k++) sc.box[0][k] = -g[k], sc.box[1][k] = g[3 + k];
+        sc.have_box = 1;
+        if (o->slice_current && d->field[1]) { /* the slices' |J| scale: the whole's */
+            d->field_hi[1] = g[6];
+            for (size_t i = 0; i < b->n; i++)
+                if (b->rs[i].surf == &d->field_surf[1])
+                    thx_scale_from_range_mapped(&b->rs[i].scale, THX_SCALE_LINEAR, THX_MAPPING_TRUE, d->field_lo[1], g[6]);
+        }
+        size_t nn = 0;
+        st = thx_render_layer(ctx, r, &sc, rgba, depth, &nn);
+        if (nan_total) *nan_total += b->nan_count;
+        if (st == THX_OK && rank == 0) memcpy(mine, rgba, 4 * (size_t)w * h);
+    }
+    /* 3: the layers composited by depth on rank 0 (every rank's status agreed first) */
+    st = thx_par_agree(ctx, st, NULL);
+    if (st == THX_OK) st = thx_par_composite_depth(ctx, rgba, depth, w, h);
+    if (st == THX_OK && rank == 0) {
+        for (size_t i = 0; i < (size_t)w * h; i++) /* drawn by no rank: rank 0's background */
+            if (!(depth[i] < 1.0f)) memcpy(rgba + 4 * i, mine + 4 * i, 4);
+        st = thx_render_layer_finish(ctx, r, &sc, rgba, img);
+        if (st == THX_OK) collect_bars(d, b, bars);
+    }
+    free(b);
+    free(rgba);
+    free(mine);
+    free(depth);
+    return st;
 }
 
 thx_status thx_picture_draw_gl(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,

@@ -61,6 +61,8 @@ void thx_picture_data_free(thx_picture_data *d)
     picture_scan_free(d);
     free(d->field_use);
     d->field_use = NULL;
+    free(d->part_own);
+    d->part_own = NULL;
     thx_model_destroy(&d->m);
 }
 
@@ -313,8 +315,10 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
     if (o->model_dir) snprintf(model_dir, sizeof model_dir, "%s", o->model_dir);
     /* a scan alone (thorax view --image IMG: tracing starts from nothing): a model without surfaces */
     int scan_only = !o->n_files && !model_dir[0] && o->image;
+    int part = j && picture_part_wanted(o, j); /* sort-last: this rank's part of the volume alone */
     thx_status st = o->n_files ? surfaces_from_files(ctx, o, &d->m)
-                  : scan_only ? thx_model_create(ctx, &d->m) : thx_model_read(ctx, model_dir, &d->m);
+                  : scan_only ? thx_model_create(ctx, &d->m)
+                  : part ? thx_model_read_regions_only(ctx, model_dir, &d->m) : thx_model_read(ctx, model_dir, &d->m);
     if (!o->n_files) snprintf(d->model_dir, sizeof d->model_dir, "%s", model_dir);
     if (st == THX_OK && scan_only) d->m->frame = thx_frame_ras(); /* the scan's RAS millimetres */
     if (st == THX_OK) st = check_names(ctx, o, d->m);
@@ -330,7 +334,9 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         }
         if (st == THX_OK && cJSON_IsString(epi) && heart >= 0 && access(epi->valuestring, R_OK) == 0)
             st = thx_series_read(ctx, epi->valuestring, THX_SERIES_AUTO, &d->series[heart]);
-        if (st == THX_OK && picture_has_field(o))
+        if (st == THX_OK && part)
+            st = picture_part_read(ctx, o, j, d);
+        else if (st == THX_OK && picture_has_field(o))
             st = read_volume(ctx, o, j, o->isosurface ? "--isosurface" : o->n_slices ? "--slice" : o->n_streamlines ? "--streamlines" : "--volume", d);
         if (st == THX_OK && cJSON_IsString(cn) && o->arrows) {
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);

@@ -30,6 +30,15 @@ static inline int picture_has_field(const thx_picture_opts *o)
     return o->isosurface || o->n_slices || o->n_streamlines || o->volume_render;
 }
 thx_status picture_field_load(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d);
+/* sort-last (picture_parts.c): whether this run reads its rank's part of the solution whose
+ * solution.json is solution; the part read into d (the model read with its region table alone); the
+ * frame's range over the ranks into d->part_lo, part_hi (collective; st this rank's status); the cuts
+ * cut down to the own tetrahedra's triangles, with the normals of the whole */
+struct cJSON;
+int picture_part_wanted(const thx_picture_opts *o, const struct cJSON *solution);
+thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const struct cJSON *solution, thx_picture_data *d);
+thx_status picture_part_frame_range(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, thx_status st);
+thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d);
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);
 size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, thx_render_surface *rs, size_t max);
 void picture_field_free(thx_picture_data *d);

@@ -27,11 +27,12 @@ static uint64_t hash_bytes(uint64_t h, const void *data, size_t n)
     return h;
 }
 
-static uint64_t surface_hash(const thx_surface *s)
+static uint64_t surface_hash(const thx_surface *s, const double *normals)
 {
     uint64_t h = 0xcbf29ce484222325ULL;
     if (s->xyz) h = hash_bytes(h, s->xyz, 3 * s->n_nodes * sizeof *s->xyz);
     if (s->tri) h = hash_bytes(h, s->tri, 3 * s->n_tris * sizeof *s->tri);
+    if (normals) h = hash_bytes(h ^ 0x9e3779b97f4a7c15ULL, normals, 3 * s->n_nodes * sizeof *normals);
     return h;
 }
 
@@ -87,9 +88,9 @@ done:
     return ok;
 }
 
-/* Uploads the geometry of s into e: positions and area-weighted vertex normals (floats,
- * interleaved), a per-node value buffer, and the triangles. */
-static thx_status entry_upload(thx_ctx *ctx, surf_entry *e, const thx_surface *s, uint64_t hash)
+/* Uploads the geometry of s into e: positions and vertex normals (floats, interleaved: normals given,
+ * else area-weighted from the triangles), a per-node value buffer, and the triangles. */
+static thx_status entry_upload(thx_ctx *ctx, surf_entry *e, const thx_surface *s, const double *normals, uint64_t hash)
 {
     size_t nn = s->n_nodes, nt = s->n_tris;
     if (nn > UINT32_MAX || nt > (size_t)INT_MAX / 3 || (nn && !s->xyz) || (nt && !s->tri))
@@ -110,7 +111,8 @@ static thx_status entry_upload(thx_ctx *ctx, surf_entry *e, const thx_surface *s
         free(geo);
         return THX_ENOMEM;
     }
-    for (size_t t = 0; t < nt; t++) {
+    if (normals) memcpy(acc, normals, 3 * nn * sizeof *acc);
+    for (size_t t = 0; t < nt && !normals; t++) {
         const int32_t *v = s->tri + 3 * t;
         const double *a = s->xyz + 3 * v[0], *b = s->xyz + 3 * v[1], *c = s->xyz + 3 * v[2];
         double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
@@ -167,9 +169,9 @@ static thx_status entry_upload(thx_ctx *ctx, surf_entry *e, const thx_surface *s
 }
 
 /* The cache entry of s, uploading it when it is new or has changed. */
-thx_status rn_cache_get(thx_ctx *ctx, thx_renderer *r, const thx_surface *s, surf_entry **out)
+thx_status rn_cache_get(thx_ctx *ctx, thx_renderer *r, const thx_surface *s, const double *normals, surf_entry **out)
 {
-    uint64_t h = surface_hash(s);
+    uint64_t h = surface_hash(s, normals);
     surf_entry *same_ptr = NULL;
     for (size_t i = 0; i < r->n_cache; i++) {
         surf_entry *e = r->cache[i];
@@ -190,7 +192,7 @@ thx_status rn_cache_get(thx_ctx *ctx, thx_renderer *r, const thx_surface *s, sur
         r->cache[r->n_cache++] = e;
     }
     e->last_used = r->frame;
-    thx_status st = entry_upload(ctx, e, s, h);
+    thx_status st = entry_upload(ctx, e, s, normals, h);
     if (st != THX_OK) e->surf = NULL; /* never matches until uploaded again */
     *out = e;
     return st;

@@ -472,7 +472,7 @@ thx_status rn_draw_scene(thx_ctx *ctx, thx_renderer *r, const thx_scene *sc, int
         const thx_render_surface *rs = &sc->surfaces[i];
         r->ents[i] = NULL;
         if (rs->mode == THX_DRAW_HIDDEN || !rs->surf || !rs->surf->n_nodes) continue;
-        THX_TRY(rn_cache_get(ctx, r, rs->surf, &r->ents[i]));
+        THX_TRY(rn_cache_get(ctx, r, rs->surf, rs->normals, &r->ents[i]));
         if (rs->values && has_data_mode(rs->mode)) THX_TRY(upload_values(ctx, r, r->ents[i], rs, &nan));
         for (int k = 0; k < 3; k++) {
             lo[k] = fmin(lo[k], r->ents[i]->lo[k]);

@@ -126,7 +126,7 @@ thx_status rn_cmap_texture(thx_ctx *ctx, thx_renderer *r, thx_colormap c, GLuint
 
 /* render_cache.c: the uploaded surfaces. */
 void rn_entry_free_gl(surf_entry *e);
-thx_status rn_cache_get(thx_ctx *ctx, thx_renderer *r, const thx_surface *s, surf_entry **out);
+thx_status rn_cache_get(thx_ctx *ctx, thx_renderer *r, const thx_surface *s, const double *normals, surf_entry **out);
 void rn_cache_trim(thx_renderer *r);
 thx_status rn_entry_edges(thx_ctx *ctx, surf_entry *e, const thx_surface *s);
 

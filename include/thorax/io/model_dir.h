@@ -67,6 +67,10 @@ thx_status thx_model_write_claimed(thx_ctx *ctx, const thx_model *m, thx_outdir 
  * frame.set = 0. An edit log the provenance names is read into m->edit_log, refused when missing,
  * holding a NUL byte, over 64 MiB or not of the recorded SHA-256. Caller destroys *out. */
 thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out);
+/* The same without the volume mesh's files: m->volume holds the region table alone (no nodes, no
+ * tetrahedra, no node tables), for a reader that takes its part of the volume from elsewhere (a rank
+ * of sort-last rendering reading its part of a solution, thorax/fem/parts.h). */
+thx_status thx_model_read_regions_only(thx_ctx *ctx, const char *dir, thx_model **out);
 
 /* Reads a .pts/.fac pair into a surface. The .fac index base (0 or 1) is
  * detected from the node count and reported in *base (pass NULL to ignore). */

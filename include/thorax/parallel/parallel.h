@@ -53,6 +53,11 @@ thx_status thx_par_bcast(thx_ctx *ctx, void *buf, size_t n, int root);
 /* Collective: v[0..n) summed over the ranks, on every rank. */
 thx_status thx_par_sum(thx_ctx *ctx, long long *v, int n);
 
+/* Collective: every rank's st agreed as thx_par_agree does, and, when every rank succeeded, v[0..n)
+ * replaced by its largest over the ranks (a least as the largest of -v; NaN on a rank is lost to
+ * any number). On failure v is left as it was. At most 64 values. */
+thx_status thx_par_max(thx_ctx *ctx, thx_status st, double *v, int n);
+
 /* Collective: waits for every rank. */
 thx_status thx_par_barrier(thx_ctx *ctx);
 

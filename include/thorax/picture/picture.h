@@ -291,6 +291,16 @@ typedef struct {
     const thx_series *trace;  /* the series the trace draws from (not owned), its row and label */
     size_t trace_row;
     char trace_label[96];
+    /* sort-last (picture/picture_parts.c): this rank's part of a partitioned solution, when
+       part_size > 1; m->volume and volume are then the part's (its own tetrahedra and ghosts) */
+    int part_rank, part_size;
+    unsigned char *part_own;         /* per tetrahedron of the part: 1 own, 0 ghost (owned) */
+    double part_span[8][2];          /* the slices' planes' spans over the whole volume (every rank's) */
+    double part_lo, part_hi;         /* the frame part_frame's range over the whole volume */
+    int part_frame;
+    char part_unit[32];              /* the parts' values' unit (their manifest's) */
+    double *field_normals[3];        /* the cuts' normal sums at their vertices, the ghosts' triangles in (owned) */
+    int32_t *field_part_tri[3];      /* the cuts' own triangles (owned) */
 } thx_picture_data;
 
 /* The colour scales of a picture: one colour bar each (paper 4.2: "a colour bar per distinct
@@ -328,6 +338,20 @@ void thx_picture_data_free(thx_picture_data *d);
  * *nan_total (may be NULL) counts the values that are not numbers. font may be NULL (no text). */
 thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
                             thx_font *font, int frame, thx_raster *img, size_t *nan_total);
+
+/* Sort-last (thorax/parallel/parallel.h), collective: the end of thx_picture_load under mpirun. st is
+ * this rank's load; the ranks agree on it, and when each reads its part of a partitioned solution
+ * (d->part_size > 1) the volume's range and the slices' spans become the whole's, and the cuts are
+ * checked against them. Without mpirun, st itself. */
+thx_status thx_picture_parts_settle(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_status st);
+
+/* Sort-last, collective (d->part_size > 1): each rank draws its part of the volume's cuts (rank 0 the
+ * model's surfaces too) as a layer with depth, the layers are composited by IceT (the nearest
+ * fragment of each pixel) and finished on rank 0, into img there (the 3D part: thx_picture_annotate
+ * draws the rest). The colour scales drawn are left in *bars on rank 0. Every surface drawn must be
+ * opaque. Equal, byte for byte, to the picture one process draws from the whole solution. */
+thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r, thx_font *font,
+                                 int frame, thx_raster *img, thx_picture_bars *bars, size_t *nan_total);
 
 /* Sort-first (thorax/parallel/parallel.h): the 3D part of the same picture, only rank's share of
  * its pixels among size ranks, into img filled with the background first: the ray tracer's tiles of

@@ -59,6 +59,10 @@ typedef struct {
     float contour_color[4];  /* all zero: black */
     int no_clip;             /* 1: the scene's clip planes leave this surface whole (the heart
                                 seen entire through a torso opened by a clip plane) */
+    /* per node its normal, any length but not zero (the renderer normalizes it), or NULL: the sum of
+       the node's triangles' area-weighted normals. A part of a larger surface (sort-last's ranks)
+       gives the whole's sums, so that its nodes on the part's edge are lit as the whole's are. */
+    const double *normals;
 } thx_render_surface;
 
 /* Arrows, e.g. current density (paper 4.2, "Displaying vector fields"). */

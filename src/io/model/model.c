@@ -393,7 +393,7 @@ static thx_status read_edit_log(thx_ctx *ctx, const char *dir, const char *mpath
     return THX_OK;
 }
 
-thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
+static thx_status model_read(thx_ctx *ctx, const char *dir, int regions_only, thx_model **out)
 {
     *out = NULL;
     char mpath[4200], pts[4200], fac[4200];
@@ -554,7 +554,7 @@ thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out)
         m->has_interior[m->n_surfaces - 1] = has_in;
         m->interior[m->n_surfaces - 1] = in;
     }
-    THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m));
+    THX_TRY(thx_io_volume_read(ctx, dir, mpath, root, m, regions_only));
     {
         const cJSON *ck = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "volume"), "check");
         if (m->volume && cJSON_IsObject(ck) && !(m->volume_check_json = cJSON_PrintUnformatted(ck))) {
@@ -579,3 +579,7 @@ done:
     free(text);
     return st;
 }
+
+thx_status thx_model_read(thx_ctx *ctx, const char *dir, thx_model **out) { return model_read(ctx, dir, 0, out); }
+
+thx_status thx_model_read_regions_only(thx_ctx *ctx, const char *dir, thx_model **out) { return model_read(ctx, dir, 1, out); }

@@ -423,7 +423,7 @@ static thx_status read_region(thx_ctx *ctx, const char *mpath, size_t k, const c
     return THX_OK;
 }
 
-thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m)
+thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m, int regions_only)
 {
     const cJSON *vo = cJSON_GetObjectItemCaseSensitive(root, "volume");
     const cJSON *regs = cJSON_GetObjectItemCaseSensitive(root, "regions");
@@ -488,6 +488,11 @@ thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, 
                                v->regions[k].name);
                 goto done;
             }
+    }
+    if (regions_only) { /* (a rank of sort-last, which reads its part of the volume elsewhere) */
+        thx_volume_destroy(&m->volume);
+        m->volume = v;
+        return THX_OK;
     }
     THX_TRY(join(ctx, vpts, sizeof vpts, dir, jp->valuestring));
     THX_TRY(thx_io_read_xyz(ctx, vpts, "", &v->xyz, &v->n_nodes)); /* volume.pts */

@@ -31,6 +31,7 @@ thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const cha
  * is root, into m->volume; m already holds the surfaces in manifest order.
  * Does nothing when the manifest has no "volume" (and then refuses
  * "regions" or a surface "vmap" as inconsistent). */
-thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m);
+/* regions_only: the region table alone (m->volume without nodes or tetrahedra; thx_model_read_regions_only) */
+thx_status thx_io_volume_read(thx_ctx *ctx, const char *dir, const char *mpath, const cJSON *root, thx_model *m, int regions_only);
 
 #endif

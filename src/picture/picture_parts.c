@@ -1,0 +1,204 @@
+/*
+ * Sort-last's data (thorax/picture/picture.h, thx_picture_parts_settle; docs/design/parallel.md):
+ * under mpirun, a picture of a solution whose volume potentials are in parts for as many ranks
+ * (thorax forward --volume under mpirun, thorax/fem/parts.h) has each rank read the model's
+ * surfaces and region table, and its own part of the volume: its tetrahedra, their ghosts and their
+ * nodes' values. The volume's cuts are then made on the part (picture/field_layers.c), the ghosts
+ * giving the cut's vertices on the part's edge the whole's normals, and only the own tetrahedra's
+ * triangles are drawn.
+ */
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "thorax/core/fileio.h"
+#include "thorax/fem/parts.h"
+#include "thorax/field/field.h"
+#include "thorax/parallel/parallel.h"
+#include "picture/picture_internal.h"
+
+int picture_part_wanted(const thx_picture_opts *o, const cJSON *solution)
+{
+    int size = thx_par_size();
+    if (size < 2 || !picture_has_field(o)) return 0;
+    const cJSON *vp = cJSON_GetObjectItem(solution, "volume_parts"), *r = vp ? cJSON_GetObjectItem(vp, "ranks") : NULL;
+    return cJSON_IsNumber(r) && r->valuedouble == size;
+}
+
+/* What sort-last cannot draw exactly, refused before anything is read further. */
+static thx_status part_refusals(thx_ctx *ctx, const thx_picture_opts *o)
+{
+    const char *what = o->clip[0] ? "--clip" : o->panels ? "--panels" : o->arrows ? "--arrows" : o->image ? "--image" : o->tetrahedra ? "--tetrahedra"
+                     : o->n_streamlines ? "--streamlines" : o->n_landmarks ? "--landmarks" : o->n_electrodes ? "--electrodes"
+                     : NULL;
+    if (what)
+        return thx_error(ctx, THX_EINPUT, "%s: not drawn by sort-last rendering (each rank its part of %s's volume): run it "
+                         "with one process, or on a number of ranks other than the parts'", what, o->solution);
+    if (o->renderer == 1 && !o->volume_render)
+        return thx_error(ctx, THX_EINPUT, "sort-last rendering of %s's parts traces only the volume (--volume); draw the cuts "
+                         "with OpenGL (thorax render, --renderer gl)", o->solution);
+    if (o->volume_render)
+        return thx_error(ctx, THX_EINPUT, "--volume: volume rendering of %s's parts (sort-last, blended) is not yet "
+                         "composited; run it with one process, or on a number of ranks other than the parts'", o->solution);
+    return THX_OK;
+}
+
+thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const cJSON *solution, thx_picture_data *d)
+{
+    THX_CHECK(part_refusals(ctx, o));
+    int rank = thx_par_rank(), size = thx_par_size();
+    thx_volume *v = d->m->volume;
+    if (!v) return thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, d->model_dir);
+    char path[4400];
+    const cJSON *vp = cJSON_GetObjectItem(solution, "volume_parts"), *dir = cJSON_GetObjectItem(vp, "manifest");
+    if (!cJSON_IsString(dir) || strchr(dir->valuestring, '/') != strrchr(dir->valuestring, '/') ||
+        strncmp(dir->valuestring, "parts/", 6) != 0)
+        return thx_error(ctx, THX_EINPUT, "%s/solution.json: \"volume_parts\": \"manifest\" must be parts/parts.json",
+                         o->solution);
+    snprintf(path, sizeof path, "%s/%s", o->solution, dir->valuestring);
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    free(text);
+    const cJSON *fmt = cJSON_GetObjectItem(j, "format"), *ver = cJSON_GetObjectItem(j, "version");
+    const cJSON *rk = cJSON_GetObjectItem(j, "ranks"), *files = cJSON_GetObjectItem(j, "files");
+    const cJSON *file = cJSON_GetArrayItem(files, rank), *unit = cJSON_GetObjectItem(j, "unit");
+    thx_status st = THX_OK;
+    if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, "thorax-parts") || !cJSON_IsNumber(ver))
+        st = thx_error(ctx, THX_EINPUT, "%s: not the manifest of a solution's parts (format \"thorax-parts\")", path);
+    else if (ver->valuedouble != 2)
+        st = thx_error(ctx, THX_EINPUT, "%s: parts of version %g; this thorax reads version 2 (run thorax forward --volume "
+                       "under mpirun again)", path, ver->valuedouble);
+    else if (!cJSON_IsNumber(rk) || rk->valuedouble != size || cJSON_GetArraySize(files) != size || !cJSON_IsString(file) ||
+             strchr(file->valuestring, '/') || !strcmp(file->valuestring, "..") || !strcmp(file->valuestring, "."))
+        st = thx_error(ctx, THX_EINPUT, "%s: not %d parts, one file each", path, size);
+    else if (!cJSON_IsString(unit) || strlen(unit->valuestring) >= sizeof d->part_unit)
+        st = thx_error(ctx, THX_EINPUT, "%s: \"unit\" missing, not a string or too long", path);
+    char ppath[4500];
+    if (st == THX_OK) {
+        snprintf(d->part_unit, sizeof d->part_unit, "%s", unit->valuestring);
+        snprintf(path, sizeof path, "%s/%s", o->solution, dir->valuestring);
+        *strrchr(path, '/') = '\0';
+        snprintf(ppath, sizeof ppath, "%s/%s", path, file->valuestring);
+    }
+    cJSON_Delete(j);
+    if (st != THX_OK) return st;
+    thx_fem_part p;
+    THX_CHECK(thx_fem_part_read(ctx, ppath, &p));
+    if (p.rank != (uint32_t)rank || p.ranks != (uint32_t)size)
+        st = thx_error(ctx, THX_EINPUT, "%s: part %u of %u, where rank %d of %d reads it", ppath, p.rank + 1, p.ranks, rank,
+                       size);
+    for (size_t t = 0; st == THX_OK && t < p.n_tets; t++)
+        if (p.region[t] < 0 || (size_t)p.region[t] >= v->n_regions)
+            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu's region %d is not one of the model's %zu", ppath, t + 1,
+                           p.region[t] + 1, v->n_regions);
+    if (st == THX_OK && p.n_frames == 0) st = thx_error(ctx, THX_EINPUT, "%s: a part without frames", ppath);
+    if (st == THX_OK) st = thx_series_create(ctx, p.n_nodes, p.n_frames, &d->volume);
+    if (st == THX_OK && !(d->part_own = malloc(p.n_tets ? p.n_tets : 1))) st = thx_error(ctx, THX_ENOMEM, "out of memory (part)");
+    if (st != THX_OK) {
+        thx_fem_part_free(&p);
+        return st;
+    }
+    memcpy(d->volume->v, p.values, p.n_nodes * p.n_frames * sizeof *p.values);
+    snprintf(d->volume->unit, sizeof d->volume->unit, "%s", d->part_unit);
+    for (size_t t = 0; t < p.n_tets; t++) d->part_own[t] = (uint32_t)p.owner[t] == p.rank;
+    /* the part becomes the model's volume: its nodes and tetrahedra, the model's regions */
+    v->n_nodes = p.n_nodes;
+    v->xyz = p.xyz;
+    v->n_tets = p.n_tets;
+    v->tet = p.tet;
+    v->region = p.region;
+    p.xyz = NULL;
+    p.tet = NULL;
+    p.region = NULL;
+    thx_fem_part_free(&p);
+    d->part_rank = rank;
+    d->part_size = size;
+    return THX_OK;
+}
+
+thx_status thx_picture_parts_settle(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_status st)
+{
+    if (thx_par_size() < 2) return st;
+    /* the same collectives on every rank, whatever it read: its extremes, or none */
+    double v[2 + 2 * 8];
+    for (int k = 0; k < 18; k++) v[k] = -INFINITY;
+    int parts = st == THX_OK && d->part_size > 1;
+    if (parts) {
+        v[0] = -d->vmin;
+        v[1] = d->vmax;
+        for (int k = 0; k < o->n_slices && k < 8; k++) {
+            thx_field_plane p;
+            if (thx_field_plane_parse(ctx, o->slices[k], &p) != THX_OK) continue; /* (refused by the check below) */
+            double lo, hi;
+            thx_field_plane_span(d->m->volume, d->field_use, &p, &lo, &hi);
+            v[2 + 2 * k] = -lo;
+            v[3 + 2 * k] = hi;
+        }
+    }
+    st = thx_par_max(ctx, st, v, 18);
+    if (st != THX_OK || !parts) return st;
+    d->vmin = -v[0];
+    d->vmax = v[1];
+    for (int k = 0; k < 8; k++) d->part_span[k][0] = -v[2 + 2 * k], d->part_span[k][1] = v[3 + 2 * k];
+    if (!(d->vmin <= d->vmax)) st = thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
+    if (st == THX_OK) st = thx_picture_cuts_check(ctx, o, d);
+    return thx_par_agree(ctx, st, NULL);
+}
+
+thx_status picture_part_frame_range(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, thx_status st)
+{
+    double r[2] = {-INFINITY, -INFINITY};
+    if (st == THX_OK) {
+        const thx_series *x = d->volume;
+        size_t f = (size_t)frame < x->n_frames ? (size_t)frame : x->n_frames - 1;
+        double lo = INFINITY, hi = -INFINITY;
+        picture_range_of(x->v + f * x->n_rows, x->n_rows, &lo, &hi);
+        r[0] = -lo;
+        r[1] = hi;
+    }
+    st = thx_par_max(ctx, st, r, 2);
+    d->part_lo = -r[0];
+    d->part_hi = r[1];
+    d->part_frame = frame;
+    return st;
+}
+
+thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d)
+{
+    for (int k = 0; k < 2; k++) {
+        free(d->field_normals[k]);
+        free(d->field_part_tri[k]);
+        d->field_normals[k] = NULL;
+        d->field_part_tri[k] = NULL;
+        thx_surface *s = &d->field_surf[k];
+        if (!d->field[k] || !s->n_tris) continue;
+        const int32_t *cell = d->field[k]->cell; /* per triangle of field[k]: slices by |J| keep their order */
+        /* the normals summed over every triangle, ghosts' included, as the renderer sums them */
+        double *acc = calloc(3 * s->n_nodes + 1, sizeof *acc);
+        int32_t *own = malloc(3 * s->n_tris * sizeof *own);
+        if (!acc || !own) {
+            free(acc);
+            free(own);
+            return thx_error(ctx, THX_ENOMEM, "out of memory (the part's cuts)");
+        }
+        size_t n = 0;
+        for (size_t t = 0; t < s->n_tris; t++) {
+            const int32_t *q = s->tri + 3 * t;
+            const double *a = s->xyz + 3 * q[0], *b = s->xyz + 3 * q[1], *c = s->xyz + 3 * q[2];
+            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            double nv[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) acc[3 * (size_t)q[i] + j] += nv[j];
+            if (d->part_own[cell[t]]) memcpy(own + 3 * n++, q, 3 * sizeof *q);
+        }
+        d->field_normals[k] = acc;
+        d->field_part_tri[k] = own;
+        s->tri = own;
+        s->n_tris = n;
+    }
+    return THX_OK;
+}
