@@ -10,6 +10,7 @@ packages=(
   libmatio-dev                       # MATLAB .mat time series (libmatio)
   zlib1g-dev                         # import: zlib-compressed VTK XML (.vtu) data
   petsc-dev openmpi-bin              # finite-element solves: PETSc 3.18 (hypre, MUMPS, CHOLMOD) on Open MPI; mpirun
+  paraview-dev                       # sort-last compositing over MPI ranks: IceT (ParaView 5.11's; headers here, libraries in paraview); optional at build
   libsuitesparse-dev                 # CHOLMOD, which the solver module drives itself for many right-hand sides
   libopenblas0-pthread               # optimized BLAS for the sparse Cholesky factorizations (4-9x over reference BLAS)
   liblapack-dev libblas-dev          # dense algebra: -llapack -lblas (BEM dgetrf/dgetrs; inverse dgesdd, dsyevd, dposv; OpenBLAS behind them)

@@ -254,6 +254,10 @@ static void test_parts(const thx_volume *v, const unsigned char *use, const unsi
             CHECK(thx_fem_part_read(ctx, tl_path("short.bin"), &q) == THX_EINPUT);
             CHECK(strstr(thx_ctx_message(ctx), "does not fill") != NULL);
             printf("a damaged part: %s\n", thx_ctx_message(ctx));
+            memcpy(b, "THXPART1", 8); /* the first format, without ghosts: refused with the advice */
+            tl_write_bytes(tl_path("old.bin"), b, len);
+            CHECK(thx_fem_part_read(ctx, tl_path("old.bin"), &q) == THX_EINPUT);
+            CHECK(strstr(thx_ctx_message(ctx), "first format") != NULL && strstr(thx_ctx_message(ctx), "forward") != NULL);
             free(b);
         }
         thx_fem_part_free(&p);

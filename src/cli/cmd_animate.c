@@ -158,6 +158,10 @@ int cmd_animate(int argc, char **argv)
         if (st == THX_OK && !named_views) o.p.have_camera = 1;
     }
     if (st == THX_OK) st = render_setup(ctx, &o, &d, &rr, &font, &img);
+    if (st == THX_OK && d.part_size > 1) /* (each rank would draw whole frames from its part alone) */
+        st = thx_error(ctx, THX_EINPUT, "%s is in %d parts, which thorax render draws sort-last; animate does not yet: run "
+                       "it on another number of ranks (its frames shared, each drawn whole) or as one process",
+                       o.p.solution, d.part_size);
     size_t nf = 0;
     if (st == THX_OK) {
         for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)

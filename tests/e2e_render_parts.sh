@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# Sort-last rendering (issue 28 item 2; docs/design/parallel.md, "Sort-last"): a solution written by
+# `forward --volume` on N ranks holds its volume in N parts (THXPART2, with ghosts); `render` on N
+# ranks has each rank read the model's surfaces, its region table and its own part alone, cut the
+# part, draw its own tetrahedra's triangles as a layer with depth, and IceT composite the layers on
+# rank 0. Asserted: the picture is the one process's, byte for byte, on 2 and 3 ranks, for slices by
+# potential (bands), slices by |J| (a scale of their own, its largest value over the ranks) with a
+# colour bar and label, opaque equipotentials (their normals on a part's edge the whole's: the
+# ghosts) with a slice; a solution in 2 parts drawn on 3 ranks (sort-first then: the same bytes).
+# Refused, with one message, exit 1 and no picture: a translucent surface (depth compositing needs
+# opaque ones), streamlines, animate (not yet sort-last), IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
+# without Debian's paraview). Skipped (77) without mpirun. Writes only in a mktemp -d directory.
+# Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models).
+set -euo pipefail
+: "${THORAX:?}"
+PY=/usr/bin/python3
+if ! command -v mpirun > /dev/null; then
+    echo "e2e_render_parts: mpirun missing (Debian package openmpi-bin); skipped"
+    exit 77
+fi
+fail() { echo "e2e_render_parts: FAIL: $*" >&2; exit 1; }
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/e2e_render_parts.XXXXXX")
+trap 'rm -rf "$TMP"' EXIT
+HERE=$(cd "$(dirname "$0")" && pwd)
+cd "$TMP"
+MPIRUN=(mpirun --oversubscribe)
+[ "$(id -u)" -eq 0 ] && MPIRUN+=(--allow-run-as-root)
+export OMP_NUM_THREADS=1
+
+. "$HERE/medium_phantom.sh"
+medium_phantom || fail "the medium phantom"
+"$THORAX" beat model -o beat.raw --frames 240 -q
+"$PY" - <<'PYEOF'
+import numpy as np
+b = open('beat.raw', 'rb').read()
+r, f = (int(x) for x in np.frombuffer(b[8:24], dtype='<u8'))
+t = np.frombuffer(b[200:200 + 8 * f], dtype='<f8')
+v = np.frombuffer(b[200 + 8 * f:], dtype='<f8').reshape(f, r)
+k = [40, 170, 190]   # the P wave, the QRS, its end
+h = bytearray(b[:200]); h[16:24] = np.array([len(k)], dtype='<u8').tobytes()
+open('e3.raw', 'wb').write(bytes(h) + t[k].tobytes() + v[k].tobytes())
+PYEOF
+for n in 2 3; do
+    "${MPIRUN[@]}" -np $n "$THORAX" forward model --epicardial e3.raw --volume -o sol$n -q > f$n.log 2>&1 ||
+        { cat f$n.log; fail "forward --volume on $n ranks"; }
+    [ -f sol$n/parts/part_0000.bin ] || fail "forward on $n ranks wrote no parts"
+done
+
+# draw K NAME ARGS...: the picture on 1 process and on K ranks, the same bytes
+draw() {
+    local k=$1 name=$2
+    shift 2
+    "$THORAX" render "$@" -o ${name}_1.png -q > ${name}_1.log 2>&1 || { cat ${name}_1.log; fail "$name on 1 process"; }
+    "${MPIRUN[@]}" -np $k "$THORAX" render "$@" -o ${name}_$k.png -q > ${name}_$k.log 2>&1 ||
+        { cat ${name}_$k.log; fail "$name on $k ranks"; }
+    cmp -s ${name}_1.png ${name}_$k.png || fail "$name: the picture on $k ranks is not the one process's"
+    echo "$name: 1 process = $k ranks, byte for byte ($(stat -c %s ${name}_1.png) bytes)"
+}
+for n in 2 3; do
+    draw $n slices$n --solution sol$n --frame 2 --slice y=0 --slice x=-20 --only slices --view left
+    draw $n current$n --solution sol$n --frame 2 --slice y=0 --slice x=0 --slice-current --only slices --view left --colorbar --label
+    draw $n iso$n --solution sol$n --frame 3 --isosurface count:5 --surface equipotentials=phong:1 --slice z=0 \
+        --only equipotentials --only slices --view superior --colorbar
+done
+draw 3 other_count --solution sol2 --frame 2 --slice y=0 --only slices --view anterior
+
+# the pictures are not empty: a picture of the background alone would pass the comparison too
+"$PY" - <<'PYEOF'
+import zlib, struct
+def pixels(p):
+    b = open(p, 'rb').read(); o = 8; data = b''; w = h = 0
+    while o < len(b):
+        n, = struct.unpack('>I', b[o:o + 4]); t = b[o + 4:o + 8]; c = b[o + 8:o + 8 + n]
+        if t == b'IHDR': w, h = struct.unpack('>II', c[:8])
+        if t == b'IDAT': data += c
+        o += 12 + n
+    raw = zlib.decompress(data)
+    return w, h, raw
+for name in ('slices2_2.png', 'current3_3.png', 'iso3_3.png'):
+    w, h, raw = pixels(name)
+    bg = raw[1:5]  # the first pixel of the first row: the background
+    distinct = len(set(raw[1 + y * (4 * w + 1) + 4 * x: 5 + y * (4 * w + 1) + 4 * x] for y in range(0, h, 4) for x in range(0, w, 4)))
+    assert distinct > 50, (name, distinct)
+    print('%s: %d distinct colours among a sixteenth of its pixels' % (name, distinct))
+PYEOF
+
+# refused: nothing written, one message, exit 1
+refused() {
+    local what=$1 want=$2
+    shift 2
+    if "${MPIRUN[@]}" -np 2 "$@" > r.log 2>&1; then cat r.log; fail "$what was drawn"; fi
+    grep -q "$want" r.log || { cat r.log; fail "$what: no message naming '$want'"; }
+    [ "$(grep -c "thorax render" r.log)" -eq 1 ] || { cat r.log; fail "$what: not one message"; }
+    [ ! -e no.png ] || fail "$what: a picture was written"
+    echo "refused, $what: $(grep "thorax render" r.log | head -1)"
+}
+refused "a translucent torso" "must be opaque" "$THORAX" render --solution sol2 --slice y=0 -o no.png
+refused "streamlines" "not drawn by sort-last" "$THORAX" render --solution sol2 --streamlines heart:20 -o no.png
+refused "IceT out of reach" "paraview" env THORAX_ICET_LIBRARY=/nonexistent/libvtkIceTMPI.so \
+    "$THORAX" render --solution sol2 --slice y=0 --only slices -o no.png
+if "${MPIRUN[@]}" -np 2 "$THORAX" animate --solution sol2 --slice y=0 --only slices -o anim --mp4 none > r.log 2>&1; then
+    cat r.log; fail "animate drew a solution in parts frame by frame from each rank's part"
+fi
+grep -q "does not yet" r.log || { cat r.log; fail "animate on the parts: no message"; }
+[ ! -e anim/frame_00001.png ] || fail "animate on the parts wrote a frame"
+echo "refused, animate on the parts: $(grep "thorax animate" r.log | head -1)"
+echo "e2e_render_parts: all checks passed"
