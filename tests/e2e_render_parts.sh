@@ -6,7 +6,8 @@
 # rank 0. Asserted: the picture is the one process's, byte for byte, on 2 and 3 ranks, for slices by
 # potential (bands), slices by |J| (a scale of their own, its largest value over the ranks) with a
 # colour bar and label, opaque equipotentials (their normals on a part's edge the whole's: the
-# ghosts) with a slice; a solution in 2 parts drawn on 3 ranks (sort-first then: the same bytes).
+# ghosts) with a slice; a solution in 2 parts drawn on 3 ranks (sort-first then: the same bytes);
+# volume rendering (potential, |J|) within 1/255 (blended in float, front to back).
 # Refused, with one message, exit 1 and no picture: a translucent surface (depth compositing needs
 # opaque ones), streamlines, animate (not yet sort-last), IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
 # without Debian's paraview). Skipped (77) without mpirun. Writes only in a mktemp -d directory.
@@ -64,6 +65,51 @@ for n in 2 3; do
 done
 draw 3 other_count --solution sol2 --frame 2 --slice y=0 --only slices --view anterior
 
+# volume rendering: each rank traces the rays' pieces in its box (its mesh: its own tetrahedra and the
+# ghosts reaching into the box), every sample a layer of premultiplied floats, IceT blends them front to
+# back in the boxes' order from the eye, rank 0 averages the samples over the background: within 1/255
+# of one process (float32 compositing; the rays cut at the boxes' sides)
+blended() {
+    local k=$1 name=$2
+    shift 2
+    "$THORAX" trace "$@" -o ${name}_1.png -q > ${name}_1.log 2>&1 || { cat ${name}_1.log; fail "$name on 1 process"; }
+    "${MPIRUN[@]}" -np $k "$THORAX" trace "$@" -o ${name}_$k.png -q > ${name}_$k.log 2>&1 ||
+        { cat ${name}_$k.log; fail "$name on $k ranks"; }
+    "$PY" - ${name}_1.png ${name}_$k.png <<'PYEOF' || fail "$name: the picture on $k ranks is not within 1/255 of one process's"
+import sys, zlib, struct
+def pixels(p):
+    b = open(p, 'rb').read(); o = 8; data = b''
+    while o < len(b):
+        n, = struct.unpack('>I', b[o:o + 4]); t = b[o + 4:o + 8]; c = b[o + 8:o + 8 + n]
+        if t == b'IHDR': w, h, depth, ctype = struct.unpack('>IIBB', c[:10]); assert depth == 8 and ctype in (2, 6); ch = 3 if ctype == 2 else 4
+        if t == b'IDAT': data += c
+        o += 12 + n
+    raw, rows, prev, st = zlib.decompress(data), [], bytearray(ch * w), ch * w + 1
+    for y in range(h):   # PNG's filters undone (Sub, Up, Average, Paeth)
+        f, line, cur = raw[y * st], raw[y * st + 1:(y + 1) * st], bytearray(ch * w)
+        for i in range(ch * w):
+            a = cur[i - ch] if i >= ch else 0; b = prev[i]; c = prev[i - ch] if i >= ch else 0
+            if f == 0: p = 0
+            elif f == 1: p = a
+            elif f == 2: p = b
+            elif f == 3: p = (a + b) // 2
+            else:
+                pa, pb, pc = abs(b - c), abs(a - c), abs(a + b - 2 * c)
+                p = a if pa <= pb and pa <= pc else b if pb <= pc else c
+            cur[i] = (line[i] + p) & 255
+        rows.append(bytes(cur)); prev = cur
+    return b''.join(rows)
+a, b = pixels(sys.argv[1]), pixels(sys.argv[2])
+worst = max(abs(x - y) for x, y in zip(a, b)); diff = sum(1 for x, y in zip(a, b) if x != y)
+print('%s: %d bytes differ, by at most %d' % (sys.argv[2], diff, worst))
+assert len(a) == len(b) and worst <= 1, worst
+assert len(set(a[i:i + 3] for i in range(0, len(a) - 3, 3 * 97))) > 50, 'an empty picture'
+PYEOF
+}
+blended 2 volume2 --solution sol2 --frame 2 --volume potential --mode hidden --colorbar --size 300x300
+blended 3 volume3 --solution sol3 --frame 2 --volume potential --mode hidden --view superior --size 300x300
+blended 3 vcurrent3 --solution sol3 --frame 2 --volume current --mode hidden --view left --colorbar --size 300x300
+
 # the pictures are not empty: a picture of the background alone would pass the comparison too
 "$PY" - <<'PYEOF'
 import zlib, struct
@@ -90,11 +136,12 @@ refused() {
     shift 2
     if "${MPIRUN[@]}" -np 2 "$@" > r.log 2>&1; then cat r.log; fail "$what was drawn"; fi
     grep -q "$want" r.log || { cat r.log; fail "$what: no message naming '$want'"; }
-    [ "$(grep -c "thorax render" r.log)" -eq 1 ] || { cat r.log; fail "$what: not one message"; }
+    [ "$(grep -c "thorax \(render\|trace\)" r.log)" -eq 1 ] || { cat r.log; fail "$what: not one message"; }
     [ ! -e no.png ] || fail "$what: a picture was written"
-    echo "refused, $what: $(grep "thorax render" r.log | head -1)"
+    echo "refused, $what: $(grep "thorax \(render\|trace\)" r.log | head -1)"
 }
 refused "a translucent torso" "must be opaque" "$THORAX" render --solution sol2 --slice y=0 -o no.png
+refused "a surface beside the volume" "volume alone" "$THORAX" trace --solution sol2 --volume potential -o no.png
 refused "streamlines" "not drawn by sort-last" "$THORAX" render --solution sol2 --streamlines heart:20 -o no.png
 refused "IceT out of reach" "paraview" env THORAX_ICET_LIBRARY=/nonexistent/libvtkIceTMPI.so \
     "$THORAX" render --solution sol2 --slice y=0 --only slices -o no.png

@@ -544,7 +544,7 @@ static int render_main(int argc, char **argv, int traced)
     free(times);
     char by[48] = "";
     if (ranks > 1) snprintf(by, sizeof by, ", %d ranks", ranks);
-    int rc = cli_share_end(ctx, "render", st);
+    int rc = cli_share_end(ctx, o.cmd, st);
     if (!rc) {
         if (nan) thx_log(ctx, THX_LOG_WARN, "%zu values are not numbers (drawn in the NaN colour)", nan);
         if (o.verbose >= 0 && o.p.renderer == 1)

@@ -5,6 +5,7 @@
  * rendering's ordered blending), and the same cut serves the solve and the pictures; its cut is
  * close to a graph partitioner's on a tetrahedral mesh of even density (docs/design/parallel.md).
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -139,4 +140,15 @@ void thx_fem_cut_order(const thx_fem_cut *cuts, int n_parts, const double eye[3]
 {
     int at = 0;
     order_parts(cuts, n_parts - 1, 0, 0, n_parts, eye, order, &at);
+}
+
+void thx_fem_cut_box(const thx_fem_cut *cuts, int n_parts, int part, double box[2][3])
+{
+    for (int k = 0; k < 3; k++) box[0][k] = -INFINITY, box[1][k] = INFINITY;
+    for (int k = 0; k + 1 < n_parts; k++) { /* parents first: [lo, mid) below the plane, [mid, hi) at or above */
+        const thx_fem_cut *c = cuts + k;
+        if (part < c->lo || part >= c->hi) continue;
+        if (part < c->mid) box[1][c->axis] = fmin(box[1][c->axis], c->at);
+        else box[0][c->axis] = fmax(box[0][c->axis], c->at);
+    }
 }

@@ -2,6 +2,7 @@
  * A solution's volume potentials in parts (thorax/fem/parts.h): one part per rank of a bisection,
  * made, written and read back (docs/formats.md, "Partitioned volume potentials").
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,11 +74,25 @@ thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned c
         n_own++;
         for (int k = 0; k < 4; k++) near[v->tet[4 * t + k]] = 1;
     }
-    /* the part: its own tetrahedra and every used one sharing a node with them; then their nodes */
+    /* the part: its own tetrahedra, every used one sharing a node with them, and every used one reaching
+       into its box (a ray's piece in the box lies in one of these: sort-last's volume rendering); then
+       their nodes */
+    double box[2][3];
+    thx_fem_cut_box(cuts, ranks, rank, box);
     for (size_t i = 0; st == THX_OK && i < nn; i++) local[i] = -1;
     for (size_t t = 0; st == THX_OK && t < v->n_tets; t++) {
         const int32_t *q = v->tet + 4 * t;
-        if (owner[t] < 0 || !(owner[t] == rank || near[q[0]] || near[q[1]] || near[q[2]] || near[q[3]])) {
+        int into = 1; /* the tetrahedron's bounding box meets the part's box */
+        for (int d = 0; d < 3 && into; d++) {
+            double lo = INFINITY, hi = -INFINITY;
+            for (int k = 0; k < 4; k++) {
+                double x = v->xyz[3 * (size_t)q[k] + d];
+                lo = x < lo ? x : lo;
+                hi = x > hi ? x : hi;
+            }
+            into = hi >= box[0][d] && lo < box[1][d];
+        }
+        if (owner[t] < 0 || !(owner[t] == rank || near[q[0]] || near[q[1]] || near[q[2]] || near[q[3]] || into)) {
             owner[t] = -1 - (owner[t] >= 0); /* -2: used, not in this part */
             continue;
         }

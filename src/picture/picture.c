@@ -508,8 +508,9 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         d->vr_tet = malloc(4 * (vm->n_tets ? vm->n_tets : 1) * sizeof *d->vr_tet);
         if (!d->vr_tet) return thx_error(ctx, THX_ENOMEM, "out of memory (volume rendering)");
         d->vr_n_tets = 0;
-        for (size_t t = 0; t < vm->n_tets; t++)
-            if (!d->field_use || d->field_use[vm->region[t]]) memcpy(d->vr_tet + 4 * d->vr_n_tets++, vm->tet + 4 * t, 4 * sizeof *d->vr_tet);
+        for (size_t t = 0; t < vm->n_tets; t++) /* (sort-last: the ghosts too, the rays cut to the part's box) */
+            if (!d->field_use || d->field_use[vm->region[t]])
+                memcpy(d->vr_tet + 4 * d->vr_n_tets++, vm->tet + 4 * t, 4 * sizeof *d->vr_tet);
     }
     size_t f = (size_t)frame < d->volume->n_frames ? (size_t)frame : d->volume->n_frames - 1;
     const double *phi = d->volume->v + f * d->volume->n_rows;
@@ -533,6 +534,8 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
             k++;
         }
         free(j);
+        d->vr_local_hi = hi;
+        if (d->part_size > 1 && isfinite(d->part_jmax)) hi = d->part_jmax; /* sort-last: the whole's */
         v->cell_values = d->vr_cell;
         thx_scale_from_range(&v->scale, THX_SCALE_LINEAR, 0, hi > 0 ? hi : 1, 0);
     } else {
@@ -543,6 +546,7 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
             double x = phi[d->vr_tet[i]];
             if (isfinite(x)) { lo = fmin(lo, x); hi = fmax(hi, x); }
         }
+        if (d->part_size > 1) { lo = d->part_lo; hi = d->part_hi; } /* sort-last: the whole's (the same nodes) */
         if (!(lo < hi)) { lo = d->vmin; hi = d->vmax; }
         v->point_values = phi;
         picture_scale_settings(o, lo, hi, 0, &v->scale);
@@ -557,6 +561,10 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
         v->n_opacity = 2;
     }
     v->density = o->volume_density > 0 ? o->volume_density : 0.02;
+    if (d->part_size > 1) { /* sort-last: the rays' pieces in this rank's box alone */
+        v->have_box = 1;
+        picture_part_box(d, v->box);
+    }
     return THX_OK;
 }
 
@@ -566,6 +574,7 @@ static thx_status volume_of(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
 typedef struct {
     int rank, size;
     unsigned char *own;
+    float *layer; /* sort-last: the traced pixels as premultiplied floats (thx_raytrace_opts.layer) */
 } share_of;
 
 static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const thx_scene *sc,
@@ -601,7 +610,9 @@ static thx_status trace_panel(thx_ctx *ctx, const thx_picture_opts *o, thx_pictu
         if (se != THX_OK) { free(rt); return se; }
         rt->environment = d->rt_env;
     }
-    if (share) { /* sort-first: this rank's tiles */
+    if (share && share->layer) { /* sort-last: the whole picture, as a layer */
+        rt->layer = share->layer;
+    } else if (share) { /* sort-first: this rank's tiles */
         rt->share_rank = share->rank;
         rt->share_size = share->size;
         rt->own = share->own;
@@ -835,7 +846,7 @@ thx_status thx_picture_draw_share(thx_ctx *ctx, const thx_picture_opts *o, thx_p
     if (size < 1 || rank < 0 || rank >= size) return thx_error(ctx, THX_EINPUT, "picture: share %d of %d", rank, size);
     thx_raster_fill(img, BG);
     memset(own, 0, (size_t)img->w * (size_t)img->h);
-    share_of share = {rank, size, own};
+    share_of share = {rank, size, own, NULL};
     THX_CHECK(draw_panels(ctx, o, d, r, font, frame, img->w, img->h, img, bars, nan_total, &share));
     if (font) THX_CHECK(thx_picture_bars_check(ctx, o, font, img->w, img->h, bars));
     return THX_OK;
@@ -856,9 +867,75 @@ static void scene_box(const thx_scene *sc, double lo[3], double hi[3])
     }
 }
 
+/* Sort-last volume rendering (thx_picture_draw_part with o->volume_render): each rank traces the field
+ * in its own tetrahedra as a layer of premultiplied floats, the layers are blended front to back in
+ * the order of the parts' boxes from the eye (thx_fem_cut_order), rank 0 puts them over the
+ * background. The colour scale is the whole's (the frame's range, or |J|'s largest, over the ranks). */
+static thx_status draw_part_volume(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_font *font, int frame,
+                                   thx_raster *img, thx_picture_bars *bars)
+{
+    int w = img->w, h = img->h, rank = thx_par_rank(), size = thx_par_size();
+    thx_raster_fill(img, BG);
+    memset(bars, 0, sizeof *bars);
+    built_scene *b = calloc(1, sizeof *b);
+    size_t ns = (size_t)o->rt.samples * (size_t)o->rt.samples; /* samples a pixel: composited one by one */
+    float *layer = ns <= 256 && (size_t)w * h <= SIZE_MAX / 16 / ns ? calloc(4 * (size_t)w * h * ns, sizeof *layer) : NULL;
+    int *order = malloc(2 * (size_t)size * sizeof *order);
+    thx_status st = b && layer && order ? THX_OK : thx_error(ctx, THX_ENOMEM, "out of memory (sort-last layers)");
+    /* collective steps, reached by every rank whatever befell it before (st carried) */
+    st = picture_part_frame_range(ctx, o, d, frame, st); /* the frame's range over the whole volume */
+    thx_raytrace_volume vol;
+    double jmax = -INFINITY;
+    if (st == THX_OK && !strcmp(o->volume_render, "current")) { /* |J|'s largest over the ranks */
+        d->part_jmax = NAN;
+        st = volume_of(ctx, o, d, frame, &vol);
+        jmax = d->vr_local_hi;
+    }
+    st = thx_par_max(ctx, st, &jmax, 1);
+    if (st == THX_OK) d->part_jmax = jmax;
+    int vp[4];
+    thx_scene sc;
+    thx_picture_viewport(o, font, w, h, vp);
+    if (st == THX_OK) {
+        if (rank == 0) build_surfaces(o, d, frame, b, -1);
+        for (size_t i = 0; i < b->n && st == THX_OK; i++)
+            if (b->rs[i].mode != THX_DRAW_HIDDEN && b->rs[i].surf->n_tris)
+                st = thx_error(ctx, THX_EINPUT, "sort-last volume rendering blends the ranks' layers of the volume alone: '%s' "
+                               "would be drawn (hide the surfaces: --mode hidden)", b->rs[i].surf->name);
+        panel_scene(o, d, b, vp, 1, 1, 0, &sc);
+    }
+    thx_scale vol_scale;
+    thx_colormap vol_cmap = THX_CMAP_ECG;
+    if (st == THX_OK) {
+        share_of share = {0, 1, NULL, layer};
+        st = trace_panel(ctx, o, d, &sc, NULL, frame, img, &vol_scale, &vol_cmap, &share);
+    }
+    st = thx_par_agree(ctx, st, NULL);
+    if (st == THX_OK) { /* the parts front to back from the eye (an orthographic camera's: far back along its view) */
+        double eye[3], dir[3], len = 0;
+        for (int k = 0; k < 3; k++) dir[k] = sc.camera.center[k] - sc.camera.eye[k], len += dir[k] * dir[k];
+        len = sqrt(len);
+        for (int k = 0; k < 3; k++)
+            eye[k] = sc.camera.fov_deg > 0 || !(len > 0) ? sc.camera.eye[k] : sc.camera.eye[k] - 1e7 * dir[k] / len;
+        thx_fem_cut_order((const thx_fem_cut *)d->part_cuts, size, eye, order + size);
+        for (int k = 0; k < size; k++) order[k] = order[2 * size - 1 - k];
+        st = thx_par_composite_blend(ctx, layer, w * (int)ns, h, order); /* (an image of w ns x h samples) */
+    }
+    if (st == THX_OK && rank == 0) {
+        thx_raytrace_layer_finish(&sc, o->rt.samples, layer, img);
+        collect_bars(d, b, bars);
+        add_volume_bar(o, d, &vol_scale, vol_cmap, bars);
+    }
+    free(b);
+    free(layer);
+    free(order);
+    return st;
+}
+
 thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r, thx_font *font,
                                  int frame, thx_raster *img, thx_picture_bars *bars, size_t *nan_total)
 {
+    if (o->volume_render) return draw_part_volume(ctx, o, d, font, frame, img, bars);
     int w = img->w, h = img->h, rank = thx_par_rank();
     thx_raster_fill(img, BG);
     memset(bars, 0, sizeof *bars);

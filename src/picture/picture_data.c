@@ -63,6 +63,8 @@ void thx_picture_data_free(thx_picture_data *d)
     d->field_use = NULL;
     free(d->part_own);
     d->part_own = NULL;
+    free(d->part_cuts);
+    d->part_cuts = NULL;
     thx_model_destroy(&d->m);
 }
 

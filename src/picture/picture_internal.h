@@ -39,6 +39,7 @@ int picture_part_wanted(const thx_picture_opts *o, const struct cJSON *solution)
 thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const struct cJSON *solution, thx_picture_data *d);
 thx_status picture_part_frame_range(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, thx_status st);
 thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d);
+void picture_part_box(const thx_picture_data *d, double box[2][3]); /* this rank's box (sides at +-inf) */
 thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame);
 size_t picture_field_surfaces(const thx_picture_opts *o, thx_picture_data *d, thx_render_surface *rs, size_t max);
 void picture_field_free(thx_picture_data *d);

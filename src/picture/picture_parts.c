@@ -39,9 +39,12 @@ static thx_status part_refusals(thx_ctx *ctx, const thx_picture_opts *o)
     if (o->renderer == 1 && !o->volume_render)
         return thx_error(ctx, THX_EINPUT, "sort-last rendering of %s's parts traces only the volume (--volume); draw the cuts "
                          "with OpenGL (thorax render, --renderer gl)", o->solution);
-    if (o->volume_render)
-        return thx_error(ctx, THX_EINPUT, "--volume: volume rendering of %s's parts (sort-last, blended) is not yet "
-                         "composited; run it with one process, or on a number of ranks other than the parts'", o->solution);
+    if (o->volume_render && (o->isosurface || o->n_slices))
+        return thx_error(ctx, THX_EINPUT, "--volume: sort-last volume rendering of %s's parts draws the volume alone (the "
+                         "ranks' layers are blended, not depth-tested): leave out --slice and --isosurface", o->solution);
+    if (o->volume_render && (o->environment || o->rt.shutter > 0))
+        return thx_error(ctx, THX_EINPUT, "%s: not drawn by sort-last volume rendering of %s's parts",
+                         o->environment ? "--environment" : "--motion-blur", o->solution);
     return THX_OK;
 }
 
@@ -111,10 +114,13 @@ thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const cJSO
     v->n_tets = p.n_tets;
     v->tet = p.tet;
     v->region = p.region;
+    d->part_cuts = p.cuts;
     p.xyz = NULL;
     p.tet = NULL;
     p.region = NULL;
+    p.cuts = NULL;
     thx_fem_part_free(&p);
+    d->part_jmax = NAN;
     d->part_rank = rank;
     d->part_size = size;
     return THX_OK;
@@ -201,4 +207,9 @@ thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d)
         s->n_tris = n;
     }
     return THX_OK;
+}
+
+void picture_part_box(const thx_picture_data *d, double box[2][3])
+{
+    thx_fem_cut_box((const thx_fem_cut *)d->part_cuts, d->part_size, d->part_rank, box);
 }

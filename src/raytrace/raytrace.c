@@ -529,6 +529,36 @@ static inline unsigned char byte01(double c) { return (unsigned char)((c > 1 ? 1
 
 static int gcd(int a, int b) { return b ? gcd(b, a % b) : a; }
 
+/* A pixel's premultiplied colour (r, g, b) of coverage a over the background (bg, clear) or over the
+ * pixel's own colour (not clear), into its bytes. */
+static void pixel_over(unsigned char *p, double r, double g, double b, double a, int clear, const float bgc[4])
+{
+    double c[3] = {r, g, b}, bga = clear ? bgc[3] : p[3] / 255.0;
+    for (int k = 0; k < 3; k++) {
+        double bg = clear ? bgc[k] : p[k] / 255.0;
+        p[k] = byte01(c[k] + (1 - a) * bg); /* the samples' colours over the background */
+    }
+    p[3] = byte01(a + (1 - a) * bga);
+}
+
+static void viewport_of(const thx_scene *sc, const thx_raster *img, int vp[4]);
+
+void thx_raytrace_layer_finish(const thx_scene *sc, int samples, const float *layer, thx_raster *img)
+{
+    int vp[4];
+    viewport_of(sc, img, vp);
+    size_t n = (size_t)samples * (size_t)samples;
+    for (int y = vp[1]; y < vp[1] + vp[3] && y < img->h; y++)
+        for (int x = vp[0]; x < vp[0] + vp[2] && x < img->w; x++) {
+            size_t at = (size_t)y * (size_t)img->w + (size_t)x;
+            double acc[4] = {0, 0, 0, 0};
+            for (size_t s = 0; s < n; s++) /* the samples in the order thx_raytrace_scene sums them */
+                for (int k = 0; k < 4; k++) acc[k] += layer[4 * (at * n + s) + (size_t)k];
+            pixel_over(img->rgba + 4 * at, acc[0] / (double)n, acc[1] / (double)n, acc[2] / (double)n, acc[3] / (double)n,
+                       sc->clear, sc->background);
+        }
+}
+
 static void viewport_of(const thx_scene *sc, const thx_raster *img, int vp[4])
 {
     if (sc->viewport[2] > 0) memcpy(vp, sc->viewport, sizeof(int) * 4);
@@ -668,6 +698,11 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
                         }
                     }
                     for (int i = 0; i < x1 - x0; i++) {
+                        if (o->layer) { /* sort-last: each sample premultiplied, composited before they are averaged */
+                            float *L = o->layer + 4 * (((size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x0 + i)) *
+                                                           (size_t)(ns * ns) + sample);
+                            for (int k = 0; k < 4; k++) L[k] = !drawn[i] ? 0.0f : (float)(k < 3 ? rgb[i][k] * alpha[i] : alpha[i]);
+                        }
                         if (!drawn[i]) continue;
                         for (int k = 0; k < 3; k++) acc[i][k] += rgb[i][k] * alpha[i];
                         cov[i] += alpha[i];
@@ -676,15 +711,9 @@ thx_status thx_raytrace_scene(thx_ctx *ctx, thx_tracer *t, const thx_scene *sc, 
             for (int x = x0; x < x1; x++) {
                 int i = x - x0;
                 double n = (double)(ns * ns);
-                unsigned char *p = img->rgba + 4 * ((size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x));
-                double a = cov[i] / n, bga = sc->clear ? f.bg[3] : p[3] / 255.0;
-                for (int k = 0; k < 3; k++) {
-                    double bg = sc->clear ? f.bg[k] : p[k] / 255.0;
-                    double c = acc[i][k] / n + (1 - a) * bg; /* the samples' colours over the background */
-                    p[k] = byte01(c);
-                }
-                p[3] = byte01(a + (1 - a) * bga);
-                if (o->own) o->own[(size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x)] = 1;
+                size_t at = (size_t)(vp[1] + y) * (size_t)img->w + (size_t)(vp[0] + x);
+                if (!o->layer) pixel_over(img->rgba + 4 * at, acc[i][0] / n, acc[i][1] / n, acc[i][2] / n, cov[i] / n, sc->clear, f.bg);
+                if (o->own) o->own[at] = 1;
             }
             primary += (size_t)(x1 - x0) * (size_t)(ns * ns);
         }

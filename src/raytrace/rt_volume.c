@@ -263,6 +263,12 @@ void rt_volume_march(const rt_vmesh *m, const thx_raytrace_volume *v, const rt_t
     rt_v4f acc = {0, 0, 0, 0}; /* r, g, b (and a lane unused), in a register while the walk runs */
     double acc_T = 1;
     double t = tnear;
+    if (v->have_box) { /* sort-last: the ray ends where it leaves the box */
+        double t0, t1;
+        rt_box_span(v, o, d, &t0, &t1);
+        if (t1 < tfar) tfar = t1;
+        if (t0 > t1) tfar = tnear; /* the ray misses the box */
+    }
     for (int entries = 0; entries < 64 && acc_T > 1e-4 && t < tfar; entries++) {
         rt_walk w;
         int in = rt_walk_enter(m, v, tf, fld, o, d, &t, tfar, &w, rays);

@@ -268,6 +268,7 @@ __attribute__((noinline)) AVX2 static int lane_event(lanes *L, batch *b, int l, 
     rt_v4f acc;
     double T;
     lane_get(L, l, &w, &acc, &T);
+    w.sbeg = -INFINITY; /* (the lanes march rays without a box: rt_volume_march_n) */
     int r = L->steps[l] > max_steps ? -1 : walk_step(b->m, b->v, b->tf, b->fld, &w, &acc, &T);
     lane_set(L, l, &w, acc, T);
     if (r > 0 && T > T_MIN) return 1;
@@ -395,7 +396,7 @@ void rt_volume_march_n(const rt_vmesh *m, const thx_raytrace_volume *v, const rt
                        const double (*o)[3], const double (*d)[3], const double *tfar, double (*rgb)[3], double *T, size_t *rays)
 {
 #ifdef RT_LANES
-    if (n > 1 && lanes_cpu() && m->n_tets < (size_t)INT32_MAX / 16) {
+    if (n > 1 && lanes_cpu() && m->n_tets < (size_t)INT32_MAX / 16 && !v->have_box) { /* (a box: one ray at a time) */
         batch b = {m, v, tf, fld, n, 0, o, d, tfar, rgb, T, rays};
         march_lanes(&b);
         return;

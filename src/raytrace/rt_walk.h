@@ -168,10 +168,32 @@ static inline int exit_face(const rt_tet *T, int in, rt_v4f o, rt_v4f d, float s
 typedef struct {
     rt_v4f e, df, va;
     float s, send, xa;
+    float sbeg; /* the pieces before it skipped (a volume's box, sort-last), else -inf */
     size_t tt;
     int in;
     double tin;
 } rt_walk;
+
+/* The span [*t0, *t1] of the ray o + t d inside the volume's box (have_box; else all of it): the
+ * slabs of the box's sides, each box [lo, hi) as the parts' cuts make them (a ray in a side's plane
+ * is in the box above it alone). Empty when *t0 > *t1. */
+static inline void rt_box_span(const thx_raytrace_volume *v, const double o[3], const double d[3], double *t0, double *t1)
+{
+    *t0 = -INFINITY;
+    *t1 = INFINITY;
+    if (!v->have_box) return;
+    for (int k = 0; k < 3; k++) {
+        double lo = v->box[0][k], hi = v->box[1][k];
+        if (d[k] == 0) {
+            if (o[k] < lo || o[k] >= hi) *t0 = INFINITY, *t1 = -INFINITY; /* [lo, hi): as the parts' cuts are */
+            continue;
+        }
+        double a = (lo - o[k]) / d[k], b = (hi - o[k]) / d[k]; /* (an infinite side: +-inf) */
+        if (a > b) { double c = a; a = b; b = c; }
+        if (a > *t0) *t0 = a;
+        if (b < *t1) *t1 = b;
+    }
+}
 
 /* One look for where the ray o + t d (from *t to tfar) enters the mesh: 1 and the walk set in *w
  * where it enters; -1 where the face met is one the ray leaves through (*t moved past it: look
@@ -200,6 +222,12 @@ static inline int rt_walk_enter(const rt_vmesh *m, const thx_raytrace_volume *v,
     w->df = (rt_v4f){(float)d[0], (float)d[1], (float)d[2], 0};
     w->send = (float)(tfar - tin);
     w->s = 0;
+    w->sbeg = -INFINITY;
+    if (v->have_box) { /* sort-last: the pieces before the box skipped (its end is tfar's) */
+        double t0, t1;
+        rt_box_span(v, o, d, &t0, &t1);
+        if (t0 > tin) w->sbeg = (float)(t0 - tin);
+    }
     w->tt = tt;
     w->in = in;
     w->tin = tin;
@@ -222,7 +250,16 @@ static inline __attribute__((always_inline)) int walk_step(const rt_vmesh *m, co
     if (out < 0) return -1;
     float stop = sx < w->send ? sx : w->send;
     float xb = tf_pos(hsum4(fv[w->tt] * (w->e + stop * w->df)));
-    w->va = segment(tf, w->xa, xb, stop - w->s, w->va, acc, T);
+    if (__builtin_expect(w->s < w->sbeg, 0)) { /* sort-last: a piece before the box begins */
+        if (stop <= w->sbeg) {
+            w->va = tf_at(tf, xb);
+        } else { /* the piece from the box's side on */
+            w->xa = tf_pos(hsum4(fv[w->tt] * (w->e + w->sbeg * w->df)));
+            w->va = segment(tf, w->xa, xb, stop - w->sbeg, tf_at(tf, w->xa), acc, T);
+        }
+    } else {
+        w->va = segment(tf, w->xa, xb, stop - w->s, w->va, acc, T);
+    }
     w->xa = xb;
     w->s = stop;
     if (stop >= w->send) return 0;

@@ -105,6 +105,9 @@ int thx_fem_cut_part(const thx_fem_cut *cuts, int n_parts, const double p[3]);
  * point far back along its view): a part is listed after every part it hides, since for each cut the
  * side away from the eye comes first. order: n_parts ints. */
 void thx_fem_cut_order(const thx_fem_cut *cuts, int n_parts, const double eye[3], int *order);
+/* Part's box: box[0] its low corner, box[1] its high one (infinite where no cut bounds it); the box
+ * holds the points p with box[0] <= p < box[1] (thx_fem_cut_part's rule: a point on a cut is above it). */
+void thx_fem_cut_box(const thx_fem_cut *cuts, int n_parts, int part, double box[2][3]);
 void thx_fem_system_destroy(thx_fem_system **s);
 
 typedef struct {

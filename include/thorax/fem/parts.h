@@ -35,7 +35,7 @@ typedef struct {
 
 /* Part rank of ranks: the tetrahedra of the volume whose region is used (use_region NULL: all)
  * and whose centroid thx_fem_cut_part puts in rank, with their ghosts (the used tetrahedra of other
- * parts that share a node with them), with the values of their nodes from values (n_frames frames
+ * parts that share a node with them or whose bounding box meets the part's box, thx_fem_cut_box), with the values of their nodes from values (n_frames frames
  * of v->n_nodes values each, as a series holds them). */
 thx_status thx_fem_part_make(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, const thx_fem_cut *cuts,
                              int ranks, int rank, const double *values, size_t n_frames, thx_fem_part *out);

@@ -299,6 +299,9 @@ typedef struct {
     double part_lo, part_hi;         /* the frame part_frame's range over the whole volume */
     int part_frame;
     char part_unit[32];              /* the parts' values' unit (their manifest's) */
+    void *part_cuts;                 /* the parts' boxes (thx_fem_cut[ranks - 1]; owned): the blending order */
+    double part_jmax;                /* volume rendering by |J|: the largest over the ranks (NaN: none yet) */
+    double vr_local_hi;              /* ... this rank's, from its own tetrahedra */
     double *field_normals[3];        /* the cuts' normal sums at their vertices, the ghosts' triangles in (owned) */
     int32_t *field_part_tri[3];      /* the cuts' own triangles (owned) */
 } thx_picture_data;

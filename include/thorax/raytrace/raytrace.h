@@ -87,6 +87,11 @@ typedef struct {
     double opacity[THX_RAYTRACE_MAX_OPACITY][2];
     int n_opacity;
     double density;          /* extinction per mm at opacity 1 */
+    /* sort-last: only the rays' pieces inside this box count (a rank's part of a volume cut into boxes,
+       whose mesh reaches beyond the box where tetrahedra straddle its sides); have_box 0: all. The
+       layers of the boxes, blended in their order along the rays, give the whole's picture. */
+    int have_box;
+    double box[2][3];
 } thx_raytrace_volume;
 
 typedef struct thx_raytrace_opts {
@@ -118,6 +123,13 @@ typedef struct thx_raytrace_opts {
        traces it. own (when not NULL): a byte per pixel of the image, set to 1 where this call wrote */
     int share_rank, share_size;
     unsigned char *own;
+    /* sort-last (thorax/parallel/parallel.h): when not NULL, each sample of each pixel of the viewport
+       as premultiplied RGBA floats over nothing (4 floats a sample, samples^2 samples a pixel, pixels
+       of the image row by row from the top), the background left out, and img not written;
+       thx_raytrace_layer_finish puts such layers, composited sample by sample, over it. (Samples, not
+       pixels: a pixel whose samples see two parts side by side is their sum, which blending two
+       averaged pixels would not give.) */
+    float *layer;
 } thx_raytrace_opts;
 
 void thx_raytrace_opts_default(thx_raytrace_opts *o);
@@ -136,6 +148,11 @@ thx_status thx_tracer_create(thx_ctx *ctx, thx_tracer **out);
 void thx_tracer_destroy(thx_tracer **t);
 /* "Embree 3.13.5" */
 const char *thx_tracer_info(const thx_tracer *t);
+
+/* The viewport of img from a layer of samples x samples samples a pixel (thx_raytrace_opts.layer; the
+ * layers of parts of a volume blended front to back): each pixel its samples' mean over sc's
+ * background, as thx_raytrace_scene finishes the pixels it traces (sc->clear; else over img's own). */
+void thx_raytrace_layer_finish(const thx_scene *sc, int samples, const float *layer, thx_raster *img);
 
 /* Traces sc into img at sc->viewport (w = 0: the whole image; sc->clear fills it with the
  * background first, else the background is left where no surface is hit). stats may be NULL. */
