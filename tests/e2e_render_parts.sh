@@ -7,9 +7,10 @@
 # potential (bands), slices by |J| (a scale of their own, its largest value over the ranks) with a
 # colour bar and label, opaque equipotentials (their normals on a part's edge the whole's: the
 # ghosts) with a slice; a solution in 2 parts drawn on 3 ranks (sort-first then: the same bytes);
-# volume rendering (potential, |J|) within 1/255 (blended in float, front to back).
+# volume rendering (potential, |J|) within 1/255 (blended in float, front to back); animate on 3
+# ranks: every frame drawn by all ranks, frames and movie one process's, kept when run again.
 # Refused, with one message, exit 1 and no picture: a translucent surface (depth compositing needs
-# opaque ones), streamlines, animate (not yet sort-last), IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
+# opaque ones), streamlines, IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
 # without Debian's paraview). Skipped (77) without mpirun. Writes only in a mktemp -d directory.
 # Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models).
 set -euo pipefail
@@ -145,10 +146,16 @@ refused "a surface beside the volume" "volume alone" "$THORAX" trace --solution 
 refused "streamlines" "not drawn by sort-last" "$THORAX" render --solution sol2 --streamlines heart:20 -o no.png
 refused "IceT out of reach" "paraview" env THORAX_ICET_LIBRARY=/nonexistent/libvtkIceTMPI.so \
     "$THORAX" render --solution sol2 --slice y=0 --only slices -o no.png
-if "${MPIRUN[@]}" -np 2 "$THORAX" animate --solution sol2 --slice y=0 --only slices -o anim --mp4 none > r.log 2>&1; then
-    cat r.log; fail "animate drew a solution in parts frame by frame from each rank's part"
-fi
-grep -q "does not yet" r.log || { cat r.log; fail "animate on the parts: no message"; }
-[ ! -e anim/frame_00001.png ] || fail "animate on the parts wrote a frame"
-echo "refused, animate on the parts: $(grep "thorax animate" r.log | head -1)"
+# animate on the parts: every frame drawn by all ranks together; the frames and the movie one process's;
+# run again, every frame kept (rank 0's files decide for all)
+ANIM=(--solution sol3 --slice y=0 --isosurface 0 --surface equipotentials=phong:1 --only slices --only equipotentials
+      --colorbar --label --size 320x240)
+"$THORAX" animate "${ANIM[@]}" -o anim1 -q > a1.log 2>&1 || { cat a1.log; fail "animate on 1 process"; }
+"${MPIRUN[@]}" -np 3 "$THORAX" animate "${ANIM[@]}" -o anim3 > a3.log 2>&1 || { cat a3.log; fail "animate on 3 ranks"; }
+for f in anim1/frame_*.png anim1/animation.mp4; do
+    cmp -s "$f" "anim3/$(basename "$f")" || fail "animate on 3 ranks: $(basename "$f") is not one process's"
+done
+"${MPIRUN[@]}" -np 3 "$THORAX" animate "${ANIM[@]}" -o anim3 > a3b.log 2>&1 || { cat a3b.log; fail "animate again"; }
+grep -q "(0 drawn, 3 kept" a3b.log || { cat a3b.log; fail "animate again on 3 ranks: the frames not kept"; }
+echo "animate on 3 ranks (sort-last): $(ls anim1/frame_*.png | wc -l) frames and the movie one process's, byte for byte; run again: $(grep -o '([^)]*)' a3b.log | head -1)"
 echo "e2e_render_parts: all checks passed"

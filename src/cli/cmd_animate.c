@@ -109,7 +109,9 @@ int cmd_animate(int argc, char **argv)
                  "whose PNG exists are kept if drawn with the same options, data and program:\n"
                  "DIR/frames.settings), a progress bar on a terminal, then an MP4 (H.264) through\n"
                  "ffmpeg. Under mpirun -np N the frames are dealt to the ranks (frame k to rank\n"
-                 "k mod N) and rank 0 makes the movie: the same frames and movie as one process.\n",
+                 "k mod N) and rank 0 makes the movie: the same frames and movie as one process.\n"
+                 "A --solution whose volume is in N parts (forward --volume on N ranks) is drawn\n"
+                 "sort-last instead: every frame by all ranks, each its part (thorax render).\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)},
                   {"ray tracing (--renderer trace)", rt, raytrace_options(rt, &o)}},
         .positional = render_positional,
@@ -158,10 +160,10 @@ int cmd_animate(int argc, char **argv)
         if (st == THX_OK && !named_views) o.p.have_camera = 1;
     }
     if (st == THX_OK) st = render_setup(ctx, &o, &d, &rr, &font, &img);
-    if (st == THX_OK && d.part_size > 1) /* (each rank would draw whole frames from its part alone) */
-        st = thx_error(ctx, THX_EINPUT, "%s is in %d parts, which thorax render draws sort-last; animate does not yet: run "
-                       "it on another number of ranks (its frames shared, each drawn whole) or as one process",
-                       o.p.solution, d.part_size);
+    st = thx_picture_parts_settle(ctx, &o.p, &d, st); /* sort-last: the parts made one (collective) */
+    /* a solution in parts for these ranks: every frame drawn by all of them together (sort-last), else
+       the frames dealt round the ranks, each drawn whole (sort-first) */
+    int joint = st == THX_OK && d.part_size > 1;
     size_t nf = 0;
     if (st == THX_OK) {
         for (size_t s = 0; s < d.m->n_surfaces && s < 64; s++)
@@ -238,16 +240,18 @@ int cmd_animate(int argc, char **argv)
     }
     st = thx_par_agree(ctx, st, NULL);
     if (st == THX_OK) st = thx_par_bcast(ctx, &may_keep, sizeof may_keep, 0);
-    int done = 0, kept = 0, total = a_last - a_first + 1, mine = total / ranks + (rank < total % ranks);
-    for (int f = a_first + rank; st == THX_OK && f <= a_last; f += ranks) {
+    int done = 0, kept = 0, total = a_last - a_first + 1, mine = joint ? total : total / ranks + (rank < total % ranks);
+    for (int f = a_first + (joint ? 0 : rank); st == THX_OK && f <= a_last; f += joint ? 1 : ranks) {
         snprintf(path, sizeof path, "%s/frame_%05d.png", out_dir, f);
         thx_raster *old = NULL;
         thx_ctx *quiet = NULL;
         thx_ctx_create(&quiet);
-        if (may_keep && access(path, R_OK) == 0 && thx_raster_read_png(quiet, path, &old) == THX_OK && old->w == o.p.w &&
-            old->h == o.p.h) {
-            kept++; /* resumable: a complete PNG of the right size is kept */
-        } else {
+        int keep = (!joint || rank == 0) && may_keep && access(path, R_OK) == 0 &&
+                   thx_raster_read_png(quiet, path, &old) == THX_OK && old->w == o.p.w && old->h == o.p.h;
+        if (joint) st = thx_par_bcast(ctx, &keep, sizeof keep, 0); /* rank 0's files: its word */
+        if (st == THX_OK && keep) {
+            kept += !joint || rank == 0; /* resumable: a complete PNG of the right size is kept */
+        } else if (st == THX_OK) {
             int df = f;
             if (flight) { /* the flight's camera, and its data frame (else the movie frame's own, or none) */
                 o.p.have_camera = 1;
@@ -260,8 +264,14 @@ int cmd_animate(int argc, char **argv)
                 int dn = thx_camera_path_data_frame(flight, f + 1);
                 o.p.next_frame = !nf ? 0 : dn ? dn - 1 : f;
             }
-            st = thx_picture_draw(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
-            if (st == THX_OK) st = thx_raster_write_png(ctx, img, path);
+            if (joint) { /* every rank its part; rank 0 composites, annotates and writes */
+                st = cli_share_picture(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
+                if (st == THX_OK && rank == 0) st = thx_raster_write_png(ctx, img, path);
+                st = thx_par_agree(ctx, st, NULL);
+            } else {
+                st = thx_picture_draw(ctx, &o.p, &d, rr, font, df - 1, img, &nan);
+                if (st == THX_OK) st = thx_raster_write_png(ctx, img, path);
+            }
         }
         thx_raster_destroy(&old);
         thx_ctx_destroy(&quiet);
