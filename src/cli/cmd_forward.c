@@ -420,6 +420,7 @@ int cmd_forward(int argc, char **argv)
                 cJSON_AddNumberToObject(f, "flops_solves", R.factor.solve_flops);
                 cJSON_AddNumberToObject(f, "nonzeros", R.factor.nonzeros);
                 cJSON_AddNumberToObject(f, "bytes", (double)R.factor.factor_bytes);
+                if (R.factor.blas_threads) cJSON_AddNumberToObject(f, "blas_threads_factorization", R.factor.blas_threads);
                 cJSON_AddItemToObject(solver, "factor", f);
             }
         } else {
@@ -446,9 +447,10 @@ int cmd_forward(int argc, char **argv)
             if (route_txt[0]) printf("route: %s\n", route_txt);
             if (verbose > 0 && R.factor.used)
                 printf("factor (CHOLMOD, driven by thorax): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
-                       "(%.3g flops, %.1f GF/s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
+                       "(%.3g flops, %.1f GF/s, %d BLAS thread%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
                        R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
                        R.factor.t_factor, R.factor.flops, R.factor.t_factor > 0 ? R.factor.flops / R.factor.t_factor * 1e-9 : 0,
+                       R.factor.blas_threads, R.factor.blas_threads == 1 ? "" : "s",
                        R.factor.nonzeros, (double)R.factor.factor_bytes / 1048576, R.factor.solve_flops,
                        R.t_solve > 0 ? R.factor.solve_flops / R.t_solve * 1e-9 : 0, R.factor.cache_note[0] ? "; " : "",
                        R.factor.cache_note);

@@ -27,6 +27,7 @@ typedef struct {
     int ordering_cached;/* 1: the ordering came from the cache */
     int not_posdef;     /* 1: refused as not positive definite (a zero or negative pivot) */
     char cache_note[160];/* why the cache was not used or not written (empty when it was) */
+    int blas_threads;   /* OpenBLAS's threads in the factorization (set by the caller; 0: not OpenBLAS) */
 } thx_chol_info;
 
 /* Factors the symmetric positive definite matrix of order n given as a full CSR (both triangles,

@@ -13,6 +13,7 @@
 #include <sys/mman.h>
 
 #include "fem/cholesky.h"
+#include "thorax/core/cores.h"
 #include "thorax/fem/fem.h"
 #ifdef _OPENMP
 #include <omp.h>
@@ -355,6 +356,7 @@ void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *ou
     for (int t = 0; s->work && t < THX_FEM_OWN_THREADS; t++) out->solve_flops += s->work[t].flops;
     out->factor_bytes = c->factor_bytes;
     snprintf(out->cache_note, sizeof out->cache_note, "%s", c->cache_note);
+    out->blas_threads = c->blas_threads;
 }
 
 void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
@@ -458,6 +460,9 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
     s->own = size == 1 && s->ii && strcmp(how, "petsc") != 0;
 }
 
+static int blas_threads(int set);
+static int factor_threads(int was);
+
 /* The own path's factorization, once (timed as the setup, as PETSc's is). */
 static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
 {
@@ -470,7 +475,11 @@ static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
     if (!rowp || !col) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i <= n; i++) rowp[i] = (int64_t)s->ii[i];
     for (size_t k = 0; k < nz; k++) col[k] = (int32_t)s->jj[k];
+    int was = blas_threads(0), use = factor_threads(was);
+    if (use > 0 && use != was) blas_threads(use);
     st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &s->chol, &s->chol_info);
+    if (use > 0 && use != was) blas_threads(was);
+    s->chol_info.blas_threads = use > 0 ? use : 0;
     if (st == THX_ESOLVER && s->chol_info.not_posdef) {
         /* a singular system (a piece of the mesh with no prescribed potential): PETSc's interface to the
            same package decides, as before the own path existed (a consistent system may still solve) */
@@ -500,6 +509,24 @@ static int blas_threads(int set)
     int was = getn();
     if (set > 0) setn(set);
     return was;
+}
+
+/* The OpenBLAS threads for CHOLMOD's factorization (was: OpenBLAS's count, -1 when it is not the BLAS):
+ * $THORAX_FACTOR_THREADS when set; OpenBLAS's own when the user set OPENBLAS_NUM_THREADS; else as
+ * many as the cores free now, at most was. Its threads meet at every BLAS call, and a thread whose
+ * core another process holds makes its partner spin: 27 s against 6 s for the high phantom's factor
+ * at load 3.5 (docs/design/parallel.md, "CHOLMOD's BLAS threads under load"). */
+static int factor_threads(int was)
+{
+    if (was < 1) return -1;
+    const char *e = getenv("THORAX_FACTOR_THREADS");
+    if (e && *e) {
+        int n = atoi(e);
+        return n >= 1 ? n : was;
+    }
+    if (getenv("OPENBLAS_NUM_THREADS")) return was;
+    int free_cores = thx_cores_free();
+    return free_cores < was ? free_cores : was;
 }
 
 /* b = load_f - K_fd phi_d for columns c0 .. c0 + r - 1, row-major in the factor's order. */

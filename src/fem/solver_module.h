@@ -9,7 +9,7 @@
 #include "thorax/fem/fem.h"
 
 /* Raised whenever the table changes: a module from another build is refused, not misused. */
-#define THX_FEM_PETSC_ABI 3
+#define THX_FEM_PETSC_ABI 4
 
 typedef struct {
     int abi; /* THX_FEM_PETSC_ABI */

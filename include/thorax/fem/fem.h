@@ -208,6 +208,7 @@ typedef struct {
                                sweep's supernodes with no right-hand side below them) */
     size_t factor_bytes;
     char cache_note[160];   /* why the ordering was not cached (empty when it was, or was read) */
+    int blas_threads;       /* OpenBLAS's threads in the factorization (the cores free then; 0: not OpenBLAS) */
 } thx_fem_factor_info;
 
 void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out);
