@@ -3,6 +3,7 @@
  * made, written and read back (docs/formats.md, "Partitioned volume potentials").
  */
 #include <math.h>
+#include <sys/types.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -181,27 +182,47 @@ thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part
     return thx_atomic_commit(ctx, &af);
 }
 
+/* n bytes of f into p, hashed; 0, or -1 when the file ends first */
+static int get(FILE *f, thx_sha256_ctx *h, void *p, size_t n)
+{
+    if (n && fread(p, 1, n, f) != n) return -1;
+    thx_sha256_update(h, p, n);
+    return 0;
+}
+
 thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
 {
+    /* read straight into the part's arrays, hashed on the way (a part may be most of a rank's memory:
+       no second copy of the file) */
     memset(out, 0, sizeof *out);
-    char *b = NULL;
-    size_t len = 0;
-    THX_CHECK(thx_read_file(ctx, path, &b, &len));
+    FILE *f = fopen(path, "rb");
+    if (!f) return thx_error(ctx, THX_EIO, "%s: cannot open the part", path);
     thx_status st = THX_OK;
+    unsigned char head[HEAD], *cutb = NULL;
     uint64_t sz[5];
-    uint32_t rank, ranks;
-    if (len >= 8 && memcmp(b, "THXPART1", 8) == 0) {
+    uint32_t rank = 0, ranks = 0;
+    size_t len = 0;
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    if (fseeko(f, 0, SEEK_END) == 0) {
+        off_t e = ftello(f);
+        len = e > 0 ? (size_t)e : 0;
+    }
+    rewind(f);
+    size_t got = fread(head, 1, sizeof head, f);
+    thx_sha256_update(&h, head, got);
+    if (got >= 8 && memcmp(head, "THXPART1", 8) == 0) {
         st = thx_error(ctx, THX_EINPUT, "%s: a volume part of the first format (no ghost tetrahedra): run thorax forward "
                        "--volume under mpirun again to write it in this thorax's", path);
         goto done;
     }
-    if (len < HEAD + 32 || memcmp(b, MAGIC, 8) != 0) {
+    if (got < HEAD || len < HEAD + 32 || memcmp(head, MAGIC, 8) != 0) {
         st = thx_error(ctx, THX_EINPUT, "%s: not a thorax volume part (magic %s expected)", path, MAGIC);
         goto done;
     }
-    memcpy(&rank, b + 8, 4);
-    memcpy(&ranks, b + 12, 4);
-    memcpy(sz, b + 16, sizeof sz);
+    memcpy(&rank, head + 8, 4);
+    memcpy(&ranks, head + 12, 4);
+    memcpy(sz, head + 16, sizeof sz);
     /* the sizes must give the file's length exactly (each bounded first, so the sum cannot wrap) */
     if (ranks < 1 || rank >= ranks || ranks > (1u << 24) || sz[0] > len || sz[1] > len || sz[2] > len || sz[3] > INT32_MAX ||
         sz[4] > INT32_MAX || sz[0] > sz[3] || sz[1] > sz[4] || (sz[0] && sz[2] > len / 8 / sz[0]) ||
@@ -212,24 +233,27 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
                        (unsigned long long)sz[1], (unsigned long long)sz[2], len);
         goto done;
     }
-    {
-        unsigned char digest[32];
-        thx_sha256_ctx h;
-        thx_sha256_init(&h);
-        thx_sha256_update(&h, b, len - 32);
-        thx_sha256_final(&h, digest);
-        if (memcmp(digest, b + len - 32, 32) != 0) {
-            st = thx_error(ctx, THX_EINPUT, "%s: the part's checksum does not match its bytes (damaged)", path);
-            goto done;
-        }
-    }
     out->rank = rank;
     out->ranks = ranks;
     out->n_frames = sz[2];
     size_t n = sz[0], t = sz[1], r = ranks - 1;
     if ((st = part_alloc(ctx, out, n, t)) != THX_OK) goto done;
     out->n_nodes = n, out->n_tets = t, out->n_global = sz[3], out->n_global_tets = sz[4];
-    const char *q = b + HEAD;
+    cutb = thx_malloc(ctx, CUT_BYTES * (r ? r : 1));
+    unsigned char digest[32], want[32];
+    if (!cutb) { st = THX_ENOMEM; goto done; }
+    if (get(f, &h, cutb, CUT_BYTES * r) || get(f, &h, out->node, n * 4) || get(f, &h, out->xyz, n * 24) ||
+        get(f, &h, out->tet, t * 16) || get(f, &h, out->region, t * 4) || get(f, &h, out->tet_id, t * 4) ||
+        get(f, &h, out->owner, t * 4) || get(f, &h, out->values, n * out->n_frames * 8) || fread(want, 1, 32, f) != 32) {
+        st = thx_error(ctx, THX_EINPUT, "%s: the part ends before its %zu bytes (changed while read?)", path, len);
+        goto done;
+    }
+    thx_sha256_final(&h, digest);
+    if (memcmp(digest, want, 32) != 0) {
+        st = thx_error(ctx, THX_EINPUT, "%s: the part's checksum does not match its bytes (damaged)", path);
+        goto done;
+    }
+    const unsigned char *q = cutb;
     for (size_t k = 0; k < r; k++, q += CUT_BYTES) {
         int32_t iv[4];
         memcpy(iv, q, 16);
@@ -241,13 +265,6 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
             goto done;
         }
     }
-    memcpy(out->node, q, n * 4), q += n * 4;
-    memcpy(out->xyz, q, n * 24), q += n * 24;
-    memcpy(out->tet, q, t * 16), q += t * 16;
-    memcpy(out->region, q, t * 4), q += t * 4;
-    memcpy(out->tet_id, q, t * 4), q += t * 4;
-    memcpy(out->owner, q, t * 4), q += t * 4;
-    memcpy(out->values, q, n * out->n_frames * 8);
     for (size_t i = 0; i < n; i++)
         if (out->node[i] < 0 || (size_t)out->node[i] >= out->n_global || (i && out->node[i] <= out->node[i - 1])) {
             st = thx_error(ctx, THX_EINPUT, "%s: node %zu's global number %d is out of range or not ascending", path, i + 1,
@@ -274,7 +291,8 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
         out->n_own += (uint32_t)out->owner[k] == rank;
     }
 done:
-    free(b);
+    fclose(f);
+    free(cutb);
     if (st != THX_OK) thx_fem_part_free(out);
     return st;
 }

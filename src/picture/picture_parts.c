@@ -105,7 +105,9 @@ thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const cJSO
         thx_fem_part_free(&p);
         return st;
     }
-    memcpy(d->volume->v, p.values, p.n_nodes * p.n_frames * sizeof *p.values);
+    free(d->volume->v); /* the part's values taken as they are (frame after frame, as a series holds them) */
+    d->volume->v = p.values;
+    p.values = NULL;
     snprintf(d->volume->unit, sizeof d->volume->unit, "%s", d->part_unit);
     for (size_t t = 0; t < p.n_tets; t++) d->part_own[t] = (uint32_t)p.owner[t] == p.rank;
     /* the part becomes the model's volume: its nodes and tetrahedra, the model's regions */
