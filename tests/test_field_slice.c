@@ -2,7 +2,10 @@
  * linear field interpolated onto the slice matches it; the slice's area is the box's
  * cross-section; planes exactly through node layers; several planes; contour lines on the slice
  * (exact for a linear field, their length the analytic one, greater values on their left); the
- * plane texts; the writers (VTP header and OBJ counts; VTK reads them back in e2e_field). */
+ * plane texts; the writers (VTP header and OBJ counts; VTK reads them back in e2e_field); a part of
+ * the volume (a corner's tetrahedra and their neighbours, as thorax/fem/parts.h holds them) sliced
+ * with the whole's tolerance scale holds the whole's triangles of its own tetrahedra, bit for bit
+ * (what thorax field under mpirun puts together). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -157,6 +160,85 @@ static void check_writers(thx_ctx *ctx, const thx_volume *v, const double *phi)
     thx_field_mesh_destroy(&m);
 }
 
+/* The part of v whose tetrahedra's centroids lie below `corner` on every axis (own), with the
+ * tetrahedra sharing a node with them (ghosts), in v's order; its slice with v's scale against v's. */
+static void check_part(thx_ctx *ctx, const thx_volume *v, const double *phi, const char *spec, double corner)
+{
+    size_t nt = 0, nn = 0;
+    unsigned char *own = calloc(v->n_tets, 1), *near = calloc(v->n_nodes, 1), *keep = calloc(v->n_tets, 1);
+    int32_t *node_map = malloc(v->n_nodes * sizeof *node_map), *tet_of = malloc(v->n_tets * sizeof *tet_of);
+    for (size_t t = 0; t < v->n_tets; t++) {
+        double c[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            for (int a = 0; a < 3; a++) c[a] += v->xyz[3 * (size_t)v->tet[4 * t + k] + a] / 4;
+        own[t] = c[0] < corner && c[1] < corner && c[2] < corner;
+        for (int k = 0; own[t] && k < 4; k++) near[v->tet[4 * t + k]] = 1;
+    }
+    for (size_t t = 0; t < v->n_tets; t++)
+        for (int k = 0; k < 4; k++) keep[t] |= near[v->tet[4 * t + k]];
+    for (size_t i = 0; i < v->n_nodes; i++) node_map[i] = -1;
+    thx_volume p = {.n_regions = v->n_regions, .regions = v->regions};
+    p.tet = malloc(4 * v->n_tets * sizeof *p.tet);
+    p.region = malloc(v->n_tets * sizeof *p.region);
+    p.xyz = malloc(3 * v->n_nodes * sizeof *p.xyz);
+    double *pphi = malloc(v->n_nodes * sizeof *pphi);
+    for (size_t i = 0; i < v->n_nodes; i++) /* (the part's nodes in the whole's order) */
+        for (size_t t = 0; t < v->n_tets && node_map[i] < 0; t++)
+            for (int k = 0; keep[t] && k < 4; k++)
+                if ((size_t)v->tet[4 * t + k] == i && node_map[i] < 0) {
+                    memcpy(p.xyz + 3 * nn, v->xyz + 3 * i, 3 * sizeof *p.xyz);
+                    pphi[nn] = phi[i];
+                    node_map[i] = (int32_t)nn++;
+                }
+    for (size_t t = 0; t < v->n_tets; t++) {
+        if (!keep[t]) continue;
+        for (int k = 0; k < 4; k++) p.tet[4 * nt + k] = node_map[v->tet[4 * t + k]];
+        p.region[nt] = v->region[t];
+        tet_of[nt++] = (int32_t)t;
+    }
+    p.n_nodes = nn;
+    p.n_tets = nt;
+    thx_field_plane pl;
+    thx_field_mesh *w = NULL, *m = NULL;
+    CHECK_OK(ctx, thx_field_plane_parse(ctx, spec, &pl));
+    CHECK_OK(ctx, thx_field_mesh_create(ctx, &w));
+    CHECK_OK(ctx, thx_field_mesh_create(ctx, &m));
+    CHECK_OK(ctx, thx_field_slice(ctx, v, phi, &pl, 1, NULL, w));
+    CHECK_OK(ctx, thx_field_slice_scaled(ctx, &p, pphi, &pl, 1, NULL, thx_field_slice_scale(v), m));
+    size_t a = 0, b = 0, same = 0, owned = 0;
+    while (1) { /* the own triangles of both, in order: the same tetrahedra, corners and values, bit for bit */
+        while (a < w->n_tris && !own[w->cell[a]]) a++;
+        while (b < m->n_tris && !own[tet_of[m->cell[b]]]) b++;
+        if (a == w->n_tris || b == m->n_tris) break;
+        int eq = w->cell[a] == tet_of[m->cell[b]];
+        for (int c = 0; c < 3 && eq; c++) {
+            int32_t i = w->tri[3 * a + c], j = m->tri[3 * b + c];
+            eq = !memcmp(w->xyz + 3 * (size_t)i, m->xyz + 3 * (size_t)j, 3 * sizeof *w->xyz) &&
+                 !memcmp(&w->value[i], &m->value[j], sizeof *w->value);
+        }
+        same += eq;
+        owned++;
+        a++;
+        b++;
+    }
+    while (a < w->n_tris && !own[w->cell[a]]) a++;
+    while (b < m->n_tris && !own[tet_of[m->cell[b]]]) b++;
+    printf("%-30s part of %zu of %zu tetrahedra: %zu own triangles, %zu the whole's bit for bit\n", spec, nt, v->n_tets,
+           owned, same);
+    CHECK(owned > 10 && same == owned && a == w->n_tris && b == m->n_tris);
+    thx_field_mesh_destroy(&w);
+    thx_field_mesh_destroy(&m);
+    free(p.tet);
+    free(p.region);
+    free(p.xyz);
+    free(pphi);
+    free(own);
+    free(near);
+    free(keep);
+    free(node_map);
+    free(tet_of);
+}
+
 int main(void)
 {
     thx_ctx *ctx = NULL;
@@ -187,6 +269,9 @@ int main(void)
     check_slice(ctx, box, pb, "3,3,3:1,1,1", "diagonal through nodes");
     check_specs(ctx);
     check_writers(ctx, jit, pj);
+    check_part(ctx, jit, pj, "1,2,3:0.2,-0.5,1", 3.2);
+    check_part(ctx, box, pb, "3,3,3:1,1,1", 4.6);
+    check_part(ctx, box, pb, "z=3", 3.2);
     free(pb);
     free(pj);
     thx_volume_destroy(&box);

@@ -189,7 +189,7 @@ int main(int argc, char **argv)
                ranks run: any other would be run whole by every rank, each writing the same outputs. */
             int ranks = thx_par_launched();
             if (ranks != 1) {
-                static const char *const shared[] = {"forward", "bem", "verify", "render", "trace", "animate"};
+                static const char *const shared[] = {"forward", "bem", "verify", "render", "trace", "animate", "field"};
                 int ok = 0;
                 for (size_t k = 0; k < sizeof shared / sizeof shared[0]; k++) ok |= !strcmp(name, shared[k]);
                 if (!ok) {
@@ -197,7 +197,7 @@ int main(int argc, char **argv)
                         fprintf(stderr, "thorax %s: started by mpirun with %s ranks, but %s runs in one process (every rank "
                             "would do the whole work and write the same outputs): run it without mpirun, or with -np 1. "
                             "The commands that share their work among ranks: forward, bem, verify, render, trace, "
-                            "animate\n", name, ranks > 1 ? "several" : "an unreadable count of", name);
+                            "animate, field\n", name, ranks > 1 ? "several" : "an unreadable count of", name);
                     return 2;
                 }
             }

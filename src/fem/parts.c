@@ -2,6 +2,7 @@
  * A solution's volume potentials in parts (thorax/fem/parts.h): one part per rank of a bisection,
  * made, written and read back (docs/formats.md, "Partitioned volume potentials").
  */
+#include <cjson/cJSON.h>
 #include <math.h>
 #include <sys/types.h>
 #include <stdio.h>
@@ -293,6 +294,57 @@ thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out)
 done:
     fclose(f);
     free(cutb);
+    if (st != THX_OK) thx_fem_part_free(out);
+    return st;
+}
+
+thx_status thx_fem_part_open(thx_ctx *ctx, const char *solution_dir, const char *manifest, int rank, int ranks,
+                             size_t n_regions, thx_fem_part *out, char *unit, size_t unit_size)
+{
+    memset(out, 0, sizeof *out);
+    /* one file directly in DIR/parts: a manifest elsewhere could make a rank read any file */
+    if (!manifest || strchr(manifest, '/') != strrchr(manifest, '/') || strncmp(manifest, "parts/", 6) != 0)
+        return thx_error(ctx, THX_EINPUT, "%s/solution.json: \"volume_parts\": \"manifest\" must be parts/parts.json",
+                         solution_dir);
+    char path[4400];
+    if ((size_t)snprintf(path, sizeof path, "%s/%s", solution_dir, manifest) >= sizeof path)
+        return thx_error(ctx, THX_EINPUT, "%s: the path is too long", solution_dir);
+    char *text = NULL;
+    size_t len = 0;
+    THX_CHECK(thx_read_file(ctx, path, &text, &len));
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    free(text);
+    const cJSON *fmt = cJSON_GetObjectItem(j, "format"), *ver = cJSON_GetObjectItem(j, "version");
+    const cJSON *rk = cJSON_GetObjectItem(j, "ranks"), *files = cJSON_GetObjectItem(j, "files");
+    const cJSON *file = cJSON_GetArrayItem(files, rank), *un = cJSON_GetObjectItem(j, "unit");
+    thx_status st = THX_OK;
+    if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, "thorax-parts") || !cJSON_IsNumber(ver))
+        st = thx_error(ctx, THX_EINPUT, "%s: not the manifest of a solution's parts (format \"thorax-parts\")", path);
+    else if (ver->valuedouble != 2)
+        st = thx_error(ctx, THX_EINPUT, "%s: parts of version %g; this thorax reads version 2 (run thorax forward --volume "
+                       "under mpirun again)", path, ver->valuedouble);
+    else if (!cJSON_IsNumber(rk) || rk->valuedouble != ranks || cJSON_GetArraySize(files) != ranks || !cJSON_IsString(file) ||
+             strchr(file->valuestring, '/') || !strcmp(file->valuestring, "..") || !strcmp(file->valuestring, "."))
+        st = thx_error(ctx, THX_EINPUT, "%s: not %d parts, one file each", path, ranks);
+    else if (!cJSON_IsString(un) || strlen(un->valuestring) >= unit_size)
+        st = thx_error(ctx, THX_EINPUT, "%s: \"unit\" missing, not a string or too long", path);
+    char ppath[4500];
+    if (st == THX_OK) {
+        snprintf(unit, unit_size, "%s", un->valuestring);
+        *strrchr(path, '/') = '\0';
+        snprintf(ppath, sizeof ppath, "%s/%s", path, file->valuestring);
+    }
+    cJSON_Delete(j);
+    if (st != THX_OK) return st;
+    THX_CHECK(thx_fem_part_read(ctx, ppath, out));
+    if (out->rank != (uint32_t)rank || out->ranks != (uint32_t)ranks)
+        st = thx_error(ctx, THX_EINPUT, "%s: part %u of %u, where rank %d of %d reads it", ppath, out->rank + 1, out->ranks,
+                       rank, ranks);
+    for (size_t t = 0; st == THX_OK && t < out->n_tets; t++)
+        if (out->region[t] < 0 || (size_t)out->region[t] >= n_regions)
+            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu's region %d is not one of the model's %zu", ppath, t + 1,
+                           out->region[t] + 1, n_regions);
+    if (st == THX_OK && out->n_frames == 0) st = thx_error(ctx, THX_EINPUT, "%s: a part without frames", ppath);
     if (st != THX_OK) thx_fem_part_free(out);
     return st;
 }

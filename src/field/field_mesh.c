@@ -114,6 +114,11 @@ thx_status field_mesh_reserve(thx_ctx *ctx, thx_field_mesh *m, size_t n_points, 
     return THX_OK;
 }
 
+thx_status thx_field_mesh_reserve(thx_ctx *ctx, thx_field_mesh *m, size_t n_points, size_t n_tris)
+{
+    return field_mesh_reserve(ctx, m, n_points, n_tris);
+}
+
 thx_status field_mesh_reserve_contours(thx_ctx *ctx, thx_field_mesh *m, size_t n_cpoints, size_t n_segs)
 {
     if (n_cpoints > (size_t)INT32_MAX || n_segs > (size_t)INT32_MAX / 2)

@@ -9,15 +9,27 @@
 
 #include "field_impl.h"
 
+double thx_field_slice_scale(const thx_volume *v)
+{
+    double scale = 0;
+    for (size_t i = 0; i < 3 * v->n_nodes; i++) scale = fmax(scale, fabs(v->xyz[i]));
+    return scale;
+}
+
 thx_status thx_field_slice(thx_ctx *ctx, const thx_volume *v, const double *phi, const thx_field_plane *planes,
                            size_t n_planes, const unsigned char *use_region, thx_field_mesh *out)
+{
+    if (!v) return thx_error(ctx, THX_EINTERNAL, "thx_field_slice: missing volume");
+    return thx_field_slice_scaled(ctx, v, phi, planes, n_planes, use_region, thx_field_slice_scale(v), out);
+}
+
+thx_status thx_field_slice_scaled(thx_ctx *ctx, const thx_volume *v, const double *phi, const thx_field_plane *planes,
+                                  size_t n_planes, const unsigned char *use_region, double scale, thx_field_mesh *out)
 {
     if (!v || !out || (n_planes && !planes))
         return thx_error(ctx, THX_EINTERNAL, "thx_field_slice: missing volume, planes or output");
     double *s = thx_malloc(ctx, (v->n_nodes ? v->n_nodes : 1) * sizeof *s);
     if (!s) return THX_ENOMEM;
-    double scale = 0;
-    for (size_t i = 0; i < 3 * v->n_nodes; i++) scale = fmax(scale, fabs(v->xyz[i]));
     thx_status st = THX_OK;
     for (size_t k = 0; k < n_planes && st == THX_OK; k++) {
         const double *n = planes[k].n;

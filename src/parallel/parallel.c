@@ -126,6 +126,56 @@ thx_status thx_par_barrier(thx_ctx *ctx)
     return rc ? mpi_fail(ctx, rc, "waiting for every rank") : THX_OK;
 }
 
+thx_status thx_par_gather(thx_ctx *ctx, thx_status st, const void *send, size_t n, void **all, size_t **counts)
+{
+    *all = NULL;
+    *counts = NULL;
+    if (!g_running || g_size == 1) {
+        if (st != THX_OK) return st;
+        *all = thx_malloc(ctx, n ? n : 1);
+        *counts = thx_malloc(ctx, sizeof **counts);
+        if (!*all || !*counts) {
+            free(*all);
+            free(*counts);
+            *all = NULL;
+            *counts = NULL;
+            return THX_ENOMEM;
+        }
+        if (n) memcpy(*all, send, n);
+        **counts = n;
+        return THX_OK;
+    }
+    size_t *cnt = NULL, total = 0;
+    unsigned char *buf = NULL;
+    if (st == THX_OK && g_rank == 0 && !(cnt = thx_calloc(ctx, (size_t)g_size, sizeof *cnt))) st = THX_ENOMEM;
+    THX_TRY(thx_par_agree(ctx, st, NULL));
+    int rc = g_api->gather_size(n, cnt, 0);
+    if (rc) {
+        st = mpi_fail(ctx, rc, "gathering the sizes");
+        goto done;
+    }
+    if (g_rank == 0) {
+        for (int r = 0; r < g_size; r++) total += cnt[r];
+        if (!(buf = malloc(total ? total : 1))) st = thx_error(ctx, THX_ENOMEM, "out of memory (%zu bytes gathered)", total);
+    }
+    THX_TRY(thx_par_agree(ctx, st, NULL));
+    rc = g_api->gatherv(send, n, buf, cnt, 0);
+    if (rc) {
+        st = mpi_fail(ctx, rc, "gathering");
+        goto done;
+    }
+    if (g_rank == 0) {
+        *all = buf;
+        *counts = cnt;
+        buf = NULL;
+        cnt = NULL;
+    }
+done:
+    free(buf);
+    free(cnt);
+    return st;
+}
+
 /* A rank's share of a picture, as sent: n_runs, then n_runs (first pixel, pixel count) pairs, then
  * the runs' pixels, 4 bytes each. */
 typedef struct {

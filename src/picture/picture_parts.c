@@ -13,7 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "thorax/core/fileio.h"
 #include "thorax/fem/parts.h"
 #include "thorax/field/field.h"
 #include "thorax/parallel/parallel.h"
@@ -54,52 +53,11 @@ thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const cJSO
     int rank = thx_par_rank(), size = thx_par_size();
     thx_volume *v = d->m->volume;
     if (!v) return thx_error(ctx, THX_EINPUT, "%s: the model %s has no volume mesh", o->solution, d->model_dir);
-    char path[4400];
     const cJSON *vp = cJSON_GetObjectItem(solution, "volume_parts"), *dir = cJSON_GetObjectItem(vp, "manifest");
-    if (!cJSON_IsString(dir) || strchr(dir->valuestring, '/') != strrchr(dir->valuestring, '/') ||
-        strncmp(dir->valuestring, "parts/", 6) != 0)
-        return thx_error(ctx, THX_EINPUT, "%s/solution.json: \"volume_parts\": \"manifest\" must be parts/parts.json",
-                         o->solution);
-    snprintf(path, sizeof path, "%s/%s", o->solution, dir->valuestring);
-    char *text = NULL;
-    size_t len = 0;
-    THX_CHECK(thx_read_file(ctx, path, &text, &len));
-    cJSON *j = cJSON_ParseWithLength(text, len);
-    free(text);
-    const cJSON *fmt = cJSON_GetObjectItem(j, "format"), *ver = cJSON_GetObjectItem(j, "version");
-    const cJSON *rk = cJSON_GetObjectItem(j, "ranks"), *files = cJSON_GetObjectItem(j, "files");
-    const cJSON *file = cJSON_GetArrayItem(files, rank), *unit = cJSON_GetObjectItem(j, "unit");
-    thx_status st = THX_OK;
-    if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, "thorax-parts") || !cJSON_IsNumber(ver))
-        st = thx_error(ctx, THX_EINPUT, "%s: not the manifest of a solution's parts (format \"thorax-parts\")", path);
-    else if (ver->valuedouble != 2)
-        st = thx_error(ctx, THX_EINPUT, "%s: parts of version %g; this thorax reads version 2 (run thorax forward --volume "
-                       "under mpirun again)", path, ver->valuedouble);
-    else if (!cJSON_IsNumber(rk) || rk->valuedouble != size || cJSON_GetArraySize(files) != size || !cJSON_IsString(file) ||
-             strchr(file->valuestring, '/') || !strcmp(file->valuestring, "..") || !strcmp(file->valuestring, "."))
-        st = thx_error(ctx, THX_EINPUT, "%s: not %d parts, one file each", path, size);
-    else if (!cJSON_IsString(unit) || strlen(unit->valuestring) >= sizeof d->part_unit)
-        st = thx_error(ctx, THX_EINPUT, "%s: \"unit\" missing, not a string or too long", path);
-    char ppath[4500];
-    if (st == THX_OK) {
-        snprintf(d->part_unit, sizeof d->part_unit, "%s", unit->valuestring);
-        snprintf(path, sizeof path, "%s/%s", o->solution, dir->valuestring);
-        *strrchr(path, '/') = '\0';
-        snprintf(ppath, sizeof ppath, "%s/%s", path, file->valuestring);
-    }
-    cJSON_Delete(j);
-    if (st != THX_OK) return st;
     thx_fem_part p;
-    THX_CHECK(thx_fem_part_read(ctx, ppath, &p));
-    if (p.rank != (uint32_t)rank || p.ranks != (uint32_t)size)
-        st = thx_error(ctx, THX_EINPUT, "%s: part %u of %u, where rank %d of %d reads it", ppath, p.rank + 1, p.ranks, rank,
-                       size);
-    for (size_t t = 0; st == THX_OK && t < p.n_tets; t++)
-        if (p.region[t] < 0 || (size_t)p.region[t] >= v->n_regions)
-            st = thx_error(ctx, THX_EINPUT, "%s: tetrahedron %zu's region %d is not one of the model's %zu", ppath, t + 1,
-                           p.region[t] + 1, v->n_regions);
-    if (st == THX_OK && p.n_frames == 0) st = thx_error(ctx, THX_EINPUT, "%s: a part without frames", ppath);
-    if (st == THX_OK) st = thx_series_create(ctx, p.n_nodes, p.n_frames, &d->volume);
+    THX_CHECK(thx_fem_part_open(ctx, o->solution, cJSON_IsString(dir) ? dir->valuestring : NULL, rank, size, v->n_regions,
+                                &p, d->part_unit, sizeof d->part_unit));
+    thx_status st = thx_series_create(ctx, p.n_nodes, p.n_frames, &d->volume);
     if (st == THX_OK && !(d->part_own = malloc(p.n_tets ? p.n_tets : 1))) st = thx_error(ctx, THX_ENOMEM, "out of memory (part)");
     if (st != THX_OK) {
         thx_fem_part_free(&p);

@@ -47,6 +47,17 @@ thx_status thx_fem_part_write(thx_ctx *ctx, const char *path, const thx_fem_part
 thx_status thx_fem_part_read(thx_ctx *ctx, const char *path, thx_fem_part *out);
 void thx_fem_part_free(thx_fem_part *p);
 
+/*
+ * This rank's part of a solution's volume in parts, as a reader under mpirun takes it (sort-last
+ * pictures, thorax field): manifest is what solution_dir/solution.json's "volume_parts" names
+ * ("parts/parts.json"); the manifest is checked (format "thorax-parts", version 2, ranks parts,
+ * one file each, the values' unit), part rank read (thx_fem_part_read) and found to be part rank
+ * of ranks, each tetrahedron's region one of n_regions, with frames. unit (unit_size bytes) gets
+ * the values' unit. On failure *out is empty and the message names the file and what is wrong.
+ */
+thx_status thx_fem_part_open(thx_ctx *ctx, const char *solution_dir, const char *manifest, int rank, int ranks,
+                             size_t n_regions, thx_fem_part *out, char *unit, size_t unit_size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -74,6 +74,9 @@ void thx_field_mesh_destroy(thx_field_mesh **m);
 void thx_field_mesh_clear(thx_field_mesh *m);
 /* Appends src's triangles and contours to dst, src's tags increased by tag_offset. */
 thx_status thx_field_mesh_append(thx_ctx *ctx, thx_field_mesh *dst, const thx_field_mesh *src, int32_t tag_offset);
+/* Grows the mesh's point and triangle arrays to hold n_points and n_tris (the counts unchanged):
+ * for a caller that fills a mesh itself (the cut of a volume in parts put together on one rank). */
+thx_status thx_field_mesh_reserve(thx_ctx *ctx, thx_field_mesh *m, size_t n_points, size_t n_tris);
 /* Total area of the triangles with tag == tag (tag < 0: all), mm^2. */
 double thx_field_mesh_area(const thx_field_mesh *m, int tag);
 
@@ -133,6 +136,18 @@ thx_status thx_field_isosurface(thx_ctx *ctx, const thx_volume *v, const double 
  */
 thx_status thx_field_slice(thx_ctx *ctx, const thx_volume *v, const double *phi, const thx_field_plane *planes,
                            size_t n_planes, const unsigned char *use_region, thx_field_mesh *out);
+
+/*
+ * The same, with the scale of the snapping tolerance given. Planes oblique to the axes snap onto
+ * themselves the nodes whose n.x lies within 16 eps max(scale, |d|) of d (n.x rounds; a node laid
+ * on the plane must stay on it); thx_field_slice takes as scale the largest |coordinate| of v's
+ * nodes (thx_field_slice_scale). A part of a volume (thorax/fem/parts.h) passes the whole's, so that
+ * its cut is the whole's around each of its tetrahedra.
+ */
+thx_status thx_field_slice_scaled(thx_ctx *ctx, const thx_volume *v, const double *phi, const thx_field_plane *planes,
+                                  size_t n_planes, const unsigned char *use_region, double scale, thx_field_mesh *out);
+/* The largest |coordinate| of v's nodes (0 for none): thx_field_slice's scale. */
+double thx_field_slice_scale(const thx_volume *v);
 
 /*
  * Contour lines of the mesh's vertex values at values[0..n_values-1] by marching triangles over

@@ -1,6 +1,7 @@
 /*
  * thorax/parallel/parallel.h — the ranks of a run under mpirun, for the commands that share their
- * work among processes without PETSc (render, trace, animate: sort-first rendering, paper 4.3).
+ * work among processes without PETSc (render, trace, animate: sort-first and sort-last rendering;
+ * field: the cuts of a solution in parts; paper 4.3).
  *
  * The library never links MPI. A run started by a launcher with more than one rank (Open MPI's
  * OMPI_COMM_WORLD_SIZE, or PMI_SIZE / PMIX_SIZE of the others) starts MPI through the solver module
@@ -57,6 +58,12 @@ thx_status thx_par_sum(thx_ctx *ctx, long long *v, int n);
  * replaced by its largest over the ranks (a least as the largest of -v; NaN on a rank is lost to
  * any number). On failure v is left as it was. At most 64 values. */
 thx_status thx_par_max(thx_ctx *ctx, thx_status st, double *v, int n);
+
+/* Collective: every rank's st agreed as thx_par_agree does, then, when every rank succeeded, every
+ * rank's n bytes of send into *all on rank 0, rank after rank, with (*counts)[r] the bytes of rank r
+ * (*all and *counts the caller's to free on rank 0; NULL elsewhere, and on failure). With one rank,
+ * *all is a copy of send. */
+thx_status thx_par_gather(thx_ctx *ctx, thx_status st, const void *send, size_t n, void **all, size_t **counts);
 
 /* Collective: waits for every rank. */
 thx_status thx_par_barrier(thx_ctx *ctx);
