@@ -64,6 +64,7 @@ for n in 2 3; do
     draw $n iso$n --solution sol$n --frame 3 --isosurface count:5 --surface equipotentials=phong:1 --slice z=0 \
         --only equipotentials --only slices --view superior --colorbar
 done
+draw 3 oblique3 --solution sol3 --frame 2 --slice 10,-5,3:1,2,0.5 --slice 0,0,0:0.3,-1,2 --only slices --view left
 draw 3 other_count --solution sol2 --frame 2 --slice y=0 --only slices --view anterior
 
 # volume rendering: each rank traces the rays' pieces in its box (its mesh: its own tetrahedra and the
@@ -144,6 +145,12 @@ refused() {
 refused "a translucent torso" "must be opaque" "$THORAX" render --solution sol2 --slice y=0 -o no.png
 refused "a surface beside the volume" "volume alone" "$THORAX" trace --solution sol2 --volume potential -o no.png
 refused "streamlines" "not drawn by sort-last" "$THORAX" render --solution sol2 --streamlines heart:20 -o no.png
+cp -r sol2 bad2
+"$PY" -c "
+b = bytearray(open('bad2/parts/part_0001.bin', 'rb').read()); b[-40] ^= 1
+open('bad2/parts/part_0001.bin', 'wb').write(b)"
+refused "rank 1's part damaged (its own message, not rank 0's echo)" "rank 1 of 2.*checksum" \
+    "$THORAX" render --solution bad2 --slice y=0 --only slices -o no.png
 refused "IceT out of reach" "paraview" env THORAX_ICET_LIBRARY=/nonexistent/libvtkIceTMPI.so \
     "$THORAX" render --solution sol2 --slice y=0 --only slices -o no.png
 # animate on the parts: every frame drawn by all ranks together; the frames and the movie one process's;

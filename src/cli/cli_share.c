@@ -42,6 +42,7 @@ int cli_share_end(thx_ctx *ctx, const char *cmd, thx_status st)
 {
     int first = -1;
     st = thx_par_agree(ctx, st, &first);
+    if (thx_par_failed_first() >= 0) first = thx_par_failed_first(); /* the rank that failed, not an echo of it */
     int rc = 0;
     if (st != THX_OK) {
         rc = 1;

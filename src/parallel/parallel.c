@@ -17,6 +17,7 @@ _Static_assert(sizeof(size_t) == sizeof(unsigned long long), "gather_size sends 
 
 static const thx_par_mpi *volatile g_api;
 static int g_rank = 0, g_size = 1, g_started = 0, g_running = 0;
+static int g_origin = -1; /* the rank of the first failure the ranks agreed on (thx_par_failed_first) */
 
 /* A positive count from the environment variable name; -1 when unset, 0 when not a count. */
 static long env_count(const char *name)
@@ -97,6 +98,9 @@ thx_status thx_par_agree(thx_ctx *ctx, thx_status st, int *failed_rank)
     if (rc) return st != THX_OK ? st : mpi_fail(ctx, rc, "agreeing on the ranks' results");
     if (failed_rank) *failed_rank = first == INT_MAX ? -1 : first;
     if (first == INT_MAX) return st;
+    /* the first agreement that meets a failure meets only the ranks' own (every one before it agreed on
+       success): its lowest failed rank is the one whose message is the story, later ones echo it */
+    if (g_origin < 0) g_origin = first;
     /* the first failed rank's status, to every rank (the failed ones too: a collective) */
     int code = g_rank == first ? (int)st : 0;
     rc = g_api->max_int(&code, 1);
@@ -329,3 +333,5 @@ thx_status thx_par_max(thx_ctx *ctx, thx_status st, double *v, int n)
     if (n) memcpy(v, buf, (size_t)n * sizeof *v);
     return THX_OK;
 }
+
+int thx_par_failed_first(void) { return g_origin; }

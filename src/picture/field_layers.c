@@ -308,7 +308,11 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
         thx_field_plane planes[8];
         for (int k = 0; k < o->n_slices && st == THX_OK; k++) st = thx_field_plane_parse(ctx, o->slices[k], &planes[k]);
         if (st == THX_OK) st = thx_field_mesh_create(ctx, &d->field[SLICE]);
-        if (st == THX_OK) st = thx_field_slice(ctx, v, phi, planes, (size_t)o->n_slices, d->field_use, d->field[SLICE]);
+        if (st == THX_OK && d->part_size > 1) /* sort-last: oblique planes snap nodes at the whole's scale */
+            st = thx_field_slice_scaled(ctx, v, phi, planes, (size_t)o->n_slices, d->field_use, d->part_slice_scale,
+                                        d->field[SLICE]);
+        else if (st == THX_OK)
+            st = thx_field_slice(ctx, v, phi, planes, (size_t)o->n_slices, d->field_use, d->field[SLICE]);
         if (st == THX_OK && o->slice_current) st = slices_by_current(ctx, d, phi);
         else if (st == THX_OK) {
             const thx_field_mesh *m = d->field[SLICE];

@@ -90,12 +90,13 @@ thx_status thx_picture_parts_settle(thx_ctx *ctx, const thx_picture_opts *o, thx
 {
     if (thx_par_size() < 2) return st;
     /* the same collectives on every rank, whatever it read: its extremes, or none */
-    double v[2 + 2 * 8];
-    for (int k = 0; k < 18; k++) v[k] = -INFINITY;
+    double v[2 + 2 * 8 + 1];
+    for (int k = 0; k < 19; k++) v[k] = -INFINITY;
     int parts = st == THX_OK && d->part_size > 1;
     if (parts) {
         v[0] = -d->vmin;
         v[1] = d->vmax;
+        v[18] = thx_field_slice_scale(d->m->volume); /* the slices' snapping scale: the whole's, the largest */
         for (int k = 0; k < o->n_slices && k < 8; k++) {
             thx_field_plane p;
             if (thx_field_plane_parse(ctx, o->slices[k], &p) != THX_OK) continue; /* (refused by the check below) */
@@ -105,11 +106,12 @@ thx_status thx_picture_parts_settle(thx_ctx *ctx, const thx_picture_opts *o, thx
             v[3 + 2 * k] = hi;
         }
     }
-    st = thx_par_max(ctx, st, v, 18);
+    st = thx_par_max(ctx, st, v, 19);
     if (st != THX_OK || !parts) return st;
     d->vmin = -v[0];
     d->vmax = v[1];
     for (int k = 0; k < 8; k++) d->part_span[k][0] = -v[2 + 2 * k], d->part_span[k][1] = v[3 + 2 * k];
+    d->part_slice_scale = v[18];
     if (!(d->vmin <= d->vmax)) st = thx_error(ctx, THX_EINPUT, "the solution's volume potentials hold no finite value");
     if (st == THX_OK) st = thx_picture_cuts_check(ctx, o, d);
     return thx_par_agree(ctx, st, NULL);

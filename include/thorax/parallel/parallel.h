@@ -48,6 +48,11 @@ void thx_par_end(void);
  * *failed_rank (when not NULL): the lowest failed rank, or -1. */
 thx_status thx_par_agree(thx_ctx *ctx, thx_status st, int *failed_rank);
 
+/* The lowest rank that had failed when an agreement (thx_par_agree, and the calls made of it) first
+ * met a failure: the rank whose own message tells what went wrong, where later agreements see every
+ * rank failed (the others carrying "rank K failed" on). -1 when no agreement has met a failure. */
+int thx_par_failed_first(void);
+
 /* Collective: n bytes of buf from rank root to every rank. */
 thx_status thx_par_bcast(thx_ctx *ctx, void *buf, size_t n, int root);
 

@@ -296,6 +296,7 @@ typedef struct {
     int part_rank, part_size;
     unsigned char *part_own;         /* per tetrahedron of the part: 1 own, 0 ghost (owned) */
     double part_span[8][2];          /* the slices' planes' spans over the whole volume (every rank's) */
+    double part_slice_scale;         /* the slices' snapping scale over the whole volume (thx_field_slice_scaled) */
     double part_lo, part_hi;         /* the frame part_frame's range over the whole volume */
     int part_frame;
     char part_unit[32];              /* the parts' values' unit (their manifest's) */
