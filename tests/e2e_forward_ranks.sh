@@ -29,20 +29,9 @@
 # Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models, tests/medium_phantom.sh).
 set -euo pipefail
 : "${THORAX:?}"
-PY=/usr/bin/python3
-if ! command -v mpirun > /dev/null; then
-    echo "e2e_forward_ranks: mpirun missing (Debian package openmpi-bin); skipped"
-    exit 77
-fi
-fail() { echo "e2e_forward_ranks: FAIL: $*" >&2; exit 1; }
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/e2e_forward_ranks.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
 HERE=$(cd "$(dirname "$0")" && pwd)
-cd "$TMP"
-MPIRUN=(mpirun --oversubscribe)
-[ "$(id -u)" -eq 0 ] && MPIRUN+=(--allow-run-as-root)
-# one OpenMP thread a process, as ctest gives every test: three ranks share two cores here
-export OMP_NUM_THREADS=1
+. "$HERE/ranks_test.sh"
+ranks_test e2e_forward_ranks
 # the direct path keeps its ordering in a cache (docs/design/parallel.md): ctest names one, else ours
 export THORAX_CACHE_DIR="${THORAX_CACHE_DIR:-$TMP/cache}"
 

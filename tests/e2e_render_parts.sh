@@ -15,19 +15,9 @@
 # Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models).
 set -euo pipefail
 : "${THORAX:?}"
-PY=/usr/bin/python3
-if ! command -v mpirun > /dev/null; then
-    echo "e2e_render_parts: mpirun missing (Debian package openmpi-bin); skipped"
-    exit 77
-fi
-fail() { echo "e2e_render_parts: FAIL: $*" >&2; exit 1; }
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/e2e_render_parts.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
 HERE=$(cd "$(dirname "$0")" && pwd)
-cd "$TMP"
-MPIRUN=(mpirun --oversubscribe)
-[ "$(id -u)" -eq 0 ] && MPIRUN+=(--allow-run-as-root)
-export OMP_NUM_THREADS=1
+. "$HERE/ranks_test.sh"
+ranks_test e2e_render_parts
 
 . "$HERE/medium_phantom.sh"
 medium_phantom || fail "the medium phantom"
