@@ -52,6 +52,15 @@ void thx_stream_field_destroy(thx_stream_field **f)
 
 double thx_stream_field_max(const thx_stream_field *f) { return f->jmax; }
 
+void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const double box[2][3], double jmax,
+                               double diag)
+{
+    f->own = own;
+    memcpy(f->box, box, sizeof f->box);
+    f->jmax = jmax;
+    f->diag = diag;
+}
+
 thx_status thx_stream_field_create(thx_ctx *ctx, const thx_volume *v, const double *j_node, const double *phi,
                                    const unsigned char *use_region, thx_stream_field **out)
 {

@@ -13,7 +13,9 @@ struct thx_stream_field {
     unsigned char *active;     /* n_tets: in the domain */
     double jmax;               /* largest |J| at the domain's nodes */
     double lo[3], hi[3];       /* the mesh's bounding box, mm */
-    double diag;               /* its diagonal, mm */
+    double diag;               /* its diagonal, mm (the whole's on a part) */
+    const unsigned char *own;  /* on a part: n_tets, its own tetrahedra (borrowed); NULL: the whole */
+    double box[2][3];          /* on a part: its box */
 };
 
 /* The mean edge length of tetrahedron t, mm: the cell size steps are fractions of. */

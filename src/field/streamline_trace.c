@@ -8,14 +8,7 @@
 
 #include "field/streamline_impl.h"
 
-/* One line as it grows. */
-typedef struct {
-    size_t n, cap;
-    double *xyz, *cur, *phi, *arc;
-    int32_t *tet;
-    int stop, dir;
-    double length;
-} line_buf;
+typedef thx_stream_piece line_buf;
 
 typedef struct {
     line_buf line[2];
@@ -50,20 +43,30 @@ static int push(line_buf *b, const double x[3], double cur, double phi, double a
     return 1;
 }
 
-static void buf_free(line_buf *b)
+void thx_stream_piece_free(line_buf *b)
 {
     free(b->xyz), free(b->cur), free(b->phi), free(b->arc), free(b->tet);
     memset(b, 0, sizeof *b);
 }
 
-/* The unit direction sign J/|J| at p (walking from hint): 0 and *tet, 1 outside the domain, 2 |J| = 0. */
+/* Whether p is outside a part's box: where the part's mesh no longer tells the domain's edge. */
+static int beyond_part(const thx_stream_field *f, const double p[3])
+{
+    if (!f->own) return 0;
+    for (int c = 0; c < 3; c++)
+        if (!(p[c] >= f->box[0][c] && p[c] <= f->box[1][c])) return 1;
+    return 0;
+}
+
+/* The unit direction sign J/|J| at p (walking from hint): 0 and *tet, 1 outside the domain, 2 |J| = 0,
+ * 3 outside a part's mesh beyond its box (perhaps inside the domain: the part cannot tell). */
 static int direction(const thx_stream_field *f, const double p[3], long hint, double sign, double k[3], long *tet,
                      size_t *evals)
 {
     double J[3];
     (*evals)++;
     long t = thx_stream_field_eval(f, p, hint, J, NULL);
-    if (t < 0) return 1;
+    if (t < 0) return beyond_part(f, p) ? 3 : 1;
     double m = sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]);
     if (!(m > 0)) return 2;
     for (int c = 0; c < 3; c++) k[c] = sign * J[c] / m;
@@ -93,34 +96,48 @@ static const double DP_A[7][6] = {
     {35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}};
 static const double DP_E[7] = {71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525, -1.0 / 40};
 
-/*
- * One line from x0 (in tetrahedron t0) in direction sign; the stop rules of the header. The first
- * point is the seed.
- */
-static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const double x0[3], long t0, double sign,
-                      line_buf *b, size_t *n_steps, size_t *n_evals, int *nomem)
+int thx_stream_start(const thx_stream_field *f, const thx_stream_opts *o, const double x0[3], long t0, double sign,
+                     thx_stream_state *s, line_buf *b, int *nomem)
 {
-    double x[3] = {x0[0], x0[1], x0[2]}, k1[3], J[3], phi;
-    long t = t0;
-    thx_stream_interp(f, (size_t)t, x, J, &phi);
+    double J[3], phi;
+    memset(s, 0, sizeof *s);
+    memcpy(s->x0, x0, sizeof s->x0);
+    memcpy(s->x, x0, sizeof s->x);
+    s->t = s->t0 = t0;
+    s->sign = sign > 0 ? 1 : -1;
+    thx_stream_interp(f, (size_t)t0, x0, J, &phi);
     double jm = sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]), jmin = o->min_current * f->jmax;
-    double maxlen = o->max_length > 0 ? o->max_length : 4 * f->diag;
-    b->dir = sign > 0 ? 1 : -1;
+    s->j0 = jm;
+    s->phi0 = phi;
+    b->dir = s->sign;
     b->length = 0;
-    if (!push(b, x, jm, phi, 0, t)) {
+    if (!push(b, x0, jm, phi, 0, t0)) {
         *nomem = 1;
-        return;
+        return b->stop = THX_STOP_LOW_CURRENT; /* (the line is given up: out of memory) */
     }
-    if (!(jm > 0) || jm < jmin) {
-        b->stop = THX_STOP_LOW_CURRENT;
-        return;
-    }
-    for (int c = 0; c < 3; c++) k1[c] = sign * J[c] / jm;
-    const double k_start[3] = {k1[0], k1[1], k1[2]};
-    double loop_tol = o->loop_tol * thx_stream_cell_size(f->v, (size_t)t0), len = 0;
-    double h = o->step_mm > 0 ? o->step_mm : o->step * thx_stream_cell_size(f->v, (size_t)t);
-    int away = 0, fixed = o->integrator != THX_STREAM_RK45;
-    for (size_t step = 0;; step++) {
+    if (!(jm > 0) || jm < jmin) return b->stop = THX_STOP_LOW_CURRENT;
+    for (int c = 0; c < 3; c++) s->k1[c] = sign * J[c] / jm;
+    memcpy(s->k_start, s->k1, sizeof s->k1);
+    s->loop_tol = o->loop_tol * thx_stream_cell_size(f->v, (size_t)t0);
+    s->h = o->step_mm > 0 ? o->step_mm : o->step * thx_stream_cell_size(f->v, (size_t)t0);
+    return THX_STREAM_GOING;
+}
+
+/*
+ * A line's steps from the state s; the stop rules of the header. On a part, the line is handed over
+ * after a step whose point is in a tetrahedron owned elsewhere, with the state that step left.
+ */
+int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stream_state *ls, line_buf *b,
+                   size_t *n_steps, size_t *n_evals, int *nomem)
+{
+    double *x = ls->x, *k1 = ls->k1, J[3], phi, jm;
+    const double *x0 = ls->x0, *k_start = ls->k_start, sign = ls->sign;
+    double jmin = o->min_current * f->jmax, maxlen = o->max_length > 0 ? o->max_length : 4 * f->diag;
+    double loop_tol = ls->loop_tol, len = ls->len, h = ls->h;
+    long t = (long)ls->t, t0 = (long)ls->t0;
+    int away = ls->away, fixed = o->integrator != THX_STREAM_RK45;
+    b->dir = ls->sign;
+    for (size_t step = (size_t)ls->step;; step++) {
         if (step >= o->max_steps) {
             b->stop = THX_STOP_MAX_STEPS;
             break;
@@ -174,12 +191,14 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
                     h_next = h * fmin(5.0, fmax(0.2, fac));
                 }
             }
+            if (r == 3) return THX_STREAM_UNSURE;
             if (r == 2) {
                 zero = 1;
                 break;
             }
             if (!r && o->integrator != THX_STREAM_RK45) {
                 r = direction(f, xn, ts, sign, kn, &tn, n_evals);
+                if (r == 3) return THX_STREAM_UNSURE;
                 if (r == 2) {
                     zero = 1;
                     break;
@@ -205,13 +224,14 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
             }
             if (se < h) {
                 for (int c = 0; c < 3; c++) xn[c] = x[c] + se * k1[c];
+                if (f->own && !f->own[te] && beyond_part(f, xn)) return THX_STREAM_UNSURE; /* a ghost's face: the edge? */
                 thx_stream_interp(f, (size_t)te, xn, J, &phi);
                 len += se;
                 if (!push(b, xn, sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]), phi, len, te)) *nomem = 1;
                 (*n_steps)++;
                 b->stop = THX_STOP_BOUNDARY;
                 b->length = len;
-                return;
+                return b->stop;
             }
             h *= 0.5; /* the curve bends out before the straight path does: a shorter step */
             h_next = h;
@@ -234,11 +254,9 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
             away = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 2 * loop_tol;
         } else if (o->loops && dist_point_segment(x0, x, xn) < loop_tol &&
                    (xn[0] - x[0]) * k_start[0] + (xn[1] - x[1]) * k_start[1] + (xn[2] - x[2]) * k_start[2] > 0) {
-            double J0[3], phi0;
-            thx_stream_interp(f, (size_t)t0, x0, J0, &phi0);
             double dx[3] = {x0[0] - x[0], x0[1] - x[1], x0[2] - x[2]};
             len += sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]) - h;
-            if (!push(b, x0, sqrt(J0[0] * J0[0] + J0[1] * J0[1] + J0[2] * J0[2]), phi0, len, t0)) *nomem = 1;
+            if (!push(b, x0, ls->j0, ls->phi0, len, t0)) *nomem = 1;
             b->stop = THX_STOP_LOOP;
             break;
         }
@@ -254,12 +272,26 @@ static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const
             b->stop = THX_STOP_MAX_LENGTH;
             break;
         }
-        memcpy(x, xn, sizeof x);
-        memcpy(k1, kn, sizeof k1);
+        memcpy(x, xn, 3 * sizeof *x);
+        memcpy(k1, kn, sizeof kn);
         t = tn;
         h = h_next;
+        if (f->own && !f->own[t]) { /* into another part's tetrahedron: its owner goes on */
+            ls->t = t, ls->h = h, ls->len = len, ls->away = away, ls->step = (int64_t)step + 1;
+            return THX_STREAM_HANDOVER;
+        }
     }
     b->length = len;
+    return b->stop;
+}
+
+/* One line from x0 (in tetrahedron t0) in direction sign; the first point is the seed. */
+static void trace_one(const thx_stream_field *f, const thx_stream_opts *o, const double x0[3], long t0, double sign,
+                      line_buf *b, size_t *n_steps, size_t *n_evals, int *nomem)
+{
+    thx_stream_state s;
+    if (thx_stream_start(f, o, x0, t0, sign, &s, b, nomem) == THX_STREAM_GOING)
+        thx_stream_run(f, o, &s, b, n_steps, n_evals, nomem);
 }
 
 void thx_streamlines_destroy(thx_streamlines **s)
@@ -360,7 +392,7 @@ thx_status thx_streamlines_trace(thx_ctx *ctx, const thx_stream_field *f, const 
         s->n_points = np;
     }
     for (size_t i = 0; i < n_seeds; i++)
-        for (int k = 0; k < so[i].n_lines; k++) buf_free(&so[i].line[k]);
+        for (int k = 0; k < so[i].n_lines; k++) thx_stream_piece_free(&so[i].line[k]);
     free(so);
     if (st) {
         thx_streamlines_destroy(&s);

@@ -170,6 +170,53 @@ thx_status thx_streamlines_trace(thx_ctx *ctx, const thx_stream_field *f, const 
                                  size_t n_seeds, const thx_stream_opts *o, thx_streamlines **out);
 void thx_streamlines_destroy(thx_streamlines **s);
 
+/* ---- on a part of the volume (sort-last, docs/design/parallel.md "Streamlines on the parts") ----
+ *
+ * The field is made on a part (the tetrahedra a rank owns and their ghosts, thorax/fem/parts.h) with
+ * j_node the whole's J at every node of the part (the caller completes the nodes of the ghosts'
+ * far side from the parts that own them). thx_stream_field_set_part marks the own tetrahedra (own,
+ * borrowed: n_tets bytes), the part's box (a point inside it is in the part's mesh if it is in the
+ * domain: every tetrahedron whose box meets it is a ghost at least) and the whole's largest nodal
+ * |J| and bounding-box diagonal (agreed by the caller). Then thx_stream_seeds keeps a point outside
+ * the part with tetrahedron -1 (the caller agrees which part holds it, and drops or refuses as one
+ * process does), and a line is traced piece by piece: thx_stream_start from its seed, then
+ * thx_stream_run until it stops (its thx_stream_stop), or its point enters a tetrahedron the part
+ * does not own (THX_STREAM_HANDOVER: the state is the owner's to run on), or a step reaches beyond
+ * what the part can tell (THX_STREAM_UNSURE: a stage outside the part's box and its mesh). The state
+ * holds everything the next step needs, so a line run in pieces has the one process's points to
+ * the bit. On the whole (no part set), thx_streamlines_trace is start and run. */
+#define THX_STREAM_GOING (-1)
+#define THX_STREAM_HANDOVER (-2)
+#define THX_STREAM_UNSURE (-3)
+
+typedef struct {
+    double x0[3], k_start[3], j0, phi0, loop_tol; /* the seed: point, direction, |J|, phi, loop tolerance */
+    double x[3], k1[3], h, len;                   /* the current point, direction, step and length so far */
+    int64_t t, t0, step;                          /* tetrahedra of the point and of the seed (part's numbers), steps */
+    int32_t sign, away;
+} thx_stream_state;
+
+/* One piece of a line as it grows (the caller frees it with thx_stream_piece_free). */
+typedef struct {
+    size_t n, cap;
+    double *xyz, *cur, *phi, *arc;
+    int32_t *tet;
+    int stop, dir;
+    double length;
+} thx_stream_piece;
+void thx_stream_piece_free(thx_stream_piece *b);
+
+void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const double box[2][3], double jmax,
+                               double diag);
+/* The seed x0 in tetrahedron t0, direction sign (+1, -1): the state and the first point into b;
+ * THX_STREAM_GOING, or why the line ends there. *nomem set when a point could not be kept. */
+int thx_stream_start(const thx_stream_field *f, const thx_stream_opts *o, const double x0[3], long t0, double sign,
+                     thx_stream_state *s, thx_stream_piece *b, int *nomem);
+/* Steps from s, the points into b: a thx_stream_stop (b->stop, b->length set), THX_STREAM_HANDOVER
+ * (s->t is then the part's tetrahedron the point is in, owned elsewhere) or THX_STREAM_UNSURE. */
+int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stream_state *s, thx_stream_piece *b,
+                   size_t *n_steps, size_t *n_evals, int *nomem);
+
 /* ---- tubes and files ---- */
 
 /* A triangle mesh around the lines: per line with two distinct points or more, a ring of `sides`
