@@ -8,9 +8,11 @@
 # colour bar and label, opaque equipotentials (their normals on a part's edge the whole's: the
 # ghosts) with a slice; a solution in 2 parts drawn on 3 ranks (sort-first then: the same bytes);
 # volume rendering (potential, |J|) within 1/255 (blended in float, front to back); animate on 3
-# ranks: every frame drawn by all ranks, frames and movie one process's, kept when run again.
+# ranks: every frame drawn by all ranks, frames and movie one process's, kept when run again;
+# streamlines (sphere, line and point seeds; J at the ghosts' far nodes from their owners, the lines
+# handed from part to part, joined and made tubes on rank 0) one process's, byte for byte.
 # Refused, with one message, exit 1 and no picture: a translucent surface (depth compositing needs
-# opaque ones), streamlines, IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
+# opaque ones), region: and density: streamline seeds (random over the whole volume), IceT's library out of reach (THORAX_ICET_LIBRARY, as on a machine
 # without Debian's paraview). Skipped (77) without mpirun. Writes only in a mktemp -d directory.
 # Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models).
 set -euo pipefail
@@ -54,6 +56,14 @@ for n in 2 3; do
     draw $n iso$n --solution sol$n --frame 3 --isosurface count:5 --surface equipotentials=phong:1 --slice z=0 \
         --only equipotentials --only slices --view superior --colorbar
 done
+# streamlines: seeds in the torso and round the heart, lines crossing the parts (every one handed over at least
+# once on 3 ranks: the line along x crosses both cuts)
+for n in 2 3; do
+    draw $n stream$n --solution sol$n --frame 2 --streamlines sphere:0,0,0:60:40 --streamlines line:-100,0,0:100,0,0:12 \
+        --streamlines point:10,-20,5 --only streamlines --view left
+done
+grep -q "handed from part to part [1-9][0-9]* times" <("${MPIRUN[@]}" -np 3 "$THORAX" render --solution sol3 --frame 2 \
+    --streamlines line:-100,0,0:100,0,0:12 --only streamlines -o hand3.png 2>&1) || fail "streamlines on 3 ranks: no line handed over"
 draw 3 oblique3 --solution sol3 --frame 2 --slice 10,-5,3:1,2,0.5 --slice 0,0,0:0.3,-1,2 --only slices --view left
 draw 3 other_count --solution sol2 --frame 2 --slice y=0 --only slices --view anterior
 
@@ -114,7 +124,7 @@ def pixels(p):
         o += 12 + n
     raw = zlib.decompress(data)
     return w, h, raw
-for name in ('slices2_2.png', 'current3_3.png', 'iso3_3.png'):
+for name in ('slices2_2.png', 'current3_3.png', 'iso3_3.png', 'stream3_3.png'):
     w, h, raw = pixels(name)
     bg = raw[1:5]  # the first pixel of the first row: the background
     distinct = len(set(raw[1 + y * (4 * w + 1) + 4 * x: 5 + y * (4 * w + 1) + 4 * x] for y in range(0, h, 4) for x in range(0, w, 4)))
@@ -134,7 +144,9 @@ refused() {
 }
 refused "a translucent torso" "must be opaque" "$THORAX" render --solution sol2 --slice y=0 -o no.png
 refused "a surface beside the volume" "volume alone" "$THORAX" trace --solution sol2 --volume potential -o no.png
-refused "streamlines" "not drawn by sort-last" "$THORAX" render --solution sol2 --streamlines heart:20 -o no.png
+refused "region seeds" "region seeds are drawn at random" "$THORAX" render --solution sol2 --streamlines region:heart:20 -o no.png
+refused "density seeds" "density seeds are drawn at random" "$THORAX" render --solution sol2 --streamlines density:20 -o no.png
+refused "a point seed outside" "is outside the domain" "$THORAX" render --solution sol2 --streamlines point:900,0,0 -o no.png
 cp -r sol2 bad2
 "$PY" -c "
 b = bytearray(open('bad2/parts/part_0001.bin', 'rb').read()); b[-40] ^= 1

@@ -52,11 +52,14 @@ void thx_stream_field_destroy(thx_stream_field **f)
 
 double thx_stream_field_max(const thx_stream_field *f) { return f->jmax; }
 
-void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const double box[2][3], double jmax,
-                               double diag)
+const thx_tet_locator *thx_stream_field_locator(const thx_stream_field *f) { return f->loc; }
+
+void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const int32_t *id, const unsigned char *edge,
+                               double jmax, double diag)
 {
     f->own = own;
-    memcpy(f->box, box, sizeof f->box);
+    f->edge = edge;
+    thx_tet_locator_set_part(f->loc, id, edge);
     f->jmax = jmax;
     f->diag = diag;
 }
@@ -219,6 +222,31 @@ static long scan(const thx_stream_field *f, const double p[3])
     return -1;
 }
 
+long thx_stream_field_lowest(const thx_stream_field *f, const double p[3], long t)
+{
+    enum { MAX = 512 };
+    long seen[MAX], best = t;
+    int n = 1;
+    seen[0] = t;
+    for (int i = 0; i < n; i++) {
+        long u = seen[i];
+        const int32_t *q = f->v->tet + 4 * (size_t)u;
+        for (int k = 0; k < 4; k++) {
+            const double *A = f->v->xyz + 3 * (size_t)q[(k + 1) & 3], *B = f->v->xyz + 3 * (size_t)q[(k + 2) & 3],
+                         *C = f->v->xyz + 3 * (size_t)q[(k + 3) & 3];
+            if (thx_orient3d(A, B, C, p) != 0) continue; /* p not on this face: nothing of it behind */
+            long w = thx_tet_neighbour(f->loc, (size_t)u, k);
+            if (w < 0 || !f->active[w] || !holds(f->v, (size_t)w, p)) continue;
+            int known = 0;
+            for (int j = 0; j < n && !known; j++) known = seen[j] == w;
+            if (known || n == MAX) continue;
+            seen[n++] = w;
+            if (w < best) best = w;
+        }
+    }
+    return best;
+}
+
 long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hint, double *j, double *phi)
 {
     /* The walk's first test, in floating point: p clearly inside the hint (every barycentric coordinate
@@ -244,6 +272,8 @@ long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hi
         }
     }
     long t = thx_tet_locate(f->loc, p, hint, NULL);
+    if (t == -2 && hint >= 0) return -2; /* a step beyond a part's edge: the part cannot tell */
+    if (t == -2) t = -1;                  /* a seed: the scan below, then its owner's */
     if (t >= 0 && !f->active[t]) {
         /* p on a face between the domain and a region outside it: the domain's side, if it holds p */
         long u = -1;
@@ -261,7 +291,7 @@ long thx_stream_field_eval(const thx_stream_field *f, const double p[3], long hi
 }
 
 double thx_stream_exit(const thx_stream_field *f, size_t t, const double p[3], const double d[3], double smax,
-                       long *exit_tet)
+                       long *exit_tet, int *unknown)
 {
     const thx_volume *v = f->v;
     long u = (long)t, from = -1;
@@ -288,6 +318,7 @@ double thx_stream_exit(const thx_stream_field *f, size_t t, const double p[3], c
         *exit_tet = u;
         if (s_out >= smax) return INFINITY;
         long w = thx_tet_neighbour(f->loc, (size_t)u, kout);
+        if (w < 0 && f->edge && f->edge[4 * (size_t)u + (size_t)kout]) *unknown = 1;
         if (w < 0 || !f->active[w]) return s_out;
         from = u;
         u = w;

@@ -253,6 +253,7 @@ thx_status thx_stream_seeds(thx_ctx *ctx, const thx_stream_field *f, const thx_s
                 p[2] = s->a[2] + s->radius * z;
             }
             long t = thx_stream_field_eval(f, p, -1, NULL, NULL);
+            if (t >= 0) t = thx_stream_field_lowest(f, p, t);
             if (t < 0 && f->own) { /* on a part: kept, the caller agrees which part holds it, if any */
                 THX_CHECK(grow(ctx, xyz, tet, *n));
                 memcpy(*xyz + 3 * *n, p, sizeof p);

@@ -49,24 +49,15 @@ void thx_stream_piece_free(line_buf *b)
     memset(b, 0, sizeof *b);
 }
 
-/* Whether p is outside a part's box: where the part's mesh no longer tells the domain's edge. */
-static int beyond_part(const thx_stream_field *f, const double p[3])
-{
-    if (!f->own) return 0;
-    for (int c = 0; c < 3; c++)
-        if (!(p[c] >= f->box[0][c] && p[c] <= f->box[1][c])) return 1;
-    return 0;
-}
-
 /* The unit direction sign J/|J| at p (walking from hint): 0 and *tet, 1 outside the domain, 2 |J| = 0,
- * 3 outside a part's mesh beyond its box (perhaps inside the domain: the part cannot tell). */
+ * 3 beyond a part's edge (perhaps inside the domain: the part cannot tell). */
 static int direction(const thx_stream_field *f, const double p[3], long hint, double sign, double k[3], long *tet,
                      size_t *evals)
 {
     double J[3];
     (*evals)++;
     long t = thx_stream_field_eval(f, p, hint, J, NULL);
-    if (t < 0) return beyond_part(f, p) ? 3 : 1;
+    if (t < 0) return t == -2 ? 3 : 1;
     double m = sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]);
     if (!(m > 0)) return 2;
     for (int c = 0; c < 3; c++) k[c] = sign * J[c] / m;
@@ -191,14 +182,15 @@ int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stre
                     h_next = h * fmin(5.0, fmax(0.2, fac));
                 }
             }
-            if (r == 3) return THX_STREAM_UNSURE;
+            int unsure = r == 3; /* a stage the part cannot place: the exit walk below may tell */
+            if (r == 3) r = 1;
             if (r == 2) {
                 zero = 1;
                 break;
             }
             if (!r && o->integrator != THX_STREAM_RK45) {
                 r = direction(f, xn, ts, sign, kn, &tn, n_evals);
-                if (r == 3) return THX_STREAM_UNSURE;
+                if (r == 3) unsure = 1, r = 1;
                 if (r == 2) {
                     zero = 1;
                     break;
@@ -215,7 +207,11 @@ int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stre
              * the step again with exactly that length (the curve may still bend out first: halved then); a
              * point within a thousandth of the cell of the boundary goes straight to it and the line ends. */
             long te = t;
-            double se = thx_stream_exit(f, (size_t)t, x, k1, h, &te);
+            int unknown = 0;
+            double se = thx_stream_exit(f, (size_t)t, x, k1, h, &te, &unknown);
+            /* on a part: the straight path reaching the part's edge, or a stage the part could not place with
+               no edge of the domain ahead, is the whole's to tell (the one process's step may go on there) */
+            if (unknown || (unsure && !(se < h))) return THX_STREAM_UNSURE;
             if (se < h && se > 1e-3 * hc && !to_exit) {
                 h = se;
                 h_next = h;
@@ -224,7 +220,6 @@ int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stre
             }
             if (se < h) {
                 for (int c = 0; c < 3; c++) xn[c] = x[c] + se * k1[c];
-                if (f->own && !f->own[te] && beyond_part(f, xn)) return THX_STREAM_UNSURE; /* a ghost's face: the edge? */
                 thx_stream_interp(f, (size_t)te, xn, J, &phi);
                 len += se;
                 if (!push(b, xn, sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]), phi, len, te)) *nomem = 1;

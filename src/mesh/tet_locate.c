@@ -14,7 +14,15 @@ struct thx_tet_locator {
     int g[3];         /* seed grid cells per axis */
     int32_t *seed;    /* per cell */
     size_t max_steps;
+    const int32_t *id;         /* on a part: the tetrahedra's numbers in the whole (borrowed), or NULL */
+    const unsigned char *edge; /* on a part: 4 n_tets, face k of t at 4 t + k on the part's edge, or NULL */
 };
+
+void thx_tet_locator_set_part(thx_tet_locator *l, const int32_t *id, const unsigned char *edge)
+{
+    l->id = id;
+    l->edge = edge;
+}
 
 void thx_tet_locator_destroy(thx_tet_locator **l)
 {
@@ -159,7 +167,7 @@ long thx_tet_locate(const thx_tet_locator *l, const double p[3], long start, siz
     const thx_volume *v = l->v;
     long t = start >= 0 && (size_t)start < v->n_tets ? start : l->seed[cell_of(l, p)];
     long from = -1;
-    unsigned rot = (unsigned)t * 2654435761u;
+    unsigned rot = (unsigned)(l->id ? l->id[t] : t) * 2654435761u; /* a part walks as the whole does */
     size_t n = 0;
     for (;;) {
         if (++n > l->max_steps) break;
@@ -184,6 +192,10 @@ long thx_tet_locate(const thx_tet_locator *l, const double p[3], long start, siz
             return t;
         }
         long u = l->nb[4 * (size_t)t + (size_t)next];
+        if (u < 0 && l->edge && l->edge[4 * (size_t)t + (size_t)next]) { /* the whole goes on: the part cannot tell */
+            if (steps) *steps = n;
+            return -2;
+        }
         if (u < 0) break; /* out through the boundary */
         from = t;
         t = u;

@@ -192,30 +192,35 @@ static thx_status slices_by_current(thx_ctx *ctx, thx_picture_data *d, const dou
 /* The frame's streamlines: J at the nodes (the finite elements' J per tetrahedron, volume-weighted),
  * the seeds of every specification, lines both ways by RK2, tubes round them. */
 static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const double *phi,
-                                    double lo, double hi)
+                                    double lo, double hi, thx_status st)
 {
-    const thx_volume *v = d->m->volume;
-    double *jn = malloc(3 * (v->n_nodes ? v->n_nodes : 1) * sizeof *jn);
-    if (!jn) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
-    thx_fem_currents(v, d->field_use, phi, NULL, jn);
-    thx_stream_field *f = NULL;
-    thx_status st = thx_stream_field_create(ctx, v, jn, phi, d->field_use, &f);
-    free(jn);
-    double *xyz = NULL;
-    long *tet = NULL;
-    size_t n = 0;
-    for (int k = 0; k < o->n_streamlines && st == THX_OK; k++) {
-        thx_seed_spec spec;
-        st = thx_seed_spec_parse(ctx, o->streamlines[k], &spec);
-        if (st == THX_OK) st = thx_stream_seeds(ctx, f, &spec, &xyz, &tet, &n);
-    }
     thx_streamlines *lines = NULL;
-    thx_stream_opts so;
-    thx_stream_opts_default(&so);
-    if (st == THX_OK) st = thx_streamlines_trace(ctx, f, xyz, tet, n, &so, &lines);
-    free(xyz);
-    free(tet);
-    thx_stream_field_destroy(&f);
+    if (d->part_size > 1) /* sort-last: traced across the parts, the lines on rank 0 (collective: st carried) */
+        st = picture_part_streamlines(ctx, o, d, phi, st, &lines);
+    if (st != THX_OK) return st;
+    if (d->part_size <= 1) {
+        const thx_volume *v = d->m->volume;
+        double *jn = malloc(3 * (v->n_nodes ? v->n_nodes : 1) * sizeof *jn);
+        if (!jn) return thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
+        thx_fem_currents(v, d->field_use, phi, NULL, jn);
+        thx_stream_field *f = NULL;
+        st = thx_stream_field_create(ctx, v, jn, phi, d->field_use, &f);
+        free(jn);
+        double *xyz = NULL;
+        long *tet = NULL;
+        size_t n = 0;
+        for (int k = 0; k < o->n_streamlines && st == THX_OK; k++) {
+            thx_seed_spec spec;
+            st = thx_seed_spec_parse(ctx, o->streamlines[k], &spec);
+            if (st == THX_OK) st = thx_stream_seeds(ctx, f, &spec, &xyz, &tet, &n);
+        }
+        thx_stream_opts so;
+        thx_stream_opts_default(&so);
+        if (st == THX_OK) st = thx_streamlines_trace(ctx, f, xyz, tet, n, &so, &lines);
+        free(xyz);
+        free(tet);
+        thx_stream_field_destroy(&f);
+    }
     double radius = o->stream_radius;
     if (st == THX_OK && !(radius > 0)) {
         double blo[3], bhi[3];
@@ -327,7 +332,8 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
             d->field_hi[SLICE] = hi;
         }
     }
-    if (st == THX_OK && o->n_streamlines) st = build_streamlines(ctx, o, d, phi, lo, hi);
+    /* sort-last's streamlines are traced across the ranks: reached by every rank, whatever failed before */
+    if (o->n_streamlines && (st == THX_OK || d->part_size > 1)) st = build_streamlines(ctx, o, d, phi, lo, hi, st);
     if (st == THX_OK && d->part_size > 1) st = picture_part_cuts(ctx, d); /* sort-last: the own triangles drawn */
     if (st != THX_OK) {
         picture_field_free(d);

@@ -63,6 +63,8 @@ void thx_picture_data_free(thx_picture_data *d)
     d->field_use = NULL;
     free(d->part_own);
     d->part_own = NULL;
+    free(d->part_node), free(d->part_tet_id), free(d->part_owner);
+    d->part_node = d->part_tet_id = d->part_owner = NULL;
     free(d->part_cuts);
     d->part_cuts = NULL;
     thx_model_destroy(&d->m);

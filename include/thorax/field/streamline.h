@@ -96,7 +96,7 @@ double thx_stream_field_max(const thx_stream_field *f);
 /*
  * The domain's tetrahedron holding p (walking from hint, a tetrahedron, or < 0: the locator's grid,
  * then a scan of every tetrahedron if the walk fails — a mesh with holes), or -1 when p is outside
- * the domain. A point clearly inside hint (every barycentric coordinate above 1e-9, in floating
+ * the domain (on a part, -2: beyond the part's edge, thx_stream_field_set_part). A point clearly inside hint (every barycentric coordinate above 1e-9, in floating
  * point) is taken there without the walk; every other goes to the walk's exact tests. If j (3) or phi
  * are not NULL: the interpolated field there. Thread-safe.
  */
@@ -175,14 +175,16 @@ void thx_streamlines_destroy(thx_streamlines **s);
  * The field is made on a part (the tetrahedra a rank owns and their ghosts, thorax/fem/parts.h) with
  * j_node the whole's J at every node of the part (the caller completes the nodes of the ghosts'
  * far side from the parts that own them). thx_stream_field_set_part marks the own tetrahedra (own,
- * borrowed: n_tets bytes), the part's box (a point inside it is in the part's mesh if it is in the
- * domain: every tetrahedron whose box meets it is a ghost at least) and the whole's largest nodal
- * |J| and bounding-box diagonal (agreed by the caller). Then thx_stream_seeds keeps a point outside
+ * borrowed: n_tets bytes) and the whole's largest nodal
+ * |J| and bounding-box diagonal (agreed by the caller); id (n_tets, borrowed) the tetrahedra's numbers
+ * in the whole (the locator's walk takes the whole's path) and edge (4 n_tets, borrowed) the faces
+ * with no neighbour in the part that have one in the whole (thx_tet_locator_set_part). Then thx_stream_seeds keeps a point outside
  * the part with tetrahedron -1 (the caller agrees which part holds it, and drops or refuses as one
  * process does), and a line is traced piece by piece: thx_stream_start from its seed, then
  * thx_stream_run until it stops (its thx_stream_stop), or its point enters a tetrahedron the part
  * does not own (THX_STREAM_HANDOVER: the state is the owner's to run on), or a step reaches beyond
- * what the part can tell (THX_STREAM_UNSURE: a stage outside the part's box and its mesh). The state
+ * what the part can tell (THX_STREAM_UNSURE: a stage or the straight path out of the part by a face
+ * of its edge, one the whole has a tetrahedron behind). The state
  * holds everything the next step needs, so a line run in pieces has the one process's points to
  * the bit. On the whole (no part set), thx_streamlines_trace is start and run. */
 #define THX_STREAM_GOING (-1)
@@ -206,8 +208,10 @@ typedef struct {
 } thx_stream_piece;
 void thx_stream_piece_free(thx_stream_piece *b);
 
-void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const double box[2][3], double jmax,
-                               double diag);
+void thx_stream_field_set_part(thx_stream_field *f, const unsigned char *own, const int32_t *id, const unsigned char *edge,
+                               double jmax, double diag);
+/* The field's point locator (its faces' neighbours: thx_tet_neighbour). */
+const struct thx_tet_locator *thx_stream_field_locator(const thx_stream_field *f);
 /* The seed x0 in tetrahedron t0, direction sign (+1, -1): the state and the first point into b;
  * THX_STREAM_GOING, or why the line ends there. *nomem set when a point could not be kept. */
 int thx_stream_start(const thx_stream_field *f, const thx_stream_opts *o, const double x0[3], long t0, double sign,

@@ -38,9 +38,16 @@ typedef struct thx_tet_locator thx_tet_locator;
 thx_status thx_tet_locator_create(thx_ctx *ctx, const thx_volume *v, thx_tet_locator **out);
 void thx_tet_locator_destroy(thx_tet_locator **l);
 
-/* The walk above from start (< 0: the seed of p's cell): the tetrahedron holding p, or -1.
- * steps (may be NULL): the tetrahedra visited. */
+/* The walk above from start (< 0: the seed of p's cell): the tetrahedron holding p, or -1; on a
+ * part (thx_tet_locator_set_part), -2 when the walk leaves the part by a face the whole has a
+ * tetrahedron behind. steps (may be NULL): the tetrahedra visited. */
 long thx_tet_locate(const thx_tet_locator *l, const double p[3], long start, size_t *steps);
+
+/* The locator of a part of a volume (sort-last's streamlines): id (n_tets, borrowed) the tetrahedra's
+ * numbers in the whole, which the walk's face order is drawn from, so that a part walks the whole's
+ * path; edge (4 n_tets, borrowed) the faces without a neighbour in the part that have one in the
+ * whole. NULL, NULL: the whole. */
+void thx_tet_locator_set_part(thx_tet_locator *l, const int32_t *id, const unsigned char *edge);
 
 /* The tetrahedron across face k (opposite corner k) of tetrahedron t, or -1 (the boundary). */
 long thx_tet_neighbour(const thx_tet_locator *l, size_t t, int k);

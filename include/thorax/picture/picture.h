@@ -295,6 +295,7 @@ typedef struct {
        part_size > 1; m->volume and volume are then the part's (its own tetrahedra and ghosts) */
     int part_rank, part_size;
     unsigned char *part_own;         /* per tetrahedron of the part: 1 own, 0 ghost (owned) */
+    int32_t *part_node, *part_tet_id, *part_owner; /* the part's nodes' and tetrahedra's numbers in the whole, owners */
     double part_span[8][2];          /* the slices' planes' spans over the whole volume (every rank's) */
     double part_slice_scale;         /* the slices' snapping scale over the whole volume (thx_field_slice_scaled) */
     double part_lo, part_hi;         /* the frame part_frame's range over the whole volume */
