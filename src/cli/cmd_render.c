@@ -497,7 +497,8 @@ static int render_main(int argc, char **argv, int traced)
                           "mpirun -np N each rank draws a band of the picture's rows, gathered by rank 0, which\n"
                           "writes: the same bytes as one process. A --solution whose volume is in N parts\n"
                           "(thorax forward --volume on N ranks) is drawn sort-last: each rank reads and cuts its\n"
-                          "part alone (slices, equipotentials; opaque surfaces only), and IceT composites the\n"
+                          "part alone (slices, equipotentials, streamlines from point, line or sphere seeds;\n"
+                          "opaque surfaces only), and IceT composites the\n"
                           "ranks' pictures by depth on rank 0: the same bytes as one process.\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o)},
                   {"ray tracing (--renderer trace)", rt, raytrace_options(rt, &o)}},

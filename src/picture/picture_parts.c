@@ -5,7 +5,8 @@
  * surfaces and region table, and its own part of the volume: its tetrahedra, their ghosts and their
  * nodes' values. The volume's cuts are then made on the part (picture/field_layers.c), the ghosts
  * giving the cut's vertices on the part's edge the whole's normals, and only the own tetrahedra's
- * triangles are drawn.
+ * triangles are drawn. Streamlines are traced across the parts, handed from rank to rank, and drawn
+ * by rank 0 (picture_part_streamlines).
  */
 #include <cjson/cJSON.h>
 #include <math.h>
