@@ -56,8 +56,8 @@ for n in 2 3; do
     draw $n iso$n --solution sol$n --frame 3 --isosurface count:5 --surface equipotentials=phong:1 --slice z=0 \
         --only equipotentials --only slices --view superior --colorbar
 done
-# streamlines: seeds in the torso and round the heart, lines crossing the parts (every one handed over at least
-# once on 3 ranks: the line along x crosses both cuts)
+# streamlines: seeds in the torso and round the heart, lines crossing the parts (on 3 ranks the seeds along x
+# lie in every part: lines are handed over, which the log's count shows)
 for n in 2 3; do
     draw $n stream$n --solution sol$n --frame 2 --streamlines sphere:0,0,0:60:40 --streamlines line:-100,0,0:100,0,0:12 \
         --streamlines point:10,-20,5 --only streamlines --view left
