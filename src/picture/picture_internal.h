@@ -40,9 +40,8 @@ int picture_part_wanted(const thx_picture_opts *o, const struct cJSON *solution)
 thx_status picture_part_read(thx_ctx *ctx, const thx_picture_opts *o, const struct cJSON *solution, thx_picture_data *d);
 thx_status picture_part_frame_range(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame, thx_status st);
 thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d);
-/* Sort-last's streamlines (collective, st this rank's status, carried): J at the part's nodes completed
- * from the other parts, the seeds each traced by the part owning it, the lines handed from part to part,
- * joined on rank 0 into the one process's lines (*out; empty on the other ranks). */
+/* Sort-last's streamlines (collective, st this rank's status, carried): thx_streamlines_trace_parts on
+ * the picture's part with render's options; the lines on rank 0 (*out; empty on the other ranks). */
 thx_status picture_part_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const double *phi,
                                     thx_status st, thx_streamlines **out);
 void picture_part_box(const thx_picture_data *d, double box[2][3]); /* this rank's box (sides at +-inf) */

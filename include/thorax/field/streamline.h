@@ -221,6 +221,31 @@ int thx_stream_start(const thx_stream_field *f, const thx_stream_opts *o, const 
 int thx_stream_run(const thx_stream_field *f, const thx_stream_opts *o, thx_stream_state *s, thx_stream_piece *b,
                    size_t *n_steps, size_t *n_evals, int *nomem);
 
+/* A rank's part of a volume in parts (thorax/fem/parts.h), as thx_streamlines_trace_parts reads it
+ * (every array borrowed). */
+typedef struct {
+    const unsigned char *own; /* n_tets: owned by this rank */
+    const int32_t *node_id;   /* n_nodes: the nodes' numbers in the whole, ascending */
+    const int32_t *tet_id;    /* n_tets: the tetrahedra's numbers in the whole, ascending */
+    const int32_t *owner;     /* n_tets: the rank owning each */
+    int rank;
+} thx_stream_part;
+
+/*
+ * Collective (thorax/parallel/parallel.h; every rank, st its status so far, carried and agreed):
+ * thx_streamlines_trace's lines on a volume in parts, v the rank's part (its nodes and tetrahedra,
+ * the model's regions), phi its nodes' potentials, use the domain's regions, the seeds from specs
+ * (point, line and sphere: every rank makes them all; region and density are the caller's to
+ * refuse). J at the nodes is completed from the parts that own a tetrahedron round each, the seeds
+ * are traced by the part owning their tetrahedron (the lowest-numbered holding them), the lines
+ * handed from part to part in rounds until none is on its way, and joined on rank 0: *out there is
+ * the one process's lines (the points' tetrahedra numbered in the whole, n_steps and n_evals every
+ * rank's), an empty set elsewhere. what names the solution in messages.
+ */
+thx_status thx_streamlines_trace_parts(thx_ctx *ctx, const thx_volume *v, const thx_stream_part *part, const unsigned char *use,
+                                      const double *phi, const thx_seed_spec *specs, int n_specs, const thx_stream_opts *o,
+                                      const char *what, thx_status st, thx_streamlines **out);
+
 /* ---- tubes and files ---- */
 
 /* A triangle mesh around the lines: per line with two distinct points or more, a ring of `sides`
