@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "thorax/field/field.h"
+#include "thorax/field/streamline.h"
 
 #define CLI_FIELD_MAX_SLICES 64
 
@@ -74,6 +75,13 @@ thx_status cli_field_pvd(thx_ctx *ctx, const cli_field_files *f, const double *t
  */
 int cli_field_parts(const char *cmd, const char *sol, cli_field_request *rq, const char *const *regions, int n_regions,
                     const char *frames, const char *out, int verbose);
+
+/* thorax field --streamlines under mpirun on a solution in parts for as many ranks: the lines traced
+ * across the parts (thx_streamlines_trace_parts), written by rank 0: the one process's file. Seeds
+ * from point:, line: and sphere: specs only (region: and density: refused). Exit code, every rank. */
+int cli_field_streamlines_parts(const char *cmd, const char *sol, const thx_seed_spec *specs, int n_specs,
+                                const thx_stream_opts *so, int frame, double tubes, int sides, int caps, const char *out,
+                                int verbose);
 
 /* Under mpirun, a rank but 0 (the launcher's numbering) says nothing while the command line is
  * checked (every rank checks the same line: rank 0 speaks for all): mute 1 before, 0 after. */

@@ -35,6 +35,7 @@
 #include "thorax/fem/fem.h"
 #include "thorax/fem/parts.h"
 #include "thorax/io/model_dir.h"
+#include "thorax/io/solution_file.h"
 #include "thorax/io/series_file.h"
 #include "thorax/parallel/parallel.h"
 
@@ -569,6 +570,66 @@ done:
     free(jm);
     free(jg);
     thx_field_mesh_destroy(&mesh);
+    thx_ctx_destroy(&ctx);
+    return rc;
+}
+
+int cli_field_streamlines_parts(const char *cmd, const char *sol, const thx_seed_spec *specs, int n_specs,
+                                const thx_stream_opts *so, int frame, double tubes, int sides, int caps, const char *out,
+                                int verbose)
+{
+    int rc = cli_share_start(cmd, &verbose);
+    if (rc) return rc;
+    thx_ctx *ctx = cli_ctx(verbose);
+    int rank = thx_par_rank(), size = thx_par_size();
+    field_part P;
+    unsigned char *use = NULL, *own_t = NULL;
+    thx_streamlines *sl = NULL;
+    thx_stream_tubes *T = NULL;
+    double t0 = thx_wtime();
+    thx_status st = part_open(ctx, sol, rank, size, &P), mine = THX_OK;
+    if (st == THX_OK) {
+        use = thx_calloc(ctx, P.v.n_regions + 1, 1);
+        own_t = thx_malloc(ctx, P.v.n_tets + 1);
+        if (!use || !own_t) st = THX_ENOMEM;
+    }
+    if (st == THX_OK) st = thx_solution_domain(ctx, sol, &P.v, use); /* the regions the solution covers */
+    for (int k = 0; st == THX_OK && k < n_specs; k++) /* random seeds are drawn over the whole volume at once */
+        if (specs[k].kind == THX_SEED_REGION || specs[k].kind == THX_SEED_DENSITY)
+            st = thx_error(ctx, THX_EINPUT, "--seed %s: %s seeds are drawn at random over the whole volume, not on %s's parts "
+                           "(each rank its own): give point:, line: or sphere: seeds (the default is density:100), or run it "
+                           "without mpirun", specs[k].text, specs[k].kind == THX_SEED_REGION ? "region" : "density", sol);
+    if (st == THX_OK && (size_t)frame > P.p.n_frames)
+        st = thx_error(ctx, THX_EINPUT, "%s: --frame %d: the volume potentials have %zu frames", sol, frame, P.p.n_frames);
+    st = thx_par_agree(ctx, own(&mine, st), NULL); /* every rank has its part, or none goes on */
+    if (st != THX_OK) goto end;
+    for (size_t t = 0; t < P.v.n_tets; t++) own_t[t] = (uint32_t)P.p.owner[t] == P.p.rank;
+    thx_stream_part part = {own_t, P.p.node, P.p.tet_id, P.p.owner, rank};
+    double t1 = thx_wtime();
+    st = thx_streamlines_trace_parts(ctx, &P.v, &part, use, P.p.values + (size_t)(frame - 1) * P.p.n_nodes, specs, n_specs,
+                                     so, sol, st, &sl);
+    if (st != THX_OK && thx_par_failed_first() == rank) own(&mine, st); /* (this rank's failure: it speaks) */
+    double t2 = thx_wtime();
+    if (st == THX_OK && rank == 0) { /* rank 0 holds the lines, and alone writes */
+        if (tubes > 0) st = own(&mine, thx_stream_tubes_make(ctx, sl, tubes, sides, caps, &T));
+        if (st == THX_OK) st = own(&mine, thx_streamlines_write(ctx, sl, T, out));
+        size_t count[THX_STOP_COUNT] = {0};
+        for (size_t l = 0; st == THX_OK && l < sl->n_lines; l++) count[sl->stop[l]]++;
+        if (st == THX_OK)
+            thx_log(ctx, THX_LOG_INFO,
+                    "wrote %s: %zu lines, %zu points (%s); stops: %zu boundary, %zu low_current, %zu max_length, %zu max_steps, "
+                    "%zu loop; frame %d; tracing on %d parts %.3f s (%zu steps, %zu evaluations), all %.2f s",
+                    out, sl->n_lines, sl->n_points, T ? "as tubes" : "lines", count[0], count[1], count[2], count[3], count[4],
+                    frame, size, t2 - t1, sl->n_steps, sl->n_evals, thx_wtime() - t0);
+    }
+end:
+    rc = cli_share_end(ctx, cmd, mine); /* the lowest rank whose own step failed speaks; exit 1 on every rank */
+    if (!rc && st != THX_OK) rc = cli_fail(ctx, cmd, st);
+    thx_stream_tubes_destroy(&T);
+    thx_streamlines_destroy(&sl);
+    part_free(&P);
+    free(use);
+    free(own_t);
     thx_ctx_destroy(&ctx);
     return rc;
 }

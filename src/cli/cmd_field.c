@@ -174,13 +174,11 @@ int cmd_field(int argc, char **argv)
     int mpi = thx_par_launched() != 1;
     /* thorax field SOLUTION --streamlines ...: the streamlines' own options (cmd_field_streamlines.c) */
     for (int i = 1; i < argc; i++)
-        if (!strcmp(argv[i], "--streamlines")) {
-            if (!mpi) return cmd_field_streamlines(argc, argv);
-            if (thx_par_launched_rank() == 0) /* (rank 0 speaks for all) */
-                fprintf(stderr, "thorax field --streamlines: runs in one process (every rank would trace the same "
-                        "streamlines and write the same files): run it without mpirun, or with -np 1; under mpirun, "
-                        "thorax field cuts a solution in parts (--isosurface, --slice)\n");
-            return 2;
+        if (!strcmp(argv[i], "--streamlines")) { /* under mpirun: traced across the parts (cli_field_parts.c) */
+            if (mpi) cli_field_mute(1); /* the command line checked by every rank, its errors told by rank 0 */
+            int rc = cmd_field_streamlines(argc, argv);
+            if (mpi) cli_field_mute(0);
+            return rc;
         }
     if (mpi) cli_field_mute(1); /* the command line checked by every rank, its errors told by rank 0 */
     int rc = field_main(argc, argv, mpi);

@@ -6,6 +6,8 @@
 #include <string.h>
 
 #include "cli/cli.h"
+#include "cli/cli_field.h"
+#include "thorax/parallel/parallel.h"
 #include "thorax/core/fileio.h"
 #include "thorax/fem/fem.h"
 #include "thorax/field/streamline.h"
@@ -167,6 +169,16 @@ int cmd_field_streamlines(int argc, char **argv)
     if (st) {
         free(specs);
         rc = cli_fail(ctx, cmd, st);
+        goto out;
+    }
+    if (thx_par_launched() != 1) { /* under mpirun: a solution in parts, the lines traced across them */
+        so.integrator = integ;
+        so.direction = dir;
+        so.max_steps = (size_t)max_steps;
+        so.loops = loops;
+        thx_ctx_destroy(&ctx);
+        rc = cli_field_streamlines_parts(cmd, c.pos[0], specs, n_seeds, &so, frame, tubes, sides, caps, out, verbose);
+        free(specs);
         goto out;
     }
     double t0 = thx_wtime();
