@@ -7,9 +7,12 @@
 # rank can read the whole): the files are the one process's (field on the whole solution), byte for
 # byte, for equipotential surfaces by count and slices (one oblique) with contours over every frame
 # (a directory of .vtp and the .pvd; a frame of constant potential among them, with its warning), for
-# one frame as .obj and as .vtp (values, regions chosen); the messages are the one process's. Refused
+# one frame as .obj and as .vtp (values, regions chosen); the messages are the one process's;
+# --streamlines (point, line and sphere seeds, RK2 and RK45: the lines handed from part to part,
+# written by rank 0) the one process's file. Refused
 # with one message, exit status non-zero on every rank and nothing written: the parts' rank count
-# other than the run's (both counts named), a solution without parts, --streamlines, a bad --frame,
+# other than the run's (both counts named), a solution without parts, --streamlines seeded at random
+# (density:, the default; region:), a bad --frame,
 # an empty cut (found by rank 0 as it writes), one rank's part damaged (that rank's message).
 # Skipped (77) without mpirun. Writes only in a mktemp -d directory.
 # Env: THORAX (built CLI); THORAX_PHANTOM_MODELS (optional: the fixture's models).
@@ -78,6 +81,21 @@ for n in 2 3; do
 done
 same 3 regions3 one.vtp --isosurface -0.05,0,0.05 --slice x=0 --contours 0,0.02 --region lung_l --region muscle --frame 4
 
+# streamlines: traced across the parts (J at the ghosts' far nodes from their owners, each line handed to the
+# part it enters), joined and written by rank 0: the one process's file
+for n in 2 3; do
+    for integ in rk2 rk45; do
+        S=(--streamlines --seed sphere:0,0,0:60:40 --seed line:-100,0,0:100,0,0:12 --seed point:10,-20,5 --integrator $integ
+           --frame 3)
+        "$THORAX" field sol$n "${S[@]}" -o 1_lines.vtp -q || fail "streamlines ($integ) on 1 process"
+        "${MPIRUN[@]}" -np $n "$THORAX" field parts$n "${S[@]}" -o ${n}_lines.vtp > l.log 2>&1 ||
+            { cat l.log; fail "streamlines ($integ) on $n ranks"; }
+        cmp -s 1_lines.vtp ${n}_lines.vtp || fail "streamlines ($integ): the file on $n ranks is not the one process's"
+        grep -q "handed from part to part [1-9]" l.log || { cat l.log; fail "streamlines ($integ) on $n ranks: no line handed over"; }
+        echo "streamlines ($integ): on $n ranks = 1 process, byte for byte ($(stat -c %s 1_lines.vtp) bytes; $(grep -o 'handed.*rounds' l.log))"
+    done
+done
+
 # what was compared is not empty: triangles and contour lines in every frame but the constant one,
 # whose warning was given (and compared above)
 grep -q "the potentials are all 0 in this frame" frames3_1.log || fail "no warning for the constant frame"
@@ -111,7 +129,8 @@ refused "parts for 2 ranks, run on 3" "in parts for 2 ranks, and this run has 3"
 refused "parts for 3 ranks, run on 2" "in parts for 3 ranks, and this run has 2" 2 parts3 --slice y=0
 "$THORAX" forward model --epicardial e4.raw --volume -o whole -q
 refused "a solution without parts" "no parts" 2 whole --isosurface count:3
-refused "--streamlines" "runs in one process" 2 parts2 --streamlines
+refused "--streamlines seeded by density (the default)" "density seeds are drawn at random" 2 parts2 --streamlines
+refused "--streamlines from region seeds" "region seeds are drawn at random" 2 parts2 --streamlines --seed region:lung_l:5
 refused "a bad --frame" "frames 1..4" 2 parts2 --isosurface count:3 --frame 9
 # found by rank 0 alone, as it writes: the constant frame's cut is empty (no value for a count)
 refused "an empty cut" "the cuts asked for are empty" 2 parts2 --isosurface count:3 --frame 1
