@@ -606,8 +606,12 @@ int cli_field_streamlines_parts(const char *cmd, const char *sol, const thx_seed
     for (size_t t = 0; t < P.v.n_tets; t++) own_t[t] = (uint32_t)P.p.owner[t] == P.p.rank;
     thx_stream_part part = {own_t, P.p.node, P.p.tet_id, P.p.owner, rank};
     double t1 = thx_wtime();
-    st = thx_streamlines_trace_parts(ctx, &P.v, &part, use, P.p.values + (size_t)(frame - 1) * P.p.n_nodes, specs, n_specs,
-                                     so, sol, st, &sl);
+    const double *phi = P.p.values + (size_t)(frame - 1) * P.p.n_nodes;
+    double *jn = malloc((3 * P.v.n_nodes + 1) * sizeof *jn); /* J at the part's nodes (its tetrahedra round them) */
+    if (!jn) st = thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
+    if (st == THX_OK) thx_fem_currents(&P.v, use, phi, NULL, jn);
+    st = thx_streamlines_trace_parts(ctx, &P.v, &part, use, phi, jn, specs, n_specs, so, sol, st, &sl);
+    free(jn);
     if (st != THX_OK && thx_par_failed_first() == rank) own(&mine, st); /* (this rank's failure: it speaks) */
     double t2 = thx_wtime();
     if (st == THX_OK && rank == 0) { /* rank 0 holds the lines, and alone writes */

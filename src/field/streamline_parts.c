@@ -9,7 +9,6 @@
 #include <string.h>
 
 #include "thorax/field/streamline.h"
-#include "thorax/fem/fem.h"
 #include "thorax/mesh/tet_locate.h"
 #include "thorax/parallel/parallel.h"
 
@@ -226,8 +225,8 @@ static thx_status join_lines(thx_ctx *ctx, const unsigned char *all, size_t byte
 }
 
 thx_status thx_streamlines_trace_parts(thx_ctx *ctx, const thx_volume *v, const thx_stream_part *d, const unsigned char *use,
-                                      const double *phi, const thx_seed_spec *spec, int n_spec, const thx_stream_opts *opts,
-                                      const char *what, thx_status st, thx_streamlines **out)
+                                      const double *phi, const double *j_node, const thx_seed_spec *spec, int n_spec,
+                                      const thx_stream_opts *opts, const char *what, thx_status st, thx_streamlines **out)
 {
     *out = NULL;
     int rank = thx_par_rank();
@@ -241,7 +240,7 @@ thx_status thx_streamlines_trace_parts(thx_ctx *ctx, const thx_volume *v, const 
     size_t n_need = 0;
     if (st == THX_OK && (!jn || !full || !need)) st = thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
     if (st == THX_OK) {
-        thx_fem_currents(v, use, phi, NULL, jn);
+        memcpy(jn, j_node, 3 * nn * sizeof *jn);
         for (size_t t = 0; t < nt; t++)
             if (d->own[t])
                 for (int a = 0; a < 4; a++) full[v->tet[4 * t + (size_t)a]] = 1;

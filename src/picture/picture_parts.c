@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "thorax/fem/fem.h"
 #include "thorax/fem/parts.h"
 #include "thorax/field/field.h"
 #include "thorax/field/streamline.h"
@@ -201,5 +202,11 @@ thx_status picture_part_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
     thx_stream_part part = {d->part_own, d->part_node, d->part_tet_id, d->part_owner, d->part_rank};
     thx_stream_opts so;
     thx_stream_opts_default(&so);
-    return thx_streamlines_trace_parts(ctx, d->m->volume, &part, d->field_use, phi, spec, n_spec, &so, o->solution, st, out);
+    const thx_volume *v = d->m->volume; /* J at the part's nodes from its own tetrahedra and ghosts */
+    double *jn = malloc((3 * v->n_nodes + 1) * sizeof *jn);
+    if (st == THX_OK && !jn) st = thx_error(ctx, THX_ENOMEM, "out of memory (streamlines)");
+    if (st == THX_OK) thx_fem_currents(v, d->field_use, phi, NULL, jn);
+    st = thx_streamlines_trace_parts(ctx, v, &part, d->field_use, phi, jn, spec, n_spec, &so, o->solution, st, out);
+    free(jn);
+    return st;
 }

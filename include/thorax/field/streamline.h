@@ -234,7 +234,9 @@ typedef struct {
 /*
  * Collective (thorax/parallel/parallel.h; every rank, st its status so far, carried and agreed):
  * thx_streamlines_trace's lines on a volume in parts, v the rank's part (its nodes and tetrahedra,
- * the model's regions), phi its nodes' potentials, use the domain's regions, the seeds from specs
+ * the model's regions), phi its nodes' potentials, j_node (3 per node) J at its nodes from the
+ * part's own tetrahedra and ghosts (thx_fem_currents on the part: the caller's, as field stays
+ * below fem), use the domain's regions, the seeds from specs
  * (point, line and sphere: every rank makes them all; region and density are the caller's to
  * refuse). J at the nodes is completed from the parts that own a tetrahedron round each, the seeds
  * are traced by the part owning their tetrahedron (the lowest-numbered holding them), the lines
@@ -243,8 +245,8 @@ typedef struct {
  * rank's), an empty set elsewhere. what names the solution in messages.
  */
 thx_status thx_streamlines_trace_parts(thx_ctx *ctx, const thx_volume *v, const thx_stream_part *part, const unsigned char *use,
-                                      const double *phi, const thx_seed_spec *specs, int n_specs, const thx_stream_opts *o,
-                                      const char *what, thx_status st, thx_streamlines **out);
+                                      const double *phi, const double *j_node, const thx_seed_spec *specs, int n_specs,
+                                      const thx_stream_opts *o, const char *what, thx_status st, thx_streamlines **out);
 
 /* ---- tubes and files ---- */
 
