@@ -949,8 +949,10 @@ thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_pi
     int vp[4];
     thx_scene sc;
     thx_picture_viewport(o, font, w, h, vp);
+    size_t n_model = 0; /* the model's surfaces, first in b: in every rank's box, drawn by rank 0 alone */
     if (st == THX_OK) {
-        if (rank == 0) build_surfaces(o, d, frame, b, -1); /* the model's surfaces: rank 0's alone */
+        build_surfaces(o, d, frame, b, -1);
+        n_model = b->n;
         b->n += picture_field_surfaces(o, d, b->rs + b->n, sizeof b->rs / sizeof b->rs[0] - b->n);
         panel_scene(o, d, b, vp, 1, 1, 0, &sc);
         for (size_t i = 0; i < b->n && st == THX_OK; i++)
@@ -964,16 +966,9 @@ thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_pi
     if (st == THX_OK) {
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         scene_box(&sc, lo, hi);
-        if (rank != 0) { /* the model's surfaces are in rank 0's box: the others draw none, but they count */
-            built_scene *m = calloc(1, sizeof *m);
-            if (m) {
-                build_surfaces(o, d, frame, m, -1);
-                thx_scene ms = sc;
-                ms.surfaces = m->rs;
-                ms.n_surfaces = m->n;
-                scene_box(&ms, lo, hi);
-                free(m);
-            } else st = thx_error(ctx, THX_ENOMEM, "out of memory (scene)");
+        if (rank != 0) { /* the others draw their cuts alone */
+            sc.surfaces = b->rs + n_model;
+            sc.n_surfaces = b->n - n_model;
         }
         for (int k = 0; k < 3; k++) g[k] = -lo[k], g[3 + k] = hi[k];
         if (o->slice_current && d->field[1]) g[6] = d->field_hi[1];
@@ -990,7 +985,7 @@ thx_status thx_picture_draw_part(thx_ctx *ctx, const thx_picture_opts *o, thx_pi
         }
         size_t nn = 0;
         st = thx_render_layer(ctx, r, &sc, rgba, depth, &nn);
-        if (nan_total) *nan_total += b->nan_count;
+        if (nan_total && rank == 0) *nan_total += b->nan_count; /* (the model's surfaces' values: rank 0 draws them) */
         if (st == THX_OK && rank == 0) memcpy(mine, rgba, 4 * (size_t)w * h);
     }
     /* 3: the layers composited by depth on rank 0 (every rank's status agreed first) */
