@@ -4,6 +4,7 @@
  * PETSc its own block of rows; results are gathered to every rank.
  */
 #include <dlfcn.h>
+#include <errno.h>
 #include <math.h>
 #include <petscksp.h>
 #include <stddef.h>
@@ -461,7 +462,7 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
 }
 
 static int blas_threads(int set);
-static int factor_threads(int was);
+static thx_status factor_threads(thx_ctx *ctx, int was, int *use);
 
 /* The own path's factorization, once (timed as the setup, as PETSc's is). */
 static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
@@ -475,7 +476,9 @@ static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
     if (!rowp || !col) { st = THX_ENOMEM; goto done; }
     for (size_t i = 0; i <= n; i++) rowp[i] = (int64_t)s->ii[i];
     for (size_t k = 0; k < nz; k++) col[k] = (int32_t)s->jj[k];
-    int was = blas_threads(0), use = factor_threads(was);
+    int was = blas_threads(0), use = -1;
+    st = factor_threads(ctx, was, &use);
+    if (st != THX_OK) goto done;
     if (use > 0 && use != was) blas_threads(use);
     st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &s->chol, &s->chol_info);
     if (use > 0 && use != was) blas_threads(was);
@@ -511,22 +514,29 @@ static int blas_threads(int set)
     return was;
 }
 
-/* The OpenBLAS threads for CHOLMOD's factorization (was: OpenBLAS's count, -1 when it is not the BLAS):
- * $THORAX_FACTOR_THREADS when set; OpenBLAS's own when the user set OPENBLAS_NUM_THREADS; else as
+/* The OpenBLAS threads for CHOLMOD's factorization into *use (was: OpenBLAS's count, -1 when it is not
+ * the BLAS; *use -1 then): $THORAX_FACTOR_THREADS when set (1 to 1024, else refused); OpenBLAS's own when the user set OPENBLAS_NUM_THREADS; else as
  * many as the cores free now, at most was. Its threads meet at every BLAS call, and a thread whose
  * core another process holds makes its partner spin: 27 s against 6 s for the high phantom's factor
  * at load 3.5 (docs/design/parallel.md, "CHOLMOD's BLAS threads under load"). */
-static int factor_threads(int was)
+static thx_status factor_threads(thx_ctx *ctx, int was, int *use)
 {
-    if (was < 1) return -1;
+    *use = -1;
+    if (was < 1) return THX_OK;
     const char *e = getenv("THORAX_FACTOR_THREADS");
     if (e && *e) {
-        int n = atoi(e);
-        return n >= 1 ? n : was;
+        char *end;
+        errno = 0;
+        long n = strtol(e, &end, 10);
+        if (end == e || *end || errno || n < 1 || n > 1024)
+            return thx_error(ctx, THX_EINPUT, "THORAX_FACTOR_THREADS=%s: the factorization's BLAS threads, a count from 1 to 1024",
+                             e);
+        *use = (int)n;
+        return THX_OK;
     }
-    if (getenv("OPENBLAS_NUM_THREADS")) return was;
-    int free_cores = thx_cores_free();
-    return free_cores < was ? free_cores : was;
+    int free_cores = getenv("OPENBLAS_NUM_THREADS") ? was : thx_cores_free();
+    *use = free_cores < was ? free_cores : was;
+    return THX_OK;
 }
 
 /* b = load_f - K_fd phi_d for columns c0 .. c0 + r - 1, row-major in the factor's order. */
