@@ -192,7 +192,7 @@ static thx_status slices_by_current(thx_ctx *ctx, thx_picture_data *d, const dou
 /* The frame's streamlines: J at the nodes (the finite elements' J per tetrahedron, volume-weighted),
  * the seeds of every specification, lines both ways by RK2, tubes round them. */
 static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, const double *phi,
-                                    double lo, double hi, thx_status st)
+                                    double lo, double hi, int frame, thx_status st)
 {
     thx_streamlines *lines = NULL;
     if (d->part_size > 1) /* sort-last: traced across the parts, the lines on rank 0 (collective: st carried) */
@@ -230,6 +230,19 @@ static thx_status build_streamlines(thx_ctx *ctx, const thx_picture_opts *o, thx
     }
     if (st == THX_OK) st = thx_stream_tubes_make(ctx, lines, radius, 8, 1, &d->tubes);
     if (st == THX_OK) d->n_stream_lines = lines->n_lines;
+    if (st == THX_OK && lines->n_lines && d->tubes->n_tris == 0 && !d->field_warned) {
+        /* every line ended at its seed: said (once, not at every frame of a movie), not drawn in silence */
+        size_t why[THX_STOP_COUNT] = {0};
+        for (size_t k = 0; k < lines->n_lines; k++)
+            if (lines->stop[k] >= 0 && lines->stop[k] < THX_STOP_COUNT) why[lines->stop[k]]++;
+        int most = 0;
+        for (int r = 1; r < THX_STOP_COUNT; r++)
+            if (why[r] > why[most]) most = r;
+        d->field_warned = 1;
+        thx_log(ctx, THX_LOG_WARN, "--streamlines: none of the %zu lines from the seeds goes anywhere in frame %d (%zu stop at "
+                "once: %s): the picture is drawn without them", lines->n_lines, frame + 1, why[most],
+                thx_stream_stop_name(most));
+    }
     thx_streamlines_destroy(&lines);
     if (st != THX_OK) return st;
     const thx_stream_tubes *t = d->tubes;
@@ -333,7 +346,7 @@ thx_status picture_field_build(thx_ctx *ctx, const thx_picture_opts *o, thx_pict
         }
     }
     /* sort-last's streamlines are traced across the ranks: reached by every rank, whatever failed before */
-    if (o->n_streamlines && (st == THX_OK || d->part_size > 1)) st = build_streamlines(ctx, o, d, phi, lo, hi, st);
+    if (o->n_streamlines && (st == THX_OK || d->part_size > 1)) st = build_streamlines(ctx, o, d, phi, lo, hi, frame, st);
     if (st == THX_OK && d->part_size > 1) st = picture_part_cuts(ctx, d); /* sort-last: the own triangles drawn */
     if (st != THX_OK) {
         picture_field_free(d);
