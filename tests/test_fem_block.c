@@ -27,19 +27,19 @@
 
 /* A jittered lattice in [0, N-1]^3 shifted by x0 along x, tetrahedralized (positive orientation);
  * boundary nodes flagged. */
-static thx_volume *box(thx_ctx *ctx, double x0, unsigned char **on_boundary)
+static thx_volume *box_of(thx_ctx *ctx, int side, double x0, unsigned char **on_boundary)
 {
     thx_volume *v = NULL;
     thx_volume_create(ctx, &v);
-    size_t n = N * N * N, k = 0;
+    size_t n = (size_t)side * side * side, k = 0;
     v->n_nodes = n;
     v->xyz = malloc(3 * n * sizeof *v->xyz);
     *on_boundary = calloc(n, 1);
     srand(5);
-    for (int i = 0; i < N; i++)
-        for (int j = 0; j < N; j++)
-            for (int l = 0; l < N; l++, k++) {
-                int on = i == 0 || j == 0 || l == 0 || i == N - 1 || j == N - 1 || l == N - 1;
+    for (int i = 0; i < side; i++)
+        for (int j = 0; j < side; j++)
+            for (int l = 0; l < side; l++, k++) {
+                int on = i == 0 || j == 0 || l == 0 || i == side - 1 || j == side - 1 || l == side - 1;
                 double jit = on ? 0 : 0.2;
                 v->xyz[3 * k] = x0 + i + jit * (rand() / (double)RAND_MAX - 0.5);
                 v->xyz[3 * k + 1] = j + jit * (rand() / (double)RAND_MAX - 0.5);
@@ -64,6 +64,8 @@ static thx_volume *box(thx_ctx *ctx, double x0, unsigned char **on_boundary)
     memcpy(v->regions[0].sigma, sigma, sizeof sigma);
     return v;
 }
+
+static thx_volume *box(thx_ctx *ctx, double x0, unsigned char **on_boundary) { return box_of(ctx, N, x0, on_boundary); }
 
 /* The j-th linear field (a different one per column). */
 static double lin(size_t j, const double *p)
@@ -458,6 +460,55 @@ static void own_path_tests(thx_ctx *ctx)
     CHECK(d2 < 1e-13);
     printf("own path: 2 threads against %d: %.1e\n", was, d2);
 #endif
+    /* our multifrontal factorization (src/fem/multifrontal.h) against CHOLMOD's numeric one on the same
+       analysis, and on 1, 2 and 3 threads (the tree cut into subtrees for 2 and 3, the rest above them) */
+    CHECK(strstr(fi.numeric, "multifrontal") != NULL);
+    PetscOptionsSetValue(NULL, "-thorax_factor", "cholmod");
+    CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
+    PetscOptionsClearValue(NULL, "-thorax_factor");
+    CHECK(fi.used == 1 && strstr(fi.numeric, "CHOLMOD") != NULL && fi.threads == 0);
+    double dc = rel_diff(b, a, n * R);
+    CHECK(dc < 1e-12);
+    printf("own path: our factorization against CHOLMOD's: %.1e\n", dc);
+    /* a box large enough for a tree of many supernodes (18^3 nodes) */
+    unsigned char *onb2 = NULL;
+    thx_volume *v2 = box_of(ctx, 18, 0, &onb2);
+    thx_csr K2;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v2, NULL, &K2));
+    size_t n2 = v2->n_nodes;
+    unsigned char *kind2 = malloc(n2);
+    for (size_t i = 0; i < n2; i++) kind2[i] = onb2[i] ? 2 : 1;
+    double *a2 = malloc(n2 * R * sizeof *a2), *b2 = malloc(n2 * R * sizeof *b2);
+    setenv("THORAX_FACTOR_THREADS", "1", 1);
+    CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, a2, &fi));
+    double e2 = 0;
+    for (size_t j = 0; j < R; j++)
+        for (size_t i = 0; i < n2; i++) e2 = fmax(e2, fabs(a2[j * n2 + i] - lin(j, v2->xyz + 3 * i)));
+    CHECK(e2 < 1e-10);
+    printf("own path, %zu nodes: linear fields to %.1e\n", n2, e2);
+    for (int th = 1; th <= 3; th++) {
+        char tn[8];
+        snprintf(tn, sizeof tn, "%d", th);
+        setenv("THORAX_FACTOR_THREADS", tn, 1);
+        CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
+        double dt = rel_diff(b2, a2, n2 * R);
+        CHECK(fi.threads == th && dt < 1e-12);
+        CHECK(th == 1 ? fi.subtrees == 1 && fi.top == 0 : fi.subtrees >= (size_t)th && fi.top >= 1);
+        CHECK(fi.top_share >= 0 && fi.top_share < 1);
+        printf("own path: factorization on %d thread%s: %zu subtrees, %zu supernodes above them (%.0f %% of the work): "
+               "%.1e\n", th, th > 1 ? "s" : "", fi.subtrees, fi.top, 100 * fi.top_share, dt);
+    }
+    unsetenv("THORAX_FACTOR_THREADS");
+    free(a2);
+    free(b2);
+    free(kind2);
+    free(onb2);
+    thx_csr_free(&K2);
+    thx_volume_destroy(&v2);
+    PetscOptionsSetValue(NULL, "-thorax_factor", "frontal");
+    thx_status bad = own_solve_box(ctx, &K, kind, v, onb, R, b, &fi);
+    PetscOptionsClearValue(NULL, "-thorax_factor");
+    CHECK(bad == THX_EINPUT && strstr(thx_ctx_message(ctx), "-thorax_factor frontal") != NULL);
     /* PETSc's interface to the same package */
     PetscOptionsSetValue(NULL, "-thorax_direct", "petsc");
     CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));

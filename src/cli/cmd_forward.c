@@ -409,7 +409,16 @@ int cmd_forward(int argc, char **argv)
                 /* thorax's own direct path (docs/design/parallel.md): the factor's figures, so that a reader can
                    put the time beside the flops */
                 cJSON *f = cJSON_CreateObject();
-                cJSON_AddStringToObject(f, "package", "CHOLMOD (supernodal), driven by thorax");
+                cJSON_AddStringToObject(f, "package", "CHOLMOD's analysis (supernodal), driven by thorax");
+                cJSON_AddStringToObject(f, "numeric", R.factor.numeric);
+                if (R.factor.threads) {
+                    cJSON_AddNumberToObject(f, "threads", R.factor.threads);
+                    cJSON_AddNumberToObject(f, "subtrees", (double)R.factor.subtrees);
+                    cJSON_AddNumberToObject(f, "top_supernodes", (double)R.factor.top);
+                    cJSON_AddNumberToObject(f, "top_share", R.factor.top_share);
+                    cJSON_AddNumberToObject(f, "seconds_subtrees", R.factor.t_subtrees);
+                    cJSON_AddNumberToObject(f, "seconds_top", R.factor.t_top);
+                }
                 cJSON_AddStringToObject(f, "ordering", "METIS nested dissection");
                 cJSON_AddBoolToObject(f, "ordering_cached", R.factor.ordering_cached);
                 if (R.factor.cache_note[0]) cJSON_AddStringToObject(f, "cache_note", R.factor.cache_note);
@@ -445,12 +454,17 @@ int cmd_forward(int argc, char **argv)
             else
                 printf("%zu frames by the transfer matrix, %.3f s\n", epi->n_frames, R.t_solve);
             if (route_txt[0]) printf("route: %s\n", route_txt);
+            char subtrees_txt[160] = "";
+            if (R.factor.threads)
+                snprintf(subtrees_txt, sizeof subtrees_txt, ": %zu subtrees %.2f s, then %zu supernodes above them "
+                         "(%.0f %% of the work) %.2f s", R.factor.subtrees, R.factor.t_subtrees, R.factor.top,
+                         100 * R.factor.top_share, R.factor.t_top);
             if (verbose > 0 && R.factor.used)
-                printf("factor (CHOLMOD, driven by thorax): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
-                       "(%.3g flops, %.1f GF/s, %d BLAS thread%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
-                       R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
+                printf("factor (CHOLMOD's analysis, %s): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
+                       "(%.3g flops, %.1f GF/s, %d thread%s%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
+                       R.factor.numeric, R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
                        R.factor.t_factor, R.factor.flops, R.factor.t_factor > 0 ? R.factor.flops / R.factor.t_factor * 1e-9 : 0,
-                       R.factor.blas_threads, R.factor.blas_threads == 1 ? "" : "s",
+                       R.factor.blas_threads, R.factor.blas_threads == 1 ? "" : "s", subtrees_txt,
                        R.factor.nonzeros, (double)R.factor.factor_bytes / 1048576, R.factor.solve_flops,
                        R.t_solve > 0 ? R.factor.solve_flops / R.t_solve * 1e-9 : 0, R.factor.cache_note[0] ? "; " : "",
                        R.factor.cache_note);

@@ -12,6 +12,7 @@
 #include <suitesparse/cholmod.h>
 
 #include "fem/cholesky.h"
+#include "fem/multifrontal.h"
 #include "thorax/core/fileio.h"
 #include "thorax/core/sha256.h"
 
@@ -25,6 +26,8 @@ void dgemm_(const char *ta, const char *tb, const int *m, const int *n, const in
 struct thx_chol {
     cholmod_common c;
     cholmod_factor *L;
+    double *Lx;    /* the factor's values: our own (multifrontal.h), or CHOLMOD's L->x */
+    double *own_x; /* ours, when we computed them */
     int64_t n;
     int64_t *perm, *iperm;
     size_t max_below; /* the most rows below a supernode's diagonal block */
@@ -128,14 +131,17 @@ void thx_chol_free(thx_chol **fp)
     thx_chol *f = *fp;
     if (f->L) cholmod_l_free_factor(&f->L, &f->c);
     cholmod_l_finish(&f->c);
+    free(f->own_x);
     free(f->perm);
     free(f->iperm);
     free(f);
     *fp = NULL;
 }
 
+_Static_assert(sizeof(SuiteSparse_long) == sizeof(int64_t), "CHOLMOD's long integers are 64 bits");
+
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
-                           thx_chol **out, thx_chol_info *info)
+                           const thx_chol_opts *opts, thx_chol **out, thx_chol_info *info)
 {
     *out = NULL;
     thx_chol_info inf;
@@ -205,26 +211,9 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
         goto done;
     }
     inf.t_analyze = thx_wtime() - t0;
-    t0 = thx_wtime();
-    int ok = cholmod_l_factorize(A, f->L, &f->c);
-    inf.t_factor = thx_wtime() - t0;
-    if (f->c.status == CHOLMOD_NOT_POSDEF) {
-        int64_t bad = (int64_t)f->L->minor;
-        inf.not_posdef = 1;
-        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: zero or negative "
-                       "pivot at row %lld of %lld: the matrix is singular, e.g. currents into a part of the mesh with no "
-                       "prescribed potential)", (long long)(bad < n ? ((int64_t *)f->L->Perm)[bad] + 1 : bad + 1), (long long)n);
-        goto done;
-    }
-    if (!ok || f->c.status < 0 || !f->L->is_super) {
-        st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
-                       "fem: the numeric factorization (CHOLMOD) failed (status %d)", f->c.status);
-        goto done;
-    }
-    inf.flops = f->c.fl;
+    inf.flops = f->c.fl; /* the analysis's count, explicit zeros of amalgamated supernodes left out */
     inf.lnz = f->c.lnz;
     inf.n_super = f->L->nsuper;
-    inf.factor_bytes = f->L->xsize * sizeof(double) + f->L->ssize * sizeof(SuiteSparse_long);
     {
         const SuiteSparse_long *P = f->L->Perm, *super = f->L->super, *pi = f->L->pi;
         for (int64_t i = 0; i < n; i++) {
@@ -236,6 +225,51 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
             if (below > f->max_below) f->max_below = below;
         }
     }
+    t0 = thx_wtime();
+    if (opts && opts->cholmod_numeric) {
+        int ok = cholmod_l_factorize(A, f->L, &f->c);
+        inf.t_factor = thx_wtime() - t0;
+        if (f->c.status == CHOLMOD_NOT_POSDEF) {
+            inf.not_posdef = 1;
+            inf.bad_column = (int64_t)f->L->minor;
+        } else if (!ok || f->c.status < 0 || !f->L->is_super) {
+            st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
+                           "fem: the numeric factorization (CHOLMOD) failed (status %d)", f->c.status);
+            goto done;
+        }
+        f->Lx = f->L->x;
+        inf.numeric = "CHOLMOD (supernodal, left-looking)";
+    } else {
+        /* our own multifrontal factorization on CHOLMOD's symbolic factor (fem/multifrontal.h) */
+        if (!f->L->is_super || !f->L->super || !f->L->pi || !f->L->px || !f->L->s) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: CHOLMOD's analysis gave no supernodal symbolic factor");
+            goto done;
+        }
+        f->own_x = malloc((f->L->xsize ? f->L->xsize : 1) * sizeof *f->own_x);
+        if (!f->own_x) { st = THX_ENOMEM; goto done; }
+        thx_mf_symbolic S = {n, (int64_t)f->L->nsuper, (const int64_t *)f->L->super, (const int64_t *)f->L->pi,
+                             (const int64_t *)f->L->px, (const int64_t *)f->L->s};
+        thx_status e = thx_mf_factor(ctx, &S, rowp, col, val, f->perm, f->iperm, opts ? opts->threads : 1,
+                                     opts ? opts->set_blas_threads : NULL, f->own_x, &inf.mf);
+        inf.t_factor = thx_wtime() - t0;
+        if (e == THX_ESOLVER && inf.mf.not_posdef >= 0) {
+            inf.not_posdef = 1;
+            inf.bad_column = inf.mf.not_posdef;
+        } else if (e != THX_OK) {
+            st = e;
+            goto done;
+        }
+        f->Lx = f->own_x;
+        inf.numeric = "thorax (multifrontal, subtrees in parallel)";
+    }
+    if (inf.not_posdef) {
+        int64_t bad = inf.bad_column;
+        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: zero or negative "
+                       "pivot at row %lld of %lld: the matrix is singular, e.g. currents into a part of the mesh with no "
+                       "prescribed potential)", (long long)(bad >= 0 && bad < n ? f->perm[bad] + 1 : bad + 1), (long long)n);
+        goto done;
+    }
+    inf.factor_bytes = f->L->xsize * sizeof(double) + f->L->ssize * sizeof(SuiteSparse_long);
     *out = f;
     f = NULL;
 done:
@@ -256,7 +290,7 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
     double flops = 0;
     const cholmod_factor *L = f->L;
     const SuiteSparse_long *super = L->super, *pi = L->pi, *px = L->px, *Ls = L->s;
-    const double *Lx = L->x;
+    const double *Lx = f->Lx;
     const size_t ns = L->nsuper;
     const int ir = (int)r;
     const double one = 1, zero = 0, minus = -1;

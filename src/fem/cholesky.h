@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "thorax/core/core.h"
+#include "fem/multifrontal.h"
 
 typedef struct thx_chol thx_chol;
 
@@ -28,14 +29,23 @@ typedef struct {
     int not_posdef;     /* 1: refused as not positive definite (a zero or negative pivot) */
     char cache_note[160];/* why the cache was not used or not written (empty when it was) */
     int blas_threads;   /* OpenBLAS's threads in the factorization (set by the caller; 0: not OpenBLAS) */
+    int64_t bad_column; /* with not_posdef: the column (the factor's order) */
+    const char *numeric;/* who computed the factor's values */
+    thx_mf_info mf;     /* ours: threads, subtrees, the top's share, times */
 } thx_chol_info;
+
+typedef struct {
+    int threads;                    /* threads for the factorization (ours: the subtrees'; BLAS's for the top) */
+    void (*set_blas_threads)(int);  /* sets BLAS's threads, or NULL */
+    int cholmod_numeric;            /* 1: CHOLMOD's numeric factorization instead of ours (-thorax_factor cholmod) */
+} thx_chol_opts;
 
 /* Factors the symmetric positive definite matrix of order n given as a full CSR (both triangles,
  * sorted columns). The ordering is looked up in the cache (thx_chol_cache_dir) by the SHA-256 of
  * (n, rowp, col); when missing it is computed and stored there. A matrix that is not positive
  * definite is THX_ESOLVER naming the column. */
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
-                           thx_chol **out, thx_chol_info *info);
+                           const thx_chol_opts *opts, thx_chol **out, thx_chol_info *info);
 void thx_chol_free(thx_chol **f);
 
 /* The factor's order: row i of the permuted system is row perm[i] of the matrix; iperm its inverse. */

@@ -75,7 +75,7 @@ int thx_fem_options_unused(int list)
 
 /* A thread's buffers for the own path: x (b before the solve) of up to r columns (row-major, the factor's order), the
    solve's work space, the residual's sums. Kept across blocks (fresh pages cost a fault each, and faults
-   are dear on virtual machines), on huge pages where the kernel gives them. */
+   are dear on virtual machines). */
 #define THX_FEM_OWN_THREADS 64
 typedef struct own_work_s {
     double *X, *E, *acc, *P; /* P: the prescribed values of the r columns, row-major */
@@ -86,13 +86,9 @@ typedef struct own_work_s {
 static void *big_alloc(size_t bytes)
 {
     void *p = NULL;
-    size_t align = (size_t)2 << 20;
+    size_t align = 64;
     bytes = (bytes + align - 1) / align * align;
-    if (posix_memalign(&p, align, bytes ? bytes : align)) return NULL;
-#ifdef MADV_HUGEPAGE
-    madvise(p, bytes, MADV_HUGEPAGE);
-#endif
-    return p;
+    return posix_memalign(&p, align, bytes ? bytes : align) ? NULL : p;
 }
 
 static void own_work_free(own_work *w)
@@ -358,6 +354,13 @@ void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *ou
     out->factor_bytes = c->factor_bytes;
     snprintf(out->cache_note, sizeof out->cache_note, "%s", c->cache_note);
     out->blas_threads = c->blas_threads;
+    snprintf(out->numeric, sizeof out->numeric, "%s", c->numeric ? c->numeric : "");
+    out->threads = c->mf.threads;
+    out->subtrees = c->mf.subtrees;
+    out->top = c->mf.top;
+    out->top_share = c->mf.top_share;
+    out->t_subtrees = c->mf.t_subtrees;
+    out->t_top = c->mf.t_top;
 }
 
 void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
@@ -462,6 +465,7 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
 }
 
 static int blas_threads(int set);
+static void set_blas_threads(int n);
 static thx_status factor_threads(thx_ctx *ctx, int was, int *use);
 
 /* The own path's factorization, once (timed as the setup, as PETSc's is). */
@@ -480,8 +484,27 @@ static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
     st = factor_threads(ctx, was, &use);
     if (st != THX_OK) goto done;
     if (use > 0 && use != was) blas_threads(use);
-    st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &s->chol, &s->chol_info);
-    if (use > 0 && use != was) blas_threads(was);
+    /* the factor's values: ours (src/fem/multifrontal.h), or CHOLMOD's with -thorax_factor cholmod */
+    char how[16] = "thorax";
+    PetscOptionsGetString(NULL, NULL, "-thorax_factor", how, sizeof how, NULL);
+    if (strcmp(how, "thorax") && strcmp(how, "cholmod")) {
+        st = thx_error(ctx, THX_EINPUT, "-thorax_factor %s: thorax (the default: our multifrontal factorization) or "
+                       "cholmod (CHOLMOD's)", how);
+        goto done;
+    }
+    thx_chol_opts co = {use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod")};
+    if (use < 0) {
+        /* not OpenBLAS: its threads are not ours to set; the subtrees get the free cores */
+        int fc = thx_cores_free();
+#ifdef _OPENMP
+        fc = fc < omp_get_max_threads() ? fc : omp_get_max_threads();
+#else
+        fc = 1;
+#endif
+        co.threads = fc > 1 ? fc : 1;
+    }
+    st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &co, &s->chol, &s->chol_info);
+    if (was > 0) blas_threads(was);
     s->chol_info.blas_threads = use > 0 ? use : 0;
     if (st == THX_ESOLVER && s->chol_info.not_posdef) {
         /* a singular system (a piece of the mesh with no prescribed potential): PETSc's interface to the
@@ -496,6 +519,8 @@ done:
     s->t_setup += thx_wtime() - t0;
     return st;
 }
+
+static void set_blas_threads(int n) { blas_threads(n); }
 
 /* OpenBLAS's thread count, where OpenBLAS is the BLAS (else -1): our threads each call BLAS alone. */
 static int blas_threads(int set)

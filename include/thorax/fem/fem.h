@@ -209,6 +209,11 @@ typedef struct {
     size_t factor_bytes;
     char cache_note[160];   /* why the ordering was not cached (empty when it was, or was read) */
     int blas_threads;       /* OpenBLAS's threads in the factorization (the cores free then; 0: not OpenBLAS) */
+    char numeric[48];       /* who computed the factor's values (thorax's multifrontal code, or CHOLMOD) */
+    int threads;            /* ours: threads sharing the subtrees (0: CHOLMOD's) */
+    size_t subtrees, top;   /* ours: independent subtrees; supernodes above them */
+    double top_share;       /* ours: the top's share of the work */
+    double t_subtrees, t_top; /* ours: seconds in the subtrees, then in the top */
 } thx_fem_factor_info;
 
 void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out);

@@ -1,0 +1,51 @@
+/*
+ * thorax's numeric supernodal Cholesky factorization (docs/design/parallel.md, "The factorization of
+ * our own"): multifrontal, on a symbolic factor computed elsewhere (CHOLMOD's analysis, which gives the
+ * supernodes, their rows and where their values go), with the elimination tree's independent subtrees
+ * shared among threads that each call BLAS alone, and the separators at the top of the tree factored
+ * after them with BLAS's own threads. Built into the solver module beside src/fem/cholesky.c.
+ *
+ * The values are laid out as CHOLMOD lays out a supernodal factor: supernode s holds columns
+ * super[s] .. super[s + 1] - 1 of L; its rows are s_rows[pi[s] .. pi[s + 1] - 1] (ascending, the first
+ * nscol of them its own columns); its values are an nsrow x nscol column-major block at Lx + px[s].
+ */
+#ifndef THORAX_FEM_MULTIFRONTAL_H
+#define THORAX_FEM_MULTIFRONTAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "thorax/core/core.h"
+
+typedef struct {
+    int64_t n;             /* the matrix's order */
+    int64_t nsuper;        /* supernodes */
+    const int64_t *super;  /* nsuper + 1: each supernode's first column */
+    const int64_t *pi;     /* nsuper + 1: where its rows start in rows */
+    const int64_t *px;     /* nsuper + 1: where its values start in Lx */
+    const int64_t *rows;   /* the supernodes' row indices */
+} thx_mf_symbolic;
+
+typedef struct {
+    int threads;           /* threads used for the subtrees */
+    size_t subtrees;       /* independent subtrees shared among them */
+    size_t top;            /* supernodes above them, factored one after the other with BLAS's threads */
+    double top_share;      /* the top's share of the flops */
+    double flops;          /* the flops done, explicit zeros of amalgamated supernodes included */
+    double t_subtrees;     /* seconds: the subtrees, then the top */
+    double t_top;
+    size_t stack_bytes;    /* the update matrices' space, all threads */
+    int64_t not_posdef;    /* -1, or the first column (the factor's order) with a zero or negative pivot */
+} thx_mf_info;
+
+/* Factors P A P^T = L L^T into Lx (px[nsuper] values, written here). A is the symmetric matrix of order
+ * S->n given as a full CSR (both triangles) in its own numbering; row i of P A P^T is row perm[i] of A,
+ * iperm the inverse. threads: how many threads share the subtrees (each calling BLAS with one thread
+ * through set_blas_threads, when it is given); the top is factored with set_blas_threads(threads).
+ * A matrix that is not positive definite returns THX_ESOLVER with info->not_posdef set and no
+ * message (the caller names the row). */
+thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
+                         const double *val, const int64_t *perm, const int64_t *iperm, int threads,
+                         void (*set_blas_threads)(int), double *Lx, thx_mf_info *info);
+
+#endif
