@@ -529,6 +529,75 @@ static void own_path_tests(thx_ctx *ctx)
     if (!tl_fail && system(rm) != 0) fprintf(stderr, "could not remove %s\n", tl_scratch);
 }
 
+/* thx_fem_solve_rows: the prescribed values per prescribed node in, a few rows out; the same answers as
+   thx_fem_solve_block's columns of every node, on the own path, through PETSc's interface to CHOLMOD, and
+   with CG frame by frame; a node list that does not match the system refused. */
+static void rows_tests(thx_ctx *ctx)
+{
+    unsigned char *onb = NULL;
+    thx_volume *v = box_of(ctx, 10, 0, &onb);
+    thx_csr K;
+    CHECK_OK(ctx, thx_fem_assemble(ctx, v, NULL, &K));
+    size_t n = v->n_nodes, R = 30, np = 0, m = 0;
+    unsigned char *kind = malloc(n);
+    int32_t *pnode = malloc(n * sizeof *pnode), *rows = malloc(n * sizeof *rows);
+    for (size_t i = 0; i < n; i++) {
+        kind[i] = onb[i] ? 2 : 1;
+        if (onb[n - 1 - i]) pnode[np++] = (int32_t)(n - 1 - i); /* the caller's own order: backwards */
+        if (i % 7 == 3) rows[m++] = (int32_t)i;                 /* free and prescribed rows */
+    }
+    double *phi = malloc(n * R * sizeof *phi), *pres = malloc(np * R * sizeof *pres);
+    double *out = malloc(m * R * sizeof *out), *want = malloc(m * R * sizeof *want);
+    const char *how[3] = {"own", "petsc", "cg"};
+    for (int h = 0; h < 3; h++) {
+        if (h == 1) PetscOptionsSetValue(NULL, "-thorax_direct", "petsc");
+        memset(phi, 0, n * R * sizeof *phi);
+        for (size_t j = 0; j < R; j++) {
+            for (size_t c = 0; c < np; c++) {
+                const double *x = v->xyz + 3 * (size_t)pnode[c];
+                pres[j * np + c] = phi[j * n + (size_t)pnode[c]] = sin(0.3 * x[0] + 0.1 * (double)j) + x[1] * x[2] * 0.01;
+            }
+        }
+        thx_fem_system *S = NULL;
+        CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S));
+        if (h < 2) thx_fem_system_hint_rhs(S, R);
+        thx_fem_solve_stats a, b;
+        CHECK_OK(ctx, thx_fem_solve_block(ctx, S, phi, NULL, R, 0, &a));
+        for (size_t j = 0; j < R; j++)
+            for (size_t i = 0; i < m; i++) want[j * m + i] = phi[j * n + (size_t)rows[i]];
+        CHECK_OK(ctx, thx_fem_solve_rows(ctx, S, pnode, np, pres, R, 0, rows, m, out, &b));
+        double d = rel_diff(out, want, m * R);
+        CHECK(d < (h == 2 ? 1e-6 : 1e-14) && b.residual < 1e-6 && b.block >= 1);
+        CHECK(h == 2 ? b.iterations_total > (long)R : b.iterations_total == (long)R);
+        printf("solve_rows (%s): %zu of %zu rows, %zu frames, block %zu: %.1e from the columns of every node\n", how[h], m,
+               n, R, b.block, d);
+        if (h == 0) {
+            /* a prescribed node left out, and a free node given a value */
+            thx_status bad = thx_fem_solve_rows(ctx, S, pnode, np - 1, pres, R, 0, rows, m, out, &b);
+            CHECK(bad == THX_EINTERNAL && strstr(thx_ctx_message(ctx), "has no value") != NULL);
+            int32_t keep = pnode[0];
+            int32_t inner = 0;
+            while (onb[inner]) inner++;
+            pnode[0] = inner;
+            bad = thx_fem_solve_rows(ctx, S, pnode, np, pres, R, 0, rows, m, out, &b);
+            CHECK(bad == THX_EINTERNAL && strstr(thx_ctx_message(ctx), "does not prescribe") != NULL);
+            pnode[0] = keep;
+        }
+        thx_fem_system_destroy(&S);
+        if (h == 1) PetscOptionsClearValue(NULL, "-thorax_direct");
+    }
+    free(phi);
+    free(pres);
+    free(out);
+    free(want);
+    free(pnode);
+    free(rows);
+    free(kind);
+    free(onb);
+    thx_csr_free(&K);
+    thx_volume_destroy(&v);
+}
+
 int main(int argc, char **argv)
 {
     thx_ctx *ctx = NULL;
@@ -537,6 +606,7 @@ int main(int argc, char **argv)
     box_tests(ctx, NULL);
     box_tests(ctx, "mumps");
     own_path_tests(ctx);
+    rows_tests(ctx);
     singular_tests(ctx);
     phantom_tests(ctx);
     thx_fem_finalize();

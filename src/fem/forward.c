@@ -148,6 +148,55 @@ static double kfd_dot(const epi_problem *P, int32_t d, const double *y)
     return s;
 }
 
+/* The epicardial frames through thx_fem_solve_rows: the heart's nodes and its Steiner points (their values
+   interpolated in the heart's triangles) in, the outer surface's nodes out, into r->torso. */
+static thx_status epi_solve_rows(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const epi_problem *P,
+                                 const thx_forward_opts *o, thx_forward_result *r)
+{
+    const thx_volume *v = m->volume;
+    const thx_surface *hs = m->surf[P->heart], *os = m->surf[P->outer];
+    const size_t nf = epi->n_frames, nh = hs->n_nodes;
+    thx_status st = THX_OK;
+    int32_t *pnode = thx_malloc(ctx, (nh + P->n_st + 1) * sizeof *pnode);
+    int32_t *src = thx_malloc(ctx, (nh + 1) * sizeof *src); /* the heart node of each value, or -1: a Steiner point */
+    double *pres = NULL;
+    size_t np = 0;
+    if (!pnode || !src) { st = THX_ENOMEM; goto done; }
+    for (size_t i = 0; i < nh; i++) {
+        int32_t k = v->surf_node[P->heart][i];
+        if (P->kind[k] == 2) { src[np] = (int32_t)i; pnode[np++] = k; }
+    }
+    size_t nheart = np;
+    for (size_t q = 0; q < P->n_st; q++) pnode[np++] = P->st_node[q];
+    pres = thx_malloc(ctx, (np * nf > 0 ? np * nf : 1) * sizeof *pres);
+    if (!pres) { st = THX_ENOMEM; goto done; }
+    for (size_t f = 0; f < nf; f++) {
+        const double *e = epi->v + f * epi->n_rows;
+        double *pf = pres + f * np;
+        for (size_t c = 0; c < nheart; c++) pf[c] = e[src[c]];
+        for (size_t q = 0; q < P->n_st; q++) {
+            const int32_t *c = P->st_corner + 3 * q;
+            const double *w = P->st_w + 3 * q;
+            pf[nheart + q] = w[0] * e[c[0]] + w[1] * e[c[1]] + w[2] * e[c[2]];
+        }
+    }
+    thx_fem_solve_stats ss;
+    THX_TRY(thx_fem_solve_rows(ctx, P->sys, pnode, np, pres, nf, o->warm, v->surf_node[P->outer], os->n_nodes, r->torso->v,
+                               &ss));
+    r->it_min = ss.iterations_min;
+    r->it_max = ss.iterations;
+    r->it_total = ss.iterations_total;
+    r->max_residual = ss.residual;
+    r->t_solve = ss.seconds;
+    if (ss.block) r->block = ss.block;
+    if (o->progress) o->progress(o->user, nf, nf);
+done:
+    free(pnode);
+    free(src);
+    free(pres);
+    return st;
+}
+
 thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_series *epi, const thx_forward_opts *o,
                                   thx_forward_result *r)
 {
@@ -193,6 +242,12 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
     size_t nb = thx_fem_system_block(P.sys);
     nb = nb < nf ? nb : nf ? nf : 1;
     r->block = nb;
+    if (nb > 1 && !r->volume && !o->dump_system) {
+        /* a factorization and the outer surface alone: the prescribed values per prescribed node in, the outer
+           surface's values out (thx_fem_solve_rows: no column of every node is made) */
+        THX_TRY(epi_solve_rows(ctx, m, epi, &P, o, r));
+        goto solved;
+    }
     phi = thx_calloc(ctx, nn * nb > 0 ? nn * nb : 1, sizeof *phi);
     if (!phi) { st = THX_ENOMEM; goto done; }
     for (size_t f0 = 0; f0 < nf; f0 += nb) {
@@ -224,6 +279,7 @@ thx_status thx_forward_epicardial(thx_ctx *ctx, const thx_model *m, const thx_se
         }
         if (o->progress) o->progress(o->user, f0 + k, nf);
     }
+solved:
     if (!nf) r->it_min = 0;
     thx_fem_system_info(P.sys, &r->n_free, &r->n_prescribed, &r->t_setup);
     r->t_matrix = thx_fem_system_matrix_seconds(P.sys);

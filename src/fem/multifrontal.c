@@ -23,6 +23,7 @@
 #include <omp.h>
 #endif
 
+#include <stdio.h>
 #include "fem/multifrontal.h"
 
 /* LAPACK and BLAS, Fortran calling convention (OpenBLAS behind liblapack.so.3 and libblas.so.3) */
@@ -364,8 +365,10 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
         me = omp_get_thread_num();
 #endif
         int32_t *map = maps[me], *rel = maps[me] + S->n;
-#pragma omp for schedule(dynamic, 1)
+        double tb = thx_wtime(), busy = 0;
+#pragma omp for schedule(dynamic, 1) nowait
         for (size_t i = 0; i < nsub; i++) {
+            double ts = thx_wtime();
             int stop;
 #pragma omp atomic read
             stop = failed;
@@ -384,7 +387,10 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
                     break;
                 }
             }
+            busy += thx_wtime() - ts;
+            if (getenv("TMPDBG")) fprintf(stderr, "thread %d subtree %zu (root %lld, work %.3g) %.3f s\n", me, i, (long long)subs[i], t.sub[subs[i]], thx_wtime() - ts);
         }
+        if (getenv("TMPDBG")) fprintf(stderr, "thread %d busy %.3f of %.3f s\n", me, busy, thx_wtime() - tb);
     }
     inf.t_subtrees = thx_wtime() - t0;
     /* the top, in the postorder, with BLAS's threads */

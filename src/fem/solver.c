@@ -384,6 +384,8 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
 /* The same for thorax's own path: its blocks are split among the threads, and wider ones keep BLAS busier. */
 #define THX_FEM_OWN_BYTES ((size_t)768 << 20)
 #define THX_FEM_OWN_MAX 256
+/* ... and for thx_fem_solve_rows, whose blocks need no column of every node: x alone within THX_FEM_OWN_BYTES */
+#define THX_FEM_OWN_ROWS_MAX 512
 /* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
  * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system
  * (currents into a piece of the mesh with no prescribed potential) whose tiny pivot the package took. */
@@ -647,12 +649,42 @@ static void own_residual(const thx_fem_system *s, const double *P, const double 
     }
 }
 
-/* k columns of phi (and load) through the own factor: the columns dealt to the threads in contiguous
-   groups, each group row-major in the factor's order (src/fem/cholesky.h), its residuals ||b - A x||
-   from the kept CSR. rel[j]: column j's relative residual. */
-static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, double *rel)
+/* Where a block's right-hand sides come from and its answers go: phi's columns (n values each, the prescribed
+   values in, every node's value out), or the caller's prescribed values (pres: np values a column, value c for
+   the system's prescribed node whose from-index is c; from[d] = -2: the pinned node, 0) in and the values at
+   rows[0 .. m - 1] out (out: m values a column). */
+typedef struct {
+    double *phi;
+    const double *load;
+    const double *pres;
+    const int32_t *from;
+    size_t np;
+    const int32_t *rows;
+    size_t m;
+    double *out;
+} own_io;
+
+/* T[i * r + j] = pres[(c0 + j) * np + from[i]] for the nd prescribed nodes, a tile of rows at a time. */
+static void own_gather_pres(const own_io *io, size_t nd, size_t c0, size_t r, double *restrict T)
+{
+    const size_t tile = 256;
+    for (size_t i0 = 0; i0 < nd; i0 += tile) {
+        size_t i1 = i0 + tile < nd ? i0 + tile : nd;
+        for (size_t j = 0; j < r; j++) {
+            const double *pj = io->pres + (c0 + j) * io->np;
+            for (size_t i = i0; i < i1; i++) T[i * r + j] = io->from[i] >= 0 ? pj[io->from[i]] : 0;
+        }
+    }
+}
+
+/* k columns through the own factor: dealt to the threads in contiguous groups, each group row-major in the
+   factor's order (src/fem/cholesky.h), its residuals ||b - A x|| from the kept CSR. rel[j]: column j's
+   relative residual. */
+static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, size_t k, double *rel)
 {
     const size_t n = (size_t)s->n, nf = (size_t)s->nf;
+    double *phi = io->phi;
+    const double *load = io->load;
     int T = 1;
 #ifdef _OPENMP
     T = omp_get_max_threads();
@@ -681,28 +713,40 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const 
         if (!w->r) failed = 1;
         else {
             double *rn = w->acc + 2 * r, *bn = w->acc + 3 * r;
-            own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
+            if (phi) own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
+            else own_gather_pres(io, (size_t)s->nd, c0, r, w->P);
             own_rhs(s, w->P, load, c0, r, w->X);
             w->flops += thx_chol_solve_rows(s->chol, w->X, r, w->E);
             own_residual(s, w->P, load, c0, w->X, r, w->acc, rn, bn);
             for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
-            /* the free values into phi, a block of rows at a time (each column's writes near each other); nodes
-               neither free nor prescribed are 0 */
-            for (size_t q0 = 0; q0 < nf; q0 += 256) {
-                size_t q1 = q0 + 256 < nf ? q0 + 256 : nf;
-                for (size_t j = 0; j < r; j++) {
-                    double *pj = phi + (c0 + j) * n;
-                    for (size_t q = q0; q < q1; q++) pj[s->free_node[q]] = w->X[(size_t)iperm[q] * r + j];
+            if (phi) {
+                /* the free values into phi, a block of rows at a time (each column's writes near each other);
+                   nodes neither free nor prescribed are 0 */
+                for (size_t q0 = 0; q0 < nf; q0 += 256) {
+                    size_t q1 = q0 + 256 < nf ? q0 + 256 : nf;
+                    for (size_t j = 0; j < r; j++) {
+                        double *pj = phi + (c0 + j) * n;
+                        for (size_t q = q0; q < q1; q++) pj[s->free_node[q]] = w->X[(size_t)iperm[q] * r + j];
+                    }
+                }
+                for (size_t j = 0; j < r; j++)
+                    for (int32_t i = 0; i < s->n; i++)
+                        if (s->fidx[i] < 0 && s->didx[i] < 0) phi[(c0 + j) * n + (size_t)i] = 0;
+            } else {
+                /* the rows asked for: a free node's answer, a prescribed node's value, else 0 */
+                for (size_t i = 0; i < io->m; i++) {
+                    int32_t node = io->rows[i], f = s->fidx[node], d = s->didx[node];
+                    const double *src = f >= 0 ? w->X + (size_t)iperm[f] * r : d >= 0 ? w->P + (size_t)d * r : NULL;
+                    for (size_t j = 0; j < r; j++) io->out[(c0 + j) * io->m + i] = src ? src[j] : 0;
                 }
             }
-            for (size_t j = 0; j < r; j++)
-                for (int32_t i = 0; i < s->n; i++)
-                    if (s->fidx[i] < 0 && s->didx[i] < 0) phi[(c0 + j) * n + (size_t)i] = 0;
         }
     }
     if (was > 0) blas_threads(was);
     return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
 }
+
+static thx_status own_verdict(thx_ctx *ctx, const double *rel, size_t k, thx_status st, thx_fem_solve_stats *out);
 
 /* The own path for k columns: factor once, solve, refuse a singular system as the PETSc path does. */
 static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k,
@@ -713,7 +757,17 @@ static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, 
         for (size_t j = 0; j < k; j++) phi[j * (size_t)s->n + (size_t)s->pinned] = 0;
     double *rel = thx_malloc(ctx, (k ? k : 1) * sizeof *rel);
     if (!rel) return THX_ENOMEM;
-    thx_status st = own_solve(ctx, s, phi, load, k, rel);
+    own_io io = {.phi = phi, .load = load};
+    thx_status st = own_solve(ctx, s, &io, k, rel);
+    st = own_verdict(ctx, rel, k, st, out);
+    free(rel);
+    if (out) out->seconds += thx_wtime() - t0;
+    return st;
+}
+
+/* The residuals' verdict: a block whose relative residual is above THX_FEM_DIRECT_RTOL anywhere is refused. */
+static thx_status own_verdict(thx_ctx *ctx, const double *rel, size_t k, thx_status st, thx_fem_solve_stats *out)
+{
     for (size_t j = 0; j < k && st == THX_OK; j++) {
         if (!(rel[j] <= THX_FEM_DIRECT_RTOL))
             st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
@@ -721,8 +775,6 @@ static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, 
                            "currents into a part of the mesh with no prescribed potential)", rel[j], j + 1, k);
         if (out) out->residual = fmax(out->residual, rel[j]);
     }
-    free(rel);
-    if (out) out->seconds += thx_wtime() - t0;
     return st;
 }
 
@@ -983,5 +1035,98 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
     }
 done:
     if (out) *out = sum;
+    return st;
+}
+
+thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pnode, size_t np, const double *pres,
+                              size_t k, int warm, const int32_t *rows, size_t m, double *out, thx_fem_solve_stats *stats)
+{
+    thx_status st = THX_OK;
+    const size_t n = (size_t)s->n, nd = (size_t)s->nd;
+    thx_fem_solve_stats sum;
+    memset(&sum, 0, sizeof sum);
+    sum.iterations_min = 1 << 30;
+    sum.converged = 1;
+    int32_t *from = thx_malloc(ctx, (nd ? nd : 1) * sizeof *from);
+    double *phi = NULL, *rel = NULL;
+    if (!from) return THX_ENOMEM;
+    /* every prescribed node's value from the caller's list (the pinned node of a pure Neumann problem: 0) */
+    for (size_t d = 0; d < nd; d++) from[d] = -1;
+    if (s->pinned >= 0) from[s->didx[s->pinned]] = -2;
+    for (size_t c = 0; c < np; c++) {
+        int32_t node = pnode[c];
+        if (node < 0 || (size_t)node >= n || s->didx[node] < 0 || node == s->pinned) {
+            st = thx_error(ctx, THX_EINTERNAL, "fem: prescribed value %zu is for node %d, which the system does not prescribe",
+                           c + 1, node + 1);
+            goto done;
+        }
+        from[s->didx[node]] = (int32_t)c;
+    }
+    for (size_t d = 0; d < nd; d++)
+        if (from[d] == -1) {
+            st = thx_error(ctx, THX_EINTERNAL, "fem: prescribed node %d has no value", s->pres_node[d] + 1);
+            goto done;
+        }
+    for (size_t i = 0; i < m; i++)
+        if (rows[i] < 0 || (size_t)rows[i] >= n) {
+            st = thx_error(ctx, THX_EINTERNAL, "fem: row %zu asks for node %d of %zu", i + 1, rows[i] + 1, n);
+            goto done;
+        }
+    if (!k) { sum.iterations_min = 0; goto done; }
+    if (s->own) THX_TRY(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) {
+        /* blocks of x alone (no column of every node is made) */
+        size_t nb = s->block;
+        if (!nb) {
+            PetscInt want = 0;
+            PetscBool set = PETSC_FALSE;
+            PetscOptionsGetInt(NULL, NULL, "-thorax_block_size", &want, &set);
+            nb = set && want >= 1 ? (size_t)want : THX_FEM_OWN_BYTES / (sizeof(double) * (size_t)(s->nf > 0 ? s->nf : 1));
+            nb = nb < 1 ? 1 : nb > THX_FEM_OWN_ROWS_MAX ? THX_FEM_OWN_ROWS_MAX : nb;
+        }
+        rel = thx_malloc(ctx, (nb < k ? nb : k) * sizeof *rel);
+        if (!rel) { st = THX_ENOMEM; goto done; }
+        for (size_t j0 = 0; j0 < k && st == THX_OK; j0 += nb) {
+            size_t kk = k - j0 < nb ? k - j0 : nb;
+            double t0 = thx_wtime();
+            own_io io = {.pres = pres + j0 * np, .from = from, .np = np, .rows = rows, .m = m, .out = out + j0 * m};
+            st = own_solve(ctx, s, &io, kk, rel);
+            st = own_verdict(ctx, rel, kk, st, &sum);
+            sum.seconds += thx_wtime() - t0;
+        }
+        sum.iterations = sum.iterations_min = 1;
+        sum.iterations_total = (long)k;
+        sum.block = nb < k ? nb : k;
+        goto done;
+    }
+    /* any other solver: columns of every node, as thx_fem_solve_block takes them, a block at a time (the last
+       column of a block starts the next one's first when warm) */
+    size_t nb = thx_fem_system_block(s);
+    nb = nb < k ? nb : k;
+    phi = thx_calloc(ctx, n * nb, sizeof *phi);
+    if (!phi) { st = THX_ENOMEM; goto done; }
+    sum.block = nb;
+    for (size_t j0 = 0; j0 < k; j0 += nb) {
+        size_t kk = k - j0 < nb ? k - j0 : nb;
+        if (j0 > 0 && nb > 1) memcpy(phi, phi + (nb - 1) * n, n * sizeof *phi);
+        for (size_t j = 0; j < kk; j++) {
+            const double *pj = pres + (j0 + j) * np;
+            for (size_t c = 0; c < np; c++) phi[j * n + (size_t)pnode[c]] = pj[c];
+        }
+        thx_fem_solve_stats ss;
+        THX_TRY(thx_fem_solve_block(ctx, s, phi, NULL, kk, warm, &ss));
+        sum.iterations = ss.iterations > sum.iterations ? ss.iterations : sum.iterations;
+        sum.iterations_min = ss.iterations_min < sum.iterations_min ? ss.iterations_min : sum.iterations_min;
+        sum.iterations_total += ss.iterations_total;
+        sum.residual = fmax(sum.residual, ss.residual);
+        sum.seconds += ss.seconds;
+        for (size_t j = 0; j < kk; j++)
+            for (size_t i = 0; i < m; i++) out[(j0 + j) * m + i] = phi[j * n + (size_t)rows[i]];
+    }
+done:
+    free(from);
+    free(phi);
+    free(rel);
+    if (stats) *stats = sum;
     return st;
 }

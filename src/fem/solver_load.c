@@ -66,6 +66,12 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
     return g_api->solve_block(ctx, s, phi, load, k, warm, st);
 }
 
+thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pnode, size_t np, const double *pres,
+                              size_t k, int warm, const int32_t *rows, size_t m, double *out, thx_fem_solve_stats *st)
+{
+    return g_api->solve_rows(ctx, s, pnode, np, pres, k, warm, rows, m, out, st);
+}
+
 size_t thx_fem_system_block(const thx_fem_system *s) { return g_api->system_block(s); }
 
 void thx_fem_system_set_block(thx_fem_system *s, size_t k) { g_api->system_set_block(s, k); }

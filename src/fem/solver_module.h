@@ -9,7 +9,7 @@
 #include "thorax/fem/fem.h"
 
 /* Raised whenever the table changes: a module from another build is refused, not misused. */
-#define THX_FEM_PETSC_ABI 4
+#define THX_FEM_PETSC_ABI 5
 
 typedef struct {
     int abi; /* THX_FEM_PETSC_ABI */
@@ -34,6 +34,8 @@ typedef struct {
     void (*system_factor_info)(const thx_fem_system *s, thx_fem_factor_info *out);
     thx_status (*system_create_parts)(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
                                       const int32_t *part, thx_fem_system **out);
+    thx_status (*solve_rows)(thx_ctx *ctx, thx_fem_system *s, const int32_t *pnode, size_t np, const double *pres,
+                             size_t k, int warm, const int32_t *rows, size_t m, double *out, thx_fem_solve_stats *st);
 } thx_fem_petsc;
 
 /* Exported by the module. */

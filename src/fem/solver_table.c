@@ -20,6 +20,7 @@ static const thx_fem_petsc table = {
     .system_describe = thx_fem_system_describe,
     .system_factor_info = thx_fem_system_factor_info,
     .system_create_parts = thx_fem_system_create_parts,
+    .solve_rows = thx_fem_solve_rows,
 };
 
 const thx_fem_petsc *thx_fem_petsc_get(void) { return &table; }

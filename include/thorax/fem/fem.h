@@ -118,6 +118,7 @@ typedef struct {
                           of a block the largest */
     double seconds;
     int converged;     /* KSPConvergedReason > 0 */
+    size_t block;      /* thx_fem_solve_rows: the most columns solved at once (0: not said) */
 } thx_fem_solve_stats;
 
 /*
@@ -167,6 +168,21 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
  */
 thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k, int warm,
                                thx_fem_solve_stats *st);
+
+/*
+ * Many right-hand sides whose answers are wanted at a few nodes (the forward problem's outer surface
+ * without the volume): thx_fem_solve_block's solves, with the prescribed values given per prescribed
+ * node and the answers returned at rows alone, so that no column of every node is made. pnode[0 .. np-1]
+ * are the system's prescribed nodes (kind 2), each once and every one of them (a pure Neumann problem's
+ * pinned node is not among them: it is 0); pres holds k columns of np values (column j at pres + j * np,
+ * value c for node pnode[c]). out receives k columns of m values (column j at out + j * m, value i at node
+ * rows[i]: its answer, its prescribed value, or 0 for an inactive node). On thorax's own path the blocks
+ * hold as many columns as keep one free-node column per right-hand side within 768 MB (at most 512);
+ * otherwise it is thx_fem_solve_block on blocks of every node, warm as there. st as thx_fem_solve_block's.
+ * A node list that does not match the system is THX_EINTERNAL.
+ */
+thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pnode, size_t np, const double *pres,
+                              size_t k, int warm, const int32_t *rows, size_t m, double *out, thx_fem_solve_stats *st);
 
 /*
  * Columns per blocked solve: 1 without a factorization (nothing to gain);
