@@ -23,7 +23,6 @@
 #include <omp.h>
 #endif
 
-#include <stdio.h>
 #include "fem/multifrontal.h"
 
 /* LAPACK and BLAS, Fortran calling convention (OpenBLAS behind liblapack.so.3 and libblas.so.3) */
@@ -365,10 +364,8 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
         me = omp_get_thread_num();
 #endif
         int32_t *map = maps[me], *rel = maps[me] + S->n;
-        double tb = thx_wtime(), busy = 0;
-#pragma omp for schedule(dynamic, 1) nowait
+#pragma omp for schedule(dynamic, 1)
         for (size_t i = 0; i < nsub; i++) {
-            double ts = thx_wtime();
             int stop;
 #pragma omp atomic read
             stop = failed;
@@ -387,10 +384,7 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
                     break;
                 }
             }
-            busy += thx_wtime() - ts;
-            if (getenv("TMPDBG")) fprintf(stderr, "thread %d subtree %zu (root %lld, work %.3g) %.3f s\n", me, i, (long long)subs[i], t.sub[subs[i]], thx_wtime() - ts);
         }
-        if (getenv("TMPDBG")) fprintf(stderr, "thread %d busy %.3f of %.3f s\n", me, busy, thx_wtime() - tb);
     }
     inf.t_subtrees = thx_wtime() - t0;
     /* the top, in the postorder, with BLAS's threads */
