@@ -1,4 +1,5 @@
 /* PETSc option pass-through and progress display for the solving commands. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -94,6 +95,64 @@ thx_status cli_write_json(thx_ctx *ctx, const char *path, cJSON *j)
     return st;
 }
 
+/* The verdict looked at beside the model's reading (cli_volume_gate_prefetch). */
+static struct {
+    pthread_t thread;
+    int started, joined;
+    char dir[4096];
+    int trusted;
+    char why[512];
+    double seconds;
+} g_verdict;
+
+static void *verdict_job(void *unused)
+{
+    (void)unused;
+    thx_ctx *c = NULL;
+    double t0 = thx_wtime();
+    g_verdict.trusted = 0;
+    snprintf(g_verdict.why, sizeof g_verdict.why, "out of memory");
+    if (thx_ctx_create(&c) == THX_OK) {
+        g_verdict.trusted = thx_volume_verdict_trusted(c, g_verdict.dir, g_verdict.why, sizeof g_verdict.why);
+        thx_ctx_destroy(&c);
+    }
+    g_verdict.seconds = thx_wtime() - t0;
+    return NULL;
+}
+
+void cli_volume_gate_prefetch(const char *model_dir)
+{
+    if (g_verdict.started || snprintf(g_verdict.dir, sizeof g_verdict.dir, "%s", model_dir) >= (int)sizeof g_verdict.dir)
+        return;
+    g_verdict.started = pthread_create(&g_verdict.thread, NULL, verdict_job, NULL) == 0;
+    g_verdict.joined = 0;
+}
+
+void cli_volume_gate_end(void)
+{
+    if (g_verdict.started && !g_verdict.joined) pthread_join(g_verdict.thread, NULL);
+    g_verdict.joined = 1;
+}
+
+/* 1 when the kept verdict is trusted: the prefetched answer for this directory, else looked at now. */
+static int verdict_trusted(thx_ctx *ctx, const char *model_dir, char *why, size_t why_n, double *seconds)
+{
+    if (g_verdict.started && !strcmp(g_verdict.dir, model_dir)) {
+        double t0 = thx_wtime();
+        cli_volume_gate_end();
+        g_verdict.started = 0;
+        snprintf(why, why_n, "%s", g_verdict.why);
+        *seconds = g_verdict.seconds;
+        if (thx_wtime() - t0 >= 0.005)
+            thx_log(ctx, THX_LOG_DEBUG, "volume check's verdict: waited %.2f s for it", thx_wtime() - t0);
+        return g_verdict.trusted;
+    }
+    double t0 = thx_wtime();
+    int ok = thx_volume_verdict_trusted(ctx, model_dir, why, why_n);
+    *seconds = thx_wtime() - t0;
+    return ok;
+}
+
 thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir, const thx_model *m, int force,
                            int rank, cJSON **note, cJSON **warning)
 {
@@ -104,10 +163,11 @@ thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir,
     double t0 = thx_wtime();
     /* a verdict `thorax mesh` kept for exactly these files (thorax/check/verdict.h): the check is not run again */
     char why[512];
-    if (thx_volume_verdict_trusted(ctx, model_dir, why, sizeof why)) {
+    double hashed = 0;
+    if (verdict_trusted(ctx, model_dir, why, sizeof why, &hashed)) {
         if (rank == 0) /* (rank 0 speaks for all) */
             thx_log(ctx, THX_LOG_DEBUG, "volume check (%zu tetrahedra): passed, the verdict kept in model.json (its files "
-                    "unchanged: SHA-256 in %.2f s)", m->volume->n_tets, thx_wtime() - t0);
+                    "unchanged: SHA-256 in %.2f s)", m->volume->n_tets, hashed);
         if (note) {
             cJSON *j = cJSON_CreateObject();
             if (!j || !cJSON_AddArrayToObject(j, "failures") || !cJSON_AddArrayToObject(j, "reasons") ||

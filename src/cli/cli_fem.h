@@ -54,6 +54,12 @@ void cli_progress(void *user, size_t done, size_t total);
  * Other statuses: THX_ENOMEM (nothing returned).
  */
 struct thx_model;
+/* Starts looking at model_dir's kept verdict (thorax/check/verdict.h: the SHA-256 of 70 MB for the
+ * high phantom) in a thread of its own, while the caller reads the model; cli_volume_gate on the same
+ * directory takes its answer. cli_volume_gate_end joins it (every path out of a command that started
+ * it). Nothing is started when the thread cannot be made: the gate then looks itself. */
+void cli_volume_gate_prefetch(const char *model_dir);
+void cli_volume_gate_end(void);
 thx_status cli_volume_gate(thx_ctx *ctx, const char *cmd, const char *model_dir, const struct thx_model *m, int force,
                            int rank, struct cJSON **note, struct cJSON **warning);
 

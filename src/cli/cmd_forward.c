@@ -185,6 +185,8 @@ int cmd_forward(int argc, char **argv)
     /* the output directory first: refused before any work if it is not thorax's own solution */
     const char *inputs[] = {model_dir, epi_path, rows_path, transfer_in, channels};
     st = thx_outdir_claim(ctx, &od, out, "solution.json", "thorax-solution", inputs, 5);
+    /* the kept verdict's digest beside the model's reading (the gate below takes it) */
+    if (st == THX_OK && !(transfer_in && !want_volume && !currents)) cli_volume_gate_prefetch(model_dir);
     if (st == THX_OK) st = thx_model_read(ctx, model_dir, &m);
     if (st == THX_OK && epi_path) st = thx_series_read(ctx, epi_path, THX_SERIES_AUTO, &epi);
     if (st == THX_OK && channels) { /* the recording's channels as the heart's nodes */
@@ -476,6 +478,7 @@ fail:
     rc = cli_fail(ctx, "forward", st);
     if (rank == 0) thx_outdir_abort(&od); /* (begun early for the parts: nothing left behind) */
 end:
+    cli_volume_gate_end();
     cJSON_Delete(vcheck);
     cJSON_Delete(warnings);
     free(sel);
