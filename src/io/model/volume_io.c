@@ -41,7 +41,6 @@
  */
 #include "io/model/volume_io.h"
 
-#include <errno.h>
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -158,13 +157,23 @@ thx_status thx_io_volume_write_files(thx_ctx *ctx, const thx_model *m, const cha
 
 /* ---------------------------------------------------------------- read */
 
-/* A whole decimal integer token. */
+/* A whole decimal integer token within 32 bits (an optional sign, then digits: what strtol takes from a
+   token with no blanks, without its locale and its cost: a third of the 1.8 million-line volume.tet's
+   reading went to strtol). */
 static int parse_long(const char *tok, long *out)
 {
-    char *end = NULL;
-    errno = 0;
-    long v = strtol(tok, &end, 10);
-    if (end == tok || *end != '\0' || errno == ERANGE || v < INT32_MIN || v > INT32_MAX) return -1;
+    const char *p = tok;
+    int neg = *p == '-';
+    if (*p == '-' || *p == '+') p++;
+    if (*p < '0' || *p > '9') return -1;
+    long v = 0;
+    for (; *p >= '0' && *p <= '9'; p++) {
+        v = 10 * v + (*p - '0');
+        if (v > (long)INT32_MAX + 1) return -1;
+    }
+    if (*p != '\0') return -1;
+    v = neg ? -v : v;
+    if (v < INT32_MIN || v > INT32_MAX) return -1;
     *out = v;
     return 0;
 }
