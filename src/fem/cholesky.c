@@ -155,11 +155,10 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
     f->c.print = 0;
     f->c.error_handler = NULL;
     f->c.supernodal = CHOLMOD_SUPERNODAL;
-    /* larger supernodes than CHOLMOD's default (4, 16, 48 columns): fewer, larger BLAS calls in the
-       factorization and in our solves (measured in docs/design/parallel.md) */
-    f->c.nrelax[0] = 16;
-    f->c.nrelax[1] = 64;
-    f->c.nrelax[2] = 192;
+    /* CHOLMOD's own relaxed amalgamation (4, 16, 48 columns). With CHOLMOD's numeric factorization the
+       coarser 16/64/192 ran faster (3.0 s against 4.8 s); with ours the default is as fast and its factor
+       smaller: 695 against 801 MB for the high phantom, 0.96 of the time in paired runs
+       (docs/design/parallel.md, "The factorization of our own") */
     f->n = n;
     /* the upper triangle, column by column: CSR row i is column i of the symmetric matrix */
     size_t nz = 0;
