@@ -21,7 +21,20 @@ thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
  * (NUL-terminated in place); returns the count (max + 1 = "more than max");
  * *next = start of the following line or NULL. */
 int thx_io_split_line(char *p, char **tok, int max, char **next);
-/* Reads "x y z" lines (blank lines allowed); `what` prefixes the messages after FILE:LINE:. */
+/* A run of whole lines of a text: [begin, end), end the next piece's begin or the text's NUL. */
+typedef struct {
+    char *begin, *end;
+} thx_io_piece;
+/* Cuts the NUL-terminated text of len bytes into at most max pieces of whole lines, each at least min_bytes
+ * long but the last, for readers that parse the pieces in parallel (each line's tokens are its own). Returns
+ * the count (1 for a short text). A reader counts each piece's lines as it parses: piece k's first line is
+ * 1 + the lines of the pieces before it, which are known whole when the first fault is in piece k. */
+size_t thx_io_cut_lines(char *text, size_t len, size_t max, size_t min_bytes, thx_io_piece *pieces);
+/* The pieces for this machine: as many as OpenMP's threads, at most 8, from 1 MB a piece. */
+#define THX_IO_PIECES_MAX 8
+#define THX_IO_PIECE_BYTES ((size_t)1 << 20)
+/* Reads "x y z" lines (blank lines allowed); `what` prefixes the messages after FILE:LINE:. Files above a
+ * megabyte are parsed in pieces, one thread each. */
 thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out);
 /* Reads a .pts/.fac pair; want_base 0 or 1 requires that .fac base, -1 detects it (ptsfac.c). */
 thx_status thx_io_read_ptsfac(thx_ctx *ctx, const char *pts, const char *fac, const char *name, thx_role role,

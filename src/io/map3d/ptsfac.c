@@ -24,6 +24,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "thorax/core/fileio.h"
 #include "thorax/model/model.h"
 #include "thorax/io/model_dir.h"
@@ -127,6 +131,72 @@ int thx_io_split_line(char *p, char **tok, int max, char **next)
 
 /* ------------------------------------------------------------ .pts / .fac */
 
+size_t thx_io_cut_lines(char *text, size_t len, size_t max, size_t min_bytes, thx_io_piece *pieces)
+{
+    size_t n = 0;
+    char *at = text, *end = text + len;
+    size_t want = max < 1 ? 1 : max;
+    size_t step = len / want > min_bytes ? len / want : min_bytes;
+    while (at < end && n + 1 < want) {
+        if ((size_t)(end - at) <= step + min_bytes) break; /* the rest in one piece */
+        char *cut = memchr(at + step, '\n', (size_t)(end - at) - step);
+        if (!cut) break;
+        pieces[n].begin = at;
+        pieces[n].end = cut + 1;
+        n++;
+        at = cut + 1;
+    }
+    pieces[n].begin = at;
+    pieces[n].end = end;
+    return n + 1;
+}
+
+typedef struct {
+    double *xyz;
+    size_t n, cap;
+    int lines;      /* lines parsed (all of them unless it failed) */
+    int bad_line;   /* the piece's own line number of the fault, 0: none */
+    char why[160];  /* the fault, after FILE:LINE: */
+} xyz_piece;
+
+/* One piece of "x y z" lines: what it holds, or its first fault. */
+static void xyz_parse(const thx_io_piece *pc, const char *what, xyz_piece *o)
+{
+    for (char *p = pc->begin, *next = NULL; p && p < pc->end; p = next) {
+        char *tok[3];
+        o->lines++;
+        int nt = thx_io_split_line(p, tok, 3, &next);
+        if (nt == 0) continue; /* blank lines are allowed anywhere */
+        if (nt != 3) {
+            o->bad_line = o->lines;
+            snprintf(o->why, sizeof o->why, "%sexpected 3 coordinates (x y z), found %s", what,
+                     nt > 3 ? "more" : nt == 1 ? "1" : "2");
+            return;
+        }
+        if (o->n + 1 > o->cap) {
+            size_t cap = o->cap ? 2 * o->cap : 1024;
+            double *x = realloc(o->xyz, 3 * cap * sizeof *x);
+            if (!x) {
+                o->bad_line = -1;
+                return;
+            }
+            o->xyz = x;
+            o->cap = cap;
+        }
+        for (int k = 0; k < 3; k++) {
+            char *end = NULL;
+            double v = strtod(tok[k], &end);
+            if (end == tok[k] || *end != '\0' || !isfinite(v)) {
+                o->bad_line = o->lines;
+                snprintf(o->why, sizeof o->why, "%scoordinate %d is not a finite number: \"%.60s\"", what, k + 1, tok[k]);
+                return;
+            }
+            o->xyz[3 * o->n + (size_t)k] = v;
+        }
+        o->n++;
+    }
+}
+
 /* "x y z" per line, blank lines allowed (a surface's .pts and the volume's volume.pts): what
  * prefixes the messages after FILE:LINE: (e.g. "surface \"torso\": ", or ""). */
 thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out)
@@ -134,39 +204,40 @@ thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, dou
     char *text = NULL;
     thx_status st = thx_io_read_text(ctx, path, &text);
     if (st) return st;
-    double *xyz = NULL;
-    size_t n = 0, cap = 0;
-    int line = 0;
-    for (char *p = text, *next = NULL; p; p = next) {
-        char *tok[3];
-        line++;
-        int nt = thx_io_split_line(p, tok, 3, &next);
-        if (nt == 0) continue; /* blank lines are allowed anywhere */
-        if (nt != 3) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: %sexpected 3 coordinates (x y z), found %s", path, line, what,
-                           nt > 3 ? "more" : nt == 1 ? "1" : "2");
-            goto done;
-        }
-        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&xyz, &cap, n + 1, 3 * sizeof *xyz));
-        for (int k = 0; k < 3; k++) {
-            char *end = NULL;
-            double v = strtod(tok[k], &end);
-            if (end == tok[k] || *end != '\0' || !isfinite(v)) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: %scoordinate %d is not a finite number: \"%s\"", path, line, what,
-                               k + 1, tok[k]);
-                goto done;
-            }
-            xyz[3 * n + (size_t)k] = v;
-        }
-        n++;
+    thx_io_piece pc[THX_IO_PIECES_MAX];
+    xyz_piece o[THX_IO_PIECES_MAX];
+    int threads = 1;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    size_t np = thx_io_cut_lines(text, strlen(text), (size_t)threads < THX_IO_PIECES_MAX ? (size_t)threads : THX_IO_PIECES_MAX,
+                                 THX_IO_PIECE_BYTES, pc);
+    memset(o, 0, sizeof o);
+#pragma omp parallel for schedule(static, 1) num_threads((int)np) if (np > 1)
+    for (size_t k = 0; k < np; k++) xyz_parse(&pc[k], what, &o[k]);
+    /* the first fault in the file's order, its line counted over the pieces before */
+    size_t n = 0;
+    int line0 = 0;
+    for (size_t k = 0; k < np && st == THX_OK; k++) {
+        if (o[k].bad_line < 0) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        else if (o[k].bad_line) st = thx_error(ctx, THX_EINPUT, "%s:%d: %s", path, line0 + o[k].bad_line, o[k].why);
+        line0 += o[k].lines;
+        n += o[k].n;
     }
+    double *xyz = NULL;
+    if (st == THX_OK) {
+        xyz = np == 1 ? o[0].xyz : malloc(3 * (n ? n : 1) * sizeof *xyz);
+        if (!xyz && (np > 1 || n)) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        else if (np > 1)
+            for (size_t k = 0, at = 0; k < np; at += o[k].n, k++) memcpy(xyz + 3 * at, o[k].xyz, 3 * o[k].n * sizeof *xyz);
+    }
+    for (size_t k = 0; k < np; k++)
+        if (!(st == THX_OK && np == 1)) free(o[k].xyz);
+    free(text);
+    if (st != THX_OK) return st;
     *xyz_out = xyz;
     *n_out = n;
-    xyz = NULL;
-done:
-    free(xyz);
-    free(text);
-    return st;
+    return THX_OK;
 }
 
 static thx_status read_pts(thx_ctx *ctx, const char *path, const char *name, double **xyz_out, size_t *n_out)

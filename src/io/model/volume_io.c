@@ -41,6 +41,9 @@
  */
 #include "io/model/volume_io.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -178,64 +181,128 @@ static int parse_long(const char *tok, long *out)
     return 0;
 }
 
-/* volume.tet: "a b c d r" per line, 1-based; returned 0-based. */
+typedef struct {
+    int32_t *tet, *reg;
+    size_t n, cap;
+    int lines;      /* lines parsed (all of them unless it failed) */
+    int bad_line;   /* the piece's own line number of the fault (0: none, -1: out of memory) */
+    char why[200];  /* the fault, after FILE:LINE: */
+} tet_piece;
+
+/* One piece of volume.tet's lines: what it holds, or its first fault. */
+static void tets_parse(const thx_io_piece *pc, size_t n_nodes, size_t n_regions, tet_piece *o)
+{
+    for (char *p = pc->begin, *next = NULL; p && p < pc->end; p = next) {
+        char *tok[5];
+        o->lines++;
+        int nt = thx_io_split_line(p, tok, 5, &next);
+        if (nt == 0) continue;
+        if (nt != 5) {
+            o->bad_line = o->lines;
+            snprintf(o->why, sizeof o->why, "expected 5 numbers (4 node numbers, then a region number), found %s",
+                     nt > 5 ? "more" : nt == 1 ? "1" : nt == 2 ? "2" : nt == 3 ? "3" : "4");
+            return;
+        }
+        if (o->n + 1 > o->cap) {
+            size_t cap = o->cap ? 2 * o->cap : 4096;
+            int32_t *t = realloc(o->tet, 4 * cap * sizeof *t);
+            if (t) o->tet = t;
+            int32_t *r = t ? realloc(o->reg, cap * sizeof *r) : NULL;
+            if (r) o->reg = r;
+            if (!t || !r) {
+                o->bad_line = -1;
+                return;
+            }
+            o->cap = cap;
+        }
+        long val[5];
+        for (int k = 0; k < 5; k++)
+            if (parse_long(tok[k], &val[k])) {
+                o->bad_line = o->lines;
+                snprintf(o->why, sizeof o->why, "%s is not an integer: \"%.60s\"", k < 4 ? "a node number" : "the region number",
+                         tok[k]);
+                return;
+            }
+        for (int k = 0; k < 4; k++) {
+            if (val[k] < 1 || (size_t)val[k] > n_nodes) {
+                o->bad_line = o->lines;
+                snprintf(o->why, sizeof o->why, "node number %ld out of range 1..%zu (the nodes of %s)", val[k], n_nodes,
+                         VOLUME_PTS);
+                return;
+            }
+            for (int j = 0; j < k; j++)
+                if (val[j] == val[k]) {
+                    o->bad_line = o->lines;
+                    snprintf(o->why, sizeof o->why, "node %ld appears twice in the tetrahedron", val[k]);
+                    return;
+                }
+            o->tet[4 * o->n + (size_t)k] = (int32_t)(val[k] - 1);
+        }
+        if (val[4] < 1 || (size_t)val[4] > n_regions) {
+            o->bad_line = o->lines;
+            snprintf(o->why, sizeof o->why, "region %ld out of range 1..%zu (the \"regions\" of model.json)", val[4],
+                     n_regions);
+            return;
+        }
+        o->reg[o->n] = (int32_t)(val[4] - 1);
+        o->n++;
+    }
+}
+
+/* volume.tet: "a b c d r" per line, 1-based; returned 0-based. Parsed in pieces, a thread each (the high
+   phantom's 1.8 million lines: 0.22 s in one). */
 static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size_t n_regions, thx_volume *v)
 {
     char *text = NULL;
     THX_CHECK(thx_io_read_text(ctx, path, &text));
     thx_status st = THX_OK;
+    thx_io_piece pc[THX_IO_PIECES_MAX];
+    tet_piece o[THX_IO_PIECES_MAX];
+    int threads = 1;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    size_t np = thx_io_cut_lines(text, strlen(text), (size_t)threads < THX_IO_PIECES_MAX ? (size_t)threads : THX_IO_PIECES_MAX,
+                                 THX_IO_PIECE_BYTES, pc);
+    memset(o, 0, sizeof o);
+#pragma omp parallel for schedule(static, 1) num_threads((int)np) if (np > 1)
+    for (size_t k = 0; k < np; k++) tets_parse(&pc[k], n_nodes, n_regions, &o[k]);
+    size_t n = 0;
+    int line0 = 0;
+    for (size_t k = 0; k < np && st == THX_OK; k++) {
+        if (o[k].bad_line < 0) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        else if (o[k].bad_line) st = thx_error(ctx, THX_EINPUT, "%s:%d: %s", path, line0 + o[k].bad_line, o[k].why);
+        line0 += o[k].lines;
+        n += o[k].n;
+    }
     int32_t *tet = NULL, *reg = NULL;
-    size_t n = 0, cap = 0, rcap = 0;
-    int line = 0;
-    for (char *p = text, *next = NULL; p; p = next) {
-        char *tok[5];
-        line++;
-        int nt = thx_io_split_line(p, tok, 5, &next);
-        if (nt == 0) continue;
-        if (nt != 5) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: expected 5 numbers (4 node numbers, then a region number), found %s",
-                           path, line, nt > 5 ? "more" : nt == 1 ? "1" : nt == 2 ? "2" : nt == 3 ? "3" : "4");
-            goto done;
+    if (st == THX_OK && np == 1) {
+        tet = o[0].tet;
+        reg = o[0].reg;
+        o[0].tet = o[0].reg = NULL;
+    } else if (st == THX_OK) {
+        tet = malloc(4 * (n ? n : 1) * sizeof *tet);
+        reg = malloc((n ? n : 1) * sizeof *reg);
+        if (!tet || !reg) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        for (size_t k = 0, at = 0; st == THX_OK && k < np; at += o[k].n, k++) {
+            memcpy(tet + 4 * at, o[k].tet, 4 * o[k].n * sizeof *tet);
+            memcpy(reg + at, o[k].reg, o[k].n * sizeof *reg);
         }
-        if (n + 1 > cap) THX_TRY(thx_grow(ctx, (void **)&tet, &cap, n + 1, 4 * sizeof *tet));
-        if (n + 1 > rcap) THX_TRY(thx_grow(ctx, (void **)&reg, &rcap, n + 1, sizeof *reg));
-        long val[5];
-        for (int k = 0; k < 5; k++)
-            if (parse_long(tok[k], &val[k])) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: %s is not an integer: \"%s\"", path, line,
-                               k < 4 ? "a node number" : "the region number", tok[k]);
-                goto done;
-            }
-        for (int k = 0; k < 4; k++) {
-            if (val[k] < 1 || (size_t)val[k] > n_nodes) {
-                st = thx_error(ctx, THX_EINPUT, "%s:%d: node number %ld out of range 1..%zu (the nodes of %s)", path,
-                               line, val[k], n_nodes, VOLUME_PTS);
-                goto done;
-            }
-            for (int j = 0; j < k; j++)
-                if (val[j] == val[k]) {
-                    st = thx_error(ctx, THX_EINPUT, "%s:%d: node %ld appears twice in the tetrahedron", path, line, val[k]);
-                    goto done;
-                }
-            tet[4 * n + (size_t)k] = (int32_t)(val[k] - 1);
-        }
-        if (val[4] < 1 || (size_t)val[4] > n_regions) {
-            st = thx_error(ctx, THX_EINPUT, "%s:%d: region %ld out of range 1..%zu (the \"regions\" of model.json)", path,
-                           line, val[4], n_regions);
-            goto done;
-        }
-        reg[n] = (int32_t)(val[4] - 1);
-        n++;
+    }
+    for (size_t k = 0; k < np; k++) {
+        free(o[k].tet);
+        free(o[k].reg);
+    }
+    free(text);
+    if (st != THX_OK) {
+        free(tet);
+        free(reg);
+        return st;
     }
     v->tet = tet;
     v->region = reg;
     v->n_tets = n;
-    tet = reg = NULL;
-done:
-    free(tet);
-    free(reg);
-    free(text);
-    return st;
+    return THX_OK;
 }
 
 /* volume.steiner: "node surface triangle b0 b1 b2" per line (numbers 1-based); n_want records. */
