@@ -1,10 +1,11 @@
 /*
  * thorax's own direct path for many right-hand sides on one rank (docs/design/parallel.md, "The
- * forward problem at the high resolution in seconds"): CHOLMOD's supernodal factor of the free-node
+ * forward problem at the high resolution in seconds"): CHOLMOD's supernodal analysis of the free-node
  * system, with its fill-reducing ordering (METIS nested dissection) kept in the user's cache keyed
- * by the matrix's graph, and triangular solves of our own on row-major blocks (a supernode's rows of
- * every right-hand side contiguous), one block of columns per thread. Built into the solver module
- * beside src/fem/solver.c, which decides when to take this path.
+ * by the matrix's graph; the numeric factorization ours (src/fem/multifrontal.h: subtrees of the
+ * elimination tree in parallel), or CHOLMOD's on request; and triangular solves of our own on
+ * row-major blocks (a supernode's rows of every right-hand side contiguous), one block of columns per
+ * thread. Built into the solver module beside src/fem/solver.c, which decides when to take this path.
  */
 #ifndef THORAX_FEM_CHOLESKY_H
 #define THORAX_FEM_CHOLESKY_H

@@ -154,8 +154,9 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs);
  * the columns go to the factorization's package as dense blocks of
  * thx_fem_system_block(s) columns (MatMatSolve: CHOLMOD and MUMPS traverse the
  * factor once per block, not once per column, with level-3 BLAS; on one rank
- * with no solver named, thorax's own path: CHOLMOD's factor with the ordering
- * kept in the cache and row-major blocked solves over the threads,
+ * with no solver named, thorax's own path: CHOLMOD's analysis with the ordering
+ * kept in the cache, thorax's multifrontal factorization and row-major blocked
+ * solves over the threads,
  * thx_fem_system_factor_info, docs/design/parallel.md); the answers
  * agree with column-by-column solves to rounding (1e-14 relative measured),
  * the residuals are the true ones (||b - A x|| / ||b|| per column), and a
@@ -212,8 +213,8 @@ void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, cons
                       double *j_node);
 
 /* thorax's own direct path (one rank, many right-hand sides, no solver named on the command line:
- * CHOLMOD's supernodal Cholesky factor driven by thorax, docs/design/parallel.md): what it did. All
- * zero when the system was solved another way. */
+ * CHOLMOD's supernodal analysis, thorax's multifrontal numeric factorization, docs/design/parallel.md):
+ * what it did. All zero when the system was solved another way. */
 typedef struct {
     int used;               /* 1: the factor was made by the own path */
     int ordering_cached;    /* 1: the fill-reducing ordering came from the cache (else METIS ran) */
