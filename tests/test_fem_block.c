@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "testlib.h"
+#include "thorax/core/sha256.h"
 #include "thorax/fem/fem.h"
 #include "thorax/geom/surfaces.h"
 #include "thorax/mesh/delaunay.h"
@@ -386,6 +387,51 @@ static thx_status own_solve_box(thx_ctx *ctx, const thx_csr *K, const unsigned c
     return st;
 }
 
+/* The symbolic factor kept in the cache (src/fem/chol_cache.h: magic, key, n, nsuper, ssize, xsize, two
+   counts, perm, super, pi, px, rows, SHA-256 of all after the key) made wrong but whole: one supernode's
+   last row moved to a row its parent's front lacks, the checksum written anew. 1 when done. */
+static int symbolic_made_wrong(const char *dir)
+{
+    char cmd[1400], file[1200] = "";
+    snprintf(cmd, sizeof cmd, "ls -t '%s'/symbolic-*.bin 2>/dev/null | head -n 1", dir);
+    FILE *ls = popen(cmd, "r");
+    int listed = ls && fgets(file, sizeof file, ls) != NULL;
+    if (ls) pclose(ls);
+    file[strcspn(file, "\n")] = 0;
+    size_t len = 0;
+    unsigned char *b = listed ? (unsigned char *)tl_slurp(NULL, file, &len) : NULL;
+    if (!b || len < 8 + 32 + 32 + 16 + 32) { free(b); return 0; }
+    uint64_t hdr[4];
+    memcpy(hdr, b + 40, sizeof hdr);
+    int64_t n = (int64_t)hdr[0], ns = (int64_t)hdr[1];
+    int64_t *blk = (int64_t *)(b + 40 + 32 + 16);
+    int64_t *super = blk + n, *pi = super + ns + 1, *rows = pi + 2 * (ns + 1);
+    int done = 0;
+    for (int64_t sn = 0; sn < ns && !done; sn++) {
+        int64_t k = super[sn + 1] - super[sn], r = pi[sn + 1] - pi[sn];
+        if (r - k < 2) continue;
+        int64_t last = rows[pi[sn] + r - 1], first_below = rows[pi[sn] + k];
+        int64_t p = 0;
+        while (!(super[p] <= first_below && first_below < super[p + 1])) p++;
+        for (int64_t cand = last + 1; cand < n && !done; cand++) {
+            int in_parent = 0;
+            for (int64_t t = pi[p]; t < pi[p + 1]; t++) in_parent |= rows[t] == cand;
+            if (!in_parent) { rows[pi[sn] + r - 1] = cand; done = 1; }
+        }
+    }
+    if (done) {
+        thx_sha256_ctx h;
+        thx_sha256_init(&h);
+        thx_sha256_update(&h, b + 40, len - 40 - 32);
+        thx_sha256_final(&h, b + len - 32);
+        FILE *f = fopen(file, "wb");
+        done = f && fwrite(b, 1, len, f) == len;
+        if (f) fclose(f);
+    }
+    free(b);
+    return done;
+}
+
 /* thorax's own direct path (src/fem/cholesky.h): the ordering computed once and kept in the cache
    (THORAX_CACHE_DIR), read back the next time with the same answers to the bit, a damaged cache file
    computed again, an unwritable cache said and solved anyway; linear fields exact; the same answers as
@@ -418,9 +464,10 @@ static void own_path_tests(thx_ctx *ctx)
     if (ls) pclose(ls);
     file[strcspn(file, "\n")] = 0;
     CHECK(listed);
-    /* second: read from the cache, the same answers to the bit */
+    /* second: read from the cache (the ordering and the symbolic factor), the same answers to the bit */
+    CHECK(fi.symbolic_cached == 0);
     CHECK_OK(ctx, own_solve_box(ctx, &K, kind, v, onb, R, b, &fi));
-    CHECK(fi.used == 1 && fi.ordering_cached == 1);
+    CHECK(fi.used == 1 && fi.ordering_cached == 1 && fi.symbolic_cached == 1);
     CHECK(memcmp(a, b, n * R * sizeof *a) == 0);
     /* a damaged cache file (two entries of the ordering swapped: still a permutation, but not the one its
        checksum names) is computed again, with the same answers, and stored whole again */
@@ -486,6 +533,17 @@ static void own_path_tests(thx_ctx *ctx)
         for (size_t i = 0; i < n2; i++) e2 = fmax(e2, fabs(a2[j * n2 + i] - lin(j, v2->xyz + 3 * i)));
     CHECK(e2 < 1e-10);
     printf("own path, %zu nodes: linear fields to %.1e\n", n2, e2);
+    /* the symbolic factor in the cache made wrong but whole (its checksum right): the factorization finds the
+       missing row as it assembles, analyses again and answers the same */
+    CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
+    CHECK(fi.symbolic_cached == 1 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
+    CHECK(symbolic_made_wrong(tl_path("cache")));
+    CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
+    CHECK(fi.symbolic_cached == 0 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
+    CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
+    CHECK(fi.symbolic_cached == 1 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
+    printf("own path: a wrong symbolic factor in the cache found, analysed again, kept again\n");
+
     for (int th = 1; th <= 3; th++) {
         char tn[8];
         snprintf(tn, sizeof tn, "%d", th);

@@ -423,6 +423,7 @@ int cmd_forward(int argc, char **argv)
                 }
                 cJSON_AddStringToObject(f, "ordering", "METIS nested dissection");
                 cJSON_AddBoolToObject(f, "ordering_cached", R.factor.ordering_cached);
+                cJSON_AddBoolToObject(f, "symbolic_cached", R.factor.symbolic_cached);
                 if (R.factor.cache_note[0]) cJSON_AddStringToObject(f, "cache_note", R.factor.cache_note);
                 cJSON_AddNumberToObject(f, "seconds_ordering", R.factor.t_ordering);
                 cJSON_AddNumberToObject(f, "seconds_analysis", R.factor.t_analysis);
@@ -462,9 +463,10 @@ int cmd_forward(int argc, char **argv)
                          "(%.0f %% of the work) %.2f s", R.factor.subtrees, R.factor.t_subtrees, R.factor.top,
                          100 * R.factor.top_share, R.factor.t_top);
             if (verbose > 0 && R.factor.used)
-                printf("factor (CHOLMOD's analysis, %s): ordering %.2f s (%s), analysis %.2f s, factorization %.2f s "
+                printf("factor (CHOLMOD's analysis, %s): ordering %.2f s (%s), analysis %.2f s%s, factorization %.2f s "
                        "(%.3g flops, %.1f GF/s, %d thread%s%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
                        R.factor.numeric, R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
+                       R.factor.symbolic_cached ? " (cached)" : "",
                        R.factor.t_factor, R.factor.flops, R.factor.t_factor > 0 ? R.factor.flops / R.factor.t_factor * 1e-9 : 0,
                        R.factor.blas_threads, R.factor.blas_threads == 1 ? "" : "s", subtrees_txt,
                        R.factor.nonzeros, (double)R.factor.factor_bytes / 1048576, R.factor.solve_flops,

@@ -1,6 +1,7 @@
 /*
- * thorax's own direct path (src/fem/cholesky.h): CHOLMOD's supernodal factor with a cached METIS
- * ordering, and blocked triangular solves on row-major right-hand sides.
+ * thorax's own direct path (src/fem/cholesky.h): the ordering and CHOLMOD's supernodal analysis (both
+ * kept in the cache, src/fem/chol_cache.h), our numeric factorization (or CHOLMOD's), and blocked
+ * triangular solves on row-major right-hand sides.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -11,10 +12,9 @@
 
 #include <suitesparse/cholmod.h>
 
+#include "fem/chol_cache.h"
 #include "fem/cholesky.h"
 #include "fem/multifrontal.h"
-#include "thorax/core/fileio.h"
-#include "thorax/core/sha256.h"
 
 /* BLAS, Fortran calling convention (OpenBLAS behind libblas.so.3) */
 void dtrsm_(const char *side, const char *uplo, const char *transa, const char *diag, const int *m, const int *n,
@@ -25,105 +25,14 @@ void dgemm_(const char *ta, const char *tb, const int *m, const int *n, const in
 
 struct thx_chol {
     cholmod_common c;
-    cholmod_factor *L;
-    double *Lx;    /* the factor's values: our own (multifrontal.h), or CHOLMOD's L->x */
-    double *own_x; /* ours, when we computed them */
+    cholmod_factor *L;     /* CHOLMOD's factor: with its numeric factorization alone */
+    thx_chol_symbolic y;   /* the symbolic factor (the cache's, or a copy of CHOLMOD's analysis) */
+    double *Lx;            /* the factor's values: our own (multifrontal.h), or CHOLMOD's L->x */
+    double *own_x;         /* ours, when we computed them */
     int64_t n;
     int64_t *perm, *iperm;
-    size_t max_below; /* the most rows below a supernode's diagonal block */
+    size_t max_below;      /* the most rows below a supernode's diagonal block */
 };
-
-static const char k_magic[8] = {'T', 'H', 'X', 'O', 'R', 'D', '0', '1'};
-
-const char *thx_chol_cache_dir(char *buf, size_t n)
-{
-    const char *d = getenv("THORAX_CACHE_DIR");
-    if (d && *d) return snprintf(buf, n, "%s", d) < (int)n ? buf : NULL;
-    d = getenv("XDG_CACHE_HOME");
-    if (d && *d == '/') return snprintf(buf, n, "%s/thorax", d) < (int)n ? buf : NULL;
-    d = getenv("HOME");
-    if (d && *d == '/') return snprintf(buf, n, "%s/.cache/thorax", d) < (int)n ? buf : NULL;
-    return NULL;
-}
-
-
-/* The graph's key: SHA-256 of a tag, n, rowp and col. */
-static void graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32])
-{
-    thx_sha256_ctx h;
-    thx_sha256_init(&h);
-    static const char tag[] = "thorax ordering: METIS nested dissection of a CSR graph, v1";
-    thx_sha256_update(&h, tag, sizeof tag);
-    thx_sha256_update(&h, &n, sizeof n);
-    thx_sha256_update(&h, rowp, (size_t)(n + 1) * sizeof *rowp);
-    thx_sha256_update(&h, col, (size_t)rowp[n] * sizeof *col);
-    thx_sha256_final(&h, key);
-}
-
-static void cache_path(char *buf, size_t n, const char *dir, const unsigned char key[32])
-{
-    char hex[65];
-    for (int i = 0; i < 32; i++) snprintf(hex + 2 * i, 3, "%02x", key[i]);
-    snprintf(buf, n, "%s/ordering-%s.bin", dir, hex);
-}
-
-/* 1 when perm (n entries) is a permutation of 0..n-1 */
-static int is_permutation(const int64_t *perm, int64_t n)
-{
-    unsigned char *seen = calloc((size_t)(n ? n : 1), 1);
-    if (!seen) return 0;
-    int ok = 1;
-    for (int64_t i = 0; i < n && ok; i++) {
-        if (perm[i] < 0 || perm[i] >= n || seen[perm[i]]) ok = 0;
-        else seen[perm[i]] = 1;
-    }
-    free(seen);
-    return ok;
-}
-
-/* The cached ordering, or 0 (missing, another graph, damaged: the caller computes it again). */
-static int cache_read(const char *path, int64_t n, const unsigned char key[32], int64_t *perm)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return 0;
-    char magic[8];
-    uint64_t nn = 0;
-    unsigned char k2[32], sum[32], sum2[32];
-    int ok = fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_magic, 8) && fread(&nn, sizeof nn, 1, f) == 1 &&
-             nn == (uint64_t)n && fread(k2, 1, 32, f) == 32 && !memcmp(k2, key, 32) &&
-             fread(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fread(sum, 1, 32, f) == 32 && fgetc(f) == EOF;
-    fclose(f);
-    if (!ok) return 0;
-    thx_sha256_ctx h;
-    thx_sha256_init(&h);
-    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
-    thx_sha256_final(&h, sum2);
-    return !memcmp(sum, sum2, 32) && is_permutation(perm, n);
-}
-
-/* Writes the ordering atomically (a temporary file renamed); a note on failure, none on success. */
-static void cache_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
-                        char *note, size_t note_n)
-{
-    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
-    char tmp[4300];
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
-    unsigned char sum[32];
-    thx_sha256_ctx h;
-    thx_sha256_init(&h);
-    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
-    thx_sha256_final(&h, sum);
-    uint64_t nn = (uint64_t)n;
-    int ok = fwrite(k_magic, 1, 8, f) == 8 && fwrite(&nn, sizeof nn, 1, f) == 1 && fwrite(key, 1, 32, f) == 32 &&
-             fwrite(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fwrite(sum, 1, 32, f) == 32;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, path)) {
-        unlink(tmp);
-        snprintf(note, note_n, "cannot write the ordering into the cache directory %s", dir);
-    }
-}
 
 void thx_chol_free(thx_chol **fp)
 {
@@ -131,6 +40,7 @@ void thx_chol_free(thx_chol **fp)
     thx_chol *f = *fp;
     if (f->L) cholmod_l_free_factor(&f->L, &f->c);
     cholmod_l_finish(&f->c);
+    thx_chol_symbolic_free(&f->y);
     free(f->own_x);
     free(f->perm);
     free(f->iperm);
@@ -139,6 +49,26 @@ void thx_chol_free(thx_chol **fp)
 }
 
 _Static_assert(sizeof(SuiteSparse_long) == sizeof(int64_t), "CHOLMOD's long integers are 64 bits");
+
+/* CHOLMOD's upper triangle of the CSR's matrix (CSR row i is column i of the symmetric matrix), or NULL. */
+static cholmod_sparse *upper(thx_chol *f, int64_t n, const int64_t *rowp, const int32_t *col, const double *val)
+{
+    size_t nz = 0;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t k = rowp[i]; k < rowp[i + 1]; k++) nz += col[k] <= i;
+    cholmod_sparse *A = cholmod_l_allocate_sparse((size_t)n, (size_t)n, nz, 1, 1, 1, CHOLMOD_REAL, &f->c);
+    if (!A) return NULL;
+    SuiteSparse_long *Ap = A->p, *Ai = A->i;
+    double *Ax = A->x;
+    size_t w = 0;
+    for (int64_t i = 0; i < n; i++) {
+        Ap[i] = (SuiteSparse_long)w;
+        for (int64_t k = rowp[i]; k < rowp[i + 1]; k++)
+            if (col[k] <= i) { Ai[w] = col[k]; Ax[w] = val[k]; w++; }
+    }
+    Ap[n] = (SuiteSparse_long)w;
+    return A;
+}
 
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
                            const thx_chol_opts *opts, thx_chol **out, thx_chol_info *info)
@@ -149,6 +79,7 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
     thx_status st = THX_OK;
     cholmod_sparse *A = NULL;
     int64_t *order = NULL;
+    const int cholmod_numeric = opts && opts->cholmod_numeric;
     thx_chol *f = thx_calloc(ctx, 1, sizeof *f);
     if (!f) return THX_ENOMEM;
     cholmod_l_start(&f->c);
@@ -160,72 +91,74 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
        smaller: 695 against 801 MB for the high phantom, 0.96 of the time in paired runs
        (docs/design/parallel.md, "The factorization of our own") */
     f->n = n;
-    /* the upper triangle, column by column: CSR row i is column i of the symmetric matrix */
-    size_t nz = 0;
-    for (int64_t i = 0; i < n; i++)
-        for (int64_t k = rowp[i]; k < rowp[i + 1]; k++) nz += col[k] <= i;
-    A = cholmod_l_allocate_sparse((size_t)n, (size_t)n, nz, 1, 1, 1, CHOLMOD_REAL, &f->c);
     f->perm = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *f->perm);
     f->iperm = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *f->iperm);
     order = thx_malloc(ctx, (size_t)(n ? n : 1) * sizeof *order);
-    if (!A || !f->perm || !f->iperm || !order) { st = THX_ENOMEM; goto done; }
-    {
-        SuiteSparse_long *Ap = A->p, *Ai = A->i;
-        double *Ax = A->x;
-        size_t w = 0;
-        for (int64_t i = 0; i < n; i++) {
-            Ap[i] = (SuiteSparse_long)w;
-            for (int64_t k = rowp[i]; k < rowp[i + 1]; k++)
-                if (col[k] <= i) { Ai[w] = col[k]; Ax[w] = val[k]; w++; }
-        }
-        Ap[n] = (SuiteSparse_long)w;
-    }
+    if (!f->perm || !f->iperm || !order) { st = THX_ENOMEM; goto done; }
     /* the ordering: the cache, else METIS (stored for the next run) */
     double t0 = thx_wtime();
-    unsigned char key[32];
-    graph_key(n, rowp, col, key);
-    char dir[4096], path[4200];
+    unsigned char key[32], skey[32];
+    thx_chol_graph_key(n, rowp, col, key);
+    char dir[4096];
     const char *cd = thx_chol_cache_dir(dir, sizeof dir);
-    if (cd) cache_path(path, sizeof path, cd, key);
-    inf.ordering_cached = cd && cache_read(path, n, key, order);
+    inf.ordering_cached = cd && thx_chol_order_cached(cd, n, key, order);
     if (!inf.ordering_cached) {
+        if (!(A = upper(f, n, rowp, col, val))) { st = THX_ENOMEM; goto done; }
         if (!cholmod_l_metis(A, NULL, 0, 0, (SuiteSparse_long *)order, &f->c) || f->c.status < 0) {
             st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
                            "fem: the fill-reducing ordering (METIS through CHOLMOD) failed (CHOLMOD status %d)", f->c.status);
             goto done;
         }
-        if (cd) cache_write(cd, path, n, key, order, inf.cache_note, sizeof inf.cache_note);
+        if (cd) thx_chol_order_keep(cd, n, key, order, inf.cache_note, sizeof inf.cache_note);
         else snprintf(inf.cache_note, sizeof inf.cache_note, "no cache directory (HOME, XDG_CACHE_HOME and THORAX_CACHE_DIR unset)");
     }
     inf.t_order = thx_wtime() - t0;
-    /* the symbolic analysis with exactly that ordering, postordered: the same for a cached and a fresh one */
+    /* the symbolic analysis with exactly that ordering, postordered: the cache's (our factorization needs
+       nothing more), else CHOLMOD's (the same for a cached and a fresh ordering), kept for the next run */
     t0 = thx_wtime();
-    f->c.nmethods = 1;
-    f->c.method[0].ordering = CHOLMOD_GIVEN;
-    f->c.postorder = 1;
-    f->L = cholmod_l_analyze_p(A, (SuiteSparse_long *)order, NULL, 0, &f->c);
-    if (!f->L || f->c.status < 0) {
-        st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
-                       "fem: the symbolic factorization (CHOLMOD) failed (status %d)", f->c.status);
-        goto done;
+    thx_chol_symbolic_key(key, n, order, skey);
+    int use_cache = !cholmod_numeric && cd;
+analyse:
+    inf.symbolic_cached = use_cache && thx_chol_symbolic_cached(cd, n, skey, &f->y);
+    if (!inf.symbolic_cached) {
+        if (!A && !(A = upper(f, n, rowp, col, val))) { st = THX_ENOMEM; goto done; }
+        f->c.nmethods = 1;
+        f->c.method[0].ordering = CHOLMOD_GIVEN;
+        f->c.postorder = 1;
+        f->L = cholmod_l_analyze_p(A, (SuiteSparse_long *)order, NULL, 0, &f->c);
+        if (!f->L || f->c.status < 0) {
+            st = thx_error(ctx, f->c.status == CHOLMOD_OUT_OF_MEMORY ? THX_ENOMEM : THX_ESOLVER,
+                           "fem: the symbolic factorization (CHOLMOD) failed (status %d)", f->c.status);
+            goto done;
+        }
+        if (!f->L->is_super || !f->L->super || !f->L->pi || !f->L->px || !f->L->s) {
+            st = thx_error(ctx, THX_ESOLVER, "fem: CHOLMOD's analysis gave no supernodal symbolic factor");
+            goto done;
+        }
+        if (!thx_chol_symbolic_copy(&f->y, n, (int64_t)f->L->nsuper, (const int64_t *)f->L->Perm,
+                                    (const int64_t *)f->L->super, (const int64_t *)f->L->pi, (const int64_t *)f->L->px,
+                                    (const int64_t *)f->L->s, f->L->ssize, f->L->xsize)) {
+            st = THX_ENOMEM;
+            goto done;
+        }
+        f->y.flops = f->c.fl; /* the analysis's count, explicit zeros of amalgamated supernodes left out */
+        f->y.lnz = f->c.lnz;
+        if (cd && !inf.cache_note[0]) thx_chol_symbolic_keep(cd, n, skey, &f->y, inf.cache_note, sizeof inf.cache_note);
     }
     inf.t_analyze = thx_wtime() - t0;
-    inf.flops = f->c.fl; /* the analysis's count, explicit zeros of amalgamated supernodes left out */
-    inf.lnz = f->c.lnz;
-    inf.n_super = f->L->nsuper;
-    {
-        const SuiteSparse_long *P = f->L->Perm, *super = f->L->super, *pi = f->L->pi;
-        for (int64_t i = 0; i < n; i++) {
-            f->perm[i] = P[i];
-            f->iperm[P[i]] = i;
-        }
-        for (size_t s = 0; s < f->L->nsuper; s++) {
-            size_t below = (size_t)((pi[s + 1] - pi[s]) - (super[s + 1] - super[s]));
-            if (below > f->max_below) f->max_below = below;
-        }
+    inf.flops = f->y.flops;
+    inf.lnz = f->y.lnz;
+    inf.n_super = (size_t)f->y.nsuper;
+    for (int64_t i = 0; i < n; i++) {
+        f->perm[i] = f->y.perm[i];
+        f->iperm[f->y.perm[i]] = i;
+    }
+    for (int64_t s = 0; s < f->y.nsuper; s++) {
+        size_t below = (size_t)((f->y.pi[s + 1] - f->y.pi[s]) - (f->y.super[s + 1] - f->y.super[s]));
+        if (below > f->max_below) f->max_below = below;
     }
     t0 = thx_wtime();
-    if (opts && opts->cholmod_numeric) {
+    if (cholmod_numeric) {
         int ok = cholmod_l_factorize(A, f->L, &f->c);
         inf.t_factor = thx_wtime() - t0;
         if (f->c.status == CHOLMOD_NOT_POSDEF) {
@@ -239,18 +172,27 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
         f->Lx = f->L->x;
         inf.numeric = "CHOLMOD (supernodal, left-looking)";
     } else {
-        /* our own multifrontal factorization on CHOLMOD's symbolic factor (fem/multifrontal.h) */
-        if (!f->L->is_super || !f->L->super || !f->L->pi || !f->L->px || !f->L->s) {
-            st = thx_error(ctx, THX_ESOLVER, "fem: CHOLMOD's analysis gave no supernodal symbolic factor");
-            goto done;
-        }
-        f->own_x = malloc((f->L->xsize ? f->L->xsize : 1) * sizeof *f->own_x);
+        /* our own multifrontal factorization on the symbolic factor (fem/multifrontal.h); CHOLMOD's factor
+           is not needed any more */
+        if (A) cholmod_l_free_sparse(&A, &f->c);
+        if (f->L) cholmod_l_free_factor(&f->L, &f->c);
+        f->own_x = malloc((f->y.xsize ? f->y.xsize : 1) * sizeof *f->own_x);
         if (!f->own_x) { st = THX_ENOMEM; goto done; }
-        thx_mf_symbolic S = {n, (int64_t)f->L->nsuper, (const int64_t *)f->L->super, (const int64_t *)f->L->pi,
-                             (const int64_t *)f->L->px, (const int64_t *)f->L->s};
+        thx_mf_symbolic S = {n, f->y.nsuper, f->y.super, f->y.pi, f->y.px, f->y.rows};
         thx_status e = thx_mf_factor(ctx, &S, rowp, col, val, f->perm, f->iperm, opts ? opts->threads : 1,
                                      opts ? opts->set_blas_threads : NULL, f->own_x, &inf.mf);
         inf.t_factor = thx_wtime() - t0;
+        if (e == THX_EINTERNAL && inf.symbolic_cached) {
+            /* the cache's symbolic factor, though whole, is not this matrix's: analysed again, kept again */
+            thx_ctx_clear(ctx);
+            free(f->own_x);
+            f->own_x = NULL;
+            thx_chol_symbolic_free(&f->y);
+            f->max_below = 0;
+            use_cache = 0;
+            t0 = thx_wtime();
+            goto analyse;
+        }
         if (e == THX_ESOLVER && inf.mf.not_posdef >= 0) {
             inf.not_posdef = 1;
             inf.bad_column = inf.mf.not_posdef;
@@ -268,7 +210,7 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
                        "prescribed potential)", (long long)(bad >= 0 && bad < n ? f->perm[bad] + 1 : bad + 1), (long long)n);
         goto done;
     }
-    inf.factor_bytes = f->L->xsize * sizeof(double) + f->L->ssize * sizeof(SuiteSparse_long);
+    inf.factor_bytes = (f->y.xsize + f->y.ssize) * sizeof(double);
     *out = f;
     f = NULL;
 done:
@@ -287,10 +229,9 @@ size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ?
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
 {
     double flops = 0;
-    const cholmod_factor *L = f->L;
-    const SuiteSparse_long *super = L->super, *pi = L->pi, *px = L->px, *Ls = L->s;
+    const int64_t *super = f->y.super, *pi = f->y.pi, *px = f->y.px, *Ls = f->y.rows;
     const double *Lx = f->Lx;
-    const size_t ns = L->nsuper;
+    const size_t ns = (size_t)f->y.nsuper;
     const int ir = (int)r;
     const double one = 1, zero = 0, minus = -1;
     /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (r x nscol, ld r). A supernode
@@ -307,7 +248,7 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
         dtrsm_("R", "L", "T", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
         if (nb <= 0) continue;
         dgemm_("N", "T", &ir, &nb, &nscol, &one, Xs, &ir, L1 + nscol, &nsrow, &zero, E, &ir);
-        const SuiteSparse_long *rows = Ls + pi[s] + nscol;
+        const int64_t *rows = Ls + pi[s] + nscol;
         for (int t = 0; t < nb; t++) {
             double *xr = X + (size_t)rows[t] * r;
             const double *e = E + (size_t)t * r;
@@ -320,7 +261,7 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
         const double *L1 = Lx + px[s];
         double *Xs = X + (size_t)super[s] * r;
         if (nb > 0) {
-            const SuiteSparse_long *rows = Ls + pi[s] + nscol;
+            const int64_t *rows = Ls + pi[s] + nscol;
             for (int t = 0; t < nb; t++) memcpy(E + (size_t)t * r, X + (size_t)rows[t] * r, r * sizeof *E);
             dgemm_("N", "N", &ir, &nscol, &nb, &minus, E, &ir, L1 + nscol, &nsrow, &one, Xs, &ir);
         }

@@ -27,6 +27,7 @@ typedef struct {
     size_t factor_bytes;/* the factor's values and row indices */
     size_t n_super;     /* supernodes */
     int ordering_cached;/* 1: the ordering came from the cache */
+    int symbolic_cached;/* 1: the symbolic factor came from the cache (no analysis ran) */
     int not_posdef;     /* 1: refused as not positive definite (a zero or negative pivot) */
     char cache_note[160];/* why the cache was not used or not written (empty when it was) */
     int blas_threads;   /* OpenBLAS's threads in the factorization (set by the caller; 0: not OpenBLAS) */
@@ -63,8 +64,5 @@ size_t thx_chol_work_bytes(const thx_chol *f, size_t r);
  * sweeps). */
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work);
 
-/* The cache directory: $THORAX_CACHE_DIR, else $XDG_CACHE_HOME/thorax, else $HOME/.cache/thorax;
- * NULL when none can be named. Writes into buf (size n). */
-const char *thx_chol_cache_dir(char *buf, size_t n);
 
 #endif

@@ -225,7 +225,9 @@ static size_t stack_peak(const mf_tree *t, int64_t a, int64_t b)
 }
 
 /* Supernode s: its front assembled, factored, its update matrix left at the stack's top (or in the
-   roots' arena). map (n) and rel (the most rows) are the thread's. Returns 0, or dpotrf's info. */
+   roots' arena). map (n, all -1 between fronts) and rel (the most rows) are the thread's. Returns 0,
+   dpotrf's info (> 0), or -1 when the symbolic factor does not hold the matrix (a row of A or of a child's
+   update matrix missing from the front). */
 static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, int32_t *rel)
 {
     const thx_mf_symbolic *S = t->S;
@@ -236,13 +238,16 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
     memset(Lb, 0, (size_t)r * (size_t)k * sizeof *Lb);
     memset(U, 0, (size_t)nb * (size_t)nb * sizeof *U);
     for (int64_t i = 0; i < r; i++) map[rows[i]] = (int32_t)i;
+    int fault = 0;
     /* A's entries of the front's columns (the lower triangle, in the factor's order) */
     for (int64_t j = j0; j < j0 + k; j++) {
         const int64_t q = t->perm[j];
         double *cj = Lb + (size_t)(j - j0) * (size_t)r;
         for (int64_t e = t->rowp[q]; e < t->rowp[q + 1]; e++) {
             const int64_t i = t->iperm[t->col[e]];
-            if (i >= j) cj[map[i]] += t->val[e];
+            if (i < j) continue;
+            if (map[i] < 0) fault = 1; /* a row the symbolic factor does not hold */
+            else cj[map[i]] += t->val[e];
         }
     }
     /* the children's update matrices (their rows are some of the front's) */
@@ -252,7 +257,11 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
         const int64_t *crow = S->rows + S->pi[c] + kc;
         const double *Uc = t->kind[c] == K_ROOT ? t->roots + t->uoff[c] : stk + t->uoff[c];
         if (t->kind[c] != K_ROOT) popped += (size_t)nbc * (size_t)nbc;
-        for (int64_t a = 0; a < nbc; a++) rel[a] = map[crow[a]];
+        for (int64_t a = 0; a < nbc; a++) {
+            rel[a] = map[crow[a]];
+            if (rel[a] < 0) fault = 1;
+        }
+        if (fault) break;
         for (int64_t b = 0; b < nbc; b++) {
             const double *src = Uc + (size_t)b * (size_t)nbc;
             const int32_t tc = rel[b];
@@ -260,6 +269,8 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
             for (int64_t a = b; a < nbc; a++) dst[rel[a]] += src[a];
         }
     }
+    for (int64_t i = 0; i < r; i++) map[rows[i]] = -1; /* (unset for the next front: a row it lacks is seen) */
+    if (fault) return -1;
     /* the children popped: the update matrix moved down onto them */
     if (t->kind[s] != K_ROOT) {
         size_t base = *top - popped;
@@ -340,6 +351,7 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
         stacks[i] = malloc((thread_n ? thread_n : 1) * sizeof **stacks);
         maps[i] = malloc(((size_t)S->n + max_rows + 1) * sizeof **maps);
         if (!stacks[i] || !maps[i]) { st = THX_ENOMEM; goto done; }
+        for (int64_t j = 0; j < S->n; j++) maps[i][j] = -1;
     }
     inf.subtrees = nsub;
     inf.stack_bytes = (roots_n + top_n + (size_t)T * thread_n) * sizeof(double);
@@ -356,7 +368,7 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
     double t0 = thx_wtime();
     if (set_blas_threads) set_blas_threads(1);
     int64_t bad = INT64_MAX;
-    int failed = 0;
+    int failed = 0, structure = 0;
 #pragma omp parallel num_threads(T)
     {
         int me = 0;
@@ -377,8 +389,11 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
                 if (e) {
 #pragma omp critical(thx_mf_bad)
                     {
-                        int64_t c = S->super[s] + e - 1;
-                        bad = c < bad ? c : bad;
+                        if (e < 0) structure = 1;
+                        else {
+                            int64_t c = S->super[s] + e - 1;
+                            bad = c < bad ? c : bad;
+                        }
                         failed = 1;
                     }
                     break;
@@ -395,13 +410,17 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
         int64_t s = t.post[k];
         if (t.kind[s] != K_TOP) continue;
         int e = front(&t, s, top_stack, &top, maps[0], maps[0] + S->n);
-        if (e) {
+        if (e < 0) structure = failed = 1;
+        else if (e) {
             bad = S->super[s] + e - 1;
             failed = 1;
         }
     }
     inf.t_top = thx_wtime() - t0;
-    if (failed) {
+    if (structure)
+        st = thx_error(ctx, THX_EINTERNAL, "fem: the symbolic factor does not hold the matrix's pattern (a row missing "
+                       "from a supernode): not the analysis of this matrix");
+    else if (failed) {
         inf.not_posdef = bad;
         st = THX_ESOLVER;
     }

@@ -43,7 +43,9 @@ typedef struct {
  * iperm the inverse. threads: how many threads share the subtrees (each calling BLAS with one thread
  * through set_blas_threads, when it is given); the top is factored with set_blas_threads(threads).
  * A matrix that is not positive definite returns THX_ESOLVER with info->not_posdef set and no
- * message (the caller names the row). */
+ * message (the caller names the row); a symbolic factor that does not hold the matrix's pattern (a row of
+ * A, or of a child's update matrix, missing from a supernode) is THX_EINTERNAL, found as the fronts are
+ * assembled, before any value lands in a wrong place. */
 thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
                          const double *val, const int64_t *perm, const int64_t *iperm, int threads,
                          void (*set_blas_threads)(int), double *Lx, thx_mf_info *info);

@@ -350,6 +350,7 @@ void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *ou
     const thx_chol_info *c = &s->chol_info;
     out->used = 1;
     out->ordering_cached = c->ordering_cached;
+    out->symbolic_cached = c->symbolic_cached;
     out->t_ordering = c->t_order;
     out->t_analysis = c->t_analyze;
     out->t_factor = c->t_factor;

@@ -218,6 +218,7 @@ void thx_fem_currents(const thx_volume *v, const unsigned char *use_region, cons
 typedef struct {
     int used;               /* 1: the factor was made by the own path */
     int ordering_cached;    /* 1: the fill-reducing ordering came from the cache (else METIS ran) */
+    int symbolic_cached;    /* 1: the symbolic factor came from the cache (else CHOLMOD's analysis ran) */
     double t_ordering, t_analysis, t_factor; /* seconds */
     double flops;           /* the factorization's (CHOLMOD's count) */
     double nonzeros;        /* in the factor L */

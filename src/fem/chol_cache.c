@@ -1,0 +1,275 @@
+/*
+ * The direct path's cache (src/fem/chol_cache.h): the fill-reducing ordering and the symbolic factor of
+ * a matrix's graph, kept in the user's cache directory between runs.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "fem/chol_cache.h"
+#include "thorax/core/fileio.h"
+#include "thorax/core/sha256.h"
+
+static const char k_magic[8] = {'T', 'H', 'X', 'O', 'R', 'D', '0', '1'};
+
+const char *thx_chol_cache_dir(char *buf, size_t n)
+{
+    const char *d = getenv("THORAX_CACHE_DIR");
+    if (d && *d) return snprintf(buf, n, "%s", d) < (int)n ? buf : NULL;
+    d = getenv("XDG_CACHE_HOME");
+    if (d && *d == '/') return snprintf(buf, n, "%s/thorax", d) < (int)n ? buf : NULL;
+    d = getenv("HOME");
+    if (d && *d == '/') return snprintf(buf, n, "%s/.cache/thorax", d) < (int)n ? buf : NULL;
+    return NULL;
+}
+
+
+/* The graph's key: SHA-256 of a tag, n, rowp and col. */
+void thx_chol_graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32])
+{
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    static const char tag[] = "thorax ordering: METIS nested dissection of a CSR graph, v1";
+    thx_sha256_update(&h, tag, sizeof tag);
+    thx_sha256_update(&h, &n, sizeof n);
+    thx_sha256_update(&h, rowp, (size_t)(n + 1) * sizeof *rowp);
+    thx_sha256_update(&h, col, (size_t)rowp[n] * sizeof *col);
+    thx_sha256_final(&h, key);
+}
+
+static void cache_path(char *buf, size_t n, const char *dir, const unsigned char key[32], const char *what)
+{
+    char hex[65];
+    for (int i = 0; i < 32; i++) snprintf(hex + 2 * i, 3, "%02x", key[i]);
+    snprintf(buf, n, "%s/%s-%s.bin", dir, what, hex);
+}
+
+/* 1 when perm (n entries) is a permutation of 0..n-1 */
+static int is_permutation(const int64_t *perm, int64_t n)
+{
+    unsigned char *seen = calloc((size_t)(n ? n : 1), 1);
+    if (!seen) return 0;
+    int ok = 1;
+    for (int64_t i = 0; i < n && ok; i++) {
+        if (perm[i] < 0 || perm[i] >= n || seen[perm[i]]) ok = 0;
+        else seen[perm[i]] = 1;
+    }
+    free(seen);
+    return ok;
+}
+
+/* The cached ordering, or 0 (missing, another graph, damaged: the caller computes it again). */
+static int order_read(const char *path, int64_t n, const unsigned char key[32], int64_t *perm)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    char magic[8];
+    uint64_t nn = 0;
+    unsigned char k2[32], sum[32], sum2[32];
+    int ok = fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_magic, 8) && fread(&nn, sizeof nn, 1, f) == 1 &&
+             nn == (uint64_t)n && fread(k2, 1, 32, f) == 32 && !memcmp(k2, key, 32) &&
+             fread(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fread(sum, 1, 32, f) == 32 && fgetc(f) == EOF;
+    fclose(f);
+    if (!ok) return 0;
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
+    thx_sha256_final(&h, sum2);
+    return !memcmp(sum, sum2, 32) && is_permutation(perm, n);
+}
+
+/* Writes the ordering atomically (a temporary file renamed); a note on failure, none on success. */
+static void order_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
+                        char *note, size_t note_n)
+{
+    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
+    char tmp[4300];
+    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    unsigned char sum[32];
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    thx_sha256_update(&h, perm, (size_t)n * sizeof *perm);
+    thx_sha256_final(&h, sum);
+    uint64_t nn = (uint64_t)n;
+    int ok = fwrite(k_magic, 1, 8, f) == 8 && fwrite(&nn, sizeof nn, 1, f) == 1 && fwrite(key, 1, 32, f) == 32 &&
+             fwrite(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fwrite(sum, 1, 32, f) == 32;
+    ok = (fclose(f) == 0) && ok;
+    if (!ok || rename(tmp, path)) {
+        unlink(tmp);
+        snprintf(note, note_n, "cannot write the ordering into the cache directory %s", dir);
+    }
+}
+
+
+int thx_chol_order_cached(const char *dir, int64_t n, const unsigned char key[32], int64_t *perm)
+{
+    char path[4200];
+    cache_path(path, sizeof path, dir, key, "ordering");
+    return order_read(path, n, key, perm);
+}
+
+void thx_chol_order_keep(const char *dir, int64_t n, const unsigned char key[32], const int64_t *perm, char *note,
+                         size_t note_n)
+{
+    char path[4200];
+    cache_path(path, sizeof path, dir, key, "ordering");
+    order_write(dir, path, n, key, perm, note, note_n);
+}
+
+/* ------------------------------------------------------------------ the symbolic factor */
+
+static const char k_sym_magic[8] = {'T', 'H', 'X', 'S', 'Y', 'M', '0', '1'};
+
+void thx_chol_symbolic_key(const unsigned char graph[32], int64_t n, const int64_t *order, unsigned char key[32])
+{
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    static const char tag[] = "thorax symbolic factor: CHOLMOD's supernodal analysis, its default amalgamation, "
+                              "the ordering given and postordered, v1";
+    thx_sha256_update(&h, tag, sizeof tag);
+    thx_sha256_update(&h, graph, 32);
+    thx_sha256_update(&h, &n, sizeof n);
+    thx_sha256_update(&h, order, (size_t)n * sizeof *order);
+    thx_sha256_final(&h, key);
+}
+
+void thx_chol_symbolic_free(thx_chol_symbolic *y)
+{
+    free(y->block);
+    memset(y, 0, sizeof *y);
+}
+
+/* 1 when y is a supernodal symbolic factor of order n: supernodes covering 0..n-1 in order, their rows
+   ascending and in range with their own columns first, the values' places their rows x columns, perm a
+   permutation. (That the rows hold the matrix's pattern is checked by the factorization itself.) */
+static int symbolic_valid(const thx_chol_symbolic *y, int64_t n)
+{
+    const int64_t ns = y->nsuper;
+    if (ns < (n > 0) || y->super[0] != 0 || y->super[ns] != n || y->pi[0] != 0 || y->px[0] != 0 ||
+        y->pi[ns] != (int64_t)y->ssize || y->px[ns] != (int64_t)y->xsize)
+        return 0;
+    for (int64_t s = 0; s < ns; s++) {
+        int64_t k = y->super[s + 1] - y->super[s], r = y->pi[s + 1] - y->pi[s];
+        if (k < 1 || r < k || y->px[s + 1] - y->px[s] != r * k) return 0;
+        const int64_t *rw = y->rows + y->pi[s];
+        for (int64_t t = 0; t < r; t++) {
+            if (t < k ? rw[t] != y->super[s] + t : rw[t] <= rw[t - 1] || rw[t] >= n) return 0;
+        }
+    }
+    unsigned char *seen = calloc((size_t)(n ? n : 1), 1);
+    int ok = seen != NULL;
+    for (int64_t i = 0; ok && i < n; i++) {
+        if (y->perm[i] < 0 || y->perm[i] >= n || seen[y->perm[i]]) ok = 0;
+        else seen[y->perm[i]] = 1;
+    }
+    free(seen);
+    return ok;
+}
+
+/* the arrays of y in one block: perm (n), super, pi, px (nsuper + 1 each), rows (ssize) */
+static int symbolic_alloc(thx_chol_symbolic *y, int64_t n)
+{
+    size_t ns = (size_t)y->nsuper, m = (size_t)n + 3 * (ns + 1) + y->ssize;
+    y->block = malloc((m ? m : 1) * sizeof *y->block);
+    if (!y->block) return 0;
+    y->perm = y->block;
+    y->super = y->perm + n;
+    y->pi = y->super + ns + 1;
+    y->px = y->pi + ns + 1;
+    y->rows = y->px + ns + 1;
+    return 1;
+}
+
+int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key[32], thx_chol_symbolic *y)
+{
+    memset(y, 0, sizeof *y);
+    char path[4200];
+    cache_path(path, sizeof path, dir, key, "symbolic");
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    char magic[8];
+    uint64_t hdr[4] = {0}; /* n, nsuper, ssize, xsize */
+    double counts[2];      /* flops, nonzeros */
+    unsigned char k2[32], sum[32], sum2[32];
+    int ok = fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_sym_magic, 8) && fread(k2, 1, 32, f) == 32 &&
+             !memcmp(k2, key, 32) && fread(hdr, sizeof *hdr, 4, f) == 4 && hdr[0] == (uint64_t)n &&
+             hdr[1] <= (uint64_t)n + 1 && hdr[2] <= ((uint64_t)1 << 40) && fread(counts, sizeof *counts, 2, f) == 2;
+    if (ok) {
+        y->nsuper = (int64_t)hdr[1];
+        y->ssize = (size_t)hdr[2];
+        y->xsize = (size_t)hdr[3];
+        y->flops = counts[0];
+        y->lnz = counts[1];
+        ok = symbolic_alloc(y, n);
+    }
+    size_t m = (size_t)n + 3 * ((size_t)y->nsuper + 1) + y->ssize;
+    ok = ok && fread(y->block, sizeof *y->block, m, f) == m && fread(sum, 1, 32, f) == 32 && fgetc(f) == EOF;
+    fclose(f);
+    if (ok) {
+        thx_sha256_ctx h;
+        thx_sha256_init(&h);
+        thx_sha256_update(&h, hdr, sizeof hdr);
+        thx_sha256_update(&h, counts, sizeof counts);
+        thx_sha256_update(&h, y->block, m * sizeof *y->block);
+        thx_sha256_final(&h, sum2);
+        ok = !memcmp(sum, sum2, 32) && symbolic_valid(y, n);
+    }
+    if (!ok) thx_chol_symbolic_free(y);
+    return ok;
+}
+
+void thx_chol_symbolic_keep(const char *dir, int64_t n, const unsigned char key[32], const thx_chol_symbolic *y,
+                            char *note, size_t note_n)
+{
+    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
+    char path[4200], tmp[4300];
+    cache_path(path, sizeof path, dir, key, "symbolic");
+    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    uint64_t hdr[4] = {(uint64_t)n, (uint64_t)y->nsuper, (uint64_t)y->ssize, (uint64_t)y->xsize};
+    double counts[2] = {y->flops, y->lnz};
+    size_t ns = (size_t)y->nsuper;
+    unsigned char sum[32];
+    thx_sha256_ctx h;
+    thx_sha256_init(&h);
+    thx_sha256_update(&h, hdr, sizeof hdr);
+    thx_sha256_update(&h, counts, sizeof counts);
+    thx_sha256_update(&h, y->perm, (size_t)n * sizeof *y->perm);
+    thx_sha256_update(&h, y->super, (ns + 1) * sizeof *y->super);
+    thx_sha256_update(&h, y->pi, (ns + 1) * sizeof *y->pi);
+    thx_sha256_update(&h, y->px, (ns + 1) * sizeof *y->px);
+    thx_sha256_update(&h, y->rows, y->ssize * sizeof *y->rows);
+    thx_sha256_final(&h, sum);
+    int ok = fwrite(k_sym_magic, 1, 8, f) == 8 && fwrite(key, 1, 32, f) == 32 && fwrite(hdr, sizeof *hdr, 4, f) == 4 &&
+             fwrite(counts, sizeof *counts, 2, f) == 2 && fwrite(y->perm, sizeof *y->perm, (size_t)n, f) == (size_t)n &&
+             fwrite(y->super, sizeof *y->super, ns + 1, f) == ns + 1 && fwrite(y->pi, sizeof *y->pi, ns + 1, f) == ns + 1 &&
+             fwrite(y->px, sizeof *y->px, ns + 1, f) == ns + 1 && fwrite(y->rows, sizeof *y->rows, y->ssize, f) == y->ssize &&
+             fwrite(sum, 1, 32, f) == 32;
+    ok = (fclose(f) == 0) && ok;
+    if (!ok || rename(tmp, path)) {
+        unlink(tmp);
+        snprintf(note, note_n, "cannot write the symbolic factor into the cache directory %s", dir);
+    }
+}
+
+int thx_chol_symbolic_copy(thx_chol_symbolic *y, int64_t n, int64_t nsuper, const int64_t *perm, const int64_t *super,
+                           const int64_t *pi, const int64_t *px, const int64_t *rows, size_t ssize, size_t xsize)
+{
+    memset(y, 0, sizeof *y);
+    y->nsuper = nsuper;
+    y->ssize = ssize;
+    y->xsize = xsize;
+    if (!symbolic_alloc(y, n)) return 0;
+    size_t ns = (size_t)nsuper;
+    memcpy(y->perm, perm, (size_t)n * sizeof *perm);
+    memcpy(y->super, super, (ns + 1) * sizeof *super);
+    memcpy(y->pi, pi, (ns + 1) * sizeof *pi);
+    memcpy(y->px, px, (ns + 1) * sizeof *px);
+    memcpy(y->rows, rows, ssize * sizeof *rows);
+    return 1;
+}
