@@ -5,8 +5,16 @@
  * entries of the symmetric 4 x 4 |T| G sigma G^T per tetrahedron) are computed
  * per tetrahedron; then each row gathers from the tetrahedra around its node
  * (a node -> tetrahedra index), so each row is written by one thread only.
+ *
+ * Both passes visit the tetrahedra and the rows in space-filling order (a Morton
+ * code of the centroid, of the node): a mesh's own numbering may scatter a node's
+ * tetrahedra over the whole file (the high phantom's: a million tetrahedra apart
+ * for half its nodes), and every gather was then a miss in the cache. A row's
+ * sum runs over its tetrahedra in that order, the same whatever rows are asked
+ * for (the partitioned assembly sums as the whole does).
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -27,6 +35,46 @@ void thx_csr_mul(const thx_csr *a, const double *x, double *y)
         double s = 0;
         for (int64_t k = a->row[i]; k < a->row[i + 1]; k++) s += a->val[k] * x[a->col[k]];
         y[i] = s;
+    }
+}
+
+/* The 10 bits of v spread to every third bit (bit k -> bit 3k). */
+static uint32_t spread3(uint32_t v)
+{
+    v &= 0x3ff;
+    v = (v | (v << 16)) & 0x030000ff;
+    v = (v | (v << 8)) & 0x0300f00f;
+    v = (v | (v << 4)) & 0x030c30c3;
+    v = (v | (v << 2)) & 0x09249249;
+    return v;
+}
+
+/* A Morton code of p in the box [lo, lo + 1 / inv) (10 bits an axis). */
+static uint32_t morton(const double p[3], const double lo[3], const double inv[3])
+{
+    uint32_t c[3];
+    for (int a = 0; a < 3; a++) {
+        double u = (p[a] - lo[a]) * inv[a] * 1024.0;
+        c[a] = u <= 0 ? 0 : u >= 1023 ? 1023 : (uint32_t)u;
+    }
+    return spread3(c[0]) | spread3(c[1]) << 1 | spread3(c[2]) << 2;
+}
+
+/* idx[0 .. n-1] sorted by key (30 bits), stably: three passes of 10 bits. key2, idx2: n of scratch. */
+static void sort_by_key(uint32_t *key, int32_t *idx, size_t n, uint32_t *key2, int32_t *idx2)
+{
+    for (int pass = 0; pass < 3; pass++) {
+        size_t count[1025] = {0};
+        int sh = 10 * pass;
+        for (size_t i = 0; i < n; i++) count[((key[i] >> sh) & 1023) + 1]++;
+        for (int b = 0; b < 1024; b++) count[b + 1] += count[b];
+        for (size_t i = 0; i < n; i++) {
+            size_t at = count[(key[i] >> sh) & 1023]++;
+            key2[at] = key[i];
+            idx2[at] = idx[i];
+        }
+        memcpy(key, key2, n * sizeof *key);
+        memcpy(idx, idx2, n * sizeof *idx);
     }
 }
 
@@ -105,16 +153,14 @@ thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsign
     thx_status st = THX_OK;
     double *ke = NULL;
     size_t *nstart = NULL;
-    int32_t *ntet = NULL;
+    int32_t *ntet = NULL, *order = NULL, *tq = NULL, *rows_order = NULL, *idx2 = NULL;
+    uint32_t *key = NULL, *key2 = NULL;
     unsigned char *use = NULL;
     int64_t *row = NULL;
     int32_t *col = NULL;
     double *val = NULL;
-    /* element matrices, upper triangle (00 01 02 03 11 12 13 22 23 33) */
-    ke = thx_malloc(ctx, 10 * (nt ? nt : 1) * sizeof *ke);
     use = thx_malloc(ctx, nt ? nt : 1);
-    if (!ke || !use) { st = THX_ENOMEM; goto done; }
-    long bad = -1;
+    if (!use) { st = THX_ENOMEM; goto done; }
 #pragma omp parallel for schedule(static)
     for (long t = 0; t < (long)nt; t++) {
         int32_t r = v->region[t];
@@ -124,32 +170,81 @@ thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsign
             const int32_t *q = v->tet + 4 * t;
             use[t] = rows[q[0]] || rows[q[1]] || rows[q[2]] || rows[q[3]];
         }
-        if (!use[t]) continue;
+    }
+    /* the tetrahedra used, in the Morton order of their centroids; the rows in that of their nodes */
+    size_t m = 0;
+    for (size_t t = 0; t < nt; t++) m += use[t];
+    size_t big = (m > nn ? m : nn) + 1;
+    order = thx_malloc(ctx, (m ? m : 1) * sizeof *order);
+    rows_order = thx_malloc(ctx, (nn ? nn : 1) * sizeof *rows_order);
+    key = thx_malloc(ctx, big * sizeof *key);
+    key2 = thx_malloc(ctx, big * sizeof *key2);
+    idx2 = thx_malloc(ctx, big * sizeof *idx2);
+    if (!order || !rows_order || !key || !key2 || !idx2) { st = THX_ENOMEM; goto done; }
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, inv[3];
+    for (size_t i = 0; i < nn; i++)
+        for (int c = 0; c < 3; c++) {
+            double x = v->xyz[3 * i + (size_t)c];
+            if (x < lo[c]) lo[c] = x;
+            if (x > hi[c]) hi[c] = x;
+        }
+    for (int c = 0; c < 3; c++) inv[c] = hi[c] > lo[c] ? 1.0 / (hi[c] - lo[c]) : 1.0;
+    for (size_t t = 0, k = 0; t < nt; t++)
+        if (use[t]) order[k++] = (int32_t)t;
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < (long)m; k++) {
+        const int32_t *q = v->tet + 4 * (size_t)order[k];
+        double c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = 0.25 * (v->xyz[3 * (size_t)q[0] + a] + v->xyz[3 * (size_t)q[1] + a] + v->xyz[3 * (size_t)q[2] + a] +
+                           v->xyz[3 * (size_t)q[3] + a]);
+        key[k] = morton(c, lo, inv);
+    }
+    sort_by_key(key, order, m, key2, idx2);
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < (long)nn; i++) {
+        key[i] = morton(v->xyz + 3 * (size_t)i, lo, inv);
+        rows_order[i] = (int32_t)i;
+    }
+    sort_by_key(key, rows_order, nn, key2, idx2);
+    free(key);
+    free(key2);
+    free(idx2);
+    key = key2 = NULL;
+    idx2 = NULL;
+    /* element matrices and their nodes in that order, upper triangle (00 01 02 03 11 12 13 22 23 33) */
+    ke = thx_malloc(ctx, 10 * (m ? m : 1) * sizeof *ke);
+    tq = thx_malloc(ctx, 4 * (m ? m : 1) * sizeof *tq);
+    if (!ke || !tq) { st = THX_ENOMEM; goto done; }
+    long bad = -1;
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < (long)m; k++) {
+        size_t t = (size_t)order[k];
+        memcpy(tq + 4 * k, v->tet + 4 * t, 4 * sizeof *tq);
         double g[4][3];
         double vol = thx_fem_tet_gradients(v->xyz, v->tet + 4 * t, g);
         if (!(vol > 0)) {
 #pragma omp critical
-            if (bad < 0 || t < bad) bad = t;
+            if (bad < 0 || (long)t < bad) bad = (long)t;
             continue;
         }
-        const double *s = v->regions[r].sigma;
+        const double *sg0 = v->regions[v->region[t]].sigma;
         double sg[4][3];
         for (int a = 0; a < 4; a++)
-            for (int c = 0; c < 3; c++) sg[a][c] = s[3 * c] * g[a][0] + s[3 * c + 1] * g[a][1] + s[3 * c + 2] * g[a][2];
-        int k = 0;
+            for (int c = 0; c < 3; c++) sg[a][c] = sg0[3 * c] * g[a][0] + sg0[3 * c + 1] * g[a][1] + sg0[3 * c + 2] * g[a][2];
+        int e = 0;
         for (int a = 0; a < 4; a++)
-            for (int b = a; b < 4; b++) ke[10 * t + k++] = vol * (g[a][0] * sg[b][0] + g[a][1] * sg[b][1] + g[a][2] * sg[b][2]);
+            for (int b = a; b < 4; b++) ke[10 * k + e++] = vol * (g[a][0] * sg[b][0] + g[a][1] * sg[b][1] + g[a][2] * sg[b][2]);
     }
     if (bad >= 0) {
         st = thx_error(ctx, THX_EGEOM, "fem: tetrahedron %ld has non-positive volume (run thorax check)", bad + 1);
         goto done;
     }
-    /* node -> tetrahedra */
+    /* node -> tetrahedra (their places in that order, ascending) */
     nstart = thx_calloc(ctx, nn + 1, sizeof *nstart);
     if (!nstart) { st = THX_ENOMEM; goto done; }
-    for (size_t t = 0; t < nt; t++)
-        if (use[t])
-            for (int k = 0; k < 4; k++) nstart[v->tet[4 * t + k] + 1]++;
+    for (size_t k = 0; k < m; k++)
+        for (int c = 0; c < 4; c++) nstart[tq[4 * k + (size_t)c] + 1]++;
     for (size_t i = 0; i < nn; i++) nstart[i + 1] += nstart[i];
     ntet = thx_malloc(ctx, (nstart[nn] ? nstart[nn] : 1) * sizeof *ntet);
     if (!ntet) { st = THX_ENOMEM; goto done; }
@@ -157,9 +252,8 @@ thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsign
         size_t *fill = thx_malloc(ctx, (nn ? nn : 1) * sizeof *fill);
         if (!fill) { st = THX_ENOMEM; goto done; }
         memcpy(fill, nstart, nn * sizeof *fill);
-        for (size_t t = 0; t < nt; t++)
-            if (use[t])
-                for (int k = 0; k < 4; k++) ntet[fill[v->tet[4 * t + k]]++] = (int32_t)t;
+        for (size_t k = 0; k < m; k++)
+            for (int c = 0; c < 4; c++) ntet[fill[tq[4 * k + (size_t)c]]++] = (int32_t)k;
         free(fill);
     }
     /* row lengths: distinct neighbours (the node itself included), deduplicated with a per-thread mark */
@@ -175,13 +269,14 @@ thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsign
         } else {
             for (size_t i = 0; i < nn; i++) mark[i] = -1;
 #pragma omp for schedule(dynamic, 1024)
-            for (long i = 0; i < (long)nn; i++) {
+            for (long x = 0; x < (long)nn; x++) {
+                int32_t i = rows_order[x];
                 int64_t u = 0;
                 if (rows && !rows[i]) continue; /* a row not asked for stays empty */
                 for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
                     for (int c = 0; c < 4; c++) {
-                        int32_t j = v->tet[4 * (size_t)ntet[k] + c];
-                        if (mark[j] != (int32_t)i) { mark[j] = (int32_t)i; u++; }
+                        int32_t j = tq[4 * (size_t)ntet[k] + c];
+                        if (mark[j] != i) { mark[j] = i; u++; }
                     }
                 row[i + 1] = u;
             }
@@ -202,32 +297,33 @@ thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsign
         } else {
             for (size_t i = 0; i < nn; i++) pos[i] = -1;
 #pragma omp for schedule(dynamic, 1024)
-            for (long i = 0; i < (long)nn; i++) {
+            for (long x = 0; x < (long)nn; x++) {
+                int32_t i = rows_order[x];
                 int32_t *c = col + row[i];
                 double *a = val + row[i];
                 int32_t u = 0;
                 if (rows && !rows[i]) continue;
                 for (size_t k = nstart[i]; k < nstart[i + 1]; k++)
                     for (int q = 0; q < 4; q++) {
-                        int32_t j = v->tet[4 * (size_t)ntet[k] + q];
+                        int32_t j = tq[4 * (size_t)ntet[k] + q];
                         if (pos[j] < 0) { pos[j] = 0; c[u++] = j; }
                     }
                 /* sorted columns (insertion sort: rows are short) */
-                for (int32_t x = 1; x < u; x++) {
-                    int32_t key = c[x], y = x - 1;
-                    while (y >= 0 && c[y] > key) { c[y + 1] = c[y]; y--; }
-                    c[y + 1] = key;
+                for (int32_t y = 1; y < u; y++) {
+                    int32_t kk = c[y], z = y - 1;
+                    while (z >= 0 && c[z] > kk) { c[z + 1] = c[z]; z--; }
+                    c[z + 1] = kk;
                 }
-                for (int32_t x = 0; x < u; x++) pos[c[x]] = x;
+                for (int32_t y = 0; y < u; y++) pos[c[y]] = y;
                 static const int idx[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
                 for (size_t k = nstart[i]; k < nstart[i + 1]; k++) {
-                    size_t t = (size_t)ntet[k];
-                    const int32_t *q = v->tet + 4 * t;
+                    size_t e = (size_t)ntet[k];
+                    const int32_t *q = tq + 4 * e;
                     int li = 0;
                     while (q[li] != i) li++;
-                    for (int b2 = 0; b2 < 4; b2++) a[pos[q[b2]]] += ke[10 * t + idx[li][b2]];
+                    for (int b2 = 0; b2 < 4; b2++) a[pos[q[b2]]] += ke[10 * e + idx[li][b2]];
                 }
-                for (int32_t x = 0; x < u; x++) pos[c[x]] = -1;
+                for (int32_t y = 0; y < u; y++) pos[c[y]] = -1;
             }
             free(pos);
         }
@@ -245,6 +341,12 @@ done:
     free(use);
     free(nstart);
     free(ntet);
+    free(order);
+    free(tq);
+    free(rows_order);
+    free(key);
+    free(key2);
+    free(idx2);
     free(row);
     free(col);
     free(val);
