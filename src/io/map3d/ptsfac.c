@@ -229,7 +229,8 @@ thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, dou
         xyz = np == 1 ? o[0].xyz : malloc(3 * (n ? n : 1) * sizeof *xyz);
         if (!xyz && (np > 1 || n)) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
         else if (np > 1)
-            for (size_t k = 0, at = 0; k < np; at += o[k].n, k++) memcpy(xyz + 3 * at, o[k].xyz, 3 * o[k].n * sizeof *xyz);
+            for (size_t k = 0, at = 0; k < np; at += o[k].n, k++)
+                if (o[k].n) memcpy(xyz + 3 * at, o[k].xyz, 3 * o[k].n * sizeof *xyz); /* (a piece of blank lines has none) */
     }
     for (size_t k = 0; k < np; k++)
         if (!(st == THX_OK && np == 1)) free(o[k].xyz);

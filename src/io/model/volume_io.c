@@ -285,6 +285,7 @@ static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size
         reg = malloc((n ? n : 1) * sizeof *reg);
         if (!tet || !reg) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
         for (size_t k = 0, at = 0; st == THX_OK && k < np; at += o[k].n, k++) {
+            if (!o[k].n) continue; /* a piece of blank lines */
             memcpy(tet + 4 * at, o[k].tet, 4 * o[k].n * sizeof *tet);
             memcpy(reg + at, o[k].reg, o[k].n * sizeof *reg);
         }
