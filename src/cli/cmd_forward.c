@@ -459,12 +459,12 @@ int cmd_forward(int argc, char **argv)
             if (route_txt[0]) printf("route: %s\n", route_txt);
             char subtrees_txt[160] = "";
             if (R.factor.threads)
-                snprintf(subtrees_txt, sizeof subtrees_txt, ": %zu subtrees %.2f s, then %zu supernodes above them "
-                         "(%.0f %% of the work) %.2f s", R.factor.subtrees, R.factor.t_subtrees, R.factor.top,
-                         100 * R.factor.top_share, R.factor.t_top);
+                snprintf(subtrees_txt, sizeof subtrees_txt, ": %zu subtrees on %d thread%s %.2f s, then %zu supernodes above "
+                         "them (%.0f %% of the work) %.2f s", R.factor.subtrees, R.factor.threads, R.factor.threads == 1 ? "" : "s",
+                         R.factor.t_subtrees, R.factor.top, 100 * R.factor.top_share, R.factor.t_top);
             if (verbose > 0 && R.factor.used)
                 printf("factor (CHOLMOD's analysis, %s): ordering %.2f s (%s), analysis %.2f s%s, factorization %.2f s "
-                       "(%.3g flops, %.1f GF/s, %d thread%s%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
+                       "(%.3g flops, %.1f GF/s, %d BLAS thread%s%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",
                        R.factor.numeric, R.factor.t_ordering, R.factor.ordering_cached ? "cached" : "METIS", R.factor.t_analysis,
                        R.factor.symbolic_cached ? " (cached)" : "",
                        R.factor.t_factor, R.factor.flops, R.factor.t_factor > 0 ? R.factor.flops / R.factor.t_factor * 1e-9 : 0,

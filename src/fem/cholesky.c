@@ -180,7 +180,7 @@ analyse:
         if (!f->own_x) { st = THX_ENOMEM; goto done; }
         thx_mf_symbolic S = {n, f->y.nsuper, f->y.super, f->y.pi, f->y.px, f->y.rows};
         thx_status e = thx_mf_factor(ctx, &S, rowp, col, val, f->perm, f->iperm, opts ? opts->threads : 1,
-                                     opts ? opts->set_blas_threads : NULL, f->own_x, &inf.mf);
+                                     opts ? opts->top_threads : 1, opts ? opts->set_blas_threads : NULL, f->own_x, &inf.mf);
         inf.t_factor = thx_wtime() - t0;
         if (e == THX_EINTERNAL && inf.symbolic_cached) {
             /* the cache's symbolic factor, though whole, is not this matrix's: analysed again, kept again */

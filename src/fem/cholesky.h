@@ -37,7 +37,8 @@ typedef struct {
 } thx_chol_info;
 
 typedef struct {
-    int threads;                    /* threads for the factorization (ours: the subtrees'; BLAS's for the top) */
+    int threads;                    /* threads for our factorization's subtrees */
+    int top_threads;                /* BLAS's threads (ours: for the supernodes above the subtrees; CHOLMOD's: all) */
     void (*set_blas_threads)(int);  /* sets BLAS's threads, or NULL */
     int cholmod_numeric;            /* 1: CHOLMOD's numeric factorization instead of ours (-thorax_factor cholmod) */
 } thx_chol_opts;

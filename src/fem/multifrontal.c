@@ -291,7 +291,7 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
 }
 
 thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
-                         const double *val, const int64_t *perm, const int64_t *iperm, int threads,
+                         const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
                          void (*set_blas_threads)(int), double *Lx, thx_mf_info *info)
 {
     thx_mf_info inf;
@@ -404,7 +404,7 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
     inf.t_subtrees = thx_wtime() - t0;
     /* the top, in the postorder, with BLAS's threads */
     t0 = thx_wtime();
-    if (set_blas_threads) set_blas_threads(T);
+    if (set_blas_threads) set_blas_threads(top_threads > 1 ? top_threads : 1);
     size_t top = 0;
     for (int64_t k = 0; k < S->nsuper && !failed; k++) {
         int64_t s = t.post[k];

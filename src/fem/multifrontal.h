@@ -41,13 +41,15 @@ typedef struct {
 /* Factors P A P^T = L L^T into Lx (px[nsuper] values, written here). A is the symmetric matrix of order
  * S->n given as a full CSR (both triangles) in its own numbering; row i of P A P^T is row perm[i] of A,
  * iperm the inverse. threads: how many threads share the subtrees (each calling BLAS with one thread
- * through set_blas_threads, when it is given); the top is factored with set_blas_threads(threads).
+ * through set_blas_threads, when it is given); the top is factored with set_blas_threads(top_threads).
+ * The subtrees' threads never wait for one another until the last subtree is done, so on a loaded
+ * machine they may be more than the free cores; BLAS's threads meet at every call, and should not.
  * A matrix that is not positive definite returns THX_ESOLVER with info->not_posdef set and no
  * message (the caller names the row); a symbolic factor that does not hold the matrix's pattern (a row of
  * A, or of a child's update matrix, missing from a supernode) is THX_EINTERNAL, found as the fronts are
  * assembled, before any value lands in a wrong place. */
 thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
-                         const double *val, const int64_t *perm, const int64_t *iperm, int threads,
+                         const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
                          void (*set_blas_threads)(int), double *Lx, thx_mf_info *info);
 
 #endif

@@ -500,17 +500,20 @@ static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
                        "cholmod (CHOLMOD's)", how);
         goto done;
     }
-    thx_chol_opts co = {use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod")};
-    if (use < 0) {
-        /* not OpenBLAS: its threads are not ours to set; the subtrees get the free cores */
-        int fc = thx_cores_free();
+    /* BLAS's threads (CHOLMOD's factorization; the top of ours): the free cores (factor_threads). Our subtrees'
+       threads: the cores this process may use, even on a loaded machine (they wait for none but the last:
+       beside three busy loops the high phantom's factorization took 5.8 s on one, 3.5 s for the subtrees on
+       two, docs/design/parallel.md), unless THORAX_FACTOR_THREADS or OPENBLAS_NUM_THREADS says. */
+    int tree = use;
+    if (!getenv("THORAX_FACTOR_THREADS") && !getenv("OPENBLAS_NUM_THREADS")) {
+        tree = thx_cores_allowed();
 #ifdef _OPENMP
-        fc = fc < omp_get_max_threads() ? fc : omp_get_max_threads();
+        tree = tree < omp_get_max_threads() ? tree : omp_get_max_threads();
 #else
-        fc = 1;
+        tree = 1;
 #endif
-        co.threads = fc > 1 ? fc : 1;
     }
+    thx_chol_opts co = {tree > 0 ? tree : 1, use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod")};
     st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &co, &s->chol, &s->chol_info);
     if (was > 0) blas_threads(was);
     s->chol_info.blas_threads = use > 0 ? use : 0;
