@@ -21,18 +21,27 @@ thx_status thx_io_read_text(thx_ctx *ctx, const char *path, char **text);
  * (NUL-terminated in place); returns the count (max + 1 = "more than max");
  * *next = start of the following line or NULL. */
 int thx_io_split_line(char *p, char **tok, int max, char **next);
-/* A run of whole lines of a text: [begin, end), end the next piece's begin or the text's NUL. */
+/* A run of whole lines of a text, [begin, end) (end the next piece's begin or the text's NUL), and what its
+ * parser made of it: the lines it read (all of them unless it failed), the records it kept, and its first
+ * fault (bad_line: its own line number, 0 none, -1 out of memory; why: the text after FILE:LINE:). */
 typedef struct {
     char *begin, *end;
+    int lines;
+    int bad_line;
+    size_t n;
+    char why[200];
 } thx_io_piece;
 /* Cuts the NUL-terminated text of len bytes into at most max pieces of whole lines, each at least min_bytes
  * long but the last, for readers that parse the pieces in parallel (each line's tokens are its own). Returns
- * the count (1 for a short text). A reader counts each piece's lines as it parses: piece k's first line is
- * 1 + the lines of the pieces before it, which are known whole when the first fault is in piece k. */
+ * the count (1 for a short text); the outcomes are zero. */
 size_t thx_io_cut_lines(char *text, size_t len, size_t max, size_t min_bytes, thx_io_piece *pieces);
 /* The pieces for this machine: as many as OpenMP's threads, at most 8, from 1 MB a piece. */
 #define THX_IO_PIECES_MAX 8
 #define THX_IO_PIECE_BYTES ((size_t)1 << 20)
+size_t thx_io_cut_for_threads(char *text, thx_io_piece *pieces);
+/* After the pieces were parsed: the first fault in the file's order as THX_EINPUT ("PATH:LINE: why", the
+ * line counted over the pieces before it, which are whole) or THX_ENOMEM; else THX_OK and *n the records. */
+thx_status thx_io_pieces_verdict(thx_ctx *ctx, const char *path, const thx_io_piece *pc, size_t np, size_t *n);
 /* Reads "x y z" lines (blank lines allowed); `what` prefixes the messages after FILE:LINE:. Files above a
  * megabyte are parsed in pieces, one thread each. */
 thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, double **xyz_out, size_t *n_out);

@@ -137,6 +137,7 @@ size_t thx_io_cut_lines(char *text, size_t len, size_t max, size_t min_bytes, th
     char *at = text, *end = text + len;
     size_t want = max < 1 ? 1 : max;
     size_t step = len / want > min_bytes ? len / want : min_bytes;
+    memset(pieces, 0, want * sizeof *pieces);
     while (at < end && n + 1 < want) {
         if ((size_t)(end - at) <= step + min_bytes) break; /* the rest in one piece */
         char *cut = memchr(at + step, '\n', (size_t)(end - at) - step);
@@ -151,49 +152,65 @@ size_t thx_io_cut_lines(char *text, size_t len, size_t max, size_t min_bytes, th
     return n + 1;
 }
 
-typedef struct {
-    double *xyz;
-    size_t n, cap;
-    int lines;      /* lines parsed (all of them unless it failed) */
-    int bad_line;   /* the piece's own line number of the fault, 0: none */
-    char why[160];  /* the fault, after FILE:LINE: */
-} xyz_piece;
-
-/* One piece of "x y z" lines: what it holds, or its first fault. */
-static void xyz_parse(const thx_io_piece *pc, const char *what, xyz_piece *o)
+size_t thx_io_cut_for_threads(char *text, thx_io_piece *pieces)
 {
+    int threads = 1;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    return thx_io_cut_lines(text, strlen(text), (size_t)threads < THX_IO_PIECES_MAX ? (size_t)threads : THX_IO_PIECES_MAX,
+                            THX_IO_PIECE_BYTES, pieces);
+}
+
+thx_status thx_io_pieces_verdict(thx_ctx *ctx, const char *path, const thx_io_piece *pc, size_t np, size_t *n)
+{
+    int line0 = 0;
+    *n = 0;
+    for (size_t k = 0; k < np; k++) {
+        if (pc[k].bad_line < 0) return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+        if (pc[k].bad_line) return thx_error(ctx, THX_EINPUT, "%s:%d: %s", path, line0 + pc[k].bad_line, pc[k].why);
+        line0 += pc[k].lines;
+        *n += pc[k].n;
+    }
+    return THX_OK;
+}
+
+/* One piece of "x y z" lines: its points into *xyz (the piece holds their count and its first fault). */
+static void xyz_parse(thx_io_piece *pc, const char *what, double **xyz)
+{
+    size_t cap = 0;
     for (char *p = pc->begin, *next = NULL; p && p < pc->end; p = next) {
         char *tok[3];
-        o->lines++;
+        pc->lines++;
         int nt = thx_io_split_line(p, tok, 3, &next);
         if (nt == 0) continue; /* blank lines are allowed anywhere */
         if (nt != 3) {
-            o->bad_line = o->lines;
-            snprintf(o->why, sizeof o->why, "%sexpected 3 coordinates (x y z), found %s", what,
+            pc->bad_line = pc->lines;
+            snprintf(pc->why, sizeof pc->why, "%sexpected 3 coordinates (x y z), found %s", what,
                      nt > 3 ? "more" : nt == 1 ? "1" : "2");
             return;
         }
-        if (o->n + 1 > o->cap) {
-            size_t cap = o->cap ? 2 * o->cap : 1024;
-            double *x = realloc(o->xyz, 3 * cap * sizeof *x);
+        if (pc->n + 1 > cap) {
+            size_t c2 = cap ? 2 * cap : 1024;
+            double *x = realloc(*xyz, 3 * c2 * sizeof *x);
             if (!x) {
-                o->bad_line = -1;
+                pc->bad_line = -1;
                 return;
             }
-            o->xyz = x;
-            o->cap = cap;
+            *xyz = x;
+            cap = c2;
         }
         for (int k = 0; k < 3; k++) {
             char *end = NULL;
             double v = strtod(tok[k], &end);
             if (end == tok[k] || *end != '\0' || !isfinite(v)) {
-                o->bad_line = o->lines;
-                snprintf(o->why, sizeof o->why, "%scoordinate %d is not a finite number: \"%.60s\"", what, k + 1, tok[k]);
+                pc->bad_line = pc->lines;
+                snprintf(pc->why, sizeof pc->why, "%scoordinate %d is not a finite number: \"%.60s\"", what, k + 1, tok[k]);
                 return;
             }
-            o->xyz[3 * o->n + (size_t)k] = v;
+            (*xyz)[3 * pc->n + (size_t)k] = v;
         }
-        o->n++;
+        pc->n++;
     }
 }
 
@@ -205,35 +222,22 @@ thx_status thx_io_read_xyz(thx_ctx *ctx, const char *path, const char *what, dou
     thx_status st = thx_io_read_text(ctx, path, &text);
     if (st) return st;
     thx_io_piece pc[THX_IO_PIECES_MAX];
-    xyz_piece o[THX_IO_PIECES_MAX];
-    int threads = 1;
-#ifdef _OPENMP
-    threads = omp_get_max_threads();
-#endif
-    size_t np = thx_io_cut_lines(text, strlen(text), (size_t)threads < THX_IO_PIECES_MAX ? (size_t)threads : THX_IO_PIECES_MAX,
-                                 THX_IO_PIECE_BYTES, pc);
-    memset(o, 0, sizeof o);
+    double *part[THX_IO_PIECES_MAX] = {NULL};
+    size_t np = thx_io_cut_for_threads(text, pc), n = 0;
 #pragma omp parallel for schedule(static, 1) num_threads((int)np) if (np > 1)
-    for (size_t k = 0; k < np; k++) xyz_parse(&pc[k], what, &o[k]);
-    /* the first fault in the file's order, its line counted over the pieces before */
-    size_t n = 0;
-    int line0 = 0;
-    for (size_t k = 0; k < np && st == THX_OK; k++) {
-        if (o[k].bad_line < 0) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
-        else if (o[k].bad_line) st = thx_error(ctx, THX_EINPUT, "%s:%d: %s", path, line0 + o[k].bad_line, o[k].why);
-        line0 += o[k].lines;
-        n += o[k].n;
-    }
+    for (size_t k = 0; k < np; k++) xyz_parse(&pc[k], what, &part[k]);
+    st = thx_io_pieces_verdict(ctx, path, pc, np, &n);
     double *xyz = NULL;
-    if (st == THX_OK) {
-        xyz = np == 1 ? o[0].xyz : malloc(3 * (n ? n : 1) * sizeof *xyz);
-        if (!xyz && (np > 1 || n)) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
-        else if (np > 1)
-            for (size_t k = 0, at = 0; k < np; at += o[k].n, k++)
-                if (o[k].n) memcpy(xyz + 3 * at, o[k].xyz, 3 * o[k].n * sizeof *xyz); /* (a piece of blank lines has none) */
+    if (st == THX_OK && np == 1) {
+        xyz = part[0];
+        part[0] = NULL;
+    } else if (st == THX_OK && !(xyz = malloc(3 * (n ? n : 1) * sizeof *xyz))) {
+        st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+    } else if (st == THX_OK) {
+        for (size_t k = 0, at = 0; k < np; at += pc[k].n, k++)
+            if (pc[k].n) memcpy(xyz + 3 * at, part[k], 3 * pc[k].n * sizeof *xyz); /* (a piece of blank lines has none) */
     }
-    for (size_t k = 0; k < np; k++)
-        if (!(st == THX_OK && np == 1)) free(o[k].xyz);
+    for (size_t k = 0; k < np; k++) free(part[k]);
     free(text);
     if (st != THX_OK) return st;
     *xyz_out = xyz;

@@ -41,9 +41,6 @@
  */
 #include "io/model/volume_io.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -181,71 +178,65 @@ static int parse_long(const char *tok, long *out)
     return 0;
 }
 
-typedef struct {
-    int32_t *tet, *reg;
-    size_t n, cap;
-    int lines;      /* lines parsed (all of them unless it failed) */
-    int bad_line;   /* the piece's own line number of the fault (0: none, -1: out of memory) */
-    char why[200];  /* the fault, after FILE:LINE: */
-} tet_piece;
-
-/* One piece of volume.tet's lines: what it holds, or its first fault. */
-static void tets_parse(const thx_io_piece *pc, size_t n_nodes, size_t n_regions, tet_piece *o)
+/* One piece of volume.tet's lines: its tetrahedra and regions into *tet, *reg (the piece holds their count
+   and its first fault). */
+static void tets_parse(thx_io_piece *pc, size_t n_nodes, size_t n_regions, int32_t **tet, int32_t **reg)
 {
+    size_t cap = 0;
     for (char *p = pc->begin, *next = NULL; p && p < pc->end; p = next) {
         char *tok[5];
-        o->lines++;
+        pc->lines++;
         int nt = thx_io_split_line(p, tok, 5, &next);
         if (nt == 0) continue;
         if (nt != 5) {
-            o->bad_line = o->lines;
-            snprintf(o->why, sizeof o->why, "expected 5 numbers (4 node numbers, then a region number), found %s",
+            pc->bad_line = pc->lines;
+            snprintf(pc->why, sizeof pc->why, "expected 5 numbers (4 node numbers, then a region number), found %s",
                      nt > 5 ? "more" : nt == 1 ? "1" : nt == 2 ? "2" : nt == 3 ? "3" : "4");
             return;
         }
-        if (o->n + 1 > o->cap) {
-            size_t cap = o->cap ? 2 * o->cap : 4096;
-            int32_t *t = realloc(o->tet, 4 * cap * sizeof *t);
-            if (t) o->tet = t;
-            int32_t *r = t ? realloc(o->reg, cap * sizeof *r) : NULL;
-            if (r) o->reg = r;
+        if (pc->n + 1 > cap) {
+            size_t c2 = cap ? 2 * cap : 4096;
+            int32_t *t = realloc(*tet, 4 * c2 * sizeof *t);
+            if (t) *tet = t;
+            int32_t *r = t ? realloc(*reg, c2 * sizeof *r) : NULL;
+            if (r) *reg = r;
             if (!t || !r) {
-                o->bad_line = -1;
+                pc->bad_line = -1;
                 return;
             }
-            o->cap = cap;
+            cap = c2;
         }
         long val[5];
         for (int k = 0; k < 5; k++)
             if (parse_long(tok[k], &val[k])) {
-                o->bad_line = o->lines;
-                snprintf(o->why, sizeof o->why, "%s is not an integer: \"%.60s\"", k < 4 ? "a node number" : "the region number",
+                pc->bad_line = pc->lines;
+                snprintf(pc->why, sizeof pc->why, "%s is not an integer: \"%.60s\"", k < 4 ? "a node number" : "the region number",
                          tok[k]);
                 return;
             }
         for (int k = 0; k < 4; k++) {
             if (val[k] < 1 || (size_t)val[k] > n_nodes) {
-                o->bad_line = o->lines;
-                snprintf(o->why, sizeof o->why, "node number %ld out of range 1..%zu (the nodes of %s)", val[k], n_nodes,
+                pc->bad_line = pc->lines;
+                snprintf(pc->why, sizeof pc->why, "node number %ld out of range 1..%zu (the nodes of %s)", val[k], n_nodes,
                          VOLUME_PTS);
                 return;
             }
             for (int j = 0; j < k; j++)
                 if (val[j] == val[k]) {
-                    o->bad_line = o->lines;
-                    snprintf(o->why, sizeof o->why, "node %ld appears twice in the tetrahedron", val[k]);
+                    pc->bad_line = pc->lines;
+                    snprintf(pc->why, sizeof pc->why, "node %ld appears twice in the tetrahedron", val[k]);
                     return;
                 }
-            o->tet[4 * o->n + (size_t)k] = (int32_t)(val[k] - 1);
+            (*tet)[4 * pc->n + (size_t)k] = (int32_t)(val[k] - 1);
         }
         if (val[4] < 1 || (size_t)val[4] > n_regions) {
-            o->bad_line = o->lines;
-            snprintf(o->why, sizeof o->why, "region %ld out of range 1..%zu (the \"regions\" of model.json)", val[4],
+            pc->bad_line = pc->lines;
+            snprintf(pc->why, sizeof pc->why, "region %ld out of range 1..%zu (the \"regions\" of model.json)", val[4],
                      n_regions);
             return;
         }
-        o->reg[o->n] = (int32_t)(val[4] - 1);
-        o->n++;
+        (*reg)[pc->n] = (int32_t)(val[4] - 1);
+        pc->n++;
     }
 }
 
@@ -255,44 +246,30 @@ static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size
 {
     char *text = NULL;
     THX_CHECK(thx_io_read_text(ctx, path, &text));
-    thx_status st = THX_OK;
     thx_io_piece pc[THX_IO_PIECES_MAX];
-    tet_piece o[THX_IO_PIECES_MAX];
-    int threads = 1;
-#ifdef _OPENMP
-    threads = omp_get_max_threads();
-#endif
-    size_t np = thx_io_cut_lines(text, strlen(text), (size_t)threads < THX_IO_PIECES_MAX ? (size_t)threads : THX_IO_PIECES_MAX,
-                                 THX_IO_PIECE_BYTES, pc);
-    memset(o, 0, sizeof o);
+    int32_t *ptet[THX_IO_PIECES_MAX] = {NULL}, *preg[THX_IO_PIECES_MAX] = {NULL};
+    size_t np = thx_io_cut_for_threads(text, pc), n = 0;
 #pragma omp parallel for schedule(static, 1) num_threads((int)np) if (np > 1)
-    for (size_t k = 0; k < np; k++) tets_parse(&pc[k], n_nodes, n_regions, &o[k]);
-    size_t n = 0;
-    int line0 = 0;
-    for (size_t k = 0; k < np && st == THX_OK; k++) {
-        if (o[k].bad_line < 0) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
-        else if (o[k].bad_line) st = thx_error(ctx, THX_EINPUT, "%s:%d: %s", path, line0 + o[k].bad_line, o[k].why);
-        line0 += o[k].lines;
-        n += o[k].n;
-    }
+    for (size_t k = 0; k < np; k++) tets_parse(&pc[k], n_nodes, n_regions, &ptet[k], &preg[k]);
+    thx_status st = thx_io_pieces_verdict(ctx, path, pc, np, &n);
     int32_t *tet = NULL, *reg = NULL;
     if (st == THX_OK && np == 1) {
-        tet = o[0].tet;
-        reg = o[0].reg;
-        o[0].tet = o[0].reg = NULL;
+        tet = ptet[0];
+        reg = preg[0];
+        ptet[0] = preg[0] = NULL;
     } else if (st == THX_OK) {
         tet = malloc(4 * (n ? n : 1) * sizeof *tet);
         reg = malloc((n ? n : 1) * sizeof *reg);
         if (!tet || !reg) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
-        for (size_t k = 0, at = 0; st == THX_OK && k < np; at += o[k].n, k++) {
-            if (!o[k].n) continue; /* a piece of blank lines */
-            memcpy(tet + 4 * at, o[k].tet, 4 * o[k].n * sizeof *tet);
-            memcpy(reg + at, o[k].reg, o[k].n * sizeof *reg);
+        for (size_t k = 0, at = 0; st == THX_OK && k < np; at += pc[k].n, k++) {
+            if (!pc[k].n) continue; /* a piece of blank lines */
+            memcpy(tet + 4 * at, ptet[k], 4 * pc[k].n * sizeof *tet);
+            memcpy(reg + at, preg[k], pc[k].n * sizeof *reg);
         }
     }
     for (size_t k = 0; k < np; k++) {
-        free(o[k].tet);
-        free(o[k].reg);
+        free(ptet[k]);
+        free(preg[k]);
     }
     free(text);
     if (st != THX_OK) {
