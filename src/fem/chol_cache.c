@@ -160,14 +160,7 @@ static int symbolic_valid(const thx_chol_symbolic *y, int64_t n)
             if (t < k ? rw[t] != y->super[s] + t : rw[t] <= rw[t - 1] || rw[t] >= n) return 0;
         }
     }
-    unsigned char *seen = calloc((size_t)(n ? n : 1), 1);
-    int ok = seen != NULL;
-    for (int64_t i = 0; ok && i < n; i++) {
-        if (y->perm[i] < 0 || y->perm[i] >= n || seen[y->perm[i]]) ok = 0;
-        else seen[y->perm[i]] = 1;
-    }
-    free(seen);
-    return ok;
+    return is_permutation(y->perm, n);
 }
 
 /* the arrays of y in one block: perm (n), super, pi, px (nsuper + 1 each), rows (ssize) */

@@ -208,12 +208,14 @@ static thx_status cut_tree(mf_tree *t, int T, int64_t **out, size_t *n_out)
 }
 
 /* The most doubles a stack holds while the supernodes post[a .. b] are done in order (K_ROOT's update
-   matrix goes to the roots' arena, not to the stack). */
-static size_t stack_peak(const mf_tree *t, int64_t a, int64_t b)
+   matrix goes to the roots' arena, not to the stack); top_only: the K_TOP ones alone (the top's stack, whose
+   supernodes' children are K_TOP or K_ROOT). */
+static size_t stack_peak(const mf_tree *t, int64_t a, int64_t b, int top_only)
 {
     size_t top = 0, peak = 0;
     for (int64_t k = a; k <= b; k++) {
         int64_t s = t->post[k];
+        if (top_only && t->kind[s] != K_TOP) continue;
         size_t popped = 0;
         for (int64_t e = t->cstart[s]; e < t->cstart[s + 1]; e++)
             if (t->kind[t->child[e]] != K_ROOT) popped += usize(t->S, t->child[e]);
@@ -320,28 +322,14 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
     for (size_t i = 0; i < nsub; i++) {
         t.uoff[subs[i]] = (int64_t)roots_n;
         roots_n += usize(S, subs[i]);
-        size_t p = stack_peak(&t, t.first[subs[i]], t.pos[subs[i]]);
+        size_t p = stack_peak(&t, t.first[subs[i]], t.pos[subs[i]], 0);
         thread_n = p > thread_n ? p : thread_n;
     }
     for (int64_t s = 0; s < S->nsuper; s++) {
         max_rows = (size_t)nrow(S, s) > max_rows ? (size_t)nrow(S, s) : max_rows;
         if (t.kind[s] == K_TOP) inf.top++;
     }
-    {
-        /* the top's stack: its supernodes alone, in the postorder */
-        size_t tp = 0, pk = 0;
-        for (int64_t k = 0; k < S->nsuper; k++) {
-            int64_t s = t.post[k];
-            if (t.kind[s] != K_TOP) continue;
-            size_t popped = 0;
-            for (int64_t e = t.cstart[s]; e < t.cstart[s + 1]; e++)
-                if (t.kind[t.child[e]] == K_TOP) popped += usize(S, t.child[e]);
-            size_t u = usize(S, s);
-            pk = tp + u > pk ? tp + u : pk;
-            tp = tp - popped + u;
-        }
-        top_n = pk;
-    }
+    top_n = stack_peak(&t, 0, S->nsuper - 1, 1); /* the top's stack: its supernodes alone, in the postorder */
     t.roots = malloc((roots_n ? roots_n : 1) * sizeof *t.roots);
     top_stack = malloc((top_n ? top_n : 1) * sizeof *top_stack);
     stacks = calloc((size_t)T, sizeof *stacks);
