@@ -542,7 +542,24 @@ static void own_path_tests(thx_ctx *ctx)
     CHECK(fi.symbolic_cached == 0 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
     CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
     CHECK(fi.symbolic_cached == 1 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
-    printf("own path: a wrong symbolic factor in the cache found, analysed again, kept again\n");
+    /* a header that claims more than the file holds (its row count 2^39): refused before any allocation */
+    {
+        char lcmd[1400], sym[1200] = "";
+        snprintf(lcmd, sizeof lcmd, "ls -t '%s'/symbolic-*.bin 2>/dev/null | head -n 1", tl_path("cache"));
+        FILE *lp = popen(lcmd, "r");
+        int found = lp && fgets(sym, sizeof sym, lp) != NULL;
+        if (lp) pclose(lp);
+        sym[strcspn(sym, "\n")] = 0;
+        FILE *f = found ? fopen(sym, "r+b") : NULL;
+        uint64_t big = (uint64_t)1 << 39;
+        int ok = f && fseek(f, 8 + 32 + 16, SEEK_SET) == 0 && fwrite(&big, sizeof big, 1, f) == 1;
+        if (f) fclose(f);
+        CHECK(ok);
+        CHECK_OK(ctx, own_solve_box(ctx, &K2, kind2, v2, onb2, R, b2, &fi));
+        CHECK(fi.symbolic_cached == 0 && memcmp(a2, b2, n2 * R * sizeof *a2) == 0);
+    }
+    printf("own path: a wrong symbolic factor in the cache found, analysed again, kept again; an oversized claim "
+           "refused\n");
 
     for (int th = 1; th <= 3; th++) {
         char tn[8];

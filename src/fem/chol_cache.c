@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "fem/chol_cache.h"
@@ -188,9 +189,14 @@ int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key
     uint64_t hdr[4] = {0}; /* n, nsuper, ssize, xsize */
     double counts[2];      /* flops, nonzeros */
     unsigned char k2[32], sum[32], sum2[32];
-    int ok = fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_sym_magic, 8) && fread(k2, 1, 32, f) == 32 &&
-             !memcmp(k2, key, 32) && fread(hdr, sizeof *hdr, 4, f) == 4 && hdr[0] == (uint64_t)n &&
-             hdr[1] <= (uint64_t)n + 1 && hdr[2] <= ((uint64_t)1 << 40) && fread(counts, sizeof *counts, 2, f) == 2;
+    struct stat sb;
+    int ok = fstat(fileno(f), &sb) == 0 && fread(magic, 1, 8, f) == 8 && !memcmp(magic, k_sym_magic, 8) &&
+             fread(k2, 1, 32, f) == 32 && !memcmp(k2, key, 32) && fread(hdr, sizeof *hdr, 4, f) == 4 &&
+             hdr[0] == (uint64_t)n && hdr[1] <= (uint64_t)n + 1 && hdr[2] <= ((uint64_t)1 << 40) &&
+             fread(counts, sizeof *counts, 2, f) == 2;
+    /* the sizes the header claims must be the file's own before anything is allocated for them */
+    ok = ok && (uint64_t)sb.st_size == 8 + 32 + sizeof hdr + sizeof counts +
+                                           8 * (hdr[0] + 3 * (hdr[1] + 1) + hdr[2]) + 32;
     if (ok) {
         y->nsuper = (int64_t)hdr[1];
         y->ssize = (size_t)hdr[2];
