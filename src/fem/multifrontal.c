@@ -238,7 +238,9 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
     double *Lb = t->Lx + S->px[s];
     double *U = t->kind[s] == K_ROOT ? t->roots + t->uoff[s] : stk + *top;
     memset(Lb, 0, (size_t)r * (size_t)k * sizeof *Lb);
-    memset(U, 0, (size_t)nb * (size_t)nb * sizeof *U);
+    /* only U's lower triangle is ever written or read (the extend-add and dsyrk's "L"): the upper one is
+       neither zeroed nor moved, and a large update matrix's pages above the diagonal are never touched */
+    for (int64_t b = 0; b < nb; b++) memset(U + (size_t)b * (size_t)nb + (size_t)b, 0, (size_t)(nb - b) * sizeof *U);
     for (int64_t i = 0; i < r; i++) map[rows[i]] = (int32_t)i;
     int fault = 0;
     /* A's entries of the front's columns (the lower triangle, in the factor's order) */
@@ -276,7 +278,11 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
     /* the children popped: the update matrix moved down onto them */
     if (t->kind[s] != K_ROOT) {
         size_t base = *top - popped;
-        if (popped) memmove(stk + base, U, (size_t)nb * (size_t)nb * sizeof *U);
+        if (popped) /* column by column, lower parts only: each destination lies below every later source */
+            for (int64_t b = 0; b < nb; b++) {
+                size_t o = (size_t)b * (size_t)nb + (size_t)b;
+                memmove(stk + base + o, U + o, (size_t)(nb - b) * sizeof *U);
+            }
         U = stk + base;
         t->uoff[s] = (int64_t)base;
         *top = base + (size_t)nb * (size_t)nb;
