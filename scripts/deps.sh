@@ -32,11 +32,16 @@ packages=(
   invesalius-examples                # tests: a real CT (InVesalius's Cranium.inv3)
   libembree-dev embree-tools         # ray tracing (RaySpray, src/raytrace): Embree 3; embree-tools' benchmark beside ours (bench/trace.sh)
   python3-opencv                     # bench: OpenCV's intelligent scissors (Mortensen & Barrett) beside our livewire (bench/digitize.sh)
+  chromium                           # tests: the web page opened in a real browser (headless, WebGL through SwiftShader; puppeteer-core drives it)
 )
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# the web page's viewer: scripts/web.sh bundles web/ with the pinned three.js and esbuild from npm. Node
+# and npm are wanted as commands: a machine with another distribution of Node (one whose nodejs package
+# carries npm and conflicts with Debian's) keeps it
+command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
 [ ${#missing[@]} -eq 0 ] && exit 0
 echo "deps: installing ${missing[*]}"
 SUDO=""

@@ -18,6 +18,9 @@ typedef struct {
 /* Runs the export; the exit status (0, 1, or 2 for a bad --frames). */
 int cli_export_data(const cli_export_request *rq);
 
+/* thorax export --format html (cli_export_page.c): the whole command, render's options with it. */
+int cli_export_page(int argc, char **argv);
+
 /* Frame lists: cli_parse_frames (cli/options.h). */
 
 #endif

@@ -15,6 +15,10 @@ static const char *const ext_of[] = {"vtk", "vtp", "obj", "stl", "ply", "vtu", "
 
 int cmd_export(int argc, char **argv)
 {
+    /* --format html: the web page, with render's options (cli_export_page.c) */
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--format=html") || (!strcmp(argv[i], "--format") && i + 1 < argc && !strcmp(argv[i + 1], "html")))
+            return cli_export_page(argc, argv);
     const char *cmd = "export";
     const char *out_dir = NULL, *solution = NULL, *data = NULL, *frames = NULL;
     const char **only = calloc((size_t)argc + 1, sizeof *only);
@@ -25,7 +29,7 @@ int cmd_export(int argc, char **argv)
     }
     static const cli_choice formats[] = {{"vtk", THX_EXPORT_VTK}, {"vtp", THX_EXPORT_VTP}, {"obj", THX_EXPORT_OBJ},
                                          {"stl", THX_EXPORT_STL}, {"ply", THX_EXPORT_PLY}, {"vtu", THX_EXPORT_VTU},
-                                         {"msh", THX_EXPORT_MSH}, {NULL, 0}};
+                                         {"msh", THX_EXPORT_MSH}, {"html", 100}, {NULL, 0}};
     cli_opt opts[] = {
         {.name = "--format", .type = CLI_CHOICE, .meta = "F", .choices = formats, .i = &format,
          .help = "the format (required): vtk: legacy VTK ASCII polydata (ParaView, VTK); vtp: VTK XML polydata; "
@@ -34,7 +38,7 @@ int cmd_export(int argc, char **argv)
                  "(1-based region id) and \"conductivity\" (S/m), point data \"surface\" and \"surface_node\" (the node "
                  "tables), field data \"region_name\", \"region_sigma\", \"surface_name\"; msh: the volume as Gmsh MSH 4.1 "
                  "ASCII, one physical volume per region and one physical surface per surface (the tetrahedra's faces on "
-                 "it)"},
+                 "it); html: one self-contained interactive web page of the potentials (thorax export --format html --help)"},
         {.name = "--output", .alias = "-o", .type = CLI_OUTPUT, .meta = "DIR", .s = &out_dir,
          .def = "MODEL itself; required with --solution or --data",
          .help = "directory for the files (created if missing, with its parents)"},

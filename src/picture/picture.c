@@ -829,6 +829,20 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
     return THX_OK;
 }
 
+size_t thx_picture_surface_looks(const thx_picture_opts *o, thx_picture_data *d, int frame, thx_render_surface *out,
+                                 size_t max)
+{
+    built_scene *b = calloc(1, sizeof *b);
+    if (!b) return 0;
+    build_surfaces(o, d, frame, b, -1);
+    size_t n = 0;
+    for (size_t i = 0; i < b->n && n < max; i++)
+        for (size_t s = 0; s < d->m->n_surfaces; s++)
+            if (b->rs[i].surf == d->m->surf[s]) out[n++] = b->rs[i];
+    free(b);
+    return n;
+}
+
 thx_status thx_picture_draw(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, thx_renderer *r,
                             thx_font *font, int frame, thx_raster *img, size_t *nan_total)
 {

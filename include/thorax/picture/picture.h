@@ -422,6 +422,13 @@ int thx_picture_orientation(const thx_picture_opts *o, const thx_picture_data *d
 void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4]);
 /* The camera of the standard view o->view for a viewport of aspect w/h, in the model's axes,
  * framing the surfaces drawn (o->only when given, else all). */
+/* How each of the model's surfaces is drawn at frame (0-based), as thx_picture_draw draws it: its
+ * mode, colour and opacity, the values of that frame, the data style, colour map and scale; the
+ * surfaces shown only (o->only), in the model's order (out[k].surf is the model's surface), no GL.
+ * Returns how many were written (at most max; 0 also when out of memory). The web page's exporter
+ * takes its looks from here, so that the page colours as `thorax render` does. */
+size_t thx_picture_surface_looks(const thx_picture_opts *o, thx_picture_data *d, int frame, thx_render_surface *out,
+                                 size_t max);
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);
 /* The camera of standard view `view` (a thx_view) whatever o->have_camera says (the named views of
  * a camera key file, thorax/render/camera_path.h). */
