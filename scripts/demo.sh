@@ -2,7 +2,7 @@
 # The demo (make demo): the whole pipeline on the built-in phantom, timed stage by
 # stage (one line a stage on the terminal; every command's output in OUT/demo.log),
 # and OUT/index.html, the results page (scripts/demo_report.py): the figures at a
-# glance, the 12-lead ECG on ECG paper, the electrodes on the torso, the maps, the
+# glance, the interactive page (page.html), the 12-lead ECG on ECG paper, the electrodes on the torso, the maps, the
 # volume mesh and the conductivity table, the checks and the timings.
 set -euo pipefail
 T=${THORAX:-build/bin/thorax}
@@ -53,6 +53,8 @@ stage "heartbeat (500 frames)" sh -c "'$T' beat '$O/model' -o '$O/beat.raw' > '$
 stage "forward solution (500 frames)" "$T" forward "$O/model" --epicardial "$O/beat.raw" -o "$O/solution" --currents $QRS --volume -q
 stage "12-lead ECG and its plot" "$T" leads "$O/solution" --plot "$O/ecg12.svg" -q
 R=(--solution "$O/solution" --size 800x900 --colorbar --orientation --label --trace II --only torso --only heart)
+stage "interactive page (thorax export --format html)" "$T" export --solution "$O/solution" --format html -o "$O/page.html" \
+    --only torso --only heart --size 640x720 --frame $QRS --title "thorax demo: the phantom's heartbeat" -q
 stage "anterior map" "$T" render "${R[@]}" --frame $QRS --view anterior -o "$O/anterior.png" -q
 stage "posterior map" "$T" render "${R[@]}" --frame $QRS --view posterior -o "$O/posterior.png" -q
 OPEN=(--view anterior --clip anterior:0.75 --no-clip heart)   # the chest opened, the heart whole

@@ -201,6 +201,11 @@ body surface. Colours follow the field's convention: red positive, blue negative
 <p>The phantom as a simulated CT (2 mm voxels, Hounsfield units, noise 20 HU; window 400/40), the plane
 z&nbsp;=&nbsp;100&nbsp;mm, and on it the contours <code>thorax digitize</code> traced from the phantom's label map
 (torso, fat, muscle, lungs, heart; one colour a surface): the model below is built from them.</p>
+{'<h2>The beat, interactive</h2>' if have('page.html') else ''}
+{'<p><a href="page.html"><b>Open the interactive page</b></a> (page.html, one file that opens offline in a browser): turn the torso '
+ 'with the mouse, step or play through the %d frames, hide the torso or make it translucent to see the heart, click the '
+ '12-lead ECG to go to that instant, click the torso or the heart to plot that node&apos;s signal. '
+ 'Written by <code>thorax export --solution solution --format html</code>; send it to a colleague as it is.</p>' % len(ii) if have('page.html') else ''}
 <h2>The 12-lead ECG</h2>
 {img('ecg12.svg', '12-lead ECG', 'wide')}
 <p>The standard 3 &times; 4 layout on ECG paper: 25 mm/s and 10 mm/mV, small squares 1 mm = 40 ms &times; 0.1 mV,

@@ -58,6 +58,7 @@ static const char *style_name(int s)
     switch (s) {
     case THX_DATA_BANDS: return "bands";
     case THX_DATA_CONTOURS: return "contours";
+    case THX_DATA_BANDS_CONTOURS: return "bands+contours";
     case THX_DATA_CONTINUOUS_CONTOURS: return "continuous+contours";
     default: return "continuous";
     }
@@ -76,11 +77,12 @@ static int refuse_unsupported(const page_opts *o)
                        : p->image        ? "--image"
                        : p->tetrahedra   ? "--tetrahedra"
                        : p->n_landmarks  ? "--landmarks"
-                       : p->n_labels     ? "--labels"
+                       : p->n_labels     ? "--node-labels"
+                       : p->extrema      ? "--extrema"
+                       : p->contours     ? "--contours"
                        : p->trace        ? "--trace"
                        : p->renderer     ? "--renderer trace"
                        : p->volume_render ? "--volume"
-                       : p->n_files      ? "surface files (give a model directory)"
                                          : NULL;
     if (!what) return 0;
     return cli_usage_error("export", "%s: not in the web page (it draws the model's surfaces with their potentials, the "
@@ -107,7 +109,7 @@ static size_t scale_knots(const thx_scale *sc, int levels, double *v, double *t,
     int nl = sc->model == THX_SCALE_LAB7 || sc->model == THX_SCALE_LAB13 ? thx_scale_levels(sc, levels, lv, 64) : 0;
     if (nl > 64) nl = 64;
     for (size_t k = 0; k <= samples && n < max; k++) v[n++] = lo + (hi - lo) * (double)k / (double)samples;
-    if (lo < 0 && hi > 0 && n < max) v[n++] = 0;
+    if (sc->mapping == THX_MAPPING_SEPARATE && lo < 0 && hi > 0 && n < max) v[n++] = 0; /* its bend */
     for (int k = 0; k < nl && n < max; k++)
         if (lv[k] > lo && lv[k] < hi) v[n++] = lv[k];
     /* sort (insertion: few unsorted at the end) and drop repeats */
@@ -369,7 +371,7 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     /* the description */
     char title[8400];
     if (o->title) snprintf(title, sizeof title, "%s", o->title);
-    else snprintf(title, sizeof title, "thorax: %s%s%s", d->model_dir[0] ? d->model_dir : "model",
+    else snprintf(title, sizeof title, "thorax: %s%s%s", d->model_dir[0] ? d->model_dir : p->n_files ? p->files[0] : "model",
                   p->solution ? ", solution " : "", p->solution ? p->solution : "");
     cJSON_AddStringToObject(j, "format", "thorax-page");
     cJSON_AddNumberToObject(j, "version", 1);
@@ -379,6 +381,7 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     cJSON_AddStringToObject(j, "generator", gen);
     cJSON *src = cJSON_AddObjectToObject(j, "source");
     if (d->model_dir[0]) cJSON_AddStringToObject(src, "model", d->model_dir);
+    else if (p->n_files) cJSON_AddStringToObject(src, "model", p->files[0]);
     else cJSON_AddNullToObject(src, "model");
     if (p->solution) cJSON_AddStringToObject(src, "solution", p->solution);
     else cJSON_AddNullToObject(src, "solution");
@@ -466,7 +469,11 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
         cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
         if (rs->values && k < ns && d->series[k]) {
             cJSON *jd = cJSON_AddObjectToObject(x, "data");
-            THX_TRY(surface_data(ctx, pg, d->series[k], &S[i], p->levels, 0, M, jd, &max_error));
+            THX_TRY(surface_data(ctx, pg, d->series[k], &S[i], rs->n_levels, 0, M, jd, &max_error));
+            /* the surface's data style (--surface NAME=bands...) and its bands (a lab scale's own count) */
+            cJSON *sty = cJSON_AddObjectToObject(jd, "style");
+            cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
+            cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
         } else
             cJSON_AddNullToObject(x, "data");
     }
@@ -524,8 +531,12 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     if (!(text = cJSON_PrintUnformatted(j))) { st = thx_error(ctx, THX_ENOMEM, "export: out of memory"); goto done; }
     size_t vlen = 0;
     const char *viewer = thx_web_viewer(&vlen);
-    const char *inputs[3] = {p->solution, p->model_dir, p->n_data ? p->data[0] : NULL};
-    st = thx_web_page_write(ctx, pg, out, title, text, viewer, vlen, inputs, 3, bytes);
+    const char *inputs[2 + 2 * THX_PICTURE_MAX + 1] = {p->solution, p->model_dir};
+    size_t ni = 2;
+    for (int k = 0; k < p->n_data && k < THX_PICTURE_MAX; k++) inputs[ni++] = p->data[k];
+    for (int k = 0; k < p->n_files && k < THX_PICTURE_MAX; k++) inputs[ni++] = p->files[k];
+    if (o->leads) inputs[ni++] = o->leads;
+    st = thx_web_page_write(ctx, pg, out, title, text, viewer, vlen, inputs, ni, bytes);
     *nblobs = thx_web_page_blobs(pg);
     *max_err = max_error;
     snprintf(unit, unit_size, "%s", axis && axis->unit[0] ? axis->unit : "mV");
@@ -567,7 +578,8 @@ int cli_export_page(int argc, char **argv)
     cli_command cmd = {
         .name = "export",
         .usage = "MODEL --format [--solution|--data] -o [options]\n"
-                 "--solution --format -o [options]",
+                 "--solution --format -o [options]\n"
+                 "SURFACE_FILE... --format [--data [--channels]] -o [options]",
         .about = "Writes the picture thorax render draws from the same options as one\n"
                  "self-contained web page that opens offline in a browser: the surfaces coloured\n"
                  "by the potentials (render's colour maps, scales and shading), turned with the\n"
@@ -586,7 +598,8 @@ int cli_export_page(int argc, char **argv)
     int pr = cli_parse(&cmd, argc, argv);
     if (pr) return CLI_EXIT(pr);
     o.r.frame = frame - 1;
-    if (!o.r.p.model_dir && !o.r.p.solution) return cli_usage_error("export", "no model directory or --solution given");
+    if (!o.r.p.model_dir && !o.r.p.n_files && !o.r.p.solution)
+        return cli_usage_error("export", "no model directory, surface file or --solution given");
     if (!o.r.out) return cli_usage_error("export", "no page given (-o PAGE.html)");
     if (refuse_unsupported(&o)) return 2;
     thx_ctx *ctx = cli_ctx(o.r.verbose);
