@@ -398,7 +398,8 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     cJSON_AddNumberToObject(j, "initial_frame", o->r.frame < (int)M ? o->r.frame : 0);
     double size[2] = {p->w, p->h};
     cJSON_AddItemToObject(j, "size", cJSON_CreateDoubleArray(size, 2));
-    const float bg[4] = {1, 1, 1, 1}, nan_c[4] = {0.6f, 0.4f, 0.6f, 1};
+    float bg[4], nan_c[4];
+    thx_picture_colors(bg, nan_c); /* render's */
     cJSON_AddItemToObject(j, "background", rgba(bg));
     cJSON_AddItemToObject(j, "nan_color", rgba(nan_c));
     cJSON *light = cJSON_AddObjectToObject(j, "light");

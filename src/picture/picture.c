@@ -327,6 +327,12 @@ void thx_picture_opts_default(thx_picture_opts *o)
 
 static const unsigned char BG[4] = {24, 24, 28, 255}, FG[4] = {235, 235, 235, 255};
 
+void thx_picture_colors(float background[4], float nan_color[4])
+{
+    for (int k = 0; k < 4; k++) background[k] = BG[k] / 255.0f;
+    nan_color[0] = 0.6f, nan_color[1] = 0.6f, nan_color[2] = 0.2f, nan_color[3] = 1;
+}
+
 void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int h, int vp[4])
 {
     int trace_h = o->trace ? h / 5 : 0, bar_w = o->colorbar ? (w / 6 > 96 ? w / 6 : 96) : 0;
@@ -668,14 +674,7 @@ static void panel_scene(const thx_picture_opts *o, const thx_picture_data *d, co
     sc->viewport[2] = pw;
     sc->viewport[3] = ph;
     sc->clear = 1;
-    sc->background[0] = BG[0] / 255.0f;
-    sc->background[1] = BG[1] / 255.0f;
-    sc->background[2] = BG[2] / 255.0f;
-    sc->background[3] = 1;
-    sc->nan_color[0] = 0.6f;
-    sc->nan_color[1] = 0.6f;
-    sc->nan_color[2] = 0.2f;
-    sc->nan_color[3] = 1;
+    thx_picture_colors(sc->background, sc->nan_color);
     thx_picture_camera(o, d, (double)pw / ph, &sc->camera);
 }
 

@@ -427,6 +427,8 @@ void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int 
  * surfaces shown only (o->only), in the model's order (out[k].surf is the model's surface), no GL.
  * Returns how many were written (at most max; 0 also when out of memory). The web page's exporter
  * takes its looks from here, so that the page colours as `thorax render` does. */
+/* The pictures' background and the colour of values that are not numbers (RGBA, 0..1). */
+void thx_picture_colors(float background[4], float nan_color[4]);
 size_t thx_picture_surface_looks(const thx_picture_opts *o, thx_picture_data *d, int frame, thx_render_surface *out,
                                  size_t max);
 void thx_picture_camera(const thx_picture_opts *o, const thx_picture_data *d, double aspect, thx_camera *cam);

@@ -1,0 +1,213 @@
+// The web page of `thorax export --format html` in a real browser (Debian's Chromium, headless, WebGL
+// through SwiftShader), driven by puppeteer-core through the page's test hooks (docs/design/web.md):
+//   node web_browser.mjs CONFIG.json
+// CONFIG: {"page": path, "out": dir for the screenshots and result.json,
+//          "size": [w, h], "compare": [{"frame": F (1-based), "ref": render's PNG}, ...] (optional),
+//          "series": {"SURFACE": raw series path} (optional: the picked node's plot checked against it),
+//          "pick": "SURFACE" (optional), "leads": true|false, "tolerance": channel levels (default 8),
+//          "min_match": fraction of the compared pixels within the tolerance (default 0.99)}
+// Prints one line per check and the figures; writes OUT/result.json; exit 1 on the first failure.
+import { readFileSync, writeFileSync, mkdirSync } from 'node:fs';
+import { pathToFileURL } from 'node:url';
+import puppeteer from 'puppeteer-core';
+
+const cfg = JSON.parse(readFileSync(process.argv[2], 'utf8'));
+mkdirSync(cfg.out, { recursive: true });
+const result = { page: cfg.page, checks: [] };
+const fail = (msg) => {
+    console.error('web_browser: FAIL: ' + msg);
+    result.failed = msg;
+    writeFileSync(cfg.out + '/result.json', JSON.stringify(result, null, 1));
+    process.exit(1);
+};
+const ok = (msg, fig) => {
+    console.log(msg);
+    result.checks.push(Object.assign({ check: msg }, fig || {}));
+};
+
+// a thorax raw series (THXSER01): frames x rows, as rows of Float64Array
+function readSeries(path) {
+    const b = readFileSync(path);
+    if (b.toString('latin1', 0, 8) !== 'THXSER01') fail(path + ': not a thorax raw series');
+    const n = Number(b.readBigUInt64LE(8)), m = Number(b.readBigUInt64LE(16));
+    const v = new Float64Array(b.buffer.slice(b.byteOffset + 200 + 8 * m, b.byteOffset + 200 + 8 * m + 8 * n * m));
+    return { n, m, row: (i) => Float64Array.from({ length: m }, (_, f) => v[f * n + i]) };
+}
+
+const browser = await puppeteer.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist',
+           '--force-device-scale-factor=1', '--disable-gpu-rasterization'],
+});
+try {
+    const page = await browser.newPage();
+    await page.setViewport({ width: 1400, height: 1200, deviceScaleFactor: 1 });
+    const errors = [];
+    page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+    page.on('pageerror', (e) => errors.push(String(e)));
+    const t0 = Date.now();
+    await page.goto(pathToFileURL(cfg.page).href, { waitUntil: 'load', timeout: 60000 });
+    await page.waitForFunction('window.thorax && window.thorax.ready', { timeout: 60000 });
+    await page.evaluate(() => window.thorax.ready);
+    const wall = Date.now() - t0;
+    if (errors.length) fail('the page logged errors: ' + errors.join(' | '));
+    const timings = await page.evaluate(() => window.thorax.timings);
+    const meta = await page.evaluate(() => window.thorax.meta);
+    if (!meta || meta.format !== 'thorax-page') fail('window.thorax.meta is not the page\'s description');
+    result.timings = timings;
+    ok(`opened: ${meta.frames} frames, ${meta.surfaces.length} surfaces; data decoded at ${timings.load_ms.toFixed(0)} ms, ` +
+       `first picture at ${timings.first_picture_ms.toFixed(0)} ms (${wall} ms to ready, as puppeteer saw it)`,
+       { load_ms: timings.load_ms, first_picture_ms: timings.first_picture_ms });
+
+    // the electrodes off (render draws none without --electrodes)
+    await page.evaluate(() => {
+        for (const box of document.querySelectorAll('input[type=checkbox]'))
+            if (/electrode/i.test(box.closest('label')?.textContent || '') && box.checked) box.click();
+    });
+    const [W, H] = cfg.size || meta.size;
+    await page.evaluate((w, h) => { window.thorax.setSize(w, h); window.thorax.setView(window.thorax.meta.view); }, W, H);
+
+    // screenshots against render's pictures of the same frames and camera
+    const tol = cfg.tolerance ?? 8, minMatch = cfg.min_match ?? 0.99;
+    for (const c of cfg.compare || []) {
+        const png = readFileSync(c.ref).toString('base64');
+        const s = await page.evaluate(async (f, b64, tol, W, H) => {
+            window.thorax.setFrame(f);
+            const data = window.thorax.canvasPixels(); // RGBA, top row first, the 3D view's W x H pixels
+            const px = { width: data.length === 4 * W * H ? W : null, height: data.length === 4 * W * H ? H : null, data };
+            const blob = await (await fetch('data:image/png;base64,' + b64)).blob();
+            const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+            const w = bmp.width, h = bmp.height;
+            const oc = new OffscreenCanvas(w, h), g = oc.getContext('2d');
+            g.drawImage(bmp, 0, 0);
+            const ref = g.getImageData(0, 0, w, h).data;
+            if (px.width !== w || px.height !== h) return { size: [px.width, px.height, w, h] };
+            const p = px.data;
+            // the silhouette (not the background, in either picture) and its edges: pixels within 2 of a
+            // change of silhouette in either picture are left out (antialiasing differs there)
+            const bg = [ref[0], ref[1], ref[2]];
+            const inside = (a, k) => Math.abs(a[k] - bg[0]) + Math.abs(a[k + 1] - bg[1]) + Math.abs(a[k + 2] - bg[2]) > 6;
+            const sil = new Uint8Array(w * h);
+            for (let i = 0; i < w * h; i++) sil[i] = (inside(ref, 4 * i) ? 1 : 0) | (inside(p, 4 * i) ? 2 : 0);
+            let n = 0, match = 0, maxd = 0, sum = 0, shown = 0;
+            const diff = g.createImageData(w, h);
+            for (let y = 0; y < h; y++)
+                for (let x = 0; x < w; x++) {
+                    const i = y * w + x;
+                    let edge = sil[i] === 1 || sil[i] === 2;
+                    for (let dy = -2; dy <= 2 && !edge; dy++)
+                        for (let dx = -2; dx <= 2 && !edge; dx++) {
+                            const xx = x + dx, yy = y + dy;
+                            if (xx >= 0 && yy >= 0 && xx < w && yy < h && sil[yy * w + xx] !== sil[i]) edge = true;
+                        }
+                    const k = 4 * i;
+                    const d = Math.max(Math.abs(p[k] - ref[k]), Math.abs(p[k + 1] - ref[k + 1]), Math.abs(p[k + 2] - ref[k + 2]));
+                    diff.data[k + 3] = 255;
+                    if (edge) { diff.data[k] = diff.data[k + 1] = diff.data[k + 2] = 200; continue; }
+                    n++;
+                    shown += sil[i] === 3;
+                    match += d <= tol;
+                    maxd = Math.max(maxd, d);
+                    sum += d;
+                    diff.data[k] = d > tol ? 255 : 255 - 8 * d;
+                    diff.data[k + 1] = diff.data[k + 2] = d > tol ? 0 : 255 - 8 * d;
+                }
+            g.putImageData(diff, 0, 0);
+            const dblob = await oc.convertToBlob({ type: 'image/png' });
+            const dbuf = new Uint8Array(await dblob.arrayBuffer());
+            // the page's own picture as a PNG too
+            const pc = new OffscreenCanvas(w, h), pg = pc.getContext('2d');
+            pg.putImageData(new ImageData(new Uint8ClampedArray(p), w, h), 0, 0);
+            const pbuf = new Uint8Array(await (await pc.convertToBlob({ type: 'image/png' })).arrayBuffer());
+            let b = '', q = '';
+            for (let i = 0; i < dbuf.length; i++) b += String.fromCharCode(dbuf[i]);
+            for (let i = 0; i < pbuf.length; i++) q += String.fromCharCode(pbuf[i]);
+            return { n, match, maxd, mean: n ? sum / n : 0, shown, diff: btoa(b), picture: btoa(q) };
+        }, c.frame - 1, png, tol, W, H);
+        if (s.size) fail(`frame ${c.frame}: the page's picture is ${s.size[0]}x${s.size[1]}, render's ${s.size[2]}x${s.size[3]}`);
+        writeFileSync(`${cfg.out}/page_${c.frame}.png`, Buffer.from(s.picture, 'base64'));
+        writeFileSync(`${cfg.out}/diff_${c.frame}.png`, Buffer.from(s.diff, 'base64'));
+        const frac = s.match / Math.max(1, s.n);
+        const line = `frame ${c.frame}: ${(100 * frac).toFixed(2)} % of ${s.n} pixels away from edges within ${tol}/255 of ` +
+                     `render's (${s.shown} on the surfaces; mean difference ${s.mean.toFixed(2)}, largest ${s.maxd})`;
+        if (s.shown < 0.1 * s.n) fail(`frame ${c.frame}: the surfaces cover only ${s.shown} of the compared pixels`);
+        if (frac < minMatch) fail(line + `: fewer than ${(100 * minMatch).toFixed(1)} %`);
+        ok(line, { frame: c.frame, match: frac, mean: s.mean, max: s.maxd, pixels: s.n });
+    }
+
+    // a frame step
+    const step = await page.evaluate(() => window.thorax.benchFrames(100));
+    result.frame_step_ms = step;
+    if (!(step < 16)) fail(`a frame step takes ${step.toFixed(2)} ms, not under 16 ms`);
+    ok(`a frame step: ${step.toFixed(2)} ms (mean of 100, each drawn and finished)`, { frame_step_ms: step });
+
+    // the slider, the leads' marker and a click on the leads move together
+    const M = meta.frames;
+    const slid = await page.evaluate((M) => {
+        const s = document.querySelector('input[type=range]');
+        const f = Math.floor(M * 0.37);
+        s.value = String(f);
+        s.dispatchEvent(new Event('input', { bubbles: true }));
+        return { want: f, frame: window.thorax.frame(), marker: window.thorax.marker() };
+    }, M);
+    if (slid.frame !== slid.want || slid.marker !== slid.want)
+        fail(`the slider at ${slid.want}: the page is at frame ${slid.frame}, the marker at ${slid.marker}`);
+    ok(`the slider moved to frame ${slid.want + 1}: the page and the leads' marker with it`);
+    if (meta.leads && cfg.leads !== false) {
+        const cl = await page.evaluate(() => {
+            const before = window.thorax.frame();
+            const c = window.thorax.clickLeads(200);
+            return { before, after: window.thorax.frame(), marker: window.thorax.marker(), slider: Number(document.querySelector('input[type=range]').value), c };
+        });
+        if (cl.after === cl.before || cl.marker !== cl.after || cl.slider !== cl.after)
+            fail(`a click on the leads: frame ${cl.before} -> ${cl.after}, marker ${cl.marker}, slider ${cl.slider}`);
+        ok(`a click on the leads at x = 200 moved to frame ${cl.after + 1}: the marker and the slider with it`);
+    }
+
+    // a click on a node: the node under it is picked and its series plotted
+    if (cfg.pick) {
+        if (!meta.surfaces.some((s) => s.name === cfg.pick)) fail(`no surface ${cfg.pick} in the page`);
+        const hit = await page.evaluate(async (name, W, H) => {
+            const T = window.thorax;
+            // try clicks on a grid around the middle until one picks a node of the surface
+            for (let r = 0; r < 12; r++)
+                for (let a = 0; a < 8; a++) {
+                    const x = W / 2 + r * 9 * Math.cos(a), y = H / 2 + r * 9 * Math.sin(a);
+                    const p = T.pickAt(x, y);
+                    if (p && p.surface === name) return { x, y, p };
+                }
+            return null;
+        }, cfg.pick, W, H);
+        if (!hit) fail(`no click near the middle of the view picked a node of ${cfg.pick}`);
+        const node = hit.p.node;
+        const got = await page.evaluate((name, node) => ({
+            series: Array.from(window.thorax.nodeSeries(name, node)),
+            plotted: Array.from(window.thorax.plotted()),
+        }), cfg.pick, node);
+        if (got.plotted.length !== M || got.series.length !== M) fail(`the picked node's plot has ${got.plotted.length} values, not ${M}`);
+        let worst = 0;
+        for (let f = 0; f < M; f++) worst = Math.max(worst, Math.abs(got.plotted[f] - got.series[f]));
+        if (worst > 0) fail(`the plot differs from the node's decoded series by ${worst}`);
+        let line = `a click at (${hit.x.toFixed(0)}, ${hit.y.toFixed(0)}) picked ${cfg.pick} node ${node + 1}; its plot is its series`;
+        if (cfg.series && cfg.series[cfg.pick]) {
+            const ref = readSeries(cfg.series[cfg.pick]).row(node);
+            const surf = meta.surfaces.find((s) => s.name === cfg.pick);
+            const bound = surf.data.max_error;
+            let e = 0;
+            for (let f = 0; f < M; f++) e = Math.max(e, Math.abs(got.plotted[f] - ref[f]));
+            if (!(e <= bound * (1 + 1e-6) + 1e-12)) fail(`${line}, but ${e} from the solution's (the bound ${bound})`);
+            line += `, within ${e.toExponential(2)} ${meta.unit} of the solution's (the bound ${bound.toExponential(2)})`;
+            result.pick = { surface: cfg.pick, node: node + 1, error: e, bound };
+        }
+        ok(line);
+    }
+    // the whole page as the browser shows it
+    await page.screenshot({ path: cfg.out + '/whole.png', fullPage: true });
+    if (errors.length) fail('the page logged errors: ' + errors.join(' | '));
+    ok('no errors in the console');
+} finally {
+    await browser.close();
+}
+writeFileSync(cfg.out + '/result.json', JSON.stringify(result, null, 1));
+console.log('web_browser: OK');
