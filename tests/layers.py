@@ -2,7 +2,7 @@
 """The library's layers (docs/decisions.md, "One direction"): a module uses only modules below it.
 
     level 0  core
-    level 1  model
+    level 1  model, parallel, web (the web page's blobs and file: quantization, deflate, base64)
     level 2  geom, io, image, leads
     level 3  mesh, check, digitizer (tracing on image planes: livewire, threshold regions, snap,
              interpolation; uses image and geom)
@@ -42,7 +42,7 @@ import subprocess
 import sys
 import tempfile
 
-LEVEL = {"core": 0, "model": 1, "parallel": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3, "digitizer": 3,
+LEVEL = {"core": 0, "model": 1, "parallel": 1, "web": 1, "geom": 2, "io": 2, "image": 2, "leads": 2, "mesh": 3, "check": 3, "digitizer": 3,
          "fem": 4, "bem": 4, "render": 4, "phantom": 4, "import": 4, "edit": 4, "inverse": 4, "field": 4, "raytrace": 5, "picture": 6, "capi": 6, "view": 7, "cli": 8}
 
 
