@@ -32,7 +32,7 @@ packages=(
   invesalius-examples                # tests: a real CT (InVesalius's Cranium.inv3)
   libembree-dev embree-tools         # ray tracing (RaySpray, src/raytrace): Embree 3; embree-tools' benchmark beside ours (bench/trace.sh)
   python3-opencv                     # bench: OpenCV's intelligent scissors (Mortensen & Barrett) beside our livewire (bench/digitize.sh)
-  chromium                           # tests: the web page opened in a real browser (headless, WebGL through SwiftShader; puppeteer-core drives it)
+  chromium firefox-esr               # tests: the web page opened in real browsers (headless; WebGL through SwiftShader and llvmpipe; puppeteer-core drives them)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
-# End-to-end: the web page of thorax export --format html opened in a real browser (Debian's
-# Chromium, headless, WebGL through SwiftShader), driven by puppeteer-core (pinned in
+# End-to-end: the web page of thorax export --format html opened in real browsers (Debian's
+# Chromium, headless, WebGL through SwiftShader; Firefox ESR, WebGL through Mesa's llvmpipe), driven
+# by puppeteer-core (pinned in
 # web/package-lock.json, installed by scripts/web.sh beside the bundle) through the page's test hooks
 # (tests/web_browser.mjs, docs/design/web.md):
 #  1. the medium phantom's 500-frame beat (torso and heart): the page's pictures at three frames
 #     against thorax render's of the same frames and camera, pixel by pixel away from the edges;
-#     the load and first-picture times; a frame step under 16 ms; the slider, the ECG's marker and a
+#     the load, first-picture and frame-step times printed (bench/web.sh measures them); the slider,
+#     the ECG's marker and a
 #     click on the ECG move together; a click on the torso picks a node and plots its series, equal to
 #     the solution's within the quantization bound.
 #  2. real data: the Utah tank's sock (map3d's 25feb97_sock.pts) with its recording
 #     (cool1-atdr-run1.mat through sock128.channels): the page opens without errors, draws as render
 #     does, and a picked node's plot is its series.
+#  3. the phantom's page in Firefox: the same checks.
 # Skipped (77) when Chromium or node is missing, or thorax was built without the page's viewer.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
@@ -69,4 +72,9 @@ EOF
 else
     echo "e2e_web_browser: the map3d data is not beside the checkout: the sock's page left out"
 fi
+# ---- 3. Firefox
+FIREFOX=${FIREFOX:-/usr/bin/firefox-esr}
+[ -x "$FIREFOX" ] || fail "no Firefox at $FIREFOX (scripts/deps.sh installs Debian's firefox-esr)"
+sed -e 's|"out": "[^"]*"|"out": "'"$WORK"'/firefox", "browser": "firefox"|' phantom.json > firefox.json
+FIREFOX=$FIREFOX node web_browser.mjs firefox.json || fail "the phantom's page in Firefox"
 echo "e2e_web_browser: OK"

@@ -72,6 +72,22 @@ for s in m["surfaces"]:
 print("description: size, surfaces, leads, electrodes, views and camera as asked")
 EOF
 
+# the viewer in the page is the build's bundle, byte for byte, and the bundle is reproducible: the
+# same lock and sources bundled again elsewhere give the same bytes
+BUNDLE=$(cd "$(dirname "$THORAX")/.." && pwd)/web/thorax-page.js
+[ -f "$BUNDLE" ] || fail "no bundle at $BUNDLE"
+$PY - page.html "$BUNDLE" << 'EOF' || fail "the page's viewer is not the build's bundle"
+import sys
+t, b = open(sys.argv[1], encoding="utf-8").read(), open(sys.argv[2], encoding="utf-8").read()
+i = t.rindex("<script>\n") + len("<script>\n")
+j = t.rindex("\n</script>")
+assert t[i:j] == b, "the page's last script differs from the bundle"
+print("the page's viewer: the build's bundle (%d bytes)" % len(b))
+EOF
+bash "$SRC/scripts/web.sh" again.js "$WORK/npm" || fail "scripts/web.sh"
+cmp again.js "$BUNDLE" || fail "the bundle made again differs from the build's"
+echo "the bundle made again is the same: $(sha256sum again.js | cut -c1-16)"
+
 # ---- 2. a scale per frame
 "$THORAX" export --solution sol --format html -o frame.html --only torso --scope frame -q
 $PY "$READ" frame.html torso=sol/torso.raw > frame.log || fail "frame.html read back"

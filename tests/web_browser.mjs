@@ -6,7 +6,8 @@
 //          "series": {"SURFACE": raw series path} (optional: the picked node's plot checked against it),
 //          "pick": "SURFACE" (optional), "leads": true|false, "tolerance": channel levels (default 8),
 //          "min_match": fraction of the compared pixels within the tolerance (default 0.99)}
-// Prints one line per check and the figures; writes OUT/result.json; exit 1 on the first failure.
+// Prints one line per check and the figures (times are printed, never judged: bench/web.sh measures them);
+// writes OUT/result.json; exit 1 on the first failure.
 import { readFileSync, writeFileSync, mkdirSync } from 'node:fs';
 import { pathToFileURL } from 'node:url';
 import puppeteer from 'puppeteer-core';
@@ -34,12 +35,21 @@ function readSeries(path) {
     return { n, m, row: (i) => Float64Array.from({ length: m }, (_, f) => v[f * n + i]) };
 }
 
-const browser = await puppeteer.launch({
+// Chromium: WebGL through SwiftShader; Firefox: through Mesa's llvmpipe (software GL, in the content process)
+const firefox = cfg.browser === 'firefox';
+const browser = await puppeteer.launch(firefox ? {
+    browser: 'firefox',
+    executablePath: process.env.FIREFOX || '/usr/bin/firefox-esr',
+    headless: true,
+    extraPrefsFirefox: { 'webgl.force-enabled': true, 'webgl.out-of-process': false, 'gfx.webrender.software': true },
+    env: { ...process.env, LIBGL_ALWAYS_SOFTWARE: '1', MOZ_WEBGL_FORCE_EGL: '1' },
+} : {
     executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
     headless: true,
     args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist',
            '--force-device-scale-factor=1', '--disable-gpu-rasterization'],
 });
+result.browser = (await browser.version());
 try {
     const page = await browser.newPage();
     await page.setViewport({ width: 1400, height: 1200, deviceScaleFactor: 1 });
@@ -56,9 +66,24 @@ try {
     const meta = await page.evaluate(() => window.thorax.meta);
     if (!meta || meta.format !== 'thorax-page') fail('window.thorax.meta is not the page\'s description');
     result.timings = timings;
-    ok(`opened: ${meta.frames} frames, ${meta.surfaces.length} surfaces; data decoded at ${timings.load_ms.toFixed(0)} ms, ` +
-       `first picture at ${timings.first_picture_ms.toFixed(0)} ms (${wall} ms to ready, as puppeteer saw it)`,
-       { load_ms: timings.load_ms, first_picture_ms: timings.first_picture_ms });
+    ok(`opened in ${result.browser}: ${meta.frames} frames, ${meta.surfaces.length} surfaces; the script at ` +
+       `${timings.script_ms.toFixed(0)} ms, the data decoded at ${timings.load_ms.toFixed(0)} ms, the scene made at ` +
+       `${timings.scene_ms.toFixed(0)} ms, the first picture at ${timings.first_picture_ms.toFixed(0)} ms ` +
+       `(the browser's first WebGL page; ${wall} ms to ready, as puppeteer saw it)`, { cold: timings });
+    // the same page again in a second tab: the browser's graphics already started, as a user's is
+    {
+        const again = await browser.newPage();
+        await again.setViewport({ width: 1400, height: 1200, deviceScaleFactor: 1 });
+        await again.goto(pathToFileURL(cfg.page).href, { waitUntil: 'load', timeout: 60000 });
+        await again.waitForFunction('window.thorax && window.thorax.ready', { timeout: 60000 });
+        await again.evaluate(() => window.thorax.ready);
+        const t = await again.evaluate(() => window.thorax.timings);
+        await again.close();
+        result.timings_warm = t;
+        const line = `opened again: the first picture at ${t.first_picture_ms.toFixed(0)} ms (the data decoded at ` +
+                     `${t.load_ms.toFixed(0)} ms)`;
+        ok(line, { warm: t });
+    }
 
     // the electrodes off (render draws none without --electrodes)
     await page.evaluate(() => {
@@ -139,7 +164,7 @@ try {
     // a frame step
     const step = await page.evaluate(() => window.thorax.benchFrames(100));
     result.frame_step_ms = step;
-    if (!(step < 16)) fail(`a frame step takes ${step.toFixed(2)} ms, not under 16 ms`);
+    if (!(step > 0)) fail(`benchFrames gave ${step}`);
     ok(`a frame step: ${step.toFixed(2)} ms (mean of 100, each drawn and finished)`, { frame_step_ms: step });
 
     // the slider, the leads' marker and a click on the leads move together
@@ -151,9 +176,9 @@ try {
         s.dispatchEvent(new Event('input', { bubbles: true }));
         return { want: f, frame: window.thorax.frame(), marker: window.thorax.marker() };
     }, M);
-    if (slid.frame !== slid.want || slid.marker !== slid.want)
+    if (slid.frame !== slid.want || (meta.leads && slid.marker !== slid.want))
         fail(`the slider at ${slid.want}: the page is at frame ${slid.frame}, the marker at ${slid.marker}`);
-    ok(`the slider moved to frame ${slid.want + 1}: the page and the leads' marker with it`);
+    ok(`the slider moved to frame ${slid.want + 1}: the page${meta.leads ? ' and the leads\' marker' : ''} with it`);
     if (meta.leads && cfg.leads !== false) {
         const cl = await page.evaluate(() => {
             const before = window.thorax.frame();
