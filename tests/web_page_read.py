@@ -131,7 +131,8 @@ def main():
         d = surf["data"]
         line = "%s: %d nodes, %d triangles" % (surf["name"], N, T)
         if d:
-            codes = blobs[d["values"]].reshape(M, N).astype(np.uint32)
+            Ms = 1 if surf.get("layer") else M  # a layer's data: the one frame it was made for
+            codes = blobs[d["values"]].reshape(Ms, N).astype(np.uint32)
             codes = (np.cumsum(codes, axis=0) % 65536).astype(np.uint16)  # frame deltas undone
             v = d["origin"] + codes.astype(np.float64) * d["step"]
             v[codes == 65535] = np.nan
@@ -140,13 +141,13 @@ def main():
                 fail("surface %s: max_error is not half a step" % surf["name"])
             K, F = d["knots_n"], d["scale"]["frames"]
             kn = blobs[d["knots"]]
-            if kn.size != 2 * K * F or F not in (1, M):
+            if kn.size != 2 * K * F or F not in (1, Ms):
                 fail("surface %s: knots" % surf["name"])
             for f in range(F):
                 kv = kn[2 * K * f: 2 * K * f + K]
                 if np.any(np.diff(kv) <= 0):
                     fail("surface %s: knots not ascending" % surf["name"])
-            line += ", %d frames, step %.4g %s, bound %.4g" % (M, d["step"], meta["unit"], bound)
+            line += ", %d frame%s, step %.4g %s, bound %.4g" % (Ms, "s" if Ms > 1 else " (a layer)", d["step"], meta["unit"], bound)
             if surf["name"] in compare:
                 ref = read_series(compare.pop(surf["name"]))
                 if ref.shape != v.shape:
@@ -160,6 +161,10 @@ def main():
                 worst = max(worst, err)
                 line += ", decoded within %.4g of the series (%.3f of the bound)" % (err, err / bound if bound else 0)
         print(line)
+    for k, pl in enumerate(meta.get("planes", [])):
+        if blobs[pl["texels"]].size != 4 * pl["w"] * pl["h"]:
+            fail("plane %d: %d texel bytes for %d x %d" % (k, blobs[pl["texels"]].size, pl["w"], pl["h"]))
+        print("plane %d: %d x %d texels" % (k, pl["w"], pl["h"]))
     if compare:
         fail("no data on surface(s) %s in the page" % ", ".join(compare))
     if leads_path:

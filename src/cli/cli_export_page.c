@@ -71,23 +71,18 @@ static int refuse_unsupported(const page_opts *o)
     const char *what = p->clip[0]        ? "--clip"
                        : p->panels       ? "--panels"
                        : p->arrows       ? "--arrows"
-                       : p->isosurface   ? "--isosurface"
-                       : p->n_slices     ? "--slice"
-                       : p->n_streamlines ? "--streamlines"
-                       : p->image        ? "--image"
                        : p->tetrahedra   ? "--tetrahedra"
                        : p->n_landmarks  ? "--landmarks"
                        : p->n_labels     ? "--node-labels"
                        : p->extrema      ? "--extrema"
-                       : p->contours     ? "--contours"
                        : p->trace        ? "--trace"
                        : p->renderer     ? "--renderer trace"
                        : p->volume_render ? "--volume"
                                          : NULL;
     if (!what) return 0;
     return cli_usage_error("export", "%s: not in the web page (it draws the model's surfaces with their potentials, the "
-                           "leads, a picked node's signal and the electrodes; --trace's leads are the page's own plot)",
-                           what);
+                           "leads, a picked node's signal, the electrodes, and the equipotentials, slices, streamlines and "
+                           "scan planes of the frame shown first; --trace's leads are the page's own plot)", what);
 }
 
 /* The knots of t(v) for a scale: exact for linear scales (their ends, and zero where a separate
@@ -184,13 +179,13 @@ static thx_status surface_geometry(thx_ctx *ctx, thx_web_page *pg, const thx_sur
 }
 
 /* A surface's data: the codes, the range, the scales' knots, the colour bar's ticks. */
-static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const thx_series *x, const scales *S, int levels,
-                               int cmap, size_t frames, cJSON *jd, double *max_error)
+static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const double *v, size_t n_rows, size_t n_frames,
+                               const scales *S, int levels, int cmap, cJSON *jd, double *max_error)
 {
     thx_web_quant q;
-    THX_CHECK(thx_web_quantize(ctx, x->v, x->n_rows, x->n_frames, &q));
+    THX_CHECK(thx_web_quantize(ctx, v, n_rows, n_frames, &q));
     thx_status st = THX_OK;
-    double err = thx_web_quant_error(&q, x->v);
+    double err = thx_web_quant_error(&q, v);
     if (!(err <= q.step / 2 * (1 + 1e-9) + 1e-300))
         st = thx_error(ctx, THX_EINTERNAL, "export: the quantized values are %g from the data, more than half a step (%g)",
                        err, q.step / 2);
@@ -212,7 +207,6 @@ static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const thx_series 
     cJSON_AddNumberToObject(jd, "colormap", cmap);
     *max_error = fmax(*max_error, q.step / 2);
     thx_web_quant_free(&q);
-    (void)frames;
     /* the scales: knots for each */
     enum { KMAX = 1100 };
     double *kv = malloc(KMAX * sizeof *kv), *kt = malloc(KMAX * sizeof *kt);
@@ -315,6 +309,24 @@ static thx_status leads_of(thx_ctx *ctx, const page_opts *o, const thx_picture_d
     return thx_electrodes_sample(ctx, *elec, outer_series, out);
 }
 
+/* The page's index of colour map c, its table added at its first use. */
+static thx_status colormap_index(thx_ctx *ctx, thx_web_page *pg, cJSON *cms, thx_colormap c, int *index, int *n, int *out)
+{
+    int k = (int)c >= 0 && (int)c < 64 ? (int)c : 0;
+    if (index[k] < 0) {
+        unsigned char table[3 * CMAP_N];
+        thx_colormap_table((thx_colormap)k, CMAP_N, table);
+        cJSON *cm = cJSON_CreateObject();
+        cJSON_AddItemToArray(cms, cm);
+        cJSON_AddStringToObject(cm, "name", thx_colormap_name((thx_colormap)k));
+        cJSON_AddNumberToObject(cm, "n", CMAP_N);
+        THX_CHECK(blob(ctx, pg, "uint8", table, 3 * CMAP_N, 1, cm, "blob"));
+        index[k] = (*n)++;
+    }
+    *out = index[k];
+    return THX_OK;
+}
+
 static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const char *out, size_t *bytes, size_t *nblobs,
                         double *max_err, char *unit, size_t unit_size)
 {
@@ -413,14 +425,11 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     const float black[4] = {0, 0, 0, 1};
     cJSON_AddItemToObject(style, "contour_color", rgba(black));
     cJSON_AddNumberToObject(style, "line_width", 1.5);
-    /* the colour map of the data (one: render draws every surface with the picture's) */
-    unsigned char table[3 * CMAP_N];
-    thx_colormap_table((thx_colormap)p->cmap, CMAP_N, table);
-    cJSON *cms = cJSON_AddArrayToObject(j, "colormaps"), *cm = cJSON_CreateObject();
-    cJSON_AddItemToArray(cms, cm);
-    cJSON_AddStringToObject(cm, "name", thx_colormap_name((thx_colormap)p->cmap));
-    cJSON_AddNumberToObject(cm, "n", CMAP_N);
-    THX_TRY(blob(ctx, pg, "uint8", table, 3 * CMAP_N, 1, cm, "blob"));
+    /* the colour maps, each once, in the order the surfaces first use them */
+    cJSON *cms = cJSON_AddArrayToObject(j, "colormaps");
+    int cmap_index[64];
+    for (int k = 0; k < 64; k++) cmap_index[k] = -1;
+    int n_cmaps = 0;
     /* the cameras: render's at the page's size, and every standard view's with its extents (the camera
        for another aspect w/h is the same with height = 1.1 max(ev, eh / aspect)) */
     thx_camera cam;
@@ -470,13 +479,82 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
         cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
         if (rs->values && k < ns && d->series[k]) {
             cJSON *jd = cJSON_AddObjectToObject(x, "data");
-            THX_TRY(surface_data(ctx, pg, d->series[k], &S[i], rs->n_levels, 0, M, jd, &max_error));
+            int ci;
+            THX_TRY(colormap_index(ctx, pg, cms, rs->cmap, cmap_index, &n_cmaps, &ci));
+            int map = d->map[k][d->active[k]]; /* 1 activation, 2 recovery times */
+            double err = 0;
+            THX_TRY(surface_data(ctx, pg, d->series[k]->v, d->series[k]->n_rows, d->series[k]->n_frames, &S[i],
+                                 rs->n_levels, ci, jd, map ? &err : &max_error));
+            cJSON_AddStringToObject(jd, "quantity", map == 1 ? "activation" : map == 2 ? "recovery" : "potential");
+            cJSON_AddStringToObject(jd, "unit", d->series[k]->unit[0] ? d->series[k]->unit : "mV");
             /* the surface's data style (--surface NAME=bands...) and its bands (a lab scale's own count) */
             cJSON *sty = cJSON_AddObjectToObject(jd, "style");
             cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
             cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
         } else
             cJSON_AddNullToObject(x, "data");
+    }
+    /* the layers, made for the frame shown first: the volume's cuts (equipotentials, slices,
+       streamlines) and the scan's contour lines as surfaces whose data has that one frame, and the
+       scan's planes as textured rectangles */
+    int f0 = o->r.frame < (int)M ? o->r.frame : 0;
+    thx_render_surface lay[16];
+    size_t nlay = 0, npl = 0;
+    const thx_render_plane *pl = NULL;
+    THX_TRY(thx_picture_layers(ctx, p, d, f0, lay, 16, &nlay, &pl, &npl));
+    for (size_t i = 0; i < nlay; i++) {
+        const thx_render_surface *rs = &lay[i];
+        const thx_surface *s = rs->surf;
+        cJSON *x = cJSON_CreateObject();
+        cJSON_AddItemToArray(jsurf, x);
+        cJSON_AddStringToObject(x, "name", s->name);
+        cJSON_AddStringToObject(x, "role", "layer");
+        cJSON_AddNumberToObject(x, "nodes", (double)s->n_nodes);
+        cJSON_AddNumberToObject(x, "triangles", (double)s->n_tris);
+        THX_TRY(surface_geometry(ctx, pg, s, x));
+        cJSON_AddStringToObject(x, "mode", mode_name(rs->mode));
+        float c[4] = {rs->color[0], rs->color[1], rs->color[2], 1};
+        cJSON_AddItemToObject(x, "color", rgba(c));
+        cJSON_AddBoolToObject(x, "visible", rs->mode != THX_DRAW_HIDDEN);
+        cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
+        if (rs->line_width > 0) cJSON_AddNumberToObject(x, "line_width", rs->line_width);
+        cJSON *jl = cJSON_AddObjectToObject(x, "layer");
+        cJSON_AddNumberToObject(jl, "frame", f0);
+        cJSON_AddNumberToObject(jl, "time", axis ? axis->time[f0] : 0);
+        if (rs->values) {
+            cJSON *jd = cJSON_AddObjectToObject(x, "data");
+            int ci;
+            scales one = {(thx_scale *)&rs->scale, 1};
+            THX_TRY(colormap_index(ctx, pg, cms, rs->cmap, cmap_index, &n_cmaps, &ci));
+            int current = 0;
+            for (int q = 0; q < 3; q++)
+                if (s == &d->field_surf[q]) current = d->field_current[q];
+            double err = 0;
+            THX_TRY(surface_data(ctx, pg, rs->values, s->n_nodes, 1, &one, rs->n_levels, ci, jd, current ? &err : &max_error));
+            /* the units render's colour bar gives them (src/picture/picture.c) */
+            const char *vu = d->volume && d->volume->unit[0] ? d->volume->unit : current ? "unit" : "mV";
+            char lunit[32];
+            snprintf(lunit, sizeof lunit, current ? "A/m^2 per %.4s" : "%.15s", vu);
+            cJSON_AddStringToObject(jd, "quantity", current ? "|J|" : "potential");
+            cJSON_AddStringToObject(jd, "unit", lunit);
+            cJSON *sty = cJSON_AddObjectToObject(jd, "style");
+            cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
+            cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
+        } else
+            cJSON_AddNullToObject(x, "data");
+    }
+    cJSON *jpl = cJSON_AddArrayToObject(j, "planes");
+    for (size_t k = 0; k < npl; k++) {
+        cJSON *x = cJSON_CreateObject();
+        cJSON_AddItemToArray(jpl, x);
+        cJSON_AddNumberToObject(x, "w", pl[k].w);
+        cJSON_AddNumberToObject(x, "h", pl[k].h);
+        THX_TRY(blob(ctx, pg, "uint8", pl[k].rgba, 4 * (size_t)pl[k].w * (size_t)pl[k].h, 1, x, "texels"));
+        cJSON_AddItemToObject(x, "origin", vec3(pl[k].origin));
+        cJSON_AddItemToObject(x, "u", vec3(pl[k].u));
+        cJSON_AddItemToObject(x, "v", vec3(pl[k].v));
+        cJSON_AddBoolToObject(x, "nearest", pl[k].nearest);
+        cJSON_AddNumberToObject(x, "frame", f0);
     }
     cJSON *jq = cJSON_AddObjectToObject(j, "quantization");
     cJSON_AddNumberToObject(jq, "bits", 16);

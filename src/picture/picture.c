@@ -828,6 +828,22 @@ thx_status thx_picture_annotate(thx_ctx *ctx, const thx_picture_opts *o, thx_pic
     return THX_OK;
 }
 
+thx_status thx_picture_layers(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame,
+                              thx_render_surface *out, size_t max, size_t *n, const thx_render_plane **planes,
+                              size_t *n_planes)
+{
+    *n = 0;
+    *planes = NULL;
+    *n_planes = 0;
+    THX_CHECK(picture_field_build(ctx, o, d, frame));
+    THX_CHECK(picture_scan_build(ctx, o, d));
+    *n = picture_field_surfaces(o, d, out, max);
+    *n += picture_scan_surfaces(d, out + *n, max - *n);
+    *planes = d->scan_plane;
+    *n_planes = (size_t)d->n_scan_planes;
+    return THX_OK;
+}
+
 size_t thx_picture_surface_looks(const thx_picture_opts *o, thx_picture_data *d, int frame, thx_render_surface *out,
                                  size_t max)
 {

@@ -427,6 +427,13 @@ void thx_picture_viewport(const thx_picture_opts *o, thx_font *font, int w, int 
  * surfaces shown only (o->only), in the model's order (out[k].surf is the model's surface), no GL.
  * Returns how many were written (at most max; 0 also when out of memory). The web page's exporter
  * takes its looks from here, so that the page colours as `thorax render` does. */
+/* What thx_picture_draw adds to the model's surfaces at frame (0-based), made for that frame: the
+ * volume's cuts (surfaces named "equipotentials", "slices", "streamlines", with their values, scales
+ * and colour maps) and the scan's contour lines, up to max into out (*n of them), and the scan's
+ * planes (*planes: d's, *n_planes of them). Valid until the next draw or layers call. */
+thx_status thx_picture_layers(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d, int frame,
+                              thx_render_surface *out, size_t max, size_t *n, const thx_render_plane **planes,
+                              size_t *n_planes);
 /* The pictures' background and the colour of values that are not numbers (RGBA, 0..1). */
 void thx_picture_colors(float background[4], float nan_color[4]);
 size_t thx_picture_surface_looks(const thx_picture_opts *o, thx_picture_data *d, int frame, thx_render_surface *out,
