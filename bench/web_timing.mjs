@@ -1,0 +1,37 @@
+// bench/web.sh's browser side: opens a thorax page RUNS times in a fresh browser (Chromium through
+// SwiftShader, or Firefox through llvmpipe), and prints one JSON line a run: the first picture in the
+// browser's first WebGL page (cold) and in a second tab (warm), and the mean frame step over 200 steps
+// (each drawn and finished), at the 3D view's size W x H.
+//   node web_timing.mjs PAGE.html chromium|firefox RUNS W H
+import puppeteer from 'puppeteer-core';
+import { pathToFileURL } from 'node:url';
+const [page, which, runs, W, H] = process.argv.slice(2);
+const launch = which === 'firefox' ? {
+    browser: 'firefox', executablePath: '/usr/bin/firefox-esr', headless: true,
+    extraPrefsFirefox: { 'webgl.force-enabled': true, 'webgl.out-of-process': false, 'gfx.webrender.software': true },
+    env: { ...process.env, LIBGL_ALWAYS_SOFTWARE: '1', MOZ_WEBGL_FORCE_EGL: '1' },
+} : {
+    executablePath: '/usr/bin/chromium', headless: true,
+    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist'],
+};
+async function open(b) {
+    const p = await b.newPage();
+    await p.setViewport({ width: 1400, height: 1200, deviceScaleFactor: 1 });
+    await p.goto(pathToFileURL(page).href, { waitUntil: 'load', timeout: 60000 });
+    await p.waitForFunction('window.thorax && window.thorax.ready', { timeout: 60000 });
+    await p.evaluate(() => window.thorax.ready);
+    return p;
+}
+for (let r = 0; r < Number(runs); r++) {
+    const b = await puppeteer.launch(launch);
+    const p1 = await open(b);
+    const cold = await p1.evaluate(() => window.thorax.timings);
+    await p1.close();
+    const p2 = await open(b);
+    const warm = await p2.evaluate(() => window.thorax.timings);
+    const step = await p2.evaluate((w, h) => { window.thorax.setSize(w, h); window.thorax.benchFrames(20); return window.thorax.benchFrames(200); },
+                                   Number(W), Number(H));
+    console.log(JSON.stringify({ browser: await b.version(), cold: cold.first_picture_ms, cold_decoded: cold.load_ms,
+                                 warm: warm.first_picture_ms, warm_decoded: warm.load_ms, step }));
+    await b.close();
+}
