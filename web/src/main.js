@@ -62,6 +62,7 @@ class App {
         this.drawPending = false;
         this.view3d = new View3D(ui.canvas, meta, blobs, series);
         this.electrodesOn = true;
+        this.planesOn = true;
         this.nearestNormals = this.electrodeNormals(blobs);
         this.letterColor();
         this.wire();
@@ -69,11 +70,37 @@ class App {
             ? new LeadsPlot(ui.leadsCanvas, this.leads, this.time, meta.time_unit || '', meta.leads.unit || meta.unit || '', (f) => this.setFrame(f))
             : null;
         this.nodePlot = new NodePlot(ui.nodeCanvas, this.time, meta.time_unit || '', meta.unit || '', (f) => this.setFrame(f));
-        this.bars = meta.surfaces
-            .map((s, i) => ({ s, i }))
-            .filter(({ s, i }) => s.data && series[i] && s.mode !== 'hidden')
-            .map(({ s, i }) => ({ index: i, canvas: ui.bars.appendChild(document.createElement('canvas')) }));
+        this.bars = this.colorBars();
         this.renderPicked();
+    }
+
+    // The colour bars, one per distinct scale as render's (src/picture/picture.c collect_bars): the
+    // surfaces with data (layers too) sharing colour map, quantity, unit, style and scale share a bar
+    // titled with their names.
+    colorBars() {
+        const bars = [], byKey = new Map();
+        this.meta.surfaces.forEach((s, i) => {
+            const d = s.data, ser = this.series[i];
+            if (!d || !ser || s.mode === 'hidden') return;
+            const style = Object.assign({}, this.meta.style, d.style); // the surface's own style first
+            const bands = style.kind === 'bands' || style.kind === 'bands+contours';
+            const key = JSON.stringify([d.colormap, d.quantity || '', this.dataUnit(s), bands, bands ? style.levels : 0,
+                d.scale || null, Array.from(ser.knots), d.ticks || []]);
+            const b = byKey.get(key);
+            if (b) {
+                b.names.push(s.name);
+                return;
+            }
+            const bar = { index: i, names: [s.name], bands, levels: style.levels, canvas: this.ui.bars.appendChild(document.createElement('canvas')) };
+            byKey.set(key, bar);
+            bars.push(bar);
+        });
+        return bars;
+    }
+
+    // A surface's data's unit (META.unit for pages without data.unit).
+    dataUnit(s) {
+        return (s.data && s.data.unit) || this.meta.unit || '';
     }
 
     // An electrode's name is dimmed when the electrode faces away from the viewer: the normal of
@@ -83,6 +110,7 @@ class App {
         return (this.meta.electrodes || []).map((e) => {
             let best = tol * tol, n = null, surf = -1;
             this.meta.surfaces.forEach((s, si) => {
+                if (s.layer) return; // the model's surfaces only
                 const p = blobs[s.points], nr = blobs[s.normals];
                 for (let i = 0; i < s.nodes; i++) {
                     const dx = p[3 * i] - e.position[0], dy = p[3 * i + 1] - e.position[1], dz = p[3 * i + 2] - e.position[2];
@@ -118,6 +146,7 @@ class App {
             op.addEventListener('input', () => this.setSurface(i, { opacity: Number(op.value) }));
         });
         if (ui.electrodes) ui.electrodes.addEventListener('change', () => this.setElectrodes(ui.electrodes.checked));
+        if (ui.scanPlane) ui.scanPlane.addEventListener('change', () => this.setPlanes(ui.scanPlane.checked));
         for (const [name, b] of Object.entries(ui.viewButtons)) b.addEventListener('click', () => this.setView(name));
         ui.reset.addEventListener('click', () => this.setView(this.initialView()));
         ui.slider.addEventListener('input', () => this.setFrame(Number(ui.slider.value)));
@@ -273,6 +302,13 @@ class App {
         this.requestDraw();
     }
 
+    setPlanes(on) {
+        this.planesOn = on;
+        if (this.ui.scanPlane) this.ui.scanPlane.checked = on;
+        this.view3d.setPlanesVisible(on);
+        this.requestDraw();
+    }
+
     surfaceIndex(s) {
         if (typeof s === 'number' && s >= 0 && s < this.meta.surfaces.length) return s;
         const i = this.meta.surfaces.findIndex((q) => q.name === s);
@@ -284,6 +320,12 @@ class App {
         if (name === 'electrodes' && !this.meta.surfaces.some((q) => q.name === name)) {
             // Not a surface: the electrodes' layer (its checkbox), so that tests can hide it.
             if (visible !== undefined) this.setElectrodes(!!visible);
+            if (now) this.drawNow();
+            return;
+        }
+        if (name === 'scan plane' && !this.meta.surfaces.some((q) => q.name === name)) {
+            // Not a surface either: the scan's planes (their checkbox).
+            if (visible !== undefined) this.setPlanes(!!visible);
             if (now) this.drawNow();
             return;
         }
@@ -307,9 +349,9 @@ class App {
         const series = this.series[hit.surface];
         this.picked = { surface: hit.surface, node: hit.node, values: series ? series.nodeSeries(hit.node) : null };
         this.view3d.setMark(hit.surface, hit.node);
-        const title = `${s.name} node ${hit.node + 1} (1-based)`;
-        this.nodePlot.setSeries(this.picked.values, series ? title : null);
-        if (!series) this.nodePlot.setSeries(null, '');
+        const title = `${s.name} node ${hit.node + 1} (1-based)` + (s.data && s.data.quantity ? `: ${s.data.quantity}` : '');
+        if (series) this.nodePlot.setSeries(this.picked.values, title, this.dataUnit(s));
+        else this.nodePlot.setSeries(null, '');
         this.renderPicked();
         this.drawNow();
         return { surface: s.name, node: hit.node };
@@ -324,7 +366,7 @@ class App {
         const s = this.meta.surfaces[p.surface];
         const v = p.values ? p.values[this.frame] : NaN;
         el.textContent = `${s.name} node ${p.node + 1} (1-based)` +
-            (p.values ? `: ${Number.isNaN(v) ? 'no value' : fmtG(v, 4) + ' ' + (this.meta.unit || '')}` : ': no data');
+            (p.values ? `: ${Number.isNaN(v) ? 'no value' : fmtG(v, 4) + ' ' + this.dataUnit(s)}` : ': no data');
     }
 
     nodeSeries(surface, node) {
@@ -361,17 +403,17 @@ class App {
         const many = this.bars.length > 1;
         for (const b of this.bars) {
             const s = this.meta.surfaces[b.index], d = s.data, cm = this.meta.colormaps[d.colormap];
-            const style = Object.assign({}, this.meta.style, d.style); // the surface's own style first
             drawColorBar(b.canvas, {
                 rgb: this.cmapBytes[d.colormap],
                 n: cm.n,
                 series: this.series[b.index],
-                frame: this.frame,
+                frame: s.layer ? 0 : this.frame, // a layer's one scale
                 ticks: d.ticks,
-                bands: style.kind === 'bands' || style.kind === 'bands+contours',
-                levels: style.levels,
-                unit: this.meta.unit || '',
-                title: many ? s.name : '',
+                bands: b.bands,
+                levels: b.levels,
+                quantity: d.quantity || '',
+                unit: this.dataUnit(s),
+                title: many ? b.names.join(', ') : '',
                 height: Math.min(320, Math.round(this.h * 0.7 / this.bars.length)),
             });
         }
@@ -468,7 +510,8 @@ async function start() {
         ui = buildUI(root, meta);
         const blobs = await decodeBlobs(document, meta);
         const M = meta.frames;
-        const series = meta.surfaces.map((s) => (s.data ? new Series(s.data, blobs, M, s.nodes) : null));
+        // A layer's data has one frame (it was made for frame s.layer.frame).
+        const series = meta.surfaces.map((s) => (s.data ? new Series(s.data, blobs, s.layer ? 1 : M, s.nodes) : null));
         hooks.timings.load_ms = performance.now();
         buildMain(ui, meta);
         app = new App(ui, meta, blobs, series);

@@ -259,9 +259,11 @@ export class NodePlot extends TracePlot {
         this.title = '';
     }
 
-    setSeries(values, title) {
+    // The series (or null), its title and its unit (the picked surface's data's).
+    setSeries(values, title, unit) {
         this.values = values;
         this.title = title;
+        if (unit !== undefined) this.unit = unit;
         if (this.w) this.layout(this.w);
     }
 
@@ -292,10 +294,16 @@ export class NodePlot extends TracePlot {
 }
 
 // The colour bar: the colour map as render reads it (linear between texels, banded for the bands
-// styles), its ticks at their t, labelled, and the unit.
-export function drawColorBar(canvas, { rgb, n, series, frame, ticks, bands, levels, unit, title, height }) {
-    const barW = 16, w = 78, top = title ? 34 : 20, bottom = 10;
-    const h = Math.max(80, height);
+// styles), its ticks at their t, labelled; above it, as render's, the surfaces it is for (title,
+// when there are several bars), what is shown (quantity) and the unit.
+export function drawColorBar(canvas, { rgb, n, series, frame, ticks, bands, levels, quantity, unit, title, height }) {
+    const head = [title, quantity, unit ? `(${unit})` : ''].filter(Boolean);
+    const barW = 16, lineH = 13, top = 8 + lineH * head.length, bottom = 10;
+    const measure = canvas.getContext('2d');
+    measure.font = FONT;
+    const textW = Math.max(0, ...head.map((t) => Math.ceil(measure.measureText(t).width) + 4));
+    const w = Math.max(78, textW);
+    const h = Math.max(80, height) + lineH * Math.max(0, head.length - 1);
     const ctx = sizeCanvas(canvas, w, h);
     const bh = h - top - bottom, x0 = 6;
     ctx.clearRect(0, 0, w, h);
@@ -333,6 +341,5 @@ export function drawColorBar(canvas, { rgb, n, series, frame, ticks, bands, leve
         ctx.fillText(fmtG(m.v, 3), x0 + barW + 6, m.y);
     }
     ctx.textBaseline = 'top';
-    if (title) ctx.fillText(title, 2, 2);
-    ctx.fillText(unit, x0, top - 15);
+    head.forEach((t, k) => ctx.fillText(t, 2, 2 + lineH * k));
 }

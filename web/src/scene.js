@@ -1,9 +1,11 @@
 // The 3D view: three.js's WebGL2 renderer drawing the surfaces with render's shader (shader.js)
-// under render's camera (camera.js), the electrodes and the picked node's mark, picking, and the
-// canvas's pixels for the tests.
+// under render's camera (camera.js), the layers (surfaces with `layer`: one frame's values, whatever
+// the frame shown), the scan's planes (planes.js), the electrodes and the picked node's mark,
+// picking (the model's surfaces only), and the canvas's pixels for the tests.
 import * as THREE from 'three';
 import { viewMatrix, projMatrix, depthRange, cameraRay, cameraFrame } from './camera.js';
 import { surfaceMaterial, setOpacity, colormapTexture, styleCode, wireGeometry } from './shader.js';
+import { makePlanes } from './planes.js';
 
 // No colour management anywhere: the colour map's bytes go to the framebuffer as they are, as in
 // render (which has no sRGB conversion).
@@ -102,7 +104,7 @@ export class View3D {
         const style = meta.style || { kind: 'continuous', levels: 10, contour_color: [0, 0, 0, 1], line_width: 1.5 };
         const light = meta.light || { ka: 0.25, kd: 0.75, ks: 0.2, shine: 40 };
         this.light = light;
-        this.lineWidth = style.line_width > 0 ? style.line_width : 1.5;
+        this.lineWidth = style.line_width > 0 ? style.line_width : 1.5; // contour lines (render's default)
         this.textures = (meta.colormaps || []).map((c) => colormapTexture(blobs[c.blob], c.n));
 
         // The surfaces.
@@ -133,6 +135,9 @@ export class View3D {
 
             const hasData = !!series[index] && s.mode !== 'hidden';
             const prim = s.mode === 'wire' ? 2 : 0;
+            // render's widths in pixels: the surface's own (line_width), else 1 for wire edges and
+            // style.line_width for contour lines.
+            const lineWidth = s.line_width > 0 ? s.line_width : prim === 2 ? 1 : this.lineWidth;
             const lightMode = prim === 2 ? 0 : LIGHT_OF_MODE[s.mode] || 2;
             const color = (s.color || [0.85, 0.85, 0.85, 1]).slice(0, 3);
             const opacity = s.opacity !== undefined ? s.opacity : s.color ? s.color[3] : 1;
@@ -145,7 +150,7 @@ export class View3D {
                 contour: style.contour_color || [0, 0, 0, 1],
                 light,
                 levels,
-                lineWidth: this.lineWidth,
+                lineWidth,
                 cmap: hasData ? this.textures[s.data.colormap] : null,
                 cmapN: hasData ? meta.colormaps[s.data.colormap].n : 1024,
             });
@@ -167,6 +172,8 @@ export class View3D {
                 name: s.name,
                 role: s.role,
                 meta: s,
+                layer: !!s.layer, // drawn with its one frame's values, never picked
+                lineWidth,
                 mesh,
                 drawn,
                 material: mat,
@@ -181,7 +188,19 @@ export class View3D {
             };
             this.surfaces.push(surf);
             this.applyVisibility(surf);
+            if (surf.layer && surf.series) this.fillSurface(surf, 0); // its one frame, once
         });
+
+        // The scan's planes, in the box as render counts them.
+        this.planes = makePlanes(meta.planes, blobs);
+        for (const p of this.planes) {
+            this.scene.add(p.mesh);
+            for (const c of p.corners)
+                for (let k = 0; k < 3; k++) {
+                    lo[k] = Math.min(lo[k], c[k]);
+                    hi[k] = Math.max(hi[k], c[k]);
+                }
+        }
 
         // The electrodes: spheres 1.2% of the box's diagonal across (at least 2 mm), as render's.
         const vb = meta.view && meta.view.box;
@@ -268,7 +287,7 @@ export class View3D {
         for (const s of this.surfaces) {
             const u = s.material.uniforms;
             // Pixels of the framebuffer: contour lines style.line_width wide, wire edges 1 (render's defaults).
-            u.u_lw.value = (s.wire ? 1 : this.lineWidth) * this.dpr;
+            u.u_lw.value = s.lineWidth * this.dpr;
             u.u_vp.value.set(gl.drawingBufferWidth, gl.drawingBufferHeight);
         }
         if (this.cam) this.setCamera(this.cam);
@@ -302,26 +321,35 @@ export class View3D {
             return d;
         };
         const tr = this.surfaces.filter((s) => s.opacity < 1).sort((a, b) => depth(b) - depth(a) || a.index - b.index);
+        for (const s of this.surfaces) s.drawn.renderOrder = 0; // the opaque ones before the planes
         tr.forEach((s, j) => (s.drawn.renderOrder = j));
     }
 
-    // Frame f's t into every surface with data: one float per node, no allocation.
+    // Frame f's t into every model surface with data: one float per node, no allocation. The
+    // layers keep their one frame.
     setFrame(f) {
         this.frame = f;
-        for (const s of this.surfaces) {
-            if (!s.series) continue;
-            s.series.fillT(f, s.tArr);
-            s.tAttr.clearUpdateRanges();
-            s.tAttr.addUpdateRange(0, s.tArr.length);
-            s.tAttr.needsUpdate = true;
-            if (s.wire) { // the edges' corners carry their nodes' t
-                const wt = s.wire.t.array, nodeOf = s.wire.nodeOf, t = s.tArr;
-                for (let j = 0; j < wt.length; j++) wt[j] = t[nodeOf[j]];
-                s.wire.t.clearUpdateRanges();
-                s.wire.t.addUpdateRange(0, wt.length);
-                s.wire.t.needsUpdate = true;
-            }
+        for (const s of this.surfaces) if (s.series && !s.layer) this.fillSurface(s, f);
+    }
+
+    // Frame f of surface s's series into its t attribute (and its wire quads').
+    fillSurface(s, f) {
+        s.series.fillT(f, s.tArr);
+        s.tAttr.clearUpdateRanges();
+        s.tAttr.addUpdateRange(0, s.tArr.length);
+        s.tAttr.needsUpdate = true;
+        if (s.wire) { // the edges' corners carry their nodes' t
+            const wt = s.wire.t.array, nodeOf = s.wire.nodeOf, t = s.tArr;
+            for (let j = 0; j < wt.length; j++) wt[j] = t[nodeOf[j]];
+            s.wire.t.clearUpdateRanges();
+            s.wire.t.addUpdateRange(0, wt.length);
+            s.wire.t.needsUpdate = true;
         }
+    }
+
+    // The scan's planes shown or not.
+    setPlanesVisible(v) {
+        for (const p of this.planes) p.mesh.visible = !!v;
     }
 
     render() {
@@ -334,8 +362,10 @@ export class View3D {
         this.gl.readPixels(0, 0, 1, 1, this.gl.RGBA, this.gl.UNSIGNED_BYTE, px);
     }
 
-    // The node under CSS pixel (x, y): the nearest corner of the first visible triangle hit
-    // (the largest barycentric weight). {surface index, node, point} or null.
+    // The node under CSS pixel (x, y): the nearest corner of the first visible triangle of a model
+    // surface hit (the largest barycentric weight). {surface index, node} or null. The layers and
+    // the planes are not picked (a click goes through them to the model's surfaces behind): a
+    // layer has one frame, the picked node's plot is a series over the frames.
     pick(x, y) {
         const ray = cameraRay(this.cam, this.width, this.height, x, y);
         if (!ray) return null;
@@ -343,7 +373,7 @@ export class View3D {
         this.raycaster.ray.direction.set(...ray.dir);
         this.raycaster.near = 0;
         this.raycaster.far = Infinity;
-        const objs = this.surfaces.filter((s) => s.drawn.visible).map((s) => s.mesh);
+        const objs = this.surfaces.filter((s) => s.drawn.visible && !s.layer).map((s) => s.mesh);
         const hits = this.raycaster.intersectObjects(objs, false);
         if (!hits.length) return null;
         const h = hits[0];

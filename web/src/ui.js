@@ -1,6 +1,7 @@
 // The page's DOM and style: plain elements, no framework. buildUI makes the skeleton inside
 // <div id="thorax"> and returns the elements main.js wires up.
 import { VIEW_NAMES } from './camera.js';
+import { fmtTime } from './format.js';
 
 const CSS = `
 .thx { font: 14px/1.4 system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif; color: #222;
@@ -83,6 +84,15 @@ export function showError(ui, message) {
     ui.error.textContent = `This page cannot be shown: ${message}`;
 }
 
+// What a layer's row says beside its name: the time it was made for (it does not follow the frame),
+// or, for a layer without data (the scan's contour lines), what it is.
+function layerNote(s, meta) {
+    if (!s.data) return s.mode === 'wire' ? '(contour lines)' : '(layer)';
+    const unit = meta.time_unit || '';
+    const t = Number.isFinite(s.layer.time) ? s.layer.time : meta.time ? meta.time[s.layer.frame] : NaN;
+    return `(at t = ${fmtTime(t)}${unit ? ' ' + unit : ''})`;
+}
+
 // The rest, once the data are in: the 3D view and its overlays, the colour bars, the controls, the
 // time bar and the plots.
 export function buildMain(ui, meta) {
@@ -98,19 +108,35 @@ export function buildMain(ui, meta) {
     const left = el('div', { class: 'thx-left' }, viewwrap);
 
     const side = el('aside', { class: 'thx-side' });
-    side.append(el('h3', { text: 'Surfaces' }));
-    const surfaces = meta.surfaces.map((s, i) => {
+    // The model's surfaces, then the layers (each made for one frame, said beside its name) and the
+    // scan's planes; ui.surfaces is indexed as META.surfaces.
+    const surfaceRow = (s) => {
         const box = el('input', { type: 'checkbox' });
         box.checked = s.visible !== false && s.mode !== 'hidden';
         if (s.mode === 'hidden') box.disabled = true;
-        const lab = el('label', {}, box, s.name, el('span', { class: 'thx-role', text: s.role && s.role !== s.name ? `(${s.role})` : '' }));
+        const note = s.layer ? layerNote(s, meta) : s.role && s.role !== s.name ? `(${s.role})` : '';
+        const lab = el('label', {}, box, s.name, el('span', { class: 'thx-role', text: note }));
+        if (s.layer) lab.title = 'A layer: drawn as it was made for that frame, whatever the frame shown';
         const op = el('input', { type: 'range', min: '0', max: '1', step: '0.01', 'aria-label': `${s.name} opacity` });
         op.value = String(s.opacity !== undefined ? s.opacity : 1);
         const opv = el('span', { text: `${Math.round(Number(op.value) * 100)}%` });
-        const row = el('div', { class: 'thx-surf' }, lab, el('div', { class: 'thx-op' }, 'opacity', op, opv));
-        side.append(row);
-        return { box, op, opv };
-    });
+        return { row: el('div', { class: 'thx-surf' }, lab, el('div', { class: 'thx-op' }, 'opacity', op, opv)), box, op, opv };
+    };
+    const surfaces = meta.surfaces.map(surfaceRow);
+    side.append(el('h3', { text: 'Surfaces' }));
+    meta.surfaces.forEach((s, i) => !s.layer && side.append(surfaces[i].row));
+    const planes = meta.planes && meta.planes.length ? meta.planes : null;
+    let scanPlane = null;
+    if (meta.surfaces.some((s) => s.layer) || planes) {
+        side.append(el('h3', { text: 'Layers' }));
+        meta.surfaces.forEach((s, i) => s.layer && side.append(surfaces[i].row));
+        if (planes) {
+            scanPlane = el('input', { type: 'checkbox' });
+            scanPlane.checked = true;
+            side.append(el('div', { class: 'thx-surf' }, el('label', {}, scanPlane, 'scan plane',
+                el('span', { class: 'thx-role', text: planes.length > 1 ? `(${planes.length} planes)` : '' }))));
+        }
+    }
     let electrodes = null;
     if (meta.electrodes && meta.electrodes.length) {
         side.append(el('h3', { text: 'Electrodes' }));
@@ -146,7 +172,7 @@ export function buildMain(ui, meta) {
         time.style.display = 'none';
     }
     left.append(time); // under the view (and the page's first range input: the frame slider)
-    const hasData = meta.surfaces.some((s) => s.data);
+    const hasData = meta.surfaces.some((s) => s.data && !s.layer); // a series over the frames to plot
 
     const plots = el('section', { class: 'thx-plots' });
     let leadsCanvas = null;
@@ -165,6 +191,6 @@ export function buildMain(ui, meta) {
         ui.root.append(el('p', { class: 'thx-note',
             text: `Values are stored with ${q.bits}-bit quantization: each is within \u00b1${q.max_error.toPrecision(3)} ${q.unit} of the solution's.` }));
     }
-    return Object.assign(ui, { main, view, canvas, letters, labels, bars, side, surfaces, electrodes, viewButtons,
+    return Object.assign(ui, { main, view, canvas, letters, labels, bars, side, surfaces, scanPlane, electrodes, viewButtons,
         reset, picked, play, slider, readout, leadsCanvas, nodeCanvas });
 }
