@@ -14,6 +14,8 @@
 #     (cool1-atdr-run1.mat through sock128.channels): the page opens without errors, draws as render
 #     does, and a picked node's plot is its series.
 #  3. the phantom's page in Firefox: the same checks.
+#  4. the layers (equipotentials, slices by potential and by |J|, the scan's plane) in both browsers
+#     against render's pictures; layers stay at their frame; clicks never pick a layer.
 # Skipped (77) when Chromium or node is missing, or thorax was built without the page's viewer.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
@@ -72,6 +74,37 @@ EOF
 else
     echo "e2e_web_browser: the map3d data is not beside the checkout: the sock's page left out"
 fi
+# ---- 4. the layers render adds, made for the frame shown first (tests/web_layers_check.mjs): volume
+# potentials of a short beat, equipotentials, a slice by potential with contour lines and by |J|, the
+# scan's plane with the contour lines on it; each page against render's picture of the same options
+"$THORAX" beat model -o short.raw --frames 40 --dt 10 -q
+"$THORAX" forward model --epicardial short.raw -o vsol --volume -q
+"$THORAX" phantom --image ct.nii.gz --voxel 3 --modality ct -q
+HIDE=(--surface torso=hidden --surface fat=hidden --surface muscle=hidden --surface lung_r=hidden --surface lung_l=hidden
+      --surface heart=hidden)
+layer_case() { # NAME OPTIONS...: the page and render's picture of the same options
+    local name=$1; shift
+    "$THORAX" export "$@" --format html -o "$name.html" -q || fail "export $name"
+    "$THORAX" render "$@" -o "$name.png" -q || fail "render $name"
+}
+layer_case iso --solution vsol --isosurface 12%,30%,70%,88% --only torso --only heart --only equipotentials --frame 20 --size 480x540
+layer_case slice --solution vsol --slice z=110 --style continuous+contours --levels 16 --only torso --only heart --only slices \
+    --surface torso=phong:0.35 --view superior --frame 20 --size 480x540
+layer_case slice_j --solution vsol --slice z=110 --slice-current --only torso --only heart --only slices --view superior --frame 20 \
+    --size 480x540
+layer_case scan model --image ct.nii.gz --image-plane z=100 "${HIDE[@]}" --view superior --size 480x400
+cp "$SRC/tests/web_layers_check.mjs" .
+for b in chromium firefox; do
+    cat > layers_$b.json << EOF
+{"out": "$WORK/layers_$b", "browser": "$b",
+ "cases": [{"name": "iso", "page": "$WORK/iso.html", "ref": "$WORK/iso.png"},
+           {"name": "slice", "page": "$WORK/slice.html", "ref": "$WORK/slice.png"},
+           {"name": "slice_j", "page": "$WORK/slice_j.html", "ref": "$WORK/slice_j.png"},
+           {"name": "scan", "page": "$WORK/scan.html", "ref": "$WORK/scan.png"}]}
+EOF
+    CHROMIUM=$CHROMIUM FIREFOX=${FIREFOX:-/usr/bin/firefox-esr} node web_layers_check.mjs layers_$b.json || fail "the layers in $b"
+done
+
 # ---- 3. Firefox
 FIREFOX=${FIREFOX:-/usr/bin/firefox-esr}
 [ -x "$FIREFOX" ] || fail "no Firefox at $FIREFOX (scripts/deps.sh installs Debian's firefox-esr)"

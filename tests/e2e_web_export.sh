@@ -6,7 +6,8 @@
 #  1. the medium phantom, the 500 frames of the beat, forward to the torso, the 12-lead ECG: a page of
 #     the torso and the heart; the same bytes twice; under 5 MB.
 #  2. --scope frame: a scale per frame in the page.
-#  3. refusals: options the page cannot show (exit 2), a file thorax did not write (exit 1,
+#  3. refusals: options the page cannot show (exit 2), a layer the solution cannot give (exit 1), a
+#     file thorax did not write (exit 1,
 #     untouched), a page without -o (exit 2); nothing left behind.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
@@ -100,7 +101,8 @@ print('--scope frame: a scale for each of the 500 frames')" || fail "--scope fra
 
 # ---- 3. refusals
 refused 2 "--clip" "not in the web page" "$THORAX" export --solution sol --format html -o r1.html --clip anterior
-refused 2 "--isosurface" "not in the web page" "$THORAX" export --solution sol --format html -o r2.html --isosurface 5
+refused 2 "--arrows" "not in the web page" "$THORAX" export --solution sol --format html -o r2.html --arrows
+refused 1 "--isosurface without volume potentials" "isosurface" "$THORAX" export --solution sol --format html -o r2.html --isosurface 5
 refused 2 "no -o" "no page given" "$THORAX" export --solution sol --format html
 echo "my own notes" > notes.html
 refused 1 "a file thorax did not write" "notes.html" "$THORAX" export --solution sol --format html -o notes.html

@@ -11,6 +11,7 @@ import { fmtG, fmtTime } from './format.js';
 
 const PLAY_FPS = 30; // frames of the series per second when playing
 const DRAG_SLOP = 4; // CSS pixels a press may move and still be a click
+const SETTLE_MS = 150; // a software rasterizer's picture is smoothed (FXAA) once still this long
 
 let resolveReady, rejectReady;
 const ready = new Promise((res, rej) => {
@@ -62,7 +63,6 @@ class App {
         this.drawPending = false;
         this.view3d = new View3D(ui.canvas, meta, blobs, series);
         this.electrodesOn = true;
-        this.planesOn = true;
         this.nearestNormals = this.electrodeNormals(blobs);
         this.letterColor();
         this.wire();
@@ -303,7 +303,6 @@ class App {
     }
 
     setPlanes(on) {
-        this.planesOn = on;
         if (this.ui.scanPlane) this.ui.scanPlane.checked = on;
         this.view3d.setPlanesVisible(on);
         this.requestDraw();
@@ -458,17 +457,28 @@ class App {
 
     // ---------------------------------------------------------------- drawing
 
+    // A frame step (playing, the slider, turning, zooming): drawn at the next animation frame, as it
+    // is; on a software rasterizer drawn again smoothed (render's FXAA) once nothing has changed for
+    // SETTLE_MS.
     requestDraw() {
         if (this.drawPending) return;
         this.drawPending = true;
         requestAnimationFrame(() => {
-            if (this.drawPending) this.drawNow();
+            if (this.drawPending) this.drawNow(false);
         });
     }
 
-    drawNow() {
+    // Draws now: smoothed (the picture to keep), or as a frame step with the smoothed one to follow.
+    drawNow(smooth = true) {
         this.drawPending = false;
-        this.view3d.render();
+        clearTimeout(this.settleTimer);
+        this.settleTimer = null;
+        this.view3d.render(smooth);
+        if (!smooth && this.view3d.fxaa)
+            this.settleTimer = setTimeout(() => {
+                this.settleTimer = null;
+                if (!this.view3d.smoothed && !this.drawPending) this.drawNow(true);
+            }, SETTLE_MS);
     }
 
     canvasPixels() {
@@ -476,12 +486,14 @@ class App {
         return this.view3d.pixels().data;
     }
 
-    // Mean milliseconds per frame step over n steps, each drawn and waited for.
+    // Mean milliseconds per frame step over n steps, each drawn as while playing and waited for
+    // (on a software rasterizer unsmoothed; the picture is smoothed once still).
     benchFrames(n) {
         n = Math.max(1, Math.round(n));
         const t0 = performance.now();
         for (let i = 0; i < n; i++) {
-            this.setFrame((this.frame + 1) % this.M, true);
+            this.setFrame((this.frame + 1) % this.M);
+            this.drawNow(false);
             this.view3d.finish();
         }
         return (performance.now() - t0) / n;

@@ -6,6 +6,7 @@ import * as THREE from 'three';
 import { viewMatrix, projMatrix, depthRange, cameraRay, cameraFrame } from './camera.js';
 import { surfaceMaterial, setOpacity, colormapTexture, styleCode, wireGeometry } from './shader.js';
 import { makePlanes } from './planes.js';
+import { Fxaa } from './fxaa.js';
 
 // No colour management anywhere: the colour map's bytes go to the framebuffer as they are, as in
 // render (which has no sRGB conversion).
@@ -83,6 +84,8 @@ export class View3D {
         }
         this.canvas = canvas;
         this.gl = gl;
+        // One sample: smoothed as render smooths its single-sampled picture (FXAA, fxaa.js).
+        this.fxaa = this.multisampled ? null : new Fxaa(this.renderer);
         this.renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
         this.renderer.toneMapping = THREE.NoToneMapping;
         this.renderer.sortObjects = true;
@@ -284,9 +287,10 @@ export class View3D {
         this.renderer.setPixelRatio(this.dpr);
         this.renderer.setSize(this.width, this.height, true);
         const gl = this.gl;
+        if (this.fxaa) this.fxaa.setSize(gl.drawingBufferWidth, gl.drawingBufferHeight);
         for (const s of this.surfaces) {
             const u = s.material.uniforms;
-            // Pixels of the framebuffer: contour lines style.line_width wide, wire edges 1 (render's defaults).
+            // Pixels of the framebuffer: the surface's line width (its contour lines', or its wire edges').
             u.u_lw.value = s.lineWidth * this.dpr;
             u.u_vp.value.set(gl.drawingBufferWidth, gl.drawingBufferHeight);
         }
@@ -352,8 +356,13 @@ export class View3D {
         for (const p of this.planes) p.mesh.visible = !!v;
     }
 
-    render() {
-        this.renderer.render(this.scene, this.camera);
+    // Draws the scene: multisampled on a GPU; with one sample, smoothed by render's FXAA when
+    // `smooth` (a picture kept: the tests', the one shown once the view is still), else as it is (a
+    // frame step while playing, dragging or turning: FXAA would double a software rasterizer's frame).
+    render(smooth = true) {
+        if (this.fxaa && smooth) this.fxaa.render(this.scene, this.camera);
+        else this.renderer.render(this.scene, this.camera);
+        this.smoothed = !!this.fxaa && smooth;
     }
 
     // Waits for the GPU (a one-pixel read).
