@@ -4,12 +4,14 @@
 // CONFIG: {"page": path, "out": dir for the screenshots and result.json,
 //          "size": [w, h], "compare": [{"frame": F (1-based), "ref": render's PNG}, ...] (optional),
 //          "series": {"SURFACE": raw series path} (optional: the picked node's plot checked against it),
-//          "pick": "SURFACE" (optional), "leads": true|false, "tolerance": channel levels (default 8),
+//          "picks": [{"surface": S, "hide": [surfaces hidden for the click]}] or "pick": S (optional),
+//          "leads": true|false, "tolerance": channel levels (default 8),
 //          "min_match": fraction of the compared pixels within the tolerance (default 0.99)}
 // Prints one line per check and the figures (times are printed, never judged: bench/web.sh measures them);
 // writes OUT/result.json; exit 1 on the first failure.
 import { readFileSync, writeFileSync, mkdirSync } from 'node:fs';
 import { pathToFileURL } from 'node:url';
+import { inflateRawSync } from 'node:zlib';
 import puppeteer from 'puppeteer-core';
 
 const cfg = JSON.parse(readFileSync(process.argv[2], 'utf8'));
@@ -37,6 +39,48 @@ function readSeries(path) {
 
 // Chromium: WebGL through SwiftShader; Firefox: through Mesa's llvmpipe (software GL, in the content process)
 const firefox = cfg.browser === 'firefox';
+// The node of surface name whose projection a click should hit, computed from the page file: its
+// description and the surface's points blob (base64, raw deflate), the view's camera as the contract
+// gives it. Returns {node, x, y} (CSS pixels from the 3D view's top left).
+function expectedNode(file, name, W, H, hidden = []) {
+    const text = readFileSync(file, 'utf8');
+    const meta = JSON.parse(/<script type="application\/json" id="thorax-page">([\s\S]*?)<\/script>/.exec(text)[1]);
+    const surf = meta.surfaces.find((s) => s.name === name);
+    const blob = (k) => {
+        const m = new RegExp(`id="thorax-blob-${k}" data-compression="([a-z-]+)" data-bytes="\\d+">([^<]*)<`).exec(text);
+        const raw = Buffer.from(m[2], 'base64');
+        const b = m[1] === 'deflate-raw' ? inflateRawSync(raw) : raw;
+        return new Float32Array(b.buffer.slice(b.byteOffset, b.byteOffset + b.length));
+    };
+    const v = meta.views[meta.view];
+    const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const unit = (a) => { const l = Math.hypot(...a); return [a[0] / l, a[1] / l, a[2] / l]; };
+    const back = unit(sub(v.eye, v.center)), right = unit(cross(v.up, back)), up = cross(back, right);
+    const height = 1.1 * Math.max(v.extent[1], v.extent[0] / (W / H)), s = H / height;
+    const proj = [];
+    for (const other of meta.surfaces) {
+        if (other.layer || hidden.includes(other.name)) continue;
+        const P = blob(other.points);
+        for (let i = 0; i < other.nodes; i++) {
+            const d = sub([P[3 * i], P[3 * i + 1], P[3 * i + 2]], v.center);
+            proj.push({ surface: other.name, node: i, x: W / 2 + dot(d, right) * s, y: H / 2 - dot(d, up) * s, depth: dot(d, back) });
+        }
+    }
+    let best = null;
+    for (const q of proj) {
+        if (q.surface !== name || Math.abs(q.x - W / 2) > W / 4 || Math.abs(q.y - H / 2) > H / 4) continue;
+        const r = Math.hypot(q.x - W / 2, q.y - H / 2);
+        if (best && r >= best.r) continue;
+        // in front: no node of any surface within 8 pixels on screen is nearer the eye
+        if (proj.some((o) => o !== q && Math.hypot(o.x - q.x, o.y - q.y) < 8 && o.depth > q.depth + 1e-6)) continue;
+        best = { node: q.node, x: q.x, y: q.y, r };
+    }
+    if (!best) fail(`no node of ${name} faces the camera near the middle of the view`);
+    return best;
+}
+
 const browser = await puppeteer.launch(firefox ? {
     browser: 'firefox',
     executablePath: process.env.FIREFOX || '/usr/bin/firefox-esr',
@@ -191,41 +235,46 @@ try {
     }
 
     // a click on a node: the node under it is picked and its series plotted
-    if (cfg.pick) {
-        if (!meta.surfaces.some((s) => s.name === cfg.pick)) fail(`no surface ${cfg.pick} in the page`);
-        const hit = await page.evaluate(async (name, W, H) => {
-            const T = window.thorax;
-            // try clicks on a grid around the middle until one picks a node of the surface
-            for (let r = 0; r < 12; r++)
-                for (let a = 0; a < 8; a++) {
-                    const x = W / 2 + r * 9 * Math.cos(a), y = H / 2 + r * 9 * Math.sin(a);
-                    const p = T.pickAt(x, y);
-                    if (p && p.surface === name) return { x, y, p };
-                }
-            return null;
-        }, cfg.pick, W, H);
-        if (!hit) fail(`no click near the middle of the view picked a node of ${cfg.pick}`);
+    // clicks on nodes: each pick {surface, hide: [surfaces hidden first]} ("pick": NAME is {surface: NAME})
+    const picks = cfg.picks || (cfg.pick ? [{ surface: cfg.pick }] : []);
+    result.picks = [];
+    for (const pk of picks) {
+        const name = pk.surface, hide = pk.hide || [];
+        if (!meta.surfaces.some((s) => s.name === name)) fail(`no surface ${name} in the page`);
+        await page.evaluate((hide) => { for (const h of hide) window.thorax.setSurface(h, { visible: false }); }, hide);
+        // the node to click, found here from the page's file alone: the camera of the view at W x H
+        // (views[view], height 1.1 max(ev, eh / aspect): thx_camera_view's rule), the surface's points
+        // projected; the node nearest the middle that is in front of every node near it on screen
+        const target = expectedNode(cfg.page, name, W, H, hide);
+        const hit = await page.evaluate((x, y) => ({ x, y, p: window.thorax.pickAt(x, y) }), target.x, target.y);
+        if (!hit.p || hit.p.surface !== name || hit.p.node !== target.node)
+            fail(`a click at (${target.x.toFixed(1)}, ${target.y.toFixed(1)}), on ${name} node ${target.node + 1}, picked ` +
+                 (hit.p ? `${hit.p.surface} node ${hit.p.node + 1}` : 'nothing'));
         const node = hit.p.node;
         const got = await page.evaluate((name, node) => ({
             series: Array.from(window.thorax.nodeSeries(name, node)),
             plotted: Array.from(window.thorax.plotted()),
-        }), cfg.pick, node);
+        }), name, node);
         if (got.plotted.length !== M || got.series.length !== M) fail(`the picked node's plot has ${got.plotted.length} values, not ${M}`);
         let worst = 0;
         for (let f = 0; f < M; f++) worst = Math.max(worst, Math.abs(got.plotted[f] - got.series[f]));
         if (worst > 0) fail(`the plot differs from the node's decoded series by ${worst}`);
-        let line = `a click at (${hit.x.toFixed(0)}, ${hit.y.toFixed(0)}) picked ${cfg.pick} node ${node + 1}; its plot is its series`;
-        if (cfg.series && cfg.series[cfg.pick]) {
-            const ref = readSeries(cfg.series[cfg.pick]).row(node);
-            const surf = meta.surfaces.find((s) => s.name === cfg.pick);
+        let line = `a click at (${hit.x.toFixed(1)}, ${hit.y.toFixed(1)}), where ${name} node ${node + 1} projects` +
+                   `${hide.length ? ' (' + hide.join(', ') + ' hidden)' : ''}, picked that node; its plot is its series`;
+        const fig = { surface: name, node: node + 1 };
+        if (cfg.series && cfg.series[name]) {
+            const ref = readSeries(cfg.series[name]).row(node);
+            const surf = meta.surfaces.find((s) => s.name === name);
             const bound = surf.data.max_error;
             let e = 0;
             for (let f = 0; f < M; f++) e = Math.max(e, Math.abs(got.plotted[f] - ref[f]));
             if (!(e <= bound * (1 + 1e-6) + 1e-12)) fail(`${line}, but ${e} from the solution's (the bound ${bound})`);
             line += `, within ${e.toExponential(2)} ${meta.unit} of the solution's (the bound ${bound.toExponential(2)})`;
-            result.pick = { surface: cfg.pick, node: node + 1, error: e, bound };
+            Object.assign(fig, { error: e, bound });
         }
+        result.picks.push(fig);
         ok(line);
+        await page.evaluate((hide) => { for (const h of hide) window.thorax.setSurface(h, { visible: true }); }, hide);
     }
     // the whole page as the browser shows it
     await page.screenshot({ path: cfg.out + '/whole.png', fullPage: true });
