@@ -47,7 +47,7 @@ cat out.log
 [ -d "$NM/puppeteer-core" ] || fail "puppeteer-core is not in $NM (scripts/web.sh installs web/package-lock.json's packages there)"
 # the test script beside the packages it imports (an ES module resolves from its own folder)
 ln -s "$NM" node_modules
-cp "$SRC/tests/web_browser.mjs" .
+cp "$SRC/tests/web_browser.mjs" "$SRC/tests/web_common.mjs" .
 for f in 60 193 300; do
     "$THORAX" render --solution sol --only torso --only heart --size 480x540 --frame $f -o ref_$f.png -q
 done

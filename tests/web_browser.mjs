@@ -12,7 +12,7 @@
 import { readFileSync, writeFileSync, mkdirSync } from 'node:fs';
 import { pathToFileURL } from 'node:url';
 import { inflateRawSync } from 'node:zlib';
-import puppeteer from 'puppeteer-core';
+import { launchBrowser, comparePixels } from './web_common.mjs';
 
 const cfg = JSON.parse(readFileSync(process.argv[2], 'utf8'));
 mkdirSync(cfg.out, { recursive: true });
@@ -37,8 +37,6 @@ function readSeries(path) {
     return { n, m, row: (i) => Float64Array.from({ length: m }, (_, f) => v[f * n + i]) };
 }
 
-// Chromium: WebGL through SwiftShader; Firefox: through Mesa's llvmpipe (software GL, in the content process)
-const firefox = cfg.browser === 'firefox';
 // The node of surface name whose projection a click should hit, computed from the page file: its
 // description and the surface's points blob (base64, raw deflate), the view's camera as the contract
 // gives it. Returns {node, x, y} (CSS pixels from the 3D view's top left).
@@ -81,18 +79,7 @@ function expectedNode(file, name, W, H, hidden = []) {
     return best;
 }
 
-const browser = await puppeteer.launch(firefox ? {
-    browser: 'firefox',
-    executablePath: process.env.FIREFOX || '/usr/bin/firefox-esr',
-    headless: true,
-    extraPrefsFirefox: { 'webgl.force-enabled': true, 'webgl.out-of-process': false, 'gfx.webrender.software': true },
-    env: { ...process.env, LIBGL_ALWAYS_SOFTWARE: '1', MOZ_WEBGL_FORCE_EGL: '1' },
-} : {
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist',
-           '--force-device-scale-factor=1', '--disable-gpu-rasterization'],
-});
+const browser = await launchBrowser(cfg.browser);
 result.browser = (await browser.version());
 try {
     const page = await browser.newPage();
@@ -141,60 +128,9 @@ try {
     const tol = cfg.tolerance ?? 8, minMatch = cfg.min_match ?? 0.99;
     for (const c of cfg.compare || []) {
         const png = readFileSync(c.ref).toString('base64');
-        const s = await page.evaluate(async (f, b64, tol, W, H) => {
-            window.thorax.setFrame(f);
-            const data = window.thorax.canvasPixels(); // RGBA, top row first, the 3D view's W x H pixels
-            const px = { width: data.length === 4 * W * H ? W : null, height: data.length === 4 * W * H ? H : null, data };
-            const blob = await (await fetch('data:image/png;base64,' + b64)).blob();
-            const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-            const w = bmp.width, h = bmp.height;
-            const oc = new OffscreenCanvas(w, h), g = oc.getContext('2d');
-            g.drawImage(bmp, 0, 0);
-            const ref = g.getImageData(0, 0, w, h).data;
-            if (px.width !== w || px.height !== h) return { size: [px.width, px.height, w, h] };
-            const p = px.data;
-            // the silhouette (not the background, in either picture) and its edges: pixels within 2 of a
-            // change of silhouette in either picture are left out (antialiasing differs there)
-            const bg = [ref[0], ref[1], ref[2]];
-            const inside = (a, k) => Math.abs(a[k] - bg[0]) + Math.abs(a[k + 1] - bg[1]) + Math.abs(a[k + 2] - bg[2]) > 6;
-            const sil = new Uint8Array(w * h);
-            for (let i = 0; i < w * h; i++) sil[i] = (inside(ref, 4 * i) ? 1 : 0) | (inside(p, 4 * i) ? 2 : 0);
-            let n = 0, match = 0, maxd = 0, sum = 0, shown = 0;
-            const diff = g.createImageData(w, h);
-            for (let y = 0; y < h; y++)
-                for (let x = 0; x < w; x++) {
-                    const i = y * w + x;
-                    let edge = sil[i] === 1 || sil[i] === 2;
-                    for (let dy = -2; dy <= 2 && !edge; dy++)
-                        for (let dx = -2; dx <= 2 && !edge; dx++) {
-                            const xx = x + dx, yy = y + dy;
-                            if (xx >= 0 && yy >= 0 && xx < w && yy < h && sil[yy * w + xx] !== sil[i]) edge = true;
-                        }
-                    const k = 4 * i;
-                    const d = Math.max(Math.abs(p[k] - ref[k]), Math.abs(p[k + 1] - ref[k + 1]), Math.abs(p[k + 2] - ref[k + 2]));
-                    diff.data[k + 3] = 255;
-                    if (edge) { diff.data[k] = diff.data[k + 1] = diff.data[k + 2] = 200; continue; }
-                    n++;
-                    shown += sil[i] === 3;
-                    match += d <= tol;
-                    maxd = Math.max(maxd, d);
-                    sum += d;
-                    diff.data[k] = d > tol ? 255 : 255 - 8 * d;
-                    diff.data[k + 1] = diff.data[k + 2] = d > tol ? 0 : 255 - 8 * d;
-                }
-            g.putImageData(diff, 0, 0);
-            const dblob = await oc.convertToBlob({ type: 'image/png' });
-            const dbuf = new Uint8Array(await dblob.arrayBuffer());
-            // the page's own picture as a PNG too
-            const pc = new OffscreenCanvas(w, h), pg = pc.getContext('2d');
-            pg.putImageData(new ImageData(new Uint8ClampedArray(p), w, h), 0, 0);
-            const pbuf = new Uint8Array(await (await pc.convertToBlob({ type: 'image/png' })).arrayBuffer());
-            let b = '', q = '';
-            for (let i = 0; i < dbuf.length; i++) b += String.fromCharCode(dbuf[i]);
-            for (let i = 0; i < pbuf.length; i++) q += String.fromCharCode(pbuf[i]);
-            return { n, match, maxd, mean: n ? sum / n : 0, shown, diff: btoa(b), picture: btoa(q) };
-        }, c.frame - 1, png, tol, W, H);
-        if (s.size) fail(`frame ${c.frame}: the page's picture is ${s.size[0]}x${s.size[1]}, render's ${s.size[2]}x${s.size[3]}`);
+        await page.evaluate((f) => window.thorax.setFrame(f), c.frame - 1);
+        const s = await page.evaluate(comparePixels, png, tol);
+        if (s.size) fail(`frame ${c.frame}: the page's picture has ${s.size[0]} pixels, render's is ${s.size[1]}x${s.size[2]}`);
         writeFileSync(`${cfg.out}/page_${c.frame}.png`, Buffer.from(s.picture, 'base64'));
         writeFileSync(`${cfg.out}/diff_${c.frame}.png`, Buffer.from(s.diff, 'base64'));
         const frac = s.match / Math.max(1, s.n);
