@@ -664,11 +664,14 @@ int cli_export_page(int argc, char **argv)
                  "by the potentials (render's colour maps, scales and shading), turned with the\n"
                  "mouse, each one hidden or made translucent; a frame slider with play and pause;\n"
                  "the 12-lead ECG (or --leads) with a marker at the current frame (a click there\n"
-                 "moves to that time); a click on a surface plots that node's signal. The\n"
-                 "potentials are quantized to 16 bits per surface (the error bound is printed and\n"
-                 "kept in the page). docs/design/web.md.\n",
+                 "moves to that time); a click on a surface plots that node's signal. Render's\n"
+                 "layers (--isosurface, --slice, --streamlines, --image, --contours) are made for\n"
+                 "the frame shown first and kept as layers of that frame. The potentials are\n"
+                 "quantized to 16 bits per surface (the error bound is printed and kept in the\n"
+                 "page). docs/design/web.md.\n",
         .epilog = "Options of render that the page cannot show (--clip, --panels, --arrows,\n"
-                  "--isosurface, --slice, --streamlines, --image, --trace, ...) are refused.\n"
+                  "--trace, --tetrahedra, --landmarks, --node-labels, --extrema, --renderer\n"
+                  "trace, --volume) are refused.\n"
                   "Exit status: 0 ok, 1 error, 2 bad usage.\n",
         .group = {{NULL, own, sizeof own / sizeof own[0]}, {"what is drawn, and how", common, render_options(common, &o.r)}},
         .positional = render_positional,
