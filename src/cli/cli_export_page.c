@@ -180,8 +180,10 @@ static thx_status surface_geometry(thx_ctx *ctx, thx_web_page *pg, const thx_sur
 
 /* A surface's data: the codes, the range, the scales' knots, the colour bar's ticks. */
 static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const double *v, size_t n_rows, size_t n_frames,
-                               const scales *S, int levels, int cmap, cJSON *jd, double *max_error)
+                               const scales *S, const thx_render_surface *rs, int cmap, const char *quantity,
+                               const char *unit, cJSON *jd, double *max_error)
 {
+    const int levels = rs->n_levels;
     thx_web_quant q;
     THX_CHECK(thx_web_quantize(ctx, v, n_rows, n_frames, &q));
     thx_status st = THX_OK;
@@ -252,6 +254,12 @@ static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const double *v, 
             ticks[j - 1] = t;
         }
     cJSON_AddItemToObject(jd, "ticks", cJSON_CreateDoubleArray(ticks, nt));
+    cJSON_AddStringToObject(jd, "quantity", quantity);
+    cJSON_AddStringToObject(jd, "unit", unit);
+    /* the surface's data style (--surface NAME=bands...) and its bands (a lab scale's own count) */
+    cJSON *sty = cJSON_AddObjectToObject(jd, "style");
+    cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
+    cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
     free(kv);
     free(kt);
     free(knots);
@@ -307,6 +315,29 @@ static thx_status leads_of(thx_ctx *ctx, const page_opts *o, const thx_picture_d
         return thx_ecg12(ctx, *elec, outer_series, out);
     }
     return thx_electrodes_sample(ctx, *elec, outer_series, out);
+}
+
+/* A surface's entry in the description as render draws it (rs): name, role, sizes, geometry, mode,
+   colour, visibility and opacity; *out for what the caller adds (its data, a layer's frame). */
+static thx_status surface_head(thx_ctx *ctx, thx_web_page *pg, const thx_render_surface *rs, const char *role,
+                               cJSON *jsurf, cJSON **out)
+{
+    const thx_surface *s = rs->surf;
+    cJSON *x = cJSON_CreateObject();
+    cJSON_AddItemToArray(jsurf, x);
+    *out = x;
+    cJSON_AddStringToObject(x, "name", s->name);
+    cJSON_AddStringToObject(x, "role", role);
+    cJSON_AddNumberToObject(x, "nodes", (double)s->n_nodes);
+    cJSON_AddNumberToObject(x, "triangles", (double)s->n_tris);
+    THX_CHECK(surface_geometry(ctx, pg, s, x));
+    cJSON_AddStringToObject(x, "mode", mode_name(rs->mode));
+    float c[4] = {rs->color[0], rs->color[1], rs->color[2], 1};
+    if (!c[0] && !c[1] && !c[2]) c[0] = c[1] = c[2] = 0.8f; /* render's light grey */
+    cJSON_AddItemToObject(x, "color", rgba(c));
+    cJSON_AddBoolToObject(x, "visible", rs->mode != THX_DRAW_HIDDEN);
+    cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
+    return THX_OK;
 }
 
 /* The page's index of colour map c, its table added at its first use. */
@@ -464,33 +495,17 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
         const thx_surface *s = rs->surf;
         size_t k = 0;
         while (k < ns && m->surf[k] != s) k++;
-        cJSON *x = cJSON_CreateObject();
-        cJSON_AddItemToArray(jsurf, x);
-        cJSON_AddStringToObject(x, "name", s->name);
-        cJSON_AddStringToObject(x, "role", thx_role_name(s->role));
-        cJSON_AddNumberToObject(x, "nodes", (double)s->n_nodes);
-        cJSON_AddNumberToObject(x, "triangles", (double)s->n_tris);
-        THX_TRY(surface_geometry(ctx, pg, s, x));
-        cJSON_AddStringToObject(x, "mode", mode_name(rs->mode));
-        float c[4] = {rs->color[0], rs->color[1], rs->color[2], 1};
-        if (!c[0] && !c[1] && !c[2]) c[0] = c[1] = c[2] = 0.8f; /* render's light grey */
-        cJSON_AddItemToObject(x, "color", rgba(c));
-        cJSON_AddBoolToObject(x, "visible", rs->mode != THX_DRAW_HIDDEN);
-        cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
+        cJSON *x;
+        THX_TRY(surface_head(ctx, pg, rs, thx_role_name(s->role), jsurf, &x));
         if (rs->values && k < ns && d->series[k]) {
             cJSON *jd = cJSON_AddObjectToObject(x, "data");
             int ci;
             THX_TRY(colormap_index(ctx, pg, cms, rs->cmap, cmap_index, &n_cmaps, &ci));
             int map = d->map[k][d->active[k]]; /* 1 activation, 2 recovery times */
             double err = 0;
-            THX_TRY(surface_data(ctx, pg, d->series[k]->v, d->series[k]->n_rows, d->series[k]->n_frames, &S[i],
-                                 rs->n_levels, ci, jd, map ? &err : &max_error));
-            cJSON_AddStringToObject(jd, "quantity", map == 1 ? "activation" : map == 2 ? "recovery" : "potential");
-            cJSON_AddStringToObject(jd, "unit", d->series[k]->unit[0] ? d->series[k]->unit : "mV");
-            /* the surface's data style (--surface NAME=bands...) and its bands (a lab scale's own count) */
-            cJSON *sty = cJSON_AddObjectToObject(jd, "style");
-            cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
-            cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
+            THX_TRY(surface_data(ctx, pg, d->series[k]->v, d->series[k]->n_rows, d->series[k]->n_frames, &S[i], rs, ci,
+                                 map == 1 ? "activation" : map == 2 ? "recovery" : "potential",
+                                 d->series[k]->unit[0] ? d->series[k]->unit : "mV", jd, map ? &err : &max_error));
         } else
             cJSON_AddNullToObject(x, "data");
     }
@@ -505,18 +520,8 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     for (size_t i = 0; i < nlay; i++) {
         const thx_render_surface *rs = &lay[i];
         const thx_surface *s = rs->surf;
-        cJSON *x = cJSON_CreateObject();
-        cJSON_AddItemToArray(jsurf, x);
-        cJSON_AddStringToObject(x, "name", s->name);
-        cJSON_AddStringToObject(x, "role", "layer");
-        cJSON_AddNumberToObject(x, "nodes", (double)s->n_nodes);
-        cJSON_AddNumberToObject(x, "triangles", (double)s->n_tris);
-        THX_TRY(surface_geometry(ctx, pg, s, x));
-        cJSON_AddStringToObject(x, "mode", mode_name(rs->mode));
-        float c[4] = {rs->color[0], rs->color[1], rs->color[2], 1};
-        cJSON_AddItemToObject(x, "color", rgba(c));
-        cJSON_AddBoolToObject(x, "visible", rs->mode != THX_DRAW_HIDDEN);
-        cJSON_AddNumberToObject(x, "opacity", rs->color[3]);
+        cJSON *x;
+        THX_TRY(surface_head(ctx, pg, rs, "layer", jsurf, &x));
         if (rs->line_width > 0) cJSON_AddNumberToObject(x, "line_width", rs->line_width);
         cJSON *jl = cJSON_AddObjectToObject(x, "layer");
         cJSON_AddNumberToObject(jl, "frame", f0);
@@ -529,17 +534,13 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
             int current = 0;
             for (int q = 0; q < 3; q++)
                 if (s == &d->field_surf[q]) current = d->field_current[q];
-            double err = 0;
-            THX_TRY(surface_data(ctx, pg, rs->values, s->n_nodes, 1, &one, rs->n_levels, ci, jd, current ? &err : &max_error));
             /* the units render's colour bar gives them (src/picture/picture.c) */
             const char *vu = d->volume && d->volume->unit[0] ? d->volume->unit : current ? "unit" : "mV";
             char lunit[32];
             snprintf(lunit, sizeof lunit, current ? "A/m^2 per %.4s" : "%.15s", vu);
-            cJSON_AddStringToObject(jd, "quantity", current ? "|J|" : "potential");
-            cJSON_AddStringToObject(jd, "unit", lunit);
-            cJSON *sty = cJSON_AddObjectToObject(jd, "style");
-            cJSON_AddStringToObject(sty, "kind", style_name(rs->style));
-            cJSON_AddNumberToObject(sty, "levels", thx_scale_bands(&rs->scale, rs->n_levels));
+            double err = 0;
+            THX_TRY(surface_data(ctx, pg, rs->values, s->n_nodes, 1, &one, rs, ci, current ? "|J|" : "potential", lunit,
+                                 jd, current ? &err : &max_error));
         } else
             cJSON_AddNullToObject(x, "data");
     }
