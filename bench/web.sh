@@ -47,8 +47,8 @@ import json, sys, statistics as S
 r = [json.loads(l) for l in open(sys.argv[1])]
 med = lambda k: S.median(x[k] for x in r)
 rng = lambda k: "%.0f-%.0f" % (min(x[k] for x in r), max(x[k] for x in r))
-print("%s, %d runs: first picture cold %.0f ms (%s), warm %.0f ms (%s; data decoded at %.0f ms); a frame step %.2f ms (%.2f-%.2f) at %s"
-      % (r[0]["browser"], len(r), med("cold"), rng("cold"), med("warm"), rng("warm"), med("warm_decoded"), med("step"),
+print("%s, %d runs: first picture cold %.0f ms (%s; shown %.0f ms; the WebGL context made at %.0f ms), warm %.0f ms (%s; shown %.0f ms; data decoded at %.0f ms); a frame step %.2f ms (%.2f-%.2f) at %s"
+      % (r[0]["browser"], len(r), med("cold"), rng("cold"), med("cold_shown"), med("cold_context"), med("warm"), rng("warm"), med("warm_shown"), med("warm_decoded"), med("step"),
          min(x["step"] for x in r), max(x["step"] for x in r), sys.argv[2]))
 PY
 done

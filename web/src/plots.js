@@ -8,6 +8,14 @@ const AXIS = '#d08c8c';
 const MARKER = '#d0102a';
 const FONT = '11px system-ui, -apple-system, "Segoe UI", Roboto, sans-serif';
 
+// A canvas's 2D context, drawn on the CPU (`willReadFrequently`: Chromium then keeps the canvas in
+// memory). The plots are a few thousand line segments and some text, cheap on the CPU; on the GPU
+// a browser's first page compiles its 2D pipelines first, and on a software GL (SwiftShader) that
+// took 450 ms of Chromium's GPU process, ahead of the 3D view's first picture (docs/design/web.md).
+function context2d(canvas) {
+    return canvas.getContext('2d', { willReadFrequently: true });
+}
+
 // A canvas at CSS size w x h, drawn at devicePixelRatio; returns its 2D context scaled to CSS px.
 function sizeCanvas(canvas, w, h) {
     const dpr = window.devicePixelRatio || 1;
@@ -15,7 +23,7 @@ function sizeCanvas(canvas, w, h) {
     canvas.style.height = `${h}px`;
     canvas.width = Math.max(1, Math.round(w * dpr));
     canvas.height = Math.max(1, Math.round(h * dpr));
-    const ctx = canvas.getContext('2d');
+    const ctx = context2d(canvas);
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     return ctx;
 }
@@ -176,7 +184,7 @@ class TracePlot {
 
     // The traces (offscreen) and then the marker.
     present() {
-        const ctx = this.canvas.getContext('2d');
+        const ctx = context2d(this.canvas);
         const dpr = window.devicePixelRatio || 1;
         ctx.setTransform(1, 0, 0, 1, 0, 0);
         ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
@@ -299,7 +307,7 @@ export class NodePlot extends TracePlot {
 export function drawColorBar(canvas, { rgb, n, series, frame, ticks, bands, levels, quantity, unit, title, height }) {
     const head = [title, quantity, unit ? `(${unit})` : ''].filter(Boolean);
     const barW = 16, lineH = 13, top = 8 + lineH * head.length, bottom = 10;
-    const measure = canvas.getContext('2d');
+    const measure = context2d(canvas);
     measure.font = FONT;
     const textW = Math.max(0, ...head.map((t) => Math.ceil(measure.measureText(t).width) + 4));
     const w = Math.max(78, textW);

@@ -70,6 +70,7 @@ export class View3D {
         // is made without first, and remade with on a new canvas when the GL is not software.
         this.renderer = makeRenderer(canvas, false);
         let gl = this.renderer.getContext();
+        this.contextMs = performance.now(); // the page's timings: the WebGL context made
         if (!(typeof WebGL2RenderingContext !== 'undefined' && gl instanceof WebGL2RenderingContext))
             throw new Error('WebGL 2 is not available in this browser');
         this.glRenderer = rendererName(gl);
