@@ -43,6 +43,13 @@ static void test_surface(void)
     thx_surface *s = tet_surface("box");
     CHECK_OK(ctx, thx_surface_validate(ctx, s));
     CHECK_NEAR(thx_surface_volume(s), 1.0 / 6, 1e-15); /* outward: positive */
+    /* The normal sums: at the origin the three axis faces' (-1,-1,-1); at the corner on axis k the
+     * two axis faces' -e_i - e_j plus the slanted face's (1,1,1): e_k. Overwritten, whatever was there. */
+    double nsum[12];
+    for (int i = 0; i < 12; i++) nsum[i] = 7.0;
+    thx_surface_normal_sums(s, nsum);
+    static const double want[12] = {-1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int i = 0; i < 12; i++) CHECK_NEAR(nsum[i], want[i], 0);
     s->tri[7] = 4;
     CHECK(thx_surface_validate(ctx, s) == THX_EINPUT && says("triangle 3 has node index 4 out of range 0..3"));
     s->tri[7] = 1;

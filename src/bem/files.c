@@ -241,14 +241,7 @@ thx_status thx_bem_sigma_from_volume(thx_ctx *ctx, const thx_model *m, const cha
         memset(votes, 0, v->n_regions * sizeof *votes);
         nrm = thx_calloc(ctx, 3 * S->n_nodes, sizeof *nrm);
         if (!nrm) { st = THX_ENOMEM; goto done; }
-        for (size_t t = 0; t < S->n_tris; t++) { /* area-weighted node normals */
-            const int32_t *c = S->tri + 3 * t;
-            const double *a = S->xyz + 3 * c[0], *b = S->xyz + 3 * c[1], *d = S->xyz + 3 * c[2];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-            double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-            for (int k = 0; k < 3; k++)
-                for (int q = 0; q < 3; q++) nrm[3 * (size_t)c[k] + (size_t)q] += n[q];
-        }
+        thx_surface_normal_sums(S, nrm); /* area-weighted node normals */
         for (size_t i = 0; i < S->n_nodes; i++) {
             int32_t vn = v->surf_node[s][i];
             const double *p = v->xyz + 3 * (size_t)vn;

@@ -150,15 +150,9 @@ static thx_status surface_geometry(thx_ctx *ctx, thx_web_page *pg, const thx_sur
     uint32_t *tri = malloc((3 * nt + 1) * sizeof *tri);
     thx_status st = THX_OK;
     if (!xyz || !nrm || !acc || !tri) st = thx_error(ctx, THX_ENOMEM, "export: out of memory (surface \"%s\")", s->name);
-    for (size_t t = 0; st == THX_OK && t < nt; t++) {
-        const int32_t *v = s->tri + 3 * t;
-        const double *a = s->xyz + 3 * v[0], *b = s->xyz + 3 * v[1], *c = s->xyz + 3 * v[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-        for (int k = 0; k < 3; k++) {
-            tri[3 * t + (size_t)k] = (uint32_t)v[k];
-            for (int j = 0; j < 3; j++) acc[3 * (size_t)v[k] + (size_t)j] += n[j];
-        }
+    if (st == THX_OK) {
+        thx_surface_normal_sums(s, acc);
+        for (size_t i = 0; i < 3 * nt; i++) tri[i] = (uint32_t)s->tri[i];
     }
     for (size_t i = 0; st == THX_OK && i < nn; i++) {
         const double *n = acc + 3 * i;

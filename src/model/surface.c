@@ -59,6 +59,19 @@ double thx_surface_volume(const thx_surface *s)
     return v / 6.0;
 }
 
+void thx_surface_normal_sums(const thx_surface *s, double *out)
+{
+    memset(out, 0, 3 * s->n_nodes * sizeof *out);
+    for (size_t t = 0; t < s->n_tris; t++) {
+        const int32_t *v = s->tri + 3 * t;
+        const double *a = s->xyz + 3 * (size_t)v[0], *b = s->xyz + 3 * (size_t)v[1], *c = s->xyz + 3 * (size_t)v[2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++) out[3 * (size_t)v[k] + (size_t)j] += n[j];
+    }
+}
+
 thx_status thx_surface_validate(thx_ctx *ctx, const thx_surface *s)
 {
     if ((s->n_nodes && !s->xyz) || (s->n_tris && !s->tri))

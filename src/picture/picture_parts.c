@@ -168,16 +168,10 @@ thx_status picture_part_cuts(thx_ctx *ctx, thx_picture_data *d)
             free(own);
             return thx_error(ctx, THX_ENOMEM, "out of memory (the part's cuts)");
         }
+        thx_surface_normal_sums(s, acc);
         size_t n = 0;
-        for (size_t t = 0; t < s->n_tris; t++) {
-            const int32_t *q = s->tri + 3 * t;
-            const double *a = s->xyz + 3 * q[0], *b = s->xyz + 3 * q[1], *c = s->xyz + 3 * q[2];
-            double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-            double nv[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++) acc[3 * (size_t)q[i] + j] += nv[j];
-            if (d->part_own[cell[t]]) memcpy(own + 3 * n++, q, 3 * sizeof *q);
-        }
+        for (size_t t = 0; t < s->n_tris; t++)
+            if (d->part_own[cell[t]]) memcpy(own + 3 * n++, s->tri + 3 * t, 3 * sizeof *own);
         d->field_normals[k] = acc;
         d->field_part_tri[k] = own;
         s->tri = own;

@@ -151,15 +151,8 @@ static thx_status geom_of(thx_ctx *ctx, thx_tracer *t, const thx_surface *s, con
     for (size_t i = 0; i < 3 * s->n_nodes; i++) v[i] = (float)s->xyz[i];
     double *acc = thx_calloc(ctx, 3 * (s->n_nodes ? s->n_nodes : 1), sizeof *acc);
     if (!acc) { geom_free(g); return THX_ENOMEM; }
-    for (size_t k = 0; k < s->n_tris; k++) {
-        const int32_t *c = s->tri + 3 * k;
-        for (int j = 0; j < 3; j++) ix[3 * k + j] = (unsigned)c[j];
-        const double *a = s->xyz + 3 * c[0], *b = s->xyz + 3 * c[1], *d = s->xyz + 3 * c[2];
-        double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        for (int j = 0; j < 3; j++)
-            for (int q = 0; q < 3; q++) acc[3 * c[j] + q] += n[q]; /* area-weighted */
-    }
+    for (size_t k = 0; k < 3 * s->n_tris; k++) ix[k] = (unsigned)s->tri[k];
+    thx_surface_normal_sums(s, acc); /* area-weighted */
     for (size_t i = 0; i < s->n_nodes; i++) {
         double l = sqrt(acc[3 * i] * acc[3 * i] + acc[3 * i + 1] * acc[3 * i + 1] + acc[3 * i + 2] * acc[3 * i + 2]);
         for (int q = 0; q < 3; q++) g->nrm[3 * i + q] = l > 0 ? (float)(acc[3 * i + q] / l) : 0.0f;

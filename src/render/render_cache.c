@@ -112,14 +112,7 @@ static thx_status entry_upload(thx_ctx *ctx, surf_entry *e, const thx_surface *s
         return THX_ENOMEM;
     }
     if (normals) memcpy(acc, normals, 3 * nn * sizeof *acc);
-    for (size_t t = 0; t < nt && !normals; t++) {
-        const int32_t *v = s->tri + 3 * t;
-        const double *a = s->xyz + 3 * v[0], *b = s->xyz + 3 * v[1], *c = s->xyz + 3 * v[2];
-        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++) acc[3 * (size_t)v[k] + j] += n[j];
-    }
+    else thx_surface_normal_sums(s, acc);
     for (int k = 0; k < 3; k++) e->lo[k] = INFINITY, e->hi[k] = -INFINITY;
     for (size_t i = 0; i < nn; i++) {
         double *n = acc + 3 * i, l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);

@@ -65,6 +65,13 @@ thx_status thx_surface_validate(thx_ctx *ctx, const thx_surface *s);
  * surface face outward. */
 double thx_surface_volume(const thx_surface *s);
 
+/* The area-weighted normal sums at the nodes, into out (3 n_nodes doubles, overwritten): at node i,
+ * the sum over the triangles at i of (b - a) x (c - a), twice the triangle's area times its unit
+ * normal, taken in the triangles' order. Unit normals are these divided by their length (zero at a
+ * node of no triangle, or where the triangles cancel); the renderer, the ray tracer, the web page
+ * and the tissue votes all use them. */
+void thx_surface_normal_sums(const thx_surface *s, double *out);
+
 /* The point of s's triangles nearest to p (src/model/surface_nearest.c): returns its distance,
  * sets *tri (0-based triangle; ties: the lowest number), w (barycentric weights of the triangle's
  * corners, >= 0, sum 1) and q (the point, mm). A brute-force scan of every triangle: O(n_tris) per
