@@ -7,7 +7,8 @@
 #     the torso and the heart; the same bytes twice; under 5 MB.
 #  2. --scope frame: a scale per frame in the page.
 #  3. refusals: options the page cannot show (exit 2), a layer the solution cannot give (exit 1), a
-#     file thorax did not write (exit 1,
+#     solution whose ecg12 is not the 12 leads (exit 1, the page and render --trace), a file thorax
+#     did not write (exit 1,
 #     untouched), a page without -o (exit 2); nothing left behind.
 # Env: THORAX (built CLI), SRC (source dir), WORK (scratch dir, created here).
 set -euo pipefail
@@ -104,6 +105,15 @@ refused 2 "--clip" "not in the web page" "$THORAX" export --solution sol --forma
 refused 2 "--arrows" "not in the web page" "$THORAX" export --solution sol --format html -o r2.html --arrows
 refused 1 "--isosurface without volume potentials" "isosurface" "$THORAX" export --solution sol --format html -o r2.html --isosurface 5
 refused 2 "no -o" "no page given" "$THORAX" export --solution sol --format html
+# the solution's ECG must be the 12 leads: a copy whose ecg12.raw holds the torso's rows is refused,
+# by the page and by render's --trace alike (the picture reads it), naming the file
+cp -r sol badecg
+cp sol/torso.raw badecg/ecg12.raw
+refused 1 "an ecg12 that is not the 12 leads" "badecg/ecg12.raw: .* rows, not the 12 leads" \
+    "$THORAX" export --solution badecg --format html -o r3.html
+refused 1 "render --trace, the same ecg12" "badecg/ecg12.raw: .* rows, not the 12 leads" \
+    "$THORAX" render --solution badecg --trace V1 -o r3.png
+[ ! -e r3.html ] && [ ! -e r3.png ] || fail "a refused ECG left a file"
 echo "my own notes" > notes.html
 refused 1 "a file thorax did not write" "notes.html" "$THORAX" export --solution sol --format html -o notes.html
 [ "$(cat notes.html)" = "my own notes" ] || fail "notes.html was changed"

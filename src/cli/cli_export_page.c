@@ -261,27 +261,22 @@ static thx_status surface_data(thx_ctx *ctx, thx_web_page *pg, const double *v, 
 }
 
 /* The leads: --leads FILE (its electrodes' signals, or the 12-lead ECG when it holds RA, LA, LL and
-   V1..V6), else the solution's ecg12 file, else the 12-lead ECG of the model's electrodes/12lead.txt;
-   all from the outer surface's series. *out NULL: none. */
+   V1..V6), else the solution's ecg12 file (the picture's, d->ecg), else the 12-lead ECG of the
+   model's electrodes/12lead.txt; all from the outer surface's series. *out: the leads (NULL: none),
+   *made what of them the caller frees. */
 static thx_status leads_of(thx_ctx *ctx, const page_opts *o, const thx_picture_data *d, const thx_series *outer_series,
-                           const thx_surface *outer, thx_series **out, thx_electrodes **elec, int *twelve)
+                           const thx_surface *outer, const thx_series **out, thx_series **made, thx_electrodes **elec,
+                           int *twelve)
 {
     *out = NULL;
+    *made = NULL;
     *elec = NULL;
     *twelve = 0;
     char path[4400];
     const char *file = o->leads;
-    if (!file && o->r.p.solution) {
-        const char *ext[3] = {"raw", "txt", "mat"};
-        for (int k = 0; k < 3 && !*out; k++) {
-            snprintf(path, sizeof path, "%s/ecg12.%s", o->r.p.solution, ext[k]);
-            if (access(path, R_OK) == 0) {
-                THX_CHECK(thx_series_read(ctx, path, THX_SERIES_AUTO, out));
-                if ((*out)->n_rows != 12)
-                    return thx_error(ctx, THX_EINPUT, "%s: %zu rows, not the 12 leads", path, (*out)->n_rows);
-                *twelve = 1;
-            }
-        }
+    if (!file && d->ecg) {
+        *out = d->ecg;
+        *twelve = 1;
     }
     if (!file && d->model_dir[0]) {
         snprintf(path, sizeof path, "%s/electrodes/12lead.txt", d->model_dir);
@@ -304,11 +299,10 @@ static thx_status leads_of(thx_ctx *ctx, const page_opts *o, const thx_picture_d
         for (size_t i = 0; i < (*elec)->n; i++) found |= !strcmp((*elec)->name[i], TWELVE_AT[k]);
         have += found;
     }
-    if (have == 9) {
-        *twelve = 1;
-        return thx_ecg12(ctx, *elec, outer_series, out);
-    }
-    return thx_electrodes_sample(ctx, *elec, outer_series, out);
+    *twelve = have == 9;
+    THX_CHECK(have == 9 ? thx_ecg12(ctx, *elec, outer_series, made) : thx_electrodes_sample(ctx, *elec, outer_series, made));
+    *out = *made;
+    return THX_OK;
 }
 
 /* A surface's entry in the description as render draws it (rs): name, role, sizes, geometry, mode,
@@ -375,7 +369,8 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     scales *S = calloc(ns + 1, sizeof *S);
     thx_web_page *pg = NULL;
     cJSON *j = cJSON_CreateObject();
-    thx_series *leads = NULL;
+    const thx_series *leads = NULL;
+    thx_series *leads_made = NULL;
     thx_electrodes *elec = NULL;
     char *text = NULL;
     thx_status st = THX_OK;
@@ -557,8 +552,8 @@ static thx_status build(thx_ctx *ctx, page_opts *o, thx_picture_data *d, const c
     cJSON_AddStringToObject(jq, "unit", axis && axis->unit[0] ? axis->unit : "mV");
     /* the leads and the electrodes */
     int twelve = 0;
-    THX_TRY(leads_of(ctx, o, d, outer >= 0 ? d->series[outer] : NULL, outer >= 0 ? m->surf[outer] : NULL, &leads, &elec,
-                     &twelve));
+    THX_TRY(leads_of(ctx, o, d, outer >= 0 ? d->series[outer] : NULL, outer >= 0 ? m->surf[outer] : NULL, &leads,
+                     &leads_made, &elec, &twelve));
     if (leads && leads->n_frames != M) {
         st = thx_error(ctx, THX_EINPUT, "export: the leads have %zu frames, the potentials %zu", leads->n_frames, M);
         goto done;
@@ -621,7 +616,7 @@ done:
     free(text);
     cJSON_Delete(j);
     thx_web_page_free(&pg);
-    thx_series_destroy(&leads);
+    thx_series_destroy(&leads_made);
     thx_electrodes_destroy(&elec);
     return st;
 }

@@ -296,6 +296,28 @@ thx_status thx_picture_volume_load(thx_ctx *ctx, const thx_picture_opts *o, thx_
     return st;
 }
 
+/* The solution's 12-lead ECG, the file its manifest names (thorax leads writes it into the
+   solution): the binary ecg12_raw, else ecg12_mat, else the text ecg12 (exact numbers first). *out
+   NULL when it names none; a file that is not the 12 leads is an error naming it. */
+static thx_status solution_ecg12(thx_ctx *ctx, const char *sol, const cJSON *files, thx_series **out)
+{
+    static const char *const KEYS[3] = {"ecg12_raw", "ecg12_mat", "ecg12"};
+    for (int k = 0; k < 3; k++) {
+        const cJSON *f = cJSON_GetObjectItemCaseSensitive(files, KEYS[k]);
+        if (!cJSON_IsString(f)) continue;
+        char path[PATH_MAX + 64];
+        snprintf(path, sizeof path, "%s/%s", sol, f->valuestring);
+        THX_CHECK(thx_series_read(ctx, path, THX_SERIES_AUTO, out));
+        if ((*out)->n_rows != 12) {
+            size_t r = (*out)->n_rows;
+            thx_series_destroy(out);
+            return thx_error(ctx, THX_EINPUT, "%s: %zu rows, not the 12 leads (I, II, III, aVR, aVL, aVF, V1..V6)", path, r);
+        }
+        return THX_OK;
+    }
+    return THX_OK;
+}
+
 static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture_data *d)
 {
     memset(d, 0, sizeof *d);
@@ -346,15 +368,9 @@ static thx_status load_data(thx_ctx *ctx, const thx_picture_opts *o, thx_picture
             snprintf(path, sizeof path, "%s/%s", o->solution, cn->valuestring);
             st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->currents);
         }
-        if (st == THX_OK && o->trace && lead_index(o->trace) >= 0) {
-            const char *ext[3] = {"txt", "raw", "mat"};
-            for (int k = 0; k < 3 && !d->ecg; k++) {
-                snprintf(path, sizeof path, "%s/ecg12.%s", o->solution, ext[k]);
-                if (access(path, R_OK) == 0) st = thx_series_read(ctx, path, THX_SERIES_AUTO, &d->ecg);
-            }
-            if (st == THX_OK && !d->ecg)
-                st = thx_error(ctx, THX_EINPUT, "--trace: %s has no ecg12 file (run thorax leads first)", o->solution);
-        }
+        if (st == THX_OK) st = solution_ecg12(ctx, o->solution, files, &d->ecg);
+        if (st == THX_OK && o->trace && lead_index(o->trace) >= 0 && !d->ecg)
+            st = thx_error(ctx, THX_EINPUT, "--trace: %s has no ecg12 file (run thorax leads first)", o->solution);
         cJSON_Delete(j);
         if (st != THX_OK) return st;
     }
