@@ -39,7 +39,7 @@ nodes=$(python3 -c "import json; m=json.load(open('m/model.json')); print(' and 
 printf 'size: the page %.2f MB (the viewer 0.58 MB inside); the same 500 frames as .vtp files %.2f MB, gzipped %.2f MB (%s)\n' \
     "$(echo "$page / 1000000" | bc -l)" "$(echo "$vtp / 1000000" | bc -l)" "$(echo "$tgz / 1000000" | bc -l)" "$nodes"
 ln -s "$NM" node_modules
-cp "$OLDPWD/bench/web_timing.mjs" .
+cp "$OLDPWD/bench/web_timing.mjs" "$OLDPWD/tests/web_common.mjs" .
 for b in chromium firefox; do
     node web_timing.mjs "$T/page.html" $b "$RUNS" "$W" "$H" > $b.jsonl
     python3 - $b.jsonl "$SIZE" <<'PY'

@@ -4,17 +4,9 @@
 // timings.shown_ms: the second animation frame after it), and the mean frame step over 200 steps
 // (each drawn and finished), at the 3D view's size W x H.
 //   node web_timing.mjs PAGE.html chromium|firefox RUNS W H
-import puppeteer from 'puppeteer-core';
 import { pathToFileURL } from 'node:url';
+import { launchBrowser } from './web_common.mjs';
 const [page, which, runs, W, H] = process.argv.slice(2);
-const launch = which === 'firefox' ? {
-    browser: 'firefox', executablePath: '/usr/bin/firefox-esr', headless: true,
-    extraPrefsFirefox: { 'webgl.force-enabled': true, 'webgl.out-of-process': false, 'gfx.webrender.software': true },
-    env: { ...process.env, LIBGL_ALWAYS_SOFTWARE: '1', MOZ_WEBGL_FORCE_EGL: '1' },
-} : {
-    executablePath: '/usr/bin/chromium', headless: true,
-    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist'],
-};
 async function open(b) {
     const p = await b.newPage();
     await p.setViewport({ width: 1400, height: 1200, deviceScaleFactor: 1 });
@@ -25,7 +17,7 @@ async function open(b) {
     return p;
 }
 for (let r = 0; r < Number(runs); r++) {
-    const b = await puppeteer.launch(launch);
+    const b = await launchBrowser(which, { pinned: false });
     const p1 = await open(b);
     const cold = await p1.evaluate(() => window.thorax.timings);
     await p1.close();

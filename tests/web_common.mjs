@@ -1,11 +1,14 @@
-// What the browser tests share (tests/web_browser.mjs, tests/web_layers_check.mjs): launching Debian's
-// Chromium (WebGL through SwiftShader) or Firefox ESR (through Mesa's llvmpipe) headless, and the
-// in-page comparison of the page's 3D view with render's PNG. Copied beside them by
-// tests/e2e_web_browser.sh (an ES module resolves its imports from its own folder).
+// What the browser tests share (tests/web_browser.mjs, tests/web_layers_check.mjs; bench/web_timing.mjs
+// launches its browsers here too): launching Debian's Chromium (WebGL through SwiftShader) or Firefox
+// ESR (through Mesa's llvmpipe) headless, and the in-page comparison of the page's 3D view with
+// render's PNG. Copied beside them by tests/e2e_web_browser.sh and bench/web.sh (an ES module
+// resolves its imports from its own folder).
 import puppeteer from 'puppeteer-core';
 
-// browser: "chromium" (CHROMIUM names the program) or "firefox" (FIREFOX)
-export function launchBrowser(browser) {
+// browser: "chromium" (CHROMIUM names the program) or "firefox" (FIREFOX). pinned (the tests'): Chromium's
+// pixels at scale 1 and its page rasterized on the CPU, whatever the machine; the bench leaves
+// Chromium's defaults (what a reader's browser does).
+export function launchBrowser(browser, { pinned = true } = {}) {
     return puppeteer.launch(browser === 'firefox' ? {
         browser: 'firefox',
         executablePath: process.env.FIREFOX || '/usr/bin/firefox-esr',
@@ -16,7 +19,7 @@ export function launchBrowser(browser) {
         executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
         headless: true,
         args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist',
-               '--force-device-scale-factor=1', '--disable-gpu-rasterization'],
+               ...(pinned ? ['--force-device-scale-factor=1', '--disable-gpu-rasterization'] : [])],
     });
 }
 
