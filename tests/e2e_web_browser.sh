@@ -11,6 +11,10 @@
 #     click on the ECG move together; a click where a torso node projects (the camera and the points
 #     taken from the page's file here) picks that node and plots its series, equal to the solution's
 #     within the quantization bound; the same for the heart with the torso hidden.
+#     Damaged copies of that page (tests/web_damaged_check.mjs): cut short (the page's waiting text
+#     stays, the viewer never runs), a blob that is not base64 or not deflate, data-bytes that
+#     disagree, a blob missing, the description not JSON or of a later version: each refused with
+#     the message the page shows, nothing drawn.
 #  2. real data: the Utah tank's sock (map3d's 25feb97_sock.pts) with its recording
 #     (cool1-atdr-run1.mat through sock128.channels): the page opens without errors, draws as render
 #     does, and a picked node's plot is its series.
@@ -59,6 +63,9 @@ cat > phantom.json << EOF
  "picks": [{"surface": "torso"}, {"surface": "heart", "hide": ["torso"]}]}
 EOF
 CHROMIUM=$CHROMIUM node web_browser.mjs phantom.json || fail "the phantom's page in the browser"
+# damaged copies of it: cut short, a blob spoiled, the description spoiled; never shown half-read
+cp "$SRC/tests/web_damaged_check.mjs" .
+CHROMIUM=$CHROMIUM node web_damaged_check.mjs "$WORK/page.html" "$WORK/damaged" || fail "a damaged page"
 
 # ---- 2. the Utah tank's sock and its recording
 MD="$SRC/../shared/data/map3d"

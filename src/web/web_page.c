@@ -11,6 +11,10 @@
 #include "thorax/web/page.h"
 
 #define PAGE_MARKER "thorax-page" /* in the page's first bytes: a file thorax may replace */
+#define PAGE_WAITING                                                                                  \
+    "This page is a thorax viewer. Its data and its viewer come after this text; if this text stays, " \
+    "the viewer did not start: the file is cut short (an interrupted copy or download), or this "    \
+    "browser runs no scripts on it."
 
 typedef struct {
     char type[16];
@@ -119,7 +123,9 @@ thx_status thx_web_page_write(thx_ctx *ctx, const thx_web_page *p, const char *p
           "<meta name=\"generator\" content=\"" PAGE_MARKER "\">\n"
           "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>", f);
     put_html_text(f, title ? title : "thorax");
-    fputs("</title>\n</head>\n<body>\n<div id=\"thorax\"></div>\n"
+    /* what shows until the viewer starts (it removes it): all a page cut short, or one opened with
+       scripts off, can say, for the viewer comes last */
+    fputs("</title>\n</head>\n<body>\n<div id=\"thorax\"><p id=\"thorax-waiting\">" PAGE_WAITING "</p></div>\n"
           "<script type=\"application/json\" id=\"thorax-page\">", f);
     put_script_text(f, meta_json);
     fputs("</script>\n", f);

@@ -507,6 +507,8 @@ async function start() {
         root.id = 'thorax';
         document.body.appendChild(root);
     }
+    const waiting = document.getElementById('thorax-waiting'); // the page's text until the viewer starts
+    if (waiting) waiting.remove();
     let meta = null, ui = null;
     const fail = (e) => {
         const msg = e instanceof PageError ? e.message : (e && e.message) || String(e);
