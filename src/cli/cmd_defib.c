@@ -166,6 +166,8 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
         cJSON_AddNumberToObject(solver, "iterations", R.iterations);
         cJSON_AddNumberToObject(solver, "relative_residual", R.residual);
         cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
+        cJSON_AddBoolToObject(solver, "assembly_kept", R.assembly.kept);
+        if (R.assembly.note[0]) cJSON_AddStringToObject(solver, "assembly_note", R.assembly.note);
         cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddItemToObject(j, "solver", solver);
@@ -188,8 +190,8 @@ int cli_forward_defib(const char *model_dir, const char *out, const char **specs
                    "potential %.2f .. %.2f V; %.1f%% of the volume above %g V/cm\n",
                    R.heart_volume, R.e_min, R.e_max, R.e_mean, R.j_min, R.j_max, R.j_mean, R.phi_min, R.phi_max,
                    100 * R.frac_above, R.threshold);
-            printf("solver: %s + %s, %d iterations, assembly %.2f s, setup %.2f s, solve %.2f s\nwrote %s\n", R.ksp, R.pc,
-                   R.iterations, R.t_assemble, R.t_setup, R.t_solve, out);
+            printf("solver: %s + %s, %d iterations, assembly %.2f s%s, setup %.2f s, solve %.2f s\nwrote %s\n", R.ksp, R.pc,
+                   R.iterations, R.t_assemble, R.assembly.kept ? " (kept)" : "", R.t_setup, R.t_solve, out);
         }
     }
     goto end;

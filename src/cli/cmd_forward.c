@@ -405,6 +405,8 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
             cJSON_AddNumberToObject(solver, "block", (double)R.block); /* right-hand sides per solve (1: one by one) */
             cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
+            cJSON_AddBoolToObject(solver, "assembly_kept", R.assembly.kept);
+            if (R.assembly.note[0]) cJSON_AddStringToObject(solver, "assembly_note", R.assembly.note);
             cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
             cJSON_AddNumberToObject(solver, "seconds_matrix", R.t_matrix);
             if (R.factor.used) {
@@ -451,9 +453,9 @@ int cmd_forward(int argc, char **argv)
                        strstr(T->label, "adjoint") ? "adjoint" : "forward", R.it_min, R.it_max, R.t_solve);
             else if (R.ranks)
                 printf("%zu frames: %zu free nodes, %zu prescribed; %s + %s on %d rank%s, %d..%d iterations per frame; "
-                       "assembly %.2f s, setup %.2f s, solves %.2f s\n",
+                       "assembly %.2f s%s, setup %.2f s, solves %.2f s\n",
                        epi->n_frames, R.n_free, R.n_prescribed, R.ksp, R.pc, R.ranks, R.ranks > 1 ? "s" : "", R.it_min,
-                       R.it_max, R.t_assemble, R.t_setup, R.t_solve);
+                       R.it_max, R.t_assemble, R.assembly.kept ? " (kept)" : "", R.t_setup, R.t_solve);
             else
                 printf("%zu frames by the transfer matrix, %.3f s\n", epi->n_frames, R.t_solve);
             if (route_txt[0]) printf("route: %s\n", route_txt);

@@ -107,6 +107,8 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         cJSON_AddNumberToObject(solver, "iterations_total", (double)R.it_total);
         cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
         cJSON_AddNumberToObject(solver, "seconds_assembly", R.t_assemble);
+        cJSON_AddBoolToObject(solver, "assembly_kept", R.assembly.kept);
+        if (R.assembly.note[0]) cJSON_AddStringToObject(solver, "assembly_note", R.assembly.note);
         cJSON_AddNumberToObject(solver, "seconds_setup", R.t_setup);
         cJSON_AddNumberToObject(solver, "seconds_solve", R.t_solve);
         cJSON_AddNumberToObject(solver, "seconds_total", thx_wtime() - t0);
@@ -115,9 +117,9 @@ int cli_forward_dipoles(const char *model_dir, const char *out, const char *dip_
         if (st != THX_OK) goto fail;
         if (verbose >= 0) {
             printf("%zu dipole%s, %zu frame%s: %zu free nodes; %s + %s on %d rank%s, blocks of %zu, %d..%d iterations per "
-                   "solve; assembly %.2f s, setup %.2f s, solves %.2f s\n",
+                   "solve; assembly %.2f s%s, setup %.2f s, solves %.2f s\n",
                    d->n, d->n > 1 ? "s" : "", d->n_frames, d->n_frames > 1 ? "s" : "", R.n_free, R.ksp, R.pc, R.ranks,
-                   R.ranks > 1 ? "s" : "", R.block, R.it_min, R.it_max, R.t_assemble, R.t_setup, R.t_solve);
+                   R.ranks > 1 ? "s" : "", R.block, R.it_min, R.it_max, R.t_assemble, R.assembly.kept ? " (kept)" : "", R.t_setup, R.t_solve);
             printf("wrote %s\n", out);
         }
     }

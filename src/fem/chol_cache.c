@@ -10,21 +10,11 @@
 #include <unistd.h>
 
 #include "fem/chol_cache.h"
+#include "thorax/core/cache.h"
 #include "thorax/core/fileio.h"
 #include "thorax/core/sha256.h"
 
 static const char k_magic[8] = {'T', 'H', 'X', 'O', 'R', 'D', '0', '1'};
-
-const char *thx_chol_cache_dir(char *buf, size_t n)
-{
-    const char *d = getenv("THORAX_CACHE_DIR");
-    if (d && *d) return snprintf(buf, n, "%s", d) < (int)n ? buf : NULL;
-    d = getenv("XDG_CACHE_HOME");
-    if (d && *d == '/') return snprintf(buf, n, "%s/thorax", d) < (int)n ? buf : NULL;
-    d = getenv("HOME");
-    if (d && *d == '/') return snprintf(buf, n, "%s/.cache/thorax", d) < (int)n ? buf : NULL;
-    return NULL;
-}
 
 
 /* The graph's key: SHA-256 of a tag, n, rowp and col. */
@@ -42,9 +32,13 @@ void thx_chol_graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsi
 
 static void cache_path(char *buf, size_t n, const char *dir, const unsigned char key[32], const char *what)
 {
-    char hex[65];
-    for (int i = 0; i < 32; i++) snprintf(hex + 2 * i, 3, "%02x", key[i]);
-    snprintf(buf, n, "%s/%s-%s.bin", dir, what, hex);
+    thx_cache_path(buf, n, dir, what, key);
+}
+
+/* A file just written: the directory trimmed to its size, the new file kept. */
+static void trimmed(const char *dir, const char *path)
+{
+    thx_cache_trim(dir, thx_cache_max_bytes(), path);
 }
 
 /* 1 when perm (n entries) is a permutation of 0..n-1 */
@@ -85,6 +79,10 @@ static int order_read(const char *path, int64_t n, const unsigned char key[32], 
 static void order_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
                         char *note, size_t note_n)
 {
+    if (8 + 8 + 32 + 8 * (uint64_t)n + 32 > thx_cache_max_bytes()) {
+        snprintf(note, note_n, "the ordering is larger than the cache's limit (THORAX_CACHE_MAX), not kept");
+        return;
+    }
     if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
     char tmp[4300];
     snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
@@ -102,7 +100,9 @@ static void order_write(const char *dir, const char *path, int64_t n, const unsi
     if (!ok || rename(tmp, path)) {
         unlink(tmp);
         snprintf(note, note_n, "cannot write the ordering into the cache directory %s", dir);
+        return;
     }
+    trimmed(dir, path);
 }
 
 
@@ -110,7 +110,9 @@ int thx_chol_order_cached(const char *dir, int64_t n, const unsigned char key[32
 {
     char path[4200];
     cache_path(path, sizeof path, dir, key, "ordering");
-    return order_read(path, n, key, perm);
+    int hit = order_read(path, n, key, perm);
+    if (hit) thx_cache_used(path);
+    return hit;
 }
 
 void thx_chol_order_keep(const char *dir, int64_t n, const unsigned char key[32], const int64_t *perm, char *note,
@@ -218,12 +220,17 @@ int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key
         ok = !memcmp(sum, sum2, 32) && symbolic_valid(y, n);
     }
     if (!ok) thx_chol_symbolic_free(y);
+    else thx_cache_used(path);
     return ok;
 }
 
 void thx_chol_symbolic_keep(const char *dir, int64_t n, const unsigned char key[32], const thx_chol_symbolic *y,
                             char *note, size_t note_n)
 {
+    if (8 + 32 + 4 * 8 + 2 * 8 + 8 * ((uint64_t)n + 3 * ((uint64_t)y->nsuper + 1) + y->ssize) + 32 > thx_cache_max_bytes()) {
+        snprintf(note, note_n, "the symbolic factor is larger than the cache's limit (THORAX_CACHE_MAX), not kept");
+        return;
+    }
     if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
     char path[4200], tmp[4300];
     cache_path(path, sizeof path, dir, key, "symbolic");
@@ -253,7 +260,9 @@ void thx_chol_symbolic_keep(const char *dir, int64_t n, const unsigned char key[
     if (!ok || rename(tmp, path)) {
         unlink(tmp);
         snprintf(note, note_n, "cannot write the symbolic factor into the cache directory %s", dir);
+        return;
     }
+    trimmed(dir, path);
 }
 
 int thx_chol_symbolic_copy(thx_chol_symbolic *y, int64_t n, int64_t nsuper, const int64_t *perm, const int64_t *super,

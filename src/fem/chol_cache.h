@@ -4,7 +4,7 @@
  * directory for the next ones. Each file is written to a temporary name and renamed; each is read only
  * when its magic, its key, its sizes and its own SHA-256 match (and, for the symbolic factor, when its
  * structure is one), else ignored and computed again. Built into the solver module with
- * src/fem/cholesky.c, its one user.
+ * src/fem/cholesky.c, its one user. The directory and its size: thorax/core/cache.h.
  *  - ordering-KEY.bin: the fill-reducing ordering (METIS nested dissection), KEY the graph's SHA-256;
  *  - symbolic-KEY.bin: CHOLMOD's supernodal analysis with that ordering (its permutation, supernodes,
  *    their rows and values' places, the flop and nonzero counts), KEY the SHA-256 of the graph's key
@@ -15,10 +15,6 @@
 
 #include <stddef.h>
 #include <stdint.h>
-
-/* The cache directory: $THORAX_CACHE_DIR, else $XDG_CACHE_HOME/thorax, else $HOME/.cache/thorax;
- * NULL when none can be named. Writes into buf (size n). */
-const char *thx_chol_cache_dir(char *buf, size_t n);
 
 /* The graph's key: SHA-256 of a tag, n, rowp and col (a full CSR's pattern). */
 void thx_chol_graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32]);

@@ -13,6 +13,7 @@
 #include <suitesparse/cholmod.h>
 
 #include "fem/chol_cache.h"
+#include "thorax/core/cache.h"
 #include "fem/cholesky.h"
 #include "fem/multifrontal.h"
 
@@ -100,7 +101,7 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
     unsigned char key[32], skey[32];
     thx_chol_graph_key(n, rowp, col, key);
     char dir[4096];
-    const char *cd = thx_chol_cache_dir(dir, sizeof dir);
+    const char *cd = thx_cache_dir(dir, sizeof dir);
     inf.ordering_cached = cd && thx_chol_order_cached(cd, n, key, order);
     if (!inf.ordering_cached) {
         if (!(A = upper(f, n, rowp, col, val))) { st = THX_ENOMEM; goto done; }

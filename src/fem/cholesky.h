@@ -44,7 +44,7 @@ typedef struct {
 } thx_chol_opts;
 
 /* Factors the symmetric positive definite matrix of order n given as a full CSR (both triangles,
- * sorted columns). The ordering is looked up in the cache (thx_chol_cache_dir) by the SHA-256 of
+ * sorted columns). The ordering is looked up in the cache (thx_cache_dir, thorax/core/cache.h) by the SHA-256 of
  * (n, rowp, col); when missing it is computed and stored there. A matrix that is not positive
  * definite is THX_ESOLVER naming the column. */
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,

@@ -48,6 +48,7 @@ typedef struct {
     int32_t *part;             /* under mpirun: node -> rank (thx_fem_partition), else NULL */
     thx_fem_system *sys;
     double t_assemble;
+    thx_fem_assembly_info assembly;
     size_t n_st;            /* Steiner nodes on the heart surface (active ones) */
     int32_t *st_node;       /* their volume nodes */
     int32_t *st_corner;     /* 3 per node: heart-surface node numbers of the triangle's corners */
@@ -127,7 +128,10 @@ static thx_status epi_setup(thx_ctx *ctx, const thx_model *m, epi_problem *p)
             for (size_t i = 0; st == THX_OK && i < nn; i++) rows[i] = p->part[i] == rank || p->kind[i] == 2;
         }
         double t0 = thx_wtime();
-        if (st == THX_OK) st = thx_fem_assemble_rows(ctx, v, p->use_region, rows, &p->K);
+        /* one rank: the matrix kept from an earlier run on the same mesh and conductivities, if any */
+        if (st == THX_OK)
+            st = size > 1 ? thx_fem_assemble_rows(ctx, v, p->use_region, rows, &p->K)
+                          : thx_fem_assemble_kept(ctx, v, p->use_region, &p->K, &p->assembly);
         p->t_assemble = thx_wtime() - t0;
         free(rows);
         if (st != THX_OK) goto done;
@@ -286,6 +290,7 @@ solved:
     thx_fem_system_describe(P.sys, r->ksp, r->pc, &r->ranks);
     thx_fem_system_factor_info(P.sys, &r->factor);
     r->t_assemble = P.t_assemble;
+    r->assembly = P.assembly;
 done:
     if (st != THX_OK) thx_forward_result_free(r);
     free(phi);
@@ -399,6 +404,7 @@ static thx_status transfer(thx_ctx *ctx, const thx_model *m, const int32_t *rows
         thx_fem_system_describe(P.sys, info->ksp, info->pc, &info->ranks);
         thx_fem_system_factor_info(P.sys, &info->factor);
         info->t_assemble = P.t_assemble;
+        info->assembly = P.assembly;
         info->t_solve = tsolve;
         info->it_min = it_min;
         info->it_max = it_max;

@@ -49,6 +49,22 @@ thx_status thx_fem_assemble(thx_ctx *ctx, const thx_volume *v, const unsigned ch
 thx_status thx_fem_assemble_rows(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region,
                                  const unsigned char *rows, thx_csr *K);
 
+/* What thx_fem_assemble_kept did. */
+typedef struct {
+    int kept;       /* 1: the matrix was read from the cache, not assembled */
+    double seconds; /* the whole call: the key, the read and its checks, or the assembly and the write */
+    char note[256]; /* why the matrix could not be kept (empty: nothing to say) */
+} thx_fem_assembly_info;
+
+/* thx_fem_assemble's matrix, kept between runs in the user's cache directory (thorax/core/cache.h) as
+ * stiffness-KEY.bin, KEY the SHA-256 of the nodes, the tetrahedra, their regions, the conductivities and
+ * use_region. A kept file is used only when it reads back whole and is a stiffness matrix (rows and
+ * columns in order, rows summing to zero, a positive diagonal, symmetric); otherwise the matrix is
+ * assembled and the file written anew. The same matrix to the bit either way. A file that cannot be
+ * written is a note, not an error. */
+thx_status thx_fem_assemble_kept(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K,
+                                 thx_fem_assembly_info *info);
+
 /* Nodes used by the enabled tetrahedra (1) or not (0), n_nodes bytes. */
 thx_status thx_fem_active_nodes(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, unsigned char **active);
 
@@ -267,6 +283,7 @@ typedef struct {
     long it_total;
     double max_residual;
     double t_assemble, t_setup, t_solve; /* seconds: stiffness, matrix + preconditioner, all solves */
+    thx_fem_assembly_info assembly; /* the stiffness matrix kept from an earlier run (one rank) or assembled */
     double t_matrix;        /* of t_setup: handing the matrix to PETSc */
     char ksp[32], pc[32];   /* solver in use */
     int ranks;
@@ -457,6 +474,7 @@ typedef struct {
     double voltage[16];      /* mean potential of each patch, V */
     int iterations;
     double residual, t_assemble, t_setup, t_solve;
+    thx_fem_assembly_info assembly; /* the stiffness matrix kept from an earlier run or assembled */
     char ksp[32], pc[32];
     int ranks;
 } thx_defib_report;

@@ -1,0 +1,43 @@
+/*
+ * thorax/core/cache.h — the user's cache directory: what a run computes from its inputs alone (a mesh's
+ * fill-reducing ordering and symbolic factor, its stiffness matrix) kept for the next run on the same
+ * inputs (docs/design/parallel.md, "The stiffness matrix kept"). Each file is named WHAT-KEY.bin, KEY
+ * the SHA-256 of everything it depends on, and is written by its module to a temporary name and renamed;
+ * a file that does not read back whole and right is ignored and computed again. The directory is kept
+ * under a size (THORAX_CACHE_MAX): the files used least recently go first, and only files of thorax's
+ * own names are ever removed.
+ */
+#ifndef THORAX_CORE_CACHE_H
+#define THORAX_CORE_CACHE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* $THORAX_CACHE_DIR, else $XDG_CACHE_HOME/thorax, else $HOME/.cache/thorax; NULL when none can be named.
+ * Written into buf (n bytes). */
+const char *thx_cache_dir(char *buf, size_t n);
+
+/* DIR/WHAT-KEY.bin, KEY as 64 lowercase hex digits. */
+void thx_cache_path(char *buf, size_t n, const char *dir, const char *what, const unsigned char key[32]);
+
+/* A cache file read and used: its time set to now, so the trim keeps it over older ones. */
+void thx_cache_used(const char *path);
+
+/* The size the directory is kept under: THORAX_CACHE_MAX in bytes (a K, M or G suffix allowed), else
+ * 4 GiB. A value that does not parse gives the default. */
+uint64_t thx_cache_max_bytes(void);
+
+/* Removes the least recently used of thorax's cache files (names WHAT-KEY.bin with WHAT one of
+ * ordering, symbolic, stiffness and KEY 64 hex digits) until those left total at most max_bytes; never
+ * `keep` (the file just written), never a file of another name. Returns how many were removed. */
+int thx_cache_trim(const char *dir, uint64_t max_bytes, const char *keep);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
