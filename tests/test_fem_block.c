@@ -647,6 +647,37 @@ static void rows_tests(thx_ctx *ctx)
         printf("solve_rows (%s): %zu of %zu rows, %zu frames, block %zu: %.1e from the columns of every node\n", how[h], m,
                n, R, b.block, d);
         if (h == 0) {
+            /* the rows alone: the backward sweep pruned, the block checked by two combinations of its columns
+               (fem.h, thx_fem_solve_stats); a column made wrong by 1e-6 of itself is found, one by 1e-13 is
+               within rounding's reach and passes */
+            printf("solve_rows (own): backward sweep %.0f %% of its flops, check %.1e, combined residual %.1e\n",
+                   100 * b.backward_share, b.check, b.residual);
+            CHECK(b.backward_share > 0 && b.backward_share < 1 && b.check < 1e-13 && b.residual < 1e-13);
+#ifdef _OPENMP
+            /* the columns dealt to 2 and 3 threads: the partial sums of the check added in the threads' order */
+            double *out1 = malloc(m * R * sizeof *out1);
+            int was = omp_get_max_threads();
+            for (int th = 2; th <= 3; th++) {
+                omp_set_num_threads(th);
+                CHECK_OK(ctx, thx_fem_solve_rows(ctx, S, pnode, np, pres, R, 0, rows, m, out1, &b));
+                CHECK(rel_diff(out1, want, m * R) < 1e-14 && b.check < 1e-13 && b.residual < 1e-13);
+                printf("solve_rows (own), %d threads: %.1e from the columns of every node, check %.1e\n", th,
+                       rel_diff(out1, want, m * R), b.check);
+            }
+            omp_set_num_threads(was);
+            free(out1);
+#endif
+            for (int spoil = 0; spoil < 2; spoil++) {
+                PetscOptionsSetValue(NULL, "-thorax_test_spoil_column", "7");
+                PetscOptionsSetValue(NULL, "-thorax_test_spoil_by", spoil ? "1e-13" : "1e-6");
+                thx_status sp = thx_fem_solve_rows(ctx, S, pnode, np, pres, R, 0, rows, m, out, &b);
+                PetscOptionsClearValue(NULL, "-thorax_test_spoil_column");
+                PetscOptionsClearValue(NULL, "-thorax_test_spoil_by");
+                printf("solve_rows (own), column 7 made wrong by %s: %s\n", spoil ? "1e-13" : "1e-6",
+                       sp ? thx_ctx_message(ctx) : "passed");
+                if (!spoil) CHECK(sp == THX_EINTERNAL && strstr(thx_ctx_message(ctx), "disagrees") != NULL);
+                else CHECK(sp == THX_OK && b.check < 1e-9);
+            }
             /* a prescribed node left out, and a free node given a value */
             thx_status bad = thx_fem_solve_rows(ctx, S, pnode, np - 1, pres, R, 0, rows, m, out, &b);
             CHECK(bad == THX_EINTERNAL && strstr(thx_ctx_message(ctx), "has no value") != NULL);

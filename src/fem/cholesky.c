@@ -227,7 +227,61 @@ const int64_t *thx_chol_iperm(const thx_chol *f) { return f->iperm; }
 
 size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ? f->max_below : 1) * r * sizeof(double); }
 
+size_t thx_chol_nsuper(const thx_chol *f) { return (size_t)f->y.nsuper; }
+
+double thx_chol_needed(const thx_chol *f, const int64_t *want, size_t m, unsigned char *need)
+{
+    const int64_t *super = f->y.super, *pi = f->y.pi, *Ls = f->y.rows;
+    const size_t ns = (size_t)f->y.nsuper;
+    memset(need, 0, ns);
+    for (size_t i = 0; i < m; i++) {
+        /* the supernode holding factor row want[i]: the last s with super[s] <= row */
+        size_t lo = 0, hi = ns;
+        while (hi - lo > 1) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (super[mid] <= want[i]) lo = mid;
+            else hi = mid;
+        }
+        need[lo] = 1;
+    }
+    /* a parent (the supernode of the first row below the diagonal block) comes after its children */
+    double all = 0, kept = 0;
+    for (size_t s = 0; s < ns; s++) {
+        int64_t nscol = super[s + 1] - super[s], nsrow = pi[s + 1] - pi[s];
+        double w = (double)nscol * ((double)nscol + 2.0 * (double)(nsrow - nscol));
+        all += w;
+        if (!need[s]) continue;
+        kept += w;
+        if (nsrow > nscol) {
+            int64_t row = Ls[pi[s] + nscol];
+            size_t lo = s + 1, hi = ns;
+            while (hi - lo > 1) {
+                size_t mid = lo + (hi - lo) / 2;
+                if (super[mid] <= row) lo = mid;
+                else hi = mid;
+            }
+            need[lo] = 1;
+        }
+    }
+    return all > 0 ? kept / all : 1;
+}
+
+void thx_chol_zero_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach)
+{
+    const int64_t *super = f->y.super;
+    const size_t ns = (size_t)f->y.nsuper;
+    for (size_t s = 0; s < ns; s++)
+        if ((need && need[s]) || (reach && reach[s]))
+            memset(X + (size_t)super[s] * r, 0, (size_t)(super[s + 1] - super[s]) * r * sizeof *X);
+}
+
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
+{
+    return thx_chol_solve_rows_needed(f, X, r, E, NULL, NULL);
+}
+
+double thx_chol_solve_rows_needed(const thx_chol *f, double *X, size_t r, double *E, const unsigned char *need,
+                                  const unsigned char *reach)
 {
     double flops = 0;
     const int64_t *super = f->y.super, *pi = f->y.pi, *px = f->y.px, *Ls = f->y.rows;
@@ -239,6 +293,7 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
        whose rows are all zero (no right-hand side there, no update from below: the forward problem's b lives
        at the nodes next to the heart) is skipped: its rows stay zero and it updates nothing, exactly. */
     for (size_t s = 0; s < ns; s++) {
+        if (reach && !reach[s]) continue;
         int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
         const double *L1 = Lx + px[s];
         double *Xs = X + (size_t)super[s] * r;
@@ -258,6 +313,7 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
     }
     /* backward: L^T X = Y */
     for (size_t s = ns; s-- > 0;) {
+        if (need && !need[s]) continue;
         int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
         const double *L1 = Lx + px[s];
         double *Xs = X + (size_t)super[s] * r;

@@ -64,6 +64,25 @@ size_t thx_chol_work_bytes(const thx_chol *f, size_t r);
  * Returns the flops done (the triangular blocks' r nscol^2 and the rectangles' 2 r nscol nb, both
  * sweeps). */
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work);
+/* The same with the backward sweep kept to the supernodes marked in need (nsuper bytes; NULL: all):
+ * the rows of the other supernodes are left as the forward sweep made them. need from
+ * thx_chol_needed: a row's answer depends on its supernode and that supernode's ancestors alone, so
+ * the rows asked for come out the same to the bit as with every supernode. reach (NULL: every
+ * supernode may hold a nonzero): thx_chol_needed of the rows where B may be nonzero, the supernodes
+ * the forward sweep can reach; the others are skipped without reading their rows (they are zero), so
+ * pages of X no sweep writes are never touched. */
+double thx_chol_solve_rows_needed(const thx_chol *f, double *X, size_t r, double *work, const unsigned char *need,
+                                  const unsigned char *reach);
+/* The factor's supernodes (thx_chol_nsuper of them) into need: 1 for those holding one of the m factor
+ * rows given (in the factor's order) and their ancestors, else 0. Returns the share of the backward
+ * sweep's flops they hold (0 .. 1). */
+size_t thx_chol_nsuper(const thx_chol *f);
+/* Zeros, in X (r columns, as thx_chol_solve_rows_needed takes it), the rows of the supernodes marked in
+ * need or reach, the only rows the sweeps write: X's other pages are never touched. Meant for an X fresh
+ * from calloc (all zero, no page touched yet): a page written first costs one fault, where one read
+ * first (the sweeps' updates read before they write) costs two and a TLB shootdown. */
+void thx_chol_zero_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach);
+double thx_chol_needed(const thx_chol *f, const int64_t *rows, size_t m, unsigned char *need);
 
 
 #endif

@@ -191,6 +191,8 @@ static thx_status epi_solve_rows(thx_ctx *ctx, const thx_model *m, const thx_ser
     r->it_max = ss.iterations;
     r->it_total = ss.iterations_total;
     r->max_residual = ss.residual;
+    r->backward_share = ss.backward_share;
+    r->check = ss.check;
     r->t_solve = ss.seconds;
     if (ss.block) r->block = ss.block;
     if (o->progress) o->progress(o->user, nf, nf);

@@ -135,6 +135,11 @@ typedef struct {
     double seconds;
     int converged;     /* KSPConvergedReason > 0 */
     size_t block;      /* thx_fem_solve_rows: the most columns solved at once (0: not said) */
+    /* thx_fem_solve_rows on thorax's own factor: the backward sweep kept to the supernodes the rows need
+       (their share of its flops; 0: every supernode, every column's residual), and each block checked by
+       two combinations of its columns solved in full: residual is theirs, check the largest difference at
+       the rows between them and the columns' answers combined, relative to the combination's scale */
+    double backward_share, check;
 } thx_fem_solve_stats;
 
 /*
@@ -282,6 +287,7 @@ typedef struct {
     int it_min, it_max;     /* iterations per frame */
     long it_total;
     double max_residual;
+    double backward_share, check; /* the outer surface alone on thorax's own factor: thx_fem_solve_stats's */
     double t_assemble, t_setup, t_solve; /* seconds: stiffness, matrix + preconditioner, all solves */
     thx_fem_assembly_info assembly; /* the stiffness matrix kept from an earlier run (one rank) or assembled */
     double t_matrix;        /* of t_setup: handing the matrix to PETSc */
