@@ -40,6 +40,20 @@ grep -q "could not be loaded ($WORK/fake.so: " err.log || fail "foreign solver m
 [ -f sol/solution.json ] && [ -f sol/torso.raw ] || fail "solution files"
 ntorso=$(grep -A5 '"name":	"torso"' model/model.json | grep n_nodes | tr -dc 0-9)
 "$THORAX" series info sol/torso.raw | grep -q "^rows *$ntorso$" || fail "torso rows"
+# the stiffness matrix kept in a cache of its own: assembled on the first run, read on the second, the same
+# potentials to the bit; the outer surface's rows alone, checked by combinations of the frames
+for k in 1 2; do
+    THORAX_CACHE_DIR="$WORK/kcache" "$THORAX" forward model --epicardial beat.raw -o "kept$k" -q
+done
+$PY - <<'EOF' || fail "the stiffness matrix kept: $(grep -E 'assembly_|residual_of|combination' kept2/solution.json)"
+import json
+a, b = (json.load(open('kept%d/solution.json' % k))['solver'] for k in (1, 2))
+assert a['assembly_kept'] is False and b['assembly_kept'] is True
+assert b['residual_of'].startswith('two combinations') and 0 < b['backward_sweep_share'] <= 1
+assert b['combination_check'] < 1e-12 and b['max_relative_residual'] < 1e-12
+EOF
+cmp -s kept1/torso.raw kept2/torso.raw && cmp -s kept1/torso.raw sol/torso.raw || fail "the stiffness matrix kept: other potentials"
+ls "$WORK"/kcache/stiffness-*.bin >/dev/null || fail "no stiffness matrix in the cache"
 
 # 2. two ranks and other PETSc options give the same potentials. The Jacobi-preconditioned CG
 #    solves the 8 frames of beat8.raw (60 ms apart: the whole beat), not the 40 of beat.raw (the
