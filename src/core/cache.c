@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "thorax/core/cache.h"
+#include "thorax/core/fileio.h"
 
 const char *thx_cache_dir(char *buf, size_t n)
 {
@@ -30,6 +31,40 @@ void thx_cache_path(char *buf, size_t n, const char *dir, const char *what, cons
     char hex[65];
     for (int i = 0; i < 32; i++) snprintf(hex + 2 * i, 3, "%02x", key[i]);
     snprintf(buf, n, "%s/%s-%s.bin", dir, what, hex);
+}
+
+int thx_cache_create(thx_cache_file *cf, const char *dir, const char *path, uint64_t bytes, const char *what, char *note,
+                     size_t note_n)
+{
+    cf->f = NULL;
+    if (bytes > thx_cache_max_bytes()) {
+        snprintf(note, note_n, "%s (%.0f MB) is larger than the cache's limit (THORAX_CACHE_MAX), not kept", what,
+                 (double)bytes / 1e6);
+        return 0;
+    }
+    if (thx_make_dirs(dir)) {
+        snprintf(note, note_n, "cannot create the cache directory %s", dir);
+        return 0;
+    }
+    snprintf(cf->tmp, sizeof cf->tmp, "%s.%ld.tmp", path, (long)getpid());
+    if (!(cf->f = fopen(cf->tmp, "wb"))) {
+        snprintf(note, note_n, "cannot write in the cache directory %s", dir);
+        return 0;
+    }
+    return 1;
+}
+
+void thx_cache_commit(thx_cache_file *cf, int ok, const char *dir, const char *path, const char *what, char *note,
+                      size_t note_n)
+{
+    ok = (fclose(cf->f) == 0) && ok;
+    cf->f = NULL;
+    if (!ok || rename(cf->tmp, path)) {
+        unlink(cf->tmp);
+        snprintf(note, note_n, "cannot write %s into the cache directory %s", what, dir);
+        return;
+    }
+    thx_cache_trim(dir, thx_cache_max_bytes(), path);
 }
 
 void thx_cache_used(const char *path)

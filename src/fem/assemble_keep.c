@@ -20,7 +20,7 @@
 #include <unistd.h>
 
 #include "thorax/core/cache.h"
-#include "thorax/core/fileio.h"
+#include "thorax/core/hash.h"
 #include "thorax/core/sha256.h"
 #include "thorax/fem/fem.h"
 
@@ -57,15 +57,8 @@ static void matrix_key(const thx_volume *v, const unsigned char *use_region, uns
     thx_sha256_final(&h, key);
 }
 
-/* A number in [-1, 1) from i alone (splitmix64): the same vectors in every run and every thread. */
-static double probe(uint64_t i)
-{
-    uint64_t z = i + 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return (double)(z >> 11) * 0x1.0p-52 - 1.0;
-}
+/* A number in [-1, 1) from i alone: the same vectors in every run and every thread. */
+static double probe(uint64_t i) { return thx_hash_signed_unit(i); }
 
 /* 1 when K is a stiffness matrix of order n as the assembly makes it: rows in order; columns ascending
    and in range; values finite; each nonempty row with a positive diagonal and summing to zero within
@@ -154,18 +147,11 @@ static void kept_write(const char *dir, const char *path, const unsigned char ke
                        size_t note_n)
 {
     const size_t n = (size_t)K->n_rows, nnz = (size_t)K->row[n];
-    uint64_t bytes = 8 + 32 + 16 + 8 * ((uint64_t)n + 1) + 12 * (uint64_t)nnz + 3 * 32;
-    uint64_t max = thx_cache_max_bytes();
-    if (bytes > max) {
-        snprintf(note, note_n, "the stiffness matrix (%.0f MB) is larger than the cache's limit (THORAX_CACHE_MAX), not kept",
-                 (double)bytes / 1e6);
+    thx_cache_file cf;
+    if (!thx_cache_create(&cf, dir, path, 8 + 32 + 16 + 8 * ((uint64_t)n + 1) + 12 * (uint64_t)nnz + 3 * 32,
+                          "the stiffness matrix", note, note_n))
         return;
-    }
-    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
-    char tmp[4300];
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    FILE *f = cf.f;
     unsigned char d[3][32];
     const void *p[3] = {K->row, K->col, K->val};
     size_t b[3] = {(n + 1) * sizeof *K->row, nnz * sizeof *K->col, nnz * sizeof *K->val};
@@ -175,13 +161,7 @@ static void kept_write(const char *dir, const char *path, const unsigned char ke
     int ok = fwrite(k_magic, 1, 8, f) == 8 && fwrite(key, 1, 32, f) == 32 && fwrite(hdr, sizeof *hdr, 2, f) == 2 &&
              fwrite(K->row, sizeof *K->row, n + 1, f) == n + 1 && fwrite(K->col, sizeof *K->col, nnz, f) == nnz &&
              fwrite(K->val, sizeof *K->val, nnz, f) == nnz && fwrite(d, 1, sizeof d, f) == sizeof d;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, path)) {
-        unlink(tmp);
-        snprintf(note, note_n, "cannot write the stiffness matrix into the cache directory %s", dir);
-        return;
-    }
-    thx_cache_trim(dir, max, path);
+    thx_cache_commit(&cf, ok, dir, path, "the stiffness matrix", note, note_n);
 }
 
 thx_status thx_fem_assemble_kept(thx_ctx *ctx, const thx_volume *v, const unsigned char *use_region, thx_csr *K,

@@ -35,12 +35,6 @@ static void cache_path(char *buf, size_t n, const char *dir, const unsigned char
     thx_cache_path(buf, n, dir, what, key);
 }
 
-/* A file just written: the directory trimmed to its size, the new file kept. */
-static void trimmed(const char *dir, const char *path)
-{
-    thx_cache_trim(dir, thx_cache_max_bytes(), path);
-}
-
 /* 1 when perm (n entries) is a permutation of 0..n-1 */
 static int is_permutation(const int64_t *perm, int64_t n)
 {
@@ -79,15 +73,9 @@ static int order_read(const char *path, int64_t n, const unsigned char key[32], 
 static void order_write(const char *dir, const char *path, int64_t n, const unsigned char key[32], const int64_t *perm,
                         char *note, size_t note_n)
 {
-    if (8 + 8 + 32 + 8 * (uint64_t)n + 32 > thx_cache_max_bytes()) {
-        snprintf(note, note_n, "the ordering is larger than the cache's limit (THORAX_CACHE_MAX), not kept");
-        return;
-    }
-    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
-    char tmp[4300];
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    thx_cache_file cf;
+    if (!thx_cache_create(&cf, dir, path, 8 + 8 + 32 + 8 * (uint64_t)n + 32, "the ordering", note, note_n)) return;
+    FILE *f = cf.f;
     unsigned char sum[32];
     thx_sha256_ctx h;
     thx_sha256_init(&h);
@@ -96,13 +84,7 @@ static void order_write(const char *dir, const char *path, int64_t n, const unsi
     uint64_t nn = (uint64_t)n;
     int ok = fwrite(k_magic, 1, 8, f) == 8 && fwrite(&nn, sizeof nn, 1, f) == 1 && fwrite(key, 1, 32, f) == 32 &&
              fwrite(perm, sizeof *perm, (size_t)n, f) == (size_t)n && fwrite(sum, 1, 32, f) == 32;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, path)) {
-        unlink(tmp);
-        snprintf(note, note_n, "cannot write the ordering into the cache directory %s", dir);
-        return;
-    }
-    trimmed(dir, path);
+    thx_cache_commit(&cf, ok, dir, path, "the ordering", note, note_n);
 }
 
 
@@ -227,16 +209,13 @@ int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key
 void thx_chol_symbolic_keep(const char *dir, int64_t n, const unsigned char key[32], const thx_chol_symbolic *y,
                             char *note, size_t note_n)
 {
-    if (8 + 32 + 4 * 8 + 2 * 8 + 8 * ((uint64_t)n + 3 * ((uint64_t)y->nsuper + 1) + y->ssize) + 32 > thx_cache_max_bytes()) {
-        snprintf(note, note_n, "the symbolic factor is larger than the cache's limit (THORAX_CACHE_MAX), not kept");
-        return;
-    }
-    if (thx_make_dirs(dir)) { snprintf(note, note_n, "cannot create the cache directory %s", dir); return; }
-    char path[4200], tmp[4300];
+    char path[4200];
     cache_path(path, sizeof path, dir, key, "symbolic");
-    snprintf(tmp, sizeof tmp, "%s.%ld.tmp", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    if (!f) { snprintf(note, note_n, "cannot write in the cache directory %s", dir); return; }
+    thx_cache_file cf;
+    if (!thx_cache_create(&cf, dir, path, 8 + 32 + 4 * 8 + 2 * 8 + 8 * ((uint64_t)n + 3 * ((uint64_t)y->nsuper + 1) + y->ssize) + 32,
+                          "the symbolic factor", note, note_n))
+        return;
+    FILE *f = cf.f;
     uint64_t hdr[4] = {(uint64_t)n, (uint64_t)y->nsuper, (uint64_t)y->ssize, (uint64_t)y->xsize};
     double counts[2] = {y->flops, y->lnz};
     size_t ns = (size_t)y->nsuper;
@@ -256,13 +235,7 @@ void thx_chol_symbolic_keep(const char *dir, int64_t n, const unsigned char key[
              fwrite(y->super, sizeof *y->super, ns + 1, f) == ns + 1 && fwrite(y->pi, sizeof *y->pi, ns + 1, f) == ns + 1 &&
              fwrite(y->px, sizeof *y->px, ns + 1, f) == ns + 1 && fwrite(y->rows, sizeof *y->rows, y->ssize, f) == y->ssize &&
              fwrite(sum, 1, 32, f) == 32;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, path)) {
-        unlink(tmp);
-        snprintf(note, note_n, "cannot write the symbolic factor into the cache directory %s", dir);
-        return;
-    }
-    trimmed(dir, path);
+    thx_cache_commit(&cf, ok, dir, path, "the symbolic factor", note, note_n);
 }
 
 int thx_chol_symbolic_copy(thx_chol_symbolic *y, int64_t n, int64_t nsuper, const int64_t *perm, const int64_t *super,

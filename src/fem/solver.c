@@ -14,6 +14,7 @@
 #include <sys/mman.h>
 
 #include "fem/cholesky.h"
+#include "thorax/core/hash.h"
 #include "thorax/core/cores.h"
 #include "thorax/fem/fem.h"
 #ifdef _OPENMP
@@ -718,15 +719,8 @@ typedef struct {
    of 512) */
 #define THX_FEM_CHECK_RTOL 1e-9
 
-/* A number in [-1, 1) from i alone (splitmix64): the same weights whatever the threads. */
-static double check_weight(uint64_t i)
-{
-    uint64_t z = i + 0x9e3779b97f4a7c15ull;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return (double)(z >> 11) * 0x1.0p-52 - 1.0;
-}
+/* A number in [-1, 1) from i alone: the same weights whatever the threads. */
+static double check_weight(uint64_t i) { return thx_hash_signed_unit(i); }
 
 /* ||b_j||^2 of the r columns of B (row-major, the factor's order) where b can be nonzero: the free rows
    coupled to a prescribed node (no loads on this path). */

@@ -12,6 +12,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -30,6 +31,22 @@ void thx_cache_used(const char *path);
 /* The size the directory is kept under: THORAX_CACHE_MAX in bytes (a K, M or G suffix allowed), else
  * 4 GiB. A value that does not parse gives the default. */
 uint64_t thx_cache_max_bytes(void);
+
+/* A cache file being written: a temporary name beside path, renamed over it when whole. */
+typedef struct {
+    FILE *f;
+    char tmp[4300];
+} thx_cache_file;
+
+/* Opens the temporary file for path (DIR/WHAT-KEY.bin) in dir, made if missing, for `bytes` bytes; 0 and a
+ * note (naming `what`, e.g. "the ordering") when it cannot be kept: larger than THORAX_CACHE_MAX, no
+ * directory, no file. */
+int thx_cache_create(thx_cache_file *cf, const char *dir, const char *path, uint64_t bytes, const char *what, char *note,
+                     size_t note_n);
+/* Closes it; when ok and closed whole, renames it over path and trims the directory to its size (path
+ * kept), else removes it and writes a note. */
+void thx_cache_commit(thx_cache_file *cf, int ok, const char *dir, const char *path, const char *what, char *note,
+                      size_t note_n);
 
 /* Removes the least recently used of thorax's cache files (names WHAT-KEY.bin with WHAT one of
  * ordering, symbolic, stiffness and KEY 64 hex digits) until those left total at most max_bytes; never
