@@ -1,7 +1,8 @@
 /*
  * The PETSc side of thorax/fem/fem.h: the free-node system K_ff, its KSP, and
  * solves. Every rank holds the whole assembled matrix (thx_csr) and hands
- * PETSc its own block of rows; results are gathered to every rank.
+ * PETSc its own block of rows; results are gathered to every rank. thorax's own direct path (one rank,
+ * many right-hand sides, its own factor) is src/fem/solver_own.c; what both share, src/fem/solver_internal.h.
  */
 #include <dlfcn.h>
 #include <errno.h>
@@ -13,10 +14,7 @@
 #include <string.h>
 #include <sys/mman.h>
 
-#include "fem/cholesky.h"
-#include "thorax/core/hash.h"
-#include "thorax/core/cores.h"
-#include "thorax/fem/fem.h"
+#include "fem/solver_internal.h"
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -79,73 +77,7 @@ int thx_fem_options_unused(int list)
     return (int)left;
 }
 
-/* A thread's buffers for the own path: x (b before the solve) of up to r columns (row-major, the factor's order), the
-   solve's work space, the residual's sums. Kept across blocks (fresh pages cost a fault each, and faults
-   are dear on virtual machines). */
-#define THX_FEM_OWN_THREADS 64
-typedef struct own_work_s {
-    double *X, *E, *acc, *P; /* P: the prescribed values of the r columns, row-major */
-    int zero;                /* X is all zeros (fresh from calloc: its pages not yet touched) */
-    size_t r;
-    double flops; /* the solves' flops so far (thx_chol_solve_rows) */
-} own_work;
 
-static void *big_alloc(size_t bytes)
-{
-    void *p = NULL;
-    size_t align = 64;
-    bytes = (bytes + align - 1) / align * align;
-    return posix_memalign(&p, align, bytes ? bytes : align) ? NULL : p;
-}
-
-static void own_work_free(own_work *w)
-{
-    free(w->X);
-    free(w->P);
-    free(w->E);
-    free(w->acc);
-    memset(w, 0, sizeof *w);
-}
-
-struct thx_fem_system {
-    int32_t n;           /* nodes */
-    int32_t nf, nd;      /* free, prescribed */
-    int32_t *fidx;       /* node -> free index or -1 */
-    int32_t *didx;       /* node -> prescribed index or -1 */
-    int32_t *free_node;  /* free index -> node */
-    int32_t *pres_node;  /* prescribed index -> node */
-    int32_t pinned;      /* node pinned to 0 (pure Neumann), or -1 */
-    PetscInt rstart, rend;
-    thx_csr kfd;         /* own free rows x prescribed columns */
-    Mat A;
-    KSP ksp;
-    Vec x, b, xall;
-    Vec r;               /* work vector for the true residual of a direct solve */
-    VecScatter toall;
-    double t_setup;      /* the matrix (creation) and the preconditioner (KSPSetUp) */
-    double t_matrix;     /* the matrix alone */
-    int pc_ready;
-    size_t block;        /* columns per dense block (thx_fem_system_set_block), 0 = automatic */
-    /* thorax's own direct path (src/fem/cholesky.h), one rank: K_ff's CSR kept, and its factor */
-    PetscInt *ii, *jj;
-    PetscScalar *aa;
-    int own;             /* 1: many right-hand sides on one rank, no solver chosen on the command line */
-    thx_chol *chol;
-    thx_chol_info chol_info;
-    own_work *work;          /* THX_FEM_OWN_THREADS of them */
-};
-
-/* A PETSc call inside a thx function: on failure record the message and jump to done. */
-#define PCALL(ctx, call)                                                                      \
-    do {                                                                                      \
-        PetscErrorCode e_ = (call);                                                           \
-        if (e_) {                                                                             \
-            const char *txt_ = NULL;                                                          \
-            PetscErrorMessage(e_, &txt_, NULL);                                               \
-            st = thx_error(ctx, THX_ESOLVER, "PETSc: %s: %s", #call, txt_ ? txt_ : "error"); \
-            goto done;                                                                        \
-        }                                                                                     \
-    } while (0)
 
 thx_status thx_fem_system_create(thx_ctx *ctx, const thx_csr *K, const unsigned char *kind, int pin_one,
                                  thx_fem_system **out)
@@ -323,7 +255,7 @@ void thx_fem_system_destroy(thx_fem_system **sp)
     thx_csr_free(&s->kfd);
     thx_chol_free(&s->chol);
     if (s->work)
-        for (int t = 0; t < THX_FEM_OWN_THREADS; t++) own_work_free(&s->work[t]);
+        for (int t = 0; t < THX_FEM_OWN_THREADS; t++) fem_own_work_free(&s->work[t]);
     free(s->work);
     free(s->ii);
     free(s->jj);
@@ -386,22 +318,6 @@ void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32],
     if (ranks) *ranks = n;
 }
 
-/* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
-#define THX_FEM_BLOCK_BYTES ((size_t)512 << 20)
-#define THX_FEM_BLOCK_MAX 64
-/* The same for thorax's own path: its blocks are split among the threads, and wider ones keep BLAS busier. */
-#define THX_FEM_OWN_BYTES ((size_t)768 << 20)
-#define THX_FEM_OWN_MAX 256
-/* ... and for thx_fem_solve_rows, whose blocks need no column of every node: x alone within THX_FEM_OWN_BYTES */
-#define THX_FEM_OWN_ROWS_MAX 512
-/* A factorization's answer whose relative residual ||b - A x|| / ||b|| is above this is refused: a
- * backward-stable Cholesky or LU leaves 1e-15 on these matrices; 1e-3 .. 1e+0 is a singular system
- * (currents into a piece of the mesh with no prescribed potential) whose tiny pivot the package took. */
-#define THX_FEM_DIRECT_RTOL 1e-6
-
-/* A factorization in use: -ksp_type preonly with -pc_type cholesky or lu (thx_fem_system_hint_rhs's choice for
- * many right-hand sides, or the command line's). Only then does a dense block of right-hand sides go to the
- * factor at once. */
 static int is_direct(const thx_fem_system *s)
 {
     KSPType kt = NULL;
@@ -474,492 +390,17 @@ void thx_fem_system_hint_rhs(thx_fem_system *s, size_t n_rhs)
     s->own = size == 1 && s->ii && strcmp(how, "petsc") != 0;
 }
 
-static int blas_threads(int set);
-static void set_blas_threads(int n);
-static thx_status factor_threads(thx_ctx *ctx, int was, int *use);
-
-/* The own path's factorization, once (timed as the setup, as PETSc's is). */
-static thx_status own_factor(thx_ctx *ctx, thx_fem_system *s)
-{
-    if (s->chol) return THX_OK;
-    double t0 = thx_wtime();
-    thx_status st = THX_OK;
-    size_t n = (size_t)s->nf, nz = (size_t)s->ii[n];
-    int64_t *rowp = thx_malloc(ctx, (n + 1) * sizeof *rowp);
-    int32_t *col = thx_malloc(ctx, (nz ? nz : 1) * sizeof *col);
-    if (!rowp || !col) { st = THX_ENOMEM; goto done; }
-    for (size_t i = 0; i <= n; i++) rowp[i] = (int64_t)s->ii[i];
-    for (size_t k = 0; k < nz; k++) col[k] = (int32_t)s->jj[k];
-    int was = blas_threads(0), use = -1;
-    st = factor_threads(ctx, was, &use);
-    if (st != THX_OK) goto done;
-    if (use > 0 && use != was) blas_threads(use);
-    /* the factor's values: ours (src/fem/multifrontal.h), or CHOLMOD's with -thorax_factor cholmod */
-    char how[16] = "thorax";
-    PetscOptionsGetString(NULL, NULL, "-thorax_factor", how, sizeof how, NULL);
-    if (strcmp(how, "thorax") && strcmp(how, "cholmod")) {
-        st = thx_error(ctx, THX_EINPUT, "-thorax_factor %s: thorax (the default: our multifrontal factorization) or "
-                       "cholmod (CHOLMOD's)", how);
-        goto done;
-    }
-    /* BLAS's threads (CHOLMOD's factorization; the top of ours): the free cores (factor_threads). Our subtrees'
-       threads: the cores this process may use, even on a loaded machine (they wait for none but the last:
-       beside three busy loops the high phantom's factorization took 5.8 s on one, 3.5 s for the subtrees on
-       two, docs/design/parallel.md), unless THORAX_FACTOR_THREADS or OPENBLAS_NUM_THREADS says. */
-    int tree = use;
-    if (!getenv("THORAX_FACTOR_THREADS") && !getenv("OPENBLAS_NUM_THREADS")) {
-        tree = thx_cores_allowed();
-#ifdef _OPENMP
-        tree = tree < omp_get_max_threads() ? tree : omp_get_max_threads();
-#else
-        tree = 1;
-#endif
-    }
-    thx_chol_opts co = {tree > 0 ? tree : 1, use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod")};
-    st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &co, &s->chol, &s->chol_info);
-    if (was > 0) blas_threads(was);
-    s->chol_info.blas_threads = use > 0 ? use : 0;
-    if (st == THX_ESOLVER && s->chol_info.not_posdef) {
-        /* a singular system (a piece of the mesh with no prescribed potential): PETSc's interface to the
-           same package decides, as before the own path existed (a consistent system may still solve) */
-        s->own = 0;
-        st = THX_OK;
-    }
-    s->pc_ready = st == THX_OK && s->own;
-done:
-    free(rowp);
-    free(col);
-    s->t_setup += thx_wtime() - t0;
-    return st;
-}
-
-static void set_blas_threads(int n) { blas_threads(n); }
-
-/* OpenBLAS's thread count, where OpenBLAS is the BLAS (else -1): our threads each call BLAS alone. */
-static int blas_threads(int set)
-{
-    static void (*setn)(int);
-    static int (*getn)(void);
-    static int looked;
-    if (!looked) {
-        setn = (void (*)(int))dlsym(RTLD_DEFAULT, "openblas_set_num_threads");
-        getn = (int (*)(void))dlsym(RTLD_DEFAULT, "openblas_get_num_threads");
-        looked = 1;
-    }
-    if (!setn || !getn) return -1;
-    int was = getn();
-    if (set > 0) setn(set);
-    return was;
-}
-
-/* The OpenBLAS threads for CHOLMOD's factorization into *use (was: OpenBLAS's count, -1 when it is not
- * the BLAS; *use -1 then): $THORAX_FACTOR_THREADS when set (1 to 1024, else refused); OpenBLAS's own when the user set OPENBLAS_NUM_THREADS; else as
- * many as the cores free now, at most was. Its threads meet at every BLAS call, and a thread whose
- * core another process holds makes its partner spin: 27 s against 6 s for the high phantom's factor
- * at load 3.5 (docs/design/parallel.md, "CHOLMOD's BLAS threads under load"). */
-static thx_status factor_threads(thx_ctx *ctx, int was, int *use)
-{
-    *use = -1;
-    if (was < 1) return THX_OK;
-    const char *e = getenv("THORAX_FACTOR_THREADS");
-    if (e && *e) {
-        char *end;
-        errno = 0;
-        long n = strtol(e, &end, 10);
-        if (end == e || *end || errno || n < 1 || n > 1024)
-            return thx_error(ctx, THX_EINPUT, "THORAX_FACTOR_THREADS=%s: the factorization's BLAS threads, a count from 1 to 1024",
-                             e);
-        *use = (int)n;
-        return THX_OK;
-    }
-    int free_cores = getenv("OPENBLAS_NUM_THREADS") ? was : thx_cores_free();
-    *use = free_cores < was ? free_cores : was;
-    return THX_OK;
-}
-
-/* b = load_f - K_fd phi_d for columns c0 .. c0 + r - 1, row-major in the factor's order. B_zero: B holds
-   zeros already (a buffer fresh from calloc, whose pages are not touched: a row the solve never writes then
-   costs no page). */
-static void own_rhs(const thx_fem_system *s, const double *P, const double *load, size_t c0, size_t r,
-                    double *restrict B, int B_zero)
-{
-    const size_t n = (size_t)s->n, nf = (size_t)s->nf;
-    const int64_t *iperm = thx_chol_iperm(s->chol);
-    if (!B_zero) memset(B, 0, nf * r * sizeof *B);
-    for (size_t q = 0; q < nf; q++) {
-        double *restrict bq = B + (size_t)iperm[q] * r;
-        for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
-            const double a = s->kfd.val[e], *pd = P + (size_t)s->kfd.col[e] * r;
-            for (size_t j = 0; j < r; j++) bq[j] -= a * pd[j];
-        }
-    }
-    if (load)
-        for (size_t j = 0; j < r; j++) {
-            const double *lj = load + (c0 + j) * n;
-            for (size_t q = 0; q < nf; q++) B[(size_t)iperm[q] * r + j] += lj[s->free_node[q]];
-        }
-}
-
-/* Rows of phi, tiled: T[i * r + j] = phi[(c0 + j) * n + node[i]] for m nodes (a block of rows at a time,
-   so that each column's reads stay near each other). */
-static void own_gather_rows(const double *phi, size_t n, size_t c0, size_t r, const int32_t *node, size_t m,
-                            double *restrict T)
-{
-    const size_t tile = 256;
-    for (size_t i0 = 0; i0 < m; i0 += tile) {
-        size_t i1 = i0 + tile < m ? i0 + tile : m;
-        for (size_t j = 0; j < r; j++) {
-            const double *pj = phi + (c0 + j) * n;
-            for (size_t i = i0; i < i1; i++) T[i * r + j] = pj[node[i]];
-        }
-    }
-}
-
-/* Row q of b (original free numbering) for the r columns into out: load_f - K_fd phi_d, as own_rhs puts it
-   (P: the prescribed values, row-major, own_gather_rows). */
-static inline __attribute__((always_inline)) void own_rhs_row(const thx_fem_system *s, const double *P, const double *load, size_t c0, size_t r,
-                               size_t q, double *restrict out)
-{
-    const size_t n = (size_t)s->n;
-    for (size_t j = 0; j < r; j++) out[j] = 0;
-    for (int64_t e = s->kfd.row[q]; e < s->kfd.row[q + 1]; e++) {
-        const double a = s->kfd.val[e], *pd = P + (size_t)s->kfd.col[e] * r;
-        for (size_t j = 0; j < r; j++) out[j] -= a * pd[j];
-    }
-    if (load) {
-        const double *lq = load + c0 * n + (size_t)s->free_node[q];
-        for (size_t j = 0; j < r; j++) out[j] += lq[j * n];
-    }
-}
-
-/* rn[j] = ||b - K_ff x||^2 and bn[j] = ||b||^2 for the r columns, rows visited in the factor's order (their
-   neighbours are near them there); b rebuilt row by row from the prescribed values P and the loads (not
-   kept: a block of it is as large as x). */
-static inline __attribute__((always_inline)) void
-own_residual_body(const thx_fem_system *s, const double *P, const double *load, size_t c0, const double *restrict X,
-                  size_t r, double *restrict acc, double *restrict rn, double *restrict bn)
-{
-    const size_t nf = (size_t)s->nf;
-    const int64_t *perm = thx_chol_perm(s->chol), *iperm = thx_chol_iperm(s->chol);
-    double *restrict bq = acc + r;
-    for (size_t j = 0; j < r; j++) rn[j] = bn[j] = 0;
-    for (size_t p = 0; p < nf; p++) {
-        const size_t q = (size_t)perm[p];
-        own_rhs_row(s, P, load, c0, r, q, bq);
-#pragma omp simd
-        for (size_t j = 0; j < r; j++) acc[j] = bq[j];
-        for (PetscInt e = s->ii[q]; e < s->ii[q + 1]; e++) {
-            const double a = s->aa[e];
-            const double *restrict xc = X + (size_t)iperm[s->jj[e]] * r;
-#pragma omp simd
-            for (size_t j = 0; j < r; j++) acc[j] -= a * xc[j];
-        }
-#pragma omp simd
-        for (size_t j = 0; j < r; j++) {
-            rn[j] += acc[j] * acc[j];
-            bn[j] += bq[j] * bq[j];
-        }
-    }
-}
-
-/* The same compiled twice: for AVX2 with FMA (four products a step instead of SSE2's two; chosen at run time)
-   and for any x86-64. The residual is a check: its last bits may differ between the two. */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2,fma"))) static void
-own_residual_avx2(const thx_fem_system *s, const double *P, const double *load, size_t c0, const double *restrict X,
-                  size_t r, double *restrict acc, double *restrict rn, double *restrict bn)
-{
-    own_residual_body(s, P, load, c0, X, r, acc, rn, bn);
-}
-#define THX_HAVE_AVX2_RESIDUAL 1
-#endif
-
-static void own_residual(const thx_fem_system *s, const double *P, const double *load, size_t c0,
-                         const double *restrict X, size_t r, double *restrict acc, double *restrict rn,
-                         double *restrict bn)
-{
-#ifdef THX_HAVE_AVX2_RESIDUAL
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-        own_residual_avx2(s, P, load, c0, X, r, acc, rn, bn);
-        return;
-    }
-#endif
-    own_residual_body(s, P, load, c0, X, r, acc, rn, bn);
-}
-
-/* Where a block's right-hand sides come from and its answers go: phi's columns (n values each, the prescribed
-   values in, every node's value out), or the caller's prescribed values (pres: np values a column, value c for
-   the system's prescribed node whose from-index is c; from[d] = -2: the pinned node, 0) in and the values at
-   rows[0 .. m - 1] out (out: m values a column). */
-typedef struct {
-    double *phi;
-    const double *load;
-    const double *pres;
-    const int32_t *from;
-    size_t np;
-    const int32_t *rows;
-    size_t m;
-    double *out;
-    /* rows out: the backward sweep kept to the supernodes the rows need (thx_chol_needed), and the check's
-       partial sums per thread (own_check): the prescribed values and the answers at the rows of two fixed
-       combinations of the columns, and their scales */
-    const unsigned char *need, *reach;
-    double *part_p, *part_y, *part_s; /* T x nd x 2, T x m x 2, T x 2 */
-    size_t spoil;    /* the check's test: column spoil (1-based, 0: none) written times 1 + spoil_by */
-    double spoil_by;
-} own_io;
-
-/* The check of a block whose answers are kept at some rows alone (the backward sweep pruned): two fixed
-   combinations of its columns, column j weighted by w = u_j / ||b_j|| (u_j in [-1, 1) from the column's
-   number alone), solved again in full; their residual must be a factorization's, and the rows' answers
-   combined with the same weights must equal theirs. */
-#define THX_FEM_CHECK_COMBOS 2
-/* The combined rows against the combination's own answer: within this of sum_j |w_j| max_i |x_ij| (the
-   two solves differ by rounding alone, about 1e-15 of it; a column off by 1e-6 of itself shows in a block
-   of 512) */
-#define THX_FEM_CHECK_RTOL 1e-9
-
-/* A number in [-1, 1) from i alone: the same weights whatever the threads. */
-static double check_weight(uint64_t i) { return thx_hash_signed_unit(i); }
-
-/* ||b_j||^2 of the r columns of B (row-major, the factor's order) where b can be nonzero: the free rows
-   coupled to a prescribed node (no loads on this path). */
-static void own_rhs_norms(const thx_fem_system *s, const double *B, size_t r, double *restrict bn)
-{
-    const int64_t *iperm = thx_chol_iperm(s->chol);
-    for (size_t j = 0; j < r; j++) bn[j] = 0;
-    for (size_t q = 0; q < (size_t)s->nf; q++) {
-        if (s->kfd.row[q + 1] == s->kfd.row[q]) continue;
-        const double *bq = B + (size_t)iperm[q] * r;
-        for (size_t j = 0; j < r; j++) bn[j] += bq[j] * bq[j];
-    }
-}
-
-/* T[i * r + j] = pres[(c0 + j) * np + from[i]] for the nd prescribed nodes, a tile of rows at a time. */
-static void own_gather_pres(const own_io *io, size_t nd, size_t c0, size_t r, double *restrict T)
-{
-    const size_t tile = 256;
-    for (size_t i0 = 0; i0 < nd; i0 += tile) {
-        size_t i1 = i0 + tile < nd ? i0 + tile : nd;
-        for (size_t j = 0; j < r; j++) {
-            const double *pj = io->pres + (c0 + j) * io->np;
-            for (size_t i = i0; i < i1; i++) T[i * r + j] = io->from[i] >= 0 ? pj[io->from[i]] : 0;
-        }
-    }
-}
-
-/* This thread's share of the check (see THX_FEM_CHECK_COMBOS): its columns' weights, and the prescribed
-   values, the answers at the rows and the scale of each combination, summed over its columns. */
-static void own_check_part(const thx_fem_system *s, const own_io *io, own_work *w, int t, size_t c0, size_t r,
-                           const double *bn)
-{
-    const size_t nd = (size_t)s->nd, m = io->m, C = THX_FEM_CHECK_COMBOS;
-    double *pp = io->part_p + (size_t)t * nd * C, *py = io->part_y + (size_t)t * m * C, *ps = io->part_s + (size_t)t * C;
-    double *wt = w->acc; /* C x r weights (acc holds 4 r) */
-    for (size_t c = 0; c < C; c++) {
-        ps[c] = 0;
-        for (size_t j = 0; j < r; j++) {
-            double u = check_weight(C * (c0 + j) + c);
-            wt[c * r + j] = bn[j] > 0 ? u / sqrt(bn[j]) : 0;
-            double mx = 0;
-            for (size_t i = 0; i < m; i++) mx = fmax(mx, fabs(io->out[(c0 + j) * m + i]));
-            ps[c] += fabs(wt[c * r + j]) * mx;
-        }
-    }
-    for (size_t d = 0; d < nd; d++)
-        for (size_t c = 0; c < C; c++) {
-            double a = 0;
-            for (size_t j = 0; j < r; j++) a += wt[c * r + j] * w->P[d * r + j];
-            pp[d * C + c] = a;
-        }
-    for (size_t i = 0; i < m; i++)
-        for (size_t c = 0; c < C; c++) {
-            double a = 0;
-            for (size_t j = 0; j < r; j++) a += wt[c * r + j] * io->out[(c0 + j) * m + i];
-            py[i * C + c] = a;
-        }
-}
-
-/* k columns through the own factor: dealt to the threads in contiguous groups, each group row-major in the
-   factor's order (src/fem/cholesky.h), its residuals ||b - A x|| from the kept CSR. rel[j]: column j's
-   relative residual. */
-/* The threads own_solve deals k columns to. */
-static int own_threads(size_t k)
-{
-    int T = 1;
-#ifdef _OPENMP
-    T = omp_get_max_threads();
-#endif
-    if (T > THX_FEM_OWN_THREADS) T = THX_FEM_OWN_THREADS;
-    if ((size_t)T > k) T = (int)k;
-    return T < 1 ? 1 : T;
-}
-
-static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, size_t k, double *rel)
-{
-    const size_t n = (size_t)s->n, nf = (size_t)s->nf;
-    double *phi = io->phi;
-    const double *load = io->load;
-    const int T = own_threads(k);
-    const int64_t *iperm = thx_chol_iperm(s->chol);
-    if (!s->work && !(s->work = thx_calloc(ctx, THX_FEM_OWN_THREADS, sizeof *s->work))) return THX_ENOMEM;
-    int failed = 0;
-    int was = T > 1 ? blas_threads(1) : -1;
-#pragma omp parallel for num_threads(T) schedule(static, 1) reduction(| : failed)
-    for (int t = 0; t < T; t++) {
-        size_t c0 = k * (size_t)t / (size_t)T, c1 = k * (size_t)(t + 1) / (size_t)T, r = c1 - c0;
-        own_work *w = &s->work[t];
-        if (w->r < r) {
-            double done = w->flops;
-            own_work_free(w);
-            w->flops = done;
-            w->X = calloc(nf * r, sizeof *w->X);
-            w->zero = 1;
-            w->E = big_alloc(thx_chol_work_bytes(s->chol, r));
-            w->acc = malloc(4 * r * sizeof *w->acc);
-            w->P = malloc(((size_t)s->nd ? (size_t)s->nd : 1) * r * sizeof *w->P);
-            w->r = w->X && w->E && w->acc && w->P ? r : 0;
-        }
-        if (!w->r) failed = 1;
-        else {
-            double *rn = w->acc + 2 * r, *bn = w->acc + 3 * r;
-            if (phi) own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
-            else own_gather_pres(io, (size_t)s->nd, c0, r, w->P);
-            if (w->zero && io->need) thx_chol_zero_rows(s->chol, w->X, r, io->need, io->reach);
-            own_rhs(s, w->P, load, c0, r, w->X, w->zero && io->need);
-            w->zero = 0;
-            if (io->need) own_rhs_norms(s, w->X, r, bn);
-            w->flops += thx_chol_solve_rows_needed(s->chol, w->X, r, w->E, io->need, io->reach);
-            if (!io->need) {
-                own_residual(s, w->P, load, c0, w->X, r, w->acc, rn, bn);
-                for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
-            }
-            if (phi) {
-                /* the free values into phi, a block of rows at a time (each column's writes near each other);
-                   nodes neither free nor prescribed are 0 */
-                for (size_t q0 = 0; q0 < nf; q0 += 256) {
-                    size_t q1 = q0 + 256 < nf ? q0 + 256 : nf;
-                    for (size_t j = 0; j < r; j++) {
-                        double *pj = phi + (c0 + j) * n;
-                        for (size_t q = q0; q < q1; q++) pj[s->free_node[q]] = w->X[(size_t)iperm[q] * r + j];
-                    }
-                }
-                for (size_t j = 0; j < r; j++)
-                    for (int32_t i = 0; i < s->n; i++)
-                        if (s->fidx[i] < 0 && s->didx[i] < 0) phi[(c0 + j) * n + (size_t)i] = 0;
-            } else {
-                /* the rows asked for: a free node's answer, a prescribed node's value, else 0 */
-                for (size_t i = 0; i < io->m; i++) {
-                    int32_t node = io->rows[i], f = s->fidx[node], d = s->didx[node];
-                    const double *src = f >= 0 ? w->X + (size_t)iperm[f] * r : d >= 0 ? w->P + (size_t)d * r : NULL;
-                    for (size_t j = 0; j < r; j++) io->out[(c0 + j) * io->m + i] = src ? src[j] : 0;
-                }
-                if (io->spoil > c0 && io->spoil <= c0 + r)
-                    for (size_t i = 0; i < io->m; i++) io->out[(io->spoil - 1) * io->m + i] *= 1 + io->spoil_by;
-                if (io->need) own_check_part(s, io, w, t, c0, r, bn);
-            }
-        }
-    }
-    if (was > 0) blas_threads(was);
-    return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
-}
-
-static thx_status own_verdict(thx_ctx *ctx, const double *rel, size_t k, thx_status st, thx_fem_solve_stats *out);
-
-/* The check of a block solved for some rows alone (THX_FEM_CHECK_COMBOS): the threads' partial sums added
-   in their order, the two combinations solved in full, their residuals (the factorization's verdict, as
-   own_verdict gives it column by column on the other path) and their answers at the rows against the rows'
-   combined answers. */
-static thx_status own_check(thx_ctx *ctx, thx_fem_system *s, const own_io *io, size_t k, thx_fem_solve_stats *out)
-{
-    const size_t nd = (size_t)s->nd, nf = (size_t)s->nf, m = io->m, C = THX_FEM_CHECK_COMBOS;
-    const int T = own_threads(k);
-    const int64_t *iperm = thx_chol_iperm(s->chol);
-    double *P = calloc((nd ? nd : 1) * C, sizeof *P), *Y = calloc((m ? m : 1) * C, sizeof *Y);
-    double *X = big_alloc(nf * C * sizeof *X), *E = big_alloc(thx_chol_work_bytes(s->chol, C));
-    double acc[4 * THX_FEM_CHECK_COMBOS], S[THX_FEM_CHECK_COMBOS] = {0};
-    thx_status st = THX_OK;
-    if (!P || !Y || !X || !E) { st = THX_ENOMEM; goto done; }
-    for (int t = 0; t < T; t++) {
-        for (size_t q = 0; q < nd * C; q++) P[q] += io->part_p[(size_t)t * nd * C + q];
-        for (size_t q = 0; q < m * C; q++) Y[q] += io->part_y[(size_t)t * m * C + q];
-        for (size_t c = 0; c < C; c++) S[c] += io->part_s[(size_t)t * C + c];
-    }
-    own_rhs(s, P, NULL, 0, C, X, 0);
-    int was = blas_threads(1); /* two columns: calls too small to share */
-    s->work[0].flops += thx_chol_solve_rows(s->chol, X, C, E);
-    if (was > 0) blas_threads(was);
-    double *rn = acc + 2 * C, *bn = acc + 3 * C;
-    own_residual(s, P, NULL, 0, X, C, acc, rn, bn);
-    for (size_t c = 0; c < C && st == THX_OK; c++) {
-        double rel = bn[c] > 0 ? sqrt(rn[c] / bn[c]) : sqrt(rn[c]);
-        if (out) out->residual = fmax(out->residual, rel);
-        if (!(rel <= THX_FEM_DIRECT_RTOL)) {
-            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
-                           "relative residual of %g for a combination of the %zu right-hand sides of a block: the system "
-                           "is singular, e.g. currents into a part of the mesh with no prescribed potential)", rel, k);
-            break;
-        }
-        double diff = 0;
-        for (size_t i = 0; i < m; i++) {
-            int32_t node = io->rows[i], f = s->fidx[node], d = s->didx[node];
-            double x = f >= 0 ? X[(size_t)iperm[f] * C + c] : d >= 0 ? P[(size_t)d * C + c] : 0;
-            diff = fmax(diff, fabs(Y[i * C + c] - x));
-        }
-        if (out) out->check = fmax(out->check, S[c] > 0 ? diff / S[c] : diff);
-        if (!(diff <= THX_FEM_CHECK_RTOL * S[c]))
-            st = thx_error(ctx, THX_EINTERNAL, "fem: a block of %zu right-hand sides solved for %zu rows disagrees with a "
-                           "combination of its columns solved alone (%g of its scale, above %g)", k, m,
-                           S[c] > 0 ? diff / S[c] : diff, THX_FEM_CHECK_RTOL);
-    }
-done:
-    free(P);
-    free(Y);
-    free(X);
-    free(E);
-    return st;
-}
-
-/* The own path for k columns: factor once, solve, refuse a singular system as the PETSc path does. */
-static thx_status own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k,
-                                  thx_fem_solve_stats *out)
-{
-    double t0 = thx_wtime();
-    if (s->pinned >= 0)
-        for (size_t j = 0; j < k; j++) phi[j * (size_t)s->n + (size_t)s->pinned] = 0;
-    double *rel = thx_malloc(ctx, (k ? k : 1) * sizeof *rel);
-    if (!rel) return THX_ENOMEM;
-    own_io io = {.phi = phi, .load = load};
-    thx_status st = own_solve(ctx, s, &io, k, rel);
-    st = own_verdict(ctx, rel, k, st, out);
-    free(rel);
-    if (out) out->seconds += thx_wtime() - t0;
-    return st;
-}
-
-/* The residuals' verdict: a block whose relative residual is above THX_FEM_DIRECT_RTOL anywhere is refused. */
-static thx_status own_verdict(thx_ctx *ctx, const double *rel, size_t k, thx_status st, thx_fem_solve_stats *out)
-{
-    for (size_t j = 0; j < k && st == THX_OK; j++) {
-        if (!(rel[j] <= THX_FEM_DIRECT_RTOL))
-            st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization's answer leaves a "
-                           "relative residual of %g at right-hand side %zu of a block of %zu: the system is singular, e.g. "
-                           "currents into a part of the mesh with no prescribed potential)", rel[j], j + 1, k);
-        if (out) out->residual = fmax(out->residual, rel[j]);
-    }
-    return st;
-}
 
 thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, int warm,
                          thx_fem_solve_stats *out)
 {
     thx_status st = THX_OK;
     double t0 = thx_wtime();
-    if (s->own) THX_CHECK(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) THX_CHECK(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
     if (s->own) {
         thx_fem_solve_stats one;
         memset(&one, 0, sizeof one);
-        st = own_solve_block(ctx, s, phi, load, 1, &one);
+        st = fem_own_solve_block(ctx, s, phi, load, 1, &one);
         one.iterations = one.iterations_min = 1;
         one.iterations_total = 1;
         one.converged = st == THX_OK;
@@ -1151,11 +592,11 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
     sum.iterations_min = 1 << 30;
     sum.converged = 1;
     if (!k) { sum.iterations_min = 0; goto done; }
-    if (s->own) THX_TRY(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) THX_TRY(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
     if (s->own) {
         size_t nb = thx_fem_system_block(s);
         for (size_t j0 = 0; j0 < k; j0 += nb)
-            THX_TRY(own_solve_block(ctx, s, phi + j0 * n, load ? load + j0 * n : NULL, k - j0 < nb ? k - j0 : nb, &sum));
+            THX_TRY(fem_own_solve_block(ctx, s, phi + j0 * n, load ? load + j0 * n : NULL, k - j0 < nb ? k - j0 : nb, &sum));
         sum.iterations = sum.iterations_min = 1;
         sum.iterations_total = (long)k;
         goto done;
@@ -1220,8 +661,7 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
     sum.iterations_min = 1 << 30;
     sum.converged = 1;
     int32_t *from = thx_malloc(ctx, (nd ? nd : 1) * sizeof *from);
-    double *phi = NULL, *part_p = NULL, *part_y = NULL, *part_s = NULL;
-    unsigned char *need = NULL, *reach = NULL;
+    double *phi = NULL;
     if (!from) return THX_ENOMEM;
     /* every prescribed node's value from the caller's list (the pinned node of a pure Neumann problem: 0) */
     for (size_t d = 0; d < nd; d++) from[d] = -1;
@@ -1246,68 +686,10 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
             goto done;
         }
     if (!k) { sum.iterations_min = 0; goto done; }
-    if (s->own) THX_TRY(own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) THX_TRY(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
     if (s->own) {
-        /* blocks of x alone (no column of every node is made) */
-        size_t nb = s->block;
-        if (!nb) {
-            PetscInt want = 0;
-            PetscBool set = PETSC_FALSE;
-            PetscOptionsGetInt(NULL, NULL, "-thorax_block_size", &want, &set);
-            nb = set && want >= 1 ? (size_t)want : THX_FEM_OWN_BYTES / (sizeof(double) * (size_t)(s->nf > 0 ? s->nf : 1));
-            nb = nb < 1 ? 1 : nb > THX_FEM_OWN_ROWS_MAX ? THX_FEM_OWN_ROWS_MAX : nb;
-        }
-        /* the backward sweep kept to the supernodes the rows need, each block checked by two combinations of
-           its columns solved in full (own_check) instead of every column's residual, which needs every row */
-        size_t nbk = nb < k ? nb : k;
-        int T = own_threads(nbk);
-        const int64_t *iperm = thx_chol_iperm(s->chol);
-        int64_t *frow = thx_malloc(ctx, (m ? m : 1) * sizeof *frow);
-        need = thx_malloc(ctx, thx_chol_nsuper(s->chol) + 1);
-        part_p = thx_malloc(ctx, (size_t)T * (nd ? nd : 1) * THX_FEM_CHECK_COMBOS * sizeof *part_p);
-        part_y = thx_malloc(ctx, (size_t)T * (m ? m : 1) * THX_FEM_CHECK_COMBOS * sizeof *part_y);
-        part_s = thx_malloc(ctx, (size_t)T * THX_FEM_CHECK_COMBOS * sizeof *part_s);
-        if (!frow || !need || !part_p || !part_y || !part_s) { free(frow); st = THX_ENOMEM; goto done; }
-        size_t mf = 0;
-        for (size_t i = 0; i < m; i++)
-            if (s->fidx[rows[i]] >= 0) frow[mf++] = iperm[s->fidx[rows[i]]];
-        sum.backward_share = thx_chol_needed(s->chol, frow, mf, need);
-        /* the supernodes the forward sweep can reach: those of the rows b lives on (coupled to a prescribed
-           node) and their ancestors */
-        reach = thx_malloc(ctx, thx_chol_nsuper(s->chol) + 1);
-        int64_t *brow = reach ? thx_malloc(ctx, ((size_t)s->nf ? (size_t)s->nf : 1) * sizeof *brow) : NULL;
-        if (!brow) { free(frow); st = THX_ENOMEM; goto done; }
-        size_t mb = 0;
-        for (size_t q = 0; q < (size_t)s->nf; q++)
-            if (s->kfd.row[q + 1] > s->kfd.row[q]) brow[mb++] = iperm[q];
-        thx_chol_needed(s->chol, brow, mb, reach);
-        free(brow);
-        free(frow);
-        for (size_t j0 = 0; j0 < k && st == THX_OK; j0 += nb) {
-            size_t kk = k - j0 < nb ? k - j0 : nb;
-            double t0 = thx_wtime();
-            own_io io = {.pres = pres + j0 * np, .from = from, .np = np, .rows = rows, .m = m, .out = out + j0 * m,
-                         .need = need, .reach = reach, .part_p = part_p, .part_y = part_y, .part_s = part_s};
-            {
-                /* the check's own test (tests/test_fem_block.c): column J of the whole call (1-based) made wrong by
-                   a relative EPS as the solve writes it, before the check */
-                PetscInt J = 0;
-                PetscReal eps = 1e-6;
-                PetscBool set = PETSC_FALSE;
-                PetscOptionsGetInt(NULL, NULL, "-thorax_test_spoil_column", &J, &set);
-                PetscOptionsGetReal(NULL, NULL, "-thorax_test_spoil_by", &eps, NULL);
-                if (set && J >= 1 && (size_t)J > j0 && (size_t)J <= j0 + kk) {
-                    io.spoil = (size_t)J - j0;
-                    io.spoil_by = (double)eps;
-                }
-            }
-            st = own_solve(ctx, s, &io, kk, NULL);
-            if (st == THX_OK) st = own_check(ctx, s, &io, kk, &sum);
-            sum.seconds += thx_wtime() - t0;
-        }
-        sum.iterations = sum.iterations_min = 1;
-        sum.iterations_total = (long)k;
-        sum.block = nb < k ? nb : k;
+        /* blocks of x alone (no column of every node is made): src/fem/solver_own.c */
+        st = fem_own_solve_rows(ctx, s, from, np, pres, k, rows, m, out, &sum);
         goto done;
     }
     /* any other solver: columns of every node, as thx_fem_solve_block takes them, a block at a time (the last
@@ -1337,11 +719,6 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
 done:
     free(from);
     free(phi);
-    free(need);
-    free(reach);
-    free(part_p);
-    free(part_y);
-    free(part_s);
     if (stats) *stats = sum;
     return st;
 }
