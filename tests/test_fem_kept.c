@@ -4,8 +4,9 @@
  *  - the first call assembles and keeps, the second reads the file back: the same matrix as
  *    thx_fem_assemble's, to the bit, both times;
  *  - another conductivity, or another region left out, is another matrix (another file);
- *  - a file cut short, a byte spoiled, and files whole but wrong (a value changed, two values of a row
- *    swapped, their checksums written anew) are not used: the matrix is assembled again, the same bits;
+ *  - a file cut short, a byte spoiled, a header claiming 2^39 entries, a run of NULs, and files whole but
+ *    wrong (a value changed, two values of a row swapped, their checksums written anew) are not used: the
+ *    matrix is assembled again, the same bits;
  *  - THORAX_CACHE_MAX below the matrix's size: nothing kept, a note says why;
  *  - the trim removes the least recently used of thorax's files first, keeps the one just written and
  *    never touches a file of another name.
@@ -201,8 +202,19 @@ int main(void)
     size_t len = 0;
     char *good = tl_slurp(ctx, path, &len);
     CHECK(good != NULL && len > 200);
-    for (int damage = 0; damage < 4 && good; damage++) {
+    for (int damage = 0; damage < 6 && good; damage++) {
         if (damage == 0) tl_write_bytes(path, good, len - 9);    /* cut short */
+        else if (damage == 4 || damage == 5) {                    /* the header claims 2^39 entries; a NUL run */
+            char *c = malloc(len);
+            memcpy(c, good, len);
+            if (damage == 4) {
+                uint64_t big = (uint64_t)1 << 39;
+                memcpy(c + 48, &big, 8);
+            } else
+                memset(c + 56, 0, 64); /* row[0..7] zero: row lengths and checksums wrong */
+            tl_write_bytes(path, c, len);
+            free(c);
+        }
         else if (damage == 1) {                                   /* a byte of the values spoiled */
             good[len - 200] ^= 0x10;
             tl_write_bytes(path, good, len);
@@ -239,6 +251,13 @@ int main(void)
     CHECK(thx_cache_max_bytes() == (uint64_t)4 << 30); /* does not parse: the default */
     setenv("THORAX_CACHE_MAX", "3M", 1);
     CHECK(thx_cache_max_bytes() == (uint64_t)3 << 20);
+    const char *bad_max[] = {"-1", " 5", "+5", "99999999999999999999999", "", "G"};
+    for (size_t i = 0; i < sizeof bad_max / sizeof *bad_max; i++) {
+        setenv("THORAX_CACHE_MAX", bad_max[i], 1);
+        CHECK(thx_cache_max_bytes() == (uint64_t)4 << 30);
+    }
+    setenv("THORAX_CACHE_MAX", "17179869184G", 1); /* 2^34 G: past 64 bits */
+    CHECK(thx_cache_max_bytes() == UINT64_MAX);
     unsetenv("THORAX_CACHE_MAX");
 
     /* 5. the trim: least recently used first, the file just written kept, other names never */

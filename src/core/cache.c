@@ -3,6 +3,7 @@
  * under THORAX_CACHE_MAX by removing the least recently used of thorax's own files.
  */
 #include <ctype.h>
+#include <errno.h>
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -76,10 +77,11 @@ uint64_t thx_cache_max_bytes(void)
 {
     const uint64_t dflt = (uint64_t)4 << 30;
     const char *s = getenv("THORAX_CACHE_MAX");
-    if (!s || !*s) return dflt;
+    if (!s || !isdigit((unsigned char)*s)) return dflt; /* (strtoull would take "-1" as 2^64 - 1) */
     char *end = NULL;
+    errno = 0;
     unsigned long long v = strtoull(s, &end, 10);
-    if (end == s) return dflt;
+    if (end == s || errno == ERANGE) return dflt;
     uint64_t mul = 1;
     switch (toupper((unsigned char)*end)) {
     case 'K': mul = (uint64_t)1 << 10; end++; break;

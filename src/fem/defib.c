@@ -244,11 +244,7 @@ thx_status thx_defib_solve(thx_ctx *ctx, const thx_model *m, const thx_patch *pa
     double *phi = NULL, *load = NULL, *field = NULL, *Kp = NULL;
     thx_fem_system *S = NULL;
     double t0 = thx_wtime();
-    {
-        int rank = 0, size = 1;
-        THX_TRY(thx_fem_init(0, NULL, &rank, &size));
-        THX_TRY(size > 1 ? thx_fem_assemble(ctx, v, NULL, &K) : thx_fem_assemble_kept(ctx, v, NULL, &K, &rep->assembly));
-    }
+    THX_TRY(thx_fem_assemble_kept(ctx, v, NULL, &K, &rep->assembly)); /* (every rank holds the whole matrix) */
     rep->t_assemble = thx_wtime() - t0;
     THX_TRY(thx_fem_active_nodes(ctx, v, NULL, &kind));
     phi = thx_calloc(ctx, v->n_nodes ? v->n_nodes : 1, sizeof *phi);

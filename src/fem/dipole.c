@@ -361,11 +361,7 @@ thx_status thx_forward_dipoles(thx_ctx *ctx, const thx_model *m, const thx_dipol
                 goto done;
             }
     double t0 = thx_wtime();
-    {
-        int rank = 0, size = 1;
-        THX_TRY(thx_fem_init(0, NULL, &rank, &size));
-        THX_TRY(size > 1 ? thx_fem_assemble(ctx, v, use, &K) : thx_fem_assemble_kept(ctx, v, use, &K, &r->assembly));
-    }
+    THX_TRY(thx_fem_assemble_kept(ctx, v, use, &K, &r->assembly)); /* (every rank holds the whole matrix) */
     r->t_assemble = thx_wtime() - t0;
     THX_TRY(thx_fem_active_nodes(ctx, v, use, &kind));
     THX_TRY(thx_fem_system_create(ctx, &K, kind, 1, &S));

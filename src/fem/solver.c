@@ -4,20 +4,14 @@
  * PETSc its own block of rows; results are gathered to every rank. thorax's own direct path (one rank,
  * many right-hand sides, its own factor) is src/fem/solver_own.c; what both share, src/fem/solver_internal.h.
  */
-#include <dlfcn.h>
-#include <errno.h>
 #include <math.h>
 #include <petscksp.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
 
 #include "fem/solver_internal.h"
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 static int g_inited = 0, g_we_inited = 0;
 
 thx_status thx_fem_init(int argc, char **argv, int *rank, int *size)

@@ -28,8 +28,9 @@ void thx_cache_path(char *buf, size_t n, const char *dir, const char *what, cons
 /* A cache file read and used: its time set to now, so the trim keeps it over older ones. */
 void thx_cache_used(const char *path);
 
-/* The size the directory is kept under: THORAX_CACHE_MAX in bytes (a K, M or G suffix allowed), else
- * 4 GiB. A value that does not parse gives the default. */
+/* The size the directory is kept under: THORAX_CACHE_MAX in bytes (digits, then a K, M or G suffix
+ * allowed), else 4 GiB. A value that does not parse (a sign, a space, other characters, more than 64 bits
+ * of digits) gives the default; one whose suffix overflows 64 bits is the largest. */
 uint64_t thx_cache_max_bytes(void);
 
 /* A cache file being written: a temporary name beside path, renamed over it when whole. */
