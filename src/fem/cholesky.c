@@ -277,53 +277,85 @@ void thx_chol_zero_rows(const thx_chol *f, double *X, size_t r, const unsigned c
 
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)
 {
-    return thx_chol_solve_rows_needed(f, X, r, E, NULL, NULL);
+    return thx_chol_solve_rows_with(f, X, r, 0, NULL, E, NULL, NULL);
 }
 
 double thx_chol_solve_rows_needed(const thx_chol *f, double *X, size_t r, double *E, const unsigned char *need,
                                   const unsigned char *reach)
 {
-    double flops = 0;
-    const int64_t *super = f->y.super, *pi = f->y.pi, *px = f->y.px, *Ls = f->y.rows;
-    const double *Lx = f->Lx;
-    const size_t ns = (size_t)f->y.nsuper;
+    return thx_chol_solve_rows_with(f, X, r, 0, NULL, E, need, reach);
+}
+
+/* Supernode s's step of the forward sweep on the r columns of X (row-major, ld r): L11 Y = B, then the rows below
+   updated. A supernode whose rows are all zero is skipped (they stay zero and update nothing). Returns the flops. */
+static double forward_step(const thx_chol *f, size_t s, double *X, size_t r, double *E)
+{
+    const int64_t *super = f->y.super, *pi = f->y.pi;
     const int ir = (int)r;
-    const double one = 1, zero = 0, minus = -1;
-    /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (r x nscol, ld r). A supernode
-       whose rows are all zero (no right-hand side there, no update from below: the forward problem's b lives
-       at the nodes next to the heart) is skipped: its rows stay zero and it updates nothing, exactly. */
-    for (size_t s = 0; s < ns; s++) {
-        if (reach && !reach[s]) continue;
-        int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
-        const double *L1 = Lx + px[s];
-        double *Xs = X + (size_t)super[s] * r;
-        size_t z = 0, nz = (size_t)nscol * r;
-        while (z < nz && Xs[z] == 0) z++;
-        if (z == nz) continue;
-        flops += (double)r * nscol * ((double)nscol + 2.0 * nb);
-        dtrsm_("R", "L", "T", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
-        if (nb <= 0) continue;
+    const double one = 1, zero = 0;
+    int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
+    const double *L1 = f->Lx + f->y.px[s];
+    double *Xs = X + (size_t)super[s] * r;
+    size_t z = 0, nz = (size_t)nscol * r;
+    while (z < nz && Xs[z] == 0) z++;
+    if (z == nz) return 0;
+    dtrsm_("R", "L", "T", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
+    if (nb > 0) {
         dgemm_("N", "T", &ir, &nb, &nscol, &one, Xs, &ir, L1 + nscol, &nsrow, &zero, E, &ir);
-        const int64_t *rows = Ls + pi[s] + nscol;
+        const int64_t *rows = f->y.rows + pi[s] + nscol;
         for (int t = 0; t < nb; t++) {
             double *xr = X + (size_t)rows[t] * r;
             const double *e = E + (size_t)t * r;
             for (size_t j = 0; j < r; j++) xr[j] -= e[j];
         }
     }
-    /* backward: L^T X = Y */
+    return (double)r * nscol * ((double)nscol + 2.0 * nb);
+}
+
+/* Supernode s's step of the backward sweep: L11^T X_s = Y_s - L21^T X_below. Returns the flops. */
+static double backward_step(const thx_chol *f, size_t s, double *X, size_t r, double *E)
+{
+    const int64_t *super = f->y.super, *pi = f->y.pi;
+    const int ir = (int)r;
+    const double one = 1, minus = -1;
+    int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
+    const double *L1 = f->Lx + f->y.px[s];
+    double *Xs = X + (size_t)super[s] * r;
+    if (nb > 0) {
+        const int64_t *rows = f->y.rows + pi[s] + nscol;
+        for (int t = 0; t < nb; t++) memcpy(E + (size_t)t * r, X + (size_t)rows[t] * r, r * sizeof *E);
+        dgemm_("N", "N", &ir, &nscol, &nb, &minus, E, &ir, L1 + nscol, &nsrow, &one, Xs, &ir);
+    }
+    dtrsm_("R", "L", "N", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
+    return (double)r * nscol * ((double)nscol + 2.0 * nb);
+}
+
+double thx_chol_solve_rows_with(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *E,
+                                const unsigned char *need, const unsigned char *reach)
+{
+    double flops = 0;
+    const int64_t *super = f->y.super;
+    const size_t ns = (size_t)f->y.nsuper, w = r + q;
+    /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (w x nscol, ld w). The forward
+       problem's b lives at the nodes next to the heart: the supernodes it cannot reach are skipped unread. */
+    for (size_t s = 0; s < ns; s++)
+        if (!reach || reach[s]) flops += forward_step(f, s, X, w, E);
+    /* the last q columns go on in Z, where the rows of the supernodes the forward sweep never reached are zero */
+    if (q) {
+        memset(Z, 0, (size_t)f->n * q * sizeof *Z);
+        for (size_t s = 0; s < ns; s++)
+            if (!reach || reach[s])
+                for (int64_t i = super[s]; i < super[s + 1]; i++) memcpy(Z + (size_t)i * q, X + (size_t)i * w + r, q * sizeof *Z);
+    }
+    /* backward: L^T X = Y. A supernode in need: all w columns in X, its last q then copied to Z (its ancestors are
+       in need too, so the rows it reads in X are done); any other: Z's q columns alone, reading Z. */
     for (size_t s = ns; s-- > 0;) {
-        if (need && !need[s]) continue;
-        int nscol = (int)(super[s + 1] - super[s]), nsrow = (int)(pi[s + 1] - pi[s]), nb = nsrow - nscol;
-        const double *L1 = Lx + px[s];
-        double *Xs = X + (size_t)super[s] * r;
-        if (nb > 0) {
-            const int64_t *rows = Ls + pi[s] + nscol;
-            for (int t = 0; t < nb; t++) memcpy(E + (size_t)t * r, X + (size_t)rows[t] * r, r * sizeof *E);
-            dgemm_("N", "N", &ir, &nscol, &nb, &minus, E, &ir, L1 + nscol, &nsrow, &one, Xs, &ir);
-        }
-        dtrsm_("R", "L", "N", "N", &ir, &nscol, &one, L1, &nsrow, Xs, &ir);
-        flops += (double)r * nscol * ((double)nscol + 2.0 * nb);
+        if (!need || need[s]) {
+            flops += backward_step(f, s, X, w, E);
+            if (q)
+                for (int64_t i = super[s]; i < super[s + 1]; i++) memcpy(Z + (size_t)i * q, X + (size_t)i * w + r, q * sizeof *Z);
+        } else if (q)
+            flops += backward_step(f, s, Z, q, E);
     }
     return flops;
 }

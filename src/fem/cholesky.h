@@ -73,6 +73,13 @@ double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *work)
  * pages of X no sweep writes are never touched. */
 double thx_chol_solve_rows_needed(const thx_chol *f, double *X, size_t r, double *work, const unsigned char *need,
                                   const unsigned char *reach);
+/* The same on r + q columns (X row-major, ld r + q), the last q solved in full whatever need says and
+ * returned in Z (n x q, ld q, the factor's order): the check's combinations of a block (src/fem/solver_own.c),
+ * solved in the same BLAS calls as the block wherever the block itself is (the factor read once), alone on
+ * the supernodes the block's backward sweep skips (their rows then in Z). X's last q columns are left as
+ * the block's are: right on the supernodes in need. work: thx_chol_work_bytes(f, r + q). Returns the flops. */
+double thx_chol_solve_rows_with(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *work,
+                                const unsigned char *need, const unsigned char *reach);
 /* The factor's supernodes (thx_chol_nsuper of them) into need: 1 for those holding one of the m factor
  * rows given (in the factor's order) and their ancestors, else 0. Returns the share of the backward
  * sweep's flops they hold (0 .. 1). */

@@ -20,6 +20,7 @@
 #define THX_FEM_OWN_THREADS 64
 typedef struct own_work_s {
     double *X, *E, *acc, *P; /* P: the prescribed values of the r columns, row-major */
+    double *Z, *Pz;          /* the check's combinations of the r columns (src/fem/solver_own.c): x, prescribed values */
     int zero;                /* X is all zeros (fresh from calloc: its pages not yet touched) */
     size_t r;
     double flops; /* the solves' flops so far (thx_chol_solve_rows) */
