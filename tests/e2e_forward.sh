@@ -69,6 +69,9 @@ grep -q '"ranks":	2' sol2/solution.json || fail "mpirun: not 2 ranks"
 mpirun -np 2 "$THORAX" forward model --epicardial beat8.raw -o it2 -q
 grep -q '"pc":	"gamg"' it2/solution.json || fail "few frames: not GAMG"
 grep -q '"pc":	"jacobi"' sol3/solution.json || fail "PETSc option not passed through"
+# one rank: PETSc's matrix is our CSR itself, unless -mat_type asks for a matrix of PETSc's own (copied): the same bits
+"$THORAX" forward model --epicardial beat8.raw -o sol3m -q -ksp_type cg -pc_type jacobi -ksp_rtol 1e-12 -mat_type aij
+cmp -s sol3/torso.raw sol3m/torso.raw || fail "-mat_type aij: other potentials than PETSc's matrix over our CSR"
 # 3. transfer matrix to the array (adjoint), and the full one applied
 "$THORAX" forward model --transfer-out --rows model/electrodes/array.txt -o tr -q
 "$THORAX" forward model --transfer-out -o trf -q

@@ -191,16 +191,31 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
         if (part)
             for (PetscInt r = 0; r < m; r++) sort_row(jj + ii[r], aa + ii[r], ii[r + 1] - ii[r]);
     }
-    PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &s->A));
-    PCALL(ctx, MatSetSizes(s->A, m, m, s->nf, s->nf));
-    PCALL(ctx, MatSetType(s->A, MATAIJ));
-    PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
-    PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
-    PCALL(ctx, MatSetFromOptions(s->A));
-    PCALL(ctx, MatSeqAIJSetPreallocationCSR(s->A, ii, jj, aa));
-    PCALL(ctx, MatMPIAIJSetPreallocationCSR(s->A, ii, jj, aa));
-    PCALL(ctx, MatAssemblyBegin(s->A, MAT_FINAL_ASSEMBLY));
-    PCALL(ctx, MatAssemblyEnd(s->A, MAT_FINAL_ASSEMBLY));
+    PetscBool mat_type = PETSC_FALSE;
+    PCALL(ctx, PetscOptionsHasName(NULL, NULL, "-mat_type", &mat_type));
+    if (n_ranks == 1 && !mat_type) {
+        /* one rank: PETSc's matrix over our CSR itself (kept for thorax's own direct path; 52 MB not copied on
+           the high phantom), freed after the matrix (thx_fem_system_destroy) */
+        PCALL(ctx, MatCreateSeqAIJWithArrays(PETSC_COMM_WORLD, m, m, ii, jj, aa, &s->A));
+        s->ii = ii;
+        s->jj = jj;
+        s->aa = aa;
+        ii = jj = NULL;
+        aa = NULL;
+        PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
+        PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
+    } else {
+        PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &s->A));
+        PCALL(ctx, MatSetSizes(s->A, m, m, s->nf, s->nf));
+        PCALL(ctx, MatSetType(s->A, MATAIJ));
+        PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
+        PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
+        PCALL(ctx, MatSetFromOptions(s->A));
+        PCALL(ctx, MatSeqAIJSetPreallocationCSR(s->A, ii, jj, aa));
+        PCALL(ctx, MatMPIAIJSetPreallocationCSR(s->A, ii, jj, aa));
+        PCALL(ctx, MatAssemblyBegin(s->A, MAT_FINAL_ASSEMBLY));
+        PCALL(ctx, MatAssemblyEnd(s->A, MAT_FINAL_ASSEMBLY));
+    }
     PCALL(ctx, MatCreateVecs(s->A, &s->x, &s->b));
     PCALL(ctx, VecScatterCreateToAll(s->x, &s->toall, &s->xall));
     PCALL(ctx, KSPCreate(PETSC_COMM_WORLD, &s->ksp));
@@ -213,16 +228,12 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
     }
     PCALL(ctx, KSPSetTolerances(s->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 10000));
     PCALL(ctx, KSPSetFromOptions(s->ksp));
-    {
-        PetscMPIInt size = 1;
-        MPI_Comm_size(PETSC_COMM_WORLD, &size);
-        if (size == 1) { /* the whole K_ff: kept for thorax's own direct path */
-            s->ii = ii;
-            s->jj = jj;
-            s->aa = aa;
-            ii = jj = NULL;
-            aa = NULL;
-        }
+    if (n_ranks == 1 && ii) { /* the whole K_ff: kept for thorax's own direct path (copied by PETSc under -mat_type) */
+        s->ii = ii;
+        s->jj = jj;
+        s->aa = aa;
+        ii = jj = NULL;
+        aa = NULL;
     }
     s->t_setup = s->t_matrix = thx_wtime() - t0;
     *out = s;
