@@ -14,6 +14,7 @@
 
 #include "fem/chol_cache.h"
 #include "thorax/core/cache.h"
+#include "thorax/core/pages.h"
 #include "fem/cholesky.h"
 #include "fem/multifrontal.h"
 
@@ -29,7 +30,7 @@ struct thx_chol {
     cholmod_factor *L;     /* CHOLMOD's factor: with its numeric factorization alone */
     thx_chol_symbolic y;   /* the symbolic factor (the cache's, or a copy of CHOLMOD's analysis) */
     double *Lx;            /* the factor's values: our own (multifrontal.h), or CHOLMOD's L->x */
-    double *own_x;         /* ours, when we computed them */
+    thx_pages own;         /* ours, when we computed them: zeros made present at once (thorax/core/pages.h) */
     int64_t n;
     int64_t *perm, *iperm;
     size_t max_below;      /* the most rows below a supernode's diagonal block */
@@ -42,7 +43,7 @@ void thx_chol_free(thx_chol **fp)
     if (f->L) cholmod_l_free_factor(&f->L, &f->c);
     cholmod_l_finish(&f->c);
     thx_chol_symbolic_free(&f->y);
-    free(f->own_x);
+    thx_pages_free(&f->own);
     free(f->perm);
     free(f->iperm);
     free(f);
@@ -177,17 +178,18 @@ analyse:
            is not needed any more */
         if (A) cholmod_l_free_sparse(&A, &f->c);
         if (f->L) cholmod_l_free_factor(&f->L, &f->c);
-        f->own_x = malloc((f->y.xsize ? f->y.xsize : 1) * sizeof *f->own_x);
-        if (!f->own_x) { st = THX_ENOMEM; goto done; }
+        if (thx_pages_zeroed(&f->own, (f->y.xsize ? f->y.xsize : 1) * sizeof(double), opts ? opts->threads : 1)) {
+            st = THX_ENOMEM;
+            goto done;
+        }
         thx_mf_symbolic S = {n, f->y.nsuper, f->y.super, f->y.pi, f->y.px, f->y.rows};
         thx_status e = thx_mf_factor(ctx, &S, rowp, col, val, f->perm, f->iperm, opts ? opts->threads : 1,
-                                     opts ? opts->top_threads : 1, opts ? opts->set_blas_threads : NULL, f->own_x, &inf.mf);
+                                     opts ? opts->top_threads : 1, opts ? opts->set_blas_threads : NULL, f->own.p, &inf.mf);
         inf.t_factor = thx_wtime() - t0;
         if (e == THX_EINTERNAL && inf.symbolic_cached) {
             /* the cache's symbolic factor, though whole, is not this matrix's: analysed again, kept again */
             thx_ctx_clear(ctx);
-            free(f->own_x);
-            f->own_x = NULL;
+            thx_pages_free(&f->own);
             thx_chol_symbolic_free(&f->y);
             f->max_below = 0;
             use_cache = 0;
@@ -201,7 +203,7 @@ analyse:
             st = e;
             goto done;
         }
-        f->Lx = f->own_x;
+        f->Lx = f->own.p;
         inf.numeric = "thorax (multifrontal, subtrees in parallel)";
     }
     if (inf.not_posdef) {

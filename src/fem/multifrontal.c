@@ -44,7 +44,7 @@ typedef struct {
     const int64_t *rowp, *perm, *iperm;
     const int32_t *col;
     const double *val;
-    double *Lx, *roots;
+    double *Lx, *roots; /* Lx: zeros before the first front (its columns are assembled into it) */
 } mf_tree;
 
 static inline int64_t ncol(const thx_mf_symbolic *S, int64_t s) { return S->super[s + 1] - S->super[s]; }
@@ -237,7 +237,6 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
     const int64_t *rows = S->rows + S->pi[s];
     double *Lb = t->Lx + S->px[s];
     double *U = t->kind[s] == K_ROOT ? t->roots + t->uoff[s] : stk + *top;
-    memset(Lb, 0, (size_t)r * (size_t)k * sizeof *Lb);
     /* only U's lower triangle is ever written or read (the extend-add and dsyrk's "L"): the upper one is
        neither zeroed nor moved, and a large update matrix's pages above the diagonal are never touched */
     for (int64_t b = 0; b < nb; b++) memset(U + (size_t)b * (size_t)nb + (size_t)b, 0, (size_t)(nb - b) * sizeof *U);

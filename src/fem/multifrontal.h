@@ -47,7 +47,8 @@ typedef struct {
  * A matrix that is not positive definite returns THX_ESOLVER with info->not_posdef set and no
  * message (the caller names the row); a symbolic factor that does not hold the matrix's pattern (a row of
  * A, or of a child's update matrix, missing from a supernode) is THX_EINTERNAL, found as the fronts are
- * assembled, before any value lands in a wrong place. */
+ * assembled, before any value lands in a wrong place. Lx must hold zeros (thx_pages_zeroed, thorax/core/pages.h:
+ * its pages present already): the fronts' columns are assembled into it as they are. */
 thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
                          const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
                          void (*set_blas_threads)(int), double *Lx, thx_mf_info *info);

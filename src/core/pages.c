@@ -1,0 +1,48 @@
+/* Large blocks of zeros whose pages are in memory before they are used (thorax/core/pages.h). */
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "thorax/core/pages.h"
+
+#ifndef MADV_POPULATE_WRITE
+#define MADV_POPULATE_WRITE 23 /* Linux 5.14 */
+#endif
+
+int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads)
+{
+    out->p = NULL;
+    out->bytes = 0;
+    long ps = sysconf(_SC_PAGESIZE);
+    size_t page = ps > 0 ? (size_t)ps : 4096;
+    size_t n = (bytes ? bytes : 1) + page - 1;
+    if (n < bytes) return -1;
+    n -= n % page;
+    void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) return -1;
+    /* in pieces of 8 MB dealt to the threads: the kernel's work per page is the same, and a thread is not
+       held in one call for long */
+    const size_t piece = (size_t)8 << 20;
+    const size_t np = (n + piece - 1) / piece;
+    int T = threads > 1 ? threads : 1;
+    (void)T;
+#pragma omp parallel for num_threads(T) schedule(dynamic, 1)
+    for (size_t k = 0; k < np; k++) {
+        char *a = (char *)p + k * piece;
+        size_t len = k + 1 < np ? piece : n - k * piece;
+        if (madvise(a, len, MADV_POPULATE_WRITE) != 0) memset(a, 0, len); /* zero already: written to be present */
+    }
+    out->p = p;
+    out->bytes = n;
+    return 0;
+}
+
+void thx_pages_free(thx_pages *pg)
+{
+    if (pg->p) munmap(pg->p, pg->bytes);
+    pg->p = NULL;
+    pg->bytes = 0;
+}
