@@ -664,6 +664,28 @@ static void rows_tests(thx_ctx *ctx)
                 printf("solve_rows (own), %d threads: %.1e from the columns of every node, check %.1e\n", th,
                        rel_diff(out1, want, m * R), b.check);
             }
+            /* a fresh system asked for rows on 2 and 3 threads: the top of its factorization factored by one
+               thread while the others run the forward sweep below it, the same answers */
+            for (int th = 2; th <= 3; th++) {
+                omp_set_num_threads(th);
+                thx_fem_system *S2 = NULL;
+                CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S2));
+                thx_fem_system_hint_rhs(S2, R);
+                CHECK_OK(ctx, thx_fem_solve_rows(ctx, S2, pnode, np, pres, R, 0, rows, m, out1, &b));
+                thx_fem_factor_info fi;
+                thx_fem_system_factor_info(S2, &fi);
+                CHECK(fi.used && fi.top > 0 && fi.top_beside == 1);
+                CHECK(rel_diff(out1, want, m * R) < 1e-14 && b.check < 1e-13 && b.residual < 1e-13);
+                printf("solve_rows (own), %d threads, the top beside the solves: %zu supernodes, %.1e from the columns of "
+                       "every node, check %.1e\n", th, fi.top, rel_diff(out1, want, m * R), b.check);
+                /* a second call on the same system: the factor complete, the same answers to the bit as a third */
+                double *out2 = malloc(m * R * sizeof *out2);
+                CHECK_OK(ctx, thx_fem_solve_rows(ctx, S2, pnode, np, pres, R, 0, rows, m, out2, &b));
+                CHECK_OK(ctx, thx_fem_solve_rows(ctx, S2, pnode, np, pres, R, 0, rows, m, out1, &b));
+                CHECK(memcmp(out1, out2, m * R * sizeof *out1) == 0);
+                free(out2);
+                thx_fem_system_destroy(&S2);
+            }
             omp_set_num_threads(was);
             free(out1);
 #endif

@@ -429,6 +429,7 @@ int cmd_forward(int argc, char **argv)
                     cJSON_AddNumberToObject(f, "top_share", R.factor.top_share);
                     cJSON_AddNumberToObject(f, "seconds_subtrees", R.factor.t_subtrees);
                     cJSON_AddNumberToObject(f, "seconds_top", R.factor.t_top);
+                    cJSON_AddBoolToObject(f, "top_beside_solves", R.factor.top_beside);
                 }
                 cJSON_AddStringToObject(f, "ordering", "METIS nested dissection");
                 cJSON_AddBoolToObject(f, "ordering_cached", R.factor.ordering_cached);
@@ -469,8 +470,9 @@ int cmd_forward(int argc, char **argv)
             char subtrees_txt[160] = "";
             if (R.factor.threads)
                 snprintf(subtrees_txt, sizeof subtrees_txt, ": %zu subtrees on %d thread%s %.2f s, then %zu supernodes above "
-                         "them (%.0f %% of the work) %.2f s", R.factor.subtrees, R.factor.threads, R.factor.threads == 1 ? "" : "s",
-                         R.factor.t_subtrees, R.factor.top, 100 * R.factor.top_share, R.factor.t_top);
+                         "them (%.0f %% of the work) %.2f s%s", R.factor.subtrees, R.factor.threads, R.factor.threads == 1 ? "" : "s",
+                         R.factor.t_subtrees, R.factor.top, 100 * R.factor.top_share, R.factor.t_top,
+                         R.factor.top_beside ? " on one thread beside the solves' start" : "");
             if (verbose > 0 && R.factor.used)
                 printf("factor (CHOLMOD's analysis, %s): ordering %.2f s (%s), analysis %.2f s%s, factorization %.2f s "
                        "(%.3g flops, %.1f GF/s, %d BLAS thread%s%s), %.3g nonzeros, %.0f MB; solves %.3g flops, %.1f GF/s%s%s\n",

@@ -34,12 +34,15 @@ struct thx_chol {
     int64_t n;
     int64_t *perm, *iperm;
     size_t max_below;      /* the most rows below a supernode's diagonal block */
+    thx_mf_symbolic S;     /* ours: the symbolic factor as the multifrontal code takes it */
+    thx_mf *mf;            /* ours with the top still to factor (thx_chol_factor_top), or NULL */
 };
 
 void thx_chol_free(thx_chol **fp)
 {
     if (!fp || !*fp) return;
     thx_chol *f = *fp;
+    thx_mf_free(&f->mf);
     if (f->L) cholmod_l_free_factor(&f->L, &f->c);
     cholmod_l_finish(&f->c);
     thx_chol_symbolic_free(&f->y);
@@ -70,6 +73,15 @@ static cholmod_sparse *upper(thx_chol *f, int64_t n, const int64_t *rowp, const 
     }
     Ap[n] = (SuiteSparse_long)w;
     return A;
+}
+
+/* A factorization refused at column bad (the factor's order). */
+static thx_status not_posdef(thx_ctx *ctx, const thx_chol *f, int64_t bad)
+{
+    const int64_t n = f->n;
+    return thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: zero or negative "
+                     "pivot at row %lld of %lld: the matrix is singular, e.g. currents into a part of the mesh with no "
+                     "prescribed potential)", (long long)(bad >= 0 && bad < n ? f->perm[bad] + 1 : bad + 1), (long long)n);
 }
 
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
@@ -182,13 +194,21 @@ analyse:
             st = THX_ENOMEM;
             goto done;
         }
-        thx_mf_symbolic S = {n, f->y.nsuper, f->y.super, f->y.pi, f->y.px, f->y.rows};
-        thx_status e = thx_mf_factor(ctx, &S, rowp, col, val, f->perm, f->iperm, opts ? opts->threads : 1,
-                                     opts ? opts->top_threads : 1, opts ? opts->set_blas_threads : NULL, f->own.p, &inf.mf);
+        f->S = (thx_mf_symbolic){n, f->y.nsuper, f->y.super, f->y.pi, f->y.px, f->y.rows};
+        const int threads = opts ? opts->threads : 1;
+        void (*set_blas)(int) = opts ? opts->set_blas_threads : NULL;
+        thx_status e = thx_mf_begin(ctx, &f->S, rowp, col, val, f->perm, f->iperm, threads, set_blas, f->own.p, &f->mf,
+                                    &inf.mf);
+        /* the top now, or beside the caller's first solve (opts->defer_top: thx_chol_factor_top) */
+        if (e == THX_OK && !(opts && opts->defer_top && threads > 1 && inf.mf.top > 0)) {
+            e = thx_mf_top(f->mf, opts ? opts->top_threads : 1, set_blas, &inf.mf);
+            thx_mf_free(&f->mf);
+        }
         inf.t_factor = thx_wtime() - t0;
         if (e == THX_EINTERNAL && inf.symbolic_cached) {
             /* the cache's symbolic factor, though whole, is not this matrix's: analysed again, kept again */
             thx_ctx_clear(ctx);
+            thx_mf_free(&f->mf);
             thx_pages_free(&f->own);
             thx_chol_symbolic_free(&f->y);
             f->max_below = 0;
@@ -207,10 +227,7 @@ analyse:
         inf.numeric = "thorax (multifrontal, subtrees in parallel)";
     }
     if (inf.not_posdef) {
-        int64_t bad = inf.bad_column;
-        st = thx_error(ctx, THX_ESOLVER, "fem: the linear solve did not converge (the factorization failed: zero or negative "
-                       "pivot at row %lld of %lld: the matrix is singular, e.g. currents into a part of the mesh with no "
-                       "prescribed potential)", (long long)(bad >= 0 && bad < n ? f->perm[bad] + 1 : bad + 1), (long long)n);
+        st = not_posdef(ctx, f, inf.bad_column);
         goto done;
     }
     inf.factor_bytes = (f->y.xsize + f->y.ssize) * sizeof(double);
@@ -224,12 +241,42 @@ done:
     return st;
 }
 
+const unsigned char *thx_chol_top_left(const thx_chol *f) { return f->mf ? thx_mf_top_mask(f->mf) : NULL; }
+
+thx_status thx_chol_factor_top(thx_ctx *ctx, thx_chol *f, void (*set_blas_threads)(int), thx_chol_info *info)
+{
+    if (!f->mf || !thx_mf_top_mask(f->mf)) return THX_OK;
+    double t0 = thx_wtime();
+    thx_status e = thx_mf_top(f->mf, 1, set_blas_threads, &info->mf);
+    info->t_factor += thx_wtime() - t0;
+    info->mf.beside = 1;
+    if (e == THX_ESOLVER && info->mf.not_posdef >= 0) {
+        info->not_posdef = 1;
+        info->bad_column = info->mf.not_posdef;
+        return not_posdef(ctx, f, info->bad_column);
+    }
+    return e;
+}
+
+void thx_chol_top_release(thx_chol *f) { thx_mf_free(&f->mf); }
+
 const int64_t *thx_chol_perm(const thx_chol *f) { return f->perm; }
 const int64_t *thx_chol_iperm(const thx_chol *f) { return f->iperm; }
 
 size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ? f->max_below : 1) * r * sizeof(double); }
 
 size_t thx_chol_nsuper(const thx_chol *f) { return (size_t)f->y.nsuper; }
+
+double thx_chol_sweep_flops(const thx_chol *f, const unsigned char *reach, const unsigned char *need)
+{
+    const int64_t *super = f->y.super, *pi = f->y.pi;
+    double fl = 0;
+    for (int64_t s = 0; s < f->y.nsuper; s++) {
+        double k = (double)(super[s + 1] - super[s]), w = k * (k + 2.0 * (double)((pi[s + 1] - pi[s]) - (super[s + 1] - super[s])));
+        fl += (!reach || reach[s] ? w : 0) + (!need || need[s] ? w : 0);
+    }
+    return fl;
+}
 
 double thx_chol_needed(const thx_chol *f, const int64_t *want, size_t m, unsigned char *need)
 {
@@ -335,13 +382,27 @@ static double backward_step(const thx_chol *f, size_t s, double *X, size_t r, do
 double thx_chol_solve_rows_with(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *E,
                                 const unsigned char *need, const unsigned char *reach)
 {
+    return thx_chol_solve_rows_part(f, X, r, q, Z, E, need, reach, NULL, 0);
+}
+
+double thx_chol_solve_rows_part(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *E,
+                                const unsigned char *need, const unsigned char *reach, const unsigned char *top, int part)
+{
     double flops = 0;
     const int64_t *super = f->y.super;
     const size_t ns = (size_t)f->y.nsuper, w = r + q;
+    if (part == 0) top = NULL;
     /* forward: L Y = B. In column-major terms a supernode's rows of X are X_s^T (w x nscol, ld w). The forward
-       problem's b lives at the nodes next to the heart: the supernodes it cannot reach are skipped unread. */
-    for (size_t s = 0; s < ns; s++)
-        if (!reach || reach[s]) flops += forward_step(f, s, X, w, E);
+       problem's b lives at the nodes next to the heart: the supernodes it cannot reach are skipped unread.
+       Part 1: those below the top (a supernode's descendants are never in the top when it is not); part 2: the
+       top's, after them. */
+    if (part != 2)
+        for (size_t s = 0; s < ns; s++)
+            if ((!reach || reach[s]) && !(top && top[s])) flops += forward_step(f, s, X, w, E);
+    if (part == 1) return flops;
+    if (top)
+        for (size_t s = 0; s < ns; s++)
+            if ((!reach || reach[s]) && top[s]) flops += forward_step(f, s, X, w, E);
     /* the last q columns go on in Z, where the rows of the supernodes the forward sweep never reached are zero */
     if (q) {
         memset(Z, 0, (size_t)f->n * q * sizeof *Z);

@@ -41,6 +41,7 @@ typedef struct {
     int top_threads;                /* BLAS's threads (ours: for the supernodes above the subtrees; CHOLMOD's: all) */
     void (*set_blas_threads)(int);  /* sets BLAS's threads, or NULL */
     int cholmod_numeric;            /* 1: CHOLMOD's numeric factorization instead of ours (-thorax_factor cholmod) */
+    int defer_top;                  /* 1 (ours, threads > 1): the top left to thx_chol_factor_top, beside a solve */
 } thx_chol_opts;
 
 /* Factors the symmetric positive definite matrix of order n given as a full CSR (both triangles,
@@ -50,6 +51,16 @@ typedef struct {
 thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const int32_t *col, const double *val,
                            const thx_chol_opts *opts, thx_chol **out, thx_chol_info *info);
 void thx_chol_free(thx_chol **f);
+
+/* With opts->defer_top, the supernodes above the subtrees (the top: the largest separators) are left out of
+ * thx_chol_factor: thx_chol_top_left gives them (nsuper bytes, 1 each; NULL when nothing is left), and
+ * thx_chol_factor_top factors them with one BLAS thread, while other threads may run the forward sweep below
+ * them (thx_chol_solve_rows_part, part 1), which reads no column of the top. A pivot failing there is
+ * THX_ESOLVER naming the row, as thx_chol_factor's. thx_chol_top_release frees what the top needed (the mask
+ * included) once no thread reads the mask; thx_chol_free does it too. */
+const unsigned char *thx_chol_top_left(const thx_chol *f);
+thx_status thx_chol_factor_top(thx_ctx *ctx, thx_chol *f, void (*set_blas_threads)(int), thx_chol_info *info);
+void thx_chol_top_release(thx_chol *f);
 
 /* The factor's order: row i of the permuted system is row perm[i] of the matrix; iperm its inverse. */
 const int64_t *thx_chol_perm(const thx_chol *f);
@@ -80,10 +91,18 @@ double thx_chol_solve_rows_needed(const thx_chol *f, double *X, size_t r, double
  * the block's are: right on the supernodes in need. work: thx_chol_work_bytes(f, r + q). Returns the flops. */
 double thx_chol_solve_rows_with(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *work,
                                 const unsigned char *need, const unsigned char *reach);
+/* thx_chol_solve_rows_with in two parts: part 1 the forward sweep on the supernodes not in top (nsuper bytes,
+ * thx_chol_top_left's), part 2 the rest (the forward sweep on top's, then the backward sweep); part 0 both,
+ * as thx_chol_solve_rows_with (top unused). Part 1 reads none of top's columns of the factor. The same answers
+ * as part 0 but for the order in which the top's rows receive their updates (rounding). */
+double thx_chol_solve_rows_part(const thx_chol *f, double *X, size_t r, size_t q, double *Z, double *work,
+                                const unsigned char *need, const unsigned char *reach, const unsigned char *top, int part);
 /* The factor's supernodes (thx_chol_nsuper of them) into need: 1 for those holding one of the m factor
  * rows given (in the factor's order) and their ancestors, else 0. Returns the share of the backward
  * sweep's flops they hold (0 .. 1). */
 size_t thx_chol_nsuper(const thx_chol *f);
+/* The flops of one column's sweeps: forward on the supernodes in reach, backward on those in need (NULL: all). */
+double thx_chol_sweep_flops(const thx_chol *f, const unsigned char *reach, const unsigned char *need);
 /* Zeros, in X (r columns, as thx_chol_solve_rows_needed takes it), the rows of the supernodes marked in
  * need or reach, the only rows the sweeps write: X's other pages are never touched. Meant for an X fresh
  * from calloc (all zero, no page touched yet): a page written first costs one fault, where one read

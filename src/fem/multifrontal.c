@@ -297,71 +297,144 @@ static int front(mf_tree *t, int64_t s, double *stk, size_t *top, int32_t *map, 
     return 0;
 }
 
-thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
-                         const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
-                         void (*set_blas_threads)(int), double *Lx, thx_mf_info *info)
-{
-    thx_mf_info inf;
-    memset(&inf, 0, sizeof inf);
-    inf.not_posdef = -1;
-    const int T = threads > 1 ? threads : 1;
-    inf.threads = T;
+struct thx_mf {
+    const thx_mf_symbolic *S;
     mf_tree t;
-    memset(&t, 0, sizeof t);
-    int64_t *subs = NULL;
-    size_t nsub = 0;
-    double **stacks = NULL;
-    int32_t **maps = NULL;
-    double *top_stack = NULL;
-    thx_status st = tree_build(ctx, S, &t);
+    int T;
+    int64_t *subs;
+    size_t nsub;
+    double **stacks, *top_stack;
+    int32_t **maps;
+    unsigned char *top_mask; /* nsuper: 1 for the top's supernodes */
+    int top_left;            /* the top is still to be factored */
+    thx_mf_info inf;
+};
+
+void thx_mf_free(thx_mf **mp)
+{
+    if (!mp || !*mp) return;
+    thx_mf *m = *mp;
+    if (m->stacks)
+        for (int i = 0; i < m->T; i++) free(m->stacks[i]);
+    if (m->maps)
+        for (int i = 0; i < m->T; i++) free(m->maps[i]);
+    free(m->stacks);
+    free(m->maps);
+    free(m->top_stack);
+    free(m->t.roots);
+    free(m->subs);
+    free(m->top_mask);
+    tree_free(&m->t);
+    free(m);
+    *mp = NULL;
+}
+
+/* The top's fronts checked before any is factored: every row of A's columns and of each child's update matrix
+   is one of the front's rows (front() checks the same as it assembles; here it is known before the subtrees'
+   results are waited for, so a top run beside other work cannot fail on it). 1 when they all are. */
+static int top_structure_ok(const mf_tree *t, int32_t *map)
+{
+    const thx_mf_symbolic *S = t->S;
+    int ok = 1;
+    for (int64_t s = 0; s < S->nsuper && ok; s++) {
+        if (t->kind[s] != K_TOP) continue;
+        const int64_t j0 = S->super[s], k = ncol(S, s), r = nrow(S, s);
+        const int64_t *rows = S->rows + S->pi[s];
+        for (int64_t i = 0; i < r; i++) map[rows[i]] = 1;
+        for (int64_t j = j0; j < j0 + k && ok; j++) {
+            const int64_t q = t->perm[j];
+            for (int64_t e = t->rowp[q]; e < t->rowp[q + 1]; e++) {
+                const int64_t i = t->iperm[t->col[e]];
+                if (i >= j && map[i] < 0) ok = 0;
+            }
+        }
+        for (int64_t e = t->cstart[s]; e < t->cstart[s + 1] && ok; e++) {
+            const int64_t c = t->child[e], kc = ncol(S, c), nbc = nrow(S, c) - kc;
+            const int64_t *crow = S->rows + S->pi[c] + kc;
+            for (int64_t a = 0; a < nbc; a++)
+                if (map[crow[a]] < 0) ok = 0;
+        }
+        for (int64_t i = 0; i < r; i++) map[rows[i]] = -1;
+    }
+    return ok;
+}
+
+thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
+                        const double *val, const int64_t *perm, const int64_t *iperm, int threads,
+                        void (*set_blas_threads)(int), double *Lx, thx_mf **out, thx_mf_info *info)
+{
+    *out = NULL;
+    thx_mf *m = calloc(1, sizeof *m);
+    if (!m) return THX_ENOMEM;
+    m->S = S;
+    m->inf.not_posdef = -1;
+    const int T = threads > 1 ? threads : 1;
+    m->T = m->inf.threads = T;
+    mf_tree *tp = &m->t;
+    thx_status st = tree_build(ctx, S, tp);
     if (st != THX_OK) goto done;
-    t.rowp = rowp;
-    t.col = col;
-    t.val = val;
-    t.perm = perm;
-    t.iperm = iperm;
-    t.Lx = Lx;
-    if ((st = cut_tree(&t, T, &subs, &nsub)) != THX_OK) goto done;
+    tp->rowp = rowp;
+    tp->col = col;
+    tp->val = val;
+    tp->perm = perm;
+    tp->iperm = iperm;
+    tp->Lx = Lx;
+    if ((st = cut_tree(tp, T, &m->subs, &m->nsub)) != THX_OK) goto done;
+    const mf_tree t = *tp; /* (its arrays are tp's) */
     /* the arenas: the subtree roots' update matrices, a stack per thread, the top's stack */
     size_t roots_n = 0, thread_n = 0, top_n = 0, max_rows = 1;
-    for (size_t i = 0; i < nsub; i++) {
-        t.uoff[subs[i]] = (int64_t)roots_n;
-        roots_n += usize(S, subs[i]);
-        size_t p = stack_peak(&t, t.first[subs[i]], t.pos[subs[i]], 0);
+    for (size_t i = 0; i < m->nsub; i++) {
+        tp->uoff[m->subs[i]] = (int64_t)roots_n;
+        roots_n += usize(S, m->subs[i]);
+        size_t p = stack_peak(&t, t.first[m->subs[i]], t.pos[m->subs[i]], 0);
         thread_n = p > thread_n ? p : thread_n;
     }
+    m->top_mask = calloc((size_t)(S->nsuper > 0 ? S->nsuper : 1), 1);
+    if (!m->top_mask) { st = THX_ENOMEM; goto done; }
     for (int64_t s = 0; s < S->nsuper; s++) {
         max_rows = (size_t)nrow(S, s) > max_rows ? (size_t)nrow(S, s) : max_rows;
-        if (t.kind[s] == K_TOP) inf.top++;
+        if (t.kind[s] == K_TOP) {
+            m->inf.top++;
+            m->top_mask[s] = 1;
+        }
     }
     top_n = stack_peak(&t, 0, S->nsuper - 1, 1); /* the top's stack: its supernodes alone, in the postorder */
-    t.roots = malloc((roots_n ? roots_n : 1) * sizeof *t.roots);
-    top_stack = malloc((top_n ? top_n : 1) * sizeof *top_stack);
-    stacks = calloc((size_t)T, sizeof *stacks);
-    maps = calloc((size_t)T, sizeof *maps);
-    if (!t.roots || !top_stack || !stacks || !maps) { st = THX_ENOMEM; goto done; }
+    tp->roots = malloc((roots_n ? roots_n : 1) * sizeof *tp->roots);
+    m->top_stack = malloc((top_n ? top_n : 1) * sizeof *m->top_stack);
+    m->stacks = calloc((size_t)T, sizeof *m->stacks);
+    m->maps = calloc((size_t)T, sizeof *m->maps);
+    if (!tp->roots || !m->top_stack || !m->stacks || !m->maps) { st = THX_ENOMEM; goto done; }
     for (int i = 0; i < T; i++) {
-        stacks[i] = malloc((thread_n ? thread_n : 1) * sizeof **stacks);
-        maps[i] = malloc(((size_t)S->n + max_rows + 1) * sizeof **maps);
-        if (!stacks[i] || !maps[i]) { st = THX_ENOMEM; goto done; }
-        for (int64_t j = 0; j < S->n; j++) maps[i][j] = -1;
+        m->stacks[i] = malloc((thread_n ? thread_n : 1) * sizeof **m->stacks);
+        m->maps[i] = malloc(((size_t)S->n + max_rows + 1) * sizeof **m->maps);
+        if (!m->stacks[i] || !m->maps[i]) { st = THX_ENOMEM; goto done; }
+        for (int64_t j = 0; j < S->n; j++) m->maps[i][j] = -1;
     }
-    inf.subtrees = nsub;
-    inf.stack_bytes = (roots_n + top_n + (size_t)T * thread_n) * sizeof(double);
+    m->inf.subtrees = m->nsub;
+    m->inf.stack_bytes = (roots_n + top_n + (size_t)T * thread_n) * sizeof(double);
     double total = 0, top_cost = 0;
     for (int64_t s = 0; s < S->nsuper; s++) {
         total += t.cost[s];
         if (t.kind[s] == K_TOP) top_cost += t.cost[s];
         double k = (double)ncol(S, s), b = (double)(nrow(S, s) - ncol(S, s));
-        inf.flops += k * k * k / 3 + b * k * k + b * b * k;
+        m->inf.flops += k * k * k / 3 + b * k * k + b * b * k;
+        if (t.kind[s] == K_TOP) m->inf.top_flops += k * k * k / 3 + b * k * k + b * b * k;
     }
-    inf.top_share = total > 0 ? top_cost / total : 0;
+    m->inf.top_share = total > 0 ? top_cost / total : 0;
+    if (!top_structure_ok(tp, m->maps[0])) {
+        st = thx_error(ctx, THX_EINTERNAL, "fem: the symbolic factor does not hold the matrix's pattern (a row missing "
+                       "from a supernode): not the analysis of this matrix");
+        goto done;
+    }
 
     /* the subtrees, heaviest first, each thread with its own stack and BLAS single-threaded */
     double t0 = thx_wtime();
     if (set_blas_threads) set_blas_threads(1);
     int64_t bad = INT64_MAX;
     int failed = 0, structure = 0;
+    const int64_t *subs = m->subs;
+    double **stacks = m->stacks;
+    int32_t **maps = m->maps;
 #pragma omp parallel num_threads(T)
     {
         int me = 0;
@@ -370,15 +443,15 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
 #endif
         int32_t *map = maps[me], *rel = maps[me] + S->n;
 #pragma omp for schedule(dynamic, 1)
-        for (size_t i = 0; i < nsub; i++) {
+        for (size_t i = 0; i < m->nsub; i++) {
             int stop;
 #pragma omp atomic read
             stop = failed;
             if (stop) continue;
             size_t top = 0;
-            for (int64_t k = t.first[subs[i]]; k <= t.pos[subs[i]]; k++) {
-                int64_t s = t.post[k];
-                int e = front(&t, s, stacks[me], &top, map, rel);
+            for (int64_t k = tp->first[subs[i]]; k <= tp->pos[subs[i]]; k++) {
+                int64_t s = tp->post[k];
+                int e = front(tp, s, stacks[me], &top, map, rel);
                 if (e) {
 #pragma omp critical(thx_mf_bad)
                     {
@@ -394,40 +467,70 @@ thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *
             }
         }
     }
-    inf.t_subtrees = thx_wtime() - t0;
-    /* the top, in the postorder, with BLAS's threads */
-    t0 = thx_wtime();
-    if (set_blas_threads) set_blas_threads(top_threads > 1 ? top_threads : 1);
-    size_t top = 0;
-    for (int64_t k = 0; k < S->nsuper && !failed; k++) {
-        int64_t s = t.post[k];
-        if (t.kind[s] != K_TOP) continue;
-        int e = front(&t, s, top_stack, &top, maps[0], maps[0] + S->n);
-        if (e < 0) structure = failed = 1;
-        else if (e) {
-            bad = S->super[s] + e - 1;
-            failed = 1;
-        }
+    m->inf.t_subtrees = thx_wtime() - t0;
+    /* the threads' stacks are not needed by the top: given back before it (it may run beside other work) */
+    for (int i = 0; i < T; i++) {
+        free(m->stacks[i]);
+        m->stacks[i] = NULL;
     }
-    inf.t_top = thx_wtime() - t0;
     if (structure)
         st = thx_error(ctx, THX_EINTERNAL, "fem: the symbolic factor does not hold the matrix's pattern (a row missing "
                        "from a supernode): not the analysis of this matrix");
     else if (failed) {
-        inf.not_posdef = bad;
+        m->inf.not_posdef = bad;
         st = THX_ESOLVER;
     }
+    m->top_left = st == THX_OK;
 done:
-    if (stacks)
-        for (int i = 0; i < T; i++) free(stacks[i]);
-    if (maps)
-        for (int i = 0; i < T; i++) free(maps[i]);
-    free(stacks);
-    free(maps);
-    free(top_stack);
-    free(t.roots);
-    free(subs);
-    tree_free(&t);
-    if (info) *info = inf;
+    if (info) *info = m->inf;
+    if (st != THX_OK) thx_mf_free(&m);
+    *out = m;
+    return st;
+}
+
+thx_status thx_mf_top(thx_mf *m, int top_threads, void (*set_blas_threads)(int), thx_mf_info *info)
+{
+    if (!m->top_left) {
+        if (info) *info = m->inf;
+        return THX_OK;
+    }
+    const thx_mf_symbolic *S = m->S;
+    mf_tree *tp = &m->t;
+    double t0 = thx_wtime();
+    if (set_blas_threads) set_blas_threads(top_threads > 1 ? top_threads : 1);
+    size_t top = 0;
+    int failed = 0;
+    thx_status st = THX_OK;
+    for (int64_t k = 0; k < S->nsuper && !failed; k++) {
+        int64_t s = tp->post[k];
+        if (tp->kind[s] != K_TOP) continue;
+        int e = front(tp, s, m->top_stack, &top, m->maps[0], m->maps[0] + S->n);
+        if (e) { /* (e < 0, the structure, was ruled out before the subtrees) */
+            m->inf.not_posdef = e > 0 ? S->super[s] + e - 1 : S->super[s];
+            failed = 1;
+            st = THX_ESOLVER;
+        }
+    }
+    m->inf.t_top = thx_wtime() - t0;
+    m->top_left = 0;
+    /* what the top needed, given back (the mask stays: other threads may still read it) */
+    free(tp->roots);
+    tp->roots = NULL;
+    free(m->top_stack);
+    m->top_stack = NULL;
+    if (info) *info = m->inf;
+    return st;
+}
+
+const unsigned char *thx_mf_top_mask(const thx_mf *m) { return m->top_left ? m->top_mask : NULL; }
+
+thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
+                         const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
+                         void (*set_blas_threads)(int), double *Lx, thx_mf_info *info)
+{
+    thx_mf *m = NULL;
+    thx_status st = thx_mf_begin(ctx, S, rowp, col, val, perm, iperm, threads, set_blas_threads, Lx, &m, info);
+    if (st == THX_OK) st = thx_mf_top(m, top_threads, set_blas_threads, info);
+    thx_mf_free(&m);
     return st;
 }

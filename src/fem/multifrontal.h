@@ -32,8 +32,10 @@ typedef struct {
     size_t top;            /* supernodes above them, factored one after the other with BLAS's threads */
     double top_share;      /* the top's share of the flops */
     double flops;          /* the flops done, explicit zeros of amalgamated supernodes included */
+    double top_flops;      /* the top's share of them */
     double t_subtrees;     /* seconds: the subtrees, then the top */
     double t_top;
+    int beside;            /* 1: the top was factored beside the first solve's start (thx_chol_factor_top) */
     size_t stack_bytes;    /* the update matrices' space, all threads */
     int64_t not_posdef;    /* -1, or the first column (the factor's order) with a zero or negative pivot */
 } thx_mf_info;
@@ -52,5 +54,18 @@ typedef struct {
 thx_status thx_mf_factor(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
                          const double *val, const int64_t *perm, const int64_t *iperm, int threads, int top_threads,
                          void (*set_blas_threads)(int), double *Lx, thx_mf_info *info);
+
+/* The same in two steps, so that other work may run beside the top: thx_mf_begin factors the subtrees (and
+ * checks the top's fronts' structure, so that the second step can fail on a pivot alone) and returns the
+ * state in *out (NULL on failure); thx_mf_top factors the supernodes above them, one after the other, BLAS
+ * with top_threads. Until then the top's columns of Lx are not the factor's (thx_mf_top_mask: the top's
+ * supernodes, 1 each; NULL once done); the others' are. info: filled by each step. */
+typedef struct thx_mf thx_mf;
+thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *rowp, const int32_t *col,
+                        const double *val, const int64_t *perm, const int64_t *iperm, int threads,
+                        void (*set_blas_threads)(int), double *Lx, thx_mf **out, thx_mf_info *info);
+thx_status thx_mf_top(thx_mf *m, int top_threads, void (*set_blas_threads)(int), thx_mf_info *info);
+const unsigned char *thx_mf_top_mask(const thx_mf *m);
+void thx_mf_free(thx_mf **m);
 
 #endif

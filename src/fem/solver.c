@@ -259,6 +259,8 @@ void thx_fem_system_destroy(thx_fem_system **sp)
     if (s->toall) VecScatterDestroy(&s->toall);
     thx_csr_free(&s->kfd);
     thx_chol_free(&s->chol);
+    free(s->top_rowp);
+    free(s->top_col);
     if (s->work)
         for (int t = 0; t < THX_FEM_OWN_THREADS; t++) fem_own_work_free(&s->work[t]);
     free(s->work);
@@ -306,6 +308,7 @@ void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *ou
     out->top_share = c->mf.top_share;
     out->t_subtrees = c->mf.t_subtrees;
     out->t_top = c->mf.t_top;
+    out->top_beside = c->mf.beside;
 }
 
 void thx_fem_system_describe(const thx_fem_system *s, char ksp[32], char pc[32], int *ranks)
@@ -401,7 +404,7 @@ thx_status thx_fem_solve(thx_ctx *ctx, thx_fem_system *s, double *phi, const dou
 {
     thx_status st = THX_OK;
     double t0 = thx_wtime();
-    if (s->own) THX_CHECK(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) THX_CHECK(fem_own_factor(ctx, s, 0)); /* may hand the system back to PETSc */
     if (s->own) {
         thx_fem_solve_stats one;
         memset(&one, 0, sizeof one);
@@ -597,7 +600,7 @@ thx_status thx_fem_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, con
     sum.iterations_min = 1 << 30;
     sum.converged = 1;
     if (!k) { sum.iterations_min = 0; goto done; }
-    if (s->own) THX_TRY(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
+    if (s->own) THX_TRY(fem_own_factor(ctx, s, 0)); /* may hand the system back to PETSc */
     if (s->own) {
         size_t nb = thx_fem_system_block(s);
         for (size_t j0 = 0; j0 < k; j0 += nb)
@@ -691,7 +694,8 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
             goto done;
         }
     if (!k) { sum.iterations_min = 0; goto done; }
-    if (s->own) THX_TRY(fem_own_factor(ctx, s)); /* may hand the system back to PETSc */
+    /* the top of the factorization beside the first block's start (src/fem/solver_own.c) */
+    if (s->own) THX_TRY(fem_own_factor(ctx, s, 1)); /* may hand the system back to PETSc */
     if (s->own) {
         /* blocks of x alone (no column of every node is made): src/fem/solver_own.c */
         st = fem_own_solve_rows(ctx, s, from, np, pres, k, rows, m, out, &sum);

@@ -54,6 +54,8 @@ struct thx_fem_system {
     int own;             /* 1: many right-hand sides on one rank, no solver chosen on the command line */
     thx_chol *chol;
     thx_chol_info chol_info;
+    int64_t *top_rowp;       /* A's pattern in the factor's terms while its top is left (fem_own_factor's defer_top) */
+    int32_t *top_col;
     own_work *work;          /* THX_FEM_OWN_THREADS of them */
 };
 
@@ -88,7 +90,7 @@ struct thx_fem_system {
 
 /* The own path (src/fem/solver_own.c). The factorization, once, when s->own; on a singular system it hands
  * the system back to PETSc (s->own = 0) and returns THX_OK. */
-thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s);
+thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s, int defer_top);
 /* k columns of every node (phi, load: as thx_fem_solve_block takes them) through the factor, each column's
  * residual checked. */
 thx_status fem_own_solve_block(thx_ctx *ctx, thx_fem_system *s, double *phi, const double *load, size_t k,

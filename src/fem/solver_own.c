@@ -8,6 +8,7 @@
 #include <dlfcn.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <petscksp.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -43,9 +44,11 @@ void fem_own_work_free(own_work *w)
 static int blas_threads(int set);
 static void set_blas_threads(int n);
 static thx_status factor_threads(thx_ctx *ctx, int was, int *use);
+static int own_threads_max(void);
 
-/* The own path's factorization, once (timed as the setup, as PETSc's is). */
-thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s)
+/* The own path's factorization, once (timed as the setup, as PETSc's is). defer_top: the top may be left to the
+   first block of rows (own_solve factors it beside that block's start); A's pattern is then kept for it. */
+thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s, int defer_top)
 {
     if (s->chol) return THX_OK;
     double t0 = thx_wtime();
@@ -81,8 +84,15 @@ thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s)
         tree = 1;
 #endif
     }
-    thx_chol_opts co = {tree > 0 ? tree : 1, use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod")};
+    thx_chol_opts co = {tree > 0 ? tree : 1, use > 0 ? use : 1, was > 0 ? set_blas_threads : NULL, !strcmp(how, "cholmod"),
+                        defer_top && own_threads_max() > 1};
     st = thx_chol_factor(ctx, (int64_t)n, rowp, col, s->aa, &co, &s->chol, &s->chol_info);
+    if (st == THX_OK && thx_chol_top_left(s->chol)) { /* the top's fronts read A's pattern: kept until it is done */
+        s->top_rowp = rowp;
+        s->top_col = col;
+        rowp = NULL;
+        col = NULL;
+    }
     if (was > 0) blas_threads(was);
     s->chol_info.blas_threads = use > 0 ? use : 0;
     if (st == THX_ESOLVER && s->chol_info.not_posdef) {
@@ -369,16 +379,68 @@ static void own_check_finish(const thx_fem_system *s, const own_io *io, own_work
 /* k columns through the own factor: dealt to the threads in contiguous groups, each group row-major in the
    factor's order (src/fem/cholesky.h), its residuals ||b - A x|| from the kept CSR. rel[j]: column j's
    relative residual. */
-/* The threads own_solve deals k columns to. */
-static int own_threads(size_t k)
+/* The threads own_solve may use, and those it deals k columns to. */
+static int own_threads_max(void)
 {
     int T = 1;
 #ifdef _OPENMP
     T = omp_get_max_threads();
 #endif
-    if (T > THX_FEM_OWN_THREADS) T = THX_FEM_OWN_THREADS;
+    return T > THX_FEM_OWN_THREADS ? THX_FEM_OWN_THREADS : T;
+}
+
+static int own_threads(size_t k)
+{
+    int T = own_threads_max();
     if ((size_t)T > k) T = (int)k;
     return T < 1 ? 1 : T;
+}
+
+/* The top of the factorization left by fem_own_factor (defer_top), factored by thread 0 while the others start
+   their blocks: until it is done they run the forward sweep below it (thx_chol_solve_rows_part, part 1), then
+   wait here for it. */
+typedef struct {
+    pthread_mutex_t lock;
+    pthread_cond_t done_cv;
+    int done; /* 1: factored; -1: failed (the others stop) */
+} own_top;
+
+static void own_top_set(own_top *tp, int v)
+{
+    pthread_mutex_lock(&tp->lock);
+    tp->done = v;
+    pthread_cond_broadcast(&tp->done_cv);
+    pthread_mutex_unlock(&tp->lock);
+}
+
+static int own_top_wait(own_top *tp)
+{
+    pthread_mutex_lock(&tp->lock);
+    while (!tp->done) pthread_cond_wait(&tp->done_cv, &tp->lock);
+    int v = tp->done;
+    pthread_mutex_unlock(&tp->lock);
+    return v;
+}
+
+/* The first column of each thread's group (cut[0 .. T]). Evenly, or, with the top to factor by thread 0, thread 0
+   given fewer columns by the top's work in columns' worth: its flops over those of a column's sweeps (forward
+   where b reaches, backward where the rows need), the top's dense fronts counted at OWN_TOP_SPEED times the
+   sweeps' rate per flop. From the factor's counts alone: the same columns whatever the load. */
+#define OWN_TOP_SPEED 1.5
+static void own_cut(const thx_fem_system *s, const own_io *io, size_t k, int T, int top, size_t *cut)
+{
+    double c_top = 0;
+    if (top && T > 1) {
+        double per_col = thx_chol_sweep_flops(s->chol, io->reach, io->need);
+        c_top = per_col > 0 ? s->chol_info.mf.top_flops / OWN_TOP_SPEED / per_col : 0;
+    }
+    double share = ((double)k + c_top) / T, first = share - c_top;
+    size_t c0 = first <= 0 ? 0 : (size_t)first;
+    if (!top || T < 2) c0 = k / (size_t)T;
+    if (c0 > k) c0 = k;
+    cut[0] = 0;
+    cut[1] = top && T > 1 ? c0 : k / (size_t)T;
+    for (int t = 1; t < T; t++) cut[t + 1] = top && T > 1 ? c0 + (k - c0) * (size_t)t / (size_t)(T - 1) : k * (size_t)(t + 1) / (size_t)T;
 }
 
 static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, size_t k, double *rel)
@@ -391,9 +453,27 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
     if (!s->work && !(s->work = thx_calloc(ctx, THX_FEM_OWN_THREADS, sizeof *s->work))) return THX_ENOMEM;
     int failed = 0;
     int was = T > 1 ? blas_threads(1) : -1;
+    /* the top left by fem_own_factor: beside this block when its rows alone are asked for on threads, else now */
+    const unsigned char *top = thx_chol_top_left(s->chol);
+    thx_status top_st = THX_OK;
+    if (top && (T < 2 || !io->need)) {
+        top_st = thx_chol_factor_top(ctx, s->chol, was > 0 ? set_blas_threads : NULL, &s->chol_info);
+        top = NULL;
+    }
+    own_top tw = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, top ? 0 : 1};
+    size_t cut[THX_FEM_OWN_THREADS + 1];
+    own_cut(s, io, k, T, top != NULL, cut);
+    if (top_st == THX_OK)
 #pragma omp parallel for num_threads(T) schedule(static, 1) reduction(| : failed)
     for (int t = 0; t < T; t++) {
-        size_t c0 = k * (size_t)t / (size_t)T, c1 = k * (size_t)(t + 1) / (size_t)T, r = c1 - c0;
+        if (top && t == 0) {
+            /* thread 0 factors the top (BLAS on this thread alone) while the others start */
+            top_st = thx_chol_factor_top(ctx, s->chol, NULL, &s->chol_info);
+            own_top_set(&tw, top_st == THX_OK ? 1 : -1);
+            if (top_st != THX_OK) continue;
+        }
+        size_t c0 = cut[t], c1 = cut[t + 1], r = c1 - c0;
+        if (!r) continue;
         own_work *w = &s->work[t];
         if (w->r < r) {
             double done = w->flops;
@@ -423,7 +503,12 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
                 own_rhs_norms(s, w->X, r, ld, bn);
                 own_check_prepare(s, w, c0, r, bn);
             }
-            w->flops += thx_chol_solve_rows_with(s->chol, w->X, r, C, w->Z, w->E, io->need, io->reach);
+            if (top) { /* below the top, then (once it is factored) the rest */
+                w->flops += thx_chol_solve_rows_part(s->chol, w->X, r, C, w->Z, w->E, io->need, io->reach, top, 1);
+                if (own_top_wait(&tw) < 0) continue;
+                w->flops += thx_chol_solve_rows_part(s->chol, w->X, r, C, w->Z, w->E, io->need, io->reach, top, 2);
+            } else
+                w->flops += thx_chol_solve_rows_with(s->chol, w->X, r, C, w->Z, w->E, io->need, io->reach);
             if (!io->need) {
                 own_residual(s, w->P, load, c0, w->X, r, w->acc, rn, bn);
                 for (size_t j = 0; j < r; j++) rel[c0 + j] = bn[j] > 0 ? sqrt(rn[j] / bn[j]) : sqrt(rn[j]);
@@ -455,6 +540,14 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
         }
     }
     if (was > 0) blas_threads(was);
+    if (!thx_chol_top_left(s->chol) && (s->top_rowp || s->top_col)) { /* the top done: what it needed given back */
+        thx_chol_top_release(s->chol);
+        free(s->top_rowp);
+        free(s->top_col);
+        s->top_rowp = NULL;
+        s->top_col = NULL;
+    }
+    if (top_st != THX_OK) return top_st;
     return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
 }
 

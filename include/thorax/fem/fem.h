@@ -253,6 +253,7 @@ typedef struct {
     size_t subtrees, top;   /* ours: independent subtrees; supernodes above them */
     double top_share;       /* ours: the top's share of the work */
     double t_subtrees, t_top; /* ours: seconds in the subtrees, then in the top */
+    int top_beside;         /* ours: 1 when the top was factored on one thread beside the first solves' start */
 } thx_fem_factor_info;
 
 void thx_fem_system_factor_info(const thx_fem_system *s, thx_fem_factor_info *out);
