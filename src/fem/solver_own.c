@@ -57,7 +57,9 @@ thx_status fem_own_factor(thx_ctx *ctx, thx_fem_system *s, int defer_top)
     int64_t *rowp = thx_malloc(ctx, (n + 1) * sizeof *rowp);
     int32_t *col = thx_malloc(ctx, (nz ? nz : 1) * sizeof *col);
     if (!rowp || !col) { st = THX_ENOMEM; goto done; }
+#pragma omp parallel for schedule(static)
     for (size_t i = 0; i <= n; i++) rowp[i] = (int64_t)s->ii[i];
+#pragma omp parallel for schedule(static)
     for (size_t k = 0; k < nz; k++) col[k] = (int32_t)s->jj[k];
     int was = blas_threads(0), use = -1;
     st = factor_threads(ctx, was, &use);

@@ -146,10 +146,25 @@ thx_status thx_model_volume_validate(thx_ctx *ctx, const thx_model *m, const cha
     if (v->n_regions == 0 || !v->regions) return thx_error(ctx, THX_EINPUT, "%s: volume: no region table", where);
     if (v->n_nodes > (size_t)INT32_MAX || v->n_tets > (size_t)INT32_MAX || v->n_regions > (size_t)INT32_MAX)
         return thx_error(ctx, THX_EINPUT, "%s: volume: too many nodes, tetrahedra or regions", where);
+    /* the first value at fault found by the threads together (the smallest index: the same message whatever the
+       threads), then named below */
+    size_t bad_x = SIZE_MAX, bad_t = SIZE_MAX;
+#pragma omp parallel for schedule(static) reduction(min : bad_x)
     for (size_t i = 0; i < 3 * v->n_nodes; i++)
-        if (!isfinite(v->xyz[i]))
-            return thx_error(ctx, THX_EINPUT, "%s: volume node %zu has a non-finite coordinate", where, i / 3 + 1);
+        if (!isfinite(v->xyz[i]) && i < bad_x) bad_x = i;
+    if (bad_x != SIZE_MAX)
+        return thx_error(ctx, THX_EINPUT, "%s: volume node %zu has a non-finite coordinate", where, bad_x / 3 + 1);
+#pragma omp parallel for schedule(static) reduction(min : bad_t)
     for (size_t t = 0; t < v->n_tets; t++) {
+        const int32_t *q = v->tet + 4 * t;
+        int bad = v->region[t] < 0 || (size_t)v->region[t] >= v->n_regions;
+        for (int a = 0; a < 4; a++) {
+            bad |= q[a] < 0 || (size_t)q[a] >= v->n_nodes;
+            for (int b = 0; b < a; b++) bad |= q[a] == q[b];
+        }
+        if (bad && t < bad_t) bad_t = t;
+    }
+    for (size_t t = bad_t; t < v->n_tets; t++) { /* (none when bad_t is SIZE_MAX) */
         const int32_t *q = v->tet + 4 * t;
         for (int a = 0; a < 4; a++) {
             if (q[a] < 0 || (size_t)q[a] >= v->n_nodes)
