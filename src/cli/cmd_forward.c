@@ -404,9 +404,9 @@ int cmd_forward(int argc, char **argv)
             cJSON_AddNumberToObject(solver, "iterations_total", (double)R.it_total);
             cJSON_AddNumberToObject(solver, "max_relative_residual", R.max_residual);
             if (R.backward_share > 0) {
-                /* the outer surface alone: the backward sweep pruned, the residual of two combinations of each
-                   block's frames, and how far the frames' answers combined are from theirs */
-                cJSON_AddStringToObject(solver, "residual_of", "two combinations of each block's frames, solved in full");
+                /* the outer surface alone: the backward sweep pruned, the residual of two combinations of each thread's
+                   frames in a block, and how far the frames' answers combined are from theirs */
+                cJSON_AddStringToObject(solver, "residual_of", "two combinations of each thread's frames in a block, solved in full beside them");
                 cJSON_AddNumberToObject(solver, "backward_sweep_share", R.backward_share);
                 cJSON_AddNumberToObject(solver, "combination_check", R.check);
             }
@@ -484,8 +484,8 @@ int cmd_forward(int argc, char **argv)
                        R.t_solve > 0 ? R.factor.solve_flops / R.t_solve * 1e-9 : 0, R.factor.cache_note[0] ? "; " : "",
                        R.factor.cache_note);
             if (verbose > 0 && R.backward_share > 0)
-                printf("outer surface alone: the backward sweep on %.0f %% of its flops; each block checked by two "
-                       "combinations of its frames solved in full (residual %.1e, the frames' answers %.1e from theirs)\n",
+                printf("outer surface alone: the backward sweep on %.0f %% of its flops; each thread's frames checked by two "
+                       "combinations of them solved in full beside them (residual %.1e, the frames' answers %.1e from theirs)\n",
                        100 * R.backward_share, R.max_residual, R.check);
             printf("wrote %s\n", out);
         }
