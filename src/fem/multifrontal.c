@@ -14,7 +14,9 @@
  * mean; each thread takes subtrees, heaviest first, with its own stack and BLAS called single-threaded.
  * A subtree root's update matrix goes to a shared arena, where the supernodes above the subtrees (the
  * top: the largest separators) find it; those are factored one after the other, each BLAS call with
- * all the threads. The arithmetic of a supernode is the same whichever thread does it.
+ * the threads the caller gives (thx_mf_factor), or later, in a step of its own (thx_mf_begin, then
+ * thx_mf_top), on one thread while the caller's other threads start the solves below the top
+ * (src/fem/solver_own.c). The arithmetic of a supernode is the same whichever thread does it.
  */
 #include <limits.h>
 #include <stdlib.h>
