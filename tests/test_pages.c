@@ -34,9 +34,11 @@ int main(void)
         printf("%d thread(s): %zu bytes, %zu nonzero, %ld page faults reading and writing %zu pages\n", threads, pg.bytes,
                nonzero, faults, pg.bytes / page);
         CHECK(nonzero == 0);
-        /* present already: the pass over 10,000 pages faults in (almost) none of them (the kernel may
-           refuse the populate on an old kernel: then the block was written instead, present just the same) */
-        CHECK(faults < (long)(pg.bytes / page) / 100);
+        /* present already: the pass over 10,000 pages faults in none of them, where a block fresh from mmap
+           would fault in every one (the kernel may refuse the populate on an old kernel: then the block was
+           written instead, present just the same). Under AddressSanitizer the pass also touches its shadow,
+           an eighth of the block's pages, for the first time: the bound leaves room for that alone. */
+        CHECK(faults < (long)(pg.bytes / page) / 4);
         thx_pages_free(&pg);
         CHECK(pg.p == NULL && pg.bytes == 0);
     }
