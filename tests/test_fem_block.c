@@ -685,6 +685,18 @@ static void rows_tests(thx_ctx *ctx)
                 CHECK(memcmp(out1, out2, m * R * sizeof *out1) == 0);
                 free(out2);
                 thx_fem_system_destroy(&S2);
+                /* the top beside the solves failing on a pivot: the system handed to PETSc's interface, as when
+                   the subtrees meet one, and solved there (-thorax_test_fail_top: the failure made) */
+                PetscOptionsSetValue(NULL, "-thorax_test_fail_top", NULL);
+                CHECK_OK(ctx, thx_fem_system_create(ctx, &K, kind, 0, &S2));
+                thx_fem_system_hint_rhs(S2, R);
+                thx_status hs = thx_fem_solve_rows(ctx, S2, pnode, np, pres, R, 0, rows, m, out1, &b);
+                PetscOptionsClearValue(NULL, "-thorax_test_fail_top");
+                thx_fem_system_factor_info(S2, &fi);
+                CHECK(hs == THX_OK && !fi.used && rel_diff(out1, want, m * R) < 1e-12);
+                printf("solve_rows (own), %d threads, the top failing beside the solves: %s, handed to PETSc, %.1e from "
+                       "the columns of every node\n", th, hs ? thx_ctx_message(ctx) : "solved", rel_diff(out1, want, m * R));
+                thx_fem_system_destroy(&S2);
             }
             omp_set_num_threads(was);
             free(out1);

@@ -768,7 +768,21 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
     if (s->own) {
         /* blocks of x alone (no column of every node is made): src/fem/solver_own.c */
         st = fem_own_solve_rows(ctx, s, from, np, pres, k, rows, m, out, &sum);
-        goto done;
+        if (!(st == THX_ESOLVER && s->chol_info.not_posdef && s->chol_info.mf.beside)) goto done;
+        /* the top, factored beside the first block, met a zero pivot: PETSc's interface to the same package
+           decides, as fem_own_factor hands a singular system over when the subtrees meet one */
+        thx_ctx_clear(ctx);
+        thx_chol_free(&s->chol);
+        free(s->top_rowp);
+        free(s->top_col);
+        s->top_rowp = NULL;
+        s->top_col = NULL;
+        s->own = 0;
+        s->pc_ready = 0;
+        st = THX_OK;
+        memset(&sum, 0, sizeof sum);
+        sum.iterations_min = 1 << 30;
+        sum.converged = 1;
     }
     /* any other solver: columns of every node, as thx_fem_solve_block takes them, a block at a time (the last
        column of a block starts the next one's first when warm) */

@@ -284,6 +284,7 @@ typedef struct {
     const unsigned char *need, *reach;
     double *part; /* T x THX_FEM_CHECK_COMBOS x 3 */
     size_t spoil;    /* the check's test: column spoil (1-based, 0: none) written times 1 + spoil_by */
+    int fail_top;    /* the hand-over's test: the top beside the solves reported as failed on a pivot */
     double spoil_by;
 } own_io;
 
@@ -471,6 +472,10 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
         if (top && t == 0) {
             /* thread 0 factors the top (BLAS on this thread alone) while the others start */
             top_st = thx_chol_factor_top(ctx, s->chol, NULL, &s->chol_info);
+            if (top_st == THX_OK && io->fail_top) { /* the hand-over's own test (tests/test_fem_block.c) */
+                s->chol_info.not_posdef = 1;
+                top_st = thx_error(ctx, THX_ESOLVER, "fem: the top's pivot made to fail (-thorax_test_fail_top)");
+            }
             own_top_set(&tw, top_st == THX_OK ? 1 : -1);
             if (top_st != THX_OK) continue;
         }
@@ -665,6 +670,9 @@ thx_status fem_own_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *fr
                 io.spoil = (size_t)J - j0;
                 io.spoil_by = (double)eps;
             }
+            PetscBool fail_top = PETSC_FALSE;
+            PetscOptionsHasName(NULL, NULL, "-thorax_test_fail_top", &fail_top);
+            io.fail_top = fail_top == PETSC_TRUE;
         }
         st = own_solve(ctx, s, &io, kk, NULL);
         if (st == THX_OK) st = own_check(ctx, &io, kk, sum);
