@@ -19,10 +19,15 @@ void thx_startup_heavy(char **argv)
         char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
         if (corename) core = thx_blas_better_core(corename());
     }
-    if (!core) return;
-    if (setenv("OPENBLAS_CORETYPE", core, 1) || setenv(guard, core, 1)) return;
+    /* OpenMP's threads waiting at a barrier: a short spin, then sleep, unless the user chose */
+    int spin = !getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY");
+    if (!core && !spin) return;
+    if ((core && setenv("OPENBLAS_CORETYPE", core, 1)) || (spin && setenv("GOMP_SPINCOUNT", THX_STARTUP_SPINCOUNT, 1)) ||
+        setenv(guard, core ? core : "1", 1))
+        return;
     execv("/proc/self/exe", argv);
     /* the execution failed: go on as we are */
-    unsetenv("OPENBLAS_CORETYPE");
+    if (core) unsetenv("OPENBLAS_CORETYPE");
+    if (spin) unsetenv("GOMP_SPINCOUNT");
     unsetenv(guard);
 }
