@@ -94,11 +94,15 @@ if grep -q '^flags.* avx2 .*' /proc/cpuinfo && grep -q '^flags.* fma .*' /proc/c
         core=$(env -u OPENBLAS_CORETYPE -u THORAX_BLAS_REEXEC OPENBLAS_VERBOSE=2 "$THORAX" $cmd --help 2>&1 | grep '^Core: ' | tail -n 1)
         [ -n "$core" ] && [ "$core" != "Core: Prescott" ] && ok "OpenBLAS kernels for $cmd: $core" || bad "OpenBLAS kernels for $cmd: ${core:-none named}"
     done
-    core=$(OPENBLAS_CORETYPE=Prescott OPENBLAS_VERBOSE=2 "$THORAX" inverse --help 2>&1 | grep -c '^Core: ')
-    [ "$core" = 1 ] && ok "a user's OPENBLAS_CORETYPE is kept (one start)" || bad "OPENBLAS_CORETYPE=Prescott: $core starts"
-    # no second start for huge pages any more (thorax/core/startup.h): a known core, one start
-    core=$(env -u GLIBC_TUNABLES -u THORAX_BLAS_REEXEC OPENBLAS_CORETYPE=Haswell OPENBLAS_VERBOSE=2 "$THORAX" forward --help 2>&1 | grep -c '^Core: ')
-    [ "$core" = 1 ] && ok "OPENBLAS_CORETYPE given: forward starts once" || bad "forward with OPENBLAS_CORETYPE=Haswell: $core starts"
+    # the user's OPENBLAS_CORETYPE and OpenMP wait (GOMP_SPINCOUNT or OMP_WAIT_POLICY) kept: one start
+    core=$(env -u THORAX_BLAS_REEXEC OPENBLAS_CORETYPE=Prescott GOMP_SPINCOUNT=300000 OPENBLAS_VERBOSE=2 "$THORAX" inverse --help 2>&1 | grep -c '^Core: ')
+    [ "$core" = 1 ] && ok "a user's OPENBLAS_CORETYPE and GOMP_SPINCOUNT kept (one start)" || bad "OPENBLAS_CORETYPE=Prescott GOMP_SPINCOUNT=300000: $core starts"
+    core=$(env -u GLIBC_TUNABLES -u THORAX_BLAS_REEXEC OPENBLAS_CORETYPE=Haswell OMP_WAIT_POLICY=passive OPENBLAS_VERBOSE=2 "$THORAX" forward --help 2>&1 | grep -c '^Core: ')
+    [ "$core" = 1 ] && ok "OPENBLAS_CORETYPE and OMP_WAIT_POLICY given: forward starts once" || bad "forward with OPENBLAS_CORETYPE=Haswell OMP_WAIT_POLICY=passive: $core starts"
+    # the core given, the wait not: a second start for GOMP_SPINCOUNT alone, the user's core kept in it
+    cores=$(env -u THORAX_BLAS_REEXEC -u GOMP_SPINCOUNT -u OMP_WAIT_POLICY OPENBLAS_CORETYPE=Prescott OPENBLAS_VERBOSE=2 "$THORAX" inverse --help 2>&1 | grep '^Core: ')
+    [ "$(echo "$cores" | wc -l)" = 2 ] && [ "$(echo "$cores" | tail -n 1)" = "Core: Prescott" ] &&
+        ok "OPENBLAS_CORETYPE given, GOMP_SPINCOUNT not: two starts, the user's core kept" || bad "OPENBLAS_CORETYPE=Prescott alone: $cores"
     out=$(env -u OPENBLAS_CORETYPE -u THORAX_BLAS_REEXEC "$THORAX" bem --help 2>&1 | head -n 1)
     [ "${out#usage: thorax bem}" != "$out" ] && ok "arguments kept across the new execution" || bad "after the new execution: $out"
     core=$(env -u OPENBLAS_CORETYPE -u THORAX_BLAS_REEXEC OPENBLAS_VERBOSE=2 "$THORAX" mesh --help 2>&1 | grep -c '^Core: ')
