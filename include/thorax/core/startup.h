@@ -14,7 +14,7 @@
  * the core its partner needs, so unless the user set GOMP_SPINCOUNT or OMP_WAIT_POLICY it is set to
  * THX_STARTUP_SPINCOUNT, in the same new execution: the high phantom's 300 frames beside three busy
  * loops 0.98 of the time and 0.977 of the CPU, quiet the same time and 0.985 of the CPU (paired,
- * docs/design/parallel.md, "Load 5 under 8 s").
+ * docs/design/parallel.md, "Load 5 at the edge of 8 s").
  * Nothing is done under valgrind (its child would run outside it), nor when the new execution
  * fails (the program goes on as it is). A user's own OPENBLAS_CORETYPE is kept.
  */
