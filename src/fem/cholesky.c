@@ -267,12 +267,19 @@ size_t thx_chol_work_bytes(const thx_chol *f, size_t r) { return (f->max_below ?
 
 size_t thx_chol_nsuper(const thx_chol *f) { return (size_t)f->y.nsuper; }
 
+/* Supernode s's share of one column's sweep (either): nscol (nscol + 2 nb), the flops of its triangle and its
+   rectangle. */
+static double sweep_share(const thx_chol *f, size_t s)
+{
+    const double k = (double)(f->y.super[s + 1] - f->y.super[s]), r = (double)(f->y.pi[s + 1] - f->y.pi[s]);
+    return k * (k + 2.0 * (r - k));
+}
+
 double thx_chol_sweep_flops(const thx_chol *f, const unsigned char *reach, const unsigned char *need)
 {
-    const int64_t *super = f->y.super, *pi = f->y.pi;
     double fl = 0;
-    for (int64_t s = 0; s < f->y.nsuper; s++) {
-        double k = (double)(super[s + 1] - super[s]), w = k * (k + 2.0 * (double)((pi[s + 1] - pi[s]) - (super[s + 1] - super[s])));
+    for (size_t s = 0; s < (size_t)f->y.nsuper; s++) {
+        double w = sweep_share(f, s);
         fl += (!reach || reach[s] ? w : 0) + (!need || need[s] ? w : 0);
     }
     return fl;
@@ -297,7 +304,7 @@ double thx_chol_needed(const thx_chol *f, const int64_t *want, size_t m, unsigne
     double all = 0, kept = 0;
     for (size_t s = 0; s < ns; s++) {
         int64_t nscol = super[s + 1] - super[s], nsrow = pi[s + 1] - pi[s];
-        double w = (double)nscol * ((double)nscol + 2.0 * (double)(nsrow - nscol));
+        double w = sweep_share(f, s);
         all += w;
         if (!need[s]) continue;
         kept += w;

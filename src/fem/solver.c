@@ -64,18 +64,19 @@ typedef struct {
     own_work *work;
 } reap_job;
 
-static void reap_free(reap_job *j)
+static void reap_free(thx_chol *chol, own_work *work)
 {
-    thx_chol_free(&j->chol);
-    if (j->work)
-        for (int t = 0; t < THX_FEM_OWN_THREADS; t++) fem_own_work_free(&j->work[t]);
-    free(j->work);
-    free(j);
+    thx_chol_free(&chol);
+    if (work)
+        for (int t = 0; t < THX_FEM_OWN_THREADS; t++) fem_own_work_free(&work[t]);
+    free(work);
 }
 
 static void *reap_main(void *arg)
 {
-    reap_free(arg);
+    reap_job *j = arg;
+    reap_free(j->chol, j->work);
+    free(j);
     return NULL;
 }
 
@@ -88,21 +89,17 @@ static void reap_join_locked(void)
 static void reap_later(thx_chol *chol, own_work *work)
 {
     reap_job *j = malloc(sizeof *j);
-    if (!j) { /* then now */
-        reap_job now = {chol, NULL};
-        thx_chol_free(&now.chol);
-        if (work)
-            for (int t = 0; t < THX_FEM_OWN_THREADS; t++) fem_own_work_free(&work[t]);
-        free(work);
-        return;
+    if (j) {
+        j->chol = chol;
+        j->work = work;
+        pthread_mutex_lock(&g_reap.lock);
+        reap_join_locked();
+        g_reap.running = pthread_create(&g_reap.thread, NULL, reap_main, j) == 0;
+        pthread_mutex_unlock(&g_reap.lock);
+        if (g_reap.running) return;
+        free(j);
     }
-    j->chol = chol;
-    j->work = work;
-    pthread_mutex_lock(&g_reap.lock);
-    reap_join_locked();
-    g_reap.running = pthread_create(&g_reap.thread, NULL, reap_main, j) == 0;
-    pthread_mutex_unlock(&g_reap.lock);
-    if (!g_reap.running) reap_free(j);
+    reap_free(chol, work); /* no thread: now */
 }
 
 void thx_fem_finalize(void)
@@ -263,15 +260,17 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
     }
     PetscBool mat_type = PETSC_FALSE;
     PCALL(ctx, PetscOptionsHasName(NULL, NULL, "-mat_type", &mat_type));
-    if (n_ranks == 1 && !mat_type) {
-        /* one rank: PETSc's matrix over our CSR itself (kept for thorax's own direct path; 52 MB not copied on
-           the high phantom), freed after the matrix (thx_fem_system_destroy) */
-        PCALL(ctx, MatCreateSeqAIJWithArrays(PETSC_COMM_WORLD, m, m, ii, jj, aa, &s->A));
+    if (n_ranks == 1) { /* the whole K_ff: kept for thorax's own direct path, freed after the matrix */
         s->ii = ii;
         s->jj = jj;
         s->aa = aa;
         ii = jj = NULL;
         aa = NULL;
+    }
+    if (s->ii && !mat_type) {
+        /* one rank: PETSc's matrix over that CSR itself (52 MB not copied on the high phantom); -mat_type asks
+           for a matrix of PETSc's own, copied */
+        PCALL(ctx, MatCreateSeqAIJWithArrays(PETSC_COMM_WORLD, m, m, s->ii, s->jj, s->aa, &s->A));
         PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
         PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
     } else {
@@ -281,8 +280,10 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
         PCALL(ctx, MatSetOption(s->A, MAT_SYMMETRIC, PETSC_TRUE));
         PCALL(ctx, MatSetOption(s->A, MAT_SPD, PETSC_TRUE));
         PCALL(ctx, MatSetFromOptions(s->A));
-        PCALL(ctx, MatSeqAIJSetPreallocationCSR(s->A, ii, jj, aa));
-        PCALL(ctx, MatMPIAIJSetPreallocationCSR(s->A, ii, jj, aa));
+        const PetscInt *ci = s->ii ? s->ii : ii, *cj = s->ii ? s->jj : jj;
+        const PetscScalar *ca = s->ii ? s->aa : aa;
+        PCALL(ctx, MatSeqAIJSetPreallocationCSR(s->A, ci, cj, ca));
+        PCALL(ctx, MatMPIAIJSetPreallocationCSR(s->A, ci, cj, ca));
         PCALL(ctx, MatAssemblyBegin(s->A, MAT_FINAL_ASSEMBLY));
         PCALL(ctx, MatAssemblyEnd(s->A, MAT_FINAL_ASSEMBLY));
     }
@@ -298,13 +299,6 @@ thx_status thx_fem_system_create_parts(thx_ctx *ctx, const thx_csr *K, const uns
     }
     PCALL(ctx, KSPSetTolerances(s->ksp, 1e-10, PETSC_DEFAULT, PETSC_DEFAULT, 10000));
     PCALL(ctx, KSPSetFromOptions(s->ksp));
-    if (n_ranks == 1 && ii) { /* the whole K_ff: kept for thorax's own direct path (copied by PETSc under -mat_type) */
-        s->ii = ii;
-        s->jj = jj;
-        s->aa = aa;
-        ii = jj = NULL;
-        aa = NULL;
-    }
     s->t_setup = s->t_matrix = thx_wtime() - t0;
     *out = s;
     s = NULL;
@@ -331,8 +325,7 @@ void thx_fem_system_destroy(thx_fem_system **sp)
     if (s->chol || s->work) reap_later(s->chol, s->work); /* the factor and the blocks: by a thread of their own */
     s->chol = NULL;
     s->work = NULL;
-    free(s->top_rowp);
-    free(s->top_col);
+    fem_own_top_drop(s);
     free(s->ii);
     free(s->jj);
     free(s->aa);
@@ -772,11 +765,8 @@ thx_status thx_fem_solve_rows(thx_ctx *ctx, thx_fem_system *s, const int32_t *pn
         /* the top, factored beside the first block, met a zero pivot: PETSc's interface to the same package
            decides, as fem_own_factor hands a singular system over when the subtrees meet one */
         thx_ctx_clear(ctx);
+        fem_own_top_drop(s);
         thx_chol_free(&s->chol);
-        free(s->top_rowp);
-        free(s->top_col);
-        s->top_rowp = NULL;
-        s->top_col = NULL;
         s->own = 0;
         s->pc_ready = 0;
         st = THX_OK;

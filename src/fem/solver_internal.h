@@ -26,6 +26,9 @@ typedef struct own_work_s {
     double flops; /* the solves' flops so far (thx_chol_solve_rows) */
 } own_work;
 
+/* The top's state and A's pattern kept for it (fem_own_factor's defer_top) given back; nothing when none. */
+void fem_own_top_drop(thx_fem_system *s);
+
 /* A thread's buffers freed (the system's destruction). */
 void fem_own_work_free(own_work *w);
 

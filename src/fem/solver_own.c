@@ -30,6 +30,15 @@ static void *big_alloc(size_t bytes)
     return posix_memalign(&p, align, bytes ? bytes : align) ? NULL : p;
 }
 
+void fem_own_top_drop(thx_fem_system *s)
+{
+    if (s->chol) thx_chol_top_release(s->chol);
+    free(s->top_rowp);
+    free(s->top_col);
+    s->top_rowp = NULL;
+    s->top_col = NULL;
+}
+
 void fem_own_work_free(own_work *w)
 {
     free(w->X);
@@ -437,13 +446,14 @@ static void own_cut(const thx_fem_system *s, const own_io *io, size_t k, int T, 
         double per_col = thx_chol_sweep_flops(s->chol, io->reach, io->need);
         c_top = per_col > 0 ? s->chol_info.mf.top_flops / OWN_TOP_SPEED / per_col : 0;
     }
-    double share = ((double)k + c_top) / T, first = share - c_top;
-    size_t c0 = first <= 0 ? 0 : (size_t)first;
-    if (!top || T < 2) c0 = k / (size_t)T;
-    if (c0 > k) c0 = k;
     cut[0] = 0;
-    cut[1] = top && T > 1 ? c0 : k / (size_t)T;
-    for (int t = 1; t < T; t++) cut[t + 1] = top && T > 1 ? c0 + (k - c0) * (size_t)t / (size_t)(T - 1) : k * (size_t)(t + 1) / (size_t)T;
+    if (!top || T < 2) {
+        for (int t = 0; t < T; t++) cut[t + 1] = k * (size_t)(t + 1) / (size_t)T;
+        return;
+    }
+    double first = ((double)k + c_top) / T - c_top;
+    size_t c0 = first <= 0 ? 0 : first >= (double)k ? k : (size_t)first;
+    for (int t = 0; t < T; t++) cut[t + 1] = c0 + (k - c0) * (size_t)t / (size_t)(T - 1);
 }
 
 static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, size_t k, double *rel)
@@ -547,13 +557,7 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
         }
     }
     if (was > 0) blas_threads(was);
-    if (!thx_chol_top_left(s->chol) && (s->top_rowp || s->top_col)) { /* the top done: what it needed given back */
-        thx_chol_top_release(s->chol);
-        free(s->top_rowp);
-        free(s->top_col);
-        s->top_rowp = NULL;
-        s->top_col = NULL;
-    }
+    if (!thx_chol_top_left(s->chol)) fem_own_top_drop(s); /* the top done: what it needed given back */
     if (top_st != THX_OK) return top_st;
     return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
 }
