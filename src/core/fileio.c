@@ -1,9 +1,11 @@
 /* Atomic file and directory output (see thorax/core/fileio.h). */
 #include "thorax/core/fileio.h"
+#include "thorax/core/pages.h"
 #include <cjson/cJSON.h>
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -449,27 +451,73 @@ thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od)
     return THX_OK;
 }
 
+/* count bytes of fd from off (off < 0: from where it stands, a pipe's way) into p, fewer only at the end of
+   the file; -1 on an error */
+static ssize_t read_at(int fd, char *p, size_t count, off_t off)
+{
+    size_t done = 0;
+    while (done < count) {
+        ssize_t got = off < 0 ? read(fd, p + done, count - done) : pread(fd, p + done, count - done, off + (off_t)done);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) return -1;
+        if (got == 0) break;
+        done += (size_t)got;
+    }
+    return (ssize_t)done;
+}
+
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap);
-    if (!buf) { fclose(f); return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path); }
-    for (;;) {
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return thx_error(ctx, THX_EIO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat sb;
+    const int sized = fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && sb.st_size > 0;
+    const size_t size = sized ? (size_t)sb.st_size : 0;
+    /* room for the size the file has, its NUL, and one byte more: a file that grew is seen growing */
+    size_t cap = sized ? size + 2 : (size_t)1 << 16, n = 0;
+    char *buf = cap > size ? malloc(cap) : NULL;
+    if (!buf) {
+        close(fd);
+        return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+    }
+    int bad = 0;
+    if (size >= THX_READ_SPLIT) {
+        /* a large file's halves read side by side, each into pages asked for at once (thorax/core/pages.h):
+           the copy and the pages' cost are most of the reading, and one thread alone held the rest waiting */
+        const size_t half = size / 2;
+        ssize_t got[2] = {0, 0};
+#pragma omp parallel for num_threads(2) schedule(static, 1)
+        for (int k = 0; k < 2; k++) {
+            size_t at = k ? half : 0, count = k ? size - half : half;
+            (void)thx_pages_present(buf + at, count); /* (where it cannot, the copy faults them in) */
+            got[k] = read_at(fd, buf + at, count, (off_t)at);
+        }
+        bad = got[0] < 0 || got[1] < 0;
+        /* what came whole from the start; the rest (a file that shrank meanwhile) is read on below */
+        n = bad ? 0 : (size_t)got[0] < half ? (size_t)got[0] : half + (size_t)got[1];
+    }
+    while (!bad) {
         if (n + 1 >= cap) {
             char *q = realloc(buf, cap * 2);
-            if (!q) { free(buf); fclose(f); return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path); }
+            if (!q) {
+                free(buf);
+                close(fd);
+                return thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
+            }
             buf = q;
             cap *= 2;
         }
-        size_t got = fread(buf + n, 1, cap - n - 1, f);
-        n += got;
-        if (got == 0) break;
+        ssize_t got = read_at(fd, buf + n, cap - n - 1, sized ? (off_t)n : -1);
+        if (got < 0) bad = 1;
+        else n += (size_t)got;
+        if (got <= 0 || n + 1 < cap) break; /* the end of the file (a read short of the room left) */
     }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) { free(buf); return thx_error(ctx, THX_EIO, "%s: read error", path); }
+    int e = errno;
+    close(fd);
+    if (bad) {
+        free(buf);
+        return thx_error(ctx, THX_EIO, "%s: read error: %s", path, strerror(e));
+    }
     buf[n] = '\0';
     *text = buf;
     if (len) *len = n;

@@ -1,4 +1,5 @@
 /* Large blocks of zeros whose pages are in memory before they are used (thorax/core/pages.h). */
+#include <stdint.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -38,6 +39,16 @@ int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads)
     out->p = p;
     out->bytes = n;
     return 0;
+}
+
+int thx_pages_present(void *p, size_t bytes)
+{
+    if (!bytes) return 0;
+    long ps = sysconf(_SC_PAGESIZE);
+    uintptr_t page = ps > 0 ? (uintptr_t)ps : 4096, a = (uintptr_t)p, b = a + bytes;
+    a -= a % page;
+    b += (page - b % page) % page;
+    return madvise((void *)a, b - a, MADV_POPULATE_WRITE) == 0 ? 0 : -1;
 }
 
 void thx_pages_free(thx_pages *pg)

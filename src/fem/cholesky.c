@@ -322,13 +322,22 @@ double thx_chol_needed(const thx_chol *f, const int64_t *want, size_t m, unsigne
     return all > 0 ? kept / all : 1;
 }
 
-void thx_chol_zero_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach)
+void thx_chol_present_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach)
 {
     const int64_t *super = f->y.super;
     const size_t ns = (size_t)f->y.nsuper;
-    for (size_t s = 0; s < ns; s++)
-        if ((need && need[s]) || (reach && reach[s]))
-            memset(X + (size_t)super[s] * r, 0, (size_t)(super[s + 1] - super[s]) * r * sizeof *X);
+    for (size_t s = 0; s < ns;) {
+        if (!((need && need[s]) || (reach && reach[s]))) {
+            s++;
+            continue;
+        }
+        size_t e = s + 1; /* the run of marked supernodes s .. e - 1: their rows are one range */
+        while (e < ns && ((need && need[e]) || (reach && reach[e]))) e++;
+        double *a = X + (size_t)super[s] * r;
+        size_t bytes = (size_t)(super[e] - super[s]) * r * sizeof *X;
+        if (thx_pages_present(a, bytes)) memset(a, 0, bytes); /* zeros already: written to be present */
+        s = e;
+    }
 }
 
 double thx_chol_solve_rows(const thx_chol *f, double *X, size_t r, double *E)

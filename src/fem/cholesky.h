@@ -103,11 +103,12 @@ double thx_chol_solve_rows_part(const thx_chol *f, double *X, size_t r, size_t q
 size_t thx_chol_nsuper(const thx_chol *f);
 /* The flops of one column's sweeps: forward on the supernodes in reach, backward on those in need (NULL: all). */
 double thx_chol_sweep_flops(const thx_chol *f, const unsigned char *reach, const unsigned char *need);
-/* Zeros, in X (r columns, as thx_chol_solve_rows_needed takes it), the rows of the supernodes marked in
- * need or reach, the only rows the sweeps write: X's other pages are never touched. Meant for an X fresh
- * from calloc (all zero, no page touched yet): a page written first costs one fault, where one read
- * first (the sweeps' updates read before they write) costs two and a TLB shootdown. */
-void thx_chol_zero_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach);
+/* The pages of X (r columns, as thx_chol_solve_rows_needed takes it) under the rows of the supernodes marked
+ * in need or reach, the only rows the sweeps write, made present for writing (thorax/core/pages.h); X's
+ * other pages are never touched. For an X fresh from calloc (all zero, no page touched yet): a page
+ * written first costs one fault, where one read first (the sweeps' updates read before they write)
+ * costs two and a TLB shootdown, and asked for a run of rows at once none (nor a pass of zeros). */
+void thx_chol_present_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach);
 double thx_chol_needed(const thx_chol *f, const int64_t *rows, size_t m, unsigned char *need);
 
 

@@ -26,6 +26,7 @@
 #endif
 
 #include "fem/multifrontal.h"
+#include "thorax/core/pages.h"
 
 /* LAPACK and BLAS, Fortran calling convention (OpenBLAS behind liblapack.so.3 and libblas.so.3) */
 void dpotrf_(const char *uplo, const int *n, double *a, const int *lda, int *info);
@@ -305,7 +306,8 @@ struct thx_mf {
     int T;
     int64_t *subs;
     size_t nsub;
-    double **stacks, *top_stack;
+    double **stacks, *top_stack;  /* in stack_pg (the threads'), in top_pg (the top's, after the roots') */
+    thx_pages stack_pg, top_pg;    /* present before the first front (thorax/core/pages.h) */
     int32_t **maps;
     unsigned char *top_mask; /* nsuper: 1 for the top's supernodes */
     int top_left;            /* the top is still to be factored */
@@ -316,14 +318,13 @@ void thx_mf_free(thx_mf **mp)
 {
     if (!mp || !*mp) return;
     thx_mf *m = *mp;
-    if (m->stacks)
-        for (int i = 0; i < m->T; i++) free(m->stacks[i]);
     if (m->maps)
         for (int i = 0; i < m->T; i++) free(m->maps[i]);
     free(m->stacks);
     free(m->maps);
-    free(m->top_stack);
-    free(m->t.roots);
+    thx_pages_free(&m->stack_pg);
+    thx_pages_free(&m->top_pg);
+    m->t.roots = NULL;
     free(m->subs);
     free(m->top_mask);
     tree_free(&m->t);
@@ -401,15 +402,24 @@ thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *r
         }
     }
     top_n = stack_peak(&t, 0, S->nsuper - 1, 1); /* the top's stack: its supernodes alone, in the postorder */
-    tp->roots = malloc((roots_n ? roots_n : 1) * sizeof *tp->roots);
-    m->top_stack = malloc((top_n ? top_n : 1) * sizeof *m->top_stack);
+    /* the arenas' pages asked for at once, by the threads together: every page of them is written (the
+       stacks up to their peak, which is their size), and a page faulted in alone costs about twice as much */
+    const size_t line = 8; /* each thread's stack on a 64-byte line of its own */
+    roots_n = (roots_n + line - 1) / line * line;
+    thread_n = (thread_n + line - 1) / line * line;
     m->stacks = calloc((size_t)T, sizeof *m->stacks);
     m->maps = calloc((size_t)T, sizeof *m->maps);
-    if (!tp->roots || !m->top_stack || !m->stacks || !m->maps) { st = THX_ENOMEM; goto done; }
+    if (!m->stacks || !m->maps || thx_pages_zeroed(&m->top_pg, (roots_n + top_n + 1) * sizeof(double), T) ||
+        thx_pages_zeroed(&m->stack_pg, ((size_t)T * thread_n + 1) * sizeof(double), T)) {
+        st = THX_ENOMEM;
+        goto done;
+    }
+    tp->roots = m->top_pg.p;
+    m->top_stack = tp->roots + roots_n;
     for (int i = 0; i < T; i++) {
-        m->stacks[i] = malloc((thread_n ? thread_n : 1) * sizeof **m->stacks);
+        m->stacks[i] = (double *)m->stack_pg.p + (size_t)i * thread_n;
         m->maps[i] = malloc(((size_t)S->n + max_rows + 1) * sizeof **m->maps);
-        if (!m->stacks[i] || !m->maps[i]) { st = THX_ENOMEM; goto done; }
+        if (!m->maps[i]) { st = THX_ENOMEM; goto done; }
         for (int64_t j = 0; j < S->n; j++) m->maps[i][j] = -1;
     }
     m->inf.subtrees = m->nsub;
@@ -471,10 +481,8 @@ thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *r
     }
     m->inf.t_subtrees = thx_wtime() - t0;
     /* the threads' stacks are not needed by the top: given back before it (it may run beside other work) */
-    for (int i = 0; i < T; i++) {
-        free(m->stacks[i]);
-        m->stacks[i] = NULL;
-    }
+    for (int i = 0; i < T; i++) m->stacks[i] = NULL;
+    thx_pages_free(&m->stack_pg);
     if (structure)
         st = thx_error(ctx, THX_EINTERNAL, "fem: the symbolic factor does not hold the matrix's pattern (a row missing "
                        "from a supernode): not the analysis of this matrix");
@@ -516,10 +524,9 @@ thx_status thx_mf_top(thx_mf *m, int top_threads, void (*set_blas_threads)(int),
     m->inf.t_top = thx_wtime() - t0;
     m->top_left = 0;
     /* what the top needed, given back (the mask stays: other threads may still read it) */
-    free(tp->roots);
     tp->roots = NULL;
-    free(m->top_stack);
     m->top_stack = NULL;
+    thx_pages_free(&m->top_pg);
     if (info) *info = m->inf;
     return st;
 }

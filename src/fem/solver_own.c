@@ -513,7 +513,7 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
             const size_t C = io->need ? THX_FEM_CHECK_COMBOS : 0, ld = r + C;
             if (phi) own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
             else own_gather_pres(io, (size_t)s->nd, c0, r, w->P);
-            if (w->zero && io->need) thx_chol_zero_rows(s->chol, w->X, ld, io->need, io->reach);
+            if (w->zero && io->need) thx_chol_present_rows(s->chol, w->X, ld, io->need, io->reach);
             own_rhs(s, w->P, load, c0, r, w->X, ld, w->zero && io->need);
             w->zero = 0;
             if (io->need) {

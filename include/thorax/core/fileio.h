@@ -91,7 +91,10 @@ thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od);
 /* Removes od->tmp and everything in it, if begun. */
 void thx_outdir_abort(thx_outdir *od);
 
-/* Reads a whole file into a NUL-terminated buffer (caller frees). */
+/* Reads a whole file into a NUL-terminated buffer (caller frees). A regular file of THX_READ_SPLIT bytes or
+ * more is read as two halves side by side (two threads); a file that changes size meanwhile is read to its
+ * end all the same; a pipe is read as it comes. */
+#define THX_READ_SPLIT ((size_t)8 << 20)
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len);
 /* mkdir -p: dir and the directories above it that are missing (mode 0755); 0, or -1 with errno set
  * (a path of 4096 bytes or more: ENAMETOOLONG). */

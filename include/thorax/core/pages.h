@@ -26,6 +26,13 @@ typedef struct {
  * -1 with out->p NULL when no memory could be had. */
 int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads);
 
+/* The pages under [p, p + bytes) made present for writing, their contents unchanged (the whole pages the
+ * range touches: they must all be this process's, as any block from malloc is). For memory known to hold
+ * zeros (fresh from calloc) that is about to be written: the kernel's work without a fault per page, and
+ * no pass of zeros over it. Returns 0, or -1 where the kernel cannot (nothing done: the caller writes its
+ * zeros itself). */
+int thx_pages_present(void *p, size_t bytes);
+
 /* The block given back to the system (nothing for a NULL block); out is emptied. */
 void thx_pages_free(thx_pages *pg);
 

@@ -261,10 +261,14 @@ static thx_status read_tets(thx_ctx *ctx, const char *path, size_t n_nodes, size
         tet = malloc(4 * (n ? n : 1) * sizeof *tet);
         reg = malloc((n ? n : 1) * sizeof *reg);
         if (!tet || !reg) st = thx_error(ctx, THX_ENOMEM, "%s: out of memory", path);
-        for (size_t k = 0, at = 0; st == THX_OK && k < np; at += pc[k].n, k++) {
-            if (!pc[k].n) continue; /* a piece of blank lines */
-            memcpy(tet + 4 * at, ptet[k], 4 * pc[k].n * sizeof *tet);
-            memcpy(reg + at, preg[k], pc[k].n * sizeof *reg);
+        size_t at[THX_IO_PIECES_MAX];
+        for (size_t k = 0, a = 0; k < np; a += pc[k].n, k++) at[k] = a;
+        /* the pieces put together by the threads that parsed them (one thread: 0.03 s of the high phantom's) */
+#pragma omp parallel for schedule(static, 1) num_threads((int)np)
+        for (size_t k = 0; k < np; k++) {
+            if (!tet || !reg || !pc[k].n) continue; /* (no room), a piece of blank lines */
+            memcpy(tet + 4 * at[k], ptet[k], 4 * pc[k].n * sizeof *tet);
+            memcpy(reg + at[k], preg[k], pc[k].n * sizeof *reg);
         }
     }
     for (size_t k = 0; k < np; k++) {
