@@ -51,6 +51,27 @@ int thx_pages_present(void *p, size_t bytes)
     return madvise((void *)a, b - a, MADV_POPULATE_WRITE) == 0 ? 0 : -1;
 }
 
+int thx_pages_grow(thx_pages *pg, size_t bytes)
+{
+    long ps = sysconf(_SC_PAGESIZE);
+    size_t page = ps > 0 ? (size_t)ps : 4096, n = bytes + page - 1;
+    if (n < bytes) return -1;
+    n -= n % page;
+    if (!pg->p) {
+        void *p = mmap(NULL, n ? n : page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (p == MAP_FAILED) return -1;
+        pg->p = p;
+        pg->bytes = n ? n : page;
+        return 0;
+    }
+    if (n <= pg->bytes) return 0;
+    void *q = mremap(pg->p, pg->bytes, n, MREMAP_MAYMOVE);
+    if (q == MAP_FAILED) return -1;
+    pg->p = q;
+    pg->bytes = n;
+    return 0;
+}
+
 void thx_pages_free(thx_pages *pg)
 {
     if (pg->p) munmap(pg->p, pg->bytes);

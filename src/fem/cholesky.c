@@ -4,6 +4,7 @@
  * triangular solves on row-major right-hand sides.
  */
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,13 +37,49 @@ struct thx_chol {
     size_t max_below;      /* the most rows below a supernode's diagonal block */
     thx_mf_symbolic S;     /* ours: the symbolic factor as the multifrontal code takes it */
     thx_mf *mf;            /* ours with the top still to factor (thx_chol_factor_top), or NULL */
+    thx_pages spare[2];    /* the factorization's working memory once mf is gone (thx_chol_take_spare) */
+    pthread_mutex_t lock;  /* over mf's and spare's hand-outs */
 };
+
+/* mf's spare blocks into f->spare (mf about to be freed) */
+static void keep_spare(thx_chol *f)
+{
+    for (int i = 0; i < 2 && f->mf; i++)
+        if (!f->spare[i].p) thx_mf_take_spare(f->mf, &f->spare[i]);
+}
+
+void thx_chol_take_spare(thx_chol *f, thx_pages *out)
+{
+    pthread_mutex_lock(&f->lock);
+    out->p = NULL;
+    out->bytes = 0;
+    if (f->mf) thx_mf_take_spare(f->mf, out);
+    int k = f->spare[0].bytes >= f->spare[1].bytes ? 0 : 1;
+    if (!out->p && f->spare[k].p) {
+        *out = f->spare[k];
+        f->spare[k] = (thx_pages){NULL, 0};
+    }
+    pthread_mutex_unlock(&f->lock);
+}
+
+void thx_chol_drop_spare(thx_chol *f)
+{
+    pthread_mutex_lock(&f->lock);
+    thx_pages pg;
+    while (f->mf && (thx_mf_take_spare(f->mf, &pg), pg.p)) thx_pages_free(&pg);
+    thx_pages_free(&f->spare[0]);
+    thx_pages_free(&f->spare[1]);
+    pthread_mutex_unlock(&f->lock);
+}
 
 void thx_chol_free(thx_chol **fp)
 {
     if (!fp || !*fp) return;
     thx_chol *f = *fp;
     thx_mf_free(&f->mf);
+    thx_pages_free(&f->spare[0]);
+    thx_pages_free(&f->spare[1]);
+    pthread_mutex_destroy(&f->lock);
     if (f->L) cholmod_l_free_factor(&f->L, &f->c);
     cholmod_l_finish(&f->c);
     thx_chol_symbolic_free(&f->y);
@@ -96,6 +133,7 @@ thx_status thx_chol_factor(thx_ctx *ctx, int64_t n, const int64_t *rowp, const i
     const int cholmod_numeric = opts && opts->cholmod_numeric;
     thx_chol *f = thx_calloc(ctx, 1, sizeof *f);
     if (!f) return THX_ENOMEM;
+    pthread_mutex_init(&f->lock, NULL);
     cholmod_l_start(&f->c);
     f->c.print = 0;
     f->c.error_handler = NULL;
@@ -202,6 +240,7 @@ analyse:
         /* the top now, or beside the caller's first solve (opts->defer_top: thx_chol_factor_top) */
         if (e == THX_OK && !(opts && opts->defer_top && threads > 1 && inf.mf.top > 0)) {
             e = thx_mf_top(f->mf, opts ? opts->top_threads : 1, set_blas, &inf.mf);
+            keep_spare(f);
             thx_mf_free(&f->mf);
         }
         inf.t_factor = thx_wtime() - t0;
@@ -258,7 +297,13 @@ thx_status thx_chol_factor_top(thx_ctx *ctx, thx_chol *f, void (*set_blas_thread
     return e;
 }
 
-void thx_chol_top_release(thx_chol *f) { thx_mf_free(&f->mf); }
+void thx_chol_top_release(thx_chol *f)
+{
+    pthread_mutex_lock(&f->lock);
+    keep_spare(f);
+    thx_mf_free(&f->mf);
+    pthread_mutex_unlock(&f->lock);
+}
 
 const int64_t *thx_chol_perm(const thx_chol *f) { return f->perm; }
 const int64_t *thx_chol_iperm(const thx_chol *f) { return f->iperm; }
@@ -322,7 +367,8 @@ double thx_chol_needed(const thx_chol *f, const int64_t *want, size_t m, unsigne
     return all > 0 ? kept / all : 1;
 }
 
-void thx_chol_present_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach)
+void thx_chol_prepare_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach,
+                           const double *fresh)
 {
     const int64_t *super = f->y.super;
     const size_t ns = (size_t)f->y.nsuper;
@@ -333,9 +379,11 @@ void thx_chol_present_rows(const thx_chol *f, double *X, size_t r, const unsigne
         }
         size_t e = s + 1; /* the run of marked supernodes s .. e - 1: their rows are one range */
         while (e < ns && ((need && need[e]) || (reach && reach[e]))) e++;
-        double *a = X + (size_t)super[s] * r;
-        size_t bytes = (size_t)(super[e] - super[s]) * r * sizeof *X;
-        if (thx_pages_present(a, bytes)) memset(a, 0, bytes); /* zeros already: written to be present */
+        double *a = X + (size_t)super[s] * r, *b = X + (size_t)super[e] * r;
+        double *mid = fresh <= a ? a : fresh >= b ? b : (double *)fresh;
+        if (mid > a) memset(a, 0, (size_t)(mid - a) * sizeof *X); /* rows that held something */
+        if (b > mid && thx_pages_present(mid, (size_t)(b - mid) * sizeof *X))
+            memset(mid, 0, (size_t)(b - mid) * sizeof *X); /* zeros already: written to be present */
         s = e;
     }
 }

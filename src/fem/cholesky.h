@@ -103,12 +103,19 @@ double thx_chol_solve_rows_part(const thx_chol *f, double *X, size_t r, size_t q
 size_t thx_chol_nsuper(const thx_chol *f);
 /* The flops of one column's sweeps: forward on the supernodes in reach, backward on those in need (NULL: all). */
 double thx_chol_sweep_flops(const thx_chol *f, const unsigned char *reach, const unsigned char *need);
-/* The pages of X (r columns, as thx_chol_solve_rows_needed takes it) under the rows of the supernodes marked
- * in need or reach, the only rows the sweeps write, made present for writing (thorax/core/pages.h); X's
- * other pages are never touched. For an X fresh from calloc (all zero, no page touched yet): a page
- * written first costs one fault, where one read first (the sweeps' updates read before they write)
- * costs two and a TLB shootdown, and asked for a run of rows at once none (nor a pass of zeros). */
-void thx_chol_present_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach);
+/* The factorization's working memory, once no longer needed, for the caller's own use (thorax/core/pages.h;
+ * its pages present, its contents undefined): the larger block left, or out->p NULL. Thread-safe. What is
+ * not taken stays until thx_chol_drop_spare or the factor's end. */
+void thx_chol_take_spare(thx_chol *f, thx_pages *out);
+void thx_chol_drop_spare(thx_chol *f);
+/* The rows of X (r columns, as thx_chol_solve_rows_needed takes it) of the supernodes marked in need or
+ * reach, the only rows the sweeps read or write, made zero: those before fresh by writing zeros, those
+ * from fresh on (zeros already, their pages not yet touched: fresh from calloc or thx_pages_grow) by making
+ * their pages present for writing (thorax/core/pages.h). X's other pages are never touched. A fresh page
+ * written first costs one fault, where one read first (the sweeps' updates read before they write) costs
+ * two and a TLB shootdown, and asked for a run of rows at once none (nor a pass of zeros). */
+void thx_chol_prepare_rows(const thx_chol *f, double *X, size_t r, const unsigned char *need, const unsigned char *reach,
+                           const double *fresh);
 double thx_chol_needed(const thx_chol *f, const int64_t *rows, size_t m, unsigned char *need);
 
 

@@ -16,6 +16,7 @@
 #include <stdint.h>
 
 #include "thorax/core/core.h"
+#include "thorax/core/pages.h"
 
 typedef struct {
     int64_t n;             /* the matrix's order */
@@ -66,6 +67,10 @@ thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *r
                         void (*set_blas_threads)(int), double *Lx, thx_mf **out, thx_mf_info *info);
 thx_status thx_mf_top(thx_mf *m, int top_threads, void (*set_blas_threads)(int), thx_mf_info *info);
 const unsigned char *thx_mf_top_mask(const thx_mf *m);
+/* The working memory no longer needed, given to the caller (its pages present; contents undefined): the
+ * threads' stacks once thx_mf_begin has returned, the roots' and the top's arena once thx_mf_top has. The
+ * larger first; out->p NULL when none is left. Not thread-safe (the caller serializes). */
+void thx_mf_take_spare(thx_mf *m, thx_pages *out);
 void thx_mf_free(thx_mf **m);
 
 #endif

@@ -21,7 +21,8 @@
 typedef struct own_work_s {
     double *X, *E, *acc, *P; /* P: the prescribed values of the r columns, row-major */
     double *Z, *Pz;          /* the check's combinations of the r columns (src/fem/solver_own.c): x, prescribed values */
-    int zero;                /* X is all zeros (fresh from calloc: its pages not yet touched) */
+    double *fresh;           /* X from here on is zeros, its pages not yet touched; NULL: X holds anything */
+    thx_pages Xpg;           /* X's pages when X is made of the factorization's spare memory (else X from calloc) */
     size_t r;
     double flops; /* the solves' flops so far (thx_chol_solve_rows) */
 } own_work;

@@ -41,7 +41,8 @@ void fem_own_top_drop(thx_fem_system *s)
 
 void fem_own_work_free(own_work *w)
 {
-    free(w->X);
+    if (w->Xpg.p) thx_pages_free(&w->Xpg);
+    else free(w->X);
     free(w->P);
     free(w->E);
     free(w->acc);
@@ -497,8 +498,19 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
             fem_own_work_free(w);
             w->flops = done;
             const size_t C = THX_FEM_CHECK_COMBOS, nd = (size_t)s->nd ? (size_t)s->nd : 1;
-            w->X = calloc(nf * (r + C), sizeof *w->X); /* r + C: the rows out carry the check's C combinations */
-            w->zero = 1;
+            /* r + C: the rows out carry the check's C combinations. X on the factorization's working memory
+               where it is spare (its pages present: about 1 microsecond a page not spent again), the rest fresh */
+            const size_t xn = nf * (r + C);
+            thx_chol_take_spare(s->chol, &w->Xpg);
+            size_t kept = w->Xpg.bytes / sizeof *w->X;
+            if (w->Xpg.p && thx_pages_grow(&w->Xpg, (xn ? xn : 1) * sizeof *w->X) == 0) {
+                w->X = w->Xpg.p;
+                w->fresh = w->X + (kept < xn ? kept : xn);
+            } else {
+                thx_pages_free(&w->Xpg);
+                w->X = calloc(xn ? xn : 1, sizeof *w->X);
+                w->fresh = w->X;
+            }
             w->E = big_alloc(thx_chol_work_bytes(s->chol, r + C));
             w->acc = malloc(4 * (r > C ? r : C) * sizeof *w->acc);
             w->P = malloc(nd * r * sizeof *w->P);
@@ -513,9 +525,10 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
             const size_t C = io->need ? THX_FEM_CHECK_COMBOS : 0, ld = r + C;
             if (phi) own_gather_rows(phi, n, c0, r, s->pres_node, (size_t)s->nd, w->P);
             else own_gather_pres(io, (size_t)s->nd, c0, r, w->P);
-            if (w->zero && io->need) thx_chol_present_rows(s->chol, w->X, ld, io->need, io->reach);
-            own_rhs(s, w->P, load, c0, r, w->X, ld, w->zero && io->need);
-            w->zero = 0;
+            /* the rows the sweeps use made zero (the rest never touched), or all of them */
+            if (w->fresh && io->need) thx_chol_prepare_rows(s->chol, w->X, ld, io->need, io->reach, w->fresh);
+            own_rhs(s, w->P, load, c0, r, w->X, ld, w->fresh && io->need);
+            w->fresh = NULL;
             if (io->need) {
                 own_rhs_norms(s, w->X, r, ld, bn);
                 own_check_prepare(s, w, c0, r, bn);
@@ -558,6 +571,7 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
     }
     if (was > 0) blas_threads(was);
     if (!thx_chol_top_left(s->chol)) fem_own_top_drop(s); /* the top done: what it needed given back */
+    thx_chol_drop_spare(s->chol);                          /* and the working memory no block took */
     if (top_st != THX_OK) return top_st;
     return failed ? thx_error(ctx, THX_ENOMEM, "fem: out of memory for a block of %zu right-hand sides", k) : THX_OK;
 }

@@ -33,6 +33,10 @@ int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads);
  * zeros itself). */
 int thx_pages_present(void *p, size_t bytes);
 
+/* The block made bytes long (moved if it must), its pages kept with their contents; the pages added are
+ * fresh (zeros, not yet present). Returns 0, or -1 with the block as it was. */
+int thx_pages_grow(thx_pages *pg, size_t bytes);
+
 /* The block given back to the system (nothing for a NULL block); out is emptied. */
 void thx_pages_free(thx_pages *pg);
 
