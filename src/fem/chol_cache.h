@@ -16,7 +16,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* The graph's key: SHA-256 of a tag, n, rowp and col (a full CSR's pattern). */
+/* The graph's key: SHA-256 of a tag, n, the nonzeros' count and the SHA-256 of two halves of rowp and col
+ * (a full CSR's pattern), those two side by side. */
 void thx_chol_graph_key(int64_t n, const int64_t *rowp, const int32_t *col, unsigned char key[32]);
 
 /* The ordering kept for key: 1 and perm filled, or 0 (missing, another graph, damaged). */
