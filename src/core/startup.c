@@ -11,13 +11,14 @@
 void thx_startup_heavy(char **argv)
 {
     static const char guard[] = "THORAX_BLAS_REEXEC";
+    if (getenv("THORAX_BLAS_PROBE")) exit(thx_blas_probe_run()); /* a probe of thx_blas_chosen_core's */
     if (getenv(guard)) return;
     const char *preload = getenv("LD_PRELOAD");
     if (preload && strstr(preload, "vgpreload")) return; /* valgrind */
     const char *core = NULL;
     if (!getenv("OPENBLAS_CORETYPE")) {
         char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
-        if (corename) core = thx_blas_better_core(corename());
+        if (corename) core = thx_blas_chosen_core(corename(), argv);
     }
     /* OpenMP's threads waiting at a barrier: a short spin, then sleep, unless the user chose */
     int spin = !getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY");

@@ -557,11 +557,19 @@ static thx_status own_solve(thx_ctx *ctx, thx_fem_system *s, const own_io *io, s
                     for (int32_t i = 0; i < s->n; i++)
                         if (s->fidx[i] < 0 && s->didx[i] < 0) phi[(c0 + j) * n + (size_t)i] = 0;
             } else {
-                /* the rows asked for: a free node's answer, a prescribed node's value, else 0 */
-                for (size_t i = 0; i < io->m; i++) {
-                    int32_t node = io->rows[i], f = s->fidx[node], d = s->didx[node];
-                    const double *src = f >= 0 ? w->X + (size_t)iperm[f] * ld : d >= 0 ? w->P + (size_t)d * r : NULL;
-                    for (size_t j = 0; j < r; j++) io->out[(c0 + j) * io->m + i] = src ? src[j] : 0;
+                /* the rows asked for: a free node's answer, a prescribed node's value, else 0; 256 rows at a
+                   time, so that each frame's writes are near each other */
+                for (size_t i0 = 0; i0 < io->m; i0 += 256) {
+                    const size_t i1 = i0 + 256 < io->m ? i0 + 256 : io->m;
+                    const double *src[256];
+                    for (size_t i = i0; i < i1; i++) {
+                        int32_t node = io->rows[i], f = s->fidx[node], d = s->didx[node];
+                        src[i - i0] = f >= 0 ? w->X + (size_t)iperm[f] * ld : d >= 0 ? w->P + (size_t)d * r : NULL;
+                    }
+                    for (size_t j = 0; j < r; j++) {
+                        double *o = io->out + (c0 + j) * io->m;
+                        for (size_t i = i0; i < i1; i++) o[i] = src[i - i0] ? src[i - i0][j] : 0;
+                    }
                 }
                 if (io->spoil > c0 && io->spoil <= c0 + r)
                     for (size_t i = 0; i < io->m; i++) io->out[(io->spoil - 1) * io->m + i] *= 1 + io->spoil_by;
