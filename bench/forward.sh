@@ -128,6 +128,9 @@ if f:
 print(line)
 EOF
 }
+# the machine's BLAS kernels chosen before anything is timed (once, kept in the cache: thorax/core/blas_kernels.h)
+env THORAX_CACHE_DIR="$W/cache" "$THORAX" forward --help > /dev/null
+echo "BLAS kernels: $(head -1 "$W"/cache/blas-*.bin 2>/dev/null || echo "OpenBLAS's own") ($(tail -n +2 "$W"/cache/blas-*.bin 2>/dev/null | tr '\n' ',' | sed 's/,$//; s/,/, /g'))"
 frames300 "300 frames, before issue 28 (PETSc's CHOLMOD)" "$W/m_high_noverdict" -thorax_direct petsc
 cp "$W/sol/torso.raw" "$W/torso_before.raw"
 frames300 "300 frames, own path, ordering computed" "$W/m_high"

@@ -25,11 +25,11 @@
  * measures, once per machine: the program is run again as a probe (THORAX_BLAS_PROBE set: main's
  * thx_startup_heavy calls thx_blas_probe_run, which times a fixed workload of thorax's own shapes, one
  * BLAS thread, twice, and prints the shorter) with each core the processor can run (the one OpenBLAS
- * chose, SkylakeX's, Haswell's), and another core than OpenBLAS's is taken only when it is at least 5 %
- * faster. The answer is kept in the cache directory (thorax/core/cache.h: blas-KEY.bin, KEY the SHA-256
+ * chose, SkylakeX's, Haswell's), in two rounds taken in turn, each core's shorter time kept; another core
+ * than OpenBLAS's is taken only when it is at least 5 % faster. The answer is kept in the cache directory (thorax/core/cache.h: blas-KEY.bin, KEY the SHA-256
  * of OpenBLAS's configuration, its core, and the processor's name and features; the file says the core
  * and each candidate's seconds), under a lock, so that commands started together (mpirun's ranks) wait
- * for one measure and all take the same kernels. About 0.5 s, the first time only.
+ * for one measure and all take the same kernels. About 1 s, the first time only.
  */
 #ifndef THORAX_CORE_BLAS_KERNELS_H
 #define THORAX_CORE_BLAS_KERNELS_H

@@ -5,7 +5,8 @@
  * the SHA-256 of everything it depends on, and is written by its module to a temporary name and renamed;
  * a file that does not read back whole and right is ignored and computed again. The directory is kept
  * under a size (THORAX_CACHE_MAX): the files used least recently go first, and only files of thorax's
- * own names are ever removed.
+ * own names are ever removed. One small file more, blas-KEY.bin, holds the machine's choice of BLAS
+ * kernels (thorax/core/blas_kernels.h); it is never trimmed.
  */
 #ifndef THORAX_CORE_CACHE_H
 #define THORAX_CORE_CACHE_H
