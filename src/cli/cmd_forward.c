@@ -1,4 +1,5 @@
 /* thorax forward: finite-element forward solutions (paper 4.1). */
+#include <dlfcn.h>
 #include <cjson/cJSON.h>
 #include <limits.h>
 #include <math.h>
@@ -443,6 +444,9 @@ int cmd_forward(int argc, char **argv)
                 cJSON_AddNumberToObject(f, "nonzeros", R.factor.nonzeros);
                 cJSON_AddNumberToObject(f, "bytes", (double)R.factor.factor_bytes);
                 if (R.factor.blas_threads) cJSON_AddNumberToObject(f, "blas_threads_factorization", R.factor.blas_threads);
+                /* the kernels the BLAS ran (OpenBLAS's core: the machine's choice, thorax/core/blas_kernels.h) */
+                char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
+                if (corename && corename()) cJSON_AddStringToObject(f, "blas_kernels", corename());
                 cJSON_AddItemToObject(solver, "factor", f);
             }
         } else {
