@@ -21,7 +21,7 @@ PY=${PY:-/usr/bin/python3}
 [ -x "$THORAX" ] && [ -x "$ALONE" ] && [ -x "$BLOCK" ] || { echo "build first (make)"; exit 1; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 W=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$W"' EXIT
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$W"' EXIT
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 for res in medium high; do
     "$THORAX" phantom --resolution $res --seed 1 -o "$W/c_$res.txt" -q

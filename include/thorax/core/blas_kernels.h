@@ -18,9 +18,10 @@
  * never changed; setting it (to any core) turns this off.
  *
  * Where OpenBLAS does know the processor, the kernels it picks are not always the fastest for thorax's
- * shapes: on this project's Cooper Lake machines its AVX-512 kernels ("Cooperlake", "SkylakeX") run
- * dgemm with a thread's 150 columns at 37 GF/s and the triangular solves at 29-33, where its AVX2 ones
- * ("Haswell") run them at 45-48, and the high phantom's 300 frames take 0.93 of the time with them
+ * shapes: on this project's machines (AMD EPYC, Zen 4: family 25, model 17, whose AVX-512 OpenBLAS 0.3.21
+ * takes for a Cooper Lake's) its AVX-512 kernels ("Cooperlake", "SkylakeX") run dgemm with a thread's 150
+ * columns at 37 GF/s and the triangular solves at 29-33, where its AVX2 ones ("Haswell") run them at
+ * 44-48, and the high phantom's 300 frames take 0.90 of the time with them
  * (docs/design/parallel.md, "The kernels thorax's shapes run fastest with"). So thx_blas_chosen_core
  * measures, once per machine: the program is run again as a probe (THORAX_BLAS_PROBE set: main's
  * thx_startup_heavy calls thx_blas_probe_run, which times a fixed workload of thorax's own shapes, one
@@ -29,7 +30,7 @@
  * than OpenBLAS's is taken only when it is at least 5 % faster. The answer is kept in the cache directory (thorax/core/cache.h: blas-KEY.bin, KEY the SHA-256
  * of OpenBLAS's configuration, its core, and the processor's name and features; the file says the core
  * and each candidate's seconds), under a lock, so that commands started together (mpirun's ranks) wait
- * for one measure and all take the same kernels. About 1 s, the first time only.
+ * for one measure and all take the same kernels. About 2 s, the first time only.
  */
 #ifndef THORAX_CORE_BLAS_KERNELS_H
 #define THORAX_CORE_BLAS_KERNELS_H
