@@ -451,13 +451,12 @@ thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od)
     return THX_OK;
 }
 
-/* count bytes of fd from off (off < 0: from where it stands, a pipe's way) into p, fewer only at the end of
-   the file; -1 on an error */
-static ssize_t read_at(int fd, char *p, size_t count, off_t off)
+ssize_t thx_read_at(int fd, void *p, size_t count, off_t off)
 {
     size_t done = 0;
     while (done < count) {
-        ssize_t got = off < 0 ? read(fd, p + done, count - done) : pread(fd, p + done, count - done, off + (off_t)done);
+        ssize_t got = off < 0 ? read(fd, (char *)p + done, count - done)
+                              : pread(fd, (char *)p + done, count - done, off + (off_t)done);
         if (got < 0 && errno == EINTR) continue;
         if (got < 0) return -1;
         if (got == 0) break;
@@ -490,7 +489,7 @@ thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *le
         for (int k = 0; k < 2; k++) {
             size_t at = k ? half : 0, count = k ? size - half : half;
             (void)thx_pages_present(buf + at, count); /* (where it cannot, the copy faults them in) */
-            got[k] = read_at(fd, buf + at, count, (off_t)at);
+            got[k] = thx_read_at(fd, buf + at, count, (off_t)at);
         }
         bad = got[0] < 0 || got[1] < 0;
         /* what came whole from the start; the rest (a file that shrank meanwhile) is read on below */
@@ -507,7 +506,7 @@ thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *le
             buf = q;
             cap *= 2;
         }
-        ssize_t got = read_at(fd, buf + n, cap - n - 1, sized ? (off_t)n : -1);
+        ssize_t got = thx_read_at(fd, buf + n, cap - n - 1, sized ? (off_t)n : -1);
         if (got < 0) bad = 1;
         else n += (size_t)got;
         if (got <= 0 || n + 1 < cap) break; /* the end of the file (a read short of the room left) */

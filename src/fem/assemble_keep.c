@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "thorax/core/cache.h"
+#include "thorax/core/fileio.h"
 #include "thorax/core/hash.h"
 #include "thorax/core/pages.h"
 #include "thorax/core/sha256.h"
@@ -107,14 +108,7 @@ static int matrix_valid(const thx_csr *K, int64_t n)
 static int read_at(int fd, void *p, size_t count, off_t off)
 {
     (void)thx_pages_present(p, count);
-    size_t done = 0;
-    while (done < count) {
-        ssize_t got = pread(fd, (char *)p + done, count - done, off + (off_t)done);
-        if (got < 0 && errno == EINTR) continue;
-        if (got <= 0) return 0;
-        done += (size_t)got;
-    }
-    return 1;
+    return thx_read_at(fd, p, count, off) == (ssize_t)count;
 }
 
 /* The kept matrix, or 0 (missing, another matrix, damaged; K empty then). The rows and columns are read

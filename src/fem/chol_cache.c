@@ -188,14 +188,7 @@ static int symbolic_alloc(thx_chol_symbolic *y, int64_t n)
 static int read_at(int fd, void *p, size_t count, off_t off)
 {
     (void)thx_pages_present(p, count);
-    size_t done = 0;
-    while (done < count) {
-        ssize_t got = pread(fd, (char *)p + done, count - done, off + (off_t)done);
-        if (got < 0 && errno == EINTR) continue;
-        if (got <= 0) return 0;
-        done += (size_t)got;
-    }
-    return 1;
+    return thx_read_at(fd, p, count, off) == (ssize_t)count;
 }
 
 int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key[32], thx_chol_symbolic *y)

@@ -10,6 +10,7 @@
 #define THORAX_FILEIO_H
 
 #include <stdio.h>
+#include <sys/types.h>
 
 #include "thorax/core/core.h"
 typedef struct {
@@ -91,6 +92,9 @@ thx_status thx_outdir_commit(thx_ctx *ctx, thx_outdir *od);
 /* Removes od->tmp and everything in it, if begun. */
 void thx_outdir_abort(thx_outdir *od);
 
+/* count bytes of fd from offset off (off < 0: from where it stands, as a pipe is read) into p, retried
+ * until all came: fewer only at the end of the file; -1 on an error (errno set). */
+ssize_t thx_read_at(int fd, void *p, size_t count, off_t off);
 /* Reads a whole file into a NUL-terminated buffer (caller frees). A regular file of THX_READ_SPLIT bytes or
  * more is read as two halves side by side (two threads); a file that changes size meanwhile is read to its
  * end all the same; a pipe is read as it comes. */
