@@ -9,7 +9,17 @@
 #include <string.h>
 
 #include "bem/bem_impl.h"
-#include "fem/petsc_call.h"
+
+#define PTRY(call)                                                                             \
+    do {                                                                                       \
+        PetscErrorCode e_ = (call);                                                            \
+        if (e_) {                                                                              \
+            const char *txt_ = NULL;                                                           \
+            PetscErrorMessage(e_, &txt_, NULL);                                                \
+            st = thx_error(ctx, THX_ESOLVER, "PETSc: %s: %s", #call, txt_ ? txt_ : "error");   \
+            goto done;                                                                         \
+        }                                                                                      \
+    } while (0)
 
 /* The distributed dense solve shared by the transfer matrix and the symmetric dipoles: this rank's
  * rows i0..i1-1 of the n x n matrix (M) and of the nrhs right-hand sides (R), column-major with
@@ -31,50 +41,50 @@ static thx_status scalapack_solve(thx_ctx *ctx, size_t n, size_t i0, size_t i1, 
     row = thx_malloc(ctx, (w ? w : 1) * sizeof *row);
     if (!cols || !row) { st = THX_ENOMEM; goto done; }
     for (size_t j = 0; j < w; j++) cols[j] = (PetscInt)j;
-    PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &A));
-    PCALL(ctx, MatSetSizes(A, PETSC_DECIDE, PETSC_DECIDE, (PetscInt)n, (PetscInt)n));
-    PCALL(ctx, MatSetType(A, MATSCALAPACK));
-    PCALL(ctx, MatSetUp(A));
-    PCALL(ctx, MatCreate(PETSC_COMM_WORLD, &Rm));
-    PCALL(ctx, MatSetSizes(Rm, PETSC_DECIDE, PETSC_DECIDE, (PetscInt)n, (PetscInt)nrhs));
-    PCALL(ctx, MatSetType(Rm, MATSCALAPACK));
-    PCALL(ctx, MatSetUp(Rm));
+    PTRY(MatCreate(PETSC_COMM_WORLD, &A));
+    PTRY(MatSetSizes(A, PETSC_DECIDE, PETSC_DECIDE, (PetscInt)n, (PetscInt)n));
+    PTRY(MatSetType(A, MATSCALAPACK));
+    PTRY(MatSetUp(A));
+    PTRY(MatCreate(PETSC_COMM_WORLD, &Rm));
+    PTRY(MatSetSizes(Rm, PETSC_DECIDE, PETSC_DECIDE, (PetscInt)n, (PetscInt)nrhs));
+    PTRY(MatSetType(Rm, MATSCALAPACK));
+    PTRY(MatSetUp(Rm));
     /* row by row (values given column-major: one row is strided; copy it) */
     for (size_t i = 0; i < nl; i++) {
         PetscInt gi = (PetscInt)(i0 + i);
         for (size_t j = 0; j < n; j++) row[j] = M[j * nl + i];
-        PCALL(ctx, MatSetValues(A, 1, &gi, (PetscInt)n, cols, row, INSERT_VALUES));
+        PTRY(MatSetValues(A, 1, &gi, (PetscInt)n, cols, row, INSERT_VALUES));
         for (size_t j = 0; j < nrhs; j++) row[j] = R[j * nl + i];
-        PCALL(ctx, MatSetValues(Rm, 1, &gi, (PetscInt)nrhs, cols, row, INSERT_VALUES));
+        PTRY(MatSetValues(Rm, 1, &gi, (PetscInt)nrhs, cols, row, INSERT_VALUES));
     }
-    PCALL(ctx, MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
-    PCALL(ctx, MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
-    PCALL(ctx, MatAssemblyBegin(Rm, MAT_FINAL_ASSEMBLY));
-    PCALL(ctx, MatAssemblyEnd(Rm, MAT_FINAL_ASSEMBLY));
-    PCALL(ctx, MatDuplicate(Rm, MAT_DO_NOT_COPY_VALUES, &X));
-    PCALL(ctx, MatGetFactor(A, MATSOLVERSCALAPACK, MAT_FACTOR_LU, &F));
+    PTRY(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+    PTRY(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+    PTRY(MatAssemblyBegin(Rm, MAT_FINAL_ASSEMBLY));
+    PTRY(MatAssemblyEnd(Rm, MAT_FINAL_ASSEMBLY));
+    PTRY(MatDuplicate(Rm, MAT_DO_NOT_COPY_VALUES, &X));
+    PTRY(MatGetFactor(A, MATSOLVERSCALAPACK, MAT_FACTOR_LU, &F));
     {
         MatFactorInfo fi;
-        PCALL(ctx, MatFactorInfoInitialize(&fi));
-        PCALL(ctx, MatLUFactorSymbolic(F, A, NULL, NULL, &fi));
-        PCALL(ctx, MatLUFactorNumeric(F, A, &fi));
+        PTRY(MatFactorInfoInitialize(&fi));
+        PTRY(MatLUFactorSymbolic(F, A, NULL, NULL, &fi));
+        PTRY(MatLUFactorNumeric(F, A, &fi));
     }
-    PCALL(ctx, MatMatSolve(F, Rm, X));
-    PCALL(ctx, MatConvert(X, MATDENSE, MAT_INITIAL_MATRIX, &Xd));
+    PTRY(MatMatSolve(F, Rm, X));
+    PTRY(MatConvert(X, MATDENSE, MAT_INITIAL_MATRIX, &Xd));
     /* rank 0 gathers rows g0..g1-1 */
     {
         PetscInt rs, re, lda;
-        PCALL(ctx, MatGetOwnershipRange(Xd, &rs, &re));
+        PTRY(MatGetOwnershipRange(Xd, &rs, &re));
         const PetscScalar *x;
-        PCALL(ctx, MatDenseGetLDA(Xd, &lda));
-        PCALL(ctx, MatDenseGetArrayRead(Xd, &x));
+        PTRY(MatDenseGetLDA(Xd, &lda));
+        PTRY(MatDenseGetArrayRead(Xd, &x));
         size_t a = (size_t)rs > g0 ? (size_t)rs : g0, z = (size_t)re < g1 ? (size_t)re : g1;
         size_t cnt = z > a ? z - a : 0;
         loc = thx_malloc(ctx, (cnt ? cnt : 1) * (nrhs ? nrhs : 1) * sizeof *loc);
         if (!loc) { MatDenseRestoreArrayRead(Xd, &x); st = THX_ENOMEM; goto done; }
         for (size_t r = 0; r < cnt; r++)
             for (size_t j = 0; j < nrhs; j++) loc[r * nrhs + j] = x[j * (size_t)lda + (a + r - (size_t)rs)];
-        PCALL(ctx, MatDenseRestoreArrayRead(Xd, &x));
+        PTRY(MatDenseRestoreArrayRead(Xd, &x));
         int c = (int)(cnt * nrhs);
         counts = thx_malloc(ctx, (size_t)size * sizeof *counts);
         displs = thx_malloc(ctx, (size_t)size * sizeof *displs);

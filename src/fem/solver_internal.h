@@ -12,7 +12,6 @@
 #include <string.h>
 
 #include "fem/cholesky.h"
-#include "fem/petsc_call.h"
 #include "thorax/fem/fem.h"
 
 /* A thread's buffers for the own path: x (b before the solve) of up to r columns (row-major, the factor's order), the
@@ -64,7 +63,17 @@ struct thx_fem_system {
     own_work *work;          /* THX_FEM_OWN_THREADS of them */
 };
 
-/* PCALL(ctx, call): src/fem/petsc_call.h */
+/* A PETSc call inside a thx function: on failure record the message and jump to done. */
+#define PCALL(ctx, call)                                                                      \
+    do {                                                                                      \
+        PetscErrorCode e_ = (call);                                                           \
+        if (e_) {                                                                             \
+            const char *txt_ = NULL;                                                          \
+            PetscErrorMessage(e_, &txt_, NULL);                                               \
+            st = thx_error(ctx, THX_ESOLVER, "PETSc: %s: %s", #call, txt_ ? txt_ : "error"); \
+            goto done;                                                                        \
+        }                                                                                     \
+    } while (0)
 
 /* The memory-bounded block (thx_fem_system_block): bytes for the dense blocks, and the most columns. */
 #define THX_FEM_BLOCK_BYTES ((size_t)512 << 20)
