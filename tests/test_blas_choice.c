@@ -7,7 +7,6 @@
  * name that is not a name is not taken from the file. "Prescott" still gets thx_blas_better_core's answer;
  * a NULL core, none. */
 #include <dirent.h>
-#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,8 +42,7 @@ int main(int argc, char **argv)
     if (getenv("THORAX_BLAS_PROBE")) return thx_blas_probe_run(); /* a probe: this program run again */
     if (tl_scratch_make("test_blas_choice")) return 1;
     setenv("THORAX_CACHE_DIR", tl_path("cache"), 1);
-    char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
-    const char *loaded = corename ? corename() : NULL;
+    const char *loaded = thx_blas_loaded_core();
     CHECK(thx_blas_chosen_core(NULL, argv) == NULL);
     if (!loaded) {
         printf("the BLAS is not OpenBLAS: nothing to choose\n");

@@ -1,5 +1,4 @@
 /* thorax forward: finite-element forward solutions (paper 4.1). */
-#include <dlfcn.h>
 #include <cjson/cJSON.h>
 #include <limits.h>
 #include <math.h>
@@ -9,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli/cli.h"
+#include "thorax/core/blas_kernels.h"
 #include "cli/cli_fem.h"
 #include "thorax/parallel/parallel.h"
 #include "thorax/model/electrodes.h"
@@ -445,8 +445,7 @@ int cmd_forward(int argc, char **argv)
                 cJSON_AddNumberToObject(f, "bytes", (double)R.factor.factor_bytes);
                 if (R.factor.blas_threads) cJSON_AddNumberToObject(f, "blas_threads_factorization", R.factor.blas_threads);
                 /* the kernels the BLAS ran (OpenBLAS's core: the machine's choice, thorax/core/blas_kernels.h) */
-                char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
-                if (corename && corename()) cJSON_AddStringToObject(f, "blas_kernels", corename());
+                if (thx_blas_loaded_core()) cJSON_AddStringToObject(f, "blas_kernels", thx_blas_loaded_core());
                 cJSON_AddItemToObject(solver, "factor", f);
             }
         } else {

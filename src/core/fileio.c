@@ -465,6 +465,12 @@ ssize_t thx_read_at(int fd, void *p, size_t count, off_t off)
     return (ssize_t)done;
 }
 
+int thx_read_exact(int fd, void *p, size_t count, off_t off)
+{
+    (void)thx_pages_present(p, count); /* (where it cannot, the copy faults them in) */
+    return thx_read_at(fd, p, count, off) == (ssize_t)count;
+}
+
 thx_status thx_read_file(thx_ctx *ctx, const char *path, char **text, size_t *len)
 {
     int fd = open(path, O_RDONLY | O_CLOEXEC);

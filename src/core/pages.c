@@ -13,15 +13,28 @@
 #define MADV_POPULATE_WRITE 23 /* Linux 5.14 */
 #endif
 
+static size_t page_size(void)
+{
+    long ps = sysconf(_SC_PAGESIZE);
+    return ps > 0 ? (size_t)ps : 4096;
+}
+
+/* bytes (at least 1) rounded up to whole pages into *n; -1 when that overflows */
+static int whole_pages(size_t bytes, size_t *n)
+{
+    const size_t page = page_size();
+    size_t m = (bytes ? bytes : 1) + page - 1;
+    if (m < bytes) return -1;
+    *n = m - m % page;
+    return 0;
+}
+
 int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads)
 {
     out->p = NULL;
     out->bytes = 0;
-    long ps = sysconf(_SC_PAGESIZE);
-    size_t page = ps > 0 ? (size_t)ps : 4096;
-    size_t n = (bytes ? bytes : 1) + page - 1;
-    if (n < bytes) return -1;
-    n -= n % page;
+    size_t n;
+    if (whole_pages(bytes, &n)) return -1;
     void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) return -1;
     /* in pieces of 8 MB dealt to the threads: the kernel's work per page is the same, and a thread is not
@@ -44,8 +57,7 @@ int thx_pages_zeroed(thx_pages *out, size_t bytes, int threads)
 int thx_pages_present(void *p, size_t bytes)
 {
     if (!bytes) return 0;
-    long ps = sysconf(_SC_PAGESIZE);
-    uintptr_t page = ps > 0 ? (uintptr_t)ps : 4096, a = (uintptr_t)p, b = a + bytes;
+    uintptr_t page = page_size(), a = (uintptr_t)p, b = a + bytes;
     a -= a % page;
     b += (page - b % page) % page;
     return madvise((void *)a, b - a, MADV_POPULATE_WRITE) == 0 ? 0 : -1;
@@ -53,15 +65,13 @@ int thx_pages_present(void *p, size_t bytes)
 
 int thx_pages_grow(thx_pages *pg, size_t bytes)
 {
-    long ps = sysconf(_SC_PAGESIZE);
-    size_t page = ps > 0 ? (size_t)ps : 4096, n = bytes + page - 1;
-    if (n < bytes) return -1;
-    n -= n % page;
+    size_t n;
+    if (whole_pages(bytes, &n)) return -1;
     if (!pg->p) {
-        void *p = mmap(NULL, n ? n : page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         if (p == MAP_FAILED) return -1;
         pg->p = p;
-        pg->bytes = n ? n : page;
+        pg->bytes = n;
         return 0;
     }
     if (n <= pg->bytes) return 0;

@@ -1,5 +1,4 @@
 /* The environment a heavy command starts in (thorax/core/startup.h). */
-#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,10 +15,7 @@ void thx_startup_heavy(char **argv)
     const char *preload = getenv("LD_PRELOAD");
     if (preload && strstr(preload, "vgpreload")) return; /* valgrind */
     const char *core = NULL;
-    if (!getenv("OPENBLAS_CORETYPE")) {
-        char *(*corename)(void) = (char *(*)(void))dlsym(RTLD_DEFAULT, "openblas_get_corename");
-        if (corename) core = thx_blas_chosen_core(corename(), argv);
-    }
+    if (!getenv("OPENBLAS_CORETYPE")) core = thx_blas_chosen_core(thx_blas_loaded_core(), argv);
     /* OpenMP's threads waiting at a barrier: a short spin, then sleep, unless the user chose */
     int spin = !getenv("GOMP_SPINCOUNT") && !getenv("OMP_WAIT_POLICY");
     if (!core && !spin) return;

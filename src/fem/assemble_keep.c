@@ -24,7 +24,6 @@
 #include "thorax/core/cache.h"
 #include "thorax/core/fileio.h"
 #include "thorax/core/hash.h"
-#include "thorax/core/pages.h"
 #include "thorax/core/sha256.h"
 #include "thorax/fem/fem.h"
 
@@ -104,13 +103,6 @@ static int matrix_valid(const thx_csr *K, int64_t n)
     return !bad && fabs(yKx - xKy) <= 1e-11 * mag;
 }
 
-/* count bytes of fd at off into p, into pages asked for at once (thorax/core/pages.h); 1 when all came */
-static int read_at(int fd, void *p, size_t count, off_t off)
-{
-    (void)thx_pages_present(p, count);
-    return thx_read_at(fd, p, count, off) == (ssize_t)count;
-}
-
 /* The kept matrix, or 0 (missing, another matrix, damaged; K empty then). The rows and columns are read
    and hashed on one thread, the values on another (the reading, its pages and the hashes were 0.05 s of
    the high phantom's, on one thread). */
@@ -124,7 +116,7 @@ static int kept_read(const char *path, int64_t n, const unsigned char key[32], t
     uint64_t hdr[2] = {0, 0}; /* n, nnz */
     unsigned char head[8 + 32 + sizeof hdr];
     struct stat sb;
-    int ok = fstat(fd, &sb) == 0 && read_at(fd, head, sizeof head, 0);
+    int ok = fstat(fd, &sb) == 0 && thx_read_exact(fd, head, sizeof head, 0);
     if (ok) {
         memcpy(magic, head, 8);
         memcpy(k2, head + 8, 32);
@@ -149,13 +141,13 @@ static int kept_read(const char *path, int64_t n, const unsigned char key[32], t
 #pragma omp parallel for num_threads(2) schedule(static, 1)
         for (int t = 0; t < 2; t++) {
             if (t == 0) {
-                got[0] = read_at(fd, K->row, b[0], at[0]) && read_at(fd, K->col, b[1], at[1]);
+                got[0] = thx_read_exact(fd, K->row, b[0], at[0]) && thx_read_exact(fd, K->col, b[1], at[1]);
                 if (got[0]) {
                     sha(K->row, b[0], d[0]);
                     sha(K->col, b[1], d[1]);
                 }
             } else {
-                got[1] = read_at(fd, K->val, b[2], at[2]) && read_at(fd, sums, sizeof sums, at[3]);
+                got[1] = thx_read_exact(fd, K->val, b[2], at[2]) && thx_read_exact(fd, sums, sizeof sums, at[3]);
                 if (got[1]) sha(K->val, b[2], d[2]);
             }
         }

@@ -16,7 +16,6 @@
 #include "fem/chol_cache.h"
 #include "thorax/core/cache.h"
 #include "thorax/core/fileio.h"
-#include "thorax/core/pages.h"
 #include "thorax/core/sha256.h"
 
 static const char k_magic[8] = {'T', 'H', 'X', 'O', 'R', 'D', '0', '1'};
@@ -184,13 +183,6 @@ static int symbolic_alloc(thx_chol_symbolic *y, int64_t n)
     return 1;
 }
 
-/* count bytes of fd at off into p, into pages asked for at once (thorax/core/pages.h); 1 when all came */
-static int read_at(int fd, void *p, size_t count, off_t off)
-{
-    (void)thx_pages_present(p, count);
-    return thx_read_at(fd, p, count, off) == (ssize_t)count;
-}
-
 int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key[32], thx_chol_symbolic *y)
 {
     memset(y, 0, sizeof *y);
@@ -202,7 +194,7 @@ int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key
     double counts[2];      /* flops, nonzeros */
     unsigned char head[8 + 32 + sizeof hdr + sizeof counts], sum[32];
     struct stat sb;
-    int ok = fstat(fd, &sb) == 0 && read_at(fd, head, sizeof head, 0) && !memcmp(head, k_sym_magic, 8) &&
+    int ok = fstat(fd, &sb) == 0 && thx_read_exact(fd, head, sizeof head, 0) && !memcmp(head, k_sym_magic, 8) &&
              !memcmp(head + 8, key, 32);
     if (ok) {
         memcpy(hdr, head + 40, sizeof hdr);
@@ -232,9 +224,10 @@ int thx_chol_symbolic_cached(const char *dir, int64_t n, const unsigned char key
 #ifdef _OPENMP
             if (omp_get_num_threads() > 1) t = omp_get_thread_num();
 #endif
-            if (t != 1) got[0] = read_at(fd, y->block, half, (off_t)sizeof head);
-            if (t != 0) got[1] = read_at(fd, (char *)y->block + half, bytes - half, (off_t)(sizeof head + half)) &&
-                                 read_at(fd, sum, sizeof sum, (off_t)(sizeof head + bytes));
+            if (t != 1) got[0] = thx_read_exact(fd, y->block, half, (off_t)sizeof head);
+            if (t != 0)
+                got[1] = thx_read_exact(fd, (char *)y->block + half, bytes - half, (off_t)(sizeof head + half)) &&
+                         thx_read_exact(fd, sum, sizeof sum, (off_t)(sizeof head + bytes));
 #pragma omp barrier
             if (got[0] && got[1]) {
                 if (t != 1) {

@@ -308,7 +308,6 @@ struct thx_mf {
     size_t nsub;
     double **stacks, *top_stack;  /* in stack_pg (the threads'), in top_pg (the top's, after the roots') */
     thx_pages stack_pg, top_pg;    /* present before the first front (thorax/core/pages.h) */
-    int stacks_done, top_done;     /* the block is spare (thx_mf_take_spare) */
     int32_t **maps;
     unsigned char *top_mask; /* nsuper: 1 for the top's supernodes */
     int top_left;            /* the top is still to be factored */
@@ -482,8 +481,7 @@ thx_status thx_mf_begin(thx_ctx *ctx, const thx_mf_symbolic *S, const int64_t *r
     }
     m->inf.t_subtrees = thx_wtime() - t0;
     /* the threads' stacks are not needed by the top: given back before it (it may run beside other work) */
-    for (int i = 0; i < T; i++) m->stacks[i] = NULL;
-    m->stacks_done = 1; /* (the solves' blocks may be made of them: thx_mf_take_spare) */
+    for (int i = 0; i < T; i++) m->stacks[i] = NULL; /* (spare now: thx_mf_take_spare) */
     if (structure)
         st = thx_error(ctx, THX_EINTERNAL, "fem: the symbolic factor does not hold the matrix's pattern (a row missing "
                        "from a supernode): not the analysis of this matrix");
@@ -527,7 +525,6 @@ thx_status thx_mf_top(thx_mf *m, int top_threads, void (*set_blas_threads)(int),
     /* what the top needed, given back (the mask stays: other threads may still read it) */
     tp->roots = NULL;
     m->top_stack = NULL;
-    m->top_done = 1;
     if (info) *info = m->inf;
     return st;
 }
@@ -536,7 +533,8 @@ const unsigned char *thx_mf_top_mask(const thx_mf *m) { return m->top_left ? m->
 
 void thx_mf_take_spare(thx_mf *m, thx_pages *out)
 {
-    thx_pages *a = m->stacks_done && m->stack_pg.p ? &m->stack_pg : NULL, *b = m->top_done && m->top_pg.p ? &m->top_pg : NULL;
+    /* (a state the caller holds has its subtrees done: thx_mf_begin frees it on failure) */
+    thx_pages *a = m->stack_pg.p ? &m->stack_pg : NULL, *b = !m->top_left && m->top_pg.p ? &m->top_pg : NULL;
     thx_pages *take = a && b ? (a->bytes >= b->bytes ? a : b) : a ? a : b;
     if (take) {
         *out = *take;

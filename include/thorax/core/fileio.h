@@ -95,6 +95,9 @@ void thx_outdir_abort(thx_outdir *od);
 /* count bytes of fd from offset off (off < 0: from where it stands, as a pipe is read) into p, retried
  * until all came: fewer only at the end of the file; -1 on an error (errno set). */
 ssize_t thx_read_at(int fd, void *p, size_t count, off_t off);
+/* The same into fresh memory whose pages are first asked for at once (thorax/core/pages.h); 1 when all
+ * count bytes came, else 0 (an error, or the file ended first). */
+int thx_read_exact(int fd, void *p, size_t count, off_t off);
 /* Reads a whole file into a NUL-terminated buffer (caller frees). A regular file of THX_READ_SPLIT bytes or
  * more is read as two halves side by side (two threads); a file that changes size meanwhile is read to its
  * end all the same; a pipe is read as it comes. */
